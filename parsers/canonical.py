@@ -1,0 +1,143 @@
+"""Reader for the canonical measurement CSV (``../shared/spec/measurements.md``).
+
+It is the table every other reader produces, so this reader is also the strictest:
+a value that is not a number, a missing required column or a deviation that
+contradicts ``actual − nominal`` is refused with the file and line.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import math
+from pathlib import Path
+
+import pandas as pd
+
+from setupfix.errors import ParseError, SourceLocation
+from setupfix.model.measurements import CANONICAL_COLUMNS, LENGTH_COLUMNS
+from setupfix.units import LENGTH_UNITS, length_factor
+
+__all__ = ["read_canonical", "sniff_canonical", "finish_table", "DEVIATION_TOLERANCE_MM"]
+
+#: Largest accepted difference between a stated deviation and actual − nominal [mm].
+#: Reports round each value to their display resolution (0.001 mm at worst in the
+#: samples), so two roundings can differ by one display step; more is a contradiction.
+DEVIATION_TOLERANCE_MM = 0.0011
+
+
+def sniff_canonical(head: str) -> bool:
+    """True if the first line of ``head`` is a canonical CSV header. Never raises."""
+    try:
+        first = head.lstrip("\ufeff").splitlines()[0] if head else ""
+        cols = {c.strip().lower() for c in next(csv.reader([first]))}
+    except Exception:  # noqa: BLE001 - a sniffer never raises
+        return False
+    return {"characteristic", "nominal"} <= cols and bool(cols & {"actual", "deviation"})
+
+
+def _float(text: str, where: SourceLocation, column: str) -> float:
+    text = text.strip()
+    if text == "":
+        return math.nan
+    try:
+        value = float(text)
+    except ValueError:
+        raise ParseError(f"column {column!r}: expected a number, found {text!r}", location=where) from None
+    if not math.isfinite(value):
+        raise ParseError(f"column {column!r}: expected a finite number, found {text!r}", location=where)
+    return value
+
+
+def finish_table(rows: list[dict[str, object]], path: str) -> pd.DataFrame:
+    """Build a canonical DataFrame from row dicts already in mm.
+
+    Fills ``deviation``/``actual`` from each other, defaults ``unit`` to mm,
+    ``report`` to the file name, and orders the canonical columns first.
+    """
+    frame = pd.DataFrame(rows)
+    for col in CANONICAL_COLUMNS:
+        if col not in frame:
+            frame[col] = math.nan if col in LENGTH_COLUMNS else ""
+    frame["unit"] = "mm"
+    frame.loc[frame["report"].isin(["", None]) | frame["report"].isna(), "report"] = Path(path).name
+    extra = [c for c in frame.columns if c not in CANONICAL_COLUMNS]
+    return frame[list(CANONICAL_COLUMNS) + extra].reset_index(drop=True)
+
+
+def read_canonical(path: str | Path, *, text: str | None = None, unit: str | None = None) -> pd.DataFrame:
+    """Read a canonical measurement CSV into the canonical table (lengths in mm).
+
+    Parameters
+    ----------
+    path : str or Path
+        The file (also used in messages and as default ``report``).
+    text : str, optional
+        Already decoded content; read from ``path`` when omitted.
+    unit : {"mm", "inch"}, optional
+        Unit of rows that have no ``unit`` value (default mm).
+
+    Raises
+    ------
+    ParseError
+        On a missing required column, a non-numeric length, an unknown unit or a
+        deviation that contradicts actual − nominal; names file and line.
+    """
+    name = str(path)
+    if text is None:
+        try:
+            text = Path(path).read_bytes().decode("utf-8-sig")
+        except OSError as exc:
+            raise ParseError(f"cannot read: {exc.strerror}", location=SourceLocation(name)) from None
+        except UnicodeDecodeError as exc:
+            raise ParseError(f"not UTF-8 text (byte {exc.start})", location=SourceLocation(name)) from None
+    reader = csv.reader(io.StringIO(text.lstrip("\ufeff")))
+    try:
+        header = [h.strip().lower() for h in next(reader)]
+    except StopIteration:
+        raise ParseError("empty file", location=SourceLocation(name, line=1)) from None
+    missing = [c for c in ("characteristic", "nominal") if c not in header]
+    if not ("actual" in header or "deviation" in header):
+        missing.append("actual (or deviation)")
+    if missing:
+        raise ParseError(f"missing required column(s): {', '.join(missing)}", location=SourceLocation(name, line=1))
+    rows: list[dict[str, object]] = []
+    for record in reader:
+        where = SourceLocation(name, line=reader.line_num)
+        if not any(cell.strip() for cell in record):
+            continue
+        if len(record) > len(header):
+            raise ParseError(f"{len(record)} fields, header has {len(header)}", location=where)
+        row: dict[str, object] = dict(zip(header, (c.strip() for c in record)))
+        for col in header[len(record):]:
+            row[col] = ""
+        if not row["characteristic"]:
+            raise ParseError("empty characteristic name", location=where)
+        row_unit = str(row.get("unit") or unit or "mm")
+        if row_unit.strip().lower() not in LENGTH_UNITS:
+            raise ParseError(f"unknown unit {row_unit!r} (expected mm or inch)", location=where)
+        factor = length_factor(row_unit, "mm")
+        for col in LENGTH_COLUMNS:
+            if col in row:
+                row[col] = _float(str(row[col]), where, col) * factor
+        nominal, actual = float(row["nominal"]), float(row.get("actual", math.nan))  # type: ignore[arg-type]
+        stated = float(row.get("deviation", math.nan))  # type: ignore[arg-type]
+        if math.isnan(nominal):
+            raise ParseError("empty nominal value", location=where)
+        if math.isnan(actual) and math.isnan(stated):
+            raise ParseError("neither actual nor deviation is given", location=where)
+        if math.isnan(actual):
+            actual = nominal + stated
+        elif not math.isnan(stated) and abs(stated - (actual - nominal)) > DEVIATION_TOLERANCE_MM:
+            raise ParseError(
+                f"deviation {stated:g} mm contradicts actual - nominal = {actual - nominal:g} mm", location=where
+            )
+        row["actual"], row["deviation"] = actual, actual - nominal
+        lo, up = float(row.get("lower", math.nan)), float(row.get("upper", math.nan))  # type: ignore[arg-type]
+        if not math.isnan(lo) and not math.isnan(up) and lo >= up:
+            raise ParseError(f"lower limit {lo:g} is not below upper limit {up:g}", location=where)
+        row["source"] = f"{name}:{reader.line_num}"
+        rows.append(row)
+    if not rows:
+        raise ParseError("no measurement rows", location=SourceLocation(name))
+    return finish_table(rows, name)

@@ -1,0 +1,5 @@
+"""``python -m setupfix`` runs the command line."""
+
+from setupfix.cli import main
+
+raise SystemExit(main())

@@ -1,0 +1,53 @@
+"""Atomic file output: a result file is either complete or not there at all.
+
+Every writer in setupfix goes through :func:`atomic_write`: the content goes to a
+temporary file in the target's folder, is flushed to disk, then renamed over the
+target (``os.replace`` is atomic on POSIX and Windows within one file system).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import sys
+import tempfile
+from collections.abc import Iterator
+from pathlib import Path
+from typing import IO
+
+from setupfix.errors import ExportError, SourceLocation
+
+__all__ = ["atomic_write"]
+
+
+@contextlib.contextmanager
+def atomic_write(target: str | os.PathLike[str], *, newline: str | None = "") -> Iterator[IO[str]]:
+    """Open a text stream whose content replaces ``target`` only on success.
+
+    ``target == "-"`` writes to standard output instead.
+
+    Raises
+    ------
+    ExportError
+        If the folder does not exist or cannot be written.
+    """
+    if str(target) == "-":
+        yield sys.stdout
+        sys.stdout.flush()
+        return
+    path = Path(target)
+    folder = path.parent if str(path.parent) else Path(".")
+    try:
+        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=folder)
+    except OSError as exc:
+        raise ExportError(f"cannot write here: {exc.strerror}", location=SourceLocation(str(path))) from None
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8", newline=newline) as stream:
+            yield stream
+            stream.flush()
+            os.fsync(stream.fileno())
+        os.replace(tmp, path)
+    except BaseException:
+        with contextlib.suppress(OSError):
+            os.unlink(tmp)
+        raise

@@ -1,0 +1,74 @@
+"""Command line: ``setupfix <command> …``.
+
+This module is the single error boundary: a :class:`~setupfix.errors.SetupfixError`
+becomes one line on stderr and exit status 1, a usage error exit status 2, an
+unexpected exception one line naming it and exit status 3 (never a traceback),
+Ctrl-C exit status 130.  Sub-commands live one per module, each with
+``add_parser(subparsers)`` and ``run(args) -> int``; they hold no computation, only
+calls into :mod:`setupfix.pipeline`.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import sys
+from collections.abc import Sequence
+
+from setupfix import __version__
+from setupfix.cli.exit_codes import ERROR, INTERRUPTED, UNEXPECTED, USAGE
+from setupfix.errors import SetupfixError
+
+__all__ = ["main", "build_parser"]
+
+#: Sub-command modules, in the order ``--help`` lists them.
+COMMAND_MODULES: tuple[str, ...] = (
+    "setupfix.cli._correct",
+    "setupfix.cli._model",
+)
+
+
+class _Parser(argparse.ArgumentParser):
+    """argparse that raises instead of exiting, so ``main`` owns every exit."""
+
+    def error(self, message: str) -> None:  # type: ignore[override]
+        raise _UsageError(f"{self.prog}: {message}")
+
+
+class _UsageError(Exception):
+    pass
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The full argument parser with every registered sub-command."""
+    parser = _Parser(prog="setupfix", description=__doc__.splitlines()[0] if __doc__ else None)
+    parser.add_argument("--version", action="version", version=f"setupfix {__version__}")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
+    for name in COMMAND_MODULES:
+        importlib.import_module(name).add_parser(sub)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Run the command line; return the exit status."""
+    try:
+        parser = build_parser()
+        args = parser.parse_args(argv)
+        if not getattr(args, "run", None):
+            parser.print_help(sys.stderr)
+            return USAGE
+        return int(args.run(args))
+    except _UsageError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return USAGE
+    except SetupfixError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return ERROR
+    except KeyboardInterrupt:
+        print("interrupted", file=sys.stderr)
+        return INTERRUPTED
+    except BrokenPipeError:
+        return ERROR
+    except Exception as exc:  # noqa: BLE001 - the boundary: never a traceback
+        print(f"internal error: {type(exc).__name__}: {exc} (please report)", file=sys.stderr)
+        return UNEXPECTED

@@ -1,0 +1,8 @@
+"""Exit statuses of the ``setupfix`` command."""
+
+OK = 0
+ERROR = 1  #: bad input or a result that could not be produced; one line on stderr
+USAGE = 2  #: wrong arguments
+UNEXPECTED = 3  #: a bug: an exception setupfix did not raise on purpose
+PARTIAL = 4  #: batch/parse: some files failed, the others were processed
+INTERRUPTED = 130

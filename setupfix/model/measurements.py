@@ -1,0 +1,175 @@
+"""Measured parts tied to the process model.
+
+The canonical measurement table (``../shared/spec/measurements.md``) is a
+:class:`pandas.DataFrame` with the columns of :data:`CANONICAL_COLUMNS`; every reader
+in :mod:`parsers` produces it with lengths in millimetres and a ``source`` column
+giving the provenance of each row (``file:line`` or ``file#element``).
+
+:func:`match_parts` splits such a table into parts (fixture cycles) and ties each
+characteristic to a model dimension by name or alias, ignoring case and white
+space.  A dimension that a report does not contain is *absent*: it is left out of
+the objective and listed, never guessed.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Final
+
+import numpy as np
+import numpy.typing as npt
+
+from setupfix.errors import MatchError, SourceLocation
+from setupfix.model.process import ProcessModel, normalise_name
+from setupfix.units import length_factor
+
+if TYPE_CHECKING:
+    import pandas as pd
+
+__all__ = ["CANONICAL_COLUMNS", "LENGTH_COLUMNS", "PartMeasurement", "match_parts"]
+
+#: Columns of the canonical measurement table, in the order writers emit them.
+CANONICAL_COLUMNS: Final[tuple[str, ...]] = (
+    "characteristic", "nominal", "actual", "deviation", "lower", "upper", "unit",
+    "part", "report", "timestamp", "station", "x", "y", "z", "status", "source",
+)
+
+#: Columns holding lengths (converted between units together).
+LENGTH_COLUMNS: Final[tuple[str, ...]] = ("nominal", "actual", "deviation", "lower", "upper", "x", "y", "z")
+
+
+@dataclass(frozen=True)
+class PartMeasurement:
+    """One measured part (one fixture cycle) in the model's terms.
+
+    Attributes
+    ----------
+    part : str
+        Part / cycle identifier.
+    report : str
+        Source report identifier.
+    timestamp : str or None
+        When the part was machined (ISO 8601), if the report says.
+    deviation : ndarray of shape (n_dimensions,) [model unit]
+        Measured deviation (actual − nominal) of each model dimension, in model
+        order; NaN where the dimension is absent from the report.
+    sources : tuple of str
+        Provenance of each dimension's row ("" where absent).
+    unmatched : tuple of str
+        Characteristic names of the report that match no dimension.
+    absent : tuple of str
+        IDs of model dimensions the report does not contain.
+    """
+
+    part: str
+    report: str
+    timestamp: str | None
+    deviation: npt.NDArray[np.float64]
+    sources: tuple[str, ...]
+    unmatched: tuple[str, ...] = ()
+    absent: tuple[str, ...] = ()
+    notes: tuple[str, ...] = field(default=())
+
+    @property
+    def measured(self) -> npt.NDArray[np.bool_]:
+        """Mask of the dimensions present in the report, shape (n_dimensions,)."""
+        return ~np.isnan(self.deviation)
+
+
+def _lookup(model: ProcessModel) -> dict[str, list[tuple[int, str | None]]]:
+    table: dict[str, list[tuple[int, str | None]]] = {}
+    for i, dim in enumerate(model.dimensions):
+        for key in dim.keys:
+            table.setdefault(key, []).append((i, dim.group))
+    return table
+
+
+def match_parts(model: ProcessModel, table: pd.DataFrame, *, source: str = "<report>") -> list[PartMeasurement]:
+    """Split a canonical measurement table into parts matched to the model.
+
+    Parameters
+    ----------
+    model : ProcessModel
+    table : DataFrame
+        Canonical measurement table, lengths in the unit of its ``unit`` column
+        (``mm`` where empty).
+    source : str
+        Name of the report, for messages.
+
+    Returns
+    -------
+    list of PartMeasurement
+        In order of first appearance of each part.
+
+    Raises
+    ------
+    MatchError
+        If no characteristic of a part matches any model dimension, if one
+        dimension is measured twice in one part, or if a repeated name cannot be
+        told apart by station.
+    """
+    lookup = _lookup(model)
+    n = len(model.dimensions)
+    parts: list[PartMeasurement] = []
+    if table.empty:
+        raise MatchError("the report holds no measured characteristic", location=SourceLocation(source))
+    part_col = table["part"].fillna("").astype(str) if "part" in table else None
+    keys = part_col.unique().tolist() if part_col is not None else [""]
+    for key in keys:
+        rows = table[part_col == key] if part_col is not None else table
+        deviation = np.full(n, np.nan)
+        sources = [""] * n
+        unmatched: list[str] = []
+        for _, row in rows.iterrows():
+            where = str(row.get("source") or source)
+            name = str(row["characteristic"])
+            candidates = lookup.get(normalise_name(name), [])
+            station = row.get("station")
+            station = None if station is None or station != station or str(station) == "" else str(station)
+            if len(candidates) > 1:
+                candidates = [c for c in candidates if station is not None and c[1] is not None
+                              and normalise_name(c[1]) == normalise_name(station)]
+                if len(candidates) != 1:
+                    raise MatchError(
+                        f"characteristic {name!r} names several dimensions; give a station matching their group",
+                        location=SourceLocation(where),
+                    )
+            if not candidates:
+                unmatched.append(name)
+                continue
+            idx = candidates[0][0]
+            unit = row.get("unit")
+            unit = "mm" if unit is None or unit != unit or str(unit) == "" else str(unit)
+            value = float(row["deviation"]) * length_factor(unit, model.unit)
+            if not np.isfinite(value):
+                raise MatchError(f"characteristic {name!r} has no measured value", location=SourceLocation(where))
+            if not np.isnan(deviation[idx]):
+                raise MatchError(
+                    f"dimension {model.dimensions[idx].id} is measured twice in part {key or '(report)'} "
+                    f"(also at {sources[idx]})",
+                    location=SourceLocation(where),
+                )
+            deviation[idx] = value
+            sources[idx] = where
+        if np.isnan(deviation).all():
+            raise MatchError(
+                f"no characteristic of part {key or '(report)'} matches a model dimension"
+                + (f" (report names e.g. {', '.join(repr(u) for u in unmatched[:3])})" if unmatched else ""),
+                location=SourceLocation(source),
+                hint="check the dimension names and aliases in the model",
+            )
+        first = rows.iloc[0]
+        ts = first.get("timestamp")
+        report = first.get("report")
+        parts.append(
+            PartMeasurement(
+                part=key,
+                report=str(report) if report is not None and report == report and report != "" else source,
+                timestamp=str(ts) if ts is not None and ts == ts and ts != "" else None,
+                deviation=deviation,
+                sources=tuple(sources),
+                unmatched=tuple(dict.fromkeys(unmatched)),
+                absent=tuple(d.id for d, v in zip(model.dimensions, deviation) if np.isnan(v)),
+            )
+        )
+    return parts

@@ -1,0 +1,163 @@
+"""The process model: registers, features and dimensions of one machining process.
+
+A :class:`ProcessModel` is the six-tuple PM = (M, W, T, F, D, R) of Stryczek (2014),
+with the relations R stored sparsely on the elements that receive them (a feature
+knows which WKS and tools move it, a dimension which features enter it).  The dense
+matrices R_MW, R_WF, R_TF, R_FD are built by :mod:`setupfix.relation`.
+
+All lengths are in ``ProcessModel.unit``.
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass, field
+from typing import Literal
+
+__all__ = [
+    "RegisterKind",
+    "Register",
+    "MachinePoint",
+    "Feature",
+    "Dimension",
+    "ProcessModel",
+    "normalise_name",
+]
+
+RegisterKind = Literal["wks", "tool"]
+
+_SPACES = re.compile(r"\s+")
+
+
+def normalise_name(name: str) -> str:
+    """Key used to match report characteristics with dimensions.
+
+    Case is ignored and every run of white space counts as one blank
+    (``"P1  d4 "`` matches ``"p1 D4"``).
+    """
+    return _SPACES.sub(" ", name.strip()).casefold()
+
+
+@dataclass(frozen=True, slots=True)
+class Register:
+    """A correctable setup register: a work coordinate system or a tool length.
+
+    Parameters
+    ----------
+    id : str
+        Model ID (``W1``, ``T5``).
+    kind : {"wks", "tool"}
+    register : str
+        Controller register (``G54``, ``H5``).
+    limit : float
+        Bound on the absolute correction [model unit].
+    fixed : bool
+        A fixed register is never corrected.
+    """
+
+    id: str
+    kind: RegisterKind
+    register: str
+    limit: float
+    fixed: bool = False
+
+
+@dataclass(frozen=True, slots=True)
+class MachinePoint:
+    """A machine point (level 0, set M): a row of R_MW."""
+
+    id: str
+    wks: dict[str, float] = field(default_factory=dict)
+
+
+@dataclass(frozen=True, slots=True)
+class Feature:
+    """A machined feature: a column of R_WF and R_TF."""
+
+    id: str
+    wks: dict[str, float] = field(default_factory=dict)
+    tools: dict[str, float] = field(default_factory=dict)
+    position: tuple[float, float, float] | None = None
+
+
+@dataclass(frozen=True, slots=True)
+class Dimension:
+    """A toleranced dimension: a column of R_FD with its tolerance.
+
+    ``lower`` and ``upper`` are signed deviations from ``nominal``
+    (``lower < upper``); either may be infinite for a one-sided tolerance.
+    """
+
+    id: str
+    name: str
+    features: dict[str, float]
+    nominal: float
+    lower: float
+    upper: float
+    aliases: tuple[str, ...] = ()
+    group: str | None = None
+
+    @property
+    def keys(self) -> tuple[str, ...]:
+        """Normalised names this dimension answers to."""
+        return tuple(dict.fromkeys(normalise_name(n) for n in (self.name, *self.aliases)))
+
+
+@dataclass(frozen=True, slots=True)
+class ProcessModel:
+    """One machining process on one axis (the model file, validated).
+
+    Parameters
+    ----------
+    name : str
+    axis : {"X", "Y", "Z"}
+    unit : {"mm", "inch"}
+    resolution : float
+        Register grid step [unit]; corrections are whole multiples of it.
+    wks, tools : tuple of Register
+        Sets W and T, in file order.
+    machines : tuple of MachinePoint
+        Set M (may be empty).
+    features : tuple of Feature
+        Set F.
+    dimensions : tuple of Dimension
+        Set D.
+    source : str
+        The file it was loaded from (for messages).
+    """
+
+    name: str
+    axis: str
+    unit: str
+    resolution: float
+    limit: float
+    wks: tuple[Register, ...]
+    tools: tuple[Register, ...]
+    machines: tuple[MachinePoint, ...]
+    features: tuple[Feature, ...]
+    dimensions: tuple[Dimension, ...]
+    source: str = "<model>"
+
+    @property
+    def registers(self) -> tuple[Register, ...]:
+        """The decision variables x = [W_1 … W_|W|, T_1 … T_|T|] (paper's notation)."""
+        return self.wks + self.tools
+
+    @property
+    def register_ids(self) -> list[str]:
+        return [r.id for r in self.registers]
+
+    @property
+    def dimension_ids(self) -> list[str]:
+        return [d.id for d in self.dimensions]
+
+    def register(self, key: str) -> Register:
+        """Look a register up by model ID or controller name (case-insensitive)."""
+        for reg in self.registers:
+            if reg.id == key:
+                return reg
+        folded = key.strip().casefold()
+        for reg in self.registers:
+            if reg.register.casefold() == folded or reg.id.casefold() == folded:
+                return reg
+        raise KeyError(key)

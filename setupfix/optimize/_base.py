@@ -1,0 +1,132 @@
+"""One interface for every optimiser: ``Optimizer(**hyper_parameters).solve(problem)``.
+
+Metaheuristics share :class:`Metaheuristic`: randomness only through ``seed``
+(a :class:`numpy.random.Generator` per solve), a budget of evaluated solutions,
+and an :class:`Evaluator` that counts solutions, keeps the best one and the
+best-so-far history for convergence plots.
+"""
+
+from __future__ import annotations
+
+import time
+from abc import ABC, abstractmethod
+from typing import ClassVar
+
+import numpy as np
+import numpy.typing as npt
+
+from setupfix.optimize._problem import CorrectionProblem, OptimizeResult
+
+__all__ = ["Optimizer", "Metaheuristic", "Evaluator", "make_result"]
+
+Array = npt.NDArray[np.float64]
+
+
+def make_result(problem: CorrectionProblem, x: Array, *, optimizer: str, evaluations: int, seconds: float,
+                status: str, history: Array | None = None, bound: float | None = None,
+                message: str | None = None) -> OptimizeResult:
+    """Assemble an :class:`OptimizeResult` for corrections ``x`` (already on the grid)."""
+    x = np.asarray(x, dtype=float).copy()
+    x[np.abs(x) < problem.resolution / 2] = 0.0  # no "-0.000" in outputs
+    f1, f2, _ = problem.evaluate(x)
+    after = float(f1)
+    if message is None:
+        message = (
+            "all measured dimensions predicted inside tolerance"
+            if after >= 0
+            else "no correction within the register limits brings every dimension into tolerance; "
+                 "this is the least-bad correction"
+        )
+    return OptimizeResult(
+        x=x, margin_before=problem.margin_before, margin_after=after, norm=float(f2), optimizer=optimizer,
+        evaluations=int(evaluations), seconds=float(seconds), status=status, message=message,
+        binding=problem.binding(x), history=history, bound=bound,
+    )
+
+
+class Optimizer(ABC):
+    """Base of all optimisers; hyper-parameters go to ``__init__``, data to ``solve``."""
+
+    name: ClassVar[str] = ""
+
+    @abstractmethod
+    def solve(self, problem: CorrectionProblem) -> OptimizeResult:
+        """Search corrections for ``problem``; never mutates it."""
+
+    def get_params(self) -> dict[str, object]:
+        """Hyper-parameters as given to ``__init__`` (sklearn convention)."""
+        return {k: v for k, v in vars(self).items() if not k.startswith("_")}
+
+
+class Evaluator:
+    """Counts evaluated solutions and tracks the best one (maximising f = 10·f1 − f2).
+
+    Parameters
+    ----------
+    problem : CorrectionProblem
+    budget : int
+        Number of solutions the search may evaluate; ``remaining`` tells what is left.
+    """
+
+    def __init__(self, problem: CorrectionProblem, budget: int) -> None:
+        self.problem = problem
+        self.budget = int(budget)
+        self.count = 0
+        self.best_x = np.zeros(problem.n_registers)
+        self.best_f1 = -np.inf
+        self.best_f2 = np.inf
+        self.best_f = -np.inf
+        self._history: list[tuple[float, float, float, float]] = []
+
+    @property
+    def remaining(self) -> int:
+        return self.budget - self.count
+
+    def __call__(self, x: Array) -> Array:
+        """Evaluate grid solutions x of shape (n, n_registers) or (n_registers,); return f."""
+        x = np.asarray(x, dtype=float)
+        f1, f2, f = self.problem.evaluate(x)
+        flat_f = np.atleast_1d(f)
+        i = int(np.argmax(flat_f))
+        self.count += flat_f.size
+        if flat_f[i] > self.best_f:
+            self.best_f = float(flat_f[i])
+            self.best_f1 = float(np.atleast_1d(f1)[i])
+            self.best_f2 = float(np.atleast_1d(f2)[i])
+            self.best_x = np.atleast_2d(x)[i].copy()
+        self._history.append((self.count, self.best_f1, self.best_f2, self.best_f))
+        return f
+
+    @property
+    def history(self) -> Array:
+        """Best-so-far [evaluations, f1, f2, f] after each call, shape (k, 4)."""
+        return np.array(self._history, dtype=float).reshape(-1, 4)
+
+
+class Metaheuristic(Optimizer):
+    """Population search with a solution budget and a seed.
+
+    Subclasses implement :meth:`_search`, drawing all randomness from ``rng`` and
+    evaluating only through ``evaluate`` (grid points within bounds).
+    """
+
+    def __init__(self, *, n_solutions: int, seed: int | None = None) -> None:
+        self.n_solutions = n_solutions
+        self.seed = seed
+
+    @abstractmethod
+    def _search(self, problem: CorrectionProblem, rng: np.random.Generator, evaluate: Evaluator) -> None:
+        """Run the search until ``evaluate.remaining`` is spent."""
+
+    def solve(self, problem: CorrectionProblem) -> OptimizeResult:
+        if self.n_solutions < 1:
+            raise ValueError("n_solutions must be at least 1")
+        rng = np.random.default_rng(self.seed)
+        evaluate = Evaluator(problem, self.n_solutions)
+        start = time.perf_counter()
+        self._search(problem, rng, evaluate)
+        seconds = time.perf_counter() - start
+        return make_result(
+            problem, evaluate.best_x, optimizer=self.name, evaluations=evaluate.count, seconds=seconds,
+            status="budget", history=evaluate.history,
+        )

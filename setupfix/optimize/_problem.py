@@ -1,0 +1,197 @@
+"""The correction problem one part poses, and the result every optimiser returns."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+import numpy.typing as npt
+
+from setupfix.model import PartMeasurement, ProcessModel
+from setupfix.objective import correction_norm, error_budget, fitness, margins
+from setupfix.relation import relation_matrices
+
+__all__ = ["CorrectionProblem", "OptimizeResult"]
+
+Array = npt.NDArray[np.float64]
+
+
+@dataclass(frozen=True)
+class CorrectionProblem:
+    """Maximise the error budget of one part by register corrections.
+
+    Only measured dimensions take part.  Fixed registers have bounds (0, 0).
+    Corrections live on the grid ``resolution · k`` with integer k.
+
+    Attributes
+    ----------
+    composite : ndarray of shape (n_registers, n_dimensions)
+        Register → dimension matrix C restricted to the measured dimensions.
+    deviation : ndarray of shape (n_dimensions,) [model unit]
+        Measured deviations before correction.
+    lower, upper : ndarray of shape (n_dimensions,) [model unit]
+        Tolerance limits as signed deviations.
+    lb, ub : ndarray of shape (n_registers,) [model unit]
+        Bounds of each correction (both 0 for a fixed register).
+    resolution : float [model unit]
+        Register grid step.
+    register_ids, dimension_ids : tuple of str
+        Labels of rows and columns of ``composite``.
+    """
+
+    composite: Array
+    deviation: Array
+    lower: Array
+    upper: Array
+    lb: Array
+    ub: Array
+    resolution: float
+    register_ids: tuple[str, ...]
+    dimension_ids: tuple[str, ...]
+
+    @classmethod
+    def from_part(cls, model: ProcessModel, part: PartMeasurement) -> CorrectionProblem:
+        """Pose the problem for one measured part of ``model``."""
+        comp = relation_matrices(model).composite
+        keep = part.measured
+        dims = [d for d, k in zip(model.dimensions, keep) if k]
+        limits = np.array([[-r.limit, r.limit] if not r.fixed else [0.0, 0.0] for r in model.registers])
+        # Bounds are snapped inwards onto the grid so that every grid point inside is allowed.
+        h = model.resolution
+        lb = np.ceil(limits[:, 0] / h - 1e-9) * h
+        ub = np.floor(limits[:, 1] / h + 1e-9) * h
+        return cls(
+            composite=comp[:, keep],
+            deviation=part.deviation[keep].copy(),
+            lower=np.array([d.lower for d in dims]),
+            upper=np.array([d.upper for d in dims]),
+            lb=lb,
+            ub=ub,
+            resolution=h,
+            register_ids=tuple(model.register_ids),
+            dimension_ids=tuple(d.id for d in dims),
+        )
+
+    @property
+    def n_registers(self) -> int:
+        return int(self.composite.shape[0])
+
+    @property
+    def free(self) -> npt.NDArray[np.bool_]:
+        """Mask of the registers that may move, shape (n_registers,)."""
+        return self.ub > self.lb
+
+    @property
+    def kmin(self) -> npt.NDArray[np.int64]:
+        """Lower grid index of each register: lb = resolution · kmin."""
+        return np.rint(self.lb / self.resolution).astype(np.int64)
+
+    @property
+    def kmax(self) -> npt.NDArray[np.int64]:
+        return np.rint(self.ub / self.resolution).astype(np.int64)
+
+    def predicted(self, x: Array) -> Array:
+        """Deviations after corrections x: measured + x · C (eqs. 3–4).
+
+        x : ndarray of shape (..., n_registers) → ndarray of shape (..., n_dimensions)
+        """
+        return self.deviation + np.asarray(x, dtype=float) @ self.composite
+
+    def margins(self, x: Array) -> Array:
+        """Per-dimension margins after x, shape (..., n_dimensions)."""
+        return margins(self.predicted(x), self.lower, self.upper)
+
+    def evaluate(self, x: Array) -> tuple[Array, Array, Array]:
+        """f1 (eq. 8), f2 (eq. 9) and f = 10·f1 − f2 (eq. 10) of corrections x.
+
+        Parameters
+        ----------
+        x : ndarray of shape (..., n_registers) [model unit]
+
+        Returns
+        -------
+        f1, f2, f : ndarrays of shape (...)
+        """
+        x = np.asarray(x, dtype=float)
+        f1 = error_budget(self.predicted(x), self.lower, self.upper)
+        f2 = correction_norm(x)
+        return f1, f2, fitness(f1, f2)
+
+    def snap(self, x: Array) -> Array:
+        """Round corrections onto the register grid and clip them into bounds."""
+        h = self.resolution
+        return np.clip(np.rint(np.asarray(x, dtype=float) / h) * h, self.lb, self.ub)
+
+    @property
+    def margin_before(self) -> float:
+        return float(error_budget(self.deviation, self.lower, self.upper))
+
+    def binding(self, x: Array, tol: float | None = None) -> tuple[str, ...]:
+        """IDs of the dimensions whose margin after x equals the budget (within tol).
+
+        These are the constraints that stop a better correction; the default
+        tolerance is a quarter of the register resolution.
+        """
+        tol = self.resolution / 4 if tol is None else tol
+        m = self.margins(x)
+        return tuple(d for d, v in zip(self.dimension_ids, m) if v <= m.min() + tol)
+
+
+@dataclass
+class OptimizeResult:
+    """What every optimiser returns.
+
+    Attributes
+    ----------
+    x : ndarray of shape (n_registers,) [model unit]
+        Corrections on the register grid.
+    margin_before, margin_after : float
+        Error budget δ = f1 before and after the correction.
+    norm : float
+        f2 = ‖x‖.
+    optimizer : str
+    evaluations : int
+        Candidate solutions evaluated (metaheuristics) or solver calls (exact).
+    seconds : float
+        Wall time of the search.
+    status : str
+        ``"optimal"`` (proved), ``"time_limit"``, ``"rounded"`` (exact fallback) or
+        ``"budget"`` (metaheuristic spent its solution budget).
+    message : str
+        One sentence for the operator.
+    binding : tuple of str
+        Dimensions at the minimum margin after correction.
+    history : ndarray of shape (k, 4), optional
+        Best-so-far [evaluations, f1, f2, f] for convergence plots.
+    bound : float, optional
+        Upper bound on f1 proved by the exact solver (continuous LP optimum).
+    """
+
+    x: Array
+    margin_before: float
+    margin_after: float
+    norm: float
+    optimizer: str
+    evaluations: int
+    seconds: float
+    status: str
+    message: str = ""
+    binding: tuple[str, ...] = ()
+    history: Array | None = None
+    bound: float | None = None
+    extra: dict[str, object] = field(default_factory=dict)
+
+    @property
+    def bonus(self) -> float:
+        """Bonus error budget b = δ after − δ before."""
+        return self.margin_after - self.margin_before
+
+    @property
+    def fitness(self) -> float:
+        """f = 10·f1 − f2 of the result (eq. 10)."""
+        return float(fitness(self.margin_after, self.norm))
+
+    @property
+    def in_tolerance(self) -> bool:
+        """True when every measured dimension is predicted inside its limits."""
+        return self.margin_after >= 0.0

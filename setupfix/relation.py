@@ -1,0 +1,200 @@
+"""Relation matrices of the four-level graph M → W → F → D plus T → F.
+
+Stryczek (2014) writes the influence of setup data on features and dimensions as
+weighted relation matrices R_MW, R_WF, R_TF, R_FD (section "The proposed
+compensation system") and predicts the shifts of features and dimensions by
+
+    F = (M · R_MW + W) · R_WF + T · R_TF        (eq. 3)
+    D = F · R_FD                                 (eq. 4)
+
+with row vectors M, W, T of register changes.  For the decision vector
+x = [W_1 … W_|W|, T_1 … T_|T|] both equations collapse into one composite matrix
+C = [R_WF · R_FD ; R_TF · R_FD] of shape (|W| + |T|, |D|), so that D = x · C.
+Everything here is a pure function on arrays.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import numpy.typing as npt
+import scipy.linalg
+
+from setupfix.model import ProcessModel
+
+__all__ = [
+    "RelationMatrices",
+    "relation_matrices",
+    "composite_matrix",
+    "predict_features",
+    "predict_dimensions",
+    "null_space_directions",
+]
+
+Array = npt.NDArray[np.float64]
+
+
+@dataclass(frozen=True)
+class RelationMatrices:
+    """The paper's relation matrices with their row and column labels.
+
+    Attributes
+    ----------
+    R_MW : ndarray of shape (|M|, |W|)
+    R_WF : ndarray of shape (|W|, |F|)
+    R_TF : ndarray of shape (|T|, |F|)
+    R_FD : ndarray of shape (|F|, |D|)
+    machines, wks, tools, features, dimensions : list of str
+        IDs labelling the rows and columns.
+    """
+
+    R_MW: Array
+    R_WF: Array
+    R_TF: Array
+    R_FD: Array
+    machines: list[str]
+    wks: list[str]
+    tools: list[str]
+    features: list[str]
+    dimensions: list[str]
+
+    @property
+    def composite(self) -> Array:
+        """Composite matrix C, shape (|W| + |T|, |D|): D = [W, T] · C."""
+        return composite_matrix(self.R_WF, self.R_TF, self.R_FD)
+
+    @property
+    def registers(self) -> list[str]:
+        return self.wks + self.tools
+
+
+def relation_matrices(model: ProcessModel) -> RelationMatrices:
+    """Build R_MW, R_WF, R_TF and R_FD (paper eqs. 3–4) from a process model.
+
+    Weights are those of the model file: w_az = +1 when an increase of a
+    increases z, −1 when it decreases it, absent (0) otherwise; other real weights
+    (for example 2 for a radius register acting on a diameter) pass through.
+    """
+    w_ix = {r.id: i for i, r in enumerate(model.wks)}
+    t_ix = {r.id: i for i, r in enumerate(model.tools)}
+    f_ix = {f.id: i for i, f in enumerate(model.features)}
+    r_mw = np.zeros((len(model.machines), len(model.wks)))
+    for m, point in enumerate(model.machines):
+        for wid, weight in point.wks.items():
+            r_mw[m, w_ix[wid]] = weight
+    r_wf = np.zeros((len(model.wks), len(model.features)))
+    r_tf = np.zeros((len(model.tools), len(model.features)))
+    for f, feat in enumerate(model.features):
+        for wid, weight in feat.wks.items():
+            r_wf[w_ix[wid], f] = weight
+        for tid, weight in feat.tools.items():
+            r_tf[t_ix[tid], f] = weight
+    r_fd = np.zeros((len(model.features), len(model.dimensions)))
+    for d, dim in enumerate(model.dimensions):
+        for fid, weight in dim.features.items():
+            r_fd[f_ix[fid], d] = weight
+    return RelationMatrices(
+        R_MW=r_mw, R_WF=r_wf, R_TF=r_tf, R_FD=r_fd,
+        machines=[m.id for m in model.machines],
+        wks=[w.id for w in model.wks],
+        tools=[t.id for t in model.tools],
+        features=[f.id for f in model.features],
+        dimensions=[d.id for d in model.dimensions],
+    )
+
+
+def composite_matrix(r_wf: Array, r_tf: Array, r_fd: Array) -> Array:
+    """Composite register → dimension matrix C = [R_WF · R_FD ; R_TF · R_FD].
+
+    Parameters
+    ----------
+    r_wf : ndarray of shape (|W|, |F|)
+    r_tf : ndarray of shape (|T|, |F|)
+    r_fd : ndarray of shape (|F|, |D|)
+
+    Returns
+    -------
+    ndarray of shape (|W| + |T|, |D|)
+        Row i is the change of every dimension per unit change of register i
+        (eqs. 3–4 with M = 0).
+    """
+    return np.vstack([r_wf @ r_fd, r_tf @ r_fd])
+
+
+def predict_features(w: Array, t: Array, r_wf: Array, r_tf: Array,
+                     m: Array | None = None, r_mw: Array | None = None) -> Array:
+    """Feature shifts F = (M · R_MW + W) · R_WF + T · R_TF (eq. 3).
+
+    Parameters
+    ----------
+    w : ndarray of shape (..., |W|) [model unit]
+    t : ndarray of shape (..., |T|) [model unit]
+    m : ndarray of shape (..., |M|), optional
+        Machine point shifts (level 0, usually omitted as the paper says).
+
+    Returns
+    -------
+    ndarray of shape (..., |F|) [model unit]
+    """
+    wks = np.asarray(w, dtype=float)
+    if m is not None and r_mw is not None and r_mw.size:
+        wks = np.asarray(m, dtype=float) @ r_mw + wks
+    return wks @ r_wf + np.asarray(t, dtype=float) @ r_tf
+
+
+def predict_dimensions(x: Array, composite: Array) -> Array:
+    """Dimension changes D = x · C for corrections x (eqs. 3–4).
+
+    Parameters
+    ----------
+    x : ndarray of shape (..., n_registers) [model unit]
+        Register corrections, WKS first then tools, or a population of them.
+    composite : ndarray of shape (n_registers, n_dimensions)
+
+    Returns
+    -------
+    ndarray of shape (..., n_dimensions) [model unit]
+    """
+    return np.asarray(x, dtype=float) @ composite
+
+
+def null_space_directions(composite: Array, tol: float = 1e-9) -> Array:
+    """Corrections that move no dimension: a readable basis of {x : x · C = 0}.
+
+    The orthonormal basis from the SVD is brought to reduced row echelon form and
+    each row scaled to a largest entry of +1, so that a direction such as
+    "every tool +a with every WKS −a" reads as entries of ±1.
+
+    Parameters
+    ----------
+    composite : ndarray of shape (n_registers, n_dimensions)
+
+    Returns
+    -------
+    ndarray of shape (k, n_registers)
+        k = n_registers − rank(C) directions (k may be 0).
+    """
+    basis = scipy.linalg.null_space(composite.T, rcond=tol)  # (n, k)
+    if basis.shape[1] == 0:
+        return np.zeros((0, composite.shape[0]))
+    rows = basis.T.copy()
+    k, n = rows.shape
+    lead = 0
+    for r in range(k):  # Gauss-Jordan on k ≤ n rows: tiny, no library needed
+        while lead < n and np.all(np.abs(rows[r:, lead]) < tol):
+            lead += 1
+        if lead == n:
+            break
+        pivot = r + int(np.argmax(np.abs(rows[r:, lead])))
+        rows[[r, pivot]] = rows[[pivot, r]]
+        rows[r] /= rows[r, lead]
+        for other in range(k):
+            if other != r:
+                rows[other] -= rows[other, lead] * rows[r]
+        lead += 1
+    for r in range(k):
+        big = rows[r, np.argmax(np.abs(rows[r]))]
+        rows[r] /= big
+    rows[np.abs(rows) < tol] = 0.0
+    return rows

@@ -1,0 +1,27 @@
+"""Shared fixtures: paths to the bundled samples and to ../shared."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+SAMPLES = ROOT / "sample_reports"
+SHARED = ROOT.parent / "shared"
+GUIDE_PINS = SAMPLES / "guide_pins"
+
+
+@pytest.fixture
+def guide_pins_model():
+    from setupfix.model import load_model
+
+    return load_model(GUIDE_PINS / "model.toml")
+
+
+def shared_path(*parts: str) -> Path:
+    """Path below ../shared, skipping the test with a reason when it is absent."""
+    path = SHARED.joinpath(*parts)
+    if not path.exists():
+        pytest.skip(f"../shared is not beside the project ({path} absent): shared sample not available")
+    return path
