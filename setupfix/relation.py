@@ -162,8 +162,9 @@ def predict_dimensions(x: Array, composite: Array) -> Array:
 def null_space_directions(composite: Array, tol: float = 1e-9) -> Array:
     """Corrections that move no dimension: a readable basis of {x : x · C = 0}.
 
-    The orthonormal basis from the SVD is brought to reduced row echelon form and
-    each row scaled to a largest entry of +1, so that a direction such as
+    The orthonormal basis from the SVD is brought to reduced row echelon form,
+    each row scaled to a largest absolute entry of 1 and signed so that its last
+    non-zero entry (a tool, where there is one) is positive: a direction such as
     "every tool +a with every WKS −a" reads as entries of ±1.
 
     Parameters
@@ -194,7 +195,10 @@ def null_space_directions(composite: Array, tol: float = 1e-9) -> Array:
                 rows[other] -= rows[other, lead] * rows[r]
         lead += 1
     for r in range(k):
-        big = rows[r, np.argmax(np.abs(rows[r]))]
-        rows[r] /= big
+        rows[r] /= np.abs(rows[r]).max()
+        nonzero = np.flatnonzero(np.abs(rows[r]) > tol)
+        if rows[r, nonzero[-1]] < 0:  # tools come last: read "tools +a, WKS −a"
+            rows[r] = -rows[r]
+    rows = np.round(rows, 9) + 0.0
     rows[np.abs(rows) < tol] = 0.0
     return rows

@@ -29,6 +29,10 @@ __all__ = [
 OPTIMIZERS: dict[str, str] = {
     "exact": "setupfix.optimize._exact:ExactOptimizer",
     "cripso": "setupfix.optimize._cripso:CRIPSO",
+    "pso": "setupfix.optimize._pso:PSO",
+    "ga": "setupfix.optimize._ga:GA",
+    "coa": "setupfix.optimize._coa:COA",
+    "cs": "setupfix.optimize._cs:CuckooSearch",
 }
 
 

@@ -24,8 +24,12 @@ Array = npt.NDArray[np.float64]
 
 def make_result(problem: CorrectionProblem, x: Array, *, optimizer: str, evaluations: int, seconds: float,
                 status: str, history: Array | None = None, bound: float | None = None,
-                message: str | None = None) -> OptimizeResult:
-    """Assemble an :class:`OptimizeResult` for corrections ``x`` (already on the grid)."""
+                message: str | None = None, binding: tuple[str, ...] | None = None) -> OptimizeResult:
+    """Assemble an :class:`OptimizeResult` for corrections ``x`` (already on the grid).
+
+    ``binding`` defaults to the dimensions at the minimum margin after ``x``; the
+    exact optimiser passes the dimensions that prove its bound instead.
+    """
     x = np.asarray(x, dtype=float).copy()
     x[np.abs(x) < problem.resolution / 2] = 0.0  # no "-0.000" in outputs
     f1, f2, _ = problem.evaluate(x)
@@ -40,7 +44,7 @@ def make_result(problem: CorrectionProblem, x: Array, *, optimizer: str, evaluat
     return OptimizeResult(
         x=x, margin_before=problem.margin_before, margin_after=after, norm=float(f2), optimizer=optimizer,
         evaluations=int(evaluations), seconds=float(seconds), status=status, message=message,
-        binding=problem.binding(x), history=history, bound=bound,
+        binding=problem.binding(x) if binding is None else binding, history=history, bound=bound,
     )
 
 

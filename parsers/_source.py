@@ -1,0 +1,125 @@
+"""Opening a report: bytes, encoding sniffing, and the peek the sniffers look at."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+from setupfix.errors import ParseError, SourceLocation
+
+__all__ = ["Peek", "peek_file", "decode", "read_bytes", "read_text", "parse_number"]
+
+#: Bytes a sniffer sees: enough for any header we recognise, small enough to be cheap.
+PEEK_BYTES = 8192
+
+
+@dataclass(frozen=True)
+class Peek:
+    """What a sniffer sees of a file: its path, first bytes and their decoded text."""
+
+    path: Path
+    head: bytes
+    text: str
+
+    @property
+    def suffix(self) -> str:
+        return self.path.suffix.lower()
+
+
+def decode(data: bytes, path: str, encoding: str | None = None) -> str:
+    """Decode report bytes: the given encoding, else UTF-8 (BOM or not), UTF-16 by BOM,
+    CP949 when the bytes form valid Korean double-byte text, else CP1252.
+
+    CP1252 is the last resort because every byte sequence is almost valid in it; it
+    is what Western-European Windows CMM software writes (CALYPSO, PC-DMIS).
+
+    Raises
+    ------
+    ParseError
+        If an explicitly given encoding is unknown or does not fit the bytes.
+    """
+    if encoding:
+        try:
+            return data.decode(encoding)
+        except LookupError:
+            raise ParseError(f"unknown encoding {encoding!r}", location=SourceLocation(path)) from None
+        except UnicodeDecodeError as exc:
+            line = data[: exc.start].count(b"\n") + 1
+            raise ParseError(f"bytes are not {encoding} text", location=SourceLocation(path, line=line)) from None
+    if data.startswith((b"\xff\xfe", b"\xfe\xff")):
+        return data.decode("utf-16")
+    try:
+        return data.decode("utf-8-sig")
+    except UnicodeDecodeError:
+        pass
+    try:
+        text = data.decode("cp949")
+        # Hangul syllables present and no C1 controls: Korean text rather than Latin-1 noise.
+        if any("\uac00" <= ch <= "\ud7a3" for ch in text):
+            return text
+    except UnicodeDecodeError:
+        pass
+    return data.decode("cp1252", errors="replace")
+
+
+def read_bytes(path: str | Path) -> bytes:
+    """All bytes of a report.
+
+    Raises
+    ------
+    ParseError
+        If the file cannot be read (named with the OS reason).
+    """
+    try:
+        return Path(path).read_bytes()
+    except OSError as exc:
+        raise ParseError(f"cannot read: {exc.strerror or exc}", location=SourceLocation(str(path))) from None
+
+
+def read_text(path: str | Path, encoding: str | None = None) -> str:
+    """Read and :func:`decode` a text report."""
+    return decode(read_bytes(path), str(path), encoding)
+
+
+def parse_number(text: str) -> float:
+    """Parse a report number, accepting a locale decimal comma (``44,158745``).
+
+    A comma is taken as the decimal mark only when the text has no point and exactly
+    one comma: ``1,234`` is then 1.234, the reading every decimal-comma report in the
+    samples needs (Mitutoyo QVPAK, Q-DAS); thousands separators never occur there.
+
+    Raises
+    ------
+    ValueError
+        If the text is not a finite number.
+    """
+    text = text.strip()
+    if "," in text and "." not in text and text.count(",") == 1:
+        text = text.replace(",", ".")
+    value = float(text)
+    if not math.isfinite(value):
+        raise ValueError(f"not a finite number: {text!r}")
+    return value
+
+
+def peek_file(path: Path) -> Peek:
+    """Read the first bytes of ``path`` for sniffing.
+
+    Raises
+    ------
+    ParseError
+        If the file cannot be opened.
+    """
+    try:
+        with open(path, "rb") as fh:
+            head = fh.read(PEEK_BYTES)
+    except OSError as exc:
+        raise ParseError(f"cannot read: {exc.strerror}", location=SourceLocation(str(path))) from None
+    try:
+        text = head.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        # A multi-byte character may be cut at PEEK_BYTES; decode what is whole.
+        text = head[: exc.start].decode("utf-8-sig", errors="replace") if exc.start > PEEK_BYTES - 4 else \
+            head.decode("cp1252", errors="replace")
+    return Peek(path=path, head=head, text=text)
