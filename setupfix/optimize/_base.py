@@ -31,7 +31,7 @@ def make_result(problem: CorrectionProblem, x: Array, *, optimizer: str, evaluat
     exact optimiser passes the dimensions that prove its bound instead.
     """
     x = np.asarray(x, dtype=float).copy()
-    x[np.abs(x) < problem.resolution / 2] = 0.0  # no "-0.000" in outputs
+    x[np.abs(x) < 1e-12] = 0.0  # no "-0.000" in outputs
     f1, f2, _ = problem.evaluate(x)
     after = float(f1)
     if message is None:

@@ -212,8 +212,9 @@ class ExactOptimizer(Optimizer):
         g_rows, g = margin_rows(problem)
         kmin = problem.kmin[free].astype(float)
         kmax = problem.kmax[free].astype(float)
-        width = (problem.upper - problem.lower) / 2.0
-        t_cap = float(np.min(width[np.isfinite(width)]) / problem.resolution) if np.isfinite(width).any() else 1e9
+        # Only one-sided limits that corrections can move away from leave t unbounded; the
+        # cap keeps the LP bounded then, and lies far above any two-sided margin otherwise.
+        t_cap = 1e9
         x = np.zeros(n_all)
         calls = 0
         if free.sum() == 0 or g.size == 0:

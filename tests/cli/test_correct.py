@@ -1,0 +1,134 @@
+"""`setupfix correct` and `setupfix model show` end to end on the bundled sample."""
+
+from __future__ import annotations
+
+import csv
+import json
+import shutil
+
+import pytest
+
+from setupfix.cli import main
+
+from conftest import GUIDE_PINS
+
+MODEL = str(GUIDE_PINS / "model.toml")
+REPORT = str(GUIDE_PINS / "cycle_01.csv")
+SPEC_KEYS = {"optimizer", "margin_before", "margin_after", "bonus", "norm", "corrections", "binding", "dimensions"}
+
+
+def run(capsys, *argv):
+    code = main(list(argv))
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def test_json_has_the_contract_keys(capsys):
+    code, out, err = run(capsys, "correct", "--model", MODEL, "--json", REPORT)
+    assert code == 0, err
+    doc = json.loads(out)
+    assert SPEC_KEYS <= doc.keys()
+    assert doc["optimizer"] == "exact"
+    assert set(doc["corrections"]) == {f"W{i}" for i in range(1, 9)} | {"T5", "T23"}
+    assert doc["bonus"] == pytest.approx(doc["margin_after"] - doc["margin_before"])
+    assert doc["margin_after"] > doc["margin_before"]
+    dim = doc["dimensions"][0]
+    assert {"id", "name", "deviation", "predicted", "lower", "upper"} <= dim.keys()
+    assert dim["name"] == "P1 D1" and dim["deviation"] == pytest.approx(-0.0309)
+    assert all(name.startswith("P") for name in doc["binding"])
+    # predicted = deviation + x·C recomputed by hand for D4 = F4 - F3 (W1 + W5 + 2·T23)
+    c = doc["corrections"]
+    d4 = next(d for d in doc["dimensions"] if d["id"] == "P1D4")
+    assert d4["predicted"] == pytest.approx(d4["deviation"] + c["W1"] + c["W5"] + 2 * c["T23"])
+
+
+def test_offsets_csv_matches_json(capsys, tmp_path):
+    target = tmp_path / "offsets.csv"
+    code, out, _ = run(capsys, "correct", "--model", MODEL, "--json", "--offsets", str(target), REPORT)
+    assert code == 0
+    rows = list(csv.DictReader(target.open(encoding="utf-8")))
+    assert list(rows[0]) == ["report", "part", "id", "register", "kind", "axis", "delta"]
+    corrections = json.loads(out)["corrections"]
+    assert {r["id"]: float(r["delta"]) for r in rows} == pytest.approx(corrections)
+    by_id = {r["id"]: r for r in rows}
+    assert by_id["W5"]["register"] == "G58" and by_id["W5"]["kind"] == "wks"
+    assert by_id["T23"]["register"] == "H23" and by_id["T23"]["kind"] == "tool" and by_id["T23"]["axis"] == "Z"
+    assert [p.name for p in tmp_path.iterdir()] == ["offsets.csv"]  # no temporary file left behind
+
+
+def test_human_output_names_everything(capsys):
+    code, out, _ = run(capsys, "correct", "--model", MODEL, REPORT)
+    assert code == 0
+    for text in ("P4 D7", "G54.1P2", "H23", "error budget before", "bonus", "binding"):
+        assert text in out
+
+
+def test_cripso_reproducible_per_seed(capsys):
+    outs = [json.loads(run(capsys, "correct", "--model", MODEL, "--optimizer", "cripso", "--seed", "4", "--json",
+                           REPORT)[1]) for _ in range(2)]
+    assert outs[0]["corrections"] == outs[1]["corrections"]
+    assert outs[0]["optimizer"] == "cripso"
+
+
+def test_several_parts_and_part_selection(capsys, tmp_path):
+    both = tmp_path / "two.csv"
+    lines = (GUIDE_PINS / "cycle_01.csv").read_text().splitlines()
+    lines2 = (GUIDE_PINS / "cycle_02.csv").read_text().splitlines()[1:]
+    both.write_text("\n".join(lines + lines2) + "\n")
+    code, out, _ = run(capsys, "correct", "--model", MODEL, "--json", str(both))
+    assert code == 0
+    assert [p["part"] for p in json.loads(out)["parts"]] == ["cycle 01", "cycle 02"]
+    code, out, _ = run(capsys, "correct", "--model", MODEL, "--json", "--part", "cycle 02", str(both))
+    assert json.loads(out)["part"] == "cycle 02"
+    code, _, err = run(capsys, "correct", "--model", MODEL, "--part", "cycle 9", str(both))
+    assert code == 1 and "no part 'cycle 9'" in err
+
+
+def test_absent_dimension_left_out_and_reported(capsys, tmp_path):
+    report = tmp_path / "short.csv"
+    lines = REPORT and (GUIDE_PINS / "cycle_01.csv").read_text().splitlines()
+    report.write_text("\n".join(line for line in lines if not line.startswith("P3 D4")) + "\n")
+    code, out, _ = run(capsys, "correct", "--model", MODEL, "--json", str(report))
+    doc = json.loads(out)
+    assert code == 0 and doc["absent"] == ["P3D4"]
+    assert "P3D4" not in {d["id"] for d in doc["dimensions"]}
+
+
+@pytest.mark.parametrize(
+    ("mutate", "expected"),
+    [
+        (lambda d: (d / "model.toml").write_text("[process\n"), "model.toml:1: TOML syntax"),
+        (lambda d: (d / "model.toml").unlink(), "cannot read model"),
+        (lambda d: (d / "r.csv").write_text("characteristic,nominal,actual\nP1 D1,25,abc\n"),
+         "r.csv:2: column 'actual': expected a number, found 'abc'"),
+        (lambda d: (d / "r.csv").write_text("characteristic,nominal,actual\nBore 9,25,25.1\n"),
+         "no characteristic of part"),
+        (lambda d: (d / "r.csv").write_bytes(b"\x00\x01binary\xff"), "r.csv"),
+    ],
+)
+def test_bad_input_one_line_exit_1_no_output_file(capsys, tmp_path, mutate, expected):
+    shutil.copy(MODEL, tmp_path / "model.toml")
+    shutil.copy(REPORT, tmp_path / "r.csv")
+    mutate(tmp_path)
+    target = tmp_path / "offsets.csv"
+    code, out, err = run(capsys, "correct", "--model", str(tmp_path / "model.toml"), "--offsets", str(target),
+                         str(tmp_path / "r.csv"))
+    assert code == 1
+    assert expected in err and len(err.strip().splitlines()) == 1 and "Traceback" not in err
+    assert not target.exists() and out == ""
+
+
+def test_usage_errors_exit_2(capsys):
+    assert run(capsys, "correct", REPORT)[0] == 2
+    assert run(capsys, "correct", "--model", MODEL, "--optimizer", "simplex", REPORT)[0] == 2
+    assert run(capsys)[0] == 2
+
+
+def test_model_show_prints_matrices_rank_and_null_space(capsys):
+    code, out, _ = run(capsys, "model", "show", MODEL)
+    assert code == 0
+    assert "R_TF" in out and "R_FD" in out and "rank 9" in out
+    assert "−W1 −W2 −W3 −W4 −W5 −W6 −W7 −W8 +T5 +T23" in out
+    code, out, _ = run(capsys, "model", "show", MODEL, "--json")
+    doc = json.loads(out)
+    assert doc["rank"] == 9 and doc["null_space"][0]["T23"] == 1.0

@@ -1,0 +1,116 @@
+"""Exact optimiser against brute force over whole small grids, and its guarantees."""
+
+from __future__ import annotations
+
+import itertools
+import warnings
+
+import numpy as np
+import pytest
+
+from setupfix.errors import ConvergenceWarning
+from setupfix.model import PartMeasurement
+from setupfix.optimize import CorrectionProblem, get_optimizer
+from setupfix.simulate import simulate_deviations
+
+
+def random_problem(seed: int, n: int = 3, m: int = 6, limit_steps: int = 5, fixed: tuple[int, ...] = (),
+                   spread: float = 0.06) -> CorrectionProblem:
+    rng = np.random.default_rng(seed)
+    comp = rng.integers(-1, 2, size=(n, m)).astype(float)
+    comp[0, 0] = 2.0  # a weight-2 relation like D4 ← 2·T23
+    h = 0.01
+    lb = np.full(n, -limit_steps * h)
+    ub = np.full(n, limit_steps * h)
+    lb[list(fixed)] = ub[list(fixed)] = 0.0
+    width = rng.uniform(0.03, 0.1, m)
+    return CorrectionProblem(
+        composite=comp, deviation=np.round(rng.uniform(-spread, spread, m), 4), lower=-width,
+        upper=width * rng.uniform(0.5, 1.5, m), lb=lb, ub=ub, resolution=h,
+        register_ids=tuple(f"R{i}" for i in range(n)), dimension_ids=tuple(f"D{j}" for j in range(m)),
+    )
+
+
+def brute_force(problem: CorrectionProblem) -> tuple[float, float]:
+    """Best f1 over the whole grid and the least norm among the points reaching it."""
+    axes = [np.arange(lo, hi + 1) for lo, hi in zip(problem.kmin, problem.kmax)]
+    k = np.array(list(itertools.product(*axes)), dtype=float)
+    f1, f2, _ = problem.evaluate(k * problem.resolution)
+    best = f1.max()
+    return float(best), float(f2[f1 >= best - 1e-12].min())
+
+
+@pytest.mark.parametrize("seed", range(12))
+def test_grid_optimum_and_least_norm_equal_brute_force(seed):
+    problem = random_problem(seed)
+    result = get_optimizer("exact").solve(problem)
+    best, norm = brute_force(problem)
+    assert result.status == "optimal"
+    assert result.margin_after == pytest.approx(best, abs=1e-12)
+    assert result.norm == pytest.approx(norm, abs=1e-12)
+    assert result.bound >= result.margin_after - 1e-12
+    np.testing.assert_allclose(result.x / problem.resolution, np.rint(result.x / problem.resolution), atol=1e-9)
+
+
+def test_fixed_registers_never_move_and_limits_hold():
+    problem = random_problem(3, n=4, m=7, limit_steps=3, fixed=(1,))
+    result = get_optimizer("exact").solve(problem)
+    assert result.x[1] == 0.0
+    assert np.all(result.x <= problem.ub + 1e-12) and np.all(result.x >= problem.lb - 1e-12)
+    assert result.margin_after == pytest.approx(brute_force(problem)[0], abs=1e-12)
+
+
+def test_out_of_reach_returns_least_bad_correction():
+    problem = random_problem(5, limit_steps=1, spread=0.3)
+    result = get_optimizer("exact").solve(problem)
+    best, _ = brute_force(problem)
+    assert result.margin_after < 0 and not result.in_tolerance
+    assert result.margin_after == pytest.approx(best, abs=1e-12)
+    assert "least-bad" in result.message
+
+
+def test_binding_dimensions_prove_the_bound():
+    problem = random_problem(7)
+    result = get_optimizer("exact").solve(problem)
+    assert result.binding
+    # Relaxing every non-binding limit cannot raise the LP bound: the binding set alone explains it.
+    keep = np.isin(problem.dimension_ids, result.binding)
+    relaxed = CorrectionProblem(problem.composite[:, keep], problem.deviation[keep], problem.lower[keep],
+                                problem.upper[keep], problem.lb, problem.ub, problem.resolution,
+                                problem.register_ids, tuple(np.array(problem.dimension_ids)[keep]))
+    assert get_optimizer("exact").solve(relaxed).bound == pytest.approx(result.bound, abs=1e-9)
+
+
+def test_time_limit_falls_back_and_says_so():
+    problem = random_problem(2, n=6, m=12, limit_steps=50)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        result = get_optimizer("exact", time_limit=1e-9).solve(problem)
+    if result.status == "optimal":  # HiGHS may finish in presolve before looking at the clock
+        pytest.skip("solved in presolve before the time limit was checked")
+    assert result.status in ("time_limit", "rounded")
+    assert any(issubclass(w.category, ConvergenceWarning) for w in caught)
+    assert result.margin_after <= result.bound + 1e-12
+    assert "not proved" in result.message
+
+
+def test_paper_size_problem_against_lp_bound_and_null_space(guide_pins_model):
+    devs, setup = simulate_deviations(guide_pins_model, 3, seed=11)
+    for dev in devs:
+        part = PartMeasurement("c", "r", None, dev, ("",) * dev.size)
+        problem = CorrectionProblem.from_part(guide_pins_model, part)
+        result = get_optimizer("exact").solve(problem)
+        assert result.status == "optimal"
+        assert result.margin_before <= result.margin_after <= result.bound + 1e-12
+        # least norm: moving along the null space (tools +a, WKS -a) by one step cannot shorten x
+        direction = np.r_[-np.ones(8), np.ones(2)] * problem.resolution
+        for step in (-1, 1):
+            moved = result.x + step * direction
+            if np.all(moved >= problem.lb) and np.all(moved <= problem.ub):
+                assert np.linalg.norm(moved) >= result.norm - 1e-12
+
+
+def test_continuous_mode_is_the_lp_optimum():
+    problem = random_problem(4)
+    cont = get_optimizer("exact", grid=False).solve(problem)
+    assert cont.margin_after == pytest.approx(cont.bound, abs=1e-9)
