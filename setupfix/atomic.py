@@ -13,7 +13,7 @@ import sys
 import tempfile
 from collections.abc import Iterator
 from pathlib import Path
-from typing import IO
+from typing import IO, Any
 
 from setupfix.errors import ExportError, SourceLocation
 
@@ -21,10 +21,13 @@ __all__ = ["atomic_write"]
 
 
 @contextlib.contextmanager
-def atomic_write(target: str | os.PathLike[str], *, newline: str | None = "") -> Iterator[IO[str]]:
-    """Open a text stream whose content replaces ``target`` only on success.
+def atomic_write(target: str | os.PathLike[str], *, newline: str | None = "",
+                 binary: bool = False) -> Iterator[IO[Any]]:
+    """Open a stream whose content replaces ``target`` only on success.
 
-    ``target == "-"`` writes to standard output instead.
+    ``target == "-"`` writes to standard output instead.  ``binary=True`` gives a
+    bytes stream (figures).  The file gets the permissions a plain ``open`` would
+    give it (0666 less the umask), not the private 0600 of a temporary file.
 
     Raises
     ------
@@ -32,8 +35,9 @@ def atomic_write(target: str | os.PathLike[str], *, newline: str | None = "") ->
         If the folder does not exist or cannot be written.
     """
     if str(target) == "-":
-        yield sys.stdout
-        sys.stdout.flush()
+        stream = sys.stdout.buffer if binary else sys.stdout
+        yield stream
+        stream.flush()
         return
     path = Path(target)
     folder = path.parent if str(path.parent) else Path(".")
@@ -42,7 +46,11 @@ def atomic_write(target: str | os.PathLike[str], *, newline: str | None = "") ->
     except OSError as exc:
         raise ExportError(f"cannot write here: {exc.strerror}", location=SourceLocation(str(path))) from None
     try:
-        with os.fdopen(fd, "w", encoding="utf-8", newline=newline) as stream:
+        umask = os.umask(0)
+        os.umask(umask)
+        os.chmod(tmp, 0o666 & ~umask)
+        handle = os.fdopen(fd, "wb") if binary else os.fdopen(fd, "w", encoding="utf-8", newline=newline)
+        with handle as stream:
             yield stream
             stream.flush()
             os.fsync(stream.fileno())

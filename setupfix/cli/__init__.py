@@ -24,7 +24,11 @@ __all__ = ["main", "build_parser"]
 #: Sub-command modules, in the order ``--help`` lists them.
 COMMAND_MODULES: tuple[str, ...] = (
     "setupfix.cli._correct",
+    "setupfix.cli._parse",
+    "setupfix.cli._formats",
+    "setupfix.cli._compare",
     "setupfix.cli._model",
+    "setupfix.cli._thermal",
 )
 
 
@@ -69,6 +73,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         return INTERRUPTED
     except BrokenPipeError:
         return ERROR
+    except SystemExit as exc:  # --help and --version end argparse with SystemExit(0)
+        return exc.code if isinstance(exc.code, int) else (0 if exc.code is None else ERROR)
     except Exception as exc:  # noqa: BLE001 - the boundary: never a traceback
         print(f"internal error: {type(exc).__name__}: {exc} (please report)", file=sys.stderr)
         return UNEXPECTED
