@@ -1,0 +1,79 @@
+"""``setupfix compare``: every optimiser, N seeded trials each, beside the exact grid optimum."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+
+from setupfix.cli._common import add_report_options, parse_stations, report_options
+from setupfix.pipeline.compare import Comparison, compare_report, plot_comparison
+from setupfix.plots import figure_format
+
+
+def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
+    p = sub.add_parser("compare", help="compare the metaheuristics with the exact optimum on one report",
+                       description="Run CRIPSO, PSO, GA, COA and cuckoo search N seeded times each on one "
+                                   "measured part and tabulate best / median / worst f1, f2 and f beside the "
+                                   "exact grid optimum (Stryczek 2014, Figs. 12-17).")
+    p.add_argument("report", metavar="REPORT", help="CMM report in any supported format")
+    p.add_argument("--model", required=True, metavar="MODEL", help="process model TOML")
+    p.add_argument("--trials", type=_positive, default=12, metavar="N", help="seeded trials per method (default 12)")
+    p.add_argument("--seed", type=int, default=0, metavar="S", help="root of the trial seeds (default 0)")
+    p.add_argument("--part", default=None, metavar="ID", help="part / cycle of the report (default: the first)")
+    p.add_argument("--json", action="store_true", help="machine-readable output (shared/spec/cli-json.md)")
+    p.add_argument("--plot", default=None, metavar="FILE",
+                   help="draw convergence and spread figures to FILE (.png or .svg)")
+    add_report_options(p)
+    p.set_defaults(run=run)
+
+
+def _positive(text: str) -> int:
+    value = int(text)
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"must be at least 1, not {value}")
+    return value
+
+
+def format_comparison(c: Comparison) -> str:
+    """The comparison table for the terminal."""
+    unit = c.unit
+    gap_unit, scale = ("µm", 1000.0) if unit == "mm" else (f"{unit}/1000", 1000.0)
+    e = c.exact
+    lines = [
+        f"{c.report}  part {c.part or '—'}: {c.trials} trials per method, seed {c.seed}",
+        f"before correction f1 = {e.margin_before:+.4f} {unit}; exact grid optimum f1 = {e.margin_after:+.4f}, "
+        f"f2 = {e.norm:.4f}, f = {e.fitness:+.4f} ({e.status}, {e.seconds * 1000:.0f} ms)",
+        "",
+        f"{'':8}{'f1 [' + unit + ']':^24}{'f2 [' + unit + ']':^24}{'f = 10·f1 − f2':^24}"
+        f"{'':>9}{'':>9}{'gap f1 [' + gap_unit + ']':^14}",
+        f"{'method':<8}" + f"{'best':>8}{'median':>8}{'worst':>8}" * 3
+        + f"{'solutions':>10}{'seconds':>8}{'median':>7}{'worst':>7}",
+    ]
+    lines.append("-" * len(lines[-1]))
+    for row in c.table():
+        cells = "".join(f"{row[f'{k}_{s}']:>8.4f}" for k in ("f1", "f2", "f") for s in ("best", "median", "worst"))
+        lines.append(f"{row['optimizer']:<8}{cells}{row['evaluations']:>10.0f}{row['seconds']:>8.3f}"
+                     f"{row['gap_median'] * scale:>7.1f}{row['gap_worst'] * scale:>7.1f}")
+    lines += ["", "best/median/worst over the trials (best f1 and f largest, best f2 smallest); solutions and "
+                  "seconds are medians per trial (exact: solver calls); gap = exact f1 − trial f1."]
+    for name, reason in c.skipped.items():
+        lines.append(f"skipped {name}: {reason}")
+    return "\n".join(lines)
+
+
+def run(args: argparse.Namespace) -> int:
+    if args.plot:
+        figure_format(args.plot)  # refuse an unknown suffix before the trials, not after
+    comparison = compare_report(args.model, args.report, part=args.part, trials=args.trials, seed=args.seed,
+                                stations=parse_stations(args.stations), **report_options(args))
+    if args.plot:
+        plot_comparison(comparison, args.plot)
+    if args.json:
+        json.dump(comparison.to_json(), sys.stdout, indent=2)
+        sys.stdout.write("\n")
+    else:
+        sys.stdout.write(format_comparison(comparison) + "\n")
+        if args.plot:
+            sys.stdout.write(f"figures written to {args.plot}\n")
+    return 0

@@ -1,0 +1,244 @@
+"""Use case "compare": the metaheuristics of Stryczek (2014) beside the exact grid optimum.
+
+The paper runs twelve trials of CRIPSO, PSO, GA and COA on one measurement set
+("Comparison …" section, Figs. 12–17); here every method gets the same seeded
+trials on one measured part, and the exact optimum (LP + MILP on the register
+grid) is solved once as the yardstick none of those papers had.  The gap of a
+trial is exact f1 − trial f1 (≥ 0 up to rounding), in the model unit.
+
+Seeds: trial t of every method uses the t-th 32-bit word of
+``numpy.random.SeedSequence(seed)``, so a run is reproducible from ``--seed``
+alone and all methods see the same seed list.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import numpy.typing as npt
+
+from setupfix.errors import MatchError, SourceLocation
+from setupfix.model import ProcessModel, load_model
+from setupfix.optimize import OPTIMIZERS, CorrectionProblem, OptimizeResult, get_optimizer
+from setupfix.pipeline.correct import load_parts
+
+__all__ = ["DEFAULT_METHODS", "MethodTrials", "Comparison", "trial_seeds", "compare_problem",
+           "compare_report", "plot_comparison"]
+
+Array = npt.NDArray[np.float64]
+
+#: Methods compared by default, in table order.
+DEFAULT_METHODS: tuple[str, ...] = ("cripso", "pso", "ga", "coa", "cs")
+
+
+def trial_seeds(seed: int, trials: int) -> list[int]:
+    """Seeds of the trials, derived deterministically from one seed."""
+    return [int(s) for s in np.random.SeedSequence(seed).generate_state(trials, dtype=np.uint32)]
+
+
+@dataclass
+class MethodTrials:
+    """The N trials of one optimiser on one problem."""
+
+    optimizer: str
+    seeds: list[int]
+    results: list[OptimizeResult]
+
+    @property
+    def f1(self) -> Array:
+        """Error budget after correction per trial, shape (N,) [model unit]."""
+        return np.array([r.margin_after for r in self.results])
+
+    @property
+    def f2(self) -> Array:
+        """Correction norm per trial, shape (N,) [model unit]."""
+        return np.array([r.norm for r in self.results])
+
+    @property
+    def f(self) -> Array:
+        """f = 10·f1 − f2 per trial (eq. 10), shape (N,)."""
+        return np.array([r.fitness for r in self.results])
+
+    @property
+    def evaluations(self) -> npt.NDArray[np.int64]:
+        return np.array([r.evaluations for r in self.results], dtype=np.int64)
+
+    @property
+    def seconds(self) -> Array:
+        return np.array([r.seconds for r in self.results])
+
+    @property
+    def histories(self) -> list[Array]:
+        """Best-so-far [evaluations, f1, f2, f] of each trial, each of shape (k, 4)."""
+        return [r.history if r.history is not None else np.zeros((0, 4)) for r in self.results]
+
+    def gaps(self, exact: OptimizeResult) -> Array:
+        """exact f1 − trial f1 per trial, shape (N,) [model unit]."""
+        return exact.margin_after - self.f1
+
+    def summary(self, exact: OptimizeResult) -> dict[str, float]:
+        """Best / median / worst of f1, f2, f (best f1 and f are largest, best f2 smallest),
+        median solutions and seconds, median and worst gap to the exact f1."""
+        out: dict[str, float] = {}
+        for key, values, larger in (("f1", self.f1, True), ("f2", self.f2, False), ("f", self.f, True)):
+            out[f"{key}_best"] = float(values.max() if larger else values.min())
+            out[f"{key}_median"] = float(np.median(values))
+            out[f"{key}_worst"] = float(values.min() if larger else values.max())
+        gaps = self.gaps(exact)
+        out["gap_median"] = float(np.median(gaps))
+        out["gap_worst"] = float(gaps.max())
+        out["evaluations"] = float(np.median(self.evaluations))
+        out["seconds"] = float(np.median(self.seconds))
+        return out
+
+
+@dataclass
+class Comparison:
+    """Exact optimum and the seeded trials of every method on one measured part."""
+
+    problem: CorrectionProblem
+    exact: OptimizeResult
+    methods: list[MethodTrials]
+    seed: int
+    trials: int
+    part: str = ""
+    report: str = ""
+    unit: str = "mm"
+    skipped: dict[str, str] = field(default_factory=dict)
+
+    def table(self) -> list[dict[str, Any]]:
+        """One summary row per method (see :meth:`MethodTrials.summary`), exact first."""
+        e = self.exact
+        rows: list[dict[str, Any]] = [{
+            "optimizer": "exact", **{f"{k}_{s}": v for k, v in (("f1", e.margin_after), ("f2", e.norm),
+                                                                ("f", e.fitness))
+                                     for s in ("best", "median", "worst")},
+            "gap_median": 0.0, "gap_worst": 0.0, "evaluations": float(e.evaluations), "seconds": e.seconds,
+        }]
+        rows += [{"optimizer": m.optimizer, **m.summary(e)} for m in self.methods]
+        return rows
+
+    def to_json(self) -> dict[str, Any]:
+        """The ``compare --json`` object of ``../shared/spec/cli-json.md`` plus extra keys."""
+        d = 9
+        e = self.exact
+        results: list[dict[str, Any]] = []
+        for m in self.methods:
+            s = m.summary(e)
+            results.append({
+                "optimizer": m.optimizer,
+                "margins": [round(float(v), d) for v in m.f1],
+                "norms": [round(float(v), d) for v in m.f2],
+                "fitness": [round(float(v), d) for v in m.f],
+                "gaps": [round(float(v), d) for v in m.gaps(e)],
+                "seeds": m.seeds,
+                "evaluations": int(s["evaluations"]),
+                "evaluations_per_trial": [int(v) for v in m.evaluations],
+                "seconds": round(s["seconds"], 6),
+                "seconds_per_trial": [round(float(v), 6) for v in m.seconds],
+                "summary": {k: round(v, d) for k, v in s.items()},
+            })
+        return {
+            "part": self.part, "report": self.report, "unit": self.unit, "trials": self.trials, "seed": self.seed,
+            "margin_before": round(e.margin_before, d),
+            "exact_margin": round(e.margin_after, d), "exact_norm": round(e.norm, d),
+            "exact_fitness": round(e.fitness, d), "exact_status": e.status,
+            "exact_bound": None if e.bound is None else round(e.bound, d),
+            "exact_seconds": round(e.seconds, 6),
+            "results": results,
+            "skipped": dict(self.skipped),
+        }
+
+
+def _available(name: str) -> str | None:
+    """None when the optimiser's module imports, else the reason (a method still being written)."""
+    import importlib
+
+    if name not in OPTIMIZERS:
+        return f"unknown optimizer (known: {', '.join(OPTIMIZERS)})"
+    try:
+        importlib.import_module(OPTIMIZERS[name].split(":")[0])
+    except ModuleNotFoundError as exc:
+        return f"not available: {exc}"
+    return None
+
+
+def compare_problem(problem: CorrectionProblem, *, methods: Sequence[str] = DEFAULT_METHODS, trials: int = 12,
+                    seed: int = 0, params: Mapping[str, Mapping[str, Any]] | None = None,
+                    exact: OptimizeResult | None = None) -> Comparison:
+    """Solve ``problem`` exactly once and with ``trials`` seeded runs of each method.
+
+    Parameters
+    ----------
+    problem : CorrectionProblem
+    methods : sequence of str
+        Registered optimiser names; ones whose module is missing are listed in
+        ``Comparison.skipped`` instead of failing the comparison.
+    trials : int
+        Runs per method (the paper: 12).
+    seed : int
+        Root of the per-trial seeds (:func:`trial_seeds`).
+    params : mapping name → hyper-parameters, optional
+        Overrides of the paper's defaults, e.g. ``{"pso": {"n_solutions": 2000}}``.
+    exact : OptimizeResult, optional
+        A yardstick already solved for this problem.
+    """
+    if trials < 1:
+        raise ValueError("trials must be at least 1")
+    params = params or {}
+    if exact is None:
+        exact = get_optimizer("exact").solve(problem)
+    seeds = trial_seeds(seed, trials)
+    done: list[MethodTrials] = []
+    skipped: dict[str, str] = {}
+    for name in methods:
+        reason = _available(name)
+        if reason is not None:
+            skipped[name] = reason
+            continue
+        kw = dict(params.get(name, {}))
+        runs = [get_optimizer(name, seed=s, **kw).solve(problem) for s in seeds]
+        done.append(MethodTrials(optimizer=name, seeds=seeds, results=runs))
+    return Comparison(problem=problem, exact=exact, methods=done, seed=seed, trials=trials, skipped=skipped)
+
+
+def compare_report(model: ProcessModel | str | Path, report: str | Path, *, part: str | None = None,
+                   methods: Sequence[str] = DEFAULT_METHODS, trials: int = 12, seed: int = 0,
+                   format: str | None = None, unit: str | None = None, encoding: str | None = None,
+                   columns: str | None = None,
+                   stations: Sequence[str] | Mapping[str, str] | None = None) -> Comparison:
+    """Compare the methods on one part of a report (the first one unless ``part`` names it)."""
+    if not isinstance(model, ProcessModel):
+        model = load_model(model)
+    parts = load_parts(model, report, format=format, unit=unit, encoding=encoding, columns=columns,
+                       stations=stations)
+    if part is not None:
+        chosen = [p for p in parts if p.part == part]
+        if not chosen:
+            raise MatchError(f"no part {part!r} in the report (parts: {', '.join(p.part or '(none)' for p in parts)})",
+                             location=SourceLocation(str(report)))
+    else:
+        chosen = parts
+    measured = chosen[0]
+    problem = CorrectionProblem.from_part(model, measured)
+    result = compare_problem(problem, methods=methods, trials=trials, seed=seed)
+    result.part, result.report, result.unit = measured.part, measured.report or str(report), model.unit
+    return result
+
+
+def plot_comparison(comparison: Comparison, path: str | Path) -> None:
+    """Draw convergence (Figs. 12–15) and spread (Figs. 16–17) of a comparison to PNG or SVG."""
+    from setupfix.plots import comparison_figure, save_figure
+
+    e = comparison.exact
+    fig = comparison_figure(
+        {m.optimizer: m.histories for m in comparison.methods},
+        {m.optimizer: {"f1": m.f1, "f2": m.f2, "f": m.f} for m in comparison.methods},
+        exact=(e.margin_after, e.norm, e.fitness), unit=comparison.unit,
+        title=f"{comparison.report} part {comparison.part or '—'}: {comparison.trials} trials per method",
+    )
+    save_figure(fig, path)

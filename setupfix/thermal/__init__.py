@@ -1,0 +1,18 @@
+"""Thermal-drift models: Grey GM(1,N)/GMC(1,N), lumped-mass + Kalman fusion, MRA.
+
+Implements Abdulshahed, Longstaff & Fletcher (2017), *A cuckoo search optimisation-based
+Grey prediction model for thermal error compensation on CNC machine tools*, and Wang,
+Li, Cai & Wang (2017), *Thermal error modeling of the CNC machine tool based on data
+fusion method of Kalman filter*.
+
+Modules: :mod:`~setupfix.thermal.grey` (pure Grey functions), :mod:`~.calibrate`
+(CS, PSO, GA), :mod:`~.lumped` (lumped-mass model), :mod:`~.kalman` (scalar filter),
+:mod:`~.mra`, :mod:`~.metrics`, :mod:`~.models` (estimator classes),
+:mod:`~.simulator`, :mod:`~.data` (temperature logs), :mod:`~.persist` (JSON).
+"""
+
+from __future__ import annotations
+
+from setupfix.thermal.models import GreyModel, KalmanFusionModel, MRAModel, ThermalModel
+
+__all__ = ["GreyModel", "KalmanFusionModel", "MRAModel", "ThermalModel"]

@@ -1,0 +1,78 @@
+"""``setupfix thermal fit|predict|evaluate`` in-process on the bundled simulated sample."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+import setupfix.cli as cli
+
+SAMPLES = Path(__file__).resolve().parents[2] / "sample_reports" / "thermal"
+TRAIN = str(SAMPLES / "train_variable.csv")
+TEST = str(SAMPLES / "test_variable.csv")
+
+
+@pytest.fixture(autouse=True)
+def only_thermal(monkeypatch):
+    # Other sub-commands are written in parallel; test this one on its own.
+    monkeypatch.setattr(cli, "COMMAND_MODULES", ("setupfix.cli._thermal",))
+
+
+def run(capsys, *argv):
+    code = cli.main(list(argv))
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+@pytest.mark.parametrize("method", ["mra", "grey-ls", "kalman"])
+def test_evaluate_json_contract(capsys, method):
+    code, out, err = run(capsys, "thermal", "evaluate", "--method", method, "--train", TRAIN, "--test", TEST,
+                         "--target", "error_z", "--seed", "1", "--json")
+    assert code == 0, err
+    doc = json.loads(out)
+    assert {"method", "rmse", "max_residual", "efficiency", "n_test"} <= doc.keys()
+    assert doc["method"] == method and doc["n_test"] == 1439
+    assert doc["rmse"] < 0.006 and doc["efficiency"] > 0.95  # mm; the drift reaches 0.09 mm
+    assert doc["max_residual"] >= doc["rmse"]
+
+
+def test_fit_then_predict(capsys, tmp_path):
+    model = tmp_path / "kalman.json"
+    code, out, err = run(capsys, "thermal", "fit", "--method", "kalman", TRAIN, "--target", "error_z", "-o", str(model),
+                         "--seed", "0")
+    assert code == 0, err
+    assert "model written" in out
+    assert json.loads(model.read_text())["format"] == "setupfix-thermal-model"
+    csv_out = tmp_path / "pred.csv"
+    code, out, err = run(capsys, "thermal", "predict", "--model", str(model), TEST, "-o", str(csv_out), "--json")
+    assert code == 0, err
+    doc = json.loads(out)
+    assert doc["n"] == 1440 and doc["rmse"] < 0.006
+    lines = csv_out.read_text().splitlines()
+    assert lines[0] == "timestamp,predicted_error_z,error_z" and len(lines) == 1441
+    code, out, _ = run(capsys, "thermal", "predict", "--model", str(model), TEST, "--sensors-failed", "--json")
+    assert code == 0 and json.loads(out)["rmse"] < 0.015
+
+
+def test_bad_input_is_one_line_with_file_and_line(capsys, tmp_path):
+    bad = tmp_path / "log.csv"
+    text = (SAMPLES / "train_variable.csv").read_text().splitlines()
+    text[36] = text[36].replace(text[36].split(",")[1], "n/a", 1)
+    bad.write_text("\n".join(text) + "\n")
+    code, out, err = run(capsys, "thermal", "fit", "--method", "mra", str(bad), "--target", "error_z",
+                         "-o", str(tmp_path / "m.json"))
+    assert code == 1 and out == ""
+    assert err.count("\n") == 1 and "log.csv:37: non-numeric value 'n/a' in column 'spindle_motor'" in err
+    assert not (tmp_path / "m.json").exists()
+
+
+def test_missing_columns_and_usage(capsys, tmp_path):
+    code, _, err = run(capsys, "thermal", "evaluate", "--method", "mra", "--train", TRAIN, "--test", TEST,
+                       "--target", "nope")
+    assert code == 1 and "target column 'nope'" in err
+    code, _, err = run(capsys, "thermal", "fit", "--method", "magic", TRAIN, "--target", "error_z", "-o", "x.json")
+    assert code == 2
+    code, _, err = run(capsys, "thermal", "predict", "--model", str(tmp_path / "none.json"), TEST)
+    assert code == 1 and "none.json" in err
