@@ -21,10 +21,9 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
-from setupfix.errors import MatchError, SourceLocation
 from setupfix.model import ProcessModel, load_model
 from setupfix.optimize import OPTIMIZERS, CorrectionProblem, OptimizeResult, get_optimizer
-from setupfix.pipeline.correct import load_parts
+from setupfix.pipeline.correct import load_parts, select_parts
 
 __all__ = ["DEFAULT_METHODS", "MethodTrials", "Comparison", "trial_seeds", "compare_problem",
            "compare_report", "plot_comparison"]
@@ -216,14 +215,7 @@ def compare_report(model: ProcessModel | str | Path, report: str | Path, *, part
         model = load_model(model)
     parts = load_parts(model, report, format=format, unit=unit, encoding=encoding, columns=columns,
                        stations=stations)
-    if part is not None:
-        chosen = [p for p in parts if p.part == part]
-        if not chosen:
-            raise MatchError(f"no part {part!r} in the report (parts: {', '.join(p.part or '(none)' for p in parts)})",
-                             location=SourceLocation(str(report)))
-    else:
-        chosen = parts
-    measured = chosen[0]
+    measured = select_parts(parts, part, report)[0]
     problem = CorrectionProblem.from_part(model, measured)
     result = compare_problem(problem, methods=methods, trials=trials, seed=seed)
     result.part, result.report, result.unit = measured.part, measured.report or str(report), model.unit

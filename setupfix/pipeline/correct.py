@@ -22,7 +22,7 @@ from setupfix.model import PartMeasurement, ProcessModel, load_model, match_part
 from setupfix.offsets import OffsetRow, offset_rows
 from setupfix.optimize import CorrectionProblem, OptimizeResult, get_optimizer
 
-__all__ = ["PartCorrection", "assign_stations", "load_parts", "correct_part", "correct_report"]
+__all__ = ["PartCorrection", "assign_stations", "load_parts", "select_parts", "correct_part", "correct_report"]
 
 
 @dataclass
@@ -168,10 +168,21 @@ def correct_report(model: ProcessModel | str | Path, report: str | Path, *, opti
         model = load_model(model)
     parts = load_parts(model, report, format=format, unit=unit, encoding=encoding, columns=columns,
                        stations=stations)
-    if part is not None:
-        chosen = [p for p in parts if p.part == part]
-        if not chosen:
-            raise MatchError(f"no part {part!r} in the report (parts: {', '.join(p.part or '(none)' for p in parts)})",
-                             location=SourceLocation(str(report)))
-        parts = chosen
-    return [correct_part(model, p, optimizer=optimizer, seed=seed) for p in parts]
+    return [correct_part(model, p, optimizer=optimizer, seed=seed) for p in select_parts(parts, part, report)]
+
+
+def select_parts(parts: list[PartMeasurement], part: str | None, report: str | Path) -> list[PartMeasurement]:
+    """All parts, or only the one named ``part``.
+
+    Raises
+    ------
+    MatchError
+        If no part of the report has that name (the message lists the names).
+    """
+    if part is None:
+        return parts
+    chosen = [p for p in parts if p.part == part]
+    if not chosen:
+        raise MatchError(f"no part {part!r} in the report (parts: {', '.join(p.part or '(none)' for p in parts)})",
+                         location=SourceLocation(str(report)))
+    return chosen
