@@ -21,10 +21,11 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
-from math import gamma, pi, sin
 
 import numpy as np
 import numpy.typing as npt
+
+from setupfix.optimize._cs import levy_steps, mantegna_sigma  # one Mantegna implementation
 
 __all__ = ["SearchResult", "cuckoo_search", "particle_swarm", "genetic_algorithm", "mantegna_sigma"]
 
@@ -64,16 +65,6 @@ def _safe(values: Array) -> Array:
     # A diverging candidate (inf/nan) must lose every comparison, not poison argmin.
     values = np.asarray(values, dtype=float)
     return np.where(np.isfinite(values), values, np.inf)
-
-
-def mantegna_sigma(beta: float = 1.5) -> float:
-    """Scale σ_u of Mantegna's algorithm for Lévy-stable steps of index ``beta``.
-
-    σ_u = [Γ(1+β) sin(πβ/2) / (Γ((1+β)/2) β 2^((β−1)/2))]^(1/β); 0.6966 for β = 1.5.
-    """
-    num = gamma(1 + beta) * sin(pi * beta / 2)
-    den = gamma((1 + beta) / 2) * beta * 2 ** ((beta - 1) / 2)
-    return float((num / den) ** (1 / beta))
 
 
 def cuckoo_search(objective: Objective, lower: npt.ArrayLike, upper: npt.ArrayLike, *, n_nests: int = 25,
@@ -117,13 +108,10 @@ def cuckoo_search(objective: Objective, lower: npt.ArrayLike, upper: npt.ArrayLi
     evaluations = n_nests
     best = int(np.argmin(fit))
     history = [fit[best]]
-    sigma_u = mantegna_sigma(beta)
     for _ in range(n_iter):
         # Lévy flights around each nest, scaled by its distance to the best nest,
         # so the best nest itself does not move (the elitism of the method).
-        u = rng.normal(0.0, sigma_u, (n_nests, dim))
-        v = rng.normal(0.0, 1.0, (n_nests, dim))
-        step = u / np.abs(v) ** (1.0 / beta)
+        step = levy_steps((n_nests, dim), beta, rng)
         trial = nests + alpha * step * (nests - nests[best]) * rng.normal(size=(n_nests, dim))
         trial = np.clip(trial, lo, hi)
         f_trial = _safe(objective(trial))
