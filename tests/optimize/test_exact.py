@@ -114,3 +114,21 @@ def test_continuous_mode_is_the_lp_optimum():
     problem = random_problem(4)
     cont = get_optimizer("exact", grid=False).solve(problem)
     assert cont.margin_after == pytest.approx(cont.bound, abs=1e-9)
+
+
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+
+@settings(max_examples=25, deadline=None)
+@given(seed=st.integers(0, 10_000), n=st.integers(1, 6), m=st.integers(1, 10), steps=st.integers(1, 20))
+def test_no_grid_point_beats_the_exact_optimum(seed, n, m, steps):
+    problem = random_problem(seed, n=n, m=max(m, 1), limit_steps=steps)
+    result = get_optimizer("exact").solve(problem)
+    rng = np.random.default_rng(seed)
+    k = rng.integers(problem.kmin, problem.kmax + 1, size=(2000, n))
+    f1, _, _ = problem.evaluate(k * problem.resolution)
+    assert result.status == "optimal"
+    assert f1.max() <= result.margin_after + 1e-12
+    assert result.margin_after <= result.bound + 1e-12
+    assert np.all(np.abs(result.x) <= problem.ub + 1e-12)
