@@ -104,5 +104,24 @@ def find_format(path: str | Path, format: str | None = None) -> FormatSpec:
 
 
 def read(path: str | Path, *, format: str | None = None, **options: Any) -> pd.DataFrame:
-    """Read one report into the canonical measurement table (lengths in mm)."""
+    """Read one report into the canonical measurement table (lengths in mm).
+
+    Parameters
+    ----------
+    path : str or Path
+        The report.
+    format : str, optional
+        Registry name; chosen by content, then extension, when omitted.  A column
+        mapping (``columns=``) without a format means the ``table`` reader.
+    **options
+        ``unit``, ``encoding``, ``columns``: passed to the reader (unused ones ignored).
+
+    Raises
+    ------
+    ParseError
+        (or its :class:`UnknownFormatError`) naming the file and place.
+    """
+    if not format and options.get("columns") and "table" in _REGISTRY:
+        format = "table"
+    options = {k: v for k, v in options.items() if v is not None}
     return find_format(path, format).read(Path(path), **options)

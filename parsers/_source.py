@@ -2,13 +2,16 @@
 
 from __future__ import annotations
 
+import csv
+import io
 import math
+from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
 
 from setupfix.errors import ParseError, SourceLocation
 
-__all__ = ["Peek", "peek_file", "decode", "read_bytes", "read_text", "parse_number"]
+__all__ = ["Peek", "peek_file", "decode", "read_bytes", "read_text", "parse_number", "csv_records"]
 
 #: Bytes a sniffer sees: enough for any header we recognise, small enough to be cheap.
 PEEK_BYTES = 8192
@@ -55,8 +58,10 @@ def decode(data: bytes, path: str, encoding: str | None = None) -> str:
         pass
     try:
         text = data.decode("cp949")
-        # Hangul syllables present and no C1 controls: Korean text rather than Latin-1 noise.
-        if any("\uac00" <= ch <= "\ud7a3" for ch in text):
+        # Korean text rather than Western bytes that happen to pair up: most non-ASCII
+        # characters are Hangul syllables (a CP1252 "ä" + "n" decodes to one Hanja, not Hangul).
+        wide = [ch for ch in text if ord(ch) > 127]
+        if wide and sum("\uac00" <= ch <= "\ud7a3" for ch in wide) >= 0.5 * len(wide):
             return text
     except UnicodeDecodeError:
         pass
@@ -101,6 +106,27 @@ def parse_number(text: str) -> float:
     if not math.isfinite(value):
         raise ValueError(f"not a finite number: {text!r}")
     return value
+
+
+def csv_records(text: str, path: str, **fmtparams: object) -> Iterator[tuple[int, list[str]]]:
+    """Records of delimited text with the line each ends on (stdlib :mod:`csv`).
+
+    Raises
+    ------
+    ParseError
+        Where the csv module gives up (a NUL byte, a stray carriage return inside an
+        unquoted field, a runaway quote), with the line.
+    """
+    reader = csv.reader(io.StringIO(text, newline=""), **fmtparams)  # type: ignore[arg-type]
+    while True:
+        try:
+            record = next(reader)
+        except StopIteration:
+            return
+        except csv.Error as exc:
+            raise ParseError(f"unreadable line: {exc}", location=SourceLocation(path, line=reader.line_num + 1)) \
+                from None
+        yield reader.line_num, record
 
 
 def peek_file(path: Path) -> Peek:

@@ -8,12 +8,12 @@ contradicts ``actual − nominal`` is refused with the file and line.
 from __future__ import annotations
 
 import csv
-import io
 import math
 from pathlib import Path
 
 import pandas as pd
 
+from parsers._source import csv_records, decode, read_bytes
 from setupfix.errors import ParseError, SourceLocation
 from setupfix.model.measurements import CANONICAL_COLUMNS, LENGTH_COLUMNS
 from setupfix.units import LENGTH_UNITS, length_factor
@@ -49,8 +49,8 @@ def _float(text: str, where: SourceLocation, column: str) -> float:
     return value
 
 
-def finish_table(rows: list[dict[str, object]], path: str) -> pd.DataFrame:
-    """Build a canonical DataFrame from row dicts already in mm.
+def finish_table(rows: list[dict[str, object]] | dict[str, object], path: str) -> pd.DataFrame:
+    """Build a canonical DataFrame from row dicts (or a dict of columns) already in mm.
 
     Fills ``deviation``/``actual`` from each other, defaults ``unit`` to mm,
     ``report`` to the file name, and orders the canonical columns first.
@@ -65,7 +65,8 @@ def finish_table(rows: list[dict[str, object]], path: str) -> pd.DataFrame:
     return frame[list(CANONICAL_COLUMNS) + extra].reset_index(drop=True)
 
 
-def read_canonical(path: str | Path, *, text: str | None = None, unit: str | None = None) -> pd.DataFrame:
+def read_canonical(path: str | Path, *, text: str | None = None, unit: str | None = None,
+                   encoding: str | None = None) -> pd.DataFrame:
     """Read a canonical measurement CSV into the canonical table (lengths in mm).
 
     Parameters
@@ -76,6 +77,8 @@ def read_canonical(path: str | Path, *, text: str | None = None, unit: str | Non
         Already decoded content; read from ``path`` when omitted.
     unit : {"mm", "inch"}, optional
         Unit of rows that have no ``unit`` value (default mm).
+    encoding : str, optional
+        Read the file in this encoding instead of the UTF-8 the spec prescribes.
 
     Raises
     ------
@@ -84,16 +87,20 @@ def read_canonical(path: str | Path, *, text: str | None = None, unit: str | Non
         deviation that contradicts actual − nominal; names file and line.
     """
     name = str(path)
+    if text is None and encoding:
+        text = decode(read_bytes(path), name, encoding)
     if text is None:
         try:
             text = Path(path).read_bytes().decode("utf-8-sig")
         except OSError as exc:
             raise ParseError(f"cannot read: {exc.strerror}", location=SourceLocation(name)) from None
         except UnicodeDecodeError as exc:
-            raise ParseError(f"not UTF-8 text (byte {exc.start})", location=SourceLocation(name)) from None
-    reader = csv.reader(io.StringIO(text.lstrip("\ufeff")))
+            line = Path(path).read_bytes()[: exc.start].count(b"\n") + 1
+            raise ParseError("not UTF-8 text", location=SourceLocation(name, line=line),
+                             hint="give its encoding with --encoding") from None
+    records = csv_records(text.lstrip("\ufeff"), name)
     try:
-        header = [h.strip().lower() for h in next(reader)]
+        header = [h.strip().lower() for h in next(records)[1]]
     except StopIteration:
         raise ParseError("empty file", location=SourceLocation(name, line=1)) from None
     missing = [c for c in ("characteristic", "nominal") if c not in header]
@@ -102,8 +109,8 @@ def read_canonical(path: str | Path, *, text: str | None = None, unit: str | Non
     if missing:
         raise ParseError(f"missing required column(s): {', '.join(missing)}", location=SourceLocation(name, line=1))
     rows: list[dict[str, object]] = []
-    for record in reader:
-        where = SourceLocation(name, line=reader.line_num)
+    for line_num, record in records:
+        where = SourceLocation(name, line=line_num)
         if not any(cell.strip() for cell in record):
             continue
         if len(record) > len(header):
@@ -136,7 +143,7 @@ def read_canonical(path: str | Path, *, text: str | None = None, unit: str | Non
         lo, up = float(row.get("lower", math.nan)), float(row.get("upper", math.nan))  # type: ignore[arg-type]
         if not math.isnan(lo) and not math.isnan(up) and lo >= up:
             raise ParseError(f"lower limit {lo:g} is not below upper limit {up:g}", location=where)
-        row["source"] = f"{name}:{reader.line_num}"
+        row["source"] = f"{name}:{line_num}"
         rows.append(row)
     if not rows:
         raise ParseError("no measurement rows", location=SourceLocation(name))

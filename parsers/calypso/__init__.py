@@ -1,0 +1,17 @@
+"""Zeiss CALYPSO ``*_chr.txt`` table reader (registered as ``calypso``)."""
+
+from __future__ import annotations
+
+from parsers._registry import FormatSpec, register
+from parsers.calypso.reader import read_calypso, sniff_calypso
+
+__all__ = ["read_calypso", "sniff_calypso", "SPEC"]
+
+SPEC = register(FormatSpec(
+    name="calypso",
+    description="Zeiss CALYPSO characteristics table *_chr.txt (TAB separated, END line)",
+    extensions=(),
+    sniff=lambda peek: sniff_calypso(peek.text),
+    read=lambda path, unit=None, encoding=None, **_: read_calypso(path, unit=unit, encoding=encoding),
+    priority=40,
+))

@@ -1,0 +1,17 @@
+"""DMIS output (``.dmo``) reader (registered as ``dmis``)."""
+
+from __future__ import annotations
+
+from parsers._registry import FormatSpec, register
+from parsers.dmis.reader import read_dmis, sniff_dmis
+
+__all__ = ["read_dmis", "sniff_dmis", "SPEC"]
+
+SPEC = register(FormatSpec(
+    name="dmis",
+    description="DMIS output .dmo (F/T nominals, FA/TA results; one part per file)",
+    extensions=(".dmo", ".dmi", ".dms"),
+    sniff=lambda peek: sniff_dmis(peek.text),
+    read=lambda path, unit=None, encoding=None, **_: read_dmis(path, unit=unit, encoding=encoding),
+    priority=50,
+))

@@ -1,0 +1,269 @@
+"""DMIS output (``.dmo``) → the canonical measurement table.
+
+A DMIS output file lists nominal features and tolerances (``F(x)=FEAT/…``,
+``T(x_X)=TOL/CORTOL,XAXIS,lo,hi``) and, later, the actual features and tolerance
+results (``FA(x)=FEAT/…``, ``TA(x_X)=TOL/CORTOL,XAXIS,dev,INTOL``).  One row is made
+per ``TA`` result.  The deviation is recomputed from ``FA`` − ``F`` where both give the
+value and cross-checked against the ``TA`` number: some writers put the actual there
+instead of the deviation, which is recognised; any other contradiction is an error.
+
+A ``TA`` label need not match its ``T`` label (``TA(SP_00_DN)`` for
+``T(SP_00_PROFP)``, ``T(Rectángulo_12_HEI)`` vs ``…_HEIGHT`` in the real samples), so
+a result without a same-named tolerance takes the one tolerance of the same type and
+axis defined for the same feature.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+import warnings
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import pandas as pd
+
+from parsers._source import read_text
+from parsers.canonical import finish_table
+from parsers.dmis.statements import Statement, parse_statement, split_statements
+from setupfix.errors import ParseError, ParseWarning, SourceLocation
+from setupfix.units import LENGTH_UNITS, length_factor
+
+__all__ = ["read_dmis", "sniff_dmis"]
+
+_AXES = {"XAXIS": 0, "YAXIS": 1, "ZAXIS": 2}
+_DATE = re.compile(r"^DATE\s*=\s*(\d{4})/(\d{1,2})/(\d{1,2})\s*$", re.IGNORECASE)
+_TIME = re.compile(r"^TIME\s*=\s*(\d{1,2}):(\d{2}):(\d{2})\s*$", re.IGNORECASE)
+_STATUS = {"INTOL", "OUTOL", "OUTTOL"}
+#: Tolerances whose result is a signed deviation from a profile (nominal 0).
+_PROFILE = {"PROFP", "PROFS", "PROFL"}
+#: Tolerances whose result is a zone size (nominal 0, upper limit = the zone).
+_ZONE = {"POS", "FLAT", "PERP", "PARLEL", "ANGLR", "CIRLTY", "CYLCTY", "STRGHT", "CONCEN", "COAXL",
+         "RNDOUT", "TRNOUT", "SYM"}
+#: Tolerances whose result is the measured size itself.
+_SIZE = {"DIAM", "RAD"}
+
+
+def sniff_dmis(text: str) -> bool:
+    """True when the text starts like a DMIS program or output. Never raises."""
+    head = text.lstrip("\ufeff").lstrip()[:2048].upper()
+    return head.startswith(("DMISMN/", "DMISMD/")) or ("\nFA(" in head and "=FEAT/" in head)
+
+
+@dataclass
+class _Feature:
+    line: int
+    kind: str
+    values: list[str]
+    tolerances: list[str] = field(default_factory=list)
+
+
+def _numbers_after_cart(words: tuple[str, ...]) -> list[str]:
+    upper = [w.upper() for w in words]
+    return list(words[upper.index("CART") + 1:]) if "CART" in upper else []
+
+
+def _num(text: str, where: SourceLocation, allow_empty: bool = True) -> float:
+    text = text.strip()
+    if not text and allow_empty:
+        return math.nan
+    try:
+        value = float(text)
+    except ValueError:
+        raise ParseError(f"expected a number, found {text[:30]!r}", location=where) from None
+    if not math.isfinite(value):
+        raise ParseError(f"expected a finite number, found {text[:30]!r}", location=where)
+    return value
+
+
+def _geometry(feature: _Feature | None, axis: str, where: SourceLocation) -> float:
+    """Coordinate or size of a feature named by a CORTOL axis word; NaN when unknown."""
+    if feature is None:
+        return math.nan
+    nums = feature.values
+    index = _AXES.get(axis)
+    if index is None and axis in ("DIAMETER", "DIAM"):
+        index = {"SPHERE": 3, "CIRCLE": 6, "CYLNDR": 6, "CYLINDER": 6, "ARC": 6}.get(feature.kind)
+    if index is None or index >= len(nums):
+        return math.nan
+    return _num(nums[index], SourceLocation(where.path, line=feature.line))
+
+
+def read_dmis(path: str | Path, *, unit: str | None = None, encoding: str | None = None) -> pd.DataFrame:
+    """Read a DMIS output file (``.dmo``) into the canonical table.
+
+    Parameters
+    ----------
+    path : str or Path
+        The DMIS output file.
+    unit : {"mm", "inch"}, optional
+        Unit when the file has no ``UNITS/`` statement (default mm, with a warning).
+    encoding : str, optional
+        Text encoding; sniffed when omitted.
+
+    Raises
+    ------
+    ParseError
+        On a malformed number, a ``TA`` value that contradicts ``FA`` − ``F``, or a file
+        without tolerance results; names file and line.
+    """
+    name = str(path)
+    statements = [parse_statement(n, s) for n, s in split_statements(read_text(path, encoding))]
+    factor: float | None = None
+    nominal: dict[str, _Feature] = {}
+    actual: dict[str, _Feature] = {}
+    tols: dict[str, Statement] = {}
+    results: list[tuple[Statement, str, str]] = []
+    current_f = current_fa = ""
+    part = date = time = datum = ""
+    for st in statements:
+        where = SourceLocation(name, line=st.line)
+        if st.kind == "D" or (st.kind == "RECALL" and st.words and st.words[0].upper().startswith("D(")):
+            # Results are in the active datum system; in a multi-station fixture each
+            # station has its own (its own work offset), so its label names the station.
+            datum = st.label if st.kind == "D" else st.words[0][2:].rstrip(")").strip()
+        elif st.kind in ("PARTSN", "PARTID") and st.words:
+            if st.kind == "PARTSN" or not part:
+                part = st.words[0].strip().strip("'")
+        elif _DATE.match(st.text):
+            date = "{:04d}-{:02d}-{:02d}".format(*map(int, _DATE.match(st.text).groups()))  # type: ignore[union-attr]
+        elif _TIME.match(st.text):
+            time = "{:02d}:{:02d}:{:02d}".format(*map(int, _TIME.match(st.text).groups()))  # type: ignore[union-attr]
+        elif st.kind == "UNITS" and st.words:
+            word = st.words[0].strip().lower()
+            if word not in LENGTH_UNITS:
+                raise ParseError(f"unknown length unit {st.words[0]!r} in UNITS", location=where)
+            factor = length_factor(word, "mm")
+        elif st.kind == "OUTPUT":
+            first = st.words[0] if st.words else ""
+            label = first.partition("(")[2].rstrip(")") if first.upper().startswith(("F(", "FA(")) else ""
+            if first.upper().startswith("FA("):
+                current_fa = label
+            elif first.upper().startswith("F("):
+                current_f = label
+        elif st.major == "FEAT" and st.kind in ("F", "FA"):
+            kind = st.words[0].upper() if st.words else ""
+            feature = _Feature(st.line, kind, _numbers_after_cart(st.words))
+            if st.kind == "F":
+                nominal[st.label], current_f = feature, st.label
+            else:
+                actual[st.label], current_fa = feature, st.label
+        elif st.major == "TOL" and st.kind == "T":
+            tols[st.label] = st
+            if current_f in nominal:
+                nominal[current_f].tolerances.append(st.label)
+        elif st.major == "TOL" and st.kind == "TA":
+            results.append((st, current_fa, datum))
+    if not results:
+        raise ParseError("no tolerance results (TA statements): a DMIS program or an output without results",
+                         location=SourceLocation(name))
+    if factor is None:
+        factor = length_factor(unit or "mm", "mm")
+        if unit is None:
+            warnings.warn(f"{name}: no UNITS statement, lengths read as mm", ParseWarning, stacklevel=2)
+    tolerance = 0.0011 if factor == 1.0 else 0.00011
+    rows: list[dict[str, object]] = []
+    skipped: list[str] = []
+    for st, feat, station in results:
+        row = _result_row(st, feat, nominal, actual, tols, name, tolerance)
+        if row is None:
+            skipped.append(st.label)
+            continue
+        for col in ("nominal", "actual", "lower", "upper", "x", "y", "z"):
+            row[col] = float(row[col]) * factor  # type: ignore[arg-type]
+        row["part"], row["station"] = part, station
+        row["timestamp"] = f"{date}T{time}" if date and time else date
+        rows.append(row)
+    if skipped:
+        shown = ", ".join(skipped[:5]) + (", …" if len(skipped) > 5 else "")
+        warnings.warn(f"{name}: skipped {len(skipped)} result(s) whose nominal the file does not give: {shown}",
+                      ParseWarning, stacklevel=2)
+    if not rows:
+        raise ParseError("no tolerance result with a usable nominal", location=SourceLocation(name))
+    frame = finish_table(rows, name)
+    frame["deviation"] = frame["actual"] - frame["nominal"]
+    return frame
+
+
+def _matching_tolerance(st: Statement, feat: str, nominal: dict[str, _Feature], tols: dict[str, Statement]
+                        ) -> Statement | None:
+    if st.label in tols:
+        return tols[st.label]
+    if feat not in nominal:
+        return None
+    key = tuple(w.upper() for w in st.words[:2]) if st.words and st.words[0].upper() == "CORTOL" else \
+        tuple(w.upper() for w in st.words[:1])
+    same = [tols[t] for t in nominal[feat].tolerances
+            if t in tols and tuple(w.upper() for w in tols[t].words[:len(key)]) == key]
+    return same[0] if len(same) == 1 else None
+
+
+def _result_row(st: Statement, feat: str, nominal: dict[str, _Feature], actual: dict[str, _Feature],
+                tols: dict[str, Statement], name: str, tolerance: float) -> dict[str, object] | None:
+    where = SourceLocation(name, line=st.line)
+    words = [w.strip() for w in st.words]
+    kind = words[0].upper() if words else ""
+    status = next((w.upper() for w in words if w.upper() in _STATUS), "")  # before MMC, DAT(A), … in POS
+    values = [w for w in words[1:] if w and w.upper() not in _STATUS]
+    tol = _matching_tolerance(st, feat, nominal, tols)
+    f_nom, f_act = nominal.get(feat), actual.get(feat)
+    lower = upper = math.nan
+    if kind == "CORTOL":
+        if len(values) < 2:
+            raise ParseError("CORTOL result needs an axis and a deviation", location=where)
+        axis, reported = values[0].upper(), _num(values[1], where, allow_empty=False)
+        if tol is not None and len(tol.words) >= 4:
+            tw = SourceLocation(name, line=tol.line)
+            lower, upper = _num(tol.words[2], tw), _num(tol.words[3], tw)
+        nom, act = _geometry(f_nom, axis, where), _geometry(f_act, axis, where)
+        if math.isnan(nom) and math.isnan(act):
+            return None
+        if math.isnan(nom):
+            nom = act - reported
+        elif math.isnan(act):
+            act = nom + reported
+        elif abs((act - nom) - reported) > tolerance:
+            if abs(act - reported) > tolerance:  # neither the deviation nor (another writer's) actual
+                raise ParseError(f"{st.label}: result {reported:g} contradicts FA - F = {act - nom:g}",
+                                 location=where)
+    elif kind in _PROFILE or kind in _ZONE:
+        numeric = [v for v in values if _is_number(v)]
+        if not numeric:
+            raise ParseError(f"{kind} result without a value", location=where)
+        nom, act = 0.0, _num(numeric[0], where)
+        limits = [_num(v, SourceLocation(name, line=tol.line)) for v in tol.words[1:] if _is_number(v)] \
+            if tol is not None else []
+        if kind in _PROFILE and len(limits) >= 2:
+            lower, upper = limits[0], limits[1]
+        elif kind in _PROFILE and len(limits) == 1:
+            lower, upper = -limits[0] / 2, limits[0] / 2
+        elif limits:
+            upper = abs(limits[0])
+    elif kind in _SIZE:
+        numeric = [v for v in values if _is_number(v)]
+        nom = _geometry(f_nom, "DIAMETER", where) if kind == "DIAM" else math.nan
+        if not numeric or math.isnan(nom):
+            return None
+        act = _num(numeric[0], where)
+        limits = [_num(v, SourceLocation(name, line=tol.line)) for v in tol.words[1:] if _is_number(v)] \
+            if tol is not None else []
+        if len(limits) >= 2:
+            lower, upper = limits[0], limits[1]
+    else:
+        return None
+    if not math.isnan(lower) and not math.isnan(upper) and lower > upper:
+        raise ParseError(f"lower limit {lower:g} is above upper limit {upper:g}", location=where)
+    x = y = z = math.nan
+    if f_nom is not None and len(f_nom.values) >= 3:
+        loc = SourceLocation(name, line=f_nom.line)
+        x, y, z = (_num(v, loc) for v in f_nom.values[:3])
+    return {"characteristic": st.label, "nominal": nom, "actual": act, "lower": lower, "upper": upper,
+            "x": x, "y": y, "z": z, "status": status, "source": f"{name}:{st.line}"}
+
+
+def _is_number(text: str) -> bool:
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True

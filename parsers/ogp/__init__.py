@@ -1,0 +1,25 @@
+"""OGP SmartScope / Measure-X reader (step report, RTF-wrapped step report, run table); format ``ogp``."""
+
+from __future__ import annotations
+
+from parsers._registry import FormatSpec, register
+from parsers._source import Peek
+from parsers.ogp.reports import read_ogp, sniff_ogp
+from parsers.ogp.rtf import is_rtf, rtf_lines
+
+__all__ = ["read_ogp", "sniff_ogp"]
+
+
+def _sniff(peek: Peek) -> bool:
+    text = "\n".join(rtf_lines(peek.text)) if is_rtf(peek.text) else peek.text
+    return sniff_ogp(text)
+
+
+register(FormatSpec(
+    name="ogp",
+    description="OGP SmartScope / Measure-X step report (also RTF-wrapped) or run table",
+    extensions=(".rtf",),
+    sniff=_sniff,
+    read=read_ogp,
+    priority=50,
+))

@@ -1,0 +1,17 @@
+"""Q-DAS AQDEF reader (``.dfq``, ``.dfd`` + ``.dfx``); registers format ``qdas``."""
+
+from __future__ import annotations
+
+from parsers._registry import FormatSpec, register
+from parsers.qdas.aqdef import read_aqdef, sniff_aqdef
+
+__all__ = ["read_aqdef", "sniff_aqdef"]
+
+register(FormatSpec(
+    name="qdas",
+    description="Q-DAS AQDEF transfer file (.dfq, or .dfd + .dfx pair)",
+    extensions=(".dfq", ".dfd", ".dfx"),
+    sniff=lambda peek: sniff_aqdef(peek.text, peek.suffix),
+    read=read_aqdef,
+    priority=50,
+))

@@ -1,0 +1,258 @@
+"""Row building shared by the readers of issue 3 (Q-DAS, PC-DMIS, QVPAK, OGP, Korean, PiWeb).
+
+It lives in the Q-DAS package only because each reader of that issue owns its own
+subpackage; the helpers are format-neutral.  They fix the rules every one of these
+readers follows, so the six behave alike:
+
+* numbers may carry a decimal comma, an explicit ``+``, zero padding or a bare
+  leading dot (``+00020.262``, ``44,158745``, ``.1000``);
+* the deviation is always recomputed as actual − nominal; a stated deviation is
+  only cross-checked (a contradiction beyond rounding is a :class:`ParseError`);
+* a characteristic whose value is not a length (an angle, a count, an attribute) is
+  skipped, and every skipped line is named in one :class:`ParseWarning` per reason;
+* a row without a nominal cannot yield a deviation and is skipped the same way; a
+  file left with no usable row is refused with the reason.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+import warnings
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import pandas as pd
+
+from parsers._source import decode
+from parsers.canonical import DEVIATION_TOLERANCE_MM, finish_table
+from setupfix.errors import ParseError, ParseWarning, SourceLocation
+from setupfix.units import LENGTH_UNITS
+
+__all__ = [
+    "MAX_REPORT_BYTES",
+    "SkipLog",
+    "read_report_text",
+    "parse_number",
+    "try_number",
+    "unit_or_none",
+    "unit_factor",
+    "checked_deviation",
+    "text_columns",
+    "split_columns",
+    "finish_rows",
+    "warn_assumed_mm",
+]
+
+#: Largest report accepted [bytes]; a CMM text report is kilobytes, a JSON export megabytes.
+MAX_REPORT_BYTES = 256 * 1024 * 1024
+
+_NUMBER = re.compile(r"^[+-]?(?:\d+(?:[.,]\d*)?|[.,]\d+)(?:[eE][+-]?\d+)?$")
+
+
+def read_report_text(path: str | Path, encoding: str | None = None) -> str:
+    """Read and decode a report (encoding sniffed unless given).
+
+    Raises
+    ------
+    ParseError
+        If the file cannot be read, is too large, or does not fit ``encoding``.
+    """
+    name = str(path)
+    try:
+        with open(path, "rb") as fh:
+            data = fh.read(MAX_REPORT_BYTES + 1)
+    except OSError as exc:
+        raise ParseError(f"cannot read: {exc.strerror}", location=SourceLocation(name)) from None
+    if len(data) > MAX_REPORT_BYTES:
+        raise ParseError(f"larger than {MAX_REPORT_BYTES} bytes", location=SourceLocation(name))
+    return decode(data, name, encoding)
+
+
+def try_number(text: str) -> float | None:
+    """The number ``text`` spells (decimal point or comma), else None. Never raises."""
+    try:
+        value = float(text)
+    except ValueError:
+        text = text.strip()
+        if not _NUMBER.match(text):
+            return None
+        value = float(text.replace(",", "."))
+    else:
+        # float() also takes "nan", "inf" and "1_000", which no report means as numbers.
+        if "_" in text:
+            return None
+    return value if math.isfinite(value) else None
+
+
+def parse_number(text: str, where: SourceLocation, what: str) -> float:
+    """Parse a number in report notation, naming ``what`` and the place when it is not one.
+
+    Raises
+    ------
+    ParseError
+        If ``text`` is not a finite number.
+    """
+    value = try_number(text)
+    if value is None:
+        raise ParseError(f"{what}: expected a number, found {text.strip()!r}", location=where)
+    return value
+
+
+def unit_or_none(text: str) -> str | None:
+    """``"mm"``/``"inch"`` for a length-unit spelling, ``"cm"`` for centimetres, else None."""
+    key = text.strip().lower()
+    if key == "cm":
+        return "cm"
+    return LENGTH_UNITS.get(key)
+
+
+def unit_factor(unit: str) -> float:
+    """Millimetres per ``unit`` (``"mm"``, ``"inch"`` or ``"cm"``)."""
+    return {"mm": 1.0, "inch": 25.4, "cm": 10.0}[unit]
+
+
+def checked_deviation(
+    nominal: float, actual: float, stated: float | None, where: SourceLocation, *, magnitude_ok: bool = False
+) -> float | None:
+    """Return actual − nominal after checking the report's own deviation against it.
+
+    Parameters
+    ----------
+    nominal, actual : float
+        In mm.
+    stated : float or None
+        The report's deviation in mm, if it gives one.
+    where : SourceLocation
+        The line, for the error.
+    magnitude_ok : bool
+        Accept a stated deviation equal to ``|actual| − |nominal|``: OGP and the Korean
+        layout compare magnitudes of coordinates (``OGP_L123_fixture_sho_multirun.txt``
+        line 31: Y −113.895 → −113.903 reported as +0.009).
+
+    Returns
+    -------
+    float or None
+        The deviation, or None when actual and nominal have opposite signs and the
+        report compared magnitudes: the coordinate deviation is then unknown.
+
+    Raises
+    ------
+    ParseError
+        If the stated deviation contradicts the values beyond rounding.
+    """
+    deviation = actual - nominal
+    if stated is None or abs(stated - deviation) <= DEVIATION_TOLERANCE_MM:
+        return deviation
+    if magnitude_ok and abs(stated - (abs(actual) - abs(nominal))) <= DEVIATION_TOLERANCE_MM:
+        return None if actual * nominal < 0 else deviation
+    raise ParseError(
+        f"stated deviation {stated:g} mm contradicts actual - nominal = {deviation:g} mm", location=where
+    )
+
+
+@dataclass
+class SkipLog:
+    """Lines a reader left out, grouped by reason; reported as one warning per reason."""
+
+    path: str
+    reasons: dict[str, list[int | str]] = field(default_factory=dict)
+
+    def add(self, reason: str, line: int | str) -> None:
+        """Record that ``line`` (a number, or ``file:line`` in another file) was skipped for ``reason``."""
+        lines = self.reasons.setdefault(reason, [])
+        if not lines or lines[-1] != line:
+            lines.append(line)
+
+    @property
+    def count(self) -> int:
+        return sum(len(lines) for lines in self.reasons.values())
+
+    def summary(self) -> str:
+        """One phrase per reason with its count and first lines."""
+        parts = []
+        for reason, lines in self.reasons.items():
+            shown = ", ".join(str(n) for n in lines[:8]) + (", …" if len(lines) > 8 else "")
+            parts.append(f"{len(lines)} {reason} (line {shown})")
+        return "; ".join(parts)
+
+    def warn(self) -> None:
+        """Issue one :class:`ParseWarning` per reason, naming the lines."""
+        for reason, lines in self.reasons.items():
+            shown = ", ".join(str(n) for n in lines[:20]) + (f", … ({len(lines)} in all)" if len(lines) > 20 else "")
+            warnings.warn(f"{self.path}: skipped {len(lines)} {reason}: line {shown}", ParseWarning, stacklevel=3)
+
+
+def text_columns(header: str, names: dict[str, str]) -> list[tuple[str, int, int]]:
+    """Column spans of a fixed-width table from its heading line.
+
+    Parameters
+    ----------
+    header : str
+        The heading line.
+    names : dict
+        Heading word (upper case) → canonical column key; other words are ignored.
+
+    Returns
+    -------
+    list of (key, start, end)
+        One span per recognised heading word, in order.
+    """
+    spans = []
+    for match in re.finditer(r"\S+", header):
+        key = names.get(match.group().upper())
+        if key:
+            spans.append((key, match.start(), match.end()))
+    return spans
+
+
+def split_columns(line: str, spans: list[tuple[str, int, int]]) -> dict[str, str]:
+    """Assign each word of ``line`` to the heading column it lies under.
+
+    A word belongs to the column whose heading overlaps it; failing that, to the
+    column whose heading ends nearest to the word's end (values are right-aligned
+    under their headings in the vendor layouts seen).  Two words in one column are
+    joined by a space.
+    """
+    cells: dict[str, str] = {}
+    for match in re.finditer(r"\S+", line):
+        start, end = match.span()
+        best = min(spans, key=lambda s: (0 if s[1] < end and start < s[2] else 1, abs(s[2] - end)))
+        cells[best[0]] = (cells[best[0]] + " " + match.group()) if best[0] in cells else match.group()
+    return cells
+
+
+def warn_assumed_mm(path: str, first_line: int | str) -> None:
+    """Warn once that a report states no unit and its lengths were taken as mm."""
+    warnings.warn(f"{path}: no length unit stated (first such row at line {first_line}); values taken as mm "
+                  "(pass unit= to override)", ParseWarning, stacklevel=3)
+
+
+def finish_rows(rows: list[dict[str, object]], path: str, skipped: SkipLog, *, what: str) -> pd.DataFrame:
+    """Warn about skipped lines and build the canonical table, or refuse an empty result.
+
+    Parameters
+    ----------
+    rows : list of dict
+        Canonical rows, lengths in mm.
+    path : str
+        The report.
+    skipped : SkipLog
+        What was left out and why.
+    what : str
+        Name of the format, for the refusal message.
+
+    Raises
+    ------
+    ParseError
+        If no row is left: the message says what was skipped.
+    """
+    if not rows:
+        reason = skipped.summary() or "no characteristic found"
+        raise ParseError(
+            f"{what} report holds no usable length measurement: {reason}",
+            location=SourceLocation(path),
+            hint="setupfix needs nominal and actual of length characteristics",
+        )
+    skipped.warn()
+    return finish_table(rows, path)

@@ -1,0 +1,17 @@
+"""QIF 3.x / 2.x results reader (registered as ``qif``)."""
+
+from __future__ import annotations
+
+from parsers._registry import FormatSpec, register
+from parsers.qif.reader import read_qif, sniff_qif
+
+__all__ = ["read_qif", "sniff_qif", "SPEC"]
+
+SPEC = register(FormatSpec(
+    name="qif",
+    description="QIF 3.x / 2.x measurement results (XML; several parts per file)",
+    extensions=(".qif",),
+    sniff=lambda peek: sniff_qif(peek.text),
+    read=lambda path, unit=None, encoding=None, **_: read_qif(path, unit=unit, encoding=encoding),
+    priority=50,
+))

@@ -1,0 +1,121 @@
+"""QIF id lookup, within one document and across documents.
+
+Results may name a characteristic item of another QIF document: the
+``CharacteristicItemId`` then carries ``xId`` (the id in the other document) and its
+text is the id of an ``ExternalQIFReferences/ExternalQIFDocument`` (QPId + URI).
+The qif-community "exploded" samples (``QIF3_Exploded_Results1.QIF`` →
+``./Exploded_Plan.QIF``) show that the URI need not match the file's current name,
+so a plan beside the results is found by URI first, then by its QPId.  Only local
+files beside the results are ever opened.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+from lxml import etree
+
+from parsers._source import read_bytes
+from parsers.qif._xml import parse_xml
+from setupfix.errors import ParseError, SourceLocation
+
+__all__ = ["IdIndex", "build_index", "resolve_external"]
+
+#: Bytes of a sibling file searched for the referenced QPId (it is near the top).
+_QPID_PEEK = 4096
+
+
+@dataclass(frozen=True)
+class IdIndex:
+    """Elements of one QIF document by their ``id`` attribute."""
+
+    local: dict[str, etree._Element]
+
+
+#: Bulky containers of measured values: nothing in them is the target of an id reference
+#: the reader follows, so they are left out of the index (half the elements of a
+#: 20-part results file).
+_NOT_INDEXED = frozenset({"MeasurementResultsSet", "MeasuredFeatures", "MeasuredCharacteristics"})
+
+
+def build_index(root: etree._Element) -> IdIndex:
+    """Index the elements carrying an ``id`` (the first one wins on duplicates)."""
+    local: dict[str, etree._Element] = {}
+    stack = [root]
+    while stack:
+        element = stack.pop()
+        for child in element:
+            if not isinstance(child.tag, str):
+                continue
+            name = child.tag.rpartition("}")[2]
+            if name in _NOT_INDEXED and name != "MeasurementResultsSet":
+                continue
+            if name == "MeasurementResultsSet":
+                # Only MeasurementResults themselves (ids of parts) and their components.
+                stack.extend(child)
+                continue
+            ident = child.get("id")
+            if ident is not None:
+                local.setdefault(ident.strip(), child)
+            stack.append(child)
+    return IdIndex(local)
+
+
+def _qpid(root: etree._Element) -> str:
+    ns = etree.QName(root).namespace or ""
+    return (root.findtext(f"{{{ns}}}QPId") or "").strip().lower()
+
+
+def resolve_external(root: etree._Element, ns: str, path: str, doc_id: str, where: SourceLocation
+                     ) -> tuple[str, etree._Element]:
+    """Find and parse the external QIF document ``doc_id`` of ``root``.
+
+    Returns
+    -------
+    (path, root) of the external document.
+
+    Raises
+    ------
+    ParseError
+        If the reference is undeclared, not a local file, or no file beside ``path``
+        holds the referenced document.
+    """
+    declared = None
+    for ext in root.iterfind(f"{{{ns}}}ExternalQIFReferences/{{{ns}}}ExternalQIFDocument"):
+        if (ext.get("id") or "").strip() == doc_id:
+            declared = ext
+            break
+    if declared is None:
+        raise ParseError(f"refers to external QIF document {doc_id}, which ExternalQIFReferences does not declare",
+                         location=where)
+    uri = (declared.findtext(f"{{{ns}}}URI") or "").strip()
+    qpid = (declared.findtext(f"{{{ns}}}QPId") or "").strip().lower()
+    if "://" in uri and not uri.lower().startswith("file://"):
+        raise ParseError(f"external plan {uri!r} is not a local file; setupfix does not fetch it", location=where,
+                         hint="download the plan and put it beside the results")
+    folder = Path(path).parent
+    candidates: list[Path] = []
+    if uri:
+        candidates.append(folder / uri.removeprefix("file://").replace("\\", "/"))
+    try:
+        siblings = sorted(p for p in folder.iterdir() if p.suffix.lower() == ".qif" and p.name != Path(path).name)
+    except OSError:
+        siblings = []
+    candidates.extend(siblings)
+    for candidate in candidates:
+        try:
+            if not candidate.is_file():
+                continue
+            if qpid and candidate in siblings:
+                with open(candidate, "rb") as fh:
+                    if qpid.encode() not in fh.read(_QPID_PEEK).lower():
+                        continue
+        except OSError:
+            continue
+        plan = parse_xml(read_bytes(candidate), str(candidate))
+        if not qpid or _qpid(plan) == qpid:
+            return str(candidate), plan
+    raise ParseError(
+        f"results refer to characteristics in the external plan '{uri or qpid}', which is not beside the file",
+        location=where, hint="put the QIF plan in the same folder as the results")

@@ -1,0 +1,42 @@
+"""``setupfix parse``: reports in any supported format → the canonical measurement CSV."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+from setupfix.cli.exit_codes import ERROR, OK, PARTIAL
+from setupfix.pipeline.parse import parse_reports, write_canonical_csv
+
+
+def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
+    p = sub.add_parser("parse", help="read CMM reports into the canonical measurement CSV",
+                       description="Read CMM reports (QIF, DMIS, CALYPSO, shop tables, …) and write one canonical "
+                                   "measurement table: lengths in mm, deviation = actual - nominal, limits as "
+                                   "signed deviations. A bad file is named on stderr; the others are still written.")
+    p.add_argument("files", nargs="+", metavar="FILE", help="report files")
+    p.add_argument("--out", required=True, metavar="CSV", help="output CSV ('-': stdout)")
+    p.add_argument("--format", default=None, metavar="NAME", help="report format (default: sniffed; see 'formats')")
+    p.add_argument("--unit", default=None, choices=("mm", "inch"), help="unit of values the report does not label")
+    p.add_argument("--encoding", default=None, metavar="ENC", help="text encoding (default: sniffed)")
+    p.add_argument("--columns", default=None, metavar="MAP",
+                   help="column mapping for shop tables (actual=Meas,nominal=Nom,...) or a mapping file")
+    p.set_defaults(run=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    outcome = parse_reports(args.files, format=args.format, unit=args.unit, encoding=args.encoding,
+                            columns=args.columns)
+    for report in outcome.reports:
+        for note in report.warnings:
+            print(f"warning: {note}", file=sys.stderr)
+    for failure in outcome.failures:
+        print(f"error: {failure}", file=sys.stderr)
+    if not outcome.reports:
+        return ERROR
+    table = outcome.table
+    write_canonical_csv(table, args.out)
+    if args.out != "-":
+        print(f"{len(table)} rows from {len(outcome.reports)} of {len(args.files)} file(s) → {args.out}",
+              file=sys.stderr)
+    return PARTIAL if outcome.failures else OK

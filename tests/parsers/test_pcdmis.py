@@ -1,0 +1,124 @@
+"""PC-DMIS text report and CSV readers on the constructed fixtures (sample_reports/pcdmis/README.md)."""
+
+from __future__ import annotations
+
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+
+import parsers
+from parsers.pcdmis import read_pcdmis_csv, read_pcdmis_text
+from setupfix.errors import ParseError, ParseWarning
+
+SAMPLES = Path(__file__).resolve().parents[2] / "sample_reports" / "pcdmis"
+GOLDEN = Path(__file__).resolve().parent / "golden"
+NUMERIC = ["nominal", "actual", "deviation", "lower", "upper", "x", "y", "z"]
+
+
+def assert_golden(table: pd.DataFrame, golden: Path, prefix: str) -> None:
+    """Compare a canonical table with its golden CSV (source made relative to ``prefix``)."""
+    got = table.copy()
+    got["source"] = got["source"].str.replace(prefix, "", regex=False)
+    want = pd.read_csv(golden, dtype=str, keep_default_na=False)
+    assert list(got.columns) == list(want.columns)
+    assert len(got) == len(want)
+    for col in want.columns:
+        if col in NUMERIC:
+            expected = pd.to_numeric(want[col].replace("", np.nan)).to_numpy(float)
+            np.testing.assert_allclose(got[col].to_numpy(float), expected, atol=1e-9, equal_nan=True, err_msg=col)
+        else:
+            assert got[col].fillna("").astype(str).tolist() == want[col].tolist(), col
+
+
+@pytest.mark.parametrize("name, fmt", [
+    ("bracket_two_parts.txt", "pcdmis"), ("bracket_minus_negative.txt", "pcdmis"), ("bracket_ncgage.csv", "pcdmis-csv"),
+])
+def test_fixture_matches_golden(name: str, fmt: str) -> None:
+    assert parsers.find_format(SAMPLES / name).name == fmt
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", ParseWarning)
+        table = parsers.read(SAMPLES / name)
+    assert_golden(table, GOLDEN / f"pcdmis_{Path(name).stem}.csv", str(SAMPLES) + "/")
+
+
+def test_minus_tolerance_magnitude_and_signed_read_alike() -> None:
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", ParseWarning)
+        magnitude = read_pcdmis_text(SAMPLES / "bracket_two_parts.txt")
+        signed = read_pcdmis_text(SAMPLES / "bracket_minus_negative.txt")
+    first = magnitude[magnitude["part"] == "0041"].reset_index(drop=True)
+    cols = ["characteristic", "nominal", "actual", "lower", "upper"]
+    pd.testing.assert_frame_equal(first[cols], signed[cols])
+    # LOC2.Z is UNITS=IN: -0.5000 in, +0.0010/-0.0030 in.
+    z = first.set_index("characteristic").loc["LOC2.Z"]
+    assert (z["nominal"], z["lower"], z["upper"]) == pytest.approx((-12.7, -0.0762, 0.0254))
+
+
+def test_two_parts_angles_skipped_with_lines() -> None:
+    with pytest.warns(ParseWarning, match=r"skipped 2 angle characteristic\(s\).*line 27, 61"):
+        table = read_pcdmis_text(SAMPLES / "bracket_two_parts.txt")
+    assert table.groupby("part").size().to_dict() == {"0041": 7, "0042": 7}
+    assert table.loc[table["characteristic"] == "TP1.TP", "lower"].isna().all()
+    assert table.loc[2, "status"] == "out" and table.loc[0, "status"] == "ok"
+
+
+def test_csv_timestamp_serial_and_form_rows() -> None:
+    with pytest.warns(ParseWarning):
+        table = read_pcdmis_csv(SAMPLES / "bracket_ncgage.csv")
+    assert set(table["timestamp"]) == {"2025-03-14T09:41:07"} and set(table["part"]) == {"0044"}
+    assert "CIR1.Angle" not in set(table["characteristic"])
+
+
+def _edit(tmp_path: Path, old: str, new: str) -> Path:
+    text = (SAMPLES / "bracket_two_parts.txt").read_text()
+    assert old in text
+    path = tmp_path / "edited.txt"
+    path.write_text(text.replace(old, new, 1))
+    return path
+
+
+def test_contradicting_deviation_names_the_line(tmp_path: Path) -> None:
+    path = _edit(tmp_path, "50.0123     0.0123", "50.0123     0.0223")
+    with pytest.raises(ParseError, match=r"edited\.txt:7: stated deviation"):
+        read_pcdmis_text(path)
+
+
+def test_contradicting_outtol_names_the_line(tmp_path: Path) -> None:
+    path = _edit(tmp_path, "12.0264     0.0264     0.0064", "12.0264     0.0264     0.0000")
+    with pytest.raises(ParseError, match=r"edited\.txt:9: OUTTOL"):
+        read_pcdmis_text(path)
+
+
+def test_unknown_units_and_garbage_number(tmp_path: Path) -> None:
+    with pytest.raises(ParseError, match=r":4: unknown UNITS=FT"):
+        read_pcdmis_text(_edit(tmp_path, "UNITS=MM ,$", "UNITS=FT ,$"))
+    with pytest.raises(ParseError, match=r":8: MEAS: expected a number"):
+        read_pcdmis_text(_edit(tmp_path, "29.9712", "29.97x2"))
+
+
+def test_csv_column_reader_equals_row_reader() -> None:
+    from parsers.pcdmis.csv_export import read_columns, read_rows
+    from parsers.qdas.rows import read_report_text
+
+    name = str(SAMPLES / "bracket_ncgage.csv")
+    text = read_report_text(name)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", ParseWarning)
+        pd.testing.assert_frame_equal(read_columns(text, name, None), read_rows(text, name, None))
+
+
+@pytest.mark.parametrize("old, new, message", [
+    ('"29.9811"', '"29.98x1"', r"bad\.csv:8: MEAS: expected a number"),
+    ('"-.0189"', '"-.0289"', r"bad\.csv:8: stated deviation"),
+    ('".0030"', '".0000"', r"bad\.csv:9: OUTTOL"),
+])
+def test_csv_errors_name_the_line(tmp_path: Path, old: str, new: str, message: str) -> None:
+    # A blank line is inserted after line 6, so the edited rows 7 and 8 become lines 8 and 9.
+    lines = (SAMPLES / "bracket_ncgage.csv").read_text().replace(old, new, 1).splitlines()
+    path = tmp_path / "bad.csv"
+    path.write_text("\n".join(lines[:6] + [""] + lines[6:]) + "\n")
+    with pytest.raises(ParseError, match=message):
+        read_pcdmis_csv(path)
