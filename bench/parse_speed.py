@@ -61,7 +61,6 @@ def _best(fn, repeat: int = REPEAT) -> float:
 
 
 def _write_inputs(folder: Path, rows: list[dict[str, str]]) -> dict[str, Path]:
-    writer = _writer_module()
     paths = {"qif": folder / "big.qif", "canonical": folder / "big.csv", "table-csv": folder / "big_shop.csv",
              "table-xlsx": folder / "big.xlsx", "calypso": folder / "big_chr.txt"}
     _write_big_qif(paths["qif"], PARTS // 20)

@@ -13,6 +13,9 @@ from setupfix.errors import ParseError, SourceLocation
 
 __all__ = ["Peek", "peek_file", "decode", "read_bytes", "read_text", "parse_number", "csv_records"]
 
+#: Largest report accepted [bytes]; a CMM text report is kilobytes, a JSON export megabytes.
+MAX_REPORT_BYTES = 256 * 1024 * 1024
+
 #: Bytes a sniffer sees: enough for any header we recognise, small enough to be cheap.
 PEEK_BYTES = 8192
 
@@ -74,12 +77,17 @@ def read_bytes(path: str | Path) -> bytes:
     Raises
     ------
     ParseError
-        If the file cannot be read (named with the OS reason).
+        If the file cannot be read (named with the OS reason) or is larger than
+        :data:`MAX_REPORT_BYTES`.
     """
     try:
-        return Path(path).read_bytes()
+        with open(path, "rb") as fh:
+            data = fh.read(MAX_REPORT_BYTES + 1)
     except OSError as exc:
         raise ParseError(f"cannot read: {exc.strerror or exc}", location=SourceLocation(str(path))) from None
+    if len(data) > MAX_REPORT_BYTES:
+        raise ParseError(f"larger than {MAX_REPORT_BYTES} bytes: not a report", location=SourceLocation(str(path)))
+    return data
 
 
 def read_text(path: str | Path, encoding: str | None = None) -> str:

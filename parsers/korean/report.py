@@ -25,7 +25,8 @@ from pathlib import Path
 
 import pandas as pd
 
-from parsers.qdas.rows import SkipLog, checked_deviation, finish_rows, parse_number, read_report_text, unit_factor, unit_or_none
+from parsers._source import read_text
+from parsers._rows import SkipLog, checked_deviation, finish_rows, parse_number, unit_factor, unit_or_none
 from setupfix.errors import ParseError, SourceLocation
 
 __all__ = ["read_korean", "sniff_korean"]
@@ -107,7 +108,7 @@ def read_korean(path: str | Path, *, unit: str | None = None, encoding: str | No
         if known is None:
             raise ParseError(f"unknown unit {unit!r} (expected mm or inch)", location=SourceLocation(name))
         factor = unit_factor(known)
-    text = read_report_text(path, encoding)
+    text = read_text(path, encoding)
     remark = re.sub(r"\s+", "_", _header_value(text, "특기사항")) or Path(name).stem
     stamp_match = _STAMP.search(_header_value(text, "측정시간"))
     stamp = ""

@@ -26,8 +26,9 @@ from pathlib import Path
 
 import pandas as pd
 
-from parsers.qdas.rows import (
-    SkipLog, checked_deviation, finish_rows, parse_number, read_report_text, split_columns, text_columns,
+from parsers._source import read_text
+from parsers._rows import (
+    SkipLog, checked_deviation, finish_rows, parse_number, split_columns, text_columns,
     try_number, unit_factor, unit_or_none, warn_assumed_mm,
 )
 from setupfix.errors import ParseError, SourceLocation
@@ -75,7 +76,7 @@ def read_qvpak(path: str | Path, *, unit: str | None = None, encoding: str | Non
     if unit and default is None:
         raise ParseError(f"unknown unit {unit!r} (expected mm or inch)", location=SourceLocation(name))
     factor = unit_factor(default or "mm")
-    text = read_report_text(path, encoding)
+    text = read_text(path, encoding)
     skipped = SkipLog(name)
     raw: list[tuple[SourceLocation, str, dict[str, str]]] = []
     spans: list[tuple[str, int, int]] = []

@@ -9,7 +9,7 @@ each opened by ``Routine Name  Run #  Date & Time``, paginated with a repeated
 ``Machine Serial Number … Page:`` header, rows ``label nominal actual deviation`` in
 fixed columns under ``Step n - comment`` groups.
 
-Vendor conventions handled (see :mod:`parsers.qdas.rows` for the shared rules):
+Vendor conventions handled (see :mod:`parsers._rows` for the shared rules):
 
 * zero ``Upper``/``Lower`` (``+00.00000 -00.00000``) mean *no tolerance*, not a zero zone;
 * a size/location row whose nominal equals the actual with no tolerance was taught
@@ -32,8 +32,9 @@ from pathlib import Path
 import pandas as pd
 
 from parsers.ogp.rtf import is_rtf, rtf_lines
-from parsers.qdas.rows import (
-    SkipLog, checked_deviation, finish_rows, parse_number, read_report_text, unit_factor, unit_or_none,
+from parsers._source import read_text
+from parsers._rows import (
+    SkipLog, checked_deviation, finish_rows, parse_number, unit_factor, unit_or_none,
     warn_assumed_mm,
 )
 from setupfix.errors import ParseError, SourceLocation
@@ -223,7 +224,7 @@ def read_ogp(path: str | Path, *, unit: str | None = None, encoding: str | None 
         On a malformed row, a contradicting deviation, or no usable length row.
     """
     name = str(path)
-    text = read_report_text(path, encoding)
+    text = read_text(path, encoding)
     lines = rtf_lines(text) if is_rtf(text) else [line.rstrip("\r") for line in text.split("\n")]
     skipped = SkipLog(name)
     if any(_STEP.match(line) for line in lines):

@@ -17,7 +17,7 @@ import numpy as np
 import pandas as pd
 
 from parsers.pcdmis.axes import ANGLE_AXES, NON_LENGTH_AXES
-from parsers.qdas.rows import SkipLog, checked_deviation, finish_rows, parse_number, unit_factor, unit_or_none, warn_assumed_mm
+from parsers._rows import SkipLog, checked_deviation, finish_rows, parse_number, unit_factor, unit_or_none, warn_assumed_mm
 from setupfix.errors import ParseError, SourceLocation
 from setupfix.model.measurements import CANONICAL_COLUMNS
 

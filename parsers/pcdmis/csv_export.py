@@ -20,7 +20,8 @@ import pandas as pd
 from parsers.pcdmis.axes import ANGLE_AXES, NON_LENGTH_AXES
 from parsers.pcdmis.columns import STAMP, heading_of, read_columns
 from parsers.pcdmis.text_report import _Raw, rows_from_raw
-from parsers.qdas.rows import SkipLog, read_report_text, unit_or_none
+from parsers._source import read_text
+from parsers._rows import SkipLog, unit_or_none
 from setupfix.errors import ParseError, SourceLocation
 
 __all__ = ["read_pcdmis_csv", "sniff_pcdmis_csv"]
@@ -56,7 +57,7 @@ def read_pcdmis_csv(path: str | Path, *, unit: str | None = None, encoding: str 
     default_unit = unit_or_none(unit) if unit else None
     if unit and default_unit is None:
         raise ParseError(f"unknown unit {unit!r} (expected mm or inch)", location=SourceLocation(name))
-    text = read_report_text(path, encoding).lstrip("\ufeff")
+    text = read_text(path, encoding).lstrip("\ufeff")
     fast = read_columns(text, name, default_unit)
     if fast is not None:
         return fast

@@ -27,8 +27,9 @@ from pathlib import Path
 
 import pandas as pd
 
-from parsers.qdas.rows import (
-    SkipLog, checked_deviation, finish_rows, parse_number, read_report_text, split_columns, text_columns,
+from parsers._source import read_text
+from parsers._rows import (
+    SkipLog, checked_deviation, finish_rows, parse_number, split_columns, text_columns,
     try_number, unit_factor, unit_or_none, warn_assumed_mm,
 )
 from parsers.pcdmis.axes import ANGLE_AXES, NON_LENGTH_AXES
@@ -213,5 +214,5 @@ def read_pcdmis_text(path: str | Path, *, unit: str | None = None, encoding: str
     if unit and default_unit is None:
         raise ParseError(f"unknown unit {unit!r} (expected mm or inch)", location=SourceLocation(name))
     skipped = SkipLog(name)
-    raws = _collect(read_report_text(path, encoding), name, default_unit, skipped)
+    raws = _collect(read_text(path, encoding), name, default_unit, skipped)
     return rows_from_raw(raws, name, skipped, what="PC-DMIS")

@@ -21,7 +21,8 @@ from pathlib import Path
 
 import pandas as pd
 
-from parsers.qdas.rows import SkipLog, finish_rows, read_report_text, unit_factor, unit_or_none, warn_assumed_mm
+from parsers._source import read_text
+from parsers._rows import SkipLog, finish_rows, unit_factor, unit_or_none, warn_assumed_mm
 from setupfix.errors import ParseError, SourceLocation
 
 __all__ = ["read_piweb", "sniff_piweb"]
@@ -42,7 +43,7 @@ def sniff_piweb(text: str) -> bool:
 
 
 def _load(path: Path, encoding: str | None) -> object:
-    text = read_report_text(path, encoding).lstrip("\ufeff")
+    text = read_text(path, encoding).lstrip("\ufeff")
     try:
         return json.loads(text)
     except json.JSONDecodeError as exc:

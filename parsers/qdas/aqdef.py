@@ -21,8 +21,9 @@ from typing import NamedTuple
 
 import pandas as pd
 
-from parsers.qdas.rows import (
-    SkipLog, finish_rows, parse_number, read_report_text, try_number, unit_factor, unit_or_none,
+from parsers._source import read_text
+from parsers._rows import (
+    SkipLog, finish_rows, parse_number, try_number, unit_factor, unit_or_none,
     warn_assumed_mm,
 )
 from setupfix.errors import ParseError, SourceLocation
@@ -234,9 +235,9 @@ def read_aqdef(path: str | Path, *, unit: str | None = None, encoding: str | Non
             if not part.exists():
                 raise ParseError(f"{part.name} not found beside it", location=SourceLocation(name),
                                  hint="a .dfd description and its .dfx values are read together")
-            lines += _lines(read_report_text(part, encoding), str(part))
+            lines += _lines(read_text(part, encoding), str(part))
     else:
-        lines = _lines(read_report_text(path, encoding), name)
+        lines = _lines(read_text(path, encoding), name)
     state = _State()
     _parse(state, lines)
     default_unit = None

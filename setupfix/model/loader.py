@@ -22,7 +22,6 @@ from setupfix.model.process import (
     ProcessModel,
     Register,
     RegisterKind,
-    normalise_name,
 )
 from setupfix.units import LENGTH_UNITS
 

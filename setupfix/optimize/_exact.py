@@ -32,7 +32,7 @@ import warnings
 import numpy as np
 import numpy.typing as npt
 from scipy.optimize import Bounds, LinearConstraint, linprog, milp
-from scipy.sparse import csr_array, hstack, vstack, eye
+from scipy.sparse import csr_array, vstack
 
 from setupfix.errors import ConvergenceWarning, SolverError
 from setupfix.optimize._base import Optimizer, make_result

@@ -5,32 +5,15 @@ from __future__ import annotations
 import warnings
 from pathlib import Path
 
-import numpy as np
 import pandas as pd
 import pytest
 
 import parsers
+from goldens import GOLDEN, assert_golden
 from parsers.pcdmis import read_pcdmis_csv, read_pcdmis_text
 from setupfix.errors import ParseError, ParseWarning
 
 SAMPLES = Path(__file__).resolve().parents[2] / "sample_reports" / "pcdmis"
-GOLDEN = Path(__file__).resolve().parent / "golden"
-NUMERIC = ["nominal", "actual", "deviation", "lower", "upper", "x", "y", "z"]
-
-
-def assert_golden(table: pd.DataFrame, golden: Path, prefix: str) -> None:
-    """Compare a canonical table with its golden CSV (source made relative to ``prefix``)."""
-    got = table.copy()
-    got["source"] = got["source"].str.replace(prefix, "", regex=False)
-    want = pd.read_csv(golden, dtype=str, keep_default_na=False)
-    assert list(got.columns) == list(want.columns)
-    assert len(got) == len(want)
-    for col in want.columns:
-        if col in NUMERIC:
-            expected = pd.to_numeric(want[col].replace("", np.nan)).to_numpy(float)
-            np.testing.assert_allclose(got[col].to_numpy(float), expected, atol=1e-9, equal_nan=True, err_msg=col)
-        else:
-            assert got[col].fillna("").astype(str).tolist() == want[col].tolist(), col
 
 
 @pytest.mark.parametrize("name, fmt", [
@@ -101,7 +84,7 @@ def test_unknown_units_and_garbage_number(tmp_path: Path) -> None:
 
 def test_csv_column_reader_equals_row_reader() -> None:
     from parsers.pcdmis.csv_export import read_columns, read_rows
-    from parsers.qdas.rows import read_report_text
+    from parsers._source import read_text as read_report_text
 
     name = str(SAMPLES / "bracket_ncgage.csv")
     text = read_report_text(name)

@@ -1,8 +1,6 @@
 """Row building shared by the readers of issue 3 (Q-DAS, PC-DMIS, QVPAK, OGP, Korean, PiWeb).
 
-It lives in the Q-DAS package only because each reader of that issue owns its own
-subpackage; the helpers are format-neutral.  They fix the rules every one of these
-readers follows, so the six behave alike:
+They fix the rules every one of these readers follows, so the six behave alike:
 
 * numbers may carry a decimal comma, an explicit ``+``, zero padding or a bare
   leading dot (``+00020.262``, ``44,158745``, ``.1000``);
@@ -20,19 +18,15 @@ import math
 import re
 import warnings
 from dataclasses import dataclass, field
-from pathlib import Path
 
 import pandas as pd
 
-from parsers._source import decode
 from parsers.canonical import DEVIATION_TOLERANCE_MM, finish_table
 from setupfix.errors import ParseError, ParseWarning, SourceLocation
 from setupfix.units import LENGTH_UNITS
 
 __all__ = [
-    "MAX_REPORT_BYTES",
     "SkipLog",
-    "read_report_text",
     "parse_number",
     "try_number",
     "unit_or_none",
@@ -44,29 +38,8 @@ __all__ = [
     "warn_assumed_mm",
 ]
 
-#: Largest report accepted [bytes]; a CMM text report is kilobytes, a JSON export megabytes.
-MAX_REPORT_BYTES = 256 * 1024 * 1024
 
 _NUMBER = re.compile(r"^[+-]?(?:\d+(?:[.,]\d*)?|[.,]\d+)(?:[eE][+-]?\d+)?$")
-
-
-def read_report_text(path: str | Path, encoding: str | None = None) -> str:
-    """Read and decode a report (encoding sniffed unless given).
-
-    Raises
-    ------
-    ParseError
-        If the file cannot be read, is too large, or does not fit ``encoding``.
-    """
-    name = str(path)
-    try:
-        with open(path, "rb") as fh:
-            data = fh.read(MAX_REPORT_BYTES + 1)
-    except OSError as exc:
-        raise ParseError(f"cannot read: {exc.strerror}", location=SourceLocation(name)) from None
-    if len(data) > MAX_REPORT_BYTES:
-        raise ParseError(f"larger than {MAX_REPORT_BYTES} bytes", location=SourceLocation(name))
-    return decode(data, name, encoding)
 
 
 def try_number(text: str) -> float | None:
