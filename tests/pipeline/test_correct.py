@@ -1,0 +1,57 @@
+"""Pipeline "correct": stations of a multi-part report merged into one fixture cycle."""
+
+from __future__ import annotations
+
+import pytest
+
+from setupfix.errors import MatchError
+from setupfix.model import model_from_dict
+from setupfix.pipeline.correct import correct_report
+
+MODEL = {
+    "process": {"name": "two stations", "resolution": 0.001, "limit": 0.1},
+    "wks": {"W1": {"register": "G54"}, "W2": {"register": "G55"}},
+    "tools": {"T1": {"register": "H1"}},
+    "features": {"F1": {"wks": {"W1": 1}, "tools": {"T1": 1}}, "F2": {"wks": {"W2": 1}, "tools": {"T1": 1}}},
+    "dimensions": {
+        "A": {"name": "Depth", "group": "P1", "features": {"F1": 1}, "nominal": 10, "lower": -0.05, "upper": 0.05},
+        "B": {"name": "Depth", "group": "P2", "features": {"F2": 1}, "nominal": 10, "lower": -0.05, "upper": 0.05},
+    },
+}
+
+
+def report(tmp_path, parts=("s1", "s2")):
+    path = tmp_path / "r.csv"
+    path.write_text("characteristic,nominal,actual,part\n"
+                    f"Depth,10,10.040,{parts[0]}\nDepth,10,9.990,{parts[1]}\n", encoding="utf-8")
+    return path
+
+
+def test_repeated_names_without_stations_are_refused(tmp_path):
+    model = model_from_dict(MODEL)
+    with pytest.raises(MatchError, match="names several dimensions"):
+        correct_report(model, report(tmp_path))
+
+
+def test_stations_in_order_make_one_cycle(tmp_path):
+    model = model_from_dict(MODEL)
+    (pc,) = correct_report(model, report(tmp_path), stations=["P2", "P1"])
+    assert pc.part.deviation.tolist() == pytest.approx([-0.010, 0.040])  # s2 → P2 (B), s1 → P1 (A)
+    # both stations centred: W1 − W2 = -0.05 spread; the optimum centres each through its own WKS
+    assert pc.result.margin_after == pytest.approx(0.05, abs=1e-9)
+    assert pc.corrections["W1"] + pc.corrections["T1"] == pytest.approx(0.010)
+    assert pc.corrections["W2"] + pc.corrections["T1"] == pytest.approx(-0.040)
+
+
+def test_part_names_equal_to_groups_are_stations(tmp_path):
+    model = model_from_dict(MODEL)
+    (pc,) = correct_report(model, report(tmp_path, parts=("P1", "p2")))
+    assert pc.part.deviation.tolist() == pytest.approx([0.040, -0.010])
+
+
+def test_unknown_station_and_wrong_count(tmp_path):
+    model = model_from_dict(MODEL)
+    with pytest.raises(MatchError, match="station 'P9'"):
+        correct_report(model, report(tmp_path), stations={"s1": "P1", "s2": "P9"})
+    with pytest.raises(MatchError, match="3 stations given for 2 parts"):
+        correct_report(model, report(tmp_path), stations=["P1", "P2", "P1"])
