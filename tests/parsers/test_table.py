@@ -60,7 +60,17 @@ def test_without_mapping_unknown_headers_are_refused_with_hint() -> None:
         read_table(TABLES / "cycle_01_shop.csv")
 
 
-def test_excel_workbook_with_cell_provenance(tmp_path: Path) -> None:
+@pytest.fixture(params=["calamine", "openpyxl"])
+def excel_engine(request: pytest.FixtureRequest, monkeypatch: pytest.MonkeyPatch) -> str:
+    """Run an Excel test with python-calamine, and again with the openpyxl fallback."""
+    if request.param == "openpyxl":
+        import sys
+
+        monkeypatch.setitem(sys.modules, "python_calamine", None)  # import now raises ImportError
+    return str(request.param)
+
+
+def test_excel_workbook_with_cell_provenance(tmp_path: Path, excel_engine: str) -> None:
     book = openpyxl.Workbook()
     sheet = book.active
     sheet.title = "CMM"
@@ -78,7 +88,7 @@ def test_excel_workbook_with_cell_provenance(tmp_path: Path) -> None:
     assert table["source"].iloc[1].endswith("shop.xlsx#CMM!5")
 
 
-def test_bad_excel_cell_names_the_row(tmp_path: Path) -> None:
+def test_bad_excel_cell_names_the_row(tmp_path: Path, excel_engine: str) -> None:
     book = openpyxl.Workbook()
     book.active.append(["Name", "Nom", "Meas"])
     book.active.append(["A", 1, "ok?"])
@@ -86,6 +96,13 @@ def test_bad_excel_cell_names_the_row(tmp_path: Path) -> None:
     book.save(path)
     with pytest.raises(ParseError, match=r"bad.xlsx: <Sheet!2>: column 'actual': expected a number"):
         parsers.read(path)
+
+
+def test_corrupt_workbook_is_a_parse_error(tmp_path: Path, excel_engine: str) -> None:
+    path = tmp_path / "broken.xlsx"
+    path.write_bytes(b"PK\x03\x04" + b"\x00" * 200)
+    with pytest.raises(ParseError, match="broken.xlsx"):
+        parsers.read(path, format="table")
 
 
 def test_deviation_only_and_inch_unit(tmp_path: Path) -> None:
