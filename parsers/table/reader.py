@@ -1,8 +1,9 @@
 """Shop tables (CSV and Excel ``.xlsx``) → the canonical table, through a column mapping.
 
 The grid is read by pandas (CSV, with the delimiter sniffed by :class:`csv.Sniffer`)
-or openpyxl (Excel, read-only, cached formula values), then converted column-wise
-with pandas, so a table of 100 000 rows is read in well under a second.  Every row
+or python-calamine (Excel; openpyxl, read-only with cached formula values, where
+calamine is absent), then converted column-wise with pandas, so a table of 100 000
+rows is read in about a second.  Every row
 keeps its place (``file:line`` or ``file#Sheet!row``) as provenance; a bad cell is
 reported with its line or cell.
 """
