@@ -132,3 +132,9 @@ def test_model_show_prints_matrices_rank_and_null_space(capsys):
     code, out, _ = run(capsys, "model", "show", MODEL, "--json")
     doc = json.loads(out)
     assert doc["rank"] == 9 and doc["null_space"][0]["T23"] == 1.0
+
+
+def test_group_without_action_shows_its_help(capsys):
+    code, out, err = run(capsys, "model")
+    assert code == 2 and "show" in err and out == ""
+    assert run(capsys, "--help")[0] == 0
