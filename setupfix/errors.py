@@ -17,6 +17,7 @@ __all__ = [
     "UnknownFormatError",
     "MatchError",
     "SolverError",
+    "NotFittedError",
     "ExportError",
     "ParseWarning",
     "ConvergenceWarning",
@@ -105,6 +106,10 @@ class MatchError(SetupfixError, ValueError):
 
 class SolverError(SetupfixError, RuntimeError):
     """An optimiser failed in a way no fallback could mend."""
+
+
+class NotFittedError(SolverError, AttributeError):
+    """A model's ``predict`` was called before ``fit`` (sklearn's convention)."""
 
 
 class ExportError(SetupfixError, OSError):

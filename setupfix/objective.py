@@ -70,6 +70,6 @@ def correction_norm(x: Array) -> Array:
     return np.sqrt(np.sum(np.square(x), axis=-1))
 
 
-def fitness(f1: Array, f2: Array) -> Array:
+def fitness(f1: npt.ArrayLike, f2: npt.ArrayLike) -> Array:
     """Substitute single objective f = 10·f1 − f2 (eq. 10), to be maximised."""
-    return F1_WEIGHT * np.asarray(f1) - np.asarray(f2)
+    return F1_WEIGHT * np.asarray(f1, dtype=float) - np.asarray(f2, dtype=float)

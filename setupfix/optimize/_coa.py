@@ -40,7 +40,7 @@ __all__ = ["COA", "lay_eggs", "kmeans", "immigrate"]
 Array = npt.NDArray[np.float64]
 
 
-def lay_eggs(centres: Array, n_eggs: npt.NDArray[np.int64], span: Array, alpha: float,
+def lay_eggs(centres: Array, n_eggs: npt.ArrayLike, span: Array, alpha: float,
              rng: np.random.Generator) -> Array:
     """Egg positions around each habitat (Rajabioun 2011, ELR and egg laying).
 
@@ -58,6 +58,7 @@ def lay_eggs(centres: Array, n_eggs: npt.NDArray[np.int64], span: Array, alpha: 
     -------
     ndarray of shape (Σ n_eggs, n) [model unit], off the grid
     """
+    n_eggs = np.asarray(n_eggs, dtype=np.int64)
     owner = np.repeat(np.arange(centres.shape[0]), n_eggs)
     elr = n_eggs / n_eggs.sum() * alpha  # ELR_i / span
     radius = elr[owner] * rng.random(owner.size)

@@ -123,7 +123,7 @@ class ExactOptimizer(Optimizer):
     # -- stages -------------------------------------------------------------------------------
     @staticmethod
     def _lp_bound(g_rows: Array, g: Array, kmin: Array, kmax: Array,
-                  t_cap: float) -> tuple[float, Array, Array]:
+                  t_cap: float) -> tuple[float, Array, npt.NDArray[np.bool_]]:
         n = g_rows.shape[1]
         c = np.zeros(n + 1)
         c[-1] = -1.0

@@ -43,7 +43,7 @@ __all__ = ["PSO", "acceleration"]
 Array = npt.NDArray[np.float64]
 
 
-def acceleration(solution_number: Array, budget: int) -> Array:
+def acceleration(solution_number: npt.ArrayLike, budget: int) -> Array:
     """Cognition and social coefficients c1 = c2 = cos(π/2 · L_i / L) (Stryczek 2014, eq. 11).
 
     Parameters

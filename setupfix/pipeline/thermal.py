@@ -18,7 +18,7 @@ import numpy.typing as npt
 from setupfix.errors import ParseError, ParseWarning, SourceLocation
 from setupfix.thermal.data import Selection, TemperatureLog, read_temperature_log, select_columns
 from setupfix.thermal.metrics import Scores, score
-from setupfix.thermal.models import GreyModel, KalmanFusionModel, MRAModel, ThermalModel
+from setupfix.thermal.models import AnyThermalModel, GreyModel, KalmanFusionModel, MRAModel
 from setupfix.thermal.persist import SavedModel, load_model, save_model
 
 __all__ = [
@@ -38,7 +38,7 @@ METHODS: tuple[str, ...] = ("mra", "grey-ls", "grey-cs", "grey-pso", "kalman")
 Array = npt.NDArray[np.float64]
 
 
-def make_model(method: str, *, seed: int | None = None, **options: Any) -> ThermalModel:
+def make_model(method: str, *, seed: int | None = None, **options: Any) -> AnyThermalModel:
     """A fresh model for a method name of :data:`METHODS` (options go to its ``__init__``)."""
     if method == "mra":
         return MRAModel(**options)
@@ -76,7 +76,7 @@ def fit_log(log: TemperatureLog, method: str, *, target: str, inputs: Sequence[s
     if len(y) < 4:
         raise ParseError(f"{len(y)} samples are too few to fit a model", location=SourceLocation(log.source))
     extra = {k: v for k, v in data.items() if k != "T"}
-    model.fit(data["T"], y, **extra)  # type: ignore[call-arg]
+    model.fit(data["T"], y, **extra)
     saved = SavedModel(model, sel.inputs, target, sel.ambient if method == "kalman" else None,
                        sel.speed if method == "kalman" else None, log.sample_interval_s)
     fitted = _predict(saved, log, y0=float(y[0]))

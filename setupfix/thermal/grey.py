@@ -175,7 +175,7 @@ def gmc_least_squares(y: npt.ArrayLike, X: npt.ArrayLike) -> Array:
     """
     B, Y = gmc_design(y, X)
     theta, *_ = np.linalg.lstsq(B, Y, rcond=None)
-    return theta
+    return np.asarray(theta, dtype=float)
 
 
 def _convolve_exp(f: Array, decay: Array) -> Array:
@@ -287,7 +287,7 @@ def gm1n_least_squares(y: npt.ArrayLike, X: npt.ArrayLike) -> Array:
     """Classic GM(1,N) coefficients ``[b1, b2…bN]`` by least squares (SVD)."""
     B, Y = gm1n_design(y, X)
     theta, *_ = np.linalg.lstsq(B, Y, rcond=None)
-    return theta
+    return np.asarray(theta, dtype=float)
 
 
 def gm1n_response(theta: npt.ArrayLike, y0: float, X1: npt.ArrayLike) -> Array:

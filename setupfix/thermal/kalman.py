@@ -50,7 +50,8 @@ def predict(x_post: npt.ArrayLike, P_post: npt.ArrayLike, A: npt.ArrayLike, B: n
     x_prior, P_prior : ndarray
     """
     A = np.asarray(A, dtype=float)
-    x_prior = A * x_post + np.asarray(B) * ambient + c
+    x_prior = A * np.asarray(x_post, dtype=float) + np.asarray(B, dtype=float) * np.asarray(ambient, dtype=float) \
+        + np.asarray(c, dtype=float)
     P_prior = A * A * P_post + N
     return np.asarray(x_prior, dtype=float), np.asarray(P_prior, dtype=float)
 

@@ -17,26 +17,22 @@ from (usually a cold start).  ``to_dict`` / ``from_dict`` give the JSON form use
 from __future__ import annotations
 
 import warnings
-from typing import Any, ClassVar
+from typing import Any, ClassVar, Self
 
 import numpy as np
 import numpy.typing as npt
 from scipy.optimize import lsq_linear
 
-from setupfix.errors import ConvergenceWarning, SolverError
+from setupfix.errors import ConvergenceWarning, NotFittedError
 from setupfix.thermal import grey
 from setupfix.thermal.calibrate import SearchResult, cuckoo_search, genetic_algorithm, particle_swarm
 from setupfix.thermal.kalman import FusionFilter, fuse
 from setupfix.thermal.lumped import Gearbox, fit_lumped, heat_inputs, lumped_coefficients
 from setupfix.thermal.mra import mra_fit, mra_predict, rises
 
-__all__ = ["ThermalModel", "MRAModel", "GreyModel", "KalmanFusionModel", "NotFittedError"]
+__all__ = ["ThermalModel", "AnyThermalModel", "MRAModel", "GreyModel", "KalmanFusionModel", "NotFittedError"]
 
 Array = npt.NDArray[np.float64]
-
-
-class NotFittedError(SolverError):
-    """``predict`` was called before ``fit``."""
 
 
 class ThermalModel:
@@ -62,7 +58,7 @@ class ThermalModel:
         return {"method": self.method, "params": _jsonable(self.get_params()), "learned": learned}
 
     @classmethod
-    def from_dict(cls, data: dict[str, Any]) -> ThermalModel:
+    def from_dict(cls, data: dict[str, Any]) -> Self:
         model = cls(**data.get("params", {}))
         for name in cls._learned:
             value = data["learned"][name]
@@ -315,7 +311,7 @@ class KalmanFusionModel(ThermalModel):
     def predict(self, T: npt.ArrayLike, *, ambient: npt.ArrayLike, speed: npt.ArrayLike,
                 sensors_failed: bool = False, **_: Any) -> Array:
         """Predicted error, eq. (10) on the fused rises."""
-        fused, _ = self.fused_temperatures(T, ambient=ambient, speed=speed, sensors_failed=sensors_failed)
+        fused, _gains = self.fused_temperatures(T, ambient=ambient, speed=speed, sensors_failed=sensors_failed)
         return mra_predict(self.beta_, rises(fused))
 
     def stream(self) -> KalmanStream:
@@ -341,3 +337,7 @@ class KalmanStream:
         if self._start is None:
             self._start = fused.copy()
         return float(mra_predict(m.beta_, fused - self._start))
+
+
+#: Any of the fitted thermal models (what the pipeline makes, saves and loads).
+AnyThermalModel = MRAModel | GreyModel | KalmanFusionModel

@@ -16,7 +16,7 @@ from typing import Any
 
 from setupfix.atomic import atomic_write
 from setupfix.errors import ExportError, ParseError, SourceLocation
-from setupfix.thermal.models import GreyModel, KalmanFusionModel, MRAModel, ThermalModel
+from setupfix.thermal.models import AnyThermalModel, GreyModel, KalmanFusionModel, MRAModel
 
 __all__ = ["FORMAT", "VERSION", "SavedModel", "save_model", "load_model", "model_from_dict"]
 
@@ -28,7 +28,7 @@ VERSION = 1
 class SavedModel:
     """A fitted model with the column roles it was fitted with."""
 
-    model: ThermalModel
+    model: AnyThermalModel
     inputs: tuple[str, ...]
     target: str
     ambient: str | None = None
@@ -50,7 +50,7 @@ class SavedModel:
         }
 
 
-def model_from_dict(data: dict[str, Any]) -> ThermalModel:
+def model_from_dict(data: dict[str, Any]) -> AnyThermalModel:
     """Rebuild a model from its ``to_dict`` form (KeyError/TypeError on bad content)."""
     method = data["method"]
     if method == "mra":

@@ -188,7 +188,7 @@ def constant_error(t_s: npt.ArrayLike) -> Array:
 
 def _seconds(frame: pd.DataFrame) -> Array:
     stamps = pd.to_datetime(frame["timestamp"])
-    return (stamps - stamps.iloc[0]).dt.total_seconds().to_numpy()
+    return np.asarray((stamps - stamps.iloc[0]).dt.total_seconds(), dtype=np.float64)
 
 
 def add_sensor_error(frame: pd.DataFrame, column: str, error: Callable[[Array], Array]) -> pd.DataFrame:
