@@ -189,7 +189,9 @@ def rows_from_raw(raws: list[_Raw], name: str, skipped: SkipLog, *, what: str) -
             "source": f"{name}:{where.line}",
         })
     if rows and unstated:
-        warn_assumed_mm(name, next(r.where.line for r in raws if not r.unit))
+        first_line = next(r.where.line for r in raws if not r.unit)
+        assert first_line is not None  # _collect locates every row by its line number
+        warn_assumed_mm(name, first_line)
     return finish_rows(rows, name, skipped, what=what)
 
 

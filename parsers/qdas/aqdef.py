@@ -121,9 +121,9 @@ def _feed_kline(state: _State, key: str, index: int | None, value: str, where: S
             state.last_value[index] = item
             return
         targets = list(state.last_value.values()) if index == 0 else [state.last_value.get(index or 1)]
-        for item in targets:
-            if item is not None:
-                item.fields[key] = value
+        for target in targets:
+            if target is not None:
+                target.fields[key] = value
 
 
 def _feed_value_line(state: _State, line: str, where: SourceLocation) -> None:
@@ -279,9 +279,9 @@ def _rows(state: _State, name: str, default_unit: str | None) -> pd.DataFrame:
     rows: list[dict[str, object]] = []
     cache: dict[int, _Prepared] = {}
     unstated_unit = False
-    for char in state.chars.values():
+    for described in state.chars.values():
         for key, value in state.all_chars.items():
-            char.fields.setdefault(key, value)
+            described.fields.setdefault(key, value)
     for item in state.values:
         char = state.chars.get(item.char)
         line: int | str = item.where.line or 0

@@ -69,8 +69,8 @@ def parse_xml(data: bytes, path: str) -> etree._Element:
     try:
         return etree.fromstring(data, _parser())
     except etree.XMLSyntaxError as exc:
-        line = exc.lineno if exc.lineno and exc.lineno > 0 else None
+        error_line = exc.lineno if exc.lineno and exc.lineno > 0 else None
         message = _POSITION.sub("", str(exc.msg or exc)).strip() or "not well-formed XML"
-        raise ParseError(f"not well-formed XML: {message}", location=SourceLocation(path, line=line)) from None
+        raise ParseError(f"not well-formed XML: {message}", location=SourceLocation(path, line=error_line)) from None
     except ValueError as exc:  # lxml raises ValueError for e.g. unsupported encodings
         raise ParseError(f"not well-formed XML: {exc}", location=SourceLocation(path)) from None

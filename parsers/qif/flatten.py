@@ -13,6 +13,7 @@ import csv
 import io
 from dataclasses import dataclass
 from functools import lru_cache
+from typing import Any, cast
 
 import pandas as pd
 from lxml import etree
@@ -116,6 +117,7 @@ def measurement_table(root: etree._Element, ns: str) -> pd.DataFrame:
 
 def record(frame: pd.DataFrame, index: int) -> Record:
     """Row ``index`` of a :func:`measurement_table` as a :class:`Record`."""
-    row = frame.loc[index]
+    # The table's index labels are unique, so ``.loc`` gives one row (a Series), never a frame.
+    row = cast("pd.Series[Any]", frame.loc[index])
     return Record(int(row["results"]), row["tag"], row["id"], row["item"] if row["has_item"] else None,
                   row["external"], row["value"] if row["has_value"] else None, row["unit"], row["status"])

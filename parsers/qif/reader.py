@@ -126,19 +126,21 @@ def read_qif(path: str | Path, *, unit: str | None = None, encoding: str | None 
     keys = table["item"].where(table["external"] == "", "\0" + table["item"] + "\0" + table["external"])
     firsts = ~keys.duplicated()
     plans: dict[str, Doc] = {}
+    key_list: list[str] = keys.tolist()
     chains: dict[str, tuple[etree._Element, etree._Element, etree._Element, Doc]] = {}
     for index in np.flatnonzero(firsts.to_numpy()):
         rec = record(table, int(index))
-        chains[keys.iat[index]] = _chain(rec, _item_key(rec, results, doc, plans), results, doc, plans)
+        chains[key_list[index]] = _chain(rec, _item_key(rec, results, doc, plans), results, doc, plans)
     raw_nominals = [raw_float(child_text(nom, owner.ns, "TargetValue")) for _, nom, _, owner in chains.values()]
     mm = choose_file_unit(declared, raw_nominals, name, unit)
     kinds = {tag: _kind(tag) for tag in table["tag"].unique()}
     kind = table["tag"].map(kinds)
+    kind_list: list[str] = kind.tolist()
     notes: set[str] = set()
     infos: dict[str, Item | str] = {}
     for index in np.flatnonzero(firsts.to_numpy()):
-        key = keys.iat[index]
-        k = kind.iat[index]
+        key = key_list[index]
+        k = kind_list[index]
         infos[key] = f"{k} (not a length)" if k in NON_LENGTH_KINDS else item_info(k, *chains[key], doc, mm, notes)
     reason = keys.map({k: (v if isinstance(v, str) else "") for k, v in infos.items()}).astype(object)
     reason = reason.where(~kind.isin(NON_LENGTH_KINDS), kind + " (not a length)")
@@ -170,10 +172,12 @@ def read_qif(path: str | Path, *, unit: str | None = None, encoding: str | None 
     # One item measured several times in a part (point profiles): keep each, apart.
     count = labels.groupby([part_of, station_of, labels.to_numpy()], sort=False).cumcount().to_numpy() + 1
     labels = labels.where(count == 1, labels + " (" + count.astype(str) + ")")
-    ids = kept["id"].to_numpy(dtype=object)
-    source = np.where(ids != "", name + "#" + ids.astype(str), "")
-    for i in np.flatnonzero(ids == ""):
-        source[i] = f"{name}:{_find(results[int(kept['results'].iat[i])], record(kept, kept.index[i]), ns).sourceline}"
+    element_ids = kept["id"].to_numpy(dtype=object)
+    source = np.where(element_ids != "", name + "#" + element_ids.astype(str), "")
+    results_of = kept["results"].to_numpy()
+    for i in np.flatnonzero(element_ids == ""):
+        row = int(i)
+        source[i] = f"{name}:{_find(results[int(results_of[row])], record(kept, kept.index[row]), ns).sourceline}"
     columns.update({"characteristic": labels.to_numpy(), "actual": actual[keep].to_numpy(), "part": part_of,
                     "station": station_of, "status": kept["status"].to_numpy(), "source": source,
                     "timestamp": stamps[kept["results"].to_numpy()]})
@@ -188,9 +192,9 @@ def _actuals(table: pd.DataFrame, results: list[etree._Element], name: str, ns: 
     actual = pd.to_numeric(first.where(first != "", None), errors="coerce").astype(float) * mm
     odd = (table["unit"] != "") | ((first != "") & ~np.isfinite(actual))
     for index in np.flatnonzero(odd.to_numpy()):
-        rec = record(table, int(table.index[index]))
+        rec = record(table, int(table.index[int(index)]))
         element = _find(results[rec.results], rec, ns).find(f"{{{ns}}}Value")
-        actual.iat[index] = number(element, name, mm)
+        actual.iat[int(index)] = number(element, name, mm)
     return actual
 
 

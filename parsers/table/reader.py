@@ -13,7 +13,7 @@ from __future__ import annotations
 import csv
 import io
 import math
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -108,7 +108,7 @@ def _header_line(text: str, mapping: Mapping[str, str]) -> tuple[int, str]:
     return 0, _delimiter(text)
 
 
-def _is_header(cells: list[object], mapping: Mapping[str, str]) -> bool:
+def _is_header(cells: Sequence[object], mapping: Mapping[str, str]) -> bool:
     names = ["" if c is None else str(c).strip() for c in cells]
     lowered = {n.lower() for n in names}
     if mapping:
