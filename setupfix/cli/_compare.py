@@ -11,7 +11,7 @@ from setupfix.pipeline.compare import Comparison, compare_report, plot_compariso
 from setupfix.plots import figure_format
 
 
-def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
+def add_parser(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("compare", help="compare the metaheuristics with the exact optimum on one report",
                        description="Run CRIPSO, PSO, GA, COA and cuckoo search N seeded times each on one "
                                    "measured part and tabulate best / median / worst f1, f2 and f beside the "

@@ -13,7 +13,7 @@ from setupfix.optimize import OPTIMIZERS
 from setupfix.pipeline.correct import correct_report
 
 
-def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
+def add_parser(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("correct", help="setup corrections (WKS and tool offsets) for one CMM report",
                        description="Compute the WKS and tool-length corrections that maximise the unilateral "
                                    "error budget of the measured part(s) (Stryczek 2014).")

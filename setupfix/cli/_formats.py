@@ -10,7 +10,7 @@ from setupfix.cli.exit_codes import OK
 from setupfix.pipeline.parse import list_formats
 
 
-def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
+def add_parser(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("formats", help="list the supported report formats",
                        description="List the report formats in the order their content is sniffed.")
     p.add_argument("--json", action="store_true", help="machine-readable list")

@@ -12,7 +12,7 @@ from setupfix.pipeline.model import describe_model
 MATRICES = ("R_MW", "R_WF", "R_TF", "R_FD", "C")
 
 
-def add_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
+def add_parser(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("model", help="inspect a process model")
     msub = p.add_subparsers(dest="model_command", metavar="ACTION", parser_class=type(p))
     show = msub.add_parser("show", help="print R_MW, R_WF, R_TF, R_FD, the composite, its rank and null space")
