@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import warnings
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
@@ -27,3 +29,39 @@ def assert_golden(table: pd.DataFrame, golden: Path, prefix: str) -> None:
             np.testing.assert_allclose(got[col].to_numpy(float), expected, atol=1e-9, equal_nan=True, err_msg=col)
         else:
             assert got[col].fillna("").astype(str).tolist() == want[col].tolist(), col
+
+
+#: Columns of a "derived" golden: numbers only, for samples whose text may not be copied.
+DERIVED = ["line", "part_no", "nominal", "actual", "deviation", "lower", "upper", "status"]
+
+
+def derived(table: pd.DataFrame) -> pd.DataFrame:
+    """The numbers of a canonical table, without text taken from the report."""
+    out = pd.DataFrame({
+        "line": table["source"].str.rsplit(":", n=1).str[-1].astype(int),
+        "part_no": pd.factorize(table["part"])[0] + 1,
+    })
+    for col in DERIVED[2:]:
+        out[col] = table[col]
+    return out
+
+
+def assert_derived_golden(table: pd.DataFrame, golden: Path) -> None:
+    """Compare the numbers of a canonical table with a derived golden CSV."""
+    got, want = derived(table), pd.read_csv(golden, keep_default_na=False, na_values=[""], dtype={"status": str})
+    assert list(want.columns) == DERIVED and len(got) == len(want)
+    assert got["line"].tolist() == want["line"].tolist()
+    assert got["part_no"].tolist() == want["part_no"].tolist()
+    assert got["status"].fillna("").tolist() == want["status"].fillna("").tolist()
+    for col in ("nominal", "actual", "deviation", "lower", "upper"):
+        np.testing.assert_allclose(got[col].to_numpy(float), want[col].to_numpy(float), atol=1e-9, equal_nan=True)
+
+
+def read_warned(read: Callable[[Path], pd.DataFrame], path: Path) -> tuple[pd.DataFrame, str]:
+    """Read ``path``, returning the table and all ParseWarning messages joined."""
+    from setupfix.errors import ParseWarning
+
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", ParseWarning)
+        table = read(path)
+    return table, "\n".join(str(w.message) for w in caught if issubclass(w.category, ParseWarning))

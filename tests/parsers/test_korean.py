@@ -8,17 +8,15 @@ from __future__ import annotations
 import warnings
 from pathlib import Path
 
-import numpy as np
 import pandas as pd
 import pytest
 
 import parsers
+from goldens import GOLDEN, assert_derived_golden, read_warned
 from parsers.korean import read_korean
 from setupfix.errors import ParseError, ParseWarning
 
 SHARED = Path(__file__).resolve().parents[3] / "shared" / "cmm-samples" / "korean_cmm_txt"
-GOLDEN = Path(__file__).resolve().parent / "golden"
-DERIVED = ["line", "part_no", "nominal", "actual", "deviation", "lower", "upper", "status"]
 NAMES = sorted(p.name for p in SHARED.glob("KR_*.txt")) or ["KR_45926-4G100_240113_night_2-2-1_NG.cp949.txt"]
 
 
@@ -29,25 +27,6 @@ def shared(name: str) -> Path:
     return path
 
 
-def read_warned(read, path: Path) -> tuple[pd.DataFrame, str]:
-    """Read ``path``, returning the table and all ParseWarning messages joined."""
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always", ParseWarning)
-        table = read(path)
-    return table, "\n".join(str(w.message) for w in caught if issubclass(w.category, ParseWarning))
-
-
-def derived(table: pd.DataFrame) -> pd.DataFrame:
-    """The numbers of a canonical table, without text taken from the report."""
-    out = pd.DataFrame({
-        "line": table["source"].str.rsplit(":", n=1).str[-1].astype(int),
-        "part_no": pd.factorize(table["part"])[0] + 1,
-    })
-    for col in DERIVED[2:]:
-        out[col] = table[col]
-    return out
-
-
 @pytest.mark.parametrize("name", NAMES)
 def test_sample_matches_derived_golden(name: str) -> None:
     path = shared(name)
@@ -55,13 +34,7 @@ def test_sample_matches_derived_golden(name: str) -> None:
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", ParseWarning)
         table = parsers.read(path)
-    got = derived(table)
-    want = pd.read_csv(GOLDEN / f"korean_{name.split('.')[0]}.csv", keep_default_na=False, na_values=[""], dtype={"status": str})
-    assert got["line"].tolist() == want["line"].tolist()
-    assert got["part_no"].tolist() == want["part_no"].tolist()
-    assert got["status"].fillna("").tolist() == want["status"].fillna("").tolist()
-    for col in ("nominal", "actual", "deviation", "lower", "upper"):
-        np.testing.assert_allclose(got[col].to_numpy(float), want[col].to_numpy(float), atol=1e-9, equal_nan=True)
+    assert_derived_golden(table, GOLDEN / f"korean_{name.split('.')[0]}.csv")
 
 
 def test_ng_report_out_of_tolerance_and_sign_quirk() -> None:

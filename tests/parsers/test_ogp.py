@@ -10,17 +10,15 @@ import warnings
 from pathlib import Path
 
 import numpy as np
-import pandas as pd
 import pytest
 
 import parsers
+from goldens import GOLDEN, assert_derived_golden, read_warned
 from parsers.ogp import read_ogp
 from parsers.ogp.rtf import rtf_lines
 from setupfix.errors import ParseError, ParseWarning
 
 SHARED = Path(__file__).resolve().parents[3] / "shared" / "cmm-samples" / "ogp_measurex"
-GOLDEN = Path(__file__).resolve().parent / "golden"
-DERIVED = ["line", "part_no", "nominal", "actual", "deviation", "lower", "upper", "status"]
 
 
 def shared(name: str) -> Path:
@@ -28,35 +26,6 @@ def shared(name: str) -> Path:
     if not path.exists():
         pytest.skip(f"../shared is not beside the project ({path} absent): GPL sample not redistributed")
     return path
-
-
-def read_warned(read, path: Path) -> tuple[pd.DataFrame, str]:
-    """Read ``path``, returning the table and all ParseWarning messages joined."""
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always", ParseWarning)
-        table = read(path)
-    return table, "\n".join(str(w.message) for w in caught if issubclass(w.category, ParseWarning))
-
-
-def derived(table: pd.DataFrame) -> pd.DataFrame:
-    """The numbers of a canonical table, without text taken from the report."""
-    out = pd.DataFrame({
-        "line": table["source"].str.rsplit(":", n=1).str[-1].astype(int),
-        "part_no": pd.factorize(table["part"])[0] + 1,
-    })
-    for col in DERIVED[2:]:
-        out[col] = table[col]
-    return out
-
-
-def assert_derived_golden(table: pd.DataFrame, golden: Path) -> None:
-    got, want = derived(table), pd.read_csv(golden, keep_default_na=False, na_values=[""], dtype={"status": str})
-    assert list(want.columns) == DERIVED and len(got) == len(want)
-    assert got["line"].tolist() == want["line"].tolist()
-    assert got["part_no"].tolist() == want["part_no"].tolist()
-    assert got["status"].fillna("").tolist() == want["status"].fillna("").tolist()
-    for col in ("nominal", "actual", "deviation", "lower", "upper"):
-        np.testing.assert_allclose(got[col].to_numpy(float), want[col].to_numpy(float), atol=1e-9, equal_nan=True)
 
 
 NAMES = ["OGP_L0_axial_top_module1_1.rtf.txt", "OGP_L123_fixture_sho_multirun.txt", "OGP_empty_fixture0.txt",
