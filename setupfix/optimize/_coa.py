@@ -142,7 +142,7 @@ class COA(Metaheuristic):
     def _search(self, problem: CorrectionProblem, rng: np.random.Generator, evaluate: Evaluator) -> None:
         n = problem.n_registers
         span = problem.ub - problem.lb
-        centres = problem.snap(rng.uniform(problem.lb, problem.ub, size=(self.initial_cuckoos, n)))
+        centres = problem.sample(rng, self.initial_cuckoos)
         best_x, best_f = centres[0].copy(), -np.inf
         for _ in range(self.n_iterations):
             if evaluate.remaining <= 0:

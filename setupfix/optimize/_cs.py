@@ -91,7 +91,7 @@ class CuckooSearch(Metaheuristic):
     def _search(self, problem: CorrectionProblem, rng: np.random.Generator, evaluate: Evaluator) -> None:
         n = problem.n_registers
         k = max(1, min(self.n_nests, evaluate.remaining))
-        nests = problem.snap(rng.uniform(problem.lb, problem.ub, size=(k, n)))
+        nests = problem.sample(rng, k)
         f = evaluate(nests)
         while evaluate.remaining > 0:
             best = nests[int(np.argmax(f))]

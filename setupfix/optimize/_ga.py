@@ -89,9 +89,8 @@ class GA(Metaheuristic):
         self.tournament_size = tournament_size
 
     def _search(self, problem: CorrectionProblem, rng: np.random.Generator, evaluate: Evaluator) -> None:
-        n = problem.n_registers
         mu = max(1, min(self.population, evaluate.remaining))
-        x = problem.snap(rng.uniform(problem.lb, problem.ub, size=(mu, n)))
+        x = problem.sample(rng, mu)
         f = evaluate(x)
         while evaluate.remaining > 0:
             lam = min(self.population, evaluate.remaining)

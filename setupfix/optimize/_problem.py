@@ -122,6 +122,15 @@ class CorrectionProblem:
         h = self.resolution
         return np.clip(np.rint(np.asarray(x, dtype=float) / h) * h, self.lb, self.ub)
 
+    def sample(self, rng: np.random.Generator, count: int) -> Array:
+        """``count`` start points drawn uniformly in the bounds and snapped to the grid.
+
+        Returns
+        -------
+        ndarray of shape (count, n_registers) [model unit]
+        """
+        return self.snap(rng.uniform(self.lb, self.ub, size=(count, self.n_registers)))
+
     @property
     def margin_before(self) -> float:
         return float(error_budget(self.deviation, self.lower, self.upper))

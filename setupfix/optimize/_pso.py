@@ -115,7 +115,7 @@ class PSO(Metaheuristic):
         n = problem.n_registers
         p = max(1, min(self.n_particles, evaluate.remaining))
         vmax = self.vmax_fraction * (problem.ub - problem.lb)
-        x = problem.snap(rng.uniform(problem.lb, problem.ub, size=(p, n)))
+        x = problem.sample(rng, p)
         v = rng.uniform(-1.0, 1.0, size=(p, n)) * vmax
         f = evaluate(x)
         pbest, pbest_f = x.copy(), f.copy()
