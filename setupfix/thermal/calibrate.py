@@ -67,6 +67,15 @@ def _safe(values: Array) -> Array:
     return np.where(np.isfinite(values), values, np.inf)
 
 
+def _initial(objective: Objective, lo: Array, hi: Array, size: int, rng: np.random.Generator,
+             x0: npt.ArrayLike | None) -> tuple[Array, Array]:
+    """A uniform random population in the box (``x0`` clipped into row 0) and its objective values."""
+    pop = lo + rng.random((size, lo.size)) * (hi - lo)
+    if x0 is not None:
+        pop[0] = np.clip(np.asarray(x0, dtype=float), lo, hi)
+    return pop, _safe(objective(pop))
+
+
 def cuckoo_search(objective: Objective, lower: npt.ArrayLike, upper: npt.ArrayLike, *, n_nests: int = 25,
                   pa: float = 0.25, n_iter: int = 100, alpha: float = 0.01, beta: float = 1.5,
                   rng: np.random.Generator | None = None, x0: npt.ArrayLike | None = None) -> SearchResult:
@@ -101,10 +110,7 @@ def cuckoo_search(objective: Objective, lower: npt.ArrayLike, upper: npt.ArrayLi
     rng = rng if rng is not None else np.random.default_rng()
     lo, hi = _box(lower, upper)
     dim = lo.size
-    nests = lo + rng.random((n_nests, dim)) * (hi - lo)
-    if x0 is not None:
-        nests[0] = np.clip(np.asarray(x0, dtype=float), lo, hi)
-    fit = _safe(objective(nests))
+    nests, fit = _initial(objective, lo, hi, n_nests, rng, x0)
     evaluations = n_nests
     best = int(np.argmin(fit))
     history = [fit[best]]
@@ -165,11 +171,8 @@ def particle_swarm(objective: Objective, lower: npt.ArrayLike, upper: npt.ArrayL
     lo, hi = _box(lower, upper)
     dim = lo.size
     span = hi - lo
-    x = lo + rng.random((n_particles, dim)) * span
-    if x0 is not None:
-        x[0] = np.clip(np.asarray(x0, dtype=float), lo, hi)
+    x, fit = _initial(objective, lo, hi, n_particles, rng, x0)
     vel = (rng.random((n_particles, dim)) - 0.5) * span * v_max
-    fit = _safe(objective(x))
     evaluations = n_particles
     pbest, pfit = x.copy(), fit.copy()
     g = int(np.argmin(pfit))
@@ -223,10 +226,7 @@ def genetic_algorithm(objective: Objective, lower: npt.ArrayLike, upper: npt.Arr
     rng = rng if rng is not None else np.random.default_rng()
     lo, hi = _box(lower, upper)
     dim = lo.size
-    pop = lo + rng.random((pop_size, dim)) * (hi - lo)
-    if x0 is not None:
-        pop[0] = np.clip(np.asarray(x0, dtype=float), lo, hi)
-    fit = _safe(objective(pop))
+    pop, fit = _initial(objective, lo, hi, pop_size, rng, x0)
     evaluations = pop_size
     best = int(np.argmin(fit))
     elite, elite_f = pop[best].copy(), fit[best]
