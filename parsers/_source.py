@@ -11,7 +11,8 @@ from pathlib import Path
 
 from setupfix.errors import ParseError, SourceLocation
 
-__all__ = ["Peek", "peek_file", "decode", "read_bytes", "read_text", "parse_number", "csv_records"]
+__all__ = ["Peek", "peek_file", "decode", "read_bytes", "read_text", "parse_number", "point_number",
+           "csv_records"]
 
 #: Largest report accepted [bytes]; a CMM text report is kilobytes, a JSON export megabytes.
 MAX_REPORT_BYTES = 256 * 1024 * 1024
@@ -113,6 +114,30 @@ def parse_number(text: str) -> float:
     value = float(text)
     if not math.isfinite(value):
         raise ValueError(f"not a finite number: {text!r}")
+    return value
+
+
+def point_number(text: str, where: SourceLocation, what: str = "", *, allow_empty: bool = True) -> float:
+    """A finite number written with a decimal point, as the canonical CSV and DMIS require.
+
+    Empty text gives NaN when ``allow_empty``.  Unlike :func:`parse_number` no decimal
+    comma is accepted: in these formats a comma separates fields.
+
+    Raises
+    ------
+    ParseError
+        At ``where``, prefixed by ``what`` (e.g. ``"column 'actual': "``), when the text
+        is not a finite number.
+    """
+    text = text.strip()
+    if not text and allow_empty:
+        return math.nan
+    try:
+        value = float(text)
+    except ValueError:
+        raise ParseError(f"{what}expected a number, found {text[:30]!r}", location=where) from None
+    if not math.isfinite(value):
+        raise ParseError(f"{what}expected a finite number, found {text[:30]!r}", location=where)
     return value
 
 

@@ -13,7 +13,7 @@ from pathlib import Path
 
 import pandas as pd
 
-from parsers._source import csv_records, decode, read_bytes
+from parsers._source import csv_records, decode, point_number, read_bytes
 from setupfix.errors import ParseError, SourceLocation
 from setupfix.model.measurements import CANONICAL_COLUMNS, LENGTH_COLUMNS
 from setupfix.units import LENGTH_UNITS, length_factor
@@ -34,19 +34,6 @@ def sniff_canonical(head: str) -> bool:
     except Exception:  # noqa: BLE001 - a sniffer never raises
         return False
     return {"characteristic", "nominal"} <= cols and bool(cols & {"actual", "deviation"})
-
-
-def _float(text: str, where: SourceLocation, column: str) -> float:
-    text = text.strip()
-    if text == "":
-        return math.nan
-    try:
-        value = float(text)
-    except ValueError:
-        raise ParseError(f"column {column!r}: expected a number, found {text!r}", location=where) from None
-    if not math.isfinite(value):
-        raise ParseError(f"column {column!r}: expected a finite number, found {text!r}", location=where)
-    return value
 
 
 def finish_table(rows: list[dict[str, object]] | dict[str, object], path: str) -> pd.DataFrame:
@@ -126,7 +113,7 @@ def read_canonical(path: str | Path, *, text: str | None = None, unit: str | Non
         factor = length_factor(row_unit, "mm")
         for col in LENGTH_COLUMNS:
             if col in row:
-                row[col] = _float(str(row[col]), where, col) * factor
+                row[col] = point_number(str(row[col]), where, f"column {col!r}: ") * factor
         nominal, actual = float(row["nominal"]), float(row.get("actual", math.nan))  # type: ignore[arg-type]
         stated = float(row.get("deviation", math.nan))  # type: ignore[arg-type]
         if math.isnan(nominal):

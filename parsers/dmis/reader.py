@@ -23,7 +23,7 @@ from pathlib import Path
 
 import pandas as pd
 
-from parsers._source import read_text
+from parsers._source import point_number, read_text
 from parsers.canonical import finish_table
 from parsers.dmis.statements import Statement, parse_statement, split_statements
 from setupfix.errors import ParseError, ParseWarning, SourceLocation
@@ -63,19 +63,6 @@ def _numbers_after_cart(words: tuple[str, ...]) -> list[str]:
     return list(words[upper.index("CART") + 1:]) if "CART" in upper else []
 
 
-def _num(text: str, where: SourceLocation, allow_empty: bool = True) -> float:
-    text = text.strip()
-    if not text and allow_empty:
-        return math.nan
-    try:
-        value = float(text)
-    except ValueError:
-        raise ParseError(f"expected a number, found {text[:30]!r}", location=where) from None
-    if not math.isfinite(value):
-        raise ParseError(f"expected a finite number, found {text[:30]!r}", location=where)
-    return value
-
-
 def _geometry(feature: _Feature | None, axis: str, where: SourceLocation) -> float:
     """Coordinate or size of a feature named by a CORTOL axis word; NaN when unknown."""
     if feature is None:
@@ -86,7 +73,7 @@ def _geometry(feature: _Feature | None, axis: str, where: SourceLocation) -> flo
         index = {"SPHERE": 3, "CIRCLE": 6, "CYLNDR": 6, "CYLINDER": 6, "ARC": 6}.get(feature.kind)
     if index is None or index >= len(nums):
         return math.nan
-    return _num(nums[index], SourceLocation(where.path, line=feature.line))
+    return point_number(nums[index], SourceLocation(where.path, line=feature.line))
 
 
 def read_dmis(path: str | Path, *, unit: str | None = None, encoding: str | None = None) -> pd.DataFrame:
@@ -211,10 +198,10 @@ def _result_row(st: Statement, feat: str, nominal: dict[str, _Feature], actual: 
     if kind == "CORTOL":
         if len(values) < 2:
             raise ParseError("CORTOL result needs an axis and a deviation", location=where)
-        axis, reported = values[0].upper(), _num(values[1], where, allow_empty=False)
+        axis, reported = values[0].upper(), point_number(values[1], where, allow_empty=False)
         if tol is not None and len(tol.words) >= 4:
             tw = SourceLocation(name, line=tol.line)
-            lower, upper = _num(tol.words[2], tw), _num(tol.words[3], tw)
+            lower, upper = point_number(tol.words[2], tw), point_number(tol.words[3], tw)
         nom, act = _geometry(f_nom, axis, where), _geometry(f_act, axis, where)
         if math.isnan(nom) and math.isnan(act):
             return None
@@ -230,8 +217,8 @@ def _result_row(st: Statement, feat: str, nominal: dict[str, _Feature], actual: 
         numeric = [v for v in values if _is_number(v)]
         if not numeric:
             raise ParseError(f"{kind} result without a value", location=where)
-        nom, act = 0.0, _num(numeric[0], where)
-        limits = [_num(v, SourceLocation(name, line=tol.line)) for v in tol.words[1:] if _is_number(v)] \
+        nom, act = 0.0, point_number(numeric[0], where)
+        limits = [point_number(v, SourceLocation(name, line=tol.line)) for v in tol.words[1:] if _is_number(v)] \
             if tol is not None else []
         if kind in _PROFILE and len(limits) >= 2:
             lower, upper = limits[0], limits[1]
@@ -244,8 +231,8 @@ def _result_row(st: Statement, feat: str, nominal: dict[str, _Feature], actual: 
         nom = _geometry(f_nom, "DIAMETER", where) if kind == "DIAM" else math.nan
         if not numeric or math.isnan(nom):
             return None
-        act = _num(numeric[0], where)
-        limits = [_num(v, SourceLocation(name, line=tol.line)) for v in tol.words[1:] if _is_number(v)] \
+        act = point_number(numeric[0], where)
+        limits = [point_number(v, SourceLocation(name, line=tol.line)) for v in tol.words[1:] if _is_number(v)] \
             if tol is not None else []
         if len(limits) >= 2:
             lower, upper = limits[0], limits[1]
@@ -256,7 +243,7 @@ def _result_row(st: Statement, feat: str, nominal: dict[str, _Feature], actual: 
     x = y = z = math.nan
     if f_nom is not None and len(f_nom.values) >= 3:
         loc = SourceLocation(name, line=f_nom.line)
-        x, y, z = (_num(v, loc) for v in f_nom.values[:3])
+        x, y, z = (point_number(v, loc) for v in f_nom.values[:3])
     return {"characteristic": st.label, "nominal": nom, "actual": act, "lower": lower, "upper": upper,
             "x": x, "y": y, "z": z, "status": status, "source": f"{name}:{st.line}"}
 
