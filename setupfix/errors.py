@@ -19,6 +19,8 @@ __all__ = [
     "SolverError",
     "NotFittedError",
     "ExportError",
+    "ParameterError",
+    "Note",
     "ParseWarning",
     "ConvergenceWarning",
 ]
@@ -114,6 +116,41 @@ class NotFittedError(SolverError, AttributeError):
 
 class ExportError(SetupfixError, OSError):
     """A result file cannot be written."""
+
+
+class ParameterError(SetupfixError, ValueError):
+    """A hyper-parameter, option or setting is outside its allowed range or set.
+
+    The message names the owner (optimiser, thermal method, command), the parameter,
+    the value given and what is allowed, e.g.
+    ``PSO: n_particles must be an int in [1, 100000], got -5``.
+    """
+
+
+@dataclass(frozen=True, slots=True)
+class Note:
+    """A warning returned as data (never through the process-global ``warnings`` state).
+
+    Readers and use cases return their notes with their result, so that work run in
+    threads (the TUI, batch workers) keeps its notes apart.
+
+    Parameters
+    ----------
+    message : str
+        What was skipped, assumed or suspicious, one line, without the location.
+    location : SourceLocation, optional
+        Where (file, line, key, element).
+    kind : str
+        A short machine-readable category: ``"parse"``, ``"unit"``, ``"match"``,
+        ``"mismatch"``, ``"solver"``, ``"thermal"``, ``"safety"``, …
+    """
+
+    message: str
+    location: SourceLocation | None = None
+    kind: str = "warning"
+
+    def __str__(self) -> str:
+        return f"{self.location}: {self.message}" if self.location else self.message
 
 
 class ParseWarning(UserWarning):
