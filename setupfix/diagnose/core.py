@@ -144,8 +144,10 @@ class Diagnoser(ValidatedParams):
         self.reselect_every = reselect_every
         self.lam = lam
 
-    def run(self, layout: Layout, series: Series) -> Diagnosis:
+    def run(self, layout: Layout, series: Series, *, declared: tuple[EffectSpec, ...] = ()) -> Diagnosis:
         """Fit, trace, add, walk forward and forecast.
+
+        ``declared`` effects (the model's ``[effects]``) belong to the declared model.
 
         Raises
         ------
@@ -157,14 +159,14 @@ class Diagnoser(ValidatedParams):
         if obs.n == 0:
             raise ParameterError("diagnose: the series has no measured dimension")
         selection = select_effects(layout, series, alpha=self.alpha, max_effects=self.max_effects,
-                                   n_folds=self.n_folds, obs=obs)
-        before = fit_model(layout, series, obs=obs)
-        after = fit_model(layout, series, selection.found, obs=obs)
+                                   n_folds=self.n_folds, obs=obs, declared=declared)
+        before = fit_model(layout, series, declared, obs=obs)
+        after = fit_model(layout, series, declared + selection.found, obs=obs)
         effects = []
         accepted = [s for s in selection.steps if s.accepted]
         for i, spec in enumerate(selection.found):
-            est, se = after.estimate(i)
-            partial: Fit = fit_model(layout, series, selection.found[:i + 1], obs=obs)
+            est, se = after.estimate(len(declared) + i)
+            partial: Fit = fit_model(layout, series, declared + selection.found[:i + 1], obs=obs)
             effects.append(EffectResult(spec, est, se, spec.unit(layout.unit),
                                         error_summary(partial.residual, layout.lower, layout.upper).rms,
                                         accepted[i].alike))
@@ -173,7 +175,7 @@ class Diagnoser(ValidatedParams):
         if self.walk and series.n_cycles > self.min_train:
             walk = walk_forward(layout, series, score_composite=after.relation_matrix(layout),
                                 min_train=self.min_train, reselect_every=self.reselect_every, lam=self.lam,
-                                alpha=self.alpha)
+                                alpha=self.alpha, declared=declared)
         elif self.walk:
             notes.append(f"{series.n_cycles} cycle(s): too few to walk forward (needs more than {self.min_train})")
         forecast, _ = next_cycle(layout, series, after)

@@ -175,7 +175,8 @@ def _cv_sse(X: Array, z: Array, cycle: npt.NDArray[np.intp], n_folds: int) -> fl
 
 
 def select_effects(layout: Layout, series: Series, *, alpha: float = 0.01, max_effects: int = 4,
-                   n_folds: int = 5, relations: bool = True, obs: Observations | None = None) -> Selection:
+                   n_folds: int = 5, relations: bool = True, obs: Observations | None = None,
+                   declared: tuple[EffectSpec, ...] = ()) -> Selection:
     """Forward selection of the effects the declared model lacks.
 
     Parameters
@@ -189,13 +190,15 @@ def select_effects(layout: Layout, series: Series, *, alpha: float = 0.01, max_e
         Folds of the cross-validation over cycles.
     relations : bool, default=True
         Test the relation candidates (register × dimension).
+    declared : tuple of EffectSpec
+        Effects the model already has (its ``[effects]``): part of the base, never candidates.
 
     Returns
     -------
     Selection
     """
     obs = observations(layout, series) if obs is None else obs
-    specs = candidate_specs(layout, series)
+    specs = [s for s in candidate_specs(layout, series) if s not in declared]
     dense = [effect_columns(s, layout, series, obs)[:, 0] for s in specs]
     Z = np.column_stack(dense) if dense else np.zeros((obs.n, 0))
     C = layout.composite
@@ -208,7 +211,7 @@ def select_effects(layout: Layout, series: Series, *, alpha: float = 0.01, max_e
             if cyc.size >= 3:
                 pairs_ok[:, q] = np.ptp(series.applied[cyc], axis=0) > _TINY
     notes: list[str] = []
-    X = obs.base
+    X = np.hstack([obs.base] + [effect_columns(s, layout, series, obs) for s in declared])
     found: list[EffectSpec] = []
     blocks: list[Array] = []
     steps: list[Step] = []
@@ -220,6 +223,9 @@ def select_effects(layout: Layout, series: Series, *, alpha: float = 0.01, max_e
                      "over cycles); only static effects (scale, position, group) can be found")
     active_dense = np.ones(len(specs), dtype=bool)
     active_rel = pairs_ok.copy()
+    for s in declared:
+        if s.kind == "relation":
+            active_rel[layout.register_ids.index(str(s.register)), layout.dimension_ids.index(str(s.dimension))] = False
     first = True
     while len(found) < max_effects:
         Q = _orth(X)

@@ -92,7 +92,8 @@ def _state(pred: Array, C: Array) -> Array:
 
 
 def walk_forward(layout: Layout, series: Series, *, score_composite: Array | None = None, min_train: int = 5,
-                 reselect_every: int | None = None, lam: float = 0.3, alpha: float = 0.01) -> WalkForward:
+                 reselect_every: int | None = None, lam: float = 0.3, alpha: float = 0.01,
+                 declared: tuple[EffectSpec, ...] = ()) -> WalkForward:
     """Walk forward through ``series``; see the module text.
 
     Parameters
@@ -108,6 +109,8 @@ def walk_forward(layout: Layout, series: Series, *, score_composite: Array | Non
         EWMA weight.
     alpha : float
         Level of the selection (as :func:`select_effects`).
+    declared : tuple of EffectSpec
+        Effects of the model's ``[effects]``: part of the declared model (a).
 
     Returns
     -------
@@ -130,11 +133,11 @@ def walk_forward(layout: Layout, series: Series, *, score_composite: Array | Non
         train = series.take(np.arange(k))
         one = series.take([k])
         if pos == 0 or (k - scored[0]) % every == 0:
-            specs = select_effects(layout, train, alpha=alpha).found
+            specs = select_effects(layout, train, alpha=alpha, declared=declared).found
         states: dict[str, Array] = {}
-        declared = fit_model(layout, train)
-        states["declared"] = _state(declared.offset(), C)
-        aug: Fit = fit_model(layout, train, specs) if specs else declared
+        base = fit_model(layout, train, declared)
+        states["declared"] = _state(base.predict(layout, one, applied=False)[0], base.relation_matrix(layout))
+        aug: Fit = fit_model(layout, train, declared + specs) if specs else base
         states["augmented"] = _state(aug.predict(layout, one, applied=False)[0], aug.relation_matrix(layout))
         states["ewma"] = _state(ewma, C)
         states["none"] = base_state
