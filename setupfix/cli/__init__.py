@@ -31,6 +31,7 @@ COMMAND_MODULES: tuple[str, ...] = (
     "setupfix.cli._compare",
     "setupfix.cli._model",
     "setupfix.cli._thermal",
+    "setupfix.cli._tui",
 )
 
 
