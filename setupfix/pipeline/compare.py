@@ -225,7 +225,8 @@ def compare_report(model: ProcessModel | str | Path, report: str | Path, *, part
 
 def plot_comparison(comparison: Comparison, path: str | Path) -> None:
     """Draw convergence (Figs. 12–15) and spread (Figs. 16–17) of a comparison to PNG or SVG."""
-    from setupfix.plots import comparison_figure, save_figure
+    from setupfix.pipeline.writers import write_figure
+    from setupfix.plots import comparison_figure
 
     e = comparison.exact
     fig = comparison_figure(
@@ -234,4 +235,4 @@ def plot_comparison(comparison: Comparison, path: str | Path) -> None:
         exact=(e.margin_after, e.norm, e.fitness), unit=comparison.unit,
         title=f"{comparison.report} part {comparison.part or '—'}: {comparison.trials} trials per method",
     )
-    save_figure(fig, path)
+    write_figure(fig, path)
