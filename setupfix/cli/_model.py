@@ -11,6 +11,8 @@ import textwrap
 from setupfix.cli._common import add_report_options, cycle_options, report_options
 from setupfix.cli._format import format_relations
 from setupfix.pipeline.model import MatchTable, check_report, describe_model
+from setupfix.pipeline.scaffold import scaffold_model
+from setupfix.pipeline.writers import check_target, write_text
 
 MATRICES = ("R_MW", "R_WF", "R_TF", "R_FD", "C")
 #: Terminal width the human tables are laid out for.
@@ -43,6 +45,38 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     check.add_argument("--json", action="store_true", help="the match table as JSON (every name, in full)")
     add_report_options(check)
     check.set_defaults(run=run_check)
+
+    init = msub.add_parser("init", help="write a model scaffold from reports (then edit it)",
+                           description="Every toleranced length characteristic of the reports becomes a "
+                                       "dimension (name, nominal, limits, group = station) with a feature of its "
+                                       "own moved by one WKS (W1, G54) and one tool (T1, H1). The file loads as "
+                                       "written and 'correct' runs with it; its comments say what to edit.")
+    init.add_argument("reports", nargs="+", metavar="REPORT", help="CMM report(s) in any supported format")
+    init.add_argument("-o", "--out", required=True, metavar="MODEL",
+                      help="model TOML to write ('-': stdout); written atomically")
+    init.add_argument("--axis", choices=("X", "Y", "Z"), default=None,
+                      help="keep the characteristics whose name states this axis (and those stating none); "
+                           "default: keep all, process axis = the one most names state")
+    init.add_argument("--name", default=None, help="process name (default: from the report file names)")
+    g = init.add_argument_group("report reading")
+    g.add_argument("--format", default=None, metavar="NAME", help="report format (default: sniffed; see 'formats')")
+    g.add_argument("--unit", default=None, choices=("mm", "inch"), help="unit of values the report does not label")
+    g.add_argument("--encoding", default=None, metavar="ENC", help="text encoding (default: sniffed)")
+    g.add_argument("--columns", default=None, metavar="MAP",
+                   help="column mapping for shop tables, e.g. actual=Meas,nominal=Nom")
+    init.set_defaults(run=run_init)
+
+
+def run_init(args: argparse.Namespace) -> int:
+    check_target(args.out)
+    scaffold = scaffold_model(args.reports, axis=args.axis, name=args.name, **report_options(args))
+    write_text(args.out, scaffold.text + "\n")
+    if args.out != "-":
+        print(f"wrote {args.out}: {scaffold.dimensions} dimension(s), axis {scaffold.axis}, "
+              f"{len(scaffold.skipped)} characteristic(s) left out (listed in its head); "
+              "edit its registers and relations, then 'setupfix model check' and 'setupfix correct'",
+              file=sys.stderr)
+    return 0
 
 
 def run_show(args: argparse.Namespace) -> int:
