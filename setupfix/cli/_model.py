@@ -7,6 +7,7 @@ import json
 import math
 import sys
 import textwrap
+import unicodedata
 
 from setupfix.cli._common import add_report_options, cycle_options, report_options
 from setupfix.cli._format import format_relations
@@ -102,9 +103,19 @@ def run_check(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cells(text: str) -> int:
+    """Terminal cells of a text: East Asian wide and full-width characters take two."""
+    return sum(2 if unicodedata.east_asian_width(c) in "WF" else 1 for c in text)
+
+
 def _cut(text: str | None, width: int) -> str:
-    text = "—" if not text else text
-    return text if len(text) <= width else text[:width - 1] + "…"
+    """The text cut to ``width`` terminal cells (with "…") and padded to exactly that width."""
+    text = "—" if not text else "".join(c if c.isprintable() else "?" for c in text)
+    if _cells(text) > width:
+        while _cells(text) > width - 1:
+            text = text[:-1]
+        text += "…"
+    return text + " " * (width - _cells(text))
 
 
 def _n(value: float | None) -> str:
@@ -125,20 +136,20 @@ def format_match_table(table: MatchTable) -> str:
         lines = [f"{table.report}  part {part.part or '—'}:",
                  f"{int(part.measured.sum())} of {n_dims} model dimensions matched, "
                  f"{len(part.unmatched)} report characteristic(s) unmatched", ""]
-        name_w = min(22, max([len("dimension")] + [len(r["name"]) for r in rows]))
-        char_w = min(22, max([len("report name")] + [len(r["characteristic"] or "") for r in rows]))
+        name_w = min(22, max([len("dimension")] + [_cells(r["name"]) for r in rows]))
+        char_w = min(22, max([len("report name")] + [_cells(r["characteristic"] or "") for r in rows]))
         longest = max([0] + [len(r["station"] or "") for r in rows])
         st_w = min(10, max(len("station"), longest)) + 1 if longest else 0
         head = (f"{'station':<{st_w}}"[:st_w] + f"{'dimension':<{name_w}} {'report name':<{char_w}} "
                 f"{'nominal':>10} {'report':>10}  {'limits [' + unit + ']':<15} {'report':<15}")
         lines += [head.rstrip(), "-" * min(WIDTH, len(head.rstrip()))]
         for r in rows:
-            lead = f"{r['station'] or '':<{st_w}}"[:st_w] + f"{_cut(r['name'], name_w):<{name_w}} "
+            lead = (_cut(r["station"], st_w - 1) + " " if st_w else "") + _cut(r["name"], name_w) + " "
             if not r["matched"]:
                 near = ", ".join(r["closest"])
                 lines.append(lead + "absent from the report" + (f"; closest report names: {near}" if near else ""))
                 continue
-            lines.append((lead + f"{_cut(r['characteristic'], char_w):<{char_w}} {_n(r['nominal']):>10} "
+            lines.append((lead + f"{_cut(r['characteristic'], char_w)} {_n(r['nominal']):>10} "
                           f"{_n(r['report_nominal']):>10}  {_limits(r['lower'], r['upper']):<15} "
                           f"{_limits(r['report_lower'], r['report_upper']):<15}"
                           + (" ≠" if r["differs"] else "")).rstrip())

@@ -55,3 +55,11 @@ def test_check_marks_differences_and_strict_refuses(tmp_path, capsys):
     assert line.endswith("≠") and "warning:" in out and "nominal 31 mm differs from the model's 30 mm" in out
     assert main(["model", "check", MODEL, str(path), "--strict"]) == 1
     assert "refused by --strict" in capsys.readouterr().err
+
+
+def test_wide_characters_keep_columns_aligned():
+    from setupfix.cli._model import _cells, _cut
+
+    assert _cells("원통1(I).D") == 10 and _cut("원통1(I).D", 12) == "원통1(I).D  "
+    assert _cells(_cut("원통1(I).D", 7)) == 7 and _cut("원통1(I).D", 7).endswith("…")
+    assert _cut("a\x1b[31mb", 8) == "a?[31mb "  # control characters never reach the terminal
