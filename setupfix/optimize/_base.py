@@ -16,10 +16,12 @@ import numpy as np
 import numpy.typing as npt
 
 from setupfix.optimize._problem import CorrectionProblem, OptimizeResult
+from setupfix.search import generator
 
-__all__ = ["Optimizer", "Metaheuristic", "Evaluator", "make_result"]
+__all__ = ["Optimizer", "Metaheuristic", "Evaluator", "GridSpace", "GridObjective", "make_result"]
 
 Array = npt.NDArray[np.float64]
+
 
 
 def make_result(problem: CorrectionProblem, x: Array, *, optimizer: str, evaluations: int, seconds: float,
@@ -90,6 +92,11 @@ class Evaluator:
         """Evaluate grid solutions x of shape (n, n_registers) or (n_registers,); return f."""
         x = np.asarray(x, dtype=float)
         f1, f2, f = self.problem.evaluate(x)
+        self.record(x, f1, f2, f)
+        return f
+
+    def record(self, x: Array, f1: Array, f2: Array, f: Array) -> None:
+        """Count solutions x already evaluated elsewhere (their f1, f2, f) and keep the best."""
         flat_f = np.atleast_1d(f)
         i = int(np.argmax(flat_f))
         self.count += flat_f.size
@@ -99,12 +106,54 @@ class Evaluator:
             self.best_f2 = float(np.atleast_1d(f2)[i])
             self.best_x = np.atleast_2d(x)[i].copy()
         self._history.append((self.count, self.best_f1, self.best_f2, self.best_f))
-        return f
 
     @property
     def history(self) -> Array:
         """Best-so-far [evaluations, f1, f2, f] after each call, shape (k, 4)."""
         return np.array(self._history, dtype=float).reshape(-1, 4)
+
+
+class GridSpace:
+    """The register grid of a problem as a :class:`setupfix.search.Space`.
+
+    Start points are uniform in the bounds and snapped (:meth:`CorrectionProblem.sample`);
+    every move is snapped onto the grid inside the bounds (:meth:`CorrectionProblem.snap`),
+    so fixed registers (bounds 0, 0) never move.
+    """
+
+    def __init__(self, problem: CorrectionProblem) -> None:
+        self.problem = problem
+        self.lower = problem.lb
+        self.upper = problem.ub
+
+    def sample(self, rng: np.random.Generator, count: int) -> Array:
+        return self.problem.sample(rng, count)
+
+    def project(self, x: Array) -> Array:
+        return self.problem.snap(x)
+
+
+class GridObjective:
+    """−f (eq. 10) of grid solutions for the minimising searches of :mod:`setupfix.search`.
+
+    :meth:`observe` hands the solutions a search counts (always a prefix of the
+    block last evaluated) with their f1, f2 and f to the :class:`Evaluator`, so no
+    solution is evaluated twice.
+    """
+
+    def __init__(self, evaluate: Evaluator) -> None:
+        self.evaluate = evaluate
+        self._last: tuple[Array, Array, Array] = (np.empty(0), np.empty(0), np.empty(0))
+
+    def __call__(self, x: Array) -> Array:
+        f1, f2, f = self.evaluate.problem.evaluate(x)
+        self._last = (np.atleast_1d(f1), np.atleast_1d(f2), np.atleast_1d(f))
+        return -self._last[2]
+
+    def observe(self, x: Array, values: Array) -> None:
+        m = len(x)
+        f1, f2, f = self._last
+        self.evaluate.record(x, f1[:m], f2[:m], f[:m])
 
 
 class Metaheuristic(Optimizer):
@@ -125,7 +174,7 @@ class Metaheuristic(Optimizer):
     def solve(self, problem: CorrectionProblem) -> OptimizeResult:
         if self.n_solutions < 1:
             raise ValueError("n_solutions must be at least 1")
-        rng = np.random.default_rng(self.seed)
+        rng = generator(self.seed)  # seed None: setupfix.search.DEFAULT_SEED, never an unseeded run
         evaluate = Evaluator(problem, self.n_solutions)
         start = time.perf_counter()
         self._search(problem, rng, evaluate)
