@@ -78,6 +78,7 @@ import numpy.typing as npt
 
 from setupfix.objective import F1_WEIGHT
 from setupfix.optimize._base import Evaluator, Metaheuristic
+from setupfix.params import Interval
 from setupfix.optimize._problem import CorrectionProblem
 
 __all__ = ["CRIPSO", "coefficient_schedule", "planula_position"]
@@ -157,6 +158,11 @@ class CRIPSO(Metaheuristic):
     """
 
     name: ClassVar[str] = "cripso"
+    _parameter_constraints = {
+        **Metaheuristic._parameter_constraints,
+        "n_polyps": [Interval(int, 2, 100_000)],  # a tournament needs two polyps
+        "inertia": [Interval(float, 0.0, 2.0)],
+    }
 
     def __init__(self, *, n_polyps: int = 100, n_solutions: int = 5000, inertia: float = 0.75,
                  seed: int | None = None) -> None:
@@ -165,10 +171,6 @@ class CRIPSO(Metaheuristic):
         self.inertia = inertia
 
     def _search(self, problem: CorrectionProblem, rng: np.random.Generator, evaluate: Evaluator) -> None:
-        if self.n_polyps < 2:
-            raise ValueError("n_polyps must be at least 2: a tournament needs two polyps")
-        if not math.isfinite(self.inertia):
-            raise ValueError("inertia must be a finite number")
         total = evaluate.remaining
         colony = min(int(self.n_polyps), total)
         steps = total - colony

@@ -15,7 +15,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from setupfix.optimize._base import Evaluator, GridObjective, GridSpace, Metaheuristic
+from setupfix.optimize._base import POPULATION, Evaluator, GridObjective, GridSpace, Metaheuristic, count
+from setupfix.params import Interval
 from setupfix.optimize._problem import CorrectionProblem
 from setupfix.search import cuckoo_search
 
@@ -39,6 +40,13 @@ class CuckooSearch(Metaheuristic):
     """
 
     name = "cs"
+    _parameter_constraints = {
+        **Metaheuristic._parameter_constraints,
+        "n_nests": POPULATION,
+        "pa": [Interval(float, 0.0, 1.0)],
+        "alpha": [Interval(float, 0.0, 10.0, closed="right")],
+        "beta": [Interval(float, 0.0, 2.0, closed="right")],  # a Lévy-stable index
+    }
 
     def __init__(self, *, n_nests: int = 25, pa: float = 0.25, alpha: float = 0.01, beta: float = 1.5,
                  n_solutions: int = 5_000, seed: int | None = None) -> None:

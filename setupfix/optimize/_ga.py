@@ -13,7 +13,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from setupfix.optimize._base import Evaluator, GridObjective, GridSpace, Metaheuristic
+from setupfix.optimize._base import POPULATION, Evaluator, GridObjective, GridSpace, Metaheuristic, count
+from setupfix.params import Interval
 from setupfix.optimize._problem import CorrectionProblem
 from setupfix.search import tournament_ga
 
@@ -35,6 +36,12 @@ class GA(Metaheuristic):
     """
 
     name = "ga"
+    _parameter_constraints = {
+        **Metaheuristic._parameter_constraints,
+        "population": POPULATION,
+        "mutation_rate": [Interval(float, 0.0, 1.0)],
+        "tournament_size": count(1, 1000),
+    }
 
     def __init__(self, *, population: int = 50, mutation_rate: float = 0.1, tournament_size: int = 2,
                  n_solutions: int = 5_000, seed: int | None = None) -> None:

@@ -28,7 +28,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from setupfix.optimize._base import Evaluator, GridObjective, GridSpace, Metaheuristic
+from setupfix.optimize._base import POPULATION, Evaluator, GridObjective, GridSpace, Metaheuristic, count
+from setupfix.params import Interval
 from setupfix.optimize._problem import CorrectionProblem
 from setupfix.search import acceleration, particle_swarm
 
@@ -50,6 +51,12 @@ class PSO(Metaheuristic):
     """
 
     name = "pso"
+    _parameter_constraints = {
+        **Metaheuristic._parameter_constraints,
+        "n_particles": POPULATION,
+        "inertia": [Interval(float, 0.0, 2.0)],
+        "vmax_fraction": [Interval(float, 0.0, 1.0, closed="right")],
+    }
 
     def __init__(self, *, n_particles: int = 100, n_solutions: int = 10_000, inertia: float = 0.75,
                  vmax_fraction: float = 0.2, seed: int | None = None) -> None:

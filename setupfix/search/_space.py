@@ -136,7 +136,12 @@ def start(space: Space, rng: np.random.Generator, size: int, x0: npt.ArrayLike |
     return pop
 
 
+#: Most points any search may evaluate: bounds the run time whatever option is given.
+MAX_BUDGET = 10_000_000
+
+
 def check_budget(owner: str, budget: int, population: int) -> None:
-    """Budget and population must be positive (a search without them returns nothing)."""
-    if int(budget) < 1 or int(population) < 1:
-        raise ParameterError(f"{owner}: budget and population must be at least 1, got {budget} and {population}")
+    """Budget in [1, MAX_BUDGET] and a positive population (a search without them returns nothing)."""
+    if not 1 <= int(budget) <= MAX_BUDGET or int(population) < 1:
+        raise ParameterError(f"{owner}: budget must be an int in [1, {MAX_BUDGET}] and population at least 1, "
+                             f"got {budget} and {population}")

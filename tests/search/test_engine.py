@@ -53,5 +53,5 @@ def test_no_unseeded_generator():
 def test_bad_box_and_budget_are_parameter_errors():
     with pytest.raises(ParameterError, match="lower <= upper"):
         Box.of([1.0], [0.0])
-    with pytest.raises(ParameterError, match="at least 1"):
+    with pytest.raises(ParameterError, match="budget must be an int in"):
         cuckoo_search(lambda x: x[:, 0], BOX, budget=0, rng=generator(0))
