@@ -121,7 +121,8 @@ class COA(Metaheuristic):
         Groups of the k-means step.
     n_iterations : int, default=100
     n_solutions : int, default=40_000
-        Budget cap; with the defaults the iterations end first (≈ 34,000 solutions).
+        A cap only: with the defaults the ``n_iterations`` end first (the run length the
+        module docstring gives; ``tests/optimize/test_coa.py`` measures it).
     seed : int, optional
     """
 
