@@ -12,6 +12,6 @@ SPEC = register(FormatSpec(
     description="Zeiss CALYPSO characteristics table *_chr.txt (TAB separated, END line)",
     extensions=(),
     sniff=lambda peek: sniff_calypso(peek.text),
-    read=lambda path, unit=None, encoding=None, **_: read_calypso(path, unit=unit, encoding=encoding),
+    read=read_calypso,
     priority=40,
 ))

@@ -12,6 +12,6 @@ SPEC = register(FormatSpec(
     description="DMIS output .dmo (F/T nominals, FA/TA results; one part per file)",
     extensions=(".dmo", ".dmi", ".dms"),
     sniff=lambda peek: sniff_dmis(peek.text),
-    read=lambda path, unit=None, encoding=None, **_: read_dmis(path, unit=unit, encoding=encoding),
+    read=read_dmis,
     priority=50,
 ))

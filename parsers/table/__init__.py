@@ -13,7 +13,7 @@ SPEC = register(FormatSpec(
     description="shop CSV/TSV or Excel .xlsx table; columns mapped with --columns KEY=HEADER,... or guessed",
     extensions=(".xlsx", ".xlsm", ".csv", ".tsv"),
     sniff=lambda peek: sniff_table(peek.head, peek.text),
-    read=lambda path, unit=None, encoding=None, columns=None, **_: read_table(
-        path, columns=columns, unit=unit, encoding=encoding),
+    read=read_table,
+    options=("unit", "encoding", "columns"),
     priority=5,
 ))
