@@ -11,7 +11,7 @@ built-in readers.
 from __future__ import annotations
 
 from parsers._registry import FormatSpec, ReadResult, find_format, formats, read, read_report, register
-from parsers._source import STDIN, Source, load_source
+from parsers._source import STDIN, Source, final_line_break, load_source
 from parsers import canonical as _canonical
 
 __all__ = ["FormatSpec", "ReadResult", "Source", "STDIN", "find_format", "formats", "load_source", "read",
@@ -24,6 +24,7 @@ register(FormatSpec(
     sniff=lambda peek: _canonical.sniff_canonical(peek.text),
     read=_canonical.read_canonical,
     priority=10,
+    complete=final_line_break,
 ))
 # Built-in readers register themselves on import; add one line per format package here.
 from parsers import qif as _qif  # noqa: E402,F401

@@ -17,8 +17,10 @@ import pandas as pd
 import warnings
 
 from parsers._notes import collecting
-from parsers._source import Peek, Source, load_source, peek
-from setupfix.errors import Note, ParameterError, ParseWarning, SourceLocation, UnknownFormatError
+from parsers._rowkeys import row_keys
+from parsers._source import NO_FINAL_LINE_BREAK, Peek, Source, load_source, peek
+from setupfix.errors import (Note, ParameterError, ParseError, ParseWarning, SetupfixError, SourceLocation,
+                             UnknownFormatError)
 
 __all__ = ["FormatSpec", "ReadResult", "register", "formats", "find_format", "read", "read_report", "OPTIONS"]
 
@@ -49,6 +51,11 @@ class FormatSpec:
         Sniffers run in decreasing priority (specific formats before generic ones).
     options : tuple of str
         The options of :data:`OPTIONS` the reader uses; any other given is refused.
+    complete : callable(bytes) -> str or None, optional
+        Whether the bytes are a whole file as the format's writers end it (a final line
+        break, an ``ENDFIL``/``END`` statement): None when so, else what is missing.  A
+        file that fails it is refused as possibly truncated (issue 10).  Formats whose
+        parser refuses a cut file anyway (XML, JSON, zip) leave it None.
     """
 
     name: str
@@ -58,6 +65,7 @@ class FormatSpec:
     read: Reader
     priority: int = 0
     options: tuple[str, ...] = ("unit", "encoding")
+    complete: Callable[[bytes], str | None] | None = None
 
 
 @dataclass(frozen=True)
@@ -187,9 +195,44 @@ def read_report(path: str | Path | Source, *, format: str | None = None, **optio
     spec = find_format(source, format)
     options = {k: v for k, v in options.items() if v is not None}
     check_options(spec, options, source.name)
-    with collecting() as notes:
-        table = spec.read(source, **options)
+    missing = spec.complete(source.data) if spec.complete and source.data.strip() else None
+    try:
+        with collecting() as notes:
+            table = spec.read(source, **options)
+        if missing == NO_FINAL_LINE_BREAK and not _last_line_holds_no_data(spec, source, options, table):
+            raise _truncated(spec, source, missing)
+    except SetupfixError as exc:
+        if missing and exc.message.startswith(missing):
+            raise
+        if missing:
+            raise ParseError(f"{exc.message}; and the file {missing}, so it may be truncated", location=exc.location,
+                             hint="read it again once it is complete") from None
+        raise
+    if missing and missing != NO_FINAL_LINE_BREAK:
+        raise _truncated(spec, source, missing)
     return ReadResult(table, tuple(notes), spec.name, source.name)
+
+
+def _truncated(spec: FormatSpec, source: Source, missing: str) -> ParseError:
+    return ParseError(f"{missing}: the {spec.name} file may be truncated (still being written, or an "
+                      "interrupted copy)", location=SourceLocation(source.name), hint="read it again once it is complete")
+
+
+def _last_line_holds_no_data(spec: FormatSpec, source: Source, options: dict[str, Any], table: pd.DataFrame) -> bool:
+    """True when the file read without its unterminated last line gives the same rows.
+
+    Some real writers leave the last line unterminated (a Q-DAS ``K0081`` field, an OGP
+    rule of dashes); that is harmless when the line carries no number of a row.
+    """
+    cut = max(source.data.rfind(b"\n"), source.data.rfind(b"\r"))
+    if cut < 0:
+        return False
+    try:
+        with collecting():
+            shorter = spec.read(Source(source.name, source.data[: cut + 1]), **options)
+    except SetupfixError:
+        return False
+    return row_keys(shorter) == row_keys(table)
 
 
 def read(path: str | Path, *, format: str | None = None, **options: Any) -> pd.DataFrame:

@@ -4,8 +4,9 @@ from __future__ import annotations
 
 import csv
 import io
+import re
 import sys
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from typing import BinaryIO
 from dataclasses import dataclass
 from pathlib import Path
@@ -14,7 +15,7 @@ from parsers import numbers
 from setupfix.errors import ParseError, SourceLocation
 
 __all__ = ["Peek", "Source", "STDIN", "load_source", "peek", "peek_file", "decode", "read_bytes", "read_text", "parse_number", "point_number",
-           "csv_records"]
+           "csv_records", "final_line_break", "end_statement"]
 
 #: Largest report accepted [bytes]; a CMM text report is kilobytes, a JSON export megabytes.
 MAX_REPORT_BYTES = 256 * 1024 * 1024
@@ -174,6 +175,32 @@ def point_number(text: str, where: SourceLocation, what: str = "", *, allow_empt
         At ``where``, naming ``what``, when the text is not a finite number.
     """
     return numbers.parse_number(text, location=where, what=what.rstrip(": "), allow_empty=allow_empty)
+
+
+def final_line_break(data: bytes) -> str | None:
+    """None when ``data`` ends with a line break (trailing NULs, e.g. of UTF-16, aside), else why not.
+
+    Every text-report writer seen ends its last line; a file that does not was most
+    likely cut short (read while still being written, an interrupted copy).
+    """
+    if data.rstrip(b"\x00")[-1:] in (b"\n", b"\r"):
+        return None
+    return NO_FINAL_LINE_BREAK
+
+
+#: The reason :func:`final_line_break` gives.
+NO_FINAL_LINE_BREAK = "does not end with a line break"
+
+
+def end_statement(word: str) -> Callable[[bytes], str | None]:
+    """A completeness check: the last non-blank line is ``word`` (``ENDFIL``, ``END``), case-insensitive."""
+    pattern = re.compile(rb"(?:^|[\r\n])[ \t]*" + re.escape(word.encode()) + rb"[ \t]*[\r\n\x00\x1a]*\Z",
+                         re.IGNORECASE)
+
+    def check(data: bytes) -> str | None:
+        return None if pattern.search(data.rstrip(b"\x00")) else f"does not end with its {word} line"
+
+    return check
 
 
 def csv_records(text: str, path: str, **fmtparams: object) -> Iterator[tuple[int, list[str]]]:

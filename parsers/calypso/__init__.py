@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from parsers._source import end_statement
 from parsers._registry import FormatSpec, register
 from parsers.calypso.reader import read_calypso, sniff_calypso
 
@@ -14,4 +15,5 @@ SPEC = register(FormatSpec(
     sniff=lambda peek: sniff_calypso(peek.text),
     read=read_calypso,
     priority=40,
+    complete=end_statement("END"),
 ))

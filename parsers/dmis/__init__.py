@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from parsers._source import end_statement
 from parsers._registry import FormatSpec, register
 from parsers.dmis.reader import read_dmis, sniff_dmis
 
@@ -14,4 +15,5 @@ SPEC = register(FormatSpec(
     sniff=lambda peek: sniff_dmis(peek.text),
     read=read_dmis,
     priority=50,
+    complete=end_statement("ENDFIL"),
 ))

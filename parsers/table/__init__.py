@@ -2,11 +2,18 @@
 
 from __future__ import annotations
 
+from parsers._source import final_line_break
 from parsers._registry import FormatSpec, register
 from parsers.table.mapping import KEYS, guess_columns, parse_columns
 from parsers.table.reader import load_grid, read_table, sniff_table
 
 __all__ = ["KEYS", "guess_columns", "load_grid", "parse_columns", "read_table", "sniff_table", "SPEC"]
+
+
+def _table_complete(data: bytes) -> str | None:
+    """A workbook is a zip (its reader refuses a cut one); delimited text ends with a line break."""
+    return None if data[:2] == b"PK" else final_line_break(data)
+
 
 SPEC = register(FormatSpec(
     name="table",
@@ -16,4 +23,5 @@ SPEC = register(FormatSpec(
     read=read_table,
     options=("unit", "encoding", "columns"),
     priority=5,
+    complete=_table_complete,
 ))
