@@ -16,7 +16,7 @@ from pathlib import Path
 from setupfix.atomic import atomic_write
 from setupfix.model import ProcessModel
 
-__all__ = ["OFFSET_COLUMNS", "OffsetRow", "offset_rows", "write_offsets_csv"]
+__all__ = ["grid_decimals", "OFFSET_COLUMNS", "OffsetRow", "offset_rows", "write_offsets_csv"]
 
 OFFSET_COLUMNS = ("report", "part", "id", "register", "kind", "axis", "delta")
 
@@ -34,15 +34,15 @@ class OffsetRow:
     delta: float
 
 
-def _decimals(resolution: float) -> int:
-    """Decimals that show every multiple of the register resolution exactly."""
+def grid_decimals(resolution: float) -> int:
+    """Decimals that show every multiple of the register resolution exactly (0…9)."""
     return max(0, min(9, math.ceil(-math.log10(resolution) - 1e-9)))
 
 
 def offset_rows(model: ProcessModel, corrections: Mapping[str, float], *, report: str = "",
                 part: str = "") -> list[OffsetRow]:
     """Rows for every correctable (non-fixed) register of ``model``, in model order."""
-    digits = _decimals(model.resolution)
+    digits = grid_decimals(model.resolution)
     rows = []
     for reg in model.registers:
         if reg.fixed:
@@ -54,7 +54,7 @@ def offset_rows(model: ProcessModel, corrections: Mapping[str, float], *, report
 
 def write_offsets_csv(rows: Iterable[OffsetRow], target: str | Path, *, resolution: float = 0.001) -> None:
     """Write offset rows atomically (``target == "-"``: standard output)."""
-    digits = _decimals(resolution)
+    digits = grid_decimals(resolution)
     with atomic_write(target) as stream:
         writer = csv.writer(stream, lineterminator="\n")
         writer.writerow(OFFSET_COLUMNS)

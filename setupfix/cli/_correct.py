@@ -7,7 +7,7 @@ import json
 import sys
 
 from setupfix.cli._common import add_report_options, parse_stations, report_options
-from setupfix.cli._format import format_correction
+from setupfix.pipeline.present import format_correction
 from setupfix.offsets import write_offsets_csv
 from setupfix.optimize import OPTIMIZERS
 from setupfix.pipeline.correct import correct_report

@@ -6,7 +6,7 @@ import argparse
 import json
 import sys
 
-from setupfix.cli._format import format_relations
+from setupfix.pipeline.present import format_relations
 from setupfix.pipeline.model import describe_model
 
 MATRICES = ("R_MW", "R_WF", "R_TF", "R_FD", "C")

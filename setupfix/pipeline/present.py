@@ -1,4 +1,7 @@
-"""Human-readable text for the terminal (data only: stdout)."""
+"""Presentation shared by the CLI and the TUI: number formatting and text tables.
+
+Pure functions from result objects to text; nothing here prints or reads files.
+"""
 
 from __future__ import annotations
 
@@ -6,11 +9,12 @@ import math
 
 import numpy as np
 
+from setupfix.offsets import grid_decimals
 from setupfix.pipeline.correct import PartCorrection
 from setupfix.relation import RelationMatrices
 
 
-def _num(value: float, digits: int = 4) -> str:
+def format_number(value: float, digits: int = 4) -> str:
     if value is None or (isinstance(value, float) and not math.isfinite(value)):
         return "—"
     return f"{value:+.{digits}f}"
@@ -27,15 +31,15 @@ def format_correction(pc: PartCorrection) -> str:
     for row in pc.dimension_rows():
         flag = "  ◀ binding" if row["id"] in binding else ""
         out = "  OUT" if not (row["lower"] <= row["deviation"] <= row["upper"]) else ""
-        lines.append(f"{row['name']:<14}{_num(row['deviation']):>11}{_num(row['lower'], 3):>9}"
-                     f"{_num(row['upper'], 3):>9}{_num(row['predicted']):>11}{_num(row['margin']):>9}{flag}{out}")
+        lines.append(f"{row['name']:<14}{format_number(row['deviation']):>11}{format_number(row['lower'], 3):>9}"
+                     f"{format_number(row['upper'], 3):>9}{format_number(row['predicted']):>11}{format_number(row['margin']):>9}{flag}{out}")
     for did in pc.part.absent:
         name = next(d.name for d in pc.model.dimensions if d.id == did)
         lines.append(f"{name:<14}{'absent from report: not in the objective':>50}")
     lines += ["", f"corrections [{unit}], axis {pc.model.axis}:"]
     regs = {reg.id: reg for reg in pc.model.registers}
     for rid, delta in pc.corrections.items():
-        lines.append(f"  {rid:<6} {regs[rid].register:<10} {delta:+.{_digits(pc)}f}")
+        lines.append(f"  {rid:<6} {regs[rid].register:<10} {delta:+.{grid_decimals(pc.model.resolution)}f}")
     lines += [
         "",
         f"error budget before {r.margin_before:+.4f} {unit}, after {r.margin_after:+.4f} {unit}, "
@@ -48,10 +52,6 @@ def format_correction(pc: PartCorrection) -> str:
     lines.append(r.message)
     lines += pc.warnings
     return "\n".join(lines)
-
-
-def _digits(pc: PartCorrection) -> int:
-    return max(0, math.ceil(-math.log10(pc.model.resolution) - 1e-9))
 
 
 def format_matrix(matrix: np.ndarray, rows: list[str], cols: list[str], title: str) -> str:
