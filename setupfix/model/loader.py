@@ -23,6 +23,7 @@ from setupfix.model.process import (
     Register,
     RegisterKind,
 )
+from setupfix.model.safety import DIMENSION_KEYS, REGISTER_KEYS, SAFETY_KEYS, safety_from_doc
 from setupfix.units import LENGTH_UNITS
 
 __all__ = ["load_model", "model_from_dict"]
@@ -36,6 +37,11 @@ _KEYS = {
     "features": {"wks", "tools", "position"} | _FREE_TEXT,
     "dimensions": {"name", "aliases", "features", "nominal", "lower", "upper", "group"} | _FREE_TEXT,
 }
+# Safety rules and register preferences (setupfix.model.safety) extend the tables.
+_KEYS["wks"] |= REGISTER_KEYS
+_KEYS["tools"] |= REGISTER_KEYS
+_KEYS["dimensions"] |= DIMENSION_KEYS
+_KEYS["safety"] = set(SAFETY_KEYS) | _FREE_TEXT
 
 
 class _Problems:
@@ -237,6 +243,7 @@ def model_from_dict(doc: Mapping[str, Any], source: str = "<model>") -> ProcessM
         dimensions.append(dim)
     if not dimensions:
         p.add("dimensions", "the model declares no dimension")
+    safety = safety_from_doc(doc, p.add)
     p.raise_if_any()
     return ProcessModel(
         name=str(name).strip(),
@@ -250,6 +257,7 @@ def model_from_dict(doc: Mapping[str, Any], source: str = "<model>") -> ProcessM
         features=tuple(features),
         dimensions=tuple(dimensions),
         source=source,
+        safety=safety,
     )
 
 

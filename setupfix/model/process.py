@@ -14,6 +14,8 @@ import re
 from dataclasses import dataclass, field
 from typing import Literal
 
+from setupfix.model.safety import SafetySettings
+
 __all__ = [
     "RegisterKind",
     "Register",
@@ -124,6 +126,8 @@ class ProcessModel:
         Set D.
     source : str
         The file it was loaded from (for messages).
+    safety : SafetySettings
+        Safety rules and register preferences (``[safety]`` and per-register keys).
     """
 
     name: str
@@ -137,6 +141,7 @@ class ProcessModel:
     features: tuple[Feature, ...]
     dimensions: tuple[Dimension, ...]
     source: str = "<model>"
+    safety: SafetySettings = field(default_factory=SafetySettings)
 
     @property
     def registers(self) -> tuple[Register, ...]:

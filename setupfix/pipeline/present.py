@@ -20,36 +20,67 @@ def format_number(value: float, digits: int = 4) -> str:
     return f"{value:+.{digits}f}"
 
 
+_FLAG_TEXT = {"out": "OUT after", "out_before": "out before", "binding": "◀ binding", "given_up": "given up",
+              "rejected": "REJECT", "guard": "in guard band"}
+
+
+def format_flags(flags: list[str]) -> str:
+    """Dimension flags as short words for the table (``OUT after``, ``◀ binding``, …)."""
+    return ", ".join(_FLAG_TEXT.get(f, f) for f in flags)
+
+
+def verdict_line(pc: PartCorrection) -> str:
+    """One line saying what to do: APPLY / HOLD / REJECT and why."""
+    rec = pc.recommendation
+    if rec.verdict == "reject":
+        return rec.alarm
+    if rec.verdict == "hold":
+        why = next((r.message for r in rec.rules if r.rule in ("dead_band", "no_harm")), "no change needed")
+        return f"HOLD: leave the offsets as they are ({why})"
+    return "APPLY the corrections below"
+
+
 def format_correction(pc: PartCorrection) -> str:
-    """Per-dimension table, corrections by register, budgets and binding dimensions."""
+    """Verdict, per-dimension table with flags, every register, budgets, binding dimensions and rules."""
     r = pc.result
     unit = pc.model.unit
-    lines = [f"{pc.part.report}  part {pc.part.part or '—'}  ({r.optimizer}, {r.status}, {r.seconds * 1000:.0f} ms)", ""]
-    binding = set(r.binding)
-    head = f"{'dimension':<14}{'deviation':>11}{'lower':>9}{'upper':>9}{'predicted':>11}{'margin':>9}"
+    lines = [f"{pc.part.report}  part {pc.part.part or '—'}  ({r.optimizer}, {r.status}, {r.seconds * 1000:.0f} ms)",
+             f"verdict: {pc.verdict.upper()} — {verdict_line(pc)}", ""]
+    rows = pc.dimension_rows()
+    w = max([14] + [len(row["name"]) + 2 for row in rows])
+    head = f"{'dimension':<{w}}{'deviation':>11}{'lower':>9}{'upper':>9}{'predicted':>11}{'margin':>9}  flags"
     lines += [head, "-" * len(head)]
-    for row in pc.dimension_rows():
-        flag = "  ◀ binding" if row["id"] in binding else ""
-        out = "  OUT" if not (row["lower"] <= row["deviation"] <= row["upper"]) else ""
-        lines.append(f"{row['name']:<14}{format_number(row['deviation']):>11}{format_number(row['lower'], 3):>9}"
-                     f"{format_number(row['upper'], 3):>9}{format_number(row['predicted']):>11}{format_number(row['margin']):>9}{flag}{out}")
+    for row in rows:
+        lines.append(f"{row['name']:<{w}}{format_number(row['deviation']):>11}{format_number(row['lower'], 3):>9}"
+                     f"{format_number(row['upper'], 3):>9}{format_number(row['predicted']):>11}"
+                     f"{format_number(row['margin']):>9}  {format_flags(row['flags'])}".rstrip())
     for did in pc.part.absent:
         name = next(d.name for d in pc.model.dimensions if d.id == did)
-        lines.append(f"{name:<14}{'absent from report: not in the objective':>50}")
+        lines.append(f"{name:<{w}}{'absent from report: not in the objective':>50}")
     lines += ["", f"corrections [{unit}], axis {pc.model.axis}:"]
-    regs = {reg.id: reg for reg in pc.model.registers}
-    for rid, delta in pc.corrections.items():
-        lines.append(f"  {rid:<6} {regs[rid].register:<10} {delta:+.{grid_decimals(pc.model.resolution)}f}")
+    digits = grid_decimals(pc.model.resolution)
+    for reg in pc.register_rows():
+        note = "fixed" if reg["fixed"] else ("at limit" if reg["at_limit"] else "")
+        lines.append(f"  {reg['id']:<6} {reg['register']:<10} {reg['delta']:+.{digits}f}  {reg['offset']:<8} {note}"
+                     .rstrip())
     lines += [
         "",
-        f"error budget before {r.margin_before:+.4f} {unit}, after {r.margin_after:+.4f} {unit}, "
-        f"bonus {r.bonus:+.4f} {unit}; correction norm {r.norm:.4f} {unit}",
+        f"error budget before {pc.margin_before:+.4f} {unit}, after {pc.margin_after:+.4f} {unit}, "
+        f"bonus {pc.margin_after - pc.margin_before:+.4f} {unit}; correction norm {pc.norm:.4f} {unit}",
     ]
     if r.bound is not None:
         lines.append(f"upper bound (continuous LP): {r.bound:+.4f} {unit}")
     names = {d.id: d.name for d in pc.model.dimensions}
-    lines.append("binding (what stops a better correction): " + ", ".join(names[b] for b in r.binding))
-    lines.append(r.message)
+    if pc.binding:
+        lines.append("binding (what stops a better correction): " + ", ".join(names[b] for b in pc.binding))
+    if pc.recommendation.given_up:
+        lines.append("given up (need the NC program or the process, not the setup): "
+                     + ", ".join(names[b] for b in pc.recommendation.given_up))
+    if pc.verdict != "reject":
+        lines.append(r.message)
+    for rule in pc.recommendation.rules:
+        what = ", ".join([*rule.registers, *(names.get(d, d) for d in rule.dimensions)])
+        lines.append(f"rule {rule.rule}: {rule.message}" + (f" [{what}]" if what else ""))
     lines += pc.warnings
     return "\n".join(lines)
 

@@ -47,7 +47,9 @@ def test_offsets_csv_matches_json(capsys, tmp_path):
     code, out, _ = run(capsys, "correct", "--model", MODEL, "--json", "--offsets", str(target), REPORT)
     assert code == 0
     rows = list(csv.DictReader(target.open(encoding="utf-8")))
-    assert list(rows[0]) == ["report", "part", "id", "register", "kind", "axis", "delta"]
+    # the spec's columns first, in its order; then offset, current, value, verdict
+    assert list(rows[0])[:9] == ["report", "part", "id", "register", "kind", "axis", "delta", "unit", "mode"]
+    assert {r["unit"] for r in rows} == {"mm"} and {r["mode"] for r in rows} == {"add"}
     corrections = json.loads(out)["corrections"]
     assert {r["id"]: float(r["delta"]) for r in rows} == pytest.approx(corrections)
     by_id = {r["id"]: r for r in rows}
