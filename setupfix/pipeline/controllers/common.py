@@ -34,7 +34,7 @@ def one_mode(rows: Sequence[OffsetRow]) -> str:
     return modes.pop() if modes else "add"
 
 
-_UNSAFE = re.compile(r"[^A-Z0-9 .,:=+\-_/#]")
+_UNSAFE = re.compile(r"[^A-Z0-9 .+\-_/#]")
 
 
 def comment_text(text: str) -> str:

@@ -57,7 +57,7 @@ def _render(controller: str, rows: Sequence[OffsetRow], title: str,
     unit = "G21" if rows and rows[0].unit == "mm" else "G20"
     head = ["%", f"{PROGRAM} ({comment_text('SETUPFIX ' + title)})" if title else f"{PROGRAM} (SETUPFIX)"]
     if mode == "set":
-        head.append("(ABSOLUTE VALUES = CURRENT + CHANGE: SAFE TO RUN AGAIN)")
+        head.append("(ABSOLUTE VALUES - CURRENT PLUS CHANGE - SAFE TO RUN AGAIN)")
     else:
         head.append("(INCREMENTAL CHANGES: RUN ONCE ONLY - EACH RUN ADDS THEM AGAIN)")
     return "\n".join([*head, unit, *blocks, "G90", "M30", "%"]) + "\n"
