@@ -10,14 +10,18 @@ apply the change twice.  Writing the rows in a file format is
 
 from __future__ import annotations
 
+import csv
+import io
 import math
-from collections.abc import Mapping
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 
 from setupfix.errors import MatchError
 from setupfix.model import ProcessModel
+from setupfix.model.safety import safety_settings
 
-__all__ = ["grid_decimals", "format_value", "OFFSET_COLUMNS", "OffsetRow", "offset_rows"]
+__all__ = ["grid_decimals", "format_value", "OFFSET_COLUMNS", "OffsetRow", "offset_rows", "offsets_csv_text",
+           "csv_header", "csv_lines"]
 
 #: Columns of the offsets CSV, the spec's first (``../shared/spec/cli-json.md``).
 OFFSET_COLUMNS = ("report", "part", "id", "register", "kind", "axis", "delta", "unit", "mode",
@@ -27,6 +31,9 @@ OFFSET_COLUMNS = ("report", "part", "id", "register", "kind", "axis", "delta", "
 def grid_decimals(resolution: float) -> int:
     """Decimals that show every multiple of the register resolution exactly (0…9)."""
     return max(0, min(9, math.ceil(-math.log10(resolution) - 1e-9)))
+
+
+_decimals = grid_decimals  # former name, still imported by pipeline.view
 
 
 def format_value(value: float, decimals: int) -> str:
@@ -99,11 +106,12 @@ def offset_rows(model: ProcessModel, corrections: Mapping[str, float], *, report
         If ``current`` is given but lacks a correctable register.
     """
     digits = grid_decimals(model.resolution)
+    settings = safety_settings(model)
     rows = []
     for reg in model.registers:
         if reg.fixed:
             continue
-        policy = model.safety.register(reg.id)
+        policy = settings.register(reg.id)
         delta = round(float(corrections.get(reg.id, 0.0)), digits) + 0.0  # + 0.0 turns -0.0 into 0.0
         now = value = None
         if current is not None:
@@ -116,3 +124,27 @@ def offset_rows(model: ProcessModel, corrections: Mapping[str, float], *, report
                               policy.offset or ("wear" if reg.kind == "tool" else "geometry"), now, value,
                               policy.number, policy.edge, model.resolution, verdict))
     return rows
+
+
+def csv_header() -> str:
+    """The header line of the offsets CSV."""
+    return ",".join(OFFSET_COLUMNS) + "\n"
+
+
+def csv_lines(rows: Iterable[OffsetRow]) -> str:
+    """The data lines of ``rows`` (batch appends them report by report)."""
+    stream = io.StringIO()
+    writer = csv.writer(stream, lineterminator="\n")
+    for r in rows:
+        writer.writerow(r.cells())
+    return stream.getvalue()
+
+
+def offsets_csv_text(rows: Iterable[OffsetRow], *, resolution: float | None = None) -> str:
+    """The offsets CSV of ``rows`` (header included).
+
+    Each row carries its model's resolution; ``resolution`` is accepted for callers
+    of the former signature and ignored.  Written by
+    :func:`setupfix.pipeline.writers.write_offsets_csv`.
+    """
+    return csv_header() + csv_lines(rows)

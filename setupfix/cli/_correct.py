@@ -6,12 +6,13 @@ import argparse
 import json
 import sys
 
-from setupfix.cli._common import add_report_options, parse_stations, report_options
+from setupfix.cli._common import add_report_options, cycle_options, report_options
 from setupfix.cli.exit_codes import OK, REJECTED
 from setupfix.optimize import OPTIMIZERS
 from setupfix.pipeline.controllers import CONTROLLERS
 from setupfix.pipeline.correct import correct_report, write_correction_offsets
 from setupfix.pipeline.present import format_correction
+from setupfix.pipeline.writers import check_target
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
@@ -41,8 +42,10 @@ def add_offsets_options(p: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    if args.offsets:
+        check_target(args.offsets)
     results = correct_report(args.model, args.report, optimizer=args.optimizer, seed=args.seed, part=args.part,
-                             stations=parse_stations(args.stations), **report_options(args))
+                             **cycle_options(args), **report_options(args))
     rejected = any(r.verdict == "reject" for r in results)
     if args.offsets and not rejected:
         write_correction_offsets(results, args.offsets, controller=args.controller, current=args.current)

@@ -11,10 +11,9 @@ All lengths are in ``ProcessModel.unit``.
 from __future__ import annotations
 
 import re
+from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import Literal
-
-from setupfix.model.safety import SafetySettings
+from typing import Any, Literal
 
 __all__ = [
     "RegisterKind",
@@ -55,6 +54,9 @@ class Register:
         Bound on the absolute correction [model unit].
     fixed : bool
         A fixed register is never corrected.
+    extras : mapping
+        Values of the extra register keys other modules declare
+        (``loader.REGISTER_KEYS``), already validated, by key.
     """
 
     id: str
@@ -62,6 +64,7 @@ class Register:
     register: str
     limit: float
     fixed: bool = False
+    extras: Mapping[str, Any] = field(default_factory=dict)
 
 
 @dataclass(frozen=True, slots=True)
@@ -126,8 +129,9 @@ class ProcessModel:
         Set D.
     source : str
         The file it was loaded from (for messages).
-    safety : SafetySettings
-        Safety rules and register preferences (``[safety]`` and per-register keys).
+    extras : mapping
+        Parsed optional sections other modules declare (``loader.SECTIONS``),
+        by section name (``"safety"``, ``"effects"``); absent sections are absent.
     """
 
     name: str
@@ -141,7 +145,7 @@ class ProcessModel:
     features: tuple[Feature, ...]
     dimensions: tuple[Dimension, ...]
     source: str = "<model>"
-    safety: SafetySettings = field(default_factory=SafetySettings)
+    extras: Mapping[str, Any] = field(default_factory=dict)
 
     @property
     def registers(self) -> tuple[Register, ...]:

@@ -19,8 +19,11 @@ key                    default                    meaning
 Per register (``[wks.ID]`` / ``[tools.ID]``): ``cost`` (> 0, least-norm weight),
 ``offset`` (``"wear"`` or ``"geometry"``; default wear for a tool, geometry for a WKS),
 ``number`` and ``edge`` (controller slot where the register name does not give it),
-``dead_band``, ``gain``, ``cumulative_limit``.  Per dimension: ``uncertainty`` and
-``reject_band``.
+``dead_band``, ``gain``, ``cumulative_limit``.  Per dimension
+(``[safety.dimensions.ID]``): ``uncertainty`` and ``reject_band``.
+
+Both hook into the loader's extension points (``loader.SECTIONS`` and
+``loader.REGISTER_KEYS``); :func:`safety_settings` assembles them for a model.
 """
 
 from __future__ import annotations
@@ -30,8 +33,12 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from typing import Any, Literal
 
+from setupfix.model.loader import REGISTER_KEYS as _LOADER_REGISTER_KEYS
+from setupfix.model.loader import SECTIONS
+from setupfix.model.process import ProcessModel
+
 __all__ = ["OffsetType", "RegisterPolicy", "SafetySettings", "SAFETY_KEYS", "REGISTER_KEYS", "DIMENSION_KEYS",
-           "safety_from_doc"]
+           "parse_safety", "safety_settings"]
 
 OffsetType = Literal["wear", "geometry"]
 
@@ -40,7 +47,7 @@ SAFETY_KEYS = frozenset({"dead_band", "gain", "reject_band", "cumulative_limit",
                          "ewma"})
 #: Extra keys a ``[wks.ID]`` or ``[tools.ID]`` table may hold.
 REGISTER_KEYS = frozenset({"cost", "offset", "number", "edge", "dead_band", "gain", "cumulative_limit"})
-#: Extra keys a ``[dimensions.ID]`` table may hold.
+#: Keys of a ``[safety.dimensions.ID]`` table.
 DIMENSION_KEYS = frozenset({"uncertainty", "reject_band"})
 
 
@@ -78,100 +85,119 @@ class SafetySettings:
 
 _DEFAULT_POLICY = RegisterPolicy()
 
-AddProblem = Callable[[str, str], None]
-
-
-def _num(add: AddProblem, key: str, value: Any, low: float, high: float = math.inf, *,
+def _num(report: Callable[[str], None], value: Any, low: float, high: float = math.inf, *,
          open_low: bool = False) -> float | None:
     ok = isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
     if ok and (value > low or (not open_low and value == low)) and value <= high:
         return float(value)
     bracket = "(" if open_low else "["
     upper = "∞)" if high == math.inf else f"{high:g}]"
-    add(key, f"expected a number in {bracket}{low:g}, {upper}, found {value!r}")
+    report(f"expected a number in {bracket}{low:g}, {upper}, found {value!r}")
     return None
 
 
-def _slot(add: AddProblem, key: str, value: Any) -> int | None:
+def _slot(value: Any, report: Callable[[str], None]) -> int | None:
     if isinstance(value, int) and not isinstance(value, bool) and 0 <= value <= 99999:
         return value
-    add(key, f"expected a whole number in [0, 99999], found {value!r}")
+    report(f"expected a whole number in [0, 99999], found {value!r}")
     return None
 
 
-def _register_policy(add: AddProblem, key: str, table: Mapping[str, Any]) -> RegisterPolicy | None:
-    if not any(k in table for k in REGISTER_KEYS):
-        return None
-    offset = table.get("offset")
-    if offset is not None and offset not in ("wear", "geometry"):
-        add(f"{key}.offset", f'expected "wear" or "geometry", found {offset!r}')
-        offset = None
-    cost = _num(add, f"{key}.cost", table["cost"], 0.0, open_low=True) if "cost" in table else 1.0
-    return RegisterPolicy(
-        cost=cost if cost is not None else 1.0,
-        offset=offset,
-        number=_slot(add, f"{key}.number", table["number"]) if "number" in table else None,
-        edge=_slot(add, f"{key}.edge", table["edge"]) if "edge" in table else None,
-        dead_band=_num(add, f"{key}.dead_band", table["dead_band"], 0.0) if "dead_band" in table else None,
-        gain=_num(add, f"{key}.gain", table["gain"], 0.0, 1.0, open_low=True) if "gain" in table else None,
-        cumulative_limit=(_num(add, f"{key}.cumulative_limit", table["cumulative_limit"], 0.0, open_low=True)
-                          if "cumulative_limit" in table else None),
-    )
+def _offset(value: Any, report: Callable[[str], None]) -> str | None:
+    if value in ("wear", "geometry"):
+        return str(value)
+    report(f'expected "wear" or "geometry", found {value!r}')
+    return None
 
 
-def safety_from_doc(doc: Mapping[str, Any], add: AddProblem) -> SafetySettings:
-    """Read the safety settings of a parsed model document.
+_REGISTER_PARSERS: dict[str, Callable[[Any, Callable[[str], None]], Any]] = {
+    "cost": lambda v, r: _num(r, v, 0.0, open_low=True),
+    "offset": _offset,
+    "number": _slot,
+    "edge": _slot,
+    "dead_band": lambda v, r: _num(r, v, 0.0),
+    "gain": lambda v, r: _num(r, v, 0.0, 1.0, open_low=True),
+    "cumulative_limit": lambda v, r: _num(r, v, 0.0, open_low=True),
+}
 
-    ``add(key_path, message)`` collects each problem (the loader's problem list),
-    so a bad value is reported with the model's other problems, never raised alone.
-    Unknown keys of ``[safety]`` are reported the same way.
+
+def parse_safety(value: Any, model: ProcessModel, report: Callable[[str, str], None]) -> SafetySettings:
+    """The ``[safety]`` table (loader extension point ``SECTIONS["safety"]``).
+
+    ``report(key, message)`` adds a problem at ``safety.<key>``; a bad value falls
+    back to its default so every problem is reported in one pass.
     """
-    raw = doc.get("safety", {})
-    if not isinstance(raw, Mapping):
-        add("safety", f"expected a table, found {type(raw).__name__}")
-        raw = {}
-    for name in raw:
-        if name not in SAFETY_KEYS:
-            add(f"safety.{name}", f"unknown key (expected one of: {', '.join(sorted(SAFETY_KEYS))})")
+    if not isinstance(value, Mapping):
+        report("", f"expected a table, found {type(value).__name__}")
+        value = {}
+    for name in value:
+        if name not in SAFETY_KEYS and name != "dimensions":
+            report(name, f"unknown key (expected one of: {', '.join(sorted(SAFETY_KEYS | {'dimensions'}))})")
 
     def get(name: str, low: float, high: float = math.inf, *, open_low: bool = False) -> float | None:
-        return _num(add, f"safety.{name}", raw[name], low, high, open_low=open_low) if name in raw else None
+        if name not in value:
+            return None
+        return _num(lambda m: report(name, m), value[name], low, high, open_low=open_low)
 
-    registers: dict[str, RegisterPolicy] = {}
-    for section in ("wks", "tools"):
-        tables = doc.get(section, {})
-        for rid, table in (tables.items() if isinstance(tables, Mapping) else ()):
-            if isinstance(table, Mapping):
-                policy = _register_policy(add, f"{section}.{rid}", table)
-                if policy is not None:
-                    registers[rid] = policy
     uncertainty: dict[str, float] = {}
     reject: dict[str, float] = {}
-    dims = doc.get("dimensions", {})
-    for did, table in (dims.items() if isinstance(dims, Mapping) else ()):
-        if not isinstance(table, Mapping):
+    known = {d.id for d in model.dimensions}
+    dims = value.get("dimensions", {})
+    if not isinstance(dims, Mapping):
+        report("dimensions", "expected a table of dimension IDs")
+        dims = {}
+    for did, table in dims.items():
+        key = f"dimensions.{did}"
+        if did not in known:
+            report(key, f"unknown dimension {did!r}")
             continue
+        if not isinstance(table, Mapping):
+            report(key, "expected a table (uncertainty, reject_band)")
+            continue
+        for name in table:
+            if name not in DIMENSION_KEYS:
+                report(f"{key}.{name}", f"unknown key (expected one of: {', '.join(sorted(DIMENSION_KEYS))})")
         if "uncertainty" in table:
-            u = _num(add, f"dimensions.{did}.uncertainty", table["uncertainty"], 0.0)
+            u = _num(lambda m: report(f"{key}.uncertainty", m), table["uncertainty"], 0.0)
             if u is not None:
                 uncertainty[did] = u
         if "reject_band" in table:
-            r = _num(add, f"dimensions.{did}.reject_band", table["reject_band"], 0.0, open_low=True)
+            r = _num(lambda m: report(f"{key}.reject_band", m), table["reject_band"], 0.0, open_low=True)
             if r is not None:
                 reject[did] = r
     gain = get("gain", 0.0, 1.0, open_low=True)
-    uncertainty_all = get("uncertainty", 0.0)
+    u_all = get("uncertainty", 0.0)
     guard = get("guard_band", 0.0, 1.0)
-    ewma = get("ewma", 0.0, 1.0, open_low=True)
+    lam = get("ewma", 0.0, 1.0, open_low=True)
     return SafetySettings(
         dead_band=get("dead_band", 0.0),
         gain=1.0 if gain is None else gain,
         reject_band=get("reject_band", 0.0, open_low=True),
         cumulative_limit=get("cumulative_limit", 0.0, open_low=True),
-        uncertainty=0.0 if uncertainty_all is None else uncertainty_all,
+        uncertainty=0.0 if u_all is None else u_all,
         guard_band=1.0 if guard is None else guard,
-        ewma=1.0 if ewma is None else ewma,
-        registers=registers,
+        ewma=1.0 if lam is None else lam,
         dimension_uncertainty=uncertainty,
         dimension_reject_band=reject,
     )
+
+
+def safety_settings(model: ProcessModel) -> SafetySettings:
+    """The model's safety settings: its ``[safety]`` table (or the defaults) and per-register extras."""
+    base = model.extras.get("safety")
+    if not isinstance(base, SafetySettings):
+        base = SafetySettings()
+    registers: dict[str, RegisterPolicy] = {}
+    for reg in model.registers:
+        e = {k: v for k, v in reg.extras.items() if k in REGISTER_KEYS and v is not None}
+        if e:
+            registers[reg.id] = RegisterPolicy(**e)
+    if not registers:
+        return base
+    return SafetySettings(base.dead_band, base.gain, base.reject_band, base.cumulative_limit, base.uncertainty,
+                          base.guard_band, base.ewma, registers, base.dimension_uncertainty,
+                          base.dimension_reject_band)
+
+
+SECTIONS["safety"] = parse_safety
+_LOADER_REGISTER_KEYS.update(_REGISTER_PARSERS)

@@ -48,15 +48,16 @@ def format_correction(pc: PartCorrection) -> str:
              f"verdict: {pc.verdict.upper()} — {verdict_line(pc)}", ""]
     rows = pc.dimension_rows()
     w = max([14] + [len(row["name"]) + 2 for row in rows])
-    head = f"{'dimension':<{w}}{'deviation':>11}{'lower':>9}{'upper':>9}{'predicted':>11}{'margin':>9}  flags"
+    st = 9 if any(row.get("station") for row in rows) else 0  # station column only for fixtures
+    head = f"{'station':<{st}}"[:st] + f"{'dimension':<{w}}{'deviation':>11}{'lower':>9}{'upper':>9}{'predicted':>11}{'margin':>9}  flags"
     lines += [head, "-" * len(head)]
     for row in rows:
-        lines.append(f"{row['name']:<{w}}{format_number(row['deviation']):>11}{format_number(row['lower'], 3):>9}"
+        lines.append(f"{row.get('station') or '':<{st}}"[:st] + f"{row['name']:<{w}}{format_number(row['deviation']):>11}{format_number(row['lower'], 3):>9}"
                      f"{format_number(row['upper'], 3):>9}{format_number(row['predicted']):>11}"
                      f"{format_number(row['margin']):>9}  {format_flags(row['flags'])}".rstrip())
     for did in pc.part.absent:
-        name = next(d.name for d in pc.model.dimensions if d.id == did)
-        lines.append(f"{name:<{w}}{'absent from report: not in the objective':>50}")
+        dim = next(d for d in pc.model.dimensions if d.id == did)
+        lines.append(f"{dim.group or '':<{st}}"[:st] + f"{dim.name:<{w}}{'absent from report: not in the objective':>50}")
     lines += ["", f"corrections [{unit}], axis {pc.model.axis}:"]
     digits = grid_decimals(pc.model.resolution)
     for reg in pc.register_rows():

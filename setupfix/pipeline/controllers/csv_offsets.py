@@ -1,30 +1,13 @@
-"""The offsets CSV (``../shared/spec/cli-json.md``): the spec's columns first, then offset, current, value."""
+"""The offsets CSV (``../shared/spec/cli-json.md``): the spec's columns first, then offset, current, value, verdict."""
 
 from __future__ import annotations
 
-import csv
-import io
-from collections.abc import Iterable, Sequence
-from typing import TextIO
+from collections.abc import Sequence
 
-from setupfix.offsets import OFFSET_COLUMNS, OffsetRow
+from setupfix.offsets import OffsetRow, offsets_csv_text
 
-__all__ = ["render", "write_header", "write_rows"]
-
-
-def write_header(stream: TextIO) -> None:
-    csv.writer(stream, lineterminator="\n").writerow(OFFSET_COLUMNS)
-
-
-def write_rows(stream: TextIO, rows: Iterable[OffsetRow]) -> None:
-    """Append rows (batch streams them report by report)."""
-    writer = csv.writer(stream, lineterminator="\n")
-    for r in rows:
-        writer.writerow(r.cells())
+__all__ = ["render"]
 
 
 def render(rows: Sequence[OffsetRow], title: str = "") -> str:
-    out = io.StringIO()
-    write_header(out)
-    write_rows(out, rows)
-    return out.getvalue()
+    return offsets_csv_text(rows)
