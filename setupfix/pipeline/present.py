@@ -10,6 +10,7 @@ import math
 import numpy as np
 
 from setupfix.offsets import grid_decimals
+from setupfix.pipeline.batch import BatchSummary
 from setupfix.pipeline.correct import PartCorrection
 from setupfix.relation import RelationMatrices
 
@@ -127,3 +128,17 @@ def format_relations(rm: RelationMatrices, which: list[str], null: np.ndarray, r
             lines.append("  " + " ".join(terms))
     blocks.append("\n".join(lines))
     return "\n\n".join(blocks)
+
+
+def format_batch_summary(summary: BatchSummary, out: str) -> str:
+    """Reports, parts, verdicts, failures, skipped files and time of a batch run."""
+    verdicts = ", ".join(f"{summary.verdicts.get(v, 0)} {v}" for v in ("apply", "hold", "reject"))
+    rate = summary.reports / summary.seconds if summary.seconds > 0 else 0.0
+    lines = [f"{summary.reports} report(s), {summary.parts} part(s): {verdicts}",
+             f"{len(summary.failed)} failed, {len(summary.skipped)} skipped; "
+             f"{summary.seconds:.1f} s ({rate:.0f} reports/s)",
+             f"offsets written to {out}" if summary.written else f"nothing new: {out} left as it was"]
+    for path, reason in summary.skipped:
+        if not reason.startswith("still being written"):
+            lines.append(f"skipped {path}: {reason}")
+    return "\n".join(lines)

@@ -14,7 +14,6 @@ from __future__ import annotations
 import importlib
 from collections.abc import Callable, Sequence
 
-from setupfix.atomic import atomic_write
 from setupfix.errors import ParameterError
 from setupfix.offsets import OffsetRow
 from setupfix.pipeline.controllers.current import read_current
@@ -61,6 +60,6 @@ def write_offsets(rows: Sequence[OffsetRow], target: str, *, controller: str = "
     The text is complete before the file is opened: a register the format cannot
     express leaves no file at all.
     """
-    text = render(controller, rows, title)
-    with atomic_write(target) as stream:
-        stream.write(text)
+    from setupfix.pipeline.writers import write_text
+
+    write_text(target, render(controller, rows, title))
