@@ -33,7 +33,7 @@ from setupfix.objective import error_budget, margins
 from setupfix.optimize import CorrectionProblem, OptimizeResult
 
 __all__ = ["RuleEffect", "Policy", "Recommendation", "reject_mask", "guard_limits", "cumulative_bounds",
-           "apply_gain", "harmed_mask", "in_dead_band", "ewma", "recommend", "VERDICTS"]
+           "apply_gain", "harmed_mask", "in_dead_band", "ewma", "ewma_series", "recommend", "VERDICTS"]
 
 Array = npt.NDArray[np.float64]
 Mask = npt.NDArray[np.bool_]
@@ -198,6 +198,27 @@ def ewma(measured: Array, previous: Array | None, lam: float) -> Array:
     return lam * measured + (1.0 - lam) * prev
 
 
+def ewma_series(history: Array, lam: float) -> Array:
+    """EWMA over reports in time order, the last row the current report.
+
+    history : ndarray of shape (n_reports, n_dimensions) [unit]
+        Deviations of earlier reports, each already shifted by the corrections
+        applied since it was machined; NaN where a dimension was not measured or was
+        reset (a tool change since: its earlier values no longer apply).
+    lam : float
+        λ in (0, 1]; a_k = λ·y_k + (1 − λ)·a_{k−1}, starting from the first value.
+
+    Returns
+    -------
+    ndarray of shape (n_dimensions,)
+    """
+    a = np.full(history.shape[1], np.nan)
+    for row in np.asarray(history, dtype=float):
+        seen = ~np.isnan(row)
+        a = np.where(seen, np.where(np.isnan(a), row, lam * row + (1.0 - lam) * a), a)
+    return a
+
+
 def _zero_result(problem: CorrectionProblem, optimizer: str, status: str, message: str) -> OptimizeResult:
     x = np.zeros(problem.n_registers)
     budget = problem.margin_before
@@ -220,7 +241,8 @@ def _restrict(problem: CorrectionProblem, keep: Mask) -> CorrectionProblem:
 
 
 def recommend(problem: CorrectionProblem, policy: Policy, solve: Callable[[CorrectionProblem], OptimizeResult],
-              *, optimizer: str = "exact", names: Mapping[str, str] | None = None) -> Recommendation:
+              *, optimizer: str = "exact", names: Mapping[str, str] | None = None,
+              measured: Array | None = None) -> Recommendation:
     """Chain the safety rules around ``solve`` for one measured cycle.
 
     Order: reject band → guard band → cumulative limit → solve (per-step clamp =
@@ -236,6 +258,9 @@ def recommend(problem: CorrectionProblem, policy: Policy, solve: Callable[[Corre
         ``solve(problem) -> OptimizeResult`` (any optimiser).
     names : mapping, optional
         Dimension ID → name, for the messages.
+    measured : ndarray of shape (n_dimensions,), optional
+        The current report's own deviations when ``problem.deviation`` is a smoothed
+        estimate: the reject band judges the part as measured.
     """
     label = (lambda ids: ", ".join((names or {}).get(i, i) for i in ids))
     ids = np.array(problem.register_ids, dtype=object)
@@ -243,7 +268,7 @@ def recommend(problem: CorrectionProblem, policy: Policy, solve: Callable[[Corre
     rules: list[RuleEffect] = []
     dev, lower, upper = problem.deviation, problem.lower, problem.upper
 
-    bad = reject_mask(dev, lower, upper, policy.reject_band)
+    bad = reject_mask(dev if measured is None else measured, lower, upper, policy.reject_band)
     if bad.any():
         bad_ids = tuple(dims[bad])
         alarm = (f"REJECT: {label(bad_ids)} beyond the reject band (a broken tool, a bad measurement or a wrong "

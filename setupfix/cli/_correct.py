@@ -10,7 +10,7 @@ from setupfix.cli._common import add_report_options, cycle_options, report_optio
 from setupfix.cli.exit_codes import OK, REJECTED
 from setupfix.optimize import OPTIMIZERS
 from setupfix.pipeline.controllers import CONTROLLERS
-from setupfix.pipeline.correct import correct_report, write_correction_offsets
+from setupfix.pipeline.correct import correct_report, open_history, write_correction_offsets
 from setupfix.pipeline.present import format_correction
 from setupfix.pipeline.writers import check_target
 
@@ -27,6 +27,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--seed", type=int, default=None, help="seed of a metaheuristic (reproducible runs)")
     p.add_argument("--part", default=None, metavar="ID", help="correct only this part / cycle of the report")
     p.add_argument("--json", action="store_true", help="machine-readable output (shared/spec/cli-json.md)")
+    p.add_argument("--store", metavar="DB", default=None,
+                   help="history store: earlier reports and the corrections log for the EWMA smoothing "
+                        "(model [safety] ewma < 1)")
     add_offsets_options(p)
     add_report_options(p)
     p.set_defaults(run=run)
@@ -44,8 +47,9 @@ def add_offsets_options(p: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     if args.offsets:
         check_target(args.offsets)
+    store = open_history(args.store) if args.store else None
     results = correct_report(args.model, args.report, optimizer=args.optimizer, seed=args.seed, part=args.part,
-                             **cycle_options(args), **report_options(args))
+                             store=store, **cycle_options(args), **report_options(args))
     rejected = any(r.verdict == "reject" for r in results)
     if args.offsets and not rejected:
         write_correction_offsets(results, args.offsets, controller=args.controller, current=args.current)

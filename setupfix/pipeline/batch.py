@@ -228,10 +228,7 @@ def run_batch(model: ProcessModel | str | Path, folder: str | Path, out: str | P
             time.sleep(settle - youngest)
     summary = BatchSummary()
     seen: dict[str, str] = {}
-    if controller == "csv":
-        writer = _CsvOut(out)
-    else:
-        writer = _ProgramsOut(out, controller)
+    writer: _CsvOut | _ProgramsOut = _CsvOut(out) if controller == "csv" else _ProgramsOut(out, controller)
     done = _batch_reports(store) if store is not None and not force else set()
     options = dataclasses.replace(options, skip=frozenset(done))
     with contextlib.ExitStack() as stack:

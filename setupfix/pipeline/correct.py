@@ -8,6 +8,7 @@ problem → optimise → a :class:`PartCorrection` per cycle.
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -22,10 +23,12 @@ from setupfix.offsets import OffsetRow, offset_rows
 from setupfix.pipeline.controllers import read_current, write_offsets
 from setupfix.optimize import CorrectionProblem, OptimizeResult, get_optimizer
 from setupfix.pipeline.cycles import Stations, assign_stations, load_parts  # noqa: F401 - re-exported
-from setupfix.safety import Policy, Recommendation, budget, recommend
+from setupfix.pipeline.smoothing import smooth_part
+from setupfix.safety import Policy, Recommendation, RuleEffect, budget, recommend
+from setupfix.store import Store
 
 __all__ = ["PartCorrection", "safety_policy", "assign_stations", "load_parts", "select_parts", "correct_part", "correct_report",
-           "write_correction_offsets"]
+           "write_correction_offsets", "open_history"]
 
 
 @dataclass
@@ -44,6 +47,7 @@ class PartCorrection:
     result: OptimizeResult
     recommendation: Recommendation
     warnings: list[str] = field(default_factory=list)
+    measured: np.ndarray | None = None  #: the report's own deviations when ``problem`` holds smoothed ones
 
     @property
     def verdict(self) -> str:
@@ -121,11 +125,14 @@ class PartCorrection:
                 flags.append("given_up")
             if did in rejected:
                 flags.append("rejected")
-            rows.append({
+            row = {
                 "id": did, "name": d.name, "station": d.group, "deviation": float(self.problem.deviation[i]),
                 "predicted": float(predicted[i]), "lower": d.lower, "upper": d.upper,
                 "margin": float(margins[i]), "flags": flags,
-            })
+            }
+            if self.measured is not None:  # smoothed: the estimate is what was corrected
+                row["estimate"], row["deviation"] = row["deviation"], float(self.measured[i])
+            rows.append(row)
         return rows
 
     def offsets(self, current: Mapping[str, float] | None = None) -> list[OffsetRow]:
@@ -202,33 +209,57 @@ def safety_policy(model: ProcessModel, problem: CorrectionProblem,
 
 def correct_part(model: ProcessModel, part: PartMeasurement, *, optimizer: str = "exact",
                  seed: int | None = None, cumulative: Mapping[str, float] | None = None,
-                 **params: Any) -> PartCorrection:
-    """Recommend the corrections of one measured cycle: optimum under the model's safety rules."""
+                 store: Store | None = None, **params: Any) -> PartCorrection:
+    """Recommend the corrections of one measured cycle: optimum under the model's safety rules.
+
+    ``cumulative`` (register ID → change applied since the last reset) feeds the
+    cumulative limit; ``store`` (the history store) the EWMA smoothing when the
+    model's ``ewma`` λ is below 1.
+    """
+    notes = [str(n) for n in part.notes]
+    lam = safety_settings(model).ewma
+    smoothed = None
+    if lam < 1.0:
+        if store is None:
+            notes.append(f"ewma = {lam:g} needs the history store (--store): deviations not smoothed")
+        else:
+            smoothed = smooth_part(model, part, store, lam)
+            if smoothed.note:
+                notes.append(smoothed.note)
+    measured_part = part
+    if smoothed is not None and smoothed.used:
+        part = dataclasses.replace(part, deviation=smoothed.deviation)
     problem = CorrectionProblem.from_part(model, part)
+    raw = measured_part.deviation[measured_part.measured] if part is not measured_part else None
     opt = get_optimizer(optimizer, seed=seed, **params)
     rec = recommend(problem, safety_policy(model, problem, cumulative), opt.solve, optimizer=optimizer,
-                    names={d.id: d.name for d in model.dimensions})
+                    names={d.id: d.name for d in model.dimensions}, measured=raw)
+    if raw is not None and smoothed is not None:
+        rec.rules = (RuleEffect("ewma", f"deviations smoothed over {smoothed.used} earlier part(s), λ = {lam:g}",
+                                dimensions=problem.dimension_ids), *rec.rules)
     result = rec.result
-    notes = [str(n) for n in part.notes]
+    part = measured_part
     if part.absent:
         notes.append(f"{len(part.absent)} dimension(s) absent from the report, left out: {', '.join(part.absent)}")
     if part.unmatched:
         notes.append(f"{len(part.unmatched)} characteristic(s) match no dimension: {', '.join(part.unmatched[:8])}"
                      + (" …" if len(part.unmatched) > 8 else ""))
-    return PartCorrection(model=model, part=part, problem=problem, result=result, recommendation=rec, warnings=notes)
+    return PartCorrection(model=model, part=part, problem=problem, result=result, recommendation=rec, warnings=notes,
+                          measured=raw)
 
 
 def correct_report(model: ProcessModel | str | Path, report: str | Path, *, optimizer: str = "exact",
                    seed: int | None = None, part: str | None = None, format: str | None = None,
                    unit: str | None = None, encoding: str | None = None, columns: str | None = None,
                    stations: Stations | None = None, parts_per_cycle: int | None = None,
-                   strict: bool = False) -> list[PartCorrection]:
-    """Correct every cycle of a report (or the one named by ``part``)."""
+                   strict: bool = False, store: Store | None = None) -> list[PartCorrection]:
+    """Correct every cycle of a report (or the one named by ``part``); ``store`` feeds the smoothing."""
     if not isinstance(model, ProcessModel):
         model = load_model(model)
     parts = load_parts(model, report, format=format, unit=unit, encoding=encoding, columns=columns,
                        stations=stations, parts_per_cycle=parts_per_cycle, strict=strict)
-    return [correct_part(model, p, optimizer=optimizer, seed=seed) for p in select_parts(parts, part, report)]
+    return [correct_part(model, p, optimizer=optimizer, seed=seed, store=store)
+            for p in select_parts(parts, part, report)]
 
 
 def select_parts(parts: list[PartMeasurement], part: str | None, report: str | Path) -> list[PartMeasurement]:
@@ -273,3 +304,13 @@ def write_correction_offsets(results: Sequence[PartCorrection], target: str, *, 
     rows = [row for r in results for row in r.offsets(values)]
     title = f"{results[0].part.report} {results[0].part.part}".strip()
     write_offsets(rows, target, controller=controller, title=title)
+
+
+def open_history(path: str | Path) -> Store:
+    """Open an existing history store (a missing file is an error, not a new empty store)."""
+    from setupfix.store import open_store
+
+    if not Path(path).is_file():
+        raise ExportError("no history store here (import reports with 'setupfix history import')",
+                          location=SourceLocation(str(path)))
+    return open_store(path)
