@@ -8,8 +8,9 @@ import sys
 
 from setupfix.cli._common import add_report_options, cycle_options, report_options
 from setupfix.cli.exit_codes import OK, REJECTED
+from setupfix.model import load_model
 from setupfix.optimize import OPTIMIZERS
-from setupfix.pipeline.controllers import CONTROLLERS
+from setupfix.pipeline.controllers import CONTROLLERS, read_current
 from setupfix.pipeline.correct import correct_report, open_history, write_correction_offsets
 from setupfix.pipeline.present import format_correction
 from setupfix.pipeline.writers import check_target
@@ -48,11 +49,13 @@ def run(args: argparse.Namespace) -> int:
     if args.offsets:
         check_target(args.offsets)
     store = open_history(args.store) if args.store else None
-    results = correct_report(args.model, args.report, optimizer=args.optimizer, seed=args.seed, part=args.part,
-                             store=store, **cycle_options(args), **report_options(args))
+    model = load_model(args.model)
+    current = read_current(args.current, model) if args.current else None
+    results = correct_report(model, args.report, optimizer=args.optimizer, seed=args.seed, part=args.part,
+                             store=store, current=current, **cycle_options(args), **report_options(args))
     rejected = any(r.verdict == "reject" for r in results)
     if args.offsets and not rejected:
-        write_correction_offsets(results, args.offsets, controller=args.controller, current=args.current)
+        write_correction_offsets(results, args.offsets, controller=args.controller, current=current)
     for r in results:
         if r.verdict == "reject":
             print(f"error: {r.part.report}: part {r.part.part or '—'}: {r.recommendation.alarm}", file=sys.stderr)

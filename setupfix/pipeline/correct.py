@@ -28,7 +28,8 @@ from setupfix.safety import Policy, Recommendation, RuleEffect, budget, recommen
 from setupfix.store import Store
 
 __all__ = ["PartCorrection", "safety_policy", "assign_stations", "load_parts", "select_parts", "correct_part", "correct_report",
-           "write_correction_offsets", "open_history"]
+           "write_correction_offsets", "open_history",
+           "wear_totals"]
 
 
 @dataclass
@@ -184,7 +185,8 @@ def safety_policy(model: ProcessModel, problem: CorrectionProblem,
     """The model's safety settings as arrays aligned with ``problem`` (defaults filled in).
 
     ``cumulative`` gives, by register ID, the change applied since the last reset
-    (the current wear value of a wear register); it only matters with a cumulative limit.
+    (the current wear value of a wear register); the cumulative limit applies to
+    those registers only, since for the others the total is not known.
     """
     s = safety_settings(model)
     regs = [s.register(r.id) for r in model.registers]
@@ -197,7 +199,9 @@ def safety_policy(model: ProcessModel, problem: CorrectionProblem,
     return Policy(
         dead_band=np.array([p.dead_band if p.dead_band is not None else band for p in regs], dtype=float),
         gain=np.array([p.gain if p.gain is not None else s.gain for p in regs], dtype=float),
-        cumulative_limit=np.array([np.inf if c is None else c for c in cum_limit], dtype=float),
+        # only where the total since the last reset is known (a wear register's current value)
+        cumulative_limit=np.array([np.inf if c is None or r.id not in (cumulative or {}) else c
+                                   for c, r in zip(cum_limit, model.registers)], dtype=float),
         cumulative=np.array([float((cumulative or {}).get(r.id, 0.0)) for r in model.registers]),
         cost=np.array([p.cost for p in regs], dtype=float),
         reject_band=np.nan_to_num(reject, nan=np.inf, posinf=np.inf),
@@ -252,14 +256,35 @@ def correct_report(model: ProcessModel | str | Path, report: str | Path, *, opti
                    seed: int | None = None, part: str | None = None, format: str | None = None,
                    unit: str | None = None, encoding: str | None = None, columns: str | None = None,
                    stations: Stations | None = None, parts_per_cycle: int | None = None,
-                   strict: bool = False, store: Store | None = None) -> list[PartCorrection]:
-    """Correct every cycle of a report (or the one named by ``part``); ``store`` feeds the smoothing."""
+                   strict: bool = False, store: Store | None = None,
+                   current: Mapping[str, float] | None = None) -> list[PartCorrection]:
+    """Correct every cycle of a report (or the one named by ``part``).
+
+    ``store`` feeds the smoothing; ``current`` (the controller's current offsets by
+    register ID) the cumulative limit of wear registers (see :func:`wear_totals`).
+    """
     if not isinstance(model, ProcessModel):
         model = load_model(model)
     parts = load_parts(model, report, format=format, unit=unit, encoding=encoding, columns=columns,
                        stations=stations, parts_per_cycle=parts_per_cycle, strict=strict)
-    return [correct_part(model, p, optimizer=optimizer, seed=seed, store=store)
+    cumulative = wear_totals(model, current) if current is not None else None
+    return [correct_part(model, p, optimizer=optimizer, seed=seed, store=store, cumulative=cumulative)
             for p in select_parts(parts, part, report)]
+
+
+def wear_totals(model: ProcessModel, current: Mapping[str, float]) -> dict[str, float]:
+    """Change applied since the last reset of each wear register: its current value.
+
+    A wear offset is set to 0 when the tool (or the setup) is renewed, so its value
+    is the total of the corrections since; geometry registers have no such total.
+    """
+    settings = safety_settings(model)
+    out = {}
+    for reg in model.registers:
+        offset = settings.register(reg.id).offset or ("wear" if reg.kind == "tool" else "geometry")
+        if offset == "wear" and reg.id in current:
+            out[reg.id] = float(current[reg.id])
+    return out
 
 
 def select_parts(parts: list[PartMeasurement], part: str | None, report: str | Path) -> list[PartMeasurement]:
@@ -280,7 +305,7 @@ def select_parts(parts: list[PartMeasurement], part: str | None, report: str | P
 
 
 def write_correction_offsets(results: Sequence[PartCorrection], target: str, *, controller: str = "csv",
-                             current: str | Path | None = None) -> None:
+                             current: str | Path | Mapping[str, float] | None = None) -> None:
     """Write the offsets of ``results`` in a controller's syntax, atomically.
 
     ``current`` (the controller's current offsets, ``register,value``) makes the rows
@@ -297,7 +322,8 @@ def write_correction_offsets(results: Sequence[PartCorrection], target: str, *, 
     if not results:
         return
     model = results[0].model
-    values = read_current(current, model) if current is not None else None
+    values = (current if isinstance(current, Mapping) else read_current(current, model)) if current is not None \
+        else None
     if controller != "csv" and len(results) > 1:
         raise ExportError(f"{controller}: a program holds one correction, the report has {len(results)} cycles "
                           f"({', '.join(r.part.part or '—' for r in results)}): choose one with --part")

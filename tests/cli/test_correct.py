@@ -230,3 +230,24 @@ def test_controller_program_needs_one_cycle(capsys, tmp_path):
     code, _, err = run(capsys, "correct", "--model", MODEL, "--controller", "siemens", "--offsets",
                        str(tmp_path / "o.mpf"), REPORT)
     assert code == 1 and "siemens: cannot express register 'G58' (W5)" in err
+
+
+def test_current_offsets_give_absolute_program_and_feed_the_cumulative_limit(capsys, tmp_path):
+    from conftest import SAMPLES
+
+    sample = SAMPLES / "controllers"
+    target = tmp_path / "o.nc"
+    code, _, err = run(capsys, "correct", "--model", str(sample / "model.toml"), "--controller", "fanuc",
+                       "--current", str(sample / "current.csv"), "--offsets", str(target), str(sample / "report.csv"))
+    assert code == 0, err
+    text = target.read_text()
+    assert "G91" not in text.replace("G90", "") and "SAFE TO RUN AGAIN" in text
+    # H5 wear is at −0.012: with a cumulative limit of 0.015 it may move by −0.003 at most
+    model = tmp_path / "m.toml"
+    model.write_text((sample / "model.toml").read_text().replace("limit = 0.1\n", "limit = 0.1\n\n[safety]\n"
+                                                                 "cumulative_limit = 0.015\n", 1))
+    code, out, _ = run(capsys, "correct", "--model", str(model), "--current", str(sample / "current.csv"), "--json",
+                       str(sample / "report.csv"))
+    doc = json.loads(out)
+    assert doc["corrections"]["T5"] >= -0.003 - 1e-12 and "T5" in doc["at_limit"]
+    assert any(r["rule"] == "cumulative_limit" and "T5" in r["registers"] for r in doc["rules"])
