@@ -156,7 +156,10 @@ def _warn(notes: Iterable[Note]) -> list[str]:
 def run(args: argparse.Namespace) -> int:
     """Dispatch to :mod:`setupfix.pipeline.thermal`; printing only."""
     from setupfix.pipeline import thermal as pipe
+    from setupfix.pipeline.writers import check_target
 
+    if getattr(args, "output", None):
+        check_target(args.output)  # a folder, device, FIFO or link is refused before any work
     if args.action == "fit":
         result = pipe.fit_file(args.data, args.method, target=args.target, out=args.output,
                                axis=args.axis, registers=_columns(args.registers), **_fit_options(args))
