@@ -15,7 +15,8 @@ time constants are per sample.  A first row made only of numbers is data, not a
 header: the columns are then named by their letters (``A``, ``B``, …, as a
 spreadsheet shows them).
 
-Cells are read with one strict decimal-point number parser: ``2_1``, ``nan``,
+Cells are read with the project's one strict number parser (:mod:`parsers.numbers`,
+decimal point): ``2_1``, ``nan``,
 ``inf`` and ``1,5`` are refused with the file and line, never read as 21 or as a
 silent gap; an empty cell is a gap.  A header naming a column twice is refused (a
 dropped sensor would change every prediction silently).  The file goes through the
@@ -26,7 +27,6 @@ limit (131,072 characters) is refused with its line.
 from __future__ import annotations
 
 import math
-import re
 from dataclasses import dataclass, field
 from datetime import datetime
 from pathlib import Path
@@ -36,6 +36,7 @@ import numpy as np
 import numpy.typing as npt
 
 from parsers._source import csv_records, decode, read_bytes
+from parsers.numbers import try_number
 from setupfix.errors import Note, ParseError, SourceLocation
 
 __all__ = ["TemperatureLog", "read_temperature_log", "TIMESTAMP", "INDEX_COLUMNS", "strict_number"]
@@ -45,23 +46,15 @@ TIMESTAMP = "timestamp"
 #: Names of a sample-index column (case-insensitive).
 INDEX_COLUMNS = ("sample", "index", "sample_index")
 _ZIP = b"PK\x03\x04"
-#: What a log may write as a number: optional sign, digits with one decimal point, optional exponent.
-_NUMBER = re.compile(r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?")
 
 
 def strict_number(text: str) -> float | None:
-    """A finite number written with a decimal point, else None.
+    """A finite number written with a decimal point, else None (:func:`parsers.numbers.try_number`).
 
-    SWITCH: replace by the project's one strict number parser from the *parsers*
-    slice (``parsers._source``) when it lands on main; this pattern accepts exactly
-    ``[+-]digits[.digits][e±digits]`` so that ``2_1``, ``nan``, ``inf``, ``0x10`` and
-    ``1,5`` are refused (Python's ``float`` accepts the first four).
+    ``2_1``, ``nan``, ``inf``, ``0x10`` and ``1,5`` are refused (Python's ``float``
+    accepts the first three): in a CSV log a comma separates fields.
     """
-    text = text.strip()
-    if not _NUMBER.fullmatch(text):
-        return None
-    value = float(text)
-    return value if math.isfinite(value) else None
+    return try_number(text, decimal=".")
 
 
 @dataclass

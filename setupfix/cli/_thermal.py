@@ -156,7 +156,7 @@ def _warn(notes: Iterable[Note]) -> list[str]:
 def run(args: argparse.Namespace) -> int:
     """Dispatch to :mod:`setupfix.pipeline.thermal`; printing only."""
     from setupfix.pipeline import thermal as pipe
-    from setupfix.pipeline.writers import check_target
+    from setupfix.pipeline.thermal_files import check_target, prediction_csv, write_text
 
     if getattr(args, "output", None):
         check_target(args.output)  # a folder, device, FIFO or link is refused before any work
@@ -182,8 +182,6 @@ def run(args: argparse.Namespace) -> int:
         drift = pipe.predict_drift(args.model, args.data, sensors_failed=args.sensors_failed, anchor=anchor,
                                    interval=args.interval)
         if args.output:
-            from setupfix.pipeline.thermal_files import prediction_csv, write_text
-
             write_text(args.output, prediction_csv(drift))
         warnings = _warn(drift.notes)
         if args.json:

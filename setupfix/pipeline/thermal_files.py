@@ -3,8 +3,8 @@
 Reading goes through the size-limited reader of :mod:`parsers._source`; every problem
 of a model file (not UTF-8, not JSON, a missing or mistyped entry, coefficients that
 do not fit together) is one :class:`~setupfix.errors.ParseError` naming the file and
-the entry.  Writing is atomic (SWITCH: through :mod:`setupfix.pipeline.writers` once
-the *search* slice lands it).
+the entry.  Writing goes through :mod:`setupfix.pipeline.writers` (only ``-`` or a
+regular file; atomic).
 """
 
 from __future__ import annotations
@@ -16,34 +16,22 @@ from pathlib import Path
 from typing import Any
 
 from parsers._source import read_bytes
-from setupfix.atomic import atomic_write
 from setupfix.errors import ExportError, ParameterError, ParseError, SourceLocation
+from setupfix.pipeline.writers import check_target, write_text
 from setupfix.thermal.persist import SavedModel, saved_from_dict
 
-__all__ = ["save_model", "load_model", "prediction_csv", "write_text"]
-
-
-def write_text(target: str | Path, text: str) -> None:
-    """Write ``text`` to ``target`` atomically (``-``: stdout)."""
-    if str(target) == "-":
-        import sys
-
-        sys.stdout.write(text)
-        return
-    if Path(target).is_dir():
-        raise ExportError("is a directory", location=SourceLocation(str(target)))
-    with atomic_write(target, newline="\n") as stream:
-        stream.write(text)
+__all__ = ["save_model", "load_model", "prediction_csv", "check_target", "write_text"]
 
 
 def save_model(saved: SavedModel, path: str | Path) -> None:
     """Write ``saved`` as JSON; refuse non-finite coefficients (nothing written)."""
+    check_target(path)
     try:
         text = json.dumps(saved.to_dict(), indent=2, allow_nan=False, default=_plain)
     except ValueError:
         raise ExportError("the fitted model has non-finite coefficients and is not saved",
                           location=SourceLocation(str(path)), hint="the calibration diverged; try grey-ls or mra") from None
-    write_text(path, text + "\n")
+    write_text(path, text + "\n", newline="\n")
 
 
 def _plain(value: Any) -> Any:
