@@ -25,10 +25,12 @@ prediction is shifted so that ``ŷ[0] = y0`` (:func:`rebase`).
 
 **Dynamic models start from the measured temperatures**; they do not replay history
 the log does not contain.  The Kalman fusion starts its filter at the first readings
-(Wang 2017 §3.3).  The Grey response of a log that starts at the reference state is
-the one of the fit; a log that starts elsewhere starts from the steady state of its
-first temperatures (the response is run over a warm-up in which the first sample is
-held for ``20 / b1`` samples, at most :data:`MAX_WARMUP`, and the warm-up is dropped).
+(Wang 2017 §3.3).  The Grey response is a convolution over the accumulated drivers
+(AGO), which has no state a log could start from: a log that starts at the reference
+state gets the response of the fit; a log that starts elsewhere is preceded by a
+warm-up in which the temperatures rise linearly from the reference state to its first
+sample over as many samples as the training log had (the machine is taken to have
+warmed up as it did in training); the warm-up is then dropped.
 """
 
 from __future__ import annotations
@@ -48,14 +50,12 @@ from setupfix.thermal.lumped import Gearbox, fit_lumped, heat_inputs, lumped_coe
 from setupfix.thermal.mra import mra_fit, mra_predict, reference_state, rises_from
 
 __all__ = ["ThermalModel", "AnyThermalModel", "MRAModel", "GreyModel", "KalmanFusionModel", "KalmanStream",
-           "NotFittedError", "rebase", "DEFAULT_SEED", "MAX_WARMUP"]
+           "NotFittedError", "rebase", "DEFAULT_SEED"]
 
 Array = npt.NDArray[np.float64]
 #: Seed of the stochastic calibrations when none is given (results are reproducible by default).
 DEFAULT_SEED = 0
 _SEED: list[Constraint] = [Interval(int, 0, 2**63 - 1)]
-#: Longest warm-up (samples) that brings a Grey response to the steady state of a log's first temperatures.
-MAX_WARMUP = 5000
 
 
 def rebase(predicted: npt.ArrayLike, index: int, error: float) -> Array:
@@ -267,7 +267,7 @@ class GreyModel(ThermalModel):
     """
 
     dynamic = True
-    _learned = ("theta_", "n_evaluations_", "train_rmse_")
+    _learned = ("theta_", "n_train_", "n_evaluations_", "train_rmse_")
     _parameter_constraints: ClassVar[dict[str, list[Constraint]]] = {
         "calibration": [Options({"ls", "cs", "pso"})],
         "kind": [Options({"gmc", "gm1n"})],
@@ -319,6 +319,7 @@ class GreyModel(ThermalModel):
         lo[0] = min(self.b1_min, hi[0])
         X1 = grey.ago(X)
         y0 = float(dy[0])
+        self.n_train_ = int(dy.size)
         self.fit_notes_: list[Note] = []
         if self.calibration == "ls":
             # Bounded linear least squares: the plain LS solution may have b1 <= 0.
@@ -358,8 +359,9 @@ class GreyModel(ThermalModel):
             return np.zeros(0)
         warmup = 0
         if np.max(np.abs(dT[0])) > 1e-9 * (1.0 + float(np.max(np.abs(self.T_ref_)))):
-            warmup = int(min(np.ceil(20.0 / max(float(self.theta_[0]), 1e-12)), MAX_WARMUP)) + self.delay
-            dT = np.concatenate([np.repeat(dT[:1], warmup, axis=0), dT])
+            warmup = int(self.n_train_)
+            ramp = np.linspace(0.0, 1.0, warmup, endpoint=False)[:, None] * dT[:1]
+            dT = np.concatenate([ramp, dT])
         X = grey.lag_drivers(dT, self.delay)
         with np.errstate(over="ignore", invalid="ignore"):
             pred = self.y_ref_ + grey.iago(self._response(self.theta_, 0.0, grey.ago(X)))[warmup:]
@@ -380,9 +382,10 @@ class KalmanFusionModel(ThermalModel):
     every candidate.  The filter starts at the first readings of a log.
 
     **Without a spindle speed** (``speed=None`` at fit) the heat input C of eq. (5) is
-    zero: each lumped mass only exchanges heat with the ambient, the filter still
-    smooths the readings, and ``uses_speed_`` is False (the pipeline flags it in every
-    output).  ``sensors_failed`` is then refused: the lumped-mass model alone cannot
+    zero: each lumped mass only exchanges heat with the ambient, the noise ratio N/R is
+    searched from 1 up (the readings weigh at least as much as a model that cannot
+    see a heating), the filter smooths the readings, and ``uses_speed_`` is False (the
+    pipeline flags it in every output).  ``sensors_failed`` is then refused: the lumped-mass model alone cannot
     follow a heating it has no input for.  **Without an ambient column** the ambient
     temperature is taken as constant at the median of the reference temperatures
     (``ambient_const_``).
@@ -491,6 +494,10 @@ class KalmanFusionModel(ThermalModel):
 
         lo = np.full(S, self.log10_q_bounds[0])
         hi = np.full(S, self.log10_q_bounds[1])
+        if not self.uses_speed_:
+            # No heat input: the lumped-mass prediction knows nothing of a heating, so the
+            # filter must weigh the readings at least as much as the model (N/R >= 1).
+            lo = np.minimum(np.maximum(lo, 0.0), hi)
         res = genetic_algorithm(objective, lo, hi, pop_size=self.pop_size, n_gen=self.generations,
                                 p_crossover=self.p_crossover, p_mutation=self.p_mutation, rng=rng)
         self.q_ = 10.0 ** res.x
