@@ -181,12 +181,13 @@ def fit_model(layout: Layout, series: Series, specs: tuple[EffectSpec, ...] | li
     for b in blocks[1:]:
         spans.append(slice(start, start + b.shape[1]))
         start += b.shape[1]
-    coef, _, rank, _ = np.linalg.lstsq(X, obs.z, rcond=None)
+    coef: Array = np.asarray(np.linalg.lstsq(X, obs.z, rcond=None)[0], dtype=float)
+    rank = int(np.linalg.matrix_rank(X)) if X.shape[1] else 0
     resid = obs.z - X @ coef
     dof = max(obs.n - int(rank), 0)
     rss = float(resid @ resid)
     sigma = float(np.sqrt(rss / dof)) if dof > 0 else float("nan")
-    cov = (sigma ** 2 if dof > 0 else np.nan) * np.linalg.pinv(X.T @ X)
+    cov: Array = np.asarray((sigma ** 2 if dof > 0 else np.nan) * np.linalg.pinv(X.T @ X), dtype=float)
     field = np.full(series.deviation.shape, np.nan)
     field[obs.cycle, obs.dim] = resid
     return Fit(specs, coef, cov, sigma, field, int(rank), dof, row_space_basis(layout.composite), tuple(spans),

@@ -20,6 +20,7 @@ the machine runs and towards ambient during pauses; ambient swings daily.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 import numpy.typing as npt
@@ -79,7 +80,7 @@ class SimulatedSeries:
     setup_error: Array
     effects: tuple[HiddenEffect, ...]
     noise: float
-    truth: dict[str, object] = field(default_factory=dict)
+    truth: dict[str, Any] = field(default_factory=dict)
 
 
 class ShopSimulator(ValidatedParams):
@@ -213,7 +214,7 @@ class ShopSimulator(ValidatedParams):
                 log.append((at, int(layout.tools[j]), 0.0, "tool_change"))
         parts = parts_since_change(times, [np.array(c) for c in changes])
         temp_at = temp[np.clip(np.searchsorted(t_temp, times, side="right") - 1, 0, len(t_temp) - 1)]
-        setup = self.setup_error * (1.0 - 2.0 * rng.random(n_r))  # eq. 12
+        setup: Array = np.asarray(self.setup_error * (1.0 - 2.0 * rng.random(n_r)), dtype=float)  # eq. 12
         noise = rng.normal(0.0, self.noise, size=(self.n_cycles, n_d))
         # Effects that do not depend on the applied corrections are fixed in advance.
         probe = Series(np.zeros((self.n_cycles, n_d)), times, np.zeros((self.n_cycles, n_r)), parts, temp_at,
@@ -253,13 +254,13 @@ class ShopSimulator(ValidatedParams):
                 if np.any(delta != 0):
                     at = float(times[k] + self.dead_time / 60.0)
                     pending.append((at, delta))
-                    for i in np.flatnonzero(delta):
-                        log.append((at, int(i), float(delta[i]), "correction"))
-        leftover = sum((p[1] for p in pending), np.zeros(n_r))
+                    for reg in np.flatnonzero(delta):
+                        log.append((at, int(reg), float(delta[reg]), "correction"))
+        leftover: Array = np.sum([p[1] for p in pending], axis=0) if pending else np.zeros(n_r)
         dev = np.round(dev, self.decimals)
         log.sort(key=lambda r: r[0])
         series = Series(dev, times, applied, parts, temp_at, ("spindle", "ambient"),
-                        tuple(f"cycle {k + 1:03d}" for k in range(self.n_cycles)), "", np.asarray(leftover))
+                        tuple(f"cycle {k + 1:03d}" for k in range(self.n_cycles)), "", leftover)
         return SimulatedSeries(
             series=series,
             log_time=np.array([r[0] for r in log], dtype=float),

@@ -86,8 +86,7 @@ def _score(dev: Array, lower: Array, upper: Array) -> Budget:
 def _state(pred: Array, C: Array) -> Array:
     """Register state v minimising ‖pred + v · C‖ (minimum norm); absent dimensions ignored."""
     ok = np.isfinite(pred)
-    v, *_ = np.linalg.lstsq(C[:, ok].T, -pred[ok], rcond=None)
-    out: Array = v
+    out: Array = np.asarray(np.linalg.lstsq(C[:, ok].T, -pred[ok], rcond=None)[0], dtype=float)
     return out
 
 

@@ -133,11 +133,13 @@ def read_corrections_log(path: str, model: ProcessModel) -> tuple[pd.DatetimeInd
         raise ParseError("corrections log: missing column 'delta'", location=SourceLocation(path, line=1))
     lines = [i + 2 for i in range(len(table))]
     times = _times(table["timestamp"].tolist(), path, lines)
-    regs, deltas, events = [], [], []
+    regs: list[int] = []
+    deltas: list[float] = []
+    events: list[str] = []
     ids = model.register_ids
-    for i, row in enumerate(table.itertuples(index=False)):
-        rec = row._asdict()
-        event = (rec.get("event") or "correction").strip() or "correction"
+    records: list[dict[str, str]] = table.to_dict("records")  # type: ignore[assignment]
+    for i, rec in enumerate(records):
+        event = str(rec.get("event") or "correction").strip() or "correction"
         if event not in ("correction", "tool_change"):
             raise ParseError(f"unknown event {event!r} (expected correction or tool_change)",
                              location=SourceLocation(path, line=lines[i]))
