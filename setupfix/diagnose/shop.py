@@ -29,7 +29,7 @@ from setupfix.diagnose.terms import AXES, KINDS, EffectSpec, Layout, Series, eff
 from setupfix.errors import ParameterError
 from setupfix.params import Interval, ValidatedParams, validate_params
 
-__all__ = ["HiddenEffect", "ShopSimulator", "SimulatedSeries"]
+__all__ = ["HiddenEffect", "ShopSimulator", "SimulatedSeries", "random_topology"]
 
 Array = npt.NDArray[np.float64]
 
@@ -275,3 +275,38 @@ class ShopSimulator(ValidatedParams):
             truth={"effects": [{"kind": e.spec.kind, "target": e.spec.target, "magnitude": e.magnitude}
                                for e in effects]},
         )
+
+
+def random_topology(seed: int | None = None, *, positions: bool = True) -> dict[str, Any]:
+    """A random process-model document (the model file contract) for tests and benches.
+
+    2–6 WKS, 1–4 tools, 6–16 features (each moved by one WKS and one tool, weights
+    ±1), 8–24 dimensions of one feature or the difference of two, nominal sizes
+    5–120, 2–4 groups, feature positions in a 400 × 300 × 100 box.
+    """
+    rng = np.random.default_rng(seed)
+    n_w, n_t = int(rng.integers(2, 7)), int(rng.integers(1, 5))
+    n_f, n_d = int(rng.integers(6, 17)), int(rng.integers(8, 25))
+    n_g = int(rng.integers(2, 5))
+    doc: dict[str, Any] = {"process": {"name": f"random topology {seed}", "axis": "Z", "unit": "mm"},
+                           "wks": {f"W{i + 1}": {"register": f"G{54 + i}"} for i in range(n_w)},
+                           "tools": {f"T{i + 1}": {"register": f"H{i + 1}"} for i in range(n_t)},
+                           "features": {}, "dimensions": {}}
+    for f in range(n_f):
+        feat: dict[str, Any] = {"wks": {f"W{int(rng.integers(n_w)) + 1}": int(rng.choice([-1, 1]))},
+                                "tools": {f"T{int(rng.integers(n_t)) + 1}": int(rng.choice([-1, 1]))}}
+        if positions:
+            feat["position"] = [float(np.round(rng.uniform(0, 400), 1)), float(np.round(rng.uniform(0, 300), 1)),
+                                float(np.round(rng.uniform(0, 100), 1))]
+        doc["features"][f"F{f + 1}"] = feat
+    for d in range(n_d):
+        a = int(rng.integers(n_f))
+        feats = {f"F{a + 1}": 1}
+        if rng.random() < 0.4:
+            b = int(rng.integers(n_f))
+            if b != a:
+                feats[f"F{b + 1}"] = -1
+        doc["dimensions"][f"D{d + 1}"] = {"name": f"D{d + 1}", "features": feats,
+                                          "nominal": float(np.round(rng.uniform(5, 120), 1)),
+                                          "lower": -0.1, "upper": 0.1, "group": f"S{d % n_g + 1}"}
+    return doc
