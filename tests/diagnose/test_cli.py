@@ -89,3 +89,17 @@ def test_bad_timestamp_in_temperatures(series, tmp_path, capsys):
     bad.write_text("timestamp,spindle\n2026-11-02T06:00:00,20.1\nyesterday,20.2\n")
     code, _, err = run(capsys, "diagnose", "--model", MODEL, "--temperatures", bad, series / "measurements.csv")
     assert code == 1 and f"{bad}:3: not an ISO 8601 timestamp" in err
+
+
+def test_diagnose_from_the_history_store_equals_the_files(series, tmp_path, capsys):
+    db = tmp_path / "h.db"
+    code = main(["history", "import", "--db", str(db), "--corrections", str(series / "corrections.csv"),
+                 "--temperatures", str(series / "temperatures.csv"), str(series / "measurements.csv")])
+    assert code == 0
+    capsys.readouterr()
+    code, out, err = run(capsys, "diagnose", "--model", MODEL, "--db", db, "--json", "--no-walk")
+    assert code == 0, err
+    code, out2, err = run(capsys, "diagnose", "--model", MODEL, "--json", "--no-walk", series)
+    a, b = json.loads(out), json.loads(out2)
+    assert a["effects"] == b["effects"] and a["rms_before"] == b["rms_before"]
+    assert a["next_correction"] == b["next_correction"]
