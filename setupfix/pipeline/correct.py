@@ -19,6 +19,7 @@ from setupfix.model import PartMeasurement, ProcessModel, load_model
 from setupfix.offsets import OffsetRow, offset_rows
 from setupfix.optimize import CorrectionProblem, OptimizeResult, get_optimizer
 from setupfix.pipeline.cycles import Stations, assign_stations, load_parts  # noqa: F401 - re-exported
+from setupfix.pipeline.diagnose import forecast_part
 
 __all__ = ["PartCorrection", "assign_stations", "load_parts", "select_parts", "correct_part", "correct_report"]
 
@@ -115,6 +116,7 @@ def correct_report(model: ProcessModel | str | Path, report: str | Path, *, opti
         model = load_model(model)
     parts = load_parts(model, report, format=format, unit=unit, encoding=encoding, columns=columns,
                        stations=stations, parts_per_cycle=parts_per_cycle, strict=strict)
+    parts = [forecast_part(model, p) for p in parts]  # the model's [effects]: drift and wear until the next cycle
     return [correct_part(model, p, optimizer=optimizer, seed=seed) for p in select_parts(parts, part, report)]
 
 

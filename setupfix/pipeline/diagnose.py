@@ -25,9 +25,9 @@ import pandas as pd
 
 import parsers
 from setupfix.diagnose import Diagnoser, Diagnosis, Layout, Series
-from setupfix.diagnose.forecast import spec_of
+from setupfix.diagnose.forecast import forecast_shift, spec_of
 from setupfix.diagnose.terms import EffectSpec, applied_at, join_temperatures, parts_since_change
-from setupfix.errors import ExportError, MatchError, ModelError, ParseError, SourceLocation
+from setupfix.errors import ExportError, MatchError, ModelError, Note, ParseError, SourceLocation
 from setupfix.model import PartMeasurement, ProcessModel, load_model, match_parts, model_from_dict
 from setupfix.model.effects import EffectsSection, ModelEffect, effects_from_dict, load_effects, with_effects
 from setupfix.optimize import CorrectionProblem, get_optimizer
@@ -35,7 +35,7 @@ from setupfix.pipeline.writers import check_target, write_text
 
 __all__ = ["SeriesInput", "DiagnoseOutcome", "load_series", "read_corrections_log", "read_temperature_log",
            "diagnose_reports", "expand_reports", "augmented_section", "write_augmented",
-           "corrections_from_table", "temperatures_from_table"]
+           "corrections_from_table", "temperatures_from_table", "forecast_part"]
 
 _LOG_NAMES = ("corrections.csv",)
 _TEMP_NAMES = ("temperatures.csv",)
@@ -489,3 +489,27 @@ def write_augmented(model: ProcessModel, section: EffectsSection, target: str) -
     write_text(target, new)
     return target
 
+
+
+def forecast_part(model: ProcessModel, part: PartMeasurement) -> PartMeasurement:
+    """The part as the next cycle is expected to come out, by the model's ``[effects]``.
+
+    ``correct`` optimises the next cycle, not the one measured: a drift goes on for
+    one cycle interval and every tool wears one cycle more (see
+    :func:`setupfix.diagnose.forecast.forecast_shift`).  A model without drift or wear
+    effects returns the part unchanged.
+    """
+    if not Path(model.source).is_file():
+        return part
+    section = load_effects(model.source, model)
+    if not any(e.kind in ("drift", "wear") for e in section.effects):
+        return part
+    time = None
+    if section.origin and part.timestamp:
+        time = float(_hours(_times([part.timestamp], part.report), pd.Timestamp(section.origin))[0])
+    shift = forecast_shift(section, Layout.from_model(model), time=time)
+    kinds = sorted({e.kind for e in section.effects if e.kind in ("drift", "wear")})
+    note = Note(f"the model's [effects] ({', '.join(kinds)}) forecast the next cycle: up to "
+                f"{np.max(np.abs(shift)):.4f} {model.unit} added to the measured deviations",
+                SourceLocation(model.source, key="effects"), "forecast")
+    return dataclasses.replace(part, deviation=part.deviation + shift, notes=(*part.notes, note))

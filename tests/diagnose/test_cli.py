@@ -60,9 +60,11 @@ def test_diagnose_json_contract_and_augment(series, tmp_path, capsys):
     code, out, err = run(capsys, "diagnose", "--model", aug, "--json", "--no-walk", series)
     assert code == 0, err
     assert json.loads(out)["effects"] == []
-    # correct runs with the augmented model
-    code, out, err = run(capsys, "correct", "--model", aug, str(GUIDE_PINS / "cycle_01.csv"))
+    # correct forecasts the next cycle with the augmented model: one more cycle of T5 wear (C[T5, P1 D1] = 1)
+    code, out, err = run(capsys, "correct", "--model", aug, "--json", str(GUIDE_PINS / "cycle_01.csv"))
     assert code == 0, err
+    row = json.loads(out)["dimensions"][0]
+    assert row["name"] == "P1 D1" and row["deviation"] == pytest.approx(-0.0309 + effects["E1"]["estimate"])
 
 
 def test_bad_corrections_log_is_refused_with_its_line(series, tmp_path, capsys):
