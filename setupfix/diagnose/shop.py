@@ -107,6 +107,10 @@ class ShopSimulator(ValidatedParams):
         Cycles between tool changes (0: never); tools are changed in turn.
     heat : float, default=6 [°C]
         Spindle temperature rise while running.
+    sparse : int, default=0
+        0: every register gets its share of a correction; n > 0: only the n largest
+        changes are applied (an operator touching few registers: the histories of the
+        registers then differ, so a wrong relation can be assigned to its register).
     decimals : int, default=4
         Deviations rounded as a CMM prints them.
     seed : int or None
@@ -124,6 +128,7 @@ class ShopSimulator(ValidatedParams):
         "gain": [Interval(float, 0, 1)],
         "tool_change_every": [Interval(int, 0, None)],
         "heat": [Interval(float, 0, None)],
+        "sparse": [Interval(int, 0, None)],
         "decimals": [Interval(int, 0, 12)],
         "seed": [Interval(int, 0, None), None],
     }
@@ -131,7 +136,7 @@ class ShopSimulator(ValidatedParams):
     def __init__(self, *, n_cycles: int = 40, noise: float = 0.002, setup_error: float = 0.03,
                  cycle_minutes: float = 20.0, shift_cycles: int = 24, pause_hours: float = 8.0,
                  correct_every: int = 5, dead_time: float = 30.0, gain: float = 0.7, tool_change_every: int = 16,
-                 heat: float = 6.0, decimals: int = 4, seed: int | None = None) -> None:
+                 heat: float = 6.0, sparse: int = 0, decimals: int = 4, seed: int | None = None) -> None:
         self.n_cycles = n_cycles
         self.noise = noise
         self.setup_error = setup_error
@@ -143,6 +148,7 @@ class ShopSimulator(ValidatedParams):
         self.gain = gain
         self.tool_change_every = tool_change_every
         self.heat = heat
+        self.sparse = sparse
         self.decimals = decimals
         self.seed = seed
 
@@ -250,6 +256,8 @@ class ShopSimulator(ValidatedParams):
                 # deviations as they would be with the registers already planned (no double correction)
                 seen = dev[first:k + 1] + (planned - applied[first:k + 1]) @ C
                 delta = -self.gain * (seen.mean(axis=0) @ pinv)
+                if self.sparse and self.sparse < n_r:
+                    delta[np.argsort(-np.abs(delta))[self.sparse:]] = 0.0
                 delta = np.clip(np.round(delta / h) * h, -0.1, 0.1)
                 if np.any(delta != 0):
                     at = float(times[k] + self.dead_time / 60.0)
