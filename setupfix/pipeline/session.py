@@ -10,15 +10,15 @@ from __future__ import annotations
 import os
 import time
 from collections.abc import Iterator, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 
 import parsers
 from setupfix.errors import MatchError, ParseError, SourceLocation
 from setupfix.model import ProcessModel, load_model
 from setupfix.model.measurements import match_parts
-from setupfix.optimize import CorrectionProblem, get_optimizer
-from setupfix.pipeline.compare import DEFAULT_METHODS, Comparison, compare_problem
+from setupfix.optimize import CorrectionProblem, OptimizeResult, get_optimizer
+from setupfix.pipeline.compare import DEFAULT_METHODS, Comparison, MethodTrials, _available, trial_seeds
 from setupfix.pipeline.correct import PartCorrection, assign_stations, correct_part
 from setupfix.pipeline.view import MatchRow, match_rows
 
@@ -29,17 +29,22 @@ __all__ = ["OpenedReport", "open_report", "newest_report", "FolderWatch", "SKIPP
 class OpenedReport:
     """A report opened against a model.
 
-    Either ``corrections`` (one per cycle) is filled, or ``mismatch`` holds the match
-    table and ``problem`` the reason the report could not be tied to the model.
+    ``matches`` ties every characteristic of the report to a dimension (or lists close
+    names).  ``corrections`` holds one correction per cycle; it is empty when the
+    report could not be tied to the model, and ``problem`` then says why.
     """
 
     model: ProcessModel
     report: str
     format: str
     corrections: tuple[PartCorrection, ...] = ()
-    mismatch: tuple[MatchRow, ...] = ()
+    matches: tuple[MatchRow, ...] = ()
     problem: str = ""
-    notes: tuple[str, ...] = field(default=())
+
+    @property
+    def unmatched(self) -> int:
+        """Number of report characteristics that match no dimension."""
+        return sum(not m.matched for m in self.matches)
 
 
 def open_report(model: ProcessModel | str | Path, report: str | Path, *, optimizer: str = "exact",
@@ -59,14 +64,14 @@ def open_report(model: ProcessModel | str | Path, report: str | Path, *, optimiz
         raise ParseError("is a folder, not a report", location=SourceLocation(str(report)))
     spec = parsers.find_format(path)
     table = spec.read(path)
+    matches = tuple(match_rows(model, table))
     try:
         table = assign_stations(model, table)
         parts = match_parts(model, table, source=str(report))
     except MatchError as exc:
-        return OpenedReport(model, str(report), spec.name, mismatch=tuple(match_rows(model, table)),
-                            problem=str(exc))
+        return OpenedReport(model, str(report), spec.name, matches=matches, problem=str(exc))
     corrections = tuple(correct_part(model, p, optimizer=optimizer, seed=seed) for p in parts)
-    return OpenedReport(model, str(report), spec.name, corrections=corrections)
+    return OpenedReport(model, str(report), spec.name, corrections=corrections, matches=matches)
 
 
 #: Files a watched folder ignores: partial downloads, editor and temporary files.
@@ -143,18 +148,34 @@ class FolderWatch:
 
 
 def compare_steps(problem: CorrectionProblem, *, methods: Sequence[str] = DEFAULT_METHODS, trials: int = 12,
-                  seed: int = 0) -> Iterator[tuple[str, Comparison]]:
-    """:func:`~setupfix.pipeline.compare.compare_problem` one method at a time.
+                  seed: int = 0) -> Iterator[tuple[str, int, int, Comparison]]:
+    """:func:`~setupfix.pipeline.compare.compare_problem` one trial at a time.
 
-    Yields ``(step, comparison so far)`` after the exact optimum (step ``"exact"``) and
-    after each method, so a caller can show progress and stop between methods; the
-    last comparison equals ``compare_problem(problem, methods=…, trials=…, seed=…)``.
+    Yields ``(method, step, steps, comparison so far)`` after the exact optimum and
+    after every trial, so that a caller can show progress and stop within one trial;
+    the last comparison equals ``compare_problem(problem, methods=…, trials=…, seed=…)``
+    (same seeds, same order).
     """
+    if trials < 1:
+        raise ValueError("trials must be at least 1")
+    seeds = trial_seeds(seed, trials)
+    steps = 1 + len(methods) * trials
     exact = get_optimizer("exact").solve(problem)
-    done = Comparison(problem=problem, exact=exact, methods=[], seed=seed, trials=trials)
-    yield "exact", done
+    done: list[MethodTrials] = []
+    skipped: dict[str, str] = {}
+    step = 1
+    yield "exact", step, steps, Comparison(problem=problem, exact=exact, methods=[], seed=seed, trials=trials)
     for name in methods:
-        step = compare_problem(problem, methods=[name], trials=trials, seed=seed, exact=exact)
-        done = Comparison(problem=problem, exact=exact, methods=[*done.methods, *step.methods], seed=seed,
-                          trials=trials, skipped={**done.skipped, **step.skipped})
-        yield name, done
+        reason = _available(name)
+        if reason is not None:
+            skipped[name] = reason
+            step += trials
+            yield name, step, steps, Comparison(problem, exact, list(done), seed, trials, skipped=dict(skipped))
+            continue
+        runs: list[OptimizeResult] = []
+        for s in seeds:
+            runs.append(get_optimizer(name, seed=s).solve(problem))
+            step += 1
+            partial = [*done, MethodTrials(name, seeds[:len(runs)], list(runs))]
+            yield name, step, steps, Comparison(problem, exact, partial, seed, trials, skipped=dict(skipped))
+        done.append(MethodTrials(name, seeds, runs))

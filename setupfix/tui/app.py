@@ -13,7 +13,7 @@ import importlib.util
 from dataclasses import dataclass
 from functools import partial
 from pathlib import Path
-from typing import Any, ClassVar
+from typing import ClassVar
 
 from textual import on
 from textual.app import App, ComposeResult
@@ -23,7 +23,7 @@ from textual.widgets import DataTable, Footer, Header, Static, TabbedContent, Ta
 from textual.worker import Worker, WorkerState, get_current_worker
 
 from setupfix.errors import SetupfixError
-from setupfix.optimize import OPTIMIZERS
+from setupfix.optimize import OPTIMIZERS, CorrectionProblem
 from setupfix.pipeline import view
 from setupfix.pipeline.compare import DEFAULT_METHODS, Comparison
 from setupfix.pipeline.correct import PartCorrection
@@ -187,9 +187,11 @@ class SetupfixApp(App[None]):
         text = str(error) if isinstance(error, SetupfixError) else f"internal error: {type(error).__name__}: {error}"
         self.notify(text, title=f"{what} failed", severity="error", timeout=12)
         if what == "open":
+            # The previous correction is no longer what the operator asked for: showing
+            # (and exporting) it beside a failed report would invite applying stale offsets.
+            self.opened = None
+            self.sub_title = ""
             self.problem = f"✗ {text}"
-            if self.opened is not None and str(self.report_path) != self.opened.report:
-                self.problem += f"\n  still showing {self.opened.report}"
             self._show()
         elif what == "compare":
             self.query_one(ComparePanel).stopped(f"✗ {text}")
@@ -203,13 +205,16 @@ class SetupfixApp(App[None]):
         self.sub_title = f"{Path(opened.report).name} · {opened.format} · {Path(opened.model.source).name}"
         status = self.query_one("#match-status", Static)
         table = self.query_one(MatchTable)
-        if opened.mismatch:
-            status.update(f"✗ {opened.problem}\nThe report's names and the model's dimensions (✓ matched):")
-            table.show(opened.mismatch)
+        table.show(opened.matches)
+        if not opened.corrections:
+            status.update(f"✗ {opened.problem}\nEach characteristic of the report, ✓ with the dimension it "
+                          "matches, ✗ with the closest dimension names:")
             self.query_one(TabbedContent).active = "match"
+        elif opened.unmatched:
+            status.update(f"⚠ {opened.unmatched} characteristic(s) of the report match no dimension "
+                          "(✗ below, with the closest dimension names); they are left out.")
         else:
-            status.update("✓ every part of the report matches the model.")
-            table.clear(columns=True)
+            status.update("✓ every characteristic of the report matches a dimension of the model.")
         self._show()
 
     def _compared(self, comparison: object) -> None:
@@ -255,7 +260,8 @@ class SetupfixApp(App[None]):
         c = self._current()
         summary = self.query_one(SummaryBar)
         if c is None:
-            reason = self.problem or (self.opened.problem if self.opened and self.opened.mismatch else "")
+            reason = self.problem or (f"✗ {self.opened.problem} (tab 5 shows the match table)"
+                                      if self.opened and self.opened.problem else "")
             summary.show(None, optimizer=self.optimizer, problem=reason)
             self.query_one(DimensionTable).clear(columns=True)
             self.query_one(RegisterTable).clear(columns=True)
@@ -304,7 +310,7 @@ class SetupfixApp(App[None]):
             self.notify("open a report first (o)", severity="warning")
             return
         self.query_one(TabbedContent).active = "compare"
-        self.query_one(ComparePanel).progress(0, 1 + len(DEFAULT_METHODS), "exact")
+        self.query_one(ComparePanel).progress(0, 1 + len(DEFAULT_METHODS) * self.inputs.trials, "exact")
         self.run_worker(partial(_compare, self, c.problem, self.inputs.trials, self.inputs.seed), name="compare",
                         group="compare", thread=True, exclusive=True, exit_on_error=False)
 
@@ -393,14 +399,13 @@ def _drift(model: Path, log: Path) -> view.DriftView:
     return view.drift_view(predict_drift(model, log))
 
 
-def _compare(app: SetupfixApp, problem: Any, trials: int, seed: int) -> Comparison | None:
-    """Thread worker: the comparison, one method at a time, stoppable between methods."""
+def _compare(app: SetupfixApp, problem: CorrectionProblem, trials: int, seed: int) -> Comparison | None:
+    """Thread worker: the comparison one trial at a time, stoppable between trials."""
     worker = get_current_worker()
     result: Comparison | None = None
-    total = 1 + len(DEFAULT_METHODS)
-    for done, (step, comparison) in enumerate(compare_steps(problem, trials=trials, seed=seed), start=1):
+    for method, step, steps, comparison in compare_steps(problem, trials=trials, seed=seed):
         if worker.is_cancelled:
             return None
         result = comparison
-        app.post_message(CompareProgress(done, total, step))
+        app.post_message(CompareProgress(step, steps, method))
     return result
