@@ -72,7 +72,7 @@ def zone_bar(value: float, lower: float, upper: float, width: int = 11) -> str:
     cells = ["─"] * width
     cells[0], cells[-1] = "├", "┤"
     if lo < 0 < hi:
-        cells[round((0 - lo) / (hi - lo) * (width - 1))] = "┼"
+        cells[_cell((0 - lo) / (hi - lo), width)] = "┼"
     if not math.isfinite(value):
         return "".join(cells)
     if value < lower:
@@ -80,8 +80,15 @@ def zone_bar(value: float, lower: float, upper: float, width: int = 11) -> str:
     elif value > upper:
         cells[-1] = "▶"
     else:
-        cells[round(min(max((value - lo) / (hi - lo), 0.0), 1.0) * (width - 1))] = "●"
+        cells[_cell(min(max((value - lo) / (hi - lo), 0.0), 1.0), width)] = "●"
     return "".join(cells)
+
+
+def _cell(fraction: float, width: int) -> int:
+    """Cell of a fraction of the zone; halves round away from the centre (symmetric bars)."""
+    pos = fraction * (width - 1)
+    centre = (width - 1) / 2
+    return int(math.floor(pos + 0.5 + 1e-9)) if pos >= centre else int(math.ceil(pos - 0.5 - 1e-9))
 
 
 @dataclass(frozen=True)
