@@ -21,6 +21,7 @@ from dataclasses import dataclass, field
 
 import pandas as pd
 
+from parsers import numbers
 from parsers.canonical import DEVIATION_TOLERANCE_MM, finish_table
 from setupfix.errors import ParseError, ParseWarning, SourceLocation
 from setupfix.units import LENGTH_UNITS
@@ -39,37 +40,20 @@ __all__ = [
 ]
 
 
-_NUMBER = re.compile(r"^[+-]?(?:\d+(?:[.,]\d*)?|[.,]\d+)(?:[eE][+-]?\d+)?$")
-
-
 def try_number(text: str) -> float | None:
     """The number ``text`` spells (decimal point or comma), else None. Never raises."""
-    try:
-        value = float(text)
-    except ValueError:
-        text = text.strip()
-        if not _NUMBER.match(text):
-            return None
-        value = float(text.replace(",", "."))
-    else:
-        # float() also takes "nan", "inf" and "1_000", which no report means as numbers.
-        if "_" in text:
-            return None
-    return value if math.isfinite(value) else None
+    return numbers.try_number(text, decimal="auto")
 
 
 def parse_number(text: str, where: SourceLocation, what: str) -> float:
-    """Parse a number in report notation, naming ``what`` and the place when it is not one.
+    """Parse a number in report notation (decimal point or comma) with :func:`parsers.numbers.parse_number`.
 
     Raises
     ------
     ParseError
         If ``text`` is not a finite number.
     """
-    value = try_number(text)
-    if value is None:
-        raise ParseError(f"{what}: expected a number, found {text.strip()!r}", location=where)
-    return value
+    return numbers.parse_number(text, decimal="auto", location=where, what=what)
 
 
 def unit_or_none(text: str) -> str | None:

@@ -4,11 +4,11 @@ from __future__ import annotations
 
 import csv
 import io
-import math
 from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
 
+from parsers import numbers
 from setupfix.errors import ParseError, SourceLocation
 
 __all__ = ["Peek", "peek_file", "decode", "read_bytes", "read_text", "parse_number", "point_number",
@@ -97,48 +97,27 @@ def read_text(path: str | Path, encoding: str | None = None) -> str:
 
 
 def parse_number(text: str) -> float:
-    """Parse a report number, accepting a locale decimal comma (``44,158745``).
-
-    A comma is taken as the decimal mark only when the text has no point and exactly
-    one comma: ``1,234`` is then 1.234, the reading every decimal-comma report in the
-    samples needs (Mitutoyo QVPAK, Q-DAS); thousands separators never occur there.
+    """A number with a decimal point or a single decimal comma (``44,158745``).
 
     Raises
     ------
     ValueError
-        If the text is not a finite number.
+        (a :class:`ParseError`) If the text is not a finite number.
     """
-    text = text.strip()
-    if "," in text and "." not in text and text.count(",") == 1:
-        text = text.replace(",", ".")
-    value = float(text)
-    if not math.isfinite(value):
-        raise ValueError(f"not a finite number: {text!r}")
-    return value
+    return numbers.parse_number(text, decimal="auto")
 
 
 def point_number(text: str, where: SourceLocation, what: str = "", *, allow_empty: bool = True) -> float:
     """A finite number written with a decimal point, as the canonical CSV and DMIS require.
 
-    Empty text gives NaN when ``allow_empty``.  Unlike :func:`parse_number` no decimal
-    comma is accepted: in these formats a comma separates fields.
+    Empty text gives NaN when ``allow_empty``.  No decimal comma: a comma separates fields.
 
     Raises
     ------
     ParseError
-        At ``where``, prefixed by ``what`` (e.g. ``"column 'actual': "``), when the text
-        is not a finite number.
+        At ``where``, naming ``what``, when the text is not a finite number.
     """
-    text = text.strip()
-    if not text and allow_empty:
-        return math.nan
-    try:
-        value = float(text)
-    except ValueError:
-        raise ParseError(f"{what}expected a number, found {text[:30]!r}", location=where) from None
-    if not math.isfinite(value):
-        raise ParseError(f"{what}expected a finite number, found {text[:30]!r}", location=where)
-    return value
+    return numbers.parse_number(text, location=where, what=what.rstrip(": "), allow_empty=allow_empty)
 
 
 def csv_records(text: str, path: str, **fmtparams: object) -> Iterator[tuple[int, list[str]]]:

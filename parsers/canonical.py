@@ -11,6 +11,7 @@ import csv
 import math
 from pathlib import Path
 
+import numpy as np
 import pandas as pd
 
 from parsers._source import csv_records, decode, point_number, read_bytes
@@ -47,9 +48,37 @@ def finish_table(rows: list[dict[str, object]] | dict[str, object], path: str) -
         if col not in frame:
             frame[col] = math.nan if col in LENGTH_COLUMNS else ""
     frame["unit"] = "mm"
+    _check_magnitudes(frame, path)
     frame.loc[frame["report"].isin(["", None]) | frame["report"].isna(), "report"] = Path(path).name
     extra = [c for c in frame.columns if c not in CANONICAL_COLUMNS]
     return frame[list(CANONICAL_COLUMNS) + extra].reset_index(drop=True)
+
+
+#: Largest length a report row may hold [mm]: 10 km.  A larger value (``actual = 1e308``,
+#: ``1e307`` inch) is damage; refusing it here keeps inf/overflow out of every later sum.
+MAX_LENGTH_MM = 1e7
+
+
+def _check_magnitudes(frame: pd.DataFrame, path: str) -> None:
+    """Refuse a row with a length beyond :data:`MAX_LENGTH_MM` (NaN, i.e. absent, is fine)."""
+    for col in LENGTH_COLUMNS:
+        if col not in frame:
+            continue
+        values = pd.to_numeric(frame[col], errors="coerce").to_numpy(dtype=float)
+        bad = np.flatnonzero(np.abs(values) > MAX_LENGTH_MM)
+        if bad.size:
+            i = int(bad[0])
+            source = str(frame["source"].iat[i]) if "source" in frame else ""
+            raise ParseError(f"{col} {values[i]:g} mm is beyond any measurable length",
+                             location=_location_of(source, path))
+
+
+def _location_of(source: str, path: str) -> SourceLocation:
+    """The location a row's ``source`` (``file:line``, else the file) names."""
+    head, sep, tail = source.rpartition(":")
+    if sep and tail.isdigit():
+        return SourceLocation(head, line=int(tail))
+    return SourceLocation(path)
 
 
 def read_canonical(path: str | Path, *, text: str | None = None, unit: str | None = None,

@@ -24,6 +24,7 @@ from pathlib import Path
 import pandas as pd
 
 from parsers._source import point_number, read_text
+from parsers.numbers import is_number
 from parsers.canonical import finish_table
 from parsers.dmis.statements import Statement, parse_statement, split_statements
 from setupfix.errors import ParseError, ParseWarning, SourceLocation
@@ -249,8 +250,4 @@ def _result_row(st: Statement, feat: str, nominal: dict[str, _Feature], actual: 
 
 
 def _is_number(text: str) -> bool:
-    try:
-        float(text)
-    except ValueError:
-        return False
-    return True
+    return is_number(text)

@@ -22,6 +22,7 @@ from pathlib import Path
 import pandas as pd
 
 from parsers._source import read_text
+from parsers.numbers import MAX_NUMBER_CHARS, parse_number
 from parsers._rows import SkipLog, finish_rows, unit_factor, unit_or_none, warn_assumed_mm
 from setupfix.errors import ParseError, SourceLocation
 
@@ -57,13 +58,13 @@ def _number(value: object, where: SourceLocation, what: str) -> float | None:
         return None
     if isinstance(value, bool):
         raise ParseError(f"{what}: expected a number, found {value!r}", location=where)
-    try:
-        number = float(value.replace(",", ".")) if isinstance(value, str) else float(value)  # type: ignore[arg-type]
-    except (TypeError, ValueError):
-        raise ParseError(f"{what}: expected a number, found {value!r}", location=where) from None
-    if not math.isfinite(number):
-        raise ParseError(f"{what}: expected a finite number, found {value!r}", location=where)
-    return number
+    if isinstance(value, str):
+        return parse_number(value, decimal="auto", location=where, what=what)
+    if isinstance(value, int) and abs(value) > 10**MAX_NUMBER_CHARS:
+        raise ParseError(f"{what}: {len(str(value))}-digit integer is not a measurement", location=where)
+    if not isinstance(value, (int, float)) or not math.isfinite(value):
+        raise ParseError(f"{what}: expected a finite number, found {str(value)[:30]!r}", location=where)
+    return float(value)
 
 
 def _characteristics(data: object, name: str) -> dict[str, dict[str, object]]:

@@ -14,6 +14,7 @@ import warnings
 
 from lxml import etree
 
+from parsers.numbers import try_number
 from setupfix.errors import ParseError, ParseWarning, SourceLocation
 from setupfix.units import LENGTH_UNITS, length_factor
 
@@ -54,11 +55,8 @@ def file_unit_factor(root: etree._Element, ns: str, path: str) -> float | None:
     if factor is not None:
         return factor
     text = unit.findtext(f"{{{ns}}}UnitConversion/{{{ns}}}Factor")
-    try:
-        metres = float(text) if text is not None else math.nan
-    except ValueError:
-        metres = math.nan
-    if math.isfinite(metres) and metres > 0:
+    metres = try_number(text or "")
+    if metres is not None and metres > 0:
         return metres * 1000.0
     if not name:
         # SI unit with no conversion: the value is in the SI unit itself (metre).

@@ -6,7 +6,8 @@ import argparse
 import sys
 
 from setupfix.cli.exit_codes import ERROR, OK, PARTIAL
-from setupfix.pipeline.parse import parse_reports, write_canonical_csv
+from setupfix.pipeline.parse import parse_reports
+from setupfix.pipeline.writers import check_target, write_canonical_csv
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
@@ -25,6 +26,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    check_target(args.out)
     outcome = parse_reports(args.files, format=args.format, unit=args.unit, encoding=args.encoding,
                             columns=args.columns)
     for report in outcome.reports:

@@ -15,19 +15,15 @@ from pathlib import Path
 import pandas as pd
 
 import parsers
-from setupfix.atomic import atomic_write
 from setupfix.errors import ParseError, ParseWarning, SetupfixError, SourceLocation
 from setupfix.model import CANONICAL_COLUMNS
+from setupfix.pipeline.writers import FLOAT_FORMAT, write_canonical_csv
 
 __all__ = ["ParsedReport", "ParseOutcome", "parse_reports", "write_canonical_csv", "OUTPUT_COLUMNS",
            "list_formats"]
 
 #: Columns ``setupfix parse`` writes: the canonical ones, then the reference-only flag.
 OUTPUT_COLUMNS: tuple[str, ...] = (*CANONICAL_COLUMNS, "reference")
-
-#: Lengths are written with 12 significant digits: exact for every report value
-#: (≤ 7 decimals in the samples) and free of binary noise in actual − nominal.
-FLOAT_FORMAT = "%.12g"
 
 
 @dataclass(frozen=True)
@@ -94,12 +90,6 @@ def parse_reports(paths: Sequence[str | Path], *, format: str | None = None, uni
         notes = tuple(str(w.message) for w in caught if issubclass(w.category, ParseWarning))
         outcome.reports.append(ParsedReport(name, spec.name, table, notes))
     return outcome
-
-
-def write_canonical_csv(table: pd.DataFrame, out: str | Path) -> None:
-    """Write a canonical table as CSV through :func:`setupfix.atomic.atomic_write` (``-``: stdout)."""
-    with atomic_write(out) as stream:
-        table.to_csv(stream, index=False, float_format=FLOAT_FORMAT, lineterminator="\n")
 
 
 def list_formats() -> list[dict[str, object]]:

@@ -22,9 +22,10 @@ from hypothesis import strategies as st
 
 import parsers
 from setupfix.errors import SetupfixError
+from conftest import SHARED as SHARED_ROOT
 
 ROOT = Path(__file__).resolve().parents[2]
-SHARED_SAMPLES = ROOT.parent / "shared" / "cmm-samples"
+SHARED_SAMPLES = SHARED_ROOT / "cmm-samples"
 NOT_REPORTS = {".md", ".py", ".toml", ".pyc"}
 #: Wall-clock limit of one parse [s].
 HANG_SECONDS = 2.0

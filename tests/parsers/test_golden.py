@@ -18,10 +18,11 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import pytest
+from conftest import SHARED as SHARED_ROOT
 
 ROOT = Path(__file__).resolve().parents[2]
 GOLDEN = Path(__file__).resolve().parent / "golden"
-SHARED_SAMPLES = ROOT.parent / "shared" / "cmm-samples"
+SHARED_SAMPLES = SHARED_ROOT / "cmm-samples"
 COPIED = ROOT / "sample_reports"
 
 #: (golden folder, shared folder, file, kind) — kind "full" needs a copy in sample_reports/qif.

@@ -15,8 +15,9 @@ import parsers
 from goldens import GOLDEN, assert_derived_golden, read_warned
 from parsers.korean import read_korean
 from setupfix.errors import ParseError, ParseWarning
+from conftest import SHARED as SHARED_ROOT
 
-SHARED = Path(__file__).resolve().parents[3] / "shared" / "cmm-samples" / "korean_cmm_txt"
+SHARED = SHARED_ROOT / "cmm-samples" / "korean_cmm_txt"
 NAMES = sorted(p.name for p in SHARED.glob("KR_*.txt")) or ["KR_45926-4G100_240113_night_2-2-1_NG.cp949.txt"]
 
 

@@ -11,8 +11,9 @@ import pytest
 import parsers
 from parsers.mitutoyo import read_qvpak
 from setupfix.errors import ParseError, ParseWarning
+from conftest import SHARED as SHARED_ROOT
 
-SHARED = Path(__file__).resolve().parents[3] / "shared" / "cmm-samples" / "mitutoyo"
+SHARED = SHARED_ROOT / "cmm-samples" / "mitutoyo"
 
 HEADING = ("        Elemento           Atual         Nominal          Desvio        Tol.sup.        Tol.inf."
            "        De./Fora")

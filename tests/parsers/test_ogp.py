@@ -17,8 +17,9 @@ from goldens import GOLDEN, assert_derived_golden, read_warned
 from parsers.ogp import read_ogp
 from parsers.ogp.rtf import rtf_lines
 from setupfix.errors import ParseError, ParseWarning
+from conftest import SHARED as SHARED_ROOT
 
-SHARED = Path(__file__).resolve().parents[3] / "shared" / "cmm-samples" / "ogp_measurex"
+SHARED = SHARED_ROOT / "cmm-samples" / "ogp_measurex"
 
 
 def shared(name: str) -> Path:
