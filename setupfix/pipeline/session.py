@@ -16,11 +16,11 @@ from pathlib import Path
 import parsers
 from setupfix.errors import MatchError, ParseError, SourceLocation
 from setupfix.model import ProcessModel, load_model
-from setupfix.model.measurements import match_parts
 from setupfix.optimize import CorrectionProblem, OptimizeResult, get_optimizer
 from setupfix.pipeline.compare import DEFAULT_METHODS, Comparison, MethodTrials, _available, trial_seeds
-from setupfix.pipeline.correct import PartCorrection, assign_stations, correct_part
-from setupfix.pipeline.view import MatchRow, match_rows
+from setupfix.pipeline.correct import PartCorrection, correct_part
+from setupfix.pipeline.cycles import load_parts
+from setupfix.pipeline.view import MatchRow, match_rows, matched_rows
 
 __all__ = ["OpenedReport", "open_report", "newest_report", "FolderWatch", "SKIPPED_SUFFIXES", "compare_steps"]
 
@@ -63,15 +63,16 @@ def open_report(model: ProcessModel | str | Path, report: str | Path, *, optimiz
     if path.is_dir():
         raise ParseError("is a folder, not a report", location=SourceLocation(str(report)))
     spec = parsers.find_format(path)
-    table = spec.read(path)
-    matches = tuple(match_rows(model, table))
     try:
-        table = assign_stations(model, table)
-        parts = match_parts(model, table, source=str(report))
+        parts = load_parts(model, path)
     except MatchError as exc:
-        return OpenedReport(model, str(report), spec.name, matches=matches, problem=str(exc))
+        # Read again only on this path: the match table needs every row, matched or not.
+        table = spec.read(path)
+        return OpenedReport(model, str(report), spec.name, matches=tuple(match_rows(model, table)),
+                            problem=str(exc))
     corrections = tuple(correct_part(model, p, optimizer=optimizer, seed=seed) for p in parts)
-    return OpenedReport(model, str(report), spec.name, corrections=corrections, matches=matches)
+    return OpenedReport(model, str(report), spec.name, corrections=corrections,
+                        matches=tuple(matched_rows(model, parts)))
 
 
 #: Files a watched folder ignores: partial downloads, editor and temporary files.

@@ -17,9 +17,6 @@ Symbols carry every state as well as colour does, for monochrome terminals:
 
 from __future__ import annotations
 
-import csv
-import difflib
-import io
 import math
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
@@ -29,8 +26,8 @@ import numpy as np
 import numpy.typing as npt
 import pandas as pd
 
-from setupfix.model import ProcessModel, normalise_name
-from setupfix.offsets import OFFSET_COLUMNS, OffsetRow, _decimals
+from setupfix.model import PartMeasurement, ProcessModel, normalise_name
+from setupfix.model.measurements import suggest_names
 from setupfix.pipeline.compare import Comparison
 from setupfix.pipeline.correct import PartCorrection
 from setupfix.pipeline.thermal import DriftPrediction
@@ -39,8 +36,8 @@ __all__ = [
     "IN", "OUT", "BINDING", "PREDICTED_OUT", "GIVEN_UP",
     "DimensionRow", "dimension_rows", "stations", "filter_rows", "sort_rows", "SORT_KEYS",
     "zone_bar", "RegisterRow", "register_rows", "Summary", "summary",
-    "MatchRow", "match_rows", "convergence", "compare_rows", "DriftView", "drift_view",
-    "offsets_csv_text", "signed", "limits_text",
+    "MatchRow", "match_rows", "matched_rows", "convergence", "compare_rows", "DriftView", "drift_view",
+    "signed", "limits_text",
 ]
 
 IN, OUT, BINDING, PREDICTED_OUT, GIVEN_UP = "✓", "✗", "●", "▲", "⚑"
@@ -265,21 +262,31 @@ class MatchRow:
 
 def match_rows(model: ProcessModel, table: pd.DataFrame, *, limit: int = 3) -> list[MatchRow]:
     """Each characteristic of a report with the dimension it matches (by name or alias,
-    case and blanks ignored) or, failing that, up to ``limit`` similar dimension names."""
+    case and blanks ignored) or, failing that, the closest dimension names
+    (:func:`setupfix.model.measurements.suggest_names`)."""
     keys: dict[str, str] = {}
     for d in model.dimensions:
         for k in d.keys:
             keys.setdefault(k, d.id)
-    names = [d.name for d in model.dimensions]
-    by_norm = {normalise_name(n): n for n in names}
     rows = []
     for rec in table.to_dict("records"):
         name = str(rec.get("characteristic", ""))
-        key = normalise_name(name)
-        dim = keys.get(key, "")
-        close = () if dim else tuple(by_norm[m] for m in difflib.get_close_matches(key, list(by_norm), n=limit,
-                                                                                    cutoff=0.5))
-        rows.append(MatchRow(name, _text(rec.get("part")), _text(rec.get("station")), dim, close))
+        dim = keys.get(normalise_name(name), "")
+        rows.append(MatchRow(name, _text(rec.get("part")), _text(rec.get("station")), dim,
+                             () if dim else suggest_names(model, name, limit)))
+    return rows
+
+
+def matched_rows(model: ProcessModel, parts: Iterable[PartMeasurement]) -> list[MatchRow]:
+    """The match table of parts already tied to the model: every measured dimension,
+    then every unmatched characteristic with its suggestions."""
+    rows = []
+    for p in parts:
+        for dim, value in zip(model.dimensions, p.deviation):
+            if math.isfinite(value):
+                rows.append(MatchRow(dim.name, p.part, dim.group or "", dim.id, ()))
+        for name in p.unmatched:
+            rows.append(MatchRow(name, p.part, "", "", tuple(p.suggestions.get(name, ()))))
     return rows
 
 
@@ -350,14 +357,3 @@ def drift_view(prediction: DriftPrediction, recent: int = 120) -> DriftView:
     return DriftView(prediction.method, prediction.target, prediction.latest,
                      prediction.timestamps[-1] if prediction.timestamps else "",
                      np.asarray(prediction.drift[-recent:], dtype=float), m_last, int(len(prediction.drift)))
-
-
-def offsets_csv_text(rows: Iterable[OffsetRow], *, resolution: float = 0.001) -> str:
-    """The offsets CSV exactly as :func:`setupfix.offsets.write_offsets_csv` writes it."""
-    digits = _decimals(resolution)
-    stream = io.StringIO()
-    writer = csv.writer(stream, lineterminator="\n")
-    writer.writerow(OFFSET_COLUMNS)
-    for r in rows:
-        writer.writerow([r.report, r.part, r.id, r.register, r.kind, r.axis, f"{r.delta:.{digits}f}"])
-    return stream.getvalue()

@@ -10,7 +10,6 @@ import pytest
 
 from conftest import GUIDE_PINS
 
-from setupfix.offsets import write_offsets_csv
 from setupfix.pipeline import view
 from setupfix.pipeline.compare import compare_problem
 from setupfix.pipeline.correct import correct_report
@@ -102,12 +101,6 @@ def test_convergence_is_the_median_best_so_far_and_ends_at_the_final_results(cor
         assert curve.shape == (20,) and np.all(np.diff(curve) >= -1e-12)  # best-so-far never falls
         assert curve[-1] == pytest.approx(np.median(m.f1))
     assert [r["optimizer"] for r in view.compare_rows(comp)] == ["exact", "pso", "ga"]
-
-
-def test_offsets_text_is_what_the_csv_writer_writes(correction, tmp_path):
-    rows = correction.offsets()
-    write_offsets_csv(rows, tmp_path / "o.csv", resolution=0.001)
-    assert view.offsets_csv_text(rows, resolution=0.001) == (tmp_path / "o.csv").read_text(encoding="utf-8")
 
 
 def test_signed_and_limits_text():

@@ -12,7 +12,7 @@ import shutil
 from conftest import GUIDE_PINS
 from tui.conftest import CYCLE_01, MODEL, run, settle
 
-from setupfix.offsets import write_offsets_csv
+from setupfix.pipeline.writers import write_offsets_csv
 from setupfix.pipeline.correct import correct_report
 
 
