@@ -9,20 +9,25 @@ from __future__ import annotations
 
 import os
 import time
+from datetime import datetime
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
+import pandas as pd
+
 import parsers
 from setupfix.errors import MatchError, ParseError, SourceLocation
-from setupfix.model import ProcessModel, load_model
+from setupfix.model import PartMeasurement, ProcessModel, load_model, match_parts
 from setupfix.optimize import CorrectionProblem, OptimizeResult, get_optimizer
 from setupfix.pipeline.compare import DEFAULT_METHODS, Comparison, MethodTrials, _available, trial_seeds
 from setupfix.pipeline.correct import PartCorrection, correct_part
-from setupfix.pipeline.cycles import load_parts
+from setupfix.pipeline.cycles import assign_stations, load_parts
 from setupfix.pipeline.view import MatchRow, match_rows, matched_rows
+from setupfix.store import CORRECTION_COLUMNS, Recommendation, open_store
 
-__all__ = ["OpenedReport", "open_report", "newest_report", "FolderWatch", "SKIPPED_SUFFIXES", "compare_steps"]
+__all__ = ["OpenedReport", "open_report", "newest_report", "FolderWatch", "SKIPPED_SUFFIXES", "compare_steps", "store_parts",
+           "record_applied"]
 
 
 @dataclass(frozen=True)
@@ -180,3 +185,45 @@ def compare_steps(problem: CorrectionProblem, *, methods: Sequence[str] = DEFAUL
             partial = [*done, MethodTrials(name, seeds[:len(runs)], list(runs))]
             yield name, step, steps, Comparison(problem, exact, partial, seed, trials, skipped=dict(skipped))
         done.append(MethodTrials(name, seeds, runs))
+
+
+def store_parts(model: ProcessModel, db: str | Path) -> tuple[list[PartMeasurement], list[str]]:
+    """Every cycle stored in the history store ``db``, tied to ``model``, oldest first.
+
+    A stored report that does not match the model is left out and named in the notes.
+    """
+    notes: list[str] = []
+    parts: list[PartMeasurement] = []
+    with open_store(db) as store:
+        names = {r.sha256: r.name for r in store.reports()}
+        rows = store.measurements()
+    for sha, table in rows.groupby("report_sha256", sort=False):
+        try:
+            parts += match_parts(model, assign_stations(model, table), source=names.get(str(sha), str(sha)))
+        except MatchError as exc:
+            notes.append(f"left out: {exc}")
+    parts.sort(key=lambda p: p.timestamp or "")
+    return parts, notes
+
+
+def record_applied(db: str | Path, corrections: Sequence[PartCorrection], *, when: str | None = None) -> int:
+    """Record corrections as applied now: the corrections log (non-zero changes, by
+    controller register name) and the recommendations, in one transaction.
+
+    Returns
+    -------
+    int
+        Correction rows added.
+    """
+    stamp = when or datetime.now().replace(microsecond=0).isoformat()
+    rows = [(stamp, reg.register, float(c.corrections.get(reg.id, 0.0)), "correction")
+            for c in corrections for reg in c.model.registers
+            if not reg.fixed and c.corrections.get(reg.id, 0.0) != 0.0]
+    with open_store(db) as store, store.transaction():
+        added = store.add_corrections(pd.DataFrame(rows, columns=list(CORRECTION_COLUMNS)))
+        for c in corrections:
+            store.add_recommendation(Recommendation(
+                optimizer=c.result.optimizer, created_at=stamp,
+                inputs={"model": c.model.source, "report": c.part.report, "part": c.part.part, "applied": True},
+                result=c.to_json()))
+    return added

@@ -28,8 +28,10 @@ import pandas as pd
 
 from setupfix.model import PartMeasurement, ProcessModel, normalise_name
 from setupfix.model.measurements import suggest_names
+from setupfix.objective import margins as objective_margins
 from setupfix.pipeline.compare import Comparison
 from setupfix.pipeline.correct import PartCorrection
+from setupfix.pipeline.diagnose import DiagnoseOutcome
 from setupfix.pipeline.thermal import DriftPrediction
 
 __all__ = [
@@ -37,7 +39,7 @@ __all__ = [
     "DimensionRow", "dimension_rows", "stations", "filter_rows", "sort_rows", "SORT_KEYS",
     "zone_bar", "RegisterRow", "register_rows", "Summary", "summary",
     "MatchRow", "match_rows", "matched_rows", "convergence", "compare_rows", "DriftView", "drift_view",
-    "signed", "limits_text",
+    "signed", "limits_text", "CycleBudget", "cycle_budgets", "EffectRow", "DiagnosisView", "diagnosis_view",
 ]
 
 IN, OUT, BINDING, PREDICTED_OUT, GIVEN_UP = "✓", "✗", "●", "▲", "⚑"
@@ -357,3 +359,72 @@ def drift_view(prediction: DriftPrediction, recent: int = 120) -> DriftView:
     return DriftView(prediction.method, prediction.target, prediction.latest,
                      prediction.timestamps[-1] if prediction.timestamps else "",
                      np.asarray(prediction.drift[-recent:], dtype=float), m_last, int(len(prediction.drift)))
+
+
+@dataclass(frozen=True)
+class CycleBudget:
+    """The error budget δ of one measured cycle, as measured (before its correction)."""
+
+    cycle: str
+    timestamp: str
+    budget: float
+    out_of_tolerance: int
+    measured: int
+
+
+def cycle_budgets(model: ProcessModel, parts: Iterable[PartMeasurement]) -> list[CycleBudget]:
+    """δ (eq. 8 on the measured deviations) and the out-of-tolerance count of each cycle."""
+    lower = np.array([d.lower for d in model.dimensions])
+    upper = np.array([d.upper for d in model.dimensions])
+    rows = []
+    for p in parts:
+        m = p.measured
+        margins = objective_margins(p.deviation[m], lower[m], upper[m])
+        rows.append(CycleBudget(f"{p.report}:{p.part}" if p.part else p.report, p.timestamp or "",
+                                float(margins.min()) if margins.size else math.nan, int((margins < 0).sum()),
+                                int(m.sum())))
+    return rows
+
+
+@dataclass(frozen=True)
+class EffectRow:
+    """One effect the diagnosis found."""
+
+    kind: str
+    target: str
+    estimate: float
+    stderr: float
+    unit: str
+    rms_after: float
+    alike: tuple[str, ...]
+
+
+@dataclass(frozen=True)
+class DiagnosisView:
+    """A diagnosis as the history panel shows it: residual before/after, effects, walk forward."""
+
+    cycles: int
+    unit: str
+    before: tuple[float, float, int]  #: residual RMS, max |residual|, out of tolerance — declared model
+    after: tuple[float, float, int]  #: the same with the effects found
+    effects: tuple[EffectRow, ...]
+    walk: tuple[tuple[str, float, float, float, int], ...]  #: name, mean δ, worst δ, RMS, out of tolerance
+    next_correction: tuple[tuple[str, float], ...]  #: registers that move, model ID and change
+    notes: tuple[str, ...]
+    budgets: tuple[CycleBudget, ...]
+
+
+def diagnosis_view(outcome: DiagnoseOutcome) -> DiagnosisView:
+    """What the history panel shows of ``setupfix diagnose``'s outcome."""
+    d = outcome.diagnosis
+    eb, ea = d.error_before, d.error_after
+    walk = () if d.walk is None else tuple(
+        (name, b.mean_budget, b.worst_budget, b.rms, b.out_of_tolerance) for name, b in d.walk.budgets.items())
+    return DiagnosisView(
+        cycles=d.series.n_cycles, unit=d.layout.unit,
+        before=(eb.rms, eb.max, eb.out_of_tolerance), after=(ea.rms, ea.max, ea.out_of_tolerance),
+        effects=tuple(EffectRow(e.kind, e.target, e.estimate, e.stderr, e.unit, e.rms_after, tuple(e.alike))
+                      for e in d.effects),
+        walk=walk, next_correction=tuple((k, v) for k, v in outcome.next_correction.items() if v != 0),
+        notes=tuple(str(n) for n in outcome.notes),
+        budgets=tuple(cycle_budgets(outcome.input.model, outcome.input.parts)))

@@ -9,7 +9,6 @@ so a bad file never ends the app.
 
 from __future__ import annotations
 
-import importlib.util
 from dataclasses import dataclass
 from functools import partial
 from pathlib import Path
@@ -23,11 +22,14 @@ from textual.widgets import DataTable, Footer, Header, Static, TabbedContent, Ta
 from textual.worker import Worker, WorkerState, get_current_worker
 
 from setupfix.errors import SetupfixError
+from setupfix.model import ProcessModel
 from setupfix.optimize import OPTIMIZERS, CorrectionProblem
 from setupfix.pipeline import view
 from setupfix.pipeline.compare import DEFAULT_METHODS, Comparison
 from setupfix.pipeline.correct import PartCorrection
-from setupfix.pipeline.session import FolderWatch, OpenedReport, compare_steps, open_report
+from setupfix.pipeline.diagnose import diagnose_reports
+from setupfix.pipeline.session import (FolderWatch, OpenedReport, compare_steps, open_report, record_applied,
+                                      store_parts)
 from setupfix.pipeline.thermal import predict_drift
 from setupfix.tui.exporting import CONTROLLERS, render_offsets, write_offsets
 from setupfix.tui.messages import CompareProgress
@@ -43,8 +45,6 @@ SORT_ORDER: tuple[str | None, ...] = (None, "margin_after", "deviation", "name",
 #: Why panels whose pipeline is not on this branch yet show "not available".
 MISSING = {
     "verdict": "safety rules (issue 13) not in this build",
-    "history": "the history store (setupfix.store, issue 11) is not in this build",
-    "diagnose": "the diagnosis (setupfix.diagnose, issue 11) is not in this build",
     "feed": "the thermal feed-forward (issue 12) is not in this build",
 }
 
@@ -132,8 +132,9 @@ class SetupfixApp(App[None]):
     def on_mount(self) -> None:
         self._show()
         self._start_thermal()
-        self.query_one(HistoryPanel).not_available(MISSING["history"] if importlib.util.find_spec("setupfix.store")
-                                                    is None else "no history store given (--db STORE)")
+        self.query_one(HistoryPanel).status(
+            "no history store given (--db STORE): press d to diagnose the reports in the current report's folder"
+            if self.inputs.db is None else f"reading the history store {self.inputs.db} …")
         report = self.inputs.report
         if report is not None and report.is_dir():
             self.folder_watch = FolderWatch(report, settle=self.inputs.poll_seconds)
@@ -178,6 +179,13 @@ class SetupfixApp(App[None]):
                 self._opened(worker.result)
             elif worker.name == "compare":
                 self._compared(worker.result)
+            elif worker.name == "history" and isinstance(worker.result, tuple):
+                budgets, notes = worker.result
+                self.query_one(HistoryPanel).budgets(budgets, unit=self._unit(), source=str(self.inputs.db))
+                for note in notes:
+                    self.notify(note, title="history", severity="warning")
+            elif worker.name == "diagnose" and isinstance(worker.result, view.DiagnosisView):
+                self.query_one(HistoryPanel).diagnosis(worker.result, source=self._series_source())
             elif worker.name == "thermal" and isinstance(worker.result, view.DriftView):
                 self.query_one(ThermalPanel).show(worker.result, unit=self._unit(),
                                                   source=str(self.inputs.temperatures))
@@ -197,6 +205,8 @@ class SetupfixApp(App[None]):
             self.query_one(ComparePanel).stopped(f"✗ {text}")
         elif what == "thermal":
             self.query_one(ThermalPanel).not_available(text)
+        elif what in ("history", "diagnose"):
+            self.query_one(HistoryPanel).status(f"✗ {text}")
 
     def _opened(self, opened: OpenedReport) -> None:
         self.opened = opened
@@ -216,6 +226,9 @@ class SetupfixApp(App[None]):
         else:
             status.update("✓ every characteristic of the report matches a dimension of the model.")
         self._show()
+        if self.inputs.db is not None:
+            self.run_worker(partial(_history, opened.model, self.inputs.db), name="history", group="history",
+                            thread=True, exclusive=True, exit_on_error=False)
 
     def _compared(self, comparison: object) -> None:
         panel = self.query_one(ComparePanel)
@@ -344,8 +357,19 @@ class SetupfixApp(App[None]):
         self.push_screen(HelpScreen())
 
     def action_diagnose(self) -> None:
+        """Diagnose the series: the reports in the current report's (or the watched) folder."""
         self.action_tab("history")
-        self.notify(f"not available: {MISSING['diagnose']}", severity="warning")
+        if self.model_path is None or self._series_source() == "":
+            self.notify("open a model and a report first", severity="warning")
+            return
+        self.query_one(HistoryPanel).status(f"diagnosing the reports in {self._series_source()} …")
+        self.run_worker(partial(_diagnose, self.model_path, Path(self._series_source())), name="diagnose",
+                        group="diagnose", thread=True, exclusive=True, exit_on_error=False)
+
+    def _series_source(self) -> str:
+        if self.folder_watch is not None:
+            return str(self.folder_watch.folder)
+        return str(self.report_path.parent) if self.report_path is not None else ""
 
     def action_open_report(self) -> None:
         start = self.report_path or Path.cwd()
@@ -392,6 +416,13 @@ class SetupfixApp(App[None]):
             self.notify(str(exc), title="export failed", severity="error", timeout=12)
             return
         self.notify(f"wrote {request.controller} offsets to {request.path}", title="export")
+        if self.inputs.db is not None and self.opened is not None:
+            try:
+                added = record_applied(self.inputs.db, self.opened.corrections)
+            except SetupfixError as exc:
+                self.notify(str(exc), title="history store", severity="error", timeout=12)
+                return
+            self.notify(f"recorded {added} register change(s) as applied in {self.inputs.db}", title="history")
 
 
 def _drift(model: Path, log: Path) -> view.DriftView:
@@ -409,3 +440,14 @@ def _compare(app: SetupfixApp, problem: CorrectionProblem, trials: int, seed: in
         result = comparison
         app.post_message(CompareProgress(step, steps, method))
     return result
+
+
+def _history(model: ProcessModel, db: Path) -> tuple[list[view.CycleBudget], list[str]]:
+    """Thread worker: the error budget of every cycle in the history store."""
+    parts, notes = store_parts(model, db)
+    return view.cycle_budgets(model, parts), notes
+
+
+def _diagnose(model: Path, folder: Path) -> view.DiagnosisView:
+    """Thread worker: ``setupfix diagnose`` over a folder of reports (and its logs)."""
+    return view.diagnosis_view(diagnose_reports(model, [folder]))

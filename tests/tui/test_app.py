@@ -157,3 +157,35 @@ def test_a_folder_is_watched_and_the_newest_finished_report_opened(make_app, tmp
             assert app._current().part.report.endswith("b.csv")
 
     run(scenario())
+
+
+def test_history_from_the_store_one_key_diagnose_and_the_export_recorded(make_app, tmp_path):
+    from setupfix.pipeline.history import import_history
+    from setupfix.store import open_store
+
+    db = tmp_path / "h.db"
+    with open_store(db) as store:
+        import_history(store, sorted(GUIDE_PINS.glob("cycle_0*.csv")))
+
+    async def scenario():
+        app = make_app(db=db)
+        async with app.run_test(size=(100, 40)) as pilot:
+            await settle(pilot)
+            cycles = _rows(app.query_one("#history-cycles"))
+            assert [str(r[3]) for r in cycles] == ["+0.0171", "+0.0484", "+0.0681", "+0.0296", "+0.0489"]
+            await pilot.press("d")
+            await settle(pilot)
+            assert app.query_one("TabbedContent").active == "history"
+            text = str(app.query_one("#history-diagnosis").render())
+            assert "diagnosis of" in text and "residual RMS" in text
+            await pilot.press("1", "e")
+            await pilot.pause()
+            await pilot.press("ctrl+s")
+            await settle(pilot)
+            with open_store(db) as store:
+                log = store.corrections()
+            moved = {reg.register: v for reg, v in zip(app.opened.model.registers, app._current().result.x) if v}
+            assert dict(zip(log["register"], log["delta"].round(6))) == {k: round(v, 6) for k, v in moved.items()}
+            assert any("recorded" in n for n in _notes(app))
+
+    run(scenario())
