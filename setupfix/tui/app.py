@@ -69,6 +69,8 @@ class SetupfixApp(App[None]):
     """setupfix's Textual app; build it with :class:`Inputs` (tests do the same)."""
 
     CSS_PATH = "app.tcss"
+    #: The footer's room is worth more than the palette: every action has a key (see ?).
+    ENABLE_COMMAND_PALETTE = False
     TITLE = "setupfix"
     HORIZONTAL_BREAKPOINTS = [(0, "-narrow"), (120, "-wide")]
     VERTICAL_BREAKPOINTS = [(0, "-short"), (30, "-tall")]

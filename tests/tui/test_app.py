@@ -189,3 +189,26 @@ def test_history_from_the_store_one_key_diagnose_and_the_export_recorded(make_ap
             assert any("recorded" in n for n in _notes(app))
 
     run(scenario())
+
+
+def test_thermal_panel_shows_the_models_drift_over_the_log(make_app, tmp_path):
+    from conftest import SAMPLES
+
+    from setupfix.pipeline.thermal import fit_file, predict_drift
+
+    saved = tmp_path / "grey.json"
+    fit_file(SAMPLES / "thermal" / "train_variable.csv", "grey-ls", target="error_z", out=saved)
+    log = SAMPLES / "thermal" / "test_variable.csv"
+    expected = predict_drift(saved, log)
+
+    async def scenario():
+        app = make_app(thermal=saved, temperatures=log)
+        async with app.run_test() as pilot:
+            await settle(pilot)
+            await pilot.press("3")
+            text = str(app.query_one("#thermal-status").render())
+            assert f"{expected.latest:+.4f} mm" in text and "grey" in text
+            curve = app.query_one("#thermal-curve")
+            assert curve.display and list(curve.data) == [float(v) for v in expected.drift[-120:]]
+
+    run(scenario())
