@@ -23,7 +23,7 @@ def make_app(tmp_path: Path) -> Callable[..., Any]:
     def make(report: Path | None = CYCLE_01, **kw: Any) -> SetupfixApp:
         kw.setdefault("model", MODEL)
         kw.setdefault("offsets", str(tmp_path / "offsets.csv"))
-        kw.setdefault("trials", 2)
+        kw.setdefault("trials", 1)
         return SetupfixApp(Inputs(report=report, **kw))
 
     return make

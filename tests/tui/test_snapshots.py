@@ -50,11 +50,3 @@ def test_export_confirmation(snap_compare):
 def test_match_table_of_a_report_of_another_part(snap_compare):
     assert snap_compare(_app(Path("sample_reports/pcdmis/bracket_two_parts.txt")), run_before=_settled,
                         terminal_size=(80, 24))
-
-
-def test_help(snap_compare):
-    async def run_before(pilot) -> None:
-        await pilot.press("question_mark")
-        await pilot.pause()
-
-    assert snap_compare(SetupfixApp(Inputs(model=MODEL)), run_before=run_before, terminal_size=(80, 24))
