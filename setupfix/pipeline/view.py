@@ -349,6 +349,11 @@ class DriftView:
     measured_latest: float | None
     samples: int
 
+    @property
+    def recent_range(self) -> tuple[float, float]:
+        """Lowest and highest drift of the recent curve (the sparkline's scale)."""
+        return float(np.min(self.recent)), float(np.max(self.recent))
+
 
 def drift_view(prediction: DriftPrediction, recent: int = 120) -> DriftView:
     """The latest drift and its recent curve (the last ``recent`` samples)."""

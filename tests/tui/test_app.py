@@ -41,6 +41,11 @@ def test_open_sort_filter_export_then_a_bad_report(make_app, tmp_path):
             text = str(app.query_one("#summary").render())
             assert "+0.0171" in text and "+0.0822" in text and "+0.0651" in text
             assert {r[1] for r in _rows(dims) if "●" in str(r[0])} == {"P1 D6", "P1 D7"}
+            # the mouse: a click on a column header sorts by it
+            await pilot.click("#dimensions", offset=(20, 1))
+            assert app.sort_key == "deviation"
+            assert [str(r[3]) for r in _rows(dims)][0] == "-0.0829"
+            app.sort_key = None
             # station filter and sort
             await pilot.press("f", "s")
             names = [r[1] for r in _rows(dims)]
