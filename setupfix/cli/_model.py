@@ -10,8 +10,8 @@ import textwrap
 import unicodedata
 
 from setupfix.cli._common import add_report_options, cycle_options, report_options
-from setupfix.cli._format import format_relations
 from setupfix.pipeline.model import MatchTable, check_report, describe_model
+from setupfix.pipeline.present import format_relations
 from setupfix.pipeline.scaffold import scaffold_model
 from setupfix.pipeline.writers import check_target, write_text
 
