@@ -61,6 +61,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                       help="keep the characteristics whose name states this axis (and those stating none); "
                            "default: keep all, process axis = the one most names state")
     init.add_argument("--name", default=None, help="process name (default: from the report file names)")
+    init.add_argument("--parts-are-stations", action="store_true",
+                      help="the report's parts are the fixture's stations (one workpiece each): group = part "
+                           "(default: group = the report's station, if it gives one)")
     init.add_argument("--force", action="store_true",
                       help="replace MODEL if it exists (default: refuse, so an edited model is never overwritten)")
     g = init.add_argument_group("report reading")
@@ -77,7 +80,8 @@ def run_init(args: argparse.Namespace) -> int:
     if args.out != "-" and Path(args.out).exists() and not args.force:
         raise ExportError("exists: a scaffold would replace it (give --force, or another -o)",
                           location=SourceLocation(args.out))
-    scaffold = scaffold_model(args.reports, axis=args.axis, name=args.name, **report_options(args))
+    scaffold = scaffold_model(args.reports, axis=args.axis, name=args.name,
+                              parts_are_stations=args.parts_are_stations, **report_options(args))
     write_text(args.out, scaffold.text + "\n")
     if args.out != "-":
         print(f"wrote {args.out}: {scaffold.dimensions} dimension(s), axis {scaffold.axis}, "
