@@ -17,6 +17,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 from datetime import datetime
 from pathlib import Path
+from typing import Any
 
 import pandas as pd
 
@@ -25,11 +26,11 @@ from parsers._source import point_number
 from setupfix.errors import ParameterError, ParseError, SourceLocation
 from setupfix.model import CANONICAL_COLUMNS
 from setupfix.pipeline.writers import write_canonical_csv, write_table_csv
-from setupfix.store import CORRECTION_COLUMNS, Store
+from setupfix.store import CORRECTION_COLUMNS, Recommendation, Store
 from setupfix.thermal.data import read_temperature_log
 
 __all__ = ["DEFAULT_DB", "default_db_path", "read_corrections_log", "import_history", "ImportSummary",
-           "history_summary", "export_history", "EXPORTS", "EVENTS"]
+           "history_summary", "export_history", "record_recommendations", "EXPORTS", "EVENTS"]
 
 DEFAULT_DB = "setupfix.db"
 #: Kinds of corrections-log rows (``measurements.md``).
@@ -194,3 +195,21 @@ def export_history(store: Store, table: str, target: str | os.PathLike[str]) -> 
     else:
         raise ParameterError(f"history export: table must be one of {', '.join(EXPORTS)}, got {table!r}")
     return len(frame)
+
+
+def record_recommendations(store: Store, results: Sequence[Any], *, model: str | os.PathLike[str],
+                           report: str | os.PathLike[str], seed: int | None = None) -> list[int]:
+    """Store the recommendations of one ``correct`` run (``PartCorrection`` objects), one transaction.
+
+    Inputs kept: the SHA-256 of the model and report files, their names, part and seed;
+    the result is the ``correct --json`` object of each part.  Returns the stored ids.
+    """
+    hashes = {k: hashlib.sha256(_read_bytes(str(p))).hexdigest() for k, p in (("model", model), ("report", report))}
+    ids = []
+    with store.transaction():
+        for r in results:
+            result = r.to_json()
+            inputs = {"model": str(model), "model_sha256": hashes["model"], "report": str(report),
+                      "report_sha256": hashes["report"], "part": result.get("part"), "seed": seed}
+            ids.append(store.add_recommendation(Recommendation(result["optimizer"], inputs, result)))
+    return ids
