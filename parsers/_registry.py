@@ -192,6 +192,8 @@ def read_report(path: str | Path | Source, *, format: str | None = None, **optio
     if not format and options.get("columns") and "table" in _REGISTRY:
         format = "table"
     source = load_source(path)
+    if not source.data.removeprefix(b"\xef\xbb\xbf").strip(b" \t\r\n\x00"):
+        raise ParseError("empty file", location=SourceLocation(source.name))
     spec = find_format(source, format)
     options = {k: v for k, v in options.items() if v is not None}
     check_options(spec, options, source.name)

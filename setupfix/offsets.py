@@ -8,15 +8,14 @@ complete instruction ("leave H23 as it is" is an instruction too).
 from __future__ import annotations
 
 import csv
+import io
 import math
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
-from pathlib import Path
 
-from setupfix.atomic import atomic_write
 from setupfix.model import ProcessModel
 
-__all__ = ["OFFSET_COLUMNS", "OffsetRow", "offset_rows", "write_offsets_csv"]
+__all__ = ["OFFSET_COLUMNS", "OffsetRow", "offset_rows", "offsets_csv_text"]
 
 OFFSET_COLUMNS = ("report", "part", "id", "register", "kind", "axis", "delta")
 
@@ -52,11 +51,15 @@ def offset_rows(model: ProcessModel, corrections: Mapping[str, float], *, report
     return rows
 
 
-def write_offsets_csv(rows: Iterable[OffsetRow], target: str | Path, *, resolution: float = 0.001) -> None:
-    """Write offset rows atomically (``target == "-"``: standard output)."""
+def offsets_csv_text(rows: Iterable[OffsetRow], *, resolution: float = 0.001) -> str:
+    """The offsets CSV of ``rows``, deltas with the decimals of ``resolution``.
+
+    Written by :func:`setupfix.pipeline.writers.write_offsets_csv`.
+    """
     digits = _decimals(resolution)
-    with atomic_write(target) as stream:
-        writer = csv.writer(stream, lineterminator="\n")
-        writer.writerow(OFFSET_COLUMNS)
-        for r in rows:
-            writer.writerow([r.report, r.part, r.id, r.register, r.kind, r.axis, f"{r.delta:.{digits}f}"])
+    stream = io.StringIO()
+    writer = csv.writer(stream, lineterminator="\n")
+    writer.writerow(OFFSET_COLUMNS)
+    for r in rows:
+        writer.writerow([r.report, r.part, r.id, r.register, r.kind, r.axis, f"{r.delta:.{digits}f}"])
+    return stream.getvalue()

@@ -31,6 +31,10 @@ COMMAND_MODULES: tuple[str, ...] = (
     "setupfix.cli._compare",
     "setupfix.cli._model",
     "setupfix.cli._thermal",
+    "setupfix.cli._history",
+    "setupfix.cli._simulate",
+    "setupfix.cli._diagnose",
+    "setupfix.cli._tui",
 )
 
 

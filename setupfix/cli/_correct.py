@@ -6,11 +6,11 @@ import argparse
 import json
 import sys
 
-from setupfix.cli._common import add_report_options, parse_stations, report_options
+from setupfix.cli._common import add_report_options, cycle_options, report_options
 from setupfix.cli._format import format_correction
-from setupfix.offsets import write_offsets_csv
 from setupfix.optimize import OPTIMIZERS
 from setupfix.pipeline.correct import correct_report
+from setupfix.pipeline.writers import check_target, write_offsets_csv
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
@@ -30,8 +30,10 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    if args.offsets:
+        check_target(args.offsets)
     results = correct_report(args.model, args.report, optimizer=args.optimizer, seed=args.seed, part=args.part,
-                             stations=parse_stations(args.stations), **report_options(args))
+                             **cycle_options(args), **report_options(args))
     if args.offsets:
         rows = [row for r in results for row in r.offsets()]
         write_offsets_csv(rows, args.offsets, resolution=results[0].model.resolution)

@@ -22,16 +22,20 @@ def format_correction(pc: PartCorrection) -> str:
     unit = pc.model.unit
     lines = [f"{pc.part.report}  part {pc.part.part or '—'}  ({r.optimizer}, {r.status}, {r.seconds * 1000:.0f} ms)", ""]
     binding = set(r.binding)
-    head = f"{'dimension':<14}{'deviation':>11}{'lower':>9}{'upper':>9}{'predicted':>11}{'margin':>9}"
+    rows = pc.dimension_rows()
+    st = 9 if any(row.get("station") for row in rows) else 0  # station column only for fixtures
+    head = (f"{'station':<{st}}"[:st] + f"{'dimension':<14}{'deviation':>11}{'lower':>9}{'upper':>9}"
+            f"{'predicted':>11}{'margin':>9}")
     lines += [head, "-" * len(head)]
-    for row in pc.dimension_rows():
+    for row in rows:
         flag = "  ◀ binding" if row["id"] in binding else ""
         out = "  OUT" if not (row["lower"] <= row["deviation"] <= row["upper"]) else ""
-        lines.append(f"{row['name']:<14}{_num(row['deviation']):>11}{_num(row['lower'], 3):>9}"
+        lines.append(f"{row.get('station') or '':<{st}}"[:st] + f"{row['name']:<14}{_num(row['deviation']):>11}{_num(row['lower'], 3):>9}"
                      f"{_num(row['upper'], 3):>9}{_num(row['predicted']):>11}{_num(row['margin']):>9}{flag}{out}")
     for did in pc.part.absent:
-        name = next(d.name for d in pc.model.dimensions if d.id == did)
-        lines.append(f"{name:<14}{'absent from report: not in the objective':>50}")
+        dim = next(d for d in pc.model.dimensions if d.id == did)
+        name = dim.name
+        lines.append(f"{dim.group or '':<{st}}"[:st] + f"{name:<14}{'absent from report: not in the objective':>50}")
     lines += ["", f"corrections [{unit}], axis {pc.model.axis}:"]
     regs = {reg.id: reg for reg in pc.model.registers}
     for rid, delta in pc.corrections.items():

@@ -73,7 +73,10 @@ def _num(x: float) -> float | None:
 def run(args: argparse.Namespace) -> int:
     """Dispatch to :mod:`setupfix.pipeline.thermal`; printing only."""
     from setupfix.pipeline import thermal as pipe
+    from setupfix.pipeline.writers import check_target
 
+    if getattr(args, "output", None):
+        check_target(args.output)  # a folder, device, FIFO or link is refused before any work
     if args.action == "fit":
         saved = pipe.fit_file(args.data, args.method, target=args.target, out=args.output, **_options(args))
         tr = saved.train

@@ -209,12 +209,13 @@ def compare_report(model: ProcessModel | str | Path, report: str | Path, *, part
                    methods: Sequence[str] = DEFAULT_METHODS, trials: int = 12, seed: int = 0,
                    format: str | None = None, unit: str | None = None, encoding: str | None = None,
                    columns: str | None = None,
-                   stations: Sequence[str] | Mapping[str, str] | None = None) -> Comparison:
+                   stations: Sequence[str] | Mapping[str, str] | None = None, parts_per_cycle: int | None = None,
+                   strict: bool = False) -> Comparison:
     """Compare the methods on one part of a report (the first one unless ``part`` names it)."""
     if not isinstance(model, ProcessModel):
         model = load_model(model)
     parts = load_parts(model, report, format=format, unit=unit, encoding=encoding, columns=columns,
-                       stations=stations)
+                       stations=stations, parts_per_cycle=parts_per_cycle, strict=strict)
     measured = select_parts(parts, part, report)[0]
     problem = CorrectionProblem.from_part(model, measured)
     result = compare_problem(problem, methods=methods, trials=trials, seed=seed)
@@ -224,7 +225,8 @@ def compare_report(model: ProcessModel | str | Path, report: str | Path, *, part
 
 def plot_comparison(comparison: Comparison, path: str | Path) -> None:
     """Draw convergence (Figs. 12–15) and spread (Figs. 16–17) of a comparison to PNG or SVG."""
-    from setupfix.plots import comparison_figure, save_figure
+    from setupfix.pipeline.writers import write_figure
+    from setupfix.plots import comparison_figure
 
     e = comparison.exact
     fig = comparison_figure(
@@ -233,4 +235,4 @@ def plot_comparison(comparison: Comparison, path: str | Path) -> None:
         exact=(e.margin_after, e.norm, e.fitness), unit=comparison.unit,
         title=f"{comparison.report} part {comparison.part or '—'}: {comparison.trials} trials per method",
     )
-    save_figure(fig, path)
+    write_figure(fig, path)

@@ -8,19 +8,17 @@ problem → optimise → a :class:`PartCorrection` per cycle.
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 import numpy as np
-import pandas as pd
 
-import parsers
 from setupfix.errors import MatchError, SourceLocation
-from setupfix.model import PartMeasurement, ProcessModel, load_model, match_parts, normalise_name
+from setupfix.model import PartMeasurement, ProcessModel, load_model
 from setupfix.offsets import OffsetRow, offset_rows
 from setupfix.optimize import CorrectionProblem, OptimizeResult, get_optimizer
+from setupfix.pipeline.cycles import Stations, assign_stations, load_parts  # noqa: F401 - re-exported
 
 __all__ = ["PartCorrection", "assign_stations", "load_parts", "select_parts", "correct_part", "correct_report"]
 
@@ -50,7 +48,7 @@ class PartCorrection:
         for i, did in enumerate(self.problem.dimension_ids):
             d = dims[did]
             rows.append({
-                "id": did, "name": d.name, "deviation": float(self.problem.deviation[i]),
+                "id": did, "name": d.name, "station": d.group, "deviation": float(self.problem.deviation[i]),
                 "predicted": float(predicted[i]), "lower": d.lower, "upper": d.upper,
                 "margin": float(margins[i]),
             })
@@ -86,62 +84,10 @@ class PartCorrection:
             ],
             "absent": list(self.part.absent),
             "unmatched": list(self.part.unmatched),
+            "suggestions": {name: list(near) for name, near in self.part.suggestions.items()},
             "evaluations": r.evaluations,
             "seconds": round(r.seconds, 6),
         }
-
-
-def assign_stations(model: ProcessModel, table: pd.DataFrame,
-                    stations: Sequence[str] | Mapping[str, str] | None = None) -> pd.DataFrame:
-    """Map the parts of a multi-part report to fixture stations (model ``group``).
-
-    A CMM report often holds one "part" per physical workpiece while a setup
-    correction concerns one fixture cycle holding several workpieces.  With
-    ``stations`` (a list in part order, or a mapping part → station), or when every
-    part value names a model group, the parts become stations of one cycle.
-
-    Raises
-    ------
-    MatchError
-        If a station is not a group of the model, or the list length differs from
-        the number of parts.
-    """
-    groups = {normalise_name(d.group): d.group for d in model.dimensions if d.group}
-    parts = table["part"].fillna("").astype(str)
-    order = list(dict.fromkeys(parts))
-    report = str(table["report"].iloc[0]) if "report" in table and len(table) else "<report>"
-    if stations is None:
-        if len(order) > 1 and all(normalise_name(p) in groups for p in order):
-            mapping = {p: groups[normalise_name(p)] for p in order}
-        else:
-            return table
-    elif isinstance(stations, Mapping):
-        mapping = dict(stations)
-    else:
-        if len(stations) != len(order):
-            raise MatchError(f"{len(stations)} stations given for {len(order)} parts in the report "
-                             f"({', '.join(order)})", location=SourceLocation(report))
-        mapping = dict(zip(order, stations))
-    for part, station in mapping.items():
-        if normalise_name(station) not in groups:
-            raise MatchError(f"station {station!r} (for part {part!r}) is not a group of the model "
-                             f"(groups: {', '.join(sorted(set(groups.values())))})", location=SourceLocation(report))
-    out = table.copy()
-    out["station"] = parts.map(lambda p: mapping.get(p, ""))
-    out["part"] = "cycle"
-    return out
-
-
-def load_parts(model: ProcessModel, report: str | Path, *, format: str | None = None, unit: str | None = None,
-               encoding: str | None = None, columns: str | None = None,
-               stations: Sequence[str] | Mapping[str, str] | None = None) -> list[PartMeasurement]:
-    """Read a report in any supported format and tie it to the model, cycle by cycle."""
-    options: dict[str, Any] = {"unit": unit, "encoding": encoding}
-    if columns:
-        options["columns"] = columns
-    table = parsers.read(report, format=format, **options)
-    table = assign_stations(model, table, stations)
-    return match_parts(model, table, source=str(report))
 
 
 def correct_part(model: ProcessModel, part: PartMeasurement, *, optimizer: str = "exact",
@@ -150,7 +96,7 @@ def correct_part(model: ProcessModel, part: PartMeasurement, *, optimizer: str =
     problem = CorrectionProblem.from_part(model, part)
     opt = get_optimizer(optimizer, seed=seed, **params)
     result = opt.solve(problem)
-    notes = []
+    notes = [str(n) for n in part.notes]
     if part.absent:
         notes.append(f"{len(part.absent)} dimension(s) absent from the report, left out: {', '.join(part.absent)}")
     if part.unmatched:
@@ -162,12 +108,13 @@ def correct_part(model: ProcessModel, part: PartMeasurement, *, optimizer: str =
 def correct_report(model: ProcessModel | str | Path, report: str | Path, *, optimizer: str = "exact",
                    seed: int | None = None, part: str | None = None, format: str | None = None,
                    unit: str | None = None, encoding: str | None = None, columns: str | None = None,
-                   stations: Sequence[str] | Mapping[str, str] | None = None) -> list[PartCorrection]:
+                   stations: Stations | None = None, parts_per_cycle: int | None = None,
+                   strict: bool = False) -> list[PartCorrection]:
     """Correct every cycle of a report (or the one named by ``part``)."""
     if not isinstance(model, ProcessModel):
         model = load_model(model)
     parts = load_parts(model, report, format=format, unit=unit, encoding=encoding, columns=columns,
-                       stations=stations)
+                       stations=stations, parts_per_cycle=parts_per_cycle, strict=strict)
     return [correct_part(model, p, optimizer=optimizer, seed=seed) for p in select_parts(parts, part, report)]
 
 

@@ -14,19 +14,15 @@ from pathlib import Path
 import pandas as pd
 
 import parsers
-from setupfix.atomic import atomic_write
 from setupfix.errors import Note, ParseError, SetupfixError, SourceLocation, UnknownFormatError
 from setupfix.model import CANONICAL_COLUMNS
+from setupfix.pipeline.writers import FLOAT_FORMAT, write_canonical_csv
 
 __all__ = ["ParsedReport", "ParseOutcome", "parse_reports", "expand_inputs", "write_canonical_csv",
            "OUTPUT_COLUMNS", "list_formats", "note_line"]
 
 #: Columns ``setupfix parse`` writes: the canonical ones, then the reference-only flag.
 OUTPUT_COLUMNS: tuple[str, ...] = (*CANONICAL_COLUMNS, "reference")
-
-#: Lengths are written with 12 significant digits: exact for every report value
-#: (≤ 7 decimals in the samples) and free of binary noise in actual − nominal.
-FLOAT_FORMAT = "%.12g"
 
 
 @dataclass(frozen=True)
@@ -135,12 +131,6 @@ def parse_reports(paths: Sequence[str | Path], *, format: str | None = None, uni
             continue
         outcome.reports.append(ParsedReport(name, result.format, result.table, result.notes))
     return outcome
-
-
-def write_canonical_csv(table: pd.DataFrame, out: str | Path) -> None:
-    """Write a canonical table as CSV through :func:`setupfix.atomic.atomic_write` (``-``: stdout)."""
-    with atomic_write(out) as stream:
-        table.to_csv(stream, index=False, float_format=FLOAT_FORMAT, lineterminator="\n")
 
 
 def list_formats() -> list[dict[str, object]]:

@@ -1,0 +1,168 @@
+"""Per-report time of the exact optimiser on the paper's example, and where it goes.
+
+Problems: the five bundled cycles of the guide-pins model (read from their CSV files)
+and random measurement sets drawn by eqs. 12-13 as in Fig. 18 (w1 = 0.03 mm,
+w2 = 0.02 mm).  One optimiser instance solves them all in one process, as
+``setupfix batch`` does.  BLAS runs single-threaded (threadpoolctl) for the whole
+run, so the numbers do not depend on OpenBLAS's thread pool.
+
+Reported:
+
+* the median and p95 wall time of ``solve`` per report, and each as a ratio to a
+  reference timed in the same run, interleaved with the work: one vectorised
+  ``problem.evaluate`` of 5,000 random grid solutions (the reference of
+  ``bench/fig18_validation.py``);
+* the time per stage, as the optimiser records it in ``result.extra["stages"]``
+  (seconds per stage; absent in versions that do not record it);
+* a profile of the same solves: time inside HiGHS's solve calls, inside other
+  compiled code the stages call (NNLS), and in Python around them;
+* how many reports each stage was needed for (``result.extra["path"]``).
+
+    python bench/exact_per_report.py              # 5 cycles + 200 random sets
+    python bench/exact_per_report.py --sets 50
+
+Writes ``bench/results/exact_per_report.txt`` (with the command).
+"""
+
+from __future__ import annotations
+
+import argparse
+import cProfile
+import platform
+import pstats
+import re
+import sys
+import time
+from collections import Counter
+from pathlib import Path
+
+import numpy as np
+from threadpoolctl import threadpool_info, threadpool_limits
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+from setupfix.model import PartMeasurement, load_model  # noqa: E402
+from setupfix.optimize import CorrectionProblem, get_optimizer  # noqa: E402
+from setupfix.pipeline.correct import load_parts  # noqa: E402
+from setupfix.simulate import simulate_deviations  # noqa: E402
+
+RESULTS = ROOT / "bench" / "results"
+SAMPLE = ROOT / "sample_reports" / "guide_pins"
+
+
+def problems(sets: int, seed: int) -> list[tuple[str, CorrectionProblem]]:
+    model = load_model(SAMPLE / "model.toml")
+    out = []
+    for i in range(1, 6):
+        for part in load_parts(model, SAMPLE / f"cycle_{i:02d}.csv"):
+            out.append((f"cycle_{i:02d}", CorrectionProblem.from_part(model, part)))
+    devs, _ = simulate_deviations(model, sets, w1=0.03, w2=0.02, seed=seed)
+    for s, dev in enumerate(devs):
+        part = PartMeasurement(part=f"set {s + 1}", report="eqs. 12-13", timestamp=None, deviation=dev,
+                               sources=("",) * dev.size)
+        out.append((f"set {s + 1}", CorrectionProblem.from_part(model, part)))
+    return out
+
+
+def reference_seconds(problem: CorrectionProblem, x: np.ndarray) -> float:
+    start = time.perf_counter()
+    problem.evaluate(x)
+    return time.perf_counter() - start
+
+
+def profile_split(solve, items) -> dict[str, float]:
+    """Seconds inside HiGHS solve calls, inside NNLS, and in total, over all items."""
+    prof = cProfile.Profile()
+    prof.enable()
+    for _, problem in items:
+        solve(problem)
+    prof.disable()
+    stats = pstats.Stats(prof).stats  # type: ignore[attr-defined]
+    highs = nnls = total = 0.0
+    for (filename, _, name), (_, _, tottime, _, _) in stats.items():
+        where = f"{filename}:{name}".lower()
+        total += tottime
+        if "highs" in where and re.search(r"\brun\b", name):
+            highs += tottime
+        elif "nnls" in where:
+            nnls += tottime
+    return {"highs": highs, "nnls": nnls, "total": total}
+
+
+def main(argv: list[str] | None = None) -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--sets", type=int, default=200, help="random measurement sets (eqs. 12-13)")
+    parser.add_argument("--seed", type=int, default=2014)
+    parser.add_argument("--out", type=Path, default=RESULTS / "exact_per_report.txt")
+    args = parser.parse_args(argv)
+
+    with threadpool_limits(limits=1):
+        blas = ", ".join(f"{i['internal_api']} {i['num_threads']} thread(s)" for i in threadpool_info()) or "none"
+        items = problems(args.sets, args.seed)
+        exact = get_optimizer("exact")
+        exact.solve(items[0][1])  # warm-up: imports, first solver set-up
+        rng = np.random.default_rng(0)
+        times, refs = [], []
+        stages: dict[str, list[float]] = {}
+        paths: Counter[str] = Counter()
+        statuses: Counter[str] = Counter()
+        wall = time.perf_counter()
+        for _, problem in items:
+            x_ref = problem.snap(rng.uniform(problem.lb, problem.ub, (5000, problem.n_registers)))
+            refs.append(reference_seconds(problem, x_ref))
+            start = time.perf_counter()
+            result = exact.solve(problem)
+            times.append(time.perf_counter() - start)
+            statuses[result.status] += 1
+            for stage, sec in dict(result.extra.get("stages", {})).items():  # type: ignore[call-overload]
+                stages.setdefault(stage, []).append(float(sec))
+            paths[str(result.extra.get("path", "-"))] += 1
+        wall = time.perf_counter() - wall
+        split = profile_split(exact.solve, items)
+
+    t = np.array(times)
+    ref = float(np.median(refs))
+    n = len(items)
+    lines = [
+        "Exact optimiser: time per report on the guide-pins model (paper's example)",
+        f"command : python bench/exact_per_report.py --sets {args.sets} --seed {args.seed}",
+        f"machine : {platform.machine()}, Python {platform.python_version()}, numpy {np.__version__}; "
+        f"wall time {wall:.1f} s",
+        f"threads : BLAS limited to 1 by threadpoolctl ({blas})",
+        f"reports : {n} (5 bundled cycles from CSV + {args.sets} random sets by eqs. 12-13, seed {args.seed}), "
+        "one optimiser instance, in process",
+        f"status  : {dict(statuses)}",
+        "",
+        f"reference: one vectorised evaluate(5,000 grid solutions), median {ref * 1e3:.3f} ms",
+        f"solve per report, median : {np.median(t) * 1e3:7.2f} ms = {np.median(t) / ref:5.1f}x reference",
+        f"solve per report, p95    : {np.percentile(t, 95) * 1e3:7.2f} ms = "
+        f"{np.percentile(t, 95) / ref:5.1f}x reference",
+        f"solve per report, max    : {t.max() * 1e3:7.2f} ms",
+        "",
+        "per stage (median over the reports that ran it, ms; count):",
+    ]
+    for stage, secs in stages.items():
+        lines.append(f"  {stage:<28} {np.median(secs) * 1e3:7.3f} ms  ({len(secs)} of {n})")
+    if not stages:
+        lines.append("  (this version records no stage times)")
+    lines += ["", "paths taken (which stages were needed):"]
+    lines += [f"  {k:<40} {v}" for k, v in paths.most_common()]
+    total = split["total"]
+    lines += [
+        "",
+        "profile of the same solves (cProfile; shares of the profiled time):",
+        f"  inside HiGHS solve calls  {split['highs'] / total:6.1%}",
+        f"  inside NNLS               {split['nnls'] / total:6.1%}",
+        f"  Python and numpy around   {(total - split['highs'] - split['nnls']) / total:6.1%}",
+        "",
+        f"target  : median <= 5 ms per report [{'met' if np.median(t) <= 0.005 else 'not met'}]",
+    ]
+    text = "\n".join(lines) + "\n"
+    args.out.parent.mkdir(parents=True, exist_ok=True)
+    args.out.write_text(text, encoding="utf-8")
+    print(text, end="")
+
+
+if __name__ == "__main__":
+    main()
