@@ -26,6 +26,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                    help="text encoding, e.g. utf-8, cp1252, cp949 (default: sniffed)")
     p.add_argument("--columns", default=None, metavar="MAP",
                    help="column mapping for shop tables (actual=Meas,nominal=Nom,...) or a mapping file")
+    p.add_argument("--lenient", action="store_true",
+                   help="skip a row that contradicts itself (named in a warning) instead of refusing its report; "
+                        "readers that cannot tell such rows apart refuse the option")
     p.set_defaults(run=run)
 
 
@@ -40,7 +43,7 @@ def _encoding(text: str) -> str:
 def run(args: argparse.Namespace) -> int:
     check_target(args.out)
     outcome = parse_reports(args.files, format=args.format, unit=args.unit, encoding=args.encoding,
-                            columns=args.columns)
+                            columns=args.columns, lenient=args.lenient)
     for report in outcome.reports:
         for line in report.warnings:
             print(f"warning: {line}", file=sys.stderr)
