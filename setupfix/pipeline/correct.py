@@ -176,6 +176,7 @@ class PartCorrection:
             "absent": list(self.part.absent),
             "unmatched": list(self.part.unmatched),
             "suggestions": {name: list(near) for name, near in self.part.suggestions.items()},
+            "warnings": list(self.warnings),
             "evaluations": r.evaluations,
             "seconds": round(r.seconds, 6),
         }
