@@ -130,6 +130,15 @@ class LinearModel:
         self._check(self.h.passHessian(diag.size, diag.size, int(HessianFormat.kTriangular), idx,
                                        idx.copy(), diag), "passHessian")
 
+    def make_integer(self, cols: npt.NDArray[np.intp]) -> None:
+        """Turn columns into integer ones (the LP becomes a MILP, solved to a zero gap)."""
+        cols = np.asarray(cols, dtype=np.int32)
+        types = np.array([HighsVarType.kInteger] * cols.size)
+        self._check(self.h.changeColsIntegrality(cols.size, cols, types), "changeColsIntegrality")
+        if not self.is_mip:
+            self.is_mip = True
+            self.h.setOptionValue("mip_rel_gap", 0.0)
+
     def set_row_bounds(self, lo: Array, hi: Array) -> None:
         """Change every row's bounds (the deviations of a new report enter here)."""
         self._check(self.h.changeRowsBounds(  # type: ignore[attr-defined]  # in highspy, not its stubs
