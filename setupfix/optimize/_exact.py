@@ -402,6 +402,47 @@ class ExactOptimizer(Optimizer):
             a_new, rhs_new = chord_rows(new)
             model.add_rows(a_new, np.full(rhs_new.size, -INF), rhs_new)
 
+    def _triaged(self, problem: CorrectionProblem, g_rows: Array, g: Array, kmin: Array, kmax: Array, cost: Array,
+                 k_start: Array, clock: _Clock, path: list[str], notes: list[Note], calls: int,
+                 bound: float) -> OptimizeResult:
+        """No correction brings every dimension into tolerance: :func:`~setupfix.optimize._triage.triage`."""
+        from setupfix.optimize._triage import triage
+
+        upper_ok, lower_ok = np.isfinite(problem.upper), np.isfinite(problem.lower)
+        row_dim = np.r_[np.flatnonzero(upper_ok), np.flatnonzero(lower_ok)]
+        m = len(problem.dimension_ids)
+        k, proved, why, done = triage(g_rows, g, row_dim, m, kmin, kmax, cost, clock.deadline, k_start)
+        clock.lap("triage")
+        path.append("triage: " + ", ".join(done) if done else "triage")
+        x = np.zeros(problem.n_registers)
+        x[problem.free] = k * problem.resolution
+        margins = problem.margins(x)
+        quantum = QUANTUM * problem.resolution
+        given_up = tuple(d for d, v in zip(problem.dimension_ids, margins) if v < -quantum)
+        kept = margins >= -quantum
+        low = margins[kept].min() if kept.any() else 0.0
+        binding = tuple(d for d, v, ok in zip(problem.dimension_ids, margins, kept)
+                        if ok and v <= low + problem.resolution / 4)
+        message = (f"no correction within the register limits brings every dimension into tolerance: "
+                   f"{len(given_up)} dimension(s) given up ({', '.join(given_up)}) need the NC program or the "
+                   "process, not the setup; the other dimensions are kept in tolerance with the largest error "
+                   "budget and the smallest correction")
+        notes.append(Note(message, kind="solver"))
+        status = "optimal"
+        extra: dict[str, object] = {"stages": dict(clock.stages), "path": "; ".join(path)}
+        if not proved:
+            status = "time_limit" if "time limit" in why else "solver_error"
+            notes.append(Note(f"triage not proved ({why})", kind="solver"))
+            message += f"; not proved ({why})"
+            extra["stopped"] = {"stage": "triage", "reason": why}
+        result = make_result(problem, x, optimizer=self.name, evaluations=calls + 3,
+                             seconds=time.perf_counter() - clock.start, status=status, bound=bound,
+                             message=message, binding=binding)
+        result.extra.update(extra)
+        result.given_up = given_up
+        result.notes = tuple(notes)
+        return result
+
     # -- driver --------------------------------------------------------------------------------
     def solve(self, problem: CorrectionProblem) -> OptimizeResult:
         with _blas_single_thread():  # small solves: BLAS threads only contend
@@ -454,7 +495,9 @@ class ExactOptimizer(Optimizer):
 
         level = upper
         all_integer = bool(np.all((d > 0) | zero))
-        if t_best >= upper - TOL:
+        if upper < -TOL:
+            path.append("grid optimum: the bound is below 0 (no correction brings every dimension into tolerance)")
+        elif t_best >= upper - TOL:
             path.append("grid optimum: rounded LP point attains the bound")
         else:
             proved = False
@@ -546,6 +589,8 @@ class ExactOptimizer(Optimizer):
                 if res.status != "optimal":
                     stopped = ("grid optimum", "time limit" if res.status == "time_limit" else f"HiGHS: {res.detail}")
         clock.lap("grid optimum")
+        if upper < -TOL or (stopped is None and t_best < -TOL):
+            return self._triaged(problem, g_rows, g, kmin, kmax, cost, k_best, clock, path, notes, calls, bound)
 
         # Stage 3: least norm at the error budget reached (also when stage 2 was stopped).
         b = rounded_rhs(g, d, zero, t_best)
