@@ -3,8 +3,8 @@
 Random process models shaped like the paper's (and like ``../shared/repro``): two thirds
 of the registers are WKS, one third tools; every feature is cut by one tool in one WKS
 (weights ±1); 70 % of the dimensions measure one feature, 30 % the difference of two;
-asymmetric tolerances of 0.01-0.08 mm per side; register limits ±0.1 mm on a 0.001 mm
-grid; measurement sets by eqs. 12-13 (w1 = 0.03 mm, w2 = 0.02 mm), rounded to 0.1 µm.
+asymmetric tolerances of 0.02-0.1 mm per side; register limits ±0.1 mm on a 0.001 mm
+grid; measurement sets by eqs. 12-13 (w1 = 0.03 mm, w2 = 0.01 mm), rounded to 0.1 µm.
 
 For each size and seed: the solve under the time limit (2 s up to 180 x 2,000, 10 s
 above), its wall time per stage, status and which stage stopped, the gap of the error
@@ -52,10 +52,10 @@ def shop_problem(n: int, m: int, seed: int) -> CorrectionProblem:
     pairs = rng.random(m) < 0.3
     other = feat[:, rng.integers(0, n_feat, m)]
     comp[:, pairs] -= other[:, pairs]
-    lower = -np.round(rng.uniform(0.01, 0.08, m) / 0.005) * 0.005
-    upper = np.round(rng.uniform(0.01, 0.08, m) / 0.005) * 0.005
+    lower = -np.round(rng.uniform(0.02, 0.1, m) / 0.005) * 0.005
+    upper = np.round(rng.uniform(0.02, 0.1, m) / 0.005) * 0.005
     setup = 0.03 * (1 - 2 * rng.random(n))
-    dev = np.round(setup @ comp + 0.02 * (1 - 2 * rng.random(m)), 4)
+    dev = np.round(setup @ comp + 0.01 * (1 - 2 * rng.random(m)), 4)
     return CorrectionProblem(composite=comp, deviation=dev, lower=lower, upper=upper, lb=np.full(n, -0.1),
                              ub=np.full(n, 0.1), resolution=0.001, register_ids=tuple(f"R{i}" for i in range(n)),
                              dimension_ids=tuple(f"D{j}" for j in range(m)))

@@ -78,12 +78,13 @@ NNLS_MAX_ROWS = 600
 #: Radius² and size of the ellipsoids the grid-optimum stage lists for a point at its bound.
 SEARCH_RADIUS2 = 16.0
 SEARCH_LIMIT = 20_000
-#: LPs with more rows than this are solved by HiGHS's interior-point method.
-IPM_MIN_ROWS = 10**9  # off: the simplex warm start serves the feasibility checks better
+#: A cold LP with more rows than this is solved by HiGHS's interior-point method (with crossover, so the
+#: duals are a basis' and later solves of the kept model warm-start the simplex from it).
+IPM_MIN_ROWS = 2000
 #: Share of the grid-optimum stage's time a feasibility MILP may use.
 MILP_SHARE = 0.5
 #: Share of the whole time limit kept for the least-norm stage (HiGHS may overrun a limit a little).
-LEAST_NORM_SHARE = 0.35
+LEAST_NORM_SHARE = 0.5
 #: Levels the grid-optimum stage may descend by rounded rows before it uses the MILP.
 LEVEL_STEPS = 40
 #: Cap on t when one-sided limits leave it unbounded (far above any two-sided margin).
@@ -130,8 +131,6 @@ def _lp_model(g_rows: Array, kmin: Array, kmax: Array) -> LinearModel:
     r, n = g_rows.shape
     model = LinearModel(np.r_[np.zeros(n), -1.0], np.hstack([g_rows, np.ones((r, 1))]), np.full(r, -INF),
                         np.zeros(r), np.r_[kmin, -T_CAP], np.r_[kmax, T_CAP])
-    if r > IPM_MIN_ROWS:  # large LPs: interior point (with crossover, so duals stay exact) is ~2x faster
-        model.h.setOptionValue("solver", "ipm")
     return model
 
 
@@ -234,12 +233,20 @@ class ExactOptimizer(Optimizer):
         """t_LP, the LP point and the row weights y ≥ 0 of its dual."""
         lp = self._lp(g_rows, kmin, kmax, cost)
         lp.set_row_bounds(np.full(g.size, -INF), g)
+        cold = not lp.solved
+        if cold and g.size > IPM_MIN_ROWS:
+            lp.h.setOptionValue("solver", "ipm")
         res = lp.solve(clock.left())
-        if res.status != "optimal":  # one retry from scratch before giving up
+        if cold:
+            lp.h.setOptionValue("solver", "choose")
+        if res.status not in ("optimal", "time_limit") and clock.left() > 0:  # one retry from scratch
             self._cache = _Cache()
             lp = self._lp(g_rows, kmin, kmax, cost)
             lp.set_row_bounds(np.full(g.size, -INF), g)
-            res = lp.solve(max(clock.left(), 1.0))
+            res = lp.solve(clock.left())
+        if res.status == "time_limit":
+            raise SolverError(f"the LP bound was not reached within the time limit ({self.time_limit:g} s): "
+                              "no proven correction; allow more time")
         if res.status != "optimal" or res.x is None or res.row_dual is None:
             raise SolverError(f"LP stage failed: HiGHS answered {res.detail!r}")
         return float(res.x[-1]), res.x[:-1], np.maximum(-res.row_dual, 0.0)
@@ -314,11 +321,51 @@ class ExactOptimizer(Optimizer):
                 return (best if found is None else found), True, ""
             if found is not None:
                 best = found
-        best = shrink(g_rows, b, best, cost, time.perf_counter() + 0.1 * max(clock.left(), 0.0))
+        best = self._good_incumbent(g_rows, g, b, kmin, kmax, cost, t_star, best, cont, clock)
         path.append("least norm: chords of k² (LP, then MILP)")
         found, proved, why = self._chord_solve(g_rows, g, t_star, b, kmin, kmax, cost, best,
                                                cont[0] if cont else best, clock, clock.left())
         return (best if found is None else found), proved, why
+
+    def _good_incumbent(self, g_rows: Array, g: Array, b: Array, kmin: Array, kmax: Array, cost: Array,
+                        t_star: float, best: Array, cont: tuple[Array, Array, Array, Array] | None,
+                        clock: _Clock) -> Array:
+        """A small feasible grid point before the chord MILP (heuristics; the MILP proves or improves it).
+
+        * Safe rounding: the continuous least-norm point of the rows tightened by half their
+          l1 norm rounds to a point that meets the original rows (each coordinate moves ≤ ½).
+        * The segment from the incumbent to the continuous least-norm point is feasible; the
+          rounded point farthest along it that stays feasible.
+        * :func:`~setupfix.optimize._grid.shrink`: single steps towards 0 while feasible.
+        """
+        def f(k: Array) -> float:
+            return float(np.sum(cost * k**2))
+
+        def ok(k: Array) -> bool:
+            return bool(grid_margins(g_rows, g, k) >= t_star - TOL)
+
+        out = None
+        if g_rows.shape[0] + 2 * kmin.size <= NNLS_MAX_ROWS:  # one more QP only where QPs are cheap
+            safe = b - 0.5 * np.sum(np.abs(g_rows), axis=1)
+            _, out = self._continuous_least_norm(g_rows, safe, kmin, kmax, cost, clock)
+        if out is not None:
+            k = np.clip(np.rint(out[0]), kmin, kmax)
+            if ok(k) and f(k) < f(best):
+                best = k
+        if cont is None:
+            _, cont = self._continuous_least_norm(g_rows, b, kmin, kmax, cost, clock)
+        if cont is not None:
+            lo, hi = 0.0, 1.0
+            for _ in range(12):
+                mid = (lo + hi) / 2
+                k = np.clip(np.rint(best + mid * (cont[0] - best)), kmin, kmax)
+                if ok(k):
+                    lo = mid
+                    if f(k) < f(best):
+                        best = k
+                else:
+                    hi = mid
+        return shrink(g_rows, b, best, cost, time.perf_counter() + 0.1 * max(clock.left(), 0.0))
 
     def _chord_solve(self, g_rows: Array, g: Array, level: float, b: Array, kmin: Array, kmax: Array,
                      cost: Array, best: Array | None, k_cont: Array, clock: _Clock, time_limit: float,

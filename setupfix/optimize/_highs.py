@@ -117,6 +117,7 @@ class LinearModel:
         self._check(self.h.passModel(lp), "passModel")
         self._rows = np.arange(self.n_rows, dtype=np.int32)
         self._cols = np.arange(self.n_cols, dtype=np.int32)
+        self.solved = False  # True once a run has left a basis to warm-start from
 
     @staticmethod
     def _check(status: HighsStatus, what: str) -> None:
@@ -167,6 +168,7 @@ class LinearModel:
         if start is not None and self.is_mip:
             h.setSolution(self.n_cols, self._cols, np.asarray(start, dtype=float))
         run = h.run()
+        self.solved = True
         model_status = h.getModelStatus()
         info = h.getInfo()
         status = _STATUS_NAMES.get(model_status, "error") if run != HighsStatus.kError else "error"
