@@ -24,7 +24,8 @@ sys.path.insert(0, str(ROOT))
 from setupfix.model import PartMeasurement, load_model  # noqa: E402
 from setupfix.optimize import CorrectionProblem  # noqa: E402
 from setupfix.pipeline.compare import DEFAULT_METHODS, compare_problem  # noqa: E402
-from setupfix.plots import save_figure, validation_figure  # noqa: E402
+from setupfix.pipeline.writers import write_figure  # noqa: E402
+from setupfix.plots import validation_figure  # noqa: E402
 from setupfix.simulate import simulate_deviations  # noqa: E402
 
 OUT = ROOT / "bench" / "results"
@@ -91,7 +92,7 @@ def main() -> None:
     fig = validation_figure(ini, ex, per_method, unit=model.unit,
                             title=f"Fig. 18 redone: {args.sets} sets × {args.trials} trials, sorted by f1 before "
                                   "correction")
-    save_figure(fig, OUT / "validation_all_methods.png")
+    write_figure(fig, OUT / "validation_all_methods.png")
     print(text)
 
 

@@ -11,9 +11,10 @@ import csv
 import math
 from pathlib import Path
 
+import numpy as np
 import pandas as pd
 
-from parsers._source import csv_records, decode, point_number, read_bytes
+from parsers._source import Source, csv_records, decode, point_number, read_bytes
 from setupfix.errors import ParseError, SourceLocation
 from setupfix.model.measurements import CANONICAL_COLUMNS, LENGTH_COLUMNS
 from setupfix.units import LENGTH_UNITS, length_factor
@@ -47,12 +48,40 @@ def finish_table(rows: list[dict[str, object]] | dict[str, object], path: str) -
         if col not in frame:
             frame[col] = math.nan if col in LENGTH_COLUMNS else ""
     frame["unit"] = "mm"
+    _check_magnitudes(frame, path)
     frame.loc[frame["report"].isin(["", None]) | frame["report"].isna(), "report"] = Path(path).name
     extra = [c for c in frame.columns if c not in CANONICAL_COLUMNS]
     return frame[list(CANONICAL_COLUMNS) + extra].reset_index(drop=True)
 
 
-def read_canonical(path: str | Path, *, text: str | None = None, unit: str | None = None,
+#: Largest length a report row may hold [mm]: 10 km.  A larger value (``actual = 1e308``,
+#: ``1e307`` inch) is damage; refusing it here keeps inf/overflow out of every later sum.
+MAX_LENGTH_MM = 1e7
+
+
+def _check_magnitudes(frame: pd.DataFrame, path: str) -> None:
+    """Refuse a row with a length beyond :data:`MAX_LENGTH_MM` (NaN, i.e. absent, is fine)."""
+    for col in LENGTH_COLUMNS:
+        if col not in frame:
+            continue
+        values = pd.to_numeric(frame[col], errors="coerce").to_numpy(dtype=float)
+        bad = np.flatnonzero(np.abs(values) > MAX_LENGTH_MM)
+        if bad.size:
+            i = int(bad[0])
+            source = str(frame["source"].iat[i]) if "source" in frame else ""
+            raise ParseError(f"{col} {values[i]:g} mm is beyond any measurable length",
+                             location=_location_of(source, path))
+
+
+def _location_of(source: str, path: str) -> SourceLocation:
+    """The location a row's ``source`` (``file:line``, else the file) names."""
+    head, sep, tail = source.rpartition(":")
+    if sep and tail.isdigit():
+        return SourceLocation(head, line=int(tail))
+    return SourceLocation(path)
+
+
+def read_canonical(path: str | Path | Source, *, text: str | None = None, unit: str | None = None,
                    encoding: str | None = None) -> pd.DataFrame:
     """Read a canonical measurement CSV into the canonical table (lengths in mm).
 
@@ -74,17 +103,16 @@ def read_canonical(path: str | Path, *, text: str | None = None, unit: str | Non
         deviation that contradicts actual − nominal; names file and line.
     """
     name = str(path)
-    if text is None and encoding:
-        text = decode(read_bytes(path), name, encoding)
     if text is None:
-        try:
-            text = Path(path).read_bytes().decode("utf-8-sig")
-        except OSError as exc:
-            raise ParseError(f"cannot read: {exc.strerror}", location=SourceLocation(name)) from None
-        except UnicodeDecodeError as exc:
-            line = Path(path).read_bytes()[: exc.start].count(b"\n") + 1
-            raise ParseError("not UTF-8 text", location=SourceLocation(name, line=line),
-                             hint="give its encoding with --encoding") from None
+        data = read_bytes(path)
+        if encoding:
+            text = decode(data, name, encoding)
+        else:
+            try:
+                text = data.decode("utf-8-sig")
+            except UnicodeDecodeError as exc:
+                raise ParseError("not UTF-8 text", location=SourceLocation(name, line=data[: exc.start].count(b"\n") + 1),
+                                 hint="give its encoding with --encoding") from None
     records = csv_records(text.lstrip("\ufeff"), name)
     try:
         header = [h.strip().lower() for h in next(records)[1]]

@@ -19,6 +19,7 @@ __all__ = [
     "SolverError",
     "NotFittedError",
     "ExportError",
+    "StoreError",
     "ParameterError",
     "Note",
     "ParseWarning",
@@ -116,6 +117,10 @@ class NotFittedError(SolverError, AttributeError):
 
 class ExportError(SetupfixError, OSError):
     """A result file cannot be written."""
+
+
+class StoreError(SetupfixError):
+    """The history store cannot be opened, migrated or written, or an import contradicts it."""
 
 
 class ParameterError(SetupfixError, ValueError):

@@ -10,6 +10,7 @@ module costs nothing and no global backend is switched.
 
 from __future__ import annotations
 
+import os
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -17,13 +18,12 @@ from typing import TYPE_CHECKING
 import numpy as np
 import numpy.typing as npt
 
-from setupfix.atomic import atomic_write
 from setupfix.errors import ExportError, SourceLocation
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
-__all__ = ["comparison_figure", "validation_figure", "figure_format", "save_figure", "FORMATS"]
+__all__ = ["comparison_figure", "validation_figure", "figure_format", "FORMATS"]
 
 Array = npt.NDArray[np.float64]
 
@@ -143,7 +143,7 @@ def validation_figure(initial: Array, exact: Array, results: Mapping[str, Array]
     return fig
 
 
-def figure_format(path: str | Path) -> str:
+def figure_format(path: str | os.PathLike[str]) -> str:
     """matplotlib format of a figure file by its suffix.
 
     Raises
@@ -157,18 +157,3 @@ def figure_format(path: str | Path) -> str:
         raise ExportError(f"plot format {path.suffix or '(none)'!r} not supported; use .png or .svg",
                           location=SourceLocation(str(path)))
     return fmt
-
-
-def save_figure(fig: Figure, path: str | Path) -> Path:
-    """Write a figure as PNG or SVG (by suffix) atomically: temp file in the folder, then os.replace.
-
-    Raises
-    ------
-    ExportError
-        If the suffix is neither .png nor .svg, or the folder cannot be written.
-    """
-    path = Path(path)
-    fmt = figure_format(path)
-    with atomic_write(path, binary=True) as stream:
-        fig.savefig(stream, format=fmt, dpi=120)
-    return path

@@ -50,3 +50,10 @@ def simulate_deviations(model: ProcessModel, n_sets: int, *, w1: float = 0.03, w
     if decimals is not None:
         dev = np.round(dev, decimals)
     return dev, setup
+
+
+# The closed-loop shop simulator lives with the diagnosis it feeds (one definition of
+# every effect term); it is re-exported here as the project's simulation entry point.
+from setupfix.diagnose.shop import HiddenEffect, ShopSimulator, SimulatedSeries  # noqa: E402
+
+__all__ += ["HiddenEffect", "ShopSimulator", "SimulatedSeries"]

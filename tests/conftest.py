@@ -2,13 +2,15 @@
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
 SAMPLES = ROOT / "sample_reports"
-SHARED = ROOT.parent / "shared"
+#: ../shared beside the project; SETUPFIX_SHARED names it elsewhere (a worktree outside the checkout).
+SHARED = Path(os.environ.get("SETUPFIX_SHARED", ROOT.parent / "shared"))
 GUIDE_PINS = SAMPLES / "guide_pins"
 
 

@@ -16,7 +16,8 @@ from pathlib import Path
 
 import pandas as pd
 
-from parsers._source import csv_records, parse_number, read_text
+from parsers._source import csv_records, read_text
+from parsers.numbers import parse_number
 from parsers.canonical import DEVIATION_TOLERANCE_MM, finish_table
 from setupfix.errors import ParseError, SourceLocation
 from setupfix.units import LENGTH_UNITS, length_factor
@@ -40,12 +41,7 @@ def _value(row: list[str], index: dict[str, int], column: str) -> str:
 
 
 def _length(text: str, column: str, where: SourceLocation) -> float:
-    if not text:
-        return math.nan
-    try:
-        return parse_number(text)
-    except ValueError:
-        raise ParseError(f"column {column!r}: expected a number, found {text[:30]!r}", location=where) from None
+    return parse_number(text, decimal="auto", location=where, what=f"column {column!r}", allow_empty=True)
 
 
 def read_calypso(path: str | Path, *, unit: str | None = None, encoding: str | None = None) -> pd.DataFrame:

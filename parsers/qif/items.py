@@ -12,6 +12,7 @@ from dataclasses import dataclass
 
 from lxml import etree
 
+from parsers.numbers import parse_number, try_number
 from parsers.qif.external import IdIndex
 from parsers.qif.units import file_unit_factor, unit_factor
 from setupfix.errors import ParseError, SourceLocation
@@ -43,16 +44,10 @@ def number(el: etree._Element | None, path: str, mm: float) -> float:
     """Value of a length element in mm (its own ``linearUnit`` first); NaN when absent."""
     if el is None or el.text is None:
         return math.nan
-    try:
-        value = float(el.text.split()[0]) if el.text.strip() else math.nan
-    except ValueError:
-        raise ParseError(f"expected a number, found {el.text.strip()[:40]!r}",
-                         location=SourceLocation(path, line=el.sourceline, element=local(el.tag))) from None
-    if not math.isfinite(value):
-        if math.isnan(value):
-            return math.nan
-        raise ParseError("expected a finite number", location=SourceLocation(
-            path, line=el.sourceline, element=local(el.tag)))
+    words = el.text.split()
+    if not words:
+        return math.nan
+    value = parse_number(words[0], location=SourceLocation(path, line=el.sourceline, element=local(el.tag)))
     own = el.get("linearUnit")
     if own:
         factor = unit_factor(own)
@@ -81,11 +76,10 @@ def _location(item: etree._Element, doc: Doc, mm: float) -> tuple[float, float, 
     loc = _child(nominal, ns, "Location")
     if loc is None or not loc.text:
         return (math.nan, math.nan, math.nan)
-    try:
-        xyz = [float(v) * mm for v in loc.text.split()[:3]]
-    except ValueError:
+    xyz = [try_number(v, scale=mm) for v in loc.text.split()[:3]]
+    if len(xyz) != 3 or None in xyz:
         return (math.nan, math.nan, math.nan)
-    return (xyz[0], xyz[1], xyz[2]) if len(xyz) == 3 else (math.nan, math.nan, math.nan)
+    return (float(xyz[0]), float(xyz[1]), float(xyz[2]))  # type: ignore[arg-type]
 
 
 def _limits(kind: str, definition: etree._Element, owner: Doc, nominal: float, mm: float, notes: set[str]
@@ -162,10 +156,8 @@ def item_info(kind: str, item: etree._Element, nom: etree._Element, definition: 
 
 
 def raw_float(text: str) -> float:
-    try:
-        return float(text)
-    except ValueError:
-        return math.nan
+    value = try_number(text)
+    return math.nan if value is None else value
 
 
 def _owner_mm(owner: Doc, fallback: float) -> float:

@@ -10,11 +10,12 @@ the default is never applied silently (see :func:`choose_file_unit`).
 from __future__ import annotations
 
 import math
-import warnings
 
 from lxml import etree
 
-from setupfix.errors import ParseError, ParseWarning, SourceLocation
+from parsers.numbers import try_number
+from parsers._notes import note
+from setupfix.errors import ParseError, SourceLocation
 from setupfix.units import LENGTH_UNITS, length_factor
 
 __all__ = ["unit_factor", "file_unit_factor", "choose_file_unit", "METRE_PLAUSIBLE_MAX"]
@@ -54,11 +55,8 @@ def file_unit_factor(root: etree._Element, ns: str, path: str) -> float | None:
     if factor is not None:
         return factor
     text = unit.findtext(f"{{{ns}}}UnitConversion/{{{ns}}}Factor")
-    try:
-        metres = float(text) if text is not None else math.nan
-    except ValueError:
-        metres = math.nan
-    if math.isfinite(metres) and metres > 0:
+    metres = try_number(text or "")
+    if metres is not None and metres > 0:
         return metres * 1000.0
     if not name:
         # SI unit with no conversion: the value is in the SI unit itself (metre).
@@ -97,9 +95,8 @@ def choose_file_unit(declared: float | None, nominals: list[float], path: str, u
         return factor
     largest = max((abs(v) for v in nominals if math.isfinite(v)), default=0.0)
     if largest > METRE_PLAUSIBLE_MAX:
-        warnings.warn(
-            f"{path}: no FileUnits; nominals up to {largest:g} cannot be metres, read as mm "
-            "(give --unit to override)", ParseWarning, stacklevel=3)
+        note(f"no FileUnits; nominals up to {largest:g} cannot be metres, read as mm (give --unit to override)",
+             SourceLocation(path, element="FileUnits"), "unit")
         return 1.0
     raise ParseError(
         "no FileUnits: lengths would be metres by the QIF schema, but the values do not say which unit they are in",

@@ -26,11 +26,16 @@ __all__ = ["main", "build_parser"]
 #: Sub-command modules, in the order ``--help`` lists them.
 COMMAND_MODULES: tuple[str, ...] = (
     "setupfix.cli._correct",
+    "setupfix.cli._batch",
     "setupfix.cli._parse",
     "setupfix.cli._formats",
     "setupfix.cli._compare",
     "setupfix.cli._model",
     "setupfix.cli._thermal",
+    "setupfix.cli._history",
+    "setupfix.cli._simulate",
+    "setupfix.cli._diagnose",
+    "setupfix.cli._tui",
 )
 
 

@@ -17,7 +17,30 @@ def add_report_options(p: argparse.ArgumentParser) -> None:
     g.add_argument("--columns", default=None, metavar="MAP",
                    help="column mapping for shop tables, e.g. actual=Meas,nominal=Nom")
     g.add_argument("--stations", default=None, metavar="LIST",
-                   help="fixture stations of the report's parts, in order (P1,P2,…) or as part=station pairs")
+                   help="fixture stations of the report's parts, in order (P1,P2,…) or as part=station pairs; "
+                        "a subset of the fixture is allowed")
+    g.add_argument("--parts-per-cycle", type=_positive_int, default=None, metavar="N",
+                   help="group consecutive parts of the report N at a time into fixture loads (cycles), the k-th "
+                        "part of each load at the k-th of --stations (default: the model's groups when there are N)")
+    g.add_argument("--strict", action="store_true",
+                   help="refuse a report whose nominal or tolerance of a dimension differs from the model's "
+                        "(default: a warning naming both values)")
+
+
+def _positive_int(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
+    if not 1 <= value <= 10_000:
+        raise argparse.ArgumentTypeError(f"must be in [1, 10000], got {value}")
+    return value
+
+
+def cycle_options(args: argparse.Namespace) -> dict[str, Any]:
+    """Stations, parts per cycle and strictness as keyword arguments of the use cases."""
+    return {"stations": parse_stations(args.stations), "parts_per_cycle": args.parts_per_cycle,
+            "strict": args.strict}
 
 
 def report_options(args: argparse.Namespace) -> dict[str, Any]:

@@ -6,8 +6,9 @@ import argparse
 import json
 import sys
 
-from setupfix.cli._common import add_report_options, parse_stations, report_options
+from setupfix.cli._common import add_report_options, cycle_options, report_options
 from setupfix.pipeline.compare import Comparison, compare_report, plot_comparison
+from setupfix.pipeline.writers import check_target
 from setupfix.plots import figure_format
 
 
@@ -64,9 +65,10 @@ def format_comparison(c: Comparison) -> str:
 
 def run(args: argparse.Namespace) -> int:
     if args.plot:
-        figure_format(args.plot)  # refuse an unknown suffix before the trials, not after
+        figure_format(args.plot)  # refuse an unknown suffix or target before the trials, not after
+        check_target(args.plot)
     comparison = compare_report(args.model, args.report, part=args.part, trials=args.trials, seed=args.seed,
-                                stations=parse_stations(args.stations), **report_options(args))
+                                **cycle_options(args), **report_options(args))
     if args.plot:
         plot_comparison(comparison, args.plot)
     if args.json:

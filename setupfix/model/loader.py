@@ -3,14 +3,43 @@
 Every problem is collected with its key path before anything is raised, so the
 engineer fixes the file in one pass: :class:`~setupfix.errors.ModelError` carries
 the list in ``problems`` and its text has one line per problem.
+
+Sanity ranges (a correction goes into a machine: an absurd model must not load).
+Lengths are given in millimetres and converted to the model unit:
+
+======================  ==========================================================
+``resolution``          1e-6 … 1 mm, at most ``limit``, at most half the narrowest
+                        tolerance band, and ``limit / resolution`` ≤ 100,000 steps
+``limit`` (any)         ≤ 10 mm
+``nominal``             |nominal| ≤ 100,000 mm
+``lower``, ``upper``    |limit| ≤ 100 mm
+weights                 0 < |w| ≤ 1,000
+``position``            |coordinate| ≤ 100,000 mm
+======================  ==========================================================
+
+Extension point for other modules (one line each, below the imports):
+
+``SECTIONS[name] = parser``
+    accepts an optional top-level table ``[name]``.  ``parser(value, model,
+    report)`` gets the raw TOML value, the validated model without extras and
+    ``report(key, message)`` (``key`` relative to the section, ``""`` for the
+    section itself); what it returns is stored in ``ProcessModel.extras[name]``.
+    It runs only when the rest of the model is valid.
+``REGISTER_KEYS[key] = parser``
+    accepts ``key`` in ``[wks.*]`` and ``[tools.*]`` tables.  ``parser(value,
+    report)`` returns the validated value (``report(message)`` for a problem),
+    stored in ``Register.extras[key]``.
 """
 
 from __future__ import annotations
 
+import functools
 import math
 import re
+import sys
 import tomllib
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -23,9 +52,44 @@ from setupfix.model.process import (
     Register,
     RegisterKind,
 )
-from setupfix.units import LENGTH_UNITS
+from setupfix.model.stations import expand_stations
+from setupfix.units import LENGTH_UNITS, length_factor
 
-__all__ = ["load_model", "model_from_dict"]
+__all__ = [
+    "REGISTER_KEYS",
+    "SECTIONS",
+    "RANGES_MM",
+    "MAX_STEPS",
+    "SectionParser",
+    "RegisterKeyParser",
+    "load_model",
+    "model_from_dict",
+]
+
+#: ``parser(value, model, report(key, message)) -> parsed`` for an optional top-level table.
+SectionParser = Callable[[Any, ProcessModel, Callable[[str, str], None]], Any]
+#: ``parser(value, report(message)) -> parsed`` for an extra key of register tables.
+RegisterKeyParser = Callable[[Any, Callable[[str], None]], Any]
+
+#: Optional top-level tables other modules parse (see the module docstring).
+SECTIONS: dict[str, SectionParser] = {}
+#: Extra keys allowed in ``[wks.*]`` / ``[tools.*]`` tables (see the module docstring).
+REGISTER_KEYS: dict[str, RegisterKeyParser] = {}
+
+#: Allowed ranges of lengths [mm], converted to the model unit when checked.
+RANGES_MM: dict[str, tuple[float, float]] = {
+    "resolution": (1e-6, 1.0),
+    "limit": (1e-6, 10.0),
+    "nominal": (-1e5, 1e5),
+    "tolerance": (-100.0, 100.0),
+    "position": (-1e5, 1e5),
+}
+#: Bound on ``limit / resolution``: register steps one correction may span.
+MAX_STEPS = 100_000
+#: Bound on the absolute value of a relation weight.
+MAX_WEIGHT = 1000.0
+#: A model file larger than this is refused before parsing.
+MAX_BYTES = 16 * 1024 * 1024
 
 _FREE_TEXT = {"description", "comment", "note", "notes"}
 _KEYS = {
@@ -35,18 +99,31 @@ _KEYS = {
     "tools": {"register", "limit", "fixed"} | _FREE_TEXT,
     "features": {"wks", "tools", "position"} | _FREE_TEXT,
     "dimensions": {"name", "aliases", "features", "nominal", "lower", "upper", "group"} | _FREE_TEXT,
+    "effects": set(),  # validated by setupfix.model.effects (written by `diagnose --augment`)
 }
+#: Top-level tables consumed before validation (station templates, see ``stations``).
+_EXPANDED = {"stations", "template"}
 
 
 class _Problems:
     """Collects problems with their key paths."""
 
-    def __init__(self, path: str) -> None:
+    def __init__(self, path: str, origin: Mapping[str, str] | None = None) -> None:
         self.path = path
+        self.origin = origin or {}
         self.items: list[ModelError] = []
 
     def add(self, key: str, message: str) -> None:
-        self.items.append(ModelError(message, location=SourceLocation(self.path, key=key)))
+        self.items.append(ModelError(message, location=SourceLocation(self.path, key=self._where(key))))
+
+    def _where(self, key: str) -> str:
+        """Key path in the file as written (templated tables name their template and station)."""
+        parts = key.split(".")
+        for n in range(min(len(parts), 2), 1, -1):
+            head = ".".join(parts[:n])
+            if head in self.origin:
+                return ".".join([self.origin[head], *parts[n:]])
+        return key
 
     def raise_if_any(self) -> None:
         if self.items:
@@ -56,18 +133,40 @@ class _Problems:
             raise err
 
 
+def _show(value: Any) -> str:
+    """A value for a message: short, never failing (huge integers, deep tables)."""
+    if isinstance(value, int) and not isinstance(value, bool) and abs(value) > 10**15:
+        return f"an integer of {len(str(abs(value))) if value.bit_length() < 13000 else 'thousands of'} digits"
+    if isinstance(value, (dict, list)):
+        return f"a {'table' if isinstance(value, dict) else 'list'}"
+    text = repr(value)
+    return text if len(text) <= 60 else text[:57] + "..."
+
+
 def _is_number(value: Any) -> bool:
-    return isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
+    """A finite TOML number that fits a float."""
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        return False
+    if isinstance(value, int):
+        return abs(value) <= sys.float_info.max
+    return math.isfinite(value)
 
 
-def _number(p: _Problems, key: str, value: Any, *, positive: bool = False) -> float | None:
+def _number(p: _Problems, key: str, value: Any, *, positive: bool = False,
+            within: tuple[float, float] | None = None, unit: str = "") -> float | None:
     if not _is_number(value):
-        p.add(key, f"expected a number, found {value!r}")
+        why = "not finite or beyond the float range" if isinstance(value, (int, float)) and not isinstance(
+            value, bool) else "expected a number"
+        p.add(key, f"{why}, found {_show(value)}")
         return None
-    if positive and value <= 0:
-        p.add(key, f"must be > 0, found {value!r}")
+    number = float(value)
+    if positive and number <= 0:
+        p.add(key, f"must be > 0, found {_show(value)}")
         return None
-    return float(value)
+    if within is not None and not within[0] <= number <= within[1]:
+        p.add(key, f"{number:g}{unit} is outside the allowed range [{within[0]:g}, {within[1]:g}]{unit}")
+        return None
+    return number
 
 
 def _table(p: _Problems, key: str, value: Any) -> dict[str, Any]:
@@ -78,9 +177,10 @@ def _table(p: _Problems, key: str, value: Any) -> dict[str, Any]:
 
 
 def _check_keys(p: _Problems, section: str, key: str, table: Mapping[str, Any]) -> None:
+    allowed_here = _KEYS[section] | (set(REGISTER_KEYS) if section in ("wks", "tools") else set())
     for name in table:
-        if name not in _KEYS[section]:
-            allowed = ", ".join(sorted(_KEYS[section] - _FREE_TEXT))
+        if name not in allowed_here:
+            allowed = ", ".join(sorted(allowed_here - _FREE_TEXT))
             p.add(f"{key}.{name}", f"unknown key (expected one of: {allowed})")
 
 
@@ -90,13 +190,23 @@ def _weights(p: _Problems, key: str, value: Any, known: Mapping[str, Any], what:
         if ref not in known:
             p.add(f"{key}.{ref}", f"unknown {what} {ref!r}")
             continue
-        w = _number(p, f"{key}.{ref}", weight)
+        w = _number(p, f"{key}.{ref}", weight, within=(-MAX_WEIGHT, MAX_WEIGHT))
         if w is not None and w != 0.0:
             out[ref] = w
     return out
 
 
-def _registers(p: _Problems, doc: dict[str, Any], section: str, kind: RegisterKind, limit: float) -> list[Register]:
+class _Ranges:
+    """The sanity ranges converted to the model unit."""
+
+    def __init__(self, unit: str) -> None:
+        f = length_factor("mm", unit)
+        self.unit = f" {unit}"
+        self.of = {name: (lo * f, hi * f) for name, (lo, hi) in RANGES_MM.items()}
+
+
+def _registers(p: _Problems, doc: dict[str, Any], section: str, kind: RegisterKind, limit: float,
+               ranges: _Ranges) -> list[Register]:
     regs = []
     for rid, raw in _table(p, section, doc.get(section, {})).items():
         key = f"{section}.{rid}"
@@ -104,15 +214,40 @@ def _registers(p: _Problems, doc: dict[str, Any], section: str, kind: RegisterKi
         _check_keys(p, section, key, table)
         name = table.get("register", rid)
         if not isinstance(name, str) or not name.strip():
-            p.add(f"{key}.register", f"expected a register name, found {name!r}")
+            p.add(f"{key}.register", f"expected a register name, found {_show(name)}")
             name = rid
-        lim = _number(p, f"{key}.limit", table["limit"], positive=True) if "limit" in table else limit
+        lim = (_number(p, f"{key}.limit", table["limit"], positive=True, within=ranges.of["limit"],
+                       unit=ranges.unit) if "limit" in table else limit)
         fixed = table.get("fixed", False)
         if not isinstance(fixed, bool):
-            p.add(f"{key}.fixed", f"expected true or false, found {fixed!r}")
+            p.add(f"{key}.fixed", f"expected true or false, found {_show(fixed)}")
             fixed = False
-        regs.append(Register(rid, kind, name.strip(), lim if lim is not None else limit, fixed))
+        extras: dict[str, Any] = {}
+        for extra, parse in REGISTER_KEYS.items():
+            if extra in table:
+                extras[extra] = parse(table[extra], functools.partial(p.add, f"{key}.{extra}"))
+        regs.append(Register(rid, kind, name.strip(), lim if lim is not None else limit, fixed, extras))
     return regs
+
+
+def _check_resolution(p: _Problems, resolution: float, registers: list[Register],
+                      dimensions: list[Dimension], unit: str) -> None:
+    """Resolution against the register limits and the tolerance bands."""
+    for reg in registers:
+        key = f"{'wks' if reg.kind == 'wks' else 'tools'}.{reg.id}.limit"
+        if reg.limit < resolution:
+            p.add(key, f"limit {reg.limit:g} {unit} is below the resolution {resolution:g} {unit}: "
+                       "the register could never be corrected (use fixed = true)")
+        elif reg.limit / resolution > MAX_STEPS:
+            p.add(key, f"limit {reg.limit:g} {unit} spans {reg.limit / resolution:.3g} steps of the resolution "
+                       f"{resolution:g} {unit}; at most {MAX_STEPS:,} are allowed")
+    bands = [(d.upper - d.lower, d) for d in dimensions if math.isfinite(d.upper - d.lower)]
+    if bands:
+        width, narrowest = min(bands, key=lambda b: b[0])
+        if resolution > width / 2:
+            p.add("process.resolution",
+                  f"resolution {resolution:g} {unit} is coarser than half the narrowest tolerance band "
+                  f"({narrowest.name}: {width:g} {unit} wide); allowed: at most {width / 2:g} {unit}")
 
 
 def model_from_dict(doc: Mapping[str, Any], source: str = "<model>") -> ProcessModel:
@@ -123,11 +258,15 @@ def model_from_dict(doc: Mapping[str, Any], source: str = "<model>") -> ProcessM
     ModelError
         With one line per problem, each naming ``source`` and the key path.
     """
-    p = _Problems(source)
-    doc = dict(doc)
+    expanded, origin, template_problems = expand_stations(doc)
+    p = _Problems(source, origin)
+    for key, message in template_problems:
+        p.add(key, message)
+    doc = expanded
     for top in doc:
-        if top not in _KEYS:
-            p.add(top, f"unknown table (expected one of: {', '.join(_KEYS)})")
+        if top not in _KEYS and top not in SECTIONS and top not in _EXPANDED:
+            known = [*_KEYS, *SECTIONS, *sorted(_EXPANDED)]
+            p.add(top, f"unknown table (expected one of: {', '.join(known)})")
     if "process" not in doc:
         p.add("process", "missing required table [process]")
     proc = _table(p, "process", doc.get("process", {}))
@@ -137,17 +276,20 @@ def model_from_dict(doc: Mapping[str, Any], source: str = "<model>") -> ProcessM
         p.add("process.name", "missing required process name")
     axis = proc.get("axis", "Z")
     if axis not in ("X", "Y", "Z"):
-        p.add("process.axis", f'expected "X", "Y" or "Z", found {axis!r}')
+        p.add("process.axis", f'expected "X", "Y" or "Z", found {_show(axis)}')
     unit = proc.get("unit", "mm")
     if not isinstance(unit, str) or LENGTH_UNITS.get(unit.strip().lower()) is None:
-        p.add("process.unit", f'unknown unit {unit!r} (expected "mm" or "inch")')
+        p.add("process.unit", f'unknown unit {_show(unit)} (expected "mm" or "inch")')
         unit = "mm"
     unit = LENGTH_UNITS[unit.strip().lower()]
-    resolution = _number(p, "process.resolution", proc.get("resolution", 0.001), positive=True) or 0.001
-    limit = _number(p, "process.limit", proc.get("limit", 0.1), positive=True) or 0.1
+    ranges = _Ranges(unit)
+    resolution = _number(p, "process.resolution", proc.get("resolution", 0.001), positive=True,
+                         within=ranges.of["resolution"], unit=ranges.unit)
+    limit = _number(p, "process.limit", proc.get("limit", 0.1), positive=True, within=ranges.of["limit"],
+                    unit=ranges.unit)
 
-    wks = _registers(p, doc, "wks", "wks", limit)
-    tools = _registers(p, doc, "tools", "tool", limit)
+    wks = _registers(p, doc, "wks", "wks", limit or 0.1, ranges)
+    tools = _registers(p, doc, "tools", "tool", limit or 0.1, ranges)
     wks_ids = {r.id: r for r in wks}
     tool_ids = {r.id: r for r in tools}
     for rid in wks_ids.keys() & tool_ids.keys():
@@ -178,15 +320,49 @@ def model_from_dict(doc: Mapping[str, Any], source: str = "<model>") -> ProcessM
         pos = table.get("position")
         position = None
         if pos is not None:
-            if isinstance(pos, list) and len(pos) == 3 and all(_is_number(v) for v in pos):
+            lo, hi = ranges.of["position"]
+            if isinstance(pos, list) and len(pos) == 3 and all(_is_number(v) and lo <= v <= hi for v in pos):
                 position = (float(pos[0]), float(pos[1]), float(pos[2]))
             else:
-                p.add(f"{key}.position", f"expected [x, y, z] numbers, found {pos!r}")
+                p.add(f"{key}.position",
+                      f"expected [x, y, z] numbers within [{lo:g}, {hi:g}]{ranges.unit}, found {_show(pos)}")
         features.append(Feature(fid, fw, ft, position))
     feature_ids = {f.id: f for f in features}
     if not features:
         p.add("features", "the model declares no feature")
 
+    dimensions = _dimensions(p, doc, feature_ids, ranges)
+    if resolution is not None and not p.items:
+        _check_resolution(p, resolution, [*wks, *tools], dimensions, unit)
+    p.raise_if_any()
+    assert resolution is not None and limit is not None  # refused above otherwise
+    model = ProcessModel(
+        name=str(name).strip(),
+        axis=str(axis),
+        unit=unit,
+        resolution=resolution,
+        limit=limit,
+        wks=tuple(wks),
+        tools=tuple(tools),
+        machines=tuple(machines),
+        features=tuple(features),
+        dimensions=tuple(dimensions),
+        source=source,
+    )
+    extras: dict[str, Any] = {}
+    for section, parse in SECTIONS.items():
+        if section in doc:
+            extras[section] = parse(doc[section], model, functools.partial(_report_in, p, section))
+    p.raise_if_any()
+    return replace(model, extras=extras) if extras else model
+
+
+def _report_in(p: _Problems, section: str, key: str, message: str) -> None:
+    p.add(f"{section}.{key}" if key else section, message)
+
+
+def _dimensions(p: _Problems, doc: Mapping[str, Any], feature_ids: Mapping[str, Feature],
+                ranges: _Ranges) -> list[Dimension]:
     dimensions = []
     seen_names: dict[tuple[str, str | None], str] = {}
     for did, raw in _table(p, "dimensions", doc.get("dimensions", {})).items():
@@ -195,15 +371,15 @@ def model_from_dict(doc: Mapping[str, Any], source: str = "<model>") -> ProcessM
         _check_keys(p, "dimensions", key, table)
         dname = table.get("name", did)
         if not isinstance(dname, str) or not dname.strip():
-            p.add(f"{key}.name", f"expected a name, found {dname!r}")
+            p.add(f"{key}.name", f"expected a name, found {_show(dname)}")
             dname = did
         aliases = table.get("aliases", [])
         if not isinstance(aliases, list) or not all(isinstance(a, str) and a.strip() for a in aliases):
-            p.add(f"{key}.aliases", f"expected a list of names, found {aliases!r}")
+            p.add(f"{key}.aliases", f"expected a list of names, found {_show(aliases)}")
             aliases = []
         group = table.get("group")
         if group is not None and not isinstance(group, str):
-            p.add(f"{key}.group", f"expected a string, found {group!r}")
+            p.add(f"{key}.group", f"expected a string, found {_show(group)}")
             group = None
         if "features" not in table:
             p.add(f"{key}.features", "missing: which features enter this dimension")
@@ -215,7 +391,9 @@ def model_from_dict(doc: Mapping[str, Any], source: str = "<model>") -> ProcessM
                 p.add(f"{key}.{field_name}", f"missing {what}")
                 values[field_name] = None
             else:
-                values[field_name] = _number(p, f"{key}.{field_name}", table[field_name])
+                within = ranges.of["nominal" if field_name == "nominal" else "tolerance"]
+                values[field_name] = _number(p, f"{key}.{field_name}", table[field_name], within=within,
+                                             unit=ranges.unit)
         lo, up = values["lower"], values["upper"]
         if lo is not None and up is not None and lo >= up:
             p.add(f"{key}.lower", f"lower limit {lo:g} must be below upper limit {up:g}")
@@ -237,20 +415,7 @@ def model_from_dict(doc: Mapping[str, Any], source: str = "<model>") -> ProcessM
         dimensions.append(dim)
     if not dimensions:
         p.add("dimensions", "the model declares no dimension")
-    p.raise_if_any()
-    return ProcessModel(
-        name=str(name).strip(),
-        axis=str(axis),
-        unit=unit,
-        resolution=resolution,
-        limit=limit,
-        wks=tuple(wks),
-        tools=tuple(tools),
-        machines=tuple(machines),
-        features=tuple(features),
-        dimensions=tuple(dimensions),
-        source=source,
-    )
+    return dimensions
 
 
 def load_model(path: str | Path) -> ProcessModel:
@@ -263,18 +428,27 @@ def load_model(path: str | Path) -> ProcessModel:
         the file and the line (syntax) or key path (content) of every problem.
     """
     path = Path(path)
+    where = SourceLocation(str(path))
     try:
-        raw = path.read_bytes()
+        with open(path, "rb") as handle:
+            raw = handle.read(MAX_BYTES + 1)
     except OSError as exc:
-        raise ModelError(f"cannot read model: {exc.strerror}", location=SourceLocation(str(path))) from None
+        raise ModelError(f"cannot read model: {exc.strerror}", location=where) from None
+    if len(raw) > MAX_BYTES:
+        raise ModelError(f"larger than {MAX_BYTES // 2**20} MiB: not a process model", location=where)
     try:
         doc = tomllib.loads(raw.decode("utf-8-sig"))
     except UnicodeDecodeError as exc:
-        raise ModelError(f"not UTF-8 text (byte {exc.start})", location=SourceLocation(str(path))) from None
+        raise ModelError(f"not UTF-8 text (byte {exc.start})", location=where) from None
     except tomllib.TOMLDecodeError as exc:
         # Python 3.11 puts the position only in the text: "… (at line 3, column 7)".
         found = re.search(r"\(at line (\d+), column \d+\)|\(at end of document\)", str(exc))
         msg = str(exc).replace(found.group(0), "").strip() if found else str(exc)
         line = int(found.group(1)) if found and found.group(1) else raw.count(b"\n") + 1 if found else None
         raise ModelError(f"TOML syntax: {msg}", location=SourceLocation(str(path), line=line)) from None
+    except RecursionError:
+        raise ModelError("TOML nested too deeply (arrays or inline tables inside each other)",
+                         location=where) from None
+    except ValueError as exc:  # an integer beyond Python's int/str conversion limit
+        raise ModelError(f"TOML value out of range: {exc}", location=where) from None
     return model_from_dict(doc, source=str(path))

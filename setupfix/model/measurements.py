@@ -7,12 +7,16 @@ giving the provenance of each row (``file:line`` or ``file#element``).
 
 :func:`match_parts` splits such a table into parts (fixture cycles) and ties each
 characteristic to a model dimension by name or alias, ignoring case and white
-space.  A dimension that a report does not contain is *absent*: it is left out of
-the objective and listed, never guessed.
+runs of white space (``"P1  d4"`` matches ``"P1 D4"``; ``"P1D4"`` does not, but is
+suggested).  A dimension that a report does not contain is *absent*: it is left out
+of the objective and listed, never guessed.  A characteristic that matches no
+dimension is listed with the closest model names (:func:`suggest_names`).
 """
 
 from __future__ import annotations
 
+import difflib
+import re
 from dataclasses import dataclass, field
 from typing import Final
 
@@ -20,12 +24,12 @@ import numpy as np
 import numpy.typing as npt
 import pandas as pd
 
-from setupfix.errors import MatchError, SourceLocation
+from setupfix.errors import MatchError, Note, SourceLocation
 from setupfix.model.process import ProcessModel, normalise_name
 from setupfix.units import length_factor
 
 
-__all__ = ["CANONICAL_COLUMNS", "LENGTH_COLUMNS", "PartMeasurement", "match_parts"]
+__all__ = ["CANONICAL_COLUMNS", "LENGTH_COLUMNS", "PartMeasurement", "match_parts", "suggest_names"]
 
 #: Columns of the canonical measurement table, in the order writers emit them.
 CANONICAL_COLUMNS: Final[tuple[str, ...]] = (
@@ -58,6 +62,20 @@ class PartMeasurement:
         Characteristic names of the report that match no dimension.
     absent : tuple of str
         IDs of model dimensions the report does not contain.
+    notes : tuple of Note
+        What matching assumed (a dimension measured twice, …) and, after
+        :func:`setupfix.pipeline.checks.check_parts`, how the report differs from the model.
+    nominal, lower, upper : ndarray of shape (n_dimensions,) [model unit]
+        The report's own nominal and limits of each matched dimension (NaN where
+        absent or not given), kept to check the report against the model.
+    units : tuple of str
+        The unit each matched row was labelled with ("" where absent).
+    suggestions : dict
+        Each unmatched name → the closest model dimension names, best first.
+    stations : tuple of str
+        The parts (or stations) merged into this cycle, in report order.
+    names : tuple of str
+        The report's characteristic name matched to each dimension ("" where absent).
     """
 
     part: str
@@ -67,7 +85,14 @@ class PartMeasurement:
     sources: tuple[str, ...]
     unmatched: tuple[str, ...] = ()
     absent: tuple[str, ...] = ()
-    notes: tuple[str, ...] = field(default=())
+    notes: tuple[Note, ...] = field(default=())
+    nominal: npt.NDArray[np.float64] | None = None
+    lower: npt.NDArray[np.float64] | None = None
+    upper: npt.NDArray[np.float64] | None = None
+    units: tuple[str, ...] = ()
+    suggestions: dict[str, tuple[str, ...]] = field(default_factory=dict)
+    stations: tuple[str, ...] = ()
+    names: tuple[str, ...] = ()
 
     @property
     def measured(self) -> npt.NDArray[np.bool_]:
@@ -103,9 +128,10 @@ def match_parts(model: ProcessModel, table: pd.DataFrame, *, source: str = "<rep
     Raises
     ------
     MatchError
-        If no characteristic of a part matches any model dimension, if one
-        dimension is measured twice in one part, or if a repeated name cannot be
-        told apart by station.
+        If no characteristic of a part matches any model dimension, or if a
+        repeated name cannot be told apart by station.  A dimension measured twice
+        in one part keeps the later measurement (time stamp, else file order) with
+        a note.
     """
     if table.empty:
         raise MatchError("the report holds no measured characteristic", location=SourceLocation(source))
@@ -115,7 +141,8 @@ def match_parts(model: ProcessModel, table: pd.DataFrame, *, source: str = "<rep
     # which dominated the reading of large multi-part reports.
     count = len(table)
     names = table["characteristic"].astype(str).tolist()
-    values = pd.to_numeric(table["deviation"], errors="coerce").to_numpy(dtype=float)
+    values = _numbers(table, "deviation", count)
+    nominals, lowers, uppers = (_numbers(table, c, count) for c in ("nominal", "lower", "upper"))
     wheres = [_text(w) or source for w in _column(table, "source", count)]
     stations = [_text(v) for v in _column(table, "station", count)]
     units = [_text(v) or "mm" for v in _column(table, "unit", count)]
@@ -126,11 +153,14 @@ def match_parts(model: ProcessModel, table: pd.DataFrame, *, source: str = "<rep
     for i, key in enumerate(part_of):
         rows_of.setdefault(key, []).append(i)
     factors = {u: length_factor(u, model.unit) for u in set(units)}
+    suggestions: dict[str, tuple[str, ...]] = {}
     parts: list[PartMeasurement] = []
     for key, rows in rows_of.items():
         deviation = np.full(n, np.nan)
-        sources = [""] * n
+        given = np.full((3, n), np.nan)
+        row_of = [-1] * n
         unmatched: list[str] = []
+        notes: list[Note] = []
         for i in rows:
             name, where = names[i], wheres[i]
             candidates = lookup.get(normalise_name(name), [])
@@ -142,6 +172,7 @@ def match_parts(model: ProcessModel, table: pd.DataFrame, *, source: str = "<rep
                     raise MatchError(
                         f"characteristic {name!r} names several dimensions; give a station matching their group",
                         location=SourceLocation(where),
+                        hint="--stations P1,P2,… or --parts-per-cycle N",
                     )
             if not candidates:
                 unmatched.append(name)
@@ -150,21 +181,33 @@ def match_parts(model: ProcessModel, table: pd.DataFrame, *, source: str = "<rep
             value = float(values[i]) * factors[units[i]]
             if not np.isfinite(value):
                 raise MatchError(f"characteristic {name!r} has no measured value", location=SourceLocation(where))
-            if not np.isnan(deviation[idx]):
-                raise MatchError(
-                    f"dimension {model.dimensions[idx].id} is measured twice in part {key or '(report)'} "
-                    f"(also at {sources[idx]})",
-                    location=SourceLocation(where),
-                )
+            if row_of[idx] >= 0:
+                earlier = row_of[idx]
+                if _later(stamps[earlier], stamps[i]):
+                    notes.append(Note(f"dimension {model.dimensions[idx].id} ({name}) is measured twice in part "
+                                      f"{key or '(report)'}: the later measurement here is used, the one at "
+                                      f"{wheres[earlier]} ignored", SourceLocation(where), "match"))
+                else:
+                    notes.append(Note(f"dimension {model.dimensions[idx].id} ({name}) is measured twice in part "
+                                      f"{key or '(report)'}: the later measurement at {wheres[earlier]} is used, "
+                                      "this one ignored", SourceLocation(where), "match"))
+                    continue
             deviation[idx] = value
-            sources[idx] = where
+            given[:, idx] = [nominals[i] * factors[units[i]], lowers[i] * factors[units[i]],
+                             uppers[i] * factors[units[i]]]
+            row_of[idx] = i
         if np.isnan(deviation).all():
             raise MatchError(
                 f"no characteristic of part {key or '(report)'} matches a model dimension"
-                + (f" (report names e.g. {', '.join(repr(u) for u in unmatched[:3])})" if unmatched else ""),
+                + (f" (report names e.g. {_examples(model, unmatched[:3])})" if unmatched else ""),
                 location=SourceLocation(source),
-                hint="check the dimension names and aliases in the model",
+                hint="check the dimension names and aliases in the model; 'setupfix model check MODEL REPORT' "
+                     "prints the match table",
             )
+        unmatched = list(dict.fromkeys(unmatched))
+        for name in unmatched:
+            if name not in suggestions:
+                suggestions[name] = suggest_names(model, name)
         first = rows[0]
         parts.append(
             PartMeasurement(
@@ -172,12 +215,66 @@ def match_parts(model: ProcessModel, table: pd.DataFrame, *, source: str = "<rep
                 report=_text(reports[first]) or source,
                 timestamp=_text(stamps[first]),
                 deviation=deviation,
-                sources=tuple(sources),
-                unmatched=tuple(dict.fromkeys(unmatched)),
+                sources=tuple(wheres[i] if i >= 0 else "" for i in row_of),
+                unmatched=tuple(unmatched),
                 absent=tuple(d.id for d, v in zip(model.dimensions, deviation) if np.isnan(v)),
+                notes=tuple(notes),
+                nominal=given[0],
+                lower=given[1],
+                upper=given[2],
+                units=tuple(units[i] if i >= 0 else "" for i in row_of),
+                suggestions={name: suggestions[name] for name in unmatched},
+                stations=tuple(dict.fromkeys(s for i in rows if (s := stations[i]) is not None)),
+                names=tuple(names[i] if i >= 0 else "" for i in row_of),
             )
         )
     return parts
+
+
+_PUNCT = re.compile(r"[\W_]+")
+
+
+def suggest_names(model: ProcessModel, name: str, n: int = 3) -> tuple[str, ...]:
+    """The model dimension names closest to a report's characteristic name, best first.
+
+    Names equal but for white space, punctuation and case (``P1D1`` / ``P1 D1``,
+    ``SP_00_Z`` / ``SP-00_Z``) come first, then the closest by
+    :func:`difflib.get_close_matches` (ratio ≥ 0.6) when there is no such name.
+    """
+    names = list(dict.fromkeys(n_ for d in model.dimensions for n_ in (d.name, *d.aliases)))
+    skeleton = _PUNCT.sub("", name).casefold()
+    exact = [m for m in names if _PUNCT.sub("", m).casefold() == skeleton] if skeleton else []
+    if exact:
+        return tuple(exact[:n])
+    by_key = {normalise_name(m): m for m in names}
+    close = difflib.get_close_matches(normalise_name(name), list(by_key), n=n, cutoff=0.6)
+    return tuple(dict.fromkeys([*exact, *(by_key[c] for c in close)]))[:n]
+
+
+def _examples(model: ProcessModel, unmatched: list[str]) -> str:
+    parts = []
+    for name in unmatched:
+        near = suggest_names(model, name, n=1)
+        parts.append(f"{name!r}" + (f" (model: {near[0]!r}?)" if near else ""))
+    return ", ".join(parts)
+
+
+def _later(earlier: object, later: object) -> bool:
+    """Whether the row with time stamp ``later`` is the later measurement (file order on ties)."""
+    a, b = _text(earlier), _text(later)
+    if a is None or b is None or a == b:
+        return True
+    ta, tb = pd.to_datetime(a, errors="coerce"), pd.to_datetime(b, errors="coerce")
+    if pd.isna(ta) or pd.isna(tb):
+        return True
+    return bool(tb >= ta)
+
+
+def _numbers(table: pd.DataFrame, name: str, count: int) -> npt.NDArray[np.float64]:
+    """An optional numeric column as floats (NaN where empty or missing)."""
+    if name not in table:
+        return np.full(count, np.nan)
+    return pd.to_numeric(table[name], errors="coerce").to_numpy(dtype=float)
 
 
 def _column(table: pd.DataFrame, name: str, count: int) -> list[object]:

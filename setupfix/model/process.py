@@ -11,8 +11,9 @@ All lengths are in ``ProcessModel.unit``.
 from __future__ import annotations
 
 import re
+from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import Literal
+from typing import Any, Literal
 
 __all__ = [
     "RegisterKind",
@@ -53,6 +54,9 @@ class Register:
         Bound on the absolute correction [model unit].
     fixed : bool
         A fixed register is never corrected.
+    extras : mapping
+        Values of the extra register keys other modules declare
+        (``loader.REGISTER_KEYS``), already validated, by key.
     """
 
     id: str
@@ -60,6 +64,7 @@ class Register:
     register: str
     limit: float
     fixed: bool = False
+    extras: Mapping[str, Any] = field(default_factory=dict)
 
 
 @dataclass(frozen=True, slots=True)
@@ -124,6 +129,9 @@ class ProcessModel:
         Set D.
     source : str
         The file it was loaded from (for messages).
+    extras : mapping
+        Parsed optional sections other modules declare (``loader.SECTIONS``),
+        by section name (``"safety"``, ``"effects"``); absent sections are absent.
     """
 
     name: str
@@ -137,6 +145,7 @@ class ProcessModel:
     features: tuple[Feature, ...]
     dimensions: tuple[Dimension, ...]
     source: str = "<model>"
+    extras: Mapping[str, Any] = field(default_factory=dict)
 
     @property
     def registers(self) -> tuple[Register, ...]:

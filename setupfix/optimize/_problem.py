@@ -10,7 +10,7 @@ import numpy.typing as npt
 from setupfix.errors import Note, ParameterError
 from setupfix.model import PartMeasurement, ProcessModel
 from setupfix.objective import correction_norm, error_budget, fitness, margins
-from setupfix.relation import relation_matrices
+from setupfix.relation import predict_dimensions, relation_matrices
 
 __all__ = ["CorrectionProblem", "OptimizeResult"]
 
@@ -110,7 +110,7 @@ class CorrectionProblem:
 
         x : ndarray of shape (..., n_registers) → ndarray of shape (..., n_dimensions)
         """
-        return self.deviation + np.asarray(x, dtype=float) @ self.composite
+        return self.deviation + predict_dimensions(x, self.composite)
 
     def margins(self, x: Array) -> Array:
         """Per-dimension margins after x, shape (..., n_dimensions)."""

@@ -54,11 +54,46 @@ def test_nothing_matches_is_an_error():
         match_parts(small_model(), table([{"characteristic": "X", "deviation": 0.1}]))
 
 
-def test_measured_twice_is_an_error():
+def test_measured_twice_keeps_the_later_with_a_note():
     rows = [{"characteristic": "Face", "deviation": 0.1, "source": "r.csv:2"},
             {"characteristic": "FACE", "deviation": 0.2, "source": "r.csv:5"}]
-    with pytest.raises(MatchError, match=r"r\.csv:5.*measured twice.*r\.csv:2"):
-        match_parts(small_model(), table(rows))
+    (part,) = match_parts(small_model(), table(rows))
+    assert part.deviation[1] == pytest.approx(0.2) and part.sources[1] == "r.csv:5"
+    (note,) = part.notes
+    assert "measured twice" in str(note) and str(note).startswith("r.csv:5") and "r.csv:2 ignored" in str(note)
+
+
+def test_measured_twice_the_later_time_stamp_wins_over_file_order():
+    rows = [{"characteristic": "Face", "deviation": 0.1, "source": "r.csv:2", "timestamp": "2026-11-02T09:00"},
+            {"characteristic": "Face", "deviation": 0.2, "source": "r.csv:5", "timestamp": "2026-11-02T08:00"}]
+    (part,) = match_parts(small_model(), table(rows))
+    assert part.deviation[1] == pytest.approx(0.1) and part.sources[1] == "r.csv:2"
+    assert "r.csv:2 is used" in str(part.notes[0])
+
+
+@pytest.mark.parametrize(("report", "model_name"), [("P2-D3", "P2 D3"), ("SP_00_Z", "SP-00_Z"), ("p1d1", "P1 D1"),
+                                                    ("P1 D11", "P1 D1")])
+def test_unmatched_names_get_the_closest_model_names(report, model_name):
+    doc = {"process": {"name": "t"}, "wks": {"W1": {}}, "features": {"F1": {"wks": {"W1": 1}}},
+           "dimensions": {f"D{i}": {"name": n, "features": {"F1": 1}, "nominal": 1, "lower": -1, "upper": 1}
+                          for i, n in enumerate(["P2 D3", "SP-00_Z", "P1 D1", "Z1", "P2 D4"])}}
+    model = model_from_dict(doc)
+    (part,) = match_parts(model, table([{"characteristic": report, "deviation": 0.1},
+                                        {"characteristic": "Z1", "deviation": 0.1}]))
+    assert part.unmatched == (report,)
+    assert part.suggestions[report][0] == model_name
+
+
+def test_nothing_matches_suggests_names():
+    with pytest.raises(MatchError, match=r"'face_' \(model: 'Face'\?\)"):
+        match_parts(small_model(), table([{"characteristic": "face_", "deviation": 0.1}]))
+
+
+def test_report_nominal_and_limits_are_kept_in_model_unit():
+    (part,) = match_parts(small_model(), table([{"characteristic": "Face", "deviation": 0.001, "nominal": 0.2,
+                                                 "lower": -0.004, "upper": 0.004, "unit": "inch"}]))
+    assert part.nominal[1] == pytest.approx(5.08) and part.upper[1] == pytest.approx(0.1016)
+    assert np.isnan(part.nominal[0]) and part.units == ("", "inch")
 
 
 def test_repeated_names_told_apart_by_station():

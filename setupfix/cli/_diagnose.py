@@ -1,0 +1,86 @@
+"""``setupfix diagnose``: the residual of a series, the effects it traces to, error before and after."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+
+from setupfix.cli.exit_codes import OK
+from setupfix.diagnose import Diagnoser
+from setupfix.errors import SetupfixError
+from setupfix.pipeline.diagnose import DiagnoseOutcome, diagnose_reports
+
+__all__ = ["add_parser", "run"]
+
+
+def add_parser(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser(
+        "diagnose", help="find what the model lacks in a series of reports; error before and after",
+        description="Fit the declared model to a series of reports (setup state, corrections in effect at each "
+                    "part's timestamp), trace the residual to effects the model lacks (drift, thermal, wear, "
+                    "scale, position, relation, group) by forward selection with F-tests and cross-validation, "
+                    "report the error before and after, walk forward against EWMA and no correction, and "
+                    "recommend the next correction.")
+    p.add_argument("reports", nargs="*", metavar="REPORT", help="report files or folders: one series of cycles")
+    p.add_argument("--db", metavar="STORE", default=None,
+                   help="history store: its reports, corrections log and temperatures (see 'setupfix history')")
+    p.add_argument("--model", required=True, metavar="MODEL", help="process model TOML")
+    p.add_argument("--corrections", metavar="CSV", default=None, help="corrections log (applied changes, tool changes)")
+    p.add_argument("--temperatures", metavar="CSV", default=None, help="temperature log")
+    p.add_argument("--augment", metavar="OUT.toml", default=None,
+                   help="write the model with the effects found as its [effects] section")
+    p.add_argument("--alpha", type=float, default=0.01, help="family-wise level of each selection step (0.01)")
+    p.add_argument("--no-walk", action="store_true", help="skip the walk-forward comparison")
+    p.add_argument("--json", action="store_true", help="machine-readable output (shared/spec/cli-json.md)")
+    p.set_defaults(run=run)
+
+
+def _f(v: float | None, digits: int = 4) -> str:
+    return "-" if v is None or not math.isfinite(v) else f"{v:.{digits}f}"
+
+
+def format_diagnosis(out: DiagnoseOutcome) -> str:
+    """Human summary of a diagnosis."""
+    d = out.diagnosis
+    unit = d.layout.unit
+    lines = [f"{d.series.n_cycles} cycle(s), {len(d.layout.dimension_ids)} dimension(s)",
+             f"residual of the declared model: RMS {_f(d.error_before.rms)} {unit}, max {_f(d.error_before.max)}, "
+             f"out of tolerance {d.error_before.out_of_tolerance}"]
+    if d.effects:
+        lines.append("effects the model lacks:")
+        for e in d.effects:
+            lines.append(f"  {e.kind:9s} {e.target:40s} {e.estimate:+.4g} ± {e.stderr:.2g} {e.unit}"
+                         f"   (RMS after {_f(e.rms_after)})")
+            if e.alike:
+                lines.append(f"            cannot be told apart from: {', '.join(e.alike)}")
+        lines.append(f"residual with them: RMS {_f(d.error_after.rms)} {unit}, max {_f(d.error_after.max)}, "
+                     f"out of tolerance {d.error_after.out_of_tolerance}")
+    else:
+        lines.append("no effect found: the declared model explains the series to its noise")
+    if d.walk is not None:
+        lines.append(f"walk forward over {len(d.walk.cycles)} cycle(s) (error budget: mean / worst, RMS reached):")
+        for name, b in d.walk.budgets.items():
+            lines.append(f"  {name:9s} {_f(b.mean_budget)} / {_f(b.worst_budget)}   RMS {_f(b.rms)}   "
+                         f"out of tolerance {b.out_of_tolerance}")
+    moves = {k: v for k, v in out.next_correction.items() if v != 0}
+    lines.append("next correction: " + (", ".join(f"{k} {v:+.4f}" for k, v in moves.items()) or "none"))
+    if out.augmented:
+        lines.append(f"wrote {out.augmented}")
+    lines += [f"note: {n}" for n in out.notes]
+    return "\n".join(lines)
+
+
+def run(args: argparse.Namespace) -> int:
+    if not args.reports and not args.db:
+        raise SetupfixError("diagnose: give REPORT files or folders, or --db STORE")
+    out = diagnose_reports(args.model, args.reports, corrections=args.corrections, temperatures=args.temperatures,
+                           augment=args.augment, diagnoser=Diagnoser(alpha=args.alpha, walk=not args.no_walk),
+                           db=args.db)
+    if args.json:
+        json.dump(out.to_json(), sys.stdout, indent=2)
+        sys.stdout.write("\n")
+    else:
+        sys.stdout.write(format_diagnosis(out) + "\n")
+    return OK

@@ -1,0 +1,37 @@
+"""``setupfix tui``: the operator's terminal screen (Textual, imported only when run)."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from setupfix.optimize import OPTIMIZERS
+
+
+def add_parser(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser("tui", help="the operator's terminal screen: corrections, verdict, thermal drift, history",
+                       description="Open a process model and a CMM report (or the newest report of a folder, "
+                                   "re-read when a new one arrives) in a keyboard-first terminal UI. "
+                                   "Press ? in the app for the keys.")
+    p.add_argument("report", metavar="REPORT", nargs="?", type=Path, default=None,
+                   help="CMM report in any supported format, or a folder to watch")
+    p.add_argument("--model", metavar="MODEL", type=Path, default=None, help="process model TOML")
+    p.add_argument("--db", metavar="STORE", type=Path, default=None, help="history store (SQLite file)")
+    p.add_argument("--thermal", metavar="MODEL.json", type=Path, default=None,
+                   help="saved thermal model (setupfix thermal fit --out)")
+    p.add_argument("--temperatures", metavar="LOG", type=Path, default=None, help="temperature log")
+    p.add_argument("--optimizer", default="exact", choices=sorted(OPTIMIZERS), help="optimiser to start with")
+    p.add_argument("--seed", type=int, default=0, help="seed of the metaheuristics and the comparison (default 0)")
+    p.add_argument("--trials", type=int, default=12, help="trials per method in the compare view (default 12)")
+    p.add_argument("--offsets", metavar="FILE", default="offsets.csv",
+                   help="file the export offers to write (default offsets.csv)")
+    p.set_defaults(run=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    from setupfix.tui.app import Inputs, SetupfixApp  # deferred: the CLI never loads textual otherwise
+
+    SetupfixApp(Inputs(model=args.model, report=args.report, db=args.db, thermal=args.thermal,
+                       temperatures=args.temperatures, optimizer=args.optimizer, seed=args.seed,
+                       trials=args.trials, offsets=args.offsets)).run()
+    return 0

@@ -1,0 +1,28 @@
+"""Close the loop: find the residual the declared model leaves, trace it, add the effect.
+
+Engine (layer 3, arrays in and out, no file I/O):
+
+* :mod:`~setupfix.diagnose.terms` — the series, the layout and the effect terms;
+* :mod:`~setupfix.diagnose.fit` — least squares of the declared model (setup state
+  on the row space of C) with or without effects;
+* :mod:`~setupfix.diagnose.select` — candidates and forward selection (nested F-tests,
+  Bonferroni, cross-validation over cycles), diagnosability;
+* :mod:`~setupfix.diagnose.walk` — walk forward (declared, augmented, EWMA, none) and
+  the next-cycle forecast;
+* :mod:`~setupfix.diagnose.forecast` — the change an ``[effects]`` section predicts
+  until the next cycle (used by ``correct``);
+* :mod:`~setupfix.diagnose.shop` — the closed-loop shop simulator.
+"""
+
+from setupfix.diagnose.core import Diagnoser, Diagnosis, EffectResult, ErrorSummary, error_summary
+from setupfix.diagnose.fit import Fit, fit_model
+from setupfix.diagnose.select import Selection, candidate_specs, select_effects
+from setupfix.diagnose.shop import HiddenEffect, ShopSimulator, SimulatedSeries
+from setupfix.diagnose.terms import KINDS, EffectSpec, Layout, Series
+from setupfix.diagnose.walk import WalkForward, next_cycle, walk_forward
+
+__all__ = [
+    "KINDS", "Diagnoser", "Diagnosis", "EffectResult", "EffectSpec", "ErrorSummary", "Fit", "HiddenEffect",
+    "Layout", "Selection", "Series", "ShopSimulator", "SimulatedSeries", "WalkForward", "candidate_specs",
+    "error_summary", "fit_model", "next_cycle", "select_effects", "walk_forward",
+]

@@ -1,0 +1,184 @@
+"""The diagnosis of one series: residual, traced effects, error before and after, walk forward."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import numpy.typing as npt
+
+from setupfix.diagnose.fit import Fit, fit_model, observations
+from setupfix.diagnose.select import Selection, select_effects
+from setupfix.diagnose.terms import EffectSpec, Layout, Series
+from setupfix.diagnose.walk import WalkForward, next_cycle, walk_forward
+from setupfix.errors import ParameterError
+from setupfix.params import Interval, ValidatedParams
+
+__all__ = ["EffectResult", "ErrorSummary", "Diagnosis", "Diagnoser", "error_summary"]
+
+Array = npt.NDArray[np.float64]
+
+
+@dataclass(frozen=True)
+class EffectResult:
+    """One effect found: its term, estimate ± standard error, unit, and the RMS once added."""
+
+    spec: EffectSpec
+    estimate: float
+    stderr: float
+    unit: str
+    rms_after: float
+    alike: tuple[str, ...] = ()
+
+    @property
+    def kind(self) -> str:
+        return self.spec.kind
+
+    @property
+    def target(self) -> str:
+        return self.spec.target
+
+
+@dataclass(frozen=True)
+class ErrorSummary:
+    """Residual of a fit: overall, per dimension and per cycle.
+
+    ``out_of_tolerance`` counts residuals outside their dimension's limits: what
+    would stay out of tolerance with the setup state (and effects) perfectly corrected.
+    """
+
+    rms: float
+    max: float
+    out_of_tolerance: int
+    rms_by_dimension: Array
+    max_by_dimension: Array
+    rms_by_cycle: Array
+    max_by_cycle: Array
+
+
+def error_summary(residual: Array, lower: Array, upper: Array) -> ErrorSummary:
+    """Summarise a residual field (n_cycles, n_dimensions), NaN where absent."""
+    a = np.abs(residual)
+    with np.errstate(invalid="ignore"):
+        by_dim = np.sqrt(np.nanmean(residual ** 2, axis=0)) if residual.size else np.zeros(0)
+        by_cyc = np.sqrt(np.nanmean(residual ** 2, axis=1)) if residual.size else np.zeros(0)
+        out = int(np.sum((residual < lower) | (residual > upper)))
+    return ErrorSummary(
+        rms=float(np.sqrt(np.nanmean(residual ** 2))) if np.isfinite(residual).any() else float("nan"),
+        max=float(np.nanmax(a)) if np.isfinite(a).any() else float("nan"),
+        out_of_tolerance=out,
+        rms_by_dimension=by_dim,
+        max_by_dimension=np.nanmax(np.where(np.isnan(a), -np.inf, a), axis=0),
+        rms_by_cycle=by_cyc,
+        max_by_cycle=np.nanmax(np.where(np.isnan(a), -np.inf, a), axis=1),
+    )
+
+
+@dataclass(frozen=True)
+class Diagnosis:
+    """Everything ``setupfix diagnose`` reports about one series.
+
+    Attributes
+    ----------
+    layout, series
+    before, after : Fit
+        Declared model; declared model with the effects found.
+    selection : Selection
+    effects : tuple of EffectResult
+    error_before, error_after : ErrorSummary
+    walk : WalkForward or None
+        None for series too short to walk.
+    forecast : ndarray (n_dimensions,) [model unit]
+        Deviations expected on the next cycle with the registers as they are.
+    notes : tuple of str
+    """
+
+    layout: Layout
+    series: Series
+    before: Fit
+    after: Fit
+    selection: Selection
+    effects: tuple[EffectResult, ...]
+    error_before: ErrorSummary
+    error_after: ErrorSummary
+    walk: WalkForward | None
+    forecast: Array
+    notes: tuple[str, ...]
+
+
+class Diagnoser(ValidatedParams):
+    """Diagnose a series against its declared process model.
+
+    Parameters
+    ----------
+    alpha : float, default=0.01
+        Family-wise level of each selection step (Bonferroni).
+    max_effects : int, default=4
+    n_folds : int, default=5
+        Cross-validation folds over cycles.
+    walk : bool, default=True
+        Walk forward (cost: one selection every ``reselect_every`` cycles).
+    min_train : int, default=5
+    reselect_every : int or None
+    lam : float, default=0.3
+        EWMA weight of the run-to-run baseline.
+    """
+
+    _parameter_constraints = {
+        "alpha": [Interval(float, 0, 1, closed="neither")],
+        "max_effects": [Interval(int, 0, 20)],
+        "n_folds": [Interval(int, 2, 50)],
+        "walk": [bool],
+        "min_train": [Interval(int, 1, None)],
+        "reselect_every": [Interval(int, 1, None), None],
+        "lam": [Interval(float, 0, 1, closed="right")],
+    }
+
+    def __init__(self, *, alpha: float = 0.01, max_effects: int = 4, n_folds: int = 5, walk: bool = True,
+                 min_train: int = 5, reselect_every: int | None = None, lam: float = 0.3) -> None:
+        self.alpha = alpha
+        self.max_effects = max_effects
+        self.n_folds = n_folds
+        self.walk = walk
+        self.min_train = min_train
+        self.reselect_every = reselect_every
+        self.lam = lam
+
+    def run(self, layout: Layout, series: Series, *, declared: tuple[EffectSpec, ...] = ()) -> Diagnosis:
+        """Fit, trace, add, walk forward and forecast.
+
+        ``declared`` effects (the model's ``[effects]``) belong to the declared model.
+
+        Raises
+        ------
+        ParameterError
+            If a hyper-parameter is out of range or the series has no measured cell.
+        """
+        self.validate_params()
+        obs = observations(layout, series)
+        if obs.n == 0:
+            raise ParameterError("diagnose: the series has no measured dimension")
+        selection = select_effects(layout, series, alpha=self.alpha, max_effects=self.max_effects,
+                                   n_folds=self.n_folds, obs=obs, declared=declared)
+        before = fit_model(layout, series, declared, obs=obs)
+        after = fit_model(layout, series, declared + selection.found, obs=obs)
+        effects = []
+        accepted = [s for s in selection.steps if s.accepted]
+        for i, spec in enumerate(selection.found):
+            est, se = after.estimate(len(declared) + i)
+            partial: Fit = fit_model(layout, series, declared + selection.found[:i + 1], obs=obs)
+            effects.append(EffectResult(spec, est, se, spec.unit(layout.unit),
+                                        error_summary(partial.residual, layout.lower, layout.upper).rms,
+                                        accepted[i].alike))
+        walk = None
+        notes = list(selection.notes)
+        if self.walk and series.n_cycles > self.min_train:
+            walk = walk_forward(layout, series, score_composite=after.relation_matrix(layout),
+                                min_train=self.min_train, reselect_every=self.reselect_every, lam=self.lam,
+                                alpha=self.alpha, declared=declared)
+        elif self.walk:
+            notes.append(f"{series.n_cycles} cycle(s): too few to walk forward (needs more than {self.min_train})")
+        forecast, _ = next_cycle(layout, series, after)
+        return Diagnosis(layout, series, before, after, selection, tuple(effects),
+                         error_summary(before.residual, layout.lower, layout.upper),
+                         error_summary(after.residual, layout.lower, layout.upper), walk, forecast, tuple(notes))

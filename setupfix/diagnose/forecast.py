@@ -1,0 +1,63 @@
+"""What an ``[effects]`` section predicts until the next cycle (used by ``correct``).
+
+A measured report shows the part as it was cut; the correction acts on the next
+cycle.  Between the two, a drift goes on for one cycle interval and every tool wears
+by one more cycle; the static effects (scale, position, relation, group) are already
+in the measured deviations, and a thermal term needs the next temperature, which is
+not known (taken as unchanged).  The shift is added to the measured deviations
+before the correction is optimised.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import numpy.typing as npt
+
+from setupfix.diagnose.terms import EffectSpec, Layout, common_tool_row
+from setupfix.model.effects import EffectsSection, ModelEffect
+
+__all__ = ["spec_of", "forecast_shift"]
+
+Array = npt.NDArray[np.float64]
+
+
+def spec_of(effect: ModelEffect) -> EffectSpec:
+    """The engine's term of a model-file effect."""
+    return EffectSpec(effect.kind, register=effect.register, dimension=effect.dimension, axis=effect.axis,
+                      group=effect.group, channel=effect.channel, shape=effect.shape, tau=effect.tau or 0.0,
+                      reference=effect.reference)
+
+
+def forecast_shift(section: EffectsSection, layout: Layout, *, time: float | None = None,
+                   ahead: float | None = None) -> Array:
+    """Change of every dimension expected from the measured cycle to the next one.
+
+    Parameters
+    ----------
+    section : EffectsSection
+    layout : Layout
+    time : float, optional [h]
+        When the measured cycle was cut, hours since ``section.origin`` (default
+        ``section.last_hours``, else 0); matters for a saturating drift only.
+    ahead : float, optional [h]
+        Interval to the next cycle (default ``section.cycle_hours``, else 0).
+
+    Returns
+    -------
+    ndarray of shape (n_dimensions,) [model unit]
+        drift (linear): β · Δt · c_T; drift (saturating): β · (e^{−t/τ} − e^{−(t+Δt)/τ}) · c_T;
+        wear: β · C[tool] (one more cycle); other kinds: 0.
+    """
+    t = time if time is not None else (section.last_hours or 0.0)
+    dt = ahead if ahead is not None else (section.cycle_hours or 0.0)
+    out = np.zeros(layout.n_dimensions)
+    for e in section.effects:
+        if e.kind == "drift":
+            if e.shape == "saturating" and e.tau:
+                step = np.exp(-t / e.tau) - np.exp(-(t + dt) / e.tau)
+            else:
+                step = dt
+            out += e.estimate * step * common_tool_row(layout)
+        elif e.kind == "wear" and e.register in layout.register_ids:
+            out += e.estimate * layout.composite[layout.register_ids.index(e.register)]
+    return out

@@ -1,0 +1,360 @@
+"""The series and the effect terms of the closed loop, as arrays.
+
+A *series* is what a shop records over many fixture cycles: for cycle k its measured
+deviations y_k (one per model dimension, NaN where absent), the time it was machined,
+the register changes in effect at that time (every corrections-log row with timestamp
+≤ t_k), the parts cut by each tool since its last change and the temperatures.
+
+The declared process model of Stryczek (2014, eqs. 3–4) says
+
+    y_k = (s + u_k) · C + e_k                                   (closed-loop form)
+
+with C the composite register → dimension matrix, s the unknown setup state and u_k
+the applied corrections.  An *effect* the model lacks adds a term β · z_k(q) on a
+covariate field z of shape (n_cycles, n_dimensions); :func:`effect_field` builds that
+field for every kind of ``../shared/spec/cli-json.md`` (drift, thermal, wear, scale,
+position, relation, group) so that the simulator, the diagnosis and the forecast use
+one definition.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+import numpy.typing as npt
+
+from setupfix.model import ProcessModel
+from setupfix.relation import relation_matrices
+
+__all__ = ["KINDS", "Layout", "Series", "EffectSpec", "effect_field", "applied_at", "parts_since_change",
+           "join_temperatures", "common_tool_row"]
+
+Array = npt.NDArray[np.float64]
+
+#: Effect kinds of the diagnose contract, in the order candidates are listed.
+KINDS: tuple[str, ...] = ("drift", "thermal", "wear", "scale", "position", "relation", "group")
+
+AXES = ("x", "y", "z")
+
+
+@dataclass(frozen=True)
+class Layout:
+    """The static side of a process model, as arrays.
+
+    Attributes
+    ----------
+    composite : ndarray of shape (n_registers, n_dimensions)
+        C = [R_WF R_FD ; R_TF R_FD] (eqs. 3–4).
+    register_ids, dimension_ids : tuple of str
+    tools : ndarray of int
+        Row indices of the tool registers in ``composite``.
+    nominal, lower, upper : ndarray of shape (n_dimensions,) [model unit]
+    coord : ndarray of shape (n_dimensions, 3) [model unit]
+        Coordinate of each dimension, Σ_f R_FD[f, q] · position_f (NaN where unknown).
+    groups : tuple of (str or None)
+        Station / setup of each dimension.
+    unit : str
+    """
+
+    composite: Array
+    register_ids: tuple[str, ...]
+    dimension_ids: tuple[str, ...]
+    tools: npt.NDArray[np.intp]
+    nominal: Array
+    lower: Array
+    upper: Array
+    coord: Array
+    groups: tuple[str | None, ...]
+    unit: str = "mm"
+    resolution: float = 0.001
+
+    @classmethod
+    def from_model(cls, model: ProcessModel, coord: Array | None = None) -> Layout:
+        """Arrays of ``model``; ``coord`` (n_dimensions, 3) fills coordinates the model lacks."""
+        rel = relation_matrices(model)
+        pos = np.full((len(model.features), 3), np.nan)
+        for i, feat in enumerate(model.features):
+            if feat.position is not None:
+                pos[i] = feat.position
+        dim_coord = np.full((len(model.dimensions), 3), np.nan)
+        for q in range(len(model.dimensions)):
+            w = rel.R_FD[:, q]
+            used = w != 0
+            if used.any() and np.isfinite(pos[used]).all():
+                dim_coord[q] = w[used] @ pos[used]
+        if coord is not None:
+            dim_coord = np.where(np.isnan(dim_coord), coord, dim_coord)
+        n_w = len(model.wks)
+        return cls(
+            composite=rel.composite,
+            register_ids=tuple(model.register_ids),
+            dimension_ids=tuple(model.dimension_ids),
+            tools=np.arange(n_w, n_w + len(model.tools)),
+            nominal=np.array([d.nominal for d in model.dimensions], dtype=float),
+            lower=np.array([d.lower for d in model.dimensions], dtype=float),
+            upper=np.array([d.upper for d in model.dimensions], dtype=float),
+            coord=dim_coord,
+            groups=tuple(d.group for d in model.dimensions),
+            unit=model.unit,
+            resolution=model.resolution,
+        )
+
+    @property
+    def n_registers(self) -> int:
+        return int(self.composite.shape[0])
+
+    @property
+    def n_dimensions(self) -> int:
+        return int(self.composite.shape[1])
+
+    @property
+    def tool_ids(self) -> tuple[str, ...]:
+        return tuple(self.register_ids[i] for i in self.tools)
+
+
+@dataclass(frozen=True)
+class Series:
+    """Measured cycles with the covariates they carry.
+
+    Attributes
+    ----------
+    deviation : ndarray of shape (n_cycles, n_dimensions) [model unit]
+        Measured deviation, NaN where absent.
+    time : ndarray of shape (n_cycles,) [h]
+        When each cycle was machined, hours since ``origin``.
+    applied : ndarray of shape (n_cycles, n_registers) [model unit]
+        Sum of the logged register changes in effect when the cycle was machined.
+    parts : ndarray of shape (n_cycles, n_tools)
+        Cycles cut by each tool since its last change (0 right after a change).
+    temperature : ndarray of shape (n_cycles, n_channels) [°C]
+        Temperature sample at or just before each cycle (empty when no log).
+    channels : tuple of str
+    cycles : tuple of str
+        Cycle (part) identifiers.
+    origin : str
+        ISO timestamp of time 0 ("" when the series has no timestamps).
+    pending : ndarray of shape (n_registers,) [model unit]
+        Logged changes after the last cycle (in effect for the next one).
+    """
+
+    deviation: Array
+    time: Array
+    applied: Array
+    parts: Array
+    temperature: Array
+    channels: tuple[str, ...] = ()
+    cycles: tuple[str, ...] = ()
+    origin: str = ""
+    pending: Array = field(default_factory=lambda: np.zeros(0))
+
+    @property
+    def n_cycles(self) -> int:
+        return int(self.deviation.shape[0])
+
+    def take(self, rows: npt.ArrayLike) -> Series:
+        """The sub-series of the given cycle indices."""
+        idx = np.asarray(rows)
+        return Series(self.deviation[idx], self.time[idx], self.applied[idx], self.parts[idx],
+                      self.temperature[idx], self.channels, tuple(np.asarray(self.cycles, dtype=object)[idx]),
+                      self.origin, self.pending)
+
+
+@dataclass(frozen=True)
+class EffectSpec:
+    """One effect term: its kind and what it acts on.
+
+    Attributes
+    ----------
+    kind : str
+        One of :data:`KINDS`.
+    register : str, optional
+        Tool (wear) or register (relation).
+    dimension : str, optional
+        Dimension (relation).
+    axis : str, optional
+        ``x``, ``y`` or ``z`` (position).
+    group : str, optional
+        Station or setup (group).
+    channel : str, optional
+        Temperature channel (thermal).
+    shape : str
+        ``linear`` or ``saturating`` (drift).
+    tau : float
+        Time constant of a saturating drift [h].
+    reference : float
+        Temperature the thermal term is zero at [°C].
+    """
+
+    kind: str
+    register: str | None = None
+    dimension: str | None = None
+    axis: str | None = None
+    group: str | None = None
+    channel: str | None = None
+    shape: str = "linear"
+    tau: float = 0.0
+    reference: float = 0.0
+
+    @property
+    def target(self) -> str:
+        """What the effect concerns, in the words of the diagnose contract."""
+        if self.kind == "drift":
+            return "all tools ~ time" + (f" (saturating, tau {self.tau:g} h)" if self.shape == "saturating" else "")
+        if self.kind == "thermal":
+            return f"all tools ~ {self.channel}"
+        if self.kind == "wear":
+            return f"{self.register} ~ parts since change"
+        if self.kind == "scale":
+            return "all dimensions ~ nominal"
+        if self.kind == "position":
+            return str(self.axis)
+        if self.kind == "relation":
+            return f"{self.dimension} ~ {self.register}"
+        return f"group {self.group}"
+
+    def unit(self, length: str) -> str:
+        """Unit of the effect's estimate (``length`` is the model unit)."""
+        return {"drift": f"{length}/h" if self.shape == "linear" else length, "thermal": f"{length}/°C",
+                "wear": f"{length}/cycle", "scale": f"{length}/{length}", "position": f"{length}/{length}",
+                "relation": "1", "group": length}[self.kind]
+
+
+def common_tool_row(layout: Layout) -> Array:
+    """Dimension change per unit growth of every tool at once, shape (n_dimensions,).
+
+    Machine-level thermal growth along the axis lengthens every tool alike; without
+    tools in the model every WKS is moved instead.
+    """
+    rows = layout.tools if layout.tools.size else np.arange(layout.n_registers)
+    out: Array = layout.composite[rows].sum(axis=0)
+    return out
+
+
+def effect_field(spec: EffectSpec, layout: Layout, series: Series) -> Array:
+    """Covariate field z of one effect: its contribution per unit estimate.
+
+    Parameters
+    ----------
+    spec : EffectSpec
+    layout : Layout
+    series : Series
+
+    Returns
+    -------
+    ndarray of shape (n_cycles, n_dimensions)
+        The effect adds β · z to the deviations.  For a relation the field is the
+        register's applied change u_k,i on the one dimension (the constant part
+        δ · s_i is a separate free term, see :mod:`setupfix.diagnose.candidates`).
+
+    Raises
+    ------
+    KeyError
+        If the register, dimension, group, channel or axis is unknown.
+    """
+    n, d = series.n_cycles, layout.n_dimensions
+    if spec.kind == "drift":
+        t = series.time if spec.shape == "linear" else 1.0 - np.exp(-series.time / spec.tau)
+        return np.outer(t, common_tool_row(layout))
+    if spec.kind == "thermal":
+        ch = series.channels.index(str(spec.channel))
+        return np.outer(series.temperature[:, ch] - spec.reference, common_tool_row(layout))
+    if spec.kind == "wear":
+        j = layout.register_ids.index(str(spec.register))
+        k = int(np.flatnonzero(layout.tools == j)[0])
+        return np.outer(series.parts[:, k], layout.composite[j])
+    if spec.kind == "scale":
+        return np.broadcast_to(layout.nominal, (n, d)).copy()
+    if spec.kind == "position":
+        a = AXES.index(str(spec.axis))
+        return np.broadcast_to(np.nan_to_num(layout.coord[:, a]), (n, d)).copy()
+    if spec.kind == "group":
+        mask = np.array([g == spec.group for g in layout.groups], dtype=float)
+        if not mask.any():
+            raise KeyError(spec.group)
+        return np.broadcast_to(mask, (n, d)).copy()
+    if spec.kind == "relation":
+        i = layout.register_ids.index(str(spec.register))
+        q = layout.dimension_ids.index(str(spec.dimension))
+        z = np.zeros((n, d))
+        z[:, q] = series.applied[:, i]
+        return z
+    raise KeyError(spec.kind)
+
+
+def applied_at(times: Array, log_times: Array, log_register: npt.NDArray[np.intp], log_delta: Array,
+               n_registers: int) -> Array:
+    """Register changes in effect at each time: every log row with timestamp ≤ t.
+
+    Parameters
+    ----------
+    times : ndarray of shape (n_cycles,) [h]
+    log_times : ndarray of shape (n_rows,) [h]
+    log_register : ndarray of int, shape (n_rows,)
+        Row of the register in the composite matrix.
+    log_delta : ndarray of shape (n_rows,) [model unit]
+    n_registers : int
+
+    Returns
+    -------
+    ndarray of shape (n_cycles, n_registers) [model unit]
+    """
+    out = np.zeros((len(times), n_registers))
+    if len(log_times) == 0:
+        return out
+    order = np.argsort(log_times, kind="stable")
+    steps = np.zeros((len(order), n_registers))
+    steps[np.arange(len(order)), log_register[order]] = log_delta[order]
+    cum = np.vstack([np.zeros((1, n_registers)), np.cumsum(steps, axis=0)])
+    idx = np.searchsorted(log_times[order], times, side="right")
+    out[:] = cum[idx]
+    return out
+
+
+def parts_since_change(times: Array, change_times: list[Array]) -> Array:
+    """Cycles of the series cut by each tool since its last change before each cycle.
+
+    Parameters
+    ----------
+    times : ndarray of shape (n_cycles,) [h]
+    change_times : list of ndarray
+        Per tool, the times of its changes.
+
+    Returns
+    -------
+    ndarray of shape (n_cycles, n_tools)
+        For cycle k, the number of earlier cycles machined after the tool's last
+        change at or before t_k.
+    """
+    order = np.argsort(times, kind="stable")
+    sorted_t = times[order]
+    out = np.zeros((len(times), len(change_times)))
+    for j, changes in enumerate(change_times):
+        ch = np.sort(np.asarray(changes, dtype=float))
+        last = np.full(len(times), -np.inf)
+        if ch.size:
+            pos = np.searchsorted(ch, times, side="right") - 1
+            last = np.where(pos >= 0, ch[np.maximum(pos, 0)], -np.inf)
+        # cycles strictly before t_k and at or after the last change
+        before = np.searchsorted(sorted_t, times, side="left")
+        after_change = np.searchsorted(sorted_t, last, side="left")
+        out[:, j] = before - after_change
+    return out
+
+
+def join_temperatures(times: Array, sample_times: Array, samples: Array) -> Array:
+    """Temperature sample at or just before each time (the first sample before the log starts).
+
+    Parameters
+    ----------
+    times : ndarray of shape (n_cycles,) [h]
+    sample_times : ndarray of shape (n_samples,) [h], sorted
+    samples : ndarray of shape (n_samples, n_channels) [°C]
+
+    Returns
+    -------
+    ndarray of shape (n_cycles, n_channels)
+    """
+    idx = np.searchsorted(sample_times, times, side="right") - 1
+    out: Array = samples[np.clip(idx, 0, len(sample_times) - 1)]
+    return out

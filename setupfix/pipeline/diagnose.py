@@ -1,0 +1,515 @@
+"""Use case "diagnose": a series of reports, the corrections log and temperatures → diagnosis.
+
+Shared by ``setupfix diagnose``, the TUI and the benches.  Steps: load the model (and
+its ``[effects]``) → read every report (files or folders, any supported format) →
+tie them to the model, one cycle per part, ordered by timestamp → the corrections in
+effect at each part's timestamp (every log row with timestamp ≤ t), parts cut since
+each tool's last change, the temperature sample at or just before t → the engine
+(:class:`setupfix.diagnose.Diagnoser`) → the next correction (exact optimiser on the
+forecast) → JSON per ``../shared/spec/cli-json.md`` and, with ``augment``, the model
+with the effects found written as its ``[effects]`` section.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import tomllib
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+import parsers
+from setupfix.diagnose import Diagnoser, Diagnosis, Layout, Series
+from setupfix.diagnose.forecast import forecast_shift, spec_of
+from setupfix.diagnose.terms import EffectSpec, applied_at, join_temperatures, parts_since_change
+from setupfix.errors import ExportError, MatchError, ModelError, Note, ParseError, SourceLocation
+from setupfix.model import PartMeasurement, ProcessModel, load_model, match_parts, model_from_dict
+from setupfix.model.effects import EffectsSection, ModelEffect, effects_from_dict, load_effects, with_effects
+from setupfix.optimize import CorrectionProblem, get_optimizer
+from setupfix.pipeline.writers import check_target, write_text
+
+__all__ = ["SeriesInput", "DiagnoseOutcome", "load_series", "read_corrections_log", "read_temperature_log",
+           "diagnose_reports", "expand_reports", "augmented_section", "write_augmented",
+           "corrections_from_table", "temperatures_from_table", "forecast_part"]
+
+_LOG_NAMES = ("corrections.csv",)
+_TEMP_NAMES = ("temperatures.csv",)
+_SKIP = {"truth.json", "readme.md", "readme.txt", "provenance.md", "sources.md"}
+
+
+@dataclass(frozen=True)
+class SeriesInput:
+    """A series read from files, in the engine's terms."""
+
+    model: ProcessModel
+    layout: Layout
+    series: Series
+    parts: tuple[PartMeasurement, ...]
+    declared: tuple[EffectSpec, ...]
+    effects: EffectsSection
+    corrections: str | None
+    temperatures: str | None
+    notes: tuple[str, ...] = ()
+
+
+def expand_reports(paths: Sequence[str | Path]) -> tuple[list[Path], str | None, str | None, list[str]]:
+    """Files of the given paths (folders recursively, sorted); logs found in folders apart.
+
+    Returns
+    -------
+    reports, corrections, temperatures, notes
+        ``corrections.csv`` / ``temperatures.csv`` found in a folder are returned
+        apart (and said in the notes), never read as reports.
+    """
+    known = {ext for spec in parsers.formats() for ext in spec.extensions}
+    out: list[Path] = []
+    corrections = temperatures = None
+    notes: list[str] = []
+    for p in paths:
+        path = Path(p)
+        if path.is_dir():
+            for f in sorted(q for q in path.rglob("*") if q.is_file()):
+                name = f.name.lower()
+                if name in _LOG_NAMES:
+                    corrections = corrections or str(f)
+                elif name in _TEMP_NAMES:
+                    temperatures = temperatures or str(f)
+                elif name not in _SKIP and f.suffix.lower() in known:
+                    out.append(f)
+        elif path.exists():
+            out.append(path)
+        else:
+            raise ParseError("no such file or folder", location=SourceLocation(str(path)))
+    if not out:
+        raise ParseError("no report found", location=SourceLocation(", ".join(str(p) for p in paths)))
+    return out, corrections, temperatures, notes
+
+
+def _times(values: Sequence[object], where: str, lines: Sequence[int] | None = None) -> pd.DatetimeIndex:
+    """ISO 8601 timestamps as naive UTC-free datetimes; one clear error for a bad one."""
+    out = []
+    for i, v in enumerate(values):
+        try:
+            t = pd.Timestamp(str(v))
+            if pd.isna(t):
+                raise ValueError
+        except (ValueError, TypeError):
+            line = lines[i] if lines is not None else None
+            raise ParseError(f"not an ISO 8601 timestamp: {v!r}", location=SourceLocation(where, line=line)) from None
+        if t.tzinfo is not None:
+            t = t.tz_convert("UTC").tz_localize(None)
+        out.append(t)
+    return pd.DatetimeIndex(out)
+
+
+def _read_csv(path: str) -> pd.DataFrame:
+    try:
+        table = pd.read_csv(path, dtype=str, keep_default_na=False, encoding="utf-8-sig")
+    except (OSError, UnicodeDecodeError, pd.errors.ParserError, pd.errors.EmptyDataError) as exc:
+        raise ParseError(f"cannot read CSV: {exc}", location=SourceLocation(path)) from None
+    table.columns = [str(c).strip() for c in table.columns]
+    return table
+
+
+def read_corrections_log(path: str, model: ProcessModel) -> tuple[pd.DatetimeIndex, np.ndarray, np.ndarray, list[str]]:
+    """Read a corrections log (``measurements.md``): times, register rows, deltas, events.
+
+    Raises
+    ------
+    ParseError
+        Missing column, bad timestamp or delta (with the line).
+    MatchError
+        Unknown register, or a tool change of a register that is not a tool.
+    """
+    return corrections_from_table(_read_csv(path), model, path)
+
+
+def corrections_from_table(table: pd.DataFrame, model: ProcessModel,
+                           path: str) -> tuple[pd.DatetimeIndex, np.ndarray, np.ndarray, list[str]]:
+    """A corrections-log table (CSV or store) checked against the model; see :func:`read_corrections_log`."""
+    table = table.astype(object).where(table.notna(), "").astype(str)
+    for col in ("timestamp", "register"):
+        if col not in table:
+            raise ParseError(f"corrections log: missing column {col!r}", location=SourceLocation(path, line=1))
+    if "delta" not in table:
+        raise ParseError("corrections log: missing column 'delta'", location=SourceLocation(path, line=1))
+    lines = [i + 2 for i in range(len(table))]
+    times = _times(table["timestamp"].tolist(), path, lines)
+    regs: list[int] = []
+    deltas: list[float] = []
+    events: list[str] = []
+    ids = model.register_ids
+    records: list[dict[str, str]] = table.to_dict("records")  # type: ignore[assignment]
+    for i, rec in enumerate(records):
+        event = str(rec.get("event") or "correction").strip() or "correction"
+        if event not in ("correction", "tool_change"):
+            raise ParseError(f"unknown event {event!r} (expected correction or tool_change)",
+                             location=SourceLocation(path, line=lines[i]))
+        try:
+            reg = model.register(str(rec["register"]))
+        except KeyError:
+            raise MatchError(f"unknown register {rec['register']!r} (model registers: {', '.join(ids)})",
+                             location=SourceLocation(path, line=lines[i])) from None
+        if event == "tool_change" and reg.kind != "tool":
+            raise MatchError(f"tool change of {reg.id}, which is not a tool", location=SourceLocation(path, line=lines[i]))
+        text = str(rec["delta"]).strip()
+        if event == "correction":
+            try:
+                delta = float(text)
+                if not math.isfinite(delta):
+                    raise ValueError
+            except ValueError:
+                raise ParseError(f"delta {text!r} is not a number", location=SourceLocation(path, line=lines[i])) from None
+        else:
+            delta = 0.0
+        regs.append(ids.index(reg.id))
+        deltas.append(delta)
+        events.append(event)
+    return times, np.array(regs, dtype=np.intp), np.array(deltas, dtype=float), events
+
+
+def read_temperature_log(path: str) -> tuple[pd.DatetimeIndex, np.ndarray, tuple[str, ...]]:
+    """Read a temperature log: times, samples (n, channels), channel names (all numeric columns but
+    the timestamp and spindle_speed).
+
+    Raises
+    ------
+    ParseError
+        Missing timestamp column, no sensor column, bad timestamp or value.
+    """
+    return temperatures_from_table(_read_csv(path), path)
+
+
+def temperatures_from_table(table: pd.DataFrame, path: str, *,
+                            fill: bool = False) -> tuple[pd.DatetimeIndex, np.ndarray, tuple[str, ...]]:
+    """A temperature-log table (CSV or store); ``fill`` carries a channel's last sample forward
+    (a store holds each channel's samples apart)."""
+    if "timestamp" not in table:
+        raise ParseError("temperature log: missing column 'timestamp'", location=SourceLocation(path, line=1))
+    lines = [i + 2 for i in range(len(table))]
+    times = _times(table["timestamp"].tolist(), path, lines)
+    channels = tuple(c for c in table.columns if c not in ("timestamp", "spindle_speed"))
+    if not channels:
+        raise ParseError("temperature log: no sensor column", location=SourceLocation(path, line=1))
+    values = np.empty((len(table), len(channels)))
+    for j, c in enumerate(channels):
+        num = pd.to_numeric(table[c], errors="coerce")
+        col = (num.ffill().bfill() if fill else num).to_numpy(dtype=float)
+        bad = np.flatnonzero(~np.isfinite(col))
+        if bad.size:
+            raise ParseError(f"temperature {table[c].iloc[bad[0]]!r} in column {c!r} is not a number",
+                             location=SourceLocation(path, line=lines[bad[0]]))
+        values[:, j] = col
+    order = np.argsort(times.values, kind="stable")
+    return times[order], values[order], channels
+
+
+def _hours(times: pd.DatetimeIndex, origin: pd.Timestamp) -> np.ndarray:
+    return np.asarray((times - origin).total_seconds(), dtype=float) / 3600.0
+
+
+def load_series(model: ProcessModel | str | Path, reports: Sequence[str | Path] = (), *,
+                corrections: str | None = None, temperatures: str | None = None,
+                db: str | Path | None = None) -> SeriesInput:
+    """Read a series of reports (files, folders, or every report of a history store) with its logs.
+
+    With ``db`` the store's reports, corrections log and temperatures are used (files
+    given as well are added; a corrections or temperature file given replaces the
+    store's log).
+
+    Raises
+    ------
+    SetupfixError
+        Any unreadable or unmatchable file, naming it and the place.
+    """
+    if not isinstance(model, ProcessModel):
+        model = load_model(model)
+    section = load_effects(model.source, model) if Path(model.source).is_file() else EffectsSection()
+    notes: list[str] = []
+    parts: list[PartMeasurement] = []
+    log = temps = None
+    where = str(db) if db is not None else ""
+    if db is not None:
+        from setupfix.store import open_store
+
+        if not Path(db).is_file():
+            raise ParseError("no such history store", location=SourceLocation(str(db)),
+                             hint="create it with 'setupfix history import'")
+        with open_store(db) as store:
+            rows = store.measurements()
+            for rec in store.reports():
+                table = rows[rows["report_sha256"] == rec.sha256].drop(columns=["report_sha256"])
+                table = table[~table["reference"]] if "reference" in table else table
+                parts += match_parts(model, table, source=f"{db}#{rec.name}")
+            if corrections is None:
+                stored = store.corrections()
+                if not stored.empty:
+                    log = corrections_from_table(stored, model, f"{db}#corrections")
+            if temperatures is None:
+                stored_t = store.temperatures()
+                if len(stored_t.columns) > 1 and not stored_t.empty:
+                    temps = temperatures_from_table(stored_t, f"{db}#temperatures", fill=True)
+    if reports:
+        files, found_log, found_temp, more = expand_reports(reports)
+        notes += more
+        where = where or str(files[0])
+        if corrections is None and found_log and log is None:
+            corrections = found_log
+            notes.append(f"corrections log {found_log} found beside the reports: used")
+        if temperatures is None and found_temp and temps is None:
+            temperatures = found_temp
+            notes.append(f"temperature log {found_temp} found beside the reports: used")
+        for f in files:
+            parts += match_parts(model, parsers.read(f), source=str(f))
+    if not parts:
+        raise ParseError("no report in the series", location=SourceLocation(where or "<series>"))
+    if corrections:
+        log = read_corrections_log(corrections, model)
+    if temperatures:
+        temps = read_temperature_log(temperatures)
+    series, more = _assemble(model, parts, log, temps, where)
+    notes += more
+    declared = tuple(spec_of(e) for e in section.effects)
+    for e in section.effects:
+        if e.kind == "thermal" and e.channel not in series.channels:
+            raise MatchError(f"the model's thermal effect {e.id} needs temperature channel {e.channel!r}",
+                             location=SourceLocation(model.source, key=f"effects.{e.id}.channel"),
+                             hint="give --temperatures")
+    unmatched = sorted({u for p in parts for u in p.unmatched})
+    if unmatched:
+        notes.append(f"{len(unmatched)} characteristic(s) match no dimension: {', '.join(unmatched[:6])}"
+                     + (" …" if len(unmatched) > 6 else ""))
+    return SeriesInput(model, Layout.from_model(model), series, tuple(_ordered(parts)), declared, section,
+                       corrections, temperatures, tuple(notes))
+
+
+def _ordered(parts: list[PartMeasurement]) -> list[PartMeasurement]:
+    if all(p.timestamp is None for p in parts) or any(p.timestamp is None for p in parts):
+        return parts
+    ts = _times([p.timestamp for p in parts], parts[0].report)
+    return [parts[i] for i in np.argsort(ts.values, kind="stable")]
+
+
+def _assemble(model: ProcessModel, parts: list[PartMeasurement],
+              log: tuple[pd.DatetimeIndex, np.ndarray, np.ndarray, list[str]] | None,
+              temps: tuple[pd.DatetimeIndex, np.ndarray, tuple[str, ...]] | None, where: str) -> tuple[Series, list[str]]:
+    """Parts in time order with the corrections in effect, parts since tool changes, temperatures."""
+    notes: list[str] = []
+    layout = Layout.from_model(model)
+    stamps = [p.timestamp for p in parts]
+    if all(s is None for s in stamps):
+        if log is not None or temps is not None:
+            raise MatchError("the reports carry no timestamps, so the corrections or temperature log cannot be "
+                             "tied to the parts", location=SourceLocation(where), hint="add a timestamp column")
+        time = np.arange(len(parts), dtype=float)
+        origin = ""
+        notes.append("no timestamps: cycles are taken in input order, one hour apart")
+        order = np.arange(len(parts))
+    else:
+        missing = [p for p in parts if p.timestamp is None]
+        if missing:
+            raise MatchError(f"part {missing[0].part or '(report)'} has no timestamp while others have",
+                             location=SourceLocation(missing[0].report))
+        ts = _times(stamps, parts[0].report)
+        order = np.argsort(ts.values, kind="stable")
+        origin_ts = ts[order[0]]
+        time = _hours(ts, origin_ts)[order]
+        origin = origin_ts.isoformat()
+    parts = [parts[i] for i in order]
+    dev = np.vstack([p.deviation for p in parts])
+    n_r = layout.n_registers
+    applied = np.zeros((len(parts), n_r))
+    pending = np.zeros(n_r)
+    change_times: list[np.ndarray] = [np.zeros(0) for _ in layout.tools]
+    if log is not None:
+        times, regs, deltas, events = log
+        t_log = _hours(times, pd.Timestamp(origin))
+        is_corr = np.array([e == "correction" for e in events], dtype=bool)
+        applied = applied_at(time, t_log[is_corr], regs[is_corr], deltas[is_corr], n_r)
+        after = is_corr & (t_log > time[-1])
+        np.add.at(pending, regs[after], deltas[after])
+        for k, j in enumerate(layout.tools):
+            change_times[k] = t_log[(~is_corr) & (regs == j)]
+    parts_cut = parts_since_change(time, change_times)
+    channels: tuple[str, ...] = ()
+    temp = np.zeros((len(parts), 0))
+    if temps is not None:
+        t_times, samples, channels = temps
+        t_h = _hours(t_times, pd.Timestamp(origin))
+        if t_h[0] > time[0]:
+            notes.append("the temperature log starts after the first part: its first sample is used before")
+        temp = join_temperatures(time, t_h, samples)
+    series = Series(dev, time, applied, parts_cut, temp, channels, tuple(f"{p.report}:{p.part}" for p in parts),
+                    origin, pending)
+    return series, notes
+
+
+def augmented_section(diagnosis: Diagnosis, declared: EffectsSection) -> EffectsSection:
+    """The ``[effects]`` section: the model's own effects, then those found (ids E1, E2, …)."""
+    s = diagnosis.series
+    gaps = np.diff(s.time)
+    step = float(np.median(gaps[gaps <= 1.0])) if np.any(gaps <= 1.0) else (float(np.median(gaps)) if gaps.size else None)
+    effects = list(declared.effects)
+    used = {e.id for e in effects}
+    n = 1
+    for res in diagnosis.effects:
+        while f"E{n}" in used:
+            n += 1
+        sp = res.spec
+        effects.append(ModelEffect(
+            id=f"E{n}", kind=sp.kind, estimate=float(f"{res.estimate:.6g}"), stderr=float(f"{res.stderr:.3g}"),
+            unit=res.unit, target=sp.target, shape=sp.shape, tau=sp.tau if sp.shape == "saturating" else None,
+            channel=sp.channel, reference=sp.reference, register=sp.register, dimension=sp.dimension,
+            axis=sp.axis, group=sp.group))
+        used.add(f"E{n}")
+    return EffectsSection(tuple(effects), s.origin or declared.origin, step if step else declared.cycle_hours,
+                          float(s.time[-1]) if s.n_cycles else declared.last_hours)
+
+
+@dataclass
+class DiagnoseOutcome:
+    """A diagnosis with what the CLI and TUI show: next correction, notes, augmented file."""
+
+    input: SeriesInput
+    diagnosis: Diagnosis
+    next_correction: dict[str, float]
+    augmented: str | None = None
+    notes: list[str] = field(default_factory=list)
+
+    def to_json(self) -> dict[str, Any]:
+        """The ``diagnose --json`` object of ``../shared/spec/cli-json.md`` (plus extra keys)."""
+        d = self.diagnosis
+        lay = d.layout
+        names = {dim.id: dim.name for dim in self.input.model.dimensions}
+
+        def r(v: float, digits: int = 9) -> float | None:
+            return round(float(v), digits) if math.isfinite(v) else None
+
+        out: dict[str, Any] = {
+            "cycles": d.series.n_cycles,
+            "rms_before": r(d.error_before.rms), "rms_after": r(d.error_after.rms),
+            "max_before": r(d.error_before.max), "max_after": r(d.error_after.max),
+            "out_of_tolerance_before": d.error_before.out_of_tolerance,
+            "out_of_tolerance_after": d.error_after.out_of_tolerance,
+            "effects": [{"kind": e.kind, "target": e.target, "estimate": r(e.estimate, 12),
+                         "stderr": r(e.stderr, 12), "unit": e.unit, "rms_after": r(e.rms_after),
+                         "alike": list(e.alike)} for e in d.effects],
+            "next_correction": {k: round(v, 9) for k, v in self.next_correction.items()},
+            "declared_effects": [e.target for e in self.input.declared],
+            "rejected": [{"kind": s.spec.kind, "target": s.spec.target, "p_adjusted": r(s.p_adjusted, 6),
+                          "cv_before": r(s.cv_before), "cv_after": r(s.cv_after)}
+                         for s in d.selection.steps if not s.accepted],
+            "unidentifiable": list(d.selection.unidentifiable),
+            "dimensions": [{"id": did, "name": names[did],
+                            "rms_before": r(d.error_before.rms_by_dimension[q]),
+                            "rms_after": r(d.error_after.rms_by_dimension[q]),
+                            "max_before": r(d.error_before.max_by_dimension[q]),
+                            "max_after": r(d.error_after.max_by_dimension[q]),
+                            "forecast": r(d.forecast[q])}
+                           for q, did in enumerate(lay.dimension_ids)],
+            "per_cycle": [{"cycle": c, "rms_before": r(d.error_before.rms_by_cycle[k]),
+                           "rms_after": r(d.error_after.rms_by_cycle[k]),
+                           "max_before": r(d.error_before.max_by_cycle[k]),
+                           "max_after": r(d.error_after.max_by_cycle[k])}
+                          for k, c in enumerate(d.series.cycles)],
+            "walk_forward": None if d.walk is None else {
+                "cycles_scored": len(d.walk.cycles),
+                **{name: {"mean_budget": r(b.mean_budget), "worst_budget": r(b.worst_budget), "rms": r(b.rms),
+                          "out_of_tolerance": b.out_of_tolerance} for name, b in d.walk.budgets.items()}},
+            "augmented": self.augmented,
+            "notes": list(self.notes),
+        }
+        return out
+
+
+def _next_correction(model: ProcessModel, diagnosis: Diagnosis) -> tuple[dict[str, float], list[str]]:
+    """Exact optimum (max error budget, grid) on the forecast, through the augmented relations."""
+    fc = diagnosis.forecast
+    if not np.isfinite(fc).any():
+        return {}, ["no forecast: nothing measured"]
+    part = PartMeasurement(part="next", report="forecast", timestamp=None, deviation=fc,
+                           sources=tuple("" for _ in fc))
+    problem = CorrectionProblem.from_part(model, part)
+    C_aug = diagnosis.after.relation_matrix(diagnosis.layout)
+    problem = dataclasses.replace(problem, composite=C_aug[:, part.measured])
+    result = get_optimizer("exact").solve(problem)
+    corr = {rid: float(v) for rid, v, reg in zip(problem.register_ids, result.x, model.registers) if not reg.fixed}
+    return corr, []
+
+
+def diagnose_reports(model: ProcessModel | str | Path, reports: Sequence[str | Path] = (), *,
+                     corrections: str | None = None, temperatures: str | None = None, augment: str | None = None,
+                     diagnoser: Diagnoser | None = None, db: str | Path | None = None) -> DiagnoseOutcome:
+    """Diagnose a series of reports; optionally write the augmented model.
+
+    Raises
+    ------
+    SetupfixError
+        Bad input (named with its place) or an augmented file that cannot be written;
+        nothing is half-written.
+    """
+    if augment:
+        check_target(augment)  # a bad target costs nothing
+    inp = load_series(model, reports, corrections=corrections, temperatures=temperatures, db=db)
+    diagnoser = diagnoser or Diagnoser()
+    diagnosis = diagnoser.run(inp.layout, inp.series, declared=inp.declared)
+    nxt, more = _next_correction(inp.model, diagnosis)
+    notes = list(inp.notes) + list(diagnosis.notes) + more
+    out = DiagnoseOutcome(inp, diagnosis, nxt, None, notes)
+    if augment:
+        out.augmented = write_augmented(inp.model, augmented_section(diagnosis, inp.effects), augment)
+    return out
+
+
+def write_augmented(model: ProcessModel, section: EffectsSection, target: str) -> str:
+    """Write the model file with ``section`` as its ``[effects]``; the text is reloaded first.
+
+    Raises
+    ------
+    ExportError
+        If the source model cannot be read or the target cannot be written.
+    """
+    try:
+        text = Path(model.source).read_text(encoding="utf-8-sig")
+    except OSError as exc:
+        raise ExportError(f"cannot read the model to augment: {exc.strerror}",
+                          location=SourceLocation(model.source)) from None
+    new = with_effects(text, section)
+    try:  # what is written must load, model and effects
+        doc = tomllib.loads(new)
+        check = model_from_dict(doc, source=target)
+        effects_from_dict(doc.get("effects"), check, target)
+    except (tomllib.TOMLDecodeError, ModelError) as exc:
+        raise ExportError(f"the augmented model would not load: {exc}", location=SourceLocation(target)) from None
+    write_text(target, new)
+    return target
+
+
+
+def forecast_part(model: ProcessModel, part: PartMeasurement) -> PartMeasurement:
+    """The part as the next cycle is expected to come out, by the model's ``[effects]``.
+
+    ``correct`` optimises the next cycle, not the one measured: a drift goes on for
+    one cycle interval and every tool wears one cycle more (see
+    :func:`setupfix.diagnose.forecast.forecast_shift`).  A model without drift or wear
+    effects returns the part unchanged.
+    """
+    if not Path(model.source).is_file():
+        return part
+    section = load_effects(model.source, model)
+    if not any(e.kind in ("drift", "wear") for e in section.effects):
+        return part
+    time = None
+    if section.origin and part.timestamp:
+        time = float(_hours(_times([part.timestamp], part.report), pd.Timestamp(section.origin))[0])
+    shift = forecast_shift(section, Layout.from_model(model), time=time)
+    kinds = sorted({e.kind for e in section.effects if e.kind in ("drift", "wear")})
+    note = Note(f"the model's [effects] ({', '.join(kinds)}) forecast the next cycle: up to "
+                f"{np.max(np.abs(shift)):.4f} {model.unit} added to the measured deviations",
+                SourceLocation(model.source, key="effects"), "forecast")
+    return dataclasses.replace(part, deviation=part.deviation + shift, notes=(*part.notes, note))

@@ -1,0 +1,146 @@
+"""History store: every report, correction, tool change, temperature and recommendation.
+
+Callers see only the :class:`Store` protocol and :func:`open_store`; the embedded
+default is one SQLite file (:mod:`setupfix.store._sqlite`, stdlib ``sqlite3``, WAL
+mode, schema versioned with migrations).  A server database can be added later as
+another implementation of the same protocol, chosen by :func:`open_store` from the
+location given, without touching callers.
+
+Rules every implementation keeps:
+
+* reports are keyed by the SHA-256 of their bytes: adding the same report twice
+  changes nothing;
+* corrections and temperature samples are keyed by (timestamp, register, event) and
+  (timestamp, sensor): a repeated row changes nothing, a row that contradicts a stored
+  one (another delta or value at the same key) is refused with :class:`StoreError`;
+* everything done inside one ``with store.transaction():`` is stored together or not
+  at all (a failure or a kill leaves the store as it was);
+* readers in other processes see the last committed state while one process writes.
+
+Tables come and go as :class:`pandas.DataFrame` with the columns of
+``../shared/spec/measurements.md`` (measurement table, corrections log, temperature
+log).
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Mapping
+from contextlib import AbstractContextManager
+from dataclasses import dataclass
+from typing import Any, Protocol
+
+import pandas as pd
+
+__all__ = ["Store", "ReportRecord", "Recommendation", "open_store", "CORRECTION_COLUMNS"]
+
+#: Columns of the corrections log (``measurements.md``).
+CORRECTION_COLUMNS: tuple[str, ...] = ("timestamp", "register", "delta", "event")
+
+
+@dataclass(frozen=True)
+class ReportRecord:
+    """One stored report: its content hash, name, reader, size, rows and import time."""
+
+    sha256: str
+    name: str
+    format: str
+    size: int
+    rows: int
+    imported_at: str
+
+
+@dataclass(frozen=True)
+class Recommendation:
+    """One correction setupfix recommended.
+
+    Attributes
+    ----------
+    optimizer : str
+        Registry name of the optimiser.
+    inputs : mapping
+        What it was computed from (model and report hashes, part, seed, options), JSON-able.
+    result : mapping
+        The result as written by ``--json`` (``cli-json.md``), JSON-able.
+    created_at : str
+        ISO 8601 time of the recommendation; set by the store when empty.
+    """
+
+    optimizer: str
+    inputs: Mapping[str, Any]
+    result: Mapping[str, Any]
+    created_at: str = ""
+
+
+class Store(Protocol):
+    """What the rest of setupfix may ask of a history store."""
+
+    location: str
+
+    def transaction(self) -> AbstractContextManager[None]:
+        """Everything inside is committed together at the end, or rolled back on any exception."""
+        ...
+
+    def add_report(self, data: bytes, name: str, format: str, table: pd.DataFrame) -> tuple[str, bool]:
+        """Store a report (its bytes' hash, name, reader) and its canonical rows; (sha256, newly added)."""
+        ...
+
+    def report(self, sha256: str) -> ReportRecord | None:
+        """The stored report with this content hash, if any."""
+        ...
+
+    def reports(self) -> list[ReportRecord]:
+        """Every stored report in import order."""
+        ...
+
+    def measurements(self, sha256: str | None = None) -> pd.DataFrame:
+        """Canonical rows of one report (or all, in import order) plus ``reference`` and ``report_sha256``."""
+        ...
+
+    def add_corrections(self, log: pd.DataFrame) -> int:
+        """Store corrections-log rows (:data:`CORRECTION_COLUMNS`); the number of new rows."""
+        ...
+
+    def corrections(self, event: str | None = None) -> pd.DataFrame:
+        """Corrections log in time order (only ``event`` rows when given, e.g. ``"tool_change"``)."""
+        ...
+
+    def add_temperatures(self, log: pd.DataFrame) -> int:
+        """Store a temperature log (``timestamp`` and one column per channel); the number of new values."""
+        ...
+
+    def temperatures(self) -> pd.DataFrame:
+        """Temperature log in time order, one column per channel (NaN where a channel has no sample)."""
+        ...
+
+    def add_recommendation(self, rec: Recommendation) -> int:
+        """Store a recommendation; its id."""
+        ...
+
+    def recommendations(self) -> list[Recommendation]:
+        """Every stored recommendation, oldest first."""
+        ...
+
+    def close(self) -> None:
+        ...
+
+    def __enter__(self) -> Store:
+        ...
+
+    def __exit__(self, *exc: object) -> None:
+        ...
+
+
+def open_store(path: str | os.PathLike[str]) -> Store:
+    """Open (creating and migrating when needed) the history store at ``path``.
+
+    Raises
+    ------
+    StoreError
+        If the file is not a setupfix store, was written by a newer setupfix, or
+        cannot be opened.
+    """
+    from setupfix.store._sqlite import SQLiteStore
+
+    return SQLiteStore(os.fspath(path))
+

@@ -1,0 +1,136 @@
+"""Schema of the SQLite history store, as an ordered list of migrations.
+
+``schema_version`` holds one row: the number of migrations applied.  Opening a store
+applies the missing ones in order, each in its own transaction together with the new
+version number, so a store is always at one version.  Never edit a released
+migration: append a new one.
+"""
+
+from __future__ import annotations
+
+import sqlite3
+from collections.abc import Callable
+
+from setupfix.errors import StoreError, SourceLocation
+
+__all__ = ["MIGRATIONS", "SCHEMA_VERSION", "migrate", "version_of"]
+
+
+def _script(db: sqlite3.Connection, script: str) -> None:
+    """Run ``;``-separated statements inside the open transaction.
+
+    ``Connection.executescript`` would commit the pending transaction first; the
+    statements here hold no ``;`` inside literals.
+    """
+    for statement in script.split(";"):
+        if statement.strip():
+            db.execute(statement)
+
+
+def _v1(db: sqlite3.Connection) -> None:
+    """The first schema: reports, their rows, corrections log, temperatures, recommendations."""
+    _script(db, """
+        CREATE TABLE report (
+            id INTEGER PRIMARY KEY,
+            sha256 TEXT NOT NULL UNIQUE,
+            name TEXT NOT NULL,
+            format TEXT NOT NULL,
+            size INTEGER NOT NULL,
+            imported_at TEXT NOT NULL
+        );
+        CREATE TABLE measurement (
+            report_id INTEGER NOT NULL REFERENCES report(id),
+            row INTEGER NOT NULL,
+            characteristic TEXT NOT NULL, nominal REAL, actual REAL, deviation REAL,
+            lower REAL, upper REAL, unit TEXT, part TEXT, report TEXT, timestamp TEXT,
+            station TEXT, x REAL, y REAL, z REAL, status TEXT, source TEXT,
+            PRIMARY KEY (report_id, row)
+        );
+        CREATE TABLE correction (
+            timestamp TEXT NOT NULL,
+            register TEXT NOT NULL,
+            delta REAL,
+            event TEXT NOT NULL,
+            PRIMARY KEY (timestamp, register, event)
+        );
+        CREATE TABLE temperature (
+            timestamp TEXT NOT NULL,
+            channel TEXT NOT NULL,
+            value REAL NOT NULL,
+            PRIMARY KEY (timestamp, channel)
+        );
+        CREATE TABLE recommendation (
+            id INTEGER PRIMARY KEY,
+            created_at TEXT NOT NULL,
+            optimizer TEXT NOT NULL,
+            inputs TEXT NOT NULL,
+            result TEXT NOT NULL
+        );
+    """)
+
+
+def _v2(db: sqlite3.Connection) -> None:
+    """The reference-only flag of a row (``setupfix parse``'s extra column); lookup by part and time."""
+    _script(db, """
+        ALTER TABLE measurement ADD COLUMN reference INTEGER NOT NULL DEFAULT 0;
+        CREATE INDEX measurement_part ON measurement(part, timestamp);
+    """)
+
+
+#: Migrations in order; migration i (1-based) brings a store from version i − 1 to i.
+MIGRATIONS: tuple[Callable[[sqlite3.Connection], None], ...] = (_v1, _v2)
+SCHEMA_VERSION = len(MIGRATIONS)
+
+
+def version_of(db: sqlite3.Connection) -> int:
+    """Schema version of an open store (0: empty database)."""
+    tables = {r[0] for r in db.execute("SELECT name FROM sqlite_master WHERE type = 'table'")}
+    if "schema_version" not in tables:
+        return 0
+    row = db.execute("SELECT version FROM schema_version").fetchone()
+    return int(row[0]) if row else 0
+
+
+def migrate(db: sqlite3.Connection, path: str, *, upto: int = SCHEMA_VERSION) -> int:
+    """Apply the missing migrations up to ``upto``; the version reached.
+
+    ``db`` must be in autocommit mode (``isolation_level=None``): each migration runs
+    in an explicit ``BEGIN IMMEDIATE`` … ``COMMIT`` with its version bump.
+
+    Raises
+    ------
+    StoreError
+        If the database holds other tables (not a setupfix store) or a newer schema.
+    """
+    where = SourceLocation(path)
+    current = version_of(db)  # a reader does not take the write lock when nothing is to be done
+    if current > SCHEMA_VERSION:
+        raise StoreError(f"store schema version {current} is newer than this setupfix reads "
+                         f"({SCHEMA_VERSION})", location=where, hint="update setupfix")
+    if current >= upto:
+        return current
+    db.execute("BEGIN IMMEDIATE")
+    try:
+        version = version_of(db)
+        if version == 0:
+            if db.execute("SELECT count(*) FROM sqlite_master WHERE type = 'table'").fetchone()[0]:
+                raise StoreError("not a setupfix history store (it holds other tables)", location=where)
+            db.execute("CREATE TABLE schema_version (version INTEGER NOT NULL)")
+            db.execute("INSERT INTO schema_version VALUES (0)")
+        db.execute("COMMIT")
+    except BaseException:
+        db.execute("ROLLBACK")
+        raise
+    for number in range(version + 1, upto + 1):
+        db.execute("BEGIN IMMEDIATE")
+        try:
+            if version_of(db) >= number:  # another process migrated meanwhile
+                db.execute("COMMIT")
+                continue
+            MIGRATIONS[number - 1](db)
+            db.execute("UPDATE schema_version SET version = ?", (number,))
+            db.execute("COMMIT")
+        except BaseException:
+            db.execute("ROLLBACK")
+            raise
+    return max(version, upto)

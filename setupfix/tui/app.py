@@ -1,0 +1,455 @@
+"""The operator's screen: one App, thin; every number from :mod:`setupfix.pipeline`.
+
+Work that reads files or optimises runs in thread workers (``exit_on_error=False``)
+that get immutable inputs and return pipeline results; one handler,
+:meth:`SetupfixApp.on_worker_state_changed`, shows results and turns every failure
+into a notification naming the file and place — the same error boundary as the CLI,
+so a bad file never ends the app.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import partial
+from pathlib import Path
+from typing import ClassVar
+
+from textual import on
+from textual.app import App, ComposeResult
+from textual.binding import Binding, BindingType
+from textual.containers import Horizontal, Vertical
+from textual.widgets import DataTable, Footer, Header, Static, TabbedContent, TabPane
+from textual.worker import Worker, WorkerState, get_current_worker
+
+from setupfix.errors import SetupfixError
+from setupfix.model import ProcessModel
+from setupfix.optimize import OPTIMIZERS, CorrectionProblem
+from setupfix.pipeline import view
+from setupfix.pipeline.compare import DEFAULT_METHODS, Comparison
+from setupfix.pipeline.correct import PartCorrection
+from setupfix.pipeline.diagnose import diagnose_reports
+from setupfix.pipeline.session import (FolderWatch, OpenedReport, compare_steps, open_report, record_applied,
+                                      store_parts)
+from setupfix.pipeline.thermal import predict_drift
+from setupfix.tui.exporting import CONTROLLERS, render_offsets, write_offsets
+from setupfix.tui.messages import CompareProgress
+from setupfix.tui.screens import ExportRequest, ExportScreen, HelpScreen, OpenFileScreen
+from setupfix.tui.widgets import (ComparePanel, DimensionTable, HistoryPanel, MatchTable, RegisterTable, SummaryBar,
+                                  ThermalPanel)
+
+__all__ = ["SetupfixApp", "SORT_ORDER"]
+
+#: What ``s`` cycles through: None is the model's order.
+SORT_ORDER: tuple[str | None, ...] = (None, "margin_after", "deviation", "name", "station")
+
+#: Why panels whose pipeline is not on this branch yet show "not available".
+MISSING = {
+    "verdict": "safety rules (issue 13) not in this build",
+    "feed": "the thermal feed-forward (issue 12) is not in this build",
+}
+
+
+@dataclass(frozen=True)
+class Inputs:
+    """What the command line gave (paths as typed)."""
+
+    model: Path | None = None
+    report: Path | None = None
+    db: Path | None = None
+    thermal: Path | None = None
+    temperatures: Path | None = None
+    optimizer: str = "exact"
+    seed: int = 0
+    trials: int = 12
+    offsets: str = "offsets.csv"
+    poll_seconds: float = 2.0
+
+
+class SetupfixApp(App[None]):
+    """setupfix's Textual app; build it with :class:`Inputs` (tests do the same)."""
+
+    CSS_PATH = "app.tcss"
+    #: The footer's room is worth more than the palette: every action has a key (see ?).
+    ENABLE_COMMAND_PALETTE = False
+    TITLE = "setupfix"
+    HORIZONTAL_BREAKPOINTS = [(0, "-narrow"), (120, "-wide")]
+    VERTICAL_BREAKPOINTS = [(0, "-short"), (30, "-tall")]
+    BINDINGS: ClassVar[list[BindingType]] = [
+        Binding("o", "open_report", "Open"),
+        Binding("m", "open_model", "Model", show=False),
+        Binding("r", "run", "Run"),
+        Binding("p", "next_optimizer", "Optim."),
+        Binding("c", "compare", "Compare"),
+        Binding("x", "cancel", "Cancel", show=False),
+        Binding("f", "filter_station", "Station"),
+        Binding("s", "sort", "Sort"),
+        Binding("e", "export", "Export"),
+        Binding("d", "diagnose", "Diagnose", show=False),
+        Binding("left_square_bracket", "part(-1)", "Prev part", show=False),
+        Binding("right_square_bracket", "part(1)", "Next part", show=False),
+        Binding("1", "tab('correct')", "Correction", show=False),
+        Binding("2", "tab('compare')", "Compare", show=False),
+        Binding("3", "tab('thermal')", "Thermal", show=False),
+        Binding("4", "tab('history')", "History", show=False),
+        Binding("5", "tab('match')", "Match", show=False),
+        Binding("question_mark,f1", "help", "Help"),
+        Binding("q", "quit", "Quit"),
+    ]
+
+    def __init__(self, inputs: Inputs | None = None) -> None:
+        super().__init__()
+        self.inputs = inputs or Inputs()
+        self.model_path = self.inputs.model
+        self.report_path: Path | None = None
+        self.optimizer = self.inputs.optimizer
+        self.opened: OpenedReport | None = None
+        self.part_index = 0
+        self.station: str | None = None
+        self.sort_key: str | None = None
+        self.comparison: Comparison | None = None
+        self.folder_watch: FolderWatch | None = None
+        self.problem = ""
+
+    # ----------------------------------------------------------------- layout
+    def compose(self) -> ComposeResult:
+        yield Header()
+        with TabbedContent(initial="correct"):
+            with TabPane("1 Correction", id="correct"):
+                yield SummaryBar(id="summary")
+                with Horizontal(id="correct-body"):
+                    yield DimensionTable(id="dimensions")
+                    yield RegisterTable(id="registers")
+            with TabPane("2 Compare", id="compare"):
+                yield ComparePanel(id="compare-panel")
+            with TabPane("3 Thermal", id="thermal"):
+                yield ThermalPanel(id="thermal-panel")
+            with TabPane("4 History", id="history"):
+                yield HistoryPanel(id="history-panel")
+            with TabPane("5 Match", id="match"):
+                with Vertical():
+                    yield Static("The report matches the model.", id="match-status")
+                    yield MatchTable(id="match-table")
+        yield Footer()
+
+    def on_mount(self) -> None:
+        self._show()
+        self._start_thermal()
+        self.query_one(HistoryPanel).status(
+            "no history store given (--db STORE): press d to diagnose the reports in the current report's folder"
+            if self.inputs.db is None else f"reading the history store {self.inputs.db} …")
+        report = self.inputs.report
+        if report is not None and report.is_dir():
+            self.folder_watch = FolderWatch(report, settle=self.inputs.poll_seconds)
+            self.set_interval(self.inputs.poll_seconds, self._poll_folder)
+            self._poll_folder()
+        elif report is not None:
+            self.report_path = report
+            self._start_open()
+
+    # ----------------------------------------------------------------- workers
+    def _start_open(self) -> None:
+        if self.model_path is None or self.report_path is None:
+            self.problem = ("No model: press m to open the process model." if self.model_path is None
+                            else "No report: press o to open one.")
+            self._show()
+            return
+        self.problem = f"opening {self.report_path} …"
+        self._show()
+        self.run_worker(partial(open_report, self.model_path, self.report_path, optimizer=self.optimizer,
+                                seed=self.inputs.seed),
+                        name="open", group="open", thread=True, exclusive=True, exit_on_error=False)
+
+    def _start_thermal(self) -> None:
+        panel = self.query_one(ThermalPanel)
+        if self.inputs.thermal is None or self.inputs.temperatures is None:
+            missing = "--thermal MODEL.json" if self.inputs.thermal is None else "--temperatures LOG"
+            panel.not_available(f"no thermal model and log given ({missing})")
+            return
+        panel.not_available(f"predicting drift from {self.inputs.temperatures} …")
+        self.run_worker(partial(_drift, self.inputs.thermal, self.inputs.temperatures), name="thermal",
+                        group="thermal", thread=True, exclusive=True, exit_on_error=False)
+
+    def on_worker_state_changed(self, event: Worker.StateChanged) -> None:
+        """The error boundary and the one place results reach the screen."""
+        worker = event.worker
+        if event.state == WorkerState.ERROR:
+            self._failed(worker.name, worker.error)
+        elif event.state == WorkerState.CANCELLED and worker.name == "compare":
+            self.query_one(ComparePanel).stopped("comparison cancelled")
+        elif event.state == WorkerState.SUCCESS:
+            if worker.name == "open" and isinstance(worker.result, OpenedReport):
+                self._opened(worker.result)
+            elif worker.name == "compare":
+                self._compared(worker.result)
+            elif worker.name == "history" and isinstance(worker.result, tuple):
+                budgets, notes = worker.result
+                self.query_one(HistoryPanel).budgets(budgets, unit=self._unit(), source=str(self.inputs.db))
+                for note in notes:
+                    self.notify(note, title="history", severity="warning")
+            elif worker.name == "diagnose" and isinstance(worker.result, view.DiagnosisView):
+                self.query_one(HistoryPanel).diagnosis(worker.result, source=self._series_source())
+            elif worker.name == "thermal" and isinstance(worker.result, view.DriftView):
+                self.query_one(ThermalPanel).show(worker.result, unit=self._unit(),
+                                                  source=str(self.inputs.temperatures))
+                self.query_one(ThermalPanel).feed_forward(f"feed-forward not available: {MISSING['feed']}")
+
+    def _failed(self, what: str, error: BaseException | None) -> None:
+        text = str(error) if isinstance(error, SetupfixError) else f"internal error: {type(error).__name__}: {error}"
+        self.notify(text, title=f"{what} failed", severity="error", timeout=12)
+        if what == "open":
+            # The previous correction is no longer what the operator asked for: showing
+            # (and exporting) it beside a failed report would invite applying stale offsets.
+            self.opened = None
+            self.sub_title = ""
+            self.problem = f"✗ {text}"
+            self._show()
+        elif what == "compare":
+            self.query_one(ComparePanel).stopped(f"✗ {text}")
+        elif what == "thermal":
+            self.query_one(ThermalPanel).not_available(text)
+        elif what in ("history", "diagnose"):
+            self.query_one(HistoryPanel).status(f"✗ {text}")
+
+    def _opened(self, opened: OpenedReport) -> None:
+        self.opened = opened
+        self.problem = ""
+        self.part_index = min(self.part_index, max(len(opened.corrections) - 1, 0))
+        self.sub_title = f"{Path(opened.report).name} · {opened.format} · {Path(opened.model.source).name}"
+        status = self.query_one("#match-status", Static)
+        table = self.query_one(MatchTable)
+        table.show(opened.matches)
+        if not opened.corrections:
+            status.update(f"✗ {opened.problem}\nEach characteristic of the report, ✓ with the dimension it "
+                          "matches, ✗ with the closest dimension names:")
+            self.query_one(TabbedContent).active = "match"
+        elif opened.unmatched:
+            status.update(f"⚠ {opened.unmatched} characteristic(s) of the report match no dimension "
+                          "(✗ below, with the closest dimension names); they are left out.")
+        else:
+            status.update("✓ every characteristic of the report matches a dimension of the model.")
+        self._show()
+        if self.inputs.db is not None:
+            self.run_worker(partial(_history, opened.model, self.inputs.db), name="history", group="history",
+                            thread=True, exclusive=True, exit_on_error=False)
+
+    def _compared(self, comparison: object) -> None:
+        panel = self.query_one(ComparePanel)
+        if not isinstance(comparison, Comparison):
+            panel.stopped("comparison cancelled")
+            return
+        self.comparison = comparison
+        c = self._current()
+        panel.show(view.compare_rows(comparison), view.convergence(comparison, 60),
+                   exact_f1=comparison.exact.margin_after, unit=self._unit(),
+                   heading=f"{comparison.trials} seeded trials per method (seed {comparison.seed})"
+                           + (f" on {c.part.report} {c.part.part}" if c else ""))
+
+    @on(CompareProgress)
+    def _compare_progress(self, message: CompareProgress) -> None:
+        self.query_one(ComparePanel).progress(message.done, message.total, message.method)
+
+    def _poll_folder(self) -> None:
+        if self.folder_watch is None:
+            return
+        path = self.folder_watch.poll()
+        if path is not None:
+            if self.report_path is not None:
+                self.notify(f"new report {path.name}", title="folder")
+            self.report_path = path
+            self._start_open()
+        elif self.report_path is None:
+            self.problem = f"watching {self.folder_watch.folder} for a report …"
+            self._show()
+
+    # ----------------------------------------------------------------- showing
+    def _current(self) -> PartCorrection | None:
+        if self.opened is None or not self.opened.corrections:
+            return None
+        return self.opened.corrections[self.part_index]
+
+    def _unit(self) -> str:
+        return self.opened.model.unit if self.opened is not None else "mm"
+
+    def _show(self) -> None:
+        """Push the current state down into the correction tab's widgets."""
+        c = self._current()
+        summary = self.query_one(SummaryBar)
+        if c is None:
+            reason = self.problem or (f"✗ {self.opened.problem} (tab 5 shows the match table)"
+                                      if self.opened and self.opened.problem else "")
+            summary.show(None, optimizer=self.optimizer, problem=reason)
+            self.query_one(DimensionTable).clear(columns=True)
+            self.query_one(RegisterTable).clear(columns=True)
+            return
+        n = len(self.opened.corrections) if self.opened else 1
+        part = f"part {c.part.part or '—'}" + (f" ({self.part_index + 1}/{n}, [ ] to change)" if n > 1 else "")
+        head = view.summary(c)
+        summary.show(head, optimizer=self.optimizer, part=part, verdict_reason=MISSING["verdict"],
+                     problem=self.problem)
+        rows = view.filter_rows(view.dimension_rows(c), self.station)
+        if self.sort_key is not None:
+            rows = view.sort_rows(rows, self.sort_key)
+        self.query_one(DimensionTable).show(rows, wide=self.size.width >= 120)
+        self.query_one(DimensionTable).border_title = (
+            f"dimensions · station {self.station or 'all'} · sort {self.sort_key or 'model'}")
+        digits = max(0, len(f"{c.model.resolution:g}".split(".")[-1])) if c.model.resolution < 1 else 0
+        self.query_one(RegisterTable).show(view.register_rows(c), digits=digits)
+        self.query_one(RegisterTable).border_title = f"recommendation [{c.model.unit}, axis {c.model.axis}]"
+
+    def on_resize(self) -> None:
+        if self._current() is not None:
+            self._show()
+
+    @on(DataTable.HeaderSelected, "#dimensions")
+    def _header(self, event: DataTable.HeaderSelected) -> None:
+        key = str(event.column_key.value)
+        if key in view.SORT_KEYS:
+            self.sort_key = None if self.sort_key == key else key
+            self._show()
+
+    # ----------------------------------------------------------------- actions
+    def action_run(self) -> None:
+        """Correct the report again with the chosen optimiser."""
+        self._start_open()
+
+    def action_next_optimizer(self) -> None:
+        """Cycle exact → cripso → … and run at once."""
+        names = list(OPTIMIZERS)
+        self.optimizer = names[(names.index(self.optimizer) + 1) % len(names)] if self.optimizer in names else "exact"
+        self.notify(f"optimiser {self.optimizer}", timeout=2)
+        self._start_open()
+
+    def action_compare(self) -> None:
+        c = self._current()
+        if c is None:
+            self.notify("open a report first (o)", severity="warning")
+            return
+        self.query_one(TabbedContent).active = "compare"
+        self.query_one(ComparePanel).progress(0, 1 + len(DEFAULT_METHODS) * self.inputs.trials, "exact")
+        self.run_worker(partial(_compare, self, c.problem, self.inputs.trials, self.inputs.seed), name="compare",
+                        group="compare", thread=True, exclusive=True, exit_on_error=False)
+
+    def action_cancel(self) -> None:
+        running = [w for w in self.workers if w.is_running]
+        for w in running:
+            w.cancel()
+        self.notify("cancelled" if running else "nothing is running", timeout=3)
+
+    def action_filter_station(self) -> None:
+        c = self._current()
+        if c is None:
+            return
+        options: list[str | None] = [None, *view.stations(view.dimension_rows(c))]
+        self.station = options[(options.index(self.station) + 1) % len(options)] if self.station in options else None
+        self._show()
+
+    def action_sort(self) -> None:
+        self.sort_key = SORT_ORDER[(SORT_ORDER.index(self.sort_key) + 1) % len(SORT_ORDER)]
+        self._show()
+
+    def action_part(self, step: int) -> None:
+        if self.opened and self.opened.corrections:
+            self.part_index = (self.part_index + step) % len(self.opened.corrections)
+            self._show()
+
+    def action_tab(self, tab: str) -> None:
+        self.query_one(TabbedContent).active = tab
+
+    def action_help(self) -> None:
+        self.push_screen(HelpScreen())
+
+    def action_diagnose(self) -> None:
+        """Diagnose the series: the reports in the current report's (or the watched) folder."""
+        self.action_tab("history")
+        if self.model_path is None or self._series_source() == "":
+            self.notify("open a model and a report first", severity="warning")
+            return
+        self.query_one(HistoryPanel).status(f"diagnosing the reports in {self._series_source()} …")
+        self.run_worker(partial(_diagnose, self.model_path, Path(self._series_source())), name="diagnose",
+                        group="diagnose", thread=True, exclusive=True, exit_on_error=False)
+
+    def _series_source(self) -> str:
+        if self.folder_watch is not None:
+            return str(self.folder_watch.folder)
+        return str(self.report_path.parent) if self.report_path is not None else ""
+
+    def action_open_report(self) -> None:
+        start = self.report_path or Path.cwd()
+        self.push_screen(OpenFileScreen("Open a report (any supported format) or a folder to watch", start),
+                         self._picked_report)
+
+    def action_open_model(self) -> None:
+        self.push_screen(OpenFileScreen("Open a process model (TOML)", self.model_path or Path.cwd()),
+                         self._picked_model)
+
+    def _picked_report(self, path: Path | None) -> None:
+        if path is None:
+            return
+        if path.is_dir():
+            self.folder_watch = FolderWatch(path, settle=self.inputs.poll_seconds)
+            self.report_path = None
+            self.set_interval(self.inputs.poll_seconds, self._poll_folder)
+            self._poll_folder()
+            return
+        self.folder_watch = None
+        self.report_path = path
+        self._start_open()
+
+    def _picked_model(self, path: Path | None) -> None:
+        if path is not None:
+            self.model_path = path
+            self._start_open()
+
+    def action_export(self) -> None:
+        if self.opened is None or not self.opened.corrections:
+            self.notify("nothing to export: open a report that matches the model first", severity="warning")
+            return
+        corrections = self.opened.corrections
+        self.push_screen(ExportScreen(CONTROLLERS, partial(render_offsets, corrections), self.inputs.offsets),
+                         self._export_confirmed)
+
+    def _export_confirmed(self, request: ExportRequest | None) -> None:
+        if request is None:
+            self.notify("export cancelled", timeout=3)
+            return
+        try:
+            write_offsets(request)
+        except SetupfixError as exc:
+            self.notify(str(exc), title="export failed", severity="error", timeout=12)
+            return
+        self.notify(f"wrote {request.controller} offsets to {request.path}", title="export")
+        if self.inputs.db is not None and self.opened is not None:
+            try:
+                added = record_applied(self.inputs.db, self.opened.corrections)
+            except SetupfixError as exc:
+                self.notify(str(exc), title="history store", severity="error", timeout=12)
+                return
+            self.notify(f"recorded {added} register change(s) as applied in {self.inputs.db}", title="history")
+
+
+def _drift(model: Path, log: Path) -> view.DriftView:
+    """Thread worker: the saved thermal model's drift over the log."""
+    return view.drift_view(predict_drift(model, log))
+
+
+def _compare(app: SetupfixApp, problem: CorrectionProblem, trials: int, seed: int) -> Comparison | None:
+    """Thread worker: the comparison one trial at a time, stoppable between trials."""
+    worker = get_current_worker()
+    result: Comparison | None = None
+    for method, step, steps, comparison in compare_steps(problem, trials=trials, seed=seed):
+        if worker.is_cancelled:
+            return None
+        result = comparison
+        app.post_message(CompareProgress(step, steps, method))
+    return result
+
+
+def _history(model: ProcessModel, db: Path) -> tuple[list[view.CycleBudget], list[str]]:
+    """Thread worker: the error budget of every cycle in the history store."""
+    parts, notes = store_parts(model, db)
+    return view.cycle_budgets(model, parts), notes
+
+
+def _diagnose(model: Path, folder: Path) -> view.DiagnosisView:
+    """Thread worker: ``setupfix diagnose`` over a folder of reports (and its logs)."""
+    return view.diagnosis_view(diagnose_reports(model, [folder]))

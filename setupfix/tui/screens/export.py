@@ -1,0 +1,80 @@
+"""The export confirmation: the controller format, the target and exactly the text to be written."""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+
+from textual import on
+from textual.app import ComposeResult
+from textual.binding import Binding
+from textual.containers import Horizontal, Vertical
+from textual.screen import ModalScreen
+from textual.widgets import Button, Input, Label, Select, TextArea
+
+from setupfix.errors import SetupfixError
+
+__all__ = ["ExportRequest", "ExportScreen"]
+
+
+@dataclass(frozen=True)
+class ExportRequest:
+    """What the operator confirmed: the format, the file and the exact text."""
+
+    controller: str
+    path: str
+    text: str
+
+
+class ExportScreen(ModalScreen[ExportRequest | None]):
+    """Shows the text ``render(controller)`` returns; ctrl+s (or Write) writes it, escape cancels."""
+
+    BINDINGS = [Binding("ctrl+s", "write", "Write"), Binding("escape", "cancel", "Cancel")]
+
+    def __init__(self, controllers: Sequence[str], render: Callable[[str], str], path: str) -> None:
+        super().__init__()
+        self.controllers = list(controllers)
+        self.render_text = render
+        self.path = path
+        self.refusal = ""
+
+    def compose(self) -> ComposeResult:
+        with Vertical(id="export-box"):
+            yield Label("Export the offsets — this exact text will be written:", id="export-title")
+            with Horizontal(id="export-options"):
+                yield Select([(c, c) for c in self.controllers], value=self.controllers[0], allow_blank=False,
+                             id="export-controller")
+                yield Input(self.path, id="export-path")
+            yield TextArea(self._text(self.controllers[0]), read_only=True, id="export-text")
+            with Horizontal(id="export-buttons"):
+                yield Button("Write (ctrl+s)", variant="primary", id="export-write")
+                yield Button("Cancel (esc)", id="export-cancel")
+
+    @on(Select.Changed, "#export-controller")
+    def _controller(self, event: Select.Changed) -> None:
+        self.query_one("#export-text", TextArea).text = self._text(str(event.value))
+
+    def _text(self, controller: str) -> str:
+        """The text to write, or the reason there is none (then Write refuses)."""
+        try:
+            self.refusal = ""
+            return self.render_text(controller)
+        except SetupfixError as exc:
+            self.refusal = str(exc)
+            return f"cannot export in this format: {exc}"
+
+    @on(Button.Pressed, "#export-write")
+    def action_write(self) -> None:
+        controller = str(self.query_one("#export-controller", Select).value)
+        path = self.query_one("#export-path", Input).value.strip()
+        if not path:
+            self.notify("give a file to write", severity="error")
+            return
+        if self.refusal:
+            self.notify(self.refusal, title="export refused", severity="error")
+            return
+        self.dismiss(ExportRequest(controller, path, self.query_one("#export-text", TextArea).text))
+
+    @on(Button.Pressed, "#export-cancel")
+    def action_cancel(self) -> None:
+        self.dismiss(None)

@@ -1,0 +1,60 @@
+"""The help screen: every key and every symbol."""
+
+from __future__ import annotations
+
+from textual.app import ComposeResult
+from textual.binding import Binding
+from textual.containers import VerticalScroll
+from textual.screen import ModalScreen
+from textual.widgets import Markdown
+
+__all__ = ["HelpScreen", "HELP"]
+
+HELP = """\
+# setupfix — keys
+
+| key | does |
+|---|---|
+| `o` | open a report (file picker; a folder watches it for the newest report) |
+| `m` | open a process model |
+| `r` | run the correction again |
+| `p` | next optimiser (exact, cripso, pso, ga, coa, cs) — runs at once |
+| `c` | compare every optimiser on this part (progress; `x` cancels) |
+| `x` | cancel the running work |
+| `f` | filter the dimensions by station (all → P1 → P2 …) |
+| `s` | sort the dimensions (model order, margin after, deviation, name, station); or click a header |
+| `[` `]` | previous / next part (cycle) of the report |
+| `e` | export the offsets (choose the controller format, see the exact text, confirm) |
+| `d` | diagnose the history (one key) |
+| `1`…`5` | correction · compare · thermal · history · match tabs |
+| `?` | this help |
+| `q` | quit |
+
+# Symbols
+
+| symbol | meaning |
+|---|---|
+| `✓` | in tolerance (first column: measured; second: predicted after the correction) |
+| `✗` | measured out of tolerance |
+| `▲` | predicted **out** of tolerance after the correction |
+| `●` | binding: one of the dimensions that stop a better correction |
+| `⚑` | given up: no setup correction brings it in (the NC program or the process must) |
+| `├──●──┼──┤` | the tolerance zone: limits, nominal, the value; `◀` `▶` beyond a limit |
+| `◆limit` | the register is at its limit |
+
+δ is the error budget: the smallest distance of any dimension to its nearer limit
+(negative when one is out). The bonus is δ after − δ before.
+"""
+
+
+class HelpScreen(ModalScreen[None]):
+    """Keys and symbols; any of escape, q, ? closes it."""
+
+    BINDINGS = [Binding("escape,q,question_mark", "dismiss", "Close")]
+
+    def compose(self) -> ComposeResult:
+        with VerticalScroll(id="help-box"):
+            yield Markdown(HELP)
+
+    def action_dismiss(self, result: None = None) -> None:  # type: ignore[override]
+        self.dismiss(None)

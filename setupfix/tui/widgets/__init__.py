@@ -1,0 +1,14 @@
+"""Widgets of the operator's screen; each lays out rows from :mod:`setupfix.pipeline.view`."""
+
+from __future__ import annotations
+
+from setupfix.tui.widgets.compare import ComparePanel
+from setupfix.tui.widgets.dimensions import DimensionTable
+from setupfix.tui.widgets.history import HistoryPanel
+from setupfix.tui.widgets.mismatch import MatchTable
+from setupfix.tui.widgets.registers import RegisterTable
+from setupfix.tui.widgets.summary import SummaryBar
+from setupfix.tui.widgets.thermal import ThermalPanel
+
+__all__ = ["ComparePanel", "DimensionTable", "HistoryPanel", "MatchTable", "RegisterTable", "SummaryBar",
+           "ThermalPanel"]

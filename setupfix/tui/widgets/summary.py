@@ -1,0 +1,57 @@
+"""The headline: report, optimiser, δ before → after and the bonus, the verdict."""
+
+from __future__ import annotations
+
+from rich.text import Text
+from textual.widgets import Static
+
+from setupfix.pipeline.view import Summary, signed
+
+__all__ = ["SummaryBar"]
+
+#: Verdict → (symbol, style).  The symbol carries the state on a monochrome terminal.
+VERDICT_STYLE: dict[str, tuple[str, str]] = {
+    "apply": ("✓ APPLY", "bold green"), "hold": ("● HOLD", "bold yellow"), "reject": ("✗ REJECT", "bold red"),
+}
+
+
+class SummaryBar(Static):
+    """Three lines: where the numbers come from, the error budget, the verdict and notes."""
+
+    def show(self, summary: Summary | None, *, optimizer: str, part: str = "", problem: str = "",
+             verdict_reason: str = "") -> None:
+        """Render ``summary`` (None: nothing opened yet, or ``problem`` says why not)."""
+        text = Text(no_wrap=False, overflow="ellipsis")
+        if summary is None:
+            text.append(problem or "No report open: press o to open one, ? for help.", style="bold")
+            text.append(f"\noptimiser {optimizer}")
+            self.update(text)
+            return
+        u = summary.unit
+        text.append(f"{summary.report}", style="bold")
+        text.append(f"  {part or summary.part}  ")
+        text.append(f"{summary.optimizer} · {summary.status}", style="italic")
+        if summary.bound is not None:
+            text.append(f" · LP bound {signed(summary.bound)}")
+        text.append("\nδ before ")
+        text.append(signed(summary.margin_before), style="bold red" if summary.margin_before < 0 else "bold")
+        text.append(" → after ")
+        text.append(signed(summary.margin_after), style="bold red" if summary.margin_after < 0 else "bold green")
+        text.append(f" {u}   bonus ")
+        text.append(signed(summary.bonus), style="bold reverse")
+        text.append(f" {u}   ‖x‖ {summary.norm:.4f}")
+        text.append("\n" + ("✓ " if summary.in_tolerance else "✗ ") + summary.message + "\n")
+        if summary.verdict is not None:
+            label, style = VERDICT_STYLE.get(summary.verdict, (summary.verdict.upper(), "bold"))
+            text.append(label, style=style)
+            if summary.rules:
+                text.append("  " + "; ".join(summary.rules))
+        else:
+            text.append("verdict — not available", style="dim")
+            if verdict_reason:
+                text.append(f": {verdict_reason}", style="dim")
+        if problem:
+            text.append(f"\n{problem}", style="bold")
+        for note in summary.notes:
+            text.append(f"\n⚠ {note}", style="yellow")
+        self.update(text)

@@ -1,0 +1,199 @@
+"""The history store: idempotent imports, one transaction per import, migrations, concurrent readers."""
+
+from __future__ import annotations
+
+import signal
+import sqlite3
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from setupfix.cli import main
+from setupfix.errors import ParseError, StoreError
+from setupfix.model import CANONICAL_COLUMNS
+from setupfix.pipeline.history import import_history, read_corrections_log
+from setupfix.pipeline.parse import parse_reports
+from setupfix.store import Recommendation, open_store
+from setupfix.store._schema import SCHEMA_VERSION, migrate, version_of
+
+ROOT = Path(__file__).resolve().parents[2]
+GUIDE = ROOT / "sample_reports" / "guide_pins"
+REPORTS = sorted(GUIDE.glob("cycle_0*.csv"))
+TEMPS = ROOT / "sample_reports" / "thermal" / "test_constant.csv"
+LOG = "timestamp,register,delta,event\n2026-11-02T09:00:00,G54,0.012,\n2026-11-03T07:00:00,T23,,tool_change\n"
+
+
+def _counts(path):
+    with open_store(path) as s:
+        return len(s.reports()), len(s.measurements()), len(s.corrections()), len(s.temperatures())
+
+
+def _log(tmp_path, text=LOG, name="corr.csv"):
+    (tmp_path / name).write_text(text)
+    return tmp_path / name
+
+
+def test_import_twice_changes_nothing_and_rows_come_back(tmp_path):
+    db, log = tmp_path / "h.db", _log(tmp_path)
+    with open_store(db) as store:
+        first = import_history(store, REPORTS, [log], [TEMPS])
+        again = import_history(store, REPORTS, [log], [TEMPS])
+        assert len(first.new_reports) == 5 and first.corrections == 2 and first.temperatures > 0
+        assert again.new_reports == [] and len(again.known_reports) == 5
+        assert again.corrections == again.temperatures == 0
+        back = store.measurements()
+    table = parse_reports(REPORTS).table
+    np.testing.assert_array_equal(back["deviation"].to_numpy(float), table["deviation"].to_numpy(float))
+    for col in CANONICAL_COLUMNS:
+        if not pd.api.types.is_numeric_dtype(table[col]):
+            assert back[col].fillna("").tolist() == table[col].fillna("").astype(str).tolist(), col
+    assert _counts(db) == (5, 140, 2, len(pd.read_csv(TEMPS)))
+
+
+def test_logs_round_trip_and_contradictions_are_refused(tmp_path):
+    db = tmp_path / "h.db"
+    with open_store(db) as store:
+        import_history(store, corrections=[_log(tmp_path)], temperatures=[TEMPS])
+        log = store.corrections()
+        assert log.to_dict("list")["register"] == ["G54", "T23"]
+        assert log["delta"].iloc[0] == 0.012 and np.isnan(log["delta"].iloc[1])
+        assert store.corrections("tool_change")["register"].tolist() == ["T23"]
+        temps, source = store.temperatures(), pd.read_csv(TEMPS)
+        for col in temps.columns.drop("timestamp"):
+            np.testing.assert_array_equal(temps[col].to_numpy(), source[col].to_numpy(float))
+        other = _log(tmp_path, LOG.replace("0.012", "0.013"), "other.csv")
+        with pytest.raises(StoreError, match="G54.*contradicts the stored one"):
+            import_history(store, REPORTS, [other])
+        twice = _log(tmp_path, LOG + "2026-11-02T09:00:00,G54,0.02,\n", "twice.csv")
+        with pytest.raises(StoreError, match="contradicts itself"):
+            import_history(store, corrections=[twice])
+    assert _counts(db)[:3] == (0, 0, 2)  # the reports of the refused import were not stored either
+
+
+def test_a_bad_file_stores_nothing(tmp_path):
+    bad = tmp_path / "bad.csv"
+    bad.write_text("characteristic,nominal,actual\nD1,1.0,abc\n")
+    with open_store(tmp_path / "h.db") as store:
+        with pytest.raises(ParseError, match="bad.csv:2"):
+            import_history(store, [*REPORTS, bad])
+        with pytest.raises(ParseError, match="corr.csv:3: unknown event"):
+            import_history(store, REPORTS, [_log(tmp_path, LOG.replace("tool_change", "wear"))])
+        assert store.reports() == []
+
+
+@pytest.mark.parametrize("text, message", [
+    ("timestamp,register\n", "missing column"),
+    ("timestamp,register,delta\nyesterday,G54,0.1\n", ":2: timestamp"),
+    ("timestamp,register,delta\n2026-01-01T00:00:00,G54,\n", ":2: a correction needs a delta"),
+    ("timestamp,register,delta\n2026-01-01T00:00:00,G54,nan\n", ":2: column 'delta'"),
+])
+def test_corrections_log_reader_names_the_place(tmp_path, text, message):
+    with pytest.raises(ParseError, match=message):
+        read_corrections_log(_log(tmp_path, text))
+
+
+KILL = """
+import os, signal, sys
+from setupfix.pipeline.history import import_history
+from setupfix.store import open_store
+store = open_store(sys.argv[1])
+real = store.add_corrections
+def add_then_die(log):
+    real(log)  # the reports and this log are written, not committed
+    os.kill(os.getpid(), signal.SIGKILL)
+store.add_corrections = add_then_die
+import_history(store, sys.argv[3:], [sys.argv[2]])
+"""
+
+
+def test_kill_during_import_leaves_the_store_as_it_was(tmp_path):
+    db = tmp_path / "h.db"
+    with open_store(db) as store:
+        import_history(store, REPORTS[:1])
+    args = [sys.executable, "-c", KILL, str(db), str(_log(tmp_path)), *map(str, REPORTS)]
+    proc = subprocess.run(args, cwd=ROOT, capture_output=True, text=True, timeout=60)
+    assert proc.returncode == -signal.SIGKILL, proc.stderr
+    assert _counts(db) == (1, 28, 0, 0)
+    with sqlite3.connect(db) as raw:
+        assert raw.execute("PRAGMA integrity_check").fetchone() == ("ok",)
+
+
+READER = """
+import sys
+from setupfix.store import open_store
+with open_store(sys.argv[1]) as s:
+    print(len(s.reports()), len(s.measurements()))
+"""
+
+
+def test_readers_see_the_last_commit_while_another_process_writes(tmp_path):
+    db = tmp_path / "h.db"
+    with open_store(db) as store:
+        import_history(store, REPORTS[:1])
+        with store.transaction():
+            store.add_report(REPORTS[1].read_bytes(), "c2", "canonical", parse_reports(REPORTS[1:2]).table)
+            out = subprocess.run([sys.executable, "-c", READER, str(db)], cwd=ROOT, capture_output=True,
+                                 text=True, timeout=20)  # must not wait for the writer (WAL)
+            assert out.stdout.split() == ["1", "28"], out.stderr
+        with open_store(db) as reader:
+            assert len(reader.reports()) == 2 and len(reader.measurements()) == 56
+
+
+def test_migration_from_the_first_schema_keeps_the_data(tmp_path):
+    db = tmp_path / "old.db"
+    raw = sqlite3.connect(db, isolation_level=None)
+    assert migrate(raw, str(db), upto=1) == 1
+    raw.execute("INSERT INTO report VALUES (1, 'abc', 'old.csv', 'canonical', 10, '2026-01-01T00:00:00')")
+    raw.execute("INSERT INTO measurement (report_id, row, characteristic, deviation) VALUES (1, 0, 'D1', 0.5)")
+    raw.execute("INSERT INTO correction VALUES ('2026-01-01T00:00:00', 'G54', 0.1, 'correction')")
+    raw.close()
+    with open_store(db) as store:
+        assert version_of(store.db) == SCHEMA_VERSION  # type: ignore[attr-defined]
+        rows = store.measurements()
+        assert rows["characteristic"].tolist() == ["D1"] and rows["reference"].tolist() == [False]
+        assert store.corrections()["delta"].tolist() == [0.1]
+
+
+def test_what_is_not_a_store_is_refused(tmp_path):
+    (tmp_path / "text.db").write_text("hello, this is not SQLite" * 100)
+    with pytest.raises(StoreError, match="text.db"):
+        open_store(tmp_path / "text.db")
+    other = sqlite3.connect(tmp_path / "other.db")
+    other.execute("CREATE TABLE x (y)")
+    other.commit()
+    other.close()
+    with pytest.raises(StoreError, match="not a setupfix history store"):
+        open_store(tmp_path / "other.db")
+    with open_store(tmp_path / "new.db") as store:
+        store.db.execute("UPDATE schema_version SET version = 99")  # type: ignore[attr-defined]
+    with pytest.raises(StoreError, match="newer"):
+        open_store(tmp_path / "new.db")
+    with pytest.raises(StoreError, match="does not exist"):
+        open_store(tmp_path / "missing" / "h.db")
+
+
+def test_recommendations_round_trip(tmp_path):
+    with open_store(tmp_path / "h.db") as store:
+        rec = Recommendation("exact", {"report": "abc", "part": "1", "seed": None}, {"corrections": {"G54": 0.01}})
+        store.add_recommendation(rec)
+        (back,) = store.recommendations()
+        assert (back.optimizer, back.inputs, back.result) == (rec.optimizer, rec.inputs, rec.result)
+        assert back.created_at
+
+
+def test_cli_import_show_export(tmp_path, capsys):
+    db = str(tmp_path / "h.db")
+    assert main(["history", "import", "--db", db, *map(str, REPORTS), "--corrections", str(_log(tmp_path))]) == 0
+    assert main(["history", "show", "--db", db, "--json"]) == 0
+    capsys.readouterr()
+    assert main(["history", "export", "measurements", "--db", db, "--out", str(tmp_path / "m.csv")]) == 0
+    assert main(["history", "export", "corrections", "--db", db, "--out", "-"]) == 0
+    assert capsys.readouterr().out.splitlines()[1] == "2026-11-02T09:00:00,G54,0.012,correction"
+    assert main(["correct", "--model", str(GUIDE / "model.toml"), str(tmp_path / "m.csv"), "--part", "cycle 03",
+                 "--json"]) == 0
+    assert main(["history", "export", "corrections", "--db", db, "--out", str(tmp_path)]) == 1
+    assert "folder" in capsys.readouterr().err
