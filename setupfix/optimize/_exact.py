@@ -57,6 +57,7 @@ from scipy.sparse import coo_array, csr_array, hstack, vstack
 from threadpoolctl import ThreadpoolController
 
 from setupfix.errors import Note, SolverError
+from setupfix.params import Interval
 from setupfix.optimize._base import Optimizer, make_result
 from setupfix.optimize._grid import (TOL, dual_bound, enumerate_ball, ellipsoid_search, grid_margins, lagrangian_ball,
                                      least_distance,
@@ -206,6 +207,11 @@ class ExactOptimizer(Optimizer):
     """
 
     name = "exact"
+    _parameter_constraints = {
+        "grid": [bool],
+        "time_limit": [Interval(float, 0.0, None, closed="neither")],
+        "seed": [Interval(int, 0, None), None],
+    }
 
     def __init__(self, *, grid: bool = True, time_limit: float = 2.0, seed: int | None = None) -> None:
         self.grid = grid
@@ -482,9 +488,10 @@ class ExactOptimizer(Optimizer):
             notes.append(Note(f"triage not proved ({why})", kind="solver"))
             message += f"; not proved ({why})"
             extra["stopped"] = {"stage": "triage", "reason": why}
+        # guard off: triage trades the error budget of the hopeless dimensions on purpose, and says so
         result = make_result(problem, x, optimizer=self.name, evaluations=calls + 3,
                              seconds=time.perf_counter() - clock.start, status=status, bound=bound,
-                             message=message, binding=binding)
+                             message=message, binding=binding, guard=False)
         result.extra.update(extra)
         result.given_up = given_up
         result.notes = tuple(notes)
@@ -530,6 +537,9 @@ class ExactOptimizer(Optimizer):
         upper = min(dual_bound(g_rows, g, y, kmin, kmax), pair_bound(g_rows, g, kmin, kmax, pairs), T_CAP)
         k_best = np.clip(np.rint(k_lp), kmin, kmax)
         t_best = float(grid_margins(g_rows, g, k_best))
+        t_zero = float(grid_margins(g_rows, g, np.zeros_like(k_best)))
+        if t_zero >= t_best:  # no correction at all is a grid point too
+            k_best, t_best = np.zeros_like(k_best), t_zero
         stopped: tuple[str, str] | None = None
         cont = None
         least_norm_done: Array | None = None  # rows at which the least norm is already proved
