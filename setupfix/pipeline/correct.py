@@ -23,6 +23,7 @@ from setupfix.offsets import OffsetRow, offset_rows
 from setupfix.pipeline.controllers import read_current, write_offsets
 from setupfix.optimize import CorrectionProblem, OptimizeResult, get_optimizer
 from setupfix.pipeline.cycles import Stations, assign_stations, load_parts  # noqa: F401 - re-exported
+from setupfix.pipeline.diagnose import forecast_part
 from setupfix.pipeline.smoothing import smooth_part
 from setupfix.safety import Policy, Recommendation, RuleEffect, budget, recommend
 from setupfix.store import Store
@@ -267,6 +268,7 @@ def correct_report(model: ProcessModel | str | Path, report: str | Path, *, opti
         model = load_model(model)
     parts = load_parts(model, report, format=format, unit=unit, encoding=encoding, columns=columns,
                        stations=stations, parts_per_cycle=parts_per_cycle, strict=strict)
+    parts = [forecast_part(model, p) for p in parts]  # the model's [effects]: drift and wear until the next cycle
     cumulative = wear_totals(model, current) if current is not None else None
     return [correct_part(model, p, optimizer=optimizer, seed=seed, store=store, cumulative=cumulative)
             for p in select_parts(parts, part, report)]

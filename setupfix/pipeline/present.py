@@ -6,6 +6,7 @@ Pure functions from result objects to text; nothing here prints or reads files.
 from __future__ import annotations
 
 import math
+import textwrap
 
 import numpy as np
 
@@ -87,17 +88,28 @@ def format_correction(pc: PartCorrection) -> str:
     return "\n".join(lines)
 
 
-def format_matrix(matrix: np.ndarray, rows: list[str], cols: list[str], title: str) -> str:
-    """A labelled matrix like the paper prints them (integers shown without decimals)."""
+def format_matrix(matrix: np.ndarray, rows: list[str], cols: list[str], title: str, width: int = 100) -> str:
+    """A labelled matrix like the paper prints them (integers shown without decimals).
+
+    Columns that do not fit in ``width`` characters continue in further blocks, each
+    repeating the row labels and headed ``title (columns a–b of n)``.
+    """
     def cell(v: float) -> str:
         return f"{int(v)}" if float(v).is_integer() else f"{v:.3g}"
 
-    width = max([len(c) for c in cols] + [len(cell(v)) for v in matrix.ravel()] + [2]) + 1
+    col_w = max([len(c) for c in cols] + [len(cell(v)) for v in matrix.ravel()] + [2]) + 1
     lead = max([len(r) for r in rows] + [len(title)]) + 1
-    lines = [f"{title:<{lead}}" + "".join(f"{c:>{width}}" for c in cols)]
-    for name, values in zip(rows, matrix):
-        lines.append(f"{name:<{lead}}" + "".join(f"{cell(v):>{width}}" for v in values))
-    return "\n".join(lines)
+    per_block = max(1, (width - lead) // col_w)
+    blocks = []
+    for start in range(0, len(cols), per_block):
+        stop = min(start + per_block, len(cols))
+        label = title if stop - start == len(cols) else f"{title} (columns {start + 1}–{stop} of {len(cols)})"
+        lines = [label] if label != title else []
+        lines.append(f"{title:<{lead}}" + "".join(f"{c:>{col_w}}" for c in cols[start:stop]))
+        for name, values in zip(rows, matrix):
+            lines.append(f"{name:<{lead}}" + "".join(f"{cell(v):>{col_w}}" for v in values[start:stop]))
+        blocks.append("\n".join(lines))
+    return "\n\n".join(blocks)
 
 
 def format_relations(rm: RelationMatrices, which: list[str], null: np.ndarray, rank: int) -> str:
@@ -116,7 +128,7 @@ def format_relations(rm: RelationMatrices, which: list[str], null: np.ndarray, r
             continue
         blocks.append(format_matrix(m, r, c, name))
     regs = rm.registers
-    lines = [f"composite C = [R_WF·R_FD ; R_TF·R_FD]: {len(regs)} registers × {len(rm.dimensions)} dimensions, "
+    lines = [f"composite C = [R_WF·R_FD ; R_TF·R_FD]: {len(regs)} registers × {len(rm.dimensions)} dimensions,",
              f"rank {rank}"]
     if null.shape[0] == 0:
         lines.append("null space: none — every correction moves some dimension")
@@ -125,11 +137,9 @@ def format_relations(rm: RelationMatrices, which: list[str], null: np.ndarray, r
         for vec in null:
             terms = [f"{'+' if v > 0 else '−'}{'' if np.isclose(abs(v), 1) else f'{abs(v):.4g}·'}{r}"
                      for v, r in zip(vec, regs) if v != 0]
-            lines.append("  " + " ".join(terms))
+            lines.append(textwrap.fill(" ".join(terms), 100, initial_indent="  ", subsequent_indent="    "))
     blocks.append("\n".join(lines))
     return "\n\n".join(blocks)
-
-
 def format_batch_summary(summary: BatchSummary, out: str) -> str:
     """Reports, parts, verdicts, failures, skipped files and time of a batch run."""
     verdicts = ", ".join(f"{summary.verdicts.get(v, 0)} {v}" for v in ("apply", "hold", "reject"))
