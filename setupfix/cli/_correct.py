@@ -8,6 +8,7 @@ import sys
 
 from setupfix.cli._common import add_report_options, cycle_options, report_options
 from setupfix.cli._format import format_correction
+from setupfix.errors import SetupfixError
 from setupfix.optimize import OPTIMIZERS
 from setupfix.pipeline.correct import correct_report
 from setupfix.pipeline.writers import check_target, write_offsets_csv
@@ -26,6 +27,13 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--json", action="store_true", help="machine-readable output (shared/spec/cli-json.md)")
     p.add_argument("--offsets", metavar="FILE", default=None, help="write the offsets CSV here ('-': stdout)")
     add_report_options(p)
+    g = p.add_argument_group("thermal feed-forward (setupfix.pipeline.feedforward)")
+    g.add_argument("--thermal", metavar="MODEL.json", default=None,
+                   help="thermal model: add the drift since the measured parts were cut")
+    g.add_argument("--temperatures", metavar="LOG", default=None, help="temperature log for --thermal")
+    g.add_argument("--at", metavar="TIME", default=None, help="time of the correction (default: the log's last sample)")
+    g.add_argument("--thermal-dead-band", type=float, default=None, metavar="D",
+                   help="feed nothing forward below |D| (model unit; default one register step)")
     p.set_defaults(run=run)
 
 
@@ -34,6 +42,12 @@ def run(args: argparse.Namespace) -> int:
         check_target(args.offsets)
     results = correct_report(args.model, args.report, optimizer=args.optimizer, seed=args.seed, part=args.part,
                              **cycle_options(args), **report_options(args))
+    if args.thermal or args.temperatures:  # thermal feed-forward step
+        from setupfix.pipeline.feedforward import apply_feed_forward
+
+        if not (args.thermal and args.temperatures):
+            raise SetupfixError("--thermal and --temperatures go together")
+        apply_feed_forward(results, args.thermal, args.temperatures, at=args.at, dead_band=args.thermal_dead_band)
     if args.offsets:
         rows = [row for r in results for row in r.offsets()]
         write_offsets_csv(rows, args.offsets, resolution=results[0].model.resolution)
@@ -44,5 +58,7 @@ def run(args: argparse.Namespace) -> int:
         json.dump(objs[0] if len(objs) == 1 else {"parts": objs}, sys.stdout, indent=2)
         sys.stdout.write("\n")
     else:
-        sys.stdout.write("\n\n".join(format_correction(r) for r in results) + "\n")
+        sys.stdout.write("\n\n".join(format_correction(r) + (f"\n{r.thermal.line()}" + (" — included in the corrections above" if r.thermal.applied else "")
+                                                               if r.thermal else "")
+                                       for r in results) + "\n")
     return 0

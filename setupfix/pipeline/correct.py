@@ -32,12 +32,17 @@ class PartCorrection:
     problem: CorrectionProblem
     result: OptimizeResult
     warnings: list[str] = field(default_factory=list)
+    #: Thermal feed-forward step (``correct --thermal``), set by setupfix.pipeline.feedforward.apply_feed_forward.
+    thermal: Any = None
 
     @property
     def corrections(self) -> dict[str, float]:
-        """Correction of every correctable register by model ID, zero included."""
-        return {rid: float(v) for rid, v, reg in zip(self.problem.register_ids, self.result.x,
-                                                     self.model.registers) if not reg.fixed}
+        """Correction of every correctable register by model ID, zero included (thermal feed-forward added)."""
+        out = {rid: float(v) for rid, v, reg in zip(self.problem.register_ids, self.result.x,
+                                                    self.model.registers) if not reg.fixed}
+        for rid, shift in (self.thermal.corrections() if self.thermal is not None else {}).items():
+            out[rid] = out.get(rid, 0.0) + shift
+        return out
 
     def dimension_rows(self) -> list[dict[str, Any]]:
         """Per measured dimension: id, name, deviation, limits, predicted, margin after."""
@@ -87,7 +92,7 @@ class PartCorrection:
             "suggestions": {name: list(near) for name, near in self.part.suggestions.items()},
             "evaluations": r.evaluations,
             "seconds": round(r.seconds, 6),
-        }
+        } | ({"thermal": self.thermal.to_json()} if self.thermal is not None else {})
 
 
 def correct_part(model: ProcessModel, part: PartMeasurement, *, optimizer: str = "exact",
