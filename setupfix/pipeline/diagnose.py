@@ -24,17 +24,18 @@ import numpy as np
 import pandas as pd
 
 import parsers
-from setupfix.atomic import atomic_write
 from setupfix.diagnose import Diagnoser, Diagnosis, Layout, Series
-from setupfix.diagnose.forecast import spec_of
+from setupfix.diagnose.forecast import forecast_shift, spec_of
 from setupfix.diagnose.terms import EffectSpec, applied_at, join_temperatures, parts_since_change
-from setupfix.errors import ExportError, MatchError, ModelError, ParseError, SourceLocation
+from setupfix.errors import ExportError, MatchError, ModelError, Note, ParseError, SourceLocation
 from setupfix.model import PartMeasurement, ProcessModel, load_model, match_parts, model_from_dict
 from setupfix.model.effects import EffectsSection, ModelEffect, effects_from_dict, load_effects, with_effects
 from setupfix.optimize import CorrectionProblem, get_optimizer
+from setupfix.pipeline.writers import check_target, write_text
 
 __all__ = ["SeriesInput", "DiagnoseOutcome", "load_series", "read_corrections_log", "read_temperature_log",
-           "diagnose_reports", "expand_reports", "augmented_section", "write_augmented"]
+           "diagnose_reports", "expand_reports", "augmented_section", "write_augmented",
+           "corrections_from_table", "temperatures_from_table", "forecast_part"]
 
 _LOG_NAMES = ("corrections.csv",)
 _TEMP_NAMES = ("temperatures.csv",)
@@ -125,7 +126,13 @@ def read_corrections_log(path: str, model: ProcessModel) -> tuple[pd.DatetimeInd
     MatchError
         Unknown register, or a tool change of a register that is not a tool.
     """
-    table = _read_csv(path)
+    return corrections_from_table(_read_csv(path), model, path)
+
+
+def corrections_from_table(table: pd.DataFrame, model: ProcessModel,
+                           path: str) -> tuple[pd.DatetimeIndex, np.ndarray, np.ndarray, list[str]]:
+    """A corrections-log table (CSV or store) checked against the model; see :func:`read_corrections_log`."""
+    table = table.astype(object).where(table.notna(), "").astype(str)
     for col in ("timestamp", "register"):
         if col not in table:
             raise ParseError(f"corrections log: missing column {col!r}", location=SourceLocation(path, line=1))
@@ -133,11 +140,13 @@ def read_corrections_log(path: str, model: ProcessModel) -> tuple[pd.DatetimeInd
         raise ParseError("corrections log: missing column 'delta'", location=SourceLocation(path, line=1))
     lines = [i + 2 for i in range(len(table))]
     times = _times(table["timestamp"].tolist(), path, lines)
-    regs, deltas, events = [], [], []
+    regs: list[int] = []
+    deltas: list[float] = []
+    events: list[str] = []
     ids = model.register_ids
-    for i, row in enumerate(table.itertuples(index=False)):
-        rec = row._asdict()
-        event = (rec.get("event") or "correction").strip() or "correction"
+    records: list[dict[str, str]] = table.to_dict("records")  # type: ignore[assignment]
+    for i, rec in enumerate(records):
+        event = str(rec.get("event") or "correction").strip() or "correction"
         if event not in ("correction", "tool_change"):
             raise ParseError(f"unknown event {event!r} (expected correction or tool_change)",
                              location=SourceLocation(path, line=lines[i]))
@@ -173,7 +182,13 @@ def read_temperature_log(path: str) -> tuple[pd.DatetimeIndex, np.ndarray, tuple
     ParseError
         Missing timestamp column, no sensor column, bad timestamp or value.
     """
-    table = _read_csv(path)
+    return temperatures_from_table(_read_csv(path), path)
+
+
+def temperatures_from_table(table: pd.DataFrame, path: str, *,
+                            fill: bool = False) -> tuple[pd.DatetimeIndex, np.ndarray, tuple[str, ...]]:
+    """A temperature-log table (CSV or store); ``fill`` carries a channel's last sample forward
+    (a store holds each channel's samples apart)."""
     if "timestamp" not in table:
         raise ParseError("temperature log: missing column 'timestamp'", location=SourceLocation(path, line=1))
     lines = [i + 2 for i in range(len(table))]
@@ -183,7 +198,8 @@ def read_temperature_log(path: str) -> tuple[pd.DatetimeIndex, np.ndarray, tuple
         raise ParseError("temperature log: no sensor column", location=SourceLocation(path, line=1))
     values = np.empty((len(table), len(channels)))
     for j, c in enumerate(channels):
-        col = pd.to_numeric(table[c], errors="coerce").to_numpy(dtype=float)
+        num = pd.to_numeric(table[c], errors="coerce")
+        col = (num.ffill().bfill() if fill else num).to_numpy(dtype=float)
         bad = np.flatnonzero(~np.isfinite(col))
         if bad.size:
             raise ParseError(f"temperature {table[c].iloc[bad[0]]!r} in column {c!r} is not a number",
@@ -197,9 +213,14 @@ def _hours(times: pd.DatetimeIndex, origin: pd.Timestamp) -> np.ndarray:
     return np.asarray((times - origin).total_seconds(), dtype=float) / 3600.0
 
 
-def load_series(model: ProcessModel | str | Path, reports: Sequence[str | Path], *, corrections: str | None = None,
-                temperatures: str | None = None) -> SeriesInput:
-    """Read a series of reports with its logs, in the engine's terms.
+def load_series(model: ProcessModel | str | Path, reports: Sequence[str | Path] = (), *,
+                corrections: str | None = None, temperatures: str | None = None,
+                db: str | Path | None = None) -> SeriesInput:
+    """Read a series of reports (files, folders, or every report of a history store) with its logs.
+
+    With ``db`` the store's reports, corrections log and temperatures are used (files
+    given as well are added; a corrections or temperature file given replaces the
+    store's log).
 
     Raises
     ------
@@ -209,23 +230,82 @@ def load_series(model: ProcessModel | str | Path, reports: Sequence[str | Path],
     if not isinstance(model, ProcessModel):
         model = load_model(model)
     section = load_effects(model.source, model) if Path(model.source).is_file() else EffectsSection()
-    files, found_log, found_temp, notes = expand_reports(reports)
-    if corrections is None and found_log:
-        corrections = found_log
-        notes.append(f"corrections log {found_log} found beside the reports: used")
-    if temperatures is None and found_temp:
-        temperatures = found_temp
-        notes.append(f"temperature log {found_temp} found beside the reports: used")
+    notes: list[str] = []
     parts: list[PartMeasurement] = []
-    for f in files:
-        table = parsers.read(f)
-        parts += match_parts(model, table, source=str(f))
-    stamps = [p.timestamp for p in parts]
+    log = temps = None
+    where = str(db) if db is not None else ""
+    if db is not None:
+        from setupfix.store import open_store
+
+        if not Path(db).is_file():
+            raise ParseError("no such history store", location=SourceLocation(str(db)),
+                             hint="create it with 'setupfix history import'")
+        with open_store(db) as store:
+            rows = store.measurements()
+            for rec in store.reports():
+                table = rows[rows["report_sha256"] == rec.sha256].drop(columns=["report_sha256"])
+                table = table[~table["reference"]] if "reference" in table else table
+                parts += match_parts(model, table, source=f"{db}#{rec.name}")
+            if corrections is None:
+                stored = store.corrections()
+                if not stored.empty:
+                    log = corrections_from_table(stored, model, f"{db}#corrections")
+            if temperatures is None:
+                stored_t = store.temperatures()
+                if len(stored_t.columns) > 1 and not stored_t.empty:
+                    temps = temperatures_from_table(stored_t, f"{db}#temperatures", fill=True)
+    if reports:
+        files, found_log, found_temp, more = expand_reports(reports)
+        notes += more
+        where = where or str(files[0])
+        if corrections is None and found_log and log is None:
+            corrections = found_log
+            notes.append(f"corrections log {found_log} found beside the reports: used")
+        if temperatures is None and found_temp and temps is None:
+            temperatures = found_temp
+            notes.append(f"temperature log {found_temp} found beside the reports: used")
+        for f in files:
+            parts += match_parts(model, parsers.read(f), source=str(f))
+    if not parts:
+        raise ParseError("no report in the series", location=SourceLocation(where or "<series>"))
+    if corrections:
+        log = read_corrections_log(corrections, model)
+    if temperatures:
+        temps = read_temperature_log(temperatures)
+    series, more = _assemble(model, parts, log, temps, where)
+    notes += more
+    declared = tuple(spec_of(e) for e in section.effects)
+    for e in section.effects:
+        if e.kind == "thermal" and e.channel not in series.channels:
+            raise MatchError(f"the model's thermal effect {e.id} needs temperature channel {e.channel!r}",
+                             location=SourceLocation(model.source, key=f"effects.{e.id}.channel"),
+                             hint="give --temperatures")
+    unmatched = sorted({u for p in parts for u in p.unmatched})
+    if unmatched:
+        notes.append(f"{len(unmatched)} characteristic(s) match no dimension: {', '.join(unmatched[:6])}"
+                     + (" …" if len(unmatched) > 6 else ""))
+    return SeriesInput(model, Layout.from_model(model), series, tuple(_ordered(parts)), declared, section,
+                       corrections, temperatures, tuple(notes))
+
+
+def _ordered(parts: list[PartMeasurement]) -> list[PartMeasurement]:
+    if all(p.timestamp is None for p in parts) or any(p.timestamp is None for p in parts):
+        return parts
+    ts = _times([p.timestamp for p in parts], parts[0].report)
+    return [parts[i] for i in np.argsort(ts.values, kind="stable")]
+
+
+def _assemble(model: ProcessModel, parts: list[PartMeasurement],
+              log: tuple[pd.DatetimeIndex, np.ndarray, np.ndarray, list[str]] | None,
+              temps: tuple[pd.DatetimeIndex, np.ndarray, tuple[str, ...]] | None, where: str) -> tuple[Series, list[str]]:
+    """Parts in time order with the corrections in effect, parts since tool changes, temperatures."""
+    notes: list[str] = []
     layout = Layout.from_model(model)
+    stamps = [p.timestamp for p in parts]
     if all(s is None for s in stamps):
-        if corrections:
-            raise MatchError("the reports carry no timestamps, so the corrections log cannot be tied to the parts",
-                             location=SourceLocation(str(files[0])), hint="add a timestamp column")
+        if log is not None or temps is not None:
+            raise MatchError("the reports carry no timestamps, so the corrections or temperature log cannot be "
+                             "tied to the parts", location=SourceLocation(where), hint="add a timestamp column")
         time = np.arange(len(parts), dtype=float)
         origin = ""
         notes.append("no timestamps: cycles are taken in input order, one hour apart")
@@ -246,8 +326,8 @@ def load_series(model: ProcessModel | str | Path, reports: Sequence[str | Path],
     applied = np.zeros((len(parts), n_r))
     pending = np.zeros(n_r)
     change_times: list[np.ndarray] = [np.zeros(0) for _ in layout.tools]
-    if corrections:
-        times, regs, deltas, events = read_corrections_log(corrections, model)
+    if log is not None:
+        times, regs, deltas, events = log
         t_log = _hours(times, pd.Timestamp(origin))
         is_corr = np.array([e == "correction" for e in events], dtype=bool)
         applied = applied_at(time, t_log[is_corr], regs[is_corr], deltas[is_corr], n_r)
@@ -258,28 +338,15 @@ def load_series(model: ProcessModel | str | Path, reports: Sequence[str | Path],
     parts_cut = parts_since_change(time, change_times)
     channels: tuple[str, ...] = ()
     temp = np.zeros((len(parts), 0))
-    if temperatures:
-        if not origin:
-            raise MatchError("the reports carry no timestamps, so the temperature log cannot be tied to the parts",
-                             location=SourceLocation(str(files[0])))
-        t_times, samples, channels = read_temperature_log(temperatures)
+    if temps is not None:
+        t_times, samples, channels = temps
         t_h = _hours(t_times, pd.Timestamp(origin))
         if t_h[0] > time[0]:
-            notes.append(f"the temperature log starts after the first part: its first sample is used before")
+            notes.append("the temperature log starts after the first part: its first sample is used before")
         temp = join_temperatures(time, t_h, samples)
     series = Series(dev, time, applied, parts_cut, temp, channels, tuple(f"{p.report}:{p.part}" for p in parts),
                     origin, pending)
-    declared = tuple(spec_of(e) for e in section.effects)
-    for e in section.effects:
-        if e.kind == "thermal" and e.channel not in channels:
-            raise MatchError(f"the model's thermal effect {e.id} needs temperature channel {e.channel!r}",
-                             location=SourceLocation(model.source, key=f"effects.{e.id}.channel"),
-                             hint="give --temperatures")
-    unmatched = sorted({u for p in parts for u in p.unmatched})
-    if unmatched:
-        notes.append(f"{len(unmatched)} characteristic(s) match no dimension: {', '.join(unmatched[:6])}"
-                     + (" …" if len(unmatched) > 6 else ""))
-    return SeriesInput(model, layout, series, tuple(parts), declared, section, corrections, temperatures, tuple(notes))
+    return series, notes
 
 
 def augmented_section(diagnosis: Diagnosis, declared: EffectsSection) -> EffectsSection:
@@ -375,9 +442,9 @@ def _next_correction(model: ProcessModel, diagnosis: Diagnosis) -> tuple[dict[st
     return corr, []
 
 
-def diagnose_reports(model: ProcessModel | str | Path, reports: Sequence[str | Path], *,
+def diagnose_reports(model: ProcessModel | str | Path, reports: Sequence[str | Path] = (), *,
                      corrections: str | None = None, temperatures: str | None = None, augment: str | None = None,
-                     diagnoser: Diagnoser | None = None) -> DiagnoseOutcome:
+                     diagnoser: Diagnoser | None = None, db: str | Path | None = None) -> DiagnoseOutcome:
     """Diagnose a series of reports; optionally write the augmented model.
 
     Raises
@@ -386,7 +453,9 @@ def diagnose_reports(model: ProcessModel | str | Path, reports: Sequence[str | P
         Bad input (named with its place) or an augmented file that cannot be written;
         nothing is half-written.
     """
-    inp = load_series(model, reports, corrections=corrections, temperatures=temperatures)
+    if augment:
+        check_target(augment)  # a bad target costs nothing
+    inp = load_series(model, reports, corrections=corrections, temperatures=temperatures, db=db)
     diagnoser = diagnoser or Diagnoser()
     diagnosis = diagnoser.run(inp.layout, inp.series, declared=inp.declared)
     nxt, more = _next_correction(inp.model, diagnosis)
@@ -417,13 +486,30 @@ def write_augmented(model: ProcessModel, section: EffectsSection, target: str) -
         effects_from_dict(doc.get("effects"), check, target)
     except (tomllib.TOMLDecodeError, ModelError) as exc:
         raise ExportError(f"the augmented model would not load: {exc}", location=SourceLocation(target)) from None
-    path = Path(target)
-    if path.exists() and not path.is_file():
-        raise ExportError("not a regular file", location=SourceLocation(target))
-    try:
-        with atomic_write(target) as fh:
-            fh.write(new)
-    except OSError as exc:
-        raise ExportError(f"cannot write: {exc.strerror or exc}", location=SourceLocation(target)) from None
+    write_text(target, new)
     return target
 
+
+
+def forecast_part(model: ProcessModel, part: PartMeasurement) -> PartMeasurement:
+    """The part as the next cycle is expected to come out, by the model's ``[effects]``.
+
+    ``correct`` optimises the next cycle, not the one measured: a drift goes on for
+    one cycle interval and every tool wears one cycle more (see
+    :func:`setupfix.diagnose.forecast.forecast_shift`).  A model without drift or wear
+    effects returns the part unchanged.
+    """
+    if not Path(model.source).is_file():
+        return part
+    section = load_effects(model.source, model)
+    if not any(e.kind in ("drift", "wear") for e in section.effects):
+        return part
+    time = None
+    if section.origin and part.timestamp:
+        time = float(_hours(_times([part.timestamp], part.report), pd.Timestamp(section.origin))[0])
+    shift = forecast_shift(section, Layout.from_model(model), time=time)
+    kinds = sorted({e.kind for e in section.effects if e.kind in ("drift", "wear")})
+    note = Note(f"the model's [effects] ({', '.join(kinds)}) forecast the next cycle: up to "
+                f"{np.max(np.abs(shift)):.4f} {model.unit} added to the measured deviations",
+                SourceLocation(model.source, key="effects"), "forecast")
+    return dataclasses.replace(part, deviation=part.deviation + shift, notes=(*part.notes, note))

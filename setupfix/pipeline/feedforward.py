@@ -194,8 +194,8 @@ def apply_feed_forward(results: list[Any], thermal: str | Path | SavedModel, tem
     for result in results:
         ff = thermal_feed_forward(result.model, saved, log, measured_at=result.part.timestamp, at=at,
                                   dead_band=dead_band)
-        setup = {rid: float(v) for rid, v, reg in zip(result.problem.register_ids, result.result.x,
-                                                      result.model.registers) if not reg.fixed}
+        result.thermal = None
+        setup = result.corrections  # the setup correction alone (verdict applied)
         for reg in result.model.registers:
             total = setup.get(reg.id, 0.0) + ff.corrections().get(reg.id, 0.0)
             if abs(total) > reg.limit + 1e-12:

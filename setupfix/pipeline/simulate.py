@@ -22,7 +22,7 @@ from typing import Any
 
 import numpy as np
 
-from setupfix.atomic import atomic_write
+from setupfix.pipeline.writers import atomic_write, check_target
 from setupfix.diagnose import KINDS, EffectSpec, HiddenEffect, Layout, ShopSimulator, SimulatedSeries
 from setupfix.errors import ExportError, ParameterError
 from setupfix.model import ProcessModel, load_model
@@ -123,6 +123,9 @@ def write_series(model: ProcessModel, layout: Layout, sim: SimulatedSeries, out_
         raise ExportError(f"cannot create the folder: {exc.strerror}") from None
     if not out.is_dir():
         raise ExportError(f"{out} is not a folder")
+    names = ["measurements.csv"] if not per_cycle else [f"cycle_{k + 1:03d}.csv" for k in range(sim.series.n_cycles)]
+    for name in [*names, "corrections.csv", "temperatures.csv", "truth.json"]:
+        check_target(out / name)
     s = sim.series
     header = ["characteristic", "nominal", "actual", "deviation", "lower", "upper", "unit", "part", "timestamp",
               "station"]
