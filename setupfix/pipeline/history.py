@@ -26,7 +26,7 @@ from setupfix.errors import ParameterError, ParseError, SourceLocation
 from setupfix.model import CANONICAL_COLUMNS
 from setupfix.pipeline.writers import write_canonical_csv, write_table_csv
 from setupfix.store import CORRECTION_COLUMNS, Store
-from setupfix.thermal.data import read_temperature_log
+from parsers.temperature import read_temperature_log
 
 __all__ = ["DEFAULT_DB", "default_db_path", "read_corrections_log", "import_history", "ImportSummary",
            "history_summary", "export_history", "EXPORTS", "EVENTS"]
