@@ -27,8 +27,8 @@ from parsers._source import read_bytes
 from setupfix.errors import ParameterError, ParseError, SourceLocation
 from setupfix.model import CANONICAL_COLUMNS
 from setupfix.pipeline.writers import write_canonical_csv, write_table_csv
+from parsers.temperature import read_temperature_log
 from setupfix.store import CORRECTION_COLUMNS, Recommendation, Store
-from setupfix.thermal.data import read_temperature_log
 
 __all__ = ["DEFAULT_DB", "default_db_path", "read_corrections_log", "import_history", "ImportSummary",
            "history_summary", "export_history", "record_recommendations", "EXPORTS", "EVENTS"]
