@@ -130,8 +130,8 @@ def main() -> None:
             if path is None:
                 lines.append(f"{label:<16} skipped: ../shared sample absent")
                 continue
-            table = parsers.read(path, format=fmt)
-            seconds = _best(lambda: parsers.read(path, format=fmt), args.repeat)
+            table = parsers.read_report(path, format=fmt).table
+            seconds = _best(lambda: parsers.read_report(path, format=fmt).table, args.repeat)
             csv_path = folder / "ref.csv"
             table.to_csv(csv_path, index=False)
             reference = _best(lambda: pd.read_csv(csv_path), args.repeat)

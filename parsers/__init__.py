@@ -1,6 +1,7 @@
 """Postprocessors: CMM reports in their many formats → the canonical measurement table.
 
-``read(path)`` returns a :class:`pandas.DataFrame` with the columns of
+``read_report(path)`` returns a :class:`ReadResult`: the table and the reader's notes.
+The table is a :class:`pandas.DataFrame` with the columns of
 :data:`setupfix.model.CANONICAL_COLUMNS` (lengths in mm, ``deviation`` = actual −
 nominal, limits as signed deviations, ``source`` = provenance of each row).  Each
 format registers a :class:`FormatSpec`; importing this package registers the
@@ -9,18 +10,21 @@ built-in readers.
 
 from __future__ import annotations
 
-from parsers._registry import FormatSpec, find_format, formats, read, register
+from parsers._registry import FormatSpec, ReadResult, find_format, formats, read, read_report, register
+from parsers._source import STDIN, Source, final_line_break, load_source
 from parsers import canonical as _canonical
 
-__all__ = ["FormatSpec", "find_format", "formats", "read", "register"]
+__all__ = ["FormatSpec", "ReadResult", "Source", "STDIN", "find_format", "formats", "load_source", "read",
+           "read_report", "register"]
 
 register(FormatSpec(
     name="canonical",
     description="setupfix canonical measurement CSV (shared/spec/measurements.md)",
     extensions=(".csv",),
     sniff=lambda peek: _canonical.sniff_canonical(peek.text),
-    read=lambda path, unit=None, encoding=None, **_: _canonical.read_canonical(path, unit=unit, encoding=encoding),
+    read=_canonical.read_canonical,
     priority=10,
+    complete=final_line_break,
 ))
 # Built-in readers register themselves on import; add one line per format package here.
 from parsers import qif as _qif  # noqa: E402,F401

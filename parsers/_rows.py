@@ -7,7 +7,7 @@ They fix the rules every one of these readers follows, so the six behave alike:
 * the deviation is always recomputed as actual − nominal; a stated deviation is
   only cross-checked (a contradiction beyond rounding is a :class:`ParseError`);
 * a characteristic whose value is not a length (an angle, a count, an attribute) is
-  skipped, and every skipped line is named in one :class:`ParseWarning` per reason;
+  skipped, and every skipped line is named in one note per reason;
 * a row without a nominal cannot yield a deviation and is skipped the same way; a
   file left with no usable row is refused with the reason.
 """
@@ -16,14 +16,14 @@ from __future__ import annotations
 
 import math
 import re
-import warnings
 from dataclasses import dataclass, field
 
 import pandas as pd
 
 from parsers import numbers
 from parsers.canonical import DEVIATION_TOLERANCE_MM, finish_table
-from setupfix.errors import ParseError, ParseWarning, SourceLocation
+from parsers._notes import note
+from setupfix.errors import ParseError, SourceLocation
 from setupfix.units import LENGTH_UNITS
 
 __all__ = [
@@ -134,10 +134,11 @@ class SkipLog:
         return "; ".join(parts)
 
     def warn(self) -> None:
-        """Issue one :class:`ParseWarning` per reason, naming the lines."""
+        """Leave one note per reason (:func:`parsers._notes.note`), naming the lines."""
         for reason, lines in self.reasons.items():
             shown = ", ".join(str(n) for n in lines[:20]) + (f", … ({len(lines)} in all)" if len(lines) > 20 else "")
-            warnings.warn(f"{self.path}: skipped {len(lines)} {reason}: line {shown}", ParseWarning, stacklevel=3)
+            first = lines[0] if isinstance(lines[0], int) else None
+            note(f"skipped {len(lines)} {reason}: line {shown}", SourceLocation(self.path, line=first), "skipped")
 
 
 def text_columns(header: str, names: dict[str, str]) -> list[tuple[str, int, int]]:
@@ -181,8 +182,9 @@ def split_columns(line: str, spans: list[tuple[str, int, int]]) -> dict[str, str
 
 def warn_assumed_mm(path: str, first_line: int | str) -> None:
     """Warn once that a report states no unit and its lengths were taken as mm."""
-    warnings.warn(f"{path}: no length unit stated (first such row at line {first_line}); values taken as mm "
-                  "(pass unit= to override)", ParseWarning, stacklevel=3)
+    line = first_line if isinstance(first_line, int) else None
+    note("no length unit stated; values taken as mm (give the unit with --unit to override)",
+         SourceLocation(path, line=line), "unit")
 
 
 def finish_rows(rows: list[dict[str, object]], path: str, skipped: SkipLog, *, what: str) -> pd.DataFrame:

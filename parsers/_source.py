@@ -4,15 +4,18 @@ from __future__ import annotations
 
 import csv
 import io
-from collections.abc import Iterator
+import re
+import sys
+from collections.abc import Callable, Iterator
+from typing import BinaryIO
 from dataclasses import dataclass
 from pathlib import Path
 
 from parsers import numbers
 from setupfix.errors import ParseError, SourceLocation
 
-__all__ = ["Peek", "peek_file", "decode", "read_bytes", "read_text", "parse_number", "point_number",
-           "csv_records"]
+__all__ = ["Peek", "Source", "STDIN", "load_source", "peek", "peek_file", "decode", "read_bytes", "read_text", "parse_number", "point_number",
+           "csv_records", "final_line_break", "end_statement"]
 
 #: Largest report accepted [bytes]; a CMM text report is kilobytes, a JSON export megabytes.
 MAX_REPORT_BYTES = 256 * 1024 * 1024
@@ -72,26 +75,80 @@ def decode(data: bytes, path: str, encoding: str | None = None) -> str:
     return data.decode("cp1252", errors="replace")
 
 
-def read_bytes(path: str | Path) -> bytes:
-    """All bytes of a report.
+@dataclass(frozen=True)
+class Source:
+    """One input, read once into memory: its name as given (``-`` for stdin) and its bytes.
+
+    Every reader takes a :class:`Source` (or a path, read here into one); the sniffers
+    and the reader see the same bytes, so a pipe (``/dev/stdin``, ``<(…)``) is read in
+    full once and nothing is lost to a second open.
+    """
+
+    name: str
+    data: bytes
+
+    def __str__(self) -> str:
+        return self.name
+
+    @property
+    def path(self) -> Path:
+        """The name as a path (meaningless for stdin)."""
+        return Path(self.name)
+
+    @property
+    def is_stdin(self) -> bool:
+        return self.name == STDIN
+
+
+#: The name that means standard input.
+STDIN = "-"
+
+
+def _read_limited(stream: BinaryIO, name: str) -> bytes:
+    data = stream.read(MAX_REPORT_BYTES + 1)
+    if len(data) > MAX_REPORT_BYTES:
+        raise ParseError(f"larger than {MAX_REPORT_BYTES // 2**20} MiB: not a report", location=SourceLocation(name))
+    return data
+
+
+def load_source(path: str | Path | Source) -> Source:
+    """Read a report once, within :data:`MAX_REPORT_BYTES` (``-``: standard input).
+
+    This is the one place a report's bytes are read; every reader goes through it.
 
     Raises
     ------
     ParseError
-        If the file cannot be read (named with the OS reason) or is larger than
-        :data:`MAX_REPORT_BYTES`.
+        If the file cannot be read (named with the OS reason), is a folder, or is larger
+        than :data:`MAX_REPORT_BYTES`.
     """
+    if isinstance(path, Source):
+        return path
+    name = str(path)
+    if name == STDIN:
+        return Source(name, _read_limited(sys.stdin.buffer, "<stdin>"))
     try:
         with open(path, "rb") as fh:
-            data = fh.read(MAX_REPORT_BYTES + 1)
+            data = _read_limited(fh, name)
+    except IsADirectoryError:
+        raise ParseError("is a folder, not a report", location=SourceLocation(name)) from None
     except OSError as exc:
-        raise ParseError(f"cannot read: {exc.strerror or exc}", location=SourceLocation(str(path))) from None
-    if len(data) > MAX_REPORT_BYTES:
-        raise ParseError(f"larger than {MAX_REPORT_BYTES} bytes: not a report", location=SourceLocation(str(path)))
-    return data
+        raise ParseError(f"cannot read: {exc.strerror or exc}", location=SourceLocation(name)) from None
+    return Source(name, data)
 
 
-def read_text(path: str | Path, encoding: str | None = None) -> str:
+def read_bytes(path: str | Path | Source) -> bytes:
+    """All bytes of a report (see :func:`load_source`).
+
+    Raises
+    ------
+    ParseError
+        If the file cannot be read or is larger than :data:`MAX_REPORT_BYTES`.
+    """
+    return load_source(path).data
+
+
+def read_text(path: str | Path | Source, encoding: str | None = None) -> str:
     """Read and :func:`decode` a text report."""
     return decode(read_bytes(path), str(path), encoding)
 
@@ -120,6 +177,32 @@ def point_number(text: str, where: SourceLocation, what: str = "", *, allow_empt
     return numbers.parse_number(text, location=where, what=what.rstrip(": "), allow_empty=allow_empty)
 
 
+def final_line_break(data: bytes) -> str | None:
+    """None when ``data`` ends with a line break (trailing NULs, e.g. of UTF-16, aside), else why not.
+
+    Every text-report writer seen ends its last line; a file that does not was most
+    likely cut short (read while still being written, an interrupted copy).
+    """
+    if data.rstrip(b"\x00")[-1:] in (b"\n", b"\r"):
+        return None
+    return NO_FINAL_LINE_BREAK
+
+
+#: The reason :func:`final_line_break` gives.
+NO_FINAL_LINE_BREAK = "does not end with a line break"
+
+
+def end_statement(word: str) -> Callable[[bytes], str | None]:
+    """A completeness check: the last non-blank line is ``word`` (``ENDFIL``, ``END``), case-insensitive."""
+    pattern = re.compile(rb"(?:^|[\r\n])[ \t]*" + re.escape(word.encode()) + rb"[ \t]*[\r\n\x00\x1a]*\Z",
+                         re.IGNORECASE)
+
+    def check(data: bytes) -> str | None:
+        return None if pattern.search(data.rstrip(b"\x00")) else f"does not end with its {word} line"
+
+    return check
+
+
 def csv_records(text: str, path: str, **fmtparams: object) -> Iterator[tuple[int, list[str]]]:
     """Records of delimited text with the line each ends on (stdlib :mod:`csv`).
 
@@ -141,23 +224,24 @@ def csv_records(text: str, path: str, **fmtparams: object) -> Iterator[tuple[int
         yield reader.line_num, record
 
 
-def peek_file(path: Path) -> Peek:
-    """Read the first bytes of ``path`` for sniffing.
-
-    Raises
-    ------
-    ParseError
-        If the file cannot be opened.
-    """
-    try:
-        with open(path, "rb") as fh:
-            head = fh.read(PEEK_BYTES)
-    except OSError as exc:
-        raise ParseError(f"cannot read: {exc.strerror}", location=SourceLocation(str(path))) from None
+def peek(source: Source) -> Peek:
+    """What the sniffers see of ``source``: its first :data:`PEEK_BYTES` bytes, decoded."""
+    head = source.data[:PEEK_BYTES]
     try:
         text = head.decode("utf-8-sig")
     except UnicodeDecodeError as exc:
         # A multi-byte character may be cut at PEEK_BYTES; decode what is whole.
         text = head[: exc.start].decode("utf-8-sig", errors="replace") if exc.start > PEEK_BYTES - 4 else \
             head.decode("cp1252", errors="replace")
-    return Peek(path=path, head=head, text=text)
+    return Peek(path=source.path, head=head, text=text)
+
+
+def peek_file(path: str | Path | Source) -> Peek:
+    """Read ``path`` (once, see :func:`load_source`) and :func:`peek` at it.
+
+    Raises
+    ------
+    ParseError
+        If the file cannot be read.
+    """
+    return peek(load_source(path))

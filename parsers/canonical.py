@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from parsers._source import csv_records, decode, point_number, read_bytes
+from parsers._source import Source, csv_records, decode, point_number, read_bytes
 from setupfix.errors import ParseError, SourceLocation
 from setupfix.model.measurements import CANONICAL_COLUMNS, LENGTH_COLUMNS
 from setupfix.units import LENGTH_UNITS, length_factor
@@ -81,7 +81,7 @@ def _location_of(source: str, path: str) -> SourceLocation:
     return SourceLocation(path)
 
 
-def read_canonical(path: str | Path, *, text: str | None = None, unit: str | None = None,
+def read_canonical(path: str | Path | Source, *, text: str | None = None, unit: str | None = None,
                    encoding: str | None = None) -> pd.DataFrame:
     """Read a canonical measurement CSV into the canonical table (lengths in mm).
 
@@ -103,17 +103,16 @@ def read_canonical(path: str | Path, *, text: str | None = None, unit: str | Non
         deviation that contradicts actual − nominal; names file and line.
     """
     name = str(path)
-    if text is None and encoding:
-        text = decode(read_bytes(path), name, encoding)
     if text is None:
-        try:
-            text = Path(path).read_bytes().decode("utf-8-sig")
-        except OSError as exc:
-            raise ParseError(f"cannot read: {exc.strerror}", location=SourceLocation(name)) from None
-        except UnicodeDecodeError as exc:
-            line = Path(path).read_bytes()[: exc.start].count(b"\n") + 1
-            raise ParseError("not UTF-8 text", location=SourceLocation(name, line=line),
-                             hint="give its encoding with --encoding") from None
+        data = read_bytes(path)
+        if encoding:
+            text = decode(data, name, encoding)
+        else:
+            try:
+                text = data.decode("utf-8-sig")
+            except UnicodeDecodeError as exc:
+                raise ParseError("not UTF-8 text", location=SourceLocation(name, line=data[: exc.start].count(b"\n") + 1),
+                                 hint="give its encoding with --encoding") from None
     records = csv_records(text.lstrip("\ufeff"), name)
     try:
         header = [h.strip().lower() for h in next(records)[1]]

@@ -22,7 +22,7 @@ from typing import Literal
 
 from setupfix.errors import ParseError, SourceLocation
 
-__all__ = ["parse_number", "try_number", "is_number", "Decimal", "MAX_NUMBER_CHARS"]
+__all__ = ["parse_number", "try_number", "is_number", "number_pattern", "Decimal", "MAX_NUMBER_CHARS"]
 
 #: Decimal mark: ``"."`` (point only), ``","`` (comma only) or ``"auto"`` (point, or a comma
 #: when the text has exactly one and no point — every decimal-comma report in the samples).
@@ -37,6 +37,11 @@ _GRAMMAR = {
     ",": re.compile(r"[+-]?(?:\d+(?:,\d*)?|,\d+)(?:[eE][+-]?\d{1,5})?", re.ASCII),
     "auto": re.compile(r"[+-]?(?:\d+(?:[.,]\d*)?|[.,]\d+)(?:[eE][+-]?\d{1,5})?", re.ASCII),
 }
+
+
+def number_pattern(decimal: Decimal = ".") -> re.Pattern[str]:
+    """The grammar as a compiled pattern (for vectorised checks, e.g. ``Series.str.fullmatch``)."""
+    return _GRAMMAR[decimal]
 
 
 def try_number(text: str, *, decimal: Decimal = ".", scale: float = 1.0) -> float | None:

@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
-import warnings
+import re
+from contextlib import contextmanager
+
 from collections.abc import Callable
 from pathlib import Path
 
@@ -57,11 +59,25 @@ def assert_derived_golden(table: pd.DataFrame, golden: Path) -> None:
         np.testing.assert_allclose(got[col].to_numpy(float), want[col].to_numpy(float), atol=1e-9, equal_nan=True)
 
 
-def read_warned(read: Callable[[Path], pd.DataFrame], path: Path) -> tuple[pd.DataFrame, str]:
-    """Read ``path``, returning the table and all ParseWarning messages joined."""
-    from setupfix.errors import ParseWarning
+def note_text(notes) -> str:
+    """The notes of a read as lines ``file:line: message`` (as ``setupfix parse`` prints them)."""
+    return "\n".join(f"{n.location}: {n.message}" if n.location else n.message for n in notes)
 
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always", ParseWarning)
+
+def read_warned(read: Callable[[Path], pd.DataFrame], path: Path) -> tuple[pd.DataFrame, str]:
+    """Read ``path``, returning the table and the reader's notes joined."""
+    from parsers._notes import collecting
+
+    with collecting() as notes:
         table = read(path)
-    return table, "\n".join(str(w.message) for w in caught if issubclass(w.category, ParseWarning))
+    return table, note_text(notes)
+
+
+@contextmanager
+def expect_note(pattern: str = ""):
+    """Assert that the reads inside the block leave a note matching ``pattern``."""
+    from parsers._notes import collecting
+
+    with collecting() as notes:
+        yield notes
+    assert notes and re.search(pattern, note_text(notes)), note_text(notes)

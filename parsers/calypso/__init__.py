@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from parsers._source import end_statement
 from parsers._registry import FormatSpec, register
 from parsers.calypso.reader import read_calypso, sniff_calypso
 
@@ -12,6 +13,7 @@ SPEC = register(FormatSpec(
     description="Zeiss CALYPSO characteristics table *_chr.txt (TAB separated, END line)",
     extensions=(),
     sniff=lambda peek: sniff_calypso(peek.text),
-    read=lambda path, unit=None, encoding=None, **_: read_calypso(path, unit=unit, encoding=encoding),
+    read=read_calypso,
     priority=40,
+    complete=end_statement("END"),
 ))

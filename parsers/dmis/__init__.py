@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from parsers._source import end_statement
 from parsers._registry import FormatSpec, register
 from parsers.dmis.reader import read_dmis, sniff_dmis
 
@@ -12,6 +13,7 @@ SPEC = register(FormatSpec(
     description="DMIS output .dmo (F/T nominals, FA/TA results; one part per file)",
     extensions=(".dmo", ".dmi", ".dms"),
     sniff=lambda peek: sniff_dmis(peek.text),
-    read=lambda path, unit=None, encoding=None, **_: read_dmis(path, unit=unit, encoding=encoding),
+    read=read_dmis,
     priority=50,
+    complete=end_statement("ENDFIL"),
 ))

@@ -17,7 +17,6 @@ from __future__ import annotations
 
 import math
 import re
-import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -27,7 +26,8 @@ from parsers._source import point_number, read_text
 from parsers.numbers import is_number
 from parsers.canonical import finish_table
 from parsers.dmis.statements import Statement, parse_statement, split_statements
-from setupfix.errors import ParseError, ParseWarning, SourceLocation
+from parsers._notes import note
+from setupfix.errors import ParseError, SourceLocation
 from setupfix.units import LENGTH_UNITS, length_factor
 
 __all__ = ["read_dmis", "sniff_dmis"]
@@ -148,7 +148,7 @@ def read_dmis(path: str | Path, *, unit: str | None = None, encoding: str | None
     if factor is None:
         factor = length_factor(unit or "mm", "mm")
         if unit is None:
-            warnings.warn(f"{name}: no UNITS statement, lengths read as mm", ParseWarning, stacklevel=2)
+            note("no UNITS statement, lengths read as mm", SourceLocation(name), "unit")
     tolerance = 0.0011 if factor == 1.0 else 0.00011
     rows: list[dict[str, object]] = []
     skipped: list[str] = []
@@ -164,8 +164,8 @@ def read_dmis(path: str | Path, *, unit: str | None = None, encoding: str | None
         rows.append(row)
     if skipped:
         shown = ", ".join(skipped[:5]) + (", …" if len(skipped) > 5 else "")
-        warnings.warn(f"{name}: skipped {len(skipped)} result(s) whose nominal the file does not give: {shown}",
-                      ParseWarning, stacklevel=2)
+        note(f"skipped {len(skipped)} result(s) whose nominal the file does not give: {shown}",
+             SourceLocation(name), "skipped")
     if not rows:
         raise ParseError("no tolerance result with a usable nominal", location=SourceLocation(name))
     frame = finish_table(rows, name)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from parsers._source import final_line_break
 from parsers._registry import FormatSpec, register
 from parsers._source import Peek, decode
 from parsers.korean.report import read_korean, sniff_korean
@@ -24,4 +25,5 @@ register(FormatSpec(
     sniff=_sniff,
     read=read_korean,
     priority=50,
+    complete=final_line_break,
 ))

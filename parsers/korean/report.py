@@ -84,7 +84,7 @@ def _header_value(text: str, label: str) -> str:
     return match.group(1).strip() if match else ""
 
 
-def read_korean(path: str | Path, *, unit: str | None = None, encoding: str | None = None, **_: object) -> pd.DataFrame:
+def read_korean(path: str | Path, *, unit: str | None = None, encoding: str | None = None) -> pd.DataFrame:
     """Read a Korean CMM text report into the canonical table.
 
     Parameters

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from parsers._source import final_line_break
 from parsers._registry import FormatSpec, register
 from parsers.mitutoyo.qvpak import read_qvpak, sniff_qvpak
 
@@ -14,4 +15,5 @@ register(FormatSpec(
     sniff=lambda peek: sniff_qvpak(peek.text),
     read=read_qvpak,
     priority=50,
+    complete=final_line_break,
 ))

@@ -54,7 +54,7 @@ def sniff_qvpak(text: str) -> bool:
         return False
 
 
-def read_qvpak(path: str | Path, *, unit: str | None = None, encoding: str | None = None, **_: object) -> pd.DataFrame:
+def read_qvpak(path: str | Path, *, unit: str | None = None, encoding: str | None = None) -> pd.DataFrame:
     """Read a Mitutoyo QVPAK text report into the canonical table.
 
     Parameters

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from parsers._registry import FormatSpec, register
-from parsers._source import Peek
+from parsers._source import Peek, final_line_break
 from parsers.ogp.reports import read_ogp, sniff_ogp
 from parsers.ogp.rtf import is_rtf, rtf_lines
 
@@ -15,6 +15,12 @@ def _sniff(peek: Peek) -> bool:
     return sniff_ogp(text)
 
 
+def _ogp_complete(data: bytes) -> str | None:
+    """An RTF-wrapped report ends with its closing brace; a plain one with a line break."""
+    if data.lstrip()[:5] == b"{\\rtf":
+        return None if data.rstrip(b"\x00\r\n\t ")[-1:] == b"}" else "does not end with the RTF closing brace"
+    return final_line_break(data)
+
 register(FormatSpec(
     name="ogp",
     description="OGP SmartScope / Measure-X step report (also RTF-wrapped) or run table",
@@ -22,4 +28,5 @@ register(FormatSpec(
     sniff=_sniff,
     read=read_ogp,
     priority=50,
+    complete=_ogp_complete,
 ))

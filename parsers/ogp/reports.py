@@ -207,7 +207,7 @@ def _run_table(lines: list[str], name: str, skipped: SkipLog, factor: float) -> 
     return rows
 
 
-def read_ogp(path: str | Path, *, unit: str | None = None, encoding: str | None = None, **_: object) -> pd.DataFrame:
+def read_ogp(path: str | Path, *, unit: str | None = None, encoding: str | None = None) -> pd.DataFrame:
     """Read an OGP step report (plain or RTF-wrapped) or run table into the canonical table.
 
     Parameters

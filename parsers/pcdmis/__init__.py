@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from parsers._source import final_line_break
 from parsers._registry import FormatSpec, register
 from parsers.pcdmis.csv_export import read_pcdmis_csv, sniff_pcdmis_csv
 from parsers.pcdmis.text_report import read_pcdmis_text, sniff_pcdmis_text
@@ -15,6 +16,7 @@ register(FormatSpec(
     sniff=lambda peek: sniff_pcdmis_text(peek.text),
     read=read_pcdmis_text,
     priority=50,
+    complete=final_line_break,
 ))
 register(FormatSpec(
     name="pcdmis-csv",
@@ -23,4 +25,5 @@ register(FormatSpec(
     sniff=lambda peek: sniff_pcdmis_csv(peek.text),
     read=read_pcdmis_csv,
     priority=40,
+    complete=final_line_break,
 ))

@@ -38,7 +38,7 @@ def sniff_pcdmis_csv(text: str) -> bool:
     return False
 
 
-def read_pcdmis_csv(path: str | Path, *, unit: str | None = None, encoding: str | None = None, **_: object) -> pd.DataFrame:
+def read_pcdmis_csv(path: str | Path, *, unit: str | None = None, encoding: str | None = None) -> pd.DataFrame:
     """Read a PC-DMIS / NC Gage CSV export into the canonical table.
 
     Parameters

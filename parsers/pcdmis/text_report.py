@@ -195,7 +195,7 @@ def rows_from_raw(raws: list[_Raw], name: str, skipped: SkipLog, *, what: str) -
     return finish_rows(rows, name, skipped, what=what)
 
 
-def read_pcdmis_text(path: str | Path, *, unit: str | None = None, encoding: str | None = None, **_: object) -> pd.DataFrame:
+def read_pcdmis_text(path: str | Path, *, unit: str | None = None, encoding: str | None = None) -> pd.DataFrame:
     """Read a PC-DMIS text report into the canonical table.
 
     Parameters

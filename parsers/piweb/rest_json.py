@@ -21,7 +21,7 @@ from pathlib import Path
 
 import pandas as pd
 
-from parsers._source import read_text
+from parsers._source import Source, load_source, read_text
 from parsers.numbers import MAX_NUMBER_CHARS, parse_number
 from parsers._rows import SkipLog, finish_rows, unit_factor, unit_or_none, warn_assumed_mm
 from setupfix.errors import ParseError, SourceLocation
@@ -43,7 +43,7 @@ def sniff_piweb(text: str) -> bool:
         return False
 
 
-def _load(path: Path, encoding: str | None) -> object:
+def _load(path: Path | Source, encoding: str | None) -> object:
     text = read_text(path, encoding).lstrip("\ufeff")
     try:
         return json.loads(text)
@@ -102,7 +102,7 @@ def _position(attributes: dict[str, object], factor: float, where: SourceLocatio
     return out
 
 
-def read_piweb(path: str | Path, *, unit: str | None = None, encoding: str | None = None, **_: object) -> pd.DataFrame:
+def read_piweb(path: str | Path, *, unit: str | None = None, encoding: str | None = None) -> pd.DataFrame:
     """Read a PiWeb values JSON (with its characteristics JSON beside it) into the canonical table.
 
     Parameters
@@ -119,12 +119,12 @@ def read_piweb(path: str | Path, *, unit: str | None = None, encoding: str | Non
         If the file is a characteristics, measurements or parts file (no values), the
         characteristics file is missing, or a value is not a number.
     """
-    path = Path(path)
-    name = str(path)
+    source = load_source(path)
+    name = str(source)
     default = unit_or_none(unit) if unit else None
     if unit and default is None:
         raise ParseError(f"unknown unit {unit!r} (expected mm or inch)", location=SourceLocation(name))
-    data = _load(path, encoding)
+    data = _load(source, encoding)
     if not isinstance(data, list) or not data or not isinstance(data[0], dict):
         raise ParseError("not a PiWeb list of measurements", location=SourceLocation(name))
     if "characteristics" not in data[0] or not isinstance(data[0]["characteristics"], dict):
@@ -134,8 +134,8 @@ def read_piweb(path: str | Path, *, unit: str | None = None, encoding: str | Non
                 "characteristics (nominals, no values)" if "path" in first else "JSON")
         raise ParseError(f"PiWeb {kind} file holds no measured values", location=SourceLocation(name),
                          hint="read the values file; its characteristics file beside it is used for nominals")
-    chars_path = path.with_name(path.name.replace("values", "characteristics"))
-    if chars_path == path or not chars_path.exists():
+    chars_path = source.path.with_name(source.path.name.replace("values", "characteristics"))
+    if chars_path == source.path or not chars_path.exists():
         raise ParseError(f"characteristics file {chars_path.name} not found beside the values file",
                          location=SourceLocation(name))
     chars = _characteristics(_load(chars_path, encoding), str(chars_path))

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from parsers._source import final_line_break
 from parsers._registry import FormatSpec, register
 from parsers.qdas.aqdef import read_aqdef, sniff_aqdef
 
@@ -14,4 +15,5 @@ register(FormatSpec(
     sniff=lambda peek: sniff_aqdef(peek.text, peek.suffix),
     read=read_aqdef,
     priority=50,
+    complete=final_line_break,
 ))

@@ -21,7 +21,7 @@ from typing import NamedTuple
 
 import pandas as pd
 
-from parsers._source import read_text
+from parsers._source import load_source, read_text
 from parsers._rows import (
     SkipLog, finish_rows, parse_number, try_number, unit_factor, unit_or_none,
     warn_assumed_mm,
@@ -204,7 +204,7 @@ def _limits(char: _Char, nominal: float, factor: float, where: SourceLocation) -
     return lo, up
 
 
-def read_aqdef(path: str | Path, *, unit: str | None = None, encoding: str | None = None, **_: object) -> pd.DataFrame:
+def read_aqdef(path: str | Path, *, unit: str | None = None, encoding: str | None = None) -> pd.DataFrame:
     """Read a Q-DAS AQDEF ``.dfq``, or a ``.dfd``/``.dfx`` pair, into the canonical table.
 
     Parameters
@@ -223,8 +223,9 @@ def read_aqdef(path: str | Path, *, unit: str | None = None, encoding: str | Non
         On a malformed line, a value of an unknown characteristic, a contradictory
         limit, or when no variable length characteristic with nominal and value is left.
     """
-    path = Path(path)
-    name = str(path)
+    source = load_source(path)
+    path = source.path
+    name = str(source)
     suffix = path.suffix.lower()
     lines: list[tuple[SourceLocation, str]] = []
     if suffix in (".dfd", ".dfx"):
@@ -235,9 +236,9 @@ def read_aqdef(path: str | Path, *, unit: str | None = None, encoding: str | Non
             if not part.exists():
                 raise ParseError(f"{part.name} not found beside it", location=SourceLocation(name),
                                  hint="a .dfd description and its .dfx values are read together")
-            lines += _lines(read_text(part, encoding), str(part))
+            lines += _lines(read_text(source if part == path else part, encoding), str(part))
     else:
-        lines = _lines(read_text(path, encoding), name)
+        lines = _lines(read_text(source, encoding), name)
     state = _State()
     _parse(state, lines)
     default_unit = None

@@ -12,6 +12,7 @@ SPEC = register(FormatSpec(
     description="QIF 3.x / 2.x measurement results (XML; several parts per file)",
     extensions=(".qif",),
     sniff=lambda peek: sniff_qif(peek.text),
-    read=lambda path, unit=None, encoding=None, **_: read_qif(path, unit=unit, encoding=encoding),
+    read=read_qif,
+    options=("unit",),
     priority=50,
 ))

@@ -52,10 +52,16 @@ def parse_xml(data: bytes, path: str) -> etree._Element:
         (with the line libxml2 reports).
     """
     if data[:2] in (b"\xff\xfe", b"\xfe\xff") or b"\x00" in data[:4]:
-        # UTF-16 XML (legal with a BOM): look for the declarations in the decoded text.
-        data_utf8 = data.decode("utf-16", errors="replace").encode("utf-8", errors="replace")
-        match = _DTD.search(data_utf8)
-        line = data_utf8[: match.start()].count(b"\n") + 1 if match else 0
+        # UTF-16/UTF-32, either byte order, with or without BOM (XML 1.0 appendix F): look
+        # for the declarations in every wide decoding; a wrong one only yields noise.
+        match, line = None, 0
+        for codec in ("utf-16-le", "utf-16-be", "utf-32-le", "utf-32-be"):
+            width = 4 if "32" in codec else 2
+            text = data[: len(data) - len(data) % width].decode(codec, errors="replace").encode("utf-8", "replace")
+            match = _DTD.search(text)
+            if match:
+                line = text[: match.start()].count(b"\n") + 1
+                break
     else:
         start = data.find(b"<!")  # memchr-fast; the regex only runs from the first "<!" on
         match = _DTD.search(data, start) if start >= 0 else None
@@ -67,10 +73,16 @@ def parse_xml(data: bytes, path: str) -> etree._Element:
             hint="entity expansion and external entities are refused for safety",
         )
     try:
-        return etree.fromstring(data, _parser())
+        root = etree.fromstring(data, _parser())
     except etree.XMLSyntaxError as exc:
         error_line = exc.lineno if exc.lineno and exc.lineno > 0 else None
         message = _POSITION.sub("", str(exc.msg or exc)).strip() or "not well-formed XML"
         raise ParseError(f"not well-formed XML: {message}", location=SourceLocation(path, line=error_line)) from None
     except ValueError as exc:  # lxml raises ValueError for e.g. unsupported encodings
         raise ParseError(f"not well-formed XML: {exc}", location=SourceLocation(path)) from None
+    docinfo = root.getroottree().docinfo
+    if docinfo.doctype or docinfo.internalDTD is not None:
+        # A declaration in an encoding the byte check cannot see (EBCDIC, …): refuse all the same.
+        raise ParseError("document type or entity declarations are not accepted in a report",
+                         location=SourceLocation(path), hint="entity expansion and external entities are refused for safety")
+    return root

@@ -16,11 +16,11 @@ from pathlib import Path
 
 from lxml import etree
 
-from parsers._source import read_bytes
+from parsers._source import STDIN, read_bytes
 from parsers.qif._xml import parse_xml
 from setupfix.errors import ParseError, SourceLocation
 
-__all__ = ["IdIndex", "build_index", "resolve_external"]
+__all__ = ["IdIndex", "build_index", "resolve_external", "beside"]
 
 #: Bytes of a sibling file searched for the referenced QPId (it is near the top).
 _QPID_PEEK = 4096
@@ -67,6 +67,23 @@ def _qpid(root: etree._Element) -> str:
     return (root.findtext(f"{{{ns}}}QPId") or "").strip().lower()
 
 
+def beside(folder: Path, uri: str) -> Path | None:
+    """The file a plan URI names if it is a bare file name in ``folder``, else None.
+
+    Only ``name.qif``, ``./name.qif`` or ``file://name.qif`` qualify: no absolute path,
+    no ``..``, no other folder, no symbolic link out of the folder.  Whether a refused
+    name exists is never looked at, so the error cannot reveal it.
+    """
+    rel = uri.removeprefix("file://").replace("\\", "/").removeprefix("./")
+    if not rel or "/" in rel or rel in (".", "..") or ":" in rel:
+        return None
+    candidate = folder / rel
+    try:
+        return candidate if candidate.resolve().parent == folder else None
+    except OSError:
+        return None
+
+
 def resolve_external(root: etree._Element, ns: str, path: str, doc_id: str, where: SourceLocation
                      ) -> tuple[str, etree._Element]:
     """Find and parse the external QIF document ``doc_id`` of ``root``.
@@ -94,15 +111,19 @@ def resolve_external(root: etree._Element, ns: str, path: str, doc_id: str, wher
     if "://" in uri and not uri.lower().startswith("file://"):
         raise ParseError(f"external plan {uri!r} is not a local file; setupfix does not fetch it", location=where,
                          hint="download the plan and put it beside the results")
-    folder = Path(path).parent
+    if path == STDIN:
+        raise ParseError("results read from standard input refer to an external plan; read them from their folder",
+                         location=where)
+    folder = Path(path).parent.resolve()
     candidates: list[Path] = []
-    if uri:
-        candidates.append(folder / uri.removeprefix("file://").replace("\\", "/"))
+    named = beside(folder, uri) if uri else None
+    if named is not None:
+        candidates.append(named)
     try:
         siblings = sorted(p for p in folder.iterdir() if p.suffix.lower() == ".qif" and p.name != Path(path).name)
     except OSError:
         siblings = []
-    candidates.extend(siblings)
+    candidates.extend(p for p in siblings if p.resolve().parent == folder)
     for candidate in candidates:
         try:
             if not candidate.is_file():

@@ -10,21 +10,21 @@ component.  Rows carry ``file#id`` of their measurement element as provenance.
 
 from __future__ import annotations
 
-import warnings
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 from lxml import etree
 
-from parsers._source import read_bytes
+from parsers._source import Source, read_bytes
 from parsers.canonical import finish_table
 from parsers.qif._xml import parse_xml
 from parsers.qif.external import build_index, resolve_external
 from parsers.qif.flatten import Record, measurement_table, record, results_elements
 from parsers.qif.items import Doc, Item, item_info, local, number, raw_float, child_text
 from parsers.qif.units import choose_file_unit, file_unit_factor
-from setupfix.errors import ParseError, ParseWarning, SourceLocation
+from parsers._notes import note
+from setupfix.errors import ParseError, SourceLocation
 
 __all__ = ["read_qif", "sniff_qif", "NON_LENGTH_KINDS"]
 
@@ -82,7 +82,7 @@ def _part_name(results: etree._Element, doc: Doc) -> tuple[str, str]:
     return cycle or serial or f"results {results.get('id', '?')}", station
 
 
-def read_qif(path: str | Path, *, unit: str | None = None, encoding: str | None = None) -> pd.DataFrame:
+def read_qif(path: str | Path | Source, *, unit: str | None = None) -> pd.DataFrame:
     """Read the measurement results of a QIF 3.x or 2.x document.
 
     Parameters
@@ -92,8 +92,6 @@ def read_qif(path: str | Path, *, unit: str | None = None, encoding: str | None 
         are resolved against a plan beside the file (by URI or QPId).
     unit : {"mm", "inch"}, optional
         Unit of a file without ``FileUnits`` (see :mod:`parsers.qif.units`).
-    encoding : str, optional
-        Ignored: XML declares its own encoding.
 
     Raises
     ------
@@ -154,9 +152,9 @@ def read_qif(path: str | Path, *, unit: str | None = None, encoding: str | None 
     if skipped:
         what = "; ".join(f"{len(ids)} {k} (#{', #'.join(ids[:3])}{', …' if len(ids) > 3 else ''})"
                          for k, ids in skipped.items())
-        warnings.warn(f"{name}: skipped {what}", ParseWarning, stacklevel=2)
-    for note in sorted(notes):
-        warnings.warn(f"{name}: {note}", ParseWarning, stacklevel=2)
+        note(f"skipped {what}", SourceLocation(name), "skipped")
+    for text in sorted(notes):
+        note(text, SourceLocation(name), "parse")
     if not keep.any():
         raise ParseError("no length characteristics among the measurement results", location=SourceLocation(name))
     kept = table[keep]

@@ -10,12 +10,12 @@ the default is never applied silently (see :func:`choose_file_unit`).
 from __future__ import annotations
 
 import math
-import warnings
 
 from lxml import etree
 
 from parsers.numbers import try_number
-from setupfix.errors import ParseError, ParseWarning, SourceLocation
+from parsers._notes import note
+from setupfix.errors import ParseError, SourceLocation
 from setupfix.units import LENGTH_UNITS, length_factor
 
 __all__ = ["unit_factor", "file_unit_factor", "choose_file_unit", "METRE_PLAUSIBLE_MAX"]
@@ -95,9 +95,8 @@ def choose_file_unit(declared: float | None, nominals: list[float], path: str, u
         return factor
     largest = max((abs(v) for v in nominals if math.isfinite(v)), default=0.0)
     if largest > METRE_PLAUSIBLE_MAX:
-        warnings.warn(
-            f"{path}: no FileUnits; nominals up to {largest:g} cannot be metres, read as mm "
-            "(give --unit to override)", ParseWarning, stacklevel=3)
+        note(f"no FileUnits; nominals up to {largest:g} cannot be metres, read as mm (give --unit to override)",
+             SourceLocation(path, element="FileUnits"), "unit")
         return 1.0
     raise ParseError(
         "no FileUnits: lengths would be metres by the QIF schema, but the values do not say which unit they are in",

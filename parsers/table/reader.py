@@ -21,7 +21,9 @@ import numpy as np
 import pandas as pd
 
 from parsers._source import decode, read_bytes
+from parsers.numbers import MAX_NUMBER_CHARS, number_pattern
 from parsers.canonical import DEVIATION_TOLERANCE_MM, finish_table
+from parsers.table.limits import check_workbook
 from parsers.table.mapping import guess_columns, parse_columns
 from setupfix.errors import ParseError, SourceLocation
 from setupfix.units import LENGTH_UNITS, length_factor
@@ -166,6 +168,7 @@ def _excel_rows_openpyxl(data: bytes, name: str, sheet: str | None) -> tuple[str
 
 def _load_excel(data: bytes, name: str, sheet: str | None, mapping: Mapping[str, str]
                 ) -> tuple[pd.DataFrame, list[str]]:
+    check_workbook(data, name)
     try:
         title, rows = _excel_rows_calamine(data, name, sheet)
     except ImportError:
@@ -184,12 +187,13 @@ def _load_excel(data: bytes, name: str, sheet: str | None, mapping: Mapping[str,
 
 
 def _numeric(series: pd.Series, column: str, sources: list[str]) -> np.ndarray:
-    """Column to float, accepting decimal commas; a non-numeric cell is an error."""
+    """Column to float in the grammar of :mod:`parsers.numbers` (decimal point or comma), vectorised;
+    a cell that is not a number (``1_000``, ``nan``, ``inf``, 401 digits) is an error."""
     text = series.astype(str).str.strip()
-    comma = text.str.contains(",", regex=False) & ~text.str.contains(".", regex=False) & (text.str.count(",") == 1)
-    text = text.where(~comma, text.str.replace(",", ".", regex=False))
-    values = pd.to_numeric(text.where(text != "", None), errors="coerce").to_numpy(dtype=float)
-    bad = (np.isnan(values) & (text != "").to_numpy()) | np.isinf(values)
+    spelled = text.str.fullmatch(number_pattern("auto")).to_numpy(dtype=bool) & (text.str.len() <= MAX_NUMBER_CHARS)
+    text = text.str.replace(",", ".", regex=False)
+    values = pd.to_numeric(text.where(spelled & (text != ""), None), errors="coerce").to_numpy(dtype=float)
+    bad = (~spelled & (text != "").to_numpy()) | np.isinf(values)
     if bad.any():
         i = int(np.argmax(bad))
         raise ParseError(f"column {column!r}: expected a number, found {series.iloc[i]!r}",

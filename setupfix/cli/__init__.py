@@ -26,6 +26,7 @@ __all__ = ["main", "build_parser"]
 #: Sub-command modules, in the order ``--help`` lists them.
 COMMAND_MODULES: tuple[str, ...] = (
     "setupfix.cli._correct",
+    "setupfix.cli._batch",
     "setupfix.cli._parse",
     "setupfix.cli._formats",
     "setupfix.cli._compare",

@@ -6,7 +6,7 @@ import argparse
 import sys
 
 from setupfix.cli.exit_codes import ERROR, OK, PARTIAL
-from setupfix.pipeline.parse import parse_reports
+from setupfix.pipeline.parse import note_line, parse_reports
 from setupfix.pipeline.writers import check_target, write_canonical_csv
 
 
@@ -15,7 +15,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                        description="Read CMM reports (QIF, DMIS, CALYPSO, shop tables, …) and write one canonical "
                                    "measurement table: lengths in mm, deviation = actual - nominal, limits as "
                                    "signed deviations. A bad file is named on stderr; the others are still written.")
-    p.add_argument("files", nargs="+", metavar="FILE", help="report files")
+    p.add_argument("files", nargs="+", metavar="FILE",
+                   help="report files; a folder stands for its files, '-' for standard input")
     p.add_argument("--out", required=True, metavar="CSV", help="output CSV ('-': stdout)")
     p.add_argument("--format", default=None, metavar="NAME", help="report format (default: sniffed; see 'formats')")
     p.add_argument("--unit", default=None, choices=("mm", "inch"), help="unit of values the report does not label")
@@ -30,8 +31,10 @@ def run(args: argparse.Namespace) -> int:
     outcome = parse_reports(args.files, format=args.format, unit=args.unit, encoding=args.encoding,
                             columns=args.columns)
     for report in outcome.reports:
-        for note in report.warnings:
-            print(f"warning: {note}", file=sys.stderr)
+        for line in report.warnings:
+            print(f"warning: {line}", file=sys.stderr)
+    for note in outcome.skipped:
+        print(f"note: {note_line(note)}", file=sys.stderr)
     for failure in outcome.failures:
         print(f"error: {failure}", file=sys.stderr)
     if not outcome.reports:
@@ -39,6 +42,6 @@ def run(args: argparse.Namespace) -> int:
     table = outcome.table
     write_canonical_csv(table, args.out)
     if args.out != "-":
-        print(f"{len(table)} rows from {len(outcome.reports)} of {len(args.files)} file(s) → {args.out}",
+        print(f"{len(table)} rows from {len(outcome.reports)} of {outcome.inputs} file(s) → {args.out}",
               file=sys.stderr)
     return PARTIAL if outcome.failures else OK

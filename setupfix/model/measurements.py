@@ -74,6 +74,8 @@ class PartMeasurement:
         Each unmatched name → the closest model dimension names, best first.
     stations : tuple of str
         The parts (or stations) merged into this cycle, in report order.
+    names : tuple of str
+        The report's characteristic name matched to each dimension ("" where absent).
     """
 
     part: str
@@ -90,6 +92,7 @@ class PartMeasurement:
     units: tuple[str, ...] = ()
     suggestions: dict[str, tuple[str, ...]] = field(default_factory=dict)
     stations: tuple[str, ...] = ()
+    names: tuple[str, ...] = ()
 
     @property
     def measured(self) -> npt.NDArray[np.bool_]:
@@ -222,6 +225,7 @@ def match_parts(model: ProcessModel, table: pd.DataFrame, *, source: str = "<rep
                 units=tuple(units[i] if i >= 0 else "" for i in row_of),
                 suggestions={name: suggestions[name] for name in unmatched},
                 stations=tuple(dict.fromkeys(s for i in rows if (s := stations[i]) is not None)),
+                names=tuple(names[i] if i >= 0 else "" for i in row_of),
             )
         )
     return parts
@@ -235,11 +239,13 @@ def suggest_names(model: ProcessModel, name: str, n: int = 3) -> tuple[str, ...]
 
     Names equal but for white space, punctuation and case (``P1D1`` / ``P1 D1``,
     ``SP_00_Z`` / ``SP-00_Z``) come first, then the closest by
-    :func:`difflib.get_close_matches` (ratio ≥ 0.6).
+    :func:`difflib.get_close_matches` (ratio ≥ 0.6) when there is no such name.
     """
     names = list(dict.fromkeys(n_ for d in model.dimensions for n_ in (d.name, *d.aliases)))
     skeleton = _PUNCT.sub("", name).casefold()
     exact = [m for m in names if _PUNCT.sub("", m).casefold() == skeleton] if skeleton else []
+    if exact:
+        return tuple(exact[:n])
     by_key = {normalise_name(m): m for m in names}
     close = difflib.get_close_matches(normalise_name(name), list(by_key), n=n, cutoff=0.6)
     return tuple(dict.fromkeys([*exact, *(by_key[c] for c in close)]))[:n]

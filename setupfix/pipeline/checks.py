@@ -30,7 +30,7 @@ from setupfix.model import PartMeasurement, ProcessModel
 from setupfix.relation import relation_matrices
 from setupfix.units import MM_PER_INCH
 
-__all__ = ["check_parts", "UNIT_RATIO_TOLERANCE"]
+__all__ = ["check_parts", "difference_threshold", "UNIT_RATIO_TOLERANCE"]
 
 #: Relative tolerance of the 25.4 ratio between a report's and the model's nominal.
 UNIT_RATIO_TOLERANCE = 1e-3
@@ -40,7 +40,8 @@ def _fmt(value: float) -> str:
     return f"{value:.6g}"
 
 
-def _threshold(model: ProcessModel, lower: float, upper: float) -> float:
+def difference_threshold(model: ProcessModel, lower: float, upper: float) -> float:
+    """The smallest difference between a report's and the model's value that is not rounding [model unit]."""
     band = upper - lower
     return max(model.resolution / 2, 0.02 * band if math.isfinite(band) else 0.0)
 
@@ -101,7 +102,7 @@ def _compare(model: ProcessModel, part: PartMeasurement, *, strict: bool, source
         if not part.measured[i]:
             continue
         where = SourceLocation(part.sources[i] or source)
-        thr = _threshold(model, dim.lower, dim.upper)
+        thr = difference_threshold(model, dim.lower, dim.upper)
         reported = float(part.nominal[i]) if part.nominal is not None else math.nan
         if math.isfinite(reported):
             why = _unit_error(model, dim.nominal, reported, thr)

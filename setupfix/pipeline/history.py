@@ -167,7 +167,8 @@ def history_summary(store: Store) -> dict[str, object]:
         stamps = mine["timestamp"].dropna()
         reports.append({"report": rec.name, "sha256": rec.sha256[:12], "format": rec.format, "rows": rec.rows,
                         "parts": int(mine["part"].fillna("").nunique()),
-                        "first": str(stamps.min()) if len(stamps) else "", "last": str(stamps.max()) if len(stamps) else "",
+                        "first": str(stamps.min()) if len(stamps) else "",
+                        "last": str(stamps.max()) if len(stamps) else "",
                         "imported": rec.imported_at})
     log = store.corrections()
     temps = store.temperatures()

@@ -7,7 +7,6 @@ others are still read.
 
 from __future__ import annotations
 
-import warnings
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -15,12 +14,12 @@ from pathlib import Path
 import pandas as pd
 
 import parsers
-from setupfix.errors import ParseError, ParseWarning, SetupfixError, SourceLocation
+from setupfix.errors import Note, ParseError, SetupfixError, SourceLocation, UnknownFormatError
 from setupfix.model import CANONICAL_COLUMNS
-from setupfix.pipeline.writers import FLOAT_FORMAT, write_canonical_csv
+from setupfix.pipeline.writers import write_canonical_csv
 
-__all__ = ["ParsedReport", "ParseOutcome", "parse_reports", "write_canonical_csv", "OUTPUT_COLUMNS",
-           "list_formats"]
+__all__ = ["ParsedReport", "ParseOutcome", "parse_reports", "expand_inputs", "write_canonical_csv",
+           "OUTPUT_COLUMNS", "list_formats", "note_line"]
 
 #: Columns ``setupfix parse`` writes: the canonical ones, then the reference-only flag.
 OUTPUT_COLUMNS: tuple[str, ...] = (*CANONICAL_COLUMNS, "reference")
@@ -28,12 +27,22 @@ OUTPUT_COLUMNS: tuple[str, ...] = (*CANONICAL_COLUMNS, "reference")
 
 @dataclass(frozen=True)
 class ParsedReport:
-    """One report read: its path, the reader used, its rows and the reader's warnings."""
+    """One report read: its path, the reader used, its rows and the reader's notes."""
 
     path: str
     format: str
     table: pd.DataFrame
-    warnings: tuple[str, ...] = ()
+    notes: tuple[Note, ...] = ()
+
+    @property
+    def warnings(self) -> tuple[str, ...]:
+        """The notes as one line each (``file:line: message``)."""
+        return tuple(note_line(n) for n in self.notes)
+
+
+def note_line(note: Note) -> str:
+    """One line for a note: ``file:line: message``."""
+    return f"{note.location}: {note.message}" if note.location else note.message
 
 
 @dataclass
@@ -42,6 +51,10 @@ class ParseOutcome:
 
     reports: list[ParsedReport] = field(default_factory=list)
     failures: list[SetupfixError] = field(default_factory=list)
+    #: Files of a folder input that no reader recognises (left out, not failures).
+    skipped: list[Note] = field(default_factory=list)
+    #: Number of inputs after folders were expanded.
+    inputs: int = 0
 
     @property
     def table(self) -> pd.DataFrame:
@@ -56,39 +69,67 @@ class ParseOutcome:
         return table[list(OUTPUT_COLUMNS)]
 
 
+def expand_inputs(paths: Sequence[str | Path]) -> tuple[list[tuple[str, bool]], list[SetupfixError]]:
+    """Report names from the inputs: a folder stands for its files (not hidden, sorted, not recursive).
+
+    Returns
+    -------
+    (names, failures)
+        ``(name, from_folder)`` for ``-`` (stdin) and files as given, then each folder's
+        files in name order; an empty folder is a failure naming it.
+    """
+    names: list[tuple[str, bool]] = []
+    failures: list[SetupfixError] = []
+    for path in paths:
+        name = str(path)
+        folder = Path(name)
+        if name != parsers.STDIN and folder.is_dir():
+            try:
+                found = sorted(str(p) for p in folder.iterdir() if p.is_file() and not p.name.startswith("."))
+            except OSError as exc:
+                failures.append(ParseError(f"cannot list folder: {exc.strerror or exc}", location=SourceLocation(name)))
+                continue
+            if not found:
+                failures.append(ParseError("folder holds no report file", location=SourceLocation(name)))
+            names += [(f, True) for f in found]
+        else:
+            names.append((name, False))
+    return names, failures
+
+
 def parse_reports(paths: Sequence[str | Path], *, format: str | None = None, unit: str | None = None,
                   encoding: str | None = None, columns: str | Mapping[str, str] | None = None) -> ParseOutcome:
-    """Read each report; collect the tables and, separately, the errors.
+    """Read each report; collect the tables and notes and, separately, the errors.
 
     Parameters
     ----------
     paths : sequence of str or Path
-        Report files.
+        Report files, folders (their files) or ``-`` (standard input).
     format, unit, encoding, columns
-        As for :func:`parsers.read`.
+        As for :func:`parsers.read_report`.
 
     Returns
     -------
     ParseOutcome
         Never raises for a bad report: its :class:`~setupfix.errors.SetupfixError`
-        is in ``failures``.
+        is in ``failures``.  Thread-safe: notes come back as data.
     """
     outcome = ParseOutcome()
-    options = {k: v for k, v in {"unit": unit, "encoding": encoding, "columns": columns}.items() if v is not None}
-    for path in paths:
-        name = str(path)
-        with warnings.catch_warnings(record=True) as caught:
-            warnings.simplefilter("always", ParseWarning)
-            try:
-                if Path(name).is_dir():
-                    raise ParseError("is a folder, not a report", location=SourceLocation(name))
-                spec = parsers.find_format(name, format or ("table" if columns else None))
-                table = spec.read(Path(name), **options)
-            except SetupfixError as exc:
+    names, outcome.failures = expand_inputs(paths)
+    outcome.inputs = len(names)
+    for name, from_folder in names:
+        try:
+            result = parsers.read_report(name, format=format, unit=unit, encoding=encoding, columns=columns)
+        except UnknownFormatError as exc:
+            if from_folder and not format:
+                outcome.skipped.append(Note("not a report of a known format; left out", exc.location, "skipped"))
+            else:
                 outcome.failures.append(exc)
-                continue
-        notes = tuple(str(w.message) for w in caught if issubclass(w.category, ParseWarning))
-        outcome.reports.append(ParsedReport(name, spec.name, table, notes))
+            continue
+        except SetupfixError as exc:
+            outcome.failures.append(exc)
+            continue
+        outcome.reports.append(ParsedReport(name, result.format, result.table, result.notes))
     return outcome
 
 

@@ -9,37 +9,47 @@ from __future__ import annotations
 
 import os
 import time
+from datetime import datetime
 from collections.abc import Iterator, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
+
+import pandas as pd
 
 import parsers
 from setupfix.errors import MatchError, ParseError, SourceLocation
-from setupfix.model import ProcessModel, load_model
-from setupfix.model.measurements import match_parts
-from setupfix.optimize import CorrectionProblem, get_optimizer
-from setupfix.pipeline.compare import DEFAULT_METHODS, Comparison, compare_problem
-from setupfix.pipeline.correct import PartCorrection, assign_stations, correct_part
-from setupfix.pipeline.view import MatchRow, match_rows
+from setupfix.model import PartMeasurement, ProcessModel, load_model, match_parts
+from setupfix.optimize import CorrectionProblem, OptimizeResult, get_optimizer
+from setupfix.pipeline.compare import DEFAULT_METHODS, Comparison, MethodTrials, trial_seeds
+from setupfix.pipeline.correct import PartCorrection, correct_part
+from setupfix.pipeline.cycles import assign_stations, load_parts
+from setupfix.pipeline.view import MatchRow, match_rows, matched_rows
+from setupfix.store import CORRECTION_COLUMNS, Recommendation, open_store
 
-__all__ = ["OpenedReport", "open_report", "newest_report", "FolderWatch", "SKIPPED_SUFFIXES", "compare_steps"]
+__all__ = ["OpenedReport", "open_report", "newest_report", "FolderWatch", "SKIPPED_SUFFIXES", "compare_steps", "store_parts",
+           "record_applied"]
 
 
 @dataclass(frozen=True)
 class OpenedReport:
     """A report opened against a model.
 
-    Either ``corrections`` (one per cycle) is filled, or ``mismatch`` holds the match
-    table and ``problem`` the reason the report could not be tied to the model.
+    ``matches`` ties every characteristic of the report to a dimension (or lists close
+    names).  ``corrections`` holds one correction per cycle; it is empty when the
+    report could not be tied to the model, and ``problem`` then says why.
     """
 
     model: ProcessModel
     report: str
     format: str
     corrections: tuple[PartCorrection, ...] = ()
-    mismatch: tuple[MatchRow, ...] = ()
+    matches: tuple[MatchRow, ...] = ()
     problem: str = ""
-    notes: tuple[str, ...] = field(default=())
+
+    @property
+    def unmatched(self) -> int:
+        """Number of report characteristics that match no dimension."""
+        return sum(not m.matched for m in self.matches)
 
 
 def open_report(model: ProcessModel | str | Path, report: str | Path, *, optimizer: str = "exact",
@@ -58,15 +68,16 @@ def open_report(model: ProcessModel | str | Path, report: str | Path, *, optimiz
     if path.is_dir():
         raise ParseError("is a folder, not a report", location=SourceLocation(str(report)))
     spec = parsers.find_format(path)
-    table = spec.read(path)
     try:
-        table = assign_stations(model, table)
-        parts = match_parts(model, table, source=str(report))
+        parts = load_parts(model, path)
     except MatchError as exc:
-        return OpenedReport(model, str(report), spec.name, mismatch=tuple(match_rows(model, table)),
+        # Read again only on this path: the match table needs every row, matched or not.
+        table = spec.read(path)
+        return OpenedReport(model, str(report), spec.name, matches=tuple(match_rows(model, table)),
                             problem=str(exc))
     corrections = tuple(correct_part(model, p, optimizer=optimizer, seed=seed) for p in parts)
-    return OpenedReport(model, str(report), spec.name, corrections=corrections)
+    return OpenedReport(model, str(report), spec.name, corrections=corrections,
+                        matches=tuple(matched_rows(model, parts)))
 
 
 #: Files a watched folder ignores: partial downloads, editor and temporary files.
@@ -143,18 +154,77 @@ class FolderWatch:
 
 
 def compare_steps(problem: CorrectionProblem, *, methods: Sequence[str] = DEFAULT_METHODS, trials: int = 12,
-                  seed: int = 0) -> Iterator[tuple[str, Comparison]]:
-    """:func:`~setupfix.pipeline.compare.compare_problem` one method at a time.
+                  seed: int = 0) -> Iterator[tuple[str, int, int, Comparison]]:
+    """:func:`~setupfix.pipeline.compare.compare_problem` one trial at a time.
 
-    Yields ``(step, comparison so far)`` after the exact optimum (step ``"exact"``) and
-    after each method, so a caller can show progress and stop between methods; the
-    last comparison equals ``compare_problem(problem, methods=…, trials=…, seed=…)``.
+    Yields ``(method, step, steps, comparison so far)`` after the exact optimum and
+    after every trial, so that a caller can show progress and stop within one trial;
+    the last comparison equals ``compare_problem(problem, methods=…, trials=…, seed=…)``
+    (same seeds, same order).
     """
+    if trials < 1:
+        raise ValueError("trials must be at least 1")
+    seeds = trial_seeds(seed, trials)
+    steps = 1 + len(methods) * trials
     exact = get_optimizer("exact").solve(problem)
-    done = Comparison(problem=problem, exact=exact, methods=[], seed=seed, trials=trials)
-    yield "exact", done
+    done: list[MethodTrials] = []
+    skipped: dict[str, str] = {}
+    step = 1
+    yield "exact", step, steps, Comparison(problem=problem, exact=exact, methods=[], seed=seed, trials=trials)
     for name in methods:
-        step = compare_problem(problem, methods=[name], trials=trials, seed=seed, exact=exact)
-        done = Comparison(problem=problem, exact=exact, methods=[*done.methods, *step.methods], seed=seed,
-                          trials=trials, skipped={**done.skipped, **step.skipped})
-        yield name, done
+        try:
+            get_optimizer(name, seed=seeds[0])
+        except ModuleNotFoundError as exc:  # a method still being written: skipped, as compare_problem does
+            skipped[name] = f"not available: {exc}"
+            step += trials
+            yield name, step, steps, Comparison(problem, exact, list(done), seed, trials, skipped=dict(skipped))
+            continue
+        runs: list[OptimizeResult] = []
+        for s in seeds:
+            runs.append(get_optimizer(name, seed=s).solve(problem))
+            step += 1
+            partial = [*done, MethodTrials(name, seeds[:len(runs)], list(runs))]
+            yield name, step, steps, Comparison(problem, exact, partial, seed, trials, skipped=dict(skipped))
+        done.append(MethodTrials(name, seeds, runs))
+
+
+def store_parts(model: ProcessModel, db: str | Path) -> tuple[list[PartMeasurement], list[str]]:
+    """Every cycle stored in the history store ``db``, tied to ``model``, oldest first.
+
+    A stored report that does not match the model is left out and named in the notes.
+    """
+    notes: list[str] = []
+    parts: list[PartMeasurement] = []
+    with open_store(db) as store:
+        names = {r.sha256: r.name for r in store.reports()}
+        rows = store.measurements()
+    for sha, table in rows.groupby("report_sha256", sort=False):
+        try:
+            parts += match_parts(model, assign_stations(model, table), source=names.get(str(sha), str(sha)))
+        except MatchError as exc:
+            notes.append(f"left out: {exc}")
+    parts.sort(key=lambda p: p.timestamp or "")
+    return parts, notes
+
+
+def record_applied(db: str | Path, corrections: Sequence[PartCorrection], *, when: str | None = None) -> int:
+    """Record corrections as applied now: the corrections log (non-zero changes, by
+    controller register name) and the recommendations, in one transaction.
+
+    Returns
+    -------
+    int
+        Correction rows added.
+    """
+    stamp = when or datetime.now().replace(microsecond=0).isoformat()
+    rows = [(stamp, reg.register, float(c.corrections.get(reg.id, 0.0)), "correction")
+            for c in corrections for reg in c.model.registers
+            if not reg.fixed and c.corrections.get(reg.id, 0.0) != 0.0]
+    with open_store(db) as store, store.transaction():
+        added = store.add_corrections(pd.DataFrame(rows, columns=list(CORRECTION_COLUMNS)))
+        for c in corrections:
+            store.add_recommendation(Recommendation(
+                optimizer=c.result.optimizer, created_at=stamp,
+                inputs={"model": c.model.source, "report": c.part.report, "part": c.part.part, "applied": True},
+                result=c.to_json()))
+    return added

@@ -17,9 +17,6 @@ Symbols carry every state as well as colour does, for monochrome terminals:
 
 from __future__ import annotations
 
-import csv
-import difflib
-import io
 import math
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
@@ -29,18 +26,20 @@ import numpy as np
 import numpy.typing as npt
 import pandas as pd
 
-from setupfix.model import ProcessModel, normalise_name
-from setupfix.offsets import OFFSET_COLUMNS, OffsetRow, _decimals
+from setupfix.model import PartMeasurement, ProcessModel, normalise_name
+from setupfix.model.measurements import suggest_names
+from setupfix.objective import margins as objective_margins
 from setupfix.pipeline.compare import Comparison
 from setupfix.pipeline.correct import PartCorrection
+from setupfix.pipeline.diagnose import DiagnoseOutcome
 from setupfix.pipeline.thermal import DriftPrediction
 
 __all__ = [
     "IN", "OUT", "BINDING", "PREDICTED_OUT", "GIVEN_UP",
     "DimensionRow", "dimension_rows", "stations", "filter_rows", "sort_rows", "SORT_KEYS",
     "zone_bar", "RegisterRow", "register_rows", "Summary", "summary",
-    "MatchRow", "match_rows", "convergence", "compare_rows", "DriftView", "drift_view",
-    "offsets_csv_text", "signed", "limits_text",
+    "MatchRow", "match_rows", "matched_rows", "convergence", "compare_rows", "DriftView", "drift_view",
+    "signed", "limits_text", "CycleBudget", "cycle_budgets", "EffectRow", "DiagnosisView", "diagnosis_view",
 ]
 
 IN, OUT, BINDING, PREDICTED_OUT, GIVEN_UP = "✓", "✗", "●", "▲", "⚑"
@@ -72,7 +71,7 @@ def zone_bar(value: float, lower: float, upper: float, width: int = 11) -> str:
     cells = ["─"] * width
     cells[0], cells[-1] = "├", "┤"
     if lo < 0 < hi:
-        cells[round((0 - lo) / (hi - lo) * (width - 1))] = "┼"
+        cells[_cell((0 - lo) / (hi - lo), width)] = "┼"
     if not math.isfinite(value):
         return "".join(cells)
     if value < lower:
@@ -80,8 +79,15 @@ def zone_bar(value: float, lower: float, upper: float, width: int = 11) -> str:
     elif value > upper:
         cells[-1] = "▶"
     else:
-        cells[round(min(max((value - lo) / (hi - lo), 0.0), 1.0) * (width - 1))] = "●"
+        cells[_cell(min(max((value - lo) / (hi - lo), 0.0), 1.0), width)] = "●"
     return "".join(cells)
+
+
+def _cell(fraction: float, width: int) -> int:
+    """Cell of a fraction of the zone; halves round away from the centre (symmetric bars)."""
+    pos = fraction * (width - 1)
+    centre = (width - 1) / 2
+    return int(math.floor(pos + 0.5 + 1e-9)) if pos >= centre else int(math.ceil(pos - 0.5 - 1e-9))
 
 
 @dataclass(frozen=True)
@@ -258,21 +264,31 @@ class MatchRow:
 
 def match_rows(model: ProcessModel, table: pd.DataFrame, *, limit: int = 3) -> list[MatchRow]:
     """Each characteristic of a report with the dimension it matches (by name or alias,
-    case and blanks ignored) or, failing that, up to ``limit`` similar dimension names."""
+    case and blanks ignored) or, failing that, the closest dimension names
+    (:func:`setupfix.model.measurements.suggest_names`)."""
     keys: dict[str, str] = {}
     for d in model.dimensions:
         for k in d.keys:
             keys.setdefault(k, d.id)
-    names = [d.name for d in model.dimensions]
-    by_norm = {normalise_name(n): n for n in names}
     rows = []
     for rec in table.to_dict("records"):
         name = str(rec.get("characteristic", ""))
-        key = normalise_name(name)
-        dim = keys.get(key, "")
-        close = () if dim else tuple(by_norm[m] for m in difflib.get_close_matches(key, list(by_norm), n=limit,
-                                                                                    cutoff=0.5))
-        rows.append(MatchRow(name, _text(rec.get("part")), _text(rec.get("station")), dim, close))
+        dim = keys.get(normalise_name(name), "")
+        rows.append(MatchRow(name, _text(rec.get("part")), _text(rec.get("station")), dim,
+                             () if dim else suggest_names(model, name, limit)))
+    return rows
+
+
+def matched_rows(model: ProcessModel, parts: Iterable[PartMeasurement]) -> list[MatchRow]:
+    """The match table of parts already tied to the model: every measured dimension,
+    then every unmatched characteristic with its suggestions."""
+    rows = []
+    for p in parts:
+        for dim, value in zip(model.dimensions, p.deviation):
+            if math.isfinite(value):
+                rows.append(MatchRow(dim.name, p.part, dim.group or "", dim.id, ()))
+        for name in p.unmatched:
+            rows.append(MatchRow(name, p.part, "", "", tuple(p.suggestions.get(name, ()))))
     return rows
 
 
@@ -333,6 +349,11 @@ class DriftView:
     measured_latest: float | None
     samples: int
 
+    @property
+    def recent_range(self) -> tuple[float, float]:
+        """Lowest and highest drift of the recent curve (the sparkline's scale)."""
+        return float(np.min(self.recent)), float(np.max(self.recent))
+
 
 def drift_view(prediction: DriftPrediction, recent: int = 120) -> DriftView:
     """The latest drift and its recent curve (the last ``recent`` samples)."""
@@ -345,12 +366,70 @@ def drift_view(prediction: DriftPrediction, recent: int = 120) -> DriftView:
                      np.asarray(prediction.drift[-recent:], dtype=float), m_last, int(len(prediction.drift)))
 
 
-def offsets_csv_text(rows: Iterable[OffsetRow], *, resolution: float = 0.001) -> str:
-    """The offsets CSV exactly as :func:`setupfix.offsets.write_offsets_csv` writes it."""
-    digits = _decimals(resolution)
-    stream = io.StringIO()
-    writer = csv.writer(stream, lineterminator="\n")
-    writer.writerow(OFFSET_COLUMNS)
-    for r in rows:
-        writer.writerow([r.report, r.part, r.id, r.register, r.kind, r.axis, f"{r.delta:.{digits}f}"])
-    return stream.getvalue()
+@dataclass(frozen=True)
+class CycleBudget:
+    """The error budget δ of one measured cycle, as measured (before its correction)."""
+
+    cycle: str
+    timestamp: str
+    budget: float
+    out_of_tolerance: int
+    measured: int
+
+
+def cycle_budgets(model: ProcessModel, parts: Iterable[PartMeasurement]) -> list[CycleBudget]:
+    """δ (eq. 8 on the measured deviations) and the out-of-tolerance count of each cycle."""
+    lower = np.array([d.lower for d in model.dimensions])
+    upper = np.array([d.upper for d in model.dimensions])
+    rows = []
+    for p in parts:
+        m = p.measured
+        margins = objective_margins(p.deviation[m], lower[m], upper[m])
+        rows.append(CycleBudget(f"{p.report}:{p.part}" if p.part else p.report, p.timestamp or "",
+                                float(margins.min()) if margins.size else math.nan, int((margins < 0).sum()),
+                                int(m.sum())))
+    return rows
+
+
+@dataclass(frozen=True)
+class EffectRow:
+    """One effect the diagnosis found."""
+
+    kind: str
+    target: str
+    estimate: float
+    stderr: float
+    unit: str
+    rms_after: float
+    alike: tuple[str, ...]
+
+
+@dataclass(frozen=True)
+class DiagnosisView:
+    """A diagnosis as the history panel shows it: residual before/after, effects, walk forward."""
+
+    cycles: int
+    unit: str
+    before: tuple[float, float, int]  #: residual RMS, max |residual|, out of tolerance — declared model
+    after: tuple[float, float, int]  #: the same with the effects found
+    effects: tuple[EffectRow, ...]
+    walk: tuple[tuple[str, float, float, float, int], ...]  #: name, mean δ, worst δ, RMS, out of tolerance
+    next_correction: tuple[tuple[str, float], ...]  #: registers that move, model ID and change
+    notes: tuple[str, ...]
+    budgets: tuple[CycleBudget, ...]
+
+
+def diagnosis_view(outcome: DiagnoseOutcome) -> DiagnosisView:
+    """What the history panel shows of ``setupfix diagnose``'s outcome."""
+    d = outcome.diagnosis
+    eb, ea = d.error_before, d.error_after
+    walk = () if d.walk is None else tuple(
+        (name, b.mean_budget, b.worst_budget, b.rms, b.out_of_tolerance) for name, b in d.walk.budgets.items())
+    return DiagnosisView(
+        cycles=d.series.n_cycles, unit=d.layout.unit,
+        before=(eb.rms, eb.max, eb.out_of_tolerance), after=(ea.rms, ea.max, ea.out_of_tolerance),
+        effects=tuple(EffectRow(e.kind, e.target, e.estimate, e.stderr, e.unit, e.rms_after, tuple(e.alike))
+                      for e in d.effects),
+        walk=walk, next_correction=tuple((k, v) for k, v in outcome.next_correction.items() if v != 0),
+        notes=tuple(str(n) for n in outcome.notes),
+        budgets=tuple(cycle_budgets(outcome.input.model, outcome.input.parts)))

@@ -9,11 +9,10 @@ so a bad file never ends the app.
 
 from __future__ import annotations
 
-import importlib.util
 from dataclasses import dataclass
 from functools import partial
 from pathlib import Path
-from typing import Any, ClassVar
+from typing import ClassVar
 
 from textual import on
 from textual.app import App, ComposeResult
@@ -23,11 +22,14 @@ from textual.widgets import DataTable, Footer, Header, Static, TabbedContent, Ta
 from textual.worker import Worker, WorkerState, get_current_worker
 
 from setupfix.errors import SetupfixError
-from setupfix.optimize import OPTIMIZERS
+from setupfix.model import ProcessModel
+from setupfix.optimize import OPTIMIZERS, CorrectionProblem
 from setupfix.pipeline import view
 from setupfix.pipeline.compare import DEFAULT_METHODS, Comparison
 from setupfix.pipeline.correct import PartCorrection
-from setupfix.pipeline.session import FolderWatch, OpenedReport, compare_steps, open_report
+from setupfix.pipeline.diagnose import diagnose_reports
+from setupfix.pipeline.session import (FolderWatch, OpenedReport, compare_steps, open_report, record_applied,
+                                      store_parts)
 from setupfix.pipeline.thermal import predict_drift
 from setupfix.tui.exporting import CONTROLLERS, render_offsets, write_offsets
 from setupfix.tui.messages import CompareProgress
@@ -43,8 +45,6 @@ SORT_ORDER: tuple[str | None, ...] = (None, "margin_after", "deviation", "name",
 #: Why panels whose pipeline is not on this branch yet show "not available".
 MISSING = {
     "verdict": "safety rules (issue 13) not in this build",
-    "history": "the history store (setupfix.store, issue 11) is not in this build",
-    "diagnose": "the diagnosis (setupfix.diagnose, issue 11) is not in this build",
     "feed": "the thermal feed-forward (issue 12) is not in this build",
 }
 
@@ -69,6 +69,8 @@ class SetupfixApp(App[None]):
     """setupfix's Textual app; build it with :class:`Inputs` (tests do the same)."""
 
     CSS_PATH = "app.tcss"
+    #: The footer's room is worth more than the palette: every action has a key (see ?).
+    ENABLE_COMMAND_PALETTE = False
     TITLE = "setupfix"
     HORIZONTAL_BREAKPOINTS = [(0, "-narrow"), (120, "-wide")]
     VERTICAL_BREAKPOINTS = [(0, "-short"), (30, "-tall")]
@@ -132,8 +134,9 @@ class SetupfixApp(App[None]):
     def on_mount(self) -> None:
         self._show()
         self._start_thermal()
-        self.query_one(HistoryPanel).not_available(MISSING["history"] if importlib.util.find_spec("setupfix.store")
-                                                    is None else "no history store given (--db STORE)")
+        self.query_one(HistoryPanel).status(
+            "no history store given (--db STORE): press d to diagnose the reports in the current report's folder"
+            if self.inputs.db is None else f"reading the history store {self.inputs.db} …")
         report = self.inputs.report
         if report is not None and report.is_dir():
             self.folder_watch = FolderWatch(report, settle=self.inputs.poll_seconds)
@@ -178,6 +181,13 @@ class SetupfixApp(App[None]):
                 self._opened(worker.result)
             elif worker.name == "compare":
                 self._compared(worker.result)
+            elif worker.name == "history" and isinstance(worker.result, tuple):
+                budgets, notes = worker.result
+                self.query_one(HistoryPanel).budgets(budgets, unit=self._unit(), source=str(self.inputs.db))
+                for note in notes:
+                    self.notify(note, title="history", severity="warning")
+            elif worker.name == "diagnose" and isinstance(worker.result, view.DiagnosisView):
+                self.query_one(HistoryPanel).diagnosis(worker.result, source=self._series_source())
             elif worker.name == "thermal" and isinstance(worker.result, view.DriftView):
                 self.query_one(ThermalPanel).show(worker.result, unit=self._unit(),
                                                   source=str(self.inputs.temperatures))
@@ -187,14 +197,18 @@ class SetupfixApp(App[None]):
         text = str(error) if isinstance(error, SetupfixError) else f"internal error: {type(error).__name__}: {error}"
         self.notify(text, title=f"{what} failed", severity="error", timeout=12)
         if what == "open":
+            # The previous correction is no longer what the operator asked for: showing
+            # (and exporting) it beside a failed report would invite applying stale offsets.
+            self.opened = None
+            self.sub_title = ""
             self.problem = f"✗ {text}"
-            if self.opened is not None and str(self.report_path) != self.opened.report:
-                self.problem += f"\n  still showing {self.opened.report}"
             self._show()
         elif what == "compare":
             self.query_one(ComparePanel).stopped(f"✗ {text}")
         elif what == "thermal":
             self.query_one(ThermalPanel).not_available(text)
+        elif what in ("history", "diagnose"):
+            self.query_one(HistoryPanel).status(f"✗ {text}")
 
     def _opened(self, opened: OpenedReport) -> None:
         self.opened = opened
@@ -203,14 +217,20 @@ class SetupfixApp(App[None]):
         self.sub_title = f"{Path(opened.report).name} · {opened.format} · {Path(opened.model.source).name}"
         status = self.query_one("#match-status", Static)
         table = self.query_one(MatchTable)
-        if opened.mismatch:
-            status.update(f"✗ {opened.problem}\nThe report's names and the model's dimensions (✓ matched):")
-            table.show(opened.mismatch)
+        table.show(opened.matches)
+        if not opened.corrections:
+            status.update(f"✗ {opened.problem}\nEach characteristic of the report, ✓ with the dimension it "
+                          "matches, ✗ with the closest dimension names:")
             self.query_one(TabbedContent).active = "match"
+        elif opened.unmatched:
+            status.update(f"⚠ {opened.unmatched} characteristic(s) of the report match no dimension "
+                          "(✗ below, with the closest dimension names); they are left out.")
         else:
-            status.update("✓ every part of the report matches the model.")
-            table.clear(columns=True)
+            status.update("✓ every characteristic of the report matches a dimension of the model.")
         self._show()
+        if self.inputs.db is not None:
+            self.run_worker(partial(_history, opened.model, self.inputs.db), name="history", group="history",
+                            thread=True, exclusive=True, exit_on_error=False)
 
     def _compared(self, comparison: object) -> None:
         panel = self.query_one(ComparePanel)
@@ -255,7 +275,8 @@ class SetupfixApp(App[None]):
         c = self._current()
         summary = self.query_one(SummaryBar)
         if c is None:
-            reason = self.problem or (self.opened.problem if self.opened and self.opened.mismatch else "")
+            reason = self.problem or (f"✗ {self.opened.problem} (tab 5 shows the match table)"
+                                      if self.opened and self.opened.problem else "")
             summary.show(None, optimizer=self.optimizer, problem=reason)
             self.query_one(DimensionTable).clear(columns=True)
             self.query_one(RegisterTable).clear(columns=True)
@@ -304,7 +325,7 @@ class SetupfixApp(App[None]):
             self.notify("open a report first (o)", severity="warning")
             return
         self.query_one(TabbedContent).active = "compare"
-        self.query_one(ComparePanel).progress(0, 1 + len(DEFAULT_METHODS), "exact")
+        self.query_one(ComparePanel).progress(0, 1 + len(DEFAULT_METHODS) * self.inputs.trials, "exact")
         self.run_worker(partial(_compare, self, c.problem, self.inputs.trials, self.inputs.seed), name="compare",
                         group="compare", thread=True, exclusive=True, exit_on_error=False)
 
@@ -338,8 +359,19 @@ class SetupfixApp(App[None]):
         self.push_screen(HelpScreen())
 
     def action_diagnose(self) -> None:
+        """Diagnose the series: the reports in the current report's (or the watched) folder."""
         self.action_tab("history")
-        self.notify(f"not available: {MISSING['diagnose']}", severity="warning")
+        if self.model_path is None or self._series_source() == "":
+            self.notify("open a model and a report first", severity="warning")
+            return
+        self.query_one(HistoryPanel).status(f"diagnosing the reports in {self._series_source()} …")
+        self.run_worker(partial(_diagnose, self.model_path, Path(self._series_source())), name="diagnose",
+                        group="diagnose", thread=True, exclusive=True, exit_on_error=False)
+
+    def _series_source(self) -> str:
+        if self.folder_watch is not None:
+            return str(self.folder_watch.folder)
+        return str(self.report_path.parent) if self.report_path is not None else ""
 
     def action_open_report(self) -> None:
         start = self.report_path or Path.cwd()
@@ -386,6 +418,13 @@ class SetupfixApp(App[None]):
             self.notify(str(exc), title="export failed", severity="error", timeout=12)
             return
         self.notify(f"wrote {request.controller} offsets to {request.path}", title="export")
+        if self.inputs.db is not None and self.opened is not None:
+            try:
+                added = record_applied(self.inputs.db, self.opened.corrections)
+            except SetupfixError as exc:
+                self.notify(str(exc), title="history store", severity="error", timeout=12)
+                return
+            self.notify(f"recorded {added} register change(s) as applied in {self.inputs.db}", title="history")
 
 
 def _drift(model: Path, log: Path) -> view.DriftView:
@@ -393,14 +432,24 @@ def _drift(model: Path, log: Path) -> view.DriftView:
     return view.drift_view(predict_drift(model, log))
 
 
-def _compare(app: SetupfixApp, problem: Any, trials: int, seed: int) -> Comparison | None:
-    """Thread worker: the comparison, one method at a time, stoppable between methods."""
+def _compare(app: SetupfixApp, problem: CorrectionProblem, trials: int, seed: int) -> Comparison | None:
+    """Thread worker: the comparison one trial at a time, stoppable between trials."""
     worker = get_current_worker()
     result: Comparison | None = None
-    total = 1 + len(DEFAULT_METHODS)
-    for done, (step, comparison) in enumerate(compare_steps(problem, trials=trials, seed=seed), start=1):
+    for method, step, steps, comparison in compare_steps(problem, trials=trials, seed=seed):
         if worker.is_cancelled:
             return None
         result = comparison
-        app.post_message(CompareProgress(done, total, step))
+        app.post_message(CompareProgress(step, steps, method))
     return result
+
+
+def _history(model: ProcessModel, db: Path) -> tuple[list[view.CycleBudget], list[str]]:
+    """Thread worker: the error budget of every cycle in the history store."""
+    parts, notes = store_parts(model, db)
+    return view.cycle_budgets(model, parts), notes
+
+
+def _diagnose(model: Path, folder: Path) -> view.DiagnosisView:
+    """Thread worker: ``setupfix diagnose`` over a folder of reports (and its logs)."""
+    return view.diagnosis_view(diagnose_reports(model, [folder]))

@@ -8,10 +8,10 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 
-from setupfix.atomic import atomic_write
-from setupfix.errors import ExportError, SourceLocation
+from setupfix.errors import ExportError
+from setupfix.offsets import offsets_csv_text
 from setupfix.pipeline.correct import PartCorrection
-from setupfix.pipeline.view import offsets_csv_text
+from setupfix.pipeline.writers import check_target, write_text
 from setupfix.tui.screens.export import ExportRequest
 
 __all__ = ["CONTROLLERS", "render_offsets", "write_offsets"]
@@ -29,9 +29,13 @@ def render_offsets(corrections: Sequence[PartCorrection], controller: str) -> st
 
 
 def write_offsets(request: ExportRequest) -> None:
-    """Write the confirmed text atomically (a file is complete or not there)."""
-    try:
-        with atomic_write(request.path) as stream:
-            stream.write(request.text)
-    except OSError as exc:
-        raise ExportError(f"cannot write: {exc.strerror or exc}", location=SourceLocation(request.path)) from exc
+    """Write the confirmed text atomically (a file is complete or not there).
+
+    Only a regular file (new or existing) is written; a folder, device, FIFO or link
+    is refused with an :class:`~setupfix.errors.ExportError` naming it.  ``-`` (standard
+    output) is refused too: the terminal belongs to the screen.
+    """
+    if request.path.strip() == "-":
+        raise ExportError("standard output is the screen here: give a file name")
+    check_target(request.path)
+    write_text(request.path, request.text)

@@ -114,3 +114,18 @@ def test_correct_accepts_qif_and_dmis(suffix: str, capsys: pytest.CaptureFixture
     assert main(["correct", "--model", str(GUIDE / "model.toml"), str(GUIDE / f"cycle_01.{suffix}"), "--json"]) == OK
     got = json.loads(capsys.readouterr().out)
     assert got["corrections"] == expected["corrections"] and got["margin_after"] == expected["margin_after"]
+
+
+def test_a_folder_stands_for_its_reports(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    folder = ROOT / "sample_reports" / "pcdmis"
+    out = tmp_path / "all.csv"
+    assert main(["parse", str(folder), "--out", str(out)]) == OK
+    err = capsys.readouterr().err
+    assert "README.md: not a report of a known format; left out" in err
+    assert "from 3 of 4 file(s)" in err
+    assert {r["report"] for r in rows_of(out)} == {"bracket_minus_negative.txt", "bracket_ncgage.csv",
+                                                  "bracket_two_parts.txt"}
+    empty = tmp_path / "empty"
+    empty.mkdir()
+    assert main(["parse", str(empty), "--out", str(tmp_path / "x.csv")]) == ERROR
+    assert "folder holds no report file" in capsys.readouterr().err

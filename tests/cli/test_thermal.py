@@ -76,3 +76,70 @@ def test_missing_columns_and_usage(capsys, tmp_path):
     assert code == 2
     code, _, err = run(capsys, "thermal", "predict", "--model", str(tmp_path / "none.json"), TEST)
     assert code == 1 and "none.json" in err
+
+
+def _log_with(tmp_path, line: int, column: int, value: str):
+    rows = (SAMPLES / "train_variable.csv").read_text().splitlines()[:200]
+    cells = rows[line - 1].split(",")
+    cells[column] = value
+    rows[line - 1] = ",".join(cells)
+    path = tmp_path / "log.csv"
+    path.write_text("\n".join(rows) + "\n")
+    return str(path)
+
+
+@pytest.mark.parametrize(
+    ("argv", "code", "message"),
+    [
+        (["--inputs", "error_z"], 1, "'error_z' is both the target and a temperature input"),
+        (["--iterations", "-5", "--method", "grey-cs"], 2, "--iterations: must be in [1, 100000], got -5"),
+        (["--seed", "-1"], 2, "--seed: must be a whole number >= 0"),
+        (["--bound", "-1", "--method", "grey-cs"], 2, "--bound: must be a positive finite number"),
+        (["--iterations", "5"], 1, "--iterations does not apply to the mra method"),
+        (["--interval", "0"], 2, "--interval: must be a positive"),
+    ],
+)
+def test_bad_options_are_refused(capsys, tmp_path, argv, code, message):
+    args = ["thermal", "fit", "--method", "mra", TRAIN, "--target", "error_z", "-o", str(tmp_path / "m.json")]
+    if "--method" in argv:
+        i = argv.index("--method")
+        args[3] = argv[i + 1]
+        argv = argv[:i] + argv[i + 2:]
+    got, out, err = run(capsys, *args, *argv)
+    assert got == code and message in err and out == ""
+    assert not (tmp_path / "m.json").exists()
+
+
+@pytest.mark.parametrize(("value", "message"), [("1e308", "outside [-273.15, 2000]"), ("1e300", "outside"),
+                                                 ("1e306", "outside"), ("2_1", "non-numeric value '2_1'"),
+                                                 ("nan", "non-numeric value 'nan'")])
+def test_hostile_cells_are_one_line(capsys, tmp_path, value, message):
+    log = _log_with(tmp_path, 40, 1, value)
+    code, out, err = run(capsys, "thermal", "fit", "--method", "grey-ls", log, "--target", "error_z",
+                         "-o", str(tmp_path / "m.json"))
+    assert code == 1 and out == "" and err.count("\n") == 1
+    assert "log.csv:40:" in err and message in err
+
+
+def test_constant_target_and_directory_output(capsys, tmp_path):
+    rows = (SAMPLES / "train_variable.csv").read_text().splitlines()[:100]
+    const = tmp_path / "c.csv"
+    const.write_text("\n".join(rows[:1] + [",".join(r.split(",")[:-1] + ["0.1"]) for r in rows[1:]]) + "\n")
+    code, out, err = run(capsys, "thermal", "fit", "--method", "mra", str(const), "--target", "error_z",
+                         "-o", str(tmp_path / "m.json"))
+    assert code == 1 and "constant" in err and "e+29" not in err
+    code, out, err = run(capsys, "thermal", "fit", "--method", "mra", TRAIN, "--target", "error_z", "-o", str(tmp_path))
+    assert code == 1 and "internal error" not in err
+
+
+def test_units_seed_and_corrupt_model(capsys, tmp_path):
+    model = tmp_path / "g.json"
+    code, out, err = run(capsys, "thermal", "fit", "--method", "grey-pso", "--iterations", "2", TRAIN,
+                         "--target", "error_z", "--unit", "mm", "--inputs", "spindle_motor,bearing", "-o", str(model))
+    assert code == 0 and "seed 0" in out and " mm" in out
+    assert "warning:" in err and "E = " in err  # two PSO iterations fit worse than the mean: flagged
+    code, out, _ = run(capsys, "thermal", "predict", "--model", str(model), TEST)
+    assert code == 0 and " mm relative to the model's reference state" in out
+    model.write_bytes(model.read_bytes().replace(b'"theta_"', b'"th\xffeta_"'))
+    code, out, err = run(capsys, "thermal", "predict", "--model", str(model), TEST)
+    assert code == 1 and "g.json" in err and "internal error" not in err

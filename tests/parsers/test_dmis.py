@@ -10,9 +10,9 @@ import pytest
 from conftest import shared_path
 from parsers.dmis import read_dmis, sniff_dmis
 from parsers.dmis.statements import parse_statement, split_statements
-from setupfix.errors import ParseError, ParseWarning
+from setupfix.errors import ParseError
+from goldens import expect_note
 
-pytestmark = pytest.mark.filterwarnings("ignore::setupfix.errors.ParseWarning")
 
 
 def write(tmp_path: Path, lines: list[str], name: str = "p.dmo") -> Path:
@@ -83,7 +83,7 @@ def test_inch_units_convert_to_mm(tmp_path: Path) -> None:
 def test_missing_units_statement_warns(tmp_path: Path) -> None:
     path = write(tmp_path, ["F(P)=FEAT/POINT,CART,1,0,0,0,0,1", "FA(P)=FEAT/POINT,CART,1.5,0,0,0,0,1",
                             "TA(P_X)=TOL/CORTOL,XAXIS,0.5,OUTOL"])
-    with pytest.warns(ParseWarning, match="no UNITS"):
+    with expect_note("no UNITS"):
         read_dmis(path)
 
 

@@ -16,8 +16,8 @@ GUIDE = Path(__file__).resolve().parents[2] / "sample_reports" / "guide_pins"
 
 @pytest.mark.parametrize("suffix", ["qif", "dmo"])
 def test_real_format_matches_the_csv(suffix: str) -> None:
-    ref = parsers.read(GUIDE / "cycle_01.csv")
-    table = parsers.read(GUIDE / f"cycle_01.{suffix}")
+    ref = parsers.read_report(GUIDE / "cycle_01.csv").table
+    table = parsers.read_report(GUIDE / f"cycle_01.{suffix}").table
     assert parsers.find_format(GUIDE / f"cycle_01.{suffix}").name == {"qif": "qif", "dmo": "dmis"}[suffix]
     for column in ("characteristic", "part", "station", "timestamp"):
         assert table[column].tolist() == ref[column].tolist(), column

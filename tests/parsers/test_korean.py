@@ -5,7 +5,6 @@ Goldens hold derived numbers only (line, part number, values, limits, status).
 
 from __future__ import annotations
 
-import warnings
 from pathlib import Path
 
 import pandas as pd
@@ -14,7 +13,7 @@ import pytest
 import parsers
 from goldens import GOLDEN, assert_derived_golden, read_warned
 from parsers.korean import read_korean
-from setupfix.errors import ParseError, ParseWarning
+from setupfix.errors import ParseError
 from conftest import SHARED as SHARED_ROOT
 
 SHARED = SHARED_ROOT / "cmm-samples" / "korean_cmm_txt"
@@ -32,9 +31,7 @@ def shared(name: str) -> Path:
 def test_sample_matches_derived_golden(name: str) -> None:
     path = shared(name)
     assert parsers.find_format(path).name == "korean"
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", ParseWarning)
-        table = parsers.read(path)
+    table = parsers.read_report(path).table
     assert_derived_golden(table, GOLDEN / f"korean_{name.split('.')[0]}.csv")
 
 
@@ -48,9 +45,7 @@ def test_ng_report_out_of_tolerance_and_sign_quirk() -> None:
 
 
 def test_second_part_suffix_gives_second_part() -> None:
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", ParseWarning)
-        table = read_korean(shared("KR_45926-4G100_240321_day_1-2-1_OK.cp949.txt"))
+    table = read_korean(shared("KR_45926-4G100_240321_day_1-2-1_OK.cp949.txt"))
     parts = table["part"].unique().tolist()
     assert len(parts) == 2 and parts[1] == parts[0] + "#2"
     first, second = (set(table.loc[table["part"] == p, "characteristic"]) for p in parts)
@@ -61,9 +56,7 @@ def test_encoding_sniffed_and_override(tmp_path: Path) -> None:
     path = shared("KR_45926-4G400_230312_day_1-1-1_NG.cp949.txt")
     utf8 = tmp_path / "utf8.txt"
     utf8.write_text(path.read_bytes().decode("cp949"), encoding="utf-8")
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", ParseWarning)
-        a, b = read_korean(path), read_korean(utf8, encoding="utf-8")
+    a, b = read_korean(path), read_korean(utf8, encoding="utf-8")
     pd.testing.assert_frame_equal(a.drop(columns=["source", "report"]), b.drop(columns=["source", "report"]))
     with pytest.raises(ParseError, match="bytes are not utf-8 text"):
         read_korean(path, encoding="utf-8")

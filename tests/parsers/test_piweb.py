@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import json
-import warnings
 from pathlib import Path
 
 import pandas as pd
@@ -12,16 +11,14 @@ import pytest
 import parsers
 from goldens import GOLDEN, assert_golden
 from parsers.piweb import read_piweb
-from setupfix.errors import ParseError, ParseWarning
+from setupfix.errors import ParseError
 
 SAMPLES = Path(__file__).resolve().parents[2] / "sample_reports" / "piweb"
 
 
 @pytest.fixture(scope="module")
 def values() -> pd.DataFrame:
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", ParseWarning)
-        return parsers.read(SAMPLES / "PiWebApi_sample_values.json")
+    return parsers.read_report(SAMPLES / "PiWebApi_sample_values.json").table
 
 
 def test_values_file_first_measurements_match_golden(values: pd.DataFrame) -> None:

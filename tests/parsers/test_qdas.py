@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import warnings
 from pathlib import Path
 
 import pytest
@@ -10,7 +9,8 @@ import pytest
 import parsers
 from goldens import GOLDEN, assert_golden
 from parsers.qdas import read_aqdef
-from setupfix.errors import ParseError, ParseWarning
+from setupfix.errors import ParseError
+from goldens import expect_note
 from setupfix.model.measurements import CANONICAL_COLUMNS
 
 SAMPLES = Path(__file__).resolve().parents[2] / "sample_reports" / "qdas"
@@ -22,15 +22,13 @@ SAMPLES = Path(__file__).resolve().parents[2] / "sample_reports" / "qdas"
     "successfactory_testmeasures.dfq",
 ])
 def test_sample_matches_golden(name: str) -> None:
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", ParseWarning)
-        table = parsers.read(SAMPLES / name)
+    table = parsers.read_report(SAMPLES / name).table
     assert tuple(table.columns[: len(CANONICAL_COLUMNS)]) == CANONICAL_COLUMNS
     assert_golden(table, GOLDEN / f"qdas_{Path(name).stem}.csv", str(SAMPLES) + "/")
 
 
 def test_value_lines_0x0f_0x14_and_cm_to_mm() -> None:
-    with pytest.warns(ParseWarning, match=r"without nominal \(K2101\): line 173, 180, 187, 194, 201"):
+    with expect_note(r"without nominal \(K2101\): line 173, 180, 187, 194, 201"):
         table = read_aqdef(SAMPLES / "successfactory_testmeasures.dfq")
     # K2142 cm: 2.49960000000000E+0002 cm is 2499.6 mm; K2110/K2111 200/300 cm absolute → ±500 mm.
     first = table.iloc[0]
@@ -41,7 +39,7 @@ def test_value_lines_0x0f_0x14_and_cm_to_mm() -> None:
 
 
 def test_multi_part_file_gives_one_part_per_piece() -> None:
-    with pytest.warns(ParseWarning, match="no length unit stated"):
+    with expect_note("no length unit stated"):
         table = read_aqdef(SAMPLES / "diribet_basicDfq_threeParts_differentNumberOfCharacteristics.dfq")
     assert table.groupby("part").size().to_dict()["<part_number_2>#1"] == 3
     assert table["part"].nunique() == 8 + 1 + 3
@@ -49,7 +47,7 @@ def test_multi_part_file_gives_one_part_per_piece() -> None:
 
 def test_attributive_file_is_refused_with_reason() -> None:
     with pytest.raises(ParseError, match=r"attributive characteristic\(s\) without variable values \(K2004=1\)"):
-        parsers.read(SAMPLES / "diribet_attributiveDfq_attributiveCharacteristic_and_errorLogSheet.dfq")
+        parsers.read_report(SAMPLES / "diribet_attributiveDfq_attributiveCharacteristic_and_errorLogSheet.dfq").table
 
 
 @pytest.mark.parametrize("name", ["j4ggr_2604020002.dfd", "j4ggr_2604020002.dfx"])

@@ -12,9 +12,9 @@ import pytest
 
 import parsers
 from parsers.qif import read_qif, sniff_qif
-from setupfix.errors import ParseError, ParseWarning
+from setupfix.errors import ParseError
+from goldens import expect_note
 
-pytestmark = pytest.mark.filterwarnings("ignore::setupfix.errors.ParseWarning")
 
 ROOT = Path(__file__).resolve().parents[2]
 QIF = ROOT / "sample_reports" / "qif"
@@ -126,7 +126,7 @@ def test_per_value_linear_unit_overrides_file_units(tmp_path: Path) -> None:
 
 
 def test_missing_file_units_with_evident_mm_warns_and_reads_mm() -> None:
-    with pytest.warns(ParseWarning, match="no FileUnits.*read as mm"):
+    with expect_note("no FileUnits.*read as mm"):
         table = read_qif(QIF / "NIST_MTC_FAIR_Plate_Results_20parts.qif")
     assert _row(table[table["part"] == "1"], "Diameter 4")["nominal"] == 10.0
 
@@ -146,13 +146,13 @@ def test_several_measurement_results_are_parts_named_by_serial() -> None:
 
 
 def test_angles_are_skipped_with_a_warning() -> None:
-    with pytest.warns(ParseWarning, match=r"skipped 80 Angle \(not a length\)"):
+    with expect_note(r"skipped 80 Angle \(not a length\)"):
         table = read_qif(QIF / "NIST_MTC_FAIR_Plate_Results_20parts.qif")
     assert len(table) == 680
 
 
 def test_negative_zone_is_read_as_its_size_with_a_warning() -> None:
-    with pytest.warns(ParseWarning, match="negative tolerance zone -0.13 read as 0.13"):
+    with expect_note("negative tolerance zone -0.13 read as 0.13"):
         table = read_qif(QIF / "NIST_MTC_Incoming_PlateResults_20_samples.QIF")
     assert (table.loc[table["characteristic"] == "PERPENDICULARITY1", "upper"] == 0.13).all()
 
@@ -199,4 +199,4 @@ def test_truncated_xml_is_a_parse_error_with_line(tmp_path: Path) -> None:
 def test_registry_dispatches_qif_by_content_whatever_the_name(tmp_path: Path) -> None:
     path = write(tmp_path, qif_doc(), "results.xml")
     assert parsers.find_format(path).name == "qif"
-    assert np.isclose(parsers.read(path)["deviation"].iloc[0], 0.05)
+    assert np.isclose(parsers.read_report(path).table["deviation"].iloc[0], 0.05)

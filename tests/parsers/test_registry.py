@@ -42,7 +42,7 @@ def test_extension_is_the_fallback(tmp_path: Path) -> None:
     odd.write_text("garbage that no sniffer accepts\n", encoding="utf-8")
     assert parsers.find_format(odd).name == "dmis"
     with pytest.raises(ParseError, match="odd.dmo: no tolerance results"):
-        parsers.read(odd)
+        parsers.read_report(odd).table
 
 
 def test_explicit_format_wins_and_unknown_name_lists_the_known(tmp_path: Path) -> None:
@@ -55,7 +55,7 @@ def test_unaccepted_file_is_refused_with_formats_tried(tmp_path: Path) -> None:
     path = tmp_path / "notes.xyz"
     path.write_text("nothing measurable here\n", encoding="utf-8")
     with pytest.raises(UnknownFormatError) as info:
-        parsers.read(path)
+        parsers.read_report(path).table
     message = str(info.value)
     assert message.startswith(str(path)) and "tried:" in message
     assert all(name in message for name in MY_FORMATS)
@@ -72,7 +72,7 @@ def test_a_faulty_sniffer_does_not_stop_dispatch(monkeypatch: pytest.MonkeyPatch
 
 def test_missing_file_is_a_parse_error(tmp_path: Path) -> None:
     with pytest.raises(ParseError, match="cannot read"):
-        parsers.read(tmp_path / "absent.qif")
+        parsers.read_report(tmp_path / "absent.qif").table
 
 
 @pytest.mark.parametrize(("data", "text"), [
@@ -110,5 +110,5 @@ def test_canonical_csv_in_another_encoding_needs_and_accepts_encoding(tmp_path: 
     path = tmp_path / "c.csv"
     path.write_bytes("characteristic,nominal,actual\nMaß 1,1,1.01\n".encode("cp1252"))
     with pytest.raises(ParseError, match=r"c\.csv:2: not UTF-8 text \(give its encoding with --encoding\)"):
-        parsers.read(path)
-    assert parsers.read(path, encoding="cp1252")["characteristic"].iloc[0] == "Maß 1"
+        parsers.read_report(path).table
+    assert parsers.read_report(path, encoding="cp1252").table["characteristic"].iloc[0] == "Maß 1"

@@ -19,7 +19,7 @@ CSV = ROOT / "sample_reports" / "guide_pins" / "cycle_01.csv"
 
 
 def same_as_canonical(table) -> None:
-    ref = parsers.read(CSV)
+    ref = parsers.read_report(CSV).table
     assert list(table["characteristic"]) == list(ref["characteristic"])
     assert np.allclose(table["deviation"], ref["deviation"], atol=1e-12)
     assert np.allclose(table["lower"], ref["lower"]) and np.allclose(table["upper"], ref["upper"])
@@ -45,13 +45,13 @@ def test_guess_columns_knows_common_spellings_and_leaves_ambiguity() -> None:
 
 
 def test_german_export_semicolons_decimal_commas_cp1252() -> None:
-    table = parsers.read(TABLES / "cycle_01_de.csv")
+    table = parsers.read_report(TABLES / "cycle_01_de.csv").table
     same_as_canonical(table)
     assert table["source"].iloc[0].endswith("cycle_01_de.csv:2")
 
 
 def test_mapping_file_completes_the_guess() -> None:
-    table = parsers.read(TABLES / "cycle_01_shop.csv", columns=str(TABLES / "cycle_01_shop.columns.toml"))
+    table = parsers.read_report(TABLES / "cycle_01_shop.csv", columns=str(TABLES / "cycle_01_shop.columns.toml")).table
     same_as_canonical(table)
 
 
@@ -82,7 +82,7 @@ def test_excel_workbook_with_cell_provenance(tmp_path: Path, excel_engine: str) 
     path = tmp_path / "shop.xlsx"
     book.save(path)
     # The title block above the header is skipped: the header is the row naming the columns.
-    table = parsers.read(path, columns="tolerance=Tol")
+    table = parsers.read_report(path, columns="tolerance=Tol").table
     assert list(table["deviation"].round(6)) == [-0.0309, -0.0286]
     assert list(table["upper"]) == [0.1, 0.1] and list(table["lower"]) == [-0.1, -0.1]
     assert table["source"].iloc[1].endswith("shop.xlsx#CMM!5")
@@ -95,14 +95,14 @@ def test_bad_excel_cell_names_the_row(tmp_path: Path, excel_engine: str) -> None
     path = tmp_path / "bad.xlsx"
     book.save(path)
     with pytest.raises(ParseError, match=r"bad.xlsx: <Sheet!2>: column 'actual': expected a number"):
-        parsers.read(path)
+        parsers.read_report(path).table
 
 
 def test_corrupt_workbook_is_a_parse_error(tmp_path: Path, excel_engine: str) -> None:
     path = tmp_path / "broken.xlsx"
     path.write_bytes(b"PK\x03\x04" + b"\x00" * 200)
     with pytest.raises(ParseError, match="broken.xlsx"):
-        parsers.read(path, format="table")
+        parsers.read_report(path, format="table").table
 
 
 def test_deviation_only_and_inch_unit(tmp_path: Path) -> None:
@@ -136,7 +136,7 @@ def test_unknown_unit_and_missing_mapped_header(tmp_path: Path) -> None:
 def test_columns_option_selects_the_table_reader_for_a_canonical_looking_file(tmp_path: Path) -> None:
     path = tmp_path / "c.csv"
     path.write_text("characteristic,nominal,actual,Soll2\nA,1,1.1,5\n", encoding="utf-8")
-    assert parsers.read(path, columns="nominal=Soll2")["nominal"].iloc[0] == 5.0
+    assert parsers.read_report(path, columns="nominal=Soll2").table["nominal"].iloc[0] == 5.0
 
 
 def test_title_block_above_a_csv_header_is_skipped(tmp_path: Path) -> None:

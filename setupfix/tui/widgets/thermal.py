@@ -33,7 +33,8 @@ class ThermalPanel(Vertical):
         text.append(f" ({view.latest_time})")
         if view.measured_latest is not None:
             text.append(f"; measured {signed(view.measured_latest)} {unit}")
-        text.append(f"\nrecent curve, last {len(view.recent)} samples:")
+        low, high = view.recent_range
+        text.append(f"\nrecent curve, last {len(view.recent)} samples, from {signed(low)} (▁) to {signed(high)} (█) {unit}:")
         self.query_one("#thermal-status", Static).update(text)
         curve = self.query_one("#thermal-curve", Sparkline)
         curve.display = True

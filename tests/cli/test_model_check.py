@@ -1,0 +1,57 @@
+"""``setupfix model check``: the match table, suggestions both ways, in full as JSON."""
+
+from __future__ import annotations
+
+import json
+
+from setupfix.cli import main
+from tests.conftest import GUIDE_PINS
+
+MODEL = str(GUIDE_PINS / "model.toml")
+
+
+def renamed(tmp_path, old_new):
+    text = (GUIDE_PINS / "cycle_01.csv").read_text(encoding="utf-8")
+    for old, new in old_new:
+        text = text.replace(f"\n{old},", f"\n{new},")
+    path = tmp_path / "r.csv"
+    path.write_text(text, encoding="utf-8")
+    return path
+
+
+def test_check_lists_unmatched_with_closest_and_absent_with_closest(tmp_path, capsys):
+    path = renamed(tmp_path, [("P2 D3", "P2-D3"), ("P1 D1", "P1D1"), ("P4 D7", "Flatness A")])
+    assert main(["model", "check", MODEL, str(path)]) == 0
+    out = capsys.readouterr().out
+    assert "25 of 28 model dimensions matched, 3 report characteristic(s) unmatched" in out
+    assert "  P2-D3  →  P2 D3" in out and "  P1D1  →  P1 D1" in out and "  Flatness A  (nothing close)" in out
+    assert "P2 D3" in out and "absent from the report; closest report names: P2-D3" in out
+    assert max(len(line) for line in out.splitlines()) <= 100
+    assert main(["model", "check", MODEL, str(path), "--json"]) == 0
+    obj = json.loads(capsys.readouterr().out)
+    (part,) = obj["parts"]
+    assert {u["name"]: u["closest"][:1] for u in part["unmatched"]} == {
+        "P1D1": ["P1 D1"], "P2-D3": ["P2 D3"], "Flatness A": []}
+    row = next(r for r in part["dimensions"] if r["id"] == "P1D2")
+    assert row["characteristic"] == "P1 D2" and row["report_nominal"] == 40.0 and row["station"] == "P1"
+    assert row["source"].endswith("r.csv:3") and row["differs"] is False
+
+
+def test_correct_json_lists_suggestions(tmp_path, capsys):
+    path = renamed(tmp_path, [("P2 D3", "P2-D3")])
+    assert main(["correct", "--model", MODEL, "--json", str(path)]) == 0
+    obj = json.loads(capsys.readouterr().out)
+    assert obj["unmatched"] == ["P2-D3"] and obj["suggestions"] == {"P2-D3": ["P2 D3"]}
+
+
+def test_check_marks_differences_and_strict_refuses(tmp_path, capsys):
+    text = (GUIDE_PINS / "cycle_01.csv").read_text(encoding="utf-8").replace("P1 D4,30.0000,29.9253",
+                                                                              "P1 D4,31.0000,30.9253")
+    path = tmp_path / "r.csv"
+    path.write_text(text, encoding="utf-8")
+    assert main(["model", "check", MODEL, str(path)]) == 0
+    out = capsys.readouterr().out
+    (line,) = [x for x in out.splitlines() if x.startswith("P1      P1 D4")]
+    assert line.endswith("≠") and "warning:" in out and "nominal 31 mm differs from the model's 30 mm" in out
+    assert main(["model", "check", MODEL, str(path), "--strict"]) == 1
+    assert "refused by --strict" in capsys.readouterr().err
