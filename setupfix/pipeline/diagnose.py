@@ -215,12 +215,15 @@ def _hours(times: pd.DatetimeIndex, origin: pd.Timestamp) -> np.ndarray:
 
 def load_series(model: ProcessModel | str | Path, reports: Sequence[str | Path] = (), *,
                 corrections: str | None = None, temperatures: str | None = None,
-                db: str | Path | None = None) -> SeriesInput:
+                db: str | Path | None = None, thermal: str | Path | None = None) -> SeriesInput:
     """Read a series of reports (files, folders, or every report of a history store) with its logs.
 
     With ``db`` the store's reports, corrections log and temperatures are used (files
     given as well are added; a corrections or temperature file given replaces the
-    store's log).
+    store's log).  With ``thermal`` (a model saved by ``setupfix thermal fit``) its
+    predicted drift over the temperature log becomes one more channel, so the thermal
+    candidate tests the thermal slice's model itself (its measured-error column is
+    not used as a channel).
 
     Raises
     ------
@@ -272,6 +275,12 @@ def load_series(model: ProcessModel | str | Path, reports: Sequence[str | Path] 
         log = read_corrections_log(corrections, model)
     if temperatures:
         temps = read_temperature_log(temperatures)
+    if thermal is not None:
+        if not temperatures:
+            raise ParseError("a thermal model needs the temperature log it predicts from",
+                             location=SourceLocation(str(thermal)), hint="give --temperatures")
+        temps, more_notes = _with_thermal_prediction(temps, str(thermal), str(temperatures))
+        notes += more_notes
     series, more = _assemble(model, parts, log, temps, where)
     notes += more
     declared = tuple(spec_of(e) for e in section.effects)
@@ -286,6 +295,25 @@ def load_series(model: ProcessModel | str | Path, reports: Sequence[str | Path] 
                      + (" …" if len(unmatched) > 6 else ""))
     return SeriesInput(model, Layout.from_model(model), series, tuple(_ordered(parts)), declared, section,
                        corrections, temperatures, tuple(notes))
+
+
+def _with_thermal_prediction(temps: tuple[pd.DatetimeIndex, np.ndarray, tuple[str, ...]] | None, thermal: str,
+                             temperatures: str) -> tuple[tuple[pd.DatetimeIndex, np.ndarray, tuple[str, ...]], list[str]]:
+    """The temperature channels plus the drift a saved thermal model predicts over the same log."""
+    from setupfix.pipeline.thermal import predict_drift
+
+    assert temps is not None
+    pred = predict_drift(thermal, temperatures)
+    times, samples, channels = temps
+    p_times = _times(pred.timestamps, temperatures)
+    idx = np.clip(np.searchsorted(p_times.values, times.values, side="right") - 1, 0, len(p_times) - 1)
+    keep = [j for j, c in enumerate(channels) if c != pred.target]
+    name = f"{pred.method} prediction"
+    notes = [str(n) for n in pred.notes]
+    notes.append(f"thermal model {thermal} ({pred.method}, {pred.unit or 'unit not stated'}): its prediction is "
+                 f"the channel {name!r}")
+    return (times, np.column_stack([samples[:, keep], pred.drift[idx]]),
+            (*(channels[j] for j in keep), name)), notes
 
 
 def _ordered(parts: list[PartMeasurement]) -> list[PartMeasurement]:
@@ -444,7 +472,8 @@ def _next_correction(model: ProcessModel, diagnosis: Diagnosis) -> tuple[dict[st
 
 def diagnose_reports(model: ProcessModel | str | Path, reports: Sequence[str | Path] = (), *,
                      corrections: str | None = None, temperatures: str | None = None, augment: str | None = None,
-                     diagnoser: Diagnoser | None = None, db: str | Path | None = None) -> DiagnoseOutcome:
+                     diagnoser: Diagnoser | None = None, db: str | Path | None = None,
+                     thermal: str | Path | None = None) -> DiagnoseOutcome:
     """Diagnose a series of reports; optionally write the augmented model.
 
     Raises
@@ -455,7 +484,7 @@ def diagnose_reports(model: ProcessModel | str | Path, reports: Sequence[str | P
     """
     if augment:
         check_target(augment)  # a bad target costs nothing
-    inp = load_series(model, reports, corrections=corrections, temperatures=temperatures, db=db)
+    inp = load_series(model, reports, corrections=corrections, temperatures=temperatures, db=db, thermal=thermal)
     diagnoser = diagnoser or Diagnoser()
     diagnosis = diagnoser.run(inp.layout, inp.series, declared=inp.declared)
     nxt, more = _next_correction(inp.model, diagnosis)
