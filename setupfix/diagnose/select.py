@@ -280,8 +280,8 @@ def select_effects(layout: Layout, series: Series, *, alpha: float = 0.01, max_e
             alike = _alike_relation(Q, obs, series.applied, layout, spec, pairs_ok)
         else:
             q = layout.dimension_ids.index(str(spec.dimension))
-            alike = tuple(f"relation: {spec.dimension} ~ {layout.register_ids[j]}" for j in np.flatnonzero(pairs_ok[:, q])
-                          if layout.register_ids[j] != spec.register)
+            alike = tuple(f"relation: {spec.dimension} ~ {layout.register_ids[j]}"
+                          for j in np.flatnonzero(pairs_ok[:, q]) if layout.register_ids[j] != spec.register)
         steps.append(Step(spec, float(f_stat), float(p), float(p_adj), m, cv0, cv1, ok, alike))
         if not ok:
             break

@@ -26,7 +26,7 @@ import pandas as pd
 import parsers
 from setupfix.diagnose import Diagnoser, Diagnosis, Layout, Series
 from setupfix.diagnose.forecast import forecast_shift, spec_of
-from setupfix.diagnose.terms import EffectSpec, applied_at, join_temperatures, parts_since_change
+from setupfix.diagnose.terms import EffectSpec, applied_at, join_temperatures, parts_since_change, typical_step
 from setupfix.errors import ExportError, MatchError, ModelError, Note, ParseError, SourceLocation
 from setupfix.model import PartMeasurement, ProcessModel, load_model, match_parts, model_from_dict
 from setupfix.model.effects import EffectsSection, ModelEffect, effects_from_dict, load_effects, with_effects
@@ -36,6 +36,9 @@ from setupfix.pipeline.writers import check_target, write_text
 __all__ = ["SeriesInput", "DiagnoseOutcome", "load_series", "read_corrections_log", "read_temperature_log",
            "diagnose_reports", "expand_reports", "augmented_section", "write_augmented",
            "corrections_from_table", "temperatures_from_table", "forecast_part"]
+
+#: A temperature log as arrays: times, samples (n, channels), channel names.
+TempLog = tuple[pd.DatetimeIndex, np.ndarray, tuple[str, ...]]
 
 _LOG_NAMES = ("corrections.csv",)
 _TEMP_NAMES = ("temperatures.csv",)
@@ -156,7 +159,8 @@ def corrections_from_table(table: pd.DataFrame, model: ProcessModel,
             raise MatchError(f"unknown register {rec['register']!r} (model registers: {', '.join(ids)})",
                              location=SourceLocation(path, line=lines[i])) from None
         if event == "tool_change" and reg.kind != "tool":
-            raise MatchError(f"tool change of {reg.id}, which is not a tool", location=SourceLocation(path, line=lines[i]))
+            raise MatchError(f"tool change of {reg.id}, which is not a tool",
+                             location=SourceLocation(path, line=lines[i]))
         text = str(rec["delta"]).strip()
         if event == "correction":
             try:
@@ -164,7 +168,8 @@ def corrections_from_table(table: pd.DataFrame, model: ProcessModel,
                 if not math.isfinite(delta):
                     raise ValueError
             except ValueError:
-                raise ParseError(f"delta {text!r} is not a number", location=SourceLocation(path, line=lines[i])) from None
+                raise ParseError(f"delta {text!r} is not a number",
+                                 location=SourceLocation(path, line=lines[i])) from None
         else:
             delta = 0.0
         regs.append(ids.index(reg.id))
@@ -297,8 +302,7 @@ def load_series(model: ProcessModel | str | Path, reports: Sequence[str | Path] 
                        corrections, temperatures, tuple(notes))
 
 
-def _with_thermal_prediction(temps: tuple[pd.DatetimeIndex, np.ndarray, tuple[str, ...]] | None, thermal: str,
-                             temperatures: str) -> tuple[tuple[pd.DatetimeIndex, np.ndarray, tuple[str, ...]], list[str]]:
+def _with_thermal_prediction(temps: TempLog | None, thermal: str, temperatures: str) -> tuple[TempLog, list[str]]:
     """The temperature channels plus the drift a saved thermal model predicts over the same log."""
     from setupfix.pipeline.thermal import predict_drift
 
@@ -325,7 +329,7 @@ def _ordered(parts: list[PartMeasurement]) -> list[PartMeasurement]:
 
 def _assemble(model: ProcessModel, parts: list[PartMeasurement],
               log: tuple[pd.DatetimeIndex, np.ndarray, np.ndarray, list[str]] | None,
-              temps: tuple[pd.DatetimeIndex, np.ndarray, tuple[str, ...]] | None, where: str) -> tuple[Series, list[str]]:
+              temps: TempLog | None, where: str) -> tuple[Series, list[str]]:
     """Parts in time order with the corrections in effect, parts since tool changes, temperatures."""
     notes: list[str] = []
     layout = Layout.from_model(model)
@@ -380,8 +384,7 @@ def _assemble(model: ProcessModel, parts: list[PartMeasurement],
 def augmented_section(diagnosis: Diagnosis, declared: EffectsSection) -> EffectsSection:
     """The ``[effects]`` section: the model's own effects, then those found (ids E1, E2, …)."""
     s = diagnosis.series
-    gaps = np.diff(s.time)
-    step = float(np.median(gaps[gaps <= 1.0])) if np.any(gaps <= 1.0) else (float(np.median(gaps)) if gaps.size else None)
+    step = typical_step(s.time) if s.n_cycles > 1 else None
     effects = list(declared.effects)
     used = {e.id for e in effects}
     n = 1

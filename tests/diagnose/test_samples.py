@@ -25,8 +25,8 @@ def test_simulated_series_reveals_its_undeclared_thermal_effect():
 
 
 def test_real_sheet_metal_offset_only_model_leaves_a_tilt():
-    out = diagnose_reports(LOOP / "sheet_metal" / "model.toml", [SAMPLES / "qif" / "QIF3_SheetMetal_Results_6_samples.QIF"],
-                           diagnoser=Diagnoser(walk=False))
+    report = SAMPLES / "qif" / "QIF3_SheetMetal_Results_6_samples.QIF"
+    out = diagnose_reports(LOOP / "sheet_metal" / "model.toml", [report], diagnoser=Diagnoser(walk=False))
     d = out.diagnosis
     assert d.effects and all(e.kind == "position" for e in d.effects)
     assert d.effects[0].target == "x"
