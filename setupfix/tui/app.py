@@ -28,10 +28,10 @@ from setupfix.pipeline import view
 from setupfix.pipeline.compare import DEFAULT_METHODS, Comparison
 from setupfix.pipeline.correct import PartCorrection
 from setupfix.pipeline.diagnose import diagnose_reports
-from setupfix.pipeline.session import (FolderWatch, OpenedReport, compare_steps, open_report, record_applied,
-                                      store_parts)
+from setupfix.pipeline.session import (FolderWatch, OpenedReport, compare_steps, offsets_text, open_report,
+                                      record_applied, store_parts)
 from setupfix.pipeline.thermal import predict_drift
-from setupfix.tui.exporting import CONTROLLERS, render_offsets, write_offsets
+from setupfix.tui.exporting import CONTROLLERS, write_offsets
 from setupfix.tui.messages import CompareProgress
 from setupfix.tui.screens import ExportRequest, ExportScreen, HelpScreen, OpenFileScreen
 from setupfix.tui.widgets import (ComparePanel, DimensionTable, HistoryPanel, MatchTable, RegisterTable, SummaryBar,
@@ -44,7 +44,6 @@ SORT_ORDER: tuple[str | None, ...] = (None, "margin_after", "deviation", "name",
 
 #: Why panels whose pipeline is not on this branch yet show "not available".
 MISSING = {
-    "verdict": "safety rules (issue 13) not in this build",
     "feed": "the thermal feed-forward (issue 12) is not in this build",
 }
 
@@ -56,6 +55,7 @@ class Inputs:
     model: Path | None = None
     report: Path | None = None
     db: Path | None = None
+    current: Path | None = None
     thermal: Path | None = None
     temperatures: Path | None = None
     optimizer: str = "exact"
@@ -156,7 +156,7 @@ class SetupfixApp(App[None]):
         self.problem = f"opening {self.report_path} …"
         self._show()
         self.run_worker(partial(open_report, self.model_path, self.report_path, optimizer=self.optimizer,
-                                seed=self.inputs.seed),
+                                seed=self.inputs.seed, db=self.inputs.db, current=self.inputs.current),
                         name="open", group="open", thread=True, exclusive=True, exit_on_error=False)
 
     def _start_thermal(self) -> None:
@@ -284,8 +284,7 @@ class SetupfixApp(App[None]):
         n = len(self.opened.corrections) if self.opened else 1
         part = f"part {c.part.part or '—'}" + (f" ({self.part_index + 1}/{n}, [ ] to change)" if n > 1 else "")
         head = view.summary(c)
-        summary.show(head, optimizer=self.optimizer, part=part, verdict_reason=MISSING["verdict"],
-                     problem=self.problem)
+        summary.show(head, optimizer=self.optimizer, part=part, problem=self.problem)
         rows = view.filter_rows(view.dimension_rows(c), self.station)
         if self.sort_key is not None:
             rows = view.sort_rows(rows, self.sort_key)
@@ -293,7 +292,8 @@ class SetupfixApp(App[None]):
         self.query_one(DimensionTable).border_title = (
             f"dimensions · station {self.station or 'all'} · sort {self.sort_key or 'model'}")
         digits = max(0, len(f"{c.model.resolution:g}".split(".")[-1])) if c.model.resolution < 1 else 0
-        self.query_one(RegisterTable).show(view.register_rows(c), digits=digits)
+        self.query_one(RegisterTable).show(view.register_rows(c, self.opened.current if self.opened else None),
+                                           digits=digits)
         self.query_one(RegisterTable).border_title = f"recommendation [{c.model.unit}, axis {c.model.axis}]"
 
     def on_resize(self) -> None:
@@ -404,8 +404,7 @@ class SetupfixApp(App[None]):
         if self.opened is None or not self.opened.corrections:
             self.notify("nothing to export: open a report that matches the model first", severity="warning")
             return
-        corrections = self.opened.corrections
-        self.push_screen(ExportScreen(CONTROLLERS, partial(render_offsets, corrections), self.inputs.offsets),
+        self.push_screen(ExportScreen(CONTROLLERS, partial(offsets_text, self.opened), self.inputs.offsets),
                          self._export_confirmed)
 
     def _export_confirmed(self, request: ExportRequest | None) -> None:
