@@ -76,7 +76,7 @@ def test_compare_steps_end_with_what_compare_problem_gives():
         assert a.seeds == b.seeds and a.f1.tolist() == b.f1.tolist() and a.f2.tolist() == b.f2.tolist()
 
 
-@pytest.mark.parametrize("controller", ["csv", "fanuc", "haas"])
+@pytest.mark.parametrize("controller", ["csv", "fanuc"])
 def test_offsets_text_is_what_correct_writes(tmp_path, controller):
     from setupfix.pipeline.correct import correct_report, write_correction_offsets
     from setupfix.pipeline.session import offsets_text
