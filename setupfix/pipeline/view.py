@@ -353,11 +353,13 @@ class DriftView:
 
     method: str
     target: str
+    unit: str  #: the thermal model's unit ("" when it does not say)
     latest: float
     latest_time: str
     recent: Array  #: the last samples of the predicted drift, oldest first
     measured_latest: float | None
     samples: int
+    notes: tuple[str, ...] = ()
 
     @property
     def recent_range(self) -> tuple[float, float]:
@@ -371,9 +373,11 @@ def drift_view(prediction: DriftPrediction, recent: int = 120) -> DriftView:
     m_last = None
     if measured is not None and len(measured) and np.isfinite(measured[-1]):
         m_last = float(measured[-1])
-    return DriftView(prediction.method, prediction.target, prediction.latest,
+    return DriftView(prediction.method, prediction.target, (prediction.unit or "").replace("um", "µm"),
+                     prediction.latest,
                      prediction.timestamps[-1] if prediction.timestamps else "",
-                     np.asarray(prediction.drift[-recent:], dtype=float), m_last, int(len(prediction.drift)))
+                     np.asarray(prediction.drift[-recent:], dtype=float), m_last, int(len(prediction.drift)),
+                     tuple(str(n) for n in prediction.notes))
 
 
 @dataclass(frozen=True)

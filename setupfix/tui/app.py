@@ -28,6 +28,7 @@ from setupfix.pipeline import view
 from setupfix.pipeline.compare import DEFAULT_METHODS, Comparison
 from setupfix.pipeline.correct import PartCorrection
 from setupfix.pipeline.diagnose import diagnose_reports
+from setupfix.pipeline.feedforward import ThermalFeedForward, thermal_feed_forward
 from setupfix.pipeline.session import (FolderWatch, OpenedReport, compare_steps, offsets_text, open_report,
                                       record_applied, store_parts)
 from setupfix.pipeline.thermal import predict_drift
@@ -41,12 +42,6 @@ __all__ = ["SetupfixApp", "SORT_ORDER"]
 
 #: What ``s`` cycles through: None is the model's order.
 SORT_ORDER: tuple[str | None, ...] = (None, "margin_after", "deviation", "name", "station")
-
-#: Why panels whose pipeline is not on this branch yet show "not available".
-MISSING = {
-    "feed": "the thermal feed-forward (issue 12) is not in this build",
-}
-
 
 @dataclass(frozen=True)
 class Inputs:
@@ -109,6 +104,7 @@ class SetupfixApp(App[None]):
         self.comparison: Comparison | None = None
         self.folder_watch: FolderWatch | None = None
         self.problem = ""
+        self.feed: ThermalFeedForward | None = None
 
     # ----------------------------------------------------------------- layout
     def compose(self) -> ComposeResult:
@@ -169,6 +165,22 @@ class SetupfixApp(App[None]):
         self.run_worker(partial(_drift, self.inputs.thermal, self.inputs.temperatures), name="thermal",
                         group="thermal", thread=True, exclusive=True, exit_on_error=False)
 
+    def _start_feed_forward(self) -> None:
+        c = self._current()
+        self.feed = None
+        if c is None or self.inputs.thermal is None or self.inputs.temperatures is None:
+            return
+        self.query_one(ThermalPanel).feed_forward(f"feed-forward for {c.part.report} {c.part.part}: computing …")
+        self.run_worker(partial(thermal_feed_forward, c.model, self.inputs.thermal, self.inputs.temperatures,
+                                measured_at=c.part.timestamp),
+                        name="feedforward", group="feedforward", thread=True, exclusive=True, exit_on_error=False)
+
+    def _feed_text(self) -> str:
+        """The feed-forward line, shown beside the setup correction (not in the exported offsets)."""
+        if self.feed is None:
+            return ""
+        return self.feed.line() + "; shown beside the setup correction, not added to the exported offsets"
+
     def on_worker_state_changed(self, event: Worker.StateChanged) -> None:
         """The error boundary and the one place results reach the screen."""
         worker = event.worker
@@ -189,9 +201,11 @@ class SetupfixApp(App[None]):
             elif worker.name == "diagnose" and isinstance(worker.result, view.DiagnosisView):
                 self.query_one(HistoryPanel).diagnosis(worker.result, source=self._series_source())
             elif worker.name == "thermal" and isinstance(worker.result, view.DriftView):
-                self.query_one(ThermalPanel).show(worker.result, unit=self._unit(),
-                                                  source=str(self.inputs.temperatures))
-                self.query_one(ThermalPanel).feed_forward(f"feed-forward not available: {MISSING['feed']}")
+                self.query_one(ThermalPanel).show(worker.result, source=str(self.inputs.temperatures))
+            elif worker.name == "feedforward" and isinstance(worker.result, ThermalFeedForward):
+                self.feed = worker.result
+                self.query_one(ThermalPanel).feed_forward(self._feed_text())
+                self._show()
 
     def _failed(self, what: str, error: BaseException | None) -> None:
         text = str(error) if isinstance(error, SetupfixError) else f"internal error: {type(error).__name__}: {error}"
@@ -207,6 +221,9 @@ class SetupfixApp(App[None]):
             self.query_one(ComparePanel).stopped(f"✗ {text}")
         elif what == "thermal":
             self.query_one(ThermalPanel).not_available(text)
+        elif what == "feedforward":
+            self.feed = None
+            self.query_one(ThermalPanel).feed_forward(f"✗ feed-forward: {text}")
         elif what in ("history", "diagnose"):
             self.query_one(HistoryPanel).status(f"✗ {text}")
 
@@ -228,6 +245,7 @@ class SetupfixApp(App[None]):
         else:
             status.update("✓ every characteristic of the report matches a dimension of the model.")
         self._show()
+        self._start_feed_forward()
         if self.inputs.db is not None:
             self.run_worker(partial(_history, opened.model, self.inputs.db), name="history", group="history",
                             thread=True, exclusive=True, exit_on_error=False)
@@ -284,7 +302,8 @@ class SetupfixApp(App[None]):
         n = len(self.opened.corrections) if self.opened else 1
         part = f"part {c.part.part or '—'}" + (f" ({self.part_index + 1}/{n}, [ ] to change)" if n > 1 else "")
         head = view.summary(c)
-        summary.show(head, optimizer=self.optimizer, part=part, problem=self.problem)
+        summary.show(head, optimizer=self.optimizer, part=part,
+                     problem="\n".join(t for t in (self.problem, self.feed.line() if self.feed else "") if t))
         rows = view.filter_rows(view.dimension_rows(c), self.station)
         if self.sort_key is not None:
             rows = view.sort_rows(rows, self.sort_key)
@@ -351,6 +370,7 @@ class SetupfixApp(App[None]):
         if self.opened and self.opened.corrections:
             self.part_index = (self.part_index + step) % len(self.opened.corrections)
             self._show()
+            self._start_feed_forward()
 
     def action_tab(self, tab: str) -> None:
         self.query_one(TabbedContent).active = tab
