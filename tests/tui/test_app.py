@@ -54,7 +54,8 @@ def test_open_sort_filter_export_then_a_bad_report(make_app, tmp_path):
             # export: the confirmation shows the text; ctrl+s writes exactly it
             await pilot.press("e")
             await pilot.pause()
-            shown = app.screen.query_one("#export-text").text
+            shown = app.screen.text
+            assert str(app.screen.query_one("#export-text").render()) == shown
             await pilot.press("ctrl+s")
             await pilot.pause()
             written = (tmp_path / "offsets.csv").read_text(encoding="utf-8")

@@ -45,8 +45,3 @@ def test_export_confirmation(snap_compare):
         await pilot.pause()
 
     assert snap_compare(_app(), run_before=run_before, terminal_size=(80, 24))
-
-
-def test_match_table_of_a_report_of_another_part(snap_compare):
-    assert snap_compare(_app(Path("sample_reports/pcdmis/bracket_two_parts.txt")), run_before=_settled,
-                        terminal_size=(80, 24))
