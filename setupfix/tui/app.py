@@ -131,7 +131,7 @@ class SetupfixApp(App[None]):
         self._show()
         self._start_thermal()
         self.query_one(HistoryPanel).status(
-            "no history store given (--db STORE): press d to diagnose the reports in the current report's folder"
+            "no history store given (--db STORE): d diagnoses the reports in the current report's folder"
             if self.inputs.db is None else f"reading the history store {self.inputs.db} …")
         report = self.inputs.report
         if report is not None and report.is_dir():
@@ -379,16 +379,20 @@ class SetupfixApp(App[None]):
         self.push_screen(HelpScreen())
 
     def action_diagnose(self) -> None:
-        """Diagnose the series: the reports in the current report's (or the watched) folder."""
+        """Diagnose the series: the history store, else the reports in the current (or watched) folder."""
         self.action_tab("history")
         if self.model_path is None or self._series_source() == "":
             self.notify("open a model and a report first", severity="warning")
             return
         self.query_one(HistoryPanel).status(f"diagnosing the reports in {self._series_source()} …")
-        self.run_worker(partial(_diagnose, self.model_path, Path(self._series_source())), name="diagnose",
+        self.run_worker(partial(_diagnose, self.model_path, Path(self._series_source()), self.inputs.db is not None),
+                        name="diagnose",
                         group="diagnose", thread=True, exclusive=True, exit_on_error=False)
 
     def _series_source(self) -> str:
+        """The history store when given, else the watched folder or the report's folder."""
+        if self.inputs.db is not None:
+            return str(self.inputs.db)
         if self.folder_watch is not None:
             return str(self.folder_watch.folder)
         return str(self.report_path.parent) if self.report_path is not None else ""
@@ -469,6 +473,7 @@ def _history(model: ProcessModel, db: Path) -> tuple[list[view.CycleBudget], lis
     return view.cycle_budgets(model, parts), notes
 
 
-def _diagnose(model: Path, folder: Path) -> view.DiagnosisView:
-    """Thread worker: ``setupfix diagnose`` over a folder of reports (and its logs)."""
-    return view.diagnosis_view(diagnose_reports(model, [folder]))
+def _diagnose(model: Path, source: Path, store: bool) -> view.DiagnosisView:
+    """Thread worker: ``setupfix diagnose`` over the history store or a folder of reports (and its logs)."""
+    outcome = diagnose_reports(model, db=source) if store else diagnose_reports(model, [source])
+    return view.diagnosis_view(outcome)
