@@ -19,19 +19,16 @@ from textual.app import App, ComposeResult
 from textual.binding import Binding, BindingType
 from textual.containers import Horizontal, Vertical
 from textual.widgets import DataTable, Footer, Header, Static, TabbedContent, TabPane
-from textual.worker import Worker, WorkerState, get_current_worker
+from textual.worker import Worker, WorkerState
 
 from setupfix.errors import SetupfixError
-from setupfix.model import ProcessModel
-from setupfix.optimize import OPTIMIZERS, CorrectionProblem
+from setupfix.optimize import OPTIMIZERS
 from setupfix.pipeline import view
 from setupfix.pipeline.compare import DEFAULT_METHODS, Comparison
 from setupfix.pipeline.correct import PartCorrection
-from setupfix.pipeline.diagnose import diagnose_reports
 from setupfix.pipeline.feedforward import ThermalFeedForward, thermal_feed_forward
-from setupfix.pipeline.session import (FolderWatch, OpenedReport, compare_steps, offsets_text, open_report,
-                                      record_applied, store_parts)
-from setupfix.pipeline.thermal import predict_drift
+from setupfix.pipeline.session import FolderWatch, OpenedReport, offsets_text, open_report, record_applied
+from setupfix.tui import workers
 from setupfix.tui.exporting import CONTROLLERS, write_offsets
 from setupfix.tui.messages import CompareProgress
 from setupfix.tui.screens import ExportRequest, ExportScreen, HelpScreen, OpenFileScreen
@@ -162,7 +159,7 @@ class SetupfixApp(App[None]):
             panel.not_available(f"no thermal model and log given ({missing})")
             return
         panel.not_available(f"predicting drift from {self.inputs.temperatures} …")
-        self.run_worker(partial(_drift, self.inputs.thermal, self.inputs.temperatures), name="thermal",
+        self.run_worker(partial(workers.drift, self.inputs.thermal, self.inputs.temperatures), name="thermal",
                         group="thermal", thread=True, exclusive=True, exit_on_error=False)
 
     def _start_feed_forward(self) -> None:
@@ -247,7 +244,7 @@ class SetupfixApp(App[None]):
         self._show()
         self._start_feed_forward()
         if self.inputs.db is not None:
-            self.run_worker(partial(_history, opened.model, self.inputs.db), name="history", group="history",
+            self.run_worker(partial(workers.history, opened.model, self.inputs.db), name="history", group="history",
                             thread=True, exclusive=True, exit_on_error=False)
 
     def _compared(self, comparison: object) -> None:
@@ -345,7 +342,7 @@ class SetupfixApp(App[None]):
             return
         self.query_one(TabbedContent).active = "compare"
         self.query_one(ComparePanel).progress(0, 1 + len(DEFAULT_METHODS) * self.inputs.trials, "exact")
-        self.run_worker(partial(_compare, self, c.problem, self.inputs.trials, self.inputs.seed), name="compare",
+        self.run_worker(partial(workers.compare, self, c.problem, self.inputs.trials, self.inputs.seed), name="compare",
                         group="compare", thread=True, exclusive=True, exit_on_error=False)
 
     def action_cancel(self) -> None:
@@ -385,7 +382,7 @@ class SetupfixApp(App[None]):
             self.notify("open a model and a report first", severity="warning")
             return
         self.query_one(HistoryPanel).status(f"diagnosing the reports in {self._series_source()} …")
-        self.run_worker(partial(_diagnose, self.model_path, Path(self._series_source()), self.inputs.db is not None),
+        self.run_worker(partial(workers.diagnose, self.model_path, Path(self._series_source()), self.inputs.db is not None),
                         name="diagnose",
                         group="diagnose", thread=True, exclusive=True, exit_on_error=False)
 
@@ -449,31 +446,3 @@ class SetupfixApp(App[None]):
                 return
             self.notify(f"recorded {added} register change(s) as applied in {self.inputs.db}", title="history")
 
-
-def _drift(model: Path, log: Path) -> view.DriftView:
-    """Thread worker: the saved thermal model's drift over the log."""
-    return view.drift_view(predict_drift(model, log))
-
-
-def _compare(app: SetupfixApp, problem: CorrectionProblem, trials: int, seed: int) -> Comparison | None:
-    """Thread worker: the comparison one trial at a time, stoppable between trials."""
-    worker = get_current_worker()
-    result: Comparison | None = None
-    for method, step, steps, comparison in compare_steps(problem, trials=trials, seed=seed):
-        if worker.is_cancelled:
-            return None
-        result = comparison
-        app.post_message(CompareProgress(step, steps, method))
-    return result
-
-
-def _history(model: ProcessModel, db: Path) -> tuple[list[view.CycleBudget], list[str]]:
-    """Thread worker: the error budget of every cycle in the history store."""
-    parts, notes = store_parts(model, db)
-    return view.cycle_budgets(model, parts), notes
-
-
-def _diagnose(model: Path, source: Path, store: bool) -> view.DiagnosisView:
-    """Thread worker: ``setupfix diagnose`` over the history store or a folder of reports (and its logs)."""
-    outcome = diagnose_reports(model, db=source) if store else diagnose_reports(model, [source])
-    return view.diagnosis_view(outcome)
