@@ -25,8 +25,10 @@ def _in_the_repository(monkeypatch):
 
 
 async def _settled(pilot) -> None:
+    # workers done, their results laid out, breakpoint classes applied (a loaded machine needs the extra turns)
     await pilot.app.workers.wait_for_complete()
-    await pilot.pause()
+    for _ in range(3):
+        await pilot.pause()
 
 
 def _app(report: Path = CYCLE_01) -> SetupfixApp:
