@@ -9,6 +9,7 @@ import numpy as np
 from setupfix.diagnose import EffectSpec, HiddenEffect, Layout, ShopSimulator
 from setupfix.diagnose.shop import random_topology
 from setupfix.model import ProcessModel, model_from_dict
+from setupfix.model.stations import expand_stations
 
 from conftest import GUIDE_PINS
 
@@ -17,7 +18,8 @@ NOISE = 0.002
 
 def guide_pins_doc(positions: bool = True) -> dict:
     """The bundled guide-pins model; with positions, part p sits at x = 150 (p − 1), feature f at +20 f."""
-    doc = tomllib.loads((GUIDE_PINS / "model.toml").read_text(encoding="utf-8"))
+    doc, _, problems = expand_stations(tomllib.loads((GUIDE_PINS / "model.toml").read_text(encoding="utf-8")))
+    assert not problems, problems
     if positions:
         for fid, feat in doc["features"].items():
             p, f = int(fid[1]), int(fid[3:])
