@@ -22,6 +22,7 @@ from textual.widgets import DataTable, Footer, Header, Static, TabbedContent, Ta
 from textual.worker import Worker, WorkerState
 
 from setupfix.errors import SetupfixError
+from setupfix.offsets import grid_decimals
 from setupfix.optimize import OPTIMIZERS
 from setupfix.pipeline import view
 from setupfix.pipeline.compare import DEFAULT_METHODS, Comparison
@@ -225,6 +226,9 @@ class SetupfixApp(App[None]):
             self.query_one(HistoryPanel).status(f"✗ {text}")
 
     def _opened(self, opened: OpenedReport) -> None:
+        # Work started for the previous report must not land on this one.
+        self.workers.cancel_group(self, "compare")
+        self.workers.cancel_group(self, "feedforward")
         self.opened = opened
         self.problem = ""
         self.part_index = min(self.part_index, max(len(opened.corrections) - 1, 0))
@@ -252,8 +256,11 @@ class SetupfixApp(App[None]):
         if not isinstance(comparison, Comparison):
             panel.stopped("comparison cancelled")
             return
-        self.comparison = comparison
         c = self._current()
+        if c is None or comparison.problem is not c.problem:
+            panel.stopped("that comparison was for a previous report: press c to compare this one")
+            return
+        self.comparison = comparison
         panel.show(view.compare_rows(comparison), view.convergence(comparison, 60),
                    exact_f1=comparison.exact.margin_after, unit=self._unit(),
                    heading=f"{comparison.trials} seeded trials per method (seed {comparison.seed})"
@@ -307,9 +314,8 @@ class SetupfixApp(App[None]):
         self.query_one(DimensionTable).show(rows, wide=self.size.width >= 120)
         self.query_one(DimensionTable).border_title = (
             f"dimensions · station {self.station or 'all'} · sort {self.sort_key or 'model'}")
-        digits = max(0, len(f"{c.model.resolution:g}".split(".")[-1])) if c.model.resolution < 1 else 0
         self.query_one(RegisterTable).show(view.register_rows(c, self.opened.current if self.opened else None),
-                                           digits=digits)
+                                           digits=grid_decimals(c.model.resolution))
         self.query_one(RegisterTable).border_title = f"recommendation [{c.model.unit}, axis {c.model.axis}]"
 
     def on_resize(self) -> None:
