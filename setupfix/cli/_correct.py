@@ -73,6 +73,10 @@ def run(args: argparse.Namespace) -> int:
     for r in results:
         if r.verdict == "reject":
             print(f"error: {r.part.report}: part {r.part.part or '—'}: {r.recommendation.alarm}", file=sys.stderr)
+    if args.json or args.offsets == "-":  # the table below prints them; here they must not be lost
+        for r in results:
+            for warning in r.warnings:
+                print(f"warning: {warning}", file=sys.stderr)
     if args.offsets == "-":
         return REJECTED if rejected else OK
     if args.json:
