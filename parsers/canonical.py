@@ -65,6 +65,7 @@ def finish_table(rows: list[dict[str, object]] | dict[str, object], path: str) -
         if col not in frame:
             frame[col] = math.nan if col in LENGTH_COLUMNS else ""
     frame["unit"] = "mm"
+    _round_lengths(frame)
     for col in TEXT_COLUMNS:
         text = frame[col]
         dirty = text.map(lambda v: isinstance(v, str) and _CONTROL.search(v) is not None)
@@ -79,6 +80,24 @@ def finish_table(rows: list[dict[str, object]] | dict[str, object], path: str) -
 #: Largest length a report row may hold [mm]: 10 km.  A larger value (``actual = 1e308``,
 #: ``1e307`` inch) is damage; refusing it here keeps inf/overflow out of every later sum.
 MAX_LENGTH_MM = 1e7
+
+
+#: Decimals lengths are kept to [mm]: far below any report's resolution (≤ 7 decimals seen), far above
+#: the binary noise of a difference or a unit conversion (``-0.000100000000003`` → ``-0.0001``).
+LENGTH_DECIMALS = 9
+
+
+def _round_lengths(frame: pd.DataFrame) -> None:
+    """Round lengths to :data:`LENGTH_DECIMALS` and set ``deviation = actual − nominal`` where both are known."""
+    for col in LENGTH_COLUMNS:
+        frame[col] = pd.to_numeric(frame[col], errors="coerce").astype(float)
+    with np.errstate(all="ignore"):
+        difference = frame["actual"].to_numpy() - frame["nominal"].to_numpy()
+    frame["deviation"] = np.where(np.isnan(difference), frame["deviation"].to_numpy(), difference)
+    for col in LENGTH_COLUMNS:
+        values = frame[col].to_numpy()
+        finite = np.isfinite(values) & (np.abs(values) < 1e15)
+        frame[col] = np.where(finite, np.round(np.where(finite, values, 0.0), LENGTH_DECIMALS), values)
 
 
 def _check_magnitudes(frame: pd.DataFrame, path: str) -> None:
