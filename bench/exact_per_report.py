@@ -103,17 +103,20 @@ def main(argv: list[str] | None = None) -> None:
         exact = get_optimizer("exact")
         exact.solve(items[0][1])  # warm-up: imports, first solver set-up
         rng = np.random.default_rng(0)
-        times, refs = [], []
+        times, cpu, refs, ref_cpu = [], [], [], []
         stages: dict[str, list[float]] = {}
         paths: Counter[str] = Counter()
         statuses: Counter[str] = Counter()
         wall = time.perf_counter()
         for _, problem in items:
             x_ref = problem.snap(rng.uniform(problem.lb, problem.ub, (5000, problem.n_registers)))
+            c0 = time.thread_time()
             refs.append(reference_seconds(problem, x_ref))
-            start = time.perf_counter()
+            ref_cpu.append(time.thread_time() - c0)
+            start, c0 = time.perf_counter(), time.thread_time()
             result = exact.solve(problem)
             times.append(time.perf_counter() - start)
+            cpu.append(time.thread_time() - c0)
             statuses[result.status] += 1
             for stage, sec in dict(result.extra.get("stages", {})).items():  # type: ignore[call-overload]
                 stages.setdefault(stage, []).append(float(sec))
@@ -122,7 +125,9 @@ def main(argv: list[str] | None = None) -> None:
         split = profile_split(exact.solve, items)
 
     t = np.array(times)
+    tc = np.array(cpu)
     ref = float(np.median(refs))
+    refc = float(np.median(ref_cpu))
     n = len(items)
     lines = [
         "Exact optimiser: time per report on the guide-pins model (paper's example)",
@@ -135,10 +140,14 @@ def main(argv: list[str] | None = None) -> None:
         f"status  : {dict(statuses)}",
         "",
         f"reference: one vectorised evaluate(5,000 grid solutions), median {ref * 1e3:.3f} ms",
-        f"solve per report, median : {np.median(t) * 1e3:7.2f} ms = {np.median(t) / ref:5.1f}x reference",
-        f"solve per report, p95    : {np.percentile(t, 95) * 1e3:7.2f} ms = "
+        f"wall time per report, median : {np.median(t) * 1e3:7.2f} ms = {np.median(t) / ref:5.2f}x reference",
+        f"wall time per report, p95    : {np.percentile(t, 95) * 1e3:7.2f} ms = "
         f"{np.percentile(t, 95) / ref:5.1f}x reference",
-        f"solve per report, max    : {t.max() * 1e3:7.2f} ms",
+        f"wall time per report, max    : {t.max() * 1e3:7.2f} ms",
+        f"CPU time of this thread (insensitive to other processes on a busy machine; reference "
+        f"{refc * 1e3:.3f} ms):",
+        f"  median {np.median(tc) * 1e3:7.2f} ms = {np.median(tc) / refc:5.2f}x reference, "
+        f"p95 {np.percentile(tc, 95) * 1e3:7.2f} ms",
         "",
         "per stage (median over the reports that ran it, ms; count):",
     ]
@@ -156,7 +165,8 @@ def main(argv: list[str] | None = None) -> None:
         f"  inside NNLS               {split['nnls'] / total:6.1%}",
         f"  Python and numpy around   {(total - split['highs'] - split['nnls']) / total:6.1%}",
         "",
-        f"target  : median <= 5 ms per report [{'met' if np.median(t) <= 0.005 else 'not met'}]",
+        f"target  : median <= 5 ms per report: wall [{'met' if np.median(t) <= 0.005 else 'not met'}], "
+        f"CPU [{'met' if np.median(tc) <= 0.005 else 'not met'}]",
     ]
     text = "\n".join(lines) + "\n"
     args.out.parent.mkdir(parents=True, exist_ok=True)

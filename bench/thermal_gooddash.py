@@ -13,6 +13,7 @@ sample: RMSE, maximum residual (MR), Nash–Sutcliffe E; mean over pairs (and se
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 import time
 from pathlib import Path
@@ -25,7 +26,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from setupfix.thermal.metrics import score  # noqa: E402
 from setupfix.thermal.models import GreyModel, MRAModel  # noqa: E402
 
-DATA = Path(__file__).resolve().parents[2] / "shared" / "thermal-data" / "gooddash"
+DATA = Path(os.environ.get("SETUPFIX_SHARED", Path(__file__).resolve().parents[2] / "shared")) / "thermal-data" / "gooddash"
 COLS = [2, 6, 9, 12, 19, 20]
 
 

@@ -1,8 +1,11 @@
-"""Offsets CSV: the corrections to type into (or send to) the controller.
+"""Offset rows: the corrections to type into (or send to) the controller.
 
-Columns per ``../shared/spec/cli-json.md``: report, part, id, register, kind, axis,
-delta.  One row per correctable register, zero included, so that the file is a
-complete instruction ("leave H23 as it is" is an instruction too).
+One :class:`OffsetRow` per correctable register, zero included, so that the output is
+a complete instruction ("leave H23 as it is" is an instruction too).  Without the
+controller's current offsets a row says *add* ``delta``; with them it says *set*
+``value = current + delta`` — an absolute value, so applying the file twice does not
+apply the change twice.  Writing the rows in a file format is
+:mod:`setupfix.pipeline.controllers`' job; nothing here touches a file.
 """
 
 from __future__ import annotations
@@ -13,16 +16,54 @@ import math
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 
+from setupfix.errors import MatchError
 from setupfix.model import ProcessModel
+from setupfix.model.safety import safety_settings
 
-__all__ = ["OFFSET_COLUMNS", "OffsetRow", "offset_rows", "offsets_csv_text"]
+__all__ = ["grid_decimals", "format_value", "OFFSET_COLUMNS", "OffsetRow", "offset_rows", "offsets_csv_text",
+           "csv_header", "csv_lines"]
 
-OFFSET_COLUMNS = ("report", "part", "id", "register", "kind", "axis", "delta")
+#: Columns of the offsets CSV, the spec's first (``../shared/spec/cli-json.md``).
+OFFSET_COLUMNS = ("report", "part", "id", "register", "kind", "axis", "delta", "unit", "mode",
+                  "offset", "current", "value", "verdict")
+
+
+def grid_decimals(resolution: float) -> int:
+    """Decimals that show every multiple of the register resolution exactly (0…9)."""
+    return max(0, min(9, math.ceil(-math.log10(resolution) - 1e-9)))
+
+
+_decimals = grid_decimals  # former name, still imported by pipeline.view
+
+
+def format_value(value: float, decimals: int) -> str:
+    """``value`` with at least ``decimals`` decimals and as many more (up to 9) as it needs.
+
+    A controller's current offset may carry finer digits than the model's grid;
+    they are kept, never rounded away.
+    """
+    exact = round(value, 9)
+    d = decimals
+    while d < 9 and round(exact, d) != exact:
+        d += 1
+    return f"{exact:.{d}f}"
 
 
 @dataclass(frozen=True)
 class OffsetRow:
-    """One register change, as written to the offsets CSV."""
+    """One register change.
+
+    Attributes
+    ----------
+    delta : float
+        Change to add to the register [unit].
+    mode : {"add", "set"}
+        ``set`` when the current value is known: write ``value`` (= current + delta).
+    offset : {"wear", "geometry"}
+        Which offset of the register the change goes to (model, per register).
+    number, edge : int or None
+        Controller slot given in the model (else derived from ``register``).
+    """
 
     report: str
     part: str
@@ -31,35 +72,79 @@ class OffsetRow:
     kind: str
     axis: str
     delta: float
+    unit: str = "mm"
+    mode: str = "add"
+    offset: str = "geometry"
+    current: float | None = None
+    value: float | None = None
+    number: int | None = None
+    edge: int | None = None
+    resolution: float = 0.001
+    verdict: str = ""
+
+    def cells(self) -> list[str]:
+        """The CSV cells in :data:`OFFSET_COLUMNS` order, numbers on the register grid."""
+        d = grid_decimals(self.resolution)
+
+        def num(v: float | None) -> str:
+            return "" if v is None else format_value(v, d)
+
+        return [self.report, self.part, self.id, self.register, self.kind, self.axis, num(self.delta), self.unit,
+                self.mode, self.offset, num(self.current), num(self.value), self.verdict]
 
 
-def _decimals(resolution: float) -> int:
-    """Decimals that show every multiple of the register resolution exactly."""
-    return max(0, min(9, math.ceil(-math.log10(resolution) - 1e-9)))
+def offset_rows(model: ProcessModel, corrections: Mapping[str, float], *, report: str = "", part: str = "",
+                current: Mapping[str, float] | None = None, verdict: str = "") -> list[OffsetRow]:
+    """Rows for every correctable (non-fixed) register of ``model``, in model order.
 
+    ``current`` maps register IDs to the controller's current values (all of them:
+    see :func:`setupfix.pipeline.controllers.read_current`); rows become ``set`` rows.
 
-def offset_rows(model: ProcessModel, corrections: Mapping[str, float], *, report: str = "",
-                part: str = "") -> list[OffsetRow]:
-    """Rows for every correctable (non-fixed) register of ``model``, in model order."""
-    digits = _decimals(model.resolution)
+    Raises
+    ------
+    MatchError
+        If ``current`` is given but lacks a correctable register.
+    """
+    digits = grid_decimals(model.resolution)
+    settings = safety_settings(model)
     rows = []
     for reg in model.registers:
         if reg.fixed:
             continue
+        policy = settings.register(reg.id)
         delta = round(float(corrections.get(reg.id, 0.0)), digits) + 0.0  # + 0.0 turns -0.0 into 0.0
-        rows.append(OffsetRow(report, part, reg.id, reg.register, reg.kind, model.axis, delta))
+        now = value = None
+        if current is not None:
+            if reg.id not in current:
+                raise MatchError(f"no current value for register {reg.register} ({reg.id}) in the current offsets")
+            now = float(current[reg.id]) + 0.0
+            value = round(now + delta, 9) + 0.0
+        rows.append(OffsetRow(report, part, reg.id, reg.register, reg.kind, model.axis, delta, model.unit,
+                              "add" if current is None else "set",
+                              policy.offset or ("wear" if reg.kind == "tool" else "geometry"), now, value,
+                              policy.number, policy.edge, model.resolution, verdict))
     return rows
 
 
-def offsets_csv_text(rows: Iterable[OffsetRow], *, resolution: float = 0.001) -> str:
-    """The offsets CSV of ``rows``, deltas with the decimals of ``resolution``.
+def csv_header() -> str:
+    """The header line of the offsets CSV."""
+    return ",".join(OFFSET_COLUMNS) + "\n"
 
-    Written by :func:`setupfix.pipeline.writers.write_offsets_csv`.
-    """
-    digits = _decimals(resolution)
+
+def csv_lines(rows: Iterable[OffsetRow]) -> str:
+    """The data lines of ``rows`` (batch appends them report by report)."""
     stream = io.StringIO()
     writer = csv.writer(stream, lineterminator="\n")
-    writer.writerow(OFFSET_COLUMNS)
     for r in rows:
-        writer.writerow([r.report, r.part, r.id, r.register, r.kind, r.axis, f"{r.delta:.{digits}f}"])
+        writer.writerow(r.cells())
     return stream.getvalue()
+
+
+def offsets_csv_text(rows: Iterable[OffsetRow], *, resolution: float | None = None) -> str:
+    """The offsets CSV of ``rows`` (header included).
+
+    Each row carries its model's resolution; ``resolution`` is accepted for callers
+    of the former signature and ignored.  Written by
+    :func:`setupfix.pipeline.writers.write_offsets_csv`.
+    """
+    return csv_header() + csv_lines(rows)

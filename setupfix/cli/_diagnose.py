@@ -9,6 +9,7 @@ import sys
 
 from setupfix.cli.exit_codes import OK
 from setupfix.diagnose import Diagnoser
+from setupfix.errors import SetupfixError
 from setupfix.pipeline.diagnose import DiagnoseOutcome, diagnose_reports
 
 __all__ = ["add_parser", "run"]
@@ -22,10 +23,14 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                     "scale, position, relation, group) by forward selection with F-tests and cross-validation, "
                     "report the error before and after, walk forward against EWMA and no correction, and "
                     "recommend the next correction.")
-    p.add_argument("reports", nargs="+", metavar="REPORT", help="report files or folders: one series of cycles")
+    p.add_argument("reports", nargs="*", metavar="REPORT", help="report files or folders: one series of cycles")
+    p.add_argument("--db", metavar="STORE", default=None,
+                   help="history store: its reports, corrections log and temperatures (see 'setupfix history')")
     p.add_argument("--model", required=True, metavar="MODEL", help="process model TOML")
     p.add_argument("--corrections", metavar="CSV", default=None, help="corrections log (applied changes, tool changes)")
     p.add_argument("--temperatures", metavar="CSV", default=None, help="temperature log")
+    p.add_argument("--thermal", metavar="MODEL.json", default=None,
+                   help="thermal model saved by 'setupfix thermal fit': its predicted drift is tested as a channel")
     p.add_argument("--augment", metavar="OUT.toml", default=None,
                    help="write the model with the effects found as its [effects] section")
     p.add_argument("--alpha", type=float, default=0.01, help="family-wise level of each selection step (0.01)")
@@ -70,8 +75,11 @@ def format_diagnosis(out: DiagnoseOutcome) -> str:
 
 
 def run(args: argparse.Namespace) -> int:
+    if not args.reports and not args.db:
+        raise SetupfixError("diagnose: give REPORT files or folders, or --db STORE")
     out = diagnose_reports(args.model, args.reports, corrections=args.corrections, temperatures=args.temperatures,
-                           augment=args.augment, diagnoser=Diagnoser(alpha=args.alpha, walk=not args.no_walk))
+                           augment=args.augment, diagnoser=Diagnoser(alpha=args.alpha, walk=not args.no_walk),
+                           db=args.db, thermal=args.thermal)
     if args.json:
         json.dump(out.to_json(), sys.stdout, indent=2)
         sys.stdout.write("\n")

@@ -1,26 +1,90 @@
-"""``setupfix model show``: the relation matrices of a process model."""
+"""``setupfix model show | check | init``: inspect a process model, tie a report to it, scaffold one."""
 
 from __future__ import annotations
 
 import argparse
 import json
+import math
 import sys
+import textwrap
+import unicodedata
+from pathlib import Path
 
-from setupfix.cli._format import format_relations
-from setupfix.pipeline.model import describe_model
+from setupfix.cli._common import add_report_options, cycle_options, report_options
+from setupfix.errors import ExportError, SourceLocation
+from setupfix.pipeline.model import MatchTable, check_report, describe_model
+from setupfix.pipeline.present import format_relations
+from setupfix.pipeline.scaffold import scaffold_model
+from setupfix.pipeline.writers import check_target, write_text
 
 MATRICES = ("R_MW", "R_WF", "R_TF", "R_FD", "C")
+#: Terminal width the human tables are laid out for.
+WIDTH = 100
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser("model", help="inspect a process model")
+    p = sub.add_parser("model", help="inspect a process model, check a report against it, or scaffold one",
+                       description="Process model files (shared/spec/process-model.md): show its matrices, "
+                                   "check how a report matches it, or write a scaffold from reports.")
     msub = p.add_subparsers(dest="model_command", metavar="ACTION", parser_class=type(p))
-    show = msub.add_parser("show", help="print R_MW, R_WF, R_TF, R_FD, the composite, its rank and null space")
+    show = msub.add_parser("show", help="print R_MW, R_WF, R_TF, R_FD, the composite, its rank and null space",
+                           description="The relation matrices of the model (Stryczek 2014, eqs. 3-4) labelled "
+                                       "like the paper, the composite C (registers x dimensions), its rank and the "
+                                       "corrections that move no dimension (null space).")
     show.add_argument("model", metavar="MODEL", help="process model TOML")
     show.add_argument("--matrix", action="append", choices=MATRICES, default=None,
                       help="only this matrix (repeatable; default all)")
     show.add_argument("--json", action="store_true", help="matrices, rank and null space as JSON")
     show.set_defaults(run=run_show)
+
+    check = msub.add_parser("check", help="the match table of a report against the model (nothing corrected)",
+                            description="Ties every characteristic of the report to a model dimension as "
+                                        "'correct' would and prints, per dimension, the report's name, nominal "
+                                        "and limits beside the model's; unmatched report names with the closest "
+                                        "model names; absent dimensions with the closest report names; and the "
+                                        "differences 'correct' warns about.")
+    check.add_argument("model", metavar="MODEL", help="process model TOML")
+    check.add_argument("report", metavar="REPORT", help="CMM report in any supported format")
+    check.add_argument("--json", action="store_true", help="the match table as JSON (every name, in full)")
+    add_report_options(check)
+    check.set_defaults(run=run_check)
+
+    init = msub.add_parser("init", help="write a model scaffold from reports (then edit it)",
+                           description="Every toleranced length characteristic of the reports becomes a "
+                                       "dimension (name, nominal, limits, group = station) with a feature of its "
+                                       "own moved by one WKS (W1, G54) and one tool (T1, H1). The file loads as "
+                                       "written and 'correct' runs with it; its comments say what to edit.")
+    init.add_argument("reports", nargs="+", metavar="REPORT", help="CMM report(s) in any supported format")
+    init.add_argument("-o", "--out", required=True, metavar="MODEL",
+                      help="model TOML to write ('-': stdout); written atomically")
+    init.add_argument("--axis", choices=("X", "Y", "Z"), default=None,
+                      help="keep the characteristics whose name states this axis (and those stating none); "
+                           "default: keep all, process axis = the one most names state")
+    init.add_argument("--name", default=None, help="process name (default: from the report file names)")
+    init.add_argument("--force", action="store_true",
+                      help="replace MODEL if it exists (default: refuse, so an edited model is never overwritten)")
+    g = init.add_argument_group("report reading")
+    g.add_argument("--format", default=None, metavar="NAME", help="report format (default: sniffed; see 'formats')")
+    g.add_argument("--unit", default=None, choices=("mm", "inch"), help="unit of values the report does not label")
+    g.add_argument("--encoding", default=None, metavar="ENC", help="text encoding (default: sniffed)")
+    g.add_argument("--columns", default=None, metavar="MAP",
+                   help="column mapping for shop tables, e.g. actual=Meas,nominal=Nom")
+    init.set_defaults(run=run_init)
+
+
+def run_init(args: argparse.Namespace) -> int:
+    check_target(args.out)
+    if args.out != "-" and Path(args.out).exists() and not args.force:
+        raise ExportError("exists: a scaffold would replace it (give --force, or another -o)",
+                          location=SourceLocation(args.out))
+    scaffold = scaffold_model(args.reports, axis=args.axis, name=args.name, **report_options(args))
+    write_text(args.out, scaffold.text + "\n")
+    if args.out != "-":
+        print(f"wrote {args.out}: {scaffold.dimensions} dimension(s), axis {scaffold.axis}, "
+              f"{len(scaffold.skipped)} characteristic(s) left out (listed in its head); "
+              "edit its registers and relations, then 'setupfix model check' and 'setupfix correct'",
+              file=sys.stderr)
+    return 0
 
 
 def run_show(args: argparse.Namespace) -> int:
@@ -34,3 +98,81 @@ def run_show(args: argparse.Namespace) -> int:
                      f"resolution {desc.model.resolution:g})\n\n")
     sys.stdout.write(format_relations(desc.matrices, which, desc.null_space, desc.rank) + "\n")
     return 0
+
+
+def run_check(args: argparse.Namespace) -> int:
+    table = check_report(args.model, args.report, **cycle_options(args), **report_options(args))
+    if args.json:
+        json.dump(table.to_json(), sys.stdout, indent=1)
+        sys.stdout.write("\n")
+    else:
+        sys.stdout.write(format_match_table(table) + "\n")
+    return 0
+
+
+def _safe(text: str) -> str:
+    """Report text for the terminal: control characters (escape sequences) shown as "?"."""
+    return "".join(c if c.isprintable() else "?" for c in text)
+
+
+def _cells(text: str) -> int:
+    """Terminal cells of a text: East Asian wide and full-width characters take two."""
+    return sum(2 if unicodedata.east_asian_width(c) in "WF" else 1 for c in text)
+
+
+def _cut(text: str | None, width: int) -> str:
+    """The text cut to ``width`` terminal cells (with "…") and padded to exactly that width."""
+    text = "—" if not text else "".join(c if c.isprintable() else "?" for c in text)
+    if _cells(text) > width:
+        while _cells(text) > width - 1:
+            text = text[:-1]
+        text += "…"
+    return text + " " * (width - _cells(text))
+
+
+def _n(value: float | None) -> str:
+    return "—" if value is None or not math.isfinite(value) else f"{value:.6g}"
+
+
+def _limits(lower: float | None, upper: float | None) -> str:
+    return f"{_n(lower)}/{'+' if upper is not None and upper > 0 else ''}{_n(upper)}"
+
+
+def format_match_table(table: MatchTable) -> str:
+    """The match table, one block per part, at most :data:`WIDTH` columns."""
+    unit = table.model.unit
+    blocks = []
+    for part in table.parts:
+        rows = table.rows(part)
+        n_dims = len(rows)
+        lines = [_safe(f"{table.report}  part {part.part or '—'}:"),
+                 f"{int(part.measured.sum())} of {n_dims} model dimensions matched, "
+                 f"{len(part.unmatched)} report characteristic(s) unmatched", ""]
+        name_w = min(22, max([len("dimension")] + [_cells(r["name"]) for r in rows]))
+        char_w = min(22, max([len("report name")] + [_cells(r["characteristic"] or "") for r in rows]))
+        longest = max([0] + [len(r["station"] or "") for r in rows])
+        st_w = min(10, max(len("station"), longest)) + 1 if longest else 0
+        head = (f"{'station':<{st_w}}"[:st_w] + f"{'dimension':<{name_w}} {'report name':<{char_w}} "
+                f"{'nominal':>10} {'report':>10}  {'limits [' + unit + ']':<15} {'report':<15}")
+        lines += [head.rstrip(), "-" * min(WIDTH, len(head.rstrip()))]
+        for r in rows:
+            lead = (_cut(r["station"], st_w - 1) + " " if st_w else "") + _cut(r["name"], name_w) + " "
+            if not r["matched"]:
+                near = _safe(", ".join(r["closest"]))
+                lines.append(lead + "absent from the report" + (f"; closest report names: {near}" if near else ""))
+                continue
+            lines.append((lead + f"{_cut(r['characteristic'], char_w)} {_n(r['nominal']):>10} "
+                          f"{_n(r['report_nominal']):>10}  {_limits(r['lower'], r['upper']):<15} "
+                          f"{_limits(r['report_lower'], r['report_upper']):<15}"
+                          + (" ≠" if r["differs"] else "")).rstrip())
+        if part.unmatched:
+            lines += ["", "report characteristics matching no dimension (closest model names):"]
+            for unmatched in part.unmatched:
+                closest = part.suggestions.get(unmatched, ())
+                lines.append(f"  {_safe(unmatched)}"
+                             + (f"  →  {', '.join(map(_safe, closest))}" if closest else "  (nothing close)"))
+        if part.notes:
+            lines += [""] + [textwrap.fill(_safe(f"warning: {n}"), WIDTH, subsequent_indent="  ",
+                                           break_on_hyphens=False) for n in part.notes]
+        blocks.append("\n".join(lines))
+    return "\n\n".join(blocks)

@@ -6,3 +6,4 @@ USAGE = 2  #: wrong arguments
 UNEXPECTED = 3  #: a bug: an exception setupfix did not raise on purpose
 PARTIAL = 4  #: batch/parse: some files failed, the others were processed
 INTERRUPTED = 130
+REJECTED = 5  #: correct/batch: a recommendation was rejected (deviation beyond the reject band)

@@ -181,12 +181,17 @@ def fit_model(layout: Layout, series: Series, specs: tuple[EffectSpec, ...] | li
     for b in blocks[1:]:
         spans.append(slice(start, start + b.shape[1]))
         start += b.shape[1]
-    coef, _, rank, _ = np.linalg.lstsq(X, obs.z, rcond=None)
+    # one SVD gives the minimum-norm solution, the rank and (XᵀX)⁺ = V S⁻² Vᵀ
+    u, s, vt = np.linalg.svd(X, full_matrices=False)
+    keep = s > 1e-10 * max(1.0, float(s.max(initial=0.0)))
+    rank = int(keep.sum())
+    inv = np.where(keep, 1.0 / np.where(keep, s, 1.0), 0.0)
+    coef: Array = vt.T @ (inv * (u.T @ obs.z))
     resid = obs.z - X @ coef
-    dof = max(obs.n - int(rank), 0)
+    dof = max(obs.n - rank, 0)
     rss = float(resid @ resid)
     sigma = float(np.sqrt(rss / dof)) if dof > 0 else float("nan")
-    cov = (sigma ** 2 if dof > 0 else np.nan) * np.linalg.pinv(X.T @ X)
+    cov: Array = (sigma ** 2 if dof > 0 else np.nan) * (vt.T * inv ** 2) @ vt
     field = np.full(series.deviation.shape, np.nan)
     field[obs.cycle, obs.dim] = resid
     return Fit(specs, coef, cov, sigma, field, int(rank), dof, row_space_basis(layout.composite), tuple(spans),

@@ -131,8 +131,9 @@ def _dense_scores(Q: Array, r: Array, Z: Array) -> tuple[Array, Array]:
 
 
 def _relation_scores(Q: Array, r: Array, obs: Observations, applied: Array,
-                     pairs_ok: npt.NDArray[np.bool_]) -> Array:
-    """ΔRSS of every relation candidate (register i, dimension q), shape (n_registers, n_dimensions).
+                     pairs_ok: npt.NDArray[np.bool_]) -> tuple[Array, Array]:
+    """ΔRSS of every relation candidate (register i, dimension q), shape (n_registers, n_dimensions),
+    and the part of it due to the slope (beyond the free constant on q alone).
 
     Two columns per candidate: a = u_i on the cells of q, b = 1 on the cells of q.
     Gram and cross products come from per-dimension sums (Q orthonormal, Qᵀr = 0).
@@ -140,6 +141,7 @@ def _relation_scores(Q: Array, r: Array, obs: Observations, applied: Array,
     n_r = applied.shape[1]
     n_d = pairs_ok.shape[1]
     gain = np.zeros((n_r, n_d))
+    const = np.zeros(n_d)
     for q in range(n_d):
         if not pairs_ok[:, q].any():
             continue
@@ -159,7 +161,8 @@ def _relation_scores(Q: Array, r: Array, obs: Observations, applied: Array,
         t = np.column_stack([ta, np.full(n_r, tb)])
         Gi = np.linalg.pinv(G, rcond=1e-10)
         gain[:, q] = np.where(pairs_ok[:, q], np.einsum("ri,rij,rj->r", t, Gi, t), 0.0)
-    return gain
+        const[q] = tb ** 2 / bb if bb > _TINY else 0.0
+    return gain, np.maximum(gain - const[None, :], 0.0)
 
 
 def _cv_sse(X: Array, z: Array, cycle: npt.NDArray[np.intp], n_folds: int) -> float:
@@ -211,6 +214,7 @@ def select_effects(layout: Layout, series: Series, *, alpha: float = 0.01, max_e
             if cyc.size >= 3:
                 pairs_ok[:, q] = np.ptp(series.applied[cyc], axis=0) > _TINY
     notes: list[str] = []
+    slope_known = True
     X = np.hstack([obs.base] + [effect_columns(s, layout, series, obs) for s in declared])
     found: list[EffectSpec] = []
     blocks: list[Array] = []
@@ -237,15 +241,19 @@ def select_effects(layout: Layout, series: Series, *, alpha: float = 0.01, max_e
             unident += [s.target for s, gi, a in zip(specs, g, active_dense) if a and gi == 0.0]
             first = False
         gain_d = np.where(active_dense & (g > 0), gain_d, -1.0)
-        gain_r = _relation_scores(Q, r, obs, series.applied, active_rel) if active_rel.any() else None
+        gain_r, slope_r = (_relation_scores(Q, r, obs, series.applied, active_rel) if active_rel.any()
+                           else (None, None))
         m = int(np.sum(gain_d >= 0)) + (int(active_rel.sum()) if gain_r is not None else 0)
         if m == 0 or df0 <= 2:
             break
         cands: list[tuple[float, int, EffectSpec, int, float]] = []  # (p, k, spec, dense index or -1, ΔRSS)
         for i in np.flatnonzero(gain_d >= 0):
             cands.append((_pvalue(gain_d[i], rss0, df0, 1), 1, specs[i], int(i), float(gain_d[i])))
-        if gain_r is not None:
-            i_r, q_r = np.unravel_index(int(np.argmax(np.where(active_rel, gain_r, -1.0))), gain_r.shape)
+        if gain_r is not None and slope_r is not None:
+            # the register is the one whose changes the dimension answers (the slope), not the constant
+            i_r, q_r = np.unravel_index(int(np.argmax(np.where(active_rel, slope_r, -1.0))), gain_r.shape)
+            slope_p = _pvalue(slope_r[i_r, q_r], rss0 - gain_r[i_r, q_r] + slope_r[i_r, q_r], df0 - 1, 1)
+            slope_known = slope_p * m < alpha  # else: the dimension is off, the register is not identified
             if active_rel[i_r, q_r]:
                 spec = EffectSpec("relation", register=layout.register_ids[i_r], dimension=layout.dimension_ids[q_r])
                 cands.append((_pvalue(gain_r[i_r, q_r], rss0, df0, 2), 2, spec, -1, float(gain_r[i_r, q_r])))
@@ -268,8 +276,12 @@ def select_effects(layout: Layout, series: Series, *, alpha: float = 0.01, max_e
             alike: tuple[str, ...] = ()
         elif di >= 0:
             alike = _alike(Q, cols[:, 0], Z, specs, active_dense, di)
-        else:
+        elif slope_known:
             alike = _alike_relation(Q, obs, series.applied, layout, spec, pairs_ok)
+        else:
+            q = layout.dimension_ids.index(str(spec.dimension))
+            alike = tuple(f"relation: {spec.dimension} ~ {layout.register_ids[j]}"
+                          for j in np.flatnonzero(pairs_ok[:, q]) if layout.register_ids[j] != spec.register)
         steps.append(Step(spec, float(f_stat), float(p), float(p_adj), m, cv0, cv1, ok, alike))
         if not ok:
             break

@@ -20,6 +20,7 @@ the machine runs and towards ambient during pauses; ambient swings daily.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 import numpy.typing as npt
@@ -28,7 +29,7 @@ from setupfix.diagnose.terms import AXES, KINDS, EffectSpec, Layout, Series, eff
 from setupfix.errors import ParameterError
 from setupfix.params import Interval, ValidatedParams, validate_params
 
-__all__ = ["HiddenEffect", "ShopSimulator", "SimulatedSeries"]
+__all__ = ["HiddenEffect", "ShopSimulator", "SimulatedSeries", "random_topology"]
 
 Array = npt.NDArray[np.float64]
 
@@ -79,7 +80,7 @@ class SimulatedSeries:
     setup_error: Array
     effects: tuple[HiddenEffect, ...]
     noise: float
-    truth: dict[str, object] = field(default_factory=dict)
+    truth: dict[str, Any] = field(default_factory=dict)
 
 
 class ShopSimulator(ValidatedParams):
@@ -106,6 +107,10 @@ class ShopSimulator(ValidatedParams):
         Cycles between tool changes (0: never); tools are changed in turn.
     heat : float, default=6 [°C]
         Spindle temperature rise while running.
+    sparse : int, default=0
+        0: every register gets its share of a correction; n > 0: only the n largest
+        changes are applied (an operator touching few registers: the histories of the
+        registers then differ, so a wrong relation can be assigned to its register).
     decimals : int, default=4
         Deviations rounded as a CMM prints them.
     seed : int or None
@@ -123,6 +128,7 @@ class ShopSimulator(ValidatedParams):
         "gain": [Interval(float, 0, 1)],
         "tool_change_every": [Interval(int, 0, None)],
         "heat": [Interval(float, 0, None)],
+        "sparse": [Interval(int, 0, None)],
         "decimals": [Interval(int, 0, 12)],
         "seed": [Interval(int, 0, None), None],
     }
@@ -130,7 +136,7 @@ class ShopSimulator(ValidatedParams):
     def __init__(self, *, n_cycles: int = 40, noise: float = 0.002, setup_error: float = 0.03,
                  cycle_minutes: float = 20.0, shift_cycles: int = 24, pause_hours: float = 8.0,
                  correct_every: int = 5, dead_time: float = 30.0, gain: float = 0.7, tool_change_every: int = 16,
-                 heat: float = 6.0, decimals: int = 4, seed: int | None = None) -> None:
+                 heat: float = 6.0, sparse: int = 0, decimals: int = 4, seed: int | None = None) -> None:
         self.n_cycles = n_cycles
         self.noise = noise
         self.setup_error = setup_error
@@ -142,6 +148,7 @@ class ShopSimulator(ValidatedParams):
         self.gain = gain
         self.tool_change_every = tool_change_every
         self.heat = heat
+        self.sparse = sparse
         self.decimals = decimals
         self.seed = seed
 
@@ -213,7 +220,7 @@ class ShopSimulator(ValidatedParams):
                 log.append((at, int(layout.tools[j]), 0.0, "tool_change"))
         parts = parts_since_change(times, [np.array(c) for c in changes])
         temp_at = temp[np.clip(np.searchsorted(t_temp, times, side="right") - 1, 0, len(t_temp) - 1)]
-        setup = self.setup_error * (1.0 - 2.0 * rng.random(n_r))  # eq. 12
+        setup: Array = np.asarray(self.setup_error * (1.0 - 2.0 * rng.random(n_r)), dtype=float)  # eq. 12
         noise = rng.normal(0.0, self.noise, size=(self.n_cycles, n_d))
         # Effects that do not depend on the applied corrections are fixed in advance.
         probe = Series(np.zeros((self.n_cycles, n_d)), times, np.zeros((self.n_cycles, n_r)), parts, temp_at,
@@ -249,17 +256,19 @@ class ShopSimulator(ValidatedParams):
                 # deviations as they would be with the registers already planned (no double correction)
                 seen = dev[first:k + 1] + (planned - applied[first:k + 1]) @ C
                 delta = -self.gain * (seen.mean(axis=0) @ pinv)
+                if self.sparse and self.sparse < n_r:
+                    delta[np.argsort(-np.abs(delta))[self.sparse:]] = 0.0
                 delta = np.clip(np.round(delta / h) * h, -0.1, 0.1)
                 if np.any(delta != 0):
                     at = float(times[k] + self.dead_time / 60.0)
                     pending.append((at, delta))
-                    for i in np.flatnonzero(delta):
-                        log.append((at, int(i), float(delta[i]), "correction"))
-        leftover = sum((p[1] for p in pending), np.zeros(n_r))
+                    for reg in np.flatnonzero(delta):
+                        log.append((at, int(reg), float(delta[reg]), "correction"))
+        leftover: Array = np.sum([p[1] for p in pending], axis=0) if pending else np.zeros(n_r)
         dev = np.round(dev, self.decimals)
         log.sort(key=lambda r: r[0])
         series = Series(dev, times, applied, parts, temp_at, ("spindle", "ambient"),
-                        tuple(f"cycle {k + 1:03d}" for k in range(self.n_cycles)), "", np.asarray(leftover))
+                        tuple(f"cycle {k + 1:03d}" for k in range(self.n_cycles)), "", leftover)
         return SimulatedSeries(
             series=series,
             log_time=np.array([r[0] for r in log], dtype=float),
@@ -274,3 +283,38 @@ class ShopSimulator(ValidatedParams):
             truth={"effects": [{"kind": e.spec.kind, "target": e.spec.target, "magnitude": e.magnitude}
                                for e in effects]},
         )
+
+
+def random_topology(seed: int | None = None, *, positions: bool = True) -> dict[str, Any]:
+    """A random process-model document (the model file contract) for tests and benches.
+
+    2–6 WKS, 1–4 tools, 6–16 features (each moved by one WKS and one tool, weights
+    ±1), 8–24 dimensions of one feature or the difference of two, nominal sizes
+    5–120, 2–4 groups, feature positions in a 400 × 300 × 100 box.
+    """
+    rng = np.random.default_rng(seed)
+    n_w, n_t = int(rng.integers(2, 7)), int(rng.integers(1, 5))
+    n_f, n_d = int(rng.integers(6, 17)), int(rng.integers(8, 25))
+    n_g = int(rng.integers(2, 5))
+    doc: dict[str, Any] = {"process": {"name": f"random topology {seed}", "axis": "Z", "unit": "mm"},
+                           "wks": {f"W{i + 1}": {"register": f"G{54 + i}"} for i in range(n_w)},
+                           "tools": {f"T{i + 1}": {"register": f"H{i + 1}"} for i in range(n_t)},
+                           "features": {}, "dimensions": {}}
+    for f in range(n_f):
+        feat: dict[str, Any] = {"wks": {f"W{int(rng.integers(n_w)) + 1}": int(rng.choice([-1, 1]))},
+                                "tools": {f"T{int(rng.integers(n_t)) + 1}": int(rng.choice([-1, 1]))}}
+        if positions:
+            feat["position"] = [float(np.round(rng.uniform(0, 400), 1)), float(np.round(rng.uniform(0, 300), 1)),
+                                float(np.round(rng.uniform(0, 100), 1))]
+        doc["features"][f"F{f + 1}"] = feat
+    for d in range(n_d):
+        a = int(rng.integers(n_f))
+        feats = {f"F{a + 1}": 1}
+        if rng.random() < 0.4:
+            b = int(rng.integers(n_f))
+            if b != a:
+                feats[f"F{b + 1}"] = -1
+        doc["dimensions"][f"D{d + 1}"] = {"name": f"D{d + 1}", "features": feats,
+                                          "nominal": float(np.round(rng.uniform(5, 120), 1)),
+                                          "lower": -0.1, "upper": 0.1, "group": f"S{d % n_g + 1}"}
+    return doc

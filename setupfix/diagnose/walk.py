@@ -28,9 +28,9 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
-from setupfix.diagnose.fit import Fit, fit_model
+from setupfix.diagnose.fit import Fit, row_space_basis
 from setupfix.diagnose.select import select_effects
-from setupfix.diagnose.terms import EffectSpec, Layout, Series
+from setupfix.diagnose.terms import EffectSpec, Layout, Series, effect_field, typical_step
 
 __all__ = ["Budget", "WalkForward", "walk_forward", "next_cycle", "margins_of"]
 
@@ -86,9 +86,73 @@ def _score(dev: Array, lower: Array, upper: Array) -> Budget:
 def _state(pred: Array, C: Array) -> Array:
     """Register state v minimising ‖pred + v · C‖ (minimum norm); absent dimensions ignored."""
     ok = np.isfinite(pred)
-    v, *_ = np.linalg.lstsq(C[:, ok].T, -pred[ok], rcond=None)
-    out: Array = v
+    out: Array = np.asarray(np.linalg.lstsq(C[:, ok].T, -pred[ok], rcond=None)[0], dtype=float)
     return out
+
+
+def _grid(layout: Layout, series: Series, specs: tuple[EffectSpec, ...],
+          basis: Array) -> tuple[Array, npt.NDArray[np.bool_], list[tuple[int, int, int]]]:
+    """Design of the model at every (cycle, dimension), measured or not.
+
+    Returns
+    -------
+    G : ndarray (n_cycles, n_dimensions, p)
+    slope : ndarray of bool (p,)
+        Columns of relation slopes (they act through the registers).
+    relations : list of (column, register row, dimension column)
+    """
+    n, d = series.n_cycles, layout.n_dimensions
+    blocks = [np.broadcast_to(basis.T, (n, d, basis.shape[0]))]
+    slope: list[bool] = [False] * basis.shape[0]
+    relations = []
+    for spec in specs:
+        blocks.append(effect_field(spec, layout, series)[:, :, None])
+        slope.append(spec.kind == "relation")
+        if spec.kind == "relation":
+            q = layout.dimension_ids.index(str(spec.dimension))
+            const = np.zeros((n, d, 1))
+            const[:, q, 0] = 1.0
+            relations.append((len(slope) - 1, layout.register_ids.index(str(spec.register)), q))
+            blocks.append(const)
+            slope.append(False)
+    return np.concatenate(blocks, axis=2), np.array(slope, dtype=bool), relations
+
+
+class _Running:
+    """Least squares on the cycles seen so far, by accumulated normal equations (XᵀX, Xᵀz)."""
+
+    def __init__(self, layout: Layout, series: Series, specs: tuple[EffectSpec, ...], basis: Array,
+                 z: Array, upto: int) -> None:
+        self.G, self.slope, self.relations = _grid(layout, series, specs, basis)
+        self.z = z
+        self.C = layout.composite
+        p = self.G.shape[2]
+        self.xtx = np.zeros((p, p))
+        self.xtz = np.zeros(p)
+        self.seen = 0
+        self.add_until(upto)
+
+    def add_until(self, k: int) -> None:
+        """Take cycles ``seen … k − 1`` in."""
+        if k <= self.seen:
+            return
+        G = self.G[self.seen:k]
+        z = self.z[self.seen:k]
+        ok = np.isfinite(z)
+        Gm = np.where(ok[:, :, None], G, 0.0)
+        zm = np.where(ok, z, 0.0)
+        self.xtx += np.einsum("kdp,kdq->pq", Gm, Gm)
+        self.xtz += np.einsum("kdp,kd->p", Gm, zm)
+        self.seen = k
+
+    def state(self, k: int) -> Array:
+        """Register state the fitted model recommends for cycle ``k``."""
+        coef = np.linalg.lstsq(self.xtx, self.xtz, rcond=1e-12)[0]
+        pred = self.G[k][:, ~self.slope] @ coef[~self.slope]
+        C = self.C.copy()
+        for col, i, q in self.relations:
+            C[i, q] += coef[col]
+        return _state(pred, C)
 
 
 def walk_forward(layout: Layout, series: Series, *, score_composite: Array | None = None, min_train: int = 5,
@@ -115,6 +179,11 @@ def walk_forward(layout: Layout, series: Series, *, score_composite: Array | Non
     Returns
     -------
     WalkForward
+
+    Notes
+    -----
+    Coefficients are refitted at every cycle from accumulated normal equations, so
+    a walk costs one pass over the series plus one selection per ``reselect_every``.
     """
     n = series.n_cycles
     C = layout.composite
@@ -122,25 +191,24 @@ def walk_forward(layout: Layout, series: Series, *, score_composite: Array | Non
     every = reselect_every or max(5, n // 8)
     y = series.deviation
     z_obs = y - series.applied @ C
+    basis = row_space_basis(C)
     scored = list(range(min(min_train, n), n))
     reached = {name: np.full((len(scored), layout.n_dimensions), np.nan) for name in CONTROLLERS}
-    specs: tuple[EffectSpec, ...] = ()
     ewma = np.where(np.isfinite(z_obs[0]), z_obs[0], 0.0)
     for k in range(1, min(min_train, n)):
         ewma = np.where(np.isfinite(z_obs[k]), lam * z_obs[k] + (1 - lam) * ewma, ewma)
     base_state = series.applied[scored[0]] if scored else np.zeros(layout.n_registers)
+    decl = _Running(layout, series, declared, basis, z_obs, scored[0]) if scored else None
+    aug = decl
     for pos, k in enumerate(scored):
-        train = series.take(np.arange(k))
-        one = series.take([k])
+        assert decl is not None
+        decl.add_until(k)
         if pos == 0 or (k - scored[0]) % every == 0:
-            specs = select_effects(layout, train, alpha=alpha, declared=declared).found
-        states: dict[str, Array] = {}
-        base = fit_model(layout, train, declared)
-        states["declared"] = _state(base.predict(layout, one, applied=False)[0], base.relation_matrix(layout))
-        aug: Fit = fit_model(layout, train, declared + specs) if specs else base
-        states["augmented"] = _state(aug.predict(layout, one, applied=False)[0], aug.relation_matrix(layout))
-        states["ewma"] = _state(ewma, C)
-        states["none"] = base_state
+            specs = select_effects(layout, series.take(np.arange(k)), alpha=alpha, declared=declared).found
+            aug = _Running(layout, series, declared + specs, basis, z_obs, k) if specs else decl
+        assert aug is not None
+        aug.add_until(k)
+        states = {"declared": decl.state(k), "augmented": aug.state(k), "ewma": _state(ewma, C), "none": base_state}
         for name, v in states.items():
             reached[name][pos] = y[k] + (v - series.applied[k]) @ Cs
         ewma = np.where(np.isfinite(z_obs[k]), lam * z_obs[k] + (1 - lam) * ewma, ewma)
@@ -162,8 +230,7 @@ def next_cycle(layout: Layout, series: Series, fit: Fit) -> tuple[Array, Series]
         The one-cycle series of the forecast (deviation NaN).
     """
     last = series.n_cycles - 1
-    gaps = np.diff(series.time)
-    step = float(np.median(gaps[gaps <= 1.0])) if np.any(gaps <= 1.0) else (float(np.median(gaps)) if gaps.size else 0.0)
+    step = typical_step(series.time)
     pending = series.pending if series.pending.size == layout.n_registers else np.zeros(layout.n_registers)
     applied = series.applied[last] + pending
     nxt = Series(np.full((1, layout.n_dimensions), np.nan), series.time[[last]] + step, applied[None, :],

@@ -85,7 +85,8 @@ def _num(value: Any) -> bool:
     return isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
 
 
-def effects_from_dict(section: Mapping[str, Any] | None, model: ProcessModel, source: str = "<model>") -> EffectsSection:
+def effects_from_dict(section: Mapping[str, Any] | None, model: ProcessModel,
+                      source: str = "<model>") -> EffectsSection:
     """Validate an ``[effects]`` table against ``model``.
 
     Raises
@@ -143,7 +144,7 @@ def effects_from_dict(section: Mapping[str, Any] | None, model: ProcessModel, so
         tau = raw.get("tau")
         if kind == "drift" and shape not in ("linear", "saturating"):
             bad(f"{key}.shape", f'expected "linear" or "saturating", found {shape!r}')
-        if kind == "drift" and shape == "saturating" and not (_num(tau) and tau > 0):
+        if kind == "drift" and shape == "saturating" and not (_num(tau) and float(tau or 0) > 0):
             bad(f"{key}.tau", f"a saturating drift needs tau > 0 [h], found {tau!r}")
         if kind == "wear" and raw["register"] not in tools:
             bad(f"{key}.register", f"unknown tool {raw['register']!r}")
@@ -158,9 +159,10 @@ def effects_from_dict(section: Mapping[str, Any] | None, model: ProcessModel, so
             bad(f"{key}.axis", f'expected "x", "y" or "z", found {raw["axis"]!r}')
         stderr = raw.get("stderr")
         effects.append(ModelEffect(
-            id=str(eid), kind=kind, estimate=float(est), stderr=float(stderr) if _num(stderr) else None,
+            id=str(eid), kind=str(kind), estimate=float(est or 0),
+            stderr=float(stderr or 0) if _num(stderr) else None,
             unit=str(raw.get("unit", "")), target=str(raw.get("target", "")), shape=str(shape),
-            tau=float(tau) if _num(tau) else None, channel=raw.get("channel"),
+            tau=float(tau or 0) if _num(tau) else None, channel=raw.get("channel"),
             reference=float(raw["reference"]) if _num(raw.get("reference")) else 0.0,
             register=raw.get("register"), dimension=raw.get("dimension"), axis=raw.get("axis"),
             group=raw.get("group")))

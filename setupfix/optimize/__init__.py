@@ -8,8 +8,10 @@ yardstick; the metaheuristics follow Stryczek (2014) and the papers it cites.
 from __future__ import annotations
 
 import importlib
+import inspect
 from typing import Any
 
+from setupfix.errors import ParameterError
 from setupfix.optimize._base import Evaluator, Metaheuristic, Optimizer, make_result
 from setupfix.optimize._problem import CorrectionProblem, OptimizeResult
 
@@ -37,17 +39,24 @@ OPTIMIZERS: dict[str, str] = {
 
 
 def get_optimizer(name: str, **params: Any) -> Optimizer:
-    """Instantiate the optimiser registered as ``name`` with its hyper-parameters.
+    """Instantiate the optimiser registered as ``name`` with its hyper-parameters, validated.
 
     Raises
     ------
-    KeyError
-        If no optimiser has that name.
+    ParameterError
+        If no optimiser has that name (the message lists the names), a parameter is
+        unknown to it, or a value is outside its declared range.
     """
-    try:
-        target = OPTIMIZERS[name]
-    except KeyError:
-        raise KeyError(f"unknown optimizer {name!r} (known: {', '.join(OPTIMIZERS)})") from None
-    module, cls = target.split(":")
-    optimizer: Optimizer = getattr(importlib.import_module(module), cls)(**params)
+    target = OPTIMIZERS.get(name) if isinstance(name, str) else None
+    if target is None:
+        raise ParameterError(f"optimizer must be one of {', '.join(sorted(OPTIMIZERS))}, got {name!r}")
+    module, cls_name = target.split(":")
+    cls = getattr(importlib.import_module(module), cls_name)
+    known = set(inspect.signature(cls).parameters)
+    unknown = sorted(set(params) - known)
+    if unknown:
+        raise ParameterError(f"{cls.__name__}: unknown parameter {unknown[0]!r} (parameters: "
+                             f"{', '.join(sorted(known))})")
+    optimizer: Optimizer = cls(**params)
+    optimizer.validate_params()
     return optimizer

@@ -15,25 +15,62 @@ from typing import ClassVar
 import numpy as np
 import numpy.typing as npt
 
+from setupfix.errors import Note
 from setupfix.optimize._problem import CorrectionProblem, OptimizeResult
+from setupfix.params import Constraint, Interval, ValidatedParams
+from setupfix.search import generator
 
-__all__ = ["Optimizer", "Metaheuristic", "Evaluator", "make_result"]
+__all__ = ["Optimizer", "Metaheuristic", "Evaluator", "GridSpace", "GridObjective", "make_result",
+           "NO_BETTER_THAN_NONE", "SEED", "SOLUTIONS", "POPULATION", "count"]
 
 Array = npt.NDArray[np.float64]
+
+#: Status of a result whose search found nothing better than no correction (x = 0 returned).
+NO_BETTER_THAN_NONE = "no_better_than_none"
+
+#: Declared ranges shared by the optimisers (``setupfix.params``).  Budgets and
+#: populations are bounded above so that no option makes a search run for hours.
+SEED: list[Constraint] = [Interval(int, 0, None), None]
+SOLUTIONS: list[Constraint] = [Interval(int, 1, 1_000_000)]
+POPULATION: list[Constraint] = [Interval(int, 1, 100_000)]
+
+
+def count(low: int, high: int) -> list[Constraint]:
+    """An integer count in [low, high]."""
+    return [Interval(int, low, high)]
+
 
 
 def make_result(problem: CorrectionProblem, x: Array, *, optimizer: str, evaluations: int, seconds: float,
                 status: str, history: Array | None = None, bound: float | None = None,
-                message: str | None = None, binding: tuple[str, ...] | None = None) -> OptimizeResult:
+                message: str | None = None, binding: tuple[str, ...] | None = None,
+                guard: bool = True) -> OptimizeResult:
     """Assemble an :class:`OptimizeResult` for corrections ``x`` (already on the grid).
 
     ``binding`` defaults to the dimensions at the minimum margin after ``x``; the
     exact optimiser passes the dimensions that prove its bound instead.
+
+    The x = 0 guard: when ``guard`` is true (the default) and ``x`` has a smaller
+    error budget f1 than no correction at all, the result is x = 0 with status
+    :data:`NO_BETTER_THAN_NONE` and a message saying so — a search that did worse
+    than doing nothing never sends a correction to the machine.  (An optimiser that
+    trades f1 on purpose, e.g. for more dimensions in tolerance, passes
+    ``guard=False`` and says why in its message.)
     """
     x = np.asarray(x, dtype=float).copy()
     x[np.abs(x) < 1e-12] = 0.0  # no "-0.000" in outputs
     f1, f2, _ = problem.evaluate(x)
     after = float(f1)
+    if guard and after < problem.margin_before:
+        message = (f"the {optimizer} search found no correction better than none (best found: error budget "
+                   f"{after:+.4g} against {problem.margin_before:+.4g} without correction); no correction is "
+                   "recommended")
+        x = np.zeros_like(x)
+        f1, f2, _ = problem.evaluate(x)
+        after, status, binding = float(f1), NO_BETTER_THAN_NONE, None
+        notes: tuple[Note, ...] = (Note(message, kind="solver"),)
+    else:
+        notes = ()
     if message is None:
         message = (
             "all measured dimensions predicted inside tolerance"
@@ -44,22 +81,23 @@ def make_result(problem: CorrectionProblem, x: Array, *, optimizer: str, evaluat
     return OptimizeResult(
         x=x, margin_before=problem.margin_before, margin_after=after, norm=float(f2), optimizer=optimizer,
         evaluations=int(evaluations), seconds=float(seconds), status=status, message=message,
-        binding=problem.binding(x) if binding is None else binding, history=history, bound=bound,
+        binding=problem.binding(x) if binding is None else binding, history=history, bound=bound, notes=notes,
     )
 
 
-class Optimizer(ABC):
-    """Base of all optimisers; hyper-parameters go to ``__init__``, data to ``solve``."""
+class Optimizer(ValidatedParams, ABC):
+    """Base of all optimisers; hyper-parameters go to ``__init__``, data to ``solve``.
+
+    Every ``__init__`` parameter is declared in ``_parameter_constraints``
+    (:mod:`setupfix.params`); :func:`setupfix.optimize.get_optimizer` validates them
+    right after construction and metaheuristics again before any work.
+    """
 
     name: ClassVar[str] = ""
 
     @abstractmethod
     def solve(self, problem: CorrectionProblem) -> OptimizeResult:
         """Search corrections for ``problem``; never mutates it."""
-
-    def get_params(self) -> dict[str, object]:
-        """Hyper-parameters as given to ``__init__`` (sklearn convention)."""
-        return {k: v for k, v in vars(self).items() if not k.startswith("_")}
 
 
 class Evaluator:
@@ -90,6 +128,11 @@ class Evaluator:
         """Evaluate grid solutions x of shape (n, n_registers) or (n_registers,); return f."""
         x = np.asarray(x, dtype=float)
         f1, f2, f = self.problem.evaluate(x)
+        self.record(x, f1, f2, f)
+        return f
+
+    def record(self, x: Array, f1: Array, f2: Array, f: Array) -> None:
+        """Count solutions x already evaluated elsewhere (their f1, f2, f) and keep the best."""
         flat_f = np.atleast_1d(f)
         i = int(np.argmax(flat_f))
         self.count += flat_f.size
@@ -99,12 +142,54 @@ class Evaluator:
             self.best_f2 = float(np.atleast_1d(f2)[i])
             self.best_x = np.atleast_2d(x)[i].copy()
         self._history.append((self.count, self.best_f1, self.best_f2, self.best_f))
-        return f
 
     @property
     def history(self) -> Array:
         """Best-so-far [evaluations, f1, f2, f] after each call, shape (k, 4)."""
         return np.array(self._history, dtype=float).reshape(-1, 4)
+
+
+class GridSpace:
+    """The register grid of a problem as a :class:`setupfix.search.Space`.
+
+    Start points are uniform in the bounds and snapped (:meth:`CorrectionProblem.sample`);
+    every move is snapped onto the grid inside the bounds (:meth:`CorrectionProblem.snap`),
+    so fixed registers (bounds 0, 0) never move.
+    """
+
+    def __init__(self, problem: CorrectionProblem) -> None:
+        self.problem = problem
+        self.lower = problem.lb
+        self.upper = problem.ub
+
+    def sample(self, rng: np.random.Generator, count: int) -> Array:
+        return self.problem.sample(rng, count)
+
+    def project(self, x: Array) -> Array:
+        return self.problem.snap(x)
+
+
+class GridObjective:
+    """−f (eq. 10) of grid solutions for the minimising searches of :mod:`setupfix.search`.
+
+    :meth:`observe` hands the solutions a search counts (always a prefix of the
+    block last evaluated) with their f1, f2 and f to the :class:`Evaluator`, so no
+    solution is evaluated twice.
+    """
+
+    def __init__(self, evaluate: Evaluator) -> None:
+        self.evaluate = evaluate
+        self._last: tuple[Array, Array, Array] = (np.empty(0), np.empty(0), np.empty(0))
+
+    def __call__(self, x: Array) -> Array:
+        f1, f2, f = self.evaluate.problem.evaluate(x)
+        self._last = (np.atleast_1d(f1), np.atleast_1d(f2), np.atleast_1d(f))
+        return -self._last[2]
+
+    def observe(self, x: Array, values: Array) -> None:
+        m = len(x)
+        f1, f2, f = self._last
+        self.evaluate.record(x, f1[:m], f2[:m], f[:m])
 
 
 class Metaheuristic(Optimizer):
@@ -113,6 +198,8 @@ class Metaheuristic(Optimizer):
     Subclasses implement :meth:`_search`, drawing all randomness from ``rng`` and
     evaluating only through ``evaluate`` (grid points within bounds).
     """
+
+    _parameter_constraints: ClassVar[dict[str, list[Constraint]]] = {"n_solutions": SOLUTIONS, "seed": SEED}
 
     def __init__(self, *, n_solutions: int, seed: int | None = None) -> None:
         self.n_solutions = n_solutions
@@ -123,9 +210,8 @@ class Metaheuristic(Optimizer):
         """Run the search until ``evaluate.remaining`` is spent."""
 
     def solve(self, problem: CorrectionProblem) -> OptimizeResult:
-        if self.n_solutions < 1:
-            raise ValueError("n_solutions must be at least 1")
-        rng = np.random.default_rng(self.seed)
+        self.validate_params()
+        rng = generator(self.seed)  # seed None: setupfix.search.DEFAULT_SEED, never an unseeded run
         evaluate = Evaluator(problem, self.n_solutions)
         start = time.perf_counter()
         self._search(problem, rng, evaluate)

@@ -32,7 +32,9 @@ from __future__ import annotations
 import numpy as np
 import numpy.typing as npt
 
-from setupfix.optimize._base import Evaluator, Metaheuristic
+from setupfix.errors import ParameterError
+from setupfix.optimize._base import POPULATION, Evaluator, Metaheuristic, count
+from setupfix.params import Interval
 from setupfix.optimize._problem import CorrectionProblem
 
 __all__ = ["COA", "lay_eggs", "kmeans", "immigrate"]
@@ -119,11 +121,29 @@ class COA(Metaheuristic):
         Groups of the k-means step.
     n_iterations : int, default=100
     n_solutions : int, default=40_000
-        Budget cap; with the defaults the iterations end first (≈ 34,000 solutions).
+        A cap only: with the defaults the ``n_iterations`` end first (the run length the
+        module docstring gives; ``tests/optimize/test_coa.py`` measures it).
     seed : int, optional
     """
 
     name = "coa"
+    _parameter_constraints = {
+        **Metaheuristic._parameter_constraints,
+        "initial_cuckoos": POPULATION,
+        "max_cuckoos": POPULATION,
+        "min_eggs": count(1, 1000),
+        "max_eggs": count(1, 1000),
+        "radius_coeff": [Interval(float, 0.0, 100.0, closed="right")],
+        "motion_coeff": [Interval(float, 0.0, 100.0, closed="right")],
+        "n_clusters": count(1, 1000),
+        "n_iterations": count(1, 100_000),
+    }
+
+    def validate_params(self) -> None:
+        """The declared ranges, and min_eggs ≤ max_eggs."""
+        super().validate_params()
+        if self.min_eggs > self.max_eggs:
+            raise ParameterError(f"COA: min_eggs must be at most max_eggs ({self.max_eggs}), got {self.min_eggs}")
 
     def __init__(self, *, initial_cuckoos: int = 5, max_cuckoos: int = 40, min_eggs: int = 5,
                  max_eggs: int = 10, radius_coeff: float = 5.0, motion_coeff: float = 2.0,

@@ -78,6 +78,8 @@ import numpy.typing as npt
 
 from setupfix.objective import F1_WEIGHT
 from setupfix.optimize._base import Evaluator, Metaheuristic
+from setupfix.params import Interval
+from setupfix.search import acceleration
 from setupfix.optimize._problem import CorrectionProblem
 
 __all__ = ["CRIPSO", "coefficient_schedule", "planula_position"]
@@ -88,6 +90,8 @@ Array = npt.NDArray[np.float64]
 def coefficient_schedule(n_solutions: int) -> Array:
     """Cognition and social coefficients c1 = c2 for every solution number (eq. 11).
 
+    :func:`setupfix.search.acceleration` for L_i = 1 … L.
+
     Parameters
     ----------
     n_solutions : int
@@ -96,16 +100,19 @@ def coefficient_schedule(n_solutions: int) -> Array:
     Returns
     -------
     ndarray of shape (L,) [-]
-        Entry L_i − 1 holds cos(π/2 · L_i / L) for L_i = 1 … L: from almost 1 down
-        to 0 for the last solution.
+        Entry L_i − 1 holds cos(π/2 · L_i / L): from almost 1 down to 0 for the last solution.
     """
     total = int(n_solutions)
-    return np.cos(0.5 * np.pi * np.arange(1, total + 1) / total)
+    return acceleration(np.arange(1, total + 1), total)
 
 
 def planula_position(x: Array, plast: Array, pbest: Array, gbest: Array, *, inertia: float,
-                     c1: Array | float, c2: Array | float, r1: Array | float, r2: Array | float) -> Array:
+                     c1: Array | float, c2: Array | float, r1: Array | float, r2: Array | float,
+                     out: Array | None = None) -> Array:
     """Settlement point of a planula before snapping to the grid (eq. 1).
+
+    x' = x + w (plast − x) + c1 r1 (pbest − x) + c2 r2 (gbest − x), evaluated term by
+    term from the left (the CRIPSO loop calls it with ``out`` on grid units).
 
     Parameters
     ----------
@@ -117,12 +124,18 @@ def planula_position(x: Array, plast: Array, pbest: Array, gbest: Array, *, iner
         Cognition and social coefficients (eq. 11).
     r1, r2 : float or ndarray broadcastable to (..., n_registers)
         U(0, 1) numbers.
+    out : ndarray, optional
+        Where to write the result (no allocation for it).
 
     Returns
     -------
     ndarray of shape (..., n_registers), in the unit of ``x``.
     """
-    return x + inertia * (plast - x) + c1 * r1 * (pbest - x) + c2 * r2 * (gbest - x)
+    out = np.multiply(np.subtract(plast, x), inertia, out=out)
+    out += x
+    out += c1 * r1 * (pbest - x)
+    out += c2 * r2 * (gbest - x)
+    return out
 
 
 def _feed(evaluate: Evaluator, problem: CorrectionProblem, x: Array) -> None:
@@ -157,6 +170,11 @@ class CRIPSO(Metaheuristic):
     """
 
     name: ClassVar[str] = "cripso"
+    _parameter_constraints = {
+        **Metaheuristic._parameter_constraints,
+        "n_polyps": [Interval(int, 2, 100_000)],  # a tournament needs two polyps
+        "inertia": [Interval(float, 0.0, 2.0)],
+    }
 
     def __init__(self, *, n_polyps: int = 100, n_solutions: int = 5000, inertia: float = 0.75,
                  seed: int | None = None) -> None:
@@ -165,10 +183,6 @@ class CRIPSO(Metaheuristic):
         self.inertia = inertia
 
     def _search(self, problem: CorrectionProblem, rng: np.random.Generator, evaluate: Evaluator) -> None:
-        if self.n_polyps < 2:
-            raise ValueError("n_polyps must be at least 2: a tournament needs two polyps")
-        if not math.isfinite(self.inertia):
-            raise ValueError("inertia must be a finite number")
         total = evaluate.remaining
         colony = min(int(self.n_polyps), total)
         steps = total - colony
@@ -189,9 +203,7 @@ class CRIPSO(Metaheuristic):
         first = rng.integers(0, colony, steps)
         second = (first + rng.integers(1, colony, steps)) % colony if colony > 1 else first
         r = rng.random((2, steps, n))
-        c = coefficient_schedule(total)[colony:]  # L_i = colony + 1 … L
-        cr1 = c[:, None] * r[0]
-        cr2 = c[:, None] * r[1]
+        c = coefficient_schedule(total)[colony:].tolist()  # L_i = colony + 1 … L
 
         start = sol[:colony]
         f0 = F1_WEIGHT * np.min(base + start @ gain, axis=1) - h * np.sqrt(np.einsum("ij,ij->i", start, start))
@@ -199,7 +211,7 @@ class CRIPSO(Metaheuristic):
         pos = list(range(colony))  # row of sol where each polyp sits
         best = list(range(colony))  # row of each polyp's pbest
         fbest = list(fit)
-        move = np.zeros((colony, n))  # plast − x of each polyp, grid units
+        plast = sol[:colony].copy()  # last planula of each polyp, grid units (none yet: plast = x)
         gbest_polyp = int(np.argmax(f0))
         gbest_row = gbest_polyp
         gbest_f = fit[gbest_polyp]
@@ -214,16 +226,15 @@ class CRIPSO(Metaheuristic):
             # Eq. 1 term by term, left to right.  The differences are whole grid steps, so a
             # vanishing term is exactly 0 and a settlement point exactly halfway between two
             # steps (frequent: w·2 = 1.5) is rounded by rint's rule, not by rounding noise.
-            np.multiply(move[win], w, out=new)
-            new += x
-            new += cr1[t] * (sol[best[win]] - x)
-            new += cr2[t] * (sol[gbest_row] - x)
+            planula_position(x, plast[win], sol[best[win]], sol[gbest_row], inertia=w, c1=c[t], c2=c[t],
+                             r1=r[0, t], r2=r[1, t], out=new)
             np.rint(new, out=new)
             np.maximum(new, kmin, out=new)
             np.minimum(new, kmax, out=new)
-            shift = new - x
-            move[win] = shift  # winner: its last planula settled at x'
-            move[lose] = shift  # child: inertia along parent → settlement point
+            child = plast[lose]
+            np.subtract(new, x, out=child)  # child: plast − x' = x' − x (parent → settlement point)
+            child += new
+            plast[win] = new  # winner: its last planula settled at x'
             f = F1_WEIGHT * float((base + new @ gain).min()) - h * sqrt(float(new @ new))
             pos[lose] = colony + t
             fit[lose] = f

@@ -1,46 +1,95 @@
-"""Exact optimum of the setup-correction problem with HiGHS (scipy ``linprog``/``milp``).
+"""Exact optimum of the setup-correction problem with HiGHS (highspy).
 
 The max–min objective f1 (eq. 8) is linear in the corrections, so the problem is a
 linear programme, and on the register grid a mixed-integer one.  Everything is
 solved in grid units (k = x / resolution, margins in resolution steps), which
 keeps the numbers near 1–100 where the solver's tolerances are meaningful.
 
-Stages
-------
-1. **LP bound**: maximise t subject to every margin ≥ t and the register bounds.
-   Its optimum t_LP bounds every correction, on or off the grid.
-2. **Grid optimum** (MILP): the same with integer k.  The rounded LP point gives a
-   lower bound; both bounds are handed to the MILP as bounds on t.
-3. **Least norm**: among grid corrections with margin ≥ t*, the one of least
-   Euclidean norm (eq. 9).  Minimising Σ k_i² over integers is an integer QP,
-   which HiGHS does not solve; but on integers k² equals the upper envelope of
-   the chords ``(2j+1)|k| − j(j+1)``, j = 0, 1, …, so the MILP "minimise Σ s_i,
-   s_i ≥ chords" is exact.  Chords are added lazily where a solution violates
-   s_i ≥ k_i², which ends after a few rounds.
+Input quantum
+-------------
+Deviations are rounded to 1/1000 of the register resolution (1 nm on a 0.001 mm
+grid) before anything is solved, so the answer does not depend on the last bits
+of the input: a report read from CSV and the same numbers computed in memory
+(``24.9691 − 25`` against ``-0.0309``) give the same corrections.  Limits are
+taken as the model states them.  Reported margins use the unrounded deviations.
 
-Fallback: every MILP has a time limit.  If it is hit, the best incumbent is used
-(status ``time_limit``); if there is none, the LP point rounded to the grid and
-improved by greedy ±1 steps (status ``rounded``).  The LP bound is always
-reported so the operator sees how far from provably optimal a fallback can be.
+Stages, and the proofs that let one be skipped
+----------------------------------------------
+1. **LP bound** — maximise t subject to every margin ≥ t and the register bounds;
+   t_LP bounds every correction.  Its dual prices name the binding dimensions.
+   From the same duals, :func:`~setupfix.optimize._grid.dual_bound` re-proves the
+   bound in numpy, and :func:`~setupfix.optimize._grid.pair_bound` lowers it where
+   two dimensions move alike and the even split of their difference is off the
+   grid.  U = the smaller of the two bounds every grid point must respect.
+2. **Grid optimum** — if the LP point rounded to the grid already reaches U, it is
+   optimal (nothing on the grid exceeds U): no MILP.  Otherwise the MILP "max t,
+   k integer", bracketed t ∈ [t(rounded point), U], started from the rounded point.
+   A HiGHS failure ("Solve error") is retried once with the lower bracket removed,
+   and reported as such in ``notes``.
+3. **Least norm** — among grid points with margin ≥ t*, the least Σ cost_i·k_i²
+   (eq. 9; cost = 1 by default).  The continuous QP gives a point and multipliers;
+   the multipliers bound every feasible point's norm from below by an ellipsoid
+   around that point (:func:`~setupfix.optimize._grid.lagrangian_ball`), and the
+   integer points inside it that could beat the best known point are listed
+   exhaustively — the least one is the proven grid least norm.  If the best known
+   point already meets the bound, nothing is listed; if the list would be too long
+   (large problems), the exact chord MILP runs instead: on integers k² is the upper
+   envelope of the chords (2j+1)|k| − j(j+1), added lazily where a solution
+   violates s_i ≥ k_i².
+
+One ``time_limit`` bounds the wall time of the whole solve.  The grid-optimum
+stage may use half of what is left, so the least-norm stage always runs: if a
+stage stops at the limit, its best point is used, the least-norm stage still
+shrinks the correction at the error budget reached, and the status, the message,
+``notes`` and ``extra["stopped"]`` say which stage stopped and why.  The LP bound
+is always reported.
 """
 
 from __future__ import annotations
 
 import time
-import warnings
+from collections.abc import Callable
+from contextlib import AbstractContextManager
 
 import numpy as np
 import numpy.typing as npt
-from scipy.optimize import Bounds, LinearConstraint, linprog, milp
-from scipy.sparse import csr_array, vstack
+from scipy.sparse import coo_array, csr_array, hstack, vstack
+from threadpoolctl import ThreadpoolController
 
-from setupfix.errors import ConvergenceWarning, SolverError
+from setupfix.errors import Note, SolverError
+from setupfix.params import Interval
 from setupfix.optimize._base import Optimizer, make_result
+from setupfix.optimize._grid import (TOL, dual_bound, enumerate_ball, ellipsoid_search, grid_margins, lagrangian_ball,
+                                     least_distance,
+                                     next_level,
+                                     PairStructure, pair_bound, pair_structure, rounded_rhs, row_gcd, shrink)
+from setupfix.optimize._highs import INF, LinearModel, Solve
 from setupfix.optimize._problem import CorrectionProblem, OptimizeResult
 
-__all__ = ["ExactOptimizer", "margin_rows"]
+__all__ = ["ExactOptimizer", "margin_rows", "QUANTUM"]
 
 Array = npt.NDArray[np.float64]
+
+#: Deviations are rounded to this fraction of the register resolution before solving.
+QUANTUM = 1e-3
+#: Largest list of integer points the least-norm proof may enumerate before using the MILP.
+ENUMERATION_LIMIT = 200_000
+#: Largest constraint count whose continuous least-norm point is found by NNLS (else HiGHS QP).
+NNLS_MAX_ROWS = 600
+#: Radius² and size of the ellipsoids the grid-optimum stage lists for a point at its bound.
+SEARCH_RADIUS2 = 16.0
+SEARCH_LIMIT = 20_000
+#: A cold LP with more rows than this is solved by HiGHS's interior-point method (with crossover, so the
+#: duals are a basis' and later solves of the kept model warm-start the simplex from it).
+IPM_MIN_ROWS = 2000
+#: Share of the grid-optimum stage's time a feasibility MILP may use.
+MILP_SHARE = 0.5
+#: Share of the whole time limit kept for the least-norm stage (HiGHS may overrun a limit a little).
+LEAST_NORM_SHARE = 0.5
+#: Levels the grid-optimum stage may descend by rounded rows before it uses the MILP.
+LEVEL_STEPS = 40
+#: Cap on t when one-sided limits leave it unbounded (far above any two-sided margin).
+T_CAP = 1e9
 
 
 def margin_rows(problem: CorrectionProblem) -> tuple[Array, Array]:
@@ -49,7 +98,8 @@ def margin_rows(problem: CorrectionProblem) -> tuple[Array, Array]:
     For dimension q with composite column a_q, measured deviation d_q and limits
     L_q < U_q the two margins are U_q − (d_q + h·a_qᵀk) and (d_q + h·a_qᵀk) − L_q
     (eqs. 5–6 per dimension); in steps of h they give the rows
-    ``a_qᵀk + t ≤ (U_q − d_q)/h`` and ``−a_qᵀk + t ≤ (d_q − L_q)/h``.
+    ``a_qᵀk + t ≤ U_q/h − d_q/h`` and ``−a_qᵀk + t ≤ d_q/h − L_q/h``, with d_q/h
+    rounded to :data:`QUANTUM` steps.
 
     Returns
     -------
@@ -61,9 +111,10 @@ def margin_rows(problem: CorrectionProblem) -> tuple[Array, Array]:
     a = problem.composite[problem.free].T  # (m, n_free)
     upper_ok = np.isfinite(problem.upper)
     lower_ok = np.isfinite(problem.lower)
+    dev = np.round(problem.deviation / h / QUANTUM) * QUANTUM
     g_rows = np.vstack([a[upper_ok], -a[lower_ok]])
-    g = np.concatenate([(problem.upper - problem.deviation)[upper_ok] / h,
-                        (problem.deviation - problem.lower)[lower_ok] / h])
+    g = np.concatenate([(problem.upper / h)[upper_ok] - dev[upper_ok],
+                        dev[lower_ok] - (problem.lower / h)[lower_ok]])
     return g_rows, g
 
 
@@ -76,27 +127,68 @@ def _rows_to_dimensions(problem: CorrectionProblem, rows: npt.NDArray[np.bool_])
     return tuple(d for d in problem.dimension_ids if d in flagged)
 
 
-def _grid_margin(g_rows: Array, g: Array, k: Array) -> float:
-    """Smallest margin [steps] of integer point k (inf when there is no row)."""
-    return float(np.min(g - g_rows @ k)) if g.size else np.inf
+def _lp_model(g_rows: Array, kmin: Array, kmax: Array) -> LinearModel:
+    """max t s.t. G k + t ≤ g (row bounds set per report), k in the box."""
+    r, n = g_rows.shape
+    model = LinearModel(np.r_[np.zeros(n), -1.0], np.hstack([g_rows, np.ones((r, 1))]), np.full(r, -INF),
+                        np.zeros(r), np.r_[kmin, -T_CAP], np.r_[kmax, T_CAP])
+    return model
 
 
-def _greedy_round(g_rows: Array, g: Array, k: Array, kmin: Array, kmax: Array) -> Array:
-    """Round k and climb by single ±1 steps while the smallest margin grows."""
-    k = np.clip(np.rint(k), kmin, kmax)
-    best = _grid_margin(g_rows, g, k)
-    improved = True
-    while improved:
-        improved = False
-        for i in range(k.size):
-            for step in (-1.0, 1.0):
-                trial = k.copy()
-                trial[i] += step
-                if kmin[i] <= trial[i] <= kmax[i]:
-                    value = _grid_margin(g_rows, g, trial)
-                    if value > best + 1e-12:
-                        k, best, improved = trial, value, True
-    return k
+_CONTROLLER: ThreadpoolController | None = None
+
+
+def _blas_single_thread() -> AbstractContextManager[object]:
+    """BLAS limited to one thread; the controller (a scan of loaded libraries) is made once."""
+    global _CONTROLLER
+    if _CONTROLLER is None:
+        _CONTROLLER = ThreadpoolController()
+    return _CONTROLLER.limit(limits=1)
+
+
+class _Clock:
+    """Deadline of one solve and the wall time spent per stage."""
+
+    def __init__(self, limit: float) -> None:
+        self.start = time.perf_counter()
+        self.deadline = self.start + limit
+        self.stages: dict[str, float] = {}
+        self._mark = self.start
+
+    def left(self) -> float:
+        return self.deadline - time.perf_counter()
+
+    def lap(self, stage: str) -> None:
+        now = time.perf_counter()
+        self.stages[stage] = self.stages.get(stage, 0.0) + now - self._mark
+        self._mark = now
+
+
+class _Cache:
+    """Solver models kept across reports of one process model (same G and box)."""
+
+    def __init__(self) -> None:
+        self.key: tuple[object, ...] | None = None
+        self.g_rows: Array | None = None
+        self.models: dict[str, LinearModel] = {}
+        self.derived: dict[str, object] = {}
+
+    def structure(self, g_rows: Array, kmin: Array, kmax: Array, cost: Array) -> tuple[Array, PairStructure | None]:
+        """Per-row gcds and the pair structure of G (computed once per G and box)."""
+        self.get("lp", g_rows, kmin, kmax, cost, lambda: _lp_model(g_rows, kmin, kmax))
+        if "gcd" not in self.derived:
+            self.derived["gcd"] = row_gcd(g_rows)
+            self.derived["pairs"] = pair_structure(g_rows, kmin, kmax)
+        return self.derived["gcd"], self.derived["pairs"]  # type: ignore[return-value]
+
+    def get(self, name: str, g_rows: Array, kmin: Array, kmax: Array, cost: Array,
+            build: Callable[[], LinearModel]) -> LinearModel:
+        key = (g_rows.shape, kmin.tobytes(), kmax.tobytes(), cost.tobytes())
+        if key != self.key or self.g_rows is None or not np.array_equal(g_rows, self.g_rows):
+            self.key, self.g_rows, self.models, self.derived = key, g_rows.copy(), {}, {}
+        if name not in self.models:
+            self.models[name] = build()
+        return self.models[name]
 
 
 class ExactOptimizer(Optimizer):
@@ -105,174 +197,490 @@ class ExactOptimizer(Optimizer):
     Parameters
     ----------
     grid : bool, default=True
-        Solve on the register grid (MILP).  False returns the continuous LP
-        optimum with the least Euclidean norm (not on the grid).
+        Solve on the register grid.  False returns the continuous LP optimum with
+        the least weighted Euclidean norm (not on the grid).
     time_limit : float, default=2.0
-        Seconds allowed to each MILP before the documented fallback.
+        Seconds of wall time for the whole solve; when a stage hits it, the best
+        point found is used and the result says which stage stopped.
     seed : int, optional
         Accepted for interface symmetry; the solver is deterministic.
     """
 
     name = "exact"
+    _parameter_constraints = {
+        "grid": [bool],
+        "time_limit": [Interval(float, 0.0, None, closed="neither")],
+        "seed": [Interval(int, 0, None), None],
+    }
 
     def __init__(self, *, grid: bool = True, time_limit: float = 2.0, seed: int | None = None) -> None:
         self.grid = grid
         self.time_limit = time_limit
         self.seed = seed
+        self._cache = _Cache()
 
-    # -- stages -------------------------------------------------------------------------------
-    @staticmethod
-    def _lp_bound(g_rows: Array, g: Array, kmin: Array, kmax: Array,
-                  t_cap: float) -> tuple[float, Array, npt.NDArray[np.bool_]]:
-        n = g_rows.shape[1]
-        c = np.zeros(n + 1)
-        c[-1] = -1.0
-        a_ub = np.hstack([g_rows, np.ones((g_rows.shape[0], 1))])
-        bounds = list(zip(kmin, kmax)) + [(None, t_cap)]
-        res = linprog(c, A_ub=a_ub, b_ub=g, bounds=bounds, method="highs")
-        if res.status != 0:
-            raise SolverError(f"LP stage failed: {res.message}")
-        # Rows with a non-zero dual price are the dimensions whose limits prove the bound:
-        # the answer to "why can't it do better?".
-        duals = np.abs(res.ineqlin.marginals)
-        return float(res.x[-1]), res.x[:-1], duals > 1e-9
+    # -- solver models (kept across reports) ---------------------------------------------------
+    def _lp(self, g_rows: Array, kmin: Array, kmax: Array, cost: Array) -> LinearModel:
+        return self._cache.get("lp", g_rows, kmin, kmax, cost, lambda: _lp_model(g_rows, kmin, kmax))
 
-    def _milp_max_margin(self, g_rows: Array, g: Array, kmin: Array, kmax: Array,
-                         t_lo: float, t_hi: float) -> tuple[Array | None, str]:
-        n = g_rows.shape[1]
-        c = np.zeros(n + 1)
-        c[-1] = -1.0
-        cons = LinearConstraint(np.hstack([g_rows, np.ones((g_rows.shape[0], 1))]), -np.inf, g)
-        res = milp(c, constraints=cons, integrality=np.r_[np.ones(n), 0.0],
-                   bounds=Bounds(np.r_[kmin, t_lo], np.r_[kmax, t_hi]),
-                   options={"time_limit": self.time_limit, "mip_rel_gap": 0.0})
-        if res.x is None:
-            return None, "failed"
-        return np.rint(res.x[:n]), ("optimal" if res.status == 0 else "time_limit")
+    def _qp(self, g_rows: Array, kmin: Array, kmax: Array, cost: Array) -> LinearModel:
+        r, n = g_rows.shape
 
-    def _milp_least_norm(self, g_rows: Array, g: Array, kmin: Array, kmax: Array,
-                         t_star: float, k_start: Array) -> Array:
-        """Least Σk² among integer k with every margin ≥ t_star (exact chord MILP)."""
-        n = g_rows.shape[1]
-        margin_block = csr_array(np.hstack([g_rows, np.zeros((g_rows.shape[0], n))]))
-        margin_rhs = g - t_star + 1e-7
-        # Seed the chords around the continuous least-norm point at the same margin: the
-        # integer optimum is almost always within a step of it, so the first MILP is
-        # usually exact and the lazy loop ends at once.
+        def build() -> LinearModel:
+            model = LinearModel(np.zeros(n), g_rows, np.full(r, -INF), np.zeros(r), kmin, kmax)
+            model.set_hessian_diagonal(2 * cost)
+            return model
+
+        return self._cache.get("qp", g_rows, kmin, kmax, cost, build)
+
+    # -- stages --------------------------------------------------------------------------------
+    def _lp_bound(self, g_rows: Array, g: Array, kmin: Array, kmax: Array, cost: Array,
+                  clock: _Clock) -> tuple[float, Array, Array]:
+        """t_LP, the LP point and the row weights y ≥ 0 of its dual."""
+        lp = self._lp(g_rows, kmin, kmax, cost)
+        lp.set_row_bounds(np.full(g.size, -INF), g)
+        cold = not lp.solved
+        if cold and g.size > IPM_MIN_ROWS:
+            lp.h.setOptionValue("solver", "ipm")
+        res = lp.solve(clock.left())
+        if cold:
+            lp.h.setOptionValue("solver", "choose")
+        if res.status not in ("optimal", "time_limit") and clock.left() > 0:  # one retry from scratch
+            self._cache = _Cache()
+            lp = self._lp(g_rows, kmin, kmax, cost)
+            lp.set_row_bounds(np.full(g.size, -INF), g)
+            res = lp.solve(clock.left())
+        if res.status == "time_limit":
+            raise SolverError(f"the LP bound was not reached within the time limit ({self.time_limit:g} s): "
+                              "no proven correction; allow more time")
+        if res.status != "optimal" or res.x is None or res.row_dual is None:
+            raise SolverError(f"LP stage failed: HiGHS answered {res.detail!r}")
+        return float(res.x[-1]), res.x[:-1], np.maximum(-res.row_dual, 0.0)
+
+    def _rounded_rows_feasible(self, g_rows: Array, b: Array, kmin: Array, kmax: Array, cost: Array,
+                               clock: _Clock) -> str:
+        """Whether G k ≤ b has a solution in the box (the kept LP with t fixed at 0)."""
+        lp = self._lp(g_rows, kmin, kmax, cost)
+        n = kmin.size
+        lp.set_row_bounds(np.full(b.size, -INF), np.where(np.isfinite(b), b, INF))
+        lp.set_col_bounds(np.array([n], dtype=np.int32), np.zeros(1), np.zeros(1))
         try:
-            k_cont = ExactOptimizer._continuous_least_norm(g_rows, g, kmin, kmax, t_star)
-        except SolverError:
-            k_cont = k_start
+            return lp.solve(max(clock.left(), 1e-3)).status
+        finally:
+            lp.set_col_bounds(np.array([n], dtype=np.int32), np.array([-T_CAP]), np.array([T_CAP]))
+
+    def _max_margin_milp(self, g_rows: Array, g: Array, kmin: Array, kmax: Array, t_lo: float, t_hi: float,
+                         start: Array | None, time_limit: float) -> Solve:
+        r, n = g_rows.shape
+        model = LinearModel(np.r_[np.zeros(n), -1.0], np.hstack([g_rows, np.ones((r, 1))]), np.full(r, -INF), g,
+                            np.r_[kmin, t_lo], np.r_[kmax, t_hi], integer=np.r_[np.ones(n, bool), False])
+        return model.solve(time_limit, None if start is None else np.r_[start, t_lo])
+
+    def _continuous_least_norm(self, g_rows: Array, b: Array, kmin: Array, kmax: Array, cost: Array,
+                               clock: _Clock) -> tuple[str, tuple[Array, Array, Array, Array] | None]:
+        """Least Σ c k² with G k ≤ b in the box: status and (point, multipliers of rows, lower, upper).
+
+        Small problems by NNLS (:func:`~setupfix.optimize._grid.least_distance`, a fraction of a
+        millisecond), large ones by HiGHS's QP solver on the kept model.
+        """
+        if g_rows.shape[0] + 2 * g_rows.shape[1] <= NNLS_MAX_ROWS:
+            status, out = least_distance(g_rows, b, kmin, kmax, cost)
+            if status != "unknown":
+                return status, out
+        qp = self._qp(g_rows, kmin, kmax, cost)
+        finite = np.where(np.isfinite(b), b, INF)
+        qp.set_row_bounds(np.full(b.size, -INF), finite)
+        res = qp.solve(max(clock.left(), 1e-3))
+        if res.status != "optimal" or res.x is None or res.row_dual is None or res.col_dual is None:
+            return res.status, None
+        return "optimal", (res.x, np.maximum(-res.row_dual, 0.0), np.maximum(res.col_dual, 0.0),
+                           np.maximum(-res.col_dual, 0.0))
+
+    def _grid_least_norm(self, g_rows: Array, g: Array, b: Array, kmin: Array, kmax: Array, cost: Array,
+                         t_star: float, incumbent: Array, cont: tuple[Array, Array, Array, Array] | None,
+                         clock: _Clock, path: list[str]) -> tuple[Array, bool, str]:
+        """Least Σ c k² over grid points with every margin ≥ t_star; (k, proved, why not).
+
+        ``b`` are right-hand sides with {G k ≤ b} containing every such grid point (the
+        rounded rows); ``cont`` the continuous least-norm solution over them, if known.
+        """
+
+        def norm(k: Array) -> Array:
+            return np.asarray(np.sum(cost * np.atleast_2d(k) ** 2, axis=1))
+
+        best = incumbent
+        if cont is None:
+            _, cont = self._continuous_least_norm(g_rows, b, kmin, kmax, cost, clock)
+        if cont is not None:
+            k_c, lam_rows, lam_lo, lam_hi = cont
+            rounded = np.clip(np.rint(k_c), kmin, kmax)
+            if grid_margins(g_rows, g, rounded) >= t_star - TOL and norm(rounded)[0] < norm(best)[0]:
+                best = rounded
+            finite = np.isfinite(b)
+            centre, q = lagrangian_ball(g_rows[finite], b[finite], kmin, kmax, cost, lam_rows[finite], lam_lo,
+                                        lam_hi)
+            f_best = float(norm(best)[0])
+            found, proved, listed = ellipsoid_search(g_rows, g, t_star, centre, q, cost, kmin, kmax, f_best,
+                                                     ENUMERATION_LIMIT, b)
+            if proved:
+                path.append(f"least norm: {listed} grid points in the dual ellipsoid")
+                return (best if found is None else found), True, ""
+            if found is not None:
+                best = found
+        best = self._good_incumbent(g_rows, g, b, kmin, kmax, cost, t_star, best, cont, clock)
+        path.append("least norm: chords of k² (LP, then MILP)")
+        found, proved, why = self._chord_solve(g_rows, g, t_star, b, kmin, kmax, cost, best,
+                                               cont[0] if cont else best, clock, clock.left())
+        return (best if found is None else found), proved, why
+
+    def _good_incumbent(self, g_rows: Array, g: Array, b: Array, kmin: Array, kmax: Array, cost: Array,
+                        t_star: float, best: Array, cont: tuple[Array, Array, Array, Array] | None,
+                        clock: _Clock) -> Array:
+        """A small feasible grid point before the chord MILP (heuristics; the MILP proves or improves it).
+
+        * Safe rounding: the continuous least-norm point of the rows tightened by half their
+          l1 norm rounds to a point that meets the original rows (each coordinate moves ≤ ½).
+        * The segment from the incumbent to the continuous least-norm point is feasible; the
+          rounded point farthest along it that stays feasible.
+        * :func:`~setupfix.optimize._grid.shrink`: single steps towards 0 while feasible.
+        """
+        def f(k: Array) -> float:
+            return float(np.sum(cost * k**2))
+
+        def ok(k: Array) -> bool:
+            return bool(grid_margins(g_rows, g, k) >= t_star - TOL)
+
+        out = None
+        if g_rows.shape[0] + 2 * kmin.size <= NNLS_MAX_ROWS:  # one more QP only where QPs are cheap
+            safe = b - 0.5 * np.sum(np.abs(g_rows), axis=1)
+            _, out = self._continuous_least_norm(g_rows, safe, kmin, kmax, cost, clock)
+        if out is not None:
+            k = np.clip(np.rint(out[0]), kmin, kmax)
+            if ok(k) and f(k) < f(best):
+                best = k
+        if cont is None:
+            _, cont = self._continuous_least_norm(g_rows, b, kmin, kmax, cost, clock)
+        if cont is not None:
+            lo, hi = 0.0, 1.0
+            for _ in range(12):
+                mid = (lo + hi) / 2
+                k = np.clip(np.rint(best + mid * (cont[0] - best)), kmin, kmax)
+                if ok(k):
+                    lo = mid
+                    if f(k) < f(best):
+                        best = k
+                else:
+                    hi = mid
+        return shrink(g_rows, b, best, cost, time.perf_counter() + 0.1 * max(clock.left(), 0.0))
+
+    def _chord_solve(self, g_rows: Array, g: Array, level: float, b: Array, kmin: Array, kmax: Array,
+                     cost: Array, best: Array | None, k_cont: Array, clock: _Clock, time_limit: float,
+                     lp_only: bool = False) -> tuple[Array | None, bool, str]:
+        """Exact least Σ c k² over grid points with t(k) ≥ level, by chords of k² (lazy).
+
+        On integers k² is the upper envelope of the chords (2j+1)|k| − j(j+1), j ≥ 0,
+        so "min Σ c s, s_i ≥ chords, G k ≤ b" is exact for integer k.  First as an LP:
+        when its optimal vertex is integral and every s_i = k_i², that vertex is the
+        optimum (the LP is a relaxation and the vertex is a grid point) — the usual
+        case when G is a network-like matrix of ±1 relations.  Otherwise (unless
+        ``lp_only``) the same model as a MILP, started from ``best``.  Chords are added
+        where a solution violates s_i ≥ k_i².  Stops after ``time_limit`` seconds.
+
+        Returns
+        -------
+        best : ndarray or None
+            Best grid point found with t(k) ≥ level (``best`` if none better).
+        proved : bool
+        why : str
+            Why not proved (``"time limit"``, HiGHS's words, or ``"fractional"``).
+        """
+        r, n = g_rows.shape
+        deadline = min(clock.deadline, time.perf_counter() + max(time_limit, 0.0))
         chords: list[set[int]] = []
-        for vc, vs in zip(np.abs(k_cont), np.abs(k_start)):
+        ref = np.abs(k_cont) if best is None else np.abs(best)
+        for vc, vs in zip(np.abs(k_cont), ref):
             base = int(np.floor(vc))
             chords.append({max(base - 1, 0), base, base + 1, int(vs)})
-        self._chord_rounds = 0
-        deadline = time.perf_counter() + self.time_limit
-        best = k_start
-        for _ in range(50):
-            rows, rhs = [], []
-            for i, js in enumerate(chords):
-                for j in sorted(js):
-                    for sign in (1.0, -1.0):
-                        # s_i >= (2j+1)·sign·k_i − j(j+1)
-                        row = np.zeros(2 * n)
-                        row[i] = sign * (2 * j + 1)
-                        row[n + i] = -1.0
-                        rows.append(row)
-                        rhs.append(j * (j + 1))
-            a = vstack([margin_block, csr_array(np.array(rows))])
-            b = np.r_[margin_rhs, rhs]
-            remaining = deadline - time.perf_counter()
-            if remaining <= 0:
-                break
-            res = milp(np.r_[np.zeros(n), np.ones(n)], constraints=LinearConstraint(a, -np.inf, b),
-                       integrality=np.r_[np.ones(n), np.zeros(n)],
-                       bounds=Bounds(np.r_[kmin, np.zeros(n)], np.r_[kmax, np.full(n, np.inf)]),
-                       options={"time_limit": remaining, "mip_rel_gap": 0.0})
-            if res.x is None:
-                break
-            k = np.rint(res.x[:n])
-            s = res.x[n:]
-            if _grid_margin(g_rows, g, k) >= t_star - 1e-6:
-                best = k
-            short = [i for i in range(n) if s[i] < k[i] ** 2 - 1e-6]
-            self._chord_rounds += 1
-            if not short or res.status != 0:
-                break
-            for i in short:
-                chords[i].add(int(abs(k[i])))
-        return best
 
-    # -- driver -------------------------------------------------------------------------------
+        def chord_rows(pairs: list[tuple[int, int]]) -> tuple[csr_array, Array]:
+            # s_i ≥ (2j+1)·(±k_i) − j(j+1)  ⇔  ±(2j+1)·k_i − s_i ≤ j(j+1)
+            i = np.array([p[0] for p in pairs for _ in (0, 1)])
+            j = np.array([p[1] for p in pairs for _ in (0, 1)], dtype=float)
+            sign = np.tile([1.0, -1.0], len(pairs))
+            m = len(i)
+            rows = np.r_[np.arange(m), np.arange(m)]
+            cols = np.r_[i, n + i]
+            vals = np.r_[sign * (2 * j + 1), -np.ones(m)]
+            return csr_array(coo_array((vals, (rows, cols)), shape=(m, 2 * n))), j * (j + 1)
+
+        a_chords, rhs = chord_rows([(i, j) for i, js in enumerate(chords) for j in sorted(js)])
+        fin = np.isfinite(b)
+        a = vstack([hstack([csr_array(g_rows[fin]), csr_array((int(fin.sum()), n))]), a_chords]).tocsr()
+        model = LinearModel(np.r_[np.zeros(n), cost], a, np.full(a.shape[0], -INF), np.r_[b[fin], rhs],
+                            np.r_[kmin, np.zeros(n)], np.r_[kmax, np.full(n, INF)])
+        f_best = np.inf if best is None else float(np.sum(cost * best**2))
+        integer = False
+        while True:
+            left = deadline - time.perf_counter()
+            if left <= 0:
+                return best, False, "time limit"
+            res = model.solve(left, None if best is None else np.r_[best, best**2])
+            if res.x is None or res.status not in ("optimal", "time_limit"):
+                return best, False, "time limit" if res.status == "time_limit" else f"HiGHS: {res.detail}"
+            k_raw, s = res.x[:n], res.x[n:]
+            k = np.clip(np.rint(k_raw), kmin, kmax)
+            f_k = float(np.sum(cost * k**2))
+            feasible = bool(grid_margins(g_rows, g, k) >= level - TOL)
+            if feasible and f_k < f_best:
+                best, f_best = k, f_k
+            if res.status != "optimal":
+                return best, False, "time limit"
+            fractional = np.flatnonzero(np.abs(k_raw - k) > 1e-7)
+            if not integer and fractional.size:
+                new = [(int(i), int(np.floor(abs(k_raw[i])))) for i in fractional
+                       if int(np.floor(abs(k_raw[i]))) not in chords[i]]
+                if not new:
+                    if lp_only:
+                        return best, False, "fractional"
+                    model.make_integer(np.arange(n))
+                    integer = True
+                    continue
+            else:
+                short = np.flatnonzero(s < k**2 - 1e-6)
+                if short.size == 0:
+                    return best, bool(feasible and best is not None and f_best <= f_k), ""
+                new = [(int(i), int(abs(k[i]))) for i in short]
+            for i, j in new:
+                chords[i].add(j)
+            a_new, rhs_new = chord_rows(new)
+            model.add_rows(a_new, np.full(rhs_new.size, -INF), rhs_new)
+
+    def _triaged(self, problem: CorrectionProblem, g_rows: Array, g: Array, kmin: Array, kmax: Array, cost: Array,
+                 k_start: Array, clock: _Clock, path: list[str], notes: list[Note], calls: int,
+                 bound: float) -> OptimizeResult:
+        """No correction brings every dimension into tolerance: :func:`~setupfix.optimize._triage.triage`."""
+        from setupfix.optimize._triage import triage
+
+        upper_ok, lower_ok = np.isfinite(problem.upper), np.isfinite(problem.lower)
+        row_dim = np.r_[np.flatnonzero(upper_ok), np.flatnonzero(lower_ok)]
+        m = len(problem.dimension_ids)
+        k, proved, why, done = triage(g_rows, g, row_dim, m, kmin, kmax, cost, clock.deadline, k_start)
+        clock.lap("triage")
+        path.append("triage: " + ", ".join(done) if done else "triage")
+        x = np.zeros(problem.n_registers)
+        x[problem.free] = k * problem.resolution
+        margins = problem.margins(x)
+        quantum = QUANTUM * problem.resolution
+        given_up = tuple(d for d, v in zip(problem.dimension_ids, margins) if v < -quantum)
+        kept = margins >= -quantum
+        low = margins[kept].min() if kept.any() else 0.0
+        binding = tuple(d for d, v, ok in zip(problem.dimension_ids, margins, kept)
+                        if ok and v <= low + problem.resolution / 4)
+        message = (f"no correction within the register limits brings every dimension into tolerance: "
+                   f"{len(given_up)} dimension(s) given up ({', '.join(given_up)}) need the NC program or the "
+                   "process, not the setup; the other dimensions are kept in tolerance with the largest error "
+                   "budget and the smallest correction")
+        notes.append(Note(message, kind="solver"))
+        status = "optimal"
+        extra: dict[str, object] = {"stages": dict(clock.stages), "path": "; ".join(path)}
+        if not proved:
+            status = "time_limit" if "time limit" in why else "solver_error"
+            notes.append(Note(f"triage not proved ({why})", kind="solver"))
+            message += f"; not proved ({why})"
+            extra["stopped"] = {"stage": "triage", "reason": why}
+        # guard off: triage trades the error budget of the hopeless dimensions on purpose, and says so
+        result = make_result(problem, x, optimizer=self.name, evaluations=calls + 3,
+                             seconds=time.perf_counter() - clock.start, status=status, bound=bound,
+                             message=message, binding=binding, guard=False)
+        result.extra.update(extra)
+        result.given_up = given_up
+        result.notes = tuple(notes)
+        return result
+
+    # -- driver --------------------------------------------------------------------------------
     def solve(self, problem: CorrectionProblem) -> OptimizeResult:
-        start = time.perf_counter()
+        with _blas_single_thread():  # small solves: BLAS threads only contend
+            return self._solve(problem)
+
+    def _solve(self, problem: CorrectionProblem) -> OptimizeResult:
+        clock = _Clock(self.time_limit)
         free = problem.free
-        n_all = problem.n_registers
+        x = np.zeros(problem.n_registers)
         g_rows, g = margin_rows(problem)
-        kmin = problem.kmin[free].astype(float)
-        kmax = problem.kmax[free].astype(float)
-        # Only one-sided limits that corrections can move away from leave t unbounded; the
-        # cap keeps the LP bounded then, and lies far above any two-sided margin otherwise.
-        t_cap = 1e9
-        x = np.zeros(n_all)
-        calls = 0
         if free.sum() == 0 or g.size == 0:
             return make_result(problem, x, optimizer=self.name, evaluations=0,
-                               seconds=time.perf_counter() - start, status="optimal",
+                               seconds=time.perf_counter() - clock.start, status="optimal",
                                bound=problem.margin_before,
                                message="nothing can be corrected: every register is fixed or no limit applies")
-        t_lp, k_lp, active = self._lp_bound(g_rows, g, kmin, kmax, t_cap)
-        calls += 1
-        binding = _rows_to_dimensions(problem, active)
+        kmin = problem.kmin[free].astype(float)
+        kmax = problem.kmax[free].astype(float)
+        cost = problem.cost[free]
+        notes: list[Note] = []
+        path: list[str] = []
+        calls = 1
+        t_lp, k_lp, y = self._lp_bound(g_rows, g, kmin, kmax, cost, clock)
+        binding = _rows_to_dimensions(problem, y > 1e-9)
         bound = t_lp * problem.resolution
+        clock.lap("lp bound")
+
         if not self.grid:
-            k = self._continuous_least_norm(g_rows, g, kmin, kmax, t_lp)
-            x[free] = k * problem.resolution
+            _, cont = self._continuous_least_norm(g_rows, g - t_lp + 1e-8, kmin, kmax, cost, clock)
+            x[free] = (k_lp if cont is None else cont[0]) * problem.resolution
+            clock.lap("least norm")
             return make_result(problem, x, optimizer=self.name, evaluations=calls + 1,
-                               seconds=time.perf_counter() - start, status="optimal", bound=bound,
+                               seconds=time.perf_counter() - clock.start, status="optimal", bound=bound,
                                binding=binding)
-        k_round = _greedy_round(g_rows, g, k_lp, kmin, kmax)
-        t_round = _grid_margin(g_rows, g, k_round)
-        k_best, status = self._milp_max_margin(g_rows, g, kmin, kmax, min(t_round, t_lp), t_lp)
-        calls += 1
-        if k_best is None or _grid_margin(g_rows, g, k_best) < t_round:
-            k_best, status = k_round, "rounded" if k_best is None else status
-        t_star = _grid_margin(g_rows, g, k_best)
-        if status == "optimal":
-            k_best = self._milp_least_norm(g_rows, g, kmin, kmax, t_star, k_best)
-            calls += 1
+
+        # Stage 2: grid optimum.
+        d, pairs = self._cache.structure(g_rows, kmin, kmax, cost)
+        zero = ~np.any(g_rows != 0, axis=1)
+        upper = min(dual_bound(g_rows, g, y, kmin, kmax), pair_bound(g_rows, g, kmin, kmax, pairs), T_CAP)
+        k_best = np.clip(np.rint(k_lp), kmin, kmax)
+        t_best = float(grid_margins(g_rows, g, k_best))
+        t_zero = float(grid_margins(g_rows, g, np.zeros_like(k_best)))
+        if t_zero >= t_best:  # no correction at all is a grid point too
+            k_best, t_best = np.zeros_like(k_best), t_zero
+        stopped: tuple[str, str] | None = None
+        cont = None
+        least_norm_done: Array | None = None  # rows at which the least norm is already proved
+        n_free = int(kmin.size)
+        small = g_rows.shape[0] + 2 * n_free <= NNLS_MAX_ROWS
+        stage2_end = clock.deadline - LEAST_NORM_SHARE * self.time_limit
+
+        def stage2_left() -> float:  # the grid-optimum stage leaves a share of the limit to the least norm
+            return stage2_end - time.perf_counter()
+
+        level = upper
+        all_integer = bool(np.all((d > 0) | zero))
+        if upper < -TOL:
+            path.append("grid optimum: the bound is below 0 (no correction brings every dimension into tolerance)")
+        elif t_best >= upper - TOL:
+            path.append("grid optimum: rounded LP point attains the bound")
         else:
-            warnings.warn(f"grid optimum not proved within {self.time_limit} s; using the best point found "
-                          f"({status})", ConvergenceWarning, stacklevel=2)
+            proved = False
+            for _ in range(LEVEL_STEPS):
+                b = rounded_rhs(g, d, zero, level)
+                calls += 1
+                if small:
+                    status, cont = self._continuous_least_norm(g_rows, b, kmin, kmax, cost, clock)
+                else:  # large: only whether the rounded rows are feasible (an LP), then the MILP below
+                    status, cont = self._rounded_rows_feasible(g_rows, b, kmin, kmax, cost, clock), None
+                    if status == "optimal":
+                        cont = (k_best, np.zeros(g.size), np.zeros(n_free), np.zeros(n_free))
+                if cont is None:
+                    if status != "infeasible" or not all_integer:
+                        break
+                    level = next_level(g, d, b)  # nothing on the grid above this level
+                    if t_best >= level - TOL:
+                        path.append("grid optimum: rounded LP point attains the rounded-rows bound")
+                        proved = True
+                        break
+                    continue
+                k = np.clip(np.rint(cont[0]), kmin, kmax)
+                t_k = float(grid_margins(g_rows, g, k))
+                if t_k > t_best:
+                    k_best, t_best = k, t_k
+                if t_best >= level - TOL:
+                    path.append("grid optimum: least-norm point of the rounded rows attains the bound")
+                    proved = True
+                    break
+                # A grid point at the bound near the continuous one: small ellipsoids only.
+                found = None
+                if small:
+                    finite = np.isfinite(b)
+                    centre, q = lagrangian_ball(g_rows[finite], b[finite], kmin, kmax, cost, cont[1][finite],
+                                                cont[2], cont[3])
+                    found, _, _ = ellipsoid_search(g_rows, g, level, centre, q, cost, kmin, kmax,
+                                                   q + SEARCH_RADIUS2, SEARCH_LIMIT, b)
+                if found is not None:
+                    k_best, t_best = found, float(grid_margins(g_rows, g, found))
+                    path.append("grid optimum: a grid point near the rounded rows' least-norm point attains the "
+                                "bound")
+                    proved = True
+                    break
+                # A feasibility MILP on the rounded rows: a point proves the bound is reached; a proof
+                # of infeasibility lowers the bound to the next level (integer rows only).
+                fin = np.isfinite(b)
+                feas = LinearModel(np.zeros(n_free), g_rows[fin], np.full(int(fin.sum()), -INF), b[fin], kmin, kmax,
+                                   integer=np.ones(n_free, bool)).solve(stage2_left() * MILP_SHARE)
+                calls += 1
+                path.append(f"grid optimum: feasibility MILP at {level:.4g} steps ({feas.status}, {feas.seconds:.2f} s)")
+                if feas.x is not None:
+                    k = np.clip(np.rint(feas.x), kmin, kmax)
+                    t_k = float(grid_margins(g_rows, g, k))
+                    if t_k > t_best:
+                        k_best, t_best = k, t_k
+                    if t_best >= level - TOL:
+                        path.append("grid optimum: a feasibility MILP on the rounded rows reaches the bound")
+                        proved = True
+                        cont = cont if t_best <= level + TOL else None
+                        break
+                if feas.status == "infeasible" and all_integer:
+                    level = next_level(g, d, b)
+                    cont = None
+                    if t_best >= level - TOL:
+                        path.append("grid optimum: best point attains the bound lowered by infeasible levels")
+                        proved = True
+                        break
+                    continue
+                break
+            upper = min(upper, level)
+            if not small:
+                cont = None
+            if not proved:
+                cont = None
+                calls += 1
+                res = self._max_margin_milp(g_rows, g, kmin, kmax, t_best, upper, k_best, stage2_left())
+                if res.status == "error":
+                    notes.append(Note(f"HiGHS answered {res.detail!r} on the grid MILP bracketed by the best "
+                                      f"grid point ({t_best:.4g}) and the bound ({upper:.4g} steps); retried "
+                                      "without the lower bracket", kind="solver"))
+                    calls += 1
+                    res = self._max_margin_milp(g_rows, g, kmin, kmax, -T_CAP, upper, None, stage2_left())
+                if res.x is not None:
+                    k = np.clip(np.rint(res.x[:-1]), kmin, kmax)
+                    t_k = float(grid_margins(g_rows, g, k))
+                    if t_k > t_best:
+                        k_best, t_best = k, t_k
+                path.append(f"grid optimum: MILP ({res.status})")
+                if res.status != "optimal":
+                    stopped = ("grid optimum", "time limit" if res.status == "time_limit" else f"HiGHS: {res.detail}")
+        clock.lap("grid optimum")
+        if upper < -TOL or (stopped is None and t_best < -TOL):
+            return self._triaged(problem, g_rows, g, kmin, kmax, cost, k_best, clock, path, notes, calls, bound)
+
+        # Stage 3: least norm at the error budget reached (also when stage 2 was stopped).
+        b = rounded_rhs(g, d, zero, t_best)
+        if least_norm_done is not None and np.array_equal(b, least_norm_done):
+            proved_norm, why = True, ""
+            path.append("least norm: proved with the grid optimum")
+        else:
+            calls += 1
+            if cont is not None and not np.array_equal(b, rounded_rhs(g, d, zero, level)):
+                cont = None
+            k_best, proved_norm, why = self._grid_least_norm(g_rows, g, b, kmin, kmax, cost, t_best, k_best, cont,
+                                                             clock, path)
+        if not proved_norm and stopped is None:
+            stopped = ("least norm", why)
+        clock.lap("least norm")
+
         x[free] = k_best * problem.resolution
-        message = None
-        if status != "optimal":
-            message = (f"grid optimum not proved within the time limit ({status}); "
-                       f"the continuous bound is {bound:.4f}")
-        return make_result(problem, x, optimizer=self.name, evaluations=calls,
-                           seconds=time.perf_counter() - start, status=status, bound=bound, message=message,
-                           binding=binding)
-
-    @staticmethod
-    def _continuous_least_norm(g_rows: Array, g: Array, kmin: Array, kmax: Array, t_star: float) -> Array:
-        """Least Euclidean norm point with every margin ≥ t_star (convex QP via SLSQP-free NNLS dual).
-
-        Solved as a least-distance problem min ‖k‖ s.t. M k ≥ m (Lawson & Hanson 1974,
-        ch. 23): with E = [Mᵀ; mᵀ] and f = e_{n+1}, u = NNLS(E, f), r = E u − f gives
-        k = −r[:n] / r[n].
-        """
-        n = g_rows.shape[1]
-        # Constraints as M k >= m: margins (−G k >= t* − g) and bounds.
-        m_mat = np.vstack([-g_rows, np.eye(n), -np.eye(n)])
-        m_vec = np.r_[t_star - g - 1e-9, kmin, -kmax]
-        from scipy.optimize import nnls
-
-        e = np.vstack([m_mat.T, m_vec[None, :]])
-        f = np.zeros(n + 1)
-        f[-1] = 1.0
-        u, _ = nnls(e, f, maxiter=50 * e.shape[1])
-        r = e @ u - f
-        if abs(r[-1]) < 1e-12:
-            raise SolverError("least-norm stage found no feasible point")
-        return -r[:n] / r[-1]
+        status, message = "optimal", None
+        extra: dict[str, object] = {"stages": dict(clock.stages), "path": "; ".join(path)}
+        if stopped is not None:
+            stage, why = stopped
+            status = "time_limit" if why == "time limit" else "solver_error"
+            if stage == "grid optimum":
+                message = (f"grid optimum not proved ({why} in the grid-optimum stage); the least-norm correction "
+                           f"at the best error budget found is given; the continuous bound is {bound:.4f}")
+            else:
+                message = (f"grid optimum proved, least norm not proved ({why} in the least-norm stage); the "
+                           "smallest correction found at the optimum is given")
+            notes.append(Note(message, kind="solver"))
+            extra["stopped"] = {"stage": stage, "reason": why}
+        result = make_result(problem, x, optimizer=self.name, evaluations=calls,
+                             seconds=time.perf_counter() - clock.start, status=status, bound=bound,
+                             message=message, binding=binding)
+        result.extra.update(extra)
+        result.notes = tuple(notes)
+        return result

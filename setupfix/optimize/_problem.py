@@ -7,9 +7,10 @@ from dataclasses import dataclass, field
 import numpy as np
 import numpy.typing as npt
 
+from setupfix.errors import Note, ParameterError
 from setupfix.model import PartMeasurement, ProcessModel
 from setupfix.objective import correction_norm, error_budget, fitness, margins
-from setupfix.relation import relation_matrices
+from setupfix.relation import predict_dimensions, relation_matrices
 
 __all__ = ["CorrectionProblem", "OptimizeResult"]
 
@@ -37,6 +38,10 @@ class CorrectionProblem:
         Register grid step.
     register_ids, dimension_ids : tuple of str
         Labels of rows and columns of ``composite``.
+    cost : ndarray of shape (n_registers,), optional
+        Weight of each register in the least-norm stage of the exact optimiser
+        (minimise Σ cost_i·x_i² among equally good corrections; eq. 9 is all ones,
+        the default).  Positive and finite: a larger cost moves that register less.
     """
 
     composite: Array
@@ -48,6 +53,14 @@ class CorrectionProblem:
     resolution: float
     register_ids: tuple[str, ...]
     dimension_ids: tuple[str, ...]
+    cost: Array = field(default=None)  # type: ignore[arg-type]  # set to ones in __post_init__
+
+    def __post_init__(self) -> None:
+        n = self.n_registers
+        cost = np.ones(n) if self.cost is None else np.asarray(self.cost, dtype=float)
+        if cost.shape != (n,) or not np.all(np.isfinite(cost)) or not np.all(cost > 0):
+            raise ParameterError(f"register cost must be {n} positive finite numbers, got {self.cost!r}")
+        object.__setattr__(self, "cost", cost)
 
     @classmethod
     def from_part(cls, model: ProcessModel, part: PartMeasurement) -> CorrectionProblem:
@@ -70,6 +83,8 @@ class CorrectionProblem:
             resolution=h,
             register_ids=tuple(model.register_ids),
             dimension_ids=tuple(d.id for d in dims),
+            # A register may declare its cost once the model format carries one.
+            cost=np.array([float(getattr(r, "cost", 1.0)) for r in model.registers]),
         )
 
     @property
@@ -95,7 +110,7 @@ class CorrectionProblem:
 
         x : ndarray of shape (..., n_registers) → ndarray of shape (..., n_dimensions)
         """
-        return self.deviation + np.asarray(x, dtype=float) @ self.composite
+        return self.deviation + predict_dimensions(x, self.composite)
 
     def margins(self, x: Array) -> Array:
         """Per-dimension margins after x, shape (..., n_dimensions)."""
@@ -174,6 +189,13 @@ class OptimizeResult:
         Best-so-far [evaluations, f1, f2, f] for convergence plots.
     bound : float, optional
         Upper bound on f1 proved by the exact solver (continuous LP optimum).
+    given_up : tuple of str
+        Dimensions the exact optimiser gave up on because no correction brings every
+        dimension into tolerance (it keeps as many as possible in tolerance first);
+        they need the NC program or the process, not the setup.  Empty for the
+        metaheuristics.
+    notes : tuple of Note
+        Warnings as data (solver retries, limits hit), never ``warnings.warn``.
     """
 
     x: Array
@@ -189,6 +211,8 @@ class OptimizeResult:
     history: Array | None = None
     bound: float | None = None
     extra: dict[str, object] = field(default_factory=dict)
+    given_up: tuple[str, ...] = ()
+    notes: tuple[Note, ...] = ()
 
     @property
     def bonus(self) -> float:

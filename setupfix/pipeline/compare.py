@@ -153,19 +153,6 @@ class Comparison:
         }
 
 
-def _available(name: str) -> str | None:
-    """None when the optimiser's module imports, else the reason (a method still being written)."""
-    import importlib
-
-    if name not in OPTIMIZERS:
-        return f"unknown optimizer (known: {', '.join(OPTIMIZERS)})"
-    try:
-        importlib.import_module(OPTIMIZERS[name].split(":")[0])
-    except ModuleNotFoundError as exc:
-        return f"not available: {exc}"
-    return None
-
-
 def compare_problem(problem: CorrectionProblem, *, methods: Sequence[str] = DEFAULT_METHODS, trials: int = 12,
                     seed: int = 0, params: Mapping[str, Mapping[str, Any]] | None = None,
                     exact: OptimizeResult | None = None) -> Comparison:
@@ -175,8 +162,8 @@ def compare_problem(problem: CorrectionProblem, *, methods: Sequence[str] = DEFA
     ----------
     problem : CorrectionProblem
     methods : sequence of str
-        Registered optimiser names; ones whose module is missing are listed in
-        ``Comparison.skipped`` instead of failing the comparison.
+        Registered optimiser names; an unknown name or parameter is refused
+        (:class:`~setupfix.errors.ParameterError`) before any trial runs.
     trials : int
         Runs per method (the paper: 12).
     seed : int
@@ -191,14 +178,12 @@ def compare_problem(problem: CorrectionProblem, *, methods: Sequence[str] = DEFA
     params = params or {}
     if exact is None:
         exact = get_optimizer("exact").solve(problem)
+    for name in methods:  # every name and parameter checked before the first trial
+        get_optimizer(name, **params.get(name, {}))
     seeds = trial_seeds(seed, trials)
     done: list[MethodTrials] = []
-    skipped: dict[str, str] = {}
+    skipped: dict[str, str] = {}  # kept in the JSON: every registered optimiser is available now
     for name in methods:
-        reason = _available(name)
-        if reason is not None:
-            skipped[name] = reason
-            continue
         kw = dict(params.get(name, {}))
         runs = [get_optimizer(name, seed=s, **kw).solve(problem) for s in seeds]
         done.append(MethodTrials(optimizer=name, seeds=seeds, results=runs))

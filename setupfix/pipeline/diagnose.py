@@ -24,17 +24,21 @@ import numpy as np
 import pandas as pd
 
 import parsers
-from setupfix.atomic import atomic_write
 from setupfix.diagnose import Diagnoser, Diagnosis, Layout, Series
-from setupfix.diagnose.forecast import spec_of
-from setupfix.diagnose.terms import EffectSpec, applied_at, join_temperatures, parts_since_change
-from setupfix.errors import ExportError, MatchError, ModelError, ParseError, SourceLocation
+from setupfix.diagnose.forecast import forecast_shift, spec_of
+from setupfix.diagnose.terms import EffectSpec, applied_at, join_temperatures, parts_since_change, typical_step
+from setupfix.errors import ExportError, MatchError, ModelError, Note, ParseError, SourceLocation
 from setupfix.model import PartMeasurement, ProcessModel, load_model, match_parts, model_from_dict
 from setupfix.model.effects import EffectsSection, ModelEffect, effects_from_dict, load_effects, with_effects
 from setupfix.optimize import CorrectionProblem, get_optimizer
+from setupfix.pipeline.writers import check_target, write_text
 
 __all__ = ["SeriesInput", "DiagnoseOutcome", "load_series", "read_corrections_log", "read_temperature_log",
-           "diagnose_reports", "expand_reports", "augmented_section", "write_augmented"]
+           "diagnose_reports", "expand_reports", "augmented_section", "write_augmented",
+           "corrections_from_table", "temperatures_from_table", "forecast_part"]
+
+#: A temperature log as arrays: times, samples (n, channels), channel names.
+TempLog = tuple[pd.DatetimeIndex, np.ndarray, tuple[str, ...]]
 
 _LOG_NAMES = ("corrections.csv",)
 _TEMP_NAMES = ("temperatures.csv",)
@@ -125,7 +129,13 @@ def read_corrections_log(path: str, model: ProcessModel) -> tuple[pd.DatetimeInd
     MatchError
         Unknown register, or a tool change of a register that is not a tool.
     """
-    table = _read_csv(path)
+    return corrections_from_table(_read_csv(path), model, path)
+
+
+def corrections_from_table(table: pd.DataFrame, model: ProcessModel,
+                           path: str) -> tuple[pd.DatetimeIndex, np.ndarray, np.ndarray, list[str]]:
+    """A corrections-log table (CSV or store) checked against the model; see :func:`read_corrections_log`."""
+    table = table.astype(object).where(table.notna(), "").astype(str)
     for col in ("timestamp", "register"):
         if col not in table:
             raise ParseError(f"corrections log: missing column {col!r}", location=SourceLocation(path, line=1))
@@ -133,11 +143,13 @@ def read_corrections_log(path: str, model: ProcessModel) -> tuple[pd.DatetimeInd
         raise ParseError("corrections log: missing column 'delta'", location=SourceLocation(path, line=1))
     lines = [i + 2 for i in range(len(table))]
     times = _times(table["timestamp"].tolist(), path, lines)
-    regs, deltas, events = [], [], []
+    regs: list[int] = []
+    deltas: list[float] = []
+    events: list[str] = []
     ids = model.register_ids
-    for i, row in enumerate(table.itertuples(index=False)):
-        rec = row._asdict()
-        event = (rec.get("event") or "correction").strip() or "correction"
+    records: list[dict[str, str]] = table.to_dict("records")  # type: ignore[assignment]
+    for i, rec in enumerate(records):
+        event = str(rec.get("event") or "correction").strip() or "correction"
         if event not in ("correction", "tool_change"):
             raise ParseError(f"unknown event {event!r} (expected correction or tool_change)",
                              location=SourceLocation(path, line=lines[i]))
@@ -147,7 +159,8 @@ def read_corrections_log(path: str, model: ProcessModel) -> tuple[pd.DatetimeInd
             raise MatchError(f"unknown register {rec['register']!r} (model registers: {', '.join(ids)})",
                              location=SourceLocation(path, line=lines[i])) from None
         if event == "tool_change" and reg.kind != "tool":
-            raise MatchError(f"tool change of {reg.id}, which is not a tool", location=SourceLocation(path, line=lines[i]))
+            raise MatchError(f"tool change of {reg.id}, which is not a tool",
+                             location=SourceLocation(path, line=lines[i]))
         text = str(rec["delta"]).strip()
         if event == "correction":
             try:
@@ -155,7 +168,8 @@ def read_corrections_log(path: str, model: ProcessModel) -> tuple[pd.DatetimeInd
                 if not math.isfinite(delta):
                     raise ValueError
             except ValueError:
-                raise ParseError(f"delta {text!r} is not a number", location=SourceLocation(path, line=lines[i])) from None
+                raise ParseError(f"delta {text!r} is not a number",
+                                 location=SourceLocation(path, line=lines[i])) from None
         else:
             delta = 0.0
         regs.append(ids.index(reg.id))
@@ -173,7 +187,13 @@ def read_temperature_log(path: str) -> tuple[pd.DatetimeIndex, np.ndarray, tuple
     ParseError
         Missing timestamp column, no sensor column, bad timestamp or value.
     """
-    table = _read_csv(path)
+    return temperatures_from_table(_read_csv(path), path)
+
+
+def temperatures_from_table(table: pd.DataFrame, path: str, *,
+                            fill: bool = False) -> tuple[pd.DatetimeIndex, np.ndarray, tuple[str, ...]]:
+    """A temperature-log table (CSV or store); ``fill`` carries a channel's last sample forward
+    (a store holds each channel's samples apart)."""
     if "timestamp" not in table:
         raise ParseError("temperature log: missing column 'timestamp'", location=SourceLocation(path, line=1))
     lines = [i + 2 for i in range(len(table))]
@@ -183,7 +203,8 @@ def read_temperature_log(path: str) -> tuple[pd.DatetimeIndex, np.ndarray, tuple
         raise ParseError("temperature log: no sensor column", location=SourceLocation(path, line=1))
     values = np.empty((len(table), len(channels)))
     for j, c in enumerate(channels):
-        col = pd.to_numeric(table[c], errors="coerce").to_numpy(dtype=float)
+        num = pd.to_numeric(table[c], errors="coerce")
+        col = (num.ffill().bfill() if fill else num).to_numpy(dtype=float)
         bad = np.flatnonzero(~np.isfinite(col))
         if bad.size:
             raise ParseError(f"temperature {table[c].iloc[bad[0]]!r} in column {c!r} is not a number",
@@ -197,9 +218,17 @@ def _hours(times: pd.DatetimeIndex, origin: pd.Timestamp) -> np.ndarray:
     return np.asarray((times - origin).total_seconds(), dtype=float) / 3600.0
 
 
-def load_series(model: ProcessModel | str | Path, reports: Sequence[str | Path], *, corrections: str | None = None,
-                temperatures: str | None = None) -> SeriesInput:
-    """Read a series of reports with its logs, in the engine's terms.
+def load_series(model: ProcessModel | str | Path, reports: Sequence[str | Path] = (), *,
+                corrections: str | None = None, temperatures: str | None = None,
+                db: str | Path | None = None, thermal: str | Path | None = None) -> SeriesInput:
+    """Read a series of reports (files, folders, or every report of a history store) with its logs.
+
+    With ``db`` the store's reports, corrections log and temperatures are used (files
+    given as well are added; a corrections or temperature file given replaces the
+    store's log).  With ``thermal`` (a model saved by ``setupfix thermal fit``) its
+    predicted drift over the temperature log becomes one more channel, so the thermal
+    candidate tests the thermal slice's model itself (its measured-error column is
+    not used as a channel).
 
     Raises
     ------
@@ -209,23 +238,106 @@ def load_series(model: ProcessModel | str | Path, reports: Sequence[str | Path],
     if not isinstance(model, ProcessModel):
         model = load_model(model)
     section = load_effects(model.source, model) if Path(model.source).is_file() else EffectsSection()
-    files, found_log, found_temp, notes = expand_reports(reports)
-    if corrections is None and found_log:
-        corrections = found_log
-        notes.append(f"corrections log {found_log} found beside the reports: used")
-    if temperatures is None and found_temp:
-        temperatures = found_temp
-        notes.append(f"temperature log {found_temp} found beside the reports: used")
+    notes: list[str] = []
     parts: list[PartMeasurement] = []
-    for f in files:
-        table = parsers.read(f)
-        parts += match_parts(model, table, source=str(f))
-    stamps = [p.timestamp for p in parts]
+    log = temps = None
+    where = str(db) if db is not None else ""
+    if db is not None:
+        from setupfix.store import open_store
+
+        if not Path(db).is_file():
+            raise ParseError("no such history store", location=SourceLocation(str(db)),
+                             hint="create it with 'setupfix history import'")
+        with open_store(db) as store:
+            rows = store.measurements()
+            for rec in store.reports():
+                table = rows[rows["report_sha256"] == rec.sha256].drop(columns=["report_sha256"])
+                table = table[~table["reference"]] if "reference" in table else table
+                parts += match_parts(model, table, source=f"{db}#{rec.name}")
+            if corrections is None:
+                stored = store.corrections()
+                if not stored.empty:
+                    log = corrections_from_table(stored, model, f"{db}#corrections")
+            if temperatures is None:
+                stored_t = store.temperatures()
+                if len(stored_t.columns) > 1 and not stored_t.empty:
+                    temps = temperatures_from_table(stored_t, f"{db}#temperatures", fill=True)
+    if reports:
+        files, found_log, found_temp, more = expand_reports(reports)
+        notes += more
+        where = where or str(files[0])
+        if corrections is None and found_log and log is None:
+            corrections = found_log
+            notes.append(f"corrections log {found_log} found beside the reports: used")
+        if temperatures is None and found_temp and temps is None:
+            temperatures = found_temp
+            notes.append(f"temperature log {found_temp} found beside the reports: used")
+        for f in files:
+            parts += match_parts(model, parsers.read(f), source=str(f))
+    if not parts:
+        raise ParseError("no report in the series", location=SourceLocation(where or "<series>"))
+    if corrections:
+        log = read_corrections_log(corrections, model)
+    if temperatures:
+        temps = read_temperature_log(temperatures)
+    if thermal is not None:
+        if not temperatures:
+            raise ParseError("a thermal model needs the temperature log it predicts from",
+                             location=SourceLocation(str(thermal)), hint="give --temperatures")
+        temps, more_notes = _with_thermal_prediction(temps, str(thermal), str(temperatures))
+        notes += more_notes
+    series, more = _assemble(model, parts, log, temps, where)
+    notes += more
+    declared = tuple(spec_of(e) for e in section.effects)
+    for e in section.effects:
+        if e.kind == "thermal" and e.channel not in series.channels:
+            raise MatchError(f"the model's thermal effect {e.id} needs temperature channel {e.channel!r}",
+                             location=SourceLocation(model.source, key=f"effects.{e.id}.channel"),
+                             hint="give --temperatures")
+    unmatched = sorted({u for p in parts for u in p.unmatched})
+    if unmatched:
+        notes.append(f"{len(unmatched)} characteristic(s) match no dimension: {', '.join(unmatched[:6])}"
+                     + (" …" if len(unmatched) > 6 else ""))
+    return SeriesInput(model, Layout.from_model(model), series, tuple(_ordered(parts)), declared, section,
+                       corrections, temperatures, tuple(notes))
+
+
+def _with_thermal_prediction(temps: TempLog | None, thermal: str, temperatures: str) -> tuple[TempLog, list[str]]:
+    """The temperature channels plus the drift a saved thermal model predicts over the same log."""
+    from setupfix.pipeline.thermal import predict_drift
+
+    assert temps is not None
+    pred = predict_drift(thermal, temperatures)
+    times, samples, channels = temps
+    p_times = _times(pred.timestamps, temperatures)
+    idx = np.clip(np.searchsorted(p_times.values, times.values, side="right") - 1, 0, len(p_times) - 1)
+    keep = [j for j, c in enumerate(channels) if c != pred.target]
+    name = f"{pred.method} prediction"
+    notes = [str(n) for n in pred.notes]
+    notes.append(f"thermal model {thermal} ({pred.method}, {pred.unit or 'unit not stated'}): its prediction is "
+                 f"the channel {name!r}")
+    return (times, np.column_stack([samples[:, keep], pred.drift[idx]]),
+            (*(channels[j] for j in keep), name)), notes
+
+
+def _ordered(parts: list[PartMeasurement]) -> list[PartMeasurement]:
+    if all(p.timestamp is None for p in parts) or any(p.timestamp is None for p in parts):
+        return parts
+    ts = _times([p.timestamp for p in parts], parts[0].report)
+    return [parts[i] for i in np.argsort(ts.values, kind="stable")]
+
+
+def _assemble(model: ProcessModel, parts: list[PartMeasurement],
+              log: tuple[pd.DatetimeIndex, np.ndarray, np.ndarray, list[str]] | None,
+              temps: TempLog | None, where: str) -> tuple[Series, list[str]]:
+    """Parts in time order with the corrections in effect, parts since tool changes, temperatures."""
+    notes: list[str] = []
     layout = Layout.from_model(model)
+    stamps = [p.timestamp for p in parts]
     if all(s is None for s in stamps):
-        if corrections:
-            raise MatchError("the reports carry no timestamps, so the corrections log cannot be tied to the parts",
-                             location=SourceLocation(str(files[0])), hint="add a timestamp column")
+        if log is not None or temps is not None:
+            raise MatchError("the reports carry no timestamps, so the corrections or temperature log cannot be "
+                             "tied to the parts", location=SourceLocation(where), hint="add a timestamp column")
         time = np.arange(len(parts), dtype=float)
         origin = ""
         notes.append("no timestamps: cycles are taken in input order, one hour apart")
@@ -246,8 +358,8 @@ def load_series(model: ProcessModel | str | Path, reports: Sequence[str | Path],
     applied = np.zeros((len(parts), n_r))
     pending = np.zeros(n_r)
     change_times: list[np.ndarray] = [np.zeros(0) for _ in layout.tools]
-    if corrections:
-        times, regs, deltas, events = read_corrections_log(corrections, model)
+    if log is not None:
+        times, regs, deltas, events = log
         t_log = _hours(times, pd.Timestamp(origin))
         is_corr = np.array([e == "correction" for e in events], dtype=bool)
         applied = applied_at(time, t_log[is_corr], regs[is_corr], deltas[is_corr], n_r)
@@ -258,35 +370,21 @@ def load_series(model: ProcessModel | str | Path, reports: Sequence[str | Path],
     parts_cut = parts_since_change(time, change_times)
     channels: tuple[str, ...] = ()
     temp = np.zeros((len(parts), 0))
-    if temperatures:
-        if not origin:
-            raise MatchError("the reports carry no timestamps, so the temperature log cannot be tied to the parts",
-                             location=SourceLocation(str(files[0])))
-        t_times, samples, channels = read_temperature_log(temperatures)
+    if temps is not None:
+        t_times, samples, channels = temps
         t_h = _hours(t_times, pd.Timestamp(origin))
         if t_h[0] > time[0]:
-            notes.append(f"the temperature log starts after the first part: its first sample is used before")
+            notes.append("the temperature log starts after the first part: its first sample is used before")
         temp = join_temperatures(time, t_h, samples)
     series = Series(dev, time, applied, parts_cut, temp, channels, tuple(f"{p.report}:{p.part}" for p in parts),
                     origin, pending)
-    declared = tuple(spec_of(e) for e in section.effects)
-    for e in section.effects:
-        if e.kind == "thermal" and e.channel not in channels:
-            raise MatchError(f"the model's thermal effect {e.id} needs temperature channel {e.channel!r}",
-                             location=SourceLocation(model.source, key=f"effects.{e.id}.channel"),
-                             hint="give --temperatures")
-    unmatched = sorted({u for p in parts for u in p.unmatched})
-    if unmatched:
-        notes.append(f"{len(unmatched)} characteristic(s) match no dimension: {', '.join(unmatched[:6])}"
-                     + (" …" if len(unmatched) > 6 else ""))
-    return SeriesInput(model, layout, series, tuple(parts), declared, section, corrections, temperatures, tuple(notes))
+    return series, notes
 
 
 def augmented_section(diagnosis: Diagnosis, declared: EffectsSection) -> EffectsSection:
     """The ``[effects]`` section: the model's own effects, then those found (ids E1, E2, …)."""
     s = diagnosis.series
-    gaps = np.diff(s.time)
-    step = float(np.median(gaps[gaps <= 1.0])) if np.any(gaps <= 1.0) else (float(np.median(gaps)) if gaps.size else None)
+    step = typical_step(s.time) if s.n_cycles > 1 else None
     effects = list(declared.effects)
     used = {e.id for e in effects}
     n = 1
@@ -375,9 +473,10 @@ def _next_correction(model: ProcessModel, diagnosis: Diagnosis) -> tuple[dict[st
     return corr, []
 
 
-def diagnose_reports(model: ProcessModel | str | Path, reports: Sequence[str | Path], *,
+def diagnose_reports(model: ProcessModel | str | Path, reports: Sequence[str | Path] = (), *,
                      corrections: str | None = None, temperatures: str | None = None, augment: str | None = None,
-                     diagnoser: Diagnoser | None = None) -> DiagnoseOutcome:
+                     diagnoser: Diagnoser | None = None, db: str | Path | None = None,
+                     thermal: str | Path | None = None) -> DiagnoseOutcome:
     """Diagnose a series of reports; optionally write the augmented model.
 
     Raises
@@ -386,7 +485,9 @@ def diagnose_reports(model: ProcessModel | str | Path, reports: Sequence[str | P
         Bad input (named with its place) or an augmented file that cannot be written;
         nothing is half-written.
     """
-    inp = load_series(model, reports, corrections=corrections, temperatures=temperatures)
+    if augment:
+        check_target(augment)  # a bad target costs nothing
+    inp = load_series(model, reports, corrections=corrections, temperatures=temperatures, db=db, thermal=thermal)
     diagnoser = diagnoser or Diagnoser()
     diagnosis = diagnoser.run(inp.layout, inp.series, declared=inp.declared)
     nxt, more = _next_correction(inp.model, diagnosis)
@@ -417,13 +518,30 @@ def write_augmented(model: ProcessModel, section: EffectsSection, target: str) -
         effects_from_dict(doc.get("effects"), check, target)
     except (tomllib.TOMLDecodeError, ModelError) as exc:
         raise ExportError(f"the augmented model would not load: {exc}", location=SourceLocation(target)) from None
-    path = Path(target)
-    if path.exists() and not path.is_file():
-        raise ExportError("not a regular file", location=SourceLocation(target))
-    try:
-        with atomic_write(target) as fh:
-            fh.write(new)
-    except OSError as exc:
-        raise ExportError(f"cannot write: {exc.strerror or exc}", location=SourceLocation(target)) from None
+    write_text(target, new)
     return target
 
+
+
+def forecast_part(model: ProcessModel, part: PartMeasurement) -> PartMeasurement:
+    """The part as the next cycle is expected to come out, by the model's ``[effects]``.
+
+    ``correct`` optimises the next cycle, not the one measured: a drift goes on for
+    one cycle interval and every tool wears one cycle more (see
+    :func:`setupfix.diagnose.forecast.forecast_shift`).  A model without drift or wear
+    effects returns the part unchanged.
+    """
+    if not Path(model.source).is_file():
+        return part
+    section = load_effects(model.source, model)
+    if not any(e.kind in ("drift", "wear") for e in section.effects):
+        return part
+    time = None
+    if section.origin and part.timestamp:
+        time = float(_hours(_times([part.timestamp], part.report), pd.Timestamp(section.origin))[0])
+    shift = forecast_shift(section, Layout.from_model(model), time=time)
+    kinds = sorted({e.kind for e in section.effects if e.kind in ("drift", "wear")})
+    note = Note(f"the model's [effects] ({', '.join(kinds)}) forecast the next cycle: up to "
+                f"{np.max(np.abs(shift)):.4f} {model.unit} added to the measured deviations",
+                SourceLocation(model.source, key="effects"), "forecast")
+    return dataclasses.replace(part, deviation=part.deviation + shift, notes=(*part.notes, note))

@@ -16,7 +16,7 @@ import pandas as pd
 import parsers
 from setupfix.errors import Note, ParseError, SetupfixError, SourceLocation, UnknownFormatError
 from setupfix.model import CANONICAL_COLUMNS
-from setupfix.pipeline.writers import FLOAT_FORMAT, write_canonical_csv
+from setupfix.pipeline.writers import FLOAT_FORMAT, write_canonical_csv  # noqa: F401 - re-exported
 
 __all__ = ["ParsedReport", "ParseOutcome", "parse_reports", "expand_inputs", "write_canonical_csv",
            "OUTPUT_COLUMNS", "list_formats", "note_line"]

@@ -9,48 +9,65 @@ from __future__ import annotations
 
 import os
 import time
-from collections.abc import Iterator, Sequence
-from dataclasses import dataclass, field
+from datetime import datetime
+from collections.abc import Iterator, Mapping, Sequence
+from dataclasses import dataclass
 from pathlib import Path
 
-import parsers
-from setupfix.errors import MatchError, ParseError, SourceLocation
-from setupfix.model import ProcessModel, load_model
-from setupfix.model.measurements import match_parts
-from setupfix.optimize import CorrectionProblem, get_optimizer
-from setupfix.pipeline.compare import DEFAULT_METHODS, Comparison, compare_problem
-from setupfix.pipeline.correct import PartCorrection, assign_stations, correct_part
-from setupfix.pipeline.view import MatchRow, match_rows
+import pandas as pd
 
-__all__ = ["OpenedReport", "open_report", "newest_report", "FolderWatch", "SKIPPED_SUFFIXES", "compare_steps"]
+import parsers
+from setupfix.errors import ExportError, MatchError, ParseError, SourceLocation
+from setupfix.model import PartMeasurement, ProcessModel, load_model, match_parts
+from setupfix.optimize import CorrectionProblem, OptimizeResult, get_optimizer
+from setupfix.pipeline.compare import DEFAULT_METHODS, Comparison, MethodTrials, trial_seeds
+from setupfix.pipeline.controllers import read_current, render
+from setupfix.pipeline.correct import PartCorrection, correct_report, open_history
+from setupfix.pipeline.cycles import assign_stations
+from setupfix.pipeline.view import MatchRow, match_rows, matched_rows
+from setupfix.store import CORRECTION_COLUMNS, Recommendation, open_store
+
+__all__ = ["OpenedReport", "open_report", "newest_report", "FolderWatch", "SKIPPED_SUFFIXES", "compare_steps", "store_parts", "offsets_text",
+           "record_applied"]
 
 
 @dataclass(frozen=True)
 class OpenedReport:
     """A report opened against a model.
 
-    Either ``corrections`` (one per cycle) is filled, or ``mismatch`` holds the match
-    table and ``problem`` the reason the report could not be tied to the model.
+    ``matches`` ties every characteristic of the report to a dimension (or lists close
+    names).  ``corrections`` holds one correction per cycle; it is empty when the
+    report could not be tied to the model, and ``problem`` then says why.  ``current``
+    holds the controller's current offsets by register ID when they were given.
     """
 
     model: ProcessModel
     report: str
     format: str
     corrections: tuple[PartCorrection, ...] = ()
-    mismatch: tuple[MatchRow, ...] = ()
+    matches: tuple[MatchRow, ...] = ()
     problem: str = ""
-    notes: tuple[str, ...] = field(default=())
+    current: Mapping[str, float] | None = None
+
+    @property
+    def unmatched(self) -> int:
+        """Number of report characteristics that match no dimension."""
+        return sum(not m.matched for m in self.matches)
 
 
 def open_report(model: ProcessModel | str | Path, report: str | Path, *, optimizer: str = "exact",
-                seed: int | None = None) -> OpenedReport:
-    """Read ``report`` (any supported format), tie it to ``model`` and correct every cycle.
+                seed: int | None = None, db: str | Path | None = None,
+                current: str | Path | None = None) -> OpenedReport:
+    """Read ``report`` (any supported format), tie it to ``model`` and correct every cycle
+    as ``setupfix correct`` does (:func:`~setupfix.pipeline.correct.correct_report`: the
+    model's effects forecast, its safety rules, smoothing from the store ``db``, the
+    cumulative limit from the ``current`` offsets file).
 
     Raises
     ------
     SetupfixError
-        When the model or the report cannot be read (a report that does not match the
-        model is not an error: see :class:`OpenedReport`).
+        When the model, the current offsets or the report cannot be read (a report
+        that does not match the model is not an error: see :class:`OpenedReport`).
     """
     if not isinstance(model, ProcessModel):
         model = load_model(model)
@@ -58,15 +75,46 @@ def open_report(model: ProcessModel | str | Path, report: str | Path, *, optimiz
     if path.is_dir():
         raise ParseError("is a folder, not a report", location=SourceLocation(str(report)))
     spec = parsers.find_format(path)
-    table = spec.read(path)
+    values = read_current(current, model) if current is not None else None
     try:
-        table = assign_stations(model, table)
-        parts = match_parts(model, table, source=str(report))
+        if db is not None and Path(db).is_file():  # a new store has no history to smooth over
+            with open_history(db) as store:
+                corrections = correct_report(model, path, optimizer=optimizer, seed=seed, store=store,
+                                             current=values)
+        else:
+            corrections = correct_report(model, path, optimizer=optimizer, seed=seed, current=values)
     except MatchError as exc:
-        return OpenedReport(model, str(report), spec.name, mismatch=tuple(match_rows(model, table)),
-                            problem=str(exc))
-    corrections = tuple(correct_part(model, p, optimizer=optimizer, seed=seed) for p in parts)
-    return OpenedReport(model, str(report), spec.name, corrections=corrections)
+        # Read again only on this path: the match table needs every row, matched or not.
+        table = spec.read(path)
+        return OpenedReport(model, str(report), spec.name, matches=tuple(match_rows(model, table)),
+                            problem=str(exc), current=values)
+    return OpenedReport(model, str(report), spec.name, corrections=tuple(corrections),
+                        matches=tuple(matched_rows(model, [c.part for c in corrections])), current=values)
+
+
+def offsets_text(opened: OpenedReport, controller: str) -> str:
+    """The offsets of every cycle in ``controller`` format, exactly as
+    :func:`~setupfix.pipeline.correct.write_correction_offsets` writes them (absolute
+    *set* rows when the current offsets are known).
+
+    Raises
+    ------
+    ExportError
+        A rejected cycle (nothing may be written), several cycles for a controller
+        program, or a register the format cannot express.
+    """
+    results = opened.corrections
+    if not results:
+        raise ExportError("nothing to export: no correction", location=SourceLocation(opened.report))
+    rejected = [r for r in results if r.verdict == "reject"]
+    if rejected:
+        raise ExportError(f"part {rejected[0].part.part or '—'} is rejected: {rejected[0].recommendation.alarm}",
+                          location=SourceLocation(opened.report))
+    if controller != "csv" and len(results) > 1:
+        raise ExportError(f"{controller}: a program holds one correction, the report has {len(results)} cycles",
+                          location=SourceLocation(opened.report))
+    rows = [row for r in results for row in r.offsets(opened.current)]
+    return render(controller, rows, f"{results[0].part.report} {results[0].part.part}".strip())
 
 
 #: Files a watched folder ignores: partial downloads, editor and temporary files.
@@ -143,18 +191,77 @@ class FolderWatch:
 
 
 def compare_steps(problem: CorrectionProblem, *, methods: Sequence[str] = DEFAULT_METHODS, trials: int = 12,
-                  seed: int = 0) -> Iterator[tuple[str, Comparison]]:
-    """:func:`~setupfix.pipeline.compare.compare_problem` one method at a time.
+                  seed: int = 0) -> Iterator[tuple[str, int, int, Comparison]]:
+    """:func:`~setupfix.pipeline.compare.compare_problem` one trial at a time.
 
-    Yields ``(step, comparison so far)`` after the exact optimum (step ``"exact"``) and
-    after each method, so a caller can show progress and stop between methods; the
-    last comparison equals ``compare_problem(problem, methods=…, trials=…, seed=…)``.
+    Yields ``(method, step, steps, comparison so far)`` after the exact optimum and
+    after every trial, so that a caller can show progress and stop within one trial;
+    the last comparison equals ``compare_problem(problem, methods=…, trials=…, seed=…)``
+    (same seeds, same order).
     """
+    if trials < 1:
+        raise ValueError("trials must be at least 1")
+    seeds = trial_seeds(seed, trials)
+    steps = 1 + len(methods) * trials
     exact = get_optimizer("exact").solve(problem)
-    done = Comparison(problem=problem, exact=exact, methods=[], seed=seed, trials=trials)
-    yield "exact", done
+    done: list[MethodTrials] = []
+    skipped: dict[str, str] = {}
+    step = 1
+    yield "exact", step, steps, Comparison(problem=problem, exact=exact, methods=[], seed=seed, trials=trials)
     for name in methods:
-        step = compare_problem(problem, methods=[name], trials=trials, seed=seed, exact=exact)
-        done = Comparison(problem=problem, exact=exact, methods=[*done.methods, *step.methods], seed=seed,
-                          trials=trials, skipped={**done.skipped, **step.skipped})
-        yield name, done
+        try:
+            get_optimizer(name, seed=seeds[0])
+        except ModuleNotFoundError as exc:  # a method still being written: skipped, as compare_problem does
+            skipped[name] = f"not available: {exc}"
+            step += trials
+            yield name, step, steps, Comparison(problem, exact, list(done), seed, trials, skipped=dict(skipped))
+            continue
+        runs: list[OptimizeResult] = []
+        for s in seeds:
+            runs.append(get_optimizer(name, seed=s).solve(problem))
+            step += 1
+            partial = [*done, MethodTrials(name, seeds[:len(runs)], list(runs))]
+            yield name, step, steps, Comparison(problem, exact, partial, seed, trials, skipped=dict(skipped))
+        done.append(MethodTrials(name, seeds, runs))
+
+
+def store_parts(model: ProcessModel, db: str | Path) -> tuple[list[PartMeasurement], list[str]]:
+    """Every cycle stored in the history store ``db``, tied to ``model``, oldest first.
+
+    A stored report that does not match the model is left out and named in the notes.
+    """
+    notes: list[str] = []
+    parts: list[PartMeasurement] = []
+    with open_store(db) as store:
+        names = {r.sha256: r.name for r in store.reports()}
+        rows = store.measurements()
+    for sha, table in rows.groupby("report_sha256", sort=False):
+        try:
+            parts += match_parts(model, assign_stations(model, table), source=names.get(str(sha), str(sha)))
+        except MatchError as exc:
+            notes.append(f"left out: {exc}")
+    parts.sort(key=lambda p: p.timestamp or "")
+    return parts, notes
+
+
+def record_applied(db: str | Path, corrections: Sequence[PartCorrection], *, when: str | None = None) -> int:
+    """Record corrections as applied now: the corrections log (non-zero changes, by
+    controller register name) and the recommendations, in one transaction.
+
+    Returns
+    -------
+    int
+        Correction rows added.
+    """
+    stamp = when or datetime.now().replace(microsecond=0).isoformat()
+    rows = [(stamp, reg.register, float(c.corrections.get(reg.id, 0.0)), "correction")
+            for c in corrections for reg in c.model.registers
+            if not reg.fixed and c.corrections.get(reg.id, 0.0) != 0.0]
+    with open_store(db) as store, store.transaction():
+        added = store.add_corrections(pd.DataFrame(rows, columns=list(CORRECTION_COLUMNS)))
+        for c in corrections:
+            store.add_recommendation(Recommendation(
+                optimizer=c.result.optimizer, created_at=stamp,
+                inputs={"model": c.model.source, "report": c.part.report, "part": c.part.part, "applied": True},
+                result=c.to_json()))
+    return added

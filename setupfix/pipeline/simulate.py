@@ -22,7 +22,7 @@ from typing import Any
 
 import numpy as np
 
-from setupfix.atomic import atomic_write
+from setupfix.pipeline.writers import atomic_write, check_target
 from setupfix.diagnose import KINDS, EffectSpec, HiddenEffect, Layout, ShopSimulator, SimulatedSeries
 from setupfix.errors import ExportError, ParameterError
 from setupfix.model import ProcessModel, load_model
@@ -104,7 +104,8 @@ def _stamp(start: datetime, hours: float) -> str:
 
 
 def write_series(model: ProcessModel, layout: Layout, sim: SimulatedSeries, out_dir: str | Path, *,
-                 per_cycle: bool = False, start: str = START, settings: dict[str, Any] | None = None) -> tuple[str, ...]:
+                 per_cycle: bool = False, start: str = START,
+                 settings: dict[str, Any] | None = None) -> tuple[str, ...]:
     """Write the series into ``out_dir`` (created if needed); return the files written.
 
     Raises
@@ -123,6 +124,9 @@ def write_series(model: ProcessModel, layout: Layout, sim: SimulatedSeries, out_
         raise ExportError(f"cannot create the folder: {exc.strerror}") from None
     if not out.is_dir():
         raise ExportError(f"{out} is not a folder")
+    names = ["measurements.csv"] if not per_cycle else [f"cycle_{k + 1:03d}.csv" for k in range(sim.series.n_cycles)]
+    for name in [*names, "corrections.csv", "temperatures.csv", "truth.json"]:
+        check_target(out / name)
     s = sim.series
     header = ["characteristic", "nominal", "actual", "deviation", "lower", "upper", "unit", "part", "timestamp",
               "station"]

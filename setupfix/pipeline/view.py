@@ -11,15 +11,14 @@ Symbols carry every state as well as colour does, for monochrome terminals:
 ``✗``   out of tolerance
 ``●``   binding: one of the dimensions that stop a better correction
 ``▲``   predicted out of tolerance after the correction
+``◇``   predicted inside the limits but within the measurement uncertainty U of one
 ``⚑``   given up: no setup correction can bring it in (NC program / process)
+``⊘``   beyond the reject band: the reason the verdict is *reject*
 ======  ==================================================================
 """
 
 from __future__ import annotations
 
-import csv
-import difflib
-import io
 import math
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
@@ -29,21 +28,23 @@ import numpy as np
 import numpy.typing as npt
 import pandas as pd
 
-from setupfix.model import ProcessModel, normalise_name
-from setupfix.offsets import OFFSET_COLUMNS, OffsetRow, _decimals
+from setupfix.model import PartMeasurement, ProcessModel, normalise_name
+from setupfix.model.measurements import suggest_names
+from setupfix.objective import margins as objective_margins
 from setupfix.pipeline.compare import Comparison
 from setupfix.pipeline.correct import PartCorrection
+from setupfix.pipeline.diagnose import DiagnoseOutcome
 from setupfix.pipeline.thermal import DriftPrediction
 
 __all__ = [
-    "IN", "OUT", "BINDING", "PREDICTED_OUT", "GIVEN_UP",
+    "IN", "OUT", "BINDING", "PREDICTED_OUT", "GIVEN_UP", "GUARD", "REJECTED",
     "DimensionRow", "dimension_rows", "stations", "filter_rows", "sort_rows", "SORT_KEYS",
     "zone_bar", "RegisterRow", "register_rows", "Summary", "summary",
-    "MatchRow", "match_rows", "convergence", "compare_rows", "DriftView", "drift_view",
-    "offsets_csv_text", "signed", "limits_text",
+    "MatchRow", "match_rows", "matched_rows", "convergence", "compare_rows", "DriftView", "drift_view",
+    "signed", "limits_text", "CycleBudget", "cycle_budgets", "EffectRow", "DiagnosisView", "diagnosis_view",
 ]
 
-IN, OUT, BINDING, PREDICTED_OUT, GIVEN_UP = "✓", "✗", "●", "▲", "⚑"
+IN, OUT, BINDING, PREDICTED_OUT, GIVEN_UP, GUARD, REJECTED = "✓", "✗", "●", "▲", "⚑", "◇", "⊘"
 Array = npt.NDArray[np.float64]
 
 
@@ -72,7 +73,7 @@ def zone_bar(value: float, lower: float, upper: float, width: int = 11) -> str:
     cells = ["─"] * width
     cells[0], cells[-1] = "├", "┤"
     if lo < 0 < hi:
-        cells[round((0 - lo) / (hi - lo) * (width - 1))] = "┼"
+        cells[_cell((0 - lo) / (hi - lo), width)] = "┼"
     if not math.isfinite(value):
         return "".join(cells)
     if value < lower:
@@ -80,13 +81,25 @@ def zone_bar(value: float, lower: float, upper: float, width: int = 11) -> str:
     elif value > upper:
         cells[-1] = "▶"
     else:
-        cells[round(min(max((value - lo) / (hi - lo), 0.0), 1.0) * (width - 1))] = "●"
+        cells[_cell(min(max((value - lo) / (hi - lo), 0.0), 1.0), width)] = "●"
     return "".join(cells)
+
+
+def _cell(fraction: float, width: int) -> int:
+    """Cell of a fraction of the zone; halves round away from the centre (symmetric bars)."""
+    pos = fraction * (width - 1)
+    centre = (width - 1) / 2
+    return int(math.floor(pos + 0.5 + 1e-9)) if pos >= centre else int(math.ceil(pos - 0.5 - 1e-9))
 
 
 @dataclass(frozen=True)
 class DimensionRow:
-    """One measured dimension before and after the correction [model unit]."""
+    """One measured dimension before and after the correction [model unit].
+
+    ``flags`` are the pipeline's (:meth:`PartCorrection.dimension_rows`): ``out_before``,
+    ``out`` (predicted out after the changes), ``guard``, ``binding``, ``given_up``,
+    ``rejected``.
+    """
 
     id: str
     name: str
@@ -97,26 +110,28 @@ class DimensionRow:
     predicted: float
     margin_before: float
     margin_after: float
-    binding: bool
-    given_up: bool = False
+    flags_: tuple[str, ...] = ()
+
+    @property
+    def binding(self) -> bool:
+        return "binding" in self.flags_
 
     @property
     def in_before(self) -> bool:
-        return self.lower <= self.deviation <= self.upper
+        return "out_before" not in self.flags_
 
     @property
     def in_after(self) -> bool:
-        return self.lower <= self.predicted <= self.upper
+        return "out" not in self.flags_
 
     @property
     def flags(self) -> str:
         """The state symbols of the row (see the module docstring)."""
-        text = IN if self.in_before else OUT
-        text += IN if self.in_after else PREDICTED_OUT
-        if self.binding:
-            text += BINDING
-        if self.given_up:
-            text += GIVEN_UP
+        f = self.flags_
+        text = (IN if self.in_before else OUT) + (PREDICTED_OUT if "out" in f else GUARD if "guard" in f else IN)
+        for name, symbol in (("binding", BINDING), ("given_up", GIVEN_UP), ("rejected", REJECTED)):
+            if name in f:
+                text += symbol
         return text
 
     def bars(self, width: int = 11) -> tuple[str, str]:
@@ -127,17 +142,14 @@ class DimensionRow:
 
 def dimension_rows(correction: PartCorrection) -> list[DimensionRow]:
     """Rows of the dimension table, in model order."""
-    dims = {d.id: d for d in correction.model.dimensions}
-    binding = set(correction.result.binding)
-    given_up = set(getattr(correction.result, "given_up", ()))
-    before = correction.problem.margins(np.zeros(correction.problem.n_registers))
     rows = []
-    for row, m0 in zip(correction.dimension_rows(), before):
+    for row in correction.dimension_rows():
+        before = float(objective_margins(np.array([row["deviation"]]), np.array([row["lower"]]),
+                                         np.array([row["upper"]]))[0])
         rows.append(DimensionRow(
-            id=row["id"], name=row["name"], station=dims[row["id"]].group or "",
-            deviation=row["deviation"], lower=row["lower"], upper=row["upper"], predicted=row["predicted"],
-            margin_before=float(m0), margin_after=row["margin"], binding=row["id"] in binding,
-            given_up=row["id"] in given_up))
+            id=row["id"], name=row["name"], station=row.get("station") or "", deviation=row["deviation"],
+            lower=row["lower"], upper=row["upper"], predicted=row["predicted"], margin_before=before,
+            margin_after=row["margin"], flags_=tuple(row.get("flags", ()))))
     return rows
 
 
@@ -170,9 +182,10 @@ class RegisterRow:
     id: str
     register: str
     kind: str
+    offset: str
     delta: float
-    limit: float
     fixed: bool
+    at_limit: bool
     current: float | None = None
     rules: tuple[str, ...] = ()
 
@@ -182,35 +195,33 @@ class RegisterRow:
         return None if self.current is None else self.current + self.delta
 
     @property
-    def at_limit(self) -> bool:
-        return not self.fixed and abs(self.delta) >= self.limit - 1e-12
-
-    @property
     def flags(self) -> str:
-        return ("fixed" if self.fixed else "") + (" ◆limit" if self.at_limit else "")
+        return "fixed" if self.fixed else ("◆limit" if self.at_limit else "")
 
 
 def register_rows(correction: PartCorrection, current: Mapping[str, float] | None = None) -> list[RegisterRow]:
-    """Every register of the model (fixed ones too, with 0), in model order.
+    """Every register of the model (fixed ones too, with 0), in model order, with the
+    safety rules that changed it.
 
     ``current`` maps model ID or controller name to the value in the controller.
     """
     current = current or {}
-    x = dict(zip(correction.problem.register_ids, correction.result.x))
-    bounds = dict(zip(correction.problem.register_ids, zip(correction.problem.lb, correction.problem.ub)))
+    rules: dict[str, list[str]] = {}
+    for effect in correction.recommendation.rules:
+        for rid in effect.registers:
+            rules.setdefault(rid, []).append(effect.rule)
     rows = []
-    for reg in correction.model.registers:
-        lb, ub = bounds.get(reg.id, (0.0, 0.0))
-        cur = current.get(reg.id, current.get(reg.register))
-        rows.append(RegisterRow(reg.id, reg.register, reg.kind, float(x.get(reg.id, 0.0)) + 0.0,
-                                float(max(abs(lb), abs(ub))), bool(reg.fixed),
-                                None if cur is None else float(cur)))
+    for reg in correction.register_rows():
+        cur = current.get(reg["id"], current.get(reg["register"]))
+        rows.append(RegisterRow(reg["id"], reg["register"], reg["kind"], str(reg.get("offset", "")),
+                                float(reg["delta"]) + 0.0, bool(reg["fixed"]), bool(reg["at_limit"]),
+                                None if cur is None else float(cur), tuple(dict.fromkeys(rules.get(reg["id"], ())))))
     return rows
 
 
 @dataclass(frozen=True)
 class Summary:
-    """The headline of a correction."""
+    """The headline of a correction: verdict, δ before and after, bonus, rules, notes."""
 
     report: str
     part: str
@@ -225,20 +236,25 @@ class Summary:
     in_tolerance: bool
     message: str
     notes: tuple[str, ...]
-    verdict: str | None = None
+    verdict: str
     rules: tuple[str, ...] = ()
+    alarm: str = ""
+    given_up: tuple[str, ...] = ()
 
 
 def summary(correction: PartCorrection) -> Summary:
-    """δ before and after, the bonus, the optimiser's status and the notes of one correction."""
+    """The verdict and every rule that changed it, δ before and after, the bonus, the notes."""
     r = correction.result
-    verdict = getattr(correction, "verdict", None)
+    rec = correction.recommendation
+    names = {d.id: d.name for d in correction.model.dimensions}
     return Summary(
         report=correction.part.report, part=correction.part.part, unit=correction.model.unit,
-        optimizer=r.optimizer, status=r.status, margin_before=r.margin_before, margin_after=r.margin_after,
-        bonus=r.bonus, norm=r.norm, bound=r.bound, in_tolerance=r.in_tolerance, message=r.message,
-        notes=tuple(str(n) for n in correction.warnings),
-        verdict=None if verdict is None else str(verdict))
+        optimizer=r.optimizer, status=r.status, margin_before=correction.margin_before,
+        margin_after=correction.margin_after, bonus=correction.margin_after - correction.margin_before,
+        norm=correction.norm, bound=r.bound, in_tolerance=correction.margin_after >= 0, message=r.message,
+        notes=tuple(str(n) for n in correction.warnings), verdict=correction.verdict,
+        rules=tuple(f"{e.rule}: {e.message}" for e in rec.rules), alarm=rec.alarm,
+        given_up=tuple(names.get(d, d) for d in rec.given_up))
 
 
 @dataclass(frozen=True)
@@ -258,21 +274,31 @@ class MatchRow:
 
 def match_rows(model: ProcessModel, table: pd.DataFrame, *, limit: int = 3) -> list[MatchRow]:
     """Each characteristic of a report with the dimension it matches (by name or alias,
-    case and blanks ignored) or, failing that, up to ``limit`` similar dimension names."""
+    case and blanks ignored) or, failing that, the closest dimension names
+    (:func:`setupfix.model.measurements.suggest_names`)."""
     keys: dict[str, str] = {}
     for d in model.dimensions:
         for k in d.keys:
             keys.setdefault(k, d.id)
-    names = [d.name for d in model.dimensions]
-    by_norm = {normalise_name(n): n for n in names}
     rows = []
     for rec in table.to_dict("records"):
         name = str(rec.get("characteristic", ""))
-        key = normalise_name(name)
-        dim = keys.get(key, "")
-        close = () if dim else tuple(by_norm[m] for m in difflib.get_close_matches(key, list(by_norm), n=limit,
-                                                                                    cutoff=0.5))
-        rows.append(MatchRow(name, _text(rec.get("part")), _text(rec.get("station")), dim, close))
+        dim = keys.get(normalise_name(name), "")
+        rows.append(MatchRow(name, _text(rec.get("part")), _text(rec.get("station")), dim,
+                             () if dim else suggest_names(model, name, limit)))
+    return rows
+
+
+def matched_rows(model: ProcessModel, parts: Iterable[PartMeasurement]) -> list[MatchRow]:
+    """The match table of parts already tied to the model: every measured dimension,
+    then every unmatched characteristic with its suggestions."""
+    rows = []
+    for p in parts:
+        for dim, value in zip(model.dimensions, p.deviation):
+            if math.isfinite(value):
+                rows.append(MatchRow(dim.name, p.part, dim.group or "", dim.id, ()))
+        for name in p.unmatched:
+            rows.append(MatchRow(name, p.part, "", "", tuple(p.suggestions.get(name, ()))))
     return rows
 
 
@@ -327,11 +353,18 @@ class DriftView:
 
     method: str
     target: str
+    unit: str  #: the thermal model's unit ("" when it does not say)
     latest: float
     latest_time: str
     recent: Array  #: the last samples of the predicted drift, oldest first
     measured_latest: float | None
     samples: int
+    notes: tuple[str, ...] = ()
+
+    @property
+    def recent_range(self) -> tuple[float, float]:
+        """Lowest and highest drift of the recent curve (the sparkline's scale)."""
+        return float(np.min(self.recent)), float(np.max(self.recent))
 
 
 def drift_view(prediction: DriftPrediction, recent: int = 120) -> DriftView:
@@ -340,17 +373,77 @@ def drift_view(prediction: DriftPrediction, recent: int = 120) -> DriftView:
     m_last = None
     if measured is not None and len(measured) and np.isfinite(measured[-1]):
         m_last = float(measured[-1])
-    return DriftView(prediction.method, prediction.target, prediction.latest,
+    return DriftView(prediction.method, prediction.target, (prediction.unit or "").replace("um", "µm"),
+                     prediction.latest,
                      prediction.timestamps[-1] if prediction.timestamps else "",
-                     np.asarray(prediction.drift[-recent:], dtype=float), m_last, int(len(prediction.drift)))
+                     np.asarray(prediction.drift[-recent:], dtype=float), m_last, int(len(prediction.drift)),
+                     tuple(str(n) for n in prediction.notes))
 
 
-def offsets_csv_text(rows: Iterable[OffsetRow], *, resolution: float = 0.001) -> str:
-    """The offsets CSV exactly as :func:`setupfix.offsets.write_offsets_csv` writes it."""
-    digits = _decimals(resolution)
-    stream = io.StringIO()
-    writer = csv.writer(stream, lineterminator="\n")
-    writer.writerow(OFFSET_COLUMNS)
-    for r in rows:
-        writer.writerow([r.report, r.part, r.id, r.register, r.kind, r.axis, f"{r.delta:.{digits}f}"])
-    return stream.getvalue()
+@dataclass(frozen=True)
+class CycleBudget:
+    """The error budget δ of one measured cycle, as measured (before its correction)."""
+
+    cycle: str
+    timestamp: str
+    budget: float
+    out_of_tolerance: int
+    measured: int
+
+
+def cycle_budgets(model: ProcessModel, parts: Iterable[PartMeasurement]) -> list[CycleBudget]:
+    """δ (eq. 8 on the measured deviations) and the out-of-tolerance count of each cycle."""
+    lower = np.array([d.lower for d in model.dimensions])
+    upper = np.array([d.upper for d in model.dimensions])
+    rows = []
+    for p in parts:
+        m = p.measured
+        margins = objective_margins(p.deviation[m], lower[m], upper[m])
+        rows.append(CycleBudget(f"{p.report}:{p.part}" if p.part else p.report, p.timestamp or "",
+                                float(margins.min()) if margins.size else math.nan, int((margins < 0).sum()),
+                                int(m.sum())))
+    return rows
+
+
+@dataclass(frozen=True)
+class EffectRow:
+    """One effect the diagnosis found."""
+
+    kind: str
+    target: str
+    estimate: float
+    stderr: float
+    unit: str
+    rms_after: float
+    alike: tuple[str, ...]
+
+
+@dataclass(frozen=True)
+class DiagnosisView:
+    """A diagnosis as the history panel shows it: residual before/after, effects, walk forward."""
+
+    cycles: int
+    unit: str
+    before: tuple[float, float, int]  #: residual RMS, max |residual|, out of tolerance — declared model
+    after: tuple[float, float, int]  #: the same with the effects found
+    effects: tuple[EffectRow, ...]
+    walk: tuple[tuple[str, float, float, float, int], ...]  #: name, mean δ, worst δ, RMS, out of tolerance
+    next_correction: tuple[tuple[str, float], ...]  #: registers that move, model ID and change
+    notes: tuple[str, ...]
+    budgets: tuple[CycleBudget, ...]
+
+
+def diagnosis_view(outcome: DiagnoseOutcome) -> DiagnosisView:
+    """What the history panel shows of ``setupfix diagnose``'s outcome."""
+    d = outcome.diagnosis
+    eb, ea = d.error_before, d.error_after
+    walk = () if d.walk is None else tuple(
+        (name, b.mean_budget, b.worst_budget, b.rms, b.out_of_tolerance) for name, b in d.walk.budgets.items())
+    return DiagnosisView(
+        cycles=d.series.n_cycles, unit=d.layout.unit,
+        before=(eb.rms, eb.max, eb.out_of_tolerance), after=(ea.rms, ea.max, ea.out_of_tolerance),
+        effects=tuple(EffectRow(e.kind, e.target, e.estimate, e.stderr, e.unit, e.rms_after, tuple(e.alike))
+                      for e in d.effects),
+        walk=walk, next_correction=tuple((k, v) for k, v in outcome.next_correction.items() if v != 0),
+        notes=tuple(str(n) for n in outcome.notes),
+        budgets=tuple(cycle_budgets(outcome.input.model, outcome.input.parts)))

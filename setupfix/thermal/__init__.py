@@ -8,7 +8,9 @@ fusion method of Kalman filter*.
 Modules: :mod:`~setupfix.thermal.grey` (pure Grey functions), :mod:`~.calibrate`
 (CS, PSO, GA), :mod:`~.lumped` (lumped-mass model), :mod:`~.kalman` (scalar filter),
 :mod:`~.mra`, :mod:`~.metrics`, :mod:`~.models` (estimator classes),
-:mod:`~.simulator`, :mod:`~.data` (temperature logs), :mod:`~.persist` (JSON).
+:mod:`~.simulator`, :mod:`~.registry` (methods by name), :mod:`~.persist` (saved form),
+:mod:`~.feedforward` (drift fed forward into corrections).  Temperature logs are read
+by :mod:`parsers.temperature`; model files by :mod:`setupfix.pipeline.thermal_files`.
 """
 
 from __future__ import annotations

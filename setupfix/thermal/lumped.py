@@ -27,6 +27,7 @@ from scipy.optimize import lsq_linear
 from scipy.signal import lfilter
 
 from setupfix.thermal.calibrate import SearchResult, genetic_algorithm
+from setupfix.thermal.metrics import rmsv
 
 __all__ = [
     "Gearbox",
@@ -34,7 +35,6 @@ __all__ = [
     "heat_inputs",
     "lumped_coefficients",
     "lumped_simulate",
-    "lumped_rmsv",
     "lumped_equation_error",
     "fit_lumped",
 ]
@@ -155,12 +155,6 @@ def lumped_simulate(A: npt.ArrayLike, B: npt.ArrayLike, C: npt.ArrayLike, ambien
     return out[0] if single else out
 
 
-def lumped_rmsv(predicted: npt.ArrayLike, measured: npt.ArrayLike) -> Array:
-    """Objective F1 of eq. (12): sqrt(Σ (T_P − T_M)² / (n − 1)) along the last axis."""
-    d = np.asarray(predicted, dtype=float) - np.asarray(measured, dtype=float)
-    return np.sqrt(np.sum(d * d, axis=-1) / max(d.shape[-1] - 1, 1))
-
-
 def lumped_equation_error(measured: npt.ArrayLike, ambient: npt.ArrayLike, heat: npt.ArrayLike,
                           n_genes: int = 2) -> Array:
     """Equation-error estimate of ``v`` from eq. (4) rearranged as a linear regression.
@@ -224,7 +218,7 @@ def fit_lumped(measured: npt.ArrayLike, ambient: npt.ArrayLike, speed: npt.Array
         v = 10.0 ** pop
         v3 = v[:, 2] if n_genes == 3 else np.zeros(len(pop))
         A, B, C = lumped_coefficients(v[:, 0], v[:, 1], v3, heat)
-        return lumped_rmsv(lumped_simulate(A, B, C, te, T[0]), T)
+        return rmsv(T, lumped_simulate(A, B, C, te, T[0]))  # F1 of eq. (12) = RMSV of eq. (13)
 
     lo = np.full(n_genes, log10_bounds[0])
     hi = np.full(n_genes, log10_bounds[1])

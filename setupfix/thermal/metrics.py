@@ -40,12 +40,18 @@ def max_residual(measured: npt.ArrayLike, predicted: npt.ArrayLike) -> Array:
 
 
 def efficiency(measured: npt.ArrayLike, predicted: npt.ArrayLike) -> Array:
-    """Nash–Sutcliffe efficiency 1 − Σ(e − ê)² / Σ(e − ē)² (1 is perfect, 0 is the mean)."""
+    """Nash–Sutcliffe efficiency 1 − Σ(e − ê)² / Σ(e − ē)² (1 is perfect, 0 is the mean).
+
+    NaN where the measured error is constant (to rounding: its spread is below
+    1e-20 of its mean square): E is undefined there, not a huge negative number.
+    """
     e = np.asarray(measured, dtype=float)
     r = _residual(e, predicted)
     spread = np.sum((e - e.mean(axis=-1, keepdims=True)) ** 2, axis=-1)
+    scale = np.sum(e * e, axis=-1)
     with np.errstate(divide="ignore", invalid="ignore"):
-        return 1.0 - np.sum(r * r, axis=-1) / spread
+        out = 1.0 - np.sum(r * r, axis=-1) / spread
+        return np.where(spread > 1e-20 * scale, out, np.nan)
 
 
 @dataclass(frozen=True)

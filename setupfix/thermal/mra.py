@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 import numpy.typing as npt
 
-__all__ = ["rises", "mra_fit", "mra_predict"]
+__all__ = ["rises", "reference_state", "rises_from", "mra_fit", "mra_predict"]
 
 Array = npt.NDArray[np.float64]
 
@@ -28,6 +28,40 @@ def rises(T: npt.ArrayLike) -> Array:
     first_idx = np.argmax(finite, axis=-2)
     first = np.take_along_axis(T, np.expand_dims(first_idx, -2), axis=-2)
     return T - first
+
+
+def reference_state(T: npt.ArrayLike) -> Array:
+    """Reference temperatures of a log: the first finite reading of each sensor.
+
+    Parameters
+    ----------
+    T : array_like, shape (n, S)
+        Temperatures (°C) or rises (K); NaN for a missing reading.
+
+    Returns
+    -------
+    ndarray, shape (S,)
+        NaN only for a sensor that never reads.
+    """
+    T = np.asarray(T, dtype=float)
+    T = T.reshape(T.shape[0], -1)
+    first = np.argmax(np.isfinite(T), axis=0)
+    return np.asarray(T[first, np.arange(T.shape[1])], dtype=float)
+
+
+def rises_from(T: npt.ArrayLike, reference: npt.ArrayLike) -> Array:
+    """Temperature rises ΔT = T − T_ref from a stored reference state (Wang 2017 eq. (10)).
+
+    Parameters
+    ----------
+    T : array_like, shape (..., n, S)
+    reference : array_like, shape (S,)
+
+    Returns
+    -------
+    ndarray, shape of ``T``
+    """
+    return np.asarray(T, dtype=float) - np.asarray(reference, dtype=float)
 
 
 def mra_fit(dT: npt.ArrayLike, E: npt.ArrayLike, *, intercept: bool = False) -> Array:

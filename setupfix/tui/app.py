@@ -9,27 +9,28 @@ so a bad file never ends the app.
 
 from __future__ import annotations
 
-import importlib.util
 from dataclasses import dataclass
 from functools import partial
 from pathlib import Path
-from typing import Any, ClassVar
+from typing import ClassVar
 
 from textual import on
 from textual.app import App, ComposeResult
 from textual.binding import Binding, BindingType
 from textual.containers import Horizontal, Vertical
 from textual.widgets import DataTable, Footer, Header, Static, TabbedContent, TabPane
-from textual.worker import Worker, WorkerState, get_current_worker
+from textual.worker import Worker, WorkerState
 
 from setupfix.errors import SetupfixError
+from setupfix.offsets import grid_decimals
 from setupfix.optimize import OPTIMIZERS
 from setupfix.pipeline import view
 from setupfix.pipeline.compare import DEFAULT_METHODS, Comparison
 from setupfix.pipeline.correct import PartCorrection
-from setupfix.pipeline.session import FolderWatch, OpenedReport, compare_steps, open_report
-from setupfix.pipeline.thermal import predict_drift
-from setupfix.tui.exporting import CONTROLLERS, render_offsets, write_offsets
+from setupfix.pipeline.feedforward import ThermalFeedForward, thermal_feed_forward
+from setupfix.pipeline.session import FolderWatch, OpenedReport, offsets_text, open_report, record_applied
+from setupfix.tui import workers
+from setupfix.tui.exporting import CONTROLLERS, write_offsets
 from setupfix.tui.messages import CompareProgress
 from setupfix.tui.screens import ExportRequest, ExportScreen, HelpScreen, OpenFileScreen
 from setupfix.tui.widgets import (ComparePanel, DimensionTable, HistoryPanel, MatchTable, RegisterTable, SummaryBar,
@@ -40,15 +41,6 @@ __all__ = ["SetupfixApp", "SORT_ORDER"]
 #: What ``s`` cycles through: None is the model's order.
 SORT_ORDER: tuple[str | None, ...] = (None, "margin_after", "deviation", "name", "station")
 
-#: Why panels whose pipeline is not on this branch yet show "not available".
-MISSING = {
-    "verdict": "safety rules (issue 13) not in this build",
-    "history": "the history store (setupfix.store, issue 11) is not in this build",
-    "diagnose": "the diagnosis (setupfix.diagnose, issue 11) is not in this build",
-    "feed": "the thermal feed-forward (issue 12) is not in this build",
-}
-
-
 @dataclass(frozen=True)
 class Inputs:
     """What the command line gave (paths as typed)."""
@@ -56,6 +48,7 @@ class Inputs:
     model: Path | None = None
     report: Path | None = None
     db: Path | None = None
+    current: Path | None = None
     thermal: Path | None = None
     temperatures: Path | None = None
     optimizer: str = "exact"
@@ -69,6 +62,8 @@ class SetupfixApp(App[None]):
     """setupfix's Textual app; build it with :class:`Inputs` (tests do the same)."""
 
     CSS_PATH = "app.tcss"
+    #: The footer's room is worth more than the palette: every action has a key (see ?).
+    ENABLE_COMMAND_PALETTE = False
     TITLE = "setupfix"
     HORIZONTAL_BREAKPOINTS = [(0, "-narrow"), (120, "-wide")]
     VERTICAL_BREAKPOINTS = [(0, "-short"), (30, "-tall")]
@@ -107,6 +102,7 @@ class SetupfixApp(App[None]):
         self.comparison: Comparison | None = None
         self.folder_watch: FolderWatch | None = None
         self.problem = ""
+        self.feed: ThermalFeedForward | None = None
 
     # ----------------------------------------------------------------- layout
     def compose(self) -> ComposeResult:
@@ -132,8 +128,9 @@ class SetupfixApp(App[None]):
     def on_mount(self) -> None:
         self._show()
         self._start_thermal()
-        self.query_one(HistoryPanel).not_available(MISSING["history"] if importlib.util.find_spec("setupfix.store")
-                                                    is None else "no history store given (--db STORE)")
+        self.query_one(HistoryPanel).status(
+            "no history store given (--db STORE): d diagnoses the reports in the current report's folder"
+            if self.inputs.db is None else f"reading the history store {self.inputs.db} …")
         report = self.inputs.report
         if report is not None and report.is_dir():
             self.folder_watch = FolderWatch(report, settle=self.inputs.poll_seconds)
@@ -153,7 +150,7 @@ class SetupfixApp(App[None]):
         self.problem = f"opening {self.report_path} …"
         self._show()
         self.run_worker(partial(open_report, self.model_path, self.report_path, optimizer=self.optimizer,
-                                seed=self.inputs.seed),
+                                seed=self.inputs.seed, db=self.inputs.db, current=self.inputs.current),
                         name="open", group="open", thread=True, exclusive=True, exit_on_error=False)
 
     def _start_thermal(self) -> None:
@@ -163,8 +160,24 @@ class SetupfixApp(App[None]):
             panel.not_available(f"no thermal model and log given ({missing})")
             return
         panel.not_available(f"predicting drift from {self.inputs.temperatures} …")
-        self.run_worker(partial(_drift, self.inputs.thermal, self.inputs.temperatures), name="thermal",
+        self.run_worker(partial(workers.drift, self.inputs.thermal, self.inputs.temperatures), name="thermal",
                         group="thermal", thread=True, exclusive=True, exit_on_error=False)
+
+    def _start_feed_forward(self) -> None:
+        c = self._current()
+        self.feed = None
+        if c is None or self.inputs.thermal is None or self.inputs.temperatures is None:
+            return
+        self.query_one(ThermalPanel).feed_forward(f"feed-forward for {c.part.report} {c.part.part}: computing …")
+        self.run_worker(partial(thermal_feed_forward, c.model, self.inputs.thermal, self.inputs.temperatures,
+                                measured_at=c.part.timestamp),
+                        name="feedforward", group="feedforward", thread=True, exclusive=True, exit_on_error=False)
+
+    def _feed_text(self) -> str:
+        """The feed-forward line, shown beside the setup correction (not in the exported offsets)."""
+        if self.feed is None:
+            return ""
+        return self.feed.line() + "; shown beside the setup correction, not added to the exported offsets"
 
     def on_worker_state_changed(self, event: Worker.StateChanged) -> None:
         """The error boundary and the one place results reach the screen."""
@@ -178,47 +191,76 @@ class SetupfixApp(App[None]):
                 self._opened(worker.result)
             elif worker.name == "compare":
                 self._compared(worker.result)
+            elif worker.name == "history" and isinstance(worker.result, tuple):
+                budgets, notes = worker.result
+                self.query_one(HistoryPanel).budgets(budgets, unit=self._unit(), source=str(self.inputs.db))
+                for note in notes:
+                    self.notify(note, title="history", severity="warning")
+            elif worker.name == "diagnose" and isinstance(worker.result, view.DiagnosisView):
+                self.query_one(HistoryPanel).diagnosis(worker.result, source=self._series_source())
             elif worker.name == "thermal" and isinstance(worker.result, view.DriftView):
-                self.query_one(ThermalPanel).show(worker.result, unit=self._unit(),
-                                                  source=str(self.inputs.temperatures))
-                self.query_one(ThermalPanel).feed_forward(f"feed-forward not available: {MISSING['feed']}")
+                self.query_one(ThermalPanel).show(worker.result, source=str(self.inputs.temperatures))
+            elif worker.name == "feedforward" and isinstance(worker.result, ThermalFeedForward):
+                self.feed = worker.result
+                self.query_one(ThermalPanel).feed_forward(self._feed_text())
+                self._show()
 
     def _failed(self, what: str, error: BaseException | None) -> None:
         text = str(error) if isinstance(error, SetupfixError) else f"internal error: {type(error).__name__}: {error}"
         self.notify(text, title=f"{what} failed", severity="error", timeout=12)
         if what == "open":
+            # The previous correction is no longer what the operator asked for: showing
+            # (and exporting) it beside a failed report would invite applying stale offsets.
+            self.opened = None
+            self.sub_title = ""
             self.problem = f"✗ {text}"
-            if self.opened is not None and str(self.report_path) != self.opened.report:
-                self.problem += f"\n  still showing {self.opened.report}"
             self._show()
         elif what == "compare":
             self.query_one(ComparePanel).stopped(f"✗ {text}")
         elif what == "thermal":
             self.query_one(ThermalPanel).not_available(text)
+        elif what == "feedforward":
+            self.feed = None
+            self.query_one(ThermalPanel).feed_forward(f"✗ feed-forward: {text}")
+        elif what in ("history", "diagnose"):
+            self.query_one(HistoryPanel).status(f"✗ {text}")
 
     def _opened(self, opened: OpenedReport) -> None:
+        # Work started for the previous report must not land on this one.
+        self.workers.cancel_group(self, "compare")
+        self.workers.cancel_group(self, "feedforward")
         self.opened = opened
         self.problem = ""
         self.part_index = min(self.part_index, max(len(opened.corrections) - 1, 0))
         self.sub_title = f"{Path(opened.report).name} · {opened.format} · {Path(opened.model.source).name}"
         status = self.query_one("#match-status", Static)
         table = self.query_one(MatchTable)
-        if opened.mismatch:
-            status.update(f"✗ {opened.problem}\nThe report's names and the model's dimensions (✓ matched):")
-            table.show(opened.mismatch)
+        table.show(opened.matches)
+        if not opened.corrections:
+            status.update(f"✗ {opened.problem}\nEach characteristic of the report, ✓ with the dimension it "
+                          "matches, ✗ with the closest dimension names:")
             self.query_one(TabbedContent).active = "match"
+        elif opened.unmatched:
+            status.update(f"⚠ {opened.unmatched} characteristic(s) of the report match no dimension "
+                          "(✗ below, with the closest dimension names); they are left out.")
         else:
-            status.update("✓ every part of the report matches the model.")
-            table.clear(columns=True)
+            status.update("✓ every characteristic of the report matches a dimension of the model.")
         self._show()
+        self._start_feed_forward()
+        if self.inputs.db is not None:
+            self.run_worker(partial(workers.history, opened.model, self.inputs.db), name="history", group="history",
+                            thread=True, exclusive=True, exit_on_error=False)
 
     def _compared(self, comparison: object) -> None:
         panel = self.query_one(ComparePanel)
         if not isinstance(comparison, Comparison):
             panel.stopped("comparison cancelled")
             return
-        self.comparison = comparison
         c = self._current()
+        if c is None or comparison.problem is not c.problem:
+            panel.stopped("that comparison was for a previous report: press c to compare this one")
+            return
+        self.comparison = comparison
         panel.show(view.compare_rows(comparison), view.convergence(comparison, 60),
                    exact_f1=comparison.exact.margin_after, unit=self._unit(),
                    heading=f"{comparison.trials} seeded trials per method (seed {comparison.seed})"
@@ -255,7 +297,8 @@ class SetupfixApp(App[None]):
         c = self._current()
         summary = self.query_one(SummaryBar)
         if c is None:
-            reason = self.problem or (self.opened.problem if self.opened and self.opened.mismatch else "")
+            reason = self.problem or (f"✗ {self.opened.problem} (tab 5 shows the match table)"
+                                      if self.opened and self.opened.problem else "")
             summary.show(None, optimizer=self.optimizer, problem=reason)
             self.query_one(DimensionTable).clear(columns=True)
             self.query_one(RegisterTable).clear(columns=True)
@@ -263,16 +306,16 @@ class SetupfixApp(App[None]):
         n = len(self.opened.corrections) if self.opened else 1
         part = f"part {c.part.part or '—'}" + (f" ({self.part_index + 1}/{n}, [ ] to change)" if n > 1 else "")
         head = view.summary(c)
-        summary.show(head, optimizer=self.optimizer, part=part, verdict_reason=MISSING["verdict"],
-                     problem=self.problem)
+        summary.show(head, optimizer=self.optimizer, part=part,
+                     problem="\n".join(t for t in (self.problem, self.feed.line() if self.feed else "") if t))
         rows = view.filter_rows(view.dimension_rows(c), self.station)
         if self.sort_key is not None:
             rows = view.sort_rows(rows, self.sort_key)
         self.query_one(DimensionTable).show(rows, wide=self.size.width >= 120)
         self.query_one(DimensionTable).border_title = (
             f"dimensions · station {self.station or 'all'} · sort {self.sort_key or 'model'}")
-        digits = max(0, len(f"{c.model.resolution:g}".split(".")[-1])) if c.model.resolution < 1 else 0
-        self.query_one(RegisterTable).show(view.register_rows(c), digits=digits)
+        self.query_one(RegisterTable).show(view.register_rows(c, self.opened.current if self.opened else None),
+                                           digits=grid_decimals(c.model.resolution))
         self.query_one(RegisterTable).border_title = f"recommendation [{c.model.unit}, axis {c.model.axis}]"
 
     def on_resize(self) -> None:
@@ -304,8 +347,8 @@ class SetupfixApp(App[None]):
             self.notify("open a report first (o)", severity="warning")
             return
         self.query_one(TabbedContent).active = "compare"
-        self.query_one(ComparePanel).progress(0, 1 + len(DEFAULT_METHODS), "exact")
-        self.run_worker(partial(_compare, self, c.problem, self.inputs.trials, self.inputs.seed), name="compare",
+        self.query_one(ComparePanel).progress(0, 1 + len(DEFAULT_METHODS) * self.inputs.trials, "exact")
+        self.run_worker(partial(workers.compare, self, c.problem, self.inputs.trials, self.inputs.seed), name="compare",
                         group="compare", thread=True, exclusive=True, exit_on_error=False)
 
     def action_cancel(self) -> None:
@@ -330,6 +373,7 @@ class SetupfixApp(App[None]):
         if self.opened and self.opened.corrections:
             self.part_index = (self.part_index + step) % len(self.opened.corrections)
             self._show()
+            self._start_feed_forward()
 
     def action_tab(self, tab: str) -> None:
         self.query_one(TabbedContent).active = tab
@@ -338,8 +382,23 @@ class SetupfixApp(App[None]):
         self.push_screen(HelpScreen())
 
     def action_diagnose(self) -> None:
+        """Diagnose the series: the history store, else the reports in the current (or watched) folder."""
         self.action_tab("history")
-        self.notify(f"not available: {MISSING['diagnose']}", severity="warning")
+        if self.model_path is None or self._series_source() == "":
+            self.notify("open a model and a report first", severity="warning")
+            return
+        self.query_one(HistoryPanel).status(f"diagnosing the reports in {self._series_source()} …")
+        self.run_worker(partial(workers.diagnose, self.model_path, Path(self._series_source()), self.inputs.db is not None),
+                        name="diagnose",
+                        group="diagnose", thread=True, exclusive=True, exit_on_error=False)
+
+    def _series_source(self) -> str:
+        """The history store when given, else the watched folder or the report's folder."""
+        if self.inputs.db is not None:
+            return str(self.inputs.db)
+        if self.folder_watch is not None:
+            return str(self.folder_watch.folder)
+        return str(self.report_path.parent) if self.report_path is not None else ""
 
     def action_open_report(self) -> None:
         start = self.report_path or Path.cwd()
@@ -372,8 +431,7 @@ class SetupfixApp(App[None]):
         if self.opened is None or not self.opened.corrections:
             self.notify("nothing to export: open a report that matches the model first", severity="warning")
             return
-        corrections = self.opened.corrections
-        self.push_screen(ExportScreen(CONTROLLERS, partial(render_offsets, corrections), self.inputs.offsets),
+        self.push_screen(ExportScreen(CONTROLLERS, partial(offsets_text, self.opened), self.inputs.offsets),
                          self._export_confirmed)
 
     def _export_confirmed(self, request: ExportRequest | None) -> None:
@@ -386,21 +444,11 @@ class SetupfixApp(App[None]):
             self.notify(str(exc), title="export failed", severity="error", timeout=12)
             return
         self.notify(f"wrote {request.controller} offsets to {request.path}", title="export")
+        if self.inputs.db is not None and self.opened is not None:
+            try:
+                added = record_applied(self.inputs.db, self.opened.corrections)
+            except SetupfixError as exc:
+                self.notify(str(exc), title="history store", severity="error", timeout=12)
+                return
+            self.notify(f"recorded {added} register change(s) as applied in {self.inputs.db}", title="history")
 
-
-def _drift(model: Path, log: Path) -> view.DriftView:
-    """Thread worker: the saved thermal model's drift over the log."""
-    return view.drift_view(predict_drift(model, log))
-
-
-def _compare(app: SetupfixApp, problem: Any, trials: int, seed: int) -> Comparison | None:
-    """Thread worker: the comparison, one method at a time, stoppable between methods."""
-    worker = get_current_worker()
-    result: Comparison | None = None
-    total = 1 + len(DEFAULT_METHODS)
-    for done, (step, comparison) in enumerate(compare_steps(problem, trials=trials, seed=seed), start=1):
-        if worker.is_cancelled:
-            return None
-        result = comparison
-        app.post_message(CompareProgress(done, total, step))
-    return result

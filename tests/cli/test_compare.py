@@ -87,14 +87,18 @@ def test_usage_errors(capsys: pytest.CaptureFixture[str]) -> None:
     assert "nope" in capsys.readouterr().err
 
 
-def test_pipeline_seeds_and_skipped_methods() -> None:
+def test_pipeline_seeds_and_unknown_methods() -> None:
+    from setupfix.errors import ParameterError
     from setupfix.pipeline.compare import compare_problem, trial_seeds
 
     assert trial_seeds(5, 4) == trial_seeds(5, 4) and trial_seeds(5, 4)[:2] == trial_seeds(5, 2)
     assert len(set(trial_seeds(5, 12))) == 12
-    comp = compare_problem(exact_problem(), methods=("ga", "nosuch"), trials=3, seed=1,
-                           params={"ga": {"n_solutions": 300}})
-    assert [m.optimizer for m in comp.methods] == ["ga"] and "nosuch" in comp.skipped
+    with pytest.raises(ParameterError, match="optimizer must be one of .*got 'nosuch'"):
+        compare_problem(exact_problem(), methods=("ga", "nosuch"), trials=3)
+    with pytest.raises(ParameterError, match="GA: n_solutions"):
+        compare_problem(exact_problem(), methods=("ga",), trials=3, params={"ga": {"n_solutions": 0}})
+    comp = compare_problem(exact_problem(), methods=("ga",), trials=3, seed=1, params={"ga": {"n_solutions": 300}})
+    assert [m.optimizer for m in comp.methods] == ["ga"] and comp.skipped == {}
     ga = comp.methods[0]
     assert ga.evaluations.tolist() == [300, 300, 300]
     row = comp.table()[1]

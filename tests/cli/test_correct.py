@@ -47,7 +47,9 @@ def test_offsets_csv_matches_json(capsys, tmp_path):
     code, out, _ = run(capsys, "correct", "--model", MODEL, "--json", "--offsets", str(target), REPORT)
     assert code == 0
     rows = list(csv.DictReader(target.open(encoding="utf-8")))
-    assert list(rows[0]) == ["report", "part", "id", "register", "kind", "axis", "delta"]
+    # the spec's columns first, in its order; then offset, current, value, verdict
+    assert list(rows[0])[:9] == ["report", "part", "id", "register", "kind", "axis", "delta", "unit", "mode"]
+    assert {r["unit"] for r in rows} == {"mm"} and {r["mode"] for r in rows} == {"add"}
     corrections = json.loads(out)["corrections"]
     assert {r["id"]: float(r["delta"]) for r in rows} == pytest.approx(corrections)
     by_id = {r["id"]: r for r in rows}
@@ -138,3 +140,114 @@ def test_group_without_action_shows_its_help(capsys):
     code, out, err = run(capsys, "model")
     assert code == 2 and "show" in err and out == ""
     assert run(capsys, "--help")[0] == 0
+
+
+def gross_copy(tmp_path, deviation):
+    """cycle_01.csv with P1 D1 moved to ``deviation`` (issue 13's gross errors)."""
+    lines = (GUIDE_PINS / "cycle_01.csv").read_text().splitlines()
+    out = []
+    for line in lines:
+        if line.startswith("P1 D1,"):
+            cells = line.split(",")
+            cells[2], cells[3] = f"{25 + deviation:.4f}", f"{deviation:.4f}"
+            line = ",".join(cells)
+        out.append(line)
+    path = tmp_path / f"gross_{abs(deviation):.2f}.csv"
+    path.write_text("\n".join(out) + "\n")
+    return path
+
+
+def never_harms(doc):
+    for d in doc["dimensions"]:
+        if d["lower"] <= d["deviation"] <= d["upper"]:
+            assert d["lower"] <= d["predicted"] <= d["upper"], d["name"]
+            assert "out" not in d["flags"]
+
+
+def test_gross_error_is_given_up_not_paid_for_by_good_dimensions(capsys, tmp_path):
+    code, out, err = run(capsys, "correct", "--model", MODEL, "--json", str(gross_copy(tmp_path, -0.25)))
+    doc = json.loads(out)
+    assert code == 0 and doc["verdict"] == "apply"
+    never_harms(doc)
+    assert doc["given_up"] == ["P1 D1"]
+    assert any(r["rule"] in ("no_harm", "given_up") and "P1D1" in r["dimensions"] for r in doc["rules"])
+    p1d1 = doc["dimensions"][0]
+    assert {"out_before", "out", "given_up"} <= set(p1d1["flags"])
+
+
+def test_reject_exit_status_json_still_printed_no_offsets(capsys, tmp_path):
+    target = tmp_path / "offsets.csv"
+    code, out, err = run(capsys, "correct", "--model", MODEL, "--json", "--offsets", str(target),
+                         str(gross_copy(tmp_path, -0.50)))
+    assert code == 5
+    doc = json.loads(out)
+    assert doc["verdict"] == "reject" and not any(doc["corrections"].values())
+    assert "P1 D1" in doc["alarm"] and "P1 D1" in err and len(err.strip().splitlines()) == 1
+    assert doc["rules"][0]["rule"] == "reject" and "rejected" in doc["dimensions"][0]["flags"]
+    assert not target.exists()
+    code, out, _ = run(capsys, "correct", "--model", MODEL, str(gross_copy(tmp_path, -0.50)))
+    assert code == 5 and "verdict: REJECT" in out
+
+
+@pytest.mark.needs_shared
+def test_calypso_one_dimension_1_2_mm_out(capsys, tmp_path):
+    from conftest import SAMPLES, shared_path
+
+    report = shared_path("cmm-samples", "calypso", "CALYPSO_chr_PruefplanValidierungsbauteil1_16.txt")
+    model = SAMPLES / "calypso" / "model.toml"
+    code, out, _ = run(capsys, "correct", "--model", str(model), "--json", str(report))
+    doc = json.loads(out)
+    assert code == 5 and doc["verdict"] == "reject" and "Distanz Z 8mm" in doc["alarm"]
+    # with the reject band widened, the 1.2 mm dimension is given up and no good one is harmed
+    wide = tmp_path / "model.toml"
+    wide.write_text(model.read_text().replace("limit = 0.1\n", "limit = 0.1\n\n[safety]\nreject_band = 5.0\n", 1))
+    code, out, _ = run(capsys, "correct", "--model", str(wide), "--json", str(report))
+    doc = json.loads(out)
+    assert code == 0 and doc["given_up"] == ["Distanz Z 8mm"] and not doc["at_limit"]
+    never_harms(doc)
+
+
+def test_fixed_register_listed_with_zero_and_dead_band_hold(capsys, tmp_path):
+    text = (GUIDE_PINS / "model.toml").read_text()
+    text = text.replace('register = "H23"', 'register = "H23"\nfixed = true')
+    (tmp_path / "m.toml").write_text(text + "\n[safety]\ndead_band = 0.05\n")
+    code, out, _ = run(capsys, "correct", "--model", str(tmp_path / "m.toml"), "--json", REPORT)
+    doc = json.loads(out)
+    assert code == 0 and doc["verdict"] == "hold" and [r["rule"] for r in doc["rules"]] == ["dead_band"]
+    t23 = next(r for r in doc["registers"] if r["id"] == "T23")
+    assert t23 == {**t23, "fixed": True, "delta": 0.0} and "T23" not in doc["corrections"]
+    code, out, _ = run(capsys, "correct", "--model", str(tmp_path / "m.toml"), REPORT)
+    assert "HOLD" in out and "fixed" in out
+
+
+def test_controller_program_needs_one_cycle(capsys, tmp_path):
+    both = tmp_path / "two.csv"
+    lines = (GUIDE_PINS / "cycle_01.csv").read_text().splitlines()
+    both.write_text("\n".join(lines + (GUIDE_PINS / "cycle_02.csv").read_text().splitlines()[1:]) + "\n")
+    code, _, err = run(capsys, "correct", "--model", MODEL, "--controller", "fanuc", "--offsets",
+                       str(tmp_path / "o.nc"), str(both))
+    assert code == 1 and "choose one with --part" in err and not (tmp_path / "o.nc").exists()
+    code, _, err = run(capsys, "correct", "--model", MODEL, "--controller", "siemens", "--offsets",
+                       str(tmp_path / "o.mpf"), REPORT)
+    assert code == 1 and "siemens: cannot express register 'G58' (W5)" in err
+
+
+def test_current_offsets_give_absolute_program_and_feed_the_cumulative_limit(capsys, tmp_path):
+    from conftest import SAMPLES
+
+    sample = SAMPLES / "controllers"
+    target = tmp_path / "o.nc"
+    code, _, err = run(capsys, "correct", "--model", str(sample / "model.toml"), "--controller", "fanuc",
+                       "--current", str(sample / "current.csv"), "--offsets", str(target), str(sample / "report.csv"))
+    assert code == 0, err
+    text = target.read_text()
+    assert "G91" not in text.replace("G90", "") and "SAFE TO RUN AGAIN" in text
+    # H5 wear is at −0.012: with a cumulative limit of 0.015 it may move by −0.003 at most
+    model = tmp_path / "m.toml"
+    model.write_text((sample / "model.toml").read_text().replace("limit = 0.1\n", "limit = 0.1\n\n[safety]\n"
+                                                                 "cumulative_limit = 0.015\n", 1))
+    code, out, _ = run(capsys, "correct", "--model", str(model), "--current", str(sample / "current.csv"), "--json",
+                       str(sample / "report.csv"))
+    doc = json.loads(out)
+    assert doc["corrections"]["T5"] >= -0.003 - 1e-12 and "T5" in doc["at_limit"]
+    assert any(r["rule"] == "cumulative_limit" and "T5" in r["registers"] for r in doc["rules"])

@@ -2,74 +2,175 @@
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import numpy as np
 import pytest
 
-from setupfix.errors import ParseError, ParseWarning
+from parsers.temperature import TemperatureLog, read_temperature_log
+from setupfix.errors import ExportError, ParameterError, ParseError
 from setupfix.pipeline import thermal as pipe
-from setupfix.thermal.data import TemperatureLog, read_temperature_log
+from setupfix.pipeline.thermal_files import load_model, save_model
 from setupfix.thermal.metrics import score
+from setupfix.thermal.models import MRAModel
+from setupfix.thermal.persist import SavedModel
+from setupfix.thermal.registry import make_model, methods
 
 SAMPLES = Path(__file__).resolve().parents[2] / "sample_reports" / "thermal"
+SENSORS = ["spindle_motor", "bearing"]
+
+
+@pytest.fixture(scope="module")
+def train_log():
+    return read_temperature_log(SAMPLES / "train_variable.csv")
 
 
 def test_fit_save_and_predict_drift(tmp_path):
     out = tmp_path / "mra.json"
-    saved = pipe.fit_file(SAMPLES / "train_variable.csv", "mra", target="error_z", out=out,
-                          inputs=["spindle_motor", "bearing"])
+    saved = pipe.fit_file(SAMPLES / "train_variable.csv", "mra", target="error_z", out=out, inputs=SENSORS,
+                          unit="mm").saved
     assert saved.train["n"] == 1439 and saved.sample_interval_s == 10.0
     drift = pipe.predict_drift(out, SAMPLES / "test_constant.csv")
-    assert drift.drift.shape == (1440,) and drift.timestamps[0] == "2026-01-05T06:00:00"
-    assert drift.latest == pytest.approx(drift.drift[-1])
+    assert drift.drift.shape == (1440,) and drift.timestamps[0] == "2026-01-05T06:00:00" and drift.unit == "mm"
     assert score(drift.measured, drift.drift).rmse < 0.015  # mm; MRA generalises poorly to constant speed
 
 
-def test_kalman_needs_speed_and_mra_refuses_gaps():
-    log = read_temperature_log(SAMPLES / "train_variable.csv")
-    cols = {k: v for k, v in log.columns.items() if k != "spindle_speed"}
-    with pytest.raises(ParseError, match="spindle speed"):
-        pipe.fit_log(TemperatureLog.from_arrays("x.csv", cols), "kalman", target="error_z")
-    gappy = dict(log.columns)
+def test_reference_state_saved_and_reloaded(tmp_path, train_log):
+    saved = pipe.fit_log(train_log, "grey-ls", target="error_z", inputs=SENSORS, unit="um").saved
+    np.testing.assert_array_equal(saved.model.T_ref_, [train_log.columns[c][0] for c in SENSORS])
+    save_model(saved, tmp_path / "g.json")
+    back = load_model(tmp_path / "g.json")
+    np.testing.assert_array_equal(back.model.T_ref_, saved.model.T_ref_)
+    assert back.model.y_ref_ == saved.model.y_ref_ and back.unit == "um"
+    warm = train_log.slice(700, 1440)
+    np.testing.assert_allclose(pipe.predict_log(back, warm)[0], pipe.predict_log(saved, warm)[0], rtol=1e-12)
+
+
+@pytest.mark.parametrize("method", ["mra", "grey-ls", "kalman"])
+def test_log_starting_warm_is_predicted_as_if_continuous(train_log, method):
+    """The second half of a log, read on its own, gets the prediction the whole log gives it."""
+    short = train_log.head(720)
+    saved = pipe.fit_log(short, method, target="error_z", inputs=SENSORS,
+                         params={"generations": 5, "pop_size": 8} if method == "kalman" else None).saved
+    whole = pipe.predict_log(saved, train_log)[0]
+    warm = pipe.predict_log(saved, train_log.slice(720, 1440))[0]
+    y = train_log.columns["error_z"][720:]
+    assert abs(y[0]) > 0.02  # mm: the machine is warm there
+    if method == "mra":
+        np.testing.assert_allclose(warm, whole[720:], atol=1e-12)
+    else:  # dynamic models restart from the measured temperatures: a short transient only
+        np.testing.assert_allclose(warm[60:], whole[780:], atol=2e-3)
+    assert score(y, warm).rmse < 0.01  # the old rises-from-the-log's-start prediction was off by the whole drift
+
+
+def test_anchor_rebases_on_a_measured_error(train_log):
+    saved = pipe.fit_log(train_log, "mra", target="error_z", inputs=SENSORS).saved
+    plain = pipe.predict_log(saved, train_log)[0]
+    anchored = pipe.predict_log(saved, train_log, anchor=pipe.parse_anchor("2026-01-05T07:00:05=0.5"))[0]
+    i = 360  # 07:00:00 is the last sample at or before 07:00:05
+    assert anchored[i] == pytest.approx(0.5)
+    np.testing.assert_allclose(anchored - plain, 0.5 - plain[i])
+    first = pipe.predict_log(saved, train_log, anchor=pipe.parse_anchor("first"))[0]
+    assert first[0] == pytest.approx(train_log.columns["error_z"][0])
+    for bad in ("07:00", "2026-01-05T07:00=x", "=1"):
+        with pytest.raises(ParameterError):
+            pipe.predict_log(saved, train_log, anchor=pipe.parse_anchor(bad))
+    with pytest.raises(ParameterError, match="outside the log"):
+        pipe.predict_log(saved, train_log, anchor=pipe.parse_anchor("2020-01-01T00:00:00=0"))
+
+
+def test_kalman_without_speed_falls_back_and_is_flagged(train_log):
+    cols = {k: v[:300] for k, v in train_log.columns.items() if k not in ("spindle_speed", "ambient")}
+    log = TemperatureLog.from_arrays("x.csv", cols)
+    result = pipe.fit_log(log, "kalman", target="error_z", params={"generations": 5, "pop_size": 8})
+    assert result.saved.speed is None and not result.saved.model.uses_speed_
+    assert {n.kind for n in result.notes} >= {"fallback"}
+    assert any("without a spindle speed" in str(n) for n in result.notes)
+    with pytest.raises(ParameterError, match="sensors_failed"):
+        pipe.predict_log(result.saved, log, sensors_failed=True)
+    with pytest.raises(ParameterError, match="kalman"):
+        pipe.predict_log(pipe.fit_log(log, "mra", target="error_z").saved, log, sensors_failed=True)
+
+
+def test_mra_refuses_gaps_and_implausible_values(train_log):
+    gappy = dict(train_log.columns)
     gappy["bearing"] = gappy["bearing"].copy()
     gappy["bearing"][5] = np.nan
     with pytest.raises(ParseError, match="x.csv:7: empty value in column 'bearing'"):
         pipe.fit_log(TemperatureLog.from_arrays("x.csv", gappy), "mra", target="error_z")
+    for value, what in ((1e300, "temperature"), (1e306, "temperature")):
+        hot = dict(train_log.columns)
+        hot["bearing"] = hot["bearing"].copy()
+        hot["bearing"][9] = value
+        with pytest.raises(ParseError, match=rf"x.csv:11: {what} 1e\+30\d in column 'bearing' is outside"):
+            pipe.fit_log(TemperatureLog.from_arrays("x.csv", hot), "grey-ls", target="error_z")
 
 
-def test_other_sampling_interval_warns():
-    log = read_temperature_log(SAMPLES / "train_variable.csv")
-    saved = pipe.fit_log(log, "grey-ls", target="error_z")
-    other = TemperatureLog.from_arrays("y.csv", log.columns, seconds=np.arange(log.n) * 60.0)
-    with pytest.warns(ParseWarning, match="fitted on 10 s"):
-        pipe.predict_log(saved, other)
+def test_bad_roles_and_constant_target(train_log):
+    with pytest.raises(ParameterError, match="both the target and a temperature input"):
+        pipe.fit_log(train_log, "mra", target="error_z", inputs=["error_z"])
+    const = dict(train_log.columns)
+    const["error_z"] = np.full(train_log.n, 0.25)
+    with pytest.raises(ParseError, match="constant"):
+        pipe.fit_log(TemperatureLog.from_arrays("c.csv", const), "mra", target="error_z")
 
 
-def test_unknown_method():
-    with pytest.raises(ParseError, match="unknown thermal method"):
-        pipe.make_model("neural")
+def test_other_sampling_interval_is_noted(train_log):
+    saved = pipe.fit_log(train_log, "grey-ls", target="error_z").saved
+    other = TemperatureLog.from_arrays("y.csv", train_log.columns, seconds=np.arange(train_log.n) * 60.0)
+    _, notes = pipe.predict_log(saved, other)
+    assert any("fitted on 10 s" in str(n) for n in notes)
 
 
-def test_kalman_predicts_through_a_missing_reading_but_does_not_fit_on_one():
-    log = read_temperature_log(SAMPLES / "train_variable.csv")
-    short = TemperatureLog.from_arrays("s.csv", {k: v[:600] for k, v in log.columns.items()})
-    saved = pipe.fit_log(short, "kalman", target="error_z", seed=0)
-    gappy = {k: v[:600].copy() for k, v in log.columns.items()}
-    gappy["bearing"][300] = np.nan
-    pred = pipe.predict_log(saved, TemperatureLog.from_arrays("g.csv", gappy))
-    assert np.all(np.isfinite(pred))
-    with pytest.raises(ParseError, match="g.csv:302: empty value in column 'bearing'"):
-        pipe.fit_log(TemperatureLog.from_arrays("g.csv", gappy), "kalman", target="error_z")
+def test_quality_gate_and_default_seed(train_log):
+    ev = pipe.evaluate_logs(train_log.head(400), train_log.slice(400, 800), "grey-pso", target="error_z",
+                            params={"iterations": 3})
+    assert ev.saved.train["seed"] == 0
+    assert ev.train.efficiency < 0 and any(n.kind == "quality" for n in ev.notes)
+    assert any("training efficiency" in w for w in ev.as_json()["warnings"])
+    again = pipe.evaluate_logs(train_log.head(400), train_log.slice(400, 800), "grey-pso", target="error_z",
+                               params={"iterations": 3})
+    assert again.test.rmse == ev.test.rmse  # reproducible without --seed
+
+
+def test_registry_validates_and_names_methods():
+    assert methods() == ("mra", "grey-ls", "grey-cs", "grey-pso", "kalman")
+    with pytest.raises(ParameterError, match="unknown thermal method 'neural'.*mra, grey-ls"):
+        make_model("neural")
+    with pytest.raises(ParameterError, match="iterations must be an int in"):
+        make_model("grey-cs", iterations=-5)
+    with pytest.raises(ParameterError, match="has no parameter colour"):
+        make_model("mra", colour="red")
+    for name in methods():  # every method: declared constraints cover every parameter
+        model = make_model(name)
+        assert set(model.get_params()) <= set(model._parameter_constraints), name
 
 
 def test_non_finite_model_is_not_saved(tmp_path):
-    from setupfix.errors import ExportError
-    from setupfix.thermal.models import MRAModel
-    from setupfix.thermal.persist import SavedModel, save_model
-
     model = MRAModel()
     model.beta_ = np.array([np.nan])
+    model.T_ref_, model.y_ref_ = np.zeros(1), 0.0
     with pytest.raises(ExportError, match="non-finite"):
         save_model(SavedModel(model, ("T",), "E"), tmp_path / "m.json")
     assert not (tmp_path / "m.json").exists()
+
+
+@pytest.mark.parametrize("damage", ["byte", "coefficient", "reference", "method", "nan"])
+def test_corrupt_model_file_is_named(tmp_path, train_log, damage):
+    path = tmp_path / "m.json"
+    save_model(pipe.fit_log(train_log, "mra", target="error_z", inputs=SENSORS).saved, path)
+    text = path.read_text()
+    if damage == "byte":
+        path.write_bytes(text.encode()[:50] + b"\xff" + text.encode()[50:])
+    else:
+        doc = json.loads(text)
+        if damage == "coefficient":
+            doc["model"]["learned"]["beta_"].pop()
+        elif damage == "reference":
+            del doc["model"]["learned"]["T_ref_"]
+        elif damage == "method":
+            doc["model"]["method"] = "neural"
+        path.write_text(json.dumps(doc).replace("0.0", "NaN", 1) if damage == "nan" else json.dumps(doc))
+    with pytest.raises(ParseError, match=r"m\.json"):
+        load_model(path)

@@ -15,7 +15,7 @@ __all__ = ["OpenFileScreen"]
 
 
 class OpenFileScreen(ModalScreen[Path | None]):
-    """Pick a file (Enter in the tree) or type a path (Enter in the field); escape cancels."""
+    """Type a path (Enter opens it) or Tab to the tree and pick a file; escape cancels."""
 
     BINDINGS = [Binding("escape", "cancel", "Cancel")]
 
@@ -28,11 +28,11 @@ class OpenFileScreen(ModalScreen[Path | None]):
     def compose(self) -> ComposeResult:
         with Vertical(id="open-box"):
             yield Label(self.title_text, id="open-title")
-            yield Input(placeholder="path (Enter opens)", id="open-path")
+            yield Input(placeholder="type a path and press Enter, or Tab to the tree", id="open-path")
             yield DirectoryTree(str(self.start), id="open-tree")
 
     def on_mount(self) -> None:
-        self.query_one(DirectoryTree).focus()
+        self.query_one("#open-path", Input).focus()
 
     @on(DirectoryTree.FileSelected)
     def _file(self, event: DirectoryTree.FileSelected) -> None:

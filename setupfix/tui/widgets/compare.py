@@ -36,7 +36,7 @@ class ComparePanel(Vertical):
         bar = self.query_one(ProgressBar)
         bar.display = True
         bar.update(total=total, progress=done)
-        self.status(f"comparing… {done}/{total} steps done ({method}); x cancels")
+        self.status(f"comparing… {done}/{total} runs done ({method}); x cancels")
 
     def stopped(self, text: str) -> None:
         self.query_one(ProgressBar).display = False

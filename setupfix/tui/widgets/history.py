@@ -2,26 +2,81 @@
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 from rich.text import Text
 from textual.app import ComposeResult
-from textual.containers import Vertical
+from textual.containers import VerticalScroll
 from textual.widgets import DataTable, Sparkline, Static
+
+from setupfix.pipeline.view import IN, OUT, CycleBudget, DiagnosisView, signed
 
 __all__ = ["HistoryPanel"]
 
+#: Cycles listed in the table (the sparkline shows them all).
+LAST_CYCLES = 8
 
-class HistoryPanel(Vertical):
-    """Budget per cycle (sparkline and table) and the effects found, before/after."""
+
+class HistoryPanel(VerticalScroll):
+    """Budget per cycle (sparkline and table), then the diagnosis: before/after, effects, walk forward."""
 
     def compose(self) -> ComposeResult:
         yield Static("", id="history-status")
         yield Sparkline([], id="history-curve")
+        yield DataTable(id="history-cycles", cursor_type="row")
+        yield Static("", id="history-diagnosis")
         yield DataTable(id="history-effects", cursor_type="row")
+        yield Static("", id="history-walk")
 
-    def not_available(self, reason: str) -> None:
-        self.query_one("#history-status", Static).update(Text(f"not available: {reason}", style="dim"))
-        self.query_one("#history-curve", Sparkline).display = False
-        self.query_one("#history-effects", DataTable).display = False
+    def on_mount(self) -> None:
+        for wid in ("#history-curve", "#history-cycles", "#history-effects"):
+            self.query_one(wid).display = False
 
     def status(self, text: str | Text) -> None:
         self.query_one("#history-status", Static).update(text)
+
+    def budgets(self, rows: Sequence[CycleBudget], *, unit: str, source: str) -> None:
+        """δ of every cycle, oldest first; the table lists the last :data:`LAST_CYCLES`."""
+        self.status(Text(f"error budget δ of {len(rows)} cycle(s) as measured, from {source} [{unit}]"))
+        curve = self.query_one("#history-curve", Sparkline)
+        curve.display = len(rows) > 1
+        curve.data = [r.budget for r in rows]
+        table = self.query_one("#history-cycles", DataTable)
+        table.display = bool(rows)
+        table.clear(columns=True)
+        for label in ("", "cycle", "time", "δ", "out"):
+            table.add_column(label)
+        for r in rows[-LAST_CYCLES:]:
+            table.add_row(Text(IN if r.out_of_tolerance == 0 else OUT), r.cycle, r.timestamp,
+                          Text(signed(r.budget), justify="right"), str(r.out_of_tolerance))
+
+    def diagnosis(self, view: DiagnosisView, *, source: str) -> None:
+        u = view.unit
+        self.budgets(view.budgets, unit=u, source=source)
+        text = Text()
+        text.append(f"diagnosis of {view.cycles} cycle(s): ", style="bold")
+        text.append(f"residual RMS {view.before[0]:.4f} → {view.after[0]:.4f} {u}, "
+                    f"max {view.before[1]:.4f} → {view.after[1]:.4f}, "
+                    f"out of tolerance {view.before[2]} → {view.after[2]}")
+        if not view.effects:
+            text.append("\nno effect found: the declared model explains the series to its noise")
+        self.query_one("#history-diagnosis", Static).update(text)
+        table = self.query_one("#history-effects", DataTable)
+        table.display = bool(view.effects)
+        table.clear(columns=True)
+        for label in ("effect", "on", "estimate", "± s.e.", "RMS after"):
+            table.add_column(label)
+        for e in view.effects:
+            table.add_row(e.kind, e.target + (f" (≈ {', '.join(e.alike)})" if e.alike else ""),
+                          Text(f"{e.estimate:+.4g} {e.unit}", justify="right"), f"{e.stderr:.2g}",
+                          Text(f"{e.rms_after:.4f}", justify="right"))
+        walk = Text()
+        if view.walk:
+            walk.append("walk forward (error budget reached on later cycles: mean / worst):\n")
+            for name, mean, worst, rms, out in view.walk:
+                walk.append(f"  {name:<9} {signed(mean)} / {signed(worst)}  RMS {rms:.4f}  out {out}\n")
+        walk.append("next correction (augmented model): "
+                    + (", ".join(f"{k} {signed(v, 3)}" for k, v in view.next_correction) or "none"))
+        for note in view.notes:
+            walk.append(f"\n⚠ {note}", style="yellow")
+        self.query_one("#history-walk", Static).update(walk)

@@ -1,0 +1,113 @@
+"""``setupfix batch``: every report of a folder tree corrected into one offsets file."""
+
+from __future__ import annotations
+
+import argparse
+import signal
+import sys
+from types import FrameType
+
+from setupfix.cli._common import add_report_options, report_options
+from setupfix.cli.exit_codes import OK, PARTIAL, REJECTED
+from setupfix.optimize import OPTIMIZERS
+from setupfix.pipeline.batch import BatchOptions, BatchSummary, Outcome, run_batch
+from setupfix.pipeline.controllers import CONTROLLERS, read_current
+from setupfix.pipeline.present import format_batch_summary
+from setupfix.model import load_model
+from setupfix.store import open_store
+
+
+def add_parser(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser("batch", help="correct every report in a folder tree into one offsets file",
+                       description="Correct every report found in DIR (recursively, any supported format) and "
+                                   "write one offsets CSV. A file that cannot be read or matched is named on "
+                                   "stderr with its reason and skipped. Exit status 4 when any file failed, 5 "
+                                   "when a recommendation was rejected, else 0.")
+    p.add_argument("folder", metavar="DIR", help="folder searched recursively for reports")
+    p.add_argument("--model", required=True, metavar="MODEL", help="process model TOML")
+    p.add_argument("--out", required=True, metavar="FILE",
+                   help="offsets CSV (with --controller other than csv: a folder, one program per cycle)")
+    p.add_argument("--controller", default="csv", choices=sorted(CONTROLLERS), help="output syntax (default csv)")
+    p.add_argument("--current", metavar="FILE", default=None,
+                   help="the controller's current offsets (CSV register,value): write absolute new values")
+    p.add_argument("--optimizer", default="exact", choices=sorted(OPTIMIZERS))
+    p.add_argument("--seed", type=int, default=None)
+    p.add_argument("--workers", type=int, default=1, metavar="N", help="worker processes (default 1)")
+    p.add_argument("--settle", type=float, default=1.0, metavar="SECONDS",
+                   help="a file must be unchanged this long before it is read (default 1)")
+    p.add_argument("--store", metavar="DB", default=None,
+                   help="history store: reports it already holds are skipped, new ones are added")
+    p.add_argument("--force", action="store_true", help="correct reports the store already holds again")
+    p.add_argument("--json", action="store_true", help="the summary as JSON on stdout")
+    add_report_options(p)
+    p.set_defaults(run=run)
+
+
+def _terminate(signum: int, frame: FrameType | None) -> None:
+    raise KeyboardInterrupt  # unwinds the atomic writer: no partial output
+
+
+def run(args: argparse.Namespace) -> int:
+    import json
+
+    model = load_model(args.model)
+    current = read_current(args.current, model) if args.current else None
+    opts = report_options(args)
+    options = BatchOptions(optimizer=args.optimizer, seed=args.seed, format=opts["format"], unit=opts["unit"],
+                           encoding=opts["encoding"], columns=opts["columns"], parts_per_cycle=args.parts_per_cycle,
+                           strict=args.strict, current=current)
+    previous = signal.signal(signal.SIGTERM, _terminate)
+    try:
+        with _Progress() as progress:
+            summary = run_batch(model, args.folder, args.out, options=options, workers=args.workers,
+                                controller=args.controller, settle=args.settle, progress=progress,
+                                store=open_store(args.store) if args.store else None, force=args.force)
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+    for path, reason in summary.failed:
+        print(f"error: {reason if path in reason else f'{path}: {reason}'}", file=sys.stderr)
+    if args.json:
+        json.dump(summary.to_json(), sys.stdout, indent=2)
+        sys.stdout.write("\n")
+    else:
+        sys.stdout.write(format_batch_summary(summary, args.out) + "\n")
+    return _status(summary)
+
+
+def _status(summary: BatchSummary) -> int:
+    if summary.failed:
+        return PARTIAL
+    if summary.verdicts.get("reject"):
+        return REJECTED
+    return OK
+
+
+class _Progress:
+    """A rich progress bar (rate, ETA) on a terminal; one plain line per report otherwise (stderr)."""
+
+    def __enter__(self) -> _Progress:
+        self.bar = None
+        if sys.stderr.isatty():
+            from rich.console import Console
+            from rich.progress import (BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn,
+                                       TimeRemainingColumn)
+
+            self.bar = Progress(TextColumn("batch"), BarColumn(), MofNCompleteColumn(),
+                                TextColumn("{task.fields[rate]}"), TimeElapsedColumn(), TimeRemainingColumn(),
+                                console=Console(file=sys.stderr), transient=True)
+            self.bar.__enter__()
+            self.task = self.bar.add_task("batch", total=None, rate="")
+        return self
+
+    def __call__(self, done: int, total: int, outcome: Outcome) -> None:
+        if self.bar is not None:
+            elapsed = self.bar.tasks[0].elapsed or 1e-9
+            self.bar.update(self.task, completed=done, total=total, rate=f"{done / elapsed:.0f} reports/s")
+            return
+        state = ("FAILED" if outcome.error else f"skipped ({outcome.skipped})" if outcome.skipped
+                 else ", ".join(outcome.verdicts) or "no part")
+        print(f"[{done}/{total}] {outcome.path}: {state}", file=sys.stderr)
+
+    def __exit__(self, *exc: object) -> None:
+        if self.bar is not None:
+            self.bar.__exit__(None, None, None)

@@ -1,0 +1,203 @@
+"""Safety settings of a process model: the ``[safety]`` table and per-register extras.
+
+Plain data and its validation; the rules themselves are pure functions in
+:mod:`setupfix.safety`.  Every length is in the model unit.  Defaults (documented in
+the README, section *Safety rules*):
+
+=====================  =========================  =======================================
+key                    default                    meaning
+=====================  =========================  =======================================
+``dead_band``          2 × resolution             hold when every change is within it
+``gain``               1.0                        feedback fraction of the optimum applied
+``reject_band``        each tolerance's width     reject beyond a limit by more than this
+``cumulative_limit``   off                        bound on |current + change| (wear)
+``uncertainty``        0 (no guard band)          expanded uncertainty U of every dimension
+``guard_band``         1.0                        fraction of U the limits shrink by
+``ewma``               1.0 (no smoothing)         λ of the smoothing over reports
+=====================  =========================  =======================================
+
+Per register (``[wks.ID]`` / ``[tools.ID]``): ``cost`` (> 0, least-norm weight),
+``offset`` (``"wear"`` or ``"geometry"``; default wear for a tool, geometry for a WKS),
+``number`` and ``edge`` (controller slot where the register name does not give it),
+``dead_band``, ``gain``, ``cumulative_limit``.  Per dimension
+(``[safety.dimensions.ID]``): ``uncertainty`` and ``reject_band``.
+
+Both hook into the loader's extension points (``loader.SECTIONS`` and
+``loader.REGISTER_KEYS``); :func:`safety_settings` assembles them for a model.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+from typing import Any, Literal
+
+from setupfix.model.loader import REGISTER_KEYS as _LOADER_REGISTER_KEYS
+from setupfix.model.loader import SECTIONS
+from setupfix.model.process import ProcessModel
+
+__all__ = ["OffsetType", "RegisterPolicy", "SafetySettings", "SAFETY_KEYS", "REGISTER_KEYS", "DIMENSION_KEYS",
+           "parse_safety", "safety_settings"]
+
+OffsetType = Literal["wear", "geometry"]
+
+#: Keys of the ``[safety]`` table.
+SAFETY_KEYS = frozenset({"dead_band", "gain", "reject_band", "cumulative_limit", "uncertainty", "guard_band",
+                         "ewma"})
+#: Extra keys a ``[wks.ID]`` or ``[tools.ID]`` table may hold.
+REGISTER_KEYS = frozenset({"cost", "offset", "number", "edge", "dead_band", "gain", "cumulative_limit"})
+#: Keys of a ``[safety.dimensions.ID]`` table.
+DIMENSION_KEYS = frozenset({"uncertainty", "reject_band"})
+
+
+@dataclass(frozen=True, slots=True)
+class RegisterPolicy:
+    """Per-register preferences; ``None`` means the model-wide setting."""
+
+    cost: float = 1.0
+    offset: OffsetType | None = None
+    number: int | None = None
+    edge: int | None = None
+    dead_band: float | None = None
+    gain: float | None = None
+    cumulative_limit: float | None = None
+
+
+@dataclass(frozen=True, slots=True)
+class SafetySettings:
+    """The model's safety rules (``[safety]`` plus per-register and per-dimension extras)."""
+
+    dead_band: float | None = None
+    gain: float = 1.0
+    reject_band: float | None = None
+    cumulative_limit: float | None = None
+    uncertainty: float = 0.0
+    guard_band: float = 1.0
+    ewma: float = 1.0
+    registers: Mapping[str, RegisterPolicy] = field(default_factory=dict)
+    dimension_uncertainty: Mapping[str, float] = field(default_factory=dict)
+    dimension_reject_band: Mapping[str, float] = field(default_factory=dict)
+
+    def register(self, rid: str) -> RegisterPolicy:
+        return self.registers.get(rid, _DEFAULT_POLICY)
+
+
+_DEFAULT_POLICY = RegisterPolicy()
+
+def _num(report: Callable[[str], None], value: Any, low: float, high: float = math.inf, *,
+         open_low: bool = False) -> float | None:
+    ok = isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
+    if ok and (value > low or (not open_low and value == low)) and value <= high:
+        return float(value)
+    bracket = "(" if open_low else "["
+    upper = "∞)" if high == math.inf else f"{high:g}]"
+    report(f"expected a number in {bracket}{low:g}, {upper}, found {value!r}")
+    return None
+
+
+def _slot(value: Any, report: Callable[[str], None]) -> int | None:
+    if isinstance(value, int) and not isinstance(value, bool) and 0 <= value <= 99999:
+        return value
+    report(f"expected a whole number in [0, 99999], found {value!r}")
+    return None
+
+
+def _offset(value: Any, report: Callable[[str], None]) -> str | None:
+    if value in ("wear", "geometry"):
+        return str(value)
+    report(f'expected "wear" or "geometry", found {value!r}')
+    return None
+
+
+_REGISTER_PARSERS: dict[str, Callable[[Any, Callable[[str], None]], Any]] = {
+    "cost": lambda v, r: _num(r, v, 0.0, open_low=True),
+    "offset": _offset,
+    "number": _slot,
+    "edge": _slot,
+    "dead_band": lambda v, r: _num(r, v, 0.0),
+    "gain": lambda v, r: _num(r, v, 0.0, 1.0, open_low=True),
+    "cumulative_limit": lambda v, r: _num(r, v, 0.0, open_low=True),
+}
+
+
+def parse_safety(value: Any, model: ProcessModel, report: Callable[[str, str], None]) -> SafetySettings:
+    """The ``[safety]`` table (loader extension point ``SECTIONS["safety"]``).
+
+    ``report(key, message)`` adds a problem at ``safety.<key>``; a bad value falls
+    back to its default so every problem is reported in one pass.
+    """
+    if not isinstance(value, Mapping):
+        report("", f"expected a table, found {type(value).__name__}")
+        value = {}
+    for name in value:
+        if name not in SAFETY_KEYS and name != "dimensions":
+            report(name, f"unknown key (expected one of: {', '.join(sorted(SAFETY_KEYS | {'dimensions'}))})")
+
+    def get(name: str, low: float, high: float = math.inf, *, open_low: bool = False) -> float | None:
+        if name not in value:
+            return None
+        return _num(lambda m: report(name, m), value[name], low, high, open_low=open_low)
+
+    uncertainty: dict[str, float] = {}
+    reject: dict[str, float] = {}
+    known = {d.id for d in model.dimensions}
+    dims = value.get("dimensions", {})
+    if not isinstance(dims, Mapping):
+        report("dimensions", "expected a table of dimension IDs")
+        dims = {}
+    for did, table in dims.items():
+        key = f"dimensions.{did}"
+        if did not in known:
+            report(key, f"unknown dimension {did!r}")
+            continue
+        if not isinstance(table, Mapping):
+            report(key, "expected a table (uncertainty, reject_band)")
+            continue
+        for name in table:
+            if name not in DIMENSION_KEYS:
+                report(f"{key}.{name}", f"unknown key (expected one of: {', '.join(sorted(DIMENSION_KEYS))})")
+        if "uncertainty" in table:
+            u = _num(lambda m: report(f"{key}.uncertainty", m), table["uncertainty"], 0.0)
+            if u is not None:
+                uncertainty[did] = u
+        if "reject_band" in table:
+            r = _num(lambda m: report(f"{key}.reject_band", m), table["reject_band"], 0.0, open_low=True)
+            if r is not None:
+                reject[did] = r
+    gain = get("gain", 0.0, 1.0, open_low=True)
+    u_all = get("uncertainty", 0.0)
+    guard = get("guard_band", 0.0, 1.0)
+    lam = get("ewma", 0.0, 1.0, open_low=True)
+    return SafetySettings(
+        dead_band=get("dead_band", 0.0),
+        gain=1.0 if gain is None else gain,
+        reject_band=get("reject_band", 0.0, open_low=True),
+        cumulative_limit=get("cumulative_limit", 0.0, open_low=True),
+        uncertainty=0.0 if u_all is None else u_all,
+        guard_band=1.0 if guard is None else guard,
+        ewma=1.0 if lam is None else lam,
+        dimension_uncertainty=uncertainty,
+        dimension_reject_band=reject,
+    )
+
+
+def safety_settings(model: ProcessModel) -> SafetySettings:
+    """The model's safety settings: its ``[safety]`` table (or the defaults) and per-register extras."""
+    base = model.extras.get("safety")
+    if not isinstance(base, SafetySettings):
+        base = SafetySettings()
+    registers: dict[str, RegisterPolicy] = {}
+    for reg in model.registers:
+        e = {k: v for k, v in reg.extras.items() if k in REGISTER_KEYS and v is not None}
+        if e:
+            registers[reg.id] = RegisterPolicy(**e)
+    if not registers:
+        return base
+    return SafetySettings(base.dead_band, base.gain, base.reject_band, base.cumulative_limit, base.uncertainty,
+                          base.guard_band, base.ewma, registers, base.dimension_uncertainty,
+                          base.dimension_reject_band)
+
+
+SECTIONS["safety"] = parse_safety
+_LOADER_REGISTER_KEYS.update(_REGISTER_PARSERS)

@@ -1,0 +1,363 @@
+"""Use case "batch": every report in a folder tree corrected into one offsets file.
+
+Design for thousands of reports:
+
+* the model is loaded once (once per worker process) and every report runs
+  :func:`setupfix.pipeline.correct.correct_part` — no per-report start-up;
+* results are streamed: each report's offset rows are written to the (atomic)
+  output as soon as it is done, in the sorted order of the files, so memory does
+  not grow with the number of reports and the numbers do not depend on
+  ``workers``;
+* a file that fails is named with its reason and skipped; the others go on;
+* a file whose size or modification time changes between discovery and reading
+  (still being copied by the CMM) is not read;
+* the same content twice (SHA-256) is corrected once; with a history store,
+  reports it already holds are skipped unless ``force``.
+
+Nothing here prints: progress goes to a callback, the summary is returned.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import dataclasses
+import hashlib
+import os
+import time
+from collections import Counter
+from collections.abc import Callable, Iterator, Mapping
+from concurrent.futures import Future, ProcessPoolExecutor
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from setupfix.errors import ExportError, ParameterError, SetupfixError, SourceLocation
+from setupfix.model import ProcessModel, load_model
+from setupfix.offsets import OffsetRow, csv_header, csv_lines, offset_rows
+from setupfix.pipeline.controllers import render
+from setupfix.pipeline.correct import correct_part
+from setupfix.pipeline.cycles import load_parts
+from setupfix.store import Recommendation as StoreRecommendation
+from setupfix.store import Store
+
+__all__ = ["BatchOptions", "Outcome", "BatchSummary", "find_reports", "run_batch", "PROGRAM_SUFFIX"]
+
+#: File suffix of one program per cycle when a controller other than csv is chosen.
+PROGRAM_SUFFIX = {"fanuc": ".nc", "haas": ".nc", "siemens": ".mpf", "heidenhain": ".txt"}
+
+
+@dataclass(frozen=True)
+class BatchOptions:
+    """What every report is corrected with (picklable: sent once to each worker)."""
+
+    optimizer: str = "exact"
+    seed: int | None = None
+    format: str | None = None
+    unit: str | None = None
+    encoding: str | None = None
+    columns: str | None = None
+    parts_per_cycle: int | None = None
+    strict: bool = False
+    current: Mapping[str, float] | None = None
+    skip: frozenset[str] = frozenset()  #: content hashes already processed (history store)
+
+
+@dataclass
+class Outcome:
+    """One report's result: its offset rows and verdicts, or why it failed."""
+
+    path: str
+    sha256: str = ""
+    rows: list[OffsetRow] = field(default_factory=list)
+    verdicts: list[str] = field(default_factory=list)
+    parts: list[str] = field(default_factory=list)
+    error: str = ""
+    skipped: str = ""
+    format: str = ""
+
+
+@dataclass
+class BatchSummary:
+    """Counts and failures of one batch run."""
+
+    reports: int = 0
+    parts: int = 0
+    verdicts: Counter[str] = field(default_factory=Counter)
+    failed: list[tuple[str, str]] = field(default_factory=list)
+    skipped: list[tuple[str, str]] = field(default_factory=list)
+    seconds: float = 0.0
+    written: bool = False
+
+    def to_json(self) -> dict[str, Any]:
+        return {"reports": self.reports, "parts": self.parts, "verdicts": dict(self.verdicts),
+                "failed": [{"file": f, "reason": r} for f, r in self.failed],
+                "skipped": [{"file": f, "reason": r} for f, r in self.skipped],
+                "seconds": round(self.seconds, 3), "written": self.written}
+
+
+def find_reports(root: str | Path) -> list[tuple[Path, int, int]]:
+    """Every regular file below ``root`` (sorted; hidden files and folders left out) with size and mtime_ns.
+
+    Raises
+    ------
+    ParameterError
+        If ``root`` is not a folder.
+    """
+    base = Path(root)
+    if not base.is_dir():
+        raise ParameterError(f"batch: {root} is not a folder")
+    found = []
+    for folder, dirs, files in os.walk(base):
+        dirs[:] = sorted(d for d in dirs if not d.startswith("."))
+        for name in sorted(files):
+            if name.startswith("."):
+                continue
+            path = Path(folder) / name
+            st = path.lstat()
+            if path.is_file() and not path.is_symlink():
+                found.append((path, st.st_size, st.st_mtime_ns))
+    return found
+
+
+# -- per-report work (runs in a worker process, or inline with one worker) --------------------
+
+_MODEL: ProcessModel | None = None
+_OPTIONS = BatchOptions()
+
+
+def _init(model: ProcessModel, options: BatchOptions) -> None:
+    global _MODEL, _OPTIONS
+    _MODEL, _OPTIONS = model, options
+
+
+def _correct_one(path: str, size: int, mtime_ns: int) -> Outcome:
+    assert _MODEL is not None
+    out = Outcome(path)
+    try:
+        st = os.stat(path)
+        if (st.st_size, st.st_mtime_ns) != (size, mtime_ns):
+            out.skipped = "still being written (size or time changed): not read"
+            return out
+        with open(path, "rb") as fh:
+            out.sha256 = hashlib.sha256(fh.read()).hexdigest()
+        o = _OPTIONS
+        if out.sha256 in o.skip:
+            return out  # run_batch marks it "already processed"
+        parts = load_parts(_MODEL, path, format=o.format, unit=o.unit, encoding=o.encoding, columns=o.columns,
+                           parts_per_cycle=o.parts_per_cycle, strict=o.strict)
+        for part in parts:
+            pc = correct_part(_MODEL, part, optimizer=o.optimizer, seed=o.seed)
+            out.rows += pc.offsets(o.current)
+            out.verdicts.append(pc.verdict)
+            out.parts.append(part.part)
+    except SetupfixError as exc:
+        out.error = str(exc) if exc.location else f"{path}: {exc}"
+    except OSError as exc:
+        out.error = f"{path}: cannot read: {exc.strerror or exc}"
+    except Exception as exc:  # noqa: BLE001 - one bad file never stops the batch
+        out.error = f"{path}: internal error: {type(exc).__name__}: {exc}"
+    return out
+
+
+def _outcomes(files: list[tuple[Path, int, int]], model: ProcessModel, options: BatchOptions,
+              workers: int) -> Iterator[Outcome]:
+    """Outcomes in file order; at most ``2·workers`` reports in flight (memory stays flat)."""
+    if workers <= 1:
+        _init(model, options)
+        for path, size, mtime in files:
+            yield _correct_one(str(path), size, mtime)
+        return
+    with ProcessPoolExecutor(max_workers=workers, initializer=_init, initargs=(model, options)) as pool:
+        pending: list[Future[Outcome]] = []
+        it = iter(files)
+        for path, size, mtime in it:
+            pending.append(pool.submit(_correct_one, str(path), size, mtime))
+            if len(pending) >= 2 * workers:
+                break
+        while pending:
+            done = pending.pop(0)
+            nxt = next(it, None)
+            if nxt is not None:
+                pending.append(pool.submit(_correct_one, str(nxt[0]), nxt[1], nxt[2]))
+            yield done.result()
+
+
+def run_batch(model: ProcessModel | str | Path, folder: str | Path, out: str | Path, *,
+              options: BatchOptions | None = None, workers: int = 1, controller: str = "csv",
+              settle: float = 1.0, store: Store | None = None, force: bool = False,
+              progress: Callable[[int, int, Outcome], None] | None = None) -> BatchSummary:
+    """Correct every report below ``folder`` and write one offsets file ``out``.
+
+    Parameters
+    ----------
+    model : ProcessModel or path
+    folder : path
+        Searched recursively; every regular file is tried with every reader.
+    out : path
+        The offsets CSV (written atomically: complete or absent), or with a
+        ``controller`` other than csv a folder receiving one program per cycle.
+    workers : int
+        Processes (1: in this process).  Results do not depend on it.
+    settle : float
+        Seconds a file must be left unchanged before it is read.
+    store : Store, optional
+        History store: reports it holds a batch recommendation for are skipped
+        (unless ``force``); each corrected report and its recommendation are added,
+        in one transaction committed only after the output is written.
+    progress : callable, optional
+        Called after each report with (done, total, outcome).
+
+    Returns
+    -------
+    BatchSummary
+        ``written`` is False when no report produced rows (an existing output is
+        then left untouched).
+    """
+    start = time.perf_counter()
+    if not isinstance(model, ProcessModel):
+        model = load_model(model)
+    options = options or BatchOptions()
+    if not 1 <= workers <= 64:
+        raise ParameterError(f"batch: workers must be an int in [1, 64], got {workers}")
+    # An unknown controller, or a register it cannot express, fails before any work.
+    render(controller, offset_rows(model, {}, current=options.current))
+    files = find_reports(folder)
+    if files:
+        youngest = time.time() - max(m for _, _, m in files) / 1e9
+        if youngest < settle:
+            time.sleep(settle - youngest)
+    summary = BatchSummary()
+    seen: dict[str, str] = {}
+    writer: _CsvOut | _ProgramsOut = _CsvOut(out) if controller == "csv" else _ProgramsOut(out, controller)
+    done = _batch_reports(store) if store is not None and not force else set()
+    options = dataclasses.replace(options, skip=frozenset(done))
+    with contextlib.ExitStack() as stack:
+        if store is not None:
+            stack.enter_context(store.transaction())
+        with writer:
+            for i, outcome in enumerate(_outcomes(files, model, options, workers), start=1):
+                _account(summary, outcome, seen, done.__contains__ if done else None)
+                if not outcome.error and not outcome.skipped:
+                    rel = Path(outcome.path).relative_to(folder).as_posix()
+                    outcome.rows = [dataclasses.replace(r, report=rel) for r in outcome.rows]
+                    writer.add(outcome)
+                    if store is not None:
+                        _record(store, outcome, options)
+                if progress is not None:
+                    progress(i, len(files), outcome)
+            summary.written = writer.commit()
+    summary.seconds = time.perf_counter() - start
+    return summary
+
+
+def _batch_reports(store: Store) -> set[str]:
+    """Hashes of the reports the store holds a batch recommendation for."""
+    return {str(r.inputs.get("report")) for r in store.recommendations() if r.inputs.get("use") == "batch"}
+
+
+def _record(store: Store, outcome: Outcome, options: BatchOptions) -> None:
+    import parsers
+
+    path = Path(outcome.path)
+    spec = parsers.find_format(path, options.format)
+    table = parsers.read(path, format=spec.name, unit=options.unit, encoding=options.encoding,
+                         **({"columns": options.columns} if options.columns else {}))
+    sha, _ = store.add_report(path.read_bytes(), path.name, spec.name, table)
+    by_part: dict[str, dict[str, float]] = {}
+    for row in outcome.rows:
+        by_part.setdefault(row.part, {})[row.id] = row.delta
+    for (part, corrections), verdict in zip(by_part.items(), outcome.verdicts):
+        store.add_recommendation(StoreRecommendation(
+            optimizer=options.optimizer, inputs={"use": "batch", "report": sha, "part": part, "seed": options.seed},
+            result={"verdict": verdict, "corrections": corrections}))
+
+
+def _account(summary: BatchSummary, outcome: Outcome, seen: dict[str, str],
+             processed: Callable[[str], bool] | None) -> None:
+    if outcome.error:
+        summary.failed.append((outcome.path, outcome.error))
+        return
+    if not outcome.skipped and outcome.sha256 in seen:
+        outcome.skipped = f"same content as {seen[outcome.sha256]}"
+    elif not outcome.skipped and processed is not None and processed(outcome.sha256):
+        outcome.skipped = "already processed (history store); --force corrects it again"
+    if outcome.skipped:
+        summary.skipped.append((outcome.path, outcome.skipped))
+        if outcome.skipped.startswith("still being written"):
+            summary.failed.append((outcome.path, outcome.skipped))
+        return
+    seen[outcome.sha256] = outcome.path
+    summary.reports += 1
+    summary.parts += len(outcome.verdicts)
+    summary.verdicts.update(outcome.verdicts)
+
+
+class _CsvOut:
+    """One offsets CSV, streamed into a temporary file renamed over the target at the end."""
+
+    def __init__(self, target: str | Path) -> None:
+        from setupfix.pipeline.writers import atomic_write, check_target
+
+        check_target(target)
+        self._cm = atomic_write(target)
+        self._rows = 0
+
+    def __enter__(self) -> _CsvOut:
+        self._stream = self._cm.__enter__()
+        self._stream.write(csv_header())
+        return self
+
+    def add(self, outcome: Outcome) -> None:
+        self._stream.write(csv_lines(outcome.rows))
+        self._rows += len(outcome.rows)
+
+    def commit(self) -> bool:
+        return self._rows > 0
+
+    def __exit__(self, *exc: Any) -> None:
+        if exc[0] is None and not self._rows:
+            # Nothing new: leave an existing output as it was.
+            self._cm.__exit__(_NothingWritten, _NothingWritten(), None)
+            return
+        self._cm.__exit__(*exc)
+
+
+class _NothingWritten(Exception):
+    pass
+
+
+class _ProgramsOut:
+    """One controller program per corrected cycle, ``<folder>/<report stem>[_<part>]<suffix>``."""
+
+    def __init__(self, folder: str | Path, controller: str) -> None:
+        self.folder = Path(folder)
+        self.controller = controller
+        if self.folder.exists() and not self.folder.is_dir():
+            raise ExportError("with --controller other than csv, --out is a folder for one program per cycle",
+                              location=SourceLocation(str(folder)))
+        self.written = 0
+
+    def __enter__(self) -> _ProgramsOut:
+        self.folder.mkdir(parents=True, exist_ok=True)
+        return self
+
+    def add(self, outcome: Outcome) -> None:
+        from setupfix.pipeline.writers import write_text
+
+        stem = Path(outcome.path).stem
+        by_part: dict[str, list[OffsetRow]] = {}
+        for row in outcome.rows:
+            by_part.setdefault(row.part, []).append(row)
+        for (part, rows), verdict in zip(by_part.items(), outcome.verdicts):
+            if verdict != "apply":
+                continue
+            suffix = "" if len(by_part) == 1 else "_" + "".join(c if c.isalnum() else "_" for c in part)
+            text = render(self.controller, rows, f"{Path(outcome.path).name} {part}".strip())
+            write_text(self.folder / f"{stem}{suffix}{PROGRAM_SUFFIX[self.controller]}", text)
+            self.written += 1
+
+    def commit(self) -> bool:
+        return self.written > 0
+
+    def __exit__(self, *exc: Any) -> None:
+        return None

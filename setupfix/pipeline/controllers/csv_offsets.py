@@ -1,0 +1,13 @@
+"""The offsets CSV (``../shared/spec/cli-json.md``): the spec's columns first, then offset, current, value, verdict."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+from setupfix.offsets import OffsetRow, offsets_csv_text
+
+__all__ = ["render"]
+
+
+def render(rows: Sequence[OffsetRow], title: str = "") -> str:
+    return offsets_csv_text(rows)

@@ -1,0 +1,154 @@
+"""Presentation shared by the CLI and the TUI: number formatting and text tables.
+
+Pure functions from result objects to text; nothing here prints or reads files.
+"""
+
+from __future__ import annotations
+
+import math
+import textwrap
+
+import numpy as np
+
+from setupfix.offsets import grid_decimals
+from setupfix.pipeline.batch import BatchSummary
+from setupfix.pipeline.correct import PartCorrection
+from setupfix.relation import RelationMatrices
+
+
+def format_number(value: float, digits: int = 4) -> str:
+    if value is None or (isinstance(value, float) and not math.isfinite(value)):
+        return "—"
+    return f"{value:+.{digits}f}"
+
+
+_FLAG_TEXT = {"out": "OUT after", "out_before": "out before", "binding": "◀ binding", "given_up": "given up",
+              "rejected": "REJECT", "guard": "in guard band"}
+
+
+def format_flags(flags: list[str]) -> str:
+    """Dimension flags as short words for the table (``OUT after``, ``◀ binding``, …)."""
+    return ", ".join(_FLAG_TEXT.get(f, f) for f in flags)
+
+
+def verdict_line(pc: PartCorrection) -> str:
+    """One line saying what to do: APPLY / HOLD / REJECT and why."""
+    rec = pc.recommendation
+    if rec.verdict == "reject":
+        return rec.alarm
+    if rec.verdict == "hold":
+        why = next((r.message for r in rec.rules if r.rule in ("dead_band", "no_harm")), "no change needed")
+        return f"HOLD: leave the offsets as they are ({why})"
+    return "APPLY the corrections below"
+
+
+def format_correction(pc: PartCorrection) -> str:
+    """Verdict, per-dimension table with flags, every register, budgets, binding dimensions and rules."""
+    r = pc.result
+    unit = pc.model.unit
+    lines = [f"{pc.part.report}  part {pc.part.part or '—'}  ({r.optimizer}, {r.status}, {r.seconds * 1000:.0f} ms)",
+             f"verdict: {pc.verdict.upper()} — {verdict_line(pc)}", ""]
+    rows = pc.dimension_rows()
+    w = max([14] + [len(row["name"]) + 2 for row in rows])
+    st = 9 if any(row.get("station") for row in rows) else 0  # station column only for fixtures
+    head = f"{'station':<{st}}"[:st] + f"{'dimension':<{w}}{'deviation':>11}{'lower':>9}{'upper':>9}{'predicted':>11}{'margin':>9}  flags"
+    lines += [head, "-" * len(head)]
+    for row in rows:
+        lines.append(f"{row.get('station') or '':<{st}}"[:st] + f"{row['name']:<{w}}{format_number(row['deviation']):>11}{format_number(row['lower'], 3):>9}"
+                     f"{format_number(row['upper'], 3):>9}{format_number(row['predicted']):>11}"
+                     f"{format_number(row['margin']):>9}  {format_flags(row['flags'])}".rstrip())
+    for did in pc.part.absent:
+        dim = next(d for d in pc.model.dimensions if d.id == did)
+        lines.append(f"{dim.group or '':<{st}}"[:st] + f"{dim.name:<{w}}{'absent from report: not in the objective':>50}")
+    lines += ["", f"corrections [{unit}], axis {pc.model.axis}:"]
+    digits = grid_decimals(pc.model.resolution)
+    for reg in pc.register_rows():
+        note = "fixed" if reg["fixed"] else ("at limit" if reg["at_limit"] else "")
+        lines.append(f"  {reg['id']:<6} {reg['register']:<10} {reg['delta']:+.{digits}f}  {reg['offset']:<8} {note}"
+                     .rstrip())
+    lines += [
+        "",
+        f"error budget before {pc.margin_before:+.4f} {unit}, after {pc.margin_after:+.4f} {unit}, "
+        f"bonus {pc.margin_after - pc.margin_before:+.4f} {unit}; correction norm {pc.norm:.4f} {unit}",
+    ]
+    if r.bound is not None:
+        lines.append(f"upper bound (continuous LP): {r.bound:+.4f} {unit}")
+    names = {d.id: d.name for d in pc.model.dimensions}
+    if pc.binding:
+        lines.append("binding (what stops a better correction): " + ", ".join(names[b] for b in pc.binding))
+    if pc.recommendation.given_up:
+        lines.append("given up (need the NC program or the process, not the setup): "
+                     + ", ".join(names[b] for b in pc.recommendation.given_up))
+    if pc.verdict != "reject":
+        lines.append(r.message)
+    for rule in pc.recommendation.rules:
+        what = ", ".join([*rule.registers, *(names.get(d, d) for d in rule.dimensions)])
+        lines.append(f"rule {rule.rule}: {rule.message}" + (f" [{what}]" if what else ""))
+    lines += pc.warnings
+    return "\n".join(lines)
+
+
+def format_matrix(matrix: np.ndarray, rows: list[str], cols: list[str], title: str, width: int = 100) -> str:
+    """A labelled matrix like the paper prints them (integers shown without decimals).
+
+    Columns that do not fit in ``width`` characters continue in further blocks, each
+    repeating the row labels and headed ``title (columns a–b of n)``.
+    """
+    def cell(v: float) -> str:
+        return f"{int(v)}" if float(v).is_integer() else f"{v:.3g}"
+
+    col_w = max([len(c) for c in cols] + [len(cell(v)) for v in matrix.ravel()] + [2]) + 1
+    lead = max([len(r) for r in rows] + [len(title)]) + 1
+    per_block = max(1, (width - lead) // col_w)
+    blocks = []
+    for start in range(0, len(cols), per_block):
+        stop = min(start + per_block, len(cols))
+        label = title if stop - start == len(cols) else f"{title} (columns {start + 1}–{stop} of {len(cols)})"
+        lines = [label] if label != title else []
+        lines.append(f"{title:<{lead}}" + "".join(f"{c:>{col_w}}" for c in cols[start:stop]))
+        for name, values in zip(rows, matrix):
+            lines.append(f"{name:<{lead}}" + "".join(f"{cell(v):>{col_w}}" for v in values[start:stop]))
+        blocks.append("\n".join(lines))
+    return "\n\n".join(blocks)
+
+
+def format_relations(rm: RelationMatrices, which: list[str], null: np.ndarray, rank: int) -> str:
+    blocks = []
+    table = {
+        "R_MW": (rm.R_MW, rm.machines, rm.wks),
+        "R_WF": (rm.R_WF, rm.wks, rm.features),
+        "R_TF": (rm.R_TF, rm.tools, rm.features),
+        "R_FD": (rm.R_FD, rm.features, rm.dimensions),
+        "C": (rm.composite, rm.registers, rm.dimensions),
+    }
+    for name in which:
+        m, r, c = table[name]
+        if m.size == 0:
+            blocks.append(f"{name}: empty")
+            continue
+        blocks.append(format_matrix(m, r, c, name))
+    regs = rm.registers
+    lines = [f"composite C = [R_WF·R_FD ; R_TF·R_FD]: {len(regs)} registers × {len(rm.dimensions)} dimensions,",
+             f"rank {rank}"]
+    if null.shape[0] == 0:
+        lines.append("null space: none — every correction moves some dimension")
+    else:
+        lines.append(f"null space ({null.shape[0]} direction(s)): corrections that move no dimension")
+        for vec in null:
+            terms = [f"{'+' if v > 0 else '−'}{'' if np.isclose(abs(v), 1) else f'{abs(v):.4g}·'}{r}"
+                     for v, r in zip(vec, regs) if v != 0]
+            lines.append(textwrap.fill(" ".join(terms), 100, initial_indent="  ", subsequent_indent="    "))
+    blocks.append("\n".join(lines))
+    return "\n\n".join(blocks)
+def format_batch_summary(summary: BatchSummary, out: str) -> str:
+    """Reports, parts, verdicts, failures, skipped files and time of a batch run."""
+    verdicts = ", ".join(f"{summary.verdicts.get(v, 0)} {v}" for v in ("apply", "hold", "reject"))
+    rate = summary.reports / summary.seconds if summary.seconds > 0 else 0.0
+    lines = [f"{summary.reports} report(s), {summary.parts} part(s): {verdicts}",
+             f"{len(summary.failed)} failed, {len(summary.skipped)} skipped; "
+             f"{summary.seconds:.1f} s ({rate:.0f} reports/s)",
+             f"offsets written to {out}" if summary.written else f"nothing new: {out} left as it was"]
+    for path, reason in summary.skipped:
+        if not reason.startswith("still being written"):
+            lines.append(f"skipped {path}: {reason}")
+    return "\n".join(lines)

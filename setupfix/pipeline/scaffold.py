@@ -1,0 +1,244 @@
+"""Use case "model init": a process-model scaffold from CMM reports.
+
+Every toleranced length characteristic of the reports becomes a dimension (its name,
+nominal and limits as the report states them, ``group`` = the report's station), each
+entered by a feature of its own, and every feature moved by one WKS (``W1``, G54) and
+one tool (``T1``, H1): a starting topology that loads at once and with which
+``setupfix correct`` runs on the same reports.  The comments in the file say what to
+edit (which registers move which feature, with which sign).
+
+The axis of a characteristic is taken from its name (a token ``X``, ``Y`` or ``Z``:
+``SP_00_Z``, ``Cono_9_X``, ``Step 5.Z Location``, ``Distanz X 4mm``): the canonical
+measurement table carries no axis column, so a QIF ``AnalysisVector`` or a DMIS
+``CORTOL`` axis is not used (yet).  ``axis=`` keeps one axis (and the characteristics
+whose axis the name does not tell); the process axis is that axis, else the one most
+names state (``Z`` on a tie or when none does).
+
+Left out, each listed in the file's head with its reason: reference-only rows, rows
+with no limit or only one (the contract needs both; none is invented), form and
+orientation tolerances (flatness, perpendicularity, … by name: no offset moves them),
+values outside the model's sanity ranges, and other axes with ``axis=``.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import re
+from collections import Counter
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import pandas as pd
+
+import parsers
+from setupfix.errors import ModelError, SourceLocation
+from setupfix.model import normalise_name
+from setupfix.model.loader import RANGES_MM
+
+__all__ = ["Scaffold", "scaffold_model", "scaffold_from_tables", "name_axis", "FORM_WORDS"]
+
+#: Words naming a form or orientation tolerance (English, German, Korean): no setup offset moves them.
+FORM_WORDS = (
+    "flatness", "straightness", "roundness", "circularity", "cylindricity", "sphericity", "parallelism",
+    "perpendicularity", "angularity", "runout", "concentricity", "symmetry", "ebenheit", "geradheit",
+    "rundheit", "zylindrizität", "parallelität", "rechtwinkligkeit", "neigung", "lauf", "평면도", "진원도",
+    "진직도", "원통도", "평행도", "직각도", "경사도", "흔들림", "동심도",
+)
+_TOKENS = re.compile(r"[\s_.\-/:;,()\[\]#]+")
+
+
+def name_axis(name: str) -> str | None:
+    """The axis a characteristic's name states: the one token ``X``, ``Y`` or ``Z`` (any case), else None."""
+    axes = {t.upper() for t in _TOKENS.split(name) if t.upper() in ("X", "Y", "Z")}
+    return axes.pop() if len(axes) == 1 else None
+
+
+def _is_form(name: str) -> bool:
+    folded = name.casefold()
+    return any(word in folded for word in FORM_WORDS)
+
+
+def _toml_string(text: str) -> str:
+    """A TOML basic string (JSON escapes are TOML escapes; DEL is escaped too)."""
+    return json.dumps(text, ensure_ascii=False).replace("\x7f", "\\u007f")
+
+
+def _comment(text: str) -> str:
+    """Text safe inside a TOML comment (one line, no control characters)."""
+    return "".join(c if c.isprintable() else "?" for c in text)
+
+
+def _number(value: float) -> str:
+    text = f"{value:.12g}"
+    return text if any(c in text for c in ".en") else text + ".0"
+
+
+@dataclass
+class _Dim:
+    name: str
+    group: str | None
+    nominal: float
+    lower: float
+    upper: float
+    axis: str | None
+    source: str
+
+
+@dataclass
+class Scaffold:
+    """The scaffold text and what went into it."""
+
+    text: str
+    dimensions: int
+    axis: str
+    skipped: list[tuple[str, str]] = field(default_factory=list)  # (characteristic, reason)
+
+
+def _resolution(narrowest: float | None) -> float:
+    """0.001 mm, finer by powers of ten until it is at most half the narrowest tolerance band."""
+    res = 0.001
+    while narrowest is not None and res > narrowest / 2 and res > RANGES_MM["resolution"][0]:
+        res /= 10
+    return res
+
+
+def _collect(tables: Sequence[tuple[str, pd.DataFrame]], axis: str | None) -> tuple[list[_Dim], list[tuple[str, str]]]:
+    dims: dict[tuple[str, str | None], _Dim] = {}
+    skipped: dict[str, str] = {}
+    nom_lo, nom_hi = RANGES_MM["nominal"]
+    tol_lo, tol_hi = RANGES_MM["tolerance"]
+    for report, table in tables:
+        count = len(table)
+
+        def col(name: str, rows: int = count, frame: pd.DataFrame = table) -> list[Any]:
+            return frame[name].tolist() if name in frame else [None] * rows
+
+        for name, nominal, lower, upper, station, reference, where in zip(
+                col("characteristic"), col("nominal"), col("lower"), col("upper"), col("station"),
+                col("reference"), col("source")):
+            name = str(name).strip()
+            if not name or name in skipped:
+                continue
+            nominal, lower, upper = (float(v) if v is not None and v == v else math.nan
+                                     for v in (nominal, lower, upper))
+            reason = None
+            if str(reference).strip().lower() in ("true", "1", "yes"):
+                reason = "reference only"
+            elif math.isnan(lower) or math.isnan(upper):
+                reason = "no tolerance" if math.isnan(lower) and math.isnan(upper) else "one-sided tolerance"
+            elif _is_form(name):
+                reason = "form or orientation tolerance (no offset moves it)"
+            elif not lower < upper:
+                reason = f"lower limit {lower:g} not below upper {upper:g}"
+            elif upper - lower < 2 * RANGES_MM["resolution"][0]:
+                reason = f"tolerance band {upper - lower:g} mm narrower than two steps of the finest resolution"
+            elif not (math.isfinite(nominal) and nom_lo <= nominal <= nom_hi):
+                reason = f"nominal {nominal:g} outside [{nom_lo:g}, {nom_hi:g}] mm"
+            elif not (tol_lo <= lower and upper <= tol_hi):
+                reason = f"limits beyond ±{tol_hi:g} mm"
+            elif axis is not None and name_axis(name) not in (None, axis):
+                reason = f"axis {name_axis(name)} (--axis {axis})"
+            if reason:
+                skipped[name] = reason
+                continue
+            group = None if station is None or station != station or str(station).strip() == "" else str(station)
+            key = (normalise_name(name), normalise_name(group) if group else None)
+            if key not in dims:
+                dims[key] = _Dim(name, group, nominal, lower, upper, name_axis(name),
+                                 str(where) if where is not None and where == where else report)
+    return list(dims.values()), list(skipped.items())
+
+
+def scaffold_model(reports: Sequence[str | Path], *, axis: str | None = None, name: str | None = None,
+                   format: str | None = None, unit: str | None = None, encoding: str | None = None,
+                   columns: str | None = None) -> Scaffold:
+    """Write a process-model scaffold (TOML text) from the reports' toleranced length characteristics.
+
+    Raises
+    ------
+    ParseError
+        If a report cannot be read.
+    ModelError
+        If no characteristic qualifies (the message lists why, per kind).
+    """
+    if axis is not None and axis not in ("X", "Y", "Z"):
+        raise ModelError(f'axis must be "X", "Y" or "Z", got {axis!r}')
+    options: dict[str, Any] = {"unit": unit, "encoding": encoding, "columns": columns}
+    tables = [(str(r), parsers.read(r, format=format, **options)) for r in reports]
+    return scaffold_from_tables(tables, axis=axis, name=name)
+
+
+def scaffold_from_tables(tables: Sequence[tuple[str, pd.DataFrame]], *, axis: str | None = None,
+                         name: str | None = None) -> Scaffold:
+    """:func:`scaffold_model` on canonical tables already read, as (report name, table) pairs."""
+    if axis is not None and axis not in ("X", "Y", "Z"):
+        raise ModelError(f'axis must be "X", "Y" or "Z", got {axis!r}')
+    reports = [r for r, _ in tables]
+    dims, skipped = _collect(tables, axis)
+    if not dims:
+        reasons = Counter(reason for _, reason in skipped)
+        why = "; ".join(f"{n} × {r}" for r, n in reasons.most_common(4)) or "the reports hold no characteristic"
+        raise ModelError(f"no toleranced length characteristic to make a dimension of ({why})",
+                         location=SourceLocation(", ".join(reports)))
+    stated = Counter(d.axis for d in dims if d.axis)
+    model_axis = axis or max(("Z", "X", "Y"), key=lambda a: stated[a])  # most stated; Z on a tie or none
+    bands = [d.upper - d.lower for d in dims]
+    resolution = _resolution(min(bands))
+    text = _render(dims, skipped, reports, model_axis, resolution, name, axis)
+    return Scaffold(text, len(dims), model_axis, skipped)
+
+
+def _render(dims: list[_Dim], skipped: list[tuple[str, str]], reports: Sequence[str | Path], axis: str,
+            resolution: float, name: str | None, only_axis: str | None) -> str:
+    sources = ", ".join(Path(r).name for r in reports)
+    title = name or f"Scaffold from {sources}"
+    out = [
+        f"# Process model scaffold written by `setupfix model init` from: {_comment(sources)}",
+        "# It loads as written and `setupfix correct` runs with it, but its relations are a guess:",
+        "#   every feature below is moved by W1 (G54) and T1 (H1) with weight +1. Edit",
+        "#   1. [wks.*] and [tools.*]: the registers your NC program really uses (one table each);",
+        "#   2. [features.*]: which WKS and tools move each feature, +1 or -1 (a feature cut by",
+        "#      the tool's tip facing -axis gets -1), and remove features no offset moves;",
+        "#   3. [dimensions.*] features: a distance between two features is { Fa = 1, Fb = -1 };",
+        "#   4. group = \"P1\" … where a fixture holds the part at several stations.",
+        "# Then `setupfix model show` prints the matrices and `setupfix model check` the match table.",
+        f"# {len(dims)} dimension(s); axis {axis}"
+        + (f" (kept: names stating {only_axis} or no axis)" if only_axis else
+           " (from the names; other axes are kept: delete them or use --axis)"),
+    ]
+    if skipped:
+        out.append(f"# Left out ({len(skipped)}):")
+        for char, reason in skipped[:200]:
+            out.append(f"#   {_comment(char)}: {reason}")
+        if len(skipped) > 200:
+            out.append(f"#   … and {len(skipped) - 200} more")
+    out += [
+        "",
+        "[process]",
+        f"name = {_toml_string(title)}",
+        f'axis = "{axis}"',
+        'unit = "mm"             # every length below is in mm (the reports were converted)',
+        f"{'resolution = ' + _number(resolution):<24}# the controller's offset step",
+        "limit = 0.1             # bound on |correction| of every register; per register: limit = …",
+        "",
+        "[wks.W1]",
+        'register = "G54"        # rename; add [wks.W2] register = "G55" … per work offset',
+        "",
+        "[tools.T1]",
+        'register = "H1"         # rename; add [tools.T2] … per tool length offset',
+        "",
+    ]
+    for i, d in enumerate(dims, start=1):
+        note = "" if d.axis in (None, axis) else f"  # axis {d.axis}: not moved by {axis} offsets"
+        out += [f"[features.F{i}]{note}", "wks = { W1 = 1 }", "tools = { T1 = 1 }", ""]
+    for i, d in enumerate(dims, start=1):
+        out += [f"[dimensions.D{i}]  # {_comment(d.source)}", f"name = {_toml_string(d.name)}",
+                f"features = {{ F{i} = 1 }}", f"nominal = {_number(d.nominal)}", f"lower = {_number(d.lower)}",
+                f"upper = {_number(d.upper)}"]
+        if d.group:
+            out.append(f"group = {_toml_string(d.group)}")
+        out.append("")
+    return "\n".join(out)

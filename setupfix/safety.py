@@ -1,0 +1,358 @@
+"""Safety rules between the optimum and the machine: pure functions, arrays in and out.
+
+The rules follow what every probing and gauging system applies before an offset
+reaches a controller (Renishaw Inspection Plus null band / feedback % / upper
+tolerance; Siemens measuring cycles' zero-offset range, mean value and dimension
+difference check; ISO 14253-1 for decisions under measurement uncertainty):
+
+* **reject band** — a deviation beyond a tolerance limit by more than the band is a
+  broken tool, a bad measurement or a wrong part: no correction at all;
+* **guard band** — the optimiser works on the tolerance shrunk by g·U at each limit
+  (ISO 14253-1 conformance zone), so its margin is a proven margin;
+* **cumulative limit** — |applied since the last reset + change| stays within it;
+* **per-step clamp** — the register limit of the model;
+* **gain** — only this fraction of the optimum is applied (feedback %);
+* **no harm** — a correction never moves a dimension measured in tolerance out of it;
+* **dead band** — when every change is within it the verdict is *hold*;
+* **EWMA** — deviations smoothed over consecutive reports (λ), reset on a tool change.
+
+:func:`recommend` chains them around any optimiser and returns a
+:class:`Recommendation` with its verdict and the list of rules that changed it.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
+
+import numpy as np
+import numpy.typing as npt
+
+from setupfix.objective import error_budget, margins
+from setupfix.optimize import CorrectionProblem, OptimizeResult
+
+__all__ = ["RuleEffect", "Policy", "Recommendation", "reject_mask", "guard_limits", "cumulative_bounds",
+           "apply_gain", "harmed_mask", "in_dead_band", "ewma", "ewma_series", "recommend", "VERDICTS"]
+
+Array = npt.NDArray[np.float64]
+Mask = npt.NDArray[np.bool_]
+
+#: The three verdicts, in order of severity.
+VERDICTS = ("apply", "hold", "reject")
+
+
+@dataclass(frozen=True)
+class RuleEffect:
+    """One rule that changed the recommendation, with what it changed."""
+
+    rule: str
+    message: str
+    registers: tuple[str, ...] = ()
+    dimensions: tuple[str, ...] = ()
+
+    def to_json(self) -> dict[str, object]:
+        return {"rule": self.rule, "message": self.message, "registers": list(self.registers),
+                "dimensions": list(self.dimensions)}
+
+
+@dataclass(frozen=True)
+class Policy:
+    """The safety settings aligned with one :class:`CorrectionProblem`.
+
+    Attributes
+    ----------
+    dead_band, gain, cumulative_limit, cumulative, cost : ndarray of shape (n_registers,)
+        Dead band [unit], gain in (0, 1], bound on |cumulative + change| [unit] (inf: off),
+        change applied since the last reset [unit], least-norm weight (> 0).
+    reject_band, uncertainty : ndarray of shape (n_dimensions,)
+        Reject band beyond each limit [unit]; expanded uncertainty U [unit].
+    guard_band : float
+        Fraction of U by which each limit is shrunk.
+    """
+
+    dead_band: Array
+    gain: Array
+    cumulative_limit: Array
+    cumulative: Array
+    cost: Array
+    reject_band: Array
+    uncertainty: Array
+    guard_band: float = 1.0
+
+    @classmethod
+    def neutral(cls, problem: CorrectionProblem) -> Policy:
+        """No rule active: dead band 0, gain 1, no limits but the problem's, reject band ∞."""
+        n, m = problem.n_registers, problem.deviation.shape[0]
+        return cls(dead_band=np.zeros(n), gain=np.ones(n), cumulative_limit=np.full(n, np.inf),
+                   cumulative=np.zeros(n), cost=np.ones(n), reject_band=np.full(m, np.inf),
+                   uncertainty=np.zeros(m))
+
+
+@dataclass
+class Recommendation:
+    """What to do with one measured cycle.
+
+    Attributes
+    ----------
+    verdict : {"apply", "hold", "reject"}
+    x : ndarray of shape (n_registers,) [unit]
+        The changes to apply (all zero unless the verdict is ``apply``).
+    result : OptimizeResult
+        The optimiser's result on the guarded problem (x = 0 when rejected).
+    problem : CorrectionProblem
+        The guarded problem actually solved (limits shrunk, bounds tightened).
+    rules : tuple of RuleEffect
+        Every rule that changed the recommendation.
+    given_up : tuple of str
+        Dimensions no setup correction brings into tolerance (need the NC program).
+    at_limit : tuple of str
+        Registers whose change sits at a bound (per-step clamp or cumulative limit).
+    alarm : str
+        One sentence for the operator when the verdict is ``reject`` (else empty).
+    """
+
+    verdict: str
+    x: Array
+    result: OptimizeResult
+    problem: CorrectionProblem
+    rules: tuple[RuleEffect, ...] = ()
+    given_up: tuple[str, ...] = ()
+    at_limit: tuple[str, ...] = ()
+    alarm: str = ""
+
+
+def reject_mask(deviation: Array, lower: Array, upper: Array, band: Array) -> Mask:
+    """Dimensions beyond a limit by more than the reject band.
+
+    deviation, lower, upper, band : ndarray of shape (n_dimensions,) [unit]
+    → bool ndarray of shape (n_dimensions,)
+    """
+    return (deviation < lower - band) | (deviation > upper + band)
+
+
+def guard_limits(lower: Array, upper: Array, uncertainty: Array, fraction: float = 1.0) -> tuple[Array, Array]:
+    """Tolerance limits shrunk by ``fraction · U`` at each end (ISO 14253-1 conformance zone).
+
+    Where the zone would vanish (2gU ≥ upper − lower), both limits become the
+    mid-tolerance, so the margin measures the distance to the centre (negative).
+
+    Returns
+    -------
+    lower, upper : ndarrays of shape (n_dimensions,) [unit]
+    """
+    g = fraction * np.asarray(uncertainty, dtype=float)
+    lo, up = lower + g, upper - g
+    mid = (lower + upper) / 2
+    crossed = lo > up
+    return np.where(crossed, mid, lo), np.where(crossed, mid, up)
+
+
+def cumulative_bounds(lb: Array, ub: Array, cumulative: Array, limit: Array, resolution: float) -> tuple[Array, Array]:
+    """Step bounds that keep |cumulative + change| ≤ limit, snapped inwards on the grid.
+
+    A register already beyond its cumulative limit may only move back: its bound on
+    the far side becomes 0.  lb, ub, cumulative, limit : shape (n_registers,) [unit].
+    """
+    h = resolution
+    lo = np.maximum(lb, np.ceil((-limit - cumulative) / h - 1e-9) * h)
+    hi = np.minimum(ub, np.floor((limit - cumulative) / h + 1e-9) * h)
+    lo = np.where(np.isfinite(limit), np.minimum(lo, 0.0), lb)
+    hi = np.where(np.isfinite(limit), np.maximum(hi, 0.0), ub)
+    # A register pushed beyond its bounds by both sides collapses to "no change".
+    return np.where(lo > hi, 0.0, lo), np.where(lo > hi, 0.0, hi)
+
+
+def apply_gain(x: Array, gain: Array, resolution: float) -> Array:
+    """Feedback fraction of the changes, rounded towards zero onto the grid.
+
+    Rounding towards zero keeps gain·x between 0 and x register by register, so a
+    dimension inside its limits at x = 0 and at x stays inside (margins are concave).
+    """
+    steps = np.trunc(np.asarray(gain) * x / resolution + np.sign(x) * 1e-9)
+    return steps * resolution + 0.0
+
+
+def harmed_mask(deviation: Array, predicted: Array, lower: Array, upper: Array) -> Mask:
+    """Dimensions measured in tolerance and predicted out of tolerance after a change."""
+    inside_before = (deviation >= lower) & (deviation <= upper)
+    inside_after = (predicted >= lower - 1e-12) & (predicted <= upper + 1e-12)
+    return inside_before & ~inside_after
+
+
+def in_dead_band(x: Array, dead_band: Array) -> bool:
+    """True when every change is within its register's dead band (|x_j| ≤ band_j)."""
+    return bool(np.all(np.abs(x) <= dead_band + 1e-12))
+
+
+def ewma(measured: Array, previous: Array | None, lam: float) -> Array:
+    """Exponentially weighted mean of deviations over reports: λ·y + (1 − λ)·previous.
+
+    ``previous`` is the smoothed deviation of the last report shifted by the changes
+    applied since (None after a reset or for the first report: y itself).
+    Shapes (n_dimensions,) [unit]; NaN in ``previous`` falls back to y.
+    """
+    if previous is None or lam >= 1.0:
+        return np.asarray(measured, dtype=float).copy()
+    prev = np.where(np.isfinite(previous), previous, measured)
+    return lam * measured + (1.0 - lam) * prev
+
+
+def ewma_series(history: Array, lam: float) -> Array:
+    """EWMA over reports in time order, the last row the current report.
+
+    history : ndarray of shape (n_reports, n_dimensions) [unit]
+        Deviations of earlier reports, each already shifted by the corrections
+        applied since it was machined; NaN where a dimension was not measured or was
+        reset (a tool change since: its earlier values no longer apply).
+    lam : float
+        λ in (0, 1]; a_k = λ·y_k + (1 − λ)·a_{k−1}, starting from the first value.
+
+    Returns
+    -------
+    ndarray of shape (n_dimensions,)
+    """
+    a = np.full(history.shape[1], np.nan)
+    for row in np.asarray(history, dtype=float):
+        seen = ~np.isnan(row)
+        a = np.where(seen, np.where(np.isnan(a), row, lam * row + (1.0 - lam) * a), a)
+    return a
+
+
+def _zero_result(problem: CorrectionProblem, optimizer: str, status: str, message: str) -> OptimizeResult:
+    x = np.zeros(problem.n_registers)
+    budget = problem.margin_before
+    return OptimizeResult(x=x, margin_before=budget, margin_after=budget, norm=0.0, optimizer=optimizer,
+                          evaluations=0, seconds=0.0, status=status, message=message,
+                          binding=problem.binding(x))
+
+
+def _with_cost(problem: CorrectionProblem, cost: Array) -> CorrectionProblem:
+    """The problem with the registers' least-norm weights (``CorrectionProblem.cost``)."""
+    if np.all(cost == 1.0):
+        return problem
+    return dataclasses.replace(problem, cost=np.asarray(cost, dtype=float))
+
+
+def _restrict(problem: CorrectionProblem, keep: Mask) -> CorrectionProblem:
+    return dataclasses.replace(problem, composite=problem.composite[:, keep], deviation=problem.deviation[keep],
+                               lower=problem.lower[keep], upper=problem.upper[keep],
+                               dimension_ids=tuple(d for d, k in zip(problem.dimension_ids, keep) if k))
+
+
+def recommend(problem: CorrectionProblem, policy: Policy, solve: Callable[[CorrectionProblem], OptimizeResult],
+              *, optimizer: str = "exact", names: Mapping[str, str] | None = None,
+              measured: Array | None = None) -> Recommendation:
+    """Chain the safety rules around ``solve`` for one measured cycle.
+
+    Order: reject band → guard band → cumulative limit → solve (per-step clamp =
+    register bounds; costs) → gain → no harm (given-up dimensions) → dead band.
+
+    Parameters
+    ----------
+    problem : CorrectionProblem
+        The problem as measured (real tolerance limits, register limits as bounds).
+    policy : Policy
+        Settings aligned with ``problem``.
+    solve : callable
+        ``solve(problem) -> OptimizeResult`` (any optimiser).
+    names : mapping, optional
+        Dimension ID → name, for the messages.
+    measured : ndarray of shape (n_dimensions,), optional
+        The current report's own deviations when ``problem.deviation`` is a smoothed
+        estimate: the reject band judges the part as measured.
+    """
+    label = (lambda ids: ", ".join((names or {}).get(i, i) for i in ids))
+    ids = np.array(problem.register_ids, dtype=object)
+    dims = np.array(problem.dimension_ids, dtype=object)
+    rules: list[RuleEffect] = []
+    dev, lower, upper = problem.deviation, problem.lower, problem.upper
+
+    bad = reject_mask(dev if measured is None else measured, lower, upper, policy.reject_band)
+    if bad.any():
+        bad_ids = tuple(dims[bad])
+        alarm = (f"REJECT: {label(bad_ids)} beyond the reject band (a broken tool, a bad measurement or a wrong "
+                 "part?) — no correction; check the part and the measurement")
+        rules.append(RuleEffect("reject", "deviation beyond the reject band: no correction", dimensions=bad_ids))
+        result = _zero_result(problem, optimizer, "rejected", alarm)
+        return Recommendation("reject", result.x, result, problem, tuple(rules), alarm=alarm)
+
+    guarded = problem
+    if np.any(policy.uncertainty > 0):
+        lo, up = guard_limits(lower, upper, policy.uncertainty, policy.guard_band)
+        guarded = dataclasses.replace(guarded, lower=lo, upper=up)
+        shrunk = tuple(dims[policy.uncertainty > 0])
+        rules.append(RuleEffect("guard_band", f"limits of {len(shrunk)} dimension(s) shrunk by "
+                                f"{policy.guard_band:g}·U (ISO 14253-1)", dimensions=shrunk))
+    if np.any(np.isfinite(policy.cumulative_limit)):
+        lb, ub = cumulative_bounds(problem.lb, problem.ub, policy.cumulative, policy.cumulative_limit,
+                                   problem.resolution)
+        tightened = (lb > problem.lb) | (ub < problem.ub)
+        guarded = dataclasses.replace(guarded, lb=lb, ub=ub)
+        if tightened.any():
+            rules.append(RuleEffect("cumulative_limit", "step bounds tightened so that the total since the last "
+                                    "reset stays within the cumulative limit", registers=tuple(ids[tightened])))
+    guarded = _with_cost(guarded, policy.cost)
+
+    result = solve(guarded)
+    x = np.asarray(result.x, dtype=float)
+    given_up = tuple(result.given_up)
+
+    xg = apply_gain(x, policy.gain, problem.resolution)
+    if np.any(xg != x):
+        rules.append(RuleEffect("gain", "only the feedback fraction of the optimum is applied",
+                                registers=tuple(ids[xg != x])))
+    x = xg
+
+    harmed = harmed_mask(dev, problem.predicted(x), lower, upper)
+    if harmed.any():
+        # The optimum trades an in-tolerance dimension for out-of-tolerance ones: give
+        # up those no correction brought in, re-solve on the others, check again.
+        hopeless = ~((dev >= lower) & (dev <= upper))
+        if hopeless.any() and not hopeless.all():
+            retry = solve(_restrict(guarded, ~hopeless))
+            x2 = apply_gain(np.asarray(retry.x, dtype=float), policy.gain, problem.resolution)
+            if not harmed_mask(dev, problem.predicted(x2), lower, upper).any():
+                gone = tuple(dims[hopeless & ~_inside(problem.predicted(x2), lower, upper)])
+                given_up = tuple(dict.fromkeys(given_up + gone))
+                rules.append(RuleEffect("no_harm", "the optimum would move dimensions measured in tolerance out "
+                                        f"of it ({label(dims[harmed])}); corrected without "
+                                        f"{label(gone) or 'the out-of-tolerance ones'}", dimensions=gone))
+                message = (f"{label(gone)} given up: no correction brings them into tolerance without moving "
+                           "others out; the others are corrected")
+                x, result = x2, dataclasses.replace(retry, message=message)
+                harmed = np.zeros_like(harmed)
+        if harmed.any():
+            kept = tuple(dims[harmed])
+            rules.append(RuleEffect("no_harm", f"no correction keeps {label(kept)} in tolerance while "
+                                    "improving the others: nothing changed", dimensions=kept))
+            x = np.zeros_like(x)
+    if given_up and not any(r.rule == "no_harm" for r in rules):
+        rules.append(RuleEffect("given_up", "no setup correction brings these into tolerance: they need the NC "
+                                "program or the process", dimensions=given_up))
+
+    verdict = "apply"
+    if not np.any(x):
+        verdict = "hold"
+    elif in_dead_band(x, policy.dead_band):
+        rules.append(RuleEffect("dead_band", "every change is within its dead band: hold",
+                                registers=tuple(ids[x != 0])))
+        x = np.zeros_like(x)
+        verdict = "hold"
+
+    at = (x != 0) & ((x >= guarded.ub - 1e-12) | (x <= guarded.lb + 1e-12))
+    at_limit = tuple(ids[at])
+    if at_limit:
+        rules.append(RuleEffect("clamp", "change at the register's per-step or cumulative limit",
+                                registers=at_limit))
+    return Recommendation(verdict, x + 0.0, result, guarded, tuple(rules), given_up, at_limit)
+
+
+def _inside(values: Array, lower: Array, upper: Array) -> Mask:
+    return (values >= lower - 1e-12) & (values <= upper + 1e-12)
+
+
+def budget(problem: CorrectionProblem, x: Array) -> tuple[float, Array]:
+    """Error budget and per-dimension margins of ``x`` on the real limits of ``problem``."""
+    m = margins(problem.predicted(x), problem.lower, problem.upper)
+    return float(error_budget(problem.predicted(x), problem.lower, problem.upper)), m

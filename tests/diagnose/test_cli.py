@@ -1,0 +1,131 @@
+"""`setupfix simulate` and `setupfix diagnose` end to end, bad input on purpose."""
+
+from __future__ import annotations
+
+import json
+import tomllib
+
+import pytest
+
+from setupfix.cli import main
+
+from conftest import GUIDE_PINS
+
+MODEL = str(GUIDE_PINS / "model.toml")
+CONTRACT = {"cycles", "rms_before", "rms_after", "max_before", "max_after", "effects", "next_correction"}
+
+
+def run(capsys, *argv):
+    code = main([str(a) for a in argv])
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+@pytest.fixture(scope="module")
+def series(tmp_path_factory):
+    out = tmp_path_factory.mktemp("series")
+    code = main(["simulate", "--model", MODEL, "--out", str(out), "--seed", "4", "--cycles", "30",
+                 "--effect", "kind=wear,register=T5,magnitude=-0.001"])
+    assert code == 0
+    return out
+
+
+def test_simulate_writes_the_canonical_files(series):
+    names = sorted(p.name for p in series.iterdir())
+    assert names == ["corrections.csv", "measurements.csv", "temperatures.csv", "truth.json"]
+    head = (series / "corrections.csv").read_text().splitlines()[0]
+    assert head == "timestamp,register,delta,event"
+    assert "tool_change" in (series / "corrections.csv").read_text()
+    truth = json.loads((series / "truth.json").read_text())
+    assert truth["hidden_effects"][0]["kind"] == "wear"
+
+
+def test_diagnose_json_contract_and_augment(series, tmp_path, capsys):
+    aug = tmp_path / "aug.toml"
+    code, out, err = run(capsys, "diagnose", "--model", MODEL, "--corrections", series / "corrections.csv",
+                         "--temperatures", series / "temperatures.csv", "--augment", aug, "--json",
+                         series / "measurements.csv")
+    assert code == 0, err
+    doc = json.loads(out)
+    assert CONTRACT <= doc.keys()
+    assert doc["cycles"] == 30
+    assert [(e["kind"], e["target"]) for e in doc["effects"]] == [("wear", "T5 ~ parts since change")]
+    assert doc["rms_after"] < doc["rms_before"]
+    assert set(doc["next_correction"]) == {f"W{i}" for i in range(1, 9)} | {"T5", "T23"}
+    wf = doc["walk_forward"]
+    assert wf["augmented"]["mean_budget"] > wf["declared"]["mean_budget"]
+    effects = tomllib.loads(aug.read_text())["effects"]
+    assert effects["E1"]["kind"] == "wear" and effects["E1"]["register"] == "T5"
+    # the augmented model loads, and a second diagnosis with it finds nothing more
+    code, out, err = run(capsys, "diagnose", "--model", aug, "--json", "--no-walk", series)
+    assert code == 0, err
+    assert json.loads(out)["effects"] == []
+    # correct forecasts the next cycle with the augmented model: one more cycle of T5 wear (C[T5, P1 D1] = 1)
+    code, out, err = run(capsys, "correct", "--model", aug, "--json", str(GUIDE_PINS / "cycle_01.csv"))
+    assert code == 0, err
+    row = json.loads(out)["dimensions"][0]
+    assert row["name"] == "P1 D1" and row["deviation"] == pytest.approx(-0.0309 + effects["E1"]["estimate"])
+
+
+def test_bad_corrections_log_is_refused_with_its_line(series, tmp_path, capsys):
+    bad = tmp_path / "log.csv"
+    bad.write_text("timestamp,register,delta\n2026-11-02T06:00:00,W1,0.01\n2026-11-02T07:00:00,G99,0.01\n")
+    aug = tmp_path / "aug.toml"
+    code, out, err = run(capsys, "diagnose", "--model", MODEL, "--corrections", bad, "--augment", aug,
+                         series / "measurements.csv")
+    assert code == 1
+    assert err.startswith(f"error: {bad}:3: unknown register 'G99'") and err.count("\n") == 1
+    assert not aug.exists() and out == ""
+
+
+@pytest.mark.parametrize("effect", ["kind=creep,magnitude=1", "kind=drift", "kind=drift,magnitude=x",
+                                    "kind=wear,register=T99,magnitude=0.001", "kind=position,axis=x,magnitude=1e-4"])
+def test_simulate_refuses_bad_effects(effect, tmp_path, capsys):
+    code, out, err = run(capsys, "simulate", "--model", MODEL, "--out", tmp_path / "o", "--effect", effect)
+    assert code == 1 and err.startswith("error: ") and err.count("\n") == 1
+    assert not (tmp_path / "o").exists()
+
+
+def test_bad_timestamp_in_temperatures(series, tmp_path, capsys):
+    bad = tmp_path / "temps.csv"
+    bad.write_text("timestamp,spindle\n2026-11-02T06:00:00,20.1\nyesterday,20.2\n")
+    code, _, err = run(capsys, "diagnose", "--model", MODEL, "--temperatures", bad, series / "measurements.csv")
+    assert code == 1 and f"{bad}:3: not an ISO 8601 timestamp" in err
+
+
+def test_diagnose_from_the_history_store_equals_the_files(series, tmp_path, capsys):
+    db = tmp_path / "h.db"
+    code = main(["history", "import", "--db", str(db), "--corrections", str(series / "corrections.csv"),
+                 "--temperatures", str(series / "temperatures.csv"), str(series / "measurements.csv")])
+    assert code == 0
+    capsys.readouterr()
+    code, out, err = run(capsys, "diagnose", "--model", MODEL, "--db", db, "--json", "--no-walk")
+    assert code == 0, err
+    code, out2, err = run(capsys, "diagnose", "--model", MODEL, "--json", "--no-walk", series)
+    a, b = json.loads(out), json.loads(out2)
+    assert a["effects"] == b["effects"] and a["rms_before"] == b["rms_before"]
+    assert a["next_correction"] == b["next_correction"]
+
+
+def test_thermal_model_prediction_is_a_candidate_channel(tmp_path, capsys):
+    """A thermal model saved by `thermal fit` enters as one more channel; here it is linear in the
+    spindle temperature, so the report says the two cannot be told apart."""
+    import numpy as np
+    import pandas as pd
+
+    loop = GUIDE_PINS.parent / "closed_loop"
+    temps = pd.read_csv(loop / "temperatures.csv")
+    temps["error_z"] = 0.003 * (temps["spindle"] - 20) + np.random.default_rng(0).normal(0, 2e-4, len(temps))
+    log = tmp_path / "temps.csv"
+    temps.to_csv(log, index=False)
+    saved = tmp_path / "mra.json"
+    assert main(["thermal", "fit", "--method", "mra", "--target", "error_z", "--unit", "mm", "--inputs", "spindle",
+                 "-o", str(saved), str(log)]) == 0
+    capsys.readouterr()
+    code, out, err = run(capsys, "diagnose", "--model", MODEL, "--corrections", loop / "corrections.csv",
+                         "--temperatures", log, "--thermal", saved, "--json", "--no-walk", loop / "measurements.csv")
+    assert code == 0, err
+    effects = json.loads(out)["effects"]
+    assert [e["kind"] for e in effects] == ["thermal"]
+    assert {effects[0]["target"], *(a.split(": ", 1)[1] for a in effects[0]["alike"])} == \
+        {"all tools ~ spindle", "all tools ~ mra prediction"}

@@ -1,0 +1,111 @@
+"""Station templates: declared once, expanded to exactly the model written table by table."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from setupfix.errors import ModelError
+from setupfix.model import load_model, model_from_dict
+from setupfix.relation import relation_matrices
+from tests.conftest import GUIDE_PINS
+
+EXPANDED = Path(__file__).parent / "data" / "guide_pins_expanded.toml"
+
+
+def test_guide_pins_template_equals_the_expanded_model():
+    templated = load_model(GUIDE_PINS / "model.toml")
+    expanded = load_model(EXPANDED)
+    assert replace(templated, source="") == replace(expanded, source="")
+    a, b = relation_matrices(templated), relation_matrices(expanded)
+    for name in ("R_MW", "R_WF", "R_TF", "R_FD", "composite"):
+        np.testing.assert_array_equal(getattr(a, name), getattr(b, name))
+    assert (a.registers, a.features, a.dimensions) == (b.registers, b.features, b.dimensions)
+
+
+def test_generator_writes_both_forms():
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("generate", GUIDE_PINS / "generate.py")
+    assert spec and spec.loader
+    generate = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(generate)
+    assert generate.model_toml() == (GUIDE_PINS / "model.toml").read_text(encoding="utf-8")
+    assert generate.expanded_model_toml() == EXPANDED.read_text(encoding="utf-8")
+
+
+def doc(**changes):
+    base = {
+        "process": {"name": "t"},
+        "wks": {"W1": {}, "W2": {}, "W3": {}},
+        "tools": {"T1": {}},
+        "stations": {"A": {"wks": {"own": "W1"}}, "B": {"wks": {"own": "W2"}}},
+        "template": {
+            "features": {"F1": {"wks": {"own": 1}, "tools": {"T1": 1}}, "F2": {"wks": {"W3": 1}}},
+            "dimensions": {"D1": {"name": "{station}-D1", "aliases": ["D1"], "features": {"F1": 1, "F2": -1},
+                                  "nominal": 5, "lower": -0.1, "upper": 0.1}},
+        },
+    }
+    for key, value in changes.items():
+        section, _, rest = key.partition("__")
+        target = base[section]
+        *path, last = rest.split("__")
+        for p in path:
+            target = target[p]
+        if value is None:
+            del target[last]
+        else:
+            target[last] = value
+    return base
+
+
+def test_expansion_names_groups_shared_and_mapped_registers():
+    model = model_from_dict(doc())
+    assert [f.id for f in model.features] == ["AF1", "AF2", "BF1", "BF2"]
+    assert model.features[2].wks == {"W2": 1.0} and model.features[3].wks == {"W3": 1.0}
+    d = model.dimensions[1]
+    assert (d.id, d.name, d.aliases, d.group, d.features) == ("BD1", "B-D1", ("B D1",), "B",
+                                                              {"BF1": 1.0, "BF2": -1.0})
+
+
+def problems(document) -> list[str]:
+    with pytest.raises(ModelError) as info:
+        model_from_dict(document, "m.toml")
+    return str(info.value).splitlines()
+
+
+@pytest.mark.parametrize(
+    ("changes", "key", "words"),
+    [
+        ({"stations__B__wks": {}}, "template.features.F1.wks.own", "mapped by station(s) B"),
+        ({"stations__B__wks__spare": "W3"}, "stations.B.wks.spare", "used by no template feature"),
+        ({"stations__B__wks__own": "W9"}, "template.features.F1.wks.W9", "unknown WKS 'W9'"),
+        ({"template__dimensions__D1__group": "X"}, "template.dimensions.D1.group", "remove the key"),
+        ({"template__dimensions__D1__lower": 0.2}, "template.dimensions.D1.lower", "must be below upper"),
+        ({"template__features__F1__depth": 1}, "template.features.F1.depth", "unknown key"),
+        ({"stations__B__wks": "W2"}, "stations.B.wks", "expected a table"),
+        ({"template__extra": {}}, "template.extra", "unknown key"),
+    ],
+)
+def test_template_problems_name_the_template_table(changes, key, words):
+    lines = problems(doc(**changes))
+    hit = [line for line in lines if f"[{key}]" in line]
+    assert hit, lines
+    assert hit[0].startswith("m.toml: ") and words in hit[0]
+
+
+def test_template_id_colliding_with_a_plain_table():
+    d = doc()
+    d["features"] = {"AF1": {"wks": {"W1": 1}}}
+    (line,) = problems(d)
+    assert "[template.features.F1]" in line and "expands to [features.AF1]" in line
+
+
+def test_template_without_stations():
+    d = doc()
+    del d["stations"]
+    lines = problems(d)
+    assert any("[stations]" in line and "at least one" in line for line in lines)

@@ -1,0 +1,118 @@
+"""Exact optimiser: every proof path against brute force, solver errors, input quantum, time limit."""
+
+from __future__ import annotations
+
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import setupfix.optimize._exact as exact_module
+from setupfix.model import PartMeasurement
+from setupfix.optimize import CorrectionProblem, get_optimizer
+from setupfix.optimize._highs import Solve
+from setupfix.pipeline.correct import load_parts
+
+from .test_exact import brute_force, random_problem
+
+DATA = Path(__file__).resolve().parents[1] / "data" / "exact_solve_error"
+GUIDE_PINS = Path(__file__).resolve().parents[2] / "sample_reports" / "guide_pins"
+
+#: Module settings that switch the shortcuts off, so that each fallback is checked too.
+PATHS = {
+    "shortcuts": {},
+    "grid MILP": {"LEVEL_STEPS": 0, "SEARCH_LIMIT": 0},
+    "chord MILP": {"ENUMERATION_LIMIT": 0, "SEARCH_LIMIT": 0},
+    "HiGHS QP": {"NNLS_MAX_ROWS": 0},
+}
+
+
+@pytest.mark.parametrize("path", list(PATHS))
+@pytest.mark.parametrize("seed", range(6))
+def test_every_proof_path_equals_brute_force(path, seed, monkeypatch):
+    for name, value in PATHS[path].items():
+        monkeypatch.setattr(exact_module, name, value)
+    problem = random_problem(100 + seed, n=4, m=8, limit_steps=6)
+    result = get_optimizer("exact").solve(problem)
+    best, norm = brute_force(problem)
+    assert result.status == "optimal"
+    assert result.margin_after == pytest.approx(best, abs=1e-12)
+    assert result.norm == pytest.approx(norm, abs=1e-12)
+
+
+def test_solve_error_repro_is_optimal():
+    """The report on which HiGHS once answered "Solve error": optimum and least norm, proved."""
+    # The solver itself: the repro's random deviations lie beyond the default reject band of
+    # the safety rules (setupfix.safety), so `correct` would refuse the report before solving.
+    from setupfix.model import load_model
+
+    model = load_model(DATA / "model.toml")
+    (part,) = load_parts(model, DATA / "report.csv")
+    result = get_optimizer("exact").solve(CorrectionProblem.from_part(model, part))
+    assert result.status == "optimal"
+    assert result.margin_after == pytest.approx(0.0004, abs=1e-9)
+    assert result.norm == pytest.approx(0.0677, abs=1e-4)  # 0.195 mm before the fix
+    assert not [n for n in result.notes if "HiGHS answered" in n.message]
+
+
+def test_solver_error_is_retried_without_the_lower_bracket_and_reported(monkeypatch):
+    monkeypatch.setattr(exact_module, "LEVEL_STEPS", 0)
+    monkeypatch.setattr(exact_module, "SEARCH_LIMIT", 0)
+    real = exact_module.ExactOptimizer._max_margin_milp
+    brackets = []
+
+    def failing_once(self, g_rows, g, kmin, kmax, t_lo, t_hi, start, time_limit):
+        brackets.append(t_lo)
+        if len(brackets) == 1:
+            return Solve("error", "Solve error", None, float("nan"), float("nan"), None, None, 0.0)
+        return real(self, g_rows, g, kmin, kmax, t_lo, t_hi, start, time_limit)
+
+    monkeypatch.setattr(exact_module.ExactOptimizer, "_max_margin_milp", failing_once)
+    problem = random_problem(1, n=4, m=8, limit_steps=6)  # in reach, and the rounded LP point is not optimal
+    result = get_optimizer("exact").solve(problem)
+    assert len(brackets) == 2 and brackets[1] < brackets[0]  # the retry drops the lower bracket
+    assert result.status == "optimal"
+    assert result.margin_after == pytest.approx(brute_force(problem)[0], abs=1e-12)
+    assert any("Solve error" in n.message and "retried" in n.message for n in result.notes)
+
+
+def test_csv_and_in_memory_inputs_give_identical_corrections(guide_pins_model):
+    """The last bits of the deviations (actual − nominal in floating point) change nothing."""
+    import pandas as pd
+
+    (from_csv,) = load_parts(guide_pins_model, GUIDE_PINS / "cycle_01.csv")
+    table = pd.read_csv(GUIDE_PINS / "cycle_01.csv")
+    rows = [int(src.rsplit(":", 1)[1]) - 2 for src in from_csv.sources]  # file line → table row
+    # The report's deviation column and actual − nominal differ in their last bits (24.9691 − 25 ≠ −0.0309);
+    # take whichever the reader did not use.
+    printed = table["deviation"].to_numpy()[rows]
+    computed = (table["actual"] - table["nominal"]).to_numpy()[rows]
+    assert not np.array_equal(printed, computed)
+    if np.array_equal(computed, from_csv.deviation):
+        computed = printed
+    np.testing.assert_allclose(computed, from_csv.deviation, atol=1e-12)
+    in_memory = PartMeasurement(from_csv.part, "memory", None, computed, from_csv.sources)
+    a = get_optimizer("exact").solve(CorrectionProblem.from_part(guide_pins_model, from_csv))
+    b = get_optimizer("exact").solve(CorrectionProblem.from_part(guide_pins_model, in_memory))
+    np.testing.assert_array_equal(a.x, b.x)
+
+
+def test_whole_solve_respects_the_time_limit_and_says_which_stage_stopped():
+    rng = np.random.default_rng(5)
+    n, m = 60, 600
+    comp = rng.integers(-1, 2, size=(n, m)).astype(float) * (rng.random((n, m)) < 0.08)
+    h = 0.001
+    problem = CorrectionProblem(
+        composite=comp, deviation=np.round(rng.uniform(-0.05, 0.05, m), 4), lower=np.full(m, -0.06),
+        upper=np.full(m, 0.06), lb=np.full(n, -0.1), ub=np.full(n, 0.1), resolution=h,
+        register_ids=tuple(f"R{i}" for i in range(n)), dimension_ids=tuple(f"D{j}" for j in range(m)))
+    start = time.perf_counter()
+    result = get_optimizer("exact", time_limit=0.2).solve(problem)
+    wall = time.perf_counter() - start
+    assert wall < 0.2 + 1.0  # the limit bounds the whole solve (slack for a busy machine)
+    assert result.margin_after <= result.bound + 1e-12
+    if result.status != "optimal":
+        assert result.status == "time_limit"
+        assert result.extra["stopped"]["stage"] in ("grid optimum", "least norm")
+        assert any("time limit" in n.message for n in result.notes)

@@ -1,0 +1,97 @@
+"""Batch correction of a folder tree: good, bad, duplicate and changing files; store; workers."""
+
+from __future__ import annotations
+
+import shutil
+from pathlib import Path
+
+import pytest
+
+from setupfix.model import load_model
+from setupfix.pipeline.batch import run_batch
+from setupfix.store import open_store
+
+ROOT = Path(__file__).resolve().parents[2]
+GUIDE = ROOT / "sample_reports" / "guide_pins"
+MODEL = load_model(GUIDE / "model.toml")
+
+
+def folder(tmp_path: Path) -> Path:
+    d = tmp_path / "reports"
+    (d / "sub").mkdir(parents=True)
+    for i in (1, 2, 3):
+        shutil.copy(GUIDE / f"cycle_0{i}.csv", d / f"cycle_0{i}.csv")
+    shutil.copy(GUIDE / "cycle_01.qif", d / "sub" / "cycle_01.qif")
+    shutil.copy(GUIDE / "cycle_02.csv", d / "sub" / "copy_of_02.csv")
+    (d / "sub" / "notes.txt").write_text("not a report\n")
+    (d / ".hidden.csv").write_text("ignored\n")
+    return d
+
+
+def test_good_bad_and_duplicate_reports(tmp_path):
+    d = folder(tmp_path)
+    out = tmp_path / "offsets.csv"
+    s = run_batch(MODEL, d, out, settle=0)
+    assert (s.reports, s.parts, s.verdicts["apply"]) == (4, 4, 4)
+    assert [Path(f).name for f, _ in s.failed] == ["notes.txt"] and "no reader accepts" in s.failed[0][1]
+    assert [(Path(f).name, r) for f, r in s.skipped] == [("copy_of_02.csv", f"same content as {d / 'cycle_02.csv'}")]
+    lines = out.read_text().splitlines()
+    assert len(lines) == 1 + 4 * 10  # header + 10 registers per report
+    assert {line.split(",")[0] for line in lines[1:]} == {"cycle_01.csv", "cycle_02.csv", "cycle_03.csv",
+                                                          "sub/cycle_01.qif"}
+    # the QIF and the CSV of cycle 01 are the same measurements: the same corrections
+    rows = [line.split(",") for line in lines[1:]]
+    assert [r[6] for r in rows if r[0] == "cycle_01.csv"] == [r[6] for r in rows if r[0] == "sub/cycle_01.qif"]
+
+
+def test_rerun_is_idempotent_and_workers_do_not_change_numbers(tmp_path):
+    d = folder(tmp_path)
+    run_batch(MODEL, d, tmp_path / "a.csv", settle=0)
+    run_batch(MODEL, d, tmp_path / "a.csv", settle=0)
+    run_batch(MODEL, d, tmp_path / "b.csv", settle=0, workers=2)
+    assert (tmp_path / "a.csv").read_bytes() == (tmp_path / "b.csv").read_bytes()
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["a.csv", "b.csv", "reports"]  # no temp files
+
+
+def test_store_skips_processed_reports_unless_forced(tmp_path):
+    d = folder(tmp_path)
+    out = tmp_path / "offsets.csv"
+    with open_store(tmp_path / "h.db") as store:
+        first = run_batch(MODEL, d, out, settle=0, store=store)
+        text = out.read_text()
+        again = run_batch(MODEL, d, out, settle=0, store=store)
+        forced = run_batch(MODEL, d, out, settle=0, store=store, force=True)
+        assert len(store.reports()) == 4
+    assert first.reports == 4 and again.reports == 0 and not again.written and forced.reports == 4
+    assert sum("already processed" in r for _, r in again.skipped) == 5
+    assert out.read_text() == text  # nothing new: the previous output is left as it was
+
+
+def test_file_changing_during_the_run_is_not_read(tmp_path):
+    d = folder(tmp_path)
+    late = d / "sub" / "cycle_01.qif"
+
+    def touch(done, total, outcome):
+        if done == 1:
+            late.write_bytes(late.read_bytes() + b"\n")
+
+    s = run_batch(MODEL, d, tmp_path / "o.csv", settle=0, progress=touch)
+    assert any(Path(f) == late and "still being written" in r for f, r in s.failed)
+
+
+def test_bad_controller_register_fails_before_any_work(tmp_path):
+    from setupfix.errors import ExportError
+
+    with pytest.raises(ExportError, match="haas: cannot express register 'G54.1P1'"):
+        run_batch(MODEL, folder(tmp_path), tmp_path / "programs", settle=0, controller="haas")
+    assert not (tmp_path / "programs").exists()
+
+
+def test_one_program_per_cycle(tmp_path):
+    sample = ROOT / "sample_reports" / "controllers"
+    d = tmp_path / "r"
+    d.mkdir()
+    shutil.copy(sample / "report.csv", d / "a.csv")
+    s = run_batch(sample / "model.toml", d, tmp_path / "programs", settle=0, controller="fanuc")
+    assert s.written and [p.name for p in (tmp_path / "programs").iterdir()] == ["a.nc"]
+    assert "G91 G10 L2 P1 Z-0.022" in (tmp_path / "programs" / "a.nc").read_text()

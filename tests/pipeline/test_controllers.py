@@ -1,0 +1,140 @@
+"""Controller formats: golden files, absolute output is idempotent, inexpressible registers refused.
+
+Regenerate the goldens after a deliberate change with
+``PYTHONPATH=. python tests/pipeline/test_controllers.py`` and review the diff.
+"""
+
+from __future__ import annotations
+
+import re
+import sys
+from pathlib import Path
+
+import pytest
+
+from setupfix.errors import ExportError, ParseError
+from setupfix.model import load_model, model_from_dict
+from setupfix.offsets import offset_rows
+from setupfix.pipeline.controllers import CONTROLLERS, read_current, render
+from setupfix.pipeline.correct import correct_report
+
+ROOT = Path(__file__).resolve().parents[2]
+SAMPLE = ROOT / "sample_reports" / "controllers"
+GOLDEN = Path(__file__).resolve().parent / "golden" / "controllers"
+
+
+MODEL = load_model(SAMPLE / "model.toml")
+# Fixed corrections (those `correct` found on report.csv when the goldens were made), so
+# that the goldens test the formats, not the optimiser.
+CORRECTIONS = {"W1": -0.022, "W2": 0.022, "T5": -0.008, "T12": 0.002}
+
+
+def rows(mode: str):
+    current = read_current(SAMPLE / "current.csv", MODEL) if mode == "set" else None
+    return offset_rows(MODEL, CORRECTIONS, report="report.csv", part="cycle 7", current=current, verdict="apply")
+
+
+def test_sample_report_gives_those_corrections():
+    (pc,) = correct_report(MODEL, SAMPLE / "report.csv")
+    assert pc.verdict == "apply" and pc.margin_after == pytest.approx(0.048)
+    assert pc.corrections == pytest.approx(CORRECTIONS)  # T12 (cost 3) moves least
+
+
+CASES = [(name, mode) for name in CONTROLLERS for mode in ("add", "set") if (name, mode) != ("heidenhain", "add")]
+
+
+@pytest.mark.parametrize(("name", "mode"), CASES)
+def test_golden(name, mode):
+    text = render(name, rows(mode), "report.csv cycle 7")
+    assert text == (GOLDEN / f"{name}_{mode}.txt").read_text(encoding="utf-8")
+
+
+def fanuc_state(program: str, state: dict[tuple[int, int], float]) -> dict[tuple[int, int], float]:
+    """Run the G10 blocks of a program on a register state (a tiny G10 interpreter)."""
+    out = dict(state)
+    for m in re.finditer(r"^(G9[01]) G10 L(\d+) P(\d+) [ZR]([-+][\d.]+)", program, re.MULTILINE):
+        key, value = (int(m.group(2)), int(m.group(3))), float(m.group(4))
+        out[key] = value if m.group(1) == "G90" else out.get(key, 0.0) + value
+    return out
+
+
+def siemens_state(program: str, state: dict[str, float]) -> dict[str, float]:
+    out = dict(state)
+    for m in re.finditer(r"^(\$[^=]+)=(?:\1)?([-+][\d.]+)", program, re.MULTILINE):
+        incremental = m.group(0).count(m.group(1)) == 2
+        out[m.group(1)] = (out.get(m.group(1), 0.0) if incremental else 0.0) + float(m.group(2))
+    return out
+
+
+@pytest.mark.parametrize("name", ["fanuc", "haas"])
+def test_absolute_program_is_idempotent_and_incremental_is_not(name):
+    start = {(2, 1): -412.53, (2, 2): -412.487, (11, 5): -0.012, (11, 12): 0.0035}
+    absolute = render(name, rows("set"))
+    once = fanuc_state(absolute, start)
+    assert fanuc_state(absolute, once) == once
+    assert once[(2, 1)] == pytest.approx(-412.552) and once[(11, 12)] == pytest.approx(0.0055)
+    incremental = render(name, rows("add"))
+    once_inc = fanuc_state(incremental, start)
+    assert once_inc == pytest.approx(once)  # same result the first time …
+    assert fanuc_state(incremental, once_inc)[(2, 1)] == pytest.approx(-412.574)  # … doubled the second time
+
+
+def test_siemens_absolute_is_idempotent():
+    program = render("siemens", rows("set"))
+    once = siemens_state(program, {})
+    assert siemens_state(program, once) == once and once["$TC_DP12[5,1]"] == pytest.approx(-0.020)
+    inc = render("siemens", rows("add"))
+    assert siemens_state(inc, siemens_state(inc, once))["$P_UIFR[1,Z,TR]"] == pytest.approx(-412.552 - 0.044)
+
+
+def test_current_finer_than_the_grid_is_kept(tmp_path):
+    model = load_model(SAMPLE / "model.toml")
+    (tmp_path / "c.csv").write_text("register,value\nG54,-412.53046\nG55,0\nH5,0\nT12,0\n")
+    current = read_current(tmp_path / "c.csv", model)
+    (row, *_) = offset_rows(model, {"W1": -0.022}, current=current)
+    assert row.cells()[10:12] == ["-412.53046", "-412.55246"]
+
+
+TINY = {
+    "process": {"name": "t"},
+    "wks": {"W1": {"register": "G54.1P7"}},
+    "tools": {"T1": {"register": "T3 D2"}},
+    "features": {"F": {"wks": {"W1": 1}, "tools": {"T1": 1}}},
+    "dimensions": {"D": {"features": {"F": 1}, "nominal": 1, "lower": -0.1, "upper": 0.1}},
+}
+
+
+@pytest.mark.parametrize(("name", "register"), [("haas", "G54.1P7"), ("siemens", "G54.1P7"), ("fanuc", "T3 D2")])
+def test_inexpressible_register_is_named(name, register):
+    model = model_from_dict(TINY)
+    with pytest.raises(ExportError, match=f"{name}: cannot express register '{re.escape(register)}'"):
+        render(name, offset_rows(model, {"W1": 0.01, "T1": 0.0}))
+
+
+def test_heidenhain_needs_current_and_siemens_reads_t_d():
+    model = model_from_dict(TINY)
+    with pytest.raises(ExportError, match="--current"):
+        render("heidenhain", offset_rows(model, {}))
+    tool = offset_rows(model, {"T1": -0.004})[1:]
+    assert "$TC_DP12[3,2]=$TC_DP12[3,2]-0.004" in render("siemens", tool)
+    assert "G91 G10 L20 P7 Z+0.010" in render("fanuc", offset_rows(model, {"W1": 0.01})[:1])
+
+
+@pytest.mark.parametrize(("text", "message"), [
+    ("reg,val\nG54,1\n", "expected the header 'register,value'"),
+    ("register,value\nG99,1\n", "c.csv:2: register 'G99' is not in the model"),
+    ("register,value\nG54,1_0\n", "c.csv:2: expected a decimal number, found '1_0'"),
+    ("register,value\nG54,1\nG55,1\nH5,0\n", "no current value for H12"),
+    ("register,value\nG54,1\nW1,2\n", "c.csv:3: register 'W1' given twice"),
+])
+def test_bad_current_file(tmp_path, text, message):
+    (tmp_path / "c.csv").write_text(text)
+    with pytest.raises(ParseError, match=re.escape(message)):
+        read_current(tmp_path / "c.csv", load_model(SAMPLE / "model.toml"))
+
+
+if __name__ == "__main__":  # regenerate the goldens
+    GOLDEN.mkdir(parents=True, exist_ok=True)
+    for name, mode in CASES:
+        (GOLDEN / f"{name}_{mode}.txt").write_text(render(name, rows(mode), "report.csv cycle 7"), encoding="utf-8")
+    sys.exit(0)

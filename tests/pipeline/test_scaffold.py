@@ -1,0 +1,170 @@
+"""``model init``: a scaffold that loads and with which ``correct`` runs on the same report, every sample."""
+
+from __future__ import annotations
+
+import json
+import tomllib
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+
+import parsers
+from setupfix.errors import ModelError, SetupfixError
+from setupfix.model import load_model, match_parts, model_from_dict
+from setupfix.pipeline.checks import check_parts
+from setupfix.pipeline.correct import correct_part
+from setupfix.pipeline.scaffold import name_axis, scaffold_from_tables
+from tests.conftest import GUIDE_PINS, SAMPLES, shared_path
+
+
+@pytest.mark.parametrize(("name", "axis"), [("SP_00_Z", "Z"), ("Cono_9_X", "X"), ("Step 5.Z Location", "Z"),
+                                            ("Distanz X 4mm", "X"), ("점2.Y", "Y"), ("X_CIRCLE1", "X"),
+                                            ("P1 D4", None), ("XY plane", None), ("Pos X Y", None)])
+def test_axis_from_the_name(name, axis):
+    assert name_axis(name) == axis
+
+
+def scaffold_and_correct(path: Path, table: pd.DataFrame | None = None, **kwargs):
+    """Scaffold from the report, load it, correct the report's first part: what a new user does."""
+    if table is None:
+        table = _read(path)
+    assert table is not None
+    scaffold = scaffold_from_tables([(str(path), table)], **kwargs)
+    model = model_from_dict(tomllib.loads(scaffold.text), str(path) + ".toml")
+    first = table["part"].astype(str).iloc[0] if "part" in table else None
+    one = table[table["part"].astype(str) == first] if first is not None else table
+    (part,) = check_parts(model, match_parts(model, one, source=str(path)), source=str(path))
+    pc = correct_part(model, part)
+    # a gross deviation (beyond the reject band, setupfix.safety) is refused, not corrected
+    assert pc.result.status in ("optimal", "time_limit", "rounded") or pc.verdict == "reject"
+    assert part.measured.sum() >= 1 and not [n for n in part.notes if n.kind == "mismatch"]
+    return scaffold, model, pc
+
+
+def test_guide_pins_scaffold_matches_every_dimension(tmp_path):
+    scaffold, model, pc = scaffold_and_correct(GUIDE_PINS / "cycle_01.csv")
+    assert scaffold.dimensions == 28 and scaffold.axis == "Z" and not scaffold.skipped
+    assert [d.name for d in model.dimensions] == [d.name for d in load_model(GUIDE_PINS / "model.toml").dimensions]
+    assert {d.group for d in model.dimensions} == {"P1", "P2", "P3", "P4"}
+    assert not pc.part.absent and not pc.part.unmatched
+    # one feature per dimension, all on W1 + T1: the budget moves only by a common shift
+    assert pc.result.margin_after >= pc.result.margin_before
+    assert "Edit" in scaffold.text and "[wks.W1]" in scaffold.text
+
+
+#: Every bundled report but near-copies (guide-pins cycles 2–5, the QIF 3 twin of the 2.1 sample, the second
+#: exploded result) and the shop table that needs its column mapping.
+_COPIES = {"cycle_02.csv", "cycle_03.csv", "cycle_04.csv", "cycle_05.csv", "QIF3_Results_Sample.QIF",
+           "QIF3_Exploded_Results2.QIF", "cycle_01_shop.csv"}
+BUNDLED = sorted(p for folder in ("guide_pins", "qif", "qdas", "pcdmis", "tables", "piweb")
+                 for p in (SAMPLES / folder).iterdir()
+                 if p.suffix.lower() in (".csv", ".qif", ".dmo", ".txt", ".dfq", ".json") and p.name not in _COPIES)
+
+
+def _read(path: Path) -> pd.DataFrame | None:
+    """The report's table when it holds a toleranced row (the formats that carry tolerances), else None."""
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            table = parsers.read(path)
+    except SetupfixError:
+        return None
+    return table if bool((table["lower"].notna() & table["upper"].notna()).any()) else None
+
+
+def test_scaffold_on_every_bundled_sample_with_tolerances():
+    done = 0
+    for path in BUNDLED:
+        table = _read(path)
+        if table is None:
+            continue
+        try:
+            scaffold_and_correct(path, table)
+        except ModelError as exc:
+            assert "no toleranced length characteristic" in str(exc), (path, exc)
+            continue
+        done += 1
+    assert done >= 9
+
+
+@pytest.mark.needs_shared
+def test_scaffold_on_every_shared_sample_with_tolerances():
+    root = shared_path("cmm-samples")
+    done, refused = [], []
+    for path in sorted(root.glob("*/*")):
+        table = None if path.suffix == ".md" else _read(path)
+        if table is None:
+            continue
+        try:
+            scaffold, model, pc = scaffold_and_correct(path, table)
+        except ModelError as exc:
+            refused.append((path.name, str(exc)))
+            continue
+        done.append(path.name)
+        if path.name == "DMO_Impeller_6_Blades_Part_1.dmo":  # --axis Z: the _Z rows and the normal (DN) rows
+            assert scaffold.axis == "Z" and scaffold.dimensions == 789  # X, Y, Z 158 each: Z on a tie
+            z = scaffold_from_tables([(str(path), table)], axis="Z")
+            names = [d.name for d in model_from_dict(tomllib.loads(z.text)).dimensions]
+            assert z.axis == "Z" and len(names) == 473 and sum(n.endswith("_Z") for n in names) == 158
+            assert len(z.skipped) == 316 and all(r in ("axis X (--axis Z)", "axis Y (--axis Z)") for _, r in z.skipped)
+    # Q-DAS "Diameter 2500 ± 500" is beyond the model's ±100 mm tolerance range: refused with the reason
+    assert [(n, "limits beyond ±100 mm" in e) for n, e in refused] == [("successfactory_testmeasures.dfq", True)]
+    assert len(done) >= 30 and "DMO_Impeller_6_Blades_Part_1.dmo" in done and "PiWebApi_sample_values.json" in done
+
+
+def test_left_out_rows_are_listed_with_reasons():
+    table = pd.DataFrame({
+        "characteristic": ["A_Z", "Flatness 1", "B", "C", "D_X"],
+        "nominal": [10.0, 0.0, 5.0, 5.0, 3.0], "actual": [10.01, 0.01, 5.0, 5.0, 3.0],
+        "deviation": [0.01, 0.01, 0.0, 0.0, 0.0], "lower": [-0.1, 0.0, np.nan, np.nan, -0.05],
+        "upper": [0.1, 0.05, np.nan, 0.2, 0.05], "part": ["1"] * 5,
+    })
+    scaffold = scaffold_from_tables([("r.csv", table)], axis="Z")
+    assert dict(scaffold.skipped) == {"Flatness 1": "form or orientation tolerance (no offset moves it)",
+                                      "B": "no tolerance", "C": "one-sided tolerance", "D_X": "axis X (--axis Z)"}
+    assert "#   Flatness 1: form or orientation tolerance" in scaffold.text
+    model = model_from_dict(tomllib.loads(scaffold.text))
+    assert [d.name for d in model.dimensions] == ["A_Z"]
+    with pytest.raises(ModelError, match=r"no toleranced length characteristic .*1 × no tolerance"):
+        scaffold_from_tables([("r.csv", table.iloc[2:3])])
+
+
+def test_narrow_tolerance_gets_a_finer_resolution_and_hostile_names_stay_toml():
+    table = pd.DataFrame({"characteristic": ['Bore "A"\\x7f\n#1', "Z"], "nominal": [10.0, 4.0],
+                          "actual": [10.0, 4.0], "deviation": [0.0, 0.0], "lower": [-0.0004, -1.0],
+                          "upper": [0.0004, 1.0]})
+    model = model_from_dict(tomllib.loads(scaffold_from_tables([("r.csv", table)]).text))
+    assert model.resolution == pytest.approx(0.0001)
+    assert model.dimensions[0].name == 'Bore "A"\\x7f\n#1'
+
+
+def test_cli_init_then_correct(tmp_path, capsys):
+    from setupfix.cli import main
+
+    out = tmp_path / "model.toml"
+    report = str(SAMPLES / "qif" / "NIST_MTC_FAIR_Plate_Results_20parts.qif")
+    assert main(["model", "init", report, "-o", str(out), "--name", "FAIR plate"]) == 0
+    assert "wrote" in capsys.readouterr().err
+    assert load_model(out).name == "FAIR plate"
+    first = parsers.read(report)["part"].astype(str).iloc[0]
+    code = main(["correct", "--model", str(out), "--json", "--part", first, report])
+    obj = json.loads(capsys.readouterr().out)
+    assert code == 0 or (code == 5 and obj["verdict"] == "reject")  # 5: a gross deviation is refused
+    assert set(obj["corrections"]) == {"W1", "T1"} and obj["part"] == first and obj["dimensions"]
+    text = out.read_text(encoding="utf-8")
+    assert obj["unmatched"] and all(f"#   {name}: " in text for name in obj["unmatched"])  # left out, with reasons
+    assert main(["model", "init", report, "-o", str(tmp_path)]) == 1  # a folder is not a file target
+    assert "error:" in capsys.readouterr().err and not list(tmp_path.glob(".*tmp"))
+
+
+def test_several_reports_make_one_scaffold():
+    from setupfix.pipeline.scaffold import scaffold_model
+
+    reports = [GUIDE_PINS / "cycle_01.csv", GUIDE_PINS / "cycle_02.csv", GUIDE_PINS / "cycle_01.qif"]
+    scaffold = scaffold_model(reports, name="guide pins", axis="Z")
+    model = model_from_dict(tomllib.loads(scaffold.text))
+    assert scaffold.dimensions == 28 and model.name == "guide pins"
+    assert "cycle_01.csv, cycle_02.csv, cycle_01.qif" in scaffold.text.splitlines()[0]

@@ -1,0 +1,112 @@
+"""The operator-session use cases: open a report, watch a folder, compare step by step."""
+
+from __future__ import annotations
+
+import os
+import time
+
+import pytest
+
+from conftest import GUIDE_PINS
+
+from setupfix.errors import ParseError
+from setupfix.pipeline.compare import compare_problem
+from setupfix.pipeline.session import FolderWatch, compare_steps, newest_report, open_report
+
+MODEL = GUIDE_PINS / "model.toml"
+
+
+def test_open_report_corrects_every_cycle():
+    opened = open_report(MODEL, GUIDE_PINS / "cycle_01.csv")
+    assert opened.format == "canonical" and len(opened.corrections) == 1 and opened.unmatched == 0
+    assert opened.corrections[0].result.margin_after == pytest.approx(0.0822)
+
+
+def test_a_report_of_another_part_gives_the_match_table_not_an_error(tmp_path):
+    other = tmp_path / "other.csv"
+    other.write_text((GUIDE_PINS / "cycle_01.csv").read_text(encoding="utf-8").replace(" D", " Dx"),
+                     encoding="utf-8")
+    opened = open_report(MODEL, other)
+    assert opened.corrections == () and "matches a model dimension" in opened.problem
+    assert opened.unmatched == 28
+
+
+def test_an_unreadable_report_or_a_folder_is_an_error(tmp_path):
+    with pytest.raises(ParseError, match="folder"):
+        open_report(MODEL, tmp_path)
+
+
+def _touch(path, text, age):
+    path.write_text(text, encoding="utf-8")
+    t = time.time() - age
+    os.utime(path, (t, t))
+
+
+def test_newest_report_skips_hidden_partial_and_folders(tmp_path):
+    _touch(tmp_path / "a.csv", "x", 100)
+    _touch(tmp_path / "b.csv", "x", 50)
+    _touch(tmp_path / ".c.csv", "x", 0)
+    _touch(tmp_path / "d.csv.part", "x", 0)
+    (tmp_path / "sub").mkdir()
+    assert newest_report(tmp_path) == tmp_path / "b.csv"
+    assert newest_report(tmp_path / "missing") is None
+
+
+def test_folder_watch_waits_until_a_fresh_file_stops_growing(tmp_path):
+    _touch(tmp_path / "old.csv", "x", 100)
+    watch = FolderWatch(tmp_path, settle=60)
+    assert watch.poll() == tmp_path / "old.csv"  # settled long ago: at once
+    assert watch.poll() is None  # and only once
+    new = tmp_path / "new.csv"
+    new.write_text("part", encoding="utf-8")
+    assert watch.poll() is None  # fresh: seen once
+    new.write_text("part grown", encoding="utf-8")
+    assert watch.poll() is None  # still changing
+    assert watch.poll() == new  # unchanged between two polls
+    assert watch.poll() is None
+
+
+def test_compare_steps_end_with_what_compare_problem_gives():
+    problem = open_report(MODEL, GUIDE_PINS / "cycle_01.csv").corrections[0].problem
+    steps = list(compare_steps(problem, methods=("ga", "pso"), trials=2, seed=3))
+    assert [s[1] for s in steps] == [1, 2, 3, 4, 5] and all(s[2] == 5 for s in steps)
+    last, ref = steps[-1][3], compare_problem(problem, methods=("ga", "pso"), trials=2, seed=3)
+    assert [m.optimizer for m in last.methods] == ["ga", "pso"]
+    for a, b in zip(last.methods, ref.methods):
+        assert a.seeds == b.seeds and a.f1.tolist() == b.f1.tolist() and a.f2.tolist() == b.f2.tolist()
+
+
+@pytest.mark.parametrize("controller", ["csv", "fanuc"])
+def test_offsets_text_is_what_correct_writes(tmp_path, controller):
+    from setupfix.pipeline.correct import correct_report, write_correction_offsets
+    from setupfix.pipeline.session import offsets_text
+
+    current = tmp_path / "current.csv"
+    current.write_text("register,value\n" + "".join(f"{r},{i * 0.5}\n" for i, r in enumerate(
+        ["G54", "G55", "G56", "G57", "G58", "G59", "G54.1P1", "G54.1P2", "H5", "H23"])), encoding="utf-8")
+    opened = open_report(MODEL, GUIDE_PINS / "cycle_01.csv", current=current)
+    assert opened.current["W2"] == 0.5
+    write_correction_offsets(correct_report(MODEL, GUIDE_PINS / "cycle_01.csv"), str(tmp_path / "cli.txt"),
+                             controller=controller, current=current)
+    assert offsets_text(opened, controller) == (tmp_path / "cli.txt").read_text(encoding="utf-8")
+
+
+def test_a_rejected_report_cannot_be_exported(tmp_path):
+    from setupfix.errors import ExportError
+    from setupfix.pipeline.session import offsets_text
+
+    gross = tmp_path / "gross.csv"
+    gross.write_text((GUIDE_PINS / "cycle_01.csv").read_text(encoding="utf-8")
+                     .replace("P1 D1,25.0000,24.9691,-0.0309", "P1 D1,25.0000,24.5000,-0.5000"), encoding="utf-8")
+    opened = open_report(MODEL, gross)
+    assert opened.corrections[0].verdict == "reject"
+    with pytest.raises(ExportError, match="rejected"):
+        offsets_text(opened, "csv")
+
+
+def test_a_register_the_format_cannot_express_is_named():
+    from setupfix.errors import ExportError
+    from setupfix.pipeline.session import offsets_text
+
+    with pytest.raises(ExportError, match="G58"):
+        offsets_text(open_report(MODEL, GUIDE_PINS / "cycle_01.csv"), "siemens")

@@ -1,0 +1,60 @@
+"""EWMA smoothing over consecutive reports from the history store, reset on a tool change."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pandas as pd
+import pytest
+
+import parsers
+from setupfix.model import load_model
+from setupfix.pipeline.correct import correct_report
+from setupfix.store import open_store
+
+GUIDE = Path(__file__).resolve().parents[2] / "sample_reports" / "guide_pins"
+
+
+def model_with_ewma(tmp_path, lam):
+    path = tmp_path / "m.toml"
+    path.write_text((GUIDE / "model.toml").read_text() + f"\n[safety]\newma = {lam}\n")
+    return load_model(path)
+
+
+def store_with(tmp_path, log_rows):
+    store = open_store(tmp_path / "h.db")
+    for name in ("cycle_01.csv", "cycle_02.csv"):
+        store.add_report((GUIDE / name).read_bytes(), name, "canonical", parsers.read(GUIDE / name))
+    if log_rows:
+        store.add_corrections(pd.DataFrame(log_rows, columns=["timestamp", "register", "delta", "event"]))
+    return store
+
+
+def p1d1(pc):
+    return next(r for r in pc.dimension_rows() if r["id"] == "P1D1")
+
+
+def test_ewma_over_earlier_reports_shifted_by_applied_corrections(tmp_path):
+    model = model_with_ewma(tmp_path, 0.5)
+    store = store_with(tmp_path, [("2026-11-02T12:00:00", "G54", 0.010, "correction")])
+    (pc,) = correct_report(model, GUIDE / "cycle_03.csv", store=store)
+    row = p1d1(pc)
+    # cycle 01: −0.0309 + 0.010 (G54 moved since) ; cycle 02: +0.0306 ; now −0.0180
+    a = -0.0209
+    a = 0.5 * 0.0306 + 0.5 * a
+    a = 0.5 * -0.0180 + 0.5 * a
+    assert row["estimate"] == pytest.approx(a, abs=1e-12) and row["deviation"] == pytest.approx(-0.0180)
+    assert pc.recommendation.rules[0].rule == "ewma" and "2 earlier part(s)" in pc.recommendation.rules[0].message
+    assert row["predicted"] == pytest.approx(row["estimate"] + pc.corrections["W1"] + pc.corrections["T5"])
+
+
+def test_tool_change_resets_the_dimensions_it_cuts(tmp_path):
+    model = model_with_ewma(tmp_path, 0.5)
+    store = store_with(tmp_path, [("2026-11-03T12:00:00", "H5", None, "tool_change")])
+    (pc,) = correct_report(model, GUIDE / "cycle_03.csv", store=store)
+    assert p1d1(pc)["estimate"] == pytest.approx(-0.0180)  # P1 D1 = W1 + T5: history dropped
+
+
+def test_without_store_not_smoothed_and_said(tmp_path):
+    (pc,) = correct_report(model_with_ewma(tmp_path, 0.5), GUIDE / "cycle_03.csv")
+    assert "estimate" not in p1d1(pc) and any("needs the history store" in w for w in pc.warnings)

@@ -1,0 +1,46 @@
+"""Fixtures of the TUI tests: the app built from the same Inputs as the command line."""
+
+from __future__ import annotations
+
+import asyncio
+from collections.abc import Awaitable, Callable
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from conftest import GUIDE_PINS
+
+MODEL = GUIDE_PINS / "model.toml"
+CYCLE_01 = GUIDE_PINS / "cycle_01.csv"
+
+
+@pytest.fixture
+def make_app(tmp_path: Path) -> Callable[..., Any]:
+    """``make_app(report=…, **inputs)``: a SetupfixApp on the guide-pins model, exports into tmp_path."""
+    from setupfix.tui.app import Inputs, SetupfixApp
+
+    def make(report: Path | None = CYCLE_01, **kw: Any) -> SetupfixApp:
+        kw.setdefault("model", MODEL)
+        kw.setdefault("offsets", str(tmp_path / "offsets.csv"))
+        kw.setdefault("trials", 1)
+        return SetupfixApp(Inputs(report=report, **kw))
+
+    return make
+
+
+def run(coro: Awaitable[None]) -> None:
+    """Run one Pilot scenario (no pytest-asyncio here: one event loop per test)."""
+    asyncio.run(coro)  # type: ignore[arg-type]
+
+
+async def settle(pilot: Any) -> None:
+    """Wait until every worker has finished and its result reached the screen."""
+    from textual.worker import WorkerFailed
+
+    try:
+        await pilot.app.workers.wait_for_complete()
+    except WorkerFailed:  # the app shows it; the tests look at what it shows
+        pass
+    await pilot.pause()
+    await pilot.pause()

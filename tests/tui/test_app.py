@@ -1,0 +1,229 @@
+"""The operator's screen driven by Pilot: open, optimise, compare, export, bad files, folders.
+
+Few apps, several steps each: starting an app costs about a second on the shared
+2-core machine, so one scenario per app keeps the suite short.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import shutil
+
+from conftest import GUIDE_PINS
+from tui.conftest import CYCLE_01, MODEL, run, settle
+
+from setupfix.pipeline.writers import write_offsets_csv
+from setupfix.pipeline.correct import correct_report
+
+
+def _notes(app):
+    return [n.message for n in app._notifications]
+
+
+def _rows(table):
+    return [table.get_row(k) for k in table.rows]
+
+
+def test_open_sort_filter_export_then_a_bad_report(make_app, tmp_path):
+    bad = tmp_path / "bad.csv"
+    bad.write_text("characteristic,nominal,actual,deviation,lower,upper,unit,part\n"
+                   "P1 D1,25,abc,x,-0.1,0.1,mm,c1\n", encoding="utf-8")
+
+    async def scenario():
+        app = make_app()
+        async with app.run_test(size=(80, 24)) as pilot:
+            await settle(pilot)
+            # the sample: every dimension and register, README's δ and bonus, binding marked ●
+            c = app._current()
+            assert c is not None and c.result.optimizer == "exact"
+            dims = app.query_one("#dimensions")
+            assert dims.row_count == 28 and app.query_one("#registers").row_count == 10
+            text = str(app.query_one("#summary").render())
+            assert "+0.0171" in text and "+0.0822" in text and "+0.0651" in text
+            assert {r[1] for r in _rows(dims) if "●" in str(r[0])} == {"P1 D6", "P1 D7"}
+            # the mouse: a click on a column header sorts by it
+            await pilot.click("#dimensions", offset=(20, 1))
+            assert app.sort_key == "deviation"
+            assert [str(r[3]) for r in _rows(dims)][0] == "-0.0829"
+            app.sort_key = None
+            # station filter and sort
+            await pilot.press("f", "s")
+            names = [r[1] for r in _rows(dims)]
+            assert len(names) == 7 and all(n.startswith("P1") for n in names)
+            assert names[:2] == ["P1 D6", "P1 D7"] or set(names[:2]) == {"P1 D6", "P1 D7"}  # least margin first
+            # export: the confirmation shows the text; ctrl+s writes exactly it
+            await pilot.press("e")
+            await pilot.pause()
+            shown = app.screen.text
+            assert str(app.screen.query_one("#export-text").render()) == shown
+            await pilot.press("ctrl+s")
+            await pilot.pause()
+            written = (tmp_path / "offsets.csv").read_text(encoding="utf-8")
+            assert written == shown
+            write_offsets_csv([r for x in correct_report(MODEL, CYCLE_01) for r in x.offsets()], tmp_path / "cli.csv")
+            assert written == (tmp_path / "cli.csv").read_text(encoding="utf-8")  # as `correct --offsets`
+            assert any("wrote csv offsets" in n for n in _notes(app))
+            # a folder as target: refused, named, nothing written
+            await pilot.press("e")
+            await pilot.pause()
+            app.screen.query_one("#export-path").value = str(tmp_path)
+            await pilot.press("ctrl+s")
+            await pilot.pause()
+            assert any("export failed" == n.title and str(tmp_path) in n.message for n in app._notifications)
+            # a bad report: a notification naming file and line, the stale correction gone
+            app._picked_report(bad)
+            await settle(pilot)
+            assert any(f"{bad}:2:" in n for n in _notes(app))
+            assert app._current() is None and app.is_running
+            assert f"{bad}:2:" in str(app.query_one("#summary").render())
+            await pilot.press("e")
+            assert any("nothing to export" in n for n in _notes(app))
+            # help
+            await pilot.press("question_mark")
+            await pilot.pause()
+            assert type(app.screen).__name__ == "HelpScreen"
+            await pilot.press("escape")
+
+    run(scenario())
+
+
+def test_optimiser_choice_and_compare_with_cancel(make_app):
+    async def scenario():
+        app = make_app()
+        async with app.run_test(size=(100, 30)) as pilot:
+            await settle(pilot)
+            await pilot.press("p")
+            await settle(pilot)
+            c = app._current()
+            assert app.optimizer == "cripso" and c.result.optimizer == "cripso"
+            expected = correct_report(MODEL, CYCLE_01, optimizer="cripso", seed=0)[0]
+            assert c.result.margin_after == expected.result.margin_after
+            assert "cripso" in str(app.query_one("#summary").render())
+            await pilot.press("c")
+            await settle(pilot)
+            comp = app.comparison
+            assert [m.optimizer for m in comp.methods] == ["cripso", "pso", "ga", "coa", "cs"]
+            assert app.query_one("#compare-table").row_count == 6
+            assert all(m.f1.max() <= comp.exact.margin_after + 1e-9 for m in comp.methods)
+            assert len(app.query("Sparkline.curve")) == 5
+            app.comparison = None
+            app.inputs = dataclasses.replace(app.inputs, trials=12)  # long enough to cancel
+            await pilot.press("c", "x")
+            await settle(pilot)
+            assert app.comparison is None
+            assert "cancelled" in str(app.query_one("#compare-status").render())
+
+    run(scenario())
+
+
+def test_reports_that_do_not_match_show_the_match_table(make_app, tmp_path):
+    none = tmp_path / "none.csv"
+    none.write_text(CYCLE_01.read_text(encoding="utf-8").replace("P1 D", "Pin1 D").replace("P2 D", "Pin2 D")
+                    .replace("P3 D", "Pin3 D").replace("P4 D", "Pin4 D"), encoding="utf-8")
+    some = tmp_path / "some.csv"
+    some.write_text(CYCLE_01.read_text(encoding="utf-8").replace("P1 D", "Pin1 D"), encoding="utf-8")
+
+    async def scenario():
+        app = make_app(report=none)
+        async with app.run_test() as pilot:
+            await settle(pilot)
+            assert app.query_one("TabbedContent").active == "match"
+            assert app._current() is None
+            rows = _rows(app.query_one("#match-table"))
+            assert len(rows) == 28 and all(str(r[0]) == "✗" for r in rows)
+            assert "P1 D1" in next(r for r in rows if r[1] == "Pin1 D1")[5]
+            app._picked_report(some)
+            await settle(pilot)
+            assert app._current() is not None  # corrected without P1; the table says which are left out
+            rows = _rows(app.query_one("#match-table"))
+            assert sum(str(r[0]) == "✗" for r in rows) == 7
+            assert "7 characteristic(s)" in str(app.query_one("#match-status").render())
+
+    run(scenario())
+
+
+def test_a_folder_is_watched_and_the_newest_finished_report_opened(make_app, tmp_path):
+    shutil.copy(GUIDE_PINS / "cycle_01.csv", tmp_path / "a.csv")
+
+    async def scenario():
+        app = make_app(report=tmp_path, poll_seconds=0.05)
+        async with app.run_test() as pilot:
+            for _ in range(40):
+                await pilot.pause(0.05)
+                await settle(pilot)
+                if app._current() is not None:
+                    break
+            assert app._current().part.report.endswith("a.csv")
+            shutil.copy(GUIDE_PINS / "cycle_02.csv", tmp_path / "b.csv")
+            for _ in range(40):
+                await pilot.pause(0.05)
+                await settle(pilot)
+                if app._current() is not None and app._current().part.report.endswith("b.csv"):
+                    break
+            assert app._current().part.report.endswith("b.csv")
+
+    run(scenario())
+
+
+def test_history_from_the_store_one_key_diagnose_and_the_export_recorded(make_app, tmp_path):
+    from setupfix.pipeline.history import import_history
+    from setupfix.store import open_store
+
+    db = tmp_path / "h.db"
+    with open_store(db) as store:
+        import_history(store, sorted(GUIDE_PINS.glob("cycle_0*.csv")))
+
+    async def scenario():
+        app = make_app(db=db)
+        async with app.run_test(size=(100, 40)) as pilot:
+            await settle(pilot)
+            cycles = _rows(app.query_one("#history-cycles"))
+            assert [str(r[3]) for r in cycles] == ["+0.0171", "+0.0484", "+0.0681", "+0.0296", "+0.0489"]
+            await pilot.press("d")
+            await settle(pilot)
+            assert app.query_one("TabbedContent").active == "history"
+            text = str(app.query_one("#history-diagnosis").render())
+            assert "diagnosis of" in text and "residual RMS" in text
+            await pilot.press("1", "e")
+            await pilot.pause()
+            await pilot.press("ctrl+s")
+            await settle(pilot)
+            with open_store(db) as store:
+                log = store.corrections()
+            moved = {reg.register: v for reg, v in zip(app.opened.model.registers, app._current().result.x) if v}
+            assert dict(zip(log["register"], log["delta"].round(6))) == {k: round(v, 6) for k, v in moved.items()}
+            assert any("recorded" in n for n in _notes(app))
+
+    run(scenario())
+
+
+def test_thermal_panel_shows_the_drift_and_the_feed_forward(make_app, tmp_path):
+    from conftest import SAMPLES
+
+    from setupfix.pipeline.feedforward import thermal_feed_forward
+    from setupfix.pipeline.thermal import fit_file, predict_drift
+
+    saved = tmp_path / "grey.json"
+    fit_file(SAMPLES / "thermal" / "train_variable.csv", "grey-ls", target="error_z", unit="mm", out=saved)
+    # the simulated test log, moved to the day of cycle 01 (parts cut 2026-11-02T08:00)
+    log = tmp_path / "temps.csv"
+    log.write_text((SAMPLES / "thermal" / "test_variable.csv").read_text(encoding="utf-8")
+                   .replace("2026-01-05T", "2026-11-02T"), encoding="utf-8")
+    expected = predict_drift(saved, log)
+    model = correct_report(MODEL, CYCLE_01)[0].model
+    feed = thermal_feed_forward(model, saved, log, measured_at="2026-11-02T08:00:00")
+
+    async def scenario():
+        app = make_app(thermal=saved, temperatures=log)
+        async with app.run_test(size=(100, 30)) as pilot:
+            await settle(pilot)
+            await settle(pilot)
+            await pilot.press("3")
+            text = str(app.query_one("#thermal-status").render())
+            assert f"{expected.latest:+.4f} mm" in text and "grey" in text
+            curve = app.query_one("#thermal-curve")
+            assert curve.display and list(curve.data) == [float(v) for v in expected.drift[-120:]]
+            assert feed.line() in str(app.query_one("#thermal-feed").render())
+            assert feed.line() in str(app.query_one("#summary").render())
+
+    run(scenario())
