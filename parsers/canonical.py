@@ -33,15 +33,15 @@ def _unescaped(cell: str) -> str:
     return cell[1:] if cell[:1] == "'" and cell[1:2] in ("=", "+", "-", "@", "\t", "\r") else cell
 
 
-#: Text columns whose control characters are escaped (``\x1b`` → ``\\x1b``) so that a name
-#: cannot drive the operator's terminal.
+#: Text columns whose control characters are masked as ``?`` (as ``setupfix model check`` shows
+#: them) so that a name cannot drive the operator's terminal.
 TEXT_COLUMNS = ("characteristic", "part", "station", "report", "status", "timestamp")
 _CONTROL = re.compile(r"[\x00-\x1f\x7f-\x9f]")
 
 
 def escape_controls(text: str) -> str:
-    """``text`` with each control character written as a visible ``\\xNN``."""
-    return _CONTROL.sub(lambda m: f"\\x{ord(m.group()):02x}", text)
+    """``text`` with each control character (an escape sequence's ESC, a bell, …) replaced by ``?``."""
+    return _CONTROL.sub("?", text)
 
 
 def sniff_canonical(head: str) -> bool:
