@@ -230,7 +230,7 @@ def _zero_result(problem: CorrectionProblem, optimizer: str, status: str, messag
 def _with_cost(problem: CorrectionProblem, cost: Array) -> CorrectionProblem:
     fields = {f.name for f in dataclasses.fields(problem)}
     if "cost" in fields and not np.all(cost == 1.0):
-        return dataclasses.replace(problem, cost=np.asarray(cost, dtype=float))  # type: ignore[call-arg]
+        return dataclasses.replace(problem, cost=np.asarray(cost, dtype=float))
     return problem
 
 

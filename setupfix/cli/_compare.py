@@ -7,6 +7,7 @@ import json
 import sys
 
 from setupfix.cli._common import add_report_options, cycle_options, report_options
+from setupfix.cli._correct import exact_params
 from setupfix.pipeline.compare import Comparison, compare_report, plot_comparison
 from setupfix.pipeline.writers import check_target
 from setupfix.plots import figure_format
@@ -20,6 +21,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("report", metavar="REPORT", help="CMM report in any supported format")
     p.add_argument("--model", required=True, metavar="MODEL", help="process model TOML")
     p.add_argument("--trials", type=_positive, default=12, metavar="N", help="seeded trials per method (default 12)")
+    p.add_argument("--time-limit", type=float, default=None, metavar="SECONDS",
+                   help="wall time of the exact optimiser's whole solve (default 2)")
     p.add_argument("--seed", type=int, default=0, metavar="S", help="root of the trial seeds (default 0)")
     p.add_argument("--part", default=None, metavar="ID", help="part / cycle of the report (default: the first)")
     p.add_argument("--json", action="store_true", help="machine-readable output (shared/spec/cli-json.md)")
@@ -68,7 +71,8 @@ def run(args: argparse.Namespace) -> int:
         figure_format(args.plot)  # refuse an unknown suffix or target before the trials, not after
         check_target(args.plot)
     comparison = compare_report(args.model, args.report, part=args.part, trials=args.trials, seed=args.seed,
-                                **cycle_options(args), **report_options(args))
+                                params={"exact": exact_params(args.time_limit)}, **cycle_options(args),
+                                **report_options(args))
     if args.plot:
         plot_comparison(comparison, args.plot)
     if args.json:
