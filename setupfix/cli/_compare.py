@@ -5,12 +5,13 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+from typing import TYPE_CHECKING
 
 from setupfix.cli._common import add_report_options, cycle_options, report_options
 from setupfix.cli._correct import exact_params
-from setupfix.pipeline.compare import Comparison, compare_report, plot_comparison
-from setupfix.pipeline.writers import check_target
-from setupfix.plots import figure_format
+
+if TYPE_CHECKING:
+    from setupfix.pipeline.compare import Comparison
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
@@ -67,6 +68,10 @@ def format_comparison(c: Comparison) -> str:
 
 
 def run(args: argparse.Namespace) -> int:
+    from setupfix.pipeline.compare import compare_report, plot_comparison
+    from setupfix.pipeline.writers import check_target
+    from setupfix.plots import figure_format
+
     if args.plot:
         figure_format(args.plot)  # refuse an unknown suffix or target before the trials, not after
         check_target(args.plot)

@@ -6,15 +6,10 @@ import argparse
 import json
 import sys
 
+from setupfix.cli._choices import CONTROLLERS, OPTIMIZERS
 from setupfix.cli._common import add_report_options, cycle_options, report_options
 from setupfix.cli.exit_codes import OK, REJECTED
 from setupfix.errors import ParameterError
-from setupfix.model import load_model
-from setupfix.optimize import OPTIMIZERS
-from setupfix.pipeline.controllers import CONTROLLERS, read_current
-from setupfix.pipeline.correct import correct_report, open_history, write_correction_offsets
-from setupfix.pipeline.present import format_correction
-from setupfix.pipeline.writers import check_target
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
@@ -58,6 +53,12 @@ def exact_params(time_limit: float | None, optimizer: str = "exact") -> dict[str
 
 
 def run(args: argparse.Namespace) -> int:
+    from setupfix.model import load_model
+    from setupfix.pipeline.controllers import read_current
+    from setupfix.pipeline.correct import correct_report, open_history, write_correction_offsets
+    from setupfix.pipeline.present import format_correction
+    from setupfix.pipeline.writers import check_target
+
     if args.offsets:
         check_target(args.offsets)
     store = open_history(args.store) if args.store else None

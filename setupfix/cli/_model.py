@@ -7,12 +7,12 @@ import json
 import math
 import sys
 import textwrap
+from typing import TYPE_CHECKING
 
 from setupfix.cli._common import add_report_options, cycle_options, report_options
-from setupfix.pipeline.model import MatchTable, check_report, describe_model
-from setupfix.pipeline.present import format_relations
-from setupfix.pipeline.scaffold import scaffold_model
-from setupfix.pipeline.writers import check_target, write_text
+
+if TYPE_CHECKING:
+    from setupfix.pipeline.model import MatchTable
 
 MATRICES = ("R_MW", "R_WF", "R_TF", "R_FD", "C")
 #: Terminal width the human tables are laid out for.
@@ -68,6 +68,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 
 def run_init(args: argparse.Namespace) -> int:
+    from setupfix.pipeline.scaffold import scaffold_model
+    from setupfix.pipeline.writers import check_target, write_text
+
     check_target(args.out)
     scaffold = scaffold_model(args.reports, axis=args.axis, name=args.name, **report_options(args))
     write_text(args.out, scaffold.text + "\n")
@@ -80,6 +83,9 @@ def run_init(args: argparse.Namespace) -> int:
 
 
 def run_show(args: argparse.Namespace) -> int:
+    from setupfix.pipeline.model import describe_model
+    from setupfix.pipeline.present import format_relations
+
     desc = describe_model(args.model)
     if args.json:
         json.dump(desc.to_json(), sys.stdout, indent=1)
@@ -93,6 +99,8 @@ def run_show(args: argparse.Namespace) -> int:
 
 
 def run_check(args: argparse.Namespace) -> int:
+    from setupfix.pipeline.model import check_report
+
     table = check_report(args.model, args.report, **cycle_options(args), **report_options(args))
     if args.json:
         json.dump(table.to_json(), sys.stdout, indent=1)

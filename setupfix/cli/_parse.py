@@ -6,8 +6,6 @@ import argparse
 import sys
 
 from setupfix.cli.exit_codes import ERROR, OK, PARTIAL
-from setupfix.pipeline.parse import note_line, parse_reports
-from setupfix.pipeline.writers import check_target, write_canonical_csv
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
@@ -27,6 +25,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from setupfix.pipeline.parse import note_line, parse_reports
+    from setupfix.pipeline.writers import check_target, write_canonical_csv
+
     check_target(args.out)
     outcome = parse_reports(args.files, format=args.format, unit=args.unit, encoding=args.encoding,
                             columns=args.columns)
