@@ -9,13 +9,13 @@ import sys
 import textwrap
 import unicodedata
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from setupfix.cli._common import add_report_options, cycle_options, report_options
 from setupfix.errors import ExportError, SourceLocation
-from setupfix.pipeline.model import MatchTable, check_report, describe_model
-from setupfix.pipeline.present import format_relations
-from setupfix.pipeline.scaffold import scaffold_model
-from setupfix.pipeline.writers import check_target, write_text
+
+if TYPE_CHECKING:
+    from setupfix.pipeline.model import MatchTable
 
 MATRICES = ("R_MW", "R_WF", "R_TF", "R_FD", "C")
 #: Terminal width the human tables are laid out for.
@@ -76,6 +76,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 
 def run_init(args: argparse.Namespace) -> int:
+    from setupfix.pipeline.scaffold import scaffold_model
+    from setupfix.pipeline.writers import check_target, write_text
+
     check_target(args.out)
     if args.out != "-" and Path(args.out).exists() and not args.force:
         raise ExportError("exists: a scaffold would replace it (give --force, or another -o)",
@@ -92,6 +95,9 @@ def run_init(args: argparse.Namespace) -> int:
 
 
 def run_show(args: argparse.Namespace) -> int:
+    from setupfix.pipeline.model import describe_model
+    from setupfix.pipeline.present import format_relations
+
     desc = describe_model(args.model)
     if args.json:
         json.dump(desc.to_json(), sys.stdout, indent=1)
@@ -105,6 +111,8 @@ def run_show(args: argparse.Namespace) -> int:
 
 
 def run_check(args: argparse.Namespace) -> int:
+    from setupfix.pipeline.model import check_report
+
     table = check_report(args.model, args.report, **cycle_options(args), **report_options(args))
     if args.json:
         json.dump(table.to_json(), sys.stdout, indent=1)
