@@ -60,11 +60,19 @@ class PartCorrection:
         """Applied changes of every register (model order), zero unless the verdict is apply."""
         return self.recommendation.x
 
+    #: Thermal feed-forward step (``correct --thermal``), set by setupfix.pipeline.feedforward.apply_feed_forward.
+    thermal: Any = None
+
     @property
     def corrections(self) -> dict[str, float]:
-        """Correction of every correctable register by model ID, zero included."""
-        return {rid: float(v) for rid, v, reg in zip(self.problem.register_ids, self.x,
-                                                     self.model.registers) if not reg.fixed}
+        """Correction of every correctable register by model ID, zero included (thermal feed-forward added
+        unless the verdict is reject)."""
+        out = {rid: float(v) for rid, v, reg in zip(self.problem.register_ids, self.x,
+                                                    self.model.registers) if not reg.fixed}
+        if self.thermal is not None and self.verdict != "reject":
+            for rid, shift in self.thermal.corrections().items():
+                out[rid] = out.get(rid, 0.0) + shift
+        return out
 
     @property
     def margin_before(self) -> float:
@@ -172,9 +180,10 @@ class PartCorrection:
             "absent": list(self.part.absent),
             "unmatched": list(self.part.unmatched),
             "suggestions": {name: list(near) for name, near in self.part.suggestions.items()},
+            "warnings": list(self.warnings),
             "evaluations": r.evaluations,
             "seconds": round(r.seconds, 6),
-        }
+        } | ({"thermal": self.thermal.to_json()} if self.thermal is not None else {})
 
 
 def applied_result(problem: CorrectionProblem, rec: Recommendation) -> OptimizeResult:

@@ -69,7 +69,7 @@ def test_solver_error_is_retried_without_the_lower_bracket_and_reported(monkeypa
         return real(self, g_rows, g, kmin, kmax, t_lo, t_hi, start, time_limit)
 
     monkeypatch.setattr(exact_module.ExactOptimizer, "_max_margin_milp", failing_once)
-    problem = random_problem(0, n=4, m=8, limit_steps=6)
+    problem = random_problem(1, n=4, m=8, limit_steps=6)  # in reach, and the rounded LP point is not optimal
     result = get_optimizer("exact").solve(problem)
     assert len(brackets) == 2 and brackets[1] < brackets[0]  # the retry drops the lower bracket
     assert result.status == "optimal"

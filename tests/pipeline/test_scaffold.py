@@ -145,7 +145,7 @@ def test_cli_init_then_correct(tmp_path, capsys):
     from setupfix.cli import main
 
     out = tmp_path / "model.toml"
-    report = str(SAMPLES / "qif" / "QIF3_WIDGET_QIF_RESULTS.QIF")
+    report = str(SAMPLES / "qif" / "NIST_MTC_FAIR_Plate_Results_20parts.qif")
     assert main(["model", "init", report, "-o", str(out), "--name", "FAIR plate"]) == 0
     assert "wrote" in capsys.readouterr().err
     assert load_model(out).name == "FAIR plate"
@@ -158,3 +158,13 @@ def test_cli_init_then_correct(tmp_path, capsys):
     assert obj["unmatched"] and all(f"#   {name}: " in text for name in obj["unmatched"])  # left out, with reasons
     assert main(["model", "init", report, "-o", str(tmp_path)]) == 1  # a folder is not a file target
     assert "error:" in capsys.readouterr().err and not list(tmp_path.glob(".*tmp"))
+
+
+def test_several_reports_make_one_scaffold():
+    from setupfix.pipeline.scaffold import scaffold_model
+
+    reports = [GUIDE_PINS / "cycle_01.csv", GUIDE_PINS / "cycle_02.csv", GUIDE_PINS / "cycle_01.qif"]
+    scaffold = scaffold_model(reports, name="guide pins", axis="Z")
+    model = model_from_dict(tomllib.loads(scaffold.text))
+    assert scaffold.dimensions == 28 and model.name == "guide pins"
+    assert "cycle_01.csv, cycle_02.csv, cycle_01.qif" in scaffold.text.splitlines()[0]

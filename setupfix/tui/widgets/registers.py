@@ -20,13 +20,13 @@ class RegisterTable(DataTable[Text | str]):
 
     def show(self, rows: Sequence[RegisterRow], *, digits: int = 3) -> None:
         self.clear(columns=True)
-        for label, key in (("reg", "register"), ("id", "id"), ("Δ", "delta"), ("current", "current"),
-                           ("new", "new"), ("", "flags"), ("rules", "rules")):
+        for label, key in (("reg", "register"), ("id", "id"), ("offset", "offset"), ("Δ", "delta"),
+                           ("current", "current"), ("new", "new"), ("", "flags"), ("rules", "rules")):
             self.add_column(label, key=key)
         for r in rows:
             moved = r.delta != 0.0
             self.add_row(
-                Text(r.register, style="bold" if moved else "dim"), r.id,
+                Text(r.register, style="bold" if moved else "dim"), r.id, r.offset,
                 Text(signed(r.delta, digits), style="bold" if moved else "dim", justify="right"),
                 Text(signed(r.current, digits), justify="right"), Text(signed(r.new, digits), justify="right"),
                 Text(r.flags, style="bold yellow" if r.at_limit else "dim"), "; ".join(r.rules), key=r.id)
