@@ -272,7 +272,7 @@ def correct_part(model: ProcessModel, part: PartMeasurement, *, optimizer: str =
         rec.rules = (RuleEffect("ewma", f"deviations smoothed over {smoothed.used} earlier part(s), λ = {lam:g}",
                                 dimensions=problem.dimension_ids), *rec.rules)
     result = applied_result(problem, rec)
-    notes += [str(n) for n in rec.result.notes]
+    notes += [str(n) for n in rec.result.notes if n.message != rec.result.message]
     part = measured_part
     if part.absent:
         notes.append(f"{len(part.absent)} dimension(s) absent from the report, left out: {', '.join(part.absent)}")
