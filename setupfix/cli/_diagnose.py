@@ -71,7 +71,8 @@ def format_diagnosis(out: DiagnoseOutcome) -> str:
     if out.augmented:
         lines.append(f"wrote {out.augmented}")
     lines += [f"note: {n}" for n in out.notes]
-    return "\n".join(lines)
+    # report text (characteristic names, file names) reaches the terminal: no escape sequences
+    return "\n".join("".join(c if c.isprintable() else "?" for c in line) for line in lines)
 
 
 def run(args: argparse.Namespace) -> int:
