@@ -436,6 +436,7 @@ class DiagnoseOutcome:
                           "cv_before": r(s.cv_before), "cv_after": r(s.cv_after)}
                          for s in d.selection.steps if not s.accepted],
             "unidentifiable": list(d.selection.unidentifiable),
+            "lack_of_fit": d.selection.lack_of_fit,
             "dimensions": [{"id": did, "name": names[did],
                             "rms_before": r(d.error_before.rms_by_dimension[q]),
                             "rms_after": r(d.error_after.rms_by_dimension[q]),
