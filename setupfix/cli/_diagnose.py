@@ -62,7 +62,8 @@ def format_diagnosis(out: DiagnoseOutcome) -> str:
         lines.append(f"residual with them: RMS {_f(d.error_after.rms)} {unit}, max {_f(d.error_after.max)}, "
                      f"out of tolerance {d.error_after.out_of_tolerance}")
     else:
-        lines.append("no effect found: the declared model explains the series to its noise")
+        lines.append("no effect found" + ("" if d.selection.lack_of_fit else
+                                          ": the declared model explains the series to its noise"))
     if d.walk is not None:
         lines.append(f"walk forward over {len(d.walk.cycles)} cycle(s) (error budget: mean / worst, RMS reached):")
         for name, b in d.walk.budgets.items():
@@ -73,7 +74,8 @@ def format_diagnosis(out: DiagnoseOutcome) -> str:
     if out.augmented:
         lines.append(f"wrote {out.augmented}")
     lines += [f"note: {n}" for n in out.notes]
-    return "\n".join(lines)
+    # report text (characteristic names, file names) reaches the terminal: no escape sequences
+    return "\n".join("".join(c if c.isprintable() else "?" for c in line) for line in lines)
 
 
 def run(args: argparse.Namespace) -> int:
