@@ -22,14 +22,15 @@ class DimensionTable(DataTable[Text | str]):
     def show(self, rows: Sequence[DimensionRow], *, wide: bool) -> None:
         """Replace the rows (``wide`` adds the margins before and after)."""
         self.clear(columns=True)
-        self.add_column("st", key="flags")
+        # Fixed widths where the content is symbols: the layout does not wait on measuring them.
+        self.add_column("st", key="flags", width=4)
         self.add_column("name", key="name")
         self.add_column("stn", key="station")
         self.add_column("dev", key="deviation")
         self.add_column("limits", key="limits")
-        self.add_column("before", key="bar_before")
+        self.add_column("before", key="bar_before", width=11)
         self.add_column("pred", key="predicted")
-        self.add_column("after", key="bar_after")
+        self.add_column("after", key="bar_after", width=11)
         if wide:
             self.add_column("margin₀", key="margin_before")
             self.add_column("margin₁", key="margin_after")
