@@ -25,7 +25,7 @@ from setupfix.errors import (Note, ParameterError, ParseError, ParseWarning, Set
 __all__ = ["FormatSpec", "ReadResult", "register", "formats", "find_format", "read", "read_report", "OPTIONS"]
 
 #: Every option a reader may be given; each :class:`FormatSpec` declares the ones it uses.
-OPTIONS = ("unit", "encoding", "columns")
+OPTIONS = ("unit", "encoding", "columns", "lenient")
 
 Reader = Callable[..., pd.DataFrame]
 
@@ -172,8 +172,8 @@ def read_report(path: str | Path | Source, *, format: str | None = None, **optio
         Registry name; chosen by content, then extension, when omitted.  A column
         mapping (``columns=``) without a format means the ``table`` reader.
     **options
-        ``unit``, ``encoding``, ``columns`` (None = not given).  One the chosen reader
-        does not use is refused.
+        ``unit``, ``encoding``, ``columns``, ``lenient`` (None/False = not given).  One
+        the chosen reader does not use is refused.
 
     Returns
     -------
@@ -192,8 +192,10 @@ def read_report(path: str | Path | Source, *, format: str | None = None, **optio
     if not format and options.get("columns") and "table" in _REGISTRY:
         format = "table"
     source = load_source(path)
+    if not source.data.removeprefix(b"\xef\xbb\xbf").strip(b" \t\r\n\x00"):
+        raise ParseError("empty file", location=SourceLocation(source.name))
     spec = find_format(source, format)
-    options = {k: v for k, v in options.items() if v is not None}
+    options = {k: v for k, v in options.items() if v is not None and v is not False}
     check_options(spec, options, source.name)
     missing = spec.complete(source.data) if spec.complete and source.data.strip() else None
     try:

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import csv
 import math
+import re
 from pathlib import Path
 
 import numpy as np
@@ -25,6 +26,22 @@ __all__ = ["read_canonical", "sniff_canonical", "finish_table", "DEVIATION_TOLER
 #: Reports round each value to their display resolution (0.001 mm at worst in the
 #: samples), so two roundings can differ by one display step; more is a contradiction.
 DEVIATION_TOLERANCE_MM = 0.0011
+
+
+def _unescaped(cell: str) -> str:
+    """A text cell as written before :func:`setupfix.pipeline.writers.escape_formulas` prefixed it."""
+    return cell[1:] if cell[:1] == "'" and cell[1:2] in ("=", "+", "-", "@", "\t", "\r") else cell
+
+
+#: Text columns whose control characters are escaped (``\x1b`` → ``\\x1b``) so that a name
+#: cannot drive the operator's terminal.
+TEXT_COLUMNS = ("characteristic", "part", "station", "report", "status", "timestamp")
+_CONTROL = re.compile(r"[\x00-\x1f\x7f-\x9f]")
+
+
+def escape_controls(text: str) -> str:
+    """``text`` with each control character written as a visible ``\\xNN``."""
+    return _CONTROL.sub(lambda m: f"\\x{ord(m.group()):02x}", text)
 
 
 def sniff_canonical(head: str) -> bool:
@@ -48,6 +65,11 @@ def finish_table(rows: list[dict[str, object]] | dict[str, object], path: str) -
         if col not in frame:
             frame[col] = math.nan if col in LENGTH_COLUMNS else ""
     frame["unit"] = "mm"
+    for col in TEXT_COLUMNS:
+        text = frame[col]
+        dirty = text.map(lambda v: isinstance(v, str) and _CONTROL.search(v) is not None)
+        if dirty.any():
+            frame[col] = text.where(~dirty, text.map(lambda v: escape_controls(v) if isinstance(v, str) else v))
     _check_magnitudes(frame, path)
     frame.loc[frame["report"].isin(["", None]) | frame["report"].isna(), "report"] = Path(path).name
     extra = [c for c in frame.columns if c not in CANONICAL_COLUMNS]
@@ -130,7 +152,7 @@ def read_canonical(path: str | Path | Source, *, text: str | None = None, unit: 
             continue
         if len(record) > len(header):
             raise ParseError(f"{len(record)} fields, header has {len(header)}", location=where)
-        row: dict[str, object] = dict(zip(header, (c.strip() for c in record)))
+        row: dict[str, object] = dict(zip(header, (_unescaped(c.strip()) for c in record)))
         for col in header[len(record):]:
             row[col] = ""
         if not row["characteristic"]:

@@ -112,12 +112,14 @@ def test_guard_band_optimises_on_the_shrunk_limits():
 
 
 def test_no_harm_gives_up_the_hopeless_dimension():
-    # the max-min optimum (x = +0.1) would push B from +0.05 to +0.15
+    # the max-min optimum (x = +0.1) would push B from +0.05 to +0.15; the exact optimiser's triage
+    # (issue 13) already gives A up and keeps B in tolerance, and no_harm guards any optimiser that does not
     p = problem([[1.0, 1.0]], [-0.25, 0.05], [-0.1, -0.1], [0.1, 0.1])
     raw = SOLVE(p)
-    assert harmed_mask(p.deviation, p.predicted(raw.x), p.lower, p.upper).tolist() == [False, True]
+    assert raw.given_up == ("D0",)
+    assert harmed_mask(p.deviation, p.predicted(raw.x), p.lower, p.upper).tolist() == [False, False]
     rec = recommend(p, Policy.neutral(p), SOLVE)
-    assert rec.given_up == ("D0",) and "no_harm" in rules(rec)
+    assert rec.given_up == ("D0",)
     assert rec.x == pytest.approx([-0.05])  # B centred, A left to the NC program
     assert not harmed_mask(p.deviation, p.predicted(rec.x), p.lower, p.upper).any()
 
@@ -130,9 +132,6 @@ def test_no_harm_holds_when_no_correction_is_harmless():
 
 
 def test_register_cost_moves_the_cheap_register():
-    fields = {f.name for f in dataclasses.fields(CorrectionProblem)}
-    if "cost" not in fields:
-        pytest.skip("CorrectionProblem.cost (exact slice) not merged yet")
     p = problem([[1.0], [1.0]], [0.04], [-0.1], [0.1])  # W + T: any split works
     even = recommend(p, Policy.neutral(p), SOLVE)
     assert even.x == pytest.approx([-0.02, -0.02])

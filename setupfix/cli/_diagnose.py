@@ -29,6 +29,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--model", required=True, metavar="MODEL", help="process model TOML")
     p.add_argument("--corrections", metavar="CSV", default=None, help="corrections log (applied changes, tool changes)")
     p.add_argument("--temperatures", metavar="CSV", default=None, help="temperature log")
+    p.add_argument("--thermal", metavar="MODEL.json", default=None,
+                   help="thermal model saved by 'setupfix thermal fit': its predicted drift is tested as a channel")
     p.add_argument("--augment", metavar="OUT.toml", default=None,
                    help="write the model with the effects found as its [effects] section")
     p.add_argument("--alpha", type=float, default=0.01, help="family-wise level of each selection step (0.01)")
@@ -77,7 +79,7 @@ def run(args: argparse.Namespace) -> int:
         raise SetupfixError("diagnose: give REPORT files or folders, or --db STORE")
     out = diagnose_reports(args.model, args.reports, corrections=args.corrections, temperatures=args.temperatures,
                            augment=args.augment, diagnoser=Diagnoser(alpha=args.alpha, walk=not args.no_walk),
-                           db=args.db)
+                           db=args.db, thermal=args.thermal)
     if args.json:
         json.dump(out.to_json(), sys.stdout, indent=2)
         sys.stdout.write("\n")

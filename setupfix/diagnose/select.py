@@ -214,6 +214,7 @@ def select_effects(layout: Layout, series: Series, *, alpha: float = 0.01, max_e
             if cyc.size >= 3:
                 pairs_ok[:, q] = np.ptp(series.applied[cyc], axis=0) > _TINY
     notes: list[str] = []
+    slope_known = True
     X = np.hstack([obs.base] + [effect_columns(s, layout, series, obs) for s in declared])
     found: list[EffectSpec] = []
     blocks: list[Array] = []
@@ -252,7 +253,8 @@ def select_effects(layout: Layout, series: Series, *, alpha: float = 0.01, max_e
             # the register is the one whose changes the dimension answers (the slope), not the constant
             i_r, q_r = np.unravel_index(int(np.argmax(np.where(active_rel, slope_r, -1.0))), gain_r.shape)
             slope_p = _pvalue(slope_r[i_r, q_r], rss0 - gain_r[i_r, q_r] + slope_r[i_r, q_r], df0 - 1, 1)
-            if active_rel[i_r, q_r] and slope_p * m < alpha:
+            slope_known = slope_p * m < alpha  # else: the dimension is off, the register is not identified
+            if active_rel[i_r, q_r]:
                 spec = EffectSpec("relation", register=layout.register_ids[i_r], dimension=layout.dimension_ids[q_r])
                 cands.append((_pvalue(gain_r[i_r, q_r], rss0, df0, 2), 2, spec, -1, float(gain_r[i_r, q_r])))
         p, k, spec, di, gain = min(cands, key=lambda c: c[0])
@@ -274,8 +276,12 @@ def select_effects(layout: Layout, series: Series, *, alpha: float = 0.01, max_e
             alike: tuple[str, ...] = ()
         elif di >= 0:
             alike = _alike(Q, cols[:, 0], Z, specs, active_dense, di)
-        else:
+        elif slope_known:
             alike = _alike_relation(Q, obs, series.applied, layout, spec, pairs_ok)
+        else:
+            q = layout.dimension_ids.index(str(spec.dimension))
+            alike = tuple(f"relation: {spec.dimension} ~ {layout.register_ids[j]}"
+                          for j in np.flatnonzero(pairs_ok[:, q]) if layout.register_ids[j] != spec.register)
         steps.append(Step(spec, float(f_stat), float(p), float(p_adj), m, cv0, cv1, ok, alike))
         if not ok:
             break

@@ -53,15 +53,16 @@ from contextlib import AbstractContextManager
 
 import numpy as np
 import numpy.typing as npt
-from scipy.sparse import coo_array, csr_array, hstack
+from scipy.sparse import coo_array, csr_array, hstack, vstack
 from threadpoolctl import ThreadpoolController
 
 from setupfix.errors import Note, SolverError
+from setupfix.params import Interval
 from setupfix.optimize._base import Optimizer, make_result
 from setupfix.optimize._grid import (TOL, dual_bound, enumerate_ball, ellipsoid_search, grid_margins, lagrangian_ball,
                                      least_distance,
                                      next_level,
-                                     PairStructure, pair_bound, pair_structure, rounded_rhs, row_gcd)
+                                     PairStructure, pair_bound, pair_structure, rounded_rhs, row_gcd, shrink)
 from setupfix.optimize._highs import INF, LinearModel, Solve
 from setupfix.optimize._problem import CorrectionProblem, OptimizeResult
 
@@ -78,8 +79,15 @@ NNLS_MAX_ROWS = 600
 #: Radius² and size of the ellipsoids the grid-optimum stage lists for a point at its bound.
 SEARCH_RADIUS2 = 16.0
 SEARCH_LIMIT = 20_000
+#: A cold LP with more rows than this is solved by HiGHS's interior-point method (with crossover, so the
+#: duals are a basis' and later solves of the kept model warm-start the simplex from it).
+IPM_MIN_ROWS = 2000
+#: Share of the grid-optimum stage's time a feasibility MILP may use.
+MILP_SHARE = 0.5
+#: Share of the whole time limit kept for the least-norm stage (HiGHS may overrun a limit a little).
+LEAST_NORM_SHARE = 0.5
 #: Levels the grid-optimum stage may descend by rounded rows before it uses the MILP.
-LEVEL_STEPS = 12
+LEVEL_STEPS = 40
 #: Cap on t when one-sided limits leave it unbounded (far above any two-sided margin).
 T_CAP = 1e9
 
@@ -122,8 +130,9 @@ def _rows_to_dimensions(problem: CorrectionProblem, rows: npt.NDArray[np.bool_])
 def _lp_model(g_rows: Array, kmin: Array, kmax: Array) -> LinearModel:
     """max t s.t. G k + t ≤ g (row bounds set per report), k in the box."""
     r, n = g_rows.shape
-    return LinearModel(np.r_[np.zeros(n), -1.0], np.hstack([g_rows, np.ones((r, 1))]), np.full(r, -INF),
-                       np.zeros(r), np.r_[kmin, -T_CAP], np.r_[kmax, T_CAP])
+    model = LinearModel(np.r_[np.zeros(n), -1.0], np.hstack([g_rows, np.ones((r, 1))]), np.full(r, -INF),
+                        np.zeros(r), np.r_[kmin, -T_CAP], np.r_[kmax, T_CAP])
+    return model
 
 
 _CONTROLLER: ThreadpoolController | None = None
@@ -198,6 +207,11 @@ class ExactOptimizer(Optimizer):
     """
 
     name = "exact"
+    _parameter_constraints = {
+        "grid": [bool],
+        "time_limit": [Interval(float, 0.0, None, closed="neither")],
+        "seed": [Interval(int, 0, None), None],
+    }
 
     def __init__(self, *, grid: bool = True, time_limit: float = 2.0, seed: int | None = None) -> None:
         self.grid = grid
@@ -225,15 +239,35 @@ class ExactOptimizer(Optimizer):
         """t_LP, the LP point and the row weights y ≥ 0 of its dual."""
         lp = self._lp(g_rows, kmin, kmax, cost)
         lp.set_row_bounds(np.full(g.size, -INF), g)
+        cold = not lp.solved
+        if cold and g.size > IPM_MIN_ROWS:
+            lp.h.setOptionValue("solver", "ipm")
         res = lp.solve(clock.left())
-        if res.status != "optimal":  # one retry from scratch before giving up
+        if cold:
+            lp.h.setOptionValue("solver", "choose")
+        if res.status not in ("optimal", "time_limit") and clock.left() > 0:  # one retry from scratch
             self._cache = _Cache()
             lp = self._lp(g_rows, kmin, kmax, cost)
             lp.set_row_bounds(np.full(g.size, -INF), g)
-            res = lp.solve(max(clock.left(), 1.0))
+            res = lp.solve(clock.left())
+        if res.status == "time_limit":
+            raise SolverError(f"the LP bound was not reached within the time limit ({self.time_limit:g} s): "
+                              "no proven correction; allow more time")
         if res.status != "optimal" or res.x is None or res.row_dual is None:
             raise SolverError(f"LP stage failed: HiGHS answered {res.detail!r}")
         return float(res.x[-1]), res.x[:-1], np.maximum(-res.row_dual, 0.0)
+
+    def _rounded_rows_feasible(self, g_rows: Array, b: Array, kmin: Array, kmax: Array, cost: Array,
+                               clock: _Clock) -> str:
+        """Whether G k ≤ b has a solution in the box (the kept LP with t fixed at 0)."""
+        lp = self._lp(g_rows, kmin, kmax, cost)
+        n = kmin.size
+        lp.set_row_bounds(np.full(b.size, -INF), np.where(np.isfinite(b), b, INF))
+        lp.set_col_bounds(np.array([n], dtype=np.int32), np.zeros(1), np.zeros(1))
+        try:
+            return lp.solve(max(clock.left(), 1e-3)).status
+        finally:
+            lp.set_col_bounds(np.array([n], dtype=np.int32), np.array([-T_CAP]), np.array([T_CAP]))
 
     def _max_margin_milp(self, g_rows: Array, g: Array, kmin: Array, kmax: Array, t_lo: float, t_hi: float,
                          start: Array | None, time_limit: float) -> Solve:
@@ -293,16 +327,78 @@ class ExactOptimizer(Optimizer):
                 return (best if found is None else found), True, ""
             if found is not None:
                 best = found
-        finite = np.where(np.isfinite(b), b, INF)
-        return self._chord_milp(g_rows, finite, kmin, kmax, cost, best, cont[0] if cont else best, clock, path)
+        best = self._good_incumbent(g_rows, g, b, kmin, kmax, cost, t_star, best, cont, clock)
+        path.append("least norm: chords of k² (LP, then MILP)")
+        found, proved, why = self._chord_solve(g_rows, g, t_star, b, kmin, kmax, cost, best,
+                                               cont[0] if cont else best, clock, clock.left())
+        return (best if found is None else found), proved, why
 
-    def _chord_milp(self, g_rows: Array, b: Array, kmin: Array, kmax: Array, cost: Array, best: Array,
-                    k_cont: Array, clock: _Clock, path: list[str]) -> tuple[Array, bool, str]:
-        """Exact least Σ c k² by the chord MILP (lazy chords); stops at the deadline."""
+    def _good_incumbent(self, g_rows: Array, g: Array, b: Array, kmin: Array, kmax: Array, cost: Array,
+                        t_star: float, best: Array, cont: tuple[Array, Array, Array, Array] | None,
+                        clock: _Clock) -> Array:
+        """A small feasible grid point before the chord MILP (heuristics; the MILP proves or improves it).
+
+        * Safe rounding: the continuous least-norm point of the rows tightened by half their
+          l1 norm rounds to a point that meets the original rows (each coordinate moves ≤ ½).
+        * The segment from the incumbent to the continuous least-norm point is feasible; the
+          rounded point farthest along it that stays feasible.
+        * :func:`~setupfix.optimize._grid.shrink`: single steps towards 0 while feasible.
+        """
+        def f(k: Array) -> float:
+            return float(np.sum(cost * k**2))
+
+        def ok(k: Array) -> bool:
+            return bool(grid_margins(g_rows, g, k) >= t_star - TOL)
+
+        out = None
+        if g_rows.shape[0] + 2 * kmin.size <= NNLS_MAX_ROWS:  # one more QP only where QPs are cheap
+            safe = b - 0.5 * np.sum(np.abs(g_rows), axis=1)
+            _, out = self._continuous_least_norm(g_rows, safe, kmin, kmax, cost, clock)
+        if out is not None:
+            k = np.clip(np.rint(out[0]), kmin, kmax)
+            if ok(k) and f(k) < f(best):
+                best = k
+        if cont is None:
+            _, cont = self._continuous_least_norm(g_rows, b, kmin, kmax, cost, clock)
+        if cont is not None:
+            lo, hi = 0.0, 1.0
+            for _ in range(12):
+                mid = (lo + hi) / 2
+                k = np.clip(np.rint(best + mid * (cont[0] - best)), kmin, kmax)
+                if ok(k):
+                    lo = mid
+                    if f(k) < f(best):
+                        best = k
+                else:
+                    hi = mid
+        return shrink(g_rows, b, best, cost, time.perf_counter() + 0.1 * max(clock.left(), 0.0))
+
+    def _chord_solve(self, g_rows: Array, g: Array, level: float, b: Array, kmin: Array, kmax: Array,
+                     cost: Array, best: Array | None, k_cont: Array, clock: _Clock, time_limit: float,
+                     lp_only: bool = False) -> tuple[Array | None, bool, str]:
+        """Exact least Σ c k² over grid points with t(k) ≥ level, by chords of k² (lazy).
+
+        On integers k² is the upper envelope of the chords (2j+1)|k| − j(j+1), j ≥ 0,
+        so "min Σ c s, s_i ≥ chords, G k ≤ b" is exact for integer k.  First as an LP:
+        when its optimal vertex is integral and every s_i = k_i², that vertex is the
+        optimum (the LP is a relaxation and the vertex is a grid point) — the usual
+        case when G is a network-like matrix of ±1 relations.  Otherwise (unless
+        ``lp_only``) the same model as a MILP, started from ``best``.  Chords are added
+        where a solution violates s_i ≥ k_i².  Stops after ``time_limit`` seconds.
+
+        Returns
+        -------
+        best : ndarray or None
+            Best grid point found with t(k) ≥ level (``best`` if none better).
+        proved : bool
+        why : str
+            Why not proved (``"time limit"``, HiGHS's words, or ``"fractional"``).
+        """
         r, n = g_rows.shape
-        path.append("least norm: chord MILP")
+        deadline = min(clock.deadline, time.perf_counter() + max(time_limit, 0.0))
         chords: list[set[int]] = []
-        for vc, vs in zip(np.abs(k_cont), np.abs(best)):
+        ref = np.abs(k_cont) if best is None else np.abs(best)
+        for vc, vs in zip(np.abs(k_cont), ref):
             base = int(np.floor(vc))
             chords.append({max(base - 1, 0), base, base + 1, int(vs)})
 
@@ -318,34 +414,88 @@ class ExactOptimizer(Optimizer):
             return csr_array(coo_array((vals, (rows, cols)), shape=(m, 2 * n))), j * (j + 1)
 
         a_chords, rhs = chord_rows([(i, j) for i, js in enumerate(chords) for j in sorted(js)])
-        a = hstack([csr_array(g_rows), csr_array((r, n))]).tocsr()
-        from scipy.sparse import vstack
-
-        a = vstack([a, a_chords])
-        model = LinearModel(np.r_[np.zeros(n), cost], a, np.full(a.shape[0], -INF), np.r_[b, rhs],
-                            np.r_[kmin, np.zeros(n)], np.r_[kmax, np.full(n, INF)],
-                            integer=np.r_[np.ones(n, bool), np.zeros(n, bool)])
-        f_best = float(np.sum(cost * best**2))
+        fin = np.isfinite(b)
+        a = vstack([hstack([csr_array(g_rows[fin]), csr_array((int(fin.sum()), n))]), a_chords]).tocsr()
+        model = LinearModel(np.r_[np.zeros(n), cost], a, np.full(a.shape[0], -INF), np.r_[b[fin], rhs],
+                            np.r_[kmin, np.zeros(n)], np.r_[kmax, np.full(n, INF)])
+        f_best = np.inf if best is None else float(np.sum(cost * best**2))
+        integer = False
         while True:
-            left = clock.left()
+            left = deadline - time.perf_counter()
             if left <= 0:
                 return best, False, "time limit"
-            res = model.solve(left, np.r_[best, best**2])
-            if res.x is None:
+            res = model.solve(left, None if best is None else np.r_[best, best**2])
+            if res.x is None or res.status not in ("optimal", "time_limit"):
                 return best, False, "time limit" if res.status == "time_limit" else f"HiGHS: {res.detail}"
-            k = np.rint(res.x[:n])
-            s = res.x[n:]
+            k_raw, s = res.x[:n], res.x[n:]
+            k = np.clip(np.rint(k_raw), kmin, kmax)
             f_k = float(np.sum(cost * k**2))
-            if np.all(g_rows @ k <= b + 1e-9) and f_k < f_best:
+            feasible = bool(grid_margins(g_rows, g, k) >= level - TOL)
+            if feasible and f_k < f_best:
                 best, f_best = k, f_k
             if res.status != "optimal":
-                return best, False, "time limit" if res.status == "time_limit" else f"HiGHS: {res.detail}"
-            short = np.flatnonzero(s < k**2 - 1e-6)
-            if short.size == 0:
-                return best, True, ""
-            new = [(int(i), int(abs(k[i]))) for i in short]
+                return best, False, "time limit"
+            fractional = np.flatnonzero(np.abs(k_raw - k) > 1e-7)
+            if not integer and fractional.size:
+                new = [(int(i), int(np.floor(abs(k_raw[i])))) for i in fractional
+                       if int(np.floor(abs(k_raw[i]))) not in chords[i]]
+                if not new:
+                    if lp_only:
+                        return best, False, "fractional"
+                    model.make_integer(np.arange(n))
+                    integer = True
+                    continue
+            else:
+                short = np.flatnonzero(s < k**2 - 1e-6)
+                if short.size == 0:
+                    return best, bool(feasible and best is not None and f_best <= f_k), ""
+                new = [(int(i), int(abs(k[i]))) for i in short]
+            for i, j in new:
+                chords[i].add(j)
             a_new, rhs_new = chord_rows(new)
             model.add_rows(a_new, np.full(rhs_new.size, -INF), rhs_new)
+
+    def _triaged(self, problem: CorrectionProblem, g_rows: Array, g: Array, kmin: Array, kmax: Array, cost: Array,
+                 k_start: Array, clock: _Clock, path: list[str], notes: list[Note], calls: int,
+                 bound: float) -> OptimizeResult:
+        """No correction brings every dimension into tolerance: :func:`~setupfix.optimize._triage.triage`."""
+        from setupfix.optimize._triage import triage
+
+        upper_ok, lower_ok = np.isfinite(problem.upper), np.isfinite(problem.lower)
+        row_dim = np.r_[np.flatnonzero(upper_ok), np.flatnonzero(lower_ok)]
+        m = len(problem.dimension_ids)
+        k, proved, why, done = triage(g_rows, g, row_dim, m, kmin, kmax, cost, clock.deadline, k_start)
+        clock.lap("triage")
+        path.append("triage: " + ", ".join(done) if done else "triage")
+        x = np.zeros(problem.n_registers)
+        x[problem.free] = k * problem.resolution
+        margins = problem.margins(x)
+        quantum = QUANTUM * problem.resolution
+        given_up = tuple(d for d, v in zip(problem.dimension_ids, margins) if v < -quantum)
+        kept = margins >= -quantum
+        low = margins[kept].min() if kept.any() else 0.0
+        binding = tuple(d for d, v, ok in zip(problem.dimension_ids, margins, kept)
+                        if ok and v <= low + problem.resolution / 4)
+        message = (f"no correction within the register limits brings every dimension into tolerance: "
+                   f"{len(given_up)} dimension(s) given up ({', '.join(given_up)}) need the NC program or the "
+                   "process, not the setup; the other dimensions are kept in tolerance with the largest error "
+                   "budget and the smallest correction")
+        notes.append(Note(message, kind="solver"))
+        status = "optimal"
+        extra: dict[str, object] = {"stages": dict(clock.stages), "path": "; ".join(path)}
+        if not proved:
+            status = "time_limit" if "time limit" in why else "solver_error"
+            notes.append(Note(f"triage not proved ({why})", kind="solver"))
+            message += f"; not proved ({why})"
+            extra["stopped"] = {"stage": "triage", "reason": why}
+        # guard off: triage trades the error budget of the hopeless dimensions on purpose, and says so
+        result = make_result(problem, x, optimizer=self.name, evaluations=calls + 3,
+                             seconds=time.perf_counter() - clock.start, status=status, bound=bound,
+                             message=message, binding=binding, guard=False)
+        result.extra.update(extra)
+        result.given_up = given_up
+        result.notes = tuple(notes)
+        return result
 
     # -- driver --------------------------------------------------------------------------------
     def solve(self, problem: CorrectionProblem) -> OptimizeResult:
@@ -387,18 +537,36 @@ class ExactOptimizer(Optimizer):
         upper = min(dual_bound(g_rows, g, y, kmin, kmax), pair_bound(g_rows, g, kmin, kmax, pairs), T_CAP)
         k_best = np.clip(np.rint(k_lp), kmin, kmax)
         t_best = float(grid_margins(g_rows, g, k_best))
+        t_zero = float(grid_margins(g_rows, g, np.zeros_like(k_best)))
+        if t_zero >= t_best:  # no correction at all is a grid point too
+            k_best, t_best = np.zeros_like(k_best), t_zero
         stopped: tuple[str, str] | None = None
         cont = None
+        least_norm_done: Array | None = None  # rows at which the least norm is already proved
+        n_free = int(kmin.size)
+        small = g_rows.shape[0] + 2 * n_free <= NNLS_MAX_ROWS
+        stage2_end = clock.deadline - LEAST_NORM_SHARE * self.time_limit
+
+        def stage2_left() -> float:  # the grid-optimum stage leaves a share of the limit to the least norm
+            return stage2_end - time.perf_counter()
+
         level = upper
         all_integer = bool(np.all((d > 0) | zero))
-        if t_best >= upper - TOL:
+        if upper < -TOL:
+            path.append("grid optimum: the bound is below 0 (no correction brings every dimension into tolerance)")
+        elif t_best >= upper - TOL:
             path.append("grid optimum: rounded LP point attains the bound")
         else:
             proved = False
             for _ in range(LEVEL_STEPS):
                 b = rounded_rhs(g, d, zero, level)
                 calls += 1
-                status, cont = self._continuous_least_norm(g_rows, b, kmin, kmax, cost, clock)
+                if small:
+                    status, cont = self._continuous_least_norm(g_rows, b, kmin, kmax, cost, clock)
+                else:  # large: only whether the rounded rows are feasible (an LP), then the MILP below
+                    status, cont = self._rounded_rows_feasible(g_rows, b, kmin, kmax, cost, clock), None
+                    if status == "optimal":
+                        cont = (k_best, np.zeros(g.size), np.zeros(n_free), np.zeros(n_free))
                 if cont is None:
                     if status != "infeasible" or not all_integer:
                         break
@@ -417,28 +585,58 @@ class ExactOptimizer(Optimizer):
                     proved = True
                     break
                 # A grid point at the bound near the continuous one: small ellipsoids only.
-                finite = np.isfinite(b)
-                centre, q = lagrangian_ball(g_rows[finite], b[finite], kmin, kmax, cost, cont[1][finite],
-                                            cont[2], cont[3])
-                found, _, _ = ellipsoid_search(g_rows, g, level, centre, q, cost, kmin, kmax,
-                                               q + SEARCH_RADIUS2, SEARCH_LIMIT, b)
+                found = None
+                if small:
+                    finite = np.isfinite(b)
+                    centre, q = lagrangian_ball(g_rows[finite], b[finite], kmin, kmax, cost, cont[1][finite],
+                                                cont[2], cont[3])
+                    found, _, _ = ellipsoid_search(g_rows, g, level, centre, q, cost, kmin, kmax,
+                                                   q + SEARCH_RADIUS2, SEARCH_LIMIT, b)
                 if found is not None:
                     k_best, t_best = found, float(grid_margins(g_rows, g, found))
                     path.append("grid optimum: a grid point near the rounded rows' least-norm point attains the "
                                 "bound")
                     proved = True
+                    break
+                # A feasibility MILP on the rounded rows: a point proves the bound is reached; a proof
+                # of infeasibility lowers the bound to the next level (integer rows only).
+                fin = np.isfinite(b)
+                feas = LinearModel(np.zeros(n_free), g_rows[fin], np.full(int(fin.sum()), -INF), b[fin], kmin, kmax,
+                                   integer=np.ones(n_free, bool)).solve(stage2_left() * MILP_SHARE)
+                calls += 1
+                path.append(f"grid optimum: feasibility MILP at {level:.4g} steps ({feas.status}, {feas.seconds:.2f} s)")
+                if feas.x is not None:
+                    k = np.clip(np.rint(feas.x), kmin, kmax)
+                    t_k = float(grid_margins(g_rows, g, k))
+                    if t_k > t_best:
+                        k_best, t_best = k, t_k
+                    if t_best >= level - TOL:
+                        path.append("grid optimum: a feasibility MILP on the rounded rows reaches the bound")
+                        proved = True
+                        cont = cont if t_best <= level + TOL else None
+                        break
+                if feas.status == "infeasible" and all_integer:
+                    level = next_level(g, d, b)
+                    cont = None
+                    if t_best >= level - TOL:
+                        path.append("grid optimum: best point attains the bound lowered by infeasible levels")
+                        proved = True
+                        break
+                    continue
                 break
             upper = min(upper, level)
+            if not small:
+                cont = None
             if not proved:
                 cont = None
                 calls += 1
-                res = self._max_margin_milp(g_rows, g, kmin, kmax, t_best, upper, k_best, clock.left() / 2)
+                res = self._max_margin_milp(g_rows, g, kmin, kmax, t_best, upper, k_best, stage2_left())
                 if res.status == "error":
                     notes.append(Note(f"HiGHS answered {res.detail!r} on the grid MILP bracketed by the best "
                                       f"grid point ({t_best:.4g}) and the bound ({upper:.4g} steps); retried "
                                       "without the lower bracket", kind="solver"))
                     calls += 1
-                    res = self._max_margin_milp(g_rows, g, kmin, kmax, -T_CAP, upper, None, clock.left() / 2)
+                    res = self._max_margin_milp(g_rows, g, kmin, kmax, -T_CAP, upper, None, stage2_left())
                 if res.x is not None:
                     k = np.clip(np.rint(res.x[:-1]), kmin, kmax)
                     t_k = float(grid_margins(g_rows, g, k))
@@ -448,14 +646,20 @@ class ExactOptimizer(Optimizer):
                 if res.status != "optimal":
                     stopped = ("grid optimum", "time limit" if res.status == "time_limit" else f"HiGHS: {res.detail}")
         clock.lap("grid optimum")
+        if upper < -TOL or (stopped is None and t_best < -TOL):
+            return self._triaged(problem, g_rows, g, kmin, kmax, cost, k_best, clock, path, notes, calls, bound)
 
         # Stage 3: least norm at the error budget reached (also when stage 2 was stopped).
-        calls += 1
         b = rounded_rhs(g, d, zero, t_best)
-        if cont is not None and not np.array_equal(b, rounded_rhs(g, d, zero, level)):
-            cont = None
-        k_best, proved_norm, why = self._grid_least_norm(g_rows, g, b, kmin, kmax, cost, t_best, k_best, cont,
-                                                         clock, path)
+        if least_norm_done is not None and np.array_equal(b, least_norm_done):
+            proved_norm, why = True, ""
+            path.append("least norm: proved with the grid optimum")
+        else:
+            calls += 1
+            if cont is not None and not np.array_equal(b, rounded_rhs(g, d, zero, level)):
+                cont = None
+            k_best, proved_norm, why = self._grid_least_norm(g_rows, g, b, kmin, kmax, cost, t_best, k_best, cont,
+                                                             clock, path)
         if not proved_norm and stopped is None:
             stopped = ("least norm", why)
         clock.lap("least norm")

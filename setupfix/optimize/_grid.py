@@ -47,7 +47,7 @@ import numpy as np
 import numpy.typing as npt
 
 __all__ = ["TOL", "grid_margins", "dual_bound", "pair_bound", "pair_structure", "PairStructure", "row_gcd", "rounded_rhs", "next_level",
-           "least_distance", "lagrangian_ball", "enumerate_ball", "ellipsoid_search"]
+           "least_distance", "lagrangian_ball", "enumerate_ball", "ellipsoid_search", "shrink"]
 
 Array = npt.NDArray[np.float64]
 
@@ -55,6 +55,8 @@ Array = npt.NDArray[np.float64]
 #: 1/1000 step before solving, so distinct margins from one dimension differ by far more.
 TOL = 1e-9
 
+#: Array elements one enumeration may touch in all (some 20 ms of numpy work) before it gives up.
+WORK_LIMIT = 4_000_000
 #: Elements per block when margins of many points are evaluated at once.
 _BLOCK = 1 << 22
 
@@ -119,10 +121,18 @@ def pair_structure(g_rows: Array, kmin: Array, kmax: Array) -> PairStructure | N
     """The pairs :func:`pair_bound` uses; None when there are none (or non-integer rows)."""
     if g_rows.shape[0] < 2 or not np.all(g_rows == np.rint(g_rows)):
         return None
-    rows, inverse = np.unique(g_rows + 0.0, axis=0, return_inverse=True)
-    index = {r.tobytes(): i for i, r in enumerate(rows)}
-    negated = [index.get((-r + 0.0).tobytes(), -1) for r in rows]
-    pairs = [(i, j) for i, j in enumerate(negated) if i < j and np.any(rows[i])]
+    # Rows are grouped by a random integer projection (equal rows, equal keys; a collision of
+    # different rows is checked away below), which is far cheaper than sorting whole rows.
+    weights = np.random.default_rng(0).integers(1, 2**20, g_rows.shape[1]).astype(float)
+    keys = g_rows @ weights
+    uniq, first, inverse = np.unique(keys, return_index=True, return_inverse=True)
+    rows = g_rows[first] + 0.0
+    if not np.array_equal(rows[inverse.ravel()], g_rows + 0.0):
+        return None  # a collision: no pair bound (never wrong, only weaker)
+    where = {float(k): i for i, k in enumerate(uniq)}
+    negated = [where.get(float(-k), -1) for k in uniq]
+    pairs = [(i, j) for i, j in enumerate(negated)
+             if i < j and np.any(rows[i]) and np.array_equal(rows[j], -rows[i] + 0.0)]
     if not pairs:
         return None
     ia, ib = (np.array(v, dtype=np.intp) for v in zip(*pairs))
@@ -296,6 +306,8 @@ def enumerate_ball(centre: Array, cost: Array, radius2: float, kmin: Array, kmax
         partial = np.zeros((1, a.shape[0]))
     pts = np.zeros((1, 0))
     acc = np.zeros(1)
+    work = 0
+    width = 1 + (0 if rows is None else rows.shape[0])
     for p, i in enumerate(order):
         rem = np.maximum(radius2 - acc, 0.0)
         h = np.sqrt(rem / cost[i])
@@ -303,7 +315,8 @@ def enumerate_ball(centre: Array, cost: Array, radius2: float, kmin: Array, kmax
         hi = np.minimum(np.floor(centre[i] + h + 1e-12), kmax[i])
         counts = np.maximum(hi - lo + 1, 0).astype(np.int64)
         total = int(counts.sum())
-        if total > limit:
+        work += total * (width + p)
+        if total > limit or work > WORK_LIMIT:
             return None
         if total == 0:
             return np.zeros((0, n))
@@ -369,3 +382,32 @@ def ellipsoid_search(g_rows: Array, g: Array, level: float, centre: Array, q: fl
             return best, True, listed
         radius2 = min(radius2 * 4, cap)
 
+
+
+def shrink(g_rows: Array, b: Array, k: Array, cost: Array, deadline: float) -> Array:
+    """Move coordinates of a feasible grid point one step towards 0 while G k ≤ b holds.
+
+    A heuristic for the incumbent of the least-norm stage when a proof runs out of
+    time: Σ c k² never grows, feasibility is kept at every step, and it stops at the
+    deadline (time.perf_counter()) or when no single step is possible.
+    """
+    import time
+
+    k = k.copy()
+    fin = np.isfinite(b)
+    rows = g_rows[fin]
+    slack = b[fin] - rows @ k
+    cols = [rows[:, i].copy() for i in range(k.size)]
+    moved = True
+    while moved and time.perf_counter() < deadline:
+        moved = False
+        for i in np.argsort(-cost * np.abs(k), kind="stable"):
+            if k[i] == 0:
+                continue
+            step = -np.sign(k[i])
+            new = slack - step * cols[i]
+            if np.all(new >= -1e-9):
+                k[i] += step
+                slack = new
+                moved = True
+    return k

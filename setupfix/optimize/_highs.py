@@ -117,6 +117,7 @@ class LinearModel:
         self._check(self.h.passModel(lp), "passModel")
         self._rows = np.arange(self.n_rows, dtype=np.int32)
         self._cols = np.arange(self.n_cols, dtype=np.int32)
+        self.solved = False  # True once a run has left a basis to warm-start from
 
     @staticmethod
     def _check(status: HighsStatus, what: str) -> None:
@@ -129,6 +130,15 @@ class LinearModel:
         idx = np.arange(diag.size, dtype=np.int32)
         self._check(self.h.passHessian(diag.size, diag.size, int(HessianFormat.kTriangular), idx,
                                        idx.copy(), diag), "passHessian")
+
+    def make_integer(self, cols: npt.NDArray[np.intp]) -> None:
+        """Turn columns into integer ones (the LP becomes a MILP, solved to a zero gap)."""
+        cols = np.asarray(cols, dtype=np.int32)
+        types = np.array([HighsVarType.kInteger] * cols.size)
+        self._check(self.h.changeColsIntegrality(cols.size, cols, types), "changeColsIntegrality")
+        if not self.is_mip:
+            self.is_mip = True
+            self.h.setOptionValue("mip_rel_gap", 0.0)
 
     def set_row_bounds(self, lo: Array, hi: Array) -> None:
         """Change every row's bounds (the deviations of a new report enter here)."""
@@ -158,6 +168,7 @@ class LinearModel:
         if start is not None and self.is_mip:
             h.setSolution(self.n_cols, self._cols, np.asarray(start, dtype=float))
         run = h.run()
+        self.solved = True
         model_status = h.getModelStatus()
         info = h.getInfo()
         status = _STATUS_NAMES.get(model_status, "error") if run != HighsStatus.kError else "error"

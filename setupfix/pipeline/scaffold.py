@@ -221,7 +221,7 @@ def _render(dims: list[_Dim], skipped: list[tuple[str, str]], reports: Sequence[
         f"name = {_toml_string(title)}",
         f'axis = "{axis}"',
         'unit = "mm"             # every length below is in mm (the reports were converted)',
-        f"resolution = {_number(resolution)}  # the controller's offset step",
+        f"{'resolution = ' + _number(resolution):<24}# the controller's offset step",
         "limit = 0.1             # bound on |correction| of every register; per register: limit = …",
         "",
         "[wks.W1]",
