@@ -103,6 +103,7 @@ class SetupfixApp(App[None]):
         self.folder_watch: FolderWatch | None = None
         self.problem = ""
         self.feed: ThermalFeedForward | None = None
+        self._wide = False
 
     # ----------------------------------------------------------------- layout
     def compose(self) -> ComposeResult:
@@ -311,7 +312,8 @@ class SetupfixApp(App[None]):
         rows = view.filter_rows(view.dimension_rows(c), self.station)
         if self.sort_key is not None:
             rows = view.sort_rows(rows, self.sort_key)
-        self.query_one(DimensionTable).show(rows, wide=self.size.width >= 120)
+        self._wide = self.size.width >= 120
+        self.query_one(DimensionTable).show(rows, wide=self._wide)
         self.query_one(DimensionTable).border_title = (
             f"dimensions · station {self.station or 'all'} · sort {self.sort_key or 'model'}")
         self.query_one(RegisterTable).show(view.register_rows(c, self.opened.current if self.opened else None),
@@ -319,7 +321,9 @@ class SetupfixApp(App[None]):
         self.query_one(RegisterTable).border_title = f"recommendation [{c.model.unit}, axis {c.model.axis}]"
 
     def on_resize(self) -> None:
-        if self._current() is not None:
+        # Rebuild the tables only when the layout changes between narrow and wide.
+        wide = self.size.width >= 120
+        if wide != self._wide and self._current() is not None:
             self._show()
 
     @on(DataTable.HeaderSelected, "#dimensions")
