@@ -38,6 +38,9 @@ def main() -> None:
     ap.add_argument("--trials", type=int, default=10)
     ap.add_argument("--seed", type=int, default=18)
     args = ap.parse_args()
+    from threadpoolctl import threadpool_limits
+
+    threadpool_limits(1)  # BLAS threads change timings 2x on this machine; stated in the output
     OUT.mkdir(parents=True, exist_ok=True)
     model = load_model(ROOT / "sample_reports" / "guide_pins" / "model.toml")
     devs, _ = simulate_deviations(model, args.sets, w1=0.03, w2=0.02, seed=args.seed)
@@ -63,7 +66,7 @@ def main() -> None:
     wall = time.perf_counter() - start
     ini, ex, exf = np.array(initial), np.array(exact_f1), np.array(exact_f)
     lines = [f"# python bench/validation_all_methods.py --sets {args.sets} --trials {args.trials} --seed {args.seed}",
-             f"# {time.strftime('%Y-%m-%d %H:%M:%S')}, {wall:.0f} s wall", "",
+             f"# {time.strftime('%Y-%m-%d %H:%M:%S')}, {wall:.0f} s wall, BLAS threads 1 (threadpoolctl)", "",
              f"{args.sets} sets by eqs. 12–13 (w1 = 0.03, w2 = 0.02 mm); f1 before correction from {ini.min():+.4f} "
              f"to {ini.max():+.4f} mm (median {np.median(ini):+.4f}); exact grid optimum from {ex.min():+.4f} to "
              f"{ex.max():+.4f} mm (median {np.median(ex):+.4f}); exact status: "

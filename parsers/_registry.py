@@ -18,6 +18,7 @@ import warnings
 
 from parsers._notes import collecting
 from parsers._rowkeys import row_keys
+from parsers._verdicts import verdict_notes
 from parsers._source import NO_FINAL_LINE_BREAK, Peek, Source, load_source, peek
 from setupfix.errors import (Note, ParameterError, ParseError, ParseWarning, SetupfixError, SourceLocation,
                              UnknownFormatError)
@@ -25,7 +26,7 @@ from setupfix.errors import (Note, ParameterError, ParseError, ParseWarning, Set
 __all__ = ["FormatSpec", "ReadResult", "register", "formats", "find_format", "read", "read_report", "OPTIONS"]
 
 #: Every option a reader may be given; each :class:`FormatSpec` declares the ones it uses.
-OPTIONS = ("unit", "encoding", "columns")
+OPTIONS = ("unit", "encoding", "columns", "lenient")
 
 Reader = Callable[..., pd.DataFrame]
 
@@ -172,8 +173,8 @@ def read_report(path: str | Path | Source, *, format: str | None = None, **optio
         Registry name; chosen by content, then extension, when omitted.  A column
         mapping (``columns=``) without a format means the ``table`` reader.
     **options
-        ``unit``, ``encoding``, ``columns`` (None = not given).  One the chosen reader
-        does not use is refused.
+        ``unit``, ``encoding``, ``columns``, ``lenient`` (None/False = not given).  One
+        the chosen reader does not use is refused.
 
     Returns
     -------
@@ -192,8 +193,10 @@ def read_report(path: str | Path | Source, *, format: str | None = None, **optio
     if not format and options.get("columns") and "table" in _REGISTRY:
         format = "table"
     source = load_source(path)
+    if not source.data.removeprefix(b"\xef\xbb\xbf").strip(b" \t\r\n\x00"):
+        raise ParseError("empty file", location=SourceLocation(source.name))
     spec = find_format(source, format)
-    options = {k: v for k, v in options.items() if v is not None}
+    options = {k: v for k, v in options.items() if v is not None and v is not False}
     check_options(spec, options, source.name)
     missing = spec.complete(source.data) if spec.complete and source.data.strip() else None
     try:
@@ -210,7 +213,7 @@ def read_report(path: str | Path | Source, *, format: str | None = None, **optio
         raise
     if missing and missing != NO_FINAL_LINE_BREAK:
         raise _truncated(spec, source, missing)
-    return ReadResult(table, tuple(notes), spec.name, source.name)
+    return ReadResult(table, (*notes, *verdict_notes(table, source.name)), spec.name, source.name)
 
 
 def _truncated(spec: FormatSpec, source: Source, missing: str) -> ParseError:

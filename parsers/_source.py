@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import codecs
 import csv
 import io
 import re
@@ -14,7 +15,7 @@ from pathlib import Path
 from parsers import numbers
 from setupfix.errors import ParseError, SourceLocation
 
-__all__ = ["Peek", "Source", "STDIN", "load_source", "peek", "peek_file", "decode", "read_bytes", "read_text", "parse_number", "point_number",
+__all__ = ["Peek", "Source", "check_encoding", "STDIN", "load_source", "peek", "peek_file", "decode", "read_bytes", "read_text", "parse_number", "point_number",
            "csv_records", "final_line_break", "end_statement"]
 
 #: Largest report accepted [bytes]; a CMM text report is kilobytes, a JSON export megabytes.
@@ -37,6 +38,40 @@ class Peek:
         return self.path.suffix.lower()
 
 
+#: Codecs Python accepts as text encodings that rewrite text instead of mapping bytes to characters.
+_TRANSFORMS = frozenset({"idna", "punycode", "unicode-escape", "raw-unicode-escape", "undefined", "utf-7"})
+_PROBE = "0123456789.,-+eE abcXYZ_;:/()\t\r\n"
+
+
+def check_encoding(encoding: str, where: str = "") -> str:
+    """The codec name of ``encoding`` if it is a character set a report can be written in.
+
+    Refused: unknown names, byte transforms (``hex``, ``base64``), and text codecs that
+    rewrite text (``punycode``, ``idna``, ``unicode_escape``, ``utf-7``); the character set
+    must map digits, signs and separators to themselves (ASCII-compatible, or UTF-16/32).
+
+    Raises
+    ------
+    ParseError
+        Naming the encoding (and ``where``, the file, when given).
+    """
+    location = SourceLocation(where) if where else None
+    try:
+        info = codecs.lookup(encoding)
+    except LookupError:
+        raise ParseError(f"unknown encoding {encoding!r}", location=location) from None
+    usable = getattr(info, "_is_text_encoding", True) and info.name not in _TRANSFORMS
+    if usable and not info.name.startswith(("utf-16", "utf-32")):
+        try:
+            usable = _PROBE.encode(info.name).decode(info.name) == _PROBE and _PROBE.encode("ascii").decode(info.name) == _PROBE
+        except (UnicodeError, ValueError):
+            usable = False
+    if not usable:
+        raise ParseError(f"encoding {encoding!r} is not a character set a report is written in "
+                         "(e.g. utf-8, cp1252, cp949, utf-16)", location=location)
+    return info.name
+
+
 def decode(data: bytes, path: str, encoding: str | None = None) -> str:
     """Decode report bytes: the given encoding, else UTF-8 (BOM or not), UTF-16 by BOM,
     CP949 when the bytes form valid Korean double-byte text, else CP1252.
@@ -51,9 +86,7 @@ def decode(data: bytes, path: str, encoding: str | None = None) -> str:
     """
     if encoding:
         try:
-            return data.decode(encoding)
-        except LookupError:
-            raise ParseError(f"unknown encoding {encoding!r}", location=SourceLocation(path)) from None
+            return data.decode(check_encoding(encoding, path))
         except UnicodeDecodeError as exc:
             line = data[: exc.start].count(b"\n") + 1
             raise ParseError(f"bytes are not {encoding} text", location=SourceLocation(path, line=line)) from None

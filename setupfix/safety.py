@@ -228,10 +228,10 @@ def _zero_result(problem: CorrectionProblem, optimizer: str, status: str, messag
 
 
 def _with_cost(problem: CorrectionProblem, cost: Array) -> CorrectionProblem:
-    fields = {f.name for f in dataclasses.fields(problem)}
-    if "cost" in fields and not np.all(cost == 1.0):
-        return dataclasses.replace(problem, cost=np.asarray(cost, dtype=float))
-    return problem
+    """The problem with the registers' least-norm weights (``CorrectionProblem.cost``)."""
+    if np.all(cost == 1.0):
+        return problem
+    return dataclasses.replace(problem, cost=np.asarray(cost, dtype=float))
 
 
 def _restrict(problem: CorrectionProblem, keep: Mask) -> CorrectionProblem:
@@ -296,7 +296,7 @@ def recommend(problem: CorrectionProblem, policy: Policy, solve: Callable[[Corre
 
     result = solve(guarded)
     x = np.asarray(result.x, dtype=float)
-    given_up = tuple(getattr(result, "given_up", ()) or ())
+    given_up = tuple(result.given_up)
 
     xg = apply_gain(x, policy.gain, problem.resolution)
     if np.any(xg != x):

@@ -24,6 +24,7 @@ register(FormatSpec(
     extensions=(),
     sniff=_sniff,
     read=read_korean,
+    options=("unit", "encoding", "lenient"),
     priority=50,
     complete=final_line_break,
 ))

@@ -25,8 +25,10 @@ from pathlib import Path
 
 import pandas as pd
 
-from parsers._source import read_text
-from parsers._rows import SkipLog, checked_deviation, finish_rows, parse_number, unit_factor, unit_or_none
+from parsers._notes import note
+from parsers._rows import SkipLog, finish_rows, parse_number, unit_factor, unit_or_none
+from parsers._source import Source, read_text
+from parsers.canonical import DEVIATION_TOLERANCE_MM
 from setupfix.errors import ParseError, SourceLocation
 
 __all__ = ["read_korean", "sniff_korean"]
@@ -84,7 +86,37 @@ def _header_value(text: str, label: str) -> str:
     return match.group(1).strip() if match else ""
 
 
-def read_korean(path: str | Path, *, unit: str | None = None, encoding: str | None = None) -> pd.DataFrame:
+def along_normal(nominal: float, actual: float, stated: float | None, lower: float, upper: float
+                 ) -> tuple[float, float, float] | None:
+    """(nominal, lower, upper) of a row in coordinates, learning the report's sign convention.
+
+    The report states each deviation along the feature's normal.  Where the normal
+    points along the axis, ``stated = actual − nominal`` and the row is read as it is.
+    Where it points the other way, the stated deviation is the negative:
+    ``stated = −(actual − nominal)`` (``Y −2.402`` on ``−2.4`` stated ``+0.002``), and
+    the limits, also along the normal, are mirrored into the axis
+    (``[lower, upper] → [−upper, −lower]``).  Some rows also print the nominal as the
+    distance along that reversed normal (``Y −10.905`` on ``10.9`` stated ``+0.005``):
+    ``stated = −(actual + nominal)``; the coordinate nominal is then ``−nominal``.
+
+    Returns
+    -------
+    (nominal, lower, upper) or None
+        In the axis' coordinates (deviation = actual − nominal); None when the stated
+        deviation fits none of the three readings (the row contradicts itself).
+    """
+    tol = DEVIATION_TOLERANCE_MM
+    if stated is None or abs(stated - (actual - nominal)) <= tol:
+        return nominal, lower, upper
+    if abs(stated + (actual - nominal)) <= tol:
+        return nominal, -upper, -lower
+    if abs(stated + (actual + nominal)) <= tol:
+        return -nominal, -upper, -lower
+    return None
+
+
+def read_korean(path: str | Path | Source, *, unit: str | None = None, encoding: str | None = None,
+                lenient: bool = False) -> pd.DataFrame:
     """Read a Korean CMM text report into the canonical table.
 
     Parameters
@@ -94,6 +126,9 @@ def read_korean(path: str | Path, *, unit: str | None = None, encoding: str | No
         The report states no unit; its values are mm unless this says otherwise.
     encoding : str, optional
         Sniffed when omitted (CP949 / EUC-KR in every sample).
+    lenient : bool
+        Skip a row whose stated deviation fits no reading of :func:`along_normal`, with a
+        note naming its line, instead of refusing the report.
 
     Raises
     ------
@@ -116,6 +151,7 @@ def read_korean(path: str | Path, *, unit: str | None = None, encoding: str | No
         y, mo, d, hh, mi, ss = stamp_match.groups()
         stamp = f"{y}-{int(mo):02d}-{int(d):02d}T{int(hh):02d}:{mi}:{ss}"
     skipped = SkipLog(name)
+    reversed_rows = SkipLog(name)
     rows: list[dict[str, object]] = []
     element, part = "", remark
     in_table = False
@@ -167,11 +203,18 @@ def read_korean(path: str | Path, *, unit: str | None = None, encoding: str | No
             elif lower >= upper:
                 raise ParseError(f"lower tolerance {lower:g} is not below upper {upper:g}", location=where)
             stated = parse_number(cells["deviation"], where, "편차") * factor if "deviation" in cells else None
-            # Sign mismatch with a tiny deviation: the report compared magnitudes (line 32 of the NG sample).
-            deviation = checked_deviation(nominal, actual, stated, where, magnitude_ok=True)
-            if deviation is None:
-                skipped.add("row(s) whose actual and nominal differ in sign (magnitudes compared)", number)
+            read = along_normal(nominal, actual, stated, lower, upper)
+            if read is None:
+                message = (f"stated deviation {stated:g} mm fits neither actual - nominal = {actual - nominal:g} mm "
+                           "nor its negative (deviation along a reversed normal)")
+                if not lenient:
+                    raise ParseError(message, location=where, hint="--lenient skips such rows")
+                skipped.add("row(s) contradicting themselves, skipped by --lenient", number)
                 continue
+            if read[1:] != (lower, upper) and not (math.isnan(lower) and math.isnan(upper)):
+                reversed_rows.add("row(s) stating the deviation along a reversed normal (limits mirrored)", number)
+            nominal, lower, upper = read
+            deviation = actual - nominal
         else:
             raise ParseError(f"unknown item {item!r}", location=where)
         rows.append({
@@ -181,4 +224,8 @@ def read_korean(path: str | Path, *, unit: str | None = None, encoding: str | No
         })
     if not in_table:
         raise ParseError("no 측정값/기준값 heading found", location=SourceLocation(name))
-    return finish_rows(rows, name, skipped, what="Korean CMM")
+    table = finish_rows(rows, name, skipped, what="Korean CMM")
+    for reason, lines in reversed_rows.reasons.items():
+        shown = ", ".join(str(n) for n in lines[:12]) + (", …" if len(lines) > 12 else "")
+        note(f"{len(lines)} {reason}: line {shown}", SourceLocation(name, line=int(lines[0])), "convention")
+    return table

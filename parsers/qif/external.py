@@ -134,7 +134,12 @@ def resolve_external(root: etree._Element, ns: str, path: str, doc_id: str, wher
                         continue
         except OSError:
             continue
-        plan = parse_xml(read_bytes(candidate), str(candidate))
+        try:
+            plan = parse_xml(read_bytes(candidate), str(candidate))
+        except ParseError:
+            if candidate in siblings:
+                continue  # some other file beside: not the plan
+            raise
         if not qpid or _qpid(plan) == qpid:
             return str(candidate), plan
     raise ParseError(

@@ -18,6 +18,7 @@ from collections.abc import Callable, Sequence
 from typing import TextIO
 
 from setupfix import __version__
+from setupfix.cli._common import TERMS
 from setupfix.cli.exit_codes import ERROR, INTERRUPTED, UNEXPECTED, USAGE
 from setupfix.errors import SetupfixError
 
@@ -52,7 +53,8 @@ class _UsageError(Exception):
 
 def build_parser() -> argparse.ArgumentParser:
     """The full argument parser with every registered sub-command."""
-    parser = _Parser(prog="setupfix", description=__doc__.splitlines()[0] if __doc__ else None)
+    parser = _Parser(prog="setupfix", description=__doc__.splitlines()[0] if __doc__ else None,
+                     epilog=TERMS, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--version", action="version", version=f"setupfix {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
     for name in COMMAND_MODULES:

@@ -69,6 +69,8 @@ def run(args: argparse.Namespace) -> int:
                                 store=open_store(args.store) if args.store else None, force=args.force)
     finally:
         signal.signal(signal.SIGTERM, previous)
+    for path, note in summary.notes:
+        print(f"warning: {path}: {note}", file=sys.stderr)
     for path, reason in summary.failed:
         print(f"error: {reason if path in reason else f'{path}: {reason}'}", file=sys.stderr)
     if args.json:

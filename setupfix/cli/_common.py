@@ -8,6 +8,23 @@ from typing import Any
 from setupfix.errors import SetupfixError
 
 
+#: The terms of the output, explained once (``setupfix --help``; the README repeats them).
+TERMS = """\
+terms (lengths in the model unit):
+  deviation     actual - nominal of a dimension, as the report measured it
+  margin        distance of a deviation to its nearer tolerance limit; negative when
+                the dimension is out of tolerance
+  error budget  the smallest margin over the measured dimensions (the unilateral
+                error budget of Stryczek 2014); "before" as measured, "after" as
+                predicted once the corrections are applied
+  predicted     the deviation expected after the corrections: measured + the shift
+                the relation matrices give for them
+  bonus         error budget after - error budget before: what the corrections gain
+  binding       the dimensions whose margins stop a larger error budget: no correction
+                raises one of them without lowering another
+"""
+
+
 def add_report_options(p: argparse.ArgumentParser) -> None:
     """Reader options: format, unit, encoding, column mapping, stations."""
     g = p.add_argument_group("report reading")

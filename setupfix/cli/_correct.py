@@ -9,7 +9,7 @@ import sys
 from setupfix.cli._choices import CONTROLLERS, OPTIMIZERS
 from setupfix.cli._common import add_report_options, cycle_options, report_options
 from setupfix.cli.exit_codes import OK, REJECTED
-from setupfix.errors import ParameterError
+from setupfix.errors import ParameterError, SetupfixError
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
@@ -31,6 +31,13 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                         "(model [safety] ewma < 1)")
     add_offsets_options(p)
     add_report_options(p)
+    g = p.add_argument_group("thermal feed-forward (setupfix.pipeline.feedforward)")
+    g.add_argument("--thermal", metavar="MODEL.json", default=None,
+                   help="thermal model: add the drift since the measured parts were cut")
+    g.add_argument("--temperatures", metavar="LOG", default=None, help="temperature log for --thermal")
+    g.add_argument("--at", metavar="TIME", default=None, help="time of the correction (default: the log's last sample)")
+    g.add_argument("--thermal-dead-band", type=float, default=None, metavar="D",
+                   help="feed nothing forward below |D| (model unit; default one register step)")
     p.set_defaults(run=run)
 
 
@@ -68,12 +75,22 @@ def run(args: argparse.Namespace) -> int:
     results = correct_report(model, args.report, optimizer=args.optimizer, seed=args.seed, part=args.part,
                              store=store, current=current, params=params, **cycle_options(args),
                              **report_options(args))
+    if args.thermal or args.temperatures:  # thermal feed-forward step (setupfix.pipeline.feedforward)
+        from setupfix.pipeline.feedforward import apply_feed_forward
+
+        if not (args.thermal and args.temperatures):
+            raise SetupfixError("--thermal and --temperatures go together")
+        apply_feed_forward(results, args.thermal, args.temperatures, at=args.at, dead_band=args.thermal_dead_band)
     rejected = any(r.verdict == "reject" for r in results)
     if args.offsets and not rejected:
         write_correction_offsets(results, args.offsets, controller=args.controller, current=current)
     for r in results:
         if r.verdict == "reject":
             print(f"error: {r.part.report}: part {r.part.part or '—'}: {r.recommendation.alarm}", file=sys.stderr)
+    if args.json or args.offsets == "-":  # the table below prints them; here they must not be lost
+        for r in results:
+            for warning in r.warnings:
+                print(f"warning: {warning}", file=sys.stderr)
     if args.offsets == "-":
         return REJECTED if rejected else OK
     if args.json:
@@ -81,5 +98,6 @@ def run(args: argparse.Namespace) -> int:
         json.dump(objs[0] if len(objs) == 1 else {"parts": objs}, sys.stdout, indent=2)
         sys.stdout.write("\n")
     else:
-        sys.stdout.write("\n\n".join(format_correction(r) for r in results) + "\n")
+        sys.stdout.write("\n\n".join(format_correction(r) + (f"\n{r.thermal.line()}" if r.thermal else "")
+                                       for r in results) + "\n")
     return REJECTED if rejected else OK

@@ -31,6 +31,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--model", required=True, metavar="MODEL", help="process model TOML")
     p.add_argument("--corrections", metavar="CSV", default=None, help="corrections log (applied changes, tool changes)")
     p.add_argument("--temperatures", metavar="CSV", default=None, help="temperature log")
+    p.add_argument("--thermal", metavar="MODEL.json", default=None,
+                   help="thermal model saved by 'setupfix thermal fit': its predicted drift is tested as a channel")
     p.add_argument("--augment", metavar="OUT.toml", default=None,
                    help="write the model with the effects found as its [effects] section")
     p.add_argument("--alpha", type=float, default=0.01, help="family-wise level of each selection step (0.01)")
@@ -60,7 +62,8 @@ def format_diagnosis(out: DiagnoseOutcome) -> str:
         lines.append(f"residual with them: RMS {_f(d.error_after.rms)} {unit}, max {_f(d.error_after.max)}, "
                      f"out of tolerance {d.error_after.out_of_tolerance}")
     else:
-        lines.append("no effect found: the declared model explains the series to its noise")
+        lines.append("no effect found" + ("" if d.selection.lack_of_fit else
+                                          ": the declared model explains the series to its noise"))
     if d.walk is not None:
         lines.append(f"walk forward over {len(d.walk.cycles)} cycle(s) (error budget: mean / worst, RMS reached):")
         for name, b in d.walk.budgets.items():
@@ -71,7 +74,8 @@ def format_diagnosis(out: DiagnoseOutcome) -> str:
     if out.augmented:
         lines.append(f"wrote {out.augmented}")
     lines += [f"note: {n}" for n in out.notes]
-    return "\n".join(lines)
+    # report text (characteristic names, file names) reaches the terminal: no escape sequences
+    return "\n".join("".join(c if c.isprintable() else "?" for c in line) for line in lines)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -82,7 +86,7 @@ def run(args: argparse.Namespace) -> int:
         raise SetupfixError("diagnose: give REPORT files or folders, or --db STORE")
     out = diagnose_reports(args.model, args.reports, corrections=args.corrections, temperatures=args.temperatures,
                            augment=args.augment, diagnoser=Diagnoser(alpha=args.alpha, walk=not args.no_walk),
-                           db=args.db)
+                           db=args.db, thermal=args.thermal)
     if args.json:
         json.dump(out.to_json(), sys.stdout, indent=2)
         sys.stdout.write("\n")

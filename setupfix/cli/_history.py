@@ -54,6 +54,8 @@ def run(args: argparse.Namespace) -> int:
         if args.action == "import":
             s = import_history(store, args.reports, args.corrections, args.temperatures, format=args.format,
                                unit=args.unit, encoding=args.encoding)
+            for note in s.notes:
+                print(f"warning: {note}", file=sys.stderr)
             print(f"{path}: {len(s.new_reports)} new report(s), {len(s.known_reports)} already stored, "
                   f"{s.corrections} new log row(s), {s.temperatures} new temperature value(s)")
         elif args.action == "show":

@@ -7,9 +7,12 @@ import json
 import math
 import sys
 import textwrap
+import unicodedata
+from pathlib import Path
 from typing import TYPE_CHECKING
 
 from setupfix.cli._common import add_report_options, cycle_options, report_options
+from setupfix.errors import ExportError, SourceLocation
 
 if TYPE_CHECKING:
     from setupfix.pipeline.model import MatchTable
@@ -58,6 +61,11 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                       help="keep the characteristics whose name states this axis (and those stating none); "
                            "default: keep all, process axis = the one most names state")
     init.add_argument("--name", default=None, help="process name (default: from the report file names)")
+    init.add_argument("--parts-are-stations", action="store_true",
+                      help="the report's parts are the fixture's stations (one workpiece each): group = part "
+                           "(default: group = the report's station, if it gives one)")
+    init.add_argument("--force", action="store_true",
+                      help="replace MODEL if it exists (default: refuse, so an edited model is never overwritten)")
     g = init.add_argument_group("report reading")
     g.add_argument("--format", default=None, metavar="NAME", help="report format (default: sniffed; see 'formats')")
     g.add_argument("--unit", default=None, choices=("mm", "inch"), help="unit of values the report does not label")
@@ -72,7 +80,11 @@ def run_init(args: argparse.Namespace) -> int:
     from setupfix.pipeline.writers import check_target, write_text
 
     check_target(args.out)
-    scaffold = scaffold_model(args.reports, axis=args.axis, name=args.name, **report_options(args))
+    if args.out != "-" and Path(args.out).exists() and not args.force:
+        raise ExportError("exists: a scaffold would replace it (give --force, or another -o)",
+                          location=SourceLocation(args.out))
+    scaffold = scaffold_model(args.reports, axis=args.axis, name=args.name,
+                              parts_are_stations=args.parts_are_stations, **report_options(args))
     write_text(args.out, scaffold.text + "\n")
     if args.out != "-":
         print(f"wrote {args.out}: {scaffold.dimensions} dimension(s), axis {scaffold.axis}, "
@@ -110,9 +122,24 @@ def run_check(args: argparse.Namespace) -> int:
     return 0
 
 
+def _safe(text: str) -> str:
+    """Report text for the terminal: control characters (escape sequences) shown as "?"."""
+    return "".join(c if c.isprintable() else "?" for c in text)
+
+
+def _cells(text: str) -> int:
+    """Terminal cells of a text: East Asian wide and full-width characters take two."""
+    return sum(2 if unicodedata.east_asian_width(c) in "WF" else 1 for c in text)
+
+
 def _cut(text: str | None, width: int) -> str:
-    text = "—" if not text else text
-    return text if len(text) <= width else text[:width - 1] + "…"
+    """The text cut to ``width`` terminal cells (with "…") and padded to exactly that width."""
+    text = "—" if not text else "".join(c if c.isprintable() else "?" for c in text)
+    if _cells(text) > width:
+        while _cells(text) > width - 1:
+            text = text[:-1]
+        text += "…"
+    return text + " " * (width - _cells(text))
 
 
 def _n(value: float | None) -> str:
@@ -130,23 +157,23 @@ def format_match_table(table: MatchTable) -> str:
     for part in table.parts:
         rows = table.rows(part)
         n_dims = len(rows)
-        lines = [f"{table.report}  part {part.part or '—'}:",
+        lines = [_safe(f"{table.report}  part {part.part or '—'}:"),
                  f"{int(part.measured.sum())} of {n_dims} model dimensions matched, "
                  f"{len(part.unmatched)} report characteristic(s) unmatched", ""]
-        name_w = min(22, max([len("dimension")] + [len(r["name"]) for r in rows]))
-        char_w = min(22, max([len("report name")] + [len(r["characteristic"] or "") for r in rows]))
+        name_w = min(22, max([len("dimension")] + [_cells(r["name"]) for r in rows]))
+        char_w = min(22, max([len("report name")] + [_cells(r["characteristic"] or "") for r in rows]))
         longest = max([0] + [len(r["station"] or "") for r in rows])
         st_w = min(10, max(len("station"), longest)) + 1 if longest else 0
         head = (f"{'station':<{st_w}}"[:st_w] + f"{'dimension':<{name_w}} {'report name':<{char_w}} "
                 f"{'nominal':>10} {'report':>10}  {'limits [' + unit + ']':<15} {'report':<15}")
         lines += [head.rstrip(), "-" * min(WIDTH, len(head.rstrip()))]
         for r in rows:
-            lead = f"{r['station'] or '':<{st_w}}"[:st_w] + f"{_cut(r['name'], name_w):<{name_w}} "
+            lead = (_cut(r["station"], st_w - 1) + " " if st_w else "") + _cut(r["name"], name_w) + " "
             if not r["matched"]:
-                near = ", ".join(r["closest"])
+                near = _safe(", ".join(r["closest"]))
                 lines.append(lead + "absent from the report" + (f"; closest report names: {near}" if near else ""))
                 continue
-            lines.append((lead + f"{_cut(r['characteristic'], char_w):<{char_w}} {_n(r['nominal']):>10} "
+            lines.append((lead + f"{_cut(r['characteristic'], char_w)} {_n(r['nominal']):>10} "
                           f"{_n(r['report_nominal']):>10}  {_limits(r['lower'], r['upper']):<15} "
                           f"{_limits(r['report_lower'], r['report_upper']):<15}"
                           + (" ≠" if r["differs"] else "")).rstrip())
@@ -154,9 +181,10 @@ def format_match_table(table: MatchTable) -> str:
             lines += ["", "report characteristics matching no dimension (closest model names):"]
             for unmatched in part.unmatched:
                 closest = part.suggestions.get(unmatched, ())
-                lines.append(f"  {unmatched}" + (f"  →  {', '.join(closest)}" if closest else "  (nothing close)"))
+                lines.append(f"  {_safe(unmatched)}"
+                             + (f"  →  {', '.join(map(_safe, closest))}" if closest else "  (nothing close)"))
         if part.notes:
-            lines += [""] + [textwrap.fill(f"warning: {n}", WIDTH, subsequent_indent="  ", break_on_hyphens=False)
-                             for n in part.notes]
+            lines += [""] + [textwrap.fill(_safe(f"warning: {n}"), WIDTH, subsequent_indent="  ",
+                                           break_on_hyphens=False) for n in part.notes]
         blocks.append("\n".join(lines))
     return "\n\n".join(blocks)

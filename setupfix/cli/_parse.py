@@ -5,6 +5,8 @@ from __future__ import annotations
 import argparse
 import sys
 
+from parsers._source import check_encoding
+from setupfix.errors import SetupfixError
 from setupfix.cli.exit_codes import ERROR, OK, PARTIAL
 
 
@@ -18,10 +20,22 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--out", required=True, metavar="CSV", help="output CSV ('-': stdout)")
     p.add_argument("--format", default=None, metavar="NAME", help="report format (default: sniffed; see 'formats')")
     p.add_argument("--unit", default=None, choices=("mm", "inch"), help="unit of values the report does not label")
-    p.add_argument("--encoding", default=None, metavar="ENC", help="text encoding (default: sniffed)")
+    p.add_argument("--encoding", default=None, metavar="ENC", type=_encoding,
+                   help="text encoding, e.g. utf-8, cp1252, cp949 (default: sniffed)")
     p.add_argument("--columns", default=None, metavar="MAP",
                    help="column mapping for shop tables (actual=Meas,nominal=Nom,...) or a mapping file")
+    p.add_argument("--lenient", action="store_true",
+                   help="skip a row that contradicts itself (named in a warning) instead of refusing its report; "
+                        "readers that cannot tell such rows apart refuse the option")
     p.set_defaults(run=run)
+
+
+def _encoding(text: str) -> str:
+    """argparse type: a usable character set (``--encoding punycode`` is refused with the reason)."""
+    try:
+        return check_encoding(text)
+    except SetupfixError as exc:
+        raise argparse.ArgumentTypeError(exc.message) from None
 
 
 def run(args: argparse.Namespace) -> int:
@@ -30,7 +44,7 @@ def run(args: argparse.Namespace) -> int:
 
     check_target(args.out)
     outcome = parse_reports(args.files, format=args.format, unit=args.unit, encoding=args.encoding,
-                            columns=args.columns)
+                            columns=args.columns, lenient=args.lenient)
     for report in outcome.reports:
         for line in report.warnings:
             print(f"warning: {line}", file=sys.stderr)

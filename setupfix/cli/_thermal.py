@@ -69,7 +69,7 @@ def _common(p: argparse.ArgumentParser) -> None:
     p.add_argument("--speed", metavar="COL", help="kalman: spindle speed column in rpm (default: 'spindle_speed' if "
                    "present, else the ambient-only fallback)")
     p.add_argument("--seed", type=_seed, default=None, help="seed of the stochastic calibrations (default 0)")
-    p.add_argument("--iterations", type=_positive_int, default=None, help="grey-cs/grey-pso iterations (paper: 100)")
+    p.add_argument("--iterations", type=_positive_int, default=None, help="grey-cs/grey-pso iterations (paper: 100); kalman GA generations (60)")
     p.add_argument("--bound", type=_positive, default=None,
                    help="grey-cs/grey-pso search box ±BOUND for every coefficient (paper: 100)")
     p.add_argument("--form", choices=("trapezoid", "tien"), default=None,
@@ -119,6 +119,9 @@ def _params(args: argparse.Namespace) -> dict[str, Any]:
             params["seed"] = args.seed
         else:
             print(f"warning: --seed has no effect on the deterministic {args.method} method", file=sys.stderr)
+    if args.method == "kalman" and args.iterations is not None:
+        params["generations"] = args.iterations  # the GA's generations: kalman's search budget
+        args.iterations = None
     for option, name in (("iterations", "iterations"), ("bound", "bound"), ("form", "form")):
         value = getattr(args, option)
         if value is not None:

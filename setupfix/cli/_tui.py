@@ -18,6 +18,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                    help="CMM report in any supported format, or a folder to watch")
     p.add_argument("--model", metavar="MODEL", type=Path, default=None, help="process model TOML")
     p.add_argument("--db", metavar="STORE", type=Path, default=None, help="history store (SQLite file)")
+    p.add_argument("--current", metavar="FILE", type=Path, default=None,
+                   help="the controller's current offsets (CSV register,value): new values and absolute exports")
     p.add_argument("--thermal", metavar="MODEL.json", type=Path, default=None,
                    help="saved thermal model (setupfix thermal fit --out)")
     p.add_argument("--temperatures", metavar="LOG", type=Path, default=None, help="temperature log")
@@ -32,7 +34,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 def run(args: argparse.Namespace) -> int:
     from setupfix.tui.app import Inputs, SetupfixApp  # deferred: the CLI never loads textual otherwise
 
-    SetupfixApp(Inputs(model=args.model, report=args.report, db=args.db, thermal=args.thermal,
+    SetupfixApp(Inputs(model=args.model, report=args.report, db=args.db, current=args.current, thermal=args.thermal,
                        temperatures=args.temperatures, optimizer=args.optimizer, seed=args.seed,
                        trials=args.trials, offsets=args.offsets)).run()
     return 0

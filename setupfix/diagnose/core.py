@@ -172,12 +172,13 @@ class Diagnoser(ValidatedParams):
                                         accepted[i].alike))
         walk = None
         notes = list(selection.notes)
-        if self.walk and series.n_cycles > self.min_train:
+        if self.walk and series.n_cycles >= self.min_train + 5:
             walk = walk_forward(layout, series, score_composite=after.relation_matrix(layout),
                                 min_train=self.min_train, reselect_every=self.reselect_every, lam=self.lam,
                                 alpha=self.alpha, declared=declared)
         elif self.walk:
-            notes.append(f"{series.n_cycles} cycle(s): too few to walk forward (needs more than {self.min_train})")
+            notes.append(f"{series.n_cycles} cycle(s): too few to walk forward (needs {self.min_train + 5}: "
+                         f"{self.min_train} to fit, 5 to score)")
         forecast, _ = next_cycle(layout, series, after)
         return Diagnosis(layout, series, before, after, selection, tuple(effects),
                          error_summary(before.residual, layout.lower, layout.upper),

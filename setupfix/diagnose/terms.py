@@ -28,7 +28,7 @@ from setupfix.model import ProcessModel
 from setupfix.relation import relation_matrices
 
 __all__ = ["KINDS", "Layout", "Series", "EffectSpec", "effect_field", "applied_at", "parts_since_change",
-           "join_temperatures", "common_tool_row"]
+           "join_temperatures", "common_tool_row", "typical_step"]
 
 Array = npt.NDArray[np.float64]
 
@@ -218,6 +218,15 @@ class EffectSpec:
         return {"drift": f"{length}/h" if self.shape == "linear" else length, "thermal": f"{length}/°C",
                 "wear": f"{length}/cycle", "scale": f"{length}/{length}", "position": f"{length}/{length}",
                 "relation": "1", "group": length}[self.kind]
+
+
+def typical_step(time: Array) -> float:
+    """Typical interval between cycles [h]: the median gap within shifts (gaps ≤ 1 h), else of all gaps."""
+    gaps = np.diff(time)
+    short = gaps[gaps <= 1.0]
+    if short.size:
+        return float(np.median(short))
+    return float(np.median(gaps)) if gaps.size else 0.0
 
 
 def common_tool_row(layout: Layout) -> Array:

@@ -30,7 +30,7 @@ import numpy.typing as npt
 
 from setupfix.diagnose.fit import Fit, row_space_basis
 from setupfix.diagnose.select import select_effects
-from setupfix.diagnose.terms import EffectSpec, Layout, Series, effect_field
+from setupfix.diagnose.terms import EffectSpec, Layout, Series, effect_field, typical_step
 
 __all__ = ["Budget", "WalkForward", "walk_forward", "next_cycle", "margins_of"]
 
@@ -230,8 +230,7 @@ def next_cycle(layout: Layout, series: Series, fit: Fit) -> tuple[Array, Series]
         The one-cycle series of the forecast (deviation NaN).
     """
     last = series.n_cycles - 1
-    gaps = np.diff(series.time)
-    step = float(np.median(gaps[gaps <= 1.0])) if np.any(gaps <= 1.0) else (float(np.median(gaps)) if gaps.size else 0.0)
+    step = typical_step(series.time)
     pending = series.pending if series.pending.size == layout.n_registers else np.zeros(layout.n_registers)
     applied = series.applied[last] + pending
     nxt = Series(np.full((1, layout.n_dimensions), np.nan), series.time[[last]] + step, applied[None, :],

@@ -85,7 +85,8 @@ def _num(value: Any) -> bool:
     return isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
 
 
-def effects_from_dict(section: Mapping[str, Any] | None, model: ProcessModel, source: str = "<model>") -> EffectsSection:
+def effects_from_dict(section: Mapping[str, Any] | None, model: ProcessModel,
+                      source: str = "<model>") -> EffectsSection:
     """Validate an ``[effects]`` table against ``model``.
 
     Raises

@@ -152,22 +152,26 @@ def match_parts(model: ProcessModel, table: pd.DataFrame, *, source: str = "<rep
     rows_of: dict[str, list[int]] = {}
     for i, key in enumerate(part_of):
         rows_of.setdefault(key, []).append(i)
+    keys = [normalise_name(name) for name in names]
+    station_keys = [normalise_name(s) if s is not None else None for s in stations]
+    dim_ids = np.array([d.id for d in model.dimensions], dtype=object)
     factors = {u: length_factor(u, model.unit) for u in set(units)}
+    row_factor = np.array([factors[u] for u in units], dtype=float)
     suggestions: dict[str, tuple[str, ...]] = {}
     parts: list[PartMeasurement] = []
     for key, rows in rows_of.items():
         deviation = np.full(n, np.nan)
         given = np.full((3, n), np.nan)
-        row_of = [-1] * n
+        row_of = [-1] * n  # the table row matched to each dimension
         unmatched: list[str] = []
         notes: list[Note] = []
         for i in rows:
             name, where = names[i], wheres[i]
-            candidates = lookup.get(normalise_name(name), [])
-            station = stations[i]
+            candidates = lookup.get(keys[i], [])
+            station = station_keys[i]
             if len(candidates) > 1:
                 candidates = [c for c in candidates if station is not None and c[1] is not None
-                              and normalise_name(c[1]) == normalise_name(station)]
+                              and normalise_name(c[1]) == station]
                 if len(candidates) != 1:
                     raise MatchError(
                         f"characteristic {name!r} names several dimensions; give a station matching their group",
@@ -193,8 +197,6 @@ def match_parts(model: ProcessModel, table: pd.DataFrame, *, source: str = "<rep
                                       "this one ignored", SourceLocation(where), "match"))
                     continue
             deviation[idx] = value
-            given[:, idx] = [nominals[i] * factors[units[i]], lowers[i] * factors[units[i]],
-                             uppers[i] * factors[units[i]]]
             row_of[idx] = i
         if np.isnan(deviation).all():
             raise MatchError(
@@ -204,6 +206,10 @@ def match_parts(model: ProcessModel, table: pd.DataFrame, *, source: str = "<rep
                 hint="check the dimension names and aliases in the model; 'setupfix model check MODEL REPORT' "
                      "prints the match table",
             )
+        matched = np.flatnonzero(np.asarray(row_of) >= 0)
+        taken = np.asarray(row_of)[matched]
+        for k, column in enumerate((nominals, lowers, uppers)):
+            given[k, matched] = column[taken] * row_factor[taken]
         unmatched = list(dict.fromkeys(unmatched))
         for name in unmatched:
             if name not in suggestions:
@@ -217,7 +223,7 @@ def match_parts(model: ProcessModel, table: pd.DataFrame, *, source: str = "<rep
                 deviation=deviation,
                 sources=tuple(wheres[i] if i >= 0 else "" for i in row_of),
                 unmatched=tuple(unmatched),
-                absent=tuple(d.id for d, v in zip(model.dimensions, deviation) if np.isnan(v)),
+                absent=tuple(dim_ids[np.isnan(deviation)].tolist()),
                 notes=tuple(notes),
                 nominal=given[0],
                 lower=given[1],

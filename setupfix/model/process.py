@@ -10,6 +10,7 @@ All lengths are in ``ProcessModel.unit``.
 
 from __future__ import annotations
 
+import functools
 import re
 from collections.abc import Mapping
 from dataclasses import dataclass, field
@@ -30,6 +31,7 @@ RegisterKind = Literal["wks", "tool"]
 _SPACES = re.compile(r"\s+")
 
 
+@functools.lru_cache(maxsize=1 << 16)
 def normalise_name(name: str) -> str:
     """Key used to match report characteristics with dimensions.
 

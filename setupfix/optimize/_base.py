@@ -15,6 +15,7 @@ from typing import ClassVar
 import numpy as np
 import numpy.typing as npt
 
+from setupfix.errors import Note
 from setupfix.optimize._problem import CorrectionProblem, OptimizeResult
 from setupfix.params import Constraint, Interval, ValidatedParams
 from setupfix.search import generator
@@ -67,6 +68,9 @@ def make_result(problem: CorrectionProblem, x: Array, *, optimizer: str, evaluat
         x = np.zeros_like(x)
         f1, f2, _ = problem.evaluate(x)
         after, status, binding = float(f1), NO_BETTER_THAN_NONE, None
+        notes: tuple[Note, ...] = (Note(message, kind="solver"),)
+    else:
+        notes = ()
     if message is None:
         message = (
             "all measured dimensions predicted inside tolerance"
@@ -77,7 +81,7 @@ def make_result(problem: CorrectionProblem, x: Array, *, optimizer: str, evaluat
     return OptimizeResult(
         x=x, margin_before=problem.margin_before, margin_after=after, norm=float(f2), optimizer=optimizer,
         evaluations=int(evaluations), seconds=float(seconds), status=status, message=message,
-        binding=problem.binding(x) if binding is None else binding, history=history, bound=bound,
+        binding=problem.binding(x) if binding is None else binding, history=history, bound=bound, notes=notes,
     )
 
 

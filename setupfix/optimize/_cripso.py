@@ -231,7 +231,9 @@ class CRIPSO(Metaheuristic):
             np.rint(new, out=new)
             np.maximum(new, kmin, out=new)
             np.minimum(new, kmax, out=new)
-            np.subtract(2.0 * new, x, out=plast[lose])  # child: plast − x' = x' − x (parent → settlement)
+            child = plast[lose]
+            np.subtract(new, x, out=child)  # child: plast − x' = x' − x (parent → settlement point)
+            child += new
             plast[win] = new  # winner: its last planula settled at x'
             f = F1_WEIGHT * float((base + new @ gain).min()) - h * sqrt(float(new @ new))
             pos[lose] = colony + t

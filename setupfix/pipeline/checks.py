@@ -85,38 +85,43 @@ def check_parts(model: ProcessModel, parts: list[PartMeasurement], *, strict: bo
     """
     composite = relation_matrices(model).composite  # (n_registers, n_dimensions)
     correctable = np.array([not r.fixed for r in model.registers], dtype=bool)
+    expected = np.array([[d.nominal, d.lower, d.upper] for d in model.dimensions], dtype=float).T  # (3, n)
+    thr = np.array([difference_threshold(model, d.lower, d.upper) for d in model.dimensions])
     out = []
     for part in parts:
         notes = list(part.notes)
-        notes += _compare(model, part, strict=strict, source=source)
+        notes += _compare(model, part, expected, thr, strict=strict, source=source)
         notes += _coverage(model, part, composite, correctable, source)
         out.append(replace(part, notes=tuple(notes)))
     return out
 
 
-def _compare(model: ProcessModel, part: PartMeasurement, *, strict: bool, source: str) -> list[Note]:
+def _compare(model: ProcessModel, part: PartMeasurement, expected: np.ndarray, thr: np.ndarray, *,
+             strict: bool, source: str) -> list[Note]:
+    """Notes (and refusals) for one part; ``expected`` (3, n) model nominal/lower/upper, ``thr`` (n,)."""
     found: dict[str, list[tuple[str, SourceLocation]]] = {}  # difference text → dimensions showing it
     units: list[tuple[str, str, SourceLocation]] = []
     unit = model.unit
-    for i, dim in enumerate(model.dimensions):
-        if not part.measured[i]:
-            continue
+    dims = model.dimensions
+    nan = np.full(len(dims), np.nan)
+    given = np.vstack([v if v is not None else nan for v in (part.nominal, part.lower, part.upper)])
+    with np.errstate(invalid="ignore"):
+        off = np.abs(given - expected) > thr  # NaN (not given) compares False
+    # Only dimensions with some difference are looked at one by one.
+    for i in np.flatnonzero(part.measured & off.any(axis=0)):
+        dim = dims[i]
         where = SourceLocation(part.sources[i] or source)
-        thr = difference_threshold(model, dim.lower, dim.upper)
-        reported = float(part.nominal[i]) if part.nominal is not None else math.nan
-        if math.isfinite(reported):
-            why = _unit_error(model, dim.nominal, reported, thr)
+        reported, lo, up = (float(v) for v in given[:, i])
+        if off[0, i]:
+            why = _unit_error(model, dim.nominal, reported, float(thr[i]))
             if why:
                 units.append((dim.name, f"report nominal {_fmt(reported)} {unit} against the model's "
                                         f"{_fmt(dim.nominal)} {unit}: {why}", where))
                 continue
-            if abs(reported - dim.nominal) > thr:
-                text = (f"the report's nominal {_fmt(reported)} {unit} differs from the model's "
-                        f"{_fmt(dim.nominal)} {unit} (a drawing or program revision? the model's is used)")
-                found.setdefault(text, []).append((dim.name, where))
-        lo = float(part.lower[i]) if part.lower is not None else math.nan
-        up = float(part.upper[i]) if part.upper is not None else math.nan
-        if (math.isfinite(lo) and abs(lo - dim.lower) > thr) or (math.isfinite(up) and abs(up - dim.upper) > thr):
+            text = (f"the report's nominal {_fmt(reported)} {unit} differs from the model's "
+                    f"{_fmt(dim.nominal)} {unit} (a drawing or program revision? the model's is used)")
+            found.setdefault(text, []).append((dim.name, where))
+        if off[1, i] or off[2, i]:
             shown = (f"{_fmt(lo) if math.isfinite(lo) else 'none'}/{'+' if up > 0 else ''}"
                      f"{_fmt(up) if math.isfinite(up) else 'none'}")
             text = (f"the report's tolerance {shown} {unit} differs from the model's "
@@ -129,11 +134,11 @@ def _compare(model: ProcessModel, part: PartMeasurement, *, strict: bool, source
         raise MatchError(f"unit error at {name}: {message}{more}", location=where,
                          hint="give --unit inch or --unit mm, or correct the report's unit")
     notes = []
-    for text, dims in found.items():
-        names = [n for n, _ in dims]
+    for text, showing in found.items():
+        names = [n for n, _ in showing]
         label = names[0] if len(names) == 1 else (
             f"{len(names)} dimensions ({', '.join(names[:4])}{', …' if len(names) > 4 else ''})")
-        notes.append(Note(f"{label}: {text}", dims[0][1], "mismatch"))
+        notes.append(Note(f"{label}: {text}", showing[0][1], "mismatch"))
     if strict and notes:
         first = notes[0]
         more = f" ({len(notes) - 1} more difference(s))" if len(notes) > 1 else ""

@@ -29,7 +29,7 @@ from setupfix.safety import Policy, Recommendation, RuleEffect, budget, recommen
 from setupfix.store import Store
 
 __all__ = ["PartCorrection", "safety_policy", "assign_stations", "load_parts", "select_parts", "correct_part", "correct_report",
-           "write_correction_offsets", "open_history",
+           "write_correction_offsets", "open_history", "applied_result",
            "wear_totals"]
 
 
@@ -60,11 +60,19 @@ class PartCorrection:
         """Applied changes of every register (model order), zero unless the verdict is apply."""
         return self.recommendation.x
 
+    #: Thermal feed-forward step (``correct --thermal``), set by setupfix.pipeline.feedforward.apply_feed_forward.
+    thermal: Any = None
+
     @property
     def corrections(self) -> dict[str, float]:
-        """Correction of every correctable register by model ID, zero included."""
-        return {rid: float(v) for rid, v, reg in zip(self.problem.register_ids, self.x,
-                                                     self.model.registers) if not reg.fixed}
+        """Correction of every correctable register by model ID, zero included (thermal feed-forward added
+        unless the verdict is reject)."""
+        out = {rid: float(v) for rid, v, reg in zip(self.problem.register_ids, self.x,
+                                                    self.model.registers) if not reg.fixed}
+        if self.thermal is not None and self.verdict != "reject":
+            for rid, shift in self.thermal.corrections().items():
+                out[rid] = out.get(rid, 0.0) + shift
+        return out
 
     @property
     def margin_before(self) -> float:
@@ -80,12 +88,8 @@ class PartCorrection:
 
     @property
     def binding(self) -> tuple[str, ...]:
-        """The dimensions that stop a better correction (the optimiser's, when applied as found)."""
-        if self.verdict == "reject":
-            return ()
-        if self.verdict == "apply" and np.array_equal(self.x, self.result.x):
-            return self.result.binding
-        return self.problem.binding(self.x)
+        """The dimensions that stop a better correction (none when rejected)."""
+        return self.result.binding
 
     def register_rows(self) -> list[dict[str, Any]]:
         """Every register, fixed ones included: id, register, kind, offset, delta, fixed, at_limit."""
@@ -176,9 +180,34 @@ class PartCorrection:
             "absent": list(self.part.absent),
             "unmatched": list(self.part.unmatched),
             "suggestions": {name: list(near) for name, near in self.part.suggestions.items()},
+            "warnings": list(self.warnings),
             "evaluations": r.evaluations,
             "seconds": round(r.seconds, 6),
-        }
+        } | ({"thermal": self.thermal.to_json()} if self.thermal is not None else {})
+
+
+def applied_result(problem: CorrectionProblem, rec: Recommendation) -> OptimizeResult:
+    """The optimiser's result restated for the changes actually recommended.
+
+    ``x``, δ after, norm and binding dimensions are those of ``rec.x`` on the real
+    tolerance limits (the raw optimum stays in ``rec.result``), so every reader of
+    ``PartCorrection.result`` — tables, JSON, the TUI — shows what is to be applied.
+    """
+    raw = rec.result
+    x = np.asarray(rec.x, dtype=float)
+    if rec.verdict == "reject":
+        binding: tuple[str, ...] = ()
+    elif rec.verdict == "apply" and np.array_equal(x, raw.x) and raw.binding:
+        binding = raw.binding
+    else:
+        binding = problem.binding(x)
+    message = raw.message
+    if rec.verdict == "hold":
+        message = "hold: " + next((r.message for r in rec.rules if r.rule in ("dead_band", "no_harm")),
+                                  "no change needed")
+    return dataclasses.replace(raw, x=x.copy(), margin_before=problem.margin_before,
+                               margin_after=budget(problem, x)[0], norm=float(np.linalg.norm(x)),
+                               binding=binding, message=message)
 
 
 def safety_policy(model: ProcessModel, problem: CorrectionProblem,
@@ -242,7 +271,8 @@ def correct_part(model: ProcessModel, part: PartMeasurement, *, optimizer: str =
     if raw is not None and smoothed is not None:
         rec.rules = (RuleEffect("ewma", f"deviations smoothed over {smoothed.used} earlier part(s), λ = {lam:g}",
                                 dimensions=problem.dimension_ids), *rec.rules)
-    result = rec.result
+    result = applied_result(problem, rec)
+    notes += [str(n) for n in rec.result.notes if n.message != rec.result.message]
     part = measured_part
     if part.absent:
         notes.append(f"{len(part.absent)} dimension(s) absent from the report, left out: {', '.join(part.absent)}")

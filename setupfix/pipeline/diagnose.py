@@ -26,7 +26,7 @@ import pandas as pd
 import parsers
 from setupfix.diagnose import Diagnoser, Diagnosis, Layout, Series
 from setupfix.diagnose.forecast import forecast_shift, spec_of
-from setupfix.diagnose.terms import EffectSpec, applied_at, join_temperatures, parts_since_change
+from setupfix.diagnose.terms import EffectSpec, applied_at, join_temperatures, parts_since_change, typical_step
 from setupfix.errors import ExportError, MatchError, ModelError, Note, ParseError, SourceLocation
 from setupfix.model import PartMeasurement, ProcessModel, load_model, match_parts, model_from_dict
 from setupfix.model.effects import EffectsSection, ModelEffect, effects_from_dict, load_effects, with_effects
@@ -36,6 +36,9 @@ from setupfix.pipeline.writers import check_target, write_text
 __all__ = ["SeriesInput", "DiagnoseOutcome", "load_series", "read_corrections_log", "read_temperature_log",
            "diagnose_reports", "expand_reports", "augmented_section", "write_augmented",
            "corrections_from_table", "temperatures_from_table", "forecast_part"]
+
+#: A temperature log as arrays: times, samples (n, channels), channel names.
+TempLog = tuple[pd.DatetimeIndex, np.ndarray, tuple[str, ...]]
 
 _LOG_NAMES = ("corrections.csv",)
 _TEMP_NAMES = ("temperatures.csv",)
@@ -156,7 +159,8 @@ def corrections_from_table(table: pd.DataFrame, model: ProcessModel,
             raise MatchError(f"unknown register {rec['register']!r} (model registers: {', '.join(ids)})",
                              location=SourceLocation(path, line=lines[i])) from None
         if event == "tool_change" and reg.kind != "tool":
-            raise MatchError(f"tool change of {reg.id}, which is not a tool", location=SourceLocation(path, line=lines[i]))
+            raise MatchError(f"tool change of {reg.id}, which is not a tool",
+                             location=SourceLocation(path, line=lines[i]))
         text = str(rec["delta"]).strip()
         if event == "correction":
             try:
@@ -164,7 +168,8 @@ def corrections_from_table(table: pd.DataFrame, model: ProcessModel,
                 if not math.isfinite(delta):
                     raise ValueError
             except ValueError:
-                raise ParseError(f"delta {text!r} is not a number", location=SourceLocation(path, line=lines[i])) from None
+                raise ParseError(f"delta {text!r} is not a number",
+                                 location=SourceLocation(path, line=lines[i])) from None
         else:
             delta = 0.0
         regs.append(ids.index(reg.id))
@@ -215,12 +220,15 @@ def _hours(times: pd.DatetimeIndex, origin: pd.Timestamp) -> np.ndarray:
 
 def load_series(model: ProcessModel | str | Path, reports: Sequence[str | Path] = (), *,
                 corrections: str | None = None, temperatures: str | None = None,
-                db: str | Path | None = None) -> SeriesInput:
+                db: str | Path | None = None, thermal: str | Path | None = None) -> SeriesInput:
     """Read a series of reports (files, folders, or every report of a history store) with its logs.
 
     With ``db`` the store's reports, corrections log and temperatures are used (files
     given as well are added; a corrections or temperature file given replaces the
-    store's log).
+    store's log).  With ``thermal`` (a model saved by ``setupfix thermal fit``) its
+    predicted drift over the temperature log becomes one more channel, so the thermal
+    candidate tests the thermal slice's model itself (its measured-error column is
+    not used as a channel).
 
     Raises
     ------
@@ -272,6 +280,12 @@ def load_series(model: ProcessModel | str | Path, reports: Sequence[str | Path] 
         log = read_corrections_log(corrections, model)
     if temperatures:
         temps = read_temperature_log(temperatures)
+    if thermal is not None:
+        if not temperatures:
+            raise ParseError("a thermal model needs the temperature log it predicts from",
+                             location=SourceLocation(str(thermal)), hint="give --temperatures")
+        temps, more_notes = _with_thermal_prediction(temps, str(thermal), str(temperatures))
+        notes += more_notes
     series, more = _assemble(model, parts, log, temps, where)
     notes += more
     declared = tuple(spec_of(e) for e in section.effects)
@@ -288,6 +302,24 @@ def load_series(model: ProcessModel | str | Path, reports: Sequence[str | Path] 
                        corrections, temperatures, tuple(notes))
 
 
+def _with_thermal_prediction(temps: TempLog | None, thermal: str, temperatures: str) -> tuple[TempLog, list[str]]:
+    """The temperature channels plus the drift a saved thermal model predicts over the same log."""
+    from setupfix.pipeline.thermal import predict_drift
+
+    assert temps is not None
+    pred = predict_drift(thermal, temperatures)
+    times, samples, channels = temps
+    p_times = _times(pred.timestamps, temperatures)
+    idx = np.clip(np.searchsorted(p_times.values, times.values, side="right") - 1, 0, len(p_times) - 1)
+    keep = [j for j, c in enumerate(channels) if c != pred.target]
+    name = f"{pred.method} prediction"
+    notes = [str(n) for n in pred.notes]
+    notes.append(f"thermal model {thermal} ({pred.method}, {pred.unit or 'unit not stated'}): its prediction is "
+                 f"the channel {name!r}")
+    return (times, np.column_stack([samples[:, keep], pred.drift[idx]]),
+            (*(channels[j] for j in keep), name)), notes
+
+
 def _ordered(parts: list[PartMeasurement]) -> list[PartMeasurement]:
     if all(p.timestamp is None for p in parts) or any(p.timestamp is None for p in parts):
         return parts
@@ -297,7 +329,7 @@ def _ordered(parts: list[PartMeasurement]) -> list[PartMeasurement]:
 
 def _assemble(model: ProcessModel, parts: list[PartMeasurement],
               log: tuple[pd.DatetimeIndex, np.ndarray, np.ndarray, list[str]] | None,
-              temps: tuple[pd.DatetimeIndex, np.ndarray, tuple[str, ...]] | None, where: str) -> tuple[Series, list[str]]:
+              temps: TempLog | None, where: str) -> tuple[Series, list[str]]:
     """Parts in time order with the corrections in effect, parts since tool changes, temperatures."""
     notes: list[str] = []
     layout = Layout.from_model(model)
@@ -352,8 +384,7 @@ def _assemble(model: ProcessModel, parts: list[PartMeasurement],
 def augmented_section(diagnosis: Diagnosis, declared: EffectsSection) -> EffectsSection:
     """The ``[effects]`` section: the model's own effects, then those found (ids E1, E2, …)."""
     s = diagnosis.series
-    gaps = np.diff(s.time)
-    step = float(np.median(gaps[gaps <= 1.0])) if np.any(gaps <= 1.0) else (float(np.median(gaps)) if gaps.size else None)
+    step = typical_step(s.time) if s.n_cycles > 1 else None
     effects = list(declared.effects)
     used = {e.id for e in effects}
     n = 1
@@ -405,6 +436,7 @@ class DiagnoseOutcome:
                           "cv_before": r(s.cv_before), "cv_after": r(s.cv_after)}
                          for s in d.selection.steps if not s.accepted],
             "unidentifiable": list(d.selection.unidentifiable),
+            "lack_of_fit": d.selection.lack_of_fit,
             "dimensions": [{"id": did, "name": names[did],
                             "rms_before": r(d.error_before.rms_by_dimension[q]),
                             "rms_after": r(d.error_after.rms_by_dimension[q]),
@@ -444,7 +476,8 @@ def _next_correction(model: ProcessModel, diagnosis: Diagnosis) -> tuple[dict[st
 
 def diagnose_reports(model: ProcessModel | str | Path, reports: Sequence[str | Path] = (), *,
                      corrections: str | None = None, temperatures: str | None = None, augment: str | None = None,
-                     diagnoser: Diagnoser | None = None, db: str | Path | None = None) -> DiagnoseOutcome:
+                     diagnoser: Diagnoser | None = None, db: str | Path | None = None,
+                     thermal: str | Path | None = None) -> DiagnoseOutcome:
     """Diagnose a series of reports; optionally write the augmented model.
 
     Raises
@@ -455,15 +488,34 @@ def diagnose_reports(model: ProcessModel | str | Path, reports: Sequence[str | P
     """
     if augment:
         check_target(augment)  # a bad target costs nothing
-    inp = load_series(model, reports, corrections=corrections, temperatures=temperatures, db=db)
+    inp = load_series(model, reports, corrections=corrections, temperatures=temperatures, db=db, thermal=thermal)
     diagnoser = diagnoser or Diagnoser()
     diagnosis = diagnoser.run(inp.layout, inp.series, declared=inp.declared)
     nxt, more = _next_correction(inp.model, diagnosis)
     notes = list(inp.notes) + list(diagnosis.notes) + more
     out = DiagnoseOutcome(inp, diagnosis, nxt, None, notes)
+    if db is not None:
+        _record(db, inp.model, out)
     if augment:
         out.augmented = write_augmented(inp.model, augmented_section(diagnosis, inp.effects), augment)
     return out
+
+
+def _record(db: str | Path, model: ProcessModel, out: DiagnoseOutcome) -> None:
+    """Keep the recommended next correction in the history store, with what it was computed from."""
+    import hashlib
+
+    from setupfix.store import Recommendation, open_store
+
+    doc = out.to_json()
+    result = {k: doc[k] for k in ("cycles", "rms_before", "rms_after", "max_before", "max_after", "effects",
+                                  "next_correction")}
+    inputs: dict[str, Any] = {"command": "diagnose", "model": model.source,
+                              "corrections": out.input.corrections, "temperatures": out.input.temperatures}
+    if Path(model.source).is_file():
+        inputs["model_sha256"] = hashlib.sha256(Path(model.source).read_bytes()).hexdigest()
+    with open_store(db) as store, store.transaction():
+        store.add_recommendation(Recommendation("exact", inputs, result))
 
 
 def write_augmented(model: ProcessModel, section: EffectsSection, target: str) -> str:

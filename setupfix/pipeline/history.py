@@ -17,19 +17,21 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 from datetime import datetime
 from pathlib import Path
+from typing import Any
 
 import pandas as pd
 
 import parsers
-from parsers._source import point_number
+from parsers import numbers
+from parsers._source import read_bytes
 from setupfix.errors import ParameterError, ParseError, SourceLocation
 from setupfix.model import CANONICAL_COLUMNS
 from setupfix.pipeline.writers import write_canonical_csv, write_table_csv
-from setupfix.store import CORRECTION_COLUMNS, Store
-from setupfix.thermal.data import read_temperature_log
+from parsers.temperature import read_temperature_log
+from setupfix.store import CORRECTION_COLUMNS, Recommendation, Store
 
 __all__ = ["DEFAULT_DB", "default_db_path", "read_corrections_log", "import_history", "ImportSummary",
-           "history_summary", "export_history", "EXPORTS", "EVENTS"]
+           "history_summary", "export_history", "record_recommendations", "EXPORTS", "EVENTS"]
 
 DEFAULT_DB = "setupfix.db"
 #: Kinds of corrections-log rows (``measurements.md``).
@@ -65,9 +67,7 @@ def read_corrections_log(path: str | os.PathLike[str]) -> pd.DataFrame:
     """
     name = str(path)
     try:
-        text = Path(path).read_bytes().decode("utf-8-sig")
-    except OSError as exc:
-        raise ParseError(f"cannot read: {exc.strerror}", location=SourceLocation(name)) from None
+        text = read_bytes(name).decode("utf-8-sig")
     except UnicodeDecodeError:
         raise ParseError("not UTF-8 text", location=SourceLocation(name)) from None
     reader = csv.reader(io.StringIO(text))
@@ -87,7 +87,7 @@ def read_corrections_log(path: str | os.PathLike[str]) -> pd.DataFrame:
             raise ParseError(f"unknown event {event!r} (expected {' or '.join(EVENTS)})", location=where)
         if not row.get("register"):
             raise ParseError("empty register", location=where)
-        delta = point_number(row.get("delta", ""), where, "column 'delta': ")
+        delta = numbers.parse_number(row.get("delta", ""), location=where, what="column 'delta'", allow_empty=True)
         if event == "correction" and delta != delta:
             raise ParseError("a correction needs a delta", location=where)
         rows.append((_stamp(row["timestamp"], where), row["register"], delta, event))
@@ -124,22 +124,15 @@ def import_history(store: Store, reports: Sequence[str | os.PathLike[str]] = (),
         The first file that cannot be read (nothing is stored), or a log row that
         contradicts the store (nothing is stored).
     """
-    options = {k: v for k, v in {"unit": unit, "encoding": encoding}.items() if v is not None}
     read = []
+    summary = ImportSummary()
     for path in reports:
-        name = str(path)
-        if Path(name).is_dir():
-            raise ParseError("is a folder, not a report", location=SourceLocation(name))
-        data = _read_bytes(name)
-        spec = parsers.find_format(name, format)
-        table = spec.read(Path(name), **options)
-        if hashlib.sha256(_read_bytes(name)).digest() != hashlib.sha256(data).digest():
-            raise ParseError("the file changed while it was read (still being written?)",
-                             location=SourceLocation(name))
-        read.append((data, name, spec.name, table))
+        source = parsers.load_source(str(path))  # read once: the bytes hashed are the bytes parsed
+        result = parsers.read_report(source, format=format, unit=unit, encoding=encoding)
+        summary.notes += [str(n) for n in result.notes]
+        read.append((source.data, source.name, result.format, result.table))
     logs = [read_corrections_log(p) for p in corrections]
     temps = [_temperature_frame(p) for p in temperatures]
-    summary = ImportSummary()
     with store.transaction():
         for data, name, fmt, table in read:
             _, new = store.add_report(data, Path(name).name, fmt, table)
@@ -149,13 +142,6 @@ def import_history(store: Store, reports: Sequence[str | os.PathLike[str]] = (),
         for frame in temps:
             summary.temperatures += store.add_temperatures(frame)
     return summary
-
-
-def _read_bytes(name: str) -> bytes:
-    try:
-        return Path(name).read_bytes()
-    except OSError as exc:
-        raise ParseError(f"cannot read: {exc.strerror}", location=SourceLocation(name)) from None
 
 
 def history_summary(store: Store) -> dict[str, object]:
@@ -194,3 +180,21 @@ def export_history(store: Store, table: str, target: str | os.PathLike[str]) -> 
     else:
         raise ParameterError(f"history export: table must be one of {', '.join(EXPORTS)}, got {table!r}")
     return len(frame)
+
+
+def record_recommendations(store: Store, results: Sequence[Any], *, model: str | os.PathLike[str],
+                           report: str | os.PathLike[str], seed: int | None = None) -> list[int]:
+    """Store the recommendations of one ``correct`` run (``PartCorrection`` objects), one transaction.
+
+    Inputs kept: the SHA-256 of the model and report files, their names, part and seed;
+    the result is the ``correct --json`` object of each part.  Returns the stored ids.
+    """
+    hashes = {k: hashlib.sha256(read_bytes(str(p))).hexdigest() for k, p in (("model", model), ("report", report))}
+    ids = []
+    with store.transaction():
+        for r in results:
+            result = r.to_json()
+            inputs = {"model": str(model), "model_sha256": hashes["model"], "report": str(report),
+                      "report_sha256": hashes["report"], "part": result.get("part"), "seed": seed}
+            ids.append(store.add_recommendation(Recommendation(result["optimizer"], inputs, result)))
+    return ids

@@ -16,7 +16,7 @@ import pandas as pd
 import parsers
 from setupfix.errors import Note, ParseError, SetupfixError, SourceLocation, UnknownFormatError
 from setupfix.model import CANONICAL_COLUMNS
-from setupfix.pipeline.writers import write_canonical_csv
+from setupfix.pipeline.writers import FLOAT_FORMAT, write_canonical_csv  # noqa: F401 - re-exported
 
 __all__ = ["ParsedReport", "ParseOutcome", "parse_reports", "expand_inputs", "write_canonical_csv",
            "OUTPUT_COLUMNS", "list_formats", "note_line"]
@@ -98,14 +98,15 @@ def expand_inputs(paths: Sequence[str | Path]) -> tuple[list[tuple[str, bool]], 
 
 
 def parse_reports(paths: Sequence[str | Path], *, format: str | None = None, unit: str | None = None,
-                  encoding: str | None = None, columns: str | Mapping[str, str] | None = None) -> ParseOutcome:
+                  encoding: str | None = None, columns: str | Mapping[str, str] | None = None,
+                  lenient: bool = False) -> ParseOutcome:
     """Read each report; collect the tables and notes and, separately, the errors.
 
     Parameters
     ----------
     paths : sequence of str or Path
         Report files, folders (their files) or ``-`` (standard input).
-    format, unit, encoding, columns
+    format, unit, encoding, columns, lenient
         As for :func:`parsers.read_report`.
 
     Returns
@@ -119,7 +120,8 @@ def parse_reports(paths: Sequence[str | Path], *, format: str | None = None, uni
     outcome.inputs = len(names)
     for name, from_folder in names:
         try:
-            result = parsers.read_report(name, format=format, unit=unit, encoding=encoding, columns=columns)
+            result = parsers.read_report(name, format=format, unit=unit, encoding=encoding, columns=columns,
+                                         lenient=lenient)
         except UnknownFormatError as exc:
             if from_folder and not format:
                 outcome.skipped.append(Note("not a report of a known format; left out", exc.location, "skipped"))

@@ -10,23 +10,24 @@ from __future__ import annotations
 import os
 import time
 from datetime import datetime
-from collections.abc import Iterator, Sequence
+from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
 import pandas as pd
 
 import parsers
-from setupfix.errors import MatchError, ParseError, SourceLocation
+from setupfix.errors import ExportError, MatchError, ParseError, SourceLocation
 from setupfix.model import PartMeasurement, ProcessModel, load_model, match_parts
 from setupfix.optimize import CorrectionProblem, OptimizeResult, get_optimizer
 from setupfix.pipeline.compare import DEFAULT_METHODS, Comparison, MethodTrials, trial_seeds
-from setupfix.pipeline.correct import PartCorrection, correct_part
-from setupfix.pipeline.cycles import assign_stations, load_parts
+from setupfix.pipeline.controllers import read_current, render
+from setupfix.pipeline.correct import PartCorrection, correct_report, open_history
+from setupfix.pipeline.cycles import assign_stations
 from setupfix.pipeline.view import MatchRow, match_rows, matched_rows
 from setupfix.store import CORRECTION_COLUMNS, Recommendation, open_store
 
-__all__ = ["OpenedReport", "open_report", "newest_report", "FolderWatch", "SKIPPED_SUFFIXES", "compare_steps", "store_parts",
+__all__ = ["OpenedReport", "open_report", "newest_report", "FolderWatch", "SKIPPED_SUFFIXES", "compare_steps", "store_parts", "offsets_text",
            "record_applied"]
 
 
@@ -36,7 +37,8 @@ class OpenedReport:
 
     ``matches`` ties every characteristic of the report to a dimension (or lists close
     names).  ``corrections`` holds one correction per cycle; it is empty when the
-    report could not be tied to the model, and ``problem`` then says why.
+    report could not be tied to the model, and ``problem`` then says why.  ``current``
+    holds the controller's current offsets by register ID when they were given.
     """
 
     model: ProcessModel
@@ -45,6 +47,7 @@ class OpenedReport:
     corrections: tuple[PartCorrection, ...] = ()
     matches: tuple[MatchRow, ...] = ()
     problem: str = ""
+    current: Mapping[str, float] | None = None
 
     @property
     def unmatched(self) -> int:
@@ -53,14 +56,18 @@ class OpenedReport:
 
 
 def open_report(model: ProcessModel | str | Path, report: str | Path, *, optimizer: str = "exact",
-                seed: int | None = None) -> OpenedReport:
-    """Read ``report`` (any supported format), tie it to ``model`` and correct every cycle.
+                seed: int | None = None, db: str | Path | None = None,
+                current: str | Path | None = None) -> OpenedReport:
+    """Read ``report`` (any supported format), tie it to ``model`` and correct every cycle
+    as ``setupfix correct`` does (:func:`~setupfix.pipeline.correct.correct_report`: the
+    model's effects forecast, its safety rules, smoothing from the store ``db``, the
+    cumulative limit from the ``current`` offsets file).
 
     Raises
     ------
     SetupfixError
-        When the model or the report cannot be read (a report that does not match the
-        model is not an error: see :class:`OpenedReport`).
+        When the model, the current offsets or the report cannot be read (a report
+        that does not match the model is not an error: see :class:`OpenedReport`).
     """
     if not isinstance(model, ProcessModel):
         model = load_model(model)
@@ -68,16 +75,46 @@ def open_report(model: ProcessModel | str | Path, report: str | Path, *, optimiz
     if path.is_dir():
         raise ParseError("is a folder, not a report", location=SourceLocation(str(report)))
     spec = parsers.find_format(path)
+    values = read_current(current, model) if current is not None else None
     try:
-        parts = load_parts(model, path)
+        if db is not None and Path(db).is_file():  # a new store has no history to smooth over
+            with open_history(db) as store:
+                corrections = correct_report(model, path, optimizer=optimizer, seed=seed, store=store,
+                                             current=values)
+        else:
+            corrections = correct_report(model, path, optimizer=optimizer, seed=seed, current=values)
     except MatchError as exc:
         # Read again only on this path: the match table needs every row, matched or not.
         table = spec.read(path)
         return OpenedReport(model, str(report), spec.name, matches=tuple(match_rows(model, table)),
-                            problem=str(exc))
-    corrections = tuple(correct_part(model, p, optimizer=optimizer, seed=seed) for p in parts)
-    return OpenedReport(model, str(report), spec.name, corrections=corrections,
-                        matches=tuple(matched_rows(model, parts)))
+                            problem=str(exc), current=values)
+    return OpenedReport(model, str(report), spec.name, corrections=tuple(corrections),
+                        matches=tuple(matched_rows(model, [c.part for c in corrections])), current=values)
+
+
+def offsets_text(opened: OpenedReport, controller: str) -> str:
+    """The offsets of every cycle in ``controller`` format, exactly as
+    :func:`~setupfix.pipeline.correct.write_correction_offsets` writes them (absolute
+    *set* rows when the current offsets are known).
+
+    Raises
+    ------
+    ExportError
+        A rejected cycle (nothing may be written), several cycles for a controller
+        program, or a register the format cannot express.
+    """
+    results = opened.corrections
+    if not results:
+        raise ExportError("nothing to export: no correction", location=SourceLocation(opened.report))
+    rejected = [r for r in results if r.verdict == "reject"]
+    if rejected:
+        raise ExportError(f"part {rejected[0].part.part or '—'} is rejected: {rejected[0].recommendation.alarm}",
+                          location=SourceLocation(opened.report))
+    if controller != "csv" and len(results) > 1:
+        raise ExportError(f"{controller}: a program holds one correction, the report has {len(results)} cycles",
+                          location=SourceLocation(opened.report))
+    rows = [row for r in results for row in r.offsets(opened.current)]
+    return render(controller, rows, f"{results[0].part.report} {results[0].part.part}".strip())
 
 
 #: Files a watched folder ignores: partial downloads, editor and temporary files.

@@ -104,7 +104,8 @@ def _stamp(start: datetime, hours: float) -> str:
 
 
 def write_series(model: ProcessModel, layout: Layout, sim: SimulatedSeries, out_dir: str | Path, *,
-                 per_cycle: bool = False, start: str = START, settings: dict[str, Any] | None = None) -> tuple[str, ...]:
+                 per_cycle: bool = False, start: str = START,
+                 settings: dict[str, Any] | None = None) -> tuple[str, ...]:
     """Write the series into ``out_dir`` (created if needed); return the files written.
 
     Raises

@@ -334,9 +334,12 @@ def predict_drift(model: str | Path | SavedModel, log: str | Path | TemperatureL
 
     saved = model if isinstance(model, SavedModel) else load_model(model)
     data = log if isinstance(log, TemperatureLog) else read_temperature_log(
-        log, interval=interval if interval is not None else saved.sample_interval_s)
+        log, interval=interval if interval is not None else saved.sample_interval_s, require_time=False)
     drift, notes = predict_log(saved, data, sensors_failed=sensors_failed, anchor=anchor)
     notes = list(data.notes) + _drive_notes(saved, data.source) + notes
+    if not data.timestamps and interval is None and saved.sample_interval_s is not None:
+        notes.append(Note(f"no timestamp: samples taken {saved.sample_interval_s:g} s apart, as in training",
+                          data.location(), "thermal"))
     measured = data.columns.get(saved.target)
     return DriftPrediction(saved.model.name, saved.target, saved.unit, list(data.timestamps), data.seconds, drift,
                            measured, tuple(notes))

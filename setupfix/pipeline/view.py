@@ -11,7 +11,9 @@ Symbols carry every state as well as colour does, for monochrome terminals:
 ``✗``   out of tolerance
 ``●``   binding: one of the dimensions that stop a better correction
 ``▲``   predicted out of tolerance after the correction
+``◇``   predicted inside the limits but within the measurement uncertainty U of one
 ``⚑``   given up: no setup correction can bring it in (NC program / process)
+``⊘``   beyond the reject band: the reason the verdict is *reject*
 ======  ==================================================================
 """
 
@@ -35,14 +37,14 @@ from setupfix.pipeline.diagnose import DiagnoseOutcome
 from setupfix.pipeline.thermal import DriftPrediction
 
 __all__ = [
-    "IN", "OUT", "BINDING", "PREDICTED_OUT", "GIVEN_UP",
+    "IN", "OUT", "BINDING", "PREDICTED_OUT", "GIVEN_UP", "GUARD", "REJECTED",
     "DimensionRow", "dimension_rows", "stations", "filter_rows", "sort_rows", "SORT_KEYS",
     "zone_bar", "RegisterRow", "register_rows", "Summary", "summary",
     "MatchRow", "match_rows", "matched_rows", "convergence", "compare_rows", "DriftView", "drift_view",
     "signed", "limits_text", "CycleBudget", "cycle_budgets", "EffectRow", "DiagnosisView", "diagnosis_view",
 ]
 
-IN, OUT, BINDING, PREDICTED_OUT, GIVEN_UP = "✓", "✗", "●", "▲", "⚑"
+IN, OUT, BINDING, PREDICTED_OUT, GIVEN_UP, GUARD, REJECTED = "✓", "✗", "●", "▲", "⚑", "◇", "⊘"
 Array = npt.NDArray[np.float64]
 
 
@@ -92,7 +94,12 @@ def _cell(fraction: float, width: int) -> int:
 
 @dataclass(frozen=True)
 class DimensionRow:
-    """One measured dimension before and after the correction [model unit]."""
+    """One measured dimension before and after the correction [model unit].
+
+    ``flags`` are the pipeline's (:meth:`PartCorrection.dimension_rows`): ``out_before``,
+    ``out`` (predicted out after the changes), ``guard``, ``binding``, ``given_up``,
+    ``rejected``.
+    """
 
     id: str
     name: str
@@ -103,26 +110,28 @@ class DimensionRow:
     predicted: float
     margin_before: float
     margin_after: float
-    binding: bool
-    given_up: bool = False
+    flags_: tuple[str, ...] = ()
+
+    @property
+    def binding(self) -> bool:
+        return "binding" in self.flags_
 
     @property
     def in_before(self) -> bool:
-        return self.lower <= self.deviation <= self.upper
+        return "out_before" not in self.flags_
 
     @property
     def in_after(self) -> bool:
-        return self.lower <= self.predicted <= self.upper
+        return "out" not in self.flags_
 
     @property
     def flags(self) -> str:
         """The state symbols of the row (see the module docstring)."""
-        text = IN if self.in_before else OUT
-        text += IN if self.in_after else PREDICTED_OUT
-        if self.binding:
-            text += BINDING
-        if self.given_up:
-            text += GIVEN_UP
+        f = self.flags_
+        text = (IN if self.in_before else OUT) + (PREDICTED_OUT if "out" in f else GUARD if "guard" in f else IN)
+        for name, symbol in (("binding", BINDING), ("given_up", GIVEN_UP), ("rejected", REJECTED)):
+            if name in f:
+                text += symbol
         return text
 
     def bars(self, width: int = 11) -> tuple[str, str]:
@@ -133,17 +142,14 @@ class DimensionRow:
 
 def dimension_rows(correction: PartCorrection) -> list[DimensionRow]:
     """Rows of the dimension table, in model order."""
-    dims = {d.id: d for d in correction.model.dimensions}
-    binding = set(correction.result.binding)
-    given_up = set(getattr(correction.result, "given_up", ()))
-    before = correction.problem.margins(np.zeros(correction.problem.n_registers))
     rows = []
-    for row, m0 in zip(correction.dimension_rows(), before):
+    for row in correction.dimension_rows():
+        before = float(objective_margins(np.array([row["deviation"]]), np.array([row["lower"]]),
+                                         np.array([row["upper"]]))[0])
         rows.append(DimensionRow(
-            id=row["id"], name=row["name"], station=dims[row["id"]].group or "",
-            deviation=row["deviation"], lower=row["lower"], upper=row["upper"], predicted=row["predicted"],
-            margin_before=float(m0), margin_after=row["margin"], binding=row["id"] in binding,
-            given_up=row["id"] in given_up))
+            id=row["id"], name=row["name"], station=row.get("station") or "", deviation=row["deviation"],
+            lower=row["lower"], upper=row["upper"], predicted=row["predicted"], margin_before=before,
+            margin_after=row["margin"], flags_=tuple(row.get("flags", ()))))
     return rows
 
 
@@ -176,9 +182,10 @@ class RegisterRow:
     id: str
     register: str
     kind: str
+    offset: str
     delta: float
-    limit: float
     fixed: bool
+    at_limit: bool
     current: float | None = None
     rules: tuple[str, ...] = ()
 
@@ -188,35 +195,33 @@ class RegisterRow:
         return None if self.current is None else self.current + self.delta
 
     @property
-    def at_limit(self) -> bool:
-        return not self.fixed and abs(self.delta) >= self.limit - 1e-12
-
-    @property
     def flags(self) -> str:
-        return ("fixed" if self.fixed else "") + (" ◆limit" if self.at_limit else "")
+        return "fixed" if self.fixed else ("◆limit" if self.at_limit else "")
 
 
 def register_rows(correction: PartCorrection, current: Mapping[str, float] | None = None) -> list[RegisterRow]:
-    """Every register of the model (fixed ones too, with 0), in model order.
+    """Every register of the model (fixed ones too, with 0), in model order, with the
+    safety rules that changed it.
 
     ``current`` maps model ID or controller name to the value in the controller.
     """
     current = current or {}
-    x = dict(zip(correction.problem.register_ids, correction.result.x))
-    bounds = dict(zip(correction.problem.register_ids, zip(correction.problem.lb, correction.problem.ub)))
+    rules: dict[str, list[str]] = {}
+    for effect in correction.recommendation.rules:
+        for rid in effect.registers:
+            rules.setdefault(rid, []).append(effect.rule)
     rows = []
-    for reg in correction.model.registers:
-        lb, ub = bounds.get(reg.id, (0.0, 0.0))
-        cur = current.get(reg.id, current.get(reg.register))
-        rows.append(RegisterRow(reg.id, reg.register, reg.kind, float(x.get(reg.id, 0.0)) + 0.0,
-                                float(max(abs(lb), abs(ub))), bool(reg.fixed),
-                                None if cur is None else float(cur)))
+    for reg in correction.register_rows():
+        cur = current.get(reg["id"], current.get(reg["register"]))
+        rows.append(RegisterRow(reg["id"], reg["register"], reg["kind"], str(reg.get("offset", "")),
+                                float(reg["delta"]) + 0.0, bool(reg["fixed"]), bool(reg["at_limit"]),
+                                None if cur is None else float(cur), tuple(dict.fromkeys(rules.get(reg["id"], ())))))
     return rows
 
 
 @dataclass(frozen=True)
 class Summary:
-    """The headline of a correction."""
+    """The headline of a correction: verdict, δ before and after, bonus, rules, notes."""
 
     report: str
     part: str
@@ -231,20 +236,25 @@ class Summary:
     in_tolerance: bool
     message: str
     notes: tuple[str, ...]
-    verdict: str | None = None
+    verdict: str
     rules: tuple[str, ...] = ()
+    alarm: str = ""
+    given_up: tuple[str, ...] = ()
 
 
 def summary(correction: PartCorrection) -> Summary:
-    """δ before and after, the bonus, the optimiser's status and the notes of one correction."""
+    """The verdict and every rule that changed it, δ before and after, the bonus, the notes."""
     r = correction.result
-    verdict = getattr(correction, "verdict", None)
+    rec = correction.recommendation
+    names = {d.id: d.name for d in correction.model.dimensions}
     return Summary(
         report=correction.part.report, part=correction.part.part, unit=correction.model.unit,
-        optimizer=r.optimizer, status=r.status, margin_before=r.margin_before, margin_after=r.margin_after,
-        bonus=r.bonus, norm=r.norm, bound=r.bound, in_tolerance=r.in_tolerance, message=r.message,
-        notes=tuple(str(n) for n in correction.warnings),
-        verdict=None if verdict is None else str(verdict))
+        optimizer=r.optimizer, status=r.status, margin_before=correction.margin_before,
+        margin_after=correction.margin_after, bonus=correction.margin_after - correction.margin_before,
+        norm=correction.norm, bound=r.bound, in_tolerance=correction.margin_after >= 0, message=r.message,
+        notes=tuple(str(n) for n in correction.warnings), verdict=correction.verdict,
+        rules=tuple(f"{e.rule}: {e.message}" for e in rec.rules), alarm=rec.alarm,
+        given_up=tuple(names.get(d, d) for d in rec.given_up))
 
 
 @dataclass(frozen=True)
@@ -343,11 +353,13 @@ class DriftView:
 
     method: str
     target: str
+    unit: str  #: the thermal model's unit ("" when it does not say)
     latest: float
     latest_time: str
     recent: Array  #: the last samples of the predicted drift, oldest first
     measured_latest: float | None
     samples: int
+    notes: tuple[str, ...] = ()
 
     @property
     def recent_range(self) -> tuple[float, float]:
@@ -361,9 +373,11 @@ def drift_view(prediction: DriftPrediction, recent: int = 120) -> DriftView:
     m_last = None
     if measured is not None and len(measured) and np.isfinite(measured[-1]):
         m_last = float(measured[-1])
-    return DriftView(prediction.method, prediction.target, prediction.latest,
+    return DriftView(prediction.method, prediction.target, (prediction.unit or "").replace("um", "µm"),
+                     prediction.latest,
                      prediction.timestamps[-1] if prediction.timestamps else "",
-                     np.asarray(prediction.drift[-recent:], dtype=float), m_last, int(len(prediction.drift)))
+                     np.asarray(prediction.drift[-recent:], dtype=float), m_last, int(len(prediction.drift)),
+                     tuple(str(n) for n in prediction.notes))
 
 
 @dataclass(frozen=True)

@@ -27,7 +27,7 @@ if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
 __all__ = ["check_target", "write_text", "write_bytes", "atomic_write", "write_offsets_csv",
-           "write_canonical_csv", "write_figure", "write_table_csv", "FLOAT_FORMAT"]
+           "write_canonical_csv", "escape_formulas", "write_figure", "write_table_csv", "FLOAT_FORMAT"]
 
 Target = str | os.PathLike[str]
 
@@ -48,9 +48,29 @@ def write_table_csv(table: pd.DataFrame, target: Target, *, float_format: str = 
     write_text(target, buffer.getvalue())
 
 
+#: First characters that make a spreadsheet read a cell as a formula (``=HYPERLINK(…)``, ``@SUM``, …).
+FORMULA_START = ("=", "+", "-", "@", "\t", "\r")
+
+
+def escape_formulas(table: pd.DataFrame) -> pd.DataFrame:
+    """Text cells that a spreadsheet would run as a formula, prefixed with ``'`` (OWASP CSV injection).
+
+    Only text (object) columns are touched, so numbers such as ``-0.0309`` stay numbers;
+    :func:`parsers.canonical.read_canonical` removes the prefix again on reading.
+    """
+    out = table.copy()
+    for col in out.columns:
+        if out[col].dtype == object or pd.api.types.is_string_dtype(out[col]):
+            text = out[col]
+            risky = text.map(lambda v: isinstance(v, str) and v.startswith(FORMULA_START))
+            if risky.any():
+                out[col] = text.where(~risky, "'" + text.astype(str))
+    return out
+
+
 def write_canonical_csv(table: pd.DataFrame, target: Target) -> None:
-    """Write a canonical measurement table (``../shared/spec/measurements.md``) as CSV."""
-    write_table_csv(table, target)
+    """Write a canonical measurement table (``../shared/spec/measurements.md``) as CSV, formulas escaped."""
+    write_table_csv(escape_formulas(table), target)
 
 
 def write_figure(fig: Figure, target: Target) -> None:

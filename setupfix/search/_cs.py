@@ -24,7 +24,7 @@ import math
 import numpy as np
 import numpy.typing as npt
 
-from setupfix.search._space import Array, Objective, Observer, SearchResult, Space, Tally, check_budget, start
+from setupfix.search._space import Array, Objective, Observer, SearchResult, Space, Tally, launch
 
 __all__ = ["cuckoo_search", "levy_steps", "mantegna_sigma", "greedy"]
 
@@ -81,12 +81,8 @@ def cuckoo_search(objective: Objective, space: Space, *, budget: int, rng: np.ra
     SearchResult
         History: best value after the start nests and after each iteration.
     """
-    check_budget("cuckoo search", budget, n_nests)
-    tally = Tally(objective, budget, observe)
-    k = min(int(n_nests), tally.remaining)
-    nests = start(space, rng, k, x0)
-    f = tally(nests)
-    shape = nests.shape
+    tally, nests, f = launch("cuckoo search", objective, space, rng, budget, n_nests, x0, observe)
+    shape = k, _ = nests.shape
     history = [float(f.min())]
     while tally.remaining > 0:
         best = nests[int(np.argmin(f))]

@@ -18,7 +18,7 @@ from __future__ import annotations
 import numpy as np
 import numpy.typing as npt
 
-from setupfix.search._space import Array, Objective, Observer, SearchResult, Space, Tally, check_budget, start
+from setupfix.search._space import Array, Objective, Observer, SearchResult, Space, launch
 
 __all__ = ["tournament_ga", "roulette_ga", "tournament", "recombine", "mutate", "survive"]
 
@@ -61,11 +61,8 @@ def tournament_ga(objective: Objective, space: Space, *, budget: int, rng: np.ra
     SearchResult
         History: best value after the start population and after each generation.
     """
-    check_budget("genetic algorithm", budget, population)
-    tally = Tally(objective, budget, observe)
-    mu = min(int(population), tally.remaining)
-    x = start(space, rng, mu, x0)
-    f = tally(x)
+    tally, x, f = launch("genetic algorithm", objective, space, rng, budget, population, x0, observe)
+    mu = len(x)
     history = [float(f.min())]
     while tally.remaining > 0:
         lam = min(int(population), tally.remaining)
@@ -95,12 +92,9 @@ def roulette_ga(objective: Objective, space: Space, *, budget: int, rng: np.rand
     SearchResult
         History: best value after the start population and after each generation.
     """
-    check_budget("genetic algorithm", budget, pop_size)
-    tally = Tally(objective, budget, observe)
-    size = min(int(pop_size), tally.remaining)
+    tally, pop, fit = launch("genetic algorithm", objective, space, rng, budget, pop_size, x0, observe)
+    size = len(pop)
     lo, hi = space.lower, space.upper
-    pop = start(space, rng, size, x0)
-    fit = tally(pop)
     best = int(np.argmin(fit))
     elite, elite_f = pop[best].copy(), float(fit[best])
     history = [elite_f]

@@ -27,7 +27,7 @@ from __future__ import annotations
 import numpy as np
 import numpy.typing as npt
 
-from setupfix.search._space import Array, Objective, Observer, SearchResult, Space, Tally, check_budget, start
+from setupfix.search._space import Array, Objective, Observer, SearchResult, Space, launch
 
 __all__ = ["particle_swarm", "acceleration", "velocity"]
 
@@ -111,14 +111,10 @@ def particle_swarm(objective: Objective, space: Space, *, budget: int, rng: np.r
     SearchResult
         History: best value after the start swarm and after each sweep.
     """
-    check_budget("particle swarm", budget, n_particles)
-    tally = Tally(objective, budget, observe)
-    p = min(int(n_particles), tally.remaining)
     vmax = v_max * (space.upper - space.lower)
-    x = start(space, rng, p, x0)
-    n = x.shape[1]
+    tally, x, f = launch("particle swarm", objective, space, rng, budget, n_particles, x0, observe)
+    p, n = x.shape
     v = rng.uniform(-v_init, v_init, size=(p, n)) * vmax
-    f = tally(x)
     pbest, pbest_f = x.copy(), f.copy()
     g = int(np.argmin(f))
     gbest, gbest_f = x[g].copy(), float(f[g])

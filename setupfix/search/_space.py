@@ -145,3 +145,20 @@ def check_budget(owner: str, budget: int, population: int) -> None:
     if not 1 <= int(budget) <= MAX_BUDGET or int(population) < 1:
         raise ParameterError(f"{owner}: budget must be an int in [1, {MAX_BUDGET}] and population at least 1, "
                              f"got {budget} and {population}")
+
+
+def launch(owner: str, objective: Objective, space: Space, rng: np.random.Generator, budget: int, population: int,
+           x0: npt.ArrayLike | None, observe: Observer | None) -> tuple[Tally, Array, Array]:
+    """The start every search shares: budget checked, start population drawn and evaluated.
+
+    Returns
+    -------
+    tally : Tally
+        The budgeted objective, the start population counted.
+    x : ndarray of shape (min(population, budget), n)
+    values : ndarray of shape (min(population, budget),)
+    """
+    check_budget(owner, budget, population)
+    tally = Tally(objective, budget, observe)
+    x = start(space, rng, min(int(population), tally.remaining), x0)
+    return tally, x, tally(x)

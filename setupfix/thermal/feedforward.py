@@ -81,7 +81,9 @@ def drift_change(drift: npt.ArrayLike, times: npt.ArrayLike, measured_at: npt.Ar
     i_at = e.size - 1 if at is None else int(sample_at_or_before(t, at))
     if np.any(i_meas < 0) or i_at < 0:
         raise ValueError("a time lies before the first temperature sample")
-    if np.any(np.asarray(measured_at, dtype=float) > (t[-1] if at is None else at)):
+    if np.any(np.asarray(measured_at, dtype=float) > t[-1]):
+        raise ValueError("the measured parts were cut after the last temperature sample")
+    if at is not None and np.any(np.asarray(measured_at, dtype=float) > at):
         raise ValueError("the measured parts were cut after the time of the correction")
     return np.asarray(e[i_at] - e[i_meas], dtype=float)
 

@@ -19,19 +19,18 @@ from textual.app import App, ComposeResult
 from textual.binding import Binding, BindingType
 from textual.containers import Horizontal, Vertical
 from textual.widgets import DataTable, Footer, Header, Static, TabbedContent, TabPane
-from textual.worker import Worker, WorkerState, get_current_worker
+from textual.worker import Worker, WorkerState
 
 from setupfix.errors import SetupfixError
-from setupfix.model import ProcessModel
-from setupfix.optimize import OPTIMIZERS, CorrectionProblem
+from setupfix.offsets import grid_decimals
+from setupfix.optimize import OPTIMIZERS
 from setupfix.pipeline import view
 from setupfix.pipeline.compare import DEFAULT_METHODS, Comparison
 from setupfix.pipeline.correct import PartCorrection
-from setupfix.pipeline.diagnose import diagnose_reports
-from setupfix.pipeline.session import (FolderWatch, OpenedReport, compare_steps, open_report, record_applied,
-                                      store_parts)
-from setupfix.pipeline.thermal import predict_drift
-from setupfix.tui.exporting import CONTROLLERS, render_offsets, write_offsets
+from setupfix.pipeline.feedforward import ThermalFeedForward, thermal_feed_forward
+from setupfix.pipeline.session import FolderWatch, OpenedReport, offsets_text, open_report, record_applied
+from setupfix.tui import workers
+from setupfix.tui.exporting import CONTROLLERS, write_offsets
 from setupfix.tui.messages import CompareProgress
 from setupfix.tui.screens import ExportRequest, ExportScreen, HelpScreen, OpenFileScreen
 from setupfix.tui.widgets import (ComparePanel, DimensionTable, HistoryPanel, MatchTable, RegisterTable, SummaryBar,
@@ -42,13 +41,6 @@ __all__ = ["SetupfixApp", "SORT_ORDER"]
 #: What ``s`` cycles through: None is the model's order.
 SORT_ORDER: tuple[str | None, ...] = (None, "margin_after", "deviation", "name", "station")
 
-#: Why panels whose pipeline is not on this branch yet show "not available".
-MISSING = {
-    "verdict": "safety rules (issue 13) not in this build",
-    "feed": "the thermal feed-forward (issue 12) is not in this build",
-}
-
-
 @dataclass(frozen=True)
 class Inputs:
     """What the command line gave (paths as typed)."""
@@ -56,6 +48,7 @@ class Inputs:
     model: Path | None = None
     report: Path | None = None
     db: Path | None = None
+    current: Path | None = None
     thermal: Path | None = None
     temperatures: Path | None = None
     optimizer: str = "exact"
@@ -109,6 +102,8 @@ class SetupfixApp(App[None]):
         self.comparison: Comparison | None = None
         self.folder_watch: FolderWatch | None = None
         self.problem = ""
+        self.feed: ThermalFeedForward | None = None
+        self._wide = False
 
     # ----------------------------------------------------------------- layout
     def compose(self) -> ComposeResult:
@@ -135,7 +130,7 @@ class SetupfixApp(App[None]):
         self._show()
         self._start_thermal()
         self.query_one(HistoryPanel).status(
-            "no history store given (--db STORE): press d to diagnose the reports in the current report's folder"
+            "no history store given (--db STORE): d diagnoses the reports in the current report's folder"
             if self.inputs.db is None else f"reading the history store {self.inputs.db} …")
         report = self.inputs.report
         if report is not None and report.is_dir():
@@ -156,7 +151,7 @@ class SetupfixApp(App[None]):
         self.problem = f"opening {self.report_path} …"
         self._show()
         self.run_worker(partial(open_report, self.model_path, self.report_path, optimizer=self.optimizer,
-                                seed=self.inputs.seed),
+                                seed=self.inputs.seed, db=self.inputs.db, current=self.inputs.current),
                         name="open", group="open", thread=True, exclusive=True, exit_on_error=False)
 
     def _start_thermal(self) -> None:
@@ -166,8 +161,24 @@ class SetupfixApp(App[None]):
             panel.not_available(f"no thermal model and log given ({missing})")
             return
         panel.not_available(f"predicting drift from {self.inputs.temperatures} …")
-        self.run_worker(partial(_drift, self.inputs.thermal, self.inputs.temperatures), name="thermal",
+        self.run_worker(partial(workers.drift, self.inputs.thermal, self.inputs.temperatures), name="thermal",
                         group="thermal", thread=True, exclusive=True, exit_on_error=False)
+
+    def _start_feed_forward(self) -> None:
+        c = self._current()
+        self.feed = None
+        if c is None or self.inputs.thermal is None or self.inputs.temperatures is None:
+            return
+        self.query_one(ThermalPanel).feed_forward(f"feed-forward for {c.part.report} {c.part.part}: computing …")
+        self.run_worker(partial(thermal_feed_forward, c.model, self.inputs.thermal, self.inputs.temperatures,
+                                measured_at=c.part.timestamp),
+                        name="feedforward", group="feedforward", thread=True, exclusive=True, exit_on_error=False)
+
+    def _feed_text(self) -> str:
+        """The feed-forward line, shown beside the setup correction (not in the exported offsets)."""
+        if self.feed is None:
+            return ""
+        return self.feed.line() + "; shown beside the setup correction, not added to the exported offsets"
 
     def on_worker_state_changed(self, event: Worker.StateChanged) -> None:
         """The error boundary and the one place results reach the screen."""
@@ -189,9 +200,11 @@ class SetupfixApp(App[None]):
             elif worker.name == "diagnose" and isinstance(worker.result, view.DiagnosisView):
                 self.query_one(HistoryPanel).diagnosis(worker.result, source=self._series_source())
             elif worker.name == "thermal" and isinstance(worker.result, view.DriftView):
-                self.query_one(ThermalPanel).show(worker.result, unit=self._unit(),
-                                                  source=str(self.inputs.temperatures))
-                self.query_one(ThermalPanel).feed_forward(f"feed-forward not available: {MISSING['feed']}")
+                self.query_one(ThermalPanel).show(worker.result, source=str(self.inputs.temperatures))
+            elif worker.name == "feedforward" and isinstance(worker.result, ThermalFeedForward):
+                self.feed = worker.result
+                self.query_one(ThermalPanel).feed_forward(self._feed_text())
+                self._show()
 
     def _failed(self, what: str, error: BaseException | None) -> None:
         text = str(error) if isinstance(error, SetupfixError) else f"internal error: {type(error).__name__}: {error}"
@@ -207,10 +220,16 @@ class SetupfixApp(App[None]):
             self.query_one(ComparePanel).stopped(f"✗ {text}")
         elif what == "thermal":
             self.query_one(ThermalPanel).not_available(text)
+        elif what == "feedforward":
+            self.feed = None
+            self.query_one(ThermalPanel).feed_forward(f"✗ feed-forward: {text}")
         elif what in ("history", "diagnose"):
             self.query_one(HistoryPanel).status(f"✗ {text}")
 
     def _opened(self, opened: OpenedReport) -> None:
+        # Work started for the previous report must not land on this one.
+        self.workers.cancel_group(self, "compare")
+        self.workers.cancel_group(self, "feedforward")
         self.opened = opened
         self.problem = ""
         self.part_index = min(self.part_index, max(len(opened.corrections) - 1, 0))
@@ -228,8 +247,9 @@ class SetupfixApp(App[None]):
         else:
             status.update("✓ every characteristic of the report matches a dimension of the model.")
         self._show()
+        self._start_feed_forward()
         if self.inputs.db is not None:
-            self.run_worker(partial(_history, opened.model, self.inputs.db), name="history", group="history",
+            self.run_worker(partial(workers.history, opened.model, self.inputs.db), name="history", group="history",
                             thread=True, exclusive=True, exit_on_error=False)
 
     def _compared(self, comparison: object) -> None:
@@ -237,8 +257,11 @@ class SetupfixApp(App[None]):
         if not isinstance(comparison, Comparison):
             panel.stopped("comparison cancelled")
             return
-        self.comparison = comparison
         c = self._current()
+        if c is None or comparison.problem is not c.problem:
+            panel.stopped("that comparison was for a previous report: press c to compare this one")
+            return
+        self.comparison = comparison
         panel.show(view.compare_rows(comparison), view.convergence(comparison, 60),
                    exact_f1=comparison.exact.margin_after, unit=self._unit(),
                    heading=f"{comparison.trials} seeded trials per method (seed {comparison.seed})"
@@ -284,20 +307,23 @@ class SetupfixApp(App[None]):
         n = len(self.opened.corrections) if self.opened else 1
         part = f"part {c.part.part or '—'}" + (f" ({self.part_index + 1}/{n}, [ ] to change)" if n > 1 else "")
         head = view.summary(c)
-        summary.show(head, optimizer=self.optimizer, part=part, verdict_reason=MISSING["verdict"],
-                     problem=self.problem)
+        summary.show(head, optimizer=self.optimizer, part=part,
+                     problem="\n".join(t for t in (self.problem, self.feed.line() if self.feed else "") if t))
         rows = view.filter_rows(view.dimension_rows(c), self.station)
         if self.sort_key is not None:
             rows = view.sort_rows(rows, self.sort_key)
-        self.query_one(DimensionTable).show(rows, wide=self.size.width >= 120)
+        self._wide = self.size.width >= 120
+        self.query_one(DimensionTable).show(rows, wide=self._wide)
         self.query_one(DimensionTable).border_title = (
             f"dimensions · station {self.station or 'all'} · sort {self.sort_key or 'model'}")
-        digits = max(0, len(f"{c.model.resolution:g}".split(".")[-1])) if c.model.resolution < 1 else 0
-        self.query_one(RegisterTable).show(view.register_rows(c), digits=digits)
+        self.query_one(RegisterTable).show(view.register_rows(c, self.opened.current if self.opened else None),
+                                           digits=grid_decimals(c.model.resolution))
         self.query_one(RegisterTable).border_title = f"recommendation [{c.model.unit}, axis {c.model.axis}]"
 
     def on_resize(self) -> None:
-        if self._current() is not None:
+        # Rebuild the tables only when the layout changes between narrow and wide.
+        wide = self.size.width >= 120
+        if wide != self._wide and self._current() is not None:
             self._show()
 
     @on(DataTable.HeaderSelected, "#dimensions")
@@ -326,7 +352,7 @@ class SetupfixApp(App[None]):
             return
         self.query_one(TabbedContent).active = "compare"
         self.query_one(ComparePanel).progress(0, 1 + len(DEFAULT_METHODS) * self.inputs.trials, "exact")
-        self.run_worker(partial(_compare, self, c.problem, self.inputs.trials, self.inputs.seed), name="compare",
+        self.run_worker(partial(workers.compare, self, c.problem, self.inputs.trials, self.inputs.seed), name="compare",
                         group="compare", thread=True, exclusive=True, exit_on_error=False)
 
     def action_cancel(self) -> None:
@@ -351,6 +377,7 @@ class SetupfixApp(App[None]):
         if self.opened and self.opened.corrections:
             self.part_index = (self.part_index + step) % len(self.opened.corrections)
             self._show()
+            self._start_feed_forward()
 
     def action_tab(self, tab: str) -> None:
         self.query_one(TabbedContent).active = tab
@@ -359,16 +386,20 @@ class SetupfixApp(App[None]):
         self.push_screen(HelpScreen())
 
     def action_diagnose(self) -> None:
-        """Diagnose the series: the reports in the current report's (or the watched) folder."""
+        """Diagnose the series: the history store, else the reports in the current (or watched) folder."""
         self.action_tab("history")
         if self.model_path is None or self._series_source() == "":
             self.notify("open a model and a report first", severity="warning")
             return
         self.query_one(HistoryPanel).status(f"diagnosing the reports in {self._series_source()} …")
-        self.run_worker(partial(_diagnose, self.model_path, Path(self._series_source())), name="diagnose",
+        self.run_worker(partial(workers.diagnose, self.model_path, Path(self._series_source()), self.inputs.db is not None),
+                        name="diagnose",
                         group="diagnose", thread=True, exclusive=True, exit_on_error=False)
 
     def _series_source(self) -> str:
+        """The history store when given, else the watched folder or the report's folder."""
+        if self.inputs.db is not None:
+            return str(self.inputs.db)
         if self.folder_watch is not None:
             return str(self.folder_watch.folder)
         return str(self.report_path.parent) if self.report_path is not None else ""
@@ -404,8 +435,7 @@ class SetupfixApp(App[None]):
         if self.opened is None or not self.opened.corrections:
             self.notify("nothing to export: open a report that matches the model first", severity="warning")
             return
-        corrections = self.opened.corrections
-        self.push_screen(ExportScreen(CONTROLLERS, partial(render_offsets, corrections), self.inputs.offsets),
+        self.push_screen(ExportScreen(CONTROLLERS, partial(offsets_text, self.opened), self.inputs.offsets),
                          self._export_confirmed)
 
     def _export_confirmed(self, request: ExportRequest | None) -> None:
@@ -426,30 +456,3 @@ class SetupfixApp(App[None]):
                 return
             self.notify(f"recorded {added} register change(s) as applied in {self.inputs.db}", title="history")
 
-
-def _drift(model: Path, log: Path) -> view.DriftView:
-    """Thread worker: the saved thermal model's drift over the log."""
-    return view.drift_view(predict_drift(model, log))
-
-
-def _compare(app: SetupfixApp, problem: CorrectionProblem, trials: int, seed: int) -> Comparison | None:
-    """Thread worker: the comparison one trial at a time, stoppable between trials."""
-    worker = get_current_worker()
-    result: Comparison | None = None
-    for method, step, steps, comparison in compare_steps(problem, trials=trials, seed=seed):
-        if worker.is_cancelled:
-            return None
-        result = comparison
-        app.post_message(CompareProgress(step, steps, method))
-    return result
-
-
-def _history(model: ProcessModel, db: Path) -> tuple[list[view.CycleBudget], list[str]]:
-    """Thread worker: the error budget of every cycle in the history store."""
-    parts, notes = store_parts(model, db)
-    return view.cycle_budgets(model, parts), notes
-
-
-def _diagnose(model: Path, folder: Path) -> view.DiagnosisView:
-    """Thread worker: ``setupfix diagnose`` over a folder of reports (and its logs)."""
-    return view.diagnosis_view(diagnose_reports(model, [folder]))

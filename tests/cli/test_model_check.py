@@ -55,3 +55,28 @@ def test_check_marks_differences_and_strict_refuses(tmp_path, capsys):
     assert line.endswith("≠") and "warning:" in out and "nominal 31 mm differs from the model's 30 mm" in out
     assert main(["model", "check", MODEL, str(path), "--strict"]) == 1
     assert "refused by --strict" in capsys.readouterr().err
+
+
+def test_wide_characters_keep_columns_aligned():
+    from setupfix.cli._model import _cells, _cut
+
+    assert _cells("원통1(I).D") == 10 and _cut("원통1(I).D", 12) == "원통1(I).D  "
+    assert _cells(_cut("원통1(I).D", 7)) == 7 and _cut("원통1(I).D", 7).endswith("…")
+    assert _cut("a\x1b[31mb", 8) == "a?[31mb "  # control characters never reach the terminal
+
+
+def test_init_never_overwrites_an_edited_model(tmp_path, capsys):
+    out = tmp_path / "model.toml"
+    out.write_text("# edited by hand\n", encoding="utf-8")
+    report = str(GUIDE_PINS / "cycle_01.csv")
+    assert main(["model", "init", report, "-o", str(out)]) == 1
+    assert "exists" in capsys.readouterr().err and out.read_text(encoding="utf-8") == "# edited by hand\n"
+    assert main(["model", "init", report, "-o", str(out), "--force"]) == 0
+    assert "[dimensions.D28]" in out.read_text(encoding="utf-8")
+
+
+def test_hostile_report_names_do_not_reach_the_terminal(tmp_path, capsys):
+    path = renamed(tmp_path, [("P2 D3", "P2\x1b[2JD3")])
+    assert main(["model", "check", MODEL, str(path)]) == 0
+    out = capsys.readouterr().out
+    assert "\x1b" not in out and ("P2?[2JD3" in out or "P2\\x1b[2JD3" in out)  # masked here or by the reader

@@ -26,10 +26,20 @@ def run(capsys, *argv):
     return code, out, err
 
 
+@pytest.fixture(scope="module")
+def short_train(tmp_path_factory):
+    """The first half of the training log: kalman fits in a fraction of the time, as well (0.0043 mm)."""
+    path = tmp_path_factory.mktemp("thermal") / "train_half.csv"
+    path.write_text("\n".join((SAMPLES / "train_variable.csv").read_text().splitlines()[:721]) + "\n")
+    return str(path)
+
+
 @pytest.mark.parametrize("method", ["mra", "grey-ls", "kalman"])
-def test_evaluate_json_contract(capsys, method):
-    code, out, err = run(capsys, "thermal", "evaluate", "--method", method, "--train", TRAIN, "--test", TEST,
-                         "--target", "error_z", "--seed", "1", "--json")
+def test_evaluate_json_contract(capsys, method, short_train):
+    budget = ["--iterations", "20"] if method == "kalman" else []
+    train = short_train if method == "kalman" else TRAIN
+    code, out, err = run(capsys, "thermal", "evaluate", "--method", method, "--train", train, "--test", TEST,
+                         "--target", "error_z", "--seed", "1", "--json", *budget)
     assert code == 0, err
     doc = json.loads(out)
     assert {"method", "rmse", "max_residual", "efficiency", "n_test"} <= doc.keys()
@@ -38,10 +48,10 @@ def test_evaluate_json_contract(capsys, method):
     assert doc["max_residual"] >= doc["rmse"]
 
 
-def test_fit_then_predict(capsys, tmp_path):
+def test_fit_then_predict(capsys, tmp_path, short_train):
     model = tmp_path / "kalman.json"
-    code, out, err = run(capsys, "thermal", "fit", "--method", "kalman", TRAIN, "--target", "error_z", "-o", str(model),
-                         "--seed", "0")
+    code, out, err = run(capsys, "thermal", "fit", "--method", "kalman", short_train, "--target", "error_z",
+                         "-o", str(model), "--seed", "0", "--iterations", "20")
     assert code == 0, err
     assert "model written" in out
     assert json.loads(model.read_text())["format"] == "setupfix-thermal-model"
@@ -143,3 +153,39 @@ def test_units_seed_and_corrupt_model(capsys, tmp_path):
     model.write_bytes(model.read_bytes().replace(b'"theta_"', b'"th\xffeta_"'))
     code, out, err = run(capsys, "thermal", "predict", "--model", str(model), TEST)
     assert code == 1 and "g.json" in err and "internal error" not in err
+
+
+def test_warm_test_log_anchor_and_interval(capsys, tmp_path):
+    rows = (SAMPLES / "train_variable.csv").read_text().splitlines()
+    (tmp_path / "a.csv").write_text("\n".join(rows[:721]) + "\n")
+    (tmp_path / "b.csv").write_text("\n".join(rows[:1] + rows[721:]) + "\n")
+    args = ["thermal", "evaluate", "--method", "mra", "--train", str(tmp_path / "a.csv"), "--test",
+            str(tmp_path / "b.csv"), "--target", "error_z", "--unit", "mm", "--json"]
+    code, out, err = run(capsys, *args)
+    doc = json.loads(out)
+    assert code == 0 and doc["unit"] == "mm" and doc["rmse"] < 0.012  # as if continuous; the drift there is ~0.036
+    assert "from the model's reference state" in err and any("reference state" in w for w in doc["warnings"])
+    code, out, _ = run(capsys, *args, "--anchor", "first")
+    assert code == 0 and json.loads(out)["rmse"] < 0.012
+    plain = tmp_path / "plain.csv"  # no timestamp: the interval gives the time
+    plain.write_text("\n".join(",".join(r.split(",")[1:]) for r in rows[:300]) + "\n")
+    code, _, err = run(capsys, "thermal", "fit", "--method", "grey-ls", str(plain), "--target", "error_z",
+                       "-o", str(tmp_path / "m.json"))
+    assert code == 1 and "--interval SECONDS" in err
+    code, _, err = run(capsys, "thermal", "fit", "--method", "grey-ls", str(plain), "--target", "error_z",
+                       "--interval", "10", "-o", str(tmp_path / "m.json"))
+    assert code == 0, err
+    assert json.loads((tmp_path / "m.json").read_text())["sample_interval_s"] == 10.0
+
+
+@pytest.mark.needs_shared
+def test_real_xlsx_logs(capsys):
+    from conftest import shared_path
+
+    folder = shared_path("thermal-data", "gooddash")
+    code, out, err = run(capsys, "thermal", "evaluate", "--method", "mra", "--train", str(folder / "data_ex1.xlsx"),
+                         "--test", str(folder / "data_ex2.xlsx"), "--target", "W", "--interval", "60",
+                         "--unit", "um", "--json")
+    assert code == 0, err
+    doc = json.loads(out)
+    assert len(doc["inputs"]) == 22 and doc["n_test"] == 72 and doc["rmse"] < 2.5  # µm, as from the CSV copies

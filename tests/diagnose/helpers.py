@@ -13,11 +13,12 @@ from setupfix.model import ProcessModel, model_from_dict
 from conftest import GUIDE_PINS
 
 NOISE = 0.002
+EXPANDED = GUIDE_PINS.parents[1] / "tests" / "model" / "data" / "guide_pins_expanded.toml"
 
 
 def guide_pins_doc(positions: bool = True) -> dict:
     """The bundled guide-pins model; with positions, part p sits at x = 150 (p − 1), feature f at +20 f."""
-    doc = tomllib.loads((GUIDE_PINS / "model.toml").read_text(encoding="utf-8"))
+    doc = tomllib.loads(EXPANDED.read_text(encoding="utf-8"))  # the sample written table by table
     if positions:
         for fid, feat in doc["features"].items():
             p, f = int(fid[1]), int(fid[3:])

@@ -105,3 +105,32 @@ def test_diagnose_from_the_history_store_equals_the_files(series, tmp_path, caps
     a, b = json.loads(out), json.loads(out2)
     assert a["effects"] == b["effects"] and a["rms_before"] == b["rms_before"]
     assert a["next_correction"] == b["next_correction"]
+    from setupfix.store import open_store
+
+    with open_store(db) as store:  # the recommendation is kept with what it came from
+        (rec,) = store.recommendations()
+    assert rec.inputs["command"] == "diagnose" and rec.result["next_correction"] == a["next_correction"]
+
+
+def test_thermal_model_prediction_is_a_candidate_channel(tmp_path, capsys):
+    """A thermal model saved by `thermal fit` enters as one more channel; here it is linear in the
+    spindle temperature, so the report says the two cannot be told apart."""
+    import numpy as np
+    import pandas as pd
+
+    loop = GUIDE_PINS.parent / "closed_loop"
+    temps = pd.read_csv(loop / "temperatures.csv")
+    temps["error_z"] = 0.003 * (temps["spindle"] - 20) + np.random.default_rng(0).normal(0, 2e-4, len(temps))
+    log = tmp_path / "temps.csv"
+    temps.to_csv(log, index=False)
+    saved = tmp_path / "mra.json"
+    assert main(["thermal", "fit", "--method", "mra", "--target", "error_z", "--unit", "mm", "--inputs", "spindle",
+                 "-o", str(saved), str(log)]) == 0
+    capsys.readouterr()
+    code, out, err = run(capsys, "diagnose", "--model", MODEL, "--corrections", loop / "corrections.csv",
+                         "--temperatures", log, "--thermal", saved, "--json", "--no-walk", loop / "measurements.csv")
+    assert code == 0, err
+    effects = json.loads(out)["effects"]
+    assert [e["kind"] for e in effects] == ["thermal"]
+    assert {effects[0]["target"], *(a.split(": ", 1)[1] for a in effects[0]["alike"])} == \
+        {"all tools ~ spindle", "all tools ~ mra prediction"}

@@ -84,9 +84,7 @@ def _declared(name):
     return opt, opt._parameter_constraints
 
 
-@pytest.mark.parametrize("name", [pytest.param(n, marks=pytest.mark.xfail(
-    reason="ExactOptimizer declares no _parameter_constraints yet (optimize/_exact.py: the exact slice)",
-    strict=False)) if n == "exact" else n for n in NAMES])
+@pytest.mark.parametrize("name", NAMES)
 def test_every_parameter_is_declared(name):
     opt, declared = _declared(name)
     assert set(opt.get_params()) <= set(declared)
@@ -128,6 +126,7 @@ def test_guard_returns_zero_and_says_so():
     x = np.array([0.05, 0.0, -0.02, 0.0])
     guarded = make_result(problem, x, optimizer="pso", evaluations=1, seconds=0.0, status="budget")
     assert guarded.status == NO_BETTER_THAN_NONE and not guarded.x.any()
+    assert [n.kind for n in guarded.notes] == ["solver"] and "better than none" in guarded.notes[0].message
     assert guarded.margin_after == problem.margin_before == pytest.approx(0.1)
     kept = make_result(problem, x, optimizer="exact", evaluations=1, seconds=0.0, status="optimal", guard=False)
     assert kept.status == "optimal" and np.array_equal(kept.x, x)

@@ -43,6 +43,8 @@ def test_every_proof_path_equals_brute_force(path, seed, monkeypatch):
 
 def test_solve_error_repro_is_optimal():
     """The report on which HiGHS once answered "Solve error": optimum and least norm, proved."""
+    # The solver itself: the repro's random deviations lie beyond the default reject band of
+    # the safety rules (setupfix.safety), so `correct` would refuse the report before solving.
     from setupfix.model import load_model
 
     model = load_model(DATA / "model.toml")

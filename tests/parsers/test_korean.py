@@ -13,6 +13,7 @@ import pytest
 import parsers
 from goldens import GOLDEN, assert_derived_golden, read_warned
 from parsers.korean import read_korean
+from parsers.korean.report import along_normal
 from setupfix.errors import ParseError
 from conftest import SHARED as SHARED_ROOT
 
@@ -37,11 +38,36 @@ def test_sample_matches_derived_golden(name: str) -> None:
 
 def test_ng_report_out_of_tolerance_and_sign_quirk() -> None:
     table, messages = read_warned(read_korean, shared("KR_45926-4G100_240113_night_2-2-1_NG.cp949.txt"))
-    assert "differ in sign (magnitudes compared): line 32" in messages
     row = table[table["source"].str.endswith(":31")].iloc[0]  # X 116.728, nominal 116.600, +0.100/0.000, excess 0.028
     assert (row["deviation"], row["lower"], row["upper"], row["status"]) == (pytest.approx(0.128), 0.0, 0.1, "out")
     assert table["timestamp"].iloc[0] == "2024-01-13T22:55:39"
-    assert not table["source"].str.endswith(":32").any()
+    # Line 32: "Y -10.912, nominal 10.900, deviation 0.012": the nominal and the deviation are along
+    # the plane's normal, which points to -Y; in Y the nominal is -10.9 and the deviation -0.012.
+    row = table[table["source"].str.endswith(":32")].iloc[0]
+    assert (row["nominal"], row["actual"], row["deviation"]) == (-10.9, -10.912, pytest.approx(-0.012))
+
+
+@pytest.mark.parametrize(("nominal", "actual", "stated", "limits", "expected"), [
+    (5.0, 5.1, 0.1, (-0.1, 0.2), (5.0, -0.1, 0.2)),          # normal along the axis: as written
+    (-2.4, -2.5, 0.1, (-0.1, 0.2), (-2.4, -0.2, 0.1)),       # reversed normal: limits mirrored
+    (10.9, -10.912, 0.012, (-0.1, 0.2), (-10.9, -0.2, 0.1)),  # nominal also along the reversed normal
+    (5.0, 5.1, 0.3, (-0.1, 0.2), None),                       # contradicts itself
+])
+def test_deviation_along_the_feature_normal(nominal, actual, stated, limits, expected):
+    assert along_normal(nominal, actual, stated, *limits) == (pytest.approx(expected) if expected else None)
+
+
+def test_lenient_skips_a_self_contradicting_row_with_its_line(tmp_path: Path) -> None:
+    lines = shared("KR_45926-4G100_240113_night_2-2-1_NG.cp949.txt").read_bytes().decode("cp949").split("\n")
+    assert "0.012" in lines[31]
+    lines[31] = lines[31].replace("0.012", "0.512")
+    path = tmp_path / "bad.txt"
+    path.write_bytes("\n".join(lines).encode("cp949"))
+    with pytest.raises(ParseError, match=r"bad\.txt:32: stated deviation 0.512 mm fits neither"):
+        parsers.read_report(path)
+    result = parsers.read_report(path, lenient=True)
+    assert not result.table["source"].str.endswith(":32").any()
+    assert any("contradicting themselves" in n.message and n.location.line == 32 for n in result.notes)
 
 
 def test_second_part_suffix_gives_second_part() -> None:

@@ -94,4 +94,4 @@ def test_one_program_per_cycle(tmp_path):
     shutil.copy(sample / "report.csv", d / "a.csv")
     s = run_batch(sample / "model.toml", d, tmp_path / "programs", settle=0, controller="fanuc")
     assert s.written and [p.name for p in (tmp_path / "programs").iterdir()] == ["a.nc"]
-    assert "G91 G10 L2 P1 Z-0.024" in (tmp_path / "programs" / "a.nc").read_text()
+    assert "G91 G10 L2 P1 Z-0.022" in (tmp_path / "programs" / "a.nc").read_text()

@@ -91,3 +91,15 @@ def test_one_station_of_the_fixture_warns_about_shared_tools(tmp_path, guide_pin
     assert "measured dimensions only" in note
     (full,) = correct_report(guide_pins_model, CYCLE)
     assert not [w for w in full.warnings if "does not measure" in w]
+
+
+def test_warnings_reach_json_and_stderr(tmp_path, capsys):
+    import json
+
+    from setupfix.cli import main
+
+    path = rewrite(tmp_path, lambda i, r: {**r, "lower": "-0.02", "upper": "0.02"})
+    assert main(["correct", "--model", str(GUIDE_PINS / "model.toml"), "--json", str(path)]) == 0
+    captured = capsys.readouterr()
+    assert any("differs from the model's" in w for w in json.loads(captured.out)["warnings"])
+    assert "warning: " in captured.err and "-0.02/+0.02 mm differs" in captured.err

@@ -74,3 +74,39 @@ def test_compare_steps_end_with_what_compare_problem_gives():
     assert [m.optimizer for m in last.methods] == ["ga", "pso"]
     for a, b in zip(last.methods, ref.methods):
         assert a.seeds == b.seeds and a.f1.tolist() == b.f1.tolist() and a.f2.tolist() == b.f2.tolist()
+
+
+@pytest.mark.parametrize("controller", ["csv", "fanuc"])
+def test_offsets_text_is_what_correct_writes(tmp_path, controller):
+    from setupfix.pipeline.correct import correct_report, write_correction_offsets
+    from setupfix.pipeline.session import offsets_text
+
+    current = tmp_path / "current.csv"
+    current.write_text("register,value\n" + "".join(f"{r},{i * 0.5}\n" for i, r in enumerate(
+        ["G54", "G55", "G56", "G57", "G58", "G59", "G54.1P1", "G54.1P2", "H5", "H23"])), encoding="utf-8")
+    opened = open_report(MODEL, GUIDE_PINS / "cycle_01.csv", current=current)
+    assert opened.current["W2"] == 0.5
+    write_correction_offsets(correct_report(MODEL, GUIDE_PINS / "cycle_01.csv"), str(tmp_path / "cli.txt"),
+                             controller=controller, current=current)
+    assert offsets_text(opened, controller) == (tmp_path / "cli.txt").read_text(encoding="utf-8")
+
+
+def test_a_rejected_report_cannot_be_exported(tmp_path):
+    from setupfix.errors import ExportError
+    from setupfix.pipeline.session import offsets_text
+
+    gross = tmp_path / "gross.csv"
+    gross.write_text((GUIDE_PINS / "cycle_01.csv").read_text(encoding="utf-8")
+                     .replace("P1 D1,25.0000,24.9691,-0.0309", "P1 D1,25.0000,24.5000,-0.5000"), encoding="utf-8")
+    opened = open_report(MODEL, gross)
+    assert opened.corrections[0].verdict == "reject"
+    with pytest.raises(ExportError, match="rejected"):
+        offsets_text(opened, "csv")
+
+
+def test_a_register_the_format_cannot_express_is_named():
+    from setupfix.errors import ExportError
+    from setupfix.pipeline.session import offsets_text
+
+    with pytest.raises(ExportError, match="G58"):
+        offsets_text(open_report(MODEL, GUIDE_PINS / "cycle_01.csv"), "siemens")

@@ -42,10 +42,10 @@ def test_zone_bar_of_a_one_sided_tolerance_is_symmetric_about_nominal():
 def test_dimension_rows_carry_the_correction_and_its_symbols(correction):
     rows = view.dimension_rows(correction)
     assert len(rows) == 28 and [r.id for r in rows] == list(correction.problem.dimension_ids)
-    pred = correction.problem.predicted(correction.result.x)
+    pred = correction.problem.predicted(correction.x)
     np.testing.assert_allclose([r.predicted for r in rows], pred)
     assert min(r.margin_before for r in rows) == pytest.approx(correction.result.margin_before)
-    assert min(r.margin_after for r in rows) == pytest.approx(correction.result.margin_after)
+    assert min(r.margin_after for r in rows) == pytest.approx(correction.margin_after)
     assert {r.name for r in rows if view.BINDING in r.flags} == {"P1 D6", "P1 D7"}
     assert all(r.flags.startswith("✓✓") for r in rows)
     assert view.stations(rows) == ["P1", "P2", "P3", "P4"]
@@ -53,8 +53,11 @@ def test_dimension_rows_carry_the_correction_and_its_symbols(correction):
 
 def test_an_out_of_tolerance_dimension_predicted_out_is_marked():
     r = view.DimensionRow("D1", "D1", "", deviation=0.3, lower=-0.1, upper=0.1, predicted=0.2,
-                          margin_before=-0.2, margin_after=-0.1, binding=True, given_up=True)
-    assert r.flags == "✗▲●⚑"
+                          margin_before=-0.2, margin_after=-0.1,
+                          flags_=("out_before", "out", "binding", "given_up", "rejected"))
+    assert r.flags == "✗▲●⚑⊘" and not r.in_before and not r.in_after
+    guarded = view.DimensionRow("D2", "D2", "", 0.0, -0.1, 0.1, 0.095, 0.1, 0.005, ("guard",))
+    assert guarded.flags == "✓◇"
 
 
 def test_filter_and_sort(correction):
@@ -74,14 +77,26 @@ def test_register_rows_list_every_register_with_new_values_when_current_known(co
     assert g58.delta == pytest.approx(0.014) and g58.new == pytest.approx(1.514)
     assert next(r for r in rows if r.id == "T23").new == pytest.approx(-2.0 + 0.027)
     assert next(r for r in rows if r.id == "W1").new is None
-    assert not any(r.at_limit for r in rows)
+    assert not any(r.at_limit for r in rows) and {r.offset for r in rows} == {"geometry", "wear"}
 
 
 def test_summary_is_the_headline_of_the_result(correction):
     s = view.summary(correction)
-    assert (s.margin_before, s.margin_after, s.bonus) == (correction.result.margin_before,
-                                                          correction.result.margin_after, correction.result.bonus)
+    assert (s.margin_before, s.margin_after) == (correction.margin_before, correction.margin_after)
+    assert s.bonus == pytest.approx(0.0651) and s.verdict == "apply" and s.rules == () and s.alarm == ""
     assert s.unit == "mm" and s.in_tolerance
+
+
+def test_a_gross_error_is_rejected_and_its_rules_and_flags_shown(tmp_path):
+    gross = tmp_path / "gross.csv"
+    gross.write_text((GUIDE_PINS / "cycle_01.csv").read_text(encoding="utf-8")
+                     .replace("P1 D1,25.0000,24.9691,-0.0309", "P1 D1,25.0000,24.5000,-0.5000"), encoding="utf-8")
+    c = correct_report(GUIDE_PINS / "model.toml", gross)[0]
+    s = view.summary(c)
+    assert s.verdict == "reject" and s.alarm and any(r.startswith("reject") for r in s.rules)
+    p1d1 = next(r for r in view.dimension_rows(c) if r.name == "P1 D1")
+    assert view.REJECTED in p1d1.flags and view.OUT in p1d1.flags
+    assert all(r.delta == 0 for r in view.register_rows(c))
 
 
 def test_match_rows_suggest_close_dimension_names(guide_pins_model):

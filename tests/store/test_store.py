@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import hashlib
 import signal
 import sqlite3
 import subprocess
@@ -197,3 +198,24 @@ def test_cli_import_show_export(tmp_path, capsys):
                  "--json"]) == 0
     assert main(["history", "export", "corrections", "--db", db, "--out", str(tmp_path)]) == 1
     assert "folder" in capsys.readouterr().err
+
+
+def test_recommendations_of_a_correct_run_are_stored(tmp_path):
+    from setupfix.pipeline.correct import correct_report
+    from setupfix.pipeline.history import record_recommendations
+
+    results = correct_report(GUIDE / "model.toml", REPORTS[0])
+    with open_store(tmp_path / "h.db") as store:
+        record_recommendations(store, results, model=GUIDE / "model.toml", report=REPORTS[0])
+        (rec,) = store.recommendations()
+    assert rec.optimizer == "exact" and rec.result["corrections"] == results[0].to_json()["corrections"]
+    assert rec.inputs["report_sha256"] == hashlib.sha256(REPORTS[0].read_bytes()).hexdigest()
+
+
+def test_a_truncated_report_is_refused_and_nothing_stored(tmp_path):
+    cut = tmp_path / "cut.csv"
+    cut.write_bytes(REPORTS[0].read_bytes()[:322])  # ends inside a row: "P1 D4,30.0000,29."
+    with open_store(tmp_path / "h.db") as store:
+        with pytest.raises(ParseError, match="cut.csv.*truncated"):
+            import_history(store, [REPORTS[1], cut])
+        assert store.reports() == []

@@ -2,12 +2,13 @@
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
 import numpy as np
 import pytest
 
-SHARED = Path(__file__).resolve().parents[3] / "shared"
+SHARED = Path(os.environ.get("SETUPFIX_SHARED", Path(__file__).resolve().parents[3] / "shared"))
 SAMPLES = Path(__file__).resolve().parents[2] / "sample_reports" / "thermal"
 
 

@@ -12,6 +12,7 @@ from setupfix.errors import ParameterError, ParseError
 from setupfix.model import load_model as load_process_model
 from setupfix.pipeline import thermal as pipe
 from setupfix.pipeline.feedforward import thermal_feed_forward
+from setupfix.pipeline.thermal_files import load_model
 from setupfix.thermal.feedforward import drift_change, feed_forward, sample_at_or_before
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -84,3 +85,35 @@ def test_unit_conversion_and_refusals(fitted):
                             unit="mm", axis="X").saved
     with pytest.raises(ParameterError, match="acts along X"):
         thermal_feed_forward(model, fitted_x, log, measured_at=log.timestamps[100])
+
+
+def test_correct_with_thermal_feed_forward(tmp_path, monkeypatch, capsys):
+    """``setupfix correct --thermal --temperatures``: the guide-pins cycle cut at 08:00, corrected at 09:00."""
+    import json
+
+    import setupfix.cli as cli
+
+    monkeypatch.setattr(cli, "COMMAND_MODULES", ("setupfix.cli._correct", "setupfix.cli._thermal"))
+    log = tmp_path / "temps.csv"
+    log.write_text((SAMPLES / "test_variable.csv").read_text().replace("2026-01-05T", "2026-11-02T"))
+    model = tmp_path / "drift.json"
+    assert cli.main(["thermal", "fit", "--method", "mra", str(SAMPLES / "train_variable.csv"), "--target", "error_z",
+                     "--inputs", "spindle_motor,bearing", "--unit", "mm", "-o", str(model)]) == 0
+    report = str(ROOT / "sample_reports" / "guide_pins" / "cycle_01.csv")
+    base = ["correct", "--model", str(GUIDE_PINS), report, "--json"]
+    capsys.readouterr()
+    assert cli.main(base) == 0
+    plain = json.loads(capsys.readouterr().out)
+    assert cli.main(base + ["--thermal", str(model), "--temperatures", str(log), "--at", "2026-11-02T09:00:00"]) == 0
+    fed = json.loads(capsys.readouterr().out)
+    th = fed["thermal"]
+    drift = pipe.predict_log(load_model(model), read_temperature_log(log))[0]
+    assert th["delta"] == pytest.approx(drift[1080] - drift[720])  # 09:00 and 08:00, sampled every 10 s from 06:00
+    assert th["applied"] and th["registers"] == ["T5", "T23"] and th["shift"] == pytest.approx(-round(th["delta"], 3))
+    for reg in ("T5", "T23"):
+        assert fed["corrections"][reg] == pytest.approx(plain["corrections"][reg] + th["shift"])
+    assert fed["corrections"]["W1"] == plain["corrections"]["W1"]
+    assert cli.main(base[:-1] + ["--thermal", str(model), "--temperatures", str(log), "--at", "2026-11-02T09:00:00"]) == 0
+    assert "thermal feed-forward" in capsys.readouterr().out
+    assert cli.main(base + ["--thermal", str(model)]) == 1
+    assert "go together" in capsys.readouterr().err

@@ -87,7 +87,7 @@ def test_kalman_fusion_recovers_lumped_parameters(fitted, sim_runs):
 def fitted(sim_runs):
     train, _ = sim_runs
     T, y, te, sp = arrays(train.frame)
-    return (KalmanFusionModel(seed=0).fit(T, y, ambient=te, speed=sp), MRAModel().fit(T, y))
+    return (KalmanFusionModel(seed=0, generations=20).fit(T, y, ambient=te, speed=sp), MRAModel().fit(T, y))
 
 
 def test_robustness_to_sinusoidal_sensor_error(fitted, sim_runs):

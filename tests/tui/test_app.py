@@ -54,7 +54,8 @@ def test_open_sort_filter_export_then_a_bad_report(make_app, tmp_path):
             # export: the confirmation shows the text; ctrl+s writes exactly it
             await pilot.press("e")
             await pilot.pause()
-            shown = app.screen.query_one("#export-text").text
+            shown = app.screen.text
+            assert str(app.screen.query_one("#export-text").render()) == shown
             await pilot.press("ctrl+s")
             await pilot.pause()
             written = (tmp_path / "offsets.csv").read_text(encoding="utf-8")
@@ -196,24 +197,33 @@ def test_history_from_the_store_one_key_diagnose_and_the_export_recorded(make_ap
     run(scenario())
 
 
-def test_thermal_panel_shows_the_models_drift_over_the_log(make_app, tmp_path):
+def test_thermal_panel_shows_the_drift_and_the_feed_forward(make_app, tmp_path):
     from conftest import SAMPLES
 
+    from setupfix.pipeline.feedforward import thermal_feed_forward
     from setupfix.pipeline.thermal import fit_file, predict_drift
 
     saved = tmp_path / "grey.json"
-    fit_file(SAMPLES / "thermal" / "train_variable.csv", "grey-ls", target="error_z", out=saved)
-    log = SAMPLES / "thermal" / "test_variable.csv"
+    fit_file(SAMPLES / "thermal" / "train_variable.csv", "grey-ls", target="error_z", unit="mm", out=saved)
+    # the simulated test log, moved to the day of cycle 01 (parts cut 2026-11-02T08:00)
+    log = tmp_path / "temps.csv"
+    log.write_text((SAMPLES / "thermal" / "test_variable.csv").read_text(encoding="utf-8")
+                   .replace("2026-01-05T", "2026-11-02T"), encoding="utf-8")
     expected = predict_drift(saved, log)
+    model = correct_report(MODEL, CYCLE_01)[0].model
+    feed = thermal_feed_forward(model, saved, log, measured_at="2026-11-02T08:00:00")
 
     async def scenario():
         app = make_app(thermal=saved, temperatures=log)
-        async with app.run_test() as pilot:
+        async with app.run_test(size=(100, 30)) as pilot:
+            await settle(pilot)
             await settle(pilot)
             await pilot.press("3")
             text = str(app.query_one("#thermal-status").render())
             assert f"{expected.latest:+.4f} mm" in text and "grey" in text
             curve = app.query_one("#thermal-curve")
             assert curve.display and list(curve.data) == [float(v) for v in expected.drift[-120:]]
+            assert feed.line() in str(app.query_one("#thermal-feed").render())
+            assert feed.line() in str(app.query_one("#summary").render())
 
     run(scenario())

@@ -8,9 +8,9 @@ from dataclasses import dataclass
 from textual import on
 from textual.app import ComposeResult
 from textual.binding import Binding
-from textual.containers import Horizontal, Vertical
+from textual.containers import Horizontal, Vertical, VerticalScroll
 from textual.screen import ModalScreen
-from textual.widgets import Button, Input, Label, Select, TextArea
+from textual.widgets import Button, Input, Label, Select, Static
 
 from setupfix.errors import SetupfixError
 
@@ -37,6 +37,7 @@ class ExportScreen(ModalScreen[ExportRequest | None]):
         self.render_text = render
         self.path = path
         self.refusal = ""
+        self.text = ""  #: exactly what Write writes
 
     def compose(self) -> ComposeResult:
         with Vertical(id="export-box"):
@@ -45,23 +46,25 @@ class ExportScreen(ModalScreen[ExportRequest | None]):
                 yield Select([(c, c) for c in self.controllers], value=self.controllers[0], allow_blank=False,
                              id="export-controller")
                 yield Input(self.path, id="export-path")
-            yield TextArea(self._text(self.controllers[0]), read_only=True, id="export-text")
+            with VerticalScroll(id="export-scroll"):
+                yield Static(self._text(self.controllers[0]), markup=False, id="export-text")
             with Horizontal(id="export-buttons"):
                 yield Button("Write (ctrl+s)", variant="primary", id="export-write")
                 yield Button("Cancel (esc)", id="export-cancel")
 
     @on(Select.Changed, "#export-controller")
     def _controller(self, event: Select.Changed) -> None:
-        self.query_one("#export-text", TextArea).text = self._text(str(event.value))
+        self.query_one("#export-text", Static).update(self._text(str(event.value)))
 
     def _text(self, controller: str) -> str:
         """The text to write, or the reason there is none (then Write refuses)."""
         try:
             self.refusal = ""
-            return self.render_text(controller)
+            self.text = self.render_text(controller)
         except SetupfixError as exc:
-            self.refusal = str(exc)
-            return f"cannot export in this format: {exc}"
+            self.refusal, self.text = str(exc), ""
+            return f"cannot export: {exc}"
+        return self.text
 
     @on(Button.Pressed, "#export-write")
     def action_write(self) -> None:
@@ -73,7 +76,7 @@ class ExportScreen(ModalScreen[ExportRequest | None]):
         if self.refusal:
             self.notify(self.refusal, title="export refused", severity="error")
             return
-        self.dismiss(ExportRequest(controller, path, self.query_one("#export-text", TextArea).text))
+        self.dismiss(ExportRequest(controller, path, self.text))
 
     @on(Button.Pressed, "#export-cancel")
     def action_cancel(self) -> None:

@@ -18,8 +18,7 @@ VERDICT_STYLE: dict[str, tuple[str, str]] = {
 class SummaryBar(Static):
     """Three lines: where the numbers come from, the error budget, the verdict and notes."""
 
-    def show(self, summary: Summary | None, *, optimizer: str, part: str = "", problem: str = "",
-             verdict_reason: str = "") -> None:
+    def show(self, summary: Summary | None, *, optimizer: str, part: str = "", problem: str = "") -> None:
         """Render ``summary`` (None: nothing opened yet, or ``problem`` says why not)."""
         text = Text(no_wrap=False, overflow="ellipsis")
         if summary is None:
@@ -28,7 +27,9 @@ class SummaryBar(Static):
             self.update(text)
             return
         u = summary.unit
-        text.append(f"{summary.report}", style="bold")
+        label, style = VERDICT_STYLE.get(summary.verdict, (summary.verdict.upper(), "bold"))
+        text.append(f" {label} ", style=f"{style} reverse")
+        text.append(f" {summary.report}", style="bold")
         text.append(f"  {part or summary.part}  ")
         text.append(f"{summary.optimizer} · {summary.status}", style="italic")
         if summary.bound is not None:
@@ -40,16 +41,15 @@ class SummaryBar(Static):
         text.append(f" {u}   bonus ")
         text.append(signed(summary.bonus), style="bold reverse")
         text.append(f" {u}   ‖x‖ {summary.norm:.4f}")
-        text.append("\n" + ("✓ " if summary.in_tolerance else "✗ ") + summary.message + "\n")
-        if summary.verdict is not None:
-            label, style = VERDICT_STYLE.get(summary.verdict, (summary.verdict.upper(), "bold"))
-            text.append(label, style=style)
-            if summary.rules:
-                text.append("  " + "; ".join(summary.rules))
+        if summary.alarm:
+            text.append(f"\n✗ {summary.alarm}", style="bold red")
         else:
-            text.append("verdict — not available", style="dim")
-            if verdict_reason:
-                text.append(f": {verdict_reason}", style="dim")
+            text.append("\n" + ("✓ " if summary.in_tolerance else "✗ ") + summary.message)
+        if summary.given_up:
+            text.append(f"\n⚑ given up (NC program or process, not the setup): {', '.join(summary.given_up)}",
+                        style="yellow")
+        for rule in summary.rules:
+            text.append(f"\n• {rule}")
         if problem:
             text.append(f"\n{problem}", style="bold")
         for note in summary.notes:

@@ -24,17 +24,20 @@ class ThermalPanel(Vertical):
         self.query_one("#thermal-status", Static).update(Text(f"not available: {reason}", style="dim"))
         self.query_one("#thermal-curve", Sparkline).display = False
 
-    def show(self, view: DriftView, *, unit: str, source: str) -> None:
+    def show(self, view: DriftView, *, source: str) -> None:
+        unit = view.unit or "(unit not stated)"
         text = Text()
         text.append(f"{view.method} model", style="bold")
         text.append(f" on {source}: {view.samples} samples, target {view.target}\n")
-        text.append("predicted drift at the latest sample ")
+        text.append("predicted drift at the latest sample, relative to the model's reference state ")
         text.append(f"{signed(view.latest)} {unit}", style="bold")
         text.append(f" ({view.latest_time})")
         if view.measured_latest is not None:
             text.append(f"; measured {signed(view.measured_latest)} {unit}")
         low, high = view.recent_range
         text.append(f"\nrecent curve, last {len(view.recent)} samples, from {signed(low)} (▁) to {signed(high)} (█) {unit}:")
+        for note in view.notes:
+            text.append(f"\n⚠ {note}", style="yellow")
         self.query_one("#thermal-status", Static).update(text)
         curve = self.query_one("#thermal-curve", Sparkline)
         curve.display = True

@@ -1,0 +1,53 @@
+"""Thread workers: each takes immutable inputs, calls the pipeline and returns its result.
+
+They share no mutable state with the screen; the comparison posts its progress as
+messages (``post_message`` is thread-safe) and stops between trials when cancelled.
+Exceptions reach :meth:`SetupfixApp.on_worker_state_changed`, the error boundary.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from textual.app import App
+from textual.worker import get_current_worker
+
+from setupfix.model import ProcessModel
+from setupfix.optimize import CorrectionProblem
+from setupfix.pipeline import view
+from setupfix.pipeline.compare import Comparison
+from setupfix.pipeline.diagnose import diagnose_reports
+from setupfix.pipeline.session import compare_steps, store_parts
+from setupfix.pipeline.thermal import predict_drift
+from setupfix.tui.messages import CompareProgress
+
+__all__ = ["drift", "compare", "history", "diagnose"]
+
+
+def drift(model: Path, log: Path) -> view.DriftView:
+    """Thread worker: the saved thermal model's drift over the log."""
+    return view.drift_view(predict_drift(model, log))
+
+
+def compare(app: App[None], problem: CorrectionProblem, trials: int, seed: int) -> Comparison | None:
+    """Thread worker: the comparison one trial at a time, stoppable between trials."""
+    worker = get_current_worker()
+    result: Comparison | None = None
+    for method, step, steps, comparison in compare_steps(problem, trials=trials, seed=seed):
+        if worker.is_cancelled:
+            return None
+        result = comparison
+        app.post_message(CompareProgress(step, steps, method))
+    return result
+
+
+def history(model: ProcessModel, db: Path) -> tuple[list[view.CycleBudget], list[str]]:
+    """Thread worker: the error budget of every cycle in the history store."""
+    parts, notes = store_parts(model, db)
+    return view.cycle_budgets(model, parts), notes
+
+
+def diagnose(model: Path, source: Path, store: bool) -> view.DiagnosisView:
+    """Thread worker: ``setupfix diagnose`` over the history store or a folder of reports (and its logs)."""
+    outcome = diagnose_reports(model, db=source) if store else diagnose_reports(model, [source])
+    return view.diagnosis_view(outcome)
