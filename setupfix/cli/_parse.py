@@ -5,7 +5,6 @@ from __future__ import annotations
 import argparse
 import sys
 
-from parsers._source import check_encoding
 from setupfix.errors import SetupfixError
 from setupfix.cli.exit_codes import ERROR, OK, PARTIAL
 
@@ -32,6 +31,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 def _encoding(text: str) -> str:
     """argparse type: a usable character set (``--encoding punycode`` is refused with the reason)."""
+    from parsers._source import check_encoding  # here: importing the parsers loads pandas
+
     try:
         return check_encoding(text)
     except SetupfixError as exc:
