@@ -47,6 +47,7 @@ is always reported.
 
 from __future__ import annotations
 
+import threading
 import time
 from collections.abc import Callable
 from contextlib import AbstractContextManager
@@ -136,6 +137,7 @@ def _lp_model(g_rows: Array, kmin: Array, kmax: Array) -> LinearModel:
 
 
 _CONTROLLER: ThreadpoolController | None = None
+_THREAD = threading.local()
 
 
 def _blas_single_thread() -> AbstractContextManager[object]:
@@ -165,7 +167,11 @@ class _Clock:
 
 
 class _Cache:
-    """Solver models kept across reports of one process model (same G and box)."""
+    """Solver models kept across reports of one process model (same G and box).
+
+    One per thread (HiGHS objects are not shared between threads): a batch or the TUI
+    that solves in worker threads keeps one set of models per worker.
+    """
 
     def __init__(self) -> None:
         self.key: tuple[object, ...] | None = None
@@ -217,7 +223,17 @@ class ExactOptimizer(Optimizer):
         self.grid = grid
         self.time_limit = time_limit
         self.seed = seed
-        self._cache = _Cache()
+
+    @property
+    def _cache(self) -> _Cache:
+        """Solver models of this thread, kept across reports and optimiser instances."""
+        cache = getattr(_THREAD, "cache", None)
+        if cache is None:
+            cache = _THREAD.cache = _Cache()
+        return cache
+
+    def _drop_cache(self) -> None:
+        _THREAD.cache = _Cache()
 
     # -- solver models (kept across reports) ---------------------------------------------------
     def _lp(self, g_rows: Array, kmin: Array, kmax: Array, cost: Array) -> LinearModel:
@@ -246,7 +262,7 @@ class ExactOptimizer(Optimizer):
         if cold:
             lp.h.setOptionValue("solver", "choose")
         if res.status not in ("optimal", "time_limit") and clock.left() > 0:  # one retry from scratch
-            self._cache = _Cache()
+            self._drop_cache()
             lp = self._lp(g_rows, kmin, kmax, cost)
             lp.set_row_bounds(np.full(g.size, -INF), g)
             res = lp.solve(clock.left())
