@@ -89,8 +89,6 @@ MILP_SHARE = 0.5
 LEAST_NORM_SHARE = 0.5
 #: Levels the grid-optimum stage may descend by rounded rows before it uses the MILP.
 LEVEL_STEPS = 40
-#: Cap on t when one-sided limits leave it unbounded (far above any two-sided margin).
-T_CAP = 1e9
 
 
 def margin_rows(problem: CorrectionProblem) -> tuple[Array, Array]:
@@ -132,7 +130,7 @@ def _lp_model(g_rows: Array, kmin: Array, kmax: Array) -> LinearModel:
     """max t s.t. G k + t ≤ g (row bounds set per report), k in the box."""
     r, n = g_rows.shape
     model = LinearModel(np.r_[np.zeros(n), -1.0], np.hstack([g_rows, np.ones((r, 1))]), np.full(r, -INF),
-                        np.zeros(r), np.r_[kmin, -T_CAP], np.r_[kmax, T_CAP])
+                        np.zeros(r), np.r_[kmin, -INF], np.r_[kmax, INF])  # t: bounded by every row
     return model
 
 
@@ -283,7 +281,7 @@ class ExactOptimizer(Optimizer):
         try:
             return lp.solve(max(clock.left(), 1e-3)).status
         finally:
-            lp.set_col_bounds(np.array([n], dtype=np.int32), np.array([-T_CAP]), np.array([T_CAP]))
+            lp.set_col_bounds(np.array([n], dtype=np.int32), np.array([-INF]), np.array([INF]))
 
     def _max_margin_milp(self, g_rows: Array, g: Array, kmin: Array, kmax: Array, t_lo: float, t_hi: float,
                          start: Array | None, time_limit: float) -> Solve:
@@ -550,7 +548,7 @@ class ExactOptimizer(Optimizer):
         # Stage 2: grid optimum.
         d, pairs = self._cache.structure(g_rows, kmin, kmax, cost)
         zero = ~np.any(g_rows != 0, axis=1)
-        upper = min(dual_bound(g_rows, g, y, kmin, kmax), pair_bound(g_rows, g, kmin, kmax, pairs), T_CAP)
+        upper = min(dual_bound(g_rows, g, y, kmin, kmax), pair_bound(g_rows, g, kmin, kmax, pairs))
         k_best = np.clip(np.rint(k_lp), kmin, kmax)
         t_best = float(grid_margins(g_rows, g, k_best))
         t_zero = float(grid_margins(g_rows, g, np.zeros_like(k_best)))
@@ -652,7 +650,7 @@ class ExactOptimizer(Optimizer):
                                       f"grid point ({t_best:.4g}) and the bound ({upper:.4g} steps); retried "
                                       "without the lower bracket", kind="solver"))
                     calls += 1
-                    res = self._max_margin_milp(g_rows, g, kmin, kmax, -T_CAP, upper, None, stage2_left())
+                    res = self._max_margin_milp(g_rows, g, kmin, kmax, -INF, upper, None, stage2_left())
                 if res.x is not None:
                     k = np.clip(np.rint(res.x[:-1]), kmin, kmax)
                     t_k = float(grid_margins(g_rows, g, k))

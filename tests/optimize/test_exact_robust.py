@@ -143,3 +143,17 @@ def test_threads_keep_their_own_solver_models(guide_pins_model):
         threaded = list(pool.map(lambda p: get_optimizer("exact").solve(p).x, problems))
     for a, b in zip(alone, threaded):
         np.testing.assert_array_equal(a, b)
+
+
+def test_a_very_fine_grid_neither_hangs_nor_loses_the_bound(guide_pins_model):
+    """Resolution 1e-11 mm: 10^10 steps per register; bounded in time, never worse than the 0.001 grid."""
+    import dataclasses
+
+    (part,) = load_parts(guide_pins_model, GUIDE_PINS / "cycle_01.csv")
+    coarse = CorrectionProblem.from_part(guide_pins_model, part)
+    fine = dataclasses.replace(coarse, resolution=1e-11)
+    start = time.perf_counter()
+    result = get_optimizer("exact", time_limit=2.0).solve(fine)
+    assert time.perf_counter() - start < 2.0 + 3.0
+    assert get_optimizer("exact").solve(coarse).margin_after - 1e-12 <= result.margin_after
+    assert result.margin_after <= result.bound + 1e-12
