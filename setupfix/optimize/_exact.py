@@ -249,8 +249,8 @@ class ExactOptimizer(Optimizer):
 
     # -- stages --------------------------------------------------------------------------------
     def _lp_bound(self, g_rows: Array, g: Array, kmin: Array, kmax: Array, cost: Array,
-                  clock: _Clock) -> tuple[float, Array, Array]:
-        """t_LP, the LP point and the row weights y ≥ 0 of its dual."""
+                  clock: _Clock) -> tuple[float, Array, Array] | None:
+        """t_LP, the LP point and the row weights y ≥ 0 of its dual (None: time limit reached)."""
         lp = self._lp(g_rows, kmin, kmax, cost)
         lp.set_row_bounds(np.full(g.size, -INF), g)
         cold = not lp.solved
@@ -265,8 +265,7 @@ class ExactOptimizer(Optimizer):
             lp.set_row_bounds(np.full(g.size, -INF), g)
             res = lp.solve(clock.left())
         if res.status == "time_limit":
-            raise SolverError(f"the LP bound was not reached within the time limit ({self.time_limit:g} s): "
-                              "no proven correction; allow more time")
+            return None
         if res.status != "optimal" or res.x is None or res.row_dual is None:
             raise SolverError(f"LP stage failed: HiGHS answered {res.detail!r}")
         return float(res.x[-1]), res.x[:-1], np.maximum(-res.row_dual, 0.0)
@@ -532,7 +531,16 @@ class ExactOptimizer(Optimizer):
         notes: list[Note] = []
         path: list[str] = []
         calls = 1
-        t_lp, k_lp, y = self._lp_bound(g_rows, g, kmin, kmax, cost, clock)
+        lp = self._lp_bound(g_rows, g, kmin, kmax, cost, clock)
+        if lp is None:  # not even the LP bound within the limit: no correction, and says so
+            text = (f"the LP bound was not proved within the time limit ({self.time_limit:g} s): no correction "
+                    "is recommended; allow more time (--time-limit)")
+            result = make_result(problem, x, optimizer=self.name, evaluations=1,
+                                 seconds=time.perf_counter() - clock.start, status="time_limit", message=text)
+            result.notes = (Note(text, kind="solver"),)
+            result.extra.update({"stopped": {"stage": "lp bound", "reason": "time limit"}, "path": "lp bound: time limit"})
+            return result
+        t_lp, k_lp, y = lp
         binding = _rows_to_dimensions(problem, y > 1e-9)
         bound = t_lp * problem.resolution
         clock.lap("lp bound")
