@@ -307,8 +307,9 @@ class SetupfixApp(App[None]):
         n = len(self.opened.corrections) if self.opened else 1
         part = f"part {c.part.part or '—'}" + (f" ({self.part_index + 1}/{n}, [ ] to change)" if n > 1 else "")
         head = view.summary(c)
+        reader = tuple(f"⚠ {n}" for n in self.opened.notes) if self.opened else ()
         summary.show(head, optimizer=self.optimizer, part=part,
-                     problem="\n".join(t for t in (self.problem, self.feed.line() if self.feed else "") if t))
+                     problem="\n".join(t for t in (self.problem, self.feed.line() if self.feed else "", *reader) if t))
         rows = view.filter_rows(view.dimension_rows(c), self.station)
         if self.sort_key is not None:
             rows = view.sort_rows(rows, self.sort_key)
