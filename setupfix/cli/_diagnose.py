@@ -6,11 +6,13 @@ import argparse
 import json
 import math
 import sys
+from typing import TYPE_CHECKING
 
 from setupfix.cli.exit_codes import OK
-from setupfix.diagnose import Diagnoser
 from setupfix.errors import SetupfixError
-from setupfix.pipeline.diagnose import DiagnoseOutcome, diagnose_reports
+
+if TYPE_CHECKING:
+    from setupfix.pipeline.diagnose import DiagnoseOutcome
 
 __all__ = ["add_parser", "run"]
 
@@ -60,7 +62,8 @@ def format_diagnosis(out: DiagnoseOutcome) -> str:
         lines.append(f"residual with them: RMS {_f(d.error_after.rms)} {unit}, max {_f(d.error_after.max)}, "
                      f"out of tolerance {d.error_after.out_of_tolerance}")
     else:
-        lines.append("no effect found: the declared model explains the series to its noise")
+        lines.append("no effect found" + ("" if d.selection.lack_of_fit else
+                                          ": the declared model explains the series to its noise"))
     if d.walk is not None:
         lines.append(f"walk forward over {len(d.walk.cycles)} cycle(s) (error budget: mean / worst, RMS reached):")
         for name, b in d.walk.budgets.items():
@@ -71,10 +74,14 @@ def format_diagnosis(out: DiagnoseOutcome) -> str:
     if out.augmented:
         lines.append(f"wrote {out.augmented}")
     lines += [f"note: {n}" for n in out.notes]
-    return "\n".join(lines)
+    # report text (characteristic names, file names) reaches the terminal: no escape sequences
+    return "\n".join("".join(c if c.isprintable() else "?" for c in line) for line in lines)
 
 
 def run(args: argparse.Namespace) -> int:
+    from setupfix.diagnose import Diagnoser
+    from setupfix.pipeline.diagnose import diagnose_reports
+
     if not args.reports and not args.db:
         raise SetupfixError("diagnose: give REPORT files or folders, or --db STORE")
     out = diagnose_reports(args.model, args.reports, corrections=args.corrections, temperatures=args.temperatures,

@@ -6,7 +6,10 @@ candidate with the smallest p-value of the nested F-test
 
     F = (ΔRSS / k) / (RSS₁ / (N − p − k))
 
-(k columns added, Seber & Lee, *Linear Regression Analysis*, §4.3) as long as the
+(k columns added, Seber & Lee, *Linear Regression Analysis*, §4.3; a static effect —
+scale, position, group — is tested against the lack of fit, the per-dimension mean
+residuals, when those exceed the cycle-to-cycle noise: with cycles as replicates a
+static pattern must explain the dimensions' offsets, not the noise) as long as the
 Bonferroni-adjusted p-value (p · number of candidates tested in that step) stays
 below ``alpha`` *and* the term lowers the K-fold cross-validated prediction error
 over cycles (folds interleave the cycles; no CV for series of fewer than four
@@ -70,12 +73,16 @@ class Selection:
     unidentifiable : tuple of str
         Targets the series cannot identify.
     notes : tuple of str
+    lack_of_fit : bool
+        The dimensions keep constant offsets beyond the cycle-to-cycle noise after the
+        effects found (lack-of-fit F-test at ``alpha``).
     """
 
     found: tuple[EffectSpec, ...]
     steps: tuple[Step, ...]
     unidentifiable: tuple[str, ...] = ()
     notes: tuple[str, ...] = field(default=())
+    lack_of_fit: bool = False
 
 
 def candidate_specs(layout: Layout, series: Series, *, taus: tuple[float, ...] = (0.1, 0.25, 0.5)) -> list[EffectSpec]:
@@ -246,15 +253,22 @@ def select_effects(layout: Layout, series: Series, *, alpha: float = 0.01, max_e
         m = int(np.sum(gain_d >= 0)) + (int(active_rel.sum()) if gain_r is not None else 0)
         if m == 0 or df0 <= 2:
             break
+        n_static = obs.base.shape[1] + sum(s.kind in _STATIC for s in (*declared, *found))
+        lof = _lack_of_fit(obs, r, n_static, alpha) if series.n_cycles >= 2 else None
         cands: list[tuple[float, int, EffectSpec, int, float]] = []  # (p, k, spec, dense index or -1, ΔRSS)
         for i in np.flatnonzero(gain_d >= 0):
-            cands.append((_pvalue(gain_d[i], rss0, df0, 1), 1, specs[i], int(i), float(gain_d[i])))
+            if lof is not None and specs[i].kind in _STATIC:
+                # dimensions keep offsets beyond the noise: a static effect must explain them, not the noise
+                p_i = _pvalue(gain_d[i], lof[0], lof[1], 1)
+            else:
+                p_i = _pvalue(gain_d[i], rss0, df0, 1)
+            cands.append((p_i, 1, specs[i], int(i), float(gain_d[i])))
         if gain_r is not None and slope_r is not None:
             # the register is the one whose changes the dimension answers (the slope), not the constant
             i_r, q_r = np.unravel_index(int(np.argmax(np.where(active_rel, slope_r, -1.0))), gain_r.shape)
             slope_p = _pvalue(slope_r[i_r, q_r], rss0 - gain_r[i_r, q_r] + slope_r[i_r, q_r], df0 - 1, 1)
             slope_known = slope_p * m < alpha  # else: the dimension is off, the register is not identified
-            if active_rel[i_r, q_r]:
+            if active_rel[i_r, q_r] and (slope_known or lof is None):
                 spec = EffectSpec("relation", register=layout.register_ids[i_r], dimension=layout.dimension_ids[q_r])
                 cands.append((_pvalue(gain_r[i_r, q_r], rss0, df0, 2), 2, spec, -1, float(gain_r[i_r, q_r])))
         p, k, spec, di, gain = min(cands, key=lambda c: c[0])
@@ -295,8 +309,39 @@ def select_effects(layout: Layout, series: Series, *, alpha: float = 0.01, max_e
         else:
             active_rel[layout.register_ids.index(str(spec.register)),
                        layout.dimension_ids.index(str(spec.dimension))] = False
+    lack = False
+    if series.n_cycles >= 2:
+        Q = _orth(X)
+        r = obs.z - Q @ (Q.T @ obs.z)
+        n_static = obs.base.shape[1] + sum(s.kind in _STATIC for s in (*declared, *found))
+        lack = _lack_of_fit(obs, r, n_static, alpha) is not None
+        if lack:
+            notes.append("the dimensions keep constant offsets beyond the noise that no candidate explains "
+                         "(lack of fit): a register or relation the model lacks on single dimensions?")
     notes += _register_notes(layout, series, obs)
-    return Selection(tuple(found), tuple(steps), tuple(dict.fromkeys(unident)), tuple(notes))
+    return Selection(tuple(found), tuple(steps), tuple(dict.fromkeys(unident)), tuple(notes), lack)
+
+
+_STATIC = ("scale", "position", "group")
+
+
+def _lack_of_fit(obs: Observations, r: Array, n_static: int, alpha: float) -> tuple[float, int] | None:
+    """(SS, df) of the per-dimension mean residuals when they exceed the cycle-to-cycle noise, else None.
+
+    The classic lack-of-fit test with the cycles as replicates: SS_lof = Σ_q n_q r̄_q²
+    on (dimensions − static parameters) df against the pure error Σ (r − r̄_q)².
+    """
+    n_q = np.bincount(obs.dim)
+    seen = n_q > 0
+    mean_q = np.bincount(obs.dim, weights=r)[seen] / n_q[seen]
+    ss_lof = float(np.sum(n_q[seen] * mean_q ** 2))
+    ss_pure = float(r @ r) - ss_lof
+    df_lof = int(seen.sum()) - n_static
+    df_pure = obs.n - int(seen.sum())
+    if df_lof <= 1 or df_pure <= 1 or ss_pure <= 0:
+        return None
+    p = float(scipy.stats.f.sf((ss_lof / df_lof) / (ss_pure / df_pure), df_lof, df_pure))
+    return (ss_lof, df_lof) if p < alpha else None
 
 
 def _pvalue(gain: float, rss0: float, df0: int, k: int) -> float:

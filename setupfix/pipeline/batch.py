@@ -74,6 +74,7 @@ class Outcome:
     error: str = ""
     skipped: str = ""
     format: str = ""
+    notes: list[str] = field(default_factory=list)
 
 
 @dataclass
@@ -87,11 +88,13 @@ class BatchSummary:
     skipped: list[tuple[str, str]] = field(default_factory=list)
     seconds: float = 0.0
     written: bool = False
+    notes: list[tuple[str, str]] = field(default_factory=list)
 
     def to_json(self) -> dict[str, Any]:
         return {"reports": self.reports, "parts": self.parts, "verdicts": dict(self.verdicts),
                 "failed": [{"file": f, "reason": r} for f, r in self.failed],
                 "skipped": [{"file": f, "reason": r} for f, r in self.skipped],
+                "notes": [{"file": f, "note": n} for f, n in self.notes],
                 "seconds": round(self.seconds, 3), "written": self.written}
 
 
@@ -149,6 +152,9 @@ def _correct_one(path: str, size: int, mtime_ns: int) -> Outcome:
             pc = correct_part(_MODEL, part, optimizer=o.optimizer, seed=o.seed)
             out.rows += pc.offsets(o.current)
             out.verdicts.append(pc.verdict)
+            out.notes += pc.warnings
+            if pc.verdict == "reject":
+                out.notes.append(pc.recommendation.alarm)
             out.parts.append(part.part)
     except SetupfixError as exc:
         out.error = str(exc) if exc.location else f"{path}: {exc}"
@@ -287,6 +293,7 @@ def _account(summary: BatchSummary, outcome: Outcome, seen: dict[str, str],
             summary.failed.append((outcome.path, outcome.skipped))
         return
     seen[outcome.sha256] = outcome.path
+    summary.notes += [(outcome.path, n) for n in outcome.notes]
     summary.reports += 1
     summary.parts += len(outcome.verdicts)
     summary.verdicts.update(outcome.verdicts)

@@ -436,6 +436,7 @@ class DiagnoseOutcome:
                           "cv_before": r(s.cv_before), "cv_after": r(s.cv_after)}
                          for s in d.selection.steps if not s.accepted],
             "unidentifiable": list(d.selection.unidentifiable),
+            "lack_of_fit": d.selection.lack_of_fit,
             "dimensions": [{"id": did, "name": names[did],
                             "rms_before": r(d.error_before.rms_by_dimension[q]),
                             "rms_after": r(d.error_after.rms_by_dimension[q]),
@@ -493,9 +494,28 @@ def diagnose_reports(model: ProcessModel | str | Path, reports: Sequence[str | P
     nxt, more = _next_correction(inp.model, diagnosis)
     notes = list(inp.notes) + list(diagnosis.notes) + more
     out = DiagnoseOutcome(inp, diagnosis, nxt, None, notes)
+    if db is not None:
+        _record(db, inp.model, out)
     if augment:
         out.augmented = write_augmented(inp.model, augmented_section(diagnosis, inp.effects), augment)
     return out
+
+
+def _record(db: str | Path, model: ProcessModel, out: DiagnoseOutcome) -> None:
+    """Keep the recommended next correction in the history store, with what it was computed from."""
+    import hashlib
+
+    from setupfix.store import Recommendation, open_store
+
+    doc = out.to_json()
+    result = {k: doc[k] for k in ("cycles", "rms_before", "rms_after", "max_before", "max_after", "effects",
+                                  "next_correction")}
+    inputs: dict[str, Any] = {"command": "diagnose", "model": model.source,
+                              "corrections": out.input.corrections, "temperatures": out.input.temperatures}
+    if Path(model.source).is_file():
+        inputs["model_sha256"] = hashlib.sha256(Path(model.source).read_bytes()).hexdigest()
+    with open_store(db) as store, store.transaction():
+        store.add_recommendation(Recommendation("exact", inputs, result))
 
 
 def write_augmented(model: ProcessModel, section: EffectsSection, target: str) -> str:

@@ -105,6 +105,11 @@ def test_diagnose_from_the_history_store_equals_the_files(series, tmp_path, caps
     a, b = json.loads(out), json.loads(out2)
     assert a["effects"] == b["effects"] and a["rms_before"] == b["rms_before"]
     assert a["next_correction"] == b["next_correction"]
+    from setupfix.store import open_store
+
+    with open_store(db) as store:  # the recommendation is kept with what it came from
+        (rec,) = store.recommendations()
+    assert rec.inputs["command"] == "diagnose" and rec.result["next_correction"] == a["next_correction"]
 
 
 def test_thermal_model_prediction_is_a_candidate_channel(tmp_path, capsys):

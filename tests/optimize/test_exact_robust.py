@@ -116,3 +116,14 @@ def test_whole_solve_respects_the_time_limit_and_says_which_stage_stopped():
         assert result.status == "time_limit"
         assert result.extra["stopped"]["stage"] in ("grid optimum", "least norm")
         assert any("time limit" in n.message for n in result.notes)
+
+
+def test_cli_time_limit_option(capsys):
+    from setupfix.cli import main
+
+    args = ["correct", "--model", str(GUIDE_PINS / "model.toml"), str(GUIDE_PINS / "cycle_01.csv")]
+    assert main([*args, "--time-limit", "5", "--json"]) == 0
+    assert main([*args, "--time-limit", "0"]) == 1
+    assert "time_limit must be a number in (0, inf)" in capsys.readouterr().err
+    assert main([*args, "--optimizer", "pso", "--time-limit", "1"]) == 1
+    assert "--time-limit applies to the exact optimizer" in capsys.readouterr().err

@@ -210,3 +210,12 @@ def test_recommendations_of_a_correct_run_are_stored(tmp_path):
         (rec,) = store.recommendations()
     assert rec.optimizer == "exact" and rec.result["corrections"] == results[0].to_json()["corrections"]
     assert rec.inputs["report_sha256"] == hashlib.sha256(REPORTS[0].read_bytes()).hexdigest()
+
+
+def test_a_truncated_report_is_refused_and_nothing_stored(tmp_path):
+    cut = tmp_path / "cut.csv"
+    cut.write_bytes(REPORTS[0].read_bytes()[:322])  # ends inside a row: "P1 D4,30.0000,29."
+    with open_store(tmp_path / "h.db") as store:
+        with pytest.raises(ParseError, match="cut.csv.*truncated"):
+            import_history(store, [REPORTS[1], cut])
+        assert store.reports() == []
