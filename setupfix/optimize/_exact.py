@@ -73,6 +73,8 @@ Array = npt.NDArray[np.float64]
 
 #: Deviations are rounded to this fraction of the register resolution before solving.
 QUANTUM = 1e-3
+#: Most free registers for which the least-norm proof lists the grid points of the dual ellipsoid.
+ELLIPSOID_MAX_REGISTERS = 60
 #: Largest list of integer points the least-norm proof may enumerate before using the MILP.
 ENUMERATION_LIMIT = 200_000
 #: Largest constraint count whose continuous least-norm point is found by NNLS (else HiGHS QP).
@@ -333,8 +335,10 @@ class ExactOptimizer(Optimizer):
             centre, q = lagrangian_ball(g_rows[finite], b[finite], kmin, kmax, cost, lam_rows[finite], lam_lo,
                                         lam_hi)
             f_best = float(norm(best)[0])
-            found, proved, listed = ellipsoid_search(g_rows, g, t_star, centre, q, cost, kmin, kmax, f_best,
-                                                     ENUMERATION_LIMIT, b)
+            found, proved, listed = None, False, 0
+            if kmin.size <= ELLIPSOID_MAX_REGISTERS:  # beyond, the ellipsoid holds too many grid points
+                found, proved, listed = ellipsoid_search(g_rows, g, t_star, centre, q, cost, kmin, kmax, f_best,
+                                                         ENUMERATION_LIMIT, b)
             if proved:
                 path.append(f"least norm: {listed} grid points in the dual ellipsoid")
                 return (best if found is None else found), True, ""
