@@ -82,22 +82,39 @@ def finish_table(rows: list[dict[str, object]] | dict[str, object], path: str) -
 MAX_LENGTH_MM = 1e7
 
 
-#: Decimals lengths are kept to [mm]: far below any report's resolution (≤ 7 decimals seen), far above
-#: the binary noise of a difference or a unit conversion (``-0.000100000000003`` → ``-0.0001``).
-LENGTH_DECIMALS = 9
+#: Relative size of the binary noise in ``actual − nominal``: each operand is off by up to half an
+#: ulp, so the difference by up to one ulp of the larger (2.2e-16 of its size); digits below that
+#: are noise, nothing a report wrote (a double cannot hold them).
+_NOISE = 2.2e-16
+
+
+def clean_deviation(actual: np.ndarray, nominal: np.ndarray) -> np.ndarray:
+    """``actual − nominal`` without the binary noise of the subtraction.
+
+    The difference is rounded at the decimal place of its noise (one ulp of the larger
+    operand): ``22.7205 − 22.7206`` gives ``-0.0001``, not ``-0.000100000000003``;
+    every digit either operand carries is kept.
+
+    Parameters
+    ----------
+    actual, nominal : ndarray, shape (n,)
+        In mm; NaN where absent (the result is NaN there).
+    """
+    with np.errstate(all="ignore"):
+        difference = actual - nominal
+        scale = np.maximum(np.abs(actual), np.abs(nominal)) * _NOISE
+        decimals = np.clip(np.floor(-np.log10(np.where(scale > 0, scale, 1e-300))), 0, 15)
+        factor = 10.0 ** decimals
+        rounded = np.round(difference * factor) / factor
+    return np.where(np.isfinite(rounded), rounded, difference)
 
 
 def _round_lengths(frame: pd.DataFrame) -> None:
-    """Round lengths to :data:`LENGTH_DECIMALS` and set ``deviation = actual − nominal`` where both are known."""
+    """Set ``deviation = actual − nominal`` (noise-free, :func:`clean_deviation`) where both are known."""
     for col in LENGTH_COLUMNS:
         frame[col] = pd.to_numeric(frame[col], errors="coerce").astype(float)
-    with np.errstate(all="ignore"):
-        difference = frame["actual"].to_numpy() - frame["nominal"].to_numpy()
+    difference = clean_deviation(frame["actual"].to_numpy(), frame["nominal"].to_numpy())
     frame["deviation"] = np.where(np.isnan(difference), frame["deviation"].to_numpy(), difference)
-    for col in LENGTH_COLUMNS:
-        values = frame[col].to_numpy()
-        finite = np.isfinite(values) & (np.abs(values) < 1e15)
-        frame[col] = np.where(finite, np.round(np.where(finite, values, 0.0), LENGTH_DECIMALS), values)
 
 
 def _check_magnitudes(frame: pd.DataFrame, path: str) -> None:
