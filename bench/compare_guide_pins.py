@@ -46,9 +46,13 @@ def reference_seconds(problem: CorrectionProblem, n: int, repeats: int = 5) -> f
 
 
 def main() -> None:
+    from threadpoolctl import threadpool_limits
+
+    threadpool_limits(1)  # BLAS threads change timings 2x on this machine; stated in the output
     OUT.mkdir(parents=True, exist_ok=True)
     model = load_model(SAMPLE / "model.toml")
-    lines = ["# python bench/compare_guide_pins.py", f"# {time.strftime('%Y-%m-%d %H:%M:%S')}", ""]
+    lines = ["# python bench/compare_guide_pins.py",
+             f"# {time.strftime('%Y-%m-%d %H:%M:%S')}, BLAS threads 1 (threadpoolctl)", ""]
     pooled: dict[str, dict[str, list[float]]] = {m: {"gap": [], "sec": [], "ratio": [], "ev": []}
                                                 for m in DEFAULT_METHODS}
     first = None

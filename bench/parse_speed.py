@@ -86,6 +86,7 @@ def _write_inputs(folder: Path, rows: list[dict[str, str]]) -> dict[str, Path]:
         for r in rows:
             fh.write(f"Plan\t{r['part']}\t{r['characteristic']}\tLotlänge\tlengthOfAxis\t{r['actual']}\t"
                      f"{r['nominal']}\t{r['upper']}\t{r['lower']}\t{r['deviation']}\t\t0\t0\t0\tmm\n")
+        fh.write("END\n")  # as CALYPSO ends every table (a file without it is refused as truncated)
     return paths
 
 

@@ -18,6 +18,7 @@ import warnings
 
 from parsers._notes import collecting
 from parsers._rowkeys import row_keys
+from parsers._verdicts import verdict_notes
 from parsers._source import NO_FINAL_LINE_BREAK, Peek, Source, load_source, peek
 from setupfix.errors import (Note, ParameterError, ParseError, ParseWarning, SetupfixError, SourceLocation,
                              UnknownFormatError)
@@ -212,7 +213,7 @@ def read_report(path: str | Path | Source, *, format: str | None = None, **optio
         raise
     if missing and missing != NO_FINAL_LINE_BREAK:
         raise _truncated(spec, source, missing)
-    return ReadResult(table, tuple(notes), spec.name, source.name)
+    return ReadResult(table, (*notes, *verdict_notes(table, source.name)), spec.name, source.name)
 
 
 def _truncated(spec: FormatSpec, source: Source, missing: str) -> ParseError:

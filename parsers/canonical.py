@@ -33,15 +33,15 @@ def _unescaped(cell: str) -> str:
     return cell[1:] if cell[:1] == "'" and cell[1:2] in ("=", "+", "-", "@", "\t", "\r") else cell
 
 
-#: Text columns whose control characters are escaped (``\x1b`` → ``\\x1b``) so that a name
-#: cannot drive the operator's terminal.
+#: Text columns whose control characters are masked as ``?`` (as ``setupfix model check`` shows
+#: them) so that a name cannot drive the operator's terminal.
 TEXT_COLUMNS = ("characteristic", "part", "station", "report", "status", "timestamp")
 _CONTROL = re.compile(r"[\x00-\x1f\x7f-\x9f]")
 
 
 def escape_controls(text: str) -> str:
-    """``text`` with each control character written as a visible ``\\xNN``."""
-    return _CONTROL.sub(lambda m: f"\\x{ord(m.group()):02x}", text)
+    """``text`` with each control character (an escape sequence's ESC, a bell, …) replaced by ``?``."""
+    return _CONTROL.sub("?", text)
 
 
 def sniff_canonical(head: str) -> bool:
@@ -65,6 +65,7 @@ def finish_table(rows: list[dict[str, object]] | dict[str, object], path: str) -
         if col not in frame:
             frame[col] = math.nan if col in LENGTH_COLUMNS else ""
     frame["unit"] = "mm"
+    _round_lengths(frame)
     for col in TEXT_COLUMNS:
         text = frame[col]
         dirty = text.map(lambda v: isinstance(v, str) and _CONTROL.search(v) is not None)
@@ -79,6 +80,24 @@ def finish_table(rows: list[dict[str, object]] | dict[str, object], path: str) -
 #: Largest length a report row may hold [mm]: 10 km.  A larger value (``actual = 1e308``,
 #: ``1e307`` inch) is damage; refusing it here keeps inf/overflow out of every later sum.
 MAX_LENGTH_MM = 1e7
+
+
+#: Decimals lengths are kept to [mm]: far below any report's resolution (≤ 7 decimals seen), far above
+#: the binary noise of a difference or a unit conversion (``-0.000100000000003`` → ``-0.0001``).
+LENGTH_DECIMALS = 9
+
+
+def _round_lengths(frame: pd.DataFrame) -> None:
+    """Round lengths to :data:`LENGTH_DECIMALS` and set ``deviation = actual − nominal`` where both are known."""
+    for col in LENGTH_COLUMNS:
+        frame[col] = pd.to_numeric(frame[col], errors="coerce").astype(float)
+    with np.errstate(all="ignore"):
+        difference = frame["actual"].to_numpy() - frame["nominal"].to_numpy()
+    frame["deviation"] = np.where(np.isnan(difference), frame["deviation"].to_numpy(), difference)
+    for col in LENGTH_COLUMNS:
+        values = frame[col].to_numpy()
+        finite = np.isfinite(values) & (np.abs(values) < 1e15)
+        frame[col] = np.where(finite, np.round(np.where(finite, values, 0.0), LENGTH_DECIMALS), values)
 
 
 def _check_magnitudes(frame: pd.DataFrame, path: str) -> None:

@@ -110,6 +110,4 @@ def read_calypso(path: str | Path, *, unit: str | None = None, encoding: str | N
         })
     if not rows:
         raise ParseError("no characteristic rows", location=SourceLocation(name))
-    frame = finish_table(rows, name)
-    frame["deviation"] = frame["actual"] - frame["nominal"]
-    return frame
+    return finish_table(rows, name)

@@ -168,9 +168,7 @@ def read_dmis(path: str | Path, *, unit: str | None = None, encoding: str | None
              SourceLocation(name), "skipped")
     if not rows:
         raise ParseError("no tolerance result with a usable nominal", location=SourceLocation(name))
-    frame = finish_table(rows, name)
-    frame["deviation"] = frame["actual"] - frame["nominal"]
-    return frame
+    return finish_table(rows, name)
 
 
 def _matching_tolerance(st: Statement, feat: str, nominal: dict[str, _Feature], tols: dict[str, Statement]

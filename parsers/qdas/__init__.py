@@ -10,8 +10,8 @@ __all__ = ["read_aqdef", "sniff_aqdef"]
 
 register(FormatSpec(
     name="qdas",
-    description="Q-DAS AQDEF transfer file (.dfq, or .dfd + .dfx pair)",
-    extensions=(".dfq", ".dfd", ".dfx"),
+    description="Q-DAS AQDEF transfer file (.dfq, or .dfd + .dfx/.dfb pair)",
+    extensions=(".dfq", ".dfd", ".dfx", ".dfb"),
     sniff=lambda peek: sniff_aqdef(peek.text, peek.suffix),
     read=read_aqdef,
     priority=50,

@@ -44,12 +44,12 @@ _MICRO = {"µm", "um", "μm"}
 
 
 def sniff_aqdef(text: str, suffix: str = "") -> bool:
-    """True if ``text`` starts with a K-field line, or is an uncoded ``.dfx`` value file. Never raises."""
+    """True if ``text`` starts with a K-field line, or is an uncoded ``.dfx``/``.dfb`` value file. Never raises."""
     try:
         head = text.lstrip("\ufeff \r\n")
         if re.match(r"K\d{4}(?:/\d+)? ", head):
             return True
-        return suffix == ".dfx" and (_SI in head[:4096] or _DC4 in head[:4096])
+        return suffix in (".dfx", ".dfb") and (_SI in head[:4096] or _DC4 in head[:4096])
     except Exception:  # noqa: BLE001 - a sniffer never raises
         return False
 
@@ -204,8 +204,17 @@ def _limits(char: _Char, nominal: float, factor: float, where: SourceLocation) -
     return lo, up
 
 
+def _beside(path: Path, suffix: str) -> Path:
+    """The file of the same stem beside ``path`` with ``suffix`` in any letter case (or the lower-case name)."""
+    exact = path.with_suffix(suffix)
+    if exact.exists():
+        return exact
+    pattern = path.stem + "." + "".join(f"[{c.lower()}{c.upper()}]" for c in suffix[1:])
+    return next(iter(sorted(path.parent.glob(pattern))), exact)
+
+
 def read_aqdef(path: str | Path, *, unit: str | None = None, encoding: str | None = None) -> pd.DataFrame:
-    """Read a Q-DAS AQDEF ``.dfq``, or a ``.dfd``/``.dfx`` pair, into the canonical table.
+    """Read a Q-DAS AQDEF ``.dfq``, or a ``.dfd`` with its ``.dfx`` (or ``.dfb``) values, into the canonical table.
 
     Parameters
     ----------
@@ -228,14 +237,14 @@ def read_aqdef(path: str | Path, *, unit: str | None = None, encoding: str | Non
     name = str(source)
     suffix = path.suffix.lower()
     lines: list[tuple[SourceLocation, str]] = []
-    if suffix in (".dfd", ".dfx"):
-        dfd, dfx = path.with_suffix(".dfd" if suffix == ".dfx" else suffix), path.with_suffix(".dfx" if suffix == ".dfd" else suffix)
-        dfd = dfd if dfd.exists() else next((p for p in path.parent.glob(path.stem + ".[dD][fF][dD]")), dfd)
-        dfx = dfx if dfx.exists() else next((p for p in path.parent.glob(path.stem + ".[dD][fF][xX]")), dfx)
-        for part in (dfd, dfx):
-            if not part.exists():
+    if suffix in (".dfd", ".dfx", ".dfb"):
+        dfd = _beside(path, ".dfd") if suffix != ".dfd" else path
+        values = path if suffix != ".dfd" else (_beside(path, ".dfx") if _beside(path, ".dfx").exists()
+                                                 else _beside(path, ".dfb"))
+        for part in (dfd, values):
+            if not part.exists() and part != path:
                 raise ParseError(f"{part.name} not found beside it", location=SourceLocation(name),
-                                 hint="a .dfd description and its .dfx values are read together")
+                                 hint="a .dfd description and its .dfx (or .dfb) values are read together")
             lines += _lines(read_text(source if part == path else part, encoding), str(part))
     else:
         lines = _lines(read_text(source, encoding), name)

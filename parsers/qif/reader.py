@@ -179,9 +179,7 @@ def read_qif(path: str | Path | Source, *, unit: str | None = None) -> pd.DataFr
     columns.update({"characteristic": labels.to_numpy(), "actual": actual[keep].to_numpy(), "part": part_of,
                     "station": station_of, "status": kept["status"].to_numpy(), "source": source,
                     "timestamp": stamps[kept["results"].to_numpy()]})
-    frame = finish_table(columns, name)
-    frame["deviation"] = frame["actual"] - frame["nominal"]
-    return frame
+    return finish_table(columns, name)
 
 
 def _actuals(table: pd.DataFrame, results: list[etree._Element], name: str, ns: str, mm: float) -> pd.Series:

@@ -6,15 +6,14 @@ import argparse
 import signal
 import sys
 from types import FrameType
+from typing import TYPE_CHECKING
 
+from setupfix.cli._choices import CONTROLLERS, OPTIMIZERS
 from setupfix.cli._common import add_report_options, report_options
 from setupfix.cli.exit_codes import OK, PARTIAL, REJECTED
-from setupfix.optimize import OPTIMIZERS
-from setupfix.pipeline.batch import BatchOptions, BatchSummary, Outcome, run_batch
-from setupfix.pipeline.controllers import CONTROLLERS, read_current
-from setupfix.pipeline.present import format_batch_summary
-from setupfix.model import load_model
-from setupfix.store import open_store
+
+if TYPE_CHECKING:
+    from setupfix.pipeline.batch import BatchSummary, Outcome
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
@@ -48,6 +47,12 @@ def _terminate(signum: int, frame: FrameType | None) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from setupfix.model import load_model
+    from setupfix.pipeline.batch import BatchOptions, run_batch
+    from setupfix.pipeline.controllers import read_current
+    from setupfix.pipeline.present import format_batch_summary
+    from setupfix.store import open_store
+
     import json
 
     model = load_model(args.model)
@@ -64,6 +69,8 @@ def run(args: argparse.Namespace) -> int:
                                 store=open_store(args.store) if args.store else None, force=args.force)
     finally:
         signal.signal(signal.SIGTERM, previous)
+    for path, note in summary.notes:
+        print(f"warning: {path}: {note}", file=sys.stderr)
     for path, reason in summary.failed:
         print(f"error: {reason if path in reason else f'{path}: {reason}'}", file=sys.stderr)
     if args.json:

@@ -5,11 +5,13 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+from typing import TYPE_CHECKING
 
 from setupfix.cli._common import add_report_options, cycle_options, report_options
-from setupfix.pipeline.compare import Comparison, compare_report, plot_comparison
-from setupfix.pipeline.writers import check_target
-from setupfix.plots import figure_format
+from setupfix.cli._correct import exact_params
+
+if TYPE_CHECKING:
+    from setupfix.pipeline.compare import Comparison
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
@@ -20,6 +22,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("report", metavar="REPORT", help="CMM report in any supported format")
     p.add_argument("--model", required=True, metavar="MODEL", help="process model TOML")
     p.add_argument("--trials", type=_positive, default=12, metavar="N", help="seeded trials per method (default 12)")
+    p.add_argument("--time-limit", type=float, default=None, metavar="SECONDS",
+                   help="wall time of the exact optimiser's whole solve (default 2)")
     p.add_argument("--seed", type=int, default=0, metavar="S", help="root of the trial seeds (default 0)")
     p.add_argument("--part", default=None, metavar="ID", help="part / cycle of the report (default: the first)")
     p.add_argument("--json", action="store_true", help="machine-readable output (shared/spec/cli-json.md)")
@@ -64,11 +68,16 @@ def format_comparison(c: Comparison) -> str:
 
 
 def run(args: argparse.Namespace) -> int:
+    from setupfix.pipeline.compare import compare_report, plot_comparison
+    from setupfix.pipeline.writers import check_target
+    from setupfix.plots import figure_format
+
     if args.plot:
         figure_format(args.plot)  # refuse an unknown suffix or target before the trials, not after
         check_target(args.plot)
     comparison = compare_report(args.model, args.report, part=args.part, trials=args.trials, seed=args.seed,
-                                **cycle_options(args), **report_options(args))
+                                params={"exact": exact_params(args.time_limit)}, **cycle_options(args),
+                                **report_options(args))
     if args.plot:
         plot_comparison(comparison, args.plot)
     if args.json:

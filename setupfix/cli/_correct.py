@@ -6,15 +6,10 @@ import argparse
 import json
 import sys
 
+from setupfix.cli._choices import CONTROLLERS, OPTIMIZERS
 from setupfix.cli._common import add_report_options, cycle_options, report_options
 from setupfix.cli.exit_codes import OK, REJECTED
-from setupfix.model import load_model
-from setupfix.errors import SetupfixError
-from setupfix.optimize import OPTIMIZERS
-from setupfix.pipeline.controllers import CONTROLLERS, read_current
-from setupfix.pipeline.correct import correct_report, open_history, write_correction_offsets
-from setupfix.pipeline.present import format_correction
-from setupfix.pipeline.writers import check_target
+from setupfix.errors import ParameterError, SetupfixError
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
@@ -27,6 +22,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--optimizer", default="exact", choices=sorted(OPTIMIZERS),
                    help="exact (default: proved grid optimum) or a metaheuristic")
     p.add_argument("--seed", type=int, default=None, help="seed of a metaheuristic (reproducible runs)")
+    p.add_argument("--time-limit", type=float, default=None, metavar="SECONDS",
+                   help="wall time of the exact optimiser's whole solve per part (default 2)")
     p.add_argument("--part", default=None, metavar="ID", help="correct only this part / cycle of the report")
     p.add_argument("--json", action="store_true", help="machine-readable output (shared/spec/cli-json.md)")
     p.add_argument("--store", metavar="DB", default=None,
@@ -53,14 +50,31 @@ def add_offsets_options(p: argparse.ArgumentParser) -> None:
                    help="the controller's current offsets (CSV register,value): write absolute new values")
 
 
+def exact_params(time_limit: float | None, optimizer: str = "exact") -> dict[str, float]:
+    """``--time-limit`` as the exact optimiser's parameter (checked by its declared constraints)."""
+    if time_limit is None:
+        return {}
+    if optimizer != "exact":
+        raise ParameterError(f"--time-limit applies to the exact optimizer, not {optimizer!r}")
+    return {"time_limit": time_limit}
+
+
 def run(args: argparse.Namespace) -> int:
+    from setupfix.model import load_model
+    from setupfix.pipeline.controllers import read_current
+    from setupfix.pipeline.correct import correct_report, open_history, write_correction_offsets
+    from setupfix.pipeline.present import format_correction
+    from setupfix.pipeline.writers import check_target
+
     if args.offsets:
         check_target(args.offsets)
     store = open_history(args.store) if args.store else None
     model = load_model(args.model)
     current = read_current(args.current, model) if args.current else None
+    params = exact_params(args.time_limit, args.optimizer)
     results = correct_report(model, args.report, optimizer=args.optimizer, seed=args.seed, part=args.part,
-                             store=store, current=current, **cycle_options(args), **report_options(args))
+                             store=store, current=current, params=params, **cycle_options(args),
+                             **report_options(args))
     if args.thermal or args.temperatures:  # thermal feed-forward step (setupfix.pipeline.feedforward)
         from setupfix.pipeline.feedforward import apply_feed_forward
 

@@ -6,11 +6,13 @@ import argparse
 import json
 import math
 import sys
+from typing import TYPE_CHECKING
 
 from setupfix.cli.exit_codes import OK
-from setupfix.diagnose import Diagnoser
 from setupfix.errors import SetupfixError
-from setupfix.pipeline.diagnose import DiagnoseOutcome, diagnose_reports
+
+if TYPE_CHECKING:
+    from setupfix.pipeline.diagnose import DiagnoseOutcome
 
 __all__ = ["add_parser", "run"]
 
@@ -77,6 +79,9 @@ def format_diagnosis(out: DiagnoseOutcome) -> str:
 
 
 def run(args: argparse.Namespace) -> int:
+    from setupfix.diagnose import Diagnoser
+    from setupfix.pipeline.diagnose import diagnose_reports
+
     if not args.reports and not args.db:
         raise SetupfixError("diagnose: give REPORT files or folders, or --db STORE")
     out = diagnose_reports(args.model, args.reports, corrections=args.corrections, temperatures=args.temperatures,

@@ -7,7 +7,6 @@ import json
 import sys
 
 from setupfix.cli.exit_codes import OK
-from setupfix.pipeline.parse import list_formats
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
@@ -18,6 +17,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from setupfix.pipeline.parse import list_formats
+
     rows = list_formats()
     if args.json:
         json.dump(rows, sys.stdout, indent=2)

@@ -6,10 +6,8 @@ import argparse
 import json
 import sys
 
+from setupfix.cli._choices import HISTORY_EXPORTS
 from setupfix.errors import SourceLocation, StoreError
-from setupfix.pipeline.history import EXPORTS, default_db_path, export_history, history_summary, import_history
-from setupfix.pipeline.writers import check_target
-from setupfix.store import open_store
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
@@ -35,13 +33,17 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     show = actions.add_parser("show", parents=[common], help="summary of the stored reports and logs")
     show.add_argument("--json", action="store_true", help="machine-readable output")
     exp = actions.add_parser("export", parents=[common], help="write a stored table as its canonical CSV")
-    exp.add_argument("table", choices=EXPORTS, help="which table")
+    exp.add_argument("table", choices=HISTORY_EXPORTS, help="which table")
     exp.add_argument("--out", required=True, metavar="CSV", help="output CSV ('-': stdout)")
     for action in (imp, show, exp):
         action.set_defaults(run=run)
 
 
 def run(args: argparse.Namespace) -> int:
+    from setupfix.pipeline.history import default_db_path, export_history, history_summary, import_history
+    from setupfix.pipeline.writers import check_target
+    from setupfix.store import open_store
+
     path = default_db_path(args.db, args.model)
     if args.action == "export":
         check_target(args.out)
@@ -52,6 +54,8 @@ def run(args: argparse.Namespace) -> int:
         if args.action == "import":
             s = import_history(store, args.reports, args.corrections, args.temperatures, format=args.format,
                                unit=args.unit, encoding=args.encoding)
+            for note in s.notes:
+                print(f"warning: {note}", file=sys.stderr)
             print(f"{path}: {len(s.new_reports)} new report(s), {len(s.known_reports)} already stored, "
                   f"{s.corrections} new log row(s), {s.temperatures} new temperature value(s)")
         elif args.action == "show":

@@ -9,13 +9,13 @@ import sys
 import textwrap
 import unicodedata
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from setupfix.cli._common import add_report_options, cycle_options, report_options
 from setupfix.errors import ExportError, SourceLocation
-from setupfix.pipeline.model import MatchTable, check_report, describe_model
-from setupfix.pipeline.present import format_relations
-from setupfix.pipeline.scaffold import scaffold_model
-from setupfix.pipeline.writers import check_target, write_text
+
+if TYPE_CHECKING:
+    from setupfix.pipeline.model import MatchTable
 
 MATRICES = ("R_MW", "R_WF", "R_TF", "R_FD", "C")
 #: Terminal width the human tables are laid out for.
@@ -61,6 +61,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                       help="keep the characteristics whose name states this axis (and those stating none); "
                            "default: keep all, process axis = the one most names state")
     init.add_argument("--name", default=None, help="process name (default: from the report file names)")
+    init.add_argument("--parts-are-stations", action="store_true",
+                      help="the report's parts are the fixture's stations (one workpiece each): group = part "
+                           "(default: group = the report's station, if it gives one)")
     init.add_argument("--force", action="store_true",
                       help="replace MODEL if it exists (default: refuse, so an edited model is never overwritten)")
     g = init.add_argument_group("report reading")
@@ -73,11 +76,15 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 
 def run_init(args: argparse.Namespace) -> int:
+    from setupfix.pipeline.scaffold import scaffold_model
+    from setupfix.pipeline.writers import check_target, write_text
+
     check_target(args.out)
     if args.out != "-" and Path(args.out).exists() and not args.force:
         raise ExportError("exists: a scaffold would replace it (give --force, or another -o)",
                           location=SourceLocation(args.out))
-    scaffold = scaffold_model(args.reports, axis=args.axis, name=args.name, **report_options(args))
+    scaffold = scaffold_model(args.reports, axis=args.axis, name=args.name,
+                              parts_are_stations=args.parts_are_stations, **report_options(args))
     write_text(args.out, scaffold.text + "\n")
     if args.out != "-":
         print(f"wrote {args.out}: {scaffold.dimensions} dimension(s), axis {scaffold.axis}, "
@@ -88,6 +95,9 @@ def run_init(args: argparse.Namespace) -> int:
 
 
 def run_show(args: argparse.Namespace) -> int:
+    from setupfix.pipeline.model import describe_model
+    from setupfix.pipeline.present import format_relations
+
     desc = describe_model(args.model)
     if args.json:
         json.dump(desc.to_json(), sys.stdout, indent=1)
@@ -101,6 +111,8 @@ def run_show(args: argparse.Namespace) -> int:
 
 
 def run_check(args: argparse.Namespace) -> int:
+    from setupfix.pipeline.model import check_report
+
     table = check_report(args.model, args.report, **cycle_options(args), **report_options(args))
     if args.json:
         json.dump(table.to_json(), sys.stdout, indent=1)

@@ -5,11 +5,8 @@ from __future__ import annotations
 import argparse
 import sys
 
-from parsers._source import check_encoding
 from setupfix.errors import SetupfixError
 from setupfix.cli.exit_codes import ERROR, OK, PARTIAL
-from setupfix.pipeline.parse import note_line, parse_reports
-from setupfix.pipeline.writers import check_target, write_canonical_csv
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
@@ -34,6 +31,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 def _encoding(text: str) -> str:
     """argparse type: a usable character set (``--encoding punycode`` is refused with the reason)."""
+    from parsers._source import check_encoding  # here: importing the parsers loads pandas
+
     try:
         return check_encoding(text)
     except SetupfixError as exc:
@@ -41,6 +40,9 @@ def _encoding(text: str) -> str:
 
 
 def run(args: argparse.Namespace) -> int:
+    from setupfix.pipeline.parse import note_line, parse_reports
+    from setupfix.pipeline.writers import check_target, write_canonical_csv
+
     check_target(args.out)
     outcome = parse_reports(args.files, format=args.format, unit=args.unit, encoding=args.encoding,
                             columns=args.columns, lenient=args.lenient)

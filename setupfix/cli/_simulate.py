@@ -6,8 +6,8 @@ import argparse
 import json
 import sys
 
+from setupfix.cli._choices import SIMULATE_START
 from setupfix.cli.exit_codes import OK
-from setupfix.pipeline.simulate import START, parse_effect, simulate_series, write_series
 
 __all__ = ["add_parser", "run"]
 
@@ -35,13 +35,16 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--tool-change-every", type=int, default=16, help="cycles between tool changes (0: never; 16)")
     p.add_argument("--cycle-minutes", type=float, default=20.0, help="minutes per cycle (20)")
     p.add_argument("--per-cycle", action="store_true", help="one measurement file per cycle")
-    p.add_argument("--start", default=START, help=f"time of the first cycle, ISO 8601 (default {START})")
+    p.add_argument("--start", default=SIMULATE_START,
+                   help=f"time of the first cycle, ISO 8601 (default {SIMULATE_START})")
     p.add_argument("--seed", type=int, default=None, help="seed (reproducible series)")
     p.add_argument("--json", action="store_true", help="print what was written as JSON")
     p.set_defaults(run=run)
 
 
 def run(args: argparse.Namespace) -> int:
+    from setupfix.pipeline.simulate import parse_effect, simulate_series, write_series
+
     effects = [parse_effect(e) for e in args.effect]
     params = {"n_cycles": args.cycles, "noise": args.noise, "setup_error": args.setup_error,
               "correct_every": args.correct_every, "dead_time": args.dead_time,

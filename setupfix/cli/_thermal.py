@@ -7,11 +7,11 @@ import json
 import math
 import sys
 from collections.abc import Iterable
-from typing import Any
+from typing import Any, TYPE_CHECKING
 
+from setupfix.cli._choices import THERMAL_METHODS
 from setupfix.cli.exit_codes import OK
 from setupfix.errors import Note
-from setupfix.thermal.registry import get_method, methods
 
 __all__ = ["add_parser", "run"]
 
@@ -58,7 +58,7 @@ def _log_options(p: argparse.ArgumentParser) -> None:
 
 
 def _common(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--method", required=True, choices=methods(), help="thermal model")
+    p.add_argument("--method", required=True, choices=THERMAL_METHODS, help="thermal model")
     p.add_argument("--target", required=True, metavar="COL", help="measured thermal-error column")
     p.add_argument("--unit", choices=("um", "mm"), default=None,
                    help="unit of the error column (stored with the model; needed by correct --thermal)")
@@ -110,6 +110,8 @@ def add_parser(subparsers: Any) -> None:
 
 
 def _params(args: argparse.Namespace) -> dict[str, Any]:
+    from setupfix.thermal.registry import get_method
+
     spec = get_method(args.method)
     params: dict[str, Any] = {}
     if args.seed is not None:

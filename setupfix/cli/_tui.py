@@ -5,7 +5,8 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from setupfix.optimize import OPTIMIZERS
+from setupfix.cli._choices import OPTIMIZERS
+
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:

@@ -11,7 +11,13 @@ Nomenclature (lengths in the model unit unless stated):
 
 from setupfix.model.loader import load_model, model_from_dict
 from setupfix.model import safety as _safety  # noqa: F401 - registers [safety] and the register keys
-from setupfix.model.measurements import CANONICAL_COLUMNS, LENGTH_COLUMNS, PartMeasurement, match_parts
+from setupfix.model.measurements import (
+    CANONICAL_COLUMNS,
+    LENGTH_COLUMNS,
+    PartMeasurement,
+    match_parts,
+    suggest_names,
+)
 from setupfix.model.process import (
     Dimension,
     Feature,
@@ -34,4 +40,5 @@ __all__ = [
     "match_parts",
     "model_from_dict",
     "normalise_name",
+    "suggest_names",
 ]

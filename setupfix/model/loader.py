@@ -230,16 +230,18 @@ def _registers(p: _Problems, doc: dict[str, Any], section: str, kind: RegisterKi
     return regs
 
 
-def _check_resolution(p: _Problems, resolution: float, registers: list[Register],
+def _check_resolution(p: _Problems, resolution: float, limit: float, registers: list[Register],
                       dimensions: list[Dimension], unit: str) -> None:
-    """Resolution against the register limits and the tolerance bands."""
-    for reg in registers:
-        key = f"{'wks' if reg.kind == 'wks' else 'tools'}.{reg.id}.limit"
-        if reg.limit < resolution:
-            p.add(key, f"limit {reg.limit:g} {unit} is below the resolution {resolution:g} {unit}: "
-                       "the register could never be corrected (use fixed = true)")
-        elif reg.limit / resolution > MAX_STEPS:
-            p.add(key, f"limit {reg.limit:g} {unit} spans {reg.limit / resolution:.3g} steps of the resolution "
+    """Resolution against the limits (the process's, then each register's own) and the tolerance bands."""
+    checks = [("process.limit", limit)] + [
+        (f"{'wks' if reg.kind == 'wks' else 'tools'}.{reg.id}.limit", reg.limit)
+        for reg in registers if reg.limit != limit]
+    for key, lim in checks:
+        if lim < resolution:
+            p.add(key, f"limit {lim:g} {unit} is below the resolution {resolution:g} {unit}: no correction "
+                       f"could be made (allowed: at least the resolution; fixed = true holds a register)")
+        elif lim / resolution > MAX_STEPS:
+            p.add(key, f"limit {lim:g} {unit} spans {lim / resolution:.3g} steps of the resolution "
                        f"{resolution:g} {unit}; at most {MAX_STEPS:,} are allowed")
     bands = [(d.upper - d.lower, d) for d in dimensions if math.isfinite(d.upper - d.lower)]
     if bands:
@@ -333,7 +335,7 @@ def model_from_dict(doc: Mapping[str, Any], source: str = "<model>") -> ProcessM
 
     dimensions = _dimensions(p, doc, feature_ids, ranges)
     if resolution is not None and not p.items:
-        _check_resolution(p, resolution, [*wks, *tools], dimensions, unit)
+        _check_resolution(p, resolution, limit or 0.1, [*wks, *tools], dimensions, unit)
     p.raise_if_any()
     assert resolution is not None and limit is not None  # refused above otherwise
     model = ProcessModel(

@@ -182,8 +182,23 @@ def parse_safety(value: Any, model: ProcessModel, report: Callable[[str, str], N
     )
 
 
+_CACHE: list[tuple[ProcessModel, SafetySettings]] = []
+
+
 def safety_settings(model: ProcessModel) -> SafetySettings:
-    """The model's safety settings: its ``[safety]`` table (or the defaults) and per-register extras."""
+    """The model's safety settings: its ``[safety]`` table (or the defaults) and per-register extras.
+
+    Assembled once per model object (batch corrects thousands of reports with one model).
+    """
+    for known, settings in _CACHE:
+        if known is model:
+            return settings
+    settings = _assemble(model)
+    _CACHE[:] = [*_CACHE[-7:], (model, settings)]
+    return settings
+
+
+def _assemble(model: ProcessModel) -> SafetySettings:
     base = model.extras.get("safety")
     if not isinstance(base, SafetySettings):
         base = SafetySettings()

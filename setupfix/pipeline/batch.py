@@ -35,7 +35,7 @@ from setupfix.errors import ExportError, ParameterError, SetupfixError, SourceLo
 from setupfix.model import ProcessModel, load_model
 from setupfix.offsets import OffsetRow, csv_header, csv_lines, offset_rows
 from setupfix.pipeline.controllers import render
-from setupfix.pipeline.correct import correct_part
+from setupfix.pipeline.correct import correct_part, wear_totals
 from setupfix.pipeline.cycles import load_parts
 from setupfix.store import Recommendation as StoreRecommendation
 from setupfix.store import Store
@@ -74,6 +74,7 @@ class Outcome:
     error: str = ""
     skipped: str = ""
     format: str = ""
+    notes: list[str] = field(default_factory=list)
 
 
 @dataclass
@@ -87,11 +88,13 @@ class BatchSummary:
     skipped: list[tuple[str, str]] = field(default_factory=list)
     seconds: float = 0.0
     written: bool = False
+    notes: list[tuple[str, str]] = field(default_factory=list)
 
     def to_json(self) -> dict[str, Any]:
         return {"reports": self.reports, "parts": self.parts, "verdicts": dict(self.verdicts),
                 "failed": [{"file": f, "reason": r} for f, r in self.failed],
                 "skipped": [{"file": f, "reason": r} for f, r in self.skipped],
+                "notes": [{"file": f, "note": n} for f, n in self.notes],
                 "seconds": round(self.seconds, 3), "written": self.written}
 
 
@@ -145,10 +148,14 @@ def _correct_one(path: str, size: int, mtime_ns: int) -> Outcome:
             return out  # run_batch marks it "already processed"
         parts = load_parts(_MODEL, path, format=o.format, unit=o.unit, encoding=o.encoding, columns=o.columns,
                            parts_per_cycle=o.parts_per_cycle, strict=o.strict)
+        cumulative = wear_totals(_MODEL, o.current) if o.current is not None else None
         for part in parts:
-            pc = correct_part(_MODEL, part, optimizer=o.optimizer, seed=o.seed)
+            pc = correct_part(_MODEL, part, optimizer=o.optimizer, seed=o.seed, cumulative=cumulative)
             out.rows += pc.offsets(o.current)
             out.verdicts.append(pc.verdict)
+            out.notes += pc.warnings
+            if pc.verdict == "reject":
+                out.notes.append(pc.recommendation.alarm)
             out.parts.append(part.part)
     except SetupfixError as exc:
         out.error = str(exc) if exc.location else f"{path}: {exc}"
@@ -287,6 +294,7 @@ def _account(summary: BatchSummary, outcome: Outcome, seen: dict[str, str],
             summary.failed.append((outcome.path, outcome.skipped))
         return
     seen[outcome.sha256] = outcome.path
+    summary.notes += [(outcome.path, n) for n in outcome.notes]
     summary.reports += 1
     summary.parts += len(outcome.verdicts)
     summary.verdicts.update(outcome.verdicts)

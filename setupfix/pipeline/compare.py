@@ -177,7 +177,7 @@ def compare_problem(problem: CorrectionProblem, *, methods: Sequence[str] = DEFA
         raise ValueError("trials must be at least 1")
     params = params or {}
     if exact is None:
-        exact = get_optimizer("exact").solve(problem)
+        exact = get_optimizer("exact", **params.get("exact", {})).solve(problem)
     for name in methods:  # every name and parameter checked before the first trial
         get_optimizer(name, **params.get(name, {}))
     seeds = trial_seeds(seed, trials)
@@ -195,15 +195,18 @@ def compare_report(model: ProcessModel | str | Path, report: str | Path, *, part
                    format: str | None = None, unit: str | None = None, encoding: str | None = None,
                    columns: str | None = None,
                    stations: Sequence[str] | Mapping[str, str] | None = None, parts_per_cycle: int | None = None,
-                   strict: bool = False) -> Comparison:
-    """Compare the methods on one part of a report (the first one unless ``part`` names it)."""
+                   strict: bool = False, params: Mapping[str, Mapping[str, Any]] | None = None) -> Comparison:
+    """Compare the methods on one part of a report (the first one unless ``part`` names it).
+
+    ``params``: hyper-parameters by optimiser name, ``"exact"`` included (e.g. its time limit).
+    """
     if not isinstance(model, ProcessModel):
         model = load_model(model)
     parts = load_parts(model, report, format=format, unit=unit, encoding=encoding, columns=columns,
                        stations=stations, parts_per_cycle=parts_per_cycle, strict=strict)
     measured = select_parts(parts, part, report)[0]
     problem = CorrectionProblem.from_part(model, measured)
-    result = compare_problem(problem, methods=methods, trials=trials, seed=seed)
+    result = compare_problem(problem, methods=methods, trials=trials, seed=seed, params=params)
     result.part, result.report, result.unit = measured.part, measured.report or str(report), model.unit
     return result
 

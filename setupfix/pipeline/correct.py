@@ -272,7 +272,7 @@ def correct_part(model: ProcessModel, part: PartMeasurement, *, optimizer: str =
         rec.rules = (RuleEffect("ewma", f"deviations smoothed over {smoothed.used} earlier part(s), λ = {lam:g}",
                                 dimensions=problem.dimension_ids), *rec.rules)
     result = applied_result(problem, rec)
-    notes += [str(n) for n in rec.result.notes]
+    notes += [str(n) for n in rec.result.notes if n.message != rec.result.message]
     part = measured_part
     if part.absent:
         notes.append(f"{len(part.absent)} dimension(s) absent from the report, left out: {', '.join(part.absent)}")
@@ -288,11 +288,13 @@ def correct_report(model: ProcessModel | str | Path, report: str | Path, *, opti
                    unit: str | None = None, encoding: str | None = None, columns: str | None = None,
                    stations: Stations | None = None, parts_per_cycle: int | None = None,
                    strict: bool = False, store: Store | None = None,
-                   current: Mapping[str, float] | None = None) -> list[PartCorrection]:
+                   current: Mapping[str, float] | None = None,
+                   params: Mapping[str, Any] | None = None) -> list[PartCorrection]:
     """Correct every cycle of a report (or the one named by ``part``).
 
     ``store`` feeds the smoothing; ``current`` (the controller's current offsets by
-    register ID) the cumulative limit of wear registers (see :func:`wear_totals`).
+    register ID) the cumulative limit of wear registers (see :func:`wear_totals`);
+    ``params`` the optimiser's hyper-parameters (e.g. ``{"time_limit": 5.0}``).
     """
     if not isinstance(model, ProcessModel):
         model = load_model(model)
@@ -300,7 +302,8 @@ def correct_report(model: ProcessModel | str | Path, report: str | Path, *, opti
                        stations=stations, parts_per_cycle=parts_per_cycle, strict=strict)
     parts = [forecast_part(model, p) for p in parts]  # the model's [effects]: drift and wear until the next cycle
     cumulative = wear_totals(model, current) if current is not None else None
-    return [correct_part(model, p, optimizer=optimizer, seed=seed, store=store, cumulative=cumulative)
+    return [correct_part(model, p, optimizer=optimizer, seed=seed, store=store, cumulative=cumulative,
+                         **(params or {}))
             for p in select_parts(parts, part, report)]
 
 

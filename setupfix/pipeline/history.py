@@ -124,22 +124,15 @@ def import_history(store: Store, reports: Sequence[str | os.PathLike[str]] = (),
         The first file that cannot be read (nothing is stored), or a log row that
         contradicts the store (nothing is stored).
     """
-    options = {k: v for k, v in {"unit": unit, "encoding": encoding}.items() if v is not None}
     read = []
+    summary = ImportSummary()
     for path in reports:
-        name = str(path)
-        if Path(name).is_dir():
-            raise ParseError("is a folder, not a report", location=SourceLocation(name))
-        data = read_bytes(name)
-        spec = parsers.find_format(name, format)
-        table = spec.read(Path(name), **options)
-        if read_bytes(name) != data:
-            raise ParseError("the file changed while it was read (still being written?)",
-                             location=SourceLocation(name))
-        read.append((data, name, spec.name, table))
+        source = parsers.load_source(str(path))  # read once: the bytes hashed are the bytes parsed
+        result = parsers.read_report(source, format=format, unit=unit, encoding=encoding)
+        summary.notes += [str(n) for n in result.notes]
+        read.append((source.data, source.name, result.format, result.table))
     logs = [read_corrections_log(p) for p in corrections]
     temps = [_temperature_frame(p) for p in temperatures]
-    summary = ImportSummary()
     with store.transaction():
         for data, name, fmt, table in read:
             _, new = store.add_report(data, Path(name).name, fmt, table)

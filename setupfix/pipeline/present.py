@@ -37,7 +37,9 @@ def verdict_line(pc: PartCorrection) -> str:
     if rec.verdict == "reject":
         return rec.alarm
     if rec.verdict == "hold":
-        why = next((r.message for r in rec.rules if r.rule in ("dead_band", "no_harm")), "no change needed")
+        default = ("no change needed" if pc.margin_after >= 0 else
+                   "no setup correction improves it: out-of-tolerance dimensions need the NC program or the process")
+        why = next((r.message for r in rec.rules if r.rule in ("dead_band", "no_harm")), default)
         return f"HOLD: leave the offsets as they are ({why})"
     return "APPLY the corrections below"
 

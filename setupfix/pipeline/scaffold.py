@@ -1,7 +1,8 @@
 """Use case "model init": a process-model scaffold from CMM reports.
 
 Every toleranced length characteristic of the reports becomes a dimension (its name,
-nominal and limits as the report states them, ``group`` = the report's station), each
+nominal and limits as the report states them, ``group`` = the report's station, or its
+part with ``parts_are_stations``), each
 entered by a feature of its own, and every feature moved by one WKS (``W1``, G54) and
 one tool (``T1``, H1): a starting topology that loads at once and with which
 ``setupfix correct`` runs on the same reports.  The comments in the file say what to
@@ -105,7 +106,8 @@ def _resolution(narrowest: float | None) -> float:
     return res
 
 
-def _collect(tables: Sequence[tuple[str, pd.DataFrame]], axis: str | None) -> tuple[list[_Dim], list[tuple[str, str]]]:
+def _collect(tables: Sequence[tuple[str, pd.DataFrame]], axis: str | None,
+             group_column: str = "station") -> tuple[list[_Dim], list[tuple[str, str]]]:
     dims: dict[tuple[str, str | None], _Dim] = {}
     skipped: dict[str, str] = {}
     nom_lo, nom_hi = RANGES_MM["nominal"]
@@ -117,7 +119,7 @@ def _collect(tables: Sequence[tuple[str, pd.DataFrame]], axis: str | None) -> tu
             return frame[name].tolist() if name in frame else [None] * rows
 
         for name, nominal, lower, upper, station, reference, where in zip(
-                col("characteristic"), col("nominal"), col("lower"), col("upper"), col("station"),
+                col("characteristic"), col("nominal"), col("lower"), col("upper"), col(group_column),
                 col("reference"), col("source")):
             name = str(name).strip()
             if not name or name in skipped:
@@ -153,6 +155,7 @@ def _collect(tables: Sequence[tuple[str, pd.DataFrame]], axis: str | None) -> tu
 
 
 def scaffold_model(reports: Sequence[str | Path], *, axis: str | None = None, name: str | None = None,
+                   parts_are_stations: bool = False,
                    format: str | None = None, unit: str | None = None, encoding: str | None = None,
                    columns: str | None = None) -> Scaffold:
     """Write a process-model scaffold (TOML text) from the reports' toleranced length characteristics.
@@ -168,16 +171,20 @@ def scaffold_model(reports: Sequence[str | Path], *, axis: str | None = None, na
         raise ModelError(f'axis must be "X", "Y" or "Z", got {axis!r}')
     options: dict[str, Any] = {"unit": unit, "encoding": encoding, "columns": columns}
     tables = [(str(r), parsers.read(r, format=format, **options)) for r in reports]
-    return scaffold_from_tables(tables, axis=axis, name=name)
+    return scaffold_from_tables(tables, axis=axis, name=name, parts_are_stations=parts_are_stations)
 
 
 def scaffold_from_tables(tables: Sequence[tuple[str, pd.DataFrame]], *, axis: str | None = None,
-                         name: str | None = None) -> Scaffold:
-    """:func:`scaffold_model` on canonical tables already read, as (report name, table) pairs."""
+                         name: str | None = None, parts_are_stations: bool = False) -> Scaffold:
+    """:func:`scaffold_model` on canonical tables already read, as (report name, table) pairs.
+
+    ``parts_are_stations``: the report's parts are the fixture's stations (one workpiece
+    per part, names repeating): ``group`` = the part, instead of the report's station.
+    """
     if axis is not None and axis not in ("X", "Y", "Z"):
         raise ModelError(f'axis must be "X", "Y" or "Z", got {axis!r}')
     reports = [r for r, _ in tables]
-    dims, skipped = _collect(tables, axis)
+    dims, skipped = _collect(tables, axis, "part" if parts_are_stations else "station")
     if not dims:
         reasons = Counter(reason for _, reason in skipped)
         why = "; ".join(f"{n} × {r}" for r, n in reasons.most_common(4)) or "the reports hold no characteristic"

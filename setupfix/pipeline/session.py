@@ -48,6 +48,7 @@ class OpenedReport:
     matches: tuple[MatchRow, ...] = ()
     problem: str = ""
     current: Mapping[str, float] | None = None
+    notes: tuple[str, ...] = ()  #: the reader's notes (rows skipped, units assumed, …) with their places
 
     @property
     def unmatched(self) -> int:
@@ -74,7 +75,10 @@ def open_report(model: ProcessModel | str | Path, report: str | Path, *, optimiz
     path = Path(report)
     if path.is_dir():
         raise ParseError("is a folder, not a report", location=SourceLocation(str(report)))
-    spec = parsers.find_format(path)
+    # Read once here for the reader's notes as data (correct_report reads the file again:
+    # its own path still reports them through the warnings module, which threads cannot share).
+    read = parsers.read_report(path)
+    notes = tuple(str(n) for n in read.notes)
     values = read_current(current, model) if current is not None else None
     try:
         if db is not None and Path(db).is_file():  # a new store has no history to smooth over
@@ -84,12 +88,11 @@ def open_report(model: ProcessModel | str | Path, report: str | Path, *, optimiz
         else:
             corrections = correct_report(model, path, optimizer=optimizer, seed=seed, current=values)
     except MatchError as exc:
-        # Read again only on this path: the match table needs every row, matched or not.
-        table = spec.read(path)
-        return OpenedReport(model, str(report), spec.name, matches=tuple(match_rows(model, table)),
-                            problem=str(exc), current=values)
-    return OpenedReport(model, str(report), spec.name, corrections=tuple(corrections),
-                        matches=tuple(matched_rows(model, [c.part for c in corrections])), current=values)
+        return OpenedReport(model, str(report), read.format, matches=tuple(match_rows(model, read.table)),
+                            problem=str(exc), current=values, notes=notes)
+    return OpenedReport(model, str(report), read.format, corrections=tuple(corrections),
+                        matches=tuple(matched_rows(model, [c.part for c in corrections])), current=values,
+                        notes=notes)
 
 
 def offsets_text(opened: OpenedReport, controller: str) -> str:

@@ -79,4 +79,4 @@ def test_hostile_report_names_do_not_reach_the_terminal(tmp_path, capsys):
     path = renamed(tmp_path, [("P2 D3", "P2\x1b[2JD3")])
     assert main(["model", "check", MODEL, str(path)]) == 0
     out = capsys.readouterr().out
-    assert "\x1b" not in out and "P2?[2JD3" in out
+    assert "\x1b" not in out and ("P2?[2JD3" in out or "P2\\x1b[2JD3" in out)  # masked here or by the reader

@@ -109,3 +109,13 @@ def test_template_without_stations():
     del d["stations"]
     lines = problems(d)
     assert any("[stations]" in line and "at least one" in line for line in lines)
+
+
+def test_tools_mapped_per_station():
+    d = doc()
+    d["tools"] = {"T1": {}, "T2": {}}
+    d["template"]["features"]["F1"]["tools"] = {"cutter": 1}
+    d["stations"]["A"]["tools"] = {"cutter": "T1"}
+    d["stations"]["B"]["tools"] = {"cutter": "T2"}
+    model = model_from_dict(d)
+    assert model.features[0].tools == {"T1": 1.0} and model.features[2].tools == {"T2": 1.0}

@@ -84,9 +84,7 @@ def _declared(name):
     return opt, opt._parameter_constraints
 
 
-@pytest.mark.parametrize("name", [pytest.param(n, marks=pytest.mark.xfail(
-    reason="ExactOptimizer declares no _parameter_constraints yet (optimize/_exact.py: the exact slice)",
-    strict=False)) if n == "exact" else n for n in NAMES])
+@pytest.mark.parametrize("name", NAMES)
 def test_every_parameter_is_declared(name):
     opt, declared = _declared(name)
     assert set(opt.get_params()) <= set(declared)

@@ -89,3 +89,17 @@ def test_garbage_raises_parse_error(tmp_path: Path, text: str) -> None:
     path.write_text(text)
     with pytest.raises(ParseError):
         read_aqdef(path)
+
+
+def test_dfd_with_dfb_values_reads_like_the_dfq(tmp_path: Path) -> None:
+    """A .dfd description with its .dfb values (issue 14) reads as the same report in one .dfq."""
+    dfq = SAMPLES / "diribet_basicDfq_singlePart_threeCharacteristics.dfq"
+    lines = dfq.read_text().splitlines(keepends=True)
+    (tmp_path / "run.dfd").write_text("".join(l for l in lines if not l.startswith(("K0001", "K0004"))))
+    (tmp_path / "run.DFB").write_text("".join(l for l in lines if l.startswith(("K0001", "K0004"))))
+    want = parsers.read_report(dfq).table
+    for given in ("run.dfd", "run.DFB"):
+        got = parsers.read_report(tmp_path / given)
+        assert got.format == "qdas"
+        assert got.table[["characteristic", "nominal", "actual", "lower", "upper"]].equals(
+            want[["characteristic", "nominal", "actual", "lower", "upper"]])

@@ -100,3 +100,19 @@ def test_stdin_and_pipes_keep_their_first_bytes(tmp_path):
         lines = out.stdout.decode().splitlines()
         assert lines[1].split(",")[1:3] == ["25.4", "38.1"], lines  # nominal and actual in mm from inch
     assert MAX_REPORT_BYTES == 256 * 2**20
+
+
+def test_verdict_contradicting_the_numbers_is_a_note():
+    data = (b"characteristic,nominal,actual,lower,upper,status\n"
+            b"D1,10,14.4,-0.254,0.254,PASS\nD2,10,10.01,-0.254,0.254,PASS\nD3,10,10.0,-0.254,0.254,FAIL\n")
+    [note] = [n for n in parsers.read_report(Source("box.csv", data)).notes if n.kind == "verdict"]
+    assert note.location.line == 2 and note.message.startswith("2 row(s) whose own verdict contradicts")
+    assert "D1 says PASS at deviation +4.4 mm" in note.message and "D3 says FAIL" in note.message
+    assert "D2" not in note.message
+
+
+def test_lengths_carry_no_binary_noise():
+    data = b"UNITS/INCH,ANGDEC\nF(P)=FEAT/POINT,CART,1,0,0,0,0,1\nFA(P)=FEAT/POINT,CART,1.0001,0,0,0,0,1\n" \
+           b"TA(P_X)=TOL/CORTOL,XAXIS,0.0001,INTOL\nENDFIL\n"
+    row = parsers.read_report(Source("r.dmo", data)).table.iloc[0]
+    assert (row["nominal"], row["actual"], row["deviation"]) == (25.4, 25.40254, 0.00254)

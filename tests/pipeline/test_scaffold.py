@@ -168,3 +168,20 @@ def test_several_reports_make_one_scaffold():
     model = model_from_dict(tomllib.loads(scaffold.text))
     assert scaffold.dimensions == 28 and model.name == "guide pins"
     assert "cycle_01.csv, cycle_02.csv, cycle_01.qif" in scaffold.text.splitlines()[0]
+
+
+def test_parts_as_stations_scaffold_corrects_one_fixture_cycle(tmp_path):
+    from setupfix.pipeline.correct import correct_report
+
+    path = tmp_path / "r.csv"
+    path.write_text("characteristic,nominal,actual,lower,upper,part\n"
+                    "Depth_Z,10,10.04,-0.05,0.05,S1\nWidth_Z,20,19.99,-0.05,0.05,S1\n"
+                    "Depth_Z,10,9.98,-0.05,0.05,S2\nWidth_Z,20,20.01,-0.05,0.05,S2\n", encoding="utf-8")
+    table = parsers.read(path)
+    model = model_from_dict(tomllib.loads(scaffold_from_tables([(str(path), table)], parts_are_stations=True).text))
+    assert [(d.name, d.group) for d in model.dimensions] == [("Depth_Z", "S1"), ("Width_Z", "S1"),
+                                                             ("Depth_Z", "S2"), ("Width_Z", "S2")]
+    (pc,) = correct_report(model, path)
+    assert pc.part.part == "S1+S2" and pc.part.measured.all()
+    plain = model_from_dict(tomllib.loads(scaffold_from_tables([(str(path), table)]).text))
+    assert len(plain.dimensions) == 2 and len(correct_report(plain, path)) == 2  # parts as cycles

@@ -110,3 +110,8 @@ def test_a_register_the_format_cannot_express_is_named():
 
     with pytest.raises(ExportError, match="G58"):
         offsets_text(open_report(MODEL, GUIDE_PINS / "cycle_01.csv"), "siemens")
+
+
+def test_the_readers_notes_come_as_data():
+    opened = open_report(MODEL, GUIDE_PINS.parent / "pcdmis" / "bracket_two_parts.txt")
+    assert opened.format == "pcdmis" and any("angle" in n and ":27" in n for n in opened.notes)

@@ -15,7 +15,7 @@ from setupfix.pipeline.thermal_files import load_model, save_model
 from setupfix.thermal.metrics import score
 from setupfix.thermal.models import MRAModel
 from setupfix.thermal.persist import SavedModel
-from setupfix.thermal.registry import make_model, methods
+from setupfix.thermal.registry import get_method, make_model, methods
 
 SAMPLES = Path(__file__).resolve().parents[2] / "sample_reports" / "thermal"
 SENSORS = ["spindle_motor", "bearing"]
@@ -174,3 +174,25 @@ def test_corrupt_model_file_is_named(tmp_path, train_log, damage):
         path.write_text(json.dumps(doc).replace("0.0", "NaN", 1) if damage == "nan" else json.dumps(doc))
     with pytest.raises(ParseError, match=r"m\.json"):
         load_model(path)
+
+
+SMALL = {"grey-cs": {"iterations": 5}, "grey-pso": {"iterations": 5}, "kalman": {"generations": 3, "pop_size": 6}}
+
+
+@pytest.mark.parametrize("method", methods())
+def test_every_method_is_deterministic_per_seed_and_refuses_bad_values(train_log, method):
+    log = train_log.head(200)
+    params = SMALL.get(method, {})
+    first = pipe.predict_log(pipe.fit_log(log, method, target="error_z", params=params).saved, log)[0]
+    again = pipe.predict_log(pipe.fit_log(log, method, target="error_z", params=params).saved, log)[0]
+    np.testing.assert_array_equal(first, again)
+    fixed = get_method(method).fixed
+    for name, value in make_model(method).get_params().items():
+        if name in fixed:  # fixed by the method's name
+            continue
+        bad = "nonsense" if not isinstance(value, str) else 12345
+        with pytest.raises(ParameterError, match=name):
+            make_model(method, **{name: bad})
+    if fixed:
+        with pytest.raises(ParameterError, match="fixes calibration"):
+            make_model(method, calibration="ls")

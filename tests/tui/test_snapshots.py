@@ -44,6 +44,8 @@ def test_export_confirmation(snap_compare):
     async def run_before(pilot) -> None:
         await _settled(pilot)
         await pilot.press("e")
+        while type(pilot.app.screen).__name__ != "ExportScreen":
+            await pilot.pause()
         await pilot.pause()
 
     assert snap_compare(_app(), run_before=run_before, terminal_size=(80, 24))

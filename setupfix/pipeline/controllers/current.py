@@ -9,16 +9,14 @@ otherwise pass unnoticed).
 
 from __future__ import annotations
 
-import re
 from pathlib import Path
 
 from parsers._source import csv_records, read_text
+from parsers.numbers import try_number
 from setupfix.errors import ParseError, SourceLocation
 from setupfix.model import ProcessModel
 
 __all__ = ["read_current"]
-
-_NUMBER = re.compile(r"^[+-]?(\d+\.?\d*|\.\d+)$")
 
 
 def read_current(path: str | Path, model: ProcessModel) -> dict[str, float]:
@@ -49,9 +47,10 @@ def read_current(path: str | Path, model: ProcessModel) -> dict[str, float]:
             raise ParseError(f"register {key!r} is not in the model", location=where) from None
         if reg.id in out:
             raise ParseError(f"register {key!r} given twice", location=where)
-        if not _NUMBER.match(text):
+        value = try_number(text)  # the project's one strict number parser (decimal point)
+        if value is None:
             raise ParseError(f"expected a decimal number, found {text[:30]!r}", location=where)
-        out[reg.id] = float(text)
+        out[reg.id] = value
     missing = [r.register for r in model.registers if not r.fixed and r.id not in out]
     if missing:
         raise ParseError(f"no current value for {', '.join(missing)}", location=SourceLocation(name))

@@ -11,9 +11,20 @@ from setupfix.pipeline.view import DimensionRow, limits_text, signed
 
 __all__ = ["DimensionTable"]
 
+#: Width of a tolerance-zone bar [characters].
+BAR = 11
+
+
+def _width(values: Sequence[str], header: str) -> int:
+    return max([len(header), *(len(v) for v in values)])
+
 
 class DimensionTable(DataTable[Text | str]):
-    """One row per measured dimension; click a header (or press s) to sort."""
+    """One row per measured dimension; click a header (or press s) to sort.
+
+    Every column gets its width up front: measured lazily, the widths would change
+    after the first paint (and a screenshot could catch either).
+    """
 
     def on_mount(self) -> None:
         self.cursor_type = "row"
@@ -22,24 +33,25 @@ class DimensionTable(DataTable[Text | str]):
     def show(self, rows: Sequence[DimensionRow], *, wide: bool) -> None:
         """Replace the rows (``wide`` adds the margins before and after)."""
         self.clear(columns=True)
-        self.add_column("st", key="flags")
-        self.add_column("name", key="name")
-        self.add_column("stn", key="station")
-        self.add_column("dev", key="deviation")
-        self.add_column("limits", key="limits")
-        self.add_column("before", key="bar_before")
-        self.add_column("pred", key="predicted")
-        self.add_column("after", key="bar_after")
+        limits = [limits_text(r.lower, r.upper) for r in rows]
+        self.add_column("st", key="flags", width=4)
+        self.add_column("name", key="name", width=_width([r.name for r in rows], "name"))
+        self.add_column("stn", key="station", width=_width([r.station for r in rows], "stn"))
+        self.add_column("dev", key="deviation", width=8)
+        self.add_column("limits", key="limits", width=_width(limits, "limits"))
+        self.add_column("before", key="bar_before", width=BAR)
+        self.add_column("pred", key="predicted", width=8)
+        self.add_column("after", key="bar_after", width=BAR)
         if wide:
-            self.add_column("margin₀", key="margin_before")
-            self.add_column("margin₁", key="margin_after")
-        for r in rows:
-            before, after = r.bars(11)
+            self.add_column("margin₀", key="margin_before", width=8)
+            self.add_column("margin₁", key="margin_after", width=8)
+        for r, lim in zip(rows, limits):
+            before, after = r.bars(BAR)
             style = "" if r.in_before else "red"
             after_style = "bold red" if not r.in_after else ("bold" if r.binding else "")
             cells: list[Text | str] = [
                 Text(r.flags, style=after_style), r.name, r.station,
-                Text(signed(r.deviation), style=style, justify="right"), limits_text(r.lower, r.upper),
+                Text(signed(r.deviation), style=style, justify="right"), lim,
                 Text(before, style=style), Text(signed(r.predicted), style=after_style, justify="right"),
                 Text(after, style=after_style)]
             if wide:

@@ -13,20 +13,26 @@ __all__ = ["RegisterTable"]
 
 
 class RegisterTable(DataTable[Text | str]):
-    """Register, model ID, delta, current and new value, flags and safety rules."""
+    """Register, model ID, wear/geometry, delta, current and new value, flags and safety rules.
+
+    Column widths are set up front, as in :class:`DimensionTable`.
+    """
 
     def on_mount(self) -> None:
         self.cursor_type = "row"
 
     def show(self, rows: Sequence[RegisterRow], *, digits: int = 3) -> None:
         self.clear(columns=True)
-        for label, key in (("reg", "register"), ("id", "id"), ("offset", "offset"), ("Δ", "delta"),
-                           ("current", "current"), ("new", "new"), ("", "flags"), ("rules", "rules")):
-            self.add_column(label, key=key)
-        for r in rows:
+        cells = [[r.register, r.id, r.offset, signed(r.delta, digits), signed(r.current, digits),
+                  signed(r.new, digits), r.flags, "; ".join(r.rules)] for r in rows]
+        for i, (label, key) in enumerate((("reg", "register"), ("id", "id"), ("offset", "offset"), ("Δ", "delta"),
+                                          ("current", "current"), ("new", "new"), ("", "flags"),
+                                          ("rules", "rules"))):
+            self.add_column(label, key=key, width=max([len(label), *(len(c[i]) for c in cells)]))
+        for r, c in zip(rows, cells):
             moved = r.delta != 0.0
             self.add_row(
-                Text(r.register, style="bold" if moved else "dim"), r.id, r.offset,
-                Text(signed(r.delta, digits), style="bold" if moved else "dim", justify="right"),
-                Text(signed(r.current, digits), justify="right"), Text(signed(r.new, digits), justify="right"),
-                Text(r.flags, style="bold yellow" if r.at_limit else "dim"), "; ".join(r.rules), key=r.id)
+                Text(c[0], style="bold" if moved else "dim"), c[1], c[2],
+                Text(c[3], style="bold" if moved else "dim", justify="right"),
+                Text(c[4], justify="right"), Text(c[5], justify="right"),
+                Text(c[6], style="bold yellow" if r.at_limit else "dim"), c[7], key=r.id)
