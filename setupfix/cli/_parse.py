@@ -31,7 +31,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 def _encoding(text: str) -> str:
     """argparse type: a usable character set (``--encoding punycode`` is refused with the reason)."""
-    from parsers._source import check_encoding  # lazy: --help must not import pandas
+    from parsers._source import check_encoding  # here: importing the parsers loads pandas
 
     try:
         return check_encoding(text)

@@ -47,6 +47,7 @@ is always reported.
 
 from __future__ import annotations
 
+import threading
 import time
 from collections.abc import Callable
 from contextlib import AbstractContextManager
@@ -88,8 +89,6 @@ MILP_SHARE = 0.5
 LEAST_NORM_SHARE = 0.5
 #: Levels the grid-optimum stage may descend by rounded rows before it uses the MILP.
 LEVEL_STEPS = 40
-#: Cap on t when one-sided limits leave it unbounded (far above any two-sided margin).
-T_CAP = 1e9
 
 
 def margin_rows(problem: CorrectionProblem) -> tuple[Array, Array]:
@@ -131,11 +130,12 @@ def _lp_model(g_rows: Array, kmin: Array, kmax: Array) -> LinearModel:
     """max t s.t. G k + t ≤ g (row bounds set per report), k in the box."""
     r, n = g_rows.shape
     model = LinearModel(np.r_[np.zeros(n), -1.0], np.hstack([g_rows, np.ones((r, 1))]), np.full(r, -INF),
-                        np.zeros(r), np.r_[kmin, -T_CAP], np.r_[kmax, T_CAP])
+                        np.zeros(r), np.r_[kmin, -INF], np.r_[kmax, INF])  # t: bounded by every row
     return model
 
 
 _CONTROLLER: ThreadpoolController | None = None
+_THREAD = threading.local()
 
 
 def _blas_single_thread() -> AbstractContextManager[object]:
@@ -165,7 +165,11 @@ class _Clock:
 
 
 class _Cache:
-    """Solver models kept across reports of one process model (same G and box)."""
+    """Solver models kept across reports of one process model (same G and box).
+
+    One per thread (HiGHS objects are not shared between threads): a batch or the TUI
+    that solves in worker threads keeps one set of models per worker.
+    """
 
     def __init__(self) -> None:
         self.key: tuple[object, ...] | None = None
@@ -217,7 +221,17 @@ class ExactOptimizer(Optimizer):
         self.grid = grid
         self.time_limit = time_limit
         self.seed = seed
-        self._cache = _Cache()
+
+    @property
+    def _cache(self) -> _Cache:
+        """Solver models of this thread, kept across reports and optimiser instances."""
+        cache = getattr(_THREAD, "cache", None)
+        if cache is None:
+            cache = _THREAD.cache = _Cache()
+        return cache
+
+    def _drop_cache(self) -> None:
+        _THREAD.cache = _Cache()
 
     # -- solver models (kept across reports) ---------------------------------------------------
     def _lp(self, g_rows: Array, kmin: Array, kmax: Array, cost: Array) -> LinearModel:
@@ -235,8 +249,8 @@ class ExactOptimizer(Optimizer):
 
     # -- stages --------------------------------------------------------------------------------
     def _lp_bound(self, g_rows: Array, g: Array, kmin: Array, kmax: Array, cost: Array,
-                  clock: _Clock) -> tuple[float, Array, Array]:
-        """t_LP, the LP point and the row weights y ≥ 0 of its dual."""
+                  clock: _Clock) -> tuple[float, Array, Array] | None:
+        """t_LP, the LP point and the row weights y ≥ 0 of its dual (None: time limit reached)."""
         lp = self._lp(g_rows, kmin, kmax, cost)
         lp.set_row_bounds(np.full(g.size, -INF), g)
         cold = not lp.solved
@@ -246,13 +260,12 @@ class ExactOptimizer(Optimizer):
         if cold:
             lp.h.setOptionValue("solver", "choose")
         if res.status not in ("optimal", "time_limit") and clock.left() > 0:  # one retry from scratch
-            self._cache = _Cache()
+            self._drop_cache()
             lp = self._lp(g_rows, kmin, kmax, cost)
             lp.set_row_bounds(np.full(g.size, -INF), g)
             res = lp.solve(clock.left())
         if res.status == "time_limit":
-            raise SolverError(f"the LP bound was not reached within the time limit ({self.time_limit:g} s): "
-                              "no proven correction; allow more time")
+            return None
         if res.status != "optimal" or res.x is None or res.row_dual is None:
             raise SolverError(f"LP stage failed: HiGHS answered {res.detail!r}")
         return float(res.x[-1]), res.x[:-1], np.maximum(-res.row_dual, 0.0)
@@ -267,7 +280,7 @@ class ExactOptimizer(Optimizer):
         try:
             return lp.solve(max(clock.left(), 1e-3)).status
         finally:
-            lp.set_col_bounds(np.array([n], dtype=np.int32), np.array([-T_CAP]), np.array([T_CAP]))
+            lp.set_col_bounds(np.array([n], dtype=np.int32), np.array([-INF]), np.array([INF]))
 
     def _max_margin_milp(self, g_rows: Array, g: Array, kmin: Array, kmax: Array, t_lo: float, t_hi: float,
                          start: Array | None, time_limit: float) -> Solve:
@@ -518,7 +531,16 @@ class ExactOptimizer(Optimizer):
         notes: list[Note] = []
         path: list[str] = []
         calls = 1
-        t_lp, k_lp, y = self._lp_bound(g_rows, g, kmin, kmax, cost, clock)
+        lp = self._lp_bound(g_rows, g, kmin, kmax, cost, clock)
+        if lp is None:  # not even the LP bound within the limit: no correction, and says so
+            text = (f"the LP bound was not proved within the time limit ({self.time_limit:g} s): no correction "
+                    "is recommended; allow more time (--time-limit)")
+            result = make_result(problem, x, optimizer=self.name, evaluations=1,
+                                 seconds=time.perf_counter() - clock.start, status="time_limit", message=text)
+            result.notes = (Note(text, kind="solver"),)
+            result.extra.update({"stopped": {"stage": "lp bound", "reason": "time limit"}, "path": "lp bound: time limit"})
+            return result
+        t_lp, k_lp, y = lp
         binding = _rows_to_dimensions(problem, y > 1e-9)
         bound = t_lp * problem.resolution
         clock.lap("lp bound")
@@ -534,7 +556,7 @@ class ExactOptimizer(Optimizer):
         # Stage 2: grid optimum.
         d, pairs = self._cache.structure(g_rows, kmin, kmax, cost)
         zero = ~np.any(g_rows != 0, axis=1)
-        upper = min(dual_bound(g_rows, g, y, kmin, kmax), pair_bound(g_rows, g, kmin, kmax, pairs), T_CAP)
+        upper = min(dual_bound(g_rows, g, y, kmin, kmax), pair_bound(g_rows, g, kmin, kmax, pairs))
         k_best = np.clip(np.rint(k_lp), kmin, kmax)
         t_best = float(grid_margins(g_rows, g, k_best))
         t_zero = float(grid_margins(g_rows, g, np.zeros_like(k_best)))
@@ -636,7 +658,7 @@ class ExactOptimizer(Optimizer):
                                       f"grid point ({t_best:.4g}) and the bound ({upper:.4g} steps); retried "
                                       "without the lower bracket", kind="solver"))
                     calls += 1
-                    res = self._max_margin_milp(g_rows, g, kmin, kmax, -T_CAP, upper, None, stage2_left())
+                    res = self._max_margin_milp(g_rows, g, kmin, kmax, -INF, upper, None, stage2_left())
                 if res.x is not None:
                     k = np.clip(np.rint(res.x[:-1]), kmin, kmax)
                     t_k = float(grid_margins(g_rows, g, k))

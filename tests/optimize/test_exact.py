@@ -99,7 +99,7 @@ def test_time_limit_falls_back_and_says_so():
     assert result.status == "time_limit"
     assert any(n.kind == "solver" and "time limit" in n.message for n in result.notes)
     assert result.extra["stopped"]["reason"] == "time limit"
-    assert result.margin_after <= result.bound + 1e-12
+    assert result.bound is None or result.margin_after <= result.bound + 1e-12  # None: stopped in the LP
     assert "not proved" in result.message
 
 

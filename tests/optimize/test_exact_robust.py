@@ -127,3 +127,33 @@ def test_cli_time_limit_option(capsys):
     assert "time_limit must be a number in (0, inf)" in capsys.readouterr().err
     assert main([*args, "--optimizer", "pso", "--time-limit", "1"]) == 1
     assert "--time-limit applies to the exact optimizer" in capsys.readouterr().err
+
+
+def test_threads_keep_their_own_solver_models(guide_pins_model):
+    """Solves in worker threads (batch, TUI) give the same corrections as one after another."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    from setupfix.simulate import simulate_deviations
+
+    devs, _ = simulate_deviations(guide_pins_model, 8, seed=3)
+    problems = [CorrectionProblem.from_part(guide_pins_model, PartMeasurement("c", "r", None, d, ("",) * d.size))
+                for d in devs]
+    alone = [get_optimizer("exact").solve(p).x for p in problems]
+    with ThreadPoolExecutor(max_workers=2) as pool:
+        threaded = list(pool.map(lambda p: get_optimizer("exact").solve(p).x, problems))
+    for a, b in zip(alone, threaded):
+        np.testing.assert_array_equal(a, b)
+
+
+def test_a_very_fine_grid_neither_hangs_nor_loses_the_bound(guide_pins_model):
+    """Resolution 1e-11 mm: 10^10 steps per register; bounded in time, never worse than the 0.001 grid."""
+    import dataclasses
+
+    (part,) = load_parts(guide_pins_model, GUIDE_PINS / "cycle_01.csv")
+    coarse = CorrectionProblem.from_part(guide_pins_model, part)
+    fine = dataclasses.replace(coarse, resolution=1e-11)
+    start = time.perf_counter()
+    result = get_optimizer("exact", time_limit=2.0).solve(fine)
+    assert time.perf_counter() - start < 2.0 + 3.0
+    assert get_optimizer("exact").solve(coarse).margin_after - 1e-12 <= result.margin_after
+    assert result.margin_after <= result.bound + 1e-12
