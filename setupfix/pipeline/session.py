@@ -95,10 +95,13 @@ def open_report(model: ProcessModel | str | Path, report: str | Path, *, optimiz
                         notes=notes)
 
 
-def offsets_text(opened: OpenedReport, controller: str) -> str:
+def offsets_text(opened: OpenedReport, controller: str, *, cycle: int | None = None) -> str:
     """The offsets of every cycle in ``controller`` format, exactly as
     :func:`~setupfix.pipeline.correct.write_correction_offsets` writes them (absolute
     *set* rows when the current offsets are known).
+
+    A controller program holds one correction: with several cycles, ``cycle`` (an
+    index into ``opened.corrections``) chooses it, as ``--part`` does for ``correct``.
 
     Raises
     ------
@@ -107,6 +110,8 @@ def offsets_text(opened: OpenedReport, controller: str) -> str:
         program, or a register the format cannot express.
     """
     results = opened.corrections
+    if controller != "csv" and len(results) > 1 and cycle is not None:
+        results = (results[cycle],)
     if not results:
         raise ExportError("nothing to export: no correction", location=SourceLocation(opened.report))
     rejected = [r for r in results if r.verdict == "reject"]
@@ -115,7 +120,7 @@ def offsets_text(opened: OpenedReport, controller: str) -> str:
                           location=SourceLocation(opened.report))
     if controller != "csv" and len(results) > 1:
         raise ExportError(f"{controller}: a program holds one correction, the report has {len(results)} cycles",
-                          location=SourceLocation(opened.report))
+                          location=SourceLocation(opened.report), hint="choose one cycle")
     rows = [row for r in results for row in r.offsets(opened.current)]
     return render(controller, rows, f"{results[0].part.report} {results[0].part.part}".strip())
 

@@ -441,7 +441,9 @@ class SetupfixApp(App[None]):
         if self.opened is None or not self.opened.corrections:
             self.notify("nothing to export: open a report that matches the model first", severity="warning")
             return
-        self.push_screen(ExportScreen(CONTROLLERS, partial(offsets_text, self.opened), self.inputs.offsets),
+        # A controller program holds one correction: the cycle on screen ([ ] changes it).
+        self.push_screen(ExportScreen(CONTROLLERS, partial(offsets_text, self.opened, cycle=self.part_index),
+                                      self.inputs.offsets),
                          self._export_confirmed)
 
     def _export_confirmed(self, request: ExportRequest | None) -> None:
