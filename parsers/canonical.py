@@ -139,6 +139,18 @@ def _location_of(source: str, path: str) -> SourceLocation:
     return SourceLocation(path)
 
 
+#: Spellings of the ``reference`` flag that ``setupfix parse`` writes (and shop tables use).
+_FLAGS = {"true": True, "1": True, "yes": True, "false": False, "0": False, "no": False, "": False}
+
+
+def _flag(text: str, where: SourceLocation) -> bool:
+    """The reference-only flag of a row: True/False (1/0, yes/no; empty is False)."""
+    try:
+        return _FLAGS[text.strip().lower()]
+    except KeyError:
+        raise ParseError(f"column 'reference': expected True or False, found {text!r}", location=where) from None
+
+
 def read_canonical(path: str | Path | Source, *, text: str | None = None, unit: str | None = None,
                    encoding: str | None = None) -> pd.DataFrame:
     """Read a canonical measurement CSV into the canonical table (lengths in mm).
@@ -216,6 +228,8 @@ def read_canonical(path: str | Path | Source, *, text: str | None = None, unit: 
         lo, up = float(row.get("lower", math.nan)), float(row.get("upper", math.nan))  # type: ignore[arg-type]
         if not math.isnan(lo) and not math.isnan(up) and lo >= up:
             raise ParseError(f"lower limit {lo:g} is not below upper limit {up:g}", location=where)
+        if "reference" in row:
+            row["reference"] = _flag(str(row["reference"]), where)
         row["source"] = f"{name}:{line_num}"
         rows.append(row)
     if not rows:
