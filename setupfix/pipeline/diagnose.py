@@ -28,14 +28,14 @@ from setupfix.diagnose import Diagnoser, Diagnosis, Layout, Series
 from setupfix.diagnose.forecast import forecast_shift, spec_of
 from setupfix.diagnose.terms import EffectSpec, applied_at, join_temperatures, parts_since_change, typical_step
 from setupfix.errors import ExportError, MatchError, ModelError, Note, ParseError, SourceLocation
-from setupfix.model import PartMeasurement, ProcessModel, load_model, match_parts, model_from_dict
+from setupfix.model import PartMeasurement, ProcessModel, load_model, match_parts, model_from_dict, normalise_name
 from setupfix.model.effects import EffectsSection, ModelEffect, effects_from_dict, load_effects, with_effects
 from setupfix.optimize import CorrectionProblem, get_optimizer
 from setupfix.pipeline.writers import check_target, write_text
 
 __all__ = ["SeriesInput", "DiagnoseOutcome", "load_series", "read_corrections_log", "read_temperature_log",
            "diagnose_reports", "expand_reports", "augmented_section", "write_augmented",
-           "corrections_from_table", "temperatures_from_table", "forecast_part"]
+           "corrections_from_table", "temperatures_from_table", "forecast_part", "report_coordinates"]
 
 #: A temperature log as arrays: times, samples (n, channels), channel names.
 TempLog = tuple[pd.DatetimeIndex, np.ndarray, tuple[str, ...]]
@@ -240,6 +240,7 @@ def load_series(model: ProcessModel | str | Path, reports: Sequence[str | Path] 
     section = load_effects(model.source, model) if Path(model.source).is_file() else EffectsSection()
     notes: list[str] = []
     parts: list[PartMeasurement] = []
+    tables: list[pd.DataFrame] = []
     log = temps = None
     where = str(db) if db is not None else ""
     if db is not None:
@@ -254,6 +255,7 @@ def load_series(model: ProcessModel | str | Path, reports: Sequence[str | Path] 
                 table = rows[rows["report_sha256"] == rec.sha256].drop(columns=["report_sha256"])
                 table = table[~table["reference"]] if "reference" in table else table
                 parts += match_parts(model, table, source=f"{db}#{rec.name}")
+                tables.append(table)
             if corrections is None:
                 stored = store.corrections()
                 if not stored.empty:
@@ -273,7 +275,9 @@ def load_series(model: ProcessModel | str | Path, reports: Sequence[str | Path] 
             temperatures = found_temp
             notes.append(f"temperature log {found_temp} found beside the reports: used")
         for f in files:
-            parts += match_parts(model, parsers.read(f), source=str(f))
+            table = parsers.read(f)
+            parts += match_parts(model, table, source=str(f))
+            tables.append(table)
     if not parts:
         raise ParseError("no report in the series", location=SourceLocation(where or "<series>"))
     if corrections:
@@ -298,8 +302,34 @@ def load_series(model: ProcessModel | str | Path, reports: Sequence[str | Path] 
     if unmatched:
         notes.append(f"{len(unmatched)} characteristic(s) match no dimension: {', '.join(unmatched[:6])}"
                      + (" …" if len(unmatched) > 6 else ""))
-    return SeriesInput(model, Layout.from_model(model), series, tuple(_ordered(parts)), declared, section,
+    layout = Layout.from_model(model, coord=report_coordinates(model, tables))
+    if np.isfinite(layout.coord).all() and not all(f.position for f in model.features):
+        notes.append("dimension coordinates for position effects taken from the reports' x, y, z columns")
+    return SeriesInput(model, layout, series, tuple(_ordered(parts)), declared, section,
                        corrections, temperatures, tuple(notes))
+
+
+def report_coordinates(model: ProcessModel, tables: Sequence[pd.DataFrame]) -> np.ndarray:
+    """Nominal location (x, y, z) of each dimension as the reports give it, NaN where none does.
+
+    Used where the model has no feature positions: a characteristic's location is the
+    dimension's coordinate for a position effect.  Names repeated across stations are
+    left out (their location would be ambiguous).
+    """
+    out = np.full((len(model.dimensions), 3), np.nan)
+    index: dict[str, list[int]] = {}
+    for q, dim in enumerate(model.dimensions):
+        for key in dim.keys:
+            index.setdefault(key, []).append(q)
+    for table in tables:
+        if not {"x", "y", "z", "characteristic"} <= set(table.columns):
+            continue
+        xyz = table[["x", "y", "z"]].apply(pd.to_numeric, errors="coerce").to_numpy(dtype=float)
+        for name, row in zip(table["characteristic"].astype(str), xyz):
+            qs = index.get(normalise_name(name), [])
+            if len(qs) == 1 and np.isfinite(row).all() and np.isnan(out[qs[0]]).all():
+                out[qs[0]] = row
+    return out
 
 
 def _with_thermal_prediction(temps: TempLog | None, thermal: str, temperatures: str) -> tuple[TempLog, list[str]]:

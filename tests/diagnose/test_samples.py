@@ -35,3 +35,14 @@ def test_real_sheet_metal_offset_only_model_leaves_a_tilt():
     assert [(e.kind, e.target) for e in d.effects] == [("position", "x"), ("position", "z")]
     assert d.error_after.out_of_tolerance < d.error_before.out_of_tolerance
     assert d.error_after.rms < 0.7 * d.error_before.rms
+
+
+def test_positions_from_the_reports_when_the_model_has_none(tmp_path):
+    text = (LOOP / "sheet_metal" / "model.toml").read_text(encoding="utf-8")
+    bare = tmp_path / "model.toml"
+    bare.write_text("\n".join(line for line in text.splitlines() if not line.startswith("position")),
+                    encoding="utf-8")
+    report = SAMPLES / "qif" / "QIF3_SheetMetal_Results_6_samples.QIF"
+    out = diagnose_reports(bare, [report], diagnoser=Diagnoser(walk=False, alpha=0.05))
+    assert [(e.kind, e.target) for e in out.diagnosis.effects] == [("position", "x"), ("position", "z")]
+    assert any("taken from the reports' x, y, z" in n for n in out.notes)
