@@ -85,6 +85,8 @@ def run_init(args: argparse.Namespace) -> int:
                           location=SourceLocation(args.out))
     scaffold = scaffold_model(args.reports, axis=args.axis, name=args.name,
                               parts_are_stations=args.parts_are_stations, **report_options(args))
+    for note in scaffold.notes:
+        print(f"warning: {note}", file=sys.stderr)
     write_text(args.out, scaffold.text + "\n")
     if args.out != "-":
         print(f"wrote {args.out}: {scaffold.dimensions} dimension(s), axis {scaffold.axis}, "

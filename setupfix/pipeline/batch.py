@@ -31,7 +31,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from setupfix.errors import ExportError, ParameterError, SetupfixError, SourceLocation
+import parsers
+from setupfix.errors import ExportError, ParameterError, SetupfixError, SourceLocation, StoreError
 from setupfix.model import ProcessModel, load_model
 from setupfix.offsets import OffsetRow, csv_header, csv_lines, offset_rows
 from setupfix.pipeline.controllers import render
@@ -141,12 +142,12 @@ def _correct_one(path: str, size: int, mtime_ns: int) -> Outcome:
         if (st.st_size, st.st_mtime_ns) != (size, mtime_ns):
             out.skipped = "still being written (size or time changed): not read"
             return out
-        with open(path, "rb") as fh:
-            out.sha256 = hashlib.sha256(fh.read()).hexdigest()
+        source = parsers.load_source(path)  # read once: the bytes hashed are the bytes corrected
+        out.sha256 = hashlib.sha256(source.data).hexdigest()
         o = _OPTIONS
         if out.sha256 in o.skip:
             return out  # run_batch marks it "already processed"
-        parts = load_parts(_MODEL, path, format=o.format, unit=o.unit, encoding=o.encoding, columns=o.columns,
+        parts = load_parts(_MODEL, source, format=o.format, unit=o.unit, encoding=o.encoding, columns=o.columns,
                            parts_per_cycle=o.parts_per_cycle, strict=o.strict)
         cumulative = wear_totals(_MODEL, o.current) if o.current is not None else None
         for part in parts:
@@ -249,7 +250,10 @@ def run_batch(model: ProcessModel | str | Path, folder: str | Path, out: str | P
                     outcome.rows = [dataclasses.replace(r, report=rel) for r in outcome.rows]
                     writer.add(outcome)
                     if store is not None:
-                        _record(store, outcome, options)
+                        try:
+                            _record(store, outcome, options)
+                        except SetupfixError as exc:  # its offsets stand; it is corrected again next run
+                            outcome.notes.append(str(exc))
                 if progress is not None:
                     progress(i, len(files), outcome)
             summary.written = writer.commit()
@@ -263,13 +267,13 @@ def _batch_reports(store: Store) -> set[str]:
 
 
 def _record(store: Store, outcome: Outcome, options: BatchOptions) -> None:
-    import parsers
-
     path = Path(outcome.path)
-    spec = parsers.find_format(path, options.format)
-    table = parsers.read(path, format=spec.name, unit=options.unit, encoding=options.encoding,
-                         **({"columns": options.columns} if options.columns else {}))
-    sha, _ = store.add_report(path.read_bytes(), path.name, spec.name, table)
+    source = parsers.load_source(path)
+    if hashlib.sha256(source.data).hexdigest() != outcome.sha256:
+        raise StoreError("changed after it was corrected: not recorded in the history store", location=SourceLocation(str(path)))
+    read = parsers.read_report(source, format=options.format, unit=options.unit, encoding=options.encoding,
+                               **({"columns": options.columns} if options.columns else {}))
+    sha, _ = store.add_report(source.data, path.name, read.format, read.table)
     by_part: dict[str, dict[str, float]] = {}
     for row in outcome.rows:
         by_part.setdefault(row.part, {})[row.id] = row.delta

@@ -26,6 +26,7 @@ from typing import Any
 import pandas as pd
 
 import parsers
+from parsers import Source
 from setupfix.errors import MatchError, Note, SourceLocation
 from setupfix.model import PartMeasurement, ProcessModel, match_parts, normalise_name
 from setupfix.pipeline.checks import check_parts
@@ -139,7 +140,7 @@ def _by_count(model: ProcessModel, table: pd.DataFrame, parts: pd.Series, order:
     return out
 
 
-def load_parts(model: ProcessModel, report: str | Path, *, format: str | None = None, unit: str | None = None,
+def load_parts(model: ProcessModel, report: str | Path | Source, *, format: str | None = None, unit: str | None = None,
                encoding: str | None = None, columns: str | None = None, stations: Stations | None = None,
                parts_per_cycle: int | None = None, strict: bool = False) -> list[PartMeasurement]:
     """Read a report in any supported format, group it into cycles, tie it to the model and check it.
@@ -153,7 +154,8 @@ def load_parts(model: ProcessModel, report: str | Path, *, format: str | None = 
     options: dict[str, Any] = {"unit": unit, "encoding": encoding}
     if columns:
         options["columns"] = columns
-    table = parsers.read(report, format=format, **options)
+    read = parsers.read_report(report, format=format, **options)
+    table = read.table
     grouped = assign_stations(model, table, stations, parts_per_cycle=parts_per_cycle)
     parts = match_parts(model, grouped, source=str(report))
     if parts_per_cycle is not None and parts_per_cycle > 1:
@@ -162,7 +164,9 @@ def load_parts(model: ProcessModel, report: str | Path, *, format: str | None = 
             last = parts[-1]
             parts[-1] = _with_note(last, Note(f"the last cycle {last.part} holds {len(order) % parts_per_cycle} "
                                               f"of {parts_per_cycle} parts", SourceLocation(str(report)), "cycle"))
-    return check_parts(model, parts, strict=strict, source=str(report))
+    checked = check_parts(model, parts, strict=strict, source=str(report))
+    # the reader's notes (skipped rows, assumed units) travel with every cycle they concern, as data
+    return [replace(p, notes=(*read.notes, *p.notes)) for p in checked] if read.notes else checked
 
 
 def _with_note(part: PartMeasurement, note: Note) -> PartMeasurement:

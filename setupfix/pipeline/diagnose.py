@@ -31,6 +31,7 @@ from setupfix.errors import ExportError, MatchError, ModelError, Note, ParseErro
 from setupfix.model import PartMeasurement, ProcessModel, load_model, match_parts, model_from_dict, normalise_name
 from setupfix.model.effects import EffectsSection, ModelEffect, effects_from_dict, load_effects, with_effects
 from setupfix.optimize import CorrectionProblem, get_optimizer
+from setupfix.pipeline.checks import check_parts
 from setupfix.pipeline.writers import check_target, write_text
 
 __all__ = ["SeriesInput", "DiagnoseOutcome", "load_series", "read_corrections_log", "read_temperature_log",
@@ -275,8 +276,10 @@ def load_series(model: ProcessModel | str | Path, reports: Sequence[str | Path] 
             temperatures = found_temp
             notes.append(f"temperature log {found_temp} found beside the reports: used")
         for f in files:
-            table = parsers.read(f)
-            parts += match_parts(model, table, source=str(f))
+            read = parsers.read_report(f)
+            table = read.table
+            notes += [str(n) for n in read.notes]
+            parts += check_parts(model, match_parts(model, table, source=str(f)), source=str(f))
             tables.append(table)
     if not parts:
         raise ParseError("no report in the series", location=SourceLocation(where or "<series>"))

@@ -96,6 +96,7 @@ class Scaffold:
     dimensions: int
     axis: str
     skipped: list[tuple[str, str]] = field(default_factory=list)  # (characteristic, reason)
+    notes: list[str] = field(default_factory=list)  # the readers' notes (skipped rows, assumed units)
 
 
 def _resolution(narrowest: float | None) -> float:
@@ -170,8 +171,11 @@ def scaffold_model(reports: Sequence[str | Path], *, axis: str | None = None, na
     if axis is not None and axis not in ("X", "Y", "Z"):
         raise ModelError(f'axis must be "X", "Y" or "Z", got {axis!r}')
     options: dict[str, Any] = {"unit": unit, "encoding": encoding, "columns": columns}
-    tables = [(str(r), parsers.read(r, format=format, **options)) for r in reports]
-    return scaffold_from_tables(tables, axis=axis, name=name, parts_are_stations=parts_are_stations)
+    reads = [parsers.read_report(r, format=format, **options) for r in reports]
+    scaffold = scaffold_from_tables([(str(r), read.table) for r, read in zip(reports, reads)], axis=axis,
+                                    name=name, parts_are_stations=parts_are_stations)
+    scaffold.notes = [str(n) for read in reads for n in read.notes]
+    return scaffold
 
 
 def scaffold_from_tables(tables: Sequence[tuple[str, pd.DataFrame]], *, axis: str | None = None,
