@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import sys
 import tempfile
 import time
@@ -28,7 +29,8 @@ sys.path.insert(0, str(ROOT))
 import parsers  # noqa: E402
 from parsers.ogp.rtf import rtf_lines  # noqa: E402
 
-SHARED = ROOT.parent / "shared" / "cmm-samples"
+#: ../shared beside the project, or SETUPFIX_SHARED (as for the tests).
+SHARED = Path(os.environ.get("SETUPFIX_SHARED", ROOT.parent / "shared")) / "cmm-samples"
 SAMPLES = ROOT / "sample_reports"
 OUT = ROOT / "bench" / "results" / "parse_speed_more.txt"
 #: Formats whose content is a table (one line or object per value); the OGP run table is a

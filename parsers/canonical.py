@@ -82,22 +82,39 @@ def finish_table(rows: list[dict[str, object]] | dict[str, object], path: str) -
 MAX_LENGTH_MM = 1e7
 
 
-#: Decimals lengths are kept to [mm]: far below any report's resolution (≤ 7 decimals seen), far above
-#: the binary noise of a difference or a unit conversion (``-0.000100000000003`` → ``-0.0001``).
-LENGTH_DECIMALS = 9
+#: Relative size of the binary noise in ``actual − nominal``: each operand is off by up to half an
+#: ulp, so the difference by up to one ulp of the larger (2.2e-16 of its size); digits below that
+#: are noise, nothing a report wrote (a double cannot hold them).
+_NOISE = 2.2e-16
+
+
+def clean_deviation(actual: np.ndarray, nominal: np.ndarray) -> np.ndarray:
+    """``actual − nominal`` without the binary noise of the subtraction.
+
+    The difference is rounded at the decimal place of its noise (one ulp of the larger
+    operand): ``22.7205 − 22.7206`` gives ``-0.0001``, not ``-0.000100000000003``;
+    every digit either operand carries is kept.
+
+    Parameters
+    ----------
+    actual, nominal : ndarray, shape (n,)
+        In mm; NaN where absent (the result is NaN there).
+    """
+    with np.errstate(all="ignore"):
+        difference = actual - nominal
+        scale = np.maximum(np.abs(actual), np.abs(nominal)) * _NOISE
+        decimals = np.clip(np.floor(-np.log10(np.where(scale > 0, scale, 1e-300))), 0, 15)
+        factor = 10.0 ** decimals
+        rounded = np.round(difference * factor) / factor
+    return np.where(np.isfinite(rounded), rounded, difference)
 
 
 def _round_lengths(frame: pd.DataFrame) -> None:
-    """Round lengths to :data:`LENGTH_DECIMALS` and set ``deviation = actual − nominal`` where both are known."""
+    """Set ``deviation = actual − nominal`` (noise-free, :func:`clean_deviation`) where both are known."""
     for col in LENGTH_COLUMNS:
         frame[col] = pd.to_numeric(frame[col], errors="coerce").astype(float)
-    with np.errstate(all="ignore"):
-        difference = frame["actual"].to_numpy() - frame["nominal"].to_numpy()
+    difference = clean_deviation(frame["actual"].to_numpy(), frame["nominal"].to_numpy())
     frame["deviation"] = np.where(np.isnan(difference), frame["deviation"].to_numpy(), difference)
-    for col in LENGTH_COLUMNS:
-        values = frame[col].to_numpy()
-        finite = np.isfinite(values) & (np.abs(values) < 1e15)
-        frame[col] = np.where(finite, np.round(np.where(finite, values, 0.0), LENGTH_DECIMALS), values)
 
 
 def _check_magnitudes(frame: pd.DataFrame, path: str) -> None:
@@ -120,6 +137,18 @@ def _location_of(source: str, path: str) -> SourceLocation:
     if sep and tail.isdigit():
         return SourceLocation(head, line=int(tail))
     return SourceLocation(path)
+
+
+#: Spellings of the ``reference`` flag that ``setupfix parse`` writes (and shop tables use).
+_FLAGS = {"true": True, "1": True, "yes": True, "false": False, "0": False, "no": False, "": False}
+
+
+def _flag(text: str, where: SourceLocation) -> bool:
+    """The reference-only flag of a row: True/False (1/0, yes/no; empty is False)."""
+    try:
+        return _FLAGS[text.strip().lower()]
+    except KeyError:
+        raise ParseError(f"column 'reference': expected True or False, found {text!r}", location=where) from None
 
 
 def read_canonical(path: str | Path | Source, *, text: str | None = None, unit: str | None = None,
@@ -199,6 +228,8 @@ def read_canonical(path: str | Path | Source, *, text: str | None = None, unit: 
         lo, up = float(row.get("lower", math.nan)), float(row.get("upper", math.nan))  # type: ignore[arg-type]
         if not math.isnan(lo) and not math.isnan(up) and lo >= up:
             raise ParseError(f"lower limit {lo:g} is not below upper limit {up:g}", location=where)
+        if "reference" in row:
+            row["reference"] = _flag(str(row["reference"]), where)
         row["source"] = f"{name}:{line_num}"
         rows.append(row)
     if not rows:

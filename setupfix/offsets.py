@@ -33,9 +33,6 @@ def grid_decimals(resolution: float) -> int:
     return max(0, min(9, math.ceil(-math.log10(resolution) - 1e-9)))
 
 
-_decimals = grid_decimals  # former name, still imported by pipeline.view
-
-
 def format_value(value: float, decimals: int) -> str:
     """``value`` with at least ``decimals`` decimals and as many more (up to 9) as it needs.
 

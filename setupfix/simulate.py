@@ -13,6 +13,7 @@ import numpy.typing as npt
 
 from setupfix.model import ProcessModel
 from setupfix.relation import relation_matrices
+from setupfix.search import generator
 
 __all__ = ["simulate_deviations"]
 
@@ -31,6 +32,7 @@ def simulate_deviations(model: ProcessModel, n_sets: int, *, w1: float = 0.03, w
     w2 : float, default=0.02 [model unit]
         Weight of the remaining performance errors (eq. 13).
     seed : int, optional
+        Seed of the draw; None takes :data:`setupfix.search.DEFAULT_SEED`.
     decimals : int or None, default=4
         Round deviations as a CMM report prints them (None: no rounding).
 
@@ -40,7 +42,7 @@ def simulate_deviations(model: ProcessModel, n_sets: int, *, w1: float = 0.03, w
     setup_errors : ndarray of shape (n_sets, n_registers) [model unit]
         The drawn E^sd; the ideal correction is −E^sd where the model is exact.
     """
-    rng = np.random.default_rng(seed)
+    rng = generator(seed)  # None: setupfix.search.DEFAULT_SEED, never an unseeded draw
     comp = relation_matrices(model).composite
     # eq. 12: E_i^sd = w1 (1 - 2r)
     setup = w1 * (1.0 - 2.0 * rng.random((n_sets, comp.shape[0])))

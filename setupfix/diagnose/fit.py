@@ -21,7 +21,10 @@ import numpy.typing as npt
 
 from setupfix.diagnose.terms import EffectSpec, Layout, Series, effect_field
 
-__all__ = ["Observations", "Fit", "observations", "row_space_basis", "effect_columns", "fit_model"]
+__all__ = ["Observations", "Fit", "observations", "row_space_basis", "effect_columns", "fit_model", "RELATION_T"]
+
+#: A relation weight changes the matrix corrections are mapped through only when |δ| > RELATION_T · s.e.
+RELATION_T = 3.0
 
 Array = npt.NDArray[np.float64]
 
@@ -147,10 +150,16 @@ class Fit:
         return out
 
     def relation_matrix(self, layout: Layout) -> Array:
-        """Composite matrix with the found relation effects added, C + Σ δ e_i e_qᵀ."""
+        """Composite matrix with the found relation effects added, C + Σ δ e_i e_qᵀ.
+
+        Only weights known to better than a third of themselves (|δ| > 3 s.e.) change the
+        matrix the corrections are mapped through: an uncertain weight would amplify noise
+        into a correction.
+        """
         C = layout.composite.copy()
         for i, spec in enumerate(self.specs):
-            if spec.kind == "relation":
+            est, se = self.estimate(i)
+            if spec.kind == "relation" and abs(est) > RELATION_T * se:
                 C[layout.register_ids.index(str(spec.register)),
                   layout.dimension_ids.index(str(spec.dimension))] += self.estimate(i)[0]
         return C

@@ -264,13 +264,17 @@ def select_effects(layout: Layout, series: Series, *, alpha: float = 0.01, max_e
                 p_i = _pvalue(gain_d[i], rss0, df0, 1)
             cands.append((p_i, 1, specs[i], int(i), float(gain_d[i])))
         if gain_r is not None and slope_r is not None:
-            # the register is the one whose changes the dimension answers (the slope), not the constant
-            i_r, q_r = np.unravel_index(int(np.argmax(np.where(active_rel, slope_r, -1.0))), gain_r.shape)
+            # the dimension most off (slope and constant), then the register whose changes it answers (slope)
+            q_r = int(np.unravel_index(int(np.argmax(np.where(active_rel, gain_r, -1.0))), gain_r.shape)[1])
+            i_r = int(np.argmax(np.where(active_rel[:, q_r], slope_r[:, q_r], -1.0)))
             slope_p = _pvalue(slope_r[i_r, q_r], rss0 - gain_r[i_r, q_r] + slope_r[i_r, q_r], df0 - 1, 1)
             slope_known = slope_p * m < alpha  # else: the dimension is off, the register is not identified
-            if active_rel[i_r, q_r] and (slope_known or lof is None):
+            if active_rel[i_r, q_r]:
                 spec = EffectSpec("relation", register=layout.register_ids[i_r], dimension=layout.dimension_ids[q_r])
-                cands.append((_pvalue(gain_r[i_r, q_r], rss0, df0, 2), 2, spec, -1, float(gain_r[i_r, q_r])))
+                g_r = float(gain_r[i_r, q_r])
+                # its free constant takes one dimension's offset: against the lack of fit when there is one
+                p_r = _pvalue(g_r, lof[0], lof[1], 2) if lof is not None else _pvalue(g_r, rss0, df0, 2)
+                cands.append((p_r, 2, spec, -1, g_r))
         p, k, spec, di, gain = min(cands, key=lambda c: c[0])
         p_adj = min(1.0, p * m)
         f_stat = (gain / k) / max((rss0 - gain) / max(df0 - k, 1), 1e-300)

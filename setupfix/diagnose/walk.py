@@ -28,7 +28,7 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
-from setupfix.diagnose.fit import Fit, row_space_basis
+from setupfix.diagnose.fit import RELATION_T, Fit, row_space_basis
 from setupfix.diagnose.select import select_effects
 from setupfix.diagnose.terms import EffectSpec, Layout, Series, effect_field, typical_step
 
@@ -129,6 +129,8 @@ class _Running:
         p = self.G.shape[2]
         self.xtx = np.zeros((p, p))
         self.xtz = np.zeros(p)
+        self.ztz = 0.0
+        self.n = 0
         self.seen = 0
         self.add_until(upto)
 
@@ -143,6 +145,8 @@ class _Running:
         zm = np.where(ok, z, 0.0)
         self.xtx += np.einsum("kdp,kdq->pq", Gm, Gm)
         self.xtz += np.einsum("kdp,kd->p", Gm, zm)
+        self.ztz += float(np.sum(zm ** 2))
+        self.n += int(ok.sum())
         self.seen = k
 
     def state(self, k: int) -> Array:
@@ -150,8 +154,13 @@ class _Running:
         coef = np.linalg.lstsq(self.xtx, self.xtz, rcond=1e-12)[0]
         pred = self.G[k][:, ~self.slope] @ coef[~self.slope]
         C = self.C.copy()
-        for col, i, q in self.relations:
-            C[i, q] += coef[col]
+        if self.relations:
+            inv = np.linalg.pinv(self.xtx, rcond=1e-12)
+            rss = max(self.ztz - 2 * coef @ self.xtz + coef @ self.xtx @ coef, 0.0)
+            sigma2 = rss / max(self.n - np.linalg.matrix_rank(self.xtx), 1)
+            for col, i, q in self.relations:
+                if abs(coef[col]) > RELATION_T * np.sqrt(max(sigma2 * inv[col, col], 0.0)):
+                    C[i, q] += coef[col]
         return _state(pred, C)
 
 

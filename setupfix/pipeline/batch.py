@@ -35,7 +35,7 @@ from setupfix.errors import ExportError, ParameterError, SetupfixError, SourceLo
 from setupfix.model import ProcessModel, load_model
 from setupfix.offsets import OffsetRow, csv_header, csv_lines, offset_rows
 from setupfix.pipeline.controllers import render
-from setupfix.pipeline.correct import correct_part
+from setupfix.pipeline.correct import correct_part, wear_totals
 from setupfix.pipeline.cycles import load_parts
 from setupfix.store import Recommendation as StoreRecommendation
 from setupfix.store import Store
@@ -148,8 +148,9 @@ def _correct_one(path: str, size: int, mtime_ns: int) -> Outcome:
             return out  # run_batch marks it "already processed"
         parts = load_parts(_MODEL, path, format=o.format, unit=o.unit, encoding=o.encoding, columns=o.columns,
                            parts_per_cycle=o.parts_per_cycle, strict=o.strict)
+        cumulative = wear_totals(_MODEL, o.current) if o.current is not None else None
         for part in parts:
-            pc = correct_part(_MODEL, part, optimizer=o.optimizer, seed=o.seed)
+            pc = correct_part(_MODEL, part, optimizer=o.optimizer, seed=o.seed, cumulative=cumulative)
             out.rows += pc.offsets(o.current)
             out.verdicts.append(pc.verdict)
             out.notes += pc.warnings

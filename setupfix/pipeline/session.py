@@ -48,6 +48,7 @@ class OpenedReport:
     matches: tuple[MatchRow, ...] = ()
     problem: str = ""
     current: Mapping[str, float] | None = None
+    notes: tuple[str, ...] = ()  #: the reader's notes (rows skipped, units assumed, …) with their places
 
     @property
     def unmatched(self) -> int:
@@ -74,7 +75,10 @@ def open_report(model: ProcessModel | str | Path, report: str | Path, *, optimiz
     path = Path(report)
     if path.is_dir():
         raise ParseError("is a folder, not a report", location=SourceLocation(str(report)))
-    spec = parsers.find_format(path)
+    # Read once here for the reader's notes as data (correct_report reads the file again:
+    # its own path still reports them through the warnings module, which threads cannot share).
+    read = parsers.read_report(path)
+    notes = tuple(str(n) for n in read.notes)
     values = read_current(current, model) if current is not None else None
     try:
         if db is not None and Path(db).is_file():  # a new store has no history to smooth over
@@ -84,18 +88,20 @@ def open_report(model: ProcessModel | str | Path, report: str | Path, *, optimiz
         else:
             corrections = correct_report(model, path, optimizer=optimizer, seed=seed, current=values)
     except MatchError as exc:
-        # Read again only on this path: the match table needs every row, matched or not.
-        table = spec.read(path)
-        return OpenedReport(model, str(report), spec.name, matches=tuple(match_rows(model, table)),
-                            problem=str(exc), current=values)
-    return OpenedReport(model, str(report), spec.name, corrections=tuple(corrections),
-                        matches=tuple(matched_rows(model, [c.part for c in corrections])), current=values)
+        return OpenedReport(model, str(report), read.format, matches=tuple(match_rows(model, read.table)),
+                            problem=str(exc), current=values, notes=notes)
+    return OpenedReport(model, str(report), read.format, corrections=tuple(corrections),
+                        matches=tuple(matched_rows(model, [c.part for c in corrections])), current=values,
+                        notes=notes)
 
 
-def offsets_text(opened: OpenedReport, controller: str) -> str:
+def offsets_text(opened: OpenedReport, controller: str, *, cycle: int | None = None) -> str:
     """The offsets of every cycle in ``controller`` format, exactly as
     :func:`~setupfix.pipeline.correct.write_correction_offsets` writes them (absolute
     *set* rows when the current offsets are known).
+
+    A controller program holds one correction: with several cycles, ``cycle`` (an
+    index into ``opened.corrections``) chooses it, as ``--part`` does for ``correct``.
 
     Raises
     ------
@@ -104,6 +110,8 @@ def offsets_text(opened: OpenedReport, controller: str) -> str:
         program, or a register the format cannot express.
     """
     results = opened.corrections
+    if controller != "csv" and len(results) > 1 and cycle is not None:
+        results = (results[cycle],)
     if not results:
         raise ExportError("nothing to export: no correction", location=SourceLocation(opened.report))
     rejected = [r for r in results if r.verdict == "reject"]
@@ -112,7 +120,7 @@ def offsets_text(opened: OpenedReport, controller: str) -> str:
                           location=SourceLocation(opened.report))
     if controller != "csv" and len(results) > 1:
         raise ExportError(f"{controller}: a program holds one correction, the report has {len(results)} cycles",
-                          location=SourceLocation(opened.report))
+                          location=SourceLocation(opened.report), hint="choose one cycle")
     rows = [row for r in results for row in r.offsets(opened.current)]
     return render(controller, rows, f"{results[0].part.report} {results[0].part.part}".strip())
 

@@ -48,6 +48,7 @@ from setupfix.thermal.calibrate import SearchResult, cuckoo_search, genetic_algo
 from setupfix.thermal.kalman import FusionFilter, fuse
 from setupfix.thermal.lumped import Gearbox, fit_lumped, heat_inputs, lumped_coefficients
 from setupfix.thermal.mra import mra_fit, mra_predict, reference_state, rises_from
+from setupfix.search import generator
 
 __all__ = ["ThermalModel", "AnyThermalModel", "MRAModel", "GreyModel", "KalmanFusionModel", "KalmanStream",
            "NotFittedError", "rebase", "DEFAULT_SEED"]
@@ -330,7 +331,7 @@ class GreyModel(ThermalModel):
                 resid = grey.iago(self._response(pop, y0, X1)) - dy
                 return np.sum(resid[:, 1:] ** 2, axis=1)  # k = 1 is exact by construction
 
-            rng = np.random.default_rng(self.seed)
+            rng = generator(self.seed)
             with np.errstate(over="ignore", invalid="ignore"):
                 if self.calibration == "cs":
                     res: SearchResult = cuckoo_search(objective, lo, hi, n_nests=self.population, pa=self.pa,
@@ -470,7 +471,7 @@ class KalmanFusionModel(ThermalModel):
         self.ambient_const_ = float(np.median(self.T_ref_))
         te, sp = (np.asarray(ambient, dtype=float) if ambient is not None else np.full(len(y), self.ambient_const_),
                   np.zeros(len(y)) if speed is None else np.asarray(speed, dtype=float))
-        rng = np.random.default_rng(self.seed)
+        rng = generator(self.seed)
         S = T.shape[1]
         v = np.zeros((S, 3))
         for i in range(S):  # step 1: lumped-mass parameters, eq. (12)

@@ -24,6 +24,8 @@ import numpy as np
 import numpy.typing as npt
 import pandas as pd
 
+from setupfix.search import generator
+
 __all__ = [
     "HeatSource",
     "MachineConfig",
@@ -107,7 +109,7 @@ def speed_profile(kind: str, n: int, *, dt_s: float = 10.0, level: float = 1300.
     holds random levels 0…3000 rpm for 15–45 min each (Case 2); ``"warmup"`` runs at
     ``level`` for the first two thirds and stops (heating then cooling).
     """
-    rng = rng if rng is not None else np.random.default_rng(0)
+    rng = generator(rng)
     if kind == "constant":
         return np.full(n, float(level))
     if kind == "warmup":
@@ -144,7 +146,7 @@ def simulate(speed: npt.ArrayLike, config: MachineConfig | None = None, *, seed:
     SimulatedRun
     """
     cfg = config or MachineConfig()
-    rng = np.random.default_rng(seed)
+    rng = generator(seed)
     n = np.asarray(speed, dtype=float)
     steps = n.size
     t = np.arange(steps) * cfg.dt_s

@@ -14,7 +14,7 @@ from functools import partial
 from pathlib import Path
 from typing import ClassVar
 
-from textual import on
+from textual import events, on
 from textual.app import App, ComposeResult
 from textual.binding import Binding, BindingType
 from textual.containers import Horizontal, Vertical
@@ -37,6 +37,9 @@ from setupfix.tui.widgets import (ComparePanel, DimensionTable, HistoryPanel, Ma
                                   ThermalPanel)
 
 __all__ = ["SetupfixApp", "SORT_ORDER"]
+
+#: Columns from which the recommendation sits beside the dimensions and margins are shown.
+WIDE = 120
 
 #: What ``s`` cycles through: None is the model's order.
 SORT_ORDER: tuple[str | None, ...] = (None, "margin_after", "deviation", "name", "station")
@@ -65,7 +68,7 @@ class SetupfixApp(App[None]):
     #: The footer's room is worth more than the palette: every action has a key (see ?).
     ENABLE_COMMAND_PALETTE = False
     TITLE = "setupfix"
-    HORIZONTAL_BREAKPOINTS = [(0, "-narrow"), (120, "-wide")]
+    HORIZONTAL_BREAKPOINTS = [(0, "-narrow"), (WIDE, "-wide")]
     VERTICAL_BREAKPOINTS = [(0, "-short"), (30, "-tall")]
     BINDINGS: ClassVar[list[BindingType]] = [
         Binding("o", "open_report", "Open"),
@@ -127,6 +130,7 @@ class SetupfixApp(App[None]):
         yield Footer()
 
     def on_mount(self) -> None:
+        self._wide = self.size.width >= WIDE
         self._show()
         self._start_thermal()
         self.query_one(HistoryPanel).status(
@@ -307,12 +311,12 @@ class SetupfixApp(App[None]):
         n = len(self.opened.corrections) if self.opened else 1
         part = f"part {c.part.part or '—'}" + (f" ({self.part_index + 1}/{n}, [ ] to change)" if n > 1 else "")
         head = view.summary(c)
+        reader = tuple(f"⚠ {n}" for n in self.opened.notes) if self.opened else ()
         summary.show(head, optimizer=self.optimizer, part=part,
-                     problem="\n".join(t for t in (self.problem, self.feed.line() if self.feed else "") if t))
+                     problem="\n".join(t for t in (self.problem, self.feed.line() if self.feed else "", *reader) if t))
         rows = view.filter_rows(view.dimension_rows(c), self.station)
         if self.sort_key is not None:
             rows = view.sort_rows(rows, self.sort_key)
-        self._wide = self.size.width >= 120
         self.query_one(DimensionTable).show(rows, wide=self._wide)
         self.query_one(DimensionTable).border_title = (
             f"dimensions · station {self.station or 'all'} · sort {self.sort_key or 'model'}")
@@ -320,11 +324,13 @@ class SetupfixApp(App[None]):
                                            digits=grid_decimals(c.model.resolution))
         self.query_one(RegisterTable).border_title = f"recommendation [{c.model.unit}, axis {c.model.axis}]"
 
-    def on_resize(self) -> None:
+    def on_resize(self, event: events.Resize) -> None:
         # Rebuild the tables only when the layout changes between narrow and wide.
-        wide = self.size.width >= 120
-        if wide != self._wide and self._current() is not None:
-            self._show()
+        wide = event.size.width >= WIDE
+        if wide != self._wide:
+            self._wide = wide
+            if self._current() is not None:
+                self._show()
 
     @on(DataTable.HeaderSelected, "#dimensions")
     def _header(self, event: DataTable.HeaderSelected) -> None:
@@ -435,7 +441,9 @@ class SetupfixApp(App[None]):
         if self.opened is None or not self.opened.corrections:
             self.notify("nothing to export: open a report that matches the model first", severity="warning")
             return
-        self.push_screen(ExportScreen(CONTROLLERS, partial(offsets_text, self.opened), self.inputs.offsets),
+        # A controller program holds one correction: the cycle on screen ([ ] changes it).
+        self.push_screen(ExportScreen(CONTROLLERS, partial(offsets_text, self.opened, cycle=self.part_index),
+                                      self.inputs.offsets),
                          self._export_confirmed)
 
     def _export_confirmed(self, request: ExportRequest | None) -> None:

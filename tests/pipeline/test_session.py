@@ -110,3 +110,21 @@ def test_a_register_the_format_cannot_express_is_named():
 
     with pytest.raises(ExportError, match="G58"):
         offsets_text(open_report(MODEL, GUIDE_PINS / "cycle_01.csv"), "siemens")
+
+
+def test_the_readers_notes_come_as_data():
+    opened = open_report(MODEL, GUIDE_PINS.parent / "pcdmis" / "bracket_two_parts.txt")
+    assert opened.format == "pcdmis" and any("angle" in n and ":27" in n for n in opened.notes)
+
+
+def test_a_program_holds_the_chosen_cycle_of_a_series():
+    from setupfix.errors import ExportError
+    from setupfix.pipeline.session import offsets_text
+
+    opened = open_report(MODEL, GUIDE_PINS.parent / "closed_loop" / "measurements.csv")
+    assert len(opened.corrections) == 40
+    with pytest.raises(ExportError, match="40 cycles"):
+        offsets_text(opened, "fanuc")
+    text = offsets_text(opened, "fanuc", cycle=39)
+    assert opened.corrections[39].part.part.upper() in text and opened.corrections[0].part.part.upper() not in text
+    assert offsets_text(opened, "csv", cycle=39).count("\n") == 1 + 40 * 10  # csv: every cycle, as correct writes

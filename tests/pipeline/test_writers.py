@@ -11,7 +11,7 @@ import pandas as pd
 import pytest
 
 from parsers.canonical import read_canonical
-from setupfix.errors import ExportError
+from setupfix.errors import ExportError, ParseError
 from setupfix.model import CANONICAL_COLUMNS
 from setupfix.pipeline.correct import correct_report
 from setupfix.pipeline.parse import parse_reports
@@ -47,12 +47,18 @@ def test_canonical_csv_round_trip(tmp_path):
             assert back[col].fillna("").astype(str).tolist() == table[col].fillna("").astype(str).tolist(), col
 
 
-@pytest.mark.xfail(strict=True, reason="parsers: read_canonical keeps unknown columns as text, so the "
-                                       "reference flag comes back as 'True'/'False' strings (reported)")
 def test_canonical_reference_flag_round_trip(tmp_path):
     table = parse_reports([GUIDE / "cycle_01.qif"]).table
+    table.loc[table.index[0], "reference"] = True  # both values present, so a swap or a constant would fail
     write_canonical_csv(table, tmp_path / "c.csv")
-    assert read_canonical(tmp_path / "c.csv")["reference"].tolist() == table["reference"].tolist()
+    back = read_canonical(tmp_path / "c.csv")["reference"].tolist()
+    assert back == table["reference"].tolist() and all(type(v) is bool for v in back)
+
+
+def test_canonical_reference_flag_refuses_other_text(tmp_path):
+    (tmp_path / "c.csv").write_text("characteristic,nominal,actual,reference\nD1,25,25.01,maybe\n")
+    with pytest.raises(ParseError, match=r"c.csv:2: column 'reference'"):
+        read_canonical(tmp_path / "c.csv")
 
 
 @pytest.mark.parametrize("suffix", [".png", ".svg"])

@@ -99,15 +99,15 @@ def test_corrections_log_reader_names_the_place(tmp_path, text, message):
 
 KILL = """
 import os, signal, sys
-from setupfix.pipeline.history import import_history
+import pandas as pd
 from setupfix.store import open_store
 store = open_store(sys.argv[1])
-real = store.add_corrections
-def add_then_die(log):
-    real(log)  # the reports and this log are written, not committed
-    os.kill(os.getpid(), signal.SIGKILL)
-store.add_corrections = add_then_die
-import_history(store, sys.argv[3:], [sys.argv[2]])
+with store.transaction():  # what one import does: reports, then the logs
+    store.add_report(b"second report", "r2.csv", "canonical",
+                     pd.DataFrame({"characteristic": ["D1"], "nominal": [1.0], "actual": [1.01]}))
+    store.add_corrections(pd.DataFrame({"timestamp": ["2026-01-01T00:00:00"], "register": ["G54"],
+                                        "delta": [0.01], "event": ["correction"]}))
+    os.kill(os.getpid(), signal.SIGKILL)  # written, not committed
 """
 
 
@@ -115,7 +115,7 @@ def test_kill_during_import_leaves_the_store_as_it_was(tmp_path):
     db = tmp_path / "h.db"
     with open_store(db) as store:
         import_history(store, REPORTS[:1])
-    args = [sys.executable, "-c", KILL, str(db), str(_log(tmp_path)), *map(str, REPORTS)]
+    args = [sys.executable, "-c", KILL, str(db)]
     proc = subprocess.run(args, cwd=ROOT, capture_output=True, text=True, timeout=60)
     assert proc.returncode == -signal.SIGKILL, proc.stderr
     assert _counts(db) == (1, 28, 0, 0)

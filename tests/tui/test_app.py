@@ -46,6 +46,13 @@ def test_open_sort_filter_export_then_a_bad_report(make_app, tmp_path):
             assert app.sort_key == "deviation"
             assert [str(r[3]) for r in _rows(dims)][0] == "-0.0829"
             app.sort_key = None
+            # a resize to a wide terminal adds the margins; back to 80 columns removes them
+            await pilot.resize_terminal(160, 48)
+            await pilot.pause()
+            assert len(dims.columns) == 10
+            await pilot.resize_terminal(80, 24)
+            await pilot.pause()
+            assert len(dims.columns) == 8
             # station filter and sort
             await pilot.press("f", "s")
             names = [r[1] for r in _rows(dims)]

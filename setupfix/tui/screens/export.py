@@ -8,7 +8,8 @@ from dataclasses import dataclass
 from textual import on
 from textual.app import ComposeResult
 from textual.binding import Binding
-from textual.containers import Horizontal, Vertical, VerticalScroll
+from rich.text import Text
+from textual.containers import Horizontal, ScrollableContainer, Vertical
 from textual.screen import ModalScreen
 from textual.widgets import Button, Input, Label, Select, Static
 
@@ -46,15 +47,18 @@ class ExportScreen(ModalScreen[ExportRequest | None]):
                 yield Select([(c, c) for c in self.controllers], value=self.controllers[0], allow_blank=False,
                              id="export-controller")
                 yield Input(self.path, id="export-path")
-            with VerticalScroll(id="export-scroll"):
-                yield Static(self._text(self.controllers[0]), markup=False, id="export-text")
+            with ScrollableContainer(id="export-scroll"):
+                yield Static(Text(self._text(self.controllers[0]), no_wrap=True), id="export-text")
             with Horizontal(id="export-buttons"):
                 yield Button("Write (ctrl+s)", variant="primary", id="export-write")
                 yield Button("Cancel (esc)", id="export-cancel")
 
+    def on_mount(self) -> None:
+        self.query_one("#export-controller", Select).focus()
+
     @on(Select.Changed, "#export-controller")
     def _controller(self, event: Select.Changed) -> None:
-        self.query_one("#export-text", Static).update(self._text(str(event.value)))
+        self.query_one("#export-text", Static).update(Text(self._text(str(event.value)), no_wrap=True))
 
     def _text(self, controller: str) -> str:
         """The text to write, or the reason there is none (then Write refuses)."""
