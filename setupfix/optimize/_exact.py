@@ -74,7 +74,7 @@ Array = npt.NDArray[np.float64]
 #: Deviations are rounded to this fraction of the register resolution before solving.
 QUANTUM = 1e-3
 #: Most free registers for which the least-norm proof lists the grid points of the dual ellipsoid.
-ELLIPSOID_MAX_REGISTERS = 60
+ELLIPSOID_MAX_REGISTERS = 120
 #: Largest list of integer points the least-norm proof may enumerate before using the MILP.
 ENUMERATION_LIMIT = 200_000
 #: Largest constraint count whose continuous least-norm point is found by NNLS (else HiGHS QP).
