@@ -10,6 +10,7 @@ Nomenclature (lengths in the model unit unless stated):
 """
 
 from setupfix.model.loader import load_model, model_from_dict
+from setupfix.model import effects as _effects  # noqa: F401 - registers [effects]
 from setupfix.model import safety as _safety  # noqa: F401 - registers [safety] and the register keys
 from setupfix.model.measurements import (
     CANONICAL_COLUMNS,

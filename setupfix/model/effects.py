@@ -34,9 +34,10 @@ from pathlib import Path
 from typing import Any
 
 from setupfix.errors import ModelError, SourceLocation
+from setupfix.model.loader import SECTIONS
 from setupfix.model.process import ProcessModel
 
-__all__ = ["ModelEffect", "EffectsSection", "effects_from_dict", "load_effects", "effects_toml", "with_effects",
+__all__ = ["ModelEffect", "EffectsSection", "effects_from_dict", "load_effects", "model_effects", "effects_toml", "with_effects",
            "EFFECT_KINDS"]
 
 EFFECT_KINDS: tuple[str, ...] = ("drift", "thermal", "wear", "scale", "position", "relation", "group")
@@ -169,6 +170,27 @@ def effects_from_dict(section: Mapping[str, Any] | None, model: ProcessModel,
     if problems:
         raise ModelError("\n".join(problems))
     return EffectsSection(tuple(effects), origin, head.get("cycle_hours"), head.get("last_hours"))
+
+
+def model_effects(model: ProcessModel) -> EffectsSection:
+    """The ``[effects]`` the model was loaded with (parsed once, at load time)."""
+    section = model.extras.get("effects")
+    return section if isinstance(section, EffectsSection) else EffectsSection()
+
+
+def _parse_section(value: Any, model: ProcessModel, report: Any) -> EffectsSection:
+    """Loader extension point ``SECTIONS["effects"]``: validated once, when the model loads."""
+    if not isinstance(value, Mapping):
+        report("", "expected a table [effects]")
+        return EffectsSection()
+    try:
+        return effects_from_dict(value, model, model.source)
+    except ModelError as exc:
+        report("", exc.message)
+        return EffectsSection()
+
+
+SECTIONS["effects"] = _parse_section
 
 
 def load_effects(path: str | Path, model: ProcessModel) -> EffectsSection:

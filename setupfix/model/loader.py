@@ -99,7 +99,6 @@ _KEYS = {
     "tools": {"register", "limit", "fixed"} | _FREE_TEXT,
     "features": {"wks", "tools", "position"} | _FREE_TEXT,
     "dimensions": {"name", "aliases", "features", "nominal", "lower", "upper", "group"} | _FREE_TEXT,
-    "effects": set(),  # validated by setupfix.model.effects (written by `diagnose --augment`)
 }
 #: Top-level tables consumed before validation (station templates, see ``stations``).
 _EXPANDED = {"stations", "template"}

@@ -29,7 +29,7 @@ from setupfix.diagnose.forecast import forecast_shift, spec_of
 from setupfix.diagnose.terms import EffectSpec, applied_at, join_temperatures, parts_since_change, typical_step
 from setupfix.errors import ExportError, MatchError, ModelError, Note, ParseError, SourceLocation
 from setupfix.model import PartMeasurement, ProcessModel, load_model, match_parts, model_from_dict, normalise_name
-from setupfix.model.effects import EffectsSection, ModelEffect, effects_from_dict, load_effects, with_effects
+from setupfix.model.effects import EffectsSection, ModelEffect, effects_from_dict, model_effects, with_effects
 from setupfix.optimize import CorrectionProblem, get_optimizer
 from setupfix.pipeline.checks import check_parts
 from setupfix.pipeline.writers import check_target, write_text
@@ -238,7 +238,7 @@ def load_series(model: ProcessModel | str | Path, reports: Sequence[str | Path] 
     """
     if not isinstance(model, ProcessModel):
         model = load_model(model)
-    section = load_effects(model.source, model) if Path(model.source).is_file() else EffectsSection()
+    section = model_effects(model)
     notes: list[str] = []
     parts: list[PartMeasurement] = []
     tables: list[pd.DataFrame] = []
@@ -584,9 +584,7 @@ def forecast_part(model: ProcessModel, part: PartMeasurement) -> PartMeasurement
     :func:`setupfix.diagnose.forecast.forecast_shift`).  A model without drift or wear
     effects returns the part unchanged.
     """
-    if not Path(model.source).is_file():
-        return part
-    section = load_effects(model.source, model)
+    section = model_effects(model)
     if not any(e.kind in ("drift", "wear") for e in section.effects):
         return part
     time = None

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 import tomllib
 
 import numpy as np
@@ -11,7 +13,7 @@ from setupfix.diagnose import Layout
 from setupfix.diagnose.forecast import forecast_shift
 from setupfix.errors import ModelError
 from setupfix.model import load_model, model_from_dict
-from setupfix.model.effects import EffectsSection, ModelEffect, effects_from_dict, effects_toml, with_effects
+from setupfix.model.effects import EffectsSection, ModelEffect, effects_from_dict, effects_toml, model_effects, with_effects
 
 from conftest import GUIDE_PINS
 
@@ -71,4 +73,6 @@ def test_forecast_shift_adds_drift_and_wear_until_the_next_cycle(guide_pins_mode
 
 def test_model_without_effects_loads_as_before(guide_pins_model):
     doc = tomllib.loads((GUIDE_PINS / "model.toml").read_text(encoding="utf-8"))
-    assert model_from_dict(doc) == model_from_dict({**doc, "effects": {}})
+    empty = model_from_dict({**doc, "effects": {}})
+    assert not model_effects(empty).effects
+    assert model_from_dict(doc) == dataclasses.replace(empty, extras={})
