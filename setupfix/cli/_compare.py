@@ -5,13 +5,9 @@ from __future__ import annotations
 import argparse
 import json
 import sys
-from typing import TYPE_CHECKING
 
 from setupfix.cli._common import add_report_options, cycle_options, report_options
 from setupfix.cli._correct import exact_params
-
-if TYPE_CHECKING:
-    from setupfix.pipeline.compare import Comparison
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
@@ -40,35 +36,9 @@ def _positive(text: str) -> int:
     return value
 
 
-def format_comparison(c: Comparison) -> str:
-    """The comparison table for the terminal."""
-    unit = c.unit
-    gap_unit, scale = ("µm", 1000.0) if unit == "mm" else (f"{unit}/1000", 1000.0)
-    e = c.exact
-    lines = [
-        f"{c.report}  part {c.part or '—'}: {c.trials} trials per method, seed {c.seed}",
-        f"before correction f1 = {e.margin_before:+.4f} {unit}; exact grid optimum f1 = {e.margin_after:+.4f}, "
-        f"f2 = {e.norm:.4f}, f = {e.fitness:+.4f} ({e.status}, {e.seconds * 1000:.0f} ms)",
-        "",
-        f"{'':8}{'f1 [' + unit + ']':^24}{'f2 [' + unit + ']':^24}{'f = 10·f1 − f2':^24}"
-        f"{'':>9}{'':>9}{'gap f1 [' + gap_unit + ']':^14}",
-        f"{'method':<8}" + f"{'best':>8}{'median':>8}{'worst':>8}" * 3
-        + f"{'solutions':>10}{'seconds':>8}{'median':>7}{'worst':>7}",
-    ]
-    lines.append("-" * len(lines[-1]))
-    for row in c.table():
-        cells = "".join(f"{row[f'{k}_{s}']:>8.4f}" for k in ("f1", "f2", "f") for s in ("best", "median", "worst"))
-        lines.append(f"{row['optimizer']:<8}{cells}{row['evaluations']:>10.0f}{row['seconds']:>8.3f}"
-                     f"{row['gap_median'] * scale:>7.1f}{row['gap_worst'] * scale:>7.1f}")
-    lines += ["", "best/median/worst over the trials (best f1 and f largest, best f2 smallest); solutions and "
-                  "seconds are medians per trial (exact: solver calls); gap = exact f1 − trial f1."]
-    for name, reason in c.skipped.items():
-        lines.append(f"skipped {name}: {reason}")
-    return "\n".join(lines)
-
-
 def run(args: argparse.Namespace) -> int:
     from setupfix.pipeline.compare import compare_report, plot_comparison
+    from setupfix.pipeline.present import format_comparison
     from setupfix.pipeline.writers import check_target
     from setupfix.plots import figure_format
 

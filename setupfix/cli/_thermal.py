@@ -7,7 +7,7 @@ import json
 import math
 import sys
 from collections.abc import Iterable
-from typing import Any, TYPE_CHECKING
+from typing import Any
 
 from setupfix.cli._choices import THERMAL_METHODS
 from setupfix.cli.exit_codes import OK
@@ -193,10 +193,8 @@ def run(args: argparse.Namespace) -> int:
             out: dict[str, Any] = {"method": drift.method, "target": drift.target, "unit": drift.unit,
                                    "n": int(drift.drift.size), "latest": _num(drift.latest),
                                    "predicted": [_num(float(v)) for v in drift.drift], "warnings": warnings}
-            if drift.measured is not None:
-                from setupfix.thermal.metrics import score
-
-                out["rmse"] = _num(score(drift.measured, drift.drift).rmse)
+            if drift.rmse is not None:
+                out["rmse"] = _num(drift.rmse)
             print(json.dumps(out))
         elif args.output != "-":
             print(f"{drift.method}: predicted {drift.target} at the last sample {_fmt(drift.latest)}{_unit(drift.unit)} "

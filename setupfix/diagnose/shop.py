@@ -28,6 +28,7 @@ import numpy.typing as npt
 from setupfix.diagnose.terms import AXES, KINDS, EffectSpec, Layout, Series, effect_field, parts_since_change
 from setupfix.errors import ParameterError
 from setupfix.params import Interval, ValidatedParams, validate_params
+from setupfix.search import generator
 
 __all__ = ["HiddenEffect", "ShopSimulator", "SimulatedSeries", "random_topology"]
 
@@ -114,6 +115,7 @@ class ShopSimulator(ValidatedParams):
     decimals : int, default=4
         Deviations rounded as a CMM prints them.
     seed : int or None
+        Seed of the simulation; None means :data:`setupfix.search.DEFAULT_SEED` (never entropy).
     """
 
     _parameter_constraints = {
@@ -195,7 +197,7 @@ class ShopSimulator(ValidatedParams):
             feature positions the model does not have.
         """
         self.validate_params()
-        rng = np.random.default_rng(self.seed)
+        rng = generator(self.seed)
         C = layout.composite
         n_r, n_d = C.shape
         effects = tuple(effects)
@@ -292,7 +294,7 @@ def random_topology(seed: int | None = None, *, positions: bool = True) -> dict[
     ±1), 8–24 dimensions of one feature or the difference of two, nominal sizes
     5–120, 2–4 groups, feature positions in a 400 × 300 × 100 box.
     """
-    rng = np.random.default_rng(seed)
+    rng = generator(seed)
     n_w, n_t = int(rng.integers(2, 7)), int(rng.integers(1, 5))
     n_f, n_d = int(rng.integers(6, 17)), int(rng.integers(8, 25))
     n_g = int(rng.integers(2, 5))

@@ -325,6 +325,15 @@ class DriftPrediction:
         """
         return float(self.drift[-1])
 
+    @property
+    def rmse(self) -> float | None:
+        """RMS error of the prediction against the log's own target column (None without one)."""
+        if self.measured is None:
+            return None
+        from setupfix.thermal.metrics import score
+
+        return float(score(self.measured, self.drift).rmse)
+
 
 def predict_drift(model: str | Path | SavedModel, log: str | Path | TemperatureLog, *,
                   sensors_failed: bool = False, anchor: Anchor | None = None,

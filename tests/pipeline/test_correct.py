@@ -55,3 +55,18 @@ def test_unknown_station_and_wrong_count(tmp_path):
         correct_report(model, report(tmp_path), stations={"s1": "P1", "s2": "P9"})
     with pytest.raises(MatchError, match="3 stations given for 2 parts"):
         correct_report(model, report(tmp_path), stations=["P1", "P2", "P1"])
+
+
+def test_readme_headline_example():
+    """README: P1 D6 and P1 D7 move alike (−W5 − T5) and were measured 0.0352 mm apart, so no
+    correction beats the LP bound 0.1 − 0.0352/2, and they are the binding pair."""
+    from conftest import GUIDE_PINS
+
+    (pc,) = correct_report(GUIDE_PINS / "model.toml", GUIDE_PINS / "cycle_01.csv")
+    dev = {r["name"]: r["deviation"] for r in pc.dimension_rows()}
+    spread = dev["P1 D6"] - dev["P1 D7"]
+    assert spread == pytest.approx(0.0352, abs=5e-5)
+    out = pc.to_json()
+    assert out["bound"] == pytest.approx(0.1 - spread / 2, abs=1e-9)
+    assert set(out["binding"]) == {"P1 D6", "P1 D7"}
+    assert out["margin_after"] == pytest.approx(0.0822, abs=5e-5) and out["verdict"] == "apply"
