@@ -1,4 +1,8 @@
-"""Every hostile report through ``setupfix parse`` and ``setupfix correct``: one line, exit 1/2, never 3."""
+"""Every hostile report through every command that reads reports: one line, exit 1/2, never 3.
+
+``parse`` and ``correct`` take every case; the commands whose options differ (``compare``,
+``model init``, ``model check``, ``diagnose``) take the cases that need no extra option.
+"""
 
 from __future__ import annotations
 
@@ -10,14 +14,23 @@ import pytest
 from setupfix.cli import main
 from tests.hostile.cases import CASES, GUIDE, Case
 
+MODEL = str(GUIDE / "model.toml")
 COMMANDS = {
     "parse": lambda path, out: ["parse", str(path), "--out", str(out)],
-    "correct": lambda path, out: ["correct", "--model", str(GUIDE / "model.toml"), str(path), "--offsets", str(out)],
+    "correct": lambda path, out: ["correct", "--model", MODEL, str(path), "--offsets", str(out)],
+    "compare": lambda path, out: ["compare", "--model", MODEL, "--trials", "1", "--plot", str(out) + ".png",
+                                  str(path)],
+    "model-init": lambda path, out: ["model", "init", str(path), "-o", str(out)],
+    "model-check": lambda path, out: ["model", "check", MODEL, str(path)],
+    "diagnose": lambda path, out: ["diagnose", "--model", MODEL, "--augment", str(out), str(path)],
 }
+#: Commands that take every case (the cases' extra options are theirs).
+ALL_CASES = ("parse", "correct")
+PAIRS = [(command, case) for command in sorted(COMMANDS) for case in CASES
+         if command in ALL_CASES or not case.options]
 
 
-@pytest.mark.parametrize("command", sorted(COMMANDS))
-@pytest.mark.parametrize("case", CASES, ids=lambda c: c.name)
+@pytest.mark.parametrize(("command", "case"), PAIRS, ids=lambda v: v if isinstance(v, str) else v.name)
 def test_hostile_report_is_refused_in_one_line(case: Case, command: str, tmp_path: Path,
                                                capsys: pytest.CaptureFixture[str]) -> None:
     path = tmp_path / case.name
@@ -36,4 +49,4 @@ def test_hostile_report_is_refused_in_one_line(case: Case, command: str, tmp_pat
     assert re.search(case.expect, errors[0]), errors[0]
     if status == 1:
         assert case.name in errors[0], errors[0]
-    assert not out.exists()
+    assert not out.exists() and not Path(str(out) + ".png").exists()
