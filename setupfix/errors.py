@@ -49,14 +49,19 @@ class SourceLocation:
     element: str | None = None
 
     def __str__(self) -> str:
-        text = self.path
+        text = _printable(self.path)
         if self.line is not None:
             text += f":{self.line}"
         if self.key:
-            text += f": [{self.key}]"
+            text += f": [{_printable(self.key)}]"
         if self.element:
-            text += f": <{self.element}>"
+            text += f": <{_printable(self.element)}>"
         return text
+
+
+def _printable(text: str) -> str:
+    """``text`` with control characters (terminal escape sequences) shown as ``?``."""
+    return text if text.isprintable() else "".join(c if c.isprintable() else "?" for c in text)
 
 
 class SetupfixError(Exception):
