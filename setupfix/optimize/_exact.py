@@ -54,13 +54,14 @@ from contextlib import AbstractContextManager
 
 import numpy as np
 import numpy.typing as npt
-from scipy.sparse import coo_array, csr_array, hstack, vstack
+from scipy.sparse import csr_array, hstack, vstack
 from threadpoolctl import ThreadpoolController
 
 from setupfix.errors import Note, SolverError
 from setupfix.params import Interval
 from setupfix.optimize._base import Optimizer, make_result
-from setupfix.optimize._grid import (TOL, dual_bound, enumerate_ball, ellipsoid_search, grid_margins, lagrangian_ball,
+from setupfix.optimize._grid import chord_rows as grid_chord_rows
+from setupfix.optimize._grid import (TOL, dual_bound, ellipsoid_search, grid_margins, lagrangian_ball,
                                      least_distance,
                                      next_level,
                                      PairStructure, pair_bound, pair_structure, rounded_rhs, row_gcd, shrink)
@@ -420,15 +421,7 @@ class ExactOptimizer(Optimizer):
             chords.append({max(base - 1, 0), base, base + 1, int(vs)})
 
         def chord_rows(pairs: list[tuple[int, int]]) -> tuple[csr_array, Array]:
-            # s_i ≥ (2j+1)·(±k_i) − j(j+1)  ⇔  ±(2j+1)·k_i − s_i ≤ j(j+1)
-            i = np.array([p[0] for p in pairs for _ in (0, 1)])
-            j = np.array([p[1] for p in pairs for _ in (0, 1)], dtype=float)
-            sign = np.tile([1.0, -1.0], len(pairs))
-            m = len(i)
-            rows = np.r_[np.arange(m), np.arange(m)]
-            cols = np.r_[i, n + i]
-            vals = np.r_[sign * (2 * j + 1), -np.ones(m)]
-            return csr_array(coo_array((vals, (rows, cols)), shape=(m, 2 * n))), j * (j + 1)
+            return grid_chord_rows(pairs, n, 2 * n)
 
         a_chords, rhs = chord_rows([(i, j) for i, js in enumerate(chords) for j in sorted(js)])
         fin = np.isfinite(b)

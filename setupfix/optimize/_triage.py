@@ -28,6 +28,7 @@ import numpy.typing as npt
 from scipy.sparse import coo_array, csr_array, hstack, vstack
 
 from setupfix.optimize._grid import TOL
+from setupfix.optimize._grid import chord_rows as grid_chord_rows
 from setupfix.optimize._highs import INF, LinearModel
 
 __all__ = ["triage"]
@@ -123,14 +124,7 @@ def triage(g_rows: Array, g: Array, row_dim: npt.NDArray[np.intp], n_dims: int, 
     bigs = big + t_star
 
     def chord_rows(pairs: list[tuple[int, int]]) -> tuple[csr_array, Array]:
-        i = np.array([p[0] for p in pairs for _ in (0, 1)])
-        j = np.array([p[1] for p in pairs for _ in (0, 1)], dtype=float)
-        sign = np.tile([1.0, -1.0], len(pairs))
-        m = len(i)
-        rows = np.r_[np.arange(m), np.arange(m)]
-        cols = np.r_[i, n + i]
-        vals = np.r_[sign * (2 * j + 1), -np.ones(m)]
-        return csr_array(coo_array((vals, (rows, cols)), shape=(m, 2 * n + n_dims))), j * (j + 1)
+        return grid_chord_rows(pairs, n, 2 * n + n_dims)
 
     chords = [{0, int(abs(v)), max(int(abs(v)) - 1, 0)} for v in best]
     a_ch, rhs_ch = chord_rows([(i, j) for i, js in enumerate(chords) for j in sorted(js)])
