@@ -49,7 +49,7 @@ class PartCorrection:
     result: OptimizeResult
     recommendation: Recommendation
     warnings: list[str] = field(default_factory=list)
-    measured: np.ndarray | None = None  #: the report's own deviations when ``problem`` holds smoothed ones
+    measured: np.ndarray | None = None  #: the report's own deviations when ``problem`` holds smoothed/forecast ones
 
     @property
     def verdict(self) -> str:
@@ -136,7 +136,7 @@ class PartCorrection:
                 "predicted": float(predicted[i]), "lower": d.lower, "upper": d.upper,
                 "margin": float(margins[i]), "flags": flags,
             }
-            if self.measured is not None:  # smoothed: the estimate is what was corrected
+            if self.measured is not None:  # smoothed or forecast: the estimate is what was corrected
                 row["estimate"], row["deviation"] = row["deviation"], float(self.measured[i])
             rows.append(row)
         return rows
@@ -263,6 +263,10 @@ def correct_part(model: ProcessModel, part: PartMeasurement, *, optimizer: str =
     measured_part = part
     if smoothed is not None and smoothed.used:
         part = dataclasses.replace(part, deviation=smoothed.deviation)
+    forecast = forecast_part(model, part)  # the model's [effects]: drift and wear until the next cycle
+    if forecast is not part:
+        notes += [str(n) for n in forecast.notes[len(part.notes):]]
+        part = forecast
     problem = CorrectionProblem.from_part(model, part)
     raw = measured_part.deviation[measured_part.measured] if part is not measured_part else None
     opt = get_optimizer(optimizer, seed=seed, **params)
@@ -300,7 +304,6 @@ def correct_report(model: ProcessModel | str | Path, report: str | Path, *, opti
         model = load_model(model)
     parts = load_parts(model, report, format=format, unit=unit, encoding=encoding, columns=columns,
                        stations=stations, parts_per_cycle=parts_per_cycle, strict=strict)
-    parts = [forecast_part(model, p) for p in parts]  # the model's [effects]: drift and wear until the next cycle
     cumulative = wear_totals(model, current) if current is not None else None
     return [correct_part(model, p, optimizer=optimizer, seed=seed, store=store, cumulative=cumulative,
                          **(params or {}))

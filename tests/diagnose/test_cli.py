@@ -64,7 +64,8 @@ def test_diagnose_json_contract_and_augment(series, tmp_path, capsys):
     code, out, err = run(capsys, "correct", "--model", aug, "--json", str(GUIDE_PINS / "cycle_01.csv"))
     assert code == 0, err
     row = json.loads(out)["dimensions"][0]
-    assert row["name"] == "P1 D1" and row["deviation"] == pytest.approx(-0.0309 + effects["E1"]["estimate"])
+    assert row["name"] == "P1 D1" and row["deviation"] == pytest.approx(-0.0309)  # as measured (the contract)
+    assert row["estimate"] == pytest.approx(-0.0309 + effects["E1"]["estimate"])  # what was corrected
 
 
 def test_bad_corrections_log_is_refused_with_its_line(series, tmp_path, capsys):
