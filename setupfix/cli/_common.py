@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import argparse
+import math
+from collections.abc import Callable
 from typing import Any
 
 from setupfix.errors import SetupfixError
@@ -36,7 +38,7 @@ def add_report_options(p: argparse.ArgumentParser) -> None:
     g.add_argument("--stations", default=None, metavar="LIST",
                    help="fixture stations of the report's parts, in order (P1,P2,…) or as part=station pairs; "
                         "a subset of the fixture is allowed")
-    g.add_argument("--parts-per-cycle", type=_positive_int, default=None, metavar="N",
+    g.add_argument("--parts-per-cycle", type=whole_number(1, 10_000), default=None, metavar="N",
                    help="group consecutive parts of the report N at a time into fixture loads (cycles), the k-th "
                         "part of each load at the k-th of --stations (default: the model's groups when there are N)")
     g.add_argument("--strict", action="store_true",
@@ -44,14 +46,32 @@ def add_report_options(p: argparse.ArgumentParser) -> None:
                         "(default: a warning naming both values)")
 
 
-def _positive_int(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
-    if not 1 <= value <= 10_000:
-        raise argparse.ArgumentTypeError(f"must be in [1, 10000], got {value}")
-    return value
+def whole_number(low: int, high: int, allowed: str | None = None) -> Callable[[str], int]:
+    """argparse type: a whole number in [low, high] (``allowed`` words the range in the message)."""
+    def parse(text: str) -> int:
+        try:
+            value = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
+        if not low <= value <= high:
+            raise argparse.ArgumentTypeError(f"must be {allowed or f'in [{low}, {high}]'}, got {value}")
+        return value
+
+    return parse
+
+
+def positive_number(high: float) -> Callable[[str], float]:
+    """argparse type: a finite number in (0, high]."""
+    def parse(text: str) -> float:
+        try:
+            value = float(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
+        if not (math.isfinite(value) and 0 < value <= high):
+            raise argparse.ArgumentTypeError(f"must be a positive finite number, got {text!r}")
+        return value
+
+    return parse
 
 
 def cycle_options(args: argparse.Namespace) -> dict[str, Any]:

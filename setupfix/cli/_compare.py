@@ -6,7 +6,7 @@ import argparse
 import json
 import sys
 
-from setupfix.cli._common import add_report_options, cycle_options, report_options
+from setupfix.cli._common import add_report_options, cycle_options, report_options, whole_number
 from setupfix.cli._correct import exact_params
 
 
@@ -17,7 +17,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                                    "exact grid optimum (Stryczek 2014, Figs. 12-17).")
     p.add_argument("report", metavar="REPORT", help="CMM report in any supported format")
     p.add_argument("--model", required=True, metavar="MODEL", help="process model TOML")
-    p.add_argument("--trials", type=_positive, default=12, metavar="N", help="seeded trials per method (default 12)")
+    p.add_argument("--trials", type=whole_number(1, 10_000), default=12, metavar="N", help="seeded trials per method (default 12)")
     p.add_argument("--time-limit", type=float, default=None, metavar="SECONDS",
                    help="wall time of the exact optimiser's whole solve (default 2)")
     p.add_argument("--seed", type=int, default=0, metavar="S", help="root of the trial seeds (default 0)")
@@ -27,13 +27,6 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                    help="draw convergence and spread figures to FILE (.png or .svg)")
     add_report_options(p)
     p.set_defaults(run=run)
-
-
-def _positive(text: str) -> int:
-    value = int(text)
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"must be at least 1, not {value}")
-    return value
 
 
 def run(args: argparse.Namespace) -> int:

@@ -10,6 +10,7 @@ from collections.abc import Iterable
 from typing import Any
 
 from setupfix.cli._choices import THERMAL_METHODS
+from setupfix.cli._common import positive_number, whole_number
 from setupfix.cli.exit_codes import OK
 from setupfix.errors import Note
 
@@ -20,38 +21,8 @@ def _columns(text: str | None) -> list[str] | None:
     return [c.strip() for c in text.split(",") if c.strip()] if text else None
 
 
-def _positive_int(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
-    if not 1 <= value <= 100_000:
-        raise argparse.ArgumentTypeError(f"must be in [1, 100000], got {value}")
-    return value
-
-
-def _seed(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
-    if not 0 <= value < 2**63:
-        raise argparse.ArgumentTypeError(f"must be a whole number >= 0, got {value}")
-    return value
-
-
-def _positive(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
-    if not (math.isfinite(value) and 0 < value <= 1e9):
-        raise argparse.ArgumentTypeError(f"must be a positive finite number, got {text!r}")
-    return value
-
-
 def _log_options(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--interval", type=_positive, default=None, metavar="SECONDS",
+    p.add_argument("--interval", type=positive_number(1e9), default=None, metavar="SECONDS",
                    help="sampling interval of a log without a timestamp column")
     p.add_argument("--sheet", default=None, metavar="NAME", help="worksheet of an .xlsx log (default: the first)")
     p.add_argument("--json", action="store_true", help="machine-readable output")
@@ -68,9 +39,9 @@ def _common(p: argparse.ArgumentParser) -> None:
                    "present, else constant)")
     p.add_argument("--speed", metavar="COL", help="kalman: spindle speed column in rpm (default: 'spindle_speed' if "
                    "present, else the ambient-only fallback)")
-    p.add_argument("--seed", type=_seed, default=None, help="seed of the stochastic calibrations (default 0)")
-    p.add_argument("--iterations", type=_positive_int, default=None, help="grey-cs/grey-pso iterations (paper: 100); kalman GA generations (60)")
-    p.add_argument("--bound", type=_positive, default=None,
+    p.add_argument("--seed", type=whole_number(0, 2**63 - 1, "a whole number >= 0"), default=None, help="seed of the stochastic calibrations (default 0)")
+    p.add_argument("--iterations", type=whole_number(1, 100_000), default=None, help="grey-cs/grey-pso iterations (paper: 100); kalman GA generations (60)")
+    p.add_argument("--bound", type=positive_number(1e9), default=None,
                    help="grey-cs/grey-pso search box ±BOUND for every coefficient (paper: 100)")
     p.add_argument("--form", choices=("trapezoid", "tien"), default=None,
                    help="grey: discretisation of the response (eq. 2 trapezoid, or Tien's form)")
