@@ -85,8 +85,12 @@ Array = npt.NDArray[np.float64]
 QUANTUM = 1e-3
 #: Most free registers for which the least-norm proof lists the grid points of the dual ellipsoid.
 ELLIPSOID_MAX_REGISTERS = 120
-#: Largest list of integer points the least-norm proof may enumerate before using the MILP.
-ENUMERATION_LIMIT = 200_000
+#: Largest list of integer points the least-norm proof may enumerate before using the MILPs.
+ENUMERATION_LIMIT = 512
+#: The least-norm proof in the Lagrangian box is one MILP with every chord up to these sizes
+#: (else chords are added lazily).
+BOX_PROOF_MAX_REGISTERS = 40
+BOX_PROOF_MAX_CHORDS = 20_000
 #: Largest constraint count whose continuous least-norm point is found by NNLS (else HiGHS QP).
 NNLS_MAX_ROWS = 600
 #: Larger problems: NNLS on a working set of rows (False: HiGHS's QP solver at once).
@@ -371,14 +375,20 @@ class ExactOptimizer(Optimizer):
             best = rounded
         finite = np.isfinite(b)
         centre, q = lagrangian_ball(g_rows[finite], b[finite], kmin, kmax, cost, lam_rows[finite], lam_lo, lam_hi)
-        if kmin.size <= ELLIPSOID_MAX_REGISTERS:  # beyond, the ellipsoid holds too many grid points
+        def listed_least(limit: int) -> bool:  # the dual ellipsoid, listed; True: best is proven least
+            nonlocal best
             found, proved, listed = ellipsoid_search(g_rows, g, t_star, centre, q, cost, kmin, kmax, norm(best),
-                                                     ENUMERATION_LIMIT, b)
+                                                     limit, b)
+            best = best if found is None else found
             if proved:
                 path.append(f"least norm: {listed} grid points in the dual ellipsoid")
-                return (best if found is None else found), True, "", norm(best if found is None else found)
-            if found is not None:
-                best = found
+            return proved
+
+        ellipsoid = kmin.size <= ELLIPSOID_MAX_REGISTERS  # beyond, the ellipsoid holds too many grid points
+        # A short list only: most reports end here, and where the list would be long the box MILPs
+        # below are cheaper (bench/exact_per_report.py).
+        if ellipsoid and listed_least(ENUMERATION_LIMIT):
+            return best, True, "", norm(best)
         best = self._good_incumbent(g_rows, g, b, kmin, kmax, cost, t_star, best, cont, clock)
         # A near-least incumbent: the least norm in the unit box around the continuous point (a MILP
         # with a linear objective), else in the box one step wider.
@@ -401,11 +411,23 @@ class ExactOptimizer(Optimizer):
         if norm(best) <= _ceil_bound(lower, cost):
             path.append("least norm: the incumbent meets the Lagrangian bound")
             return best, True, "", norm(best)
-        path.append(f"least norm: chords of k² in the Lagrangian box ({np.mean(box_hi - box_lo + 1):.1f} values "
-                    "per register)")
-        found, proved, why, chord_lower = self._chord_solve(
-            g_rows, g, t_star, b, box_lo, box_hi, cost, best, k_c, clock,
-            clock.left() - DESCENT_RESERVE * self.time_limit, proof=True)
+        values = f"{np.mean(box_hi - box_lo + 1):.1f} values per register"
+        if kmin.size <= BOX_PROOF_MAX_REGISTERS and float(np.sum(box_hi - box_lo)) <= BOX_PROOF_MAX_CHORDS:
+            # few registers and a short box: every chord of the box at once, one MILP
+            res, found = box_least_norm(g_rows, b, box_lo, box_hi, cost,
+                                        clock.left() - DESCENT_RESERVE * self.time_limit, best, proof=True)
+            path.append(f"least norm: box MILP in the Lagrangian box ({values}; {res.status})")
+            found = found if ok(found) else None
+            proved = res.status == "optimal" and found is not None
+            why = "" if proved else ("time limit" if res.status == "time_limit" else f"HiGHS: {res.detail}")
+            chord_lower = res.dual_bound if np.isfinite(res.dual_bound) else 0.0
+        else:
+            path.append(f"least norm: chords of k² in the Lagrangian box ({values})")
+            found, proved, why, chord_lower = self._chord_solve(
+                g_rows, g, t_star, b, box_lo, box_hi, cost, best, k_c, clock,
+                clock.left() - DESCENT_RESERVE * self.time_limit, proof=True)
+        if found is not None and norm(found) > norm(best):
+            found = None
         best = best if found is None else found
         # points outside the box have Σ c k² > f(best): the chord bound holds up to f(best)
         lower = max(lower, min(chord_lower, norm(best)))

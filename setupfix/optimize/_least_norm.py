@@ -170,13 +170,16 @@ def lagrangian_box(centre: Array, q: float, cost: Array, kmin: Array, kmax: Arra
 
 
 def box_least_norm(g_rows: Array, b: Array, lo: Array, hi: Array, cost: Array, time_limit: float,
-                   start: Array | None = None) -> tuple[Solve, Array | None]:
+                   start: Array | None = None, proof: bool = False) -> tuple[Solve, Array | None]:
     """Least Σ c k² over integer k in [lo, hi] with G k ≤ b, as one exact MILP.
 
     On each coordinate's integers k² is the upper envelope of the chords
     s ≥ (2j+1)·k − j(j+1), j = lo … hi−1 (signed k), so the MILP's optimum is the
     least norm in the box.  Coordinates with two values need no chord: there k² is
     linear, lo² + (2·lo+1)(k − lo).
+
+    ``proof``: ``start`` is near-least already (see
+    :meth:`~setupfix.optimize._highs.LinearModel.prefer_proof`).
 
     Returns
     -------
@@ -206,6 +209,8 @@ def box_least_norm(g_rows: Array, b: Array, lo: Array, hi: Array, cost: Array, t
     model = LinearModel(np.r_[linear, cost[chorded]], a, np.full(a.shape[0], -INF), np.r_[b[fin], j * (j + 1)],
                         np.r_[lo, np.zeros(chorded.size)], np.r_[hi, np.full(chorded.size, INF)],
                         integer=np.r_[np.ones(n, bool), np.zeros(chorded.size, bool)])
+    if proof:
+        model.prefer_proof()
     sol = None
     if start is not None and np.all((start >= lo) & (start <= hi)):
         sol = np.r_[start, start[chorded] ** 2]

@@ -23,8 +23,10 @@ GUIDE_PINS = Path(__file__).resolve().parents[2] / "sample_reports" / "guide_pin
 PATHS = {
     "shortcuts": {},
     "grid MILP": {"LEVEL_STEPS": 0, "SEARCH_LIMIT": 0},
-    "chord MILP": {"ENUMERATION_LIMIT": 0, "SEARCH_LIMIT": 0},
-    "HiGHS QP": {"NNLS_MAX_ROWS": 0},
+    "box MILPs": {"ENUMERATION_LIMIT": 0, "SEARCH_LIMIT": 0},
+    "lazy chord MILP": {"ENUMERATION_LIMIT": 0, "SEARCH_LIMIT": 0, "BOX_PROOF_MAX_REGISTERS": 0},
+    "working-set NNLS": {"NNLS_MAX_ROWS": 0},
+    "HiGHS QP": {"NNLS_MAX_ROWS": 0, "WORKING_SET_NNLS": False},
 }
 
 
