@@ -425,9 +425,12 @@ def augmented_section(diagnosis: Diagnosis, declared: EffectsSection) -> Effects
         while f"E{n}" in used:
             n += 1
         sp = res.spec
+        target = sp.target
+        if len(res.registers) > 1:  # the register is not named: the file must not pretend it is
+            target = f"{sp.dimension} ~ one of {', '.join(res.registers)} (moved together; {sp.register} fitted)"
         effects.append(ModelEffect(
             id=f"E{n}", kind=sp.kind, estimate=float(f"{res.estimate:.6g}"), stderr=float(f"{res.stderr:.3g}"),
-            unit=res.unit, target=sp.target, shape=sp.shape, tau=sp.tau if sp.shape == "saturating" else None,
+            unit=res.unit, target=target, shape=sp.shape, tau=sp.tau if sp.shape == "saturating" else None,
             channel=sp.channel, reference=sp.reference, register=sp.register, dimension=sp.dimension,
             axis=sp.axis, group=sp.group))
         used.add(f"E{n}")
@@ -462,7 +465,8 @@ class DiagnoseOutcome:
             "out_of_tolerance_after": d.error_after.out_of_tolerance,
             "effects": [{"kind": e.kind, "target": e.target, "estimate": r(e.estimate, 12),
                          "stderr": r(e.stderr, 12), "unit": e.unit, "rms_after": r(e.rms_after),
-                         "alike": list(e.alike)} for e in d.effects],
+                         "alike": list(e.alike),
+                         **({"registers": list(e.registers)} if e.kind == "relation" else {})} for e in d.effects],
             "next_correction": {k: round(v, 9) for k, v in self.next_correction.items()},
             "declared_effects": [e.target for e in self.input.declared],
             "rejected": [{"kind": s.spec.kind, "target": s.spec.target, "p_adjusted": r(s.p_adjusted, 6),
@@ -500,7 +504,7 @@ def _next_correction(model: ProcessModel, diagnosis: Diagnosis) -> tuple[dict[st
     part = PartMeasurement(part="next", report="forecast", timestamp=None, deviation=fc,
                            sources=tuple("" for _ in fc))
     problem = CorrectionProblem.from_part(model, part)
-    C_aug = diagnosis.after.relation_matrix(diagnosis.layout)
+    C_aug = diagnosis.relation_matrix()
     problem = dataclasses.replace(problem, composite=C_aug[:, part.measured])
     result = get_optimizer("exact").solve(problem)
     corr = {rid: float(v) for rid, v, reg in zip(problem.register_ids, result.x, model.registers) if not reg.fixed}
