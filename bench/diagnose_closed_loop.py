@@ -143,8 +143,11 @@ def section_b(lines: list[str]) -> None:
 def section_c(lines: list[str]) -> None:
     lines += ["C. detection limit (guide pins, 20 seeds per magnitude): smallest magnitude of the ladder found",
               "   in >= 90 % of the seeds; found = right kind and the true target among those named (named:",
-              "   median count at the limit); for a relation also the limit of naming its register alone",
-              f"{'kind':11s} {'limit':>12s} {'unit':>10s} {'found at limit':>15s} {'named':>6s} {'register alone':>15s}"]
+              "   median count at the limit).  For a relation also: moved = seeds whose register was corrected",
+              "   during the series; alone|moved = smallest weight whose register is named alone in >= 90 % of",
+              "   those (a register never moved, with a setup error near 0, leaves nothing in the data)",
+              f"{'kind':11s} {'limit':>12s} {'unit':>10s} {'found at limit':>15s} {'named':>6s} {'moved':>6s} "
+              f"{'alone|moved':>12s}"]
     units = {"drift": "mm/h", "saturating": "mm", "thermal": "mm/°C", "wear": "mm/cycle", "scale": "mm/mm",
              "position": "mm/mm", "relation": "weight", "group": "mm"}
     layout = Layout.from_model(guide_pins())
@@ -152,26 +155,35 @@ def section_c(lines: list[str]) -> None:
         base = kind.rstrip("*")
         limit = alone = None
         rate = size = 0.0
+        moved_share = float("nan")
         sparse = sparse_of(kind)
         for f in LADDER:
             hidden = one_effect(layout, base, scale=f)
             hits = []
             for s in range(20):
-                d = Diagnoser(walk=False).run(layout, simulate(layout, [hidden], seed=400 + s, sparse=sparse).series)
-                hits.append(verdict(d.effects, hidden))
+                series = simulate(layout, [hidden], seed=400 + s, sparse=sparse).series
+                d = Diagnoser(walk=False).run(layout, series)
+                moved = base == "relation" and bool(
+                    np.ptp(series.applied[:, layout.register_ids.index(hidden.spec.register)]) > 0)
+                hits.append((*verdict(d.effects, hidden), moved))
             h = np.array(hits, dtype=float)
             if limit is None:
                 rate, size = float(h[:, 3].mean()), float(np.median(h[:, 4]))
                 if rate >= 0.9:
                     limit = abs(hidden.magnitude)
-            if alone is None and h[:, 2].mean() >= 0.9:
-                alone = abs(hidden.magnitude)
+            if base == "relation":
+                moved_share = float(h[:, 5].mean())
+                if alone is None and h[:, 5].any() and h[h[:, 5] > 0, 2].mean() >= 0.9:
+                    alone = abs(hidden.magnitude)
             if limit is not None and (base != "relation" or alone is not None):
                 break
         top = abs(one_effect(layout, base, scale=LADDER[-1]).magnitude)
         text = f"{limit:.3g}" if limit is not None else f"> {top:.3g}"
-        text_alone = "" if base != "relation" else (f"{alone:.3g}" if alone is not None else f"> {top:.3g}")
-        lines.append(f"{kind:11s} {text:>12s} {units[base]:>10s} {rate:15.0%} {size:6.0f} {text_alone:>15s}")
+        rel = base == "relation"
+        text_alone = "" if not rel else (f"{alone:.3g}" if alone is not None else f"> {top:.3g}")
+        text_moved = f"{moved_share:.0%}" if rel else ""
+        lines.append(f"{kind:11s} {text:>12s} {units[base]:>10s} {rate:15.0%} {size:6.0f} {text_moved:>6s} "
+                     f"{text_alone:>12s}")
     lines.append("")
 
 
