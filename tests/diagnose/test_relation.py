@@ -6,6 +6,9 @@ import numpy as np
 import pytest
 
 from setupfix.diagnose import Diagnoser, Layout, Series, walk_forward
+from setupfix.diagnose.forecast import relation_composite
+from setupfix.model.effects import EffectsSection
+from setupfix.pipeline.diagnose import augmented_section
 
 from diagnose.helpers import NOISE, guide_pins
 
@@ -50,6 +53,9 @@ def test_distinguishable_histories_name_the_register(seed):
     # a named relation changes the matrix the next correction is mapped through, at its place only
     delta = d.relation_matrix() - layout.composite
     assert np.flatnonzero(delta).tolist() == [layout.register_ids.index(reg) * layout.n_dimensions]
+    # and so does the augmented model file, for `correct`
+    np.testing.assert_allclose(relation_composite(augmented_section(d, EffectsSection()), layout),
+                               d.relation_matrix(), atol=1e-5 * abs(e.estimate))
 
 
 def test_registers_that_moved_together_are_named_together_and_not_guessed():
@@ -70,6 +76,11 @@ def test_registers_that_moved_together_are_named_together_and_not_guessed():
         # and the correction matrix is left as declared: putting the weight on one would be a guess
         np.testing.assert_array_equal(d.relation_matrix(), layout.composite)
         assert any(f"{a} and {b} always moved together" in n for n in d.notes)
+        # the augmented model file keeps the set, and `correct` then leaves the weight out
+        section = augmented_section(d, EffectsSection())
+        (eff,) = section.effects
+        assert set(eff.registers) == set(e.registers) and "one of" in eff.target
+        np.testing.assert_array_equal(relation_composite(section, layout), layout.composite)
 
 
 def test_a_named_relation_is_used_by_the_augmented_walk(monkeypatch):
