@@ -23,6 +23,9 @@ cannot be told apart from it.  Both are reported, never guessed.
 
 The relation candidates (register i × dimension q) are scored from per-dimension
 sums, without forming their N-row columns, so the cost stays linear in the cycles.
+The register of a relation found is reported as a confidence set: every register
+whose corrections the data cannot tell from the chosen one's (encompassing F-tests,
+:func:`_relation_set`); registers that moved together are never told apart.
 """
 
 from __future__ import annotations

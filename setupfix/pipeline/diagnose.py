@@ -427,7 +427,8 @@ def augmented_section(diagnosis: Diagnosis, declared: EffectsSection) -> Effects
         sp = res.spec
         target = sp.target
         if len(res.registers) > 1:  # the register is not named: the file must not pretend it is
-            target = f"{sp.dimension} ~ one of {', '.join(res.registers)} (moved together; {sp.register} fitted)"
+            target = (f"{sp.dimension} ~ one of {', '.join(res.registers)} "
+                      f"(the series cannot tell which; {sp.register} fitted)")
         effects.append(ModelEffect(
             id=f"E{n}", kind=sp.kind, estimate=float(f"{res.estimate:.6g}"), stderr=float(f"{res.stderr:.3g}"),
             unit=res.unit, target=target, shape=sp.shape, tau=sp.tau if sp.shape == "saturating" else None,
