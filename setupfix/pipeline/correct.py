@@ -23,7 +23,7 @@ from setupfix.offsets import OffsetRow, offset_rows
 from setupfix.pipeline.controllers import read_current, write_offsets
 from setupfix.optimize import CorrectionProblem, OptimizeResult, get_optimizer
 from setupfix.pipeline.cycles import Stations, assign_stations, load_parts  # noqa: F401 - re-exported
-from setupfix.pipeline.diagnose import forecast_part
+from setupfix.pipeline.diagnose import effect_relations, forecast_part
 from setupfix.pipeline.smoothing import smooth_part
 from setupfix.safety import Policy, Recommendation, RuleEffect, budget, recommend
 from setupfix.store import Store
@@ -267,7 +267,9 @@ def correct_part(model: ProcessModel, part: PartMeasurement, *, optimizer: str =
     if forecast is not part:
         notes += [str(n) for n in forecast.notes[len(part.notes):]]
         part = forecast
-    problem = CorrectionProblem.from_part(model, part)
+    problem, relation_note = effect_relations(model, CorrectionProblem.from_part(model, part), part)
+    if relation_note is not None:  # the model's [effects] relations change what a correction does
+        notes.append(str(relation_note))
     raw = measured_part.deviation[measured_part.measured] if part is not measured_part else None
     opt = get_optimizer(optimizer, seed=seed, **params)
     rec = recommend(problem, safety_policy(model, problem, cumulative), opt.solve, optimizer=optimizer,
