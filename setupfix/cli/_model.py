@@ -11,7 +11,7 @@ import unicodedata
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from setupfix.cli._common import add_report_options, cycle_options, report_options
+from setupfix.cli._common import add_lenient_option, add_report_options, cycle_options, report_options
 from setupfix.errors import ExportError, SourceLocation
 
 if TYPE_CHECKING:
@@ -72,6 +72,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     g.add_argument("--encoding", default=None, metavar="ENC", help="text encoding (default: sniffed)")
     g.add_argument("--columns", default=None, metavar="MAP",
                    help="column mapping for shop tables, e.g. actual=Meas,nominal=Nom")
+    add_lenient_option(g)
     init.set_defaults(run=run_init)
 
 

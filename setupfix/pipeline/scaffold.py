@@ -196,7 +196,7 @@ def _collect(tables: Sequence[tuple[str, pd.DataFrame]], axis: str | None,
 def scaffold_model(reports: Sequence[str | Path], *, axis: str | None = None, name: str | None = None,
                    parts_are_stations: bool = False,
                    format: str | None = None, unit: str | None = None, encoding: str | None = None,
-                   columns: str | None = None) -> Scaffold:
+                   columns: str | None = None, lenient: bool = False) -> Scaffold:
     """Write a process-model scaffold (TOML text) from the reports' toleranced length characteristics.
 
     Raises
@@ -208,7 +208,7 @@ def scaffold_model(reports: Sequence[str | Path], *, axis: str | None = None, na
     """
     if axis is not None and axis not in ("X", "Y", "Z"):
         raise ModelError(f'axis must be "X", "Y" or "Z", got {axis!r}')
-    options: dict[str, Any] = {"unit": unit, "encoding": encoding, "columns": columns}
+    options: dict[str, Any] = {"unit": unit, "encoding": encoding, "columns": columns, "lenient": lenient}
     reads = [parsers.read_report(r, format=format, **options) for r in reports]
     scaffold = scaffold_from_tables([(str(r), read.table) for r, read in zip(reports, reads)], axis=axis,
                                     name=name, parts_are_stations=parts_are_stations)

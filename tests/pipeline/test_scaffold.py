@@ -237,14 +237,14 @@ def test_model_init_on_a_qif_takes_the_axes_from_its_vectors(tmp_path, capsys):
     report = SAMPLES / "qif" / "NIST_MTC_Incoming_PlateResults_20_samples.QIF"
     out = tmp_path / "plate.toml"
     assert main(["model", "init", str(report), "-o", str(out)]) == 0
-    assert "(axes: 6 stated by the report, 17 with none), process axis X" in capsys.readouterr().err
+    assert "(axes: 8 stated by the report, 20 with none), process axis X" in capsys.readouterr().err
     comments = _dimension_comments(out.read_text(encoding="utf-8"))
     # DS002 <AnalysisVector>1 0 0, DS003 0 1 0; the slot's width across its centre line (X), length along it (Y)
     assert (comments["DS002"].endswith("axis X stated by the report")
             and comments["DS003"].endswith("axis Y stated by the report")
             and comments["WIDTH1"].endswith("axis X stated by the report")
             and comments["LENGTH1"].endswith("axis Y stated by the report"))
-    assert comments["DIAMETER1"].endswith("no axis stated")
+    assert comments["DIAMETER4"].endswith("no axis stated")
     table = _read(report)
     scaffold_and_correct(report, table)
     z = scaffold_and_correct(report, table, axis="Z")[0]
