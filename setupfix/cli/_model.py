@@ -54,7 +54,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                                        "dimension (name, nominal, limits, group = station) with a feature of its "
                                        "own moved by one WKS (W1, G54) and one tool (T1, H1). The file loads as "
                                        "written and 'correct' runs with it; its comments say what to edit.")
-    init.add_argument("reports", nargs="+", metavar="REPORT", help="CMM report(s) in any supported format")
+    init.add_argument("reports", nargs="+", metavar="REPORT",
+                      help="CMM report(s) in any supported format; a folder stands for its files")
     init.add_argument("-o", "--out", required=True, metavar="MODEL",
                       help="model TOML to write ('-': stdout); written atomically")
     init.add_argument("--axis", choices=("X", "Y", "Z"), default=None,

@@ -40,7 +40,7 @@ import pandas as pd
 
 import parsers
 from parsers.axes import AXES, AXIS_COLUMN
-from setupfix.errors import ModelError, ParseError, SourceLocation
+from setupfix.errors import ModelError, ParseError, SetupfixError, SourceLocation
 from setupfix.model import normalise_name
 from setupfix.model.loader import RANGES_MM
 
@@ -199,20 +199,39 @@ def scaffold_model(reports: Sequence[str | Path], *, axis: str | None = None, na
                    columns: str | None = None, lenient: bool = False) -> Scaffold:
     """Write a process-model scaffold (TOML text) from the reports' toleranced length characteristics.
 
+    ``reports`` may name folders: their files (not hidden, not recursive, in name order);
+    a file of a folder that no reader takes, or that is refused, is left out with a note.
+
     Raises
     ------
     ParseError
-        If a report cannot be read.
+        If a report named as a file cannot be read, or no file of a folder can.
     ModelError
         If no characteristic qualifies (the message lists why, per kind).
     """
     if axis is not None and axis not in ("X", "Y", "Z"):
         raise ModelError(f'axis must be "X", "Y" or "Z", got {axis!r}')
+    from setupfix.pipeline.parse import expand_inputs
+
     options: dict[str, Any] = {"unit": unit, "encoding": encoding, "columns": columns, "lenient": lenient}
-    reads = [parsers.read_report(r, format=format, **options) for r in reports]
-    scaffold = scaffold_from_tables([(str(r), read.table) for r, read in zip(reports, reads)], axis=axis,
+    names, failures = expand_inputs(reports)
+    if failures:
+        raise failures[0]
+    reads: list[tuple[str, parsers.ReadResult]] = []
+    left_out: list[str] = []
+    for report, from_folder in names:
+        try:
+            reads.append((report, parsers.read_report(report, format=format, **options)))
+        except SetupfixError as exc:
+            if not from_folder:
+                raise
+            left_out.append(f"{exc}; left out")
+    if not reads:
+        raise ParseError(f"no file of {', '.join(map(str, reports))} is a readable report",
+                         location=SourceLocation(str(reports[0])), hint=left_out[0] if left_out else None)
+    scaffold = scaffold_from_tables([(r, read.table) for r, read in reads], axis=axis,
                                     name=name, parts_are_stations=parts_are_stations)
-    scaffold.notes = [str(n) for read in reads for n in read.notes]
+    scaffold.notes = left_out + [str(n) for _, read in reads for n in read.notes]
     return scaffold
 
 
@@ -249,7 +268,8 @@ def _render(dims: list[_Dim], skipped: list[tuple[str, str]], reports: Sequence[
     out = [
         f"# Process model scaffold written by `setupfix model init` from: {_comment(sources)}",
         "# It loads as written and `setupfix correct` runs with it, but its relations are a guess:",
-        "#   every feature below is moved by W1 (G54) and T1 (H1) with weight +1. Edit",
+        "#   every feature below is moved by W1 (G54) and T1 (H1) with weight +1 (a feature along",
+        "#   another axis than the process's by none). Edit",
         "#   1. [wks.*] and [tools.*]: the registers your NC program really uses (one table each);",
         "#   2. [features.*]: which WKS and tools move each feature, +1 or -1 (a feature cut by",
         "#      the tool's tip facing -axis gets -1), and remove features no offset moves;",

@@ -250,3 +250,19 @@ def test_model_init_on_a_qif_takes_the_axes_from_its_vectors(tmp_path, capsys):
     z = scaffold_and_correct(report, table, axis="Z")[0]
     assert {r for _, r in z.skipped if r.startswith("axis")} == {"axis X stated by the report (--axis Z)",
                                                                   "axis Y stated by the report (--axis Z)"}
+
+
+def test_a_folder_stands_for_its_files_and_unreadable_ones_are_left_out_with_a_note(tmp_path):
+    from setupfix.pipeline.scaffold import scaffold_model
+
+    folder = tmp_path / "reports"
+    folder.mkdir()
+    (folder / "cycle_01.csv").write_bytes((GUIDE_PINS / "cycle_01.csv").read_bytes())
+    (folder / "notes.txt").write_text("not a report\n", encoding="utf-8")
+    scaffold = scaffold_model([folder])
+    assert scaffold.dimensions == 28 and any("notes.txt" in n and "left out" in n for n in scaffold.notes)
+    (folder / "cycle_01.csv").unlink()
+    with pytest.raises(SetupfixError, match="no file of .* is a readable report"):
+        scaffold_model([folder])
+    with pytest.raises(SetupfixError, match="notes.txt"):
+        scaffold_model([folder / "notes.txt"])  # named as a file: refused, not left out
