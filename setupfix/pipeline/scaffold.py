@@ -91,7 +91,8 @@ class _Dim:
     upper: float
     axis: str | None
     source: str
-    #: Where ``axis`` came from: "report" (the axis column), "name", or "" (neither states one).
+    #: Where ``axis`` came from: "report" (the axis column), "name", "" (neither states one), or
+    #: why there is none although reports state one ("the reports state X and Y").
     axis_from: str = ""
     #: The axis the name states when it differs from the report's.
     name_says: str | None = None
@@ -99,7 +100,7 @@ class _Dim:
     def axis_note(self) -> str:
         """The comment on the dimension's axis: which one, and from what."""
         if self.axis is None:
-            return "no axis stated"
+            return f"no axis: {self.axis_from}" if self.axis_from else "no axis stated"
         if self.axis_from == "report":
             return f"axis {self.axis} stated by the report" + (
                 f" (its name says {self.name_says}: the report's vector wins)" if self.name_says else "")
@@ -190,6 +191,14 @@ def _collect(tables: Sequence[tuple[str, pd.DataFrame]], axis: str | None,
                 dims[key] = _Dim(name, group, nominal, lower, upper, dim_axis, where,
                                  "report" if from_report else "name" if from_name else "",
                                  from_name if from_report and from_name not in (None, from_report) else None)
+                continue
+            known = dims[key]
+            if from_report and known.axis_from == "report" and known.axis != from_report:
+                # two reports state different axes for one dimension: neither is taken
+                known.axis_from, known.axis = f"the reports state {known.axis} and {from_report}", None
+            elif from_report and known.axis_from in ("", "name") and axis in (None, from_report):
+                known.name_says = from_name if from_name not in (None, from_report) else None
+                known.axis, known.axis_from = from_report, "report"
     return list(dims.values()), list(skipped.items())
 
 
@@ -256,7 +265,7 @@ def scaffold_from_tables(tables: Sequence[tuple[str, pd.DataFrame]], *, axis: st
     bands = [d.upper - d.lower for d in dims]
     resolution = _resolution(min(bands))
     text = _render(dims, skipped, reports, model_axis, resolution, name, axis)
-    origins = Counter(d.axis_from or "none" for d in dims)
+    origins = Counter(d.axis_from if d.axis_from in ("report", "name") else "none" for d in dims)
     return Scaffold(text, len(dims), model_axis, skipped,
                     axes_from={k: origins[k] for k in ("report", "name", "none") if origins[k]})
 

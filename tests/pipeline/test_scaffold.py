@@ -266,3 +266,17 @@ def test_a_folder_stands_for_its_files_and_unreadable_ones_are_left_out_with_a_n
         scaffold_model([folder])
     with pytest.raises(SetupfixError, match="notes.txt"):
         scaffold_model([folder / "notes.txt"])  # named as a file: refused, not left out
+
+
+def test_reports_stating_different_axes_for_one_dimension_give_none():
+    def table(axis: str) -> pd.DataFrame:
+        return pd.DataFrame({"characteristic": ["Step", "Bore_X"], "nominal": [5.0, 3.0], "actual": [5.0, 3.0],
+                             "lower": [-0.1, -0.1], "upper": [0.1, 0.1], "axis": [axis, axis]})
+
+    scaffold = scaffold_from_tables([("a.csv", table("Z")), ("b.csv", table("Y")), ("c.csv", table(""))])
+    comments = _dimension_comments(scaffold.text)
+    assert comments["Step"].endswith("no axis: the reports state Z and Y")
+    assert comments["Bore_X"].endswith("no axis: the reports state Z and Y")
+    later = scaffold_from_tables([("c.csv", table("")), ("a.csv", table("Z"))])  # a later report states it
+    assert _dimension_comments(later.text)["Bore_X"].endswith(
+        "axis Z stated by the report (its name says X: the report's vector wins)")
