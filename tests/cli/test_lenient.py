@@ -85,3 +85,12 @@ def test_lenient_on_a_report_whose_reader_cannot_tell_rows_apart_is_refused(setu
     csv = Path(__file__).resolve().parents[2] / "sample_reports" / "guide_pins" / "cycle_01.csv"
     assert main(["model", "check", str(model), str(csv), "--lenient"]) != 0
     assert "does not use --lenient" in capsys.readouterr().err
+
+
+def test_history_import_takes_lenient(setup, capsys, tmp_path):
+    _, bad, _ = setup
+    db = tmp_path / "h.db"
+    _refused(capsys, ["history", "import", "--db", str(db), str(bad)])
+    assert main(["history", "import", "--db", str(db), "--lenient", str(bad)]) == 0
+    captured = capsys.readouterr()
+    assert "1 new report(s)" in captured.out and f"{bad}:32: " in captured.err
