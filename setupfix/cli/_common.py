@@ -51,8 +51,7 @@ def add_lenient_option(group: Any) -> None:
     """``--lenient``: the reader skips a self-contradicting row (with a warning naming its line)."""
     group.add_argument("--lenient", action="store_true",
                        help="skip a row that contradicts itself (named in a warning) instead of refusing the "
-                            "report; readers that cannot tell such rows apart (all but the Korean layout) "
-                            "refuse the option")
+                            "report; readers without such rows (all but the Korean layout) ignore it")
 
 
 def whole_number(low: int, high: int, allowed: str | None = None) -> Callable[[str], int]:

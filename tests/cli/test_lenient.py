@@ -59,12 +59,15 @@ def test_compare_check_init_and_batch_take_lenient_too(setup, capsys, tmp_path):
             (["compare", "--model", str(model), "--trials", "1", "--json", str(bad)], "warnings"),
             (["model", "check", str(model), "--json", str(bad)], "notes"),
             (["model", "init", str(bad), "-o", str(tmp_path / "m.toml")], None),
+            (["diagnose", "--model", str(model), "--no-walk", "--json", str(bad)], "diagnose"),
     ):
         _refused(capsys, argv)
         assert main([*argv, "--lenient"]) == 0
         captured = capsys.readouterr()
         if lenient_ok == "warnings":
             warnings = json.loads(captured.out)["warnings"]
+        elif lenient_ok == "diagnose":
+            warnings = json.loads(captured.out)["notes"]
         elif lenient_ok == "notes":
             warnings = [f"{n['location']}: {n['message']}" for n in json.loads(captured.out)["parts"][0]["notes"]]
         else:
