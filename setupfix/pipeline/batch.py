@@ -57,6 +57,7 @@ class BatchOptions:
     unit: str | None = None
     encoding: str | None = None
     columns: str | None = None
+    lenient: bool = False
     parts_per_cycle: int | None = None
     strict: bool = False
     current: Mapping[str, float] | None = None
@@ -148,7 +149,7 @@ def _correct_one(path: str, size: int, mtime_ns: int) -> Outcome:
         if out.sha256 in o.skip:
             return out  # run_batch marks it "already processed"
         parts = load_parts(_MODEL, source, format=o.format, unit=o.unit, encoding=o.encoding, columns=o.columns,
-                           parts_per_cycle=o.parts_per_cycle, strict=o.strict)
+                           parts_per_cycle=o.parts_per_cycle, strict=o.strict, lenient=o.lenient)
         cumulative = wear_totals(_MODEL, o.current) if o.current is not None else None
         for part in parts:
             pc = correct_part(_MODEL, part, optimizer=o.optimizer, seed=o.seed, cumulative=cumulative)
@@ -272,7 +273,7 @@ def _record(store: Store, outcome: Outcome, options: BatchOptions) -> None:
     if hashlib.sha256(source.data).hexdigest() != outcome.sha256:
         raise StoreError("changed after it was corrected: not recorded in the history store", location=SourceLocation(str(path)))
     read = parsers.read_report(source, format=options.format, unit=options.unit, encoding=options.encoding,
-                               **({"columns": options.columns} if options.columns else {}))
+                               lenient=options.lenient, **({"columns": options.columns} if options.columns else {}))
     sha, _ = store.add_report(source.data, path.name, read.format, read.table)
     by_part: dict[str, dict[str, float]] = {}
     for row in outcome.rows:

@@ -23,7 +23,7 @@ from setupfix.offsets import OffsetRow, offset_rows
 from setupfix.pipeline.controllers import read_current, write_offsets
 from setupfix.optimize import CorrectionProblem, OptimizeResult, get_optimizer
 from setupfix.pipeline.cycles import Stations, assign_stations, load_parts  # noqa: F401 - re-exported
-from setupfix.pipeline.diagnose import forecast_part
+from setupfix.pipeline.diagnose import effect_relations, forecast_part
 from setupfix.pipeline.smoothing import smooth_part
 from setupfix.safety import Policy, Recommendation, RuleEffect, budget, recommend
 from setupfix.store import Store
@@ -267,7 +267,9 @@ def correct_part(model: ProcessModel, part: PartMeasurement, *, optimizer: str =
     if forecast is not part:
         notes += [str(n) for n in forecast.notes[len(part.notes):]]
         part = forecast
-    problem = CorrectionProblem.from_part(model, part)
+    problem, relation_note = effect_relations(model, CorrectionProblem.from_part(model, part), part)
+    if relation_note is not None:  # the model's [effects] relations change what a correction does
+        notes.append(str(relation_note))
     raw = measured_part.deviation[measured_part.measured] if part is not measured_part else None
     opt = get_optimizer(optimizer, seed=seed, **params)
     rec = recommend(problem, safety_policy(model, problem, cumulative), opt.solve, optimizer=optimizer,
@@ -291,7 +293,7 @@ def correct_report(model: ProcessModel | str | Path, report: str | Path, *, opti
                    seed: int | None = None, part: str | None = None, format: str | None = None,
                    unit: str | None = None, encoding: str | None = None, columns: str | None = None,
                    stations: Stations | None = None, parts_per_cycle: int | None = None,
-                   strict: bool = False, store: Store | None = None,
+                   strict: bool = False, lenient: bool = False, store: Store | None = None,
                    current: Mapping[str, float] | None = None,
                    params: Mapping[str, Any] | None = None) -> list[PartCorrection]:
     """Correct every cycle of a report (or the one named by ``part``).
@@ -303,7 +305,7 @@ def correct_report(model: ProcessModel | str | Path, report: str | Path, *, opti
     if not isinstance(model, ProcessModel):
         model = load_model(model)
     parts = load_parts(model, report, format=format, unit=unit, encoding=encoding, columns=columns,
-                       stations=stations, parts_per_cycle=parts_per_cycle, strict=strict)
+                       stations=stations, parts_per_cycle=parts_per_cycle, strict=strict, lenient=lenient)
     cumulative = wear_totals(model, current) if current is not None else None
     return [correct_part(model, p, optimizer=optimizer, seed=seed, store=store, cumulative=cumulative,
                          **(params or {}))
