@@ -109,6 +109,10 @@ IPM_MIN_ROWS = 2000
 MILP_SHARE = 0.5
 #: Share of the whole time limit kept for the least-norm stage (HiGHS may overrun a limit a little).
 LEAST_NORM_SHARE = 0.5
+#: HiGHS looks at its clock only between the cut rounds of a MILP's root node, each some LP solves
+#: long, and overran short limits by seconds at shop scale: a chord MILP starts only when this many
+#: times the longest LP of its model is left (else the stage stops at the limit with its incumbent).
+ROOT_LP_MULTIPLE = 8.0
 #: Levels the grid-optimum stage may descend by rounded rows before it uses the MILP.
 LEVEL_STEPS = 40
 
@@ -477,7 +481,7 @@ class ExactOptimizer(Optimizer):
                         best = k
                 else:
                     hi = mid
-        return descend(g_rows, b, best, cost, time.perf_counter() + 0.1 * max(clock.left(), 0.0))
+        return descend(g_rows, b, best, cost, time.perf_counter() + 0.03 * max(clock.left(), 0.0))
 
     def _chord_solve(self, g_rows: Array, g: Array, level: float, b: Array, kmin: Array, kmax: Array,
                      cost: Array, best: Array | None, k_cont: Array, clock: _Clock, time_limit: float,
@@ -527,11 +531,15 @@ class ExactOptimizer(Optimizer):
         f_best = np.inf if best is None else float(np.sum(cost * best**2))
         integer = False
         lower = 0.0
+        lp_seconds = 0.0
         while True:
             left = deadline - time.perf_counter()
-            if left <= 0:
+            if left <= 0 or (integer and left < ROOT_LP_MULTIPLE * lp_seconds):
                 return best, False, "time limit", lower
+            started = time.perf_counter()
             res = model.solve(left, None if best is None else np.r_[best, best**2])
+            if not integer:
+                lp_seconds = max(lp_seconds, time.perf_counter() - started)
             bound_k = res.dual_bound if integer else (res.objective if res.status == "optimal" else np.nan)
             if np.isfinite(bound_k):
                 lower = max(lower, float(bound_k))
