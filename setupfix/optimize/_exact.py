@@ -98,6 +98,8 @@ WORKING_SET_NNLS = True
 #: Shares of the time left that the least-norm stage gives the box MILPs around the rounded continuous
 #: point (the incumbent), and the time kept back for the descent when the proof stops at the limit.
 BOX_SHARE = 0.25
+#: Relative gap at which those box MILPs stop (they look for an incumbent; the proof comes after).
+INCUMBENT_GAP = 1e-4
 DESCENT_RESERVE = 0.03
 #: Radius² and size of the ellipsoids the grid-optimum stage lists for a point at its bound.
 SEARCH_RADIUS2 = 16.0
@@ -348,14 +350,15 @@ class ExactOptimizer(Optimizer):
 
     def _grid_least_norm(self, g_rows: Array, g: Array, b: Array, kmin: Array, kmax: Array, cost: Array,
                          t_star: float, incumbent: Array, cont: tuple[Array, Array, Array, Array] | None,
-                         clock: _Clock, path: list[str], unit_box_done: bool = False
+                         clock: _Clock, path: list[str], unit_box: bool | None = None
                          ) -> tuple[Array, bool, str, float]:
         """Least Σ c k² over grid points with every margin ≥ t_star; (k, proved, why not, lower bound).
 
         ``b`` are right-hand sides with {G k ≤ b} containing every such grid point (the
         rounded rows); ``cont`` the continuous least-norm solution over them, if known.
         The lower bound (0 when none is known) is certified: no such grid point has a
-        smaller Σ c k².
+        smaller Σ c k².  ``unit_box``: stage 2 searched the unit box around the continuous
+        point at these rows already (True: it found the incumbent there; False: it is empty).
         """
 
         def norm(k: Array) -> float:
@@ -398,14 +401,10 @@ class ExactOptimizer(Optimizer):
         # with a linear objective), else in the box one step wider.
         floor_c = np.clip(np.floor(k_c), kmin, kmax)
         ceil_c = np.clip(np.ceil(k_c), kmin, kmax)
-        # (stage 2 may have settled the unit box already: its least norm is the incumbent, or it is empty)
-        for widen in (0.0, 1.0):
-            if unit_box_done and widen == 0.0:
-                continue
-            if unit_box_done and widen == 1.0 and np.all(np.abs(best - k_c) <= 1.0):
-                break  # the incumbent is the unit box's least norm
+        # (stage 2 may have searched the unit box already: its point is the incumbent, or it is empty)
+        for widen in (() if unit_box else (1.0,) if unit_box is False else (0.0, 1.0)):
             lo, hi = np.maximum(floor_c - widen, kmin), np.minimum(ceil_c + widen, kmax)
-            res, k = box_least_norm(g_rows, b, lo, hi, cost, BOX_SHARE * clock.left(), best)
+            res, k = box_least_norm(g_rows, b, lo, hi, cost, BOX_SHARE * clock.left(), best, gap=INCUMBENT_GAP)
             if ok(k) and norm(k) < norm(best):  # type: ignore[arg-type]
                 best = k  # type: ignore[assignment]
             path.append(f"least norm: box MILP ±{widen:g} around the continuous point ({res.status})")
@@ -671,7 +670,7 @@ class ExactOptimizer(Optimizer):
         stopped: tuple[str, str] | None = None
         cont = None
         placeholder = False  # cont holds no least-norm point (large problems whose QP failed)
-        unit_box: Array | None = None  # rows whose unit-box least norm stage 2 found already
+        unit_box: tuple[Array, bool] | None = None  # rows whose unit box stage 2 searched, and if it had a point
         least_norm_done: Array | None = None  # rows at which the least norm is already proved
         n_free = int(kmin.size)
         small = g_rows.shape[0] + 2 * n_free <= NNLS_MAX_ROWS
@@ -728,14 +727,14 @@ class ExactOptimizer(Optimizer):
                 elif not placeholder:  # large: the least norm in the unit box around the continuous point
                     res_box, found = box_least_norm(g_rows, b, np.clip(np.floor(cont[0]), kmin, kmax),
                                                     np.clip(np.ceil(cont[0]), kmin, kmax), cost,
-                                                    stage2_left() * MILP_SHARE / 2)
+                                                    stage2_left() * MILP_SHARE / 2, gap=INCUMBENT_GAP)
                     calls += 1
                     path.append(f"grid optimum: box MILP ±0 around the rounded rows' least-norm point "
                                 f"({res_box.status})")
                     if found is not None and float(grid_margins(g_rows, g, found)) < level - TOL:
                         found = None
                     if found is not None or res_box.status == "infeasible":
-                        unit_box = b.copy()  # the unit box is settled at these rows
+                        unit_box = (b.copy(), found is not None)  # the unit box is settled at these rows
                     if found is None and res_box.status == "infeasible":  # any point one step wider (a feasibility MILP)
                         fin = np.isfinite(b)
                         lo = np.clip(np.floor(cont[0]) - 1, kmin, kmax)
@@ -817,7 +816,7 @@ class ExactOptimizer(Optimizer):
                 cont = None
             k_best, proved_norm, why, norm_lower = self._grid_least_norm(
                 g_rows, g, b, kmin, kmax, cost, t_best, k_best, cont, clock, path,
-                unit_box_done=unit_box is not None and np.array_equal(b, unit_box))
+                unit_box=None if unit_box is None or not np.array_equal(b, unit_box[0]) else unit_box[1])
         if not proved_norm and stopped is None:
             stopped = ("least norm", why)
         clock.lap("least norm")

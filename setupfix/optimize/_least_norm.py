@@ -170,7 +170,7 @@ def lagrangian_box(centre: Array, q: float, cost: Array, kmin: Array, kmax: Arra
 
 
 def box_least_norm(g_rows: Array, b: Array, lo: Array, hi: Array, cost: Array, time_limit: float,
-                   start: Array | None = None, proof: bool = False) -> tuple[Solve, Array | None]:
+                   start: Array | None = None, proof: bool = False, gap: float = 0.0) -> tuple[Solve, Array | None]:
     """Least Σ c k² over integer k in [lo, hi] with G k ≤ b, as one exact MILP.
 
     On each coordinate's integers k² is the upper envelope of the chords
@@ -179,7 +179,9 @@ def box_least_norm(g_rows: Array, b: Array, lo: Array, hi: Array, cost: Array, t
     linear, lo² + (2·lo+1)(k − lo).
 
     ``proof``: ``start`` is near-least already (see
-    :meth:`~setupfix.optimize._highs.LinearModel.prefer_proof`).
+    :meth:`~setupfix.optimize._highs.LinearModel.prefer_proof`).  ``gap``: HiGHS may stop at
+    this relative gap (an incumbent is wanted, not a proof; the result's ``status`` is then
+    ``optimal`` without proving the box's least norm).
 
     Returns
     -------
@@ -211,6 +213,8 @@ def box_least_norm(g_rows: Array, b: Array, lo: Array, hi: Array, cost: Array, t
                         integer=np.r_[np.ones(n, bool), np.zeros(chorded.size, bool)])
     if proof:
         model.prefer_proof()
+    if gap > 0:  # an incumbent is wanted, not a proof
+        model.h.setOptionValue("mip_rel_gap", float(gap))
     sol = None
     if start is not None and np.all((start >= lo) & (start <= hi)):
         sol = np.r_[start, start[chorded] ** 2]
