@@ -98,6 +98,8 @@ WORKING_SET_NNLS = True
 #: Shares of the time left that the least-norm stage gives the box MILPs around the rounded continuous
 #: point (the incumbent), and the time kept back for the descent when the proof stops at the limit.
 BOX_SHARE = 0.25
+#: The same share when the grid-optimum stage was stopped (the incumbent matters more than a proof).
+STOPPED_BOX_SHARE = 0.8
 #: Relative gap at which those box MILPs stop (they look for an incumbent; the proof comes after).
 INCUMBENT_GAP = 1e-4
 DESCENT_RESERVE = 0.03
@@ -350,8 +352,8 @@ class ExactOptimizer(Optimizer):
 
     def _grid_least_norm(self, g_rows: Array, g: Array, b: Array, kmin: Array, kmax: Array, cost: Array,
                          t_star: float, incumbent: Array, cont: tuple[Array, Array, Array, Array] | None,
-                         clock: _Clock, path: list[str], unit_box: bool | None = None
-                         ) -> tuple[Array, bool, str, float]:
+                         clock: _Clock, path: list[str], unit_box: bool | None = None,
+                         box_share: float = BOX_SHARE) -> tuple[Array, bool, str, float]:
         """Least Σ c k² over grid points with every margin ≥ t_star; (k, proved, why not, lower bound).
 
         ``b`` are right-hand sides with {G k ≤ b} containing every such grid point (the
@@ -359,6 +361,8 @@ class ExactOptimizer(Optimizer):
         The lower bound (0 when none is known) is certified: no such grid point has a
         smaller Σ c k².  ``unit_box``: stage 2 searched the unit box around the continuous
         point at these rows already (True: it found the incumbent there; False: it is empty).
+        ``box_share``: share of the time left for each box MILP (larger when the grid-optimum
+        stage was stopped: then a good incumbent matters more than a proof).
         """
 
         def norm(k: Array) -> float:
@@ -404,7 +408,7 @@ class ExactOptimizer(Optimizer):
         # (stage 2 may have searched the unit box already: its point is the incumbent, or it is empty)
         for widen in (() if unit_box else (1.0,) if unit_box is False else (0.0, 1.0)):
             lo, hi = np.maximum(floor_c - widen, kmin), np.minimum(ceil_c + widen, kmax)
-            res, k = box_least_norm(g_rows, b, lo, hi, cost, BOX_SHARE * clock.left(), best, gap=INCUMBENT_GAP)
+            res, k = box_least_norm(g_rows, b, lo, hi, cost, box_share * clock.left(), best, gap=INCUMBENT_GAP)
             if ok(k) and norm(k) < norm(best):  # type: ignore[arg-type]
                 best = k  # type: ignore[assignment]
             path.append(f"least norm: box MILP ±{widen:g} around the continuous point ({res.status})")
@@ -688,6 +692,8 @@ class ExactOptimizer(Optimizer):
         else:
             proved = False
             for _ in range(LEVEL_STEPS):
+                if stage2_left() <= 0:
+                    break
                 b = rounded_rhs(g, d, zero, level)
                 calls += 1
                 if small:
@@ -724,7 +730,7 @@ class ExactOptimizer(Optimizer):
                                                 cont[2], cont[3])
                     found, _, _ = ellipsoid_search(g_rows, g, level, centre, q, cost, kmin, kmax,
                                                    q + SEARCH_RADIUS2, SEARCH_LIMIT, b)
-                elif not placeholder:  # large: the least norm in the unit box around the continuous point
+                elif not placeholder and stage2_left() > 0:  # large: the least norm in the unit box around it
                     res_box, found = box_least_norm(g_rows, b, np.clip(np.floor(cont[0]), kmin, kmax),
                                                     np.clip(np.ceil(cont[0]), kmin, kmax), cost,
                                                     stage2_left() * MILP_SHARE / 2, gap=INCUMBENT_GAP)
@@ -735,7 +741,8 @@ class ExactOptimizer(Optimizer):
                         found = None
                     if found is not None or res_box.status == "infeasible":
                         unit_box = (b.copy(), found is not None)  # the unit box is settled at these rows
-                    if found is None and res_box.status == "infeasible":  # any point one step wider (a feasibility MILP)
+                    if found is None and res_box.status == "infeasible" and stage2_left() > 0:
+                        # any point one step wider (a feasibility MILP)
                         fin = np.isfinite(b)
                         lo = np.clip(np.floor(cont[0]) - 1, kmin, kmax)
                         hi = np.clip(np.ceil(cont[0]) + 1, kmin, kmax)
@@ -755,6 +762,8 @@ class ExactOptimizer(Optimizer):
                     break
                 # A feasibility MILP on the rounded rows: a point proves the bound is reached; a proof
                 # of infeasibility lowers the bound to the next level (integer rows only).
+                if stage2_left() <= 0:
+                    break
                 fin = np.isfinite(b)
                 feas = LinearModel(np.zeros(n_free), g_rows[fin], np.full(int(fin.sum()), -INF), b[fin], kmin, kmax,
                                    integer=np.ones(n_free, bool)).solve(stage2_left() * MILP_SHARE)
@@ -782,7 +791,11 @@ class ExactOptimizer(Optimizer):
             upper = min(upper, level)
             if placeholder:
                 cont = None
-            if not proved:
+            if not proved and stage2_left() <= 0:  # its share of the limit is spent: no MILP
+                cont = None
+                path.append("grid optimum: its share of the time limit spent before the MILP")
+                stopped = ("grid optimum", "time limit")
+            elif not proved:
                 cont = None
                 calls += 1
                 res = self._max_margin_milp(g_rows, g, kmin, kmax, t_best, upper, k_best, stage2_left())
@@ -816,7 +829,8 @@ class ExactOptimizer(Optimizer):
                 cont = None
             k_best, proved_norm, why, norm_lower = self._grid_least_norm(
                 g_rows, g, b, kmin, kmax, cost, t_best, k_best, cont, clock, path,
-                unit_box=None if unit_box is None or not np.array_equal(b, unit_box[0]) else unit_box[1])
+                unit_box=None if unit_box is None or not np.array_equal(b, unit_box[0]) else unit_box[1],
+                box_share=BOX_SHARE if stopped is None else STOPPED_BOX_SHARE)
         if not proved_norm and stopped is None:
             stopped = ("least norm", why)
         clock.lap("least norm")
