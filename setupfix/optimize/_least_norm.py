@@ -12,7 +12,7 @@ The pieces, each with what proves it:
   rows whatever the number of dimensions.  The answer satisfies every row (checked
   here), so it is the optimum of the whole problem; an empty working set proves
   the whole problem empty (Farkas, checked against the box).  HiGHS's QP solver
-  stalled on some of these problems (300 × 5,000: no answer in 100 s).
+  stalled on one of the 300 × 5,000 problems of ``bench/exact_scaling.py`` (seed 1).
 * :func:`lagrangian_box` — with the centre κ and value q of
   :func:`~setupfix.optimize._grid.lagrangian_ball`, f(k) ≥ q + Σ c_i (k_i − κ_i)²
   for every feasible k; on integers the right side is at least
