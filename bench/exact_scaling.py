@@ -13,7 +13,9 @@ from a solve with a long limit (``--long`` seconds; 0 skips it), and the certifi
 on that ratio the solver states when its least-norm proof stopped.  BLAS single-threaded
 (threadpoolctl); a reference workload (one vectorised evaluate of 500 grid solutions of
 the 180 x 2,000 problem) is timed before every solve; the CPU time of each solve and the
-load average at the start and end are recorded (the machine may be shared).
+load average at the start and end are recorded (the machine may be shared).  The summary
+also counts the independent blocks of registers (no dimension joins two; more than one
+would let the problem decompose).
 
     python bench/exact_scaling.py                    # sizes up to 300 x 5,000, 5 seeds
     python bench/exact_scaling.py --seeds 2 --long 0
@@ -31,6 +33,8 @@ import time
 from pathlib import Path
 
 import numpy as np
+from scipy.sparse import csr_array
+from scipy.sparse.csgraph import connected_components
 from threadpoolctl import threadpool_limits
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -65,6 +69,12 @@ def shop_problem(n: int, m: int, seed: int) -> CorrectionProblem:
                              dimension_ids=tuple(f"D{j}" for j in range(m)))
 
 
+def register_blocks(problem: CorrectionProblem) -> int:
+    """Independent blocks of registers (no dimension joins two): problems that would decompose."""
+    touch = csr_array((np.abs(problem.composite) > 0).astype(float))  # (n registers, m dimensions)
+    return int(connected_components(touch @ touch.T, directed=False)[0])
+
+
 def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--seeds", type=int, default=5)
@@ -84,14 +94,16 @@ def main(argv: list[str] | None = None) -> None:
         header = (f"{'size':>11} {'seed':>4} {'limit':>5} {'wall s':>7} {'cpu s':>6} {'lp':>6} {'grid':>6} {'norm':>6} "
                   f"{'status':<11} {'stopped':<26} {'gap µm':>7} {'‖x‖ mm':>8} {'least mm':>8} {'cert ≤':>6}  path")
         lines.append(header)
-        summary: list[tuple[int, int, float, list[float], int, list[float]]] = []
+        summary: list[tuple[int, int, float, list[float], int, list[float], int]] = []
         for n, m in SIZES[: args.max_size]:
             limit = 2.0 if n * m <= 180 * 2000 else 10.0
             times = []
             excess = []
             proved = 0
+            blocks = []
             for seed in range(args.seeds):
                 problem = shop_problem(n, m, seed)
+                blocks.append(register_blocks(problem))
                 start = time.perf_counter()
                 ref_problem.evaluate(x_ref)  # the reference, interleaved with the solves
                 refs.append(time.perf_counter() - start)
@@ -133,13 +145,13 @@ def main(argv: list[str] | None = None) -> None:
                              f"{result.status:<11} {stop_text:<26} {gap:>7.2f} {result.norm:>8.4f} {least:>8.4f} "
                              f"{cert_text}  {result.extra.get('path', '')}")
                 print(lines[-1], flush=True)
-            summary.append((n, m, limit, times, proved, excess))
+            summary.append((n, m, limit, times, proved, excess, max(blocks)))
     ref = float(np.median(refs))
     summary_lines = [f"{n:>4} x {m:<5} limit {limit:>4.0f} s: median wall {np.median(times):6.3f} s "
                      f"= {np.median(times) / ref:6.2f}x ref, max {np.max(times):6.3f} s; both stages proved "
                      f"{proved}/{len(times)}; norm / proven least norm: "
-                     + (f"max {max(excess):.4f}" if excess else "n/a")
-                     for n, m, limit, times, proved, excess in summary]
+                     + (f"max {max(excess):.4f}" if excess else "n/a") + f"; independent register blocks, most: {blocks}"
+                     for n, m, limit, times, proved, excess, blocks in summary]
     head = [
         "Exact optimiser at shop scale (random multi-part fixtures; times in seconds of wall time)",
         f"command : python bench/exact_scaling.py --seeds {args.seeds} --long {args.long:g}"
