@@ -760,8 +760,8 @@ class ExactOptimizer(Optimizer):
             if not proved_norm:
                 ratio = lower_bound_ratio(float(np.sum(cost * k_best**2)), norm_lower)
                 extra["norm_ratio_max"] = ratio
-                if np.isfinite(ratio):
-                    message += f", at most {ratio:.3f}× the least norm (certified)"
+                message += (f", at most {ratio:.3f}× the least norm (certified)" if np.isfinite(ratio)
+                            else ", with no bound on how far it is from the least norm")
             notes.append(Note(message, kind="solver"))
             extra["stopped"] = {"stage": stage, "reason": why}
         result = make_result(problem, x, optimizer=self.name, evaluations=calls,
