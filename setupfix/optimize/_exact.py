@@ -83,8 +83,10 @@ Array = npt.NDArray[np.float64]
 QUANTUM = 1e-3
 #: Most free registers for which the least-norm proof lists the grid points of the dual ellipsoid.
 ELLIPSOID_MAX_REGISTERS = 120
-#: Largest list of integer points the least-norm proof may enumerate before using the MILPs.
-ENUMERATION_LIMIT = 512
+#: Largest list of (partial) integer points per coordinate, and most array elements touched in all, that
+#: the least-norm proof may enumerate before it uses the MILPs (a list of that size is some 5 ms of numpy).
+ENUMERATION_LIMIT = 20_000
+ENUMERATION_WORK = 1_500_000
 #: The least-norm proof in the Lagrangian box is one MILP with every chord up to these sizes
 #: (else chords are added lazily).
 BOX_PROOF_MAX_REGISTERS = 40
@@ -383,7 +385,7 @@ class ExactOptimizer(Optimizer):
         def listed_least(limit: int) -> bool:  # the dual ellipsoid, listed; True: best is proven least
             nonlocal best
             found, proved, listed = ellipsoid_search(g_rows, g, t_star, centre, q, cost, kmin, kmax, norm(best),
-                                                     limit, b)
+                                                     limit, b, work_limit=ENUMERATION_WORK)
             best = best if found is None else found
             if proved:
                 path.append(f"least norm: {listed} grid points in the dual ellipsoid")
