@@ -103,9 +103,10 @@ STOPPED_BOX_SHARE = 0.8
 #: Relative gap at which those box MILPs stop (they look for an incumbent; the proof comes after).
 INCUMBENT_GAP = 1e-4
 DESCENT_RESERVE = 0.03
-#: Radius² and size of the ellipsoids the grid-optimum stage lists for a point at its bound.
-SEARCH_RADIUS2 = 16.0
+#: Most (partial) points per coordinate, and array elements in all, that the grid-optimum stage lists in the
+#: ellipsoids around the rounded rows' least-norm point (a point at its bound, and the least norm there).
 SEARCH_LIMIT = 20_000
+SEARCH_WORK = 1_500_000
 #: A cold LP with more rows than this is solved by HiGHS's interior-point method (with crossover, so the
 #: duals are a basis' and later solves of the kept model warm-start the simplex from it).
 IPM_MIN_ROWS = 2000
@@ -588,6 +589,7 @@ class ExactOptimizer(Optimizer):
         placeholder = False  # cont holds no least-norm point (large problems whose QP failed)
         unit_box: tuple[Array, bool] | None = None  # rows whose unit box stage 2 searched, and if it had a point
         least_norm_done: Array | None = None  # rows at which the least norm is already proved
+        least_listed = 0
         n_free = int(kmin.size)
         small = g_rows.shape[0] + 2 * n_free <= NNLS_MAX_ROWS
         stage2_end = clock.deadline - LEAST_NORM_SHARE * self.time_limit
@@ -634,14 +636,26 @@ class ExactOptimizer(Optimizer):
                     path.append("grid optimum: least-norm point of the rounded rows attains the bound")
                     proved = True
                     break
-                # A grid point at the bound near the continuous one: small ellipsoids only.
+                # A grid point at the bound near the continuous one: growing ellipsoids, a bounded list.
                 found = None
                 if small:
                     finite = np.isfinite(b)
                     centre, q = lagrangian_ball(g_rows[finite], b[finite], kmin, kmax, cost, cont[1][finite],
                                                 cont[2], cont[3])
-                    found, _, _ = ellipsoid_search(g_rows, g, level, centre, q, cost, kmin, kmax,
-                                                   q + SEARCH_RADIUS2, SEARCH_LIMIT, b)
+                    found, least, listed = ellipsoid_search(g_rows, g, level, centre, q, cost, kmin, kmax, np.inf,
+                                                            SEARCH_LIMIT, b, work_limit=SEARCH_WORK)
+                    if found is not None and least:  # the least norm at the bound: stage 3 has nothing to do
+                        least_norm_done = b.copy()
+                        least_listed = listed
+                    elif found is None and least and all_integer:  # the whole box listed: no grid point at level
+                        path.append(f"grid optimum: no grid point at {level:.4g} steps (the whole box listed)")
+                        level = next_level(g, d, b)
+                        cont = None
+                        if t_best >= level - TOL:
+                            path.append("grid optimum: best point attains the bound lowered by infeasible levels")
+                            proved = True
+                            break
+                        continue
                 elif not placeholder and stage2_left() > 0:  # large: the least norm in the unit box around it
                     res_box, found = box_least_norm(g_rows, b, np.clip(np.floor(cont[0]), kmin, kmax),
                                                     np.clip(np.ceil(cont[0]), kmin, kmax), cost,
@@ -734,7 +748,7 @@ class ExactOptimizer(Optimizer):
         norm_lower = 0.0
         if least_norm_done is not None and np.array_equal(b, least_norm_done):
             proved_norm, why = True, ""
-            path.append("least norm: proved with the grid optimum")
+            path.append(f"least norm: {least_listed} grid points in the dual ellipsoid (listed with the grid optimum)")
         else:
             calls += 1
             if cont is not None and not np.array_equal(b, rounded_rhs(g, d, zero, level)):

@@ -390,7 +390,7 @@ def ellipsoid_search(g_rows: Array, g: Array, level: float, centre: Array, q: fl
 
     Every feasible k satisfies Σ c (k − centre)² ≤ f(k) − q (:func:`lagrangian_ball`).
     Radii² 1, 4, 16, … up to f − q (f: the least norm of a feasible point known so far,
-    ``f_known`` at first, or inf) are listed in turn, only points of norm ≤ f (pruned by
+    ``f_known`` at first, or inf), or up to the radius² that holds the whole box, are listed in turn, only points of norm ≤ f (pruned by
     the rows G k ≤ b, which every feasible point meets, when ``b`` is given); as soon as
     the best feasible point found, of norm f_b, has f_b − q ≤ the radius² listed, nothing
     outside can beat it and it is the least (ties: the lexicographically smallest k).
@@ -407,7 +407,9 @@ def ellipsoid_search(g_rows: Array, g: Array, level: float, centre: Array, q: fl
     def room(f: float) -> float:
         return f - q + 1e-9 * max(1.0, abs(f)) if np.isfinite(f) else np.inf
 
-    cap = room(f_known)
+    # an ellipsoid holding the whole box lists every grid point: no larger radius is needed
+    whole = float(np.sum(cost * np.maximum((kmin - centre) ** 2, (kmax - centre) ** 2)))
+    cap = min(room(f_known), whole)
     f_cut = f_known
     radius2 = min(1.0, cap)
     listed = 0
