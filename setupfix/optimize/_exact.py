@@ -86,7 +86,7 @@ ELLIPSOID_MAX_REGISTERS = 120
 #: Largest list of (partial) integer points per coordinate, and most array elements touched in all, that
 #: the least-norm proof may enumerate before it uses the MILPs (a list of that size is some 5 ms of numpy).
 ENUMERATION_LIMIT = 20_000
-ENUMERATION_WORK = 1_500_000
+ENUMERATION_WORK = 400_000
 #: The least-norm proof in the Lagrangian box is one MILP with every chord up to these sizes
 #: (else chords are added lazily).
 BOX_PROOF_MAX_REGISTERS = 40
@@ -106,7 +106,7 @@ DESCENT_RESERVE = 0.03
 #: Most (partial) points per coordinate, and array elements in all, that the grid-optimum stage lists in the
 #: ellipsoids around the rounded rows' least-norm point (a point at its bound, and the least norm there).
 SEARCH_LIMIT = 20_000
-SEARCH_WORK = 1_500_000
+SEARCH_WORK = 400_000
 #: A cold LP with more rows than this is solved by HiGHS's interior-point method (with crossover, so the
 #: duals are a basis' and later solves of the kept model warm-start the simplex from it).
 IPM_MIN_ROWS = 2000
@@ -386,7 +386,8 @@ class ExactOptimizer(Optimizer):
         def listed_least(limit: int) -> bool:  # the dual ellipsoid, listed; True: best is proven least
             nonlocal best
             found, proved, listed = ellipsoid_search(g_rows, g, t_star, centre, q, cost, kmin, kmax, norm(best),
-                                                     limit, b, work_limit=ENUMERATION_WORK)
+                                                     limit, b, work_limit=ENUMERATION_WORK,
+                                                     multipliers=(lam_rows, lam_lo, lam_hi))
             best = best if found is None else found
             if proved:
                 path.append(f"least norm: {listed} grid points in the dual ellipsoid")
@@ -643,7 +644,8 @@ class ExactOptimizer(Optimizer):
                     centre, q = lagrangian_ball(g_rows[finite], b[finite], kmin, kmax, cost, cont[1][finite],
                                                 cont[2], cont[3])
                     found, least, listed = ellipsoid_search(g_rows, g, level, centre, q, cost, kmin, kmax, np.inf,
-                                                            SEARCH_LIMIT, b, work_limit=SEARCH_WORK)
+                                                            SEARCH_LIMIT, b, work_limit=SEARCH_WORK,
+                                                            multipliers=(cont[1], cont[2], cont[3]))
                     if found is not None and least:  # the least norm at the bound: stage 3 has nothing to do
                         least_norm_done = b.copy()
                         least_listed = listed

@@ -276,7 +276,8 @@ def lagrangian_ball(g_rows: Array, b: Array, kmin: Array, kmax: Array, cost: Arr
 
 def enumerate_ball(centre: Array, cost: Array, radius2: float, kmin: Array, kmax: Array, limit: int,
                    rows: Array | None = None, rhs: Array | None = None, fmax: float = np.inf,
-                   work_limit: int = WORK_LIMIT) -> npt.NDArray[np.float64] | None:
+                   work_limit: int = WORK_LIMIT,
+                   multipliers: tuple[Array, Array, Array] | None = None) -> npt.NDArray[np.float64] | None:
     """Every integer k in the box with Σ c_i (k_i − centre_i)² ≤ radius2 [rows·k ≤ rhs] [Σ c_i k_i² ≤ fmax].
 
     Coordinates are fixed one at a time, breadth first (all partial points of one depth
@@ -288,7 +289,11 @@ def enumerate_ball(centre: Array, cost: Array, radius2: float, kmin: Array, kmax
       its minimum over the box and a_r·centre_r − √E_rest·‖a_r/√c_r‖ (Cauchy–Schwarz on the
       rest's ellipsoid);
     * the norm (``fmax``): Σ_r c k_r² is at least the larger of Σ_r min over the box of c k_r²
-      and (‖centre_r‖_c − √E_rest)² (triangle inequality in the c-norm).
+      and (‖centre_r‖_c − √E_rest)² (triangle inequality in the c-norm), and, given
+      ``multipliers`` (λ ≥ 0 of ``rows`` and of the box bounds kmin, kmax), the Lagrangian dual
+      bound of the rest's continuous problem "min Σ_r c k_r², rows with the fixed part moved to
+      the right, box": max over s ≥ 0 of −s²·Σ_r w_r²/(4 c_r) − s·B, w = λᵀ[rows; I; −I] on
+      the rest, B = λ·(slack left to the rest) — B²/(4·Σ w²/4c) when B < 0 (weak duality, any λ).
 
     Each bound holds for every completion, so nothing with the stated properties is ever
     dropped (the list is exhaustive; it may also hold points that miss a row or ``fmax``).
@@ -327,9 +332,18 @@ def enumerate_ball(centre: Array, cost: Array, radius2: float, kmin: Array, kmax
 
     rest_f = after(c * np.where((lo_o <= 0) & (hi_o >= 0), 0.0, np.minimum(lo_o**2, hi_o**2)))
     rest_norm = np.sqrt(after(c * ce**2))
+    dual = multipliers is not None and rows is not None and rhs is not None and np.isfinite(f_slack)
     a = np.zeros((0, n))
     if rows is not None and rhs is not None:
         a = rows[:, order]
+        if dual:
+            assert multipliers is not None
+            lam = np.maximum(multipliers[0], 0.0)
+            lam_lo, lam_hi = (np.maximum(v, 0.0)[order] for v in multipliers[1:])
+            lam_a = lam @ a  # (n,): λ·row coefficient of each coordinate
+            w = lam_a + lam_hi - lam_lo
+            rest_quad = after(w * w / (4 * c))
+            rest_slack = float(lam @ rhs) + after(lam_hi * kmax[order] - lam_lo * kmin[order])
         # rows no point of the ellipsoid can violate are left out
         top = np.minimum(np.sum(np.maximum(a * lo_o, a * hi_o), axis=1),
                          a @ ce + np.sqrt(max(radius2, 0.0)) * np.sqrt(np.sum(a * a / c, axis=1)))
@@ -343,6 +357,7 @@ def enumerate_ball(centre: Array, cost: Array, radius2: float, kmin: Array, kmax
     partial = np.zeros((1, a.shape[0]))
     acc = np.zeros(1)
     f_acc = np.zeros(1)
+    lam_acc = np.zeros(1)
     values: list[Array] = []  # per depth: the value of each partial point and the index of its parent
     parents: list[npt.NDArray[np.intp]] = []
     work = 0
@@ -364,13 +379,25 @@ def enumerate_ball(centre: Array, cost: Array, radius2: float, kmin: Array, kmax
         acc = acc[rep] + c[p] * (vals - ce[p]) ** 2
         f_acc = f_acc[rep] + c[p] * vals**2
         root = np.sqrt(np.maximum(radius2 - acc, 0.0))
-        keep = np.flatnonzero(f_acc + np.maximum(rest_f[p], np.maximum(rest_norm[p] - root, 0.0) ** 2) <= f_slack)
+        low_f = np.maximum(rest_f[p], np.maximum(rest_norm[p] - root, 0.0) ** 2)
+        if dual:
+            lam_acc = lam_acc[rep] + vals * lam_a[p]
+            slack = rest_slack[p] - lam_acc
+            if rest_quad[p] > 1e-12:
+                low_f = np.maximum(low_f, np.where(slack < 0, slack * slack / (4 * rest_quad[p]), 0.0))
+            else:  # nothing left to move: a negative weighted slack is a violated row
+                low_f = np.where(slack < -1e-7 * max(1.0, float(np.max(np.abs(lam), initial=0.0))), np.inf, low_f)
+        keep = np.flatnonzero(f_acc + low_f <= f_slack)
         rep, vals, acc, f_acc, root = rep[keep], vals[keep], acc[keep], f_acc[keep], root[keep]
+        if dual:
+            lam_acc = lam_acc[keep]
         if pruned:
             partial = partial[rep] + vals[:, None] * a[:, p][None, :]
             low = np.maximum(rest_box[:, p], rest_centre[:, p] - root[:, None] * rest_scale[:, p])
             ok = np.flatnonzero(np.all(partial + low <= rhs + 1e-7, axis=1))
             rep, vals, acc, f_acc, partial = rep[ok], vals[ok], acc[ok], f_acc[ok], partial[ok]
+            if dual:
+                lam_acc = lam_acc[ok]
         if vals.size == 0:
             return np.zeros((0, n))
         values.append(vals)
@@ -385,7 +412,8 @@ def enumerate_ball(centre: Array, cost: Array, radius2: float, kmin: Array, kmax
 
 def ellipsoid_search(g_rows: Array, g: Array, level: float, centre: Array, q: float, cost: Array, kmin: Array,
                      kmax: Array, f_known: float, limit: int, b: Array | None = None,
-                     work_limit: int = WORK_LIMIT) -> tuple[Array | None, bool, int]:
+                     work_limit: int = WORK_LIMIT,
+                     multipliers: tuple[Array, Array, Array] | None = None) -> tuple[Array | None, bool, int]:
     """Least Σ c k² among grid points with t(k) ≥ level, by growing ellipsoids around ``centre``.
 
     Every feasible k satisfies Σ c (k − centre)² ≤ f(k) − q (:func:`lagrangian_ball`).
@@ -394,6 +422,8 @@ def ellipsoid_search(g_rows: Array, g: Array, level: float, centre: Array, q: fl
     the rows G k ≤ b, which every feasible point meets, when ``b`` is given); as soon as
     the best feasible point found, of norm f_b, has f_b − q ≤ the radius² listed, nothing
     outside can beat it and it is the least (ties: the lexicographically smallest k).
+    ``multipliers`` (λ of the rows G k ≤ b, of k ≥ kmin and of k ≤ kmax; any λ ≥ 0) sharpen
+    the pruning by the norm (:func:`enumerate_ball`).
 
     Returns
     -------
@@ -419,8 +449,9 @@ def ellipsoid_search(g_rows: Array, g: Array, level: float, centre: Array, q: fl
         if b is None or fin is None:
             points = enumerate_ball(centre, cost, radius2, kmin, kmax, limit, fmax=f_cut, work_limit=work_limit)
         else:
+            lam = None if multipliers is None else (multipliers[0][fin], multipliers[1], multipliers[2])
             points = enumerate_ball(centre, cost, radius2, kmin, kmax, limit, g_rows[fin], b[fin], fmax=f_cut,
-                                    work_limit=work_limit)
+                                    work_limit=work_limit, multipliers=lam)
         if points is None:
             return best, False, listed
         listed = points.shape[0]
