@@ -67,7 +67,7 @@ from setupfix.errors import Note, SolverError
 from setupfix.params import Interval
 from setupfix.optimize._base import Optimizer, make_result
 from setupfix.optimize._grid import (TOL, dual_bound, ellipsoid_search, grid_margins, lagrangian_ball,
-                                     least_distance,
+                                     least_distance, least_distance_system,
                                      next_level,
                                      PairStructure, pair_bound, pair_structure, rounded_rhs, row_gcd)
 from setupfix.optimize._highs import INF, LinearModel, Solve
@@ -331,7 +331,14 @@ class ExactOptimizer(Optimizer):
         millisecond), large ones by HiGHS's QP solver on the kept model.
         """
         if g_rows.shape[0] + 2 * g_rows.shape[1] <= NNLS_MAX_ROWS:
-            status, out = least_distance(g_rows, b, kmin, kmax, cost)
+            # the b-independent part of the NNLS system, kept with the solver models (the cache holds this
+            # G and cost: the LP bound, which every solve starts with, set it)
+            keep = np.isfinite(b)
+            key = ("nnls", keep.tobytes())
+            system = self._cache.derived.get(key)
+            if system is None or self._cache.g_rows is None or self._cache.g_rows.shape != g_rows.shape:
+                system = self._cache.derived[key] = least_distance_system(g_rows[keep], cost)
+            status, out = least_distance(g_rows, b, kmin, kmax, cost, system)  # type: ignore[arg-type]
             if status != "unknown":
                 return status, out
         elif WORKING_SET_NNLS:

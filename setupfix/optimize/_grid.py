@@ -48,7 +48,7 @@ import numpy.typing as npt
 from scipy.sparse import coo_array, csr_array
 
 __all__ = ["TOL", "grid_margins", "dual_bound", "pair_bound", "pair_structure", "PairStructure", "row_gcd", "rounded_rhs", "next_level",
-           "least_distance", "lagrangian_ball", "enumerate_ball", "ellipsoid_search"]
+           "least_distance", "least_distance_system", "lagrangian_ball", "enumerate_ball", "ellipsoid_search"]
 
 Array = npt.NDArray[np.float64]
 
@@ -202,7 +202,8 @@ def next_level(g: Array, d: Array, b: Array) -> float:
     return float(np.max(g[m] - b[m] - d[m])) if np.any(m) else -np.inf
 
 
-def least_distance(g_rows: Array, b: Array, kmin: Array, kmax: Array, cost: Array
+def least_distance(g_rows: Array, b: Array, kmin: Array, kmax: Array, cost: Array,
+                   system: tuple[Array, Array] | None = None
                    ) -> tuple[str, tuple[Array, Array, Array, Array] | None]:
     """Least Σ c k² subject to G k ≤ b and the box, by NNLS (Lawson & Hanson 1974, ch. 23).
 
@@ -213,19 +214,24 @@ def least_distance(g_rows: Array, b: Array, kmin: Array, kmax: Array, cost: Arra
     Farkas certificate, checked here: Mᵀu = ε, mᵀu = s > 0 and ‖ε‖₁·max|k| < s over
     the box proves that no k satisfies the constraints.
 
-    Rows with b = +inf are left out.  Returns ``("optimal", (k, λ_rows, λ_lower,
-    λ_upper))``, ``("infeasible", None)`` with a checked certificate, or
-    ``("unknown", None)``.
+    Rows with b = +inf are left out.  ``system``: the part that does not depend on b
+    (:func:`least_distance_system` of the rows kept), for a caller that solves many b.
+    Returns ``("optimal", (k, λ_rows, λ_lower, λ_upper))``, ``("infeasible", None)`` with a
+    checked certificate, or ``("unknown", None)``.
     """
     from scipy.optimize import nnls
 
     n = kmin.size
     keep = np.isfinite(b)
-    rows = g_rows[keep]
-    m_mat = np.vstack([-rows, np.eye(n), -np.eye(n)])
-    m_vec = np.r_[-b[keep], kmin, -kmax]
+    n_rows = int(keep.sum())
+    m_mat, e = least_distance_system(g_rows[keep], cost) if system is None else system
     scale = 1.0 / np.sqrt(cost)
-    e = np.vstack([(m_mat * scale).T, m_vec[None, :]])
+    e = e.copy()
+    e[-1, :n_rows] = -b[keep]
+    e[-1, n_rows:n_rows + n] = kmin
+    e[-1, n_rows + n:] = -kmax
+    m_vec = e[-1]
+    rows = g_rows[keep]
     f = np.zeros(n + 1)
     f[-1] = 1.0
     try:
@@ -243,6 +249,18 @@ def least_distance(g_rows: Array, b: Array, kmin: Array, kmax: Array, cost: Arra
     if s > 0 and float(np.sum(np.abs(eps))) * float(np.max(np.abs(np.r_[kmin, kmax]), initial=0.0)) < s:
         return "infeasible", None
     return "unknown", None
+
+
+def least_distance_system(rows: Array, cost: Array) -> tuple[Array, Array]:
+    """The part of :func:`least_distance`'s NNLS system that does not depend on b.
+
+    Returns M = [−rows; I; −I] (shape (r + 2n, n)) and E = [(M/√c)ᵀ; 0] (shape (n + 1, r + 2n)),
+    whose last row :func:`least_distance` fills with the right-hand sides.
+    """
+    n = cost.size
+    m_mat = np.vstack([-rows, np.eye(n), -np.eye(n)])
+    e = np.vstack([(m_mat * (1.0 / np.sqrt(cost))).T, np.zeros((1, m_mat.shape[0]))])
+    return m_mat, e
 
 
 def lagrangian_ball(g_rows: Array, b: Array, kmin: Array, kmax: Array, cost: Array, lam_rows: Array,
