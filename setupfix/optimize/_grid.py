@@ -314,7 +314,7 @@ def enumerate_ball(centre: Array, cost: Array, radius2: float, kmin: Array, kmax
       the rest, B = λ·(slack left to the rest) — B²/(4·Σ w²/4c) when B < 0 (weak duality, any λ).
 
     Each bound holds for every completion, so nothing with the stated properties is ever
-    dropped (the list is exhaustive; it may also hold points that miss a row or ``fmax``).
+    dropped, and the last coordinate checks them exactly: the list is exactly those points.
     With a finite ``fmax`` coordinates are fixed largest |√c·centre| first (the norm bound
     bites early); otherwise fewest candidates first.
 
@@ -337,6 +337,8 @@ def enumerate_ball(centre: Array, cost: Array, radius2: float, kmin: Array, kmax
         keep = np.sum(cost * (grid - centre) ** 2, axis=1) <= radius2
         if np.isfinite(f_slack):
             keep &= np.sum(cost * grid**2, axis=1) <= f_slack
+        if rows is not None and rhs is not None and rows.shape[0]:
+            keep &= np.all(grid @ rows.T <= rhs + 1e-7, axis=1)
         return grid[keep]
     if np.isfinite(f_slack):
         order = np.argsort(-np.sqrt(cost) * np.abs(centre), kind="stable")
