@@ -16,10 +16,13 @@ Reported:
   (seconds per stage; absent in versions that do not record it);
 * a profile of the same solves: time inside HiGHS's solve calls, inside other
   compiled code the stages call (NNLS), and in Python around them;
-* how many reports each stage was needed for (``result.extra["path"]``).
+* how many reports each stage was needed for (``result.extra["path"]``);
+* the five bundled guide-pins cycles as ``bench/batch_throughput.py`` feeds them (in turn:
+  1, 2, 3, 4, 5, 1, 2, …, ``--rounds`` times, one optimiser instance): the median per cycle,
+  the mean of the five medians, each as a ratio to the same reference.
 
-    python bench/exact_per_report.py              # 5 cycles + 200 random sets
-    python bench/exact_per_report.py --sets 50
+    python bench/exact_per_report.py              # 5 cycles + 200 random sets, 40 rounds of the cycles
+    python bench/exact_per_report.py --sets 50 --rounds 10
 
 Writes ``bench/results/exact_per_report.txt`` (with the command).
 """
@@ -95,6 +98,7 @@ def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--sets", type=int, default=200, help="random measurement sets (eqs. 12-13)")
     parser.add_argument("--seed", type=int, default=2014)
+    parser.add_argument("--rounds", type=int, default=40, help="rounds over the five bundled cycles")
     parser.add_argument("--out", type=Path, default=RESULTS / "exact_per_report.txt")
     args = parser.parse_args(argv)
     load_start = os.getloadavg()[0]
@@ -125,15 +129,26 @@ def main(argv: list[str] | None = None) -> None:
             paths[str(result.extra.get("path", "-"))] += 1
         wall = time.perf_counter() - wall
         split = profile_split(exact.solve, items)
+        cycles = items[:5]
+        cycle_times: dict[str, list[float]] = {name: [] for name, _ in cycles}
+        cycle_paths: dict[str, Counter[str]] = {name: Counter() for name, _ in cycles}
+        for _ in range(args.rounds):
+            for name, problem in cycles:
+                x_ref = problem.snap(rng.uniform(problem.lb, problem.ub, (5000, problem.n_registers)))
+                refs.append(reference_seconds(problem, x_ref))
+                start = time.perf_counter()
+                result = exact.solve(problem)
+                cycle_times[name].append(time.perf_counter() - start)
+                cycle_paths[name][str(result.extra.get("path", "-"))] += 1
 
     t = np.array(times)
     tc = np.array(cpu)
-    ref = float(np.median(refs))
+    ref = float(np.median(refs))  # over the 205 reports and the rounds of the cycles
     refc = float(np.median(ref_cpu))
     n = len(items)
     lines = [
         "Exact optimiser: time per report on the guide-pins model (paper's example)",
-        f"command : python bench/exact_per_report.py --sets {args.sets} --seed {args.seed}",
+        f"command : python bench/exact_per_report.py --sets {args.sets} --seed {args.seed} --rounds {args.rounds}",
         f"machine : {platform.machine()}, Python {platform.python_version()}, numpy {np.__version__}; "
         f"wall time {wall:.1f} s",
         f"threads : BLAS limited to 1 by threadpoolctl ({blas})",
@@ -161,6 +176,14 @@ def main(argv: list[str] | None = None) -> None:
         lines.append("  (this version records no stage times)")
     lines += ["", "paths taken (which stages were needed):"]
     lines += [f"  {k:<40} {v}" for k, v in paths.most_common()]
+    medians = {name: float(np.median(v)) for name, v in cycle_times.items()}
+    lines += ["", f"bundled guide-pins cycles, in turn as the batch bench feeds them ({args.rounds} rounds; "
+              "median per cycle):"]
+    for name, med in medians.items():
+        lines.append(f"  {name}  {med * 1e3:7.2f} ms = {med / ref:5.2f}x reference   "
+                     f"{'; '.join(cycle_paths[name])[:160]}")
+    mean = float(np.mean(list(medians.values())))
+    lines.append(f"  mean of the five medians {mean * 1e3:7.2f} ms = {mean / ref:5.2f}x reference")
     total = split["total"]
     lines += [
         "",
