@@ -22,9 +22,10 @@ from __future__ import annotations
 import contextlib
 import dataclasses
 import hashlib
+import itertools
 import os
 import time
-from collections import Counter
+from collections import Counter, deque
 from collections.abc import Callable, Iterator, Mapping
 from concurrent.futures import Future, ProcessPoolExecutor
 from dataclasses import dataclass, field
@@ -167,27 +168,46 @@ def _correct_one(path: str, size: int, mtime_ns: int) -> Outcome:
     return out
 
 
+def _correct_chunk(items: list[tuple[str, int, int]]) -> list[Outcome]:
+    return [_correct_one(*item) for item in items]
+
+
+#: Most reports sent to a worker in one task.  A task per report costs a round trip
+#: (pickling the arguments and the outcome, waking the parent) of ~0.5 ms, a few
+#: percent of a report; chunks make that negligible while keeping progress lively.
+CHUNK = 16
+
+
+def chunk_size(n_files: int, workers: int) -> int:
+    """Reports per task: about 8 tasks per worker, between 1 and :data:`CHUNK` reports each."""
+    return max(1, min(CHUNK, -(-n_files // (8 * workers))))
+
+
 def _outcomes(files: list[tuple[Path, int, int]], model: ProcessModel, options: BatchOptions,
               workers: int) -> Iterator[Outcome]:
-    """Outcomes in file order; at most ``2·workers`` reports in flight (memory stays flat)."""
+    """Outcomes in file order.
+
+    With several workers the model and options go to each worker process once (its
+    initializer), the files in chunks of :func:`chunk_size`; at most ``2·workers``
+    chunks are in flight, so memory stays flat in the number of reports.
+    """
+    items = [(str(path), size, mtime) for path, size, mtime in files]
     if workers <= 1:
         _init(model, options)
-        for path, size, mtime in files:
-            yield _correct_one(str(path), size, mtime)
+        for item in items:
+            yield _correct_one(*item)
         return
+    size = chunk_size(len(items), workers)
+    chunks = iter([items[i:i + size] for i in range(0, len(items), size)])
     with ProcessPoolExecutor(max_workers=workers, initializer=_init, initargs=(model, options)) as pool:
-        pending: list[Future[Outcome]] = []
-        it = iter(files)
-        for path, size, mtime in it:
-            pending.append(pool.submit(_correct_one, str(path), size, mtime))
-            if len(pending) >= 2 * workers:
-                break
+        pending: deque[Future[list[Outcome]]] = deque(pool.submit(_correct_chunk, c)
+                                                      for c in itertools.islice(chunks, 2 * workers))
         while pending:
-            done = pending.pop(0)
-            nxt = next(it, None)
+            done = pending.popleft()
+            nxt = next(chunks, None)
             if nxt is not None:
-                pending.append(pool.submit(_correct_one, str(nxt[0]), nxt[1], nxt[2]))
-            yield done.result()
+                pending.append(pool.submit(_correct_chunk, nxt))
+            yield from done.result()
 
 
 def run_batch(model: ProcessModel | str | Path, folder: str | Path, out: str | Path, *,

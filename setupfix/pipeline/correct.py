@@ -18,12 +18,12 @@ import numpy as np
 
 from setupfix.errors import ExportError, MatchError, SourceLocation
 from setupfix.model import PartMeasurement, ProcessModel, load_model
+from setupfix.model.effects import model_effects
 from setupfix.model.safety import safety_settings
 from setupfix.offsets import OffsetRow, offset_rows
 from setupfix.pipeline.controllers import read_current, write_offsets
 from setupfix.optimize import CorrectionProblem, OptimizeResult, get_optimizer
 from setupfix.pipeline.cycles import Stations, assign_stations, load_parts  # noqa: F401 - re-exported
-from setupfix.pipeline.diagnose import forecast_part
 from setupfix.pipeline.smoothing import smooth_part
 from setupfix.safety import Policy, Recommendation, RuleEffect, budget, recommend
 from setupfix.store import Store
@@ -263,10 +263,15 @@ def correct_part(model: ProcessModel, part: PartMeasurement, *, optimizer: str =
     measured_part = part
     if smoothed is not None and smoothed.used:
         part = dataclasses.replace(part, deviation=smoothed.deviation)
-    forecast = forecast_part(model, part)  # the model's [effects]: drift and wear until the next cycle
-    if forecast is not part:
-        notes += [str(n) for n in forecast.notes[len(part.notes):]]
-        part = forecast
+    if model_effects(model).effects:
+        # the model's [effects]: drift and wear until the next cycle.  Imported here: the diagnosis
+        # brings scipy.stats (~0.5 s of start-up), which a model without effects never needs.
+        from setupfix.pipeline.diagnose import forecast_part
+
+        forecast = forecast_part(model, part)
+        if forecast is not part:
+            notes += [str(n) for n in forecast.notes[len(part.notes):]]
+            part = forecast
     problem = CorrectionProblem.from_part(model, part)
     raw = measured_part.deviation[measured_part.measured] if part is not measured_part else None
     opt = get_optimizer(optimizer, seed=seed, **params)
