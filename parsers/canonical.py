@@ -16,6 +16,7 @@ import numpy as np
 import pandas as pd
 
 from parsers._source import Source, csv_records, decode, point_number, read_bytes
+from parsers.numbers import try_number
 from setupfix.errors import ParseError, SourceLocation
 from setupfix.model.measurements import CANONICAL_COLUMNS, LENGTH_COLUMNS
 from setupfix.units import LENGTH_UNITS, length_factor
@@ -249,42 +250,52 @@ def read_canonical(path: str | Path | Source, *, text: str | None = None, unit: 
     if missing:
         raise ParseError(f"missing required column(s): {', '.join(missing)}", location=SourceLocation(name, line=1))
     rows: list[dict[str, object]] = []
+    width = len(header)
+    lengths_here = [c for c in LENGTH_COLUMNS if c in header]  # every row holds every header key
+    factors: dict[str, float] = {}
     for line_num, record in records:
-        where = SourceLocation(name, line=line_num)
         if not any(cell.strip() for cell in record):
             continue
-        if len(record) > len(header):
-            raise ParseError(f"{len(record)} fields, header has {len(header)}", location=where)
-        row: dict[str, object] = dict(zip(header, (_unescaped(c.strip()) for c in record)))
+        if len(record) > width:
+            raise ParseError(f"{len(record)} fields, header has {width}", location=SourceLocation(name, line=line_num))
+        row: dict[str, object] = dict(zip(header, [_unescaped(c.strip()) for c in record]))
         for col in header[len(record):]:
             row[col] = ""
         if not row["characteristic"]:
-            raise ParseError("empty characteristic name", location=where)
+            raise ParseError("empty characteristic name", location=SourceLocation(name, line=line_num))
         row_unit = str(row.get("unit") or unit or "mm")
-        if row_unit.strip().lower() not in LENGTH_UNITS:
-            raise ParseError(f"unknown unit {row_unit!r} (expected mm or inch)", location=where)
-        factor = length_factor(row_unit, "mm")
-        for col in LENGTH_COLUMNS:
-            if col in row:
-                row[col] = point_number(str(row[col]), where, f"column {col!r}: ") * factor
+        factor = factors.get(row_unit)
+        if factor is None:
+            if row_unit.strip().lower() not in LENGTH_UNITS:
+                raise ParseError(f"unknown unit {row_unit!r} (expected mm or inch)",
+                                 location=SourceLocation(name, line=line_num))
+            factor = factors[row_unit] = length_factor(row_unit, "mm")
+        for col in lengths_here:
+            cell = str(row[col])
+            # The grammar's fast path; anything it does not read (empty, damaged) goes through
+            # point_number, which gives NaN for empty text or the error naming file and line.
+            value = try_number(cell)
+            if value is None:
+                value = point_number(cell, SourceLocation(name, line=line_num), f"column {col!r}: ")
+            row[col] = value * factor
         nominal, actual = float(row["nominal"]), float(row.get("actual", math.nan))  # type: ignore[arg-type]
         stated = float(row.get("deviation", math.nan))  # type: ignore[arg-type]
         if math.isnan(nominal):
-            raise ParseError("empty nominal value", location=where)
+            raise ParseError("empty nominal value", location=SourceLocation(name, line=line_num))
         if math.isnan(actual) and math.isnan(stated):
-            raise ParseError("neither actual nor deviation is given", location=where)
+            raise ParseError("neither actual nor deviation is given", location=SourceLocation(name, line=line_num))
         if math.isnan(actual):
             actual = nominal + stated
         elif not math.isnan(stated) and abs(stated - (actual - nominal)) > DEVIATION_TOLERANCE_MM:
-            raise ParseError(
-                f"deviation {stated:g} mm contradicts actual - nominal = {actual - nominal:g} mm", location=where
-            )
+            raise ParseError(f"deviation {stated:g} mm contradicts actual - nominal = {actual - nominal:g} mm",
+                             location=SourceLocation(name, line=line_num))
         row["actual"], row["deviation"] = actual, actual - nominal
         lo, up = float(row.get("lower", math.nan)), float(row.get("upper", math.nan))  # type: ignore[arg-type]
         if not math.isnan(lo) and not math.isnan(up) and lo >= up:
-            raise ParseError(f"lower limit {lo:g} is not below upper limit {up:g}", location=where)
+            raise ParseError(f"lower limit {lo:g} is not below upper limit {up:g}",
+                             location=SourceLocation(name, line=line_num))
         if "reference" in row:
-            row["reference"] = _flag(str(row["reference"]), where)
+            row["reference"] = _flag(str(row["reference"]), SourceLocation(name, line=line_num))
         row["source"] = f"{name}:{line_num}"
         rows.append(row)
     if not rows:
