@@ -16,7 +16,7 @@ import numpy as np
 import pandas as pd
 
 from parsers._source import Source, csv_records, decode, point_number, read_bytes
-from parsers.numbers import try_number
+from parsers.numbers import MAX_NUMBER_CHARS, number_pattern, try_number
 from setupfix.errors import ParseError, SourceLocation
 from setupfix.model.measurements import CANONICAL_COLUMNS, LENGTH_COLUMNS
 from setupfix.units import LENGTH_UNITS, length_factor
@@ -239,7 +239,8 @@ def read_canonical(path: str | Path | Source, *, text: str | None = None, unit: 
             except UnicodeDecodeError as exc:
                 raise ParseError("not UTF-8 text", location=SourceLocation(name, line=data[: exc.start].count(b"\n") + 1),
                                  hint="give its encoding with --encoding") from None
-    records = csv_records(text.lstrip("\ufeff"), name)
+    body = text.lstrip("\ufeff")
+    records = csv_records(body, name)
     try:
         header = [h.strip().lower() for h in next(records)[1]]
     except StopIteration:
@@ -249,6 +250,9 @@ def read_canonical(path: str | Path | Source, *, text: str | None = None, unit: 
         missing.append("actual (or deviation)")
     if missing:
         raise ParseError(f"missing required column(s): {', '.join(missing)}", location=SourceLocation(name, line=1))
+    columns = _plain_columns(body, header, name, unit) if FAST_PATH else None
+    if columns is not None:
+        return finish_table(columns, name)
     rows: list[dict[str, object]] = []
     width = len(header)
     lengths_here = [c for c in LENGTH_COLUMNS if c in header]  # every row holds every header key
@@ -301,3 +305,87 @@ def read_canonical(path: str | Path | Source, *, text: str | None = None, unit: 
     if not rows:
         raise ParseError("no measurement rows", location=SourceLocation(name))
     return finish_table(rows, name)
+
+
+#: Whether :func:`read_canonical` tries :func:`_plain_columns` first (tests compare both paths).
+FAST_PATH = True
+
+#: Longest line the fast path takes: the csv module refuses a field over 131,072 characters.
+_MAX_PLAIN_LINE = 131072
+
+_NUMBER = number_pattern(".")
+
+
+def _plain_columns(body: str, header: list[str], name: str, unit: str | None) -> dict[str, object] | None:
+    """The columns the row loop of :func:`read_canonical` would build, column by column; or None.
+
+    A plain file (no quote, no NUL, no lone carriage return, no huge line, unique
+    headers, every row complete) whose every cell passes every check of the row loop
+    is read here a column at a time (several times faster on large files).  Anything
+    else — any cell the loop would refuse or treat specially — gives None, and the
+    loop reads the file and names the first offending line.  Same values, same checks,
+    same order of keys (tested against the loop on every sample and on fuzzed files).
+    """
+    if '"' in body or "\x00" in body or body.count("\r") != body.count("\r\n") or len(set(header)) != len(header):
+        return None
+    lines = body.replace("\r\n", "\n").split("\n")
+    if max(map(len, lines)) >= _MAX_PLAIN_LINE:
+        return None
+    width = len(header)
+    # A line is blank for the loop when every field is white space: exactly when the line
+    # without its commas is.
+    kept = [(i, line) for i, line in enumerate(lines[1:], start=2) if line.replace(",", "").strip()]
+    if not kept:
+        return None
+    records = [line.split(",") for _, line in kept]
+    if any(len(r) != width for r in records):
+        return None
+    unescape = "'" in body
+    cells: dict[str, list[str]] = {}
+    for col, values in zip(header, zip(*records)):
+        cells[col] = [_unescaped(v.strip()) for v in values] if unescape else [v.strip() for v in values]
+    if not all(cells["characteristic"]):
+        return None
+    n = len(records)
+    spellings = cells["unit"] if "unit" in cells else [""] * n
+    factors = {}
+    for spelling in set(spellings):
+        row_unit = str(spelling or unit or "mm")
+        if row_unit.strip().lower() not in LENGTH_UNITS:
+            return None
+        factors[spelling] = length_factor(row_unit, "mm")
+    factor = np.array([factors[s] for s in spellings]) if len(factors) > 1 else next(iter(factors.values()))
+    out: dict[str, object] = {}
+    numbers: dict[str, np.ndarray] = {}
+    for col in header:
+        if col not in LENGTH_COLUMNS:
+            out[col] = cells[col]
+            continue
+        text = cells[col]
+        if max(map(len, text)) > MAX_NUMBER_CHARS or not all(map(_NUMBER.fullmatch, filter(None, text))):
+            return None
+        raw = np.array([float(v) if v else math.nan for v in text])  # NaN exactly where empty
+        with np.errstate(over="ignore", invalid="ignore"):
+            values = raw * factor
+        if (~np.isfinite(values) & ~np.isnan(raw)).any():
+            return None  # beyond the range of a length (the loop names it)
+        numbers[col] = out[col] = values
+    nan = np.full(n, math.nan)
+    nominal, actual, stated = numbers["nominal"], numbers.get("actual", nan), numbers.get("deviation", nan)
+    if np.isnan(nominal).any() or (np.isnan(actual) & np.isnan(stated)).any():
+        return None
+    with np.errstate(invalid="ignore"):
+        if (~np.isnan(actual) & ~np.isnan(stated) & (np.abs(stated - (actual - nominal)) > DEVIATION_TOLERANCE_MM)).any():
+            return None
+        actual = np.where(np.isnan(actual), nominal + stated, actual)
+        lo, up = numbers.get("lower", nan), numbers.get("upper", nan)
+        if (lo >= up).any():  # NaN compares False: a missing limit is fine
+            return None
+    out["actual"], out["deviation"] = actual, actual - nominal
+    if "reference" in out:
+        flags = [_FLAGS.get(v.strip().lower()) for v in cells["reference"]]
+        if any(f is None for f in flags):
+            return None
+        out["reference"] = flags
+    out["source"] = [f"{name}:{line}" for line, _ in kept]
+    return out
