@@ -34,6 +34,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--dead-time", type=float, default=30.0, help="minutes from the last part to the correction (30)")
     p.add_argument("--tool-change-every", type=int, default=16, help="cycles between tool changes (0: never; 16)")
     p.add_argument("--cycle-minutes", type=float, default=20.0, help="minutes per cycle (20)")
+    p.add_argument("--sparse", type=int, default=0,
+                   help="registers the operator changes per correction, the largest (0: all, least-norm shares; "
+                        "then every register moves in proportion and a wrong relation's register cannot be named)")
     p.add_argument("--per-cycle", action="store_true", help="one measurement file per cycle")
     p.add_argument("--start", default=SIMULATE_START,
                    help=f"time of the first cycle, ISO 8601 (default {SIMULATE_START})")
@@ -48,7 +51,8 @@ def run(args: argparse.Namespace) -> int:
     effects = [parse_effect(e) for e in args.effect]
     params = {"n_cycles": args.cycles, "noise": args.noise, "setup_error": args.setup_error,
               "correct_every": args.correct_every, "dead_time": args.dead_time,
-              "tool_change_every": args.tool_change_every, "cycle_minutes": args.cycle_minutes, "seed": args.seed}
+              "tool_change_every": args.tool_change_every, "cycle_minutes": args.cycle_minutes, "sparse": args.sparse,
+              "seed": args.seed}
     model, layout, sim = simulate_series(args.model, effects, **params)
     files = write_series(model, layout, sim, args.out, per_cycle=args.per_cycle, start=args.start,
                          settings={**params, "effects": args.effect})

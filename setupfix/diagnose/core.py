@@ -38,6 +38,17 @@ class EffectResult:
     def target(self) -> str:
         return self.spec.target
 
+    @property
+    def registers(self) -> tuple[str, ...]:
+        """A relation's register and every other the series cannot tell from it (empty for other kinds).
+
+        One register: the series names it.  Several: they moved together (or the dimension
+        is off by a constant no correction step explains) and any of them may be the one.
+        """
+        if self.kind != "relation":
+            return ()
+        return (str(self.spec.register), *(a.rsplit(" ~ ", 1)[1] for a in self.alike))
+
 
 @dataclass(frozen=True)
 class ErrorSummary:
@@ -104,6 +115,12 @@ class Diagnosis:
     walk: WalkForward | None
     forecast: Array
     notes: tuple[str, ...]
+
+    def relation_matrix(self) -> Array:
+        """Composite matrix the corrections are mapped through: C with the relations found whose
+        register is named (:meth:`Fit.relation_matrix`; a relation shared by registers that moved
+        together changes nothing)."""
+        return self.after.relation_matrix(self.layout, self.selection.unnamed)
 
 
 class Diagnoser(ValidatedParams):
@@ -173,7 +190,7 @@ class Diagnoser(ValidatedParams):
         walk = None
         notes = list(selection.notes)
         if self.walk and series.n_cycles >= self.min_train + 5:
-            walk = walk_forward(layout, series, score_composite=after.relation_matrix(layout),
+            walk = walk_forward(layout, series, score_composite=after.relation_matrix(layout, selection.unnamed),
                                 min_train=self.min_train, reselect_every=self.reselect_every, lam=self.lam,
                                 alpha=self.alpha, declared=declared)
         elif self.walk:

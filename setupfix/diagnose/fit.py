@@ -14,6 +14,7 @@ dimension, the δ · s_i part).  Ordinary least squares by QR/SVD (numpy).
 
 from __future__ import annotations
 
+from collections.abc import Collection
 from dataclasses import dataclass
 
 import numpy as np
@@ -149,19 +150,21 @@ class Fit:
             out += self.coef[span.start] * effect_field(spec, layout, series)
         return out
 
-    def relation_matrix(self, layout: Layout) -> Array:
+    def relation_matrix(self, layout: Layout, skip: Collection[EffectSpec] = ()) -> Array:
         """Composite matrix with the found relation effects added, C + Σ δ e_i e_qᵀ.
 
         Only weights known to better than a third of themselves (|δ| > 3 s.e.) change the
         matrix the corrections are mapped through: an uncertain weight would amplify noise
-        into a correction.
+        into a correction.  Relations in ``skip`` (those whose register the series cannot
+        name: it moved together with others) never do: putting the weight on one register
+        of the set would be a guess.
         """
         C = layout.composite.copy()
         for i, spec in enumerate(self.specs):
             est, se = self.estimate(i)
-            if spec.kind == "relation" and abs(est) > RELATION_T * se:
+            if spec.kind == "relation" and spec not in skip and abs(est) > RELATION_T * se:
                 C[layout.register_ids.index(str(spec.register)),
-                  layout.dimension_ids.index(str(spec.dimension))] += self.estimate(i)[0]
+                  layout.dimension_ids.index(str(spec.dimension))] += est
         return C
 
 

@@ -2,10 +2,13 @@
 
 A measured report shows the part as it was cut; the correction acts on the next
 cycle.  Between the two, a drift goes on for one cycle interval and every tool wears
-by one more cycle; the static effects (scale, position, relation, group) are already
-in the measured deviations, and a thermal term needs the next temperature, which is
-not known (taken as unchanged).  The shift is added to the measured deviations
-before the correction is optimised.
+by one more cycle; the static effects (scale, position, group) are already in the
+measured deviations, and a thermal term needs the next temperature, which is not
+known (taken as unchanged).  The shift is added to the measured deviations before
+the correction is optimised.
+
+A relation is in the measured deviations too, but it also changes what a correction
+does: :func:`relation_composite` gives the matrix the correction is mapped through.
 """
 
 from __future__ import annotations
@@ -13,10 +16,11 @@ from __future__ import annotations
 import numpy as np
 import numpy.typing as npt
 
+from setupfix.diagnose.fit import RELATION_T
 from setupfix.diagnose.terms import EffectSpec, Layout, common_tool_row
 from setupfix.model.effects import EffectsSection, ModelEffect
 
-__all__ = ["spec_of", "forecast_shift"]
+__all__ = ["spec_of", "forecast_shift", "relation_composite"]
 
 Array = npt.NDArray[np.float64]
 
@@ -61,3 +65,27 @@ def forecast_shift(section: EffectsSection, layout: Layout, *, time: float | Non
         elif e.kind == "wear" and e.register in layout.register_ids:
             out += e.estimate * layout.composite[layout.register_ids.index(e.register)]
     return out
+
+
+def relation_composite(section: EffectsSection, layout: Layout) -> Array:
+    """The composite matrix with the section's relations added, C + Σ δ e_i e_qᵀ (eqs. 3–4).
+
+    A relation changes the matrix only when its register is named (``registers`` empty
+    or that register alone: a weight shared by registers that moved together would be a
+    guess) and its weight is known to better than a third of itself (|δ| > 3 s.e.; a
+    relation written without a standard error is taken as given).
+
+    Returns
+    -------
+    ndarray of shape (n_registers, n_dimensions)
+    """
+    C = layout.composite.copy()
+    for e in section.effects:
+        if e.kind != "relation" or e.register not in layout.register_ids or e.dimension not in layout.dimension_ids:
+            continue
+        if set(e.registers) - {e.register}:
+            continue
+        if e.stderr is not None and abs(e.estimate) <= RELATION_T * e.stderr:
+            continue
+        C[layout.register_ids.index(str(e.register)), layout.dimension_ids.index(str(e.dimension))] += e.estimate
+    return C

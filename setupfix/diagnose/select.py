@@ -23,6 +23,9 @@ cannot be told apart from it.  Both are reported, never guessed.
 
 The relation candidates (register i × dimension q) are scored from per-dimension
 sums, without forming their N-row columns, so the cost stays linear in the cycles.
+The register of a relation found is reported as a confidence set: every register
+whose corrections the data cannot tell from the chosen one's (encompassing F-tests,
+:func:`_relation_set`); registers that moved together are never told apart.
 """
 
 from __future__ import annotations
@@ -83,6 +86,11 @@ class Selection:
     unidentifiable: tuple[str, ...] = ()
     notes: tuple[str, ...] = field(default=())
     lack_of_fit: bool = False
+
+    @property
+    def unnamed(self) -> tuple[EffectSpec, ...]:
+        """Relations found whose register the series cannot name (others are as likely: ``Step.alike``)."""
+        return tuple(s.spec for s in self.steps if s.accepted and s.spec.kind == "relation" and s.alike)
 
 
 def candidate_specs(layout: Layout, series: Series, *, taus: tuple[float, ...] = (0.1, 0.25, 0.5)) -> list[EffectSpec]:
@@ -221,7 +229,6 @@ def select_effects(layout: Layout, series: Series, *, alpha: float = 0.01, max_e
             if cyc.size >= 3:
                 pairs_ok[:, q] = np.ptp(series.applied[cyc], axis=0) > _TINY
     notes: list[str] = []
-    slope_known = True
     X = np.hstack([obs.base] + [effect_columns(s, layout, series, obs) for s in declared])
     found: list[EffectSpec] = []
     blocks: list[Array] = []
@@ -267,8 +274,6 @@ def select_effects(layout: Layout, series: Series, *, alpha: float = 0.01, max_e
             # the dimension most off (slope and constant), then the register whose changes it answers (slope)
             q_r = int(np.unravel_index(int(np.argmax(np.where(active_rel, gain_r, -1.0))), gain_r.shape)[1])
             i_r = int(np.argmax(np.where(active_rel[:, q_r], slope_r[:, q_r], -1.0)))
-            slope_p = _pvalue(slope_r[i_r, q_r], rss0 - gain_r[i_r, q_r] + slope_r[i_r, q_r], df0 - 1, 1)
-            slope_known = slope_p * m < alpha  # else: the dimension is off, the register is not identified
             if active_rel[i_r, q_r]:
                 spec = EffectSpec("relation", register=layout.register_ids[i_r], dimension=layout.dimension_ids[q_r])
                 g_r = float(gain_r[i_r, q_r])
@@ -294,12 +299,8 @@ def select_effects(layout: Layout, series: Series, *, alpha: float = 0.01, max_e
             alike: tuple[str, ...] = ()
         elif di >= 0:
             alike = _alike(Q, cols[:, 0], Z, specs, active_dense, di)
-        elif slope_known:
-            alike = _alike_relation(Q, obs, series.applied, layout, spec, pairs_ok)
         else:
-            q = layout.dimension_ids.index(str(spec.dimension))
-            alike = tuple(f"relation: {spec.dimension} ~ {layout.register_ids[j]}"
-                          for j in np.flatnonzero(pairs_ok[:, q]) if layout.register_ids[j] != spec.register)
+            alike = _relation_set(Q, r, obs, series.applied, layout, spec, alpha)
         steps.append(Step(spec, float(f_stat), float(p), float(p_adj), m, cv0, cv1, ok, alike))
         if not ok:
             break
@@ -371,20 +372,54 @@ def _alike(Q: Array, col: Array, Z: Array, specs: list[EffectSpec], active: npt.
                  if i != chosen)
 
 
-def _alike_relation(Q: Array, obs: Observations, applied: Array, layout: Layout, spec: EffectSpec,
-                    pairs_ok: npt.NDArray[np.bool_], threshold: float = 0.98) -> tuple[str, ...]:
-    """Other registers whose applied changes on the same dimension are nearly collinear with the chosen one."""
+def _relation_set(Q: Array, r: Array, obs: Observations, applied: Array, layout: Layout, spec: EffectSpec,
+                  alpha: float) -> tuple[str, ...]:
+    """Other registers the data cannot tell from the chosen one as the source of a relation effect.
+
+    The dimension q answers register i's corrections: z_q ≈ c + δ u_i.  Register j stays
+    a candidate unless the data reject "j alone" (c + δ_j u_j) in favour of both
+    (c + δ_i u_i + δ_j u_j): the encompassing F-test (Seber & Lee, §4.3; 1 and N − p − 3 df)
+    at ``alpha`` divided by the number of moved registers (Bonferroni over the register that
+    could have been chosen), so the set holds the true register with probability ≥ 1 − α.
+    A register never moved on q has u_j constant: "j alone" is the constant, which stays a
+    candidate when the slope on u_i is not significant — registers that moved together
+    (proportionally) always stay together.
+
+    Returns
+    -------
+    tuple of str
+        ``relation: q ~ j`` for every register j in the set but i, in register order.
+    """
     q = layout.dimension_ids.index(str(spec.dimension))
     i = layout.register_ids.index(str(spec.register))
     rows = obs.dim == q
-    A = np.zeros((obs.n, applied.shape[1]))
-    A[rows] = applied[obs.cycle[rows]]
-    A[rows] -= A[rows].mean(axis=0)  # the free constant of the candidate absorbs the mean
-    P = A - Q @ (Q.T @ A)
-    norm = np.linalg.norm(P, axis=0)
-    corr = np.abs(P.T @ P[:, i]) / np.maximum(norm * norm[i], _TINY)
-    return tuple(f"relation: {spec.dimension} ~ {layout.register_ids[j]}"
-                 for j in np.flatnonzero((corr > threshold) & pairs_ok[:, q]) if j != i)
+    n_r = applied.shape[1]
+    M = np.zeros((obs.n, n_r + 1))
+    M[rows, :n_r] = applied[obs.cycle[rows]]
+    M[rows, n_r] = 1.0
+    P = M - Q @ (Q.T @ M)
+    rss0 = float(r @ r)
+    df = obs.n - Q.shape[1] - 3
+    if df <= 0:
+        return tuple(f"relation: {spec.dimension} ~ {rid}" for j, rid in enumerate(layout.register_ids) if j != i)
+
+    def rss(cols: list[int]) -> float:
+        B = _orth(P[:, cols])
+        t = B.T @ r
+        return rss0 - float(t @ t)
+
+    moved = np.ptp(applied[np.unique(obs.cycle[rows])], axis=0) > _TINY
+    m = max(int(moved.sum()), 1)
+    out = []
+    for j in range(n_r):
+        if j == i:
+            continue
+        both = rss([i, j, n_r])
+        gain = rss([j, n_r]) - both
+        p = float(scipy.stats.f.sf(gain / max(both / df, 1e-300), 1, df)) if gain > 0 else 1.0
+        if p * m >= alpha:
+            out.append(f"relation: {spec.dimension} ~ {layout.register_ids[j]}")
+    return tuple(out)
 
 
 def _refine_tau(spec: EffectSpec, layout: Layout, series: Series, obs: Observations, Q: Array,

@@ -155,9 +155,9 @@ class Series:
     def take(self, rows: npt.ArrayLike) -> Series:
         """The sub-series of the given cycle indices."""
         idx = np.asarray(rows)
+        cycles = tuple(np.asarray(self.cycles, dtype=object)[idx]) if self.cycles else ()
         return Series(self.deviation[idx], self.time[idx], self.applied[idx], self.parts[idx],
-                      self.temperature[idx], self.channels, tuple(np.asarray(self.cycles, dtype=object)[idx]),
-                      self.origin, self.pending)
+                      self.temperature[idx], self.channels, cycles, self.origin, self.pending)
 
 
 @dataclass(frozen=True)

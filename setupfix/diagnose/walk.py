@@ -90,16 +90,18 @@ def _state(pred: Array, C: Array) -> Array:
     return out
 
 
-def _grid(layout: Layout, series: Series, specs: tuple[EffectSpec, ...],
-          basis: Array) -> tuple[Array, npt.NDArray[np.bool_], list[tuple[int, int, int]]]:
+def _grid(layout: Layout, series: Series, specs: tuple[EffectSpec, ...], basis: Array,
+          unnamed: tuple[EffectSpec, ...] = ()) -> tuple[Array, npt.NDArray[np.bool_], list[tuple[int, int, int]]]:
     """Design of the model at every (cycle, dimension), measured or not.
 
     Returns
     -------
     G : ndarray (n_cycles, n_dimensions, p)
     slope : ndarray of bool (p,)
-        Columns of relation slopes (they act through the registers).
+        Columns of relation slopes that act through the registers (named relations).
     relations : list of (column, register row, dimension column)
+        The relations whose register is named (not in ``unnamed``): they change the
+        matrix the state is solved through.
     """
     n, d = series.n_cycles, layout.n_dimensions
     blocks = [np.broadcast_to(basis.T, (n, d, basis.shape[0]))]
@@ -107,12 +109,14 @@ def _grid(layout: Layout, series: Series, specs: tuple[EffectSpec, ...],
     relations = []
     for spec in specs:
         blocks.append(effect_field(spec, layout, series)[:, :, None])
-        slope.append(spec.kind == "relation")
+        # an unnamed relation is predicted at the registers in effect, like the static terms
+        slope.append(spec.kind == "relation" and spec not in unnamed)
         if spec.kind == "relation":
             q = layout.dimension_ids.index(str(spec.dimension))
             const = np.zeros((n, d, 1))
             const[:, q, 0] = 1.0
-            relations.append((len(slope) - 1, layout.register_ids.index(str(spec.register)), q))
+            if spec not in unnamed:
+                relations.append((len(slope) - 1, layout.register_ids.index(str(spec.register)), q))
             blocks.append(const)
             slope.append(False)
     return np.concatenate(blocks, axis=2), np.array(slope, dtype=bool), relations
@@ -122,8 +126,8 @@ class _Running:
     """Least squares on the cycles seen so far, by accumulated normal equations (XᵀX, Xᵀz)."""
 
     def __init__(self, layout: Layout, series: Series, specs: tuple[EffectSpec, ...], basis: Array,
-                 z: Array, upto: int) -> None:
-        self.G, self.slope, self.relations = _grid(layout, series, specs, basis)
+                 z: Array, upto: int, unnamed: tuple[EffectSpec, ...] = ()) -> None:
+        self.G, self.slope, self.relations = _grid(layout, series, specs, basis, unnamed)
         self.z = z
         self.C = layout.composite
         p = self.G.shape[2]
@@ -213,8 +217,9 @@ def walk_forward(layout: Layout, series: Series, *, score_composite: Array | Non
         assert decl is not None
         decl.add_until(k)
         if pos == 0 or (k - scored[0]) % every == 0:
-            specs = select_effects(layout, series.take(np.arange(k)), alpha=alpha, declared=declared).found
-            aug = _Running(layout, series, declared + specs, basis, z_obs, k) if specs else decl
+            sel = select_effects(layout, series.take(np.arange(k)), alpha=alpha, declared=declared)
+            specs = sel.found
+            aug = _Running(layout, series, declared + specs, basis, z_obs, k, sel.unnamed) if specs else decl
         assert aug is not None
         aug.add_until(k)
         states = {"declared": decl.state(k), "augmented": aug.state(k), "ewma": _state(ewma, C), "none": base_state}

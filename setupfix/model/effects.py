@@ -17,7 +17,8 @@ this section; a model without it loads as before.  Layout::
     target = "all tools ~ time"      # free text, for people
 
 Keys by kind: thermal ``channel`` and ``reference`` [°C]; wear ``register`` (a tool);
-position ``axis``; relation ``register`` and ``dimension``; group ``group``.  Each
+position ``axis``; relation ``register`` and ``dimension`` (and ``registers``, every
+register the series could not tell from it, when more than one); group ``group``.  Each
 effect adds ``estimate`` × its covariate to the deviations (see
 :mod:`setupfix.diagnose.terms`).  Everything here is plain data: parse, validate
 against the model, and write.
@@ -43,7 +44,7 @@ __all__ = ["ModelEffect", "EffectsSection", "effects_from_dict", "load_effects",
 EFFECT_KINDS: tuple[str, ...] = ("drift", "thermal", "wear", "scale", "position", "relation", "group")
 
 _KEYS = {"kind", "shape", "tau", "estimate", "stderr", "unit", "target", "channel", "reference", "register",
-         "dimension", "axis", "group", "description", "comment", "note", "notes"}
+         "dimension", "axis", "group", "registers", "description", "comment", "note", "notes"}
 _REQUIRED = {"drift": (), "thermal": ("channel",), "wear": ("register",), "scale": (), "position": ("axis",),
              "relation": ("register", "dimension"), "group": ("group",)}
 
@@ -66,6 +67,7 @@ class ModelEffect:
     dimension: str | None = None
     axis: str | None = None
     group: str | None = None
+    registers: tuple[str, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -154,6 +156,9 @@ def effects_from_dict(section: Mapping[str, Any] | None, model: ProcessModel,
                 bad(f"{key}.register", f"unknown register {raw['register']!r}")
             if raw["dimension"] not in dims:
                 bad(f"{key}.dimension", f"unknown dimension {raw['dimension']!r}")
+            alts = raw.get("registers", [])
+            if not isinstance(alts, list) or not all(isinstance(r, str) and r in regs for r in alts):
+                bad(f"{key}.registers", f"expected a list of register IDs, found {alts!r}")
         if kind == "group" and raw["group"] not in groups:
             bad(f"{key}.group", f"unknown group {raw['group']!r}")
         if kind == "position" and raw["axis"] not in ("x", "y", "z"):
@@ -166,7 +171,8 @@ def effects_from_dict(section: Mapping[str, Any] | None, model: ProcessModel,
             tau=float(tau or 0) if _num(tau) else None, channel=raw.get("channel"),
             reference=float(raw["reference"]) if _num(raw.get("reference")) else 0.0,
             register=raw.get("register"), dimension=raw.get("dimension"), axis=raw.get("axis"),
-            group=raw.get("group")))
+            group=raw.get("group"),
+            registers=tuple(raw.get("registers", ())) if kind == "relation" else ()))
     if problems:
         raise ModelError("\n".join(problems))
     return EffectsSection(tuple(effects), origin, head.get("cycle_hours"), head.get("last_hours"))
@@ -225,7 +231,9 @@ def effects_toml(section: EffectsSection) -> str:
         "# 1 - exp(-t/tau); thermal: channel - reference; wear: cycles since the tool's last",
         "# change; scale: nominal; position: the dimension's coordinate; relation: the",
         "# register's change on that dimension; group: 1 on the group's dimensions).",
-        "# `setupfix correct` adds the drift and wear expected until the next cycle.",
+        "# `setupfix correct` adds the drift and wear expected until the next cycle, and maps",
+        "# corrections through a relation whose register is named (registers: the ones the",
+        "# series could not tell apart; with more than one the weight is not used).",
         "[effects]",
     ]
     if section.origin is not None:
@@ -244,6 +252,8 @@ def effects_toml(section: EffectsSection) -> str:
             value = getattr(e, name)
             if value is not None:
                 out.append(f"{name} = {_value(value)}")
+        if e.registers:
+            out.append(f"registers = [{', '.join(_value(r) for r in e.registers)}]")
         if e.kind == "thermal":
             out.append(f"reference = {e.reference!r}")
         out.append(f"estimate = {e.estimate!r}")

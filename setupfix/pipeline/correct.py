@@ -263,7 +263,8 @@ def correct_part(model: ProcessModel, part: PartMeasurement, *, optimizer: str =
     measured_part = part
     if smoothed is not None and smoothed.used:
         part = dataclasses.replace(part, deviation=smoothed.deviation)
-    if model_effects(model).effects:
+    effects = bool(model_effects(model).effects)
+    if effects:
         # the model's [effects]: drift and wear until the next cycle.  Imported here: the diagnosis
         # brings scipy.stats (~0.5 s of start-up), which a model without effects never needs.
         from setupfix.pipeline.diagnose import forecast_part
@@ -273,6 +274,12 @@ def correct_part(model: ProcessModel, part: PartMeasurement, *, optimizer: str =
             notes += [str(n) for n in forecast.notes[len(part.notes):]]
             part = forecast
     problem = CorrectionProblem.from_part(model, part)
+    if effects:
+        from setupfix.pipeline.diagnose import effect_relations
+
+        problem, relation_note = effect_relations(model, problem, part)
+        if relation_note is not None:  # the model's [effects] relations change what a correction does
+            notes.append(str(relation_note))
     raw = measured_part.deviation[measured_part.measured] if part is not measured_part else None
     opt = get_optimizer(optimizer, seed=seed, **params)
     rec = recommend(problem, safety_policy(model, problem, cumulative), opt.solve, optimizer=optimizer,

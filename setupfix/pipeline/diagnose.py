@@ -25,7 +25,7 @@ import pandas as pd
 
 import parsers
 from setupfix.diagnose import Diagnoser, Diagnosis, Layout, Series
-from setupfix.diagnose.forecast import forecast_shift, spec_of
+from setupfix.diagnose.forecast import forecast_shift, relation_composite, spec_of
 from setupfix.diagnose.terms import EffectSpec, applied_at, join_temperatures, parts_since_change, typical_step
 from setupfix.errors import ExportError, MatchError, ModelError, Note, ParseError, SourceLocation
 from setupfix.model import PartMeasurement, ProcessModel, load_model, match_parts, model_from_dict, normalise_name
@@ -36,7 +36,7 @@ from setupfix.pipeline.writers import check_target, write_text
 
 __all__ = ["SeriesInput", "DiagnoseOutcome", "load_series", "read_corrections_log", "read_temperature_log",
            "diagnose_reports", "expand_reports", "augmented_section", "write_augmented",
-           "corrections_from_table", "temperatures_from_table", "forecast_part", "report_coordinates"]
+           "corrections_from_table", "temperatures_from_table", "forecast_part", "effect_relations", "report_coordinates"]
 
 #: A temperature log as arrays: times, samples (n, channels), channel names.
 TempLog = tuple[pd.DatetimeIndex, np.ndarray, tuple[str, ...]]
@@ -425,11 +425,15 @@ def augmented_section(diagnosis: Diagnosis, declared: EffectsSection) -> Effects
         while f"E{n}" in used:
             n += 1
         sp = res.spec
+        target = sp.target
+        if len(res.registers) > 1:  # the register is not named: the file must not pretend it is
+            target = (f"{sp.dimension} ~ one of {', '.join(res.registers)} "
+                      f"(the series cannot tell which; {sp.register} fitted)")
         effects.append(ModelEffect(
             id=f"E{n}", kind=sp.kind, estimate=float(f"{res.estimate:.6g}"), stderr=float(f"{res.stderr:.3g}"),
-            unit=res.unit, target=sp.target, shape=sp.shape, tau=sp.tau if sp.shape == "saturating" else None,
+            unit=res.unit, target=target, shape=sp.shape, tau=sp.tau if sp.shape == "saturating" else None,
             channel=sp.channel, reference=sp.reference, register=sp.register, dimension=sp.dimension,
-            axis=sp.axis, group=sp.group))
+            axis=sp.axis, group=sp.group, registers=res.registers if len(res.registers) > 1 else ()))
         used.add(f"E{n}")
     return EffectsSection(tuple(effects), s.origin or declared.origin, step if step else declared.cycle_hours,
                           float(s.time[-1]) if s.n_cycles else declared.last_hours)
@@ -462,7 +466,8 @@ class DiagnoseOutcome:
             "out_of_tolerance_after": d.error_after.out_of_tolerance,
             "effects": [{"kind": e.kind, "target": e.target, "estimate": r(e.estimate, 12),
                          "stderr": r(e.stderr, 12), "unit": e.unit, "rms_after": r(e.rms_after),
-                         "alike": list(e.alike)} for e in d.effects],
+                         "alike": list(e.alike),
+                         **({"registers": list(e.registers)} if e.kind == "relation" else {})} for e in d.effects],
             "next_correction": {k: round(v, 9) for k, v in self.next_correction.items()},
             "declared_effects": [e.target for e in self.input.declared],
             "rejected": [{"kind": s.spec.kind, "target": s.spec.target, "p_adjusted": r(s.p_adjusted, 6),
@@ -500,7 +505,7 @@ def _next_correction(model: ProcessModel, diagnosis: Diagnosis) -> tuple[dict[st
     part = PartMeasurement(part="next", report="forecast", timestamp=None, deviation=fc,
                            sources=tuple("" for _ in fc))
     problem = CorrectionProblem.from_part(model, part)
-    C_aug = diagnosis.after.relation_matrix(diagnosis.layout)
+    C_aug = diagnosis.relation_matrix()
     problem = dataclasses.replace(problem, composite=C_aug[:, part.measured])
     result = get_optimizer("exact").solve(problem)
     corr = {rid: float(v) for rid, v, reg in zip(problem.register_ids, result.x, model.registers) if not reg.fixed}
@@ -596,3 +601,27 @@ def forecast_part(model: ProcessModel, part: PartMeasurement) -> PartMeasurement
                 f"{np.max(np.abs(shift)):.4f} {model.unit} added to the measured deviations",
                 SourceLocation(model.source, key="effects"), "forecast")
     return dataclasses.replace(part, deviation=part.deviation + shift, notes=(*part.notes, note))
+
+
+def effect_relations(model: ProcessModel, problem: CorrectionProblem,
+                     part: PartMeasurement) -> tuple[CorrectionProblem, Note | None]:
+    """The problem with the corrections mapped through the model's ``[effects]`` relations.
+
+    A relation found by ``diagnose`` says how a dimension really answers a register; the
+    correction for the next cycle must be mapped through it (see
+    :func:`setupfix.diagnose.forecast.relation_composite`: only a named register with a
+    weight known to a third).  Without such a relation the problem is returned as is.
+    """
+    section = model_effects(model)
+    if not any(e.kind == "relation" for e in section.effects):
+        return problem, None
+    layout = Layout.from_model(model)
+    C = relation_composite(section, layout)
+    changed = np.argwhere(C != layout.composite)
+    if changed.size == 0:
+        return problem, None
+    what = ", ".join(f"{layout.dimension_ids[q]} ~ {layout.register_ids[i]} {layout.composite[i, q]:g} → {C[i, q]:.4g}"
+                     for i, q in changed)
+    note = Note(f"the model's [effects] relation(s) map the correction: {what}",
+                SourceLocation(model.source, key="effects"), "relation")
+    return dataclasses.replace(problem, composite=C[:, part.measured]), note

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from setupfix.diagnose import Layout
-from setupfix.diagnose.forecast import forecast_shift
+from setupfix.diagnose.forecast import forecast_shift, relation_composite
 from setupfix.errors import ModelError
 from setupfix.model import load_model, model_from_dict
 from setupfix.model.effects import EffectsSection, ModelEffect, effects_from_dict, effects_toml, model_effects, with_effects
@@ -23,7 +23,9 @@ SECTION = EffectsSection(
      ModelEffect("E3", "wear", -0.0008, 1e-5, "mm/cycle", "T5 ~ parts since change", register="T5"),
      ModelEffect("E4", "relation", 0.5, 0.01, "1", "P2D3 ~ T23", register="T23", dimension="P2D3"),
      ModelEffect("E5", "group", 0.01, 0.001, "mm", "group P3", group="P3"),
-     ModelEffect("E6", "thermal", 0.003, 1e-4, "mm/°C", "all tools ~ spindle", channel="spindle", reference=21.5)),
+     ModelEffect("E6", "thermal", 0.003, 1e-4, "mm/°C", "all tools ~ spindle", channel="spindle", reference=21.5),
+     ModelEffect("E7", "relation", 0.4, 0.01, "1", "P1D1 ~ one of W1, W2", register="W1", dimension="P1D1",
+                 registers=("W1", "W2"))),
     origin="2026-11-02T06:00:00", cycle_hours=1 / 3, last_hours=10.0)
 
 
@@ -52,6 +54,8 @@ def test_augmenting_twice_replaces_the_section_and_keeps_the_rest():
     ({"E1": {"kind": "wear", "estimate": 1.0, "register": "W1"}}, "effects.E1.register"),
     ({"E1": {"kind": "relation", "estimate": 1.0, "register": "T5", "dimension": "D99"}}, "effects.E1.dimension"),
     ({"E1": {"kind": "drift", "estimate": "x"}}, "effects.E1.estimate"),
+    ({"E1": {"kind": "relation", "estimate": 1.0, "register": "T5", "dimension": "P1D1", "registers": ["X9"]}},
+     "effects.E1.registers"),
     ({"E1": {"kind": "drift", "shape": "saturating", "estimate": 1.0}}, "effects.E1.tau"),
 ])
 def test_bad_effects_are_named_with_their_key(table, key, guide_pins_model):
@@ -76,3 +80,27 @@ def test_model_without_effects_loads_as_before(guide_pins_model):
     empty = model_from_dict({**doc, "effects": {}})
     assert not model_effects(empty).effects
     assert model_from_dict(doc) == dataclasses.replace(empty, extras={})
+
+
+def test_correct_maps_through_a_named_relation_only(tmp_path, guide_pins_model):
+    """A relation whose register is named changes what the correction does; a shared one does not."""
+    from setupfix.pipeline.correct import correct_report
+
+    layout = Layout.from_model(guide_pins_model)
+    C = relation_composite(SECTION, layout)
+    delta = C - layout.composite
+    i, q = layout.register_ids.index("T23"), layout.dimension_ids.index("P2D3")
+    assert delta[i, q] == 0.5 and np.count_nonzero(delta) == 1  # E7 (W1 or W2) is not used
+    weak = EffectsSection((dataclasses.replace(SECTION.effects[3], stderr=0.2),))  # 0.5 ± 0.2: not known to a third
+    np.testing.assert_array_equal(relation_composite(weak, layout), layout.composite)
+    path = tmp_path / "aug.toml"
+    path.write_text(with_effects((GUIDE_PINS / "model.toml").read_text(encoding="utf-8"),
+                                 EffectsSection(SECTION.effects[3:4] + SECTION.effects[6:])), encoding="utf-8")
+    plain = correct_report(GUIDE_PINS / "model.toml", GUIDE_PINS / "cycle_01.csv")[0]
+    aug = correct_report(path, GUIDE_PINS / "cycle_01.csv")[0]
+    keep = plain.part.measured
+    np.testing.assert_array_equal(aug.problem.composite, C[:, keep])
+    np.testing.assert_array_equal(plain.problem.composite, layout.composite[:, keep])
+    w0 = layout.composite[i, q]
+    assert any(f"P2D3 ~ T23 {w0:g} → {w0 + 0.5:.4g}" in w for w in aug.warnings)
+    assert not any("relation" in w for w in plain.warnings)
