@@ -11,6 +11,7 @@ import csv
 import math
 import re
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pandas as pd
@@ -140,7 +141,8 @@ def _blank(value: object) -> bool:
     """An empty ``report`` cell: None, NaN/NA or the empty string."""
     if isinstance(value, str):
         return value == ""
-    return value is None or (np.ndim(value) == 0 and bool(pd.isna(value)))
+    cell: Any = value
+    return cell is None or (np.ndim(cell) == 0 and bool(pd.isna(cell)))
 
 
 #: Largest length a report row may hold [mm]: 10 km.  A larger value (``actual = 1e308``,
@@ -366,10 +368,10 @@ def _plain_columns(body: str, header: list[str], name: str, unit: str | None) ->
             return None
         raw = np.array([float(v) if v else math.nan for v in text])  # NaN exactly where empty
         with np.errstate(over="ignore", invalid="ignore"):
-            values = raw * factor
-        if (~np.isfinite(values) & ~np.isnan(raw)).any():
+            scaled = raw * factor
+        if (~np.isfinite(scaled) & ~np.isnan(raw)).any():
             return None  # beyond the range of a length (the loop names it)
-        numbers[col] = out[col] = values
+        numbers[col] = out[col] = scaled
     nan = np.full(n, math.nan)
     nominal, actual, stated = numbers["nominal"], numbers.get("actual", nan), numbers.get("deviation", nan)
     if np.isnan(nominal).any() or (np.isnan(actual) & np.isnan(stated)).any():
