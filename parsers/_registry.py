@@ -174,7 +174,9 @@ def read_report(path: str | Path | Source, *, format: str | None = None, **optio
         mapping (``columns=``) without a format means the ``table`` reader.
     **options
         ``unit``, ``encoding``, ``columns``, ``lenient`` (None/False = not given).  One
-        the chosen reader does not use is refused.
+        the chosen reader does not use is refused, except ``lenient``: it only allows
+        skipping a self-contradicting row, so a reader that never skips one ignores it
+        (``batch --lenient`` over a folder of mixed formats).
 
     Returns
     -------
@@ -197,6 +199,8 @@ def read_report(path: str | Path | Source, *, format: str | None = None, **optio
         raise ParseError("empty file", location=SourceLocation(source.name))
     spec = find_format(source, format)
     options = {k: v for k, v in options.items() if v is not None and v is not False}
+    if "lenient" not in spec.options:  # only relaxes: a reader that never skips a row has nothing to relax
+        options.pop("lenient", None)
     check_options(spec, options, source.name)
     missing = spec.complete(source.data) if spec.complete and source.data.strip() else None
     try:

@@ -23,6 +23,7 @@ from pathlib import Path
 import pandas as pd
 
 from parsers._source import point_number, read_text
+from parsers.axes import axis_word, vector_axis
 from parsers.numbers import is_number
 from parsers.canonical import finish_table
 from parsers.dmis.statements import Statement, parse_statement, split_statements
@@ -244,7 +245,24 @@ def _result_row(st: Statement, feat: str, nominal: dict[str, _Feature], actual: 
         loc = SourceLocation(name, line=f_nom.line)
         x, y, z = (point_number(v, loc) for v in f_nom.values[:3])
     return {"characteristic": st.label, "nominal": nom, "actual": act, "lower": lower, "upper": upper,
-            "x": x, "y": y, "z": z, "status": status, "source": f"{name}:{st.line}"}
+            "x": x, "y": y, "z": z, "status": status, "source": f"{name}:{st.line}",
+            "axis": _axis(kind, values, f_nom, name)}
+
+
+#: Features whose nominal ``FEAT/…,CART,x,y,z,i,j,k`` gives the surface normal (i, j, k) at x, y, z.
+_NORMAL_FEATURES = {"POINT", "PLANE"}
+
+
+def _axis(kind: str, values: list[str], feature: _Feature | None, name: str) -> str:
+    """The machine axis of a result (:mod:`parsers.axes`): a ``CORTOL`` axis word (``XAXIS`` → X; DIAMETER,
+    RADIAL, … → none), or for a point profile (``PROFP``) the nominal normal of its point or plane feature,
+    when that is within 5° of an axis; ``""`` otherwise."""
+    if kind == "CORTOL":
+        return axis_word(values[0]) if values else ""
+    if kind == "PROFP" and feature is not None and feature.kind in _NORMAL_FEATURES and len(feature.values) >= 6:
+        loc = SourceLocation(name, line=feature.line)
+        return vector_axis([point_number(v, loc) for v in feature.values[3:6]])
+    return ""
 
 
 def _is_number(text: str) -> bool:

@@ -12,12 +12,13 @@ from dataclasses import dataclass
 
 from lxml import etree
 
+from parsers.axes import AXIS_COSINE, axis_word, cross, vector_axis
 from parsers.numbers import parse_number, try_number
 from parsers.qif.external import IdIndex
 from parsers.qif.units import file_unit_factor, unit_factor
 from setupfix.errors import ParseError, SourceLocation
 
-__all__ = ["PROFILE_KINDS", "Doc", "Item", "item_info", "local", "number", "child_text", "raw_float"]
+__all__ = ["PROFILE_KINDS", "Doc", "Item", "item_info", "item_axis", "local", "number", "child_text", "raw_float"]
 
 
 #: Profile kinds: the value is a signed deviation from the true profile, the zone is
@@ -67,19 +68,90 @@ def child_text(el: etree._Element | None, ns: str, name: str) -> str:
     return (found.text or "").strip() if found is not None else ""
 
 
+def _features(item: etree._Element, doc: Doc) -> list[etree._Element | None]:
+    """The nominal of each feature of the item (item → feature item → feature nominal); None where broken."""
+    ns, ids = doc.ns, doc.index.local
+    out: list[etree._Element | None] = []
+    for ref in item.iterfind(f"{{{ns}}}FeatureItemIds/{{{ns}}}Id"):
+        feature = ids.get((ref.text or "").strip())
+        out.append(ids.get(child_text(feature, ns, "FeatureNominalId")) if feature is not None else None)
+    return out
+
+
 def _location(item: etree._Element, doc: Doc, mm: float) -> tuple[float, float, float]:
     """Nominal location of the item's first feature (item → feature item → nominal)."""
-    ns, ids = doc.ns, doc.index.local
-    ref = item.find(f"{{{ns}}}FeatureItemIds/{{{ns}}}Id")
-    feature = ids.get((ref.text or "").strip()) if ref is not None else None
-    nominal = ids.get(child_text(feature, ns, "FeatureNominalId")) if feature is not None else None
-    loc = _child(nominal, ns, "Location")
+    features = _features(item, doc)
+    nominal = features[0] if features else None
+    loc = _child(nominal, doc.ns, "Location")
     if loc is None or not loc.text:
         return (math.nan, math.nan, math.nan)
     xyz = [try_number(v, scale=mm) for v in loc.text.split()[:3]]
     if len(xyz) != 3 or None in xyz:
         return (math.nan, math.nan, math.nan)
     return (float(xyz[0]), float(xyz[1]), float(xyz[2]))  # type: ignore[arg-type]
+
+
+def _vector(el: etree._Element | None) -> tuple[float, float, float] | None:
+    """Three numbers of a vector element (``Normal``, ``AnalysisVector``, …); None when absent or not numbers."""
+    words = (el.text or "").split() if el is not None else []
+    values = [try_number(w) for w in words]
+    if len(values) != 3 or any(v is None for v in values):
+        return None
+    return (float(values[0]), float(values[1]), float(values[2]))  # type: ignore[arg-type]
+
+
+def _unit(vector: tuple[float, float, float] | None) -> tuple[float, float, float] | None:
+    norm = math.sqrt(sum(v * v for v in vector)) if vector is not None else 0.0
+    if vector is None or not math.isfinite(norm) or norm == 0.0:
+        return None
+    return (vector[0] / norm, vector[1] / norm, vector[2] / norm)
+
+
+#: Kinds whose value is a distance: along the ``AnalysisVector``, else perpendicular to a plane feature.
+_DISTANCES = frozenset({"DistanceBetween", "DistanceFrom"})
+#: Features whose ``Normal`` is the surface normal a point-profile deviation is measured along.
+_SURFACES = frozenset({"PointFeatureNominal", "PlaneFeatureNominal"})
+
+
+def item_axis(kind: str, item: etree._Element, nom: etree._Element, owner: Doc) -> str:
+    """The machine axis along which the report measures a characteristic, else ``""`` (:mod:`parsers.axes`).
+
+    In order: the nominal's ``Direction`` word (``LinearCoordinate``: ``XAXIS`` …); its
+    ``AnalysisVector``; for a point profile, the surface normal of its point (or plane)
+    feature (not of an edge point: its deviation may be along either of its two normals);
+    for a distance, the common normal of its plane features (a distance to a plane is
+    measured perpendicular to it; planes whose normals differ give none); for the width
+    (length) of a slot (``OppositeParallelLines``), the direction across (along) its
+    centre line in the plane of its normal.  Sizes (diameter, radius), positions and form
+    tolerances have no single axis: ``""``, as has a vector more than 5° from every axis.
+    """
+    ns = owner.ns
+    word = child_text(nom, ns, "Direction")
+    if word:
+        return axis_word(word)
+    analysis = _child(nom, ns, "AnalysisVector")
+    if analysis is not None:
+        return vector_axis(_vector(analysis))
+    features = _features(item, owner)
+    if kind == "PointProfile":
+        # An edge point's deviation may be along its Normal or its AdjacentNormal: not stated, so none.
+        surface = len(features) == 1 and features[0] is not None and local(features[0].tag) in _SURFACES
+        return vector_axis(_vector(_child(features[0], ns, "Normal"))) if surface else ""
+    if kind in _DISTANCES:
+        planes = {vector_axis(_vector(_child(f, ns, "Normal")))
+                  for f in features if f is not None and local(f.tag) == "PlaneFeatureNominal"}
+        return planes.pop() if len(planes) == 1 else ""
+    if kind in ("Width", "Length") and len(features) == 1 and features[0] is not None \
+            and local(features[0].tag) == "OppositeParallelLinesFeatureNominal":
+        normal = _unit(_vector(_child(features[0], ns, "Normal")))
+        along = _unit(_vector(features[0].find(f"{{{ns}}}CenterLine/{{{ns}}}Vector")))
+        if normal is None or along is None:
+            return ""
+        across = cross(normal, along)
+        if math.sqrt(sum(v * v for v in across)) < AXIS_COSINE:
+            return ""  # the centre line is not in the plane of the normal: no width direction stated
+        return vector_axis(across if kind == "Width" else along)
+    return ""
 
 
 def _limits(kind: str, definition: etree._Element, owner: Doc, nominal: float, mm: float, notes: set[str]
@@ -129,6 +201,7 @@ class Item:
     x: float
     y: float
     z: float
+    axis: str
 
 
 def item_info(kind: str, item: etree._Element, nom: etree._Element, definition: etree._Element, owner: Doc,
@@ -152,7 +225,7 @@ def item_info(kind: str, item: etree._Element, nom: etree._Element, definition: 
                                                  element=f"{local(definition.tag)} id={definition.get('id')}"))
     label = (child_text(item, owner.ns, "Name") or child_text(definition, owner.ns, "Name")
              or f"{kind} {item.get('id', '?')}")
-    return Item(label, nominal, lower, upper, reference, x, y, z)
+    return Item(label, nominal, lower, upper, reference, x, y, z, item_axis(kind, item, nom, owner))
 
 
 def raw_float(text: str) -> float:

@@ -59,7 +59,8 @@ def run(args: argparse.Namespace) -> int:
     current = read_current(args.current, model) if args.current else None
     opts = report_options(args)
     options = BatchOptions(optimizer=args.optimizer, seed=args.seed, format=opts["format"], unit=opts["unit"],
-                           encoding=opts["encoding"], columns=opts["columns"], parts_per_cycle=args.parts_per_cycle,
+                           encoding=opts["encoding"], columns=opts["columns"], lenient=opts["lenient"],
+                           parts_per_cycle=args.parts_per_cycle,
                            strict=args.strict, current=current)
     previous = signal.signal(signal.SIGTERM, _terminate)
     try:

@@ -35,6 +35,7 @@ def add_report_options(p: argparse.ArgumentParser) -> None:
     g.add_argument("--encoding", default=None, metavar="ENC", help="text encoding (default: sniffed)")
     g.add_argument("--columns", default=None, metavar="MAP",
                    help="column mapping for shop tables, e.g. actual=Meas,nominal=Nom")
+    add_lenient_option(g)
     g.add_argument("--stations", default=None, metavar="LIST",
                    help="fixture stations of the report's parts, in order (P1,P2,…) or as part=station pairs; "
                         "a subset of the fixture is allowed")
@@ -44,6 +45,13 @@ def add_report_options(p: argparse.ArgumentParser) -> None:
     g.add_argument("--strict", action="store_true",
                    help="refuse a report whose nominal or tolerance of a dimension differs from the model's "
                         "(default: a warning naming both values)")
+
+
+def add_lenient_option(group: Any) -> None:
+    """``--lenient``: the reader skips a self-contradicting row (with a warning naming its line)."""
+    group.add_argument("--lenient", action="store_true",
+                       help="skip a row that contradicts itself (named in a warning) instead of refusing the "
+                            "report; readers without such rows (all but the Korean layout) ignore it")
 
 
 def whole_number(low: int, high: int, allowed: str | None = None) -> Callable[[str], int]:
@@ -81,7 +89,8 @@ def cycle_options(args: argparse.Namespace) -> dict[str, Any]:
 
 
 def report_options(args: argparse.Namespace) -> dict[str, Any]:
-    return {"format": args.format, "unit": args.unit, "encoding": args.encoding, "columns": args.columns}
+    return {"format": args.format, "unit": args.unit, "encoding": args.encoding, "columns": args.columns,
+            "lenient": args.lenient}
 
 
 def parse_stations(text: str | None) -> list[str] | dict[str, str] | None:

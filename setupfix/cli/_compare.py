@@ -43,6 +43,8 @@ def run(args: argparse.Namespace) -> int:
                                 **report_options(args))
     if args.plot:
         plot_comparison(comparison, args.plot)
+    for warning in comparison.warnings:  # the reader's and the matching's notes: a skipped row is never silent
+        print(f"warning: {warning}", file=sys.stderr)
     if args.json:
         json.dump(comparison.to_json(), sys.stdout, indent=2)
         sys.stdout.write("\n")

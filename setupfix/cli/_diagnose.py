@@ -8,6 +8,7 @@ import math
 import sys
 from typing import TYPE_CHECKING
 
+from setupfix.cli._common import add_lenient_option
 from setupfix.cli.exit_codes import OK
 from setupfix.errors import SetupfixError
 
@@ -37,6 +38,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                    help="write the model with the effects found as its [effects] section")
     p.add_argument("--alpha", type=float, default=0.01, help="family-wise level of each selection step (0.01)")
     p.add_argument("--no-walk", action="store_true", help="skip the walk-forward comparison")
+    add_lenient_option(p)
     p.add_argument("--json", action="store_true", help="machine-readable output (shared/spec/cli-json.md)")
     p.set_defaults(run=run)
 
@@ -86,7 +88,7 @@ def run(args: argparse.Namespace) -> int:
         raise SetupfixError("diagnose: give REPORT files or folders, or --db STORE")
     out = diagnose_reports(args.model, args.reports, corrections=args.corrections, temperatures=args.temperatures,
                            augment=args.augment, diagnoser=Diagnoser(alpha=args.alpha, walk=not args.no_walk),
-                           db=args.db, thermal=args.thermal)
+                           db=args.db, thermal=args.thermal, lenient=args.lenient)
     if args.json:
         json.dump(out.to_json(), sys.stdout, indent=2)
         sys.stdout.write("\n")

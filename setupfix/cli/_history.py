@@ -7,6 +7,7 @@ import json
 import sys
 
 from setupfix.cli._choices import HISTORY_EXPORTS
+from setupfix.cli._common import add_lenient_option
 from setupfix.errors import SourceLocation, StoreError
 
 
@@ -30,6 +31,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     imp.add_argument("--format", default=None, metavar="NAME", help="report format (default: sniffed)")
     imp.add_argument("--unit", default=None, choices=("mm", "inch"), help="unit of values the report does not label")
     imp.add_argument("--encoding", default=None, metavar="ENC", help="text encoding (default: sniffed)")
+    add_lenient_option(imp)
     show = actions.add_parser("show", parents=[common], help="summary of the stored reports and logs")
     show.add_argument("--json", action="store_true", help="machine-readable output")
     exp = actions.add_parser("export", parents=[common], help="write a stored table as its canonical CSV")
@@ -53,7 +55,7 @@ def run(args: argparse.Namespace) -> int:
     with open_store(path) as store:
         if args.action == "import":
             s = import_history(store, args.reports, args.corrections, args.temperatures, format=args.format,
-                               unit=args.unit, encoding=args.encoding)
+                               unit=args.unit, encoding=args.encoding, lenient=args.lenient)
             for note in s.notes:
                 print(f"warning: {note}", file=sys.stderr)
             print(f"{path}: {len(s.new_reports)} new report(s), {len(s.known_reports)} already stored, "

@@ -11,7 +11,7 @@ import unicodedata
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from setupfix.cli._common import add_report_options, cycle_options, report_options
+from setupfix.cli._common import add_lenient_option, add_report_options, cycle_options, report_options
 from setupfix.errors import ExportError, SourceLocation
 
 if TYPE_CHECKING:
@@ -54,12 +54,13 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                                        "dimension (name, nominal, limits, group = station) with a feature of its "
                                        "own moved by one WKS (W1, G54) and one tool (T1, H1). The file loads as "
                                        "written and 'correct' runs with it; its comments say what to edit.")
-    init.add_argument("reports", nargs="+", metavar="REPORT", help="CMM report(s) in any supported format")
+    init.add_argument("reports", nargs="+", metavar="REPORT",
+                      help="CMM report(s) in any supported format; a folder stands for its files")
     init.add_argument("-o", "--out", required=True, metavar="MODEL",
                       help="model TOML to write ('-': stdout); written atomically")
     init.add_argument("--axis", choices=("X", "Y", "Z"), default=None,
-                      help="keep the characteristics whose name states this axis (and those stating none); "
-                           "default: keep all, process axis = the one most names state")
+                      help="keep the characteristics along this axis (as the report states it, else the name) "
+                           "and those with none; default: keep all, process axis = the one most state")
     init.add_argument("--name", default=None, help="process name (default: from the report file names)")
     init.add_argument("--parts-are-stations", action="store_true",
                       help="the report's parts are the fixture's stations (one workpiece each): group = part "
@@ -72,6 +73,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     g.add_argument("--encoding", default=None, metavar="ENC", help="text encoding (default: sniffed)")
     g.add_argument("--columns", default=None, metavar="MAP",
                    help="column mapping for shop tables, e.g. actual=Meas,nominal=Nom")
+    add_lenient_option(g)
     init.set_defaults(run=run_init)
 
 
@@ -89,7 +91,10 @@ def run_init(args: argparse.Namespace) -> int:
         print(f"warning: {note}", file=sys.stderr)
     write_text(args.out, scaffold.text + "\n")
     if args.out != "-":
-        print(f"wrote {args.out}: {scaffold.dimensions} dimension(s), axis {scaffold.axis}, "
+        origins = ", ".join(f"{n} {what}" for what, n in (
+            ("stated by the report", scaffold.axes_from.get("report", 0)),
+            ("from names", scaffold.axes_from.get("name", 0)), ("with none", scaffold.axes_from.get("none", 0))) if n)
+        print(f"wrote {args.out}: {scaffold.dimensions} dimension(s) (axes: {origins}), process axis {scaffold.axis}, "
               f"{len(scaffold.skipped)} characteristic(s) left out (listed in its head); "
               "edit its registers and relations, then 'setupfix model check' and 'setupfix correct'",
               file=sys.stderr)

@@ -60,6 +60,7 @@ class BatchOptions:
     unit: str | None = None
     encoding: str | None = None
     columns: str | None = None
+    lenient: bool = False
     parts_per_cycle: int | None = None
     strict: bool = False
     current: Mapping[str, float] | None = None
@@ -154,7 +155,8 @@ def _correct_one(path: str, size: int, mtime_ns: int) -> Outcome:
         if out.sha256 in o.skip:
             return out  # run_batch marks it "already processed"
         read, parts = read_parts(_MODEL, source, format=o.format, unit=o.unit, encoding=o.encoding,
-                                 columns=o.columns, parts_per_cycle=o.parts_per_cycle, strict=o.strict)
+                                 columns=o.columns, parts_per_cycle=o.parts_per_cycle, strict=o.strict,
+                                 lenient=o.lenient)
         if o.record:  # the store records these very bytes and table: the parent reads nothing again
             out.data, out.table, out.format = source.data, read.table, read.format
         cumulative = wear_totals(_MODEL, o.current) if o.current is not None else None

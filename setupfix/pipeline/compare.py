@@ -108,6 +108,8 @@ class Comparison:
     report: str = ""
     unit: str = "mm"
     skipped: dict[str, str] = field(default_factory=dict)
+    #: What reading and matching the report assumed or skipped (rows skipped by --lenient, angles, …).
+    warnings: list[str] = field(default_factory=list)
 
     def table(self) -> list[dict[str, Any]]:
         """One summary row per method (see :meth:`MethodTrials.summary`), exact first."""
@@ -150,6 +152,7 @@ class Comparison:
             "exact_seconds": round(e.seconds, 6),
             "results": results,
             "skipped": dict(self.skipped),
+            "warnings": list(self.warnings),
         }
 
 
@@ -195,7 +198,8 @@ def compare_report(model: ProcessModel | str | Path, report: str | Path, *, part
                    format: str | None = None, unit: str | None = None, encoding: str | None = None,
                    columns: str | None = None,
                    stations: Sequence[str] | Mapping[str, str] | None = None, parts_per_cycle: int | None = None,
-                   strict: bool = False, params: Mapping[str, Mapping[str, Any]] | None = None) -> Comparison:
+                   strict: bool = False, params: Mapping[str, Mapping[str, Any]] | None = None,
+                   lenient: bool = False) -> Comparison:
     """Compare the methods on one part of a report (the first one unless ``part`` names it).
 
     ``params``: hyper-parameters by optimiser name, ``"exact"`` included (e.g. its time limit).
@@ -203,11 +207,12 @@ def compare_report(model: ProcessModel | str | Path, report: str | Path, *, part
     if not isinstance(model, ProcessModel):
         model = load_model(model)
     parts = load_parts(model, report, format=format, unit=unit, encoding=encoding, columns=columns,
-                       stations=stations, parts_per_cycle=parts_per_cycle, strict=strict)
+                       stations=stations, parts_per_cycle=parts_per_cycle, strict=strict, lenient=lenient)
     measured = select_parts(parts, part, report)[0]
     problem = CorrectionProblem.from_part(model, measured)
     result = compare_problem(problem, methods=methods, trials=trials, seed=seed, params=params)
     result.part, result.report, result.unit = measured.part, measured.report or str(report), model.unit
+    result.warnings = [str(n) for n in measured.notes]
     return result
 
 

@@ -303,7 +303,7 @@ def correct_report(model: ProcessModel | str | Path, report: str | Path, *, opti
                    seed: int | None = None, part: str | None = None, format: str | None = None,
                    unit: str | None = None, encoding: str | None = None, columns: str | None = None,
                    stations: Stations | None = None, parts_per_cycle: int | None = None,
-                   strict: bool = False, store: Store | None = None,
+                   strict: bool = False, lenient: bool = False, store: Store | None = None,
                    current: Mapping[str, float] | None = None,
                    params: Mapping[str, Any] | None = None) -> list[PartCorrection]:
     """Correct every cycle of a report (or the one named by ``part``).
@@ -315,7 +315,7 @@ def correct_report(model: ProcessModel | str | Path, report: str | Path, *, opti
     if not isinstance(model, ProcessModel):
         model = load_model(model)
     parts = load_parts(model, report, format=format, unit=unit, encoding=encoding, columns=columns,
-                       stations=stations, parts_per_cycle=parts_per_cycle, strict=strict)
+                       stations=stations, parts_per_cycle=parts_per_cycle, strict=strict, lenient=lenient)
     cumulative = wear_totals(model, current) if current is not None else None
     return [correct_part(model, p, optimizer=optimizer, seed=seed, store=store, cumulative=cumulative,
                          **(params or {}))

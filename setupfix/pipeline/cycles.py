@@ -142,7 +142,7 @@ def _by_count(model: ProcessModel, table: pd.DataFrame, parts: pd.Series, order:
 
 def load_parts(model: ProcessModel, report: str | Path | Source, *, format: str | None = None, unit: str | None = None,
                encoding: str | None = None, columns: str | None = None, stations: Stations | None = None,
-               parts_per_cycle: int | None = None, strict: bool = False) -> list[PartMeasurement]:
+               parts_per_cycle: int | None = None, strict: bool = False, lenient: bool = False) -> list[PartMeasurement]:
     """Read a report in any supported format, group it into cycles, tie it to the model and check it.
 
     Raises
@@ -152,15 +152,15 @@ def load_parts(model: ProcessModel, report: str | Path | Source, *, format: str 
         :func:`setupfix.pipeline.checks.check_parts` (unit error; any difference with ``strict``).
     """
     return read_parts(model, report, format=format, unit=unit, encoding=encoding, columns=columns,
-                      stations=stations, parts_per_cycle=parts_per_cycle, strict=strict)[1]
+                      stations=stations, parts_per_cycle=parts_per_cycle, strict=strict, lenient=lenient)[1]
 
 
 def read_parts(model: ProcessModel, report: str | Path | Source, *, format: str | None = None,
                unit: str | None = None, encoding: str | None = None, columns: str | None = None,
                stations: Stations | None = None, parts_per_cycle: int | None = None,
-               strict: bool = False) -> tuple[parsers.ReadResult, list[PartMeasurement]]:
+               strict: bool = False, lenient: bool = False) -> tuple[parsers.ReadResult, list[PartMeasurement]]:
     """:func:`load_parts` that also returns what was read (table, format), e.g. for the history store."""
-    options: dict[str, Any] = {"unit": unit, "encoding": encoding}
+    options: dict[str, Any] = {"unit": unit, "encoding": encoding, "lenient": lenient}
     if columns:
         options["columns"] = columns
     read = parsers.read_report(report, format=format, **options)

@@ -221,7 +221,8 @@ def _hours(times: pd.DatetimeIndex, origin: pd.Timestamp) -> np.ndarray:
 
 def load_series(model: ProcessModel | str | Path, reports: Sequence[str | Path] = (), *,
                 corrections: str | None = None, temperatures: str | None = None,
-                db: str | Path | None = None, thermal: str | Path | None = None) -> SeriesInput:
+                db: str | Path | None = None, thermal: str | Path | None = None,
+                lenient: bool = False) -> SeriesInput:
     """Read a series of reports (files, folders, or every report of a history store) with its logs.
 
     With ``db`` the store's reports, corrections log and temperatures are used (files
@@ -229,7 +230,8 @@ def load_series(model: ProcessModel | str | Path, reports: Sequence[str | Path] 
     store's log).  With ``thermal`` (a model saved by ``setupfix thermal fit``) its
     predicted drift over the temperature log becomes one more channel, so the thermal
     candidate tests the thermal slice's model itself (its measured-error column is
-    not used as a channel).
+    not used as a channel).  ``lenient`` lets a reader skip a self-contradicting row (a
+    note names its line).
 
     Raises
     ------
@@ -276,7 +278,7 @@ def load_series(model: ProcessModel | str | Path, reports: Sequence[str | Path] 
             temperatures = found_temp
             notes.append(f"temperature log {found_temp} found beside the reports: used")
         for f in files:
-            read = parsers.read_report(f)
+            read = parsers.read_report(f, lenient=lenient)
             table = read.table
             notes += [str(n) for n in read.notes]
             parts += check_parts(model, match_parts(model, table, source=str(f)), source=str(f))
@@ -515,7 +517,7 @@ def _next_correction(model: ProcessModel, diagnosis: Diagnosis) -> tuple[dict[st
 def diagnose_reports(model: ProcessModel | str | Path, reports: Sequence[str | Path] = (), *,
                      corrections: str | None = None, temperatures: str | None = None, augment: str | None = None,
                      diagnoser: Diagnoser | None = None, db: str | Path | None = None,
-                     thermal: str | Path | None = None) -> DiagnoseOutcome:
+                     thermal: str | Path | None = None, lenient: bool = False) -> DiagnoseOutcome:
     """Diagnose a series of reports; optionally write the augmented model.
 
     Raises
@@ -526,7 +528,8 @@ def diagnose_reports(model: ProcessModel | str | Path, reports: Sequence[str | P
     """
     if augment:
         check_target(augment)  # a bad target costs nothing
-    inp = load_series(model, reports, corrections=corrections, temperatures=temperatures, db=db, thermal=thermal)
+    inp = load_series(model, reports, corrections=corrections, temperatures=temperatures, db=db, thermal=thermal,
+                      lenient=lenient)
     diagnoser = diagnoser or Diagnoser()
     diagnosis = diagnoser.run(inp.layout, inp.series, declared=inp.declared)
     nxt, more = _next_correction(inp.model, diagnosis)

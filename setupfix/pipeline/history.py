@@ -115,7 +115,7 @@ class ImportSummary:
 def import_history(store: Store, reports: Sequence[str | os.PathLike[str]] = (),
                    corrections: Sequence[str | os.PathLike[str]] = (),
                    temperatures: Sequence[str | os.PathLike[str]] = (), *, format: str | None = None,
-                   unit: str | None = None, encoding: str | None = None) -> ImportSummary:
+                   unit: str | None = None, encoding: str | None = None, lenient: bool = False) -> ImportSummary:
     """Read every file, then store all of it in one transaction.
 
     Raises
@@ -128,7 +128,7 @@ def import_history(store: Store, reports: Sequence[str | os.PathLike[str]] = (),
     summary = ImportSummary()
     for path in reports:
         source = parsers.load_source(str(path))  # read once: the bytes hashed are the bytes parsed
-        result = parsers.read_report(source, format=format, unit=unit, encoding=encoding)
+        result = parsers.read_report(source, format=format, unit=unit, encoding=encoding, lenient=lenient)
         summary.notes += [str(n) for n in result.notes]
         read.append((source.data, source.name, result.format, result.table))
     logs = [read_corrections_log(p) for p in corrections]

@@ -110,10 +110,10 @@ def _closest(dim: Dimension, names: tuple[str, ...], n: int = 3) -> tuple[str, .
 def check_report(model: ProcessModel | str | Path, report: str | Path, *, format: str | None = None,
                  unit: str | None = None, encoding: str | None = None, columns: str | None = None,
                  stations: Stations | None = None, parts_per_cycle: int | None = None,
-                 strict: bool = False) -> MatchTable:
+                 strict: bool = False, lenient: bool = False) -> MatchTable:
     """Read a report and tie it to the model without correcting: the match table of ``model check``."""
     if not isinstance(model, ProcessModel):
         model = load_model(model)
     parts = load_parts(model, report, format=format, unit=unit, encoding=encoding, columns=columns,
-                       stations=stations, parts_per_cycle=parts_per_cycle, strict=strict)
+                       stations=stations, parts_per_cycle=parts_per_cycle, strict=strict, lenient=lenient)
     return MatchTable(model, str(report), parts)

@@ -14,6 +14,7 @@ from pathlib import Path
 import pandas as pd
 
 import parsers
+from parsers.axes import AXIS_COLUMN
 from setupfix.errors import Note, ParseError, SetupfixError, SourceLocation, UnknownFormatError
 from setupfix.model import CANONICAL_COLUMNS
 from setupfix.pipeline.writers import FLOAT_FORMAT, write_canonical_csv  # noqa: F401 - re-exported
@@ -58,7 +59,8 @@ class ParseOutcome:
 
     @property
     def table(self) -> pd.DataFrame:
-        """Rows of every readable report, in input order, with :data:`OUTPUT_COLUMNS`."""
+        """Rows of every readable report, in input order, with :data:`OUTPUT_COLUMNS`, then ``axis``
+        where a report states one (:mod:`parsers.axes`; "" for the rows of others)."""
         frames = [r.table for r in self.reports]
         if not frames:
             return pd.DataFrame(columns=list(OUTPUT_COLUMNS))
@@ -66,7 +68,10 @@ class ParseOutcome:
         if "reference" not in table:
             table["reference"] = False
         table["reference"] = table["reference"].fillna(False).astype(bool)
-        return table[list(OUTPUT_COLUMNS)]
+        if AXIS_COLUMN not in table:
+            return table[list(OUTPUT_COLUMNS)]
+        table[AXIS_COLUMN] = table[AXIS_COLUMN].fillna("")
+        return table[[*OUTPUT_COLUMNS, AXIS_COLUMN]]
 
 
 def expand_inputs(paths: Sequence[str | Path]) -> tuple[list[tuple[str, bool]], list[SetupfixError]]:

@@ -8,12 +8,16 @@ one tool (``T1``, H1): a starting topology that loads at once and with which
 ``setupfix correct`` runs on the same reports.  The comments in the file say what to
 edit (which registers move which feature, with which sign).
 
-The axis of a characteristic is taken from its name (a token ``X``, ``Y`` or ``Z``:
-``SP_00_Z``, ``Cono_9_X``, ``Step 5.Z Location``, ``Distanz X 4mm``): the canonical
-measurement table carries no axis column, so a QIF ``AnalysisVector`` or a DMIS
-``CORTOL`` axis is not used (yet).  ``axis=`` keeps one axis (and the characteristics
-whose axis the name does not tell); the process axis is that axis, else the one most
-names state (``Z`` on a tie or when none does).
+The axis of a characteristic is, first, the one the report states — the ``axis`` column
+of the canonical table (:mod:`parsers.axes`: a DMIS ``CORTOL`` axis word, a QIF
+``LinearCoordinate`` direction or ``AnalysisVector``, a plane or point normal within 5°
+of an axis) — and, where the report states none, the one its name states (a token
+``X``, ``Y`` or ``Z``: ``SP_00_Z``, ``Cono_9_X``, ``Step 5.Z Location``, ``Distanz X
+4mm``).  When both state one and they differ, the report's vector wins and the
+dimension's comment names both.  Each dimension's comment says where its axis came
+from.  ``axis=`` keeps one axis (and the characteristics whose axis neither tells);
+the process axis is that axis, else the one most dimensions state (``Z`` on a tie or
+when none does).
 
 Left out, each listed in the file's head with its reason: reference-only rows, rows
 with no limit or only one (the contract needs both; none is invented), form and
@@ -35,7 +39,8 @@ from typing import Any
 import pandas as pd
 
 import parsers
-from setupfix.errors import ModelError, SourceLocation
+from parsers.axes import AXES, AXIS_COLUMN
+from setupfix.errors import ModelError, ParseError, SetupfixError, SourceLocation
 from setupfix.model import normalise_name
 from setupfix.model.loader import RANGES_MM
 
@@ -86,6 +91,34 @@ class _Dim:
     upper: float
     axis: str | None
     source: str
+    #: Where ``axis`` came from: "report" (the axis column), "name", "" (neither states one), or
+    #: why there is none although reports state one ("the reports state X and Y").
+    axis_from: str = ""
+    #: The axis the name states when it differs from the report's.
+    name_says: str | None = None
+
+    def axis_note(self) -> str:
+        """The comment on the dimension's axis: which one, and from what."""
+        if self.axis is None:
+            return f"no axis: {self.axis_from}" if self.axis_from else "no axis stated"
+        if self.axis_from == "report":
+            return f"axis {self.axis} stated by the report" + (
+                f" (its name says {self.name_says}: the report's vector wins)" if self.name_says else "")
+        return f"axis {self.axis} from the name"
+
+
+def _stated_axis(value: Any, where: str, report: str) -> str | None:
+    """A cell of the ``axis`` column: X, Y or Z (any case), None when empty; anything else is refused."""
+    if value is None or value != value:
+        return None
+    text = str(value).strip().upper()
+    if text in AXES:
+        return text
+    if text in ("", "NAN"):
+        return None
+    head, sep, tail = where.rpartition(":")
+    location = SourceLocation(head, line=int(tail)) if sep and tail.isdigit() else SourceLocation(where or report)
+    raise ParseError(f"column 'axis': expected X, Y, Z or empty, found {str(value)!r}", location=location)
 
 
 @dataclass
@@ -97,6 +130,8 @@ class Scaffold:
     axis: str
     skipped: list[tuple[str, str]] = field(default_factory=list)  # (characteristic, reason)
     notes: list[str] = field(default_factory=list)  # the readers' notes (skipped rows, assumed units)
+    #: How many dimensions took their axis from the report, from the name, or have none.
+    axes_from: dict[str, int] = field(default_factory=dict)
 
 
 def _resolution(narrowest: float | None) -> float:
@@ -119,12 +154,15 @@ def _collect(tables: Sequence[tuple[str, pd.DataFrame]], axis: str | None,
         def col(name: str, rows: int = count, frame: pd.DataFrame = table) -> list[Any]:
             return frame[name].tolist() if name in frame else [None] * rows
 
-        for name, nominal, lower, upper, station, reference, where in zip(
+        for name, nominal, lower, upper, station, reference, where, stated in zip(
                 col("characteristic"), col("nominal"), col("lower"), col("upper"), col(group_column),
-                col("reference"), col("source")):
+                col("reference"), col("source"), col(AXIS_COLUMN)):
             name = str(name).strip()
             if not name or name in skipped:
                 continue
+            where = str(where) if where is not None and where == where else report
+            from_report, from_name = _stated_axis(stated, where, report), name_axis(name)
+            dim_axis = from_report or from_name
             nominal, lower, upper = (float(v) if v is not None and v == v else math.nan
                                      for v in (nominal, lower, upper))
             reason = None
@@ -142,39 +180,67 @@ def _collect(tables: Sequence[tuple[str, pd.DataFrame]], axis: str | None,
                 reason = f"nominal {nominal:g} outside [{nom_lo:g}, {nom_hi:g}] mm"
             elif not (tol_lo <= lower and upper <= tol_hi):
                 reason = f"limits beyond ±{tol_hi:g} mm"
-            elif axis is not None and name_axis(name) not in (None, axis):
-                reason = f"axis {name_axis(name)} (--axis {axis})"
+            elif axis is not None and dim_axis not in (None, axis):
+                reason = f"axis {dim_axis}{' stated by the report' if from_report else ''} (--axis {axis})"
             if reason:
                 skipped[name] = reason
                 continue
             group = None if station is None or station != station or str(station).strip() == "" else str(station)
             key = (normalise_name(name), normalise_name(group) if group else None)
             if key not in dims:
-                dims[key] = _Dim(name, group, nominal, lower, upper, name_axis(name),
-                                 str(where) if where is not None and where == where else report)
+                dims[key] = _Dim(name, group, nominal, lower, upper, dim_axis, where,
+                                 "report" if from_report else "name" if from_name else "",
+                                 from_name if from_report and from_name not in (None, from_report) else None)
+                continue
+            known = dims[key]
+            if from_report and known.axis_from == "report" and known.axis != from_report:
+                # two reports state different axes for one dimension: neither is taken
+                known.axis_from, known.axis = f"the reports state {known.axis} and {from_report}", None
+            elif from_report and known.axis_from in ("", "name") and axis in (None, from_report):
+                known.name_says = from_name if from_name not in (None, from_report) else None
+                known.axis, known.axis_from = from_report, "report"
     return list(dims.values()), list(skipped.items())
 
 
 def scaffold_model(reports: Sequence[str | Path], *, axis: str | None = None, name: str | None = None,
                    parts_are_stations: bool = False,
                    format: str | None = None, unit: str | None = None, encoding: str | None = None,
-                   columns: str | None = None) -> Scaffold:
+                   columns: str | None = None, lenient: bool = False) -> Scaffold:
     """Write a process-model scaffold (TOML text) from the reports' toleranced length characteristics.
+
+    ``reports`` may name folders: their files (not hidden, not recursive, in name order);
+    a file of a folder that no reader takes, or that is refused, is left out with a note.
 
     Raises
     ------
     ParseError
-        If a report cannot be read.
+        If a report named as a file cannot be read, or no file of a folder can.
     ModelError
         If no characteristic qualifies (the message lists why, per kind).
     """
     if axis is not None and axis not in ("X", "Y", "Z"):
         raise ModelError(f'axis must be "X", "Y" or "Z", got {axis!r}')
-    options: dict[str, Any] = {"unit": unit, "encoding": encoding, "columns": columns}
-    reads = [parsers.read_report(r, format=format, **options) for r in reports]
-    scaffold = scaffold_from_tables([(str(r), read.table) for r, read in zip(reports, reads)], axis=axis,
+    from setupfix.pipeline.parse import expand_inputs
+
+    options: dict[str, Any] = {"unit": unit, "encoding": encoding, "columns": columns, "lenient": lenient}
+    names, failures = expand_inputs(reports)
+    if failures:
+        raise failures[0]
+    reads: list[tuple[str, parsers.ReadResult]] = []
+    left_out: list[str] = []
+    for report, from_folder in names:
+        try:
+            reads.append((report, parsers.read_report(report, format=format, **options)))
+        except SetupfixError as exc:
+            if not from_folder:
+                raise
+            left_out.append(f"{exc}; left out")
+    if not reads:
+        raise ParseError(f"no file of {', '.join(map(str, reports))} is a readable report",
+                         location=SourceLocation(str(reports[0])), hint=left_out[0] if left_out else None)
+    scaffold = scaffold_from_tables([(r, read.table) for r, read in reads], axis=axis,
                                     name=name, parts_are_stations=parts_are_stations)
-    scaffold.notes = [str(n) for read in reads for n in read.notes]
+    scaffold.notes = left_out + [str(n) for _, read in reads for n in read.notes]
     return scaffold
 
 
@@ -199,7 +265,9 @@ def scaffold_from_tables(tables: Sequence[tuple[str, pd.DataFrame]], *, axis: st
     bands = [d.upper - d.lower for d in dims]
     resolution = _resolution(min(bands))
     text = _render(dims, skipped, reports, model_axis, resolution, name, axis)
-    return Scaffold(text, len(dims), model_axis, skipped)
+    origins = Counter(d.axis_from if d.axis_from in ("report", "name") else "none" for d in dims)
+    return Scaffold(text, len(dims), model_axis, skipped,
+                    axes_from={k: origins[k] for k in ("report", "name", "none") if origins[k]})
 
 
 def _render(dims: list[_Dim], skipped: list[tuple[str, str]], reports: Sequence[str | Path], axis: str,
@@ -209,7 +277,8 @@ def _render(dims: list[_Dim], skipped: list[tuple[str, str]], reports: Sequence[
     out = [
         f"# Process model scaffold written by `setupfix model init` from: {_comment(sources)}",
         "# It loads as written and `setupfix correct` runs with it, but its relations are a guess:",
-        "#   every feature below is moved by W1 (G54) and T1 (H1) with weight +1. Edit",
+        "#   every feature below is moved by W1 (G54) and T1 (H1) with weight +1 (a feature along",
+        "#   another axis than the process's by none). Edit",
         "#   1. [wks.*] and [tools.*]: the registers your NC program really uses (one table each);",
         "#   2. [features.*]: which WKS and tools move each feature, +1 or -1 (a feature cut by",
         "#      the tool's tip facing -axis gets -1), and remove features no offset moves;",
@@ -217,8 +286,10 @@ def _render(dims: list[_Dim], skipped: list[tuple[str, str]], reports: Sequence[
         "#   4. group = \"P1\" … where a fixture holds the part at several stations.",
         "# Then `setupfix model show` prints the matrices and `setupfix model check` the match table.",
         f"# {len(dims)} dimension(s); axis {axis}"
-        + (f" (kept: names stating {only_axis} or no axis)" if only_axis else
-           " (from the names; other axes are kept: delete them or use --axis)"),
+        + (f" (kept: dimensions along {only_axis} or with no axis stated)" if only_axis else
+           " (the one most dimensions state; other axes are kept: delete them or use --axis)"),
+        "# Each dimension's axis is the one the report states (CORTOL axis, QIF direction or vector,",
+        "#   a plane or point normal), else the one its name states; its comment says which.",
     ]
     if skipped:
         out.append(f"# Left out ({len(skipped)}):")
@@ -243,10 +314,14 @@ def _render(dims: list[_Dim], skipped: list[tuple[str, str]], reports: Sequence[
         "",
     ]
     for i, d in enumerate(dims, start=1):
-        note = "" if d.axis in (None, axis) else f"  # axis {d.axis}: not moved by {axis} offsets"
-        out += [f"[features.F{i}]{note}", "wks = { W1 = 1 }", "tools = { T1 = 1 }", ""]
+        if d.axis in (None, axis):
+            out += [f"[features.F{i}]", "wks = { W1 = 1 }", "tools = { T1 = 1 }", ""]
+        else:  # a length along another axis: a shift along this one does not change it
+            out += [f"[features.F{i}]  # axis {d.axis}: no {axis} offset moves it (nothing to correct here)",
+                    "wks = {}", "tools = {}", ""]
     for i, d in enumerate(dims, start=1):
-        out += [f"[dimensions.D{i}]  # {_comment(d.source)}", f"name = {_toml_string(d.name)}",
+        out += [f"[dimensions.D{i}]  # {_comment(d.source)}; {_comment(d.axis_note())}",
+                f"name = {_toml_string(d.name)}",
                 f"features = {{ F{i} = 1 }}", f"nominal = {_number(d.nominal)}", f"lower = {_number(d.lower)}",
                 f"upper = {_number(d.upper)}"]
         if d.group:

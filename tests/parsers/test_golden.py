@@ -85,21 +85,23 @@ def read_quietly(path: Path) -> pd.DataFrame:
 
 
 def render_full(table: pd.DataFrame) -> str:
-    """The canonical table as `setupfix parse` writes it, provenance reduced to the file name."""
-    from setupfix.pipeline.parse import FLOAT_FORMAT, OUTPUT_COLUMNS
+    """The canonical table as `setupfix parse` writes it (the ``axis`` column last where the
+    reader states axes), provenance reduced to the file name."""
+    from setupfix.pipeline.parse import FLOAT_FORMAT, ParsedReport, ParseOutcome
 
     table = table.copy()
-    if "reference" not in table:
-        table["reference"] = False
     table["source"] = table["source"].map(lambda s: Path(str(s)).name)
+    written = ParseOutcome(reports=[ParsedReport("", "", table)]).table
     buffer = io.StringIO()
-    table[list(OUTPUT_COLUMNS)].to_csv(buffer, index=False, float_format=FLOAT_FORMAT, lineterminator="\n")
+    written.to_csv(buffer, index=False, float_format=FLOAT_FORMAT, lineterminator="\n")
     return buffer.getvalue()
 
 
 def render_summary(table: pd.DataFrame) -> str:
-    """Derived numbers per part: counts, sums and extremes (facts, not the file)."""
+    """Derived numbers per part: counts, sums and extremes (facts, not the file); the number of
+    rows along X, Y and Z where the reader states axes (QIF, DMIS)."""
     out = []
+    axes = "axis" in table
     ref = table["reference"] if "reference" in table else pd.Series(False, index=table.index)
     for part, rows in table.groupby(table["part"].astype(str), sort=False):
         dev, lo, up = rows["deviation"], rows["lower"], rows["upper"]
@@ -109,8 +111,11 @@ def render_summary(table: pd.DataFrame) -> str:
                     "reference": int(ref[rows.index].astype(bool).sum()),
                     "sum_nominal": rows["nominal"].sum(), "sum_deviation": dev.sum(),
                     "min_deviation": dev.min(), "max_deviation": dev.max()})
+        if axes:
+            out[-1].update({f"axis_{a.lower()}": int((rows["axis"] == a).sum()) for a in "XYZ"})
     buffer = io.StringIO()
-    pd.DataFrame(out, columns=SUMMARY_COLUMNS).to_csv(buffer, index=False, float_format="%.6f", lineterminator="\n")
+    columns = SUMMARY_COLUMNS + (["axis_x", "axis_y", "axis_z"] if axes else [])
+    pd.DataFrame(out, columns=columns).to_csv(buffer, index=False, float_format="%.6f", lineterminator="\n")
     return buffer.getvalue()
 
 

@@ -14,8 +14,8 @@ import parsers
 from goldens import GOLDEN, assert_derived_golden, read_warned
 from parsers.korean import read_korean
 from parsers.korean.report import along_normal
-from setupfix.errors import ParseError
-from conftest import SHARED as SHARED_ROOT
+from setupfix.errors import ParameterError, ParseError
+from conftest import SAMPLES, SHARED as SHARED_ROOT
 
 SHARED = SHARED_ROOT / "cmm-samples" / "korean_cmm_txt"
 NAMES = sorted(p.name for p in SHARED.glob("KR_*.txt")) or ["KR_45926-4G100_240113_night_2-2-1_NG.cp949.txt"]
@@ -95,3 +95,17 @@ def test_misplaced_value_names_the_line(tmp_path: Path) -> None:
     path.write_bytes("\n".join(lines).encode("cp949"))
     with pytest.raises(ParseError, match=r"bad\.txt:13: 측정값: expected a number"):
         read_korean(path)
+
+
+@pytest.mark.parametrize("name", ["cycle_01.csv", "cycle_01.qif", "cycle_01.dmo"])
+def test_lenient_is_ignored_by_a_reader_that_never_skips_a_row(name: str) -> None:
+    """``--lenient`` only relaxes: a reader without self-contradicting rows reads the same with it
+    (``batch --lenient`` over a folder of mixed formats); an option that changes numbers is still refused."""
+    path = SAMPLES / "guide_pins" / name
+    plain = parsers.read_report(path)
+    lenient = parsers.read_report(path, lenient=True)
+    assert lenient.format == plain.format != "korean"
+    pd.testing.assert_frame_equal(lenient.table, plain.table)
+    if name.endswith(".qif"):  # an option that would change numbers is still refused by a reader without it
+        with pytest.raises(ParameterError, match="does not use --encoding"):
+            parsers.read_report(path, encoding="cp949")

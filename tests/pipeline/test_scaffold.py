@@ -109,7 +109,8 @@ def test_scaffold_on_every_shared_sample_with_tolerances():
             z = scaffold_from_tables([(str(path), table)], axis="Z")
             names = [d.name for d in model_from_dict(tomllib.loads(z.text)).dimensions]
             assert z.axis == "Z" and len(names) == 473 and sum(n.endswith("_Z") for n in names) == 158
-            assert len(z.skipped) == 316 and all(r in ("axis X (--axis Z)", "axis Y (--axis Z)") for _, r in z.skipped)
+            assert len(z.skipped) == 316 and all(r in ("axis X stated by the report (--axis Z)",
+                                                       "axis Y stated by the report (--axis Z)") for _, r in z.skipped)
     # Q-DAS "Diameter 2500 ± 500" is beyond the model's ±100 mm tolerance range: refused with the reason
     assert [(n, "limits beyond ±100 mm" in e) for n, e in refused] == [("successfactory_testmeasures.dfq", True)]
     assert len(done) >= 30 and "DMO_Impeller_6_Blades_Part_1.dmo" in done and "PiWebApi_sample_values.json" in done
@@ -185,3 +186,97 @@ def test_parts_as_stations_scaffold_corrects_one_fixture_cycle(tmp_path):
     assert pc.part.part == "S1+S2" and pc.part.measured.all()
     plain = model_from_dict(tomllib.loads(scaffold_from_tables([(str(path), table)]).text))
     assert len(plain.dimensions) == 2 and len(correct_report(plain, path)) == 2  # parts as cycles
+
+
+def _dimension_comments(text: str) -> dict[str, str]:
+    """name → the comment on its [dimensions.*] header."""
+    model = tomllib.loads(text)
+    heads = {line.split("]")[0] + "]": line.partition("#")[2] for line in text.splitlines()
+             if line.startswith("[dimensions.")}
+    return {d["name"]: heads[f"[dimensions.{key}]"] for key, d in model["dimensions"].items()}
+
+
+def test_axis_from_the_report_first_then_the_name_and_the_report_wins():
+    table = pd.DataFrame({
+        "characteristic": ["Depth_X", "Step", "Bore_Y", "Hole"], "nominal": [10.0, 5.0, 3.0, 4.0],
+        "actual": [10.01, 5.0, 3.0, 4.0], "lower": [-0.1] * 4, "upper": [0.1] * 4, "part": ["1"] * 4,
+        "axis": ["Z", "Z", "", ""], "source": [f"r.csv:{i}" for i in range(2, 6)],
+    })
+    scaffold = scaffold_from_tables([("r.csv", table)])
+    comments = _dimension_comments(scaffold.text)
+    assert comments["Depth_X"].endswith("axis Z stated by the report (its name says X: the report's vector wins)")
+    assert comments["Step"].endswith("axis Z stated by the report")
+    assert comments["Bore_Y"].endswith("axis Y from the name") and comments["Hole"].endswith("no axis stated")
+    assert scaffold.axis == "Z" and scaffold.axes_from == {"report": 2, "name": 1, "none": 1}
+    raw = tomllib.loads(scaffold.text)
+    model_from_dict(raw)
+    # Bore_Y is along Y: no Z offset moves its feature; the others keep W1 + T1
+    moved = {d["name"]: raw["features"][next(iter(d["features"]))] == {"wks": {"W1": 1}, "tools": {"T1": 1}}
+             for d in raw["dimensions"].values()}
+    assert moved == {"Depth_X": True, "Step": True, "Bore_Y": False, "Hole": True}
+    # --axis keeps the report's axis too: Depth_X stays (Z), Bore_Y goes (name), Hole stays (none)
+    kept = scaffold_from_tables([("r.csv", table)], axis="Z")
+    assert dict(kept.skipped) == {"Bore_Y": "axis Y (--axis Z)"}
+    only_x = scaffold_from_tables([("r.csv", table)], axis="X")
+    assert dict(only_x.skipped) == {"Depth_X": "axis Z stated by the report (--axis X)",
+                                    "Step": "axis Z stated by the report (--axis X)", "Bore_Y": "axis Y (--axis X)"}
+
+
+def test_an_axis_cell_that_is_not_an_axis_is_refused_with_its_line():
+    table = pd.DataFrame({"characteristic": ["A", "B"], "nominal": [1.0, 2.0], "actual": [1.0, 2.0],
+                          "lower": [-0.1, -0.1], "upper": [0.1, 0.1], "axis": ["z", "W"],
+                          "source": ["r.csv:2", "r.csv:3"]})
+    with pytest.raises(SetupfixError, match=r"^r\.csv:3: column 'axis': expected X, Y, Z or empty, found 'W'"):
+        scaffold_from_tables([("r.csv", table)])
+    assert "axis Z stated by the report" in scaffold_from_tables([("r.csv", table.iloc[:1])]).text  # any case
+
+
+def test_model_init_on_a_qif_takes_the_axes_from_its_vectors(tmp_path, capsys):
+    from setupfix.cli import main
+
+    report = SAMPLES / "qif" / "NIST_MTC_Incoming_PlateResults_20_samples.QIF"
+    out = tmp_path / "plate.toml"
+    assert main(["model", "init", str(report), "-o", str(out)]) == 0
+    assert "(axes: 8 stated by the report, 20 with none), process axis X" in capsys.readouterr().err
+    comments = _dimension_comments(out.read_text(encoding="utf-8"))
+    # DS002 <AnalysisVector>1 0 0, DS003 0 1 0; the slot's width across its centre line (X), length along it (Y)
+    assert (comments["DS002"].endswith("axis X stated by the report")
+            and comments["DS003"].endswith("axis Y stated by the report")
+            and comments["WIDTH1"].endswith("axis X stated by the report")
+            and comments["LENGTH1"].endswith("axis Y stated by the report"))
+    assert comments["DIAMETER4"].endswith("no axis stated")
+    table = _read(report)
+    scaffold_and_correct(report, table)
+    z = scaffold_and_correct(report, table, axis="Z")[0]
+    assert {r for _, r in z.skipped if r.startswith("axis")} == {"axis X stated by the report (--axis Z)",
+                                                                  "axis Y stated by the report (--axis Z)"}
+
+
+def test_a_folder_stands_for_its_files_and_unreadable_ones_are_left_out_with_a_note(tmp_path):
+    from setupfix.pipeline.scaffold import scaffold_model
+
+    folder = tmp_path / "reports"
+    folder.mkdir()
+    (folder / "cycle_01.csv").write_bytes((GUIDE_PINS / "cycle_01.csv").read_bytes())
+    (folder / "notes.txt").write_text("not a report\n", encoding="utf-8")
+    scaffold = scaffold_model([folder])
+    assert scaffold.dimensions == 28 and any("notes.txt" in n and "left out" in n for n in scaffold.notes)
+    (folder / "cycle_01.csv").unlink()
+    with pytest.raises(SetupfixError, match="no file of .* is a readable report"):
+        scaffold_model([folder])
+    with pytest.raises(SetupfixError, match="notes.txt"):
+        scaffold_model([folder / "notes.txt"])  # named as a file: refused, not left out
+
+
+def test_reports_stating_different_axes_for_one_dimension_give_none():
+    def table(axis: str) -> pd.DataFrame:
+        return pd.DataFrame({"characteristic": ["Step", "Bore_X"], "nominal": [5.0, 3.0], "actual": [5.0, 3.0],
+                             "lower": [-0.1, -0.1], "upper": [0.1, 0.1], "axis": [axis, axis]})
+
+    scaffold = scaffold_from_tables([("a.csv", table("Z")), ("b.csv", table("Y")), ("c.csv", table(""))])
+    comments = _dimension_comments(scaffold.text)
+    assert comments["Step"].endswith("no axis: the reports state Z and Y")
+    assert comments["Bore_X"].endswith("no axis: the reports state Z and Y")
+    later = scaffold_from_tables([("c.csv", table("")), ("a.csv", table("Z"))])  # a later report states it
+    assert _dimension_comments(later.text)["Bore_X"].endswith(
+        "axis Z stated by the report (its name says X: the report's vector wins)")
