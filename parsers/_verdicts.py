@@ -62,7 +62,14 @@ def verdict_notes(table: pd.DataFrame, path: str, limit: int = 8) -> list[Note]:
         return []
     # Plain lists and arrays: this runs on every report read, and pandas' string methods
     # cost ~1 ms on a 28-row table; a table with no verdict word returns at once.
-    word = [_word(v) for v in table["status"].tolist()]
+    status = table["status"].tolist()
+    try:  # a report repeats a few spellings: each distinct cell is looked at once
+        spelled = {v: _word(v) for v in set(status)}
+    except TypeError:  # an unhashable cell
+        spelled = None
+    if spelled is not None and not any(w in PASS_WORDS or w in FAIL_WORDS for w in spelled.values()):
+        return []
+    word = [spelled[v] for v in status] if spelled is not None else [_word(v) for v in status]
     says_pass = np.fromiter((w in PASS_WORDS for w in word), bool, len(word))
     says_fail = np.fromiter((w in FAIL_WORDS for w in word), bool, len(word))
     if not (says_pass.any() or says_fail.any()):

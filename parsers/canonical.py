@@ -132,7 +132,11 @@ def _floats(column: _Column) -> np.ndarray:
 def _masked(column: _Column) -> _Column:
     """A text column with control characters masked (:func:`escape_controls`); unchanged when it has none."""
     values = _values(column)
-    if _CONTROL.search("".join(v for v in values if isinstance(v, str))) is None:
+    try:
+        joined = "".join(values)  # type: ignore[arg-type]
+    except TypeError:  # not all text (NaN, numbers): look at the text only
+        joined = "".join(v for v in values if isinstance(v, str))
+    if _CONTROL.search(joined) is None:
         return column
     return [escape_controls(v) if isinstance(v, str) else v for v in values]
 
