@@ -27,6 +27,7 @@ Writes ``bench/results/exact_per_report.txt`` (with the command).
 from __future__ import annotations
 
 import argparse
+import os
 import cProfile
 import platform
 import pstats
@@ -96,6 +97,7 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--seed", type=int, default=2014)
     parser.add_argument("--out", type=Path, default=RESULTS / "exact_per_report.txt")
     args = parser.parse_args(argv)
+    load_start = os.getloadavg()[0]
 
     with threadpool_limits(limits=1):
         blas = ", ".join(f"{i['internal_api']} {i['num_threads']} thread(s)" for i in threadpool_info()) or "none"
@@ -135,6 +137,8 @@ def main(argv: list[str] | None = None) -> None:
         f"machine : {platform.machine()}, Python {platform.python_version()}, numpy {np.__version__}; "
         f"wall time {wall:.1f} s",
         f"threads : BLAS limited to 1 by threadpoolctl ({blas})",
+        f"load    : 1-min load average {load_start:.2f} at the start, {os.getloadavg()[0]:.2f} at the end "
+        f"({os.cpu_count()} cores; other processes share them when it exceeds about 1)",
         f"reports : {n} (5 bundled cycles from CSV + {args.sets} random sets by eqs. 12-13, seed {args.seed}), "
         "one optimiser instance, in process",
         f"status  : {dict(statuses)}",

@@ -27,15 +27,22 @@ Stages, and the proofs that let one be skipped
    A HiGHS failure ("Solve error") is retried once with the lower bracket removed,
    and reported as such in ``notes``.
 3. **Least norm** — among grid points with margin ≥ t*, the least Σ cost_i·k_i²
-   (eq. 9; cost = 1 by default).  The continuous QP gives a point and multipliers;
-   the multipliers bound every feasible point's norm from below by an ellipsoid
-   around that point (:func:`~setupfix.optimize._grid.lagrangian_ball`), and the
-   integer points inside it that could beat the best known point are listed
-   exhaustively — the least one is the proven grid least norm.  If the best known
-   point already meets the bound, nothing is listed; if the list would be too long
-   (large problems), the exact chord MILP runs instead: on integers k² is the upper
-   envelope of the chords (2j+1)|k| − j(j+1), added lazily where a solution
-   violates s_i ≥ k_i².
+   (eq. 9; cost = 1 by default).  The continuous QP (NNLS; on a working set of rows
+   for large problems) gives a point and multipliers; the multipliers bound every
+   feasible point's norm from below by an ellipsoid around that point
+   (:func:`~setupfix.optimize._grid.lagrangian_ball`), and the integer points inside
+   it that could beat the best known point are listed exhaustively — the least one
+   is the proven grid least norm.  If the best known point already meets the bound,
+   nothing is listed.  Large problems (more than ``ELLIPSOID_MAX_REGISTERS`` free
+   registers, or a list too long): a near-least incumbent from the least norm in the
+   unit box around the rounded continuous point (one MILP with a linear objective;
+   one step wider if that box is empty), then the exact chord MILP — on integers k²
+   is the upper envelope of the chords (2j+1)|k| − j(j+1), added lazily where a
+   solution violates s_i ≥ k_i² — restricted to the box the same multipliers prove
+   holds every point at most as large as the incumbent
+   (:func:`~setupfix.optimize._least_norm.lagrangian_box`).  If the limit stops the
+   proof, the best point is improved by coordinate descent and the result states a
+   certified bound on ‖x‖ / least norm (``extra["norm_ratio_max"]``).
 
 One ``time_limit`` bounds the wall time of the whole solve.  The grid-optimum
 stage may use half of what is left, so the least-norm stage always runs: if a
@@ -54,18 +61,18 @@ from contextlib import AbstractContextManager
 
 import numpy as np
 import numpy.typing as npt
-from scipy.sparse import csr_array, hstack, vstack
 from threadpoolctl import ThreadpoolController
 
 from setupfix.errors import Note, SolverError
 from setupfix.params import Interval
 from setupfix.optimize._base import Optimizer, make_result
-from setupfix.optimize._grid import chord_rows as grid_chord_rows
 from setupfix.optimize._grid import (TOL, dual_bound, ellipsoid_search, grid_margins, lagrangian_ball,
                                      least_distance,
                                      next_level,
-                                     PairStructure, pair_bound, pair_structure, rounded_rhs, row_gcd, shrink)
+                                     PairStructure, pair_bound, pair_structure, rounded_rhs, row_gcd)
 from setupfix.optimize._highs import INF, LinearModel, Solve
+from setupfix.optimize._least_norm import (box_least_norm, chord_least_norm, descend, lagrangian_box,
+                                           least_distance_working_set, lower_bound_ratio)
 from setupfix.optimize._problem import CorrectionProblem, OptimizeResult
 
 __all__ = ["ExactOptimizer", "margin_rows", "QUANTUM"]
@@ -76,10 +83,24 @@ Array = npt.NDArray[np.float64]
 QUANTUM = 1e-3
 #: Most free registers for which the least-norm proof lists the grid points of the dual ellipsoid.
 ELLIPSOID_MAX_REGISTERS = 120
-#: Largest list of integer points the least-norm proof may enumerate before using the MILP.
-ENUMERATION_LIMIT = 200_000
+#: Largest list of integer points the least-norm proof may enumerate before using the MILPs.
+ENUMERATION_LIMIT = 512
+#: The least-norm proof in the Lagrangian box is one MILP with every chord up to these sizes
+#: (else chords are added lazily).
+BOX_PROOF_MAX_REGISTERS = 40
+BOX_PROOF_MAX_CHORDS = 20_000
 #: Largest constraint count whose continuous least-norm point is found by NNLS (else HiGHS QP).
 NNLS_MAX_ROWS = 600
+#: Larger problems: NNLS on a working set of rows (False: HiGHS's QP solver at once).
+WORKING_SET_NNLS = True
+#: Shares of the time left that the least-norm stage gives the box MILPs around the rounded continuous
+#: point (the incumbent), and the time kept back for the descent when the proof stops at the limit.
+BOX_SHARE = 0.25
+#: The same share when the grid-optimum stage was stopped (the incumbent matters more than a proof).
+STOPPED_BOX_SHARE = 0.8
+#: Relative gap at which those box MILPs stop (they look for an incumbent; the proof comes after).
+INCUMBENT_GAP = 1e-4
+DESCENT_RESERVE = 0.03
 #: Radius² and size of the ellipsoids the grid-optimum stage lists for a point at its bound.
 SEARCH_RADIUS2 = 16.0
 SEARCH_LIMIT = 20_000
@@ -92,6 +113,13 @@ MILP_SHARE = 0.5
 LEAST_NORM_SHARE = 0.5
 #: Levels the grid-optimum stage may descend by rounded rows before it uses the MILP.
 LEVEL_STEPS = 40
+
+
+def _ceil_bound(lower: float, cost: Array) -> float:
+    """A lower bound on Σ c k² over integers, rounded up to an integer when every cost is one."""
+    if np.all(cost == np.rint(cost)):
+        return float(np.ceil(lower - 1e-6))
+    return lower - 1e-9 * max(1.0, abs(lower))
 
 
 def margin_rows(problem: CorrectionProblem) -> tuple[Array, Array]:
@@ -303,6 +331,10 @@ class ExactOptimizer(Optimizer):
             status, out = least_distance(g_rows, b, kmin, kmax, cost)
             if status != "unknown":
                 return status, out
+        elif WORKING_SET_NNLS:
+            status, out = least_distance_working_set(g_rows, b, kmin, kmax, cost, clock.deadline)
+            if status != "unknown" or clock.left() <= 0:
+                return status, out
         qp = self._qp(g_rows, kmin, kmax, cost)
         finite = np.where(np.isfinite(b), b, INF)
         qp.set_row_bounds(np.full(b.size, -INF), finite)
@@ -314,53 +346,112 @@ class ExactOptimizer(Optimizer):
 
     def _grid_least_norm(self, g_rows: Array, g: Array, b: Array, kmin: Array, kmax: Array, cost: Array,
                          t_star: float, incumbent: Array, cont: tuple[Array, Array, Array, Array] | None,
-                         clock: _Clock, path: list[str]) -> tuple[Array, bool, str]:
-        """Least Σ c k² over grid points with every margin ≥ t_star; (k, proved, why not).
+                         clock: _Clock, path: list[str], unit_box: bool | None = None,
+                         box_share: float = BOX_SHARE) -> tuple[Array, bool, str, float]:
+        """Least Σ c k² over grid points with every margin ≥ t_star; (k, proved, why not, lower bound).
 
         ``b`` are right-hand sides with {G k ≤ b} containing every such grid point (the
         rounded rows); ``cont`` the continuous least-norm solution over them, if known.
+        The lower bound (0 when none is known) is certified: no such grid point has a
+        smaller Σ c k².  ``unit_box``: stage 2 searched the unit box around the continuous
+        point at these rows already (True: it found the incumbent there; False: it is empty).
+        ``box_share``: share of the time left for each box MILP (larger when the grid-optimum
+        stage was stopped: then a good incumbent matters more than a proof).
         """
 
-        def norm(k: Array) -> Array:
-            return np.asarray(np.sum(cost * np.atleast_2d(k) ** 2, axis=1))
+        def norm(k: Array) -> float:
+            return float(np.sum(cost * k**2))
+
+        def ok(k: Array | None) -> bool:
+            return k is not None and bool(grid_margins(g_rows, g, k) >= t_star - TOL)
 
         best = incumbent
         if cont is None:
             _, cont = self._continuous_least_norm(g_rows, b, kmin, kmax, cost, clock)
-        if cont is not None:
-            k_c, lam_rows, lam_lo, lam_hi = cont
-            rounded = np.clip(np.rint(k_c), kmin, kmax)
-            if grid_margins(g_rows, g, rounded) >= t_star - TOL and norm(rounded)[0] < norm(best)[0]:
-                best = rounded
-            finite = np.isfinite(b)
-            centre, q = lagrangian_ball(g_rows[finite], b[finite], kmin, kmax, cost, lam_rows[finite], lam_lo,
-                                        lam_hi)
-            f_best = float(norm(best)[0])
-            found, proved, listed = None, False, 0
-            if kmin.size <= ELLIPSOID_MAX_REGISTERS:  # beyond, the ellipsoid holds too many grid points
-                found, proved, listed = ellipsoid_search(g_rows, g, t_star, centre, q, cost, kmin, kmax, f_best,
-                                                         ENUMERATION_LIMIT, b)
+        if cont is None:  # no multipliers: the chord MILP over the whole box
+            best = self._good_incumbent(g_rows, g, b, kmin, kmax, cost, t_star, best, None, clock)
+            path.append("least norm: chords of k² (LP, then MILP)")
+            found, proved, why, lower = self._chord_solve(g_rows, g, t_star, b, kmin, kmax, cost, best, best,
+                                                          clock, clock.left() - DESCENT_RESERVE * self.time_limit)
+            return self._finish(g_rows, b, cost, best if found is None else found, proved, why, lower, clock)
+        k_c, lam_rows, lam_lo, lam_hi = cont
+        rounded = np.clip(np.rint(k_c), kmin, kmax)
+        if ok(rounded) and norm(rounded) < norm(best):
+            best = rounded
+        finite = np.isfinite(b)
+        centre, q = lagrangian_ball(g_rows[finite], b[finite], kmin, kmax, cost, lam_rows[finite], lam_lo, lam_hi)
+        def listed_least(limit: int) -> bool:  # the dual ellipsoid, listed; True: best is proven least
+            nonlocal best
+            found, proved, listed = ellipsoid_search(g_rows, g, t_star, centre, q, cost, kmin, kmax, norm(best),
+                                                     limit, b)
+            best = best if found is None else found
             if proved:
                 path.append(f"least norm: {listed} grid points in the dual ellipsoid")
-                return (best if found is None else found), True, ""
-            if found is not None:
-                best = found
+            return proved
+
+        ellipsoid = kmin.size <= ELLIPSOID_MAX_REGISTERS  # beyond, the ellipsoid holds too many grid points
+        # A short list only: most reports end here, and where the list would be long the box MILPs
+        # below are cheaper (bench/exact_per_report.py).
+        if ellipsoid and listed_least(ENUMERATION_LIMIT):
+            return best, True, "", norm(best)
         best = self._good_incumbent(g_rows, g, b, kmin, kmax, cost, t_star, best, cont, clock)
-        path.append("least norm: chords of k² (LP, then MILP)")
-        found, proved, why = self._chord_solve(g_rows, g, t_star, b, kmin, kmax, cost, best,
-                                               cont[0] if cont else best, clock, clock.left())
-        return (best if found is None else found), proved, why
+        # A near-least incumbent: the least norm in the unit box around the continuous point (a MILP
+        # with a linear objective), else in the box one step wider.
+        floor_c = np.clip(np.floor(k_c), kmin, kmax)
+        ceil_c = np.clip(np.ceil(k_c), kmin, kmax)
+        # (stage 2 may have searched the unit box already: its point is the incumbent, or it is empty)
+        for widen in (() if unit_box else (1.0,) if unit_box is False else (0.0, 1.0)):
+            lo, hi = np.maximum(floor_c - widen, kmin), np.minimum(ceil_c + widen, kmax)
+            res, k = box_least_norm(g_rows, b, lo, hi, cost, box_share * clock.left(), best, gap=INCUMBENT_GAP)
+            if ok(k) and norm(k) < norm(best):  # type: ignore[arg-type]
+                best = k  # type: ignore[assignment]
+            path.append(f"least norm: box MILP ±{widen:g} around the continuous point ({res.status})")
+            if k is not None or res.status not in ("infeasible", "optimal") or clock.left() <= 0:
+                break
+        box_lo, box_hi, lower = lagrangian_box(centre, q, cost, kmin, kmax, norm(best))
+        if norm(best) <= _ceil_bound(lower, cost):
+            path.append("least norm: the incumbent meets the Lagrangian bound")
+            return best, True, "", norm(best)
+        values = f"{np.mean(box_hi - box_lo + 1):.1f} values per register"
+        if kmin.size <= BOX_PROOF_MAX_REGISTERS and float(np.sum(box_hi - box_lo)) <= BOX_PROOF_MAX_CHORDS:
+            # few registers and a short box: every chord of the box at once, one MILP
+            res, found = box_least_norm(g_rows, b, box_lo, box_hi, cost,
+                                        clock.left() - DESCENT_RESERVE * self.time_limit, best, proof=True)
+            path.append(f"least norm: box MILP in the Lagrangian box ({values}; {res.status})")
+            found = found if ok(found) else None
+            proved = res.status == "optimal" and found is not None
+            why = "" if proved else ("time limit" if res.status == "time_limit" else f"HiGHS: {res.detail}")
+            chord_lower = res.dual_bound if np.isfinite(res.dual_bound) else 0.0
+        else:
+            path.append(f"least norm: chords of k² in the Lagrangian box ({values})")
+            found, proved, why, chord_lower = self._chord_solve(
+                g_rows, g, t_star, b, box_lo, box_hi, cost, best, k_c, clock,
+                clock.left() - DESCENT_RESERVE * self.time_limit, proof=True)
+        if found is not None and norm(found) > norm(best):
+            found = None
+        best = best if found is None else found
+        # points outside the box have Σ c k² > f(best): the chord bound holds up to f(best)
+        lower = max(lower, min(chord_lower, norm(best)))
+        return self._finish(g_rows, b, cost, best, proved, why, lower, clock)
+
+    def _finish(self, g_rows: Array, b: Array, cost: Array, best: Array, proved: bool, why: str, lower: float,
+                clock: _Clock) -> tuple[Array, bool, str, float]:
+        """A stopped least-norm proof: coordinate descent on its best point (the norm never grows)."""
+        if not proved:
+            best = descend(g_rows, b, best, cost, time.perf_counter() + max(clock.left(), 0.0)
+                           + DESCENT_RESERVE * self.time_limit / 2)
+        return best, proved, why, lower
 
     def _good_incumbent(self, g_rows: Array, g: Array, b: Array, kmin: Array, kmax: Array, cost: Array,
                         t_star: float, best: Array, cont: tuple[Array, Array, Array, Array] | None,
                         clock: _Clock) -> Array:
-        """A small feasible grid point before the chord MILP (heuristics; the MILP proves or improves it).
+        """A small feasible grid point before the MILPs (heuristics; the MILPs prove or improve it).
 
         * Safe rounding: the continuous least-norm point of the rows tightened by half their
           l1 norm rounds to a point that meets the original rows (each coordinate moves ≤ ½).
         * The segment from the incumbent to the continuous least-norm point is feasible; the
           rounded point farthest along it that stays feasible.
-        * :func:`~setupfix.optimize._grid.shrink`: single steps towards 0 while feasible.
+        * :func:`~setupfix.optimize._least_norm.descend`: coordinate moves towards 0 while feasible.
         """
         def f(k: Array) -> float:
             return float(np.sum(cost * k**2))
@@ -376,8 +467,6 @@ class ExactOptimizer(Optimizer):
             k = np.clip(np.rint(out[0]), kmin, kmax)
             if ok(k) and f(k) < f(best):
                 best = k
-        if cont is None:
-            _, cont = self._continuous_least_norm(g_rows, b, kmin, kmax, cost, clock)
         if cont is not None:
             lo, hi = 0.0, 1.0
             for _ in range(12):
@@ -389,81 +478,14 @@ class ExactOptimizer(Optimizer):
                         best = k
                 else:
                     hi = mid
-        return shrink(g_rows, b, best, cost, time.perf_counter() + 0.1 * max(clock.left(), 0.0))
+        return descend(g_rows, b, best, cost, time.perf_counter() + 0.03 * max(clock.left(), 0.0))
 
     def _chord_solve(self, g_rows: Array, g: Array, level: float, b: Array, kmin: Array, kmax: Array,
                      cost: Array, best: Array | None, k_cont: Array, clock: _Clock, time_limit: float,
-                     lp_only: bool = False) -> tuple[Array | None, bool, str]:
-        """Exact least Σ c k² over grid points with t(k) ≥ level, by chords of k² (lazy).
-
-        On integers k² is the upper envelope of the chords (2j+1)|k| − j(j+1), j ≥ 0,
-        so "min Σ c s, s_i ≥ chords, G k ≤ b" is exact for integer k.  First as an LP:
-        when its optimal vertex is integral and every s_i = k_i², that vertex is the
-        optimum (the LP is a relaxation and the vertex is a grid point) — the usual
-        case when G is a network-like matrix of ±1 relations.  Otherwise (unless
-        ``lp_only``) the same model as a MILP, started from ``best``.  Chords are added
-        where a solution violates s_i ≥ k_i².  Stops after ``time_limit`` seconds.
-
-        Returns
-        -------
-        best : ndarray or None
-            Best grid point found with t(k) ≥ level (``best`` if none better).
-        proved : bool
-        why : str
-            Why not proved (``"time limit"``, HiGHS's words, or ``"fractional"``).
-        """
-        r, n = g_rows.shape
+                     proof: bool = False) -> tuple[Array | None, bool, str, float]:
+        """:func:`~setupfix.optimize._least_norm.chord_least_norm` for at most ``time_limit`` seconds."""
         deadline = min(clock.deadline, time.perf_counter() + max(time_limit, 0.0))
-        chords: list[set[int]] = []
-        ref = np.abs(k_cont) if best is None else np.abs(best)
-        for vc, vs in zip(np.abs(k_cont), ref):
-            base = int(np.floor(vc))
-            chords.append({max(base - 1, 0), base, base + 1, int(vs)})
-
-        def chord_rows(pairs: list[tuple[int, int]]) -> tuple[csr_array, Array]:
-            return grid_chord_rows(pairs, n, 2 * n)
-
-        a_chords, rhs = chord_rows([(i, j) for i, js in enumerate(chords) for j in sorted(js)])
-        fin = np.isfinite(b)
-        a = vstack([hstack([csr_array(g_rows[fin]), csr_array((int(fin.sum()), n))]), a_chords]).tocsr()
-        model = LinearModel(np.r_[np.zeros(n), cost], a, np.full(a.shape[0], -INF), np.r_[b[fin], rhs],
-                            np.r_[kmin, np.zeros(n)], np.r_[kmax, np.full(n, INF)])
-        f_best = np.inf if best is None else float(np.sum(cost * best**2))
-        integer = False
-        while True:
-            left = deadline - time.perf_counter()
-            if left <= 0:
-                return best, False, "time limit"
-            res = model.solve(left, None if best is None else np.r_[best, best**2])
-            if res.x is None or res.status not in ("optimal", "time_limit"):
-                return best, False, "time limit" if res.status == "time_limit" else f"HiGHS: {res.detail}"
-            k_raw, s = res.x[:n], res.x[n:]
-            k = np.clip(np.rint(k_raw), kmin, kmax)
-            f_k = float(np.sum(cost * k**2))
-            feasible = bool(grid_margins(g_rows, g, k) >= level - TOL)
-            if feasible and f_k < f_best:
-                best, f_best = k, f_k
-            if res.status != "optimal":
-                return best, False, "time limit"
-            fractional = np.flatnonzero(np.abs(k_raw - k) > 1e-7)
-            if not integer and fractional.size:
-                new = [(int(i), int(np.floor(abs(k_raw[i])))) for i in fractional
-                       if int(np.floor(abs(k_raw[i]))) not in chords[i]]
-                if not new:
-                    if lp_only:
-                        return best, False, "fractional"
-                    model.make_integer(np.arange(n))
-                    integer = True
-                    continue
-            else:
-                short = np.flatnonzero(s < k**2 - 1e-6)
-                if short.size == 0:
-                    return best, bool(feasible and best is not None and f_best <= f_k), ""
-                new = [(int(i), int(abs(k[i]))) for i in short]
-            for i, j in new:
-                chords[i].add(j)
-            a_new, rhs_new = chord_rows(new)
-            model.add_rows(a_new, np.full(rhs_new.size, -INF), rhs_new)
+        return chord_least_norm(g_rows, g, level, b, kmin, kmax, cost, best, k_cont, deadline, proof)
 
     def _triaged(self, problem: CorrectionProblem, g_rows: Array, g: Array, kmin: Array, kmax: Array, cost: Array,
                  k_start: Array, clock: _Clock, path: list[str], notes: list[Note], calls: int,
@@ -561,6 +583,8 @@ class ExactOptimizer(Optimizer):
             k_best, t_best = np.zeros_like(k_best), t_zero
         stopped: tuple[str, str] | None = None
         cont = None
+        placeholder = False  # cont holds no least-norm point (large problems whose QP failed)
+        unit_box: tuple[Array, bool] | None = None  # rows whose unit box stage 2 searched, and if it had a point
         least_norm_done: Array | None = None  # rows at which the least norm is already proved
         n_free = int(kmin.size)
         small = g_rows.shape[0] + 2 * n_free <= NNLS_MAX_ROWS
@@ -578,14 +602,19 @@ class ExactOptimizer(Optimizer):
         else:
             proved = False
             for _ in range(LEVEL_STEPS):
+                if stage2_left() <= 0:
+                    break
                 b = rounded_rhs(g, d, zero, level)
                 calls += 1
                 if small:
                     status, cont = self._continuous_least_norm(g_rows, b, kmin, kmax, cost, clock)
-                else:  # large: only whether the rounded rows are feasible (an LP), then the MILP below
+                else:  # large: whether the rounded rows are feasible (an LP), then their least-norm point
                     status, cont = self._rounded_rows_feasible(g_rows, b, kmin, kmax, cost, clock), None
                     if status == "optimal":
-                        cont = (k_best, np.zeros(g.size), np.zeros(n_free), np.zeros(n_free))
+                        _, cont = self._continuous_least_norm(g_rows, b, kmin, kmax, cost, clock)
+                        placeholder = cont is None
+                        if cont is None:
+                            cont = (k_best, np.zeros(g.size), np.zeros(n_free), np.zeros(n_free))
                 if cont is None:
                     if status != "infeasible" or not all_integer:
                         break
@@ -611,6 +640,30 @@ class ExactOptimizer(Optimizer):
                                                 cont[2], cont[3])
                     found, _, _ = ellipsoid_search(g_rows, g, level, centre, q, cost, kmin, kmax,
                                                    q + SEARCH_RADIUS2, SEARCH_LIMIT, b)
+                elif not placeholder and stage2_left() > 0:  # large: the least norm in the unit box around it
+                    res_box, found = box_least_norm(g_rows, b, np.clip(np.floor(cont[0]), kmin, kmax),
+                                                    np.clip(np.ceil(cont[0]), kmin, kmax), cost,
+                                                    stage2_left() * MILP_SHARE / 2, gap=INCUMBENT_GAP)
+                    calls += 1
+                    path.append(f"grid optimum: box MILP ±0 around the rounded rows' least-norm point "
+                                f"({res_box.status})")
+                    if found is not None and float(grid_margins(g_rows, g, found)) < level - TOL:
+                        found = None
+                    if found is not None or res_box.status == "infeasible":
+                        unit_box = (b.copy(), found is not None)  # the unit box is settled at these rows
+                    if found is None and res_box.status == "infeasible" and stage2_left() > 0:
+                        # any point one step wider (a feasibility MILP)
+                        fin = np.isfinite(b)
+                        lo = np.clip(np.floor(cont[0]) - 1, kmin, kmax)
+                        hi = np.clip(np.ceil(cont[0]) + 1, kmin, kmax)
+                        wide = LinearModel(np.zeros(n_free), g_rows[fin], np.full(int(fin.sum()), -INF), b[fin], lo,
+                                           hi, integer=np.ones(n_free, bool)).solve(stage2_left() * MILP_SHARE / 2)
+                        calls += 1
+                        path.append(f"grid optimum: feasibility MILP ±1 around it ({wide.status})")
+                        if wide.x is not None:
+                            found = np.clip(np.rint(wide.x), lo, hi)
+                            if float(grid_margins(g_rows, g, found)) < level - TOL:
+                                found = None
                 if found is not None:
                     k_best, t_best = found, float(grid_margins(g_rows, g, found))
                     path.append("grid optimum: a grid point near the rounded rows' least-norm point attains the "
@@ -619,6 +672,8 @@ class ExactOptimizer(Optimizer):
                     break
                 # A feasibility MILP on the rounded rows: a point proves the bound is reached; a proof
                 # of infeasibility lowers the bound to the next level (integer rows only).
+                if stage2_left() <= 0:
+                    break
                 fin = np.isfinite(b)
                 feas = LinearModel(np.zeros(n_free), g_rows[fin], np.full(int(fin.sum()), -INF), b[fin], kmin, kmax,
                                    integer=np.ones(n_free, bool)).solve(stage2_left() * MILP_SHARE)
@@ -644,9 +699,13 @@ class ExactOptimizer(Optimizer):
                     continue
                 break
             upper = min(upper, level)
-            if not small:
+            if placeholder:
                 cont = None
-            if not proved:
+            if not proved and stage2_left() <= 0:  # its share of the limit is spent: no MILP
+                cont = None
+                path.append("grid optimum: its share of the time limit spent before the MILP")
+                stopped = ("grid optimum", "time limit")
+            elif not proved:
                 cont = None
                 calls += 1
                 res = self._max_margin_milp(g_rows, g, kmin, kmax, t_best, upper, k_best, stage2_left())
@@ -670,6 +729,7 @@ class ExactOptimizer(Optimizer):
 
         # Stage 3: least norm at the error budget reached (also when stage 2 was stopped).
         b = rounded_rhs(g, d, zero, t_best)
+        norm_lower = 0.0
         if least_norm_done is not None and np.array_equal(b, least_norm_done):
             proved_norm, why = True, ""
             path.append("least norm: proved with the grid optimum")
@@ -677,8 +737,10 @@ class ExactOptimizer(Optimizer):
             calls += 1
             if cont is not None and not np.array_equal(b, rounded_rhs(g, d, zero, level)):
                 cont = None
-            k_best, proved_norm, why = self._grid_least_norm(g_rows, g, b, kmin, kmax, cost, t_best, k_best, cont,
-                                                             clock, path)
+            k_best, proved_norm, why, norm_lower = self._grid_least_norm(
+                g_rows, g, b, kmin, kmax, cost, t_best, k_best, cont, clock, path,
+                unit_box=None if unit_box is None or not np.array_equal(b, unit_box[0]) else unit_box[1],
+                box_share=BOX_SHARE if stopped is None else STOPPED_BOX_SHARE)
         if not proved_norm and stopped is None:
             stopped = ("least norm", why)
         clock.lap("least norm")
@@ -695,6 +757,11 @@ class ExactOptimizer(Optimizer):
             else:
                 message = (f"grid optimum proved, least norm not proved ({why} in the least-norm stage); the "
                            "smallest correction found at the optimum is given")
+            if not proved_norm:
+                ratio = lower_bound_ratio(float(np.sum(cost * k_best**2)), norm_lower)
+                extra["norm_ratio_max"] = ratio
+                message += (f", at most {ratio:.3f}× the least norm (certified)" if np.isfinite(ratio)
+                            else ", with no bound on how far it is from the least norm")
             notes.append(Note(message, kind="solver"))
             extra["stopped"] = {"stage": stage, "reason": why}
         result = make_result(problem, x, optimizer=self.name, evaluations=calls,

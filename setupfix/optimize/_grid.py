@@ -48,7 +48,7 @@ import numpy.typing as npt
 from scipy.sparse import coo_array, csr_array
 
 __all__ = ["TOL", "grid_margins", "dual_bound", "pair_bound", "pair_structure", "PairStructure", "row_gcd", "rounded_rhs", "next_level",
-           "least_distance", "lagrangian_ball", "enumerate_ball", "ellipsoid_search", "shrink"]
+           "least_distance", "lagrangian_ball", "enumerate_ball", "ellipsoid_search"]
 
 Array = npt.NDArray[np.float64]
 
@@ -383,35 +383,6 @@ def ellipsoid_search(g_rows: Array, g: Array, level: float, centre: Array, q: fl
             return best, True, listed
         radius2 = min(radius2 * 4, cap)
 
-
-
-def shrink(g_rows: Array, b: Array, k: Array, cost: Array, deadline: float) -> Array:
-    """Move coordinates of a feasible grid point one step towards 0 while G k ≤ b holds.
-
-    A heuristic for the incumbent of the least-norm stage when a proof runs out of
-    time: Σ c k² never grows, feasibility is kept at every step, and it stops at the
-    deadline (time.perf_counter()) or when no single step is possible.
-    """
-    import time
-
-    k = k.copy()
-    fin = np.isfinite(b)
-    rows = g_rows[fin]
-    slack = b[fin] - rows @ k
-    cols = [rows[:, i].copy() for i in range(k.size)]
-    moved = True
-    while moved and time.perf_counter() < deadline:
-        moved = False
-        for i in np.argsort(-cost * np.abs(k), kind="stable"):
-            if k[i] == 0:
-                continue
-            step = -np.sign(k[i])
-            new = slack - step * cols[i]
-            if np.all(new >= -1e-9):
-                k[i] += step
-                slack = new
-                moved = True
-    return k
 
 
 def chord_rows(pairs: list[tuple[int, int]], n: int, width: int) -> tuple[csr_array, npt.NDArray[np.float64]]:
