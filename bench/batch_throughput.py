@@ -11,13 +11,27 @@ solver has a wall-clock limit (2 s): on a busy machine a solve may stop at it an
 return a different (unproved) correction, so the 1- and 2-worker outputs are compared
 and the differing rows counted.
 
-    python bench/batch_throughput.py [--reports 1000]   # writes bench/results/batch_throughput.txt
+Where the time goes: the command on a folder of one report (start-up: imports, model,
+one report), and the batch's own per-report stages run in this process over the first
+``--stages`` reports (wall clock, mean per report): reading the file and hashing it,
+reading the report (sniffing, parsing, the canonical table), matching it to the model
+and checking it, correcting it (exact solve and safety rules), and its offset rows.
+
+``--vary`` gives every copy its own deviations (each actual moved by a seeded uniform
+step in ±0.005 mm, the stated deviation recomputed), so that no two reports pose the
+same problem to the solver; without it the copies repeat five problems.
+
+    python bench/batch_throughput.py [--reports 1000] [--vary]   # writes bench/results/batch_throughput[_vary].txt
 """
 
 from __future__ import annotations
 
 import argparse
+import csv
+import hashlib
+import io
 import os
+import random
 import statistics
 import subprocess
 import sys
@@ -29,18 +43,36 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 os.environ.update(OPENBLAS_NUM_THREADS="1", MKL_NUM_THREADS="1", OMP_NUM_THREADS="1")
 
-from setupfix.model import load_model  # noqa: E402
-from setupfix.pipeline.correct import correct_report  # noqa: E402
+import parsers  # noqa: E402
+from setupfix.model import load_model, match_parts  # noqa: E402
+from setupfix.pipeline.checks import check_parts  # noqa: E402
+from setupfix.pipeline.correct import correct_part, correct_report  # noqa: E402
+from setupfix.pipeline.cycles import assign_stations  # noqa: E402
 
 GUIDE = ROOT / "sample_reports" / "guide_pins"
-OUT = ROOT / "bench" / "results" / "batch_throughput.txt"
+RESULTS = ROOT / "bench" / "results"
 
 
-def make_reports(folder: Path, n: int) -> None:
+def _varied(text: str, rng: random.Random) -> str:
+    """The cycle with each actual moved by a uniform step in ±0.005 mm (4 decimals), deviation recomputed."""
+    rows = list(csv.DictReader(io.StringIO(text, newline="")))
+    for row in rows:
+        actual = round(float(row["actual"]) + rng.uniform(-0.005, 0.005), 4)
+        row["actual"] = f"{actual:.4f}"
+        row["deviation"] = f"{actual - float(row['nominal']):.4f}"
+    out = io.StringIO(newline="")
+    writer = csv.DictWriter(out, fieldnames=list(rows[0]), lineterminator="\n")
+    writer.writeheader()
+    writer.writerows(rows)
+    return out.getvalue()
+
+
+def make_reports(folder: Path, n: int, vary: bool = False) -> None:
     texts = [(GUIDE / f"cycle_0{i}.csv").read_text() for i in range(1, 6)]
+    rng = random.Random(0)
     for k in range(n):
         text = texts[k % 5].replace("T08:00:00", f"T{8 + (k // 3600) % 12:02d}:{(k // 60) % 60:02d}:{k % 60:02d}")
-        (folder / f"r{k:05d}.csv").write_text(text)
+        (folder / f"r{k:05d}.csv").write_text(_varied(text, rng) if vary else text)
 
 
 def reference() -> float:
@@ -58,6 +90,29 @@ def reference() -> float:
     return statistics.mean(per_cycle)
 
 
+def stages(files: list[Path]) -> dict[str, float]:
+    """Mean seconds per report of each stage of the batch's per-report work, in this process."""
+    model = load_model(GUIDE / "model.toml")
+    total = dict.fromkeys(("file + hash", "read", "match + check", "correct", "offset rows"), 0.0)
+    for path in files:
+        t0 = time.perf_counter()
+        source = parsers.load_source(path)
+        hashlib.sha256(source.data).hexdigest()
+        t1 = time.perf_counter()
+        table = parsers.read_report(source).table
+        t2 = time.perf_counter()
+        parts = check_parts(model, match_parts(model, assign_stations(model, table), source=str(path)),
+                            source=str(path))
+        t3 = time.perf_counter()
+        results = [correct_part(model, part) for part in parts]
+        t4 = time.perf_counter()
+        [r.offsets(None) for r in results]
+        t5 = time.perf_counter()
+        for key, seconds in zip(total, (t1 - t0, t2 - t1, t3 - t2, t4 - t3, t5 - t4)):
+            total[key] += seconds
+    return {key: seconds / len(files) for key, seconds in total.items()}
+
+
 def run(folder: Path, out: Path, workers: int) -> float:
     t = time.perf_counter()
     proc = subprocess.run([sys.executable, "-m", "setupfix", "batch", "--model", str(GUIDE / "model.toml"),
@@ -72,30 +127,48 @@ def run(folder: Path, out: Path, workers: int) -> float:
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--reports", type=int, default=1000)
-    n = ap.parse_args().reports
+    ap.add_argument("--stages", type=int, default=200, help="reports timed stage by stage in process")
+    ap.add_argument("--vary", action="store_true", help="every report with its own deviations")
+    args = ap.parse_args()
+    n = args.reports
     ref = reference()
-    lines = [f"setupfix batch on {n} guide-pins reports (28 dimensions, 10 registers), start-up included; "
-             "OPENBLAS/MKL/OMP threads = 1",
+    kind = "varied copies (own deviations)" if args.vary else "copies repeating five problems"
+    lines = [f"setupfix batch on {n} guide-pins reports (28 dimensions, 10 registers; {kind}), start-up "
+             "included; OPENBLAS/MKL/OMP threads = 1, HiGHS threads = 1",
              f"reference: in-process correct_report (read + match + exact solve + rules), mean over the five "
              f"cycles of the median of 5: {ref * 1000:.1f} ms"]
     with tempfile.TemporaryDirectory() as tmp:
         folder = Path(tmp) / "reports"
         folder.mkdir()
-        make_reports(folder, n)
+        make_reports(folder, n, args.vary)
+        files = sorted(folder.iterdir())
+        one = Path(tmp) / "one"
+        one.mkdir()
+        (one / files[0].name).write_bytes(files[0].read_bytes())
+        startup = statistics.median(run(one, Path(tmp) / "one.csv", 1) for _ in range(3))
+        lines.append(f"start-up: the command on a folder of one report, median of 3: {startup:.2f} s "
+                     f"= {startup / ref:.0f}× the reference")
+        per = stages(files[: args.stages])
+        shown = ", ".join(f"{k} {v * 1000:.2f} ms ({v / ref:.2f})" for k, v in per.items())
+        lines.append(f"per report in process, mean over {min(args.stages, n)} of these reports (× the reference): "
+                     f"{shown}; sum {sum(per.values()) * 1000:.2f} ms ({sum(per.values()) / ref:.2f})")
         outs = []
         for workers in (1, 2):
             out = Path(tmp) / f"offsets_{workers}.csv"
             seconds = run(folder, out, workers)
             outs.append(out.read_bytes())
-            per = seconds / n
-            lines.append(f"workers {workers}: {seconds:.1f} s total, {per * 1000:.1f} ms per report "
-                         f"= {per / ref:.2f}× the reference; {n / seconds:.0f} reports/s")
+            per_report = seconds / n
+            lines.append(f"workers {workers}: {seconds:.1f} s total, {per_report * 1000:.1f} ms per report "
+                         f"= {per_report / ref:.2f}× the reference; {n / seconds:.0f} reports/s; after start-up "
+                         f"{(seconds - startup) / n * 1000:.1f} ms per report")
         a, b = outs[0].decode().splitlines(), outs[1].decode().splitlines()
         differing = sum(x != y for x, y in zip(a, b)) + abs(len(a) - len(b))
         lines.append(f"outputs of 1 and 2 workers: {'identical' if outs[0] == outs[1] else 'differ'} "
                      f"({differing} of {len(a) - 1} rows differ)")
-        lines.append(f"target (issue 13): {n} reports in ≤ 10 s → {10 / n * 1000:.0f} ms per report")
-    OUT.write_text("$ python bench/batch_throughput.py --reports %d\n" % n + "\n".join(lines) + "\n")
+        lines.append(f"target (issue 15): {n} reports in ≤ 10 s → {10 / n * 1000:.0f} ms per report")
+    suffix = "_vary" if args.vary else ""
+    command = f"$ python bench/batch_throughput.py --reports {n}" + (" --vary" if args.vary else "")
+    (RESULTS / f"batch_throughput{suffix}.txt").write_text(command + "\n" + "\n".join(lines) + "\n")
     print("\n".join(lines))
 
 

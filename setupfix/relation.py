@@ -15,7 +15,9 @@ Everything here is a pure function on arrays.
 
 from __future__ import annotations
 
+import threading
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 import numpy.typing as npt
@@ -59,23 +61,51 @@ class RelationMatrices:
     features: list[str]
     dimensions: list[str]
 
-    @property
+    @cached_property
     def composite(self) -> Array:
-        """Composite matrix C, shape (|W| + |T|, |D|): D = [W, T] · C."""
-        return composite_matrix(self.R_WF, self.R_TF, self.R_FD)
+        """Composite matrix C, shape (|W| + |T|, |D|): D = [W, T] · C (computed once, read-only)."""
+        return _read_only(composite_matrix(self.R_WF, self.R_TF, self.R_FD))
 
     @property
     def registers(self) -> list[str]:
         return self.wks + self.tools
 
 
+def _read_only(array: Array) -> Array:
+    array.setflags(write=False)
+    return array
+
+
+#: Matrices of the models used last, by ``id``: a batch or the TUI poses one problem per
+#: report on the same model, and rebuilding them cost ~0.1 ms each time.  Each entry
+#: holds its model, so the ``id`` cannot be reused while the entry lives; a model is
+#: immutable (frozen), so its matrices never go stale.
+_RECENT: dict[int, tuple[ProcessModel, RelationMatrices]] = {}
+_RECENT_SIZE = 8
+_RECENT_LOCK = threading.Lock()
+
+
 def relation_matrices(model: ProcessModel) -> RelationMatrices:
-    """Build R_MW, R_WF, R_TF and R_FD (paper eqs. 3–4) from a process model.
+    """R_MW, R_WF, R_TF and R_FD (paper eqs. 3–4) of a process model (read-only arrays).
 
     Weights are those of the model file: w_az = +1 when an increase of a
     increases z, −1 when it decreases it, absent (0) otherwise; other real weights
     (for example 2 for a radius register acting on a diameter) pass through.
+    The result is kept for the last few models (the same object is returned for
+    the same model object).
     """
+    hit = _RECENT.get(id(model))
+    if hit is not None and hit[0] is model:
+        return hit[1]
+    mats = _relation_matrices(model)
+    with _RECENT_LOCK:  # the TUI and threaded callers build concurrently
+        while len(_RECENT) >= _RECENT_SIZE:
+            _RECENT.pop(next(iter(_RECENT)))
+        _RECENT[id(model)] = (model, mats)
+    return mats
+
+
+def _relation_matrices(model: ProcessModel) -> RelationMatrices:
     w_ix = {r.id: i for i, r in enumerate(model.wks)}
     t_ix = {r.id: i for i, r in enumerate(model.tools)}
     f_ix = {f.id: i for i, f in enumerate(model.features)}
@@ -95,7 +125,7 @@ def relation_matrices(model: ProcessModel) -> RelationMatrices:
         for fid, weight in dim.features.items():
             r_fd[f_ix[fid], d] = weight
     return RelationMatrices(
-        R_MW=r_mw, R_WF=r_wf, R_TF=r_tf, R_FD=r_fd,
+        R_MW=_read_only(r_mw), R_WF=_read_only(r_wf), R_TF=_read_only(r_tf), R_FD=_read_only(r_fd),
         machines=[m.id for m in model.machines],
         wks=[w.id for w in model.wks],
         tools=[t.id for t in model.tools],

@@ -84,3 +84,35 @@ def test_null_space_spans_and_is_readable():
     assert null.shape[0] == comp.shape[0] - np.linalg.matrix_rank(comp)
     np.testing.assert_allclose(null @ comp, 0.0, atol=1e-9)
     assert np.allclose(np.abs(null).max(axis=1), 1.0)
+
+
+def test_matrices_are_kept_per_model_object_and_never_stale(guide_pins_model):
+    """The matrices are built once per model object (batch: once, not per report), are read-only,
+    and a different model, even one equal in all but one weight, gets its own."""
+    import dataclasses
+
+    from setupfix import relation
+
+    first = relation_matrices(guide_pins_model)
+    assert relation_matrices(guide_pins_model) is first
+    assert first.composite is first.composite
+    for array in (first.R_WF, first.R_TF, first.R_FD, first.composite):
+        with pytest.raises(ValueError):
+            array[0, 0] = 5.0
+    d0 = guide_pins_model.dimensions[0]
+    feature = next(iter(d0.features))
+    changed = dataclasses.replace(
+        guide_pins_model,
+        dimensions=(dataclasses.replace(d0, features={**d0.features, feature: 2.0 * d0.features[feature]}),
+                    *guide_pins_model.dimensions[1:]))
+    other = relation_matrices(changed)
+    assert other is not first
+    np.testing.assert_array_equal(other.R_FD[:, 1:], first.R_FD[:, 1:])
+    assert other.R_FD[[f.id for f in changed.features].index(feature), 0] == 2.0 * d0.features[feature]
+    # More models than are kept: each still gets its own matrices, never another's.
+    models = [dataclasses.replace(guide_pins_model, dimensions=guide_pins_model.dimensions[:k])
+              for k in range(1, relation._RECENT_SIZE + 3)]
+    for _ in range(2):
+        for m in models:
+            assert relation_matrices(m).R_FD.shape == (len(m.features), len(m.dimensions))
+    assert len(relation._RECENT) <= relation._RECENT_SIZE

@@ -18,12 +18,12 @@ import numpy as np
 
 from setupfix.errors import ExportError, MatchError, SourceLocation
 from setupfix.model import PartMeasurement, ProcessModel, load_model
+from setupfix.model.effects import model_effects
 from setupfix.model.safety import safety_settings
 from setupfix.offsets import OffsetRow, offset_rows
 from setupfix.pipeline.controllers import read_current, write_offsets
 from setupfix.optimize import CorrectionProblem, OptimizeResult, get_optimizer
 from setupfix.pipeline.cycles import Stations, assign_stations, load_parts  # noqa: F401 - re-exported
-from setupfix.pipeline.diagnose import effect_relations, forecast_part
 from setupfix.pipeline.smoothing import smooth_part
 from setupfix.safety import Policy, Recommendation, RuleEffect, budget, recommend
 from setupfix.store import Store
@@ -263,13 +263,23 @@ def correct_part(model: ProcessModel, part: PartMeasurement, *, optimizer: str =
     measured_part = part
     if smoothed is not None and smoothed.used:
         part = dataclasses.replace(part, deviation=smoothed.deviation)
-    forecast = forecast_part(model, part)  # the model's [effects]: drift and wear until the next cycle
-    if forecast is not part:
-        notes += [str(n) for n in forecast.notes[len(part.notes):]]
-        part = forecast
-    problem, relation_note = effect_relations(model, CorrectionProblem.from_part(model, part), part)
-    if relation_note is not None:  # the model's [effects] relations change what a correction does
-        notes.append(str(relation_note))
+    effects = bool(model_effects(model).effects)
+    if effects:
+        # the model's [effects]: drift and wear until the next cycle.  Imported here: the diagnosis
+        # brings scipy.stats (~0.5 s of start-up), which a model without effects never needs.
+        from setupfix.pipeline.diagnose import forecast_part
+
+        forecast = forecast_part(model, part)
+        if forecast is not part:
+            notes += [str(n) for n in forecast.notes[len(part.notes):]]
+            part = forecast
+    problem = CorrectionProblem.from_part(model, part)
+    if effects:
+        from setupfix.pipeline.diagnose import effect_relations
+
+        problem, relation_note = effect_relations(model, problem, part)
+        if relation_note is not None:  # the model's [effects] relations change what a correction does
+            notes.append(str(relation_note))
     raw = measured_part.deviation[measured_part.measured] if part is not measured_part else None
     opt = get_optimizer(optimizer, seed=seed, **params)
     rec = recommend(problem, safety_policy(model, problem, cumulative), opt.solve, optimizer=optimizer,

@@ -31,7 +31,7 @@ from setupfix.errors import MatchError, Note, SourceLocation
 from setupfix.model import PartMeasurement, ProcessModel, match_parts, normalise_name
 from setupfix.pipeline.checks import check_parts
 
-__all__ = ["Stations", "assign_stations", "cycle_name", "load_parts", "model_groups"]
+__all__ = ["Stations", "assign_stations", "cycle_name", "load_parts", "model_groups", "read_parts"]
 
 #: Stations of a report's parts: a list in part order or a mapping part → station.
 Stations = Sequence[str] | Mapping[str, str]
@@ -151,6 +151,15 @@ def load_parts(model: ProcessModel, report: str | Path | Source, *, format: str 
         See :func:`assign_stations`, :func:`setupfix.model.match_parts` and
         :func:`setupfix.pipeline.checks.check_parts` (unit error; any difference with ``strict``).
     """
+    return read_parts(model, report, format=format, unit=unit, encoding=encoding, columns=columns,
+                      stations=stations, parts_per_cycle=parts_per_cycle, strict=strict, lenient=lenient)[1]
+
+
+def read_parts(model: ProcessModel, report: str | Path | Source, *, format: str | None = None,
+               unit: str | None = None, encoding: str | None = None, columns: str | None = None,
+               stations: Stations | None = None, parts_per_cycle: int | None = None,
+               strict: bool = False, lenient: bool = False) -> tuple[parsers.ReadResult, list[PartMeasurement]]:
+    """:func:`load_parts` that also returns what was read (table, format), e.g. for the history store."""
     options: dict[str, Any] = {"unit": unit, "encoding": encoding, "lenient": lenient}
     if columns:
         options["columns"] = columns
@@ -166,7 +175,7 @@ def load_parts(model: ProcessModel, report: str | Path | Source, *, format: str 
                                               f"of {parts_per_cycle} parts", SourceLocation(str(report)), "cycle"))
     checked = check_parts(model, parts, strict=strict, source=str(report))
     # the reader's notes (skipped rows, assumed units) travel with every cycle they concern, as data
-    return [replace(p, notes=(*read.notes, *p.notes)) for p in checked] if read.notes else checked
+    return read, ([replace(p, notes=(*read.notes, *p.notes)) for p in checked] if read.notes else checked)
 
 
 def _with_note(part: PartMeasurement, note: Note) -> PartMeasurement:

@@ -285,6 +285,8 @@ def load_series(model: ProcessModel | str | Path, reports: Sequence[str | Path] 
             tables.append(table)
     if not parts:
         raise ParseError("no report in the series", location=SourceLocation(where or "<series>"))
+    if not corrections and log is None and len(parts) > 1:
+        notes.append(_no_log_note(reports))
     if corrections:
         log = read_corrections_log(corrections, model)
     if temperatures:
@@ -312,6 +314,15 @@ def load_series(model: ProcessModel | str | Path, reports: Sequence[str | Path] 
         notes.append("dimension coordinates for position effects taken from the reports' x, y, z columns")
     return SeriesInput(model, layout, series, tuple(_ordered(parts)), declared, section,
                        corrections, temperatures, tuple(notes))
+
+
+def _no_log_note(reports: Sequence[str | Path]) -> str:
+    """The note for a series read without a corrections log (naming a log file lying beside a report)."""
+    beside = sorted({str(Path(r).parent / n) for r in reports if not Path(r).is_dir()
+                     for n in _LOG_NAMES if (Path(r).parent / n).is_file()})
+    text = ("no corrections log: every part is taken as cut with the same offsets, so a correction applied "
+            "during the series would show as drift or a step")
+    return text + (f"; {beside[0]} lies beside the reports: give it with --corrections" if beside else "")
 
 
 def report_coordinates(model: ProcessModel, tables: Sequence[pd.DataFrame]) -> np.ndarray:

@@ -135,3 +135,13 @@ def test_thermal_model_prediction_is_a_candidate_channel(tmp_path, capsys):
     assert [e["kind"] for e in effects] == ["thermal"]
     assert {effects[0]["target"], *(a.split(": ", 1)[1] for a in effects[0]["alike"])} == \
         {"all tools ~ spindle", "all tools ~ mra prediction"}
+
+
+def test_a_series_without_its_corrections_log_says_so_and_names_the_log_beside_it(series, capsys):
+    code, out, err = run(capsys, "diagnose", "--model", MODEL, "--json", "--no-walk", series / "measurements.csv")
+    assert code == 0, err
+    notes = [n for n in json.loads(out)["notes"] if n.startswith("no corrections log")]
+    assert len(notes) == 1 and f"{series / 'corrections.csv'} lies beside the reports" in notes[0]
+    code, out, err = run(capsys, "diagnose", "--model", MODEL, "--json", "--no-walk", series)  # the folder: used
+    assert code == 0, err
+    assert not [n for n in json.loads(out)["notes"] if n.startswith("no corrections log")]

@@ -95,3 +95,46 @@ def test_one_program_per_cycle(tmp_path):
     s = run_batch(sample / "model.toml", d, tmp_path / "programs", settle=0, controller="fanuc")
     assert s.written and [p.name for p in (tmp_path / "programs").iterdir()] == ["a.nc"]
     assert "G91 G10 L2 P1 Z-0.022" in (tmp_path / "programs" / "a.nc").read_text()
+
+
+def test_store_records_what_was_corrected_without_reading_again(tmp_path, monkeypatch):
+    """With a history store each report is read once (in the worker): the store gets those bytes and that table."""
+    import parsers
+
+    d = folder(tmp_path)
+    calls: list[str] = []
+    real = parsers.read_report
+
+    def counted(source, **options):  # type: ignore[no-untyped-def]
+        calls.append(str(source))
+        return real(source, **options)
+
+    monkeypatch.setattr(parsers, "read_report", counted)
+    with open_store(tmp_path / "h.db") as store:
+        s = run_batch(MODEL, d, tmp_path / "offsets.csv", settle=0, store=store)
+        assert s.reports == 4 and len(store.reports()) == 4
+        stored = store.measurements(store.reports()[0].sha256)
+    assert sorted(Path(c).name for c in calls) == sorted(
+        ["cycle_01.csv", "cycle_02.csv", "cycle_03.csv", "cycle_01.qif", "copy_of_02.csv", "notes.txt"])
+    table = real(GUIDE / "cycle_01.csv").table
+    assert stored["characteristic"].tolist() == table["characteristic"].tolist()
+    assert stored["deviation"].tolist() == pytest.approx(table["deviation"].tolist(), abs=0)
+
+
+def test_many_reports_in_chunks_give_the_same_output_and_progress_order(tmp_path):
+    from setupfix.pipeline.batch import chunk_size
+
+    d = tmp_path / "reports"
+    d.mkdir()
+    texts = [(GUIDE / f"cycle_0{i}.csv").read_text() for i in range(1, 6)]
+    for k in range(45):
+        (d / f"r{k:03d}.csv").write_text(texts[k % 5].replace("T08:00:00", f"T09:00:{k:02d}"))
+    (d / "r020.csv").write_text("characteristic,nominal\n")  # one bad file inside a chunk
+    assert chunk_size(45, 2) == 3 and chunk_size(1000, 2) == 16 and chunk_size(1, 2) == 1
+    seen: dict[int, list[str]] = {1: [], 2: []}
+    for workers in (1, 2):
+        s = run_batch(MODEL, d, tmp_path / f"w{workers}.csv", settle=0, workers=workers,
+                      progress=lambda done, total, o, w=workers: seen[w].append(Path(o.path).name))
+        assert (s.reports, len(s.failed)) == (44, 1) and "r020.csv" in s.failed[0][0]
+    assert seen[1] == seen[2] == sorted(p.name for p in d.iterdir())
+    assert (tmp_path / "w1.csv").read_bytes() == (tmp_path / "w2.csv").read_bytes()
