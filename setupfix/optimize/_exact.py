@@ -334,7 +334,7 @@ class ExactOptimizer(Optimizer):
             # the b-independent part of the NNLS system, kept with the solver models (the cache holds this
             # G and cost: the LP bound, which every solve starts with, set it)
             keep = np.isfinite(b)
-            key = ("nnls", keep.tobytes())
+            key = "nnls " + keep.tobytes().hex()
             system = self._cache.derived.get(key)
             if system is None or self._cache.g_rows is None or self._cache.g_rows.shape != g_rows.shape:
                 system = self._cache.derived[key] = least_distance_system(g_rows[keep], cost)

@@ -354,6 +354,7 @@ def enumerate_ball(centre: Array, cost: Array, radius2: float, kmin: Array, kmax
     rest_norm = np.sqrt(after(c * ce**2))
     dual = multipliers is not None and rows is not None and rhs is not None and np.isfinite(f_slack)
     a = np.zeros((0, n))
+    rhs_live = np.zeros(0)
     if rows is not None and rhs is not None:
         a = rows[:, order]
         if dual:
@@ -368,7 +369,7 @@ def enumerate_ball(centre: Array, cost: Array, radius2: float, kmin: Array, kmax
         top = np.minimum(np.sum(np.maximum(a * lo_o, a * hi_o), axis=1),
                          a @ ce + np.sqrt(max(radius2, 0.0)) * np.sqrt(np.sum(a * a / c, axis=1)))
         live = top > rhs + 1e-7
-        a, rhs = a[live], rhs[live]
+        a, rhs_live = a[live], rhs[live]
         limit = min(limit, max(1, (1 << 24) // max(a.shape[0], 1)))
     pruned = a.shape[0] > 0
     rest_box = after(np.minimum(a * lo_o, a * hi_o))  # (r, n): least a_r·k_r over the box
@@ -414,7 +415,7 @@ def enumerate_ball(centre: Array, cost: Array, radius2: float, kmin: Array, kmax
         if pruned:
             partial = partial[rep] + vals[:, None] * a[:, p][None, :]
             low = np.maximum(rest_box[:, p], rest_centre[:, p] - root[:, None] * rest_scale[:, p])
-            ok = np.flatnonzero(np.all(partial + low <= rhs + 1e-7, axis=1))
+            ok = np.flatnonzero(np.all(partial + low <= rhs_live + 1e-7, axis=1))
             rep, vals, acc, f_acc, partial = rep[ok], vals[ok], acc[ok], f_acc[ok], partial[ok]
             if dual:
                 lam_acc = lam_acc[ok]
