@@ -53,6 +53,11 @@ from setupfix.simulate import simulate_deviations  # noqa: E402
 
 RESULTS = ROOT / "bench" / "results"
 SAMPLE = ROOT / "sample_reports" / "guide_pins"
+#: glibc returns freed blocks above a dynamic threshold to the system, so a 1 MB numpy temporary costs
+#: page faults or not depending on what the process freed before: the reference took 1.2 ms after the
+#: previous version's solves and 4 ms after this one's (or with no solve at all).  Pinned here (Linux;
+#: the bench re-executes itself with them), so that both sides of every ratio see the same allocator.
+MALLOC = {"MALLOC_MMAP_THRESHOLD_": str(32 << 20), "MALLOC_TRIM_THRESHOLD_": str(64 << 20)}
 
 
 def problems(sets: int, seed: int) -> list[tuple[str, CorrectionProblem]]:
@@ -70,6 +75,9 @@ def problems(sets: int, seed: int) -> list[tuple[str, CorrectionProblem]]:
 
 
 def reference_seconds(problem: CorrectionProblem, x: np.ndarray) -> float:
+    """One evaluate, timed after an untimed one: the first after a solve pays for the memory the
+    solve's arrays left to the allocator (some 25 % more), which would flatter the solver's ratio."""
+    problem.evaluate(x)
     start = time.perf_counter()
     problem.evaluate(x)
     return time.perf_counter() - start
@@ -152,6 +160,8 @@ def main(argv: list[str] | None = None) -> None:
         f"machine : {platform.machine()}, Python {platform.python_version()}, numpy {np.__version__}; "
         f"wall time {wall:.1f} s",
         f"threads : BLAS limited to 1 by threadpoolctl ({blas})",
+        "malloc  : " + (", ".join(f"{k}={os.environ.get(k)}" for k in MALLOC) if platform.system() == "Linux"
+                        else "system default") + " (pinned: see MALLOC in the script)",
         f"load    : 1-min load average {load_start:.2f} at the start, {os.getloadavg()[0]:.2f} at the end "
         f"({os.cpu_count()} cores; other processes share them when it exceeds about 1)",
         f"reports : {n} (5 bundled cycles from CSV + {args.sets} random sets by eqs. 12-13, seed {args.seed}), "
@@ -202,4 +212,6 @@ def main(argv: list[str] | None = None) -> None:
 
 
 if __name__ == "__main__":
+    if platform.system() == "Linux" and any(os.environ.get(k) != v for k, v in MALLOC.items()):
+        os.execve(sys.executable, [sys.executable, *sys.argv], {**os.environ, **MALLOC})
     main()
