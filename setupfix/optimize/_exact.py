@@ -22,8 +22,13 @@ Stages, and the proofs that let one be skipped
    two dimensions move alike and the even split of their difference is off the
    grid.  U = the smaller of the two bounds every grid point must respect.
 2. **Grid optimum** — if the LP point rounded to the grid already reaches U, it is
-   optimal (nothing on the grid exceeds U): no MILP.  Otherwise the MILP "max t,
-   k integer", bracketed t ∈ [t(rounded point), U], started from the rounded point.
+   optimal (nothing on the grid exceeds U): no MILP.  Otherwise levels of rounded rows
+   from U down: an empty continuous system lowers the level; small problems list growing
+   ellipsoids around its continuous least-norm point (bounded work): a point found reaches
+   the level, a list that closes also proves the least norm there (stage 3 is skipped), a
+   list holding the whole box with no point proves the level empty; then a feasibility
+   MILP; only then the MILP "max t, k integer", bracketed t ∈ [t(rounded point), U],
+   started from the rounded point.
    A HiGHS failure ("Solve error") is retried once with the lower bracket removed,
    and reported as such in ``notes``.
 3. **Least norm** — among grid points with margin ≥ t*, the least Σ cost_i·k_i²
@@ -31,8 +36,10 @@ Stages, and the proofs that let one be skipped
    for large problems) gives a point and multipliers; the multipliers bound every
    feasible point's norm from below by an ellipsoid around that point
    (:func:`~setupfix.optimize._grid.lagrangian_ball`), and the integer points inside
-   it that could beat the best known point are listed exhaustively — the least one
-   is the proven grid least norm.  If the best known point already meets the bound,
+   it that could beat the best known point are listed exhaustively, pruned by the rows
+   and by the Lagrangian dual bound of the coordinates not yet fixed
+   (:func:`~setupfix.optimize._grid.enumerate_ball`) — the least one is the proven grid
+   least norm (ties: the lexicographically smallest).  If the best known point already meets the bound,
    nothing is listed.  Large problems (more than ``ELLIPSOID_MAX_REGISTERS`` free
    registers, or a list too long): a near-least incumbent from the least norm in the
    unit box around the rounded continuous point (one MILP with a linear objective;
