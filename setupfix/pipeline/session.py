@@ -127,20 +127,16 @@ def offsets_text(opened: OpenedReport, controller: str, *, cycle: int | None = N
 
 #: Files a watched folder ignores: partial downloads, editor and temporary files.
 SKIPPED_SUFFIXES: tuple[str, ...] = (".tmp", ".part", ".partial", ".crdownload", "~", ".swp", ".lock")
-#: Files kept beside reports that are never reports: process models, notes, scripts, the
-#: history store, pictures, and the logs ``setupfix diagnose`` finds beside a series.
-NOT_REPORT_SUFFIXES: tuple[str, ...] = (".toml", ".md", ".py", ".db", ".db-wal", ".db-shm", ".db-journal", ".sqlite",
-                                        ".svg", ".png")
-NOT_REPORT_NAMES: tuple[str, ...] = ("corrections.csv", "temperatures.csv")
+
 
 
 def newest_report(folder: str | Path) -> Path | None:
     """The most recently modified report candidate in ``folder`` (not recursive).
 
     Hidden files, sub-folders, :data:`SKIPPED_SUFFIXES` (files still being written) and
-    files that are never reports (:data:`NOT_REPORT_SUFFIXES`, :data:`NOT_REPORT_NAMES`:
-    a model or the logs kept beside the reports) are ignored; whether any other file is
-    a report is for the reader to say.
+    files that are never reports (:func:`parsers.never_a_report`: a model or the logs
+    kept beside the reports) are ignored; whether any other file is a report is for the
+    reader to say.
     """
     best: tuple[float, str] | None = None
     try:
@@ -148,8 +144,7 @@ def newest_report(folder: str | Path) -> Path | None:
     except OSError:
         return None
     for entry in entries:
-        name = entry.name.lower()
-        if name.startswith(".") or name.endswith(SKIPPED_SUFFIXES + NOT_REPORT_SUFFIXES) or name in NOT_REPORT_NAMES:
+        if entry.name.startswith(".") or entry.name.endswith(SKIPPED_SUFFIXES) or parsers.never_a_report(entry.name):
             continue
         try:
             if not entry.is_file(follow_symlinks=False):
