@@ -10,12 +10,12 @@ built-in readers.
 
 from __future__ import annotations
 
-from parsers._registry import FormatSpec, ReadResult, find_format, formats, read, read_report, register
+from parsers._registry import FormatSpec, ReadResult, find_format, formats, never_a_report, read, read_report, register
 from parsers._source import STDIN, Source, final_line_break, load_source
 from parsers import canonical as _canonical
 
-__all__ = ["FormatSpec", "ReadResult", "Source", "STDIN", "find_format", "formats", "load_source", "read",
-           "read_report", "register"]
+__all__ = ["FormatSpec", "ReadResult", "Source", "STDIN", "find_format", "formats", "load_source", "never_a_report",
+           "read", "read_report", "register"]
 
 register(FormatSpec(
     name="canonical",

@@ -142,6 +142,20 @@ def find_format(path: str | Path | Source, format: str | None = None) -> FormatS
     )
 
 
+#: Files kept beside reports that are never reports: process models, notes, scripts, the
+#: history store and its journals, pictures, and the logs ``setupfix diagnose`` reads beside
+#: a series.  Folder readers (batch, the TUI's folder watch) leave them out.
+NOT_REPORT_SUFFIXES: tuple[str, ...] = (".toml", ".md", ".py", ".db", ".db-wal", ".db-shm", ".db-journal", ".sqlite",
+                                        ".svg", ".png")
+NOT_REPORT_NAMES: tuple[str, ...] = ("corrections.csv", "temperatures.csv")
+
+
+def never_a_report(name: str) -> bool:
+    """True for a file name that is never a report (:data:`NOT_REPORT_SUFFIXES`, :data:`NOT_REPORT_NAMES`)."""
+    folded = name.lower()
+    return folded.endswith(NOT_REPORT_SUFFIXES) or folded in NOT_REPORT_NAMES
+
+
 def check_options(spec: FormatSpec, options: dict[str, Any], where: str) -> None:
     """Refuse an option the reader does not use (rather than ignore it silently).
 

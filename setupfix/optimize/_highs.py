@@ -2,8 +2,10 @@
 
 Why highspy and not scipy's ``linprog``/``milp``: scipy rebuilds the whole model and
 re-validates every option on each call; highspy keeps the solver model, so a batch
-of reports of one process model changes only the row bounds (the deviations) and
-re-solves from the previous basis (about 0.1 ms per LP on the paper's example).
+of reports of one process model changes only the row bounds (the deviations).  Each
+run starts from a cleared solver (no basis or incumbent of an earlier report): where
+the least norm is attained at two grid points, the answer must not depend on which
+reports this thread solved before (batch workers would disagree).
 
 Every solver object is created silent (``output_flag`` off: nothing may reach stdout,
 which carries ``--json``) and single-threaded (``threads`` = 1: the solves here are
@@ -181,6 +183,7 @@ class LinearModel:
         """Run HiGHS for at most ``time_limit`` seconds (optionally from a feasible ``start``)."""
         h = self.h
         h.setOptionValue("time_limit", float(max(time_limit, 1e-3)))
+        h.clearSolver()  # the answer depends on this model and start only, never on earlier runs
         if start is not None and self.is_mip:
             h.setSolution(self.n_cols, self._cols, np.asarray(start, dtype=float))
         run = h.run()

@@ -107,7 +107,10 @@ class BatchSummary:
 
 
 def find_reports(root: str | Path) -> list[tuple[Path, int, int]]:
-    """Every regular file below ``root`` (sorted; hidden files and folders left out) with size and mtime_ns.
+    """Every regular file below ``root`` (sorted) with size and mtime_ns.
+
+    Hidden files and folders are left out, and so are files that are never reports
+    (:func:`parsers.never_a_report`: a process model, notes, the history store, the logs).
 
     Raises
     ------
@@ -121,7 +124,7 @@ def find_reports(root: str | Path) -> list[tuple[Path, int, int]]:
     for folder, dirs, files in os.walk(base):
         dirs[:] = sorted(d for d in dirs if not d.startswith("."))
         for name in sorted(files):
-            if name.startswith("."):
+            if name.startswith(".") or parsers.never_a_report(name):
                 continue
             path = Path(folder) / name
             st = path.lstat()

@@ -285,6 +285,8 @@ def load_series(model: ProcessModel | str | Path, reports: Sequence[str | Path] 
             tables.append(table)
     if not parts:
         raise ParseError("no report in the series", location=SourceLocation(where or "<series>"))
+    parts, more = _one_per_part(parts)
+    notes += more
     if not corrections and log is None and len(parts) > 1:
         notes.append(_no_log_note(reports))
     if corrections:
@@ -364,6 +366,33 @@ def _with_thermal_prediction(temps: TempLog | None, thermal: str, temperatures: 
                  f"the channel {name!r}")
     return (times, np.column_stack([samples[:, keep], pred.drift[idx]]),
             (*(channels[j] for j in keep), name)), notes
+
+
+def _one_per_part(parts: list[PartMeasurement]) -> tuple[list[PartMeasurement], list[str]]:
+    """Each machined part once: reports of the same part and time (the same cycle exported twice, or
+    measured twice) would count as independent cycles and make any effect look significant.
+
+    The later one read is kept (as ``correct`` keeps a part's later measurement); the note says
+    whether their deviations agree.
+    """
+    last: dict[tuple[str, str], int] = {}
+    for i, p in enumerate(parts):
+        if p.timestamp is not None:
+            last[(p.part, str(p.timestamp))] = i
+    notes: list[str] = []
+    keep = []
+    for i, p in enumerate(parts):
+        j = last.get((p.part, str(p.timestamp))) if p.timestamp is not None else i
+        if j == i:
+            keep.append(p)
+            continue
+        q = parts[j]
+        both = np.isfinite(p.deviation) & np.isfinite(q.deviation)
+        gap = float(np.max(np.abs(p.deviation[both] - q.deviation[both]), initial=0.0))
+        same = "the same deviations" if gap <= 1e-9 else f"deviations differing by up to {gap:.4g}"
+        notes.append(f"{p.report}:{p.part} and {q.report}:{q.part} are one part (same name and time {p.timestamp}, "
+                     f"{same}): {q.report} is used once")
+    return keep, notes
 
 
 def _ordered(parts: list[PartMeasurement]) -> list[PartMeasurement]:

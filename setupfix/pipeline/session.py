@@ -129,11 +129,14 @@ def offsets_text(opened: OpenedReport, controller: str, *, cycle: int | None = N
 SKIPPED_SUFFIXES: tuple[str, ...] = (".tmp", ".part", ".partial", ".crdownload", "~", ".swp", ".lock")
 
 
+
 def newest_report(folder: str | Path) -> Path | None:
     """The most recently modified report candidate in ``folder`` (not recursive).
 
-    Hidden files, sub-folders and :data:`SKIPPED_SUFFIXES` are ignored; whether the
-    file is a report is for the reader to say.
+    Hidden files, sub-folders, :data:`SKIPPED_SUFFIXES` (files still being written) and
+    files that are never reports (:func:`parsers.never_a_report`: a model or the logs
+    kept beside the reports) are ignored; whether any other file is a report is for the
+    reader to say.
     """
     best: tuple[float, str] | None = None
     try:
@@ -141,7 +144,7 @@ def newest_report(folder: str | Path) -> Path | None:
     except OSError:
         return None
     for entry in entries:
-        if entry.name.startswith(".") or entry.name.endswith(SKIPPED_SUFFIXES):
+        if entry.name.startswith(".") or entry.name.endswith(SKIPPED_SUFFIXES) or parsers.never_a_report(entry.name):
             continue
         try:
             if not entry.is_file(follow_symlinks=False):

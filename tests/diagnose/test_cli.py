@@ -145,3 +145,25 @@ def test_a_series_without_its_corrections_log_says_so_and_names_the_log_beside_i
     code, out, err = run(capsys, "diagnose", "--model", MODEL, "--json", "--no-walk", series)  # the folder: used
     assert code == 0, err
     assert not [n for n in json.loads(out)["notes"] if n.startswith("no corrections log")]
+
+
+def test_one_part_reported_twice_counts_once(tmp_path, capsys):
+    """The bundled cycle 01 comes as CSV, DMIS and QIF: three files, one machined part.  Counted three
+    times it made drift and wear look significant; it counts once, said in a note."""
+    code, out, err = run(capsys, "diagnose", "--model", MODEL, "--json", "--no-walk", GUIDE_PINS)
+    assert code == 0, err
+    doc = json.loads(out)
+    assert doc["cycles"] == 5 and doc["effects"] == []
+    assert sum("are one part" in n and "the same deviations" in n for n in doc["notes"]) == 2
+    # measured twice with other values: the later file is used, and the note says by how much they differ
+    text = (GUIDE_PINS / "cycle_02.csv").read_text()
+    (tmp_path / "a.csv").write_text(text)
+    assert "P1 D1,25.0000,25.0306,0.0306," in text
+    (tmp_path / "b.csv").write_text(text.replace("P1 D1,25.0000,25.0306,0.0306,", "P1 D1,25.0000,25.0206,0.0206,"))
+    (tmp_path / "c.csv").write_text((GUIDE_PINS / "cycle_03.csv").read_text())
+    code, out, err = run(capsys, "diagnose", "--model", MODEL, "--json", "--no-walk", tmp_path)
+    assert code == 0, err
+    doc = json.loads(out)
+    assert doc["cycles"] == 2
+    assert any("a.csv:cycle 02 and b.csv:cycle 02 are one part" in n and "differing by up to 0.01)" in n
+               and "b.csv is used once" in n for n in doc["notes"])

@@ -138,3 +138,17 @@ def test_many_reports_in_chunks_give_the_same_output_and_progress_order(tmp_path
         assert (s.reports, len(s.failed)) == (44, 1) and "r020.csv" in s.failed[0][0]
     assert seen[1] == seen[2] == sorted(p.name for p in d.iterdir())
     assert (tmp_path / "w1.csv").read_bytes() == (tmp_path / "w2.csv").read_bytes()
+
+
+def test_files_kept_beside_reports_are_not_read_as_reports(tmp_path: Path) -> None:
+    """A model, notes, scripts, the store and the logs beside the reports are left out (they were
+    'failed' before, so a clean folder exited 4); reports of any extension are kept."""
+    from setupfix.pipeline.batch import find_reports
+
+    for name in ("model.toml", "README.md", "generate.py", "setupfix.db", "setupfix.db-wal", "corrections.csv",
+                 "TEMPERATURES.csv", "r1.csv", "r2.qif", "values.json", "k.txt", "odd.report"):
+        (tmp_path / name).write_text("x")
+    assert [p.name for p, _, _ in find_reports(tmp_path)] == sorted(
+        ["r1.csv", "r2.qif", "values.json", "k.txt", "odd.report"])
+    summary = run_batch(load_model(GUIDE / "model.toml"), GUIDE, tmp_path / "out.csv", settle=0)
+    assert summary.reports == 7 and not summary.failed

@@ -150,7 +150,7 @@ def test_cli_init_then_correct(tmp_path, capsys):
     assert main(["model", "init", report, "-o", str(out), "--name", "FAIR plate"]) == 0
     assert "wrote" in capsys.readouterr().err
     assert load_model(out).name == "FAIR plate"
-    first = parsers.read(report)["part"].astype(str).iloc[0]
+    first = parsers.read_report(report).table["part"].astype(str).iloc[0]
     code = main(["correct", "--model", str(out), "--json", "--part", first, report])
     obj = json.loads(capsys.readouterr().out)
     assert code == 0 or (code == 5 and obj["verdict"] == "reject")  # 5: a gross deviation is refused

@@ -49,6 +49,12 @@ def test_newest_report_skips_hidden_partial_and_folders(tmp_path):
     _touch(tmp_path / "d.csv.part", "x", 0)
     (tmp_path / "sub").mkdir()
     assert newest_report(tmp_path) == tmp_path / "b.csv"
+    for name in ("model.toml", "README.md", "generate.py", "setupfix.db", "setupfix.db-wal", "corrections.csv",
+                 "Temperatures.CSV"):  # kept beside reports, never reports
+        _touch(tmp_path / name, "x", 0)
+    assert newest_report(tmp_path) == tmp_path / "b.csv"
+    _touch(tmp_path / "e.json", "x", 0)  # a PiWeb report
+    assert newest_report(tmp_path) == tmp_path / "e.json"
     assert newest_report(tmp_path / "missing") is None
 
 
