@@ -22,8 +22,13 @@ Stages, and the proofs that let one be skipped
    two dimensions move alike and the even split of their difference is off the
    grid.  U = the smaller of the two bounds every grid point must respect.
 2. **Grid optimum** — if the LP point rounded to the grid already reaches U, it is
-   optimal (nothing on the grid exceeds U): no MILP.  Otherwise the MILP "max t,
-   k integer", bracketed t ∈ [t(rounded point), U], started from the rounded point.
+   optimal (nothing on the grid exceeds U): no MILP.  Otherwise levels of rounded rows
+   from U down: an empty continuous system lowers the level; small problems list growing
+   ellipsoids around its continuous least-norm point (bounded work): a point found reaches
+   the level, a list that closes also proves the least norm there (stage 3 is skipped), a
+   list holding the whole box with no point proves the level empty; then a feasibility
+   MILP; only then the MILP "max t, k integer", bracketed t ∈ [t(rounded point), U],
+   started from the rounded point.
    A HiGHS failure ("Solve error") is retried once with the lower bracket removed,
    and reported as such in ``notes``.
 3. **Least norm** — among grid points with margin ≥ t*, the least Σ cost_i·k_i²
@@ -31,8 +36,10 @@ Stages, and the proofs that let one be skipped
    for large problems) gives a point and multipliers; the multipliers bound every
    feasible point's norm from below by an ellipsoid around that point
    (:func:`~setupfix.optimize._grid.lagrangian_ball`), and the integer points inside
-   it that could beat the best known point are listed exhaustively — the least one
-   is the proven grid least norm.  If the best known point already meets the bound,
+   it that could beat the best known point are listed exhaustively, pruned by the rows
+   and by the Lagrangian dual bound of the coordinates not yet fixed
+   (:func:`~setupfix.optimize._grid.enumerate_ball`) — the least one is the proven grid
+   least norm (ties: the lexicographically smallest).  If the best known point already meets the bound,
    nothing is listed.  Large problems (more than ``ELLIPSOID_MAX_REGISTERS`` free
    registers, or a list too long): a near-least incumbent from the least norm in the
    unit box around the rounded continuous point (one MILP with a linear objective;
@@ -67,7 +74,7 @@ from setupfix.errors import Note, SolverError
 from setupfix.params import Interval
 from setupfix.optimize._base import Optimizer, make_result
 from setupfix.optimize._grid import (TOL, dual_bound, ellipsoid_search, grid_margins, lagrangian_ball,
-                                     least_distance,
+                                     least_distance, least_distance_system,
                                      next_level,
                                      PairStructure, pair_bound, pair_structure, rounded_rhs, row_gcd)
 from setupfix.optimize._highs import INF, LinearModel, Solve
@@ -83,8 +90,10 @@ Array = npt.NDArray[np.float64]
 QUANTUM = 1e-3
 #: Most free registers for which the least-norm proof lists the grid points of the dual ellipsoid.
 ELLIPSOID_MAX_REGISTERS = 120
-#: Largest list of integer points the least-norm proof may enumerate before using the MILPs.
-ENUMERATION_LIMIT = 512
+#: Largest list of (partial) integer points per coordinate, and most array elements touched in all, that
+#: the least-norm proof may enumerate before it uses the MILPs (a list of that size is some 5 ms of numpy).
+ENUMERATION_LIMIT = 20_000
+ENUMERATION_WORK = 400_000
 #: The least-norm proof in the Lagrangian box is one MILP with every chord up to these sizes
 #: (else chords are added lazily).
 BOX_PROOF_MAX_REGISTERS = 40
@@ -101,9 +110,10 @@ STOPPED_BOX_SHARE = 0.8
 #: Relative gap at which those box MILPs stop (they look for an incumbent; the proof comes after).
 INCUMBENT_GAP = 1e-4
 DESCENT_RESERVE = 0.03
-#: Radius² and size of the ellipsoids the grid-optimum stage lists for a point at its bound.
-SEARCH_RADIUS2 = 16.0
+#: Most (partial) points per coordinate, and array elements in all, that the grid-optimum stage lists in the
+#: ellipsoids around the rounded rows' least-norm point (a point at its bound, and the least norm there).
 SEARCH_LIMIT = 20_000
+SEARCH_WORK = 400_000
 #: A cold LP with more rows than this is solved by HiGHS's interior-point method (with crossover, so the
 #: duals are a basis' and later solves of the kept model warm-start the simplex from it).
 IPM_MIN_ROWS = 2000
@@ -328,7 +338,14 @@ class ExactOptimizer(Optimizer):
         millisecond), large ones by HiGHS's QP solver on the kept model.
         """
         if g_rows.shape[0] + 2 * g_rows.shape[1] <= NNLS_MAX_ROWS:
-            status, out = least_distance(g_rows, b, kmin, kmax, cost)
+            # the b-independent part of the NNLS system, kept with the solver models (the cache holds this
+            # G and cost: the LP bound, which every solve starts with, set it)
+            keep = np.isfinite(b)
+            key = "nnls " + keep.tobytes().hex()
+            system = self._cache.derived.get(key)
+            if system is None or self._cache.g_rows is None or self._cache.g_rows.shape != g_rows.shape:
+                system = self._cache.derived[key] = least_distance_system(g_rows[keep], cost)
+            status, out = least_distance(g_rows, b, kmin, kmax, cost, system)  # type: ignore[arg-type]
             if status != "unknown":
                 return status, out
         elif WORKING_SET_NNLS:
@@ -383,7 +400,8 @@ class ExactOptimizer(Optimizer):
         def listed_least(limit: int) -> bool:  # the dual ellipsoid, listed; True: best is proven least
             nonlocal best
             found, proved, listed = ellipsoid_search(g_rows, g, t_star, centre, q, cost, kmin, kmax, norm(best),
-                                                     limit, b)
+                                                     limit, b, work_limit=ENUMERATION_WORK,
+                                                     multipliers=(lam_rows, lam_lo, lam_hi))
             best = best if found is None else found
             if proved:
                 path.append(f"least norm: {listed} grid points in the dual ellipsoid")
@@ -586,6 +604,7 @@ class ExactOptimizer(Optimizer):
         placeholder = False  # cont holds no least-norm point (large problems whose QP failed)
         unit_box: tuple[Array, bool] | None = None  # rows whose unit box stage 2 searched, and if it had a point
         least_norm_done: Array | None = None  # rows at which the least norm is already proved
+        least_listed = 0
         n_free = int(kmin.size)
         small = g_rows.shape[0] + 2 * n_free <= NNLS_MAX_ROWS
         stage2_end = clock.deadline - LEAST_NORM_SHARE * self.time_limit
@@ -632,14 +651,27 @@ class ExactOptimizer(Optimizer):
                     path.append("grid optimum: least-norm point of the rounded rows attains the bound")
                     proved = True
                     break
-                # A grid point at the bound near the continuous one: small ellipsoids only.
+                # A grid point at the bound near the continuous one: growing ellipsoids, a bounded list.
                 found = None
                 if small:
                     finite = np.isfinite(b)
                     centre, q = lagrangian_ball(g_rows[finite], b[finite], kmin, kmax, cost, cont[1][finite],
                                                 cont[2], cont[3])
-                    found, _, _ = ellipsoid_search(g_rows, g, level, centre, q, cost, kmin, kmax,
-                                                   q + SEARCH_RADIUS2, SEARCH_LIMIT, b)
+                    found, least, listed = ellipsoid_search(g_rows, g, level, centre, q, cost, kmin, kmax, np.inf,
+                                                            SEARCH_LIMIT, b, work_limit=SEARCH_WORK,
+                                                            multipliers=(cont[1], cont[2], cont[3]))
+                    if found is not None and least:  # the least norm at the bound: stage 3 has nothing to do
+                        least_norm_done = b.copy()
+                        least_listed = listed
+                    elif found is None and least and all_integer:  # the whole box listed: no grid point at level
+                        path.append(f"grid optimum: no grid point at {level:.4g} steps (the whole box listed)")
+                        level = next_level(g, d, b)
+                        cont = None
+                        if t_best >= level - TOL:
+                            path.append("grid optimum: best point attains the bound lowered by infeasible levels")
+                            proved = True
+                            break
+                        continue
                 elif not placeholder and stage2_left() > 0:  # large: the least norm in the unit box around it
                     res_box, found = box_least_norm(g_rows, b, np.clip(np.floor(cont[0]), kmin, kmax),
                                                     np.clip(np.ceil(cont[0]), kmin, kmax), cost,
@@ -732,7 +764,7 @@ class ExactOptimizer(Optimizer):
         norm_lower = 0.0
         if least_norm_done is not None and np.array_equal(b, least_norm_done):
             proved_norm, why = True, ""
-            path.append("least norm: proved with the grid optimum")
+            path.append(f"least norm: {least_listed} grid points in the dual ellipsoid (listed with the grid optimum)")
         else:
             calls += 1
             if cont is not None and not np.array_equal(b, rounded_rhs(g, d, zero, level)):

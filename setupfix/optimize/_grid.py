@@ -48,7 +48,7 @@ import numpy.typing as npt
 from scipy.sparse import coo_array, csr_array
 
 __all__ = ["TOL", "grid_margins", "dual_bound", "pair_bound", "pair_structure", "PairStructure", "row_gcd", "rounded_rhs", "next_level",
-           "least_distance", "lagrangian_ball", "enumerate_ball", "ellipsoid_search"]
+           "least_distance", "least_distance_system", "lagrangian_ball", "enumerate_ball", "ellipsoid_search"]
 
 Array = npt.NDArray[np.float64]
 
@@ -202,7 +202,8 @@ def next_level(g: Array, d: Array, b: Array) -> float:
     return float(np.max(g[m] - b[m] - d[m])) if np.any(m) else -np.inf
 
 
-def least_distance(g_rows: Array, b: Array, kmin: Array, kmax: Array, cost: Array
+def least_distance(g_rows: Array, b: Array, kmin: Array, kmax: Array, cost: Array,
+                   system: tuple[Array, Array] | None = None
                    ) -> tuple[str, tuple[Array, Array, Array, Array] | None]:
     """Least Σ c k² subject to G k ≤ b and the box, by NNLS (Lawson & Hanson 1974, ch. 23).
 
@@ -213,19 +214,24 @@ def least_distance(g_rows: Array, b: Array, kmin: Array, kmax: Array, cost: Arra
     Farkas certificate, checked here: Mᵀu = ε, mᵀu = s > 0 and ‖ε‖₁·max|k| < s over
     the box proves that no k satisfies the constraints.
 
-    Rows with b = +inf are left out.  Returns ``("optimal", (k, λ_rows, λ_lower,
-    λ_upper))``, ``("infeasible", None)`` with a checked certificate, or
-    ``("unknown", None)``.
+    Rows with b = +inf are left out.  ``system``: the part that does not depend on b
+    (:func:`least_distance_system` of the rows kept), for a caller that solves many b.
+    Returns ``("optimal", (k, λ_rows, λ_lower, λ_upper))``, ``("infeasible", None)`` with a
+    checked certificate, or ``("unknown", None)``.
     """
     from scipy.optimize import nnls
 
     n = kmin.size
     keep = np.isfinite(b)
-    rows = g_rows[keep]
-    m_mat = np.vstack([-rows, np.eye(n), -np.eye(n)])
-    m_vec = np.r_[-b[keep], kmin, -kmax]
+    n_rows = int(keep.sum())
+    m_mat, e = least_distance_system(g_rows[keep], cost) if system is None else system
     scale = 1.0 / np.sqrt(cost)
-    e = np.vstack([(m_mat * scale).T, m_vec[None, :]])
+    e = e.copy()
+    e[-1, :n_rows] = -b[keep]
+    e[-1, n_rows:n_rows + n] = kmin
+    e[-1, n_rows + n:] = -kmax
+    m_vec = e[-1]
+    rows = g_rows[keep]
     f = np.zeros(n + 1)
     f[-1] = 1.0
     try:
@@ -243,6 +249,18 @@ def least_distance(g_rows: Array, b: Array, kmin: Array, kmax: Array, cost: Arra
     if s > 0 and float(np.sum(np.abs(eps))) * float(np.max(np.abs(np.r_[kmin, kmax]), initial=0.0)) < s:
         return "infeasible", None
     return "unknown", None
+
+
+def least_distance_system(rows: Array, cost: Array) -> tuple[Array, Array]:
+    """The part of :func:`least_distance`'s NNLS system that does not depend on b.
+
+    Returns M = [−rows; I; −I] (shape (r + 2n, n)) and E = [(M/√c)ᵀ; 0] (shape (n + 1, r + 2n)),
+    whose last row :func:`least_distance` fills with the right-hand sides.
+    """
+    n = cost.size
+    m_mat = np.vstack([-rows, np.eye(n), -np.eye(n)])
+    e = np.vstack([(m_mat * (1.0 / np.sqrt(cost))).T, np.zeros((1, m_mat.shape[0]))])
+    return m_mat, e
 
 
 def lagrangian_ball(g_rows: Array, b: Array, kmin: Array, kmax: Array, cost: Array, lam_rows: Array,
@@ -275,17 +293,36 @@ def lagrangian_ball(g_rows: Array, b: Array, kmin: Array, kmax: Array, cost: Arr
 
 
 def enumerate_ball(centre: Array, cost: Array, radius2: float, kmin: Array, kmax: Array, limit: int,
-                   rows: Array | None = None, rhs: Array | None = None) -> npt.NDArray[np.float64] | None:
-    """Every integer k in the box with Σ c_i (k_i − centre_i)² ≤ radius2 [and rows·k ≤ rhs].
+                   rows: Array | None = None, rhs: Array | None = None, fmax: float = np.inf,
+                   work_limit: int = WORK_LIMIT,
+                   multipliers: tuple[Array, Array, Array] | None = None) -> npt.NDArray[np.float64] | None:
+    """Every integer k in the box with Σ c_i (k_i − centre_i)² ≤ radius2 [rows·k ≤ rhs] [Σ c_i k_i² ≤ fmax].
 
-    Coordinates are fixed one at a time (fewest candidates first); a partial point is
-    dropped as soon as the radius is spent or, when ``rows``/``rhs`` are given, some
-    row cannot be met whatever the remaining coordinates take in their ranges.
+    Coordinates are fixed one at a time, breadth first (all partial points of one depth
+    as one array).  A partial point is dropped as soon as no completion can meet the
+    conditions; with E_rest the radius² left for the coordinates not yet fixed:
+
+    * the radius: the next coordinate's range is |k_i − centre_i| ≤ √(E_rest / c_i);
+    * a row a·k ≤ rhs (``rows``/``rhs``): the rest's part a_r·k_r is at least the larger of
+      its minimum over the box and a_r·centre_r − √E_rest·‖a_r/√c_r‖ (Cauchy–Schwarz on the
+      rest's ellipsoid);
+    * the norm (``fmax``): Σ_r c k_r² is at least the larger of Σ_r min over the box of c k_r²
+      and (‖centre_r‖_c − √E_rest)² (triangle inequality in the c-norm), and, given
+      ``multipliers`` (λ ≥ 0 of ``rows`` and of the box bounds kmin, kmax), the Lagrangian dual
+      bound of the rest's continuous problem "min Σ_r c k_r², rows with the fixed part moved to
+      the right, box": max over s ≥ 0 of −s²·Σ_r w_r²/(4 c_r) − s·B, w = λᵀ[rows; I; −I] on
+      the rest, B = λ·(slack left to the rest) — B²/(4·Σ w²/4c) when B < 0 (weak duality, any λ).
+
+    Each bound holds for every completion, so nothing with the stated properties is ever
+    dropped, and the last coordinate checks them exactly: the list is exactly those points.
+    With a finite ``fmax`` coordinates are fixed largest |√c·centre| first (the norm bound
+    bites early); otherwise fewest candidates first.
 
     Returns
     -------
     ndarray of shape (N, n), or None if more than ``limit`` partial points would be
-    listed at some coordinate (the caller then needs another proof).
+    listed at some coordinate, or more than ``work_limit`` array elements touched in all
+    (the caller then needs another proof).
     """
     n = centre.size
     half = np.sqrt(max(radius2, 0.0) / cost)
@@ -294,59 +331,120 @@ def enumerate_ball(centre: Array, cost: Array, radius2: float, kmin: Array, kmax
     if np.any(lo_all > hi_all):
         return np.zeros((0, n))
     counts_all = hi_all - lo_all + 1
+    f_slack = fmax + 1e-9 * max(1.0, abs(fmax)) if np.isfinite(fmax) else np.inf
     if np.prod(counts_all) <= 4096:  # a small box around the centre: list it whole, keep the ellipsoid
         grid = np.indices(tuple(int(c) for c in counts_all)).reshape(n, -1).T + lo_all
-        return grid[np.sum(cost * (grid - centre) ** 2, axis=1) <= radius2]
-    order = np.argsort(counts_all, kind="stable")  # fewest candidates first keeps the lists short
+        keep = np.sum(cost * (grid - centre) ** 2, axis=1) <= radius2
+        if np.isfinite(f_slack):
+            keep &= np.sum(cost * grid**2, axis=1) <= f_slack
+        if rows is not None and rhs is not None and rows.shape[0]:
+            keep &= np.all(grid @ rows.T <= rhs + 1e-7, axis=1)
+        return grid[keep]
+    if np.isfinite(f_slack):
+        order = np.argsort(-np.sqrt(cost) * np.abs(centre), kind="stable")
+    else:
+        order = np.argsort(counts_all, kind="stable")  # fewest candidates first keeps the lists short
+    c, ce, lo_o, hi_o = cost[order], centre[order], lo_all[order], hi_all[order]
+
+    def after(x: Array) -> Array:  # after(x)[..., p] = Σ_{q > p} x[..., q]
+        s = np.cumsum(x[..., ::-1], axis=-1)[..., ::-1]
+        return np.concatenate([s[..., 1:], np.zeros(s.shape[:-1] + (1,))], axis=-1)
+
+    rest_f = after(c * np.where((lo_o <= 0) & (hi_o >= 0), 0.0, np.minimum(lo_o**2, hi_o**2)))
+    rest_norm = np.sqrt(after(c * ce**2))
+    dual = multipliers is not None and rows is not None and rhs is not None and np.isfinite(f_slack)
+    a = np.zeros((0, n))
+    rhs_live = np.zeros(0)
     if rows is not None and rhs is not None:
         a = rows[:, order]
-        cmin = np.minimum(a * lo_all[order], a * hi_all[order])  # (r, n)
-        rest = np.cumsum(cmin[:, ::-1], axis=1)[:, ::-1]  # rest[:, p] = Σ_{q ≥ p} cmin[:, q]
-        rest = np.hstack([rest[:, 1:], np.zeros((a.shape[0], 1))])  # Σ over q > p
+        if dual:
+            assert multipliers is not None
+            lam = np.maximum(multipliers[0], 0.0)
+            lam_lo, lam_hi = (np.maximum(v, 0.0)[order] for v in multipliers[1:])
+            lam_a = lam @ a  # (n,): λ·row coefficient of each coordinate
+            w = lam_a + lam_hi - lam_lo
+            rest_quad = after(w * w / (4 * c))
+            rest_slack = float(lam @ rhs) + after(lam_hi * kmax[order] - lam_lo * kmin[order])
+        # rows no point of the ellipsoid can violate are left out
+        top = np.minimum(np.sum(np.maximum(a * lo_o, a * hi_o), axis=1),
+                         a @ ce + np.sqrt(max(radius2, 0.0)) * np.sqrt(np.sum(a * a / c, axis=1)))
+        live = top > rhs + 1e-7
+        a, rhs_live = a[live], rhs[live]
         limit = min(limit, max(1, (1 << 24) // max(a.shape[0], 1)))
-        partial = np.zeros((1, a.shape[0]))
-    pts = np.zeros((1, 0))
+    pruned = a.shape[0] > 0
+    rest_box = after(np.minimum(a * lo_o, a * hi_o))  # (r, n): least a_r·k_r over the box
+    rest_centre = after(a * ce)
+    rest_scale = np.sqrt(after(a * a / c))
+    partial = np.zeros((1, a.shape[0]))
     acc = np.zeros(1)
+    f_acc = np.zeros(1)
+    lam_acc = np.zeros(1)
+    values: list[Array] = []  # per depth: the value of each partial point and the index of its parent
+    parents: list[npt.NDArray[np.intp]] = []
     work = 0
-    width = 1 + (0 if rows is None else rows.shape[0])
-    for p, i in enumerate(order):
+    width = 2 + a.shape[0]
+    for p in range(n):
         rem = np.maximum(radius2 - acc, 0.0)
-        h = np.sqrt(rem / cost[i])
-        lo = np.maximum(np.ceil(centre[i] - h - 1e-12), kmin[i])
-        hi = np.minimum(np.floor(centre[i] + h + 1e-12), kmax[i])
+        h = np.sqrt(rem / c[p])
+        lo = np.maximum(np.ceil(ce[p] - h - 1e-12), lo_o[p])
+        hi = np.minimum(np.floor(ce[p] + h + 1e-12), hi_o[p])
         counts = np.maximum(hi - lo + 1, 0).astype(np.int64)
         total = int(counts.sum())
-        work += total * (width + p)
-        if total > limit or work > WORK_LIMIT:
+        work += total * width
+        if total > limit or work > work_limit:
             return None
         if total == 0:
             return np.zeros((0, n))
         rep = np.repeat(np.arange(counts.size), counts)
-        offset = np.arange(total) - np.repeat(np.cumsum(counts) - counts, counts)
-        vals = lo[rep] + offset
-        pts = np.column_stack([pts[rep], vals])
-        acc = acc[rep] + cost[i] * (vals - centre[i]) ** 2
-        if rows is not None and rhs is not None:
+        vals = lo[rep] + (np.arange(total) - np.repeat(np.cumsum(counts) - counts, counts))
+        acc = acc[rep] + c[p] * (vals - ce[p]) ** 2
+        f_acc = f_acc[rep] + c[p] * vals**2
+        root = np.sqrt(np.maximum(radius2 - acc, 0.0))
+        low_f = np.maximum(rest_f[p], np.maximum(rest_norm[p] - root, 0.0) ** 2)
+        if dual:
+            lam_acc = lam_acc[rep] + vals * lam_a[p]
+            slack = rest_slack[p] - lam_acc
+            if rest_quad[p] > 1e-12:
+                low_f = np.maximum(low_f, np.where(slack < 0, slack * slack / (4 * rest_quad[p]), 0.0))
+            else:  # nothing left to move: a negative weighted slack is a violated row
+                low_f = np.where(slack < -1e-7 * max(1.0, float(np.max(np.abs(lam), initial=0.0))), np.inf, low_f)
+        keep = np.flatnonzero(f_acc + low_f <= f_slack)
+        rep, vals, acc, f_acc, root = rep[keep], vals[keep], acc[keep], f_acc[keep], root[keep]
+        if dual:
+            lam_acc = lam_acc[keep]
+        if pruned:
             partial = partial[rep] + vals[:, None] * a[:, p][None, :]
-            keep = np.all(partial + rest[:, p] <= rhs + 1e-7, axis=1)
-            pts, acc, partial = pts[keep], acc[keep], partial[keep]
-            if pts.shape[0] == 0:
-                return np.zeros((0, n))
-    out = np.empty_like(pts)
-    out[:, order] = pts
-    return out
+            low = np.maximum(rest_box[:, p], rest_centre[:, p] - root[:, None] * rest_scale[:, p])
+            ok = np.flatnonzero(np.all(partial + low <= rhs_live + 1e-7, axis=1))
+            rep, vals, acc, f_acc, partial = rep[ok], vals[ok], acc[ok], f_acc[ok], partial[ok]
+            if dual:
+                lam_acc = lam_acc[ok]
+        if vals.size == 0:
+            return np.zeros((0, n))
+        values.append(vals)
+        parents.append(rep)
+    pts = np.empty((values[-1].size, n))
+    idx = np.arange(values[-1].size)
+    for p in range(n - 1, -1, -1):  # back along the parents
+        pts[:, order[p]] = values[p][idx]
+        idx = parents[p][idx]
+    return pts
 
 
 def ellipsoid_search(g_rows: Array, g: Array, level: float, centre: Array, q: float, cost: Array, kmin: Array,
-                     kmax: Array, f_known: float, limit: int, b: Array | None = None) -> tuple[Array | None, bool, int]:
+                     kmax: Array, f_known: float, limit: int, b: Array | None = None,
+                     work_limit: int = WORK_LIMIT,
+                     multipliers: tuple[Array, Array, Array] | None = None) -> tuple[Array | None, bool, int]:
     """Least Σ c k² among grid points with t(k) ≥ level, by growing ellipsoids around ``centre``.
 
     Every feasible k satisfies Σ c (k − centre)² ≤ f(k) − q (:func:`lagrangian_ball`).
-    Radii² 1, 4, 16, … up to f_known − q (f_known: the norm of a feasible point
-    already known, or inf) are listed in turn (pruned by the rows G k ≤ b, which
-    every feasible point meets, when ``b`` is given); as soon as the best feasible point
-    found, of norm f_b, has f_b − q ≤ the radius² listed, nothing outside can beat
-    it and it is the least.
+    Radii² 1, 4, 16, … up to f − q (f: the least norm of a feasible point known so far,
+    ``f_known`` at first, or inf), or up to the radius² that holds the whole box, are listed in turn, only points of norm ≤ f (pruned by
+    the rows G k ≤ b, which every feasible point meets, when ``b`` is given); as soon as
+    the best feasible point found, of norm f_b, has f_b − q ≤ the radius² listed, nothing
+    outside can beat it and it is the least (ties: the lexicographically smallest k).
+    ``multipliers`` (λ of the rows G k ≤ b, of k ≥ kmin and of k ≤ kmax; any λ ≥ 0) sharpen
+    the pruning by the norm (:func:`enumerate_ball`).
 
     Returns
     -------
@@ -357,19 +455,27 @@ def ellipsoid_search(g_rows: Array, g: Array, level: float, centre: Array, q: fl
     listed : int
         Grid points listed in the last ellipsoid.
     """
-    cap = f_known - q + 1e-9 * max(1.0, abs(f_known)) if np.isfinite(f_known) else np.inf
+    def room(f: float) -> float:
+        return f - q + 1e-9 * max(1.0, abs(f)) if np.isfinite(f) else np.inf
+
+    # an ellipsoid holding the whole box lists every grid point: no larger radius is needed
+    whole = float(np.sum(cost * np.maximum((kmin - centre) ** 2, (kmax - centre) ** 2)))
+    cap = min(room(f_known), whole)
+    f_cut = f_known
     radius2 = min(1.0, cap)
     listed = 0
+    best = None
+    fin = None if b is None else np.isfinite(b)
     while True:
-        if b is None:
-            points = enumerate_ball(centre, cost, radius2, kmin, kmax, limit)
+        if b is None or fin is None:
+            points = enumerate_ball(centre, cost, radius2, kmin, kmax, limit, fmax=f_cut, work_limit=work_limit)
         else:
-            fin = np.isfinite(b)
-            points = enumerate_ball(centre, cost, radius2, kmin, kmax, limit, g_rows[fin], b[fin])
+            lam = None if multipliers is None else (multipliers[0][fin], multipliers[1], multipliers[2])
+            points = enumerate_ball(centre, cost, radius2, kmin, kmax, limit, g_rows[fin], b[fin], fmax=f_cut,
+                                    work_limit=work_limit, multipliers=lam)
         if points is None:
-            return None, False, listed
+            return best, False, listed
         listed = points.shape[0]
-        best = None
         if listed:
             ok = points[grid_margins(g_rows, g, points) >= level - TOL]
             if ok.shape[0]:
@@ -377,12 +483,13 @@ def ellipsoid_search(g_rows: Array, g: Array, level: float, centre: Array, q: fl
                 order = np.lexsort((*ok.T[::-1], f))  # least norm, ties by the smallest k
                 if f[order[0]] < f_known:
                     best = ok[order[0]]
-                    if f[order[0]] - q <= radius2:
+                    f_cut = float(f[order[0]])
+                    cap = min(cap, room(f_cut))
+                    if f_cut - q <= radius2:
                         return best, True, listed
         if radius2 >= cap:
             return best, True, listed
         radius2 = min(radius2 * 4, cap)
-
 
 
 def chord_rows(pairs: list[tuple[int, int]], n: int, width: int) -> tuple[csr_array, npt.NDArray[np.float64]]:

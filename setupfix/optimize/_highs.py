@@ -95,9 +95,17 @@ class LinearModel:
 
     def __init__(self, c: Array, a: object, row_lo: Array, row_hi: Array, col_lo: Array, col_hi: Array,
                  integer: npt.NDArray[np.bool_] | None = None) -> None:
-        mat = csc_array(a)
-        self.n_cols = int(mat.shape[1])
-        self.n_rows = int(mat.shape[0])
+        if isinstance(a, np.ndarray):  # dense (small models): column-wise arrays by numpy, no scipy round trip
+            at = np.asarray(a, dtype=float).T
+            nonzero = at != 0
+            start = np.r_[0, np.cumsum(np.sum(nonzero, axis=1))]
+            index, value = np.nonzero(nonzero)[1], at[nonzero]
+            self.n_cols, self.n_rows = int(at.shape[0]), int(at.shape[1])
+        else:
+            mat = csc_array(a)
+            start, index, value = mat.indptr, mat.indices, mat.data
+            self.n_cols = int(mat.shape[1])
+            self.n_rows = int(mat.shape[0])
         lp = HighsLp()
         lp.num_col_ = self.n_cols
         lp.num_row_ = self.n_rows
@@ -107,9 +115,9 @@ class LinearModel:
         lp.row_lower_ = np.asarray(row_lo, dtype=float)
         lp.row_upper_ = np.asarray(row_hi, dtype=float)
         lp.a_matrix_.format_ = MatrixFormat.kColwise
-        lp.a_matrix_.start_ = mat.indptr.astype(np.int32)
-        lp.a_matrix_.index_ = mat.indices.astype(np.int32)
-        lp.a_matrix_.value_ = mat.data.astype(float)
+        lp.a_matrix_.start_ = np.asarray(start, dtype=np.int32)
+        lp.a_matrix_.index_ = np.asarray(index, dtype=np.int32)
+        lp.a_matrix_.value_ = np.asarray(value, dtype=float)
         if integer is not None and np.any(integer):
             lp.integrality_ = [HighsVarType.kInteger if i else HighsVarType.kContinuous for i in integer]
         self.is_mip = integer is not None and bool(np.any(integer))

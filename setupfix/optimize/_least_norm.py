@@ -51,6 +51,8 @@ Array = npt.NDArray[np.float64]
 
 #: Rows added to the working set per round (the most violated first).
 WORKING_SET_ADD = 100
+#: A box MILP with at most this many matrix elements is built as one dense array.
+DENSE_MAX_ELEMENTS = 200_000
 
 
 def _nnls_least_distance(m_mat: Array, m_vec: Array, cost: Array, box: float
@@ -208,12 +210,20 @@ def box_least_norm(g_rows: Array, b: Array, lo: Array, hi: Array, cost: Array, t
     m = i.size
     col = np.full(n, -1, dtype=np.int64)
     col[chorded] = n + np.arange(chorded.size)
-    chords = csr_array(coo_array((np.r_[2 * j + 1, -np.ones(m)], (np.r_[np.arange(m), np.arange(m)],
-                                                                    np.r_[i, col[i]])),
-                                 shape=(m, n + chorded.size)))
-    rows = hstack([csr_array(g_rows[fin]), csr_array((int(fin.sum()), chorded.size))])
-    a = vstack([rows, chords]).tocsr()
-    model = LinearModel(np.r_[linear, cost[chorded]], a, np.full(a.shape[0], -INF), np.r_[b[fin], j * (j + 1)],
+    r = int(fin.sum())
+    a: object
+    if (r + m) * (n + chorded.size) <= DENSE_MAX_ELEMENTS:  # small: one dense array (same matrix, less overhead)
+        a = np.zeros((r + m, n + chorded.size))
+        a[:r, :n] = g_rows[fin]
+        a[r + np.arange(m), i] = 2 * j + 1
+        a[r + np.arange(m), col[i]] = -1.0
+    else:
+        chords = csr_array(coo_array((np.r_[2 * j + 1, -np.ones(m)], (np.r_[np.arange(m), np.arange(m)],
+                                                                        np.r_[i, col[i]])),
+                                     shape=(m, n + chorded.size)))
+        rows = hstack([csr_array(g_rows[fin]), csr_array((r, chorded.size))])
+        a = vstack([rows, chords]).tocsr()
+    model = LinearModel(np.r_[linear, cost[chorded]], a, np.full(r + m, -INF), np.r_[b[fin], j * (j + 1)],
                         np.r_[lo, np.zeros(chorded.size)], np.r_[hi, np.full(chorded.size, INF)],
                         integer=np.r_[np.ones(n, bool), np.zeros(chorded.size, bool)])
     if proof:

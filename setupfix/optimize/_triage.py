@@ -99,6 +99,9 @@ def triage(g_rows: Array, g: Array, row_dim: npt.NDArray[np.intp], n_dims: int, 
         return best, False, f"most dimensions in tolerance: {_status_word(res.status)}", tuple(done)
     kept = int(in_tolerance(best).sum())
     done.append(f"{kept} of {n_dims} dimensions can be kept in tolerance")
+    if kept == 0:  # no budget to keep: the least correction of all is the box point nearest zero
+        done.append("least norm")
+        return np.clip(np.zeros(n), kmin, kmax), True, "", tuple(done)
 
     # 2. largest error budget of the kept dimensions: columns k, z, t
     bigt = big + top

@@ -111,3 +111,13 @@ def test_register_cost_must_be_positive_and_finite(cost):
 def test_metaheuristics_give_nothing_up():
     problem = random_problem(5, limit_steps=1, spread=0.3)
     assert get_optimizer("pso", seed=1, n_solutions=200).solve(problem).given_up == ()
+
+
+def test_no_dimension_in_reach_gives_the_least_correction():
+    """One dimension out of reach of a ±1-step register (hypothesis found it): x = 0, given up, no crash."""
+    problem = random_problem(1845, n=1, m=1, limit_steps=1)
+    result = get_optimizer("exact").solve(problem)
+    assert brute_triage(problem)[0] == 0
+    assert result.status == "optimal"
+    assert np.all(result.x == 0)
+    assert result.given_up == problem.dimension_ids
