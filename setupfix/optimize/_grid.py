@@ -48,7 +48,7 @@ import numpy.typing as npt
 from scipy.sparse import coo_array, csr_array
 
 __all__ = ["TOL", "grid_margins", "dual_bound", "pair_bound", "pair_structure", "PairStructure", "row_gcd", "rounded_rhs", "next_level",
-           "least_distance", "least_distance_system", "lagrangian_ball", "enumerate_ball", "ellipsoid_search"]
+           "least_distance", "nnls_least_distance", "least_distance_system", "lagrangian_ball", "enumerate_ball", "ellipsoid_search"]
 
 Array = npt.NDArray[np.float64]
 
@@ -219,36 +219,59 @@ def least_distance(g_rows: Array, b: Array, kmin: Array, kmax: Array, cost: Arra
     Returns ``("optimal", (k, λ_rows, λ_lower, λ_upper))``, ``("infeasible", None)`` with a
     checked certificate, or ``("unknown", None)``.
     """
-    from scipy.optimize import nnls
-
     n = kmin.size
     keep = np.isfinite(b)
     n_rows = int(keep.sum())
     m_mat, e = least_distance_system(g_rows[keep], cost) if system is None else system
-    scale = 1.0 / np.sqrt(cost)
     e = e.copy()
     e[-1, :n_rows] = -b[keep]
     e[-1, n_rows:n_rows + n] = kmin
     e[-1, n_rows + n:] = -kmax
-    m_vec = e[-1]
-    rows = g_rows[keep]
+    status, k, u = nnls_least_distance(m_mat, e, cost, float(np.max(np.abs(np.r_[kmin, kmax]), initial=0.0)))
+    if status != "optimal" or k is None or u is None:
+        return status, None
+    lam = np.zeros(b.size)
+    lam[keep] = u[:n_rows]
+    return "optimal", (k, lam, u[n_rows:n_rows + n], u[n_rows + n:])
+
+
+def nnls_least_distance(m_mat: Array, e: Array, cost: Array, box: float) -> tuple[str, Array | None, Array | None]:
+    """Solve min Σ c k² s.t. M k ≥ m through u = NNLS(E, e_{n+1}) (see :func:`least_distance`).
+
+    Parameters
+    ----------
+    m_mat : ndarray of shape (m, n)
+        The constraint rows M.
+    e : ndarray of shape (n + 1, m)
+        E = [(M/√c)ᵀ; mᵀ]: the last row holds the right-hand sides m.
+    cost : ndarray of shape (n,)
+    box : float
+        max |k| over the true box, for the Farkas check of an infeasible system.
+
+    Returns
+    -------
+    status : ``"optimal"``, ``"infeasible"`` (checked certificate) or ``"unknown"``
+    k : ndarray of shape (n,) or None
+    u : ndarray of shape (m,) or None
+        Multipliers of the rows, ≥ 0, up to one positive scale.
+    """
+    from scipy.optimize import nnls
+
+    n = cost.size
     f = np.zeros(n + 1)
     f[-1] = 1.0
     try:
         u, _ = nnls(e, f, maxiter=50 * e.shape[1])
     except RuntimeError:  # iteration limit
-        return "unknown", None
+        return "unknown", None, None
     r = e @ u - f
     if abs(r[-1]) > 1e-9:
-        k = -r[:n] / r[-1] * scale
-        lam = np.zeros(b.size)
-        lam[keep] = u[: rows.shape[0]]
-        return "optimal", (k, lam, u[rows.shape[0]:rows.shape[0] + n], u[rows.shape[0] + n:])
+        return "optimal", -r[:n] / r[-1] / np.sqrt(cost), u
     eps = m_mat.T @ u
-    s = float(m_vec @ u)
-    if s > 0 and float(np.sum(np.abs(eps))) * float(np.max(np.abs(np.r_[kmin, kmax]), initial=0.0)) < s:
-        return "infeasible", None
-    return "unknown", None
+    s = float(e[-1] @ u)
+    if s > 0 and float(np.sum(np.abs(eps))) * box < s:
+        return "infeasible", None, None
+    return "unknown", None, None
 
 
 def least_distance_system(rows: Array, cost: Array) -> tuple[Array, Array]:

@@ -37,10 +37,9 @@ import time
 
 import numpy as np
 import numpy.typing as npt
-from scipy.optimize import nnls
 from scipy.sparse import coo_array, csr_array, hstack, vstack
 
-from setupfix.optimize._grid import TOL, grid_margins
+from setupfix.optimize._grid import TOL, grid_margins, nnls_least_distance
 from setupfix.optimize._grid import chord_rows as grid_chord_rows
 from setupfix.optimize._highs import INF, LinearModel, Solve
 
@@ -61,23 +60,8 @@ def _nnls_least_distance(m_mat: Array, m_vec: Array, cost: Array, box: float
 
     Returns ``(status, k, u)``: u ≥ 0 are the multipliers of the rows, up to one positive scale.
     """
-    n = m_mat.shape[1]
-    scale = 1.0 / np.sqrt(cost)
-    e = np.vstack([(m_mat * scale).T, m_vec[None, :]])
-    f = np.zeros(n + 1)
-    f[-1] = 1.0
-    try:
-        u, _ = nnls(e, f, maxiter=50 * e.shape[1])
-    except RuntimeError:  # iteration limit
-        return "unknown", None, None
-    r = e @ u - f
-    if abs(r[-1]) > 1e-9:
-        return "optimal", -r[:n] / r[-1] * scale, u
-    eps = m_mat.T @ u
-    s = float(m_vec @ u)
-    if s > 0 and float(np.sum(np.abs(eps))) * box < s:
-        return "infeasible", None, None
-    return "unknown", None, None
+    e = np.vstack([(m_mat / np.sqrt(cost)).T, m_vec[None, :]])
+    return nnls_least_distance(m_mat, e, cost, box)
 
 
 def least_distance_working_set(g_rows: Array, b: Array, kmin: Array, kmax: Array, cost: Array, deadline: float,

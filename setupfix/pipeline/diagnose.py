@@ -382,7 +382,7 @@ def _one_per_part(parts: list[PartMeasurement]) -> tuple[list[PartMeasurement], 
     notes: list[str] = []
     keep = []
     for i, p in enumerate(parts):
-        j = last.get((p.part, str(p.timestamp))) if p.timestamp is not None else i
+        j = last[(p.part, str(p.timestamp))] if p.timestamp is not None else i
         if j == i:
             keep.append(p)
             continue
