@@ -9,7 +9,7 @@ from types import FrameType
 from typing import TYPE_CHECKING
 
 from setupfix.cli._choices import CONTROLLERS, OPTIMIZERS
-from setupfix.cli._common import add_report_options, report_options
+from setupfix.cli._common import add_report_options, report_options, whole_number
 from setupfix.cli.exit_codes import OK, PARTIAL, REJECTED
 
 if TYPE_CHECKING:
@@ -31,7 +31,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                    help="the controller's current offsets (CSV register,value): write absolute new values")
     p.add_argument("--optimizer", default="exact", choices=sorted(OPTIMIZERS))
     p.add_argument("--seed", type=int, default=None)
-    p.add_argument("--workers", type=int, default=1, metavar="N", help="worker processes (default 1)")
+    p.add_argument("--workers", type=whole_number(1, 64), default=None, metavar="N",
+                   help="worker processes (default: one per available CPU, at most 8; one for fewer than 32 "
+                        "reports); the output does not depend on it")
     p.add_argument("--settle", type=float, default=1.0, metavar="SECONDS",
                    help="a file must be unchanged this long before it is read (default 1)")
     p.add_argument("--store", metavar="DB", default=None,

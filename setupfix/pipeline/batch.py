@@ -222,8 +222,27 @@ def _outcomes(files: list[tuple[Path, int, int]], model: ProcessModel, options: 
             yield from done.result()
 
 
+#: Fewest reports for which the automatic worker count starts processes (below it a pool's
+#: start costs more than it saves).
+AUTO_MIN_REPORTS = 32
+#: Most processes the automatic worker count uses.
+AUTO_MAX_WORKERS = 8
+
+
+def auto_workers(n_files: int) -> int:
+    """The worker count when none is given: one per CPU this process may run on (at most
+    :data:`AUTO_MAX_WORKERS`), and 1 for fewer than :data:`AUTO_MIN_REPORTS` reports."""
+    if n_files < AUTO_MIN_REPORTS:
+        return 1
+    try:
+        cpus = len(os.sched_getaffinity(0))
+    except (AttributeError, OSError):  # not on Linux
+        cpus = os.cpu_count() or 1
+    return max(1, min(cpus, AUTO_MAX_WORKERS))
+
+
 def run_batch(model: ProcessModel | str | Path, folder: str | Path, out: str | Path, *,
-              options: BatchOptions | None = None, workers: int = 1, controller: str = "csv",
+              options: BatchOptions | None = None, workers: int | None = 1, controller: str = "csv",
               settle: float = 1.0, store: Store | None = None, force: bool = False,
               progress: Callable[[int, int, Outcome], None] | None = None) -> BatchSummary:
     """Correct every report below ``folder`` and write one offsets file ``out``.
@@ -236,8 +255,9 @@ def run_batch(model: ProcessModel | str | Path, folder: str | Path, out: str | P
     out : path
         The offsets CSV (written atomically: complete or absent), or with a
         ``controller`` other than csv a folder receiving one program per cycle.
-    workers : int
-        Processes (1: in this process).  Results do not depend on it.
+    workers : int or None
+        Processes (1: in this process; None: :func:`auto_workers`).  Results do not
+        depend on it.
     settle : float
         Seconds a file must be left unchanged before it is read.
     store : Store, optional
@@ -257,11 +277,13 @@ def run_batch(model: ProcessModel | str | Path, folder: str | Path, out: str | P
     if not isinstance(model, ProcessModel):
         model = load_model(model)
     options = options or BatchOptions()
-    if not 1 <= workers <= 64:
+    if workers is not None and not 1 <= workers <= 64:
         raise ParameterError(f"batch: workers must be an int in [1, 64], got {workers}")
     # An unknown controller, or a register it cannot express, fails before any work.
     render(controller, offset_rows(model, {}, current=options.current))
     files = find_reports(folder)
+    if workers is None:
+        workers = auto_workers(len(files))
     if files:
         youngest = time.time() - max(m for _, _, m in files) / 1e9
         if youngest < settle:

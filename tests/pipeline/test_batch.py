@@ -152,3 +152,14 @@ def test_files_kept_beside_reports_are_not_read_as_reports(tmp_path: Path) -> No
         ["r1.csv", "r2.qif", "values.json", "k.txt", "odd.report"])
     summary = run_batch(load_model(GUIDE / "model.toml"), GUIDE, tmp_path / "out.csv", settle=0)
     assert summary.reports == 7 and not summary.failed
+
+
+def test_automatic_worker_count(monkeypatch) -> None:
+    """Without --workers: one process per CPU the batch may use (at most 8), one for a small folder."""
+    from setupfix.pipeline import batch
+
+    monkeypatch.setattr(batch.os, "sched_getaffinity", lambda pid: set(range(12)), raising=False)
+    assert batch.auto_workers(31) == 1
+    assert batch.auto_workers(32) == 8
+    monkeypatch.setattr(batch.os, "sched_getaffinity", lambda pid: {0, 1}, raising=False)
+    assert batch.auto_workers(1000) == 2
