@@ -22,14 +22,13 @@ import subprocess
 import sys
 import tarfile
 import tempfile
-import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "bench"))
 os.environ.update(OPENBLAS_NUM_THREADS="1", MKL_NUM_THREADS="1", OMP_NUM_THREADS="1")
 
-from batch_throughput import GUIDE, make_reports  # noqa: E402
+from batch_throughput import make_reports, run  # noqa: E402
 
 OUT = ROOT / "bench" / "results" / "batch_vs_commit.txt"
 
@@ -41,17 +40,6 @@ def export(commit: str, target: Path) -> str:
         tar.extractall(target, filter="data")
     return subprocess.run(["git", "rev-parse", "--short", commit], cwd=ROOT, capture_output=True, text=True,
                           check=True).stdout.strip()
-
-
-def run(tree: Path, folder: Path, out: Path, workers: int) -> float:
-    t = time.perf_counter()
-    proc = subprocess.run([sys.executable, "-m", "setupfix", "batch", "--model", str(GUIDE / "model.toml"),
-                           str(folder), "--out", str(out), "--settle", "0", "--workers", str(workers)],
-                          cwd=tree, capture_output=True, text=True)
-    seconds = time.perf_counter() - t
-    if proc.returncode != 0:
-        raise SystemExit(f"{tree}: {proc.stderr[-2000:]}")
-    return seconds
 
 
 def main() -> None:
@@ -74,7 +62,7 @@ def main() -> None:
             for workers in (1, 2):
                 for name, tree in ((short, base), ("this", ROOT)):
                     out = Path(tmp) / f"{name}_{workers}.csv"
-                    times.setdefault((name, workers), []).append(run(tree, folder, out, workers))
+                    times.setdefault((name, workers), []).append(run(folder, out, workers, tree))
                     outputs[(name, workers)] = out.read_bytes()
     kind = "varied copies (own deviations)" if args.vary else "copies repeating five problems"
     lines = [f"setupfix batch on {args.reports} guide-pins reports ({kind}), this tree against {short}, "

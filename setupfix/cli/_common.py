@@ -27,8 +27,8 @@ terms (lengths in the model unit):
 """
 
 
-def add_report_options(p: argparse.ArgumentParser) -> None:
-    """Reader options: format, unit, encoding, column mapping, stations."""
+def add_reader_options(p: argparse.ArgumentParser) -> Any:
+    """The reader's options (format, unit, encoding, column mapping, lenient) in a "report reading" group."""
     g = p.add_argument_group("report reading")
     g.add_argument("--format", default=None, metavar="NAME", help="report format (default: sniffed; see 'formats')")
     g.add_argument("--unit", default=None, choices=("mm", "inch"), help="unit of values the report does not label")
@@ -36,6 +36,12 @@ def add_report_options(p: argparse.ArgumentParser) -> None:
     g.add_argument("--columns", default=None, metavar="MAP",
                    help="column mapping for shop tables, e.g. actual=Meas,nominal=Nom")
     add_lenient_option(g)
+    return g
+
+
+def add_report_options(p: argparse.ArgumentParser) -> None:
+    """Reader options (:func:`add_reader_options`), then stations, cycles and strictness."""
+    g = add_reader_options(p)
     g.add_argument("--stations", default=None, metavar="LIST",
                    help="fixture stations of the report's parts, in order (P1,P2,…) or as part=station pairs; "
                         "a subset of the fixture is allowed")

@@ -11,7 +11,7 @@ import unicodedata
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from setupfix.cli._common import add_lenient_option, add_report_options, cycle_options, report_options
+from setupfix.cli._common import add_reader_options, add_report_options, cycle_options, report_options
 from setupfix.errors import ExportError, SourceLocation
 
 if TYPE_CHECKING:
@@ -67,13 +67,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                            "(default: group = the report's station, if it gives one)")
     init.add_argument("--force", action="store_true",
                       help="replace MODEL if it exists (default: refuse, so an edited model is never overwritten)")
-    g = init.add_argument_group("report reading")
-    g.add_argument("--format", default=None, metavar="NAME", help="report format (default: sniffed; see 'formats')")
-    g.add_argument("--unit", default=None, choices=("mm", "inch"), help="unit of values the report does not label")
-    g.add_argument("--encoding", default=None, metavar="ENC", help="text encoding (default: sniffed)")
-    g.add_argument("--columns", default=None, metavar="MAP",
-                   help="column mapping for shop tables, e.g. actual=Meas,nominal=Nom")
-    add_lenient_option(g)
+    add_reader_options(init)
     init.set_defaults(run=run_init)
 
 
