@@ -1,0 +1,174 @@
+"""Which files of a folder are reports: the one folder-walk policy of every command.
+
+``parse``, ``batch``, ``diagnose``, ``history import``, ``model init`` and the TUI's
+folder watch all list a folder through :func:`list_reports`, so they see the same
+reports.  The policy:
+
+* every regular file is a report candidate, whatever its suffix: whether it *is* a
+  report is for the readers to say (content sniffing), never for the listing;
+* left out by policy, each with its reason in :attr:`Listing.ignored`: hidden files
+  and folders (``.name``), files that are never reports (:func:`never_a_report`: a
+  process model, notes, scripts, the history store, figures), partial downloads and
+  editor files (:data:`PARTIAL_SUFFIXES`), and the series logs, which are returned
+  apart in :attr:`Listing.logs` (``corrections.csv``, ``temperatures.csv``);
+* a symbolic link to a file is followed (a report linked into a folder is read); a
+  link to a folder is not followed (it could loop) and is named;
+* anything that cannot be listed or looked at — an unreadable folder, a file
+  renamed or removed while the folder was listed, a broken link, a device or pipe —
+  is named with its reason in :attr:`Listing.problems`, never silently dropped.
+
+Nothing here reads a file's content.
+"""
+
+from __future__ import annotations
+
+import os
+import stat
+from dataclasses import dataclass
+from pathlib import Path
+
+from parsers._registry import NOT_REPORT_NAMES, never_a_report
+
+__all__ = ["FoundFile", "Listing", "list_reports", "PARTIAL_SUFFIXES", "LOG_NAMES"]
+
+#: Files a folder listing leaves out as still being written: partial downloads, editor and lock files.
+PARTIAL_SUFFIXES: tuple[str, ...] = (".tmp", ".part", ".partial", ".crdownload", "~", ".swp", ".lock")
+
+#: The logs of a series kept beside its reports, by kind (lower-case file names).
+LOG_NAMES: dict[str, str] = {"corrections.csv": "corrections", "temperatures.csv": "temperatures"}
+assert set(LOG_NAMES) == set(NOT_REPORT_NAMES)
+
+
+@dataclass(frozen=True, slots=True)
+class FoundFile:
+    """A report candidate: its path (as listed, below the root), size [bytes] and mtime [ns]."""
+
+    path: Path
+    size: int
+    mtime_ns: int
+
+
+@dataclass(frozen=True, slots=True)
+class Listing:
+    """What :func:`list_reports` found below one root.
+
+    Attributes
+    ----------
+    files : tuple of FoundFile
+        Report candidates in sorted path order (folders depth-first, names sorted).
+    ignored : tuple of (path, reason)
+        Files left out by the policy (hidden, never a report, partial).
+    problems : tuple of (path, reason)
+        Entries that could not be listed or looked at; say them to the user.
+    logs : tuple of (kind, path)
+        Series logs found (``corrections``/``temperatures``), in listing order.
+    """
+
+    root: Path
+    files: tuple[FoundFile, ...] = ()
+    ignored: tuple[tuple[str, str], ...] = ()
+    problems: tuple[tuple[str, str], ...] = ()
+    logs: tuple[tuple[str, str], ...] = ()
+
+    def log(self, kind: str) -> str | None:
+        """The first log of ``kind`` found (``"corrections"`` or ``"temperatures"``), else None."""
+        return next((path for k, path in self.logs if k == kind), None)
+
+    @property
+    def paths(self) -> list[Path]:
+        return [f.path for f in self.files]
+
+
+def _policy(name: str) -> str | None:
+    """Why a file name is left out, or None for a report candidate."""
+    if name.startswith("."):
+        return "hidden file"
+    folded = name.lower()
+    if folded in LOG_NAMES:
+        return f"the series' {LOG_NAMES[folded]} log, not a report"
+    if folded.endswith(PARTIAL_SUFFIXES):
+        return "still being written (partial or temporary file)"
+    if never_a_report(name):
+        return "never a report (model, notes, script, store or figure)"
+    return None
+
+
+def _reason(exc: OSError) -> str:
+    if isinstance(exc, FileNotFoundError):
+        return "renamed or removed while the folder was listed"
+    if isinstance(exc, PermissionError):
+        return "permission denied"
+    return exc.strerror or str(exc)
+
+
+def list_reports(root: str | os.PathLike[str], *, recursive: bool = True) -> Listing:
+    """List the report candidates below ``root`` under the module's policy.
+
+    Parameters
+    ----------
+    root : path
+        A folder (a file is not listed: callers take a file as given).
+    recursive : bool
+        Descend into sub-folders (hidden ones excepted).
+
+    Returns
+    -------
+    Listing
+        Never raises for what it finds inside ``root``; a ``root`` that cannot be
+        listed is the first entry of ``problems``.
+    """
+    base = Path(root)
+    files: list[FoundFile] = []
+    ignored: list[tuple[str, str]] = []
+    problems: list[tuple[str, str]] = []
+    logs: list[tuple[str, str]] = []
+
+    def visit(folder: Path) -> None:
+        try:
+            with os.scandir(folder) as it:
+                entries = sorted(it, key=lambda e: e.name)
+        except OSError as exc:
+            problems.append((str(folder), f"cannot list folder: {_reason(exc)}"))
+            return
+        subfolders: list[Path] = []
+        for entry in entries:
+            path = folder / entry.name
+            is_link = is_link_safe(entry)
+            try:
+                st = os.stat(path)  # follows a link: a linked report is read as a report
+            except OSError as exc:
+                problems.append((str(path), "broken link" if is_link else _reason(exc)))
+                continue
+            if stat.S_ISDIR(st.st_mode):
+                if entry.name.startswith("."):
+                    ignored.append((str(path), "hidden folder"))
+                elif is_link:
+                    problems.append((str(path), "link to a folder: not followed"))
+                elif recursive:
+                    subfolders.append(path)
+                else:
+                    ignored.append((str(path), "sub-folder (not searched)"))
+                continue
+            if not stat.S_ISREG(st.st_mode):
+                problems.append((str(path), "not a regular file"))
+                continue
+            why = _policy(entry.name)
+            if why is None:
+                files.append(FoundFile(path, st.st_size, st.st_mtime_ns))
+            else:
+                if entry.name.lower() in LOG_NAMES:
+                    logs.append((LOG_NAMES[entry.name.lower()], str(path)))
+                ignored.append((str(path), why))
+        for sub in subfolders:
+            visit(sub)
+
+    visit(base)
+    return Listing(base, tuple(files), tuple(ignored), tuple(problems), tuple(logs))
+
+
+def is_link_safe(entry: os.DirEntry[str]) -> bool:
+    """``entry.is_symlink()`` that never raises (a file may vanish between the calls)."""
+    try:
+        return entry.is_symlink()
+    except OSError:
+        return False
