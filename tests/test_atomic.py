@@ -65,8 +65,8 @@ def _link(p):
 def _socket(p):
     import socket
 
-    s = socket.socket(socket.AF_UNIX)
-    s.bind(str(p))
+    with socket.socket(socket.AF_UNIX) as s:  # the socket file stays after the socket is closed
+        s.bind(str(p))
     return p
 
 

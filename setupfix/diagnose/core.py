@@ -67,15 +67,24 @@ class ErrorSummary:
     max_by_cycle: Array
 
 
+def _rms(values: Array, axis: int | None) -> Array:
+    """Root mean square over ``axis`` of the finite values; NaN where there is none (no warning)."""
+    seen = np.isfinite(values)
+    count = seen.sum(axis=axis)
+    total = np.where(seen, values, 0.0) ** 2
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return np.sqrt(np.where(count > 0, total.sum(axis=axis) / np.maximum(count, 1), np.nan))
+
+
 def error_summary(residual: Array, lower: Array, upper: Array) -> ErrorSummary:
     """Summarise a residual field (n_cycles, n_dimensions), NaN where absent."""
     a = np.abs(residual)
     with np.errstate(invalid="ignore"):
-        by_dim = np.sqrt(np.nanmean(residual ** 2, axis=0)) if residual.size else np.zeros(0)
-        by_cyc = np.sqrt(np.nanmean(residual ** 2, axis=1)) if residual.size else np.zeros(0)
+        by_dim = _rms(residual, axis=0) if residual.size else np.zeros(0)
+        by_cyc = _rms(residual, axis=1) if residual.size else np.zeros(0)
         out = int(np.sum((residual < lower) | (residual > upper)))
     return ErrorSummary(
-        rms=float(np.sqrt(np.nanmean(residual ** 2))) if np.isfinite(residual).any() else float("nan"),
+        rms=float(_rms(residual, axis=None)),
         max=float(np.nanmax(a)) if np.isfinite(a).any() else float("nan"),
         out_of_tolerance=out,
         rms_by_dimension=by_dim,

@@ -46,7 +46,8 @@ def test_offsets_csv_matches_json(capsys, tmp_path):
     target = tmp_path / "offsets.csv"
     code, out, _ = run(capsys, "correct", "--model", MODEL, "--json", "--offsets", str(target), REPORT)
     assert code == 0
-    rows = list(csv.DictReader(target.open(encoding="utf-8")))
+    with target.open(encoding="utf-8") as f:
+        rows = list(csv.DictReader(f))
     # the spec's columns first, in its order; then offset, current, value, verdict
     assert list(rows[0])[:9] == ["report", "part", "id", "register", "kind", "axis", "delta", "unit", "mode"]
     assert {r["unit"] for r in rows} == {"mm"} and {r["mode"] for r in rows} == {"add"}
