@@ -29,6 +29,7 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from parsers._registry import NOT_REPORT_NAMES, never_a_report
+from setupfix.errors import Note, SourceLocation
 
 __all__ = ["FoundFile", "Listing", "list_reports", "Inputs", "expand_inputs", "PARTIAL_SUFFIXES", "LOG_NAMES"]
 
@@ -208,9 +209,13 @@ class Inputs:
         """The first log of ``kind`` found in a folder, else None."""
         return next((path for k, path in self.logs if k == kind), None)
 
+    def notes(self) -> list[Note]:
+        """One note per problem (kind ``"folder"``): the path, the reason, left out."""
+        return [Note(f"{reason}; left out", SourceLocation(path), "folder") for path, reason in self.problems]
+
     def warnings(self) -> list[str]:
         """One line per problem: ``path: reason; left out``."""
-        return [f"{path}: {reason}; left out" for path, reason in self.problems]
+        return [str(n) for n in self.notes()]
 
 
 def expand_inputs(paths: Sequence[str | os.PathLike[str]], *, recursive: bool = True) -> Inputs:
