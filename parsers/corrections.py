@@ -22,7 +22,7 @@ from __future__ import annotations
 
 import math
 import os
-from collections.abc import Iterable, Mapping
+from collections.abc import Mapping
 from dataclasses import dataclass
 from datetime import datetime
 
@@ -185,9 +185,8 @@ def log_from_frame(frame: pd.DataFrame, source: str) -> CorrectionsLog:
     table.columns = [str(c).strip().casefold() for c in table.columns]
     _header(list(table.columns), SourceLocation(source))
     rows = []
-    records: Iterable[dict[str, object]] = table.to_dict("records")
-    for i, rec in enumerate(records, start=1):
-        row = _row({k: str(v) for k, v in rec.items()}, SourceLocation(source, element=f"row {i}"))
+    for i, rec in enumerate(table.to_dict("records"), start=1):
+        row = _row({str(k): str(v) for k, v in rec.items()}, SourceLocation(source, element=f"row {i}"))
         if row is not None:
             rows.append(row)
     return CorrectionsLog(source, tuple(rows))
