@@ -80,7 +80,7 @@ def format_diagnosis(out: DiagnoseOutcome) -> str:
     lines.append("next correction: " + (", ".join(f"{k} {v:+.4f}" for k, v in moves.items()) or "none"))
     if out.augmented:
         lines.append(f"wrote {out.augmented}")
-    lines += [f"note: {n}" for n in out.notes]
+    lines += [n if n.startswith("warning: ") else f"note: {n}" for n in out.notes]  # a folder's problems: warnings
     # report text (characteristic names, file names) reaches the terminal: no escape sequences
     return "\n".join("".join(c if c.isprintable() else "?" for c in line) for line in lines)
 

@@ -103,6 +103,14 @@ def test_diagnose_reads_the_listed_reports_and_uses_the_logs_found(shop):
     assert series.series.n_cycles == 5  # parts 0041 and 0042 twice (root and sub-folder), 0043 (linked)
 
 
+def test_diagnose_says_the_folder_problem_as_a_warning(shop, capsys):
+    root, model = shop
+    for log in ("corrections.csv", "temperatures.csv"):
+        (root / log).unlink()
+    assert main(["diagnose", "--model", str(model), "--no-walk", str(root)]) == 0
+    assert f"\nwarning: {root / 'folder_link'}: {LINK_PROBLEM}\n" in capsys.readouterr().out
+
+
 def test_a_folder_with_nothing_readable_is_refused_naming_why(tmp_path, capsys):
     empty = tmp_path / "empty"
     empty.mkdir()
