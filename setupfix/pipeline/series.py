@@ -1,6 +1,11 @@
 """Reading a series for the diagnosis: reports (files, folders or a history store), the
 corrections log and the temperature log → the engine's :class:`~setupfix.diagnose.Series`.
 
+Folders are listed by the one policy of every command (:func:`parsers.expand_inputs`);
+the logs are read by their one reader each (:mod:`parsers.corrections`, checked against
+the model by :func:`parsers.corrections.check_corrections`, and
+:mod:`parsers.temperature`), from a file or, through the same row checks, a history store.
+
 Each report is read in any supported format and tied to the model, one cycle per
 machined part (a part reported in several files counts once), ordered by timestamp; the
 corrections in effect at each part's timestamp (every log row with timestamp ≤ t), the
@@ -18,13 +23,13 @@ import numpy as np
 import pandas as pd
 
 import parsers
+from parsers.corrections import RegisterLog, check_corrections, log_from_frame, read_corrections_log
+from parsers.folders import LOG_NAMES
+from parsers.temperature import TemperatureLog, read_temperature_log
+from parsers.timestamps import parse_timestamp, to_index
 from setupfix.diagnose import Layout, Series
 from setupfix.diagnose.forecast import spec_of
 from setupfix.diagnose.terms import EffectSpec, applied_at, join_temperatures, parts_since_change
-from parsers.folders import LOG_NAMES
-from parsers.corrections import RegisterLog, check_corrections, log_from_frame, read_corrections_log
-from parsers.temperature import TemperatureLog, read_temperature_log
-from parsers.timestamps import parse_timestamp, to_index
 from setupfix.errors import MatchError, ParseError, SourceLocation, UnknownFormatError
 from setupfix.model import PartMeasurement, ProcessModel, load_model, match_parts, normalise_name
 from setupfix.model.effects import EffectsSection, model_effects
