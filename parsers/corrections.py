@@ -11,11 +11,13 @@ header is accepted or refused alike and a bad row is named at the same line:
   text that is not UTF-8, a column named twice, a row with more cells than the header
   (``…,0,05`` — a decimal comma — would otherwise lose its second half), a bad
   timestamp, an empty register, a delta that is not a plain decimal number, a
-  correction without delta, a tool change with one, an unknown event.
+  correction without delta, a tool change with one, an unknown event, a row given
+  twice (same time, register and event: a store keeps one, a sum would count two).
 * :func:`log_from_frame` — the rows of a history store, through the same row checks
   (named by the store and the row).
 * :func:`check_corrections` — a log against a process model: every register known to
-  the model, tool changes only of tools → :class:`RegisterLog` (arrays for the engine).
+  the model, tool changes only of tools, no register changed twice at one time (by its
+  ID and its register name) → :class:`RegisterLog` (arrays for the engine).
 """
 
 from __future__ import annotations
@@ -32,7 +34,7 @@ import pandas as pd
 
 from parsers import numbers
 from parsers._source import csv_records, read_bytes
-from parsers.timestamps import parse_timestamp, to_index
+from parsers.timestamps import parse_timestamp, to_index, utc_naive
 from setupfix.errors import MatchError, ParseError, SourceLocation
 from setupfix.model import ProcessModel
 
@@ -130,6 +132,28 @@ def _row(cells: Mapping[str, str], where: SourceLocation) -> CorrectionRow | Non
     return CorrectionRow(moment, register, math.nan if event == "tool_change" else delta, event, where)
 
 
+def _place(where: SourceLocation) -> str:
+    """A row's place within its log: ``line 3`` (file) or ``row 3`` (store)."""
+    return f"line {where.line}" if where.line is not None else where.element or str(where)
+
+
+def _once(rows: list[CorrectionRow], source: str) -> CorrectionsLog:
+    """The log, refusing a row given twice (same time, register and event).
+
+    A history store keeps one row per (timestamp, register, event); a file with two would
+    be read as two changes by one door and as one by another, so it is refused.
+    """
+    seen: dict[tuple[datetime, str, str], CorrectionRow] = {}
+    for row in rows:
+        key = (utc_naive(row.moment), row.register, row.event)
+        if key in seen:
+            raise ParseError(f"{row.register} {row.event.replace('_', ' ')} at {row.timestamp} given twice "
+                             f"(also at {_place(seen[key].where)})", location=row.where,
+                             hint="give one row with the total change")
+        seen[key] = row
+    return CorrectionsLog(source, tuple(rows))
+
+
 def _header(cells: list[str], where: SourceLocation) -> list[str]:
     header = [c.strip().casefold() for c in cells]
     seen: dict[str, int] = {}
@@ -173,7 +197,7 @@ def read_corrections_log(path: str | os.PathLike[str]) -> CorrectionsLog:
         row = _row(dict(zip(header, cells)), where)
         if row is not None:
             rows.append(row)
-    return CorrectionsLog(name, tuple(rows))
+    return _once(rows, name)
 
 
 def log_from_frame(frame: pd.DataFrame, source: str) -> CorrectionsLog:
@@ -189,7 +213,7 @@ def log_from_frame(frame: pd.DataFrame, source: str) -> CorrectionsLog:
         row = _row({str(k): str(v) for k, v in rec.items()}, SourceLocation(source, element=f"row {i}"))
         if row is not None:
             rows.append(row)
-    return CorrectionsLog(source, tuple(rows))
+    return _once(rows, source)
 
 
 def check_corrections(log: CorrectionsLog, model: ProcessModel) -> RegisterLog:
@@ -203,6 +227,7 @@ def check_corrections(log: CorrectionsLog, model: ProcessModel) -> RegisterLog:
     """
     ids = model.register_ids
     regs: list[int] = []
+    seen: dict[tuple[datetime, str, str], CorrectionRow] = {}
     for row in log.rows:
         try:
             reg = model.register(row.register)
@@ -211,6 +236,12 @@ def check_corrections(log: CorrectionsLog, model: ProcessModel) -> RegisterLog:
                              location=row.where) from None
         if row.event == "tool_change" and reg.kind != "tool":
             raise MatchError(f"tool change of {reg.id}, which is not a tool", location=row.where)
+        key = (utc_naive(row.moment), reg.id, row.event)
+        if key in seen:  # the same register by its ID and its register name
+            raise MatchError(f"{reg.id} ({reg.register}) {row.event.replace('_', ' ')} at {row.timestamp} given "
+                             f"twice (also at {_place(seen[key].where)})", location=row.where,
+                             hint="give one row with the total change")
+        seen[key] = row
         regs.append(ids.index(reg.id))
     deltas = np.array([0.0 if r.event == "tool_change" else r.delta for r in log.rows], dtype=float)
     return RegisterLog(to_index([r.moment for r in log.rows]), np.array(regs, dtype=np.intp), deltas,

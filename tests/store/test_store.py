@@ -70,7 +70,8 @@ def test_logs_round_trip_and_contradictions_are_refused(tmp_path):
         with pytest.raises(StoreError, match="G54.*contradicts the stored one"):
             import_history(store, REPORTS, [other])
         twice = _log(tmp_path, LOG + "2026-11-02T09:00:00,G54,0.02,\n", "twice.csv")
-        with pytest.raises(StoreError, match="contradicts itself"):
+        with pytest.raises(ParseError, match=r"twice.csv:4: G54 correction at 2026-11-02T09:00:00 given twice "
+                                             r"\(also at line 2\)"):  # the reader names it, as every door does
             import_history(store, corrections=[twice])
     assert _counts(db)[:3] == (0, 0, 2)  # the reports of the refused import were not stored either
 
