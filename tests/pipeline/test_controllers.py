@@ -12,7 +12,7 @@ from pathlib import Path
 
 import pytest
 
-from setupfix.errors import ExportError, ParseError
+from setupfix.errors import ExportError
 from setupfix.model import load_model, model_from_dict
 from setupfix.offsets import offset_rows
 from setupfix.pipeline.controllers import CONTROLLERS, read_current, render
