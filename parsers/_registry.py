@@ -143,11 +143,12 @@ def find_format(path: str | Path | Source, format: str | None = None) -> FormatS
 
 
 #: Files kept beside reports that are never reports: process models, notes, scripts, the
-#: history store and its journals, pictures, and the logs ``setupfix diagnose`` reads beside
-#: a series.  Folder readers (batch, the TUI's folder watch) leave them out.
+#: history store and its journals, pictures, the logs ``setupfix diagnose`` reads beside
+#: a series, the hidden truth ``setupfix simulate`` writes beside one, and a folder's read-me.
+#: Folder listings (:mod:`parsers.folders`) leave them out.
 NOT_REPORT_SUFFIXES: tuple[str, ...] = (".toml", ".md", ".py", ".db", ".db-wal", ".db-shm", ".db-journal", ".sqlite",
                                         ".svg", ".png")
-NOT_REPORT_NAMES: tuple[str, ...] = ("corrections.csv", "temperatures.csv")
+NOT_REPORT_NAMES: tuple[str, ...] = ("corrections.csv", "temperatures.csv", "truth.json", "readme.txt")
 
 
 def never_a_report(name: str) -> bool:

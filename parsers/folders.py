@@ -25,18 +25,20 @@ from __future__ import annotations
 import os
 import stat
 from dataclasses import dataclass
+from collections.abc import Sequence
 from pathlib import Path
 
 from parsers._registry import NOT_REPORT_NAMES, never_a_report
+from setupfix.errors import Note, SourceLocation
 
-__all__ = ["FoundFile", "Listing", "list_reports", "PARTIAL_SUFFIXES", "LOG_NAMES"]
+__all__ = ["FoundFile", "Listing", "list_reports", "Inputs", "expand_inputs", "PARTIAL_SUFFIXES", "LOG_NAMES"]
 
 #: Files a folder listing leaves out as still being written: partial downloads, editor and lock files.
 PARTIAL_SUFFIXES: tuple[str, ...] = (".tmp", ".part", ".partial", ".crdownload", "~", ".swp", ".lock")
 
 #: The logs of a series kept beside its reports, by kind (lower-case file names).
 LOG_NAMES: dict[str, str] = {"corrections.csv": "corrections", "temperatures.csv": "temperatures"}
-assert set(LOG_NAMES) == set(NOT_REPORT_NAMES)
+assert set(LOG_NAMES) <= set(NOT_REPORT_NAMES)
 
 
 @dataclass(frozen=True, slots=True)
@@ -172,3 +174,77 @@ def is_link_safe(entry: os.DirEntry[str]) -> bool:
         return entry.is_symlink()
     except OSError:
         return False
+
+
+@dataclass(frozen=True, slots=True)
+class Inputs:
+    """The reports a command's inputs stand for (:func:`expand_inputs`).
+
+    Attributes
+    ----------
+    files : tuple of (name, from_folder)
+        Files named on the command line (and ``-``) as given, in order, each folder's
+        candidates in its place (``from_folder`` True).
+    problems : tuple of (path, reason)
+        What a folder listing could not list or look at: say each to the user.
+    ignored : tuple of (path, reason)
+        Files of the folders left out by policy.
+    logs : tuple of (kind, path)
+        Series logs found in the folders.
+    empty : tuple of str
+        Folders holding no report candidate.
+    """
+
+    files: tuple[tuple[str, bool], ...] = ()
+    problems: tuple[tuple[str, str], ...] = ()
+    ignored: tuple[tuple[str, str], ...] = ()
+    logs: tuple[tuple[str, str], ...] = ()
+    empty: tuple[str, ...] = ()
+
+    @property
+    def names(self) -> list[str]:
+        return [name for name, _ in self.files]
+
+    def log(self, kind: str) -> str | None:
+        """The first log of ``kind`` found in a folder, else None."""
+        return next((path for k, path in self.logs if k == kind), None)
+
+    def notes(self) -> list[Note]:
+        """One note per problem (kind ``"folder"``): the path, the reason, left out."""
+        return [Note(f"{reason}; left out", SourceLocation(path), "folder") for path, reason in self.problems]
+
+    def warnings(self) -> list[str]:
+        """One line per problem: ``path: reason; left out``."""
+        return [str(n) for n in self.notes()]
+
+
+def expand_inputs(paths: Sequence[str | os.PathLike[str]], *, recursive: bool = True) -> Inputs:
+    """Files as given, folders as :func:`list_reports` lists them (the one policy of every command).
+
+    Parameters
+    ----------
+    paths : sequence of path
+        Report files, folders and ``-`` (standard input).  A file is taken as given,
+        whatever its name (its reader says whether it is a report); a missing file is
+        taken as given too, so that the reader names it.
+    recursive : bool
+        Folders with their sub-folders (every command's default).
+    """
+    files: list[tuple[str, bool]] = []
+    problems: list[tuple[str, str]] = []
+    ignored: list[tuple[str, str]] = []
+    logs: list[tuple[str, str]] = []
+    empty: list[str] = []
+    for path in paths:
+        name = os.fspath(path)
+        if name != "-" and os.path.isdir(name):
+            listing = list_reports(name, recursive=recursive)
+            files += [(str(f.path), True) for f in listing.files]
+            problems += listing.problems
+            ignored += listing.ignored
+            logs += listing.logs
+            if not listing.files:
+                empty.append(name)
+        else:
+            files.append((name, False))
+    return Inputs(tuple(files), tuple(problems), tuple(ignored), tuple(logs), tuple(empty))

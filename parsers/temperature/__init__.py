@@ -1,7 +1,8 @@
 """Temperature logs (``spec/measurements.md``, "Temperature log"): CSV or ``.xlsx`` → arrays.
 
-Not a CMM report format, so not in the format registry: the thermal commands read
-these files directly with :func:`read_temperature_log`.
+Not a CMM report format, so not in the format registry: every command that takes a
+temperature log (``thermal``, ``correct --temperatures``, ``diagnose``, ``history
+import``) reads it with :func:`read_temperature_log`, the one reader.
 """
 
 from __future__ import annotations

@@ -37,6 +37,7 @@ import numpy.typing as npt
 
 from parsers._source import csv_records, decode, read_bytes
 from parsers.numbers import try_number
+from parsers.timestamps import parse_timestamp
 from setupfix.errors import Note, ParseError, SourceLocation
 
 __all__ = ["TemperatureLog", "read_temperature_log", "TIMESTAMP", "INDEX_COLUMNS", "strict_number"]
@@ -112,13 +113,13 @@ class TemperatureLog:
                              hint=f"numeric columns: {', '.join(self.columns) or 'none'}")
         return self.columns[name]
 
-    def require_finite(self, name: str) -> Array:
+    def require_finite(self, name: str, *,
+                       hint: str = "this model needs every reading; only the kalman model tolerates gaps") -> Array:
         """A column without empty cells; the first empty one is named by its line."""
         values = self.column(name)
         bad = np.flatnonzero(~np.isfinite(values))
         if bad.size:
-            raise ParseError(f"empty value in column {name!r}", location=self.location(int(bad[0])),
-                             hint="this model needs every reading; only the kalman model tolerates gaps")
+            raise ParseError(f"empty value in column {name!r}", location=self.location(int(bad[0])), hint=hint)
         return values
 
     def head(self, stop: int) -> TemperatureLog:
@@ -140,17 +141,6 @@ class TemperatureLog:
         n = len(next(iter(cols.values())))
         return cls(source, cols, None if seconds is None else np.asarray(seconds, dtype=float), [],
                    np.arange(2, n + 2))
-
-
-def _parse_time(value: Any, where: SourceLocation) -> datetime:
-    if isinstance(value, datetime):
-        return value
-    text = str(value).strip()
-    try:
-        return datetime.fromisoformat(text.replace("Z", "+00:00"))
-    except ValueError:
-        raise ParseError(f"timestamp {text[:40]!r} is not ISO 8601", location=where,
-                         hint="write e.g. 2026-01-05T06:00:10") from None
 
 
 def _letters(j: int) -> str:
@@ -282,7 +272,7 @@ def read_temperature_log(path: str | Path, *, interval: float | None = None, req
         for i, cell in enumerate(raw):
             if cell is None or not str(cell).strip():
                 raise ParseError("empty timestamp", location=where(int(lines[i])))
-        times = [_parse_time(c, where(int(line))) for c, line in zip(raw, lines)]
+        times = [parse_timestamp(c, where(int(line))) for c, line in zip(raw, lines)]
         stamps = [t.isoformat() if isinstance(c, datetime) else str(c).strip() for c, t in zip(raw, times)]
         try:
             seconds = np.array([(t - times[0]).total_seconds() for t in times])

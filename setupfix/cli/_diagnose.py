@@ -26,11 +26,16 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                     "scale, position, relation, group) by forward selection with F-tests and cross-validation, "
                     "report the error before and after, walk forward against EWMA and no correction, and "
                     "recommend the next correction.")
-    p.add_argument("reports", nargs="*", metavar="REPORT", help="report files or folders: one series of cycles")
+    p.add_argument("reports", nargs="*", metavar="REPORT",
+                   help="report files or folders: one series of cycles; a folder stands for the reports in it and "
+                        "its sub-folders (hidden, partial files and models left out; a link to a folder or an "
+                        "unreadable one named in a note) and its corrections.csv / temperatures.csv are used "
+                        "unless --corrections / --temperatures are given")
     p.add_argument("--db", metavar="STORE", default=None,
                    help="history store: its reports, corrections log and temperatures (see 'setupfix history')")
     p.add_argument("--model", required=True, metavar="MODEL", help="process model TOML")
-    p.add_argument("--corrections", metavar="CSV", default=None, help="corrections log (applied changes, tool changes)")
+    p.add_argument("--corrections", metavar="CSV", default=None,
+                   help="corrections log (timestamp,register,delta[,event]; header in any case)")
     p.add_argument("--temperatures", metavar="CSV", default=None, help="temperature log")
     p.add_argument("--thermal", metavar="MODEL.json", default=None,
                    help="thermal model saved by 'setupfix thermal fit': its predicted drift is tested as a channel")
@@ -75,7 +80,7 @@ def format_diagnosis(out: DiagnoseOutcome) -> str:
     lines.append("next correction: " + (", ".join(f"{k} {v:+.4f}" for k, v in moves.items()) or "none"))
     if out.augmented:
         lines.append(f"wrote {out.augmented}")
-    lines += [f"note: {n}" for n in out.notes]
+    lines += [n if n.startswith("warning: ") else f"note: {n}" for n in out.notes]  # a folder's problems: warnings
     # report text (characteristic names, file names) reaches the terminal: no escape sequences
     return "\n".join("".join(c if c.isprintable() else "?" for c in line) for line in lines)
 

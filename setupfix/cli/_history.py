@@ -20,12 +20,19 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     common = argparse.ArgumentParser(add_help=False)
     common.add_argument("--db", default=None, metavar="PATH",
                         help="store file (default: setupfix.db beside --model, else in the current folder)")
-    common.add_argument("--model", default=None, metavar="MODEL", help="process model TOML (locates the store)")
+    common.add_argument("--model", default=None, metavar="MODEL",
+                        help="process model TOML: locates the store; on import, the corrections log is checked "
+                             "against it")
     imp = actions.add_parser("import", parents=[common], help="store reports, a corrections log, a temperature log",
                              description="Read every file first, then store all of them in one transaction.")
-    imp.add_argument("reports", nargs="*", metavar="REPORT", help="CMM reports in any supported format")
+    imp.add_argument("reports", nargs="*", metavar="REPORT",
+                     help="CMM reports in any supported format; a folder stands for the reports in it and its "
+                          "sub-folders (hidden, partial files and models left out; a link to a folder or an "
+                          "unreadable one named in a warning) and its corrections.csv / temperatures.csv are "
+                          "imported unless --corrections / --temperatures are given")
     imp.add_argument("--corrections", action="append", default=[], metavar="CSV",
-                     help="corrections log (timestamp,register,delta,event); repeatable")
+                     help="corrections log (timestamp,register,delta[,event]; header in any case); repeatable; "
+                          "with --model every register is checked against the model, as diagnose does")
     imp.add_argument("--temperatures", action="append", default=[], metavar="CSV",
                      help="temperature log (timestamp, one column per channel); repeatable")
     imp.add_argument("--format", default=None, metavar="NAME", help="report format (default: sniffed)")
@@ -42,6 +49,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from setupfix.model import load_model
     from setupfix.pipeline.history import default_db_path, export_history, history_summary, import_history
     from setupfix.pipeline.writers import check_target
     from setupfix.store import open_store
@@ -52,10 +60,11 @@ def run(args: argparse.Namespace) -> int:
     if args.action != "import" and not path.is_file():
         raise StoreError("no history store here", location=SourceLocation(str(path)),
                          hint="create it with 'setupfix history import', or give --db")
+    model = load_model(args.model) if args.action == "import" and args.model else None  # before the store opens
     with open_store(path) as store:
         if args.action == "import":
             s = import_history(store, args.reports, args.corrections, args.temperatures, format=args.format,
-                               unit=args.unit, encoding=args.encoding, lenient=args.lenient)
+                               unit=args.unit, encoding=args.encoding, lenient=args.lenient, model=model)
             for note in s.notes:
                 print(f"warning: {note}", file=sys.stderr)
             print(f"{path}: {len(s.new_reports)} new report(s), {len(s.known_reports)} already stored, "

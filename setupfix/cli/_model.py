@@ -55,7 +55,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                                        "own moved by one WKS (W1, G54) and one tool (T1, H1). The file loads as "
                                        "written and 'correct' runs with it; its comments say what to edit.")
     init.add_argument("reports", nargs="+", metavar="REPORT",
-                      help="CMM report(s) in any supported format; a folder stands for its files")
+                      help="CMM report(s) in any supported format; a folder stands for the reports in it and its "
+                           "sub-folders (hidden, partial and log files and models left out; a link to a folder or "
+                           "an unreadable one named in a warning)")
     init.add_argument("-o", "--out", required=True, metavar="MODEL",
                       help="model TOML to write ('-': stdout); written atomically")
     init.add_argument("--axis", choices=("X", "Y", "Z"), default=None,

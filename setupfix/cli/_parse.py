@@ -15,7 +15,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                                    "measurement table: lengths in mm, deviation = actual - nominal, limits as "
                                    "signed deviations. A bad file is named on stderr; the others are still written.")
     p.add_argument("files", nargs="+", metavar="FILE",
-                   help="report files; a folder stands for its files, '-' for standard input")
+                   help="report files; a folder stands for the reports in it and its sub-folders (hidden, "
+                        "partial and log files and models left out; a link to a folder or an unreadable one "
+                        "named in a warning), '-' for standard input")
     p.add_argument("--out", required=True, metavar="CSV", help="output CSV ('-': stdout)")
     p.add_argument("--format", default=None, metavar="NAME", help="report format (default: sniffed; see 'formats')")
     p.add_argument("--unit", default=None, choices=("mm", "inch"), help="unit of values the report does not label")
@@ -49,6 +51,8 @@ def run(args: argparse.Namespace) -> int:
     for report in outcome.reports:
         for line in report.warnings:
             print(f"warning: {line}", file=sys.stderr)
+    for note in outcome.problems:
+        print(f"warning: {note_line(note)}", file=sys.stderr)
     for note in outcome.skipped:
         print(f"note: {note_line(note)}", file=sys.stderr)
     for failure in outcome.failures:

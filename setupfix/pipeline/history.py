@@ -9,33 +9,30 @@ it was.
 
 from __future__ import annotations
 
-import csv
 import hashlib
-import io
 import os
 from collections.abc import Sequence
 from dataclasses import dataclass, field
-from datetime import datetime
 from pathlib import Path
 from typing import Any
 
 import pandas as pd
 
 import parsers
-from parsers import numbers
 from parsers._source import read_bytes
-from setupfix.errors import ParameterError, ParseError, SourceLocation
-from setupfix.model import CANONICAL_COLUMNS
-from setupfix.pipeline.writers import write_canonical_csv, write_table_csv
+from parsers.corrections import COLUMNS, EVENTS, check_corrections, read_corrections_log
 from parsers.temperature import read_temperature_log
+from parsers.timestamps import iso_text
+from setupfix.errors import ParameterError, ParseError, UnknownFormatError
+from setupfix.model import CANONICAL_COLUMNS, ProcessModel
+from setupfix.pipeline.writers import write_canonical_csv, write_table_csv
 from setupfix.store import CORRECTION_COLUMNS, Recommendation, Store
 
-__all__ = ["DEFAULT_DB", "default_db_path", "read_corrections_log", "import_history", "ImportSummary",
+__all__ = ["DEFAULT_DB", "default_db_path", "import_history", "ImportSummary",
            "history_summary", "export_history", "record_recommendations", "EXPORTS", "EVENTS"]
 
 DEFAULT_DB = "setupfix.db"
-#: Kinds of corrections-log rows (``measurements.md``).
-EVENTS = ("correction", "tool_change")
+assert CORRECTION_COLUMNS == COLUMNS  # the store keeps the log as its one reader gives it
 #: Tables ``history export`` writes.
 EXPORTS = ("measurements", "corrections", "temperatures")
 
@@ -47,57 +44,13 @@ def default_db_path(db: str | None, model: str | None = None) -> Path:
     return (Path(model).parent if model else Path(".")) / DEFAULT_DB
 
 
-def _stamp(text: str, where: SourceLocation) -> str:
-    """An ISO 8601 timestamp in normal form (sortable as text)."""
-    try:
-        return datetime.fromisoformat(text.strip().replace("Z", "+00:00")).isoformat()
-    except ValueError:
-        raise ParseError(f"timestamp {text.strip()[:40]!r} is not ISO 8601", location=where,
-                         hint="write e.g. 2026-01-05T06:00:10") from None
-
-
-def read_corrections_log(path: str | os.PathLike[str]) -> pd.DataFrame:
-    """Read a corrections log (``measurements.md``): timestamp, register, delta, event.
-
-    Raises
-    ------
-    ParseError
-        A missing column, a bad timestamp, an empty register, a non-numeric delta, a
-        correction without delta or an unknown event — with file and line.
-    """
-    name = str(path)
-    try:
-        text = read_bytes(name).decode("utf-8-sig")
-    except UnicodeDecodeError:
-        raise ParseError("not UTF-8 text", location=SourceLocation(name)) from None
-    reader = csv.reader(io.StringIO(text))
-    header = [h.strip().lower() for h in next(reader, [])]
-    missing = [c for c in ("timestamp", "register", "delta") if c not in header]
-    if missing:
-        raise ParseError(f"not a corrections log: missing column(s) {', '.join(missing)}",
-                         location=SourceLocation(name, line=1))
-    rows = []
-    for record in reader:
-        where = SourceLocation(name, line=reader.line_num)
-        if not any(c.strip() for c in record):
-            continue
-        row = dict(zip(header, (c.strip() for c in record)))
-        event = row.get("event") or "correction"
-        if event not in EVENTS:
-            raise ParseError(f"unknown event {event!r} (expected {' or '.join(EVENTS)})", location=where)
-        if not row.get("register"):
-            raise ParseError("empty register", location=where)
-        delta = numbers.parse_number(row.get("delta", ""), location=where, what="column 'delta'", allow_empty=True)
-        if event == "correction" and delta != delta:
-            raise ParseError("a correction needs a delta", location=where)
-        rows.append((_stamp(row["timestamp"], where), row["register"], delta, event))
-    return pd.DataFrame(rows, columns=list(CORRECTION_COLUMNS))
-
-
 def _temperature_frame(path: str | os.PathLike[str]) -> pd.DataFrame:
+    """A temperature log (:func:`parsers.temperature.read_temperature_log`) as the store keeps it."""
     log = read_temperature_log(Path(path))
-    stamps = [_stamp(t, SourceLocation(str(path), line=int(line)))
-              for t, line in zip(log.timestamps, log.lines if log.lines is not None else [])]
+    if not log.timestamps:
+        raise ParseError("a temperature log for the history store needs a 'timestamp' column",
+                         location=log.location(), hint="the store ties samples to parts by time")
+    stamps = [iso_text(t, log.location(i)) for i, t in enumerate(log.timestamps)]
     return pd.DataFrame({"timestamp": stamps, **log.columns})
 
 
@@ -115,30 +68,55 @@ class ImportSummary:
 def import_history(store: Store, reports: Sequence[str | os.PathLike[str]] = (),
                    corrections: Sequence[str | os.PathLike[str]] = (),
                    temperatures: Sequence[str | os.PathLike[str]] = (), *, format: str | None = None,
-                   unit: str | None = None, encoding: str | None = None, lenient: bool = False) -> ImportSummary:
+                   unit: str | None = None, encoding: str | None = None, lenient: bool = False,
+                   model: ProcessModel | None = None) -> ImportSummary:
     """Read every file, then store all of it in one transaction.
+
+    ``reports`` may name folders: their reports as :func:`parsers.expand_inputs` lists
+    them (sub-folders too; each listing problem becomes a note; a file of a folder that
+    no reader recognises is left out with a note), and a corrections or temperature log
+    found in them is imported when none is given.  With ``model`` every corrections-log
+    row is checked against it (:func:`parsers.corrections.check_corrections`), as
+    ``diagnose`` checks it.
 
     Raises
     ------
     SetupfixError
         The first file that cannot be read (nothing is stored), or a log row that
-        contradicts the store (nothing is stored).
+        contradicts the store or the model (nothing is stored).
     """
     read = []
     summary = ImportSummary()
-    for path in reports:
-        source = parsers.load_source(str(path))  # read once: the bytes hashed are the bytes parsed
-        result = parsers.read_report(source, format=format, unit=unit, encoding=encoding, lenient=lenient)
+    inputs = parsers.expand_inputs(reports)
+    summary.notes += inputs.warnings()
+    for name, from_folder in inputs.files:
+        source = parsers.load_source(name)  # read once: the bytes hashed are the bytes parsed
+        try:
+            result = parsers.read_report(source, format=format, unit=unit, encoding=encoding, lenient=lenient)
+        except UnknownFormatError as exc:
+            if not from_folder or format:
+                raise
+            summary.notes.append(f"{exc.location}: not a report of a known format; left out")
+            continue
         summary.notes += [str(n) for n in result.notes]
         read.append((source.data, source.name, result.format, result.table))
+    corrections, temperatures = list(corrections), list(temperatures)
+    for kind, given in (("corrections", corrections), ("temperatures", temperatures)):
+        found = inputs.log(kind)
+        if found and not given:
+            given.append(found)
+            summary.notes.append(f"{kind} log {found} found beside the reports: imported")
     logs = [read_corrections_log(p) for p in corrections]
+    if model is not None:
+        for log in logs:
+            check_corrections(log, model)
     temps = [_temperature_frame(p) for p in temperatures]
     with store.transaction():
         for data, name, fmt, table in read:
             _, new = store.add_report(data, Path(name).name, fmt, table)
             (summary.new_reports if new else summary.known_reports).append(name)
         for log in logs:
-            summary.corrections += store.add_corrections(log)
+            summary.corrections += store.add_corrections(log.frame())
         for frame in temps:
             summary.temperatures += store.add_temperatures(frame)
     return summary

@@ -19,7 +19,7 @@ from setupfix.errors import Note, ParseError, SetupfixError, SourceLocation, Unk
 from setupfix.model import CANONICAL_COLUMNS
 from setupfix.pipeline.writers import FLOAT_FORMAT, write_canonical_csv  # noqa: F401 - re-exported
 
-__all__ = ["ParsedReport", "ParseOutcome", "parse_reports", "expand_inputs", "write_canonical_csv",
+__all__ = ["ParsedReport", "ParseOutcome", "parse_reports", "write_canonical_csv",
            "OUTPUT_COLUMNS", "list_formats", "note_line"]
 
 #: Columns ``setupfix parse`` writes: the canonical ones, then the reference-only flag.
@@ -54,6 +54,9 @@ class ParseOutcome:
     failures: list[SetupfixError] = field(default_factory=list)
     #: Files of a folder input that no reader recognises (left out, not failures).
     skipped: list[Note] = field(default_factory=list)
+    #: What a folder listing could not list or look at (a link to a folder, an unreadable
+    #: folder, a file renamed while listed): each named, for a warning.
+    problems: list[Note] = field(default_factory=list)
     #: Number of inputs after folders were expanded.
     inputs: int = 0
 
@@ -74,34 +77,6 @@ class ParseOutcome:
         return table[[*OUTPUT_COLUMNS, AXIS_COLUMN]]
 
 
-def expand_inputs(paths: Sequence[str | Path]) -> tuple[list[tuple[str, bool]], list[SetupfixError]]:
-    """Report names from the inputs: a folder stands for its files (not hidden, sorted, not recursive).
-
-    Returns
-    -------
-    (names, failures)
-        ``(name, from_folder)`` for ``-`` (stdin) and files as given, then each folder's
-        files in name order; an empty folder is a failure naming it.
-    """
-    names: list[tuple[str, bool]] = []
-    failures: list[SetupfixError] = []
-    for path in paths:
-        name = str(path)
-        folder = Path(name)
-        if name != parsers.STDIN and folder.is_dir():
-            try:
-                found = sorted(str(p) for p in folder.iterdir() if p.is_file() and not p.name.startswith("."))
-            except OSError as exc:
-                failures.append(ParseError(f"cannot list folder: {exc.strerror or exc}", location=SourceLocation(name)))
-                continue
-            if not found:
-                failures.append(ParseError("folder holds no report file", location=SourceLocation(name)))
-            names += [(f, True) for f in found]
-        else:
-            names.append((name, False))
-    return names, failures
-
-
 def parse_reports(paths: Sequence[str | Path], *, format: str | None = None, unit: str | None = None,
                   encoding: str | None = None, columns: str | Mapping[str, str] | None = None,
                   lenient: bool = False) -> ParseOutcome:
@@ -110,7 +85,9 @@ def parse_reports(paths: Sequence[str | Path], *, format: str | None = None, uni
     Parameters
     ----------
     paths : sequence of str or Path
-        Report files, folders (their files) or ``-`` (standard input).
+        Report files, folders or ``-`` (standard input).  A folder stands for its
+        reports and those of its sub-folders, as :func:`parsers.expand_inputs` lists
+        them (the policy every command shares); an empty folder is a failure naming it.
     format, unit, encoding, columns, lenient
         As for :func:`parsers.read_report`.
 
@@ -121,9 +98,12 @@ def parse_reports(paths: Sequence[str | Path], *, format: str | None = None, uni
         is in ``failures``.  Thread-safe: notes come back as data.
     """
     outcome = ParseOutcome()
-    names, outcome.failures = expand_inputs(paths)
-    outcome.inputs = len(names)
-    for name, from_folder in names:
+    inputs = parsers.expand_inputs(paths)
+    outcome.problems = inputs.notes()
+    outcome.failures = [ParseError("folder holds no report file", location=SourceLocation(folder))
+                        for folder in inputs.empty]
+    outcome.inputs = len(inputs.files)
+    for name, from_folder in inputs.files:
         try:
             result = parsers.read_report(name, format=format, unit=unit, encoding=encoding, columns=columns,
                                          lenient=lenient)

@@ -208,8 +208,10 @@ def scaffold_model(reports: Sequence[str | Path], *, axis: str | None = None, na
                    columns: str | None = None, lenient: bool = False) -> Scaffold:
     """Write a process-model scaffold (TOML text) from the reports' toleranced length characteristics.
 
-    ``reports`` may name folders: their files (not hidden, not recursive, in name order);
-    a file of a folder that no reader takes, or that is refused, is left out with a note.
+    ``reports`` may name folders: their reports and those of their sub-folders, as
+    :func:`parsers.expand_inputs` lists them (the policy every command shares; what the
+    listing could not look at is a note); a file of a folder that no reader takes, or
+    that is refused, is left out with a note.
 
     Raises
     ------
@@ -220,15 +222,14 @@ def scaffold_model(reports: Sequence[str | Path], *, axis: str | None = None, na
     """
     if axis is not None and axis not in ("X", "Y", "Z"):
         raise ModelError(f'axis must be "X", "Y" or "Z", got {axis!r}')
-    from setupfix.pipeline.parse import expand_inputs
-
     options: dict[str, Any] = {"unit": unit, "encoding": encoding, "columns": columns, "lenient": lenient}
-    names, failures = expand_inputs(reports)
-    if failures:
-        raise failures[0]
+    inputs = parsers.expand_inputs(reports)
+    if inputs.empty:
+        raise ParseError("folder holds no report file", location=SourceLocation(inputs.empty[0]),
+                         hint="; ".join(inputs.warnings()[:3]) or None)
     reads: list[tuple[str, parsers.ReadResult]] = []
-    left_out: list[str] = []
-    for report, from_folder in names:
+    left_out: list[str] = inputs.warnings()
+    for report, from_folder in inputs.files:
         try:
             reads.append((report, parsers.read_report(report, format=format, **options)))
         except SetupfixError as exc:

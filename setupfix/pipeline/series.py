@@ -1,6 +1,11 @@
 """Reading a series for the diagnosis: reports (files, folders or a history store), the
 corrections log and the temperature log → the engine's :class:`~setupfix.diagnose.Series`.
 
+Folders are listed by the one policy of every command (:func:`parsers.expand_inputs`);
+the logs are read by their one reader each (:mod:`parsers.corrections`, checked against
+the model by :func:`parsers.corrections.check_corrections`, and
+:mod:`parsers.temperature`), from a file or, through the same row checks, a history store.
+
 Each report is read in any supported format and tied to the model, one cycle per
 machined part (a part reported in several files counts once), ordered by timestamp; the
 corrections in effect at each part's timestamp (every log row with timestamp ≤ t), the
@@ -10,7 +15,6 @@ are joined to it.  Used by :mod:`setupfix.pipeline.diagnose`.
 
 from __future__ import annotations
 
-import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -19,23 +23,26 @@ import numpy as np
 import pandas as pd
 
 import parsers
+from parsers.corrections import RegisterLog, check_corrections, log_from_frame, read_corrections_log
+from parsers.folders import LOG_NAMES
+from parsers.temperature import TemperatureLog, read_temperature_log
+from parsers.timestamps import parse_timestamp, to_index
 from setupfix.diagnose import Layout, Series
 from setupfix.diagnose.forecast import spec_of
 from setupfix.diagnose.terms import EffectSpec, applied_at, join_temperatures, parts_since_change
-from setupfix.errors import MatchError, ParseError, SourceLocation
+from setupfix.errors import MatchError, ParseError, SourceLocation, UnknownFormatError
 from setupfix.model import PartMeasurement, ProcessModel, load_model, match_parts, normalise_name
 from setupfix.model.effects import EffectsSection, model_effects
 from setupfix.pipeline.checks import check_parts
 
-__all__ = ["SeriesInput", "TempLog", "load_series", "parse_times", "hours_since", "read_corrections_log", "read_temperature_log", "expand_reports",
-           "corrections_from_table", "temperatures_from_table", "report_coordinates"]
+__all__ = ["SeriesInput", "TempLog", "load_series", "parse_times", "hours_since", "temperature_arrays",
+           "store_temperatures", "report_coordinates"]
 
 #: A temperature log as arrays: times, samples (n, channels), channel names.
 TempLog = tuple[pd.DatetimeIndex, np.ndarray, tuple[str, ...]]
 
-_LOG_NAMES = ("corrections.csv",)
-_TEMP_NAMES = ("temperatures.csv",)
-_SKIP = {"truth.json", "readme.md", "readme.txt", "provenance.md", "sources.md"}
+#: Columns of a temperature log that are not temperature channels.
+NOT_CHANNELS = ("spindle_speed",)
 
 
 @dataclass(frozen=True)
@@ -53,41 +60,11 @@ class SeriesInput:
     notes: tuple[str, ...] = ()
 
 
-def expand_reports(paths: Sequence[str | Path]) -> tuple[list[Path], str | None, str | None, list[str]]:
-    """Files of the given paths (folders recursively, sorted); logs found in folders apart.
-
-    Returns
-    -------
-    reports, corrections, temperatures, notes
-        ``corrections.csv`` / ``temperatures.csv`` found in a folder are returned
-        apart (and said in the notes), never read as reports.
-    """
-    known = {ext for spec in parsers.formats() for ext in spec.extensions}
-    out: list[Path] = []
-    corrections = temperatures = None
-    notes: list[str] = []
-    for p in paths:
-        path = Path(p)
-        if path.is_dir():
-            for f in sorted(q for q in path.rglob("*") if q.is_file()):
-                name = f.name.lower()
-                if name in _LOG_NAMES:
-                    corrections = corrections or str(f)
-                elif name in _TEMP_NAMES:
-                    temperatures = temperatures or str(f)
-                elif name not in _SKIP and f.suffix.lower() in known:
-                    out.append(f)
-        elif path.exists():
-            out.append(path)
-        else:
-            raise ParseError("no such file or folder", location=SourceLocation(str(path)))
-    if not out:
-        raise ParseError("no report found", location=SourceLocation(", ".join(str(p) for p in paths)))
-    return out, corrections, temperatures, notes
-
-
 def parse_times(values: Sequence[object], where: str, lines: Sequence[int] | None = None) -> pd.DatetimeIndex:
-    """ISO 8601 timestamps as naive UTC-free datetimes; one clear error for a bad one."""
+    """The reports' part timestamps as naive datetimes (UTC when an offset is given); one clear error for a bad one.
+
+    The logs' timestamps are read by their readers (:mod:`parsers.timestamps`).
+    """
     out = []
     for i, v in enumerate(values):
         try:
@@ -103,108 +80,56 @@ def parse_times(values: Sequence[object], where: str, lines: Sequence[int] | Non
     return pd.DatetimeIndex(out)
 
 
-def _read_csv(path: str) -> pd.DataFrame:
-    try:
-        table = pd.read_csv(path, dtype=str, keep_default_na=False, encoding="utf-8-sig")
-    except (OSError, UnicodeDecodeError, pd.errors.ParserError, pd.errors.EmptyDataError) as exc:
-        raise ParseError(f"cannot read CSV: {exc}", location=SourceLocation(path)) from None
-    table.columns = [str(c).strip() for c in table.columns]
-    return table
+def temperature_arrays(log: TemperatureLog) -> TempLog:
+    """A temperature log read by :func:`parsers.temperature.read_temperature_log` as the series' arrays.
 
-
-def read_corrections_log(path: str, model: ProcessModel) -> tuple[pd.DatetimeIndex, np.ndarray, np.ndarray, list[str]]:
-    """Read a corrections log (``measurements.md``): times, register rows, deltas, events.
+    Every numeric column but ``spindle_speed`` is a channel; the diagnosis needs a
+    timestamp column and every reading (the first empty cell is named by its line).
 
     Raises
     ------
     ParseError
-        Missing column, bad timestamp or delta (with the line).
-    MatchError
-        Unknown register, or a tool change of a register that is not a tool.
+        No timestamp column, no channel, an empty reading.
     """
-    return corrections_from_table(_read_csv(path), model, path)
-
-
-def corrections_from_table(table: pd.DataFrame, model: ProcessModel,
-                           path: str) -> tuple[pd.DatetimeIndex, np.ndarray, np.ndarray, list[str]]:
-    """A corrections-log table (CSV or store) checked against the model; see :func:`read_corrections_log`."""
-    table = table.astype(object).where(table.notna(), "").astype(str)
-    for col in ("timestamp", "register"):
-        if col not in table:
-            raise ParseError(f"corrections log: missing column {col!r}", location=SourceLocation(path, line=1))
-    if "delta" not in table:
-        raise ParseError("corrections log: missing column 'delta'", location=SourceLocation(path, line=1))
-    lines = [i + 2 for i in range(len(table))]
-    times = parse_times(table["timestamp"].tolist(), path, lines)
-    regs: list[int] = []
-    deltas: list[float] = []
-    events: list[str] = []
-    ids = model.register_ids
-    records: list[dict[str, str]] = table.to_dict("records")  # type: ignore[assignment]
-    for i, rec in enumerate(records):
-        event = str(rec.get("event") or "correction").strip() or "correction"
-        if event not in ("correction", "tool_change"):
-            raise ParseError(f"unknown event {event!r} (expected correction or tool_change)",
-                             location=SourceLocation(path, line=lines[i]))
-        try:
-            reg = model.register(str(rec["register"]))
-        except KeyError:
-            raise MatchError(f"unknown register {rec['register']!r} (model registers: {', '.join(ids)})",
-                             location=SourceLocation(path, line=lines[i])) from None
-        if event == "tool_change" and reg.kind != "tool":
-            raise MatchError(f"tool change of {reg.id}, which is not a tool",
-                             location=SourceLocation(path, line=lines[i]))
-        text = str(rec["delta"]).strip()
-        if event == "correction":
-            try:
-                delta = float(text)
-                if not math.isfinite(delta):
-                    raise ValueError
-            except ValueError:
-                raise ParseError(f"delta {text!r} is not a number",
-                                 location=SourceLocation(path, line=lines[i])) from None
-        else:
-            delta = 0.0
-        regs.append(ids.index(reg.id))
-        deltas.append(delta)
-        events.append(event)
-    return times, np.array(regs, dtype=np.intp), np.array(deltas, dtype=float), events
-
-
-def read_temperature_log(path: str) -> tuple[pd.DatetimeIndex, np.ndarray, tuple[str, ...]]:
-    """Read a temperature log: times, samples (n, channels), channel names (all numeric columns but
-    the timestamp and spindle_speed).
-
-    Raises
-    ------
-    ParseError
-        Missing timestamp column, no sensor column, bad timestamp or value.
-    """
-    return temperatures_from_table(_read_csv(path), path)
-
-
-def temperatures_from_table(table: pd.DataFrame, path: str, *,
-                            fill: bool = False) -> tuple[pd.DatetimeIndex, np.ndarray, tuple[str, ...]]:
-    """A temperature-log table (CSV or store); ``fill`` carries a channel's last sample forward
-    (a store holds each channel's samples apart)."""
-    if "timestamp" not in table:
-        raise ParseError("temperature log: missing column 'timestamp'", location=SourceLocation(path, line=1))
-    lines = [i + 2 for i in range(len(table))]
-    times = parse_times(table["timestamp"].tolist(), path, lines)
-    channels = tuple(c for c in table.columns if c not in ("timestamp", "spindle_speed"))
+    if not log.timestamps:
+        raise ParseError("temperature log: missing column 'timestamp'", location=log.location(),
+                         hint="the diagnosis ties each part to the sample at or before its timestamp")
+    channels = tuple(c for c in log.columns if c.casefold() not in NOT_CHANNELS)
     if not channels:
-        raise ParseError("temperature log: no sensor column", location=SourceLocation(path, line=1))
-    values = np.empty((len(table), len(channels)))
+        raise ParseError("temperature log: no sensor column", location=log.location())
+    values = np.empty((log.n, len(channels)))
     for j, c in enumerate(channels):
-        num = pd.to_numeric(table[c], errors="coerce")
-        col = (num.ffill().bfill() if fill else num).to_numpy(dtype=float)
-        bad = np.flatnonzero(~np.isfinite(col))
-        if bad.size:
-            raise ParseError(f"temperature {table[c].iloc[bad[0]]!r} in column {c!r} is not a number",
-                             location=SourceLocation(path, line=lines[bad[0]]))
-        values[:, j] = col
+        values[:, j] = log.require_finite(c, hint="the diagnosis needs every reading of a channel")
+    times = to_index([parse_timestamp(t, log.location(i)) for i, t in enumerate(log.timestamps)])
+    return times, values, channels
+
+
+def store_temperatures(table: pd.DataFrame, source: str) -> TempLog:
+    """The temperatures a history store holds (read at import by the one reader) as the series' arrays.
+
+    A store keeps each channel's samples apart: a channel's last sample is carried
+    forward (and its first one back) over the times only other channels were sampled.
+    """
+    where = SourceLocation(source)
+    times = to_index([parse_timestamp(t, where) for t in table["timestamp"]])
+    channels = tuple(str(c) for c in table.columns if c != "timestamp" and str(c).casefold() not in NOT_CHANNELS)
+    if not channels:
+        raise ParseError("temperature log: no sensor column", location=where)
+    values = np.column_stack([pd.to_numeric(table[c], errors="coerce").ffill().bfill().to_numpy(dtype=float)
+                              for c in channels])
     order = np.argsort(times.values, kind="stable")
     return times[order], values[order], channels
+
+
+def _corrections(path: str, model: ProcessModel) -> RegisterLog:
+    """A corrections-log file read and checked against the model (the one reader, the one check)."""
+    return check_corrections(read_corrections_log(path), model)
+
+
+# TODO(issue 20 merge): remove — pipeline.diagnose imports these names from here.
+expand_reports = parsers.expand_inputs
+corrections_from_table = log_from_frame
+temperatures_from_table = store_temperatures
 
 
 def hours_since(times: pd.DatetimeIndex, origin: pd.Timestamp) -> np.ndarray:
@@ -254,26 +179,36 @@ def load_series(model: ProcessModel | str | Path, reports: Sequence[str | Path] 
             if corrections is None:
                 stored = store.corrections()
                 if not stored.empty:
-                    log = corrections_from_table(stored, model, f"{db}#corrections")
+                    log = check_corrections(log_from_frame(stored, f"{db}#corrections"), model)
             if temperatures is None:
                 stored_t = store.temperatures()
                 if len(stored_t.columns) > 1 and not stored_t.empty:
-                    temps = temperatures_from_table(stored_t, f"{db}#temperatures", fill=True)
+                    temps = store_temperatures(stored_t, f"{db}#temperatures")
     if reports:
-        files, found_log, found_temp, more = expand_reports(reports)
-        notes += more
-        where = where or str(files[0])
+        inputs = parsers.expand_inputs(reports)
+        notes += [f"warning: {w}" for w in inputs.warnings()]
+        if not inputs.files:
+            raise ParseError("no report found", location=SourceLocation(", ".join(str(p) for p in reports)),
+                             hint="; ".join(inputs.warnings()[:3]) or None)
+        where = where or inputs.files[0][0]
+        found_log, found_temp = inputs.log("corrections"), inputs.log("temperatures")
         if corrections is None and found_log and log is None:
             corrections = found_log
             notes.append(f"corrections log {found_log} found beside the reports: used")
         if temperatures is None and found_temp and temps is None:
             temperatures = found_temp
             notes.append(f"temperature log {found_temp} found beside the reports: used")
-        for f in files:
-            read = parsers.read_report(f, lenient=lenient)
+        for f, from_folder in inputs.files:
+            try:
+                read = parsers.read_report(f, lenient=lenient)
+            except UnknownFormatError as exc:
+                if not from_folder:
+                    raise
+                notes.append(f"{exc.location}: not a report of a known format; left out")
+                continue
             table = read.table
             notes += [str(n) for n in read.notes]
-            parts += check_parts(model, match_parts(model, table, source=str(f)), source=str(f))
+            parts += check_parts(model, match_parts(model, table, source=f), source=f)
             tables.append(table)
     if not parts:
         raise ParseError("no report in the series", location=SourceLocation(where or "<series>"))
@@ -282,14 +217,17 @@ def load_series(model: ProcessModel | str | Path, reports: Sequence[str | Path] 
     if not corrections and log is None and len(parts) > 1:
         notes.append(_no_log_note(reports))
     if corrections:
-        log = read_corrections_log(corrections, model)
+        log = _corrections(corrections, model)
+    temp_log = None
     if temperatures:
-        temps = read_temperature_log(temperatures)
+        temp_log = read_temperature_log(temperatures)
+        notes += [str(n) for n in temp_log.notes]
+        temps = temperature_arrays(temp_log)
     if thermal is not None:
-        if not temperatures:
+        if temp_log is None or temps is None:
             raise ParseError("a thermal model needs the temperature log it predicts from",
                              location=SourceLocation(str(thermal)), hint="give --temperatures")
-        temps, more_notes = _with_thermal_prediction(temps, str(thermal), str(temperatures))
+        temps, more_notes = _with_thermal_prediction(temps, str(thermal), temp_log)
         notes += more_notes
     series, more = _assemble(model, parts, log, temps, where)
     notes += more
@@ -313,7 +251,7 @@ def load_series(model: ProcessModel | str | Path, reports: Sequence[str | Path] 
 def _no_log_note(reports: Sequence[str | Path]) -> str:
     """The note for a series read without a corrections log (naming a log file lying beside a report)."""
     beside = sorted({str(Path(r).parent / n) for r in reports if not Path(r).is_dir()
-                     for n in _LOG_NAMES if (Path(r).parent / n).is_file()})
+                     for n, kind in LOG_NAMES.items() if kind == "corrections" and (Path(r).parent / n).is_file()})
     text = ("no corrections log: every part is taken as cut with the same offsets, so a correction applied "
             "during the series would show as drift or a step")
     return text + (f"; {beside[0]} lies beside the reports: give it with --corrections" if beside else "")
@@ -342,22 +280,18 @@ def report_coordinates(model: ProcessModel, tables: Sequence[pd.DataFrame]) -> n
     return out
 
 
-def _with_thermal_prediction(temps: TempLog | None, thermal: str, temperatures: str) -> tuple[TempLog, list[str]]:
+def _with_thermal_prediction(temps: TempLog, thermal: str, log: TemperatureLog) -> tuple[TempLog, list[str]]:
     """The temperature channels plus the drift a saved thermal model predicts over the same log."""
     from setupfix.pipeline.thermal import predict_drift
 
-    assert temps is not None
-    pred = predict_drift(thermal, temperatures)
+    pred = predict_drift(thermal, log)
     times, samples, channels = temps
-    p_times = parse_times(pred.timestamps, temperatures)
-    idx = np.clip(np.searchsorted(p_times.values, times.values, side="right") - 1, 0, len(p_times) - 1)
     keep = [j for j, c in enumerate(channels) if c != pred.target]
     name = f"{pred.method} prediction"
     notes = [str(n) for n in pred.notes]
     notes.append(f"thermal model {thermal} ({pred.method}, {pred.unit or 'unit not stated'}): its prediction is "
                  f"the channel {name!r}")
-    return (times, np.column_stack([samples[:, keep], pred.drift[idx]]),
-            (*(channels[j] for j in keep), name)), notes
+    return (times, np.column_stack([samples[:, keep], pred.drift]), (*(channels[j] for j in keep), name)), notes
 
 
 def _one_per_part(parts: list[PartMeasurement]) -> tuple[list[PartMeasurement], list[str]]:
@@ -395,7 +329,7 @@ def _ordered(parts: list[PartMeasurement]) -> list[PartMeasurement]:
 
 
 def _assemble(model: ProcessModel, parts: list[PartMeasurement],
-              log: tuple[pd.DatetimeIndex, np.ndarray, np.ndarray, list[str]] | None,
+              log: RegisterLog | None,
               temps: TempLog | None, where: str) -> tuple[Series, list[str]]:
     """Parts in time order with the corrections in effect, parts since tool changes, temperatures."""
     notes: list[str] = []
@@ -426,7 +360,7 @@ def _assemble(model: ProcessModel, parts: list[PartMeasurement],
     pending = np.zeros(n_r)
     change_times: list[np.ndarray] = [np.zeros(0) for _ in layout.tools]
     if log is not None:
-        times, regs, deltas, events = log
+        times, regs, deltas, events = log.times, log.registers, log.deltas, log.events
         t_log = hours_since(times, pd.Timestamp(origin))
         is_corr = np.array([e == "correction" for e in events], dtype=bool)
         applied = applied_at(time, t_log[is_corr], regs[is_corr], deltas[is_corr], n_r)

@@ -83,3 +83,24 @@ def test_unreadable_folder_is_named_even_as_root(tmp_path, monkeypatch):
 def test_a_missing_root_is_a_problem_not_an_exception(tmp_path):
     listing = list_reports(tmp_path / "nope")
     assert listing.files == () and listing.problems[0][1].startswith("cannot list folder")
+
+
+def test_expand_inputs_takes_files_as_given_and_folders_by_the_policy(tmp_path):
+    from parsers import expand_inputs
+
+    root = tmp_path / "t"
+    root.mkdir()
+    _tree(root)
+    os.symlink(root / "a", root / "b" / "folder_link")
+    (tmp_path / "empty").mkdir()
+    given = root / ".r5.csv"  # hidden, but named: taken as given
+    inputs = expand_inputs([given, "-", root, tmp_path / "empty", tmp_path / "missing.csv"])
+    assert inputs.files == ((str(given), False), ("-", False), (str(root / "a" / "r1.csv"), True),
+                            (str(root / "a" / "report.txt"), True), (str(root / "b" / "r2.qif"), True),
+                            (str(tmp_path / "missing.csv"), False))  # a missing file: its reader names it
+    assert inputs.empty == (str(tmp_path / "empty"),)
+    assert inputs.log("corrections") == str(root / "corrections.csv")
+    assert inputs.warnings() == [f"{root / 'b' / 'folder_link'}: link to a folder: not followed; left out"]
+    assert [n.kind for n in inputs.notes()] == ["folder"]
+    flat = expand_inputs([root], recursive=False)
+    assert flat.files == () and flat.empty == (str(root),)

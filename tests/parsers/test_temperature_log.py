@@ -107,3 +107,29 @@ def test_xlsx_log_without_header(tmp_path):
 def test_irregular_sampling_is_noted(tmp_path):
     log = read_temperature_log(write(tmp_path, GOOD.replace("06:00:20", "06:01:20")))
     assert any("sampling interval varies" in str(n) for n in log.notes)
+
+
+# -- one reader behind every door: history import, diagnose ---------------------------------------
+
+_GUIDE = __import__("pathlib").Path(__file__).resolve().parents[2] / "sample_reports" / "guide_pins"
+_TEMPS = "timestamp,spindle\n2026-11-02T06:00:00,20.1\n\n"
+
+
+@pytest.mark.parametrize(("row", "message"), [
+    ("yesterday,20.2", "timestamp 'yesterday' is not ISO 8601"),
+    ("2026-11-02T07:00:00,2_0", "non-numeric value '2_0' in column 'spindle'"),
+    ("2026-11-02T07:00:00,20.2,21", "3 cells but 2 columns in the header"),
+    ("2026-11-02T05:00:00,20.2", "timestamp not after the previous one"),
+])
+def test_a_bad_temperature_row_is_named_alike_by_history_import_and_diagnose(tmp_path, capsys, row, message):
+    from setupfix.cli import main
+
+    log = write(tmp_path, _TEMPS + row + "\n")  # the bad row is line 4
+    reports = [str(p) for p in sorted(_GUIDE.glob("cycle_0*.csv"))]
+    errors = []
+    for argv in (["history", "import", "--db", str(tmp_path / "h.db"), "--temperatures", str(log), *reports],
+                 ["diagnose", "--model", str(_GUIDE / "model.toml"), "--no-walk", "--temperatures", str(log),
+                  *reports]):
+        assert main(argv) == 1
+        errors.append(capsys.readouterr().err)
+    assert errors[0] == errors[1] and errors[0].startswith(f"error: {log}:4: {message}")

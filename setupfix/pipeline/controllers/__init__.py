@@ -16,7 +16,7 @@ from collections.abc import Callable, Sequence
 
 from setupfix.errors import ParameterError
 from setupfix.offsets import OffsetRow
-from setupfix.pipeline.controllers.current import read_current
+from parsers.current import read_current
 
 __all__ = ["CONTROLLERS", "render", "renderer", "read_current", "Renderer", "write_offsets"]
 
