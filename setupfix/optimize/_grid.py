@@ -45,10 +45,10 @@ from dataclasses import dataclass
 
 import numpy as np
 import numpy.typing as npt
-from scipy.sparse import coo_array, csr_array
 
 __all__ = ["TOL", "grid_margins", "dual_bound", "pair_bound", "pair_structure", "PairStructure", "row_gcd", "rounded_rhs", "next_level",
-           "least_distance", "nnls_least_distance", "least_distance_system", "lagrangian_ball", "enumerate_ball", "ellipsoid_search"]
+           "least_distance", "nnls_least_distance", "least_distance_system", "lagrangian_ball", "enumerate_ball",
+           "ellipsoid_search"]
 
 Array = npt.NDArray[np.float64]
 
@@ -514,34 +514,3 @@ def ellipsoid_search(g_rows: Array, g: Array, level: float, centre: Array, q: fl
             return best, True, listed
         radius2 = min(radius2 * 4, cap)
 
-
-def chord_rows(pairs: list[tuple[int, int]], n: int, width: int) -> tuple[csr_array, npt.NDArray[np.float64]]:
-    """Chord cuts of k² on the integers: ``s_i ≥ (2j+1)·|k_i| − j(j+1)`` for each (i, j).
-
-    On integers k² is exactly the upper envelope of these chords, so with enough of them
-    Σ s_i is Σ k_i² (the least-norm stage, eq. 9, as an exact MILP).
-
-    Parameters
-    ----------
-    pairs : list of (i, j)
-        Register index i and chord j ≥ 0; each pair gives the two rows for +k_i and −k_i.
-    n : int
-        Number of registers: columns 0…n−1 are k, n…2n−1 are s.
-    width : int
-        Total number of columns of the model (≥ 2n; the rest are zero here).
-
-    Returns
-    -------
-    A : csr_array of shape (2·len(pairs), width)
-        Rows ``±(2j+1)·k_i − s_i``.
-    rhs : ndarray of shape (2·len(pairs),)
-        Upper bounds ``j(j+1)``.
-    """
-    i = np.array([p[0] for p in pairs for _ in (0, 1)])
-    j = np.array([p[1] for p in pairs for _ in (0, 1)], dtype=float)
-    sign = np.tile([1.0, -1.0], len(pairs))
-    m = len(i)
-    rows = np.r_[np.arange(m), np.arange(m)]
-    cols = np.r_[i, n + i]
-    vals = np.r_[sign * (2 * j + 1), -np.ones(m)]
-    return csr_array(coo_array((vals, (rows, cols)), shape=(m, width))), j * (j + 1)
