@@ -1,11 +1,14 @@
 """Thin layer over HiGHS's own Python interface (highspy) for the exact optimiser.
 
 Why highspy and not scipy's ``linprog``/``milp``: scipy rebuilds the whole model and
-re-validates every option on each call; highspy keeps the solver model, so a batch
-of reports of one process model changes only the row bounds (the deviations).  Each
-run starts from a cleared solver (no basis or incumbent of an earlier report): where
-the least norm is attained at two grid points, the answer must not depend on which
-reports this thread solved before (batch workers would disagree).
+re-validates every option on each call; highspy keeps the solver model, so one solve can
+change only row bounds or add rows (lazy cuts) between runs.  Each run starts from a
+cleared solver (no basis or incumbent of an earlier run): where the least norm is attained
+at two grid points, the answer must depend on this model and start only.  HiGHS's run
+clock, though, is not cleared: it adds up over every run of one object, and its
+``time_limit`` applies to that sum, so :meth:`LinearModel.solve` sets the limit to the
+clock's reading plus the run's own allowance (and the exact optimiser keeps no model beyond
+one solve: :class:`~setupfix.optimize._session.Session`).
 
 Every solver object is created silent (``output_flag`` off: nothing may reach stdout,
 which carries ``--json``) and single-threaded (``threads`` = 1: the solves here are
@@ -59,7 +62,7 @@ class Solve:
         Duals of an LP or QP (HiGHS's signs: for a minimisation, ≤ 0 on a row or column at
         its upper bound, ≥ 0 at its lower bound).
     seconds : float
-        HiGHS's own run time.
+        HiGHS's own run time of this run.
     """
 
     status: str
@@ -182,8 +185,11 @@ class LinearModel:
     def solve(self, time_limit: float, start: Array | None = None) -> Solve:
         """Run HiGHS for at most ``time_limit`` seconds (optionally from a feasible ``start``)."""
         h = self.h
-        h.setOptionValue("time_limit", float(max(time_limit, 1e-3)))
+        # HiGHS's run clock adds up over every run of this object and its limit applies to that sum:
+        # the limit given is this run's own
+        h.setOptionValue("time_limit", float(h.getRunTime()) + float(max(time_limit, 1e-3)))
         h.clearSolver()  # the answer depends on this model and start only, never on earlier runs
+        clock = float(h.getRunTime())
         if start is not None and self.is_mip:
             h.setSolution(self.n_cols, self._cols, np.asarray(start, dtype=float))
         run = h.run()
@@ -203,4 +209,5 @@ class LinearModel:
             row_dual = np.array(sol.row_dual, dtype=float) if has_point else None
         col_dual = None if self.is_mip or not has_point else np.array(sol.col_dual, dtype=float)
         return Solve(status=status, detail=h.modelStatusToString(model_status), x=x, objective=objective,
-                     dual_bound=dual_bound, row_dual=row_dual, col_dual=col_dual, seconds=float(h.getRunTime()))
+                     dual_bound=dual_bound, row_dual=row_dual, col_dual=col_dual,
+                     seconds=float(h.getRunTime()) - clock)
