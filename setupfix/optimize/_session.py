@@ -6,7 +6,9 @@ report to the next — no basis, no incumbent, and no run clock (HiGHS adds the 
 every run of one model, and compares its time limit with that sum: a model kept across
 thousands of reports ended up with no time left at all).  The answer to a report is
 therefore the answer it gets in a fresh process, whatever was solved before and in which
-thread.
+thread.  Only data derived from G, the box and the costs (row gcds, pairs of rows, NNLS
+systems) is memoised across solves (:func:`derived`): pure functions of those bytes, kept
+read-only.
 
 Grid units (see :func:`setupfix.optimize._lp_bound.margin_rows`): corrections k in
 register steps, margin rows ``m_j(k) = g_j − G_j·k`` (eqs. 5–6 per dimension), error
@@ -15,6 +17,7 @@ budget ``t(k) = min_j m_j(k)`` (f1, eq. 8), norm ``f(k) = Σ c_i k_i²`` (f2, eq
 
 from __future__ import annotations
 
+import threading
 import time
 from dataclasses import dataclass, field
 
@@ -27,7 +30,7 @@ from setupfix.optimize._highs import INF, LinearModel, Solve
 from setupfix.optimize._least_norm import least_distance_working_set
 from setupfix.optimize._settings import ExactSettings
 
-__all__ = ["Clock", "GridRows", "Relaxation", "Session"]
+__all__ = ["Clock", "Derived", "GridRows", "Relaxation", "Session", "derived"]
 
 Array = npt.NDArray[np.float64]
 
@@ -51,8 +54,60 @@ class Clock:
 
 
 @dataclass(frozen=True)
+class Derived:
+    """Data derived from G, the box and the costs alone (never from a report's deviations).
+
+    Attributes
+    ----------
+    d : ndarray of shape (r,)
+        Per-row gcd of integer rows (0: not all integers) — :func:`~setupfix.optimize._grid.row_gcd`.
+    zero : ndarray of bool, shape (r,)
+        Rows with no coefficient (every register fixed for that dimension).
+    pairs : PairStructure or None
+        Opposite integer rows (:func:`~setupfix.optimize._grid.pair_structure`).
+    nnls : dict
+        The b-independent NNLS systems (:func:`~setupfix.optimize._grid.least_distance_system`)
+        per set of finite rows, filled on first use.
+    """
+
+    d: Array
+    zero: npt.NDArray[np.bool_]
+    pairs: PairStructure | None
+    nnls: dict[bytes, tuple[Array, Array]] = field(default_factory=dict)
+
+
+#: Derived data of the last few (G, box, cost): pure functions of those bytes, read-only arrays, so a
+#: memo can never change an answer (it only spares a batch of one process model recomputing them).
+_DERIVED: dict[tuple[object, ...], Derived] = {}
+_DERIVED_MAX = 8
+_DERIVED_LOCK = threading.Lock()
+
+
+def _read_only(*arrays: Array) -> None:
+    for a in arrays:
+        a.flags.writeable = False
+
+
+def derived(g_rows: Array, kmin: Array, kmax: Array, cost: Array) -> Derived:
+    """:class:`Derived` of exactly these arrays (memoised by their bytes)."""
+    key = (g_rows.shape, g_rows.tobytes(), kmin.tobytes(), kmax.tobytes(), cost.tobytes())
+    found = _DERIVED.get(key)
+    if found is None:
+        pairs = pair_structure(g_rows, kmin, kmax)
+        found = Derived(row_gcd(g_rows), ~np.any(g_rows != 0, axis=1), pairs)
+        _read_only(found.d, found.zero)
+        if pairs is not None:
+            _read_only(pairs.inverse, pairs.ia, pairs.ib, pairs.d, pairs.zlo, pairs.zhi)
+        with _DERIVED_LOCK:
+            while len(_DERIVED) >= _DERIVED_MAX:
+                del _DERIVED[next(iter(_DERIVED))]
+            found = _DERIVED.setdefault(key, found)
+    return found
+
+
+@dataclass(frozen=True)
 class GridRows:
-    """The problem of one solve in grid units, with the data derived from G alone.
+    """The problem of one solve in grid units.
 
     Attributes
     ----------
@@ -60,12 +115,8 @@ class GridRows:
         G over the free registers; g : ndarray of shape (r,) (margin ≥ t ⇔ G k + t ≤ g).
     kmin, kmax, cost : ndarray of shape (n,)
         Register bounds [steps] and costs c_i of eq. 9.
-    d : ndarray of shape (r,)
-        Per-row gcd of integer rows (0: not all integers) — :func:`~setupfix.optimize._grid.row_gcd`.
-    zero : ndarray of bool, shape (r,)
-        Rows with no coefficient (every register fixed for that dimension).
-    pairs : PairStructure or None
-        Opposite integer rows (:func:`~setupfix.optimize._grid.pair_structure`).
+    derived : Derived
+        What follows from G, the box and the costs alone.
     """
 
     g_rows: Array
@@ -73,14 +124,22 @@ class GridRows:
     kmin: Array
     kmax: Array
     cost: Array
-    d: Array = field(init=False)
-    zero: npt.NDArray[np.bool_] = field(init=False)
-    pairs: PairStructure | None = field(init=False)
+    derived: Derived = field(init=False)
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "d", row_gcd(self.g_rows))
-        object.__setattr__(self, "zero", ~np.any(self.g_rows != 0, axis=1))
-        object.__setattr__(self, "pairs", pair_structure(self.g_rows, self.kmin, self.kmax))
+        object.__setattr__(self, "derived", derived(self.g_rows, self.kmin, self.kmax, self.cost))
+
+    @property
+    def d(self) -> Array:
+        return self.derived.d
+
+    @property
+    def zero(self) -> npt.NDArray[np.bool_]:
+        return self.derived.zero
+
+    @property
+    def pairs(self) -> PairStructure | None:
+        return self.derived.pairs
 
     @property
     def n_free(self) -> int:
@@ -98,6 +157,16 @@ class GridRows:
     def below(self, b: Array) -> float:
         """The next level down once the rounded rows ``b`` hold no grid point."""
         return next_level(self.g, self.d, b)
+
+    def nnls_system(self, keep: npt.NDArray[np.bool_]) -> tuple[Array, Array]:
+        """The b-independent NNLS system of the rows ``keep`` (memoised with :class:`Derived`)."""
+        key = keep.tobytes()
+        system = self.derived.nnls.get(key)
+        if system is None:
+            system = least_distance_system(self.g_rows[keep], self.cost)
+            _read_only(*system)
+            system = self.derived.nnls.setdefault(key, system)
+        return system
 
 
 @dataclass(frozen=True)
@@ -143,7 +212,6 @@ class Session:
         self.clock = Clock(time_limit) if clock is None else clock
         self._lp: LinearModel | None = None
         self._qp: LinearModel | None = None
-        self._nnls: dict[bytes, tuple[Array, Array]] = {}
 
     @property
     def small(self) -> bool:
@@ -183,11 +251,7 @@ class Session:
         rows = self.rows
         g_rows, kmin, kmax, cost = rows.g_rows, rows.kmin, rows.kmax, rows.cost
         if self.small:
-            keep = np.isfinite(b)
-            key = keep.tobytes()
-            if key not in self._nnls:  # the part of the NNLS system that does not depend on b
-                self._nnls[key] = least_distance_system(g_rows[keep], cost)
-            status, out = least_distance(g_rows, b, kmin, kmax, cost, self._nnls[key])
+            status, out = least_distance(g_rows, b, kmin, kmax, cost, rows.nnls_system(np.isfinite(b)))
             if status != "unknown":
                 return status, None if out is None else Relaxation(b, *out)
         elif self.settings.working_set_nnls:
