@@ -44,10 +44,10 @@ shared: :class:`~setupfix.optimize._settings.ExactSettings`.
    (eq. 9; cost = 1 by default).  The continuous QP (NNLS; on a working set of rows
    for large problems) gives a point and multipliers; the multipliers bound every
    feasible point's norm from below by an ellipsoid around that point
-   (:func:`~setupfix.optimize._grid.lagrangian_ball`), and the integer points inside
+   (:func:`~setupfix.optimize._listing.lagrangian_ball`), and the integer points inside
    it that could beat the best known point are listed exhaustively, pruned by the rows
    and by the Lagrangian dual bound of the coordinates not yet fixed
-   (:func:`~setupfix.optimize._grid.enumerate_ball`) — the least one is the proven grid
+   (:func:`~setupfix.optimize._listing.enumerate_ball`) — the least one is the proven grid
    least norm (ties: the lexicographically smallest).  If the best known point already meets the bound,
    nothing is listed.  Large problems (more than ``ellipsoid_max_registers`` free
    registers, or a list too long): a near-least incumbent from the least norm in the

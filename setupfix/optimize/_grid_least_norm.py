@@ -5,7 +5,7 @@ hold every such grid point.  In order, each step stopping as soon as it proves:
 
 1. the continuous least norm over b (NNLS, or HiGHS's QP) gives a point κ₀ and
    multipliers λ; the Lagrangian bound f(k) ≥ Σ c_i (k_i − κ_i)² + q holds for every
-   feasible k (:func:`~setupfix.optimize._grid.lagrangian_ball`);
+   feasible k (:func:`~setupfix.optimize._listing.lagrangian_ball`);
 2. small problems: the integer points of that ellipsoid which could beat the best known
    point are listed exhaustively — the least feasible one is the grid least norm;
 3. a near-least incumbent: heuristics, then the least norm in the unit box around the
@@ -25,7 +25,8 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
-from setupfix.optimize._grid import TOL, ellipsoid_search, grid_margins, lagrangian_ball
+from setupfix.optimize._grid import TOL, grid_margins
+from setupfix.optimize._listing import ellipsoid_search, lagrangian_ball
 from setupfix.optimize._least_norm import box_least_norm, chord_least_norm, descend, lagrangian_box
 from setupfix.optimize._session import Relaxation, Session
 

@@ -31,8 +31,9 @@ import numpy as np
 import numpy.typing as npt
 
 from setupfix.errors import Note
-from setupfix.optimize._grid import TOL, dual_bound, ellipsoid_search, grid_margins, lagrangian_ball, pair_bound
+from setupfix.optimize._grid import TOL, dual_bound, grid_margins, pair_bound
 from setupfix.optimize._highs import INF, LinearModel
+from setupfix.optimize._listing import ellipsoid_search, lagrangian_ball
 from setupfix.optimize._least_norm import box_least_norm
 from setupfix.optimize._lp_bound import LPBound
 from setupfix.optimize._session import Relaxation, Session

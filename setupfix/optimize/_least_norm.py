@@ -14,7 +14,7 @@ The pieces, each with what proves it:
   the whole problem empty (Farkas, checked against the box).  HiGHS's QP solver
   stalled on one of the 300 × 5,000 problems of ``bench/exact_scaling.py`` (seed 1).
 * :func:`lagrangian_box` — with the centre κ and value q of
-  :func:`~setupfix.optimize._grid.lagrangian_ball`, f(k) ≥ q + Σ c_i (k_i − κ_i)²
+  :func:`~setupfix.optimize._listing.lagrangian_ball`, f(k) ≥ q + Σ c_i (k_i − κ_i)²
   for every feasible k; on integers the right side is at least
   LB = q + Σ d_i (d_i: the least c_i (k_i − κ_i)² over integer k_i), a certified
   lower bound on the grid least norm, and every feasible k with f(k) ≤ F lies in the
@@ -134,7 +134,7 @@ def lagrangian_box(centre: Array, q: float, cost: Array, kmin: Array, kmax: Arra
     Parameters
     ----------
     centre, q
-        From :func:`~setupfix.optimize._grid.lagrangian_ball` (f(k) ≥ Σ c (k − centre)² + q
+        From :func:`~setupfix.optimize._listing.lagrangian_ball` (f(k) ≥ Σ c (k − centre)² + q
         for every feasible k).
     cost, kmin, kmax : ndarray of shape (n,)
     f_best : float

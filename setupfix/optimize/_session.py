@@ -83,7 +83,7 @@ _DERIVED_MAX = 8
 _DERIVED_LOCK = threading.Lock()
 
 
-def _read_only(*arrays: Array) -> None:
+def _read_only(*arrays: npt.NDArray[np.generic]) -> None:
     for a in arrays:
         a.flags.writeable = False
 
