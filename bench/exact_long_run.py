@@ -92,15 +92,15 @@ def main(argv: list[str] | None = None) -> None:
     lines = [
         "Exact optimiser: a long run in one process against a fresh process (issue 21, item 1)",
         f"command : python bench/exact_long_run.py --reports {args.reports} --sets {args.sets} --seed {args.seed}",
-        f"machine : {platform.machine()}, Python {platform.python_version()}, numpy {np.__version__}; "
-        f"wall time {wall:.1f} s; 1-min load average {os.getloadavg()[0]:.2f} at the end ({os.cpu_count()} cores)",
-        f"reports : {args.reports} in one process, one optimiser instance, default time limit; "
-        f"{args.sets} distinct sets (eqs. 12-13, seed {args.seed}) in turn",
+        (f"machine : {platform.machine()}, Python {platform.python_version()}, numpy {np.__version__}; "
+         f"wall time {wall:.1f} s; 1-min load average {os.getloadavg()[0]:.2f} at the end ({os.cpu_count()} cores)"),
+        (f"reports : {args.reports} in one process, one optimiser instance, default time limit; "
+         f"{args.sets} distinct sets (eqs. 12-13, seed {args.seed}) in turn"),
         f"fresh   : statuses of the distinct sets in a fresh process {dict(Counter(s for _, s in fresh))}",
         f"status  : {dict(statuses)}; first report not optimal: {first_stop or 'none'}",
         f"answers : {differ} of {args.reports} differ from the fresh process's",
-        f"time    : median {np.median(t) * 1e3:.2f} ms = {np.median(t) / ref:.2f}x reference "
-        f"({ref * 1e3:.3f} ms); last 500 reports median {np.median(t[-500:]) * 1e3:.2f} ms",
+        (f"time    : median {np.median(t) * 1e3:.2f} ms = {np.median(t) / ref:.2f}x reference "
+         f"({ref * 1e3:.3f} ms); last 500 reports median {np.median(t[-500:]) * 1e3:.2f} ms"),
     ]
     text = "\n".join(lines) + "\n"
     print(text, end="")

@@ -27,7 +27,7 @@ from scipy.sparse import coo_array, csr_array
 
 from setupfix.optimize._highs import INF, LinearModel
 
-__all__ = ["ChordProof", "chord_rows", "lazy_chords", "ROOT_LP_MULTIPLE"]
+__all__ = ["ROOT_LP_MULTIPLE", "ChordProof", "chord_rows", "lazy_chords"]
 
 Array = npt.NDArray[np.float64]
 

@@ -72,13 +72,13 @@ from __future__ import annotations
 
 import time
 from contextlib import AbstractContextManager
+from typing import ClassVar
 
 import numpy as np
 import numpy.typing as npt
 from threadpoolctl import ThreadpoolController
 
 from setupfix.errors import Note
-from setupfix.params import Interval
 from setupfix.optimize._base import Optimizer, make_result
 from setupfix.optimize._grid import TOL
 from setupfix.optimize._grid_least_norm import LeastNorm, grid_least_norm
@@ -89,12 +89,15 @@ from setupfix.optimize._problem import CorrectionProblem, OptimizeResult
 from setupfix.optimize._session import Clock, GridRows, Session
 from setupfix.optimize._settings import ExactSettings
 from setupfix.optimize._triage import triaged_result
+from setupfix.params import Constraint, Interval
 
 __all__ = ["ExactOptimizer", "ExactSettings", "margin_rows"]
 
 Array = npt.NDArray[np.float64]
 
 _CONTROLLER: ThreadpoolController | None = None
+#: The settings an optimiser gets by default (frozen: shared safely).
+DEFAULT_SETTINGS = ExactSettings()
 
 
 def _blas_single_thread() -> AbstractContextManager[object]:
@@ -126,7 +129,7 @@ class ExactOptimizer(Optimizer):
     """
 
     name = "exact"
-    _parameter_constraints = {
+    _parameter_constraints: ClassVar[dict[str, list[Constraint]]] = {
         "grid": [bool],
         "time_limit": [Interval(float, 0.0, None, closed="neither")],
         "seed": [Interval(int, 0, None), None],
@@ -134,7 +137,7 @@ class ExactOptimizer(Optimizer):
     }
 
     def __init__(self, *, grid: bool = True, time_limit: float = 2.0, seed: int | None = None,
-                 settings: ExactSettings = ExactSettings()) -> None:
+                 settings: ExactSettings = DEFAULT_SETTINGS) -> None:
         self.grid = grid
         self.time_limit = time_limit
         self.seed = seed

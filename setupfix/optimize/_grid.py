@@ -37,8 +37,20 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
-__all__ = ["TOL", "grid_margins", "dual_bound", "pair_bound", "pair_structure", "PairStructure", "row_gcd", "rounded_rhs", "next_level",
-           "least_distance", "nnls_least_distance", "least_distance_system"]
+__all__ = [
+    "TOL",
+    "PairStructure",
+    "dual_bound",
+    "grid_margins",
+    "least_distance",
+    "least_distance_system",
+    "next_level",
+    "nnls_least_distance",
+    "pair_bound",
+    "pair_structure",
+    "rounded_rhs",
+    "row_gcd",
+]
 
 Array = npt.NDArray[np.float64]
 

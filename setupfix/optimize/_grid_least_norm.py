@@ -26,11 +26,16 @@ import numpy as np
 import numpy.typing as npt
 
 from setupfix.optimize._grid import TOL, grid_margins
+from setupfix.optimize._least_norm import (
+    box_least_norm,
+    chord_least_norm,
+    descend,
+    lagrangian_box,
+)
 from setupfix.optimize._listing import ellipsoid_search, lagrangian_ball
-from setupfix.optimize._least_norm import box_least_norm, chord_least_norm, descend, lagrangian_box
 from setupfix.optimize._session import Relaxation, Session
 
-__all__ = ["LeastNorm", "grid_least_norm", "chord_proof"]
+__all__ = ["LeastNorm", "chord_proof", "grid_least_norm"]
 
 Array = npt.NDArray[np.float64]
 

@@ -33,12 +33,12 @@ import numpy.typing as npt
 from setupfix.errors import Note
 from setupfix.optimize._grid import TOL, dual_bound, grid_margins, pair_bound
 from setupfix.optimize._highs import INF, LinearModel
-from setupfix.optimize._listing import ellipsoid_search, lagrangian_ball
 from setupfix.optimize._least_norm import box_least_norm
+from setupfix.optimize._listing import ellipsoid_search, lagrangian_ball
 from setupfix.optimize._lp_bound import LPBound
 from setupfix.optimize._session import Relaxation, Session
 
-__all__ = ["GridOptimum", "Level", "Listed", "Step", "Stop", "UnitBox", "grid_optimum", "LEVEL_STRATEGIES"]
+__all__ = ["LEVEL_STRATEGIES", "GridOptimum", "Level", "Listed", "Step", "Stop", "UnitBox", "grid_optimum"]
 
 Array = npt.NDArray[np.float64]
 

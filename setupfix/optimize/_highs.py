@@ -23,10 +23,19 @@ from dataclasses import dataclass
 
 import numpy as np
 import numpy.typing as npt
-from highspy._core import HessianFormat, HighsLp, HighsModelStatus, HighsStatus, HighsVarType, MatrixFormat, _Highs, kHighsInf
+from highspy._core import (
+    HessianFormat,
+    HighsModelStatus,
+    HighsStatus,
+    HighsVarType,
+    MatrixFormat,
+    ObjSense,
+    _Highs,
+    kHighsInf,
+)
 from scipy.sparse import csc_array
 
-__all__ = ["INF", "Solve", "LinearModel"]
+__all__ = ["INF", "Colwise", "LinearModel", "Solve"]
 
 Array = npt.NDArray[np.float64]
 INF = float(kHighsInf)
@@ -83,13 +92,47 @@ def new_solver() -> _Highs:
     return h
 
 
+@dataclass(frozen=True)
+class Colwise:
+    """A constraint matrix in HiGHS's column-wise form (pure data: may be shared between models).
+
+    Attributes
+    ----------
+    n_rows, n_cols : int
+    start : ndarray of int32, shape (n_cols + 1,)
+        Where each column's entries start in ``index``/``value``.
+    index : ndarray of int32, shape (nnz,)
+        Row of each entry.
+    value : ndarray of shape (nnz,)
+    """
+
+    n_rows: int
+    n_cols: int
+    start: npt.NDArray[np.int32]
+    index: npt.NDArray[np.int32]
+    value: Array
+
+    @classmethod
+    def of(cls, a: object) -> Colwise:
+        """From a dense array of shape (n_rows, n_cols) or any scipy sparse array."""
+        if isinstance(a, np.ndarray):  # dense (small models): column-wise arrays by numpy, no scipy round trip
+            at = np.asarray(a, dtype=float).T
+            nonzero = at != 0
+            start = np.r_[0, np.cumsum(np.sum(nonzero, axis=1))]
+            return cls(int(at.shape[1]), int(at.shape[0]), start.astype(np.int32),
+                       np.nonzero(nonzero)[1].astype(np.int32), at[nonzero])
+        mat = csc_array(a)
+        return cls(int(mat.shape[0]), int(mat.shape[1]), mat.indptr.astype(np.int32), mat.indices.astype(np.int32),
+                   np.asarray(mat.data, dtype=float))
+
+
 class LinearModel:
     """One LP/MILP ``min cᵀx, row_lo ≤ A x ≤ row_hi, col_lo ≤ x ≤ col_hi`` kept in HiGHS.
 
     Parameters
     ----------
     c : ndarray of shape (n_cols,)
-    a : ndarray of shape (n_rows, n_cols) or scipy sparse array
+    a : ndarray of shape (n_rows, n_cols), scipy sparse array or Colwise
     row_lo, row_hi : ndarray of shape (n_rows,)
     col_lo, col_hi : ndarray of shape (n_cols,)
     integer : ndarray of bool, shape (n_cols,), optional
@@ -98,39 +141,21 @@ class LinearModel:
 
     def __init__(self, c: Array, a: object, row_lo: Array, row_hi: Array, col_lo: Array, col_hi: Array,
                  integer: npt.NDArray[np.bool_] | None = None) -> None:
-        if isinstance(a, np.ndarray):  # dense (small models): column-wise arrays by numpy, no scipy round trip
-            at = np.asarray(a, dtype=float).T
-            nonzero = at != 0
-            start = np.r_[0, np.cumsum(np.sum(nonzero, axis=1))]
-            index, value = np.nonzero(nonzero)[1], at[nonzero]
-            self.n_cols, self.n_rows = int(at.shape[0]), int(at.shape[1])
-        else:
-            mat = csc_array(a)
-            start, index, value = mat.indptr, mat.indices, mat.data
-            self.n_cols = int(mat.shape[1])
-            self.n_rows = int(mat.shape[0])
-        lp = HighsLp()
-        lp.num_col_ = self.n_cols
-        lp.num_row_ = self.n_rows
-        lp.col_cost_ = np.asarray(c, dtype=float)
-        lp.col_lower_ = np.asarray(col_lo, dtype=float)
-        lp.col_upper_ = np.asarray(col_hi, dtype=float)
-        lp.row_lower_ = np.asarray(row_lo, dtype=float)
-        lp.row_upper_ = np.asarray(row_hi, dtype=float)
-        lp.a_matrix_.format_ = MatrixFormat.kColwise
-        lp.a_matrix_.start_ = np.asarray(start, dtype=np.int32)
-        lp.a_matrix_.index_ = np.asarray(index, dtype=np.int32)
-        lp.a_matrix_.value_ = np.asarray(value, dtype=float)
-        if integer is not None and np.any(integer):
-            lp.integrality_ = [HighsVarType.kInteger if i else HighsVarType.kContinuous for i in integer]
+        mat = a if isinstance(a, Colwise) else Colwise.of(a)
+        self.n_cols, self.n_rows = mat.n_cols, mat.n_rows
         self.is_mip = integer is not None and bool(np.any(integer))
+        kinds = np.zeros(self.n_cols, dtype=np.int32) if integer is None else np.asarray(integer, dtype=np.int32)
         self.h = new_solver()
         if self.is_mip:
             self.h.setOptionValue("mip_rel_gap", 0.0)
-        self._check(self.h.passModel(lp), "passModel")
+        # the arrays go to HiGHS as they are (column-wise, minimise, no offset; integrality 0/1 per column)
+        self._check(self.h.passModel(  # the array overload
+            self.n_cols, self.n_rows, int(mat.value.size), int(MatrixFormat.kColwise), int(ObjSense.kMinimize), 0.0,
+            np.asarray(c, dtype=float), np.asarray(col_lo, dtype=float), np.asarray(col_hi, dtype=float),
+            np.asarray(row_lo, dtype=float), np.asarray(row_hi, dtype=float), mat.start, mat.index, mat.value,
+            kinds), "passModel")
         self._rows = np.arange(self.n_rows, dtype=np.int32)
         self._cols = np.arange(self.n_cols, dtype=np.int32)
-        self.solved = False  # True once a run has left a basis to warm-start from
 
     @staticmethod
     def _check(status: HighsStatus, what: str) -> None:
@@ -193,7 +218,6 @@ class LinearModel:
         if start is not None and self.is_mip:
             h.setSolution(self.n_cols, self._cols, np.asarray(start, dtype=float))
         run = h.run()
-        self.solved = True
         model_status = h.getModelStatus()
         info = h.getInfo()
         status = _STATUS_NAMES.get(model_status, "error") if run != HighsStatus.kError else "error"

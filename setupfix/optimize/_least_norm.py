@@ -39,12 +39,18 @@ import numpy as np
 import numpy.typing as npt
 from scipy.sparse import coo_array, csr_array, hstack, vstack
 
-from setupfix.optimize._grid import TOL, grid_margins, nnls_least_distance
 from setupfix.optimize._chords import chord_rows, lazy_chords
+from setupfix.optimize._grid import TOL, grid_margins, nnls_least_distance
 from setupfix.optimize._highs import INF, LinearModel, Solve
 
-__all__ = ["least_distance_working_set", "lagrangian_box", "box_least_norm", "chord_least_norm", "descend",
-           "lower_bound_ratio"]
+__all__ = [
+    "box_least_norm",
+    "chord_least_norm",
+    "descend",
+    "lagrangian_box",
+    "least_distance_working_set",
+    "lower_bound_ratio",
+]
 
 Array = npt.NDArray[np.float64]
 

@@ -22,7 +22,7 @@ import numpy.typing as npt
 
 from setupfix.optimize._grid import TOL, grid_margins
 
-__all__ = ["WORK_LIMIT", "lagrangian_ball", "enumerate_ball", "ellipsoid_search"]
+__all__ = ["WORK_LIMIT", "ellipsoid_search", "enumerate_ball", "lagrangian_ball"]
 
 Array = npt.NDArray[np.float64]
 

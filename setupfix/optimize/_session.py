@@ -6,8 +6,8 @@ report to the next — no basis, no incumbent, and no run clock (HiGHS adds the 
 every run of one model, and compares its time limit with that sum: a model kept across
 thousands of reports ended up with no time left at all).  The answer to a report is
 therefore the answer it gets in a fresh process, whatever was solved before and in which
-thread.  Only data derived from G, the box and the costs (row gcds, pairs of rows, NNLS
-systems) is memoised across solves (:func:`derived`): pure functions of those bytes, kept
+thread.  Only data derived from G, the box and the costs (row gcds, pairs of rows, the LP's
+matrix, NNLS systems) is memoised across solves (:func:`derived`): pure functions of those bytes, kept
 read-only.
 
 Grid units (see :func:`setupfix.optimize._lp_bound.margin_rows`): corrections k in
@@ -24,9 +24,16 @@ from dataclasses import dataclass, field
 import numpy as np
 import numpy.typing as npt
 
-from setupfix.optimize._grid import (PairStructure, least_distance, least_distance_system, next_level,
-                                     pair_structure, rounded_rhs, row_gcd)
-from setupfix.optimize._highs import INF, LinearModel, Solve
+from setupfix.optimize._grid import (
+    PairStructure,
+    least_distance,
+    least_distance_system,
+    next_level,
+    pair_structure,
+    rounded_rhs,
+    row_gcd,
+)
+from setupfix.optimize._highs import INF, Colwise, LinearModel, Solve
 from setupfix.optimize._least_norm import least_distance_working_set
 from setupfix.optimize._settings import ExactSettings
 
@@ -65,6 +72,8 @@ class Derived:
         Rows with no coefficient (every register fixed for that dimension).
     pairs : PairStructure or None
         Opposite integer rows (:func:`~setupfix.optimize._grid.pair_structure`).
+    lp_matrix : Colwise
+        [G | 1], the matrix of the LP of eq. 8 (:meth:`Session.lp_model`).
     nnls : dict
         The b-independent NNLS systems (:func:`~setupfix.optimize._grid.least_distance_system`)
         per set of finite rows, filled on first use.
@@ -73,6 +82,7 @@ class Derived:
     d: Array
     zero: npt.NDArray[np.bool_]
     pairs: PairStructure | None
+    lp_matrix: Colwise
     nnls: dict[bytes, tuple[Array, Array]] = field(default_factory=dict)
 
 
@@ -94,8 +104,9 @@ def derived(g_rows: Array, kmin: Array, kmax: Array, cost: Array) -> Derived:
     found = _DERIVED.get(key)
     if found is None:
         pairs = pair_structure(g_rows, kmin, kmax)
-        found = Derived(row_gcd(g_rows), ~np.any(g_rows != 0, axis=1), pairs)
-        _read_only(found.d, found.zero)
+        lp_matrix = Colwise.of(np.hstack([g_rows, np.ones((g_rows.shape[0], 1))]))
+        found = Derived(row_gcd(g_rows), ~np.any(g_rows != 0, axis=1), pairs, lp_matrix)
+        _read_only(found.d, found.zero, lp_matrix.start, lp_matrix.index, lp_matrix.value)
         if pairs is not None:
             _read_only(pairs.inverse, pairs.ia, pairs.ib, pairs.d, pairs.zlo, pairs.zhi)
         with _DERIVED_LOCK:
@@ -221,8 +232,8 @@ class Session:
     def lp_model(self) -> LinearModel:
         """max t s.t. G k + t ≤ g, k in the box (eq. 8 as an LP; row bounds set per use)."""
         if self._lp is None:
-            g_rows, r = self.rows.g_rows, self.rows.g_rows.shape[0]
-            self._lp = LinearModel(np.r_[np.zeros(self.rows.n_free), -1.0], np.hstack([g_rows, np.ones((r, 1))]),
+            r = self.rows.g_rows.shape[0]
+            self._lp = LinearModel(np.r_[np.zeros(self.rows.n_free), -1.0], self.rows.derived.lp_matrix,
                                    np.full(r, -INF), np.zeros(r), np.r_[self.rows.kmin, -INF],
                                    np.r_[self.rows.kmax, INF])
         return self._lp

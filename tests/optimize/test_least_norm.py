@@ -10,11 +10,16 @@ import pytest
 
 import setupfix.optimize._grid_least_norm as least_norm_stage
 from setupfix.optimize import get_optimizer
-from setupfix.optimize._lp_bound import margin_rows
 from setupfix.optimize._grid import grid_margins, least_distance
+from setupfix.optimize._least_norm import (
+    box_least_norm,
+    descend,
+    lagrangian_box,
+    least_distance_working_set,
+    lower_bound_ratio,
+)
 from setupfix.optimize._listing import lagrangian_ball
-from setupfix.optimize._least_norm import (box_least_norm, descend, lagrangian_box, least_distance_working_set,
-                                           lower_bound_ratio)
+from setupfix.optimize._lp_bound import margin_rows
 
 from .test_exact_robust import shop_problem
 
