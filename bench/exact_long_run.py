@@ -12,7 +12,7 @@ the one a fresh process gives (a subprocess solving each distinct set once).
 
 Writes ``bench/results/exact_long_run.txt`` (with the command).  The time per report is
 given as a ratio to one vectorised ``problem.evaluate`` of 5,000 grid solutions (the
-reference of ``bench/exact_per_report.py``), timed in the same run.
+reference of ``bench/exact_per_report.py``), timed in the same run; BLAS single-threaded.
 """
 
 from __future__ import annotations
@@ -29,6 +29,7 @@ from collections import Counter
 from pathlib import Path
 
 import numpy as np
+from threadpoolctl import threadpool_limits
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
@@ -68,6 +69,7 @@ def main(argv: list[str] | None = None) -> None:
         fresh = pickle.loads(dst.read_bytes())
     optimizer = get_optimizer("exact")
     rng = np.random.default_rng(0)
+    limits = threadpool_limits(limits=1)  # BLAS single-threaded for the reference too, as in exact_per_report
     statuses: Counter[str] = Counter()
     differ, first_stop, times, refs = 0, None, [], []
     wall = time.perf_counter()
@@ -88,6 +90,7 @@ def main(argv: list[str] | None = None) -> None:
             first_stop = n + 1
         differ += not np.array_equal(result.x, fresh[i][0])
     wall = time.perf_counter() - wall
+    limits.unregister()
     t, ref = np.array(times), float(np.median(refs))
     lines = [
         "Exact optimiser: a long run in one process against a fresh process (issue 21, item 1)",
