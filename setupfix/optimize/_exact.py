@@ -7,8 +7,8 @@ keeps the numbers near 1–100 where the solver's tolerances are meaningful.
 
 Input quantum
 -------------
-Deviations are rounded to 1/1000 of the register resolution (``ExactSettings.quantum``) (1 nm on a 0.001 mm
-grid) before anything is solved, so the answer does not depend on the last bits
+Deviations are rounded to 1/1000 of the register resolution (1 nm on a 0.001 mm grid;
+``ExactSettings.quantum``) before anything is solved, so the answer does not depend on the last bits
 of the input: a report read from CSV and the same numbers computed in memory
 (``24.9691 − 25`` against ``-0.0309``) give the same corrections.  Limits are
 taken as the model states them.  Reported margins use the unrounded deviations.
@@ -60,8 +60,9 @@ shared: :class:`~setupfix.optimize._settings.ExactSettings`.
    proof, the best point is improved by coordinate descent and the result states a
    certified bound on ‖x‖ / least norm (``extra["norm_ratio_max"]``).
 
-One ``time_limit`` bounds the wall time of the whole solve.  The grid-optimum
-stage may use half of what is left, so the least-norm stage always runs: if a
+One ``time_limit`` bounds the wall time of the whole solve, counted from the solve's own
+start (each solve has its own session; nothing of an earlier solve's clock carries over).  The
+grid-optimum stage stops when ``least_norm_share`` of the limit is left, so the least-norm stage always runs: if a
 stage stops at the limit, its best point is used, the least-norm stage still
 shrinks the correction at the error budget reached, and the status, the message,
 ``notes`` and ``extra["stopped"]`` say which stage stopped and why.  The LP bound

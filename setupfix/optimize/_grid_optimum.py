@@ -26,6 +26,7 @@ from __future__ import annotations
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Literal
 
 import numpy as np
 import numpy.typing as npt
@@ -82,11 +83,15 @@ class Level:
         return self.stage_end - time.perf_counter()
 
 
+#: A strategy's verdict on one level (see the module text).
+Verdict = Literal["reached", "empty", "undecided", "give_up"]
+
+
 @dataclass(frozen=True)
 class Step:
     """A strategy's answer at one level (see the module text); ``k`` a grid point found (shape (n,))."""
 
-    verdict: str
+    verdict: Verdict
     k: Array | None = None
     relaxation: Relaxation | None = None
     text: str = ""  # path entry when reached, or when the lowered level is attained (empty)
@@ -246,7 +251,7 @@ def grid_optimum(session: Session, bound: LPBound) -> GridOptimum:
             break
         level = Level(tau, rows.rounded(tau), k_best, t_best, None, stage_end)
         calls += 1
-        verdict = "give_up"  # when every strategy is undecided
+        verdict: Verdict = "give_up"  # when every strategy is undecided
         for strategy in LEVEL_STRATEGIES:
             step = strategy(session, level)
             calls += step.calls
