@@ -1,11 +1,14 @@
 """Thin layer over HiGHS's own Python interface (highspy) for the exact optimiser.
 
 Why highspy and not scipy's ``linprog``/``milp``: scipy rebuilds the whole model and
-re-validates every option on each call; highspy keeps the solver model, so a batch
-of reports of one process model changes only the row bounds (the deviations).  Each
-run starts from a cleared solver (no basis or incumbent of an earlier report): where
-the least norm is attained at two grid points, the answer must not depend on which
-reports this thread solved before (batch workers would disagree).
+re-validates every option on each call; highspy keeps the solver model, so one solve can
+change only row bounds or add rows (lazy cuts) between runs.  Each run starts from a
+cleared solver (no basis or incumbent of an earlier run): where the least norm is attained
+at two grid points, the answer must depend on this model and start only.  HiGHS's run
+clock, though, is not cleared: it adds up over every run of one object, and its
+``time_limit`` applies to that sum, so :meth:`LinearModel.solve` sets the limit to the
+clock's reading plus the run's own allowance (and the exact optimiser keeps no model beyond
+one solve: :class:`~setupfix.optimize._session.Session`).
 
 Every solver object is created silent (``output_flag`` off: nothing may reach stdout,
 which carries ``--json``) and single-threaded (``threads`` = 1: the solves here are
@@ -20,10 +23,19 @@ from dataclasses import dataclass
 
 import numpy as np
 import numpy.typing as npt
-from highspy._core import HessianFormat, HighsLp, HighsModelStatus, HighsStatus, HighsVarType, MatrixFormat, _Highs, kHighsInf
+from highspy._core import (
+    HessianFormat,
+    HighsModelStatus,
+    HighsStatus,
+    HighsVarType,
+    MatrixFormat,
+    ObjSense,
+    _Highs,
+    kHighsInf,
+)
 from scipy.sparse import csc_array
 
-__all__ = ["INF", "Solve", "LinearModel"]
+__all__ = ["INF", "Colwise", "LinearModel", "Solve"]
 
 Array = npt.NDArray[np.float64]
 INF = float(kHighsInf)
@@ -59,7 +71,7 @@ class Solve:
         Duals of an LP or QP (HiGHS's signs: for a minimisation, ≤ 0 on a row or column at
         its upper bound, ≥ 0 at its lower bound).
     seconds : float
-        HiGHS's own run time.
+        HiGHS's own run time of this run.
     """
 
     status: str
@@ -80,13 +92,47 @@ def new_solver() -> _Highs:
     return h
 
 
+@dataclass(frozen=True)
+class Colwise:
+    """A constraint matrix in HiGHS's column-wise form (pure data: may be shared between models).
+
+    Attributes
+    ----------
+    n_rows, n_cols : int
+    start : ndarray of int32, shape (n_cols + 1,)
+        Where each column's entries start in ``index``/``value``.
+    index : ndarray of int32, shape (nnz,)
+        Row of each entry.
+    value : ndarray of shape (nnz,)
+    """
+
+    n_rows: int
+    n_cols: int
+    start: npt.NDArray[np.int32]
+    index: npt.NDArray[np.int32]
+    value: Array
+
+    @classmethod
+    def of(cls, a: object) -> Colwise:
+        """From a dense array of shape (n_rows, n_cols) or any scipy sparse array."""
+        if isinstance(a, np.ndarray):  # dense (small models): column-wise arrays by numpy, no scipy round trip
+            at = np.asarray(a, dtype=float).T
+            nonzero = at != 0
+            start = np.r_[0, np.cumsum(np.sum(nonzero, axis=1))]
+            return cls(int(at.shape[1]), int(at.shape[0]), start.astype(np.int32),
+                       np.nonzero(nonzero)[1].astype(np.int32), at[nonzero])
+        mat = csc_array(a)
+        return cls(int(mat.shape[0]), int(mat.shape[1]), mat.indptr.astype(np.int32), mat.indices.astype(np.int32),
+                   np.asarray(mat.data, dtype=float))
+
+
 class LinearModel:
     """One LP/MILP ``min cᵀx, row_lo ≤ A x ≤ row_hi, col_lo ≤ x ≤ col_hi`` kept in HiGHS.
 
     Parameters
     ----------
     c : ndarray of shape (n_cols,)
-    a : ndarray of shape (n_rows, n_cols) or scipy sparse array
+    a : ndarray of shape (n_rows, n_cols), scipy sparse array or Colwise
     row_lo, row_hi : ndarray of shape (n_rows,)
     col_lo, col_hi : ndarray of shape (n_cols,)
     integer : ndarray of bool, shape (n_cols,), optional
@@ -95,39 +141,21 @@ class LinearModel:
 
     def __init__(self, c: Array, a: object, row_lo: Array, row_hi: Array, col_lo: Array, col_hi: Array,
                  integer: npt.NDArray[np.bool_] | None = None) -> None:
-        if isinstance(a, np.ndarray):  # dense (small models): column-wise arrays by numpy, no scipy round trip
-            at = np.asarray(a, dtype=float).T
-            nonzero = at != 0
-            start = np.r_[0, np.cumsum(np.sum(nonzero, axis=1))]
-            index, value = np.nonzero(nonzero)[1], at[nonzero]
-            self.n_cols, self.n_rows = int(at.shape[0]), int(at.shape[1])
-        else:
-            mat = csc_array(a)
-            start, index, value = mat.indptr, mat.indices, mat.data
-            self.n_cols = int(mat.shape[1])
-            self.n_rows = int(mat.shape[0])
-        lp = HighsLp()
-        lp.num_col_ = self.n_cols
-        lp.num_row_ = self.n_rows
-        lp.col_cost_ = np.asarray(c, dtype=float)
-        lp.col_lower_ = np.asarray(col_lo, dtype=float)
-        lp.col_upper_ = np.asarray(col_hi, dtype=float)
-        lp.row_lower_ = np.asarray(row_lo, dtype=float)
-        lp.row_upper_ = np.asarray(row_hi, dtype=float)
-        lp.a_matrix_.format_ = MatrixFormat.kColwise
-        lp.a_matrix_.start_ = np.asarray(start, dtype=np.int32)
-        lp.a_matrix_.index_ = np.asarray(index, dtype=np.int32)
-        lp.a_matrix_.value_ = np.asarray(value, dtype=float)
-        if integer is not None and np.any(integer):
-            lp.integrality_ = [HighsVarType.kInteger if i else HighsVarType.kContinuous for i in integer]
+        mat = a if isinstance(a, Colwise) else Colwise.of(a)
+        self.n_cols, self.n_rows = mat.n_cols, mat.n_rows
         self.is_mip = integer is not None and bool(np.any(integer))
+        kinds = np.zeros(self.n_cols, dtype=np.int32) if integer is None else np.asarray(integer, dtype=np.int32)
         self.h = new_solver()
         if self.is_mip:
             self.h.setOptionValue("mip_rel_gap", 0.0)
-        self._check(self.h.passModel(lp), "passModel")
+        # the arrays go to HiGHS as they are (column-wise, minimise, no offset; integrality 0/1 per column)
+        self._check(self.h.passModel(  # the array overload
+            self.n_cols, self.n_rows, int(mat.value.size), int(MatrixFormat.kColwise), int(ObjSense.kMinimize), 0.0,
+            np.asarray(c, dtype=float), np.asarray(col_lo, dtype=float), np.asarray(col_hi, dtype=float),
+            np.asarray(row_lo, dtype=float), np.asarray(row_hi, dtype=float), mat.start, mat.index, mat.value,
+            kinds), "passModel")
         self._rows = np.arange(self.n_rows, dtype=np.int32)
         self._cols = np.arange(self.n_cols, dtype=np.int32)
-        self.solved = False  # True once a run has left a basis to warm-start from
 
     @staticmethod
     def _check(status: HighsStatus, what: str) -> None:
@@ -182,12 +210,14 @@ class LinearModel:
     def solve(self, time_limit: float, start: Array | None = None) -> Solve:
         """Run HiGHS for at most ``time_limit`` seconds (optionally from a feasible ``start``)."""
         h = self.h
-        h.setOptionValue("time_limit", float(max(time_limit, 1e-3)))
+        # HiGHS's run clock adds up over every run of this object and its limit applies to that sum:
+        # the limit given is this run's own
+        h.setOptionValue("time_limit", float(h.getRunTime()) + float(max(time_limit, 1e-3)))
         h.clearSolver()  # the answer depends on this model and start only, never on earlier runs
+        clock = float(h.getRunTime())
         if start is not None and self.is_mip:
             h.setSolution(self.n_cols, self._cols, np.asarray(start, dtype=float))
         run = h.run()
-        self.solved = True
         model_status = h.getModelStatus()
         info = h.getInfo()
         status = _STATUS_NAMES.get(model_status, "error") if run != HighsStatus.kError else "error"
@@ -203,4 +233,5 @@ class LinearModel:
             row_dual = np.array(sol.row_dual, dtype=float) if has_point else None
         col_dual = None if self.is_mip or not has_point else np.array(sol.col_dual, dtype=float)
         return Solve(status=status, detail=h.modelStatusToString(model_status), x=x, objective=objective,
-                     dual_bound=dual_bound, row_dual=row_dual, col_dual=col_dual, seconds=float(h.getRunTime()))
+                     dual_bound=dual_bound, row_dual=row_dual, col_dual=col_dual,
+                     seconds=float(h.getRunTime()) - clock)

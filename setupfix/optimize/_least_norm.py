@@ -14,7 +14,7 @@ The pieces, each with what proves it:
   the whole problem empty (Farkas, checked against the box).  HiGHS's QP solver
   stalled on one of the 300 × 5,000 problems of ``bench/exact_scaling.py`` (seed 1).
 * :func:`lagrangian_box` — with the centre κ and value q of
-  :func:`~setupfix.optimize._grid.lagrangian_ball`, f(k) ≥ q + Σ c_i (k_i − κ_i)²
+  :func:`~setupfix.optimize._listing.lagrangian_ball`, f(k) ≥ q + Σ c_i (k_i − κ_i)²
   for every feasible k; on integers the right side is at least
   LB = q + Σ d_i (d_i: the least c_i (k_i − κ_i)² over integer k_i), a certified
   lower bound on the grid least norm, and every feasible k with f(k) ≤ F lies in the
@@ -39,12 +39,18 @@ import numpy as np
 import numpy.typing as npt
 from scipy.sparse import coo_array, csr_array, hstack, vstack
 
+from setupfix.optimize._chords import chord_rows, lazy_chords
 from setupfix.optimize._grid import TOL, grid_margins, nnls_least_distance
-from setupfix.optimize._grid import chord_rows as grid_chord_rows
 from setupfix.optimize._highs import INF, LinearModel, Solve
 
-__all__ = ["least_distance_working_set", "lagrangian_box", "box_least_norm", "chord_least_norm", "descend",
-           "lower_bound_ratio"]
+__all__ = [
+    "box_least_norm",
+    "chord_least_norm",
+    "descend",
+    "lagrangian_box",
+    "least_distance_working_set",
+    "lower_bound_ratio",
+]
 
 Array = npt.NDArray[np.float64]
 
@@ -134,7 +140,7 @@ def lagrangian_box(centre: Array, q: float, cost: Array, kmin: Array, kmax: Arra
     Parameters
     ----------
     centre, q
-        From :func:`~setupfix.optimize._grid.lagrangian_ball` (f(k) ≥ Σ c (k − centre)² + q
+        From :func:`~setupfix.optimize._listing.lagrangian_ball` (f(k) ≥ Σ c (k − centre)² + q
         for every feasible k).
     cost, kmin, kmax : ndarray of shape (n,)
     f_best : float
@@ -270,12 +276,6 @@ def lower_bound_ratio(f_best: float, lower: float) -> float:
     return float(np.sqrt(f_best / lower))
 
 
-#: HiGHS looks at its clock only between the cut rounds of a MILP's root node, each some LP solves
-#: long, and overran short limits by seconds at shop scale: a chord MILP starts only when this many
-#: times the longest LP of its model is left (else the proof stops at the limit with its incumbent).
-ROOT_LP_MULTIPLE = 8.0
-
-
 def chord_least_norm(g_rows: Array, g: Array, level: float, b: Array, kmin: Array, kmax: Array, cost: Array,
                      best: Array | None, k_cont: Array, deadline: float, proof: bool = False
                      ) -> tuple[Array | None, bool, str, float]:
@@ -287,7 +287,8 @@ def chord_least_norm(g_rows: Array, g: Array, level: float, b: Array, kmin: Arra
     optimum (the LP is a relaxation and the vertex is a grid point) — the usual
     case when G is a network-like matrix of ±1 relations.  Otherwise the same model
     as a MILP, started from ``best``.  Chords are added where a solution violates
-    s_i ≥ k_i².  Stops at ``deadline`` (``time.perf_counter()``).
+    s_i ≥ k_i² (:func:`~setupfix.optimize._chords.lazy_chords`).  Stops at ``deadline``
+    (``time.perf_counter()``).
 
     Parameters
     ----------
@@ -317,57 +318,17 @@ def chord_least_norm(g_rows: Array, g: Array, level: float, b: Array, kmin: Arra
     for vc, vs in zip(np.abs(k_cont), ref):
         base = int(np.floor(vc))
         chords.append({max(base - 1, 0), base, base + 1, int(vs)})
-
-    def chord_rows(pairs: list[tuple[int, int]]) -> tuple[csr_array, Array]:
-        return grid_chord_rows(pairs, n, 2 * n)
-
-    a_chords, rhs = chord_rows([(i, j) for i, js in enumerate(chords) for j in sorted(js)])
+    a_chords, rhs = chord_rows([(i, j) for i, js in enumerate(chords) for j in sorted(js)], n, 2 * n)
     fin = np.isfinite(b)
     a = vstack([hstack([csr_array(g_rows[fin]), csr_array((int(fin.sum()), n))]), a_chords]).tocsr()
     model = LinearModel(np.r_[np.zeros(n), cost], a, np.full(a.shape[0], -INF), np.r_[b[fin], rhs],
                         np.r_[kmin, np.zeros(n)], np.r_[kmax, np.full(n, INF)])
     if proof:
         model.prefer_proof()
-    f_best = np.inf if best is None else float(np.sum(cost * best**2))
-    integer = False
-    lower = 0.0
-    lp_seconds = 0.0
-    while True:
-        left = deadline - time.perf_counter()
-        if left <= 0 or (integer and left < ROOT_LP_MULTIPLE * lp_seconds):
-            return best, False, "time limit", lower
-        started = time.perf_counter()
-        res = model.solve(left, None if best is None else np.r_[best, best**2])
-        if not integer:
-            lp_seconds = max(lp_seconds, time.perf_counter() - started)
-        bound_k = res.dual_bound if integer else (res.objective if res.status == "optimal" else np.nan)
-        if np.isfinite(bound_k):
-            lower = max(lower, float(bound_k))
-        if res.x is None or res.status not in ("optimal", "time_limit"):
-            why = "time limit" if res.status == "time_limit" else f"HiGHS: {res.detail}"
-            return best, False, why, lower
-        k_raw, s = res.x[:n], res.x[n:]
-        k = np.clip(np.rint(k_raw), kmin, kmax)
-        f_k = float(np.sum(cost * k**2))
-        feasible = bool(grid_margins(g_rows, g, k) >= level - TOL)
-        if feasible and f_k < f_best:
-            best, f_best = k, f_k
-        if res.status != "optimal":
-            return best, False, "time limit", lower
-        fractional = np.flatnonzero(np.abs(k_raw - k) > 1e-7)
-        if not integer and fractional.size:
-            new = [(int(i), int(np.floor(abs(k_raw[i])))) for i in fractional
-                   if int(np.floor(abs(k_raw[i]))) not in chords[i]]
-            if not new:
-                model.make_integer(np.arange(n))
-                integer = True
-                continue
-        else:
-            short = np.flatnonzero(s < k**2 - 1e-6)
-            if short.size == 0:
-                return best, bool(feasible and best is not None and f_best <= f_k), "", lower
-            new = [(int(i), int(abs(k[i]))) for i in short]
-        for i, j in new:
-            chords[i].add(j)
-        a_new, rhs_new = chord_rows(new)
-        model.add_rows(a_new, np.full(rhs_new.size, -INF), rhs_new)
+
+    def feasible(k: Array) -> bool:
+        return bool(grid_margins(g_rows, g, k) >= level - TOL)
+
+    out = lazy_chords(model, n, chords, cost, kmin, kmax, best, feasible, lambda k: np.r_[k, k**2], deadline,
+                      integer=False)
+    return out.best, out.proved, out.why, out.lower

@@ -12,7 +12,7 @@ register bounds, three exact MILPs in turn (lexicographic optimum):
    can have in the box).  Optimum t*.
 3. **Least norm**: min Σ c_i k_i² s.t. Σ z_q ≥ N*, G_j k ≤ g_j − t* + (M_j + t*)(1 − z_q(j)),
    with k_i² as the upper envelope of its chords (exact on integers), chords added
-   lazily where a solution violates s_i ≥ k_i².
+   lazily where a solution violates s_i ≥ k_i² (:func:`~setupfix.optimize._chords.lazy_chords`).
 
 No point can keep more than N* dimensions in tolerance, so every point that meets
 Σ z ≥ N* keeps exactly the dimensions with z = 1; the dimensions given up are read
@@ -27,11 +27,15 @@ import numpy as np
 import numpy.typing as npt
 from scipy.sparse import coo_array, csr_array, hstack, vstack
 
+from setupfix.errors import Note
+from setupfix.optimize._base import make_result
+from setupfix.optimize._chords import chord_rows, lazy_chords
 from setupfix.optimize._grid import TOL
-from setupfix.optimize._grid import chord_rows as grid_chord_rows
 from setupfix.optimize._highs import INF, LinearModel
+from setupfix.optimize._problem import CorrectionProblem, OptimizeResult
+from setupfix.optimize._session import Session
 
-__all__ = ["triage"]
+__all__ = ["triage", "triaged_result"]
 
 Array = npt.NDArray[np.float64]
 
@@ -126,11 +130,8 @@ def triage(g_rows: Array, g: Array, row_dim: npt.NDArray[np.intp], n_dims: int, 
     # 3. least Σ c k² with at least `kept` dimensions at margin ≥ t*: columns k, s, z
     bigs = big + t_star
 
-    def chord_rows(pairs: list[tuple[int, int]]) -> tuple[csr_array, Array]:
-        return grid_chord_rows(pairs, n, 2 * n + n_dims)
-
     chords = [{0, int(abs(v)), max(int(abs(v)) - 1, 0)} for v in best]
-    a_ch, rhs_ch = chord_rows([(i, j) for i, js in enumerate(chords) for j in sorted(js)])
+    a_ch, rhs_ch = chord_rows([(i, j) for i, js in enumerate(chords) for j in sorted(js)], n, 2 * n + n_dims)
     a3 = vstack([hstack([csr_array(g_rows), csr_array((r, n)), zmat.multiply(bigs[:, None])]),
                  csr_array(np.r_[np.zeros(2 * n), np.ones(n_dims)][None, :]), a_ch]).tocsr()
     m3 = LinearModel(np.r_[np.zeros(n), cost, np.zeros(n_dims)], a3,
@@ -142,26 +143,55 @@ def triage(g_rows: Array, g: Array, row_dim: npt.NDArray[np.intp], n_dims: int, 
         ok_k = in_tolerance(k)
         return bool(ok_k.sum() >= kept and (g - g_rows @ k)[ok_k[row_dim]].min() >= t_star - TOL)
 
-    f_best = float(np.sum(cost * best**2))
-    while True:
-        if left() <= 0:
-            return best, False, "least norm: time limit", tuple(done)
-        res = m3.solve(left(), np.r_[best, best**2, in_tolerance(best).astype(float)])
-        if res.x is None:
-            return best, False, f"least norm: {_status_word(res.status)}", tuple(done)
-        k = np.clip(np.rint(res.x[:n]), kmin, kmax)
-        s = res.x[n:2 * n]
-        f_k = float(np.sum(cost * k**2))
-        if feasible(k) and f_k < f_best:
-            best, f_best = k, f_k
-        if res.status != "optimal":
-            return best, False, f"least norm: {_status_word(res.status)}", tuple(done)
-        short = np.flatnonzero(s < k**2 - 1e-6)
-        if short.size == 0:
-            done.append("least norm")
-            return best, True, "", tuple(done)
-        new = [(int(i), int(abs(k[i]))) for i in short]
-        for i, j in new:
-            chords[i].add(j)
-        a_new, rhs_new = chord_rows(new)
-        m3.add_rows(a_new, np.full(rhs_new.size, -INF), rhs_new)
+    out = lazy_chords(m3, n, chords, cost, kmin, kmax, best, feasible,
+                      lambda k: np.r_[k, k**2, in_tolerance(k).astype(float)], deadline, integer=True)
+    if out.proved:
+        done.append("least norm")
+    best = best if out.best is None else out.best
+    return best, out.proved, "" if out.proved else f"least norm: {out.why}", tuple(done)
+
+
+def triaged_result(problem: CorrectionProblem, session: Session, k_start: Array, path: list[str],
+                   notes: list[Note], calls: int, bound: float, name: str) -> OptimizeResult:
+    """The triage stage: no correction brings every dimension into tolerance, so :func:`triage` decides.
+
+    The dimensions given up are read from the final point's own margins (below −quantum);
+    the result says which, and that they need the NC program or the process, not the setup.
+    """
+    rows, clock = session.rows, session.clock
+    upper_ok, lower_ok = np.isfinite(problem.upper), np.isfinite(problem.lower)
+    row_dim = np.r_[np.flatnonzero(upper_ok), np.flatnonzero(lower_ok)]
+    m = len(problem.dimension_ids)
+    k, proved, why, done = triage(rows.g_rows, rows.g, row_dim, m, rows.kmin, rows.kmax, rows.cost,
+                                  clock.deadline, k_start)
+    clock.lap("triage")
+    path.append("triage: " + ", ".join(done) if done else "triage")
+    x = np.zeros(problem.n_registers)
+    x[problem.free] = k * problem.resolution
+    margins = problem.margins(x)
+    quantum = session.settings.quantum * problem.resolution
+    given_up = tuple(d for d, v in zip(problem.dimension_ids, margins) if v < -quantum)
+    kept = margins >= -quantum
+    low = margins[kept].min() if kept.any() else 0.0
+    binding = tuple(d for d, v, ok in zip(problem.dimension_ids, margins, kept)
+                    if ok and v <= low + problem.resolution / 4)
+    message = (f"no correction within the register limits brings every dimension into tolerance: "
+               f"{len(given_up)} dimension(s) given up ({', '.join(given_up)}) need the NC program or the "
+               "process, not the setup; the other dimensions are kept in tolerance with the largest error "
+               "budget and the smallest correction")
+    notes.append(Note(message, kind="solver"))
+    status = "optimal"
+    extra: dict[str, object] = {"stages": dict(clock.stages), "path": "; ".join(path)}
+    if not proved:
+        status = "time_limit" if "time limit" in why else "solver_error"
+        notes.append(Note(f"triage not proved ({why})", kind="solver"))
+        message += f"; not proved ({why})"
+        extra["stopped"] = {"stage": "triage", "reason": why}
+    # guard off: triage trades the error budget of the hopeless dimensions on purpose, and says so
+    result = make_result(problem, x, optimizer=name, evaluations=calls + 3,
+                         seconds=time.perf_counter() - clock.start, status=status, bound=bound,
+                         message=message, binding=binding, guard=False)
+    result.extra.update(extra)
+    result.given_up = given_up
+    result.notes = tuple(notes)
+    return result

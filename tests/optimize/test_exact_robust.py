@@ -8,10 +8,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-import setupfix.optimize._exact as exact_module
 from setupfix.model import PartMeasurement
 from setupfix.optimize import CorrectionProblem, get_optimizer
 from setupfix.optimize._highs import Solve
+from setupfix.optimize._session import Session
+from setupfix.optimize._settings import ExactSettings
 from setupfix.pipeline.correct import load_parts
 
 from .test_exact import brute_force, random_problem
@@ -19,24 +20,22 @@ from .test_exact import brute_force, random_problem
 DATA = Path(__file__).resolve().parents[1] / "data" / "exact_solve_error"
 GUIDE_PINS = Path(__file__).resolve().parents[2] / "sample_reports" / "guide_pins"
 
-#: Module settings that switch the shortcuts off, so that each fallback is checked too.
+#: Settings that switch the shortcuts off, so that each fallback is checked too.
 PATHS = {
-    "shortcuts": {},
-    "grid MILP": {"LEVEL_STEPS": 0, "SEARCH_LIMIT": 0},
-    "box MILPs": {"ENUMERATION_LIMIT": 0, "SEARCH_LIMIT": 0},
-    "lazy chord MILP": {"ENUMERATION_LIMIT": 0, "SEARCH_LIMIT": 0, "BOX_PROOF_MAX_REGISTERS": 0},
-    "working-set NNLS": {"NNLS_MAX_ROWS": 0},
-    "HiGHS QP": {"NNLS_MAX_ROWS": 0, "WORKING_SET_NNLS": False},
+    "shortcuts": ExactSettings(),
+    "grid MILP": ExactSettings(level_steps=0, search_limit=0),
+    "box MILPs": ExactSettings(enumeration_limit=0, search_limit=0),
+    "lazy chord MILP": ExactSettings(enumeration_limit=0, search_limit=0, box_proof_max_registers=0),
+    "working-set NNLS": ExactSettings(nnls_max_rows=0),
+    "HiGHS QP": ExactSettings(nnls_max_rows=0, working_set_nnls=False),
 }
 
 
 @pytest.mark.parametrize("path", list(PATHS))
 @pytest.mark.parametrize("seed", range(6))
-def test_every_proof_path_equals_brute_force(path, seed, monkeypatch):
-    for name, value in PATHS[path].items():
-        monkeypatch.setattr(exact_module, name, value)
+def test_every_proof_path_equals_brute_force(path, seed):
     problem = random_problem(100 + seed, n=4, m=8, limit_steps=6)
-    result = get_optimizer("exact").solve(problem)
+    result = get_optimizer("exact", settings=PATHS[path]).solve(problem)
     best, norm = brute_force(problem)
     assert result.status == "optimal"
     assert result.margin_after == pytest.approx(best, abs=1e-12)
@@ -59,20 +58,18 @@ def test_solve_error_repro_is_optimal():
 
 
 def test_solver_error_is_retried_without_the_lower_bracket_and_reported(monkeypatch):
-    monkeypatch.setattr(exact_module, "LEVEL_STEPS", 0)
-    monkeypatch.setattr(exact_module, "SEARCH_LIMIT", 0)
-    real = exact_module.ExactOptimizer._max_margin_milp
+    real = Session.max_margin_milp
     brackets = []
 
-    def failing_once(self, g_rows, g, kmin, kmax, t_lo, t_hi, start, time_limit):
+    def failing_once(self, t_lo, t_hi, start, time_limit):  # HiGHS's "Solve error", once
         brackets.append(t_lo)
         if len(brackets) == 1:
             return Solve("error", "Solve error", None, float("nan"), float("nan"), None, None, 0.0)
-        return real(self, g_rows, g, kmin, kmax, t_lo, t_hi, start, time_limit)
+        return real(self, t_lo, t_hi, start, time_limit)
 
-    monkeypatch.setattr(exact_module.ExactOptimizer, "_max_margin_milp", failing_once)
+    monkeypatch.setattr(Session, "max_margin_milp", failing_once)
     problem = random_problem(1, n=4, m=8, limit_steps=6)  # in reach, and the rounded LP point is not optimal
-    result = get_optimizer("exact").solve(problem)
+    result = get_optimizer("exact", settings=ExactSettings(level_steps=0, search_limit=0)).solve(problem)
     assert len(brackets) == 2 and brackets[1] < brackets[0]  # the retry drops the lower bracket
     assert result.status == "optimal"
     assert result.margin_after == pytest.approx(brute_force(problem)[0], abs=1e-12)
@@ -174,16 +171,14 @@ def test_a_very_fine_grid_neither_hangs_nor_loses_the_bound(guide_pins_model):
 
 
 def test_the_answer_does_not_depend_on_the_reports_solved_before(guide_pins_model):
-    """Solver models are kept across reports; a solve must still start from scratch, or a report whose
-    least norm is attained at two grid points gets one or the other depending on history (batch
-    workers would then disagree).  The pair of reports below showed it."""
+    """A solve starts from scratch (its own session), or a report whose least norm is attained at two
+    grid points gets one or the other depending on history (batch workers would then disagree).  The
+    pair of reports below showed it when solver models were kept across reports."""
     data = Path(__file__).resolve().parent / "data"
     (before,) = load_parts(guide_pins_model, data / "history_before.csv")
     (tie,) = load_parts(guide_pins_model, data / "history_tie.csv")
     opt = get_optimizer("exact")
-    exact_module._THREAD.cache = exact_module._Cache()
     fresh = opt.solve(CorrectionProblem.from_part(guide_pins_model, tie))
-    exact_module._THREAD.cache = exact_module._Cache()
     opt.solve(CorrectionProblem.from_part(guide_pins_model, before))
     after = opt.solve(CorrectionProblem.from_part(guide_pins_model, tie))
     assert fresh.status == after.status == "optimal"

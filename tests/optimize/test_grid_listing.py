@@ -5,10 +5,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-import setupfix.optimize._exact as exact_module
 from setupfix.model import load_model
 from setupfix.optimize import CorrectionProblem, get_optimizer
-from setupfix.optimize._grid import enumerate_ball, ellipsoid_search, lagrangian_ball, least_distance
+from setupfix.optimize._grid import least_distance
+from setupfix.optimize._listing import ellipsoid_search, enumerate_ball, lagrangian_ball
+from setupfix.optimize._settings import ExactSettings
 from setupfix.pipeline.correct import load_parts
 
 from .test_exact import brute_force, random_problem
@@ -75,16 +76,15 @@ def test_a_level_with_no_grid_point_is_proved_by_listing_the_whole_box():
 
 
 @pytest.mark.parametrize("cycle", range(1, 6))
-def test_guide_pins_cycles_equal_the_milp_proofs(cycle, monkeypatch):
+def test_guide_pins_cycles_equal_the_milp_proofs(cycle):
     """The bundled cycles (28 dimensions × 10 registers, a box of 201¹⁰ grid points: no brute force):
     the listings' answer equals the MILP proofs' answer with a long limit; cycle 4 needs no MILP."""
     model = load_model(GUIDE_PINS / "model.toml")
     (part,) = load_parts(model, GUIDE_PINS / f"cycle_{cycle:02d}.csv")
     problem = CorrectionProblem.from_part(model, part)
     fast = get_optimizer("exact").solve(problem)
-    for name in ("ENUMERATION_LIMIT", "SEARCH_LIMIT"):
-        monkeypatch.setattr(exact_module, name, 0)
-    slow = get_optimizer("exact", time_limit=60.0).solve(problem)
+    no_listing = ExactSettings(enumeration_limit=0, search_limit=0)
+    slow = get_optimizer("exact", time_limit=60.0, settings=no_listing).solve(problem)
     assert fast.status == slow.status == "optimal"
     assert fast.margin_after == pytest.approx(slow.margin_after, abs=1e-12)
     assert fast.norm == pytest.approx(slow.norm, abs=1e-12)

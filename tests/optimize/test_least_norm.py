@@ -8,11 +8,18 @@ import time
 import numpy as np
 import pytest
 
-import setupfix.optimize._exact as exact_module
+import setupfix.optimize._grid_least_norm as least_norm_stage
 from setupfix.optimize import get_optimizer
-from setupfix.optimize._grid import grid_margins, lagrangian_ball, least_distance
-from setupfix.optimize._least_norm import (box_least_norm, descend, lagrangian_box, least_distance_working_set,
-                                           lower_bound_ratio)
+from setupfix.optimize._grid import grid_margins, least_distance
+from setupfix.optimize._least_norm import (
+    box_least_norm,
+    descend,
+    lagrangian_box,
+    least_distance_working_set,
+    lower_bound_ratio,
+)
+from setupfix.optimize._listing import lagrangian_ball
+from setupfix.optimize._lp_bound import margin_rows
 
 from .test_exact_robust import shop_problem
 
@@ -108,14 +115,13 @@ def test_a_stopped_least_norm_proof_returns_a_certified_near_least_correction(mo
     problem = shop_problem(100, 800, 1)  # 100 registers: the chord MILP in the Lagrangian box
     proven = get_optimizer("exact", time_limit=30.0).solve(problem)
     assert proven.status == "optimal"
-    real = exact_module.ExactOptimizer._chord_solve
+    real = least_norm_stage.chord_proof
 
-    def out_of_time(self, *args, **kwargs):
-        args = list(args)
-        args[10] = 0.0  # time_limit: the proof stops at once, as at the deadline
-        return real(self, *args, **kwargs)
+    def out_of_time(*args, **kwargs):
+        kwargs["time_limit"] = 0.0  # the proof stops at once, as at the deadline
+        return real(*args, **kwargs)
 
-    monkeypatch.setattr(exact_module.ExactOptimizer, "_chord_solve", out_of_time)
+    monkeypatch.setattr(least_norm_stage, "chord_proof", out_of_time)
     result = get_optimizer("exact", time_limit=30.0).solve(problem)
     assert result.status == "time_limit"
     assert result.extra["stopped"] == {"stage": "least norm", "reason": "time limit"}
@@ -125,5 +131,5 @@ def test_a_stopped_least_norm_proof_returns_a_certified_near_least_correction(mo
     assert 1.0 <= ratio < 1.1
     assert proven.norm - 1e-12 <= result.norm <= ratio * proven.norm + 1e-12
     x_steps = result.x / problem.resolution
-    assert grid_margins(*exact_module.margin_rows(problem), x_steps[problem.free]) >= result.margin_after / \
+    assert grid_margins(*margin_rows(problem), x_steps[problem.free]) >= result.margin_after / \
         problem.resolution - 1e-6

@@ -1,0 +1,89 @@
+"""The exact solver's structure: validated settings, stages in layers, typed stage results."""
+
+from __future__ import annotations
+
+import ast
+import dataclasses
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from setupfix.errors import ParameterError
+from setupfix.optimize import get_optimizer
+from setupfix.optimize._grid_optimum import LEVEL_STRATEGIES, GridOptimum
+from setupfix.optimize._lp_bound import lp_bound, margin_rows
+from setupfix.optimize._session import GridRows, Session
+from setupfix.optimize._settings import ExactSettings
+
+from .test_exact import brute_force, random_problem
+
+OPTIMIZE = Path(__file__).resolve().parents[2] / "setupfix" / "optimize"
+
+#: The exact solver's modules, bottom to top: each imports only solver modules of a lower rank.
+RANKS = {"_settings": 0, "_highs": 0, "_problem": 0, "_base": 1, "_grid": 1, "_chords": 1, "_listing": 2,
+         "_least_norm": 2, "_session": 3, "_lp_bound": 4, "_grid_optimum": 5, "_grid_least_norm": 5,
+         "_triage": 5, "_exact": 6}
+
+
+@pytest.mark.parametrize("module", sorted(RANKS))
+def test_solver_modules_import_only_lower_ranks(module):
+    tree = ast.parse((OPTIMIZE / f"{module}.py").read_text(encoding="utf-8"))
+    for node in ast.walk(tree):
+        if isinstance(node, ast.ImportFrom) and node.module and node.module.startswith("setupfix.optimize._"):
+            target = node.module.rsplit(".", 1)[1]
+            assert RANKS[target] < RANKS[module], f"{module} imports {target}"
+
+
+def test_solver_modules_keep_a_sensible_size():
+    for module in RANKS:
+        lines = (OPTIMIZE / f"{module}.py").read_text(encoding="utf-8").count("\n")
+        assert 100 <= lines <= 400, (module, lines)
+
+
+@pytest.mark.parametrize(("field", "value"), [("quantum", 0.0), ("level_steps", -1), ("box_share", 1.5),
+                                              ("working_set_nnls", 1), ("search_limit", 2.5)])
+def test_settings_are_validated_naming_the_field(field, value):
+    with pytest.raises(ParameterError, match=f"ExactSettings: {field}"):
+        ExactSettings(**{field: value})
+
+
+def test_settings_are_frozen_and_reach_the_optimizer_through_the_registry():
+    settings = ExactSettings(level_steps=0)
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        settings.level_steps = 3  # type: ignore[misc]
+    assert get_optimizer("exact", time_limit=1.0, settings=settings).settings is settings
+    with pytest.raises(ParameterError, match="settings"):
+        get_optimizer("exact", settings={"level_steps": 0})
+
+
+def test_a_coarser_quantum_rounds_the_deviations_it_says():
+    problem = random_problem(3)
+    _, g_fine = margin_rows(problem)
+    _, g_coarse = margin_rows(problem, quantum=0.5)
+    diff = np.abs(g_fine - g_coarse)
+    assert np.max(diff) <= 0.25 + 1e-12 and np.max(diff) > 0.01  # rounded to half steps, and it shows
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_stage_results_are_frozen_and_bracket_the_brute_force_optimum(seed):
+    problem = random_problem(100 + seed, n=4, m=8, limit_steps=6)
+    g_rows, g = margin_rows(problem)
+    free = problem.free
+    rows = GridRows(g_rows, g, problem.kmin[free].astype(float), problem.kmax[free].astype(float),
+                    problem.cost[free])
+    session = Session(rows, ExactSettings(), 10.0)
+    bound = lp_bound(session)
+    assert bound is not None
+    from setupfix.optimize._grid_optimum import grid_optimum
+
+    opt = grid_optimum(session, bound)
+    assert isinstance(opt, GridOptimum)
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        opt.t = 0.0  # type: ignore[misc]
+    best, _ = brute_force(problem)
+    assert opt.t * problem.resolution == pytest.approx(best, abs=1e-12)  # t* in steps, proved
+    assert opt.stopped is None and opt.upper >= opt.t - 1e-9
+    assert bound.t >= opt.upper - 1e-9  # LP bound ≥ grid bound ≥ grid optimum
+    assert [s.__name__ for s in LEVEL_STRATEGIES] == ["relax", "rounded_relaxation", "listing", "unit_boxes",
+                                                      "feasibility_milp"]

@@ -1,0 +1,77 @@
+"""A long run in one process gives every report the answer it gets in a fresh process (issue 21, item 1).
+
+HiGHS adds up the run time of every run of one solver object and compares its time limit
+with that sum.  Solver models kept across reports therefore ran out of time after a few
+thousand reports (at the default 2 s limit), and every later solve stopped at once.  Here
+the limit is 0.3 s, so kept models would be spent after some 600 reports of the paper's
+example; 1,200 reports must all come back optimal and equal to a fresh process's answers.
+(``bench/exact_long_run.py`` runs 6,000 at the default limit.)
+"""
+
+from __future__ import annotations
+
+import os
+import pickle
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+
+from setupfix.model import PartMeasurement
+from setupfix.optimize import CorrectionProblem, get_optimizer
+from setupfix.simulate import simulate_deviations
+
+ROOT = Path(__file__).resolve().parents[2]
+LIMIT = 0.3
+
+#: Solves each pickled problem once in this fresh process and pickles (x, status, path) back.
+FRESH = """
+import pickle, sys
+from setupfix.optimize import get_optimizer
+problems = pickle.load(open(sys.argv[1], "rb"))
+out = []
+for p in problems:
+    r = get_optimizer("exact", time_limit=float(sys.argv[3])).solve(p)
+    out.append((r.x, r.status, str(r.extra.get("path", ""))))
+pickle.dump(out, open(sys.argv[2], "wb"))
+"""
+
+
+def fresh_process(problems: list[CorrectionProblem], tmp_path: Path) -> list[tuple[np.ndarray, str, str]]:
+    src, dst = tmp_path / "problems.pkl", tmp_path / "answers.pkl"
+    src.write_bytes(pickle.dumps(problems))
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    subprocess.run([sys.executable, "-c", FRESH, str(src), str(dst), str(LIMIT)], check=True, env=env, cwd=ROOT)
+    answers: list[tuple[np.ndarray, str, str]] = pickle.loads(dst.read_bytes())
+    return answers
+
+
+def test_a_long_run_never_runs_out_of_time_and_equals_a_fresh_process(guide_pins_model, tmp_path):
+    devs, _ = simulate_deviations(guide_pins_model, 16, seed=3)
+    problems = [CorrectionProblem.from_part(guide_pins_model, PartMeasurement("c", "r", None, d, ("",) * d.size))
+                for d in devs]
+    fresh = fresh_process(problems, tmp_path)
+    # the reports a fresh process proves without a MILP (a few ms each: far from the limit on a busy machine)
+    quick = [i for i, (_, status, path) in enumerate(fresh) if status == "optimal" and "MILP" not in path]
+    assert len(quick) >= 8
+    optimizer = get_optimizer("exact", time_limit=LIMIT)
+    for n in range(1200):
+        i = quick[n % len(quick)]
+        result = optimizer.solve(problems[i])
+        assert result.status == "optimal", (n, result.extra.get("stopped"))
+        np.testing.assert_array_equal(result.x, fresh[i][0])
+
+
+def test_each_run_of_one_highs_model_has_its_own_time_limit():
+    """Runs of one model within a solve (lazy cuts, levels) each get the limit they are given."""
+    from setupfix.optimize._highs import INF, LinearModel
+
+    model = LinearModel(np.array([0.0, -1.0]), np.array([[1.0, 1.0], [-1.0, 1.0]]), np.full(2, -INF),
+                        np.array([1.0, 1.0]), np.array([-5.0, -INF]), np.array([5.0, INF]))
+    statuses = set()
+    while model.h.getRunTime() < 0.1:  # HiGHS's own clock, summed over the runs: twice the limit below
+        run = model.solve(0.05)
+        statuses.add(run.status)
+        assert run.seconds < 0.05
+    assert statuses == {"optimal"}
