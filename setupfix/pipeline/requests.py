@@ -85,7 +85,7 @@ class CycleOptions:
         if self.stations is None:
             return None
         if self.stations and isinstance(self.stations[0], tuple):
-            return {str(k): str(v) for k, v in self.stations}  # type: ignore[misc]
+            return {str(k): str(v) for k, v in self.stations}
         return [str(s) for s in self.stations]
 
     def kwargs(self) -> dict[str, Any]:
@@ -130,9 +130,9 @@ class SolveOptions:
         if self.time_limit is not None:
             if self.optimizer != "exact":
                 raise ParameterError(f"--time-limit applies to the exact optimizer, not {self.optimizer!r}")
-            if not (isinstance(self.time_limit, (int, float)) and math.isfinite(self.time_limit)
-                    and self.time_limit > 0):
-                raise ParameterError(f"--time-limit must be a positive number of seconds, got {self.time_limit!r}")
+        from setupfix.optimize import get_optimizer
+
+        get_optimizer(self.optimizer, seed=self.seed, **self.params())  # the optimiser's declared constraints
 
     def params(self) -> dict[str, Any]:
         """The optimiser's hyper-parameters (``time_limit`` when given)."""
@@ -216,7 +216,7 @@ def _stamp(text: object) -> np.datetime64 | None:
     if pd.isna(t):
         return None
     t = t.tz_convert("UTC").tz_localize(None) if t.tzinfo is not None else t
-    return np.datetime64(t.to_datetime64(), "ns")
+    return np.datetime64(t.value, "ns")
 
 
 @dataclass(frozen=True, eq=False)
