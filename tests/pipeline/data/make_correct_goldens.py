@@ -1,6 +1,7 @@
 """Write the goldens of ``setupfix correct`` (JSON, text, offsets) for the guide-pins cycles 1–5.
 
-Run from the repository root: ``PYTHONPATH=$PWD python tests/pipeline/data/make_correct_goldens.py``.
+Run from the repository root: ``PYTHONPATH=$PWD python tests/pipeline/data/make_correct_goldens.py``
+(``PYTHONPATH`` at a checkout of the tree the goldens should come from).
 The goldens were written by the tree *before* issue 20 (one use-case core) changed anything,
 so the test comparing with them pins that the refactoring kept every number.  Wall times
 (``seconds`` in JSON, the "ms" of the text head) are blanked.
@@ -114,6 +115,17 @@ def cases(tmp: Path) -> dict[str, list[str]]:
         out[f"costs_{k}"] = ["correct", "--model", costed, report]
         out[f"effects_{k}"] = ["correct", "--model", effects, report]
         out[f"ewma_{k}"] = ["correct", "--model", smooth, report, "--store", db]
+    tables = ROOT / "sample_reports" / "tables"
+    out["format_dmo"] = ["correct", "--model", GUIDE / "model.toml", GUIDE / "cycle_01.dmo"]
+    out["format_qif"] = ["correct", "--model", GUIDE / "model.toml", GUIDE / "cycle_01.qif"]
+    out["table_de"] = ["correct", "--model", GUIDE / "model.toml", tables / "cycle_01_de.csv"]
+    out["table_shop"] = ["correct", "--model", GUIDE / "model.toml", tables / "cycle_01_shop.csv",
+                         "--columns", tables / "cycle_01_shop.columns.toml"]
+    two = tmp / "two_cycles.csv"
+    lines = (GUIDE / "cycle_01.csv").read_text().splitlines()
+    two.write_text("\n".join(lines + (GUIDE / "cycle_02.csv").read_text().splitlines()[1:]) + "\n")
+    out["two_cycles"] = ["correct", "--model", costed, two]
+    out["two_cycles_part"] = ["correct", "--model", costed, two, "--part", "cycle 02"]
     out["controllers"] = ["correct", "--model", CONTROLLERS / "model.toml", CONTROLLERS / "report.csv",
                           "--current", CONTROLLERS / "current.csv"]
     return out
