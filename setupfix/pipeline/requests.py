@@ -14,22 +14,24 @@ import math
 from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import numpy.typing as npt
 import pandas as pd
 
-from parsers.temperature import TemperatureLog
 from setupfix.errors import MatchError, Note, ParameterError, SetupfixError, SourceLocation
 from setupfix.model import PartMeasurement, ProcessModel, match_parts
 from setupfix.optimize import OPTIMIZERS, CorrectionProblem, OptimizeResult
-from setupfix.pipeline.feedforward import ThermalFeedForward
 from setupfix.pose import PosedProblem, Smoothed, ewma_history
 from setupfix.relation import relation_matrices
 from setupfix.safety import Recommendation, budget
 from setupfix.store import Store
-from setupfix.thermal.persist import SavedModel
+
+if TYPE_CHECKING:  # the thermal modules bring scipy.signal (~0.5 s): loaded only with --thermal
+    from parsers.temperature import TemperatureLog
+    from setupfix.pipeline.feedforward import ThermalFeedForward
+    from setupfix.thermal.persist import SavedModel
 
 __all__ = ["ReadOptions", "CycleOptions", "SolveOptions", "ThermalInputs", "load_thermal", "CurrentOffsets",
            "History", "CorrectRequest", "CycleCorrection", "CorrectOutcome", "HISTORY"]
