@@ -22,7 +22,7 @@ import pandas as pd
 
 from setupfix.errors import MatchError, Note, ParameterError, SetupfixError, SourceLocation
 from setupfix.model import PartMeasurement, ProcessModel, match_parts
-from setupfix.optimize import OPTIMIZERS, CorrectionProblem, OptimizeResult
+from setupfix.optimize import OPTIMIZERS, CorrectionProblem, OptimizeResult, get_optimizer
 from setupfix.pose import PosedProblem, Smoothed, ewma_history
 from setupfix.relation import relation_matrices
 from setupfix.safety import Recommendation, budget
@@ -129,11 +129,8 @@ class SolveOptions:
     def __post_init__(self) -> None:
         if self.optimizer not in OPTIMIZERS:
             raise ParameterError(f"unknown optimizer {self.optimizer!r} (known: {', '.join(sorted(OPTIMIZERS))})")
-        if self.time_limit is not None:
-            if self.optimizer != "exact":
-                raise ParameterError(f"--time-limit applies to the exact optimizer, not {self.optimizer!r}")
-        from setupfix.optimize import get_optimizer
-
+        if self.time_limit is not None and self.optimizer != "exact":
+            raise ParameterError(f"--time-limit applies to the exact optimizer, not {self.optimizer!r}")
         get_optimizer(self.optimizer, seed=self.seed, **self.params())  # the optimiser's declared constraints
 
     def params(self) -> dict[str, Any]:
