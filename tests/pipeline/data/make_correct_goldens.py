@@ -12,6 +12,7 @@ from __future__ import annotations
 import contextlib
 import io
 import json
+import os
 import re
 import sys
 from pathlib import Path
@@ -20,6 +21,9 @@ ROOT = Path(__file__).resolve().parents[3]
 OUT = Path(__file__).resolve().parent / "correct_golden"
 GUIDE = ROOT / "sample_reports" / "guide_pins"
 CONTROLLERS = ROOT / "sample_reports" / "controllers"
+#: ../shared (SETUPFIX_SHARED elsewhere, as in tests/conftest.py): the CALYPSO report is not bundled.
+SHARED = Path(os.environ.get("SETUPFIX_SHARED", ROOT.parent / "shared"))
+CALYPSO = SHARED / "cmm-samples" / "calypso" / "CALYPSO_chr_PruefplanValidierungsbauteil1_16.txt"
 
 #: A guide-pins model with every pre-solve and post-solve safety setting and register costs.
 SAFETY = """
@@ -126,6 +130,12 @@ def cases(tmp: Path) -> dict[str, list[str]]:
     two.write_text("\n".join(lines + (GUIDE / "cycle_02.csv").read_text().splitlines()[1:]) + "\n")
     out["two_cycles"] = ["correct", "--model", costed, two]
     out["two_cycles_part"] = ["correct", "--model", costed, two, "--part", "cycle 02"]
+    if CALYPSO.exists():  # a 1.2 mm error: rejected; with the reject band widened, given up
+        calypso = ROOT / "sample_reports" / "calypso" / "model.toml"
+        wide = tmp / "calypso_wide.toml"
+        wide.write_text(calypso.read_text().replace("limit = 0.1\n", "limit = 0.1\n\n[safety]\nreject_band = 5.0\n", 1))
+        out["calypso_reject"] = ["correct", "--model", calypso, CALYPSO]
+        out["calypso_wide"] = ["correct", "--model", wide, CALYPSO]
     out["controllers"] = ["correct", "--model", CONTROLLERS / "model.toml", CONTROLLERS / "report.csv",
                           "--current", CONTROLLERS / "current.csv"]
     return out
