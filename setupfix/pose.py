@@ -338,7 +338,9 @@ def pose_problem(model: ProcessModel, part: PartMeasurement, *, smoothed: Smooth
     if note is not None:
         deviation = deviation + shift
         notes.append(note)
-        effects.append(RuleEffect("forecast", note.message, dimensions=dim_ids))
+        moved = tuple(d for d, v in zip(dim_ids, shift[keep]) if v != 0)
+        effects.append(RuleEffect("forecast", "deviations forecast to the next cycle by the model's [effects] "
+                                  "(drift, wear)", dimensions=moved))
     problem = CorrectionProblem.from_part(model, dataclasses.replace(part, deviation=deviation))
     if composite is None:  # … and relations
         composite, note = effects_composite(model)
