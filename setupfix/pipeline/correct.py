@@ -24,7 +24,7 @@ import parsers
 from setupfix.errors import ExportError, Note, ParameterError, SourceLocation
 from setupfix.model import PartMeasurement, ProcessModel, load_model
 from setupfix.optimize import CorrectionProblem, OptimizeResult, get_optimizer
-from setupfix.pipeline.cycles import load_parts, read_parts  # load_parts: re-exported for the tests and benches
+from setupfix.pipeline.cycles import load_parts, read_parts  # TODO(issue 20 merge): load_parts re-exported for tests/benches: import it from pipeline.cycles
 from setupfix.pipeline.requests import (CorrectOutcome, CorrectRequest, CurrentOffsets, CycleCorrection, CycleOptions,
                                         History, ReadOptions, SolveOptions, ThermalInputs)
 from setupfix.pose import Smoothed, pose_problem, recommend
