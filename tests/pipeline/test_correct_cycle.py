@@ -133,3 +133,23 @@ def test_thermal_feed_forward_is_a_step_of_the_use_case_and_requests_pickle(tmp_
 
     text = format_correction(fed)
     assert ff.line() in text and text.index(ff.line()) < text.index("error budget before")
+
+
+def test_load_request_reads_each_input_once_and_only_what_the_model_uses(tmp_path):
+    from setupfix.errors import SetupfixError
+    from setupfix.pipeline.correct import load_request
+
+    controllers = SAMPLES / "controllers"
+    req = load_request(controllers / "model.toml", current=controllers / "current.csv")
+    assert req.current is not None and req.current.source.endswith("current.csv") and req.history is None
+    assert req.current.wear_totals(req.model) == {"T5": req.current["T5"], "T12": req.current["T12"]}
+    smooth = tmp_path / "m.toml"
+    smooth.write_text((GUIDE_PINS / "model.toml").read_text() + "\n[safety]\newma = 0.5\n")
+    db = tmp_path / "h.db"
+    assert golden.run(["history", "import", "--db", db, "--model", smooth, *CYCLES])[0] == 0
+    assert load_request(smooth, store=db).history is not None
+    assert load_request(GUIDE_PINS / "model.toml", store=db).history is None  # λ = 1: nothing to smooth
+    with pytest.raises(SetupfixError, match="go together"):
+        load_request(GUIDE_PINS / "model.toml", thermal=tmp_path / "t.json")
+    with pytest.raises(SetupfixError, match="no history store"):
+        load_request(GUIDE_PINS / "model.toml", store=tmp_path / "none.db")
