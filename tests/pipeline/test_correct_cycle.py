@@ -10,13 +10,12 @@ import pytest
 
 from conftest import GUIDE_PINS, SAMPLES
 from setupfix.diagnose import Diagnoser
-from setupfix.errors import ParameterError
 from setupfix.model import PartMeasurement, load_model
 from setupfix.pipeline.compare import compare_report
 from setupfix.pipeline.correct import correct_cycle, correct_report
 from setupfix.pipeline.cycles import load_parts
 from setupfix.pipeline.diagnose import diagnose_reports, forecast_model
-from setupfix.pipeline.requests import CorrectRequest, CycleOptions, History, SolveOptions
+from setupfix.pipeline.requests import CorrectRequest, History
 from setupfix.store import open_store
 
 sys.path.insert(0, str(Path(__file__).resolve().parent / "data"))
@@ -79,17 +78,6 @@ def test_store_history_equals_the_parts_given_and_counts_a_part_once(tmp_path):
     assert last.recommendation.rules[0].rule == "ewma" and "over 4 earlier part(s)" in last.recommendation.rules[0].message
     plain = correct_report(CorrectRequest(model), CYCLES[-1]).cycles[0]
     assert any("needs the history store" in n.message for n in plain.notes)
-
-
-def test_requests_are_hashable_options_and_checked():
-    assert CycleOptions.of({"A7": "P1"}).station_map() == {"A7": "P1"}
-    assert CycleOptions.of(["P2", "P1"]).station_map() == ["P2", "P1"]
-    hash(CycleOptions.of(["P1"], part="x"))
-    assert SolveOptions(time_limit=1.5).params() == {"time_limit": 1.5}
-    with pytest.raises(ParameterError, match="applies to the exact optimizer"):
-        SolveOptions("pso", time_limit=1.0)
-    with pytest.raises(ParameterError, match="unknown optimizer"):
-        SolveOptions("magic")
 
 
 def test_outcome_reads_once_and_states_what_it_read():
