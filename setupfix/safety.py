@@ -16,8 +16,10 @@ difference check; ISO 14253-1 for decisions under measurement uncertainty):
 * **dead band** — when every change is within it the verdict is *hold*;
 * **EWMA** — deviations smoothed over consecutive reports (λ), reset on a tool change.
 
-:func:`recommend` chains them around any optimiser and returns a
-:class:`Recommendation` with its verdict and the list of rules that changed it.
+:func:`setupfix.pose.pose_problem` applies the rules that shape the problem (EWMA,
+guard band, cumulative limit, costs) and :func:`recommend` those after
+the solve, returning a :class:`Recommendation` with its verdict and the list of rules
+that changed it.
 """
 
 from __future__ import annotations
@@ -25,15 +27,21 @@ from __future__ import annotations
 import dataclasses
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 import numpy.typing as npt
 
+from setupfix.errors import Note
 from setupfix.objective import error_budget, margins
 from setupfix.optimize import CorrectionProblem, OptimizeResult
 
+if TYPE_CHECKING:  # pose builds the problem with these rules; recommend takes what it built
+    from setupfix.pose import PosedProblem
+
 __all__ = ["RuleEffect", "Policy", "Recommendation", "reject_mask", "guard_limits", "cumulative_bounds",
-           "apply_gain", "harmed_mask", "in_dead_band", "ewma", "ewma_series", "recommend", "VERDICTS"]
+           "apply_gain", "harmed_mask", "in_dead_band", "ewma", "ewma_series", "Smoothed", "ewma_history", "recommend",
+           "budget", "VERDICTS"]
 
 Array = npt.NDArray[np.float64]
 Mask = npt.NDArray[np.bool_]
@@ -219,6 +227,77 @@ def ewma_series(history: Array, lam: float) -> Array:
     return a
 
 
+@dataclass(frozen=True, eq=False)
+class Smoothed:
+    """The EWMA estimate of one cycle's deviations (step 2).
+
+    Attributes
+    ----------
+    deviation : ndarray of shape (n_dimensions,) [unit]
+        Model order, NaN where the cycle did not measure the dimension.
+    used : int
+        Earlier parts that entered the estimate (0: the estimate is the measurement).
+    lam : float
+        λ of the smoothing.
+    notes : tuple of Note
+        Why nothing was smoothed (no timestamp …).
+    """
+
+    deviation: Array
+    used: int
+    lam: float
+    notes: tuple[Note, ...] = ()
+
+
+def ewma_history(deviation: Array, now: np.datetime64 | None, times: npt.NDArray[np.datetime64], earlier: Array,
+                 log_times: npt.NDArray[np.datetime64], log_register: npt.NDArray[np.int64], log_delta: Array,
+                 log_reset: Mask, composite: Array, lam: float, *, limit: int = 50) -> Smoothed:
+    """EWMA of a cycle's deviations over the earlier parts, each shifted to the machine as it is now.
+
+    An earlier part's deviation y_k becomes y_k + Σ Δx·C over the corrections logged
+    after it was machined and up to ``now`` (eqs. 3–4), NaN on the dimensions a tool
+    changed since cuts (its wear restarted); then a_k = λ·y_k + (1 − λ)·a_{k−1}
+    (:func:`setupfix.safety.ewma_series`), the last row the current cycle.
+
+    Parameters
+    ----------
+    deviation : ndarray of shape (n_dimensions,)
+        The cycle as measured (NaN where not measured).
+    now : datetime64 or None
+        When the cycle was machined; None: nothing is smoothed.
+    times, earlier : ndarrays of shapes (n_parts,), (n_parts, n_dimensions)
+        Earlier parts (any order; only those before ``now`` count, the last ``limit``).
+    log_times, log_register, log_delta, log_reset : ndarrays of shape (n_log,)
+        Corrections log: time, register index (−1: not in the model), change, tool change.
+    composite : ndarray of shape (n_registers, n_dimensions)
+    lam : float in (0, 1]
+    """
+    if lam >= 1.0 or now is None:
+        return Smoothed(deviation, 0, lam)
+    before = np.flatnonzero(times < now)
+    if before.size == 0:
+        return Smoothed(deviation, 0, lam)
+    before = before[np.argsort(times[before], kind="stable")][-limit:]
+    rows = []
+    known = log_register >= 0
+    for k in before:
+        t = times[k]
+        since = known & (log_times > t) & (log_times <= now)
+        reset = np.zeros(composite.shape[1], dtype=bool)
+        shift = np.zeros(composite.shape[0])
+        for j, delta, tool_change in zip(log_register[since], log_delta[since], log_reset[since]):
+            if tool_change:
+                reset |= composite[j] != 0
+            elif np.isfinite(delta):
+                shift[j] += delta
+        row = earlier[k] + shift @ composite
+        row[reset] = np.nan
+        rows.append(row)
+    rows.append(deviation)
+    smoothed = ewma_series(np.vstack(rows), lam)
+    return Smoothed(np.where(np.isnan(deviation), np.nan, smoothed), int(before.size), lam)
+
+
 def _zero_result(problem: CorrectionProblem, optimizer: str, status: str, message: str) -> OptimizeResult:
     x = np.zeros(problem.n_registers)
     budget = problem.margin_before
@@ -227,73 +306,49 @@ def _zero_result(problem: CorrectionProblem, optimizer: str, status: str, messag
                           binding=problem.binding(x))
 
 
-def _with_cost(problem: CorrectionProblem, cost: Array) -> CorrectionProblem:
-    """The problem with the registers' least-norm weights (``CorrectionProblem.cost``)."""
-    if np.all(cost == 1.0):
-        return problem
-    return dataclasses.replace(problem, cost=np.asarray(cost, dtype=float))
-
-
 def _restrict(problem: CorrectionProblem, keep: Mask) -> CorrectionProblem:
     return dataclasses.replace(problem, composite=problem.composite[:, keep], deviation=problem.deviation[keep],
                                lower=problem.lower[keep], upper=problem.upper[keep],
                                dimension_ids=tuple(d for d, k in zip(problem.dimension_ids, keep) if k))
 
 
-def recommend(problem: CorrectionProblem, policy: Policy, solve: Callable[[CorrectionProblem], OptimizeResult],
-              *, optimizer: str = "exact", names: Mapping[str, str] | None = None,
-              measured: Array | None = None) -> Recommendation:
-    """Chain the safety rules around ``solve`` for one measured cycle.
+def _inside(values: Array, lower: Array, upper: Array) -> Mask:
+    return (values >= lower - 1e-12) & (values <= upper + 1e-12)
 
-    Order: reject band → guard band → cumulative limit → solve (per-step clamp =
-    register bounds; costs) → gain → no harm (given-up dimensions) → dead band.
+
+def recommend(posed: PosedProblem, solve: Callable[[CorrectionProblem], OptimizeResult], *,
+              optimizer: str = "exact", names: Mapping[str, str] | None = None) -> Recommendation:
+    """The rules after the solve, around ``solve(posed.guarded)``.
+
+    Order: reject band (on the part as measured: no solve at all) → solve → gain →
+    no harm (given-up dimensions) → dead band → clamp report.  The pre-solve rules
+    (``posed.effects``) head the rule list.
 
     Parameters
     ----------
-    problem : CorrectionProblem
-        The problem as measured (real tolerance limits, register limits as bounds).
-    policy : Policy
-        Settings aligned with ``problem``.
+    posed : PosedProblem
     solve : callable
         ``solve(problem) -> OptimizeResult`` (any optimiser).
     names : mapping, optional
         Dimension ID → name, for the messages.
-    measured : ndarray of shape (n_dimensions,), optional
-        The current report's own deviations when ``problem.deviation`` is a smoothed
-        estimate: the reject band judges the part as measured.
     """
     label = (lambda ids: ", ".join((names or {}).get(i, i) for i in ids))
+    problem, guarded, policy = posed.problem, posed.guarded, posed.policy
     ids = np.array(problem.register_ids, dtype=object)
     dims = np.array(problem.dimension_ids, dtype=object)
-    rules: list[RuleEffect] = []
     dev, lower, upper = problem.deviation, problem.lower, problem.upper
 
-    bad = reject_mask(dev if measured is None else measured, lower, upper, policy.reject_band)
+    bad = reject_mask(posed.measured, lower, upper, policy.reject_band)
     if bad.any():
         bad_ids = tuple(dims[bad])
         alarm = (f"REJECT: {label(bad_ids)} beyond the reject band (a broken tool, a bad measurement or a wrong "
                  "part?) — no correction; check the part and the measurement")
+        rules = [e for e in posed.effects if e.rule in ("ewma", "forecast")]
         rules.append(RuleEffect("reject", "deviation beyond the reject band: no correction", dimensions=bad_ids))
         result = _zero_result(problem, optimizer, "rejected", alarm)
         return Recommendation("reject", result.x, result, problem, tuple(rules), alarm=alarm)
 
-    guarded = problem
-    if np.any(policy.uncertainty > 0):
-        lo, up = guard_limits(lower, upper, policy.uncertainty, policy.guard_band)
-        guarded = dataclasses.replace(guarded, lower=lo, upper=up)
-        shrunk = tuple(dims[policy.uncertainty > 0])
-        rules.append(RuleEffect("guard_band", f"limits of {len(shrunk)} dimension(s) shrunk by "
-                                f"{policy.guard_band:g}·U (ISO 14253-1)", dimensions=shrunk))
-    if np.any(np.isfinite(policy.cumulative_limit)):
-        lb, ub = cumulative_bounds(problem.lb, problem.ub, policy.cumulative, policy.cumulative_limit,
-                                   problem.resolution)
-        tightened = (lb > problem.lb) | (ub < problem.ub)
-        guarded = dataclasses.replace(guarded, lb=lb, ub=ub)
-        if tightened.any():
-            rules.append(RuleEffect("cumulative_limit", "step bounds tightened so that the total since the last "
-                                    "reset stays within the cumulative limit", registers=tuple(ids[tightened])))
-    guarded = _with_cost(guarded, policy.cost)
-
+    rules = list(posed.effects)
     result = solve(guarded)
     x = np.asarray(result.x, dtype=float)
     given_up = tuple(result.given_up)
@@ -346,10 +401,6 @@ def recommend(problem: CorrectionProblem, policy: Policy, solve: Callable[[Corre
         rules.append(RuleEffect("clamp", "change at the register's per-step or cumulative limit",
                                 registers=at_limit))
     return Recommendation(verdict, x + 0.0, result, guarded, tuple(rules), given_up, at_limit)
-
-
-def _inside(values: Array, lower: Array, upper: Array) -> Mask:
-    return (values >= lower - 1e-12) & (values <= upper + 1e-12)
 
 
 def budget(problem: CorrectionProblem, x: Array) -> tuple[float, Array]:

@@ -1,100 +1,136 @@
-"""Smoothing over consecutive reports (EWMA λ) from the history store, reset on a tool change.
+"""The smoothing history: earlier parts and the corrections log as arrays, from the store or given.
 
-The estimate of each dimension is an exponentially weighted mean of the current
-report and the earlier parts of the same model held in the store (Siemens measuring
-cycles' mean value with weighting factor k = 1/λ; Renishaw/EZ-Comp running
-average).  An earlier part's deviation is first shifted by the corrections applied
-since it was machined (the corrections log, through the relation matrix), so every
-value describes the machine as it is now; a tool change since then drops that part's
-values of the dimensions the tool cuts (its wear restarted).
+The EWMA estimate of a cycle (``[safety] ewma`` = λ < 1) is an exponentially weighted mean
+of the cycle and the earlier parts of the same model (Siemens measuring cycles' mean value
+with weighting factor k = 1/λ; Renishaw/EZ-Comp running average).  :class:`History` holds
+what it needs as arrays — read once from the history store (``correct --store``) or built
+from the parts of a batch — and :func:`setupfix.safety.ewma_history` computes the estimate:
+each earlier part shifted by the corrections logged since (eqs. 3–4), reset on a tool change.
 """
 
 from __future__ import annotations
 
+import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
+import numpy.typing as npt
 import pandas as pd
 
-from setupfix.errors import SetupfixError
+from setupfix.errors import Note, SetupfixError
 from setupfix.model import PartMeasurement, ProcessModel, match_parts
 from setupfix.relation import relation_matrices
-from setupfix.safety import ewma_series
+from setupfix.safety import Smoothed, ewma_history
 from setupfix.store import Store
 
-__all__ = ["Smoothed", "smooth_part", "HISTORY"]
+__all__ = ["History", "HISTORY"]
 
-#: Earlier reports looked at, newest first (weights (1 − λ)^50 are negligible for λ ≥ 0.1).
+Array = npt.NDArray[np.float64]
+
+#: Earlier reports of the store looked at, newest first (weights (1 − λ)^50 are negligible for λ ≥ 0.1).
 HISTORY = 50
 
 
-@dataclass(frozen=True)
-class Smoothed:
-    """The smoothed deviations of one part and how many earlier parts entered them."""
-
-    deviation: np.ndarray
-    used: int
-    note: str = ""
-
-
-def _stamp(text: str | None) -> pd.Timestamp | None:
-    if not text:
+def _stamp(text: object) -> np.datetime64 | None:
+    if text is None or (isinstance(text, float) and math.isnan(text)) or text == "":
         return None
     try:
-        t = pd.Timestamp(text)
+        t = pd.Timestamp(str(text))
     except (ValueError, TypeError):
         return None
-    return t.tz_convert("UTC").tz_localize(None) if t.tzinfo is not None else t
+    if pd.isna(t):
+        return None
+    t = t.tz_convert("UTC").tz_localize(None) if t.tzinfo is not None else t
+    return np.datetime64(t.value, "ns")
 
 
-def smooth_part(model: ProcessModel, part: PartMeasurement, store: Store, lam: float) -> Smoothed:
-    """EWMA estimate of ``part``'s deviations (model order, NaN where not measured).
+@dataclass(frozen=True, eq=False)
+class History:
+    """What the smoothing of a cycle needs: the earlier parts and the corrections log, as arrays.
 
-    The part must carry a timestamp; earlier parts are those of the store's reports
-    (matched to ``model``; reports of other processes are left out) machined before it.
+    Attributes
+    ----------
+    times : ndarray of datetime64[ns], shape (n_parts,)
+        When each earlier part was machined.
+    deviations : ndarray of shape (n_parts, n_dimensions) [unit]
+        Their deviations in model order (NaN where not measured).
+    keys : tuple of str
+        Part names (a part already held is not added twice by :meth:`with_parts`).
+    log_times, log_register, log_delta, log_reset : ndarrays of shape (n_log,)
+        The corrections log: time, register index in the model (−1: not in it),
+        change [unit], tool change.
     """
-    now = _stamp(part.timestamp)
-    if lam >= 1.0:
-        return Smoothed(part.deviation, 0)
-    if now is None:
-        return Smoothed(part.deviation, 0, "no timestamp in the report: not smoothed")
-    earlier: list[tuple[pd.Timestamp, np.ndarray]] = []
-    for record in sorted(store.reports(), key=lambda r: r.imported_at, reverse=True)[:HISTORY]:
-        try:
-            parts = match_parts(model, store.measurements(record.sha256), source=record.name)
-        except SetupfixError:
-            continue
-        for p in parts:
-            t = _stamp(p.timestamp)
-            if t is not None and t < now:
-                earlier.append((t, p.deviation))
-    if not earlier:
-        return Smoothed(part.deviation, 0)
-    earlier.sort(key=lambda e: e[0])
-    earlier = earlier[-HISTORY:]
-    comp = relation_matrices(model).composite  # (registers, dimensions)
-    log = store.corrections()
-    times = [_stamp(str(t)) for t in log["timestamp"]] if len(log) else []
-    ids = model.register_ids
-    rows = []
-    for t, dev in earlier:
-        shift = np.zeros(len(ids))
-        reset = np.zeros(comp.shape[1], dtype=bool)
-        for (_, entry), when in zip(log.iterrows(), times):
-            if when is None or not (t < when <= now):
+
+    times: npt.NDArray[np.datetime64]
+    deviations: Array
+    keys: tuple[str, ...]
+    log_times: npt.NDArray[np.datetime64]
+    log_register: npt.NDArray[np.int64]
+    log_delta: Array
+    log_reset: npt.NDArray[np.bool_]
+
+    @classmethod
+    def empty(cls, model: ProcessModel) -> History:
+        t = np.array([], dtype="datetime64[ns]")
+        return cls(t, np.zeros((0, len(model.dimensions))), (), t.copy(), np.zeros(0, dtype=np.int64), np.zeros(0),
+                   np.zeros(0, dtype=bool))
+
+    @classmethod
+    def from_store(cls, model: ProcessModel, store: Store) -> History:
+        """The parts of the store's newest :data:`HISTORY` reports matched to ``model`` and its corrections log.
+
+        Reports of other processes (that do not match the model) are left out.
+        """
+        out = cls.empty(model)
+        parts: list[PartMeasurement] = []
+        for record in sorted(store.reports(), key=lambda r: r.imported_at, reverse=True)[:HISTORY]:
+            try:
+                parts += match_parts(model, store.measurements(record.sha256), source=record.name)
+            except SetupfixError:
+                continue
+        out = out.with_parts(parts)
+        log = store.corrections()
+        if not len(log):
+            return out
+        ids = model.register_ids
+        times, regs, deltas, resets = [], [], [], []
+        for _, entry in log.iterrows():
+            when = _stamp(entry["timestamp"])
+            if when is None:
                 continue
             try:
-                reg = model.register(str(entry["register"]))
+                j = ids.index(model.register(str(entry["register"])).id)
             except KeyError:
+                j = -1
+            times.append(when)
+            regs.append(j)
+            deltas.append(float(entry["delta"]) if pd.notna(entry["delta"]) else math.nan)
+            resets.append(str(entry.get("event") or "correction") == "tool_change")
+        return cls(out.times, out.deviations, out.keys, np.array(times, dtype="datetime64[ns]"),
+                   np.array(regs, dtype=np.int64), np.array(deltas, dtype=float), np.array(resets, dtype=bool))
+
+    def with_parts(self, parts: Sequence[PartMeasurement]) -> History:
+        """This history plus ``parts`` (those with a timestamp, not already held: same time and name)."""
+        held = set(zip(self.times.tolist(), self.keys))
+        times, devs, keys = list(self.times), list(self.deviations), list(self.keys)
+        for p in parts:
+            t = _stamp(p.timestamp)
+            if t is None or (t.tolist(), p.part) in held:
                 continue
-            j = ids.index(reg.id)
-            if str(entry.get("event") or "correction") == "tool_change":
-                reset |= comp[j] != 0
-            elif pd.notna(entry["delta"]):
-                shift[j] += float(entry["delta"])
-        row = dev + shift @ comp
-        row[reset] = np.nan
-        rows.append(row)
-    rows.append(part.deviation)
-    smoothed = ewma_series(np.vstack(rows), lam)
-    return Smoothed(np.where(np.isnan(part.deviation), np.nan, smoothed), len(earlier))
+            held.add((t.tolist(), p.part))
+            times.append(t)
+            devs.append(np.asarray(p.deviation, dtype=float))
+            keys.append(p.part)
+        width = self.deviations.shape[1]
+        return History(np.array(times, dtype="datetime64[ns]"),
+                       np.vstack(devs) if devs else np.zeros((0, width)), tuple(keys), self.log_times,
+                       self.log_register, self.log_delta, self.log_reset)
+
+    def smooth(self, model: ProcessModel, part: PartMeasurement, lam: float) -> Smoothed:
+        """The EWMA estimate of ``part`` over every held part machined before it (:func:`setupfix.safety.ewma_history`)."""
+        now = _stamp(part.timestamp)
+        if lam < 1.0 and now is None:
+            return Smoothed(part.deviation, 0, lam, (Note("no timestamp in the report: not smoothed", None, "ewma"),))
+        return ewma_history(part.deviation, now, self.times, self.deviations, self.log_times, self.log_register,
+                            self.log_delta, self.log_reset, relation_matrices(model).composite, lam, limit=HISTORY)
