@@ -9,7 +9,7 @@ from types import FrameType
 from typing import TYPE_CHECKING
 
 from setupfix.cli._choices import CONTROLLERS, OPTIMIZERS
-from setupfix.cli._common import add_report_options, report_options, whole_number
+from setupfix.cli._common import add_report_options, cycle_options, report_options, whole_number
 from setupfix.cli.exit_codes import OK, PARTIAL, REJECTED
 
 if TYPE_CHECKING:
@@ -59,11 +59,8 @@ def run(args: argparse.Namespace) -> int:
 
     model = load_model(args.model)
     current = read_current(args.current, model) if args.current else None
-    opts = report_options(args)
-    options = BatchOptions(optimizer=args.optimizer, seed=args.seed, format=opts["format"], unit=opts["unit"],
-                           encoding=opts["encoding"], columns=opts["columns"], lenient=opts["lenient"],
-                           parts_per_cycle=args.parts_per_cycle,
-                           strict=args.strict, current=current)
+    options = BatchOptions(optimizer=args.optimizer, seed=args.seed, current=current, **report_options(args),
+                           **cycle_options(args))
     previous = signal.signal(signal.SIGTERM, _terminate)
     try:
         with _Progress() as progress:

@@ -40,7 +40,7 @@ from setupfix.model import ProcessModel, load_model
 from setupfix.offsets import OffsetRow, csv_header, csv_lines, offset_rows
 from setupfix.pipeline.controllers import render
 from setupfix.pipeline.correct import correct_part, wear_totals
-from setupfix.pipeline.cycles import read_parts
+from setupfix.pipeline.cycles import Stations, read_parts
 from setupfix.store import Recommendation as StoreRecommendation
 from setupfix.store import Store
 
@@ -61,6 +61,7 @@ class BatchOptions:
     encoding: str | None = None
     columns: str | None = None
     lenient: bool = False
+    stations: Stations | None = None
     parts_per_cycle: int | None = None
     strict: bool = False
     current: Mapping[str, float] | None = None
@@ -106,31 +107,17 @@ class BatchSummary:
                 "seconds": round(self.seconds, 3), "written": self.written}
 
 
-def find_reports(root: str | Path) -> list[tuple[Path, int, int]]:
-    """Every regular file below ``root`` (sorted) with size and mtime_ns.
-
-    Hidden files and folders are left out, and so are files that are never reports
-    (:func:`parsers.never_a_report`: a process model, notes, the history store, the logs).
+def find_reports(root: str | Path) -> parsers.Listing:
+    """The reports below ``root`` under the one folder-walk policy (:func:`parsers.list_reports`).
 
     Raises
     ------
     ParameterError
         If ``root`` is not a folder.
     """
-    base = Path(root)
-    if not base.is_dir():
+    if not Path(root).is_dir():
         raise ParameterError(f"batch: {root} is not a folder")
-    found = []
-    for folder, dirs, files in os.walk(base):
-        dirs[:] = sorted(d for d in dirs if not d.startswith("."))
-        for name in sorted(files):
-            if name.startswith(".") or parsers.never_a_report(name):
-                continue
-            path = Path(folder) / name
-            st = path.lstat()
-            if path.is_file() and not path.is_symlink():
-                found.append((path, st.st_size, st.st_mtime_ns))
-    return found
+    return parsers.list_reports(root)
 
 
 # -- per-report work (runs in a worker process, or inline with one worker) --------------------
@@ -158,7 +145,7 @@ def _correct_one(path: str, size: int, mtime_ns: int) -> Outcome:
         if out.sha256 in o.skip:
             return out  # run_batch marks it "already processed"
         read, parts = read_parts(_MODEL, source, format=o.format, unit=o.unit, encoding=o.encoding,
-                                 columns=o.columns, parts_per_cycle=o.parts_per_cycle, strict=o.strict,
+                                 columns=o.columns, stations=o.stations, parts_per_cycle=o.parts_per_cycle, strict=o.strict,
                                  lenient=o.lenient)
         if o.record:  # the store records these very bytes and table: the parent reads nothing again
             out.data, out.table, out.format = source.data, read.table, read.format
@@ -281,7 +268,8 @@ def run_batch(model: ProcessModel | str | Path, folder: str | Path, out: str | P
         raise ParameterError(f"batch: workers must be an int in [1, 64], got {workers}")
     # An unknown controller, or a register it cannot express, fails before any work.
     render(controller, offset_rows(model, {}, current=options.current))
-    files = find_reports(folder)
+    listing = find_reports(folder)
+    files = [(f.path, f.size, f.mtime_ns) for f in listing.files]
     if workers is None:
         workers = auto_workers(len(files))
     if files:
@@ -289,6 +277,7 @@ def run_batch(model: ProcessModel | str | Path, folder: str | Path, out: str | P
         if youngest < settle:
             time.sleep(settle - youngest)
     summary = BatchSummary()
+    summary.failed += listing.problems  # named, never dropped: an unreadable folder, a broken link, …
     seen: dict[str, str] = {}
     writer: _CsvOut | _ProgramsOut = _CsvOut(out) if controller == "csv" else _ProgramsOut(out, controller)
     done = _batch_reports(store) if store is not None and not force else set()

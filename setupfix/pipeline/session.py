@@ -7,7 +7,6 @@ newest report in a watched folder once its writer has finished with it.
 
 from __future__ import annotations
 
-import os
 import time
 from datetime import datetime
 from collections.abc import Iterator, Mapping, Sequence
@@ -27,7 +26,7 @@ from setupfix.pipeline.cycles import assign_stations
 from setupfix.pipeline.view import MatchRow, match_rows, matched_rows
 from setupfix.store import CORRECTION_COLUMNS, Recommendation, open_store
 
-__all__ = ["OpenedReport", "open_report", "newest_report", "FolderWatch", "SKIPPED_SUFFIXES", "compare_steps", "store_parts", "offsets_text",
+__all__ = ["OpenedReport", "open_report", "newest_report", "FolderWatch", "compare_steps", "store_parts", "offsets_text",
            "record_applied"]
 
 
@@ -125,36 +124,16 @@ def offsets_text(opened: OpenedReport, controller: str, *, cycle: int | None = N
     return render(controller, rows, f"{results[0].part.report} {results[0].part.part}".strip())
 
 
-#: Files a watched folder ignores: partial downloads, editor and temporary files.
-SKIPPED_SUFFIXES: tuple[str, ...] = (".tmp", ".part", ".partial", ".crdownload", "~", ".swp", ".lock")
-
-
-
 def newest_report(folder: str | Path) -> Path | None:
-    """The most recently modified report candidate in ``folder`` (not recursive).
+    """The most recently modified report candidate in ``folder`` (not recursive), under the
+    one folder-walk policy (:func:`parsers.list_reports`); whether it is a report is for the
+    reader to say."""
+    found = _newest(parsers.list_reports(folder, recursive=False))
+    return None if found is None else found.path
 
-    Hidden files, sub-folders, :data:`SKIPPED_SUFFIXES` (files still being written) and
-    files that are never reports (:func:`parsers.never_a_report`: a model or the logs
-    kept beside the reports) are ignored; whether any other file is a report is for the
-    reader to say.
-    """
-    best: tuple[float, str] | None = None
-    try:
-        entries = list(os.scandir(folder))
-    except OSError:
-        return None
-    for entry in entries:
-        if entry.name.startswith(".") or entry.name.endswith(SKIPPED_SUFFIXES) or parsers.never_a_report(entry.name):
-            continue
-        try:
-            if not entry.is_file(follow_symlinks=False):
-                continue
-            key = (entry.stat().st_mtime, entry.name)
-        except OSError:
-            continue
-        if best is None or key > best:
-            best = key
-    return None if best is None else Path(folder) / best[1]
+
+def _newest(listing: parsers.Listing) -> parsers.FoundFile | None:
+    return max(listing.files, key=lambda f: (f.mtime_ns, f.path.name), default=None)
 
 
 class FolderWatch:
@@ -171,6 +150,10 @@ class FolderWatch:
         self.settle = settle
         self._pending: tuple[Path, int, int] | None = None
         self._done: set[tuple[str, int, int]] = set()
+        self._said: set[tuple[str, str]] = set()
+        #: What the last poll could not look at (an unreadable folder, a broken link …), each
+        #: (path, reason) once: the screen says them.
+        self.problems: tuple[tuple[str, str], ...] = ()
         for p in seen:
             stamp = self._stamp(Path(p))
             if stamp is not None:
@@ -185,13 +168,16 @@ class FolderWatch:
         return st.st_size, st.st_mtime_ns
 
     def poll(self) -> Path | None:
-        """The newest finished report not handed out before, else None."""
-        path = newest_report(self.folder)
-        if path is None:
+        """The newest finished report not handed out before, else None (new problems in :attr:`problems`)."""
+        listing = parsers.list_reports(self.folder, recursive=False)
+        self.problems = tuple(p for p in listing.problems if p not in self._said)
+        self._said.update(self.problems)
+        found = _newest(listing)
+        if found is None:
             self._pending = None
             return None
-        stamp = self._stamp(path)
-        if stamp is None or (str(path), *stamp) in self._done:
+        path, stamp = found.path, (found.size, found.mtime_ns)
+        if (str(path), *stamp) in self._done:
             return None
         if self._pending == (path, *stamp) or time.time() - stamp[1] / 1e9 >= self.settle:
             self._done.add((str(path), *stamp))

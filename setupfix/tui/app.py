@@ -279,6 +279,8 @@ class SetupfixApp(App[None]):
         if self.folder_watch is None:
             return
         path = self.folder_watch.poll()
+        for where, why in self.folder_watch.problems:  # named once each, never silently dropped
+            self.notify(f"{where}: {why}", title="folder", severity="warning", timeout=12)
         if path is not None:
             if self.report_path is not None:
                 self.notify(f"new report {path.name}", title="folder")

@@ -141,15 +141,21 @@ def test_many_reports_in_chunks_give_the_same_output_and_progress_order(tmp_path
 
 
 def test_files_kept_beside_reports_are_not_read_as_reports(tmp_path: Path) -> None:
-    """A model, notes, scripts, the store and the logs beside the reports are left out (they were
-    'failed' before, so a clean folder exited 4); reports of any extension are kept."""
-    from setupfix.pipeline.batch import find_reports
+    """A model, notes, scripts, the store, the logs and partial files beside the reports are left out
+    (they were 'failed' before, so a clean folder exited 4); every other file is tried, whatever its
+    extension; what cannot be looked at (a broken link) is named as failed, never dropped."""
+    import os
 
+    d = tmp_path / "in"
+    d.mkdir()
     for name in ("model.toml", "README.md", "generate.py", "setupfix.db", "setupfix.db-wal", "corrections.csv",
-                 "TEMPERATURES.csv", "r1.csv", "r2.qif", "values.json", "k.txt", "odd.report"):
-        (tmp_path / name).write_text("x")
-    assert [p.name for p, _, _ in find_reports(tmp_path)] == sorted(
-        ["r1.csv", "r2.qif", "values.json", "k.txt", "odd.report"])
+                 "TEMPERATURES.csv", "r1.csv", "r2.qif", "values.json", "k.txt", "odd.report", "r3.csv.part"):
+        (d / name).write_text("x")
+    os.symlink(d / "missing.csv", d / "gone.csv")
+    s = run_batch(MODEL, d, tmp_path / "out.csv", settle=0)
+    assert sorted(Path(f).name for f, _ in s.failed) == sorted(
+        ["gone.csv", "r1.csv", "r2.qif", "values.json", "k.txt", "odd.report"])
+    assert dict(s.failed)[str(d / "gone.csv")] == "broken link"
     summary = run_batch(load_model(GUIDE / "model.toml"), GUIDE, tmp_path / "out.csv", settle=0)
     assert summary.reports == 7 and not summary.failed
 
