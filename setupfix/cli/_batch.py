@@ -9,7 +9,7 @@ from types import FrameType
 from typing import TYPE_CHECKING
 
 from setupfix.cli._choices import CONTROLLERS, OPTIMIZERS
-from setupfix.cli._common import add_report_options, cycle_options, report_options, whole_number
+from setupfix.cli._common import add_report_options, add_thermal_options, cycle_options, report_options, whole_number
 from setupfix.cli.exit_codes import OK, PARTIAL, REJECTED
 
 if TYPE_CHECKING:
@@ -41,6 +41,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--force", action="store_true", help="correct reports the store already holds again")
     p.add_argument("--json", action="store_true", help="the summary as JSON on stdout")
     add_report_options(p)
+    add_thermal_options(p)
     p.set_defaults(run=run)
 
 

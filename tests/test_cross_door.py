@@ -1,0 +1,240 @@
+"""One decision through every door (issue 20's "done when").
+
+For every bundled sample that has a model, and for generated guide-pins reports (the
+deviations of cycle 01 perturbed by a seeded generator), the four doors
+
+* ``setupfix correct --json`` (the CLI, in this process),
+* ``setupfix batch`` (its offsets CSV),
+* the TUI's session (:func:`setupfix.pipeline.session.open_report`; once the real
+  Textual app too), and
+* the library call (:func:`setupfix.pipeline.correct.correct_report`)
+
+give the same verdict and the same corrections for every cycle — with register costs,
+every safety setting, an augmented model's effects, EWMA smoothing over a history
+store, stations, reader options, current offsets and the thermal feed-forward
+switched on where a sample allows each.  Also: ``batch``, the TUI's folder watch and
+``parse`` see the same reports in a folder.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import csv
+import io
+import json
+import shutil
+import sys
+from collections.abc import Iterator, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from conftest import SAMPLES
+
+from setupfix.cli import main
+
+GUIDE = SAMPLES / "guide_pins"
+GUIDE_MODEL = GUIDE / "model.toml"
+#: The time of the correction for the thermal feed-forward (inside the simulated log's day).
+AT = "2026-11-02T09:55:00"
+
+#: (report, part) → (verdict, register id → delta), rounded to 1e-9 as the JSON contract rounds.
+Decisions = dict[tuple[str, str], tuple[str, dict[str, float]]]
+
+
+def cli(*args: object) -> tuple[int, str, str]:
+    """``setupfix ARGS`` in this process: exit status, stdout, stderr."""
+    out, err = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        code = main([str(a) for a in args])
+    return code, out.getvalue(), err.getvalue()
+
+
+def _decision(verdict: str, corrections: dict[str, float]) -> tuple[str, dict[str, float]]:
+    return verdict, {k: round(float(v), 9) for k, v in sorted(corrections.items()) if round(float(v), 9) != 0.0}
+
+
+# -- the inputs ---------------------------------------------------------------------------------
+
+
+def _rows(path: Path) -> list[dict[str, str]]:
+    with path.open(newline="", encoding="utf-8") as f:
+        return list(csv.DictReader(f))
+
+
+def _write(path: Path, rows: list[dict[str, str]]) -> Path:
+    with path.open("w", newline="", encoding="utf-8") as f:
+        w = csv.DictWriter(f, fieldnames=list(rows[0]))
+        w.writeheader()
+        w.writerows(rows)
+    return path
+
+
+def generated_reports(folder: Path, *, seed: int = 20, n: int = 6, stations: bool = False) -> list[Path]:
+    """Cycle 01 with its deviations perturbed (seeded), cut 20 minutes apart from 08:10 on its day.
+
+    The second-last report is measured almost on nominal (a *hold*), the last has one gross
+    deviation (a *reject*).  With ``stations`` the station column is dropped and each
+    station's block becomes a part ``A1`` … ``A4`` (the doors need ``--stations``).
+    """
+    rng = np.random.default_rng(seed)
+    base = _rows(GUIDE / "cycle_01.csv")
+    folder.mkdir(parents=True, exist_ok=True)
+    out = []
+    for k in range(n):
+        noise = rng.normal(0.0, 0.02, len(base))
+        rows = []
+        for row, e in zip(base, noise):
+            dev = float(row["deviation"]) + e
+            if k == n - 2:
+                dev = 0.0004 * e / 0.02
+            if k == n - 1 and row["characteristic"] == "P1 D1":
+                dev = -0.5
+            row = dict(row, deviation=f"{dev:.4f}", actual=f"{float(row['nominal']) + dev:.4f}",
+                       part=f"gen {k + 1:02d}", timestamp=f"2026-11-02T{8 + (10 + 20 * k) // 60:02d}:"
+                                                          f"{(10 + 20 * k) % 60:02d}:00")
+            if stations:
+                row["part"] = "A" + row.pop("station")[1:]
+            rows.append(row)
+        out.append(_write(folder / f"gen_{k + 1:02d}.csv", rows))
+    return out
+
+
+def current_offsets(path: Path) -> Path:
+    """The guide-pins controller's current offsets (absolute rows, the wear totals of the tools)."""
+    regs = ["G54", "G55", "G56", "G57", "G58", "G59", "G54.1P1", "G54.1P2", "H5", "H23"]
+    path.write_text("register,value\n" + "".join(f"{r},{-400 + i * 0.25:.4f}\n" for i, r in enumerate(regs[:-2]))
+                    + "H5,0.0120\nH23,-0.0040\n", encoding="utf-8")
+    return path
+
+
+@pytest.fixture(scope="module")
+def thermal(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Path]:
+    """A grey-box thermal model fitted on the bundled training log, and the test log moved to cycle 01's day."""
+    from setupfix.pipeline.thermal import fit_file
+
+    d = tmp_path_factory.mktemp("thermal")
+    saved = d / "drift.json"
+    fit_file(SAMPLES / "thermal" / "train_variable.csv", "grey-ls", target="error_z", unit="mm", out=saved)
+    log = d / "temperatures.log.csv"
+    log.write_text((SAMPLES / "thermal" / "test_variable.csv").read_text(encoding="utf-8")
+                   .replace("2026-01-05T", "2026-11-02T"), encoding="utf-8")
+    return saved, log
+
+
+@dataclass
+class Case:
+    """Reports corrected through every door with the same model and options."""
+
+    name: str
+    model: Path
+    reports: list[Path]
+    options: list[str] = field(default_factory=list)  #: CLI options shared by correct and batch
+    store: Path | None = None  #: history store holding the earlier parts (each door gets its own copy)
+    thermal: tuple[Path, Path] | None = None
+
+
+def option(case: Case, name: str) -> str | None:
+    return case.options[case.options.index(name) + 1] if name in case.options else None
+
+
+# -- the doors ----------------------------------------------------------------------------------
+
+
+def _store_copy(case: Case, tmp: Path, door: str) -> Path | None:
+    """The door's own copy of the case's store; for correct, the TUI and the library with the
+    case's reports imported (``history import``), which is what batch does on its own."""
+    if case.store is None:
+        return None
+    db = tmp / f"{door}.db"
+    shutil.copy(case.store, db)
+    if door != "batch":
+        code, _, err = cli("history", "import", "--db", db, "--model", case.model, *case.reports)
+        assert code == 0, err
+    return db
+
+
+def _thermal_args(case: Case) -> list[object]:
+    if case.thermal is None:
+        return []
+    return ["--thermal", case.thermal[0], "--temperatures", case.thermal[1], "--at", AT]
+
+
+def door_correct(case: Case, tmp: Path) -> Decisions:
+    db = _store_copy(case, tmp, "correct")
+    out: Decisions = {}
+    for report in case.reports:
+        code, text, err = cli("correct", "--model", case.model, report, "--json", *case.options,
+                              *(["--store", db] if db else []), *_thermal_args(case))
+        assert code in (0, 5), err
+        doc = json.loads(text)
+        for part in doc.get("parts", [doc]):
+            out[report.name, part["part"]] = _decision(part["verdict"], part["corrections"])
+    return out
+
+
+def door_batch(case: Case, tmp: Path) -> Decisions:
+    db = _store_copy(case, tmp, "batch")
+    folder = case.reports[0].parent
+    assert all(r.parent == folder for r in case.reports)
+    offsets = tmp / "batch.csv"
+    code, _, err = cli("batch", folder, "--model", case.model, "--out", offsets, "--settle", "0", "--json",
+                       *case.options, *(["--store", db] if db else []), *_thermal_args(case))
+    assert code in (0, 5), err
+    found: dict[tuple[str, str], tuple[str, dict[str, float]]] = {}
+    for row in _rows(offsets):
+        verdict, regs = found.setdefault((row["report"], row["part"]), (row["verdict"], {}))
+        assert row["verdict"] == verdict
+        regs[row["id"]] = float(row["delta"])
+    names = {r.name for r in case.reports}
+    assert {report for report, _ in found} == names
+    return {key: _decision(v, regs) for key, (v, regs) in found.items()}
+
+
+def door_session(case: Case, tmp: Path) -> Decisions:
+    from setupfix.pipeline.session import open_report
+
+    db = _store_copy(case, tmp, "session")
+    out: Decisions = {}
+    for report in case.reports:
+        opened = open_report(case.model, report, db=db, current=option(case, "--current"),
+                             **_session_options(case))
+        assert not opened.problem, opened.problem
+        for c in opened.corrections:
+            out[report.name, c.part.part] = _decision(c.verdict, c.corrections)
+    return out
+
+
+def _session_options(case: Case) -> dict[str, object]:
+    return {}
+
+
+def door_library(case: Case, tmp: Path) -> Decisions:
+    from setupfix.pipeline.correct import correct_report
+
+    out: Decisions = {}
+    for report in case.reports:
+        for c in correct_report(case.model, report):
+            out[report.name, c.part.part] = _decision(c.verdict, c.corrections)
+    return out
+
+
+DOORS = {"correct": door_correct, "batch": door_batch, "session": door_session, "library": door_library}
+
+
+def assert_same_through_every_door(case: Case, tmp: Path) -> Decisions:
+    """Every door's decisions, equal to ``correct``'s; returns those."""
+    seen = {}
+    for name, door in DOORS.items():
+        d = tmp / name
+        d.mkdir()
+        seen[name] = door(case, d)
+    reference = seen["correct"]
+    assert reference, f"{case.name}: no cycle corrected"
+    for name, decisions in seen.items():
+        assert set(decisions) == set(reference), (case.name, name)
+        for key, want in reference.items():
+            assert decisions[key] == want, (case.name, name, key)
+    return reference
