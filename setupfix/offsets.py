@@ -18,7 +18,6 @@ from dataclasses import dataclass
 
 from setupfix.errors import MatchError
 from setupfix.model import ProcessModel
-from setupfix.model.safety import safety_settings
 
 __all__ = ["grid_decimals", "format_value", "OFFSET_COLUMNS", "OffsetRow", "offset_rows", "offsets_csv_text",
            "csv_header", "csv_lines"]
@@ -103,12 +102,11 @@ def offset_rows(model: ProcessModel, corrections: Mapping[str, float], *, report
         If ``current`` is given but lacks a correctable register.
     """
     digits = grid_decimals(model.resolution)
-    settings = safety_settings(model)
     rows = []
     for reg in model.registers:
         if reg.fixed:
             continue
-        policy = settings.register(reg.id)
+        policy = reg.policy
         delta = round(float(corrections.get(reg.id, 0.0)), digits) + 0.0  # + 0.0 turns -0.0 into 0.0
         now = value = None
         if current is not None:
@@ -118,7 +116,7 @@ def offset_rows(model: ProcessModel, corrections: Mapping[str, float], *, report
             value = round(now + delta, 9) + 0.0
         rows.append(OffsetRow(report, part, reg.id, reg.register, reg.kind, model.axis, delta, model.unit,
                               "add" if current is None else "set",
-                              policy.offset or ("wear" if reg.kind == "tool" else "geometry"), now, value,
+                              reg.offset, now, value,
                               policy.number, policy.edge, model.resolution, verdict))
     return rows
 

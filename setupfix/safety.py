@@ -16,14 +16,14 @@ difference check; ISO 14253-1 for decisions under measurement uncertainty):
 * **dead band** — when every change is within it the verdict is *hold*;
 * **EWMA** — deviations smoothed over consecutive reports (λ), reset on a tool change.
 
-:func:`recommend` chains them around any optimiser and returns a
-:class:`Recommendation` with its verdict and the list of rules that changed it.
+:func:`setupfix.pose.pose_problem` applies the rules that shape the problem (EWMA,
+guard band, cumulative limit, costs) and :func:`setupfix.pose.recommend` those after
+the solve, returning a :class:`Recommendation` with its verdict and the list of rules
+that changed it.
 """
 
 from __future__ import annotations
 
-import dataclasses
-from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 
 import numpy as np
@@ -33,7 +33,7 @@ from setupfix.objective import error_budget, margins
 from setupfix.optimize import CorrectionProblem, OptimizeResult
 
 __all__ = ["RuleEffect", "Policy", "Recommendation", "reject_mask", "guard_limits", "cumulative_bounds",
-           "apply_gain", "harmed_mask", "in_dead_band", "ewma", "ewma_series", "recommend", "VERDICTS"]
+           "apply_gain", "harmed_mask", "in_dead_band", "ewma", "ewma_series", "budget", "VERDICTS"]
 
 Array = npt.NDArray[np.float64]
 Mask = npt.NDArray[np.bool_]
@@ -217,139 +217,6 @@ def ewma_series(history: Array, lam: float) -> Array:
         seen = ~np.isnan(row)
         a = np.where(seen, np.where(np.isnan(a), row, lam * row + (1.0 - lam) * a), a)
     return a
-
-
-def _zero_result(problem: CorrectionProblem, optimizer: str, status: str, message: str) -> OptimizeResult:
-    x = np.zeros(problem.n_registers)
-    budget = problem.margin_before
-    return OptimizeResult(x=x, margin_before=budget, margin_after=budget, norm=0.0, optimizer=optimizer,
-                          evaluations=0, seconds=0.0, status=status, message=message,
-                          binding=problem.binding(x))
-
-
-def _with_cost(problem: CorrectionProblem, cost: Array) -> CorrectionProblem:
-    """The problem with the registers' least-norm weights (``CorrectionProblem.cost``)."""
-    if np.all(cost == 1.0):
-        return problem
-    return dataclasses.replace(problem, cost=np.asarray(cost, dtype=float))
-
-
-def _restrict(problem: CorrectionProblem, keep: Mask) -> CorrectionProblem:
-    return dataclasses.replace(problem, composite=problem.composite[:, keep], deviation=problem.deviation[keep],
-                               lower=problem.lower[keep], upper=problem.upper[keep],
-                               dimension_ids=tuple(d for d, k in zip(problem.dimension_ids, keep) if k))
-
-
-def recommend(problem: CorrectionProblem, policy: Policy, solve: Callable[[CorrectionProblem], OptimizeResult],
-              *, optimizer: str = "exact", names: Mapping[str, str] | None = None,
-              measured: Array | None = None) -> Recommendation:
-    """Chain the safety rules around ``solve`` for one measured cycle.
-
-    Order: reject band → guard band → cumulative limit → solve (per-step clamp =
-    register bounds; costs) → gain → no harm (given-up dimensions) → dead band.
-
-    Parameters
-    ----------
-    problem : CorrectionProblem
-        The problem as measured (real tolerance limits, register limits as bounds).
-    policy : Policy
-        Settings aligned with ``problem``.
-    solve : callable
-        ``solve(problem) -> OptimizeResult`` (any optimiser).
-    names : mapping, optional
-        Dimension ID → name, for the messages.
-    measured : ndarray of shape (n_dimensions,), optional
-        The current report's own deviations when ``problem.deviation`` is a smoothed
-        estimate: the reject band judges the part as measured.
-    """
-    label = (lambda ids: ", ".join((names or {}).get(i, i) for i in ids))
-    ids = np.array(problem.register_ids, dtype=object)
-    dims = np.array(problem.dimension_ids, dtype=object)
-    rules: list[RuleEffect] = []
-    dev, lower, upper = problem.deviation, problem.lower, problem.upper
-
-    bad = reject_mask(dev if measured is None else measured, lower, upper, policy.reject_band)
-    if bad.any():
-        bad_ids = tuple(dims[bad])
-        alarm = (f"REJECT: {label(bad_ids)} beyond the reject band (a broken tool, a bad measurement or a wrong "
-                 "part?) — no correction; check the part and the measurement")
-        rules.append(RuleEffect("reject", "deviation beyond the reject band: no correction", dimensions=bad_ids))
-        result = _zero_result(problem, optimizer, "rejected", alarm)
-        return Recommendation("reject", result.x, result, problem, tuple(rules), alarm=alarm)
-
-    guarded = problem
-    if np.any(policy.uncertainty > 0):
-        lo, up = guard_limits(lower, upper, policy.uncertainty, policy.guard_band)
-        guarded = dataclasses.replace(guarded, lower=lo, upper=up)
-        shrunk = tuple(dims[policy.uncertainty > 0])
-        rules.append(RuleEffect("guard_band", f"limits of {len(shrunk)} dimension(s) shrunk by "
-                                f"{policy.guard_band:g}·U (ISO 14253-1)", dimensions=shrunk))
-    if np.any(np.isfinite(policy.cumulative_limit)):
-        lb, ub = cumulative_bounds(problem.lb, problem.ub, policy.cumulative, policy.cumulative_limit,
-                                   problem.resolution)
-        tightened = (lb > problem.lb) | (ub < problem.ub)
-        guarded = dataclasses.replace(guarded, lb=lb, ub=ub)
-        if tightened.any():
-            rules.append(RuleEffect("cumulative_limit", "step bounds tightened so that the total since the last "
-                                    "reset stays within the cumulative limit", registers=tuple(ids[tightened])))
-    guarded = _with_cost(guarded, policy.cost)
-
-    result = solve(guarded)
-    x = np.asarray(result.x, dtype=float)
-    given_up = tuple(result.given_up)
-
-    xg = apply_gain(x, policy.gain, problem.resolution)
-    if np.any(xg != x):
-        rules.append(RuleEffect("gain", "only the feedback fraction of the optimum is applied",
-                                registers=tuple(ids[xg != x])))
-    x = xg
-
-    harmed = harmed_mask(dev, problem.predicted(x), lower, upper)
-    if harmed.any():
-        # The optimum trades an in-tolerance dimension for out-of-tolerance ones: give
-        # up those no correction brought in, re-solve on the others, check again.
-        hopeless = ~((dev >= lower) & (dev <= upper))
-        if hopeless.any() and not hopeless.all():
-            retry = solve(_restrict(guarded, ~hopeless))
-            x2 = apply_gain(np.asarray(retry.x, dtype=float), policy.gain, problem.resolution)
-            if not harmed_mask(dev, problem.predicted(x2), lower, upper).any():
-                gone = tuple(dims[hopeless & ~_inside(problem.predicted(x2), lower, upper)])
-                given_up = tuple(dict.fromkeys(given_up + gone))
-                rules.append(RuleEffect("no_harm", "the optimum would move dimensions measured in tolerance out "
-                                        f"of it ({label(dims[harmed])}); corrected without "
-                                        f"{label(gone) or 'the out-of-tolerance ones'}", dimensions=gone))
-                message = (f"{label(gone)} given up: no correction brings them into tolerance without moving "
-                           "others out; the others are corrected")
-                x, result = x2, dataclasses.replace(retry, message=message)
-                harmed = np.zeros_like(harmed)
-        if harmed.any():
-            kept = tuple(dims[harmed])
-            rules.append(RuleEffect("no_harm", f"no correction keeps {label(kept)} in tolerance while "
-                                    "improving the others: nothing changed", dimensions=kept))
-            x = np.zeros_like(x)
-    if given_up and not any(r.rule == "no_harm" for r in rules):
-        rules.append(RuleEffect("given_up", "no setup correction brings these into tolerance: they need the NC "
-                                "program or the process", dimensions=given_up))
-
-    verdict = "apply"
-    if not np.any(x):
-        verdict = "hold"
-    elif in_dead_band(x, policy.dead_band):
-        rules.append(RuleEffect("dead_band", "every change is within its dead band: hold",
-                                registers=tuple(ids[x != 0])))
-        x = np.zeros_like(x)
-        verdict = "hold"
-
-    at = (x != 0) & ((x >= guarded.ub - 1e-12) | (x <= guarded.lb + 1e-12))
-    at_limit = tuple(ids[at])
-    if at_limit:
-        rules.append(RuleEffect("clamp", "change at the register's per-step or cumulative limit",
-                                registers=at_limit))
-    return Recommendation(verdict, x + 0.0, result, guarded, tuple(rules), given_up, at_limit)
-
-
-def _inside(values: Array, lower: Array, upper: Array) -> Mask:
-    return (values >= lower - 1e-12) & (values <= upper + 1e-12)
 
 
 def budget(problem: CorrectionProblem, x: Array) -> tuple[float, Array]:

@@ -1,4 +1,4 @@
-"""Each safety rule's effect on a recommendation (setupfix.safety), on small problems solved exactly."""
+"""Each safety rule's effect on a recommendation (setupfix.safety, posed by setupfix.pose), on small problems solved exactly."""
 
 from __future__ import annotations
 
@@ -15,9 +15,10 @@ from setupfix.safety import (
     ewma,
     guard_limits,
     harmed_mask,
-    recommend,
     reject_mask,
 )
+from setupfix.pose import pose_policy
+from setupfix.pose import recommend as recommend_posed
 
 SOLVE = get_optimizer("exact").solve
 
@@ -34,6 +35,11 @@ def problem(composite, deviation, lower, upper, limit=0.1, h=0.001):
 def policy(p, **kw):
     return dataclasses.replace(Policy.neutral(p), **{k: np.asarray(v, float) if k != "guard_band" else v
                                                     for k, v in kw.items()})
+
+
+def recommend(p, pol, solve, *, measured=None, **kw):
+    """The rules around ``solve`` on ``p`` posed with ``pol`` (setupfix.pose: guard band, bounds, costs)."""
+    return recommend_posed(pose_policy(p, pol, measured=measured), solve, **kw)
 
 
 def rules(rec):

@@ -105,6 +105,21 @@ def cycle_options(args: argparse.Namespace) -> dict[str, Any]:
             "strict": args.strict}
 
 
+def read_options(args: argparse.Namespace) -> Any:
+    """The reader's options as a :class:`~setupfix.pipeline.requests.ReadOptions`."""
+    from setupfix.pipeline.requests import ReadOptions
+
+    return ReadOptions(args.format, args.unit, args.encoding, args.columns, args.lenient)
+
+
+def cycles_of(args: argparse.Namespace) -> Any:
+    """Stations, parts per cycle, strictness and ``--part`` as a :class:`~setupfix.pipeline.requests.CycleOptions`."""
+    from setupfix.pipeline.requests import CycleOptions
+
+    return CycleOptions.of(parse_stations(args.stations), parts_per_cycle=args.parts_per_cycle, strict=args.strict,
+                           part=getattr(args, "part", None))
+
+
 def report_options(args: argparse.Namespace) -> dict[str, Any]:
     return {"format": args.format, "unit": args.unit, "encoding": args.encoding, "columns": args.columns,
             "lenient": args.lenient}

@@ -6,8 +6,7 @@ import argparse
 import json
 import sys
 
-from setupfix.cli._common import add_report_options, cycle_options, report_options, whole_number
-from setupfix.cli._correct import exact_params
+from setupfix.cli._common import add_report_options, cycles_of, read_options, whole_number
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
@@ -31,19 +30,20 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from setupfix.pipeline.compare import compare_report, plot_comparison
-    from setupfix.pipeline.present import format_comparison
+    from setupfix.pipeline.present import format_comparison, note_lines
+    from setupfix.pipeline.requests import SolveOptions
     from setupfix.pipeline.writers import check_target
     from setupfix.plots import figure_format
 
     if args.plot:
         figure_format(args.plot)  # refuse an unknown suffix or target before the trials, not after
         check_target(args.plot)
-    comparison = compare_report(args.model, args.report, part=args.part, trials=args.trials, seed=args.seed,
-                                params={"exact": exact_params(args.time_limit)}, **cycle_options(args),
-                                **report_options(args))
+    solve = SolveOptions("exact", None, args.time_limit)
+    comparison = compare_report(args.model, args.report, trials=args.trials, seed=args.seed, read=read_options(args),
+                                cycles=cycles_of(args), params={"exact": solve.params()})
     if args.plot:
         plot_comparison(comparison, args.plot)
-    for warning in comparison.warnings:  # the reader's and the matching's notes: a skipped row is never silent
+    for warning in note_lines(comparison.notes):  # the reader's and the matching's notes: a skipped row is never silent
         print(f"warning: {warning}", file=sys.stderr)
     if args.json:
         json.dump(comparison.to_json(), sys.stdout, indent=2)

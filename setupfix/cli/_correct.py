@@ -7,9 +7,11 @@ import json
 import sys
 
 from setupfix.cli._choices import CONTROLLERS, OPTIMIZERS
-from setupfix.cli._common import add_report_options, add_thermal_options, cycle_options, report_options
+from typing import Any
+
+from setupfix.cli._common import add_report_options, add_thermal_options, cycles_of, read_options
 from setupfix.cli.exit_codes import OK, REJECTED
-from setupfix.errors import ParameterError, SetupfixError
+from setupfix.errors import SetupfixError
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
@@ -44,54 +46,52 @@ def add_offsets_options(p: argparse.ArgumentParser) -> None:
                    help="the controller's current offsets (CSV register,value): write absolute new values")
 
 
-def exact_params(time_limit: float | None, optimizer: str = "exact") -> dict[str, float]:
-    """``--time-limit`` as the exact optimiser's parameter (checked by its declared constraints)."""
-    if time_limit is None:
-        return {}
-    if optimizer != "exact":
-        raise ParameterError(f"--time-limit applies to the exact optimizer, not {optimizer!r}")
-    return {"time_limit": time_limit}
+def correct_request(args: argparse.Namespace) -> Any:
+    """The :class:`~setupfix.pipeline.requests.CorrectRequest` of ``correct``'s arguments (every input loaded once)."""
+    from setupfix.model import load_model
+    from setupfix.pipeline.correct import open_history
+    from setupfix.pipeline.requests import CorrectRequest, CurrentOffsets, History, SolveOptions, load_thermal
+
+    solve = SolveOptions(args.optimizer, args.seed, args.time_limit)
+    if bool(args.thermal) != bool(args.temperatures):
+        raise SetupfixError("--thermal and --temperatures go together")
+    history_store = open_history(args.store) if args.store else None
+    model = load_model(args.model)
+    current = CurrentOffsets.read(args.current, model) if args.current else None
+    history = None
+    if history_store is not None:
+        with history_store as store:  # read once: the smoothing needs the earlier parts and the log
+            history = History.from_store(model, store) if model.safety.ewma < 1.0 else None
+    thermal = (load_thermal(args.thermal, args.temperatures, at=args.at, dead_band=args.thermal_dead_band)
+               if args.thermal else None)
+    return CorrectRequest(model, read_options(args), cycles_of(args), solve, current, history, thermal)
 
 
 def run(args: argparse.Namespace) -> int:
-    from setupfix.model import load_model
-    from setupfix.pipeline.controllers import read_current
-    from setupfix.pipeline.correct import correct_report, open_history, write_correction_offsets
-    from setupfix.pipeline.present import format_correction
+    from setupfix.pipeline.correct import correct_report
+    from setupfix.pipeline.export import export
+    from setupfix.pipeline.present import format_correction, note_lines, outcome_json
     from setupfix.pipeline.writers import check_target
 
     if args.offsets:
         check_target(args.offsets)
-    store = open_history(args.store) if args.store else None
-    model = load_model(args.model)
-    current = read_current(args.current, model) if args.current else None
-    params = exact_params(args.time_limit, args.optimizer)
-    results = correct_report(model, args.report, optimizer=args.optimizer, seed=args.seed, part=args.part,
-                             store=store, current=current, params=params, **cycle_options(args),
-                             **report_options(args))
-    if args.thermal or args.temperatures:  # thermal feed-forward step (setupfix.pipeline.feedforward)
-        from setupfix.pipeline.feedforward import apply_feed_forward
-
-        if not (args.thermal and args.temperatures):
-            raise SetupfixError("--thermal and --temperatures go together")
-        apply_feed_forward(results, args.thermal, args.temperatures, at=args.at, dead_band=args.thermal_dead_band)
-    rejected = any(r.verdict == "reject" for r in results)
+    request = correct_request(args)
+    outcome = correct_report(request, args.report)
+    cycles = outcome.cycles
+    rejected = bool(outcome.rejected)
     if args.offsets and not rejected:
-        write_correction_offsets(results, args.offsets, controller=args.controller, current=current)
-    for r in results:
-        if r.verdict == "reject":
-            print(f"error: {r.part.report}: part {r.part.part or '—'}: {r.recommendation.alarm}", file=sys.stderr)
+        export(cycles, args.offsets, controller=args.controller, current=request.current)
+    for c in outcome.rejected:
+        print(f"error: {c.part.report}: part {c.part.part or '—'}: {c.recommendation.alarm}", file=sys.stderr)
     if args.json or args.offsets == "-":  # the table below prints them; here they must not be lost
-        for r in results:
-            for warning in r.warnings:
-                print(f"warning: {warning}", file=sys.stderr)
+        for c in cycles:
+            for line in note_lines(c.notes):
+                print(f"warning: {line}", file=sys.stderr)
     if args.offsets == "-":
         return REJECTED if rejected else OK
     if args.json:
-        objs = [r.to_json() for r in results]
-        json.dump(objs[0] if len(objs) == 1 else {"parts": objs}, sys.stdout, indent=2)
+        json.dump(outcome_json(cycles), sys.stdout, indent=2)
         sys.stdout.write("\n")
     else:
-        sys.stdout.write("\n\n".join(format_correction(r) + (f"\n{r.thermal.line()}" if r.thermal else "")
-                                       for r in results) + "\n")
+        sys.stdout.write("\n\n".join(format_correction(c) for c in cycles) + "\n")
     return REJECTED if rejected else OK

@@ -9,9 +9,9 @@ Nomenclature (lengths in the model unit unless stated):
 ``predicted``  deviation expected after a correction.
 """
 
+from setupfix.model.effects import EffectsSection
 from setupfix.model.loader import load_model, model_from_dict
-from setupfix.model import effects as _effects  # noqa: F401 - registers [effects]
-from setupfix.model import safety as _safety  # noqa: F401 - registers [safety] and the register keys
+from setupfix.model.safety import RegisterPolicy, SafetySettings
 from setupfix.model.measurements import (
     CANONICAL_COLUMNS,
     LENGTH_COLUMNS,
@@ -32,11 +32,14 @@ __all__ = [
     "CANONICAL_COLUMNS",
     "LENGTH_COLUMNS",
     "Dimension",
+    "EffectsSection",
     "Feature",
     "MachinePoint",
     "PartMeasurement",
     "ProcessModel",
     "Register",
+    "RegisterPolicy",
+    "SafetySettings",
     "load_model",
     "match_parts",
     "model_from_dict",

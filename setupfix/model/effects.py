@@ -32,14 +32,15 @@ import tomllib
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from setupfix.errors import ModelError, SourceLocation
-from setupfix.model.loader import SECTIONS
-from setupfix.model.process import ProcessModel
 
-__all__ = ["ModelEffect", "EffectsSection", "effects_from_dict", "load_effects", "model_effects", "effects_toml", "with_effects",
-           "EFFECT_KINDS"]
+if TYPE_CHECKING:  # the model holds its [effects] section: process imports this module
+    from setupfix.model.process import ProcessModel
+
+__all__ = ["ModelEffect", "EffectsSection", "effects_from_dict", "parse_effects", "load_effects", "model_effects",
+           "effects_toml", "with_effects", "EFFECT_KINDS"]
 
 EFFECT_KINDS: tuple[str, ...] = ("drift", "thermal", "wear", "scale", "position", "relation", "group")
 
@@ -179,13 +180,16 @@ def effects_from_dict(section: Mapping[str, Any] | None, model: ProcessModel,
 
 
 def model_effects(model: ProcessModel) -> EffectsSection:
-    """The ``[effects]`` the model was loaded with (parsed once, at load time)."""
-    section = model.extras.get("effects")
-    return section if isinstance(section, EffectsSection) else EffectsSection()
+    """The ``[effects]`` the model was loaded with: ``model.effects``."""
+    # TODO(issue 20 merge): remove (pipeline/series.py still calls it; use model.effects)
+    return model.effects
 
 
-def _parse_section(value: Any, model: ProcessModel, report: Any) -> EffectsSection:
-    """Loader extension point ``SECTIONS["effects"]``: validated once, when the model loads."""
+def parse_effects(value: Any, model: ProcessModel, report: Any) -> EffectsSection:
+    """The ``[effects]`` table as the loader reads it: validated once, when the model loads.
+
+    ``report(key, message)`` adds a problem (``key`` relative to the section).
+    """
     if not isinstance(value, Mapping):
         report("", "expected a table [effects]")
         return EffectsSection()
@@ -194,9 +198,6 @@ def _parse_section(value: Any, model: ProcessModel, report: Any) -> EffectsSecti
     except ModelError as exc:
         report("", exc.message)
         return EffectsSection()
-
-
-SECTIONS["effects"] = _parse_section
 
 
 def load_effects(path: str | Path, model: ProcessModel) -> EffectsSection:

@@ -17,18 +17,10 @@ weights                 0 < |w| ≤ 1,000
 ``position``            |coordinate| ≤ 100,000 mm
 ======================  ==========================================================
 
-Extension point for other modules (one line each, below the imports):
-
-``SECTIONS[name] = parser``
-    accepts an optional top-level table ``[name]``.  ``parser(value, model,
-    report)`` gets the raw TOML value, the validated model without extras and
-    ``report(key, message)`` (``key`` relative to the section, ``""`` for the
-    section itself); what it returns is stored in ``ProcessModel.extras[name]``.
-    It runs only when the rest of the model is valid.
-``REGISTER_KEYS[key] = parser``
-    accepts ``key`` in ``[wks.*]`` and ``[tools.*]`` tables.  ``parser(value,
-    report)`` returns the validated value (``report(message)`` for a problem),
-    stored in ``Register.extras[key]``.
+Optional tables parsed into typed fields: ``[safety]`` (:func:`setupfix.model.safety.parse_safety`
+→ ``ProcessModel.safety``), ``[effects]`` (:func:`setupfix.model.effects.parse_effects` →
+``ProcessModel.effects``) and the per-register keys of ``[wks.*]`` / ``[tools.*]``
+(:func:`setupfix.model.safety.parse_register_policy` → ``Register.policy``).
 """
 
 from __future__ import annotations
@@ -38,12 +30,13 @@ import math
 import re
 import sys
 import tomllib
-from collections.abc import Callable, Mapping
+from collections.abc import Mapping
 from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
 from setupfix.errors import ModelError, SourceLocation
+from setupfix.model.effects import parse_effects
 from setupfix.model.process import (
     Dimension,
     Feature,
@@ -52,29 +45,20 @@ from setupfix.model.process import (
     Register,
     RegisterKind,
 )
+from setupfix.model.safety import REGISTER_KEYS, parse_register_policy, parse_safety
 from setupfix.model.stations import expand_stations
 from setupfix.units import LENGTH_UNITS, length_factor
 
 __all__ = [
-    "REGISTER_KEYS",
     "SECTIONS",
     "RANGES_MM",
     "MAX_STEPS",
-    "SectionParser",
-    "RegisterKeyParser",
     "load_model",
     "model_from_dict",
 ]
 
-#: ``parser(value, model, report(key, message)) -> parsed`` for an optional top-level table.
-SectionParser = Callable[[Any, ProcessModel, Callable[[str, str], None]], Any]
-#: ``parser(value, report(message)) -> parsed`` for an extra key of register tables.
-RegisterKeyParser = Callable[[Any, Callable[[str], None]], Any]
-
-#: Optional top-level tables other modules parse (see the module docstring).
-SECTIONS: dict[str, SectionParser] = {}
-#: Extra keys allowed in ``[wks.*]`` / ``[tools.*]`` tables (see the module docstring).
-REGISTER_KEYS: dict[str, RegisterKeyParser] = {}
+#: Optional top-level tables, each parsed into a typed field of the model (module docstring).
+SECTIONS: tuple[str, ...] = ("effects", "safety")
 
 #: Allowed ranges of lengths [mm], converted to the model unit when checked.
 RANGES_MM: dict[str, tuple[float, float]] = {
@@ -221,11 +205,8 @@ def _registers(p: _Problems, doc: dict[str, Any], section: str, kind: RegisterKi
         if not isinstance(fixed, bool):
             p.add(f"{key}.fixed", f"expected true or false, found {_show(fixed)}")
             fixed = False
-        extras: dict[str, Any] = {}
-        for extra, parse in REGISTER_KEYS.items():
-            if extra in table:
-                extras[extra] = parse(table[extra], functools.partial(p.add, f"{key}.{extra}"))
-        regs.append(Register(rid, kind, name.strip(), lim if lim is not None else limit, fixed, extras))
+        policy = parse_register_policy(table, functools.partial(_report_in, p, key))
+        regs.append(Register(rid, kind, name.strip(), lim if lim is not None else limit, fixed, policy))
     return regs
 
 
@@ -350,12 +331,13 @@ def model_from_dict(doc: Mapping[str, Any], source: str = "<model>") -> ProcessM
         dimensions=tuple(dimensions),
         source=source,
     )
-    extras: dict[str, Any] = {}
-    for section, parse in SECTIONS.items():
-        if section in doc:
-            extras[section] = parse(doc[section], model, functools.partial(_report_in, p, section))
+    if "effects" in doc:
+        model = replace(model, effects=parse_effects(doc["effects"], model, functools.partial(_report_in, p, "effects")))
+    if "safety" in doc:
+        model = replace(model, safety=parse_safety(doc["safety"], model.dimension_ids,
+                                                   functools.partial(_report_in, p, "safety")))
     p.raise_if_any()
-    return replace(model, extras=extras) if extras else model
+    return model
 
 
 def _report_in(p: _Problems, section: str, key: str, message: str) -> None:

@@ -12,9 +12,11 @@ from __future__ import annotations
 
 import functools
 import re
-from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import Any, Literal
+from typing import Literal
+
+from setupfix.model.effects import EffectsSection
+from setupfix.model.safety import RegisterPolicy, SafetySettings
 
 __all__ = [
     "RegisterKind",
@@ -56,9 +58,9 @@ class Register:
         Bound on the absolute correction [model unit].
     fixed : bool
         A fixed register is never corrected.
-    extras : mapping
-        Values of the extra register keys other modules declare
-        (``loader.REGISTER_KEYS``), already validated, by key.
+    policy : RegisterPolicy
+        Its own settings: cost, offset type, controller slot, dead band, gain,
+        cumulative limit (``None`` where the model-wide ``[safety]`` value applies).
     """
 
     id: str
@@ -66,7 +68,17 @@ class Register:
     register: str
     limit: float
     fixed: bool = False
-    extras: Mapping[str, Any] = field(default_factory=dict)
+    policy: RegisterPolicy = field(default_factory=RegisterPolicy)
+
+    @property
+    def cost(self) -> float:
+        """Weight of the register in the least-norm stage (Σ cost·x², eq. 9 weighted)."""
+        return self.policy.cost
+
+    @property
+    def offset(self) -> str:
+        """The offset the change goes to: ``"wear"`` or ``"geometry"``."""
+        return self.policy.offset_type(self.kind)
 
 
 @dataclass(frozen=True, slots=True)
@@ -131,9 +143,10 @@ class ProcessModel:
         Set D.
     source : str
         The file it was loaded from (for messages).
-    extras : mapping
-        Parsed optional sections other modules declare (``loader.SECTIONS``),
-        by section name (``"safety"``, ``"effects"``); absent sections are absent.
+    safety : SafetySettings
+        The ``[safety]`` table, defaults filled in when the file has none.
+    effects : EffectsSection
+        The ``[effects]`` section ``diagnose --augment`` writes (empty when absent).
     """
 
     name: str
@@ -147,7 +160,8 @@ class ProcessModel:
     features: tuple[Feature, ...]
     dimensions: tuple[Dimension, ...]
     source: str = "<model>"
-    extras: Mapping[str, Any] = field(default_factory=dict)
+    safety: SafetySettings = field(default_factory=SafetySettings)
+    effects: EffectsSection = field(default_factory=EffectsSection)
 
     @property
     def registers(self) -> tuple[Register, ...]:

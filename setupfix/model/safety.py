@@ -22,23 +22,20 @@ Per register (``[wks.ID]`` / ``[tools.ID]``): ``cost`` (> 0, least-norm weight),
 ``dead_band``, ``gain``, ``cumulative_limit``.  Per dimension
 (``[safety.dimensions.ID]``): ``uncertainty`` and ``reject_band``.
 
-Both hook into the loader's extension points (``loader.SECTIONS`` and
-``loader.REGISTER_KEYS``); :func:`safety_settings` assembles them for a model.
+The loader calls :func:`parse_safety` and :func:`parse_register_policy` directly; the
+results are typed fields of the model (``ProcessModel.safety``, ``Register.policy``).
 """
 
 from __future__ import annotations
 
+import functools
 import math
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Collection, Mapping
 from dataclasses import dataclass, field
 from typing import Any, Literal
 
-from setupfix.model.loader import REGISTER_KEYS as _LOADER_REGISTER_KEYS
-from setupfix.model.loader import SECTIONS
-from setupfix.model.process import ProcessModel
-
 __all__ = ["OffsetType", "RegisterPolicy", "SafetySettings", "SAFETY_KEYS", "REGISTER_KEYS", "DIMENSION_KEYS",
-           "parse_safety", "safety_settings"]
+           "parse_safety", "parse_register_policy"]
 
 OffsetType = Literal["wear", "geometry"]
 
@@ -53,7 +50,12 @@ DIMENSION_KEYS = frozenset({"uncertainty", "reject_band"})
 
 @dataclass(frozen=True, slots=True)
 class RegisterPolicy:
-    """Per-register preferences; ``None`` means the model-wide setting."""
+    """Per-register preferences (``Register.policy``); ``None`` means the model-wide setting.
+
+    ``cost`` is the register's weight in the least-norm stage (Σ cost·x², eq. 9 with
+    weights); ``offset`` the offset the change goes to (None: wear for a tool, geometry
+    for a WKS, see :meth:`offset_type`).
+    """
 
     cost: float = 1.0
     offset: OffsetType | None = None
@@ -63,10 +65,17 @@ class RegisterPolicy:
     gain: float | None = None
     cumulative_limit: float | None = None
 
+    def offset_type(self, kind: str) -> str:
+        """The offset a change goes to: the declared one, else wear for a tool and geometry for a WKS."""
+        return self.offset or ("wear" if kind == "tool" else "geometry")
+
 
 @dataclass(frozen=True, slots=True)
 class SafetySettings:
-    """The model's safety rules (``[safety]`` plus per-register and per-dimension extras)."""
+    """The model's ``[safety]`` table (``ProcessModel.safety``) with its per-dimension settings.
+
+    Per-register settings are on each register (``Register.policy``).
+    """
 
     dead_band: float | None = None
     gain: float = 1.0
@@ -75,15 +84,9 @@ class SafetySettings:
     uncertainty: float = 0.0
     guard_band: float = 1.0
     ewma: float = 1.0
-    registers: Mapping[str, RegisterPolicy] = field(default_factory=dict)
     dimension_uncertainty: Mapping[str, float] = field(default_factory=dict)
     dimension_reject_band: Mapping[str, float] = field(default_factory=dict)
 
-    def register(self, rid: str) -> RegisterPolicy:
-        return self.registers.get(rid, _DEFAULT_POLICY)
-
-
-_DEFAULT_POLICY = RegisterPolicy()
 
 def _num(report: Callable[[str], None], value: Any, low: float, high: float = math.inf, *,
          open_low: bool = False) -> float | None:
@@ -121,8 +124,26 @@ _REGISTER_PARSERS: dict[str, Callable[[Any, Callable[[str], None]], Any]] = {
 }
 
 
-def parse_safety(value: Any, model: ProcessModel, report: Callable[[str, str], None]) -> SafetySettings:
-    """The ``[safety]`` table (loader extension point ``SECTIONS["safety"]``).
+def parse_register_policy(table: Mapping[str, Any], report: Callable[[str, str], None]) -> RegisterPolicy:
+    """The per-register keys of a ``[wks.ID]`` / ``[tools.ID]`` table (:data:`REGISTER_KEYS`; others ignored).
+
+    ``report(key, message)`` adds a problem at that key of the table; a bad value
+    falls back to the model-wide setting so every problem is reported in one pass.
+    """
+    values: dict[str, Any] = {}
+    for key, parse in _REGISTER_PARSERS.items():
+        if key in table:
+            value = parse(table[key], functools.partial(report, key))
+            if value is not None:
+                values[key] = value
+    return RegisterPolicy(**values) if values else _DEFAULT_POLICY
+
+
+_DEFAULT_POLICY = RegisterPolicy()
+
+
+def parse_safety(value: Any, dimension_ids: Collection[str], report: Callable[[str, str], None]) -> SafetySettings:
+    """The ``[safety]`` table, validated against the model's dimension IDs.
 
     ``report(key, message)`` adds a problem at ``safety.<key>``; a bad value falls
     back to its default so every problem is reported in one pass.
@@ -141,7 +162,7 @@ def parse_safety(value: Any, model: ProcessModel, report: Callable[[str, str], N
 
     uncertainty: dict[str, float] = {}
     reject: dict[str, float] = {}
-    known = {d.id for d in model.dimensions}
+    known = set(dimension_ids)
     dims = value.get("dimensions", {})
     if not isinstance(dims, Mapping):
         report("dimensions", "expected a table of dimension IDs")
@@ -180,39 +201,3 @@ def parse_safety(value: Any, model: ProcessModel, report: Callable[[str, str], N
         dimension_uncertainty=uncertainty,
         dimension_reject_band=reject,
     )
-
-
-_CACHE: list[tuple[ProcessModel, SafetySettings]] = []
-
-
-def safety_settings(model: ProcessModel) -> SafetySettings:
-    """The model's safety settings: its ``[safety]`` table (or the defaults) and per-register extras.
-
-    Assembled once per model object (batch corrects thousands of reports with one model).
-    """
-    for known, settings in _CACHE:
-        if known is model:
-            return settings
-    settings = _assemble(model)
-    _CACHE[:] = [*_CACHE[-7:], (model, settings)]
-    return settings
-
-
-def _assemble(model: ProcessModel) -> SafetySettings:
-    base = model.extras.get("safety")
-    if not isinstance(base, SafetySettings):
-        base = SafetySettings()
-    registers: dict[str, RegisterPolicy] = {}
-    for reg in model.registers:
-        e = {k: v for k, v in reg.extras.items() if k in REGISTER_KEYS and v is not None}
-        if e:
-            registers[reg.id] = RegisterPolicy(**e)
-    if not registers:
-        return base
-    return SafetySettings(base.dead_band, base.gain, base.reject_band, base.cumulative_limit, base.uncertainty,
-                          base.guard_band, base.ewma, registers, base.dimension_uncertainty,
-                          base.dimension_reject_band)
-
-
-SECTIONS["safety"] = parse_safety
-_LOADER_REGISTER_KEYS.update(_REGISTER_PARSERS)

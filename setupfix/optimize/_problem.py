@@ -64,7 +64,14 @@ class CorrectionProblem:
 
     @classmethod
     def from_part(cls, model: ProcessModel, part: PartMeasurement) -> CorrectionProblem:
-        """Pose the problem for one measured part of ``model``."""
+        """The problem of one measured part of ``model``: eqs. 3–4 on its measured dimensions.
+
+        Composite C of the model, the part's deviations, the tolerance limits, the
+        register limits snapped onto the grid as bounds ((0, 0) for a fixed register)
+        and the registers' costs (``[wks.ID] cost``: weights of f2, eq. 9).  Every
+        safety step (smoothing, forecast, guard band …) is
+        :func:`setupfix.pose.pose_problem`'s.
+        """
         comp = relation_matrices(model).composite
         keep = part.measured
         dims = [d for d, k in zip(model.dimensions, keep) if k]
@@ -83,8 +90,7 @@ class CorrectionProblem:
             resolution=h,
             register_ids=tuple(model.register_ids),
             dimension_ids=tuple(d.id for d in dims),
-            # A register may declare its cost once the model format carries one.
-            cost=np.array([float(getattr(r, "cost", 1.0)) for r in model.registers]),
+            cost=np.array([r.policy.cost for r in model.registers], dtype=float),
         )
 
     @property

@@ -21,9 +21,12 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
+from setupfix.errors import Note
 from setupfix.model import ProcessModel, load_model
 from setupfix.optimize import OPTIMIZERS, CorrectionProblem, OptimizeResult, get_optimizer
-from setupfix.pipeline.correct import load_parts, select_parts
+from setupfix.pipeline.cycles import read_parts
+from setupfix.pipeline.requests import CycleOptions, ReadOptions
+from setupfix.pose import pose_problem
 
 __all__ = ["DEFAULT_METHODS", "MethodTrials", "Comparison", "trial_seeds", "compare_problem",
            "compare_report", "plot_comparison"]
@@ -108,8 +111,13 @@ class Comparison:
     report: str = ""
     unit: str = "mm"
     skipped: dict[str, str] = field(default_factory=dict)
-    #: What reading and matching the report assumed or skipped (rows skipped by --lenient, angles, …).
-    warnings: list[str] = field(default_factory=list)
+    #: What reading, matching and posing assumed or skipped (rows skipped by --lenient, angles, forecast …).
+    notes: tuple[Note, ...] = ()
+
+    @property
+    def warnings(self) -> list[str]:
+        """The notes as text (the JSON's ``warnings``)."""
+        return [str(n) for n in self.notes]
 
     def table(self) -> list[dict[str, Any]]:
         """One summary row per method (see :meth:`MethodTrials.summary`), exact first."""
@@ -193,26 +201,25 @@ def compare_problem(problem: CorrectionProblem, *, methods: Sequence[str] = DEFA
     return Comparison(problem=problem, exact=exact, methods=done, seed=seed, trials=trials, skipped=skipped)
 
 
-def compare_report(model: ProcessModel | str | Path, report: str | Path, *, part: str | None = None,
-                   methods: Sequence[str] = DEFAULT_METHODS, trials: int = 12, seed: int = 0,
-                   format: str | None = None, unit: str | None = None, encoding: str | None = None,
-                   columns: str | None = None,
-                   stations: Sequence[str] | Mapping[str, str] | None = None, parts_per_cycle: int | None = None,
-                   strict: bool = False, params: Mapping[str, Mapping[str, Any]] | None = None,
-                   lenient: bool = False) -> Comparison:
-    """Compare the methods on one part of a report (the first one unless ``part`` names it).
+def compare_report(model: ProcessModel | str | Path, report: str | Path, *, methods: Sequence[str] = DEFAULT_METHODS,
+                   trials: int = 12, seed: int = 0, read: ReadOptions = ReadOptions(),
+                   cycles: CycleOptions = CycleOptions(),
+                   params: Mapping[str, Mapping[str, Any]] | None = None) -> Comparison:
+    """Compare the methods on one cycle of a report (the first one unless ``cycles.part`` names it).
 
-    ``params``: hyper-parameters by optimiser name, ``"exact"`` included (e.g. its time limit).
+    The problem is the one ``correct`` solves (:func:`setupfix.pose.pose_problem`: the
+    model's forecast, relations, guard band and register costs), so the exact result
+    is ``correct``'s raw optimum.  ``params``: hyper-parameters by optimiser name,
+    ``"exact"`` included (e.g. its time limit).
     """
     if not isinstance(model, ProcessModel):
         model = load_model(model)
-    parts = load_parts(model, report, format=format, unit=unit, encoding=encoding, columns=columns,
-                       stations=stations, parts_per_cycle=parts_per_cycle, strict=strict, lenient=lenient)
-    measured = select_parts(parts, part, report)[0]
-    problem = CorrectionProblem.from_part(model, measured)
-    result = compare_problem(problem, methods=methods, trials=trials, seed=seed, params=params)
+    _, parts = read_parts(model, report, **read.kwargs(), **cycles.kwargs())
+    measured = cycles.select(parts, report)[0]
+    posed = pose_problem(model, measured)
+    result = compare_problem(posed.guarded, methods=methods, trials=trials, seed=seed, params=params)
     result.part, result.report, result.unit = measured.part, measured.report or str(report), model.unit
-    result.warnings = [str(n) for n in measured.notes]
+    result.notes = (*measured.notes, *posed.notes)
     return result
 
 

@@ -20,23 +20,22 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-import pandas as pd
 
-from setupfix.diagnose import Diagnoser, Diagnosis, Layout
-from setupfix.diagnose.forecast import forecast_shift, relation_composite
+from setupfix.diagnose import Diagnoser, Diagnosis
 from setupfix.diagnose.terms import typical_step
-from setupfix.errors import ExportError, ModelError, Note, SourceLocation
+from setupfix.errors import ExportError, ModelError, SourceLocation
 from setupfix.model import PartMeasurement, ProcessModel, model_from_dict
-from setupfix.model.effects import EffectsSection, ModelEffect, effects_from_dict, model_effects, with_effects
-from setupfix.optimize import CorrectionProblem, get_optimizer
-from setupfix.pipeline.series import (SeriesInput, corrections_from_table, expand_reports, hours_since, load_series,
-                                      parse_times, read_corrections_log, read_temperature_log, report_coordinates,
+from setupfix.model.effects import EffectsSection, ModelEffect, effects_from_dict, with_effects
+from setupfix.pipeline.correct import correct_cycle
+from setupfix.pipeline.requests import CorrectRequest, CycleCorrection
+from setupfix.pipeline.series import (SeriesInput, corrections_from_table, expand_reports, load_series,
+                                      read_corrections_log, read_temperature_log, report_coordinates,
                                       temperatures_from_table)
 from setupfix.pipeline.writers import check_target, write_text
 
 __all__ = ["SeriesInput", "DiagnoseOutcome", "load_series", "read_corrections_log", "read_temperature_log",
            "diagnose_reports", "expand_reports", "augmented_section", "write_augmented",
-           "corrections_from_table", "temperatures_from_table", "forecast_part", "effect_relations", "report_coordinates"]
+           "corrections_from_table", "temperatures_from_table", "forecast_model", "report_coordinates"]
 
 def augmented_section(diagnosis: Diagnosis, declared: EffectsSection) -> EffectsSection:
     """The ``[effects]`` section: the model's own effects, then those found (ids E1, E2, …)."""
@@ -72,6 +71,8 @@ class DiagnoseOutcome:
     next_correction: dict[str, float]
     augmented: str | None = None
     notes: list[str] = field(default_factory=list)
+    #: ``correct`` on the forecast (None when nothing was measured); ``next_correction`` is its corrections.
+    next_cycle: CycleCorrection | None = None
 
     def to_json(self) -> dict[str, Any]:
         """The ``diagnose --json`` object of ``../shared/spec/cli-json.md`` (plus extra keys)."""
@@ -121,19 +122,29 @@ class DiagnoseOutcome:
         return out
 
 
-def _next_correction(model: ProcessModel, diagnosis: Diagnosis) -> tuple[dict[str, float], list[str]]:
-    """Exact optimum (max error budget, grid) on the forecast, through the augmented relations."""
+def forecast_model(model: ProcessModel) -> ProcessModel:
+    """The model ``correct`` poses the diagnosis's forecast with.
+
+    The forecast is already the next cycle, smoothed over the series, with every effect
+    found or declared: the model's own ``[effects]`` forecast and the EWMA must not act
+    on it a second time (its relations come in through the augmented matrix).
+    """
+    return dataclasses.replace(model, effects=EffectsSection(),
+                               safety=dataclasses.replace(model.safety, ewma=1.0))
+
+
+def _next_correction(model: ProcessModel, diagnosis: Diagnosis) -> tuple[CycleCorrection | None, list[str]]:
+    """``correct`` on the forecast, through the augmented relations (:func:`correct_cycle`, exact optimiser)."""
     fc = diagnosis.forecast
     if not np.isfinite(fc).any():
-        return {}, ["no forecast: nothing measured"]
+        return None, ["no forecast: nothing measured"]
     part = PartMeasurement(part="next", report="forecast", timestamp=None, deviation=fc,
                            sources=tuple("" for _ in fc))
-    problem = CorrectionProblem.from_part(model, part)
-    C_aug = diagnosis.relation_matrix()
-    problem = dataclasses.replace(problem, composite=C_aug[:, part.measured])
-    result = get_optimizer("exact").solve(problem)
-    corr = {rid: float(v) for rid, v, reg in zip(problem.register_ids, result.x, model.registers) if not reg.fixed}
-    return corr, []
+    cycle = correct_cycle(CorrectRequest(forecast_model(model)), part, composite=diagnosis.relation_matrix())
+    notes = [str(n) for n in cycle.notes]
+    if cycle.verdict == "reject":
+        notes.append(f"next correction: {cycle.recommendation.alarm}")
+    return cycle, notes
 
 
 def diagnose_reports(model: ProcessModel | str | Path, reports: Sequence[str | Path] = (), *,
@@ -154,9 +165,9 @@ def diagnose_reports(model: ProcessModel | str | Path, reports: Sequence[str | P
                       lenient=lenient)
     diagnoser = diagnoser or Diagnoser()
     diagnosis = diagnoser.run(inp.layout, inp.series, declared=inp.declared)
-    nxt, more = _next_correction(inp.model, diagnosis)
+    cycle, more = _next_correction(inp.model, diagnosis)
     notes = list(inp.notes) + list(diagnosis.notes) + more
-    out = DiagnoseOutcome(inp, diagnosis, nxt, None, notes)
+    out = DiagnoseOutcome(inp, diagnosis, cycle.corrections if cycle is not None else {}, None, notes, cycle)
     if db is not None:
         _record(db, inp.model, out)
     if augment:
@@ -203,50 +214,3 @@ def write_augmented(model: ProcessModel, section: EffectsSection, target: str) -
         raise ExportError(f"the augmented model would not load: {exc}", location=SourceLocation(target)) from None
     write_text(target, new)
     return target
-
-
-
-def forecast_part(model: ProcessModel, part: PartMeasurement) -> PartMeasurement:
-    """The part as the next cycle is expected to come out, by the model's ``[effects]``.
-
-    ``correct`` optimises the next cycle, not the one measured: a drift goes on for
-    one cycle interval and every tool wears one cycle more (see
-    :func:`setupfix.diagnose.forecast.forecast_shift`).  A model without drift or wear
-    effects returns the part unchanged.
-    """
-    section = model_effects(model)
-    if not any(e.kind in ("drift", "wear") for e in section.effects):
-        return part
-    time = None
-    if section.origin and part.timestamp:
-        time = float(hours_since(parse_times([part.timestamp], part.report), pd.Timestamp(section.origin))[0])
-    shift = forecast_shift(section, Layout.from_model(model), time=time)
-    kinds = sorted({e.kind for e in section.effects if e.kind in ("drift", "wear")})
-    note = Note(f"the model's [effects] ({', '.join(kinds)}) forecast the next cycle: up to "
-                f"{np.max(np.abs(shift)):.4f} {model.unit} added to the measured deviations",
-                SourceLocation(model.source, key="effects"), "forecast")
-    return dataclasses.replace(part, deviation=part.deviation + shift, notes=(*part.notes, note))
-
-
-def effect_relations(model: ProcessModel, problem: CorrectionProblem,
-                     part: PartMeasurement) -> tuple[CorrectionProblem, Note | None]:
-    """The problem with the corrections mapped through the model's ``[effects]`` relations.
-
-    A relation found by ``diagnose`` says how a dimension really answers a register; the
-    correction for the next cycle must be mapped through it (see
-    :func:`setupfix.diagnose.forecast.relation_composite`: only a named register with a
-    weight known to a third).  Without such a relation the problem is returned as is.
-    """
-    section = model_effects(model)
-    if not any(e.kind == "relation" for e in section.effects):
-        return problem, None
-    layout = Layout.from_model(model)
-    C = relation_composite(section, layout)
-    changed = np.argwhere(C != layout.composite)
-    if changed.size == 0:
-        return problem, None
-    what = ", ".join(f"{layout.dimension_ids[q]} ~ {layout.register_ids[i]} {layout.composite[i, q]:g} → {C[i, q]:.4g}"
-                     for i, q in changed)
-    note = Note(f"the model's [effects] relation(s) map the correction: {what}",
-                SourceLocation(model.source, key="effects"), "relation")
-    return dataclasses.replace(problem, composite=C[:, part.measured]), note

@@ -1,7 +1,7 @@
 """Drift fed forward: the thermal change since the measured parts were cut, as a register correction.
 
 ``setupfix correct --thermal MODEL.json --temperatures LOG`` adds the line this module
-builds beside the setup correction ("thermal feed-forward −0.004 mm on H5, H23").  The
+builds beside the setup correction (a step of :func:`setupfix.pipeline.correct.correct_cycle`) ("thermal feed-forward −0.004 mm on H5, H23").  The
 arithmetic is :mod:`setupfix.thermal.feedforward` (pure); here the files are read, the
 times joined, the registers and units resolved, and the result described.
 """
@@ -21,7 +21,7 @@ from setupfix.model.process import ProcessModel
 from setupfix.thermal.feedforward import drift_change, feed_forward
 from setupfix.thermal.persist import UNITS, SavedModel
 
-__all__ = ["ThermalFeedForward", "thermal_feed_forward", "apply_feed_forward", "moved_registers", "unit_factor"]
+__all__ = ["ThermalFeedForward", "thermal_feed_forward", "moved_registers", "unit_factor"]
 
 _MM_PER: dict[str, float] = {"mm": 1.0, "inch": 25.4}
 
@@ -171,35 +171,3 @@ def thermal_feed_forward(model: ProcessModel, thermal: str | Path | SavedModel, 
     return ThermalFeedForward(saved.model.name, delta, str(saved.unit), float(x[mask][0]), model.unit,
                               tuple(r.id for r in regs), tuple(r.register for r in regs), measured_at, at_text, band,
                               tuple(list(data.notes) + notes))
-
-
-def apply_feed_forward(results: list[Any], thermal: str | Path | SavedModel, temperatures: str | Path | TemperatureLog,
-                       *, at: str | None = None, dead_band: float | None = None) -> None:
-    """The thermal step of ``setupfix correct``: attach a :class:`ThermalFeedForward` to each correction.
-
-    Each :class:`~setupfix.pipeline.correct.PartCorrection` gets ``thermal`` set from its
-    part's timestamp; its ``corrections`` then include the feed-forward.
-
-    Raises
-    ------
-    ParameterError
-        The setup correction plus the feed-forward would exceed a register's limit.
-    """
-    from setupfix.pipeline.thermal_files import load_model
-
-    saved = thermal if isinstance(thermal, SavedModel) else load_model(thermal)
-    source = str(thermal) if not isinstance(thermal, SavedModel) else "thermal model"
-    log = temperatures if isinstance(temperatures, TemperatureLog) else read_temperature_log(
-        temperatures, interval=saved.sample_interval_s)
-    for result in results:
-        ff = thermal_feed_forward(result.model, saved, log, measured_at=result.part.timestamp, at=at,
-                                  dead_band=dead_band)
-        result.thermal = None
-        setup = result.corrections  # the setup correction alone (verdict applied)
-        for reg in result.model.registers:
-            total = setup.get(reg.id, 0.0) + ff.corrections().get(reg.id, 0.0)
-            if abs(total) > reg.limit + 1e-12:
-                raise ParameterError(f"setup correction plus thermal feed-forward on {reg.register} "
-                                     f"({total:+g} {result.model.unit}) exceeds its limit ±{reg.limit:g}",
-                                     hint=f"{source}: check the thermal model or the temperature log")
-        result.thermal = ff

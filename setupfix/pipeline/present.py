@@ -1,20 +1,32 @@
-"""Presentation shared by the CLI and the TUI: number formatting and text tables.
+"""Presentation shared by the CLI and the TUI: number formatting, text tables and the JSON contract.
 
-Pure functions from result objects to text; nothing here prints or reads files.
+Pure functions from outcome objects to text or JSON-ready dicts; nothing here prints
+or reads files.  Typed notes (:class:`~setupfix.errors.Note`) become text only here.
 """
 
 from __future__ import annotations
 
 import math
 import textwrap
+from collections.abc import Iterable
+from typing import Any
 
 import numpy as np
 
+from setupfix.errors import Note
 from setupfix.offsets import grid_decimals
 from setupfix.pipeline.batch import BatchSummary
 from setupfix.pipeline.compare import Comparison
-from setupfix.pipeline.correct import PartCorrection
+from setupfix.pipeline.requests import CycleCorrection
 from setupfix.relation import RelationMatrices
+
+#: Digits of the lengths in the JSON output.
+JSON_DIGITS = 9
+
+
+def note_lines(notes: Iterable[Note]) -> list[str]:
+    """Typed notes as one line of text each (``file: [place]: message``)."""
+    return [str(n) for n in notes]
 
 
 def format_number(value: float, digits: int = 4) -> str:
@@ -32,7 +44,7 @@ def format_flags(flags: list[str]) -> str:
     return ", ".join(_FLAG_TEXT.get(f, f) for f in flags)
 
 
-def verdict_line(pc: PartCorrection) -> str:
+def verdict_line(pc: CycleCorrection) -> str:
     """One line saying what to do: APPLY / HOLD / REJECT and why."""
     rec = pc.recommendation
     if rec.verdict == "reject":
@@ -45,8 +57,9 @@ def verdict_line(pc: PartCorrection) -> str:
     return "APPLY the corrections below"
 
 
-def format_correction(pc: PartCorrection) -> str:
-    """Verdict, per-dimension table with flags, every register, budgets, binding dimensions and rules."""
+def format_correction(pc: CycleCorrection) -> str:
+    """Verdict, per-dimension table with flags, every register, the thermal feed-forward, budgets,
+    binding dimensions, rules and notes."""
     r = pc.result
     unit = pc.model.unit
     lines = [f"{pc.part.report}  part {pc.part.part or '—'}  ({r.optimizer}, {r.status}, {r.seconds * 1000:.0f} ms)",
@@ -69,6 +82,8 @@ def format_correction(pc: PartCorrection) -> str:
         note = "fixed" if reg["fixed"] else ("at limit" if reg["at_limit"] else "")
         lines.append(f"  {reg['id']:<6} {reg['register']:<10} {reg['delta']:+.{digits}f}  {reg['offset']:<8} {note}"
                      .rstrip())
+    if pc.thermal is not None:
+        lines.append(pc.thermal.line())
     lines += [
         "",
         f"error budget before {pc.margin_before:+.4f} {unit}, after {pc.margin_after:+.4f} {unit}, "
@@ -87,8 +102,55 @@ def format_correction(pc: PartCorrection) -> str:
     for rule in pc.recommendation.rules:
         what = ", ".join([*rule.registers, *(names.get(d, d) for d in rule.dimensions)])
         lines.append(f"rule {rule.rule}: {rule.message}" + (f" [{what}]" if what else ""))
-    lines += pc.warnings
+    lines += note_lines(pc.notes)
     return "\n".join(lines)
+
+
+def cycle_json(pc: CycleCorrection) -> dict[str, Any]:
+    """The ``correct --json`` object of ``../shared/spec/cli-json.md`` (plus extra keys) for one cycle."""
+    digits = JSON_DIGITS
+    r = pc.result
+    names = {d.id: d.name for d in pc.model.dimensions}
+    rec = pc.recommendation
+    return {
+        "part": pc.part.part,
+        "report": pc.part.report,
+        "verdict": rec.verdict,
+        "alarm": rec.alarm or None,
+        "optimizer": r.optimizer,
+        "status": r.status,
+        "margin_before": round(pc.margin_before, digits),
+        "margin_after": round(pc.margin_after, digits),
+        "bonus": round(pc.margin_after - pc.margin_before, digits),
+        "norm": round(pc.norm, digits),
+        "bound": None if r.bound is None else round(r.bound, digits),
+        "in_tolerance": pc.margin_after >= 0,
+        "message": r.message,
+        "corrections": {k: round(v, digits) for k, v in pc.corrections.items()},
+        "registers": [{**row, "delta": round(row["delta"], digits)} for row in pc.register_rows()],
+        "binding": [names[b] for b in pc.binding],
+        "given_up": [names[b] for b in rec.given_up],
+        "at_limit": list(rec.at_limit),
+        "rules": [e.to_json() for e in rec.rules],
+        "dimensions": [
+            {k: (round(v, digits) if isinstance(v, float) and np.isfinite(v) else
+                 (None if isinstance(v, float) else v))
+             for k, v in row.items()}
+            for row in pc.dimension_rows()
+        ],
+        "absent": list(pc.part.absent),
+        "unmatched": list(pc.part.unmatched),
+        "suggestions": {name: list(near) for name, near in pc.part.suggestions.items()},
+        "warnings": note_lines(pc.notes),
+        "evaluations": r.evaluations,
+        "seconds": round(r.seconds, 6),
+    } | ({"thermal": pc.thermal.to_json()} if pc.thermal is not None else {})
+
+
+def outcome_json(cycles: Iterable[CycleCorrection]) -> dict[str, Any]:
+    """``correct --json``: one cycle's object, or ``{"parts": [...]}`` for several."""
+    objs = [cycle_json(c) for c in cycles]
+    return objs[0] if len(objs) == 1 else {"parts": objs}
 
 
 def format_matrix(matrix: np.ndarray, rows: list[str], cols: list[str], title: str, width: int = 100) -> str:

@@ -13,7 +13,7 @@ from setupfix.diagnose import Layout
 from setupfix.diagnose.forecast import forecast_shift, relation_composite
 from setupfix.errors import ModelError
 from setupfix.model import load_model, model_from_dict
-from setupfix.model.effects import EffectsSection, ModelEffect, effects_from_dict, effects_toml, model_effects, with_effects
+from setupfix.model.effects import EffectsSection, ModelEffect, effects_from_dict, effects_toml, with_effects
 
 from conftest import GUIDE_PINS
 
@@ -78,8 +78,8 @@ def test_forecast_shift_adds_drift_and_wear_until_the_next_cycle(guide_pins_mode
 def test_model_without_effects_loads_as_before(guide_pins_model):
     doc = tomllib.loads((GUIDE_PINS / "model.toml").read_text(encoding="utf-8"))
     empty = model_from_dict({**doc, "effects": {}})
-    assert not model_effects(empty).effects
-    assert model_from_dict(doc) == dataclasses.replace(empty, extras={})
+    assert not empty.effects.effects and empty.effects == EffectsSection()
+    assert model_from_dict(doc) == empty
 
 
 def test_correct_maps_through_a_named_relation_only(tmp_path, guide_pins_model):

@@ -67,35 +67,20 @@ def test_deep_nesting_and_huge_integer_are_messages(tmp_path):
     assert "model.toml" in line and "out of range" in line
 
 
-def test_section_and_register_key_hooks(tmp_path, monkeypatch):
-    seen = {}
-
-    def parse_safety(value, model, report):
-        seen["model"] = model
-        if value.get("band", 0) <= 0:
-            report("band", "must be > 0")
-        return dict(value)
-
-    def parse_cost(value, report):
-        if not isinstance(value, (int, float)) or value <= 0:
-            report(f"expected a number > 0, found {value!r}")
-        return value
-
-    monkeypatch.setitem(loader.SECTIONS, "safety", parse_safety)
-    monkeypatch.setitem(loader.REGISTER_KEYS, "cost", parse_cost)
-    text = SPEC_EXAMPLE.replace('register = "H5"', 'register = "H5"\ncost = 2.5') + "\n[safety]\nband = 0.3\n"
+def test_safety_and_register_settings_are_typed_fields_with_key_paths(tmp_path):
+    """[safety] and a register's cost load into typed fields (no registry); problems name file and key."""
+    text = SPEC_EXAMPLE.replace('register = "H5"', 'register = "H5"\ncost = 2.5') + "\n[safety]\ngain = 0.5\n"
     path = tmp_path / "model.toml"
     path.write_text(text, encoding="utf-8")
     model = load_model(path)
-    assert model.extras == {"safety": {"band": 0.3}} and seen["model"].register("T5").extras == {"cost": 2.5}
-    assert model.register("T23").extras == {}
-    bad = text.replace("band = 0.3", "band = -1").replace("cost = 2.5", "cost = -1")
-    lines = lines_of(tmp_path, bad)
-    assert any("[tools.T5.cost]" in line and "expected a number > 0" in line for line in lines), lines
-    bad_safety = text.replace("band = 0.3", "band = -1")
-    (line,) = lines_of(tmp_path, bad_safety)
-    assert "[safety.band]" in line and "must be > 0" in line
-
+    assert model.safety.gain == 0.5 and model.register("T5").policy.cost == 2.5 and model.register("T5").cost == 2.5
+    assert model.register("T23").cost == 1.0 and not model.effects
+    (line,) = lines_of(tmp_path, text.replace("cost = 2.5", "cost = -1"))
+    assert "[tools.T5.cost]" in line and "expected a number in (0, ∞)" in line
+    (line,) = lines_of(tmp_path, text.replace("gain = 0.5", "gain = -1"))  # sections: once the rest is valid
+    assert "[safety.gain]" in line and "expected a number in (0, 1]" in line
+    (line,) = lines_of(tmp_path, text.replace("gain = 0.5", "band = 1"))
+    assert "[safety.band]" in line and "unknown key" in line
 
 def test_unknown_section_still_refused(tmp_path):
     # ([safety] itself is registered by setupfix.model.safety)

@@ -1,4 +1,4 @@
-"""The model's [safety] table and per-register / per-dimension extras."""
+"""The model's [safety] table (ProcessModel.safety) and per-register settings (Register.policy), typed."""
 
 from __future__ import annotations
 
@@ -6,7 +6,7 @@ import pytest
 
 from setupfix.errors import ModelError
 from setupfix.model import model_from_dict
-from setupfix.model.safety import safety_settings
+from setupfix.model.safety import RegisterPolicy, SafetySettings
 
 BASE = {
     "process": {"name": "p"},
@@ -29,9 +29,13 @@ def doc(**over):
 
 
 def test_defaults_without_safety_table():
-    s = safety_settings(model_from_dict(BASE))
-    assert s.dead_band is None and s.gain == 1.0 and s.reject_band is None and s.ewma == 1.0
-    assert s.register("T5").cost == 1.0 and s.register("T5").offset is None
+    m = model_from_dict(BASE)
+    s = m.safety
+    assert s == SafetySettings() and s.dead_band is None and s.gain == 1.0 and s.reject_band is None and s.ewma == 1.0
+    t5 = m.register("T5")
+    assert t5.policy == RegisterPolicy() and t5.cost == 1.0 and t5.policy.offset is None
+    assert t5.offset == "wear" and m.register("W1").offset == "geometry"  # defaults by kind
+    assert not m.effects and m.effects.effects == ()
 
 
 def test_values_are_read():
@@ -39,10 +43,11 @@ def test_values_are_read():
                             tools__T5__cost=4, tools__T5__offset="geometry", tools__T5__number=5,
                             wks__W1__cumulative_limit=0.3, safety__dimensions__D1__uncertainty=0.004,
                             safety__dimensions__D1__reject_band=0.5))
-    s = safety_settings(m)
+    s = m.safety
     assert (s.gain, s.dead_band, s.uncertainty) == (0.7, 0.003, 0.002)
-    assert s.register("T5").cost == 4.0 and s.register("T5").offset == "geometry" and s.register("T5").number == 5
-    assert s.register("W1").cumulative_limit == 0.3
+    t5 = m.register("T5").policy
+    assert t5.cost == 4.0 and t5.offset == "geometry" and t5.number == 5 and m.register("T5").offset == "geometry"
+    assert m.register("W1").policy.cumulative_limit == 0.3 and m.register("W1").cost == 1.0
     assert s.dimension_uncertainty == {"D1": 0.004} and s.dimension_reject_band == {"D1": 0.5}
 
 

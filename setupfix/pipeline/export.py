@@ -1,0 +1,107 @@
+"""Export: the one place that decides what of a recommendation reaches the controller, and writes it.
+
+Policy, the same for every door (``correct --offsets``, the TUI's export, batch):
+
+* **apply** — each correctable register's change (setup correction plus the thermal
+  feed-forward), one row per register, zero included;
+* **hold** — the rows are written too, each setup change 0 (plus the feed-forward,
+  which does not depend on the setup verdict) with ``verdict`` ``hold``: "leave the
+  offsets as they are" is a complete instruction, and with ``current`` offsets the
+  program sets every register to its present value (safe to run);
+* **reject** — nothing is written: :func:`export` refuses with an
+  :class:`~setupfix.errors.ExportError` naming the report and the part;
+* a controller program (every format but ``csv``) holds one cycle: several are refused
+  (choose one with ``--part``).
+
+The text is complete before the target is opened and written atomically (complete
+or absent); a register a format cannot express leaves no file at all.
+"""
+
+from __future__ import annotations
+
+import hashlib
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+
+from setupfix.errors import ExportError, SourceLocation
+from setupfix.offsets import OffsetRow, offset_rows
+from setupfix.pipeline.controllers import render
+from setupfix.pipeline.requests import CycleCorrection
+from setupfix.pipeline.writers import write_text
+
+__all__ = ["Exported", "cycle_rows", "offsets_text", "export"]
+
+
+@dataclass(frozen=True)
+class Exported:
+    """What :func:`export` wrote: target, controller syntax, the exact text and its hash, the parts and rows."""
+
+    target: str
+    controller: str
+    text: str
+    sha256: str
+    parts: tuple[str, ...]
+    rows: tuple[OffsetRow, ...]
+
+
+def cycle_rows(cycle: CycleCorrection, current: Mapping[str, float] | None = None) -> list[OffsetRow]:
+    """The offset rows of one cycle under the policy above (rows of a rejected cycle carry zeros).
+
+    Raises
+    ------
+    MatchError
+        If ``current`` lacks a correctable register.
+    """
+    return offset_rows(cycle.model, cycle.corrections, report=cycle.part.report, part=cycle.part.part,
+                       current=current, verdict=cycle.verdict)
+
+
+def _check(cycles: Sequence[CycleCorrection], controller: str) -> None:
+    for c in cycles:
+        if c.verdict == "reject":
+            raise ExportError(f"part {c.part.part or '—'} is rejected, nothing exported: {c.recommendation.alarm}",
+                              location=SourceLocation(c.part.report or "<report>"))
+    if controller != "csv" and len(cycles) > 1:
+        report = cycles[0].part.report or "<report>"
+        raise ExportError(f"{controller}: a program holds one correction, the report has {len(cycles)} cycles "
+                          f"({', '.join(c.part.part or '—' for c in cycles)}): choose one with --part",
+                          location=SourceLocation(report))
+
+
+def offsets_text(cycles: Sequence[CycleCorrection], controller: str = "csv",
+                 current: Mapping[str, float] | None = None) -> str:
+    """The exact text :func:`export` writes (offsets CSV or a controller program).
+
+    Raises
+    ------
+    ExportError
+        A rejected cycle, several cycles for a controller program, or a register the
+        format cannot express.
+    MatchError
+        If ``current`` lacks a correctable register.
+    """
+    _check(cycles, controller)
+    if not cycles:
+        return render(controller, [])
+    rows = [row for c in cycles for row in cycle_rows(c, current)]
+    title = f"{cycles[0].part.report} {cycles[0].part.part}".strip()
+    return render(controller, rows, title)
+
+
+def export(cycles: Sequence[CycleCorrection], target: str, *, controller: str = "csv",
+           current: Mapping[str, float] | None = None) -> Exported:
+    """Write the offsets of ``cycles`` to ``target`` (``-``: standard output) atomically.
+
+    ``current`` (the controller's current offsets by register ID) makes the rows
+    absolute (mode *set*).  See the module docstring for the policy.
+
+    Raises
+    ------
+    ExportError
+        As :func:`offsets_text`, or the target cannot be written; nothing is written then.
+    """
+    text = offsets_text(cycles, controller, current)
+    write_text(target, text)
+    rows = tuple(row for c in cycles for row in cycle_rows(c, current))
+    return Exported(str(target), controller, text, hashlib.sha256(text.encode("utf-8")).hexdigest(),
+                    tuple(c.part.part for c in cycles), rows)

@@ -1,0 +1,474 @@
+"""Requests and outcomes of the ``correct`` use case: typed, frozen, the same through every door.
+
+The CLI, batch, the TUI and the diagnosis build a :class:`CorrectRequest` and call
+:func:`setupfix.pipeline.correct.correct_report` (a report) or
+:func:`~setupfix.pipeline.correct.correct_cycle` (one cycle); they get a
+:class:`CorrectOutcome` / :class:`CycleCorrection` back and render it
+(:mod:`setupfix.pipeline.present`) or export it (:mod:`setupfix.pipeline.export`).
+Every request is picklable (batch sends it to worker processes).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterator, Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import numpy.typing as npt
+import pandas as pd
+
+from parsers.temperature import TemperatureLog
+from setupfix.errors import MatchError, Note, ParameterError, SetupfixError, SourceLocation
+from setupfix.model import PartMeasurement, ProcessModel, match_parts
+from setupfix.optimize import OPTIMIZERS, CorrectionProblem, OptimizeResult
+from setupfix.pipeline.feedforward import ThermalFeedForward
+from setupfix.pose import PosedProblem, Smoothed, ewma_history
+from setupfix.relation import relation_matrices
+from setupfix.safety import Recommendation, budget
+from setupfix.store import Store
+from setupfix.thermal.persist import SavedModel
+
+__all__ = ["ReadOptions", "CycleOptions", "SolveOptions", "ThermalInputs", "load_thermal", "CurrentOffsets",
+           "History", "CorrectRequest", "CycleCorrection", "CorrectOutcome", "HISTORY"]
+
+Array = npt.NDArray[np.float64]
+
+#: Earlier reports of the store looked at, newest first (weights (1 − λ)^50 are negligible for λ ≥ 0.1).
+HISTORY = 50
+
+
+@dataclass(frozen=True)
+class ReadOptions:
+    """The report reader's options (``--format``, ``--unit``, ``--encoding``, ``--columns``, ``--lenient``)."""
+
+    format: str | None = None
+    unit: str | None = None
+    encoding: str | None = None
+    columns: str | None = None
+    lenient: bool = False
+
+    def kwargs(self) -> dict[str, Any]:
+        """As keyword arguments of :func:`setupfix.pipeline.cycles.read_parts`."""
+        return {"format": self.format, "unit": self.unit, "encoding": self.encoding, "columns": self.columns,
+                "lenient": self.lenient}
+
+
+@dataclass(frozen=True)
+class CycleOptions:
+    """How a report's parts become fixture cycles, and which cycle to correct.
+
+    ``stations``: the stations in part order (``("P1", "P2")``) or part → station
+    pairs (``(("A7", "P1"), ("A8", "P2"))``); see :mod:`setupfix.pipeline.cycles`.
+    """
+
+    stations: tuple[str, ...] | tuple[tuple[str, str], ...] | None = None
+    parts_per_cycle: int | None = None
+    strict: bool = False
+    part: str | None = None
+
+    @classmethod
+    def of(cls, stations: Sequence[str] | Mapping[str, str] | None = None, *, parts_per_cycle: int | None = None,
+           strict: bool = False, part: str | None = None) -> CycleOptions:
+        """From a list or a mapping of stations (made hashable)."""
+        st: tuple[str, ...] | tuple[tuple[str, str], ...] | None = None
+        if isinstance(stations, Mapping):
+            st = tuple((str(k), str(v)) for k, v in stations.items())
+        elif stations is not None:
+            st = tuple(str(s) for s in stations)
+        return cls(st, parts_per_cycle, strict, part)
+
+    def station_map(self) -> list[str] | dict[str, str] | None:
+        """The stations as :func:`setupfix.pipeline.cycles.assign_stations` takes them."""
+        if self.stations is None:
+            return None
+        if self.stations and isinstance(self.stations[0], tuple):
+            return {str(k): str(v) for k, v in self.stations}  # type: ignore[misc]
+        return [str(s) for s in self.stations]
+
+    def kwargs(self) -> dict[str, Any]:
+        """Stations, parts per cycle and strictness as keyword arguments of ``read_parts``."""
+        return {"stations": self.station_map(), "parts_per_cycle": self.parts_per_cycle, "strict": self.strict}
+
+    def select(self, parts: Sequence[PartMeasurement], report: str | Path) -> list[PartMeasurement]:
+        """All cycles, or only the one named by ``part``.
+
+        Raises
+        ------
+        MatchError
+            If no cycle of the report has that name (the message lists the names).
+        """
+        if self.part is None:
+            return list(parts)
+        chosen = [p for p in parts if p.part == self.part]
+        if not chosen:
+            raise MatchError(f"no part {self.part!r} in the report "
+                             f"(parts: {', '.join(p.part or '(none)' for p in parts)})",
+                             location=SourceLocation(str(report)))
+        return chosen
+
+
+@dataclass(frozen=True)
+class SolveOptions:
+    """The optimiser: its name, seed (metaheuristics) and time limit (exact only, seconds).
+
+    Raises
+    ------
+    ParameterError
+        An unknown optimiser, a time limit for a metaheuristic or not a positive number.
+    """
+
+    optimizer: str = "exact"
+    seed: int | None = None
+    time_limit: float | None = None
+
+    def __post_init__(self) -> None:
+        if self.optimizer not in OPTIMIZERS:
+            raise ParameterError(f"unknown optimizer {self.optimizer!r} (known: {', '.join(sorted(OPTIMIZERS))})")
+        if self.time_limit is not None:
+            if self.optimizer != "exact":
+                raise ParameterError(f"--time-limit applies to the exact optimizer, not {self.optimizer!r}")
+            if not (isinstance(self.time_limit, (int, float)) and math.isfinite(self.time_limit)
+                    and self.time_limit > 0):
+                raise ParameterError(f"--time-limit must be a positive number of seconds, got {self.time_limit!r}")
+
+    def params(self) -> dict[str, Any]:
+        """The optimiser's hyper-parameters (``time_limit`` when given)."""
+        return {} if self.time_limit is None else {"time_limit": float(self.time_limit)}
+
+
+@dataclass(frozen=True)
+class ThermalInputs:
+    """The thermal feed-forward's inputs, loaded once (``--thermal``, ``--temperatures``, ``--at``, dead band)."""
+
+    saved: SavedModel
+    log: TemperatureLog
+    source: str = "thermal model"
+    at: str | None = None
+    dead_band: float | None = None
+
+
+def load_thermal(thermal: str | Path, temperatures: str | Path, *, at: str | None = None,
+                 dead_band: float | None = None) -> ThermalInputs:
+    """Read the thermal model (``thermal fit``) and the temperature log once.
+
+    Raises
+    ------
+    SetupfixError
+        Either file unreadable or invalid (named with its place).
+    """
+    from parsers.temperature import read_temperature_log
+    from setupfix.pipeline.thermal_files import load_model
+
+    saved = load_model(thermal)
+    log = read_temperature_log(temperatures, interval=saved.sample_interval_s)
+    return ThermalInputs(saved, log, str(thermal), at, dead_band)
+
+
+@dataclass(frozen=True)
+class CurrentOffsets(Mapping[str, float]):
+    """The controller's current offsets: register ID → value, and where they came from (for messages)."""
+
+    items_: tuple[tuple[str, float], ...]
+    source: str = ""
+
+    @classmethod
+    def of(cls, values: Mapping[str, float], source: str = "") -> CurrentOffsets:
+        return cls(tuple((str(k), float(v)) for k, v in values.items()), source)
+
+    @classmethod
+    def read(cls, path: str | Path, model: ProcessModel) -> CurrentOffsets:
+        """Read a ``register,value`` file (:func:`setupfix.pipeline.controllers.read_current`)."""
+        from setupfix.pipeline.controllers import read_current
+
+        return cls.of(read_current(path, model), str(path))
+
+    def __getitem__(self, key: str) -> float:
+        for k, v in self.items_:
+            if k == key:
+                return v
+        raise KeyError(key)
+
+    def __iter__(self) -> Iterator[str]:
+        return (k for k, _ in self.items_)
+
+    def __len__(self) -> int:
+        return len(self.items_)
+
+    def wear_totals(self, model: ProcessModel) -> dict[str, float]:
+        """Change applied since the last reset of each wear register: its current value.
+
+        A wear offset is set to 0 when the tool (or the setup) is renewed, so its value
+        is the total of the corrections since; geometry registers have no such total.
+        """
+        return {r.id: float(self[r.id]) for r in model.registers if r.offset == "wear" and r.id in self}
+
+
+def _stamp(text: object) -> np.datetime64 | None:
+    if text is None or (isinstance(text, float) and math.isnan(text)) or text == "":
+        return None
+    try:
+        t = pd.Timestamp(str(text))
+    except (ValueError, TypeError):
+        return None
+    if pd.isna(t):
+        return None
+    t = t.tz_convert("UTC").tz_localize(None) if t.tzinfo is not None else t
+    return np.datetime64(t.to_datetime64(), "ns")
+
+
+@dataclass(frozen=True, eq=False)
+class History:
+    """What the smoothing of a cycle needs: the earlier parts and the corrections log, as arrays.
+
+    Attributes
+    ----------
+    times : ndarray of datetime64[ns], shape (n_parts,)
+        When each earlier part was machined.
+    deviations : ndarray of shape (n_parts, n_dimensions) [unit]
+        Their deviations in model order (NaN where not measured).
+    keys : tuple of str
+        Part names (a part already held is not added twice by :meth:`with_parts`).
+    log_times, log_register, log_delta, log_reset : ndarrays of shape (n_log,)
+        The corrections log: time, register index in the model (−1: not in it),
+        change [unit], tool change.
+    """
+
+    times: npt.NDArray[np.datetime64]
+    deviations: Array
+    keys: tuple[str, ...]
+    log_times: npt.NDArray[np.datetime64]
+    log_register: npt.NDArray[np.int64]
+    log_delta: Array
+    log_reset: npt.NDArray[np.bool_]
+
+    @classmethod
+    def empty(cls, model: ProcessModel) -> History:
+        t = np.array([], dtype="datetime64[ns]")
+        return cls(t, np.zeros((0, len(model.dimensions))), (), t.copy(), np.zeros(0, dtype=np.int64), np.zeros(0),
+                   np.zeros(0, dtype=bool))
+
+    @classmethod
+    def from_store(cls, model: ProcessModel, store: Store) -> History:
+        """The parts of the store's newest :data:`HISTORY` reports matched to ``model`` and its corrections log.
+
+        Reports of other processes (that do not match the model) are left out.
+        """
+        out = cls.empty(model)
+        parts: list[PartMeasurement] = []
+        for record in sorted(store.reports(), key=lambda r: r.imported_at, reverse=True)[:HISTORY]:
+            try:
+                parts += match_parts(model, store.measurements(record.sha256), source=record.name)
+            except SetupfixError:
+                continue
+        out = out.with_parts(parts)
+        log = store.corrections()
+        if not len(log):
+            return out
+        ids = model.register_ids
+        times, regs, deltas, resets = [], [], [], []
+        for _, entry in log.iterrows():
+            when = _stamp(entry["timestamp"])
+            if when is None:
+                continue
+            try:
+                j = ids.index(model.register(str(entry["register"])).id)
+            except KeyError:
+                j = -1
+            times.append(when)
+            regs.append(j)
+            deltas.append(float(entry["delta"]) if pd.notna(entry["delta"]) else math.nan)
+            resets.append(str(entry.get("event") or "correction") == "tool_change")
+        return cls(out.times, out.deviations, out.keys, np.array(times, dtype="datetime64[ns]"),
+                   np.array(regs, dtype=np.int64), np.array(deltas, dtype=float), np.array(resets, dtype=bool))
+
+    def with_parts(self, parts: Sequence[PartMeasurement]) -> History:
+        """This history plus ``parts`` (those with a timestamp, not already held: same time and name)."""
+        held = set(zip(self.times.tolist(), self.keys))
+        times, devs, keys = list(self.times), list(self.deviations), list(self.keys)
+        for p in parts:
+            t = _stamp(p.timestamp)
+            if t is None or (t.tolist(), p.part) in held:
+                continue
+            held.add((t.tolist(), p.part))
+            times.append(t)
+            devs.append(np.asarray(p.deviation, dtype=float))
+            keys.append(p.part)
+        width = self.deviations.shape[1]
+        return History(np.array(times, dtype="datetime64[ns]"),
+                       np.vstack(devs) if devs else np.zeros((0, width)), tuple(keys), self.log_times,
+                       self.log_register, self.log_delta, self.log_reset)
+
+    def smooth(self, model: ProcessModel, part: PartMeasurement, lam: float) -> Smoothed:
+        """The EWMA estimate of ``part`` over every held part machined before it (:func:`setupfix.pose.ewma_history`)."""
+        now = _stamp(part.timestamp)
+        if lam < 1.0 and now is None:
+            return Smoothed(part.deviation, 0, lam, (Note("no timestamp in the report: not smoothed", None, "ewma"),))
+        return ewma_history(part.deviation, now, self.times, self.deviations, self.log_times, self.log_register,
+                            self.log_delta, self.log_reset, relation_matrices(model).composite, lam, limit=HISTORY)
+
+
+@dataclass(frozen=True)
+class CorrectRequest:
+    """Everything ``correct`` needs besides the report: the model and every option, loaded once."""
+
+    model: ProcessModel
+    read: ReadOptions = field(default_factory=ReadOptions)
+    cycles: CycleOptions = field(default_factory=CycleOptions)
+    solve: SolveOptions = field(default_factory=SolveOptions)
+    current: CurrentOffsets | None = None
+    history: History | None = None
+    thermal: ThermalInputs | None = None
+
+
+@dataclass(frozen=True, eq=False)
+class CycleCorrection:
+    """The recommendation for one measured cycle and everything needed to show or export it.
+
+    ``result`` is the optimiser's answer restated for the changes recommended (on the
+    real limits; the raw optimum is ``recommendation.result``); every number shown
+    (predicted, margins, budgets) is for the applied changes on the real tolerance
+    limits of ``posed.problem``.
+    """
+
+    model: ProcessModel
+    part: PartMeasurement
+    posed: PosedProblem
+    result: OptimizeResult
+    recommendation: Recommendation
+    thermal: ThermalFeedForward | None = None
+    notes: tuple[Note, ...] = ()
+
+    @property
+    def problem(self) -> CorrectionProblem:
+        """The problem on the real limits (estimated deviations, costs)."""
+        return self.posed.problem
+
+    @property
+    def verdict(self) -> str:
+        return self.recommendation.verdict
+
+    @property
+    def x(self) -> Array:
+        """Applied changes of every register (model order), zero unless the verdict is apply."""
+        return self.recommendation.x
+
+    @property
+    def measured(self) -> Array | None:
+        """The report's own deviations when the problem holds an estimate (smoothed, forecast), else None."""
+        return self.posed.measured if self.posed.estimated else None
+
+    @property
+    def corrections(self) -> dict[str, float]:
+        """Correction of every correctable register by model ID, zero included (thermal feed-forward
+        added unless the verdict is reject)."""
+        out = {reg.id: float(v) for v, reg in zip(self.x, self.model.registers) if not reg.fixed}
+        if self.thermal is not None and self.verdict != "reject":
+            for rid, shift in self.thermal.corrections().items():
+                out[rid] = out.get(rid, 0.0) + shift
+        return out
+
+    @property
+    def margin_before(self) -> float:
+        return self.problem.margin_before
+
+    @property
+    def margin_after(self) -> float:
+        return budget(self.problem, self.x)[0]
+
+    @property
+    def norm(self) -> float:
+        return float(np.linalg.norm(self.x))
+
+    @property
+    def binding(self) -> tuple[str, ...]:
+        """The dimensions that stop a better correction (none when rejected)."""
+        return self.result.binding
+
+    @property
+    def warnings(self) -> list[str]:
+        """The notes as text."""
+        # TODO(issue 20 merge): remove (pipeline/batch.py, view.py read it; render self.notes instead)
+        return [str(n) for n in self.notes]
+
+    def register_rows(self) -> list[dict[str, Any]]:
+        """Every register, fixed ones included: id, register, kind, offset, delta, fixed, at_limit."""
+        at = set(self.recommendation.at_limit)
+        return [{"id": reg.id, "register": reg.register, "kind": reg.kind, "offset": reg.offset,
+                 "delta": float(delta), "fixed": reg.fixed, "at_limit": reg.id in at}
+                for reg, delta in zip(self.model.registers, self.x)]
+
+    def dimension_rows(self) -> list[dict[str, Any]]:
+        """Per measured dimension: id, name, station, deviation, limits, predicted, margin, flags.
+
+        ``flags`` lists ``out`` (predicted out of tolerance after the changes),
+        ``out_before`` (out of tolerance before), ``binding``, ``given_up``, ``rejected``
+        and ``guard`` (predicted inside the limits but within U of one).  When the
+        problem holds an estimate, ``estimate`` is it and ``deviation`` the report's.
+        """
+        dims = {d.id: d for d in self.model.dimensions}
+        problem = self.problem
+        predicted = problem.predicted(self.x)
+        margins = budget(problem, self.x)[1]
+        binding, given_up = set(self.binding), set(self.recommendation.given_up)
+        rejected = {d for r in self.recommendation.rules if r.rule == "reject" for d in r.dimensions}
+        guard = self.recommendation.problem
+        measured = self.measured
+        rows = []
+        for i, did in enumerate(problem.dimension_ids):
+            d = dims[did]
+            flags = []
+            if not d.lower <= problem.deviation[i] <= d.upper:
+                flags.append("out_before")
+            if margins[i] < -1e-12:
+                flags.append("out")
+            elif not guard.lower[i] - 1e-12 <= predicted[i] <= guard.upper[i] + 1e-12:
+                flags.append("guard")
+            if did in binding:
+                flags.append("binding")
+            if did in given_up:
+                flags.append("given_up")
+            if did in rejected:
+                flags.append("rejected")
+            row: dict[str, Any] = {
+                "id": did, "name": d.name, "station": d.group, "deviation": float(problem.deviation[i]),
+                "predicted": float(predicted[i]), "lower": d.lower, "upper": d.upper,
+                "margin": float(margins[i]), "flags": flags,
+            }
+            if measured is not None:  # smoothed or forecast: the estimate is what was corrected
+                row["estimate"], row["deviation"] = row["deviation"], float(measured[i])
+            rows.append(row)
+        return rows
+
+    def offsets(self, current: Mapping[str, float] | None = None) -> list[Any]:
+        """The offset rows of this cycle (:func:`setupfix.offsets.offset_rows`)."""
+        # TODO(issue 20 merge): remove (pipeline/batch.py, session.py call it; use pipeline.export)
+        from setupfix.offsets import offset_rows
+
+        return offset_rows(self.model, self.corrections, report=self.part.report, part=self.part.part,
+                           current=current, verdict=self.verdict)
+
+    def to_json(self) -> dict[str, Any]:
+        """The ``correct --json`` object (:func:`setupfix.pipeline.present.cycle_json`)."""
+        # TODO(issue 20 merge): remove (pipeline/history.py, session.py call it; use present.cycle_json)
+        from setupfix.pipeline.present import cycle_json
+
+        return cycle_json(self)
+
+
+@dataclass(frozen=True, eq=False)
+class CorrectOutcome:
+    """One report corrected: what was read (format, hash, canonical table, reader's notes) and every cycle."""
+
+    report: str
+    format: str
+    sha256: str
+    table: pd.DataFrame
+    cycles: tuple[CycleCorrection, ...]
+    notes: tuple[Note, ...] = ()
+
+    @property
+    def rejected(self) -> tuple[CycleCorrection, ...]:
+        return tuple(c for c in self.cycles if c.verdict == "reject")

@@ -1,0 +1,450 @@
+"""Posing the correction problem of one measured cycle: the one builder, in one documented order.
+
+Every door (``correct``, batch, the TUI, ``compare``, the diagnosis's next correction)
+solves the problem :func:`pose_problem` builds, and :func:`recommend` applies the rules
+that act after the solve.  The order, each step on the output of the one before:
+
+1. **measurements** — the cycle's deviations y (model order, NaN where not measured);
+   only measured dimensions enter the problem (eqs. 3–4: predicted = y + x·C);
+2. **smoothing** — the EWMA estimate ŷ of the deviations over the earlier parts
+   (λ of ``[safety] ewma``; :func:`ewma_history`, arrays computed from the history);
+3. **effects forecast** — the model's ``[effects]`` drift and wear until the next cycle
+   are added (:func:`setupfix.diagnose.forecast.forecast_shift`); its relations (or a
+   composite given by the caller, e.g. the diagnosis's augmented matrix) replace C;
+4. **guard band** — each tolerance limit shrunk by g·U (ISO 14253-1); the error budget
+   f1 (eq. 8) of the guarded problem is a proven margin;
+5. **cumulative bounds** — step bounds tightened so |applied since reset + x| stays
+   within the cumulative limit;
+6. **costs** — the registers' least-norm weights (f2 = Σ cost·x², eq. 9 weighted;
+   the exact optimiser's second stage, f = 10·f1 − f2 of eq. 10 with unit costs);
+7. **fixed registers** — bounds (0, 0).
+
+:class:`PosedProblem` keeps the problem on the real limits (for every number shown),
+the guarded problem (what is solved), the policy of the rules after the solve, the
+as-measured deviations (the reject band judges the part as measured) and the
+pre-solve :class:`~setupfix.safety.RuleEffect` list.  Pure: arrays in and out, no files.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
+
+import numpy as np
+import numpy.typing as npt
+import pandas as pd
+
+from setupfix.diagnose.forecast import forecast_shift, relation_composite
+from setupfix.diagnose.terms import Layout
+from setupfix.errors import Note, ParseError, SourceLocation
+from setupfix.model import PartMeasurement, ProcessModel
+from setupfix.optimize import CorrectionProblem, OptimizeResult
+from setupfix.safety import (Policy, Recommendation, RuleEffect, apply_gain, cumulative_bounds, ewma_series,
+                             guard_limits, harmed_mask, in_dead_band, reject_mask)
+
+__all__ = ["Smoothed", "PosedProblem", "ewma_history", "forecast_of", "effects_composite", "policy_of",
+           "pose_problem", "pose_policy", "recommend", "hours_between"]
+
+Array = npt.NDArray[np.float64]
+Mask = npt.NDArray[np.bool_]
+
+
+@dataclass(frozen=True, eq=False)
+class Smoothed:
+    """The EWMA estimate of one cycle's deviations (step 2).
+
+    Attributes
+    ----------
+    deviation : ndarray of shape (n_dimensions,) [unit]
+        Model order, NaN where the cycle did not measure the dimension.
+    used : int
+        Earlier parts that entered the estimate (0: the estimate is the measurement).
+    lam : float
+        λ of the smoothing.
+    notes : tuple of Note
+        Why nothing was smoothed (no timestamp …).
+    """
+
+    deviation: Array
+    used: int
+    lam: float
+    notes: tuple[Note, ...] = ()
+
+
+def ewma_history(deviation: Array, now: np.datetime64 | None, times: npt.NDArray[np.datetime64], earlier: Array,
+                 log_times: npt.NDArray[np.datetime64], log_register: npt.NDArray[np.int64], log_delta: Array,
+                 log_reset: Mask, composite: Array, lam: float, *, limit: int = 50) -> Smoothed:
+    """EWMA of a cycle's deviations over the earlier parts, each shifted to the machine as it is now.
+
+    An earlier part's deviation y_k becomes y_k + Σ Δx·C over the corrections logged
+    after it was machined and up to ``now`` (eqs. 3–4), NaN on the dimensions a tool
+    changed since cuts (its wear restarted); then a_k = λ·y_k + (1 − λ)·a_{k−1}
+    (:func:`setupfix.safety.ewma_series`), the last row the current cycle.
+
+    Parameters
+    ----------
+    deviation : ndarray of shape (n_dimensions,)
+        The cycle as measured (NaN where not measured).
+    now : datetime64 or None
+        When the cycle was machined; None: nothing is smoothed.
+    times, earlier : ndarrays of shapes (n_parts,), (n_parts, n_dimensions)
+        Earlier parts (any order; only those before ``now`` count, the last ``limit``).
+    log_times, log_register, log_delta, log_reset : ndarrays of shape (n_log,)
+        Corrections log: time, register index (−1: not in the model), change, tool change.
+    composite : ndarray of shape (n_registers, n_dimensions)
+    lam : float in (0, 1]
+    """
+    if lam >= 1.0 or now is None:
+        return Smoothed(deviation, 0, lam)
+    before = np.flatnonzero(times < now)
+    if before.size == 0:
+        return Smoothed(deviation, 0, lam)
+    before = before[np.argsort(times[before], kind="stable")][-limit:]
+    rows = []
+    known = log_register >= 0
+    for k in before:
+        t = times[k]
+        since = known & (log_times > t) & (log_times <= now)
+        reset = np.zeros(composite.shape[1], dtype=bool)
+        shift = np.zeros(composite.shape[0])
+        for j, delta, tool_change in zip(log_register[since], log_delta[since], log_reset[since]):
+            if tool_change:
+                reset |= composite[j] != 0
+            elif np.isfinite(delta):
+                shift[j] += delta
+        row = earlier[k] + shift @ composite
+        row[reset] = np.nan
+        rows.append(row)
+    rows.append(deviation)
+    smoothed = ewma_series(np.vstack(rows), lam)
+    return Smoothed(np.where(np.isnan(deviation), np.nan, smoothed), int(before.size), lam)
+
+
+def hours_between(stamp: str, origin: str, where: str) -> float:
+    """Hours from ``origin`` to ``stamp`` (ISO 8601; aware times compared in UTC).
+
+    Raises
+    ------
+    ParseError
+        If ``stamp`` is not an ISO 8601 time (named with ``where``).
+    """
+    def naive(text: str) -> pd.Timestamp:
+        try:
+            t = pd.Timestamp(str(text))
+            if pd.isna(t):
+                raise ValueError
+        except (ValueError, TypeError):
+            raise ParseError(f"not an ISO 8601 timestamp: {text!r}", location=SourceLocation(where)) from None
+        return t.tz_convert("UTC").tz_localize(None) if t.tzinfo is not None else t
+
+    return float((naive(stamp) - naive(origin)).total_seconds()) / 3600.0
+
+
+def forecast_of(model: ProcessModel, timestamp: str | None, report: str = "") -> tuple[Array, Note | None]:
+    """Step 3: change of every dimension from the measured cycle to the next, by ``model.effects``.
+
+    Drift goes on for one cycle interval, every tool wears one more cycle
+    (:func:`setupfix.diagnose.forecast.forecast_shift`).  Returns zeros and no note
+    when the model has no drift or wear effect.
+
+    Returns
+    -------
+    shift : ndarray of shape (n_dimensions,) [unit]
+    note : Note or None
+    """
+    section = model.effects
+    if not any(e.kind in ("drift", "wear") for e in section.effects):
+        return np.zeros(len(model.dimensions)), None
+    time = hours_between(timestamp, section.origin, report) if section.origin and timestamp else None
+    shift = forecast_shift(section, Layout.from_model(model), time=time)
+    kinds = sorted({e.kind for e in section.effects if e.kind in ("drift", "wear")})
+    note = Note(f"the model's [effects] ({', '.join(kinds)}) forecast the next cycle: up to "
+                f"{np.max(np.abs(shift)):.4f} {model.unit} added to the measured deviations",
+                SourceLocation(model.source, key="effects"), "forecast")
+    return shift, note
+
+
+def effects_composite(model: ProcessModel) -> tuple[Array | None, Note | None]:
+    """Step 3: the composite C with the model's ``[effects]`` relations (None when they change nothing).
+
+    See :func:`setupfix.diagnose.forecast.relation_composite`: C + Σ δ e_i e_qᵀ for a
+    named register whose weight is known to a third.
+
+    Returns
+    -------
+    composite : ndarray of shape (n_registers, n_dimensions) or None
+    note : Note or None
+    """
+    section = model.effects
+    if not any(e.kind == "relation" for e in section.effects):
+        return None, None
+    layout = Layout.from_model(model)
+    C = relation_composite(section, layout)
+    changed = np.argwhere(C != layout.composite)
+    if changed.size == 0:
+        return None, None
+    what = ", ".join(f"{layout.dimension_ids[q]} ~ {layout.register_ids[i]} {layout.composite[i, q]:g} → {C[i, q]:.4g}"
+                     for i, q in changed)
+    note = Note(f"the model's [effects] relation(s) map the correction: {what}",
+                SourceLocation(model.source, key="effects"), "relation")
+    return C, note
+
+
+def policy_of(model: ProcessModel, dimension_ids: tuple[str, ...],
+              cumulative: Mapping[str, float] | None = None) -> Policy:
+    """The model's safety settings as arrays aligned with the problem's dimensions (defaults filled in).
+
+    ``cumulative`` gives, by register ID, the change applied since the last reset
+    (the current wear value of a wear register); the cumulative limit applies to
+    those registers only, since for the others the total is not known.
+    """
+    s = model.safety
+    regs = [r.policy for r in model.registers]
+    band = s.dead_band if s.dead_band is not None else 2 * model.resolution
+    dims = {d.id: d for d in model.dimensions}
+    width = np.array([dims[d].upper - dims[d].lower for d in dimension_ids])
+    reject = np.array([s.dimension_reject_band.get(d, s.reject_band if s.reject_band is not None else w)
+                       for d, w in zip(dimension_ids, width)], dtype=float)
+    cum_limit = [p.cumulative_limit if p.cumulative_limit is not None else s.cumulative_limit for p in regs]
+    return Policy(
+        dead_band=np.array([p.dead_band if p.dead_band is not None else band for p in regs], dtype=float),
+        gain=np.array([p.gain if p.gain is not None else s.gain for p in regs], dtype=float),
+        cumulative_limit=np.array([np.inf if c is None or r.id not in (cumulative or {}) else c
+                                   for c, r in zip(cum_limit, model.registers)], dtype=float),
+        cumulative=np.array([float((cumulative or {}).get(r.id, 0.0)) for r in model.registers]),
+        cost=np.array([p.cost for p in regs], dtype=float),
+        reject_band=np.nan_to_num(reject, nan=np.inf, posinf=np.inf),
+        uncertainty=np.array([s.dimension_uncertainty.get(d, s.uncertainty) for d in dimension_ids], dtype=float),
+        guard_band=s.guard_band,
+    )
+
+
+@dataclass(frozen=True, eq=False)
+class PosedProblem:
+    """The problem of one cycle, posed (module docstring), ready for any optimiser.
+
+    Attributes
+    ----------
+    problem : CorrectionProblem
+        On the real tolerance limits with the estimated deviations (smoothed,
+        forecast), the effective composite and the register costs.
+    guarded : CorrectionProblem
+        What is solved: limits shrunk by the guard band, bounds by the cumulative
+        limit, fixed registers at (0, 0).
+    policy : Policy
+        The settings of the rules (those after the solve: reject band, gain, no harm,
+        dead band, clamp).
+    measured : ndarray of shape (n_dimensions,) [unit]
+        The measured dimensions' deviations as the report gives them (reject band).
+    effects : tuple of RuleEffect
+        The pre-solve rules that changed the problem (ewma, forecast, guard_band,
+        cumulative_limit), in the order applied.
+    notes : tuple of Note
+        What the steps assumed (forecast, relations, smoothing not possible …).
+    """
+
+    problem: CorrectionProblem
+    guarded: CorrectionProblem
+    policy: Policy
+    measured: Array
+    effects: tuple[RuleEffect, ...] = ()
+    notes: tuple[Note, ...] = ()
+
+    @property
+    def estimated(self) -> bool:
+        """True when the problem's deviations are an estimate (smoothed or forecast), not the report's."""
+        return any(e.rule in ("ewma", "forecast") for e in self.effects)
+
+
+def pose_policy(problem: CorrectionProblem, policy: Policy, *, measured: Array | None = None,
+                effects: tuple[RuleEffect, ...] = (), notes: tuple[Note, ...] = ()) -> PosedProblem:
+    """Steps 4–7 on a problem already holding its deviations and composite (steps 1–3).
+
+    Parameters
+    ----------
+    problem : CorrectionProblem
+        Real limits; register limits as bounds.
+    policy : Policy
+        Aligned with ``problem``.
+    measured : ndarray of shape (n_dimensions,), optional
+        The report's own deviations when ``problem.deviation`` is an estimate.
+    effects, notes
+        What steps 1–3 did (prepended to the rule list).
+    """
+    dims = np.array(problem.dimension_ids, dtype=object)
+    ids = np.array(problem.register_ids, dtype=object)
+    rules = list(effects)
+    guarded = problem
+    if np.any(policy.uncertainty > 0):  # 4. guard band
+        lo, up = guard_limits(problem.lower, problem.upper, policy.uncertainty, policy.guard_band)
+        guarded = dataclasses.replace(guarded, lower=lo, upper=up)
+        shrunk = tuple(dims[policy.uncertainty > 0])
+        rules.append(RuleEffect("guard_band", f"limits of {len(shrunk)} dimension(s) shrunk by "
+                                f"{policy.guard_band:g}·U (ISO 14253-1)", dimensions=shrunk))
+    lb, ub = problem.lb, problem.ub
+    if np.any(np.isfinite(policy.cumulative_limit)):  # 5. cumulative bounds
+        lb, ub = cumulative_bounds(lb, ub, policy.cumulative, policy.cumulative_limit, problem.resolution)
+        tightened = (lb > problem.lb) | (ub < problem.ub)
+        if tightened.any():
+            rules.append(RuleEffect("cumulative_limit", "step bounds tightened so that the total since the last "
+                                    "reset stays within the cumulative limit", registers=tuple(ids[tightened])))
+    cost = np.asarray(policy.cost, dtype=float)  # 6. costs
+    fixed = problem.ub <= problem.lb  # 7. fixed registers (and registers without room)
+    lb, ub = np.where(fixed, 0.0, lb), np.where(fixed, 0.0, ub)
+    if not (np.array_equal(lb, guarded.lb) and np.array_equal(ub, guarded.ub)
+            and np.array_equal(cost, guarded.cost)):
+        guarded = dataclasses.replace(guarded, lb=lb, ub=ub, cost=cost)
+    raw = problem.deviation if measured is None else np.asarray(measured, dtype=float)
+    return PosedProblem(problem, guarded, policy, raw, tuple(rules), notes)
+
+
+def pose_problem(model: ProcessModel, part: PartMeasurement, *, smoothed: Smoothed | None = None,
+                 cumulative: Mapping[str, float] | None = None, composite: Array | None = None,
+                 policy: Policy | None = None) -> PosedProblem:
+    """Pose the problem of one measured cycle in the module's order (steps 1–7).
+
+    Parameters
+    ----------
+    model : ProcessModel
+    part : PartMeasurement
+        The cycle as measured (step 1).
+    smoothed : Smoothed, optional
+        Its EWMA estimate (step 2), from the history (:func:`ewma_history`).
+    cumulative : mapping register ID → float, optional
+        Change applied since the last reset (the current value of wear registers, step 5).
+    composite : ndarray of shape (n_registers, n_dimensions), optional
+        A relation matrix replacing C (the diagnosis's augmented one); default the
+        model's, with its ``[effects]`` relations (step 3).
+    policy : Policy, optional
+        Settings replacing the model's (tests, what-if); default :func:`policy_of`.
+    """
+    keep = part.measured
+    measured = part.deviation[keep].copy()
+    deviation = part.deviation
+    effects: list[RuleEffect] = []
+    notes: list[Note] = list(smoothed.notes) if smoothed is not None else []
+    dim_ids = tuple(d.id for d, k in zip(model.dimensions, keep) if k)
+    if smoothed is not None and smoothed.used:  # 2. smoothing
+        deviation = smoothed.deviation
+        effects.append(RuleEffect("ewma", f"deviations smoothed over {smoothed.used} earlier part(s), "
+                                  f"λ = {smoothed.lam:g}", dimensions=dim_ids))
+    shift, note = forecast_of(model, part.timestamp, part.report)  # 3. effects: forecast …
+    if note is not None:
+        deviation = deviation + shift
+        notes.append(note)
+        effects.append(RuleEffect("forecast", note.message, dimensions=dim_ids))
+    problem = CorrectionProblem.from_part(model, dataclasses.replace(part, deviation=deviation))
+    if composite is None:  # … and relations
+        composite, note = effects_composite(model)
+        if note is not None:
+            notes.append(note)
+    if composite is not None:
+        problem = dataclasses.replace(problem, composite=np.asarray(composite, dtype=float)[:, keep])
+    policy = policy if policy is not None else policy_of(model, problem.dimension_ids, cumulative)
+    return pose_policy(problem, policy, measured=measured, effects=tuple(effects), notes=tuple(notes))
+
+
+def _zero_result(problem: CorrectionProblem, optimizer: str, status: str, message: str) -> OptimizeResult:
+    x = np.zeros(problem.n_registers)
+    budget = problem.margin_before
+    return OptimizeResult(x=x, margin_before=budget, margin_after=budget, norm=0.0, optimizer=optimizer,
+                          evaluations=0, seconds=0.0, status=status, message=message,
+                          binding=problem.binding(x))
+
+
+def _restrict(problem: CorrectionProblem, keep: Mask) -> CorrectionProblem:
+    return dataclasses.replace(problem, composite=problem.composite[:, keep], deviation=problem.deviation[keep],
+                               lower=problem.lower[keep], upper=problem.upper[keep],
+                               dimension_ids=tuple(d for d, k in zip(problem.dimension_ids, keep) if k))
+
+
+def _inside(values: Array, lower: Array, upper: Array) -> Mask:
+    return (values >= lower - 1e-12) & (values <= upper + 1e-12)
+
+
+def recommend(posed: PosedProblem, solve: Callable[[CorrectionProblem], OptimizeResult], *,
+              optimizer: str = "exact", names: Mapping[str, str] | None = None) -> Recommendation:
+    """The rules after the solve, around ``solve(posed.guarded)``.
+
+    Order: reject band (on the part as measured: no solve at all) → solve → gain →
+    no harm (given-up dimensions) → dead band → clamp report.  The pre-solve rules
+    (``posed.effects``) head the rule list.
+
+    Parameters
+    ----------
+    posed : PosedProblem
+    solve : callable
+        ``solve(problem) -> OptimizeResult`` (any optimiser).
+    names : mapping, optional
+        Dimension ID → name, for the messages.
+    """
+    label = (lambda ids: ", ".join((names or {}).get(i, i) for i in ids))
+    problem, guarded, policy = posed.problem, posed.guarded, posed.policy
+    ids = np.array(problem.register_ids, dtype=object)
+    dims = np.array(problem.dimension_ids, dtype=object)
+    dev, lower, upper = problem.deviation, problem.lower, problem.upper
+
+    bad = reject_mask(posed.measured, lower, upper, policy.reject_band)
+    if bad.any():
+        bad_ids = tuple(dims[bad])
+        alarm = (f"REJECT: {label(bad_ids)} beyond the reject band (a broken tool, a bad measurement or a wrong "
+                 "part?) — no correction; check the part and the measurement")
+        rules = [e for e in posed.effects if e.rule in ("ewma", "forecast")]
+        rules.append(RuleEffect("reject", "deviation beyond the reject band: no correction", dimensions=bad_ids))
+        result = _zero_result(problem, optimizer, "rejected", alarm)
+        return Recommendation("reject", result.x, result, problem, tuple(rules), alarm=alarm)
+
+    rules = list(posed.effects)
+    result = solve(guarded)
+    x = np.asarray(result.x, dtype=float)
+    given_up = tuple(result.given_up)
+
+    xg = apply_gain(x, policy.gain, problem.resolution)
+    if np.any(xg != x):
+        rules.append(RuleEffect("gain", "only the feedback fraction of the optimum is applied",
+                                registers=tuple(ids[xg != x])))
+    x = xg
+
+    harmed = harmed_mask(dev, problem.predicted(x), lower, upper)
+    if harmed.any():
+        # The optimum trades an in-tolerance dimension for out-of-tolerance ones: give
+        # up those no correction brought in, re-solve on the others, check again.
+        hopeless = ~((dev >= lower) & (dev <= upper))
+        if hopeless.any() and not hopeless.all():
+            retry = solve(_restrict(guarded, ~hopeless))
+            x2 = apply_gain(np.asarray(retry.x, dtype=float), policy.gain, problem.resolution)
+            if not harmed_mask(dev, problem.predicted(x2), lower, upper).any():
+                gone = tuple(dims[hopeless & ~_inside(problem.predicted(x2), lower, upper)])
+                given_up = tuple(dict.fromkeys(given_up + gone))
+                rules.append(RuleEffect("no_harm", "the optimum would move dimensions measured in tolerance out "
+                                        f"of it ({label(dims[harmed])}); corrected without "
+                                        f"{label(gone) or 'the out-of-tolerance ones'}", dimensions=gone))
+                message = (f"{label(gone)} given up: no correction brings them into tolerance without moving "
+                           "others out; the others are corrected")
+                x, result = x2, dataclasses.replace(retry, message=message)
+                harmed = np.zeros_like(harmed)
+        if harmed.any():
+            kept = tuple(dims[harmed])
+            rules.append(RuleEffect("no_harm", f"no correction keeps {label(kept)} in tolerance while "
+                                    "improving the others: nothing changed", dimensions=kept))
+            x = np.zeros_like(x)
+    if given_up and not any(r.rule == "no_harm" for r in rules):
+        rules.append(RuleEffect("given_up", "no setup correction brings these into tolerance: they need the NC "
+                                "program or the process", dimensions=given_up))
+
+    verdict = "apply"
+    if not np.any(x):
+        verdict = "hold"
+    elif in_dead_band(x, policy.dead_band):
+        rules.append(RuleEffect("dead_band", "every change is within its dead band: hold",
+                                registers=tuple(ids[x != 0])))
+        x = np.zeros_like(x)
+        verdict = "hold"
+
+    at = (x != 0) & ((x >= guarded.ub - 1e-12) | (x <= guarded.lb + 1e-12))
+    at_limit = tuple(ids[at])
+    if at_limit:
+        rules.append(RuleEffect("clamp", "change at the register's per-step or cumulative limit",
+                                registers=at_limit))
+    return Recommendation(verdict, x + 0.0, result, guarded, tuple(rules), given_up, at_limit)

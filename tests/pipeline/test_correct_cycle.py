@@ -1,0 +1,103 @@
+"""The correct use case as every door uses it: compare, the diagnosis's next correction, the history."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from conftest import GUIDE_PINS, SAMPLES
+from setupfix.diagnose import Diagnoser
+from setupfix.errors import ParameterError
+from setupfix.model import PartMeasurement, load_model
+from setupfix.pipeline.compare import compare_report
+from setupfix.pipeline.correct import correct_cycle, correct_report
+from setupfix.pipeline.cycles import load_parts
+from setupfix.pipeline.diagnose import diagnose_reports, forecast_model
+from setupfix.pipeline.requests import CorrectRequest, CycleOptions, History, SolveOptions
+from setupfix.store import open_store
+
+sys.path.insert(0, str(Path(__file__).resolve().parent / "data"))
+import make_correct_goldens as golden  # noqa: E402
+
+CYCLES = [GUIDE_PINS / f"cycle_{k:02d}.csv" for k in range(1, 6)]
+
+
+@pytest.fixture(scope="module")
+def costed(tmp_path_factory):
+    """The guide-pins model with register costs, gain, guard band and dead band (the goldens' model)."""
+    return load_model(golden.costed_model(tmp_path_factory.mktemp("costed")))
+
+
+@pytest.mark.parametrize("report", CYCLES, ids=lambda p: p.stem)
+def test_compare_exact_is_corrects_raw_optimum_with_costs(costed, report):
+    cycle = correct_report(CorrectRequest(costed), report).cycles[0]
+    comparison = compare_report(costed, report, methods=(), trials=1)
+    raw = cycle.recommendation.result
+    np.testing.assert_array_equal(comparison.exact.x, raw.x)
+    assert comparison.exact.margin_after == raw.margin_after and comparison.exact.fitness == raw.fitness
+    np.testing.assert_array_equal(comparison.problem.cost, [r.cost for r in costed.registers])
+    assert comparison.problem.cost.max() == 4.0
+
+
+def test_diagnosis_next_correction_is_correct_on_its_forecast():
+    loop = SAMPLES / "closed_loop"
+    out = diagnose_reports(GUIDE_PINS / "model.toml", [loop / "measurements.csv"],
+                           corrections=str(loop / "corrections.csv"), temperatures=str(loop / "temperatures.csv"),
+                           diagnoser=Diagnoser(walk=False))
+    fc = out.diagnosis.forecast
+    part = PartMeasurement(part="next", report="forecast", timestamp=None, deviation=fc,
+                           sources=tuple("" for _ in fc))
+    model = forecast_model(out.input.model)
+    again = correct_cycle(CorrectRequest(model), part, composite=out.diagnosis.relation_matrix())
+    assert out.next_cycle is not None and out.next_correction == again.corrections
+    np.testing.assert_array_equal(out.next_cycle.x, again.x)
+    assert out.next_cycle.verdict == again.verdict
+    np.testing.assert_array_equal(again.problem.composite, out.diagnosis.relation_matrix()[:, part.measured])
+
+
+def test_store_history_equals_the_parts_given_and_counts_a_part_once(tmp_path):
+    path = tmp_path / "m.toml"
+    path.write_text((GUIDE_PINS / "model.toml").read_text() + "\n[safety]\newma = 0.5\n")
+    model = load_model(path)
+    db = tmp_path / "h.db"
+    code, _, err = golden.run(["history", "import", "--db", db, "--model", path, *CYCLES])
+    assert code == 0, err
+    with open_store(db) as store:
+        stored = History.from_store(model, store)
+    parts = [p for r in CYCLES for p in load_parts(model, r)]
+    given = History.empty(model).with_parts(parts)
+    assert stored.with_parts(parts).keys == stored.keys  # the same parts are not counted twice
+    for report in CYCLES:
+        a = correct_report(CorrectRequest(model, history=stored), report).cycles[0]
+        b = correct_report(CorrectRequest(model, history=given), report).cycles[0]
+        assert a.corrections == b.corrections and a.verdict == b.verdict
+        np.testing.assert_array_equal(a.problem.deviation, b.problem.deviation)
+    last = correct_report(CorrectRequest(model, history=given), CYCLES[-1]).cycles[0]
+    assert last.recommendation.rules[0].rule == "ewma" and "over 4 earlier part(s)" in last.recommendation.rules[0].message
+    plain = correct_report(CorrectRequest(model), CYCLES[-1]).cycles[0]
+    assert any("needs the history store" in n.message for n in plain.notes)
+
+
+def test_requests_are_hashable_options_and_checked():
+    assert CycleOptions.of({"A7": "P1"}).station_map() == {"A7": "P1"}
+    assert CycleOptions.of(["P2", "P1"]).station_map() == ["P2", "P1"]
+    hash(CycleOptions.of(["P1"], part="x"))
+    assert SolveOptions(time_limit=1.5).params() == {"time_limit": 1.5}
+    with pytest.raises(ParameterError, match="applies to the exact optimizer"):
+        SolveOptions("pso", time_limit=1.0)
+    with pytest.raises(ParameterError, match="unknown optimizer"):
+        SolveOptions("magic")
+
+
+def test_outcome_reads_once_and_states_what_it_read():
+    import hashlib
+
+    import parsers
+
+    source = parsers.load_source(GUIDE_PINS / "cycle_01.csv")
+    out = correct_report(CorrectRequest(load_model(GUIDE_PINS / "model.toml")), source)
+    assert out.sha256 == hashlib.sha256(source.data).hexdigest() and out.format and len(out.table)
+    assert out.report == source.name and len(out.cycles) == 1 and not out.rejected

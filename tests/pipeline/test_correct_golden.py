@@ -1,0 +1,63 @@
+"""``setupfix correct`` against the goldens the tree wrote before issue 20 (tests/pipeline/data).
+
+JSON, text and offsets of the guide-pins cycles 1–5 (plain; costs and every safety setting;
+[effects] drift, wear and a relation; EWMA over a store) and the controllers sample with its
+current offsets must not change: the one use-case core keeps every number.  Differences
+allowed on purpose, each asserted: the ``forecast`` rule a model with drift or wear now lists
+(right after ``ewma``), and the thermal line's place in the text (none here).
+"""
+
+from __future__ import annotations
+
+import json
+import re
+import sys
+from pathlib import Path
+
+import pytest
+
+DATA = Path(__file__).resolve().parent / "data"
+sys.path.insert(0, str(DATA))
+
+import make_correct_goldens as golden  # noqa: E402
+
+NAMES = sorted(p.stem for p in (DATA / "correct_golden").glob("*.json"))
+
+
+@pytest.fixture(scope="module")
+def cases(tmp_path_factory):
+    tmp = tmp_path_factory.mktemp("golden")
+    return tmp, golden.cases(tmp)
+
+
+def without_forecast(doc):
+    """The JSON with the new ``forecast`` rule taken out (checked to be there, after ``ewma`` if any)."""
+    rules = doc["rules"]
+    kinds = [r["rule"] for r in rules]
+    assert kinds.count("forecast") == 1 and kinds.index("forecast") == int("ewma" in kinds)
+    return {**doc, "rules": [r for r in rules if r["rule"] != "forecast"]}
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_json_text_and_offsets_equal_the_goldens(name, cases):
+    tmp, table = cases
+    args = table[name]
+    code, out, err = golden.run([*args, "--json"])
+    want = json.loads((DATA / "correct_golden" / f"{name}.json").read_text())
+    got = json.loads(json.dumps(golden.blank(json.loads(out)), ensure_ascii=False).replace(str(tmp), "TMP"))
+    assert code == want["exit"], err
+    if name.startswith("effects"):
+        got = without_forecast(got)
+    assert got == want["json"]
+    assert list(got) == list(want["json"])  # key order too: the contract's text is byte-identical
+
+    target = tmp / f"{name}.o.csv"
+    code, text, _ = golden.run([*args, "--offsets", target])
+    text = re.sub(r"\d+ ms\)", "# ms)", text).replace(str(tmp), "TMP")
+    expected = (DATA / "correct_golden" / f"{name}.txt").read_text()
+    if name.startswith("effects"):
+        line = next(li for li in text.splitlines() if li.startswith("rule forecast:"))
+        text = text.replace(line + "\n", "")
+    assert text == expected
+    offsets = target.read_text().replace(str(tmp), "TMP") if target.exists() else ""
+    assert offsets == (DATA / "correct_golden" / f"{name}.offsets.csv").read_text()
