@@ -41,7 +41,9 @@ def test_killed_run_leaves_no_partial_file(tmp_path):
     import pytest
 
     from setupfix.cli._batch import _terminate
+    from setupfix.model import load_model
     from setupfix.pipeline.batch import run_batch
+    from setupfix.pipeline.requests import CorrectRequest
 
     d = tmp_path / "in"
     d.mkdir()
@@ -55,5 +57,5 @@ def test_killed_run_leaves_no_partial_file(tmp_path):
         _terminate(signal.SIGTERM, None)
 
     with pytest.raises(KeyboardInterrupt):
-        run_batch(MODEL, d, out, settle=0, progress=killed_after_first)
+        run_batch(CorrectRequest(load_model(MODEL)), d, out, settle=0, progress=killed_after_first)
     assert [p.name for p in tmp_path.iterdir()] == ["in"]  # … and neither output nor temporary file is left
