@@ -34,6 +34,11 @@ import pytest
 from conftest import SAMPLES
 
 from setupfix.cli import main
+from setupfix.model import load_model
+from setupfix.pipeline.correct import correct_report
+from setupfix.pipeline.requests import (CorrectRequest, CurrentOffsets, CycleOptions, History, ReadOptions,
+                                        SolveOptions, load_thermal)
+from setupfix.store import open_store
 
 GUIDE = SAMPLES / "guide_pins"
 GUIDE_MODEL = GUIDE / "model.toml"
@@ -131,13 +136,36 @@ class Case:
     name: str
     model: Path
     reports: list[Path]
-    options: list[str] = field(default_factory=list)  #: CLI options shared by correct and batch
+    columns: Path | None = None  #: the reader's column mapping (--columns)
+    stations: tuple[str, ...] | None = None  #: the stations of the parts (--stations)
+    current: Path | None = None  #: the controller's current offsets (--current)
     store: Path | None = None  #: history store holding the earlier parts (each door gets its own copy)
-    thermal: tuple[Path, Path] | None = None
+    thermal: tuple[Path, Path] | None = None  #: thermal model and temperature log (--at AT)
 
+    def options(self) -> list[object]:
+        """The options ``correct`` and ``batch`` share, as typed on the command line."""
+        out: list[object] = []
+        if self.columns:
+            out += ["--columns", self.columns]
+        if self.stations:
+            out += ["--stations", ",".join(self.stations)]
+        if self.current:
+            out += ["--current", self.current]
+        if self.thermal:
+            out += ["--thermal", self.thermal[0], "--temperatures", self.thermal[1], "--at", AT]
+        return out
 
-def option(case: Case, name: str) -> str | None:
-    return case.options[case.options.index(name) + 1] if name in case.options else None
+    def request(self, db: Path | None) -> CorrectRequest:
+        """The library's request for the same inputs, built from the pieces (no CLI code)."""
+        model = load_model(self.model)
+        history = None
+        if db is not None:
+            with open_store(db) as store:
+                history = History.from_store(model, store)
+        return CorrectRequest(model, ReadOptions(columns=str(self.columns) if self.columns else None),
+                              CycleOptions.of(self.stations), SolveOptions(),
+                              CurrentOffsets.read(self.current, model) if self.current else None, history,
+                              load_thermal(*self.thermal, at=AT) if self.thermal else None)
 
 
 # -- the doors ----------------------------------------------------------------------------------
@@ -156,18 +184,12 @@ def _store_copy(case: Case, tmp: Path, door: str) -> Path | None:
     return db
 
 
-def _thermal_args(case: Case) -> list[object]:
-    if case.thermal is None:
-        return []
-    return ["--thermal", case.thermal[0], "--temperatures", case.thermal[1], "--at", AT]
-
-
 def door_correct(case: Case, tmp: Path) -> Decisions:
     db = _store_copy(case, tmp, "correct")
     out: Decisions = {}
     for report in case.reports:
-        code, text, err = cli("correct", "--model", case.model, report, "--json", *case.options,
-                              *(["--store", db] if db else []), *_thermal_args(case))
+        code, text, err = cli("correct", "--model", case.model, report, "--json", *case.options(),
+                              *(["--store", db] if db else []))
         assert code in (0, 5), err
         doc = json.loads(text)
         for part in doc.get("parts", [doc]):
@@ -181,7 +203,7 @@ def door_batch(case: Case, tmp: Path) -> Decisions:
     assert all(r.parent == folder for r in case.reports)
     offsets = tmp / "batch.csv"
     code, _, err = cli("batch", folder, "--model", case.model, "--out", offsets, "--settle", "0", "--json",
-                       *case.options, *(["--store", db] if db else []), *_thermal_args(case))
+                       *case.options(), *(["--store", db] if db else []))
     assert code in (0, 5), err
     found: dict[tuple[str, str], tuple[str, dict[str, float]]] = {}
     for row in _rows(offsets):
@@ -194,34 +216,32 @@ def door_batch(case: Case, tmp: Path) -> Decisions:
 
 
 def door_session(case: Case, tmp: Path) -> Decisions:
-    from setupfix.pipeline.session import open_report
+    """The TUI's session: the request from the operator's inputs (as the app passes them), each report opened."""
+    from setupfix.pipeline.session import open_report, session_request
 
     db = _store_copy(case, tmp, "session")
+    request = session_request(case.model, read=ReadOptions(columns=str(case.columns) if case.columns else None),
+                              cycles=CycleOptions.of(case.stations), db=db, current=case.current,
+                              thermal=load_thermal(*case.thermal, at=AT) if case.thermal else None)
     out: Decisions = {}
     for report in case.reports:
-        opened = open_report(case.model, report, db=db, current=option(case, "--current"),
-                             **_session_options(case))
+        opened = open_report(request, report)
         assert not opened.problem, opened.problem
         for c in opened.corrections:
             out[report.name, c.part.part] = _decision(c.verdict, c.corrections)
     return out
 
 
-def _session_options(case: Case) -> dict[str, object]:
-    return {}
-
-
 def door_library(case: Case, tmp: Path) -> Decisions:
-    from setupfix.pipeline.correct import correct_report
-
+    request = case.request(_store_copy(case, tmp, "library"))
     out: Decisions = {}
     for report in case.reports:
-        for c in correct_report(case.model, report):
+        for c in correct_report(request, report).cycles:
             out[report.name, c.part.part] = _decision(c.verdict, c.corrections)
     return out
 
 
-DOORS = {"correct": door_correct, "batch": door_batch}
+DOORS = {"correct": door_correct, "batch": door_batch, "session": door_session, "library": door_library}
 
 
 def assert_same_through_every_door(case: Case, tmp: Path) -> Decisions:
@@ -254,11 +274,10 @@ def bundled_cases(tmp: Path) -> Iterator[Case]:
                _copy(tmp / "guide", *sorted(GUIDE.glob("cycle_0?.csv")), GUIDE / "cycle_01.dmo", GUIDE / "cycle_01.qif"))
     controllers = SAMPLES / "controllers"
     yield Case("controllers, current offsets", controllers / "model.toml",
-               _copy(tmp / "controllers", controllers / "report.csv"),
-               ["--current", str(controllers / "current.csv")])
+               _copy(tmp / "controllers", controllers / "report.csv"), current=controllers / "current.csv")
     tables = SAMPLES / "tables"
     yield Case("shop table, column mapping", GUIDE_MODEL, _copy(tmp / "shop", tables / "cycle_01_shop.csv"),
-               ["--columns", str(tables / "cycle_01_shop.columns.toml")])
+               columns=tables / "cycle_01_shop.columns.toml")
     yield Case("German table", GUIDE_MODEL, _copy(tmp / "de", tables / "cycle_01_de.csv"))
     yield Case("closed loop, 40 cycles", GUIDE_MODEL,
                _copy(tmp / "loop", SAMPLES / "closed_loop" / "measurements.csv"))
@@ -301,11 +320,46 @@ def test_generated_reports_with_everything_switched_on(tmp_path, thermal):
     """Costs, safety, effects, EWMA over a store, current offsets and the feed-forward, on seeded reports."""
     model = everything_model(tmp_path)
     case = Case("generated, everything on", model, generated_reports(tmp_path / "gen"),
-                ["--current", str(current_offsets(tmp_path / "current.csv"))], store=seeded_store(tmp_path, model),
-                thermal=thermal)
+                current=current_offsets(tmp_path / "current.csv"), store=seeded_store(tmp_path, model), thermal=thermal)
     decisions = assert_same_through_every_door(case, tmp_path)
     verdicts = [decisions[key][0] for key in sorted(decisions)]
     assert verdicts == ["apply"] * 5 + ["reject"]  # the near-nominal report's estimate keeps half the earlier ones
+    # the real Textual app, on the store ``correct`` used: the same decision on screen, the same offsets written
+    report = case.reports[2]
+    code, _, err = cli("correct", "--model", case.model, report, *case.options(), "--store",
+                       tmp_path / "correct" / "correct.db", "--offsets", tmp_path / "cli.csv")
+    assert code == 0, err
+    app_cycles, written = run_app(case, report, tmp_path / "correct" / "correct.db", tmp_path / "tui.csv")
+    assert {(report.name, part): d for part, d in app_cycles.items()} == {
+        key: d for key, d in decisions.items() if key[0] == report.name}
+    assert written == (tmp_path / "cli.csv").read_text(encoding="utf-8")
+
+
+def run_app(case: Case, report: Path, db: Path, offsets: Path) -> tuple[dict[str, tuple[str, dict[str, float]]], str]:
+    """The TUI (``setupfix tui`` with the case's options) on ``report``: its decisions and what its export wrote."""
+    import asyncio
+
+    from setupfix.tui.app import Inputs, SetupfixApp
+
+    app = SetupfixApp(Inputs(model=case.model, report=report, db=db, current=case.current,
+                             thermal=case.thermal[0] if case.thermal else None,
+                             temperatures=case.thermal[1] if case.thermal else None, at=AT,
+                             read=ReadOptions(columns=str(case.columns) if case.columns else None),
+                             cycles=CycleOptions.of(case.stations), offsets=str(offsets)))
+
+    async def scenario() -> dict[str, tuple[str, dict[str, float]]]:
+        async with app.run_test(size=(100, 30)) as pilot:
+            await app.workers.wait_for_complete()
+            await pilot.pause()
+            assert app.opened is not None and not app.opened.problem, app.problem
+            shown = {c.part.part: _decision(c.verdict, c.corrections) for c in app.opened.corrections}
+            await pilot.press("e")
+            await pilot.pause()
+            await pilot.press("ctrl+s")
+            await pilot.pause()
+            return shown
+
+    return asyncio.run(scenario()), offsets.read_text(encoding="utf-8")
 
 
 def test_generated_reports_with_stations(tmp_path, thermal):
@@ -314,7 +368,7 @@ def test_generated_reports_with_stations(tmp_path, thermal):
     plain = model.with_name("no_ewma.toml")
     plain.write_text(model.read_text(encoding="utf-8").replace("ewma = 0.5\n", ""), encoding="utf-8")
     case = Case("generated, stations", plain, generated_reports(tmp_path / "gen", seed=7, n=3, stations=True),
-                ["--stations", "P1,P2,P3,P4"], thermal=thermal)
+                stations=("P1", "P2", "P3", "P4"), thermal=thermal)
     decisions = assert_same_through_every_door(case, tmp_path)
     assert {part for _, part in decisions} == {"A1+A2+A3+A4"}
     assert [decisions[key][0] for key in sorted(decisions)] == ["apply", "hold", "reject"]

@@ -6,7 +6,7 @@ import argparse
 from pathlib import Path
 
 from setupfix.cli._choices import OPTIMIZERS
-from setupfix.cli._common import add_report_options, add_thermal_options
+from setupfix.cli._common import add_report_options, add_thermal_options, cycles_of, read_options
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
@@ -35,6 +35,7 @@ def run(args: argparse.Namespace) -> int:
 
     SetupfixApp(Inputs(model=args.model, report=args.report, db=args.db, current=args.current,
                        thermal=Path(args.thermal) if args.thermal else None,
-                       temperatures=Path(args.temperatures) if args.temperatures else None, optimizer=args.optimizer, seed=args.seed,
-                       trials=args.trials, offsets=args.offsets)).run()
+                       temperatures=Path(args.temperatures) if args.temperatures else None, at=args.at,
+                       thermal_dead_band=args.thermal_dead_band, read=read_options(args), cycles=cycles_of(args),
+                       optimizer=args.optimizer, seed=args.seed, trials=args.trials, offsets=args.offsets)).run()
     return 0

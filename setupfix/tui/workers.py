@@ -14,14 +14,29 @@ from textual.worker import get_current_worker
 
 from setupfix.model import ProcessModel
 from setupfix.optimize import CorrectionProblem
-from setupfix.pipeline import view
+from setupfix.pipeline import session, view
 from setupfix.pipeline.compare import Comparison
 from setupfix.pipeline.diagnose import diagnose_reports
+from setupfix.pipeline.requests import CycleOptions, ReadOptions, SolveOptions, load_thermal
 from setupfix.pipeline.session import compare_steps, store_parts
 from setupfix.pipeline.thermal import predict_drift
 from setupfix.tui.messages import CompareProgress
 
-__all__ = ["drift", "compare", "history", "diagnose"]
+__all__ = ["open_report", "drift", "compare", "history", "diagnose"]
+
+
+def open_report(model: Path, report: Path, *, read: ReadOptions, cycles: CycleOptions, solve: SolveOptions,
+                db: Path | None, current: Path | None,
+                thermal: tuple[Path, Path, str | None, float | None] | None) -> session.OpenedReport:
+    """Thread worker: the request ``correct`` would build from these inputs (every file read once), and the
+    report opened with it (:func:`setupfix.pipeline.session.open_report`)."""
+    loaded = None
+    if thermal is not None:
+        saved, log, at, dead_band = thermal
+        loaded = load_thermal(saved, log, at=at, dead_band=dead_band)
+    request = session.session_request(model, read=read, cycles=cycles, solve=solve, db=db, current=current,
+                                      thermal=loaded)
+    return session.open_report(request, report)
 
 
 def drift(model: Path, log: Path) -> view.DriftView:
