@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import shutil
 from pathlib import Path
 
@@ -171,3 +172,34 @@ def test_automatic_worker_count(monkeypatch) -> None:
     assert batch.auto_workers(32) == 8
     monkeypatch.setattr(batch.os, "sched_getaffinity", lambda pid: {0, 1}, raising=False)
     assert batch.auto_workers(1000) == 2
+
+
+def test_ewma_over_the_store_and_the_batch_does_not_depend_on_workers(tmp_path):
+    """With λ < 1 and a store, each report is smoothed over every earlier part (store and batch): the same
+    output for 1 and 2 workers, different from the unsmoothed one, and equal to correcting each report with
+    the history of the store holding them all."""
+    from setupfix.pipeline.correct import correct_report
+    from setupfix.pipeline.export import cycle_rows
+    from setupfix.pipeline.requests import History
+    from setupfix.offsets import csv_lines
+
+    model_path = tmp_path / "ewma.toml"
+    model_path.write_text((GUIDE / "model.toml").read_text() + "\n[safety]\newma = 0.5\n")
+    request = CorrectRequest(load_model(model_path))
+    d = tmp_path / "reports"
+    d.mkdir()
+    for i in range(1, 6):
+        shutil.copy(GUIDE / f"cycle_0{i}.csv", d / f"cycle_0{i}.csv")
+    for workers in (1, 2):
+        with open_store(tmp_path / f"w{workers}.db") as store:
+            s = run_batch(request, d, tmp_path / f"w{workers}.csv", settle=0, store=store, workers=workers)
+        assert s.reports == 5 and not any("needs the history store" in str(n) for _, n in s.notes)
+    assert (tmp_path / "w1.csv").read_bytes() == (tmp_path / "w2.csv").read_bytes()
+    run_batch(request, d, tmp_path / "plain.csv", settle=0)
+    assert (tmp_path / "plain.csv").read_bytes() != (tmp_path / "w1.csv").read_bytes()
+    with open_store(tmp_path / "w1.db") as store:  # now holding the five reports
+        full = dataclasses.replace(request, history=History.from_store(request.model, store))
+    rows = [row for i in range(1, 6) for c in correct_report(full, d / f"cycle_0{i}.csv").cycles
+            for row in cycle_rows(c)]
+    lines = (tmp_path / "w1.csv").read_text().splitlines()[1:]
+    assert [line.split(",")[1:] for line in lines] == [line.split(",")[1:] for line in csv_lines(rows).splitlines()]

@@ -173,3 +173,12 @@ def test_a_program_holds_the_chosen_cycle_and_only_it_is_recorded_as_applied(tmp
     assert added == len(moved) > 0
     assert dict(zip(log["register"], log["delta"])) == pytest.approx(moved)
     assert [r.inputs["part"] for r in recs] == [last.part.part] and recs[0].inputs["export"]["controller"] == "fanuc"
+
+
+def test_the_folder_watch_names_what_it_cannot_look_at_once(tmp_path):
+    _touch(tmp_path / "a.csv", "x", 100)
+    os.symlink(tmp_path / "missing.csv", tmp_path / "gone.csv")
+    watch = FolderWatch(tmp_path, settle=0)
+    assert watch.poll() == tmp_path / "a.csv"
+    assert watch.problems == ((str(tmp_path / "gone.csv"), "broken link"),)
+    assert watch.poll() is None and watch.problems == ()  # said once
