@@ -35,8 +35,6 @@ import numpy as np
 import numpy.typing as npt
 import pandas as pd
 
-from setupfix.diagnose.forecast import forecast_shift, relation_composite
-from setupfix.diagnose.terms import Layout
 from setupfix.errors import Note, ParseError, SourceLocation
 from setupfix.model import PartMeasurement, ProcessModel
 from setupfix.optimize import CorrectionProblem, OptimizeResult
@@ -156,6 +154,10 @@ def forecast_of(model: ProcessModel, timestamp: str | None, report: str = "") ->
     section = model.effects
     if not any(e.kind in ("drift", "wear") for e in section.effects):
         return np.zeros(len(model.dimensions)), None
+    # Imported here: the diagnosis brings scipy.stats (~0.5 s of start-up) a model without effects never needs.
+    from setupfix.diagnose.forecast import forecast_shift
+    from setupfix.diagnose.terms import Layout
+
     time = hours_between(timestamp, section.origin, report) if section.origin and timestamp else None
     shift = forecast_shift(section, Layout.from_model(model), time=time)
     kinds = sorted({e.kind for e in section.effects if e.kind in ("drift", "wear")})
@@ -179,6 +181,9 @@ def effects_composite(model: ProcessModel) -> tuple[Array | None, Note | None]:
     section = model.effects
     if not any(e.kind == "relation" for e in section.effects):
         return None, None
+    from setupfix.diagnose.forecast import relation_composite  # lazy: see forecast_of
+    from setupfix.diagnose.terms import Layout
+
     layout = Layout.from_model(model)
     C = relation_composite(section, layout)
     changed = np.argwhere(C != layout.composite)

@@ -114,11 +114,6 @@ class Comparison:
     #: What reading, matching and posing assumed or skipped (rows skipped by --lenient, angles, forecast …).
     notes: tuple[Note, ...] = ()
 
-    @property
-    def warnings(self) -> list[str]:
-        """The notes as text (the JSON's ``warnings``)."""
-        return [str(n) for n in self.notes]
-
     def table(self) -> list[dict[str, Any]]:
         """One summary row per method (see :meth:`MethodTrials.summary`), exact first."""
         e = self.exact
@@ -160,7 +155,7 @@ class Comparison:
             "exact_seconds": round(e.seconds, 6),
             "results": results,
             "skipped": dict(self.skipped),
-            "warnings": list(self.warnings),
+            "warnings": [str(n) for n in self.notes],  # the JSON renderer: notes become text here
         }
 
 
@@ -202,8 +197,8 @@ def compare_problem(problem: CorrectionProblem, *, methods: Sequence[str] = DEFA
 
 
 def compare_report(model: ProcessModel | str | Path, report: str | Path, *, methods: Sequence[str] = DEFAULT_METHODS,
-                   trials: int = 12, seed: int = 0, read: ReadOptions = ReadOptions(),
-                   cycles: CycleOptions = CycleOptions(),
+                   trials: int = 12, seed: int = 0, read: ReadOptions | None = None,
+                   cycles: CycleOptions | None = None,
                    params: Mapping[str, Mapping[str, Any]] | None = None) -> Comparison:
     """Compare the methods on one cycle of a report (the first one unless ``cycles.part`` names it).
 
@@ -214,6 +209,7 @@ def compare_report(model: ProcessModel | str | Path, report: str | Path, *, meth
     """
     if not isinstance(model, ProcessModel):
         model = load_model(model)
+    read, cycles = read or ReadOptions(), cycles or CycleOptions()
     _, parts = read_parts(model, report, **read.kwargs(), **cycles.kwargs())
     measured = cycles.select(parts, report)[0]
     posed = pose_problem(model, measured)

@@ -16,7 +16,7 @@ import dataclasses
 import hashlib
 from collections.abc import Mapping, Sequence
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -25,12 +25,14 @@ from setupfix.errors import ExportError, Note, ParameterError, SourceLocation
 from setupfix.model import PartMeasurement, ProcessModel, load_model
 from setupfix.optimize import CorrectionProblem, OptimizeResult, get_optimizer
 from setupfix.pipeline.cycles import load_parts, read_parts  # load_parts: re-exported for the tests and benches
-from setupfix.pipeline.feedforward import ThermalFeedForward, thermal_feed_forward
 from setupfix.pipeline.requests import (CorrectOutcome, CorrectRequest, CurrentOffsets, CycleCorrection, CycleOptions,
                                         History, ReadOptions, SolveOptions, ThermalInputs)
 from setupfix.pose import Smoothed, pose_problem, recommend
 from setupfix.safety import Recommendation, budget
 from setupfix.store import Store
+
+if TYPE_CHECKING:
+    from setupfix.pipeline.feedforward import ThermalFeedForward
 
 __all__ = ["correct_report", "correct_cycle", "open_history", "load_parts",
            # TODO(issue 20 merge): remove the names below (callers in batch.py, session.py, view.py, tui)
@@ -79,6 +81,8 @@ def _feed_forward(thermal: ThermalInputs, cycle: CycleCorrection) -> ThermalFeed
     ParameterError
         The sum exceeds a register's limit (or the thermal inputs do not fit the cycle).
     """
+    from setupfix.pipeline.feedforward import thermal_feed_forward  # scipy.signal: only with thermal inputs
+
     model = cycle.model
     ff = thermal_feed_forward(model, thermal.saved, thermal.log, measured_at=cycle.part.timestamp, at=thermal.at,
                               dead_band=thermal.dead_band)

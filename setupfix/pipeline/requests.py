@@ -14,22 +14,24 @@ import math
 from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import numpy.typing as npt
 import pandas as pd
 
-from parsers.temperature import TemperatureLog
 from setupfix.errors import MatchError, Note, ParameterError, SetupfixError, SourceLocation
 from setupfix.model import PartMeasurement, ProcessModel, match_parts
-from setupfix.optimize import OPTIMIZERS, CorrectionProblem, OptimizeResult
-from setupfix.pipeline.feedforward import ThermalFeedForward
+from setupfix.optimize import OPTIMIZERS, CorrectionProblem, OptimizeResult, get_optimizer
 from setupfix.pose import PosedProblem, Smoothed, ewma_history
 from setupfix.relation import relation_matrices
 from setupfix.safety import Recommendation, budget
 from setupfix.store import Store
-from setupfix.thermal.persist import SavedModel
+
+if TYPE_CHECKING:  # the thermal modules bring scipy.signal (~0.5 s): loaded only with --thermal
+    from parsers.temperature import TemperatureLog
+    from setupfix.pipeline.feedforward import ThermalFeedForward
+    from setupfix.thermal.persist import SavedModel
 
 __all__ = ["ReadOptions", "CycleOptions", "SolveOptions", "ThermalInputs", "load_thermal", "CurrentOffsets",
            "History", "CorrectRequest", "CycleCorrection", "CorrectOutcome", "HISTORY"]
@@ -85,7 +87,7 @@ class CycleOptions:
         if self.stations is None:
             return None
         if self.stations and isinstance(self.stations[0], tuple):
-            return {str(k): str(v) for k, v in self.stations}  # type: ignore[misc]
+            return {str(k): str(v) for k, v in self.stations}
         return [str(s) for s in self.stations]
 
     def kwargs(self) -> dict[str, Any]:
@@ -127,12 +129,9 @@ class SolveOptions:
     def __post_init__(self) -> None:
         if self.optimizer not in OPTIMIZERS:
             raise ParameterError(f"unknown optimizer {self.optimizer!r} (known: {', '.join(sorted(OPTIMIZERS))})")
-        if self.time_limit is not None:
-            if self.optimizer != "exact":
-                raise ParameterError(f"--time-limit applies to the exact optimizer, not {self.optimizer!r}")
-            if not (isinstance(self.time_limit, (int, float)) and math.isfinite(self.time_limit)
-                    and self.time_limit > 0):
-                raise ParameterError(f"--time-limit must be a positive number of seconds, got {self.time_limit!r}")
+        if self.time_limit is not None and self.optimizer != "exact":
+            raise ParameterError(f"--time-limit applies to the exact optimizer, not {self.optimizer!r}")
+        get_optimizer(self.optimizer, seed=self.seed, **self.params())  # the optimiser's declared constraints
 
     def params(self) -> dict[str, Any]:
         """The optimiser's hyper-parameters (``time_limit`` when given)."""
@@ -216,7 +215,7 @@ def _stamp(text: object) -> np.datetime64 | None:
     if pd.isna(t):
         return None
     t = t.tz_convert("UTC").tz_localize(None) if t.tzinfo is not None else t
-    return np.datetime64(t.to_datetime64(), "ns")
+    return np.datetime64(t.value, "ns")
 
 
 @dataclass(frozen=True, eq=False)

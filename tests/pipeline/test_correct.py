@@ -5,8 +5,14 @@ from __future__ import annotations
 import pytest
 
 from setupfix.errors import MatchError
-from setupfix.model import model_from_dict
+from setupfix.model import load_model, model_from_dict
 from setupfix.pipeline.correct import correct_report
+from setupfix.pipeline.present import cycle_json
+from setupfix.pipeline.requests import CorrectRequest, CycleOptions
+
+
+def correct(model, path, stations=None):
+    return correct_report(CorrectRequest(model, cycles=CycleOptions.of(stations)), path).cycles
 
 MODEL = {
     "process": {"name": "two stations", "resolution": 0.001, "limit": 0.1},
@@ -30,12 +36,12 @@ def report(tmp_path, parts=("s1", "s2")):
 def test_repeated_names_without_stations_are_refused(tmp_path):
     model = model_from_dict(MODEL)
     with pytest.raises(MatchError, match="names several dimensions"):
-        correct_report(model, report(tmp_path))
+        correct(model, report(tmp_path))
 
 
 def test_stations_in_order_make_one_cycle(tmp_path):
     model = model_from_dict(MODEL)
-    (pc,) = correct_report(model, report(tmp_path), stations=["P2", "P1"])
+    (pc,) = correct(model, report(tmp_path), stations=["P2", "P1"])
     assert pc.part.deviation.tolist() == pytest.approx([-0.010, 0.040])  # s2 → P2 (B), s1 → P1 (A)
     # both stations centred: W1 − W2 = -0.05 spread; the optimum centres each through its own WKS
     assert pc.result.margin_after == pytest.approx(0.05, abs=1e-9)
@@ -45,16 +51,16 @@ def test_stations_in_order_make_one_cycle(tmp_path):
 
 def test_part_names_equal_to_groups_are_stations(tmp_path):
     model = model_from_dict(MODEL)
-    (pc,) = correct_report(model, report(tmp_path, parts=("P1", "p2")))
+    (pc,) = correct(model, report(tmp_path, parts=("P1", "p2")))
     assert pc.part.deviation.tolist() == pytest.approx([0.040, -0.010])
 
 
 def test_unknown_station_and_wrong_count(tmp_path):
     model = model_from_dict(MODEL)
     with pytest.raises(MatchError, match="station 'P9'"):
-        correct_report(model, report(tmp_path), stations={"s1": "P1", "s2": "P9"})
+        correct(model, report(tmp_path), stations={"s1": "P1", "s2": "P9"})
     with pytest.raises(MatchError, match="3 stations given for 2 parts"):
-        correct_report(model, report(tmp_path), stations=["P1", "P2", "P1"])
+        correct(model, report(tmp_path), stations=["P1", "P2", "P1"])
 
 
 def test_readme_headline_example():
@@ -62,11 +68,11 @@ def test_readme_headline_example():
     correction beats the LP bound 0.1 − 0.0352/2, and they are the binding pair."""
     from conftest import GUIDE_PINS
 
-    (pc,) = correct_report(GUIDE_PINS / "model.toml", GUIDE_PINS / "cycle_01.csv")
+    (pc,) = correct(load_model(GUIDE_PINS / "model.toml"), GUIDE_PINS / "cycle_01.csv")
     dev = {r["name"]: r["deviation"] for r in pc.dimension_rows()}
     spread = dev["P1 D6"] - dev["P1 D7"]
     assert spread == pytest.approx(0.0352, abs=5e-5)
-    out = pc.to_json()
+    out = cycle_json(pc)
     assert out["bound"] == pytest.approx(0.1 - spread / 2, abs=1e-9)
     assert set(out["binding"]) == {"P1 D6", "P1 D7"}
     assert out["margin_after"] == pytest.approx(0.0822, abs=5e-5) and out["verdict"] == "apply"

@@ -101,3 +101,35 @@ def test_outcome_reads_once_and_states_what_it_read():
     out = correct_report(CorrectRequest(load_model(GUIDE_PINS / "model.toml")), source)
     assert out.sha256 == hashlib.sha256(source.data).hexdigest() and out.format and len(out.table)
     assert out.report == source.name and len(out.cycles) == 1 and not out.rejected
+
+
+def test_thermal_feed_forward_is_a_step_of_the_use_case_and_requests_pickle(tmp_path):
+    """The feed-forward joins the corrections (not a CLI step); the whole request survives pickling
+    (batch sends it to its workers) and gives the same answer there."""
+    import pickle
+
+    from parsers.temperature import read_temperature_log
+    from setupfix.pipeline import thermal as pipe
+    from setupfix.pipeline.requests import ThermalInputs
+
+    thermal = SAMPLES / "thermal"
+    saved = pipe.fit_log(read_temperature_log(thermal / "train_variable.csv"), "mra", target="error_z",
+                         inputs=["spindle_motor", "bearing"], unit="mm").saved
+    log_path = tmp_path / "temps.csv"
+    log_path.write_text((thermal / "test_variable.csv").read_text().replace("2026-01-05T", "2026-11-02T"))
+    log = read_temperature_log(log_path, interval=saved.sample_interval_s)
+    model = load_model(GUIDE_PINS / "model.toml")
+    request = CorrectRequest(model, thermal=ThermalInputs(saved, log, "drift.json", at="2026-11-02T09:00:00"))
+    fed = correct_report(request, CYCLES[0]).cycles[0]
+    plain = correct_report(CorrectRequest(model), CYCLES[0]).cycles[0]
+    ff = fed.thermal
+    assert ff is not None and ff.applied and ff.registers == ("T5", "T23")
+    for reg in model.register_ids:
+        assert fed.corrections[reg] == pytest.approx(plain.corrections[reg] + ff.corrections().get(reg, 0.0))
+    np.testing.assert_array_equal(fed.x, plain.x)  # the setup correction itself is unchanged
+    again = correct_report(pickle.loads(pickle.dumps(request)), CYCLES[0]).cycles[0]
+    assert again.corrections == fed.corrections
+    from setupfix.pipeline.present import format_correction
+
+    text = format_correction(fed)
+    assert ff.line() in text and text.index(ff.line()) < text.index("error budget before")

@@ -41,6 +41,8 @@ def without_forecast(doc):
 @pytest.mark.parametrize("name", NAMES)
 def test_json_text_and_offsets_equal_the_goldens(name, cases):
     tmp, table = cases
+    if name not in table:
+        pytest.skip(f"{golden.CALYPSO} absent: shared sample not available")
     args = table[name]
     code, out, err = golden.run([*args, "--json"])
     want = json.loads((DATA / "correct_golden" / f"{name}.json").read_text())

@@ -1,4 +1,4 @@
-"""EWMA smoothing over consecutive reports from the history store, reset on a tool change."""
+"""EWMA smoothing over consecutive reports from the history store (History.from_store), reset on a tool change."""
 
 from __future__ import annotations
 
@@ -10,6 +10,7 @@ import pytest
 import parsers
 from setupfix.model import load_model
 from setupfix.pipeline.correct import correct_report
+from setupfix.pipeline.requests import CorrectRequest, History
 from setupfix.store import open_store
 
 GUIDE = Path(__file__).resolve().parents[2] / "sample_reports" / "guide_pins"
@@ -30,6 +31,11 @@ def store_with(tmp_path, log_rows):
     return store
 
 
+def correct(model, report, store=None):
+    history = History.from_store(model, store) if store is not None else None
+    return correct_report(CorrectRequest(model, history=history), report).cycles
+
+
 def p1d1(pc):
     return next(r for r in pc.dimension_rows() if r["id"] == "P1D1")
 
@@ -37,7 +43,7 @@ def p1d1(pc):
 def test_ewma_over_earlier_reports_shifted_by_applied_corrections(tmp_path):
     model = model_with_ewma(tmp_path, 0.5)
     store = store_with(tmp_path, [("2026-11-02T12:00:00", "G54", 0.010, "correction")])
-    (pc,) = correct_report(model, GUIDE / "cycle_03.csv", store=store)
+    (pc,) = correct(model, GUIDE / "cycle_03.csv", store)
     row = p1d1(pc)
     # cycle 01: −0.0309 + 0.010 (G54 moved since) ; cycle 02: +0.0306 ; now −0.0180
     a = -0.0209
@@ -51,10 +57,10 @@ def test_ewma_over_earlier_reports_shifted_by_applied_corrections(tmp_path):
 def test_tool_change_resets_the_dimensions_it_cuts(tmp_path):
     model = model_with_ewma(tmp_path, 0.5)
     store = store_with(tmp_path, [("2026-11-03T12:00:00", "H5", None, "tool_change")])
-    (pc,) = correct_report(model, GUIDE / "cycle_03.csv", store=store)
+    (pc,) = correct(model, GUIDE / "cycle_03.csv", store)
     assert p1d1(pc)["estimate"] == pytest.approx(-0.0180)  # P1 D1 = W1 + T5: history dropped
 
 
 def test_without_store_not_smoothed_and_said(tmp_path):
-    (pc,) = correct_report(model_with_ewma(tmp_path, 0.5), GUIDE / "cycle_03.csv")
-    assert "estimate" not in p1d1(pc) and any("needs the history store" in w for w in pc.warnings)
+    (pc,) = correct(model_with_ewma(tmp_path, 0.5), GUIDE / "cycle_03.csv")
+    assert "estimate" not in p1d1(pc) and any("needs the history store" in n.message for n in pc.notes)

@@ -1,6 +1,7 @@
 """Write the goldens of ``setupfix correct`` (JSON, text, offsets) for the guide-pins cycles 1–5.
 
-Run from the repository root: ``PYTHONPATH=$PWD python tests/pipeline/data/make_correct_goldens.py``.
+Run from the repository root: ``PYTHONPATH=$PWD python tests/pipeline/data/make_correct_goldens.py``
+(``PYTHONPATH`` at a checkout of the tree the goldens should come from).
 The goldens were written by the tree *before* issue 20 (one use-case core) changed anything,
 so the test comparing with them pins that the refactoring kept every number.  Wall times
 (``seconds`` in JSON, the "ms" of the text head) are blanked.
@@ -11,6 +12,7 @@ from __future__ import annotations
 import contextlib
 import io
 import json
+import os
 import re
 import sys
 from pathlib import Path
@@ -19,6 +21,9 @@ ROOT = Path(__file__).resolve().parents[3]
 OUT = Path(__file__).resolve().parent / "correct_golden"
 GUIDE = ROOT / "sample_reports" / "guide_pins"
 CONTROLLERS = ROOT / "sample_reports" / "controllers"
+#: ../shared (SETUPFIX_SHARED elsewhere, as in tests/conftest.py): the CALYPSO report is not bundled.
+SHARED = Path(os.environ.get("SETUPFIX_SHARED", ROOT.parent / "shared"))
+CALYPSO = SHARED / "cmm-samples" / "calypso" / "CALYPSO_chr_PruefplanValidierungsbauteil1_16.txt"
 
 #: A guide-pins model with every pre-solve and post-solve safety setting and register costs.
 SAFETY = """
@@ -114,6 +119,23 @@ def cases(tmp: Path) -> dict[str, list[str]]:
         out[f"costs_{k}"] = ["correct", "--model", costed, report]
         out[f"effects_{k}"] = ["correct", "--model", effects, report]
         out[f"ewma_{k}"] = ["correct", "--model", smooth, report, "--store", db]
+    tables = ROOT / "sample_reports" / "tables"
+    out["format_dmo"] = ["correct", "--model", GUIDE / "model.toml", GUIDE / "cycle_01.dmo"]
+    out["format_qif"] = ["correct", "--model", GUIDE / "model.toml", GUIDE / "cycle_01.qif"]
+    out["table_de"] = ["correct", "--model", GUIDE / "model.toml", tables / "cycle_01_de.csv"]
+    out["table_shop"] = ["correct", "--model", GUIDE / "model.toml", tables / "cycle_01_shop.csv",
+                         "--columns", tables / "cycle_01_shop.columns.toml"]
+    two = tmp / "two_cycles.csv"
+    lines = (GUIDE / "cycle_01.csv").read_text().splitlines()
+    two.write_text("\n".join(lines + (GUIDE / "cycle_02.csv").read_text().splitlines()[1:]) + "\n")
+    out["two_cycles"] = ["correct", "--model", costed, two]
+    out["two_cycles_part"] = ["correct", "--model", costed, two, "--part", "cycle 02"]
+    if CALYPSO.exists():  # a 1.2 mm error: rejected; with the reject band widened, given up
+        calypso = ROOT / "sample_reports" / "calypso" / "model.toml"
+        wide = tmp / "calypso_wide.toml"
+        wide.write_text(calypso.read_text().replace("limit = 0.1\n", "limit = 0.1\n\n[safety]\nreject_band = 5.0\n", 1))
+        out["calypso_reject"] = ["correct", "--model", calypso, CALYPSO]
+        out["calypso_wide"] = ["correct", "--model", wide, CALYPSO]
     out["controllers"] = ["correct", "--model", CONTROLLERS / "model.toml", CONTROLLERS / "report.csv",
                           "--current", CONTROLLERS / "current.csv"]
     return out
