@@ -74,8 +74,8 @@ class OpenedReport:
         return sum(not m.matched for m in self.matches)
 
 
-def session_request(model: ProcessModel | str | Path, *, read: ReadOptions = ReadOptions(),
-                    cycles: CycleOptions = CycleOptions(), solve: SolveOptions = SolveOptions(),
+def session_request(model: ProcessModel | str | Path, *, read: ReadOptions | None = None,
+                    cycles: CycleOptions | None = None, solve: SolveOptions | None = None,
                     db: str | Path | None = None, current: str | Path | None = None,
                     thermal: ThermalInputs | None = None) -> CorrectRequest:
     """The request ``setupfix correct`` builds from the same inputs (every file read once).
@@ -93,7 +93,8 @@ def session_request(model: ProcessModel | str | Path, *, read: ReadOptions = Rea
                 history = History.from_store(model, store)
         else:
             history = History.empty(model)
-    return CorrectRequest(model, read, cycles, solve, values, history, thermal)
+    return CorrectRequest(model, read or ReadOptions(), cycles or CycleOptions(), solve or SolveOptions(), values,
+                          history, thermal)
 
 
 def open_report(request: CorrectRequest, report: str | Path) -> OpenedReport:

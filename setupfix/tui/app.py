@@ -9,7 +9,7 @@ so a bad file never ends the app.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from functools import partial
 from pathlib import Path
 from typing import ClassVar
@@ -55,8 +55,8 @@ class Inputs:
     temperatures: Path | None = None
     at: str | None = None  #: time of the correction for the feed-forward (default: the log's last sample)
     thermal_dead_band: float | None = None
-    read: ReadOptions = ReadOptions()  #: the reader's options, as ``correct`` takes them
-    cycles: CycleOptions = CycleOptions()  #: stations, parts per cycle, strictness
+    read: ReadOptions = field(default_factory=ReadOptions)  #: the reader's options, as ``correct`` takes them
+    cycles: CycleOptions = field(default_factory=CycleOptions)  #: stations, parts per cycle, strictness
     optimizer: str = "exact"
     seed: int = 0
     trials: int = 12
