@@ -91,7 +91,7 @@ def generated_reports(folder: Path, *, seed: int = 20, n: int = 6, stations: boo
     for k in range(n):
         noise = rng.normal(0.0, 0.02, len(base))
         rows = []
-        for row, e in zip(base, noise):
+        for row, e in zip(base, noise, strict=True):
             dev = float(row["deviation"]) + e
             if k == n - 2:
                 dev = 0.0004 * e / 0.02

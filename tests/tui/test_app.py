@@ -246,3 +246,20 @@ def test_thermal_panel_shows_the_drift_and_the_feed_forward(make_app, tmp_path):
             assert feed.applied and app._current().corrections["T5"] == app._current().x[8] + feed.shift
 
     run(scenario())
+
+
+def test_the_command_line_gives_the_app_correct_s_reader_cycle_and_thermal_options(monkeypatch, tmp_path):
+    """``setupfix tui`` takes the options of ``correct`` (same adders) and hands them to the app unchanged."""
+    from setupfix.pipeline.requests import CycleOptions, ReadOptions
+    from setupfix.tui.app import SetupfixApp
+
+    started = []
+    monkeypatch.setattr(SetupfixApp, "run", lambda self: started.append(self.inputs))
+    assert main(["tui", str(CYCLE_01), "--model", str(MODEL), "--columns", "actual=Meas", "--unit", "inch",
+                 "--lenient", "--stations", "P1,P2,P3,P4", "--strict", "--thermal", "t.json", "--temperatures",
+                 "log.csv", "--at", "2026-11-02T09:00:00", "--thermal-dead-band", "0.002"]) == 0
+    inputs = started[0]
+    assert inputs.read == ReadOptions(unit="inch", columns="actual=Meas", lenient=True)
+    assert inputs.cycles == CycleOptions(("P1", "P2", "P3", "P4"), strict=True)
+    assert (str(inputs.thermal), str(inputs.temperatures), inputs.at, inputs.thermal_dead_band) == (
+        "t.json", "log.csv", "2026-11-02T09:00:00", 0.002)
