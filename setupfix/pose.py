@@ -1,13 +1,13 @@
 """Posing the correction problem of one measured cycle: the one builder, in one documented order.
 
 Every door (``correct``, batch, the TUI, ``compare``, the diagnosis's next correction)
-solves the problem :func:`pose_problem` builds, and :func:`recommend` applies the rules
-that act after the solve.  The order, each step on the output of the one before:
+solves the problem :func:`pose_problem` builds, and :func:`setupfix.safety.recommend`
+applies the rules that act after the solve.  The order, each step on the output of the one before:
 
 1. **measurements** — the cycle's deviations y (model order, NaN where not measured);
    only measured dimensions enter the problem (eqs. 3–4: predicted = y + x·C);
 2. **smoothing** — the EWMA estimate ŷ of the deviations over the earlier parts
-   (λ of ``[safety] ewma``; :func:`ewma_history`, arrays computed from the history);
+   (λ of ``[safety] ewma``; :func:`setupfix.safety.ewma_history`, arrays from the history);
 3. **effects forecast** — the model's ``[effects]`` drift and wear until the next cycle
    are added (:func:`setupfix.diagnose.forecast.forecast_shift`); its relations (or a
    composite given by the caller, e.g. the diagnosis's augmented matrix) replace C;
@@ -28,7 +28,7 @@ pre-solve :class:`~setupfix.safety.RuleEffect` list.  Pure: arrays in and out, n
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Callable, Mapping
+from collections.abc import Mapping
 from dataclasses import dataclass
 
 import numpy as np
@@ -37,86 +37,14 @@ import pandas as pd
 
 from setupfix.errors import Note, ParseError, SourceLocation
 from setupfix.model import PartMeasurement, ProcessModel
-from setupfix.optimize import CorrectionProblem, OptimizeResult
-from setupfix.safety import (Policy, Recommendation, RuleEffect, apply_gain, cumulative_bounds, ewma_series,
-                             guard_limits, harmed_mask, in_dead_band, reject_mask)
+from setupfix.optimize import CorrectionProblem
+from setupfix.safety import Policy, RuleEffect, Smoothed, cumulative_bounds, guard_limits
 
-__all__ = ["Smoothed", "PosedProblem", "ewma_history", "forecast_of", "effects_composite", "policy_of",
-           "pose_problem", "pose_policy", "recommend", "hours_between"]
+__all__ = ["PosedProblem", "forecast_of", "effects_composite", "policy_of", "pose_problem", "pose_policy",
+           "hours_between"]
 
 Array = npt.NDArray[np.float64]
 Mask = npt.NDArray[np.bool_]
-
-
-@dataclass(frozen=True, eq=False)
-class Smoothed:
-    """The EWMA estimate of one cycle's deviations (step 2).
-
-    Attributes
-    ----------
-    deviation : ndarray of shape (n_dimensions,) [unit]
-        Model order, NaN where the cycle did not measure the dimension.
-    used : int
-        Earlier parts that entered the estimate (0: the estimate is the measurement).
-    lam : float
-        λ of the smoothing.
-    notes : tuple of Note
-        Why nothing was smoothed (no timestamp …).
-    """
-
-    deviation: Array
-    used: int
-    lam: float
-    notes: tuple[Note, ...] = ()
-
-
-def ewma_history(deviation: Array, now: np.datetime64 | None, times: npt.NDArray[np.datetime64], earlier: Array,
-                 log_times: npt.NDArray[np.datetime64], log_register: npt.NDArray[np.int64], log_delta: Array,
-                 log_reset: Mask, composite: Array, lam: float, *, limit: int = 50) -> Smoothed:
-    """EWMA of a cycle's deviations over the earlier parts, each shifted to the machine as it is now.
-
-    An earlier part's deviation y_k becomes y_k + Σ Δx·C over the corrections logged
-    after it was machined and up to ``now`` (eqs. 3–4), NaN on the dimensions a tool
-    changed since cuts (its wear restarted); then a_k = λ·y_k + (1 − λ)·a_{k−1}
-    (:func:`setupfix.safety.ewma_series`), the last row the current cycle.
-
-    Parameters
-    ----------
-    deviation : ndarray of shape (n_dimensions,)
-        The cycle as measured (NaN where not measured).
-    now : datetime64 or None
-        When the cycle was machined; None: nothing is smoothed.
-    times, earlier : ndarrays of shapes (n_parts,), (n_parts, n_dimensions)
-        Earlier parts (any order; only those before ``now`` count, the last ``limit``).
-    log_times, log_register, log_delta, log_reset : ndarrays of shape (n_log,)
-        Corrections log: time, register index (−1: not in the model), change, tool change.
-    composite : ndarray of shape (n_registers, n_dimensions)
-    lam : float in (0, 1]
-    """
-    if lam >= 1.0 or now is None:
-        return Smoothed(deviation, 0, lam)
-    before = np.flatnonzero(times < now)
-    if before.size == 0:
-        return Smoothed(deviation, 0, lam)
-    before = before[np.argsort(times[before], kind="stable")][-limit:]
-    rows = []
-    known = log_register >= 0
-    for k in before:
-        t = times[k]
-        since = known & (log_times > t) & (log_times <= now)
-        reset = np.zeros(composite.shape[1], dtype=bool)
-        shift = np.zeros(composite.shape[0])
-        for j, delta, tool_change in zip(log_register[since], log_delta[since], log_reset[since]):
-            if tool_change:
-                reset |= composite[j] != 0
-            elif np.isfinite(delta):
-                shift[j] += delta
-        row = earlier[k] + shift @ composite
-        row[reset] = np.nan
-        rows.append(row)
-    rows.append(deviation)
-    smoothed = ewma_series(np.vstack(rows), lam)
-    return Smoothed(np.where(np.isnan(deviation), np.nan, smoothed), int(before.size), lam)
 
 
 def hours_between(stamp: str, origin: str, where: str) -> float:
@@ -315,7 +243,7 @@ def pose_problem(model: ProcessModel, part: PartMeasurement, *, smoothed: Smooth
     part : PartMeasurement
         The cycle as measured (step 1).
     smoothed : Smoothed, optional
-        Its EWMA estimate (step 2), from the history (:func:`ewma_history`).
+        Its EWMA estimate (step 2), from the history (:func:`setupfix.safety.ewma_history`).
     cumulative : mapping register ID → float, optional
         Change applied since the last reset (the current value of wear registers, step 5).
     composite : ndarray of shape (n_registers, n_dimensions), optional
@@ -338,7 +266,9 @@ def pose_problem(model: ProcessModel, part: PartMeasurement, *, smoothed: Smooth
     if note is not None:
         deviation = deviation + shift
         notes.append(note)
-        effects.append(RuleEffect("forecast", note.message, dimensions=dim_ids))
+        moved = tuple(d for d, v in zip(dim_ids, shift[keep]) if v != 0)
+        effects.append(RuleEffect("forecast", "deviations forecast to the next cycle by the model's [effects] "
+                                  "(drift, wear)", dimensions=moved))
     problem = CorrectionProblem.from_part(model, dataclasses.replace(part, deviation=deviation))
     if composite is None:  # … and relations
         composite, note = effects_composite(model)
@@ -348,108 +278,3 @@ def pose_problem(model: ProcessModel, part: PartMeasurement, *, smoothed: Smooth
         problem = dataclasses.replace(problem, composite=np.asarray(composite, dtype=float)[:, keep])
     policy = policy if policy is not None else policy_of(model, problem.dimension_ids, cumulative)
     return pose_policy(problem, policy, measured=measured, effects=tuple(effects), notes=tuple(notes))
-
-
-def _zero_result(problem: CorrectionProblem, optimizer: str, status: str, message: str) -> OptimizeResult:
-    x = np.zeros(problem.n_registers)
-    budget = problem.margin_before
-    return OptimizeResult(x=x, margin_before=budget, margin_after=budget, norm=0.0, optimizer=optimizer,
-                          evaluations=0, seconds=0.0, status=status, message=message,
-                          binding=problem.binding(x))
-
-
-def _restrict(problem: CorrectionProblem, keep: Mask) -> CorrectionProblem:
-    return dataclasses.replace(problem, composite=problem.composite[:, keep], deviation=problem.deviation[keep],
-                               lower=problem.lower[keep], upper=problem.upper[keep],
-                               dimension_ids=tuple(d for d, k in zip(problem.dimension_ids, keep) if k))
-
-
-def _inside(values: Array, lower: Array, upper: Array) -> Mask:
-    return (values >= lower - 1e-12) & (values <= upper + 1e-12)
-
-
-def recommend(posed: PosedProblem, solve: Callable[[CorrectionProblem], OptimizeResult], *,
-              optimizer: str = "exact", names: Mapping[str, str] | None = None) -> Recommendation:
-    """The rules after the solve, around ``solve(posed.guarded)``.
-
-    Order: reject band (on the part as measured: no solve at all) → solve → gain →
-    no harm (given-up dimensions) → dead band → clamp report.  The pre-solve rules
-    (``posed.effects``) head the rule list.
-
-    Parameters
-    ----------
-    posed : PosedProblem
-    solve : callable
-        ``solve(problem) -> OptimizeResult`` (any optimiser).
-    names : mapping, optional
-        Dimension ID → name, for the messages.
-    """
-    label = (lambda ids: ", ".join((names or {}).get(i, i) for i in ids))
-    problem, guarded, policy = posed.problem, posed.guarded, posed.policy
-    ids = np.array(problem.register_ids, dtype=object)
-    dims = np.array(problem.dimension_ids, dtype=object)
-    dev, lower, upper = problem.deviation, problem.lower, problem.upper
-
-    bad = reject_mask(posed.measured, lower, upper, policy.reject_band)
-    if bad.any():
-        bad_ids = tuple(dims[bad])
-        alarm = (f"REJECT: {label(bad_ids)} beyond the reject band (a broken tool, a bad measurement or a wrong "
-                 "part?) — no correction; check the part and the measurement")
-        rules = [e for e in posed.effects if e.rule in ("ewma", "forecast")]
-        rules.append(RuleEffect("reject", "deviation beyond the reject band: no correction", dimensions=bad_ids))
-        result = _zero_result(problem, optimizer, "rejected", alarm)
-        return Recommendation("reject", result.x, result, problem, tuple(rules), alarm=alarm)
-
-    rules = list(posed.effects)
-    result = solve(guarded)
-    x = np.asarray(result.x, dtype=float)
-    given_up = tuple(result.given_up)
-
-    xg = apply_gain(x, policy.gain, problem.resolution)
-    if np.any(xg != x):
-        rules.append(RuleEffect("gain", "only the feedback fraction of the optimum is applied",
-                                registers=tuple(ids[xg != x])))
-    x = xg
-
-    harmed = harmed_mask(dev, problem.predicted(x), lower, upper)
-    if harmed.any():
-        # The optimum trades an in-tolerance dimension for out-of-tolerance ones: give
-        # up those no correction brought in, re-solve on the others, check again.
-        hopeless = ~((dev >= lower) & (dev <= upper))
-        if hopeless.any() and not hopeless.all():
-            retry = solve(_restrict(guarded, ~hopeless))
-            x2 = apply_gain(np.asarray(retry.x, dtype=float), policy.gain, problem.resolution)
-            if not harmed_mask(dev, problem.predicted(x2), lower, upper).any():
-                gone = tuple(dims[hopeless & ~_inside(problem.predicted(x2), lower, upper)])
-                given_up = tuple(dict.fromkeys(given_up + gone))
-                rules.append(RuleEffect("no_harm", "the optimum would move dimensions measured in tolerance out "
-                                        f"of it ({label(dims[harmed])}); corrected without "
-                                        f"{label(gone) or 'the out-of-tolerance ones'}", dimensions=gone))
-                message = (f"{label(gone)} given up: no correction brings them into tolerance without moving "
-                           "others out; the others are corrected")
-                x, result = x2, dataclasses.replace(retry, message=message)
-                harmed = np.zeros_like(harmed)
-        if harmed.any():
-            kept = tuple(dims[harmed])
-            rules.append(RuleEffect("no_harm", f"no correction keeps {label(kept)} in tolerance while "
-                                    "improving the others: nothing changed", dimensions=kept))
-            x = np.zeros_like(x)
-    if given_up and not any(r.rule == "no_harm" for r in rules):
-        rules.append(RuleEffect("given_up", "no setup correction brings these into tolerance: they need the NC "
-                                "program or the process", dimensions=given_up))
-
-    verdict = "apply"
-    if not np.any(x):
-        verdict = "hold"
-    elif in_dead_band(x, policy.dead_band):
-        rules.append(RuleEffect("dead_band", "every change is within its dead band: hold",
-                                registers=tuple(ids[x != 0])))
-        x = np.zeros_like(x)
-        verdict = "hold"
-
-    at = (x != 0) & ((x >= guarded.ub - 1e-12) | (x <= guarded.lb + 1e-12))
-    at_limit = tuple(ids[at])
-    if at_limit:
-        rules.append(RuleEffect("clamp", "change at the register's per-step or cumulative limit",
-                                registers=at_limit))
-    return Recommendation(verdict, x + 0.0, result, guarded, tuple(rules), given_up, at_limit)

@@ -17,23 +17,31 @@ difference check; ISO 14253-1 for decisions under measurement uncertainty):
 * **EWMA** — deviations smoothed over consecutive reports (λ), reset on a tool change.
 
 :func:`setupfix.pose.pose_problem` applies the rules that shape the problem (EWMA,
-guard band, cumulative limit, costs) and :func:`setupfix.pose.recommend` those after
+guard band, cumulative limit, costs) and :func:`recommend` those after
 the solve, returning a :class:`Recommendation` with its verdict and the list of rules
 that changed it.
 """
 
 from __future__ import annotations
 
+import dataclasses
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 import numpy.typing as npt
 
+from setupfix.errors import Note
 from setupfix.objective import error_budget, margins
 from setupfix.optimize import CorrectionProblem, OptimizeResult
 
+if TYPE_CHECKING:  # pose builds the problem with these rules; recommend takes what it built
+    from setupfix.pose import PosedProblem
+
 __all__ = ["RuleEffect", "Policy", "Recommendation", "reject_mask", "guard_limits", "cumulative_bounds",
-           "apply_gain", "harmed_mask", "in_dead_band", "ewma", "ewma_series", "budget", "VERDICTS"]
+           "apply_gain", "harmed_mask", "in_dead_band", "ewma", "ewma_series", "Smoothed", "ewma_history", "recommend",
+           "budget", "VERDICTS"]
 
 Array = npt.NDArray[np.float64]
 Mask = npt.NDArray[np.bool_]
@@ -217,6 +225,182 @@ def ewma_series(history: Array, lam: float) -> Array:
         seen = ~np.isnan(row)
         a = np.where(seen, np.where(np.isnan(a), row, lam * row + (1.0 - lam) * a), a)
     return a
+
+
+@dataclass(frozen=True, eq=False)
+class Smoothed:
+    """The EWMA estimate of one cycle's deviations (step 2).
+
+    Attributes
+    ----------
+    deviation : ndarray of shape (n_dimensions,) [unit]
+        Model order, NaN where the cycle did not measure the dimension.
+    used : int
+        Earlier parts that entered the estimate (0: the estimate is the measurement).
+    lam : float
+        λ of the smoothing.
+    notes : tuple of Note
+        Why nothing was smoothed (no timestamp …).
+    """
+
+    deviation: Array
+    used: int
+    lam: float
+    notes: tuple[Note, ...] = ()
+
+
+def ewma_history(deviation: Array, now: np.datetime64 | None, times: npt.NDArray[np.datetime64], earlier: Array,
+                 log_times: npt.NDArray[np.datetime64], log_register: npt.NDArray[np.int64], log_delta: Array,
+                 log_reset: Mask, composite: Array, lam: float, *, limit: int = 50) -> Smoothed:
+    """EWMA of a cycle's deviations over the earlier parts, each shifted to the machine as it is now.
+
+    An earlier part's deviation y_k becomes y_k + Σ Δx·C over the corrections logged
+    after it was machined and up to ``now`` (eqs. 3–4), NaN on the dimensions a tool
+    changed since cuts (its wear restarted); then a_k = λ·y_k + (1 − λ)·a_{k−1}
+    (:func:`setupfix.safety.ewma_series`), the last row the current cycle.
+
+    Parameters
+    ----------
+    deviation : ndarray of shape (n_dimensions,)
+        The cycle as measured (NaN where not measured).
+    now : datetime64 or None
+        When the cycle was machined; None: nothing is smoothed.
+    times, earlier : ndarrays of shapes (n_parts,), (n_parts, n_dimensions)
+        Earlier parts (any order; only those before ``now`` count, the last ``limit``).
+    log_times, log_register, log_delta, log_reset : ndarrays of shape (n_log,)
+        Corrections log: time, register index (−1: not in the model), change, tool change.
+    composite : ndarray of shape (n_registers, n_dimensions)
+    lam : float in (0, 1]
+    """
+    if lam >= 1.0 or now is None:
+        return Smoothed(deviation, 0, lam)
+    before = np.flatnonzero(times < now)
+    if before.size == 0:
+        return Smoothed(deviation, 0, lam)
+    before = before[np.argsort(times[before], kind="stable")][-limit:]
+    rows = []
+    known = log_register >= 0
+    for k in before:
+        t = times[k]
+        since = known & (log_times > t) & (log_times <= now)
+        reset = np.zeros(composite.shape[1], dtype=bool)
+        shift = np.zeros(composite.shape[0])
+        for j, delta, tool_change in zip(log_register[since], log_delta[since], log_reset[since]):
+            if tool_change:
+                reset |= composite[j] != 0
+            elif np.isfinite(delta):
+                shift[j] += delta
+        row = earlier[k] + shift @ composite
+        row[reset] = np.nan
+        rows.append(row)
+    rows.append(deviation)
+    smoothed = ewma_series(np.vstack(rows), lam)
+    return Smoothed(np.where(np.isnan(deviation), np.nan, smoothed), int(before.size), lam)
+
+
+def _zero_result(problem: CorrectionProblem, optimizer: str, status: str, message: str) -> OptimizeResult:
+    x = np.zeros(problem.n_registers)
+    budget = problem.margin_before
+    return OptimizeResult(x=x, margin_before=budget, margin_after=budget, norm=0.0, optimizer=optimizer,
+                          evaluations=0, seconds=0.0, status=status, message=message,
+                          binding=problem.binding(x))
+
+
+def _restrict(problem: CorrectionProblem, keep: Mask) -> CorrectionProblem:
+    return dataclasses.replace(problem, composite=problem.composite[:, keep], deviation=problem.deviation[keep],
+                               lower=problem.lower[keep], upper=problem.upper[keep],
+                               dimension_ids=tuple(d for d, k in zip(problem.dimension_ids, keep) if k))
+
+
+def _inside(values: Array, lower: Array, upper: Array) -> Mask:
+    return (values >= lower - 1e-12) & (values <= upper + 1e-12)
+
+
+def recommend(posed: PosedProblem, solve: Callable[[CorrectionProblem], OptimizeResult], *,
+              optimizer: str = "exact", names: Mapping[str, str] | None = None) -> Recommendation:
+    """The rules after the solve, around ``solve(posed.guarded)``.
+
+    Order: reject band (on the part as measured: no solve at all) → solve → gain →
+    no harm (given-up dimensions) → dead band → clamp report.  The pre-solve rules
+    (``posed.effects``) head the rule list.
+
+    Parameters
+    ----------
+    posed : PosedProblem
+    solve : callable
+        ``solve(problem) -> OptimizeResult`` (any optimiser).
+    names : mapping, optional
+        Dimension ID → name, for the messages.
+    """
+    label = (lambda ids: ", ".join((names or {}).get(i, i) for i in ids))
+    problem, guarded, policy = posed.problem, posed.guarded, posed.policy
+    ids = np.array(problem.register_ids, dtype=object)
+    dims = np.array(problem.dimension_ids, dtype=object)
+    dev, lower, upper = problem.deviation, problem.lower, problem.upper
+
+    bad = reject_mask(posed.measured, lower, upper, policy.reject_band)
+    if bad.any():
+        bad_ids = tuple(dims[bad])
+        alarm = (f"REJECT: {label(bad_ids)} beyond the reject band (a broken tool, a bad measurement or a wrong "
+                 "part?) — no correction; check the part and the measurement")
+        rules = [e for e in posed.effects if e.rule in ("ewma", "forecast")]
+        rules.append(RuleEffect("reject", "deviation beyond the reject band: no correction", dimensions=bad_ids))
+        result = _zero_result(problem, optimizer, "rejected", alarm)
+        return Recommendation("reject", result.x, result, problem, tuple(rules), alarm=alarm)
+
+    rules = list(posed.effects)
+    result = solve(guarded)
+    x = np.asarray(result.x, dtype=float)
+    given_up = tuple(result.given_up)
+
+    xg = apply_gain(x, policy.gain, problem.resolution)
+    if np.any(xg != x):
+        rules.append(RuleEffect("gain", "only the feedback fraction of the optimum is applied",
+                                registers=tuple(ids[xg != x])))
+    x = xg
+
+    harmed = harmed_mask(dev, problem.predicted(x), lower, upper)
+    if harmed.any():
+        # The optimum trades an in-tolerance dimension for out-of-tolerance ones: give
+        # up those no correction brought in, re-solve on the others, check again.
+        hopeless = ~((dev >= lower) & (dev <= upper))
+        if hopeless.any() and not hopeless.all():
+            retry = solve(_restrict(guarded, ~hopeless))
+            x2 = apply_gain(np.asarray(retry.x, dtype=float), policy.gain, problem.resolution)
+            if not harmed_mask(dev, problem.predicted(x2), lower, upper).any():
+                gone = tuple(dims[hopeless & ~_inside(problem.predicted(x2), lower, upper)])
+                given_up = tuple(dict.fromkeys(given_up + gone))
+                rules.append(RuleEffect("no_harm", "the optimum would move dimensions measured in tolerance out "
+                                        f"of it ({label(dims[harmed])}); corrected without "
+                                        f"{label(gone) or 'the out-of-tolerance ones'}", dimensions=gone))
+                message = (f"{label(gone)} given up: no correction brings them into tolerance without moving "
+                           "others out; the others are corrected")
+                x, result = x2, dataclasses.replace(retry, message=message)
+                harmed = np.zeros_like(harmed)
+        if harmed.any():
+            kept = tuple(dims[harmed])
+            rules.append(RuleEffect("no_harm", f"no correction keeps {label(kept)} in tolerance while "
+                                    "improving the others: nothing changed", dimensions=kept))
+            x = np.zeros_like(x)
+    if given_up and not any(r.rule == "no_harm" for r in rules):
+        rules.append(RuleEffect("given_up", "no setup correction brings these into tolerance: they need the NC "
+                                "program or the process", dimensions=given_up))
+
+    verdict = "apply"
+    if not np.any(x):
+        verdict = "hold"
+    elif in_dead_band(x, policy.dead_band):
+        rules.append(RuleEffect("dead_band", "every change is within its dead band: hold",
+                                registers=tuple(ids[x != 0])))
+        x = np.zeros_like(x)
+        verdict = "hold"
+
+    at = (x != 0) & ((x >= guarded.ub - 1e-12) | (x <= guarded.lb + 1e-12))
+    at_limit = tuple(ids[at])
+    if at_limit:
+        rules.append(RuleEffect("clamp", "change at the register's per-step or cumulative limit",
+                                registers=at_limit))
+    return Recommendation(verdict, x + 0.0, result, guarded, tuple(rules), given_up, at_limit)
 
 
 def budget(problem: CorrectionProblem, x: Array) -> tuple[float, Array]:

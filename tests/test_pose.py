@@ -11,8 +11,9 @@ from setupfix.diagnose.forecast import forecast_shift
 from setupfix.diagnose.terms import Layout
 from setupfix.model import PartMeasurement, model_from_dict
 from setupfix.optimize import CorrectionProblem, get_optimizer
-from setupfix.pose import ewma_history, pose_problem, recommend
+from setupfix.pose import pose_problem
 from setupfix.relation import relation_matrices
+from setupfix.safety import ewma_history, recommend
 
 SOLVE = get_optimizer("exact").solve
 
@@ -108,6 +109,7 @@ def test_forecast_equals_forecast_shift_and_relations_replace_the_composite():
     C[0, 0] += 0.5
     np.testing.assert_array_equal(posed.problem.composite, C)
     assert [e.rule for e in posed.effects] == ["forecast"]
+    assert posed.effects[0].dimensions == ("D2",)  # drift and wear of the tool: only its dimension moves
     assert [n.kind for n in posed.notes] == ["forecast", "relation"]
     given = np.ones_like(C)  # a composite given by the caller (the diagnosis's) wins over the relations
     np.testing.assert_array_equal(pose_problem(m, part(m, y), composite=given).problem.composite, given)

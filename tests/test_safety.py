@@ -18,7 +18,7 @@ from setupfix.safety import (
     reject_mask,
 )
 from setupfix.pose import pose_policy
-from setupfix.pose import recommend as recommend_posed
+from setupfix.safety import recommend as recommend_posed
 
 SOLVE = get_optimizer("exact").solve
 

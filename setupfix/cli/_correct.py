@@ -5,13 +5,15 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+from typing import TYPE_CHECKING
 
 from setupfix.cli._choices import CONTROLLERS, OPTIMIZERS
-from typing import Any
-
 from setupfix.cli._common import add_report_options, add_thermal_options, cycles_of, read_options
 from setupfix.cli.exit_codes import OK, REJECTED
 from setupfix.errors import SetupfixError
+
+if TYPE_CHECKING:
+    from setupfix.pipeline.requests import CorrectRequest
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
@@ -46,7 +48,7 @@ def add_offsets_options(p: argparse.ArgumentParser) -> None:
                    help="the controller's current offsets (CSV register,value): write absolute new values")
 
 
-def correct_request(args: argparse.Namespace) -> Any:
+def correct_request(args: argparse.Namespace) -> CorrectRequest:
     """The :class:`~setupfix.pipeline.requests.CorrectRequest` of ``correct``'s arguments (every input loaded once)."""
     from setupfix.model import load_model
     from setupfix.pipeline.correct import open_history

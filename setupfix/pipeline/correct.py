@@ -6,7 +6,7 @@ read the report once (any supported format) → tie characteristics to dimension
 (:func:`correct_cycle`): the smoothing over the history, the problem posed by
 :func:`setupfix.pose.pose_problem` (forecast, relations, guard band, cumulative
 bounds, costs, fixed registers), the optimiser, the rules after the solve
-(:func:`setupfix.pose.recommend`), the thermal feed-forward with its limit check →
+(:func:`setupfix.safety.recommend`), the thermal feed-forward with its limit check →
 an immutable :class:`~setupfix.pipeline.requests.CycleCorrection`.
 """
 
@@ -24,11 +24,11 @@ import parsers
 from setupfix.errors import ExportError, Note, ParameterError, SourceLocation
 from setupfix.model import PartMeasurement, ProcessModel, load_model
 from setupfix.optimize import CorrectionProblem, OptimizeResult, get_optimizer
-from setupfix.pipeline.cycles import load_parts, read_parts  # load_parts: re-exported for the tests and benches
+from setupfix.pipeline.cycles import load_parts, read_parts  # TODO(issue 20 merge): load_parts re-exported for tests/benches: import it from pipeline.cycles
 from setupfix.pipeline.requests import (CorrectOutcome, CorrectRequest, CurrentOffsets, CycleCorrection, CycleOptions,
                                         History, ReadOptions, SolveOptions, ThermalInputs)
-from setupfix.pose import Smoothed, pose_problem, recommend
-from setupfix.safety import Recommendation, budget
+from setupfix.pose import pose_problem
+from setupfix.safety import Recommendation, Smoothed, budget, recommend
 from setupfix.store import Store
 
 if TYPE_CHECKING:
