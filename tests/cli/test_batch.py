@@ -59,3 +59,29 @@ def test_killed_run_leaves_no_partial_file(tmp_path):
     with pytest.raises(KeyboardInterrupt):
         run_batch(CorrectRequest(load_model(MODEL)), d, out, settle=0, progress=killed_after_first)
     assert [p.name for p in tmp_path.iterdir()] == ["in"]  # … and neither output nor temporary file is left
+
+
+def test_batch_store_smooths_as_correct_store_does(capsys, tmp_path):
+    """Issue 20: with ``ewma = 0.5`` and the guide-pins cycles 1–5, ``batch --store`` differed from ``correct
+    --store`` in 36 register values (batch never smoothed); now every value agrees."""
+    import csv
+
+    model = tmp_path / "ewma.toml"
+    model.write_text((GUIDE_PINS / "model.toml").read_text() + "\n[safety]\newma = 0.5\n")
+    d = tmp_path / "in"
+    d.mkdir()
+    reports = [shutil.copy(GUIDE_PINS / f"cycle_0{i}.csv", d / f"cycle_0{i}.csv") for i in range(1, 6)]
+    code, _, err = run(capsys, "batch", "--model", str(model), str(d), "--out", str(tmp_path / "batch.csv"),
+                       "--settle", "0", "--store", str(tmp_path / "batch.db"))
+    assert code == 0 and "needs the history store" not in err
+    code, _, err = run(capsys, "history", "import", "--db", str(tmp_path / "h.db"), "--model", str(model),
+                       *map(str, reports))
+    assert code == 0, err
+    expected, plain = {}, {}
+    for report in reports:
+        for db, into in ((["--store", str(tmp_path / "h.db")], expected), ([], plain)):
+            code, out, _ = run(capsys, "correct", "--model", str(model), str(report), "--json", *db)
+            into.update({(report.name, k): v for k, v in json.loads(out)["corrections"].items()})
+    with (tmp_path / "batch.csv").open() as f:
+        got = {(row["report"], row["id"]): float(row["delta"]) for row in csv.DictReader(f)}
+    assert got == expected and sum(expected[k] != plain[k] for k in expected) >= 30
