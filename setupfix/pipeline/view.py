@@ -203,18 +203,24 @@ def register_rows(correction: CycleCorrection, current: Mapping[str, float] | No
     """Every register of the model (fixed ones too, with 0), in model order, with the
     safety rules that changed it.
 
-    ``current`` maps model ID or controller name to the value in the controller.
+    ``delta`` is the change the export writes (the thermal feed-forward included, rule
+    ``thermal``); ``current`` maps model ID or controller name to the value in the controller.
     """
     current = current or {}
     rules: dict[str, list[str]] = {}
     for effect in correction.recommendation.rules:
         for rid in effect.registers:
             rules.setdefault(rid, []).append(effect.rule)
+    exported = correction.corrections
+    fed = correction.thermal.corrections() if correction.thermal is not None and correction.verdict != "reject" else {}
+    for rid in fed:
+        rules.setdefault(rid, []).append("thermal")
     rows = []
     for reg in correction.register_rows():
         cur = current.get(reg["id"], current.get(reg["register"]))
         rows.append(RegisterRow(reg["id"], reg["register"], reg["kind"], str(reg.get("offset", "")),
-                                float(reg["delta"]) + 0.0, bool(reg["fixed"]), bool(reg["at_limit"]),
+                                float(exported.get(reg["id"], reg["delta"])) + 0.0, bool(reg["fixed"]),
+                                bool(reg["at_limit"]),
                                 None if cur is None else float(cur), tuple(dict.fromkeys(rules.get(reg["id"], ())))))
     return rows
 
