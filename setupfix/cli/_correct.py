@@ -10,7 +10,6 @@ from typing import TYPE_CHECKING
 from setupfix.cli._choices import CONTROLLERS, OPTIMIZERS
 from setupfix.cli._common import add_report_options, add_thermal_options, cycles_of, read_options
 from setupfix.cli.exit_codes import OK, REJECTED
-from setupfix.errors import SetupfixError
 
 if TYPE_CHECKING:
     from setupfix.pipeline.requests import CorrectRequest
@@ -50,23 +49,13 @@ def add_offsets_options(p: argparse.ArgumentParser) -> None:
 
 def correct_request(args: argparse.Namespace) -> CorrectRequest:
     """The :class:`~setupfix.pipeline.requests.CorrectRequest` of ``correct``'s arguments (every input loaded once)."""
-    from setupfix.model import load_model
-    from setupfix.pipeline.correct import open_history
-    from setupfix.pipeline.requests import CorrectRequest, CurrentOffsets, History, SolveOptions, load_thermal
+    from setupfix.pipeline.correct import load_request
+    from setupfix.pipeline.requests import SolveOptions
 
-    solve = SolveOptions(args.optimizer, args.seed, args.time_limit)
-    if bool(args.thermal) != bool(args.temperatures):
-        raise SetupfixError("--thermal and --temperatures go together")
-    history_store = open_history(args.store) if args.store else None
-    model = load_model(args.model)
-    current = CurrentOffsets.read(args.current, model) if args.current else None
-    history = None
-    if history_store is not None:
-        with history_store as store:  # read once: the smoothing needs the earlier parts and the log
-            history = History.from_store(model, store) if model.safety.ewma < 1.0 else None
-    thermal = (load_thermal(args.thermal, args.temperatures, at=args.at, dead_band=args.thermal_dead_band)
-               if args.thermal else None)
-    return CorrectRequest(model, read_options(args), cycles_of(args), solve, current, history, thermal)
+    return load_request(args.model, read=read_options(args), cycles=cycles_of(args),
+                        solve=SolveOptions(args.optimizer, args.seed, args.time_limit), current=args.current,
+                        store=args.store, thermal=args.thermal, temperatures=args.temperatures, at=args.at,
+                        thermal_dead_band=args.thermal_dead_band)
 
 
 def run(args: argparse.Namespace) -> int:

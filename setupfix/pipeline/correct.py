@@ -21,12 +21,12 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 import parsers
-from setupfix.errors import ExportError, Note, ParameterError, SourceLocation
+from setupfix.errors import ExportError, Note, ParameterError, SetupfixError, SourceLocation
 from setupfix.model import PartMeasurement, ProcessModel, load_model
 from setupfix.optimize import CorrectionProblem, OptimizeResult, get_optimizer
 from setupfix.pipeline.cycles import load_parts, read_parts  # TODO(issue 20 merge): load_parts re-exported for tests/benches: import it from pipeline.cycles
 from setupfix.pipeline.requests import (CorrectOutcome, CorrectRequest, CurrentOffsets, CycleCorrection, CycleOptions,
-                                        History, ReadOptions, SolveOptions, ThermalInputs)
+                                        History, ReadOptions, SolveOptions, ThermalInputs, load_thermal)
 from setupfix.pose import pose_problem
 from setupfix.safety import Recommendation, Smoothed, budget, recommend
 from setupfix.store import Store
@@ -34,7 +34,7 @@ from setupfix.store import Store
 if TYPE_CHECKING:
     from setupfix.pipeline.feedforward import ThermalFeedForward
 
-__all__ = ["correct_report", "correct_cycle", "open_history", "load_parts",
+__all__ = ["correct_report", "correct_cycle", "load_request", "open_history", "load_parts",
            # TODO(issue 20 merge): remove the names below (callers in batch.py, session.py, view.py, tui)
            "PartCorrection", "correct_part", "wear_totals", "write_correction_offsets"]
 
@@ -148,6 +148,39 @@ def correct_report(request: CorrectRequest | ProcessModel | str | Path, report: 
     cycles = tuple(correct_cycle(request, p) for p in request.cycles.select(parts, source.name))
     return CorrectOutcome(report=source.name, format=read.format, sha256=hashlib.sha256(source.data).hexdigest(),
                           table=read.table, cycles=cycles, notes=tuple(read.notes))
+
+
+def load_request(model: ProcessModel | str | Path, *, read: ReadOptions | None = None,
+                 cycles: CycleOptions | None = None, solve: SolveOptions | None = None,
+                 current: str | Path | None = None, store: str | Path | None = None,
+                 thermal: str | Path | None = None, temperatures: str | Path | None = None, at: str | None = None,
+                 thermal_dead_band: float | None = None) -> CorrectRequest:
+    """A :class:`CorrectRequest` with every input file read once (the CLI's and the TUI's way to build one).
+
+    ``current``: the controller's current offsets (``register,value``); ``store``: the
+    history store, read only when the model smooths (``[safety] ewma`` < 1);
+    ``thermal`` and ``temperatures`` (together): the feed-forward's inputs.
+
+    Raises
+    ------
+    SetupfixError
+        A file that cannot be read or does not fit the model (named with its place),
+        ``thermal`` without ``temperatures`` or the reverse, a store that does not exist.
+    """
+    if (thermal is None) != (temperatures is None):
+        raise SetupfixError("--thermal and --temperatures go together")
+    history_store = open_history(store) if store is not None else None
+    if not isinstance(model, ProcessModel):
+        model = load_model(model)
+    offsets = CurrentOffsets.read(current, model) if current is not None else None
+    history = None
+    if history_store is not None:
+        with history_store as opened:  # read once: the smoothing needs the earlier parts and the log
+            history = History.from_store(model, opened) if model.safety.ewma < 1.0 else None
+    inputs = (load_thermal(thermal, temperatures, at=at, dead_band=thermal_dead_band)
+              if thermal is not None and temperatures is not None else None)
+    return CorrectRequest(model, read or ReadOptions(), cycles or CycleOptions(), solve or SolveOptions(), offsets,
+                          history, inputs)
 
 
 def open_history(path: str | Path) -> Store:

@@ -10,13 +10,12 @@ import pytest
 
 from conftest import GUIDE_PINS, SAMPLES
 from setupfix.diagnose import Diagnoser
-from setupfix.errors import ParameterError
 from setupfix.model import PartMeasurement, load_model
 from setupfix.pipeline.compare import compare_report
 from setupfix.pipeline.correct import correct_cycle, correct_report
 from setupfix.pipeline.cycles import load_parts
 from setupfix.pipeline.diagnose import diagnose_reports, forecast_model
-from setupfix.pipeline.requests import CorrectRequest, CycleOptions, History, SolveOptions
+from setupfix.pipeline.requests import CorrectRequest, History
 from setupfix.store import open_store
 
 sys.path.insert(0, str(Path(__file__).resolve().parent / "data"))
@@ -81,17 +80,6 @@ def test_store_history_equals_the_parts_given_and_counts_a_part_once(tmp_path):
     assert any("needs the history store" in n.message for n in plain.notes)
 
 
-def test_requests_are_hashable_options_and_checked():
-    assert CycleOptions.of({"A7": "P1"}).station_map() == {"A7": "P1"}
-    assert CycleOptions.of(["P2", "P1"]).station_map() == ["P2", "P1"]
-    hash(CycleOptions.of(["P1"], part="x"))
-    assert SolveOptions(time_limit=1.5).params() == {"time_limit": 1.5}
-    with pytest.raises(ParameterError, match="applies to the exact optimizer"):
-        SolveOptions("pso", time_limit=1.0)
-    with pytest.raises(ParameterError, match="unknown optimizer"):
-        SolveOptions("magic")
-
-
 def test_outcome_reads_once_and_states_what_it_read():
     import hashlib
 
@@ -133,3 +121,23 @@ def test_thermal_feed_forward_is_a_step_of_the_use_case_and_requests_pickle(tmp_
 
     text = format_correction(fed)
     assert ff.line() in text and text.index(ff.line()) < text.index("error budget before")
+
+
+def test_load_request_reads_each_input_once_and_only_what_the_model_uses(tmp_path):
+    from setupfix.errors import SetupfixError
+    from setupfix.pipeline.correct import load_request
+
+    controllers = SAMPLES / "controllers"
+    req = load_request(controllers / "model.toml", current=controllers / "current.csv")
+    assert req.current is not None and req.current.source.endswith("current.csv") and req.history is None
+    assert req.current.wear_totals(req.model) == {"T5": req.current["T5"], "T12": req.current["T12"]}
+    smooth = tmp_path / "m.toml"
+    smooth.write_text((GUIDE_PINS / "model.toml").read_text() + "\n[safety]\newma = 0.5\n")
+    db = tmp_path / "h.db"
+    assert golden.run(["history", "import", "--db", db, "--model", smooth, *CYCLES])[0] == 0
+    assert load_request(smooth, store=db).history is not None
+    assert load_request(GUIDE_PINS / "model.toml", store=db).history is None  # λ = 1: nothing to smooth
+    with pytest.raises(SetupfixError, match="go together"):
+        load_request(GUIDE_PINS / "model.toml", thermal=tmp_path / "t.json")
+    with pytest.raises(SetupfixError, match="no history store"):
+        load_request(GUIDE_PINS / "model.toml", store=tmp_path / "none.db")
