@@ -216,16 +216,15 @@ def door_batch(case: Case, tmp: Path) -> Decisions:
 
 
 def door_session(case: Case, tmp: Path) -> Decisions:
-    """The TUI's session: the request from the operator's inputs (as the app passes them), each report opened."""
-    from setupfix.pipeline.session import open_report, session_request
+    """The TUI's session: its open worker with the inputs ``setupfix tui`` gives it, report by report."""
+    from setupfix.tui.workers import open_report
 
     db = _store_copy(case, tmp, "session")
-    request = session_request(case.model, read=ReadOptions(columns=str(case.columns) if case.columns else None),
-                              cycles=CycleOptions.of(case.stations), db=db, current=case.current,
-                              thermal=load_thermal(*case.thermal, at=AT) if case.thermal else None)
     out: Decisions = {}
     for report in case.reports:
-        opened = open_report(request, report)
+        opened = open_report(case.model, report, read=ReadOptions(columns=str(case.columns) if case.columns else None),
+                             cycles=CycleOptions.of(case.stations), solve=SolveOptions(), db=db, current=case.current,
+                             thermal=(*case.thermal, AT, None) if case.thermal else None)
         assert not opened.problem, opened.problem
         for c in opened.corrections:
             out[report.name, c.part.part] = _decision(c.verdict, c.corrections)

@@ -1,7 +1,7 @@
 """Use case "operator session": what the operator's screen asks of the pipeline.
 
 Open a report against a model — its corrections, as ``setupfix correct`` gives them
-(one :class:`~setupfix.pipeline.requests.CorrectRequest`, one
+(the request :func:`~setupfix.pipeline.correct.load_request` builds, one
 :func:`~setupfix.pipeline.correct.correct_report`), or, when the report and the model
 do not match, the match table with suggestions instead of an error —, choose what an
 export holds, record what was written as applied, and find the newest report in a
@@ -20,19 +20,18 @@ import pandas as pd
 
 import parsers
 from setupfix.errors import MatchError, Note, ParseError, SourceLocation
-from setupfix.model import PartMeasurement, ProcessModel, load_model, match_parts
+from setupfix.model import PartMeasurement, ProcessModel, match_parts
 from setupfix.optimize import CorrectionProblem, OptimizeResult, get_optimizer
 from setupfix.pipeline.compare import DEFAULT_METHODS, Comparison, MethodTrials, trial_seeds
-from setupfix.pipeline.correct import correct_report, open_history
+from setupfix.pipeline.correct import correct_report
 from setupfix.pipeline.cycles import assign_stations
 from setupfix.pipeline.export import Exported
 from setupfix.pipeline.present import cycle_json
-from setupfix.pipeline.requests import (CorrectOutcome, CorrectRequest, CurrentOffsets, CycleCorrection, CycleOptions,
-                                        History, ReadOptions, SolveOptions, ThermalInputs)
+from setupfix.pipeline.requests import CorrectOutcome, CorrectRequest, CurrentOffsets, CycleCorrection
 from setupfix.pipeline.view import MatchRow, match_rows, matched_rows
 from setupfix.store import CORRECTION_COLUMNS, Recommendation, open_store
 
-__all__ = ["OpenedReport", "open_report", "session_request", "export_cycles", "newest_report", "FolderWatch",
+__all__ = ["OpenedReport", "open_report", "export_cycles", "newest_report", "FolderWatch",
            "compare_steps", "store_parts", "record_applied"]
 
 
@@ -72,29 +71,6 @@ class OpenedReport:
     def unmatched(self) -> int:
         """Number of report characteristics that match no dimension."""
         return sum(not m.matched for m in self.matches)
-
-
-def session_request(model: ProcessModel | str | Path, *, read: ReadOptions | None = None,
-                    cycles: CycleOptions | None = None, solve: SolveOptions | None = None,
-                    db: str | Path | None = None, current: str | Path | None = None,
-                    thermal: ThermalInputs | None = None) -> CorrectRequest:
-    """The request ``setupfix correct`` builds from the same inputs (every file read once).
-
-    ``db`` (the history store) feeds the EWMA smoothing when the model's λ is below 1;
-    a store not yet created holds no history.
-    """
-    if not isinstance(model, ProcessModel):
-        model = load_model(model)
-    values = CurrentOffsets.read(current, model) if current is not None else None
-    history = None
-    if db is not None and model.safety.ewma < 1.0:
-        if Path(db).is_file():
-            with open_history(db) as store:
-                history = History.from_store(model, store)
-        else:
-            history = History.empty(model)
-    return CorrectRequest(model, read or ReadOptions(), cycles or CycleOptions(), solve or SolveOptions(), values,
-                          history, thermal)
 
 
 def open_report(request: CorrectRequest, report: str | Path) -> OpenedReport:

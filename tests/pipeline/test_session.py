@@ -14,15 +14,15 @@ from setupfix.pipeline.requests import ReadOptions
 from setupfix.errors import ParseError
 from setupfix.pipeline.compare import compare_problem
 from setupfix.pipeline.export import export, offsets_text
-from setupfix.pipeline.session import (FolderWatch, compare_steps, export_cycles, newest_report, open_report,
-                                       session_request)
+from setupfix.pipeline.correct import load_request
+from setupfix.pipeline.session import FolderWatch, compare_steps, export_cycles, newest_report, open_report
 
 MODEL = GUIDE_PINS / "model.toml"
 
 
 def opened_report(report, **inputs):
     """The report opened as the TUI opens it: the request from the operator's inputs, then the report."""
-    return open_report(session_request(MODEL, **inputs), report)
+    return open_report(load_request(MODEL, **inputs), report)
 
 
 def export_text(opened, controller, cycle=None):
