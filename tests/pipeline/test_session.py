@@ -166,12 +166,12 @@ def test_a_program_holds_the_chosen_cycle_and_only_it_is_recorded_as_applied(tmp
     assert exported.text == text == (tmp_path / "o.nc").read_text(encoding="utf-8")
     added = record_applied(tmp_path / "h.db", exported, opened.corrections, when="2026-11-03T12:00:00")
     last = opened.corrections[35]
-    moved = {r.register: v for r, v in zip(last.model.registers, last.x) if v}
+    moved = {r.register: v for r, v in zip(last.model.registers, last.x, strict=True) if v}
     with open_store(tmp_path / "h.db") as store:
         log = store.corrections()
         recs = store.recommendations()
     assert added == len(moved) > 0
-    assert dict(zip(log["register"], log["delta"])) == pytest.approx(moved)
+    assert dict(zip(log["register"], log["delta"], strict=True)) == pytest.approx(moved)
     assert [r.inputs["part"] for r in recs] == [last.part.part] and recs[0].inputs["export"]["controller"] == "fanuc"
 
 
