@@ -85,3 +85,16 @@ def test_batch_store_smooths_as_correct_store_does(capsys, tmp_path):
     with (tmp_path / "batch.csv").open() as f:
         got = {(row["report"], row["id"]): float(row["delta"]) for row in csv.DictReader(f)}
     assert got == expected and sum(expected[k] != plain[k] for k in expected) >= 30
+
+
+def test_bad_thermal_inputs_are_refused_before_any_work(capsys, tmp_path):
+    d = tmp_path / "in"
+    d.mkdir()
+    shutil.copy(GUIDE_PINS / "cycle_01.csv", d / "a.csv")
+    out = tmp_path / "o.csv"
+    code, _, err = run(capsys, "batch", "--model", MODEL, str(d), "--out", str(out), "--settle", "0",
+                       "--thermal", str(tmp_path / "missing.json"))
+    assert code == 1 and "go together" in err and not out.exists()
+    code, _, err = run(capsys, "batch", "--model", MODEL, str(d), "--out", str(out), "--settle", "0",
+                       "--thermal", str(tmp_path / "missing.json"), "--temperatures", str(GUIDE_PINS / "cycle_01.csv"))
+    assert code == 1 and "missing.json" in err and "Traceback" not in err and not out.exists()
