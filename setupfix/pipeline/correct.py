@@ -16,7 +16,7 @@ import dataclasses
 import hashlib
 from collections.abc import Mapping, Sequence
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, overload
 
 import numpy as np
 
@@ -122,8 +122,17 @@ def correct_cycle(request: CorrectRequest, part: PartMeasurement, *,
     return cycle
 
 
+@overload
+def correct_report(request: CorrectRequest, report: str | Path | parsers.Source) -> CorrectOutcome: ...
+
+
+@overload  # TODO(issue 20 merge): remove with the legacy keyword interface
+def correct_report(request: ProcessModel | str | Path, report: str | Path | parsers.Source,
+                   **legacy: Any) -> list[CycleCorrection]: ...
+
+
 def correct_report(request: CorrectRequest | ProcessModel | str | Path, report: str | Path | parsers.Source,
-                   **legacy: Any) -> Any:
+                   **legacy: Any) -> CorrectOutcome | list[CycleCorrection]:
     """Correct every cycle of a report (or the one ``request.cycles.part`` names).
 
     The report is read once (``report`` may be a :class:`parsers.Source` already
@@ -221,9 +230,7 @@ def _legacy_request(model: ProcessModel | str | Path, *, optimizer: str = "exact
 
 def _legacy_correct_report(model: ProcessModel | str | Path, report: str | Path | parsers.Source,
                            **kw: Any) -> CorrectOutcome:
-    result = correct_report(_legacy_request(model, **kw), report)
-    assert isinstance(result, CorrectOutcome)
-    return result
+    return correct_report(_legacy_request(model, **kw), report)
 
 
 def correct_part(model: ProcessModel, part: PartMeasurement, *, optimizer: str = "exact", seed: int | None = None,
