@@ -9,7 +9,7 @@ from types import FrameType
 from typing import TYPE_CHECKING
 
 from setupfix.cli._choices import CONTROLLERS, OPTIMIZERS
-from setupfix.cli._common import add_report_options, report_options, whole_number
+from setupfix.cli._common import add_report_options, add_thermal_options, whole_number
 from setupfix.cli.exit_codes import OK, PARTIAL, REJECTED
 
 if TYPE_CHECKING:
@@ -31,17 +31,23 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                    help="the controller's current offsets (CSV register,value): write absolute new values")
     p.add_argument("--optimizer", default="exact", choices=sorted(OPTIMIZERS))
     p.add_argument("--seed", type=int, default=None)
+    p.add_argument("--time-limit", type=float, default=None, metavar="SECONDS",
+                   help="wall time of the exact optimiser's whole solve per cycle (default 2)")
     p.add_argument("--workers", type=whole_number(1, 64), default=None, metavar="N",
                    help="worker processes (default: one per available CPU, at most 8; one for fewer than 32 "
                         "reports); the output does not depend on it")
     p.add_argument("--settle", type=float, default=1.0, metavar="SECONDS",
                    help="a file must be unchanged this long before it is read (default 1)")
-    p.add_argument("--store", metavar="DB", default=None,
-                   help="history store: reports it already holds are skipped, new ones are added")
+    p.add_argument("--store", metavar="DB", default=None, dest="db",
+                   help="history store: reports it already holds are skipped, new ones are added; with the "
+                        "model's EWMA (ewma < 1) every report is smoothed over the store's parts and the batch's "
+                        "machined before it")
     p.add_argument("--force", action="store_true", help="correct reports the store already holds again")
     p.add_argument("--json", action="store_true", help="the summary as JSON on stdout")
     add_report_options(p)
-    p.set_defaults(run=run)
+    add_thermal_options(p)
+    # correct_request reads no store here: run_batch builds the history from the store and the batch's reports
+    p.set_defaults(run=run, store=None)
 
 
 def _terminate(signum: int, frame: FrameType | None) -> None:
@@ -49,27 +55,20 @@ def _terminate(signum: int, frame: FrameType | None) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from setupfix.model import load_model
-    from setupfix.pipeline.batch import BatchOptions, run_batch
-    from setupfix.pipeline.controllers import read_current
+    from setupfix.cli._correct import correct_request
+    from setupfix.pipeline.batch import run_batch
     from setupfix.pipeline.present import format_batch_summary
     from setupfix.store import open_store
 
     import json
 
-    model = load_model(args.model)
-    current = read_current(args.current, model) if args.current else None
-    opts = report_options(args)
-    options = BatchOptions(optimizer=args.optimizer, seed=args.seed, format=opts["format"], unit=opts["unit"],
-                           encoding=opts["encoding"], columns=opts["columns"], lenient=opts["lenient"],
-                           parts_per_cycle=args.parts_per_cycle,
-                           strict=args.strict, current=current)
+    request = correct_request(args)  # the very request ``correct`` builds from the same options
     previous = signal.signal(signal.SIGTERM, _terminate)
     try:
         with _Progress() as progress:
-            summary = run_batch(model, args.folder, args.out, options=options, workers=args.workers,
-                                controller=args.controller, settle=args.settle, progress=progress,
-                                store=open_store(args.store) if args.store else None, force=args.force)
+            summary = run_batch(request, args.folder, args.out, workers=args.workers, controller=args.controller,
+                                settle=args.settle, progress=progress, store=open_store(args.db) if args.db else None,
+                                force=args.force)
     finally:
         signal.signal(signal.SIGTERM, previous)
     for path, note in summary.notes:

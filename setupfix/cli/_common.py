@@ -53,6 +53,17 @@ def add_report_options(p: argparse.ArgumentParser) -> None:
                         "(default: a warning naming both values)")
 
 
+def add_thermal_options(p: argparse.ArgumentParser) -> None:
+    """The thermal feed-forward's options (``correct``, ``batch``, ``tui``): model, log, time, dead band."""
+    g = p.add_argument_group("thermal feed-forward (setupfix.pipeline.feedforward)")
+    g.add_argument("--thermal", metavar="MODEL.json", default=None,
+                   help="thermal model: add the drift since the measured parts were cut")
+    g.add_argument("--temperatures", metavar="LOG", default=None, help="temperature log for --thermal")
+    g.add_argument("--at", metavar="TIME", default=None, help="time of the correction (default: the log's last sample)")
+    g.add_argument("--thermal-dead-band", type=float, default=None, metavar="D",
+                   help="feed nothing forward below |D| (model unit; default one register step)")
+
+
 def add_lenient_option(group: Any) -> None:
     """``--lenient``: the reader skips a self-contradicting row (with a warning naming its line)."""
     group.add_argument("--lenient", action="store_true",

@@ -8,7 +8,7 @@ import sys
 from typing import TYPE_CHECKING
 
 from setupfix.cli._choices import CONTROLLERS, OPTIMIZERS
-from setupfix.cli._common import add_report_options, cycles_of, read_options
+from setupfix.cli._common import add_report_options, add_thermal_options, cycles_of, read_options
 from setupfix.cli.exit_codes import OK, REJECTED
 
 if TYPE_CHECKING:
@@ -34,13 +34,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                         "(model [safety] ewma < 1)")
     add_offsets_options(p)
     add_report_options(p)
-    g = p.add_argument_group("thermal feed-forward (setupfix.pipeline.feedforward)")
-    g.add_argument("--thermal", metavar="MODEL.json", default=None,
-                   help="thermal model: add the drift since the measured parts were cut")
-    g.add_argument("--temperatures", metavar="LOG", default=None, help="temperature log for --thermal")
-    g.add_argument("--at", metavar="TIME", default=None, help="time of the correction (default: the log's last sample)")
-    g.add_argument("--thermal-dead-band", type=float, default=None, metavar="D",
-                   help="feed nothing forward below |D| (model unit; default one register step)")
+    add_thermal_options(p)
     p.set_defaults(run=run)
 
 

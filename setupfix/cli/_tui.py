@@ -6,7 +6,7 @@ import argparse
 from pathlib import Path
 
 from setupfix.cli._choices import OPTIMIZERS
-
+from setupfix.cli._common import add_report_options, add_thermal_options, cycles_of, read_options
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
@@ -20,21 +20,22 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--db", metavar="STORE", type=Path, default=None, help="history store (SQLite file)")
     p.add_argument("--current", metavar="FILE", type=Path, default=None,
                    help="the controller's current offsets (CSV register,value): new values and absolute exports")
-    p.add_argument("--thermal", metavar="MODEL.json", type=Path, default=None,
-                   help="saved thermal model (setupfix thermal fit --out)")
-    p.add_argument("--temperatures", metavar="LOG", type=Path, default=None, help="temperature log")
     p.add_argument("--optimizer", default="exact", choices=sorted(OPTIMIZERS), help="optimiser to start with")
     p.add_argument("--seed", type=int, default=0, help="seed of the metaheuristics and the comparison (default 0)")
     p.add_argument("--trials", type=int, default=12, help="trials per method in the compare view (default 12)")
     p.add_argument("--offsets", metavar="FILE", default="offsets.csv",
                    help="file the export offers to write (default offsets.csv)")
+    add_report_options(p)
+    add_thermal_options(p)
     p.set_defaults(run=run)
 
 
 def run(args: argparse.Namespace) -> int:
     from setupfix.tui.app import Inputs, SetupfixApp  # deferred: the CLI never loads textual otherwise
 
-    SetupfixApp(Inputs(model=args.model, report=args.report, db=args.db, current=args.current, thermal=args.thermal,
-                       temperatures=args.temperatures, optimizer=args.optimizer, seed=args.seed,
-                       trials=args.trials, offsets=args.offsets)).run()
+    SetupfixApp(Inputs(model=args.model, report=args.report, db=args.db, current=args.current,
+                       thermal=Path(args.thermal) if args.thermal else None,
+                       temperatures=Path(args.temperatures) if args.temperatures else None, at=args.at,
+                       thermal_dead_band=args.thermal_dead_band, read=read_options(args), cycles=cycles_of(args),
+                       optimizer=args.optimizer, seed=args.seed, trials=args.trials, offsets=args.offsets)).run()
     return 0

@@ -2,8 +2,15 @@
 
 Design for thousands of reports:
 
-* the model is loaded once (once per worker process) and every report runs
-  :func:`setupfix.pipeline.correct.correct_part` — no per-report start-up;
+* one :class:`~setupfix.pipeline.requests.CorrectRequest` — the very request
+  ``setupfix correct`` builds (model, reader and cycle options, optimiser, current
+  offsets, thermal inputs, smoothing history) — goes to each worker process once,
+  and every report runs :func:`setupfix.pipeline.correct.correct_report` on it; its
+  rows are :func:`setupfix.pipeline.export.cycle_rows` (the export policy);
+* with a history store and EWMA (λ < 1) every report is read first: the history is
+  the store plus every report of the batch, so that a report is smoothed over every
+  part machined before it, as ``history import`` of the same reports followed by
+  ``correct --store`` on each would smooth it;
 * results are streamed: each report's offset rows are written to the (atomic)
   output as soon as it is done, in the sorted order of the files, so memory does
   not grow with the number of reports and the numbers do not depend on
@@ -26,7 +33,7 @@ import itertools
 import os
 import time
 from collections import Counter, deque
-from collections.abc import Callable, Iterator, Mapping
+from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import Future, ProcessPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -35,37 +42,30 @@ from typing import Any
 import pandas as pd
 
 import parsers
-from setupfix.errors import ExportError, ParameterError, SetupfixError, SourceLocation
-from setupfix.model import ProcessModel, load_model
+from setupfix.errors import ExportError, Note, ParameterError, SetupfixError, SourceLocation
+from setupfix.model import PartMeasurement, match_parts
 from setupfix.offsets import OffsetRow, csv_header, csv_lines, offset_rows
 from setupfix.pipeline.controllers import render
-from setupfix.pipeline.correct import correct_part, wear_totals
-from setupfix.pipeline.cycles import read_parts
+from setupfix.pipeline.correct import correct_report
+from setupfix.pipeline.export import cycle_rows, offsets_text
+from setupfix.pipeline.requests import CorrectRequest, History, SolveOptions
 from setupfix.store import Recommendation as StoreRecommendation
 from setupfix.store import Store
 
-__all__ = ["BatchOptions", "Outcome", "BatchSummary", "find_reports", "run_batch", "PROGRAM_SUFFIX"]
+__all__ = ["Outcome", "BatchSummary", "find_reports", "run_batch", "batch_history", "PROGRAM_SUFFIX"]
 
 #: File suffix of one program per cycle when a controller other than csv is chosen.
 PROGRAM_SUFFIX = {"fanuc": ".nc", "haas": ".nc", "siemens": ".mpf", "heidenhain": ".txt"}
 
 
 @dataclass(frozen=True)
-class BatchOptions:
-    """What every report is corrected with (picklable: sent once to each worker)."""
+class _Work:
+    """What every worker gets once: the request and the batch's own switches (picklable)."""
 
-    optimizer: str = "exact"
-    seed: int | None = None
-    format: str | None = None
-    unit: str | None = None
-    encoding: str | None = None
-    columns: str | None = None
-    lenient: bool = False
-    parts_per_cycle: int | None = None
-    strict: bool = False
-    current: Mapping[str, float] | None = None
+    request: CorrectRequest
     skip: frozenset[str] = frozenset()  #: content hashes already processed (history store)
     record: bool = False  #: return the bytes and table read with each outcome (for the history store)
+    controller: str = "csv"  #: other than csv: each cycle's program text (:func:`~setupfix.pipeline.export.offsets_text`)
 
 
 @dataclass
@@ -80,8 +80,9 @@ class Outcome:
     error: str = ""
     skipped: str = ""
     format: str = ""
-    notes: list[str] = field(default_factory=list)
-    data: bytes = b""  #: the bytes corrected (only with ``BatchOptions.record``)
+    notes: list[Note] = field(default_factory=list)
+    programs: list[tuple[str, str]] = field(default_factory=list)  #: (part, program) of every cycle not rejected
+    data: bytes = b""  #: the bytes corrected (only with a history store)
     table: pd.DataFrame | None = None  #: the canonical table read from them (only with ``record``)
 
 
@@ -96,56 +97,41 @@ class BatchSummary:
     skipped: list[tuple[str, str]] = field(default_factory=list)
     seconds: float = 0.0
     written: bool = False
-    notes: list[tuple[str, str]] = field(default_factory=list)
+    notes: list[tuple[str, Note]] = field(default_factory=list)
 
     def to_json(self) -> dict[str, Any]:
         return {"reports": self.reports, "parts": self.parts, "verdicts": dict(self.verdicts),
                 "failed": [{"file": f, "reason": r} for f, r in self.failed],
                 "skipped": [{"file": f, "reason": r} for f, r in self.skipped],
-                "notes": [{"file": f, "note": n} for f, n in self.notes],
+                "notes": [{"file": f, "note": str(n)} for f, n in self.notes],
                 "seconds": round(self.seconds, 3), "written": self.written}
 
 
-def find_reports(root: str | Path) -> list[tuple[Path, int, int]]:
-    """Every regular file below ``root`` (sorted) with size and mtime_ns.
-
-    Hidden files and folders are left out, and so are files that are never reports
-    (:func:`parsers.never_a_report`: a process model, notes, the history store, the logs).
+def find_reports(root: str | Path) -> parsers.Listing:
+    """The reports below ``root`` under the one folder-walk policy (:func:`parsers.list_reports`).
 
     Raises
     ------
     ParameterError
         If ``root`` is not a folder.
     """
-    base = Path(root)
-    if not base.is_dir():
+    if not Path(root).is_dir():
         raise ParameterError(f"batch: {root} is not a folder")
-    found = []
-    for folder, dirs, files in os.walk(base):
-        dirs[:] = sorted(d for d in dirs if not d.startswith("."))
-        for name in sorted(files):
-            if name.startswith(".") or parsers.never_a_report(name):
-                continue
-            path = Path(folder) / name
-            st = path.lstat()
-            if path.is_file() and not path.is_symlink():
-                found.append((path, st.st_size, st.st_mtime_ns))
-    return found
+    return parsers.list_reports(root)
 
 
 # -- per-report work (runs in a worker process, or inline with one worker) --------------------
 
-_MODEL: ProcessModel | None = None
-_OPTIONS = BatchOptions()
+_WORK: _Work | None = None
 
 
-def _init(model: ProcessModel, options: BatchOptions) -> None:
-    global _MODEL, _OPTIONS
-    _MODEL, _OPTIONS = model, options
+def _init(work: _Work) -> None:
+    global _WORK
+    _WORK = work
 
 
 def _correct_one(path: str, size: int, mtime_ns: int) -> Outcome:
-    assert _MODEL is not None
+    assert _WORK is not None
     out = Outcome(path)
     try:
         st = os.stat(path)
@@ -154,23 +140,21 @@ def _correct_one(path: str, size: int, mtime_ns: int) -> Outcome:
             return out
         source = parsers.load_source(path)  # read once: the bytes hashed are the bytes corrected
         out.sha256 = hashlib.sha256(source.data).hexdigest()
-        o = _OPTIONS
-        if out.sha256 in o.skip:
+        if out.sha256 in _WORK.skip:
             return out  # run_batch marks it "already processed"
-        read, parts = read_parts(_MODEL, source, format=o.format, unit=o.unit, encoding=o.encoding,
-                                 columns=o.columns, parts_per_cycle=o.parts_per_cycle, strict=o.strict,
-                                 lenient=o.lenient)
-        if o.record:  # the store records these very bytes and table: the parent reads nothing again
-            out.data, out.table, out.format = source.data, read.table, read.format
-        cumulative = wear_totals(_MODEL, o.current) if o.current is not None else None
-        for part in parts:
-            pc = correct_part(_MODEL, part, optimizer=o.optimizer, seed=o.seed, cumulative=cumulative)
-            out.rows += pc.offsets(o.current)
-            out.verdicts.append(pc.verdict)
-            out.notes += pc.warnings
-            if pc.verdict == "reject":
-                out.notes.append(pc.recommendation.alarm)
-            out.parts.append(part.part)
+        request = _WORK.request
+        corrected = correct_report(request, source)
+        if _WORK.record:  # the store records these very bytes and table: the parent reads nothing again
+            out.data, out.table, out.format = source.data, corrected.table, corrected.format
+        for cycle in corrected.cycles:
+            out.rows += cycle_rows(cycle, request.current)
+            out.verdicts.append(cycle.verdict)
+            out.notes += cycle.notes
+            if cycle.verdict == "reject":
+                out.notes.append(Note(cycle.recommendation.alarm, SourceLocation(path), "safety"))
+            elif _WORK.controller != "csv":
+                out.programs.append((cycle.part.part, offsets_text([cycle], _WORK.controller, request.current)))
+            out.parts.append(cycle.part.part)
     except SetupfixError as exc:
         out.error = str(exc) if exc.location else f"{path}: {exc}"
     except OSError as exc:
@@ -195,23 +179,22 @@ def chunk_size(n_files: int, workers: int) -> int:
     return max(1, min(CHUNK, -(-n_files // (8 * workers))))
 
 
-def _outcomes(files: list[tuple[Path, int, int]], model: ProcessModel, options: BatchOptions,
-              workers: int) -> Iterator[Outcome]:
+def _outcomes(files: list[tuple[Path, int, int]], work: _Work, workers: int) -> Iterator[Outcome]:
     """Outcomes in file order.
 
-    With several workers the model and options go to each worker process once (its
+    With several workers the request goes to each worker process once (its
     initializer), the files in chunks of :func:`chunk_size`; at most ``2·workers``
     chunks are in flight, so memory stays flat in the number of reports.
     """
     items = [(str(path), size, mtime) for path, size, mtime in files]
     if workers <= 1:
-        _init(model, options)
+        _init(work)
         for item in items:
             yield _correct_one(*item)
         return
     size = chunk_size(len(items), workers)
     chunks = iter([items[i:i + size] for i in range(0, len(items), size)])
-    with ProcessPoolExecutor(max_workers=workers, initializer=_init, initargs=(model, options)) as pool:
+    with ProcessPoolExecutor(max_workers=workers, initializer=_init, initargs=(work,)) as pool:
         pending: deque[Future[list[Outcome]]] = deque(pool.submit(_correct_chunk, c)
                                                       for c in itertools.islice(chunks, 2 * workers))
         while pending:
@@ -241,17 +224,18 @@ def auto_workers(n_files: int) -> int:
     return max(1, min(cpus, AUTO_MAX_WORKERS))
 
 
-def run_batch(model: ProcessModel | str | Path, folder: str | Path, out: str | Path, *,
-              options: BatchOptions | None = None, workers: int | None = 1, controller: str = "csv",
-              settle: float = 1.0, store: Store | None = None, force: bool = False,
+def run_batch(request: CorrectRequest, folder: str | Path, out: str | Path, *, workers: int | None = 1,
+              controller: str = "csv", settle: float = 1.0, store: Store | None = None, force: bool = False,
               progress: Callable[[int, int, Outcome], None] | None = None) -> BatchSummary:
-    """Correct every report below ``folder`` and write one offsets file ``out``.
+    """Correct every report below ``folder`` with ``request`` and write one offsets file ``out``.
 
     Parameters
     ----------
-    model : ProcessModel or path
+    request : CorrectRequest
+        As ``setupfix correct`` builds it; every report is corrected with it.
     folder : path
-        Searched recursively; every regular file is tried with every reader.
+        Searched recursively (:func:`parsers.list_reports`); every candidate is tried
+        with every reader; what cannot be listed is named in ``failed``.
     out : path
         The offsets CSV (written atomically: complete or absent), or with a
         ``controller`` other than csv a folder receiving one program per cycle.
@@ -263,7 +247,9 @@ def run_batch(model: ProcessModel | str | Path, folder: str | Path, out: str | P
     store : Store, optional
         History store: reports it holds a batch recommendation for are skipped
         (unless ``force``); each corrected report and its recommendation are added,
-        in one transaction committed only after the output is written.
+        in one transaction committed only after the output is written.  With the
+        model's EWMA (λ < 1) the smoothing history is the store (or
+        ``request.history``) plus every report of the batch (:func:`batch_history`).
     progress : callable, optional
         Called after each report with (done, total, outcome).
 
@@ -274,30 +260,33 @@ def run_batch(model: ProcessModel | str | Path, folder: str | Path, out: str | P
         then left untouched).
     """
     start = time.perf_counter()
-    if not isinstance(model, ProcessModel):
-        model = load_model(model)
-    options = options or BatchOptions()
+    model = request.model
     if workers is not None and not 1 <= workers <= 64:
         raise ParameterError(f"batch: workers must be an int in [1, 64], got {workers}")
     # An unknown controller, or a register it cannot express, fails before any work.
-    render(controller, offset_rows(model, {}, current=options.current))
-    files = find_reports(folder)
+    render(controller, offset_rows(model, {}, current=request.current))
+    listing = find_reports(folder)
+    files = [(f.path, f.size, f.mtime_ns) for f in listing.files]
     if workers is None:
         workers = auto_workers(len(files))
     if files:
         youngest = time.time() - max(m for _, _, m in files) / 1e9
         if youngest < settle:
             time.sleep(settle - youngest)
+    if model.safety.ewma < 1.0 and (store is not None or request.history is not None):
+        base = request.history if request.history is not None else History.from_store(model, store)  # type: ignore[arg-type]
+        request = dataclasses.replace(request, history=batch_history(request, base, [f for f, _, _ in files]))
     summary = BatchSummary()
+    summary.failed += listing.problems  # named, never dropped: an unreadable folder, a broken link, …
     seen: dict[str, str] = {}
     writer: _CsvOut | _ProgramsOut = _CsvOut(out) if controller == "csv" else _ProgramsOut(out, controller)
     done = _batch_reports(store) if store is not None and not force else set()
-    options = dataclasses.replace(options, skip=frozenset(done), record=store is not None)
+    work = _Work(request, frozenset(done), record=store is not None, controller=controller)
     with contextlib.ExitStack() as stack:
         if store is not None:
             stack.enter_context(store.transaction())
         with writer:
-            for i, outcome in enumerate(_outcomes(files, model, options, workers), start=1):
+            for i, outcome in enumerate(_outcomes(files, work, workers), start=1):
                 _account(summary, outcome, seen, done.__contains__ if done else None)
                 if not outcome.error and not outcome.skipped:
                     rel = Path(outcome.path).relative_to(folder).as_posix()
@@ -305,9 +294,9 @@ def run_batch(model: ProcessModel | str | Path, folder: str | Path, out: str | P
                     writer.add(outcome)
                     if store is not None:
                         try:
-                            _record(store, outcome, options)
+                            _record(store, outcome, request.solve)
                         except SetupfixError as exc:  # its offsets stand; it is corrected again next run
-                            outcome.notes.append(str(exc))
+                            outcome.notes.append(Note(exc.message, exc.location, "store"))
                     outcome.data, outcome.table = b"", None
                 if progress is not None:
                     progress(i, len(files), outcome)
@@ -316,12 +305,28 @@ def run_batch(model: ProcessModel | str | Path, folder: str | Path, out: str | P
     return summary
 
 
+def batch_history(request: CorrectRequest, base: History, files: Sequence[str | Path]) -> History:
+    """``base`` plus the parts of every report in ``files``, read as ``history import`` stores them.
+
+    A report that cannot be read or matched adds nothing here (its correction names
+    the reason); a part already held (same time and name) is not added twice.
+    """
+    parts: list[PartMeasurement] = []
+    for path in files:
+        try:
+            read = parsers.read_report(path, **request.read.kwargs())
+            parts += match_parts(request.model, read.table, source=str(path))
+        except (SetupfixError, OSError):
+            continue
+    return base.with_parts(parts)
+
+
 def _batch_reports(store: Store) -> set[str]:
     """Hashes of the reports the store holds a batch recommendation for."""
     return {str(r.inputs.get("report")) for r in store.recommendations() if r.inputs.get("use") == "batch"}
 
 
-def _record(store: Store, outcome: Outcome, options: BatchOptions) -> None:
+def _record(store: Store, outcome: Outcome, solve: SolveOptions) -> None:
     """Add the report (the bytes and table the worker corrected, not a second reading) and its recommendations."""
     assert outcome.table is not None
     sha, _ = store.add_report(outcome.data, Path(outcome.path).name, outcome.format, outcome.table)
@@ -330,7 +335,7 @@ def _record(store: Store, outcome: Outcome, options: BatchOptions) -> None:
         by_part.setdefault(row.part, {})[row.id] = row.delta
     for (part, corrections), verdict in zip(by_part.items(), outcome.verdicts):
         store.add_recommendation(StoreRecommendation(
-            optimizer=options.optimizer, inputs={"use": "batch", "report": sha, "part": part, "seed": options.seed},
+            optimizer=solve.optimizer, inputs={"use": "batch", "report": sha, "part": part, "seed": solve.seed},
             result={"verdict": verdict, "corrections": corrections}))
 
 
@@ -408,14 +413,8 @@ class _ProgramsOut:
         from setupfix.pipeline.writers import write_text
 
         stem = Path(outcome.path).stem
-        by_part: dict[str, list[OffsetRow]] = {}
-        for row in outcome.rows:
-            by_part.setdefault(row.part, []).append(row)
-        for (part, rows), verdict in zip(by_part.items(), outcome.verdicts):
-            if verdict != "apply":
-                continue
-            suffix = "" if len(by_part) == 1 else "_" + "".join(c if c.isalnum() else "_" for c in part)
-            text = render(self.controller, rows, f"{Path(outcome.path).name} {part}".strip())
+        for part, text in outcome.programs:
+            suffix = "" if len(outcome.parts) == 1 else "_" + "".join(c if c.isalnum() else "_" for c in part)
             write_text(self.folder / f"{stem}{suffix}{PROGRAM_SUFFIX[self.controller]}", text)
             self.written += 1
 

@@ -1,54 +1,71 @@
 """Use case "operator session": what the operator's screen asks of the pipeline.
 
-Open a report against a model — its corrections, or, when the report and the model
-do not match, the match table with suggestions instead of an error — and find the
-newest report in a watched folder once its writer has finished with it.
+Open a report against a model — its corrections, as ``setupfix correct`` gives them
+(the request :func:`~setupfix.pipeline.correct.load_request` builds, one
+:func:`~setupfix.pipeline.correct.correct_report`), or, when the report and the model
+do not match, the match table with suggestions instead of an error —, choose what an
+export holds, record what was written as applied, and find the newest report in a
+watched folder once its writer has finished with it.
 """
 
 from __future__ import annotations
 
-import os
 import time
-from datetime import datetime
-from collections.abc import Iterator, Mapping, Sequence
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
+from datetime import datetime
 from pathlib import Path
 
 import pandas as pd
 
 import parsers
-from setupfix.errors import ExportError, MatchError, ParseError, SourceLocation
-from setupfix.model import PartMeasurement, ProcessModel, load_model, match_parts
+from setupfix.errors import MatchError, Note, ParseError, SourceLocation
+from setupfix.model import PartMeasurement, ProcessModel, match_parts
 from setupfix.optimize import CorrectionProblem, OptimizeResult, get_optimizer
 from setupfix.pipeline.compare import DEFAULT_METHODS, Comparison, MethodTrials, trial_seeds
-from setupfix.pipeline.controllers import read_current, render
-from setupfix.pipeline.correct import PartCorrection, correct_report, open_history
+from setupfix.pipeline.correct import correct_report
 from setupfix.pipeline.cycles import assign_stations
+from setupfix.pipeline.export import Exported
+from setupfix.pipeline.present import cycle_json
+from setupfix.pipeline.requests import CorrectOutcome, CorrectRequest, CurrentOffsets, CycleCorrection
 from setupfix.pipeline.view import MatchRow, match_rows, matched_rows
 from setupfix.store import CORRECTION_COLUMNS, Recommendation, open_store
 
-__all__ = ["OpenedReport", "open_report", "newest_report", "FolderWatch", "SKIPPED_SUFFIXES", "compare_steps", "store_parts", "offsets_text",
-           "record_applied"]
+__all__ = ["OpenedReport", "open_report", "export_cycles", "newest_report", "FolderWatch",
+           "compare_steps", "store_parts", "record_applied"]
 
 
 @dataclass(frozen=True)
 class OpenedReport:
     """A report opened against a model.
 
-    ``matches`` ties every characteristic of the report to a dimension (or lists close
-    names).  ``corrections`` holds one correction per cycle; it is empty when the
-    report could not be tied to the model, and ``problem`` then says why.  ``current``
-    holds the controller's current offsets by register ID when they were given.
+    ``outcome`` is :func:`~setupfix.pipeline.correct.correct_report`'s, for the
+    ``request`` built from the operator's inputs; it is None when the report could not
+    be tied to the model, and ``problem`` then says why.  ``matches`` ties every
+    characteristic of the report to a dimension (or lists close names).
     """
 
-    model: ProcessModel
+    request: CorrectRequest
     report: str
     format: str
-    corrections: tuple[PartCorrection, ...] = ()
+    outcome: CorrectOutcome | None = None
     matches: tuple[MatchRow, ...] = ()
     problem: str = ""
-    current: Mapping[str, float] | None = None
-    notes: tuple[str, ...] = ()  #: the reader's notes (rows skipped, units assumed, …) with their places
+    notes: tuple[Note, ...] = ()  #: the reader's notes (rows skipped, units assumed, …) with their places
+
+    @property
+    def model(self) -> ProcessModel:
+        return self.request.model
+
+    @property
+    def current(self) -> CurrentOffsets | None:
+        """The controller's current offsets by register ID, when given."""
+        return self.request.current
+
+    @property
+    def corrections(self) -> tuple[CycleCorrection, ...]:
+        """One correction per cycle (none when the report does not match the model)."""
+        return self.outcome.cycles if self.outcome is not None else ()
 
     @property
     def unmatched(self) -> int:
@@ -56,105 +73,55 @@ class OpenedReport:
         return sum(not m.matched for m in self.matches)
 
 
-def open_report(model: ProcessModel | str | Path, report: str | Path, *, optimizer: str = "exact",
-                seed: int | None = None, db: str | Path | None = None,
-                current: str | Path | None = None) -> OpenedReport:
-    """Read ``report`` (any supported format), tie it to ``model`` and correct every cycle
-    as ``setupfix correct`` does (:func:`~setupfix.pipeline.correct.correct_report`: the
-    model's effects forecast, its safety rules, smoothing from the store ``db``, the
-    cumulative limit from the ``current`` offsets file).
+def open_report(request: CorrectRequest, report: str | Path) -> OpenedReport:
+    """Read ``report`` once (any supported format) and correct every cycle with ``request``,
+    exactly as ``setupfix correct`` does.
 
     Raises
     ------
     SetupfixError
-        When the model, the current offsets or the report cannot be read (a report
-        that does not match the model is not an error: see :class:`OpenedReport`).
+        When the report cannot be read (a report that does not match the model is not
+        an error: see :class:`OpenedReport`).
     """
-    if not isinstance(model, ProcessModel):
-        model = load_model(model)
     path = Path(report)
     if path.is_dir():
         raise ParseError("is a folder, not a report", location=SourceLocation(str(report)))
-    # Read once here for the reader's notes as data (correct_report reads the file again:
-    # its own path still reports them through the warnings module, which threads cannot share).
-    read = parsers.read_report(path)
-    notes = tuple(str(n) for n in read.notes)
-    values = read_current(current, model) if current is not None else None
+    source = parsers.load_source(str(path))
     try:
-        if db is not None and Path(db).is_file():  # a new store has no history to smooth over
-            with open_history(db) as store:
-                corrections = correct_report(model, path, optimizer=optimizer, seed=seed, store=store,
-                                             current=values)
-        else:
-            corrections = correct_report(model, path, optimizer=optimizer, seed=seed, current=values)
-    except MatchError as exc:
-        return OpenedReport(model, str(report), read.format, matches=tuple(match_rows(model, read.table)),
-                            problem=str(exc), current=values, notes=notes)
-    return OpenedReport(model, str(report), read.format, corrections=tuple(corrections),
-                        matches=tuple(matched_rows(model, [c.part for c in corrections])), current=values,
-                        notes=notes)
+        outcome = correct_report(request, source)
+    except MatchError as exc:  # the match table from the same bytes: what matches, what is close
+        read = parsers.read_report(source, **request.read.kwargs())
+        return OpenedReport(request, str(report), read.format, matches=tuple(match_rows(request.model, read.table)),
+                            problem=str(exc), notes=tuple(read.notes))
+    return OpenedReport(request, str(report), outcome.format, outcome,
+                        matches=tuple(matched_rows(request.model, [c.part for c in outcome.cycles])),
+                        notes=outcome.notes)
 
 
-def offsets_text(opened: OpenedReport, controller: str, *, cycle: int | None = None) -> str:
-    """The offsets of every cycle in ``controller`` format, exactly as
-    :func:`~setupfix.pipeline.correct.write_correction_offsets` writes them (absolute
-    *set* rows when the current offsets are known).
+def export_cycles(opened: OpenedReport, controller: str, cycle: int | None = None) -> tuple[CycleCorrection, ...]:
+    """What an export of ``opened`` holds: every cycle in an offsets CSV; in a controller
+    program (one correction) the cycle ``cycle`` (an index into ``opened.corrections``)
+    when the report has several, as ``--part`` chooses it for ``correct``.
 
-    A controller program holds one correction: with several cycles, ``cycle`` (an
-    index into ``opened.corrections``) chooses it, as ``--part`` does for ``correct``.
-
-    Raises
-    ------
-    ExportError
-        A rejected cycle (nothing may be written), several cycles for a controller
-        program, or a register the format cannot express.
+    :func:`~setupfix.pipeline.export.offsets_text` and
+    :func:`~setupfix.pipeline.export.export` apply the policy (reject refused, …).
     """
-    results = opened.corrections
-    if controller != "csv" and len(results) > 1 and cycle is not None:
-        results = (results[cycle],)
-    if not results:
-        raise ExportError("nothing to export: no correction", location=SourceLocation(opened.report))
-    rejected = [r for r in results if r.verdict == "reject"]
-    if rejected:
-        raise ExportError(f"part {rejected[0].part.part or '—'} is rejected: {rejected[0].recommendation.alarm}",
-                          location=SourceLocation(opened.report))
-    if controller != "csv" and len(results) > 1:
-        raise ExportError(f"{controller}: a program holds one correction, the report has {len(results)} cycles",
-                          location=SourceLocation(opened.report), hint="choose one cycle")
-    rows = [row for r in results for row in r.offsets(opened.current)]
-    return render(controller, rows, f"{results[0].part.report} {results[0].part.part}".strip())
-
-
-#: Files a watched folder ignores: partial downloads, editor and temporary files.
-SKIPPED_SUFFIXES: tuple[str, ...] = (".tmp", ".part", ".partial", ".crdownload", "~", ".swp", ".lock")
-
+    cycles = opened.corrections
+    if controller != "csv" and len(cycles) > 1 and cycle is not None:
+        return (cycles[cycle],)
+    return cycles
 
 
 def newest_report(folder: str | Path) -> Path | None:
-    """The most recently modified report candidate in ``folder`` (not recursive).
+    """The most recently modified report candidate in ``folder`` (not recursive), under the
+    one folder-walk policy (:func:`parsers.list_reports`); whether it is a report is for the
+    reader to say."""
+    found = _newest(parsers.list_reports(folder, recursive=False))
+    return None if found is None else found.path
 
-    Hidden files, sub-folders, :data:`SKIPPED_SUFFIXES` (files still being written) and
-    files that are never reports (:func:`parsers.never_a_report`: a model or the logs
-    kept beside the reports) are ignored; whether any other file is a report is for the
-    reader to say.
-    """
-    best: tuple[float, str] | None = None
-    try:
-        entries = list(os.scandir(folder))
-    except OSError:
-        return None
-    for entry in entries:
-        if entry.name.startswith(".") or entry.name.endswith(SKIPPED_SUFFIXES) or parsers.never_a_report(entry.name):
-            continue
-        try:
-            if not entry.is_file(follow_symlinks=False):
-                continue
-            key = (entry.stat().st_mtime, entry.name)
-        except OSError:
-            continue
-        if best is None or key > best:
-            best = key
-    return None if best is None else Path(folder) / best[1]
+
+def _newest(listing: parsers.Listing) -> parsers.FoundFile | None:
+    return max(listing.files, key=lambda f: (f.mtime_ns, f.path.name), default=None)
 
 
 class FolderWatch:
@@ -171,6 +138,10 @@ class FolderWatch:
         self.settle = settle
         self._pending: tuple[Path, int, int] | None = None
         self._done: set[tuple[str, int, int]] = set()
+        self._said: set[tuple[str, str]] = set()
+        #: What the last poll could not look at (an unreadable folder, a broken link …), each
+        #: (path, reason) once: the screen says them.
+        self.problems: tuple[tuple[str, str], ...] = ()
         for p in seen:
             stamp = self._stamp(Path(p))
             if stamp is not None:
@@ -185,13 +156,16 @@ class FolderWatch:
         return st.st_size, st.st_mtime_ns
 
     def poll(self) -> Path | None:
-        """The newest finished report not handed out before, else None."""
-        path = newest_report(self.folder)
-        if path is None:
+        """The newest finished report not handed out before, else None (new problems in :attr:`problems`)."""
+        listing = parsers.list_reports(self.folder, recursive=False)
+        self.problems = tuple(p for p in listing.problems if p not in self._said)
+        self._said.update(self.problems)
+        found = _newest(listing)
+        if found is None:
             self._pending = None
             return None
-        stamp = self._stamp(path)
-        if stamp is None or (str(path), *stamp) in self._done:
+        path, stamp = found.path, (found.size, found.mtime_ns)
+        if (str(path), *stamp) in self._done:
             return None
         if self._pending == (path, *stamp) or time.time() - stamp[1] / 1e9 >= self.settle:
             self._done.add((str(path), *stamp))
@@ -255,9 +229,11 @@ def store_parts(model: ProcessModel, db: str | Path) -> tuple[list[PartMeasureme
     return parts, notes
 
 
-def record_applied(db: str | Path, corrections: Sequence[PartCorrection], *, when: str | None = None) -> int:
-    """Record corrections as applied now: the corrections log (non-zero changes, by
-    controller register name) and the recommendations, in one transaction.
+def record_applied(db: str | Path, exported: Exported, cycles: Sequence[CycleCorrection], *,
+                   when: str | None = None) -> int:
+    """Record what ``exported`` wrote as applied now, in one transaction: its non-zero rows
+    in the corrections log (by controller register name) and, for each exported cycle
+    (``exported.parts``; the others of ``cycles`` are left out), its recommendation.
 
     Returns
     -------
@@ -265,14 +241,15 @@ def record_applied(db: str | Path, corrections: Sequence[PartCorrection], *, whe
         Correction rows added.
     """
     stamp = when or datetime.now().replace(microsecond=0).isoformat()
-    rows = [(stamp, reg.register, float(c.corrections.get(reg.id, 0.0)), "correction")
-            for c in corrections for reg in c.model.registers
-            if not reg.fixed and c.corrections.get(reg.id, 0.0) != 0.0]
+    rows = [(stamp, row.register, float(row.delta), "correction") for row in exported.rows if row.delta != 0.0]
+    written = [c for c in cycles if c.part.part in exported.parts]
     with open_store(db) as store, store.transaction():
         added = store.add_corrections(pd.DataFrame(rows, columns=list(CORRECTION_COLUMNS)))
-        for c in corrections:
+        for c in written:
             store.add_recommendation(Recommendation(
                 optimizer=c.result.optimizer, created_at=stamp,
-                inputs={"model": c.model.source, "report": c.part.report, "part": c.part.part, "applied": True},
-                result=c.to_json()))
+                inputs={"model": c.model.source, "report": c.part.report, "part": c.part.part, "applied": True,
+                        "export": {"target": exported.target, "controller": exported.controller,
+                                   "sha256": exported.sha256}},
+                result=cycle_json(c)))
     return added

@@ -32,8 +32,8 @@ from setupfix.model import PartMeasurement, ProcessModel, normalise_name
 from setupfix.model.measurements import suggest_names
 from setupfix.objective import margins as objective_margins
 from setupfix.pipeline.compare import Comparison
-from setupfix.pipeline.correct import PartCorrection
 from setupfix.pipeline.diagnose import DiagnoseOutcome
+from setupfix.pipeline.requests import CycleCorrection
 from setupfix.pipeline.thermal import DriftPrediction
 
 __all__ = [
@@ -96,7 +96,7 @@ def _cell(fraction: float, width: int) -> int:
 class DimensionRow:
     """One measured dimension before and after the correction [model unit].
 
-    ``flags`` are the pipeline's (:meth:`PartCorrection.dimension_rows`): ``out_before``,
+    ``flags`` are the pipeline's (:meth:`CycleCorrection.dimension_rows`): ``out_before``,
     ``out`` (predicted out after the changes), ``guard``, ``binding``, ``given_up``,
     ``rejected``.
     """
@@ -140,7 +140,7 @@ class DimensionRow:
                 zone_bar(self.predicted, self.lower, self.upper, width))
 
 
-def dimension_rows(correction: PartCorrection) -> list[DimensionRow]:
+def dimension_rows(correction: CycleCorrection) -> list[DimensionRow]:
     """Rows of the dimension table, in model order."""
     rows = []
     for row in correction.dimension_rows():
@@ -199,22 +199,28 @@ class RegisterRow:
         return "fixed" if self.fixed else ("◆limit" if self.at_limit else "")
 
 
-def register_rows(correction: PartCorrection, current: Mapping[str, float] | None = None) -> list[RegisterRow]:
+def register_rows(correction: CycleCorrection, current: Mapping[str, float] | None = None) -> list[RegisterRow]:
     """Every register of the model (fixed ones too, with 0), in model order, with the
     safety rules that changed it.
 
-    ``current`` maps model ID or controller name to the value in the controller.
+    ``delta`` is the change the export writes (the thermal feed-forward included, rule
+    ``thermal``); ``current`` maps model ID or controller name to the value in the controller.
     """
     current = current or {}
     rules: dict[str, list[str]] = {}
     for effect in correction.recommendation.rules:
         for rid in effect.registers:
             rules.setdefault(rid, []).append(effect.rule)
+    exported = correction.corrections
+    fed = correction.thermal.corrections() if correction.thermal is not None and correction.verdict != "reject" else {}
+    for rid in fed:
+        rules.setdefault(rid, []).append("thermal")
     rows = []
     for reg in correction.register_rows():
         cur = current.get(reg["id"], current.get(reg["register"]))
         rows.append(RegisterRow(reg["id"], reg["register"], reg["kind"], str(reg.get("offset", "")),
-                                float(reg["delta"]) + 0.0, bool(reg["fixed"]), bool(reg["at_limit"]),
+                                float(exported.get(reg["id"], reg["delta"])) + 0.0, bool(reg["fixed"]),
+                                bool(reg["at_limit"]),
                                 None if cur is None else float(cur), tuple(dict.fromkeys(rules.get(reg["id"], ())))))
     return rows
 
@@ -242,7 +248,7 @@ class Summary:
     given_up: tuple[str, ...] = ()
 
 
-def summary(correction: PartCorrection) -> Summary:
+def summary(correction: CycleCorrection) -> Summary:
     """The verdict and every rule that changed it, δ before and after, the bonus, the notes."""
     r = correction.result
     rec = correction.recommendation
@@ -252,7 +258,7 @@ def summary(correction: PartCorrection) -> Summary:
         optimizer=r.optimizer, status=r.status, margin_before=correction.margin_before,
         margin_after=correction.margin_after, bonus=correction.margin_after - correction.margin_before,
         norm=correction.norm, bound=r.bound, in_tolerance=correction.margin_after >= 0, message=r.message,
-        notes=tuple(str(n) for n in correction.warnings), verdict=correction.verdict,
+        notes=tuple(str(n) for n in correction.notes), verdict=correction.verdict,
         rules=tuple(f"{e.rule}: {e.message}" for e in rec.rules), alarm=rec.alarm,
         given_up=tuple(names.get(d, d) for d in rec.given_up))
 

@@ -9,7 +9,7 @@ so a bad file never ends the app.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from functools import partial
 from pathlib import Path
 from typing import ClassVar
@@ -26,11 +26,10 @@ from setupfix.offsets import grid_decimals
 from setupfix.optimize import OPTIMIZERS
 from setupfix.pipeline import view
 from setupfix.pipeline.compare import DEFAULT_METHODS, Comparison
-from setupfix.pipeline.correct import PartCorrection
-from setupfix.pipeline.feedforward import ThermalFeedForward, thermal_feed_forward
-from setupfix.pipeline.session import FolderWatch, OpenedReport, offsets_text, open_report, record_applied
+from setupfix.pipeline.requests import CycleCorrection, CycleOptions, ReadOptions, SolveOptions
+from setupfix.pipeline.session import FolderWatch, OpenedReport, record_applied
 from setupfix.tui import workers
-from setupfix.tui.exporting import CONTROLLERS, write_offsets
+from setupfix.tui.exporting import CONTROLLERS, preview, write_offsets
 from setupfix.tui.messages import CompareProgress
 from setupfix.tui.screens import ExportRequest, ExportScreen, HelpScreen, OpenFileScreen
 from setupfix.tui.widgets import (ComparePanel, DimensionTable, HistoryPanel, MatchTable, RegisterTable, SummaryBar,
@@ -54,6 +53,10 @@ class Inputs:
     current: Path | None = None
     thermal: Path | None = None
     temperatures: Path | None = None
+    at: str | None = None  #: time of the correction for the feed-forward (default: the log's last sample)
+    thermal_dead_band: float | None = None
+    read: ReadOptions = field(default_factory=ReadOptions)  #: the reader's options, as ``correct`` takes them
+    cycles: CycleOptions = field(default_factory=CycleOptions)  #: stations, parts per cycle, strictness
     optimizer: str = "exact"
     seed: int = 0
     trials: int = 12
@@ -105,7 +108,6 @@ class SetupfixApp(App[None]):
         self.comparison: Comparison | None = None
         self.folder_watch: FolderWatch | None = None
         self.problem = ""
-        self.feed: ThermalFeedForward | None = None
         self._wide = False
 
     # ----------------------------------------------------------------- layout
@@ -154,8 +156,11 @@ class SetupfixApp(App[None]):
             return
         self.problem = f"opening {self.report_path} …"
         self._show()
-        self.run_worker(partial(open_report, self.model_path, self.report_path, optimizer=self.optimizer,
-                                seed=self.inputs.seed, db=self.inputs.db, current=self.inputs.current),
+        i = self.inputs
+        thermal = (i.thermal, i.temperatures, i.at, i.thermal_dead_band) if i.thermal and i.temperatures else None
+        self.run_worker(partial(workers.open_report, self.model_path, self.report_path, read=i.read, cycles=i.cycles,
+                                solve=SolveOptions(self.optimizer, i.seed), db=i.db, current=i.current,
+                                thermal=thermal),
                         name="open", group="open", thread=True, exclusive=True, exit_on_error=False)
 
     def _start_thermal(self) -> None:
@@ -168,21 +173,12 @@ class SetupfixApp(App[None]):
         self.run_worker(partial(workers.drift, self.inputs.thermal, self.inputs.temperatures), name="thermal",
                         group="thermal", thread=True, exclusive=True, exit_on_error=False)
 
-    def _start_feed_forward(self) -> None:
-        c = self._current()
-        self.feed = None
-        if c is None or self.inputs.thermal is None or self.inputs.temperatures is None:
-            return
-        self.query_one(ThermalPanel).feed_forward(f"feed-forward for {c.part.report} {c.part.part}: computing …")
-        self.run_worker(partial(thermal_feed_forward, c.model, self.inputs.thermal, self.inputs.temperatures,
-                                measured_at=c.part.timestamp),
-                        name="feedforward", group="feedforward", thread=True, exclusive=True, exit_on_error=False)
-
     def _feed_text(self) -> str:
-        """The feed-forward line, shown beside the setup correction (not in the exported offsets)."""
-        if self.feed is None:
+        """The cycle's thermal feed-forward (part of its corrections and of the exported offsets)."""
+        c = self._current()
+        if c is None or c.thermal is None:
             return ""
-        return self.feed.line() + "; shown beside the setup correction, not added to the exported offsets"
+        return c.thermal.line() + "; added to the exported offsets"
 
     def on_worker_state_changed(self, event: Worker.StateChanged) -> None:
         """The error boundary and the one place results reach the screen."""
@@ -205,10 +201,6 @@ class SetupfixApp(App[None]):
                 self.query_one(HistoryPanel).diagnosis(worker.result, source=self._series_source())
             elif worker.name == "thermal" and isinstance(worker.result, view.DriftView):
                 self.query_one(ThermalPanel).show(worker.result, source=str(self.inputs.temperatures))
-            elif worker.name == "feedforward" and isinstance(worker.result, ThermalFeedForward):
-                self.feed = worker.result
-                self.query_one(ThermalPanel).feed_forward(self._feed_text())
-                self._show()
 
     def _failed(self, what: str, error: BaseException | None) -> None:
         text = str(error) if isinstance(error, SetupfixError) else f"internal error: {type(error).__name__}: {error}"
@@ -224,16 +216,12 @@ class SetupfixApp(App[None]):
             self.query_one(ComparePanel).stopped(f"✗ {text}")
         elif what == "thermal":
             self.query_one(ThermalPanel).not_available(text)
-        elif what == "feedforward":
-            self.feed = None
-            self.query_one(ThermalPanel).feed_forward(f"✗ feed-forward: {text}")
         elif what in ("history", "diagnose"):
             self.query_one(HistoryPanel).status(f"✗ {text}")
 
     def _opened(self, opened: OpenedReport) -> None:
         # Work started for the previous report must not land on this one.
         self.workers.cancel_group(self, "compare")
-        self.workers.cancel_group(self, "feedforward")
         self.opened = opened
         self.problem = ""
         self.part_index = min(self.part_index, max(len(opened.corrections) - 1, 0))
@@ -251,7 +239,6 @@ class SetupfixApp(App[None]):
         else:
             status.update("✓ every characteristic of the report matches a dimension of the model.")
         self._show()
-        self._start_feed_forward()
         if self.inputs.db is not None:
             self.run_worker(partial(workers.history, opened.model, self.inputs.db), name="history", group="history",
                             thread=True, exclusive=True, exit_on_error=False)
@@ -279,6 +266,8 @@ class SetupfixApp(App[None]):
         if self.folder_watch is None:
             return
         path = self.folder_watch.poll()
+        for where, why in self.folder_watch.problems:  # named once each, never silently dropped
+            self.notify(f"{where}: {why}", title="folder", severity="warning", timeout=12)
         if path is not None:
             if self.report_path is not None:
                 self.notify(f"new report {path.name}", title="folder")
@@ -289,7 +278,7 @@ class SetupfixApp(App[None]):
             self._show()
 
     # ----------------------------------------------------------------- showing
-    def _current(self) -> PartCorrection | None:
+    def _current(self) -> CycleCorrection | None:
         if self.opened is None or not self.opened.corrections:
             return None
         return self.opened.corrections[self.part_index]
@@ -313,7 +302,10 @@ class SetupfixApp(App[None]):
         head = view.summary(c)
         reader = tuple(f"⚠ {n}" for n in self.opened.notes) if self.opened else ()
         summary.show(head, optimizer=self.optimizer, part=part,
-                     problem="\n".join(t for t in (self.problem, self.feed.line() if self.feed else "", *reader) if t))
+                     problem="\n".join(t for t in (self.problem, c.thermal.line() if c.thermal else "", *reader) if t))
+        if self.inputs.thermal is not None and self.inputs.temperatures is not None:
+            self.query_one(ThermalPanel).feed_forward(
+                self._feed_text() or f"no feed-forward for {c.part.report} {c.part.part}".rstrip())
         rows = view.filter_rows(view.dimension_rows(c), self.station)
         if self.sort_key is not None:
             rows = view.sort_rows(rows, self.sort_key)
@@ -383,7 +375,6 @@ class SetupfixApp(App[None]):
         if self.opened and self.opened.corrections:
             self.part_index = (self.part_index + step) % len(self.opened.corrections)
             self._show()
-            self._start_feed_forward()
 
     def action_tab(self, tab: str) -> None:
         self.query_one(TabbedContent).active = tab
@@ -442,23 +433,22 @@ class SetupfixApp(App[None]):
             self.notify("nothing to export: open a report that matches the model first", severity="warning")
             return
         # A controller program holds one correction: the cycle on screen ([ ] changes it).
-        self.push_screen(ExportScreen(CONTROLLERS, partial(offsets_text, self.opened, cycle=self.part_index),
-                                      self.inputs.offsets),
-                         self._export_confirmed)
+        self.push_screen(ExportScreen(CONTROLLERS, preview(self.opened, self.part_index), self.inputs.offsets),
+                         partial(self._export_confirmed, self.opened, self.part_index))
 
-    def _export_confirmed(self, request: ExportRequest | None) -> None:
+    def _export_confirmed(self, opened: OpenedReport, cycle: int, request: ExportRequest | None) -> None:
         if request is None:
             self.notify("export cancelled", timeout=3)
             return
         try:
-            write_offsets(request)
+            exported = write_offsets(request, opened, cycle)
         except SetupfixError as exc:
             self.notify(str(exc), title="export failed", severity="error", timeout=12)
             return
         self.notify(f"wrote {request.controller} offsets to {request.path}", title="export")
-        if self.inputs.db is not None and self.opened is not None:
-            try:
-                added = record_applied(self.inputs.db, self.opened.corrections)
+        if self.inputs.db is not None:
+            try:  # exactly what was written: its rows, and the cycles it holds
+                added = record_applied(self.inputs.db, exported, opened.corrections)
             except SetupfixError as exc:
                 self.notify(str(exc), title="history store", severity="error", timeout=12)
                 return

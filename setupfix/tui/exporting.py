@@ -1,24 +1,39 @@
-"""Export glue: the controller formats the screen offers and the write.
+"""Export glue: the controller formats the screen offers, the text it shows and the write.
 
-The text comes from :func:`setupfix.pipeline.session.offsets_text` and is written as
-shown: what the confirmation screen displays is byte for byte what lands in the file.
+The text shown is :func:`setupfix.pipeline.export.offsets_text` and the write is
+:func:`setupfix.pipeline.export.export` of the same cycles
+(:func:`setupfix.pipeline.session.export_cycles`): what the confirmation screen displays
+is byte for byte what lands in the file, and what ``setupfix correct --offsets`` writes
+(the thermal feed-forward included).
 """
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 from setupfix.errors import ExportError
 from setupfix.pipeline.controllers import CONTROLLERS as _REGISTRY
-from setupfix.pipeline.writers import check_target, write_text
+from setupfix.pipeline.export import Exported, export, offsets_text
+from setupfix.pipeline.session import OpenedReport, export_cycles
+from setupfix.pipeline.writers import check_target
 from setupfix.tui.screens.export import ExportRequest
 
-__all__ = ["CONTROLLERS", "write_offsets"]
+__all__ = ["CONTROLLERS", "preview", "write_offsets"]
 
 #: Controller formats offered, in menu order (the pipeline's registry).
 CONTROLLERS: tuple[str, ...] = tuple(_REGISTRY)
 
 
-def write_offsets(request: ExportRequest) -> None:
-    """Write the confirmed text atomically (a file is complete or not there).
+def preview(opened: OpenedReport, cycle: int) -> Callable[[str], str]:
+    """The text an export of ``opened`` writes in a controller's syntax (``cycle``: the one on screen)."""
+    def text(controller: str) -> str:
+        return offsets_text(export_cycles(opened, controller, cycle), controller, opened.current)
+
+    return text
+
+
+def write_offsets(request: ExportRequest, opened: OpenedReport, cycle: int) -> Exported:
+    """Write what the operator confirmed, atomically (a file is complete or not there).
 
     Only a regular file (new or existing) is written; a folder, device, FIFO or link
     is refused with an :class:`~setupfix.errors.ExportError` naming it.  ``-`` (standard
@@ -27,4 +42,6 @@ def write_offsets(request: ExportRequest) -> None:
     if request.path.strip() == "-":
         raise ExportError("standard output is the screen here: give a file name")
     check_target(request.path)
-    write_text(request.path, request.text)
+    # the same cycles through the same function as preview(): the text shown is the text written
+    return export(export_cycles(opened, request.controller, cycle), request.path, controller=request.controller,
+                  current=opened.current)

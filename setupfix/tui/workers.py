@@ -14,14 +14,31 @@ from textual.worker import get_current_worker
 
 from setupfix.model import ProcessModel
 from setupfix.optimize import CorrectionProblem
-from setupfix.pipeline import view
+from setupfix.pipeline import session, view
 from setupfix.pipeline.compare import Comparison
 from setupfix.pipeline.diagnose import diagnose_reports
+from setupfix.pipeline.correct import load_request
+from setupfix.pipeline.requests import CycleOptions, ReadOptions, SolveOptions
 from setupfix.pipeline.session import compare_steps, store_parts
 from setupfix.pipeline.thermal import predict_drift
 from setupfix.tui.messages import CompareProgress
 
-__all__ = ["drift", "compare", "history", "diagnose"]
+__all__ = ["open_report", "drift", "compare", "history", "diagnose"]
+
+
+def open_report(model: Path, report: Path, *, read: ReadOptions, cycles: CycleOptions, solve: SolveOptions,
+                db: Path | None, current: Path | None,
+                thermal: tuple[Path, Path, str | None, float | None] | None) -> session.OpenedReport:
+    """Thread worker: the request ``correct`` builds from these inputs (every file read once,
+    :func:`~setupfix.pipeline.correct.load_request`), and the report opened with it.
+
+    A history store not created yet (the first export creates it) holds no history.
+    """
+    saved, log, at, dead_band = thermal if thermal is not None else (None, None, None, None)
+    request = load_request(model, read=read, cycles=cycles, solve=solve, current=current,
+                           store=db if db is not None and db.is_file() else None, thermal=saved, temperatures=log,
+                           at=at, thermal_dead_band=dead_band)
+    return session.open_report(request, report)
 
 
 def drift(model: Path, log: Path) -> view.DriftView:

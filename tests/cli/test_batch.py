@@ -41,7 +41,9 @@ def test_killed_run_leaves_no_partial_file(tmp_path):
     import pytest
 
     from setupfix.cli._batch import _terminate
+    from setupfix.model import load_model
     from setupfix.pipeline.batch import run_batch
+    from setupfix.pipeline.requests import CorrectRequest
 
     d = tmp_path / "in"
     d.mkdir()
@@ -55,5 +57,44 @@ def test_killed_run_leaves_no_partial_file(tmp_path):
         _terminate(signal.SIGTERM, None)
 
     with pytest.raises(KeyboardInterrupt):
-        run_batch(MODEL, d, out, settle=0, progress=killed_after_first)
+        run_batch(CorrectRequest(load_model(MODEL)), d, out, settle=0, progress=killed_after_first)
     assert [p.name for p in tmp_path.iterdir()] == ["in"]  # … and neither output nor temporary file is left
+
+
+def test_batch_store_smooths_as_correct_store_does(capsys, tmp_path):
+    """Issue 20: with ``ewma = 0.5`` and the guide-pins cycles 1–5, ``batch --store`` differed from ``correct
+    --store`` in 36 register values (batch never smoothed); now every value agrees."""
+    import csv
+
+    model = tmp_path / "ewma.toml"
+    model.write_text((GUIDE_PINS / "model.toml").read_text() + "\n[safety]\newma = 0.5\n")
+    d = tmp_path / "in"
+    d.mkdir()
+    reports = [shutil.copy(GUIDE_PINS / f"cycle_0{i}.csv", d / f"cycle_0{i}.csv") for i in range(1, 6)]
+    code, _, err = run(capsys, "batch", "--model", str(model), str(d), "--out", str(tmp_path / "batch.csv"),
+                       "--settle", "0", "--store", str(tmp_path / "batch.db"))
+    assert code == 0 and "needs the history store" not in err
+    code, _, err = run(capsys, "history", "import", "--db", str(tmp_path / "h.db"), "--model", str(model),
+                       *map(str, reports))
+    assert code == 0, err
+    expected, plain = {}, {}
+    for report in reports:
+        for db, into in ((["--store", str(tmp_path / "h.db")], expected), ([], plain)):
+            code, out, _ = run(capsys, "correct", "--model", str(model), str(report), "--json", *db)
+            into.update({(report.name, k): v for k, v in json.loads(out)["corrections"].items()})
+    with (tmp_path / "batch.csv").open() as f:
+        got = {(row["report"], row["id"]): float(row["delta"]) for row in csv.DictReader(f)}
+    assert got == expected and sum(expected[k] != plain[k] for k in expected) >= 30
+
+
+def test_bad_thermal_inputs_are_refused_before_any_work(capsys, tmp_path):
+    d = tmp_path / "in"
+    d.mkdir()
+    shutil.copy(GUIDE_PINS / "cycle_01.csv", d / "a.csv")
+    out = tmp_path / "o.csv"
+    code, _, err = run(capsys, "batch", "--model", MODEL, str(d), "--out", str(out), "--settle", "0",
+                       "--thermal", str(tmp_path / "missing.json"))
+    assert code == 1 and "go together" in err and not out.exists()
+    code, _, err = run(capsys, "batch", "--model", MODEL, str(d), "--out", str(out), "--settle", "0",
+                       "--thermal", str(tmp_path / "missing.json"), "--temperatures", str(GUIDE_PINS / "cycle_01.csv"))
+    assert code == 1 and "missing.json" in err and "Traceback" not in err and not out.exists()

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import shutil
 from pathlib import Path
 
@@ -9,11 +10,13 @@ import pytest
 
 from setupfix.model import load_model
 from setupfix.pipeline.batch import run_batch
+from setupfix.pipeline.requests import CorrectRequest
 from setupfix.store import open_store
 
 ROOT = Path(__file__).resolve().parents[2]
 GUIDE = ROOT / "sample_reports" / "guide_pins"
 MODEL = load_model(GUIDE / "model.toml")
+REQUEST = CorrectRequest(MODEL)
 
 
 def folder(tmp_path: Path) -> Path:
@@ -31,7 +34,7 @@ def folder(tmp_path: Path) -> Path:
 def test_good_bad_and_duplicate_reports(tmp_path):
     d = folder(tmp_path)
     out = tmp_path / "offsets.csv"
-    s = run_batch(MODEL, d, out, settle=0)
+    s = run_batch(REQUEST, d, out, settle=0)
     assert (s.reports, s.parts, s.verdicts["apply"]) == (4, 4, 4)
     assert [Path(f).name for f, _ in s.failed] == ["notes.txt"] and "no reader accepts" in s.failed[0][1]
     assert [(Path(f).name, r) for f, r in s.skipped] == [("copy_of_02.csv", f"same content as {d / 'cycle_02.csv'}")]
@@ -46,9 +49,9 @@ def test_good_bad_and_duplicate_reports(tmp_path):
 
 def test_rerun_is_idempotent_and_workers_do_not_change_numbers(tmp_path):
     d = folder(tmp_path)
-    run_batch(MODEL, d, tmp_path / "a.csv", settle=0)
-    run_batch(MODEL, d, tmp_path / "a.csv", settle=0)
-    run_batch(MODEL, d, tmp_path / "b.csv", settle=0, workers=2)
+    run_batch(REQUEST, d, tmp_path / "a.csv", settle=0)
+    run_batch(REQUEST, d, tmp_path / "a.csv", settle=0)
+    run_batch(REQUEST, d, tmp_path / "b.csv", settle=0, workers=2)
     assert (tmp_path / "a.csv").read_bytes() == (tmp_path / "b.csv").read_bytes()
     assert sorted(p.name for p in tmp_path.iterdir()) == ["a.csv", "b.csv", "reports"]  # no temp files
 
@@ -57,10 +60,10 @@ def test_store_skips_processed_reports_unless_forced(tmp_path):
     d = folder(tmp_path)
     out = tmp_path / "offsets.csv"
     with open_store(tmp_path / "h.db") as store:
-        first = run_batch(MODEL, d, out, settle=0, store=store)
+        first = run_batch(REQUEST, d, out, settle=0, store=store)
         text = out.read_text()
-        again = run_batch(MODEL, d, out, settle=0, store=store)
-        forced = run_batch(MODEL, d, out, settle=0, store=store, force=True)
+        again = run_batch(REQUEST, d, out, settle=0, store=store)
+        forced = run_batch(REQUEST, d, out, settle=0, store=store, force=True)
         assert len(store.reports()) == 4
     assert first.reports == 4 and again.reports == 0 and not again.written and forced.reports == 4
     assert sum("already processed" in r for _, r in again.skipped) == 5
@@ -75,7 +78,7 @@ def test_file_changing_during_the_run_is_not_read(tmp_path):
         if done == 1:
             late.write_bytes(late.read_bytes() + b"\n")
 
-    s = run_batch(MODEL, d, tmp_path / "o.csv", settle=0, progress=touch)
+    s = run_batch(REQUEST, d, tmp_path / "o.csv", settle=0, progress=touch)
     assert any(Path(f) == late and "still being written" in r for f, r in s.failed)
 
 
@@ -83,7 +86,7 @@ def test_bad_controller_register_fails_before_any_work(tmp_path):
     from setupfix.errors import ExportError
 
     with pytest.raises(ExportError, match="haas: cannot express register 'G54.1P1'"):
-        run_batch(MODEL, folder(tmp_path), tmp_path / "programs", settle=0, controller="haas")
+        run_batch(REQUEST, folder(tmp_path), tmp_path / "programs", settle=0, controller="haas")
     assert not (tmp_path / "programs").exists()
 
 
@@ -92,7 +95,7 @@ def test_one_program_per_cycle(tmp_path):
     d = tmp_path / "r"
     d.mkdir()
     shutil.copy(sample / "report.csv", d / "a.csv")
-    s = run_batch(sample / "model.toml", d, tmp_path / "programs", settle=0, controller="fanuc")
+    s = run_batch(CorrectRequest(load_model(sample / "model.toml")), d, tmp_path / "programs", settle=0, controller="fanuc")
     assert s.written and [p.name for p in (tmp_path / "programs").iterdir()] == ["a.nc"]
     assert "G91 G10 L2 P1 Z-0.022" in (tmp_path / "programs" / "a.nc").read_text()
 
@@ -111,7 +114,7 @@ def test_store_records_what_was_corrected_without_reading_again(tmp_path, monkey
 
     monkeypatch.setattr(parsers, "read_report", counted)
     with open_store(tmp_path / "h.db") as store:
-        s = run_batch(MODEL, d, tmp_path / "offsets.csv", settle=0, store=store)
+        s = run_batch(REQUEST, d, tmp_path / "offsets.csv", settle=0, store=store)
         assert s.reports == 4 and len(store.reports()) == 4
         stored = store.measurements(store.reports()[0].sha256)
     assert sorted(Path(c).name for c in calls) == sorted(
@@ -133,7 +136,7 @@ def test_many_reports_in_chunks_give_the_same_output_and_progress_order(tmp_path
     assert chunk_size(45, 2) == 3 and chunk_size(1000, 2) == 16 and chunk_size(1, 2) == 1
     seen: dict[int, list[str]] = {1: [], 2: []}
     for workers in (1, 2):
-        s = run_batch(MODEL, d, tmp_path / f"w{workers}.csv", settle=0, workers=workers,
+        s = run_batch(REQUEST, d, tmp_path / f"w{workers}.csv", settle=0, workers=workers,
                       progress=lambda done, total, o, w=workers: seen[w].append(Path(o.path).name))
         assert (s.reports, len(s.failed)) == (44, 1) and "r020.csv" in s.failed[0][0]
     assert seen[1] == seen[2] == sorted(p.name for p in d.iterdir())
@@ -141,16 +144,22 @@ def test_many_reports_in_chunks_give_the_same_output_and_progress_order(tmp_path
 
 
 def test_files_kept_beside_reports_are_not_read_as_reports(tmp_path: Path) -> None:
-    """A model, notes, scripts, the store and the logs beside the reports are left out (they were
-    'failed' before, so a clean folder exited 4); reports of any extension are kept."""
-    from setupfix.pipeline.batch import find_reports
+    """A model, notes, scripts, the store, the logs and partial files beside the reports are left out
+    (they were 'failed' before, so a clean folder exited 4); every other file is tried, whatever its
+    extension; what cannot be looked at (a broken link) is named as failed, never dropped."""
+    import os
 
+    d = tmp_path / "in"
+    d.mkdir()
     for name in ("model.toml", "README.md", "generate.py", "setupfix.db", "setupfix.db-wal", "corrections.csv",
-                 "TEMPERATURES.csv", "r1.csv", "r2.qif", "values.json", "k.txt", "odd.report"):
-        (tmp_path / name).write_text("x")
-    assert [p.name for p, _, _ in find_reports(tmp_path)] == sorted(
-        ["r1.csv", "r2.qif", "values.json", "k.txt", "odd.report"])
-    summary = run_batch(load_model(GUIDE / "model.toml"), GUIDE, tmp_path / "out.csv", settle=0)
+                 "TEMPERATURES.csv", "r1.csv", "r2.qif", "values.json", "k.txt", "odd.report", "r3.csv.part"):
+        (d / name).write_text("x")
+    os.symlink(d / "missing.csv", d / "gone.csv")
+    s = run_batch(REQUEST, d, tmp_path / "out.csv", settle=0)
+    assert sorted(Path(f).name for f, _ in s.failed) == sorted(
+        ["gone.csv", "r1.csv", "r2.qif", "values.json", "k.txt", "odd.report"])
+    assert dict(s.failed)[str(d / "gone.csv")] == "broken link"
+    summary = run_batch(REQUEST, GUIDE, tmp_path / "out.csv", settle=0)
     assert summary.reports == 7 and not summary.failed
 
 
@@ -163,3 +172,34 @@ def test_automatic_worker_count(monkeypatch) -> None:
     assert batch.auto_workers(32) == 8
     monkeypatch.setattr(batch.os, "sched_getaffinity", lambda pid: {0, 1}, raising=False)
     assert batch.auto_workers(1000) == 2
+
+
+def test_ewma_over_the_store_and_the_batch_does_not_depend_on_workers(tmp_path):
+    """With λ < 1 and a store, each report is smoothed over every earlier part (store and batch): the same
+    output for 1 and 2 workers, different from the unsmoothed one, and equal to correcting each report with
+    the history of the store holding them all."""
+    from setupfix.pipeline.correct import correct_report
+    from setupfix.pipeline.export import cycle_rows
+    from setupfix.pipeline.requests import History
+    from setupfix.offsets import csv_lines
+
+    model_path = tmp_path / "ewma.toml"
+    model_path.write_text((GUIDE / "model.toml").read_text() + "\n[safety]\newma = 0.5\n")
+    request = CorrectRequest(load_model(model_path))
+    d = tmp_path / "reports"
+    d.mkdir()
+    for i in range(1, 6):
+        shutil.copy(GUIDE / f"cycle_0{i}.csv", d / f"cycle_0{i}.csv")
+    for workers in (1, 2):
+        with open_store(tmp_path / f"w{workers}.db") as store:
+            s = run_batch(request, d, tmp_path / f"w{workers}.csv", settle=0, store=store, workers=workers)
+        assert s.reports == 5 and not any("needs the history store" in str(n) for _, n in s.notes)
+    assert (tmp_path / "w1.csv").read_bytes() == (tmp_path / "w2.csv").read_bytes()
+    run_batch(request, d, tmp_path / "plain.csv", settle=0)
+    assert (tmp_path / "plain.csv").read_bytes() != (tmp_path / "w1.csv").read_bytes()
+    with open_store(tmp_path / "w1.db") as store:  # now holding the five reports
+        full = dataclasses.replace(request, history=History.from_store(request.model, store))
+    rows = [row for i in range(1, 6) for c in correct_report(full, d / f"cycle_0{i}.csv").cycles
+            for row in cycle_rows(c)]
+    lines = (tmp_path / "w1.csv").read_text().splitlines()[1:]
+    assert [line.split(",")[1:] for line in lines] == [line.split(",")[1:] for line in csv_lines(rows).splitlines()]

@@ -9,15 +9,28 @@ import pytest
 
 from conftest import GUIDE_PINS
 
+from setupfix.pipeline.requests import ReadOptions
+
 from setupfix.errors import ParseError
 from setupfix.pipeline.compare import compare_problem
-from setupfix.pipeline.session import FolderWatch, compare_steps, newest_report, open_report
+from setupfix.pipeline.export import export, offsets_text
+from setupfix.pipeline.correct import load_request
+from setupfix.pipeline.session import FolderWatch, compare_steps, export_cycles, newest_report, open_report
 
 MODEL = GUIDE_PINS / "model.toml"
 
 
+def opened_report(report, **inputs):
+    """The report opened as the TUI opens it: the request from the operator's inputs, then the report."""
+    return open_report(load_request(MODEL, **inputs), report)
+
+
+def export_text(opened, controller, cycle=None):
+    return offsets_text(export_cycles(opened, controller, cycle), controller, opened.current)
+
+
 def test_open_report_corrects_every_cycle():
-    opened = open_report(MODEL, GUIDE_PINS / "cycle_01.csv")
+    opened = opened_report(GUIDE_PINS / "cycle_01.csv")
     assert opened.format == "canonical" and len(opened.corrections) == 1 and opened.unmatched == 0
     assert opened.corrections[0].result.margin_after == pytest.approx(0.0822)
 
@@ -26,14 +39,14 @@ def test_a_report_of_another_part_gives_the_match_table_not_an_error(tmp_path):
     other = tmp_path / "other.csv"
     other.write_text((GUIDE_PINS / "cycle_01.csv").read_text(encoding="utf-8").replace(" D", " Dx"),
                      encoding="utf-8")
-    opened = open_report(MODEL, other)
+    opened = opened_report(other)
     assert opened.corrections == () and "matches a model dimension" in opened.problem
     assert opened.unmatched == 28
 
 
 def test_an_unreadable_report_or_a_folder_is_an_error(tmp_path):
     with pytest.raises(ParseError, match="folder"):
-        open_report(MODEL, tmp_path)
+        opened_report(tmp_path)
 
 
 def _touch(path, text, age):
@@ -73,7 +86,7 @@ def test_folder_watch_waits_until_a_fresh_file_stops_growing(tmp_path):
 
 
 def test_compare_steps_end_with_what_compare_problem_gives():
-    problem = open_report(MODEL, GUIDE_PINS / "cycle_01.csv").corrections[0].problem
+    problem = opened_report(GUIDE_PINS / "cycle_01.csv").corrections[0].problem
     steps = list(compare_steps(problem, methods=("ga", "pso"), trials=2, seed=3))
     assert [s[1] for s in steps] == [1, 2, 3, 4, 5] and all(s[2] == 5 for s in steps)
     last, ref = steps[-1][3], compare_problem(problem, methods=("ga", "pso"), trials=2, seed=3)
@@ -83,54 +96,89 @@ def test_compare_steps_end_with_what_compare_problem_gives():
 
 
 @pytest.mark.parametrize("controller", ["csv", "fanuc"])
-def test_offsets_text_is_what_correct_writes(tmp_path, controller):
-    from setupfix.pipeline.correct import correct_report, write_correction_offsets
-    from setupfix.pipeline.session import offsets_text
+def test_the_export_text_is_what_correct_writes(tmp_path, controller):
+    from setupfix.cli import main
 
     current = tmp_path / "current.csv"
     current.write_text("register,value\n" + "".join(f"{r},{i * 0.5}\n" for i, r in enumerate(
         ["G54", "G55", "G56", "G57", "G58", "G59", "G54.1P1", "G54.1P2", "H5", "H23"])), encoding="utf-8")
-    opened = open_report(MODEL, GUIDE_PINS / "cycle_01.csv", current=current)
+    opened = opened_report(GUIDE_PINS / "cycle_01.csv", current=current)
     assert opened.current["W2"] == 0.5
-    write_correction_offsets(correct_report(MODEL, GUIDE_PINS / "cycle_01.csv"), str(tmp_path / "cli.txt"),
-                             controller=controller, current=current)
-    assert offsets_text(opened, controller) == (tmp_path / "cli.txt").read_text(encoding="utf-8")
+    assert main(["correct", "--model", str(MODEL), str(GUIDE_PINS / "cycle_01.csv"), "--offsets",
+                 str(tmp_path / "cli.txt"), "--controller", controller, "--current", str(current)]) == 0
+    assert export_text(opened, controller) == (tmp_path / "cli.txt").read_text(encoding="utf-8")
 
 
 def test_a_rejected_report_cannot_be_exported(tmp_path):
     from setupfix.errors import ExportError
-    from setupfix.pipeline.session import offsets_text
 
     gross = tmp_path / "gross.csv"
     gross.write_text((GUIDE_PINS / "cycle_01.csv").read_text(encoding="utf-8")
                      .replace("P1 D1,25.0000,24.9691,-0.0309", "P1 D1,25.0000,24.5000,-0.5000"), encoding="utf-8")
-    opened = open_report(MODEL, gross)
+    opened = opened_report(gross)
     assert opened.corrections[0].verdict == "reject"
     with pytest.raises(ExportError, match="rejected"):
-        offsets_text(opened, "csv")
+        export_text(opened, "csv")
 
 
 def test_a_register_the_format_cannot_express_is_named():
     from setupfix.errors import ExportError
-    from setupfix.pipeline.session import offsets_text
 
     with pytest.raises(ExportError, match="G58"):
-        offsets_text(open_report(MODEL, GUIDE_PINS / "cycle_01.csv"), "siemens")
+        export_text(opened_report(GUIDE_PINS / "cycle_01.csv"), "siemens")
 
 
-def test_the_readers_notes_come_as_data():
-    opened = open_report(MODEL, GUIDE_PINS.parent / "pcdmis" / "bracket_two_parts.txt")
-    assert opened.format == "pcdmis" and any("angle" in n and ":27" in n for n in opened.notes)
+def test_the_readers_options_and_notes_come_as_data():
+    opened = opened_report(GUIDE_PINS.parent / "pcdmis" / "bracket_two_parts.txt")
+    assert opened.format == "pcdmis" and any("angle" in str(n) and ":27" in str(n) for n in opened.notes)
+    tables = GUIDE_PINS.parent / "tables"
+    shop = opened_report(tables / "cycle_01_shop.csv", read=ReadOptions(columns=str(tables / "cycle_01_shop.columns.toml")))
+    plain = opened_report(GUIDE_PINS / "cycle_01.csv")
+    assert shop.corrections[0].corrections == plain.corrections[0].corrections
 
 
-def test_a_program_holds_the_chosen_cycle_of_a_series():
+def test_the_report_is_read_once(monkeypatch):
+    import parsers
+
+    files, reads = [], []
+    load, read = parsers.load_source, parsers.read_report
+    monkeypatch.setattr(parsers, "load_source", lambda source, *a, **k: (
+        files.append(source) if not isinstance(source, parsers.Source) else None) or load(source, *a, **k))
+    monkeypatch.setattr(parsers, "read_report", lambda source, *a, **k: reads.append(source) or read(source, *a, **k))
+    assert opened_report(GUIDE_PINS / "cycle_01.csv").corrections
+    assert len(files) == 1 and len(reads) == 1
+
+
+def test_a_program_holds_the_chosen_cycle_and_only_it_is_recorded_as_applied(tmp_path):
+    """Issue 21 item 5: recording an export recorded every cycle's corrections; now exactly what was written."""
     from setupfix.errors import ExportError
-    from setupfix.pipeline.session import offsets_text
+    from setupfix.pipeline.session import record_applied
+    from setupfix.store import open_store
 
-    opened = open_report(MODEL, GUIDE_PINS.parent / "closed_loop" / "measurements.csv")
+    opened = opened_report(GUIDE_PINS.parent / "closed_loop" / "measurements.csv")
     assert len(opened.corrections) == 40
     with pytest.raises(ExportError, match="40 cycles"):
-        offsets_text(opened, "fanuc")
-    text = offsets_text(opened, "fanuc", cycle=39)
-    assert opened.corrections[39].part.part.upper() in text and opened.corrections[0].part.part.upper() not in text
-    assert offsets_text(opened, "csv", cycle=39).count("\n") == 1 + 40 * 10  # csv: every cycle, as correct writes
+        export_text(opened, "fanuc")
+    text = export_text(opened, "fanuc", cycle=35)
+    assert opened.corrections[35].part.part.upper() in text and opened.corrections[0].part.part.upper() not in text
+    assert export_text(opened, "csv", cycle=35).count("\n") == 1 + 40 * 10  # csv: every cycle, as correct writes
+    exported = export(export_cycles(opened, "fanuc", 35), str(tmp_path / "o.nc"), controller="fanuc")
+    assert exported.text == text == (tmp_path / "o.nc").read_text(encoding="utf-8")
+    added = record_applied(tmp_path / "h.db", exported, opened.corrections, when="2026-11-03T12:00:00")
+    last = opened.corrections[35]
+    moved = {r.register: v for r, v in zip(last.model.registers, last.x, strict=True) if v}
+    with open_store(tmp_path / "h.db") as store:
+        log = store.corrections()
+        recs = store.recommendations()
+    assert added == len(moved) > 0
+    assert dict(zip(log["register"], log["delta"], strict=True)) == pytest.approx(moved)
+    assert [r.inputs["part"] for r in recs] == [last.part.part] and recs[0].inputs["export"]["controller"] == "fanuc"
+
+
+def test_the_folder_watch_names_what_it_cannot_look_at_once(tmp_path):
+    _touch(tmp_path / "a.csv", "x", 100)
+    os.symlink(tmp_path / "missing.csv", tmp_path / "gone.csv")
+    watch = FolderWatch(tmp_path, settle=0)
+    assert watch.poll() == tmp_path / "a.csv"
+    assert watch.problems == ((str(tmp_path / "gone.csv"), "broken link"),)
+    assert watch.poll() is None and watch.problems == ()  # said once

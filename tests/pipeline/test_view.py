@@ -10,14 +10,18 @@ import pytest
 
 from conftest import GUIDE_PINS
 
+from setupfix.model import load_model
 from setupfix.pipeline import view
 from setupfix.pipeline.compare import compare_problem
 from setupfix.pipeline.correct import correct_report
+from setupfix.pipeline.requests import CorrectRequest
+
+REQUEST = CorrectRequest(load_model(GUIDE_PINS / "model.toml"))
 
 
 @pytest.fixture(scope="module")
 def correction():
-    return correct_report(GUIDE_PINS / "model.toml", GUIDE_PINS / "cycle_01.csv")[0]
+    return correct_report(REQUEST, GUIDE_PINS / "cycle_01.csv").cycles[0]
 
 
 @pytest.mark.parametrize(("value", "expected"), [
@@ -80,6 +84,23 @@ def test_register_rows_list_every_register_with_new_values_when_current_known(co
     assert not any(r.at_limit for r in rows) and {r.offset for r in rows} == {"geometry", "wear"}
 
 
+def test_register_rows_show_what_the_export_writes_feed_forward_included(correction):
+    import dataclasses
+
+    from setupfix.pipeline.export import cycle_rows
+    from setupfix.pipeline.feedforward import ThermalFeedForward
+
+    feed = ThermalFeedForward("grey", 4.2, "um", -0.004, "mm", ("T5", "T23"), ("H5", "H23"),
+                              "2026-11-02T08:00:00", "2026-11-02T09:00:00", 0.001)
+    fed = dataclasses.replace(correction, thermal=feed)
+    rows = view.register_rows(fed, {"H5": 0.5})
+    written = {r.id: r.delta for r in cycle_rows(fed)}
+    assert {r.id: r.delta for r in rows if not r.fixed} == pytest.approx(written)
+    t5 = next(r for r in rows if r.id == "T5")
+    assert t5.delta == pytest.approx(correction.corrections["T5"] - 0.004) and "thermal" in t5.rules
+    assert t5.new == pytest.approx(0.5 + t5.delta)
+
+
 def test_summary_is_the_headline_of_the_result(correction):
     s = view.summary(correction)
     assert (s.margin_before, s.margin_after) == (correction.margin_before, correction.margin_after)
@@ -91,7 +112,7 @@ def test_a_gross_error_is_rejected_and_its_rules_and_flags_shown(tmp_path):
     gross = tmp_path / "gross.csv"
     gross.write_text((GUIDE_PINS / "cycle_01.csv").read_text(encoding="utf-8")
                      .replace("P1 D1,25.0000,24.9691,-0.0309", "P1 D1,25.0000,24.5000,-0.5000"), encoding="utf-8")
-    c = correct_report(GUIDE_PINS / "model.toml", gross)[0]
+    c = correct_report(REQUEST, gross).cycles[0]
     s = view.summary(c)
     assert s.verdict == "reject" and s.alarm and any(r.startswith("reject") for r in s.rules)
     p1d1 = next(r for r in view.dimension_rows(c) if r.name == "P1 D1")

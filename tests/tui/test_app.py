@@ -12,8 +12,10 @@ import shutil
 from conftest import GUIDE_PINS
 from tui.conftest import CYCLE_01, MODEL, run, settle
 
-from setupfix.pipeline.writers import write_offsets_csv
+from setupfix.cli import main
+from setupfix.model import load_model
 from setupfix.pipeline.correct import correct_report
+from setupfix.pipeline.requests import CorrectRequest, SolveOptions
 
 
 def _notes(app):
@@ -67,7 +69,7 @@ def test_open_sort_filter_export_then_a_bad_report(make_app, tmp_path):
             await pilot.pause()
             written = (tmp_path / "offsets.csv").read_text(encoding="utf-8")
             assert written == shown
-            write_offsets_csv([r for x in correct_report(MODEL, CYCLE_01) for r in x.offsets()], tmp_path / "cli.csv")
+            assert main(["correct", "--model", str(MODEL), str(CYCLE_01), "--offsets", str(tmp_path / "cli.csv")]) == 0
             assert written == (tmp_path / "cli.csv").read_text(encoding="utf-8")  # as `correct --offsets`
             assert any("wrote csv offsets" in n for n in _notes(app))
             # a folder as target: refused, named, nothing written
@@ -103,7 +105,8 @@ def test_optimiser_choice_and_compare_with_cancel(make_app):
             await settle(pilot)
             c = app._current()
             assert app.optimizer == "cripso" and c.result.optimizer == "cripso"
-            expected = correct_report(MODEL, CYCLE_01, optimizer="cripso", seed=0)[0]
+            expected = correct_report(CorrectRequest(load_model(MODEL), solve=SolveOptions("cripso", 0)),
+                                      CYCLE_01).cycles[0]
             assert c.result.margin_after == expected.result.margin_after
             assert "cripso" in str(app.query_one("#summary").render())
             await pilot.press("c")
@@ -217,8 +220,7 @@ def test_thermal_panel_shows_the_drift_and_the_feed_forward(make_app, tmp_path):
     log.write_text((SAMPLES / "thermal" / "test_variable.csv").read_text(encoding="utf-8")
                    .replace("2026-01-05T", "2026-11-02T"), encoding="utf-8")
     expected = predict_drift(saved, log)
-    model = correct_report(MODEL, CYCLE_01)[0].model
-    feed = thermal_feed_forward(model, saved, log, measured_at="2026-11-02T08:00:00")
+    feed = thermal_feed_forward(load_model(MODEL), saved, log, measured_at="2026-11-02T08:00:00")
 
     async def scenario():
         app = make_app(thermal=saved, temperatures=log)
@@ -232,5 +234,32 @@ def test_thermal_panel_shows_the_drift_and_the_feed_forward(make_app, tmp_path):
             assert curve.display and list(curve.data) == [float(v) for v in expected.drift[-120:]]
             assert feed.line() in str(app.query_one("#thermal-feed").render())
             assert feed.line() in str(app.query_one("#summary").render())
+            # the export holds the feed-forward, exactly as `correct --offsets --thermal` writes it
+            await pilot.press("1", "e")
+            await pilot.pause()
+            await pilot.press("ctrl+s")
+            await settle(pilot)
+            assert main(["correct", "--model", str(MODEL), str(CYCLE_01), "--offsets", str(tmp_path / "cli.csv"),
+                         "--thermal", str(saved), "--temperatures", str(log)]) == 0
+            written = (tmp_path / "offsets.csv").read_text(encoding="utf-8")
+            assert written == (tmp_path / "cli.csv").read_text(encoding="utf-8")
+            assert feed.applied and app._current().corrections["T5"] == app._current().x[8] + feed.shift
 
     run(scenario())
+
+
+def test_the_command_line_gives_the_app_correct_s_reader_cycle_and_thermal_options(monkeypatch, tmp_path):
+    """``setupfix tui`` takes the options of ``correct`` (same adders) and hands them to the app unchanged."""
+    from setupfix.pipeline.requests import CycleOptions, ReadOptions
+    from setupfix.tui.app import SetupfixApp
+
+    started = []
+    monkeypatch.setattr(SetupfixApp, "run", lambda self: started.append(self.inputs))
+    assert main(["tui", str(CYCLE_01), "--model", str(MODEL), "--columns", "actual=Meas", "--unit", "inch",
+                 "--lenient", "--stations", "P1,P2,P3,P4", "--strict", "--thermal", "t.json", "--temperatures",
+                 "log.csv", "--at", "2026-11-02T09:00:00", "--thermal-dead-band", "0.002"]) == 0
+    inputs = started[0]
+    assert inputs.read == ReadOptions(unit="inch", columns="actual=Meas", lenient=True)
+    assert inputs.cycles == CycleOptions(("P1", "P2", "P3", "P4"), strict=True)
+    assert (str(inputs.thermal), str(inputs.temperatures), inputs.at, inputs.thermal_dead_band) == (
+        "t.json", "log.csv", "2026-11-02T09:00:00", 0.002)
