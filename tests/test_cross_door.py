@@ -453,8 +453,6 @@ def test_batch_and_the_tui_folder_watch_see_the_same_reports(tmp_path):
     assert seen_by_the_folder_watch(folder, tmp_path) == reports
 
 
-@pytest.mark.xfail(reason="parse lists folders through parsers.list_reports on branch h-inputs; remove this "
-                          "marker once it is merged", strict=False)
 def test_parse_sees_the_same_reports(tmp_path):
     from setupfix.pipeline.parse import parse_reports
 
