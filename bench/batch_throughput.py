@@ -46,8 +46,10 @@ os.environ.update(OPENBLAS_NUM_THREADS="1", MKL_NUM_THREADS="1", OMP_NUM_THREADS
 import parsers  # noqa: E402
 from setupfix.model import load_model, match_parts  # noqa: E402
 from setupfix.pipeline.checks import check_parts  # noqa: E402
-from setupfix.pipeline.correct import correct_part, correct_report  # noqa: E402
+from setupfix.pipeline.correct import correct_cycle, correct_report  # noqa: E402
 from setupfix.pipeline.cycles import assign_stations  # noqa: E402
+from setupfix.pipeline.export import cycle_rows  # noqa: E402
+from setupfix.pipeline.requests import CorrectRequest  # noqa: E402
 
 GUIDE = ROOT / "sample_reports" / "guide_pins"
 RESULTS = ROOT / "bench" / "results"
@@ -76,15 +78,15 @@ def make_reports(folder: Path, n: int, vary: bool = False) -> None:
 
 
 def reference() -> float:
-    model = load_model(GUIDE / "model.toml")
+    request = CorrectRequest(load_model(GUIDE / "model.toml"))
     per_cycle = []
     for i in range(1, 6):
         report = GUIDE / f"cycle_0{i}.csv"
-        correct_report(model, report)
+        correct_report(request, report)
         times = []
         for _ in range(5):
             t = time.perf_counter()
-            correct_report(model, report)
+            correct_report(request, report)
             times.append(time.perf_counter() - t)
         per_cycle.append(statistics.median(times))
     return statistics.mean(per_cycle)
@@ -93,6 +95,7 @@ def reference() -> float:
 def stages(files: list[Path]) -> dict[str, float]:
     """Mean seconds per report of each stage of the batch's per-report work, in this process."""
     model = load_model(GUIDE / "model.toml")
+    request = CorrectRequest(model)
     total = dict.fromkeys(("file + hash", "read", "match + check", "correct", "offset rows"), 0.0)
     for path in files:
         t0 = time.perf_counter()
@@ -104,9 +107,9 @@ def stages(files: list[Path]) -> dict[str, float]:
         parts = check_parts(model, match_parts(model, assign_stations(model, table), source=str(path)),
                             source=str(path))
         t3 = time.perf_counter()
-        results = [correct_part(model, part) for part in parts]
+        results = [correct_cycle(request, part) for part in parts]
         t4 = time.perf_counter()
-        [r.offsets(None) for r in results]
+        [cycle_rows(r) for r in results]
         t5 = time.perf_counter()
         for key, seconds in zip(total, (t1 - t0, t2 - t1, t3 - t2, t4 - t3, t5 - t4)):
             total[key] += seconds

@@ -277,12 +277,6 @@ class CycleCorrection:
         """The dimensions that stop a better correction (none when rejected)."""
         return self.result.binding
 
-    @property
-    def warnings(self) -> list[str]:
-        """The notes as text."""
-        # TODO(issue 20 merge): remove (pipeline/batch.py, view.py read it; render self.notes instead)
-        return [str(n) for n in self.notes]
-
     def register_rows(self) -> list[dict[str, Any]]:
         """Every register, fixed ones included: id, register, kind, offset, delta, fixed, at_limit."""
         at = set(self.recommendation.at_limit)
@@ -331,21 +325,6 @@ class CycleCorrection:
                 row["estimate"], row["deviation"] = row["deviation"], float(measured[i])
             rows.append(row)
         return rows
-
-    def offsets(self, current: Mapping[str, float] | None = None) -> list[Any]:
-        """The offset rows of this cycle (:func:`setupfix.offsets.offset_rows`)."""
-        # TODO(issue 20 merge): remove (pipeline/batch.py, session.py call it; use pipeline.export)
-        from setupfix.offsets import offset_rows
-
-        return offset_rows(self.model, self.corrections, report=self.part.report, part=self.part.part,
-                           current=current, verdict=self.verdict)
-
-    def to_json(self) -> dict[str, Any]:
-        """The ``correct --json`` object (:func:`setupfix.pipeline.present.cycle_json`)."""
-        # TODO(issue 20 merge): remove (pipeline/history.py, session.py call it; use present.cycle_json)
-        from setupfix.pipeline.present import cycle_json
-
-        return cycle_json(self)
 
 
 @dataclass(frozen=True, eq=False)

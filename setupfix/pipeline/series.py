@@ -32,7 +32,7 @@ from setupfix.diagnose.forecast import spec_of
 from setupfix.diagnose.terms import EffectSpec, applied_at, join_temperatures, parts_since_change
 from setupfix.errors import MatchError, ParseError, SourceLocation, UnknownFormatError
 from setupfix.model import PartMeasurement, ProcessModel, load_model, match_parts, normalise_name
-from setupfix.model.effects import EffectsSection, model_effects
+from setupfix.model.effects import EffectsSection
 from setupfix.pipeline.checks import check_parts
 
 __all__ = ["SeriesInput", "TempLog", "load_series", "parse_times", "hours_since", "temperature_arrays",
@@ -126,12 +126,6 @@ def _corrections(path: str, model: ProcessModel) -> RegisterLog:
     return check_corrections(read_corrections_log(path), model)
 
 
-# TODO(issue 20 merge): remove — pipeline.diagnose imports these names from here.
-expand_reports = parsers.expand_inputs
-corrections_from_table = log_from_frame
-temperatures_from_table = store_temperatures
-
-
 def hours_since(times: pd.DatetimeIndex, origin: pd.Timestamp) -> np.ndarray:
     return np.asarray((times - origin).total_seconds(), dtype=float) / 3600.0
 
@@ -157,7 +151,7 @@ def load_series(model: ProcessModel | str | Path, reports: Sequence[str | Path] 
     """
     if not isinstance(model, ProcessModel):
         model = load_model(model)
-    section = model_effects(model)
+    section = model.effects
     notes: list[str] = []
     parts: list[PartMeasurement] = []
     tables: list[pd.DataFrame] = []

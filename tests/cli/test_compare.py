@@ -45,7 +45,7 @@ def test_json_contract_and_exact_yardstick(capsys: pytest.CaptureFixture[str]) -
 def exact_problem():
     from setupfix.model import load_model
     from setupfix.optimize import CorrectionProblem
-    from setupfix.pipeline.correct import load_parts
+    from setupfix.pipeline.cycles import load_parts
 
     model = load_model(MODEL)
     return CorrectionProblem.from_part(model, load_parts(model, REPORT)[0])

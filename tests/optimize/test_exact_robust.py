@@ -13,7 +13,7 @@ from setupfix.optimize import CorrectionProblem, get_optimizer
 from setupfix.optimize._highs import Solve
 from setupfix.optimize._session import Session
 from setupfix.optimize._settings import ExactSettings
-from setupfix.pipeline.correct import load_parts
+from setupfix.pipeline.cycles import load_parts
 
 from .test_exact import brute_force, random_problem
 

@@ -9,7 +9,7 @@ import pytest
 
 from setupfix.model import PartMeasurement
 from setupfix.optimize import CorrectionProblem, get_optimizer
-from setupfix.pipeline.correct import load_parts
+from setupfix.pipeline.cycles import load_parts
 
 from .test_exact import random_problem
 from .test_exact_robust import GUIDE_PINS

@@ -10,7 +10,7 @@ from setupfix.optimize import CorrectionProblem, get_optimizer
 from setupfix.optimize._grid import least_distance
 from setupfix.optimize._listing import ellipsoid_search, enumerate_ball, lagrangian_ball
 from setupfix.optimize._settings import ExactSettings
-from setupfix.pipeline.correct import load_parts
+from setupfix.pipeline.cycles import load_parts
 
 from .test_exact import brute_force, random_problem
 from .test_exact_robust import GUIDE_PINS

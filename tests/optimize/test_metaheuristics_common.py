@@ -59,7 +59,7 @@ def brute_force(problem: CorrectionProblem) -> float:
 
 def guide_pins_problem(cycle: int) -> CorrectionProblem:
     from setupfix.model import load_model
-    from setupfix.pipeline.correct import load_parts
+    from setupfix.pipeline.cycles import load_parts
 
     model = load_model(GUIDE_PINS / "model.toml")
     part = load_parts(model, GUIDE_PINS / f"cycle_{cycle:02d}.csv")[0]

@@ -191,14 +191,17 @@ def test_cli_import_show_export(tmp_path, capsys):
 
 
 def test_recommendations_of_a_correct_run_are_stored(tmp_path):
+    from setupfix.model import load_model
     from setupfix.pipeline.correct import correct_report
     from setupfix.pipeline.history import record_recommendations
+    from setupfix.pipeline.present import cycle_json
+    from setupfix.pipeline.requests import CorrectRequest
 
-    results = correct_report(GUIDE / "model.toml", REPORTS[0])
+    results = correct_report(CorrectRequest(load_model(GUIDE / "model.toml")), REPORTS[0]).cycles
     with open_store(tmp_path / "h.db") as store:
         record_recommendations(store, results, model=GUIDE / "model.toml", report=REPORTS[0])
         (rec,) = store.recommendations()
-    assert rec.optimizer == "exact" and rec.result["corrections"] == results[0].to_json()["corrections"]
+    assert rec.optimizer == "exact" and rec.result["corrections"] == cycle_json(results[0])["corrections"]
     assert rec.inputs["report_sha256"] == hashlib.sha256(REPORTS[0].read_bytes()).hexdigest()
 
 
