@@ -33,9 +33,9 @@ from dataclasses import dataclass
 
 import numpy as np
 import numpy.typing as npt
-import pandas as pd
 
-from setupfix.errors import Note, ParseError, SourceLocation
+from parsers.timestamps import instant
+from setupfix.errors import Note, SourceLocation
 from setupfix.model import PartMeasurement, ProcessModel
 from setupfix.optimize import CorrectionProblem
 from setupfix.safety import Policy, RuleEffect, Smoothed, cumulative_bounds, guard_limits
@@ -48,23 +48,16 @@ Mask = npt.NDArray[np.bool_]
 
 
 def hours_between(stamp: str, origin: str, where: str) -> float:
-    """Hours from ``origin`` to ``stamp`` (ISO 8601; aware times compared in UTC).
+    """Hours from ``origin`` to ``stamp`` (ISO 8601, read by :func:`parsers.timestamps.instant`:
+    aware times compared in UTC).
 
     Raises
     ------
     ParseError
-        If ``stamp`` is not an ISO 8601 time (named with ``where``).
+        If either is not an ISO 8601 time (named with ``where``).
     """
-    def naive(text: str) -> pd.Timestamp:
-        try:
-            t = pd.Timestamp(str(text))
-            if pd.isna(t):
-                raise ValueError
-        except (ValueError, TypeError):
-            raise ParseError(f"not an ISO 8601 timestamp: {text!r}", location=SourceLocation(where)) from None
-        return t.tz_convert("UTC").tz_localize(None) if t.tzinfo is not None else t
-
-    return float((naive(stamp) - naive(origin)).total_seconds()) / 3600.0
+    place = SourceLocation(where)
+    return (instant(stamp, place) - instant(origin, place)).total_seconds() / 3600.0
 
 
 def forecast_of(model: ProcessModel, timestamp: str | None, report: str = "") -> tuple[Array, Note | None]:

@@ -60,24 +60,13 @@ class SeriesInput:
     notes: tuple[str, ...] = ()
 
 
-def parse_times(values: Sequence[object], where: str, lines: Sequence[int] | None = None) -> pd.DatetimeIndex:
+def parse_times(values: Sequence[object], where: str) -> pd.DatetimeIndex:
     """The reports' part timestamps as naive datetimes (UTC when an offset is given); one clear error for a bad one.
 
-    The logs' timestamps are read by their readers (:mod:`parsers.timestamps`).
+    Read by the one timestamp parser (:func:`parsers.timestamps.parse_timestamp`), as the logs' are.
     """
-    out = []
-    for i, v in enumerate(values):
-        try:
-            t = pd.Timestamp(str(v))
-            if pd.isna(t):
-                raise ValueError
-        except (ValueError, TypeError):
-            line = lines[i] if lines is not None else None
-            raise ParseError(f"not an ISO 8601 timestamp: {v!r}", location=SourceLocation(where, line=line)) from None
-        if t.tzinfo is not None:
-            t = t.tz_convert("UTC").tz_localize(None)
-        out.append(t)
-    return pd.DatetimeIndex(out)
+    place = SourceLocation(where)
+    return to_index([parse_timestamp(v, place) for v in values])
 
 
 def temperature_arrays(log: TemperatureLog) -> TempLog:

@@ -18,7 +18,8 @@ import numpy as np
 import numpy.typing as npt
 import pandas as pd
 
-from setupfix.errors import Note, SetupfixError
+from parsers.timestamps import instant
+from setupfix.errors import Note, SetupfixError, SourceLocation
 from setupfix.model import PartMeasurement, ProcessModel, match_parts
 from setupfix.relation import relation_matrices
 from setupfix.safety import Smoothed, ewma_history
@@ -32,17 +33,17 @@ Array = npt.NDArray[np.float64]
 HISTORY = 50
 
 
-def _stamp(text: object) -> np.datetime64 | None:
-    if text is None or (isinstance(text, float) and math.isnan(text)) or text == "":
+def _stamp(part: PartMeasurement) -> np.datetime64 | None:
+    """When ``part`` was machined (the one parser, :func:`parsers.timestamps.instant`); None when not given.
+
+    Raises
+    ------
+    ParseError
+        A timestamp that is not ISO 8601 (named with the report).
+    """
+    if part.timestamp is None or not str(part.timestamp).strip():
         return None
-    try:
-        t = pd.Timestamp(str(text))
-    except (ValueError, TypeError):
-        return None
-    if pd.isna(t):
-        return None
-    t = t.tz_convert("UTC").tz_localize(None) if t.tzinfo is not None else t
-    return np.datetime64(t.value, "ns")
+    return np.datetime64(instant(part.timestamp, SourceLocation(part.report)), "ns")
 
 
 @dataclass(frozen=True, eq=False)
@@ -96,9 +97,7 @@ class History:
         ids = model.register_ids
         times, regs, deltas, resets = [], [], [], []
         for _, entry in log.iterrows():
-            when = _stamp(entry["timestamp"])
-            if when is None:
-                continue
+            when = np.datetime64(instant(entry["timestamp"], SourceLocation(store.location)), "ns")
             try:
                 j = ids.index(model.register(str(entry["register"])).id)
             except KeyError:
@@ -115,7 +114,7 @@ class History:
         held = set(zip(self.times.tolist(), self.keys))
         times, devs, keys = list(self.times), list(self.deviations), list(self.keys)
         for p in parts:
-            t = _stamp(p.timestamp)
+            t = _stamp(p)
             if t is None or (t.tolist(), p.part) in held:
                 continue
             held.add((t.tolist(), p.part))
@@ -129,7 +128,7 @@ class History:
 
     def smooth(self, model: ProcessModel, part: PartMeasurement, lam: float) -> Smoothed:
         """The EWMA estimate of ``part`` over every held part machined before it (:func:`setupfix.safety.ewma_history`)."""
-        now = _stamp(part.timestamp)
+        now = _stamp(part)
         if lam < 1.0 and now is None:
             return Smoothed(part.deviation, 0, lam, (Note("no timestamp in the report: not smoothed", None, "ewma"),))
         return ewma_history(part.deviation, now, self.times, self.deviations, self.log_times, self.log_register,

@@ -8,6 +8,7 @@ import pandas as pd
 import pytest
 
 import parsers
+from setupfix.errors import ParseError
 from setupfix.model import load_model
 from setupfix.pipeline.correct import correct_report
 from setupfix.pipeline.requests import CorrectRequest, History
@@ -64,3 +65,25 @@ def test_tool_change_resets_the_dimensions_it_cuts(tmp_path):
 def test_without_store_not_smoothed_and_said(tmp_path):
     (pc,) = correct(model_with_ewma(tmp_path, 0.5), GUIDE / "cycle_03.csv")
     assert "estimate" not in p1d1(pc) and any("needs the history store" in n.message for n in pc.notes)
+
+
+def restamped(tmp_path, stamp):
+    text = (GUIDE / "cycle_03.csv").read_text().replace("2026-11-04T08:00:00", stamp)
+    path = tmp_path / "c3.csv"
+    path.write_text(text)
+    return path
+
+
+def test_the_cycle_time_is_read_by_the_one_parser(tmp_path):
+    model = model_with_ewma(tmp_path, 0.5)
+    store = store_with(tmp_path, [("2026-11-03T12:00:00", "G54", 0.010, "correction")])
+    (ref,) = correct(model, GUIDE / "cycle_03.csv", store)
+    # the same instant with an offset: compared in UTC, the same estimate
+    (aware,) = correct(model, restamped(tmp_path, "2026-11-04T09:00:00+01:00"), store)
+    assert p1d1(aware)["estimate"] == p1d1(ref)["estimate"]
+    # 07:00 UTC on the 3rd: after cycle 01 (the 2nd, 08:00), before cycle 02 (the 3rd, 08:00)
+    (early,) = correct(model, restamped(tmp_path, "2026-11-03T09:00:00+02:00"), store)
+    assert "1 earlier part(s)" in early.recommendation.rules[0].message
+    # not ISO 8601: refused like the diagnosis and the forecast refuse it, not read month-first and unsmoothed
+    with pytest.raises(ParseError, match=r"c3\.csv: timestamp '04\.11\.2026 08:00' is not ISO 8601"):
+        correct(model, restamped(tmp_path, "04.11.2026 08:00"), store)
