@@ -19,7 +19,7 @@ import pandas as pd
 
 import parsers
 from parsers._source import read_bytes
-from parsers.corrections import COLUMNS, EVENTS, check_corrections, read_corrections_log
+from parsers.corrections import EVENTS, check_corrections, read_corrections_log
 from parsers.temperature import read_temperature_log
 from parsers.timestamps import iso_text
 from setupfix.errors import ParameterError, ParseError, UnknownFormatError
@@ -27,13 +27,12 @@ from setupfix.model import CANONICAL_COLUMNS, ProcessModel
 from setupfix.pipeline.present import cycle_json
 from setupfix.pipeline.requests import CycleCorrection
 from setupfix.pipeline.writers import write_canonical_csv, write_table_csv
-from setupfix.store import CORRECTION_COLUMNS, Recommendation, Store
+from setupfix.store import Recommendation, Store
 
 __all__ = ["DEFAULT_DB", "default_db_path", "import_history", "ImportSummary",
            "history_summary", "export_history", "record_recommendations", "EXPORTS", "EVENTS"]
 
 DEFAULT_DB = "setupfix.db"
-assert CORRECTION_COLUMNS == COLUMNS  # the store keeps the log as its one reader gives it
 #: Tables ``history export`` writes.
 EXPORTS = ("measurements", "corrections", "temperatures")
 

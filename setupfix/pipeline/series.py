@@ -23,7 +23,7 @@ import numpy as np
 import pandas as pd
 
 import parsers
-from parsers.corrections import RegisterLog, check_corrections, log_from_frame, read_corrections_log
+from parsers.corrections import RegisterLog, check_corrections, read_corrections_log
 from parsers.folders import LOG_NAMES
 from parsers.temperature import TemperatureLog, read_temperature_log
 from parsers.timestamps import parse_timestamp, to_index
@@ -147,7 +147,7 @@ def load_series(model: ProcessModel | str | Path, reports: Sequence[str | Path] 
     log = temps = None
     where = str(db) if db is not None else ""
     if db is not None:
-        from setupfix.store import open_store
+        from setupfix.store import open_store, stored_corrections
 
         if not Path(db).is_file():
             raise ParseError("no such history store", location=SourceLocation(str(db)),
@@ -160,9 +160,7 @@ def load_series(model: ProcessModel | str | Path, reports: Sequence[str | Path] 
                 parts += match_parts(model, table, source=f"{db}#{rec.name}")
                 tables.append(table)
             if corrections is None:
-                stored = store.corrections()
-                if not stored.empty:
-                    log = check_corrections(log_from_frame(stored, f"{db}#corrections"), model)
+                log = stored_corrections(store, model)
             if temperatures is None:
                 stored_t = store.temperatures()
                 if len(stored_t.columns) > 1 and not stored_t.empty:

@@ -10,20 +10,18 @@ each earlier part shifted by the corrections logged since (eqs. 3–4), reset on
 
 from __future__ import annotations
 
-import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
 import numpy.typing as npt
-import pandas as pd
 
 from parsers.timestamps import instant
 from setupfix.errors import Note, SetupfixError, SourceLocation
 from setupfix.model import PartMeasurement, ProcessModel, match_parts
 from setupfix.relation import relation_matrices
 from setupfix.safety import Smoothed, ewma_history
-from setupfix.store import Store
+from setupfix.store import Store, stored_corrections
 
 __all__ = ["History", "HISTORY"]
 
@@ -91,23 +89,12 @@ class History:
             except SetupfixError:
                 continue
         out = out.with_parts(parts)
-        log = store.corrections()
-        if not len(log):
+        log = stored_corrections(store, model)
+        if log is None:
             return out
-        ids = model.register_ids
-        times, regs, deltas, resets = [], [], [], []
-        for _, entry in log.iterrows():
-            when = np.datetime64(instant(entry["timestamp"], SourceLocation(store.location)), "ns")
-            try:
-                j = ids.index(model.register(str(entry["register"])).id)
-            except KeyError:
-                j = -1
-            times.append(when)
-            regs.append(j)
-            deltas.append(float(entry["delta"]) if pd.notna(entry["delta"]) else math.nan)
-            resets.append(str(entry.get("event") or "correction") == "tool_change")
-        return cls(out.times, out.deviations, out.keys, np.array(times, dtype="datetime64[ns]"),
-                   np.array(regs, dtype=np.int64), np.array(deltas, dtype=float), np.array(resets, dtype=bool))
+        return cls(out.times, out.deviations, out.keys, log.times.values.astype("datetime64[ns]"),
+                   log.registers.astype(np.int64), log.deltas.astype(float),
+                   np.array([e == "tool_change" for e in log.events], dtype=bool))
 
     def with_parts(self, parts: Sequence[PartMeasurement]) -> History:
         """This history plus ``parts`` (those with a timestamp, not already held: same time and name)."""

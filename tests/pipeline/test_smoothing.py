@@ -2,13 +2,14 @@
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 import pandas as pd
 import pytest
 
 import parsers
-from setupfix.errors import ParseError
+from setupfix.errors import MatchError, ParseError
 from setupfix.model import load_model
 from setupfix.pipeline.correct import correct_report
 from setupfix.pipeline.requests import CorrectRequest, History
@@ -87,3 +88,35 @@ def test_the_cycle_time_is_read_by_the_one_parser(tmp_path):
     # not ISO 8601: refused like the diagnosis and the forecast refuse it, not read month-first and unsmoothed
     with pytest.raises(ParseError, match=r"c3\.csv: timestamp '04\.11\.2026 08:00' is not ISO 8601"):
         correct(model, restamped(tmp_path, "04.11.2026 08:00"), store)
+
+
+def test_store_log_is_read_and_checked_as_diagnose_reads_it(tmp_path, capsys):
+    """``correct --store`` smooths over the store's log read by the one reader and checked by the one model
+    check, so a row ``diagnose --db`` refuses (a register the model does not know) is refused by both, at one
+    place; a log the check accepts (a register by its ID or its controller name) smooths the same either way."""
+    from setupfix.cli import main
+
+    model_path = tmp_path / "m.toml"
+    model_path.write_text((GUIDE / "model.toml").read_text() + "\n[safety]\newma = 0.5\n")
+    model = load_model(model_path)
+    by_name = store_with(tmp_path, [("2026-11-02T12:00:00", "G54", 0.010, "correction")])
+    (named,) = correct(model, GUIDE / "cycle_03.csv", by_name)
+    by_name.close()
+    (tmp_path / "h.db").unlink()
+    by_id = store_with(tmp_path, [("2026-11-02T12:00:00", "W1", 0.010, "correction")])
+    (ided,) = correct(model, GUIDE / "cycle_03.csv", by_id)
+    assert p1d1(ided)["estimate"] == p1d1(named)["estimate"] != p1d1(ided)["deviation"]
+    by_id.add_corrections(pd.DataFrame([("2026-11-03T12:00:00", "H99", 0.002, "correction")],
+                                       columns=["timestamp", "register", "delta", "event"]))
+    by_id.close()
+    db = str(tmp_path / "h.db")
+    where = f"{db}#corrections: <row 2>: unknown register 'H99'"
+    with pytest.raises(MatchError, match=re.escape(where)):
+        History.from_store(model, open_store(db))
+    assert main(["correct", "--model", str(model_path), "--store", db, str(GUIDE / "cycle_03.csv")]) == 1
+    from_correct = capsys.readouterr().err
+    assert main(["diagnose", "--model", str(model_path), "--db", db, "--no-walk"]) == 1
+    from_diagnose = capsys.readouterr().err
+    assert where in from_correct and where in from_diagnose
+    line = next(x for x in from_correct.splitlines() if where in x)
+    assert line in from_diagnose.splitlines()

@@ -212,3 +212,10 @@ def test_a_truncated_report_is_refused_and_nothing_stored(tmp_path):
         with pytest.raises(ParseError, match="cut.csv.*truncated"):
             import_history(store, [REPORTS[1], cut])
         assert store.reports() == []
+
+
+def test_the_store_keeps_the_corrections_log_in_its_readers_columns():
+    from parsers.corrections import COLUMNS
+    from setupfix.store import CORRECTION_COLUMNS
+
+    assert CORRECTION_COLUMNS is COLUMNS  # one definition
