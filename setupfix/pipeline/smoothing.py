@@ -17,7 +17,7 @@ import numpy as np
 import numpy.typing as npt
 
 from parsers.timestamps import instant
-from setupfix.errors import Note, SetupfixError, SourceLocation
+from setupfix.errors import Note, ParseError, SetupfixError, SourceLocation
 from setupfix.model import PartMeasurement, ProcessModel, match_parts
 from setupfix.relation import relation_matrices
 from setupfix.safety import Smoothed, ewma_history
@@ -27,7 +27,8 @@ __all__ = ["History", "HISTORY"]
 
 Array = npt.NDArray[np.float64]
 
-#: Earlier reports of the store looked at, newest first (weights (1 − λ)^50 are negligible for λ ≥ 0.1).
+#: Earlier parts an estimate looks at: the last ones machined before the cycle (weights (1 − λ)^50 are
+#: negligible for λ ≥ 0.1).  The history itself holds every part (:meth:`History.from_store`).
 HISTORY = 50
 
 
@@ -77,18 +78,33 @@ class History:
 
     @classmethod
     def from_store(cls, model: ProcessModel, store: Store) -> History:
-        """The parts of the store's newest :data:`HISTORY` reports matched to ``model`` and its corrections log.
+        """Every part the store holds matched to ``model`` (one query), and its corrections log.
 
-        Reports of other processes (that do not match the model) are left out.
+        Every stored report counts, however many: the estimate itself looks at the last
+        :data:`HISTORY` parts machined before the cycle, so ``batch --store`` equals
+        ``history import`` + ``correct --store``.  Reports of other processes (that do
+        not match the model) are left out; a part kept by two reports (same time and
+        name) counts once, as the newest import gives it.  The log is read and checked
+        as ``diagnose --db`` reads it (:func:`setupfix.store.stored_corrections`).
+
+        Raises
+        ------
+        ParseError
+            A stored part's timestamp that is not ISO 8601 (``diagnose --db`` refuses it too).
+        MatchError
+            A log row the model check refuses (e.g. an unknown register).
         """
-        out = cls.empty(model)
+        names = {r.sha256: r.name for r in store.reports()}
         parts: list[PartMeasurement] = []
-        for record in sorted(store.reports(), key=lambda r: r.imported_at, reverse=True)[:HISTORY]:
+        for sha, table in reversed(list(store.measurements().groupby("report_sha256", sort=False))):
             try:
-                parts += match_parts(model, store.measurements(record.sha256), source=record.name)
+                matched = match_parts(model, table, source=names.get(str(sha), str(sha)))
             except SetupfixError:
                 continue
-        out = out.with_parts(parts)
+            for p in matched:
+                _stamp(p)  # an unreadable time is refused, not left out
+            parts += matched
+        out = cls.empty(model).with_parts(parts)
         log = stored_corrections(store, model)
         if log is None:
             return out
@@ -101,7 +117,10 @@ class History:
         held = set(zip(self.times.tolist(), self.keys))
         times, devs, keys = list(self.times), list(self.deviations), list(self.keys)
         for p in parts:
-            t = _stamp(p)
+            try:
+                t = _stamp(p)
+            except ParseError:  # refused when that part itself is corrected (batch: its own line)
+                continue
             if t is None or (t.tolist(), p.part) in held:
                 continue
             held.add((t.tolist(), p.part))

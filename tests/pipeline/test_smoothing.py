@@ -12,6 +12,7 @@ import parsers
 from setupfix.errors import MatchError, ParseError
 from setupfix.model import load_model
 from setupfix.pipeline.correct import correct_report
+from setupfix.pipeline.cycles import load_parts
 from setupfix.pipeline.requests import CorrectRequest, History
 from setupfix.store import open_store
 
@@ -120,3 +121,38 @@ def test_store_log_is_read_and_checked_as_diagnose_reads_it(tmp_path, capsys):
     assert where in from_correct and where in from_diagnose
     line = next(x for x in from_correct.splitlines() if where in x)
     assert line in from_diagnose.splitlines()
+
+
+def test_every_stored_report_counts_not_the_newest_imports(tmp_path):
+    """60 reports imported latest-machined first: the estimate looks at the 50 parts machined last before the
+    cycle, as a history built from the same files does (the newest 50 imports would be the 50 earliest)."""
+    import datetime as dt
+
+    model = model_with_ewma(tmp_path, 0.5)
+    base = pd.read_csv(GUIDE / "cycle_01.csv", dtype={"timestamp": str})
+    store = open_store(tmp_path / "h.db")
+    paths = []
+    for k in range(60):
+        table = base.copy()
+        shift = 0.004 * ((k * 7) % 11 - 5)
+        table["actual"] = (table["actual"] + shift).round(4)
+        table["deviation"] = (table["actual"] - table["nominal"]).round(4)
+        table["part"] = f"p{k}"
+        table["timestamp"] = (dt.datetime(2026, 9, 1) + dt.timedelta(hours=60 - k)).isoformat()
+        path = tmp_path / f"r{k:02d}.csv"
+        table.to_csv(path, index=False)
+        paths.append(path)
+        store.add_report(path.read_bytes(), path.name, "canonical", parsers.read(path))
+    assert len(store.reports()) == 60
+    stored = History.from_store(model, store)
+    given = History.empty(model).with_parts([p for path in paths for p in load_parts(model, path)])
+    assert len(stored.keys) == 60
+    (a,) = correct_report(CorrectRequest(model, history=stored), GUIDE / "cycle_03.csv").cycles
+    (b,) = correct_report(CorrectRequest(model, history=given), GUIDE / "cycle_03.csv").cycles
+    assert "50 earlier part(s)" in a.recommendation.rules[0].message
+    assert [r["estimate"] for r in a.dimension_rows()] == [r["estimate"] for r in b.dimension_rows()]
+    assert a.corrections == b.corrections
+    # the 50 earliest alone (what the newest 50 imports held) give another estimate
+    early = History.empty(model).with_parts([p for path in paths[10:] for p in load_parts(model, path)])
+    (c,) = correct_report(CorrectRequest(model, history=early), GUIDE / "cycle_03.csv").cycles
+    assert p1d1(c)["estimate"] != pytest.approx(p1d1(a)["estimate"], abs=1e-6)
