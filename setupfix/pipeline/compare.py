@@ -23,7 +23,7 @@ import numpy.typing as npt
 
 from setupfix.errors import Note
 from setupfix.model import ProcessModel, load_model
-from setupfix.optimize import OPTIMIZERS, CorrectionProblem, OptimizeResult, get_optimizer
+from setupfix.optimize import CorrectionProblem, OptimizeResult, get_optimizer
 from setupfix.pipeline.cycles import read_parts
 from setupfix.pipeline.requests import CycleOptions, ReadOptions
 from setupfix.pose import pose_problem

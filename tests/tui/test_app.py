@@ -9,13 +9,15 @@ from __future__ import annotations
 import dataclasses
 import shutil
 
-from conftest import GUIDE_PINS
+from conftest import GUIDE_PINS, SAMPLES
 from tui.conftest import CYCLE_01, MODEL, run, settle
 
 from setupfix.cli import main
 from setupfix.model import load_model
 from setupfix.pipeline.correct import correct_report
 from setupfix.pipeline.requests import CorrectRequest, SolveOptions
+
+CONTROLLERS = SAMPLES / "controllers"
 
 
 def _notes(app):
@@ -263,3 +265,34 @@ def test_the_command_line_gives_the_app_correct_s_reader_cycle_and_thermal_optio
     assert inputs.cycles == CycleOptions(("P1", "P2", "P3", "P4"), strict=True)
     assert (str(inputs.thermal), str(inputs.temperatures), inputs.at, inputs.thermal_dead_band) == (
         "t.json", "log.csv", "2026-11-02T09:00:00", 0.002)
+
+
+def test_compare_solves_the_problem_correct_solves(make_app, tmp_path):
+    """The compare tab's exact result is the correction shown: the guarded problem with the register costs
+    (controllers sample: T12 costs 3), not the problem on the real limits."""
+    import numpy as np
+
+    from setupfix.optimize import get_optimizer
+
+    model = tmp_path / "m.toml"
+    model.write_text((CONTROLLERS / "model.toml").read_text(encoding="utf-8") + "\n[safety]\nuncertainty = 0.004\n",
+                     encoding="utf-8")
+
+    async def scenario():
+        app = make_app(report=CONTROLLERS / "report.csv", model=model)
+        async with app.run_test(size=(100, 30)) as pilot:
+            await settle(pilot)
+            c = app._current()
+            await pilot.press("c")
+            await settle(pilot)
+            comp = app.comparison
+            assert comp is not None and comp.problem is c.posed.guarded
+            raw = c.recommendation.result
+            assert c.verdict == "apply" and np.array_equal(c.x, raw.x)  # the correction shown is the optimum
+            assert np.array_equal(comp.exact.x, raw.x) and comp.exact.margin_after == raw.margin_after
+            assert np.any(c.posed.guarded.cost != 1.0)
+            # the real-limit problem is another one: its exact optimum is not what correct shows
+            other = get_optimizer("exact").solve(c.problem)
+            assert not np.array_equal(other.x, raw.x) or other.margin_after != raw.margin_after
+
+    run(scenario())
