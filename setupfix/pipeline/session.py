@@ -11,7 +11,7 @@ watched folder once its writer has finished with it.
 from __future__ import annotations
 
 import time
-from collections.abc import Iterator, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass
 from datetime import datetime
 from pathlib import Path
@@ -21,8 +21,7 @@ import pandas as pd
 import parsers
 from setupfix.errors import MatchError, Note, ParseError, SourceLocation
 from setupfix.model import PartMeasurement, ProcessModel, match_parts
-from setupfix.optimize import CorrectionProblem, OptimizeResult, get_optimizer
-from setupfix.pipeline.compare import DEFAULT_METHODS, Comparison, MethodTrials, trial_seeds
+from setupfix.pipeline.compare import compare_steps  # the TUI's worker takes it from here, with store_parts
 from setupfix.pipeline.correct import correct_report
 from setupfix.pipeline.cycles import assign_stations
 from setupfix.pipeline.export import Exported
@@ -173,41 +172,6 @@ class FolderWatch:
             return path
         self._pending = (path, *stamp)
         return None
-
-
-def compare_steps(problem: CorrectionProblem, *, methods: Sequence[str] = DEFAULT_METHODS, trials: int = 12,
-                  seed: int = 0) -> Iterator[tuple[str, int, int, Comparison]]:
-    """:func:`~setupfix.pipeline.compare.compare_problem` one trial at a time.
-
-    Yields ``(method, step, steps, comparison so far)`` after the exact optimum and
-    after every trial, so that a caller can show progress and stop within one trial;
-    the last comparison equals ``compare_problem(problem, methods=…, trials=…, seed=…)``
-    (same seeds, same order).
-    """
-    if trials < 1:
-        raise ValueError("trials must be at least 1")
-    seeds = trial_seeds(seed, trials)
-    steps = 1 + len(methods) * trials
-    exact = get_optimizer("exact").solve(problem)
-    done: list[MethodTrials] = []
-    skipped: dict[str, str] = {}
-    step = 1
-    yield "exact", step, steps, Comparison(problem=problem, exact=exact, methods=[], seed=seed, trials=trials)
-    for name in methods:
-        try:
-            get_optimizer(name, seed=seeds[0])
-        except ModuleNotFoundError as exc:  # a method still being written: skipped, as compare_problem does
-            skipped[name] = f"not available: {exc}"
-            step += trials
-            yield name, step, steps, Comparison(problem, exact, list(done), seed, trials, skipped=dict(skipped))
-            continue
-        runs: list[OptimizeResult] = []
-        for s in seeds:
-            runs.append(get_optimizer(name, seed=s).solve(problem))
-            step += 1
-            partial = [*done, MethodTrials(name, seeds[:len(runs)], list(runs))]
-            yield name, step, steps, Comparison(problem, exact, partial, seed, trials, skipped=dict(skipped))
-        done.append(MethodTrials(name, seeds, runs))
 
 
 def store_parts(model: ProcessModel, db: str | Path) -> tuple[list[PartMeasurement], list[str]]:
