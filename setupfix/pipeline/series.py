@@ -147,16 +147,14 @@ def load_series(model: ProcessModel | str | Path, reports: Sequence[str | Path] 
     log = temps = None
     where = str(db) if db is not None else ""
     if db is not None:
-        from setupfix.store import open_store, stored_corrections
+        from setupfix.store import open_store, report_tables, stored_corrections
 
         if not Path(db).is_file():
             raise ParseError("no such history store", location=SourceLocation(str(db)),
                              hint="create it with 'setupfix history import'")
         with open_store(db) as store:
-            rows = store.measurements()
-            for rec in store.reports():
-                table = rows[rows["report_sha256"] == rec.sha256].drop(columns=["report_sha256"])
-                table = table[~table["reference"]] if "reference" in table else table
+            for rec, table in report_tables(store):
+                table = table[~table["reference"]]
                 parts += match_parts(model, table, source=f"{db}#{rec.name}")
                 tables.append(table)
             if corrections is None:

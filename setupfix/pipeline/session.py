@@ -28,7 +28,7 @@ from setupfix.pipeline.export import Exported
 from setupfix.pipeline.present import cycle_json
 from setupfix.pipeline.requests import CorrectOutcome, CorrectRequest, CurrentOffsets, CycleCorrection
 from setupfix.pipeline.view import MatchRow, match_rows, matched_rows
-from setupfix.store import CORRECTION_COLUMNS, Recommendation, open_store
+from setupfix.store import CORRECTION_COLUMNS, Recommendation, open_store, report_tables
 
 __all__ = ["OpenedReport", "open_report", "export_cycles", "newest_report", "FolderWatch",
            "compare_steps", "store_parts", "record_applied"]
@@ -182,11 +182,10 @@ def store_parts(model: ProcessModel, db: str | Path) -> tuple[list[PartMeasureme
     notes: list[str] = []
     parts: list[PartMeasurement] = []
     with open_store(db) as store:
-        names = {r.sha256: r.name for r in store.reports()}
-        rows = store.measurements()
-    for sha, table in rows.groupby("report_sha256", sort=False):
+        tables = report_tables(store)
+    for record, table in tables:
         try:
-            parts += match_parts(model, assign_stations(model, table), source=names.get(str(sha), str(sha)))
+            parts += match_parts(model, assign_stations(model, table), source=record.name)
         except MatchError as exc:
             notes.append(f"left out: {exc}")
     parts.sort(key=lambda p: p.timestamp or "")

@@ -21,7 +21,7 @@ from setupfix.errors import Note, ParseError, SetupfixError, SourceLocation
 from setupfix.model import PartMeasurement, ProcessModel, match_parts
 from setupfix.relation import relation_matrices
 from setupfix.safety import Smoothed, ewma_history
-from setupfix.store import Store, stored_corrections
+from setupfix.store import Store, report_tables, stored_corrections
 
 __all__ = ["History", "HISTORY"]
 
@@ -94,11 +94,10 @@ class History:
         MatchError
             A log row the model check refuses (e.g. an unknown register).
         """
-        names = {r.sha256: r.name for r in store.reports()}
         parts: list[PartMeasurement] = []
-        for sha, table in reversed(list(store.measurements().groupby("report_sha256", sort=False))):
+        for record, table in reversed(report_tables(store)):
             try:
-                matched = match_parts(model, table, source=names.get(str(sha), str(sha)))
+                matched = match_parts(model, table, source=record.name)
             except SetupfixError:
                 continue
             for p in matched:

@@ -36,7 +36,8 @@ from parsers.corrections import COLUMNS as CORRECTION_COLUMNS
 from parsers.corrections import RegisterLog, check_corrections, log_from_frame
 from setupfix.model import ProcessModel
 
-__all__ = ["Store", "ReportRecord", "Recommendation", "open_store", "stored_corrections", "CORRECTION_COLUMNS"]
+__all__ = ["Store", "ReportRecord", "Recommendation", "open_store", "report_tables", "stored_corrections",
+           "CORRECTION_COLUMNS"]
 
 
 @dataclass(frozen=True)
@@ -144,6 +145,18 @@ def open_store(path: str | os.PathLike[str]) -> Store:
     from setupfix.store._sqlite import SQLiteStore
 
     return SQLiteStore(os.fspath(path))
+
+
+def report_tables(store: Store) -> list[tuple[ReportRecord, pd.DataFrame]]:
+    """Every stored report with its canonical rows (and ``reference`` flags), in import order: one query.
+
+    The one way the doors read a store's reports (``correct --store``'s smoothing,
+    ``diagnose --db``, the TUI's history).
+    """
+    records = {r.sha256: r for r in store.reports()}
+    rows = store.measurements()
+    return [(records[str(sha)], table.drop(columns=["report_sha256"]))
+            for sha, table in rows.groupby("report_sha256", sort=False)]
 
 
 def stored_corrections(store: Store, model: ProcessModel) -> RegisterLog | None:
