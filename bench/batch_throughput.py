@@ -43,13 +43,13 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 os.environ.update(OPENBLAS_NUM_THREADS="1", MKL_NUM_THREADS="1", OMP_NUM_THREADS="1")
 
-import parsers  # noqa: E402
-from setupfix.model import load_model, match_parts  # noqa: E402
-from setupfix.pipeline.checks import check_parts  # noqa: E402
-from setupfix.pipeline.correct import correct_cycle, correct_report  # noqa: E402
-from setupfix.pipeline.cycles import assign_stations  # noqa: E402
-from setupfix.pipeline.export import cycle_rows  # noqa: E402
-from setupfix.pipeline.requests import CorrectRequest  # noqa: E402
+import parsers
+from setupfix.model import load_model, match_parts
+from setupfix.pipeline.checks import check_parts
+from setupfix.pipeline.correct import correct_cycle, correct_report
+from setupfix.pipeline.cycles import assign_stations
+from setupfix.pipeline.export import cycle_rows
+from setupfix.pipeline.requests import CorrectRequest
 
 GUIDE = ROOT / "sample_reports" / "guide_pins"
 RESULTS = ROOT / "bench" / "results"
@@ -111,7 +111,7 @@ def stages(files: list[Path]) -> dict[str, float]:
         t4 = time.perf_counter()
         [cycle_rows(r) for r in results]
         t5 = time.perf_counter()
-        for key, seconds in zip(total, (t1 - t0, t2 - t1, t3 - t2, t4 - t3, t5 - t4)):
+        for key, seconds in zip(total, (t1 - t0, t2 - t1, t3 - t2, t4 - t3, t5 - t4), strict=True):
             total[key] += seconds
     return {key: seconds / len(files) for key, seconds in total.items()}
 
@@ -166,7 +166,7 @@ def main() -> None:
                          f"= {per_report / ref:.2f}× the reference; {n / seconds:.0f} reports/s; after start-up "
                          f"{(seconds - startup) / n * 1000:.1f} ms per report")
         a, b = outs[0].decode().splitlines(), outs[1].decode().splitlines()
-        differing = sum(x != y for x, y in zip(a, b)) + abs(len(a) - len(b))
+        differing = sum(x != y for x, y in zip(a, b, strict=False)) + abs(len(a) - len(b))
         lines.append(f"outputs of 1 and 2 workers: {'identical' if outs[0] == outs[1] else 'differ'} "
                      f"({differing} of {len(a) - 1} rows differ)")
         lines.append(f"target (issue 15): {n} reports in ≤ 10 s → {10 / n * 1000:.0f} ms per report")

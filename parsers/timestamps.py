@@ -9,7 +9,7 @@ computation compares (a time with an offset converted to UTC, a local time as wr
 from __future__ import annotations
 
 from collections.abc import Sequence
-from datetime import datetime, timezone
+from datetime import UTC, datetime
 from typing import Any
 
 import pandas as pd
@@ -50,7 +50,7 @@ def utc_naive(moment: datetime) -> datetime:
     """``moment`` as a naive time: converted to UTC when it carries an offset, else as written."""
     if moment.tzinfo is None:
         return moment
-    return moment.astimezone(timezone.utc).replace(tzinfo=None)
+    return moment.astimezone(UTC).replace(tzinfo=None)
 
 
 def instant(value: Any, where: SourceLocation) -> datetime:

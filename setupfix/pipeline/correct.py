@@ -112,7 +112,8 @@ def correct_cycle(request: CorrectRequest, part: PartMeasurement, *,
                           f"{', '.join(part.absent)}", None, "match"))
     if part.unmatched:
         notes.append(Note(f"{len(part.unmatched)} characteristic(s) match no dimension: "
-                          f"{', '.join(part.unmatched[:8])}" + (" …" if len(part.unmatched) > 8 else ""), None, "match"))
+                          f"{', '.join(part.unmatched[:8])}" + (" …" if len(part.unmatched) > 8 else ""),
+                          None, "match"))
     cycle = CycleCorrection(model, part, posed, _applied_result(posed.problem, rec), rec, None, tuple(notes))
     if request.thermal is not None:
         cycle = dataclasses.replace(cycle, thermal=_feed_forward(request.thermal, cycle))

@@ -254,7 +254,7 @@ class CycleCorrection:
     def corrections(self) -> dict[str, float]:
         """Correction of every correctable register by model ID, zero included (thermal feed-forward
         added unless the verdict is reject)."""
-        out = {reg.id: float(v) for v, reg in zip(self.x, self.model.registers) if not reg.fixed}
+        out = {reg.id: float(v) for v, reg in zip(self.x, self.model.registers, strict=True) if not reg.fixed}
         if self.thermal is not None and self.verdict != "reject":
             for rid, shift in self.thermal.corrections().items():
                 out[rid] = out.get(rid, 0.0) + shift
@@ -282,7 +282,7 @@ class CycleCorrection:
         at = set(self.recommendation.at_limit)
         return [{"id": reg.id, "register": reg.register, "kind": reg.kind, "offset": reg.offset,
                  "delta": float(delta), "fixed": reg.fixed, "at_limit": reg.id in at}
-                for reg, delta in zip(self.model.registers, self.x)]
+                for reg, delta in zip(self.model.registers, self.x, strict=True)]
 
     def dimension_rows(self) -> list[dict[str, Any]]:
         """Per measured dimension: id, name, station, deviation, limits, predicted, margin, flags.

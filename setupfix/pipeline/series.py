@@ -252,7 +252,7 @@ def report_coordinates(model: ProcessModel, tables: Sequence[pd.DataFrame]) -> n
         if not {"x", "y", "z", "characteristic"} <= set(table.columns):
             continue
         xyz = table[["x", "y", "z"]].apply(pd.to_numeric, errors="coerce").to_numpy(dtype=float)
-        for name, row in zip(table["characteristic"].astype(str), xyz):
+        for name, row in zip(table["characteristic"].astype(str), xyz, strict=True):
             qs = index.get(normalise_name(name), [])
             if len(qs) == 1 and np.isfinite(row).all() and np.isnan(out[qs[0]]).all():
                 out[qs[0]] = row

@@ -113,7 +113,7 @@ class History:
 
     def with_parts(self, parts: Sequence[PartMeasurement]) -> History:
         """This history plus ``parts`` (those with a timestamp, not already held: same time and name)."""
-        held = set(zip(self.times.tolist(), self.keys))
+        held = set(zip(self.times.tolist(), self.keys, strict=True))
         times, devs, keys = list(self.times), list(self.deviations), list(self.keys)
         for p in parts:
             try:
@@ -132,7 +132,8 @@ class History:
                        self.log_register, self.log_delta, self.log_reset)
 
     def smooth(self, model: ProcessModel, part: PartMeasurement, lam: float) -> Smoothed:
-        """The EWMA estimate of ``part`` over every held part machined before it (:func:`setupfix.safety.ewma_history`)."""
+        """The EWMA estimate of ``part`` over every held part machined before it
+        (:func:`setupfix.safety.ewma_history`)."""
         now = _stamp(part)
         if lam < 1.0 and now is None:
             return Smoothed(part.deviation, 0, lam, (Note("no timestamp in the report: not smoothed", None, "ewma"),))
