@@ -52,7 +52,7 @@ def small_problem(seed: int = 0, cls: type[CorrectionProblem] = CorrectionProble
 
 def brute_force(problem: CorrectionProblem) -> float:
     """Largest f over every grid point within the bounds."""
-    axes = [np.arange(k0, k1 + 1) * problem.resolution for k0, k1 in zip(problem.kmin, problem.kmax)]
+    axes = [np.arange(k0, k1 + 1) * problem.resolution for k0, k1 in zip(problem.kmin, problem.kmax, strict=True)]
     grid = np.array(list(itertools.product(*axes)))
     return float(np.max(problem.evaluate(grid)[2]))
 

@@ -34,5 +34,5 @@ def test_not_iso_is_named_with_its_place(text, message):
 def test_hours_between_compares_in_utc():
     assert hours_between("2026-11-02T10:00:00+02:00", "2026-11-02T06:00:00", "r.csv") == pytest.approx(2.0)
     assert hours_between("2026-11-03T06:00:00Z", "2026-11-02T06:00:00+00:00", "r.csv") == pytest.approx(24.0)
-    with pytest.raises(ParseError, match="r.csv: timestamp '11/03/2026' is not ISO 8601"):
+    with pytest.raises(ParseError, match=r"r.csv: timestamp '11/03/2026' is not ISO 8601"):
         hours_between("11/03/2026", "2026-11-02T06:00:00", "r.csv")

@@ -53,7 +53,7 @@ def test_inch_values_labelled_mm_are_a_unit_error(tmp_path, guide_pins_model):
 
 def test_mm_values_labelled_inch_are_a_unit_error(tmp_path, guide_pins_model):
     path = rewrite(tmp_path, lambda i, r: {**r, "unit": "inch"})
-    with pytest.raises(MatchError, match="25.4 times too large: mm values read as inch"):
+    with pytest.raises(MatchError, match=r"25.4 times too large: mm values read as inch"):
         cycles(guide_pins_model, path)
 
 

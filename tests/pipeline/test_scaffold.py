@@ -100,7 +100,7 @@ def test_scaffold_on_every_shared_sample_with_tolerances():
         if table is None:
             continue
         try:
-            scaffold, model, pc = scaffold_and_correct(path, table)
+            scaffold, _model, _pc = scaffold_and_correct(path, table)
         except ModelError as exc:
             refused.append((path.name, str(exc)))
             continue
@@ -262,9 +262,9 @@ def test_a_folder_stands_for_its_files_and_unreadable_ones_are_left_out_with_a_n
     scaffold = scaffold_model([folder])
     assert scaffold.dimensions == 28 and any("notes.txt" in n and "left out" in n for n in scaffold.notes)
     (folder / "cycle_01.csv").unlink()
-    with pytest.raises(SetupfixError, match="no file of .* is a readable report"):
+    with pytest.raises(SetupfixError, match=r"no file of .* is a readable report"):
         scaffold_model([folder])
-    with pytest.raises(SetupfixError, match="notes.txt"):
+    with pytest.raises(SetupfixError, match=r"notes.txt"):
         scaffold_model([folder / "notes.txt"])  # named as a file: refused, not left out
 
 

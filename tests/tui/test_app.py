@@ -48,7 +48,7 @@ def test_open_sort_filter_export_then_a_bad_report(make_app, tmp_path):
             # the mouse: a click on a column header sorts by it
             await pilot.click("#dimensions", offset=(20, 1))
             assert app.sort_key == "deviation"
-            assert [str(r[3]) for r in _rows(dims)][0] == "-0.0829"
+            assert next(str(r[3]) for r in _rows(dims)) == "-0.0829"
             app.sort_key = None
             # a resize to a wide terminal adds the margins; back to 80 columns removes them
             await pilot.resize_terminal(160, 48)
@@ -80,7 +80,7 @@ def test_open_sort_filter_export_then_a_bad_report(make_app, tmp_path):
             app.screen.query_one("#export-path").value = str(tmp_path)
             await pilot.press("ctrl+s")
             await pilot.pause()
-            assert any("export failed" == n.title and str(tmp_path) in n.message for n in app._notifications)
+            assert any(n.title == "export failed" and str(tmp_path) in n.message for n in app._notifications)
             # a bad report: a notification naming file and line, the stale correction gone
             app._picked_report(bad)
             await settle(pilot)
@@ -202,8 +202,10 @@ def test_history_from_the_store_one_key_diagnose_and_the_export_recorded(make_ap
             await settle(pilot)
             with open_store(db) as store:
                 log = store.corrections()
-            moved = {reg.register: v for reg, v in zip(app.opened.model.registers, app._current().result.x) if v}
-            assert dict(zip(log["register"], log["delta"].round(6))) == {k: round(v, 6) for k, v in moved.items()}
+            x = app._current().result.x
+            moved = {reg.register: v for reg, v in zip(app.opened.model.registers, x, strict=True) if v}
+            logged = dict(zip(log["register"], log["delta"].round(6), strict=True))
+            assert logged == {k: round(v, 6) for k, v in moved.items()}
             assert any("recorded" in n for n in _notes(app))
 
     run(scenario())
