@@ -127,6 +127,7 @@ def test_every_stored_report_counts_not_the_newest_imports(tmp_path):
     """60 reports imported latest-machined first: the estimate looks at the 50 parts machined last before the
     cycle, as a history built from the same files does (the newest 50 imports would be the 50 earliest)."""
     import datetime as dt
+    import sqlite3
 
     model = model_with_ewma(tmp_path, 0.5)
     base = pd.read_csv(GUIDE / "cycle_01.csv", dtype={"timestamp": str})
@@ -144,13 +145,19 @@ def test_every_stored_report_counts_not_the_newest_imports(tmp_path):
         paths.append(path)
         store.add_report(path.read_bytes(), path.name, "canonical", parsers.read(path))
     assert len(store.reports()) == 60
+    store.close()
+    with sqlite3.connect(tmp_path / "h.db") as db:  # one import a second, in the order above
+        db.execute("UPDATE report SET imported_at = printf('2026-10-01T00:00:%02d', id)")
+    db.close()
+    store = open_store(tmp_path / "h.db")
     stored = History.from_store(model, store)
     given = History.empty(model).with_parts([p for path in paths for p in load_parts(model, path)])
     assert len(stored.keys) == 60
     (a,) = correct_report(CorrectRequest(model, history=stored), GUIDE / "cycle_03.csv").cycles
     (b,) = correct_report(CorrectRequest(model, history=given), GUIDE / "cycle_03.csv").cycles
     assert "50 earlier part(s)" in a.recommendation.rules[0].message
-    assert [r["estimate"] for r in a.dimension_rows()] == [r["estimate"] for r in b.dimension_rows()]
+    assert [r["estimate"] for r in a.dimension_rows()] == pytest.approx([r["estimate"] for r in b.dimension_rows()],
+                                                                        abs=1e-12)
     assert a.corrections == b.corrections
     # the 50 earliest alone (what the newest 50 imports held) give another estimate
     early = History.empty(model).with_parts([p for path in paths[10:] for p in load_parts(model, path)])
