@@ -43,11 +43,13 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 os.environ.update(OPENBLAS_NUM_THREADS="1", MKL_NUM_THREADS="1", OMP_NUM_THREADS="1")
 
-import parsers  # noqa: E402
-from setupfix.model import load_model, match_parts  # noqa: E402
-from setupfix.pipeline.checks import check_parts  # noqa: E402
-from setupfix.pipeline.correct import correct_part, correct_report  # noqa: E402
-from setupfix.pipeline.cycles import assign_stations  # noqa: E402
+import parsers
+from setupfix.model import load_model, match_parts
+from setupfix.pipeline.checks import check_parts
+from setupfix.pipeline.correct import correct_cycle, correct_report
+from setupfix.pipeline.cycles import assign_stations
+from setupfix.pipeline.export import cycle_rows
+from setupfix.pipeline.requests import CorrectRequest
 
 GUIDE = ROOT / "sample_reports" / "guide_pins"
 RESULTS = ROOT / "bench" / "results"
@@ -76,15 +78,15 @@ def make_reports(folder: Path, n: int, vary: bool = False) -> None:
 
 
 def reference() -> float:
-    model = load_model(GUIDE / "model.toml")
+    request = CorrectRequest(load_model(GUIDE / "model.toml"))
     per_cycle = []
     for i in range(1, 6):
         report = GUIDE / f"cycle_0{i}.csv"
-        correct_report(model, report)
+        correct_report(request, report)
         times = []
         for _ in range(5):
             t = time.perf_counter()
-            correct_report(model, report)
+            correct_report(request, report)
             times.append(time.perf_counter() - t)
         per_cycle.append(statistics.median(times))
     return statistics.mean(per_cycle)
@@ -93,6 +95,7 @@ def reference() -> float:
 def stages(files: list[Path]) -> dict[str, float]:
     """Mean seconds per report of each stage of the batch's per-report work, in this process."""
     model = load_model(GUIDE / "model.toml")
+    request = CorrectRequest(model)
     total = dict.fromkeys(("file + hash", "read", "match + check", "correct", "offset rows"), 0.0)
     for path in files:
         t0 = time.perf_counter()
@@ -104,11 +107,11 @@ def stages(files: list[Path]) -> dict[str, float]:
         parts = check_parts(model, match_parts(model, assign_stations(model, table), source=str(path)),
                             source=str(path))
         t3 = time.perf_counter()
-        results = [correct_part(model, part) for part in parts]
+        results = [correct_cycle(request, part) for part in parts]
         t4 = time.perf_counter()
-        [r.offsets(None) for r in results]
+        [cycle_rows(r) for r in results]
         t5 = time.perf_counter()
-        for key, seconds in zip(total, (t1 - t0, t2 - t1, t3 - t2, t4 - t3, t5 - t4)):
+        for key, seconds in zip(total, (t1 - t0, t2 - t1, t3 - t2, t4 - t3, t5 - t4), strict=True):
             total[key] += seconds
     return {key: seconds / len(files) for key, seconds in total.items()}
 
@@ -163,7 +166,7 @@ def main() -> None:
                          f"= {per_report / ref:.2f}× the reference; {n / seconds:.0f} reports/s; after start-up "
                          f"{(seconds - startup) / n * 1000:.1f} ms per report")
         a, b = outs[0].decode().splitlines(), outs[1].decode().splitlines()
-        differing = sum(x != y for x, y in zip(a, b)) + abs(len(a) - len(b))
+        differing = sum(x != y for x, y in zip(a, b, strict=False)) + abs(len(a) - len(b))
         lines.append(f"outputs of 1 and 2 workers: {'identical' if outs[0] == outs[1] else 'differ'} "
                      f"({differing} of {len(a) - 1} rows differ)")
         lines.append(f"target (issue 15): {n} reports in ≤ 10 s → {10 / n * 1000:.0f} ms per report")

@@ -48,7 +48,7 @@ sys.path.insert(0, str(ROOT))
 
 from setupfix.model import PartMeasurement, load_model  # noqa: E402
 from setupfix.optimize import CorrectionProblem, get_optimizer  # noqa: E402
-from setupfix.pipeline.correct import load_parts  # noqa: E402
+from setupfix.pipeline.cycles import load_parts  # noqa: E402
 from setupfix.simulate import simulate_deviations  # noqa: E402
 
 RESULTS = ROOT / "bench" / "results"

@@ -194,7 +194,7 @@ def read_corrections_log(path: str | os.PathLike[str]) -> CorrectionsLog:
         if len(cells) > len(header) and any(c.strip() for c in cells[len(header):]):
             raise ParseError(f"{len(cells)} cells but {len(header)} columns in the header", location=where,
                              hint="a decimal comma splits a number in two: write 0.05, not 0,05")
-        row = _row(dict(zip(header, cells)), where)
+        row = _row(dict(zip(header, cells, strict=False)), where)  # a short row: its missing cells are empty
         if row is not None:
             rows.append(row)
     return _once(rows, name)

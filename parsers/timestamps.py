@@ -9,14 +9,14 @@ computation compares (a time with an offset converted to UTC, a local time as wr
 from __future__ import annotations
 
 from collections.abc import Sequence
-from datetime import datetime, timezone
+from datetime import UTC, datetime
 from typing import Any
 
 import pandas as pd
 
 from setupfix.errors import ParseError, SourceLocation
 
-__all__ = ["parse_timestamp", "iso_text", "utc_naive", "to_index", "TIMESTAMP_HINT"]
+__all__ = ["parse_timestamp", "iso_text", "utc_naive", "instant", "to_index", "TIMESTAMP_HINT"]
 
 #: What the error for a bad timestamp suggests.
 TIMESTAMP_HINT = "write e.g. 2026-01-05T06:00:10"
@@ -50,7 +50,18 @@ def utc_naive(moment: datetime) -> datetime:
     """``moment`` as a naive time: converted to UTC when it carries an offset, else as written."""
     if moment.tzinfo is None:
         return moment
-    return moment.astimezone(timezone.utc).replace(tzinfo=None)
+    return moment.astimezone(UTC).replace(tzinfo=None)
+
+
+def instant(value: Any, where: SourceLocation) -> datetime:
+    """One timestamp read by :func:`parse_timestamp` as the naive instant series compare (:func:`utc_naive`).
+
+    Raises
+    ------
+    ParseError
+        As :func:`parse_timestamp`.
+    """
+    return utc_naive(parse_timestamp(value, where))
 
 
 def to_index(moments: Sequence[datetime]) -> pd.DatetimeIndex:

@@ -33,9 +33,9 @@ from dataclasses import dataclass
 
 import numpy as np
 import numpy.typing as npt
-import pandas as pd
 
-from setupfix.errors import Note, ParseError, SourceLocation
+from parsers.timestamps import instant
+from setupfix.errors import Note, SourceLocation
 from setupfix.model import PartMeasurement, ProcessModel
 from setupfix.optimize import CorrectionProblem
 from setupfix.safety import Policy, RuleEffect, Smoothed, cumulative_bounds, guard_limits
@@ -48,23 +48,16 @@ Mask = npt.NDArray[np.bool_]
 
 
 def hours_between(stamp: str, origin: str, where: str) -> float:
-    """Hours from ``origin`` to ``stamp`` (ISO 8601; aware times compared in UTC).
+    """Hours from ``origin`` to ``stamp`` (ISO 8601, read by :func:`parsers.timestamps.instant`:
+    aware times compared in UTC).
 
     Raises
     ------
     ParseError
-        If ``stamp`` is not an ISO 8601 time (named with ``where``).
+        If either is not an ISO 8601 time (named with ``where``).
     """
-    def naive(text: str) -> pd.Timestamp:
-        try:
-            t = pd.Timestamp(str(text))
-            if pd.isna(t):
-                raise ValueError
-        except (ValueError, TypeError):
-            raise ParseError(f"not an ISO 8601 timestamp: {text!r}", location=SourceLocation(where)) from None
-        return t.tz_convert("UTC").tz_localize(None) if t.tzinfo is not None else t
-
-    return float((naive(stamp) - naive(origin)).total_seconds()) / 3600.0
+    place = SourceLocation(where)
+    return (instant(stamp, place) - instant(origin, place)).total_seconds() / 3600.0
 
 
 def forecast_of(model: ProcessModel, timestamp: str | None, report: str = "") -> tuple[Array, Note | None]:
@@ -114,7 +107,7 @@ def effects_composite(model: ProcessModel) -> tuple[Array | None, Note | None]:
 
     layout = Layout.from_model(model)
     C = relation_composite(section, layout)
-    changed = np.argwhere(C != layout.composite)
+    changed = np.argwhere(layout.composite != C)
     if changed.size == 0:
         return None, None
     what = ", ".join(f"{layout.dimension_ids[q]} ~ {layout.register_ids[i]} {layout.composite[i, q]:g} → {C[i, q]:.4g}"
@@ -138,13 +131,13 @@ def policy_of(model: ProcessModel, dimension_ids: tuple[str, ...],
     dims = {d.id: d for d in model.dimensions}
     width = np.array([dims[d].upper - dims[d].lower for d in dimension_ids])
     reject = np.array([s.dimension_reject_band.get(d, s.reject_band if s.reject_band is not None else w)
-                       for d, w in zip(dimension_ids, width)], dtype=float)
+                       for d, w in zip(dimension_ids, width, strict=True)], dtype=float)
     cum_limit = [p.cumulative_limit if p.cumulative_limit is not None else s.cumulative_limit for p in regs]
     return Policy(
         dead_band=np.array([p.dead_band if p.dead_band is not None else band for p in regs], dtype=float),
         gain=np.array([p.gain if p.gain is not None else s.gain for p in regs], dtype=float),
         cumulative_limit=np.array([np.inf if c is None or r.id not in (cumulative or {}) else c
-                                   for c, r in zip(cum_limit, model.registers)], dtype=float),
+                                   for c, r in zip(cum_limit, model.registers, strict=True)], dtype=float),
         cumulative=np.array([float((cumulative or {}).get(r.id, 0.0)) for r in model.registers]),
         cost=np.array([p.cost for p in regs], dtype=float),
         reject_band=np.nan_to_num(reject, nan=np.inf, posinf=np.inf),
@@ -257,7 +250,7 @@ def pose_problem(model: ProcessModel, part: PartMeasurement, *, smoothed: Smooth
     deviation = part.deviation
     effects: list[RuleEffect] = []
     notes: list[Note] = list(smoothed.notes) if smoothed is not None else []
-    dim_ids = tuple(d.id for d, k in zip(model.dimensions, keep) if k)
+    dim_ids = tuple(d.id for d, k in zip(model.dimensions, keep, strict=True) if k)
     if smoothed is not None and smoothed.used:  # 2. smoothing
         deviation = smoothed.deviation
         effects.append(RuleEffect("ewma", f"deviations smoothed over {smoothed.used} earlier part(s), "
@@ -266,7 +259,7 @@ def pose_problem(model: ProcessModel, part: PartMeasurement, *, smoothed: Smooth
     if note is not None:
         deviation = deviation + shift
         notes.append(note)
-        moved = tuple(d for d, v in zip(dim_ids, shift[keep]) if v != 0)
+        moved = tuple(d for d, v in zip(dim_ids, shift[keep], strict=True) if v != 0)
         effects.append(RuleEffect("forecast", "deviations forecast to the next cycle by the model's [effects] "
                                   "(drift, wear)", dimensions=moved))
     problem = CorrectionProblem.from_part(model, dataclasses.replace(part, deviation=deviation))

@@ -22,10 +22,9 @@ ROOT = Path(__file__).resolve().parents[1]
 def test_failure_leaves_old_content_and_no_temp(tmp_path):
     target = tmp_path / "out.csv"
     target.write_text("old\n")
-    with pytest.raises(RuntimeError):
-        with atomic_write(target) as stream:
-            stream.write("half")
-            raise RuntimeError("disk full")
+    with pytest.raises(RuntimeError), atomic_write(target) as stream:
+        stream.write("half")
+        raise RuntimeError("disk full")
     assert target.read_text() == "old\n"
     assert [p.name for p in tmp_path.iterdir()] == ["out.csv"]
 
@@ -43,9 +42,8 @@ def test_text_and_binary_with_plain_permissions(tmp_path):
 
 
 def test_missing_folder_is_an_export_error(tmp_path):
-    with pytest.raises(ExportError, match="no-such-dir"):
-        with atomic_write(tmp_path / "no-such-dir" / "x.csv") as stream:
-            stream.write("x")
+    with pytest.raises(ExportError, match="no-such-dir"), atomic_write(tmp_path / "no-such-dir" / "x.csv") as stream:
+        stream.write("x")
 
 
 # -- output targets (issue 10): only '-' or a regular file ----------------------------------------

@@ -270,7 +270,8 @@ def _copy(folder: Path, *reports: Path) -> list[Path]:
 def bundled_cases(tmp: Path) -> Iterator[Case]:
     """Every bundled sample that a bundled model matches, with the options it needs."""
     yield Case("guide pins, cycles 1-5 in three formats", GUIDE_MODEL,
-               _copy(tmp / "guide", *sorted(GUIDE.glob("cycle_0?.csv")), GUIDE / "cycle_01.dmo", GUIDE / "cycle_01.qif"))
+               _copy(tmp / "guide", *sorted(GUIDE.glob("cycle_0?.csv")), GUIDE / "cycle_01.dmo",
+                     GUIDE / "cycle_01.qif"))
     controllers = SAMPLES / "controllers"
     yield Case("controllers, current offsets", controllers / "model.toml",
                _copy(tmp / "controllers", controllers / "report.csv"), current=controllers / "current.csv")
@@ -350,7 +351,8 @@ def test_every_bundled_sample_through_every_door(tmp_path):
         work.mkdir()
         assert_same_through_every_door(case, work)
     names = {c.name.split(" ")[0] for c in cases}
-    assert len(cases) >= 20 and {"pcdmis/bracket_two_parts.txt", "qdas/diribet_basicDfq_singlePart_threeCharacteristics.dfq",
+    assert len(cases) >= 20 and {"pcdmis/bracket_two_parts.txt",
+                                 "qdas/diribet_basicDfq_singlePart_threeCharacteristics.dfq",
                                  "qif/QIF3_WIDGET_QIF_RESULTS.QIF", "piweb,"} <= names
 
 

@@ -3,15 +3,16 @@
 from __future__ import annotations
 
 import math
+from typing import ClassVar
 
 import pytest
 
 from setupfix.errors import ParameterError, SetupfixError
-from setupfix.params import Interval, Options, Predicate, ValidatedParams, validate_params
+from setupfix.params import Constraint, Interval, Options, Predicate, ValidatedParams, validate_params
 
 
 class _Est(ValidatedParams):
-    _parameter_constraints = {
+    _parameter_constraints: ClassVar[dict[str, list[Constraint]]] = {
         "n": [Interval(int, 1, 100)],
         "pa": [Interval(float, 0, 1, closed="neither")],
         "kind": [Options({"a", "b"})],

@@ -43,7 +43,7 @@ def part(m, deviation, timestamp=None, name="A1"):
 
 def brute_force(problem: CorrectionProblem):
     """Every grid point: the best f1 (eq. 8), then the least Σ cost·x² among those (eq. 9 weighted)."""
-    axes = [np.arange(k0, k1 + 1) * problem.resolution for k0, k1 in zip(problem.kmin, problem.kmax)]
+    axes = [np.arange(k0, k1 + 1) * problem.resolution for k0, k1 in zip(problem.kmin, problem.kmax, strict=True)]
     grid = np.array(list(itertools.product(*axes)))
     f1 = problem.evaluate(grid)[0]
     best = grid[f1 >= f1.max() - 1e-12]

@@ -35,7 +35,7 @@ def test_d4_moves_with_w1_w5_and_twice_t23(guide_pins_model):
     rm = relation_matrices(guide_pins_model)
     column = rm.composite[:, rm.dimensions.index("P1D4")]
     expected = dict.fromkeys(rm.registers, 0.0) | {"W1": 1.0, "W5": 1.0, "T23": 2.0}
-    assert dict(zip(rm.registers, column)) == expected
+    assert dict(zip(rm.registers, column, strict=True)) == expected
     # a unit change of each moves D4 by its weight: +0.01 on W1, W5 and T23 → +0.04
     x = np.zeros(len(rm.registers))
     x[[rm.registers.index(r) for r in ("W1", "W5", "T23")]] = 0.01

@@ -1,4 +1,5 @@
-"""Each safety rule's effect on a recommendation (setupfix.safety, posed by setupfix.pose), on small problems solved exactly."""
+"""Each safety rule's effect on a recommendation (setupfix.safety, posed by setupfix.pose), on small problems
+solved exactly."""
 
 from __future__ import annotations
 

@@ -39,7 +39,7 @@ from setupfix.errors import ModelError, SourceLocation
 if TYPE_CHECKING:  # the model holds its [effects] section: process imports this module
     from setupfix.model.process import ProcessModel
 
-__all__ = ["ModelEffect", "EffectsSection", "effects_from_dict", "parse_effects", "load_effects", "model_effects",
+__all__ = ["ModelEffect", "EffectsSection", "effects_from_dict", "parse_effects", "load_effects",
            "effects_toml", "with_effects", "EFFECT_KINDS"]
 
 EFFECT_KINDS: tuple[str, ...] = ("drift", "thermal", "wear", "scale", "position", "relation", "group")
@@ -177,12 +177,6 @@ def effects_from_dict(section: Mapping[str, Any] | None, model: ProcessModel,
     if problems:
         raise ModelError("\n".join(problems))
     return EffectsSection(tuple(effects), origin, head.get("cycle_hours"), head.get("last_hours"))
-
-
-def model_effects(model: ProcessModel) -> EffectsSection:
-    """The ``[effects]`` the model was loaded with: ``model.effects``."""
-    # TODO(issue 20 merge): remove (pipeline/series.py still calls it; use model.effects)
-    return model.effects
 
 
 def parse_effects(value: Any, model: ProcessModel, report: Any) -> EffectsSection:

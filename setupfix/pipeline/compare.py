@@ -13,7 +13,7 @@ alone and all methods see the same seed list.
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -23,12 +23,12 @@ import numpy.typing as npt
 
 from setupfix.errors import Note
 from setupfix.model import ProcessModel, load_model
-from setupfix.optimize import OPTIMIZERS, CorrectionProblem, OptimizeResult, get_optimizer
+from setupfix.optimize import CorrectionProblem, OptimizeResult, get_optimizer
 from setupfix.pipeline.cycles import read_parts
 from setupfix.pipeline.requests import CycleOptions, ReadOptions
 from setupfix.pose import pose_problem
 
-__all__ = ["DEFAULT_METHODS", "MethodTrials", "Comparison", "trial_seeds", "compare_problem",
+__all__ = ["DEFAULT_METHODS", "MethodTrials", "Comparison", "trial_seeds", "compare_steps", "compare_problem",
            "compare_report", "plot_comparison"]
 
 Array = npt.NDArray[np.float64]
@@ -159,6 +159,39 @@ class Comparison:
         }
 
 
+def compare_steps(problem: CorrectionProblem, *, methods: Sequence[str] = DEFAULT_METHODS, trials: int = 12,
+                  seed: int = 0, params: Mapping[str, Mapping[str, Any]] | None = None,
+                  exact: OptimizeResult | None = None) -> Iterator[tuple[str, int, int, Comparison]]:
+    """The comparison one trial at a time (the TUI shows progress and can stop within one trial).
+
+    Yields ``(method, step, steps, comparison so far)`` after the exact optimum and
+    after every trial; the last comparison is :func:`compare_problem`'s.  Arguments as
+    :func:`compare_problem`; every name and parameter is checked before the first solve.
+    """
+    if trials < 1:
+        raise ValueError("trials must be at least 1")
+    params = params or {}
+    for name in methods:  # every name and parameter checked before the first trial
+        get_optimizer(name, **params.get(name, {}))
+    if exact is None:
+        exact = get_optimizer("exact", **params.get("exact", {})).solve(problem)
+    seeds = trial_seeds(seed, trials)
+    steps = 1 + len(methods) * trials
+    step = 1
+    done: list[MethodTrials] = []
+    yield "exact", step, steps, Comparison(problem=problem, exact=exact, methods=[], seed=seed, trials=trials)
+    for name in methods:
+        kw = dict(params.get(name, {}))
+        runs: list[OptimizeResult] = []
+        for s in seeds:
+            runs.append(get_optimizer(name, seed=s, **kw).solve(problem))
+            step += 1
+            partial = [*done, MethodTrials(optimizer=name, seeds=seeds[:len(runs)], results=list(runs))]
+            yield name, step, steps, Comparison(problem=problem, exact=exact, methods=partial, seed=seed,
+                                                trials=trials)
+        done.append(MethodTrials(optimizer=name, seeds=seeds, results=runs))
+
+
 def compare_problem(problem: CorrectionProblem, *, methods: Sequence[str] = DEFAULT_METHODS, trials: int = 12,
                     seed: int = 0, params: Mapping[str, Mapping[str, Any]] | None = None,
                     exact: OptimizeResult | None = None) -> Comparison:
@@ -179,21 +212,9 @@ def compare_problem(problem: CorrectionProblem, *, methods: Sequence[str] = DEFA
     exact : OptimizeResult, optional
         A yardstick already solved for this problem.
     """
-    if trials < 1:
-        raise ValueError("trials must be at least 1")
-    params = params or {}
-    if exact is None:
-        exact = get_optimizer("exact", **params.get("exact", {})).solve(problem)
-    for name in methods:  # every name and parameter checked before the first trial
-        get_optimizer(name, **params.get(name, {}))
-    seeds = trial_seeds(seed, trials)
-    done: list[MethodTrials] = []
-    skipped: dict[str, str] = {}  # kept in the JSON: every registered optimiser is available now
-    for name in methods:
-        kw = dict(params.get(name, {}))
-        runs = [get_optimizer(name, seed=s, **kw).solve(problem) for s in seeds]
-        done.append(MethodTrials(optimizer=name, seeds=seeds, results=runs))
-    return Comparison(problem=problem, exact=exact, methods=done, seed=seed, trials=trials, skipped=skipped)
+    *_, (_, _, _, last) = compare_steps(problem, methods=methods, trials=trials, seed=seed, params=params,
+                                        exact=exact)
+    return last
 
 
 def compare_report(model: ProcessModel | str | Path, report: str | Path, *, methods: Sequence[str] = DEFAULT_METHODS,

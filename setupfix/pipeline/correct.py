@@ -14,9 +14,8 @@ from __future__ import annotations
 
 import dataclasses
 import hashlib
-from collections.abc import Mapping, Sequence
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, overload
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -24,7 +23,7 @@ import parsers
 from setupfix.errors import ExportError, Note, ParameterError, SetupfixError, SourceLocation
 from setupfix.model import PartMeasurement, ProcessModel, load_model
 from setupfix.optimize import CorrectionProblem, OptimizeResult, get_optimizer
-from setupfix.pipeline.cycles import load_parts, read_parts  # TODO(issue 20 merge): load_parts re-exported for tests/benches: import it from pipeline.cycles
+from setupfix.pipeline.cycles import read_parts
 from setupfix.pipeline.requests import (CorrectOutcome, CorrectRequest, CurrentOffsets, CycleCorrection, CycleOptions,
                                         History, ReadOptions, SolveOptions, ThermalInputs, load_thermal)
 from setupfix.pose import pose_problem
@@ -34,9 +33,7 @@ from setupfix.store import Store
 if TYPE_CHECKING:
     from setupfix.pipeline.feedforward import ThermalFeedForward
 
-__all__ = ["correct_report", "correct_cycle", "load_request", "open_history", "load_parts",
-           # TODO(issue 20 merge): remove the names below (callers in batch.py, session.py, view.py, tui)
-           "PartCorrection", "correct_part", "wear_totals", "write_correction_offsets"]
+__all__ = ["correct_report", "correct_cycle", "load_request", "open_history"]
 
 
 def _applied_result(problem: CorrectionProblem, rec: Recommendation) -> OptimizeResult:
@@ -115,24 +112,15 @@ def correct_cycle(request: CorrectRequest, part: PartMeasurement, *,
                           f"{', '.join(part.absent)}", None, "match"))
     if part.unmatched:
         notes.append(Note(f"{len(part.unmatched)} characteristic(s) match no dimension: "
-                          f"{', '.join(part.unmatched[:8])}" + (" …" if len(part.unmatched) > 8 else ""), None, "match"))
+                          f"{', '.join(part.unmatched[:8])}" + (" …" if len(part.unmatched) > 8 else ""),
+                          None, "match"))
     cycle = CycleCorrection(model, part, posed, _applied_result(posed.problem, rec), rec, None, tuple(notes))
     if request.thermal is not None:
         cycle = dataclasses.replace(cycle, thermal=_feed_forward(request.thermal, cycle))
     return cycle
 
 
-@overload
-def correct_report(request: CorrectRequest, report: str | Path | parsers.Source) -> CorrectOutcome: ...
-
-
-@overload  # TODO(issue 20 merge): remove with the legacy keyword interface
-def correct_report(request: ProcessModel | str | Path, report: str | Path | parsers.Source,
-                   **legacy: Any) -> list[CycleCorrection]: ...
-
-
-def correct_report(request: CorrectRequest | ProcessModel | str | Path, report: str | Path | parsers.Source,
-                   **legacy: Any) -> CorrectOutcome | list[CycleCorrection]:
+def correct_report(request: CorrectRequest, report: str | Path | parsers.Source) -> CorrectOutcome:
     """Correct every cycle of a report (or the one ``request.cycles.part`` names).
 
     The report is read once (``report`` may be a :class:`parsers.Source` already
@@ -148,9 +136,6 @@ def correct_report(request: CorrectRequest | ProcessModel | str | Path, report: 
         Unreadable or unmatchable report, unknown part, bad thermal inputs (named with
         file and place).
     """
-    if not isinstance(request, CorrectRequest):
-        # TODO(issue 20 merge): remove (pipeline/session.py and tests of others call the old signature)
-        return list(_legacy_correct_report(request, report, **legacy).cycles)
     model = request.model
     source = parsers.load_source(report)
     read, parts = read_parts(model, source, **request.read.kwargs(), **request.cycles.kwargs())
@@ -200,61 +185,3 @@ def open_history(path: str | Path) -> Store:
         raise ExportError("no history store here (import reports with 'setupfix history import')",
                           location=SourceLocation(str(path)))
     return open_store(path)
-
-
-# --- TODO(issue 20 merge): remove everything below; the doors call correct_report / correct_cycle. ---
-
-PartCorrection = CycleCorrection
-
-
-def _legacy_request(model: ProcessModel | str | Path, *, optimizer: str = "exact", seed: int | None = None,
-                    part: str | None = None, format: str | None = None, unit: str | None = None,
-                    encoding: str | None = None, columns: str | None = None,
-                    stations: Sequence[str] | Mapping[str, str] | None = None, parts_per_cycle: int | None = None,
-                    strict: bool = False, lenient: bool = False, store: Store | None = None,
-                    current: Mapping[str, float] | None = None,
-                    params: Mapping[str, Any] | None = None) -> CorrectRequest:
-    if not isinstance(model, ProcessModel):
-        model = load_model(model)
-    extra = dict(params or {})
-    time_limit = extra.pop("time_limit", None)
-    if extra:
-        raise ParameterError(f"unknown optimizer parameter(s): {', '.join(sorted(extra))}")
-    return CorrectRequest(
-        model, ReadOptions(format, unit, encoding, columns, lenient),
-        CycleOptions.of(stations, parts_per_cycle=parts_per_cycle, strict=strict, part=part),
-        SolveOptions(optimizer, seed, time_limit),
-        CurrentOffsets.of(current) if current is not None else None,
-        History.from_store(model, store) if store is not None else None)
-
-
-def _legacy_correct_report(model: ProcessModel | str | Path, report: str | Path | parsers.Source,
-                           **kw: Any) -> CorrectOutcome:
-    return correct_report(_legacy_request(model, **kw), report)
-
-
-def correct_part(model: ProcessModel, part: PartMeasurement, *, optimizer: str = "exact", seed: int | None = None,
-                 cumulative: Mapping[str, float] | None = None, store: Store | None = None,
-                 **params: Any) -> CycleCorrection:
-    """One cycle through the old keyword interface (see :func:`correct_cycle`)."""
-    request = _legacy_request(model, optimizer=optimizer, seed=seed, store=store, params=params)
-    if cumulative is not None:
-        request = dataclasses.replace(request, current=CurrentOffsets.of(cumulative))
-    return correct_cycle(request, part)
-
-
-def wear_totals(model: ProcessModel, current: Mapping[str, float]) -> dict[str, float]:
-    """Change applied since the last reset of each wear register (:meth:`CurrentOffsets.wear_totals`)."""
-    return CurrentOffsets.of(current).wear_totals(model)
-
-
-def write_correction_offsets(results: Sequence[CycleCorrection], target: str, *, controller: str = "csv",
-                             current: str | Path | Mapping[str, float] | None = None) -> None:
-    """The offsets of ``results`` written by :func:`setupfix.pipeline.export.export`."""
-    from setupfix.pipeline.export import export
-
-    if not results:
-        return
-    values = (current if isinstance(current, Mapping) else CurrentOffsets.read(current, results[0].model)) \
-        if current is not None else None
-    export(results, target, controller=controller, current=values)

@@ -28,14 +28,10 @@ from setupfix.model import PartMeasurement, ProcessModel, model_from_dict
 from setupfix.model.effects import EffectsSection, ModelEffect, effects_from_dict, with_effects
 from setupfix.pipeline.correct import correct_cycle
 from setupfix.pipeline.requests import CorrectRequest, CycleCorrection
-from setupfix.pipeline.series import (SeriesInput, corrections_from_table, expand_reports, load_series,
-                                      read_corrections_log, read_temperature_log, report_coordinates,
-                                      temperatures_from_table)
+from setupfix.pipeline.series import SeriesInput, load_series
 from setupfix.pipeline.writers import check_target, write_text
 
-__all__ = ["SeriesInput", "DiagnoseOutcome", "load_series", "read_corrections_log", "read_temperature_log",
-           "diagnose_reports", "expand_reports", "augmented_section", "write_augmented",
-           "corrections_from_table", "temperatures_from_table", "forecast_model", "report_coordinates"]
+__all__ = ["DiagnoseOutcome", "diagnose_reports", "augmented_section", "write_augmented", "forecast_model"]
 
 def augmented_section(diagnosis: Diagnosis, declared: EffectsSection) -> EffectsSection:
     """The ``[effects]`` section: the model's own effects, then those found (ids E1, E2, …)."""

@@ -14,25 +14,25 @@ import os
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
 
 import pandas as pd
 
 import parsers
 from parsers._source import read_bytes
-from parsers.corrections import COLUMNS, EVENTS, check_corrections, read_corrections_log
+from parsers.corrections import EVENTS, check_corrections, read_corrections_log
 from parsers.temperature import read_temperature_log
 from parsers.timestamps import iso_text
 from setupfix.errors import ParameterError, ParseError, UnknownFormatError
 from setupfix.model import CANONICAL_COLUMNS, ProcessModel
+from setupfix.pipeline.present import cycle_json
+from setupfix.pipeline.requests import CycleCorrection
 from setupfix.pipeline.writers import write_canonical_csv, write_table_csv
-from setupfix.store import CORRECTION_COLUMNS, Recommendation, Store
+from setupfix.store import Recommendation, Store
 
 __all__ = ["DEFAULT_DB", "default_db_path", "import_history", "ImportSummary",
            "history_summary", "export_history", "record_recommendations", "EXPORTS", "EVENTS"]
 
 DEFAULT_DB = "setupfix.db"
-assert CORRECTION_COLUMNS == COLUMNS  # the store keeps the log as its one reader gives it
 #: Tables ``history export`` writes.
 EXPORTS = ("measurements", "corrections", "temperatures")
 
@@ -160,9 +160,9 @@ def export_history(store: Store, table: str, target: str | os.PathLike[str]) -> 
     return len(frame)
 
 
-def record_recommendations(store: Store, results: Sequence[Any], *, model: str | os.PathLike[str],
+def record_recommendations(store: Store, results: Sequence[CycleCorrection], *, model: str | os.PathLike[str],
                            report: str | os.PathLike[str], seed: int | None = None) -> list[int]:
-    """Store the recommendations of one ``correct`` run (``PartCorrection`` objects), one transaction.
+    """Store the recommendations of one ``correct`` run (its cycles), one transaction.
 
     Inputs kept: the SHA-256 of the model and report files, their names, part and seed;
     the result is the ``correct --json`` object of each part.  Returns the stored ids.
@@ -171,7 +171,7 @@ def record_recommendations(store: Store, results: Sequence[Any], *, model: str |
     ids = []
     with store.transaction():
         for r in results:
-            result = r.to_json()
+            result = cycle_json(r)
             inputs = {"model": str(model), "model_sha256": hashes["model"], "report": str(report),
                       "report_sha256": hashes["report"], "part": result.get("part"), "seed": seed}
             ids.append(store.add_recommendation(Recommendation(result["optimizer"], inputs, result)))

@@ -67,15 +67,18 @@ def format_correction(pc: CycleCorrection) -> str:
     rows = pc.dimension_rows()
     w = max([14] + [len(row["name"]) + 2 for row in rows])
     st = 9 if any(row.get("station") for row in rows) else 0  # station column only for fixtures
-    head = f"{'station':<{st}}"[:st] + f"{'dimension':<{w}}{'deviation':>11}{'lower':>9}{'upper':>9}{'predicted':>11}{'margin':>9}  flags"
+    head = (f"{'station':<{st}}"[:st]
+            + f"{'dimension':<{w}}{'deviation':>11}{'lower':>9}{'upper':>9}{'predicted':>11}{'margin':>9}  flags")
     lines += [head, "-" * len(head)]
     for row in rows:
-        lines.append(f"{row.get('station') or '':<{st}}"[:st] + f"{row['name']:<{w}}{format_number(row['deviation']):>11}{format_number(row['lower'], 3):>9}"
+        lines.append(f"{row.get('station') or '':<{st}}"[:st]
+                     + f"{row['name']:<{w}}{format_number(row['deviation']):>11}{format_number(row['lower'], 3):>9}"
                      f"{format_number(row['upper'], 3):>9}{format_number(row['predicted']):>11}"
                      f"{format_number(row['margin']):>9}  {format_flags(row['flags'])}".rstrip())
     for did in pc.part.absent:
         dim = next(d for d in pc.model.dimensions if d.id == did)
-        lines.append(f"{dim.group or '':<{st}}"[:st] + f"{dim.name:<{w}}{'absent from report: not in the objective':>50}")
+        lines.append(f"{dim.group or '':<{st}}"[:st]
+                     + f"{dim.name:<{w}}{'absent from report: not in the objective':>50}")
     lines += ["", f"corrections [{unit}], axis {pc.model.axis}:"]
     digits = grid_decimals(pc.model.resolution)
     for reg in pc.register_rows():
@@ -171,7 +174,7 @@ def format_matrix(matrix: np.ndarray, rows: list[str], cols: list[str], title: s
         label = title if stop - start == len(cols) else f"{title} (columns {start + 1}–{stop} of {len(cols)})"
         lines = [label] if label != title else []
         lines.append(f"{title:<{lead}}" + "".join(f"{c:>{col_w}}" for c in cols[start:stop]))
-        for name, values in zip(rows, matrix):
+        for name, values in zip(rows, matrix, strict=True):
             lines.append(f"{name:<{lead}}" + "".join(f"{cell(v):>{col_w}}" for v in values[start:stop]))
         blocks.append("\n".join(lines))
     return "\n\n".join(blocks)
@@ -201,7 +204,7 @@ def format_relations(rm: RelationMatrices, which: list[str], null: np.ndarray, r
         lines.append(f"null space ({null.shape[0]} direction(s)): corrections that move no dimension")
         for vec in null:
             terms = [f"{'+' if v > 0 else '−'}{'' if np.isclose(abs(v), 1) else f'{abs(v):.4g}·'}{r}"
-                     for v, r in zip(vec, regs) if v != 0]
+                     for v, r in zip(vec, regs, strict=True) if v != 0]
             lines.append(textwrap.fill(" ".join(terms), 100, initial_indent="  ", subsequent_indent="    "))
     blocks.append("\n".join(lines))
     return "\n\n".join(blocks)

@@ -254,7 +254,7 @@ class CycleCorrection:
     def corrections(self) -> dict[str, float]:
         """Correction of every correctable register by model ID, zero included (thermal feed-forward
         added unless the verdict is reject)."""
-        out = {reg.id: float(v) for v, reg in zip(self.x, self.model.registers) if not reg.fixed}
+        out = {reg.id: float(v) for v, reg in zip(self.x, self.model.registers, strict=True) if not reg.fixed}
         if self.thermal is not None and self.verdict != "reject":
             for rid, shift in self.thermal.corrections().items():
                 out[rid] = out.get(rid, 0.0) + shift
@@ -277,18 +277,12 @@ class CycleCorrection:
         """The dimensions that stop a better correction (none when rejected)."""
         return self.result.binding
 
-    @property
-    def warnings(self) -> list[str]:
-        """The notes as text."""
-        # TODO(issue 20 merge): remove (pipeline/batch.py, view.py read it; render self.notes instead)
-        return [str(n) for n in self.notes]
-
     def register_rows(self) -> list[dict[str, Any]]:
         """Every register, fixed ones included: id, register, kind, offset, delta, fixed, at_limit."""
         at = set(self.recommendation.at_limit)
         return [{"id": reg.id, "register": reg.register, "kind": reg.kind, "offset": reg.offset,
                  "delta": float(delta), "fixed": reg.fixed, "at_limit": reg.id in at}
-                for reg, delta in zip(self.model.registers, self.x)]
+                for reg, delta in zip(self.model.registers, self.x, strict=True)]
 
     def dimension_rows(self) -> list[dict[str, Any]]:
         """Per measured dimension: id, name, station, deviation, limits, predicted, margin, flags.
@@ -331,21 +325,6 @@ class CycleCorrection:
                 row["estimate"], row["deviation"] = row["deviation"], float(measured[i])
             rows.append(row)
         return rows
-
-    def offsets(self, current: Mapping[str, float] | None = None) -> list[Any]:
-        """The offset rows of this cycle (:func:`setupfix.offsets.offset_rows`)."""
-        # TODO(issue 20 merge): remove (pipeline/batch.py, session.py call it; use pipeline.export)
-        from setupfix.offsets import offset_rows
-
-        return offset_rows(self.model, self.corrections, report=self.part.report, part=self.part.part,
-                           current=current, verdict=self.verdict)
-
-    def to_json(self) -> dict[str, Any]:
-        """The ``correct --json`` object (:func:`setupfix.pipeline.present.cycle_json`)."""
-        # TODO(issue 20 merge): remove (pipeline/history.py, session.py call it; use present.cycle_json)
-        from setupfix.pipeline.present import cycle_json
-
-        return cycle_json(self)
 
 
 @dataclass(frozen=True, eq=False)

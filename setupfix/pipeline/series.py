@@ -23,7 +23,7 @@ import numpy as np
 import pandas as pd
 
 import parsers
-from parsers.corrections import RegisterLog, check_corrections, log_from_frame, read_corrections_log
+from parsers.corrections import RegisterLog, check_corrections, read_corrections_log
 from parsers.folders import LOG_NAMES
 from parsers.temperature import TemperatureLog, read_temperature_log
 from parsers.timestamps import parse_timestamp, to_index
@@ -32,7 +32,7 @@ from setupfix.diagnose.forecast import spec_of
 from setupfix.diagnose.terms import EffectSpec, applied_at, join_temperatures, parts_since_change
 from setupfix.errors import MatchError, ParseError, SourceLocation, UnknownFormatError
 from setupfix.model import PartMeasurement, ProcessModel, load_model, match_parts, normalise_name
-from setupfix.model.effects import EffectsSection, model_effects
+from setupfix.model.effects import EffectsSection
 from setupfix.pipeline.checks import check_parts
 
 __all__ = ["SeriesInput", "TempLog", "load_series", "parse_times", "hours_since", "temperature_arrays",
@@ -60,24 +60,13 @@ class SeriesInput:
     notes: tuple[str, ...] = ()
 
 
-def parse_times(values: Sequence[object], where: str, lines: Sequence[int] | None = None) -> pd.DatetimeIndex:
+def parse_times(values: Sequence[object], where: str) -> pd.DatetimeIndex:
     """The reports' part timestamps as naive datetimes (UTC when an offset is given); one clear error for a bad one.
 
-    The logs' timestamps are read by their readers (:mod:`parsers.timestamps`).
+    Read by the one timestamp parser (:func:`parsers.timestamps.parse_timestamp`), as the logs' are.
     """
-    out = []
-    for i, v in enumerate(values):
-        try:
-            t = pd.Timestamp(str(v))
-            if pd.isna(t):
-                raise ValueError
-        except (ValueError, TypeError):
-            line = lines[i] if lines is not None else None
-            raise ParseError(f"not an ISO 8601 timestamp: {v!r}", location=SourceLocation(where, line=line)) from None
-        if t.tzinfo is not None:
-            t = t.tz_convert("UTC").tz_localize(None)
-        out.append(t)
-    return pd.DatetimeIndex(out)
+    place = SourceLocation(where)
+    return to_index([parse_timestamp(v, place) for v in values])
 
 
 def temperature_arrays(log: TemperatureLog) -> TempLog:
@@ -126,12 +115,6 @@ def _corrections(path: str, model: ProcessModel) -> RegisterLog:
     return check_corrections(read_corrections_log(path), model)
 
 
-# TODO(issue 20 merge): remove — pipeline.diagnose imports these names from here.
-expand_reports = parsers.expand_inputs
-corrections_from_table = log_from_frame
-temperatures_from_table = store_temperatures
-
-
 def hours_since(times: pd.DatetimeIndex, origin: pd.Timestamp) -> np.ndarray:
     return np.asarray((times - origin).total_seconds(), dtype=float) / 3600.0
 
@@ -157,29 +140,25 @@ def load_series(model: ProcessModel | str | Path, reports: Sequence[str | Path] 
     """
     if not isinstance(model, ProcessModel):
         model = load_model(model)
-    section = model_effects(model)
+    section = model.effects
     notes: list[str] = []
     parts: list[PartMeasurement] = []
     tables: list[pd.DataFrame] = []
     log = temps = None
     where = str(db) if db is not None else ""
     if db is not None:
-        from setupfix.store import open_store
+        from setupfix.store import open_store, report_tables, stored_corrections
 
         if not Path(db).is_file():
             raise ParseError("no such history store", location=SourceLocation(str(db)),
                              hint="create it with 'setupfix history import'")
         with open_store(db) as store:
-            rows = store.measurements()
-            for rec in store.reports():
-                table = rows[rows["report_sha256"] == rec.sha256].drop(columns=["report_sha256"])
-                table = table[~table["reference"]] if "reference" in table else table
+            for rec, table in report_tables(store):
+                table = table[~table["reference"]]
                 parts += match_parts(model, table, source=f"{db}#{rec.name}")
                 tables.append(table)
             if corrections is None:
-                stored = store.corrections()
-                if not stored.empty:
-                    log = check_corrections(log_from_frame(stored, f"{db}#corrections"), model)
+                log = stored_corrections(store, model)
             if temperatures is None:
                 stored_t = store.temperatures()
                 if len(stored_t.columns) > 1 and not stored_t.empty:
@@ -273,7 +252,7 @@ def report_coordinates(model: ProcessModel, tables: Sequence[pd.DataFrame]) -> n
         if not {"x", "y", "z", "characteristic"} <= set(table.columns):
             continue
         xyz = table[["x", "y", "z"]].apply(pd.to_numeric, errors="coerce").to_numpy(dtype=float)
-        for name, row in zip(table["characteristic"].astype(str), xyz):
+        for name, row in zip(table["characteristic"].astype(str), xyz, strict=True):
             qs = index.get(normalise_name(name), [])
             if len(qs) == 1 and np.isfinite(row).all() and np.isnan(out[qs[0]]).all():
                 out[qs[0]] = row

@@ -11,7 +11,7 @@ watched folder once its writer has finished with it.
 from __future__ import annotations
 
 import time
-from collections.abc import Iterator, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass
 from datetime import datetime
 from pathlib import Path
@@ -21,15 +21,14 @@ import pandas as pd
 import parsers
 from setupfix.errors import MatchError, Note, ParseError, SourceLocation
 from setupfix.model import PartMeasurement, ProcessModel, match_parts
-from setupfix.optimize import CorrectionProblem, OptimizeResult, get_optimizer
-from setupfix.pipeline.compare import DEFAULT_METHODS, Comparison, MethodTrials, trial_seeds
+from setupfix.pipeline.compare import compare_steps  # the TUI's worker takes it from here, with store_parts
 from setupfix.pipeline.correct import correct_report
 from setupfix.pipeline.cycles import assign_stations
 from setupfix.pipeline.export import Exported
 from setupfix.pipeline.present import cycle_json
 from setupfix.pipeline.requests import CorrectOutcome, CorrectRequest, CurrentOffsets, CycleCorrection
 from setupfix.pipeline.view import MatchRow, match_rows, matched_rows
-from setupfix.store import CORRECTION_COLUMNS, Recommendation, open_store
+from setupfix.store import CORRECTION_COLUMNS, Recommendation, open_store, report_tables
 
 __all__ = ["OpenedReport", "open_report", "export_cycles", "newest_report", "FolderWatch",
            "compare_steps", "store_parts", "record_applied"]
@@ -175,41 +174,6 @@ class FolderWatch:
         return None
 
 
-def compare_steps(problem: CorrectionProblem, *, methods: Sequence[str] = DEFAULT_METHODS, trials: int = 12,
-                  seed: int = 0) -> Iterator[tuple[str, int, int, Comparison]]:
-    """:func:`~setupfix.pipeline.compare.compare_problem` one trial at a time.
-
-    Yields ``(method, step, steps, comparison so far)`` after the exact optimum and
-    after every trial, so that a caller can show progress and stop within one trial;
-    the last comparison equals ``compare_problem(problem, methods=…, trials=…, seed=…)``
-    (same seeds, same order).
-    """
-    if trials < 1:
-        raise ValueError("trials must be at least 1")
-    seeds = trial_seeds(seed, trials)
-    steps = 1 + len(methods) * trials
-    exact = get_optimizer("exact").solve(problem)
-    done: list[MethodTrials] = []
-    skipped: dict[str, str] = {}
-    step = 1
-    yield "exact", step, steps, Comparison(problem=problem, exact=exact, methods=[], seed=seed, trials=trials)
-    for name in methods:
-        try:
-            get_optimizer(name, seed=seeds[0])
-        except ModuleNotFoundError as exc:  # a method still being written: skipped, as compare_problem does
-            skipped[name] = f"not available: {exc}"
-            step += trials
-            yield name, step, steps, Comparison(problem, exact, list(done), seed, trials, skipped=dict(skipped))
-            continue
-        runs: list[OptimizeResult] = []
-        for s in seeds:
-            runs.append(get_optimizer(name, seed=s).solve(problem))
-            step += 1
-            partial = [*done, MethodTrials(name, seeds[:len(runs)], list(runs))]
-            yield name, step, steps, Comparison(problem, exact, partial, seed, trials, skipped=dict(skipped))
-        done.append(MethodTrials(name, seeds, runs))
-
-
 def store_parts(model: ProcessModel, db: str | Path) -> tuple[list[PartMeasurement], list[str]]:
     """Every cycle stored in the history store ``db``, tied to ``model``, oldest first.
 
@@ -218,11 +182,10 @@ def store_parts(model: ProcessModel, db: str | Path) -> tuple[list[PartMeasureme
     notes: list[str] = []
     parts: list[PartMeasurement] = []
     with open_store(db) as store:
-        names = {r.sha256: r.name for r in store.reports()}
-        rows = store.measurements()
-    for sha, table in rows.groupby("report_sha256", sort=False):
+        tables = report_tables(store)
+    for record, table in tables:
         try:
-            parts += match_parts(model, assign_stations(model, table), source=names.get(str(sha), str(sha)))
+            parts += match_parts(model, assign_stations(model, table), source=record.name)
         except MatchError as exc:
             notes.append(f"left out: {exc}")
     parts.sort(key=lambda p: p.timestamp or "")

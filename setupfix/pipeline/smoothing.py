@@ -10,39 +10,39 @@ each earlier part shifted by the corrections logged since (eqs. 3–4), reset on
 
 from __future__ import annotations
 
-import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
 import numpy.typing as npt
-import pandas as pd
 
-from setupfix.errors import Note, SetupfixError
+from parsers.timestamps import instant
+from setupfix.errors import Note, ParseError, SetupfixError, SourceLocation
 from setupfix.model import PartMeasurement, ProcessModel, match_parts
 from setupfix.relation import relation_matrices
 from setupfix.safety import Smoothed, ewma_history
-from setupfix.store import Store
+from setupfix.store import Store, report_tables, stored_corrections
 
 __all__ = ["History", "HISTORY"]
 
 Array = npt.NDArray[np.float64]
 
-#: Earlier reports of the store looked at, newest first (weights (1 − λ)^50 are negligible for λ ≥ 0.1).
+#: Earlier parts an estimate looks at: the last ones machined before the cycle (weights (1 − λ)^50 are
+#: negligible for λ ≥ 0.1).  The history itself holds every part (:meth:`History.from_store`).
 HISTORY = 50
 
 
-def _stamp(text: object) -> np.datetime64 | None:
-    if text is None or (isinstance(text, float) and math.isnan(text)) or text == "":
+def _stamp(part: PartMeasurement) -> np.datetime64 | None:
+    """When ``part`` was machined (the one parser, :func:`parsers.timestamps.instant`); None when not given.
+
+    Raises
+    ------
+    ParseError
+        A timestamp that is not ISO 8601 (named with the report).
+    """
+    if part.timestamp is None or not str(part.timestamp).strip():
         return None
-    try:
-        t = pd.Timestamp(str(text))
-    except (ValueError, TypeError):
-        return None
-    if pd.isna(t):
-        return None
-    t = t.tz_convert("UTC").tz_localize(None) if t.tzinfo is not None else t
-    return np.datetime64(t.value, "ns")
+    return np.datetime64(instant(part.timestamp, SourceLocation(part.report)), "ns")
 
 
 @dataclass(frozen=True, eq=False)
@@ -78,44 +78,48 @@ class History:
 
     @classmethod
     def from_store(cls, model: ProcessModel, store: Store) -> History:
-        """The parts of the store's newest :data:`HISTORY` reports matched to ``model`` and its corrections log.
+        """Every part the store holds matched to ``model`` (one query), and its corrections log.
 
-        Reports of other processes (that do not match the model) are left out.
+        Every stored report counts, however many: the estimate itself looks at the last
+        :data:`HISTORY` parts machined before the cycle, so ``batch --store`` equals
+        ``history import`` + ``correct --store``.  Reports of other processes (that do
+        not match the model) are left out; a part kept by two reports (same time and
+        name) counts once, as the newest import gives it.  The log is read and checked
+        as ``diagnose --db`` reads it (:func:`setupfix.store.stored_corrections`).
+
+        Raises
+        ------
+        ParseError
+            A stored part's timestamp that is not ISO 8601 (``diagnose --db`` refuses it too).
+        MatchError
+            A log row the model check refuses (e.g. an unknown register).
         """
-        out = cls.empty(model)
         parts: list[PartMeasurement] = []
-        for record in sorted(store.reports(), key=lambda r: r.imported_at, reverse=True)[:HISTORY]:
+        for record, table in reversed(report_tables(store)):
             try:
-                parts += match_parts(model, store.measurements(record.sha256), source=record.name)
+                matched = match_parts(model, table, source=record.name)
             except SetupfixError:
                 continue
-        out = out.with_parts(parts)
-        log = store.corrections()
-        if not len(log):
+            for p in matched:
+                _stamp(p)  # an unreadable time is refused, not left out
+            parts += matched
+        out = cls.empty(model).with_parts(parts)
+        log = stored_corrections(store, model)
+        if log is None:
             return out
-        ids = model.register_ids
-        times, regs, deltas, resets = [], [], [], []
-        for _, entry in log.iterrows():
-            when = _stamp(entry["timestamp"])
-            if when is None:
-                continue
-            try:
-                j = ids.index(model.register(str(entry["register"])).id)
-            except KeyError:
-                j = -1
-            times.append(when)
-            regs.append(j)
-            deltas.append(float(entry["delta"]) if pd.notna(entry["delta"]) else math.nan)
-            resets.append(str(entry.get("event") or "correction") == "tool_change")
-        return cls(out.times, out.deviations, out.keys, np.array(times, dtype="datetime64[ns]"),
-                   np.array(regs, dtype=np.int64), np.array(deltas, dtype=float), np.array(resets, dtype=bool))
+        return cls(out.times, out.deviations, out.keys, log.times.values.astype("datetime64[ns]"),
+                   log.registers.astype(np.int64), log.deltas.astype(float),
+                   np.array([e == "tool_change" for e in log.events], dtype=bool))
 
     def with_parts(self, parts: Sequence[PartMeasurement]) -> History:
         """This history plus ``parts`` (those with a timestamp, not already held: same time and name)."""
-        held = set(zip(self.times.tolist(), self.keys))
+        held = set(zip(self.times.tolist(), self.keys, strict=True))
         times, devs, keys = list(self.times), list(self.deviations), list(self.keys)
         for p in parts:
-            t = _stamp(p.timestamp)
+            try:
+                t = _stamp(p)
+            except ParseError:  # refused when that part itself is corrected (batch: its own line)
+                continue
             if t is None or (t.tolist(), p.part) in held:
                 continue
             held.add((t.tolist(), p.part))
@@ -128,8 +132,9 @@ class History:
                        self.log_register, self.log_delta, self.log_reset)
 
     def smooth(self, model: ProcessModel, part: PartMeasurement, lam: float) -> Smoothed:
-        """The EWMA estimate of ``part`` over every held part machined before it (:func:`setupfix.safety.ewma_history`)."""
-        now = _stamp(part.timestamp)
+        """The EWMA estimate of ``part`` over every held part machined before it
+        (:func:`setupfix.safety.ewma_history`)."""
+        now = _stamp(part)
         if lam < 1.0 and now is None:
             return Smoothed(part.deviation, 0, lam, (Note("no timestamp in the report: not smoothed", None, "ewma"),))
         return ewma_history(part.deviation, now, self.times, self.deviations, self.log_times, self.log_register,

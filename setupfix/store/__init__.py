@@ -32,10 +32,12 @@ from typing import Any, Protocol
 
 import pandas as pd
 
-__all__ = ["Store", "ReportRecord", "Recommendation", "open_store", "CORRECTION_COLUMNS"]
+from parsers.corrections import COLUMNS as CORRECTION_COLUMNS
+from parsers.corrections import RegisterLog, check_corrections, log_from_frame
+from setupfix.model import ProcessModel
 
-#: Columns of the corrections log (``measurements.md``).
-CORRECTION_COLUMNS: tuple[str, ...] = ("timestamp", "register", "delta", "event")
+__all__ = ["Store", "ReportRecord", "Recommendation", "open_store", "report_tables", "stored_corrections",
+           "CORRECTION_COLUMNS"]
 
 
 @dataclass(frozen=True)
@@ -144,3 +146,33 @@ def open_store(path: str | os.PathLike[str]) -> Store:
 
     return SQLiteStore(os.fspath(path))
 
+
+def report_tables(store: Store) -> list[tuple[ReportRecord, pd.DataFrame]]:
+    """Every stored report with its canonical rows (and ``reference`` flags), in import order: one query.
+
+    The one way the doors read a store's reports (``correct --store``'s smoothing,
+    ``diagnose --db``, the TUI's history).
+    """
+    records = {r.sha256: r for r in store.reports()}
+    rows = store.measurements()
+    return [(records[str(sha)], table.drop(columns=["report_sha256"]))
+            for sha, table in rows.groupby("report_sha256", sort=False)]
+
+
+def stored_corrections(store: Store, model: ProcessModel) -> RegisterLog | None:
+    """The store's corrections log through the one reader and the one model check; None when it holds none.
+
+    Every door that uses a store's log (``correct --store``'s smoothing, ``batch --store``,
+    ``diagnose --db``) reads it here, so a row is accepted or refused alike and named
+    at the same place (``<store>#corrections``, ``row N``).
+
+    Raises
+    ------
+    ParseError, MatchError
+        :func:`parsers.corrections.log_from_frame`, :func:`parsers.corrections.check_corrections`
+        (e.g. a register the model does not know).
+    """
+    stored = store.corrections()
+    if stored.empty:
+        return None
+    return check_corrections(log_from_frame(stored, f"{store.location}#corrections"), model)

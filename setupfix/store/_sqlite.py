@@ -16,7 +16,7 @@ import json
 import math
 import sqlite3
 from collections.abc import Iterator, Sequence
-from datetime import datetime, timezone
+from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any
 
@@ -37,7 +37,7 @@ _TEXT = frozenset(c for c in CANONICAL_COLUMNS if c not in
 
 
 def _now() -> str:
-    return datetime.now(timezone.utc).isoformat(timespec="seconds")
+    return datetime.now(UTC).isoformat(timespec="seconds")
 
 
 def _cell(value: Any, text: bool) -> Any:
@@ -113,8 +113,8 @@ class SQLiteStore(Store):
             cols = list(CANONICAL_COLUMNS)
             frame = table.reindex(columns=[*cols, "reference"])
             flags = [int(str(v).strip().lower() in ("true", "1", "1.0")) for v in frame["reference"]]
-            rows = [(report_id, i, *(_cell(v, c in _TEXT) for c, v in zip(cols, values)), flag)
-                    for i, (values, flag) in enumerate(zip(frame[cols].itertuples(index=False), flags))]
+            rows = [(report_id, i, *(_cell(v, c in _TEXT) for c, v in zip(cols, values, strict=True)), flag)
+                    for i, (values, flag) in enumerate(zip(frame[cols].itertuples(index=False), flags, strict=True))]
             marks = ",".join("?" * (len(cols) + 3))
             self.db.executemany(f"INSERT INTO measurement (report_id, row, {', '.join(cols)}, reference) "
                                 f"VALUES ({marks})", rows)
@@ -184,7 +184,7 @@ class SQLiteStore(Store):
             clash = twice or self.db.execute(f"SELECT {', '.join(f'i.{k}' for k in keys)} FROM incoming_{table} i "
                                              f"JOIN {table} t ON {on} WHERE {differ} LIMIT 1").fetchone()
             if clash:
-                what = ", ".join(f"{k} {v}" for k, v in zip(keys, clash))
+                what = ", ".join(f"{k} {v}" for k, v in zip(keys, clash, strict=True))
                 raise StoreError(f"{table} at {what} contradicts " + ("itself" if twice else "the stored one"),
                                  location=self._where, hint="a stored row is never changed")
             before = self.db.total_changes

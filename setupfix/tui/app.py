@@ -249,7 +249,7 @@ class SetupfixApp(App[None]):
             panel.stopped("comparison cancelled")
             return
         c = self._current()
-        if c is None or comparison.problem is not c.problem:
+        if c is None or comparison.problem is not c.posed.guarded:
             panel.stopped("that comparison was for a previous report: press c to compare this one")
             return
         self.comparison = comparison
@@ -350,8 +350,9 @@ class SetupfixApp(App[None]):
             return
         self.query_one(TabbedContent).active = "compare"
         self.query_one(ComparePanel).progress(0, 1 + len(DEFAULT_METHODS) * self.inputs.trials, "exact")
-        self.run_worker(partial(workers.compare, self, c.problem, self.inputs.trials, self.inputs.seed), name="compare",
-                        group="compare", thread=True, exclusive=True, exit_on_error=False)
+        # the problem correct solves (guard band, cumulative bounds, costs, fixed registers): exact = the correction
+        self.run_worker(partial(workers.compare, self, c.posed.guarded, self.inputs.trials, self.inputs.seed),
+                        name="compare", group="compare", thread=True, exclusive=True, exit_on_error=False)
 
     def action_cancel(self) -> None:
         running = [w for w in self.workers if w.is_running]

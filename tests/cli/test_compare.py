@@ -45,7 +45,7 @@ def test_json_contract_and_exact_yardstick(capsys: pytest.CaptureFixture[str]) -
 def exact_problem():
     from setupfix.model import load_model
     from setupfix.optimize import CorrectionProblem
-    from setupfix.pipeline.correct import load_parts
+    from setupfix.pipeline.cycles import load_parts
 
     model = load_model(MODEL)
     return CorrectionProblem.from_part(model, load_parts(model, REPORT)[0])
@@ -93,7 +93,7 @@ def test_pipeline_seeds_and_unknown_methods() -> None:
 
     assert trial_seeds(5, 4) == trial_seeds(5, 4) and trial_seeds(5, 4)[:2] == trial_seeds(5, 2)
     assert len(set(trial_seeds(5, 12))) == 12
-    with pytest.raises(ParameterError, match="optimizer must be one of .*got 'nosuch'"):
+    with pytest.raises(ParameterError, match=r"optimizer must be one of .*got 'nosuch'"):
         compare_problem(exact_problem(), methods=("ga", "nosuch"), trials=3)
     with pytest.raises(ParameterError, match="GA: n_solutions"):
         compare_problem(exact_problem(), methods=("ga",), trials=3, params={"ga": {"n_solutions": 0}})

@@ -33,5 +33,5 @@ def test_parser_choices_match_the_registries():
     assert set(_choices.OPTIMIZERS) == set(OPTIMIZERS)
     assert set(_choices.CONTROLLERS) == set(CONTROLLERS)
     assert _choices.HISTORY_EXPORTS == EXPORTS
-    assert _choices.THERMAL_METHODS == methods()
+    assert methods() == _choices.THERMAL_METHODS
     assert _choices.SIMULATE_START == START

@@ -134,11 +134,12 @@ def test_hostile_cells_are_one_line(capsys, tmp_path, value, message):
 def test_constant_target_and_directory_output(capsys, tmp_path):
     rows = (SAMPLES / "train_variable.csv").read_text().splitlines()[:100]
     const = tmp_path / "c.csv"
-    const.write_text("\n".join(rows[:1] + [",".join(r.split(",")[:-1] + ["0.1"]) for r in rows[1:]]) + "\n")
-    code, out, err = run(capsys, "thermal", "fit", "--method", "mra", str(const), "--target", "error_z",
+    const.write_text("\n".join(rows[:1] + [",".join([*r.split(",")[:-1], "0.1"]) for r in rows[1:]]) + "\n")
+    code, _out, err = run(capsys, "thermal", "fit", "--method", "mra", str(const), "--target", "error_z",
                          "-o", str(tmp_path / "m.json"))
     assert code == 1 and "constant" in err and "e+29" not in err
-    code, out, err = run(capsys, "thermal", "fit", "--method", "mra", TRAIN, "--target", "error_z", "-o", str(tmp_path))
+    code, _out, err = run(capsys, "thermal", "fit", "--method", "mra", TRAIN, "--target", "error_z",
+                          "-o", str(tmp_path))
     assert code == 1 and "internal error" not in err
 
 

@@ -13,7 +13,7 @@ from setupfix.diagnose import Layout
 from setupfix.diagnose.forecast import forecast_shift, relation_composite
 from setupfix.errors import ModelError
 from setupfix.model import load_model, model_from_dict
-from setupfix.model.effects import EffectsSection, ModelEffect, effects_from_dict, effects_toml, with_effects
+from setupfix.model.effects import EffectsSection, ModelEffect, effects_from_dict, with_effects
 
 from conftest import GUIDE_PINS
 
@@ -85,6 +85,8 @@ def test_model_without_effects_loads_as_before(guide_pins_model):
 def test_correct_maps_through_a_named_relation_only(tmp_path, guide_pins_model):
     """A relation whose register is named changes what the correction does; a shared one does not."""
     from setupfix.pipeline.correct import correct_report
+    from setupfix.pipeline.present import note_lines
+    from setupfix.pipeline.requests import CorrectRequest
 
     layout = Layout.from_model(guide_pins_model)
     C = relation_composite(SECTION, layout)
@@ -96,11 +98,11 @@ def test_correct_maps_through_a_named_relation_only(tmp_path, guide_pins_model):
     path = tmp_path / "aug.toml"
     path.write_text(with_effects((GUIDE_PINS / "model.toml").read_text(encoding="utf-8"),
                                  EffectsSection(SECTION.effects[3:4] + SECTION.effects[6:])), encoding="utf-8")
-    plain = correct_report(GUIDE_PINS / "model.toml", GUIDE_PINS / "cycle_01.csv")[0]
-    aug = correct_report(path, GUIDE_PINS / "cycle_01.csv")[0]
+    plain = correct_report(CorrectRequest(load_model(GUIDE_PINS / "model.toml")), GUIDE_PINS / "cycle_01.csv").cycles[0]
+    aug = correct_report(CorrectRequest(load_model(path)), GUIDE_PINS / "cycle_01.csv").cycles[0]
     keep = plain.part.measured
     np.testing.assert_array_equal(aug.problem.composite, C[:, keep])
     np.testing.assert_array_equal(plain.problem.composite, layout.composite[:, keep])
     w0 = layout.composite[i, q]
-    assert any(f"P2D3 ~ T23 {w0:g} → {w0 + 0.5:.4g}" in w for w in aug.warnings)
-    assert not any("relation" in w for w in plain.warnings)
+    assert any(f"P2D3 ~ T23 {w0:g} → {w0 + 0.5:.4g}" in w for w in note_lines(aug.notes))
+    assert not any("relation" in w for w in note_lines(plain.notes))

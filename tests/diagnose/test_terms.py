@@ -16,7 +16,7 @@ def test_applied_at_takes_every_row_at_or_before_the_part():
     got = applied_at(times, log_t, regs, deltas, 4)
     for k, t in enumerate(times):  # brute force: a part machined at t had every row with timestamp <= t
         want = np.zeros(4)
-        for tl, r, d in zip(log_t, regs, deltas):
+        for tl, r, d in zip(log_t, regs, deltas, strict=True):
             if tl <= t:
                 want[r] += d
         np.testing.assert_allclose(got[k], want, atol=1e-12)

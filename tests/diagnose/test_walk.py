@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from setupfix.diagnose import Diagnoser, EffectSpec, Layout, Series, fit_model, walk_forward
+from setupfix.diagnose import Diagnoser, EffectSpec, Layout, fit_model, walk_forward
 from setupfix.diagnose.walk import margins_of, next_cycle
 
 from diagnose.helpers import guide_pins, one_effect, simulate

@@ -49,7 +49,7 @@ def _xlsx(ref: str) -> bytes:
 
     book = openpyxl.Workbook()
     sheet = book.active
-    for col, head in zip("ABC", ("characteristic", "nominal", "actual")):
+    for col, head in zip("ABC", ("characteristic", "nominal", "actual"), strict=True):
         sheet[f"{col}1"] = head
     sheet[ref] = 1
     buffer = io.BytesIO()
@@ -83,7 +83,8 @@ CASES: list[Case] = [
     Case("truncated_cycle.csv", _cut(GUIDE / "cycle_01.csv", 322), "may be truncated"),
     Case("truncated_cycle.dmo", _cut(GUIDE / "cycle_01.dmo", 4000), "may be truncated"),
     Case("truncated_cycle.qif", _cut(GUIDE / "cycle_01.qif", 20000), "not well-formed XML"),
-    Case("underscore.csv", lambda: _canonical("P1 D1,25,-0_0309,-0.1,0.1,cycle\n"), "expected a number, found '-0_0309'"),
+    Case("underscore.csv", lambda: _canonical("P1 D1,25,-0_0309,-0.1,0.1,cycle\n"),
+         "expected a number, found '-0_0309'"),
     Case("nan_limit.csv", lambda: _canonical("P1 D1,25,24.97,-0.1,NaN,cycle\n"), "expected a number, found 'NaN'"),
     Case("inf_actual.csv", lambda: _canonical("P1 D1,25,inf,-0.1,0.1,cycle\n"), "expected a number, found 'inf'"),
     Case("huge_actual.csv", lambda: _canonical("P1 D1,25,1e308,-0.1,0.1,cycle\n"), "beyond any measurable length"),

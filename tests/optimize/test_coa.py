@@ -51,7 +51,7 @@ def test_immigration_moves_towards_the_goal() -> None:
 def test_paper_run_length() -> None:
     from setupfix.model import load_model
     from setupfix.optimize import CorrectionProblem
-    from setupfix.pipeline.correct import load_parts
+    from setupfix.pipeline.cycles import load_parts
     from pathlib import Path
 
     here = Path(__file__).resolve().parents[2] / "sample_reports" / "guide_pins"

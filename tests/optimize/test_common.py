@@ -106,7 +106,7 @@ def test_the_issue_cases_and_unknown_names():
                          ("cs", {"pa": 7}), ("pso", {"n_solutions": 10**9}), ("cripso", {"n_polyps": 1})]:
         with pytest.raises(ParameterError, match=next(iter(params))):
             get_optimizer(name, **params)
-    with pytest.raises(ParameterError, match="must be one of .*cripso.*got 'psoo'"):
+    with pytest.raises(ParameterError, match=r"must be one of .*cripso.*got 'psoo'"):
         get_optimizer("psoo")
     with pytest.raises(ParameterError, match="unknown parameter 'particles'"):
         get_optimizer("pso", particles=5)

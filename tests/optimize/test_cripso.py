@@ -40,7 +40,7 @@ def small_problem(seed: int) -> CorrectionProblem:
 
 def brute_force_f(problem: CorrectionProblem) -> tuple[float, float]:
     """Largest f = 10·f1 − f2 over the whole grid, and f1 there."""
-    axes = [np.arange(lo, hi + 1) for lo, hi in zip(problem.kmin, problem.kmax)]
+    axes = [np.arange(lo, hi + 1) for lo, hi in zip(problem.kmin, problem.kmax, strict=True)]
     x = np.array(list(itertools.product(*axes)), dtype=float) * problem.resolution
     f1, _, f = problem.evaluate(x)
     i = int(np.argmax(f))

@@ -7,6 +7,8 @@ import warnings
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from setupfix.model import PartMeasurement
 from setupfix.optimize import CorrectionProblem, get_optimizer
@@ -32,7 +34,7 @@ def random_problem(seed: int, n: int = 3, m: int = 6, limit_steps: int = 5, fixe
 
 def brute_force(problem: CorrectionProblem) -> tuple[float, float]:
     """Best f1 over the whole grid and the least norm among the points reaching it."""
-    axes = [np.arange(lo, hi + 1) for lo, hi in zip(problem.kmin, problem.kmax)]
+    axes = [np.arange(lo, hi + 1) for lo, hi in zip(problem.kmin, problem.kmax, strict=True)]
     k = np.array(list(itertools.product(*axes)), dtype=float)
     f1, f2, _ = problem.evaluate(k * problem.resolution)
     best = f1.max()
@@ -103,7 +105,7 @@ def test_time_limit_falls_back_and_says_so():
 
 
 def test_paper_size_problem_against_lp_bound_and_null_space(guide_pins_model):
-    devs, setup = simulate_deviations(guide_pins_model, 3, seed=11)
+    devs, _setup = simulate_deviations(guide_pins_model, 3, seed=11)
     for dev in devs:
         part = PartMeasurement("c", "r", None, dev, ("",) * dev.size)
         problem = CorrectionProblem.from_part(guide_pins_model, part)
@@ -123,9 +125,6 @@ def test_continuous_mode_is_the_lp_optimum():
     cont = get_optimizer("exact", grid=False).solve(problem)
     assert cont.margin_after == pytest.approx(cont.bound, abs=1e-9)
 
-
-from hypothesis import given, settings
-from hypothesis import strategies as st
 
 
 @settings(max_examples=25, deadline=None)

@@ -13,7 +13,7 @@ from setupfix.optimize import CorrectionProblem, get_optimizer
 from setupfix.optimize._highs import Solve
 from setupfix.optimize._session import Session
 from setupfix.optimize._settings import ExactSettings
-from setupfix.pipeline.correct import load_parts
+from setupfix.pipeline.cycles import load_parts
 
 from .test_exact import brute_force, random_problem
 
@@ -152,7 +152,7 @@ def test_threads_keep_their_own_solver_models(guide_pins_model):
     alone = [get_optimizer("exact").solve(p).x for p in problems]
     with ThreadPoolExecutor(max_workers=2) as pool:
         threaded = list(pool.map(lambda p: get_optimizer("exact").solve(p).x, problems))
-    for a, b in zip(alone, threaded):
+    for a, b in zip(alone, threaded, strict=True):
         np.testing.assert_array_equal(a, b)
 
 

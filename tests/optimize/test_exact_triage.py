@@ -9,14 +9,14 @@ import pytest
 
 from setupfix.model import PartMeasurement
 from setupfix.optimize import CorrectionProblem, get_optimizer
-from setupfix.pipeline.correct import load_parts
+from setupfix.pipeline.cycles import load_parts
 
 from .test_exact import random_problem
 from .test_exact_robust import GUIDE_PINS
 
 
 def grid_points(problem: CorrectionProblem) -> np.ndarray:
-    axes = [np.arange(lo, hi + 1) for lo, hi in zip(problem.kmin, problem.kmax)]
+    axes = [np.arange(lo, hi + 1) for lo, hi in zip(problem.kmin, problem.kmax, strict=True)]
     return np.array(list(itertools.product(*axes)), dtype=float) * problem.resolution
 
 
@@ -46,7 +46,7 @@ def test_triage_equals_brute_force(seed):
         return
     assert result.status == "optimal"
     assert kept.sum() == count
-    assert set(result.given_up) == {d for d, k in zip(problem.dimension_ids, kept) if not k}
+    assert set(result.given_up) == {d for d, k in zip(problem.dimension_ids, kept, strict=True) if not k}
     assert margins[kept].min() == pytest.approx(budget, abs=1e-12)
     assert result.norm == pytest.approx(norm, abs=1e-12)
     assert "given up" in result.message and "NC program or the process" in result.message

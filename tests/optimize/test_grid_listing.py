@@ -10,7 +10,7 @@ from setupfix.optimize import CorrectionProblem, get_optimizer
 from setupfix.optimize._grid import least_distance
 from setupfix.optimize._listing import ellipsoid_search, enumerate_ball, lagrangian_ball
 from setupfix.optimize._settings import ExactSettings
-from setupfix.pipeline.correct import load_parts
+from setupfix.pipeline.cycles import load_parts
 
 from .test_exact import brute_force, random_problem
 from .test_exact_robust import GUIDE_PINS
@@ -28,7 +28,7 @@ def _brute(pts, centre, cost, radius2, g_rows, b, fmax):
 def test_enumerate_ball_lists_exactly_the_points_of_brute_force(seed):
     """Radius, rows and norm pruning (with the QP's multipliers and with arbitrary ones) drop nothing."""
     g_rows, b, kmin, kmax, cost = small_system(seed, n=5, r=10, steps=4)  # 9⁵ points: no whole-box shortcut
-    status, (k, lam, lam_lo, lam_hi) = least_distance(g_rows, b, kmin, kmax, cost)
+    status, (_k, lam, lam_lo, lam_hi) = least_distance(g_rows, b, kmin, kmax, cost)
     assert status == "optimal"
     centre, q = lagrangian_ball(g_rows, b, kmin, kmax, cost, lam, lam_lo, lam_hi)
     pts = grid_points(kmin, kmax)
@@ -39,7 +39,8 @@ def test_enumerate_ball_lists_exactly_the_points_of_brute_force(seed):
         radius2 = fmax - q + 1e-9
         expected = _brute(pts, centre, cost, radius2, g_rows, b, fmax)
         assert expected  # the points of least norm at least
-        for multipliers in (None, (lam, lam_lo, lam_hi), tuple(rng.uniform(0, 2, v.size) for v in (lam, lam_lo, lam_hi))):
+        scaled = tuple(rng.uniform(0, 2, v.size) for v in (lam, lam_lo, lam_hi))
+        for multipliers in (None, (lam, lam_lo, lam_hi), scaled):
             listed = enumerate_ball(centre, cost, radius2, kmin, kmax, 10**6, g_rows, b, fmax=fmax,
                                     work_limit=10**9, multipliers=multipliers)
             assert {tuple(p) for p in listed} == expected
@@ -53,7 +54,7 @@ def test_enumerate_ball_lists_exactly_the_points_of_brute_force(seed):
 def test_ellipsoid_search_finds_the_least_norm_of_brute_force(seed):
     """Growing ellipsoids from no known point: the least Σ c k² (ties: the smallest k), proved."""
     g_rows, b, kmin, kmax, cost = small_system(seed, n=5, r=10, steps=4)
-    _, (k, lam, lam_lo, lam_hi) = least_distance(g_rows, b, kmin, kmax, cost)
+    _, (_k, lam, lam_lo, lam_hi) = least_distance(g_rows, b, kmin, kmax, cost)
     centre, q = lagrangian_ball(g_rows, b, kmin, kmax, cost, lam, lam_lo, lam_hi)
     best, proved, _ = ellipsoid_search(g_rows, b, 0.0, centre, q, cost, kmin, kmax, np.inf, 10**6, b,
                                        work_limit=10**9, multipliers=(lam, lam_lo, lam_hi))

@@ -36,7 +36,7 @@ def small_system(seed: int, n: int = 4, r: int = 10, steps: int = 4):
 
 
 def grid_points(lo, hi):
-    return np.array(list(itertools.product(*[np.arange(a, c + 1) for a, c in zip(lo, hi)])), dtype=float)
+    return np.array(list(itertools.product(*[np.arange(a, c + 1) for a, c in zip(lo, hi, strict=True)])), dtype=float)
 
 
 @pytest.mark.parametrize("seed", range(8))
@@ -61,7 +61,7 @@ def test_working_set_nnls_proves_an_empty_system():
 @pytest.mark.parametrize("seed", range(8))
 def test_lagrangian_box_holds_every_point_up_to_the_norm_and_bounds_the_least(seed):
     g_rows, b, kmin, kmax, cost = small_system(seed)
-    _, (k, lam, lam_lo, lam_hi) = least_distance(g_rows, b, kmin, kmax, cost)
+    _, (_k, lam, lam_lo, lam_hi) = least_distance(g_rows, b, kmin, kmax, cost)
     centre, q = lagrangian_ball(g_rows, b, kmin, kmax, cost, lam, lam_lo, lam_hi)
     pts = grid_points(kmin, kmax)
     feasible = pts[np.all(pts @ g_rows.T <= b + 1e-9, axis=1)]
@@ -76,7 +76,7 @@ def test_lagrangian_box_holds_every_point_up_to_the_norm_and_bounds_the_least(se
 
 @pytest.mark.parametrize("seed", range(8))
 def test_box_least_norm_equals_brute_force_over_the_box(seed):
-    g_rows, b, kmin, kmax, cost = small_system(seed)
+    g_rows, b, kmin, _kmax, cost = small_system(seed)
     rng = np.random.default_rng(100 + seed)
     lo = kmin + rng.integers(0, 3, kmin.size)
     hi = np.maximum(lo + rng.integers(0, 4, kmin.size), lo)

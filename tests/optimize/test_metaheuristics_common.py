@@ -52,14 +52,14 @@ def small_problem(seed: int = 0, cls: type[CorrectionProblem] = CorrectionProble
 
 def brute_force(problem: CorrectionProblem) -> float:
     """Largest f over every grid point within the bounds."""
-    axes = [np.arange(k0, k1 + 1) * problem.resolution for k0, k1 in zip(problem.kmin, problem.kmax)]
+    axes = [np.arange(k0, k1 + 1) * problem.resolution for k0, k1 in zip(problem.kmin, problem.kmax, strict=True)]
     grid = np.array(list(itertools.product(*axes)))
     return float(np.max(problem.evaluate(grid)[2]))
 
 
 def guide_pins_problem(cycle: int) -> CorrectionProblem:
     from setupfix.model import load_model
-    from setupfix.pipeline.correct import load_parts
+    from setupfix.pipeline.cycles import load_parts
 
     model = load_model(GUIDE_PINS / "model.toml")
     part = load_parts(model, GUIDE_PINS / f"cycle_{cycle:02d}.csv")[0]

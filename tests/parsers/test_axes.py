@@ -43,7 +43,7 @@ def test_vector_axis_is_the_axis_within_five_degrees(angle, turn, which, sign):
 def _axes(path: Path) -> dict[str, str]:
     table = parsers.read_report(path).table
     assert set(table["axis"]) <= {"", "X", "Y", "Z"}
-    return dict(zip(table["characteristic"], table["axis"]))
+    return dict(zip(table["characteristic"], table["axis"], strict=True))
 
 
 def test_qif_axes_from_directions_vectors_and_normals():

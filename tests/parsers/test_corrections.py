@@ -75,14 +75,14 @@ def test_a_bad_log_is_named_at_its_line(tmp_path, text, message):
 
 def test_not_utf8_is_named_at_its_line(tmp_path):
     (tmp_path / "c.csv").write_bytes(b"timestamp,register,delta\n2026-01-01T00:00:00,G\xe454,0.1\n")
-    with pytest.raises(ParseError, match="c.csv:2: not UTF-8"):
+    with pytest.raises(ParseError, match=r"c.csv:2: not UTF-8"):
         read_corrections_log(tmp_path / "c.csv")
 
 
 def test_the_model_check_names_the_row(tmp_path):
     model = load_model(MODEL)
     log = read_corrections_log(_write(tmp_path / "c.csv", HEAD + GOOD_ROW + "2026-11-02T07:30:00,G54,,tool_change\n"))
-    with pytest.raises(MatchError, match="c.csv:3: tool change of W1, which is not a tool"):
+    with pytest.raises(MatchError, match=r"c.csv:3: tool change of W1, which is not a tool"):
         check_corrections(log, model)
     twice = read_corrections_log(_write(tmp_path / "t.csv", HEAD + GOOD_ROW + "2026-11-02T07:00:00,G54,0.02,\n"))
     with pytest.raises(MatchError, match=r"t.csv:3: W1 \(G54\) correction at 2026-11-02T07:00:00 given twice "

@@ -37,7 +37,7 @@ def test_sample_matches_derived_golden(name: str) -> None:
 
 
 def test_ng_report_out_of_tolerance_and_sign_quirk() -> None:
-    table, messages = read_warned(read_korean, shared("KR_45926-4G100_240113_night_2-2-1_NG.cp949.txt"))
+    table, _messages = read_warned(read_korean, shared("KR_45926-4G100_240113_night_2-2-1_NG.cp949.txt"))
     row = table[table["source"].str.endswith(":31")].iloc[0]  # X 116.728, nominal 116.600, +0.100/0.000, excess 0.028
     assert (row["deviation"], row["lower"], row["upper"], row["status"]) == (pytest.approx(0.128), 0.0, 0.1, "out")
     assert table["timestamp"].iloc[0] == "2024-01-13T22:55:39"

@@ -43,7 +43,7 @@ def _report(tmp_path: Path, *values: str) -> Path:
     lines = ["", HEADING, "Distância: Dist-1(ID:3) entre Ponto-1(ID:1) e Ponto-2(ID:2)"]
     lines += [f"           {v}" for v in values]
     path = tmp_path / "qv.txt"
-    path.write_bytes("\r\n".join(lines + [""]).encode("cp1252"))
+    path.write_bytes("\r\n".join([*lines, ""]).encode("cp1252"))
     return path
 
 

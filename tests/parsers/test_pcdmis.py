@@ -96,6 +96,6 @@ def test_csv_errors_name_the_line(tmp_path: Path, old: str, new: str, message: s
     # A blank line is inserted after line 6, so the edited rows 7 and 8 become lines 8 and 9.
     lines = (SAMPLES / "bracket_ncgage.csv").read_text().replace(old, new, 1).splitlines()
     path = tmp_path / "bad.csv"
-    path.write_text("\n".join(lines[:6] + [""] + lines[6:]) + "\n")
+    path.write_text("\n".join([*lines[:6], "", *lines[6:]]) + "\n")
     with pytest.raises(ParseError, match=message):
         read_pcdmis_csv(path)

@@ -51,7 +51,7 @@ def test_missing_characteristics_file_and_bad_value(tmp_path: Path) -> None:
     raw = json.loads((SAMPLES / "PiWebApi_sample_values.json").read_text(encoding="utf-8-sig"))[:1]
     path = tmp_path / "x_values.json"
     path.write_text(json.dumps(raw))
-    with pytest.raises(ParseError, match="x_characteristics.json not found"):
+    with pytest.raises(ParseError, match=r"x_characteristics.json not found"):
         read_piweb(path)
     (tmp_path / "x_characteristics.json").write_bytes((SAMPLES / "PiWebApi_sample_characteristics.json").read_bytes())
     uuid = next(iter(raw[0]["characteristics"]))

@@ -53,12 +53,14 @@ def test_attributive_file_is_refused_with_reason() -> None:
 @pytest.mark.parametrize("name", ["j4ggr_2604020002.dfd", "j4ggr_2604020002.dfx"])
 def test_dfd_dfx_pair_of_forces_is_refused(name: str) -> None:
     # Force 1/2 are in N and "Meas ID" is an error-log characteristic: nothing is a length.
-    with pytest.raises(ParseError, match=r"2 value\(s\) in a non-length unit \(K2142=N\) \(line (j4ggr_2604020002\.dfx:)?1, "):
+    with pytest.raises(ParseError,
+                       match=r"2 value\(s\) in a non-length unit \(K2142=N\) \(line (j4ggr_2604020002\.dfx:)?1, "):
         read_aqdef(SAMPLES / name)
 
 
 def test_dfd_dfx_pair_is_read_together(tmp_path: Path) -> None:
-    (tmp_path / "p.dfd").write_text("K0100 1\nK1001 P-1\nK2002/1 Bore\nK2101/1 10,0\nK2112/1 -0,02\nK2113/1 0,03\nK2142/1 mm\n")
+    (tmp_path / "p.dfd").write_text("K0100 1\nK1001 P-1\nK2002/1 Bore\nK2101/1 10,0\nK2112/1 -0,02\nK2113/1 0,03\n"
+                                    "K2142/1 mm\n")
     (tmp_path / "p.dfx").write_bytes(b"10,012\x14\x14" + b"01.02.2024/08:00:00\x14\x14\x14\x14\r\n9,99\r\n")
     table = read_aqdef(tmp_path / "p.dfx")
     assert table["deviation"].round(6).tolist() == [0.012, -0.01]
@@ -95,8 +97,8 @@ def test_dfd_with_dfb_values_reads_like_the_dfq(tmp_path: Path) -> None:
     """A .dfd description with its .dfb values (issue 14) reads as the same report in one .dfq."""
     dfq = SAMPLES / "diribet_basicDfq_singlePart_threeCharacteristics.dfq"
     lines = dfq.read_text().splitlines(keepends=True)
-    (tmp_path / "run.dfd").write_text("".join(l for l in lines if not l.startswith(("K0001", "K0004"))))
-    (tmp_path / "run.DFB").write_text("".join(l for l in lines if l.startswith(("K0001", "K0004"))))
+    (tmp_path / "run.dfd").write_text("".join(x for x in lines if not x.startswith(("K0001", "K0004"))))
+    (tmp_path / "run.DFB").write_text("".join(x for x in lines if x.startswith(("K0001", "K0004"))))
     want = parsers.read_report(dfq).table
     for given in ("run.dfd", "run.DFB"):
         got = parsers.read_report(tmp_path / given)

@@ -133,7 +133,7 @@ def test_missing_file_units_with_evident_mm_warns_and_reads_mm() -> None:
 
 def test_missing_file_units_with_small_values_needs_unit(tmp_path: Path) -> None:
     path = write(tmp_path, qif_doc(units="", target="<TargetValue>0.04</TargetValue>", value="0.0401"))
-    with pytest.raises(ParseError, match="no FileUnits.*--unit"):
+    with pytest.raises(ParseError, match=r"no FileUnits.*--unit"):
         read_qif(path)
     assert read_qif(path, unit="inch").iloc[0]["nominal"] == pytest.approx(0.04 * 25.4)
 

@@ -18,7 +18,8 @@ from setupfix.errors import ParameterError, ParseError
 
 ROOT = Path(__file__).resolve().parents[2]
 SAMPLES = ROOT / "sample_reports"
-DMIS_NO_UNITS = b"F(P)=FEAT/POINT,CART,1,0,0,0,0,1\nFA(P)=FEAT/POINT,CART,1.5,0,0,0,0,1\nTA(P_X)=TOL/CORTOL,XAXIS,0.5,OUTOL\nENDFIL\n"
+DMIS_NO_UNITS = (b"F(P)=FEAT/POINT,CART,1,0,0,0,0,1\nFA(P)=FEAT/POINT,CART,1.5,0,0,0,0,1\n"
+                 b"TA(P_X)=TOL/CORTOL,XAXIS,0.5,OUTOL\nENDFIL\n")
 DMIS_INCH = b"UNITS/INCH,ANGDEC\n" + DMIS_NO_UNITS
 
 

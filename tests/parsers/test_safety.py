@@ -59,7 +59,7 @@ def listener():
 def _connected(server: socket.socket) -> bool:
     try:
         conn, _ = server.accept()
-    except (TimeoutError, socket.timeout):
+    except TimeoutError:
         return False
     conn.close()
     return True

@@ -101,7 +101,7 @@ def test_bad_excel_cell_names_the_row(tmp_path: Path, excel_engine: str) -> None
 def test_corrupt_workbook_is_a_parse_error(tmp_path: Path, excel_engine: str) -> None:
     path = tmp_path / "broken.xlsx"
     path.write_bytes(b"PK\x03\x04" + b"\x00" * 200)
-    with pytest.raises(ParseError, match="broken.xlsx"):
+    with pytest.raises(ParseError, match=r"broken.xlsx"):
         parsers.read_report(path, format="table").table
 
 
@@ -129,7 +129,7 @@ def test_unknown_unit_and_missing_mapped_header(tmp_path: Path) -> None:
     path.write_text("Name,Nominal,Actual,Unit\nA,1,1.1,furlong\n", encoding="utf-8")
     with pytest.raises(ParseError, match=r"u\.csv:2: unknown unit 'furlong'"):
         read_table(path)
-    with pytest.raises(ParseError, match="mapped header.*'Meas'"):
+    with pytest.raises(ParseError, match=r"mapped header.*'Meas'"):
         read_table(path, columns="actual=Meas")
 
 

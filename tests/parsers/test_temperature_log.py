@@ -52,7 +52,8 @@ def test_non_numbers_are_refused_with_the_line(tmp_path, cell):
         (lambda r: r.__setitem__(3, r[3].replace("06:00:20", "06:00:05")), r":4: timestamp not after"),
         (lambda r: r.__setitem__(2, r[2] + ",extra,cell"), r":3: 8 cells but 6 columns"),
         (lambda r: r.__setitem__(0, r[0].replace("T2", "t1")), r":1: column 't1' appears twice \(columns 2 and 3\)"),
-        (lambda r: r.__setitem__(2, r[2].replace("20.5", "9" * 140_000)), r"log\.csv:\d+: unreadable line: field larger than field limit"),
+        (lambda r: r.__setitem__(2, r[2].replace("20.5", "9" * 140_000)),
+         r"log\.csv:\d+: unreadable line: field larger than field limit"),
     ],
 )
 def test_structural_errors(tmp_path, edit, message):

@@ -85,7 +85,7 @@ def test_file_changing_during_the_run_is_not_read(tmp_path):
 def test_bad_controller_register_fails_before_any_work(tmp_path):
     from setupfix.errors import ExportError
 
-    with pytest.raises(ExportError, match="haas: cannot express register 'G54.1P1'"):
+    with pytest.raises(ExportError, match=r"haas: cannot express register 'G54.1P1'"):
         run_batch(REQUEST, folder(tmp_path), tmp_path / "programs", settle=0, controller="haas")
     assert not (tmp_path / "programs").exists()
 
@@ -95,7 +95,8 @@ def test_one_program_per_cycle(tmp_path):
     d = tmp_path / "r"
     d.mkdir()
     shutil.copy(sample / "report.csv", d / "a.csv")
-    s = run_batch(CorrectRequest(load_model(sample / "model.toml")), d, tmp_path / "programs", settle=0, controller="fanuc")
+    s = run_batch(CorrectRequest(load_model(sample / "model.toml")), d, tmp_path / "programs", settle=0,
+                  controller="fanuc")
     assert s.written and [p.name for p in (tmp_path / "programs").iterdir()] == ["a.nc"]
     assert "G91 G10 L2 P1 Z-0.022" in (tmp_path / "programs" / "a.nc").read_text()
 

@@ -9,9 +9,15 @@ import pytest
 
 from setupfix.errors import MatchError
 from setupfix.pipeline.correct import correct_report
+from setupfix.pipeline.present import note_lines
+from setupfix.pipeline.requests import CorrectRequest, CycleOptions
 from tests.conftest import GUIDE_PINS
 
 CYCLE = GUIDE_PINS / "cycle_01.csv"
+
+
+def cycles(model, path, strict=False):
+    return correct_report(CorrectRequest(model, cycles=CycleOptions(strict=strict)), path).cycles
 
 
 def rewrite(tmp_path: Path, change, rows_slice=slice(None)) -> Path:
@@ -36,19 +42,19 @@ def test_inch_values_labelled_mm_are_a_unit_error(tmp_path, guide_pins_model):
     path = rewrite(tmp_path, inch_values)
     with pytest.raises(MatchError, match=r"r\.csv:2: unit error at P1 D1: .*0\.98425 mm .* 25 mm.*inch values read "
                                          r"as mm \(27 more"):
-        correct_report(guide_pins_model, path)
+        cycles(guide_pins_model, path)
     # labelled as what it is, the same report corrects like the original (to the register grid)
     labelled = rewrite(tmp_path, lambda i, r: {**inch_values(i, r), "unit": "inch"})
-    (pc,) = correct_report(guide_pins_model, labelled)
-    (ref,) = correct_report(guide_pins_model, CYCLE)
+    (pc,) = cycles(guide_pins_model, labelled)
+    (ref,) = cycles(guide_pins_model, CYCLE)
     assert pc.corrections == pytest.approx(ref.corrections, abs=0.0021)
-    assert not [w for w in pc.warnings if "differs" in w]
+    assert not [w for w in note_lines(pc.notes) if "differs" in w]
 
 
 def test_mm_values_labelled_inch_are_a_unit_error(tmp_path, guide_pins_model):
     path = rewrite(tmp_path, lambda i, r: {**r, "unit": "inch"})
-    with pytest.raises(MatchError, match="25.4 times too large: mm values read as inch"):
-        correct_report(guide_pins_model, path)
+    with pytest.raises(MatchError, match=r"25.4 times too large: mm values read as inch"):
+        cycles(guide_pins_model, path)
 
 
 def shifted(i, row):
@@ -60,37 +66,37 @@ def shifted(i, row):
 
 def test_shifted_nominal_is_noted_and_refused_when_strict(tmp_path, guide_pins_model):
     path = rewrite(tmp_path, shifted)
-    (pc,) = correct_report(guide_pins_model, path)
-    (note,) = [w for w in pc.warnings if "nominal" in w]
+    (pc,) = cycles(guide_pins_model, path)
+    (note,) = [w for w in note_lines(pc.notes) if "nominal" in w]
     assert "r.csv:5: P1 D4: the report's nominal 130 mm differs from the model's 30 mm" in note
     with pytest.raises(MatchError, match=r"r\.csv:5: P1 D4: .*nominal 130 mm.*refused by --strict"):
-        correct_report(guide_pins_model, path, strict=True)
+        cycles(guide_pins_model, path, strict=True)
 
 
 def test_narrower_report_tolerance_is_not_silent(tmp_path, guide_pins_model):
     path = rewrite(tmp_path, lambda i, r: {**r, "lower": "-0.02", "upper": "0.02"})
-    (pc,) = correct_report(guide_pins_model, path)
-    (note,) = [w for w in pc.warnings if "tolerance" in w]
+    (pc,) = cycles(guide_pins_model, path)
+    (note,) = [w for w in note_lines(pc.notes) if "tolerance" in w]
     assert "28 dimensions (P1 D1" in note and "-0.02/+0.02 mm differs from the model's -0.1/+0.1 mm" in note
     with pytest.raises(MatchError, match="refused by --strict"):
-        correct_report(guide_pins_model, path, strict=True)
+        cycles(guide_pins_model, path, strict=True)
 
 
 def test_rounding_is_not_a_difference(tmp_path, guide_pins_model):
     # a nominal printed to three decimals less and a limit 1 µm off are rounding, not a revision
     path = rewrite(tmp_path, lambda i, r: {**r, "nominal": f"{float(r['nominal']) + 0.0004:.4f}", "upper": "0.101"})
-    (pc,) = correct_report(guide_pins_model, path, strict=True)
-    assert not [w for w in pc.warnings if "differs" in w]
+    (pc,) = cycles(guide_pins_model, path, strict=True)
+    assert not [w for w in note_lines(pc.notes) if "differs" in w]
 
 
 def test_one_station_of_the_fixture_warns_about_shared_tools(tmp_path, guide_pins_model):
     path = rewrite(tmp_path, lambda i, r: r, slice(0, 7))
-    (pc,) = correct_report(guide_pins_model, path)
-    (note,) = [w for w in pc.warnings if "does not measure" in w]
+    (pc,) = cycles(guide_pins_model, path)
+    (note,) = [w for w in note_lines(pc.notes) if "does not measure" in w]
     assert "a correction of T5, T23 also moves 21 dimension(s)" in note and "stations P2, P3, P4" in note
     assert "measured dimensions only" in note
-    (full,) = correct_report(guide_pins_model, CYCLE)
-    assert not [w for w in full.warnings if "does not measure" in w]
+    (full,) = cycles(guide_pins_model, CYCLE)
+    assert not [w for w in note_lines(full.notes) if "does not measure" in w]
 
 
 def test_warnings_reach_json_and_stderr(tmp_path, capsys):

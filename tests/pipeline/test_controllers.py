@@ -17,6 +17,7 @@ from setupfix.model import load_model, model_from_dict
 from setupfix.offsets import offset_rows
 from setupfix.pipeline.controllers import CONTROLLERS, read_current, render
 from setupfix.pipeline.correct import correct_report
+from setupfix.pipeline.requests import CorrectRequest
 
 ROOT = Path(__file__).resolve().parents[2]
 SAMPLE = ROOT / "sample_reports" / "controllers"
@@ -35,7 +36,7 @@ def rows(mode: str):
 
 
 def test_sample_report_gives_those_corrections():
-    (pc,) = correct_report(MODEL, SAMPLE / "report.csv")
+    (pc,) = correct_report(CorrectRequest(MODEL), SAMPLE / "report.csv").cycles
     assert pc.verdict == "apply" and pc.margin_after == pytest.approx(0.048)
     assert pc.corrections == pytest.approx(CORRECTIONS)  # T12 (cost 3) moves least
 

@@ -19,7 +19,7 @@ from setupfix.pipeline.requests import CorrectRequest, History
 from setupfix.store import open_store
 
 sys.path.insert(0, str(Path(__file__).resolve().parent / "data"))
-import make_correct_goldens as golden  # noqa: E402
+import make_correct_goldens as golden
 
 CYCLES = [GUIDE_PINS / f"cycle_{k:02d}.csv" for k in range(1, 6)]
 
@@ -75,7 +75,8 @@ def test_store_history_equals_the_parts_given_and_counts_a_part_once(tmp_path):
         assert a.corrections == b.corrections and a.verdict == b.verdict
         np.testing.assert_array_equal(a.problem.deviation, b.problem.deviation)
     last = correct_report(CorrectRequest(model, history=given), CYCLES[-1]).cycles[0]
-    assert last.recommendation.rules[0].rule == "ewma" and "over 4 earlier part(s)" in last.recommendation.rules[0].message
+    rule = last.recommendation.rules[0]
+    assert rule.rule == "ewma" and "over 4 earlier part(s)" in rule.message
     plain = correct_report(CorrectRequest(model), CYCLES[-1]).cycles[0]
     assert any("needs the history store" in n.message for n in plain.notes)
 

@@ -11,6 +11,7 @@ import pytest
 from setupfix.errors import MatchError
 from setupfix.pipeline.correct import correct_report
 from setupfix.pipeline.cycles import cycle_name, load_parts, model_groups
+from setupfix.pipeline.requests import CorrectRequest, CycleOptions
 from tests.conftest import GUIDE_PINS
 
 
@@ -52,8 +53,8 @@ def test_parts_per_cycle_groups_loads_named_by_their_parts(tmp_path, short_names
     for c, part in enumerate(parts, start=1):
         (ref,) = load_parts(short_names, GUIDE_PINS / f"cycle_{c:02d}.csv")
         np.testing.assert_allclose(part.deviation, ref.deviation, atol=1e-12)
-    results = correct_report(short_names, path, parts_per_cycle=4)
-    (ref,) = correct_report(short_names, GUIDE_PINS / "cycle_02.csv")
+    results = correct_report(CorrectRequest(short_names, cycles=CycleOptions(parts_per_cycle=4)), path).cycles
+    (ref,) = correct_report(CorrectRequest(short_names), GUIDE_PINS / "cycle_02.csv").cycles
     assert results[1].corrections == pytest.approx(ref.corrections)
 
 

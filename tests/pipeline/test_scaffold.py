@@ -15,7 +15,8 @@ import parsers
 from setupfix.errors import ModelError, SetupfixError
 from setupfix.model import load_model, match_parts, model_from_dict
 from setupfix.pipeline.checks import check_parts
-from setupfix.pipeline.correct import correct_part
+from setupfix.pipeline.correct import correct_cycle, correct_report
+from setupfix.pipeline.requests import CorrectRequest
 from setupfix.pipeline.scaffold import name_axis, scaffold_from_tables
 from tests.conftest import GUIDE_PINS, SAMPLES, shared_path
 
@@ -37,7 +38,7 @@ def scaffold_and_correct(path: Path, table: pd.DataFrame | None = None, **kwargs
     first = table["part"].astype(str).iloc[0] if "part" in table else None
     one = table[table["part"].astype(str) == first] if first is not None else table
     (part,) = check_parts(model, match_parts(model, one, source=str(path)), source=str(path))
-    pc = correct_part(model, part)
+    pc = correct_cycle(CorrectRequest(model), part)
     # a gross deviation (beyond the reject band, setupfix.safety) is refused, not corrected
     assert pc.result.status in ("optimal", "time_limit", "rounded") or pc.verdict == "reject"
     assert part.measured.sum() >= 1 and not [n for n in part.notes if n.kind == "mismatch"]
@@ -99,7 +100,7 @@ def test_scaffold_on_every_shared_sample_with_tolerances():
         if table is None:
             continue
         try:
-            scaffold, model, pc = scaffold_and_correct(path, table)
+            scaffold, _model, _pc = scaffold_and_correct(path, table)
         except ModelError as exc:
             refused.append((path.name, str(exc)))
             continue
@@ -172,8 +173,6 @@ def test_several_reports_make_one_scaffold():
 
 
 def test_parts_as_stations_scaffold_corrects_one_fixture_cycle(tmp_path):
-    from setupfix.pipeline.correct import correct_report
-
     path = tmp_path / "r.csv"
     path.write_text("characteristic,nominal,actual,lower,upper,part\n"
                     "Depth_Z,10,10.04,-0.05,0.05,S1\nWidth_Z,20,19.99,-0.05,0.05,S1\n"
@@ -182,10 +181,11 @@ def test_parts_as_stations_scaffold_corrects_one_fixture_cycle(tmp_path):
     model = model_from_dict(tomllib.loads(scaffold_from_tables([(str(path), table)], parts_are_stations=True).text))
     assert [(d.name, d.group) for d in model.dimensions] == [("Depth_Z", "S1"), ("Width_Z", "S1"),
                                                              ("Depth_Z", "S2"), ("Width_Z", "S2")]
-    (pc,) = correct_report(model, path)
+    (pc,) = correct_report(CorrectRequest(model), path).cycles
     assert pc.part.part == "S1+S2" and pc.part.measured.all()
     plain = model_from_dict(tomllib.loads(scaffold_from_tables([(str(path), table)]).text))
-    assert len(plain.dimensions) == 2 and len(correct_report(plain, path)) == 2  # parts as cycles
+    # parts as cycles
+    assert len(plain.dimensions) == 2 and len(correct_report(CorrectRequest(plain), path).cycles) == 2
 
 
 def _dimension_comments(text: str) -> dict[str, str]:
@@ -262,9 +262,9 @@ def test_a_folder_stands_for_its_files_and_unreadable_ones_are_left_out_with_a_n
     scaffold = scaffold_model([folder])
     assert scaffold.dimensions == 28 and any("notes.txt" in n and "left out" in n for n in scaffold.notes)
     (folder / "cycle_01.csv").unlink()
-    with pytest.raises(SetupfixError, match="no file of .* is a readable report"):
+    with pytest.raises(SetupfixError, match=r"no file of .* is a readable report"):
         scaffold_model([folder])
-    with pytest.raises(SetupfixError, match="notes.txt"):
+    with pytest.raises(SetupfixError, match=r"notes.txt"):
         scaffold_model([folder / "notes.txt"])  # named as a file: refused, not left out
 
 

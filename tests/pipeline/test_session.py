@@ -91,7 +91,7 @@ def test_compare_steps_end_with_what_compare_problem_gives():
     assert [s[1] for s in steps] == [1, 2, 3, 4, 5] and all(s[2] == 5 for s in steps)
     last, ref = steps[-1][3], compare_problem(problem, methods=("ga", "pso"), trials=2, seed=3)
     assert [m.optimizer for m in last.methods] == ["ga", "pso"]
-    for a, b in zip(last.methods, ref.methods):
+    for a, b in zip(last.methods, ref.methods, strict=True):
         assert a.seeds == b.seeds and a.f1.tolist() == b.f1.tolist() and a.f2.tolist() == b.f2.tolist()
 
 
@@ -132,7 +132,8 @@ def test_the_readers_options_and_notes_come_as_data():
     opened = opened_report(GUIDE_PINS.parent / "pcdmis" / "bracket_two_parts.txt")
     assert opened.format == "pcdmis" and any("angle" in str(n) and ":27" in str(n) for n in opened.notes)
     tables = GUIDE_PINS.parent / "tables"
-    shop = opened_report(tables / "cycle_01_shop.csv", read=ReadOptions(columns=str(tables / "cycle_01_shop.columns.toml")))
+    shop = opened_report(tables / "cycle_01_shop.csv",
+                         read=ReadOptions(columns=str(tables / "cycle_01_shop.columns.toml")))
     plain = opened_report(GUIDE_PINS / "cycle_01.csv")
     assert shop.corrections[0].corrections == plain.corrections[0].corrections
 

@@ -12,9 +12,11 @@ import pytest
 
 from parsers.canonical import read_canonical
 from setupfix.errors import ExportError, ParseError
-from setupfix.model import CANONICAL_COLUMNS
+from setupfix.model import CANONICAL_COLUMNS, load_model
 from setupfix.pipeline.correct import correct_report
+from setupfix.pipeline.export import cycle_rows
 from setupfix.pipeline.parse import parse_reports
+from setupfix.pipeline.requests import CorrectRequest
 from setupfix.pipeline.writers import (check_target, write_bytes, write_canonical_csv, write_figure,
                                        write_offsets_csv, write_text)
 
@@ -23,8 +25,8 @@ GUIDE = ROOT / "sample_reports" / "guide_pins"
 
 
 def test_offsets_csv_round_trip(tmp_path):
-    result = correct_report(GUIDE / "model.toml", GUIDE / "cycle_01.csv")[0]
-    rows = result.offsets()
+    result = correct_report(CorrectRequest(load_model(GUIDE / "model.toml")), GUIDE / "cycle_01.csv").cycles[0]
+    rows = cycle_rows(result)
     write_offsets_csv(rows, tmp_path / "off.csv", resolution=result.model.resolution)
     with open(tmp_path / "off.csv", newline="", encoding="utf-8") as stream:
         back = list(csv.DictReader(stream))

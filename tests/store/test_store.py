@@ -67,7 +67,7 @@ def test_logs_round_trip_and_contradictions_are_refused(tmp_path):
         for col in temps.columns.drop("timestamp"):
             np.testing.assert_array_equal(temps[col].to_numpy(), source[col].to_numpy(float))
         other = _log(tmp_path, LOG.replace("0.012", "0.013"), "other.csv")
-        with pytest.raises(StoreError, match="G54.*contradicts the stored one"):
+        with pytest.raises(StoreError, match=r"G54.*contradicts the stored one"):
             import_history(store, REPORTS, [other])
         twice = _log(tmp_path, LOG + "2026-11-02T09:00:00,G54,0.02,\n", "twice.csv")
         with pytest.raises(ParseError, match=r"twice.csv:4: G54 correction at 2026-11-02T09:00:00 given twice "
@@ -80,9 +80,9 @@ def test_a_bad_file_stores_nothing(tmp_path):
     bad = tmp_path / "bad.csv"
     bad.write_text("characteristic,nominal,actual\nD1,1.0,abc\n")
     with open_store(tmp_path / "h.db") as store:
-        with pytest.raises(ParseError, match="bad.csv:2"):
+        with pytest.raises(ParseError, match=r"bad.csv:2"):
             import_history(store, [*REPORTS, bad])
-        with pytest.raises(ParseError, match="corr.csv:3: unknown event"):
+        with pytest.raises(ParseError, match=r"corr.csv:3: unknown event"):
             import_history(store, REPORTS, [_log(tmp_path, LOG.replace("tool_change", "wear"))])
         assert store.reports() == []
 
@@ -151,7 +151,7 @@ def test_migration_from_the_first_schema_keeps_the_data(tmp_path):
 
 def test_what_is_not_a_store_is_refused(tmp_path):
     (tmp_path / "text.db").write_text("hello, this is not SQLite" * 100)
-    with pytest.raises(StoreError, match="text.db"):
+    with pytest.raises(StoreError, match=r"text.db"):
         open_store(tmp_path / "text.db")
     other = sqlite3.connect(tmp_path / "other.db")
     other.execute("CREATE TABLE x (y)")
@@ -191,14 +191,17 @@ def test_cli_import_show_export(tmp_path, capsys):
 
 
 def test_recommendations_of_a_correct_run_are_stored(tmp_path):
+    from setupfix.model import load_model
     from setupfix.pipeline.correct import correct_report
     from setupfix.pipeline.history import record_recommendations
+    from setupfix.pipeline.present import cycle_json
+    from setupfix.pipeline.requests import CorrectRequest
 
-    results = correct_report(GUIDE / "model.toml", REPORTS[0])
+    results = correct_report(CorrectRequest(load_model(GUIDE / "model.toml")), REPORTS[0]).cycles
     with open_store(tmp_path / "h.db") as store:
         record_recommendations(store, results, model=GUIDE / "model.toml", report=REPORTS[0])
         (rec,) = store.recommendations()
-    assert rec.optimizer == "exact" and rec.result["corrections"] == results[0].to_json()["corrections"]
+    assert rec.optimizer == "exact" and rec.result["corrections"] == cycle_json(results[0])["corrections"]
     assert rec.inputs["report_sha256"] == hashlib.sha256(REPORTS[0].read_bytes()).hexdigest()
 
 
@@ -206,6 +209,13 @@ def test_a_truncated_report_is_refused_and_nothing_stored(tmp_path):
     cut = tmp_path / "cut.csv"
     cut.write_bytes(REPORTS[0].read_bytes()[:322])  # ends inside a row: "P1 D4,30.0000,29."
     with open_store(tmp_path / "h.db") as store:
-        with pytest.raises(ParseError, match="cut.csv.*truncated"):
+        with pytest.raises(ParseError, match=r"cut.csv.*truncated"):
             import_history(store, [REPORTS[1], cut])
         assert store.reports() == []
+
+
+def test_the_store_keeps_the_corrections_log_in_its_readers_columns():
+    from parsers.corrections import COLUMNS
+    from setupfix.store import CORRECTION_COLUMNS
+
+    assert CORRECTION_COLUMNS is COLUMNS  # one definition

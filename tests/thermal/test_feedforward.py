@@ -104,7 +104,7 @@ def test_correct_with_thermal_feed_forward(tmp_path, monkeypatch, capsys):
     capsys.readouterr()
     assert cli.main(base) == 0
     plain = json.loads(capsys.readouterr().out)
-    assert cli.main(base + ["--thermal", str(model), "--temperatures", str(log), "--at", "2026-11-02T09:00:00"]) == 0
+    assert cli.main([*base, "--thermal", str(model), "--temperatures", str(log), "--at", "2026-11-02T09:00:00"]) == 0
     fed = json.loads(capsys.readouterr().out)
     th = fed["thermal"]
     drift = pipe.predict_log(load_model(model), read_temperature_log(log))[0]
@@ -113,7 +113,8 @@ def test_correct_with_thermal_feed_forward(tmp_path, monkeypatch, capsys):
     for reg in ("T5", "T23"):
         assert fed["corrections"][reg] == pytest.approx(plain["corrections"][reg] + th["shift"])
     assert fed["corrections"]["W1"] == plain["corrections"]["W1"]
-    assert cli.main(base[:-1] + ["--thermal", str(model), "--temperatures", str(log), "--at", "2026-11-02T09:00:00"]) == 0
+    assert cli.main([*base[:-1], "--thermal", str(model), "--temperatures", str(log),
+                     "--at", "2026-11-02T09:00:00"]) == 0
     assert "thermal feed-forward" in capsys.readouterr().out
-    assert cli.main(base + ["--thermal", str(model)]) == 1
+    assert cli.main([*base, "--thermal", str(model)]) == 1
     assert "go together" in capsys.readouterr().err

@@ -97,7 +97,7 @@ def test_mra_refuses_gaps_and_implausible_values(train_log):
     gappy = dict(train_log.columns)
     gappy["bearing"] = gappy["bearing"].copy()
     gappy["bearing"][5] = np.nan
-    with pytest.raises(ParseError, match="x.csv:7: empty value in column 'bearing'"):
+    with pytest.raises(ParseError, match=r"x.csv:7: empty value in column 'bearing'"):
         pipe.fit_log(TemperatureLog.from_arrays("x.csv", gappy), "mra", target="error_z")
     for value, what in ((1e300, "temperature"), (1e306, "temperature")):
         hot = dict(train_log.columns)
@@ -136,7 +136,7 @@ def test_quality_gate_and_default_seed(train_log):
 
 def test_registry_validates_and_names_methods():
     assert methods() == ("mra", "grey-ls", "grey-cs", "grey-pso", "kalman")
-    with pytest.raises(ParameterError, match="unknown thermal method 'neural'.*mra, grey-ls"):
+    with pytest.raises(ParameterError, match=r"unknown thermal method 'neural'.*mra, grey-ls"):
         make_model("neural")
     with pytest.raises(ParameterError, match="iterations must be an int in"):
         make_model("grey-cs", iterations=-5)

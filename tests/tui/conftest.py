@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import asyncio
+import contextlib
 from collections.abc import Awaitable, Callable
 from pathlib import Path
 from typing import Any
@@ -38,9 +39,7 @@ async def settle(pilot: Any) -> None:
     """Wait until every worker has finished and its result reached the screen."""
     from textual.worker import WorkerFailed
 
-    try:
+    with contextlib.suppress(WorkerFailed):  # the app shows it; the tests look at what it shows
         await pilot.app.workers.wait_for_complete()
-    except WorkerFailed:  # the app shows it; the tests look at what it shows
-        pass
     await pilot.pause()
     await pilot.pause()

@@ -9,13 +9,15 @@ from __future__ import annotations
 import dataclasses
 import shutil
 
-from conftest import GUIDE_PINS
+from conftest import GUIDE_PINS, SAMPLES
 from tui.conftest import CYCLE_01, MODEL, run, settle
 
 from setupfix.cli import main
 from setupfix.model import load_model
 from setupfix.pipeline.correct import correct_report
 from setupfix.pipeline.requests import CorrectRequest, SolveOptions
+
+CONTROLLERS = SAMPLES / "controllers"
 
 
 def _notes(app):
@@ -46,7 +48,7 @@ def test_open_sort_filter_export_then_a_bad_report(make_app, tmp_path):
             # the mouse: a click on a column header sorts by it
             await pilot.click("#dimensions", offset=(20, 1))
             assert app.sort_key == "deviation"
-            assert [str(r[3]) for r in _rows(dims)][0] == "-0.0829"
+            assert next(str(r[3]) for r in _rows(dims)) == "-0.0829"
             app.sort_key = None
             # a resize to a wide terminal adds the margins; back to 80 columns removes them
             await pilot.resize_terminal(160, 48)
@@ -78,7 +80,7 @@ def test_open_sort_filter_export_then_a_bad_report(make_app, tmp_path):
             app.screen.query_one("#export-path").value = str(tmp_path)
             await pilot.press("ctrl+s")
             await pilot.pause()
-            assert any("export failed" == n.title and str(tmp_path) in n.message for n in app._notifications)
+            assert any(n.title == "export failed" and str(tmp_path) in n.message for n in app._notifications)
             # a bad report: a notification naming file and line, the stale correction gone
             app._picked_report(bad)
             await settle(pilot)
@@ -200,8 +202,10 @@ def test_history_from_the_store_one_key_diagnose_and_the_export_recorded(make_ap
             await settle(pilot)
             with open_store(db) as store:
                 log = store.corrections()
-            moved = {reg.register: v for reg, v in zip(app.opened.model.registers, app._current().result.x) if v}
-            assert dict(zip(log["register"], log["delta"].round(6))) == {k: round(v, 6) for k, v in moved.items()}
+            x = app._current().result.x
+            moved = {reg.register: v for reg, v in zip(app.opened.model.registers, x, strict=True) if v}
+            logged = dict(zip(log["register"], log["delta"].round(6), strict=True))
+            assert logged == {k: round(v, 6) for k, v in moved.items()}
             assert any("recorded" in n for n in _notes(app))
 
     run(scenario())
@@ -263,3 +267,34 @@ def test_the_command_line_gives_the_app_correct_s_reader_cycle_and_thermal_optio
     assert inputs.cycles == CycleOptions(("P1", "P2", "P3", "P4"), strict=True)
     assert (str(inputs.thermal), str(inputs.temperatures), inputs.at, inputs.thermal_dead_band) == (
         "t.json", "log.csv", "2026-11-02T09:00:00", 0.002)
+
+
+def test_compare_solves_the_problem_correct_solves(make_app, tmp_path):
+    """The compare tab's exact result is the correction shown: the guarded problem with the register costs
+    (controllers sample: T12 costs 3), not the problem on the real limits."""
+    import numpy as np
+
+    from setupfix.optimize import get_optimizer
+
+    model = tmp_path / "m.toml"
+    model.write_text((CONTROLLERS / "model.toml").read_text(encoding="utf-8") + "\n[safety]\nuncertainty = 0.004\n",
+                     encoding="utf-8")
+
+    async def scenario():
+        app = make_app(report=CONTROLLERS / "report.csv", model=model)
+        async with app.run_test(size=(100, 30)) as pilot:
+            await settle(pilot)
+            c = app._current()
+            await pilot.press("c")
+            await settle(pilot)
+            comp = app.comparison
+            assert comp is not None and comp.problem is c.posed.guarded
+            raw = c.recommendation.result
+            assert c.verdict == "apply" and np.array_equal(c.x, raw.x)  # the correction shown is the optimum
+            assert np.array_equal(comp.exact.x, raw.x) and comp.exact.margin_after == raw.margin_after
+            assert np.any(c.posed.guarded.cost != 1.0)
+            # the real-limit problem is another one: its exact optimum is not what correct shows
+            other = get_optimizer("exact").solve(c.problem)
+            assert not np.array_equal(other.x, raw.x) or other.margin_after != raw.margin_after
+
+    run(scenario())

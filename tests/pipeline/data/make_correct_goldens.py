@@ -148,9 +148,10 @@ def main() -> None:
     with tempfile.TemporaryDirectory() as d:
         tmp = Path(d)
         for name, args in cases(tmp).items():
-            code, out, err = run([*args, "--json"])
+            code, out, _err = run([*args, "--json"])
             doc = blank(json.loads(out))
-            (OUT / f"{name}.json").write_text(json.dumps({"exit": code, "json": doc}, indent=1, ensure_ascii=False).replace(str(tmp), "TMP") + "\n")
+            text = json.dumps({"exit": code, "json": doc}, indent=1, ensure_ascii=False).replace(str(tmp), "TMP")
+            (OUT / f"{name}.json").write_text(text + "\n")
             code, text, _ = run([*args, "--offsets", tmp / "o.csv"])
             text = re.sub(r"\d+ ms\)", "# ms)", text).replace(str(tmp), "TMP")
             (OUT / f"{name}.txt").write_text(text)
