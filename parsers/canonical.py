@@ -178,7 +178,8 @@ def clean_deviation(actual: np.ndarray, nominal: np.ndarray) -> np.ndarray:
         decimals = np.clip(np.floor(-np.log10(np.where(scale > 0, scale, 1e-300))), 0, 15)
         factor = 10.0 ** decimals
         rounded = np.round(difference * factor) / factor
-    return np.where(np.isfinite(rounded), rounded, difference)
+    out: np.ndarray = np.where(np.isfinite(rounded), rounded, difference)
+    return out
 
 
 def _check_magnitudes(lengths: dict[str, np.ndarray], source: _Column, path: str) -> None:

@@ -25,7 +25,7 @@ that changed it.
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
@@ -332,7 +332,11 @@ def recommend(posed: PosedProblem, solve: Callable[[CorrectionProblem], Optimize
     names : mapping, optional
         Dimension ID → name, for the messages.
     """
-    label = (lambda ids: ", ".join((names or {}).get(i, i) for i in ids))
+    shown = names or {}
+
+    def label(ids: Iterable[str]) -> str:
+        return ", ".join(shown.get(i, i) for i in ids)
+
     problem, guarded, policy = posed.problem, posed.guarded, posed.policy
     ids = np.array(problem.register_ids, dtype=object)
     dims = np.array(problem.dimension_ids, dtype=object)

@@ -54,7 +54,7 @@ def _report_date(results: etree._Element, root: etree._Element, ns: str) -> str:
     """``InspectionTraceability/ReportPreparationDate`` of the part's results, else of the
     document's: when it was inspected, the nearest a QIF file comes to when it was machined."""
     path = f"{{{ns}}}InspectionTraceability/{{{ns}}}ReportPreparationDate"
-    own = results.findtext(path)
+    own: str | None = results.findtext(path)
     if own and own.strip():
         return own.strip()
     container = results.getparent()

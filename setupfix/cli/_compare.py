@@ -9,7 +9,7 @@ import sys
 from setupfix.cli._common import add_report_options, cycles_of, read_options, whole_number
 
 
-def add_parser(sub: argparse._SubParsersAction) -> None:
+def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     p = sub.add_parser("compare", help="compare the metaheuristics with the exact optimum on one report",
                        description="Run CRIPSO, PSO, GA, COA and cuckoo search N seeded times each on one "
                                    "measured part and tabulate best / median / worst f1, f2 and f beside the "

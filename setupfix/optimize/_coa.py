@@ -70,7 +70,8 @@ def lay_eggs(centres: Array, n_eggs: npt.ArrayLike, span: Array, alpha: float,
     theta = 2.0 * np.pi * rank / np.maximum(n_eggs[owner] - 1, 1)
     sign = np.where(rng.random((owner.size, centres.shape[1])) < 0.5, -1.0, 1.0)
     step = radius[:, None] * (sign * np.cos(theta)[:, None] + np.sin(theta)[:, None])
-    return centres[owner] + step * span
+    eggs: Array = centres[owner] + step * span
+    return eggs
 
 
 def kmeans(x: Array, k: int, rng: np.random.Generator, n_iter: int = 20) -> npt.NDArray[np.int64]:

@@ -100,7 +100,8 @@ def least_distance_working_set(g_rows: Array, b: Array, kmin: Array, kmax: Array
     box = float(np.max(np.abs(np.r_[kmin, kmax]), initial=0.0))
 
     def lhs(k: Array) -> Array:
-        return np.r_[g_rows @ k, k, -k]
+        stacked: Array = np.r_[g_rows @ k, k, -k]
+        return stacked
 
     def row(idx: npt.NDArray[np.intp]) -> Array:
         out = np.zeros((idx.size, n))

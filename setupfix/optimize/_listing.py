@@ -106,7 +106,8 @@ def enumerate_ball(centre: Array, cost: Array, radius2: float, kmin: Array, kmax
             keep &= np.sum(cost * grid**2, axis=1) <= f_slack
         if rows is not None and rhs is not None and rows.shape[0]:
             keep &= np.all(grid @ rows.T <= rhs + 1e-7, axis=1)
-        return grid[keep]
+        kept: Array = grid[keep]
+        return kept
     if np.isfinite(f_slack):
         order = np.argsort(-np.sqrt(cost) * np.abs(centre), kind="stable")
     else:

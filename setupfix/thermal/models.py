@@ -77,8 +77,8 @@ def rebase(predicted: npt.ArrayLike, index: int, error: float) -> Array:
     -------
     ndarray, shape (n,)
     """
-    p = np.asarray(predicted, dtype=float)
-    return p + (float(error) - p[index])
+    p = np.asarray(predicted, dtype=np.float64)
+    return p + (float(error) - float(p[index]))
 
 
 class ThermalModel(ValidatedParams):
@@ -329,7 +329,8 @@ class GreyModel(ThermalModel):
         else:
             def objective(pop: Array) -> Array:
                 resid = grey.iago(self._response(pop, y0, X1)) - dy
-                return np.sum(resid[:, 1:] ** 2, axis=1)  # k = 1 is exact by construction
+                sse: Array = np.sum(resid[:, 1:] ** 2, axis=1)  # k = 1 is exact by construction
+                return sse
 
             rng = generator(self.seed)
             with np.errstate(over="ignore", invalid="ignore"):
