@@ -171,7 +171,7 @@ def main(argv: list[str] | None = None) -> None:
     text = "\n".join(head + lines + ["", "summary:"] + summary_lines) + "\n"
     args.out.parent.mkdir(parents=True, exist_ok=True)
     args.out.write_text(text, encoding="utf-8")
-    print("\n".join(["", "summary:"] + summary_lines))
+    print("\n".join(["", "summary:", *summary_lines]))
 
 
 if __name__ == "__main__":

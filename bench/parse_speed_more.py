@@ -12,6 +12,7 @@ from ``../shared`` are used when present and their formats skipped otherwise.
 from __future__ import annotations
 
 import argparse
+import functools
 import json
 import os
 import sys
@@ -133,10 +134,10 @@ def main() -> None:
                 lines.append(f"{label:<16} skipped: ../shared sample absent")
                 continue
             table = parsers.read_report(path, format=fmt).table
-            seconds = _best(lambda: parsers.read_report(path, format=fmt).table, args.repeat)
+            seconds = _best(functools.partial(parsers.read_report, path, format=fmt), args.repeat)
             csv_path = folder / "ref.csv"
             table.to_csv(csv_path, index=False)
-            reference = _best(lambda: pd.read_csv(csv_path), args.repeat)
+            reference = _best(functools.partial(pd.read_csv, csv_path), args.repeat)
             kind = "table-like" if label in TABLE_LIKE else "text report"
             lines.append(f"{label:<16} {len(table):>8} {seconds:>8.3f} {len(table) / seconds:>10,.0f} "
                          f"{reference:>10.3f} {seconds / reference:>6.1f}  {kind}")

@@ -8,9 +8,9 @@ import io
 import re
 import sys
 from collections.abc import Callable, Iterator
-from typing import BinaryIO
 from dataclasses import dataclass
 from pathlib import Path
+from typing import BinaryIO
 
 from parsers import numbers
 from setupfix.errors import ParseError, SourceLocation

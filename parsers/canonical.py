@@ -269,7 +269,7 @@ def read_canonical(path: str | Path | Source, *, text: str | None = None, unit: 
             continue
         if len(record) > width:
             raise ParseError(f"{len(record)} fields, header has {width}", location=SourceLocation(name, line=line_num))
-        row: dict[str, object] = dict(zip(header, [_unescaped(c.strip()) for c in record]))
+        row: dict[str, object] = dict(zip(header, [_unescaped(c.strip()) for c in record], strict=False))  # short rows: filled below
         for col in header[len(record):]:
             row[col] = ""
         if not row["characteristic"]:
@@ -349,7 +349,7 @@ def _plain_columns(body: str, header: list[str], name: str, unit: str | None) ->
         return None
     unescape = "'" in body
     cells: dict[str, list[str]] = {}
-    for col, values in zip(header, zip(*records)):
+    for col, values in zip(header, zip(*records, strict=True), strict=True):
         cells[col] = [_unescaped(v.strip()) for v in values] if unescape else [v.strip() for v in values]
     if not all(cells["characteristic"]):
         return None

@@ -11,8 +11,6 @@ from __future__ import annotations
 from collections.abc import Iterable
 from dataclasses import dataclass
 
-import pandas as pd
-
 from parsers._registry import read_report
 from parsers._rowkeys import ROW_COLUMNS, row_keys
 from parsers._source import Source

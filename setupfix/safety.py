@@ -285,7 +285,7 @@ def ewma_history(deviation: Array, now: np.datetime64 | None, times: npt.NDArray
         since = known & (log_times > t) & (log_times <= now)
         reset = np.zeros(composite.shape[1], dtype=bool)
         shift = np.zeros(composite.shape[0])
-        for j, delta, tool_change in zip(log_register[since], log_delta[since], log_reset[since]):
+        for j, delta, tool_change in zip(log_register[since], log_delta[since], log_reset[since], strict=True):
             if tool_change:
                 reset |= composite[j] != 0
             elif np.isfinite(delta):
@@ -309,7 +309,7 @@ def _zero_result(problem: CorrectionProblem, optimizer: str, status: str, messag
 def _restrict(problem: CorrectionProblem, keep: Mask) -> CorrectionProblem:
     return dataclasses.replace(problem, composite=problem.composite[:, keep], deviation=problem.deviation[keep],
                                lower=problem.lower[keep], upper=problem.upper[keep],
-                               dimension_ids=tuple(d for d, k in zip(problem.dimension_ids, keep) if k))
+                               dimension_ids=tuple(d for d, k in zip(problem.dimension_ids, keep, strict=True) if k))
 
 
 def _inside(values: Array, lower: Array, upper: Array) -> Mask:

@@ -22,12 +22,12 @@ from pathlib import Path
 
 import pandas as pd
 
+from parsers._notes import note
 from parsers._source import point_number, read_text
 from parsers.axes import axis_word, vector_axis
-from parsers.numbers import is_number
 from parsers.canonical import finish_table
 from parsers.dmis.statements import Statement, parse_statement, split_statements
-from parsers._notes import note
+from parsers.numbers import is_number
 from setupfix.errors import ParseError, SourceLocation
 from setupfix.units import LENGTH_UNITS, length_factor
 
@@ -209,10 +209,9 @@ def _result_row(st: Statement, feat: str, nominal: dict[str, _Feature], actual: 
             nom = act - reported
         elif math.isnan(act):
             act = nom + reported
-        elif abs((act - nom) - reported) > tolerance:
-            if abs(act - reported) > tolerance:  # neither the deviation nor (another writer's) actual
-                raise ParseError(f"{st.label}: result {reported:g} contradicts FA - F = {act - nom:g}",
-                                 location=where)
+        elif abs((act - nom) - reported) > tolerance and abs(act - reported) > tolerance:
+            # neither the deviation nor (another writer's) actual
+            raise ParseError(f"{st.label}: result {reported:g} contradicts FA - F = {act - nom:g}", location=where)
     elif kind in _PROFILE or kind in _ZONE:
         numeric = [v for v in values if _is_number(v)]
         if not numeric:

@@ -73,7 +73,7 @@ def _words(line: str) -> list[tuple[int, int, str]]:
 
 def _cells(line: str, where: SourceLocation) -> dict[str, str]:
     cells: dict[str, str] = {}
-    for start, end, word in _words(line):
+    for _start, end, word in _words(line):
         key = next((k for k, edge in _EDGES if end <= edge), "judgement")
         if key in cells and key != "judgement":
             raise ParseError(f"two values in the {key} column ({cells[key]!r}, {word!r})", location=where)

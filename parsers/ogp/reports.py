@@ -31,12 +31,17 @@ from pathlib import Path
 
 import pandas as pd
 
-from parsers.ogp.rtf import is_rtf, rtf_lines
-from parsers._source import read_text
 from parsers._rows import (
-    SkipLog, checked_deviation, finish_rows, parse_number, unit_factor, unit_or_none,
+    SkipLog,
+    checked_deviation,
+    finish_rows,
+    parse_number,
+    unit_factor,
+    unit_or_none,
     warn_assumed_mm,
 )
+from parsers._source import read_text
+from parsers.ogp.rtf import is_rtf, rtf_lines
 from setupfix.errors import ParseError, SourceLocation
 
 __all__ = ["read_ogp", "sniff_ogp"]

@@ -21,11 +21,16 @@ from typing import NamedTuple
 
 import pandas as pd
 
-from parsers._source import load_source, read_text
 from parsers._rows import (
-    SkipLog, finish_rows, parse_number, try_number, unit_factor, unit_or_none,
+    SkipLog,
+    finish_rows,
+    parse_number,
+    try_number,
+    unit_factor,
+    unit_or_none,
     warn_assumed_mm,
 )
+from parsers._source import load_source, read_text
 from setupfix.errors import ParseError, SourceLocation
 
 __all__ = ["read_aqdef", "sniff_aqdef"]
@@ -133,7 +138,7 @@ def _feed_value_line(state: _State, line: str, where: SourceLocation) -> None:
         parts = group.split(_DC4)
         if len(parts) > 20:
             raise ParseError(f"characteristic {number}: {len(parts)} fields in a value group", location=where)
-        item = _Value(number, state.coded_lines, where, dict(zip(_VALUE_FIELDS, parts)))
+        item = _Value(number, state.coded_lines, where, dict(zip(_VALUE_FIELDS, parts, strict=False)))  # fields past K0012 unused
         state.samples[number] = state.coded_lines
         state.values.append(item)
         state.last_value[number] = item

@@ -75,7 +75,7 @@ def write_qif(rows: list[dict[str, str]], target: Path) -> None:
     mset = _el(results, "MeasurementResultsSet", n=str(len(stations)))
     comps = _el(_el(results, "ActualComponentSets", n="1"), "ActualComponentSet", n=str(len(stations)))
     for station in stations:
-        mine = [(r, i) for r, i in zip(rows, item_ids) if r["station"] == station]
+        mine = [(r, i) for r, i in zip(rows, item_ids, strict=True) if r["station"] == station]
         res_id, comp_id = next_id, next_id + 1
         next_id += 2
         res = _el(mset, "MeasurementResults", id=str(res_id))

@@ -29,13 +29,15 @@ reference program drops duplicate eggs too).  The optional killing of the worst
 
 from __future__ import annotations
 
+from typing import ClassVar
+
 import numpy as np
 import numpy.typing as npt
 
 from setupfix.errors import ParameterError
 from setupfix.optimize._base import POPULATION, Evaluator, Metaheuristic, count
-from setupfix.params import Interval
 from setupfix.optimize._problem import CorrectionProblem
+from setupfix.params import Constraint, Interval
 
 __all__ = ["COA", "lay_eggs", "kmeans", "immigrate"]
 
@@ -128,7 +130,7 @@ class COA(Metaheuristic):
     """
 
     name = "coa"
-    _parameter_constraints = {
+    _parameter_constraints: ClassVar[dict[str, list[Constraint]]] = {
         **Metaheuristic._parameter_constraints,
         "initial_cuckoos": POPULATION,
         "max_cuckoos": POPULATION,

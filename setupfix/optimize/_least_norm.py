@@ -316,7 +316,7 @@ def chord_least_norm(g_rows: Array, g: Array, level: float, b: Array, kmin: Arra
     n = g_rows.shape[1]
     chords: list[set[int]] = []
     ref = np.abs(k_cont) if best is None else np.abs(best)
-    for vc, vs in zip(np.abs(k_cont), ref):
+    for vc, vs in zip(np.abs(k_cont), ref, strict=True):
         base = int(np.floor(vc))
         chords.append({max(base - 1, 0), base, base + 1, int(vs)})
     a_chords, rhs = chord_rows([(i, j) for i, js in enumerate(chords) for j in sorted(js)], n, 2 * n)

@@ -116,7 +116,7 @@ def enumerate_ball(centre: Array, cost: Array, radius2: float, kmin: Array, kmax
 
     def after(x: Array) -> Array:  # after(x)[..., p] = Σ_{q > p} x[..., q]
         s = np.cumsum(x[..., ::-1], axis=-1)[..., ::-1]
-        return np.concatenate([s[..., 1:], np.zeros(s.shape[:-1] + (1,))], axis=-1)
+        return np.concatenate([s[..., 1:], np.zeros((*s.shape[:-1], 1))], axis=-1)
 
     rest_f = after(c * np.where((lo_o <= 0) & (hi_o >= 0), 0.0, np.minimum(lo_o**2, hi_o**2)))
     rest_norm = np.sqrt(after(c * ce**2))

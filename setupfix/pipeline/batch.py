@@ -333,10 +333,12 @@ def _record(store: Store, outcome: Outcome, solve: SolveOptions) -> None:
     by_part: dict[str, dict[str, float]] = {}
     for row in outcome.rows:
         by_part.setdefault(row.part, {})[row.id] = row.delta
-    for (part, corrections), verdict in zip(by_part.items(), outcome.verdicts):
+    # One recommendation per corrected part, its verdict beside it (a part with no offset row -- every
+    # register fixed -- still gets its verdict, and no verdict slides onto the next part).
+    for part, verdict in zip(outcome.parts, outcome.verdicts, strict=True):
         store.add_recommendation(StoreRecommendation(
             optimizer=solve.optimizer, inputs={"use": "batch", "report": sha, "part": part, "seed": solve.seed},
-            result={"verdict": verdict, "corrections": corrections}))
+            result={"verdict": verdict, "corrections": by_part.get(part, {})}))
 
 
 def _account(summary: BatchSummary, outcome: Outcome, seen: dict[str, str],

@@ -94,7 +94,7 @@ def assign_stations(model: ProcessModel, table: pd.DataFrame, stations: Stations
             raise MatchError(f"{len(stations)} stations given for {len(order)} parts in the report "
                              f"({', '.join(order)})", location=SourceLocation(report),
                              hint="--parts-per-cycle N groups a long report into loads of N parts")
-        mapping = dict(zip(order, stations))
+        mapping = dict(zip(order, stations, strict=True))
     mapping = {part: _check_station(groups, station, part, report) for part, station in mapping.items()}
     out = table.copy()
     out["station"] = parts.map(lambda p: mapping.get(p, ""))

@@ -166,7 +166,7 @@ def thermal_feed_forward(model: ProcessModel, thermal: str | Path | SavedModel, 
     if not np.isfinite(band) or band < 0:
         raise ParameterError(f"the thermal dead band must be a number >= 0, got {band!r}")
     x = feed_forward(delta, mask, factor=factor, resolution=model.resolution, dead_band=band)
-    regs = [r for r, m in zip(model.registers, mask) if m]
+    regs = [r for r, m in zip(model.registers, mask, strict=True) if m]
     at_text = at if at is not None else data.timestamps[-1]
     return ThermalFeedForward(saved.model.name, delta, str(saved.unit), float(x[mask][0]), model.unit,
                               tuple(r.id for r in regs), tuple(r.register for r in regs), measured_at, at_text, band,

@@ -183,7 +183,7 @@ def fit_log(log: TemperatureLog, method: str, *, target: str, inputs: Sequence[s
     notes += _drive_notes(saved, log.source)
     fitted = predict_log(saved, log)[0]
     scores = score(y, fitted)
-    saved.train = {"source": Path(log.source).name, "n": int(len(y)), "seed": params.get("seed"),
+    saved.train = {"source": Path(log.source).name, "n": len(y), "seed": params.get("seed"),
                    **scores.as_dict()}
     notes += _quality_notes("training", scores, log.source)
     return FitResult(saved, notes)

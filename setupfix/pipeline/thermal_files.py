@@ -69,7 +69,7 @@ def load_model(path: str | Path) -> SavedModel:
     try:
         return saved_from_dict(doc)
     except ValueError as exc:
-        key, reason = (exc.args + ("",))[:2] if len(exc.args) == 2 else ("model", str(exc))
+        key, reason = exc.args if len(exc.args) == 2 else ("model", str(exc))
         raise ParseError(str(reason), location=SourceLocation(source, key=str(key)),
                          hint="write one with 'setupfix thermal fit'") from None
     except ParameterError as exc:
