@@ -215,7 +215,8 @@ def true_composite(layout: Layout, hidden) -> np.ndarray:
 
 
 D_ROWS = [("none", 1.0, 0.03), *((k, 1.0, 0.03) for k in KINDS), ("relation*", 1.0, 0.03), ("relation", 2.0, 0.03),
-          ("relation*", 2.0, 0.03), ("none", 1.0, 0.08), ("relation", 2.0, 0.08), ("relation*", 2.0, 0.08), ("relation**", 2.0, 0.08)]
+          ("relation*", 2.0, 0.03), ("none", 1.0, 0.08), ("relation", 2.0, 0.08), ("relation*", 2.0, 0.08),
+          ("relation**", 2.0, 0.08)]
 
 
 def section_d(lines: list[str]) -> None:

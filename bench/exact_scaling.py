@@ -150,7 +150,8 @@ def main(argv: list[str] | None = None) -> None:
     summary_lines = [f"{n:>4} x {m:<5} limit {limit:>4.0f} s: median wall {np.median(times):6.3f} s "
                      f"= {np.median(times) / ref:6.2f}x ref, max {np.max(times):6.3f} s; both stages proved "
                      f"{proved}/{len(times)}; norm / proven least norm: "
-                     + (f"max {max(excess):.4f}" if excess else "n/a") + f"; independent register blocks, most: {blocks}"
+                     + (f"max {max(excess):.4f}" if excess else "n/a")
+                     + f"; independent register blocks, most: {blocks}"
                      for n, m, limit, times, proved, excess, blocks in summary]
     head = [
         "Exact optimiser at shop scale (random multi-part fixtures; times in seconds of wall time)",

@@ -85,7 +85,8 @@ def _qvpak(folder: Path, rows: int) -> Path:
 
 def _piweb(folder: Path, copies: int) -> Path:
     values = json.loads((SAMPLES / "piweb" / "PiWebApi_sample_values.json").read_text(encoding="utf-8-sig"))
-    (folder / "b_characteristics.json").write_bytes((SAMPLES / "piweb" / "PiWebApi_sample_characteristics.json").read_bytes())
+    characteristics = SAMPLES / "piweb" / "PiWebApi_sample_characteristics.json"
+    (folder / "b_characteristics.json").write_bytes(characteristics.read_bytes())
     path = folder / "b_values.json"
     path.write_text(json.dumps(values * copies))
     return path

@@ -52,7 +52,8 @@ def main() -> int:
         for o in outcomes:
             if o.verdict == "changed":
                 print(f"    cut {o.cut}: {o.detail}")
-    print(f"TOTAL {files} readable samples x ({args.cuts} byte + {args.cuts} line-end) cuts: {totals['refused']} refused, "
+    print(f"TOTAL {files} readable samples x ({args.cuts} byte + {args.cuts} line-end) cuts: "
+          f"{totals['refused']} refused, "
           f"{totals['subset']} subset, {totals['changed']} changed")
     return 0
 

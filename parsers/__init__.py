@@ -15,8 +15,8 @@ from parsers._source import STDIN, Source, final_line_break, load_source
 from parsers.folders import FoundFile, Inputs, Listing, expand_inputs, list_reports
 from parsers import canonical as _canonical
 
-__all__ = ["FormatSpec", "ReadResult", "Source", "STDIN", "find_format", "formats", "list_reports", "Listing", "FoundFile", "expand_inputs", "Inputs", "load_source", "never_a_report",
-           "read", "read_report", "register"]
+__all__ = ["FormatSpec", "ReadResult", "Source", "STDIN", "find_format", "formats", "list_reports", "Listing",
+           "FoundFile", "expand_inputs", "Inputs", "load_source", "never_a_report", "read", "read_report", "register"]
 
 register(FormatSpec(
     name="canonical",

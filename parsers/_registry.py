@@ -237,7 +237,8 @@ def read_report(path: str | Path | Source, *, format: str | None = None, **optio
 
 def _truncated(spec: FormatSpec, source: Source, missing: str) -> ParseError:
     return ParseError(f"{missing}: the {spec.name} file may be truncated (still being written, or an "
-                      "interrupted copy)", location=SourceLocation(source.name), hint="read it again once it is complete")
+                      "interrupted copy)", location=SourceLocation(source.name),
+                      hint="read it again once it is complete")
 
 
 def _last_line_holds_no_data(spec: FormatSpec, source: Source, options: dict[str, Any], table: pd.DataFrame) -> bool:

@@ -15,8 +15,8 @@ from typing import BinaryIO
 from parsers import numbers
 from setupfix.errors import ParseError, SourceLocation
 
-__all__ = ["Peek", "Source", "check_encoding", "STDIN", "load_source", "peek", "peek_file", "decode", "read_bytes", "read_text", "parse_number", "point_number",
-           "csv_records", "final_line_break", "end_statement"]
+__all__ = ["Peek", "Source", "check_encoding", "STDIN", "load_source", "peek", "peek_file", "decode", "read_bytes",
+           "read_text", "parse_number", "point_number", "csv_records", "final_line_break", "end_statement"]
 
 #: Largest report accepted [bytes]; a CMM text report is kilobytes, a JSON export megabytes.
 MAX_REPORT_BYTES = 256 * 1024 * 1024
@@ -63,7 +63,8 @@ def check_encoding(encoding: str, where: str = "") -> str:
     usable = getattr(info, "_is_text_encoding", True) and info.name not in _TRANSFORMS
     if usable and not info.name.startswith(("utf-16", "utf-32")):
         try:
-            usable = _PROBE.encode(info.name).decode(info.name) == _PROBE and _PROBE.encode("ascii").decode(info.name) == _PROBE
+            usable = (_PROBE.encode(info.name).decode(info.name) == _PROBE
+                      and _PROBE.encode("ascii").decode(info.name) == _PROBE)
         except (UnicodeError, ValueError):
             usable = False
     if not usable:

@@ -244,8 +244,8 @@ def read_canonical(path: str | Path | Source, *, text: str | None = None, unit: 
             try:
                 text = data.decode("utf-8-sig")
             except UnicodeDecodeError as exc:
-                raise ParseError("not UTF-8 text", location=SourceLocation(name, line=data[: exc.start].count(b"\n") + 1),
-                                 hint="give its encoding with --encoding") from None
+                where = SourceLocation(name, line=data[: exc.start].count(b"\n") + 1)
+                raise ParseError("not UTF-8 text", location=where, hint="give its encoding with --encoding") from None
     body = text.lstrip("\ufeff")
     records = csv_records(body, name)
     try:
@@ -269,7 +269,8 @@ def read_canonical(path: str | Path | Source, *, text: str | None = None, unit: 
             continue
         if len(record) > width:
             raise ParseError(f"{len(record)} fields, header has {width}", location=SourceLocation(name, line=line_num))
-        row: dict[str, object] = dict(zip(header, [_unescaped(c.strip()) for c in record], strict=False))  # short rows: filled below
+        # A short row: the columns past its end are filled below.
+        row: dict[str, object] = dict(zip(header, [_unescaped(c.strip()) for c in record], strict=False))
         for col in header[len(record):]:
             row[col] = ""
         if not row["characteristic"]:
@@ -382,7 +383,8 @@ def _plain_columns(body: str, header: list[str], name: str, unit: str | None) ->
     if np.isnan(nominal).any() or (np.isnan(actual) & np.isnan(stated)).any():
         return None
     with np.errstate(invalid="ignore"):
-        if (~np.isnan(actual) & ~np.isnan(stated) & (np.abs(stated - (actual - nominal)) > DEVIATION_TOLERANCE_MM)).any():
+        disagree = np.abs(stated - (actual - nominal)) > DEVIATION_TOLERANCE_MM
+        if (~np.isnan(actual) & ~np.isnan(stated) & disagree).any():
             return None
         actual = np.where(np.isnan(actual), nominal + stated, actual)
         lo, up = numbers.get("lower", nan), numbers.get("upper", nan)

@@ -95,7 +95,8 @@ def read_columns(text: str, name: str, default_unit: str | None) -> pd.DataFrame
     if heading is None:
         return None
     body = "\n".join(lines[heading_at + 1:])
-    line_numbers = np.array([heading_at + 2 + i for i, row in enumerate(lines[heading_at + 1:]) if row.strip(" ,\r\t\"")])
+    line_numbers = np.array([heading_at + 2 + i for i, row in enumerate(lines[heading_at + 1:])
+                             if row.strip(" ,\r\t\"")])
     try:
         # Numbers are converted by the C parser; text columns stay text. Only "" is missing.
         text_columns = {i: object for key, i in heading.items() if key in ("name", "axis", "unit")}
@@ -156,7 +157,8 @@ def read_columns(text: str, name: str, default_unit: str | None) -> pd.DataFrame
         expected = np.where(np.isnan(upper), 0.0, np.maximum(deviation - upper, 0.0))
         expected = np.where(~np.isnan(lower) & (deviation < lower), lower - deviation, expected)
         outtol = num["outtol"]
-        off = usable & ~np.isnan(outtol) & (np.abs(np.abs(outtol * factor) - expected) > np.maximum(0.0011, 0.00011 * factor))
+        mismatch = np.abs(np.abs(outtol * factor) - expected) > np.maximum(0.0011, 0.00011 * factor)
+        off = usable & ~np.isnan(outtol) & mismatch
     if off.any():
         i = int(np.argmax(off))
         raise ParseError(f"OUTTOL {outtol[i]:g} contradicts the deviation and tolerances "

@@ -163,7 +163,8 @@ def read_qif(path: str | Path | Source, *, unit: str | None = None) -> pd.DataFr
     part_of = np.asarray([p[0] for p in parts], dtype=object)[kept["results"].to_numpy()]
     station_of = np.asarray([p[1] for p in parts], dtype=object)[kept["results"].to_numpy()]
     columns: dict[str, object] = {
-        field: np.asarray([getattr(infos[k], field) for k in known], dtype=object if field in ("label", "axis") else None)[code]
+        field: np.asarray([getattr(infos[k], field) for k in known],
+                          dtype=object if field in ("label", "axis") else None)[code]
         for field in Item.__dataclass_fields__
     }
     labels = pd.Series(columns.pop("label"), dtype=object)

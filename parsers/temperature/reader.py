@@ -168,7 +168,8 @@ def _grid(data: bytes, source: str, sheet: str | None) -> tuple[list[Any], list[
 
         frame, sources = load_grid(source, sheet=sheet)
         title = sources[0].split("#", 1)[1].rsplit("!", 1)[0] if sources else (sheet or "")
-        rows = [(int(s.rsplit("!", 1)[1]), list(r)) for s, r in zip(sources, frame.itertuples(index=False), strict=True)]
+        rows = [(int(s.rsplit("!", 1)[1]), list(r))
+                for s, r in zip(sources, frame.itertuples(index=False), strict=True)]
         return list(frame.columns), rows, title
     if sheet is not None:
         raise ParseError("--sheet applies to .xlsx logs only", location=SourceLocation(source))
@@ -209,7 +210,9 @@ def read_temperature_log(path: str | Path, *, interval: float | None = None, req
     raw_header, raw_body, title = _grid(read_bytes(path), source, sheet)
 
     def where(line: int) -> SourceLocation:
-        return SourceLocation(source, element=f"{title}!{line}") if title is not None else SourceLocation(source, line=line)
+        if title is not None:
+            return SourceLocation(source, element=f"{title}!{line}")
+        return SourceLocation(source, line=line)
 
     notes: list[Note] = []
     header = ["" if h is None else str(h).strip() for h in raw_header]

@@ -13,8 +13,9 @@ The same measurements as the canonical CSV, in two real report formats, so that
   the machining time, and ``RECALL/D(station)`` the datum system (one per fixture
   station) each block is reported in.
 
-Both carry the cycle's timestamp (QIF ``ReportPreparationDate``, DMIS ``DATE``/``TIME``).  Labels are the model's names, blanks included: strict DMIS
-  labels have none, but the names must match the model for ``setupfix correct``.
+Both carry the cycle's timestamp (QIF ``ReportPreparationDate``, DMIS ``DATE``/``TIME``).
+Labels are the model's names, blanks included: strict DMIS labels have none, but the
+names must match the model for ``setupfix correct``.
 
 Run: ``python sample_reports/guide_pins/write_formats.py`` (rewrites both files).
 """

@@ -16,7 +16,8 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
                                    "exact grid optimum (Stryczek 2014, Figs. 12-17).")
     p.add_argument("report", metavar="REPORT", help="CMM report in any supported format")
     p.add_argument("--model", required=True, metavar="MODEL", help="process model TOML")
-    p.add_argument("--trials", type=whole_number(1, 10_000), default=12, metavar="N", help="seeded trials per method (default 12)")
+    p.add_argument("--trials", type=whole_number(1, 10_000), default=12, metavar="N",
+                   help="seeded trials per method (default 12)")
     p.add_argument("--time-limit", type=float, default=None, metavar="SECONDS",
                    help="wall time of the exact optimiser's whole solve (default 2)")
     p.add_argument("--seed", type=int, default=0, metavar="S", help="root of the trial seeds (default 0)")

@@ -194,7 +194,8 @@ def box_least_norm(g_rows: Array, b: Array, lo: Array, hi: Array, cost: Array, t
     chorded = np.flatnonzero(width >= 2)
     # two values: c·k² = c·(2·lo+1)·k − c·(lo² + lo); one value: the constant c·lo²
     linear = np.where(width == 1, cost * (2 * lo + 1), 0.0)
-    const = float(np.sum(np.where(width == 0, cost * lo**2, 0.0)) - np.sum(np.where(width == 1, cost * (lo**2 + lo), 0.0)))
+    const = float(np.sum(np.where(width == 0, cost * lo**2, 0.0))
+                  - np.sum(np.where(width == 1, cost * (lo**2 + lo), 0.0)))
     counts = width[chorded]
     i = np.repeat(chorded, counts)
     j = np.repeat(lo[chorded], counts) + np.arange(int(counts.sum())) - np.repeat(np.cumsum(counts) - counts, counts)

@@ -207,7 +207,8 @@ def ellipsoid_search(g_rows: Array, g: Array, level: float, centre: Array, q: fl
 
     Every feasible k satisfies Σ c (k − centre)² ≤ f(k) − q (:func:`lagrangian_ball`).
     Radii² 1, 4, 16, … up to f − q (f: the least norm of a feasible point known so far,
-    ``f_known`` at first, or inf), or up to the radius² that holds the whole box, are listed in turn, only points of norm ≤ f (pruned by
+    ``f_known`` at first, or inf), or up to the radius² that holds the whole box, are listed in turn, only
+    points of norm ≤ f (pruned by
     the rows G k ≤ b, which every feasible point meets, when ``b`` is given); as soon as
     the best feasible point found, of norm f_b, has f_b − q ≤ the radius² listed, nothing
     outside can beat it and it is the least (ties: the lexicographically smallest k).

@@ -65,7 +65,8 @@ class _Work:
     request: CorrectRequest
     skip: frozenset[str] = frozenset()  #: content hashes already processed (history store)
     record: bool = False  #: return the bytes and table read with each outcome (for the history store)
-    controller: str = "csv"  #: other than csv: each cycle's program text (:func:`~setupfix.pipeline.export.offsets_text`)
+    #: other than csv: each cycle's program text (:func:`~setupfix.pipeline.export.offsets_text`)
+    controller: str = "csv"
 
 
 @dataclass

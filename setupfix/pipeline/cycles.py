@@ -142,7 +142,8 @@ def _by_count(model: ProcessModel, table: pd.DataFrame, parts: pd.Series, order:
 
 def load_parts(model: ProcessModel, report: str | Path | Source, *, format: str | None = None, unit: str | None = None,
                encoding: str | None = None, columns: str | None = None, stations: Stations | None = None,
-               parts_per_cycle: int | None = None, strict: bool = False, lenient: bool = False) -> list[PartMeasurement]:
+               parts_per_cycle: int | None = None, strict: bool = False,
+               lenient: bool = False) -> list[PartMeasurement]:
     """Read a report in any supported format, group it into cycles, tie it to the model and check it.
 
     Raises

@@ -1,7 +1,8 @@
 """Drift fed forward: the thermal change since the measured parts were cut, as a register correction.
 
 ``setupfix correct --thermal MODEL.json --temperatures LOG`` adds the line this module
-builds beside the setup correction (a step of :func:`setupfix.pipeline.correct.correct_cycle`) ("thermal feed-forward −0.004 mm on H5, H23").  The
+builds beside the setup correction (a step of :func:`setupfix.pipeline.correct.correct_cycle`)
+("thermal feed-forward −0.004 mm on H5, H23").  The
 arithmetic is :mod:`setupfix.thermal.feedforward` (pure); here the files are read, the
 times joined, the registers and units resolved, and the result described.
 """

@@ -267,8 +267,9 @@ def predict_log(saved: SavedModel, log: TemperatureLog, *, anchor: Anchor | None
     """
     notes: list[Note] = []
     interval = log.sample_interval_s
-    if saved.sample_interval_s and interval and abs(interval - saved.sample_interval_s) > 0.05 * saved.sample_interval_s:
-        notes.append(Note(f"sampled every {interval:g} s but the model was fitted on {saved.sample_interval_s:g} s; "
+    trained = saved.sample_interval_s
+    if trained and interval and abs(interval - trained) > 0.05 * trained:
+        notes.append(Note(f"sampled every {interval:g} s but the model was fitted on {trained:g} s; "
                           "its time constants are per sample", log.location(), "thermal"))
     sel = Selection(saved.inputs, None, saved.ambient, saved.speed)
     data = _drive_arrays(log, sel, gaps=isinstance(saved.model, KalmanFusionModel))

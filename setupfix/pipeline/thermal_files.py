@@ -30,7 +30,8 @@ def save_model(saved: SavedModel, path: str | Path) -> None:
         text = json.dumps(saved.to_dict(), indent=2, allow_nan=False, default=_plain)
     except ValueError:
         raise ExportError("the fitted model has non-finite coefficients and is not saved",
-                          location=SourceLocation(str(path)), hint="the calibration diverged; try grey-ls or mra") from None
+                          location=SourceLocation(str(path)),
+                          hint="the calibration diverged; try grey-ls or mra") from None
     write_text(path, text + "\n", newline="\n")
 
 
