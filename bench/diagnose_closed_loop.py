@@ -42,10 +42,10 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "tests"))
 
-from diagnose.helpers import NOISE, guide_pins, one_effect, simulate, topology  # noqa: E402
+from diagnose.helpers import NOISE, guide_pins, one_effect, simulate, topology
 
-from setupfix.diagnose import Diagnoser, Layout, select_effects, walk_forward  # noqa: E402
-from setupfix.diagnose.fit import row_space_basis  # noqa: E402
+from setupfix.diagnose import Diagnoser, Layout, select_effects, walk_forward
+from setupfix.diagnose.fit import row_space_basis
 
 OUT = ROOT / "bench" / "results" / "diagnose_closed_loop.txt"
 KINDS = ["drift", "saturating", "thermal", "wear", "scale", "position", "relation", "group"]

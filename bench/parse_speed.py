@@ -28,7 +28,7 @@ import pandas as pd
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-import parsers  # noqa: E402
+import parsers
 
 GUIDE = ROOT / "sample_reports" / "guide_pins"
 NIST = ROOT / "sample_reports" / "qif" / "NIST_MTC_FAIR_Plate_Results_20parts.qif"
@@ -39,7 +39,7 @@ PARTS = 4000  # × 28 characteristics = 112 000 rows per large file
 def _writer_module():
     spec = importlib.util.spec_from_file_location("write_formats", GUIDE / "write_formats.py")
     module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)  # type: ignore[union-attr]
+    spec.loader.exec_module(module)  # type: ignore[union-attr]  # a file spec has a loader
     return module
 
 

@@ -27,8 +27,8 @@ import pandas as pd
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-import parsers  # noqa: E402
-from parsers.ogp.rtf import rtf_lines  # noqa: E402
+import parsers
+from parsers.ogp.rtf import rtf_lines
 
 #: ../shared beside the project, or SETUPFIX_SHARED (as for the tests).
 SHARED = Path(os.environ.get("SETUPFIX_SHARED", ROOT.parent / "shared")) / "cmm-samples"

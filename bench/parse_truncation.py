@@ -17,8 +17,8 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from parsers.truncation import check_prefixes, cut_points, line_cut_points  # noqa: E402
-from setupfix.errors import SetupfixError  # noqa: E402
+from parsers.truncation import check_prefixes, cut_points, line_cut_points
+from setupfix.errors import SetupfixError
 
 SKIP_SUFFIXES = {".md", ".py", ".toml", ".png"}
 

@@ -84,10 +84,14 @@ def main() -> None:
             else:
                 mra_s = score(y2, mra.predict(T2))
                 gls_s = score(y2, gls.predict(T2, y0=y2[0]))
-            fmt = lambda s, a: "n/a" if s is None else f"{getattr(s, a):.4f}"  # noqa: E731
             print(f"{cname:<19} {kname:<26} {np.mean([s.rmsv for s in kf]):>10.4f} {fmt(mra_s, 'rmsv'):>9} "
                   f"{fmt(gls_s, 'rmsv'):>11} {np.mean([s.max_residual for s in kf]):>9.4f} "
                   f"{fmt(mra_s, 'max_residual'):>8}")
+
+
+def fmt(scores: object | None, metric: str) -> str:
+    """One metric of a score, or n/a when the method was not run."""
+    return "n/a" if scores is None else f"{getattr(scores, metric):.4f}"
 
 
 if __name__ == "__main__":

@@ -246,7 +246,7 @@ def csv_records(text: str, path: str, **fmtparams: object) -> Iterator[tuple[int
         Where the csv module gives up (a NUL byte, a stray carriage return inside an
         unquoted field, a runaway quote), with the line.
     """
-    reader = csv.reader(io.StringIO(text, newline=""), **fmtparams)  # type: ignore[arg-type]
+    reader = csv.reader(io.StringIO(text, newline=""), **fmtparams)  # type: ignore[arg-type]  # csv dialect keywords, passed through
     while True:
         try:
             record = next(reader)

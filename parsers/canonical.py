@@ -105,8 +105,8 @@ def _columns(rows: list[dict[str, object]] | dict[str, object]) -> dict[str, _Co
     if isinstance(rows, dict):
         values = list(rows.values())
         if values and all(isinstance(v, (list, np.ndarray)) and np.ndim(v) == 1 for v in values) \
-                and len({len(v) for v in values}) == 1:  # type: ignore[arg-type]
-            return dict(rows)  # type: ignore[arg-type]
+                and len({len(v) for v in values}) == 1:  # type: ignore[arg-type]  # lists or arrays: tested
+            return dict(rows)  # type: ignore[arg-type]  # columns of equal length: tested
     elif rows and all(type(r) is dict for r in rows):
         keys = list(dict.fromkeys(k for r in rows for k in r))
         if all(len(r) == len(keys) for r in rows):
@@ -133,7 +133,7 @@ def _masked(column: _Column) -> _Column:
     """A text column with control characters masked (:func:`escape_controls`); unchanged when it has none."""
     values = _values(column)
     try:
-        joined = "".join(values)  # type: ignore[arg-type]
+        joined = "".join(values)  # type: ignore[arg-type]  # a text column; TypeError below if not
     except TypeError:  # not all text (NaN, numbers): look at the text only
         joined = "".join(v for v in values if isinstance(v, str))
     if _CONTROL.search(joined) is None:
@@ -290,8 +290,8 @@ def read_canonical(path: str | Path | Source, *, text: str | None = None, unit: 
             if value is None:
                 value = point_number(cell, SourceLocation(name, line=line_num), f"column {col!r}: ")
             row[col] = value * factor
-        nominal, actual = float(row["nominal"]), float(row.get("actual", math.nan))  # type: ignore[arg-type]
-        stated = float(row.get("deviation", math.nan))  # type: ignore[arg-type]
+        nominal, actual = float(row["nominal"]), float(row.get("actual", math.nan))  # type: ignore[arg-type]  # numbers by now
+        stated = float(row.get("deviation", math.nan))  # type: ignore[arg-type]  # numbers by now
         if math.isnan(nominal):
             raise ParseError("empty nominal value", location=SourceLocation(name, line=line_num))
         if math.isnan(actual) and math.isnan(stated):
@@ -302,7 +302,7 @@ def read_canonical(path: str | Path | Source, *, text: str | None = None, unit: 
             raise ParseError(f"deviation {stated:g} mm contradicts actual - nominal = {actual - nominal:g} mm",
                              location=SourceLocation(name, line=line_num))
         row["actual"], row["deviation"] = actual, actual - nominal
-        lo, up = float(row.get("lower", math.nan)), float(row.get("upper", math.nan))  # type: ignore[arg-type]
+        lo, up = float(row.get("lower", math.nan)), float(row.get("upper", math.nan))  # type: ignore[arg-type]  # numbers by now
         if not math.isnan(lo) and not math.isnan(up) and lo >= up:
             raise ParseError(f"lower limit {lo:g} is not below upper limit {up:g}",
                              location=SourceLocation(name, line=line_num))

@@ -25,9 +25,9 @@ def run(args: argparse.Namespace) -> int:
         sys.stdout.write("\n")
         return OK
     width = max(len(str(r["name"])) for r in rows) + 2
-    ext_width = max(len(", ".join(r["extensions"])) for r in rows) + 2  # type: ignore[arg-type]
+    ext_width = max(len(", ".join(r["extensions"])) for r in rows) + 2  # type: ignore[arg-type]  # a list of str
     print(f"{'format':<{width}}{'extensions':<{ext_width}}description")
     for r in rows:
-        extensions = ", ".join(r["extensions"])  # type: ignore[arg-type]
+        extensions = ", ".join(r["extensions"])  # type: ignore[arg-type]  # a list of str
         print(f"{r['name']:<{width}}{extensions:<{ext_width}}{r['description']}")
     return OK

@@ -112,7 +112,7 @@ class _Problems:
         if self.items:
             text = "\n".join(str(p) for p in self.items)
             err = ModelError(text)
-            err.problems = self.items  # type: ignore[attr-defined]
+            err.problems = tuple(self.items)
             raise err
 
 

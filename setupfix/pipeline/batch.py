@@ -275,7 +275,7 @@ def run_batch(request: CorrectRequest, folder: str | Path, out: str | Path, *, w
         if youngest < settle:
             time.sleep(settle - youngest)
     if model.safety.ewma < 1.0 and (store is not None or request.history is not None):
-        base = request.history if request.history is not None else History.from_store(model, store)  # type: ignore[arg-type]
+        base = request.history if request.history is not None else History.from_store(model, store)  # type: ignore[arg-type]  # store is set: tested above
         request = dataclasses.replace(request, history=batch_history(request, base, [f for f, _, _ in files]))
     summary = BatchSummary()
     summary.failed += listing.problems  # named, never dropped: an unreadable folder, a broken link, …

@@ -284,7 +284,7 @@ def predict_log(saved: SavedModel, log: TemperatureLog, *, anchor: Anchor | None
                                  location=log.location(0))
             pred = rebase(pred, 0, float(measured[0]))
         else:
-            pred = rebase(pred, sample_at(log, anchor.time), float(anchor.error))  # type: ignore[arg-type]
+            pred = rebase(pred, sample_at(log, anchor.time), float(anchor.error))  # type: ignore[arg-type]  # anchor.time is a timestamp on this branch
     if not np.all(np.isfinite(pred)):
         raise ParseError(f"the {saved.model.name} model diverges on this log (non-finite prediction)",
                          location=log.location(), hint="refit, or use mra")

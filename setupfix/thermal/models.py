@@ -297,13 +297,13 @@ class GreyModel(ThermalModel):
         self.seed = seed
 
     @property
-    def method(self) -> str:  # type: ignore[override]
+    def method(self) -> str:  # type: ignore[override]  # a property over the base class attribute
         return f"grey-{self.calibration}"
 
     def _response(self, theta: Array, y0: float, X1: Array) -> Array:
         if self.kind == "gm1n":
             return grey.gm1n_response(theta, y0, X1)
-        return grey.gmc_response(theta, y0, X1, self.form)  # type: ignore[arg-type]
+        return grey.gmc_response(theta, y0, X1, self.form)  # type: ignore[arg-type]  # form checked by validate_params
 
     def fit(self, T: npt.ArrayLike, y: npt.ArrayLike, *, ambient: npt.ArrayLike | None = None,
             speed: npt.ArrayLike | None = None) -> GreyModel:
