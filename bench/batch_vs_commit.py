@@ -28,7 +28,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "bench"))
 os.environ.update(OPENBLAS_NUM_THREADS="1", MKL_NUM_THREADS="1", OMP_NUM_THREADS="1")
 
-from batch_throughput import make_reports, run  # noqa: E402
+from batch_throughput import make_reports, run
 
 OUT = ROOT / "bench" / "results" / "batch_vs_commit.txt"
 

@@ -21,10 +21,10 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from setupfix.model import load_model  # noqa: E402
-from setupfix.optimize import CorrectionProblem  # noqa: E402
-from setupfix.pipeline.compare import DEFAULT_METHODS, compare_problem, plot_comparison  # noqa: E402
-from setupfix.pipeline.cycles import load_parts  # noqa: E402
+from setupfix.model import load_model
+from setupfix.optimize import CorrectionProblem
+from setupfix.pipeline.compare import DEFAULT_METHODS, compare_problem, plot_comparison
+from setupfix.pipeline.cycles import load_parts
 
 SAMPLE = ROOT / "sample_reports" / "guide_pins"
 OUT = ROOT / "bench" / "results"

@@ -42,10 +42,10 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "tests"))
 
-from diagnose.helpers import NOISE, guide_pins, one_effect, simulate, topology  # noqa: E402
+from diagnose.helpers import NOISE, guide_pins, one_effect, simulate, topology
 
-from setupfix.diagnose import Diagnoser, Layout, select_effects, walk_forward  # noqa: E402
-from setupfix.diagnose.fit import row_space_basis  # noqa: E402
+from setupfix.diagnose import Diagnoser, Layout, select_effects, walk_forward
+from setupfix.diagnose.fit import row_space_basis
 
 OUT = ROOT / "bench" / "results" / "diagnose_closed_loop.txt"
 KINDS = ["drift", "saturating", "thermal", "wear", "scale", "position", "relation", "group"]
@@ -215,7 +215,8 @@ def true_composite(layout: Layout, hidden) -> np.ndarray:
 
 
 D_ROWS = [("none", 1.0, 0.03), *((k, 1.0, 0.03) for k in KINDS), ("relation*", 1.0, 0.03), ("relation", 2.0, 0.03),
-          ("relation*", 2.0, 0.03), ("none", 1.0, 0.08), ("relation", 2.0, 0.08), ("relation*", 2.0, 0.08), ("relation**", 2.0, 0.08)]
+          ("relation*", 2.0, 0.03), ("none", 1.0, 0.08), ("relation", 2.0, 0.08), ("relation*", 2.0, 0.08),
+          ("relation**", 2.0, 0.08)]
 
 
 def section_d(lines: list[str]) -> None:

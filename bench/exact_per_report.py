@@ -46,10 +46,10 @@ from threadpoolctl import threadpool_info, threadpool_limits
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from setupfix.model import PartMeasurement, load_model  # noqa: E402
-from setupfix.optimize import CorrectionProblem, get_optimizer  # noqa: E402
-from setupfix.pipeline.cycles import load_parts  # noqa: E402
-from setupfix.simulate import simulate_deviations  # noqa: E402
+from setupfix.model import PartMeasurement, load_model
+from setupfix.optimize import CorrectionProblem, get_optimizer
+from setupfix.pipeline.cycles import load_parts
+from setupfix.simulate import simulate_deviations
 
 RESULTS = ROOT / "bench" / "results"
 SAMPLE = ROOT / "sample_reports" / "guide_pins"
@@ -90,7 +90,7 @@ def profile_split(solve, items) -> dict[str, float]:
     for _, problem in items:
         solve(problem)
     prof.disable()
-    stats = pstats.Stats(prof).stats  # type: ignore[attr-defined]
+    stats = pstats.Stats(prof).stats  # type: ignore[attr-defined]  # undocumented, not in the stubs
     highs = nnls = total = 0.0
     for (filename, _, name), (_, _, tottime, _, _) in stats.items():
         where = f"{filename}:{name}".lower()
@@ -132,7 +132,7 @@ def main(argv: list[str] | None = None) -> None:
             times.append(time.perf_counter() - start)
             cpu.append(time.process_time() - c0)
             statuses[result.status] += 1
-            for stage, sec in dict(result.extra.get("stages", {})).items():  # type: ignore[call-overload]
+            for stage, sec in dict(result.extra.get("stages", {})).items():  # type: ignore[call-overload]  # a dict
                 stages.setdefault(stage, []).append(float(sec))
             paths[str(result.extra.get("path", "-"))] += 1
         wall = time.perf_counter() - wall

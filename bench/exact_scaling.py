@@ -40,8 +40,8 @@ from threadpoolctl import threadpool_limits
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from setupfix.errors import SetupfixError  # noqa: E402
-from setupfix.optimize import CorrectionProblem, get_optimizer  # noqa: E402
+from setupfix.errors import SetupfixError
+from setupfix.optimize import CorrectionProblem, get_optimizer
 
 RESULTS = ROOT / "bench" / "results"
 SIZES = [(10, 28), (30, 100), (60, 400), (100, 800), (180, 2000), (300, 5000)]
@@ -121,7 +121,7 @@ def main(argv: list[str] | None = None) -> None:
                 cpu = time.process_time() - cpu
                 times.append(sec)
                 proved += result.status == "optimal"
-                st = dict(result.extra.get("stages", {}))  # type: ignore[call-overload]
+                st = dict(result.extra.get("stages", {}))  # type: ignore[call-overload]  # a dict of stage seconds
                 stopped = result.extra.get("stopped")
                 stop_text = f"{stopped['stage']}: {stopped['reason']}" if isinstance(stopped, dict) else "-"
                 gap = (float(result.bound or 0.0) - result.margin_after) * 1e3
@@ -150,7 +150,8 @@ def main(argv: list[str] | None = None) -> None:
     summary_lines = [f"{n:>4} x {m:<5} limit {limit:>4.0f} s: median wall {np.median(times):6.3f} s "
                      f"= {np.median(times) / ref:6.2f}x ref, max {np.max(times):6.3f} s; both stages proved "
                      f"{proved}/{len(times)}; norm / proven least norm: "
-                     + (f"max {max(excess):.4f}" if excess else "n/a") + f"; independent register blocks, most: {blocks}"
+                     + (f"max {max(excess):.4f}" if excess else "n/a")
+                     + f"; independent register blocks, most: {blocks}"
                      for n, m, limit, times, proved, excess, blocks in summary]
     head = [
         "Exact optimiser at shop scale (random multi-part fixtures; times in seconds of wall time)",
@@ -171,7 +172,7 @@ def main(argv: list[str] | None = None) -> None:
     text = "\n".join(head + lines + ["", "summary:"] + summary_lines) + "\n"
     args.out.parent.mkdir(parents=True, exist_ok=True)
     args.out.write_text(text, encoding="utf-8")
-    print("\n".join(["", "summary:"] + summary_lines))
+    print("\n".join(["", "summary:", *summary_lines]))
 
 
 if __name__ == "__main__":

@@ -31,9 +31,9 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from setupfix.model import PartMeasurement, load_model  # noqa: E402
-from setupfix.optimize import CorrectionProblem, get_optimizer  # noqa: E402
-from setupfix.simulate import simulate_deviations  # noqa: E402
+from setupfix.model import PartMeasurement, load_model
+from setupfix.optimize import CorrectionProblem, get_optimizer
+from setupfix.simulate import simulate_deviations
 
 RESULTS = ROOT / "bench" / "results"
 MODEL = ROOT / "sample_reports" / "guide_pins" / "model.toml"
@@ -47,6 +47,11 @@ def reference_seconds(problem: CorrectionProblem, x: np.ndarray, repeat: int = 3
         problem.evaluate(x)
         times.append(time.perf_counter() - start)
     return float(np.median(times))
+
+
+def um(value: float) -> str:
+    """A length in µm, aligned."""
+    return f"{value:8.2f} µm"
 
 
 def main(argv: list[str] | None = None) -> None:
@@ -101,7 +106,6 @@ def main(argv: list[str] | None = None) -> None:
     f_found = 10 * found - found_norm
     at_optimum = gap < 0.5
     norm_excess = ((found_norm - optimum_norm[:, None]) * 1000.0)[at_optimum] if at_optimum.any() else np.zeros(1)
-    um = lambda v: f"{v:8.2f} µm"  # noqa: E731
     lines = [
         "Fig. 18 validation: CRIPSO (Stryczek 2014) vs the exact grid optimum, guide-pins model",
         f"command : python bench/fig18_validation.py --sets {args.sets} --runs {args.runs} --seed {args.seed}",

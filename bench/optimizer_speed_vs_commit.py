@@ -71,8 +71,10 @@ def main() -> None:
                 runs["this"].append(run_tree(ROOT, args.seeds))
         finally:
             subprocess.run(["git", "worktree", "remove", "--force", str(old)], cwd=ROOT, check=False)
-    head = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=ROOT, capture_output=True, text=True).stdout.strip()
-    lines = [f"$ python bench/optimizer_speed_vs_commit.py --base {args.base} --seeds {args.seeds} --rounds {args.rounds}",
+    head = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=ROOT, capture_output=True,
+                          text=True).stdout.strip()
+    lines = [f"$ python bench/optimizer_speed_vs_commit.py --base {args.base} --seeds {args.seeds} "
+             f"--rounds {args.rounds}",
              f"guide-pins cycle 01; {args.seeds} seeds per method and round; {args.rounds} interleaved rounds; "
              "BLAS threads 1; median ms per trial over all rounds",
              f"{'method':<8}{'base ' + args.base:>16}{'this ' + head:>16}{'this / base':>13}   f1 base / this [mm]"]

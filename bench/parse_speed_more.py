@@ -12,6 +12,7 @@ from ``../shared`` are used when present and their formats skipped otherwise.
 from __future__ import annotations
 
 import argparse
+import functools
 import json
 import os
 import sys
@@ -26,8 +27,8 @@ import pandas as pd
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-import parsers  # noqa: E402
-from parsers.ogp.rtf import rtf_lines  # noqa: E402
+import parsers
+from parsers.ogp.rtf import rtf_lines
 
 #: ../shared beside the project, or SETUPFIX_SHARED (as for the tests).
 SHARED = Path(os.environ.get("SETUPFIX_SHARED", ROOT.parent / "shared")) / "cmm-samples"
@@ -84,7 +85,8 @@ def _qvpak(folder: Path, rows: int) -> Path:
 
 def _piweb(folder: Path, copies: int) -> Path:
     values = json.loads((SAMPLES / "piweb" / "PiWebApi_sample_values.json").read_text(encoding="utf-8-sig"))
-    (folder / "b_characteristics.json").write_bytes((SAMPLES / "piweb" / "PiWebApi_sample_characteristics.json").read_bytes())
+    characteristics = SAMPLES / "piweb" / "PiWebApi_sample_characteristics.json"
+    (folder / "b_characteristics.json").write_bytes(characteristics.read_bytes())
     path = folder / "b_values.json"
     path.write_text(json.dumps(values * copies))
     return path
@@ -133,10 +135,10 @@ def main() -> None:
                 lines.append(f"{label:<16} skipped: ../shared sample absent")
                 continue
             table = parsers.read_report(path, format=fmt).table
-            seconds = _best(lambda: parsers.read_report(path, format=fmt).table, args.repeat)
+            seconds = _best(functools.partial(parsers.read_report, path, format=fmt), args.repeat)
             csv_path = folder / "ref.csv"
             table.to_csv(csv_path, index=False)
-            reference = _best(lambda: pd.read_csv(csv_path), args.repeat)
+            reference = _best(functools.partial(pd.read_csv, csv_path), args.repeat)
             kind = "table-like" if label in TABLE_LIKE else "text report"
             lines.append(f"{label:<16} {len(table):>8} {seconds:>8.3f} {len(table) / seconds:>10,.0f} "
                          f"{reference:>10.3f} {seconds / reference:>6.1f}  {kind}")

@@ -17,8 +17,8 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from parsers.truncation import check_prefixes, cut_points, line_cut_points  # noqa: E402
-from setupfix.errors import SetupfixError  # noqa: E402
+from parsers.truncation import check_prefixes, cut_points, line_cut_points
+from setupfix.errors import SetupfixError
 
 SKIP_SUFFIXES = {".md", ".py", ".toml", ".png"}
 
@@ -52,7 +52,8 @@ def main() -> int:
         for o in outcomes:
             if o.verdict == "changed":
                 print(f"    cut {o.cut}: {o.detail}")
-    print(f"TOTAL {files} readable samples x ({args.cuts} byte + {args.cuts} line-end) cuts: {totals['refused']} refused, "
+    print(f"TOTAL {files} readable samples x ({args.cuts} byte + {args.cuts} line-end) cuts: "
+          f"{totals['refused']} refused, "
           f"{totals['subset']} subset, {totals['changed']} changed")
     return 0
 

@@ -23,10 +23,11 @@ import pandas as pd
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from setupfix.thermal.metrics import score  # noqa: E402
-from setupfix.thermal.models import GreyModel, MRAModel  # noqa: E402
+from setupfix.thermal.metrics import score
+from setupfix.thermal.models import GreyModel, MRAModel
 
-DATA = Path(os.environ.get("SETUPFIX_SHARED", Path(__file__).resolve().parents[2] / "shared")) / "thermal-data" / "gooddash"
+SHARED = Path(os.environ.get("SETUPFIX_SHARED", Path(__file__).resolve().parents[2] / "shared"))
+DATA = SHARED / "thermal-data" / "gooddash"
 COLS = [2, 6, 9, 12, 19, 20]
 
 

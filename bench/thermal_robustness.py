@@ -20,9 +20,9 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from setupfix.thermal.metrics import score  # noqa: E402
-from setupfix.thermal.models import GreyModel, KalmanFusionModel, MRAModel  # noqa: E402
-from setupfix.thermal.simulator import (  # noqa: E402
+from setupfix.thermal.metrics import score
+from setupfix.thermal.models import GreyModel, KalmanFusionModel, MRAModel
+from setupfix.thermal.simulator import (
     add_sensor_error,
     constant_error,
     simulate,
@@ -67,9 +67,9 @@ def main() -> None:
     fit_s = (time.perf_counter() - t0) / args.seeds
     print(f"training: {N} samples at 10 s; kalman fit {fit_s:.2f} s per seed; seeds 0..{args.seeds - 1}")
     print("fitted N/R per sensor (seed 0):", np.array2string(fused[0].q_, precision=3))
-    print("fit RMSV mm: kalman %.4f  mra %.4f  grey-ls %.4f" % (
-        np.mean([score(y, m.predict(T, ambient=te, speed=sp)).rmsv for m in fused]),
-        score(y, mra.predict(T)).rmsv, score(y, gls.predict(T, y0=y[0])).rmsv))
+    kalman_rmsv = np.mean([score(y, m.predict(T, ambient=te, speed=sp)).rmsv for m in fused])
+    mra_rmsv, grey_rmsv = score(y, mra.predict(T)).rmsv, score(y, gls.predict(T, y0=y[0])).rmsv
+    print(f"fit RMSV mm: kalman {kalman_rmsv:.4f}  mra {mra_rmsv:.4f}  grey-ls {grey_rmsv:.4f}")
     print()
     print(f"{'case':<19} {'condition':<26} {'RMSV fused':>10} {'RMSV MRA':>9} {'RMSV GMC-LS':>11} "
           f"{'MR fused':>9} {'MR MRA':>8}")
@@ -84,10 +84,14 @@ def main() -> None:
             else:
                 mra_s = score(y2, mra.predict(T2))
                 gls_s = score(y2, gls.predict(T2, y0=y2[0]))
-            fmt = lambda s, a: "n/a" if s is None else f"{getattr(s, a):.4f}"  # noqa: E731
             print(f"{cname:<19} {kname:<26} {np.mean([s.rmsv for s in kf]):>10.4f} {fmt(mra_s, 'rmsv'):>9} "
                   f"{fmt(gls_s, 'rmsv'):>11} {np.mean([s.max_residual for s in kf]):>9.4f} "
                   f"{fmt(mra_s, 'max_residual'):>8}")
+
+
+def fmt(scores: object | None, metric: str) -> str:
+    """One metric of a score, or n/a when the method was not run."""
+    return "n/a" if scores is None else f"{getattr(scores, metric):.4f}"
 
 
 if __name__ == "__main__":

@@ -8,6 +8,7 @@ lower-triangular kernel matrix) instead of the O(n) recursion used by the librar
 
 from __future__ import annotations
 
+import functools
 import sys
 import time
 from pathlib import Path
@@ -16,9 +17,9 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from setupfix.thermal import grey  # noqa: E402
-from setupfix.thermal.models import GreyModel, KalmanFusionModel  # noqa: E402
-from setupfix.thermal.simulator import simulate, speed_profile  # noqa: E402
+from setupfix.thermal import grey
+from setupfix.thermal.models import GreyModel, KalmanFusionModel
+from setupfix.thermal.simulator import simulate, speed_profile
 
 
 def best_of(fn, repeat=5):
@@ -28,6 +29,13 @@ def best_of(fn, repeat=5):
         fn()
         times.append(time.perf_counter() - t0)
     return min(times)
+
+
+def _stream(model: KalmanFusionModel, T: np.ndarray, te: np.ndarray, sp: np.ndarray) -> None:
+    """Feed the samples one at a time, as a machine's controller would."""
+    s = model.stream()
+    for j in range(len(T)):
+        s.step(T[j], te[j], sp[j])
 
 
 def direct_response(theta, y0, X1):
@@ -75,13 +83,8 @@ def main() -> None:
         run = simulate(speed_profile("variable", length, rng=np.random.default_rng(2)), seed=2).frame
         T, te, sp = run[cols].to_numpy(), run["ambient"].to_numpy(), run["spindle_speed"].to_numpy()
 
-        def streaming():
-            s = model.stream()
-            for j in range(length):
-                s.step(T[j], te[j], sp[j])
-
-        t_stream = best_of(streaming, repeat=1) / length
-        t_batch = best_of(lambda: model.predict(T, ambient=te, speed=sp), repeat=3) / length
+        t_stream = best_of(functools.partial(_stream, model, T, te, sp), repeat=1) / length
+        t_batch = best_of(functools.partial(model.predict, T, ambient=te, speed=sp), repeat=3) / length
         print(f"  {length:>6} samples: streaming {t_stream * 1e6:6.1f} us/sample, batch {t_batch * 1e6:5.1f} us/sample "
               f"(streaming/batch {t_stream / t_batch:.1f})")
 

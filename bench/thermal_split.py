@@ -30,10 +30,10 @@ from threadpoolctl import threadpool_limits
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from parsers.temperature import read_temperature_log  # noqa: E402
-from setupfix.pipeline.thermal import fit_log, predict_log  # noqa: E402
-from setupfix.thermal.metrics import score  # noqa: E402
-from setupfix.thermal.registry import methods  # noqa: E402
+from parsers.temperature import read_temperature_log
+from setupfix.pipeline.thermal import fit_log, predict_log
+from setupfix.thermal.metrics import score
+from setupfix.thermal.registry import methods
 
 DATA = Path(os.environ.get("SETUPFIX_SHARED", ROOT.parent / "shared")) / "thermal-data" / "gooddash"
 SPLIT = 0.4

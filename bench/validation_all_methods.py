@@ -21,12 +21,12 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from setupfix.model import PartMeasurement, load_model  # noqa: E402
-from setupfix.optimize import CorrectionProblem  # noqa: E402
-from setupfix.pipeline.compare import DEFAULT_METHODS, compare_problem  # noqa: E402
-from setupfix.pipeline.writers import write_figure  # noqa: E402
-from setupfix.plots import validation_figure  # noqa: E402
-from setupfix.simulate import simulate_deviations  # noqa: E402
+from setupfix.model import PartMeasurement, load_model
+from setupfix.optimize import CorrectionProblem
+from setupfix.pipeline.compare import DEFAULT_METHODS, compare_problem
+from setupfix.pipeline.writers import write_figure
+from setupfix.plots import validation_figure
+from setupfix.simulate import simulate_deviations
 
 OUT = ROOT / "bench" / "results"
 TARGET_UM = {"cripso": 2.0, "pso": 10.0, "ga": 10.0, "coa": 25.0, "cs": 25.0}

@@ -146,8 +146,8 @@ def find_format(path: str | Path | Source, format: str | None = None) -> FormatS
 #: history store and its journals, pictures, the logs ``setupfix diagnose`` reads beside
 #: a series, the hidden truth ``setupfix simulate`` writes beside one, and a folder's read-me.
 #: Folder listings (:mod:`parsers.folders`) leave them out.
-NOT_REPORT_SUFFIXES: tuple[str, ...] = (".toml", ".md", ".py", ".db", ".db-wal", ".db-shm", ".db-journal", ".sqlite",
-                                        ".svg", ".png")
+NOT_REPORT_SUFFIXES: tuple[str, ...] = (".toml", ".md", ".py", ".pyc", ".db", ".db-wal", ".db-shm", ".db-journal",
+                                        ".sqlite", ".svg", ".png")
 NOT_REPORT_NAMES: tuple[str, ...] = ("corrections.csv", "temperatures.csv", "truth.json", "readme.txt")
 
 
@@ -237,7 +237,8 @@ def read_report(path: str | Path | Source, *, format: str | None = None, **optio
 
 def _truncated(spec: FormatSpec, source: Source, missing: str) -> ParseError:
     return ParseError(f"{missing}: the {spec.name} file may be truncated (still being written, or an "
-                      "interrupted copy)", location=SourceLocation(source.name), hint="read it again once it is complete")
+                      "interrupted copy)", location=SourceLocation(source.name),
+                      hint="read it again once it is complete")
 
 
 def _last_line_holds_no_data(spec: FormatSpec, source: Source, options: dict[str, Any], table: pd.DataFrame) -> bool:

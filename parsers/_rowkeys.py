@@ -22,4 +22,4 @@ def _cell(value: object) -> object:
 def row_keys(table: pd.DataFrame) -> list[tuple[object, ...]]:
     """Each row as a comparable tuple of :data:`ROW_COLUMNS` (absent columns empty)."""
     cols = [table[c].tolist() if c in table else [""] * len(table) for c in ROW_COLUMNS]
-    return [tuple(_cell(v) for v in row) for row in zip(*cols)]
+    return [tuple(_cell(v) for v in row) for row in zip(*cols, strict=True)]

@@ -14,15 +14,14 @@ They fix the rules every one of these readers follows, so the six behave alike:
 
 from __future__ import annotations
 
-import math
 import re
 from dataclasses import dataclass, field
 
 import pandas as pd
 
 from parsers import numbers
-from parsers.canonical import DEVIATION_TOLERANCE_MM, finish_table
 from parsers._notes import note
+from parsers.canonical import DEVIATION_TOLERANCE_MM, finish_table
 from setupfix.errors import ParseError, SourceLocation
 from setupfix.units import LENGTH_UNITS
 

@@ -8,15 +8,15 @@ import io
 import re
 import sys
 from collections.abc import Callable, Iterator
-from typing import BinaryIO
 from dataclasses import dataclass
 from pathlib import Path
+from typing import BinaryIO
 
 from parsers import numbers
 from setupfix.errors import ParseError, SourceLocation
 
-__all__ = ["Peek", "Source", "check_encoding", "STDIN", "load_source", "peek", "peek_file", "decode", "read_bytes", "read_text", "parse_number", "point_number",
-           "csv_records", "final_line_break", "end_statement"]
+__all__ = ["Peek", "Source", "check_encoding", "STDIN", "load_source", "peek", "peek_file", "decode", "read_bytes",
+           "read_text", "parse_number", "point_number", "csv_records", "final_line_break", "end_statement"]
 
 #: Largest report accepted [bytes]; a CMM text report is kilobytes, a JSON export megabytes.
 MAX_REPORT_BYTES = 256 * 1024 * 1024
@@ -63,7 +63,8 @@ def check_encoding(encoding: str, where: str = "") -> str:
     usable = getattr(info, "_is_text_encoding", True) and info.name not in _TRANSFORMS
     if usable and not info.name.startswith(("utf-16", "utf-32")):
         try:
-            usable = _PROBE.encode(info.name).decode(info.name) == _PROBE and _PROBE.encode("ascii").decode(info.name) == _PROBE
+            usable = (_PROBE.encode(info.name).decode(info.name) == _PROBE
+                      and _PROBE.encode("ascii").decode(info.name) == _PROBE)
         except (UnicodeError, ValueError):
             usable = False
     if not usable:
@@ -245,7 +246,7 @@ def csv_records(text: str, path: str, **fmtparams: object) -> Iterator[tuple[int
         Where the csv module gives up (a NUL byte, a stray carriage return inside an
         unquoted field, a runaway quote), with the line.
     """
-    reader = csv.reader(io.StringIO(text, newline=""), **fmtparams)  # type: ignore[arg-type]
+    reader = csv.reader(io.StringIO(text, newline=""), **fmtparams)  # type: ignore[arg-type]  # csv dialect keywords, passed through
     while True:
         try:
             record = next(reader)

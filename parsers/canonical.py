@@ -105,8 +105,8 @@ def _columns(rows: list[dict[str, object]] | dict[str, object]) -> dict[str, _Co
     if isinstance(rows, dict):
         values = list(rows.values())
         if values and all(isinstance(v, (list, np.ndarray)) and np.ndim(v) == 1 for v in values) \
-                and len({len(v) for v in values}) == 1:  # type: ignore[arg-type]
-            return dict(rows)  # type: ignore[arg-type]
+                and len({len(v) for v in values}) == 1:  # type: ignore[arg-type]  # lists or arrays: tested
+            return dict(rows)  # type: ignore[arg-type]  # columns of equal length: tested
     elif rows and all(type(r) is dict for r in rows):
         keys = list(dict.fromkeys(k for r in rows for k in r))
         if all(len(r) == len(keys) for r in rows):
@@ -133,7 +133,7 @@ def _masked(column: _Column) -> _Column:
     """A text column with control characters masked (:func:`escape_controls`); unchanged when it has none."""
     values = _values(column)
     try:
-        joined = "".join(values)  # type: ignore[arg-type]
+        joined = "".join(values)  # type: ignore[arg-type]  # a text column; TypeError below if not
     except TypeError:  # not all text (NaN, numbers): look at the text only
         joined = "".join(v for v in values if isinstance(v, str))
     if _CONTROL.search(joined) is None:
@@ -178,7 +178,8 @@ def clean_deviation(actual: np.ndarray, nominal: np.ndarray) -> np.ndarray:
         decimals = np.clip(np.floor(-np.log10(np.where(scale > 0, scale, 1e-300))), 0, 15)
         factor = 10.0 ** decimals
         rounded = np.round(difference * factor) / factor
-    return np.where(np.isfinite(rounded), rounded, difference)
+    out: np.ndarray = np.where(np.isfinite(rounded), rounded, difference)
+    return out
 
 
 def _check_magnitudes(lengths: dict[str, np.ndarray], source: _Column, path: str) -> None:
@@ -243,8 +244,8 @@ def read_canonical(path: str | Path | Source, *, text: str | None = None, unit: 
             try:
                 text = data.decode("utf-8-sig")
             except UnicodeDecodeError as exc:
-                raise ParseError("not UTF-8 text", location=SourceLocation(name, line=data[: exc.start].count(b"\n") + 1),
-                                 hint="give its encoding with --encoding") from None
+                where = SourceLocation(name, line=data[: exc.start].count(b"\n") + 1)
+                raise ParseError("not UTF-8 text", location=where, hint="give its encoding with --encoding") from None
     body = text.lstrip("\ufeff")
     records = csv_records(body, name)
     try:
@@ -268,7 +269,8 @@ def read_canonical(path: str | Path | Source, *, text: str | None = None, unit: 
             continue
         if len(record) > width:
             raise ParseError(f"{len(record)} fields, header has {width}", location=SourceLocation(name, line=line_num))
-        row: dict[str, object] = dict(zip(header, [_unescaped(c.strip()) for c in record]))
+        # A short row: the columns past its end are filled below.
+        row: dict[str, object] = dict(zip(header, [_unescaped(c.strip()) for c in record], strict=False))
         for col in header[len(record):]:
             row[col] = ""
         if not row["characteristic"]:
@@ -288,8 +290,8 @@ def read_canonical(path: str | Path | Source, *, text: str | None = None, unit: 
             if value is None:
                 value = point_number(cell, SourceLocation(name, line=line_num), f"column {col!r}: ")
             row[col] = value * factor
-        nominal, actual = float(row["nominal"]), float(row.get("actual", math.nan))  # type: ignore[arg-type]
-        stated = float(row.get("deviation", math.nan))  # type: ignore[arg-type]
+        nominal, actual = float(row["nominal"]), float(row.get("actual", math.nan))  # type: ignore[arg-type]  # numbers by now
+        stated = float(row.get("deviation", math.nan))  # type: ignore[arg-type]  # numbers by now
         if math.isnan(nominal):
             raise ParseError("empty nominal value", location=SourceLocation(name, line=line_num))
         if math.isnan(actual) and math.isnan(stated):
@@ -300,7 +302,7 @@ def read_canonical(path: str | Path | Source, *, text: str | None = None, unit: 
             raise ParseError(f"deviation {stated:g} mm contradicts actual - nominal = {actual - nominal:g} mm",
                              location=SourceLocation(name, line=line_num))
         row["actual"], row["deviation"] = actual, actual - nominal
-        lo, up = float(row.get("lower", math.nan)), float(row.get("upper", math.nan))  # type: ignore[arg-type]
+        lo, up = float(row.get("lower", math.nan)), float(row.get("upper", math.nan))  # type: ignore[arg-type]  # numbers by now
         if not math.isnan(lo) and not math.isnan(up) and lo >= up:
             raise ParseError(f"lower limit {lo:g} is not below upper limit {up:g}",
                              location=SourceLocation(name, line=line_num))
@@ -348,7 +350,7 @@ def _plain_columns(body: str, header: list[str], name: str, unit: str | None) ->
         return None
     unescape = "'" in body
     cells: dict[str, list[str]] = {}
-    for col, values in zip(header, zip(*records)):
+    for col, values in zip(header, zip(*records, strict=True), strict=True):
         cells[col] = [_unescaped(v.strip()) for v in values] if unescape else [v.strip() for v in values]
     if not all(cells["characteristic"]):
         return None
@@ -381,7 +383,8 @@ def _plain_columns(body: str, header: list[str], name: str, unit: str | None) ->
     if np.isnan(nominal).any() or (np.isnan(actual) & np.isnan(stated)).any():
         return None
     with np.errstate(invalid="ignore"):
-        if (~np.isnan(actual) & ~np.isnan(stated) & (np.abs(stated - (actual - nominal)) > DEVIATION_TOLERANCE_MM)).any():
+        disagree = np.abs(stated - (actual - nominal)) > DEVIATION_TOLERANCE_MM
+        if (~np.isnan(actual) & ~np.isnan(stated) & disagree).any():
             return None
         actual = np.where(np.isnan(actual), nominal + stated, actual)
         lo, up = numbers.get("lower", nan), numbers.get("upper", nan)

@@ -7,7 +7,7 @@ reports.  The policy:
 * every regular file is a report candidate, whatever its suffix: whether it *is* a
   report is for the readers to say (content sniffing), never for the listing;
 * left out by policy, each with its reason in :attr:`Listing.ignored`: hidden files
-  and folders (``.name``), files that are never reports (:func:`never_a_report`: a
+  and folders (``.name``), Python's ``__pycache__``, files that are never reports (:func:`never_a_report`: a
   process model, notes, scripts, the history store, figures), partial downloads and
   editor files (:data:`PARTIAL_SUFFIXES`), and the series logs, which are returned
   apart in :attr:`Listing.logs` (``corrections.csv``, ``temperatures.csv``);
@@ -35,6 +35,9 @@ __all__ = ["FoundFile", "Listing", "list_reports", "Inputs", "expand_inputs", "P
 
 #: Files a folder listing leaves out as still being written: partial downloads, editor and lock files.
 PARTIAL_SUFFIXES: tuple[str, ...] = (".tmp", ".part", ".partial", ".crdownload", "~", ".swp", ".lock")
+
+#: Folders never searched: Python's byte-code cache (a script kept beside the reports leaves one).
+CACHE_FOLDERS: frozenset[str] = frozenset({"__pycache__"})
 
 #: The logs of a series kept beside its reports, by kind (lower-case file names).
 LOG_NAMES: dict[str, str] = {"corrections.csv": "corrections", "temperatures.csv": "temperatures"}
@@ -144,6 +147,8 @@ def list_reports(root: str | os.PathLike[str], *, recursive: bool = True) -> Lis
             if stat.S_ISDIR(st.st_mode):
                 if entry.name.startswith("."):
                     ignored.append((str(path), "hidden folder"))
+                elif entry.name in CACHE_FOLDERS:
+                    ignored.append((str(path), "Python's byte-code cache, not reports"))
                 elif is_link:
                     problems.append((str(path), "link to a folder: not followed"))
                 elif recursive:

@@ -11,8 +11,6 @@ from __future__ import annotations
 from collections.abc import Iterable
 from dataclasses import dataclass
 
-import pandas as pd
-
 from parsers._registry import read_report
 from parsers._rowkeys import ROW_COLUMNS, row_keys
 from parsers._source import Source
@@ -52,11 +50,11 @@ def check_prefixes(name: str, data: bytes, cuts: Iterable[int], **options: objec
     SetupfixError
         If the whole file itself cannot be read.
     """
-    whole = set(row_keys(read_report(Source(name, data), **options).table))  # type: ignore[arg-type]
+    whole = set(row_keys(read_report(Source(name, data), **options).table))  # type: ignore[arg-type]  # reader options
     outcomes = []
     for cut in cuts:
         try:
-            table = read_report(Source(name, data[:cut]), **options).table  # type: ignore[arg-type]
+            table = read_report(Source(name, data[:cut]), **options).table  # type: ignore[arg-type]  # reader options
         except SetupfixError:
             outcomes.append(CutOutcome(cut, "refused"))
             continue

@@ -99,6 +99,9 @@ class SetupfixError(Exception):
 class ModelError(SetupfixError, ValueError):
     """The process model file is invalid (unknown ID, bad limits, …)."""
 
+    #: Every problem of a file reported in one pass (the message lists them, one a line).
+    problems: tuple[ModelError, ...] = ()
+
 
 class ParseError(SetupfixError, ValueError):
     """A measurement report or data table cannot be read."""

@@ -34,7 +34,7 @@ def margins(deviation: Array, lower: Array, upper: Array) -> Array:
     -------
     ndarray of shape (..., n_dimensions) [model unit]
     """
-    dev = np.asarray(deviation, dtype=float)
+    dev = np.asarray(deviation, dtype=np.float64)
     return np.minimum(dev - lower, upper - dev)
 
 
@@ -53,7 +53,8 @@ def error_budget(deviation: Array, lower: Array, upper: Array) -> Array:
         Negative when some dimension is out of tolerance.
     """
     m = margins(deviation, lower, upper)
-    return np.min(np.where(np.isnan(m), np.inf, m), axis=-1)
+    worst: Array = np.min(np.where(np.isnan(m), np.inf, m), axis=-1)
+    return worst
 
 
 def correction_norm(x: Array) -> Array:
@@ -67,9 +68,10 @@ def correction_norm(x: Array) -> Array:
     -------
     ndarray of shape (...) [model unit]
     """
-    return np.sqrt(np.sum(np.square(x), axis=-1))
+    norm: Array = np.sqrt(np.sum(np.square(x), axis=-1))
+    return norm
 
 
 def fitness(f1: npt.ArrayLike, f2: npt.ArrayLike) -> Array:
     """Substitute single objective f = 10·f1 − f2 (eq. 10), to be maximised."""
-    return F1_WEIGHT * np.asarray(f1, dtype=float) - np.asarray(f2, dtype=float)
+    return F1_WEIGHT * np.asarray(f1, dtype=np.float64) - np.asarray(f2, dtype=np.float64)

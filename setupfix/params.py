@@ -55,13 +55,10 @@ class Interval:
         elif not isinstance(value, numbers.Real) or not math.isfinite(float(value)):
             return False
         v = float(value) if self.type is not int else int(value)
-        if self.left is not None:
-            if v < self.left or (v == self.left and self.closed in ("right", "neither")):
-                return False
-        if self.right is not None:
-            if v > self.right or (v == self.right and self.closed in ("left", "neither")):
-                return False
-        return True
+        if self.left is not None and (v < self.left or (v == self.left and self.closed in ("right", "neither"))):
+            return False
+        return not (self.right is not None
+                    and (v > self.right or (v == self.right and self.closed in ("left", "neither"))))
 
     def __str__(self) -> str:
         lo = "-inf" if self.left is None else f"{self.left:g}"

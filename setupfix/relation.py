@@ -229,6 +229,6 @@ def null_space_directions(composite: Array, tol: float = 1e-9) -> Array:
         nonzero = np.flatnonzero(np.abs(rows[r]) > tol)
         if rows[r, nonzero[-1]] < 0:  # tools come last: read "tools +a, WKS −a"
             rows[r] = -rows[r]
-    rows = np.round(rows, 9) + 0.0
+    rows = np.asarray(np.round(rows, 9) + 0.0, dtype=np.float64)
     rows[np.abs(rows) < tol] = 0.0
     return rows

@@ -25,7 +25,7 @@ that changed it.
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
@@ -285,7 +285,7 @@ def ewma_history(deviation: Array, now: np.datetime64 | None, times: npt.NDArray
         since = known & (log_times > t) & (log_times <= now)
         reset = np.zeros(composite.shape[1], dtype=bool)
         shift = np.zeros(composite.shape[0])
-        for j, delta, tool_change in zip(log_register[since], log_delta[since], log_reset[since]):
+        for j, delta, tool_change in zip(log_register[since], log_delta[since], log_reset[since], strict=True):
             if tool_change:
                 reset |= composite[j] != 0
             elif np.isfinite(delta):
@@ -309,7 +309,7 @@ def _zero_result(problem: CorrectionProblem, optimizer: str, status: str, messag
 def _restrict(problem: CorrectionProblem, keep: Mask) -> CorrectionProblem:
     return dataclasses.replace(problem, composite=problem.composite[:, keep], deviation=problem.deviation[keep],
                                lower=problem.lower[keep], upper=problem.upper[keep],
-                               dimension_ids=tuple(d for d, k in zip(problem.dimension_ids, keep) if k))
+                               dimension_ids=tuple(d for d, k in zip(problem.dimension_ids, keep, strict=True) if k))
 
 
 def _inside(values: Array, lower: Array, upper: Array) -> Mask:
@@ -332,7 +332,11 @@ def recommend(posed: PosedProblem, solve: Callable[[CorrectionProblem], Optimize
     names : mapping, optional
         Dimension ID → name, for the messages.
     """
-    label = (lambda ids: ", ".join((names or {}).get(i, i) for i in ids))
+    shown = names or {}
+
+    def label(ids: Iterable[str]) -> str:
+        return ", ".join(shown.get(i, i) for i in ids)
+
     problem, guarded, policy = posed.problem, posed.guarded, posed.policy
     ids = np.array(problem.register_ids, dtype=object)
     dims = np.array(problem.dimension_ids, dtype=object)

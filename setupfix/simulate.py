@@ -11,11 +11,14 @@ from __future__ import annotations
 import numpy as np
 import numpy.typing as npt
 
+# The closed-loop shop simulator lives with the diagnosis it feeds (one definition of
+# every effect term); it is re-exported here as the project's simulation entry point.
+from setupfix.diagnose.shop import HiddenEffect, ShopSimulator, SimulatedSeries
 from setupfix.model import ProcessModel
 from setupfix.relation import relation_matrices
 from setupfix.search import generator
 
-__all__ = ["simulate_deviations"]
+__all__ = ["simulate_deviations", "HiddenEffect", "ShopSimulator", "SimulatedSeries"]
 
 
 def simulate_deviations(model: ProcessModel, n_sets: int, *, w1: float = 0.03, w2: float = 0.02,
@@ -53,9 +56,3 @@ def simulate_deviations(model: ProcessModel, n_sets: int, *, w1: float = 0.03, w
         dev = np.round(dev, decimals)
     return dev, setup
 
-
-# The closed-loop shop simulator lives with the diagnosis it feeds (one definition of
-# every effect term); it is re-exported here as the project's simulation entry point.
-from setupfix.diagnose.shop import HiddenEffect, ShopSimulator, SimulatedSeries  # noqa: E402
-
-__all__ += ["HiddenEffect", "ShopSimulator", "SimulatedSeries"]

@@ -74,3 +74,54 @@ def test_parsers_is_ours():
     import parsers
 
     assert Path(parsers.__file__).resolve().parent == ROOT / "parsers"
+
+
+# Sub-layers of setupfix.pipeline (layer 4).  A module imports only pipeline modules of a lower rank, so no
+# use case reaches into another one's module for a helper, and renderers and doors sit on top:
+# 0-1 file writers, checks, controller syntaxes, thermal-model files, report cycles; 2 use cases that need
+# no request (thermal fit/predict, parse, simulate, model init/check); 3 the feed-forward step and the
+# series reader; 4 the typed requests and outcomes; 5 the use cases on a request (correct, compare) and the
+# one export; 6 use cases that run correct (batch on a folder, the diagnosis's next correction);
+# 7 renderers (text/JSON, TUI rows); 8 the doors' sessions (TUI session, history store).
+PIPELINE_RANKS = {
+    "writers": 0, "checks": 0, "smoothing": 0,
+    "controllers": 1, "thermal_files": 1, "cycles": 1,
+    "thermal": 2, "parse": 2, "simulate": 2, "scaffold": 2, "model": 2,
+    "feedforward": 3, "series": 3,
+    "requests": 4,
+    "correct": 5, "compare": 5, "export": 5,
+    "batch": 6, "diagnose": 6,
+    "present": 7, "view": 7,
+    "history": 8, "session": 8,
+}
+
+
+def _pipeline_module(module: str) -> str | None:
+    parts = module.split(".")
+    return parts[2] if len(parts) > 2 and parts[:2] == ["setupfix", "pipeline"] else None
+
+
+def test_every_pipeline_module_has_a_rank():
+    names = {p.stem if p.suffix else p.name for p in (ROOT / "setupfix" / "pipeline").iterdir()
+             if (p.suffix == ".py" and p.stem != "__init__") or (p.is_dir() and (p / "__init__.py").exists())}
+    assert names == set(PIPELINE_RANKS)
+
+
+@pytest.mark.parametrize("name", sorted(PIPELINE_RANKS))
+def test_pipeline_modules_import_only_lower_ranks(name):
+    folder = ROOT / "setupfix" / "pipeline"
+    paths = sorted((folder / name).rglob("*.py")) if (folder / name).is_dir() else [folder / f"{name}.py"]
+    own = PIPELINE_RANKS[name]
+    for path in paths:
+        tree = ast.parse(path.read_text(encoding="utf-8"))
+        for node in ast.walk(tree):
+            if not isinstance(node, ast.ImportFrom) or not node.module or node.level:
+                continue
+            targets = ([_pipeline_module(node.module)] if _pipeline_module(node.module)
+                       else [a.name for a in node.names] if node.module == "setupfix.pipeline" else [])
+            for target in targets:
+                if target is None or target == name:
+                    continue
+                assert target in PIPELINE_RANKS, f"{path.name} imports setupfix.pipeline.{target}: give it a rank"
+                rank = PIPELINE_RANKS[target]
+                assert rank < own, f"setupfix.pipeline.{name} (rank {own}) imports pipeline.{target} (rank {rank})"

@@ -22,12 +22,12 @@ from pathlib import Path
 
 import pandas as pd
 
+from parsers._notes import note
 from parsers._source import point_number, read_text
 from parsers.axes import axis_word, vector_axis
-from parsers.numbers import is_number
 from parsers.canonical import finish_table
 from parsers.dmis.statements import Statement, parse_statement, split_statements
-from parsers._notes import note
+from parsers.numbers import is_number
 from setupfix.errors import ParseError, SourceLocation
 from setupfix.units import LENGTH_UNITS, length_factor
 
@@ -114,10 +114,10 @@ def read_dmis(path: str | Path, *, unit: str | None = None, encoding: str | None
         elif st.kind in ("PARTSN", "PARTID") and st.words:
             if st.kind == "PARTSN" or not part:
                 part = st.words[0].strip().strip("'")
-        elif _DATE.match(st.text):
-            date = "{:04d}-{:02d}-{:02d}".format(*map(int, _DATE.match(st.text).groups()))  # type: ignore[union-attr]
-        elif _TIME.match(st.text):
-            time = "{:02d}:{:02d}:{:02d}".format(*map(int, _TIME.match(st.text).groups()))  # type: ignore[union-attr]
+        elif date_match := _DATE.match(st.text):
+            date = "{:04d}-{:02d}-{:02d}".format(*map(int, date_match.groups()))
+        elif time_match := _TIME.match(st.text):
+            time = "{:02d}:{:02d}:{:02d}".format(*map(int, time_match.groups()))
         elif st.kind == "UNITS" and st.words:
             word = st.words[0].strip().lower()
             if word not in LENGTH_UNITS:
@@ -159,7 +159,7 @@ def read_dmis(path: str | Path, *, unit: str | None = None, encoding: str | None
             skipped.append(st.label)
             continue
         for col in ("nominal", "actual", "lower", "upper", "x", "y", "z"):
-            row[col] = float(row[col]) * factor  # type: ignore[arg-type]
+            row[col] = float(row[col]) * factor  # type: ignore[arg-type]  # numbers in these columns
         row["part"], row["station"] = part, station
         row["timestamp"] = f"{date}T{time}" if date and time else date
         rows.append(row)
@@ -209,10 +209,9 @@ def _result_row(st: Statement, feat: str, nominal: dict[str, _Feature], actual: 
             nom = act - reported
         elif math.isnan(act):
             act = nom + reported
-        elif abs((act - nom) - reported) > tolerance:
-            if abs(act - reported) > tolerance:  # neither the deviation nor (another writer's) actual
-                raise ParseError(f"{st.label}: result {reported:g} contradicts FA - F = {act - nom:g}",
-                                 location=where)
+        elif abs((act - nom) - reported) > tolerance and abs(act - reported) > tolerance:
+            # neither the deviation nor (another writer's) actual
+            raise ParseError(f"{st.label}: result {reported:g} contradicts FA - F = {act - nom:g}", location=where)
     elif kind in _PROFILE or kind in _ZONE:
         numeric = [v for v in values if _is_number(v)]
         if not numeric:

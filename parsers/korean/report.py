@@ -35,7 +35,8 @@ __all__ = ["read_korean", "sniff_korean"]
 
 _LENGTH_ITEMS = frozenset({"X", "Y", "Z", "D", "DS", "R", "L", "W", "H"})
 _ANGLE_ITEMS = frozenset({"ANG", "X/Y", "Y/X", "Z/X", "X/Z", "Y/Z", "Z/Y", "A"})
-_FORM_ITEMS = frozenset({"평면도", "원통도", "진원도", "동심도", "직각도", "평행도", "위치도", "진직도", "경사도", "대칭도", "윤곽도"})
+_FORM_ITEMS = frozenset({"평면도", "원통도", "진원도", "동심도", "직각도", "평행도",
+                         "위치도", "진직도", "경사도", "대칭도", "윤곽도"})
 #: Right edges (display columns) of actual, nominal, upper, lower, deviation; judgement after.
 _EDGES = (("item", 18), ("actual", 31), ("nominal", 45), ("upper", 59), ("lower", 73), ("deviation", 86))
 _ELEMENT = re.compile(r"^\s{0,6}(\d+)\s+(\S+)")
@@ -73,7 +74,7 @@ def _words(line: str) -> list[tuple[int, int, str]]:
 
 def _cells(line: str, where: SourceLocation) -> dict[str, str]:
     cells: dict[str, str] = {}
-    for start, end, word in _words(line):
+    for _start, end, word in _words(line):
         key = next((k for k, edge in _EDGES if end <= edge), "judgement")
         if key in cells and key != "judgement":
             raise ParseError(f"two values in the {key} column ({cells[key]!r}, {word!r})", location=where)

@@ -26,11 +26,19 @@ from pathlib import Path
 
 import pandas as pd
 
-from parsers._source import read_text
 from parsers._rows import (
-    SkipLog, checked_deviation, finish_rows, parse_number, split_columns, text_columns,
-    try_number, unit_factor, unit_or_none, warn_assumed_mm,
+    SkipLog,
+    checked_deviation,
+    finish_rows,
+    parse_number,
+    split_columns,
+    text_columns,
+    try_number,
+    unit_factor,
+    unit_or_none,
+    warn_assumed_mm,
 )
+from parsers._source import read_text
 from setupfix.errors import ParseError, SourceLocation
 
 __all__ = ["read_qvpak", "sniff_qvpak"]

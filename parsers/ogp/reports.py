@@ -31,18 +31,24 @@ from pathlib import Path
 
 import pandas as pd
 
-from parsers.ogp.rtf import is_rtf, rtf_lines
-from parsers._source import read_text
 from parsers._rows import (
-    SkipLog, checked_deviation, finish_rows, parse_number, unit_factor, unit_or_none,
+    SkipLog,
+    checked_deviation,
+    finish_rows,
+    parse_number,
+    unit_factor,
+    unit_or_none,
     warn_assumed_mm,
 )
+from parsers._source import read_text
+from parsers.ogp.rtf import is_rtf, rtf_lines
 from setupfix.errors import ParseError, SourceLocation
 
 __all__ = ["read_ogp", "sniff_ogp"]
 
 _STEP = re.compile(r"^\s*Step:\s+(\d+)\s+(\S+)")
-_ROW = re.compile(r"^\s*(?:v\s+)?(?P<label>[A-Za-z0-9][A-Za-z0-9 ./#-]*?)\s+(?P<nums>[+-]\d+\.\d+(?:\s+[+-]\d+\.\d+)*)\s*(?P<rest>.*)$")
+_ROW = re.compile(r"^\s*(?:v\s+)?(?P<label>[A-Za-z0-9][A-Za-z0-9 ./#-]*?)"
+                  r"\s+(?P<nums>[+-]\d+\.\d+(?:\s+[+-]\d+\.\d+)*)\s*(?P<rest>.*)$")
 _FORM = ("flatness", "sphericity", "cylindricity", "circularity", "roundness", "straightness", "true position",
          "position", "profile", "parallelism", "perpendicularity", "concentricity", "runout")
 _ANGLE = ("angle", "elevation", "azimuth")
@@ -88,7 +94,8 @@ def _step_report(lines: list[str], name: str, skipped: SkipLog) -> list[dict[str
         where = SourceLocation(name, line=number)
         match = _STEP.match(line)
         if match:
-            step, factor, table, taught_step = match.group(1), unit_factor(_unit(match.group(2), None, where)), "", False
+            step, factor = match.group(1), unit_factor(_unit(match.group(2), None, where))
+            table, taught_step = "", False
             continue
         words = line.split()
         if "Actual" in words and "Nominal" in words:
@@ -111,7 +118,8 @@ def _step_report(lines: list[str], name: str, skipped: SkipLog) -> list[dict[str
             continue
         if table == "size":
             if len(nums) != 4:
-                raise ParseError(f"{label}: expected Actual Nominal Upper Lower, found {len(nums)} numbers", location=where)
+                raise ParseError(f"{label}: expected Actual Nominal Upper Lower, found {len(nums)} numbers",
+                                 location=where)
             actual, nominal, upper, lower = nums
             if upper == 0 and lower == 0:
                 upper = lower = math.nan

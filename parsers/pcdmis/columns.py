@@ -16,8 +16,16 @@ import re
 import numpy as np
 import pandas as pd
 
+from parsers._rows import (
+    SkipLog,
+    checked_deviation,
+    finish_rows,
+    parse_number,
+    unit_factor,
+    unit_or_none,
+    warn_assumed_mm,
+)
 from parsers.pcdmis.axes import ANGLE_AXES, NON_LENGTH_AXES
-from parsers._rows import SkipLog, checked_deviation, finish_rows, parse_number, unit_factor, unit_or_none, warn_assumed_mm
 from setupfix.errors import ParseError, SourceLocation
 from setupfix.model.measurements import CANONICAL_COLUMNS
 
@@ -72,6 +80,7 @@ def read_columns(text: str, name: str, default_unit: str | None) -> pd.DataFrame
     lines = text.split("\n")
     meta: dict[str, str] = {}
     heading = None
+    heading_at = 0  # index of the heading line
     for number, line in enumerate(lines[:50]):
         try:
             record = next(csv.reader([line]), [])
@@ -79,13 +88,15 @@ def read_columns(text: str, name: str, default_unit: str | None) -> pd.DataFrame
             return None
         heading = heading_of(record)
         if heading is not None:
+            heading_at = number
             break
         if len(record) >= 2:
             meta[record[0].strip().lower()] = record[1].strip()
     if heading is None:
         return None
-    body = "\n".join(lines[number + 1:])
-    line_numbers = np.array([number + 2 + i for i, line in enumerate(lines[number + 1:]) if line.strip(" ,\r\t\"")])
+    body = "\n".join(lines[heading_at + 1:])
+    line_numbers = np.array([heading_at + 2 + i for i, row in enumerate(lines[heading_at + 1:])
+                             if row.strip(" ,\r\t\"")])
     try:
         # Numbers are converted by the C parser; text columns stay text. Only "" is missing.
         text_columns = {i: object for key, i in heading.items() if key in ("name", "axis", "unit")}
@@ -146,7 +157,8 @@ def read_columns(text: str, name: str, default_unit: str | None) -> pd.DataFrame
         expected = np.where(np.isnan(upper), 0.0, np.maximum(deviation - upper, 0.0))
         expected = np.where(~np.isnan(lower) & (deviation < lower), lower - deviation, expected)
         outtol = num["outtol"]
-        off = usable & ~np.isnan(outtol) & (np.abs(np.abs(outtol * factor) - expected) > np.maximum(0.0011, 0.00011 * factor))
+        mismatch = np.abs(np.abs(outtol * factor) - expected) > np.maximum(0.0011, 0.00011 * factor)
+        off = usable & ~np.isnan(outtol) & mismatch
     if off.any():
         i = int(np.argmax(off))
         raise ParseError(f"OUTTOL {outtol[i]:g} contradicts the deviation and tolerances "
@@ -158,7 +170,7 @@ def read_columns(text: str, name: str, default_unit: str | None) -> pd.DataFrame
     names, axes = cells["name"][usable].astype(object), cells["axis"][usable].astype(object)
     n = int(usable.sum())
     frame = pd.DataFrame({
-        "characteristic": [f"{a}.{b}" if b else a for a, b in zip(names, axes)],
+        "characteristic": [f"{a}.{b}" if b else a for a, b in zip(names, axes, strict=True)],
         "nominal": nominal[usable], "actual": actual[usable], "deviation": deviation[usable],
         "lower": lower[usable], "upper": upper[usable], "unit": "mm",
         "part": meta.get("serial number") or f"{meta.get('part name', 'part')}#1",

@@ -17,11 +17,11 @@ from pathlib import Path
 
 import pandas as pd
 
+from parsers._rows import SkipLog, unit_or_none
+from parsers._source import read_text
 from parsers.pcdmis.axes import ANGLE_AXES, NON_LENGTH_AXES
 from parsers.pcdmis.columns import STAMP, heading_of, read_columns
 from parsers.pcdmis.text_report import _Raw, rows_from_raw
-from parsers._source import read_text
-from parsers._rows import SkipLog, unit_or_none
 from setupfix.errors import ParseError, SourceLocation
 
 __all__ = ["read_pcdmis_csv", "sniff_pcdmis_csv"]
@@ -89,7 +89,7 @@ def read_rows(text: str, name: str, default_unit: str | None) -> pd.DataFrame:
             if getter is None:
                 keys, getter, width = list(cols), itemgetter(*cols.values()), max(cols.values()) + 1
             if len(record) >= width:
-                cells = dict(zip(keys, map(str.strip, getter(record))))
+                cells = dict(zip(keys, map(str.strip, getter(record)), strict=True))
             else:
                 cells = {k: record[i].strip() for k, i in cols.items() if i < len(record)}
             axis = cells.get("axis", "")

@@ -27,11 +27,19 @@ from pathlib import Path
 
 import pandas as pd
 
-from parsers._source import read_text
 from parsers._rows import (
-    SkipLog, checked_deviation, finish_rows, parse_number, split_columns, text_columns,
-    try_number, unit_factor, unit_or_none, warn_assumed_mm,
+    SkipLog,
+    checked_deviation,
+    finish_rows,
+    parse_number,
+    split_columns,
+    text_columns,
+    try_number,
+    unit_factor,
+    unit_or_none,
+    warn_assumed_mm,
 )
+from parsers._source import read_text
 from parsers.pcdmis.axes import ANGLE_AXES, NON_LENGTH_AXES
 from setupfix.errors import ParseError, SourceLocation
 

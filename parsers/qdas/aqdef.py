@@ -21,11 +21,16 @@ from typing import NamedTuple
 
 import pandas as pd
 
-from parsers._source import load_source, read_text
 from parsers._rows import (
-    SkipLog, finish_rows, parse_number, try_number, unit_factor, unit_or_none,
+    SkipLog,
+    finish_rows,
+    parse_number,
+    try_number,
+    unit_factor,
+    unit_or_none,
     warn_assumed_mm,
 )
+from parsers._source import load_source, read_text
 from setupfix.errors import ParseError, SourceLocation
 
 __all__ = ["read_aqdef", "sniff_aqdef"]
@@ -133,7 +138,8 @@ def _feed_value_line(state: _State, line: str, where: SourceLocation) -> None:
         parts = group.split(_DC4)
         if len(parts) > 20:
             raise ParseError(f"characteristic {number}: {len(parts)} fields in a value group", location=where)
-        item = _Value(number, state.coded_lines, where, dict(zip(_VALUE_FIELDS, parts)))
+        fields = dict(zip(_VALUE_FIELDS, parts, strict=False))  # a short group, or fields past K0012 (unused)
+        item = _Value(number, state.coded_lines, where, fields)
         state.samples[number] = state.coded_lines
         state.values.append(item)
         state.last_value[number] = item
@@ -195,7 +201,8 @@ def _limits(char: _Char, nominal: float, factor: float, where: SourceLocation) -
     lower = lo_abs - nominal if lo_abs is not None else lo_rel
     upper = up_abs - nominal if up_abs is not None else up_rel
     for absolute, relative, key in ((lo_abs, lo_rel, "K2112"), (up_abs, up_rel, "K2113")):
-        if absolute is not None and relative is not None and abs(absolute - nominal - relative) > 1e-6 * max(1.0, abs(nominal)):
+        if (absolute is not None and relative is not None
+                and abs(absolute - nominal - relative) > 1e-6 * max(1.0, abs(nominal))):
             raise ParseError(f"{key} allowance contradicts the absolute limit", location=char.lines.get(key, where))
     lo = math.nan if lower is None else lower
     up = math.nan if upper is None else upper
@@ -298,7 +305,8 @@ def _rows(state: _State, name: str, default_unit: str | None) -> pd.DataFrame:
         if item.where.path != name:
             line = f"{Path(item.where.path).name}:{line}"
         if char is None:
-            raise ParseError(f"value of characteristic {item.char}, which the file does not describe", location=item.where)
+            raise ParseError(f"value of characteristic {item.char}, which the file does not describe",
+                             location=item.where)
         kind = char.fields.get("K2004", "0").strip() or "0"
         if kind != "0":
             skipped.add(f"value(s) of attributive characteristics (K2004={kind})", line)

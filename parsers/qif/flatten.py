@@ -92,9 +92,9 @@ def _transform(ns: str) -> etree.XSLT:
 
 def results_elements(root: etree._Element, ns: str) -> list[etree._Element]:
     """The ``MeasurementResults`` elements (one per part) in document order, as the stylesheet sees them."""
-    if ns:
-        return root.xpath(RESULTS_XPATH, namespaces={"q": ns})
-    return root.xpath(RESULTS_XPATH.replace("q:", ""))
+    found: list[etree._Element] = (root.xpath(RESULTS_XPATH, namespaces={"q": ns}) if ns
+                                   else root.xpath(RESULTS_XPATH.replace("q:", "")))
+    return found
 
 
 #: Columns of :func:`measurement_table` (the fields of :class:`Record` but ``results``).

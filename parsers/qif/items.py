@@ -88,7 +88,7 @@ def _location(item: etree._Element, doc: Doc, mm: float) -> tuple[float, float, 
     xyz = [try_number(v, scale=mm) for v in loc.text.split()[:3]]
     if len(xyz) != 3 or None in xyz:
         return (math.nan, math.nan, math.nan)
-    return (float(xyz[0]), float(xyz[1]), float(xyz[2]))  # type: ignore[arg-type]
+    return (float(xyz[0]), float(xyz[1]), float(xyz[2]))  # type: ignore[arg-type]  # no None: tested above
 
 
 def _vector(el: etree._Element | None) -> tuple[float, float, float] | None:
@@ -97,7 +97,7 @@ def _vector(el: etree._Element | None) -> tuple[float, float, float] | None:
     values = [try_number(w) for w in words]
     if len(values) != 3 or any(v is None for v in values):
         return None
-    return (float(values[0]), float(values[1]), float(values[2]))  # type: ignore[arg-type]
+    return (float(values[0]), float(values[1]), float(values[2]))  # type: ignore[arg-type]  # no None: tested above
 
 
 def _unit(vector: tuple[float, float, float] | None) -> tuple[float, float, float] | None:

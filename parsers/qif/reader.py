@@ -16,14 +16,14 @@ import numpy as np
 import pandas as pd
 from lxml import etree
 
+from parsers._notes import note
 from parsers._source import Source, read_bytes
 from parsers.canonical import finish_table
 from parsers.qif._xml import parse_xml
 from parsers.qif.external import build_index, resolve_external
 from parsers.qif.flatten import Record, measurement_table, record, results_elements
-from parsers.qif.items import Doc, Item, item_info, local, number, raw_float, child_text
+from parsers.qif.items import Doc, Item, child_text, item_info, local, number, raw_float
 from parsers.qif.units import choose_file_unit, file_unit_factor
-from parsers._notes import note
 from setupfix.errors import ParseError, SourceLocation
 
 __all__ = ["read_qif", "sniff_qif", "NON_LENGTH_KINDS"]
@@ -54,7 +54,7 @@ def _report_date(results: etree._Element, root: etree._Element, ns: str) -> str:
     """``InspectionTraceability/ReportPreparationDate`` of the part's results, else of the
     document's: when it was inspected, the nearest a QIF file comes to when it was machined."""
     path = f"{{{ns}}}InspectionTraceability/{{{ns}}}ReportPreparationDate"
-    own = results.findtext(path)
+    own: str | None = results.findtext(path)
     if own and own.strip():
         return own.strip()
     container = results.getparent()
@@ -163,7 +163,8 @@ def read_qif(path: str | Path | Source, *, unit: str | None = None) -> pd.DataFr
     part_of = np.asarray([p[0] for p in parts], dtype=object)[kept["results"].to_numpy()]
     station_of = np.asarray([p[1] for p in parts], dtype=object)[kept["results"].to_numpy()]
     columns: dict[str, object] = {
-        field: np.asarray([getattr(infos[k], field) for k in known], dtype=object if field in ("label", "axis") else None)[code]
+        field: np.asarray([getattr(infos[k], field) for k in known],
+                          dtype=object if field in ("label", "axis") else None)[code]
         for field in Item.__dataclass_fields__
     }
     labels = pd.Series(columns.pop("label"), dtype=object)

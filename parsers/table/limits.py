@@ -26,7 +26,8 @@ MAX_RATIO = 200
 #: Largest sheet area (rows × columns up to the last cell named) the grid reader may allocate.
 MAX_CELLS = 5_000_000
 
-_REF = re.compile(rb'<(?:c|row|dimension)\b[^>]*?\br(?:ef)?="\$?([A-Z]{0,3})\$?([0-9]{1,9})(?::\$?([A-Z]{0,3})\$?([0-9]{1,9}))?"')
+_REF = re.compile(rb'<(?:c|row|dimension)\b[^>]*?\br(?:ef)?='
+                  rb'"\$?([A-Z]{0,3})\$?([0-9]{1,9})(?::\$?([A-Z]{0,3})\$?([0-9]{1,9}))?"')
 _CHUNK = 1 << 20
 
 

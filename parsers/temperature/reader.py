@@ -168,7 +168,8 @@ def _grid(data: bytes, source: str, sheet: str | None) -> tuple[list[Any], list[
 
         frame, sources = load_grid(source, sheet=sheet)
         title = sources[0].split("#", 1)[1].rsplit("!", 1)[0] if sources else (sheet or "")
-        rows = [(int(s.rsplit("!", 1)[1]), list(r)) for s, r in zip(sources, frame.itertuples(index=False))]
+        rows = [(int(s.rsplit("!", 1)[1]), list(r))
+                for s, r in zip(sources, frame.itertuples(index=False), strict=True)]
         return list(frame.columns), rows, title
     if sheet is not None:
         raise ParseError("--sheet applies to .xlsx logs only", location=SourceLocation(source))
@@ -209,14 +210,16 @@ def read_temperature_log(path: str | Path, *, interval: float | None = None, req
     raw_header, raw_body, title = _grid(read_bytes(path), source, sheet)
 
     def where(line: int) -> SourceLocation:
-        return SourceLocation(source, element=f"{title}!{line}") if title is not None else SourceLocation(source, line=line)
+        if title is not None:
+            return SourceLocation(source, element=f"{title}!{line}")
+        return SourceLocation(source, line=line)
 
     notes: list[Note] = []
     header = ["" if h is None else str(h).strip() for h in raw_header]
     if header and all(_cell_number(h) is not None for h in header if h) and any(header):
         # No header row: the first row is data; name the columns by their letters.
         first_line = raw_body[0][0] - 1 if raw_body else 1
-        raw_body = [(first_line, list(raw_header))] + raw_body
+        raw_body = [(first_line, list(raw_header)), *raw_body]
         header = [_letters(j) for j in range(len(header))]
         notes.append(Note("no header row: columns named A, B, C … by position", where(first_line), "parse"))
     body = [(line, r) for line, r in raw_body if any(c is not None and str(c).strip() for c in r)]
@@ -272,8 +275,8 @@ def read_temperature_log(path: str | Path, *, interval: float | None = None, req
         for i, cell in enumerate(raw):
             if cell is None or not str(cell).strip():
                 raise ParseError("empty timestamp", location=where(int(lines[i])))
-        times = [parse_timestamp(c, where(int(line))) for c, line in zip(raw, lines)]
-        stamps = [t.isoformat() if isinstance(c, datetime) else str(c).strip() for c, t in zip(raw, times)]
+        times = [parse_timestamp(c, where(int(line))) for c, line in zip(raw, lines, strict=True)]
+        stamps = [t.isoformat() if isinstance(c, datetime) else str(c).strip() for c, t in zip(raw, times, strict=True)]
         try:
             seconds = np.array([(t - times[0]).total_seconds() for t in times])
         except TypeError:

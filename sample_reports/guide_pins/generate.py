@@ -43,7 +43,7 @@ def _header(comments: list[str]) -> list[str]:
         p = (j - 1) % N_PARTS + 1
         table = "B0" if j <= N_PARTS else "B180"
         out += [f"[wks.W{j}]", f'register = "{reg}"  # part {p} at {table}', ""]
-    return out + ["[tools.T5]", 'register = "H5"', "", "[tools.T23]", 'register = "H23"', ""]
+    return [*out, "[tools.T5]", 'register = "H5"', "", "[tools.T23]", 'register = "H23"', ""]
 
 
 def model_toml() -> str:
@@ -112,7 +112,7 @@ def main() -> None:
             writer = csv.writer(fh)
             writer.writerow(["characteristic", "nominal", "actual", "deviation", "lower", "upper", "unit",
                              "part", "station", "timestamp"])
-            for dim, e in zip(model.dimensions, dev):
+            for dim, e in zip(model.dimensions, dev, strict=True):
                 writer.writerow([dim.name, f"{dim.nominal:.4f}", f"{dim.nominal + e:.4f}", f"{e:.4f}",
                                  dim.lower, dim.upper, "mm", f"cycle {cycle:02d}", dim.group,
                                  f"2026-11-{cycle + 1:02d}T08:00:00"])

@@ -13,8 +13,9 @@ The same measurements as the canonical CSV, in two real report formats, so that
   the machining time, and ``RECALL/D(station)`` the datum system (one per fixture
   station) each block is reported in.
 
-Both carry the cycle's timestamp (QIF ``ReportPreparationDate``, DMIS ``DATE``/``TIME``).  Labels are the model's names, blanks included: strict DMIS
-  labels have none, but the names must match the model for ``setupfix correct``.
+Both carry the cycle's timestamp (QIF ``ReportPreparationDate``, DMIS ``DATE``/``TIME``).
+Labels are the model's names, blanks included: strict DMIS labels have none, but the
+names must match the model for ``setupfix correct``.
 
 Run: ``python sample_reports/guide_pins/write_formats.py`` (rewrites both files).
 """
@@ -75,7 +76,7 @@ def write_qif(rows: list[dict[str, str]], target: Path) -> None:
     mset = _el(results, "MeasurementResultsSet", n=str(len(stations)))
     comps = _el(_el(results, "ActualComponentSets", n="1"), "ActualComponentSet", n=str(len(stations)))
     for station in stations:
-        mine = [(r, i) for r, i in zip(rows, item_ids) if r["station"] == station]
+        mine = [(r, i) for r, i in zip(rows, item_ids, strict=True) if r["station"] == station]
         res_id, comp_id = next_id, next_id + 1
         next_id += 2
         res = _el(mset, "MeasurementResults", id=str(res_id))

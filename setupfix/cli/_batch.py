@@ -16,7 +16,7 @@ if TYPE_CHECKING:
     from setupfix.pipeline.batch import BatchSummary, Outcome
 
 
-def add_parser(sub: argparse._SubParsersAction) -> None:
+def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     p = sub.add_parser("batch", help="correct every report in a folder tree into one offsets file",
                        description="Correct every report found in DIR (recursively, any supported format) and "
                                    "write one offsets CSV. A file that cannot be read or matched is named on "

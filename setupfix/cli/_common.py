@@ -131,7 +131,8 @@ def parse_stations(text: str | None) -> list[str] | dict[str, str] | None:
         return None
     items = [t.strip() for t in text.split(",") if t.strip()]
     if all("=" in t for t in items):
-        return dict(tuple(s.strip() for s in t.split("=", 1)) for t in items)  # type: ignore[misc]
+        pairs = (t.split("=", 1) for t in items)
+        return {part.strip(): station.strip() for part, station in pairs}
     if any("=" in t for t in items):
         raise SetupfixError(f"--stations {text!r}: give either a list (P1,P2) or pairs (part=station), not both")
     return items

@@ -9,14 +9,15 @@ import sys
 from setupfix.cli._common import add_report_options, cycles_of, read_options, whole_number
 
 
-def add_parser(sub: argparse._SubParsersAction) -> None:
+def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     p = sub.add_parser("compare", help="compare the metaheuristics with the exact optimum on one report",
                        description="Run CRIPSO, PSO, GA, COA and cuckoo search N seeded times each on one "
                                    "measured part and tabulate best / median / worst f1, f2 and f beside the "
                                    "exact grid optimum (Stryczek 2014, Figs. 12-17).")
     p.add_argument("report", metavar="REPORT", help="CMM report in any supported format")
     p.add_argument("--model", required=True, metavar="MODEL", help="process model TOML")
-    p.add_argument("--trials", type=whole_number(1, 10_000), default=12, metavar="N", help="seeded trials per method (default 12)")
+    p.add_argument("--trials", type=whole_number(1, 10_000), default=12, metavar="N",
+                   help="seeded trials per method (default 12)")
     p.add_argument("--time-limit", type=float, default=None, metavar="SECONDS",
                    help="wall time of the exact optimiser's whole solve (default 2)")
     p.add_argument("--seed", type=int, default=0, metavar="S", help="root of the trial seeds (default 0)")

@@ -15,7 +15,7 @@ if TYPE_CHECKING:
     from setupfix.pipeline.requests import CorrectRequest
 
 
-def add_parser(sub: argparse._SubParsersAction) -> None:
+def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     p = sub.add_parser("correct", help="setup corrections (WKS and tool offsets) for one CMM report",
                        description="Compute the WKS and tool-length corrections that maximise the unilateral "
                                    "error budget of the measured part(s) (Stryczek 2014), under the model's "

@@ -18,7 +18,7 @@ if TYPE_CHECKING:
 __all__ = ["add_parser", "run"]
 
 
-def add_parser(sub: argparse._SubParsersAction) -> None:
+def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     p = sub.add_parser(
         "diagnose", help="find what the model lacks in a series of reports; error before and after",
         description="Fit the declared model to a series of reports (setup state, corrections in effect at each "

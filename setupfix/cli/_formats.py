@@ -9,7 +9,7 @@ import sys
 from setupfix.cli.exit_codes import OK
 
 
-def add_parser(sub: argparse._SubParsersAction) -> None:
+def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     p = sub.add_parser("formats", help="list the supported report formats",
                        description="List the report formats in the order their content is sniffed.")
     p.add_argument("--json", action="store_true", help="machine-readable list")
@@ -25,9 +25,9 @@ def run(args: argparse.Namespace) -> int:
         sys.stdout.write("\n")
         return OK
     width = max(len(str(r["name"])) for r in rows) + 2
-    ext_width = max(len(", ".join(r["extensions"])) for r in rows) + 2  # type: ignore[arg-type]
+    ext_width = max(len(", ".join(r["extensions"])) for r in rows) + 2  # type: ignore[arg-type]  # a list of str
     print(f"{'format':<{width}}{'extensions':<{ext_width}}description")
     for r in rows:
-        extensions = ", ".join(r["extensions"])  # type: ignore[arg-type]
+        extensions = ", ".join(r["extensions"])  # type: ignore[arg-type]  # a list of str
         print(f"{r['name']:<{width}}{extensions:<{ext_width}}{r['description']}")
     return OK

@@ -5,13 +5,15 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+from collections.abc import Mapping
+from typing import Any
 
 from setupfix.cli._choices import HISTORY_EXPORTS
 from setupfix.cli._common import add_lenient_option
 from setupfix.errors import SourceLocation, StoreError
 
 
-def add_parser(sub: argparse._SubParsersAction) -> None:
+def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     p = sub.add_parser("history", help="the history store: import reports and logs, show, export",
                        description="Keep every report (by content hash: importing one twice changes nothing), "
                                    "the corrections log, the temperature log and every recommendation in one "
@@ -83,7 +85,8 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-def _format(s: dict) -> str:
+def _format(s: Mapping[str, Any]) -> str:
+    """The ``history show`` summary (the JSON object ``--json`` prints, values as JSON gives them) as text."""
     lines = [f"{s['store']}: {len(s['reports'])} report(s)"]
     if s["reports"]:
         lines.append(f"{'report':<32}{'format':<10}{'rows':>6}{'parts':>6}  {'first':<20}{'last':<20}sha256")

@@ -22,7 +22,7 @@ MATRICES = ("R_MW", "R_WF", "R_TF", "R_FD", "C")
 WIDTH = 100
 
 
-def add_parser(sub: argparse._SubParsersAction) -> None:
+def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     p = sub.add_parser("model", help="inspect a process model, check a report against it, or scaffold one",
                        description="Process model files (shared/spec/process-model.md): show its matrices, "
                                    "check how a report matches it, or write a scaffold from reports.")

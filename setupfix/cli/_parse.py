@@ -9,7 +9,7 @@ from setupfix.errors import SetupfixError
 from setupfix.cli.exit_codes import ERROR, OK, PARTIAL
 
 
-def add_parser(sub: argparse._SubParsersAction) -> None:
+def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     p = sub.add_parser("parse", help="read CMM reports into the canonical measurement CSV",
                        description="Read CMM reports (QIF, DMIS, CALYPSO, shop tables, …) and write one canonical "
                                    "measurement table: lengths in mm, deviation = actual - nominal, limits as "

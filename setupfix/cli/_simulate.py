@@ -12,7 +12,7 @@ from setupfix.cli.exit_codes import OK
 __all__ = ["add_parser", "run"]
 
 
-def add_parser(sub: argparse._SubParsersAction) -> None:
+def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     p = sub.add_parser(
         "simulate", help="simulate a shop series (setup errors, noise, hidden effects, corrections)",
         description="Closed-loop shop simulator: true setup errors, measurement noise, hidden effects the "

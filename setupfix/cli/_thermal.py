@@ -39,8 +39,10 @@ def _common(p: argparse.ArgumentParser) -> None:
                    "present, else constant)")
     p.add_argument("--speed", metavar="COL", help="kalman: spindle speed column in rpm (default: 'spindle_speed' if "
                    "present, else the ambient-only fallback)")
-    p.add_argument("--seed", type=whole_number(0, 2**63 - 1, "a whole number >= 0"), default=None, help="seed of the stochastic calibrations (default 0)")
-    p.add_argument("--iterations", type=whole_number(1, 100_000), default=None, help="grey-cs/grey-pso iterations (paper: 100); kalman GA generations (60)")
+    p.add_argument("--seed", type=whole_number(0, 2**63 - 1, "a whole number >= 0"), default=None,
+                   help="seed of the stochastic calibrations (default 0)")
+    p.add_argument("--iterations", type=whole_number(1, 100_000), default=None,
+                   help="grey-cs/grey-pso iterations (paper: 100); kalman GA generations (60)")
     p.add_argument("--bound", type=positive_number(1e9), default=None,
                    help="grey-cs/grey-pso search box ±BOUND for every coefficient (paper: 100)")
     p.add_argument("--form", choices=("trapezoid", "tien"), default=None,
@@ -168,7 +170,8 @@ def run(args: argparse.Namespace) -> int:
                 out["rmse"] = _num(drift.rmse)
             print(json.dumps(out))
         elif args.output != "-":
-            print(f"{drift.method}: predicted {drift.target} at the last sample {_fmt(drift.latest)}{_unit(drift.unit)} "
+            print(f"{drift.method}: predicted {drift.target} at the last sample "
+                  f"{_fmt(drift.latest)}{_unit(drift.unit)} "
                   f"relative to the model's reference state ({drift.drift.size} samples)")
         return OK
     anchor = pipe.parse_anchor(args.anchor) if args.anchor else None

@@ -9,7 +9,7 @@ from setupfix.cli._choices import OPTIMIZERS
 from setupfix.cli._common import add_report_options, add_thermal_options, cycles_of, read_options
 
 
-def add_parser(sub: argparse._SubParsersAction) -> None:
+def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     p = sub.add_parser("tui", help="the operator's terminal screen: corrections, verdict, thermal drift, history",
                        description="Open a process model and a CMM report (or the newest report of a folder, "
                                    "re-read when a new one arrives) in a keyboard-first terminal UI. "

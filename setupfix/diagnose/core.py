@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import ClassVar
 
 import numpy as np
 import numpy.typing as npt
@@ -12,7 +13,7 @@ from setupfix.diagnose.select import Selection, select_effects
 from setupfix.diagnose.terms import EffectSpec, Layout, Series
 from setupfix.diagnose.walk import WalkForward, next_cycle, walk_forward
 from setupfix.errors import ParameterError
-from setupfix.params import Interval, ValidatedParams
+from setupfix.params import Constraint, Interval, ValidatedParams
 
 __all__ = ["EffectResult", "ErrorSummary", "Diagnosis", "Diagnoser", "error_summary"]
 
@@ -150,7 +151,7 @@ class Diagnoser(ValidatedParams):
         EWMA weight of the run-to-run baseline.
     """
 
-    _parameter_constraints = {
+    _parameter_constraints: ClassVar[dict[str, list[Constraint]]] = {
         "alpha": [Interval(float, 0, 1, closed="neither")],
         "max_effects": [Interval(int, 0, 20)],
         "n_folds": [Interval(int, 2, 50)],

@@ -127,7 +127,7 @@ class Fit:
         """Fitted setup state seen through C plus every static constant, shape (n_dimensions,)."""
         r = self.basis.shape[0]
         out: Array = self.coef[:r] @ self.basis
-        for spec, span in zip(self.specs, self.spans):
+        for spec, span in zip(self.specs, self.spans, strict=True):
             if spec.kind == "relation":
                 # the free constant (δ · s_i) of a relation sits on its dimension
                 out = out.copy()
@@ -144,7 +144,7 @@ class Fit:
         registers; see :meth:`relation_matrix`).
         """
         out = np.broadcast_to(self.offset(), series.deviation.shape).copy()
-        for spec, span in zip(self.specs, self.spans):
+        for spec, span in zip(self.specs, self.spans, strict=True):
             if spec.kind == "relation" and not applied:
                 continue
             out += self.coef[span.start] * effect_field(spec, layout, series)

@@ -57,10 +57,8 @@ def forecast_shift(section: EffectsSection, layout: Layout, *, time: float | Non
     out = np.zeros(layout.n_dimensions)
     for e in section.effects:
         if e.kind == "drift":
-            if e.shape == "saturating" and e.tau:
-                step = np.exp(-t / e.tau) - np.exp(-(t + dt) / e.tau)
-            else:
-                step = dt
+            tau = e.tau if e.shape == "saturating" else None
+            step = np.exp(-t / tau) - np.exp(-(t + dt) / tau) if tau else dt
             out += e.estimate * step * common_tool_row(layout)
         elif e.kind == "wear" and e.register in layout.register_ids:
             out += e.estimate * layout.composite[layout.register_ids.index(e.register)]

@@ -252,7 +252,7 @@ def select_effects(layout: Layout, series: Series, *, alpha: float = 0.01, max_e
         df0 = obs.n - Q.shape[1]
         gain_d, g = _dense_scores(Q, r, Z) if Z.shape[1] else (np.zeros(0), np.zeros(0))
         if first:
-            unident += [s.target for s, gi, a in zip(specs, g, active_dense) if a and gi == 0.0]
+            unident += [s.target for s, gi, a in zip(specs, g, active_dense, strict=True) if a and gi == 0.0]
             first = False
         gain_d = np.where(active_dense & (g > 0), gain_d, -1.0)
         gain_r, slope_r = (_relation_scores(Q, r, obs, series.applied, active_rel) if active_rel.any()

@@ -20,14 +20,14 @@ the machine runs and towards ambient during pauses; ambient swings daily.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 import numpy.typing as npt
 
 from setupfix.diagnose.terms import AXES, KINDS, EffectSpec, Layout, Series, effect_field, parts_since_change
 from setupfix.errors import ParameterError
-from setupfix.params import Interval, ValidatedParams, validate_params
+from setupfix.params import Constraint, Interval, ValidatedParams, validate_params
 from setupfix.search import generator
 
 __all__ = ["HiddenEffect", "ShopSimulator", "SimulatedSeries", "random_topology"]
@@ -118,7 +118,7 @@ class ShopSimulator(ValidatedParams):
         Seed of the simulation; None means :data:`setupfix.search.DEFAULT_SEED` (never entropy).
     """
 
-    _parameter_constraints = {
+    _parameter_constraints: ClassVar[dict[str, list[Constraint]]] = {
         "n_cycles": [Interval(int, 1, 1_000_000)],
         "noise": [Interval(float, 0, None)],
         "setup_error": [Interval(float, 0, None)],

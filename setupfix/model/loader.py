@@ -112,7 +112,7 @@ class _Problems:
         if self.items:
             text = "\n".join(str(p) for p in self.items)
             err = ModelError(text)
-            err.problems = self.items  # type: ignore[attr-defined]
+            err.problems = tuple(self.items)
             raise err
 
 
@@ -332,7 +332,8 @@ def model_from_dict(doc: Mapping[str, Any], source: str = "<model>") -> ProcessM
         source=source,
     )
     if "effects" in doc:
-        model = replace(model, effects=parse_effects(doc["effects"], model, functools.partial(_report_in, p, "effects")))
+        effects = parse_effects(doc["effects"], model, functools.partial(_report_in, p, "effects"))
+        model = replace(model, effects=effects)
     if "safety" in doc:
         model = replace(model, safety=parse_safety(doc["safety"], model.dimension_ids,
                                                    functools.partial(_report_in, p, "safety")))

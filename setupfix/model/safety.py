@@ -179,11 +179,11 @@ def parse_safety(value: Any, dimension_ids: Collection[str], report: Callable[[s
             if name not in DIMENSION_KEYS:
                 report(f"{key}.{name}", f"unknown key (expected one of: {', '.join(sorted(DIMENSION_KEYS))})")
         if "uncertainty" in table:
-            u = _num(lambda m: report(f"{key}.uncertainty", m), table["uncertainty"], 0.0)
+            u = _num(functools.partial(report, f"{key}.uncertainty"), table["uncertainty"], 0.0)
             if u is not None:
                 uncertainty[did] = u
         if "reject_band" in table:
-            r = _num(lambda m: report(f"{key}.reject_band", m), table["reject_band"], 0.0, open_low=True)
+            r = _num(functools.partial(report, f"{key}.reject_band"), table["reject_band"], 0.0, open_low=True)
             if r is not None:
                 reject[did] = r
     gain = get("gain", 0.0, 1.0, open_low=True)

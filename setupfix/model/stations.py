@@ -95,7 +95,7 @@ def expand_stations(doc: Mapping[str, Any]) -> tuple[dict[str, Any], dict[str, s
     t_dimensions = template.get("dimensions", {})
     for name, table in (("features", t_features), ("dimensions", t_dimensions)):
         if not isinstance(table, Mapping) or not all(isinstance(v, Mapping) for v in table.values()):
-            problems.append((f"template.{name}", "expected tables [template.%s.<ID>]" % name))
+            problems.append((f"template.{name}", f"expected tables [template.{name}.<ID>]"))
     if problems:
         return out, origin, problems
 

@@ -29,13 +29,15 @@ reference program drops duplicate eggs too).  The optional killing of the worst
 
 from __future__ import annotations
 
+from typing import ClassVar
+
 import numpy as np
 import numpy.typing as npt
 
 from setupfix.errors import ParameterError
 from setupfix.optimize._base import POPULATION, Evaluator, Metaheuristic, count
-from setupfix.params import Interval
 from setupfix.optimize._problem import CorrectionProblem
+from setupfix.params import Constraint, Interval
 
 __all__ = ["COA", "lay_eggs", "kmeans", "immigrate"]
 
@@ -70,7 +72,8 @@ def lay_eggs(centres: Array, n_eggs: npt.ArrayLike, span: Array, alpha: float,
     theta = 2.0 * np.pi * rank / np.maximum(n_eggs[owner] - 1, 1)
     sign = np.where(rng.random((owner.size, centres.shape[1])) < 0.5, -1.0, 1.0)
     step = radius[:, None] * (sign * np.cos(theta)[:, None] + np.sin(theta)[:, None])
-    return centres[owner] + step * span
+    eggs: Array = centres[owner] + step * span
+    return eggs
 
 
 def kmeans(x: Array, k: int, rng: np.random.Generator, n_iter: int = 20) -> npt.NDArray[np.int64]:
@@ -127,7 +130,7 @@ class COA(Metaheuristic):
     """
 
     name = "coa"
-    _parameter_constraints = {
+    _parameter_constraints: ClassVar[dict[str, list[Constraint]]] = {
         **Metaheuristic._parameter_constraints,
         "initial_cuckoos": POPULATION,
         "max_cuckoos": POPULATION,

@@ -78,9 +78,9 @@ import numpy.typing as npt
 
 from setupfix.objective import F1_WEIGHT
 from setupfix.optimize._base import Evaluator, Metaheuristic
-from setupfix.params import Interval
-from setupfix.search import acceleration
 from setupfix.optimize._problem import CorrectionProblem
+from setupfix.params import Constraint, Interval
+from setupfix.search import acceleration
 
 __all__ = ["CRIPSO", "coefficient_schedule", "planula_position"]
 
@@ -170,7 +170,7 @@ class CRIPSO(Metaheuristic):
     """
 
     name: ClassVar[str] = "cripso"
-    _parameter_constraints = {
+    _parameter_constraints: ClassVar[dict[str, list[Constraint]]] = {
         **Metaheuristic._parameter_constraints,
         "n_polyps": [Interval(int, 2, 100_000)],  # a tournament needs two polyps
         "inertia": [Interval(float, 0.0, 2.0)],
@@ -217,7 +217,7 @@ class CRIPSO(Metaheuristic):
         gbest_f = fit[gbest_polyp]
         sqrt = math.sqrt
 
-        for t, (i, j) in enumerate(zip(first.tolist(), second.tolist())):
+        for t, (i, j) in enumerate(zip(first.tolist(), second.tolist(), strict=True)):
             win, lose = (i, j) if fit[i] >= fit[j] else (j, i)
             if lose == gbest_polyp:  # only on a tie: the equal winner is the colony's best now
                 gbest_polyp, gbest_row = win, pos[win]

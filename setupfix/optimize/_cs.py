@@ -13,11 +13,13 @@ no budget is given; the default 5,000 solutions equals CRIPSO's and the GA's.
 
 from __future__ import annotations
 
+from typing import ClassVar
+
 import numpy as np
 
-from setupfix.optimize._base import POPULATION, Evaluator, GridObjective, GridSpace, Metaheuristic, count
-from setupfix.params import Interval
+from setupfix.optimize._base import POPULATION, Evaluator, GridObjective, GridSpace, Metaheuristic
 from setupfix.optimize._problem import CorrectionProblem
+from setupfix.params import Constraint, Interval
 from setupfix.search import cuckoo_search
 
 __all__ = ["CuckooSearch"]
@@ -40,7 +42,7 @@ class CuckooSearch(Metaheuristic):
     """
 
     name = "cs"
-    _parameter_constraints = {
+    _parameter_constraints: ClassVar[dict[str, list[Constraint]]] = {
         **Metaheuristic._parameter_constraints,
         "n_nests": POPULATION,
         "pa": [Interval(float, 0.0, 1.0)],

@@ -106,7 +106,8 @@ def _blas_single_thread() -> AbstractContextManager[object]:
     global _CONTROLLER
     if _CONTROLLER is None:
         _CONTROLLER = ThreadpoolController()
-    return _CONTROLLER.limit(limits=1)
+    limiter: AbstractContextManager[object] = _CONTROLLER.limit(limits=1)
+    return limiter
 
 
 class ExactOptimizer(Optimizer):

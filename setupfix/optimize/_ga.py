@@ -11,11 +11,13 @@ the bounds, fixed registers never move), minimising −f.  Each generation evalu
 
 from __future__ import annotations
 
+from typing import ClassVar
+
 import numpy as np
 
 from setupfix.optimize._base import POPULATION, Evaluator, GridObjective, GridSpace, Metaheuristic, count
-from setupfix.params import Interval
 from setupfix.optimize._problem import CorrectionProblem
+from setupfix.params import Constraint, Interval
 from setupfix.search import tournament_ga
 
 __all__ = ["GA"]
@@ -36,7 +38,7 @@ class GA(Metaheuristic):
     """
 
     name = "ga"
-    _parameter_constraints = {
+    _parameter_constraints: ClassVar[dict[str, list[Constraint]]] = {
         **Metaheuristic._parameter_constraints,
         "population": POPULATION,
         "mutation_rate": [Interval(float, 0.0, 1.0)],

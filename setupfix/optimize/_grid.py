@@ -136,7 +136,7 @@ def pair_structure(g_rows: Array, kmin: Array, kmax: Array) -> PairStructure | N
              if i < j and np.any(rows[i]) and np.array_equal(rows[j], -rows[i] + 0.0)]
     if not pairs:
         return None
-    ia, ib = (np.array(v, dtype=np.intp) for v in zip(*pairs))
+    ia, ib = (np.array(v, dtype=np.intp) for v in zip(*pairs, strict=True))
     a = rows[ia]
     d = np.gcd.reduce(np.abs(a).astype(np.int64), axis=1).astype(float)
     zlo = np.sum(np.minimum(a * kmin, a * kmax), axis=1)

@@ -100,7 +100,8 @@ def least_distance_working_set(g_rows: Array, b: Array, kmin: Array, kmax: Array
     box = float(np.max(np.abs(np.r_[kmin, kmax]), initial=0.0))
 
     def lhs(k: Array) -> Array:
-        return np.r_[g_rows @ k, k, -k]
+        stacked: Array = np.r_[g_rows @ k, k, -k]
+        return stacked
 
     def row(idx: npt.NDArray[np.intp]) -> Array:
         out = np.zeros((idx.size, n))
@@ -193,7 +194,8 @@ def box_least_norm(g_rows: Array, b: Array, lo: Array, hi: Array, cost: Array, t
     chorded = np.flatnonzero(width >= 2)
     # two values: c·k² = c·(2·lo+1)·k − c·(lo² + lo); one value: the constant c·lo²
     linear = np.where(width == 1, cost * (2 * lo + 1), 0.0)
-    const = float(np.sum(np.where(width == 0, cost * lo**2, 0.0)) - np.sum(np.where(width == 1, cost * (lo**2 + lo), 0.0)))
+    const = float(np.sum(np.where(width == 0, cost * lo**2, 0.0))
+                  - np.sum(np.where(width == 1, cost * (lo**2 + lo), 0.0)))
     counts = width[chorded]
     i = np.repeat(chorded, counts)
     j = np.repeat(lo[chorded], counts) + np.arange(int(counts.sum())) - np.repeat(np.cumsum(counts) - counts, counts)
@@ -315,7 +317,7 @@ def chord_least_norm(g_rows: Array, g: Array, level: float, b: Array, kmin: Arra
     n = g_rows.shape[1]
     chords: list[set[int]] = []
     ref = np.abs(k_cont) if best is None else np.abs(best)
-    for vc, vs in zip(np.abs(k_cont), ref):
+    for vc, vs in zip(np.abs(k_cont), ref, strict=True):
         base = int(np.floor(vc))
         chords.append({max(base - 1, 0), base, base + 1, int(vs)})
     a_chords, rhs = chord_rows([(i, j) for i, js in enumerate(chords) for j in sorted(js)], n, 2 * n)

@@ -106,7 +106,8 @@ def enumerate_ball(centre: Array, cost: Array, radius2: float, kmin: Array, kmax
             keep &= np.sum(cost * grid**2, axis=1) <= f_slack
         if rows is not None and rhs is not None and rows.shape[0]:
             keep &= np.all(grid @ rows.T <= rhs + 1e-7, axis=1)
-        return grid[keep]
+        kept: Array = grid[keep]
+        return kept
     if np.isfinite(f_slack):
         order = np.argsort(-np.sqrt(cost) * np.abs(centre), kind="stable")
     else:
@@ -115,7 +116,7 @@ def enumerate_ball(centre: Array, cost: Array, radius2: float, kmin: Array, kmax
 
     def after(x: Array) -> Array:  # after(x)[..., p] = Σ_{q > p} x[..., q]
         s = np.cumsum(x[..., ::-1], axis=-1)[..., ::-1]
-        return np.concatenate([s[..., 1:], np.zeros(s.shape[:-1] + (1,))], axis=-1)
+        return np.concatenate([s[..., 1:], np.zeros((*s.shape[:-1], 1))], axis=-1)
 
     rest_f = after(c * np.where((lo_o <= 0) & (hi_o >= 0), 0.0, np.minimum(lo_o**2, hi_o**2)))
     rest_norm = np.sqrt(after(c * ce**2))
@@ -206,7 +207,8 @@ def ellipsoid_search(g_rows: Array, g: Array, level: float, centre: Array, q: fl
 
     Every feasible k satisfies Σ c (k − centre)² ≤ f(k) − q (:func:`lagrangian_ball`).
     Radii² 1, 4, 16, … up to f − q (f: the least norm of a feasible point known so far,
-    ``f_known`` at first, or inf), or up to the radius² that holds the whole box, are listed in turn, only points of norm ≤ f (pruned by
+    ``f_known`` at first, or inf), or up to the radius² that holds the whole box, are listed in turn, only
+    points of norm ≤ f (pruned by
     the rows G k ≤ b, which every feasible point meets, when ``b`` is given); as soon as
     the best feasible point found, of norm f_b, has f_b − q ≤ the radius² listed, nothing
     outside can beat it and it is the least (ties: the lexicographically smallest k).

@@ -74,7 +74,7 @@ class CorrectionProblem:
         """
         comp = relation_matrices(model).composite
         keep = part.measured
-        dims = [d for d, k in zip(model.dimensions, keep) if k]
+        dims = [d for d, k in zip(model.dimensions, keep, strict=True) if k]
         limits = np.array([[-r.limit, r.limit] if not r.fixed else [0.0, 0.0] for r in model.registers])
         # Bounds are snapped inwards onto the grid so that every grid point inside is allowed.
         h = model.resolution
@@ -164,7 +164,7 @@ class CorrectionProblem:
         """
         tol = self.resolution / 4 if tol is None else tol
         m = self.margins(x)
-        return tuple(d for d, v in zip(self.dimension_ids, m) if v <= m.min() + tol)
+        return tuple(d for d, v in zip(self.dimension_ids, m, strict=True) if v <= m.min() + tol)
 
 
 @dataclass

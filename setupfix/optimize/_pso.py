@@ -26,11 +26,13 @@ Fixed registers (lb = ub = 0) never move.
 
 from __future__ import annotations
 
+from typing import ClassVar
+
 import numpy as np
 
-from setupfix.optimize._base import POPULATION, Evaluator, GridObjective, GridSpace, Metaheuristic, count
-from setupfix.params import Interval
+from setupfix.optimize._base import POPULATION, Evaluator, GridObjective, GridSpace, Metaheuristic
 from setupfix.optimize._problem import CorrectionProblem
+from setupfix.params import Constraint, Interval
 from setupfix.search import acceleration, particle_swarm
 
 __all__ = ["PSO", "acceleration"]
@@ -51,7 +53,7 @@ class PSO(Metaheuristic):
     """
 
     name = "pso"
-    _parameter_constraints = {
+    _parameter_constraints: ClassVar[dict[str, list[Constraint]]] = {
         **Metaheuristic._parameter_constraints,
         "n_particles": POPULATION,
         "inertia": [Interval(float, 0.0, 2.0)],

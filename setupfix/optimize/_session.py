@@ -227,7 +227,7 @@ class Session:
     @property
     def small(self) -> bool:
         """Few enough constraints (rows + 2·registers) for NNLS on the whole system."""
-        return self.rows.g_rows.shape[0] + 2 * self.rows.n_free <= self.settings.nnls_max_rows
+        return bool(self.rows.g_rows.shape[0] + 2 * self.rows.n_free <= self.settings.nnls_max_rows)
 
     def lp_model(self) -> LinearModel:
         """max t s.t. G k + t ≤ g, k in the box (eq. 8 as an LP; row bounds set per use)."""

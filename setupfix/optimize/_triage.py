@@ -170,10 +170,10 @@ def triaged_result(problem: CorrectionProblem, session: Session, k_start: Array,
     x[problem.free] = k * problem.resolution
     margins = problem.margins(x)
     quantum = session.settings.quantum * problem.resolution
-    given_up = tuple(d for d, v in zip(problem.dimension_ids, margins) if v < -quantum)
+    given_up = tuple(d for d, v in zip(problem.dimension_ids, margins, strict=True) if v < -quantum)
     kept = margins >= -quantum
     low = margins[kept].min() if kept.any() else 0.0
-    binding = tuple(d for d, v, ok in zip(problem.dimension_ids, margins, kept)
+    binding = tuple(d for d, v, ok in zip(problem.dimension_ids, margins, kept, strict=True)
                     if ok and v <= low + problem.resolution / 4)
     message = (f"no correction within the register limits brings every dimension into tolerance: "
                f"{len(given_up)} dimension(s) given up ({', '.join(given_up)}) need the NC program or the "

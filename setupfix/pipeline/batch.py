@@ -65,7 +65,8 @@ class _Work:
     request: CorrectRequest
     skip: frozenset[str] = frozenset()  #: content hashes already processed (history store)
     record: bool = False  #: return the bytes and table read with each outcome (for the history store)
-    controller: str = "csv"  #: other than csv: each cycle's program text (:func:`~setupfix.pipeline.export.offsets_text`)
+    #: other than csv: each cycle's program text (:func:`~setupfix.pipeline.export.offsets_text`)
+    controller: str = "csv"
 
 
 @dataclass
@@ -274,7 +275,7 @@ def run_batch(request: CorrectRequest, folder: str | Path, out: str | Path, *, w
         if youngest < settle:
             time.sleep(settle - youngest)
     if model.safety.ewma < 1.0 and (store is not None or request.history is not None):
-        base = request.history if request.history is not None else History.from_store(model, store)  # type: ignore[arg-type]
+        base = request.history if request.history is not None else History.from_store(model, store)  # type: ignore[arg-type]  # store is set: tested above
         request = dataclasses.replace(request, history=batch_history(request, base, [f for f, _, _ in files]))
     summary = BatchSummary()
     summary.failed += listing.problems  # named, never dropped: an unreadable folder, a broken link, …
@@ -333,10 +334,12 @@ def _record(store: Store, outcome: Outcome, solve: SolveOptions) -> None:
     by_part: dict[str, dict[str, float]] = {}
     for row in outcome.rows:
         by_part.setdefault(row.part, {})[row.id] = row.delta
-    for (part, corrections), verdict in zip(by_part.items(), outcome.verdicts):
+    # One recommendation per corrected part, its verdict beside it (a part with no offset row -- every
+    # register fixed -- still gets its verdict, and no verdict slides onto the next part).
+    for part, verdict in zip(outcome.parts, outcome.verdicts, strict=True):
         store.add_recommendation(StoreRecommendation(
             optimizer=solve.optimizer, inputs={"use": "batch", "report": sha, "part": part, "seed": solve.seed},
-            result={"verdict": verdict, "corrections": corrections}))
+            result={"verdict": verdict, "corrections": by_part.get(part, {})}))
 
 
 def _account(summary: BatchSummary, outcome: Outcome, seen: dict[str, str],

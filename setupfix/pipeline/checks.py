@@ -157,10 +157,10 @@ def _coverage(model: ProcessModel, part: PartMeasurement, composite: np.ndarray,
     if not shared.any():
         return []
     touched = moves[shared][:, ~measured].any(axis=0)
-    absent_dims = [d for d, m in zip(model.dimensions, measured) if not m]
-    hit = [d for d, t in zip(absent_dims, touched) if t]
+    absent_dims = [d for d, m in zip(model.dimensions, measured, strict=True) if not m]
+    hit = [d for d, t in zip(absent_dims, touched, strict=True) if t]
     groups = sorted({d.group for d in hit if d.group})
-    regs = [r.id for r, s in zip(model.registers, shared) if s]
+    regs = [r.id for r, s in zip(model.registers, shared, strict=True) if s]
     where = f"stations {', '.join(groups)}" if groups else ", ".join(d.name for d in hit[:5]) + (
         " …" if len(hit) > 5 else "")
     return [Note(f"a correction of {', '.join(regs)} also moves {len(hit)} dimension(s) this report does not "

@@ -94,7 +94,7 @@ def assign_stations(model: ProcessModel, table: pd.DataFrame, stations: Stations
             raise MatchError(f"{len(stations)} stations given for {len(order)} parts in the report "
                              f"({', '.join(order)})", location=SourceLocation(report),
                              hint="--parts-per-cycle N groups a long report into loads of N parts")
-        mapping = dict(zip(order, stations))
+        mapping = dict(zip(order, stations, strict=True))
     mapping = {part: _check_station(groups, station, part, report) for part, station in mapping.items()}
     out = table.copy()
     out["station"] = parts.map(lambda p: mapping.get(p, ""))
@@ -142,7 +142,8 @@ def _by_count(model: ProcessModel, table: pd.DataFrame, parts: pd.Series, order:
 
 def load_parts(model: ProcessModel, report: str | Path | Source, *, format: str | None = None, unit: str | None = None,
                encoding: str | None = None, columns: str | None = None, stations: Stations | None = None,
-               parts_per_cycle: int | None = None, strict: bool = False, lenient: bool = False) -> list[PartMeasurement]:
+               parts_per_cycle: int | None = None, strict: bool = False,
+               lenient: bool = False) -> list[PartMeasurement]:
     """Read a report in any supported format, group it into cycles, tie it to the model and check it.
 
     Raises

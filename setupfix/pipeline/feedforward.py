@@ -1,7 +1,8 @@
 """Drift fed forward: the thermal change since the measured parts were cut, as a register correction.
 
 ``setupfix correct --thermal MODEL.json --temperatures LOG`` adds the line this module
-builds beside the setup correction (a step of :func:`setupfix.pipeline.correct.correct_cycle`) ("thermal feed-forward −0.004 mm on H5, H23").  The
+builds beside the setup correction (a step of :func:`setupfix.pipeline.correct.correct_cycle`)
+("thermal feed-forward −0.004 mm on H5, H23").  The
 arithmetic is :mod:`setupfix.thermal.feedforward` (pure); here the files are read, the
 times joined, the registers and units resolved, and the result described.
 """
@@ -166,7 +167,7 @@ def thermal_feed_forward(model: ProcessModel, thermal: str | Path | SavedModel, 
     if not np.isfinite(band) or band < 0:
         raise ParameterError(f"the thermal dead band must be a number >= 0, got {band!r}")
     x = feed_forward(delta, mask, factor=factor, resolution=model.resolution, dead_band=band)
-    regs = [r for r, m in zip(model.registers, mask) if m]
+    regs = [r for r, m in zip(model.registers, mask, strict=True) if m]
     at_text = at if at is not None else data.timestamps[-1]
     return ThermalFeedForward(saved.model.name, delta, str(saved.unit), float(x[mask][0]), model.unit,
                               tuple(r.id for r in regs), tuple(r.register for r in regs), measured_at, at_text, band,

@@ -35,7 +35,7 @@ class ModelDescription:
             "registers": m.registers, "features": m.features, "dimensions": m.dimensions,
             "R_MW": m.R_MW.tolist(), "R_WF": m.R_WF.tolist(), "R_TF": m.R_TF.tolist(), "R_FD": m.R_FD.tolist(),
             "composite": m.composite.tolist(), "rank": self.rank,
-            "null_space": [dict(zip(m.registers, v.tolist())) for v in self.null_space],
+            "null_space": [dict(zip(m.registers, v.tolist(), strict=True)) for v in self.null_space],
         }
 
 

@@ -156,7 +156,7 @@ def _collect(tables: Sequence[tuple[str, pd.DataFrame]], axis: str | None,
 
         for name, nominal, lower, upper, station, reference, where, stated in zip(
                 col("characteristic"), col("nominal"), col("lower"), col("upper"), col(group_column),
-                col("reference"), col("source"), col(AXIS_COLUMN)):
+                col("reference"), col("source"), col(AXIS_COLUMN), strict=True):
             name = str(name).strip()
             if not name or name in skipped:
                 continue

@@ -22,10 +22,10 @@ from typing import Any
 
 import numpy as np
 
-from setupfix.pipeline.writers import atomic_write, check_target
 from setupfix.diagnose import KINDS, EffectSpec, HiddenEffect, Layout, ShopSimulator, SimulatedSeries
 from setupfix.errors import ExportError, ParameterError
 from setupfix.model import ProcessModel, load_model
+from setupfix.pipeline.writers import atomic_write, check_target
 
 __all__ = ["parse_effect", "SimulateOutcome", "simulate_series", "write_series"]
 
@@ -158,20 +158,20 @@ def write_series(model: ProcessModel, layout: Layout, sim: SimulatedSeries, out_
     with atomic_write(out / "corrections.csv") as fh:
         w = csv.writer(fh, lineterminator="\n")
         w.writerow(["timestamp", "register", "delta", "event"])
-        for t, i, d, ev in zip(sim.log_time, sim.log_register, sim.log_delta, sim.log_event):
+        for t, i, d, ev in zip(sim.log_time, sim.log_register, sim.log_delta, sim.log_event, strict=True):
             w.writerow([_stamp(t0, t), layout.register_ids[i], "" if ev == "tool_change" else f"{d:.6g}", ev])
     written.append(str(out / "corrections.csv"))
     with atomic_write(out / "temperatures.csv") as fh:
         w = csv.writer(fh, lineterminator="\n")
         w.writerow(["timestamp", *s.channels])
-        for t, row in zip(sim.temp_time, sim.temp):
+        for t, row in zip(sim.temp_time, sim.temp, strict=True):
             w.writerow([_stamp(t0, t), *(f"{v:.2f}" for v in row)])
     written.append(str(out / "temperatures.csv"))
     truth = {
         "model": model.source,
         "start": start,
         "hidden_effects": sim.truth.get("effects", []),
-        "setup_error": dict(zip(layout.register_ids, (round(float(v), 6) for v in sim.setup_error))),
+        "setup_error": dict(zip(layout.register_ids, (round(float(v), 6) for v in sim.setup_error), strict=True)),
         "noise": sim.noise,
         "settings": settings or {},
     }

@@ -183,7 +183,7 @@ def fit_log(log: TemperatureLog, method: str, *, target: str, inputs: Sequence[s
     notes += _drive_notes(saved, log.source)
     fitted = predict_log(saved, log)[0]
     scores = score(y, fitted)
-    saved.train = {"source": Path(log.source).name, "n": int(len(y)), "seed": params.get("seed"),
+    saved.train = {"source": Path(log.source).name, "n": len(y), "seed": params.get("seed"),
                    **scores.as_dict()}
     notes += _quality_notes("training", scores, log.source)
     return FitResult(saved, notes)
@@ -267,8 +267,9 @@ def predict_log(saved: SavedModel, log: TemperatureLog, *, anchor: Anchor | None
     """
     notes: list[Note] = []
     interval = log.sample_interval_s
-    if saved.sample_interval_s and interval and abs(interval - saved.sample_interval_s) > 0.05 * saved.sample_interval_s:
-        notes.append(Note(f"sampled every {interval:g} s but the model was fitted on {saved.sample_interval_s:g} s; "
+    trained = saved.sample_interval_s
+    if trained and interval and abs(interval - trained) > 0.05 * trained:
+        notes.append(Note(f"sampled every {interval:g} s but the model was fitted on {trained:g} s; "
                           "its time constants are per sample", log.location(), "thermal"))
     sel = Selection(saved.inputs, None, saved.ambient, saved.speed)
     data = _drive_arrays(log, sel, gaps=isinstance(saved.model, KalmanFusionModel))
@@ -283,7 +284,7 @@ def predict_log(saved: SavedModel, log: TemperatureLog, *, anchor: Anchor | None
                                  location=log.location(0))
             pred = rebase(pred, 0, float(measured[0]))
         else:
-            pred = rebase(pred, sample_at(log, anchor.time), float(anchor.error))  # type: ignore[arg-type]
+            pred = rebase(pred, sample_at(log, anchor.time), float(anchor.error))  # type: ignore[arg-type]  # anchor.time is a timestamp on this branch
     if not np.all(np.isfinite(pred)):
         raise ParseError(f"the {saved.model.name} model diverges on this log (non-finite prediction)",
                          location=log.location(), hint="refit, or use mra")

@@ -30,7 +30,8 @@ def save_model(saved: SavedModel, path: str | Path) -> None:
         text = json.dumps(saved.to_dict(), indent=2, allow_nan=False, default=_plain)
     except ValueError:
         raise ExportError("the fitted model has non-finite coefficients and is not saved",
-                          location=SourceLocation(str(path)), hint="the calibration diverged; try grey-ls or mra") from None
+                          location=SourceLocation(str(path)),
+                          hint="the calibration diverged; try grey-ls or mra") from None
     write_text(path, text + "\n", newline="\n")
 
 
@@ -69,7 +70,7 @@ def load_model(path: str | Path) -> SavedModel:
     try:
         return saved_from_dict(doc)
     except ValueError as exc:
-        key, reason = (exc.args + ("",))[:2] if len(exc.args) == 2 else ("model", str(exc))
+        key, reason = exc.args if len(exc.args) == 2 else ("model", str(exc))
         raise ParseError(str(reason), location=SourceLocation(source, key=str(key)),
                          hint="write one with 'setupfix thermal fit'") from None
     except ParameterError as exc:

@@ -89,7 +89,7 @@ def _cell(fraction: float, width: int) -> int:
     """Cell of a fraction of the zone; halves round away from the centre (symmetric bars)."""
     pos = fraction * (width - 1)
     centre = (width - 1) / 2
-    return int(math.floor(pos + 0.5 + 1e-9)) if pos >= centre else int(math.ceil(pos - 0.5 - 1e-9))
+    return math.floor(pos + 0.5 + 1e-9) if pos >= centre else math.ceil(pos - 0.5 - 1e-9)
 
 
 @dataclass(frozen=True)
@@ -300,7 +300,7 @@ def matched_rows(model: ProcessModel, parts: Iterable[PartMeasurement]) -> list[
     then every unmatched characteristic with its suggestions."""
     rows = []
     for p in parts:
-        for dim, value in zip(model.dimensions, p.deviation):
+        for dim, value in zip(model.dimensions, p.deviation, strict=True):
             if math.isfinite(value):
                 rows.append(MatchRow(dim.name, p.part, dim.group or "", dim.id, ()))
         for name in p.unmatched:
@@ -382,7 +382,7 @@ def drift_view(prediction: DriftPrediction, recent: int = 120) -> DriftView:
     return DriftView(prediction.method, prediction.target, (prediction.unit or "").replace("um", "µm"),
                      prediction.latest,
                      prediction.timestamps[-1] if prediction.timestamps else "",
-                     np.asarray(prediction.drift[-recent:], dtype=float), m_last, int(len(prediction.drift)),
+                     np.asarray(prediction.drift[-recent:], dtype=float), m_last, len(prediction.drift),
                      tuple(str(n) for n in prediction.notes))
 
 

@@ -33,7 +33,7 @@ def mantegna_sigma(beta: float) -> float:
     """σ_u of Mantegna's algorithm for a Lévy-stable step of index β (0.6966 for β = 1.5)."""
     num = math.gamma(1.0 + beta) * math.sin(math.pi * beta / 2.0)
     den = math.gamma((1.0 + beta) / 2.0) * beta * 2.0 ** ((beta - 1.0) / 2.0)
-    return (num / den) ** (1.0 / beta)
+    return float((num / den) ** (1.0 / beta))
 
 
 def levy_steps(shape: tuple[int, ...], beta: float, rng: np.random.Generator) -> Array:

@@ -29,7 +29,8 @@ def tournament(values: Array, n: int, rng: np.random.Generator, size: int = 2) -
     values : ndarray of shape (μ,) → ndarray of shape (n,)
     """
     entrants = rng.integers(0, values.size, size=(n, size))
-    return entrants[np.arange(n), np.argmin(values[entrants], axis=1)]
+    winners: npt.NDArray[np.int64] = entrants[np.arange(n), np.argmin(values[entrants], axis=1)]
+    return winners
 
 
 def recombine(p1: Array, p2: Array, rng: np.random.Generator) -> Array:

@@ -99,8 +99,8 @@ def background(x1: npt.ArrayLike) -> Array:
     -------
     ndarray, shape (n - 1,) or (n - 1, p)
     """
-    x1 = np.asarray(x1, dtype=float)
-    return 0.5 * (x1[1:] + x1[:-1])
+    x: Array = np.asarray(x1, dtype=np.float64)
+    return 0.5 * (x[1:] + x[:-1])
 
 
 def lag_drivers(X: npt.ArrayLike, delay: int) -> Array:
@@ -236,7 +236,7 @@ def gmc_response(theta: npt.ArrayLike, y0: float | npt.ArrayLike, X1: npt.ArrayL
                 conv[:, 1:] = np.exp(-0.5 * b1)[:, None] * _convolve_exp(g, decay)
     else:
         raise ValueError(f"unknown response form {form!r}")
-    x1hat = y0[:, None] * decay_k + conv
+    x1hat: Array = y0[:, None] * decay_k + conv
     return x1hat[0] if single else x1hat
 
 
@@ -316,7 +316,7 @@ def gm1n_response(theta: npt.ArrayLike, y0: float, X1: npt.ArrayLike) -> Array:
     S = theta[:, 1:] @ X1.T
     k = np.arange(X1.shape[0], dtype=float)
     with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
-        x1hat = (y0 - S / b1) * np.exp(-b1 * k) + S / b1
+        x1hat: Array = (y0 - S / b1) * np.exp(-b1 * k) + S / b1
     return x1hat[0] if single else x1hat
 
 

@@ -144,11 +144,11 @@ def fuse(measured: npt.ArrayLike, ambient: npt.ArrayLike, A: npt.ArrayLike, B: n
     x = np.broadcast_to(np.asarray(x0, dtype=float), shape).copy()
     P = np.full(shape, float(p0))
     failed = np.zeros(shape, dtype=bool)
-    fused = np.empty(shape[:-1] + (n, shape[-1]))
+    fused = np.empty((*shape[:-1], n, shape[-1]))
     gain = np.zeros_like(fused)
     fused[..., 0, :] = x
     prev = Tm[0]
-    Cn = np.broadcast_to(C, shape + (n,))
+    Cn = np.broadcast_to(C, (*shape, n))
     for j in range(1, n):
         z = Tm[j]
         ok = np.isfinite(z)

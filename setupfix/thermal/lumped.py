@@ -174,7 +174,8 @@ def lumped_equation_error(measured: npt.ArrayLike, ambient: npt.ArrayLike, heat:
     X = np.column_stack([te[1:] - T[1:], heat[1:, :n_genes - 1]])
     tiny = 1e-9
     res = lsq_linear(X, np.diff(T), bounds=(np.full(n_genes, tiny), np.full(n_genes, np.inf)))
-    return np.maximum(res.x, tiny)
+    rates: Array = np.maximum(res.x, tiny)
+    return rates
 
 
 def fit_lumped(measured: npt.ArrayLike, ambient: npt.ArrayLike, speed: npt.ArrayLike, *,

@@ -19,24 +19,27 @@ Array = npt.NDArray[np.float64]
 
 
 def _residual(measured: npt.ArrayLike, predicted: npt.ArrayLike) -> Array:
-    return np.asarray(measured, dtype=float) - np.asarray(predicted, dtype=float)
+    return np.asarray(measured, dtype=np.float64) - np.asarray(predicted, dtype=np.float64)
 
 
 def rmse(measured: npt.ArrayLike, predicted: npt.ArrayLike) -> Array:
     """sqrt(mean((e − ê)²)), target unit."""
     r = _residual(measured, predicted)
-    return np.sqrt(np.mean(r * r, axis=-1))
+    out: Array = np.sqrt(np.mean(r * r, axis=-1))
+    return out
 
 
 def rmsv(measured: npt.ArrayLike, predicted: npt.ArrayLike) -> Array:
     """sqrt(Σ(e − ê)² / (n − 1)), Wang (2017) eq. (13)."""
     r = _residual(measured, predicted)
-    return np.sqrt(np.sum(r * r, axis=-1) / max(r.shape[-1] - 1, 1))
+    out: Array = np.sqrt(np.sum(r * r, axis=-1) / max(r.shape[-1] - 1, 1))
+    return out
 
 
 def max_residual(measured: npt.ArrayLike, predicted: npt.ArrayLike) -> Array:
     """max |e − ê|, Wang (2017) eq. (17)."""
-    return np.max(np.abs(_residual(measured, predicted)), axis=-1)
+    out: Array = np.max(np.abs(_residual(measured, predicted)), axis=-1)
+    return out
 
 
 def efficiency(measured: npt.ArrayLike, predicted: npt.ArrayLike) -> Array:

@@ -77,8 +77,8 @@ def rebase(predicted: npt.ArrayLike, index: int, error: float) -> Array:
     -------
     ndarray, shape (n,)
     """
-    p = np.asarray(predicted, dtype=float)
-    return p + (float(error) - p[index])
+    p = np.asarray(predicted, dtype=np.float64)
+    return p + (float(error) - float(p[index]))
 
 
 class ThermalModel(ValidatedParams):
@@ -297,13 +297,13 @@ class GreyModel(ThermalModel):
         self.seed = seed
 
     @property
-    def method(self) -> str:  # type: ignore[override]
+    def method(self) -> str:  # type: ignore[override]  # a property over the base class attribute
         return f"grey-{self.calibration}"
 
     def _response(self, theta: Array, y0: float, X1: Array) -> Array:
         if self.kind == "gm1n":
             return grey.gm1n_response(theta, y0, X1)
-        return grey.gmc_response(theta, y0, X1, self.form)  # type: ignore[arg-type]
+        return grey.gmc_response(theta, y0, X1, self.form)  # type: ignore[arg-type]  # form checked by validate_params
 
     def fit(self, T: npt.ArrayLike, y: npt.ArrayLike, *, ambient: npt.ArrayLike | None = None,
             speed: npt.ArrayLike | None = None) -> GreyModel:
@@ -329,7 +329,8 @@ class GreyModel(ThermalModel):
         else:
             def objective(pop: Array) -> Array:
                 resid = grey.iago(self._response(pop, y0, X1)) - dy
-                return np.sum(resid[:, 1:] ** 2, axis=1)  # k = 1 is exact by construction
+                sse: Array = np.sum(resid[:, 1:] ** 2, axis=1)  # k = 1 is exact by construction
+                return sse
 
             rng = generator(self.seed)
             with np.errstate(over="ignore", invalid="ignore"):

@@ -26,7 +26,7 @@ def rises(T: npt.ArrayLike) -> Array:
         T = T[:, None]
     finite = np.isfinite(T)
     first_idx = np.argmax(finite, axis=-2)
-    first = np.take_along_axis(T, np.expand_dims(first_idx, -2), axis=-2)
+    first: Array = np.take_along_axis(T, np.expand_dims(first_idx, -2), axis=-2)
     return T - first
 
 
@@ -61,7 +61,7 @@ def rises_from(T: npt.ArrayLike, reference: npt.ArrayLike) -> Array:
     -------
     ndarray, shape of ``T``
     """
-    return np.asarray(T, dtype=float) - np.asarray(reference, dtype=float)
+    return np.asarray(T, dtype=np.float64) - np.asarray(reference, dtype=np.float64)
 
 
 def mra_fit(dT: npt.ArrayLike, E: npt.ArrayLike, *, intercept: bool = False) -> Array:
@@ -85,7 +85,7 @@ def mra_fit(dT: npt.ArrayLike, E: npt.ArrayLike, *, intercept: bool = False) -> 
     X = X.reshape(X.shape[0], -1)
     if intercept:
         X = np.column_stack([X, np.ones(X.shape[0])])
-    beta, *_ = np.linalg.lstsq(X, np.asarray(E, dtype=float), rcond=None)
+    beta: Array = np.linalg.lstsq(X, np.asarray(E, dtype=float), rcond=None)[0]
     return beta
 
 
@@ -104,5 +104,5 @@ def mra_predict(beta: npt.ArrayLike, dT: npt.ArrayLike) -> Array:
     beta = np.asarray(beta, dtype=float)
     dT = np.asarray(dT, dtype=float)
     S = dT.shape[-1]
-    out = dT @ beta[:S]
+    out: Array = dT @ beta[:S]
     return out + beta[S] if beta.size > S else out

@@ -104,3 +104,14 @@ def test_expand_inputs_takes_files_as_given_and_folders_by_the_policy(tmp_path):
     assert [n.kind for n in inputs.notes()] == ["folder"]
     flat = expand_inputs([root], recursive=False)
     assert flat.files == () and flat.empty == (str(root),)
+
+
+def test_a_scripts_byte_code_cache_is_not_searched(tmp_path):
+    root = _tree(tmp_path)
+    (root / "__pycache__").mkdir()
+    (root / "__pycache__" / "generate.cpython-311.pyc").write_bytes(b"\x00")
+    (root / "stray.pyc").write_bytes(b"\x00")
+    listing = list_reports(root)
+    assert not any(p.suffix == ".pyc" for p in listing.paths)
+    reasons = dict(listing.ignored)
+    assert "byte-code" in reasons[str(root / "__pycache__")] and "never a report" in reasons[str(root / "stray.pyc")]

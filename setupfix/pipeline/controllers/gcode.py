@@ -45,15 +45,15 @@ def _render(controller: str, rows: Sequence[OffsetRow], title: str,
             lp = wks(row.register)
             if lp is None:
                 raise cannot(controller, row, f"a work offset is {wks_forms}")
-            l, p = lp
+            g10_l, g10_p = lp
             word = f"{row.axis}{number(row, target(row))}"
         else:
-            l, p = _tool(controller, row, tool_top)
+            g10_l, g10_p = _tool(controller, row, tool_top)
             word = f"R{number(row, target(row))}"
         note = f"{row.register} {row.offset} {row.id}"
         if mode == "set":
             note += f" WAS {number(row, row.current or 0.0)} CHANGE {number(row, row.delta)}"
-        blocks.append(f"{'G90' if mode == 'set' else 'G91'} G10 L{l} P{p} {word} ({comment_text(note)})")
+        blocks.append(f"{'G90' if mode == 'set' else 'G91'} G10 L{g10_l} P{g10_p} {word} ({comment_text(note)})")
     unit = "G21" if rows and rows[0].unit == "mm" else "G20"
     head = ["%", f"{PROGRAM} ({comment_text('SETUPFIX ' + title)})" if title else f"{PROGRAM} (SETUPFIX)"]
     if mode == "set":

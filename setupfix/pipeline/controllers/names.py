@@ -19,7 +19,8 @@ def _g(name: str) -> tuple[int, int | None, int | None] | None:
     m = _G.match(name.strip())
     if not m:
         return None
-    return int(m.group(1)), None if m.group(2) is None else int(m.group(2)), None if m.group(3) is None else int(m.group(3))
+    second, third = m.group(2), m.group(3)
+    return int(m.group(1)), None if second is None else int(second), None if third is None else int(third)
 
 
 def wks_fanuc(name: str) -> tuple[int, int] | None:

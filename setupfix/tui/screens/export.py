@@ -4,11 +4,12 @@ from __future__ import annotations
 
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from typing import ClassVar
 
+from rich.text import Text
 from textual import on
 from textual.app import ComposeResult
-from textual.binding import Binding
-from rich.text import Text
+from textual.binding import Binding, BindingType
 from textual.containers import Horizontal, ScrollableContainer, Vertical
 from textual.screen import ModalScreen
 from textual.widgets import Button, Input, Label, Select, Static
@@ -30,7 +31,7 @@ class ExportRequest:
 class ExportScreen(ModalScreen[ExportRequest | None]):
     """Shows the text ``render(controller)`` returns; ctrl+s (or Write) writes it, escape cancels."""
 
-    BINDINGS = [Binding("ctrl+s", "write", "Write"), Binding("escape", "cancel", "Cancel")]
+    BINDINGS: ClassVar[list[BindingType]] = [Binding("ctrl+s", "write", "Write"), Binding("escape", "cancel", "Cancel")]
 
     def __init__(self, controllers: Sequence[str], render: Callable[[str], str], path: str) -> None:
         super().__init__()

@@ -3,10 +3,11 @@
 from __future__ import annotations
 
 from pathlib import Path
+from typing import ClassVar
 
 from textual import on
 from textual.app import ComposeResult
-from textual.binding import Binding
+from textual.binding import Binding, BindingType
 from textual.containers import Vertical
 from textual.screen import ModalScreen
 from textual.widgets import DirectoryTree, Input, Label
@@ -17,7 +18,7 @@ __all__ = ["OpenFileScreen"]
 class OpenFileScreen(ModalScreen[Path | None]):
     """Type a path (Enter opens it) or Tab to the tree and pick a file; escape cancels."""
 
-    BINDINGS = [Binding("escape", "cancel", "Cancel")]
+    BINDINGS: ClassVar[list[BindingType]] = [Binding("escape", "cancel", "Cancel")]
 
     def __init__(self, title: str, start: Path, *, allow_folder: bool = False) -> None:
         super().__init__()

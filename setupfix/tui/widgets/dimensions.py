@@ -45,7 +45,7 @@ class DimensionTable(DataTable[Text | str]):
         if wide:
             self.add_column("margin₀", key="margin_before", width=8)
             self.add_column("margin₁", key="margin_after", width=8)
-        for r, lim in zip(rows, limits):
+        for r, lim in zip(rows, limits, strict=True):
             before, after = r.bars(BAR)
             style = "" if r.in_before else "red"
             after_style = "bold red" if not r.in_after else ("bold" if r.binding else "")

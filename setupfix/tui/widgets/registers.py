@@ -29,7 +29,7 @@ class RegisterTable(DataTable[Text | str]):
                                           ("current", "current"), ("new", "new"), ("", "flags"),
                                           ("rules", "rules"))):
             self.add_column(label, key=key, width=max([len(label), *(len(c[i]) for c in cells)]))
-        for r, c in zip(rows, cells):
+        for r, c in zip(rows, cells, strict=True):
             moved = r.delta != 0.0
             self.add_row(
                 Text(c[0], style="bold" if moved else "dim"), c[1], c[2],

@@ -35,7 +35,8 @@ class ThermalPanel(Vertical):
         if view.measured_latest is not None:
             text.append(f"; measured {signed(view.measured_latest)} {unit}")
         low, high = view.recent_range
-        text.append(f"\nrecent curve, last {len(view.recent)} samples, from {signed(low)} (▁) to {signed(high)} (█) {unit}:")
+        text.append(f"\nrecent curve, last {len(view.recent)} samples, "
+                    f"from {signed(low)} (▁) to {signed(high)} (█) {unit}:")
         for note in view.notes:
             text.append(f"\n⚠ {note}", style="yellow")
         self.query_one("#thermal-status", Static).update(text)
