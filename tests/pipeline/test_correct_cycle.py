@@ -14,7 +14,7 @@ from setupfix.model import PartMeasurement, load_model
 from setupfix.pipeline.compare import compare_report
 from setupfix.pipeline.correct import correct_cycle, correct_report
 from setupfix.pipeline.cycles import load_parts
-from setupfix.pipeline.diagnose import diagnose_reports, forecast_model
+from setupfix.pipeline.diagnose import DiagnoseRequest, diagnose_reports, forecast_model
 from setupfix.pipeline.requests import CorrectRequest, History
 from setupfix.store import open_store
 
@@ -43,9 +43,9 @@ def test_compare_exact_is_corrects_raw_optimum_with_costs(costed, report):
 
 def test_diagnosis_next_correction_is_correct_on_its_forecast():
     loop = SAMPLES / "closed_loop"
-    out = diagnose_reports(GUIDE_PINS / "model.toml", [loop / "measurements.csv"],
-                           corrections=str(loop / "corrections.csv"), temperatures=str(loop / "temperatures.csv"),
-                           diagnoser=Diagnoser(walk=False))
+    out = diagnose_reports(DiagnoseRequest(
+        GUIDE_PINS / "model.toml", (loop / "measurements.csv",), corrections=str(loop / "corrections.csv"),
+        temperatures=str(loop / "temperatures.csv"), diagnoser=Diagnoser(walk=False)))
     fc = out.diagnosis.forecast
     part = PartMeasurement(part="next", report="forecast", timestamp=None, deviation=fc,
                            sources=tuple("" for _ in fc))

@@ -18,6 +18,7 @@ from parsers import list_reports
 from setupfix.cli import main
 from setupfix.errors import MatchError
 from setupfix.model import load_model
+from setupfix.pipeline.diagnose import note_text
 from setupfix.pipeline.history import import_history
 from setupfix.pipeline.parse import parse_reports
 from setupfix.pipeline.scaffold import scaffold_model
@@ -99,7 +100,7 @@ def test_diagnose_reads_the_listed_reports_and_uses_the_logs_found(shop):
     (root / "temperatures.csv").unlink()
     series = load_series(model, [root])
     assert sorted({p.report for p in series.parts}) == sorted(Path(n).name for n in expected)  # parts name their file
-    assert f"warning: {root / 'folder_link'}: {LINK_PROBLEM}" in series.notes
+    assert f"warning: {root / 'folder_link'}: {LINK_PROBLEM}" in [note_text(n) for n in series.notes]
     assert series.series.n_cycles == 5  # parts 0041 and 0042 twice (root and sub-folder), 0043 (linked)
 
 
