@@ -19,7 +19,7 @@ from setupfix.cli import main
 from setupfix.errors import MatchError
 from setupfix.model import load_model
 from setupfix.pipeline.diagnose import note_text
-from setupfix.pipeline.history import import_history
+from setupfix.pipeline.history import ImportRequest, import_history
 from setupfix.pipeline.parse import parse_reports
 from setupfix.pipeline.scaffold import scaffold_model
 from setupfix.pipeline.series import load_series
@@ -82,11 +82,11 @@ def test_model_init_reads_the_listed_reports(shop):
 def test_history_import_stores_the_listed_reports_and_the_logs_found(shop, tmp_path):
     root, model = shop
     with open_store(tmp_path / "h.db") as store:
-        summary = import_history(store, [root], model=load_model(model))
-        assert summary.new_reports + summary.known_reports == _expected(root)
-        assert summary.known_reports == [str(root / "sub" / "again.txt")]  # the same bytes as the first
+        summary = import_history(store, ImportRequest((root,), model=load_model(model)))
+        assert list(summary.new_reports + summary.known_reports) == _expected(root)
+        assert list(summary.known_reports) == [str(root / "sub" / "again.txt")]  # the same bytes as the first
         assert (summary.corrections, summary.temperatures) == (1, 1)
-        assert f"{root / 'folder_link'}: {LINK_PROBLEM}" in summary.notes
+        assert f"{root / 'folder_link'}: {LINK_PROBLEM}" in map(str, summary.notes)
         assert [r.name for r in store.reports()] == ["bracket_two_parts.txt", "linked.txt"]
 
 
