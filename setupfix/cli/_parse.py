@@ -42,12 +42,13 @@ def _encoding(text: str) -> str:
 
 
 def run(args: argparse.Namespace) -> int:
+    from setupfix.pipeline.cycles import ReadOptions
     from setupfix.pipeline.parse import note_line, parse_reports
     from setupfix.pipeline.writers import check_target, write_canonical_csv
 
     check_target(args.out)
-    outcome = parse_reports(args.files, format=args.format, unit=args.unit, encoding=args.encoding,
-                            columns=args.columns, lenient=args.lenient)
+    outcome = parse_reports(args.files, ReadOptions(args.format, args.unit, args.encoding, args.columns,
+                                                    args.lenient))
     for report in outcome.reports:
         for line in report.warnings:
             print(f"warning: {line}", file=sys.stderr)

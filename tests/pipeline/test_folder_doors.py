@@ -65,7 +65,7 @@ def _expected(root: Path) -> list[str]:
 def test_parse_reads_the_listed_reports_and_warns_of_the_folder_link(shop, tmp_path, capsys):
     root, _ = shop
     outcome = parse_reports([root])
-    assert [r.path for r in outcome.reports] == _expected(root) and outcome.failures == []
+    assert [r.path for r in outcome.reports] == _expected(root) and list(outcome.failures) == []
     assert [str(n) for n in outcome.problems] == [f"{root / 'folder_link'}: {LINK_PROBLEM}"]
     assert main(["parse", str(root), "--out", str(tmp_path / "all.csv")]) == 0
     assert f"warning: {root / 'folder_link'}: {LINK_PROBLEM}" in capsys.readouterr().err
