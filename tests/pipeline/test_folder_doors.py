@@ -76,7 +76,7 @@ def test_model_init_reads_the_listed_reports(shop):
     scaffold = scaffold_model([root])
     head = scaffold.text.splitlines()[0]
     assert head.endswith("from: " + ", ".join(Path(n).name for n in _expected(root)))
-    assert f"{root / 'folder_link'}: {LINK_PROBLEM}" in scaffold.notes
+    assert f"{root / 'folder_link'}: {LINK_PROBLEM}" in map(str, scaffold.notes)
 
 
 def test_history_import_stores_the_listed_reports_and_the_logs_found(shop, tmp_path):
