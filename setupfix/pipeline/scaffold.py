@@ -44,6 +44,7 @@ from parsers.axes import AXES, AXIS_COLUMN
 from setupfix.errors import ModelError, Note, ParseError, SetupfixError, SourceLocation
 from setupfix.model import normalise_name
 from setupfix.model.loader import RANGES_MM
+from setupfix.pipeline.cycles import ReadOptions
 
 __all__ = ["Scaffold", "scaffold_model", "scaffold_from_tables", "name_axis", "FORM_WORDS"]
 
@@ -205,15 +206,14 @@ def _collect(tables: Sequence[tuple[str, pd.DataFrame]], axis: str | None,
 
 
 def scaffold_model(reports: Sequence[str | Path], *, axis: str | None = None, name: str | None = None,
-                   parts_are_stations: bool = False,
-                   format: str | None = None, unit: str | None = None, encoding: str | None = None,
-                   columns: str | None = None, lenient: bool = False) -> Scaffold:
+                   parts_are_stations: bool = False, read: ReadOptions | None = None) -> Scaffold:
     """Write a process-model scaffold (TOML text) from the reports' toleranced length characteristics.
 
     ``reports`` may name folders: their reports and those of their sub-folders, as
     :func:`parsers.expand_inputs` lists them (the policy every command shares; what the
     listing could not look at is a note); a file of a folder that no reader takes, or
-    that is refused, is left out with a note.
+    that is refused, is left out with a note.  ``read``: the reader's options (default:
+    every one sniffed, not lenient).
 
     Raises
     ------
@@ -224,7 +224,7 @@ def scaffold_model(reports: Sequence[str | Path], *, axis: str | None = None, na
     """
     if axis is not None and axis not in ("X", "Y", "Z"):
         raise ModelError(f'axis must be "X", "Y" or "Z", got {axis!r}')
-    options: dict[str, Any] = {"unit": unit, "encoding": encoding, "columns": columns, "lenient": lenient}
+    options = (read if read is not None else ReadOptions()).kwargs()
     inputs = parsers.expand_inputs(reports)
     if inputs.empty:
         raise ParseError("folder holds no report file", location=SourceLocation(inputs.empty[0]),
@@ -233,7 +233,7 @@ def scaffold_model(reports: Sequence[str | Path], *, axis: str | None = None, na
     left_out: list[Note] = inputs.notes()
     for report, from_folder in inputs.files:
         try:
-            reads.append((report, parsers.read_report(report, format=format, **options)))
+            reads.append((report, parsers.read_report(report, **options)))
         except SetupfixError as exc:
             if not from_folder:
                 raise
