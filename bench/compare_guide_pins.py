@@ -12,6 +12,7 @@ solutions measured in the same run (machine-independent).
 
 from __future__ import annotations
 
+import dataclasses
 import sys
 import time
 from pathlib import Path
@@ -59,8 +60,8 @@ def main() -> None:
     for cycle in range(1, 6):
         part = load_parts(model, SAMPLE / f"cycle_{cycle:02d}.csv")[0]
         problem = CorrectionProblem.from_part(model, part)
-        comp = compare_problem(problem, trials=12, seed=2014)
-        comp.part, comp.report, comp.unit = part.part, f"cycle_{cycle:02d}.csv", model.unit
+        comp = dataclasses.replace(compare_problem(problem, trials=12, seed=2014), part=part.part,
+                                   report=f"cycle_{cycle:02d}.csv", unit=model.unit)
         first = first or comp
         e = comp.exact
         lines.append(f"## cycle_{cycle:02d}: f1 before {e.margin_before:+.4f} mm, exact grid optimum "

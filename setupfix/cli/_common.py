@@ -106,8 +106,8 @@ def cycle_options(args: argparse.Namespace) -> dict[str, Any]:
 
 
 def read_options(args: argparse.Namespace) -> Any:
-    """The reader's options as a :class:`~setupfix.pipeline.requests.ReadOptions`."""
-    from setupfix.pipeline.requests import ReadOptions
+    """The reader's options as a :class:`~setupfix.pipeline.cycles.ReadOptions`."""
+    from setupfix.pipeline.cycles import ReadOptions  # not requests: that loads the optimisers
 
     return ReadOptions(args.format, args.unit, args.encoding, args.columns, args.lenient)
 

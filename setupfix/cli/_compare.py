@@ -30,7 +30,7 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
 
 
 def run(args: argparse.Namespace) -> int:
-    from setupfix.pipeline.compare import compare_report, plot_comparison
+    from setupfix.pipeline.compare import CompareRequest, compare_report, plot_comparison
     from setupfix.pipeline.present import format_comparison, note_lines
     from setupfix.pipeline.requests import SolveOptions
     from setupfix.pipeline.writers import check_target
@@ -40,8 +40,9 @@ def run(args: argparse.Namespace) -> int:
         figure_format(args.plot)  # refuse an unknown suffix or target before the trials, not after
         check_target(args.plot)
     solve = SolveOptions("exact", None, args.time_limit)
-    comparison = compare_report(args.model, args.report, trials=args.trials, seed=args.seed, read=read_options(args),
-                                cycles=cycles_of(args), params={"exact": solve.params()})
+    request = CompareRequest(args.model, read_options(args), cycles_of(args), trials=args.trials, seed=args.seed,
+                             params={"exact": solve.params()})
+    comparison = compare_report(request, args.report)
     if args.plot:
         plot_comparison(comparison, args.plot)
     for warning in note_lines(comparison.notes):  # the reader's and the matching's notes: a skipped row is never silent

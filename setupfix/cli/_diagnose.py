@@ -80,20 +80,22 @@ def format_diagnosis(out: DiagnoseOutcome) -> str:
     lines.append("next correction: " + (", ".join(f"{k} {v:+.4f}" for k, v in moves.items()) or "none"))
     if out.augmented:
         lines.append(f"wrote {out.augmented}")
-    lines += [n if n.startswith("warning: ") else f"note: {n}" for n in out.notes]  # a folder's problems: warnings
+    lines += [f"warning: {n}" if n.kind == "folder" else f"note: {n}" for n in out.notes]  # a folder's problems
     # report text (characteristic names, file names) reaches the terminal: no escape sequences
     return "\n".join("".join(c if c.isprintable() else "?" for c in line) for line in lines)
 
 
 def run(args: argparse.Namespace) -> int:
     from setupfix.diagnose import Diagnoser
-    from setupfix.pipeline.diagnose import diagnose_reports
+    from setupfix.pipeline.diagnose import DiagnoseRequest, diagnose_reports
+    from setupfix.pipeline.requests import ReadOptions
 
     if not args.reports and not args.db:
         raise SetupfixError("diagnose: give REPORT files or folders, or --db STORE")
-    out = diagnose_reports(args.model, args.reports, corrections=args.corrections, temperatures=args.temperatures,
-                           augment=args.augment, diagnoser=Diagnoser(alpha=args.alpha, walk=not args.no_walk),
-                           db=args.db, thermal=args.thermal, lenient=args.lenient)
+    out = diagnose_reports(DiagnoseRequest(
+        args.model, tuple(args.reports), ReadOptions(lenient=args.lenient), corrections=args.corrections,
+        temperatures=args.temperatures, db=args.db, thermal=args.thermal, augment=args.augment,
+        diagnoser=Diagnoser(alpha=args.alpha, walk=not args.no_walk)))
     if args.json:
         json.dump(out.to_json(), sys.stdout, indent=2)
         sys.stdout.write("\n")

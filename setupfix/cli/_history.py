@@ -52,7 +52,9 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
 
 def run(args: argparse.Namespace) -> int:
     from setupfix.model import load_model
-    from setupfix.pipeline.history import default_db_path, export_history, history_summary, import_history
+    from setupfix.pipeline.history import (ImportRequest, default_db_path, export_history, history_summary,
+                                           import_history)
+    from setupfix.pipeline.requests import ReadOptions
     from setupfix.pipeline.writers import check_target
     from setupfix.store import open_store
 
@@ -65,8 +67,9 @@ def run(args: argparse.Namespace) -> int:
     model = load_model(args.model) if args.action == "import" and args.model else None  # before the store opens
     with open_store(path) as store:
         if args.action == "import":
-            s = import_history(store, args.reports, args.corrections, args.temperatures, format=args.format,
-                               unit=args.unit, encoding=args.encoding, lenient=args.lenient, model=model)
+            read = ReadOptions(format=args.format, unit=args.unit, encoding=args.encoding, lenient=args.lenient)
+            s = import_history(store, ImportRequest(tuple(args.reports), tuple(args.corrections),
+                                                    tuple(args.temperatures), read, model))
             for note in s.notes:
                 print(f"warning: {note}", file=sys.stderr)
             print(f"{path}: {len(s.new_reports)} new report(s), {len(s.known_reports)} already stored, "

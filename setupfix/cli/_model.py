@@ -11,7 +11,8 @@ import unicodedata
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from setupfix.cli._common import add_reader_options, add_report_options, cycle_options, report_options
+from setupfix.cli._common import (add_reader_options, add_report_options, cycle_options, read_options,
+                                  report_options)
 from setupfix.errors import ExportError, SourceLocation
 
 if TYPE_CHECKING:
@@ -82,7 +83,7 @@ def run_init(args: argparse.Namespace) -> int:
         raise ExportError("exists: a scaffold would replace it (give --force, or another -o)",
                           location=SourceLocation(args.out))
     scaffold = scaffold_model(args.reports, axis=args.axis, name=args.name,
-                              parts_are_stations=args.parts_are_stations, **report_options(args))
+                              parts_are_stations=args.parts_are_stations, read=read_options(args))
     for note in scaffold.notes:
         print(f"warning: {note}", file=sys.stderr)
     write_text(args.out, scaffold.text + "\n")

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import sys
 
+from setupfix.cli._common import read_options
 from setupfix.errors import SetupfixError
 from setupfix.cli.exit_codes import ERROR, OK, PARTIAL
 
@@ -46,8 +47,7 @@ def run(args: argparse.Namespace) -> int:
     from setupfix.pipeline.writers import check_target, write_canonical_csv
 
     check_target(args.out)
-    outcome = parse_reports(args.files, format=args.format, unit=args.unit, encoding=args.encoding,
-                            columns=args.columns, lenient=args.lenient)
+    outcome = parse_reports(args.files, read_options(args))
     for report in outcome.reports:
         for line in report.warnings:
             print(f"warning: {line}", file=sys.stderr)

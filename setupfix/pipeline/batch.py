@@ -33,7 +33,7 @@ import itertools
 import os
 import time
 from collections import Counter, deque
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from concurrent.futures import Future, ProcessPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -87,18 +87,22 @@ class Outcome:
     table: pd.DataFrame | None = None  #: the canonical table read from them (only with ``record``)
 
 
-@dataclass
+@dataclass(frozen=True, eq=False)
 class BatchSummary:
-    """Counts and failures of one batch run."""
+    """Counts and failures of one batch run, built once at its end.
+
+    ``verdicts`` counts the verdicts (a missing one counts 0); ``failed`` and
+    ``skipped`` are (file, reason) pairs; ``notes`` (file, note) pairs, typed.
+    """
 
     reports: int = 0
     parts: int = 0
-    verdicts: Counter[str] = field(default_factory=Counter)
-    failed: list[tuple[str, str]] = field(default_factory=list)
-    skipped: list[tuple[str, str]] = field(default_factory=list)
+    verdicts: Mapping[str, int] = field(default_factory=Counter)
+    failed: tuple[tuple[str, str], ...] = ()
+    skipped: tuple[tuple[str, str], ...] = ()
     seconds: float = 0.0
     written: bool = False
-    notes: list[tuple[str, Note]] = field(default_factory=list)
+    notes: tuple[tuple[str, Note], ...] = ()
 
     def to_json(self) -> dict[str, Any]:
         return {"reports": self.reports, "parts": self.parts, "verdicts": dict(self.verdicts),
@@ -106,6 +110,22 @@ class BatchSummary:
                 "skipped": [{"file": f, "reason": r} for f, r in self.skipped],
                 "notes": [{"file": f, "note": str(n)} for f, n in self.notes],
                 "seconds": round(self.seconds, 3), "written": self.written}
+
+
+@dataclass
+class _Tally:
+    """The batch's counts while the reports stream in (private: :class:`BatchSummary` is the outcome)."""
+
+    reports: int = 0
+    parts: int = 0
+    verdicts: Counter[str] = field(default_factory=Counter)
+    failed: list[tuple[str, str]] = field(default_factory=list)
+    skipped: list[tuple[str, str]] = field(default_factory=list)
+    notes: list[tuple[str, Note]] = field(default_factory=list)
+
+    def summary(self, seconds: float, written: bool) -> BatchSummary:
+        return BatchSummary(self.reports, self.parts, Counter(self.verdicts), tuple(self.failed),
+                            tuple(self.skipped), seconds, written, tuple(self.notes))
 
 
 def find_reports(root: str | Path) -> parsers.Listing:
@@ -277,7 +297,7 @@ def run_batch(request: CorrectRequest, folder: str | Path, out: str | Path, *, w
     if model.safety.ewma < 1.0 and (store is not None or request.history is not None):
         base = request.history if request.history is not None else History.from_store(model, store)  # type: ignore[arg-type]  # store is set: tested above
         request = dataclasses.replace(request, history=batch_history(request, base, [f for f, _, _ in files]))
-    summary = BatchSummary()
+    summary = _Tally()
     summary.failed += listing.problems  # named, never dropped: an unreadable folder, a broken link, …
     seen: dict[str, str] = {}
     writer: _CsvOut | _ProgramsOut = _CsvOut(out) if controller == "csv" else _ProgramsOut(out, controller)
@@ -301,9 +321,8 @@ def run_batch(request: CorrectRequest, folder: str | Path, out: str | Path, *, w
                     outcome.data, outcome.table = b"", None
                 if progress is not None:
                     progress(i, len(files), outcome)
-            summary.written = writer.commit()
-    summary.seconds = time.perf_counter() - start
-    return summary
+            written = writer.commit()
+    return summary.summary(time.perf_counter() - start, written)
 
 
 def batch_history(request: CorrectRequest, base: History, files: Sequence[str | Path]) -> History:
@@ -342,7 +361,7 @@ def _record(store: Store, outcome: Outcome, solve: SolveOptions) -> None:
             result={"verdict": verdict, "corrections": by_part.get(part, {})}))
 
 
-def _account(summary: BatchSummary, outcome: Outcome, seen: dict[str, str],
+def _account(summary: _Tally, outcome: Outcome, seen: dict[str, str],
              processed: Callable[[str], bool] | None) -> None:
     if outcome.error:
         summary.failed.append((outcome.path, outcome.error))

@@ -13,6 +13,7 @@ alone and all methods see the same seed list.
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -28,8 +29,8 @@ from setupfix.pipeline.cycles import read_parts
 from setupfix.pipeline.requests import CycleOptions, ReadOptions
 from setupfix.pose import pose_problem
 
-__all__ = ["DEFAULT_METHODS", "MethodTrials", "Comparison", "trial_seeds", "compare_steps", "compare_problem",
-           "compare_report", "plot_comparison"]
+__all__ = ["DEFAULT_METHODS", "CompareRequest", "MethodTrials", "Comparison", "trial_seeds", "compare_steps",
+           "compare_problem", "compare_report", "plot_comparison"]
 
 Array = npt.NDArray[np.float64]
 
@@ -42,13 +43,28 @@ def trial_seeds(seed: int, trials: int) -> list[int]:
     return [int(s) for s in np.random.SeedSequence(seed).generate_state(trials, dtype=np.uint32)]
 
 
-@dataclass
+@dataclass(frozen=True)
+class CompareRequest:
+    """What ``compare`` needs besides the report: the model, the reader's and the cycles' options,
+    the methods, trials per method, the root seed and hyper-parameters by optimiser name
+    (``"exact"`` included, e.g. its time limit)."""
+
+    model: ProcessModel | str | Path
+    read: ReadOptions = field(default_factory=ReadOptions)
+    cycles: CycleOptions = field(default_factory=CycleOptions)
+    methods: tuple[str, ...] = DEFAULT_METHODS
+    trials: int = 12
+    seed: int = 0
+    params: Mapping[str, Mapping[str, Any]] = field(default_factory=dict)
+
+
+@dataclass(frozen=True, eq=False)
 class MethodTrials:
     """The N trials of one optimiser on one problem."""
 
     optimizer: str
-    seeds: list[int]
-    results: list[OptimizeResult]
+    seeds: tuple[int, ...]
+    results: tuple[OptimizeResult, ...]
 
     @property
     def f1(self) -> Array:
@@ -98,19 +114,19 @@ class MethodTrials:
         return out
 
 
-@dataclass
+@dataclass(frozen=True, eq=False)
 class Comparison:
     """Exact optimum and the seeded trials of every method on one measured part."""
 
     problem: CorrectionProblem
     exact: OptimizeResult
-    methods: list[MethodTrials]
+    methods: tuple[MethodTrials, ...]
     seed: int
     trials: int
     part: str = ""
     report: str = ""
     unit: str = "mm"
-    skipped: dict[str, str] = field(default_factory=dict)
+    skipped: Mapping[str, str] = field(default_factory=dict)
     #: What reading, matching and posing assumed or skipped (rows skipped by --lenient, angles, forecast …).
     notes: tuple[Note, ...] = ()
 
@@ -139,7 +155,7 @@ class Comparison:
                 "norms": [round(float(v), d) for v in m.f2],
                 "fitness": [round(float(v), d) for v in m.f],
                 "gaps": [round(float(v), d) for v in m.gaps(e)],
-                "seeds": m.seeds,
+                "seeds": list(m.seeds),
                 "evaluations": int(s["evaluations"]),
                 "evaluations_per_trial": [int(v) for v in m.evaluations],
                 "seconds": round(s["seconds"], 6),
@@ -175,21 +191,21 @@ def compare_steps(problem: CorrectionProblem, *, methods: Sequence[str] = DEFAUL
         get_optimizer(name, **params.get(name, {}))
     if exact is None:
         exact = get_optimizer("exact", **params.get("exact", {})).solve(problem)
-    seeds = trial_seeds(seed, trials)
+    seeds = tuple(trial_seeds(seed, trials))
     steps = 1 + len(methods) * trials
     step = 1
-    done: list[MethodTrials] = []
-    yield "exact", step, steps, Comparison(problem=problem, exact=exact, methods=[], seed=seed, trials=trials)
+    done: tuple[MethodTrials, ...] = ()
+    yield "exact", step, steps, Comparison(problem=problem, exact=exact, methods=(), seed=seed, trials=trials)
     for name in methods:
         kw = dict(params.get(name, {}))
-        runs: list[OptimizeResult] = []
+        runs: tuple[OptimizeResult, ...] = ()
         for s in seeds:
-            runs.append(get_optimizer(name, seed=s, **kw).solve(problem))
+            runs = (*runs, get_optimizer(name, seed=s, **kw).solve(problem))
             step += 1
-            partial = [*done, MethodTrials(optimizer=name, seeds=seeds[:len(runs)], results=list(runs))]
+            partial = (*done, MethodTrials(optimizer=name, seeds=seeds[:len(runs)], results=runs))
             yield name, step, steps, Comparison(problem=problem, exact=exact, methods=partial, seed=seed,
                                                 trials=trials)
-        done.append(MethodTrials(optimizer=name, seeds=seeds, results=runs))
+        done = (*done, MethodTrials(optimizer=name, seeds=seeds, results=runs))
 
 
 def compare_problem(problem: CorrectionProblem, *, methods: Sequence[str] = DEFAULT_METHODS, trials: int = 12,
@@ -217,27 +233,21 @@ def compare_problem(problem: CorrectionProblem, *, methods: Sequence[str] = DEFA
     return last
 
 
-def compare_report(model: ProcessModel | str | Path, report: str | Path, *, methods: Sequence[str] = DEFAULT_METHODS,
-                   trials: int = 12, seed: int = 0, read: ReadOptions | None = None,
-                   cycles: CycleOptions | None = None,
-                   params: Mapping[str, Mapping[str, Any]] | None = None) -> Comparison:
-    """Compare the methods on one cycle of a report (the first one unless ``cycles.part`` names it).
+def compare_report(request: CompareRequest, report: str | Path) -> Comparison:
+    """Compare the methods on one cycle of a report (the first one unless ``request.cycles.part`` names it).
 
     The problem is the one ``correct`` solves (:func:`setupfix.pose.pose_problem`: the
     model's forecast, relations, guard band and register costs), so the exact result
-    is ``correct``'s raw optimum.  ``params``: hyper-parameters by optimiser name,
-    ``"exact"`` included (e.g. its time limit).
+    is ``correct``'s raw optimum.
     """
-    if not isinstance(model, ProcessModel):
-        model = load_model(model)
-    read, cycles = read or ReadOptions(), cycles or CycleOptions()
-    _, parts = read_parts(model, report, **read.kwargs(), **cycles.kwargs())
-    measured = cycles.select(parts, report)[0]
+    model = request.model if isinstance(request.model, ProcessModel) else load_model(request.model)
+    _, parts = read_parts(model, report, **request.read.kwargs(), **request.cycles.kwargs())
+    measured = request.cycles.select(parts, report)[0]
     posed = pose_problem(model, measured)
-    result = compare_problem(posed.guarded, methods=methods, trials=trials, seed=seed, params=params)
-    result.part, result.report, result.unit = measured.part, measured.report or str(report), model.unit
-    result.notes = (*measured.notes, *posed.notes)
-    return result
+    result = compare_problem(posed.guarded, methods=request.methods, trials=request.trials, seed=request.seed,
+                             params=request.params)
+    return dataclasses.replace(result, part=measured.part, report=measured.report or str(report), unit=model.unit,
+                               notes=(*measured.notes, *posed.notes))
 
 
 def plot_comparison(comparison: Comparison, path: str | Path) -> None:

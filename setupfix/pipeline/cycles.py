@@ -19,7 +19,7 @@ report, groups it, matches it to the model and checks it against the model
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from dataclasses import replace
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
@@ -31,10 +31,30 @@ from setupfix.errors import MatchError, Note, SourceLocation
 from setupfix.model import PartMeasurement, ProcessModel, match_parts, normalise_name
 from setupfix.pipeline.checks import check_parts
 
-__all__ = ["Stations", "assign_stations", "cycle_name", "load_parts", "model_groups", "read_parts"]
+__all__ = ["ReadOptions", "Stations", "assign_stations", "cycle_name", "load_parts", "model_groups", "read_parts"]
 
 #: Stations of a report's parts: a list in part order or a mapping part → station.
 Stations = Sequence[str] | Mapping[str, str]
+
+
+@dataclass(frozen=True)
+class ReadOptions:
+    """The report reader's options (``--format``, ``--unit``, ``--encoding``, ``--columns``, ``--lenient``).
+
+    The same for every command: ``kwargs()`` are keyword arguments of :func:`read_parts`
+    and of :func:`parsers.read_report`.
+    """
+
+    format: str | None = None
+    unit: str | None = None
+    encoding: str | None = None
+    columns: str | None = None
+    lenient: bool = False
+
+    def kwargs(self) -> dict[str, Any]:
+        """As keyword arguments of :func:`read_parts` (and :func:`parsers.read_report`)."""
+        return {"format": self.format, "unit": self.unit, "encoding": self.encoding, "columns": self.columns,
+                "lenient": self.lenient}
 
 
 def model_groups(model: ProcessModel) -> list[str]:

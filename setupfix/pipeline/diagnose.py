@@ -14,7 +14,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import tomllib
-from collections.abc import Sequence
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -23,15 +23,16 @@ import numpy as np
 
 from setupfix.diagnose import Diagnoser, Diagnosis
 from setupfix.diagnose.terms import typical_step
-from setupfix.errors import ExportError, ModelError, SourceLocation
+from setupfix.errors import ExportError, ModelError, Note, SourceLocation
 from setupfix.model import PartMeasurement, ProcessModel, model_from_dict
 from setupfix.model.effects import EffectsSection, ModelEffect, effects_from_dict, with_effects
 from setupfix.pipeline.correct import correct_cycle
-from setupfix.pipeline.requests import CorrectRequest, CycleCorrection
+from setupfix.pipeline.requests import CorrectRequest, CycleCorrection, ReadOptions
 from setupfix.pipeline.series import SeriesInput, load_series
 from setupfix.pipeline.writers import check_target, write_text
 
-__all__ = ["DiagnoseOutcome", "diagnose_reports", "augmented_section", "write_augmented", "forecast_model"]
+__all__ = ["DiagnoseRequest", "DiagnoseOutcome", "note_text", "diagnose_reports", "augmented_section",
+           "write_augmented", "forecast_model"]
 
 def augmented_section(diagnosis: Diagnosis, declared: EffectsSection) -> EffectsSection:
     """The ``[effects]`` section: the model's own effects, then those found (ids E1, E2, …)."""
@@ -58,15 +59,42 @@ def augmented_section(diagnosis: Diagnosis, declared: EffectsSection) -> Effects
                           float(s.time[-1]) if s.n_cycles else declared.last_hours)
 
 
-@dataclass
+@dataclass(frozen=True)
+class DiagnoseRequest:
+    """Everything ``diagnose`` needs: the model, the series' sources and the engine's settings.
+
+    ``reports`` are files or folders (or none with ``db``); ``read`` the reader's options
+    (``lenient`` lets a reader skip a self-contradicting row); ``corrections`` and
+    ``temperatures`` the logs (found beside the reports when not given); ``db`` a history
+    store; ``thermal`` a model saved by ``setupfix thermal fit``; ``augment`` where to write
+    the model with the effects found; ``diagnoser`` the engine with its settings.
+    """
+
+    model: ProcessModel | str | Path
+    reports: tuple[str | Path, ...] = ()
+    read: ReadOptions = field(default_factory=ReadOptions)
+    corrections: str | None = None
+    temperatures: str | None = None
+    db: str | Path | None = None
+    thermal: str | Path | None = None
+    augment: str | Path | None = None
+    diagnoser: Diagnoser = field(default_factory=Diagnoser)
+
+
+def note_text(note: Note) -> str:
+    """A note of the diagnosis as a line of its JSON (a folder's problem is a warning)."""
+    return f"warning: {note}" if note.kind == "folder" else str(note)
+
+
+@dataclass(frozen=True, eq=False)
 class DiagnoseOutcome:
     """A diagnosis with what the CLI and TUI show: next correction, notes, augmented file."""
 
     input: SeriesInput
     diagnosis: Diagnosis
-    next_correction: dict[str, float]
+    next_correction: Mapping[str, float]
     augmented: str | None = None
-    notes: list[str] = field(default_factory=list)
+    notes: tuple[Note, ...] = ()
     #: ``correct`` on the forecast (None when nothing was measured); ``next_correction`` is its corrections.
     next_cycle: CycleCorrection | None = None
 
@@ -113,7 +141,7 @@ class DiagnoseOutcome:
                 **{name: {"mean_budget": r(b.mean_budget), "worst_budget": r(b.worst_budget), "rms": r(b.rms),
                           "out_of_tolerance": b.out_of_tolerance} for name, b in d.walk.budgets.items()}},
             "augmented": self.augmented,
-            "notes": list(self.notes),
+            "notes": [note_text(n) for n in self.notes],
         }
         return out
 
@@ -129,24 +157,21 @@ def forecast_model(model: ProcessModel) -> ProcessModel:
                                safety=dataclasses.replace(model.safety, ewma=1.0))
 
 
-def _next_correction(model: ProcessModel, diagnosis: Diagnosis) -> tuple[CycleCorrection | None, list[str]]:
+def _next_correction(model: ProcessModel, diagnosis: Diagnosis) -> tuple[CycleCorrection | None, list[Note]]:
     """``correct`` on the forecast, through the augmented relations (:func:`correct_cycle`, exact optimiser)."""
     fc = diagnosis.forecast
     if not np.isfinite(fc).any():
-        return None, ["no forecast: nothing measured"]
+        return None, [Note("no forecast: nothing measured", None, "diagnosis")]
     part = PartMeasurement(part="next", report="forecast", timestamp=None, deviation=fc,
                            sources=tuple("" for _ in fc))
     cycle = correct_cycle(CorrectRequest(forecast_model(model)), part, composite=diagnosis.relation_matrix())
-    notes = [str(n) for n in cycle.notes]
+    notes = list(cycle.notes)
     if cycle.verdict == "reject":
-        notes.append(f"next correction: {cycle.recommendation.alarm}")
+        notes.append(Note(f"next correction: {cycle.recommendation.alarm}", None, "safety"))
     return cycle, notes
 
 
-def diagnose_reports(model: ProcessModel | str | Path, reports: Sequence[str | Path] = (), *,
-                     corrections: str | None = None, temperatures: str | None = None, augment: str | None = None,
-                     diagnoser: Diagnoser | None = None, db: str | Path | None = None,
-                     thermal: str | Path | None = None, lenient: bool = False) -> DiagnoseOutcome:
+def diagnose_reports(request: DiagnoseRequest) -> DiagnoseOutcome:
     """Diagnose a series of reports; optionally write the augmented model.
 
     Raises
@@ -155,19 +180,19 @@ def diagnose_reports(model: ProcessModel | str | Path, reports: Sequence[str | P
         Bad input (named with its place) or an augmented file that cannot be written;
         nothing is half-written.
     """
-    if augment:
-        check_target(augment)  # a bad target costs nothing
-    inp = load_series(model, reports, corrections=corrections, temperatures=temperatures, db=db, thermal=thermal,
-                      lenient=lenient)
-    diagnoser = diagnoser or Diagnoser()
-    diagnosis = diagnoser.run(inp.layout, inp.series, declared=inp.declared)
+    if request.augment:
+        check_target(request.augment)  # a bad target costs nothing
+    inp = load_series(request.model, request.reports, corrections=request.corrections,
+                      temperatures=request.temperatures, db=request.db, thermal=request.thermal, read=request.read)
+    diagnosis = request.diagnoser.run(inp.layout, inp.series, declared=inp.declared)
     cycle, more = _next_correction(inp.model, diagnosis)
-    notes = list(inp.notes) + list(diagnosis.notes) + more
+    notes = (*inp.notes, *(Note(n, None, "diagnosis") for n in diagnosis.notes), *more)
     out = DiagnoseOutcome(inp, diagnosis, cycle.corrections if cycle is not None else {}, None, notes, cycle)
-    if db is not None:
-        _record(db, inp.model, out)
-    if augment:
-        out.augmented = write_augmented(inp.model, augmented_section(diagnosis, inp.effects), augment)
+    if request.db is not None:
+        _record(request.db, inp.model, out)
+    if request.augment:
+        written = write_augmented(inp.model, augmented_section(diagnosis, inp.effects), str(request.augment))
+        out = dataclasses.replace(out, augmented=written)
     return out
 
 

@@ -22,14 +22,14 @@ from parsers._source import read_bytes
 from parsers.corrections import EVENTS, check_corrections, read_corrections_log
 from parsers.temperature import read_temperature_log
 from parsers.timestamps import iso_text
-from setupfix.errors import ParameterError, ParseError, UnknownFormatError
+from setupfix.errors import Note, ParameterError, ParseError, UnknownFormatError
 from setupfix.model import CANONICAL_COLUMNS, ProcessModel
 from setupfix.pipeline.present import cycle_json
-from setupfix.pipeline.requests import CycleCorrection
+from setupfix.pipeline.requests import CycleCorrection, ReadOptions
 from setupfix.pipeline.writers import write_canonical_csv, write_table_csv
 from setupfix.store import Recommendation, Store
 
-__all__ = ["DEFAULT_DB", "default_db_path", "import_history", "ImportSummary",
+__all__ = ["DEFAULT_DB", "default_db_path", "import_history", "ImportRequest", "ImportSummary",
            "history_summary", "export_history", "record_recommendations", "EXPORTS", "EVENTS"]
 
 DEFAULT_DB = "setupfix.db"
@@ -54,25 +54,36 @@ def _temperature_frame(path: str | os.PathLike[str]) -> pd.DataFrame:
     return pd.DataFrame({"timestamp": stamps, **log.columns})
 
 
-@dataclass
-class ImportSummary:
-    """What one import stored: new reports, reports already there, new log rows."""
+@dataclass(frozen=True)
+class ImportRequest:
+    """What ``history import`` stores: report files or folders, corrections and temperature logs.
 
-    new_reports: list[str] = field(default_factory=list)
-    known_reports: list[str] = field(default_factory=list)
+    ``read`` holds the report reader's options; with ``model`` every corrections-log row
+    is checked against it.
+    """
+
+    reports: tuple[str | os.PathLike[str], ...] = ()
+    corrections: tuple[str | os.PathLike[str], ...] = ()
+    temperatures: tuple[str | os.PathLike[str], ...] = ()
+    read: ReadOptions = field(default_factory=ReadOptions)
+    model: ProcessModel | None = None
+
+
+@dataclass(frozen=True)
+class ImportSummary:
+    """What one import stored: new reports, reports already there, new log rows, and the notes."""
+
+    new_reports: tuple[str, ...] = ()
+    known_reports: tuple[str, ...] = ()
     corrections: int = 0
     temperatures: int = 0
-    notes: list[str] = field(default_factory=list)
+    notes: tuple[Note, ...] = ()
 
 
-def import_history(store: Store, reports: Sequence[str | os.PathLike[str]] = (),
-                   corrections: Sequence[str | os.PathLike[str]] = (),
-                   temperatures: Sequence[str | os.PathLike[str]] = (), *, format: str | None = None,
-                   unit: str | None = None, encoding: str | None = None, lenient: bool = False,
-                   model: ProcessModel | None = None) -> ImportSummary:
+def import_history(store: Store, request: ImportRequest) -> ImportSummary:
     """Read every file, then store all of it in one transaction.
 
-    ``reports`` may name folders: their reports as :func:`parsers.expand_inputs` lists
+    ``request.reports`` may name folders: their reports as :func:`parsers.expand_inputs` lists
     them (sub-folders too; each listing problem becomes a note; a file of a folder that
     no reader recognises is left out with a note), and a corrections or temperature log
     found in them is imported when none is given.  With ``model`` every corrections-log
@@ -86,40 +97,44 @@ def import_history(store: Store, reports: Sequence[str | os.PathLike[str]] = (),
         contradicts the store or the model (nothing is stored).
     """
     read = []
-    summary = ImportSummary()
-    inputs = parsers.expand_inputs(reports)
-    summary.notes += inputs.warnings()
+    options = request.read
+    inputs = parsers.expand_inputs(request.reports)
+    notes: list[Note] = inputs.notes()
     for name, from_folder in inputs.files:
         source = parsers.load_source(name)  # read once: the bytes hashed are the bytes parsed
         try:
-            result = parsers.read_report(source, format=format, unit=unit, encoding=encoding, lenient=lenient)
+            result = parsers.read_report(source, format=options.format, unit=options.unit,
+                                         encoding=options.encoding, lenient=options.lenient)
         except UnknownFormatError as exc:
-            if not from_folder or format:
+            if not from_folder or options.format:
                 raise
-            summary.notes.append(f"{exc.location}: not a report of a known format; left out")
+            notes.append(Note("not a report of a known format; left out", exc.location, "skipped"))
             continue
-        summary.notes += [str(n) for n in result.notes]
+        notes += result.notes
         read.append((source.data, source.name, result.format, result.table))
-    corrections, temperatures = list(corrections), list(temperatures)
+    corrections, temperatures = list(request.corrections), list(request.temperatures)
     for kind, given in (("corrections", corrections), ("temperatures", temperatures)):
         found = inputs.log(kind)
         if found and not given:
             given.append(found)
-            summary.notes.append(f"{kind} log {found} found beside the reports: imported")
+            notes.append(Note(f"{kind} log {found} found beside the reports: imported", None, "folder_log"))
     logs = [read_corrections_log(p) for p in corrections]
-    if model is not None:
+    if request.model is not None:
         for log in logs:
-            check_corrections(log, model)
+            check_corrections(log, request.model)
     temps = [_temperature_frame(p) for p in temperatures]
+    new_reports: list[str] = []
+    known_reports: list[str] = []
+    n_corrections = n_temperatures = 0
     with store.transaction():
         for data, name, fmt, table in read:
             _, new = store.add_report(data, Path(name).name, fmt, table)
-            (summary.new_reports if new else summary.known_reports).append(name)
+            (new_reports if new else known_reports).append(name)
         for log in logs:
-            summary.corrections += store.add_corrections(log.frame())
+            n_corrections += store.add_corrections(log.frame())
         for frame in temps:
-            summary.temperatures += store.add_temperatures(frame)
-    return summary
+            n_temperatures += store.add_temperatures(frame)
+    return ImportSummary(tuple(new_reports), tuple(known_reports), n_corrections, n_temperatures, tuple(notes))
 
 
 def history_summary(store: Store) -> dict[str, object]:

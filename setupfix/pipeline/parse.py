@@ -7,8 +7,8 @@ others are still read.
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
+from collections.abc import Sequence
+from dataclasses import dataclass
 from pathlib import Path
 
 import pandas as pd
@@ -17,6 +17,7 @@ import parsers
 from parsers.axes import AXIS_COLUMN
 from setupfix.errors import Note, ParseError, SetupfixError, SourceLocation, UnknownFormatError
 from setupfix.model import CANONICAL_COLUMNS
+from setupfix.pipeline.cycles import ReadOptions
 from setupfix.pipeline.writers import FLOAT_FORMAT, write_canonical_csv  # noqa: F401 - re-exported
 
 __all__ = ["ParsedReport", "ParseOutcome", "parse_reports", "write_canonical_csv",
@@ -46,17 +47,17 @@ def note_line(note: Note) -> str:
     return f"{note.location}: {note.message}" if note.location else note.message
 
 
-@dataclass
+@dataclass(frozen=True, eq=False)
 class ParseOutcome:
     """All reports of one ``parse`` call: those read and those refused."""
 
-    reports: list[ParsedReport] = field(default_factory=list)
-    failures: list[SetupfixError] = field(default_factory=list)
+    reports: tuple[ParsedReport, ...] = ()
+    failures: tuple[SetupfixError, ...] = ()
     #: Files of a folder input that no reader recognises (left out, not failures).
-    skipped: list[Note] = field(default_factory=list)
+    skipped: tuple[Note, ...] = ()
     #: What a folder listing could not list or look at (a link to a folder, an unreadable
     #: folder, a file renamed while listed): each named, for a warning.
-    problems: list[Note] = field(default_factory=list)
+    problems: tuple[Note, ...] = ()
     #: Number of inputs after folders were expanded.
     inputs: int = 0
 
@@ -77,9 +78,7 @@ class ParseOutcome:
         return table[[*OUTPUT_COLUMNS, AXIS_COLUMN]]
 
 
-def parse_reports(paths: Sequence[str | Path], *, format: str | None = None, unit: str | None = None,
-                  encoding: str | None = None, columns: str | Mapping[str, str] | None = None,
-                  lenient: bool = False) -> ParseOutcome:
+def parse_reports(paths: Sequence[str | Path], read: ReadOptions | None = None) -> ParseOutcome:
     """Read each report; collect the tables and notes and, separately, the errors.
 
     Parameters
@@ -88,8 +87,9 @@ def parse_reports(paths: Sequence[str | Path], *, format: str | None = None, uni
         Report files, folders or ``-`` (standard input).  A folder stands for its
         reports and those of its sub-folders, as :func:`parsers.expand_inputs` lists
         them (the policy every command shares); an empty folder is a failure naming it.
-    format, unit, encoding, columns, lenient
-        As for :func:`parsers.read_report`.
+    read : ReadOptions, optional
+        The reader's options (format, unit, encoding, columns, lenient), as for
+        :func:`parsers.read_report`; default: every one sniffed, not lenient.
 
     Returns
     -------
@@ -97,27 +97,26 @@ def parse_reports(paths: Sequence[str | Path], *, format: str | None = None, uni
         Never raises for a bad report: its :class:`~setupfix.errors.SetupfixError`
         is in ``failures``.  Thread-safe: notes come back as data.
     """
-    outcome = ParseOutcome()
+    options = read if read is not None else ReadOptions()
     inputs = parsers.expand_inputs(paths)
-    outcome.problems = inputs.notes()
-    outcome.failures = [ParseError("folder holds no report file", location=SourceLocation(folder))
-                        for folder in inputs.empty]
-    outcome.inputs = len(inputs.files)
+    failures: list[SetupfixError] = [ParseError("folder holds no report file", location=SourceLocation(folder))
+                                     for folder in inputs.empty]
+    skipped: list[Note] = []
+    reports: list[ParsedReport] = []
     for name, from_folder in inputs.files:
         try:
-            result = parsers.read_report(name, format=format, unit=unit, encoding=encoding, columns=columns,
-                                         lenient=lenient)
+            result = parsers.read_report(name, **options.kwargs())
         except UnknownFormatError as exc:
-            if from_folder and not format:
-                outcome.skipped.append(Note("not a report of a known format; left out", exc.location, "skipped"))
+            if from_folder and not options.format:
+                skipped.append(Note("not a report of a known format; left out", exc.location, "skipped"))
             else:
-                outcome.failures.append(exc)
+                failures.append(exc)
             continue
         except SetupfixError as exc:
-            outcome.failures.append(exc)
+            failures.append(exc)
             continue
-        outcome.reports.append(ParsedReport(name, result.format, result.table, result.notes))
-    return outcome
+        reports.append(ParsedReport(name, result.format, result.table, result.notes))
+    return ParseOutcome(tuple(reports), tuple(failures), tuple(skipped), tuple(inputs.notes()), len(inputs.files))
 
 
 def list_formats() -> list[dict[str, object]]:

@@ -22,6 +22,7 @@ import pandas as pd
 from setupfix.errors import MatchError, Note, ParameterError, SourceLocation
 from setupfix.model import PartMeasurement, ProcessModel
 from setupfix.optimize import OPTIMIZERS, CorrectionProblem, OptimizeResult, get_optimizer
+from setupfix.pipeline.cycles import ReadOptions
 from setupfix.pipeline.smoothing import History
 from setupfix.pose import PosedProblem
 from setupfix.safety import Recommendation, budget
@@ -35,22 +36,6 @@ __all__ = ["ReadOptions", "CycleOptions", "SolveOptions", "ThermalInputs", "load
            "History", "CorrectRequest", "CycleCorrection", "CorrectOutcome"]
 
 Array = npt.NDArray[np.float64]
-
-
-@dataclass(frozen=True)
-class ReadOptions:
-    """The report reader's options (``--format``, ``--unit``, ``--encoding``, ``--columns``, ``--lenient``)."""
-
-    format: str | None = None
-    unit: str | None = None
-    encoding: str | None = None
-    columns: str | None = None
-    lenient: bool = False
-
-    def kwargs(self) -> dict[str, Any]:
-        """As keyword arguments of :func:`setupfix.pipeline.cycles.read_parts`."""
-        return {"format": self.format, "unit": self.unit, "encoding": self.encoding, "columns": self.columns,
-                "lenient": self.lenient}
 
 
 @dataclass(frozen=True)

@@ -27,11 +27,12 @@ values outside the model's sanity ranges, and other axes with ``axis=``.
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
 import re
 from collections import Counter
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -40,9 +41,10 @@ import pandas as pd
 
 import parsers
 from parsers.axes import AXES, AXIS_COLUMN
-from setupfix.errors import ModelError, ParseError, SetupfixError, SourceLocation
+from setupfix.errors import ModelError, Note, ParseError, SetupfixError, SourceLocation
 from setupfix.model import normalise_name
 from setupfix.model.loader import RANGES_MM
+from setupfix.pipeline.cycles import ReadOptions
 
 __all__ = ["Scaffold", "scaffold_model", "scaffold_from_tables", "name_axis", "FORM_WORDS"]
 
@@ -121,17 +123,18 @@ def _stated_axis(value: Any, where: str, report: str) -> str | None:
     raise ParseError(f"column 'axis': expected X, Y, Z or empty, found {str(value)!r}", location=location)
 
 
-@dataclass
+@dataclass(frozen=True)
 class Scaffold:
     """The scaffold text and what went into it."""
 
     text: str
     dimensions: int
     axis: str
-    skipped: list[tuple[str, str]] = field(default_factory=list)  # (characteristic, reason)
-    notes: list[str] = field(default_factory=list)  # the readers' notes (skipped rows, assumed units)
+    skipped: tuple[tuple[str, str], ...] = ()  # (characteristic, reason)
+    #: What the folder listing could not look at, files left out and the readers' notes (skipped rows, units).
+    notes: tuple[Note, ...] = ()
     #: How many dimensions took their axis from the report, from the name, or have none.
-    axes_from: dict[str, int] = field(default_factory=dict)
+    axes_from: Mapping[str, int] = field(default_factory=dict)
 
 
 def _resolution(narrowest: float | None) -> float:
@@ -203,15 +206,14 @@ def _collect(tables: Sequence[tuple[str, pd.DataFrame]], axis: str | None,
 
 
 def scaffold_model(reports: Sequence[str | Path], *, axis: str | None = None, name: str | None = None,
-                   parts_are_stations: bool = False,
-                   format: str | None = None, unit: str | None = None, encoding: str | None = None,
-                   columns: str | None = None, lenient: bool = False) -> Scaffold:
+                   parts_are_stations: bool = False, read: ReadOptions | None = None) -> Scaffold:
     """Write a process-model scaffold (TOML text) from the reports' toleranced length characteristics.
 
     ``reports`` may name folders: their reports and those of their sub-folders, as
     :func:`parsers.expand_inputs` lists them (the policy every command shares; what the
     listing could not look at is a note); a file of a folder that no reader takes, or
-    that is refused, is left out with a note.
+    that is refused, is left out with a note.  ``read``: the reader's options (default:
+    every one sniffed, not lenient).
 
     Raises
     ------
@@ -222,27 +224,27 @@ def scaffold_model(reports: Sequence[str | Path], *, axis: str | None = None, na
     """
     if axis is not None and axis not in ("X", "Y", "Z"):
         raise ModelError(f'axis must be "X", "Y" or "Z", got {axis!r}')
-    options: dict[str, Any] = {"unit": unit, "encoding": encoding, "columns": columns, "lenient": lenient}
+    options = (read if read is not None else ReadOptions()).kwargs()
     inputs = parsers.expand_inputs(reports)
     if inputs.empty:
         raise ParseError("folder holds no report file", location=SourceLocation(inputs.empty[0]),
                          hint="; ".join(inputs.warnings()[:3]) or None)
     reads: list[tuple[str, parsers.ReadResult]] = []
-    left_out: list[str] = inputs.warnings()
+    left_out: list[Note] = inputs.notes()
     for report, from_folder in inputs.files:
         try:
-            reads.append((report, parsers.read_report(report, format=format, **options)))
+            reads.append((report, parsers.read_report(report, **options)))
         except SetupfixError as exc:
             if not from_folder:
                 raise
-            left_out.append(f"{exc}; left out")
+            hint = f" ({exc.hint})" if exc.hint else ""
+            left_out.append(Note(f"{exc.message}{hint}; left out", exc.location, "skipped"))
     if not reads:
         raise ParseError(f"no file of {', '.join(map(str, reports))} is a readable report",
-                         location=SourceLocation(str(reports[0])), hint=left_out[0] if left_out else None)
+                         location=SourceLocation(str(reports[0])), hint=str(left_out[0]) if left_out else None)
     scaffold = scaffold_from_tables([(r, read.table) for r, read in reads], axis=axis,
                                     name=name, parts_are_stations=parts_are_stations)
-    scaffold.notes = left_out + [str(n) for _, read in reads for n in read.notes]
-    return scaffold
+    return dataclasses.replace(scaffold, notes=(*left_out, *(n for _, read in reads for n in read.notes)))
 
 
 def scaffold_from_tables(tables: Sequence[tuple[str, pd.DataFrame]], *, axis: str | None = None,
@@ -267,7 +269,7 @@ def scaffold_from_tables(tables: Sequence[tuple[str, pd.DataFrame]], *, axis: st
     resolution = _resolution(min(bands))
     text = _render(dims, skipped, reports, model_axis, resolution, name, axis)
     origins = Counter(d.axis_from if d.axis_from in ("report", "name") else "none" for d in dims)
-    return Scaffold(text, len(dims), model_axis, skipped,
+    return Scaffold(text, len(dims), model_axis, tuple(skipped),
                     axes_from={k: origins[k] for k in ("report", "name", "none") if origins[k]})
 
 

@@ -30,10 +30,11 @@ from parsers.timestamps import parse_timestamp, to_index
 from setupfix.diagnose import Layout, Series
 from setupfix.diagnose.forecast import spec_of
 from setupfix.diagnose.terms import EffectSpec, applied_at, join_temperatures, parts_since_change
-from setupfix.errors import MatchError, ParseError, SourceLocation, UnknownFormatError
+from setupfix.errors import MatchError, Note, ParseError, SourceLocation, UnknownFormatError
 from setupfix.model import PartMeasurement, ProcessModel, load_model, match_parts, normalise_name
 from setupfix.model.effects import EffectsSection
 from setupfix.pipeline.checks import check_parts
+from setupfix.pipeline.cycles import ReadOptions
 
 __all__ = ["SeriesInput", "TempLog", "load_series", "parse_times", "hours_since", "temperature_arrays",
            "store_temperatures", "report_coordinates"]
@@ -57,7 +58,7 @@ class SeriesInput:
     effects: EffectsSection
     corrections: str | None
     temperatures: str | None
-    notes: tuple[str, ...] = ()
+    notes: tuple[Note, ...] = ()
 
 
 def parse_times(values: Sequence[object], where: str) -> pd.DatetimeIndex:
@@ -122,7 +123,7 @@ def hours_since(times: pd.DatetimeIndex, origin: pd.Timestamp) -> np.ndarray:
 def load_series(model: ProcessModel | str | Path, reports: Sequence[str | Path] = (), *,
                 corrections: str | None = None, temperatures: str | None = None,
                 db: str | Path | None = None, thermal: str | Path | None = None,
-                lenient: bool = False) -> SeriesInput:
+                read: ReadOptions | None = None) -> SeriesInput:
     """Read a series of reports (files, folders, or every report of a history store) with its logs.
 
     With ``db`` the store's reports, corrections log and temperatures are used (files
@@ -130,8 +131,8 @@ def load_series(model: ProcessModel | str | Path, reports: Sequence[str | Path] 
     store's log).  With ``thermal`` (a model saved by ``setupfix thermal fit``) its
     predicted drift over the temperature log becomes one more channel, so the thermal
     candidate tests the thermal slice's model itself (its measured-error column is
-    not used as a channel).  ``lenient`` lets a reader skip a self-contradicting row (a
-    note names its line).
+    not used as a channel).  ``read``: the report reader's options (``lenient`` lets a
+    reader skip a self-contradicting row, a note names its line).
 
     Raises
     ------
@@ -141,7 +142,8 @@ def load_series(model: ProcessModel | str | Path, reports: Sequence[str | Path] 
     if not isinstance(model, ProcessModel):
         model = load_model(model)
     section = model.effects
-    notes: list[str] = []
+    read_options = read if read is not None else ReadOptions()
+    notes: list[Note] = []
     parts: list[PartMeasurement] = []
     tables: list[pd.DataFrame] = []
     log = temps = None
@@ -165,7 +167,7 @@ def load_series(model: ProcessModel | str | Path, reports: Sequence[str | Path] 
                     temps = store_temperatures(stored_t, f"{db}#temperatures")
     if reports:
         inputs = parsers.expand_inputs(reports)
-        notes += [f"warning: {w}" for w in inputs.warnings()]
+        notes += inputs.notes()
         if not inputs.files:
             raise ParseError("no report found", location=SourceLocation(", ".join(str(p) for p in reports)),
                              hint="; ".join(inputs.warnings()[:3]) or None)
@@ -173,20 +175,20 @@ def load_series(model: ProcessModel | str | Path, reports: Sequence[str | Path] 
         found_log, found_temp = inputs.log("corrections"), inputs.log("temperatures")
         if corrections is None and found_log and log is None:
             corrections = found_log
-            notes.append(f"corrections log {found_log} found beside the reports: used")
+            notes.append(Note(f"corrections log {found_log} found beside the reports: used", None, "series"))
         if temperatures is None and found_temp and temps is None:
             temperatures = found_temp
-            notes.append(f"temperature log {found_temp} found beside the reports: used")
+            notes.append(Note(f"temperature log {found_temp} found beside the reports: used", None, "series"))
         for f, from_folder in inputs.files:
             try:
-                read = parsers.read_report(f, lenient=lenient)
+                result = parsers.read_report(f, **read_options.kwargs())
             except UnknownFormatError as exc:
                 if not from_folder:
                     raise
-                notes.append(f"{exc.location}: not a report of a known format; left out")
+                notes.append(Note("not a report of a known format; left out", exc.location, "format"))
                 continue
-            table = read.table
-            notes += [str(n) for n in read.notes]
+            table = result.table
+            notes += result.notes
             parts += check_parts(model, match_parts(model, table, source=f), source=f)
             tables.append(table)
     if not parts:
@@ -194,13 +196,13 @@ def load_series(model: ProcessModel | str | Path, reports: Sequence[str | Path] 
     parts, more = _one_per_part(parts)
     notes += more
     if not corrections and log is None and len(parts) > 1:
-        notes.append(_no_log_note(reports))
+        notes.append(Note(_no_log_note(reports), None, "series"))
     if corrections:
         log = _corrections(corrections, model)
     temp_log = None
     if temperatures:
         temp_log = read_temperature_log(temperatures)
-        notes += [str(n) for n in temp_log.notes]
+        notes += temp_log.notes
         temps = temperature_arrays(temp_log)
     if thermal is not None:
         if temp_log is None or temps is None:
@@ -218,11 +220,12 @@ def load_series(model: ProcessModel | str | Path, reports: Sequence[str | Path] 
                              hint="give --temperatures")
     unmatched = sorted({u for p in parts for u in p.unmatched})
     if unmatched:
-        notes.append(f"{len(unmatched)} characteristic(s) match no dimension: {', '.join(unmatched[:6])}"
-                     + (" …" if len(unmatched) > 6 else ""))
+        notes.append(Note(f"{len(unmatched)} characteristic(s) match no dimension: {', '.join(unmatched[:6])}"
+                          + (" …" if len(unmatched) > 6 else ""), None, "match"))
     layout = Layout.from_model(model, coord=report_coordinates(model, tables))
     if np.isfinite(layout.coord).all() and not all(f.position for f in model.features):
-        notes.append("dimension coordinates for position effects taken from the reports' x, y, z columns")
+        notes.append(Note("dimension coordinates for position effects taken from the reports' x, y, z columns",
+                          None, "series"))
     return SeriesInput(model, layout, series, tuple(_ordered(parts)), declared, section,
                        corrections, temperatures, tuple(notes))
 
@@ -259,7 +262,7 @@ def report_coordinates(model: ProcessModel, tables: Sequence[pd.DataFrame]) -> n
     return out
 
 
-def _with_thermal_prediction(temps: TempLog, thermal: str, log: TemperatureLog) -> tuple[TempLog, list[str]]:
+def _with_thermal_prediction(temps: TempLog, thermal: str, log: TemperatureLog) -> tuple[TempLog, list[Note]]:
     """The temperature channels plus the drift a saved thermal model predicts over the same log."""
     from setupfix.pipeline.thermal import predict_drift
 
@@ -267,13 +270,13 @@ def _with_thermal_prediction(temps: TempLog, thermal: str, log: TemperatureLog) 
     times, samples, channels = temps
     keep = [j for j, c in enumerate(channels) if c != pred.target]
     name = f"{pred.method} prediction"
-    notes = [str(n) for n in pred.notes]
-    notes.append(f"thermal model {thermal} ({pred.method}, {pred.unit or 'unit not stated'}): its prediction is "
-                 f"the channel {name!r}")
+    notes = list(pred.notes)
+    notes.append(Note(f"thermal model {thermal} ({pred.method}, {pred.unit or 'unit not stated'}): its prediction "
+                      f"is the channel {name!r}", None, "thermal"))
     return (times, np.column_stack([samples[:, keep], pred.drift]), (*(channels[j] for j in keep), name)), notes
 
 
-def _one_per_part(parts: list[PartMeasurement]) -> tuple[list[PartMeasurement], list[str]]:
+def _one_per_part(parts: list[PartMeasurement]) -> tuple[list[PartMeasurement], list[Note]]:
     """Each machined part once: reports of the same part and time (the same cycle exported twice, or
     measured twice) would count as independent cycles and make any effect look significant.
 
@@ -284,7 +287,7 @@ def _one_per_part(parts: list[PartMeasurement]) -> tuple[list[PartMeasurement], 
     for i, p in enumerate(parts):
         if p.timestamp is not None:
             last[(p.part, str(p.timestamp))] = i
-    notes: list[str] = []
+    notes: list[Note] = []
     keep = []
     for i, p in enumerate(parts):
         j = last[(p.part, str(p.timestamp))] if p.timestamp is not None else i
@@ -295,8 +298,8 @@ def _one_per_part(parts: list[PartMeasurement]) -> tuple[list[PartMeasurement], 
         both = np.isfinite(p.deviation) & np.isfinite(q.deviation)
         gap = float(np.max(np.abs(p.deviation[both] - q.deviation[both]), initial=0.0))
         same = "the same deviations" if gap <= 1e-9 else f"deviations differing by up to {gap:.4g}"
-        notes.append(f"{p.report}:{p.part} and {q.report}:{q.part} are one part (same name and time {p.timestamp}, "
-                     f"{same}): {q.report} is used once")
+        notes.append(Note(f"{p.report}:{p.part} and {q.report}:{q.part} are one part (same name and time "
+                          f"{p.timestamp}, {same}): {q.report} is used once", None, "series"))
     return keep, notes
 
 
@@ -309,9 +312,9 @@ def _ordered(parts: list[PartMeasurement]) -> list[PartMeasurement]:
 
 def _assemble(model: ProcessModel, parts: list[PartMeasurement],
               log: RegisterLog | None,
-              temps: TempLog | None, where: str) -> tuple[Series, list[str]]:
+              temps: TempLog | None, where: str) -> tuple[Series, list[Note]]:
     """Parts in time order with the corrections in effect, parts since tool changes, temperatures."""
-    notes: list[str] = []
+    notes: list[Note] = []
     layout = Layout.from_model(model)
     stamps = [p.timestamp for p in parts]
     if all(s is None for s in stamps):
@@ -320,7 +323,7 @@ def _assemble(model: ProcessModel, parts: list[PartMeasurement],
                              "tied to the parts", location=SourceLocation(where), hint="add a timestamp column")
         time = np.arange(len(parts), dtype=float)
         origin = ""
-        notes.append("no timestamps: cycles are taken in input order, one hour apart")
+        notes.append(Note("no timestamps: cycles are taken in input order, one hour apart", None, "series"))
         order = np.arange(len(parts))
     else:
         missing = [p for p in parts if p.timestamp is None]
@@ -354,7 +357,8 @@ def _assemble(model: ProcessModel, parts: list[PartMeasurement],
         t_times, samples, channels = temps
         t_h = hours_since(t_times, pd.Timestamp(origin))
         if t_h[0] > time[0]:
-            notes.append("the temperature log starts after the first part: its first sample is used before")
+            notes.append(Note("the temperature log starts after the first part: its first sample is used before",
+                              None, "thermal"))
         temp = join_temperatures(time, t_h, samples)
     series = Series(dev, time, applied, parts_cut, temp, channels, tuple(f"{p.report}:{p.part}" for p in parts),
                     origin, pending)

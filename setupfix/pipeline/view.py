@@ -32,7 +32,7 @@ from setupfix.model import PartMeasurement, ProcessModel, normalise_name
 from setupfix.model.measurements import suggest_names
 from setupfix.objective import margins as objective_margins
 from setupfix.pipeline.compare import Comparison
-from setupfix.pipeline.diagnose import DiagnoseOutcome
+from setupfix.pipeline.diagnose import DiagnoseOutcome, note_text
 from setupfix.pipeline.requests import CycleCorrection
 from setupfix.pipeline.thermal import DriftPrediction
 
@@ -451,5 +451,5 @@ def diagnosis_view(outcome: DiagnoseOutcome) -> DiagnosisView:
         effects=tuple(EffectRow(e.kind, e.target, e.estimate, e.stderr, e.unit, e.rms_after, tuple(e.alike))
                       for e in d.effects),
         walk=walk, next_correction=tuple((k, v) for k, v in outcome.next_correction.items() if v != 0),
-        notes=tuple(str(n) for n in outcome.notes),
+        notes=tuple(note_text(n) for n in outcome.notes),
         budgets=tuple(cycle_budgets(outcome.input.model, outcome.input.parts)))

@@ -16,7 +16,7 @@ from setupfix.model import ProcessModel
 from setupfix.optimize import CorrectionProblem
 from setupfix.pipeline import session, view
 from setupfix.pipeline.compare import Comparison
-from setupfix.pipeline.diagnose import diagnose_reports
+from setupfix.pipeline.diagnose import DiagnoseRequest, diagnose_reports
 from setupfix.pipeline.correct import load_request
 from setupfix.pipeline.requests import CycleOptions, ReadOptions, SolveOptions
 from setupfix.pipeline.session import compare_steps, store_parts
@@ -66,5 +66,6 @@ def history(model: ProcessModel, db: Path) -> tuple[list[view.CycleBudget], list
 
 def diagnose(model: Path, source: Path, store: bool) -> view.DiagnosisView:
     """Thread worker: ``setupfix diagnose`` over the history store or a folder of reports (and its logs)."""
-    outcome = diagnose_reports(model, db=source) if store else diagnose_reports(model, [source])
+    request = DiagnoseRequest(model, db=source) if store else DiagnoseRequest(model, (source,))
+    outcome = diagnose_reports(request)
     return view.diagnosis_view(outcome)

@@ -23,12 +23,12 @@ def _run_json(capsys: pytest.CaptureFixture[str], *extra: str) -> dict:
 def test_json_contract_and_exact_yardstick(capsys: pytest.CaptureFixture[str]) -> None:
     out = _run_json(capsys, "--seed", "7")
     from setupfix.optimize import get_optimizer
-    from setupfix.pipeline.compare import compare_report
+    from setupfix.pipeline.compare import CompareRequest, compare_report
 
     assert set(out) >= {"exact_margin", "results"}
     names = [r["optimizer"] for r in out["results"]]
     assert {"pso", "ga", "coa", "cs"} <= set(names) and "exact" not in names
-    exact = compare_report(MODEL, REPORT, methods=(), trials=1).exact
+    exact = compare_report(CompareRequest(MODEL, methods=(), trials=1), REPORT).exact
     assert out["exact_margin"] == pytest.approx(exact.margin_after, abs=1e-9)
     for r in out["results"]:
         assert set(r) >= {"optimizer", "margins", "norms", "evaluations", "seconds"}

@@ -5,7 +5,7 @@ from __future__ import annotations
 import json
 
 from setupfix.diagnose import Diagnoser
-from setupfix.pipeline.diagnose import diagnose_reports
+from setupfix.pipeline.diagnose import DiagnoseRequest, diagnose_reports
 
 from conftest import GUIDE_PINS, SAMPLES
 
@@ -13,9 +13,9 @@ LOOP = SAMPLES / "closed_loop"
 
 
 def test_simulated_series_reveals_its_undeclared_thermal_effect():
-    out = diagnose_reports(GUIDE_PINS / "model.toml", [LOOP / "measurements.csv"],
-                           corrections=str(LOOP / "corrections.csv"), temperatures=str(LOOP / "temperatures.csv"),
-                           diagnoser=Diagnoser(walk=False))
+    out = diagnose_reports(DiagnoseRequest(
+        GUIDE_PINS / "model.toml", (LOOP / "measurements.csv",), corrections=str(LOOP / "corrections.csv"),
+        temperatures=str(LOOP / "temperatures.csv"), diagnoser=Diagnoser(walk=False)))
     truth = json.loads((LOOP / "truth.json").read_text())["hidden_effects"]
     found = [(e.kind, e.target) for e in out.diagnosis.effects]
     assert found == [(t["kind"], t["target"]) for t in truth]
@@ -29,9 +29,9 @@ def test_real_sheet_metal_offset_only_model_leaves_a_tilt():
     α = 0.01 no tilt is claimed; at α = 0.05 the position effects in x and z are."""
     report = SAMPLES / "qif" / "QIF3_SheetMetal_Results_6_samples.QIF"
     model = LOOP / "sheet_metal" / "model.toml"
-    strict = diagnose_reports(model, [report], diagnoser=Diagnoser(walk=False)).diagnosis
+    strict = diagnose_reports(DiagnoseRequest(model, (report,), diagnoser=Diagnoser(walk=False))).diagnosis
     assert strict.effects == () and strict.selection.lack_of_fit
-    d = diagnose_reports(model, [report], diagnoser=Diagnoser(walk=False, alpha=0.05)).diagnosis
+    d = diagnose_reports(DiagnoseRequest(model, (report,), diagnoser=Diagnoser(walk=False, alpha=0.05))).diagnosis
     assert [(e.kind, e.target) for e in d.effects] == [("position", "x"), ("position", "z")]
     assert d.error_after.out_of_tolerance < d.error_before.out_of_tolerance
     assert d.error_after.rms < 0.7 * d.error_before.rms
@@ -43,6 +43,6 @@ def test_positions_from_the_reports_when_the_model_has_none(tmp_path):
     bare.write_text("\n".join(line for line in text.splitlines() if not line.startswith("position")),
                     encoding="utf-8")
     report = SAMPLES / "qif" / "QIF3_SheetMetal_Results_6_samples.QIF"
-    out = diagnose_reports(bare, [report], diagnoser=Diagnoser(walk=False, alpha=0.05))
+    out = diagnose_reports(DiagnoseRequest(bare, (report,), diagnoser=Diagnoser(walk=False, alpha=0.05)))
     assert [(e.kind, e.target) for e in out.diagnosis.effects] == [("position", "x"), ("position", "z")]
-    assert any("taken from the reports' x, y, z" in n for n in out.notes)
+    assert any("taken from the reports' x, y, z" in str(n) for n in out.notes)

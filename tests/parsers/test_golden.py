@@ -91,7 +91,7 @@ def render_full(table: pd.DataFrame) -> str:
 
     table = table.copy()
     table["source"] = table["source"].map(lambda s: Path(str(s)).name)
-    written = ParseOutcome(reports=[ParsedReport("", "", table)]).table
+    written = ParseOutcome(reports=(ParsedReport("", "", table),)).table
     buffer = io.StringIO()
     written.to_csv(buffer, index=False, float_format=FLOAT_FORMAT, lineterminator="\n")
     return buffer.getvalue()

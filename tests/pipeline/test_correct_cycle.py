@@ -11,10 +11,10 @@ import pytest
 from conftest import GUIDE_PINS, SAMPLES
 from setupfix.diagnose import Diagnoser
 from setupfix.model import PartMeasurement, load_model
-from setupfix.pipeline.compare import compare_report
+from setupfix.pipeline.compare import CompareRequest, compare_report
 from setupfix.pipeline.correct import correct_cycle, correct_report
 from setupfix.pipeline.cycles import load_parts
-from setupfix.pipeline.diagnose import diagnose_reports, forecast_model
+from setupfix.pipeline.diagnose import DiagnoseRequest, diagnose_reports, forecast_model
 from setupfix.pipeline.requests import CorrectRequest, History
 from setupfix.store import open_store
 
@@ -33,7 +33,7 @@ def costed(tmp_path_factory):
 @pytest.mark.parametrize("report", CYCLES, ids=lambda p: p.stem)
 def test_compare_exact_is_corrects_raw_optimum_with_costs(costed, report):
     cycle = correct_report(CorrectRequest(costed), report).cycles[0]
-    comparison = compare_report(costed, report, methods=(), trials=1)
+    comparison = compare_report(CompareRequest(costed, methods=(), trials=1), report)
     raw = cycle.recommendation.result
     np.testing.assert_array_equal(comparison.exact.x, raw.x)
     assert comparison.exact.margin_after == raw.margin_after and comparison.exact.fitness == raw.fitness
@@ -43,9 +43,9 @@ def test_compare_exact_is_corrects_raw_optimum_with_costs(costed, report):
 
 def test_diagnosis_next_correction_is_correct_on_its_forecast():
     loop = SAMPLES / "closed_loop"
-    out = diagnose_reports(GUIDE_PINS / "model.toml", [loop / "measurements.csv"],
-                           corrections=str(loop / "corrections.csv"), temperatures=str(loop / "temperatures.csv"),
-                           diagnoser=Diagnoser(walk=False))
+    out = diagnose_reports(DiagnoseRequest(
+        GUIDE_PINS / "model.toml", (loop / "measurements.csv",), corrections=str(loop / "corrections.csv"),
+        temperatures=str(loop / "temperatures.csv"), diagnoser=Diagnoser(walk=False)))
     fc = out.diagnosis.forecast
     part = PartMeasurement(part="next", report="forecast", timestamp=None, deviation=fc,
                            sources=tuple("" for _ in fc))

@@ -18,7 +18,8 @@ from parsers import list_reports
 from setupfix.cli import main
 from setupfix.errors import MatchError
 from setupfix.model import load_model
-from setupfix.pipeline.history import import_history
+from setupfix.pipeline.diagnose import note_text
+from setupfix.pipeline.history import ImportRequest, import_history
 from setupfix.pipeline.parse import parse_reports
 from setupfix.pipeline.scaffold import scaffold_model
 from setupfix.pipeline.series import load_series
@@ -64,7 +65,7 @@ def _expected(root: Path) -> list[str]:
 def test_parse_reads_the_listed_reports_and_warns_of_the_folder_link(shop, tmp_path, capsys):
     root, _ = shop
     outcome = parse_reports([root])
-    assert [r.path for r in outcome.reports] == _expected(root) and outcome.failures == []
+    assert [r.path for r in outcome.reports] == _expected(root) and list(outcome.failures) == []
     assert [str(n) for n in outcome.problems] == [f"{root / 'folder_link'}: {LINK_PROBLEM}"]
     assert main(["parse", str(root), "--out", str(tmp_path / "all.csv")]) == 0
     assert f"warning: {root / 'folder_link'}: {LINK_PROBLEM}" in capsys.readouterr().err
@@ -75,17 +76,17 @@ def test_model_init_reads_the_listed_reports(shop):
     scaffold = scaffold_model([root])
     head = scaffold.text.splitlines()[0]
     assert head.endswith("from: " + ", ".join(Path(n).name for n in _expected(root)))
-    assert f"{root / 'folder_link'}: {LINK_PROBLEM}" in scaffold.notes
+    assert f"{root / 'folder_link'}: {LINK_PROBLEM}" in map(str, scaffold.notes)
 
 
 def test_history_import_stores_the_listed_reports_and_the_logs_found(shop, tmp_path):
     root, model = shop
     with open_store(tmp_path / "h.db") as store:
-        summary = import_history(store, [root], model=load_model(model))
-        assert summary.new_reports + summary.known_reports == _expected(root)
-        assert summary.known_reports == [str(root / "sub" / "again.txt")]  # the same bytes as the first
+        summary = import_history(store, ImportRequest((root,), model=load_model(model)))
+        assert list(summary.new_reports + summary.known_reports) == _expected(root)
+        assert list(summary.known_reports) == [str(root / "sub" / "again.txt")]  # the same bytes as the first
         assert (summary.corrections, summary.temperatures) == (1, 1)
-        assert f"{root / 'folder_link'}: {LINK_PROBLEM}" in summary.notes
+        assert f"{root / 'folder_link'}: {LINK_PROBLEM}" in map(str, summary.notes)
         assert [r.name for r in store.reports()] == ["bracket_two_parts.txt", "linked.txt"]
 
 
@@ -99,7 +100,7 @@ def test_diagnose_reads_the_listed_reports_and_uses_the_logs_found(shop):
     (root / "temperatures.csv").unlink()
     series = load_series(model, [root])
     assert sorted({p.report for p in series.parts}) == sorted(Path(n).name for n in expected)  # parts name their file
-    assert f"warning: {root / 'folder_link'}: {LINK_PROBLEM}" in series.notes
+    assert f"warning: {root / 'folder_link'}: {LINK_PROBLEM}" in [note_text(n) for n in series.notes]
     assert series.series.n_cycles == 5  # parts 0041 and 0042 twice (root and sub-folder), 0043 (linked)
 
 

@@ -260,7 +260,7 @@ def test_a_folder_stands_for_its_files_and_unreadable_ones_are_left_out_with_a_n
     (folder / "cycle_01.csv").write_bytes((GUIDE_PINS / "cycle_01.csv").read_bytes())
     (folder / "notes.txt").write_text("not a report\n", encoding="utf-8")
     scaffold = scaffold_model([folder])
-    assert scaffold.dimensions == 28 and any("notes.txt" in n and "left out" in n for n in scaffold.notes)
+    assert scaffold.dimensions == 28 and any("notes.txt" in str(n) and "left out" in str(n) for n in scaffold.notes)
     (folder / "cycle_01.csv").unlink()
     with pytest.raises(SetupfixError, match=r"no file of .* is a readable report"):
         scaffold_model([folder])

@@ -16,7 +16,7 @@ import pytest
 from setupfix.cli import main
 from setupfix.errors import ParseError, StoreError
 from setupfix.model import CANONICAL_COLUMNS
-from setupfix.pipeline.history import import_history
+from setupfix.pipeline.history import ImportRequest, import_history
 from setupfix.pipeline.parse import parse_reports
 from setupfix.store import Recommendation, open_store
 from setupfix.store._schema import SCHEMA_VERSION, migrate, version_of
@@ -41,10 +41,10 @@ def _log(tmp_path, text=LOG, name="corr.csv"):
 def test_import_twice_changes_nothing_and_rows_come_back(tmp_path):
     db, log = tmp_path / "h.db", _log(tmp_path)
     with open_store(db) as store:
-        first = import_history(store, REPORTS, [log], [TEMPS])
-        again = import_history(store, REPORTS, [log], [TEMPS])
+        first = import_history(store, ImportRequest(tuple(REPORTS), (log,), (TEMPS,)))
+        again = import_history(store, ImportRequest(tuple(REPORTS), (log,), (TEMPS,)))
         assert len(first.new_reports) == 5 and first.corrections == 2 and first.temperatures > 0
-        assert again.new_reports == [] and len(again.known_reports) == 5
+        assert list(again.new_reports) == [] and len(again.known_reports) == 5
         assert again.corrections == again.temperatures == 0
         back = store.measurements()
     table = parse_reports(REPORTS).table
@@ -58,7 +58,7 @@ def test_import_twice_changes_nothing_and_rows_come_back(tmp_path):
 def test_logs_round_trip_and_contradictions_are_refused(tmp_path):
     db = tmp_path / "h.db"
     with open_store(db) as store:
-        import_history(store, corrections=[_log(tmp_path)], temperatures=[TEMPS])
+        import_history(store, ImportRequest(corrections=(_log(tmp_path),), temperatures=(TEMPS,)))
         log = store.corrections()
         assert log.to_dict("list")["register"] == ["G54", "T23"]
         assert log["delta"].iloc[0] == 0.012 and np.isnan(log["delta"].iloc[1])
@@ -68,11 +68,11 @@ def test_logs_round_trip_and_contradictions_are_refused(tmp_path):
             np.testing.assert_array_equal(temps[col].to_numpy(), source[col].to_numpy(float))
         other = _log(tmp_path, LOG.replace("0.012", "0.013"), "other.csv")
         with pytest.raises(StoreError, match=r"G54.*contradicts the stored one"):
-            import_history(store, REPORTS, [other])
+            import_history(store, ImportRequest(tuple(REPORTS), (other,)))
         twice = _log(tmp_path, LOG + "2026-11-02T09:00:00,G54,0.02,\n", "twice.csv")
         with pytest.raises(ParseError, match=r"twice.csv:4: G54 correction at 2026-11-02T09:00:00 given twice "
                                              r"\(also at line 2\)"):  # the reader names it, as every door does
-            import_history(store, corrections=[twice])
+            import_history(store, ImportRequest(corrections=(twice,)))
     assert _counts(db)[:3] == (0, 0, 2)  # the reports of the refused import were not stored either
 
 
@@ -81,9 +81,9 @@ def test_a_bad_file_stores_nothing(tmp_path):
     bad.write_text("characteristic,nominal,actual\nD1,1.0,abc\n")
     with open_store(tmp_path / "h.db") as store:
         with pytest.raises(ParseError, match=r"bad.csv:2"):
-            import_history(store, [*REPORTS, bad])
+            import_history(store, ImportRequest((*REPORTS, bad)))
         with pytest.raises(ParseError, match=r"corr.csv:3: unknown event"):
-            import_history(store, REPORTS, [_log(tmp_path, LOG.replace("tool_change", "wear"))])
+            import_history(store, ImportRequest(tuple(REPORTS), (_log(tmp_path, LOG.replace("tool_change", "wear")),)))
         assert store.reports() == []
 
 
@@ -104,7 +104,7 @@ with store.transaction():  # what one import does: reports, then the logs
 def test_kill_during_import_leaves_the_store_as_it_was(tmp_path):
     db = tmp_path / "h.db"
     with open_store(db) as store:
-        import_history(store, REPORTS[:1])
+        import_history(store, ImportRequest(tuple(REPORTS[:1])))
     args = [sys.executable, "-c", KILL, str(db)]
     proc = subprocess.run(args, cwd=ROOT, capture_output=True, text=True, timeout=60)
     assert proc.returncode == -signal.SIGKILL, proc.stderr
@@ -124,7 +124,7 @@ with open_store(sys.argv[1]) as s:
 def test_readers_see_the_last_commit_while_another_process_writes(tmp_path):
     db = tmp_path / "h.db"
     with open_store(db) as store:
-        import_history(store, REPORTS[:1])
+        import_history(store, ImportRequest(tuple(REPORTS[:1])))
         with store.transaction():
             store.add_report(REPORTS[1].read_bytes(), "c2", "canonical", parse_reports(REPORTS[1:2]).table)
             out = subprocess.run([sys.executable, "-c", READER, str(db)], cwd=ROOT, capture_output=True,
@@ -210,7 +210,7 @@ def test_a_truncated_report_is_refused_and_nothing_stored(tmp_path):
     cut.write_bytes(REPORTS[0].read_bytes()[:322])  # ends inside a row: "P1 D4,30.0000,29."
     with open_store(tmp_path / "h.db") as store:
         with pytest.raises(ParseError, match=r"cut.csv.*truncated"):
-            import_history(store, [REPORTS[1], cut])
+            import_history(store, ImportRequest((REPORTS[1], cut)))
         assert store.reports() == []
 
 

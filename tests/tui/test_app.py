@@ -178,12 +178,12 @@ def test_a_folder_is_watched_and_the_newest_finished_report_opened(make_app, tmp
 
 
 def test_history_from_the_store_one_key_diagnose_and_the_export_recorded(make_app, tmp_path):
-    from setupfix.pipeline.history import import_history
+    from setupfix.pipeline.history import ImportRequest, import_history
     from setupfix.store import open_store
 
     db = tmp_path / "h.db"
     with open_store(db) as store:
-        import_history(store, sorted(GUIDE_PINS.glob("cycle_0*.csv")))
+        import_history(store, ImportRequest(tuple(sorted(GUIDE_PINS.glob("cycle_0*.csv")))))
 
     async def scenario():
         app = make_app(db=db)
