@@ -317,7 +317,9 @@ def run_batch(request: CorrectRequest, folder: str | Path, out: str | Path, *, w
                         try:
                             _record(store, outcome, request.solve)
                         except SetupfixError as exc:  # its offsets stand; it is corrected again next run
-                            outcome.notes.append(Note(exc.message, exc.location, "store"))
+                            note = Note(exc.message, exc.location, "store")
+                            outcome.notes.append(note)
+                            summary.notes.append((outcome.path, note))  # counted above: said here
                     outcome.data, outcome.table = b"", None
                 if progress is not None:
                     progress(i, len(files), outcome)

@@ -204,3 +204,25 @@ def test_ewma_over_the_store_and_the_batch_does_not_depend_on_workers(tmp_path):
             for row in cycle_rows(c)]
     lines = (tmp_path / "w1.csv").read_text().splitlines()[1:]
     assert [line.split(",")[1:] for line in lines] == [line.split(",")[1:] for line in csv_lines(rows).splitlines()]
+
+
+def test_a_report_the_store_refuses_is_said_in_the_summary(tmp_path, monkeypatch):
+    """Its offsets stand (it is corrected again next run), and the summary names why it was not stored."""
+    from setupfix.errors import StoreError
+    from setupfix.pipeline import batch
+
+    d = folder(tmp_path)
+    real = batch._record
+
+    def refuse_one(store, outcome, solve):  # type: ignore[no-untyped-def]
+        if Path(outcome.path).name == "cycle_02.csv":
+            raise StoreError("the store is full", location=None)
+        return real(store, outcome, solve)
+
+    monkeypatch.setattr(batch, "_record", refuse_one)
+    with open_store(tmp_path / "h.db") as store:
+        s = run_batch(REQUEST, d, tmp_path / "offsets.csv", settle=0, store=store)
+        assert len(store.reports()) == 3
+    assert s.reports == 4
+    said = [(Path(f).name, str(n)) for f, n in s.notes if n.kind == "store"]
+    assert said == [("cycle_02.csv", "the store is full")]
