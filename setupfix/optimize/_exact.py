@@ -146,6 +146,10 @@ class ExactOptimizer(Optimizer):
         self.settings = settings
 
     def solve(self, problem: CorrectionProblem) -> OptimizeResult:
+        # What the stages import lazily (to keep `import setupfix` light) is imported before the clock
+        # starts: the first solve of a process would otherwise spend ~0.1 s of its time limit on it.
+        import scipy.optimize  # noqa: F401 - loaded for _grid.nnls_least_distance, outside the clock
+
         with _blas_single_thread():  # small solves: BLAS threads only contend
             return self._solve(problem)
 

@@ -75,3 +75,32 @@ def test_each_run_of_one_highs_model_has_its_own_time_limit():
         statuses.add(run.status)
         assert run.seconds < 0.05
     assert statuses == {"optimal"}
+
+
+def test_the_first_solve_of_a_process_imports_before_its_clock_starts():
+    """scipy.optimize (NNLS, imported lazily by the stages) is loaded before the time limit starts counting."""
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    code = """
+import sys
+import setupfix.optimize._exact as exact
+from setupfix.model import load_model
+from setupfix.optimize import CorrectionProblem, get_optimizer
+from setupfix.pipeline.cycles import load_parts
+seen = []
+class Watched(exact.Clock):
+    def __init__(self, limit):
+        seen.append("scipy.optimize" in sys.modules)
+        super().__init__(limit)
+exact.Clock = Watched
+m = load_model("sample_reports/guide_pins/model.toml")
+p = load_parts(m, "sample_reports/guide_pins/cycle_01.csv")[0]
+assert "scipy.optimize" not in sys.modules, "the test needs a process that has not loaded it yet"
+get_optimizer("exact").solve(CorrectionProblem.from_part(m, p))
+print(seen)
+"""
+    root = Path(__file__).resolve().parents[2]
+    out = subprocess.run([sys.executable, "-c", code], cwd=root, capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "[True]"
