@@ -94,7 +94,7 @@ def offset_rows(model: ProcessModel, corrections: Mapping[str, float], *, report
     """Rows for every correctable (non-fixed) register of ``model``, in model order.
 
     ``current`` maps register IDs to the controller's current values (all of them:
-    see :func:`setupfix.pipeline.controllers.read_current`); rows become ``set`` rows.
+    see :func:`parsers.current.read_current`); rows become ``set`` rows.
 
     Raises
     ------

@@ -43,7 +43,7 @@ def _encoding(text: str) -> str:
 
 
 def run(args: argparse.Namespace) -> int:
-    from setupfix.pipeline.parse import note_line, parse_reports
+    from setupfix.pipeline.parse import parse_reports
     from setupfix.pipeline.writers import check_target, write_canonical_csv
 
     check_target(args.out)
@@ -52,9 +52,9 @@ def run(args: argparse.Namespace) -> int:
         for line in report.warnings:
             print(f"warning: {line}", file=sys.stderr)
     for note in outcome.problems:
-        print(f"warning: {note_line(note)}", file=sys.stderr)
+        print(f"warning: {note}", file=sys.stderr)
     for note in outcome.skipped:
-        print(f"note: {note_line(note)}", file=sys.stderr)
+        print(f"note: {note}", file=sys.stderr)
     for failure in outcome.failures:
         print(f"error: {failure}", file=sys.stderr)
     if not outcome.reports:

@@ -21,7 +21,7 @@ from setupfix.pipeline.cycles import ReadOptions
 from setupfix.pipeline.writers import FLOAT_FORMAT, write_canonical_csv  # noqa: F401 - re-exported
 
 __all__ = ["ParsedReport", "ParseOutcome", "parse_reports", "write_canonical_csv",
-           "OUTPUT_COLUMNS", "list_formats", "note_line"]
+           "OUTPUT_COLUMNS", "list_formats"]
 
 #: Columns ``setupfix parse`` writes: the canonical ones, then the reference-only flag.
 OUTPUT_COLUMNS: tuple[str, ...] = (*CANONICAL_COLUMNS, "reference")
@@ -39,12 +39,7 @@ class ParsedReport:
     @property
     def warnings(self) -> tuple[str, ...]:
         """The notes as one line each (``file:line: message``)."""
-        return tuple(note_line(n) for n in self.notes)
-
-
-def note_line(note: Note) -> str:
-    """One line for a note: ``file:line: message``."""
-    return f"{note.location}: {note.message}" if note.location else note.message
+        return tuple(str(n) for n in self.notes)
 
 
 @dataclass(frozen=True, eq=False)

@@ -159,8 +159,8 @@ class CurrentOffsets(Mapping[str, float]):
 
     @classmethod
     def read(cls, path: str | Path, model: ProcessModel) -> CurrentOffsets:
-        """Read a ``register,value`` file (:func:`setupfix.pipeline.controllers.read_current`)."""
-        from setupfix.pipeline.controllers import read_current
+        """Read a ``register,value`` file (:func:`parsers.current.read_current`, the one reader)."""
+        from parsers.current import read_current
 
         return cls.of(read_current(path, model), str(path))
 

@@ -15,7 +15,8 @@ import pytest
 from setupfix.errors import ExportError
 from setupfix.model import load_model, model_from_dict
 from setupfix.offsets import offset_rows
-from setupfix.pipeline.controllers import CONTROLLERS, read_current, render
+from parsers.current import read_current
+from setupfix.pipeline.controllers import CONTROLLERS, render
 from setupfix.pipeline.correct import correct_report
 from setupfix.pipeline.requests import CorrectRequest
 

@@ -5,7 +5,7 @@
 programs), ``siemens`` (840D part program with system variables) and
 ``heidenhain`` (preset and tool table values).  Every renderer raises
 :class:`~setupfix.errors.ExportError` naming a register it cannot express, so no
-file is written half right.  :func:`read_current` reads the controller's current
+file is written half right.  :func:`parsers.current.read_current` reads the controller's current
 offsets (``register,value``) that turn *add* rows into absolute *set* rows.
 """
 
@@ -16,9 +16,8 @@ from collections.abc import Callable, Sequence
 
 from setupfix.errors import ParameterError
 from setupfix.offsets import OffsetRow
-from parsers.current import read_current
 
-__all__ = ["CONTROLLERS", "render", "renderer", "read_current", "Renderer", "write_offsets"]
+__all__ = ["CONTROLLERS", "render", "renderer", "Renderer", "write_offsets"]
 
 Renderer = Callable[[Sequence[OffsetRow], str], str]
 
