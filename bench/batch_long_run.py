@@ -1,0 +1,111 @@
+"""A long batch in one process gives every report the answer it gets alone (issue 21, item 1).
+
+Before issue 20's per-solve session, the HiGHS models kept across reports summed their run
+clocks, so after a few thousand reports in one process every solve stopped at its limit and
+the report read "hold". This bench writes ``--reports`` guide-pins reports, each with its own
+deviations (``bench/batch_throughput.py --vary``: each actual moved by a seeded uniform step in
+±0.005 mm), corrects them with ONE ``setupfix batch --workers 1`` process, and corrects each
+report again *alone*: in a fresh forked process per report (a pool with ``maxtasksperchild=1``,
+forked from a parent that has solved nothing), through the same use case (``correct_report``)
+and offsets policy (``cycle_rows``). Every offset row (report, part, register, delta, verdict)
+is compared; the statuses of the lone solves are counted.
+
+    python bench/batch_long_run.py                # 6,000 reports
+    python bench/batch_long_run.py --reports 500
+
+Writes ``bench/results/batch_long_run.txt``. Threads: OPENBLAS/MKL/OMP = 1, HiGHS 1 thread.
+The reference timed in the same run is the in-process ``correct_report`` of
+``bench/batch_throughput.py``; the batch's time per report is given as a ratio to it.
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import multiprocessing as mp
+import os
+import sys
+import tempfile
+import time
+from collections import Counter
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(ROOT / "bench"))
+os.environ.update(OPENBLAS_NUM_THREADS="1", MKL_NUM_THREADS="1", OMP_NUM_THREADS="1")
+
+from batch_throughput import GUIDE, make_reports, reference, run
+
+from setupfix.model import load_model
+from setupfix.pipeline.correct import correct_report
+from setupfix.pipeline.export import cycle_rows
+from setupfix.pipeline.requests import CorrectRequest
+
+RESULTS = ROOT / "bench" / "results"
+Key = tuple[str, str, str]
+
+
+def alone(path: str) -> tuple[str, list[tuple[Key, str, str]], list[str]]:
+    """One report corrected in this (fresh) process: its offset rows and the solver statuses."""
+    outcome = correct_report(CorrectRequest(load_model(GUIDE / "model.toml")), Path(path))
+    rows, statuses = [], []
+    for cycle in outcome.cycles:
+        statuses.append(cycle.result.status)
+        for row in cycle_rows(cycle):
+            rows.append(((Path(path).name, row.part, row.id), f"{row.delta:.3f}", row.verdict))
+    return path, rows, statuses
+
+
+def batch_rows(out: Path) -> dict[Key, tuple[str, str]]:
+    with out.open(newline="") as handle:
+        return {(Path(r["report"]).name, r["part"], r["id"]): (f"{float(r['delta']):.3f}", r["verdict"])
+                for r in csv.DictReader(handle)}
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--reports", type=int, default=6000)
+    args = ap.parse_args()
+    n = args.reports
+    with tempfile.TemporaryDirectory() as tmp:
+        folder = Path(tmp) / "reports"
+        folder.mkdir()
+        make_reports(folder, n, vary=True)
+        files = sorted(str(p) for p in folder.iterdir())
+        ctx = mp.get_context("fork")
+        t = time.perf_counter()
+        with ctx.Pool(2, maxtasksperchild=1) as pool:  # forked before this process solves anything
+            lone = pool.map(alone, files, chunksize=1)
+        lone_seconds = time.perf_counter() - t
+        out = Path(tmp) / "offsets.csv"
+        seconds = run(folder, out, 1)
+        ref = reference()
+        got = batch_rows(out)
+    statuses: Counter[str] = Counter()
+    expected: dict[Key, tuple[str, str]] = {}
+    for _, rows, stats in lone:
+        statuses.update(stats)
+        expected.update({key: (delta, verdict) for key, delta, verdict in rows})
+    differ = [k for k in expected if got.get(k) != expected[k]]
+    missing_reports = {k[0] for k in expected} - {k[0] for k in got}
+    first_bad = min((int(k[0][1:6]) for k in differ), default=None)
+    lines = [
+        f"$ python bench/batch_long_run.py --reports {n}",
+        f"{n} guide-pins reports (28 dimensions, 10 registers), each with its own deviations; "
+        "OPENBLAS/MKL/OMP threads = 1, HiGHS 1 thread; machine: busy 2-core box",
+        f"batch, one process, --workers 1: {seconds:.1f} s = {seconds / n * 1000:.2f} ms per report "
+        f"= {seconds / n / ref:.2f}× the reference (in-process correct_report, {ref * 1000:.2f} ms)",
+        f"alone (a fresh forked process per report, 2 at a time): {lone_seconds:.1f} s; "
+        f"statuses {dict(sorted(statuses.items()))}",
+        f"offset rows compared: {len(expected)}; differing: {len(differ)}; reports missing from the batch: "
+        f"{len(missing_reports)}" + (f"; first differing report r{first_bad:05d}" if differ else ""),
+        "verdict: " + ("every report gets exactly the answer it gets alone"
+                       if not differ and not missing_reports else "DIFFERENT ANSWERS"),
+    ]
+    (RESULTS / "batch_long_run.txt").write_text("\n".join(lines) + "\n")
+    print("\n".join(lines))
+
+
+if __name__ == "__main__":
+    main()
