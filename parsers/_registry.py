@@ -252,7 +252,7 @@ def _last_line_holds_no_data(spec: FormatSpec, source: Source, options: dict[str
         return False
     try:
         with collecting():
-            shorter = spec.read(Source(source.name, source.data[: cut + 1]), **options)
+            shorter = spec.read(Source(source.name, source.data[: cut + 1], source.file), **options)
     except SetupfixError:
         return False
     return row_keys(shorter) == row_keys(table)

@@ -42,13 +42,15 @@ from typing import Any
 import pandas as pd
 
 import parsers
+from parsers.names import visible_name
 from setupfix.errors import ExportError, Note, ParameterError, SetupfixError, SourceLocation
 from setupfix.model import PartMeasurement, match_parts
-from setupfix.offsets import OffsetRow, csv_header, csv_lines, offset_rows
+from setupfix.offsets import OffsetRow, offset_rows
 from setupfix.pipeline.controllers import render
 from setupfix.pipeline.correct import correct_report
 from setupfix.pipeline.export import cycle_rows, offsets_text
 from setupfix.pipeline.requests import CorrectRequest, History, SolveOptions
+from setupfix.pipeline.writers import atomic_write, check_target, csv_header, csv_lines, write_text
 from setupfix.store import Recommendation as StoreRecommendation
 from setupfix.store import Store
 
@@ -351,7 +353,7 @@ def _batch_reports(store: Store) -> set[str]:
 def _record(store: Store, outcome: Outcome, solve: SolveOptions) -> None:
     """Add the report (the bytes and table the worker corrected, not a second reading) and its recommendations."""
     assert outcome.table is not None
-    sha, _ = store.add_report(outcome.data, Path(outcome.path).name, outcome.format, outcome.table)
+    sha, _ = store.add_report(outcome.data, visible_name(Path(outcome.path).name), outcome.format, outcome.table)
     by_part: dict[str, dict[str, float]] = {}
     for row in outcome.rows:
         by_part.setdefault(row.part, {})[row.id] = row.delta
@@ -388,8 +390,6 @@ class _CsvOut:
     """One offsets CSV, streamed into a temporary file renamed over the target at the end."""
 
     def __init__(self, target: str | Path) -> None:
-        from setupfix.pipeline.writers import atomic_write, check_target
-
         check_target(target)
         self._cm = atomic_write(target)
         self._rows = 0
@@ -434,8 +434,6 @@ class _ProgramsOut:
         return self
 
     def add(self, outcome: Outcome) -> None:
-        from setupfix.pipeline.writers import write_text
-
         stem = Path(outcome.path).stem
         for part, text in outcome.programs:
             suffix = "" if len(outcome.parts) == 1 else "_" + "".join(c if c.isalnum() else "_" for c in part)

@@ -182,7 +182,7 @@ def test_ewma_over_the_store_and_the_batch_does_not_depend_on_workers(tmp_path):
     from setupfix.pipeline.correct import correct_report
     from setupfix.pipeline.export import cycle_rows
     from setupfix.pipeline.requests import History
-    from setupfix.offsets import csv_lines
+    from setupfix.pipeline.writers import csv_lines
 
     model_path = tmp_path / "ewma.toml"
     model_path.write_text((GUIDE / "model.toml").read_text() + "\n[safety]\newma = 0.5\n")
