@@ -79,8 +79,22 @@ def _one_line_warning(message: Warning | str, category: type[Warning], filename:
     print(f"warning: {message}", file=sys.stderr)
 
 
+def _safe_streams() -> None:
+    """Standard output and error never fail on a character they cannot encode (a file name that
+    is not UTF-8 is shown escaped, never an ``internal error``); names the commands print go through
+    :func:`setupfix.cli._common.shown` first, this is the net below it."""
+    for stream in (sys.stdout, sys.stderr):
+        reconfigure = getattr(stream, "reconfigure", None)
+        if reconfigure is not None and getattr(stream, "errors", "") in ("strict", None):
+            try:
+                reconfigure(errors="backslashreplace")
+            except (ValueError, OSError):  # a stream that cannot change: left as it is
+                pass
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the command line; return the exit status."""
+    _safe_streams()
     with warnings.catch_warnings():
         warnings.showwarning = _one_line_warning
         return _main(argv)

@@ -9,7 +9,7 @@ from types import FrameType
 from typing import TYPE_CHECKING
 
 from setupfix.cli._choices import CONTROLLERS, OPTIMIZERS
-from setupfix.cli._common import add_report_options, add_thermal_options, whole_number
+from setupfix.cli._common import add_report_options, add_thermal_options, shown, whole_number
 from setupfix.cli.exit_codes import OK, PARTIAL, REJECTED
 
 if TYPE_CHECKING:
@@ -79,7 +79,7 @@ def run(args: argparse.Namespace) -> int:
         json.dump(summary.to_json(), sys.stdout, indent=2)
         sys.stdout.write("\n")
     else:
-        sys.stdout.write(format_batch_summary(summary, args.out) + "\n")
+        sys.stdout.write(format_batch_summary(summary, shown(args.out)) + "\n")
     return _status(summary)
 
 
@@ -115,7 +115,7 @@ class _Progress:
             return
         state = ("FAILED" if outcome.error else f"skipped ({outcome.skipped})" if outcome.skipped
                  else ", ".join(outcome.verdicts) or "no part")
-        print(f"[{done}/{total}] {outcome.path}: {state}", file=sys.stderr)
+        print(f"[{done}/{total}] {shown(outcome.path)}: {state}", file=sys.stderr)
 
     def __exit__(self, *exc: object) -> None:
         if self.bar is not None:
