@@ -12,7 +12,7 @@ apply the change twice.  Writing the rows in a file format is
 from __future__ import annotations
 
 import math
-from collections.abc import Iterable, Mapping
+from collections.abc import Mapping
 from dataclasses import dataclass
 
 from setupfix.errors import MatchError

@@ -11,6 +11,7 @@ calls into :mod:`setupfix.pipeline`.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import importlib
 import sys
 import warnings
@@ -86,10 +87,8 @@ def _safe_streams() -> None:
     for stream in (sys.stdout, sys.stderr):
         reconfigure = getattr(stream, "reconfigure", None)
         if reconfigure is not None and getattr(stream, "errors", "") in ("strict", None):
-            try:
+            with contextlib.suppress(ValueError, OSError):  # a stream that cannot change: left as it is
                 reconfigure(errors="backslashreplace")
-            except (ValueError, OSError):  # a stream that cannot change: left as it is
-                pass
 
 
 def main(argv: Sequence[str] | None = None) -> int:

@@ -45,7 +45,7 @@ def test_batch_names_every_hostile_file_and_writes_the_good_ones(tmp_path, capsy
         code = main(["batch", str(d), "--model", MODEL, "--out", str(tmp_path / "o.csv"), "--settle", "0"])
     finally:
         unlock(d)
-    out, err = capsys.readouterr()
+    err = capsys.readouterr().err
     assert code == 4 and "internal error" not in err and "Traceback" not in err
     errors = [line for line in err.splitlines() if line.startswith("error:")]
     for case in CASES:

@@ -100,7 +100,8 @@ def test_link_loops_are_named_never_followed(tmp_path):
     problems = dict(list_reports(tmp_path).problems)
     assert problems == {str(tmp_path / "sub" / "up"): "link to a folder: not followed",
                         str(tmp_path / "self.csv"): "symbolic link loop",
-                        str(tmp_path / "ping.csv"): "symbolic link loop", str(tmp_path / "pong.csv"): "symbolic link loop"}
+                        str(tmp_path / "ping.csv"): "symbolic link loop",
+                        str(tmp_path / "pong.csv"): "symbolic link loop"}
 
 
 @pytest.mark.skipif(os.geteuid() == 0, reason="root reads a chmod 000 folder")
