@@ -71,8 +71,9 @@ def run(args: argparse.Namespace) -> int:
                                 force=args.force)
     finally:
         signal.signal(signal.SIGTERM, previous)
-    for path, note in summary.notes:
-        print(f"warning: {path}: {note}", file=sys.stderr)
+    for path, note in summary.notes:  # a note that names its file is printed as it is (not the path twice)
+        text = str(note)
+        print(f"warning: {text if text.startswith(path) else f'{path}: {text}'}", file=sys.stderr)
     for path, reason in summary.failed:
         print(f"error: {reason if path in reason else f'{path}: {reason}'}", file=sys.stderr)
     if args.json:

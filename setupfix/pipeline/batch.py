@@ -475,7 +475,7 @@ class _ProgramsOut:
 
     def _replace(self, rel: str, names: list[str]) -> None:
         for old in self.manifest.get(rel, []):
-            if old not in names:
+            if old not in names and old not in self._owner:  # never a program this run wrote for another report
                 _remove_inside(self.folder, old)
         if self.manifest.get(rel, []) != names:
             self._changed = True

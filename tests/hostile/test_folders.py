@@ -56,6 +56,7 @@ def test_batch_names_every_hostile_file_and_writes_the_good_ones(tmp_path, capsy
     if os.geteuid() != 0:
         assert any(line.endswith("locked: cannot list folder: permission denied") for line in errors)
     assert f"warning: {d / 'linked.csv'}: symbolic link to" in err
+    assert not any(len(p := line.split(": ")) > 2 and p[1] == p[2] for line in err.splitlines())  # path said once
     reports = {line.split(",")[0] for line in (tmp_path / "o.csv").read_text().splitlines()[1:]}
     assert {"good.csv", "linked.csv"} <= reports
 
