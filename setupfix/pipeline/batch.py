@@ -15,7 +15,9 @@ Design for thousands of reports:
   output as soon as it is done, in the sorted order of the files, so memory does
   not grow with the number of reports and the numbers do not depend on
   ``workers``;
-* a file that fails is named with its reason and skipped; the others go on;
+* a file that fails is named with its reason and skipped; the others go on (a file
+  removed between the listing and its reading too); every path the summary holds is
+  printable (:func:`parsers.names.visible_name`);
 * a file whose size or modification time changes between discovery and reading
   (still being copied by the CMM) is not read;
 * the same content twice (SHA-256) is corrected once; with a history store,
@@ -264,7 +266,10 @@ def run_batch(request: CorrectRequest, folder: str | Path, out: str | Path, *, w
         with every reader; what cannot be listed is named in ``failed``.
     out : path
         The offsets CSV (written atomically: complete or absent), or with a
-        ``controller`` other than csv a folder receiving one program per cycle.
+        ``controller`` other than csv a folder receiving one program per cycle, at
+        :func:`~setupfix.pipeline.controllers.program_path` of the report's path below
+        ``folder``; its manifest (:data:`MANIFEST`) lets a report that yields no program
+        this run (rejected, refused, a copy of another) remove those of an earlier run.
     workers : int or None
         Processes (1: in this process; None: :func:`auto_workers`).  Results do not
         depend on it.
