@@ -20,6 +20,7 @@ from parsers._notes import collecting
 from parsers._rowkeys import row_keys
 from parsers._verdicts import verdict_notes
 from parsers._source import NO_FINAL_LINE_BREAK, Peek, Source, load_source, peek
+from parsers.names import visible_name
 from setupfix.errors import (Note, ParameterError, ParseError, ParseWarning, SetupfixError, SourceLocation,
                              UnknownFormatError)
 
@@ -224,6 +225,7 @@ def read_report(path: str | Path | Source, *, format: str | None = None, **optio
         if missing == NO_FINAL_LINE_BREAK and not _last_line_holds_no_data(spec, source, options, table):
             raise _truncated(spec, source, missing)
     except SetupfixError as exc:
+        exc.message = visible_name(exc.message)  # a message quoting the file's bytes stays one printable line
         if missing and exc.message.startswith(missing):
             raise
         if missing:
@@ -252,7 +254,7 @@ def _last_line_holds_no_data(spec: FormatSpec, source: Source, options: dict[str
         return False
     try:
         with collecting():
-            shorter = spec.read(Source(source.name, source.data[: cut + 1]), **options)
+            shorter = spec.read(Source(source.name, source.data[: cut + 1], source.file), **options)
     except SetupfixError:
         return False
     return row_keys(shorter) == row_keys(table)

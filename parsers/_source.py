@@ -5,6 +5,7 @@ from __future__ import annotations
 import codecs
 import csv
 import io
+import os
 import re
 import sys
 from collections.abc import Callable, Iterator
@@ -13,6 +14,7 @@ from pathlib import Path
 from typing import BinaryIO
 
 from parsers import numbers
+from parsers.names import visible_name
 from setupfix.errors import ParseError, SourceLocation
 
 __all__ = ["Peek", "Source", "check_encoding", "STDIN", "load_source", "peek", "peek_file", "decode", "read_bytes",
@@ -115,19 +117,22 @@ class Source:
 
     Every reader takes a :class:`Source` (or a path, read here into one); the sniffers
     and the reader see the same bytes, so a pipe (``/dev/stdin``, ``<(…)``) is read in
-    full once and nothing is lost to a second open.
+    full once and nothing is lost to a second open.  ``name`` is printable
+    (:func:`parsers.names.visible_name` of the path); ``file`` is the path as opened,
+    for files read beside it (a QIF plan, a PiWeb characteristics file).
     """
 
     name: str
     data: bytes
+    file: str = ""
 
     def __str__(self) -> str:
         return self.name
 
     @property
     def path(self) -> Path:
-        """The name as a path (meaningless for stdin)."""
-        return Path(self.name)
+        """The path the bytes were read from (meaningless for stdin)."""
+        return Path(self.file or self.name)
 
     @property
     def is_stdin(self) -> bool:
@@ -158,17 +163,17 @@ def load_source(path: str | Path | Source) -> Source:
     """
     if isinstance(path, Source):
         return path
-    name = str(path)
+    name = os.fspath(path)
     if name == STDIN:
         return Source(name, _read_limited(sys.stdin.buffer, "<stdin>"))
     try:
         with open(path, "rb") as fh:
-            data = _read_limited(fh, name)
+            data = _read_limited(fh, visible_name(name))
     except IsADirectoryError:
-        raise ParseError("is a folder, not a report", location=SourceLocation(name)) from None
+        raise ParseError("is a folder, not a report", location=SourceLocation(visible_name(name))) from None
     except OSError as exc:
-        raise ParseError(f"cannot read: {exc.strerror or exc}", location=SourceLocation(name)) from None
-    return Source(name, data)
+        raise ParseError(f"cannot read: {exc.strerror or exc}", location=SourceLocation(visible_name(name))) from None
+    return Source(visible_name(name), data, name)
 
 
 def read_bytes(path: str | Path | Source) -> bytes:

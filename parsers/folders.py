@@ -11,17 +11,27 @@ reports.  The policy:
   process model, notes, scripts, the history store, figures), partial downloads and
   editor files (:data:`PARTIAL_SUFFIXES`), and the series logs, which are returned
   apart in :attr:`Listing.logs` (``corrections.csv``, ``temperatures.csv``);
-* a symbolic link to a file is followed (a report linked into a folder is read); a
-  link to a folder is not followed (it could loop) and is named;
-* anything that cannot be listed or looked at — an unreadable folder, a file
-  renamed or removed while the folder was listed, a broken link, a device or pipe —
-  is named with its reason in :attr:`Listing.problems`, never silently dropped.
+* symbolic links: a link to a regular file is followed (the report is read under the
+  link's name) and said in :attr:`Listing.links`, unless its target is listed below
+  the same root anyway (then it is left out, named in ``ignored``: one report is
+  never read twice through a link); a link to a folder is never followed (no loops,
+  no walking out of the tree) and is named in ``problems``, as is a link that loops
+  or points nowhere;
+* anything that cannot be listed or looked at — an unreadable sub-folder, a file
+  renamed or removed while the folder was listed, a device or pipe — is named with
+  its reason in :attr:`Listing.problems`, never silently dropped (a file removed
+  after the listing is the reader's to name: ``batch`` makes it a failed line and
+  goes on);
+* every path in ``problems``, ``ignored`` and ``links`` is printable
+  (:func:`parsers.names.visible_name`: a name that is not UTF-8 shows ``\\xff``); the
+  paths of ``files`` and ``logs`` are the real ones, to be opened.
 
 Nothing here reads a file's content.
 """
 
 from __future__ import annotations
 
+import errno
 import os
 import stat
 from dataclasses import dataclass
@@ -29,6 +39,7 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from parsers._registry import NOT_REPORT_NAMES, never_a_report
+from parsers.names import visible_name
 from setupfix.errors import Note, SourceLocation
 
 __all__ = ["FoundFile", "Listing", "list_reports", "Inputs", "expand_inputs", "PARTIAL_SUFFIXES", "LOG_NAMES"]
@@ -67,6 +78,8 @@ class Listing:
         Entries that could not be listed or looked at; say them to the user.
     logs : tuple of (kind, path)
         Series logs found (``corrections``/``temperatures``), in listing order.
+    links : tuple of (path, target)
+        Report candidates reached through a symbolic link (printable), said to the user.
     """
 
     root: Path
@@ -74,6 +87,11 @@ class Listing:
     ignored: tuple[tuple[str, str], ...] = ()
     problems: tuple[tuple[str, str], ...] = ()
     logs: tuple[tuple[str, str], ...] = ()
+    links: tuple[tuple[str, str], ...] = ()
+
+    def notes(self) -> list[Note]:
+        """What to say about the listing: each problem (left out) and each link followed (kind ``"folder"``)."""
+        return _notes(self.problems, self.links)
 
     def log(self, kind: str) -> str | None:
         """The first log of ``kind`` found (``"corrections"`` or ``"temperatures"``), else None."""
@@ -103,7 +121,19 @@ def _reason(exc: OSError) -> str:
         return "renamed or removed while the folder was listed"
     if isinstance(exc, PermissionError):
         return "permission denied"
+    if exc.errno == errno.ELOOP:
+        return "symbolic link loop"
     return exc.strerror or str(exc)
+
+
+def _notes(problems: Sequence[tuple[str, str]], links: Sequence[tuple[str, str]]) -> list[Note]:
+    return ([Note(f"{reason}; left out", SourceLocation(path), "folder") for path, reason in problems]
+            + [Note(f"symbolic link to {target}: read as a report", SourceLocation(path), "folder")
+               for path, target in links])
+
+
+def _hidden(parts: Sequence[str]) -> bool:
+    return any(p.startswith(".") or p in CACHE_FOLDERS for p in parts)
 
 
 def list_reports(root: str | os.PathLike[str], *, recursive: bool = True) -> Listing:
@@ -127,50 +157,78 @@ def list_reports(root: str | os.PathLike[str], *, recursive: bool = True) -> Lis
     ignored: list[tuple[str, str]] = []
     problems: list[tuple[str, str]] = []
     logs: list[tuple[str, str]] = []
+    links: list[tuple[str, str]] = []
+    try:
+        real_root = base.resolve()
+    except (OSError, RuntimeError):
+        real_root = base
+
+    def listed_anyway(target: Path) -> bool:
+        """True if ``target`` (a link's resolved file) is listed below the root under its own name."""
+        try:
+            rel = target.relative_to(real_root)
+        except ValueError:
+            return False
+        return (recursive or len(rel.parts) == 1) and not _hidden(rel.parts[:-1]) and _policy(rel.name) is None
 
     def visit(folder: Path) -> None:
         try:
             with os.scandir(folder) as it:
                 entries = sorted(it, key=lambda e: e.name)
         except OSError as exc:
-            problems.append((str(folder), f"cannot list folder: {_reason(exc)}"))
+            problems.append((visible_name(str(folder)), f"cannot list folder: {_reason(exc)}"))
             return
         subfolders: list[Path] = []
         for entry in entries:
             path = folder / entry.name
+            shown = visible_name(str(path))
             is_link = is_link_safe(entry)
             try:
                 st = os.stat(path)  # follows a link: a linked report is read as a report
             except OSError as exc:
-                problems.append((str(path), "broken link" if is_link else _reason(exc)))
+                problems.append((shown, _reason(exc) if not is_link or exc.errno == errno.ELOOP
+                                 else "broken link"))
                 continue
             if stat.S_ISDIR(st.st_mode):
                 if entry.name.startswith("."):
-                    ignored.append((str(path), "hidden folder"))
+                    ignored.append((shown, "hidden folder"))
                 elif entry.name in CACHE_FOLDERS:
-                    ignored.append((str(path), "Python's byte-code cache, not reports"))
+                    ignored.append((shown, "Python's byte-code cache, not reports"))
                 elif is_link:
-                    problems.append((str(path), "link to a folder: not followed"))
+                    problems.append((shown, "link to a folder: not followed"))
                 elif recursive:
                     subfolders.append(path)
                 else:
-                    ignored.append((str(path), "sub-folder (not searched)"))
+                    ignored.append((shown, "sub-folder (not searched)"))
                 continue
             if not stat.S_ISREG(st.st_mode):
-                problems.append((str(path), "not a regular file"))
+                problems.append((shown, "not a regular file"))
                 continue
             why = _policy(entry.name)
+            if why is None and is_link:
+                target = _resolved(path)
+                if listed_anyway(target):
+                    ignored.append((shown, f"link to {visible_name(str(target))}, which is read under its own name"))
+                    continue
+                links.append((shown, visible_name(str(target))))
             if why is None:
                 files.append(FoundFile(path, st.st_size, st.st_mtime_ns))
             else:
                 if entry.name.lower() in LOG_NAMES:
                     logs.append((LOG_NAMES[entry.name.lower()], str(path)))
-                ignored.append((str(path), why))
+                ignored.append((shown, why))
         for sub in subfolders:
             visit(sub)
 
     visit(base)
-    return Listing(base, tuple(files), tuple(ignored), tuple(problems), tuple(logs))
+    return Listing(base, tuple(files), tuple(ignored), tuple(problems), tuple(logs), tuple(links))
+
+
+def _resolved(path: Path) -> Path:
+    try:
+        return path.resolve()
+    except (OSError, RuntimeError):
+        return path
 
 
 def is_link_safe(entry: os.DirEntry[str]) -> bool:
@@ -198,6 +256,8 @@ class Inputs:
         Series logs found in the folders.
     empty : tuple of str
         Folders holding no report candidate.
+    links : tuple of (path, target)
+        Candidates of the folders reached through a symbolic link.
     """
 
     files: tuple[tuple[str, bool], ...] = ()
@@ -205,6 +265,7 @@ class Inputs:
     ignored: tuple[tuple[str, str], ...] = ()
     logs: tuple[tuple[str, str], ...] = ()
     empty: tuple[str, ...] = ()
+    links: tuple[tuple[str, str], ...] = ()
 
     @property
     def names(self) -> list[str]:
@@ -215,11 +276,11 @@ class Inputs:
         return next((path for k, path in self.logs if k == kind), None)
 
     def notes(self) -> list[Note]:
-        """One note per problem (kind ``"folder"``): the path, the reason, left out."""
-        return [Note(f"{reason}; left out", SourceLocation(path), "folder") for path, reason in self.problems]
+        """One note per problem (kind ``"folder"``: the path, the reason, left out) and per link followed."""
+        return _notes(self.problems, self.links)
 
     def warnings(self) -> list[str]:
-        """One line per problem: ``path: reason; left out``."""
+        """One line per note: ``path: reason; left out`` (``path: symbolic link to …``)."""
         return [str(n) for n in self.notes()]
 
 
@@ -240,6 +301,7 @@ def expand_inputs(paths: Sequence[str | os.PathLike[str]], *, recursive: bool = 
     ignored: list[tuple[str, str]] = []
     logs: list[tuple[str, str]] = []
     empty: list[str] = []
+    links: list[tuple[str, str]] = []
     for path in paths:
         name = os.fspath(path)
         if name != "-" and os.path.isdir(name):
@@ -248,8 +310,9 @@ def expand_inputs(paths: Sequence[str | os.PathLike[str]], *, recursive: bool = 
             problems += listing.problems
             ignored += listing.ignored
             logs += listing.logs
+            links += listing.links
             if not listing.files:
-                empty.append(name)
+                empty.append(visible_name(name))
         else:
             files.append((name, False))
-    return Inputs(tuple(files), tuple(problems), tuple(ignored), tuple(logs), tuple(empty))
+    return Inputs(tuple(files), tuple(problems), tuple(ignored), tuple(logs), tuple(empty), tuple(links))

@@ -5,22 +5,20 @@ a complete instruction ("leave H23 as it is" is an instruction too).  Without th
 controller's current offsets a row says *add* ``delta``; with them it says *set*
 ``value = current + delta`` — an absolute value, so applying the file twice does not
 apply the change twice.  Writing the rows in a file format is
-:mod:`setupfix.pipeline.controllers`' job; nothing here touches a file.
+:mod:`setupfix.pipeline.controllers`' job (the offsets CSV's text, names escaped, is
+:mod:`setupfix.pipeline.writers`'); nothing here touches a file.
 """
 
 from __future__ import annotations
 
-import csv
-import io
 import math
-from collections.abc import Iterable, Mapping
+from collections.abc import Mapping
 from dataclasses import dataclass
 
 from setupfix.errors import MatchError
 from setupfix.model import ProcessModel
 
-__all__ = ["grid_decimals", "format_value", "OFFSET_COLUMNS", "OffsetRow", "offset_rows", "offsets_csv_text",
-           "csv_header", "csv_lines"]
+__all__ = ["grid_decimals", "format_value", "OFFSET_COLUMNS", "OffsetRow", "offset_rows"]
 
 #: Columns of the offsets CSV, the spec's first (``../shared/spec/cli-json.md``).
 OFFSET_COLUMNS = ("report", "part", "id", "register", "kind", "axis", "delta", "unit", "mode",
@@ -119,27 +117,3 @@ def offset_rows(model: ProcessModel, corrections: Mapping[str, float], *, report
                               reg.offset, now, value,
                               policy.number, policy.edge, model.resolution, verdict))
     return rows
-
-
-def csv_header() -> str:
-    """The header line of the offsets CSV."""
-    return ",".join(OFFSET_COLUMNS) + "\n"
-
-
-def csv_lines(rows: Iterable[OffsetRow]) -> str:
-    """The data lines of ``rows`` (batch appends them report by report)."""
-    stream = io.StringIO()
-    writer = csv.writer(stream, lineterminator="\n")
-    for r in rows:
-        writer.writerow(r.cells())
-    return stream.getvalue()
-
-
-def offsets_csv_text(rows: Iterable[OffsetRow], *, resolution: float | None = None) -> str:
-    """The offsets CSV of ``rows`` (header included).
-
-    Each row carries its model's resolution; ``resolution`` is accepted for callers
-    of the former signature and ignored.  Written by
-    :func:`setupfix.pipeline.writers.write_offsets_csv`.
-    """
-    return csv_header() + csv_lines(rows)

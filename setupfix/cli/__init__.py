@@ -11,6 +11,7 @@ calls into :mod:`setupfix.pipeline`.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import importlib
 import sys
 import warnings
@@ -79,8 +80,20 @@ def _one_line_warning(message: Warning | str, category: type[Warning], filename:
     print(f"warning: {message}", file=sys.stderr)
 
 
+def _safe_streams() -> None:
+    """Standard output and error never fail on a character they cannot encode (a file name that
+    is not UTF-8 is shown escaped, never an ``internal error``); names the commands print go through
+    :func:`setupfix.cli._common.shown` first, this is the net below it."""
+    for stream in (sys.stdout, sys.stderr):
+        reconfigure = getattr(stream, "reconfigure", None)
+        if reconfigure is not None and getattr(stream, "errors", "") in ("strict", None):
+            with contextlib.suppress(ValueError, OSError):  # a stream that cannot change: left as it is
+                reconfigure(errors="backslashreplace")
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the command line; return the exit status."""
+    _safe_streams()
     with warnings.catch_warnings():
         warnings.showwarning = _one_line_warning
         return _main(argv)

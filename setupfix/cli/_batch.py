@@ -9,7 +9,7 @@ from types import FrameType
 from typing import TYPE_CHECKING
 
 from setupfix.cli._choices import CONTROLLERS, OPTIMIZERS
-from setupfix.cli._common import add_report_options, add_thermal_options, whole_number
+from setupfix.cli._common import add_report_options, add_thermal_options, shown, whole_number
 from setupfix.cli.exit_codes import OK, PARTIAL, REJECTED
 
 if TYPE_CHECKING:
@@ -71,15 +71,16 @@ def run(args: argparse.Namespace) -> int:
                                 force=args.force)
     finally:
         signal.signal(signal.SIGTERM, previous)
-    for path, note in summary.notes:
-        print(f"warning: {path}: {note}", file=sys.stderr)
+    for path, note in summary.notes:  # a note that names its file is printed as it is (not the path twice)
+        text = str(note)
+        print(f"warning: {text if text.startswith(path) else f'{path}: {text}'}", file=sys.stderr)
     for path, reason in summary.failed:
         print(f"error: {reason if path in reason else f'{path}: {reason}'}", file=sys.stderr)
     if args.json:
         json.dump(summary.to_json(), sys.stdout, indent=2)
         sys.stdout.write("\n")
     else:
-        sys.stdout.write(format_batch_summary(summary, args.out) + "\n")
+        sys.stdout.write(format_batch_summary(summary, shown(args.out)) + "\n")
     return _status(summary)
 
 
@@ -115,7 +116,7 @@ class _Progress:
             return
         state = ("FAILED" if outcome.error else f"skipped ({outcome.skipped})" if outcome.skipped
                  else ", ".join(outcome.verdicts) or "no part")
-        print(f"[{done}/{total}] {outcome.path}: {state}", file=sys.stderr)
+        print(f"[{done}/{total}] {shown(outcome.path)}: {state}", file=sys.stderr)
 
     def __exit__(self, *exc: object) -> None:
         if self.bar is not None:

@@ -27,6 +27,14 @@ terms (lengths in the model unit):
 """
 
 
+def shown(path: object) -> str:
+    """A path (or any name) as the commands print it: printable, a name that is not UTF-8 escaped
+    (``\\xff``), a control character escaped (``\\r``) — the one helper for printing paths."""
+    from parsers.names import visible_name  # lazily: the command line starts without the readers
+
+    return visible_name(str(path))
+
+
 def add_reader_options(p: argparse.ArgumentParser) -> Any:
     """The reader's options (format, unit, encoding, column mapping, lenient) in a "report reading" group."""
     g = p.add_argument_group("report reading")

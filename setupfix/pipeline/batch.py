@@ -15,7 +15,9 @@ Design for thousands of reports:
   output as soon as it is done, in the sorted order of the files, so memory does
   not grow with the number of reports and the numbers do not depend on
   ``workers``;
-* a file that fails is named with its reason and skipped; the others go on;
+* a file that fails is named with its reason and skipped; the others go on (a file
+  removed between the listing and its reading too); every path the summary holds is
+  printable (:func:`parsers.names.visible_name`);
 * a file whose size or modification time changes between discovery and reading
   (still being copied by the CMM) is not read;
 * the same content twice (SHA-256) is corrected once; with a history store,
@@ -30,6 +32,7 @@ import contextlib
 import dataclasses
 import hashlib
 import itertools
+import json
 import os
 import time
 from collections import Counter, deque
@@ -42,20 +45,19 @@ from typing import Any
 import pandas as pd
 
 import parsers
+from parsers.names import visible_name
 from setupfix.errors import ExportError, Note, ParameterError, SetupfixError, SourceLocation
 from setupfix.model import PartMeasurement, match_parts
-from setupfix.offsets import OffsetRow, csv_header, csv_lines, offset_rows
-from setupfix.pipeline.controllers import render
+from setupfix.offsets import OffsetRow, offset_rows
+from setupfix.pipeline.controllers import program_path, render
 from setupfix.pipeline.correct import correct_report
 from setupfix.pipeline.export import cycle_rows, offsets_text
 from setupfix.pipeline.requests import CorrectRequest, History, SolveOptions
+from setupfix.pipeline.writers import atomic_write, check_target, csv_header, csv_lines, write_text
 from setupfix.store import Recommendation as StoreRecommendation
 from setupfix.store import Store
 
-__all__ = ["Outcome", "BatchSummary", "find_reports", "run_batch", "batch_history", "PROGRAM_SUFFIX"]
-
-#: File suffix of one program per cycle when a controller other than csv is chosen.
-PROGRAM_SUFFIX = {"fanuc": ".nc", "haas": ".nc", "siemens": ".mpf", "heidenhain": ".txt"}
+__all__ = ["Outcome", "BatchSummary", "find_reports", "run_batch", "batch_history", "MANIFEST"]
 
 
 @dataclass(frozen=True)
@@ -154,8 +156,13 @@ def _init(work: _Work) -> None:
 def _correct_one(path: str, size: int, mtime_ns: int) -> Outcome:
     assert _WORK is not None
     out = Outcome(path)
+    shown = visible_name(path)
     try:
-        st = os.stat(path)
+        try:
+            st = os.stat(path)
+        except FileNotFoundError:
+            out.error = f"{shown}: renamed or removed after the folder was listed: not read"
+            return out
         if (st.st_size, st.st_mtime_ns) != (size, mtime_ns):
             out.skipped = "still being written (size or time changed): not read"
             return out
@@ -172,16 +179,16 @@ def _correct_one(path: str, size: int, mtime_ns: int) -> Outcome:
             out.verdicts.append(cycle.verdict)
             out.notes += cycle.notes
             if cycle.verdict == "reject":
-                out.notes.append(Note(cycle.recommendation.alarm, SourceLocation(path), "safety"))
+                out.notes.append(Note(cycle.recommendation.alarm, SourceLocation(shown), "safety"))
             elif _WORK.controller != "csv":
                 out.programs.append((cycle.part.part, offsets_text([cycle], _WORK.controller, request.current)))
             out.parts.append(cycle.part.part)
     except SetupfixError as exc:
-        out.error = str(exc) if exc.location else f"{path}: {exc}"
+        out.error = str(exc) if exc.location else f"{shown}: {exc}"
     except OSError as exc:
-        out.error = f"{path}: cannot read: {exc.strerror or exc}"
+        out.error = f"{shown}: cannot read: {exc.strerror or exc}"
     except Exception as exc:  # noqa: BLE001 - one bad file never stops the batch
-        out.error = f"{path}: internal error: {type(exc).__name__}: {exc}"
+        out.error = f"{shown}: internal error: {type(exc).__name__}: {exc}"
     return out
 
 
@@ -259,7 +266,10 @@ def run_batch(request: CorrectRequest, folder: str | Path, out: str | Path, *, w
         with every reader; what cannot be listed is named in ``failed``.
     out : path
         The offsets CSV (written atomically: complete or absent), or with a
-        ``controller`` other than csv a folder receiving one program per cycle.
+        ``controller`` other than csv a folder receiving one program per cycle, at
+        :func:`~setupfix.pipeline.controllers.program_path` of the report's path below
+        ``folder``; its manifest (:data:`MANIFEST`) lets a report that yields no program
+        this run (rejected, refused, a copy of another) remove those of an earlier run.
     workers : int or None
         Processes (1: in this process; None: :func:`auto_workers`).  Results do not
         depend on it.
@@ -299,6 +309,8 @@ def run_batch(request: CorrectRequest, folder: str | Path, out: str | Path, *, w
         request = dataclasses.replace(request, history=batch_history(request, base, [f for f, _, _ in files]))
     summary = _Tally()
     summary.failed += listing.problems  # named, never dropped: an unreadable folder, a broken link, …
+    summary.notes += [(path, Note(f"symbolic link to {target}: read as a report", None, "folder"))
+                      for path, target in listing.links]
     seen: dict[str, str] = {}
     writer: _CsvOut | _ProgramsOut = _CsvOut(out) if controller == "csv" else _ProgramsOut(out, controller)
     done = _batch_reports(store) if store is not None and not force else set()
@@ -309,17 +321,19 @@ def run_batch(request: CorrectRequest, folder: str | Path, out: str | Path, *, w
         with writer:
             for i, outcome in enumerate(_outcomes(files, work, workers), start=1):
                 _account(summary, outcome, seen, done.__contains__ if done else None)
-                if not outcome.error and not outcome.skipped:
-                    rel = Path(outcome.path).relative_to(folder).as_posix()
-                    outcome.rows = [dataclasses.replace(r, report=rel) for r in outcome.rows]
-                    writer.add(outcome)
+                rel = Path(outcome.path).relative_to(folder).as_posix()
+                if outcome.error or (outcome.skipped and outcome.sha256 not in done):
+                    writer.drop(rel)  # no program this run (refused, a copy, rewritten): none of an earlier run
+                elif not outcome.skipped:
+                    outcome.rows = [dataclasses.replace(r, report=visible_name(rel)) for r in outcome.rows]
+                    writer.add(outcome, rel)
                     if store is not None:
                         try:
                             _record(store, outcome, request.solve)
                         except SetupfixError as exc:  # its offsets stand; it is corrected again next run
                             note = Note(exc.message, exc.location, "store")
                             outcome.notes.append(note)
-                            summary.notes.append((outcome.path, note))  # counted above: said here
+                            summary.notes.append((visible_name(outcome.path), note))  # counted above: said here
                     outcome.data, outcome.table = b"", None
                 if progress is not None:
                     progress(i, len(files), outcome)
@@ -351,7 +365,7 @@ def _batch_reports(store: Store) -> set[str]:
 def _record(store: Store, outcome: Outcome, solve: SolveOptions) -> None:
     """Add the report (the bytes and table the worker corrected, not a second reading) and its recommendations."""
     assert outcome.table is not None
-    sha, _ = store.add_report(outcome.data, Path(outcome.path).name, outcome.format, outcome.table)
+    sha, _ = store.add_report(outcome.data, visible_name(Path(outcome.path).name), outcome.format, outcome.table)
     by_part: dict[str, dict[str, float]] = {}
     for row in outcome.rows:
         by_part.setdefault(row.part, {})[row.id] = row.delta
@@ -365,20 +379,21 @@ def _record(store: Store, outcome: Outcome, solve: SolveOptions) -> None:
 
 def _account(summary: _Tally, outcome: Outcome, seen: dict[str, str],
              processed: Callable[[str], bool] | None) -> None:
+    shown = visible_name(outcome.path)  # what the summary says: printable, whatever the file's name
     if outcome.error:
-        summary.failed.append((outcome.path, outcome.error))
+        summary.failed.append((shown, outcome.error))
         return
     if not outcome.skipped and outcome.sha256 in seen:
         outcome.skipped = f"same content as {seen[outcome.sha256]}"
     elif not outcome.skipped and processed is not None and processed(outcome.sha256):
         outcome.skipped = "already processed (history store); --force corrects it again"
     if outcome.skipped:
-        summary.skipped.append((outcome.path, outcome.skipped))
+        summary.skipped.append((shown, outcome.skipped))
         if outcome.skipped.startswith("still being written"):
-            summary.failed.append((outcome.path, outcome.skipped))
+            summary.failed.append((shown, outcome.skipped))
         return
-    seen[outcome.sha256] = outcome.path
-    summary.notes += [(outcome.path, n) for n in outcome.notes]
+    seen[outcome.sha256] = shown
+    summary.notes += [(shown, n) for n in outcome.notes]
     summary.reports += 1
     summary.parts += len(outcome.verdicts)
     summary.verdicts.update(outcome.verdicts)
@@ -388,8 +403,6 @@ class _CsvOut:
     """One offsets CSV, streamed into a temporary file renamed over the target at the end."""
 
     def __init__(self, target: str | Path) -> None:
-        from setupfix.pipeline.writers import atomic_write, check_target
-
         check_target(target)
         self._cm = atomic_write(target)
         self._rows = 0
@@ -399,9 +412,12 @@ class _CsvOut:
         self._stream.write(csv_header())
         return self
 
-    def add(self, outcome: Outcome) -> None:
+    def add(self, outcome: Outcome, rel: str) -> None:
         self._stream.write(csv_lines(outcome.rows))
         self._rows += len(outcome.rows)
+
+    def drop(self, rel: str) -> None:
+        """Nothing to remove: the offsets CSV is written whole each run."""
 
     def commit(self) -> bool:
         return self._rows > 0
@@ -419,31 +435,93 @@ class _NothingWritten(Exception):
 
 
 class _ProgramsOut:
-    """One controller program per corrected cycle, ``<folder>/<report stem>[_<part>]<suffix>``."""
+    """One controller program per corrected cycle at :func:`~setupfix.pipeline.controllers.program_path`.
+
+    The folder keeps a manifest (:data:`MANIFEST`: report → the programs written for it), so
+    that a report corrected again replaces exactly its own programs: one that no longer
+    yields a program (rejected, refused, …) leaves none of an earlier run behind.  Only
+    files the manifest names are ever removed.
+    """
 
     def __init__(self, folder: str | Path, controller: str) -> None:
         self.folder = Path(folder)
         self.controller = controller
         if self.folder.exists() and not self.folder.is_dir():
             raise ExportError("with --controller other than csv, --out is a folder for one program per cycle",
-                              location=SourceLocation(str(folder)))
+                              location=SourceLocation(visible_name(str(folder))))
         self.written = 0
+        self.manifest = _read_manifest(self.folder / MANIFEST)
+        self._owner: dict[str, tuple[str, str]] = {}  # program written in this run → (report, part)
+        self._changed = False
 
     def __enter__(self) -> _ProgramsOut:
         self.folder.mkdir(parents=True, exist_ok=True)
         return self
 
-    def add(self, outcome: Outcome) -> None:
-        from setupfix.pipeline.writers import write_text
-
-        stem = Path(outcome.path).stem
+    def add(self, outcome: Outcome, rel: str) -> None:
+        several = len(outcome.parts) > 1
+        names: list[str] = []
         for part, text in outcome.programs:
-            suffix = "" if len(outcome.parts) == 1 else "_" + "".join(c if c.isalnum() else "_" for c in part)
-            write_text(self.folder / f"{stem}{suffix}{PROGRAM_SUFFIX[self.controller]}", text)
+            name = program_path(rel, part if several else None, self.controller).as_posix()
+            if self._owner.setdefault(name, (rel, part)) != (rel, part):  # a report named like another's program
+                name = program_path(rel + "~" + _short_hash(rel, part), part if several else None,
+                                    self.controller).as_posix()
+                self._owner[name] = (rel, part)
+            target = self.folder / name
+            target.parent.mkdir(parents=True, exist_ok=True)
+            write_text(target, text)
+            names.append(name)
             self.written += 1
+        self._replace(rel, names)
+
+    def drop(self, rel: str) -> None:
+        """The report yields no program this run: remove those an earlier run wrote for it."""
+        self._replace(rel, [])
+
+    def _replace(self, rel: str, names: list[str]) -> None:
+        for old in self.manifest.get(rel, []):
+            if old not in names and old not in self._owner:  # never a program this run wrote for another report
+                _remove_inside(self.folder, old)
+        if self.manifest.get(rel, []) != names:
+            self._changed = True
+        if names:
+            self.manifest[rel] = names
+        else:
+            self.manifest.pop(rel, None)
 
     def commit(self) -> bool:
         return self.written > 0
 
     def __exit__(self, *exc: Any) -> None:
-        return None
+        if self._changed:  # also after an interruption: what was written or removed is on record
+            write_text(self.folder / MANIFEST, json.dumps(self.manifest, indent=1, sort_keys=True) + "\n")
+
+
+#: The programs folder's record of which report each program was written for (hidden, JSON).
+MANIFEST = ".setupfix-programs.json"
+
+
+def _short_hash(*texts: str) -> str:
+    return hashlib.sha256(os.fsencode("\0".join(texts))).hexdigest()[:10]
+
+
+def _read_manifest(path: Path) -> dict[str, list[str]]:
+    """The manifest of a programs folder; an absent or damaged one is empty (nothing is then removed)."""
+    try:
+        found = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return {}
+    if not isinstance(found, dict):
+        return {}
+    return {str(k): [str(n) for n in v] for k, v in found.items() if isinstance(v, list)}
+
+
+def _remove_inside(folder: Path, name: str) -> None:
+    """Remove the program ``name`` of an earlier run: a regular file inside ``folder`` only (never a link)."""
+    target = folder / name
+    try:
+        inside = target.parent.resolve().is_relative_to(folder.resolve()) and ".." not in Path(name).parts
+        if inside and target.is_file() and not target.is_symlink():
+            target.unlink()
+    except OSError:
+        pass  # gone already, or not ours to remove

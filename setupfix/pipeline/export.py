@@ -14,7 +14,11 @@ Policy, the same for every door (``correct --offsets``, the TUI's export, batch)
   (choose one with ``--part``).
 
 The text is complete before the target is opened and written atomically (complete
-or absent); a register a format cannot express leaves no file at all.
+or absent); a register a format cannot express leaves no file at all.  Names (the
+report's, the part's) reach the text escaped: CSV cells through
+:func:`~setupfix.pipeline.writers.csv_cell`, a program's title comment through
+:func:`parsers.folders.visible_name` (a name that is not UTF-8 or holds a line
+break never breaks the file or the write).
 """
 
 from __future__ import annotations
@@ -23,6 +27,7 @@ import hashlib
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
+from parsers.names import visible_name
 from setupfix.errors import ExportError, SourceLocation
 from setupfix.offsets import OffsetRow, offset_rows
 from setupfix.pipeline.controllers import render
@@ -84,7 +89,7 @@ def offsets_text(cycles: Sequence[CycleCorrection], controller: str = "csv",
     if not cycles:
         return render(controller, [])
     rows = [row for c in cycles for row in cycle_rows(c, current)]
-    title = f"{cycles[0].part.report} {cycles[0].part.part}".strip()
+    title = visible_name(f"{cycles[0].part.report} {cycles[0].part.part}".strip())  # one comment line, any name
     return render(controller, rows, title)
 
 

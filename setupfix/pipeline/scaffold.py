@@ -233,7 +233,8 @@ def scaffold_model(reports: Sequence[str | Path], *, axis: str | None = None, na
     left_out: list[Note] = inputs.notes()
     for report, from_folder in inputs.files:
         try:
-            reads.append((report, parsers.read_report(report, **options)))
+            result = parsers.read_report(report, **options)
+            reads.append((result.source, result))  # its printable name: it goes into the model's comments
         except SetupfixError as exc:
             if not from_folder:
                 raise

@@ -19,6 +19,7 @@ from pathlib import Path
 import pandas as pd
 
 import parsers
+from parsers.names import visible_name
 from setupfix.errors import MatchError, Note, ParseError, SourceLocation
 from setupfix.model import PartMeasurement, ProcessModel, match_parts
 from setupfix.pipeline.compare import compare_steps  # the TUI's worker takes it from here, with store_parts
@@ -36,7 +37,7 @@ __all__ = ["OpenedReport", "open_report", "export_cycles", "newest_report", "Fol
 
 @dataclass(frozen=True)
 class OpenedReport:
-    """A report opened against a model.
+    """A report opened against a model (``report``: its printable name, :func:`parsers.names.visible_name`).
 
     ``outcome`` is :func:`~setupfix.pipeline.correct.correct_report`'s, for the
     ``request`` built from the operator's inputs; it is None when the report could not
@@ -84,15 +85,15 @@ def open_report(request: CorrectRequest, report: str | Path) -> OpenedReport:
     """
     path = Path(report)
     if path.is_dir():
-        raise ParseError("is a folder, not a report", location=SourceLocation(str(report)))
+        raise ParseError("is a folder, not a report", location=SourceLocation(visible_name(str(report))))
     source = parsers.load_source(str(path))
     try:
         outcome = correct_report(request, source)
     except MatchError as exc:  # the match table from the same bytes: what matches, what is close
         read = parsers.read_report(source, **request.read.kwargs())
-        return OpenedReport(request, str(report), read.format, matches=tuple(match_rows(request.model, read.table)),
+        return OpenedReport(request, source.name, read.format, matches=tuple(match_rows(request.model, read.table)),
                             problem=str(exc), notes=tuple(read.notes))
-    return OpenedReport(request, str(report), outcome.format, outcome,
+    return OpenedReport(request, source.name, outcome.format, outcome,
                         matches=tuple(matched_rows(request.model, [c.part for c in outcome.cycles])),
                         notes=outcome.notes)
 
@@ -212,7 +213,7 @@ def record_applied(db: str | Path, exported: Exported, cycles: Sequence[CycleCor
             store.add_recommendation(Recommendation(
                 optimizer=c.result.optimizer, created_at=stamp,
                 inputs={"model": c.model.source, "report": c.part.report, "part": c.part.part, "applied": True,
-                        "export": {"target": exported.target, "controller": exported.controller,
+                        "export": {"target": visible_name(exported.target), "controller": exported.controller,
                                    "sha256": exported.sha256}},
                 result=cycle_json(c)))
     return added

@@ -9,10 +9,19 @@ target costs nothing.
 
 The format writers below turn a result into bytes and hand them to those
 primitives; each has a write → read round trip test.
+
+Every text cell of every CSV setupfix writes (the offsets CSV of ``correct``,
+``batch`` and the TUI's export, the canonical tables of ``parse``) goes through the
+one function :func:`csv_cell`: a name that is not UTF-8 or holds a control
+character is written with visible escapes (``\\xff``, ``\\r``; never a crash, never a
+line break inside a row), and a cell a spreadsheet would run as a formula
+(``= + - @``, tab, CR first) is prefixed with ``'``, which
+:func:`parsers.canonical.read_canonical` removes again.  Numbers are never touched.
 """
 
 from __future__ import annotations
 
+import csv
 import io
 import os
 from collections.abc import Iterable
@@ -21,13 +30,15 @@ from typing import TYPE_CHECKING
 import pandas as pd
 
 from setupfix.atomic import atomic_write, check_target, write_bytes, write_text
-from setupfix.offsets import OffsetRow, offsets_csv_text
+from parsers.names import visible_name
+from setupfix.offsets import OFFSET_COLUMNS, OffsetRow
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
-__all__ = ["check_target", "write_text", "write_bytes", "atomic_write", "write_offsets_csv",
-           "write_canonical_csv", "escape_formulas", "write_figure", "write_table_csv", "FLOAT_FORMAT"]
+__all__ = ["check_target", "write_text", "write_bytes", "atomic_write", "write_offsets_csv", "offsets_csv_text",
+           "csv_header", "csv_lines", "csv_cell", "write_canonical_csv", "escape_formulas", "write_figure",
+           "write_table_csv", "FLOAT_FORMAT", "FORMULA_START"]
 
 Target = str | os.PathLike[str]
 
@@ -36,9 +47,51 @@ Target = str | os.PathLike[str]
 FLOAT_FORMAT = "%.12g"
 
 
-def write_offsets_csv(rows: Iterable[OffsetRow], target: Target, *, resolution: float = 0.001) -> None:
+#: First characters that make a spreadsheet read a cell as a formula (``=HYPERLINK(…)``, ``@SUM``, …).
+FORMULA_START = ("=", "+", "-", "@", "\t", "\r")
+
+#: Columns of the offsets CSV that hold text (names from the report and the model); the others are numbers.
+_OFFSET_TEXT = frozenset({"report", "part", "id", "register", "kind", "axis", "unit", "mode", "offset", "verdict"})
+_TEXT_AT = tuple(i for i, name in enumerate(OFFSET_COLUMNS) if name in _OFFSET_TEXT)
+
+
+def csv_cell(text: str) -> str:
+    """One text cell as every CSV setupfix writes holds it (see the module docstring).
+
+    >>> csv_cell("=HYPERLINK(1)"), csv_cell("a\\rb"), csv_cell("-0.5"), csv_cell("P1 D1")
+    ("'=HYPERLINK(1)", 'a\\\\rb', "'-0.5", 'P1 D1')
+
+    Only text cells go through it (a number column is written as a number).
+    """
+    text = visible_name(text)
+    return "'" + text if text.startswith(FORMULA_START) else text
+
+
+def csv_header() -> str:
+    """The header line of the offsets CSV (``../shared/spec/cli-json.md``)."""
+    return ",".join(OFFSET_COLUMNS) + "\n"
+
+
+def csv_lines(rows: Iterable[OffsetRow]) -> str:
+    """The data lines of ``rows``, text cells through :func:`csv_cell` (batch appends them report by report)."""
+    stream = io.StringIO()
+    writer = csv.writer(stream, lineterminator="\n")
+    for r in rows:
+        cells = r.cells()
+        for i in _TEXT_AT:
+            cells[i] = csv_cell(cells[i])
+        writer.writerow(cells)
+    return stream.getvalue()
+
+
+def offsets_csv_text(rows: Iterable[OffsetRow]) -> str:
+    """The offsets CSV of ``rows``, header included (the ``csv`` controller's text)."""
+    return csv_header() + csv_lines(rows)
+
+
+def write_offsets_csv(rows: Iterable[OffsetRow], target: Target) -> None:
     """Write the offsets CSV (``../shared/spec/cli-json.md``) atomically; ``-``: standard output."""
-    write_text(target, offsets_csv_text(rows, resolution=resolution))
+    write_text(target, offsets_csv_text(rows))
 
 
 def write_table_csv(table: pd.DataFrame, target: Target, *, float_format: str = FLOAT_FORMAT) -> None:
@@ -48,12 +101,8 @@ def write_table_csv(table: pd.DataFrame, target: Target, *, float_format: str = 
     write_text(target, buffer.getvalue())
 
 
-#: First characters that make a spreadsheet read a cell as a formula (``=HYPERLINK(…)``, ``@SUM``, …).
-FORMULA_START = ("=", "+", "-", "@", "\t", "\r")
-
-
 def escape_formulas(table: pd.DataFrame) -> pd.DataFrame:
-    """Text cells that a spreadsheet would run as a formula, prefixed with ``'`` (OWASP CSV injection).
+    """Every text cell through :func:`csv_cell` (formulas prefixed with ``'``, names made visible).
 
     Only text (object) columns are touched, so numbers such as ``-0.0309`` stay numbers;
     :func:`parsers.canonical.read_canonical` removes the prefix again on reading.
@@ -62,9 +111,9 @@ def escape_formulas(table: pd.DataFrame) -> pd.DataFrame:
     for col in out.columns:
         if out[col].dtype == object or pd.api.types.is_string_dtype(out[col]):
             text = out[col]
-            risky = text.map(lambda v: isinstance(v, str) and v.startswith(FORMULA_START))
-            if risky.any():
-                out[col] = text.where(~risky, "'" + text.astype(str))
+            escaped = text.map(lambda v: csv_cell(v) if isinstance(v, str) else v)
+            if not escaped.equals(text):
+                out[col] = escaped
     return out
 
 

@@ -6,12 +6,18 @@ runs the whole corpus in ``test_corpus.py``: exit status 1 (or 2 for a bad optio
 one ``error:`` line naming the file, never exit 3 / "internal error" / a traceback.
 
 To add a case, append a :class:`Case` to :data:`CASES` (other slices: your cases too).
+:data:`HOSTILE_NAMES` are file names no command may choke on (formula starts, tab, CR,
+line feed, bytes that are not UTF-8); each names a refused file in :data:`CASES` too, and
+``test_names.py`` runs good reports under them through every command.  ``test_readers.py``
+runs every case through every reader of the registry; ``test_folders.py`` runs a whole
+corpus folder (with links, loops and an unreadable sub-folder) through ``batch``.
 ``python -m tests.hostile.cases DIR`` writes the corpus into DIR to try by hand.
 """
 
 from __future__ import annotations
 
 import io
+import os
 import sys
 import zipfile
 from collections.abc import Callable
@@ -110,6 +116,22 @@ CASES: list[Case] = [
     Case("empty.csv", lambda: b"", "empty file"),
     Case("blank.dmo", lambda: b"\r\n \n", "empty file"),
     Case("binary.dmo", lambda: bytes(range(256)) * 4, "ENDFIL|no tolerance|not|truncated"),
+]
+
+
+#: File names a command must show escaped, never choke on (and must not run as a spreadsheet formula).
+HOSTILE_NAMES: tuple[str, ...] = ("=HYPERLINK(0).csv", "+sum.csv", "-minus.csv", "@at.csv", "\ttab.csv",
+                                  "\rcr_first.csv", "cr\rinside.csv", "line\nfeed.csv",
+                                  os.fsdecode(b"not_utf8_\xff\xfe.csv"))
+
+CASES += [
+    Case("decimal_comma.csv", lambda: _canonical("P1 D1,25,24,9691,-0.1,0.1,cycle\n"), "7 fields, header has 6"),
+    Case("decimal_comma_quoted.csv", lambda: _canonical('P1 D1,25,"24,9691",-0.1,0.1,cycle\n'),
+         "expected a number, found '24,9691'"),
+    Case("huge_1e300.csv", lambda: _canonical("P1 D1,25,1e300,-0.1,0.1,cycle\n"), "beyond any measurable length"),
+    Case("binary.csv", lambda: bytes(range(256)) * 8, "no reader accepts|not|empty"),
+    Case("nul_only.csv", lambda: b"\x00" * 64, "empty file"),
+    *(Case(name, _cut(GUIDE / "cycle_01.csv", 322), "may be truncated") for name in HOSTILE_NAMES),
 ]
 
 

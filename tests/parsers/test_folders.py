@@ -5,11 +5,13 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
+import pytest
+
 from parsers import list_reports
 
 
 def _tree(tmp_path: Path) -> Path:
-    (tmp_path / "a").mkdir()
+    (tmp_path / "a").mkdir(parents=True)
     (tmp_path / "a" / "r1.csv").write_text("x")
     (tmp_path / "a" / "report.txt").write_text("x")  # PC-DMIS text: a candidate whatever its suffix
     (tmp_path / "b").mkdir()
@@ -44,12 +46,21 @@ def test_not_recursive_names_sub_folders(tmp_path):
 
 
 def test_links_unreadable_folders_and_vanished_files_are_named(tmp_path, monkeypatch):
-    root = _tree(tmp_path)
+    root = _tree(tmp_path / "root")
+    outside = tmp_path / "elsewhere.csv"
+    outside.write_text("x")
     os.symlink(root / "a" / "r1.csv", root / "b" / "linked.csv")
+    os.symlink(outside, root / "b" / "outside.csv")
     os.symlink(root / "a", root / "b" / "folder_link")
     os.symlink(root / "missing.csv", root / "b" / "broken.csv")
     listing = list_reports(root)
-    assert root / "b" / "linked.csv" in listing.paths  # a linked report is read
+    # a link to a report read under its own name is left out, said; one to a file elsewhere is read, said
+    assert root / "b" / "linked.csv" not in listing.paths and root / "a" / "r1.csv" in listing.paths
+    assert "which is read under its own name" in dict(listing.ignored)[str(root / "b" / "linked.csv")]
+    assert root / "b" / "outside.csv" in listing.paths
+    assert listing.links == ((str(root / "b" / "outside.csv"), str(outside.resolve())),)
+    assert [str(n) for n in listing.notes() if "symbolic link" in str(n)] == [
+        f"{root / 'b' / 'outside.csv'}: symbolic link to {outside.resolve()}: read as a report"]
     problems = dict(listing.problems)
     assert problems[str(root / "b" / "folder_link")] == "link to a folder: not followed"
     assert problems[str(root / "b" / "broken.csv")] == "broken link"
@@ -78,6 +89,43 @@ def test_unreadable_folder_is_named_even_as_root(tmp_path, monkeypatch):
     monkeypatch.setattr(os, "scandir", refuse)
     problems = dict(list_reports(root).problems)
     assert problems[str(root / "b")] == "cannot list folder: permission denied"
+
+
+def test_link_loops_are_named_never_followed(tmp_path):
+    (tmp_path / "sub").mkdir()
+    os.symlink(tmp_path, tmp_path / "sub" / "up")  # a folder loop
+    os.symlink(tmp_path / "self.csv", tmp_path / "self.csv")  # a link to itself
+    os.symlink(tmp_path / "pong.csv", tmp_path / "ping.csv")
+    os.symlink(tmp_path / "ping.csv", tmp_path / "pong.csv")
+    problems = dict(list_reports(tmp_path).problems)
+    assert problems == {str(tmp_path / "sub" / "up"): "link to a folder: not followed",
+                        str(tmp_path / "self.csv"): "symbolic link loop",
+                        str(tmp_path / "ping.csv"): "symbolic link loop",
+                        str(tmp_path / "pong.csv"): "symbolic link loop"}
+
+
+@pytest.mark.skipif(os.geteuid() == 0, reason="root reads a chmod 000 folder")
+def test_an_unreadable_sub_folder_is_named_really(tmp_path):
+    root = _tree(tmp_path)
+    (root / "b").chmod(0)
+    try:
+        listing = list_reports(root)
+    finally:
+        (root / "b").chmod(0o755)
+    assert dict(listing.problems) == {str(root / "b"): "cannot list folder: permission denied"}
+    assert root / "a" / "r1.csv" in listing.paths
+
+
+def test_names_that_are_not_utf8_are_listed_and_shown_escaped(tmp_path):
+    raw = os.fsencode(tmp_path) + b"/bad\xffname.csv"
+    with open(raw, "wb") as fh:
+        fh.write(b"x")
+    os.mkdir(os.fsencode(tmp_path) + b"/sub\xfe")
+    os.symlink(os.fsencode(tmp_path) + b"/sub\xfe", os.fsencode(tmp_path) + b"/link\xfd")
+    listing = list_reports(tmp_path)
+    assert [os.fsencode(p) for p in listing.paths] == [raw]  # the real path, to be opened
+    assert dict(listing.problems) == {f"{tmp_path}/link\\xfd": "link to a folder: not followed"}  # printable
+    assert all(str(n).isprintable() for n in listing.notes())
 
 
 def test_a_missing_root_is_a_problem_not_an_exception(tmp_path):

@@ -9,7 +9,7 @@ from pathlib import Path
 import pytest
 
 from setupfix.model import load_model
-from setupfix.pipeline.batch import run_batch
+from setupfix.pipeline.batch import MANIFEST, run_batch
 from setupfix.pipeline.requests import CorrectRequest
 from setupfix.store import open_store
 
@@ -97,8 +97,8 @@ def test_one_program_per_cycle(tmp_path):
     shutil.copy(sample / "report.csv", d / "a.csv")
     s = run_batch(CorrectRequest(load_model(sample / "model.toml")), d, tmp_path / "programs", settle=0,
                   controller="fanuc")
-    assert s.written and [p.name for p in (tmp_path / "programs").iterdir()] == ["a.nc"]
-    assert "G91 G10 L2 P1 Z-0.022" in (tmp_path / "programs" / "a.nc").read_text()
+    assert s.written and sorted(p.name for p in (tmp_path / "programs").iterdir()) == [MANIFEST, "a.csv.nc"]
+    assert "G91 G10 L2 P1 Z-0.022" in (tmp_path / "programs" / "a.csv.nc").read_text()
 
 
 def test_store_records_what_was_corrected_without_reading_again(tmp_path, monkeypatch):
@@ -182,7 +182,7 @@ def test_ewma_over_the_store_and_the_batch_does_not_depend_on_workers(tmp_path):
     from setupfix.pipeline.correct import correct_report
     from setupfix.pipeline.export import cycle_rows
     from setupfix.pipeline.requests import History
-    from setupfix.offsets import csv_lines
+    from setupfix.pipeline.writers import csv_lines
 
     model_path = tmp_path / "ewma.toml"
     model_path.write_text((GUIDE / "model.toml").read_text() + "\n[safety]\newma = 0.5\n")

@@ -66,9 +66,12 @@ def test_parse_reads_the_listed_reports_and_warns_of_the_folder_link(shop, tmp_p
     root, _ = shop
     outcome = parse_reports([root])
     assert [r.path for r in outcome.reports] == _expected(root) and list(outcome.failures) == []
-    assert [str(n) for n in outcome.problems] == [f"{root / 'folder_link'}: {LINK_PROBLEM}"]
+    target = (root.parent / "elsewhere" / "bracket_minus_negative.txt").resolve()
+    linked = f"{root / 'linked.txt'}: symbolic link to {target}: read as a report"  # said, not read silently
+    assert [str(n) for n in outcome.problems] == [f"{root / 'folder_link'}: {LINK_PROBLEM}", linked]
     assert main(["parse", str(root), "--out", str(tmp_path / "all.csv")]) == 0
-    assert f"warning: {root / 'folder_link'}: {LINK_PROBLEM}" in capsys.readouterr().err
+    err = capsys.readouterr().err
+    assert f"warning: {root / 'folder_link'}: {LINK_PROBLEM}" in err and f"warning: {linked}" in err
 
 
 def test_model_init_reads_the_listed_reports(shop):

@@ -27,7 +27,7 @@ GUIDE = ROOT / "sample_reports" / "guide_pins"
 def test_offsets_csv_round_trip(tmp_path):
     result = correct_report(CorrectRequest(load_model(GUIDE / "model.toml")), GUIDE / "cycle_01.csv").cycles[0]
     rows = cycle_rows(result)
-    write_offsets_csv(rows, tmp_path / "off.csv", resolution=result.model.resolution)
+    write_offsets_csv(rows, tmp_path / "off.csv")
     with open(tmp_path / "off.csv", newline="", encoding="utf-8") as stream:
         back = list(csv.DictReader(stream))
     assert [r["id"] for r in back] == [r.id for r in rows]

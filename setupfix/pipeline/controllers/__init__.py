@@ -7,17 +7,26 @@ programs), ``siemens`` (840D part program with system variables) and
 :class:`~setupfix.errors.ExportError` naming a register it cannot express, so no
 file is written half right.  :func:`parsers.current.read_current` reads the controller's current
 offsets (``register,value``) that turn *add* rows into absolute *set* rows.
+
+``batch --controller`` writes one program per cycle into a folder; :func:`program_path`
+names it after the report's path below the batch folder (unique by construction:
+``line_A/cycle.csv`` and ``line_B/cycle.csv``, ``cycle.csv`` and ``cycle.dmo`` never
+share a program), shortened deterministically when a name exceeds :data:`NAME_MAX`.
 """
 
 from __future__ import annotations
 
+import hashlib
 import importlib
+import os
 from collections.abc import Callable, Sequence
+from pathlib import PurePosixPath
 
 from setupfix.errors import ParameterError
 from setupfix.offsets import OffsetRow
 
-__all__ = ["CONTROLLERS", "render", "renderer", "Renderer", "write_offsets"]
+__all__ = ["CONTROLLERS", "render", "renderer", "Renderer", "write_offsets", "PROGRAM_SUFFIX", "NAME_MAX",
+           "PROGRAM_NAME_MAX", "program_path", "fit_name"]
 
 Renderer = Callable[[Sequence[OffsetRow], str], str]
 
@@ -62,3 +71,66 @@ def write_offsets(rows: Sequence[OffsetRow], target: str, *, controller: str = "
     from setupfix.pipeline.writers import write_text
 
     write_text(target, render(controller, rows, title))
+
+
+#: File suffix of a program by controller (every format but ``csv``).
+PROGRAM_SUFFIX: dict[str, str] = {"fanuc": ".nc", "haas": ".nc", "siemens": ".mpf", "heidenhain": ".txt"}
+
+#: Longest file name [bytes] the file systems in use accept (POSIX ``NAME_MAX``).
+NAME_MAX = 255
+#: Longest program name [bytes]: room left for the atomic writer's temporary name beside it
+#: (``.<name>.<pid>.<random>.tmp``, :mod:`setupfix.atomic`).
+PROGRAM_NAME_MAX = NAME_MAX - 40
+
+
+def _digest(text: str) -> str:
+    return hashlib.sha256(os.fsencode(text)).hexdigest()[:10]
+
+
+def fit_name(name: str, suffix: str = "", limit: int = NAME_MAX) -> str:
+    """``name + suffix``, or when that exceeds ``limit`` bytes (file-system encoding) the longest
+    prefix of ``name`` that fits with ``~`` and a 10-digit hash of the whole name before ``suffix``.
+
+    Deterministic (the same name always gives the same file) and distinct for distinct names
+    (up to the hash).
+    """
+    if len(os.fsencode(name + suffix)) <= limit:
+        return name + suffix
+    tail = f"~{_digest(name)}{suffix}"
+    room = limit - len(os.fsencode(tail))
+    head = name
+    while len(os.fsencode(head)) > room:  # cut whole characters (an encoded character is never split)
+        head = head[:max(0, min(len(head) - 1, room))]
+    return head + tail
+
+
+def program_path(report: str, part: str | None, controller: str) -> PurePosixPath:
+    """Where ``batch`` writes the program of one cycle, relative to its output folder.
+
+    Parameters
+    ----------
+    report : str
+        The report's path relative to the batch folder, ``/``-separated (``line_A/cycle.csv``).
+    part : str or None
+        The cycle's part when the report holds several cycles (None: one cycle).
+    controller : str
+        A key of :data:`PROGRAM_SUFFIX`.
+
+    Returns
+    -------
+    PurePosixPath
+        The report's folders, then its full name (suffix kept, so ``cycle.csv`` and
+        ``cycle.dmo`` differ), ``__<part>`` for one of several cycles (a part name with
+        other characters than ASCII letters, digits, ``-_.`` has them as ``_`` and a
+        hash of the name added: ``__P_1~3f…``), and the controller's suffix:
+        ``line_A/cycle.csv.nc``, ``r.csv__P1.mpf``.  The file name fits in
+        :data:`PROGRAM_NAME_MAX` bytes, each folder in :data:`NAME_MAX` (:func:`fit_name`).
+    """
+    rel = PurePosixPath(report)
+    tag = ""
+    if part is not None:
+        plain = "".join(c if c.isascii() and (c.isalnum() or c in "-_.") else "_" for c in part)
+        tag = "__" + plain + ("" if plain == part and plain else f"~{_digest(part)}")  # "P 1" ≠ "P_1"
+    name = fit_name(rel.name + tag, PROGRAM_SUFFIX[controller], PROGRAM_NAME_MAX)
+    folders = [fit_name(p) for p in rel.parts[:-1]]
+    return PurePosixPath(*folders, name)

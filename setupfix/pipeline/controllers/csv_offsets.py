@@ -4,7 +4,8 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 
-from setupfix.offsets import OffsetRow, offsets_csv_text
+from setupfix.offsets import OffsetRow
+from setupfix.pipeline.writers import offsets_csv_text
 
 __all__ = ["render"]
 
