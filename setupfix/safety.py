@@ -41,13 +41,27 @@ if TYPE_CHECKING:  # pose builds the problem with these rules; recommend takes w
 
 __all__ = ["RuleEffect", "Policy", "Recommendation", "reject_mask", "guard_limits", "cumulative_bounds",
            "apply_gain", "harmed_mask", "in_dead_band", "ewma", "ewma_series", "Smoothed", "ewma_history", "recommend",
-           "budget", "VERDICTS"]
+           "budget", "VERDICTS", "STOPPED", "short_list"]
 
 Array = npt.NDArray[np.float64]
 Mask = npt.NDArray[np.bool_]
 
 #: The three verdicts, in order of severity.
 VERDICTS = ("apply", "hold", "reject")
+
+#: Optimiser statuses of a solve stopped before its answer was proved (time limit, solver failure).
+STOPPED = ("time_limit", "solver_error")
+
+#: Names an alarm or a rule message lists before "… and N more" (the full list is in the rule's dimensions).
+SHOWN = 3
+
+
+def short_list(names: Iterable[str], shown: int = SHOWN) -> str:
+    """The first ``shown`` names and how many more: ``"A, B, C, … and 741 more"`` (one line for any length)."""
+    items = list(names)
+    if len(items) <= shown + 1:
+        return ", ".join(items)
+    return ", ".join(items[:shown]) + f", … and {len(items) - shown} more"
 
 
 @dataclass(frozen=True)
@@ -118,6 +132,13 @@ class Recommendation:
         Registers whose change sits at a bound (per-step clamp or cumulative limit).
     alarm : str
         One sentence for the operator when the verdict is ``reject`` (else empty).
+    solved : bool
+        False when the solve was stopped (status in :data:`STOPPED`: time limit, solver
+        error) and nothing is recommended (verdict ``hold``): the hold then means "not
+        solved within the time limit", never "no change needed"; the rule ``not_solved``
+        says so.  A stopped solve that still yields a correction (checked better than none,
+        e.g. the grid optimum proved but not the least norm) is ``apply`` with the rule
+        ``stopped`` stating what is certified (``result.extra["norm_ratio_max"]``).
     """
 
     verdict: str
@@ -128,6 +149,7 @@ class Recommendation:
     given_up: tuple[str, ...] = ()
     at_limit: tuple[str, ...] = ()
     alarm: str = ""
+    solved: bool = True
 
 
 def reject_mask(deviation: Array, lower: Array, upper: Array, band: Array) -> Mask:
@@ -404,7 +426,42 @@ def recommend(posed: PosedProblem, solve: Callable[[CorrectionProblem], Optimize
     if at_limit:
         rules.append(RuleEffect("clamp", "change at the register's per-step or cumulative limit",
                                 registers=at_limit))
-    return Recommendation(verdict, x + 0.0, result, guarded, tuple(rules), given_up, at_limit)
+    solved = True
+    if result.status in STOPPED:
+        stopped = stopped_rule(result, recommended=verdict == "apply")
+        rules.append(stopped)
+        solved = stopped.rule != "not_solved"
+    return Recommendation(verdict, x + 0.0, result, guarded, tuple(rules), given_up, at_limit, solved=solved)
+
+
+def stopped_rule(result: OptimizeResult, *, recommended: bool) -> RuleEffect:
+    """The rule of a solve stopped before its proof (``result.status`` in :data:`STOPPED`).
+
+    ``not_solved`` when nothing is recommended: "not solved within the time limit" (or
+    "the solver failed"), naming the stage; ``stopped`` when a correction is still
+    recommended: what was proved and the certified bound on the norm
+    (``result.extra["norm_ratio_max"]``: ‖x‖²_cost ≤ ratio · least norm).
+    """
+    where = result.extra.get("stopped")
+    stage = where.get("stage", "") if isinstance(where, dict) else ""
+    reason = where.get("reason", "") if isinstance(where, dict) else ""
+    at = f" (the {stage} stage stopped)" if stage else ""
+    if not recommended:
+        what = ("not solved within the time limit" if result.status == "time_limit"
+                else f"not solved: the solver failed{f' ({reason})' if reason else ''}")
+        return RuleEffect("not_solved", f"{what}{at}: no proven correction, nothing is recommended (this is not "
+                          "'no change needed'); allow more time (--time-limit) or check the model")
+    ratio = result.extra.get("norm_ratio_max")
+    certified = []
+    if stage != "least norm" and result.bound is not None and np.isfinite(result.bound):
+        certified.append(f"the error budget {result.margin_after:+.4f} is within "
+                         f"{max(result.bound - result.margin_after, 0.0):.4f} of the best possible (LP bound "
+                         f"{result.bound:+.4f})")
+    if isinstance(ratio, float) and np.isfinite(ratio):
+        certified.append(f"the correction's weighted norm is at most {ratio:.3f}× the least norm")
+    first = "solve stopped by the time limit" if result.status == "time_limit" else "solve stopped by a solver error"
+    return RuleEffect("stopped", f"{first}{at}: {result.message}"
+                      + (f"; certified: {' and '.join(certified)}" if certified else ""))
 
 
 def budget(problem: CorrectionProblem, x: Array) -> tuple[float, Array]:

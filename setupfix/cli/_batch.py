@@ -10,7 +10,7 @@ from typing import TYPE_CHECKING
 
 from setupfix.cli._choices import CONTROLLERS, OPTIMIZERS
 from setupfix.cli._common import add_report_options, add_thermal_options, whole_number
-from setupfix.cli.exit_codes import OK, PARTIAL, REJECTED
+from setupfix.cli.exit_codes import NOT_SOLVED, OK, PARTIAL, REJECTED
 
 if TYPE_CHECKING:
     from setupfix.pipeline.batch import BatchSummary, Outcome
@@ -21,7 +21,9 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
                        description="Correct every report found in DIR (recursively, any supported format) and "
                                    "write one offsets CSV. A file that cannot be read or matched is named on "
                                    "stderr with its reason and skipped. Exit status 4 when any file failed, 5 "
-                                   "when a recommendation was rejected, else 0.")
+                                   "when a recommendation was rejected, 6 when a solve was stopped by its "
+                                   "time limit with nothing proven (counted in the summary, not stored as "
+                                   "done), else 0.")
     p.add_argument("folder", metavar="DIR", help="folder searched recursively for reports")
     p.add_argument("--model", required=True, metavar="MODEL", help="process model TOML")
     p.add_argument("--out", required=True, metavar="FILE",
@@ -88,6 +90,8 @@ def _status(summary: BatchSummary) -> int:
         return PARTIAL
     if summary.verdicts.get("reject"):
         return REJECTED
+    if summary.unsolved:
+        return NOT_SOLVED
     return OK
 
 

@@ -45,7 +45,7 @@ def _applied_result(problem: CorrectionProblem, rec: Recommendation) -> Optimize
     """
     raw = rec.result
     x = np.asarray(rec.x, dtype=float)
-    if rec.verdict == "reject":
+    if rec.verdict == "reject" or not rec.solved:  # nothing was solved: nothing binds
         binding: tuple[str, ...] = ()
     elif rec.verdict == "apply" and np.array_equal(x, raw.x) and raw.binding:
         binding = raw.binding
@@ -53,7 +53,7 @@ def _applied_result(problem: CorrectionProblem, rec: Recommendation) -> Optimize
         binding = problem.binding(x)
     message = raw.message
     if rec.verdict == "hold":
-        message = "hold: " + next((r.message for r in rec.rules if r.rule in ("dead_band", "no_harm")),
+        message = "hold: " + next((r.message for r in rec.rules if r.rule in ("not_solved", "dead_band", "no_harm")),
                                   "no change needed")
     return dataclasses.replace(raw, x=x.copy(), margin_before=problem.margin_before,
                                margin_after=budget(problem, x)[0], norm=float(np.linalg.norm(x)),
