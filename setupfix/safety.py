@@ -33,6 +33,7 @@ import numpy as np
 import numpy.typing as npt
 
 from setupfix.errors import Note
+from setupfix.explain import fit_registers, leave_one_out, targets
 from setupfix.objective import error_budget, margins
 from setupfix.optimize import CorrectionProblem, OptimizeResult
 
@@ -339,12 +340,15 @@ def _inside(values: Array, lower: Array, upper: Array) -> Mask:
 
 
 def recommend(posed: PosedProblem, solve: Callable[[CorrectionProblem], OptimizeResult], *,
-              optimizer: str = "exact", names: Mapping[str, str] | None = None) -> Recommendation:
+              optimizer: str = "exact", names: Mapping[str, str] | None = None,
+              registers: Mapping[str, str] | None = None, unit: str = "") -> Recommendation:
     """The rules after the solve, around ``solve(posed.guarded)``.
 
-    Order: reject band (on the part as measured: no solve at all) → solve → gain →
-    no harm (given-up dimensions) → dead band → clamp report.  The pre-solve rules
-    (``posed.effects``) head the rule list.
+    Order: reject band (on the part as measured: no solve at all; :func:`beyond_band`
+    tells gross deviations from setup errors) → solve → gain → no harm (given-up
+    dimensions) → dead band → clamp report → stopped solve (:func:`stopped_rule`).  The
+    pre-solve rules (``posed.effects``) head the rule list.  Lists of names in messages
+    are short (:func:`short_list`); the rules' ``dimensions`` hold them all.
 
     Parameters
     ----------
@@ -353,11 +357,15 @@ def recommend(posed: PosedProblem, solve: Callable[[CorrectionProblem], Optimize
         ``solve(problem) -> OptimizeResult`` (any optimiser).
     names : mapping, optional
         Dimension ID → name, for the messages.
+    registers : mapping, optional
+        Register ID → controller register (``G55``), for the messages.
+    unit : str
+        Length unit, for the messages.
     """
     shown = names or {}
 
     def label(ids: Iterable[str]) -> str:
-        return ", ".join(shown.get(i, i) for i in ids)
+        return short_list(shown.get(i, i) for i in ids)
 
     problem, guarded, policy = posed.problem, posed.guarded, posed.policy
     ids = np.array(problem.register_ids, dtype=object)
@@ -366,13 +374,9 @@ def recommend(posed: PosedProblem, solve: Callable[[CorrectionProblem], Optimize
 
     bad = reject_mask(posed.measured, lower, upper, policy.reject_band)
     if bad.any():
-        bad_ids = tuple(dims[bad])
-        alarm = (f"REJECT: {label(bad_ids)} beyond the reject band (a broken tool, a bad measurement or a wrong "
-                 "part?) — no correction; check the part and the measurement")
-        rules = [e for e in posed.effects if e.rule in ("ewma", "forecast")]
-        rules.append(RuleEffect("reject", "deviation beyond the reject band: no correction", dimensions=bad_ids))
-        result = _zero_result(problem, optimizer, "rejected", alarm)
-        return Recommendation("reject", result.x, result, problem, tuple(rules), alarm=alarm)
+        stop = beyond_band(posed, bad, optimizer, label, registers or {}, unit)
+        if stop is not None:
+            return stop
 
     rules = list(posed.effects)
     result = solve(guarded)
@@ -462,6 +466,70 @@ def stopped_rule(result: OptimizeResult, *, recommended: bool) -> RuleEffect:
     first = "solve stopped by the time limit" if result.status == "time_limit" else "solve stopped by a solver error"
     return RuleEffect("stopped", f"{first}{at}: {result.message}"
                       + (f"; certified: {' and '.join(certified)}" if certified else ""))
+
+
+def beyond_band(posed: PosedProblem, bad: Mask, optimizer: str, label: Callable[[Iterable[str]], str],
+                registers: Mapping[str, str], unit: str) -> Recommendation | None:
+    """The decision on a part with deviations beyond the reject band (``bad``), before any solve.
+
+    * **gross** — a deviation whose residual after the best correction of the *other*
+      dimensions (:func:`setupfix.explain.leave_one_out`) is still beyond the reject band:
+      nothing the setup does explains it (a broken tool, a bad measurement, a wrong
+      part): verdict ``reject``, rule ``reject`` naming every such dimension;
+    * **setup error** — the others explain it (a register entered wrong: a whole station
+      shifted): the registers fitted to the dimensions that are not gross
+      (:func:`setupfix.explain.fit_registers`) are named where the change they need is
+      beyond their per-step limit (a fixed register: any change), in the rule
+      ``setup_error`` (``registers``: their IDs), e.g. "G55 looks off by −0.350 mm;
+      beyond the per-step limit 0.1".  The documented rule: **hold** — no register is
+      changed, the alarm names the register and the amount to check; a wrong entry is
+      corrected by the operator at the control, not stepped off by the per-step limit
+      over several parts (each of them scrap).  With gross deviations as well the verdict
+      is ``reject`` and the setup error is named beside them;
+    * explained within the registers' limits: None — the solve corrects it.
+    """
+    problem, policy = posed.problem, posed.policy
+    ids = np.array(problem.register_ids, dtype=object)
+    dims = np.array(problem.dimension_ids, dtype=object)
+    lower, upper = problem.lower, problem.upper
+    goal = targets(lower, upper)
+    residual = posed.measured - goal
+    gross = bad & reject_mask(goal + leave_one_out(problem.composite, residual), lower, upper, policy.reject_band)
+    explained = bad & ~gross
+    setup: RuleEffect | None = None
+    if explained.any():
+        x = fit_registers(problem.composite, residual, ~gross)
+        h = problem.resolution
+        moves = np.any(problem.composite[:, explained] != 0, axis=1)
+        fixed = problem.ub <= problem.lb
+        over = moves & ((x > problem.ub + h / 2) | (x < problem.lb - h / 2)) & (np.abs(x) >= h)
+        if over.any():
+            digits = max(0, int(-np.floor(np.log10(h) + 1e-9)))
+            parts = [f"{registers.get(r, r)} looks off by {v:+.{digits}f}{f' {unit}' if unit else ''}; "
+                     + ("fixed in the model" if f else f"beyond the per-step limit {max(abs(lo), hi):g}")
+                     for r, v, lo, hi, f in zip(ids[over], x[over], problem.lb[over], problem.ub[over],
+                                                fixed[over], strict=True)]
+            setup = RuleEffect("setup_error", "; ".join(parts) + f" (it explains {label(dims[explained])}): a "
+                               "register entered wrong? no correction — check it at the control",
+                               registers=tuple(ids[over]), dimensions=tuple(dims[explained]))
+    rules = [e for e in posed.effects if e.rule in ("ewma", "forecast")]
+    if gross.any():
+        gross_ids = tuple(dims[gross])
+        alarm = (f"REJECT: {len(gross_ids)} dimension(s) beyond the reject band that no setup correction explains: "
+                 f"{label(gross_ids)} (a broken tool, a bad measurement or a wrong part?) — no correction; check "
+                 "the part and the measurement")
+        if setup is not None:
+            alarm += f"; also {setup.message.split(' (it explains')[0]}"
+        rules.append(RuleEffect("reject", "deviation beyond the reject band, not explained by any setup "
+                                "correction: no correction", dimensions=gross_ids))
+        rules += [setup] if setup is not None else []
+        result = _zero_result(problem, optimizer, "rejected", alarm)
+        return Recommendation("reject", result.x, result, problem, tuple(rules), alarm=alarm)
+    if setup is None:
+        return None
+    alarm = f"SETUP ERROR: {setup.message}"
+    result = _zero_result(problem, optimizer, "setup_error", alarm)
+    return Recommendation("hold", result.x, result, posed.guarded, (*rules, setup), alarm=alarm)
 
 
 def budget(problem: CorrectionProblem, x: Array) -> tuple[float, Array]:

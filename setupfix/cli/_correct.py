@@ -76,6 +76,9 @@ def run(args: argparse.Namespace) -> int:
         export(cycles, args.offsets, controller=args.controller, current=request.current)
     for c in outcome.rejected:
         print(f"error: {c.part.report}: part {c.part.part or '—'}: {c.recommendation.alarm}", file=sys.stderr)
+    for c in cycles:
+        if c.verdict != "reject" and c.recommendation.alarm:  # a setup error, held: nothing changed, check it
+            print(f"warning: {c.part.report}: part {c.part.part or '—'}: {c.recommendation.alarm}", file=sys.stderr)
     for c in outcome.unsolved:
         print(f"error: {c.part.report}: part {c.part.part or '—'}: NOT SOLVED: {verdict_line(c)}"
               + ("; nothing exported" if args.offsets else ""), file=sys.stderr)

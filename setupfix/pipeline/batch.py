@@ -178,7 +178,7 @@ def _correct_one(path: str, size: int, mtime_ns: int) -> Outcome:
             out.verdicts.append(cycle.verdict)
             out.solved.append(cycle.solved)
             out.notes += cycle.notes
-            if cycle.verdict == "reject":
+            if cycle.recommendation.alarm:  # reject, or a setup error held
                 out.notes.append(Note(cycle.recommendation.alarm, SourceLocation(path), "safety"))
             elif not cycle.solved:
                 out.notes.append(Note(cycle.result.message, SourceLocation(path), "solver"))

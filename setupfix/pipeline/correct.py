@@ -27,7 +27,7 @@ from setupfix.pipeline.cycles import read_parts
 from setupfix.pipeline.requests import (CorrectOutcome, CorrectRequest, CurrentOffsets, CycleCorrection, CycleOptions,
                                         History, ReadOptions, SolveOptions, ThermalInputs, load_thermal)
 from setupfix.pose import pose_problem
-from setupfix.safety import Recommendation, Smoothed, budget, recommend
+from setupfix.safety import Recommendation, Smoothed, budget, recommend, short_list
 from setupfix.store import Store
 
 if TYPE_CHECKING:
@@ -105,15 +105,15 @@ def correct_cycle(request: CorrectRequest, part: PartMeasurement, *,
     posed = pose_problem(model, part, smoothed=_smoothed(request, part), cumulative=cumulative, composite=composite)
     solve = request.solve
     opt = get_optimizer(solve.optimizer, seed=solve.seed, **solve.params())
-    rec = recommend(posed, opt.solve, optimizer=solve.optimizer, names={d.id: d.name for d in model.dimensions})
+    rec = recommend(posed, opt.solve, optimizer=solve.optimizer, names={d.id: d.name for d in model.dimensions},
+                    registers={r.id: r.register for r in model.registers}, unit=model.unit)
     notes = [*part.notes, *posed.notes, *(n for n in rec.result.notes if n.message != rec.result.message)]
     if part.absent:
         notes.append(Note(f"{len(part.absent)} dimension(s) absent from the report, left out: "
-                          f"{', '.join(part.absent)}", None, "match"))
+                          f"{short_list(part.absent)}", None, "match"))
     if part.unmatched:
         notes.append(Note(f"{len(part.unmatched)} characteristic(s) match no dimension: "
-                          f"{', '.join(part.unmatched[:8])}" + (" …" if len(part.unmatched) > 8 else ""),
-                          None, "match"))
+                          f"{short_list(part.unmatched)}", None, "match"))
     cycle = CycleCorrection(model, part, posed, _applied_result(posed.problem, rec), rec, None, tuple(notes))
     if request.thermal is not None:
         cycle = dataclasses.replace(cycle, thermal=_feed_forward(request.thermal, cycle))

@@ -19,7 +19,7 @@ from setupfix.pipeline.batch import BatchSummary
 from setupfix.pipeline.compare import Comparison
 from setupfix.pipeline.requests import CycleCorrection
 from setupfix.relation import RelationMatrices
-from setupfix.safety import STOPPED
+from setupfix.safety import STOPPED, short_list
 
 #: Digits of the lengths in the JSON output.
 JSON_DIGITS = 9
@@ -54,7 +54,7 @@ def verdict_label(pc: CycleCorrection) -> str:
 def verdict_line(pc: CycleCorrection) -> str:
     """One line saying what to do: APPLY / HOLD / REJECT / NOT SOLVED and why."""
     rec = pc.recommendation
-    if rec.verdict == "reject":
+    if rec.alarm:  # reject, or a setup error held
         return rec.alarm
     if not rec.solved:
         why = next(r.message for r in rec.rules if r.rule == "not_solved")
@@ -109,11 +109,11 @@ def format_correction(pc: CycleCorrection) -> str:
         lines.append("binding (what stops a better correction): " + ", ".join(names[b] for b in pc.binding))
     if pc.recommendation.given_up:
         lines.append("given up (need the NC program or the process, not the setup): "
-                     + ", ".join(names[b] for b in pc.recommendation.given_up))
+                     + short_list(names[b] for b in pc.recommendation.given_up))
     if pc.verdict != "reject":
         lines.append(r.message)
     for rule in pc.recommendation.rules:
-        what = ", ".join([*rule.registers, *(names.get(d, d) for d in rule.dimensions)])
+        what = short_list([*rule.registers, *(names.get(d, d) for d in rule.dimensions)])
         lines.append(f"rule {rule.rule}: {rule.message}" + (f" [{what}]" if what else ""))
     lines += note_lines(pc.notes)
     return "\n".join(lines)
