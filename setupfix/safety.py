@@ -42,7 +42,7 @@ if TYPE_CHECKING:  # pose builds the problem with these rules; recommend takes w
 
 __all__ = ["RuleEffect", "Policy", "Recommendation", "reject_mask", "guard_limits", "cumulative_bounds",
            "apply_gain", "harmed_mask", "in_dead_band", "ewma", "ewma_series", "Smoothed", "ewma_history", "recommend",
-           "budget", "VERDICTS", "STOPPED", "short_list"]
+           "budget", "VERDICTS", "STOPPED", "short_list", "shifted_history", "last_measured"]
 
 Array = npt.NDArray[np.float64]
 Mask = npt.NDArray[np.bool_]
@@ -297,10 +297,28 @@ def ewma_history(deviation: Array, now: np.datetime64 | None, times: npt.NDArray
     """
     if lam >= 1.0 or now is None:
         return Smoothed(deviation, 0, lam)
-    before = np.flatnonzero(times < now)
-    if before.size == 0:
+    rows = shifted_history(now, times, earlier, log_times, log_register, log_delta, log_reset, composite, limit)
+    if rows.shape[0] == 0:
         return Smoothed(deviation, 0, lam)
-    before = before[np.argsort(times[before], kind="stable")][-limit:]
+    smoothed = ewma_series(np.vstack([rows, deviation]), lam)
+    return Smoothed(np.where(np.isnan(deviation), np.nan, smoothed), int(rows.shape[0]), lam)
+
+
+def shifted_history(now: np.datetime64, times: npt.NDArray[np.datetime64], earlier: Array,
+                    log_times: npt.NDArray[np.datetime64], log_register: npt.NDArray[np.int64], log_delta: Array,
+                    log_reset: Mask, composite: Array, limit: int = 50) -> Array:
+    """The last ``limit`` parts machined before ``now``, oldest first, each moved to the machine as it is now.
+
+    y_k + Σ Δx·C over the corrections logged after part k and up to ``now`` (eqs. 3–4);
+    NaN where a tool changed since cuts the dimension (its wear restarted) or where the
+    part did not measure it.  Arguments as :func:`ewma_history`.
+
+    Returns
+    -------
+    ndarray of shape (n_before, n_dimensions) [unit]
+    """
+    before = np.flatnonzero(times < now)
+    before = before[np.argsort(times[before], kind="stable")][-limit:] if before.size else before
     rows = []
     known = log_register >= 0
     for k in before:
@@ -316,9 +334,18 @@ def ewma_history(deviation: Array, now: np.datetime64 | None, times: npt.NDArray
         row = earlier[k] + shift @ composite
         row[reset] = np.nan
         rows.append(row)
-    rows.append(deviation)
-    smoothed = ewma_series(np.vstack(rows), lam)
-    return Smoothed(np.where(np.isnan(deviation), np.nan, smoothed), int(before.size), lam)
+    return np.vstack(rows) if rows else np.zeros((0, composite.shape[1]))
+
+
+def last_measured(rows: Array) -> Array:
+    """Each dimension's most recent value in ``rows`` (oldest first; NaN where none): the coverage stand-in.
+
+    rows : ndarray of shape (n_parts, n_dimensions) → ndarray of shape (n_dimensions,)
+    """
+    out = np.full(rows.shape[1], np.nan)
+    for row in rows:
+        out = np.where(np.isnan(row), out, row)
+    return out
 
 
 def _zero_result(problem: CorrectionProblem, optimizer: str, status: str, message: str) -> OptimizeResult:

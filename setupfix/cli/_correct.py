@@ -33,7 +33,8 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
     p.add_argument("--json", action="store_true", help="machine-readable output (shared/spec/cli-json.md)")
     p.add_argument("--store", metavar="DB", default=None,
                    help="history store: earlier reports and the corrections log for the EWMA smoothing "
-                        "(model [safety] ewma < 1)")
+                        "(model [safety] ewma < 1) and for the recent measurements that stand in for dimensions "
+                        "the report lacks")
     add_offsets_options(p)
     add_report_options(p)
     add_thermal_options(p)

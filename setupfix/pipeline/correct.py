@@ -102,7 +102,9 @@ def correct_cycle(request: CorrectRequest, part: PartMeasurement, *,
     """
     model = request.model
     cumulative = request.current.wear_totals(model) if request.current is not None else None
-    posed = pose_problem(model, part, smoothed=_smoothed(request, part), cumulative=cumulative, composite=composite)
+    stand_in = request.history.stand_in(model, part) if request.history is not None else None
+    posed = pose_problem(model, part, smoothed=_smoothed(request, part), cumulative=cumulative, composite=composite,
+                         stand_in=stand_in)
     solve = request.solve
     opt = get_optimizer(solve.optimizer, seed=solve.seed, **solve.params())
     rec = recommend(posed, opt.solve, optimizer=solve.optimizer, names={d.id: d.name for d in model.dimensions},
@@ -152,7 +154,8 @@ def load_request(model: ProcessModel | str | Path, *, read: ReadOptions | None =
     """A :class:`CorrectRequest` with every input file read once (the CLI's and the TUI's way to build one).
 
     ``current``: the controller's current offsets (``register,value``); ``store``: the
-    history store, read only when the model smooths (``[safety] ewma`` < 1);
+    history store (the smoothing's earlier parts when ``[safety] ewma`` < 1, and the recent
+    measurements that stand in for dimensions a report lacks);
     ``thermal`` and ``temperatures`` (together): the feed-forward's inputs.
 
     Raises
@@ -170,7 +173,7 @@ def load_request(model: ProcessModel | str | Path, *, read: ReadOptions | None =
     history = None
     if history_store is not None:
         with history_store as opened:  # read once: the smoothing needs the earlier parts and the log
-            history = History.from_store(model, opened) if model.safety.ewma < 1.0 else None
+            history = History.from_store(model, opened)
     inputs = (load_thermal(thermal, temperatures, at=at, dead_band=thermal_dead_band)
               if thermal is not None and temperatures is not None else None)
     return CorrectRequest(model, read or ReadOptions(), cycles or CycleOptions(), solve or SolveOptions(), offsets,

@@ -24,6 +24,9 @@ from setupfix.safety import STOPPED, short_list
 #: Digits of the lengths in the JSON output.
 JSON_DIGITS = 9
 
+#: Names a line of the text output lists before "… and N more" (alarms name fewer; the JSON every one).
+TEXT_LIST = 30
+
 
 def note_lines(notes: Iterable[Note]) -> list[str]:
     """Typed notes as one line of text each (``file: [place]: message``)."""
@@ -109,11 +112,11 @@ def format_correction(pc: CycleCorrection) -> str:
         lines.append("binding (what stops a better correction): " + ", ".join(names[b] for b in pc.binding))
     if pc.recommendation.given_up:
         lines.append("given up (need the NC program or the process, not the setup): "
-                     + short_list(names[b] for b in pc.recommendation.given_up))
+                     + short_list((names[b] for b in pc.recommendation.given_up), TEXT_LIST))
     if pc.verdict != "reject":
         lines.append(r.message)
     for rule in pc.recommendation.rules:
-        what = short_list([*rule.registers, *(names.get(d, d) for d in rule.dimensions)])
+        what = short_list([*rule.registers, *(names.get(d, d) for d in rule.dimensions)], TEXT_LIST)
         lines.append(f"rule {rule.rule}: {rule.message}" + (f" [{what}]" if what else ""))
     lines += note_lines(pc.notes)
     return "\n".join(lines)
