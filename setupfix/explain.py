@@ -37,7 +37,8 @@ def targets(lower: Array, upper: Array) -> Array:
     """
     lo, up = np.asarray(lower, dtype=float), np.asarray(upper, dtype=float)
     mid = (lo + up) / 2
-    return np.where(np.isfinite(mid), mid, np.clip(0.0, lo, up))
+    out: Array = np.where(np.isfinite(mid), mid, np.clip(0.0, lo, up))
+    return out
 
 
 def _system(composite: Array) -> tuple[Array, float]:
@@ -99,4 +100,5 @@ def leave_one_out(composite: Array, residual: Array) -> Array:
     x = -solved @ r
     e = r + c.T @ x
     leverage = np.einsum("jq,jq->q", c, solved)  # H_qq
-    return e / np.maximum(1.0 - leverage, 1e-15)
+    out: Array = e / np.maximum(1.0 - leverage, 1e-15)
+    return out

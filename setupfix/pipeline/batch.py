@@ -303,9 +303,11 @@ def run_batch(request: CorrectRequest, folder: str | Path, out: str | Path, *, w
         youngest = time.time() - max(m for _, _, m in files) / 1e9
         if youngest < settle:
             time.sleep(settle - youngest)
-    if store is not None or request.history is not None:  # smoothing and the coverage stand-ins (as correct)
+    if model.safety.ewma < 1.0 and (store is not None or request.history is not None):
         base = request.history if request.history is not None else History.from_store(model, store)  # type: ignore[arg-type]  # store is set: tested above
         request = dataclasses.replace(request, history=batch_history(request, base, [f for f, _, _ in files]))
+    elif store is not None and request.history is None:  # the coverage stand-ins: the store's parts (as correct)
+        request = dataclasses.replace(request, history=History.from_store(model, store))
     summary = _Tally()
     summary.failed += listing.problems  # named, never dropped: an unreadable folder, a broken link, …
     seen: dict[str, str] = {}
