@@ -490,6 +490,9 @@ def test_a_stopped_solve_is_not_solved_through_every_door(tmp_path):
         s = json.loads(text)
         assert code == 6, (run, err)
         assert (s["reports"], s["unsolved"], s["verdicts"], s["skipped"]) == (1, 1, {"hold": 1}, []), run
+    code, text, err = cli("batch", report.parent, "--model", model, "--out", tmp_path / "b.csv", "--settle", "0",
+                          *limit)
+    assert code == 6 and "1 of the holds not solved within the time limit" in text and "NOT SOLVED" in err
     code, text, _ = cli("batch", report.parent, "--model", model, "--out", tmp_path / "b.csv", "--settle", "0",
                         "--json", "--store", db)
     assert code == 0 and json.loads(text)["unsolved"] == 0  # solved with the default limit: stored as done …

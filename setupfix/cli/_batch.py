@@ -118,7 +118,8 @@ class _Progress:
             self.bar.update(self.task, completed=done, total=total, rate=f"{done / elapsed:.0f} reports/s")
             return
         state = ("FAILED" if outcome.error else f"skipped ({outcome.skipped})" if outcome.skipped
-                 else ", ".join(outcome.verdicts) or "no part")
+                 else ", ".join(v if solved else "NOT SOLVED" for v, solved in zip(outcome.verdicts, outcome.solved,
+                                                                                 strict=True)) or "no part")
         print(f"[{done}/{total}] {outcome.path}: {state}", file=sys.stderr)
 
     def __exit__(self, *exc: object) -> None:

@@ -232,8 +232,8 @@ def format_batch_summary(summary: BatchSummary, out: str) -> str:
     """Reports, parts, verdicts, failures, skipped files and time of a batch run."""
     verdicts = ", ".join(f"{summary.verdicts.get(v, 0)} {v}" for v in ("apply", "hold", "reject"))
     rate = summary.reports / summary.seconds if summary.seconds > 0 else 0.0
-    unsolved = (f" ({summary.unsolved} of the holds not solved within the time limit: nothing proven, "
-                "corrected again next run)" if summary.unsolved else "")
+    unsolved = (f" ({summary.unsolved} of the holds not solved within the time limit: nothing proven; a "
+                "history store does not count them as done)" if summary.unsolved else "")
     lines = [f"{summary.reports} report(s), {summary.parts} part(s): {verdicts}{unsolved}",
              f"{len(summary.failed)} failed, {len(summary.skipped)} skipped; "
              f"{summary.seconds:.1f} s ({rate:.0f} reports/s)",
