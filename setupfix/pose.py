@@ -238,14 +238,14 @@ def pose_policy(problem: CorrectionProblem, policy: Policy, *, measured: Array |
     return PosedProblem(problem, guarded, policy, raw, tuple(rules), notes)
 
 
-def coverage(model: ProcessModel, part: PartMeasurement, composite: Array,
+def coverage(model: ProcessModel, part: PartMeasurement, composite: Array | None = None,
              stand_in: Array | None = None) -> tuple[PartMeasurement, Mask, list[RuleEffect]]:
     """Step 1's coverage: the part with stand-ins for absent dimensions, the registers held at 0, the rules.
 
     Parameters
     ----------
-    composite : ndarray of shape (n_registers, n_dimensions)
-        The model's C (every dimension).
+    composite : ndarray of shape (n_registers, n_dimensions), optional
+        C over every dimension (default the model's).
     stand_in : ndarray of shape (n_dimensions,), optional
         A recent measurement of each dimension moved to the machine as it is now (NaN: none).
 
@@ -260,7 +260,8 @@ def coverage(model: ProcessModel, part: PartMeasurement, composite: Array,
     absent = ~part.measured
     rules: list[RuleEffect] = []
     if not absent.any():
-        return part, np.zeros(composite.shape[0], dtype=bool), rules
+        return part, np.zeros(len(model.registers), dtype=bool), rules
+    composite = relation_matrices(model).composite if composite is None else np.asarray(composite, dtype=float)
     ids = np.array([d.id for d in model.dimensions], dtype=object)
     names = {d.id: d.name for d in model.dimensions}
     if stand_in is not None:
@@ -309,8 +310,7 @@ def pose_problem(model: ProcessModel, part: PartMeasurement, *, smoothed: Smooth
         Recent measurements from the history standing in for absent dimensions (coverage,
         step 1; NaN where none).
     """
-    held_part, held, effects = coverage(model, part, relation_matrices(model).composite if composite is None
-                                        else np.asarray(composite, dtype=float), stand_in)
+    held_part, held, effects = coverage(model, part, composite, stand_in)
     if held_part is not part:  # stood-in dimensions are measured for the problem (and the smoothing skips them)
         part = held_part
         if smoothed is not None:
