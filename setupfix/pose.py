@@ -6,6 +6,13 @@ applies the rules that act after the solve.  The order, each step on the output 
 
 1. **measurements** — the cycle's deviations y (model order, NaN where not measured);
    only measured dimensions enter the problem (eqs. 3–4: predicted = y + x·C);
+   **coverage** — a dimension absent from the report is stood in for by its recent
+   measurement from the history, moved by the corrections applied since (``stand_in``,
+   :meth:`setupfix.pipeline.smoothing.History.stand_in`), and then enters the problem
+   like a measured one; without one, every register that moves it is held at 0 (rule
+   ``coverage``, naming registers and dimensions) — a correction never moves what was
+   not measured — unless the model marks the dimension ``sampled = true`` (not measured
+   every cycle: a sampling plan), which leaves its registers free as before;
 2. **smoothing** — the EWMA estimate ŷ of the deviations over the earlier parts
    (λ of ``[safety] ewma``; :func:`setupfix.safety.ewma_history`, arrays from the history);
 3. **effects forecast** — the model's ``[effects]`` drift and wear until the next cycle
@@ -17,7 +24,7 @@ applies the rules that act after the solve.  The order, each step on the output 
    within the cumulative limit;
 6. **costs** — the registers' least-norm weights (f2 = Σ cost·x², eq. 9 weighted;
    the exact optimiser's second stage, f = 10·f1 − f2 of eq. 10 with unit costs);
-7. **fixed registers** — bounds (0, 0).
+7. **fixed registers** — bounds (0, 0), also for the registers coverage holds.
 
 :class:`PosedProblem` keeps the problem on the real limits (for every number shown),
 the guarded problem (what is solved), the policy of the rules after the solve, the
@@ -38,10 +45,11 @@ from parsers.timestamps import instant
 from setupfix.errors import Note, SourceLocation
 from setupfix.model import PartMeasurement, ProcessModel
 from setupfix.optimize import CorrectionProblem
-from setupfix.safety import Policy, RuleEffect, Smoothed, cumulative_bounds, guard_limits
+from setupfix.relation import relation_matrices
+from setupfix.safety import Policy, RuleEffect, Smoothed, cumulative_bounds, guard_limits, short_list
 
 __all__ = ["PosedProblem", "forecast_of", "effects_composite", "policy_of", "pose_problem", "pose_policy",
-           "hours_between"]
+           "coverage", "hours_between"]
 
 Array = npt.NDArray[np.float64]
 Mask = npt.NDArray[np.bool_]
@@ -184,7 +192,8 @@ class PosedProblem:
 
 
 def pose_policy(problem: CorrectionProblem, policy: Policy, *, measured: Array | None = None,
-                effects: tuple[RuleEffect, ...] = (), notes: tuple[Note, ...] = ()) -> PosedProblem:
+                effects: tuple[RuleEffect, ...] = (), notes: tuple[Note, ...] = (),
+                held: Mask | None = None) -> PosedProblem:
     """Steps 4–7 on a problem already holding its deviations and composite (steps 1–3).
 
     Parameters
@@ -197,6 +206,8 @@ def pose_policy(problem: CorrectionProblem, policy: Policy, *, measured: Array |
         The report's own deviations when ``problem.deviation`` is an estimate.
     effects, notes
         What steps 1–3 did (prepended to the rule list).
+    held : bool ndarray of shape (n_registers,), optional
+        Registers held at 0 in the guarded problem (coverage, step 1).
     """
     dims = np.array(problem.dimension_ids, dtype=object)
     ids = np.array(problem.register_ids, dtype=object)
@@ -216,7 +227,9 @@ def pose_policy(problem: CorrectionProblem, policy: Policy, *, measured: Array |
             rules.append(RuleEffect("cumulative_limit", "step bounds tightened so that the total since the last "
                                     "reset stays within the cumulative limit", registers=tuple(ids[tightened])))
     cost = np.asarray(policy.cost, dtype=float)  # 6. costs
-    fixed = problem.ub <= problem.lb  # 7. fixed registers (and registers without room)
+    fixed = problem.ub <= problem.lb  # 7. fixed registers (and registers without room) …
+    if held is not None:
+        fixed = fixed | held  # … and those coverage holds
     lb, ub = np.where(fixed, 0.0, lb), np.where(fixed, 0.0, ub)
     if not (np.array_equal(lb, guarded.lb) and np.array_equal(ub, guarded.ub)
             and np.array_equal(cost, guarded.cost)):
@@ -225,9 +238,58 @@ def pose_policy(problem: CorrectionProblem, policy: Policy, *, measured: Array |
     return PosedProblem(problem, guarded, policy, raw, tuple(rules), notes)
 
 
+def coverage(model: ProcessModel, part: PartMeasurement, composite: Array | None = None,
+             stand_in: Array | None = None) -> tuple[PartMeasurement, Mask, list[RuleEffect]]:
+    """Step 1's coverage: the part with stand-ins for absent dimensions, the registers held at 0, the rules.
+
+    Parameters
+    ----------
+    composite : ndarray of shape (n_registers, n_dimensions), optional
+        C over every dimension (default the model's).
+    stand_in : ndarray of shape (n_dimensions,), optional
+        A recent measurement of each dimension moved to the machine as it is now (NaN: none).
+
+    Returns
+    -------
+    part : PartMeasurement
+        With the stand-ins in place of NaN (they are then measured for the problem).
+    held : bool ndarray of shape (n_registers,)
+    rules : list of RuleEffect
+        ``stand_in`` and ``coverage`` where they changed anything.
+    """
+    absent = ~part.measured
+    rules: list[RuleEffect] = []
+    if not absent.any():
+        return part, np.zeros(len(model.registers), dtype=bool), rules
+    composite = relation_matrices(model).composite if composite is None else np.asarray(composite, dtype=float)
+    ids = np.array([d.id for d in model.dimensions], dtype=object)
+    names = {d.id: d.name for d in model.dimensions}
+    if stand_in is not None:
+        stands = absent & np.isfinite(stand_in)
+        if stands.any():
+            part = dataclasses.replace(part, deviation=np.where(stands, stand_in, part.deviation))
+            absent = absent & ~stands
+            rules.append(RuleEffect("stand_in", f"{int(stands.sum())} dimension(s) absent from the report stood in "
+                                    f"for by their last measurement in the history, moved by the corrections "
+                                    f"applied since: {short_list(names[d] for d in ids[stands])}",
+                                    dimensions=tuple(ids[stands])))
+    sampled = np.array([d.sampled for d in model.dimensions], dtype=bool)
+    blind = absent & ~sampled
+    held = np.any(composite[:, blind] != 0, axis=1)
+    if held.any():
+        regs = tuple(r.id for r, h in zip(model.registers, held, strict=True) if h)
+        shown = short_list(r.register for r, h in zip(model.registers, held, strict=True) if h)
+        rules.append(RuleEffect("coverage", f"{shown} held at 0: they move {int(blind.sum())} dimension(s) absent "
+                                f"from the report ({short_list(names[d] for d in ids[blind])}) with no recent "
+                                "measurement in the history; a correction never moves what was not measured "
+                                "(mark a dimension not measured every cycle with sampled = true)",
+                                registers=regs, dimensions=tuple(ids[blind])))
+    return part, held, rules
+
+
 def pose_problem(model: ProcessModel, part: PartMeasurement, *, smoothed: Smoothed | None = None,
                  cumulative: Mapping[str, float] | None = None, composite: Array | None = None,
-                 policy: Policy | None = None) -> PosedProblem:
+                 policy: Policy | None = None, stand_in: Array | None = None) -> PosedProblem:
     """Pose the problem of one measured cycle in the module's order (steps 1–7).
 
     Parameters
@@ -244,11 +306,19 @@ def pose_problem(model: ProcessModel, part: PartMeasurement, *, smoothed: Smooth
         model's, with its ``[effects]`` relations (step 3).
     policy : Policy, optional
         Settings replacing the model's (tests, what-if); default :func:`policy_of`.
+    stand_in : ndarray of shape (n_dimensions,), optional
+        Recent measurements from the history standing in for absent dimensions (coverage,
+        step 1; NaN where none).
     """
+    held_part, held, effects = coverage(model, part, composite, stand_in)
+    if held_part is not part:  # stood-in dimensions are measured for the problem (and the smoothing skips them)
+        part = held_part
+        if smoothed is not None:
+            smoothed = dataclasses.replace(smoothed, deviation=np.where(np.isnan(smoothed.deviation),
+                                                                        part.deviation, smoothed.deviation))
     keep = part.measured
     measured = part.deviation[keep].copy()
     deviation = part.deviation
-    effects: list[RuleEffect] = []
     notes: list[Note] = list(smoothed.notes) if smoothed is not None else []
     dim_ids = tuple(d.id for d, k in zip(model.dimensions, keep, strict=True) if k)
     if smoothed is not None and smoothed.used:  # 2. smoothing
@@ -270,4 +340,5 @@ def pose_problem(model: ProcessModel, part: PartMeasurement, *, smoothed: Smooth
     if composite is not None:
         problem = dataclasses.replace(problem, composite=np.asarray(composite, dtype=float)[:, keep])
     policy = policy if policy is not None else policy_of(model, problem.dimension_ids, cumulative)
-    return pose_policy(problem, policy, measured=measured, effects=tuple(effects), notes=tuple(notes))
+    return pose_policy(problem, policy, measured=measured, effects=tuple(effects), notes=tuple(notes),
+                       held=held if held.any() else None)

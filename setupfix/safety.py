@@ -33,6 +33,7 @@ import numpy as np
 import numpy.typing as npt
 
 from setupfix.errors import Note
+from setupfix.explain import fit_registers, leave_one_out, targets
 from setupfix.objective import error_budget, margins
 from setupfix.optimize import CorrectionProblem, OptimizeResult
 
@@ -41,13 +42,27 @@ if TYPE_CHECKING:  # pose builds the problem with these rules; recommend takes w
 
 __all__ = ["RuleEffect", "Policy", "Recommendation", "reject_mask", "guard_limits", "cumulative_bounds",
            "apply_gain", "harmed_mask", "in_dead_band", "ewma", "ewma_series", "Smoothed", "ewma_history", "recommend",
-           "budget", "VERDICTS"]
+           "budget", "VERDICTS", "STOPPED", "short_list", "shifted_history", "last_measured"]
 
 Array = npt.NDArray[np.float64]
 Mask = npt.NDArray[np.bool_]
 
 #: The three verdicts, in order of severity.
 VERDICTS = ("apply", "hold", "reject")
+
+#: Optimiser statuses of a solve stopped before its answer was proved (time limit, solver failure).
+STOPPED = ("time_limit", "solver_error")
+
+#: Names an alarm or a rule message lists before "… and N more" (the full list is in the rule's dimensions).
+SHOWN = 3
+
+
+def short_list(names: Iterable[str], shown: int = SHOWN) -> str:
+    """The first ``shown`` names and how many more: ``"A, B, C, … and 741 more"`` (one line for any length)."""
+    items = list(names)
+    if len(items) <= shown + 1:
+        return ", ".join(items)
+    return ", ".join(items[:shown]) + f", … and {len(items) - shown} more"
 
 
 @dataclass(frozen=True)
@@ -118,6 +133,13 @@ class Recommendation:
         Registers whose change sits at a bound (per-step clamp or cumulative limit).
     alarm : str
         One sentence for the operator when the verdict is ``reject`` (else empty).
+    solved : bool
+        False when the solve was stopped (status in :data:`STOPPED`: time limit, solver
+        error) and nothing is recommended (verdict ``hold``): the hold then means "not
+        solved within the time limit", never "no change needed"; the rule ``not_solved``
+        says so.  A stopped solve that still yields a correction (checked better than none,
+        e.g. the grid optimum proved but not the least norm) is ``apply`` with the rule
+        ``stopped`` stating what is certified (``result.extra["norm_ratio_max"]``).
     """
 
     verdict: str
@@ -128,6 +150,7 @@ class Recommendation:
     given_up: tuple[str, ...] = ()
     at_limit: tuple[str, ...] = ()
     alarm: str = ""
+    solved: bool = True
 
 
 def reject_mask(deviation: Array, lower: Array, upper: Array, band: Array) -> Mask:
@@ -274,10 +297,28 @@ def ewma_history(deviation: Array, now: np.datetime64 | None, times: npt.NDArray
     """
     if lam >= 1.0 or now is None:
         return Smoothed(deviation, 0, lam)
-    before = np.flatnonzero(times < now)
-    if before.size == 0:
+    rows = shifted_history(now, times, earlier, log_times, log_register, log_delta, log_reset, composite, limit)
+    if rows.shape[0] == 0:
         return Smoothed(deviation, 0, lam)
-    before = before[np.argsort(times[before], kind="stable")][-limit:]
+    smoothed = ewma_series(np.vstack([rows, deviation]), lam)
+    return Smoothed(np.where(np.isnan(deviation), np.nan, smoothed), int(rows.shape[0]), lam)
+
+
+def shifted_history(now: np.datetime64, times: npt.NDArray[np.datetime64], earlier: Array,
+                    log_times: npt.NDArray[np.datetime64], log_register: npt.NDArray[np.int64], log_delta: Array,
+                    log_reset: Mask, composite: Array, limit: int = 50) -> Array:
+    """The last ``limit`` parts machined before ``now``, oldest first, each moved to the machine as it is now.
+
+    y_k + Σ Δx·C over the corrections logged after part k and up to ``now`` (eqs. 3–4);
+    NaN where a tool changed since cuts the dimension (its wear restarted) or where the
+    part did not measure it.  Arguments as :func:`ewma_history`.
+
+    Returns
+    -------
+    ndarray of shape (n_before, n_dimensions) [unit]
+    """
+    before = np.flatnonzero(times < now)
+    before = before[np.argsort(times[before], kind="stable")][-limit:] if before.size else before
     rows = []
     known = log_register >= 0
     for k in before:
@@ -293,9 +334,18 @@ def ewma_history(deviation: Array, now: np.datetime64 | None, times: npt.NDArray
         row = earlier[k] + shift @ composite
         row[reset] = np.nan
         rows.append(row)
-    rows.append(deviation)
-    smoothed = ewma_series(np.vstack(rows), lam)
-    return Smoothed(np.where(np.isnan(deviation), np.nan, smoothed), int(before.size), lam)
+    return np.vstack(rows) if rows else np.zeros((0, composite.shape[1]))
+
+
+def last_measured(rows: Array) -> Array:
+    """Each dimension's most recent value in ``rows`` (oldest first; NaN where none): the coverage stand-in.
+
+    rows : ndarray of shape (n_parts, n_dimensions) → ndarray of shape (n_dimensions,)
+    """
+    out = np.full(rows.shape[1], np.nan)
+    for row in rows:
+        out = np.where(np.isnan(row), out, row)
+    return out
 
 
 def _zero_result(problem: CorrectionProblem, optimizer: str, status: str, message: str) -> OptimizeResult:
@@ -317,12 +367,15 @@ def _inside(values: Array, lower: Array, upper: Array) -> Mask:
 
 
 def recommend(posed: PosedProblem, solve: Callable[[CorrectionProblem], OptimizeResult], *,
-              optimizer: str = "exact", names: Mapping[str, str] | None = None) -> Recommendation:
+              optimizer: str = "exact", names: Mapping[str, str] | None = None,
+              registers: Mapping[str, str] | None = None, unit: str = "") -> Recommendation:
     """The rules after the solve, around ``solve(posed.guarded)``.
 
-    Order: reject band (on the part as measured: no solve at all) → solve → gain →
-    no harm (given-up dimensions) → dead band → clamp report.  The pre-solve rules
-    (``posed.effects``) head the rule list.
+    Order: reject band (on the part as measured: no solve at all; :func:`beyond_band`
+    tells gross deviations from setup errors) → solve → gain → no harm (given-up
+    dimensions) → dead band → clamp report → stopped solve (:func:`stopped_rule`).  The
+    pre-solve rules (``posed.effects``) head the rule list.  Lists of names in messages
+    are short (:func:`short_list`); the rules' ``dimensions`` hold them all.
 
     Parameters
     ----------
@@ -331,11 +384,15 @@ def recommend(posed: PosedProblem, solve: Callable[[CorrectionProblem], Optimize
         ``solve(problem) -> OptimizeResult`` (any optimiser).
     names : mapping, optional
         Dimension ID → name, for the messages.
+    registers : mapping, optional
+        Register ID → controller register (``G55``), for the messages.
+    unit : str
+        Length unit, for the messages.
     """
     shown = names or {}
 
     def label(ids: Iterable[str]) -> str:
-        return ", ".join(shown.get(i, i) for i in ids)
+        return short_list(shown.get(i, i) for i in ids)
 
     problem, guarded, policy = posed.problem, posed.guarded, posed.policy
     ids = np.array(problem.register_ids, dtype=object)
@@ -344,13 +401,9 @@ def recommend(posed: PosedProblem, solve: Callable[[CorrectionProblem], Optimize
 
     bad = reject_mask(posed.measured, lower, upper, policy.reject_band)
     if bad.any():
-        bad_ids = tuple(dims[bad])
-        alarm = (f"REJECT: {label(bad_ids)} beyond the reject band (a broken tool, a bad measurement or a wrong "
-                 "part?) — no correction; check the part and the measurement")
-        rules = [e for e in posed.effects if e.rule in ("ewma", "forecast")]
-        rules.append(RuleEffect("reject", "deviation beyond the reject band: no correction", dimensions=bad_ids))
-        result = _zero_result(problem, optimizer, "rejected", alarm)
-        return Recommendation("reject", result.x, result, problem, tuple(rules), alarm=alarm)
+        stop = beyond_band(posed, bad, optimizer, label, registers or {}, unit)
+        if stop is not None:
+            return stop
 
     rules = list(posed.effects)
     result = solve(guarded)
@@ -404,7 +457,106 @@ def recommend(posed: PosedProblem, solve: Callable[[CorrectionProblem], Optimize
     if at_limit:
         rules.append(RuleEffect("clamp", "change at the register's per-step or cumulative limit",
                                 registers=at_limit))
-    return Recommendation(verdict, x + 0.0, result, guarded, tuple(rules), given_up, at_limit)
+    solved = True
+    if result.status in STOPPED:
+        stopped = stopped_rule(result, recommended=verdict == "apply")
+        rules.append(stopped)
+        solved = stopped.rule != "not_solved"
+    return Recommendation(verdict, x + 0.0, result, guarded, tuple(rules), given_up, at_limit, solved=solved)
+
+
+def stopped_rule(result: OptimizeResult, *, recommended: bool) -> RuleEffect:
+    """The rule of a solve stopped before its proof (``result.status`` in :data:`STOPPED`).
+
+    ``not_solved`` when nothing is recommended: "not solved within the time limit" (or
+    "the solver failed"), naming the stage; ``stopped`` when a correction is still
+    recommended: what was proved and the certified bound on the norm
+    (``result.extra["norm_ratio_max"]``: ‖x‖²_cost ≤ ratio · least norm).
+    """
+    where = result.extra.get("stopped")
+    stage = where.get("stage", "") if isinstance(where, dict) else ""
+    reason = where.get("reason", "") if isinstance(where, dict) else ""
+    at = f" (the {stage} stage stopped)" if stage else ""
+    if not recommended:
+        what = ("not solved within the time limit" if result.status == "time_limit"
+                else f"not solved: the solver failed{f' ({reason})' if reason else ''}")
+        return RuleEffect("not_solved", f"{what}{at}: no proven correction, nothing is recommended (this is not "
+                          "'no change needed'); allow more time (--time-limit) or check the model")
+    ratio = result.extra.get("norm_ratio_max")
+    certified = []
+    if stage != "least norm" and result.bound is not None and np.isfinite(result.bound):
+        certified.append(f"the error budget {result.margin_after:+.4f} is within "
+                         f"{max(result.bound - result.margin_after, 0.0):.4f} of the best possible (LP bound "
+                         f"{result.bound:+.4f})")
+    if isinstance(ratio, float) and np.isfinite(ratio):
+        certified.append(f"the correction's weighted norm is at most {ratio:.3f}× the least norm")
+    first = "solve stopped by the time limit" if result.status == "time_limit" else "solve stopped by a solver error"
+    return RuleEffect("stopped", f"{first}{at}: {result.message}"
+                      + (f"; certified: {' and '.join(certified)}" if certified else ""))
+
+
+def beyond_band(posed: PosedProblem, bad: Mask, optimizer: str, label: Callable[[Iterable[str]], str],
+                registers: Mapping[str, str], unit: str) -> Recommendation | None:
+    """The decision on a part with deviations beyond the reject band (``bad``), before any solve.
+
+    * **gross** — a deviation whose residual after the best correction of the *other*
+      dimensions (:func:`setupfix.explain.leave_one_out`) is still beyond the reject band:
+      nothing the setup does explains it (a broken tool, a bad measurement, a wrong
+      part): verdict ``reject``, rule ``reject`` naming every such dimension;
+    * **setup error** — the others explain it (a register entered wrong: a whole station
+      shifted): the registers fitted to the dimensions that are not gross
+      (:func:`setupfix.explain.fit_registers`) are named where the change they need is
+      beyond their per-step limit (a fixed register: any change), in the rule
+      ``setup_error`` (``registers``: their IDs), e.g. "G55 looks off by −0.350 mm;
+      beyond the per-step limit 0.1".  The documented rule: **hold** — no register is
+      changed, the alarm names the register and the amount to check; a wrong entry is
+      corrected by the operator at the control, not stepped off by the per-step limit
+      over several parts (each of them scrap).  With gross deviations as well the verdict
+      is ``reject`` and the setup error is named beside them;
+    * explained within the registers' limits: None — the solve corrects it.
+    """
+    problem, policy = posed.problem, posed.policy
+    ids = np.array(problem.register_ids, dtype=object)
+    dims = np.array(problem.dimension_ids, dtype=object)
+    lower, upper = problem.lower, problem.upper
+    goal = targets(lower, upper)
+    residual = posed.measured - goal
+    gross = bad & reject_mask(goal + leave_one_out(problem.composite, residual), lower, upper, policy.reject_band)
+    explained = bad & ~gross
+    setup: RuleEffect | None = None
+    if explained.any():
+        x = fit_registers(problem.composite, residual, ~gross)
+        h = problem.resolution
+        moves = np.any(problem.composite[:, explained] != 0, axis=1)
+        fixed = problem.ub <= problem.lb
+        over = moves & ((x > problem.ub + h / 2) | (x < problem.lb - h / 2)) & (np.abs(x) >= h)
+        if over.any():
+            digits = max(0, int(-np.floor(np.log10(h) + 1e-9)))
+            parts = [f"{registers.get(r, r)} looks off by {v:+.{digits}f}{f' {unit}' if unit else ''}; "
+                     + ("fixed in the model" if f else f"beyond the per-step limit {max(abs(lo), hi):g}")
+                     for r, v, lo, hi, f in zip(ids[over], x[over], problem.lb[over], problem.ub[over],
+                                                fixed[over], strict=True)]
+            setup = RuleEffect("setup_error", "; ".join(parts) + f" (it explains {label(dims[explained])}): a "
+                               "register entered wrong? no correction — check it at the control",
+                               registers=tuple(ids[over]), dimensions=tuple(dims[explained]))
+    rules = [e for e in posed.effects if e.rule in ("ewma", "forecast")]
+    if gross.any():
+        gross_ids = tuple(dims[gross])
+        alarm = (f"REJECT: {len(gross_ids)} dimension(s) beyond the reject band that no setup correction explains: "
+                 f"{label(gross_ids)} (a broken tool, a bad measurement or a wrong part?) — no correction; check "
+                 "the part and the measurement")
+        if setup is not None:
+            alarm += f"; also {setup.message.split(' (it explains')[0]}"
+        rules.append(RuleEffect("reject", "deviation beyond the reject band, not explained by any setup "
+                                "correction: no correction", dimensions=gross_ids))
+        rules += [setup] if setup is not None else []
+        result = _zero_result(problem, optimizer, "rejected", alarm)
+        return Recommendation("reject", result.x, result, problem, tuple(rules), alarm=alarm)
+    if setup is None:
+        return None
+    alarm = f"SETUP ERROR: {setup.message}"
+    result = _zero_result(problem, optimizer, "setup_error", alarm)
+    return Recommendation("hold", result.x, result, posed.guarded, (*rules, setup), alarm=alarm)
 
 
 def budget(problem: CorrectionProblem, x: Array) -> tuple[float, Array]:

@@ -464,3 +464,54 @@ def test_parse_sees_the_same_reports(tmp_path):
     tried |= {Path(str(n.location.path)).name for n in outcome.skipped if n.location}
     tried |= {Path(str(f.location.path)).name for f in outcome.failures if f.location}
     assert tried == reports == seen_by_batch(folder, tmp_path)
+
+
+def test_a_stopped_solve_is_not_solved_through_every_door(tmp_path):
+    """Issue 21 #1: a solve stopped by its time limit with nothing proven is "not solved" at every door, never
+    "no change needed": exit 6, ``"solved": false``, the batch counts it and its store does not skip it next run."""
+    from shop_model import write_shop
+
+    from setupfix.pipeline.view import summary
+
+    model, report = write_shop(tmp_path / "shop")  # 60 registers × 600 dimensions: the LP bound alone > 1e-5 s
+    limit = ["--time-limit", "1e-5"]
+    code, text, err = cli("correct", "--model", model, report, "--json", *limit)
+    doc = json.loads(text)
+    assert code == 6 and doc["verdict"] == "hold" and doc["solved"] is False and doc["status"] == "time_limit"
+    assert not any(doc["corrections"].values()) and "no change needed" not in doc["message"].replace("not 'no", "")
+    assert "NOT SOLVED" in err and "not solved within the time limit" in err
+    code, text, _ = cli("correct", "--model", model, report, *limit, "--offsets", tmp_path / "o.csv")
+    assert code == 6 and "verdict: NOT SOLVED" in text and not (tmp_path / "o.csv").exists()
+
+    db = tmp_path / "history.db"
+    for run in (1, 2):  # stored, but not as done: the second run corrects it again
+        code, text, err = cli("batch", report.parent, "--model", model, "--out", tmp_path / "b.csv", "--settle", "0",
+                              "--json", "--store", db, *limit)
+        s = json.loads(text)
+        assert code == 6, (run, err)
+        assert (s["reports"], s["unsolved"], s["verdicts"], s["skipped"]) == (1, 1, {"hold": 1}, []), run
+    code, text, err = cli("batch", report.parent, "--model", model, "--out", tmp_path / "b.csv", "--settle", "0",
+                          *limit)
+    assert code == 6 and "1 of the holds not solved within the time limit" in text and "NOT SOLVED" in err
+    code, text, _ = cli("batch", report.parent, "--model", model, "--out", tmp_path / "b.csv", "--settle", "0",
+                        "--json", "--store", db)
+    assert code == 0 and json.loads(text)["unsolved"] == 0  # solved with the default limit: stored as done …
+    code, text, _ = cli("batch", report.parent, "--model", model, "--out", tmp_path / "b.csv", "--settle", "0",
+                        "--json", "--store", db)
+    assert json.loads(text)["skipped"][0]["reason"].startswith("already processed")  # … and skipped next time
+
+    from setupfix.pipeline.export import export
+    from setupfix.errors import ExportError
+    from setupfix.tui.workers import open_report
+
+    opened = open_report(model, report, read=ReadOptions(), cycles=CycleOptions(),
+                         solve=SolveOptions("exact", None, 1e-5), db=None, current=None, thermal=None)
+    (c,) = opened.corrections
+    head = summary(c)
+    assert c.verdict == "hold" and not head.solved and head.alarm.startswith("NOT SOLVED: not solved within")
+    with pytest.raises(ExportError, match="not solved"):
+        export(opened.corrections, str(tmp_path / "tui.csv"))
+
+    request = CorrectRequest(load_model(model), solve=SolveOptions("exact", None, 1e-5))
+    outcome = correct_report(request, report)
+    assert [c.solved for c in outcome.cycles] == [False] and outcome.unsolved == outcome.cycles

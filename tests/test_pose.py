@@ -141,3 +141,91 @@ def test_reject_judges_the_part_as_measured_not_the_estimate():
     posed = pose_problem(m, part(m, y))
     rec = recommend(posed, SOLVE)
     assert rec.verdict == "reject" and [r.rule for r in rec.rules] == ["reject"] and not rec.x.any()
+
+
+# -- coverage: registers that move a dimension the report lacks -----------------------------------------------------
+
+from conftest import GUIDE_PINS  # noqa: E402
+
+TRUNCATED = ("P2 D1", "P2 D2", "P2 D3", "P2 D4")  # half of station P2's seven dimensions
+
+
+def truncated_copy(tmp_path, name="cycle_02.csv", drop=TRUNCATED):
+    lines = (GUIDE_PINS / name).read_text(encoding="utf-8").splitlines(keepends=True)
+    out = tmp_path / f"truncated_{name}"
+    out.write_text("".join(li for li in lines if not li.startswith(tuple(f"{d}," for d in drop))), encoding="utf-8")
+    return out
+
+
+def corrected(report, model_path=GUIDE_PINS / "model.toml", **inputs):
+    from setupfix.pipeline.correct import correct_report, load_request
+
+    (cycle,) = correct_report(load_request(model_path, **inputs), report).cycles
+    return cycle
+
+
+def moving(cycle, dims):
+    """Register IDs whose composite column moves any of ``dims`` (names), from the model's relation matrices."""
+    rm = relation_matrices(cycle.model)
+    cols = [i for i, d in enumerate(cycle.model.dimensions) if d.name in dims]
+    return {r for r, row in zip(rm.registers, rm.composite, strict=True) if np.any(row[cols] != 0)}
+
+
+def test_a_truncated_report_holds_every_register_that_moves_a_missing_dimension(tmp_path):
+    full = corrected(GUIDE_PINS / "cycle_02.csv")
+    cycle = corrected(truncated_copy(tmp_path))
+    held = moving(cycle, TRUNCATED)
+    assert {"W2", "W6"} <= held
+    assert any(full.corrections[r] != 0 for r in held)  # the whole report moves some of them …
+    assert all(cycle.corrections[r] == 0 for r in held)  # … the truncated one none
+    (rule,) = [r for r in cycle.recommendation.rules if r.rule == "coverage"]
+    assert set(rule.registers) == held and {cycle.model.dimensions[i].id for i in range(7, 11)} == set(rule.dimensions)
+    assert "G55" in rule.message and "P2 D1" in rule.message
+    if cycle.verdict == "apply":  # the other registers are still corrected
+        assert any(v != 0 for r, v in cycle.corrections.items() if r not in held)
+
+
+def test_a_dimension_marked_sampled_leaves_its_registers_free(tmp_path):
+    text = (GUIDE_PINS / "model.toml").read_text(encoding="utf-8")
+    assert "[template.dimensions.D1]" in text
+    for d in ("D1", "D2", "D3", "D4"):
+        text = text.replace(f"[template.dimensions.{d}]\n", f"[template.dimensions.{d}]\nsampled = true\n")
+    model_path = tmp_path / "model.toml"
+    model_path.write_text(text, encoding="utf-8")
+    cycle = corrected(truncated_copy(tmp_path), model_path)
+    assert "coverage" not in [r.rule for r in cycle.recommendation.rules]
+    assert all(d.sampled == (d.id[-2:] in ("D1", "D2", "D3", "D4")) for d in cycle.model.dimensions)
+    bad = tmp_path / "bad.toml"
+    bad.write_text(text.replace("sampled = true", "sampled = \"yes\"", 1), encoding="utf-8")
+    from setupfix.errors import SetupfixError
+    from setupfix.model import load_model
+
+    with pytest.raises(SetupfixError, match="sampled"):
+        load_model(bad)
+
+
+def test_a_recent_measurement_in_the_history_stands_in_moved_by_the_corrections_since(tmp_path):
+    import contextlib
+    import io
+
+    from setupfix.cli import main
+
+    db = tmp_path / "history.db"
+    log = tmp_path / "corrections.csv"  # G55 moved by +0.010 between cycle 01 and cycle 02
+    log.write_text("timestamp,register,delta,event\n2026-11-02T12:00:00,G55,0.010,correction\n", encoding="utf-8")
+    with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()) as err:
+        code = main(["history", "import", "--db", str(db), "--model", str(GUIDE_PINS / "model.toml"),
+                     str(GUIDE_PINS / "cycle_01.csv"), "--corrections", str(log)])
+    assert code == 0, err.getvalue()
+    cycle = corrected(truncated_copy(tmp_path), store=db)
+    rules = {r.rule: r for r in cycle.recommendation.rules}
+    assert "coverage" not in rules and len(rules["stand_in"].dimensions) == 4
+    first = corrected(GUIDE_PINS / "cycle_01.csv")
+    model = cycle.model
+    rm = relation_matrices(model)
+    w2 = rm.composite[rm.registers.index("W2")]
+    ids = list(cycle.problem.dimension_ids)
+    for did in rules["stand_in"].dimensions:
+        q = [d.id for d in model.dimensions].index(did)
+        before = first.problem.deviation[list(first.problem.dimension_ids).index(did)]
+        assert cycle.problem.deviation[ids.index(did)] == pytest.approx(before + 0.010 * w2[q])

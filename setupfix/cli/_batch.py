@@ -10,7 +10,7 @@ from typing import TYPE_CHECKING
 
 from setupfix.cli._choices import CONTROLLERS, OPTIMIZERS
 from setupfix.cli._common import add_report_options, add_thermal_options, shown, whole_number
-from setupfix.cli.exit_codes import OK, PARTIAL, REJECTED
+from setupfix.cli.exit_codes import NOT_SOLVED, OK, PARTIAL, REJECTED
 
 if TYPE_CHECKING:
     from setupfix.pipeline.batch import BatchSummary, Outcome
@@ -21,7 +21,9 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
                        description="Correct every report found in DIR (recursively, any supported format) and "
                                    "write one offsets CSV. A file that cannot be read or matched is named on "
                                    "stderr with its reason and skipped. Exit status 4 when any file failed, 5 "
-                                   "when a recommendation was rejected, else 0.")
+                                   "when a recommendation was rejected, 6 when a solve was stopped by its "
+                                   "time limit with nothing proven (counted in the summary, not stored as "
+                                   "done), else 0.")
     p.add_argument("folder", metavar="DIR", help="folder searched recursively for reports")
     p.add_argument("--model", required=True, metavar="MODEL", help="process model TOML")
     p.add_argument("--out", required=True, metavar="FILE",
@@ -89,6 +91,8 @@ def _status(summary: BatchSummary) -> int:
         return PARTIAL
     if summary.verdicts.get("reject"):
         return REJECTED
+    if summary.unsolved:
+        return NOT_SOLVED
     return OK
 
 
@@ -115,7 +119,8 @@ class _Progress:
             self.bar.update(self.task, completed=done, total=total, rate=f"{done / elapsed:.0f} reports/s")
             return
         state = ("FAILED" if outcome.error else f"skipped ({outcome.skipped})" if outcome.skipped
-                 else ", ".join(outcome.verdicts) or "no part")
+                 else ", ".join(v if solved else "NOT SOLVED" for v, solved in zip(outcome.verdicts, outcome.solved,
+                                                                                 strict=True)) or "no part")
         print(f"[{done}/{total}] {shown(outcome.path)}: {state}", file=sys.stderr)
 
     def __exit__(self, *exc: object) -> None:

@@ -9,7 +9,7 @@ from typing import TYPE_CHECKING
 
 from setupfix.cli._choices import CONTROLLERS, OPTIMIZERS
 from setupfix.cli._common import add_report_options, add_thermal_options, cycles_of, read_options
-from setupfix.cli.exit_codes import OK, REJECTED
+from setupfix.cli.exit_codes import NOT_SOLVED, OK, REJECTED
 
 if TYPE_CHECKING:
     from setupfix.pipeline.requests import CorrectRequest
@@ -19,7 +19,9 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
     p = sub.add_parser("correct", help="setup corrections (WKS and tool offsets) for one CMM report",
                        description="Compute the WKS and tool-length corrections that maximise the unilateral "
                                    "error budget of the measured part(s) (Stryczek 2014), under the model's "
-                                   "safety rules. Exit status 5 when a recommendation is rejected.")
+                                   "safety rules. Exit status 5 when a recommendation is rejected, 6 when a "
+                                   "solve was stopped by its time limit with nothing proven to recommend "
+                                   "(nothing is exported then).")
     p.add_argument("report", metavar="REPORT", help="CMM report in any supported format")
     p.add_argument("--model", required=True, metavar="MODEL", help="process model TOML")
     p.add_argument("--optimizer", default="exact", choices=sorted(OPTIMIZERS),
@@ -31,7 +33,8 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
     p.add_argument("--json", action="store_true", help="machine-readable output (shared/spec/cli-json.md)")
     p.add_argument("--store", metavar="DB", default=None,
                    help="history store: earlier reports and the corrections log for the EWMA smoothing "
-                        "(model [safety] ewma < 1)")
+                        "(model [safety] ewma < 1) and for the recent measurements that stand in for dimensions "
+                        "the report lacks")
     add_offsets_options(p)
     add_report_options(p)
     add_thermal_options(p)
@@ -61,7 +64,7 @@ def correct_request(args: argparse.Namespace) -> CorrectRequest:
 def run(args: argparse.Namespace) -> int:
     from setupfix.pipeline.correct import correct_report
     from setupfix.pipeline.export import export
-    from setupfix.pipeline.present import format_correction, note_lines, outcome_json
+    from setupfix.pipeline.present import format_correction, note_lines, outcome_json, verdict_line
     from setupfix.pipeline.writers import check_target
 
     if args.offsets:
@@ -69,20 +72,27 @@ def run(args: argparse.Namespace) -> int:
     request = correct_request(args)
     outcome = correct_report(request, args.report)
     cycles = outcome.cycles
-    rejected = bool(outcome.rejected)
-    if args.offsets and not rejected:
+    rejected, unsolved = bool(outcome.rejected), bool(outcome.unsolved)
+    if args.offsets and not rejected and not unsolved:
         export(cycles, args.offsets, controller=args.controller, current=request.current)
     for c in outcome.rejected:
         print(f"error: {c.part.report}: part {c.part.part or '—'}: {c.recommendation.alarm}", file=sys.stderr)
+    for c in cycles:
+        if c.verdict != "reject" and c.recommendation.alarm:  # a setup error, held: nothing changed, check it
+            print(f"warning: {c.part.report}: part {c.part.part or '—'}: {c.recommendation.alarm}", file=sys.stderr)
+    for c in outcome.unsolved:
+        print(f"error: {c.part.report}: part {c.part.part or '—'}: NOT SOLVED: {verdict_line(c)}"
+              + ("; nothing exported" if args.offsets else ""), file=sys.stderr)
+    status = REJECTED if rejected else NOT_SOLVED if unsolved else OK
     if args.json or args.offsets == "-":  # the table below prints them; here they must not be lost
         for c in cycles:
             for line in note_lines(c.notes):
                 print(f"warning: {line}", file=sys.stderr)
     if args.offsets == "-":
-        return REJECTED if rejected else OK
+        return status
     if args.json:
         json.dump(outcome_json(cycles), sys.stdout, indent=2)
         sys.stdout.write("\n")
     else:
         sys.stdout.write("\n\n".join(format_correction(c) for c in cycles) + "\n")
-    return REJECTED if rejected else OK
+    return status

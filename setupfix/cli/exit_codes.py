@@ -7,3 +7,4 @@ UNEXPECTED = 3  #: a bug: an exception setupfix did not raise on purpose
 PARTIAL = 4  #: batch/parse: some files failed, the others were processed
 INTERRUPTED = 130
 REJECTED = 5  #: correct/batch: a recommendation was rejected (deviation beyond the reject band)
+NOT_SOLVED = 6  #: correct/batch: a solve was stopped (time limit, solver error) with nothing proven to recommend

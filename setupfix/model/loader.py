@@ -82,7 +82,7 @@ _KEYS = {
     "wks": {"register", "limit", "fixed"} | _FREE_TEXT,
     "tools": {"register", "limit", "fixed"} | _FREE_TEXT,
     "features": {"wks", "tools", "position"} | _FREE_TEXT,
-    "dimensions": {"name", "aliases", "features", "nominal", "lower", "upper", "group"} | _FREE_TEXT,
+    "dimensions": {"name", "aliases", "features", "nominal", "lower", "upper", "group", "sampled"} | _FREE_TEXT,
 }
 #: Top-level tables consumed before validation (station templates, see ``stations``).
 _EXPANDED = {"stations", "template"}
@@ -365,6 +365,10 @@ def _dimensions(p: _Problems, doc: Mapping[str, Any], feature_ids: Mapping[str, 
         if group is not None and not isinstance(group, str):
             p.add(f"{key}.group", f"expected a string, found {_show(group)}")
             group = None
+        sampled = table.get("sampled", False)  # not measured every cycle (coverage: pose_problem)
+        if not isinstance(sampled, bool):
+            p.add(f"{key}.sampled", f"expected true or false, found {_show(sampled)}")
+            sampled = False
         if "features" not in table:
             p.add(f"{key}.features", "missing: which features enter this dimension")
         fd = _weights(p, f"{key}.features", table.get("features", {}), feature_ids, "feature")
@@ -390,6 +394,7 @@ def _dimensions(p: _Problems, doc: Mapping[str, Any], feature_ids: Mapping[str, 
             upper=up if up is not None else math.inf,
             aliases=tuple(a.strip() for a in aliases),
             group=group,
+            sampled=sampled,
         )
         for k in dim.keys:
             if (k, group) in seen_names and seen_names[(k, group)] != did:

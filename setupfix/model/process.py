@@ -105,6 +105,9 @@ class Dimension:
 
     ``lower`` and ``upper`` are signed deviations from ``nominal``
     (``lower < upper``); either may be infinite for a one-sided tolerance.
+    ``sampled`` (model key ``sampled = true``): the dimension is not measured every
+    cycle (a sampling plan), so a report without it does not hold the registers that
+    move it (:func:`setupfix.pose.pose_problem`, coverage).
     """
 
     id: str
@@ -115,6 +118,7 @@ class Dimension:
     upper: float
     aliases: tuple[str, ...] = ()
     group: str | None = None
+    sampled: bool = False
 
     @property
     def keys(self) -> tuple[str, ...]:

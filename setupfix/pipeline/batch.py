@@ -80,6 +80,8 @@ class Outcome:
     rows: list[OffsetRow] = field(default_factory=list)
     verdicts: list[str] = field(default_factory=list)
     parts: list[str] = field(default_factory=list)
+    #: per verdict: False for a cycle whose solve was stopped with nothing proven (not stored as done)
+    solved: list[bool] = field(default_factory=list)
     error: str = ""
     skipped: str = ""
     format: str = ""
@@ -93,7 +95,8 @@ class Outcome:
 class BatchSummary:
     """Counts and failures of one batch run, built once at its end.
 
-    ``verdicts`` counts the verdicts (a missing one counts 0); ``failed`` and
+    ``verdicts`` counts the verdicts (a missing one counts 0); ``unsolved`` the holds
+    whose solve was stopped with nothing proven (time limit); ``failed`` and
     ``skipped`` are (file, reason) pairs; ``notes`` (file, note) pairs, typed.
     """
 
@@ -105,9 +108,11 @@ class BatchSummary:
     seconds: float = 0.0
     written: bool = False
     notes: tuple[tuple[str, Note], ...] = ()
+    unsolved: int = 0
 
     def to_json(self) -> dict[str, Any]:
         return {"reports": self.reports, "parts": self.parts, "verdicts": dict(self.verdicts),
+                "unsolved": self.unsolved,
                 "failed": [{"file": f, "reason": r} for f, r in self.failed],
                 "skipped": [{"file": f, "reason": r} for f, r in self.skipped],
                 "notes": [{"file": f, "note": str(n)} for f, n in self.notes],
@@ -124,10 +129,11 @@ class _Tally:
     failed: list[tuple[str, str]] = field(default_factory=list)
     skipped: list[tuple[str, str]] = field(default_factory=list)
     notes: list[tuple[str, Note]] = field(default_factory=list)
+    unsolved: int = 0
 
     def summary(self, seconds: float, written: bool) -> BatchSummary:
         return BatchSummary(self.reports, self.parts, Counter(self.verdicts), tuple(self.failed),
-                            tuple(self.skipped), seconds, written, tuple(self.notes))
+                            tuple(self.skipped), seconds, written, tuple(self.notes), self.unsolved)
 
 
 def find_reports(root: str | Path) -> parsers.Listing:
@@ -177,9 +183,12 @@ def _correct_one(path: str, size: int, mtime_ns: int) -> Outcome:
         for cycle in corrected.cycles:
             out.rows += cycle_rows(cycle, request.current)
             out.verdicts.append(cycle.verdict)
+            out.solved.append(cycle.solved)
             out.notes += cycle.notes
-            if cycle.verdict == "reject":
+            if cycle.recommendation.alarm:  # reject, or a setup error held
                 out.notes.append(Note(cycle.recommendation.alarm, SourceLocation(shown), "safety"))
+            elif not cycle.solved:
+                out.notes.append(Note(cycle.result.message, SourceLocation(shown), "solver"))
             elif _WORK.controller != "csv":
                 out.programs.append((cycle.part.part, offsets_text([cycle], _WORK.controller, request.current)))
             out.parts.append(cycle.part.part)
@@ -307,6 +316,8 @@ def run_batch(request: CorrectRequest, folder: str | Path, out: str | Path, *, w
     if model.safety.ewma < 1.0 and (store is not None or request.history is not None):
         base = request.history if request.history is not None else History.from_store(model, store)  # type: ignore[arg-type]  # store is set: tested above
         request = dataclasses.replace(request, history=batch_history(request, base, [f for f, _, _ in files]))
+    elif store is not None and request.history is None:  # the coverage stand-ins: the store's parts (as correct)
+        request = dataclasses.replace(request, history=History.from_store(model, store))
     summary = _Tally()
     summary.failed += listing.problems  # named, never dropped: an unreadable folder, a broken link, …
     summary.notes += [(path, Note(f"symbolic link to {target}: read as a report", None, "folder"))
@@ -358,8 +369,14 @@ def batch_history(request: CorrectRequest, base: History, files: Sequence[str | 
 
 
 def _batch_reports(store: Store) -> set[str]:
-    """Hashes of the reports the store holds a batch recommendation for."""
-    return {str(r.inputs.get("report")) for r in store.recommendations() if r.inputs.get("use") == "batch"}
+    """Hashes of the reports the store holds a batch recommendation for, each part's latest one solved
+    (a part not solved within the time limit is corrected again next run)."""
+    solved: dict[str, dict[str, bool]] = {}
+    for r in store.recommendations():
+        if r.inputs.get("use") == "batch":
+            solved.setdefault(str(r.inputs.get("report")), {})[str(r.inputs.get("part"))] = \
+                r.result.get("solved", True) is not False
+    return {sha for sha, parts in solved.items() if all(parts.values())}
 
 
 def _record(store: Store, outcome: Outcome, solve: SolveOptions) -> None:
@@ -371,10 +388,10 @@ def _record(store: Store, outcome: Outcome, solve: SolveOptions) -> None:
         by_part.setdefault(row.part, {})[row.id] = row.delta
     # One recommendation per corrected part, its verdict beside it (a part with no offset row -- every
     # register fixed -- still gets its verdict, and no verdict slides onto the next part).
-    for part, verdict in zip(outcome.parts, outcome.verdicts, strict=True):
+    for part, verdict, solved in zip(outcome.parts, outcome.verdicts, outcome.solved, strict=True):
         store.add_recommendation(StoreRecommendation(
             optimizer=solve.optimizer, inputs={"use": "batch", "report": sha, "part": part, "seed": solve.seed},
-            result={"verdict": verdict, "corrections": by_part.get(part, {})}))
+            result={"verdict": verdict, "corrections": by_part.get(part, {}), "solved": solved}))
 
 
 def _account(summary: _Tally, outcome: Outcome, seen: dict[str, str],
@@ -397,6 +414,7 @@ def _account(summary: _Tally, outcome: Outcome, seen: dict[str, str],
     summary.reports += 1
     summary.parts += len(outcome.verdicts)
     summary.verdicts.update(outcome.verdicts)
+    summary.unsolved += outcome.solved.count(False)
 
 
 class _CsvOut:

@@ -27,7 +27,7 @@ from setupfix.pipeline.cycles import read_parts
 from setupfix.pipeline.requests import (CorrectOutcome, CorrectRequest, CurrentOffsets, CycleCorrection, CycleOptions,
                                         History, ReadOptions, SolveOptions, ThermalInputs, load_thermal)
 from setupfix.pose import pose_problem
-from setupfix.safety import Recommendation, Smoothed, budget, recommend
+from setupfix.safety import Recommendation, Smoothed, budget, recommend, short_list
 from setupfix.store import Store
 
 if TYPE_CHECKING:
@@ -45,7 +45,7 @@ def _applied_result(problem: CorrectionProblem, rec: Recommendation) -> Optimize
     """
     raw = rec.result
     x = np.asarray(rec.x, dtype=float)
-    if rec.verdict == "reject":
+    if rec.verdict == "reject" or not rec.solved:  # nothing was solved: nothing binds
         binding: tuple[str, ...] = ()
     elif rec.verdict == "apply" and np.array_equal(x, raw.x) and raw.binding:
         binding = raw.binding
@@ -53,7 +53,7 @@ def _applied_result(problem: CorrectionProblem, rec: Recommendation) -> Optimize
         binding = problem.binding(x)
     message = raw.message
     if rec.verdict == "hold":
-        message = "hold: " + next((r.message for r in rec.rules if r.rule in ("dead_band", "no_harm")),
+        message = "hold: " + next((r.message for r in rec.rules if r.rule in ("not_solved", "dead_band", "no_harm")),
                                   "no change needed")
     return dataclasses.replace(raw, x=x.copy(), margin_before=problem.margin_before,
                                margin_after=budget(problem, x)[0], norm=float(np.linalg.norm(x)),
@@ -102,18 +102,20 @@ def correct_cycle(request: CorrectRequest, part: PartMeasurement, *,
     """
     model = request.model
     cumulative = request.current.wear_totals(model) if request.current is not None else None
-    posed = pose_problem(model, part, smoothed=_smoothed(request, part), cumulative=cumulative, composite=composite)
+    stand_in = request.history.stand_in(model, part) if request.history is not None else None
+    posed = pose_problem(model, part, smoothed=_smoothed(request, part), cumulative=cumulative, composite=composite,
+                         stand_in=stand_in)
     solve = request.solve
     opt = get_optimizer(solve.optimizer, seed=solve.seed, **solve.params())
-    rec = recommend(posed, opt.solve, optimizer=solve.optimizer, names={d.id: d.name for d in model.dimensions})
+    rec = recommend(posed, opt.solve, optimizer=solve.optimizer, names={d.id: d.name for d in model.dimensions},
+                    registers={r.id: r.register for r in model.registers}, unit=model.unit)
     notes = [*part.notes, *posed.notes, *(n for n in rec.result.notes if n.message != rec.result.message)]
     if part.absent:
         notes.append(Note(f"{len(part.absent)} dimension(s) absent from the report, left out: "
-                          f"{', '.join(part.absent)}", None, "match"))
+                          f"{short_list(part.absent)}", None, "match"))
     if part.unmatched:
         notes.append(Note(f"{len(part.unmatched)} characteristic(s) match no dimension: "
-                          f"{', '.join(part.unmatched[:8])}" + (" …" if len(part.unmatched) > 8 else ""),
-                          None, "match"))
+                          f"{short_list(part.unmatched)}", None, "match"))
     cycle = CycleCorrection(model, part, posed, _applied_result(posed.problem, rec), rec, None, tuple(notes))
     if request.thermal is not None:
         cycle = dataclasses.replace(cycle, thermal=_feed_forward(request.thermal, cycle))
@@ -152,7 +154,8 @@ def load_request(model: ProcessModel | str | Path, *, read: ReadOptions | None =
     """A :class:`CorrectRequest` with every input file read once (the CLI's and the TUI's way to build one).
 
     ``current``: the controller's current offsets (``register,value``); ``store``: the
-    history store, read only when the model smooths (``[safety] ewma`` < 1);
+    history store (the smoothing's earlier parts when ``[safety] ewma`` < 1, and the recent
+    measurements that stand in for dimensions a report lacks);
     ``thermal`` and ``temperatures`` (together): the feed-forward's inputs.
 
     Raises
@@ -170,7 +173,7 @@ def load_request(model: ProcessModel | str | Path, *, read: ReadOptions | None =
     history = None
     if history_store is not None:
         with history_store as opened:  # read once: the smoothing needs the earlier parts and the log
-            history = History.from_store(model, opened) if model.safety.ewma < 1.0 else None
+            history = History.from_store(model, opened)
     inputs = (load_thermal(thermal, temperatures, at=at, dead_band=thermal_dead_band)
               if thermal is not None and temperatures is not None else None)
     return CorrectRequest(model, read or ReadOptions(), cycles or CycleOptions(), solve or SolveOptions(), offsets,

@@ -118,6 +118,7 @@ class DiagnoseOutcome:
                          "alike": list(e.alike),
                          **({"registers": list(e.registers)} if e.kind == "relation" else {})} for e in d.effects],
             "next_correction": {k: round(v, 9) for k, v in self.next_correction.items()},
+            "next_solved": self.next_cycle.solved if self.next_cycle is not None else None,
             "declared_effects": [e.target for e in self.input.declared],
             "rejected": [{"kind": s.spec.kind, "target": s.spec.target, "p_adjusted": r(s.p_adjusted, 6),
                           "cv_before": r(s.cv_before), "cv_after": r(s.cv_after)}
@@ -168,6 +169,9 @@ def _next_correction(model: ProcessModel, diagnosis: Diagnosis) -> tuple[CycleCo
     notes = list(cycle.notes)
     if cycle.verdict == "reject":
         notes.append(Note(f"next correction: {cycle.recommendation.alarm}", None, "safety"))
+    elif not cycle.solved:
+        why = next(r.message for r in cycle.recommendation.rules if r.rule == "not_solved")
+        notes.append(Note(f"next correction: {why}", None, "solver"))
     return cycle, notes
 
 

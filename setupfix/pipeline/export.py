@@ -66,6 +66,10 @@ def _check(cycles: Sequence[CycleCorrection], controller: str) -> None:
         if c.verdict == "reject":
             raise ExportError(f"part {c.part.part or '—'} is rejected, nothing exported: {c.recommendation.alarm}",
                               location=SourceLocation(c.part.report or "<report>"))
+        if not c.solved:
+            why = next(r.message for r in c.recommendation.rules if r.rule == "not_solved")
+            raise ExportError(f"part {c.part.part or '—'} is not solved, nothing exported: {why}",
+                              location=SourceLocation(c.part.report or "<report>"))
     if controller != "csv" and len(cycles) > 1:
         report = cycles[0].part.report or "<report>"
         raise ExportError(f"{controller}: a program holds one correction, the report has {len(cycles)} cycles "

@@ -19,9 +19,13 @@ from setupfix.pipeline.batch import BatchSummary
 from setupfix.pipeline.compare import Comparison
 from setupfix.pipeline.requests import CycleCorrection
 from setupfix.relation import RelationMatrices
+from setupfix.safety import STOPPED, short_list
 
 #: Digits of the lengths in the JSON output.
 JSON_DIGITS = 9
+
+#: Names a line of the text output lists before "… and N more" (alarms name fewer; the JSON every one).
+TEXT_LIST = 30
 
 
 def note_lines(notes: Iterable[Note]) -> list[str]:
@@ -44,11 +48,20 @@ def format_flags(flags: list[str]) -> str:
     return ", ".join(_FLAG_TEXT.get(f, f) for f in flags)
 
 
+def verdict_label(pc: CycleCorrection) -> str:
+    """The verdict as shown: APPLY, HOLD, REJECT, or NOT SOLVED for a stopped solve with nothing proven
+    (its JSON ``verdict`` stays ``hold``, with ``"solved": false``)."""
+    return pc.verdict.upper() if pc.solved else "NOT SOLVED"
+
+
 def verdict_line(pc: CycleCorrection) -> str:
-    """One line saying what to do: APPLY / HOLD / REJECT and why."""
+    """One line saying what to do: APPLY / HOLD / REJECT / NOT SOLVED and why."""
     rec = pc.recommendation
-    if rec.verdict == "reject":
+    if rec.alarm:  # reject, or a setup error held
         return rec.alarm
+    if not rec.solved:
+        why = next(r.message for r in rec.rules if r.rule == "not_solved")
+        return f"leave the offsets as they are and correct again — {why}"
     if rec.verdict == "hold":
         default = ("no change needed" if pc.margin_after >= 0 else
                    "no setup correction improves it: out-of-tolerance dimensions need the NC program or the process")
@@ -63,7 +76,7 @@ def format_correction(pc: CycleCorrection) -> str:
     r = pc.result
     unit = pc.model.unit
     lines = [f"{pc.part.report}  part {pc.part.part or '—'}  ({r.optimizer}, {r.status}, {r.seconds * 1000:.0f} ms)",
-             f"verdict: {pc.verdict.upper()} — {verdict_line(pc)}", ""]
+             f"verdict: {verdict_label(pc)} — {verdict_line(pc)}", ""]
     rows = pc.dimension_rows()
     w = max([14] + [len(row["name"]) + 2 for row in rows])
     st = 9 if any(row.get("station") for row in rows) else 0  # station column only for fixtures
@@ -99,11 +112,11 @@ def format_correction(pc: CycleCorrection) -> str:
         lines.append("binding (what stops a better correction): " + ", ".join(names[b] for b in pc.binding))
     if pc.recommendation.given_up:
         lines.append("given up (need the NC program or the process, not the setup): "
-                     + ", ".join(names[b] for b in pc.recommendation.given_up))
+                     + short_list((names[b] for b in pc.recommendation.given_up), TEXT_LIST))
     if pc.verdict != "reject":
         lines.append(r.message)
     for rule in pc.recommendation.rules:
-        what = ", ".join([*rule.registers, *(names.get(d, d) for d in rule.dimensions)])
+        what = short_list([*rule.registers, *(names.get(d, d) for d in rule.dimensions)], TEXT_LIST)
         lines.append(f"rule {rule.rule}: {rule.message}" + (f" [{what}]" if what else ""))
     lines += note_lines(pc.notes)
     return "\n".join(lines)
@@ -122,6 +135,9 @@ def cycle_json(pc: CycleCorrection) -> dict[str, Any]:
         "alarm": rec.alarm or None,
         "optimizer": r.optimizer,
         "status": r.status,
+        "solved": rec.solved,
+        "stopped": r.extra.get("stopped") if r.status in STOPPED else None,
+        "norm_ratio_max": _finite(r.extra.get("norm_ratio_max")),
         "margin_before": round(pc.margin_before, digits),
         "margin_after": round(pc.margin_after, digits),
         "bonus": round(pc.margin_after - pc.margin_before, digits),
@@ -148,6 +164,10 @@ def cycle_json(pc: CycleCorrection) -> dict[str, Any]:
         "evaluations": r.evaluations,
         "seconds": round(r.seconds, 6),
     } | ({"thermal": pc.thermal.to_json()} if pc.thermal is not None else {})
+
+
+def _finite(value: object) -> float | None:
+    return round(float(value), 6) if isinstance(value, float) and math.isfinite(value) else None
 
 
 def outcome_json(cycles: Iterable[CycleCorrection]) -> dict[str, Any]:
@@ -212,7 +232,9 @@ def format_batch_summary(summary: BatchSummary, out: str) -> str:
     """Reports, parts, verdicts, failures, skipped files and time of a batch run."""
     verdicts = ", ".join(f"{summary.verdicts.get(v, 0)} {v}" for v in ("apply", "hold", "reject"))
     rate = summary.reports / summary.seconds if summary.seconds > 0 else 0.0
-    lines = [f"{summary.reports} report(s), {summary.parts} part(s): {verdicts}",
+    unsolved = (f" ({summary.unsolved} of the holds not solved within the time limit: nothing proven; a "
+                "history store does not count them as done)" if summary.unsolved else "")
+    lines = [f"{summary.reports} report(s), {summary.parts} part(s): {verdicts}{unsolved}",
              f"{len(summary.failed)} failed, {len(summary.skipped)} skipped; "
              f"{summary.seconds:.1f} s ({rate:.0f} reports/s)",
              f"offsets written to {out}" if summary.written else f"nothing new: {out} left as it was"]

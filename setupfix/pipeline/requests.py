@@ -226,6 +226,11 @@ class CycleCorrection:
         return self.recommendation.verdict
 
     @property
+    def solved(self) -> bool:
+        """False when the solve was stopped and nothing is recommended ("not solved within the time limit")."""
+        return self.recommendation.solved
+
+    @property
     def x(self) -> Array:
         """Applied changes of every register (model order), zero unless the verdict is apply."""
         return self.recommendation.x
@@ -326,3 +331,8 @@ class CorrectOutcome:
     @property
     def rejected(self) -> tuple[CycleCorrection, ...]:
         return tuple(c for c in self.cycles if c.verdict == "reject")
+
+    @property
+    def unsolved(self) -> tuple[CycleCorrection, ...]:
+        """Cycles whose solve was stopped with nothing proven to recommend (:attr:`CycleCorrection.solved`)."""
+        return tuple(c for c in self.cycles if not c.solved)

@@ -20,7 +20,7 @@ from parsers.timestamps import instant
 from setupfix.errors import Note, ParseError, SetupfixError, SourceLocation
 from setupfix.model import PartMeasurement, ProcessModel, match_parts
 from setupfix.relation import relation_matrices
-from setupfix.safety import Smoothed, ewma_history
+from setupfix.safety import Smoothed, ewma_history, last_measured, shifted_history
 from setupfix.store import Store, report_tables, stored_corrections
 
 __all__ = ["History", "HISTORY"]
@@ -130,6 +130,17 @@ class History:
         return History(np.array(times, dtype="datetime64[ns]"),
                        np.vstack(devs) if devs else np.zeros((0, width)), tuple(keys), self.log_times,
                        self.log_register, self.log_delta, self.log_reset)
+
+    def stand_in(self, model: ProcessModel, part: PartMeasurement) -> Array | None:
+        """For the dimensions ``part`` lacks, their last measurement among the :data:`HISTORY` parts machined
+        before it, moved by the corrections logged since (:func:`setupfix.safety.shifted_history`; NaN where
+        none, where a tool changed since, or where ``part`` measures it).  None when ``part`` has no time."""
+        now = _stamp(part)
+        if now is None or not np.isnan(part.deviation).any():
+            return None
+        rows = shifted_history(now, self.times, self.deviations, self.log_times, self.log_register, self.log_delta,
+                               self.log_reset, relation_matrices(model).composite, HISTORY)
+        return np.where(np.isnan(part.deviation), last_measured(rows), np.nan)
 
     def smooth(self, model: ProcessModel, part: PartMeasurement, lam: float) -> Smoothed:
         """The EWMA estimate of ``part`` over every held part machined before it

@@ -246,6 +246,7 @@ class Summary:
     rules: tuple[str, ...] = ()
     alarm: str = ""
     given_up: tuple[str, ...] = ()
+    solved: bool = True  #: False: the solve was stopped with nothing proven (``alarm`` says so)
 
 
 def summary(correction: CycleCorrection) -> Summary:
@@ -259,8 +260,10 @@ def summary(correction: CycleCorrection) -> Summary:
         margin_after=correction.margin_after, bonus=correction.margin_after - correction.margin_before,
         norm=correction.norm, bound=r.bound, in_tolerance=correction.margin_after >= 0, message=r.message,
         notes=tuple(str(n) for n in correction.notes), verdict=correction.verdict,
-        rules=tuple(f"{e.rule}: {e.message}" for e in rec.rules), alarm=rec.alarm,
-        given_up=tuple(names.get(d, d) for d in rec.given_up))
+        rules=tuple(f"{e.rule}: {e.message}" for e in rec.rules),
+        alarm=rec.alarm or ("" if rec.solved else
+                            "NOT SOLVED: " + next(e.message for e in rec.rules if e.rule == "not_solved")),
+        given_up=tuple(names.get(d, d) for d in rec.given_up), solved=rec.solved)
 
 
 @dataclass(frozen=True)

@@ -252,3 +252,26 @@ def test_current_offsets_give_absolute_program_and_feed_the_cumulative_limit(cap
     doc = json.loads(out)
     assert doc["corrections"]["T5"] >= -0.003 - 1e-12 and "T5" in doc["at_limit"]
     assert any(r["rule"] == "cumulative_limit" and "T5" in r["registers"] for r in doc["rules"])
+
+
+def test_a_wks_entered_wrong_is_held_and_named_on_stderr_and_in_the_json(capsys, tmp_path):
+    """Issue 22: G55 (W2, station P2 at B0) off by 0.35 mm: not a reject; the register and the amount are named."""
+    lines = (GUIDE_PINS / "cycle_01.csv").read_text().splitlines()
+    moved = {"P2 D1", "P2 D2", "P2 D4"}  # the dimensions W2 moves, each by +1 (model show)
+    out = []
+    for line in lines:
+        cells = line.split(",")
+        if cells[0] in moved:
+            dev = float(cells[3]) + 0.35
+            cells[2], cells[3] = f"{float(cells[1]) + dev:.4f}", f"{dev:.4f}"
+        out.append(",".join(cells))
+    report = tmp_path / "g55.csv"
+    report.write_text("\n".join(out) + "\n")
+    target = tmp_path / "o.csv"
+    code, text, err = run(capsys, "correct", "--model", MODEL, "--json", "--offsets", str(target), str(report))
+    doc = json.loads(text)
+    assert code == 0 and doc["verdict"] == "hold" and not any(doc["corrections"].values())
+    (rule,) = [r for r in doc["rules"] if r["rule"] == "setup_error"]
+    assert rule["registers"] == ["W2"] and "G55 looks off by -0.3" in rule["message"]
+    assert doc["alarm"].startswith("SETUP ERROR: G55") and "warning:" in err and "G55 looks off" in err
+    assert target.exists()  # a hold: the rows say "leave the offsets as they are"

@@ -46,7 +46,10 @@ def test_correct_refuses_then_skips_the_row_with_a_warning(setup, capsys):
     _refused(capsys, ["correct", "--model", str(model), "--json", str(bad)])
     assert main(["correct", "--model", str(model), "--json", "--lenient", str(bad)]) == 0
     out = json.loads(capsys.readouterr().out)
-    assert out["verdict"] == "apply" and out["corrections"]
+    # issue 22 (coverage): the skipped row's dimension is absent, so the registers that move it (in this scaffold
+    # every feature is moved by W1 and T1) are held at 0 and the rule says so -- no longer an "apply"
+    (coverage,) = [r for r in out["rules"] if r["rule"] == "coverage"]
+    assert out["verdict"] == "hold" and set(coverage["registers"]) == {"W1", "T1"} and coverage["dimensions"]
     assert any(w.startswith(f"{bad}:32: ") and "contradicting themselves" in w for w in out["warnings"])
     # the skipped row is a model dimension: absent, listed, never guessed
     skipped = [d["id"] for d in out["dimensions"] if d["name"] == "점2.Y"]

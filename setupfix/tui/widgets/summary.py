@@ -12,6 +12,7 @@ __all__ = ["SummaryBar"]
 #: Verdict → (symbol, style).  The symbol carries the state on a monochrome terminal.
 VERDICT_STYLE: dict[str, tuple[str, str]] = {
     "apply": ("✓ APPLY", "bold green"), "hold": ("● HOLD", "bold yellow"), "reject": ("✗ REJECT", "bold red"),
+    "not_solved": ("✗ NOT SOLVED", "bold red"),
 }
 
 
@@ -27,7 +28,8 @@ class SummaryBar(Static):
             self.update(text)
             return
         u = summary.unit
-        label, style = VERDICT_STYLE.get(summary.verdict, (summary.verdict.upper(), "bold"))
+        key = summary.verdict if summary.solved else "not_solved"
+        label, style = VERDICT_STYLE.get(key, (key.upper(), "bold"))
         text.append(f" {label} ", style=f"{style} reverse")
         text.append(f" {summary.report}", style="bold")
         text.append(f"  {part or summary.part}  ")
