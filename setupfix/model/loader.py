@@ -30,6 +30,7 @@ import math
 import re
 import sys
 import tomllib
+import unicodedata
 from collections.abc import Mapping
 from dataclasses import replace
 from pathlib import Path
@@ -46,6 +47,7 @@ from setupfix.model.process import (
     RegisterKind,
 )
 from setupfix.model.safety import REGISTER_KEYS, parse_register_policy, parse_safety
+from setupfix.model.slots import register_slots
 from setupfix.model.stations import expand_stations
 from setupfix.units import LENGTH_UNITS, length_factor
 
@@ -152,6 +154,20 @@ def _number(p: _Problems, key: str, value: Any, *, positive: bool = False,
     return number
 
 
+def _control_free(p: _Problems, key: str, text: str, what: str) -> bool:
+    """An ID or a name matched against reports: no control character (a table row would break).
+
+    Control characters are Unicode categories Cc (tab, newline, escape …), Zl and Zp
+    (line and paragraph separators); other blanks (no-break space) are kept.
+    """
+    bad = next((c for c in text if unicodedata.category(c) in ("Cc", "Zl", "Zp")), None)
+    if bad is None:
+        return True
+    p.add(key, f"{what} {text!r} holds the control character U+{ord(bad):04X}; IDs and names are one "
+               "line of printable text")
+    return False
+
+
 def _table(p: _Problems, key: str, value: Any) -> dict[str, Any]:
     if not isinstance(value, Mapping):
         p.add(key, f"expected a table, found {type(value).__name__}")
@@ -195,9 +211,12 @@ def _registers(p: _Problems, doc: dict[str, Any], section: str, kind: RegisterKi
         key = f"{section}.{rid}"
         table = _table(p, key, raw)
         _check_keys(p, section, key, table)
+        _control_free(p, key, rid, "ID")
         name = table.get("register", rid)
         if not isinstance(name, str) or not name.strip():
             p.add(f"{key}.register", f"expected a register name, found {_show(name)}")
+            name = rid
+        elif "register" in table and not _control_free(p, f"{key}.register", name, "register name"):
             name = rid
         lim = (_number(p, f"{key}.limit", table["limit"], positive=True, within=ranges.of["limit"],
                        unit=ranges.unit) if "limit" in table else limit)
@@ -208,6 +227,25 @@ def _registers(p: _Problems, doc: dict[str, Any], section: str, kind: RegisterKi
         policy = parse_register_policy(table, functools.partial(_report_in, p, key))
         regs.append(Register(rid, kind, name.strip(), lim if lim is not None else limit, fixed, policy))
     return regs
+
+
+def _section(reg: Register) -> str:
+    return f"{'wks' if reg.kind == 'wks' else 'tools'}.{reg.id}"
+
+
+def _check_slots(p: _Problems, registers: list[Register]) -> None:
+    """Two registers addressing one controller slot (``H5``/``H05``, ``G110``/``G154 P1``, ``number``)."""
+    owner: dict[str, Register] = {}
+    for reg in registers:
+        for slot in sorted(register_slots(reg.kind, reg.register, reg.policy.number, reg.policy.edge)):
+            first = owner.setdefault(slot, reg)
+            if first is not reg:
+                p.add(f"{_section(reg)}.register",
+                      f"register {reg.register!r} addresses the controller slot {slot}, also used by "
+                      f"{first.id} ([{_section(first)}], register {first.register!r}"
+                      + (f", number = {first.policy.number}" if first.policy.number is not None else "")
+                      + "): a program would write both corrections to one offset")
+                break
 
 
 def _check_resolution(p: _Problems, resolution: float, limit: float, registers: list[Register],
@@ -276,19 +314,14 @@ def model_from_dict(doc: Mapping[str, Any], source: str = "<model>") -> ProcessM
     tool_ids = {r.id: r for r in tools}
     for rid in wks_ids.keys() & tool_ids.keys():
         p.add(f"tools.{rid}", f"ID {rid!r} is declared both as a WKS and as a tool")
-    seen_reg: dict[str, str] = {}
-    for reg in (*wks, *tools):
-        section = "wks" if reg.kind == "wks" else "tools"
-        folded = reg.register.casefold()
-        if folded in seen_reg:
-            p.add(f"{section}.{reg.id}.register", f"register {reg.register!r} is also used by {seen_reg[folded]}")
-        seen_reg[folded] = reg.id
+    _check_slots(p, [*wks, *tools])
     if not wks and not tools:
         p.add("wks", "the model declares no WKS and no tool: nothing to correct")
 
     machines = []
     for mid, raw in _table(p, "machine", doc.get("machine", {})).items():
         table = _table(p, f"machine.{mid}", raw)
+        _control_free(p, f"machine.{mid}", mid, "ID")
         _check_keys(p, "machine", f"machine.{mid}", table)
         machines.append(MachinePoint(mid, _weights(p, f"machine.{mid}.wks", table.get("wks", {}), wks_ids, "WKS")))
 
@@ -296,6 +329,7 @@ def model_from_dict(doc: Mapping[str, Any], source: str = "<model>") -> ProcessM
     for fid, raw in _table(p, "features", doc.get("features", {})).items():
         key = f"features.{fid}"
         table = _table(p, key, raw)
+        _control_free(p, key, fid, "ID")
         _check_keys(p, "features", key, table)
         fw = _weights(p, f"{key}.wks", table.get("wks", {}), wks_ids, "WKS")
         ft = _weights(p, f"{key}.tools", table.get("tools", {}), tool_ids, "tool")
@@ -353,18 +387,25 @@ def _dimensions(p: _Problems, doc: Mapping[str, Any], feature_ids: Mapping[str, 
         key = f"dimensions.{did}"
         table = _table(p, key, raw)
         _check_keys(p, "dimensions", key, table)
+        _control_free(p, key, did, "ID")
         dname = table.get("name", did)
         if not isinstance(dname, str) or not dname.strip():
             p.add(f"{key}.name", f"expected a name, found {_show(dname)}")
             dname = did
+        elif "name" in table:
+            _control_free(p, f"{key}.name", dname, "name")
         aliases = table.get("aliases", [])
         if not isinstance(aliases, list) or not all(isinstance(a, str) and a.strip() for a in aliases):
             p.add(f"{key}.aliases", f"expected a list of names, found {_show(aliases)}")
             aliases = []
+        for alias in aliases:
+            _control_free(p, f"{key}.aliases", alias, "alias")
         group = table.get("group")
         if group is not None and not isinstance(group, str):
             p.add(f"{key}.group", f"expected a string, found {_show(group)}")
             group = None
+        elif group is not None:
+            _control_free(p, f"{key}.group", group, "group")
         if "features" not in table:
             p.add(f"{key}.features", "missing: which features enter this dimension")
         fd = _weights(p, f"{key}.features", table.get("features", {}), feature_ids, "feature")
