@@ -225,7 +225,7 @@ def _validated(section: Mapping[str, Any] | None, model: ProcessModel,
         bound, scales = ESTIMATE_BOUNDS[shape_of]
         bound *= length if scales else 1.0
         if abs(est) > bound:
-            per = {"drift": "/h", "thermal": "/°C", "wear": "/cycle"}.get(str(kind), "")
+            per = {"drift": "/h", "thermal": "/°C", "wear": "/cycle"}.get(shape_of, "")
             what = f"{model.unit}{per}" if scales else "(a ratio)" if kind != "relation" else "(a weight)"
             label = "saturating drift" if shape_of == "saturating" else str(kind)
             bad(f"{key}.estimate", f"estimate {est:g} is beyond the plausible ±{bound:g} {what} of a {label} effect")
