@@ -17,6 +17,13 @@ weights                 0 < |w| ≤ 1,000
 ``position``            |coordinate| ≤ 100,000 mm
 ======================  ==========================================================
 
+Registers: two registers addressing one controller slot (``H5`` and ``H05``, ``G110``
+and ``G154 P1``, a ``number`` another register's name gives) are refused, naming both
+(:func:`setupfix.model.slots.register_slots`).  IDs and the names matched against
+reports (register, dimension name, aliases, group) must not hold control characters
+(Unicode Cc, Zl, Zp: a newline or escape would break every table); the process name is
+free text and is escaped where it is printed.
+
 Optional tables parsed into typed fields: ``[safety]`` (:func:`setupfix.model.safety.parse_safety`
 → ``ProcessModel.safety``), ``[effects]`` (:func:`setupfix.model.effects.parse_effects` →
 ``ProcessModel.effects``) and the per-register keys of ``[wks.*]`` / ``[tools.*]``
