@@ -19,10 +19,12 @@ weights                 0 < |w| ≤ 1,000
 
 Registers: two registers addressing one controller slot (``H5`` and ``H05``, ``G110``
 and ``G154 P1``, a ``number`` another register's name gives) are refused, naming both
-(:func:`setupfix.model.slots.register_slots`).  IDs and the names matched against
-reports (register, dimension name, aliases, group) must not hold control characters
-(Unicode Cc, Zl, Zp: a newline or escape would break every table); the process name is
-free text and is escaped where it is printed.
+(:func:`setupfix.model.slots.register_slots`).  IDs (the keys of ``[wks]``, ``[tools]``,
+``[features]``, ``[machine]``, ``[dimensions]``) and register names must not hold
+control characters (Unicode Cc, Zl, Zp: a newline or escape breaks a table row or a
+program line).  Names are free text (the process name, a dimension's ``name``,
+``aliases`` and ``group`` match reports whose names may hold anything): they load as
+written and every text table escapes them.
 
 Optional tables parsed into typed fields: ``[safety]`` (:func:`setupfix.model.safety.parse_safety`
 → ``ProcessModel.safety``), ``[effects]`` (:func:`setupfix.model.effects.parse_effects` →
@@ -162,7 +164,7 @@ def _number(p: _Problems, key: str, value: Any, *, positive: bool = False,
 
 
 def _control_free(p: _Problems, key: str, text: str, what: str) -> bool:
-    """An ID or a name matched against reports: no control character (a table row would break).
+    """An ID (table key, register name): no control character (a table row, a program line would break).
 
     Control characters are Unicode categories Cc (tab, newline, escape …), Zl and Zp
     (line and paragraph separators); other blanks (no-break space) are kept.
@@ -399,20 +401,14 @@ def _dimensions(p: _Problems, doc: Mapping[str, Any], feature_ids: Mapping[str, 
         if not isinstance(dname, str) or not dname.strip():
             p.add(f"{key}.name", f"expected a name, found {_show(dname)}")
             dname = did
-        elif "name" in table:
-            _control_free(p, f"{key}.name", dname, "name")
         aliases = table.get("aliases", [])
         if not isinstance(aliases, list) or not all(isinstance(a, str) and a.strip() for a in aliases):
             p.add(f"{key}.aliases", f"expected a list of names, found {_show(aliases)}")
             aliases = []
-        for alias in aliases:
-            _control_free(p, f"{key}.aliases", alias, "alias")
         group = table.get("group")
         if group is not None and not isinstance(group, str):
             p.add(f"{key}.group", f"expected a string, found {_show(group)}")
             group = None
-        elif group is not None:
-            _control_free(p, f"{key}.group", group, "group")
         if "features" not in table:
             p.add(f"{key}.features", "missing: which features enter this dimension")
         fd = _weights(p, f"{key}.features", table.get("features", {}), feature_ids, "feature")

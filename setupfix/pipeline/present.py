@@ -24,9 +24,14 @@ from setupfix.relation import RelationMatrices
 JSON_DIGITS = 9
 
 
+def _one_line(text: str) -> str:
+    """Free text (a dimension's name) for one table cell: control characters shown as "?"."""
+    return text if text.isprintable() else "".join(c if c.isprintable() else "?" for c in text)
+
+
 def note_lines(notes: Iterable[Note]) -> list[str]:
-    """Typed notes as one line of text each (``file: [place]: message``)."""
-    return [str(n) for n in notes]
+    """Typed notes as one line of text each (``file: [place]: message``; control characters of names as "?")."""
+    return [_one_line(str(n)) for n in notes]
 
 
 def format_number(value: float, digits: int = 4) -> str:
@@ -71,14 +76,14 @@ def format_correction(pc: CycleCorrection) -> str:
             + f"{'dimension':<{w}}{'deviation':>11}{'lower':>9}{'upper':>9}{'predicted':>11}{'margin':>9}  flags")
     lines += [head, "-" * len(head)]
     for row in rows:
-        lines.append(f"{row.get('station') or '':<{st}}"[:st]
-                     + f"{row['name']:<{w}}{format_number(row['deviation']):>11}{format_number(row['lower'], 3):>9}"
+        lines.append(f"{_one_line(row.get('station') or ''):<{st}}"[:st]
+                     + f"{_one_line(row['name']):<{w}}{format_number(row['deviation']):>11}{format_number(row['lower'], 3):>9}"
                      f"{format_number(row['upper'], 3):>9}{format_number(row['predicted']):>11}"
                      f"{format_number(row['margin']):>9}  {format_flags(row['flags'])}".rstrip())
     for did in pc.part.absent:
         dim = next(d for d in pc.model.dimensions if d.id == did)
-        lines.append(f"{dim.group or '':<{st}}"[:st]
-                     + f"{dim.name:<{w}}{'absent from report: not in the objective':>50}")
+        lines.append(f"{_one_line(dim.group or ''):<{st}}"[:st]
+                     + f"{_one_line(dim.name):<{w}}{'absent from report: not in the objective':>50}")
     lines += ["", f"corrections [{unit}], axis {pc.model.axis}:"]
     digits = grid_decimals(pc.model.resolution)
     for reg in pc.register_rows():
@@ -94,7 +99,7 @@ def format_correction(pc: CycleCorrection) -> str:
     ]
     if r.bound is not None:
         lines.append(f"upper bound (continuous LP): {r.bound:+.4f} {unit}")
-    names = {d.id: d.name for d in pc.model.dimensions}
+    names = {d.id: _one_line(d.name) for d in pc.model.dimensions}
     if pc.binding:
         lines.append("binding (what stops a better correction): " + ", ".join(names[b] for b in pc.binding))
     if pc.recommendation.given_up:

@@ -1,7 +1,7 @@
 """Control characters in a model's IDs and names (issue 21, item 12).
 
-IDs and the names matched against reports (register, dimension name, alias, group) are
-refused at load; the process name is free text and is escaped where it is printed.
+IDs (table keys) and register names are refused at load; names (process, dimension
+name, aliases, group) are free text: they load as written and the tables escape them.
 """
 
 from __future__ import annotations
@@ -26,11 +26,6 @@ def write(tmp_path, text: str):
 @pytest.mark.parametrize(
     ("old", "new", "key", "char"),
     [
-        ('name = "P1 D1"', 'name = "P1\\nD1"', "dimensions.D1.name", "U+000A"),
-        ('name = "P1 D1"', 'name = "P1\\tD1"', "dimensions.D1.name", "U+0009"),
-        ('name = "P1 D1"', 'name = "P1\\u2028D1"', "dimensions.D1.name", "U+2028"),
-        ('name = "P1 D1"', 'name = "P1 D1"\naliases = ["x\\u001b[2Jy"]', "dimensions.D1.aliases", "U+001B"),
-        ('name = "P1 D1"', 'name = "P1 D1"\ngroup = "A\\rB"', "dimensions.D1.group", "U+000D"),
         ('register = "H5"', 'register = "H5\\n"', "tools.T5.register", "U+000A"),
         ("[dimensions.D1]", '[dimensions."D1\\n"]', "dimensions.D1?", "U+000A"),
         ("[wks.W1]", '[wks."W\\u00071"]', "wks.W?1", "U+0007"),
@@ -47,6 +42,26 @@ def test_control_characters_in_ids_and_names_are_refused(tmp_path, old, new, key
     hit = [line for line in lines if f"[{key}]" in line and char in line]
     assert hit, lines
     assert "model.toml" in hit[0] and "one line of printable text" in hit[0]
+
+
+FREE_TEXT = 'name = "P1\\nD1"\ngroup = "A\\u001b[2JB"\naliases = ["x\\u2028y"]'
+
+
+def test_names_are_free_text_and_escaped_in_the_correct_table(tmp_path):
+    text = SPEC_EXAMPLE.replace('name = "P1 D1"', FREE_TEXT, 1)
+    path = write(tmp_path, text)
+    model = load_model(path)
+    assert model.dimensions[0].name == "P1\nD1" and model.dimensions[0].group == "A\x1b[2JB"
+    report = tmp_path / "r.csv"
+    report.write_text("characteristic,nominal,actual,lower,upper\n"
+                      'P1 D1,25.0,25.05,-0.1,0.1\nP1 D4,30.0,30.0,-0.1,0.1\n', encoding="utf-8")
+    out = io.StringIO()
+    with redirect_stdout(out):
+        assert main(["correct", "--model", str(path), str(report)]) == 0
+    text = out.getvalue()
+    assert "\x1b" not in text and "\r" not in text
+    row = next(line for line in text.splitlines() if line.startswith("A?[2JB"))  # the station column
+    assert "P1?D1" in row and "+0.05" in row
 
 
 def test_ordinary_names_still_load(tmp_path):
