@@ -67,7 +67,7 @@ def main(argv: list[str] | None = None) -> None:
             path = Path(tmp) / f"model_{n}.toml"
             path.write_text(model_text(n), encoding="utf-8")
             rows.append((n, *timed(path)))
-    ref_n, ref_wall, ref_cpu, _ = rows[0]
+    ref_n, _, ref_cpu, _ = rows[0]
     lines = [f"setupfix model show on generated models (reference: {ref_n} dimensions, same run)",
              f"command : python bench/model_show_large.py {' '.join(sys.argv[1:])}".rstrip(),
              f"machine : {platform.machine()}, Python {platform.python_version()}", "",

@@ -216,9 +216,9 @@ def null_space_directions(composite: Array, tol: float = 1e-9) -> Array:
     ndarray of shape (k, n_registers)
         k = n_registers − rank(C) directions (k may be 0).
     """
-    a = composite.T  # (|D|, n); its null space is that of its triangular factor (same singular values),
+    a: Array = composite.T  # (|D|, n); its null space is that of its triangular factor (same singular values),
     if a.shape[0] > a.shape[1]:  # whose SVD is n × n: no |D| × |D| factor for a model of many dimensions
-        a = np.linalg.qr(a, mode="r")
+        a = np.asarray(np.linalg.qr(a, mode="r"))
     basis = scipy.linalg.null_space(a, rcond=tol)  # (n, k)
     if basis.shape[1] == 0:
         return np.zeros((0, composite.shape[0]))

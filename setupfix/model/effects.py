@@ -217,7 +217,7 @@ def _validated(section: Mapping[str, Any] | None, model: ProcessModel,
         if kind not in EFFECT_KINDS:
             bad(f"{key}.kind", f"expected one of {', '.join(EFFECT_KINDS)}, found {kind!r}")
             continue
-        est = raw.get("estimate")
+        est: Any = raw.get("estimate")
         if not _num(est):
             bad(f"{key}.estimate", f"expected a finite number, found {_shown(est)}")
             continue

@@ -77,9 +77,10 @@ def format_correction(pc: CycleCorrection) -> str:
     lines += [head, "-" * len(head)]
     for row in rows:
         lines.append(f"{_one_line(row.get('station') or ''):<{st}}"[:st]
-                     + f"{_one_line(row['name']):<{w}}{format_number(row['deviation']):>11}{format_number(row['lower'], 3):>9}"
-                     f"{format_number(row['upper'], 3):>9}{format_number(row['predicted']):>11}"
-                     f"{format_number(row['margin']):>9}  {format_flags(row['flags'])}".rstrip())
+                     + f"{_one_line(row['name']):<{w}}{format_number(row['deviation']):>11}"
+                     f"{format_number(row['lower'], 3):>9}{format_number(row['upper'], 3):>9}"
+                     f"{format_number(row['predicted']):>11}{format_number(row['margin']):>9}"
+                     f"  {format_flags(row['flags'])}".rstrip())
     for did in pc.part.absent:
         dim = next(d for d in pc.model.dimensions if d.id == did)
         lines.append(f"{_one_line(dim.group or ''):<{st}}"[:st]

@@ -65,7 +65,7 @@ def collide(kind: str, a: tuple, b: tuple) -> set[str]:
 
 
 def has_edge(name: str, edge: int | None) -> bool:
-    return edge is not None or bool(re.search(r"D\s*\d", name, re.IGNORECASE)) and name.upper().startswith("T")
+    return edge is not None or (bool(re.search(r"D\s*\d", name, re.IGNORECASE)) and name.upper().startswith("T"))
 
 
 @pytest.mark.parametrize(("kind", "registers"), [("wks", WKS), ("tool", [(n, k, e) for n, k, e in TOOLS])])
@@ -73,7 +73,7 @@ def test_slots_agree_with_every_controller_program(kind, registers):
     """Shared slot ⟺ some controller family writes both to one address (Heidenhain tool edges excepted)."""
     disagree = []
     for a, b in itertools.combinations(registers, 2):
-        a3, b3 = (a + (None,))[:3], (b + (None,))[:3]
+        a3, b3 = (*a, None)[:3], (*b, None)[:3]
         slots = register_slots(kind, *a3) & register_slots(kind, *b3)
         families = collide(kind, a3, b3)
         if families == {"heidenhain"} and kind == "tool" and (has_edge(a3[0], a3[2]) or has_edge(b3[0], b3[2])):

@@ -58,7 +58,8 @@ def test_rewritten_sample_keeps_every_date(tmp_path, how, rewrite):
     assert stamps(variant(tmp_path, changed)) == EXPECTED, how
 
 
-HEAD = "K0100 2\nK1001 P1\nK2001/1 A\nK2101/1 10\nK2110/1 9\nK2111/1 11\nK2001/2 B\nK2101/2 20\nK2110/2 19\nK2111/2 21\n"
+HEAD = ("K0100 2\nK1001 P1\nK2001/1 A\nK2101/1 10\nK2110/1 9\nK2111/1 11\n"
+        "K2001/2 B\nK2101/2 20\nK2110/2 19\nK2111/2 21\n")
 
 
 def test_interleaved_values_dated_by_slash_zero_and_by_unindexed_lines(tmp_path):
