@@ -99,16 +99,55 @@ _KEYS = {
 _EXPANDED = {"stations", "template"}
 
 
-class _Problems:
-    """Collects problems with their key paths."""
+_HEADER = re.compile(r"^\s*\[\[?\s*([^\[\]]+?)\s*\]\]?\s*(?:#.*)?$")
+_ASSIGN = re.compile(r"""^\s*["']?([^"'=\s]+)["']?\s*=""")
 
-    def __init__(self, path: str, origin: Mapping[str, str] | None = None) -> None:
+
+class _Lines:
+    """Line of a key path in the model's text: its own ``key =`` line, else its table's header.
+
+    Enough for the files people write (``[wks.W5]`` then ``register = …``); a key it
+    cannot place gets no line, only its key path.
+    """
+
+    def __init__(self, text: str | None) -> None:
+        self.tables: dict[str, int] = {}
+        self.assigned: dict[str, int] = {}
+        table = ""
+        for number, line in enumerate((text or "").splitlines(), 1):
+            header = _HEADER.match(line)
+            if header:
+                table = ".".join(part.strip().strip("\"'") for part in header.group(1).split("."))
+                self.tables.setdefault(table, number)
+                continue
+            assign = _ASSIGN.match(line)
+            if assign:
+                self.assigned.setdefault(f"{table}.{assign.group(1)}" if table else assign.group(1), number)
+
+    def __call__(self, key: str) -> int | None:
+        parts = key.split(".")
+        for n in range(len(parts), 0, -1):
+            head = ".".join(parts[:n])
+            if head in self.assigned:
+                return self.assigned[head]
+            if head in self.tables:
+                return self.tables[head]
+        return None
+
+
+class _Problems:
+    """Collects problems with their key paths (and lines, when the text is known)."""
+
+    def __init__(self, path: str, origin: Mapping[str, str] | None = None, text: str | None = None) -> None:
         self.path = path
         self.origin = origin or {}
         self.items: list[ModelError] = []
+        self.line_of = _Lines(text)
 
     def add(self, key: str, message: str) -> None:
-        self.items.append(ModelError(message, location=SourceLocation(self.path, key=self._where(key))))
+        where = self._where(key)
+        self.items.append(ModelError(message, location=SourceLocation(self.path, line=self.line_of(where),
+                                                                      key=where)))
 
     def _where(self, key: str) -> str:
         """Key path in the file as written (templated tables name their template and station)."""
@@ -249,9 +288,10 @@ def _check_slots(p: _Problems, registers: list[Register]) -> None:
         for slot in sorted(register_slots(reg.kind, reg.register, reg.policy.number, reg.policy.edge)):
             first = owner.setdefault(slot, reg)
             if first is not reg:
+                line = p.line_of(p._where(f"{_section(first)}.register"))
                 p.add(f"{_section(reg)}.register",
                       f"register {reg.register!r} addresses the controller slot {slot}, also used by "
-                      f"{first.id} ([{_section(first)}], register {first.register!r}"
+                      f"{first.id} ([{_section(first)}]{f' line {line}' if line else ''}, register {first.register!r}"
                       + (f", number = {first.policy.number}" if first.policy.number is not None else "")
                       + "): a program would write both corrections to one offset")
                 break
@@ -279,8 +319,10 @@ def _check_resolution(p: _Problems, resolution: float, limit: float, registers: 
                   f"({narrowest.name}: {width:g} {unit} wide); allowed: at most {width / 2:g} {unit}")
 
 
-def model_from_dict(doc: Mapping[str, Any], source: str = "<model>") -> ProcessModel:
+def model_from_dict(doc: Mapping[str, Any], source: str = "<model>", text: str | None = None) -> ProcessModel:
     """Validate a parsed model document and build the :class:`ProcessModel`.
+
+    ``text``, the document as written, lets every problem name its line too.
 
     Raises
     ------
@@ -288,7 +330,7 @@ def model_from_dict(doc: Mapping[str, Any], source: str = "<model>") -> ProcessM
         With one line per problem, each naming ``source`` and the key path.
     """
     expanded, origin, template_problems = expand_stations(doc)
-    p = _Problems(source, origin)
+    p = _Problems(source, origin, text)
     for key, message in template_problems:
         p.add(key, message)
     doc = expanded
@@ -465,7 +507,8 @@ def load_model(path: str | Path) -> ProcessModel:
     if len(raw) > MAX_BYTES:
         raise ModelError(f"larger than {MAX_BYTES // 2**20} MiB: not a process model", location=where)
     try:
-        doc = tomllib.loads(raw.decode("utf-8-sig"))
+        text = raw.decode("utf-8-sig")
+        doc = tomllib.loads(text)
     except UnicodeDecodeError as exc:
         raise ModelError(f"not UTF-8 text (byte {exc.start})", location=where) from None
     except tomllib.TOMLDecodeError as exc:
@@ -479,4 +522,4 @@ def load_model(path: str | Path) -> ProcessModel:
                          location=where) from None
     except ValueError as exc:  # an integer beyond Python's int/str conversion limit
         raise ModelError(f"TOML value out of range: {exc}", location=where) from None
-    return model_from_dict(doc, source=str(path))
+    return model_from_dict(doc, source=str(path), text=text)

@@ -117,8 +117,11 @@ def test_two_registers_of_one_slot_refuse_the_model_naming_both(tmp_path, kind, 
         load_model(path)
     (line,) = str(info.value).splitlines()
     section = "wks" if kind == "wks" else "tools"
-    assert line.startswith(f"{path}: [{section}.{ids[1]}.register]: ") and "controller slot" in line
-    assert f"also used by {ids[0]} ([{section}.{ids[0]}]" in line
+    lines = text.splitlines()
+    at_second = lines.index(f"[{section}.{ids[1]}]") + 2  # the register's own line, below its header
+    at_first = lines.index(f"[{section}.{ids[0]}]") + 2
+    assert line.startswith(f"{path}:{at_second}: [{section}.{ids[1]}.register]: ") and "controller slot" in line
+    assert f"also used by {ids[0]} ([{section}.{ids[0]}] line {at_first}, register" in line
     name_a = first.split('"')[1]
     name_b = second.split('"')[1]
     assert repr(name_a) in line and repr(name_b) in line
