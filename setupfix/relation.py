@@ -148,8 +148,18 @@ def composite_matrix(r_wf: Array, r_tf: Array, r_fd: Array) -> Array:
     ndarray of shape (|W| + |T|, |D|)
         Row i is the change of every dimension per unit change of register i
         (eqs. 3–4 with M = 0).
+
+    Notes
+    -----
+    R_FD has a few features per dimension, so the product runs over its non-zero
+    entries: O(nnz · (|W| + |T|)) instead of O(|F| · |D| · (|W| + |T|)) (a model of
+    10,000 dimensions took seconds and gigabytes as a dense product).
     """
-    return np.vstack([r_wf @ r_fd, r_tf @ r_fd])
+    rows = np.vstack([r_wf, r_tf])
+    out = np.zeros((rows.shape[0], r_fd.shape[1]))
+    f, d = np.nonzero(r_fd)
+    np.add.at(out.T, d, (rows[:, f] * r_fd[f, d]).T)
+    return out
 
 
 def predict_features(w: Array, t: Array, r_wf: Array, r_tf: Array,
@@ -206,7 +216,10 @@ def null_space_directions(composite: Array, tol: float = 1e-9) -> Array:
     ndarray of shape (k, n_registers)
         k = n_registers − rank(C) directions (k may be 0).
     """
-    basis = scipy.linalg.null_space(composite.T, rcond=tol)  # (n, k)
+    a: Array = composite.T  # (|D|, n); its null space is that of its triangular factor (same singular values),
+    if a.shape[0] > a.shape[1]:  # whose SVD is n × n: no |D| × |D| factor for a model of many dimensions
+        a = np.asarray(np.linalg.qr(a, mode="r"))
+    basis = scipy.linalg.null_space(a, rcond=tol)  # (n, k)
     if basis.shape[1] == 0:
         return np.zeros((0, composite.shape[0]))
     rows = basis.T.copy()

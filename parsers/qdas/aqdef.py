@@ -2,7 +2,10 @@
 
 Each line is a K-field ``Kkkkk[/i] value`` or an uncoded value line.  ``/i`` is the
 part index for K1xxx, the characteristic index for K2xxx and K0xxx; ``/0`` applies a
-field to every part or characteristic (an explicit index wins).  Values come either
+field to every part or characteristic (an explicit index wins); a value field (K0002,
+K0004 …) written without ``/i`` belongs to the value line just above it (the last
+K0001 line, or every value of the last uncoded line), and a date (K0004) with no
+value of its (variable) characteristic above it is refused, not dropped.  Values come either
 as K-field lines (``K0001/2 3.1`` followed by ``K0004/2 …``) or as one uncoded line
 per measured piece: characteristics separated by 0x0F, their fields by 0x14 in the
 order K0001 K0002 K0004 K0005 K0006 K0007 K0008 K0010 K0011 K0012.
@@ -86,6 +89,8 @@ class _State:
     all_parts: dict[str, str] = field(default_factory=dict)
     values: list[_Value] = field(default_factory=list)
     last_value: dict[int, _Value] = field(default_factory=dict)
+    #: The values of the last K0001 line or uncoded value line (what an unindexed K0xxx field follows).
+    last_read: list[_Value] = field(default_factory=list)
     samples: dict[int, int] = field(default_factory=dict)
     coded_lines: int = 0
     current_part: int = 1
@@ -124,16 +129,33 @@ def _feed_kline(state: _State, key: str, index: int | None, value: str, where: S
             item = _Value(index, state.samples[index], where, {"K0001": value})
             state.values.append(item)
             state.last_value[index] = item
+            state.last_read = [item]
             return
-        targets = list(state.last_value.values()) if index == 0 else [state.last_value.get(index or 1)]
+        if index == 0:
+            targets = list(state.last_value.values())
+        elif index is None:  # written without /i: the field of the value line(s) just above
+            targets = state.last_read
+        else:
+            found = state.last_value.get(index)
+            targets = [] if found is None else [found]
+        if not targets and key == "K0004" and index and _variable(state, index):
+            raise ParseError(f"{key} (date) before a value of characteristic {index}: a K0004 line follows "
+                             "the K0001 line it dates", location=where)
         for target in targets:
-            if target is not None:
-                target.fields[key] = value
+            target.fields[key] = value
+
+
+def _variable(state: _State, index: int) -> bool:
+    """Whether characteristic ``index`` is described as variable (K2004 0 or absent; attributive ones have no K0001)."""
+    char = state.chars.get(index)
+    kind = (char.fields.get("K2004") if char else None) or state.all_chars.get("K2004", "0")
+    return kind.strip() in ("", "0")
 
 
 def _feed_value_line(state: _State, line: str, where: SourceLocation) -> None:
     state.coded_lines += 1
     groups = line.split(_SI)
+    state.last_read = []
     for number, group in enumerate(groups, 1):
         parts = group.split(_DC4)
         if len(parts) > 20:
@@ -143,6 +165,7 @@ def _feed_value_line(state: _State, line: str, where: SourceLocation) -> None:
         state.samples[number] = state.coded_lines
         state.values.append(item)
         state.last_value[number] = item
+        state.last_read.append(item)
 
 
 def _parse(state: _State, lines: list[tuple[SourceLocation, str]]) -> None:

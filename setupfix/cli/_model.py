@@ -108,7 +108,7 @@ def run_show(args: argparse.Namespace) -> int:
         sys.stdout.write("\n")
         return 0
     which = args.matrix or [m for m in MATRICES if m != "R_MW" or desc.matrices.R_MW.size]
-    sys.stdout.write(f"{desc.model.name}  (axis {desc.model.axis}, unit {desc.model.unit}, "
+    sys.stdout.write(f"{_safe(desc.model.name)}  (axis {desc.model.axis}, unit {desc.model.unit}, "
                      f"resolution {desc.model.resolution:g})\n\n")
     sys.stdout.write(format_relations(desc.matrices, which, desc.null_space, desc.rank) + "\n")
     return 0

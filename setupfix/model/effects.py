@@ -22,19 +22,43 @@ register the series could not tell from it, when more than one); group ``group``
 effect adds ``estimate`` × its covariate to the deviations (see
 :mod:`setupfix.diagnose.terms`).  Everything here is plain data: parse, validate
 against the model, and write.
+
+Every value is checked when the model loads (a forecast goes into a machine): numbers
+finite, ``origin`` an ISO 8601 time in 1970…2200, and within these bounds (lengths in
+mm, converted to the model unit):
+
+=======================  ================  =================================================
+key                      bound             why
+=======================  ================  =================================================
+drift (linear)           |β| ≤ 1 mm/h      warming spindles and frames drift µm per hour
+drift (saturating)       |β| ≤ 10 mm       the largest correction a register may take
+thermal                  |β| ≤ 1 mm/°C     a 10 m steel part grows 0.12 mm/°C
+wear                     |β| ≤ 1 mm/cycle  a tool losing a millimetre per part is broken
+scale, position          |β| ≤ 0.01        1 %: steel grows that much over 850 °C
+relation                 |β| ≤ 1000        the bound on every relation weight of the model
+group                    |β| ≤ 10 mm       the largest correction a register may take
+``stderr``               0 … 1000 × bound  a statistic: only absurd values are refused
+``tau``                  0 < τ ≤ 100,000 h saturation over more than ~11 years is linear
+``reference``            −50 … 200 °C      shop, coolant and spindle temperatures
+``cycle_hours``          0 … 8,784 h       one cycle per year at the slowest
+``last_hours``           0 … 876,600 h     a hundred years after ``origin``
+=======================  ================  =================================================
 """
 
 from __future__ import annotations
 
 import math
 import re
+import sys
 import tomllib
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
+from datetime import date, datetime
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from setupfix.errors import ModelError, SourceLocation
+from setupfix.units import length_factor
 
 if TYPE_CHECKING:  # the model holds its [effects] section: process imports this module
     from setupfix.model.process import ProcessModel
@@ -86,7 +110,48 @@ class EffectsSection:
 
 
 def _num(value: Any) -> bool:
-    return isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
+    return (isinstance(value, (int, float)) and not isinstance(value, bool)
+            and abs(value) <= sys.float_info.max and math.isfinite(value))
+
+
+#: Bound on |estimate| per kind (and drift shape), in mm-based units (module table).
+ESTIMATE_BOUNDS: dict[str, tuple[float, bool]] = {
+    # kind: (bound, is the bound a length that scales with the model unit)
+    "drift": (1.0, True), "saturating": (10.0, True), "thermal": (1.0, True), "wear": (1.0, True),
+    "scale": (0.01, False), "position": (0.01, False), "relation": (1000.0, False), "group": (10.0, True),
+}
+#: Bounds of the section's time base and of the other numbers (module table).
+HEAD_BOUNDS: dict[str, tuple[float, float]] = {"cycle_hours": (0.0, 8784.0), "last_hours": (0.0, 876_600.0)}
+TAU_HOURS = 100_000.0
+REFERENCE_CELSIUS = (-50.0, 200.0)
+ORIGIN_YEARS = (1970, 2200)
+STDERR_FACTOR = 1000.0
+
+
+def _origin_problem(value: Any) -> str | None:
+    """Why ``origin`` is not a usable time (None when it is)."""
+    if isinstance(value, datetime):
+        moment = value
+    elif isinstance(value, date) and not isinstance(value, datetime):
+        moment = datetime(value.year, value.month, value.day)
+    elif isinstance(value, str):
+        try:
+            moment = datetime.fromisoformat(value.strip().replace("Z", "+00:00"))
+        except ValueError:
+            return f"expected an ISO 8601 time (e.g. 2026-11-02T08:00:00), found {value[:40]!r}"
+    else:
+        return f"expected an ISO 8601 time (e.g. 2026-11-02T08:00:00), found {_shown(value)}"
+    if not ORIGIN_YEARS[0] <= moment.year <= ORIGIN_YEARS[1]:
+        return f"year {moment.year} is outside {ORIGIN_YEARS[0]}…{ORIGIN_YEARS[1]}"
+    return None
+
+
+def _shown(value: Any) -> str:
+    """A value for a message, short (huge integers and tables named, not printed)."""
+    if isinstance(value, int) and not isinstance(value, bool) and abs(value) > 10**15:
+        return "an integer beyond the float range" if abs(value) > sys.float_info.max else f"{value:.3e}"
+    text = repr(value) if not isinstance(value, (dict, list)) else f"a {type(value).__name__}"
+    return text if len(text) <= 60 else text[:57] + "..."
 
 
 def effects_from_dict(section: Mapping[str, Any] | None, model: ProcessModel,
@@ -98,24 +163,41 @@ def effects_from_dict(section: Mapping[str, Any] | None, model: ProcessModel,
     ModelError
         One line per problem, each naming ``source`` and the key path.
     """
-    if not section:
-        return EffectsSection()
     problems: list[str] = []
 
     def bad(key: str, message: str) -> None:
         problems.append(str(ModelError(message, location=SourceLocation(source, key=key))))
 
+    section_read = _validated(section, model, bad)
+    if problems:
+        raise ModelError("\n".join(problems))
+    return section_read
+
+
+def _validated(section: Mapping[str, Any] | None, model: ProcessModel,
+               bad: Callable[[str, str], None]) -> EffectsSection:
+    """The section read, every problem given to ``bad(key, message)`` (key from the document's top)."""
+    if not section:
+        return EffectsSection()
+    problems = _Count(bad)
+    bad = problems.add
     head: dict[str, Any] = {}
     for name in ("origin", "cycle_hours", "last_hours"):
         if name in section:
             head[name] = section[name]
     origin = head.get("origin")
-    if origin is not None and not isinstance(origin, str):
+    why = None if origin is None else _origin_problem(origin)
+    if why is not None:
+        bad("effects.origin", why)
+        origin = None
+    elif origin is not None and not isinstance(origin, str):
         origin = str(origin)  # TOML local date-times arrive as datetime objects
     for name in ("cycle_hours", "last_hours"):
-        if name in head and not _num(head[name]):
-            bad(f"effects.{name}", f"expected a number, found {head[name]!r}")
+        low, high = HEAD_BOUNDS[name]
+        if name in head and not (_num(head[name]) and low <= head[name] <= high):
+            bad(f"effects.{name}", f"expected a number of hours in [{low:g}, {high:g}], found {_shown(head[name])}")
             head.pop(name)
+    length = length_factor("mm", model.unit)
     regs = set(model.register_ids)
     tools = {t.id for t in model.tools}
     dims = set(model.dimension_ids)
@@ -135,10 +217,30 @@ def effects_from_dict(section: Mapping[str, Any] | None, model: ProcessModel,
         if kind not in EFFECT_KINDS:
             bad(f"{key}.kind", f"expected one of {', '.join(EFFECT_KINDS)}, found {kind!r}")
             continue
-        est = raw.get("estimate")
+        est: Any = raw.get("estimate")
         if not _num(est):
-            bad(f"{key}.estimate", f"expected a number, found {est!r}")
+            bad(f"{key}.estimate", f"expected a finite number, found {_shown(est)}")
             continue
+        shape_of = "saturating" if kind == "drift" and raw.get("shape") == "saturating" else str(kind)
+        bound, scales = ESTIMATE_BOUNDS[shape_of]
+        bound *= length if scales else 1.0
+        if abs(est) > bound:
+            per = {"drift": "/h", "thermal": "/°C", "wear": "/cycle"}.get(shape_of, "")
+            what = f"{model.unit}{per}" if scales else "(a ratio)" if kind != "relation" else "(a weight)"
+            label = "saturating drift" if shape_of == "saturating" else str(kind)
+            bad(f"{key}.estimate", f"estimate {est:g} is beyond the plausible ±{bound:g} {what} of a {label} effect")
+        stderr_raw = raw.get("stderr")
+        if stderr_raw is not None and not (_num(stderr_raw) and 0 <= stderr_raw <= STDERR_FACTOR * bound):
+            bad(f"{key}.stderr", f"expected a number in [0, {STDERR_FACTOR * bound:g}], found {_shown(stderr_raw)}")
+        if "tau" in raw and not (_num(raw["tau"]) and 0 < raw["tau"] <= TAU_HOURS):
+            bad(f"{key}.tau", f"expected hours in (0, {TAU_HOURS:g}], found {_shown(raw['tau'])}")
+        if "reference" in raw and not (_num(raw["reference"])
+                                       and REFERENCE_CELSIUS[0] <= raw["reference"] <= REFERENCE_CELSIUS[1]):
+            bad(f"{key}.reference", f"expected °C in [{REFERENCE_CELSIUS[0]:g}, {REFERENCE_CELSIUS[1]:g}], "
+                                    f"found {_shown(raw['reference'])}")
+        for name in ("unit", "target", "shape", "channel", "register", "dimension", "axis", "group"):
+            if name in raw and not isinstance(raw[name], str):
+                bad(f"{key}.{name}", f"expected a string, found {_shown(raw[name])}")
         for k in _REQUIRED[kind]:
             if not isinstance(raw.get(k), str):
                 bad(f"{key}.{k}", f"a {kind} effect needs {k} (a string)")
@@ -174,9 +276,22 @@ def effects_from_dict(section: Mapping[str, Any] | None, model: ProcessModel,
             register=raw.get("register"), dimension=raw.get("dimension"), axis=raw.get("axis"),
             group=raw.get("group"),
             registers=tuple(raw.get("registers", ())) if kind == "relation" else ()))
-    if problems:
-        raise ModelError("\n".join(problems))
     return EffectsSection(tuple(effects), origin, head.get("cycle_hours"), head.get("last_hours"))
+
+
+class _Count:
+    """Passes problems on and counts them (an effect is built only while none was found)."""
+
+    def __init__(self, report: Callable[[str, str], None]) -> None:
+        self.report = report
+        self.n = 0
+
+    def add(self, key: str, message: str) -> None:
+        self.n += 1
+        self.report(key, message)
+
+    def __bool__(self) -> bool:
+        return self.n > 0
 
 
 def parse_effects(value: Any, model: ProcessModel, report: Any) -> EffectsSection:
@@ -187,11 +302,11 @@ def parse_effects(value: Any, model: ProcessModel, report: Any) -> EffectsSectio
     if not isinstance(value, Mapping):
         report("", "expected a table [effects]")
         return EffectsSection()
-    try:
-        return effects_from_dict(value, model, model.source)
-    except ModelError as exc:
-        report("", exc.message)
-        return EffectsSection()
+    found: list[tuple[str, str]] = []
+    section = _validated(value, model, lambda key, message: found.append((key, message)))
+    for key, message in found:
+        report(key.removeprefix("effects").removeprefix("."), message)
+    return EffectsSection() if found else section
 
 
 def load_effects(path: str | Path, model: ProcessModel) -> EffectsSection:

@@ -17,6 +17,15 @@ weights                 0 < |w| ≤ 1,000
 ``position``            |coordinate| ≤ 100,000 mm
 ======================  ==========================================================
 
+Registers: two registers addressing one controller slot (``H5`` and ``H05``, ``G110``
+and ``G154 P1``, a ``number`` another register's name gives) are refused, naming both
+(:func:`setupfix.model.slots.register_slots`).  IDs (the keys of ``[wks]``, ``[tools]``,
+``[features]``, ``[machine]``, ``[dimensions]``) and register names must not hold
+control characters (Unicode Cc, Zl, Zp: a newline or escape breaks a table row or a
+program line).  Names are free text (the process name, a dimension's ``name``,
+``aliases`` and ``group`` match reports whose names may hold anything): they load as
+written and every text table escapes them.
+
 Optional tables parsed into typed fields: ``[safety]`` (:func:`setupfix.model.safety.parse_safety`
 → ``ProcessModel.safety``), ``[effects]`` (:func:`setupfix.model.effects.parse_effects` →
 ``ProcessModel.effects``) and the per-register keys of ``[wks.*]`` / ``[tools.*]``
@@ -30,6 +39,7 @@ import math
 import re
 import sys
 import tomllib
+import unicodedata
 from collections.abc import Mapping
 from dataclasses import replace
 from pathlib import Path
@@ -46,6 +56,7 @@ from setupfix.model.process import (
     RegisterKind,
 )
 from setupfix.model.safety import REGISTER_KEYS, parse_register_policy, parse_safety
+from setupfix.model.slots import register_slots
 from setupfix.model.stations import expand_stations
 from setupfix.units import LENGTH_UNITS, length_factor
 
@@ -88,16 +99,55 @@ _KEYS = {
 _EXPANDED = {"stations", "template"}
 
 
-class _Problems:
-    """Collects problems with their key paths."""
+_HEADER = re.compile(r"^\s*\[\[?\s*([^\[\]]+?)\s*\]\]?\s*(?:#.*)?$")
+_ASSIGN = re.compile(r"""^\s*["']?([^"'=\s]+)["']?\s*=""")
 
-    def __init__(self, path: str, origin: Mapping[str, str] | None = None) -> None:
+
+class _Lines:
+    """Line of a key path in the model's text: its own ``key =`` line, else its table's header.
+
+    Enough for the files people write (``[wks.W5]`` then ``register = …``); a key it
+    cannot place gets no line, only its key path.
+    """
+
+    def __init__(self, text: str | None) -> None:
+        self.tables: dict[str, int] = {}
+        self.assigned: dict[str, int] = {}
+        table = ""
+        for number, line in enumerate((text or "").splitlines(), 1):
+            header = _HEADER.match(line)
+            if header:
+                table = ".".join(part.strip().strip("\"'") for part in header.group(1).split("."))
+                self.tables.setdefault(table, number)
+                continue
+            assign = _ASSIGN.match(line)
+            if assign:
+                self.assigned.setdefault(f"{table}.{assign.group(1)}" if table else assign.group(1), number)
+
+    def __call__(self, key: str) -> int | None:
+        parts = key.split(".")
+        for n in range(len(parts), 0, -1):
+            head = ".".join(parts[:n])
+            if head in self.assigned:
+                return self.assigned[head]
+            if head in self.tables:
+                return self.tables[head]
+        return None
+
+
+class _Problems:
+    """Collects problems with their key paths (and lines, when the text is known)."""
+
+    def __init__(self, path: str, origin: Mapping[str, str] | None = None, text: str | None = None) -> None:
         self.path = path
         self.origin = origin or {}
         self.items: list[ModelError] = []
+        self.line_of = _Lines(text)
 
     def add(self, key: str, message: str) -> None:
-        self.items.append(ModelError(message, location=SourceLocation(self.path, key=self._where(key))))
+        where = self._where(key)
+        self.items.append(ModelError(message, location=SourceLocation(self.path, line=self.line_of(where),
+                                                                      key=where)))
 
     def _where(self, key: str) -> str:
         """Key path in the file as written (templated tables name their template and station)."""
@@ -152,6 +202,20 @@ def _number(p: _Problems, key: str, value: Any, *, positive: bool = False,
     return number
 
 
+def _control_free(p: _Problems, key: str, text: str, what: str) -> bool:
+    """An ID (table key, register name): no control character (a table row, a program line would break).
+
+    Control characters are Unicode categories Cc (tab, newline, escape …), Zl and Zp
+    (line and paragraph separators); other blanks (no-break space) are kept.
+    """
+    bad = next((c for c in text if unicodedata.category(c) in ("Cc", "Zl", "Zp")), None)
+    if bad is None:
+        return True
+    p.add(key, f"{what} {text!r} holds the control character U+{ord(bad):04X}; IDs and names are one "
+               "line of printable text")
+    return False
+
+
 def _table(p: _Problems, key: str, value: Any) -> dict[str, Any]:
     if not isinstance(value, Mapping):
         p.add(key, f"expected a table, found {type(value).__name__}")
@@ -195,9 +259,12 @@ def _registers(p: _Problems, doc: dict[str, Any], section: str, kind: RegisterKi
         key = f"{section}.{rid}"
         table = _table(p, key, raw)
         _check_keys(p, section, key, table)
+        _control_free(p, key, rid, "ID")
         name = table.get("register", rid)
         if not isinstance(name, str) or not name.strip():
             p.add(f"{key}.register", f"expected a register name, found {_show(name)}")
+            name = rid
+        elif "register" in table and not _control_free(p, f"{key}.register", name, "register name"):
             name = rid
         lim = (_number(p, f"{key}.limit", table["limit"], positive=True, within=ranges.of["limit"],
                        unit=ranges.unit) if "limit" in table else limit)
@@ -208,6 +275,26 @@ def _registers(p: _Problems, doc: dict[str, Any], section: str, kind: RegisterKi
         policy = parse_register_policy(table, functools.partial(_report_in, p, key))
         regs.append(Register(rid, kind, name.strip(), lim if lim is not None else limit, fixed, policy))
     return regs
+
+
+def _section(reg: Register) -> str:
+    return f"{'wks' if reg.kind == 'wks' else 'tools'}.{reg.id}"
+
+
+def _check_slots(p: _Problems, registers: list[Register]) -> None:
+    """Two registers addressing one controller slot (``H5``/``H05``, ``G110``/``G154 P1``, ``number``)."""
+    owner: dict[str, Register] = {}
+    for reg in registers:
+        for slot in sorted(register_slots(reg.kind, reg.register, reg.policy.number, reg.policy.edge)):
+            first = owner.setdefault(slot, reg)
+            if first is not reg:
+                line = p.line_of(p._where(f"{_section(first)}.register"))
+                p.add(f"{_section(reg)}.register",
+                      f"register {reg.register!r} addresses the controller slot {slot}, also used by "
+                      f"{first.id} ([{_section(first)}]{f' line {line}' if line else ''}, register {first.register!r}"
+                      + (f", number = {first.policy.number}" if first.policy.number is not None else "")
+                      + "): a program would write both corrections to one offset")
+                break
 
 
 def _check_resolution(p: _Problems, resolution: float, limit: float, registers: list[Register],
@@ -232,8 +319,10 @@ def _check_resolution(p: _Problems, resolution: float, limit: float, registers: 
                   f"({narrowest.name}: {width:g} {unit} wide); allowed: at most {width / 2:g} {unit}")
 
 
-def model_from_dict(doc: Mapping[str, Any], source: str = "<model>") -> ProcessModel:
+def model_from_dict(doc: Mapping[str, Any], source: str = "<model>", text: str | None = None) -> ProcessModel:
     """Validate a parsed model document and build the :class:`ProcessModel`.
+
+    ``text``, the document as written, lets every problem name its line too.
 
     Raises
     ------
@@ -241,7 +330,7 @@ def model_from_dict(doc: Mapping[str, Any], source: str = "<model>") -> ProcessM
         With one line per problem, each naming ``source`` and the key path.
     """
     expanded, origin, template_problems = expand_stations(doc)
-    p = _Problems(source, origin)
+    p = _Problems(source, origin, text)
     for key, message in template_problems:
         p.add(key, message)
     doc = expanded
@@ -276,19 +365,14 @@ def model_from_dict(doc: Mapping[str, Any], source: str = "<model>") -> ProcessM
     tool_ids = {r.id: r for r in tools}
     for rid in wks_ids.keys() & tool_ids.keys():
         p.add(f"tools.{rid}", f"ID {rid!r} is declared both as a WKS and as a tool")
-    seen_reg: dict[str, str] = {}
-    for reg in (*wks, *tools):
-        section = "wks" if reg.kind == "wks" else "tools"
-        folded = reg.register.casefold()
-        if folded in seen_reg:
-            p.add(f"{section}.{reg.id}.register", f"register {reg.register!r} is also used by {seen_reg[folded]}")
-        seen_reg[folded] = reg.id
+    _check_slots(p, [*wks, *tools])
     if not wks and not tools:
         p.add("wks", "the model declares no WKS and no tool: nothing to correct")
 
     machines = []
     for mid, raw in _table(p, "machine", doc.get("machine", {})).items():
         table = _table(p, f"machine.{mid}", raw)
+        _control_free(p, f"machine.{mid}", mid, "ID")
         _check_keys(p, "machine", f"machine.{mid}", table)
         machines.append(MachinePoint(mid, _weights(p, f"machine.{mid}.wks", table.get("wks", {}), wks_ids, "WKS")))
 
@@ -296,6 +380,7 @@ def model_from_dict(doc: Mapping[str, Any], source: str = "<model>") -> ProcessM
     for fid, raw in _table(p, "features", doc.get("features", {})).items():
         key = f"features.{fid}"
         table = _table(p, key, raw)
+        _control_free(p, key, fid, "ID")
         _check_keys(p, "features", key, table)
         fw = _weights(p, f"{key}.wks", table.get("wks", {}), wks_ids, "WKS")
         ft = _weights(p, f"{key}.tools", table.get("tools", {}), tool_ids, "tool")
@@ -353,6 +438,7 @@ def _dimensions(p: _Problems, doc: Mapping[str, Any], feature_ids: Mapping[str, 
         key = f"dimensions.{did}"
         table = _table(p, key, raw)
         _check_keys(p, "dimensions", key, table)
+        _control_free(p, key, did, "ID")
         dname = table.get("name", did)
         if not isinstance(dname, str) or not dname.strip():
             p.add(f"{key}.name", f"expected a name, found {_show(dname)}")
@@ -426,7 +512,8 @@ def load_model(path: str | Path) -> ProcessModel:
     if len(raw) > MAX_BYTES:
         raise ModelError(f"larger than {MAX_BYTES // 2**20} MiB: not a process model", location=where)
     try:
-        doc = tomllib.loads(raw.decode("utf-8-sig"))
+        text = raw.decode("utf-8-sig")
+        doc = tomllib.loads(text)
     except UnicodeDecodeError as exc:
         raise ModelError(f"not UTF-8 text (byte {exc.start})", location=where) from None
     except tomllib.TOMLDecodeError as exc:
@@ -440,4 +527,4 @@ def load_model(path: str | Path) -> ProcessModel:
                          location=where) from None
     except ValueError as exc:  # an integer beyond Python's int/str conversion limit
         raise ModelError(f"TOML value out of range: {exc}", location=where) from None
-    return model_from_dict(doc, source=str(path))
+    return model_from_dict(doc, source=str(path), text=text)

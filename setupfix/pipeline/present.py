@@ -28,9 +28,14 @@ JSON_DIGITS = 9
 TEXT_LIST = 30
 
 
+def _one_line(text: str) -> str:
+    """Free text (a dimension's name) for one table cell: control characters shown as "?"."""
+    return text if text.isprintable() else "".join(c if c.isprintable() else "?" for c in text)
+
+
 def note_lines(notes: Iterable[Note]) -> list[str]:
-    """Typed notes as one line of text each (``file: [place]: message``)."""
-    return [str(n) for n in notes]
+    """Typed notes as one line of text each (``file: [place]: message``; control characters of names as "?")."""
+    return [_one_line(str(n)) for n in notes]
 
 
 def format_number(value: float, digits: int = 4) -> str:
@@ -84,14 +89,15 @@ def format_correction(pc: CycleCorrection) -> str:
             + f"{'dimension':<{w}}{'deviation':>11}{'lower':>9}{'upper':>9}{'predicted':>11}{'margin':>9}  flags")
     lines += [head, "-" * len(head)]
     for row in rows:
-        lines.append(f"{row.get('station') or '':<{st}}"[:st]
-                     + f"{row['name']:<{w}}{format_number(row['deviation']):>11}{format_number(row['lower'], 3):>9}"
-                     f"{format_number(row['upper'], 3):>9}{format_number(row['predicted']):>11}"
-                     f"{format_number(row['margin']):>9}  {format_flags(row['flags'])}".rstrip())
+        lines.append(f"{_one_line(row.get('station') or ''):<{st}}"[:st]
+                     + f"{_one_line(row['name']):<{w}}{format_number(row['deviation']):>11}"
+                     f"{format_number(row['lower'], 3):>9}{format_number(row['upper'], 3):>9}"
+                     f"{format_number(row['predicted']):>11}{format_number(row['margin']):>9}"
+                     f"  {format_flags(row['flags'])}".rstrip())
     for did in pc.part.absent:
         dim = next(d for d in pc.model.dimensions if d.id == did)
-        lines.append(f"{dim.group or '':<{st}}"[:st]
-                     + f"{dim.name:<{w}}{'absent from report: not in the objective':>50}")
+        lines.append(f"{_one_line(dim.group or ''):<{st}}"[:st]
+                     + f"{_one_line(dim.name):<{w}}{'absent from report: not in the objective':>50}")
     lines += ["", f"corrections [{unit}], axis {pc.model.axis}:"]
     digits = grid_decimals(pc.model.resolution)
     for reg in pc.register_rows():
@@ -107,7 +113,7 @@ def format_correction(pc: CycleCorrection) -> str:
     ]
     if r.bound is not None:
         lines.append(f"upper bound (continuous LP): {r.bound:+.4f} {unit}")
-    names = {d.id: d.name for d in pc.model.dimensions}
+    names = {d.id: _one_line(d.name) for d in pc.model.dimensions}
     if pc.binding:
         lines.append("binding (what stops a better correction): " + ", ".join(names[b] for b in pc.binding))
     if pc.recommendation.given_up:
@@ -200,6 +206,36 @@ def format_matrix(matrix: np.ndarray, rows: list[str], cols: list[str], title: s
     return "\n\n".join(blocks)
 
 
+#: A matrix with more cells than this is listed by its non-zero entries, not printed as a grid.
+DENSE_CELLS = 20_000
+
+
+def format_sparse(matrix: np.ndarray, rows: list[str], cols: list[str], title: str, width: int = 100) -> str:
+    """A large relation matrix as its non-zero entries, column by column (``D17: +F17 −0.5·F3``).
+
+    Linear in the number of non-zero entries (a grid of 10,000 × 10,000 cells is not
+    readable, and took minutes and gigabytes to print).
+    """
+    c, r = np.nonzero(matrix)
+    order = np.argsort(r, kind="stable")  # column by column, rows in order within each
+    r, c = r[order], c[order]
+    head = (f"{title}: {len(rows)} × {len(cols)}, {len(r)} non-zero entries; each column with its "
+            f"non-zero rows (columns without any: none shown)")
+    lines = [head]
+    starts = np.flatnonzero(np.r_[True, r[1:] != r[:-1]]) if len(r) else np.zeros(0, dtype=int)
+    for begin, end in zip(starts, [*starts[1:], len(r)], strict=True):
+        terms = [_term(float(matrix[i, r[begin]]), rows[i]) for i in c[begin:end]]
+        lines.append(textwrap.fill(f"{cols[r[begin]]}: " + " ".join(terms), width, initial_indent="  ",
+                                   subsequent_indent="    "))
+    return "\n".join(lines)
+
+
+def _term(value: float, name: str) -> str:
+    """``+F3``, ``−0.5·F3``: a weight and what it applies to."""
+    one = abs(abs(value) - 1.0) <= 1e-8 + 1e-5  # np.isclose(|value|, 1), without its per-call cost
+    return f"{'+' if value > 0 else '−'}{'' if one else f'{abs(value):.4g}·'}{name}"
+
+
 def format_relations(rm: RelationMatrices, which: list[str], null: np.ndarray, rank: int) -> str:
     blocks = []
     table = {
@@ -214,7 +250,7 @@ def format_relations(rm: RelationMatrices, which: list[str], null: np.ndarray, r
         if m.size == 0:
             blocks.append(f"{name}: empty")
             continue
-        blocks.append(format_matrix(m, r, c, name))
+        blocks.append(format_matrix(m, r, c, name) if m.size <= DENSE_CELLS else format_sparse(m, r, c, name))
     regs = rm.registers
     lines = [f"composite C = [R_WF·R_FD ; R_TF·R_FD]: {len(regs)} registers × {len(rm.dimensions)} dimensions,",
              f"rank {rank}"]
@@ -223,8 +259,7 @@ def format_relations(rm: RelationMatrices, which: list[str], null: np.ndarray, r
     else:
         lines.append(f"null space ({null.shape[0]} direction(s)): corrections that move no dimension")
         for vec in null:
-            terms = [f"{'+' if v > 0 else '−'}{'' if np.isclose(abs(v), 1) else f'{abs(v):.4g}·'}{r}"
-                     for v, r in zip(vec, regs, strict=True) if v != 0]
+            terms = [_term(v, r) for v, r in zip(vec, regs, strict=True) if v != 0]
             lines.append(textwrap.fill(" ".join(terms), 100, initial_indent="  ", subsequent_indent="    "))
     blocks.append("\n".join(lines))
     return "\n\n".join(blocks)

@@ -67,3 +67,32 @@ def test_correct_refuses_a_decimal_comma_in_current_with_file_and_line(tmp_path,
     err = capsys.readouterr().err
     assert code != 0 and err.startswith(f"error: {bad}:2: 3 cells but 2 columns") and err.count("\n") == 1
     assert not out.exists()
+
+
+ONE = model_from_dict({
+    "process": {"name": "one register"}, "wks": {"W1": {"register": "G54"}},
+    "features": {"F": {"wks": {"W1": 1}}},
+    "dimensions": {"D": {"features": {"F": 1}, "nominal": 1, "lower": -0.01, "upper": 0.01}}})
+
+
+@pytest.mark.parametrize(("rows", "message"), [
+    ("G54,-412,5300", "c.csv:2: 3 cells but 2 columns in the header"),
+    ("G54,-412,53", "c.csv:2: 3 cells but 2 columns in the header"),
+    ("G54,1e6", "c.csv:2: value 1e6 of G54 is beyond any control's offset"),
+    ("G54,1e300", "c.csv:2: value 1e300 of G54 is beyond any control's offset"),
+    ("G54,-1e300", "c.csv:2: value -1e300 of G54 is beyond any control's offset"),
+    ("G54,inf", "c.csv:2: expected a decimal number, found 'inf'"),
+])
+@pytest.mark.parametrize("end", ["\n", "", "\r\n"])
+def test_one_row_files_are_refused_like_longer_ones(tmp_path, rows, message, end):
+    """A file of one register row (no second row to compare with) and its last row without a line end."""
+    (tmp_path / "c.csv").write_text(f"register,value{end or chr(10)}{rows}{end}", newline="")
+    with pytest.raises(ParseError, match=re.escape(message)):
+        read_current(tmp_path / "c.csv", ONE)
+
+
+@pytest.mark.parametrize("row", ["H12,0,0035", "H12,1e6", "H12,1e300"])
+def test_the_last_row_of_a_longer_file_is_checked(tmp_path, row):
+    (tmp_path / "c.csv").write_text(GOOD.replace("H12,0.0035\n", row))  # no line end after it
+    with pytest.raises(ParseError, match=r"c\.csv:5: "):
+        read_current(tmp_path / "c.csv", MODEL)

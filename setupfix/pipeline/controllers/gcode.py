@@ -16,7 +16,7 @@ from collections.abc import Callable, Sequence
 
 from setupfix.offsets import OffsetRow
 from setupfix.pipeline.controllers.common import cannot, comment_text, number, one_mode, target
-from setupfix.pipeline.controllers.names import tool_hd, wks_fanuc, wks_haas
+from setupfix.model.slots import tool_hd, wks_fanuc, wks_haas
 
 __all__ = ["render_fanuc", "render_haas"]
 

@@ -11,18 +11,14 @@ into the control's table (TNCremo, table editor).
 
 from __future__ import annotations
 
-import re
 from collections.abc import Sequence
 
 from setupfix.errors import ExportError
+from setupfix.model.slots import preset_row, tool_edge
 from setupfix.offsets import OffsetRow
 from setupfix.pipeline.controllers.common import cannot, number, one_mode, target
-from setupfix.pipeline.controllers.names import tool_edge
 
 __all__ = ["render"]
-
-_PRESET = re.compile(r"^(?:PRESET|PR)\s*#?\s*(\d+)$", re.IGNORECASE)
-
 
 def _table(name: str, unit: str, columns: tuple[str, str], rows: list[tuple[str, str]]) -> list[str]:
     w0 = max(len(columns[0]), *(len(r[0]) for r in rows)) + 2
@@ -43,8 +39,7 @@ def render(rows: Sequence[OffsetRow], title: str = "") -> str:
         if row.kind == "wks":
             if row.offset == "wear":
                 raise cannot("heidenhain", row, 'the preset table has no wear column: use offset = "geometry"')
-            m = _PRESET.match(row.register.strip())
-            n = row.number if row.number is not None else (int(m.group(1)) if m else None)
+            n = row.number if row.number is not None else preset_row(row.register)
             if n is None:
                 raise cannot("heidenhain", row, "give the preset row: number = n in the model (or name it PRESET n)")
             presets.append((str(n), number(row, target(row))))
@@ -54,6 +49,12 @@ def render(rows: Sequence[OffsetRow], title: str = "") -> str:
             if t is None:
                 raise cannot("heidenhain", row, "give the tool number: number = n in the model (or name it Tn)")
             tools["DL" if row.offset == "wear" else "L"].append((str(t), number(row, target(row))))
+    for table, entries in (("preset", presets), *(("tool " + c, v) for c, v in tools.items())):
+        seen = [n for n, _ in entries]
+        twice = sorted({n for n in seen if seen.count(n) > 1})
+        if twice:  # two edges of one tool (T5 D1, T5 D2): the tool table has one row per tool
+            raise ExportError(f"heidenhain: two registers write {table} row {twice[0]}; the table holds one "
+                              "value per row (give each register its own number)")
     unit = rows[0].unit if rows else "mm"
     out: list[str] = []
     if presets:

@@ -16,7 +16,7 @@ from collections.abc import Sequence
 
 from setupfix.offsets import OffsetRow
 from setupfix.pipeline.controllers.common import cannot, number, one_mode, target
-from setupfix.pipeline.controllers.names import tool_edge, wks_siemens
+from setupfix.model.slots import tool_edge, wks_siemens
 
 __all__ = ["render"]
 
