@@ -204,7 +204,8 @@ class OptimizeResult:
     x : ndarray of shape (n_registers,) [model unit]
         Corrections on the register grid.
     margin_before, margin_after : float
-        Error budget δ = f1 before and after the correction.
+        Error budget δ = f1 before and after the correction; over the dimensions kept when some
+        are given up (``given_up``: the triage's margins of those are in ``extra["given_up"]``).
     norm : float
         f2 = ‖x‖.
     optimizer : str
@@ -222,7 +223,8 @@ class OptimizeResult:
     history : ndarray of shape (k, 4), optional
         Best-so-far [evaluations, f1, f2, f] for convergence plots.
     bound : float, optional
-        Upper bound on f1 proved by the exact solver (continuous LP optimum).
+        Upper bound on f1 proved by the exact solver (continuous LP optimum; over the dimensions
+        kept when some are given up).
     given_up : tuple of str
         Dimensions the exact optimiser gave up on because no correction brings every
         dimension into tolerance (it keeps as many as possible in tolerance first);
@@ -260,5 +262,5 @@ class OptimizeResult:
 
     @property
     def in_tolerance(self) -> bool:
-        """True when every measured dimension is predicted inside its limits."""
-        return self.margin_after >= 0.0
+        """True when every measured dimension is predicted inside its limits (none given up)."""
+        return self.margin_after >= 0.0 and not self.given_up

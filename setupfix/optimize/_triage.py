@@ -42,6 +42,10 @@ __all__ = ["Triaged", "triage", "triaged_result"]
 
 Array = npt.NDArray[np.float64]
 
+#: Share of the time limit the triage's leximin levels after the first may take (the least norm
+#: needs the rest; the levels proved are stated in the result).
+LEXIMIN_SHARE = 0.2
+
 
 @dataclass(frozen=True)
 class Triaged:
@@ -79,7 +83,7 @@ def _status_word(status: str) -> str:
     return "time limit" if status == "time_limit" else f"HiGHS: {status}"
 
 
-def triage(t: TriageRows, deadline: float, reserve: float, start: Array, quantum: float) -> Triaged:
+def triage(t: TriageRows, deadline: float, reserve: float, budget: float, start: Array, quantum: float) -> Triaged:
     """Keep the most dimensions in tolerance without harm, then the leximin of their margins, then the least norm.
 
     Parameters
@@ -90,6 +94,8 @@ def triage(t: TriageRows, deadline: float, reserve: float, start: Array, quantum
         ``time.perf_counter()`` value at which to stop.
     reserve : float
         Seconds kept for stage 3: no leximin level after the first starts with less left.
+    budget : float
+        Seconds the leximin levels may take: no level after the first starts once they have.
     start : ndarray of shape (n,)
         A grid point to start from (used when it keeps the held dimensions).
     quantum : float
@@ -134,8 +140,9 @@ def triage(t: TriageRows, deadline: float, reserve: float, start: Array, quantum
     why = ""
     eps = quantum / 2
     t_lo = float(np.min(t.sorted_kept(best), initial=t.top))
+    began = time.perf_counter()
     while not complete:
-        if levels and left() < reserve:
+        if levels and (left() < reserve or time.perf_counter() - began > budget):
             break
         m2, _ = t.model(kept, levels, objective="level", t_lo=min(t_lo, t.top))
         p = count_below(levels)
@@ -154,19 +161,20 @@ def triage(t: TriageRows, deadline: float, reserve: float, start: Array, quantum
             break
         value = v0
         levels = (*levels[:-1], Level(value, p)) if levels else (Level(value, 0),)
-        # its multiplicity: the fewest kept margins within the quantum of it
-        m3, _ = t.model(kept, levels, objective="multiplicity", at=value + eps)
-        s = t.sorted_kept(best)
-        res = m3.solve(left(), t.start(best))
-        if res.x is not None:
-            k = np.clip(np.rint(res.x[:t.n]), t.kmin, t.kmax)
-            if t.meets(k, kept, levels) and np.sum(t.sorted_kept(k) < value + eps) < np.sum(s < value + eps):
-                best = k
+        # its multiplicity: the fewest kept margins within the quantum of it (p + 1 when the point has so few)
         below = int(np.sum(t.sorted_kept(best) < value + eps - SLACK))
-        if res.status != "optimal" or below > round(res.objective):
-            why = f"leximin level {len(levels)} multiplicity: " + (
-                _status_word(res.status) if res.status != "optimal" else "HiGHS's point does not reach its count")
-            break
+        if below > p + 1:
+            m3, _ = t.model(kept, levels, objective="multiplicity", at=value + eps)
+            res = m3.solve(left(), t.start(best))
+            if res.x is not None:
+                k = np.clip(np.rint(res.x[:t.n]), t.kmin, t.kmax)
+                if t.meets(k, kept, levels) and np.sum(t.sorted_kept(k) < value + eps - SLACK) < below:
+                    best = k
+            below = int(np.sum(t.sorted_kept(best) < value + eps - SLACK))
+            if res.status != "optimal" or below > round(res.objective):
+                why = f"leximin level {len(levels)} multiplicity: " + (
+                    _status_word(res.status) if res.status != "optimal" else "HiGHS's point does not reach its count")
+                break
         levels = (*levels, Level(value + eps, below))
         t_lo = value + eps
         done.append(f"leximin level {len(levels) - 1}: {below} kept margin(s) at {value:+.4g} steps")
@@ -174,9 +182,13 @@ def triage(t: TriageRows, deadline: float, reserve: float, start: Array, quantum
 
     # 3. least Σ c k² holding N* and the levels
     n = t.n
-    chords = [{0, int(abs(v)), max(int(abs(v)) - 1, 0)} for v in best]
+    # every better point has c_i k_i² ≤ f(best): a box; chords near best, the others added lazily
+    reach = np.floor(np.sqrt(float(np.sum(t.cost * best**2)) / t.cost) + 1e-9)
+    lo_k, hi_k = np.maximum(t.kmin, -reach), np.minimum(t.kmax, reach)
+    chords = [{0, *range(max(int(abs(v)) - 2, 0), int(abs(v)) + 2)} for v in best]
     pairs = [(i, j) for i, js in enumerate(chords) for j in sorted(js)]
     m4, _ = t.model(kept, levels, objective="norm")
+    m4.set_col_bounds(np.arange(n, dtype=np.int32), lo_k, hi_k)
     a_ch, rhs_ch = chord_rows(pairs, n, m4.n_cols)
     m4.add_rows(a_ch, np.full(rhs_ch.size, -INF), rhs_ch)
     out = lazy_chords(m4, n, chords, t.cost, t.kmin, t.kmax, best, lambda k: t.meets(k, kept, levels), t.start,
@@ -221,7 +233,7 @@ def triaged_result(problem: CorrectionProblem, session: Session, k_start: Array,
     quantum = session.settings.quantum
     t = TriageRows(rows.g_rows, rows.g, row_dim, problem.held_floor / h, rows.kmin, rows.kmax, rows.cost)
     reserve = session.settings.least_norm_share * session.time_limit
-    out = triage(t, clock.deadline, reserve, k_start, quantum)
+    out = triage(t, clock.deadline, reserve, LEXIMIN_SHARE * session.time_limit, k_start, quantum)
     clock.lap("triage")
     path.append("triage: " + ", ".join(out.stages) if out.stages else "triage")
     extra: dict[str, object] = {"lp_bound_all": bound}

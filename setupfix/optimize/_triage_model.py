@@ -91,6 +91,9 @@ class TriageRows:
         self.hard_rows = np.flatnonzero(hr)
         self.hard_min = np.minimum(self.floor[row_dim[hr]], g[hr])
         self.keepable = np.flatnonzero(self.held | (self.zcol >= 0))
+        # least margin of each row at a point that keeps its dimension: the hard floor (held), 0 (candidates)
+        self.row_floor = np.zeros(g.size)
+        self.row_floor[self.hard_rows] = np.maximum(self.low[self.hard_rows], self.hard_min)
         self.rowless = int(np.sum(~has_rows))
 
     def positions(self, kept: int) -> int:
@@ -130,8 +133,8 @@ class TriageRows:
     def _block(self, value: float | None, below: int | None) -> _Block:
         threshold = self.top if value is None else value
         low = np.full(self.n_dims, np.inf)
-        np.minimum.at(low, self.row_dim, self.low)
-        dims = self.keepable[low[self.keepable] < threshold - SLACK]  # the others never fall below
+        np.minimum.at(low, self.row_dim, self.row_floor)
+        dims = self.keepable[low[self.keepable] < threshold - SLACK]  # kept, the others never fall below
         return _Block(dims, value, below, below is None or below > 0)
 
     def model(self, count: int, levels: tuple[Level, ...], *, objective: str, at: float | None = None,
@@ -207,12 +210,13 @@ class TriageRows:
         for b, y0 in zip(blocks, ycols, strict=True):
             rows = np.flatnonzero(np.isin(self.row_dim, b.dims))
             value = self.top if b.value is None else b.value - SLACK
-            big = np.maximum(value - self.low[rows], 0.0)
+            big = np.maximum(value - self.low[rows], 0.0)  # z = 0: the row's least margin in the box
+            big_y = np.maximum(value - self.row_floor[rows], 0.0)  # y = 1: its least margin when kept
             zc = self.zcol[self.row_dim[rows]]
             is_c = zc >= 0
             extra = [(z0 + zc[is_c], big[is_c], is_c)]
             if b.binary:
-                extra.append((y0 + np.searchsorted(b.dims, self.row_dim[rows]), -big, np.ones(rows.size, bool)))
+                extra.append((y0 + np.searchsorted(b.dims, self.row_dim[rows]), -big_y, np.ones(rows.size, bool)))
             if b.value is None:
                 extra.append((np.full(rows.size, tcol), np.ones(rows.size), np.ones(rows.size, bool)))
                 hi = self.g[rows] + np.where(is_c, big, 0.0)
