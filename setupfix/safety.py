@@ -329,6 +329,10 @@ def no_harm_floor(deviation: Array, lower: Array, upper: Array, guarded_lower: A
     return np.where(inside, -shrink, -np.inf)
 
 
+def _inside(values: Array, lower: Array, upper: Array) -> Mask:
+    return (values >= lower - 1e-12) & (values <= upper + 1e-12)
+
+
 def recommend(posed: PosedProblem, solve: Callable[[CorrectionProblem], OptimizeResult], *,
               optimizer: str = "exact", names: Mapping[str, str] | None = None) -> Recommendation:
     """The rules after the solve, around ``solve(posed.guarded)``.
@@ -394,6 +398,8 @@ def recommend(posed: PosedProblem, solve: Callable[[CorrectionProblem], Optimize
     elif given_up and isinstance(triaged, dict) and triaged.get("held"):
         rules.append(RuleEffect("no_harm", f"the triage kept the {triaged['held']} dimension(s) measured in "
                                 "tolerance in it and gave up only what no such correction brings in"))
+    out_after = ~_inside(problem.predicted(x), lower, upper)  # read from the answer applied (gain included)
+    given_up = tuple(d for d, out in zip(dims, out_after, strict=True) if out and d in set(given_up))
     if given_up:
         rules.append(RuleEffect("given_up", "no setup correction brings these into tolerance: they need the NC "
                                 "program or the process", dimensions=given_up))

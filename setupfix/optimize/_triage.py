@@ -25,6 +25,7 @@ Each MILP is solved to a zero gap by HiGHS; every point it returns is checked ex
 from __future__ import annotations
 
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -33,7 +34,7 @@ import numpy.typing as npt
 from setupfix.errors import Note
 from setupfix.optimize._base import make_result
 from setupfix.optimize._chords import chord_rows, lazy_chords
-from setupfix.optimize._highs import INF, LinearModel
+from setupfix.optimize._highs import INF, LinearModel, Solve
 from setupfix.optimize._problem import CorrectionProblem, OptimizeResult
 from setupfix.optimize._session import Session
 from setupfix.optimize._triage_model import SLACK, Level, TriageRows, count_below
@@ -79,6 +80,17 @@ class Triaged:
     stages: tuple[str, ...]
 
 
+def _checked(model: LinearModel, left: float, start: Array | None, n: int, value: Callable[[Array], float],
+             tol: float) -> Solve:
+    """Solve from ``start``; when HiGHS says optimal but its point's exact objective ``value(k)`` is not
+    the one it reports (it sometimes hands the start back as optimal), solve again without the start."""
+    res = model.solve(left, start)
+    if start is not None and res.status == "optimal" and res.x is not None:
+        if not abs(value(np.rint(res.x[:n])) - res.objective) <= tol:
+            res = model.solve(left, None)
+    return res
+
+
 def _status_word(status: str) -> str:
     return "time limit" if status == "time_limit" else f"HiGHS: {status}"
 
@@ -119,7 +131,8 @@ def triage(t: TriageRows, deadline: float, reserve: float, budget: float, start:
     # 1. most dimensions in tolerance, the held ones kept
     if t.cand.size:
         m1, _ = t.model(0, (), objective="count")
-        res = m1.solve(left(), t.start(best) if t.hard_ok(best) else None)
+        res = _checked(m1, left(), t.start(best) if t.hard_ok(best) else None, t.n,
+                       lambda k: float(t.held.sum() - t.kept(k).sum()) if t.hard_ok(k) else np.inf, 0.5)
         if res.status == "infeasible":
             return Triaged(None, 0, (), False, True, "", ("the dimensions measured in tolerance cannot all be kept",))
         if res.x is not None:
@@ -136,7 +149,7 @@ def triage(t: TriageRows, deadline: float, reserve: float, budget: float, start:
 
     # 2. leximin of the kept margins
     levels: tuple[Level, ...] = ()
-    complete = False
+    complete = t.positions(kept) == 0  # nothing kept has a margin: no level to find
     why = ""
     eps = quantum / 2
     t_lo = float(np.min(t.sorted_kept(best), initial=t.top))
@@ -147,7 +160,9 @@ def triage(t: TriageRows, deadline: float, reserve: float, budget: float, start:
         m2, _ = t.model(kept, levels, objective="level", t_lo=min(t_lo, t.top))
         p = count_below(levels)
         v0 = float(t.sorted_kept(best)[p]) if t.sorted_kept(best).size > p else t.top
-        res = m2.solve(left(), t.start(best, min(max(v0, t_lo), t.top)))
+        res = _checked(m2, left(), t.start(best, min(max(v0, t_lo), t.top)), t.n,
+                       lambda k: -float(np.r_[t.sorted_kept(k), t.top][p]) if t.meets(k, kept, levels) else np.inf,
+                       quantum / 10)
         if res.x is not None:
             k = np.clip(np.rint(res.x[:t.n]), t.kmin, t.kmax)
             s = t.sorted_kept(k)
@@ -165,7 +180,9 @@ def triage(t: TriageRows, deadline: float, reserve: float, budget: float, start:
         below = int(np.sum(t.sorted_kept(best) < value + eps - SLACK))
         if below > p + 1:
             m3, _ = t.model(kept, levels, objective="multiplicity", at=value + eps)
-            res = m3.solve(left(), t.start(best))
+            res = _checked(m3, left(), t.start(best), t.n,
+                           lambda k: float(np.sum(t.sorted_kept(k) < value + eps - SLACK))
+                           if t.meets(k, kept, levels) else np.inf, 0.5)
             if res.x is not None:
                 k = np.clip(np.rint(res.x[:t.n]), t.kmin, t.kmax)
                 if t.meets(k, kept, levels) and np.sum(t.sorted_kept(k) < value + eps - SLACK) < below:
@@ -198,7 +215,7 @@ def triage(t: TriageRows, deadline: float, reserve: float, budget: float, start:
     best = best if out.best is None else out.best
     if not out.proved:
         why = why or f"least norm: {out.why}"
-    proved = out.proved and bool(levels)
+    proved = out.proved and (bool(levels) or complete)
     return Triaged(best, kept, levels, complete, proved, "" if proved else why, tuple(done))
 
 
