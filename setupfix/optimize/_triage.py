@@ -114,9 +114,13 @@ def triage(t: TriageRows, deadline: float, reserve: float, budget: float, start:
         Margins within this many steps are ties (a level's multiplicity counts them).
     """
     done: list[str] = []
+    why = ""
 
     def left() -> float:
         return deadline - time.perf_counter()
+
+    def first() -> float:  # stage 1 and level 1 leave the reserve to stage 3
+        return max(left() - reserve, min(left(), 0.05))
 
     zero = np.clip(np.zeros(t.n), t.kmin, t.kmax)
     if not t.hard_ok(zero):  # "no correction" is outside the box: nothing keeps the held ones for sure
@@ -131,7 +135,7 @@ def triage(t: TriageRows, deadline: float, reserve: float, budget: float, start:
     # 1. most dimensions in tolerance, the held ones kept
     if t.cand.size:
         m1, _ = t.model(0, (), objective="count")
-        res = _checked(m1, left(), t.start(best) if t.hard_ok(best) else None, t.n,
+        res = _checked(m1, first(), t.start(best) if t.hard_ok(best) else None, t.n,
                        lambda k: float(t.held.sum() - t.kept(k).sum()) if t.hard_ok(k) else np.inf, 0.5)
         if res.status == "infeasible":
             return Triaged(None, 0, (), False, True, "", ("the dimensions measured in tolerance cannot all be kept",))
@@ -140,27 +144,26 @@ def triage(t: TriageRows, deadline: float, reserve: float, budget: float, start:
             if t.hard_ok(k) and t.kept(k).sum() > t.kept(best).sum():
                 best = k
         if res.status != "optimal" or t.kept(best).sum() < int(t.held.sum()) - res.objective - 0.5:
-            why = _status_word(res.status) if res.status != "optimal" else "HiGHS's point does not keep its count"
-            kept = int(t.kept(best).sum())
-            return Triaged(best, kept, (), False, False, f"most dimensions in tolerance: {why}", tuple(done))
+            stop = _status_word(res.status) if res.status != "optimal" else "HiGHS's point does not keep its count"
+            why = f"most dimensions in tolerance: {stop}"  # the best count found goes on: never fewer, no harm
     kept = int(t.kept(best).sum())
     held = int(t.held.sum())
-    done.append(f"{kept} of {t.n_dims} dimensions kept in tolerance ({held} measured in tolerance held)")
+    if not why:
+        done.append(f"{kept} of {t.n_dims} dimensions kept in tolerance ({held} measured in tolerance held)")
 
     # 2. leximin of the kept margins
     levels: tuple[Level, ...] = ()
     complete = t.positions(kept) == 0  # nothing kept has a margin: no level to find
-    why = ""
     eps = quantum / 2
     t_lo = float(np.min(t.sorted_kept(best), initial=t.top))
     began = time.perf_counter()
-    while not complete:
+    while not complete and not why:
         if levels and (left() < reserve or time.perf_counter() - began > budget):
             break
         m2, _ = t.model(kept, levels, objective="level", t_lo=min(t_lo, t.top))
         p = count_below(levels)
         v0 = float(t.sorted_kept(best)[p]) if t.sorted_kept(best).size > p else t.top
-        res = _checked(m2, left(), t.start(best, min(max(v0, t_lo), t.top)), t.n,
+        res = _checked(m2, left() if levels else first(), t.start(best, min(max(v0, t_lo), t.top)), t.n,
                        lambda k: -float(np.r_[t.sorted_kept(k), t.top][p]) if t.meets(k, kept, levels) else np.inf,
                        quantum / 10)
         if res.x is not None:
@@ -171,8 +174,8 @@ def triage(t: TriageRows, deadline: float, reserve: float, budget: float, start:
         if res.status != "optimal" or v0 < -res.objective - quantum / 10:
             why = _status_word(res.status) if res.status != "optimal" else "HiGHS's point is below its level"
             why = f"leximin level {len(levels) + (0 if levels else 1)}: {why}"
-            if not levels:
-                return Triaged(best, kept, (), False, False, why, tuple(done))
+            if not levels:  # level 1 stopped: the level its best point reaches holds in stage 3
+                levels = (Level(float(np.r_[t.sorted_kept(best), t.top][0]), 0),)
             break
         value = v0
         levels = (*levels[:-1], Level(value, p)) if levels else (Level(value, 0),)
@@ -206,6 +209,7 @@ def triage(t: TriageRows, deadline: float, reserve: float, budget: float, start:
     pairs = [(i, j) for i, js in enumerate(chords) for j in sorted(js)]
     m4, _ = t.model(kept, levels, objective="norm")
     m4.set_col_bounds(np.arange(n, dtype=np.int32), lo_k, hi_k)
+    m4.prefer_proof()  # a feasible start is known: no RINS/RENS (they can overrun the limit)
     a_ch, rhs_ch = chord_rows(pairs, n, m4.n_cols)
     m4.add_rows(a_ch, np.full(rhs_ch.size, -INF), rhs_ch)
     out = lazy_chords(m4, n, chords, t.cost, t.kmin, t.kmax, best, lambda k: t.meets(k, kept, levels), t.start,
@@ -215,7 +219,7 @@ def triage(t: TriageRows, deadline: float, reserve: float, budget: float, start:
     best = best if out.best is None else out.best
     if not out.proved:
         why = why or f"least norm: {out.why}"
-    proved = out.proved and (bool(levels) or complete)
+    proved = out.proved and not why and (bool(levels) or complete)
     return Triaged(best, kept, levels, complete, proved, "" if proved else why, tuple(done))
 
 

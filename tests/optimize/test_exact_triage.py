@@ -277,3 +277,28 @@ def test_no_dimension_in_reach_gives_the_least_correction():
     assert result.status == "optimal"
     assert np.all(result.x == 0)
     assert result.given_up == problem.dimension_ids
+
+
+@pytest.mark.parametrize("seed", range(8))
+def test_bound_is_the_kept_dimensions_lp_and_seconds_the_whole_call(seed):
+    """The bound describes the final answer: the LP over the dimensions it keeps (held ones held)."""
+    from scipy.optimize import linprog
+
+    problem = random_problem(seed, n=3, m=7, limit_steps=2, spread=0.3)
+    result = get_optimizer("exact").solve(problem)
+    if not result.given_up:
+        pytest.skip("every dimension can be kept: no triage")
+    keep = ~np.isin(problem.dimension_ids, result.given_up)
+    held = np.isfinite(problem.held_floor)
+    ct = problem.composite.T  # (m, n)
+    dev, up, lo, fl = problem.deviation, problem.upper, problem.lower, problem.held_floor
+    a = np.r_[np.c_[ct[keep], np.ones(keep.sum())], np.c_[-ct[keep], np.ones(keep.sum())],
+              np.c_[ct[held], np.zeros(held.sum())], np.c_[-ct[held], np.zeros(held.sum())]]
+    b = np.r_[(up - dev)[keep], (dev - lo)[keep], (up - dev - fl)[held], (dev - lo - fl)[held]]
+    lp = linprog(np.r_[np.zeros(problem.n_registers), -1.0], A_ub=a, b_ub=b,
+                 bounds=[*zip(problem.lb, problem.ub, strict=True), (None, None)], method="highs")
+    assert result.bound == pytest.approx(-lp.fun, abs=1e-9)
+    assert result.bound >= result.margin_after - 1e-12
+    assert result.extra["lp_bound_all"] < result.bound  # the whole problem's, given-up dimensions included
+    assert result.seconds >= sum(result.extra["stages"].values()) - 1e-9
+    assert result.status == "optimal" and result.extra["triage"]["leximin_complete"]
