@@ -37,7 +37,7 @@ from setupfix.optimize._chords import chord_rows, lazy_chords
 from setupfix.optimize._highs import INF, LinearModel, Solve
 from setupfix.optimize._problem import CorrectionProblem, OptimizeResult
 from setupfix.optimize._session import Session
-from setupfix.optimize._triage_model import SLACK, Level, TriageRows, count_below
+from setupfix.optimize._triage_model import SLACK, Level, TriageRows, count_below, lp_starts
 
 __all__ = ["Triaged", "triage", "triaged_result"]
 
@@ -129,8 +129,9 @@ def triage(t: TriageRows, deadline: float, reserve: float, budget: float, start:
         if res.status == "infeasible":
             return Triaged(None, 0, (), False, True, "", ("the dimensions measured in tolerance cannot all be kept",))
     best = zero
-    if t.hard_ok(start) and t.kept(start).sum() > t.kept(best).sum():
-        best = start
+    for k in [start, *(lp_starts(t, 0.25 * first()) if t.cand.size else [])]:
+        if t.hard_ok(k) and t.kept(k).sum() > t.kept(best).sum():
+            best = k
 
     # 1. most dimensions in tolerance, the held ones kept
     if t.cand.size:

@@ -26,7 +26,7 @@ from scipy.sparse import coo_array, csr_array
 
 from setupfix.optimize._highs import INF, LinearModel
 
-__all__ = ["Level", "TriageRows", "SLACK"]
+__all__ = ["Level", "TriageRows", "SLACK", "count_below", "lp_starts"]
 
 Array = npt.NDArray[np.float64]
 Mask = npt.NDArray[np.bool_]
@@ -267,6 +267,35 @@ class TriageRows:
         if tcol >= 0 and t is not None:
             x[tcol] = t
         return x
+
+
+def lp_starts(t: TriageRows, time_limit: float) -> list[Array]:
+    """Grid points for stage 1 from two LPs, rounded: the largest smallest margin of the held dimensions
+    alone (what a re-solve on them would give), and of the held and every candidate dimension; the held
+    rows keep half their row's |G| of room so that rounding k cannot push them below their floor."""
+    from scipy.sparse import hstack as sparse_hstack
+
+    out: list[Array] = []
+    hard = t.hard_rows
+    room = 0.5 * np.sum(np.abs(t.G[hard]), axis=1)
+    hi_hard = t.g[hard] - t.hard_min - np.minimum(room, np.maximum(t.g[hard] - t.hard_min, 0.0))
+    crow = np.flatnonzero(t.zcol[t.row_dim] >= 0)
+    for rows in (hard, np.r_[hard, crow]):
+        if rows.size == 0 or time_limit <= 0:
+            continue
+        a = sparse_hstack([csr_array(t.G[rows]), csr_array(np.ones((rows.size, 1)))])
+        a_hard = sparse_hstack([csr_array(t.G[hard]), csr_array((hard.size, 1))])
+        from scipy.sparse import vstack as sparse_vstack
+
+        model = LinearModel(np.r_[np.zeros(t.n), -1.0], sparse_vstack([a, a_hard]).tocsr(),
+                            np.full(rows.size + hard.size, -INF), np.r_[t.g[rows], hi_hard],
+                            np.r_[t.kmin, -INF], np.r_[t.kmax, t.top])
+        res = model.solve(time_limit)
+        if res.x is not None:
+            k = np.clip(np.rint(res.x[:t.n]), t.kmin, t.kmax)
+            if t.hard_ok(k):
+                out.append(k)
+    return out
 
 
 def count_below(levels: tuple[Level, ...]) -> int:
