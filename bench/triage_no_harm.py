@@ -137,7 +137,7 @@ def main(argv: list[str] | None = None) -> None:
     for i, r in enumerate(new):
         o = old[i] if i < len(old) else {}
         lines.append(f"{r['n']:>4} x {r['m']:<5} {r['seed']:>4} {r['measured_in']:>9} {r['kept']:>8} "
-                     f"{o.get('kept', '-'):>8} {r['harmed']:>4} {r['status']:<11} {str(o.get('status', '-')):<11} "
+                     f"{o.get('kept', '-'):>8} {r['harmed']:>4} {r['status']:<11} {o.get('status', '-')!s:<11} "
                      f"{r['levels']:>6} {r['seconds']:>7.3f} {o.get('seconds', float('nan')):>7.3f} "
                      f"{1e3 * float(r['lp']):>6.1f} {float(r['seconds']) / float(r['lp']):>7.0f}")
     lines.append("")

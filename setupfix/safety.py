@@ -39,7 +39,8 @@ if TYPE_CHECKING:  # pose builds the problem with these rules; recommend takes w
     from setupfix.pose import PosedProblem
 
 __all__ = ["RuleEffect", "Policy", "Recommendation", "reject_mask", "guard_limits", "cumulative_bounds",
-           "apply_gain", "harmed_mask", "no_harm_floor", "in_dead_band", "ewma", "ewma_series", "Smoothed", "ewma_history", "recommend",
+           "apply_gain", "harmed_mask", "no_harm_floor",
+           "in_dead_band", "ewma", "ewma_series", "Smoothed", "ewma_history", "recommend",
            "budget", "VERDICTS"]
 
 Array = npt.NDArray[np.float64]

@@ -85,9 +85,9 @@ def _checked(model: LinearModel, left: float, start: Array | None, n: int, value
     """Solve from ``start``; when HiGHS says optimal but its point's exact objective ``value(k)`` is not
     the one it reports (it sometimes hands the start back as optimal), solve again without the start."""
     res = model.solve(left, start)
-    if start is not None and res.status == "optimal" and res.x is not None:
-        if not abs(value(np.rint(res.x[:n])) - res.objective) <= tol:
-            res = model.solve(left, None)
+    if (start is not None and res.status == "optimal" and res.x is not None
+            and not abs(value(np.rint(res.x[:n])) - res.objective) <= tol):
+        res = model.solve(left, None)
     return res
 
 
@@ -164,9 +164,11 @@ def triage(t: TriageRows, deadline: float, reserve: float, budget: float, start:
         m2, _ = t.model(kept, levels, objective="level", t_lo=min(t_lo, t.top))
         p = count_below(levels)
         v0 = float(t.sorted_kept(best)[p]) if t.sorted_kept(best).size > p else t.top
+        def level_of(k: Array, p: int = p, levels: tuple[Level, ...] = levels) -> float:
+            return -float(np.r_[t.sorted_kept(k), t.top][p]) if t.meets(k, kept, levels) else np.inf
+
         res = _checked(m2, left() if levels else first(), t.start(best, min(max(v0, t_lo), t.top)), t.n,
-                       lambda k: -float(np.r_[t.sorted_kept(k), t.top][p]) if t.meets(k, kept, levels) else np.inf,
-                       quantum / 10)
+                       level_of, quantum / 10)
         if res.x is not None:
             k = np.clip(np.rint(res.x[:t.n]), t.kmin, t.kmax)
             s = t.sorted_kept(k)
@@ -184,9 +186,10 @@ def triage(t: TriageRows, deadline: float, reserve: float, budget: float, start:
         below = int(np.sum(t.sorted_kept(best) < value + eps - SLACK))
         if below > p + 1:
             m3, _ = t.model(kept, levels, objective="multiplicity", at=value + eps)
-            res = _checked(m3, left(), t.start(best), t.n,
-                           lambda k: float(np.sum(t.sorted_kept(k) < value + eps - SLACK))
-                           if t.meets(k, kept, levels) else np.inf, 0.5)
+            def count_of(k: Array, at: float = value + eps, levels: tuple[Level, ...] = levels) -> float:
+                return float(np.sum(t.sorted_kept(k) < at - SLACK)) if t.meets(k, kept, levels) else np.inf
+
+            res = _checked(m3, left(), t.start(best), t.n, count_of, 0.5)
             if res.x is not None:
                 k = np.clip(np.rint(res.x[:t.n]), t.kmin, t.kmax)
                 if t.meets(k, kept, levels) and np.sum(t.sorted_kept(k) < value + eps - SLACK) < below:

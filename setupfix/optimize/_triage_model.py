@@ -167,8 +167,8 @@ class TriageRows:
         tcol = col if objective == "level" else -1
         width = col + (1 if objective == "level" else 0)
 
-        trip_r: list[Array] = []
-        trip_c: list[Array] = []
+        trip_r: list[npt.NDArray[np.generic]] = []
+        trip_c: list[npt.NDArray[np.generic]] = []
         trip_v: list[Array] = []
         lo_parts: list[Array] = []
         hi_parts: list[Array] = []

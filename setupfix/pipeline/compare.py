@@ -34,7 +34,8 @@ from setupfix.pipeline.cycles import read_parts
 from setupfix.pipeline.requests import CycleOptions, ReadOptions
 from setupfix.pose import pose_problem
 
-__all__ = ["DEFAULT_METHODS", "CompareRequest", "MethodTrials", "Comparison", "trial_seeds", "over_kept", "compare_steps",
+__all__ = ["DEFAULT_METHODS", "CompareRequest", "MethodTrials", "Comparison", "trial_seeds", "over_kept",
+           "compare_steps",
            "compare_problem", "compare_report", "plot_comparison"]
 
 Array = npt.NDArray[np.float64]

@@ -93,7 +93,7 @@ def test_triage_with_costs_fixed_registers_and_guard_floor_equals_brute_force(se
 def milp_triage(problem: CorrectionProblem) -> tuple[int, np.ndarray, float]:
     """An independent formulation with scipy.optimize.milp: one-hot grid values per register
     (k_i = Σ v·b_iv, k_i² = Σ v²·b_iv exactly), binaries "kept" per dimension, and the leximin as
-    the lexicographic maximum of the cumulative ordered sums θ_ℓ = max_r ℓ·r − Σ_q max(r − m'_q, 0)
+    the lexicographic maximum of the cumulative ordered sums θ_l = max_r l·r − Σ_q max(r − m'_q, 0)
     (Ogryczak's ordered outcomes) over m'_q = kept margin (a large value when given up)."""
     from scipy.optimize import Bounds, LinearConstraint, milp
 
@@ -101,7 +101,7 @@ def milp_triage(problem: CorrectionProblem) -> tuple[int, np.ndarray, float]:
     n, m = problem.n_registers, len(problem.dimension_ids)
     values = [np.arange(lo, hi + 1) for lo, hi in zip(problem.kmin, problem.kmax, strict=True)]
     nb = sum(v.size for v in values)
-    # columns: b (nb) | z (m) | mp (m) | then per ℓ = 1…m its own r_ℓ and d_ℓ (m)
+    # columns: b (nb) | z (m) | mp (m) | then per l = 1…m its own r_l and d_l (m)
     width = nb + 2 * m + m * (1 + m)
     iz, imp = nb, nb + m
 
@@ -152,7 +152,7 @@ def milp_triage(problem: CorrectionProblem) -> tuple[int, np.ndarray, float]:
             zrow = np.zeros(width)
             zrow[iz + q] = 1
             cons.append(LinearConstraint(zrow[None], 1, 1))
-    # d_ℓq ≥ r_ℓ − m'_q
+    # d_lq ≥ r_l − m'_q
     for ell in range(1, m + 1):
         for q in range(m):
             row = np.zeros(width)
@@ -173,7 +173,7 @@ def milp_triage(problem: CorrectionProblem) -> tuple[int, np.ndarray, float]:
     zsum[iz:iz + m] = 1
     c = np.zeros(width)
     c[iz:iz + m] = -1
-    count = int(round(-solve(c, []).fun))
+    count = round(-solve(c, []).fun)
     fixed = [LinearConstraint(zsum[None], count, np.inf)]
     thetas = []
     for ell in range(1, count + 1):
