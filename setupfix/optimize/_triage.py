@@ -129,7 +129,7 @@ def triage(t: TriageRows, deadline: float, reserve: float, budget: float, start:
         if res.status == "infeasible":
             return Triaged(None, 0, (), False, True, "", ("the dimensions measured in tolerance cannot all be kept",))
     best = zero
-    for k in [start, *(lp_starts(t, 0.25 * first()) if t.cand.size else [])]:
+    for k in [start, *(lp_starts(t, 0.4 * first()) if t.cand.size else [])]:
         if t.hard_ok(k) and t.kept(k).sum() > t.kept(best).sum():
             best = k
 

@@ -18,6 +18,7 @@ kept margins at the leximin prefix found so far (positions P_i + 1 … are ≥ v
 
 from __future__ import annotations
 
+import time
 from dataclasses import dataclass
 
 import numpy as np
@@ -269,7 +270,7 @@ class TriageRows:
         return x
 
 
-def lp_starts(t: TriageRows, time_limit: float) -> list[Array]:
+def lp_starts(t: TriageRows, time_limit: float) -> list[Array]:  # time_limit: for both LPs
     """Grid points for stage 1 from two LPs, rounded: the largest smallest margin of the held dimensions
     alone (what a re-solve on them would give), and of the held and every candidate dimension; the held
     rows keep half their row's |G| of room so that rounding k cannot push them below their floor."""
@@ -280,8 +281,9 @@ def lp_starts(t: TriageRows, time_limit: float) -> list[Array]:
     room = 0.5 * np.sum(np.abs(t.G[hard]), axis=1)
     hi_hard = t.g[hard] - t.hard_min - np.minimum(room, np.maximum(t.g[hard] - t.hard_min, 0.0))
     crow = np.flatnonzero(t.zcol[t.row_dim] >= 0)
+    until = time.perf_counter() + time_limit
     for rows in (hard, np.r_[hard, crow]):
-        if rows.size == 0 or time_limit <= 0:
+        if rows.size == 0 or until - time.perf_counter() <= 0:
             continue
         a = sparse_hstack([csr_array(t.G[rows]), csr_array(np.ones((rows.size, 1)))])
         a_hard = sparse_hstack([csr_array(t.G[hard]), csr_array((hard.size, 1))])
@@ -290,7 +292,7 @@ def lp_starts(t: TriageRows, time_limit: float) -> list[Array]:
         model = LinearModel(np.r_[np.zeros(t.n), -1.0], sparse_vstack([a, a_hard]).tocsr(),
                             np.full(rows.size + hard.size, -INF), np.r_[t.g[rows], hi_hard],
                             np.r_[t.kmin, -INF], np.r_[t.kmax, t.top])
-        res = model.solve(time_limit)
+        res = model.solve(until - time.perf_counter())
         if res.x is not None:
             k = np.clip(np.rint(res.x[:t.n]), t.kmin, t.kmax)
             if t.hard_ok(k):
