@@ -13,7 +13,9 @@ levels of :mod:`~setupfix.optimize._triage_model`, one lexicographic optimum in 
    quantum of it any such point has; level 2 maximises the next smallest holding level 1, and so on
    (each a MILP with one binary per kept dimension that can fall below the level), until every kept
    position is fixed or the time reserved for stage 3 is reached (level 1 is always solved).
-3. **Least norm**: min Σ c_i k_i² subject to N* and every level proved, k_i² as the upper envelope
+3. **Least norm**: min Σ c_i k_i² subject to N* and every level proved, ties to the lexicographically
+   smallest k: in the box c_i k_i² ≤ f(best point) listed when it is small
+   (:func:`~setupfix.optimize._triage_model.least_listed`), else a MILP with k_i² as the upper envelope
    of its chords (exact on integers), added lazily (:func:`~setupfix.optimize._chords.lazy_chords`).
 
 No point keeps more than N* dimensions, so every point meeting Σ z ≥ N* − held keeps exactly the
@@ -37,7 +39,15 @@ from setupfix.optimize._chords import chord_rows, lazy_chords
 from setupfix.optimize._highs import INF, LinearModel, Solve
 from setupfix.optimize._problem import CorrectionProblem, OptimizeResult
 from setupfix.optimize._session import Session
-from setupfix.optimize._triage_model import SLACK, Level, TriageRows, count_below, lp_starts
+from setupfix.optimize._triage_model import (
+    SLACK,
+    Level,
+    TriageRows,
+    count_below,
+    least_listed,
+    listed_triage,
+    lp_starts,
+)
 
 __all__ = ["Triaged", "triage", "triaged_result"]
 
@@ -128,6 +138,12 @@ def triage(t: TriageRows, deadline: float, reserve: float, budget: float, start:
         res = m1.solve(left())
         if res.status == "infeasible":
             return Triaged(None, 0, (), False, True, "", ("the dimensions measured in tolerance cannot all be kept",))
+    listed = listed_triage(t, quantum)
+    if listed is not None:  # a small box: every grid point looked at
+        k, kept = listed
+        return Triaged(k, kept, (), True, True, "", (f"{kept} of {t.n_dims} dimensions kept in tolerance "
+                                                      f"({int(t.held.sum())} measured in tolerance held), "
+                                                      "leximin and least norm by listing the grid",))
     best = zero
     for k in [start, *(lp_starts(t, 0.4 * first()) if t.cand.size else [])]:
         if t.hard_ok(k) and t.kept(k).sum() > t.kept(best).sum():
@@ -209,6 +225,11 @@ def triage(t: TriageRows, deadline: float, reserve: float, budget: float, start:
     # every better point has c_i k_i² ≤ f(best): a box; chords near best, the others added lazily
     reach = np.floor(np.sqrt(float(np.sum(t.cost * best**2)) / t.cost) + 1e-9)
     lo_k, hi_k = np.maximum(t.kmin, -reach), np.minimum(t.kmax, reach)
+    listed = least_listed(t, lo_k, hi_k, kept, levels)
+    if listed is not None and t.meets(listed, kept, levels):  # a small box: listed, ties to the smallest k
+        done.append("least norm (listed)")
+        proved = not why and (bool(levels) or complete)
+        return Triaged(listed, kept, levels, complete, proved, "" if proved else why, tuple(done))
     chords = [{0, *range(max(int(abs(v)) - 2, 0), int(abs(v)) + 2)} for v in best]
     pairs = [(i, j) for i, js in enumerate(chords) for j in sorted(js)]
     m4, _ = t.model(kept, levels, objective="norm")

@@ -27,7 +27,7 @@ from scipy.sparse import coo_array, csr_array
 
 from setupfix.optimize._highs import INF, LinearModel
 
-__all__ = ["Level", "TriageRows", "SLACK", "count_below", "lp_starts"]
+__all__ = ["Level", "TriageRows", "SLACK", "LIST_POINTS", "count_below", "least_listed", "listed_triage", "lp_starts"]
 
 Array = npt.NDArray[np.float64]
 Mask = npt.NDArray[np.bool_]
@@ -125,6 +125,26 @@ class TriageRows:
             return False
         m = self.margins(k)[kept]
         return all(int(np.sum(m < lv.value - 1e-6)) <= lv.below for lv in levels)
+
+    def meets_many(self, ks: Array, count: int, levels: tuple[Level, ...]) -> Mask:
+        """:meth:`meets` for grid points ks of shape (p, n), vectorised → bool ndarray of shape (p,)."""
+        ok = np.all(self.g[self.hard_rows] - ks @ self.G[self.hard_rows].T >= self.hard_min - 1e-6, axis=1)
+        m = self.margins_many(ks)
+        kept = self.held[None, :] | (m >= -1e-6)
+        ok &= kept.sum(axis=1) >= count
+        for lv in levels:
+            ok &= np.sum(kept & (m < lv.value - 1e-6), axis=1) <= lv.below
+        return ok
+
+    def margins_many(self, ks: Array) -> Array:
+        """Margins of every dimension at grid points ks (p, n), steps → shape (p, n_dims), +inf without rows."""
+        slack = self.g[None, :] - ks @ self.G.T
+        order = np.argsort(self.row_dim, kind="stable")
+        dims, starts = np.unique(self.row_dim[order], return_index=True)
+        m = np.full((ks.shape[0], self.n_dims), np.inf)
+        if order.size:
+            m[:, dims] = np.minimum.reduceat(slack[:, order], starts, axis=1)
+        return m
 
     def sorted_kept(self, k: Array) -> Array:
         m = self.margins(k)
@@ -298,6 +318,68 @@ def lp_starts(t: TriageRows, time_limit: float) -> list[Array]:  # time_limit: f
             if t.hard_ok(k):
                 out.append(k)
     return out
+
+
+#: Most grid points stage 3 lists (in the box its best point's norm allows) instead of its MILP.
+LIST_POINTS = 400_000
+
+
+def least_listed(t: TriageRows, lo: Array, hi: Array, count: int, levels: tuple[Level, ...]) -> Array | None:
+    """The least Σ c k² grid point in the box [lo, hi] meeting ``count`` and ``levels``, ties to the
+    lexicographically smallest k, by listing the box (None when it holds more than LIST_POINTS points
+    or no such point)."""
+    sizes = (hi - lo + 1).astype(np.int64)
+    if np.prod(sizes.astype(float)) > LIST_POINTS:
+        return None
+    axes = [np.arange(a, b + 1, dtype=float) for a, b in zip(lo, hi, strict=True)]
+    ks = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, t.n)
+    best: Array | None = None
+    chunk = max(1, 4_000_000 // max(t.g.size, 1))
+    for i in range(0, ks.shape[0], chunk):
+        part = ks[i:i + chunk]
+        ok = part[t.meets_many(part, count, levels)]
+        if ok.size:
+            cand = ok if best is None else np.vstack([best[None, :], ok])
+            norm = cand**2 @ t.cost
+            first = np.lexsort((*cand.T[::-1], norm))[0]  # least norm, then the smallest k lexicographically
+            best = cand[first]
+    return best
+
+
+def listed_triage(t: TriageRows, quantum: float) -> tuple[Array, int] | None:
+    """The whole triage by listing the box (None when it holds more than LIST_POINTS points).
+
+    Every grid point: the held dimensions kept (no harm), the most dimensions in tolerance, then the
+    leximin of the kept margins (position by position, ties within ``quantum`` steps), then the least
+    Σ c k², then the lexicographically smallest k.  Returns the point and its count.
+    """
+    sizes = (t.kmax - t.kmin + 1).astype(float)
+    if np.prod(sizes) > LIST_POINTS:
+        return None
+    axes = [np.arange(a, b + 1, dtype=float) for a, b in zip(t.kmin, t.kmax, strict=True)]
+    ks = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, t.n)
+    chunk = max(1, 4_000_000 // max(t.g.size, t.n_dims, 1))
+    counts = np.full(ks.shape[0], -1)
+    for i in range(0, ks.shape[0], chunk):
+        part = ks[i:i + chunk]
+        ok = np.all(t.g[t.hard_rows] - part @ t.G[t.hard_rows].T >= t.hard_min - 1e-6, axis=1)
+        kept = t.held[None, :] | (t.margins_many(part) >= -1e-6)
+        counts[i:i + chunk] = np.where(ok, kept.sum(axis=1), -1)
+    if counts.max() < 0:
+        return None
+    ks = ks[counts == counts.max()]
+    m = t.margins_many(ks)
+    kept = t.held[None, :] | (m >= -1e-6)
+    s = np.sort(np.where(kept & np.isfinite(m), m, np.inf), axis=1)
+    alive = np.ones(ks.shape[0], bool)
+    for j in range(s.shape[1]):  # the leximin: position by position, ties within the quantum
+        col = s[:, j]
+        if not np.isfinite(col[alive]).any():
+            break
+        alive &= col >= col[alive].max() - quantum / 2
+    ks = ks[alive]
+    norm = ks**2 @ t.cost
+    return ks[np.lexsort((*ks.T[::-1], norm))[0]], int(counts.max())
 
 
 def count_below(levels: tuple[Level, ...]) -> int:

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from setupfix.model import PartMeasurement
-from setupfix.optimize import CorrectionProblem, get_optimizer
+from setupfix.optimize import CorrectionProblem, _triage_model, get_optimizer
 from setupfix.pipeline.cycles import load_parts
 
 from .test_exact import random_problem
@@ -55,14 +55,22 @@ def check_triage(problem: CorrectionProblem, result) -> None:
     assert set(result.given_up) == {d for d, k in zip(problem.dimension_ids, kept, strict=True) if not k}
     assert np.sort(margins[kept]) == pytest.approx(sorted_kept, abs=1e-9)  # the whole leximin vector
     assert np.sqrt(np.sum(problem.cost * result.x**2)) == pytest.approx(norm, abs=1e-12)
-    assert any(np.array_equal(np.rint(result.x / problem.resolution), p) for p in points)
+    assert tuple(np.rint(result.x / problem.resolution)) == min(map(tuple, points))  # ties: the smallest k
     assert result.margin_after == pytest.approx(sorted_kept[0], abs=1e-9)  # δ over the kept dimensions
     assert result.bound is not None and result.bound >= result.margin_after - 1e-9
     assert "given up" in result.message and "NC program or the process" in result.message
 
 
+@pytest.fixture(params=["listed", "milp"])
+def path(request, monkeypatch):
+    """Both ways of the triage: listing a small box, and the MILPs (listing switched off)."""
+    if request.param == "milp":
+        monkeypatch.setattr(_triage_model, "LIST_POINTS", 0)
+    return request.param
+
+
 @pytest.mark.parametrize("seed", range(24))
-def test_triage_equals_brute_force(seed):
+def test_triage_equals_brute_force(seed, path):
     problem = random_problem(seed, n=3, m=7, limit_steps=2, spread=0.3)
     result = get_optimizer("exact").solve(problem)
     if brute_triage(problem)[0] == len(problem.dimension_ids):  # everything can be kept: no triage
@@ -72,7 +80,7 @@ def test_triage_equals_brute_force(seed):
 
 
 @pytest.mark.parametrize("seed", range(12))
-def test_triage_with_costs_fixed_registers_and_guard_floor_equals_brute_force(seed):
+def test_triage_with_costs_fixed_registers_and_guard_floor_equals_brute_force(seed, path):
     """Weighted norm, a fixed register, and a no-harm floor below 0 (a guard band: kept inside the real limits)."""
     import dataclasses
 
@@ -195,7 +203,7 @@ def milp_triage(problem: CorrectionProblem) -> tuple[int, np.ndarray, float]:
 
 
 @pytest.mark.parametrize("seed", range(10))
-def test_triage_equals_an_independent_milp(seed):
+def test_triage_equals_an_independent_milp(seed, path):
     problem = random_problem(700 + seed, n=3, m=6, limit_steps=3, spread=0.3)
     result = get_optimizer("exact").solve(problem)
     if not result.given_up:
@@ -280,7 +288,7 @@ def test_no_dimension_in_reach_gives_the_least_correction():
 
 
 @pytest.mark.parametrize("seed", range(8))
-def test_bound_is_the_kept_dimensions_lp_and_seconds_the_whole_call(seed):
+def test_bound_is_the_kept_dimensions_lp_and_seconds_the_whole_call(seed, path):
     """The bound describes the final answer: the LP over the dimensions it keeps (held ones held)."""
     from scipy.optimize import linprog
 
@@ -302,3 +310,4 @@ def test_bound_is_the_kept_dimensions_lp_and_seconds_the_whole_call(seed):
     assert result.extra["lp_bound_all"] < result.bound  # the whole problem's, given-up dimensions included
     assert result.seconds >= sum(result.extra["stages"].values()) - 1e-9
     assert result.status == "optimal" and result.extra["triage"]["leximin_complete"]
+    assert ("listing" in str(result.extra["path"])) == (path == "listed")
