@@ -225,11 +225,11 @@ def triage(t: TriageRows, deadline: float, reserve: float, budget: float, start:
     # every better point has c_i k_i² ≤ f(best): a box; chords near best, the others added lazily
     reach = np.floor(np.sqrt(float(np.sum(t.cost * best**2)) / t.cost) + 1e-9)
     lo_k, hi_k = np.maximum(t.kmin, -reach), np.minimum(t.kmax, reach)
-    listed = least_listed(t, lo_k, hi_k, kept, levels)
-    if listed is not None and t.meets(listed, kept, levels):  # a small box: listed, ties to the smallest k
+    least = least_listed(t, lo_k, hi_k, kept, levels)
+    if least is not None and t.meets(least, kept, levels):  # a small box: listed, ties to the smallest k
         done.append("least norm (listed)")
         proved = not why and (bool(levels) or complete)
-        return Triaged(listed, kept, levels, complete, proved, "" if proved else why, tuple(done))
+        return Triaged(least, kept, levels, complete, proved, "" if proved else why, tuple(done))
     chords = [{0, *range(max(int(abs(v)) - 2, 0), int(abs(v)) + 2)} for v in best]
     pairs = [(i, j) for i, js in enumerate(chords) for j in sorted(js)]
     m4, _ = t.model(kept, levels, objective="norm")
