@@ -129,7 +129,7 @@ def triage(t: TriageRows, deadline: float, reserve: float, budget: float, start:
     def left() -> float:
         return deadline - time.perf_counter()
 
-    def first() -> float:  # stage 1 and level 1 leave the reserve to stage 3
+    def first() -> float:  # stages 1 and 2 leave the reserve to stage 3
         return max(left() - reserve, min(left(), 0.05))
 
     zero = np.clip(np.zeros(t.n), t.kmin, t.kmax)
@@ -183,7 +183,7 @@ def triage(t: TriageRows, deadline: float, reserve: float, budget: float, start:
         def level_of(k: Array, p: int = p, levels: tuple[Level, ...] = levels) -> float:
             return -float(np.r_[t.sorted_kept(k), t.top][p]) if t.meets(k, kept, levels) else np.inf
 
-        res = _checked(m2, left() if levels else first(), t.start(best, min(max(v0, t_lo), t.top)), t.n,
+        res = _checked(m2, first(), t.start(best, min(max(v0, t_lo), t.top)), t.n,
                        level_of, quantum / 10)
         if res.x is not None:
             k = np.clip(np.rint(res.x[:t.n]), t.kmin, t.kmax)
@@ -205,7 +205,7 @@ def triage(t: TriageRows, deadline: float, reserve: float, budget: float, start:
             def count_of(k: Array, at: float = value + eps, levels: tuple[Level, ...] = levels) -> float:
                 return float(np.sum(t.sorted_kept(k) < at - SLACK)) if t.meets(k, kept, levels) else np.inf
 
-            res = _checked(m3, left(), t.start(best), t.n, count_of, 0.5)
+            res = _checked(m3, first(), t.start(best), t.n, count_of, 0.5)
             if res.x is not None:
                 k = np.clip(np.rint(res.x[:t.n]), t.kmin, t.kmax)
                 if t.meets(k, kept, levels) and np.sum(t.sorted_kept(k) < value + eps - SLACK) < below:
