@@ -46,7 +46,8 @@ from setupfix.errors import Note, SourceLocation
 from setupfix.model import PartMeasurement, ProcessModel
 from setupfix.optimize import CorrectionProblem
 from setupfix.relation import relation_matrices
-from setupfix.safety import Policy, RuleEffect, Smoothed, cumulative_bounds, guard_limits, short_list
+from setupfix.safety import (Policy, RuleEffect, Smoothed, cumulative_bounds, guard_limits, no_harm_floor,
+                             short_list)
 
 __all__ = ["PosedProblem", "forecast_of", "effects_composite", "policy_of", "pose_problem", "pose_policy",
            "coverage", "hours_between"]
@@ -215,7 +216,8 @@ def pose_policy(problem: CorrectionProblem, policy: Policy, *, measured: Array |
     guarded = problem
     if np.any(policy.uncertainty > 0):  # 4. guard band
         lo, up = guard_limits(problem.lower, problem.upper, policy.uncertainty, policy.guard_band)
-        guarded = dataclasses.replace(guarded, lower=lo, upper=up)
+        floor = no_harm_floor(problem.deviation, problem.lower, problem.upper, lo, up)  # no harm on the real limits
+        guarded = dataclasses.replace(guarded, lower=lo, upper=up, floor=floor)
         shrunk = tuple(dims[policy.uncertainty > 0])
         rules.append(RuleEffect("guard_band", f"limits of {len(shrunk)} dimension(s) shrunk by "
                                 f"{policy.guard_band:g}·U (ISO 14253-1)", dimensions=shrunk))

@@ -24,7 +24,6 @@ that changed it.
 
 from __future__ import annotations
 
-import dataclasses
 from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
@@ -41,8 +40,9 @@ if TYPE_CHECKING:  # pose builds the problem with these rules; recommend takes w
     from setupfix.pose import PosedProblem
 
 __all__ = ["RuleEffect", "Policy", "Recommendation", "reject_mask", "guard_limits", "cumulative_bounds",
-           "apply_gain", "harmed_mask", "in_dead_band", "ewma", "ewma_series", "Smoothed", "ewma_history", "recommend",
-           "budget", "VERDICTS", "STOPPED", "short_list", "shifted_history", "last_measured"]
+           "apply_gain", "harmed_mask", "no_harm_floor", "in_dead_band", "ewma", "ewma_series", "Smoothed",
+           "ewma_history", "recommend", "budget", "VERDICTS", "STOPPED", "short_list", "shifted_history",
+           "last_measured"]
 
 Array = npt.NDArray[np.float64]
 Mask = npt.NDArray[np.bool_]
@@ -356,10 +356,28 @@ def _zero_result(problem: CorrectionProblem, optimizer: str, status: str, messag
                           binding=problem.binding(x))
 
 
-def _restrict(problem: CorrectionProblem, keep: Mask) -> CorrectionProblem:
-    return dataclasses.replace(problem, composite=problem.composite[:, keep], deviation=problem.deviation[keep],
-                               lower=problem.lower[keep], upper=problem.upper[keep],
-                               dimension_ids=tuple(d for d, k in zip(problem.dimension_ids, keep, strict=True) if k))
+def no_harm_floor(deviation: Array, lower: Array, upper: Array, guarded_lower: Array, guarded_upper: Array) -> Array:
+    """No-harm floor of the guarded problem: a dimension measured inside its real limits keeps
+    a guarded margin ≥ −(the guard band's shrink), i.e. stays inside the real limits.
+
+    deviation, lower, upper : ndarray of shape (n_dimensions,) [unit]
+        The (estimated) deviations and the real limits.
+    guarded_lower, guarded_upper : ndarray of shape (n_dimensions,) [unit]
+        The limits shrunk by :func:`guard_limits`.
+
+    Returns
+    -------
+    ndarray of shape (n_dimensions,) [unit]
+        −shrink (≤ 0; the smaller shrink of the two sides) where measured inside, −inf elsewhere
+        (:attr:`setupfix.optimize.CorrectionProblem.floor`).
+    """
+    with np.errstate(invalid="ignore"):
+        low = np.where(np.isfinite(lower), guarded_lower - lower, np.inf)
+        high = np.where(np.isfinite(upper), upper - guarded_upper, np.inf)
+    shrink = np.minimum(low, high)
+    shrink = np.where(np.isfinite(shrink), np.maximum(shrink, 0.0), 0.0)
+    inside = (deviation >= lower) & (deviation <= upper)
+    return np.where(inside, -shrink, -np.inf)
 
 
 def _inside(values: Array, lower: Array, upper: Array) -> Mask:
@@ -372,8 +390,9 @@ def recommend(posed: PosedProblem, solve: Callable[[CorrectionProblem], Optimize
     """The rules after the solve, around ``solve(posed.guarded)``.
 
     Order: reject band (on the part as measured: no solve at all; :func:`beyond_band`
-    tells gross deviations from setup errors) → solve → gain → no harm (given-up
-    dimensions) → dead band → clamp report → stopped solve (:func:`stopped_rule`).  The
+    tells gross deviations from setup errors) → solve → gain → no harm (the triage's
+    refusal; any harmful answer refused: nothing changed) → given up (read from the
+    result) → dead band → clamp report → stopped solve (:func:`stopped_rule`).  The
     pre-solve rules (``posed.effects``) head the rule list.  Lists of names in messages
     are short (:func:`short_list`); the rules' ``dimensions`` hold them all.
 
@@ -416,30 +435,26 @@ def recommend(posed: PosedProblem, solve: Callable[[CorrectionProblem], Optimize
                                 registers=tuple(ids[xg != x])))
     x = xg
 
+    # no harm: the exact triage keeps every dimension measured in tolerance in it inside its optimum
+    # (CorrectionProblem.floor); this checks the answer of any optimiser and refuses a harmful one
+    triaged = result.extra.get("triage")
+    if isinstance(triaged, dict) and triaged.get("refused"):
+        rules.append(RuleEffect("no_harm", "not even the dimensions measured in tolerance can all be kept in it "
+                                "within the register limits: nothing changed"))
+        x = np.zeros_like(x)
     harmed = harmed_mask(dev, problem.predicted(x), lower, upper)
     if harmed.any():
-        # The optimum trades an in-tolerance dimension for out-of-tolerance ones: give
-        # up those no correction brought in, re-solve on the others, check again.
-        hopeless = ~((dev >= lower) & (dev <= upper))
-        if hopeless.any() and not hopeless.all():
-            retry = solve(_restrict(guarded, ~hopeless))
-            x2 = apply_gain(np.asarray(retry.x, dtype=float), policy.gain, problem.resolution)
-            if not harmed_mask(dev, problem.predicted(x2), lower, upper).any():
-                gone = tuple(dims[hopeless & ~_inside(problem.predicted(x2), lower, upper)])
-                given_up = tuple(dict.fromkeys(given_up + gone))
-                rules.append(RuleEffect("no_harm", "the optimum would move dimensions measured in tolerance out "
-                                        f"of it ({label(dims[harmed])}); corrected without "
-                                        f"{label(gone) or 'the out-of-tolerance ones'}", dimensions=gone))
-                message = (f"{label(gone)} given up: no correction brings them into tolerance without moving "
-                           "others out; the others are corrected")
-                x, result = x2, dataclasses.replace(retry, message=message)
-                harmed = np.zeros_like(harmed)
-        if harmed.any():
-            kept = tuple(dims[harmed])
-            rules.append(RuleEffect("no_harm", f"no correction keeps {label(kept)} in tolerance while "
-                                    "improving the others: nothing changed", dimensions=kept))
-            x = np.zeros_like(x)
-    if given_up and not any(r.rule == "no_harm" for r in rules):
+        kept = tuple(dims[harmed])
+        rules.append(RuleEffect("no_harm", f"the correction would move {label(kept)} (measured in tolerance) out "
+                                "of it: nothing changed", dimensions=kept))
+        x = np.zeros_like(x)
+        given_up = ()
+    elif given_up and isinstance(triaged, dict) and triaged.get("held"):
+        rules.append(RuleEffect("no_harm", f"the triage kept the {triaged['held']} dimension(s) measured in "
+                                "tolerance in it and gave up only what no such correction brings in"))
+    out_after = ~_inside(problem.predicted(x), lower, upper)  # read from the answer applied (gain included)
+    given_up = tuple(d for d, out in zip(dims, out_after, strict=True) if out and d in set(given_up))
+    if given_up:
         rules.append(RuleEffect("given_up", "no setup correction brings these into tolerance: they need the NC "
                                 "program or the process", dimensions=given_up))
 
@@ -559,7 +574,13 @@ def beyond_band(posed: PosedProblem, bad: Mask, optimizer: str, label: Callable[
     return Recommendation("hold", result.x, result, posed.guarded, (*rules, setup), alarm=alarm)
 
 
-def budget(problem: CorrectionProblem, x: Array) -> tuple[float, Array]:
-    """Error budget and per-dimension margins of ``x`` on the real limits of ``problem``."""
+def budget(problem: CorrectionProblem, x: Array, given_up: tuple[str, ...] = ()) -> tuple[float, Array]:
+    """Error budget and per-dimension margins of ``x`` on the real limits of ``problem``.
+
+    The budget is over the dimensions not in ``given_up`` (the triage's: the headline δ is that of
+    the dimensions kept); the margins are every dimension's.
+    """
     m = margins(problem.predicted(x), problem.lower, problem.upper)
+    if given_up:
+        return problem.kept_margin(x, given_up), m
     return float(error_budget(problem.predicted(x), problem.lower, problem.upper)), m

@@ -153,3 +153,79 @@ def test_reject_mask_and_ewma():
     assert ewma(y, prev, 0.25) == pytest.approx([0.01, 0.0])
     assert ewma(y, None, 0.25) == pytest.approx(y)
     assert apply_gain(np.array([0.0119, -0.0119]), np.array([1.0, 1.0]), 0.001) == pytest.approx([0.011, -0.011])
+
+
+# --- no harm inside the triage's optimum (issue 22) -------------------------------------------------------
+
+def fourteen_and_seventeen():
+    """R0 moves A1…A14 (measured +0.09, in) and B1…B15 (−0.15, out); R1 moves C1…C3 (−0.12, out).
+    Bringing the B in pushes every A out; the C come in on their own.  The triage without no harm
+    brought the 15 B and 3 C in, the re-solve on the A alone then gave the C up too: 14 kept."""
+    comp = np.zeros((2, 32))
+    comp[0, :29] = 1.0
+    comp[1, 29:] = 1.0
+    dev = np.r_[np.full(14, 0.09), np.full(15, -0.15), np.full(3, -0.12)]
+    return problem(comp, dev, np.full(32, -0.1), np.full(32, 0.1))
+
+
+def test_triage_keeps_seventeen_where_the_re_solve_kept_fourteen():
+    p = fourteen_and_seventeen()
+    rec = recommend(p, Policy.neutral(p), SOLVE)
+    m = p.margins(rec.x)
+    assert rec.verdict == "apply" and rec.result.status == "optimal"
+    assert (m >= 0).sum() == 17  # the 14 A held, the 3 C brought in
+    assert rec.given_up == tuple(f"D{j}" for j in range(14, 29))  # the 15 B, read from the answer
+    assert rec.result.given_up == rec.given_up
+    assert rec.x == pytest.approx([-0.09, 0.1])  # A centred; C as far in as R1's limit allows
+    # brute force over the whole grid: no correction keeps more without moving an A out
+    k = np.arange(-100, 101) * 0.001
+    x = np.stack(np.meshgrid(k, k, indexing="ij"), axis=-1).reshape(-1, 2)
+    margins = p.margins(x)
+    no_harm = np.all(margins[:, :14] >= 0, axis=1)
+    assert (margins[no_harm] >= 0).sum(axis=1).max() == 17
+    assert "no_harm" in rules(rec) and "given_up" in rules(rec)
+
+
+def test_guarded_triage_keeps_the_dimensions_measured_inside_the_real_limits():
+    # B measured at 0.095 (inside ±0.1 but within U = 0.01 of the limit): the guard band alone would let
+    # the triage push it out to bring A in; the no-harm floor keeps it inside the real limits
+    p = problem([[1.0, 1.0]], [-0.3, 0.095], [-0.1, -0.1], [0.1, 0.1])
+    rec = recommend(p, policy(p, uncertainty=[0.0, 0.01]), SOLVE)
+    assert not harmed_mask(p.deviation, p.predicted(rec.x), p.lower, p.upper).any()
+    assert rec.given_up == ("D0",)
+    assert rec.problem.floor == pytest.approx([-np.inf, -0.01])
+    assert rec.x == pytest.approx([-0.095])  # B centred (guarded margin 0.09 at the centre)
+
+
+def test_no_harm_refuses_when_not_even_the_measured_in_tolerance_can_be_kept():
+    # "no change" is outside the register's bounds [+0.01, +0.05]: every step pushes B (+0.095) out
+    c = problem([[1.0, 1.0]], [-0.3, 0.095], [-0.1, -0.1], [0.1, 0.1])
+    p = dataclasses.replace(c, lb=np.array([0.01]), ub=np.array([0.05]))
+    raw = SOLVE(p)
+    assert raw.extra["triage"]["refused"] and not raw.x.any()
+    rec = recommend(p, Policy.neutral(p), SOLVE)
+    assert rec.verdict == "hold" and not rec.x.any() and rec.given_up == ()
+    assert "no_harm" in rules(rec)
+
+
+@pytest.mark.parametrize("seed", range(30))
+def test_given_up_never_names_a_dimension_predicted_in_tolerance(seed):
+    rng = np.random.default_rng(seed)
+    n, m = 3, 9
+    comp = rng.integers(-1, 2, size=(n, m)).astype(float)
+    p = problem(comp, np.round(rng.uniform(-0.2, 0.2, m), 4), np.full(m, -0.05), np.full(m, 0.05), limit=0.03,
+                h=0.005)
+    pol = policy(p, uncertainty=rng.uniform(0, 0.01, m), gain=rng.choice([1.0, 0.5], n))
+    rec = recommend(p, pol, SOLVE)
+    predicted = p.predicted(rec.x)
+    inside = (predicted >= p.lower - 1e-12) & (predicted <= p.upper + 1e-12)
+    named = np.isin(p.dimension_ids, rec.given_up)
+    assert not (named & inside).any()
+    assert not harmed_mask(p.deviation, predicted, p.lower, p.upper).any()
+    raw = rec.result
+    if raw.given_up:  # status, bound and δ read from the final answer, over the kept dimensions
+        kept = ~np.isin(rec.problem.dimension_ids, raw.given_up)
+        assert raw.margin_after == pytest.approx(rec.problem.margins(raw.x)[kept].min(), abs=1e-12)
+        assert raw.bound is not None and raw.bound >= raw.margin_after - 1e-9
+        assert raw.status == "optimal" and "stopped" not in raw.extra
+        assert set(raw.extra["given_up"]) == set(raw.given_up)

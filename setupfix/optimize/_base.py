@@ -44,7 +44,7 @@ def count(low: int, high: int) -> list[Constraint]:
 def make_result(problem: CorrectionProblem, x: Array, *, optimizer: str, evaluations: int, seconds: float,
                 status: str, history: Array | None = None, bound: float | None = None,
                 message: str | None = None, binding: tuple[str, ...] | None = None,
-                guard: bool = True) -> OptimizeResult:
+                guard: bool = True, given_up: tuple[str, ...] = ()) -> OptimizeResult:
     """Assemble an :class:`OptimizeResult` for corrections ``x`` (already on the grid).
 
     ``binding`` defaults to the dimensions at the minimum margin after ``x``; the
@@ -56,11 +56,23 @@ def make_result(problem: CorrectionProblem, x: Array, *, optimizer: str, evaluat
     than doing nothing never sends a correction to the machine.  (An optimiser that
     trades f1 on purpose, e.g. for more dimensions in tolerance, passes
     ``guard=False`` and says why in its message.)
+
+    ``given_up`` (the triage's dimensions left to the NC program): δ before and after and the
+    binding dimensions are those of the other dimensions, the kept ones; the result lists them.
     """
     x = np.asarray(x, dtype=float).copy()
     x[np.abs(x) < 1e-12] = 0.0  # no "-0.000" in outputs
     f1, f2, _ = problem.evaluate(x)
     after = float(f1)
+    before = problem.margin_before
+    if given_up:
+        keep = np.array([d not in given_up for d in problem.dimension_ids], dtype=bool)
+        after = problem.kept_margin(x, given_up)
+        before = problem.kept_margin(np.zeros_like(x), given_up)
+        if binding is None:
+            m = problem.margins(x)
+            binding = tuple(d for d, v, k in zip(problem.dimension_ids, m, keep, strict=True)
+                            if k and v <= after + problem.resolution / 4)
     if guard and after < problem.margin_before:
         message = (f"the {optimizer} search found no correction better than none (best found: error budget "
                    f"{after:+.4g} against {problem.margin_before:+.4g} without correction); no correction is "
@@ -79,9 +91,10 @@ def make_result(problem: CorrectionProblem, x: Array, *, optimizer: str, evaluat
                  "this is the least-bad correction"
         )
     return OptimizeResult(
-        x=x, margin_before=problem.margin_before, margin_after=after, norm=float(f2), optimizer=optimizer,
+        x=x, margin_before=before, margin_after=after, norm=float(f2), optimizer=optimizer,
         evaluations=int(evaluations), seconds=float(seconds), status=status, message=message,
         binding=problem.binding(x) if binding is None else binding, history=history, bound=bound, notes=notes,
+        given_up=given_up,
     )
 
 

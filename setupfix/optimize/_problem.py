@@ -42,6 +42,13 @@ class CorrectionProblem:
         Weight of each register in the least-norm stage of the exact optimiser
         (minimise Σ cost_i·x_i² among equally good corrections; eq. 9 is all ones,
         the default).  Positive and finite: a larger cost moves that register less.
+    floor : ndarray of shape (n_dimensions,), optional [model unit]
+        No harm: the least margin each dimension must keep after any correction, −inf where
+        none.  Default (None): 0 on the dimensions whose deviation is inside their limits,
+        −inf on the others (:attr:`held_floor`).  Where the guard band shrinks the limits,
+        :func:`setupfix.pose.pose_policy` sets −(the shrink) on the dimensions measured inside
+        the real limits, so "margin ≥ floor" keeps them inside those.  Only the exact optimiser's
+        triage reads it (when every dimension can be brought in, no floor binds).
     """
 
     composite: Array
@@ -54,9 +61,16 @@ class CorrectionProblem:
     register_ids: tuple[str, ...]
     dimension_ids: tuple[str, ...]
     cost: Array = field(default=None)  # type: ignore[arg-type]  # set to ones in __post_init__
+    floor: Array | None = None
 
     def __post_init__(self) -> None:
         n = self.n_registers
+        if self.floor is not None:
+            floor = np.asarray(self.floor, dtype=float)
+            if floor.shape != self.deviation.shape or np.any(np.isnan(floor)) or np.any(floor > 0):
+                raise ParameterError(f"no-harm floor must be {self.deviation.size} numbers ≤ 0 (−inf: none), "
+                                     f"got {self.floor!r}")
+            object.__setattr__(self, "floor", floor)
         cost = np.ones(n) if self.cost is None else np.asarray(self.cost, dtype=float)
         if cost.shape != (n,) or not np.all(np.isfinite(cost)) or not np.all(cost > 0):
             raise ParameterError(f"register cost must be {n} positive finite numbers, got {self.cost!r}")
@@ -153,6 +167,20 @@ class CorrectionProblem:
         return self.snap(rng.uniform(self.lb, self.ub, size=(count, self.n_registers)))
 
     @property
+    def held_floor(self) -> Array:
+        """The no-harm floor of every dimension, shape (n_dimensions,) [model unit] (see ``floor``)."""
+        if self.floor is not None:
+            return self.floor
+        inside = (self.deviation >= self.lower) & (self.deviation <= self.upper)
+        return np.where(inside, 0.0, -np.inf)
+
+    def kept_margin(self, x: Array, given_up: tuple[str, ...] = ()) -> float:
+        """Error budget f1 (eq. 8) over the dimensions not in ``given_up`` (+inf when none is left)."""
+        keep = np.array([d not in given_up for d in self.dimension_ids], dtype=bool)
+        m = self.margins(np.asarray(x, dtype=float))
+        return float(m[keep].min()) if keep.any() else float("inf")
+
+    @property
     def margin_before(self) -> float:
         return float(error_budget(self.deviation, self.lower, self.upper))
 
@@ -176,7 +204,8 @@ class OptimizeResult:
     x : ndarray of shape (n_registers,) [model unit]
         Corrections on the register grid.
     margin_before, margin_after : float
-        Error budget δ = f1 before and after the correction.
+        Error budget δ = f1 before and after the correction; over the dimensions kept when some
+        are given up (``given_up``: the triage's margins of those are in ``extra["given_up"]``).
     norm : float
         f2 = ‖x‖.
     optimizer : str
@@ -194,7 +223,8 @@ class OptimizeResult:
     history : ndarray of shape (k, 4), optional
         Best-so-far [evaluations, f1, f2, f] for convergence plots.
     bound : float, optional
-        Upper bound on f1 proved by the exact solver (continuous LP optimum).
+        Upper bound on f1 proved by the exact solver (continuous LP optimum; over the dimensions
+        kept when some are given up).
     given_up : tuple of str
         Dimensions the exact optimiser gave up on because no correction brings every
         dimension into tolerance (it keeps as many as possible in tolerance first);
@@ -232,5 +262,5 @@ class OptimizeResult:
 
     @property
     def in_tolerance(self) -> bool:
-        """True when every measured dimension is predicted inside its limits."""
-        return self.margin_after >= 0.0
+        """True when every measured dimension is predicted inside its limits (none given up)."""
+        return self.margin_after >= 0.0 and not self.given_up

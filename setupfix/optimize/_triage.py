@@ -1,197 +1,333 @@
-"""Triage: when no correction brings every dimension into tolerance (issue 13).
+"""Triage: when no correction brings every dimension into tolerance, give up only what must be.
 
-A hopeless dimension must not ruin good ones.  In grid units (rows ``G k ≤ g`` of
-:func:`setupfix.optimize._exact.margin_rows`, each row belonging to one dimension),
-with a binary z_q per dimension ("kept in tolerance") and big-M constants from the
-register bounds, three exact MILPs in turn (lexicographic optimum):
+A hopeless dimension must not ruin good ones, and no correction may move a dimension measured in
+tolerance out of it (no harm, inside the optimum).  In grid units, with the rows, binaries and
+levels of :mod:`~setupfix.optimize._triage_model`, one lexicographic optimum in three stages:
 
-1. **Most dimensions in tolerance**: max Σ z_q s.t. G_j k ≤ g_j + M_j (1 − z_q(j)),
-   M_j = max_box G_j k − g_j (a row with M_j ≤ 0 holds for every k).  Optimum N*.
-2. **Largest error budget of those**: max t s.t. Σ z_q ≥ N*,
-   G_j k + t ≤ g_j + (M_j + T)(1 − z_q(j)), 0 ≤ t ≤ T (T: the largest margin any row
-   can have in the box).  Optimum t*.
-3. **Least norm**: min Σ c_i k_i² s.t. Σ z_q ≥ N*, G_j k ≤ g_j − t* + (M_j + t*)(1 − z_q(j)),
-   with k_i² as the upper envelope of its chords (exact on integers), chords added
-   lazily where a solution violates s_i ≥ k_i² (:func:`~setupfix.optimize._chords.lazy_chords`).
+1. **Most dimensions in tolerance, no harm**: max Σ z_q over the dimensions measured out of
+   tolerance, every dimension measured in tolerance held by hard rows (margin ≥ its no-harm floor,
+   :attr:`~setupfix.optimize._problem.CorrectionProblem.held_floor`; no binary for it).  Optimum N*
+   (held + brought in).  Infeasible (the box excludes "no correction"): a refusal.
+2. **Leximin of the kept dimensions' margins**: level 1 maximises the smallest kept margin (the error
+   budget of the kept dimensions); its multiplicity is the least number of kept margins within the
+   quantum of it any such point has; level 2 maximises the next smallest holding level 1, and so on
+   (each a MILP with one binary per kept dimension that can fall below the level), until every kept
+   position is fixed or the time reserved for stage 3 is reached (level 1 is always solved).
+3. **Least norm**: min Σ c_i k_i² subject to N* and every level proved, ties to the lexicographically
+   smallest k: in the box c_i k_i² ≤ f(best point) listed when it is small
+   (:func:`~setupfix.optimize._triage_model.least_listed`), else a MILP with k_i² as the upper envelope
+   of its chords (exact on integers), added lazily (:func:`~setupfix.optimize._chords.lazy_chords`).
 
-No point can keep more than N* dimensions in tolerance, so every point that meets
-Σ z ≥ N* keeps exactly the dimensions with z = 1; the dimensions given up are read
-from the final point's own margins.  Each MILP is solved to a zero gap by HiGHS.
+No point keeps more than N* dimensions, so every point meeting Σ z ≥ N* − held keeps exactly the
+dimensions with z = 1 and the held ones; the dimensions given up are read from the final point.
+Each MILP is solved to a zero gap by HiGHS; every point it returns is checked exactly
+(:meth:`~setupfix.optimize._triage_model.TriageRows.meets`) before it is used.
 """
 
 from __future__ import annotations
 
 import time
+from collections.abc import Callable
+from dataclasses import dataclass
 
 import numpy as np
 import numpy.typing as npt
-from scipy.sparse import coo_array, csr_array, hstack, vstack
 
 from setupfix.errors import Note
 from setupfix.optimize._base import make_result
 from setupfix.optimize._chords import chord_rows, lazy_chords
-from setupfix.optimize._grid import TOL
-from setupfix.optimize._highs import INF, LinearModel
+from setupfix.optimize._highs import INF, LinearModel, Solve
 from setupfix.optimize._problem import CorrectionProblem, OptimizeResult
 from setupfix.optimize._session import Session
+from setupfix.optimize._triage_model import (
+    SLACK,
+    Level,
+    TriageRows,
+    count_below,
+    least_listed,
+    listed_triage,
+    lp_starts,
+)
 
-__all__ = ["triage", "triaged_result"]
+__all__ = ["Triaged", "triage", "triaged_result"]
 
 Array = npt.NDArray[np.float64]
+
+#: Share of the time limit the triage's leximin levels after the first may take (the least norm
+#: needs the rest; the levels proved are stated in the result).
+LEXIMIN_SHARE = 0.2
+
+
+@dataclass(frozen=True)
+class Triaged:
+    """Outcome of :func:`triage`.
+
+    Attributes
+    ----------
+    k : ndarray of shape (n,) or None
+        The triaged correction in steps; None when not even the dimensions measured in tolerance
+        can all be kept (a refusal: nothing is changed).
+    kept : int
+        Dimensions kept in tolerance (held ones included), N*.
+    levels : tuple of Level
+        Leximin levels proved: at most ``below`` kept margins under ``value`` (steps).
+    complete : bool
+        Every kept position is fixed by the levels (the whole leximin vector is proved).
+    proved : bool
+        Stage 1, level 1 and the least norm were solved to optimality.
+    why : str
+        Which stage stopped and why (empty when proved).
+    stages : tuple of str
+        The stages completed, for the record.
+    """
+
+    k: Array | None
+    kept: int
+    levels: tuple[Level, ...]
+    complete: bool
+    proved: bool
+    why: str
+    stages: tuple[str, ...]
+
+
+def _checked(model: LinearModel, left: float, start: Array | None, n: int, value: Callable[[Array], float],
+             tol: float) -> Solve:
+    """Solve from ``start``; when HiGHS says optimal but its point's exact objective ``value(k)`` is not
+    the one it reports (it sometimes hands the start back as optimal), solve again without the start."""
+    res = model.solve(left, start)
+    if (start is not None and res.status == "optimal" and res.x is not None
+            and not abs(value(np.rint(res.x[:n])) - res.objective) <= tol):
+        res = model.solve(left, None)
+    return res
 
 
 def _status_word(status: str) -> str:
     return "time limit" if status == "time_limit" else f"HiGHS: {status}"
 
 
-def triage(g_rows: Array, g: Array, row_dim: npt.NDArray[np.intp], n_dims: int, kmin: Array, kmax: Array,
-           cost: Array, deadline: float, start: Array) -> tuple[Array, bool, str, tuple[str, ...]]:
-    """Keep the most dimensions in tolerance, then their largest budget, then the least norm.
+def triage(t: TriageRows, deadline: float, reserve: float, budget: float, start: Array, quantum: float) -> Triaged:
+    """Keep the most dimensions in tolerance without harm, then the leximin of their margins, then the least norm.
 
     Parameters
     ----------
-    g_rows : ndarray of shape (r, n); g : ndarray of shape (r,)
-        Margin rows in grid steps (margin_j(k) = g_j − G_j k).
-    row_dim : ndarray of int, shape (r,)
-        Dimension index (0 … n_dims−1) of each row.
-    kmin, kmax, cost : ndarray of shape (n,)
+    t : TriageRows
+        Rows, dimensions and no-harm floors in grid steps.
     deadline : float
         ``time.perf_counter()`` value at which to stop.
+    reserve : float
+        Seconds kept for stage 3: no leximin level after the first starts with less left.
+    budget : float
+        Seconds the leximin levels may take: no level after the first starts once they have.
     start : ndarray of shape (n,)
-        A grid point to start from (any point in the box).
-
-    Returns
-    -------
-    k : ndarray of shape (n,)
-        The triaged correction in steps (``start`` if nothing better was found).
-    proved : bool
-        All three stages solved to optimality.
-    why : str
-        Which stage stopped and why (empty when proved).
-    stages : tuple of str
-        The stages completed, for the record.
+        A grid point to start from (used when it keeps the held dimensions).
+    quantum : float
+        Margins within this many steps are ties (a level's multiplicity counts them).
     """
-    r, n = g_rows.shape
-    hi = np.sum(np.maximum(g_rows * kmin, g_rows * kmax), axis=1)
-    lo = np.sum(np.minimum(g_rows * kmin, g_rows * kmax), axis=1)
-    big = np.maximum(hi - g, 0.0)  # M_j
-    top = float(np.max(g - lo))  # no margin exceeds this
-    zmat = csr_array(coo_array((np.ones(r), (np.arange(r), row_dim)), shape=(r, n_dims)))
     done: list[str] = []
+    why = ""
 
     def left() -> float:
         return deadline - time.perf_counter()
 
-    def in_tolerance(k: Array) -> npt.NDArray[np.bool_]:
-        ok = np.ones(n_dims, bool)
-        np.logical_and.at(ok, row_dim, g - g_rows @ k >= -TOL)
-        return ok
+    def first() -> float:  # stages 1 and 2 leave the reserve to stage 3
+        return max(left() - reserve, min(left(), 0.05))
 
-    # 1. most dimensions in tolerance: columns k (n), z (n_dims)
-    a1 = hstack([csr_array(g_rows), zmat.multiply(big[:, None])]).tocsr()
-    m1 = LinearModel(np.r_[np.zeros(n), -np.ones(n_dims)], a1, np.full(r, -INF), g + big,
-                     np.r_[kmin, np.zeros(n_dims)], np.r_[kmax, np.ones(n_dims)],
-                     integer=np.ones(n + n_dims, bool))
-    z0 = in_tolerance(start).astype(float)
-    res = m1.solve(left(), np.r_[start, z0])
-    best = start
-    if res.x is not None:
-        k = np.clip(np.rint(res.x[:n]), kmin, kmax)
-        if in_tolerance(k).sum() >= in_tolerance(best).sum():
+    zero = np.clip(np.zeros(t.n), t.kmin, t.kmax)
+    if not t.hard_ok(zero):  # "no correction" is outside the box: nothing keeps the held ones for sure
+        m1, _ = t.model(0, (), objective="count")
+        res = m1.solve(left())
+        if res.status == "infeasible":
+            return Triaged(None, 0, (), False, True, "", ("the dimensions measured in tolerance cannot all be kept",))
+    listed = listed_triage(t, quantum)
+    if listed is not None:  # a small box: every grid point looked at
+        k, kept = listed
+        return Triaged(k, kept, (), True, True, "", (f"{kept} of {t.n_dims} dimensions kept in tolerance "
+                                                      f"({int(t.held.sum())} measured in tolerance held), "
+                                                      "leximin and least norm by listing the grid",))
+    best = zero
+    for k in [start, *(lp_starts(t, 0.4 * first()) if t.cand.size else [])]:
+        if t.hard_ok(k) and t.kept(k).sum() > t.kept(best).sum():
             best = k
-    if res.status != "optimal":
-        return best, False, f"most dimensions in tolerance: {_status_word(res.status)}", tuple(done)
-    kept = int(in_tolerance(best).sum())
-    done.append(f"{kept} of {n_dims} dimensions can be kept in tolerance")
-    if kept == 0:  # no budget to keep: the least correction of all is the box point nearest zero
-        done.append("least norm")
-        return np.clip(np.zeros(n), kmin, kmax), True, "", tuple(done)
 
-    # 2. largest error budget of the kept dimensions: columns k, z, t
-    bigt = big + top
-    a2 = vstack([hstack([csr_array(g_rows), zmat.multiply(bigt[:, None]), csr_array(np.ones((r, 1)))]),
-                 csr_array(np.r_[np.zeros(n), np.ones(n_dims), 0.0][None, :])]).tocsr()
-    m2 = LinearModel(np.r_[np.zeros(n + n_dims), -1.0], a2, np.r_[np.full(r, -INF), kept], np.r_[g + bigt, INF],
-                     np.r_[kmin, np.zeros(n_dims), 0.0], np.r_[kmax, np.ones(n_dims), top],
-                     integer=np.r_[np.ones(n + n_dims, bool), False])
-    ok = in_tolerance(best)
-    t0 = float(np.min((g - g_rows @ best)[ok[row_dim]])) if ok.any() else 0.0
-    res = m2.solve(left(), np.r_[best, ok.astype(float), max(t0, 0.0)])
-    if res.x is not None:
-        k = np.clip(np.rint(res.x[:n]), kmin, kmax)
-        ok_k = in_tolerance(k)
-        if ok_k.sum() >= kept and (g - g_rows @ k)[ok_k[row_dim]].min() > t0:
-            best, t0 = k, float((g - g_rows @ k)[ok_k[row_dim]].min())
-    if res.status != "optimal":
-        return best, False, f"error budget of the kept dimensions: {_status_word(res.status)}", tuple(done)
-    t_star = t0
-    done.append("their error budget")
+    # 1. most dimensions in tolerance, the held ones kept
+    if t.cand.size:
+        m1, _ = t.model(0, (), objective="count")
+        res = _checked(m1, first(), t.start(best) if t.hard_ok(best) else None, t.n,
+                       lambda k: float(t.held.sum() - t.kept(k).sum()) if t.hard_ok(k) else np.inf, 0.5)
+        if res.status == "infeasible":
+            return Triaged(None, 0, (), False, True, "", ("the dimensions measured in tolerance cannot all be kept",))
+        if res.x is not None:
+            k = np.clip(np.rint(res.x[:t.n]), t.kmin, t.kmax)
+            if t.hard_ok(k) and t.kept(k).sum() > t.kept(best).sum():
+                best = k
+        if res.status != "optimal" or t.kept(best).sum() < int(t.held.sum()) - res.objective - 0.5:
+            stop = _status_word(res.status) if res.status != "optimal" else "HiGHS's point does not keep its count"
+            why = f"most dimensions in tolerance: {stop}"  # the best count found goes on: never fewer, no harm
+    kept = int(t.kept(best).sum())
+    held = int(t.held.sum())
+    if not why:
+        done.append(f"{kept} of {t.n_dims} dimensions kept in tolerance ({held} measured in tolerance held)")
 
-    # 3. least Σ c k² with at least `kept` dimensions at margin ≥ t*: columns k, s, z
-    bigs = big + t_star
+    # 2. leximin of the kept margins
+    levels: tuple[Level, ...] = ()
+    complete = t.positions(kept) == 0  # nothing kept has a margin: no level to find
+    eps = quantum / 2
+    t_lo = float(np.min(t.sorted_kept(best), initial=t.top))
+    began = time.perf_counter()
+    while not complete and not why:
+        if levels and (left() < reserve or time.perf_counter() - began > budget):
+            break
+        m2, _ = t.model(kept, levels, objective="level", t_lo=min(t_lo, t.top))
+        p = count_below(levels)
+        v0 = float(t.sorted_kept(best)[p]) if t.sorted_kept(best).size > p else t.top
+        def level_of(k: Array, p: int = p, levels: tuple[Level, ...] = levels) -> float:
+            return -float(np.r_[t.sorted_kept(k), t.top][p]) if t.meets(k, kept, levels) else np.inf
 
-    chords = [{0, int(abs(v)), max(int(abs(v)) - 1, 0)} for v in best]
-    a_ch, rhs_ch = chord_rows([(i, j) for i, js in enumerate(chords) for j in sorted(js)], n, 2 * n + n_dims)
-    a3 = vstack([hstack([csr_array(g_rows), csr_array((r, n)), zmat.multiply(bigs[:, None])]),
-                 csr_array(np.r_[np.zeros(2 * n), np.ones(n_dims)][None, :]), a_ch]).tocsr()
-    m3 = LinearModel(np.r_[np.zeros(n), cost, np.zeros(n_dims)], a3,
-                     np.r_[np.full(r, -INF), kept, np.full(rhs_ch.size, -INF)], np.r_[g - t_star + bigs, INF, rhs_ch],
-                     np.r_[kmin, np.zeros(n), np.zeros(n_dims)], np.r_[kmax, np.full(n, INF), np.ones(n_dims)],
-                     integer=np.r_[np.ones(n, bool), np.zeros(n, bool), np.ones(n_dims, bool)])
+        res = _checked(m2, first(), t.start(best, min(max(v0, t_lo), t.top)), t.n,
+                       level_of, quantum / 10)
+        if res.x is not None:
+            k = np.clip(np.rint(res.x[:t.n]), t.kmin, t.kmax)
+            s = t.sorted_kept(k)
+            if t.meets(k, kept, levels) and s.size > p and s[p] > v0:
+                best, v0 = k, float(s[p])
+        if res.status != "optimal" or v0 < -res.objective - quantum / 10:
+            why = _status_word(res.status) if res.status != "optimal" else "HiGHS's point is below its level"
+            why = f"leximin level {len(levels) + (0 if levels else 1)}: {why}"
+            if not levels:  # level 1 stopped: the level its best point reaches holds in stage 3
+                levels = (Level(float(np.r_[t.sorted_kept(best), t.top][0]), 0),)
+            break
+        value = v0
+        levels = (*levels[:-1], Level(value, p)) if levels else (Level(value, 0),)
+        # its multiplicity: the fewest kept margins within the quantum of it (p + 1 when the point has so few)
+        below = int(np.sum(t.sorted_kept(best) < value + eps - SLACK))
+        if below > p + 1:
+            m3, _ = t.model(kept, levels, objective="multiplicity", at=value + eps)
+            def count_of(k: Array, at: float = value + eps, levels: tuple[Level, ...] = levels) -> float:
+                return float(np.sum(t.sorted_kept(k) < at - SLACK)) if t.meets(k, kept, levels) else np.inf
 
-    def feasible(k: Array) -> bool:
-        ok_k = in_tolerance(k)
-        return bool(ok_k.sum() >= kept and (g - g_rows @ k)[ok_k[row_dim]].min() >= t_star - TOL)
+            res = _checked(m3, first(), t.start(best), t.n, count_of, 0.5)
+            if res.x is not None:
+                k = np.clip(np.rint(res.x[:t.n]), t.kmin, t.kmax)
+                if t.meets(k, kept, levels) and np.sum(t.sorted_kept(k) < value + eps - SLACK) < below:
+                    best = k
+            below = int(np.sum(t.sorted_kept(best) < value + eps - SLACK))
+            if res.status != "optimal" or below > round(res.objective):
+                why = f"leximin level {len(levels)} multiplicity: " + (
+                    _status_word(res.status) if res.status != "optimal" else "HiGHS's point does not reach its count")
+                break
+        levels = (*levels, Level(value + eps, below))
+        t_lo = value + eps
+        done.append(f"leximin level {len(levels) - 1}: {below} kept margin(s) at {value:+.4g} steps")
+        complete = below >= t.positions(kept)
 
-    out = lazy_chords(m3, n, chords, cost, kmin, kmax, best, feasible,
-                      lambda k: np.r_[k, k**2, in_tolerance(k).astype(float)], deadline, integer=True)
+    # 3. least Σ c k² holding N* and the levels
+    n = t.n
+    # every better point has c_i k_i² ≤ f(best): a box; chords near best, the others added lazily
+    reach = np.floor(np.sqrt(float(np.sum(t.cost * best**2)) / t.cost) + 1e-9)
+    lo_k, hi_k = np.maximum(t.kmin, -reach), np.minimum(t.kmax, reach)
+    least = least_listed(t, lo_k, hi_k, kept, levels)
+    if least is not None and t.meets(least, kept, levels):  # a small box: listed, ties to the smallest k
+        done.append("least norm (listed)")
+        proved = not why and (bool(levels) or complete)
+        return Triaged(least, kept, levels, complete, proved, "" if proved else why, tuple(done))
+    chords = [{0, *range(max(int(abs(v)) - 2, 0), int(abs(v)) + 2)} for v in best]
+    pairs = [(i, j) for i, js in enumerate(chords) for j in sorted(js)]
+    m4, _ = t.model(kept, levels, objective="norm")
+    m4.set_col_bounds(np.arange(n, dtype=np.int32), lo_k, hi_k)
+    m4.prefer_proof()  # a feasible start is known: no RINS/RENS (they can overrun the limit)
+    a_ch, rhs_ch = chord_rows(pairs, n, m4.n_cols)
+    m4.add_rows(a_ch, np.full(rhs_ch.size, -INF), rhs_ch)
+    out = lazy_chords(m4, n, chords, t.cost, t.kmin, t.kmax, best, lambda k: t.meets(k, kept, levels), t.start,
+                      deadline, integer=True)
     if out.proved:
         done.append("least norm")
     best = best if out.best is None else out.best
-    return best, out.proved, "" if out.proved else f"least norm: {out.why}", tuple(done)
+    if not out.proved:
+        why = why or f"least norm: {out.why}"
+    proved = out.proved and not why and (bool(levels) or complete)
+    return Triaged(best, kept, levels, complete, proved, "" if proved else why, tuple(done))
+
+
+def _kept_bound(t: TriageRows, keep: npt.NDArray[np.bool_], left: float) -> float | None:
+    """LP bound (steps) on the smallest margin of the dimensions ``keep`` with the held ones held."""
+    from scipy.sparse import csr_array, hstack
+
+    rows = np.flatnonzero(keep[t.row_dim])
+    if rows.size == 0:
+        return None
+    a = hstack([csr_array(t.G[np.r_[rows, t.hard_rows]]),
+                csr_array(np.r_[np.ones(rows.size), np.zeros(t.hard_rows.size)][:, None])])
+    model = LinearModel(np.r_[np.zeros(t.n), -1.0], a, np.full(rows.size + t.hard_rows.size, -INF),
+                        np.r_[t.g[rows], t.g[t.hard_rows] - t.hard_min], np.r_[t.kmin, -INF], np.r_[t.kmax, INF])
+    res = model.solve(max(left, 0.05))
+    return -float(res.objective) if res.status == "optimal" else None
 
 
 def triaged_result(problem: CorrectionProblem, session: Session, k_start: Array, path: list[str],
                    notes: list[Note], calls: int, bound: float, name: str) -> OptimizeResult:
     """The triage stage: no correction brings every dimension into tolerance, so :func:`triage` decides.
 
-    The dimensions given up are read from the final point's own margins (below −quantum);
-    the result says which, and that they need the NC program or the process, not the setup.
+    Everything the result states is read from the final answer: the dimensions given up (not held
+    and predicted out of tolerance, ``extra["given_up"]`` with their margins), δ, the bonus and the
+    binding dimensions over the dimensions kept, the LP bound of those (``bound``; the whole problem's
+    LP bound ``bound`` passed in stays in ``extra["lp_bound_all"]``), status and seconds of this call.
     """
     rows, clock = session.rows, session.clock
     upper_ok, lower_ok = np.isfinite(problem.upper), np.isfinite(problem.lower)
     row_dim = np.r_[np.flatnonzero(upper_ok), np.flatnonzero(lower_ok)]
-    m = len(problem.dimension_ids)
-    k, proved, why, done = triage(rows.g_rows, rows.g, row_dim, m, rows.kmin, rows.kmax, rows.cost,
-                                  clock.deadline, k_start)
+    h = problem.resolution
+    quantum = session.settings.quantum
+    t = TriageRows(rows.g_rows, rows.g, row_dim, problem.held_floor / h, rows.kmin, rows.kmax, rows.cost)
+    reserve = session.settings.least_norm_share * session.time_limit
+    out = triage(t, clock.deadline, reserve, LEXIMIN_SHARE * session.time_limit, k_start, quantum)
     clock.lap("triage")
-    path.append("triage: " + ", ".join(done) if done else "triage")
+    path.append("triage: " + ", ".join(out.stages) if out.stages else "triage")
+    extra: dict[str, object] = {"lp_bound_all": bound}
     x = np.zeros(problem.n_registers)
-    x[problem.free] = k * problem.resolution
+    if out.k is None:
+        message = ("not even the dimensions measured in tolerance can all be kept within the register limits: "
+                   "no correction is recommended")
+        notes.append(Note(message, kind="solver"))
+        extra.update({"stages": dict(clock.stages), "path": "; ".join(path),
+                      "triage": {"refused": True, "kept": 0, "held": int(t.held.sum())}})
+        result = make_result(problem, x, optimizer=name, evaluations=calls + 1,
+                             seconds=time.perf_counter() - clock.start, status="optimal", message=message,
+                             guard=False)
+        result.extra.update(extra)
+        result.notes = tuple(notes)
+        return result
+    x[problem.free] = out.k * h
     margins = problem.margins(x)
-    quantum = session.settings.quantum * problem.resolution
-    given_up = tuple(d for d, v in zip(problem.dimension_ids, margins, strict=True) if v < -quantum)
-    kept = margins >= -quantum
-    low = margins[kept].min() if kept.any() else 0.0
-    binding = tuple(d for d, v, ok in zip(problem.dimension_ids, margins, kept, strict=True)
-                    if ok and v <= low + problem.resolution / 4)
+    held = np.isfinite(problem.held_floor)
+    gone = ~held & (margins < -1e-12)
+    given_up = tuple(d for d, g in zip(problem.dimension_ids, gone, strict=True) if g)
+    kept_bound = _kept_bound(t, ~gone, clock.left())
+    n_held = int(held.sum())
     message = (f"no correction within the register limits brings every dimension into tolerance: "
                f"{len(given_up)} dimension(s) given up ({', '.join(given_up)}) need the NC program or the "
-               "process, not the setup; the other dimensions are kept in tolerance with the largest error "
-               "budget and the smallest correction")
+               f"process, not the setup; the {int((~gone).sum())} others (the {n_held} measured in tolerance "
+               "among them) are kept in tolerance, centred level by level, with the smallest correction")
     notes.append(Note(message, kind="solver"))
     status = "optimal"
-    extra: dict[str, object] = {"stages": dict(clock.stages), "path": "; ".join(path)}
-    if not proved:
-        status = "time_limit" if "time limit" in why else "solver_error"
-        notes.append(Note(f"triage not proved ({why})", kind="solver"))
-        message += f"; not proved ({why})"
-        extra["stopped"] = {"stage": "triage", "reason": why}
-    # guard off: triage trades the error budget of the hopeless dimensions on purpose, and says so
-    result = make_result(problem, x, optimizer=name, evaluations=calls + 3,
-                         seconds=time.perf_counter() - clock.start, status=status, bound=bound,
-                         message=message, binding=binding, guard=False)
+    extra.update({"stages": dict(clock.stages), "path": "; ".join(path),
+                  "given_up": {d: float(v) for d, v, g in zip(problem.dimension_ids, margins, gone, strict=True)
+                               if g},
+                  "triage": {"refused": False, "kept": int((~gone).sum()), "held": n_held,
+                             "leximin_levels": sum(1 for s in out.stages if s.startswith("leximin level")),
+                             "leximin_complete": out.complete}})
+    if not out.complete and out.proved:
+        notes.append(Note(f"triage: leximin proved for the {out.levels[-1].below if out.levels else 0} smallest "
+                          "kept margins within the time reserved for the least norm; the rest by least norm",
+                          kind="solver"))
+    if not out.proved:
+        status = "time_limit" if "time limit" in out.why else "solver_error"
+        notes.append(Note(f"triage not proved ({out.why})", kind="solver"))
+        message += f"; not proved ({out.why})"
+        extra["stopped"] = {"stage": "triage", "reason": out.why}
+    result = make_result(problem, x, optimizer=name, evaluations=calls + 2 + 2 * len(out.levels),
+                         seconds=time.perf_counter() - clock.start, status=status,
+                         bound=None if kept_bound is None else kept_bound * h, message=message, guard=False,
+                         given_up=given_up)
     result.extra.update(extra)
-    result.given_up = given_up
     result.notes = tuple(notes)
     return result

@@ -6,6 +6,11 @@ trials on one measured part, and the exact optimum (LP + MILP on the register
 grid) is solved once as the yardstick none of those papers had.  The gap of a
 trial is exact f1 − trial f1 (≥ 0 up to rounding), in the model unit.
 
+When no correction brings every dimension into tolerance, the exact optimum gives some up (its
+triage: ``given_up``); then every f1 here — the exact one, each trial's and so each gap — is the
+error budget of the dimensions the exact optimum keeps (each trial's budget over all dimensions
+stays in its ``extra["margin_all"]``), and the given-up ones are listed apart (``exact_given_up``).
+
 Seeds: trial t of every method uses the t-th 32-bit word of
 ``numpy.random.SeedSequence(seed)``, so a run is reproducible from ``--seed``
 alone and all methods see the same seed list.
@@ -29,7 +34,8 @@ from setupfix.pipeline.cycles import read_parts
 from setupfix.pipeline.requests import CycleOptions, ReadOptions
 from setupfix.pose import pose_problem
 
-__all__ = ["DEFAULT_METHODS", "CompareRequest", "MethodTrials", "Comparison", "trial_seeds", "compare_steps",
+__all__ = ["DEFAULT_METHODS", "CompareRequest", "MethodTrials", "Comparison", "trial_seeds", "over_kept",
+           "compare_steps",
            "compare_problem", "compare_report", "plot_comparison"]
 
 Array = npt.NDArray[np.float64]
@@ -130,6 +136,13 @@ class Comparison:
     #: What reading, matching and posing assumed or skipped (rows skipped by --lenient, angles, forecast …).
     notes: tuple[Note, ...] = ()
 
+    def given_up_margins(self) -> dict[str, float]:
+        """The dimensions the exact optimum gives up, with their margins after it (every f1 is over the others)."""
+        if not self.exact.given_up:
+            return {}
+        m = self.problem.margins(self.exact.x)
+        return {d: float(v) for d, v in zip(self.problem.dimension_ids, m, strict=True) if d in self.exact.given_up}
+
     def table(self) -> list[dict[str, Any]]:
         """One summary row per method (see :meth:`MethodTrials.summary`), exact first."""
         e = self.exact
@@ -144,7 +157,7 @@ class Comparison:
 
     def to_json(self) -> dict[str, Any]:
         """The ``compare --json`` object of ``../shared/spec/cli-json.md`` plus extra keys."""
-        d = 9
+        d = d_ = 9
         e = self.exact
         results: list[dict[str, Any]] = []
         for m in self.methods:
@@ -169,10 +182,21 @@ class Comparison:
             "exact_fitness": round(e.fitness, d), "exact_status": e.status,
             "exact_bound": None if e.bound is None else round(e.bound, d),
             "exact_seconds": round(e.seconds, 6),
+            "exact_given_up": {d: round(float(v), d_) for d, v in self.given_up_margins().items()},
             "results": results,
             "skipped": dict(self.skipped),
             "warnings": [str(n) for n in self.notes],  # the JSON renderer: notes become text here
         }
+
+
+def over_kept(problem: CorrectionProblem, result: OptimizeResult, given_up: tuple[str, ...]) -> OptimizeResult:
+    """A trial's result restated over the dimensions the exact optimum keeps (δ before, after)."""
+    if not given_up:
+        return result
+    x = np.asarray(result.x, dtype=float)
+    return dataclasses.replace(result, margin_before=problem.kept_margin(np.zeros_like(x), given_up),
+                               margin_after=problem.kept_margin(x, given_up),
+                               extra={**result.extra, "margin_all": result.margin_after})
 
 
 def compare_steps(problem: CorrectionProblem, *, methods: Sequence[str] = DEFAULT_METHODS, trials: int = 12,
@@ -200,7 +224,7 @@ def compare_steps(problem: CorrectionProblem, *, methods: Sequence[str] = DEFAUL
         kw = dict(params.get(name, {}))
         runs: tuple[OptimizeResult, ...] = ()
         for s in seeds:
-            runs = (*runs, get_optimizer(name, seed=s, **kw).solve(problem))
+            runs = (*runs, over_kept(problem, get_optimizer(name, seed=s, **kw).solve(problem), exact.given_up))
             step += 1
             partial = (*done, MethodTrials(optimizer=name, seeds=seeds[:len(runs)], results=runs))
             yield name, step, steps, Comparison(problem=problem, exact=exact, methods=partial, seed=seed,

@@ -55,8 +55,8 @@ def _applied_result(problem: CorrectionProblem, rec: Recommendation) -> Optimize
     if rec.verdict == "hold":
         message = "hold: " + next((r.message for r in rec.rules if r.rule in ("not_solved", "dead_band", "no_harm")),
                                   "no change needed")
-    return dataclasses.replace(raw, x=x.copy(), margin_before=problem.margin_before,
-                               margin_after=budget(problem, x)[0], norm=float(np.linalg.norm(x)),
+    return dataclasses.replace(raw, x=x.copy(), margin_before=budget(problem, 0 * x, rec.given_up)[0],
+                               margin_after=budget(problem, x, rec.given_up)[0], norm=float(np.linalg.norm(x)),
                                binding=binding, message=message)
 
 

@@ -149,7 +149,7 @@ def cycle_json(pc: CycleCorrection) -> dict[str, Any]:
         "bonus": round(pc.margin_after - pc.margin_before, digits),
         "norm": round(pc.norm, digits),
         "bound": None if r.bound is None else round(r.bound, digits),
-        "in_tolerance": pc.margin_after >= 0,
+        "in_tolerance": pc.margin_after >= 0 and not rec.given_up,
         "message": r.message,
         "corrections": {k: round(v, digits) for k, v in pc.corrections.items()},
         "registers": [{**row, "delta": round(row["delta"], digits)} for row in pc.register_rows()],

@@ -252,11 +252,12 @@ class CycleCorrection:
 
     @property
     def margin_before(self) -> float:
-        return self.problem.margin_before
+        """δ before, over the dimensions kept (the triage's given-up ones are reported apart)."""
+        return budget(self.problem, np.zeros_like(self.x), self.recommendation.given_up)[0]
 
     @property
     def margin_after(self) -> float:
-        return budget(self.problem, self.x)[0]
+        return budget(self.problem, self.x, self.recommendation.given_up)[0]
 
     @property
     def norm(self) -> float:

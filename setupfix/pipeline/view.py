@@ -258,7 +258,8 @@ def summary(correction: CycleCorrection) -> Summary:
         report=correction.part.report, part=correction.part.part, unit=correction.model.unit,
         optimizer=r.optimizer, status=r.status, margin_before=correction.margin_before,
         margin_after=correction.margin_after, bonus=correction.margin_after - correction.margin_before,
-        norm=correction.norm, bound=r.bound, in_tolerance=correction.margin_after >= 0, message=r.message,
+        norm=correction.norm, bound=r.bound, in_tolerance=correction.margin_after >= 0 and not rec.given_up,
+        message=r.message,
         notes=tuple(str(n) for n in correction.notes), verdict=correction.verdict,
         rules=tuple(f"{e.rule}: {e.message}" for e in rec.rules),
         alarm=rec.alarm or ("" if rec.solved else

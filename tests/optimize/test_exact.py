@@ -72,11 +72,13 @@ def test_out_of_reach_returns_least_bad_correction():
     problem = random_problem(5, limit_steps=1, spread=0.3)
     result = get_optimizer("exact").solve(problem)
     best, _ = brute_force(problem)
-    assert best < 0 and result.margin_after < 0 and not result.in_tolerance
-    # triage (issue 13): the dimensions out of reach are given up, the others kept in tolerance
+    assert best < 0 and problem.evaluate(result.x)[0] < 0 and not result.in_tolerance
+    # triage (issue 13): the dimensions out of reach are given up, the others kept in tolerance;
+    # δ is that of the kept dimensions (issue 22)
     assert result.given_up and "given up" in result.message
     kept = ~np.isin(problem.dimension_ids, result.given_up)
     assert np.all(problem.margins(result.x)[kept] >= 0)
+    assert result.margin_after == pytest.approx(problem.margins(result.x)[kept].min(), abs=1e-12)
 
 
 def test_binding_dimensions_prove_the_bound():

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from setupfix.model import PartMeasurement
-from setupfix.optimize import CorrectionProblem, get_optimizer
+from setupfix.optimize import CorrectionProblem, _triage_model, get_optimizer
 from setupfix.pipeline.cycles import load_parts
 
 from .test_exact import random_problem
@@ -20,36 +20,200 @@ def grid_points(problem: CorrectionProblem) -> np.ndarray:
     return np.array(list(itertools.product(*axes)), dtype=float) * problem.resolution
 
 
-def brute_triage(problem: CorrectionProblem) -> tuple[int, float, float]:
-    """Most dimensions in tolerance, then their error budget, then the least weighted norm."""
+def brute_triage(problem: CorrectionProblem) -> tuple[int, np.ndarray, float, np.ndarray]:
+    """Every grid point: the most dimensions in tolerance with every dimension measured in tolerance
+    kept in, then the leximin of the kept margins (sorted, compared lexicographically), then the least
+    weighted norm, then the lexicographically smallest k.
+
+    Returns the count, the sorted kept margins, the norm and the set of optimal points (steps).
+    """
     x = grid_points(problem)
     margins = problem.margins(x)
-    ok = margins >= -1e-12
-    count = ok.sum(axis=1)
-    best_count = count.max()
-    budget = np.where(ok, margins, np.inf).min(axis=1)
-    top = budget[count == best_count].max()
-    chosen = (count == best_count) & (budget >= top - 1e-12)
-    norm = np.sqrt(np.sum(problem.cost * x[chosen] ** 2, axis=1)).min()
-    return int(best_count), float(top), float(norm)
+    floor = problem.held_floor
+    held = np.isfinite(floor)
+    no_harm = np.all(margins[:, held] >= floor[held] - 1e-12, axis=1)
+    kept = held | (margins >= -1e-12)
+    count = np.where(no_harm, kept.sum(axis=1), -1)
+    best = count.max()
+    rows = np.flatnonzero(count == best)
+    keys = [tuple(np.round(np.sort(margins[i][kept[i]]), 9)) for i in rows]
+    top = max(keys)
+    rows = np.array([i for i, key in zip(rows, keys, strict=True) if key == top])
+    norms = np.sum(problem.cost * x[rows] ** 2, axis=1)
+    least = rows[norms <= norms.min() + 1e-15]
+    return int(best), np.array(top), float(np.sqrt(norms.min())), np.rint(x[least] / problem.resolution)
 
 
-@pytest.mark.parametrize("seed", range(8))
-def test_triage_equals_brute_force(seed):
-    problem = random_problem(seed, n=3, m=7, limit_steps=2, spread=0.3)
-    result = get_optimizer("exact").solve(problem)
-    count, budget, norm = brute_triage(problem)
+def check_triage(problem: CorrectionProblem, result) -> None:
+    count, sorted_kept, norm, points = brute_triage(problem)
     margins = problem.margins(result.x)
-    kept = margins >= -1e-12
-    if count == len(problem.dimension_ids):  # everything can be kept: no triage
-        assert result.given_up == ()
-        return
+    held = np.isfinite(problem.held_floor)
+    kept = held | (margins >= -1e-12)
     assert result.status == "optimal"
+    assert np.all(margins[held] >= problem.held_floor[held] - 1e-12)  # no harm
     assert kept.sum() == count
     assert set(result.given_up) == {d for d, k in zip(problem.dimension_ids, kept, strict=True) if not k}
-    assert margins[kept].min() == pytest.approx(budget, abs=1e-12)
-    assert result.norm == pytest.approx(norm, abs=1e-12)
+    assert np.sort(margins[kept]) == pytest.approx(sorted_kept, abs=1e-9)  # the whole leximin vector
+    assert np.sqrt(np.sum(problem.cost * result.x**2)) == pytest.approx(norm, abs=1e-12)
+    assert tuple(np.rint(result.x / problem.resolution)) == min(map(tuple, points))  # ties: the smallest k
+    assert result.margin_after == pytest.approx(sorted_kept[0], abs=1e-9)  # δ over the kept dimensions
+    assert result.bound is not None and result.bound >= result.margin_after - 1e-9
     assert "given up" in result.message and "NC program or the process" in result.message
+
+
+@pytest.fixture(params=["listed", "milp"])
+def path(request, monkeypatch):
+    """Both ways of the triage: listing a small box, and the MILPs (listing switched off)."""
+    if request.param == "milp":
+        monkeypatch.setattr(_triage_model, "LIST_POINTS", 0)
+    return request.param
+
+
+@pytest.mark.parametrize("seed", range(24))
+def test_triage_equals_brute_force(seed, path):
+    problem = random_problem(seed, n=3, m=7, limit_steps=2, spread=0.3)
+    result = get_optimizer("exact").solve(problem)
+    if brute_triage(problem)[0] == len(problem.dimension_ids):  # everything can be kept: no triage
+        assert result.given_up == ()
+        return
+    check_triage(problem, result)
+
+
+@pytest.mark.parametrize("seed", range(12))
+def test_triage_with_costs_fixed_registers_and_guard_floor_equals_brute_force(seed, path):
+    """Weighted norm, a fixed register, and a no-harm floor below 0 (a guard band: kept inside the real limits)."""
+    import dataclasses
+
+    rng = np.random.default_rng(900 + seed)
+    base = random_problem(300 + seed, n=4, m=8, limit_steps=2, spread=0.25, fixed=(3,))
+    floor = np.where(rng.random(8) < 0.5, -rng.uniform(0.0, 0.02, 8), base.held_floor)
+    inside = (base.deviation >= base.lower) & (base.deviation <= base.upper)
+    floor = np.where(inside, np.minimum(floor, 0.0), -np.inf)
+    problem = dataclasses.replace(base, cost=rng.uniform(0.5, 3.0, 4), floor=floor)
+    result = get_optimizer("exact").solve(problem)
+    if brute_triage(problem)[0] == len(problem.dimension_ids) and result.margin_after >= 0:
+        return
+    if not result.given_up and result.margin_after >= 0:
+        return
+    check_triage(problem, result)
+
+
+def milp_triage(problem: CorrectionProblem) -> tuple[int, np.ndarray, float]:
+    """An independent formulation with scipy.optimize.milp: one-hot grid values per register
+    (k_i = Σ v·b_iv, k_i² = Σ v²·b_iv exactly), binaries "kept" per dimension, and the leximin as
+    the lexicographic maximum of the cumulative ordered sums θ_l = max_r l·r − Σ_q max(r − m'_q, 0)
+    (Ogryczak's ordered outcomes) over m'_q = kept margin (a large value when given up)."""
+    from scipy.optimize import Bounds, LinearConstraint, milp
+
+    h = problem.resolution
+    n, m = problem.n_registers, len(problem.dimension_ids)
+    values = [np.arange(lo, hi + 1) for lo, hi in zip(problem.kmin, problem.kmax, strict=True)]
+    nb = sum(v.size for v in values)
+    # columns: b (nb) | z (m) | mp (m) | then per l = 1…m its own r_l and d_l (m)
+    width = nb + 2 * m + m * (1 + m)
+    iz, imp = nb, nb + m
+
+    def ir(ell: int) -> int:
+        return nb + 2 * m + (ell - 1) * (1 + m)
+
+    def idd(ell: int) -> int:
+        return ir(ell) + 1
+    kx = np.zeros((n, width))  # k_i as a row over the columns
+    start = 0
+    for i, v in enumerate(values):
+        kx[i, start:start + v.size] = v
+        start += v.size
+    one_hot = np.zeros((n, width))
+    start = 0
+    for i, v in enumerate(values):
+        one_hot[i, start:start + v.size] = 1
+        start += v.size
+    comp = problem.composite
+    dev = problem.deviation / h
+    up, lo = problem.upper / h, problem.lower / h
+    pred = comp.T @ kx  # predicted − deviation, in steps, rows (m, width)
+    big = 1e3
+    floor = problem.held_floor / h
+    held = np.isfinite(floor)
+    cons = [LinearConstraint(one_hot, 1, 1)]
+    for q in range(m):
+        for sign, limit in ((1.0, up[q]), (-1.0, -lo[q])):
+            if not np.isfinite(limit):
+                continue
+            margin = -sign * pred[q]  # margin = limit − sign·(dev + pred) = (limit − sign·dev) + margin row
+            const = limit - sign * dev[q]
+            row = margin.copy()
+            if held[q]:
+                cons.append(LinearConstraint(row[None], floor[q] - const, np.inf))  # hard no-harm row
+                row_z = row.copy()
+            else:
+                row_z = row.copy()
+                row_z[iz + q] = -big
+                cons.append(LinearConstraint(row_z[None], -const - big, np.inf))  # margin ≥ 0 when kept
+            row_mp = -row.copy()
+            row_mp[imp + q] = 1.0
+            if not held[q]:
+                row_mp[iz + q] = big
+            cons.append(LinearConstraint(row_mp[None], -np.inf, const + big * (0 if held[q] else 1)))
+    for q in range(m):
+        if held[q]:
+            zrow = np.zeros(width)
+            zrow[iz + q] = 1
+            cons.append(LinearConstraint(zrow[None], 1, 1))
+    # d_lq ≥ r_l − m'_q
+    for ell in range(1, m + 1):
+        for q in range(m):
+            row = np.zeros(width)
+            row[idd(ell) + q], row[ir(ell)], row[imp + q] = 1, -1, 1
+            cons.append(LinearConstraint(row[None], 0, np.inf))
+    integrality = np.r_[np.ones(nb + m), np.zeros(width - nb - m)]
+    lb = np.r_[np.zeros(nb + m), np.full(m, -big), np.tile(np.r_[-big, np.zeros(m)], m)]
+    ub = np.r_[np.ones(nb + m), np.full(m, big / 2), np.tile(np.r_[big, np.full(m, 2 * big)], m)]
+    bounds = Bounds(lb, ub)
+
+    def solve(c, extra):
+        res = milp(c, constraints=cons + extra, integrality=integrality, bounds=bounds,
+                   options={"mip_rel_gap": 0, "presolve": True})
+        assert res.status == 0, res.message
+        return res
+
+    zsum = np.zeros(width)
+    zsum[iz:iz + m] = 1
+    c = np.zeros(width)
+    c[iz:iz + m] = -1
+    count = round(-solve(c, []).fun)
+    fixed = [LinearConstraint(zsum[None], count, np.inf)]
+    thetas = []
+    for ell in range(1, count + 1):
+        c = np.zeros(width)
+        c[ir(ell)], c[idd(ell):idd(ell) + m] = -ell, 1
+        theta = -solve(c, fixed).fun
+        thetas.append(theta)
+        row = np.zeros(width)
+        row[ir(ell)], row[idd(ell):idd(ell) + m] = ell, -1
+        fixed.append(LinearConstraint(row[None], theta - 1e-7, np.inf))
+    cost = np.zeros(width)
+    start = 0
+    for i, v in enumerate(values):
+        cost[start:start + v.size] = problem.cost[i] * v.astype(float) ** 2
+        start += v.size
+    norm = solve(cost, fixed).fun
+    sorted_kept = np.diff(np.r_[0.0, thetas]) * h
+    return count, sorted_kept, float(np.sqrt(norm) * h)
+
+
+@pytest.mark.parametrize("seed", range(10))
+def test_triage_equals_an_independent_milp(seed, path):
+    problem = random_problem(700 + seed, n=3, m=6, limit_steps=3, spread=0.3)
+    result = get_optimizer("exact").solve(problem)
+    if not result.given_up:
+        pytest.skip("every dimension can be kept: no triage")
+    count, sorted_kept, norm = milp_triage(problem)
+    margins = problem.margins(result.x)
+    kept = np.array([d not in result.given_up for d in problem.dimension_ids])
+    assert kept.sum() == count
+    assert np.sort(margins[kept]) == pytest.approx(sorted_kept, abs=1e-7)
+    assert np.sqrt(np.sum(problem.cost * result.x**2)) == pytest.approx(norm, abs=1e-7)
 
 
 def test_one_gross_error_does_not_push_good_dimensions_out(guide_pins_model):
@@ -121,3 +285,29 @@ def test_no_dimension_in_reach_gives_the_least_correction():
     assert result.status == "optimal"
     assert np.all(result.x == 0)
     assert result.given_up == problem.dimension_ids
+
+
+@pytest.mark.parametrize("seed", range(8))
+def test_bound_is_the_kept_dimensions_lp_and_seconds_the_whole_call(seed, path):
+    """The bound describes the final answer: the LP over the dimensions it keeps (held ones held)."""
+    from scipy.optimize import linprog
+
+    problem = random_problem(seed, n=3, m=7, limit_steps=2, spread=0.3)
+    result = get_optimizer("exact").solve(problem)
+    if not result.given_up:
+        pytest.skip("every dimension can be kept: no triage")
+    keep = ~np.isin(problem.dimension_ids, result.given_up)
+    held = np.isfinite(problem.held_floor)
+    ct = problem.composite.T  # (m, n)
+    dev, up, lo, fl = problem.deviation, problem.upper, problem.lower, problem.held_floor
+    a = np.r_[np.c_[ct[keep], np.ones(keep.sum())], np.c_[-ct[keep], np.ones(keep.sum())],
+              np.c_[ct[held], np.zeros(held.sum())], np.c_[-ct[held], np.zeros(held.sum())]]
+    b = np.r_[(up - dev)[keep], (dev - lo)[keep], (up - dev - fl)[held], (dev - lo - fl)[held]]
+    lp = linprog(np.r_[np.zeros(problem.n_registers), -1.0], A_ub=a, b_ub=b,
+                 bounds=[*zip(problem.lb, problem.ub, strict=True), (None, None)], method="highs")
+    assert result.bound == pytest.approx(-lp.fun, abs=1e-9)
+    assert result.bound >= result.margin_after - 1e-12
+    assert result.extra["lp_bound_all"] < result.bound  # the whole problem's, given-up dimensions included
+    assert result.seconds >= sum(result.extra["stages"].values()) - 1e-9
+    assert result.status == "optimal" and result.extra["triage"]["leximin_complete"]
+    assert ("listing" in str(result.extra["path"])) == (path == "listed")
