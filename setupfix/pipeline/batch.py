@@ -43,12 +43,13 @@ import pandas as pd
 
 import parsers
 from setupfix.errors import ExportError, Note, ParameterError, SetupfixError, SourceLocation
-from setupfix.model import PartMeasurement, match_parts
+from setupfix.model import PartMeasurement
 from setupfix.offsets import OffsetRow, csv_header, csv_lines, offset_rows
 from setupfix.pipeline.controllers import render
 from setupfix.pipeline.correct import correct_report
 from setupfix.pipeline.export import cycle_rows, offsets_text
 from setupfix.pipeline.requests import CorrectRequest, History, SolveOptions
+from setupfix.pipeline.smoothing import history_parts
 from setupfix.store import Recommendation as StoreRecommendation
 from setupfix.store import Store
 
@@ -337,7 +338,7 @@ def batch_history(request: CorrectRequest, base: History, files: Sequence[str | 
     for path in files:
         try:
             read = parsers.read_report(path, **request.read.kwargs())
-            parts += match_parts(request.model, read.table, source=str(path))
+            parts += history_parts(request.model, read.table, source=str(path))
         except (SetupfixError, OSError):
             continue
     return base.with_parts(parts)
