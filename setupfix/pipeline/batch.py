@@ -330,6 +330,8 @@ def run_batch(request: CorrectRequest, folder: str | Path, out: str | Path, *, w
         raise ParameterError(f"batch: workers must be an int in [1, 64], got {workers}")
     # An unknown controller, or a register it cannot express, fails before any work.
     render(controller, offset_rows(model, {}, current=request.current))
+    if store is not None:
+        store.verify()  # a damaged store is refused before any work, not written into
     listing = find_reports(folder)
     files = [(f.path, f.size, f.mtime_ns) for f in listing.files]
     if workers is None:

@@ -186,6 +186,16 @@ class Store(Protocol):
         """Free every claim ``claimant`` still holds (nothing is marked processed)."""
         ...
 
+    def verify(self) -> None:
+        """Check the whole store for damage (reads every page: for commands that present it all).
+
+        Raises
+        ------
+        StoreError
+            Naming the store, when any part of it is damaged.
+        """
+        ...
+
     def close(self) -> None:
         ...
 

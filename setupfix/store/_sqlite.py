@@ -297,6 +297,13 @@ class SQLiteStore(Store):
         rows = self.db.execute("SELECT optimizer, inputs, result, created_at FROM recommendation ORDER BY id")
         return [Recommendation(o, json.loads(i), json.loads(r), c) for o, i, r, c in rows]
 
+    @_guarded
+    def verify(self) -> None:
+        problems = [str(r[0]) for r in self.db.execute("PRAGMA quick_check")]
+        if problems != ["ok"]:
+            raise StoreError("the history store is damaged (not a readable SQLite database)",
+                             location=self._where, hint="restore it from a backup, or give another --db/--store")
+
     # -- batch claims --------------------------------------------------------------------------
     @_guarded
     def claim_reports(self, keys: Sequence[str], claimant: Claimant, *, again: bool = False) -> dict[str, str]:
