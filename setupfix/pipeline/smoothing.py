@@ -67,7 +67,7 @@ def part_identity(name: str, time: np.datetime64, deviation: Array) -> tuple[obj
     have two.
     """
     rounded = np.round(np.asarray(deviation, dtype=float), IDENTITY_DECIMALS)
-    return (name, int(np.datetime64(time, "ns").astype(np.int64)),
+    return (name, int(np.asarray(time, dtype="datetime64[ns]").astype(np.int64)),
             tuple(None if np.isnan(v) else float(v) + 0.0 for v in rounded))
 
 

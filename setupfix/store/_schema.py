@@ -17,13 +17,14 @@ migration (``schema_version`` = 0 and no other table) is completed, not refused.
 
 from __future__ import annotations
 
+import contextlib
 import json
 import sqlite3
 from collections.abc import Callable
 
 from setupfix.errors import StoreError, SourceLocation
 
-__all__ = ["MIGRATIONS", "SCHEMA_VERSION", "migrate", "version_of"]
+__all__ = ["MIGRATIONS", "SCHEMA_VERSION", "migrate", "version_of", "rollback"]
 
 
 def _script(db: sqlite3.Connection, script: str) -> None:
@@ -161,7 +162,7 @@ def migrate(db: sqlite3.Connection, path: str, *, upto: int = SCHEMA_VERSION) ->
             return upto
         db.execute("COMMIT")
     except BaseException:
-        _rollback(db)
+        rollback(db)
         raise
     for number in range(version + 1, upto + 1):
         db.execute("BEGIN IMMEDIATE")
@@ -172,7 +173,7 @@ def migrate(db: sqlite3.Connection, path: str, *, upto: int = SCHEMA_VERSION) ->
             _apply(db, number, number)
             db.execute("COMMIT")
         except BaseException:
-            _rollback(db)
+            rollback(db)
             raise
     return max(version, upto)
 
@@ -184,10 +185,8 @@ def _apply(db: sqlite3.Connection, first: int, last: int) -> None:
     db.execute("UPDATE schema_version SET version = ?", (last,))
 
 
-def _rollback(db: sqlite3.Connection) -> None:
-    """Roll back if a transaction is open (a failed COMMIT may have ended it already)."""
+def rollback(db: sqlite3.Connection) -> None:
+    """Roll back if a transaction is open (a failed COMMIT may have ended it already); never raises."""
     if db.in_transaction:
-        try:
+        with contextlib.suppress(sqlite3.Error):
             db.execute("ROLLBACK")
-        except sqlite3.Error:
-            pass

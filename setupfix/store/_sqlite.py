@@ -31,7 +31,7 @@ import pandas as pd
 from setupfix.errors import SourceLocation, StoreError
 from setupfix.model import CANONICAL_COLUMNS
 from setupfix.store import ALREADY_PROCESSED, CORRECTION_COLUMNS, Claimant, Recommendation, ReportRecord, Store
-from setupfix.store._schema import migrate
+from setupfix.store._schema import migrate, rollback
 
 __all__ = ["SQLiteStore", "BUSY_TIMEOUT_S"]
 
@@ -90,13 +90,6 @@ def _guarded(method: Callable[_P, _R]) -> Callable[_P, _R]:
             raise _failure(exc, args[0].location) from None  # type: ignore[attr-defined]  # args[0] is self
 
     return run
-
-
-def _rollback(db: sqlite3.Connection) -> None:
-    """Roll back if a transaction is open (a failed COMMIT may have ended it already)."""
-    if db.in_transaction:
-        with contextlib.suppress(sqlite3.Error):
-            db.execute("ROLLBACK")
 
 
 def _age_s(at: str | None) -> float:
@@ -164,10 +157,10 @@ class SQLiteStore(Store):
             yield
             self.db.execute("COMMIT")
         except sqlite3.Error as exc:  # the COMMIT itself (a full disk, an I/O error)
-            _rollback(self.db)
+            rollback(self.db)
             raise _failure(exc, self.location) from None
         except BaseException:
-            _rollback(self.db)
+            rollback(self.db)
             raise
         finally:
             self._depth = 0

@@ -36,7 +36,7 @@ def _estimates(tmp_path, model, db, capsys):
     capsys.readouterr()
     assert main(["correct", "--model", str(model), "--store", str(db), str(GUIDE / "cycle_03.csv"), "--json"]) == 0
     out = json.loads(capsys.readouterr().out)
-    (part,) = out["parts"] if "parts" in out else [out]
+    (part,) = out.get("parts", [out])
     return part
 
 
