@@ -200,6 +200,9 @@ def _correct_one(path: str, size: int, mtime_ns: int, claimed: str = "", refused
         if claimed and out.sha256 != claimed:
             out.skipped = "still being written (content changed since it was claimed): not read"
             return out
+        if _WORK.record and not claimed:  # unreadable when the batch claimed it: not corrected unclaimed
+            out.error = f"{path}: could not be read when it was claimed in the history store; run again"
+            return out
         request = _WORK.request
         corrected = correct_report(request, source)
         if _WORK.record:  # the store records these very bytes and table: the parent reads nothing again
