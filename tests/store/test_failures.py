@@ -68,6 +68,7 @@ COMMANDS = {
     "export": ["history", "export", "measurements", "--db", "{db}", "--out", "{out}"],
     "batch": ["batch", "{dir}", "--model", str(MODEL), "--out", "{out}", "--store", "{db}", "--settle", "0"],
     "correct": ["correct", "--model", "{ewma}", "--store", "{db}", str(REPORTS[4]), "--offsets", "{out}"],
+    "diagnose": ["diagnose", "--db", "{db}", "--model", str(MODEL), "--no-walk"],
 }
 
 
@@ -130,7 +131,7 @@ def read_only(path: Path):
         subprocess.run(["chattr", "-i", str(path)], check=True)
 
 
-@pytest.mark.parametrize("command", ["import", "batch"])
+@pytest.mark.parametrize("command", ["import", "batch", "diagnose"])
 def test_a_read_only_store_file_is_one_line_naming_it(tmp_path, capsys, command):
     db = store_of(tmp_path)
     before = counts(db)
@@ -153,7 +154,7 @@ def test_a_store_in_a_read_only_folder_is_one_line_naming_it(tmp_path, capsys, e
 
 # -- locked --------------------------------------------------------------------------------------
 
-@pytest.mark.parametrize("command", ["import", "batch", "correct"])
+@pytest.mark.parametrize("command", ["import", "batch", "diagnose", "correct"])
 def test_a_store_locked_beyond_the_busy_timeout_is_one_line_naming_it(tmp_path, capsys, monkeypatch, command):
     import setupfix.store._sqlite as sqlite_store
 
