@@ -54,7 +54,7 @@ import pandas as pd
 
 import parsers
 from setupfix.atomic import process_alive, process_started
-from setupfix.errors import ExportError, Note, ParameterError, SetupfixError, SourceLocation
+from setupfix.errors import ExportError, Note, ParameterError, SetupfixError, SourceLocation, StoreError
 from setupfix.model import PartMeasurement
 from setupfix.offsets import OffsetRow, csv_header, csv_lines, offset_rows
 from setupfix.pipeline.controllers import render
@@ -431,11 +431,16 @@ class _Claims:
         self.pending.append((outcome.sha256, _record(self.store, outcome, solve)))
 
     def finish(self) -> None:
-        with self.store.transaction():
-            for _, recs in self.pending:
-                for rec in recs:
-                    self.store.add_recommendation(rec)
-            self.store.finish_claims([sha for sha, _ in self.pending], self.claimant)
+        try:
+            with self.store.transaction():
+                for _, recs in self.pending:
+                    for rec in recs:
+                        self.store.add_recommendation(rec)
+                self.store.finish_claims([sha for sha, _ in self.pending], self.claimant)
+        except StoreError as exc:
+            raise StoreError(exc.message, location=exc.location,
+                             hint="the output was written; its reports are not marked processed in the store and "
+                                  "are corrected again by the next run") from None
         self.pending = []
 
     def release(self) -> None:

@@ -182,3 +182,34 @@ def test_a_store_of_older_batches_keeps_its_processed_reports(tmp_path):
         me = Claimant.this_run()
         assert store.claim_reports(["abc", "def"], me) == {"abc": ALREADY_PROCESSED}
         assert isinstance(store.recommendations()[0], Recommendation)
+
+
+def test_a_store_that_cannot_finish_the_claims_says_the_output_stands_and_the_next_run_redoes_them(
+        tmp_path, capsys, monkeypatch):
+    """The store fills up after the output is written: one line naming the store, the offsets in place, and
+    no report marked processed (SQLITE_FULL from SQLite's page limit, set just before the claims finish)."""
+    from setupfix.cli import main
+    from setupfix.pipeline import batch as batch_module
+
+    folder = tmp_path / "reports"
+    reports(folder, 60)  # their recommendations need pages the store does not have
+    db, out = tmp_path / "h.db", tmp_path / "out.csv"
+    real = batch_module._Claims.finish
+
+    def full(self):  # type: ignore[no-untyped-def]
+        db_ = self.store.db
+        db_.execute(f"PRAGMA max_page_count = {db_.execute('PRAGMA page_count').fetchone()[0]}")
+        return real(self)
+
+    monkeypatch.setattr(batch_module._Claims, "finish", full)
+    argv = ["batch", str(folder), "--model", str(GUIDE / "model.toml"), "--out", str(out), "--store", str(db),
+            "--settle", "0"]
+    assert main(argv) == 1
+    err = capsys.readouterr().err
+    line = next(x for x in err.splitlines() if x.startswith("error:"))
+    assert "h.db" in line and "disk is full" in line and "corrected again by the next run" in line
+    assert len(out.read_text().splitlines()) > 1
+    monkeypatch.undo()
+    assert stored_batch_reports(db) == []
+    assert main([*argv, "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["reports"] == 60
