@@ -323,3 +323,47 @@ def test_what_a_killed_creation_left_is_completed(tmp_path, left):
             con.commit()
     assert main(["history", "import", "--db", str(db), str(REPORTS[0])]) == 0
     assert counts(db) == (1, 0)
+
+
+@contextlib.contextmanager
+def tiny_disk(where: Path, size: str = "512k"):
+    """A real small file system (tmpfs) at ``where`` -- root only, where mounting is allowed; else skipped."""
+    where.mkdir()
+    if os.geteuid() != 0 or shutil.which("mount") is None:
+        pytest.skip("mounting a small file system needs root")
+    made = subprocess.run(["mount", "-t", "tmpfs", "-o", f"size={size}", "tmpfs", str(where)], capture_output=True)
+    if made.returncode:
+        pytest.skip("this system does not allow mounting a tmpfs")
+    try:
+        yield where
+    finally:
+        subprocess.run(["umount", "-l", str(where)], check=False)
+
+
+def _fill(disk: Path, leave: int) -> None:
+    """Fill ``disk`` until about ``leave`` bytes are free."""
+    free = shutil.disk_usage(disk).free
+    with open(disk / "filler", "wb") as f:
+        f.write(b"\0" * max(0, free - leave))
+
+
+def test_a_full_disk_under_the_store_and_under_an_output_is_one_line_naming_it(tmp_path, capsys):
+    """ENOSPC from a real file system: the store keeps what it held, the old output stays, no temporary file."""
+    with tiny_disk(tmp_path / "disk") as disk:
+        db = store_of(disk)
+        before = counts(db)
+        _fill(disk, 8192)
+        many_reports(tmp_path / "many", 40)
+        capsys.readouterr()
+        assert main(["history", "import", "--db", str(db), str(tmp_path / "many")]) == ERROR
+        line = one_line(capsys.readouterr().err, db.name)
+        assert "disk" in line
+        (disk / "filler").unlink()  # (reading a WAL store needs room for its -shm index too)
+        assert counts(db) == before
+        old = disk / "offsets.csv"
+        old.write_text("old\n")
+        _fill(disk, 0)
+        assert main(["correct", "--model", str(MODEL), str(REPORTS[0]), "--offsets", str(old)]) == ERROR
+        line = one_line(capsys.readouterr().err, old.name)
+        assert "cannot write" in line and "No space left" in line
+        assert old.read_text() == "old\n" and not list(disk.glob("*.tmp"))
