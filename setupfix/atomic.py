@@ -17,6 +17,7 @@ target removes those whose process is gone.
 from __future__ import annotations
 
 import contextlib
+import errno
 import os
 import re
 import secrets
@@ -29,7 +30,7 @@ from typing import IO, Any
 
 from setupfix.errors import ExportError, SourceLocation
 
-__all__ = ["atomic_write", "check_target", "write_text", "write_bytes"]
+__all__ = ["atomic_write", "check_target", "write_text", "write_bytes", "process_started", "process_alive"]
 
 #: Temporary files of writes whose process is unknown (other host, older setupfix)
 #: older than this are stale (seconds).
@@ -82,7 +83,28 @@ def check_target(target: str | os.PathLike[str]) -> Path | None:
     return path
 
 
-def _pid_alive(pid: int) -> bool:
+def process_started(pid: int) -> str:
+    """A mark of when process ``pid`` started ("" when unknown or gone): with the pid, it names one process.
+
+    On Linux the start time in clock ticks since boot (``/proc/PID/stat`` field 22), so a
+    pid the system has given to a new process is told apart from the old one; elsewhere "".
+    """
+    try:
+        with open(f"/proc/{pid}/stat", "rb") as f:
+            stat_line = f.read().decode("ascii", "replace")
+    except OSError:
+        return ""
+    fields = stat_line[stat_line.rfind(")") + 2:].split()  # after the command name, which may hold spaces
+    if len(fields) < 20 or fields[0] == "Z":  # a zombie has ended
+        return ""
+    return fields[19]
+
+
+def process_alive(pid: int, started: str = "") -> bool:
+    """Whether process ``pid`` runs (and, when ``started`` is given and the system says, is that very process).
+
+    Conservative: True when it cannot be told (another user's process, not POSIX).
+    """
     if pid == os.getpid():
         return True
     if os.name != "posix":  # os.kill(pid, 0) would send CTRL_C_EVENT on Windows
@@ -92,7 +114,9 @@ def _pid_alive(pid: int) -> bool:
     except ProcessLookupError:
         return False
     except OSError:  # exists, owned by another user
-        return True
+        pass
+    if started and os.path.isdir("/proc/self"):
+        return process_started(pid) == started
     return True
 
 
@@ -119,7 +143,7 @@ def _remove_stale(path: Path) -> None:
             if not stat.S_ISREG(info.st_mode):
                 continue
             match = ours.match(entry.name)
-            stale = not _pid_alive(int(match.group(1))) if match else now - info.st_mtime > STALE_AGE_S
+            stale = not process_alive(int(match.group(1))) if match else now - info.st_mtime > STALE_AGE_S
             if stale:
                 os.unlink(entry.path)
 
@@ -150,8 +174,10 @@ def atomic_write(target: str | os.PathLike[str], *, newline: str | None = "",
     Raises
     ------
     ExportError
-        If the target is not a regular file (:func:`check_target`), or the folder
-        does not exist or cannot be written.
+        If the target is not a regular file (:func:`check_target`), the folder
+        does not exist or cannot be written, or the content cannot be written (a full
+        disk, a file size limit: named with the target; the old content stays and no
+        temporary file is left).
     """
     path = check_target(target)
     if path is None:
@@ -161,6 +187,7 @@ def atomic_write(target: str | os.PathLike[str], *, newline: str | None = "",
         return
     _remove_stale(path)
     fd, tmp = _create_temp(path)
+    in_body = False
     try:
         with contextlib.suppress(OSError):
             old = os.stat(path)
@@ -168,15 +195,38 @@ def atomic_write(target: str | os.PathLike[str], *, newline: str | None = "",
                 os.chmod(fd if os.chmod in os.supports_fd else tmp, stat.S_IMODE(old.st_mode))
         handle = os.fdopen(fd, "wb") if binary else os.fdopen(fd, "w", encoding="utf-8", newline=newline)
         with handle as stream:
+            in_body = True
             yield stream
+            in_body = False
             stream.flush()
             os.fsync(stream.fileno())
         check_target(path)  # still a regular file (or absent) just before the rename
         os.replace(tmp, path)
-    except BaseException:
-        with contextlib.suppress(OSError):
-            os.unlink(tmp)
+    except ExportError:
+        _discard(tmp)
         raise
+    except OSError as exc:
+        _discard(tmp)
+        if in_body and exc.errno not in _WRITE_FAILURES:
+            raise  # the caller's own error (e.g. reading another file), not this write's
+        raise ExportError(f"cannot write: {exc.strerror or exc}; nothing written", location=SourceLocation(str(path)),
+                          hint=_WRITE_HINTS.get(exc.errno or 0)) from None
+    except BaseException:
+        _discard(tmp)
+        raise
+
+
+#: errno values that only a write gives (a full disk, a file size limit, a quota, a read-only file system):
+#: raised while the caller writes the stream, they are this write's failure and named with its target.
+_WRITE_FAILURES = frozenset({errno.ENOSPC, errno.EFBIG, errno.EDQUOT, errno.EROFS})
+_WRITE_HINTS = {errno.ENOSPC: "the disk is full: free space and run again",
+                errno.EFBIG: "the file is larger than this process may write (ulimit -f) or the file system holds",
+                errno.EDQUOT: "the disk quota is used up", errno.EROFS: "the file system is mounted read-only"}
+
+
+def _discard(tmp: Path) -> None:
+    with contextlib.suppress(OSError):
+        os.unlink(tmp)
 
 
 def write_text(target: str | os.PathLike[str], text: str, *, newline: str | None = "") -> None:

@@ -21,7 +21,17 @@ Design for thousands of reports:
 * a file whose size or modification time changes between discovery and reading
   (still being copied by the CMM) is not read;
 * the same content twice (SHA-256) is corrected once; with a history store,
-  reports it already holds are skipped unless ``force``.
+  reports it already holds are skipped unless ``force``;
+* with a history store each report is claimed in the store before a worker gets it
+  (:meth:`~setupfix.store.Store.claim_reports`, one short transaction per chunk), so
+  two runs at once over one store correct each report once between them; the claims
+  become "processed" only after the output is written, and are freed on any failure
+  (a killed run's claims are taken over: its process is gone);
+* worker processes end with the batch: each watches the batch's process (pid and
+  start mark) and exits when it is gone, so a SIGKILL of the batch leaves no worker
+  running.  (A thread polling the parent was chosen over ``PR_SET_PDEATHSIG``, which
+  fires when the *thread* that started the worker ends and is Linux-only, and over a
+  pipe's end of file, which every forked worker would hold open for its siblings.)
 
 Nothing here prints: progress goes to a callback, the summary is returned.
 """
@@ -34,6 +44,7 @@ import hashlib
 import itertools
 import json
 import os
+import threading
 import time
 from collections import Counter, deque
 from collections.abc import Callable, Iterator, Mapping, Sequence
@@ -46,16 +57,18 @@ import pandas as pd
 
 import parsers
 from parsers.names import visible_name
-from setupfix.errors import ExportError, Note, ParameterError, SetupfixError, SourceLocation
-from setupfix.model import PartMeasurement, match_parts
+from setupfix.atomic import process_alive, process_started
+from setupfix.errors import ExportError, Note, ParameterError, SetupfixError, SourceLocation, StoreError
+from setupfix.model import PartMeasurement
 from setupfix.offsets import OffsetRow, offset_rows
 from setupfix.pipeline.controllers import program_path, render
 from setupfix.pipeline.correct import correct_report
 from setupfix.pipeline.export import cycle_rows, offsets_text
 from setupfix.pipeline.requests import CorrectRequest, History, SolveOptions
+from setupfix.pipeline.smoothing import history_parts
 from setupfix.pipeline.writers import atomic_write, check_target, csv_header, csv_lines, write_text
+from setupfix.store import ALREADY_PROCESSED, HELD_ELSEWHERE, Claimant, Store
 from setupfix.store import Recommendation as StoreRecommendation
-from setupfix.store import Store
 
 __all__ = ["Outcome", "BatchSummary", "find_reports", "run_batch", "batch_history", "MANIFEST"]
 
@@ -65,7 +78,6 @@ class _Work:
     """What every worker gets once: the request and the batch's own switches (picklable)."""
 
     request: CorrectRequest
-    skip: frozenset[str] = frozenset()  #: content hashes already processed (history store)
     record: bool = False  #: return the bytes and table read with each outcome (for the history store)
     #: other than csv: each cycle's program text (:func:`~setupfix.pipeline.export.offsets_text`)
     controller: str = "csv"
@@ -154,15 +166,39 @@ def find_reports(root: str | Path) -> parsers.Listing:
 _WORK: _Work | None = None
 
 
+#: Seconds between a worker's looks at whether the batch's process still runs.
+WATCH_S = 0.5
+
+
 def _init(work: _Work) -> None:
     global _WORK
     _WORK = work
 
 
-def _correct_one(path: str, size: int, mtime_ns: int) -> Outcome:
+def _init_worker(work: _Work, parent: int, started: str) -> None:
+    """A worker process's start: the request, and a watch that ends the worker when the batch is gone."""
+    _init(work)
+
+    def watch() -> None:
+        while process_alive(parent, started):
+            time.sleep(WATCH_S)
+        os._exit(1)  # the batch is gone (killed): nobody would read this worker's results
+
+    threading.Thread(target=watch, name="setupfix-batch-watch", daemon=True).start()
+
+
+#: One report for a worker: path, size and modification time when listed, the content hash it was
+#: claimed under ("" without a store) and why it is not to be corrected ("" to correct it).
+_Item = tuple[str, int, int, str, str]
+
+
+def _correct_one(path: str, size: int, mtime_ns: int, claimed: str = "", refused: str = "") -> Outcome:
     assert _WORK is not None
-    out = Outcome(path)
+    out = Outcome(path, sha256=claimed)
     shown = visible_name(path)
+    if refused:
+        out.skipped = refused
+        return out
     try:
         try:
             st = os.stat(path)
@@ -174,8 +210,12 @@ def _correct_one(path: str, size: int, mtime_ns: int) -> Outcome:
             return out
         source = parsers.load_source(path)  # read once: the bytes hashed are the bytes corrected
         out.sha256 = hashlib.sha256(source.data).hexdigest()
-        if out.sha256 in _WORK.skip:
-            return out  # run_batch marks it "already processed"
+        if claimed and out.sha256 != claimed:
+            out.skipped = "still being written (content changed since it was claimed): not read"
+            return out
+        if _WORK.record and not claimed:  # unreadable when the batch claimed it: not corrected unclaimed
+            out.error = f"{path}: could not be read when it was claimed in the history store; run again"
+            return out
         request = _WORK.request
         corrected = correct_report(request, source)
         if _WORK.record:  # the store records these very bytes and table: the parent reads nothing again
@@ -201,7 +241,7 @@ def _correct_one(path: str, size: int, mtime_ns: int) -> Outcome:
     return out
 
 
-def _correct_chunk(items: list[tuple[str, int, int]]) -> list[Outcome]:
+def _correct_chunk(items: list[_Item]) -> list[Outcome]:
     return [_correct_one(*item) for item in items]
 
 
@@ -216,22 +256,27 @@ def chunk_size(n_files: int, workers: int) -> int:
     return max(1, min(CHUNK, -(-n_files // (8 * workers))))
 
 
-def _outcomes(files: list[tuple[Path, int, int]], work: _Work, workers: int) -> Iterator[Outcome]:
+def _outcomes(files: list[tuple[Path, int, int]], work: _Work, workers: int,
+              claim: Callable[[list[_Item]], list[_Item]] | None = None) -> Iterator[Outcome]:
     """Outcomes in file order.
 
     With several workers the request goes to each worker process once (its
     initializer), the files in chunks of :func:`chunk_size`; at most ``2·workers``
-    chunks are in flight, so memory stays flat in the number of reports.
+    chunks are in flight, so memory stays flat in the number of reports.  ``claim``
+    (a history store's) marks each chunk's reports just before it is handed out.
     """
-    items = [(str(path), size, mtime) for path, size, mtime in files]
+    items: list[_Item] = [(str(path), size, mtime, "", "") for path, size, mtime in files]
+    take = claim if claim is not None else (lambda chunk: chunk)
     if workers <= 1:
         _init(work)
-        for item in items:
-            yield _correct_one(*item)
+        for start in range(0, len(items), CHUNK):
+            for item in take(items[start:start + CHUNK]):
+                yield _correct_one(*item)
         return
     size = chunk_size(len(items), workers)
-    chunks = iter([items[i:i + size] for i in range(0, len(items), size)])
-    with ProcessPoolExecutor(max_workers=workers, initializer=_init, initargs=(work,)) as pool:
+    chunks = (take(items[i:i + size]) for i in range(0, len(items), size))
+    with ProcessPoolExecutor(max_workers=workers, initializer=_init_worker,
+                             initargs=(work, os.getpid(), process_started(os.getpid()))) as pool:
         pending: deque[Future[list[Outcome]]] = deque(pool.submit(_correct_chunk, c)
                                                       for c in itertools.islice(chunks, 2 * workers))
         while pending:
@@ -285,8 +330,10 @@ def run_batch(request: CorrectRequest, folder: str | Path, out: str | Path, *, w
     settle : float
         Seconds a file must be left unchanged before it is read.
     store : Store, optional
-        History store: reports it holds a batch recommendation for are skipped
-        (unless ``force``); each corrected report and its recommendation are added,
+        History store: each report is claimed in it before it is corrected
+        (:class:`_Claims`); reports a batch processed are skipped (unless ``force``), and
+        so are reports another running batch holds.  Each corrected report is added as
+        it is done; its recommendations, and the mark that it was processed, are added
         in one transaction committed only after the output is written.  With the
         model's EWMA (λ < 1) the smoothing history is the store (or
         ``request.history``) plus every report of the batch (:func:`batch_history`).
@@ -305,6 +352,8 @@ def run_batch(request: CorrectRequest, folder: str | Path, out: str | Path, *, w
         raise ParameterError(f"batch: workers must be an int in [1, 64], got {workers}")
     # An unknown controller, or a register it cannot express, fails before any work.
     render(controller, offset_rows(model, {}, current=request.current))
+    if store is not None:
+        store.verify()  # a damaged store is refused before any work, not written into
     listing = find_reports(folder)
     files = [(f.path, f.size, f.mtime_ns) for f in listing.files]
     if workers is None:
@@ -324,23 +373,22 @@ def run_batch(request: CorrectRequest, folder: str | Path, out: str | Path, *, w
                       for path, target in listing.links]
     seen: dict[str, str] = {}
     writer: _CsvOut | _ProgramsOut = _CsvOut(out) if controller == "csv" else _ProgramsOut(out, controller)
-    done = _batch_reports(store) if store is not None and not force else set()
-    work = _Work(request, frozenset(done), record=store is not None, controller=controller)
-    with contextlib.ExitStack() as stack:
-        if store is not None:
-            stack.enter_context(store.transaction())
+    claims = _Claims(store, force) if store is not None else None
+    work = _Work(request, record=store is not None, controller=controller)
+    try:
         with writer:
-            for i, outcome in enumerate(_outcomes(files, work, workers), start=1):
-                _account(summary, outcome, seen, done.__contains__ if done else None)
+            for i, outcome in enumerate(_outcomes(files, work, workers, claims.take if claims else None), start=1):
+                stored = outcome.skipped == ALREADY_PROCESSED or outcome.skipped.startswith(HELD_ELSEWHERE)
+                _account(summary, outcome, seen)
                 rel = Path(outcome.path).relative_to(folder).as_posix()
-                if outcome.error or (outcome.skipped and outcome.sha256 not in done):
+                if outcome.error or (outcome.skipped and not stored):
                     writer.drop(rel)  # no program this run (refused, a copy, rewritten): none of an earlier run
                 elif not outcome.skipped:
                     outcome.rows = [dataclasses.replace(r, report=visible_name(rel)) for r in outcome.rows]
                     writer.add(outcome, rel)
-                    if store is not None:
+                    if claims is not None:
                         try:
-                            _record(store, outcome, request.solve)
+                            claims.record(outcome, request.solve)
                         except SetupfixError as exc:  # its offsets stand; it is corrected again next run
                             note = Note(exc.message, exc.location, "store")
                             outcome.notes.append(note)
@@ -349,6 +397,11 @@ def run_batch(request: CorrectRequest, folder: str | Path, out: str | Path, *, w
                 if progress is not None:
                     progress(i, len(files), outcome)
             written = writer.commit()
+        if claims is not None:
+            claims.finish()  # the output is in place: now the reports count as processed
+    finally:
+        if claims is not None:
+            claims.release()
     return summary.summary(time.perf_counter() - start, written)
 
 
@@ -362,25 +415,72 @@ def batch_history(request: CorrectRequest, base: History, files: Sequence[str | 
     for path in files:
         try:
             read = parsers.read_report(path, **request.read.kwargs())
-            parts += match_parts(request.model, read.table, source=str(path))
+            parts += history_parts(request.model, read.table, source=str(path))
         except (SetupfixError, OSError):
             continue
     return base.with_parts(parts)
 
 
-def _batch_reports(store: Store) -> set[str]:
-    """Hashes of the reports the store holds a batch recommendation for, each part's latest one solved
-    (a part not solved within the time limit is corrected again next run)."""
-    solved: dict[str, dict[str, bool]] = {}
-    for r in store.recommendations():
-        if r.inputs.get("use") == "batch":
-            solved.setdefault(str(r.inputs.get("report")), {})[str(r.inputs.get("part"))] = \
-                r.result.get("solved", True) is not False
-    return {sha for sha, parts in solved.items() if all(parts.values())}
+class _Claims:
+    """A batch's claims in the history store: taken chunk by chunk, finished once the output is written.
+
+    The claim is keyed by the content hash of the bytes read here; the worker reads the
+    file again and corrects it only if its hash is the one claimed.  Recommendations wait
+    in memory (a verdict and a few numbers per part) and are stored, with the claims
+    turned into "processed", in one transaction by :meth:`finish`; :meth:`release` frees
+    whatever is still held (a failure, an interrupt), so those reports are corrected by
+    the next run.  A SIGKILL leaves the claims behind: the next run takes them over (the
+    process is gone, :meth:`setupfix.store.Claimant.gone`).
+    """
+
+    def __init__(self, store: Store, force: bool) -> None:
+        self.store, self.force = store, force
+        self.claimant = Claimant.this_run()
+        self.pending: list[tuple[str, list[StoreRecommendation], bool]] = []
+        self.held = False
+
+    def take(self, chunk: list[_Item]) -> list[_Item]:
+        """``chunk`` with each report's claimed hash, or why it is not to be corrected."""
+        hashed: list[_Item] = []
+        for path, size, mtime, _, _ in chunk:
+            try:
+                with open(path, "rb") as f:
+                    sha = hashlib.sha256(f.read()).hexdigest()
+            except OSError:
+                sha = ""  # the worker reads it and says why it cannot
+            hashed.append((path, size, mtime, sha, ""))
+        self.held = True
+        refused = self.store.claim_reports([h for _, _, _, h, _ in hashed if h], self.claimant, again=self.force)
+        return [(p, n, m, h, refused.get(h, "")) for p, n, m, h, _ in hashed]
+
+    def record(self, outcome: Outcome, solve: SolveOptions) -> None:
+        self.pending.append((outcome.sha256, _record(self.store, outcome, solve), all(outcome.solved)))
+
+    def finish(self) -> None:
+        try:
+            with self.store.transaction():
+                for _, recs, _ in self.pending:
+                    for rec in recs:
+                        self.store.add_recommendation(rec)
+                # a report with a part not solved within the time limit stays unprocessed: release() frees its
+                # claim and the next run corrects it again
+                self.store.finish_claims([sha for sha, _, solved in self.pending if solved], self.claimant)
+        except StoreError as exc:
+            raise StoreError(exc.message, location=exc.location,
+                             hint="the output was written; its reports are not marked processed in the store and "
+                                  "are corrected again by the next run") from None
+        self.pending = []
+
+    def release(self) -> None:
+        if not self.held:
+            return
+        with contextlib.suppress(SetupfixError):  # what cannot be freed now is taken over as stale later
+            self.store.release_claims(self.claimant)
+        self.held = False
 
 
-def _record(store: Store, outcome: Outcome, solve: SolveOptions) -> None:
-    """Add the report (the bytes and table the worker corrected, not a second reading) and its recommendations."""
+def _record(store: Store, outcome: Outcome, solve: SolveOptions) -> list[StoreRecommendation]:
+    """Add the report (the bytes and table the worker corrected, not a second reading); its recommendations."""
     assert outcome.table is not None
     sha, _ = store.add_report(outcome.data, visible_name(Path(outcome.path).name), outcome.format, outcome.table)
     by_part: dict[str, dict[str, float]] = {}
@@ -388,22 +488,19 @@ def _record(store: Store, outcome: Outcome, solve: SolveOptions) -> None:
         by_part.setdefault(row.part, {})[row.id] = row.delta
     # One recommendation per corrected part, its verdict beside it (a part with no offset row -- every
     # register fixed -- still gets its verdict, and no verdict slides onto the next part).
-    for part, verdict, solved in zip(outcome.parts, outcome.verdicts, outcome.solved, strict=True):
-        store.add_recommendation(StoreRecommendation(
-            optimizer=solve.optimizer, inputs={"use": "batch", "report": sha, "part": part, "seed": solve.seed},
-            result={"verdict": verdict, "corrections": by_part.get(part, {}), "solved": solved}))
+    return [StoreRecommendation(optimizer=solve.optimizer,
+                                inputs={"use": "batch", "report": sha, "part": part, "seed": solve.seed},
+                                result={"verdict": verdict, "corrections": by_part.get(part, {}), "solved": solved})
+            for part, verdict, solved in zip(outcome.parts, outcome.verdicts, outcome.solved, strict=True)]
 
 
-def _account(summary: _Tally, outcome: Outcome, seen: dict[str, str],
-             processed: Callable[[str], bool] | None) -> None:
+def _account(summary: _Tally, outcome: Outcome, seen: dict[str, str]) -> None:
     shown = visible_name(outcome.path)  # what the summary says: printable, whatever the file's name
     if outcome.error:
         summary.failed.append((shown, outcome.error))
         return
     if not outcome.skipped and outcome.sha256 in seen:
         outcome.skipped = f"same content as {seen[outcome.sha256]}"
-    elif not outcome.skipped and processed is not None and processed(outcome.sha256):
-        outcome.skipped = "already processed (history store); --force corrects it again"
     if outcome.skipped:
         summary.skipped.append((shown, outcome.skipped))
         if outcome.skipped.startswith("still being written"):

@@ -95,6 +95,8 @@ def import_history(store: Store, request: ImportRequest) -> ImportSummary:
     SetupfixError
         The first file that cannot be read (nothing is stored), or a log row that
         contradicts the store or the model (nothing is stored).
+    StoreError
+        A damaged store (checked whole first), or one that cannot be written.
     """
     read = []
     options = request.read
@@ -126,6 +128,7 @@ def import_history(store: Store, request: ImportRequest) -> ImportSummary:
     new_reports: list[str] = []
     known_reports: list[str] = []
     n_corrections = n_temperatures = 0
+    store.verify()  # a damaged store is refused, not written into
     with store.transaction():
         for data, name, fmt, table in read:
             _, new = store.add_report(data, Path(name).name, fmt, table)
@@ -138,7 +141,12 @@ def import_history(store: Store, request: ImportRequest) -> ImportSummary:
 
 
 def history_summary(store: Store) -> dict[str, object]:
-    """Reports (name, reader, rows, parts, first and last timestamp), corrections, tool changes, temperatures."""
+    """Reports (name, reader, rows, parts, first and last timestamp), corrections, tool changes, temperatures.
+
+    The store is checked whole first (:meth:`~setupfix.store.Store.verify`): a damaged one is refused, not
+    summarised from what happens to be readable.
+    """
+    store.verify()
     rows = store.measurements()
     reports = []
     for rec in store.reports():
@@ -160,7 +168,12 @@ def history_summary(store: Store) -> dict[str, object]:
 
 
 def export_history(store: Store, table: str, target: str | os.PathLike[str]) -> int:
-    """Write one stored table as its canonical CSV (``-``: standard output); the number of rows."""
+    """Write one stored table as its canonical CSV (``-``: standard output); the number of rows.
+
+    The store is checked whole first (:meth:`~setupfix.store.Store.verify`): a damaged one is refused, never
+    exported in part.
+    """
+    store.verify()
     if table == "measurements":
         frame = store.measurements()
         write_canonical_csv(frame[[*CANONICAL_COLUMNS, "reference"]], target)

@@ -6,6 +6,14 @@ with weighting factor k = 1/λ; Renishaw/EZ-Comp running average).  :class:`Hist
 what it needs as arrays — read once from the history store (``correct --store``) or built
 from the parts of a batch — and :func:`setupfix.safety.ewma_history` computes the estimate:
 each earlier part shifted by the corrections logged since (eqs. 3–4), reset on a tool change.
+
+A part counts once however often it is stored: its identity is what was measured — part
+name, time and deviations (:func:`part_identity`) — never the bytes of the file that
+brought it (a CRLF copy of a report, or ``history export`` imported again, changes
+nothing).  The history is deduplicated here, on read, the one place every door's history
+goes through; the store keeps what it was given (reports by content hash).  Rows of one
+stored table that came from several reports (an exported table, its ``report`` column)
+are matched report by report (:func:`history_parts`), as they were first stored.
 """
 
 from __future__ import annotations
@@ -15,6 +23,7 @@ from dataclasses import dataclass
 
 import numpy as np
 import numpy.typing as npt
+import pandas as pd
 
 from parsers.timestamps import instant
 from setupfix.errors import Note, ParseError, SetupfixError, SourceLocation
@@ -23,7 +32,7 @@ from setupfix.relation import relation_matrices
 from setupfix.safety import Smoothed, ewma_history, last_measured, shifted_history
 from setupfix.store import Store, report_tables, stored_corrections
 
-__all__ = ["History", "HISTORY"]
+__all__ = ["History", "HISTORY", "history_parts", "part_identity"]
 
 Array = npt.NDArray[np.float64]
 
@@ -45,6 +54,43 @@ def _stamp(part: PartMeasurement) -> np.datetime64 | None:
     return np.datetime64(instant(part.timestamp, SourceLocation(part.report)), "ns")
 
 
+#: Deviations equal to this many decimals [model unit] are the same measurement (a value written to
+#: CSV and read back comes back within far less; a CMM resolves ~1e-4 mm).
+IDENTITY_DECIMALS = 9
+
+
+def part_identity(name: str, time: np.datetime64, deviation: Array) -> tuple[object, ...]:
+    """What makes a measured part itself: (name, time [ns], deviations rounded to :data:`IDENTITY_DECIMALS`).
+
+    Two stored copies of one part (any file bytes) have one identity; two parts of one name
+    and time that measured differently (unnamed parts within the report's time resolution)
+    have two.
+    """
+    rounded = np.round(np.asarray(deviation, dtype=float), IDENTITY_DECIMALS)
+    return (name, int(np.asarray(time, dtype="datetime64[ns]").astype(np.int64)),
+            tuple(None if np.isnan(v) else float(v) + 0.0 for v in rounded))
+
+
+def history_parts(model: ProcessModel, table: pd.DataFrame, *, source: str) -> list[PartMeasurement]:
+    """The parts of one report's canonical table for the history, one report at a time.
+
+    A table whose ``report`` column names several reports (``history export``'s measurement
+    table, ``setupfix parse`` of several reports) is split by it first, so that parts of
+    different reports sharing a name (unnamed parts) are not merged into one.
+
+    Raises
+    ------
+    MatchError
+        :func:`setupfix.model.match_parts`, of the first report that does not match.
+    """
+    if "report" not in table or table["report"].nunique(dropna=False) <= 1:
+        return match_parts(model, table, source=source)
+    parts: list[PartMeasurement] = []
+    for _, rows in table.groupby(table["report"].fillna(""), sort=False):
+        parts += match_parts(model, rows.reset_index(drop=True), source=source)
+    return parts
+
+
 @dataclass(frozen=True, eq=False)
 class History:
     """What the smoothing of a cycle needs: the earlier parts and the corrections log, as arrays.
@@ -56,7 +102,8 @@ class History:
     deviations : ndarray of shape (n_parts, n_dimensions) [unit]
         Their deviations in model order (NaN where not measured).
     keys : tuple of str
-        Part names (a part already held is not added twice by :meth:`with_parts`).
+        Part names (a part already held -- same :func:`part_identity` -- is not added twice by
+        :meth:`with_parts`).
     log_times, log_register, log_delta, log_reset : ndarrays of shape (n_log,)
         The corrections log: time, register index in the model (−1: not in it),
         change [unit], tool change.
@@ -97,7 +144,7 @@ class History:
         parts: list[PartMeasurement] = []
         for record, table in reversed(report_tables(store)):
             try:
-                matched = match_parts(model, table, source=record.name)
+                matched = history_parts(model, table, source=record.name)
             except SetupfixError:
                 continue
             for p in matched:
@@ -112,17 +159,20 @@ class History:
                    np.array([e == "tool_change" for e in log.events], dtype=bool))
 
     def with_parts(self, parts: Sequence[PartMeasurement]) -> History:
-        """This history plus ``parts`` (those with a timestamp, not already held: same time and name)."""
-        held = set(zip(self.times.tolist(), self.keys, strict=True))
+        """This history plus ``parts`` (those with a timestamp, not already held: same :func:`part_identity`)."""
+        held = {part_identity(k, t, d) for k, t, d in zip(self.keys, self.times, self.deviations, strict=True)}
         times, devs, keys = list(self.times), list(self.deviations), list(self.keys)
         for p in parts:
             try:
                 t = _stamp(p)
             except ParseError:  # refused when that part itself is corrected (batch: its own line)
                 continue
-            if t is None or (t.tolist(), p.part) in held:
+            if t is None:
                 continue
-            held.add((t.tolist(), p.part))
+            key = part_identity(p.part, t, p.deviation)
+            if key in held:
+                continue
+            held.add(key)
             times.append(t)
             devs.append(np.asarray(p.deviation, dtype=float))
             keys.append(p.part)

@@ -15,7 +15,15 @@ Rules every implementation keeps:
   one (another delta or value at the same key) is refused with :class:`StoreError`;
 * everything done inside one ``with store.transaction():`` is stored together or not
   at all (a failure or a kill leaves the store as it was);
-* readers in other processes see the last committed state while one process writes.
+* readers in other processes see the last committed state while one process writes;
+* a batch claims each report before correcting it (:meth:`Store.claim_reports`, one
+  transaction per group of reports): a report is corrected by one run at a time and,
+  once a run has written its output and finished its claims, by no later run unless
+  forced.  A claim names its run (random token), host, pid, the process's start mark
+  and time; a claim whose process is gone (same host: the pid is not running or is
+  another process; another host: older than :data:`CLAIM_STALE_S`) is taken over;
+* every failure of the file (damaged, read-only, locked beyond the busy timeout, full)
+  is a :class:`StoreError` naming the store, never a bare database error.
 
 Tables come and go as :class:`pandas.DataFrame` with the columns of
 ``../shared/spec/measurements.md`` (measurement table, corrections log, temperature
@@ -25,7 +33,9 @@ log).
 from __future__ import annotations
 
 import os
-from collections.abc import Mapping
+import secrets
+import socket
+from collections.abc import Mapping, Sequence
 from contextlib import AbstractContextManager
 from dataclasses import dataclass
 from typing import Any, Protocol
@@ -34,10 +44,50 @@ import pandas as pd
 
 from parsers.corrections import COLUMNS as CORRECTION_COLUMNS
 from parsers.corrections import RegisterLog, check_corrections, log_from_frame
+from setupfix.atomic import process_alive, process_started
 from setupfix.model import ProcessModel
 
-__all__ = ["Store", "ReportRecord", "Recommendation", "open_store", "report_tables", "stored_corrections",
-           "CORRECTION_COLUMNS"]
+__all__ = ["Store", "ReportRecord", "Recommendation", "Claimant", "open_store", "report_tables",
+           "stored_corrections", "CORRECTION_COLUMNS", "CLAIM_STALE_S", "ALREADY_PROCESSED",
+           "HELD_ELSEWHERE"]
+
+#: A claim from another host (whose process cannot be looked at) is stale after this long, seconds.
+CLAIM_STALE_S = 12 * 3600.0
+#: Why a report a batch already processed is skipped.
+ALREADY_PROCESSED = "already processed (history store); --force corrects it again"
+#: How a refusal of a report another live batch holds begins (the rest names that run).
+HELD_ELSEWHERE = "being corrected by another run"
+
+
+@dataclass(frozen=True)
+class Claimant:
+    """Who holds a claim: one run of one process (``token`` is random per run).
+
+    ``host``, ``pid`` and ``started`` (:func:`setupfix.atomic.process_started`) tell whether
+    its process still runs, for a claim left by a run that was killed.
+    """
+
+    token: str
+    host: str
+    pid: int
+    started: str
+
+    @classmethod
+    def this_run(cls) -> Claimant:
+        """A new claimant for a run of this process."""
+        pid = os.getpid()
+        return cls(secrets.token_hex(8), socket.gethostname(), pid, process_started(pid))
+
+    def gone(self, age_s: float) -> bool:
+        """Whether this claimant's process has ended: on this host, asked of the system; on another
+        host, assumed when the claim is older than :data:`CLAIM_STALE_S`."""
+        if self.host == socket.gethostname():
+            return not process_alive(self.pid, self.started)
+        return age_s > CLAIM_STALE_S
+
+    def __str__(self) -> str:
+        return f"process {self.pid} on {self.host}"
+
 
 
 @dataclass(frozen=True)
@@ -123,6 +173,32 @@ class Store(Protocol):
         """Every stored recommendation, oldest first."""
         ...
 
+    def claim_reports(self, keys: Sequence[str], claimant: Claimant, *, again: bool = False) -> dict[str, str]:
+        """Claim every report (content hash) of ``keys`` in one transaction; {key: why not} for the others.
+
+        Not claimed: a report a batch processed (:data:`ALREADY_PROCESSED`) unless ``again``,
+        and one another live run holds.  A claim of a run whose process is gone is taken over.
+        """
+        ...
+
+    def finish_claims(self, keys: Sequence[str], claimant: Claimant) -> None:
+        """Mark ``keys`` (held by ``claimant``) processed and free (inside the caller's transaction)."""
+        ...
+
+    def release_claims(self, claimant: Claimant) -> None:
+        """Free every claim ``claimant`` still holds (nothing is marked processed)."""
+        ...
+
+    def verify(self) -> None:
+        """Check the whole store for damage (reads every page: for commands that present it all).
+
+        Raises
+        ------
+        StoreError
+            Naming the store, when any part of it is damaged.
+        """
+        ...
+
     def close(self) -> None:
         ...
 
@@ -139,8 +215,8 @@ def open_store(path: str | os.PathLike[str]) -> Store:
     Raises
     ------
     StoreError
-        If the file is not a setupfix store, was written by a newer setupfix, or
-        cannot be opened.
+        If the file is not a setupfix store, was written by a newer setupfix, is damaged,
+        or cannot be opened or created (read-only, locked, full), naming the file.
     """
     from setupfix.store._sqlite import SQLiteStore
 

@@ -4,16 +4,27 @@
 applies the missing ones in order, each in its own transaction together with the new
 version number, so a store is always at one version.  Never edit a released
 migration: append a new one.
+
+Creation is atomic: a new store gets ``schema_version`` and every migration in ONE
+``BEGIN IMMEDIATE`` transaction, so two processes creating it at once are serialised by
+SQLite (the second finds the finished store) and a kill during creation leaves an empty
+database, which the next open creates again.  (A temporary file renamed into place was
+the other choice; it was not taken because a process that already opened the path would
+keep the replaced inode, and SQLite's WAL and lock files are tied to the path.)  A store
+left by an older setupfix killed between its ``schema_version`` row and its first
+migration (``schema_version`` = 0 and no other table) is completed, not refused.
 """
 
 from __future__ import annotations
 
+import contextlib
+import json
 import sqlite3
 from collections.abc import Callable
 
 from setupfix.errors import StoreError, SourceLocation
 
-__all__ = ["MIGRATIONS", "SCHEMA_VERSION", "migrate", "version_of"]
+__all__ = ["MIGRATIONS", "SCHEMA_VERSION", "migrate", "version_of", "rollback"]
 
 
 def _script(db: sqlite3.Connection, script: str) -> None:
@@ -77,8 +88,34 @@ def _v2(db: sqlite3.Connection) -> None:
     """)
 
 
+def _v3(db: sqlite3.Connection) -> None:
+    """Batch claims: which run is correcting a report now, and which reports a batch has processed.
+
+    A row per report (content hash): ``done`` once a batch recommendation for it is stored;
+    ``owner`` (a run's random token), ``host``, ``pid``, ``started`` (the process's start
+    mark) and ``claimed_at`` while a run holds it.  Filled from the batch recommendations
+    already stored (what ``batch --store`` used to read to skip processed reports).
+    """
+    _script(db, """
+        CREATE TABLE batch_claim (
+            report_sha256 TEXT PRIMARY KEY,
+            done INTEGER NOT NULL DEFAULT 0,
+            owner TEXT, host TEXT, pid INTEGER, started TEXT, claimed_at TEXT
+        )
+    """)
+    done = set()
+    for (inputs,) in db.execute("SELECT inputs FROM recommendation"):
+        try:
+            given = json.loads(inputs)
+        except ValueError:
+            continue
+        if isinstance(given, dict) and given.get("use") == "batch" and given.get("report"):
+            done.add(str(given["report"]))
+    db.executemany("INSERT INTO batch_claim (report_sha256, done) VALUES (?, 1)", sorted((d,) for d in done))
+
+
 #: Migrations in order; migration i (1-based) brings a store from version i − 1 to i.
-MIGRATIONS: tuple[Callable[[sqlite3.Connection], None], ...] = (_v1, _v2)
+MIGRATIONS: tuple[Callable[[sqlite3.Connection], None], ...] = (_v1, _v2, _v3)
 SCHEMA_VERSION = len(MIGRATIONS)
 
 
@@ -112,14 +149,20 @@ def migrate(db: sqlite3.Connection, path: str, *, upto: int = SCHEMA_VERSION) ->
     db.execute("BEGIN IMMEDIATE")
     try:
         version = version_of(db)
-        if version == 0:
-            if db.execute("SELECT count(*) FROM sqlite_master WHERE type = 'table'").fetchone()[0]:
+        if version == 0:  # new (or left empty by a kill): the whole schema in this one transaction
+            tables = {r[0] for r in db.execute("SELECT name FROM sqlite_master WHERE type = 'table'")}
+            if tables - {"schema_version"}:
                 raise StoreError("not a setupfix history store (it holds other tables)", location=where)
-            db.execute("CREATE TABLE schema_version (version INTEGER NOT NULL)")
+            if not tables:
+                db.execute("CREATE TABLE schema_version (version INTEGER NOT NULL)")
+            db.execute("DELETE FROM schema_version")
             db.execute("INSERT INTO schema_version VALUES (0)")
+            _apply(db, 1, upto)
+            db.execute("COMMIT")
+            return upto
         db.execute("COMMIT")
     except BaseException:
-        db.execute("ROLLBACK")
+        rollback(db)
         raise
     for number in range(version + 1, upto + 1):
         db.execute("BEGIN IMMEDIATE")
@@ -127,10 +170,23 @@ def migrate(db: sqlite3.Connection, path: str, *, upto: int = SCHEMA_VERSION) ->
             if version_of(db) >= number:  # another process migrated meanwhile
                 db.execute("COMMIT")
                 continue
-            MIGRATIONS[number - 1](db)
-            db.execute("UPDATE schema_version SET version = ?", (number,))
+            _apply(db, number, number)
             db.execute("COMMIT")
         except BaseException:
-            db.execute("ROLLBACK")
+            rollback(db)
             raise
     return max(version, upto)
+
+
+def _apply(db: sqlite3.Connection, first: int, last: int) -> None:
+    """Migrations ``first`` … ``last`` and the version number, inside the open transaction."""
+    for number in range(first, last + 1):
+        MIGRATIONS[number - 1](db)
+    db.execute("UPDATE schema_version SET version = ?", (last,))
+
+
+def rollback(db: sqlite3.Connection) -> None:
+    """Roll back if a transaction is open (a failed COMMIT may have ended it already); never raises."""
+    if db.in_transaction:
+        with contextlib.suppress(sqlite3.Error):
+            db.execute("ROLLBACK")

@@ -6,26 +6,33 @@ connection runs in autocommit mode and :meth:`SQLiteStore.transaction` issues
 ``BEGIN IMMEDIATE`` … ``COMMIT`` itself, so one import is one transaction and a kill
 at any point leaves the last committed state (SQLite's journal rolls back the rest).
 One :class:`SQLiteStore` belongs to one thread; other threads open their own.
+
+Every public method turns a database failure into one :class:`StoreError` naming the
+file and what is wrong with it (:func:`_failure`: damaged, read-only, locked beyond
+:data:`BUSY_TIMEOUT_S`, full, I/O error); nothing reaches the caller as a bare
+``sqlite3`` or pandas error.
 """
 
 from __future__ import annotations
 
 import contextlib
+import functools
 import hashlib
 import json
 import math
 import sqlite3
-from collections.abc import Iterator, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from datetime import UTC, datetime
 from pathlib import Path
-from typing import Any
+from typing import Any, ParamSpec, TypeVar
 
 import pandas as pd
 
 from setupfix.errors import SourceLocation, StoreError
 from setupfix.model import CANONICAL_COLUMNS
-from setupfix.store import CORRECTION_COLUMNS, Recommendation, ReportRecord, Store
-from setupfix.store._schema import migrate
+from setupfix.store import (ALREADY_PROCESSED, CORRECTION_COLUMNS, HELD_ELSEWHERE, Claimant, Recommendation,
+                            ReportRecord, Store)
+from setupfix.store._schema import migrate, rollback
 
 __all__ = ["SQLiteStore", "BUSY_TIMEOUT_S"]
 
@@ -38,6 +45,63 @@ _TEXT = frozenset(c for c in CANONICAL_COLUMNS if c not in
 
 def _now() -> str:
     return datetime.now(UTC).isoformat(timespec="seconds")
+
+
+#: (SQLite result code prefix, what is wrong, hint) in the order they are tried.
+_FAILURES: tuple[tuple[tuple[str, ...], str, str | None], ...] = (
+    (("SQLITE_BUSY", "SQLITE_LOCKED"), "the history store is locked by another process (waited {timeout:g} s)",
+     "another setupfix or a database tool is writing it: run again when it is done"),
+    (("SQLITE_READONLY",), "the history store cannot be written (read-only file, folder or file system)",
+     "SQLite writes the file and a -wal and -shm file beside it: allow writing both"),
+    (("SQLITE_FULL",), "the history store cannot grow: its disk is full", "free space and run again"),
+    (("SQLITE_IOERR",), "the history store cannot be read or written (disk I/O error)",
+     "is the disk full, a file size limit (ulimit -f) reached, or the disk failing?"),
+    (("SQLITE_CORRUPT", "SQLITE_NOTADB"), "the history store is damaged (not a readable SQLite database)",
+     "restore it from a backup, or give another --db/--store"),
+    (("SQLITE_CANTOPEN", "SQLITE_PERM", "SQLITE_AUTH"), "the history store cannot be opened or created",
+     "is the path a file, and may this user write its folder?"),
+)
+
+
+def _failure(exc: BaseException, path: str) -> StoreError:
+    """A database failure as one :class:`StoreError` naming the store and what is wrong with it."""
+    cause = exc.__cause__ if isinstance(exc.__cause__, sqlite3.Error) else exc  # pandas wraps sqlite's errors
+    code = str(getattr(cause, "sqlite_errorname", "") or "")
+    text = str(cause)
+    for prefixes, message, hint in _FAILURES:
+        if code.startswith(prefixes):
+            return StoreError(message.format(timeout=BUSY_TIMEOUT_S), location=SourceLocation(path), hint=hint)
+    return StoreError(f"history store: {text}", location=SourceLocation(path))
+
+
+_P = ParamSpec("_P")
+_R = TypeVar("_R")
+#: What a database failure looks like to a method (pandas' read_sql_query wraps sqlite3's errors).
+_DB_ERRORS = (sqlite3.Error, pd.errors.DatabaseError)
+
+
+def _guarded(method: Callable[_P, _R]) -> Callable[_P, _R]:
+    """A store method whose database failures are :class:`StoreError` naming the store."""
+
+    @functools.wraps(method)
+    def run(*args: _P.args, **kwargs: _P.kwargs) -> _R:
+        try:
+            return method(*args, **kwargs)
+        except _DB_ERRORS as exc:
+            raise _failure(exc, args[0].location) from None  # type: ignore[attr-defined]  # args[0] is self
+
+    return run
+
+
+def _age_s(at: str | None) -> float:
+    """Seconds since the ISO time ``at`` (infinite when it cannot be read)."""
+    try:
+        then = datetime.fromisoformat(str(at))
+    except ValueError:
+        return math.inf
+    if then.tzinfo is None:
+        then = then.replace(tzinfo=UTC)
+    return (datetime.now(UTC) - then).total_seconds()
 
 
 def _cell(value: Any, text: bool) -> Any:
@@ -58,15 +122,22 @@ class SQLiteStore(Store):
         self._depth = 0
         if path != ":memory:" and not Path(path).parent.is_dir():
             raise StoreError(f"folder {str(Path(path).parent)!r} does not exist", location=self._where)
+        if path != ":memory:" and Path(path).exists() and not Path(path).is_file():
+            raise StoreError("the history store is not a file", location=self._where, hint="give a file (--db)")
+        db: sqlite3.Connection | None = None
         try:
-            self.db = sqlite3.connect(path, timeout=BUSY_TIMEOUT_S, isolation_level=None)
-            self.db.execute("PRAGMA journal_mode = WAL")
-            self.db.execute("PRAGMA synchronous = FULL")
-            self.db.execute("PRAGMA foreign_keys = ON")
-            migrate(self.db, path)
-        except sqlite3.DatabaseError as exc:
-            raise StoreError(f"cannot open the history store: {exc}", location=self._where,
-                             hint="is it a setupfix store (--db)?") from None
+            db = sqlite3.connect(path, timeout=BUSY_TIMEOUT_S, isolation_level=None)
+            db.execute("PRAGMA journal_mode = WAL")
+            db.execute("PRAGMA synchronous = FULL")
+            db.execute("PRAGMA foreign_keys = ON")
+            migrate(db, path)
+        except BaseException as exc:
+            if db is not None:
+                db.close()
+            if isinstance(exc, sqlite3.Error):
+                raise _failure(exc, path) from None
+            raise
+        self.db = db
 
     # -- transactions ------------------------------------------------------------------------
     @contextlib.contextmanager
@@ -80,20 +151,24 @@ class SQLiteStore(Store):
             return
         try:
             self.db.execute("BEGIN IMMEDIATE")
-        except sqlite3.OperationalError as exc:
-            raise StoreError(f"cannot write the history store: {exc}", location=self._where) from None
+        except sqlite3.Error as exc:
+            raise _failure(exc, self.location) from None
         self._depth = 1
         try:
             yield
             self.db.execute("COMMIT")
+        except sqlite3.Error as exc:  # the COMMIT itself (a full disk, an I/O error)
+            rollback(self.db)
+            raise _failure(exc, self.location) from None
         except BaseException:
-            self.db.execute("ROLLBACK")
+            rollback(self.db)
             raise
         finally:
             self._depth = 0
 
     def close(self) -> None:
-        self.db.close()
+        with contextlib.suppress(sqlite3.Error):
+            self.db.close()
 
     def __enter__(self) -> SQLiteStore:
         return self
@@ -102,6 +177,7 @@ class SQLiteStore(Store):
         self.close()
 
     # -- reports and their rows --------------------------------------------------------------
+    @_guarded
     def add_report(self, data: bytes, name: str, format: str, table: pd.DataFrame) -> tuple[str, bool]:
         sha = hashlib.sha256(data).hexdigest()
         with self.transaction():
@@ -120,10 +196,12 @@ class SQLiteStore(Store):
                                 f"VALUES ({marks})", rows)
         return sha, True
 
+    @_guarded
     def report(self, sha256: str) -> ReportRecord | None:
         found = self._reports("WHERE r.sha256 = ?", (sha256,))
         return found[0] if found else None
 
+    @_guarded
     def reports(self) -> list[ReportRecord]:
         return self._reports("", ())
 
@@ -132,6 +210,7 @@ class SQLiteStore(Store):
                f"WHERE m.report_id = r.id), r.imported_at FROM report r {where} ORDER BY r.id")
         return [ReportRecord(*row) for row in self.db.execute(sql, args)]
 
+    @_guarded
     def measurements(self, sha256: str | None = None) -> pd.DataFrame:
         cols = ", ".join(f"m.{c}" for c in CANONICAL_COLUMNS)
         where, args = ("WHERE r.sha256 = ?", (sha256,)) if sha256 else ("", ())
@@ -142,17 +221,20 @@ class SQLiteStore(Store):
         return frame
 
     # -- logs: corrections and temperatures ---------------------------------------------------
+    @_guarded
     def add_corrections(self, log: pd.DataFrame) -> int:
         frame = log.reindex(columns=list(CORRECTION_COLUMNS))
         rows = [(str(t), str(r), _cell(d, False), str(e or "correction"))
                 for t, r, d, e in frame.itertuples(index=False)]
         return self._merge("correction", CORRECTION_COLUMNS, ("timestamp", "register", "event"), rows)
 
+    @_guarded
     def corrections(self, event: str | None = None) -> pd.DataFrame:
         where, args = ("WHERE event = ?", (event,)) if event else ("", ())
         return pd.read_sql_query(f"SELECT timestamp, register, delta, event FROM correction {where} "
                                  "ORDER BY timestamp, rowid", self.db, params=args)
 
+    @_guarded
     def add_temperatures(self, log: pd.DataFrame) -> int:
         if "timestamp" not in log:
             raise StoreError("a temperature log needs a timestamp column", location=self._where)
@@ -160,6 +242,7 @@ class SQLiteStore(Store):
         rows = [(str(t), str(c), float(v)) for t, c, v in long.itertuples(index=False)]
         return self._merge("temperature", ("timestamp", "channel", "value"), ("timestamp", "channel"), rows)
 
+    @_guarded
     def temperatures(self) -> pd.DataFrame:
         long = pd.read_sql_query("SELECT timestamp, channel, value FROM temperature ORDER BY timestamp", self.db)
         if long.empty:
@@ -194,6 +277,7 @@ class SQLiteStore(Store):
         return new
 
     # -- recommendations -----------------------------------------------------------------------
+    @_guarded
     def add_recommendation(self, rec: Recommendation) -> int:
         with self.transaction():
             cur = self.db.execute(
@@ -202,6 +286,54 @@ class SQLiteStore(Store):
                  json.dumps(rec.result, sort_keys=True)))
         return int(cur.lastrowid or 0)
 
+    @_guarded
     def recommendations(self) -> list[Recommendation]:
         rows = self.db.execute("SELECT optimizer, inputs, result, created_at FROM recommendation ORDER BY id")
         return [Recommendation(o, json.loads(i), json.loads(r), c) for o, i, r, c in rows]
+
+    @_guarded
+    def verify(self) -> None:
+        problems = [str(r[0]) for r in self.db.execute("PRAGMA quick_check")]
+        if problems != ["ok"]:
+            raise StoreError("the history store is damaged (not a readable SQLite database)",
+                             location=self._where, hint="restore it from a backup, or give another --db/--store")
+
+    # -- batch claims --------------------------------------------------------------------------
+    @_guarded
+    def claim_reports(self, keys: Sequence[str], claimant: Claimant, *, again: bool = False) -> dict[str, str]:
+        refused: dict[str, str] = {}
+        with self.transaction():
+            for key in dict.fromkeys(keys):
+                row = self.db.execute("SELECT done, owner, host, pid, started, claimed_at FROM batch_claim "
+                                      "WHERE report_sha256 = ?", (key,)).fetchone()
+                if row is not None:
+                    done, owner, host, pid, started, at = row
+                    if owner is not None and owner != claimant.token:
+                        holder = Claimant(owner, str(host or ""), int(pid or 0), str(started or ""))
+                        if not holder.gone(_age_s(at)):
+                            refused[key] = f"{HELD_ELSEWHERE} ({holder}, since {at}): left to it"
+                            continue
+                    if done and not again and owner != claimant.token:
+                        refused[key] = ALREADY_PROCESSED
+                        continue
+                self.db.execute(
+                    "INSERT INTO batch_claim (report_sha256, done, owner, host, pid, started, claimed_at) "
+                    "VALUES (?, 0, ?, ?, ?, ?, ?) ON CONFLICT (report_sha256) DO UPDATE SET owner = excluded.owner, "
+                    "host = excluded.host, pid = excluded.pid, started = excluded.started, "
+                    "claimed_at = excluded.claimed_at",
+                    (key, claimant.token, claimant.host, claimant.pid, claimant.started, _now()))
+        return refused
+
+    @_guarded
+    def finish_claims(self, keys: Sequence[str], claimant: Claimant) -> None:
+        with self.transaction():
+            self.db.executemany("UPDATE batch_claim SET done = 1, owner = NULL, host = NULL, pid = NULL, "
+                                "started = NULL, claimed_at = NULL WHERE report_sha256 = ? AND owner = ?",
+                                [(k, claimant.token) for k in dict.fromkeys(keys)])
+
+    @_guarded
+    def release_claims(self, claimant: Claimant) -> None:
+        with self.transaction():
+            self.db.execute("UPDATE batch_claim SET owner = NULL, host = NULL, pid = NULL, started = NULL, "
+                            "claimed_at = NULL WHERE owner = ?", (claimant.token,))
+            self.db.execute("DELETE FROM batch_claim WHERE owner IS NULL AND done = 0")

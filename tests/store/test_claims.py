@@ -1,0 +1,215 @@
+"""Issue 21 item 6: two batches on one store correct each report once; a killed batch leaves no worker.
+
+Real processes: two ``setupfix batch --store`` runs at once over one folder, and a SIGKILL of
+``batch --workers 2`` (its workers looked up in /proc, or psutil when installed).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import sqlite3
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from setupfix.store import ALREADY_PROCESSED, Claimant, open_store
+
+ROOT = Path(__file__).resolve().parents[2]
+GUIDE = ROOT / "sample_reports" / "guide_pins"
+ENV = {**os.environ, "PYTHONPATH": str(ROOT) + os.pathsep + os.environ.get("PYTHONPATH", "")}
+
+
+def reports(folder: Path, n: int) -> list[Path]:
+    """``n`` distinct reports (the guide-pin cycles, each with its own part name)."""
+    folder.mkdir(parents=True, exist_ok=True)
+    out = []
+    for k in range(n):
+        text = (GUIDE / f"cycle_0{k % 5 + 1}.csv").read_text().replace(f"cycle 0{k % 5 + 1}", f"part {k:03d}")
+        path = folder / f"r{k:03d}.csv"
+        path.write_text(text)
+        out.append(path)
+    return out
+
+
+def batch(folder: Path, db: Path, out: Path, *extra: str) -> subprocess.Popen[str]:
+    return subprocess.Popen([sys.executable, "-m", "setupfix", "batch", str(folder), "--model",
+                             str(GUIDE / "model.toml"), "--out", str(out), "--store", str(db), "--settle", "0",
+                             "--json", *extra], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=ENV)
+
+
+def stored_batch_reports(db: Path) -> list[str]:
+    with open_store(db) as store:
+        return [str(r.inputs["report"]) for r in store.recommendations() if r.inputs.get("use") == "batch"]
+
+
+def test_two_batches_at_once_correct_every_report_exactly_once(tmp_path):
+    n = 40
+    folder = tmp_path / "reports"
+    reports(folder, n)
+    db = tmp_path / "h.db"
+    open_store(db).close()  # both runs find the store (its creation at once is another test)
+    runs = [batch(folder, db, tmp_path / f"out{i}.csv", "--workers", "1") for i in (1, 2)]
+    results = [p.communicate(timeout=600) for p in runs]
+    summaries = []
+    for p, (out, err) in zip(runs, results, strict=True):
+        assert p.returncode == 0, err
+        summaries.append(json.loads(out))
+    assert sum(s["reports"] for s in summaries) == n
+    for s in summaries:
+        assert s["failed"] == []
+        assert all("another run" in k["reason"] or k["reason"] == ALREADY_PROCESSED for k in s["skipped"]), s
+    named = [line.split(",")[0] for i in (1, 2) if (tmp_path / f"out{i}.csv").exists()
+             for line in (tmp_path / f"out{i}.csv").read_text().splitlines()[1:]]
+    per_report = {name for name in named}
+    assert len(per_report) == n  # every report has its rows in exactly one of the outputs
+    stored = stored_batch_reports(db)
+    assert len(stored) == n and len(set(stored)) == n  # one recommendation each: corrected once in total
+    with sqlite3.connect(db) as con:
+        assert con.execute("SELECT count(*), sum(done), count(owner) FROM batch_claim").fetchone() == (n, n, 0)
+    con.close()
+
+
+def _children(pid: int) -> list[int]:
+    """Processes whose parent is ``pid`` (psutil when installed, else /proc)."""
+    try:
+        import psutil
+    except ImportError:
+        kids = []
+        for entry in os.listdir("/proc"):
+            if entry.isdigit():
+                try:
+                    stat = Path(f"/proc/{entry}/stat").read_text()
+                except OSError:
+                    continue
+                if int(stat[stat.rfind(")") + 2:].split()[1]) == pid:
+                    kids.append(int(entry))
+        return kids
+    return [c.pid for c in psutil.Process(pid).children(recursive=True)]
+
+
+def _running(pid: int) -> bool:
+    try:
+        stat = Path(f"/proc/{pid}/stat").read_text()
+    except OSError:
+        return False
+    return stat[stat.rfind(")") + 2:].split()[0] != "Z"  # a zombie has ended
+
+
+@pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="looks the workers up in /proc")
+def test_sigkill_of_a_batch_leaves_no_worker_and_its_claims_are_taken_over(tmp_path):
+    folder = tmp_path / "reports"
+    reports(folder, 60)
+    db = tmp_path / "h.db"
+    run = batch(folder, db, tmp_path / "out.csv", "--workers", "2")
+    deadline = time.monotonic() + 120
+    workers: list[int] = []
+    while time.monotonic() < deadline and len(workers) < 2:
+        workers = [w for w in _children(run.pid) if _running(w)]
+        time.sleep(0.05)
+    assert len(workers) == 2, "the batch started no workers"
+    time.sleep(0.5)  # the workers are correcting, the batch holds claims
+    os.kill(run.pid, signal.SIGKILL)
+    run.wait()  # not communicate(): surviving workers would hold its pipes open
+    deadline = time.monotonic() + 15
+    while time.monotonic() < deadline and any(_running(w) for w in workers):
+        time.sleep(0.1)
+    survivors = [w for w in workers if _running(w)]
+    for w in survivors:  # never leave them behind, even when the test fails
+        os.kill(w, signal.SIGKILL)
+    run.stdout.close()  # type: ignore[union-attr]
+    run.stderr.close()  # type: ignore[union-attr]
+    assert not survivors, "workers outlived the killed batch"
+    with sqlite3.connect(db) as con:
+        held = con.execute("SELECT count(*) FROM batch_claim WHERE owner IS NOT NULL").fetchone()[0]
+    con.close()
+    assert held > 0  # the kill left claims behind ...
+    again = batch(folder, db, tmp_path / "again.csv", "--workers", "1")
+    out, err = again.communicate(timeout=600)
+    assert again.returncode == 0, err
+    summary = json.loads(out)
+    assert summary["reports"] == 60 and summary["skipped"] == []  # ... which the next run takes over
+
+
+def test_claims_refuse_a_live_holder_and_processed_reports_take_over_a_dead_one(tmp_path):
+    store = open_store(tmp_path / "h.db")
+    me = Claimant.this_run()
+    other_live = Claimant("other", me.host, os.getppid(), "")  # pytest's parent runs
+    dead = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"], capture_output=True, text=True)
+    gone = Claimant("gone", me.host, int(dead.stdout), "")
+    assert store.claim_reports(["a"], other_live) == {}
+    assert store.claim_reports(["b"], gone) == {}
+    refused = store.claim_reports(["a", "b", "c"], me)
+    assert list(refused) == ["a"] and "another run" in refused["a"] and str(os.getppid()) in refused["a"]
+    store.finish_claims(["b", "c"], me)
+    assert store.claim_reports(["b"], other_live) == {"b": ALREADY_PROCESSED}
+    assert store.claim_reports(["b"], other_live, again=True) == {}  # --force
+    assert "another run" in store.claim_reports(["b"], me, again=True)["b"]
+    store.release_claims(other_live)
+    assert store.claim_reports(["b"], me) == {"b": ALREADY_PROCESSED}  # a released --force run keeps it done
+    assert store.claim_reports(["a"], me) == {}  # freed
+    far = Claimant("far", "another-host", 1, "")
+    store.release_claims(me)
+    assert store.claim_reports(["z"], far) == {}
+    assert "another run" in store.claim_reports(["z"], me).get("z", "")  # another host: stale only when old
+    store.close()
+    with sqlite3.connect(tmp_path / "h.db") as con:
+        con.execute("UPDATE batch_claim SET claimed_at = '2000-01-01T00:00:00+00:00' WHERE owner = 'far'")
+    con.close()
+    with open_store(tmp_path / "h.db") as store:
+        assert store.claim_reports(["z"], me) == {}
+
+
+def test_a_store_of_older_batches_keeps_its_processed_reports(tmp_path):
+    """Migration 3 marks the reports older batch recommendations name as processed."""
+    from setupfix.store import Recommendation
+    from setupfix.store._schema import migrate
+
+    path = tmp_path / "old.db"
+    con = sqlite3.connect(path, isolation_level=None)
+    migrate(con, str(path), upto=2)
+    con.close()
+    with sqlite3.connect(path) as con:
+        con.execute("INSERT INTO recommendation (created_at, optimizer, inputs, result) VALUES "
+                    "('2026-01-01', 'exact', '{\"use\": \"batch\", \"report\": \"abc\"}', '{}'), "
+                    "('2026-01-01', 'exact', '{\"report\": \"def\"}', '{}')")
+    con.close()
+    with open_store(path) as store:
+        me = Claimant.this_run()
+        assert store.claim_reports(["abc", "def"], me) == {"abc": ALREADY_PROCESSED}
+        assert isinstance(store.recommendations()[0], Recommendation)
+
+
+def test_a_store_that_cannot_finish_the_claims_says_the_output_stands_and_the_next_run_redoes_them(
+        tmp_path, capsys, monkeypatch):
+    """The store fills up after the output is written: one line naming the store, the offsets in place, and
+    no report marked processed (SQLITE_FULL from SQLite's page limit, set just before the claims finish)."""
+    from setupfix.cli import main
+    from setupfix.pipeline import batch as batch_module
+
+    folder = tmp_path / "reports"
+    reports(folder, 60)  # their recommendations need pages the store does not have
+    db, out = tmp_path / "h.db", tmp_path / "out.csv"
+    real = batch_module._Claims.finish
+
+    def full(self):  # type: ignore[no-untyped-def]
+        db_ = self.store.db
+        db_.execute(f"PRAGMA max_page_count = {db_.execute('PRAGMA page_count').fetchone()[0]}")
+        return real(self)
+
+    monkeypatch.setattr(batch_module._Claims, "finish", full)
+    argv = ["batch", str(folder), "--model", str(GUIDE / "model.toml"), "--out", str(out), "--store", str(db),
+            "--settle", "0"]
+    assert main(argv) == 1
+    err = capsys.readouterr().err
+    line = next(x for x in err.splitlines() if x.startswith("error:"))
+    assert "h.db" in line and "disk is full" in line and "corrected again by the next run" in line
+    assert len(out.read_text().splitlines()) > 1
+    monkeypatch.undo()
+    assert stored_batch_reports(db) == []
+    assert main([*argv, "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["reports"] == 60
