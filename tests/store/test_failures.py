@@ -257,7 +257,7 @@ OUTPUTS = {
     "offsets CSV (batch)": (["batch", "{t}/many", "--model", MODEL, "--out", "{t}/old.csv", "--settle", "0"],
                             "old.csv", 64),
     "program (batch)": (["batch", "{t}/many", "--model", MODEL, "--out", "{t}/progs", "--settle", "0",
-                         "--controller", "fanuc"], "progs/r000.nc", 64),
+                         "--controller", "fanuc"], "progs/r000.csv.nc", 64),
     "export CSV": (["history", "export", "measurements", "--db", "{t}/h.db", "--out", "{t}/old.csv"], "old.csv",
                    36000),
     "CSV and JSON (simulate)": (["simulate", "--model", MODEL, "--out", "{t}/sim", "--cycles", "30"],
