@@ -5,7 +5,7 @@ tools, 30 % difference dimensions, ±0.1 mm limits on a 0.001 mm grid) with a la
 of each deviation (``--noise``, default ±0.045 mm on top of eq. 12's setup error), so that about a
 tenth of the dimensions are measured out of tolerance and no correction brings all of them in.
 
-Each problem goes through ``setupfix.safety.recommend`` (neutral policy) twice: in this tree and
+Each problem goes through ``setupfix.recommend.recommend`` (neutral policy) twice: in this tree and
 in ``--old`` (a checkout of the tree before issue 22, run in a subprocess), both under the same
 time limit.  Stated per problem: dimensions measured in tolerance, kept in tolerance after the
 recommended correction (new, old), whether the answer moves a dimension measured in tolerance out
@@ -82,7 +82,8 @@ def run(sizes: list[tuple[int, int]], seeds: int, noise: float, limit: float) ->
 
     from setupfix.optimize import get_optimizer
     from setupfix.pose import pose_policy
-    from setupfix.safety import Policy, harmed_mask, recommend
+    from setupfix.recommend import recommend
+    from setupfix.safety import Policy, harmed_mask
 
     out = []
     with threadpool_limits(limits=1):

@@ -1,7 +1,7 @@
 """Posing the correction problem of one measured cycle: the one builder, in one documented order.
 
 Every door (``correct``, batch, the TUI, ``compare``, the diagnosis's next correction)
-solves the problem :func:`pose_problem` builds, and :func:`setupfix.safety.recommend`
+solves the problem :func:`pose_problem` builds, and :func:`setupfix.recommend.recommend`
 applies the rules that act after the solve.  The order, each step on the output of the one before:
 
 1. **measurements** — the cycle's deviations y (model order, NaN where not measured);
@@ -14,7 +14,7 @@ applies the rules that act after the solve.  The order, each step on the output 
    not measured — unless the model marks the dimension ``sampled = true`` (not measured
    every cycle: a sampling plan), which leaves its registers free as before;
 2. **smoothing** — the EWMA estimate ŷ of the deviations over the earlier parts
-   (λ of ``[safety] ewma``; :func:`setupfix.safety.ewma_history`, arrays from the history);
+   (λ of ``[safety] ewma``; :func:`setupfix.ewma.ewma_history`, arrays from the history);
 3. **effects forecast** — the model's ``[effects]`` drift and wear until the next cycle
    are added (:func:`setupfix.diagnose.forecast.forecast_shift`); its relations (or a
    composite given by the caller, e.g. the diagnosis's augmented matrix) replace C;
@@ -43,11 +43,11 @@ import numpy.typing as npt
 
 from parsers.timestamps import instant
 from setupfix.errors import Note, SourceLocation
+from setupfix.ewma import Smoothed
 from setupfix.model import PartMeasurement, ProcessModel
 from setupfix.optimize import CorrectionProblem
 from setupfix.relation import relation_matrices
-from setupfix.safety import (Policy, RuleEffect, Smoothed, cumulative_bounds, guard_limits, no_harm_floor,
-                             short_list)
+from setupfix.safety import Policy, RuleEffect, cumulative_bounds, guard_limits, no_harm_floor, short_list
 
 __all__ = ["PosedProblem", "forecast_of", "effects_composite", "policy_of", "pose_problem", "pose_policy",
            "coverage", "hours_between"]
@@ -300,7 +300,7 @@ def pose_problem(model: ProcessModel, part: PartMeasurement, *, smoothed: Smooth
     part : PartMeasurement
         The cycle as measured (step 1).
     smoothed : Smoothed, optional
-        Its EWMA estimate (step 2), from the history (:func:`setupfix.safety.ewma_history`).
+        Its EWMA estimate (step 2), from the history (:func:`setupfix.ewma.ewma_history`).
     cumulative : mapping register ID → float, optional
         Change applied since the last reset (the current value of wear registers, step 5).
     composite : ndarray of shape (n_registers, n_dimensions), optional

@@ -9,11 +9,12 @@ import pytest
 
 from setupfix.diagnose.forecast import forecast_shift
 from setupfix.diagnose.terms import Layout
+from setupfix.ewma import ewma_history
 from setupfix.model import PartMeasurement, model_from_dict
 from setupfix.optimize import CorrectionProblem, get_optimizer
 from setupfix.pose import pose_problem
+from setupfix.recommend import recommend
 from setupfix.relation import relation_matrices
-from setupfix.safety import ewma_history, recommend
 
 SOLVE = get_optimizer("exact").solve
 

@@ -8,18 +8,11 @@ import dataclasses
 import numpy as np
 import pytest
 
+from setupfix.ewma import ewma
 from setupfix.optimize import CorrectionProblem, get_optimizer
-from setupfix.safety import (
-    Policy,
-    apply_gain,
-    cumulative_bounds,
-    ewma,
-    guard_limits,
-    harmed_mask,
-    reject_mask,
-)
 from setupfix.pose import pose_policy
-from setupfix.safety import recommend as recommend_posed
+from setupfix.recommend import recommend as recommend_posed
+from setupfix.safety import Policy, apply_gain, cumulative_bounds, guard_limits, harmed_mask, reject_mask
 
 SOLVE = get_optimizer("exact").solve
 

@@ -1,5 +1,5 @@
 """The verdict around a solve that did not finish, on real problems stopped by a tiny time limit
-(setupfix.safety.recommend, stopped_rule)."""
+(setupfix.recommend.recommend, stopped_rule)."""
 
 from __future__ import annotations
 
@@ -8,18 +8,17 @@ import re
 
 import numpy as np
 import pytest
-
 from conftest import GUIDE_PINS
 from optimize.test_exact_robust import shop_problem
 
-from setupfix.model import load_model
+import parsers
 from setupfix.explain import fit_registers, leave_one_out
+from setupfix.model import load_model
 from setupfix.optimize import CorrectionProblem, get_optimizer
 from setupfix.pipeline.cycles import read_parts
 from setupfix.pose import pose_policy, pose_problem
-from setupfix.safety import STOPPED, Policy, recommend, short_list, stopped_rule
-
-import parsers
+from setupfix.recommend import recommend, stopped_rule
+from setupfix.safety import STOPPED, Policy, short_list
 
 
 def test_a_solve_stopped_before_any_proof_is_not_solved_never_no_change_needed():

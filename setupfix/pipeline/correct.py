@@ -6,7 +6,7 @@ read the report once (any supported format) → tie characteristics to dimension
 (:func:`correct_cycle`): the smoothing over the history, the problem posed by
 :func:`setupfix.pose.pose_problem` (forecast, relations, guard band, cumulative
 bounds, costs, fixed registers), the optimiser, the rules after the solve
-(:func:`setupfix.safety.recommend`), the thermal feed-forward with its limit check →
+(:func:`setupfix.recommend.recommend`), the thermal feed-forward with its limit check →
 an immutable :class:`~setupfix.pipeline.requests.CycleCorrection`.
 """
 
@@ -21,13 +21,15 @@ import numpy as np
 
 import parsers
 from setupfix.errors import ExportError, Note, ParameterError, SetupfixError, SourceLocation
+from setupfix.ewma import Smoothed
 from setupfix.model import PartMeasurement, ProcessModel, load_model
 from setupfix.optimize import CorrectionProblem, OptimizeResult, get_optimizer
 from setupfix.pipeline.cycles import read_parts
 from setupfix.pipeline.requests import (CorrectOutcome, CorrectRequest, CurrentOffsets, CycleCorrection, CycleOptions,
                                         History, ReadOptions, SolveOptions, ThermalInputs, load_thermal)
 from setupfix.pose import pose_problem
-from setupfix.safety import Recommendation, Smoothed, budget, recommend, short_list
+from setupfix.recommend import budget, recommend
+from setupfix.safety import Recommendation, short_list
 from setupfix.store import Store
 
 if TYPE_CHECKING:

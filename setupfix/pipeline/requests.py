@@ -25,7 +25,8 @@ from setupfix.optimize import OPTIMIZERS, CorrectionProblem, OptimizeResult, get
 from setupfix.pipeline.cycles import ReadOptions
 from setupfix.pipeline.smoothing import History
 from setupfix.pose import PosedProblem
-from setupfix.safety import Recommendation, budget
+from setupfix.recommend import budget
+from setupfix.safety import Recommendation
 
 if TYPE_CHECKING:  # the thermal modules bring scipy.signal (~0.5 s): loaded only with --thermal
     from parsers.temperature import TemperatureLog

@@ -4,7 +4,7 @@ The EWMA estimate of a cycle (``[safety] ewma`` = λ < 1) is an exponentially we
 of the cycle and the earlier parts of the same model (Siemens measuring cycles' mean value
 with weighting factor k = 1/λ; Renishaw/EZ-Comp running average).  :class:`History` holds
 what it needs as arrays — read once from the history store (``correct --store``) or built
-from the parts of a batch — and :func:`setupfix.safety.ewma_history` computes the estimate:
+from the parts of a batch — and :func:`setupfix.ewma.ewma_history` computes the estimate:
 each earlier part shifted by the corrections logged since (eqs. 3–4), reset on a tool change.
 
 A part counts once however often it is stored: its identity is what was measured — part
@@ -27,9 +27,9 @@ import pandas as pd
 
 from parsers.timestamps import instant
 from setupfix.errors import Note, ParseError, SetupfixError, SourceLocation
+from setupfix.ewma import Smoothed, ewma_history, last_measured, shifted_history
 from setupfix.model import PartMeasurement, ProcessModel, match_parts
 from setupfix.relation import relation_matrices
-from setupfix.safety import Smoothed, ewma_history, last_measured, shifted_history
 from setupfix.store import Store, report_tables, stored_corrections
 
 __all__ = ["History", "HISTORY", "history_parts", "part_identity"]
@@ -194,7 +194,7 @@ class History:
 
     def smooth(self, model: ProcessModel, part: PartMeasurement, lam: float) -> Smoothed:
         """The EWMA estimate of ``part`` over every held part machined before it
-        (:func:`setupfix.safety.ewma_history`)."""
+        (:func:`setupfix.ewma.ewma_history`)."""
         now = _stamp(part)
         if lam < 1.0 and now is None:
             return Smoothed(part.deviation, 0, lam, (Note("no timestamp in the report: not smoothed", None, "ewma"),))
