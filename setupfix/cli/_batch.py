@@ -13,7 +13,7 @@ from setupfix.cli._common import add_report_options, add_thermal_options, shown,
 from setupfix.cli.exit_codes import NOT_SOLVED, OK, PARTIAL, REJECTED
 
 if TYPE_CHECKING:
-    from setupfix.pipeline.batch import BatchSummary, Outcome
+    from setupfix.pipeline.batch_records import BatchSummary, Outcome
 
 
 def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:

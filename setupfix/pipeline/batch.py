@@ -38,39 +38,35 @@ Nothing here prints: progress goes to a callback, the summary is returned.
 
 from __future__ import annotations
 
-import contextlib
 import dataclasses
 import hashlib
 import itertools
-import json
 import os
 import threading
 import time
-from collections import Counter, deque
-from collections.abc import Callable, Iterator, Mapping, Sequence
+from collections import deque
+from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import Future, ProcessPoolExecutor
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
 
-import pandas as pd
 
 import parsers
 from parsers.names import visible_name
 from setupfix.atomic import process_alive, process_started
-from setupfix.errors import ExportError, Note, ParameterError, SetupfixError, SourceLocation, StoreError
+from setupfix.errors import Note, ParameterError, SetupfixError, SourceLocation
 from setupfix.model import PartMeasurement
-from setupfix.offsets import OffsetRow, offset_rows
-from setupfix.pipeline.controllers import program_path, render
+from setupfix.offsets import offset_rows
+from setupfix.pipeline.batch_output import CsvOut, ProgramsOut
+from setupfix.pipeline.batch_records import BatchSummary, Claims, Item, Outcome, Tally, account
+from setupfix.pipeline.controllers import render
 from setupfix.pipeline.correct import correct_report
 from setupfix.pipeline.export import cycle_rows, offsets_text
-from setupfix.pipeline.requests import CorrectRequest, History, SolveOptions
+from setupfix.pipeline.requests import CorrectRequest, History
 from setupfix.pipeline.smoothing import history_parts
-from setupfix.pipeline.writers import atomic_write, check_target, csv_header, csv_lines, write_text
-from setupfix.store import ALREADY_PROCESSED, HELD_ELSEWHERE, Claimant, Store
-from setupfix.store import Recommendation as StoreRecommendation
+from setupfix.store import ALREADY_PROCESSED, HELD_ELSEWHERE, Store
 
-__all__ = ["Outcome", "BatchSummary", "find_reports", "run_batch", "batch_history", "MANIFEST"]
+__all__ = ["find_reports", "run_batch", "batch_history", "auto_workers", "chunk_size"]
 
 
 @dataclass(frozen=True)
@@ -81,71 +77,6 @@ class _Work:
     record: bool = False  #: return the bytes and table read with each outcome (for the history store)
     #: other than csv: each cycle's program text (:func:`~setupfix.pipeline.export.offsets_text`)
     controller: str = "csv"
-
-
-@dataclass
-class Outcome:
-    """One report's result: its offset rows and verdicts, or why it failed."""
-
-    path: str
-    sha256: str = ""
-    rows: list[OffsetRow] = field(default_factory=list)
-    verdicts: list[str] = field(default_factory=list)
-    parts: list[str] = field(default_factory=list)
-    #: per verdict: False for a cycle whose solve was stopped with nothing proven (not stored as done)
-    solved: list[bool] = field(default_factory=list)
-    error: str = ""
-    skipped: str = ""
-    format: str = ""
-    notes: list[Note] = field(default_factory=list)
-    programs: list[tuple[str, str]] = field(default_factory=list)  #: (part, program) of every cycle not rejected
-    data: bytes = b""  #: the bytes corrected (only with a history store)
-    table: pd.DataFrame | None = None  #: the canonical table read from them (only with ``record``)
-
-
-@dataclass(frozen=True, eq=False)
-class BatchSummary:
-    """Counts and failures of one batch run, built once at its end.
-
-    ``verdicts`` counts the verdicts (a missing one counts 0); ``unsolved`` the holds
-    whose solve was stopped with nothing proven (time limit); ``failed`` and
-    ``skipped`` are (file, reason) pairs; ``notes`` (file, note) pairs, typed.
-    """
-
-    reports: int = 0
-    parts: int = 0
-    verdicts: Mapping[str, int] = field(default_factory=Counter)
-    failed: tuple[tuple[str, str], ...] = ()
-    skipped: tuple[tuple[str, str], ...] = ()
-    seconds: float = 0.0
-    written: bool = False
-    notes: tuple[tuple[str, Note], ...] = ()
-    unsolved: int = 0
-
-    def to_json(self) -> dict[str, Any]:
-        return {"reports": self.reports, "parts": self.parts, "verdicts": dict(self.verdicts),
-                "unsolved": self.unsolved,
-                "failed": [{"file": f, "reason": r} for f, r in self.failed],
-                "skipped": [{"file": f, "reason": r} for f, r in self.skipped],
-                "notes": [{"file": f, "note": str(n)} for f, n in self.notes],
-                "seconds": round(self.seconds, 3), "written": self.written}
-
-
-@dataclass
-class _Tally:
-    """The batch's counts while the reports stream in (private: :class:`BatchSummary` is the outcome)."""
-
-    reports: int = 0
-    parts: int = 0
-    verdicts: Counter[str] = field(default_factory=Counter)
-    failed: list[tuple[str, str]] = field(default_factory=list)
-    skipped: list[tuple[str, str]] = field(default_factory=list)
-    notes: list[tuple[str, Note]] = field(default_factory=list)
-    unsolved: int = 0
-
-    def summary(self, seconds: float, written: bool) -> BatchSummary:
-        return BatchSummary(self.reports, self.parts, Counter(self.verdicts), tuple(self.failed),
-                            tuple(self.skipped), seconds, written, tuple(self.notes), self.unsolved)
 
 
 def find_reports(root: str | Path) -> parsers.Listing:
@@ -185,11 +116,6 @@ def _init_worker(work: _Work, parent: int, started: str) -> None:
         os._exit(1)  # the batch is gone (killed): nobody would read this worker's results
 
     threading.Thread(target=watch, name="setupfix-batch-watch", daemon=True).start()
-
-
-#: One report for a worker: path, size and modification time when listed, the content hash it was
-#: claimed under ("" without a store) and why it is not to be corrected ("" to correct it).
-_Item = tuple[str, int, int, str, str]
 
 
 def _correct_one(path: str, size: int, mtime_ns: int, claimed: str = "", refused: str = "") -> Outcome:
@@ -241,7 +167,7 @@ def _correct_one(path: str, size: int, mtime_ns: int, claimed: str = "", refused
     return out
 
 
-def _correct_chunk(items: list[_Item]) -> list[Outcome]:
+def _correct_chunk(items: list[Item]) -> list[Outcome]:
     return [_correct_one(*item) for item in items]
 
 
@@ -257,7 +183,7 @@ def chunk_size(n_files: int, workers: int) -> int:
 
 
 def _outcomes(files: list[tuple[Path, int, int]], work: _Work, workers: int,
-              claim: Callable[[list[_Item]], list[_Item]] | None = None) -> Iterator[Outcome]:
+              claim: Callable[[list[Item]], list[Item]] | None = None) -> Iterator[Outcome]:
     """Outcomes in file order.
 
     With several workers the request goes to each worker process once (its
@@ -265,7 +191,7 @@ def _outcomes(files: list[tuple[Path, int, int]], work: _Work, workers: int,
     chunks are in flight, so memory stays flat in the number of reports.  ``claim``
     (a history store's) marks each chunk's reports just before it is handed out.
     """
-    items: list[_Item] = [(str(path), size, mtime, "", "") for path, size, mtime in files]
+    items: list[Item] = [(str(path), size, mtime, "", "") for path, size, mtime in files]
     take = claim if claim is not None else (lambda chunk: chunk)
     if workers <= 1:
         _init(work)
@@ -322,7 +248,7 @@ def run_batch(request: CorrectRequest, folder: str | Path, out: str | Path, *, w
         The offsets CSV (written atomically: complete or absent), or with a
         ``controller`` other than csv a folder receiving one program per cycle, at
         :func:`~setupfix.pipeline.controllers.program_path` of the report's path below
-        ``folder``; its manifest (:data:`MANIFEST`) lets a report that yields no program
+        ``folder``; its manifest (:data:`~setupfix.pipeline.batch_output.MANIFEST`) lets a report that yields no program
         this run (rejected, refused, a copy of another) remove those of an earlier run.
     workers : int or None
         Processes (1: in this process; None: :func:`auto_workers`).  Results do not
@@ -331,8 +257,8 @@ def run_batch(request: CorrectRequest, folder: str | Path, out: str | Path, *, w
         Seconds a file must be left unchanged before it is read.
     store : Store, optional
         History store: each report is claimed in it before it is corrected
-        (:class:`_Claims`); reports a batch processed are skipped (unless ``force``), and
-        so are reports another running batch holds.  Each corrected report is added as
+        (:class:`~setupfix.pipeline.batch_records.Claims`); reports a batch processed are
+        skipped (unless ``force``), and so are reports another running batch holds.  Each corrected report is added as
         it is done; its recommendations, and the mark that it was processed, are added
         in one transaction committed only after the output is written.  With the
         model's EWMA (λ < 1) the smoothing history is the store (or
@@ -367,25 +293,25 @@ def run_batch(request: CorrectRequest, folder: str | Path, out: str | Path, *, w
         request = dataclasses.replace(request, history=batch_history(request, base, [f for f, _, _ in files]))
     elif store is not None and request.history is None:  # the coverage stand-ins: the store's parts (as correct)
         request = dataclasses.replace(request, history=History.from_store(model, store))
-    summary = _Tally()
+    summary = Tally()
     summary.failed += listing.problems  # named, never dropped: an unreadable folder, a broken link, …
     summary.notes += [(path, Note(f"symbolic link to {target}: read as a report", None, "folder"))
                       for path, target in listing.links]
     seen: dict[str, str] = {}
-    writer: _CsvOut | _ProgramsOut = _CsvOut(out) if controller == "csv" else _ProgramsOut(out, controller)
-    claims = _Claims(store, force) if store is not None else None
+    writer: CsvOut | ProgramsOut = CsvOut(out) if controller == "csv" else ProgramsOut(out, controller)
+    claims = Claims(store, force) if store is not None else None
     work = _Work(request, record=store is not None, controller=controller)
     try:
         with writer:
             for i, outcome in enumerate(_outcomes(files, work, workers, claims.take if claims else None), start=1):
                 stored = outcome.skipped == ALREADY_PROCESSED or outcome.skipped.startswith(HELD_ELSEWHERE)
-                _account(summary, outcome, seen)
+                account(summary, outcome, seen)
                 rel = Path(outcome.path).relative_to(folder).as_posix()
                 if outcome.error or (outcome.skipped and not stored):
                     writer.drop(rel)  # no program this run (refused, a copy, rewritten): none of an earlier run
                 elif not outcome.skipped:
                     outcome.rows = [dataclasses.replace(r, report=visible_name(rel)) for r in outcome.rows]
-                    writer.add(outcome, rel)
+                    writer.add(rel, outcome.rows, outcome.programs)
                     if claims is not None:
                         try:
                             claims.record(outcome, request.solve)
@@ -421,222 +347,3 @@ def batch_history(request: CorrectRequest, base: History, files: Sequence[str | 
     return base.with_parts(parts)
 
 
-class _Claims:
-    """A batch's claims in the history store: taken chunk by chunk, finished once the output is written.
-
-    The claim is keyed by the content hash of the bytes read here; the worker reads the
-    file again and corrects it only if its hash is the one claimed.  Recommendations wait
-    in memory (a verdict and a few numbers per part) and are stored, with the claims
-    turned into "processed", in one transaction by :meth:`finish`; :meth:`release` frees
-    whatever is still held (a failure, an interrupt), so those reports are corrected by
-    the next run.  A SIGKILL leaves the claims behind: the next run takes them over (the
-    process is gone, :meth:`setupfix.store.Claimant.gone`).
-    """
-
-    def __init__(self, store: Store, force: bool) -> None:
-        self.store, self.force = store, force
-        self.claimant = Claimant.this_run()
-        self.pending: list[tuple[str, list[StoreRecommendation], bool]] = []
-        self.held = False
-
-    def take(self, chunk: list[_Item]) -> list[_Item]:
-        """``chunk`` with each report's claimed hash, or why it is not to be corrected."""
-        hashed: list[_Item] = []
-        for path, size, mtime, _, _ in chunk:
-            try:
-                with open(path, "rb") as f:
-                    sha = hashlib.sha256(f.read()).hexdigest()
-            except OSError:
-                sha = ""  # the worker reads it and says why it cannot
-            hashed.append((path, size, mtime, sha, ""))
-        self.held = True
-        refused = self.store.claim_reports([h for _, _, _, h, _ in hashed if h], self.claimant, again=self.force)
-        return [(p, n, m, h, refused.get(h, "")) for p, n, m, h, _ in hashed]
-
-    def record(self, outcome: Outcome, solve: SolveOptions) -> None:
-        self.pending.append((outcome.sha256, _record(self.store, outcome, solve), all(outcome.solved)))
-
-    def finish(self) -> None:
-        try:
-            with self.store.transaction():
-                for _, recs, _ in self.pending:
-                    for rec in recs:
-                        self.store.add_recommendation(rec)
-                # a report with a part not solved within the time limit stays unprocessed: release() frees its
-                # claim and the next run corrects it again
-                self.store.finish_claims([sha for sha, _, solved in self.pending if solved], self.claimant)
-        except StoreError as exc:
-            raise StoreError(exc.message, location=exc.location,
-                             hint="the output was written; its reports are not marked processed in the store and "
-                                  "are corrected again by the next run") from None
-        self.pending = []
-
-    def release(self) -> None:
-        if not self.held:
-            return
-        with contextlib.suppress(SetupfixError):  # what cannot be freed now is taken over as stale later
-            self.store.release_claims(self.claimant)
-        self.held = False
-
-
-def _record(store: Store, outcome: Outcome, solve: SolveOptions) -> list[StoreRecommendation]:
-    """Add the report (the bytes and table the worker corrected, not a second reading); its recommendations."""
-    assert outcome.table is not None
-    sha, _ = store.add_report(outcome.data, visible_name(Path(outcome.path).name), outcome.format, outcome.table)
-    by_part: dict[str, dict[str, float]] = {}
-    for row in outcome.rows:
-        by_part.setdefault(row.part, {})[row.id] = row.delta
-    # One recommendation per corrected part, its verdict beside it (a part with no offset row -- every
-    # register fixed -- still gets its verdict, and no verdict slides onto the next part).
-    return [StoreRecommendation(optimizer=solve.optimizer,
-                                inputs={"use": "batch", "report": sha, "part": part, "seed": solve.seed},
-                                result={"verdict": verdict, "corrections": by_part.get(part, {}), "solved": solved})
-            for part, verdict, solved in zip(outcome.parts, outcome.verdicts, outcome.solved, strict=True)]
-
-
-def _account(summary: _Tally, outcome: Outcome, seen: dict[str, str]) -> None:
-    shown = visible_name(outcome.path)  # what the summary says: printable, whatever the file's name
-    if outcome.error:
-        summary.failed.append((shown, outcome.error))
-        return
-    if not outcome.skipped and outcome.sha256 in seen:
-        outcome.skipped = f"same content as {seen[outcome.sha256]}"
-    if outcome.skipped:
-        summary.skipped.append((shown, outcome.skipped))
-        if outcome.skipped.startswith("still being written"):
-            summary.failed.append((shown, outcome.skipped))
-        return
-    seen[outcome.sha256] = shown
-    summary.notes += [(shown, n) for n in outcome.notes]
-    summary.reports += 1
-    summary.parts += len(outcome.verdicts)
-    summary.verdicts.update(outcome.verdicts)
-    summary.unsolved += outcome.solved.count(False)
-
-
-class _CsvOut:
-    """One offsets CSV, streamed into a temporary file renamed over the target at the end."""
-
-    def __init__(self, target: str | Path) -> None:
-        check_target(target)
-        self._cm = atomic_write(target)
-        self._rows = 0
-
-    def __enter__(self) -> _CsvOut:
-        self._stream = self._cm.__enter__()
-        self._stream.write(csv_header())
-        return self
-
-    def add(self, outcome: Outcome, rel: str) -> None:
-        self._stream.write(csv_lines(outcome.rows))
-        self._rows += len(outcome.rows)
-
-    def drop(self, rel: str) -> None:
-        """Nothing to remove: the offsets CSV is written whole each run."""
-
-    def commit(self) -> bool:
-        return self._rows > 0
-
-    def __exit__(self, *exc: Any) -> None:
-        if exc[0] is None and not self._rows:
-            # Nothing new: leave an existing output as it was.
-            self._cm.__exit__(_NothingWritten, _NothingWritten(), None)
-            return
-        self._cm.__exit__(*exc)
-
-
-class _NothingWritten(Exception):
-    pass
-
-
-class _ProgramsOut:
-    """One controller program per corrected cycle at :func:`~setupfix.pipeline.controllers.program_path`.
-
-    The folder keeps a manifest (:data:`MANIFEST`: report → the programs written for it), so
-    that a report corrected again replaces exactly its own programs: one that no longer
-    yields a program (rejected, refused, …) leaves none of an earlier run behind.  Only
-    files the manifest names are ever removed.
-    """
-
-    def __init__(self, folder: str | Path, controller: str) -> None:
-        self.folder = Path(folder)
-        self.controller = controller
-        if self.folder.exists() and not self.folder.is_dir():
-            raise ExportError("with --controller other than csv, --out is a folder for one program per cycle",
-                              location=SourceLocation(visible_name(str(folder))))
-        self.written = 0
-        self.manifest = _read_manifest(self.folder / MANIFEST)
-        self._owner: dict[str, tuple[str, str]] = {}  # program written in this run → (report, part)
-        self._changed = False
-
-    def __enter__(self) -> _ProgramsOut:
-        self.folder.mkdir(parents=True, exist_ok=True)
-        return self
-
-    def add(self, outcome: Outcome, rel: str) -> None:
-        several = len(outcome.parts) > 1
-        names: list[str] = []
-        for part, text in outcome.programs:
-            name = program_path(rel, part if several else None, self.controller).as_posix()
-            if self._owner.setdefault(name, (rel, part)) != (rel, part):  # a report named like another's program
-                name = program_path(rel + "~" + _short_hash(rel, part), part if several else None,
-                                    self.controller).as_posix()
-                self._owner[name] = (rel, part)
-            target = self.folder / name
-            target.parent.mkdir(parents=True, exist_ok=True)
-            write_text(target, text)
-            names.append(name)
-            self.written += 1
-        self._replace(rel, names)
-
-    def drop(self, rel: str) -> None:
-        """The report yields no program this run: remove those an earlier run wrote for it."""
-        self._replace(rel, [])
-
-    def _replace(self, rel: str, names: list[str]) -> None:
-        for old in self.manifest.get(rel, []):
-            if old not in names and old not in self._owner:  # never a program this run wrote for another report
-                _remove_inside(self.folder, old)
-        if self.manifest.get(rel, []) != names:
-            self._changed = True
-        if names:
-            self.manifest[rel] = names
-        else:
-            self.manifest.pop(rel, None)
-
-    def commit(self) -> bool:
-        return self.written > 0
-
-    def __exit__(self, *exc: Any) -> None:
-        if self._changed:  # also after an interruption: what was written or removed is on record
-            write_text(self.folder / MANIFEST, json.dumps(self.manifest, indent=1, sort_keys=True) + "\n")
-
-
-#: The programs folder's record of which report each program was written for (hidden, JSON).
-MANIFEST = ".setupfix-programs.json"
-
-
-def _short_hash(*texts: str) -> str:
-    return hashlib.sha256(os.fsencode("\0".join(texts))).hexdigest()[:10]
-
-
-def _read_manifest(path: Path) -> dict[str, list[str]]:
-    """The manifest of a programs folder; an absent or damaged one is empty (nothing is then removed)."""
-    try:
-        found = json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, ValueError):
-        return {}
-    if not isinstance(found, dict):
-        return {}
-    return {str(k): [str(n) for n in v] for k, v in found.items() if isinstance(v, list)}
-
-
-def _remove_inside(folder: Path, name: str) -> None:
-    """Remove the program ``name`` of an earlier run: a regular file inside ``folder`` only (never a link)."""
-    target = folder / name
-    try:
-        inside = target.parent.resolve().is_relative_to(folder.resolve()) and ".." not in Path(name).parts
-        if inside and target.is_file() and not target.is_symlink():
-            target.unlink()
-    except OSError:
-        pass  # gone already, or not ours to remove

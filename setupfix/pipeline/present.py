@@ -15,7 +15,7 @@ import numpy as np
 
 from setupfix.errors import Note
 from setupfix.offsets import grid_decimals
-from setupfix.pipeline.batch import BatchSummary
+from setupfix.pipeline.batch_records import BatchSummary
 from setupfix.pipeline.compare import Comparison
 from setupfix.pipeline.requests import CycleCorrection
 from setupfix.relation import RelationMatrices

@@ -9,7 +9,8 @@ from pathlib import Path
 import pytest
 
 from setupfix.model import load_model
-from setupfix.pipeline.batch import MANIFEST, run_batch
+from setupfix.pipeline.batch import run_batch
+from setupfix.pipeline.batch_output import MANIFEST
 from setupfix.pipeline.requests import CorrectRequest
 from setupfix.store import open_store
 
@@ -209,17 +210,17 @@ def test_ewma_over_the_store_and_the_batch_does_not_depend_on_workers(tmp_path):
 def test_a_report_the_store_refuses_is_said_in_the_summary(tmp_path, monkeypatch):
     """Its offsets stand (it is corrected again next run), and the summary names why it was not stored."""
     from setupfix.errors import StoreError
-    from setupfix.pipeline import batch
+    from setupfix.pipeline import batch_records
 
     d = folder(tmp_path)
-    real = batch._record
+    real = batch_records._record
 
     def refuse_one(store, outcome, solve):  # type: ignore[no-untyped-def]
         if Path(outcome.path).name == "cycle_02.csv":
             raise StoreError("the store is full", location=None)
         return real(store, outcome, solve)
 
-    monkeypatch.setattr(batch, "_record", refuse_one)
+    monkeypatch.setattr(batch_records, "_record", refuse_one)
     with open_store(tmp_path / "h.db") as store:
         s = run_batch(REQUEST, d, tmp_path / "offsets.csv", settle=0, store=store)
         assert len(store.reports()) == 3

@@ -7,7 +7,8 @@ import shutil
 from pathlib import Path
 
 from setupfix.model import load_model
-from setupfix.pipeline.batch import MANIFEST, run_batch
+from setupfix.pipeline.batch import run_batch
+from setupfix.pipeline.batch_output import MANIFEST
 from setupfix.pipeline.controllers import NAME_MAX, PROGRAM_NAME_MAX, fit_name, program_path
 from setupfix.pipeline.requests import CorrectRequest
 

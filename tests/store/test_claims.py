@@ -189,19 +189,19 @@ def test_a_store_that_cannot_finish_the_claims_says_the_output_stands_and_the_ne
     """The store fills up after the output is written: one line naming the store, the offsets in place, and
     no report marked processed (SQLITE_FULL from SQLite's page limit, set just before the claims finish)."""
     from setupfix.cli import main
-    from setupfix.pipeline import batch as batch_module
+    from setupfix.pipeline import batch_records
 
     folder = tmp_path / "reports"
     reports(folder, 60)  # their recommendations need pages the store does not have
     db, out = tmp_path / "h.db", tmp_path / "out.csv"
-    real = batch_module._Claims.finish
+    real = batch_records.Claims.finish
 
     def full(self):  # type: ignore[no-untyped-def]
         db_ = self.store.db
         db_.execute(f"PRAGMA max_page_count = {db_.execute('PRAGMA page_count').fetchone()[0]}")
         return real(self)
 
-    monkeypatch.setattr(batch_module._Claims, "finish", full)
+    monkeypatch.setattr(batch_records.Claims, "finish", full)
     argv = ["batch", str(folder), "--model", str(GUIDE / "model.toml"), "--out", str(out), "--store", str(db),
             "--settle", "0"]
     assert main(argv) == 1

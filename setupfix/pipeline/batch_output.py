@@ -1,0 +1,156 @@
+"""Where a batch's corrections go: one offsets CSV, or one controller program per cycle.
+
+Both writers take the report's path below the batch folder (``rel``), its offset rows and
+its programs, and say at the end whether anything was written (``commit``).  The CSV is
+streamed into a temporary file renamed over the target (complete or absent; an existing
+output is left as it was when no report gave rows).  Programs go to
+:func:`~setupfix.pipeline.controllers.program_path` below the output folder, each written
+atomically, with a manifest (:data:`MANIFEST`) of which report each program was written for.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+from parsers.names import visible_name
+from setupfix.errors import ExportError, SourceLocation
+from setupfix.offsets import OffsetRow
+from setupfix.pipeline.controllers import program_path
+from setupfix.pipeline.writers import atomic_write, check_target, csv_header, csv_lines, write_text
+
+__all__ = ["CsvOut", "ProgramsOut", "MANIFEST"]
+
+
+class CsvOut:
+    """One offsets CSV, streamed into a temporary file renamed over the target at the end."""
+
+    def __init__(self, target: str | Path) -> None:
+        check_target(target)
+        self._cm = atomic_write(target)
+        self._rows = 0
+
+    def __enter__(self) -> CsvOut:
+        self._stream = self._cm.__enter__()
+        self._stream.write(csv_header())
+        return self
+
+    def add(self, rel: str, rows: Sequence[OffsetRow], programs: Sequence[tuple[str, str]]) -> None:
+        """The rows of the report ``rel`` (its programs are not this writer's)."""
+        self._stream.write(csv_lines(rows))
+        self._rows += len(rows)
+
+    def drop(self, rel: str) -> None:
+        """Nothing to remove: the offsets CSV is written whole each run."""
+
+    def commit(self) -> bool:
+        return self._rows > 0
+
+    def __exit__(self, *exc: Any) -> None:
+        if exc[0] is None and not self._rows:
+            # Nothing new: leave an existing output as it was.
+            self._cm.__exit__(_NothingWritten, _NothingWritten(), None)
+            return
+        self._cm.__exit__(*exc)
+
+
+class _NothingWritten(Exception):
+    pass
+
+
+class ProgramsOut:
+    """One controller program per corrected cycle at :func:`~setupfix.pipeline.controllers.program_path`.
+
+    The folder keeps a manifest (:data:`MANIFEST`: report → the programs written for it), so
+    that a report corrected again replaces exactly its own programs: one that no longer
+    yields a program (rejected, refused, …) leaves none of an earlier run behind.  Only
+    files the manifest names are ever removed.
+    """
+
+    def __init__(self, folder: str | Path, controller: str) -> None:
+        self.folder = Path(folder)
+        self.controller = controller
+        if self.folder.exists() and not self.folder.is_dir():
+            raise ExportError("with --controller other than csv, --out is a folder for one program per cycle",
+                              location=SourceLocation(visible_name(str(folder))))
+        self.written = 0
+        self.manifest = _read_manifest(self.folder / MANIFEST)
+        self._owner: dict[str, tuple[str, str]] = {}  # program written in this run → (report, part)
+        self._changed = False
+
+    def __enter__(self) -> ProgramsOut:
+        self.folder.mkdir(parents=True, exist_ok=True)
+        return self
+
+    def add(self, rel: str, rows: Sequence[OffsetRow], programs: Sequence[tuple[str, str]]) -> None:
+        """The programs (part, text) of the report ``rel``, one per cycle; replaces those of an earlier run."""
+        several = len(programs) > 1
+        names: list[str] = []
+        for part, text in programs:
+            name = program_path(rel, part if several else None, self.controller).as_posix()
+            if self._owner.setdefault(name, (rel, part)) != (rel, part):  # a report named like another's program
+                name = program_path(rel + "~" + _short_hash(rel, part), part if several else None,
+                                    self.controller).as_posix()
+                self._owner[name] = (rel, part)
+            target = self.folder / name
+            target.parent.mkdir(parents=True, exist_ok=True)
+            write_text(target, text)
+            names.append(name)
+            self.written += 1
+        self._replace(rel, names)
+
+    def drop(self, rel: str) -> None:
+        """The report yields no program this run: remove those an earlier run wrote for it."""
+        self._replace(rel, [])
+
+    def _replace(self, rel: str, names: list[str]) -> None:
+        for old in self.manifest.get(rel, []):
+            if old not in names and old not in self._owner:  # never a program this run wrote for another report
+                _remove_inside(self.folder, old)
+        if self.manifest.get(rel, []) != names:
+            self._changed = True
+        if names:
+            self.manifest[rel] = names
+        else:
+            self.manifest.pop(rel, None)
+
+    def commit(self) -> bool:
+        return self.written > 0
+
+    def __exit__(self, *exc: Any) -> None:
+        if self._changed:  # also after an interruption: what was written or removed is on record
+            write_text(self.folder / MANIFEST, json.dumps(self.manifest, indent=1, sort_keys=True) + "\n")
+
+
+#: The programs folder's record of which report each program was written for (hidden, JSON).
+MANIFEST = ".setupfix-programs.json"
+
+
+def _short_hash(*texts: str) -> str:
+    return hashlib.sha256(os.fsencode("\0".join(texts))).hexdigest()[:10]
+
+
+def _read_manifest(path: Path) -> dict[str, list[str]]:
+    """The manifest of a programs folder; an absent or damaged one is empty (nothing is then removed)."""
+    try:
+        found = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return {}
+    if not isinstance(found, dict):
+        return {}
+    return {str(k): [str(n) for n in v] for k, v in found.items() if isinstance(v, list)}
+
+
+def _remove_inside(folder: Path, name: str) -> None:
+    """Remove the program ``name`` of an earlier run: a regular file inside ``folder`` only (never a link)."""
+    target = folder / name
+    try:
+        inside = target.parent.resolve().is_relative_to(folder.resolve()) and ".." not in Path(name).parts
+        if inside and target.is_file() and not target.is_symlink():
+            target.unlink()
+    except OSError:
+        pass  # gone already, or not ours to remove
