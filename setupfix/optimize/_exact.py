@@ -85,12 +85,14 @@ from setupfix.optimize._grid import TOL
 from setupfix.optimize._grid_least_norm import LeastNorm, grid_least_norm
 from setupfix.optimize._grid_optimum import GridOptimum, Stop, grid_optimum
 from setupfix.optimize._least_norm import lower_bound_ratio
-from setupfix.optimize._lp_bound import lp_bound, margin_rows, rows_to_dimensions
+from setupfix.optimize._leximin import Leximin, leximin, leximin_least_norm
+from setupfix.optimize._leximin_level import LevelValue
+from setupfix.optimize._lp_bound import LPBound, dimension_of_rows, lp_bound, margin_rows, rows_to_dimensions
 from setupfix.optimize._problem import CorrectionProblem, OptimizeResult
 from setupfix.optimize._session import Clock, GridRows, Session
 from setupfix.optimize._settings import ExactSettings
 from setupfix.optimize._triage import triaged_result
-from setupfix.params import Constraint, Interval
+from setupfix.params import Constraint, Interval, Options
 
 __all__ = ["ExactOptimizer", "ExactSettings", "margin_rows"]
 
@@ -136,10 +138,12 @@ class ExactOptimizer(Optimizer):
         "time_limit": [Interval(float, 0.0, None, closed="neither")],
         "seed": [Interval(int, 0, None), None],
         "settings": [ExactSettings],
+        "objective": [Options({"leximin", "paper"})],
     }
 
     def __init__(self, *, grid: bool = True, time_limit: float = 2.0, seed: int | None = None,
-                 settings: ExactSettings = DEFAULT_SETTINGS) -> None:
+                 settings: ExactSettings = DEFAULT_SETTINGS, objective: str = "leximin") -> None:
+        self.objective = objective
         self.grid = grid
         self.time_limit = time_limit
         self.seed = seed
@@ -191,10 +195,33 @@ class ExactOptimizer(Optimizer):
         calls = 1 + opt.calls
         if opt.upper < -TOL or (opt.stopped is None and opt.t < -TOL):
             return triaged_result(problem, session, opt.k, list(opt.path), list(opt.notes), calls, bound, self.name)
+        if self.objective == "leximin" and opt.stopped is None:
+            return self._leximin(problem, session, lp, opt, calls, bound, binding)
         least, calls = self._least_norm(session, opt, calls)
         session.clock.lap("least norm")
         x[free] = least.k * problem.resolution
         return self._result(problem, session, x, opt, least, calls, bound, binding)
+
+    def _leximin(self, problem: CorrectionProblem, session: Session, lp: LPBound, opt: GridOptimum, calls: int,
+                 bound: float, binding: tuple[str, ...]) -> OptimizeResult:
+        """Levels 2, 3 … after the proved first level (the paper's δ), then the least norm among the
+        leximin-optimal grid points (:mod:`setupfix.optimize._leximin`)."""
+        row_dim = dimension_of_rows(problem)
+        stage_end = session.clock.deadline - self.settings.least_norm_share * self.time_limit
+        lex = leximin(session, row_dim, len(problem.dimension_ids), opt.k, opt.t,
+                      first=LevelValue(opt.t, opt.k, lp.t, lp.y), stage_end=stage_end)
+        session.clock.lap("leximin")
+        share = self.settings.box_share if lex.stopped is None else self.settings.stopped_box_share
+        least = leximin_least_norm(session, lex, row_dim, share)
+        session.clock.lap("least norm")
+        x = np.zeros(problem.n_registers)
+        x[problem.free] = least.k * problem.resolution
+        opt = GridOptimum(lex.k, opt.t, opt.upper, lex.stopped, None, None, None, opt.path + lex.path, opt.notes,
+                          calls + lex.calls)
+        result = self._result(problem, session, x, opt, least, calls + lex.calls, bound, binding)
+        h = problem.resolution
+        result.extra["leximin"] = [[value * h, count] for value, count in lex.levels]
+        return result
 
     def _least_norm(self, session: Session, opt: GridOptimum, calls: int) -> tuple[LeastNorm, int]:
         """Stage 3 at the error budget reached (also when stage 2 was stopped), unless stage 2 proved it."""
@@ -217,7 +244,10 @@ class ExactOptimizer(Optimizer):
         extra: dict[str, object] = {"stages": dict(session.clock.stages), "path": "; ".join(opt.path + least.path)}
         if stopped is not None:
             status = "time_limit" if stopped.reason == "time limit" else "solver_error"
-            if stopped.stage == "grid optimum":
+            if stopped.stage == "leximin":
+                message = (f"paper's optimum proved, leximin levels not all proved ({stopped.reason} in the "
+                           "leximin stage); the least-norm correction at the levels reached is given")
+            elif stopped.stage == "grid optimum":
                 message = (f"grid optimum not proved ({stopped.reason} in the grid-optimum stage); the least-norm "
                            f"correction at the best error budget found is given; the continuous bound is "
                            f"{bound:.4f}")

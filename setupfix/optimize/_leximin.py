@@ -1,0 +1,279 @@
+"""Leximin centring on the register grid: every dimension as far inside its tolerance as the others allow.
+
+Grid units as in :mod:`setupfix.optimize._session`.  Each dimension q has the margin
+``M_q(k) = min_{j ∈ q} (g_j − G_j k)`` (its rows, eqs. 5–6); the objective orders the
+grid points by the vector of these margins sorted ascending, compared lexicographically
+(the *leximin* order; margins within ``ε`` = half the input quantum are ties), and among
+the leximin-optimal points takes the least Σ c_i k_i² (eq. 9), ties to the lexicographically
+smallest k where a listing proves it.  Its first level is the paper's error budget δ = t*
+of eq. 8 (:func:`~setupfix.optimize._grid_optimum.grid_optimum`): leximin keeps the paper's
+optimum and then centres every dimension that does not bind.
+
+Levels (progressive filling, each level proved on the grid)
+-----------------------------------------------------------
+State: dimensions *fixed* with a floor v_q (every leximin-optimal point has M_q ≥ v_q and
+no point of the current level set has M_q above v_q + ε), the others *active*.
+
+1. Level value: t_ℓ = max t over grid points with M_q ≥ v_q (fixed) and M_q ≥ t (active)
+   (:func:`~setupfix.optimize._leximin_level.level_value`: LP bound, rounded points, the
+   rounded-rows descent — one LP per level where the rows are totally unimodular — and the
+   bracketed MILP).
+2. Saturation: a weighted sum of the level's rows (the LP's duals, checked in numpy by weak
+   duality, :func:`pinned_dimensions`) proves that an active dimension cannot rise above
+   t_ℓ + ε, or that its a_qᵀk is the same at every grid point of the level set (integer rows:
+   it cannot move by one lattice step).  Those dimensions are fixed.
+3. The next level must rise above t_ℓ + ε; then exactly the fixed dimensions sit at t_ℓ.  If
+   nothing is proved saturated or the next level does not rise (a discrete conflict: e.g. two
+   dimensions moved oppositely by one register with the even split off the grid), the rest is
+   decided by counts (:mod:`setupfix.optimize._leximin_counts`, always correct, MILPs with
+   binaries).
+
+When every dimension is fixed, the leximin-optimal points are exactly the grid points with
+M_q ≥ v_q for every q, and the least norm among them is stage 3
+(:func:`~setupfix.optimize._grid_least_norm.grid_least_norm`) on the rows shifted by the floors.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+
+import numpy as np
+import numpy.typing as npt
+
+from setupfix.optimize._grid import TOL
+from setupfix.optimize._grid_least_norm import LeastNorm, grid_least_norm
+from setupfix.optimize._grid_optimum import Stop
+from setupfix.optimize._leximin_counts import CountLevels, count_levels, count_least_norm
+from setupfix.optimize._leximin_level import Certificates, LevelModel, LevelValue, dim_margins
+from setupfix.optimize._session import GridRows, Session
+
+__all__ = ["Leximin", "leximin", "leximin_least_norm", "pinned_dimensions"]
+
+Array = npt.NDArray[np.float64]
+Mask = npt.NDArray[np.bool_]
+
+
+@dataclass(frozen=True)
+class Leximin:
+    """Outcome of the leximin levels (before the least norm).
+
+    Attributes
+    ----------
+    k : ndarray of shape (n,)
+        A leximin-optimal grid point (the best found when ``stopped``).
+    floors : ndarray of shape (n_dims,)
+        v_q [steps]: the floor of each dimension (−inf for a dimension without rows).
+    levels : tuple of (float, int)
+        The leximin vector as distinct values [steps] and how many dimensions sit at each.
+    counts : CountLevels or None
+        The count constraints that decide the dimensions left when a discrete conflict
+        stopped the progressive filling (None: every dimension has its floor).
+    stopped : Stop or None
+    path : tuple of str
+    calls : int
+        Solver calls.
+    """
+
+    k: Array
+    floors: Array
+    levels: tuple[tuple[float, int], ...]
+    counts: CountLevels | None
+    stopped: Stop | None
+    path: tuple[str, ...]
+    calls: int
+
+
+def pinned_dimensions(level: Certificates, row_dim: npt.NDArray[np.intp], active_rows: Mask, eps: float,
+                      d: Array) -> tuple[Mask, Mask]:
+    """Rows whose margin cannot rise above t + ε, and integer rows whose value G_j k is pinned.
+
+    Weak duality with the level LP's row weights y (≥ 0, over the active rows normalised to
+    sum 1) and the fixed rows' weights w: for every k in the box
+    ``Σ_A y_j (rhs_j − G_j k) + Σ_F w_j (rhs_j − G_j k) ≤ C`` with C computed here from y, w
+    and the box (not from the solver's objective).  On the level set every term is ≥ its floor,
+    so for an active row j: ``m_j(k) − t ≤ (C − t)/y_j`` (rhs = g_j; ``saturated`` when this is
+    ≤ ε).  For the rounded-rows LP (rhs = b_j, floors 0) and an integer row with gcd d_j:
+    ``b_j − G_j k ∈ d_j ℤ≥0`` is below d_j, so G_j k = b_j on every grid point (``pinned``).
+
+    Parameters
+    ----------
+    level : Certificates
+        The weights, the right-hand sides and the floors of the LPs the weights come from.
+    row_dim : ndarray of int, shape (r,)
+    active_rows : ndarray of bool, shape (r,)
+    eps : float
+        Tie threshold [steps].
+    d : ndarray of shape (r,)
+        Row gcds (0: not an integer row).
+
+    Returns
+    -------
+    saturated, pinned : ndarray of bool, shape (r,)
+    """
+    sat = np.zeros(active_rows.size, bool)
+    pin = np.zeros(active_rows.size, bool)
+    for weights, rhs, floor_a, rounded in level.certificates:
+        y = np.maximum(weights, 0.0)
+        total = float(y[active_rows].sum())
+        if not np.isfinite(total) or total <= 0:
+            continue
+        y = y / total
+        w = y @ level.g_rows
+        c = float(y @ rhs + np.sum(np.maximum(-w * level.kmin, -w * level.kmax)))
+        slack = c - floor_a  # Σ_A y_j (m_j − floor) ≤ slack on the level set
+        with np.errstate(divide="ignore", invalid="ignore"):
+            room = np.where(y > 0, slack / y, np.inf)
+        if rounded:
+            pin |= active_rows & (d > 0) & (room < d - 1e-7)
+        else:
+            sat |= active_rows & (room <= eps - 1e-9)
+    return sat, pin
+
+
+def leximin(session: Session, row_dim: npt.NDArray[np.intp], n_dims: int, k_first: Array, t_first: float,
+            first: LevelValue | None = None, floors: Array | None = None, stage_end: float | None = None) -> Leximin:
+    """The leximin levels from a proved first level (t_first at the grid point k_first).
+
+    Parameters
+    ----------
+    session : Session
+        The solve (rows in grid units, clock, settings).
+    row_dim : ndarray of int, shape (r,)
+        Dimension (0 … n_dims − 1) of each row.
+    n_dims : int
+    k_first : ndarray of shape (n,); t_first : float
+        A grid point and its proved max–min over the active dimensions (level 1, the paper's δ).
+    first : LevelValue, optional
+        The first level's LP certificate (its duals prove saturation at once).
+    floors : ndarray of shape (n_dims,), optional
+        Dimensions fixed before (finite floor v_q; NaN: active).  A caller that keeps a subset
+        (the triage) passes floors for it and −inf for dimensions it leaves out.
+    stage_end : float, optional
+        ``time.perf_counter()`` at which the levels stop (default: the solve's deadline).
+    """
+    rows, s = session.rows, session.settings
+    g_rows, g = rows.g_rows, rows.g
+    eps = s.quantum / 2
+    stage_end = session.clock.deadline if stage_end is None else stage_end
+    v = np.full(n_dims, np.nan) if floors is None else np.asarray(floors, dtype=float).copy()
+    has_rows = np.zeros(n_dims, bool)
+    has_rows[row_dim] = True
+    v[~has_rows] = -np.inf
+    # a dimension no free register moves keeps its margin: fixed at it from the start
+    constant = np.zeros(n_dims, bool)
+    np.logical_or.at(constant, row_dim, True)
+    np.logical_and.at(constant, row_dim, rows.zero)
+    m_first = dim_margins(g_rows, g, k_first, row_dim, n_dims)
+    v[np.isnan(v) & constant] = m_first[np.isnan(v) & constant]
+    model = LevelModel(session, row_dim, n_dims)
+    k, t = k_first, t_first
+    levels: list[tuple[float, int]] = []
+    path: list[str] = []
+    calls = 0
+    level = first
+    while True:
+        active = np.isnan(v)
+        if not active.any():
+            break
+        if level is None:  # level ℓ ≥ 2 (or a first level without its certificate)
+            if time.perf_counter() >= stage_end:
+                return _stopped(v, k, levels, path, calls, model, "time limit")
+            level = model.value(v, k, stage_end)
+            calls += level.calls
+            path.extend(level.path)
+            if level.stop is not None:
+                return _stopped(v, level.k, levels, path, calls, model, level.stop)
+            k, t = level.k, level.t
+        active_rows = active[row_dim]
+        sat, pin = pinned_dimensions(model.certify(level, v), row_dim, active_rows, eps, rows.d)
+        if not (sat & active_rows).any() and rows.all_integer:  # the rounded rows' weights
+            sat2, pin = pinned_dimensions(model.certify_rounded(level, v, stage_end), row_dim, active_rows, eps,
+                                          rows.d)
+            sat |= sat2
+            calls += 1
+        m_k = dim_margins(g_rows, g, k, row_dim, n_dims)
+        fix_sat = np.zeros(n_dims, bool)
+        fix_sat[row_dim[sat]] = True
+        fix_pin = np.zeros(n_dims, bool)
+        fix_pin[row_dim[pin]] = True
+        fix_pin &= active & ~fix_sat
+        fix_sat &= active
+        if not (fix_sat.any() or fix_pin.any()):  # each dimension at t: can it rise alone?
+            for q in np.flatnonzero(active & (m_k <= t + eps)):
+                if time.perf_counter() >= stage_end:
+                    return _stopped(v, k, levels, path, calls, model, "time limit")
+                rise = model.can_rise(v, int(q), t, eps, stage_end)
+                calls += 1
+                if rise is None:
+                    return _stopped(v, k, levels, path, calls, model, "time limit")
+                fix_sat[q] = not rise
+            if not fix_sat.any():  # each can, not all together: a discrete conflict
+                return _counts(session, model, v, k, t, levels, path, calls, stage_end)
+            path.append("leximin: saturation proved by the rounded rows one dimension at a time")
+        v[fix_sat] = t
+        v[fix_pin] = m_k[fix_pin]
+        at_t = int(np.sum(fix_sat | (fix_pin & (m_k <= t + eps))))
+        if at_t == 0:  # only dimensions pinned above t: the level is decided by counts
+            return _counts(session, model, v, k, t, levels, path, calls, stage_end)
+        levels.append((t, at_t))
+        path.append(f"leximin: {at_t} dimension(s) at {t:.4g} steps")
+        level = None
+    return Leximin(k, v, _with_pinned(levels, v, row_dim), None, None, tuple(path), calls)
+
+
+def _with_pinned(levels: list[tuple[float, int]], v: Array, row_dim: npt.NDArray[np.intp]) -> tuple[
+        tuple[float, int], ...]:
+    """The leximin vector as (value, count): every finite floor counted once at its value."""
+    finite = v[np.isfinite(v)]
+    values, counts = np.unique(np.round(finite, 9), return_counts=True)
+    del levels, row_dim
+    return tuple((float(a), int(b)) for a, b in zip(values, counts, strict=True))
+
+
+def _stopped(v: Array, k: Array, levels: list[tuple[float, int]], path: list[str], calls: int, model: LevelModel,
+             reason: str) -> Leximin:
+    """The limit stopped the levels: the dimensions left get the best point's smallest margin as floor."""
+    m_k = dim_margins(model.rows.g_rows, model.rows.g, k, model.row_dim, model.n_dims)
+    active = np.isnan(v)
+    v = v.copy()
+    if active.any():
+        v[active] = float(np.min(m_k[active]))
+    path.append(f"leximin: stopped ({reason})")
+    return Leximin(k, v, _with_pinned(levels, v, model.row_dim), None, Stop("leximin", reason), tuple(path),
+                   calls)
+
+
+def _counts(session: Session, model: LevelModel, v: Array, k: Array, t: float, levels: list[tuple[float, int]],
+            path: list[str], calls: int, stage_end: float) -> Leximin:
+    """A discrete conflict at level t: the dimensions left are decided by counts (MILPs with binaries)."""
+    path.append(f"leximin: discrete conflict at {t:.4g} steps; the rest by counts")
+    out = count_levels(session, model.row_dim, model.n_dims, v, k, t, stage_end)
+    path.extend(out.path)
+    vv = v.copy()
+    active = np.isnan(vv)
+    vv[active] = t  # every active dimension has at least t (the counts say which have more)
+    stop = None if out.proved else Stop("leximin", out.why)
+    base = [(a, b) for a, b in _with_pinned(levels, v, model.row_dim)]
+    lex = tuple(sorted(base + list(out.levels)))
+    return Leximin(out.k, vv, lex, out, stop, tuple(path), calls + out.calls)
+
+
+def leximin_least_norm(session: Session, lex: Leximin, row_dim: npt.NDArray[np.intp], box_share: float
+                       ) -> LeastNorm:
+    """The least Σ c k² among the leximin-optimal grid points (every margin at least its floor).
+
+    Floors for every dimension: stage 3 on the rows shifted by them (g_j − v_q(j) ≥ G_j k, level 0).
+    Count constraints left by a discrete conflict: :func:`~setupfix.optimize._leximin_counts.count_least_norm`.
+    """
+    rows = session.rows
+    floor_rows = np.where(np.isfinite(lex.floors[row_dim]), lex.floors[row_dim], -np.inf)
+    if lex.counts is not None:
+        return count_least_norm(session, row_dim, lex.counts, lex.k)
+    shifted = Session(GridRows(rows.g_rows, np.where(np.isfinite(floor_rows), rows.g - floor_rows, np.inf),
+                               rows.kmin, rows.kmax, rows.cost), session.settings, session.time_limit, session.clock)
+    g_shift = shifted.rows.g
+    b = shifted.rows.rounded(0.0)
+    b[~np.isfinite(g_shift)] = np.inf
+    least = grid_least_norm(shifted, 0.0 - TOL, b, lex.k, None, None, box_share)
+    return least
