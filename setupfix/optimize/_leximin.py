@@ -73,6 +73,8 @@ class Leximin:
     path : tuple of str
     calls : int
         Solver calls.
+    alternatives : tuple of Leximin
+        Other outcomes with the same leximin vector (branches of a discrete conflict that tie).
     """
 
     k: Array
@@ -82,6 +84,7 @@ class Leximin:
     stopped: Stop | None
     path: tuple[str, ...]
     calls: int
+    alternatives: tuple[Leximin, ...] = ()
 
 
 def pinned_dimensions(level: Certificates, row_dim: npt.NDArray[np.intp], active_rows: Mask, eps: float,
@@ -131,6 +134,24 @@ def pinned_dimensions(level: Certificates, row_dim: npt.NDArray[np.intp], active
     return sat, pin
 
 
+class _Search:
+    """What one leximin search shares across its branches: the model, the deadline, the counters."""
+
+    def __init__(self, session: Session, model: LevelModel, stage_end: float) -> None:
+        self.session, self.model, self.stage_end = session, model, stage_end
+        self.eps = session.settings.quantum / 2
+        self.leaves = 0
+        self.calls = 0
+
+    def margins(self, k: Array) -> Array:
+        m = self.model
+        return dim_margins(m.rows.g_rows, m.rows.g, k, m.row_dim, m.n_dims)
+
+
+#: Most branches a search may open on discrete conflicts before the counts decide the rest.
+MAX_BRANCHES = 12
+
+
 def leximin(session: Session, row_dim: npt.NDArray[np.intp], n_dims: int, k_first: Array, t_first: float,
             first: LevelValue | None = None, floors: Array | None = None, stage_end: float | None = None) -> Leximin:
     """The leximin levels from a proved first level (t_first at the grid point k_first).
@@ -151,10 +172,14 @@ def leximin(session: Session, row_dim: npt.NDArray[np.intp], n_dims: int, k_firs
         (the triage) passes floors for it and −inf for dimensions it leaves out.
     stage_end : float, optional
         ``time.perf_counter()`` at which the levels stop (default: the solve's deadline).
+
+    Returns
+    -------
+    Leximin
+        With ``alternatives``: other branches of a discrete conflict whose leximin vectors tie with it
+        (the least norm is taken over all of them).
     """
-    rows, s = session.rows, session.settings
-    g_rows, g = rows.g_rows, rows.g
-    eps = s.quantum / 2
+    rows = session.rows
     stage_end = session.clock.deadline if stage_end is None else stage_end
     v = np.full(n_dims, np.nan) if floors is None else np.asarray(floors, dtype=float).copy()
     has_rows = np.zeros(n_dims, bool)
@@ -164,99 +189,141 @@ def leximin(session: Session, row_dim: npt.NDArray[np.intp], n_dims: int, k_firs
     constant = np.zeros(n_dims, bool)
     np.logical_or.at(constant, row_dim, True)
     np.logical_and.at(constant, row_dim, rows.zero)
-    m_first = dim_margins(g_rows, g, k_first, row_dim, n_dims)
+    search = _Search(session, LevelModel(session, row_dim, n_dims), stage_end)
+    m_first = search.margins(k_first)
     v[np.isnan(v) & constant] = m_first[np.isnan(v) & constant]
-    model = LevelModel(session, row_dim, n_dims)
-    k, t = k_first, t_first
-    levels: list[tuple[float, int]] = []
-    path: list[str] = []
-    calls = 0
-    level = first
+    best = _fill(search, v, k_first, t_first, first, [])
+    head = best[0]
+    return Leximin(head.k, head.floors, head.levels, head.counts, head.stopped, head.path, search.calls,
+                   tuple(best[1:]))
+
+
+def _vector(lex: Leximin) -> Array:
+    return np.repeat([a for a, _ in lex.levels], [b for _, b in lex.levels])
+
+
+def _compare(a: Leximin, b: Leximin, eps: float) -> int:
+    """+1 if a's sorted margins beat b's (leximin, ties within ε), −1 if worse, 0 if tied."""
+    va, vb = _vector(a), _vector(b)
+    for x, y in zip(va, vb, strict=False):
+        if abs(x - y) > eps:
+            return 1 if x > y else -1
+    return 0
+
+
+def _fill(search: _Search, v: Array, k: Array, t: float, level: LevelValue | None, path: list[str]) -> list[Leximin]:
+    """Progressive filling from this state; the tied-best outcomes (branches of discrete conflicts)."""
+    model, eps, rows = search.model, search.eps, search.session.rows
+    row_dim = model.row_dim
+    v = v.copy()
+    path = list(path)
     while True:
         active = np.isnan(v)
         if not active.any():
             break
         if level is None:  # level ℓ ≥ 2 (or a first level without its certificate)
-            if time.perf_counter() >= stage_end:
-                return _stopped(v, k, levels, path, calls, model, "time limit")
-            level = model.value(v, k, stage_end)
-            calls += level.calls
+            if time.perf_counter() >= search.stage_end:
+                return [_stopped(search, v, k, path, "time limit")]
+            level = model.value(v, k, search.stage_end)
+            search.calls += level.calls
             path.extend(level.path)
             if level.stop is not None:
-                return _stopped(v, level.k, levels, path, calls, model, level.stop)
+                return [_stopped(search, v, level.k, path, level.stop)]
             k, t = level.k, level.t
         active_rows = active[row_dim]
         sat, pin = pinned_dimensions(model.certify(level, v), row_dim, active_rows, eps, rows.d)
         if not (sat & active_rows).any() and rows.all_integer:  # the rounded rows' weights
-            sat2, pin = pinned_dimensions(model.certify_rounded(level, v, stage_end), row_dim, active_rows, eps,
-                                          rows.d)
+            sat2, pin = pinned_dimensions(model.certify_rounded(level, v, search.stage_end), row_dim, active_rows,
+                                          eps, rows.d)
             sat |= sat2
-            calls += 1
-        m_k = dim_margins(g_rows, g, k, row_dim, n_dims)
-        fix_sat = np.zeros(n_dims, bool)
+            search.calls += 1
+        m_k = search.margins(k)
+        fix_sat = np.zeros(v.size, bool)
         fix_sat[row_dim[sat]] = True
-        fix_pin = np.zeros(n_dims, bool)
+        fix_pin = np.zeros(v.size, bool)
         fix_pin[row_dim[pin]] = True
         fix_pin &= active & ~fix_sat
         fix_sat &= active
         if not (fix_sat.any() or fix_pin.any()):  # each dimension at t: can it rise alone?
             for q in np.flatnonzero(active & (m_k <= t + eps)):
-                if time.perf_counter() >= stage_end:
-                    return _stopped(v, k, levels, path, calls, model, "time limit")
-                rise = model.can_rise(v, int(q), t, eps, stage_end)
-                calls += 1
+                rise = model.can_rise(v, int(q), t, eps, search.stage_end)
+                search.calls += 1
                 if rise is None:
-                    return _stopped(v, k, levels, path, calls, model, "time limit")
+                    return [_stopped(search, v, k, path, "time limit")]
                 fix_sat[q] = not rise
             if not fix_sat.any():  # each can, not all together: a discrete conflict
-                return _counts(session, model, v, k, t, levels, path, calls, stage_end)
+                return _conflict(search, v, k, t, path)
             path.append("leximin: saturation proved by the rounded rows one dimension at a time")
         v[fix_sat] = t
         v[fix_pin] = m_k[fix_pin]
         at_t = int(np.sum(fix_sat | (fix_pin & (m_k <= t + eps))))
-        if at_t == 0:  # only dimensions pinned above t: the level is decided by counts
-            return _counts(session, model, v, k, t, levels, path, calls, stage_end)
-        levels.append((t, at_t))
-        path.append(f"leximin: {at_t} dimension(s) at {t:.4g} steps")
+        if at_t:
+            path.append(f"leximin: {at_t} dimension(s) at {t:.4g} steps")
         level = None
-    return Leximin(k, v, _with_pinned(levels, v, row_dim), None, None, tuple(path), calls)
+    return [Leximin(k, v, _levels(v), None, None, tuple(path), 0)]
 
 
-def _with_pinned(levels: list[tuple[float, int]], v: Array, row_dim: npt.NDArray[np.intp]) -> tuple[
-        tuple[float, int], ...]:
+def _conflict(search: _Search, v: Array, k: Array, t: float, path: list[str]) -> list[Leximin]:
+    """A discrete conflict at level t: one branch per dimension that can be the only one left at t
+    (every other active dimension above t + ε at some grid point); none, or too many branches:
+    the counts decide (:mod:`setupfix.optimize._leximin_counts`)."""
+    model, eps = search.model, search.eps
+    starts: list[tuple[int, Array]] = []
+    for q in np.flatnonzero(np.isnan(v)):
+        found = model.alone_at(v, int(q), t, eps, search.stage_end)
+        search.calls += 1
+        if found is None:
+            return [_stopped(search, v, k, path, "time limit")]
+        if found is not False:
+            starts.append((int(q), np.asarray(found, dtype=float)))
+    if not starts or search.leaves + len(starts) > MAX_BRANCHES:
+        return [_counts(search, v, k, t, path)]
+    search.leaves += len(starts)
+    best: list[Leximin] = []
+    for q, k_q in starts:
+        v_q = v.copy()
+        v_q[q] = t
+        branch = _fill(search, v_q, k_q, t, None,
+                       [*path, f"leximin: discrete conflict at {t:.4g} steps, branch: dimension {q} at it"])
+        if branch[0].stopped is not None:
+            return branch
+        order = 1 if not best else _compare(branch[0], best[0], eps)
+        if order > 0:
+            best = branch
+        elif order == 0:
+            best = best + branch
+    return best
+
+
+def _levels(v: Array) -> tuple[tuple[float, int], ...]:
     """The leximin vector as (value, count): every finite floor counted once at its value."""
     finite = v[np.isfinite(v)]
     values, counts = np.unique(np.round(finite, 9), return_counts=True)
-    del levels, row_dim
     return tuple((float(a), int(b)) for a, b in zip(values, counts, strict=True))
 
 
-def _stopped(v: Array, k: Array, levels: list[tuple[float, int]], path: list[str], calls: int, model: LevelModel,
-             reason: str) -> Leximin:
+def _stopped(search: _Search, v: Array, k: Array, path: list[str], reason: str) -> Leximin:
     """The limit stopped the levels: the dimensions left get the best point's smallest margin as floor."""
-    m_k = dim_margins(model.rows.g_rows, model.rows.g, k, model.row_dim, model.n_dims)
+    m_k = search.margins(k)
     active = np.isnan(v)
     v = v.copy()
     if active.any():
         v[active] = float(np.min(m_k[active]))
-    path.append(f"leximin: stopped ({reason})")
-    return Leximin(k, v, _with_pinned(levels, v, model.row_dim), None, Stop("leximin", reason), tuple(path),
-                   calls)
+    return Leximin(k, v, _levels(v), None, Stop("leximin", reason), (*path, f"leximin: stopped ({reason})"), 0)
 
 
-def _counts(session: Session, model: LevelModel, v: Array, k: Array, t: float, levels: list[tuple[float, int]],
-            path: list[str], calls: int, stage_end: float) -> Leximin:
-    """A discrete conflict at level t: the dimensions left are decided by counts (MILPs with binaries)."""
-    path.append(f"leximin: discrete conflict at {t:.4g} steps; the rest by counts")
-    out = count_levels(session, model.row_dim, model.n_dims, v, k, t, stage_end)
+def _counts(search: _Search, v: Array, k: Array, t: float, path: list[str]) -> Leximin:
+    """The dimensions left are decided by counts (MILPs with binaries)."""
+    path = [*path, f"leximin: discrete conflict at {t:.4g} steps; the rest by counts"]
+    model = search.model
+    out = count_levels(search.session, model.row_dim, model.n_dims, v, k, t, search.stage_end)
+    search.calls += out.calls
     path.extend(out.path)
     vv = v.copy()
-    active = np.isnan(vv)
-    vv[active] = t  # every active dimension has at least t (the counts say which have more)
+    vv[np.isnan(vv)] = t  # every active dimension has at least t (the counts say which have more)
     stop = None if out.proved else Stop("leximin", out.why)
-    base = [(a, b) for a, b in _with_pinned(levels, v, model.row_dim)]
-    lex = tuple(sorted(base + list(out.levels)))
-    return Leximin(out.k, vv, lex, out, stop, tuple(path), calls + out.calls)
+    lex = tuple(sorted(list(_levels(v)) + list(out.levels)))
+    return Leximin(out.k, vv, lex, out, stop, tuple(path), 0)
 
 
 def leximin_least_norm(session: Session, lex: Leximin, row_dim: npt.NDArray[np.intp], box_share: float
@@ -265,15 +332,37 @@ def leximin_least_norm(session: Session, lex: Leximin, row_dim: npt.NDArray[np.i
 
     Floors for every dimension: stage 3 on the rows shifted by them (g_j − v_q(j) ≥ G_j k, level 0).
     Count constraints left by a discrete conflict: :func:`~setupfix.optimize._leximin_counts.count_least_norm`.
+    Tied branches (``lex.alternatives``): the least over them (ties: the lexicographically smallest k).
     """
+    best: LeastNorm | None = None
+    for option in (lex, *lex.alternatives):
+        least = _least_norm_of(session, option, row_dim, box_share)
+        if best is None or _better(least, best, session.rows.cost):
+            best = least if best is None else LeastNorm(least.k, least.proved and best.proved,
+                                                        least.why or best.why, min(least.lower, best.lower),
+                                                        best.path + least.path)
+        else:
+            best = LeastNorm(best.k, least.proved and best.proved, best.why or least.why,
+                             min(least.lower, best.lower), best.path + least.path)
+    assert best is not None
+    return best
+
+
+def _better(a: LeastNorm, b: LeastNorm, cost: Array) -> bool:
+    fa, fb = float(np.sum(cost * a.k**2)), float(np.sum(cost * b.k**2))
+    if abs(fa - fb) > 1e-9 * max(1.0, fb):
+        return fa < fb
+    return tuple(a.k) < tuple(b.k)
+
+
+def _least_norm_of(session: Session, lex: Leximin, row_dim: npt.NDArray[np.intp], box_share: float) -> LeastNorm:
     rows = session.rows
-    floor_rows = np.where(np.isfinite(lex.floors[row_dim]), lex.floors[row_dim], -np.inf)
     if lex.counts is not None:
         return count_least_norm(session, row_dim, lex.counts, lex.k)
-    shifted = Session(GridRows(rows.g_rows, np.where(np.isfinite(floor_rows), rows.g - floor_rows, np.inf),
-                               rows.kmin, rows.kmax, rows.cost), session.settings, session.time_limit, session.clock)
-    g_shift = shifted.rows.g
+    floor_rows = lex.floors[row_dim]
+    g_shift = np.where(np.isfinite(floor_rows), rows.g - floor_rows, np.inf)
+    shifted = Session(GridRows(rows.g_rows, g_shift, rows.kmin, rows.kmax, rows.cost), session.settings,
+                      session.time_limit, session.clock)
     b = shifted.rows.rounded(0.0)
     b[~np.isfinite(g_shift)] = np.inf
-    least = grid_least_norm(shifted, 0.0 - TOL, b, lex.k, None, None, box_share)
-    return least
+    return grid_least_norm(shifted, -TOL, b, lex.k, None, None, box_share)

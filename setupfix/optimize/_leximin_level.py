@@ -208,31 +208,48 @@ class LevelModel:
         False is a proof (the LP or MILP of the rounded rows with q's rows at t + ε is infeasible);
         None: the limit or HiGHS stopped the test.
         """
-        rows = self.rows
         f = self._floors(v).copy()
         f[np.isnan(f)] = t
         f[self.row_dim == q] = t + eps
+        found = self.point_above(f, stage_end)
+        return None if found is None else found is not False
+
+    def alone_at(self, v: Array, q: int, t: float, eps: float, stage_end: float) -> Array | bool | None:
+        """A grid point with every active dimension but q at t + ε or more (q ≥ t, fixed ≥ floors);
+        False: proved none; None: stopped."""
+        f = self._floors(v).copy()
+        f[np.isnan(f)] = t + eps
+        f[self.row_dim == q] = t
+        return self.point_above(f, stage_end)
+
+    def point_above(self, f: Array, stage_end: float) -> Array | bool | None:
+        """A grid point with every row's margin ≥ f_j (shape (r,), −inf: no floor); False: proved none
+        (the LP or MILP of the rounded rows is infeasible); None: the limit or HiGHS stopped it."""
+        rows = self.rows
         fin = np.isfinite(f)
         b = np.full(f.size, np.inf)
         b[fin] = rounded_rhs(rows.g[fin], rows.d[fin], rows.zero[fin], f[fin])
+
+        def meets(k: Array) -> bool:
+            return bool(np.all((rows.g - rows.g_rows @ k)[fin] >= f[fin] - 1e-9))
+
         if rows.all_integer:
             feas, kx = self._feasible(b, stage_end - time.perf_counter())
             if feas == "infeasible":
                 return False
-            if feas == "optimal" and kx is not None:
-                k = np.clip(np.rint(kx), rows.kmin, rows.kmax)
-                if np.all(rows.g_rows[fin] @ k <= b[fin] + 1e-9):
-                    return True
-            elif feas != "optimal":
+            if feas != "optimal":
                 return None
+            if kx is not None:
+                k = np.clip(np.rint(kx), rows.kmin, rows.kmax)
+                if meets(k):
+                    return k
         res = LinearModel(np.zeros(self.n), rows.g_rows[fin], np.full(int(fin.sum()), -INF), b[fin], rows.kmin,
                           rows.kmax, integer=np.ones(self.n, bool)).solve(stage_end - time.perf_counter())
         if res.status == "infeasible":
             return False
         if res.x is not None:
             k = np.clip(np.rint(res.x), rows.kmin, rows.kmax)
-            m = rows.g - rows.g_rows @ k
-            return bool(np.all(m[fin] >= f[fin] - 1e-9)) or None
+            return k if meets(k) else None
         return None
 
     # -- certificates of saturation ---------------------------------------------------------------
