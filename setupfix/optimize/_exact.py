@@ -60,6 +60,16 @@ shared: :class:`~setupfix.optimize._settings.ExactSettings`.
    proof, the best point is improved by coordinate descent and the result states a
    certified bound on ‖x‖ / least norm (``extra["norm_ratio_max"]``).
 
+Objective
+---------
+``objective="leximin"`` (the default) goes on after stage 2: with the smallest margin t* (the
+paper's δ, eq. 8, leximin's first level) held, the next smallest dimension margin is raised as far
+as the grid allows, then the next, and so on — every dimension centred as far as the others allow
+(:mod:`setupfix.optimize._leximin`: each level proved by an LP bound, rounded rows or a MILP; a
+discrete conflict by branches or counts) — and stage 3 runs among the leximin-optimal grid points
+(every dimension's margin at least its level).  ``objective="paper"`` stops after stage 2 and runs
+stage 3 at t* (eqs. 8–9 exactly, what ``compare`` and the paper's validation use).
+
 One ``time_limit`` bounds the wall time of the whole solve, counted from the solve's own
 start (each solve has its own session; nothing of an earlier solve's clock carries over).  The
 grid-optimum stage stops when ``least_norm_share`` of the limit is left, so the least-norm stage always runs: if a
@@ -127,6 +137,10 @@ class ExactOptimizer(Optimizer):
         Accepted for interface symmetry; the solver is deterministic.
     settings : ExactSettings, optional
         Which proofs are tried and how the time is shared (defaults: ``ExactSettings()``).
+    objective : {"leximin", "paper"}, default="leximin"
+        ``"leximin"``: the sorted dimension margins maximised lexicographically (first level = the
+        paper's δ), then the least Σ cost·x²; ``"paper"``: eqs. 8–9 (δ, then the least norm).
+        ``result.extra["leximin"]`` lists the leximin levels ([margin, how many dimensions]).
 
     Every :meth:`solve` opens its own :class:`~setupfix.optimize._session.Session`: no solver
     model or state outlives it, so a report's answer never depends on what was solved before.

@@ -191,7 +191,9 @@ def leximin(session: Session, row_dim: npt.NDArray[np.intp], n_dims: int, k_firs
     np.logical_and.at(constant, row_dim, rows.zero)
     search = _Search(session, LevelModel(session, row_dim, n_dims), stage_end)
     m_first = search.margins(k_first)
-    v[np.isnan(v) & constant] = m_first[np.isnan(v) & constant]
+    if np.any(np.isnan(v) & constant):  # the first level was over them too: it is recomputed without them
+        v[np.isnan(v) & constant] = m_first[np.isnan(v) & constant]
+        first = None
     best = _fill(search, v, k_first, t_first, first, [])
     head = best[0]
     return Leximin(head.k, head.floors, head.levels, head.counts, head.stopped, head.path, search.calls,

@@ -176,18 +176,13 @@ def count_levels(session: Session, row_dim: npt.NDArray[np.intp], n_dims: int, f
     calls, cur_t, above = 0, t0, rows.n_active
     best = k
 
-    def start(kk: Array, ts: list[float | None], t_val: float | None) -> Array:
-        m = rows.margins(kk)
-        parts = [kk] + ([np.array([t_val])] if t_val is not None else [])
-        parts += [(m >= (t_val if t is None else t) - TOL).astype(float) for t in ts]
-        return np.concatenate(parts)
-
     while True:
         if time.perf_counter() >= stage_end:
             return CountLevels(best, floors.copy(), t0, tuple(blocks), tuple(levels), False, "time limit", tuple(path), calls)
         # how many stay strictly above cur_t
         model, _ = _model(rows, blocks, 0, (cur_t + eps, 0), "count", top, cur_t)
-        res = model.solve(stage_end - time.perf_counter(), start(best, [b[0] for b in blocks] + [cur_t + eps], None))
+        # no start point: given one, HiGHS 1.16 may report the optimum's objective with the start's point
+        res = model.solve(stage_end - time.perf_counter())
         calls += 1
         c_best = int(np.sum(rows.margins(best) >= cur_t + eps - TOL))
         if res.x is not None:
@@ -245,7 +240,10 @@ def count_least_norm(session: Session, row_dim: npt.NDArray[np.intp], counts: Co
         ts = [t for t, _ in blocks] if blocks else [counts.t0]
         return np.concatenate([kk, kk**2] + [(m >= t - TOL).astype(float) for t in ts])
 
-    out = lazy_chords(model, n, chords, cost, rows.kmin, rows.kmax, k, lambda kk: rows.feasible(kk, blocks),
+    # no start point (best=None): given one, HiGHS 1.16 may hand it back with the optimum's objective
+    out = lazy_chords(model, n, chords, cost, rows.kmin, rows.kmax, None, lambda kk: rows.feasible(kk, blocks),
                       start, session.clock.deadline, integer=True)
-    best = k if out.best is None else out.best
+    best = k
+    if out.best is not None and float(np.sum(cost * out.best**2)) <= float(np.sum(cost * k**2)):
+        best = out.best
     return LeastNorm(best, out.proved, out.why, out.lower, ("least norm: chord MILP with the count blocks",))

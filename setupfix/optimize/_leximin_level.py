@@ -191,6 +191,10 @@ class LevelModel:
                             integer=np.r_[np.ones(n, bool), False])
         res = model.solve(stage_end - time.perf_counter(), np.r_[k_best, t_best])
         calls += 1
+        if res.x is not None and self.level_of(np.clip(np.rint(res.x[:-1]), rows.kmin, rows.kmax), v) < (
+                -res.objective - 1e-6):  # HiGHS 1.16 handed back the start with the optimum's objective
+            res = model.solve(stage_end - time.perf_counter())
+            calls += 1
         path.append(f"leximin: level MILP ({res.status})")
         if res.x is not None:
             k = np.clip(np.rint(res.x[:-1]), rows.kmin, rows.kmax)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import itertools
 
 import numpy as np
@@ -160,3 +161,65 @@ def test_objective_is_validated_and_metaheuristics_refuse_leximin():
         get_optimizer("exact", objective="centred")
     assert get_optimizer("exact").objective == "leximin"
     assert get_optimizer("exact", objective="paper").objective == "paper"
+
+
+#: Generated problems with a discrete conflict (found by running the solver on seeds 0-150 of both families).
+CONFLICTS = [("axis", 5, {}), ("axis", 37, {}), ("axis", 139, {}), ("axis", 5, {"cost": True, "fixed": (0,)}),
+             ("guide", 5, {})]
+
+
+def guide_pins_window(cycle: int) -> CorrectionProblem:
+    """A bundled guide-pins cycle (the paper's topology) with every register limited to the paper's optimum
+    ± 1 step: 3^10 grid points, few enough for brute force."""
+    from pathlib import Path
+
+    from setupfix.model import load_model
+    from setupfix.pipeline.cycles import load_parts
+
+    folder = Path(__file__).resolve().parents[2] / "sample_reports" / "guide_pins"
+    model = load_model(folder / "model.toml")
+    problem = CorrectionProblem.from_part(model, load_parts(model, folder / f"cycle_{cycle:02d}.csv")[0])
+    x = get_optimizer("exact", objective="paper").solve(problem).x
+    h = problem.resolution
+    return dataclasses.replace(problem, lb=np.where(problem.free, x - h, 0.0), ub=np.where(problem.free, x + h, 0.0))
+
+
+def make(kind: str, seed: int, kw: dict) -> CorrectionProblem:
+    if kind == "guide":
+        return guide_pins_window(seed)
+    return random_problem(seed, **kw) if kind == "random" else one_axis_problem(seed, **kw)
+
+
+@pytest.mark.parametrize("cycle", range(1, 6))
+def test_leximin_equals_brute_force_on_the_papers_topology(cycle):
+    problem = guide_pins_window(cycle)
+    best, norm, _ = brute_leximin(problem)
+    result, k, sorted_m = solved_steps(problem)
+    assert result.status == "optimal"
+    np.testing.assert_allclose(sorted_m, best, atol=1e-6)
+    assert float(problem.cost[problem.free] @ k**2) == pytest.approx(norm, abs=1e-9)
+
+
+@pytest.mark.parametrize(("kind", "seed", "kw"), CONFLICTS)
+def test_discrete_conflicts_by_branches_equal_brute_force(kind, seed, kw):
+    problem = make(kind, seed, kw)
+    best, norm, _ = brute_leximin(problem)
+    result, k, sorted_m = solved_steps(problem)
+    assert "discrete conflict" in result.extra["path"]
+    np.testing.assert_allclose(sorted_m, best, atol=1e-6)
+    assert float(problem.cost[problem.free] @ k**2) == pytest.approx(norm, abs=1e-9)
+
+
+@pytest.mark.parametrize(("kind", "seed", "kw"), CONFLICTS)
+def test_counts_alone_decide_discrete_conflicts_as_brute_force(kind, seed, kw, monkeypatch):
+    """With no branching allowed, every discrete conflict goes to the count MILPs: same optimum."""
+    import setupfix.optimize._leximin as lexmod
+
+    monkeypatch.setattr(lexmod, "MAX_BRANCHES", 0)
+    problem = make(kind, seed, kw)
+    best, norm, _ = brute_leximin(problem)
+    result, k, sorted_m = solved_steps(problem)
+    assert result.status == "optimal", result.message
+    assert "the rest by counts" in result.extra["path"]
+    np.testing.assert_allclose(sorted_m, best, atol=1e-6)
+    assert float(problem.cost[problem.free] @ k**2) == pytest.approx(norm, abs=1e-9)
