@@ -104,6 +104,8 @@ def main(argv: list[str] | None = None) -> None:
         lines.append(f"  leximin paths: {dict(kinds)} (counts: a discrete conflict decided by the count MILPs)")
         n, m = (int(v) for v in args.shop.split("x"))
         times, refs, stats = [], [], Counter()
+        if args.shop_seeds < 1:
+            args.shop_seeds, n, m = 1, 10, 28  # only the smallest shop fixture
         for seed in range(args.shop_seeds):
             problem = shop_problem(n, m, seed)
             refs.append(lp_seconds(problem))
