@@ -33,13 +33,13 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "bench"))
 
-from exact_per_report import problems  # noqa: E402
-from exact_scaling import shop_problem  # noqa: E402
+from exact_per_report import problems
+from exact_scaling import shop_problem
 
-from setupfix.optimize import CorrectionProblem, get_optimizer  # noqa: E402
-from setupfix.optimize._lp_bound import lp_bound, margin_rows  # noqa: E402
-from setupfix.optimize._session import GridRows, Session  # noqa: E402
-from setupfix.optimize._settings import ExactSettings  # noqa: E402
+from setupfix.optimize import CorrectionProblem, get_optimizer
+from setupfix.optimize._lp_bound import lp_bound, margin_rows
+from setupfix.optimize._session import GridRows, Session
+from setupfix.optimize._settings import ExactSettings
 
 RESULTS = ROOT / "bench" / "results"
 

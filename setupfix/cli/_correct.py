@@ -55,8 +55,8 @@ def correct_request(args: argparse.Namespace) -> CorrectRequest:
 
     return load_request(args.model, read=read_options(args), cycles=cycles_of(args),
                         solve=SolveOptions(args.optimizer, args.seed, args.time_limit, args.objective),
-                        current=args.current, store=args.store, thermal=args.thermal, temperatures=args.temperatures, at=args.at,
-                        thermal_dead_band=args.thermal_dead_band)
+                        current=args.current, store=args.store, thermal=args.thermal,
+                        temperatures=args.temperatures, at=args.at, thermal_dead_band=args.thermal_dead_band)
 
 
 def run(args: argparse.Namespace) -> int:

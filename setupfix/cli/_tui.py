@@ -38,5 +38,6 @@ def run(args: argparse.Namespace) -> int:
                        thermal=Path(args.thermal) if args.thermal else None,
                        temperatures=Path(args.temperatures) if args.temperatures else None, at=args.at,
                        thermal_dead_band=args.thermal_dead_band, read=read_options(args), cycles=cycles_of(args),
-                       optimizer=args.optimizer, objective=args.objective, seed=args.seed, trials=args.trials, offsets=args.offsets)).run()
+                       optimizer=args.optimizer, objective=args.objective, seed=args.seed, trials=args.trials,
+                       offsets=args.offsets)).run()
     return 0

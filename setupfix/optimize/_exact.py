@@ -95,7 +95,7 @@ from setupfix.optimize._grid import TOL
 from setupfix.optimize._grid_least_norm import LeastNorm, grid_least_norm
 from setupfix.optimize._grid_optimum import GridOptimum, Stop, grid_optimum
 from setupfix.optimize._least_norm import lower_bound_ratio
-from setupfix.optimize._leximin import Leximin, leximin, leximin_least_norm
+from setupfix.optimize._leximin import leximin, leximin_least_norm
 from setupfix.optimize._leximin_level import LevelValue
 from setupfix.optimize._lp_bound import LPBound, dimension_of_rows, lp_bound, margin_rows, rows_to_dimensions
 from setupfix.optimize._problem import CorrectionProblem, OptimizeResult

@@ -14,15 +14,15 @@ Levels (progressive filling, each level proved on the grid)
 State: dimensions *fixed* with a floor v_q (every leximin-optimal point has M_q ≥ v_q and
 no point of the current level set has M_q above v_q + ε), the others *active*.
 
-1. Level value: t_ℓ = max t over grid points with M_q ≥ v_q (fixed) and M_q ≥ t (active)
+1. Level value: t_i = max t over grid points with M_q ≥ v_q (fixed) and M_q ≥ t (active)
    (:func:`~setupfix.optimize._leximin_level.level_value`: LP bound, rounded points, the
    rounded-rows descent — one LP per level where the rows are totally unimodular — and the
    bracketed MILP).
 2. Saturation: a weighted sum of the level's rows (the LP's duals, checked in numpy by weak
    duality, :func:`pinned_dimensions`) proves that an active dimension cannot rise above
-   t_ℓ + ε, or that its a_qᵀk is the same at every grid point of the level set (integer rows:
+   t_i + ε, or that its a_qᵀk is the same at every grid point of the level set (integer rows:
    it cannot move by one lattice step).  Those dimensions are fixed.
-3. The next level must rise above t_ℓ + ε; then exactly the fixed dimensions sit at t_ℓ.  If
+3. The next level must rise above t_i + ε; then exactly the fixed dimensions sit at t_i.  If
    nothing is proved saturated or the next level does not rise (a discrete conflict: e.g. two
    dimensions moved oppositely by one register with the even split off the grid), the rest is
    decided by counts (:mod:`setupfix.optimize._leximin_counts`, always correct, MILPs with
@@ -223,7 +223,7 @@ def _fill(search: _Search, v: Array, k: Array, t: float, level: LevelValue | Non
         active = np.isnan(v)
         if not active.any():
             break
-        if level is None:  # level ℓ ≥ 2 (or a first level without its certificate)
+        if level is None:  # level i ≥ 2 (or a first level without its certificate)
             if time.perf_counter() >= search.stage_end:
                 return [_stopped(search, v, k, path, "time limit")]
             level = model.value(v, k, search.stage_end)
@@ -282,11 +282,11 @@ def _conflict(search: _Search, v: Array, k: Array, t: float, path: list[str]) ->
         return [_counts(search, v, k, t, path)]
     search.leaves += len(starts)
     best: list[Leximin] = []
-    for q, k_q in starts:
+    for dim, k_q in starts:
         v_q = v.copy()
-        v_q[q] = t
+        v_q[dim] = t
         branch = _fill(search, v_q, k_q, t, None,
-                       [*path, f"leximin: discrete conflict at {t:.4g} steps, branch: dimension {q} at it"])
+                       [*path, f"leximin: discrete conflict at {t:.4g} steps, branch: dimension {dim} at it"])
         if branch[0].stopped is not None:
             return branch
         order = 1 if not best else _compare(branch[0], best[0], eps)

@@ -178,7 +178,8 @@ def count_levels(session: Session, row_dim: npt.NDArray[np.intp], n_dims: int, f
 
     while True:
         if time.perf_counter() >= stage_end:
-            return CountLevels(best, floors.copy(), t0, tuple(blocks), tuple(levels), False, "time limit", tuple(path), calls)
+            return CountLevels(best, floors.copy(), t0, tuple(blocks), tuple(levels), False, "time limit",
+                               tuple(path), calls)
         # how many stay strictly above cur_t
         model, _ = _model(rows, blocks, 0, (cur_t + eps, 0), "count", top, cur_t)
         # no start point: given one, HiGHS 1.16 may report the optimum's objective with the start's point
@@ -210,13 +211,13 @@ def count_levels(session: Session, row_dim: npt.NDArray[np.intp], n_dims: int, f
             calls += 1
             if res.status == "infeasible":
                 break
-            kk = None if res.x is None else np.clip(np.rint(res.x[:rows.n]), rows.kmin, rows.kmax)
-            t_k = -np.inf if kk is None else float(np.sort(rows.margins(kk))[::-1][above - 1])
-            if kk is None or not rows.feasible(kk, blocks) or t_k < tau + eps - TOL:
+            k_new = None if res.x is None else np.clip(np.rint(res.x[:rows.n]), rows.kmin, rows.kmax)
+            t_k = -np.inf if k_new is None else float(np.sort(rows.margins(k_new))[::-1][above - 1])
+            if k_new is None or not rows.feasible(k_new, blocks) or t_k < tau + eps - TOL:
                 why = "time limit" if res.status == "time_limit" else f"HiGHS: {res.detail}"
                 return CountLevels(best, floors.copy(), t0, tuple(blocks), tuple(levels), False, why, tuple(path),
                                    calls)
-            best, tau = kk, t_k
+            best, tau = k_new, t_k
         blocks.append((tau, above))
         cur_t = tau
 

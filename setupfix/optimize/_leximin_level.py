@@ -3,7 +3,7 @@
 Grid units as in :mod:`setupfix.optimize._session`.  With floors v_q for the fixed
 dimensions and the others active, the level is
 
-    t_ℓ = max t  over integer k in the box  s.t.  G_j k + t ≤ g_j  (rows of active dimensions),
+    t_i = max t  over integer k in the box  s.t.  G_j k + t ≤ g_j  (rows of active dimensions),
                                                   G_j k ≤ g_j − v_q(j)  (rows of fixed ones).
 
 Proof, cheapest first (as :func:`~setupfix.optimize._grid_optimum.grid_optimum` for level 1):
@@ -135,7 +135,7 @@ class LevelModel:
 
     # -- the level --------------------------------------------------------------------------------
     def value(self, v: Array, k_prev: Array, stage_end: float) -> LevelValue:
-        """The proved level t_ℓ (or the best point when stopped) — see the module text."""
+        """The proved level t_i (or the best point when stopped) — see the module text."""
         rows, s = self.rows, self.session.settings
         self._pattern(v)
         status, x, y = self._solve(self.rhs(v), stage_end - time.perf_counter())
@@ -148,7 +148,7 @@ class LevelModel:
         t_round = self.level_of(k_round, v)
         if t_round > t_best:
             k_best, t_best = k_round, t_round
-        calls, path = 1, []
+        calls, path = 1, list[str]()
         if t_best >= t_lp - TOL:
             return LevelValue(t_best, k_best, t_lp, y, None, (), calls)
         upper = t_lp

@@ -52,8 +52,9 @@ def margin_rows(problem: CorrectionProblem, quantum: float = 1e-3) -> tuple[Arra
 
 def dimension_of_rows(problem: CorrectionProblem) -> npt.NDArray[np.intp]:
     """Index of the dimension (in ``problem.dimension_ids``) of each margin row of :func:`margin_rows`, shape (r,)."""
-    return np.r_[np.flatnonzero(np.isfinite(problem.upper)), np.flatnonzero(np.isfinite(problem.lower))].astype(
-        np.intp)
+    rows: npt.NDArray[np.intp] = np.concatenate([np.flatnonzero(np.isfinite(problem.upper)),
+                                                 np.flatnonzero(np.isfinite(problem.lower))]).astype(np.intp)
+    return rows
 
 
 def rows_to_dimensions(problem: CorrectionProblem, rows: npt.NDArray[np.bool_]) -> tuple[str, ...]:

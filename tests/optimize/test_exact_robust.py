@@ -69,7 +69,8 @@ def test_solver_error_is_retried_without_the_lower_bracket_and_reported(monkeypa
 
     monkeypatch.setattr(Session, "max_margin_milp", failing_once)
     problem = random_problem(1, n=4, m=8, limit_steps=6)  # in reach, and the rounded LP point is not optimal
-    result = get_optimizer("exact", objective="paper", settings=ExactSettings(level_steps=0, search_limit=0)).solve(problem)
+    result = get_optimizer("exact", objective="paper",
+                           settings=ExactSettings(level_steps=0, search_limit=0)).solve(problem)
     assert len(brackets) == 2 and brackets[1] < brackets[0]  # the retry drops the lower bracket
     assert result.status == "optimal"
     assert result.margin_after == pytest.approx(brute_force(problem)[0], abs=1e-12)

@@ -73,8 +73,9 @@ def test_a_costlier_register_moves_less_among_equally_good_corrections():
                 upper=np.full(3, 0.05), lb=np.full(3, -0.05), ub=np.full(3, 0.05), resolution=0.001,
                 register_ids=("G54", "H5", "H6"), dimension_ids=("D1", "D2", "D3"))
     plain = get_optimizer("exact", objective="paper").solve(CorrectionProblem(**base))
-    tool_dear = get_optimizer("exact", objective="paper").solve(CorrectionProblem(**base, cost=np.array([1.0, 10.0, 1.0])))
-    wks_dear = get_optimizer("exact", objective="paper").solve(CorrectionProblem(**base, cost=np.array([10.0, 1.0, 1.0])))
+    paper = get_optimizer("exact", objective="paper")
+    tool_dear = paper.solve(CorrectionProblem(**base, cost=np.array([1.0, 10.0, 1.0])))
+    wks_dear = paper.solve(CorrectionProblem(**base, cost=np.array([10.0, 1.0, 1.0])))
     assert plain.margin_after == tool_dear.margin_after == wks_dear.margin_after
     assert abs(tool_dear.x[1]) < abs(plain.x[1]) and abs(tool_dear.x[0]) > abs(plain.x[0])
     assert abs(wks_dear.x[0]) < abs(plain.x[0])

@@ -81,14 +81,15 @@ CASES = ([("random", s, {}) for s in range(10)]
 @pytest.mark.parametrize(("kind", "seed", "kw"), CASES)
 def test_leximin_equals_brute_force(kind, seed, kw):
     problem = random_problem(seed, **kw) if kind == "random" else one_axis_problem(seed, **kw)
-    best, norm, k_first = brute_leximin(problem)
+    best, norm, _ = brute_leximin(problem)
     if best[0] < 0:
         pytest.skip("out of reach: triage (another part of issue 22)")
     result, k, sorted_m = solved_steps(problem)
     assert result.status == "optimal", result.message
     np.testing.assert_allclose(sorted_m, best, atol=1e-6)
     assert float(problem.cost[problem.free] @ k**2) == pytest.approx(norm, abs=1e-9)
-    assert result.extra["leximin"][0][0] == pytest.approx(result.margin_after, abs=1e-3 * problem.resolution)  # level 1 = δ
+    level_1 = result.extra["leximin"][0][0]
+    assert level_1 == pytest.approx(result.margin_after, abs=1e-3 * problem.resolution)  # leximin's level 1 = δ
 
 
 @pytest.mark.parametrize("seed", range(6))
@@ -105,7 +106,7 @@ def test_first_level_is_the_papers_delta_and_paper_keeps_its_least_norm(seed):
 
 
 def ordered_outcomes(problem: CorrectionProblem) -> np.ndarray:
-    """Leximin by Ogryczak's ordered outcomes: θ_ℓ = max_r ℓ·r − Σ_q (r − M_q)⁺ is the sum of the ℓ smallest
+    """Leximin by Ogryczak's ordered outcomes: θ_L = max_r L·r − Σ_q (r − M_q)⁺ is the sum of the L smallest
     margins; maximise θ_1, θ_2, … in turn (scipy's MILP; a formulation without binaries or levels)."""
     g_rows, g = margin_rows(problem)
     row_dim = dimension_of_rows(problem)
