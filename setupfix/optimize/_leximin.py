@@ -239,6 +239,9 @@ def _fill(search: _Search, v: Array, k: Array, t: float, level: LevelValue | Non
                                           eps, rows.d)
             sat |= sat2
             search.calls += 1
+        # a row whose margin is proved within ε of t (integer: one lattice value) or pinned pins G_j k, and
+        # with it every row equal or opposite to it: their dimensions' margins are the same at every point
+        pin |= model.same_vector(sat | pin) & active_rows
         m_k = search.margins(k)
         fix_sat = np.zeros(v.size, bool)
         fix_sat[row_dim[sat]] = True

@@ -79,6 +79,24 @@ class LevelModel:
                                np.r_[self.rows.kmin, -INF], np.r_[self.rows.kmax, INF])
         self._coef = np.ones(r)
         self.network = bool(self.rows.all_integer and is_network(self.rows.g_rows))
+        # rows keyed by a random integer projection: equal (or opposite) rows, equal (or opposite) keys
+        weights = np.random.default_rng(0).integers(1, 2**20, n).astype(float)
+        self._key = self.rows.g_rows @ weights
+
+    def same_vector(self, rows_mask: npt.NDArray[np.bool_]) -> npt.NDArray[np.bool_]:
+        """Integer rows equal or opposite to one of ``rows_mask``'s integer rows (checked, not only keyed).
+
+        When G_j k is the same at every grid point of a level set, so is G_j' k for G_j' = ±G_j.
+        """
+        rows = self.rows
+        out = np.zeros(rows_mask.size, bool)
+        integer = rows.d > 0
+        for j in np.flatnonzero(rows_mask & integer):
+            cand = np.flatnonzero(integer & ~out & (np.abs(self._key) == abs(self._key[j])))
+            same = np.all(rows.g_rows[cand] == rows.g_rows[j], axis=1) | np.all(
+                rows.g_rows[cand] == -rows.g_rows[j], axis=1)
+            out[cand[same]] = True
+        return out
 
     # -- the model --------------------------------------------------------------------------------
     def _floors(self, v: Array) -> Array:
