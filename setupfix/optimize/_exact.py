@@ -221,7 +221,7 @@ class ExactOptimizer(Optimizer):
         """Levels 2, 3 … after the proved first level (the paper's δ), then the least norm among the
         leximin-optimal grid points (:mod:`setupfix.optimize._leximin`)."""
         row_dim = dimension_of_rows(problem)
-        stage_end = session.clock.deadline - self.settings.least_norm_share * self.time_limit
+        stage_end = session.clock.deadline - self.settings.leximin_norm_share * self.time_limit
         lex = leximin(session, row_dim, len(problem.dimension_ids), opt.k, opt.t,
                       first=LevelValue(opt.t, opt.k, lp.t, lp.y), stage_end=stage_end)
         session.clock.lap("leximin")

@@ -213,8 +213,13 @@ def _compare(a: Leximin, b: Leximin, eps: float) -> int:
     return 0
 
 
-def _fill(search: _Search, v: Array, k: Array, t: float, level: LevelValue | None, path: list[str]) -> list[Leximin]:
-    """Progressive filling from this state; the tied-best outcomes (branches of discrete conflicts)."""
+def _fill(search: _Search, v: Array, k: Array, t: float, level: LevelValue | None, path: list[str],
+          bound: Array | None = None) -> list[Leximin]:
+    """Progressive filling from this state; the tied-best outcomes (branches of discrete conflicts).
+
+    ``bound``: the sorted margins of the best branch so far; a branch whose settled margins (the
+    fixed ones up to its current level) already fall below it is dropped (empty list).
+    """
     model, eps, rows = search.model, search.eps, search.session.rows
     row_dim = model.row_dim
     v = v.copy()
@@ -257,18 +262,21 @@ def _fill(search: _Search, v: Array, k: Array, t: float, level: LevelValue | Non
                     return [_stopped(search, v, k, path, "time limit")]
                 fix_sat[q] = not rise
             if not fix_sat.any():  # each can, not all together: a discrete conflict
-                return _conflict(search, v, k, t, path)
+                return _conflict(search, v, k, t, path, bound)
             path.append("leximin: saturation proved by the rounded rows one dimension at a time")
         v[fix_sat] = t
         v[fix_pin] = m_k[fix_pin]
         at_t = int(np.sum(fix_sat | (fix_pin & (m_k <= t + eps))))
         if at_t:
             path.append(f"leximin: {at_t} dimension(s) at {t:.4g} steps")
+        if bound is not None and _worse(np.sort(v[np.isfinite(v) & (v <= t + eps)]), bound, eps):
+            return []
         level = None
     return [Leximin(k, v, _levels(v), None, None, tuple(path), 0)]
 
 
-def _conflict(search: _Search, v: Array, k: Array, t: float, path: list[str]) -> list[Leximin]:
+def _conflict(search: _Search, v: Array, k: Array, t: float, path: list[str],
+              bound: Array | None = None) -> list[Leximin]:
     """A discrete conflict at level t: one branch per dimension that can be the only one left at t
     (every other active dimension above t + ε at some grid point); none, or too many branches:
     the counts decide (:mod:`setupfix.optimize._leximin_counts`)."""
@@ -289,7 +297,10 @@ def _conflict(search: _Search, v: Array, k: Array, t: float, path: list[str]) ->
         v_q = v.copy()
         v_q[dim] = t
         branch = _fill(search, v_q, k_q, t, None,
-                       [*path, f"leximin: discrete conflict at {t:.4g} steps, branch: dimension {dim} at it"])
+                       [*path, f"leximin: discrete conflict at {t:.4g} steps, branch: dimension {dim} at it"],
+                       _vector(best[0]) if best else bound)
+        if not branch:  # pruned: below the best branch
+            continue
         if branch[0].stopped is not None:
             return branch
         order = 1 if not best else _compare(branch[0], best[0], eps)
@@ -298,6 +309,14 @@ def _conflict(search: _Search, v: Array, k: Array, t: float, path: list[str]) ->
         elif order == 0:
             best = best + branch
     return best
+
+
+def _worse(settled: Array, bound: Array, eps: float) -> bool:
+    """Whether sorted margins ``settled`` (the smallest of a branch, final) fall below ``bound``'s start."""
+    for x, y in zip(settled, bound, strict=False):
+        if abs(x - y) > eps:
+            return bool(x < y)
+    return False
 
 
 def _levels(v: Array) -> tuple[tuple[float, int], ...]:

@@ -177,22 +177,22 @@ class LevelModel:
                 if time.perf_counter() >= stage_end:
                     return LevelValue(t_best, k_best, t_lp, y, "time limit", tuple(path), calls)
                 b = self.rounded(v, tau)
-                feas, kx = self._feasible(b, stage_end - time.perf_counter())
+                f = self._floors(v)
+                found = self.point_above(np.where(np.isnan(f), tau, f), stage_end)  # LP, then a feasibility MILP
                 calls += 1
-                if feas == "infeasible":
+                if found is False:  # no grid point at τ: the next level down
                     tau = float(np.max(rows.g[active] - b[active] - rows.d[active]))
                     upper = tau
                     if t_best >= tau - TOL:
                         path.append("leximin: rounded rows empty above the best point")
                         return LevelValue(t_best, k_best, t_lp, y, None, tuple(path), calls)
                     continue
-                if feas == "optimal" and kx is not None:
-                    k = np.clip(np.rint(kx), rows.kmin, rows.kmax)
-                    t_k = self.level_of(k, v)
+                if found is not None and not isinstance(found, bool):
+                    t_k = self.level_of(found, v)
                     if t_k > t_best:
-                        k_best, t_best = k, t_k
+                        k_best, t_best = found, t_k
                     if t_best >= tau - TOL:
-                        path.append("leximin: a vertex of the rounded rows reaches the level")
+                        path.append("leximin: a grid point of the rounded rows reaches the level")
                         return LevelValue(t_best, k_best, t_lp, y, None, tuple(path), calls)
                 break
         return self._milp(v, k_best, t_best, upper, t_lp, y, stage_end, path, calls)
