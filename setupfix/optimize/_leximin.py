@@ -22,11 +22,16 @@ no point of the current level set has M_q above v_q + ε), the others *active*.
    duality, :func:`pinned_dimensions`) proves that an active dimension cannot rise above
    t_i + ε, or that its a_qᵀk is the same at every grid point of the level set (integer rows:
    it cannot move by one lattice step).  Those dimensions are fixed.
-3. The next level must rise above t_i + ε; then exactly the fixed dimensions sit at t_i.  If
-   nothing is proved saturated or the next level does not rise (a discrete conflict: e.g. two
-   dimensions moved oppositely by one register with the even split off the grid), the rest is
-   decided by counts (:mod:`setupfix.optimize._leximin_counts`, always correct, MILPs with
-   binaries).
+3. If neither proof fixes a dimension, each dimension at t_i is tested alone: the rounded rows
+   with its rows at t_i + ε (an LP, a feasibility MILP) either hold no grid point (saturated:
+   fixed) or do.  If every one can rise alone but not all together (a *discrete conflict*: e.g.
+   two dimensions moved oppositely by one register with the even split off the grid), the
+   dimensions that can be the only one left at t_i (every other one above it at some grid
+   point) each open a branch with that dimension fixed at t_i; the branches' leximin vectors are
+   compared (a branch already below the best is dropped), tied branches all go to the least
+   norm.  No such dimension (two or more must stay at t_i), or more than ``MAX_BRANCHES``
+   branches: the rest is decided by counts (:mod:`setupfix.optimize._leximin_counts`, always
+   correct, MILPs with binaries).
 
 When every dimension is fixed, the leximin-optimal points are exactly the grid points with
 M_q ≥ v_q for every q, and the least norm among them is stage 3
