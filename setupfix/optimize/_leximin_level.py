@@ -8,11 +8,12 @@ dimensions and the others active, the level is
 
 Proof, cheapest first (as :func:`~setupfix.optimize._grid_optimum.grid_optimum` for level 1):
 the LP bound t_LP; a grid point (the previous level's, the LP point rounded) reaching it; the
-rounded-rows descent for integer rows (rows rounded at τ hold every grid point with level ≥ τ,
-:func:`~setupfix.optimize._grid.rounded_rhs`; an LP proves them empty, and where every row has
-at most two ±1 entries that a flip of columns makes opposite (:func:`~setupfix.optimize._grid.is_network`,
-totally unimodular) a feasible LP's vertex is itself a grid point); last the MILP "max t, k
-integer" bracketed by the best point and the bound.
+ascent on rounded rows: the rows rounded at t(best) + ε hold every grid point better than the
+best one (:func:`~setupfix.optimize._grid.rounded_rhs`), so an LP proving them empty proves the
+level, and where every row has at most two ±1 entries that a flip of columns makes opposite
+(:func:`~setupfix.optimize._grid.is_network`, totally unimodular) a feasible LP's vertex is itself
+a better grid point; else a feasibility MILP decides; last (after ``level_steps`` ascents) the
+MILP "max t, k integer" bracketed by the best point and the bound.
 
 One HiGHS model per solve holds [G | a] (a_j = 1 for active rows, 0 for fixed ones), changed in
 place from level to level (:class:`LevelModel`).
@@ -26,7 +27,7 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
-from setupfix.optimize._grid import TOL, is_network, rounded_rhs
+from setupfix.optimize._grid import TOL, rounded_rhs
 from setupfix.optimize._highs import INF, LinearModel
 from setupfix.optimize._session import GridRows, Session
 
@@ -78,7 +79,6 @@ class LevelModel:
         self._lp = LinearModel(np.r_[np.zeros(n), -1.0], self.rows.derived.lp_matrix, np.full(r, -INF), self.rows.g,
                                np.r_[self.rows.kmin, -INF], np.r_[self.rows.kmax, INF])
         self._coef = np.ones(r)
-        self.network = bool(self.rows.all_integer and is_network(self.rows.g_rows))
         # rows keyed by a random integer projection: equal (or opposite) rows, equal (or opposite) keys
         weights = np.random.default_rng(0).integers(1, 2**20, n).astype(float)
         self._key = self.rows.g_rows @ weights
@@ -169,32 +169,25 @@ class LevelModel:
         calls, path = 1, list[str]()
         if t_best >= t_lp - TOL:
             return LevelValue(t_best, k_best, t_lp, y, None, (), calls)
-        upper = t_lp
-        if rows.all_integer:
-            tau = t_lp
-            active = np.isnan(self._floors(v)) & (rows.d > 0)
-            for _ in range(s.level_steps):
-                if time.perf_counter() >= stage_end:
-                    return LevelValue(t_best, k_best, t_lp, y, "time limit", tuple(path), calls)
-                b = self.rounded(v, tau)
-                f = self._floors(v)
-                found = self.point_above(np.where(np.isnan(f), tau, f), stage_end)  # LP, then a feasibility MILP
-                calls += 1
-                if found is False:  # no grid point at τ: the next level down
-                    tau = float(np.max(rows.g[active] - b[active] - rows.d[active]))
-                    upper = tau
-                    if t_best >= tau - TOL:
-                        path.append("leximin: rounded rows empty above the best point")
-                        return LevelValue(t_best, k_best, t_lp, y, None, tuple(path), calls)
-                    continue
-                if found is not None and not isinstance(found, bool):
-                    t_k = self.level_of(found, v)
-                    if t_k > t_best:
-                        k_best, t_best = found, t_k
-                    if t_best >= tau - TOL:
-                        path.append("leximin: a grid point of the rounded rows reaches the level")
-                        return LevelValue(t_best, k_best, t_lp, y, None, tuple(path), calls)
+        # ascent: a grid point with every active margin ≥ t(best) + ε on the rounded rows (an LP, a feasibility
+        # MILP), until none is left (proved) — the rounded LP point is usually at or next to the level
+        f = self._floors(v)
+        eps = s.quantum / 2
+        for _ in range(s.level_steps):
+            if time.perf_counter() >= stage_end:
+                return LevelValue(t_best, k_best, t_lp, y, "time limit", tuple(path), calls)
+            found = self.point_above(np.where(np.isnan(f), t_best + eps, f), stage_end)
+            calls += 1
+            if found is False:
+                path.append("leximin: no grid point above the best one (rounded rows)")
+                return LevelValue(t_best, k_best, t_lp, y, None, tuple(path), calls)
+            if found is None or isinstance(found, bool) or self.level_of(found, v) < t_best + eps - 1e-9:
                 break
+            k_best, t_best = found, self.level_of(found, v)
+            if t_best >= t_lp - TOL:
+                path.append("leximin: a grid point of the rounded rows reaches the LP bound")
+                return LevelValue(t_best, k_best, t_lp, y, None, tuple(path), calls)
+        upper = t_lp
         return self._milp(v, k_best, t_best, upper, t_lp, y, stage_end, path, calls)
 
     def _milp(self, v: Array, k_best: Array, t_best: float, upper: float, t_lp: float, y: Array | None,

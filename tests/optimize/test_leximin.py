@@ -224,3 +224,16 @@ def test_counts_alone_decide_discrete_conflicts_as_brute_force(kind, seed, kw, m
     assert "the rest by counts" in result.extra["path"]
     np.testing.assert_allclose(sorted_m, best, atol=1e-6)
     assert float(problem.cost[problem.free] @ k**2) == pytest.approx(norm, abs=1e-9)
+
+
+def test_is_network_recognises_one_wks_and_one_tool_per_row():
+    """±1 rows with two entries that a flip of columns makes opposite: totally unimodular (an LP's vertex on the
+    grid); a row with a 2, three entries, or an odd cycle of equal signs is not."""
+    from setupfix.optimize._grid import is_network
+
+    wks_tool = np.array([[1.0, 0, 1, 0], [0, 1, 0, -1], [1, 0, 0, 1], [-1, 0, -1, 0]])
+    assert is_network(wks_tool)
+    assert not is_network(np.array([[1.0, 0, 2, 0]]))
+    assert not is_network(np.array([[1.0, 1, 1]]))
+    assert not is_network(np.array([[1.0, 1, 0], [0, 1, 1], [1, 0, 1]]))  # odd cycle: no signing
+    assert is_network(np.array([[1.0, -1, 0], [0, 1, -1], [1, 0, -1]]))
