@@ -67,7 +67,8 @@ paper's δ, eq. 8, leximin's first level) held, the next smallest dimension marg
 as the grid allows, then the next, and so on — every dimension centred as far as the others allow
 (:mod:`setupfix.optimize._leximin`: each level proved by an LP bound, rounded rows or a MILP; a
 discrete conflict by branches or counts) — and stage 3 runs among the leximin-optimal grid points
-(every dimension's margin at least its level).  ``objective="paper"`` stops after stage 2 and runs
+(every dimension's margin at least its level); the levels may use all but ``leximin_norm_share`` of the
+limit.  ``objective="paper"`` stops after stage 2 and runs
 stage 3 at t* (eqs. 8–9 exactly, what ``compare`` and the paper's validation use).
 
 One ``time_limit`` bounds the wall time of the whole solve, counted from the solve's own
