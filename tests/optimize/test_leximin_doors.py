@@ -70,3 +70,27 @@ def test_compare_measures_the_metaheuristics_against_the_papers_optimum():
     problem = CorrectionProblem.from_part(model, load_parts(model, GUIDE_PINS / "cycle_01.csv")[0])
     paper = get_optimizer("exact", objective="paper").solve(problem)
     np.testing.assert_array_equal(comparison.exact.x, paper.x)
+
+
+@pytest.mark.parametrize("objective", ["paper", "leximin"])
+def test_diagnose_next_correction_follows_the_objective(objective):
+    """``diagnose --objective``: the next correction is ``correct``'s on the forecast with that objective."""
+    from conftest import SAMPLES
+    from setupfix.diagnose import Diagnoser
+    from setupfix.model import PartMeasurement
+    from setupfix.pipeline.correct import correct_cycle
+    from setupfix.pipeline.diagnose import DiagnoseRequest, diagnose_reports, forecast_model
+    from setupfix.pipeline.requests import CorrectRequest
+
+    loop = SAMPLES / "closed_loop"
+    solve = SolveOptions(objective=objective)
+    out = diagnose_reports(DiagnoseRequest(
+        GUIDE_PINS / "model.toml", (loop / "measurements.csv",), corrections=str(loop / "corrections.csv"),
+        temperatures=str(loop / "temperatures.csv"), diagnoser=Diagnoser(walk=False), solve=solve))
+    fc = out.diagnosis.forecast
+    part = PartMeasurement(part="next", report="forecast", timestamp=None, deviation=fc,
+                           sources=tuple("" for _ in fc))
+    again = correct_cycle(CorrectRequest(forecast_model(out.input.model), solve=solve), part,
+                          composite=out.diagnosis.relation_matrix())
+    assert out.next_cycle is not None
+    np.testing.assert_array_equal(out.next_cycle.x, again.x)
