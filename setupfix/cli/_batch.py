@@ -9,7 +9,7 @@ from types import FrameType
 from typing import TYPE_CHECKING
 
 from setupfix.cli._choices import CONTROLLERS, OPTIMIZERS
-from setupfix.cli._common import add_report_options, add_thermal_options, shown, whole_number
+from setupfix.cli._common import add_objective_option, add_report_options, add_thermal_options, shown, whole_number
 from setupfix.cli.exit_codes import NOT_SOLVED, OK, PARTIAL, REJECTED
 
 if TYPE_CHECKING:
@@ -35,6 +35,7 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
     p.add_argument("--seed", type=int, default=None)
     p.add_argument("--time-limit", type=float, default=None, metavar="SECONDS",
                    help="wall time of the exact optimiser's whole solve per cycle (default 2)")
+    add_objective_option(p)
     p.add_argument("--workers", type=whole_number(1, 64), default=None, metavar="N",
                    help="worker processes (default: one per available CPU, at most 8; one for fewer than 32 "
                         "reports); the output does not depend on it")

@@ -35,6 +35,15 @@ def shown(path: object) -> str:
     return visible_name(str(path))
 
 
+def add_objective_option(p: argparse.ArgumentParser) -> None:
+    """--objective: leximin (the exact optimiser's default) or paper (eqs. 8-9)."""
+    p.add_argument("--objective", default=None, choices=("leximin", "paper"),
+                   help="what the exact optimiser maximises: leximin (default: the smallest margin, then the "
+                        "next smallest, and so on - every dimension centred - then the least correction) or "
+                        "paper (Stryczek 2014 eqs. 8-9: the smallest margin, then the least correction); "
+                        "the metaheuristics optimise the paper's error budget")
+
+
 def add_reader_options(p: argparse.ArgumentParser) -> Any:
     """The reader's options (format, unit, encoding, column mapping, lenient) in a "report reading" group."""
     g = p.add_argument_group("report reading")

@@ -8,7 +8,8 @@ import sys
 from typing import TYPE_CHECKING
 
 from setupfix.cli._choices import CONTROLLERS, OPTIMIZERS
-from setupfix.cli._common import add_report_options, add_thermal_options, cycles_of, read_options
+from setupfix.cli._common import (add_objective_option, add_report_options, add_thermal_options, cycles_of,
+                                  read_options)
 from setupfix.cli.exit_codes import NOT_SOLVED, OK, REJECTED
 
 if TYPE_CHECKING:
@@ -29,6 +30,7 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
     p.add_argument("--seed", type=int, default=None, help="seed of a metaheuristic (reproducible runs)")
     p.add_argument("--time-limit", type=float, default=None, metavar="SECONDS",
                    help="wall time of the exact optimiser's whole solve per part (default 2)")
+    add_objective_option(p)
     p.add_argument("--part", default=None, metavar="ID", help="correct only this part / cycle of the report")
     p.add_argument("--json", action="store_true", help="machine-readable output (shared/spec/cli-json.md)")
     p.add_argument("--store", metavar="DB", default=None,
@@ -56,9 +58,9 @@ def correct_request(args: argparse.Namespace) -> CorrectRequest:
     from setupfix.pipeline.requests import SolveOptions
 
     return load_request(args.model, read=read_options(args), cycles=cycles_of(args),
-                        solve=SolveOptions(args.optimizer, args.seed, args.time_limit), current=args.current,
-                        store=args.store, thermal=args.thermal, temperatures=args.temperatures, at=args.at,
-                        thermal_dead_band=args.thermal_dead_band)
+                        solve=SolveOptions(args.optimizer, args.seed, args.time_limit, args.objective),
+                        current=args.current, store=args.store, thermal=args.thermal,
+                        temperatures=args.temperatures, at=args.at, thermal_dead_band=args.thermal_dead_band)
 
 
 def run(args: argparse.Namespace) -> int:

@@ -8,7 +8,7 @@ import math
 import sys
 from typing import TYPE_CHECKING
 
-from setupfix.cli._common import add_lenient_option
+from setupfix.cli._common import add_lenient_option, add_objective_option
 from setupfix.cli.exit_codes import OK
 from setupfix.errors import SetupfixError
 
@@ -45,6 +45,7 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
     p.add_argument("--no-walk", action="store_true", help="skip the walk-forward comparison")
     add_lenient_option(p)
     p.add_argument("--json", action="store_true", help="machine-readable output (shared/spec/cli-json.md)")
+    add_objective_option(p)
     p.set_defaults(run=run)
 
 
@@ -88,14 +89,14 @@ def format_diagnosis(out: DiagnoseOutcome) -> str:
 def run(args: argparse.Namespace) -> int:
     from setupfix.diagnose import Diagnoser
     from setupfix.pipeline.diagnose import DiagnoseRequest, diagnose_reports
-    from setupfix.pipeline.requests import ReadOptions
+    from setupfix.pipeline.requests import ReadOptions, SolveOptions
 
     if not args.reports and not args.db:
         raise SetupfixError("diagnose: give REPORT files or folders, or --db STORE")
     out = diagnose_reports(DiagnoseRequest(
         args.model, tuple(args.reports), ReadOptions(lenient=args.lenient), corrections=args.corrections,
         temperatures=args.temperatures, db=args.db, thermal=args.thermal, augment=args.augment,
-        diagnoser=Diagnoser(alpha=args.alpha, walk=not args.no_walk)))
+        diagnoser=Diagnoser(alpha=args.alpha, walk=not args.no_walk), solve=SolveOptions(objective=args.objective)))
     if args.json:
         json.dump(out.to_json(), sys.stdout, indent=2)
         sys.stdout.write("\n")

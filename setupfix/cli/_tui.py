@@ -6,7 +6,7 @@ import argparse
 from pathlib import Path
 
 from setupfix.cli._choices import OPTIMIZERS
-from setupfix.cli._common import add_report_options, add_thermal_options, cycles_of, read_options
+from setupfix.cli._common import add_objective_option, add_report_options, add_thermal_options, cycles_of, read_options
 
 
 def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
@@ -21,6 +21,7 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
     p.add_argument("--current", metavar="FILE", type=Path, default=None,
                    help="the controller's current offsets (CSV register,value): new values and absolute exports")
     p.add_argument("--optimizer", default="exact", choices=sorted(OPTIMIZERS), help="optimiser to start with")
+    add_objective_option(p)
     p.add_argument("--seed", type=int, default=0, help="seed of the metaheuristics and the comparison (default 0)")
     p.add_argument("--trials", type=int, default=12, help="trials per method in the compare view (default 12)")
     p.add_argument("--offsets", metavar="FILE", default="offsets.csv",
@@ -37,5 +38,6 @@ def run(args: argparse.Namespace) -> int:
                        thermal=Path(args.thermal) if args.thermal else None,
                        temperatures=Path(args.temperatures) if args.temperatures else None, at=args.at,
                        thermal_dead_band=args.thermal_dead_band, read=read_options(args), cycles=cycles_of(args),
-                       optimizer=args.optimizer, seed=args.seed, trials=args.trials, offsets=args.offsets)).run()
+                       optimizer=args.optimizer, objective=args.objective, seed=args.seed, trials=args.trials,
+                       offsets=args.offsets)).run()
     return 0

@@ -60,6 +60,17 @@ shared: :class:`~setupfix.optimize._settings.ExactSettings`.
    proof, the best point is improved by coordinate descent and the result states a
    certified bound on ‖x‖ / least norm (``extra["norm_ratio_max"]``).
 
+Objective
+---------
+``objective="leximin"`` (the default) goes on after stage 2: with the smallest margin t* (the
+paper's δ, eq. 8, leximin's first level) held, the next smallest dimension margin is raised as far
+as the grid allows, then the next, and so on — every dimension centred as far as the others allow
+(:mod:`setupfix.optimize._leximin`: each level proved by an LP bound, rounded rows or a MILP; a
+discrete conflict by branches or counts) — and stage 3 runs among the leximin-optimal grid points
+(every dimension's margin at least its level); the levels may use all but ``leximin_norm_share`` of the
+limit.  ``objective="paper"`` stops after stage 2 and runs
+stage 3 at t* (eqs. 8–9 exactly, what ``compare`` and the paper's validation use).
+
 One ``time_limit`` bounds the wall time of the whole solve, counted from the solve's own
 start (each solve has its own session; nothing of an earlier solve's clock carries over).  The
 grid-optimum stage stops when ``least_norm_share`` of the limit is left, so the least-norm stage always runs: if a
@@ -85,12 +96,14 @@ from setupfix.optimize._grid import TOL
 from setupfix.optimize._grid_least_norm import LeastNorm, grid_least_norm
 from setupfix.optimize._grid_optimum import GridOptimum, Stop, grid_optimum
 from setupfix.optimize._least_norm import lower_bound_ratio
-from setupfix.optimize._lp_bound import lp_bound, margin_rows, rows_to_dimensions
+from setupfix.optimize._leximin import leximin, leximin_least_norm
+from setupfix.optimize._leximin_level import LevelValue
+from setupfix.optimize._lp_bound import LPBound, dimension_of_rows, lp_bound, margin_rows, rows_to_dimensions
 from setupfix.optimize._problem import CorrectionProblem, OptimizeResult
 from setupfix.optimize._session import Clock, GridRows, Session
 from setupfix.optimize._settings import ExactSettings
 from setupfix.optimize._triage import triaged_result
-from setupfix.params import Constraint, Interval
+from setupfix.params import Constraint, Interval, Options
 
 __all__ = ["ExactOptimizer", "ExactSettings", "margin_rows"]
 
@@ -125,6 +138,10 @@ class ExactOptimizer(Optimizer):
         Accepted for interface symmetry; the solver is deterministic.
     settings : ExactSettings, optional
         Which proofs are tried and how the time is shared (defaults: ``ExactSettings()``).
+    objective : {"leximin", "paper"}, default="leximin"
+        ``"leximin"``: the sorted dimension margins maximised lexicographically (first level = the
+        paper's δ), then the least Σ cost·x²; ``"paper"``: eqs. 8–9 (δ, then the least norm).
+        ``result.extra["leximin"]`` lists the leximin levels ([margin, how many dimensions]).
 
     Every :meth:`solve` opens its own :class:`~setupfix.optimize._session.Session`: no solver
     model or state outlives it, so a report's answer never depends on what was solved before.
@@ -136,10 +153,12 @@ class ExactOptimizer(Optimizer):
         "time_limit": [Interval(float, 0.0, None, closed="neither")],
         "seed": [Interval(int, 0, None), None],
         "settings": [ExactSettings],
+        "objective": [Options({"leximin", "paper"})],
     }
 
     def __init__(self, *, grid: bool = True, time_limit: float = 2.0, seed: int | None = None,
-                 settings: ExactSettings = DEFAULT_SETTINGS) -> None:
+                 settings: ExactSettings = DEFAULT_SETTINGS, objective: str = "leximin") -> None:
+        self.objective = objective
         self.grid = grid
         self.time_limit = time_limit
         self.seed = seed
@@ -191,10 +210,33 @@ class ExactOptimizer(Optimizer):
         calls = 1 + opt.calls
         if opt.upper < -TOL or (opt.stopped is None and opt.t < -TOL):
             return triaged_result(problem, session, opt.k, list(opt.path), list(opt.notes), calls, bound, self.name)
+        if self.objective == "leximin" and opt.stopped is None:
+            return self._leximin(problem, session, lp, opt, calls, bound, binding)
         least, calls = self._least_norm(session, opt, calls)
         session.clock.lap("least norm")
         x[free] = least.k * problem.resolution
         return self._result(problem, session, x, opt, least, calls, bound, binding)
+
+    def _leximin(self, problem: CorrectionProblem, session: Session, lp: LPBound, opt: GridOptimum, calls: int,
+                 bound: float, binding: tuple[str, ...]) -> OptimizeResult:
+        """Levels 2, 3 … after the proved first level (the paper's δ), then the least norm among the
+        leximin-optimal grid points (:mod:`setupfix.optimize._leximin`)."""
+        row_dim = dimension_of_rows(problem)
+        stage_end = session.clock.deadline - self.settings.leximin_norm_share * self.time_limit
+        lex = leximin(session, row_dim, len(problem.dimension_ids), opt.k, opt.t,
+                      first=LevelValue(opt.t, opt.k, lp.t, lp.y), stage_end=stage_end)
+        session.clock.lap("leximin")
+        share = self.settings.box_share if lex.stopped is None else self.settings.stopped_box_share
+        least = leximin_least_norm(session, lex, row_dim, share)
+        session.clock.lap("least norm")
+        x = np.zeros(problem.n_registers)
+        x[problem.free] = least.k * problem.resolution
+        opt = GridOptimum(lex.k, opt.t, opt.upper, lex.stopped, None, None, None, opt.path + lex.path, opt.notes,
+                          calls + lex.calls)
+        result = self._result(problem, session, x, opt, least, calls + lex.calls, bound, binding)
+        h = problem.resolution
+        result.extra["leximin"] = [[value * h, count] for value, count in lex.levels]
+        return result
 
     def _least_norm(self, session: Session, opt: GridOptimum, calls: int) -> tuple[LeastNorm, int]:
         """Stage 3 at the error budget reached (also when stage 2 was stopped), unless stage 2 proved it."""
@@ -217,7 +259,10 @@ class ExactOptimizer(Optimizer):
         extra: dict[str, object] = {"stages": dict(session.clock.stages), "path": "; ".join(opt.path + least.path)}
         if stopped is not None:
             status = "time_limit" if stopped.reason == "time limit" else "solver_error"
-            if stopped.stage == "grid optimum":
+            if stopped.stage == "leximin":
+                message = (f"paper's optimum proved, leximin levels not all proved ({stopped.reason} in the "
+                           "leximin stage); the least-norm correction at the levels reached is given")
+            elif stopped.stage == "grid optimum":
                 message = (f"grid optimum not proved ({stopped.reason} in the grid-optimum stage); the least-norm "
                            f"correction at the best error budget found is given; the continuous bound is "
                            f"{bound:.4f}")

@@ -42,6 +42,7 @@ __all__ = [
     "PairStructure",
     "dual_bound",
     "grid_margins",
+    "is_network",
     "least_distance",
     "least_distance_system",
     "next_level",
@@ -178,18 +179,56 @@ def row_gcd(g_rows: Array) -> npt.NDArray[np.float64]:
     return d
 
 
-def rounded_rhs(g: Array, d: Array, zero: npt.NDArray[np.bool_], tau: float) -> Array:
+def rounded_rhs(g: Array, d: Array, zero: npt.NDArray[np.bool_], tau: float | Array) -> Array:
     """Right-hand sides b with {k : G k ≤ b} ⊇ {grid k : t(k) ≥ τ}.
+
+    ``tau`` may be one level or one per row (shape (r,): the leximin levels' floors).
 
     Integer rows (d > 0): d·⌊(g − τ)/d⌋ (with 1e-7 slack: rounding up a value a hair
     below an integer only relaxes); zero rows (``zero``): +inf when g ≥ τ, else −1
     (0 ≤ −1: empty); other rows: g − τ + TOL.
     """
+    tau = np.broadcast_to(np.asarray(tau, dtype=float), g.shape)
     b = g - tau + TOL
     m = d > 0
-    b[m] = d[m] * np.floor((g[m] - tau) / d[m] + 1e-7)
-    b[zero] = np.where(g[zero] >= tau - TOL, np.inf, -1.0)
+    b[m] = d[m] * np.floor((g[m] - tau[m]) / d[m] + 1e-7)
+    b[zero] = np.where(g[zero] >= tau[zero] - TOL, np.inf, -1.0)
     return b
+
+
+def is_network(g_rows: Array) -> bool:
+    """Whether G is totally unimodular as a network matrix after flipping the signs of some columns.
+
+    True when every row has at most two non-zero entries, each ±1, and the columns can be signed so
+    that every row with two entries holds one +1 and one −1 (one WKS and one tool per dimension: a
+    2-colouring of the columns with parities, checked by union–find).  Then {G k ≤ b, box} with
+    integer b and box has integral vertices: a feasible LP's vertex is a grid point.
+    """
+    nz = g_rows != 0
+    if g_rows.size == 0 or np.any(np.abs(g_rows[nz]) != 1) or np.any(nz.sum(axis=1) > 2):
+        return False
+    n = g_rows.shape[1]
+    parent = list(range(n))
+    parity = [0] * n  # sign of a column relative to its root (0: same, 1: flipped)
+
+    def find(i: int) -> tuple[int, int]:
+        p = 0
+        while parent[i] != i:
+            p ^= parity[i]
+            i = parent[i]
+        return i, p
+
+    for row in np.flatnonzero(nz.sum(axis=1) == 2):
+        a, b = np.flatnonzero(nz[row])
+        need = 0 if g_rows[row, a] != g_rows[row, b] else 1  # flipped relative to each other?
+        (ra, pa), (rb, pb) = find(int(a)), find(int(b))
+        if ra == rb:
+            if pa ^ pb != need:
+                return False
+        else:
+            parent[ra] = rb
+            parity[ra] = pa ^ pb ^ need
+    return True
 
 
 def next_level(g: Array, d: Array, b: Array) -> float:

@@ -64,6 +64,10 @@ class ExactSettings:
         crossover: the duals are a basis').
     milp_share : float
         Share of the grid-optimum stage's time that one feasibility MILP may use.
+    leximin_norm_share : float
+        Share of the whole time limit kept for the least-norm stage after the leximin levels
+        (smaller than ``least_norm_share``: with every dimension at its floor the least norm is
+        confined to a small region and usually listed at once).
     least_norm_share : float
         Share of the whole time limit kept for the least-norm stage.
     level_steps : int
@@ -87,6 +91,7 @@ class ExactSettings:
     ipm_min_rows: int = 2000
     milp_share: float = 0.5
     least_norm_share: float = 0.5
+    leximin_norm_share: float = 0.15
     level_steps: int = 40
 
     _constraints: ClassVar[dict[str, list[Constraint]]] = {
@@ -96,7 +101,7 @@ class ExactSettings:
         "working_set_nnls": [bool],
         "box_share": _SHARE, "stopped_box_share": _SHARE, "incumbent_gap": _FRACTION,
         "descent_reserve": _FRACTION, "search_limit": _COUNT, "search_work": _COUNT, "ipm_min_rows": _COUNT,
-        "milp_share": _SHARE, "least_norm_share": _FRACTION, "level_steps": _COUNT,
+        "milp_share": _SHARE, "least_norm_share": _FRACTION, "leximin_norm_share": _FRACTION, "level_steps": _COUNT,
     }
 
     def __post_init__(self) -> None:

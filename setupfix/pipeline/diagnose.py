@@ -27,7 +27,7 @@ from setupfix.errors import ExportError, ModelError, Note, SourceLocation
 from setupfix.model import PartMeasurement, ProcessModel, model_from_dict
 from setupfix.model.effects import EffectsSection, ModelEffect, effects_from_dict, with_effects
 from setupfix.pipeline.correct import correct_cycle
-from setupfix.pipeline.requests import CorrectRequest, CycleCorrection, ReadOptions
+from setupfix.pipeline.requests import CorrectRequest, CycleCorrection, ReadOptions, SolveOptions
 from setupfix.pipeline.series import SeriesInput, load_series
 from setupfix.pipeline.writers import check_target, write_text
 
@@ -79,6 +79,7 @@ class DiagnoseRequest:
     thermal: str | Path | None = None
     augment: str | Path | None = None
     diagnoser: Diagnoser = field(default_factory=Diagnoser)
+    solve: SolveOptions = field(default_factory=SolveOptions)  #: the next correction's optimiser (objective)
 
 
 def note_text(note: Note) -> str:
@@ -158,14 +159,16 @@ def forecast_model(model: ProcessModel) -> ProcessModel:
                                safety=dataclasses.replace(model.safety, ewma=1.0))
 
 
-def _next_correction(model: ProcessModel, diagnosis: Diagnosis) -> tuple[CycleCorrection | None, list[Note]]:
+def _next_correction(model: ProcessModel, diagnosis: Diagnosis, solve: SolveOptions | None = None
+                     ) -> tuple[CycleCorrection | None, list[Note]]:
     """``correct`` on the forecast, through the augmented relations (:func:`correct_cycle`, exact optimiser)."""
     fc = diagnosis.forecast
     if not np.isfinite(fc).any():
         return None, [Note("no forecast: nothing measured", None, "diagnosis")]
     part = PartMeasurement(part="next", report="forecast", timestamp=None, deviation=fc,
                            sources=tuple("" for _ in fc))
-    cycle = correct_cycle(CorrectRequest(forecast_model(model)), part, composite=diagnosis.relation_matrix())
+    cycle = correct_cycle(CorrectRequest(forecast_model(model), solve=solve or SolveOptions()), part,
+                          composite=diagnosis.relation_matrix())
     notes = list(cycle.notes)
     if cycle.verdict == "reject":
         notes.append(Note(f"next correction: {cycle.recommendation.alarm}", None, "safety"))
@@ -189,7 +192,7 @@ def diagnose_reports(request: DiagnoseRequest) -> DiagnoseOutcome:
     inp = load_series(request.model, request.reports, corrections=request.corrections,
                       temperatures=request.temperatures, db=request.db, thermal=request.thermal, read=request.read)
     diagnosis = request.diagnoser.run(inp.layout, inp.series, declared=inp.declared)
-    cycle, more = _next_correction(inp.model, diagnosis)
+    cycle, more = _next_correction(inp.model, diagnosis, request.solve)
     notes = (*inp.notes, *(Note(n, None, "diagnosis") for n in diagnosis.notes), *more)
     out = DiagnoseOutcome(inp, diagnosis, cycle.corrections if cycle is not None else {}, None, notes, cycle)
     if request.db is not None:

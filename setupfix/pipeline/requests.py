@@ -95,28 +95,50 @@ class CycleOptions:
 
 @dataclass(frozen=True)
 class SolveOptions:
-    """The optimiser: its name, seed (metaheuristics) and time limit (exact only, seconds).
+    """The optimiser: its name, seed (metaheuristics), time limit (exact only, seconds) and objective.
+
+    ``objective``: ``"leximin"`` (every dimension centred in turn, then the least norm; the exact
+    optimiser's default) or ``"paper"`` (eqs. 8–9: the smallest margin, then the least norm).  None:
+    the optimiser's own (leximin for exact; the metaheuristics optimise the paper's f1, so asking
+    them for leximin is refused).
 
     Raises
     ------
     ParameterError
-        An unknown optimiser, a time limit for a metaheuristic or not a positive number.
+        An unknown optimiser or objective, a time limit or leximin for a metaheuristic, or a time
+        limit that is not a positive number.
     """
 
     optimizer: str = "exact"
     seed: int | None = None
     time_limit: float | None = None
+    objective: str | None = None
 
     def __post_init__(self) -> None:
         if self.optimizer not in OPTIMIZERS:
             raise ParameterError(f"unknown optimizer {self.optimizer!r} (known: {', '.join(sorted(OPTIMIZERS))})")
         if self.time_limit is not None and self.optimizer != "exact":
             raise ParameterError(f"--time-limit applies to the exact optimizer, not {self.optimizer!r}")
+        if self.objective not in (None, "leximin", "paper"):
+            raise ParameterError(f"unknown objective {self.objective!r} (known: leximin, paper)")
+        if self.objective == "leximin" and self.optimizer != "exact":
+            raise ParameterError(f"--objective leximin applies to the exact optimizer; {self.optimizer!r} "
+                                 "optimises the paper's error budget f1 (use --objective paper or omit it)")
         get_optimizer(self.optimizer, seed=self.seed, **self.params())  # the optimiser's declared constraints
 
+    @property
+    def resolved_objective(self) -> str:
+        """The objective the optimiser pursues (its default when none was asked for)."""
+        if self.objective is not None:
+            return self.objective
+        return "leximin" if self.optimizer == "exact" else "paper"
+
     def params(self) -> dict[str, Any]:
-        """The optimiser's hyper-parameters (``time_limit`` when given)."""
-        return {} if self.time_limit is None else {"time_limit": float(self.time_limit)}
+        """The optimiser's hyper-parameters (``time_limit`` and the exact optimiser's ``objective`` when given)."""
+        out: dict[str, Any] = {} if self.time_limit is None else {"time_limit": float(self.time_limit)}
+        if self.objective is not None and self.optimizer == "exact":
+            out["objective"] = self.objective
+        return out
 
 
 @dataclass(frozen=True)

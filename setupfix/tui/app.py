@@ -58,6 +58,7 @@ class Inputs:
     read: ReadOptions = field(default_factory=ReadOptions)  #: the reader's options, as ``correct`` takes them
     cycles: CycleOptions = field(default_factory=CycleOptions)  #: stations, parts per cycle, strictness
     optimizer: str = "exact"
+    objective: str | None = None  #: the exact optimiser's objective (leximin or paper; None: its default)
     seed: int = 0
     trials: int = 12
     offsets: str = "offsets.csv"
@@ -159,7 +160,9 @@ class SetupfixApp(App[None]):
         i = self.inputs
         thermal = (i.thermal, i.temperatures, i.at, i.thermal_dead_band) if i.thermal and i.temperatures else None
         self.run_worker(partial(workers.open_report, self.model_path, self.report_path, read=i.read, cycles=i.cycles,
-                                solve=SolveOptions(self.optimizer, i.seed), db=i.db, current=i.current,
+                                solve=SolveOptions(self.optimizer, i.seed, None,
+                                                   i.objective if self.optimizer == "exact" else None),
+                                db=i.db, current=i.current,
                                 thermal=thermal),
                         name="open", group="open", thread=True, exclusive=True, exit_on_error=False)
 

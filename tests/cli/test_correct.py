@@ -212,12 +212,13 @@ def test_fixed_register_listed_with_zero_and_dead_band_hold(capsys, tmp_path):
     text = (GUIDE_PINS / "model.toml").read_text()
     text = text.replace('register = "H23"', 'register = "H23"\nfixed = true')
     (tmp_path / "m.toml").write_text(text + "\n[safety]\ndead_band = 0.05\n")
-    code, out, _ = run(capsys, "correct", "--model", str(tmp_path / "m.toml"), "--json", REPORT)
+    code, out, _ = run(capsys, "correct", "--objective", "paper", "--model", str(tmp_path / "m.toml"), "--json",
+                       REPORT)
     doc = json.loads(out)
     assert code == 0 and doc["verdict"] == "hold" and [r["rule"] for r in doc["rules"]] == ["dead_band"]
     t23 = next(r for r in doc["registers"] if r["id"] == "T23")
     assert t23 == {**t23, "fixed": True, "delta": 0.0} and "T23" not in doc["corrections"]
-    code, out, _ = run(capsys, "correct", "--model", str(tmp_path / "m.toml"), REPORT)
+    code, out, _ = run(capsys, "correct", "--objective", "paper", "--model", str(tmp_path / "m.toml"), REPORT)
     assert "HOLD" in out and "fixed" in out
 
 

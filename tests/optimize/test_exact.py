@@ -44,7 +44,7 @@ def brute_force(problem: CorrectionProblem) -> tuple[float, float]:
 @pytest.mark.parametrize("seed", range(12))
 def test_grid_optimum_and_least_norm_equal_brute_force(seed):
     problem = random_problem(seed)
-    result = get_optimizer("exact").solve(problem)
+    result = get_optimizer("exact", objective="paper").solve(problem)
     best, norm = brute_force(problem)
     assert result.status == "optimal"
     if best < 0:  # out of reach: triage (issue 13), checked against brute force in test_exact_triage
@@ -58,7 +58,7 @@ def test_grid_optimum_and_least_norm_equal_brute_force(seed):
 
 def test_fixed_registers_never_move_and_limits_hold():
     problem = random_problem(3, n=4, m=7, limit_steps=3, fixed=(1,))
-    result = get_optimizer("exact").solve(problem)
+    result = get_optimizer("exact", objective="paper").solve(problem)
     assert result.x[1] == 0.0
     assert np.all(result.x <= problem.ub + 1e-12) and np.all(result.x >= problem.lb - 1e-12)
     best = brute_force(problem)[0]
@@ -70,7 +70,7 @@ def test_fixed_registers_never_move_and_limits_hold():
 
 def test_out_of_reach_returns_least_bad_correction():
     problem = random_problem(5, limit_steps=1, spread=0.3)
-    result = get_optimizer("exact").solve(problem)
+    result = get_optimizer("exact", objective="paper").solve(problem)
     best, _ = brute_force(problem)
     assert best < 0 and problem.evaluate(result.x)[0] < 0 and not result.in_tolerance
     # triage (issue 13): the dimensions out of reach are given up, the others kept in tolerance;
@@ -83,14 +83,14 @@ def test_out_of_reach_returns_least_bad_correction():
 
 def test_binding_dimensions_prove_the_bound():
     problem = random_problem(7)
-    result = get_optimizer("exact").solve(problem)
+    result = get_optimizer("exact", objective="paper").solve(problem)
     assert result.binding
     # Relaxing every non-binding limit cannot raise the LP bound: the binding set alone explains it.
     keep = np.isin(problem.dimension_ids, result.binding)
     relaxed = CorrectionProblem(problem.composite[:, keep], problem.deviation[keep], problem.lower[keep],
                                 problem.upper[keep], problem.lb, problem.ub, problem.resolution,
                                 problem.register_ids, tuple(np.array(problem.dimension_ids)[keep]))
-    assert get_optimizer("exact").solve(relaxed).bound == pytest.approx(result.bound, abs=1e-9)
+    assert get_optimizer("exact", objective="paper").solve(relaxed).bound == pytest.approx(result.bound, abs=1e-9)
 
 
 def test_time_limit_falls_back_and_says_so():
@@ -98,7 +98,7 @@ def test_time_limit_falls_back_and_says_so():
     problem = random_problem(2, n=10, m=40, limit_steps=50)
     with warnings.catch_warnings():
         warnings.simplefilter("error")  # notes are data: nothing may go through warnings
-        result = get_optimizer("exact", time_limit=1e-9).solve(problem)
+        result = get_optimizer("exact", objective="paper", time_limit=1e-9).solve(problem)
     assert result.status == "time_limit"
     assert any(n.kind == "solver" and "time limit" in n.message for n in result.notes)
     assert result.extra["stopped"]["reason"] == "time limit"
@@ -111,7 +111,7 @@ def test_paper_size_problem_against_lp_bound_and_null_space(guide_pins_model):
     for dev in devs:
         part = PartMeasurement("c", "r", None, dev, ("",) * dev.size)
         problem = CorrectionProblem.from_part(guide_pins_model, part)
-        result = get_optimizer("exact").solve(problem)
+        result = get_optimizer("exact", objective="paper").solve(problem)
         assert result.status == "optimal"
         assert result.margin_before <= result.margin_after <= result.bound + 1e-12
         # least norm: moving along the null space (tools +a, WKS -a) by one step cannot shorten x
@@ -124,7 +124,7 @@ def test_paper_size_problem_against_lp_bound_and_null_space(guide_pins_model):
 
 def test_continuous_mode_is_the_lp_optimum():
     problem = random_problem(4)
-    cont = get_optimizer("exact", grid=False).solve(problem)
+    cont = get_optimizer("exact", objective="paper", grid=False).solve(problem)
     assert cont.margin_after == pytest.approx(cont.bound, abs=1e-9)
 
 
@@ -133,7 +133,7 @@ def test_continuous_mode_is_the_lp_optimum():
 @given(seed=st.integers(0, 10_000), n=st.integers(1, 6), m=st.integers(1, 10), steps=st.integers(1, 20))
 def test_no_grid_point_beats_the_exact_optimum(seed, n, m, steps):
     problem = random_problem(seed, n=n, m=max(m, 1), limit_steps=steps)
-    result = get_optimizer("exact").solve(problem)
+    result = get_optimizer("exact", objective="paper").solve(problem)
     rng = np.random.default_rng(seed)
     k = rng.integers(problem.kmin, problem.kmax + 1, size=(2000, n))
     f1, _, _ = problem.evaluate(k * problem.resolution)

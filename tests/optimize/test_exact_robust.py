@@ -35,7 +35,7 @@ PATHS = {
 @pytest.mark.parametrize("seed", range(6))
 def test_every_proof_path_equals_brute_force(path, seed):
     problem = random_problem(100 + seed, n=4, m=8, limit_steps=6)
-    result = get_optimizer("exact", settings=PATHS[path]).solve(problem)
+    result = get_optimizer("exact", objective="paper", settings=PATHS[path]).solve(problem)
     best, norm = brute_force(problem)
     assert result.status == "optimal"
     assert result.margin_after == pytest.approx(best, abs=1e-12)
@@ -50,7 +50,7 @@ def test_solve_error_repro_is_optimal():
 
     model = load_model(DATA / "model.toml")
     (part,) = load_parts(model, DATA / "report.csv")
-    result = get_optimizer("exact").solve(CorrectionProblem.from_part(model, part))
+    result = get_optimizer("exact", objective="paper").solve(CorrectionProblem.from_part(model, part))
     assert result.status == "optimal"
     assert result.margin_after == pytest.approx(0.0004, abs=1e-9)
     assert result.norm == pytest.approx(0.0677, abs=1e-4)  # 0.195 mm before the fix
@@ -69,7 +69,8 @@ def test_solver_error_is_retried_without_the_lower_bracket_and_reported(monkeypa
 
     monkeypatch.setattr(Session, "max_margin_milp", failing_once)
     problem = random_problem(1, n=4, m=8, limit_steps=6)  # in reach, and the rounded LP point is not optimal
-    result = get_optimizer("exact", settings=ExactSettings(level_steps=0, search_limit=0)).solve(problem)
+    result = get_optimizer("exact", objective="paper",
+                           settings=ExactSettings(level_steps=0, search_limit=0)).solve(problem)
     assert len(brackets) == 2 and brackets[1] < brackets[0]  # the retry drops the lower bracket
     assert result.status == "optimal"
     assert result.margin_after == pytest.approx(brute_force(problem)[0], abs=1e-12)
@@ -92,8 +93,8 @@ def test_csv_and_in_memory_inputs_give_identical_corrections(guide_pins_model):
         computed = printed
     np.testing.assert_allclose(computed, from_csv.deviation, atol=1e-12)
     in_memory = PartMeasurement(from_csv.part, "memory", None, computed, from_csv.sources)
-    a = get_optimizer("exact").solve(CorrectionProblem.from_part(guide_pins_model, from_csv))
-    b = get_optimizer("exact").solve(CorrectionProblem.from_part(guide_pins_model, in_memory))
+    a = get_optimizer("exact", objective="paper").solve(CorrectionProblem.from_part(guide_pins_model, from_csv))
+    b = get_optimizer("exact", objective="paper").solve(CorrectionProblem.from_part(guide_pins_model, in_memory))
     np.testing.assert_array_equal(a.x, b.x)
 
 
@@ -119,7 +120,7 @@ def shop_problem(n: int, m: int, seed: int) -> CorrectionProblem:
 def test_whole_solve_respects_the_time_limit_and_says_which_stage_stopped():
     problem = shop_problem(180, 2000, 2)  # several seconds to prove on the 2-core test machine
     start = time.perf_counter()
-    result = get_optimizer("exact", time_limit=0.6).solve(problem)
+    result = get_optimizer("exact", objective="paper", time_limit=0.6).solve(problem)
     wall = time.perf_counter() - start
     assert wall < 0.6 + 1.0  # the limit bounds the whole solve (slack for HiGHS's clock and a busy machine)
     assert result.margin_after <= result.bound + 1e-12
@@ -149,9 +150,9 @@ def test_threads_keep_their_own_solver_models(guide_pins_model):
     devs, _ = simulate_deviations(guide_pins_model, 8, seed=3)
     problems = [CorrectionProblem.from_part(guide_pins_model, PartMeasurement("c", "r", None, d, ("",) * d.size))
                 for d in devs]
-    alone = [get_optimizer("exact").solve(p).x for p in problems]
+    alone = [get_optimizer("exact", objective="paper").solve(p).x for p in problems]
     with ThreadPoolExecutor(max_workers=2) as pool:
-        threaded = list(pool.map(lambda p: get_optimizer("exact").solve(p).x, problems))
+        threaded = list(pool.map(lambda p: get_optimizer("exact", objective="paper").solve(p).x, problems))
     for a, b in zip(alone, threaded, strict=True):
         np.testing.assert_array_equal(a, b)
 
@@ -164,9 +165,9 @@ def test_a_very_fine_grid_neither_hangs_nor_loses_the_bound(guide_pins_model):
     coarse = CorrectionProblem.from_part(guide_pins_model, part)
     fine = dataclasses.replace(coarse, resolution=1e-11)
     start = time.perf_counter()
-    result = get_optimizer("exact", time_limit=2.0).solve(fine)
+    result = get_optimizer("exact", objective="paper", time_limit=2.0).solve(fine)
     assert time.perf_counter() - start < 2.0 + 3.0
-    assert get_optimizer("exact").solve(coarse).margin_after - 1e-12 <= result.margin_after
+    assert get_optimizer("exact", objective="paper").solve(coarse).margin_after - 1e-12 <= result.margin_after
     assert result.margin_after <= result.bound + 1e-12
 
 
@@ -177,7 +178,7 @@ def test_the_answer_does_not_depend_on_the_reports_solved_before(guide_pins_mode
     data = Path(__file__).resolve().parent / "data"
     (before,) = load_parts(guide_pins_model, data / "history_before.csv")
     (tie,) = load_parts(guide_pins_model, data / "history_tie.csv")
-    opt = get_optimizer("exact")
+    opt = get_optimizer("exact", objective="paper")
     fresh = opt.solve(CorrectionProblem.from_part(guide_pins_model, tie))
     opt.solve(CorrectionProblem.from_part(guide_pins_model, before))
     after = opt.solve(CorrectionProblem.from_part(guide_pins_model, tie))

@@ -223,7 +223,7 @@ def test_one_gross_error_does_not_push_good_dimensions_out(guide_pins_model):
     ids = [d.id for d in guide_pins_model.dimensions]
     dev[0] = -0.25
     problem = CorrectionProblem.from_part(guide_pins_model, PartMeasurement("c", "r", None, dev, part.sources))
-    result = get_optimizer("exact").solve(problem)
+    result = get_optimizer("exact", objective="paper").solve(problem)
     margins = problem.margins(result.x)
     assert result.given_up == (ids[0],)
     assert np.all(np.delete(margins, 0) >= 0)
@@ -236,9 +236,10 @@ def test_a_costlier_register_moves_less_among_equally_good_corrections():
     base = dict(composite=comp, deviation=np.array([0.03, 0.03, -0.03]), lower=np.full(3, -0.05),
                 upper=np.full(3, 0.05), lb=np.full(3, -0.05), ub=np.full(3, 0.05), resolution=0.001,
                 register_ids=("G54", "H5", "H6"), dimension_ids=("D1", "D2", "D3"))
-    plain = get_optimizer("exact").solve(CorrectionProblem(**base))
-    tool_dear = get_optimizer("exact").solve(CorrectionProblem(**base, cost=np.array([1.0, 10.0, 1.0])))
-    wks_dear = get_optimizer("exact").solve(CorrectionProblem(**base, cost=np.array([10.0, 1.0, 1.0])))
+    plain = get_optimizer("exact", objective="paper").solve(CorrectionProblem(**base))
+    paper = get_optimizer("exact", objective="paper")
+    tool_dear = paper.solve(CorrectionProblem(**base, cost=np.array([1.0, 10.0, 1.0])))
+    wks_dear = paper.solve(CorrectionProblem(**base, cost=np.array([10.0, 1.0, 1.0])))
     assert plain.margin_after == tool_dear.margin_after == wks_dear.margin_after
     assert abs(tool_dear.x[1]) < abs(plain.x[1]) and abs(tool_dear.x[0]) > abs(plain.x[0])
     assert abs(wks_dear.x[0]) < abs(plain.x[0])
@@ -251,7 +252,7 @@ def test_weighted_least_norm_equals_brute_force(seed):
     weighted = CorrectionProblem(problem.composite, problem.deviation, problem.lower, problem.upper, problem.lb,
                                  problem.ub, problem.resolution, problem.register_ids, problem.dimension_ids,
                                  cost=cost)
-    result = get_optimizer("exact").solve(weighted)
+    result = get_optimizer("exact", objective="paper").solve(weighted)
     x = grid_points(weighted)
     f1, _, _ = weighted.evaluate(x)
     best = f1.max()
@@ -280,7 +281,7 @@ def test_metaheuristics_give_nothing_up():
 def test_no_dimension_in_reach_gives_the_least_correction():
     """One dimension out of reach of a ±1-step register (hypothesis found it): x = 0, given up, no crash."""
     problem = random_problem(1845, n=1, m=1, limit_steps=1)
-    result = get_optimizer("exact").solve(problem)
+    result = get_optimizer("exact", objective="paper").solve(problem)
     assert brute_triage(problem)[0] == 0
     assert result.status == "optimal"
     assert np.all(result.x == 0)

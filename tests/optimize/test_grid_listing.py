@@ -68,7 +68,7 @@ def test_ellipsoid_search_finds_the_least_norm_of_brute_force(seed):
 
 def test_a_level_with_no_grid_point_is_proved_by_listing_the_whole_box():
     problem = random_problem(101, n=4, m=8, limit_steps=6)
-    result = get_optimizer("exact").solve(problem)
+    result = get_optimizer("exact", objective="paper").solve(problem)
     assert "the whole box listed" in result.extra["path"] and "MILP" not in result.extra["path"]
     best, norm = brute_force(problem)
     assert result.status == "optimal"
@@ -83,9 +83,9 @@ def test_guide_pins_cycles_equal_the_milp_proofs(cycle):
     model = load_model(GUIDE_PINS / "model.toml")
     (part,) = load_parts(model, GUIDE_PINS / f"cycle_{cycle:02d}.csv")
     problem = CorrectionProblem.from_part(model, part)
-    fast = get_optimizer("exact").solve(problem)
+    fast = get_optimizer("exact", objective="paper").solve(problem)
     no_listing = ExactSettings(enumeration_limit=0, search_limit=0)
-    slow = get_optimizer("exact", time_limit=60.0, settings=no_listing).solve(problem)
+    slow = get_optimizer("exact", objective="paper", time_limit=60.0, settings=no_listing).solve(problem)
     assert fast.status == slow.status == "optimal"
     assert fast.margin_after == pytest.approx(slow.margin_after, abs=1e-12)
     assert fast.norm == pytest.approx(slow.norm, abs=1e-12)

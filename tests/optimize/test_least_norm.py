@@ -113,7 +113,7 @@ def test_descend_keeps_every_row_and_ends_where_no_single_move_helps(seed):
 def test_a_stopped_least_norm_proof_returns_a_certified_near_least_correction(monkeypatch):
     """The limit hit in the least-norm stage: the stage is named, and ‖x‖ is within the certified ratio."""
     problem = shop_problem(100, 800, 1)  # 100 registers: the chord MILP in the Lagrangian box
-    proven = get_optimizer("exact", time_limit=30.0).solve(problem)
+    proven = get_optimizer("exact", objective="paper", time_limit=30.0).solve(problem)
     assert proven.status == "optimal"
     real = least_norm_stage.chord_proof
 
@@ -122,7 +122,7 @@ def test_a_stopped_least_norm_proof_returns_a_certified_near_least_correction(mo
         return real(*args, **kwargs)
 
     monkeypatch.setattr(least_norm_stage, "chord_proof", out_of_time)
-    result = get_optimizer("exact", time_limit=30.0).solve(problem)
+    result = get_optimizer("exact", objective="paper", time_limit=30.0).solve(problem)
     assert result.status == "time_limit"
     assert result.extra["stopped"] == {"stage": "least norm", "reason": "time limit"}
     assert "least-norm stage" in result.message and "certified" in result.message

@@ -32,7 +32,7 @@ from setupfix.optimize import get_optimizer
 problems = pickle.load(open(sys.argv[1], "rb"))
 out = []
 for p in problems:
-    r = get_optimizer("exact", time_limit=float(sys.argv[3])).solve(p)
+    r = get_optimizer("exact", objective="paper", time_limit=float(sys.argv[3])).solve(p)
     out.append((r.x, r.status, str(r.extra.get("path", ""))))
 pickle.dump(out, open(sys.argv[2], "wb"))
 """
@@ -55,7 +55,7 @@ def test_a_long_run_never_runs_out_of_time_and_equals_a_fresh_process(guide_pins
     # the reports a fresh process proves without a MILP (a few ms each: far from the limit on a busy machine)
     quick = [i for i, (_, status, path) in enumerate(fresh) if status == "optimal" and "MILP" not in path]
     assert len(quick) >= 8
-    optimizer = get_optimizer("exact", time_limit=LIMIT)
+    optimizer = get_optimizer("exact", objective="paper", time_limit=LIMIT)
     for n in range(1200):
         i = quick[n % len(quick)]
         result = optimizer.solve(problems[i])
@@ -98,7 +98,7 @@ exact.Clock = Watched
 m = load_model("sample_reports/guide_pins/model.toml")
 p = load_parts(m, "sample_reports/guide_pins/cycle_01.csv")[0]
 assert "scipy.optimize" not in sys.modules, "the test needs a process that has not loaded it yet"
-get_optimizer("exact").solve(CorrectionProblem.from_part(m, p))
+get_optimizer("exact", objective="paper").solve(CorrectionProblem.from_part(m, p))
 print(seen)
 """
     root = Path(__file__).resolve().parents[2]

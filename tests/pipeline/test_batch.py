@@ -11,7 +11,7 @@ import pytest
 from setupfix.model import load_model
 from setupfix.pipeline.batch import run_batch
 from setupfix.pipeline.batch_output import MANIFEST
-from setupfix.pipeline.requests import CorrectRequest
+from setupfix.pipeline.requests import CorrectRequest, SolveOptions
 from setupfix.store import open_store
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -96,7 +96,8 @@ def test_one_program_per_cycle(tmp_path):
     d = tmp_path / "r"
     d.mkdir()
     shutil.copy(sample / "report.csv", d / "a.csv")
-    s = run_batch(CorrectRequest(load_model(sample / "model.toml")), d, tmp_path / "programs", settle=0,
+    request = CorrectRequest(load_model(sample / "model.toml"), solve=SolveOptions(objective="paper"))  # README's
+    s = run_batch(request, d, tmp_path / "programs", settle=0,
                   controller="fanuc")
     assert s.written and sorted(p.name for p in (tmp_path / "programs").iterdir()) == [MANIFEST, "a.csv.nc"]
     assert "G91 G10 L2 P1 Z-0.022" in (tmp_path / "programs" / "a.csv.nc").read_text()

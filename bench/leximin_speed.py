@@ -1,0 +1,131 @@
+"""Leximin centring (issue 22): time per report against the paper's objective and one LP solve.
+
+Problems: the guide-pins model (paper's example) — its five bundled cycles and random sets by
+eqs. 12-13 (w1 = 0.03 mm, w2 = 0.02 mm), as ``bench/exact_per_report.py`` draws them — and
+shop-scale fixtures of ``bench/exact_scaling.py`` (``shop_problem``: registers x dimensions).
+Every time is also given as a ratio to one LP solve timed in the same run, interleaved with the
+work: the LP of eq. 8 (max t s.t. every margin ≥ t, the register box) of the same problem, by
+the same HiGHS interface the optimiser uses.
+
+Threads: BLAS limited to 1 (threadpoolctl), HiGHS single-threaded (``threads`` = 1, as the
+optimiser sets it).
+
+    python bench/leximin_speed.py                     # 5 cycles + 100 random sets; 180 x 2000, 3 seeds
+    python bench/leximin_speed.py --sets 20 --shop-seeds 1
+
+Writes ``bench/results/leximin_speed.txt`` (with the command).
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import platform
+import sys
+import time
+from collections import Counter
+from pathlib import Path
+
+import numpy as np
+from threadpoolctl import threadpool_limits
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(ROOT / "bench"))
+
+from exact_per_report import problems
+from exact_scaling import shop_problem
+
+from setupfix.optimize import CorrectionProblem, get_optimizer
+from setupfix.optimize._lp_bound import lp_bound, margin_rows
+from setupfix.optimize._session import GridRows, Session
+from setupfix.optimize._settings import ExactSettings
+
+RESULTS = ROOT / "bench" / "results"
+
+
+def lp_seconds(problem: CorrectionProblem) -> float:
+    """One LP of eq. 8 on this problem, in a fresh session (model built and solved)."""
+    free = problem.free
+    g_rows, g = margin_rows(problem)
+    t = time.perf_counter()
+    rows = GridRows(g_rows, g, problem.kmin[free].astype(float), problem.kmax[free].astype(float), problem.cost[free])
+    lp_bound(Session(rows, ExactSettings(), 60.0))
+    return time.perf_counter() - t
+
+
+def timed(problem: CorrectionProblem, objective: str, limit: float) -> tuple[float, str, str]:
+    opt = get_optimizer("exact", objective=objective, time_limit=limit)
+    t = time.perf_counter()
+    result = opt.solve(problem)
+    path = str(result.extra.get("path", ""))
+    kind = ("counts" if "the rest by counts" in path else "branches" if "branch:" in path else "levels"
+            ) if objective == "leximin" else "paper"
+    return time.perf_counter() - t, result.status, kind
+
+
+def main(argv: list[str] | None = None) -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--sets", type=int, default=100)
+    ap.add_argument("--seed", type=int, default=2014)
+    ap.add_argument("--limit", type=float, default=2.0, help="time limit per paper-size report [s]")
+    ap.add_argument("--shop", default="180x2000")
+    ap.add_argument("--shop-seeds", type=int, default=3)
+    ap.add_argument("--shop-limit", type=float, default=60.0)
+    args = ap.parse_args(argv)
+    lines = ["Leximin centring: time per report (exact optimiser, objective leximin vs paper)",
+             "command : python bench/leximin_speed.py " + " ".join(sys.argv[1:] if argv is None else argv),
+             f"machine : {platform.machine()}, Python {platform.python_version()}, numpy {np.__version__}; "
+             f"{os.cpu_count()} CPUs",
+             "threads : BLAS limited to 1 (threadpoolctl); HiGHS threads = 1",
+             f"load    : 1-min load average {os.getloadavg()[0]:.2f} at the start"]
+    with threadpool_limits(limits=1):
+        get_optimizer("exact").solve(problems(1, 0)[0][1])  # warm-up: imports, first HiGHS object
+        probs = problems(args.sets, args.seed)
+        rows: dict[str, list[float]] = {"leximin": [], "paper": [], "lp": []}
+        status: dict[str, Counter[str]] = {"leximin": Counter(), "paper": Counter()}
+        kinds: Counter[str] = Counter()
+        for _, problem in probs:
+            rows["lp"].append(lp_seconds(problem))
+            for objective in ("paper", "leximin"):
+                sec, st, kind = timed(problem, objective, args.limit)
+                rows[objective].append(sec)
+                status[objective][st] += 1
+                if objective == "leximin":
+                    kinds[kind] += 1
+        ref = float(np.median(rows["lp"]))
+        lines += ["", f"paper size: guide-pins model, {len(probs)} reports (5 cycles + {args.sets} random sets, seed "
+                  f"{args.seed}), time limit {args.limit:g} s",
+                  f"reference: one LP of eq. 8 on the same report, median {ref * 1e3:.3f} ms"]
+        for objective in ("paper", "leximin"):
+            t = np.array(rows[objective])
+            lines.append(f"  {objective:8s} median {np.median(t) * 1e3:8.2f} ms = {np.median(t) / ref:7.1f}x LP; "
+                         f"p95 {np.percentile(t, 95) * 1e3:8.2f} ms; max {t.max() * 1e3:8.1f} ms; "
+                         f"status {dict(status[objective])}")
+        lines.append(f"  leximin paths: {dict(kinds)} (levels: progressive filling only; branches: a discrete "
+                     "conflict decided by branches; counts: by the count MILPs)")
+        n, m = (int(v) for v in args.shop.split("x"))
+        times, refs, stats = [], [], Counter()
+        if args.shop_seeds < 1:
+            args.shop_seeds, n, m = 1, 10, 28  # only the smallest shop fixture
+        for seed in range(args.shop_seeds):
+            problem = shop_problem(n, m, seed)
+            refs.append(lp_seconds(problem))
+            sec, st, kind = timed(problem, "leximin", args.shop_limit)
+            times.append(sec)
+            stats[f"{st}/{kind}"] += 1
+        ref = float(np.median(refs))
+        lines += ["", f"shop scale: {n} registers x {m} dimensions (bench/exact_scaling.py shop_problem), seeds "
+                  f"0..{args.shop_seeds - 1}, time limit {args.shop_limit:g} s",
+                  f"reference: one LP of eq. 8, median {ref:.3f} s",
+                  f"  leximin median {np.median(times):.3f} s = {np.median(times) / ref:.1f}x LP; max "
+                  f"{max(times):.3f} s; {dict(stats)} (time_limit: the levels were stopped, δ proved)"]
+    lines.append(f"load    : 1-min load average {os.getloadavg()[0]:.2f} at the end")
+    text = "\n".join(lines) + "\n"
+    RESULTS.mkdir(exist_ok=True)
+    (RESULTS / "leximin_speed.txt").write_text(text, encoding="utf-8")
+    sys.stdout.write(text)
+
+
+if __name__ == "__main__":
+    main()

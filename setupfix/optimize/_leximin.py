@@ -1,0 +1,397 @@
+"""Leximin centring on the register grid: every dimension as far inside its tolerance as the others allow.
+
+Grid units as in :mod:`setupfix.optimize._session`.  Each dimension q has the margin
+``M_q(k) = min_{j ∈ q} (g_j − G_j k)`` (its rows, eqs. 5–6); the objective orders the
+grid points by the vector of these margins sorted ascending, compared lexicographically
+(the *leximin* order; margins within ``ε`` = half the input quantum are ties), and among
+the leximin-optimal points takes the least Σ c_i k_i² (eq. 9), ties to the lexicographically
+smallest k where a listing proves it.  Its first level is the paper's error budget δ = t*
+of eq. 8 (:func:`~setupfix.optimize._grid_optimum.grid_optimum`): leximin keeps the paper's
+optimum and then centres every dimension that does not bind.
+
+Levels (progressive filling, each level proved on the grid)
+-----------------------------------------------------------
+State: dimensions *fixed* with a floor v_q (every leximin-optimal point has M_q ≥ v_q and
+no point of the current level set has M_q above v_q + ε), the others *active*.
+
+1. Level value: t_i = max t over grid points with M_q ≥ v_q (fixed) and M_q ≥ t (active)
+   (:func:`~setupfix.optimize._leximin_level.level_value`: LP bound, rounded points, the
+   rounded-rows descent — one LP per level where the rows are totally unimodular — and the
+   bracketed MILP).
+2. Saturation: a weighted sum of the level's rows (the LP's duals, checked in numpy by weak
+   duality, :func:`pinned_dimensions`) proves that an active dimension cannot rise above
+   t_i + ε, or that its a_qᵀk is the same at every grid point of the level set (integer rows:
+   it cannot move by one lattice step).  Those dimensions are fixed.
+3. If neither proof fixes a dimension, each dimension at t_i is tested alone: the rounded rows
+   with its rows at t_i + ε (an LP, a feasibility MILP) either hold no grid point (saturated:
+   fixed) or do.  If every one can rise alone but not all together (a *discrete conflict*: e.g.
+   two dimensions moved oppositely by one register with the even split off the grid), the
+   dimensions that can be the only one left at t_i (every other one above it at some grid
+   point) each open a branch with that dimension fixed at t_i; the branches' leximin vectors are
+   compared (a branch already below the best is dropped), tied branches all go to the least
+   norm.  No such dimension (two or more must stay at t_i), or more than ``MAX_BRANCHES``
+   branches: the rest is decided by counts (:mod:`setupfix.optimize._leximin_counts`, always
+   correct, MILPs with binaries).
+
+When every dimension is fixed, the leximin-optimal points are exactly the grid points with
+M_q ≥ v_q for every q, and the least norm among them is stage 3
+(:func:`~setupfix.optimize._grid_least_norm.grid_least_norm`) on the rows shifted by the floors.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+
+import numpy as np
+import numpy.typing as npt
+
+from setupfix.optimize._grid import TOL
+from setupfix.optimize._grid_least_norm import LeastNorm, grid_least_norm
+from setupfix.optimize._grid_optimum import Stop
+from setupfix.optimize._leximin_counts import CountLevels, count_levels, count_least_norm
+from setupfix.optimize._leximin_level import Certificates, LevelModel, LevelValue, dim_margins
+from setupfix.optimize._session import GridRows, Session
+
+__all__ = ["Leximin", "leximin", "leximin_least_norm", "pinned_dimensions"]
+
+Array = npt.NDArray[np.float64]
+Mask = npt.NDArray[np.bool_]
+
+
+@dataclass(frozen=True)
+class Leximin:
+    """Outcome of the leximin levels (before the least norm).
+
+    Attributes
+    ----------
+    k : ndarray of shape (n,)
+        A leximin-optimal grid point (the best found when ``stopped``).
+    floors : ndarray of shape (n_dims,)
+        v_q [steps]: the floor of each dimension (−inf for a dimension without rows).
+    levels : tuple of (float, int)
+        The leximin vector as distinct values [steps] and how many dimensions sit at each.
+    counts : CountLevels or None
+        The count constraints that decide the dimensions left when a discrete conflict
+        stopped the progressive filling (None: every dimension has its floor).
+    stopped : Stop or None
+    path : tuple of str
+    calls : int
+        Solver calls.
+    alternatives : tuple of Leximin
+        Other outcomes with the same leximin vector (branches of a discrete conflict that tie).
+    """
+
+    k: Array
+    floors: Array
+    levels: tuple[tuple[float, int], ...]
+    counts: CountLevels | None
+    stopped: Stop | None
+    path: tuple[str, ...]
+    calls: int
+    alternatives: tuple[Leximin, ...] = ()
+
+
+def pinned_dimensions(level: Certificates, row_dim: npt.NDArray[np.intp], active_rows: Mask, eps: float,
+                      d: Array) -> tuple[Mask, Mask]:
+    """Rows whose margin cannot rise above t + ε, and integer rows whose value G_j k is pinned.
+
+    Weak duality with the level LP's row weights y (≥ 0, over the active rows normalised to
+    sum 1) and the fixed rows' weights w: for every k in the box
+    ``Σ_A y_j (rhs_j − G_j k) + Σ_F w_j (rhs_j − G_j k) ≤ C`` with C computed here from y, w
+    and the box (not from the solver's objective).  On the level set every term is ≥ its floor,
+    so for an active row j: ``m_j(k) − t ≤ (C − t)/y_j`` (rhs = g_j; ``saturated`` when this is
+    ≤ ε).  For the rounded-rows LP (rhs = b_j, floors 0) and an integer row with gcd d_j:
+    ``b_j − G_j k ∈ d_j ℤ≥0`` is below d_j, so G_j k = b_j on every grid point (``pinned``).
+
+    Parameters
+    ----------
+    level : Certificates
+        The weights, the right-hand sides and the floors of the LPs the weights come from.
+    row_dim : ndarray of int, shape (r,)
+    active_rows : ndarray of bool, shape (r,)
+    eps : float
+        Tie threshold [steps].
+    d : ndarray of shape (r,)
+        Row gcds (0: not an integer row).
+
+    Returns
+    -------
+    saturated, pinned : ndarray of bool, shape (r,)
+    """
+    sat = np.zeros(active_rows.size, bool)
+    pin = np.zeros(active_rows.size, bool)
+    for weights, rhs, floor_a, rounded in level.certificates:
+        y = np.maximum(weights, 0.0)
+        total = float(y[active_rows].sum())
+        if not np.isfinite(total) or total <= 0:
+            continue
+        y = y / total
+        w = y @ level.g_rows
+        c = float(y @ rhs + np.sum(np.maximum(-w * level.kmin, -w * level.kmax)))
+        slack = c - floor_a  # Σ_A y_j (m_j − floor) ≤ slack on the level set
+        with np.errstate(divide="ignore", invalid="ignore"):
+            room = np.where(y > 0, slack / y, np.inf)
+        if rounded:
+            pin |= active_rows & (d > 0) & (room < d - 1e-7)
+        else:
+            sat |= active_rows & (room <= eps - 1e-9)
+    return sat, pin
+
+
+class _Search:
+    """What one leximin search shares across its branches: the model, the deadline, the counters."""
+
+    def __init__(self, session: Session, model: LevelModel, stage_end: float) -> None:
+        self.session, self.model, self.stage_end = session, model, stage_end
+        self.eps = session.settings.quantum / 2
+        self.leaves = 0
+        self.calls = 0
+
+    def margins(self, k: Array) -> Array:
+        m = self.model
+        return dim_margins(m.rows.g_rows, m.rows.g, k, m.row_dim, m.n_dims)
+
+
+#: Most branches a search may open on discrete conflicts before the counts decide the rest.
+MAX_BRANCHES = 12
+
+
+def leximin(session: Session, row_dim: npt.NDArray[np.intp], n_dims: int, k_first: Array, t_first: float,
+            first: LevelValue | None = None, floors: Array | None = None, stage_end: float | None = None) -> Leximin:
+    """The leximin levels from a proved first level (t_first at the grid point k_first).
+
+    Parameters
+    ----------
+    session : Session
+        The solve (rows in grid units, clock, settings).
+    row_dim : ndarray of int, shape (r,)
+        Dimension (0 … n_dims − 1) of each row.
+    n_dims : int
+    k_first : ndarray of shape (n,); t_first : float
+        A grid point and its proved max–min over the active dimensions (level 1, the paper's δ).
+    first : LevelValue, optional
+        The first level's LP certificate (its duals prove saturation at once).
+    floors : ndarray of shape (n_dims,), optional
+        Dimensions fixed before (finite floor v_q; NaN: active).  A caller that keeps a subset
+        (the triage) passes floors for it and −inf for dimensions it leaves out.
+    stage_end : float, optional
+        ``time.perf_counter()`` at which the levels stop (default: the solve's deadline).
+
+    Returns
+    -------
+    Leximin
+        With ``alternatives``: other branches of a discrete conflict whose leximin vectors tie with it
+        (the least norm is taken over all of them).
+    """
+    rows = session.rows
+    stage_end = session.clock.deadline if stage_end is None else stage_end
+    v = np.full(n_dims, np.nan) if floors is None else np.asarray(floors, dtype=float).copy()
+    has_rows = np.zeros(n_dims, bool)
+    has_rows[row_dim] = True
+    v[~has_rows] = -np.inf
+    # a dimension no free register moves keeps its margin: fixed at it from the start
+    constant = np.zeros(n_dims, bool)
+    np.logical_or.at(constant, row_dim, True)
+    np.logical_and.at(constant, row_dim, rows.zero)
+    search = _Search(session, LevelModel(session, row_dim, n_dims), stage_end)
+    m_first = search.margins(k_first)
+    if np.any(np.isnan(v) & constant):  # the first level was over them too: it is recomputed without them
+        v[np.isnan(v) & constant] = m_first[np.isnan(v) & constant]
+        first = None
+    best = _fill(search, v, k_first, t_first, first, [])
+    head = best[0]
+    return Leximin(head.k, head.floors, head.levels, head.counts, head.stopped, head.path, search.calls,
+                   tuple(best[1:]))
+
+
+def _vector(lex: Leximin) -> Array:
+    return np.repeat([a for a, _ in lex.levels], [b for _, b in lex.levels])
+
+
+def _compare(a: Leximin, b: Leximin, eps: float) -> int:
+    """+1 if a's sorted margins beat b's (leximin, ties within ε), −1 if worse, 0 if tied."""
+    va, vb = _vector(a), _vector(b)
+    for x, y in zip(va, vb, strict=False):
+        if abs(x - y) > eps:
+            return 1 if x > y else -1
+    return 0
+
+
+def _fill(search: _Search, v: Array, k: Array, t: float, level: LevelValue | None, path: list[str],
+          bound: Array | None = None) -> list[Leximin]:
+    """Progressive filling from this state; the tied-best outcomes (branches of discrete conflicts).
+
+    ``bound``: the sorted margins of the best branch so far; a branch whose settled margins (the
+    fixed ones up to its current level) already fall below it is dropped (empty list).
+    """
+    model, eps, rows = search.model, search.eps, search.session.rows
+    row_dim = model.row_dim
+    v = v.copy()
+    path = list(path)
+    while True:
+        active = np.isnan(v)
+        if not active.any():
+            break
+        if level is None:  # level i ≥ 2 (or a first level without its certificate)
+            if time.perf_counter() >= search.stage_end:
+                return [_stopped(search, v, k, path, "time limit")]
+            level = model.value(v, k, search.stage_end)
+            search.calls += level.calls
+            path.extend(level.path)
+            if level.stop is not None:
+                return [_stopped(search, v, level.k, path, level.stop)]
+            k, t = level.k, level.t
+        active_rows = active[row_dim]
+        sat, pin = pinned_dimensions(model.certify(level, v), row_dim, active_rows, eps, rows.d)
+        if not (sat & active_rows).any() and rows.all_integer:  # the rounded rows' weights
+            sat2, pin = pinned_dimensions(model.certify_rounded(level, v, search.stage_end), row_dim, active_rows,
+                                          eps, rows.d)
+            sat |= sat2
+            search.calls += 1
+        # a row whose margin is proved within ε of t (integer: one lattice value) or pinned pins G_j k, and
+        # with it every row equal or opposite to it: their dimensions' margins are the same at every point
+        pin |= model.same_vector(sat | pin) & active_rows
+        m_k = search.margins(k)
+        fix_sat = np.zeros(v.size, bool)
+        fix_sat[row_dim[sat]] = True
+        fix_pin = np.zeros(v.size, bool)
+        fix_pin[row_dim[pin]] = True
+        fix_pin &= active & ~fix_sat
+        fix_sat &= active
+        if not (fix_sat.any() or fix_pin.any()):  # each dimension at t: can it rise alone?
+            for q in np.flatnonzero(active & (m_k <= t + eps)):
+                rise = model.can_rise(v, int(q), t, eps, search.stage_end)
+                search.calls += 1
+                if rise is None:
+                    return [_stopped(search, v, k, path, "time limit")]
+                fix_sat[q] = not rise
+            if not fix_sat.any():  # each can, not all together: a discrete conflict
+                return _conflict(search, v, k, t, path, bound)
+            path.append("leximin: saturation proved by the rounded rows one dimension at a time")
+        v[fix_sat] = t
+        v[fix_pin] = m_k[fix_pin]
+        at_t = int(np.sum(fix_sat | (fix_pin & (m_k <= t + eps))))
+        if at_t:
+            path.append(f"leximin: {at_t} dimension(s) at {t:.4g} steps")
+        if bound is not None and _worse(np.sort(v[np.isfinite(v) & (v <= t + eps)]), bound, eps):
+            return []
+        level = None
+    return [Leximin(k, v, _levels(v), None, None, tuple(path), 0)]
+
+
+def _conflict(search: _Search, v: Array, k: Array, t: float, path: list[str],
+              bound: Array | None = None) -> list[Leximin]:
+    """A discrete conflict at level t: one branch per dimension that can be the only one left at t
+    (every other active dimension above t + ε at some grid point); none, or too many branches:
+    the counts decide (:mod:`setupfix.optimize._leximin_counts`)."""
+    model, eps = search.model, search.eps
+    starts: list[tuple[int, Array]] = []
+    for q in np.flatnonzero(np.isnan(v)):
+        found = model.alone_at(v, int(q), t, eps, search.stage_end)
+        search.calls += 1
+        if found is None:
+            return [_stopped(search, v, k, path, "time limit")]
+        if found is not False:
+            starts.append((int(q), np.asarray(found, dtype=float)))
+    if not starts or search.leaves + len(starts) > MAX_BRANCHES:
+        return [_counts(search, v, k, t, path)]
+    search.leaves += len(starts)
+    best: list[Leximin] = []
+    for dim, k_q in starts:
+        v_q = v.copy()
+        v_q[dim] = t
+        branch = _fill(search, v_q, k_q, t, None,
+                       [*path, f"leximin: discrete conflict at {t:.4g} steps, branch: dimension {dim} at it"],
+                       _vector(best[0]) if best else bound)
+        if not branch:  # pruned: below the best branch
+            continue
+        if branch[0].stopped is not None:
+            return branch
+        order = 1 if not best else _compare(branch[0], best[0], eps)
+        if order > 0:
+            best = branch
+        elif order == 0:
+            best = best + branch
+    return best
+
+
+def _worse(settled: Array, bound: Array, eps: float) -> bool:
+    """Whether sorted margins ``settled`` (the smallest of a branch, final) fall below ``bound``'s start."""
+    for x, y in zip(settled, bound, strict=False):
+        if abs(x - y) > eps:
+            return bool(x < y)
+    return False
+
+
+def _levels(v: Array) -> tuple[tuple[float, int], ...]:
+    """The leximin vector as (value, count): every finite floor counted once at its value."""
+    finite = v[np.isfinite(v)]
+    values, counts = np.unique(np.round(finite, 9), return_counts=True)
+    return tuple((float(a), int(b)) for a, b in zip(values, counts, strict=True))
+
+
+def _stopped(search: _Search, v: Array, k: Array, path: list[str], reason: str) -> Leximin:
+    """The limit stopped the levels: the dimensions left get the best point's smallest margin as floor."""
+    m_k = search.margins(k)
+    active = np.isnan(v)
+    v = v.copy()
+    if active.any():
+        v[active] = float(np.min(m_k[active]))
+    return Leximin(k, v, _levels(v), None, Stop("leximin", reason), (*path, f"leximin: stopped ({reason})"), 0)
+
+
+def _counts(search: _Search, v: Array, k: Array, t: float, path: list[str]) -> Leximin:
+    """The dimensions left are decided by counts (MILPs with binaries)."""
+    path = [*path, f"leximin: discrete conflict at {t:.4g} steps; the rest by counts"]
+    model = search.model
+    out = count_levels(search.session, model.row_dim, model.n_dims, v, k, t, search.stage_end)
+    search.calls += out.calls
+    path.extend(out.path)
+    vv = v.copy()
+    vv[np.isnan(vv)] = t  # every active dimension has at least t (the counts say which have more)
+    stop = None if out.proved else Stop("leximin", out.why)
+    lex = tuple(sorted(list(_levels(v)) + list(out.levels)))
+    return Leximin(out.k, vv, lex, out, stop, tuple(path), 0)
+
+
+def leximin_least_norm(session: Session, lex: Leximin, row_dim: npt.NDArray[np.intp], box_share: float
+                       ) -> LeastNorm:
+    """The least Σ c k² among the leximin-optimal grid points (every margin at least its floor).
+
+    Floors for every dimension: stage 3 on the rows shifted by them (g_j − v_q(j) ≥ G_j k, level 0).
+    Count constraints left by a discrete conflict: :func:`~setupfix.optimize._leximin_counts.count_least_norm`.
+    Tied branches (``lex.alternatives``): the least over them (ties: the lexicographically smallest k).
+    """
+    best: LeastNorm | None = None
+    for option in (lex, *lex.alternatives):
+        least = _least_norm_of(session, option, row_dim, box_share)
+        if best is None or _better(least, best, session.rows.cost):
+            best = least if best is None else LeastNorm(least.k, least.proved and best.proved,
+                                                        least.why or best.why, min(least.lower, best.lower),
+                                                        best.path + least.path)
+        else:
+            best = LeastNorm(best.k, least.proved and best.proved, best.why or least.why,
+                             min(least.lower, best.lower), best.path + least.path)
+    assert best is not None
+    return best
+
+
+def _better(a: LeastNorm, b: LeastNorm, cost: Array) -> bool:
+    fa, fb = float(np.sum(cost * a.k**2)), float(np.sum(cost * b.k**2))
+    if abs(fa - fb) > 1e-9 * max(1.0, fb):
+        return fa < fb
+    return tuple(a.k) < tuple(b.k)
+
+
+def _least_norm_of(session: Session, lex: Leximin, row_dim: npt.NDArray[np.intp], box_share: float) -> LeastNorm:
+    rows = session.rows
+    if lex.counts is not None:
+        return count_least_norm(session, row_dim, lex.counts, lex.k)
+    floor_rows = lex.floors[row_dim]
+    g_shift = np.where(np.isfinite(floor_rows), rows.g - floor_rows, np.inf)
+    shifted = Session(GridRows(rows.g_rows, g_shift, rows.kmin, rows.kmax, rows.cost), session.settings,
+                      session.time_limit, session.clock)
+    b = shifted.rows.rounded(0.0)
+    b[~np.isfinite(g_shift)] = np.inf
+    return grid_least_norm(shifted, -TOL, b, lex.k, None, None, box_share)
