@@ -221,7 +221,7 @@ def box_least_norm(g_rows: Array, b: Array, lo: Array, hi: Array, cost: Array, t
     if proof:
         model.prefer_proof()
     if gap > 0:  # an incumbent is wanted, not a proof
-        model.h.setOptionValue("mip_rel_gap", float(gap))
+        model.set_gap(gap)
     sol = None
     if start is not None and np.all((start >= lo) & (start <= hi)):
         sol = np.r_[start, start[chorded] ** 2]
