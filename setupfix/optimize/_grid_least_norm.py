@@ -15,6 +15,13 @@ hold every such grid point.  In order, each step stopping as soon as it proves:
    its chords when small, else chords added lazily (:func:`chord_proof`);
 5. if the limit stops the proof: coordinate descent on the best point, and a certified
    lower bound on the norm (:func:`~setupfix.optimize._least_norm.lower_bound_ratio`).
+
+Before all of these, where the rows are a network matrix after flipping some columns (one
+WKS and one tool per dimension; :func:`~setupfix.optimize._least_norm.network_rows`), the
+chord LP's vertex is on the grid: one LP (chords added lazily) proves the least norm.
+
+Ties: whichever step proves the least norm F, the grid points of norm F are listed in the
+dual ellipsoid (bounded work) and the lexicographically smallest is the answer.
 """
 
 from __future__ import annotations
@@ -31,13 +38,18 @@ from setupfix.optimize._least_norm import (
     chord_least_norm,
     descend,
     lagrangian_box,
+    network_rows,
 )
 from setupfix.optimize._listing import ellipsoid_search, lagrangian_ball
 from setupfix.optimize._session import Relaxation, Session
 
-__all__ = ["LeastNorm", "chord_proof", "grid_least_norm"]
+__all__ = ["NETWORK_LP", "LeastNorm", "chord_proof", "grid_least_norm"]
 
 Array = npt.NDArray[np.float64]
+
+#: Rows of a network matrix (one WKS and one tool per dimension, ±1) with an integral right side:
+#: the least norm is the chord LP's vertex, tried before any listing or MILP (False: never).
+NETWORK_LP = True
 
 
 @dataclass(frozen=True)
@@ -118,6 +130,27 @@ def _good_incumbent(session: Session, t_star: float, b: Array, best: Array, rela
     return descend(rows.g_rows, b, best, rows.cost, time.perf_counter() + 0.03 * max(session.clock.left(), 0.0))
 
 
+def _smallest_tie(session: Session, t_star: float, b: Array, best: Array, relaxation: Relaxation | None
+                  ) -> tuple[Array, bool]:
+    """The lexicographically smallest grid point with t(k) ≥ t_star of norm f(best), f(best) proven least.
+
+    Lists the grid points of norm ≤ f(best) in the dual ellipsoid (every one lies in it), within
+    the listing's work limits; False when the list would be too long (``best`` is returned).
+    """
+    rows, s = session.rows, session.settings
+    fin = np.isfinite(b)
+    if relaxation is not None:
+        centre, q = lagrangian_ball(rows.g_rows[fin], b[fin], rows.kmin, rows.kmax, rows.cost,
+                                    relaxation.lam_rows[fin], relaxation.lam_lo, relaxation.lam_hi)
+        multipliers = relaxation.multipliers()
+    else:  # no multipliers: the ball f(k) ≤ f(best) itself
+        centre, q, multipliers = np.zeros(rows.kmin.size), 0.0, None
+    found, proved, _ = ellipsoid_search(rows.g_rows, rows.g, t_star, centre, q, rows.cost, rows.kmin, rows.kmax,
+                                        float(np.sum(rows.cost * best**2)), s.enumeration_limit, b,
+                                        work_limit=s.enumeration_work, multipliers=multipliers)
+    return (best if found is None else found), proved
+
+
 def grid_least_norm(session: Session, t_star: float, b: Array, incumbent: Array, relaxation: Relaxation | None,
                     unit_box: bool | None, box_share: float) -> LeastNorm:
     """Least Σ c k² over grid points with every margin ≥ t_star (steps 1–5 of the module text).
@@ -142,14 +175,30 @@ def grid_least_norm(session: Session, t_star: float, b: Array, incumbent: Array,
             best = descend(g_rows, b, best, cost, time.perf_counter() + max(clock.left(), 0.0) + reserve / 2)
         return LeastNorm(best, proved, why, lower, tuple(path))
 
+    def proven(best: Array) -> LeastNorm:  # the least norm is proved: ties to the smallest correction
+        best, listed = _smallest_tie(session, t_star, b, best, relaxation)
+        if not listed:
+            path.append("least norm: too many grid points of the least norm to list; the tie is not broken")
+        return LeastNorm(best, True, "", norm(best), tuple(path))
+
     best = incumbent
     if relaxation is None:
         _, relaxation = session.least_norm(b)
+    if NETWORK_LP and network_rows(g_rows, b) and np.all(kmin == np.rint(kmin)) and np.all(kmax == np.rint(kmax)):
+        k_cont = best if relaxation is None else relaxation.k
+        found, proved, _, _ = chord_proof(session, t_star, b, kmin, kmax, best, k_cont,
+                                          time_limit=clock.left() - reserve)
+        if proved and found is not None:
+            path.append("least norm: one LP over the chords of k² (network rows: its vertex is on the grid)")
+            return proven(found)
+        path.append("least norm: the network rows' chord LP did not prove it")
     if relaxation is None:  # no multipliers: the chord MILP over the whole box
         best = _good_incumbent(session, t_star, b, best, None)
         path.append("least norm: chords of k² (LP, then MILP)")
         found, proved, why, lower = chord_proof(session, t_star, b, kmin, kmax, best, best,
                                                 time_limit=clock.left() - reserve)
+        if proved and found is not None:
+            return proven(found)
         return finish(best if found is None else found, proved, why, lower)
     rounded = np.clip(np.rint(relaxation.k), kmin, kmax)
     if ok(rounded) and norm(rounded) < norm(best):
@@ -164,7 +213,7 @@ def grid_least_norm(session: Session, t_star: float, b: Array, incumbent: Array,
                                                  s.enumeration_limit, b, work_limit=s.enumeration_work,
                                                  multipliers=relaxation.multipliers())
         best = best if found is None else found
-        if proved:
+        if proved:  # the list holds every tie: the pick is the smallest
             path.append(f"least norm: {listed} grid points in the dual ellipsoid")
             return LeastNorm(best, True, "", norm(best), tuple(path))
     best = _good_incumbent(session, t_star, b, best, relaxation)
@@ -182,7 +231,7 @@ def grid_least_norm(session: Session, t_star: float, b: Array, incumbent: Array,
     box_lo, box_hi, lower = lagrangian_box(centre, q, cost, kmin, kmax, norm(best))
     if norm(best) <= _ceil_bound(lower, cost):
         path.append("least norm: the incumbent meets the Lagrangian bound")
-        return LeastNorm(best, True, "", norm(best), tuple(path))
+        return proven(best)
     values = f"{np.mean(box_hi - box_lo + 1):.1f} values per register"
     if kmin.size <= s.box_proof_max_registers and float(np.sum(box_hi - box_lo)) <= s.box_proof_max_chords:
         # few registers and a short box: every chord of the box at once, one MILP
@@ -198,5 +247,7 @@ def grid_least_norm(session: Session, t_star: float, b: Array, incumbent: Array,
                                                       time_limit=clock.left() - reserve, proof=True)
     if found is not None and norm(found) <= norm(best):
         best = found
+    if proved:
+        return proven(best)
     # points outside the box have Σ c k² > f(best): the chord bound holds up to f(best)
     return finish(best, proved, why, max(lower, min(chord_lower, norm(best))))

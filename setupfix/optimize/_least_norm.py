@@ -26,6 +26,9 @@ The pieces, each with what proves it:
   Around the rounded continuous point it gives a near-least incumbent quickly.
 * :func:`chord_least_norm` — the exact least norm over a box by the chords of k²,
   added lazily (an LP first; a MILP when the LP's vertex is fractional).
+* :func:`network_rows` — whether the rows are a network matrix after flipping some
+  columns (one WKS and one tool per dimension, coefficients ±1): then the chord LP's
+  vertex is on the grid, and :func:`chord_least_norm`'s first LP is the proof.
 * :func:`descend` — coordinate descent on the grid that keeps every row: each move
   takes one coordinate to the value of least c_i k_i² its feasible range allows;
   the norm never grows.  Used when a limit stops the proof.
@@ -50,6 +53,7 @@ __all__ = [
     "lagrangian_box",
     "least_distance_working_set",
     "lower_bound_ratio",
+    "network_rows",
 ]
 
 Array = npt.NDArray[np.float64]
@@ -334,3 +338,58 @@ def chord_least_norm(g_rows: Array, g: Array, level: float, b: Array, kmin: Arra
     out = lazy_chords(model, n, chords, cost, kmin, kmax, best, feasible, lambda k: np.r_[k, k**2], deadline,
                       integer=False)
     return out.best, out.proved, out.why, out.lower
+
+
+def network_rows(g_rows: Array, b: Array) -> bool:
+    """Whether ``G k ≤ b`` is totally unimodular with an integral right side, by a network signing.
+
+    Exact test of a sufficient structure: every row has one or two non-zeros, each ±1, and
+    the columns split into two classes such that negating one class leaves every two-entry
+    row with one +1 and one −1 (an arc of a directed graph: a network matrix, totally
+    unimodular); each finite b_j is an integer.  Then every vertex of
+    ``{(k, s): G k ≤ b, box, s_i ≥ chords of k_i² at integers}`` has integral k (at a vertex
+    the k off the chords' breakpoints solve a square subsystem of G, unimodular, with an
+    integral right side), so the chord LP of :func:`chord_least_norm` ends on the grid
+    without a MILP.
+
+    Parameters
+    ----------
+    g_rows : ndarray of shape (r, n); b : ndarray of shape (r,) (+inf: no row)
+    """
+    fin = np.isfinite(b)
+    rows = g_rows[fin]
+    if not np.all(np.abs(b[fin] - np.rint(b[fin])) <= 1e-9):
+        return False
+    nz = rows != 0
+    if not (np.all(np.abs(rows[nz]) == 1.0) and np.all(np.sum(nz, axis=1) <= 2)):
+        return False
+    pairs = rows[np.sum(nz, axis=1) == 2]
+    if pairs.size == 0:
+        return True
+    cols = np.nonzero(pairs)[1].reshape(-1, 2)
+    same = pairs[np.arange(cols.shape[0]), cols[:, 0]] == pairs[np.arange(cols.shape[0]), cols[:, 1]]
+    # same signs: the two columns in different classes; opposite signs: in the same class
+    edges = np.unique(np.c_[cols, same.astype(np.intp)], axis=0)
+    parent = list(range(rows.shape[1]))
+    parity = [0] * rows.shape[1]  # class of a column relative to its root
+
+    def root(i: int) -> tuple[int, int]:  # union-find with parities, paths compressed
+        path = []
+        while parent[i] != i:
+            path.append(i)
+            i = parent[i]
+        acc = 0
+        for node in reversed(path):
+            acc ^= parity[node]
+            parity[node], parent[node] = acc, i
+        return i, (parity[path[0]] if path else 0)
+
+    for i, j, differ in edges.tolist():
+        (ri, pi), (rj, pj) = root(i), root(j)
+        if ri == rj:
+            if pi ^ pj != differ:
+                return False
+        else:
+            parent[rj] = ri
+            parity[rj] = pi ^ pj ^ differ
+    return True
