@@ -41,6 +41,7 @@ import time
 import numpy as np
 import numpy.typing as npt
 from scipy.sparse import coo_array, csr_array, hstack, vstack
+from scipy.sparse.csgraph import connected_components
 
 from setupfix.optimize._chords import chord_rows, lazy_chords
 from setupfix.optimize._grid import TOL, grid_margins, nnls_least_distance
@@ -357,39 +358,29 @@ def network_rows(g_rows: Array, b: Array) -> bool:
     g_rows : ndarray of shape (r, n); b : ndarray of shape (r,) (+inf: no row)
     """
     fin = np.isfinite(b)
-    rows = g_rows[fin]
     if not np.all(np.abs(b[fin] - np.rint(b[fin])) <= 1e-9):
         return False
-    nz = rows != 0
-    if not (np.all(np.abs(rows[nz]) == 1.0) and np.all(np.sum(nz, axis=1) <= 2)):
+    r_idx, c_idx = np.nonzero(g_rows)  # one pass over the matrix (row-major: a row's entries are adjacent)
+    live = fin[r_idx]
+    r_idx, c_idx = r_idx[live], c_idx[live]
+    vals = g_rows[r_idx, c_idx]
+    if not np.all(np.abs(vals) == 1.0):
         return False
-    pairs = rows[np.sum(nz, axis=1) == 2]
-    if pairs.size == 0:
+    count = np.bincount(r_idx, minlength=g_rows.shape[0])
+    if np.any(count > 2):
+        return False
+    first = np.cumsum(count) - count  # position of each row's first entry
+    two = np.flatnonzero(count == 2)
+    if two.size == 0:
         return True
-    cols = np.nonzero(pairs)[1].reshape(-1, 2)
-    same = pairs[np.arange(cols.shape[0]), cols[:, 0]] == pairs[np.arange(cols.shape[0]), cols[:, 1]]
-    # same signs: the two columns in different classes; opposite signs: in the same class
-    edges = np.unique(np.c_[cols, same.astype(np.intp)], axis=0)
-    parent = list(range(rows.shape[1]))
-    parity = [0] * rows.shape[1]  # class of a column relative to its root
-
-    def root(i: int) -> tuple[int, int]:  # union-find with parities, paths compressed
-        path = []
-        while parent[i] != i:
-            path.append(i)
-            i = parent[i]
-        acc = 0
-        for node in reversed(path):
-            acc ^= parity[node]
-            parity[node], parent[node] = acc, i
-        return i, (parity[path[0]] if path else 0)
-
-    for i, j, differ in edges.tolist():
-        (ri, pi), (rj, pj) = root(i), root(j)
-        if ri == rj:
-            if pi ^ pj != differ:
-                return False
-        else:
-            parent[rj] = ri
-            parity[rj] = pi ^ pj ^ differ
-    return True
+    n = g_rows.shape[1]
+    i, j = c_idx[first[two]], c_idx[first[two] + 1]
+    differ = (vals[first[two]] == vals[first[two] + 1]).astype(np.intp)
+    # same signs: the two columns in different classes; opposite signs: in the same class.  Node
+    # (i, c) is "column i in class c"; a row joins (i, c) to (j, c xor differ) for c = 0, 1, and the
+    # classes exist iff no column has both its nodes in one component.
+    src = np.r_[2 * i, 2 * i + 1]
+    dst = np.r_[2 * j + differ, 2 * j + (1 - differ)]
+    graph = coo_array((np.ones(src.size), (src, dst)), shape=(2 * n, 2 * n))
+    _, label = connected_components(graph, directed=False)
+    return bool(np.all(label[0::2] != label[1::2]))
