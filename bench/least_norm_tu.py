@@ -113,7 +113,7 @@ def main(argv: list[str] | None = None) -> None:
                 assert "one LP over the chords" in path_tu or "listed with the grid optimum" in path_tu, path_tu
                 old_steps = "; ".join(p for p in path_old.split("; ") if p.startswith("least norm"))
                 lines.append(f"{n:>4} x {m:<5} {seed:>4} {ref * 1e3:>8.2f} {t_tu * 1e3:>8.2f} {t_tu / ref:>6.1f} "
-                             f"{t_old * 1e3:>8.2f} {t_old / ref:>7.1f} {t_old / t_tu:>8.1f} {str(same):>5}  "
+                             f"{t_old * 1e3:>8.2f} {t_old / ref:>7.1f} {t_old / t_tu:>8.1f} {same!s:>5}  "
                              f"{old_steps[:110]}")
                 print(lines[-1], flush=True)
                 if not same:

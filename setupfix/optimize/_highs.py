@@ -30,6 +30,7 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass, replace
+from typing import Any
 
 import numpy as np
 import numpy.typing as npt
@@ -63,7 +64,8 @@ HIGHS_LIMIT_SLACK = 0.0
 #: The interrupt callbacks checked against the wall clock (HiGHS's ``time_limit`` is not enough:
 #: it is read between the root's cut rounds and not at all in some sub-searches).
 _INTERRUPTS = (cb.HighsCallbackType.kCallbackMipInterrupt, cb.HighsCallbackType.kCallbackSimplexInterrupt,
-               cb.HighsCallbackType.kCallbackIpmInterrupt, cb.HighsCallbackType.kHighsCallbackQpInterrupt)
+               cb.HighsCallbackType.kCallbackIpmInterrupt,
+               cb.HighsCallbackType.kHighsCallbackQpInterrupt)  # type: ignore[attr-defined]  # not in the stubs
 
 #: Model statuses that are answers (optimal, proven infeasible, time limit with or without a point).
 _STATUS_NAMES = {
@@ -354,7 +356,8 @@ class LinearModel:
                      dual_bound=dual_bound, row_dual=row_dual, col_dual=col_dual, seconds=0.0)
 
 
-def _interrupt(kind: int, message: str, data_out: object, data_in: object, deadline: list[float]) -> None:
-    """HiGHS's interrupt callback: stop once the wall clock passes the run's deadline."""
+def _interrupt(kind: cb.HighsCallbackType, message: str, data_out: cb.HighsCallbackOutput,
+               data_in: cb.HighsCallbackInput, deadline: Any) -> None:
+    """HiGHS's interrupt callback: stop once the wall clock passes the run's deadline (``deadline[0]``)."""
     if data_in is not None and time.perf_counter() > deadline[0]:
-        data_in.user_interrupt = True  # type: ignore[attr-defined]
+        data_in.user_interrupt = True
