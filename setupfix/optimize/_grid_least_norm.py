@@ -16,12 +16,14 @@ hold every such grid point.  In order, each step stopping as soon as it proves:
 5. if the limit stops the proof: coordinate descent on the best point, and a certified
    lower bound on the norm (:func:`~setupfix.optimize._least_norm.lower_bound_ratio`).
 
-Before all of these, where the rows are a network matrix after flipping some columns (one
+Between steps 2 and 3, where the rows are a network matrix after flipping some columns (one
 WKS and one tool per dimension; :func:`~setupfix.optimize._least_norm.network_rows`), the
-chord LP's vertex is on the grid: one LP (chords added lazily) proves the least norm.
+chord LP's vertex is on the grid: one LP (chords added lazily) proves the least norm before
+any MILP.
 
 Ties: whichever step proves the least norm F, the grid points of norm F are listed in the
-dual ellipsoid (bounded work) and the lexicographically smallest is the answer.
+dual ellipsoid (at most :data:`TIE_WORK` array elements) and the lexicographically smallest
+is the answer; where they are too many to list, the path says the tie is not broken.
 """
 
 from __future__ import annotations
@@ -43,13 +45,16 @@ from setupfix.optimize._least_norm import (
 from setupfix.optimize._listing import ellipsoid_search, lagrangian_ball
 from setupfix.optimize._session import Relaxation, Session
 
-__all__ = ["NETWORK_LP", "LeastNorm", "chord_proof", "grid_least_norm"]
+__all__ = ["NETWORK_LP", "TIE_WORK", "LeastNorm", "chord_proof", "grid_least_norm"]
 
 Array = npt.NDArray[np.float64]
 
 #: Rows of a network matrix (one WKS and one tool per dimension, ±1) with an integral right side:
-#: the least norm is the chord LP's vertex, tried before any listing or MILP (False: never).
+#: the least norm is the chord LP's vertex, tried before any MILP (False: never).
 NETWORK_LP = True
+#: Array elements the listing of the least norm's ties may touch (≈ 20 ms; beyond, the tie is kept
+#: as the proof found it and the path says so).
+TIE_WORK = 400_000
 
 
 @dataclass(frozen=True)
@@ -147,7 +152,7 @@ def _smallest_tie(session: Session, t_star: float, b: Array, best: Array, relaxa
         centre, q, multipliers = np.zeros(rows.kmin.size), 0.0, None
     found, proved, _ = ellipsoid_search(rows.g_rows, rows.g, t_star, centre, q, rows.cost, rows.kmin, rows.kmax,
                                         float(np.sum(rows.cost * best**2)), s.enumeration_limit, b,
-                                        work_limit=s.enumeration_work, multipliers=multipliers)
+                                        work_limit=min(s.enumeration_work, TIE_WORK), multipliers=multipliers)
     return (best if found is None else found), proved
 
 
@@ -181,10 +186,10 @@ def grid_least_norm(session: Session, t_star: float, b: Array, incumbent: Array,
             path.append("least norm: too many grid points of the least norm to list; the tie is not broken")
         return LeastNorm(best, True, "", norm(best), tuple(path))
 
-    best = incumbent
-    if relaxation is None:
-        _, relaxation = session.least_norm(b)
-    if NETWORK_LP and network_rows(g_rows, b) and np.all(kmin == np.rint(kmin)) and np.all(kmax == np.rint(kmax)):
+    network = bool(NETWORK_LP and np.all(kmin == np.rint(kmin)) and np.all(kmax == np.rint(kmax))
+                   and network_rows(g_rows, b))
+
+    def network_lp(best: Array) -> LeastNorm | None:  # rows of a network matrix: one chord LP proves it
         k_cont = best if relaxation is None else relaxation.k
         found, proved, _, _ = chord_proof(session, t_star, b, kmin, kmax, best, k_cont,
                                           time_limit=clock.left() - reserve)
@@ -192,6 +197,13 @@ def grid_least_norm(session: Session, t_star: float, b: Array, incumbent: Array,
             path.append("least norm: one LP over the chords of k² (network rows: its vertex is on the grid)")
             return proven(found)
         path.append("least norm: the network rows' chord LP did not prove it")
+        return None
+
+    best = incumbent
+    if relaxation is None:
+        _, relaxation = session.least_norm(b)
+    if relaxation is None and network and (out := network_lp(best)) is not None:
+        return out
     if relaxation is None:  # no multipliers: the chord MILP over the whole box
         best = _good_incumbent(session, t_star, b, best, None)
         path.append("least norm: chords of k² (LP, then MILP)")
@@ -216,6 +228,10 @@ def grid_least_norm(session: Session, t_star: float, b: Array, incumbent: Array,
         if proved:  # the list holds every tie: the pick is the smallest
             path.append(f"least norm: {listed} grid points in the dual ellipsoid")
             return LeastNorm(best, True, "", norm(best), tuple(path))
+    # network rows: one LP before any MILP (after the short list, which is cheaper where it closes:
+    # bench/least_norm_tu.py)
+    if network and (out := network_lp(best)) is not None:
+        return out
     best = _good_incumbent(session, t_star, b, best, relaxation)
     # A near-least incumbent: the least norm in the unit box around the continuous point (a MILP
     # with a linear objective), else in the box one step wider (unless stage 2 settled the unit box).

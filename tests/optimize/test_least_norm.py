@@ -239,8 +239,9 @@ def test_network_rows_is_exact_on_two_entry_rows(seed):
 def test_network_rows_are_proved_by_one_chord_lp_equal_to_brute_force(seed):
     problem = tied_problem(seed, network=True)
     want, _, reach = brute_lex(problem)
-    # the grid-optimum stage's own listing (small problems only) would prove the least norm first
-    settings = ExactSettings(nnls_max_rows=0)
+    # no listing first (in the grid-optimum stage of small problems, in the least-norm stage up to 120
+    # registers), which proves the least norm before the LP where it closes
+    settings = ExactSettings(nnls_max_rows=0, ellipsoid_max_registers=0)
     result = get_optimizer("exact", settings=settings).solve(problem)
     assert result.status == "optimal"
     assert ("one LP over the chords" in str(result.extra["path"])) == reach  # else triage
@@ -252,14 +253,15 @@ def test_shop_rows_without_differences_take_the_network_lp_and_agree_with_the_li
     """60 × 400 with every dimension one WKS and one tool: the LP's answer equals the other paths'."""
     for seed in range(2):
         problem = network_shop_problem(60, 400, seed)
-        lp = get_optimizer("exact", time_limit=30.0).solve(problem)
+        lp = get_optimizer("exact", time_limit=30.0, settings=ExactSettings(ellipsoid_max_registers=0)).solve(problem)
         monkeypatch.setattr(least_norm_stage, "NETWORK_LP", False)
         other = get_optimizer("exact", time_limit=30.0).solve(problem)
         monkeypatch.setattr(least_norm_stage, "NETWORK_LP", True)
         assert lp.status == other.status == "optimal"
         assert "one LP over the chords" in str(lp.extra["path"])
         assert lp.norm == pytest.approx(other.norm, rel=1e-12)
-        np.testing.assert_array_equal(lp.x, other.x)  # the same tie pick
+        if "the tie is not broken" not in str(lp.extra["path"]) + str(other.extra["path"]):
+            np.testing.assert_array_equal(lp.x, other.x)  # the same tie pick
 
 
 def network_shop_problem(n: int, m: int, seed: int) -> CorrectionProblem:
