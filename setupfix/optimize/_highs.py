@@ -317,12 +317,13 @@ class LinearModel:
             if left > 0:
                 res = self._run(left, None)
                 why = self.check(res.x, res.objective, res.dual_bound, res.status)
-        if why:
+        if why:  # never "optimal"; a stopped run stays stopped, its point kept only if it is feasible
             x = res.x
             if x is not None and self.check(x, self.value(x), -INF, "feasible"):
                 x = None
             objective = float("nan") if x is None else self.value(x)
-            res = replace(res, status="error", detail=f"HiGHS's answer fails its model: {why}", x=x,
+            status = "time_limit" if res.status == "time_limit" else "error"
+            res = replace(res, status=status, detail=f"HiGHS's answer fails its model: {why}", x=x,
                           objective=objective, row_dual=None, col_dual=None)
         return replace(res, seconds=time.perf_counter() - began)
 

@@ -129,3 +129,16 @@ def test_every_mip_runs_without_rins_and_rens():
     model = market_split()
     for name in ("mip_heuristic_run_rins", "mip_heuristic_run_rens"):
         assert model.h.getOptionValue(name)[1] is False
+
+
+def test_a_stopped_run_with_a_wrong_point_stays_stopped_and_drops_the_point(monkeypatch):
+    model, start, _ = knapsack()
+    real_run = LinearModel._run
+
+    def stopped_with_an_infeasible_point(self: LinearModel, time_limit: float, start_: np.ndarray | None) -> Solve:
+        res = real_run(self, time_limit, start_)
+        return replace(res, status="time_limit", x=np.ones(8))  # every item: over the budget
+
+    monkeypatch.setattr(LinearModel, "_run", stopped_with_an_infeasible_point)
+    res = model.solve(5.0, start)
+    assert res.status == "time_limit" and res.x is None and "row" in res.detail
