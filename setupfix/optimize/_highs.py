@@ -58,6 +58,9 @@ FEASIBILITY_TOL = 1e-6
 #: HiGHS's own ``mip_abs_gap``: an "optimal" MIP's objective may exceed its dual bound by this.
 MIP_ABS_GAP = 1e-6
 
+#: Models up to this many matrix elements are checked with a dense copy of the matrix.
+DENSE_CHECK_ELEMENTS = 20_000
+
 #: Seconds added to HiGHS's own ``time_limit`` beyond the run's allowance (0: both clocks stop it).
 HIGHS_LIMIT_SLACK = 0.0
 
@@ -177,6 +180,11 @@ class LinearModel:
         kinds = np.zeros(self.n_cols, dtype=np.int32) if integer is None else np.asarray(integer, dtype=np.int32)
         self._c = np.asarray(c, dtype=float)
         self._a = csc_array((mat.value, mat.index, mat.start), shape=(mat.n_rows, mat.n_cols))
+        self._abs_a: csc_array | None = None  # |A|, for the rows' sizes in check()
+        self._dense: Array | None = None  # A as a dense array, where small (check() is then ~µs)
+        if isinstance(a, np.ndarray) and a.size <= DENSE_CHECK_ELEMENTS:
+            self._dense = np.asarray(a, dtype=float)
+        self._finite: tuple[npt.NDArray[np.bool_], npt.NDArray[np.bool_]] | None = None
         self._row_lo, self._row_hi = np.asarray(row_lo, dtype=float).copy(), np.asarray(row_hi, dtype=float).copy()
         self._col_lo, self._col_hi = np.asarray(col_lo, dtype=float).copy(), np.asarray(col_hi, dtype=float).copy()
         self._integer = kinds.astype(bool)
@@ -242,6 +250,7 @@ class LinearModel:
         self._check(self.h.changeRowsBounds(  # type: ignore[attr-defined]  # in highspy, not its stubs
             self.n_rows, self._rows, lo, hi), "changeRowsBounds")
         self._row_lo, self._row_hi = lo.copy(), hi.copy()
+        self._finite = None
 
     def set_col_bounds(self, cols: npt.NDArray[np.int32], lo: Array, hi: Array) -> None:
         cols = np.asarray(cols, dtype=np.int32)
@@ -257,9 +266,28 @@ class LinearModel:
         self._check(self.h.addRows(k, lo, hi, mat.nnz, mat.indptr[:-1].astype(np.int32),
                                    mat.indices.astype(np.int32), mat.data.astype(float)), "addRows")
         self._a = csc_array(vstack([self._a, mat]))
+        self._abs_a = self._dense = None
+        self._finite = None
         self._row_lo, self._row_hi = np.r_[self._row_lo, lo], np.r_[self._row_hi, hi]
         self.n_rows += k
         self._rows = np.arange(self.n_rows, dtype=np.int32)
+
+    def _matrix(self) -> Array | csc_array:
+        if self._a.shape[0] * self._a.shape[1] > DENSE_CHECK_ELEMENTS:
+            return self._a
+        if self._dense is None:
+            self._dense = self._a.toarray()
+        return self._dense
+
+    def _row_finite(self) -> tuple[npt.NDArray[np.bool_], npt.NDArray[np.bool_]]:
+        if self._finite is None:
+            self._finite = (np.isfinite(self._row_lo), np.isfinite(self._row_hi))
+        return self._finite
+
+    def _abs(self) -> csc_array:
+        if self._abs_a is None:
+            self._abs_a = abs(self._a)
+        return self._abs_a
 
     def value(self, x: Array) -> float:
         """The model's objective at ``x``."""
@@ -275,18 +303,17 @@ class LinearModel:
         """
         if x is None or status not in ("optimal", "time_limit", "feasible"):
             return "optimal without a point" if status == "optimal" else ""
-        act = self._a @ x
-        size = 1.0 + abs(self._a) @ np.abs(x)
         tol = FEASIBILITY_TOL
-        lo_b = np.where(np.isfinite(self._row_lo), self._row_lo, -np.inf)
-        hi_b = np.where(np.isfinite(self._row_hi), self._row_hi, np.inf)
-        fin_lo, fin_hi = np.isfinite(lo_b), np.isfinite(hi_b)
-        lo_v = np.zeros(act.size)
-        hi_v = np.zeros(act.size)
-        lo_v[fin_lo] = (lo_b[fin_lo] - act[fin_lo]) / (size[fin_lo] + np.abs(lo_b[fin_lo]))
-        hi_v[fin_hi] = (act[fin_hi] - hi_b[fin_hi]) / (size[fin_hi] + np.abs(hi_b[fin_hi]))
-        if lo_v.size and max(float(lo_v.max()), float(hi_v.max())) > tol:
-            return f"a row is violated by {max(float(lo_v.max()), float(hi_v.max())):.2g} (relative)"
+        a = self._matrix()
+        act = a @ x
+        size = 1.0 + np.abs(a) @ np.abs(x) if isinstance(a, np.ndarray) else 1.0 + self._abs() @ np.abs(x)
+        lo, hi = self._row_lo, self._row_hi
+        lo_ok, hi_ok = self._row_finite()
+        with np.errstate(invalid="ignore"):  # an infinite bound (left out) gives inf/inf
+            worst = max(float(np.max(((lo - act) / (size + np.abs(lo)))[lo_ok], initial=0.0)),
+                        float(np.max(((act - hi) / (size + np.abs(hi)))[hi_ok], initial=0.0)))
+        if worst > tol:
+            return f"a row is violated by {worst:.2g} (relative)"
         scale = 1.0 + np.abs(x)
         if np.any(self._col_lo - x > tol * scale) or np.any(x - self._col_hi > tol * scale):
             return "a column is outside its bounds"
