@@ -186,10 +186,10 @@ def grid_least_norm(session: Session, t_star: float, b: Array, incumbent: Array,
             path.append("least norm: too many grid points of the least norm to list; the tie is not broken")
         return LeastNorm(best, True, "", norm(best), tuple(path))
 
-    network = bool(NETWORK_LP and np.all(kmin == np.rint(kmin)) and np.all(kmax == np.rint(kmax))
-                   and network_rows(g_rows, b))
-
     def network_lp(best: Array) -> LeastNorm | None:  # rows of a network matrix: one chord LP proves it
+        if not (NETWORK_LP and np.all(kmin == np.rint(kmin)) and np.all(kmax == np.rint(kmax))
+                and network_rows(g_rows, b)):
+            return None
         k_cont = best if relaxation is None else relaxation.k
         found, proved, _, _ = chord_proof(session, t_star, b, kmin, kmax, best, k_cont,
                                           time_limit=clock.left() - reserve)
@@ -202,7 +202,7 @@ def grid_least_norm(session: Session, t_star: float, b: Array, incumbent: Array,
     best = incumbent
     if relaxation is None:
         _, relaxation = session.least_norm(b)
-    if relaxation is None and network and (out := network_lp(best)) is not None:
+    if relaxation is None and (out := network_lp(best)) is not None:
         return out
     if relaxation is None:  # no multipliers: the chord MILP over the whole box
         best = _good_incumbent(session, t_star, b, best, None)
@@ -230,7 +230,7 @@ def grid_least_norm(session: Session, t_star: float, b: Array, incumbent: Array,
             return LeastNorm(best, True, "", norm(best), tuple(path))
     # network rows: one LP before any MILP (after the short list, which is cheaper where it closes:
     # bench/least_norm_tu.py)
-    if network and (out := network_lp(best)) is not None:
+    if (out := network_lp(best)) is not None:
         return out
     best = _good_incumbent(session, t_star, b, best, relaxation)
     # A near-least incumbent: the least norm in the unit box around the continuous point (a MILP
