@@ -22,8 +22,9 @@ chord LP's vertex is on the grid: one LP (chords added lazily) proves the least 
 any MILP.
 
 Ties: whichever step proves the least norm F, the grid points of norm F are listed in the
-dual ellipsoid (at most :data:`TIE_WORK` array elements) and the lexicographically smallest
-is the answer; where they are too many to list, the path says the tie is not broken.
+dual ellipsoid (at most :data:`TIE_WORK` array elements, up to :data:`TIE_MAX_REGISTERS`
+registers) and the lexicographically smallest is the answer; where they are too many to list,
+the path says the tie is not broken.
 """
 
 from __future__ import annotations
@@ -45,7 +46,7 @@ from setupfix.optimize._least_norm import (
 from setupfix.optimize._listing import ellipsoid_search, lagrangian_ball
 from setupfix.optimize._session import Relaxation, Session
 
-__all__ = ["NETWORK_LP", "TIE_WORK", "LeastNorm", "chord_proof", "grid_least_norm"]
+__all__ = ["NETWORK_LP", "TIE_MAX_REGISTERS", "TIE_WORK", "LeastNorm", "chord_proof", "grid_least_norm"]
 
 Array = npt.NDArray[np.float64]
 
@@ -55,6 +56,8 @@ NETWORK_LP = True
 #: Array elements the listing of the least norm's ties may touch (≈ 20 ms; beyond, the tie is kept
 #: as the proof found it and the path says so).
 TIE_WORK = 400_000
+#: Registers beyond which the ties are not listed (as ``ellipsoid_max_registers``).
+TIE_MAX_REGISTERS = 120
 
 
 @dataclass(frozen=True)
@@ -140,9 +143,13 @@ def _smallest_tie(session: Session, t_star: float, b: Array, best: Array, relaxa
     """The lexicographically smallest grid point with t(k) ≥ t_star of norm f(best), f(best) proven least.
 
     Lists the grid points of norm ≤ f(best) in the dual ellipsoid (every one lies in it), within
-    the listing's work limits; False when the list would be too long (``best`` is returned).
+    the listing's work limits and up to :data:`TIE_MAX_REGISTERS` registers (beyond, the list
+    never closed in ``bench/least_norm_tu.py`` and cost some 60 ms at 180 × 2,000); False when
+    the list would be too long (``best`` is returned).
     """
     rows, s = session.rows, session.settings
+    if rows.kmin.size > TIE_MAX_REGISTERS:  # the ellipsoid holds too many grid points to list
+        return best, False
     fin = np.isfinite(b)
     if relaxation is not None:
         centre, q = lagrangian_ball(rows.g_rows[fin], b[fin], rows.kmin, rows.kmax, rows.cost,
