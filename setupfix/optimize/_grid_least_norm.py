@@ -15,6 +15,16 @@ hold every such grid point.  In order, each step stopping as soon as it proves:
    its chords when small, else chords added lazily (:func:`chord_proof`);
 5. if the limit stops the proof: coordinate descent on the best point, and a certified
    lower bound on the norm (:func:`~setupfix.optimize._least_norm.lower_bound_ratio`).
+
+Between steps 2 and 3, where the rows are a network matrix after flipping some columns (one
+WKS and one tool per dimension; :func:`~setupfix.optimize._least_norm.network_rows`), the
+chord LP's vertex is on the grid: one LP (chords added lazily) proves the least norm before
+any MILP.
+
+Ties: whichever step proves the least norm F, the grid points of norm F are listed in the
+dual ellipsoid (at most :data:`TIE_WORK` array elements, up to :data:`TIE_MAX_REGISTERS`
+registers) and the lexicographically smallest is the answer; where they are too many to list,
+the path says the tie is not broken.
 """
 
 from __future__ import annotations
@@ -31,13 +41,23 @@ from setupfix.optimize._least_norm import (
     chord_least_norm,
     descend,
     lagrangian_box,
+    network_rows,
 )
 from setupfix.optimize._listing import ellipsoid_search, lagrangian_ball
 from setupfix.optimize._session import Relaxation, Session
 
-__all__ = ["LeastNorm", "chord_proof", "grid_least_norm"]
+__all__ = ["NETWORK_LP", "TIE_MAX_REGISTERS", "TIE_WORK", "LeastNorm", "chord_proof", "grid_least_norm"]
 
 Array = npt.NDArray[np.float64]
+
+#: Rows of a network matrix (one WKS and one tool per dimension, ±1) with an integral right side:
+#: the least norm is the chord LP's vertex, tried before any MILP (False: never).
+NETWORK_LP = True
+#: Array elements the listing of the least norm's ties may touch (≈ 20 ms; beyond, the tie is kept
+#: as the proof found it and the path says so).
+TIE_WORK = 400_000
+#: Registers beyond which the ties are not listed (as ``ellipsoid_max_registers``).
+TIE_MAX_REGISTERS = 120
 
 
 @dataclass(frozen=True)
@@ -118,6 +138,31 @@ def _good_incumbent(session: Session, t_star: float, b: Array, best: Array, rela
     return descend(rows.g_rows, b, best, rows.cost, time.perf_counter() + 0.03 * max(session.clock.left(), 0.0))
 
 
+def _smallest_tie(session: Session, t_star: float, b: Array, best: Array, relaxation: Relaxation | None
+                  ) -> tuple[Array, bool]:
+    """The lexicographically smallest grid point with t(k) ≥ t_star of norm f(best), f(best) proven least.
+
+    Lists the grid points of norm ≤ f(best) in the dual ellipsoid (every one lies in it), within
+    the listing's work limits and up to :data:`TIE_MAX_REGISTERS` registers (beyond, the list
+    never closed in ``bench/least_norm_tu.py`` and cost some 60 ms at 180 × 2,000); False when
+    the list would be too long (``best`` is returned).
+    """
+    rows, s = session.rows, session.settings
+    if rows.kmin.size > TIE_MAX_REGISTERS:  # the ellipsoid holds too many grid points to list
+        return best, False
+    fin = np.isfinite(b)
+    if relaxation is not None:
+        centre, q = lagrangian_ball(rows.g_rows[fin], b[fin], rows.kmin, rows.kmax, rows.cost,
+                                    relaxation.lam_rows[fin], relaxation.lam_lo, relaxation.lam_hi)
+        multipliers = relaxation.multipliers()
+    else:  # no multipliers: the ball f(k) ≤ f(best) itself
+        centre, q, multipliers = np.zeros(rows.kmin.size), 0.0, None
+    found, proved, _ = ellipsoid_search(rows.g_rows, rows.g, t_star, centre, q, rows.cost, rows.kmin, rows.kmax,
+                                        float(np.sum(rows.cost * best**2)), s.enumeration_limit, b,
+                                        work_limit=min(s.enumeration_work, TIE_WORK), multipliers=multipliers)
+    return (best if found is None else found), proved
+
+
 def grid_least_norm(session: Session, t_star: float, b: Array, incumbent: Array, relaxation: Relaxation | None,
                     unit_box: bool | None, box_share: float) -> LeastNorm:
     """Least Σ c k² over grid points with every margin ≥ t_star (steps 1–5 of the module text).
@@ -142,14 +187,37 @@ def grid_least_norm(session: Session, t_star: float, b: Array, incumbent: Array,
             best = descend(g_rows, b, best, cost, time.perf_counter() + max(clock.left(), 0.0) + reserve / 2)
         return LeastNorm(best, proved, why, lower, tuple(path))
 
+    def proven(best: Array) -> LeastNorm:  # the least norm is proved: ties to the smallest correction
+        best, listed = _smallest_tie(session, t_star, b, best, relaxation)
+        if not listed:
+            path.append("least norm: too many grid points of the least norm to list; the tie is not broken")
+        return LeastNorm(best, True, "", norm(best), tuple(path))
+
+    def network_lp(best: Array) -> LeastNorm | None:  # rows of a network matrix: one chord LP proves it
+        if not (NETWORK_LP and np.all(kmin == np.rint(kmin)) and np.all(kmax == np.rint(kmax))
+                and network_rows(g_rows, b)):
+            return None
+        k_cont = best if relaxation is None else relaxation.k
+        found, proved, _, _ = chord_proof(session, t_star, b, kmin, kmax, best, k_cont,
+                                          time_limit=clock.left() - reserve)
+        if proved and found is not None:
+            path.append("least norm: one LP over the chords of k² (network rows: its vertex is on the grid)")
+            return proven(found)
+        path.append("least norm: the network rows' chord LP did not prove it")
+        return None
+
     best = incumbent
     if relaxation is None:
         _, relaxation = session.least_norm(b)
+    if relaxation is None and (out := network_lp(best)) is not None:
+        return out
     if relaxation is None:  # no multipliers: the chord MILP over the whole box
         best = _good_incumbent(session, t_star, b, best, None)
         path.append("least norm: chords of k² (LP, then MILP)")
         found, proved, why, lower = chord_proof(session, t_star, b, kmin, kmax, best, best,
                                                 time_limit=clock.left() - reserve)
+        if proved and found is not None:
+            return proven(found)
         return finish(best if found is None else found, proved, why, lower)
     rounded = np.clip(np.rint(relaxation.k), kmin, kmax)
     if ok(rounded) and norm(rounded) < norm(best):
@@ -164,9 +232,13 @@ def grid_least_norm(session: Session, t_star: float, b: Array, incumbent: Array,
                                                  s.enumeration_limit, b, work_limit=s.enumeration_work,
                                                  multipliers=relaxation.multipliers())
         best = best if found is None else found
-        if proved:
+        if proved:  # the list holds every tie: the pick is the smallest
             path.append(f"least norm: {listed} grid points in the dual ellipsoid")
             return LeastNorm(best, True, "", norm(best), tuple(path))
+    # network rows: one LP before any MILP (after the short list, which is cheaper where it closes:
+    # bench/least_norm_tu.py)
+    if (out := network_lp(best)) is not None:
+        return out
     best = _good_incumbent(session, t_star, b, best, relaxation)
     # A near-least incumbent: the least norm in the unit box around the continuous point (a MILP
     # with a linear objective), else in the box one step wider (unless stage 2 settled the unit box).
@@ -182,7 +254,7 @@ def grid_least_norm(session: Session, t_star: float, b: Array, incumbent: Array,
     box_lo, box_hi, lower = lagrangian_box(centre, q, cost, kmin, kmax, norm(best))
     if norm(best) <= _ceil_bound(lower, cost):
         path.append("least norm: the incumbent meets the Lagrangian bound")
-        return LeastNorm(best, True, "", norm(best), tuple(path))
+        return proven(best)
     values = f"{np.mean(box_hi - box_lo + 1):.1f} values per register"
     if kmin.size <= s.box_proof_max_registers and float(np.sum(box_hi - box_lo)) <= s.box_proof_max_chords:
         # few registers and a short box: every chord of the box at once, one MILP
@@ -198,5 +270,7 @@ def grid_least_norm(session: Session, t_star: float, b: Array, incumbent: Array,
                                                       time_limit=clock.left() - reserve, proof=True)
     if found is not None and norm(found) <= norm(best):
         best = found
+    if proved:
+        return proven(best)
     # points outside the box have Σ c k² > f(best): the chord bound holds up to f(best)
     return finish(best, proved, why, max(lower, min(chord_lower, norm(best))))

@@ -26,6 +26,9 @@ The pieces, each with what proves it:
   Around the rounded continuous point it gives a near-least incumbent quickly.
 * :func:`chord_least_norm` — the exact least norm over a box by the chords of k²,
   added lazily (an LP first; a MILP when the LP's vertex is fractional).
+* :func:`network_rows` — whether the rows are a network matrix after flipping some
+  columns (one WKS and one tool per dimension, coefficients ±1): then the chord LP's
+  vertex is on the grid, and :func:`chord_least_norm`'s first LP is the proof.
 * :func:`descend` — coordinate descent on the grid that keeps every row: each move
   takes one coordinate to the value of least c_i k_i² its feasible range allows;
   the norm never grows.  Used when a limit stops the proof.
@@ -38,6 +41,7 @@ import time
 import numpy as np
 import numpy.typing as npt
 from scipy.sparse import coo_array, csr_array, hstack, vstack
+from scipy.sparse.csgraph import connected_components
 
 from setupfix.optimize._chords import chord_rows, lazy_chords
 from setupfix.optimize._grid import TOL, grid_margins, nnls_least_distance
@@ -50,6 +54,7 @@ __all__ = [
     "lagrangian_box",
     "least_distance_working_set",
     "lower_bound_ratio",
+    "network_rows",
 ]
 
 Array = npt.NDArray[np.float64]
@@ -221,7 +226,7 @@ def box_least_norm(g_rows: Array, b: Array, lo: Array, hi: Array, cost: Array, t
     if proof:
         model.prefer_proof()
     if gap > 0:  # an incumbent is wanted, not a proof
-        model.h.setOptionValue("mip_rel_gap", float(gap))
+        model.set_gap(gap)
     sol = None
     if start is not None and np.all((start >= lo) & (start <= hi)):
         sol = np.r_[start, start[chorded] ** 2]
@@ -334,3 +339,48 @@ def chord_least_norm(g_rows: Array, g: Array, level: float, b: Array, kmin: Arra
     out = lazy_chords(model, n, chords, cost, kmin, kmax, best, feasible, lambda k: np.r_[k, k**2], deadline,
                       integer=False)
     return out.best, out.proved, out.why, out.lower
+
+
+def network_rows(g_rows: Array, b: Array) -> bool:
+    """Whether ``G k ≤ b`` is totally unimodular with an integral right side, by a network signing.
+
+    Exact test of a sufficient structure: every row has one or two non-zeros, each ±1, and
+    the columns split into two classes such that negating one class leaves every two-entry
+    row with one +1 and one −1 (an arc of a directed graph: a network matrix, totally
+    unimodular); each finite b_j is an integer.  Then every vertex of
+    ``{(k, s): G k ≤ b, box, s_i ≥ chords of k_i² at integers}`` has integral k (at a vertex
+    the k off the chords' breakpoints solve a square subsystem of G, unimodular, with an
+    integral right side), so the chord LP of :func:`chord_least_norm` ends on the grid
+    without a MILP.
+
+    Parameters
+    ----------
+    g_rows : ndarray of shape (r, n); b : ndarray of shape (r,) (+inf: no row)
+    """
+    fin = np.isfinite(b)
+    if not np.all(np.abs(b[fin] - np.rint(b[fin])) <= 1e-9):
+        return False
+    r_idx, c_idx = np.nonzero(g_rows)  # one pass over the matrix (row-major: a row's entries are adjacent)
+    live = fin[r_idx]
+    r_idx, c_idx = r_idx[live], c_idx[live]
+    vals = g_rows[r_idx, c_idx]
+    if not np.all(np.abs(vals) == 1.0):
+        return False
+    count = np.bincount(r_idx, minlength=g_rows.shape[0])
+    if np.any(count > 2):
+        return False
+    first = np.cumsum(count) - count  # position of each row's first entry
+    two = np.flatnonzero(count == 2)
+    if two.size == 0:
+        return True
+    n = g_rows.shape[1]
+    i, j = c_idx[first[two]], c_idx[first[two] + 1]
+    differ = (vals[first[two]] == vals[first[two] + 1]).astype(np.intp)
+    # same signs: the two columns in different classes; opposite signs: in the same class.  Node
+    # (i, c) is "column i in class c"; a row joins (i, c) to (j, c xor differ) for c = 0, 1, and the
+    # classes exist iff no column has both its nodes in one component.
+    src = np.r_[2 * i, 2 * i + 1]
+    dst = np.r_[2 * j + differ, 2 * j + (1 - differ)]
+    graph = coo_array((np.ones(src.size), (src, dst)), shape=(2 * n, 2 * n))
+    _, label = connected_components(graph, directed=False)
+    return bool(np.all(label[0::2] != label[1::2]))

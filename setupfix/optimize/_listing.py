@@ -218,7 +218,9 @@ def ellipsoid_search(g_rows: Array, g: Array, level: float, centre: Array, q: fl
     Returns
     -------
     best : ndarray of shape (n,) or None
-        The least feasible point found with f < f_known (None: none better).
+        The least feasible point found with f ≤ f_known, the lexicographically smallest of
+        equal norms (None: none found; a known point of norm ``f_known`` that is feasible is
+        in the list, so ``best`` is then at most as large and lexicographically no larger).
     proved : bool
         True when ``best`` (or, if None, the known point) is proven least.
     listed : int
@@ -250,7 +252,8 @@ def ellipsoid_search(g_rows: Array, g: Array, level: float, centre: Array, q: fl
             if ok.shape[0]:
                 f = np.sum(cost * ok**2, axis=1)
                 order = np.lexsort((*ok.T[::-1], f))  # least norm, ties by the smallest k
-                if f[order[0]] < f_known:
+                # ties with the known point count: the list holds it, so the pick is the smallest of them
+                if f[order[0]] <= f_known + 1e-12 * max(1.0, abs(f_known)):
                     best = ok[order[0]]
                     f_cut = float(f[order[0]])
                     cap = min(cap, room(f_cut))

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 import setupfix.optimize._grid_least_norm as least_norm_stage
-from setupfix.optimize import get_optimizer
+from setupfix.optimize import CorrectionProblem, get_optimizer
 from setupfix.optimize._grid import grid_margins, least_distance
 from setupfix.optimize._least_norm import (
     box_least_norm,
@@ -17,9 +17,11 @@ from setupfix.optimize._least_norm import (
     lagrangian_box,
     least_distance_working_set,
     lower_bound_ratio,
+    network_rows,
 )
 from setupfix.optimize._listing import lagrangian_ball
 from setupfix.optimize._lp_bound import margin_rows
+from setupfix.optimize._settings import ExactSettings
 
 from .test_exact_robust import shop_problem
 
@@ -133,3 +135,146 @@ def test_a_stopped_least_norm_proof_returns_a_certified_near_least_correction(mo
     x_steps = result.x / problem.resolution
     assert grid_margins(*margin_rows(problem), x_steps[problem.free]) >= result.margin_after / \
         problem.resolution - 1e-6
+
+
+# --- ties and network rows ---------------------------------------------------------------------
+
+def tied_problem(seed: int, network: bool = False) -> CorrectionProblem:
+    """Equal costs and registers in pairs with equal or opposite columns: the least norm is tied at many points.
+
+    ``network``: every dimension is one WKS and one tool register (±1), so the rows are a network matrix
+    (ties: a shift either register of a dimension can make).
+    """
+    rng = np.random.default_rng(seed)
+    n, m, h = 6, (3 if network else 6), 0.01
+    if network:
+        comp = np.zeros((n, m))
+        sign = rng.choice([-1.0, 1.0], m)  # a feature cut by a tool in a WKS: both with the feature's sign
+        comp[rng.integers(0, 3, m), np.arange(m)] = sign
+        comp[3 + rng.integers(0, 3, m), np.arange(m)] = sign  # either moves it: ties
+    else:
+        half = rng.integers(-1, 2, size=(n // 2, m)).astype(float)
+        comp = np.repeat(half, 2, axis=0) * np.tile([1.0, -1.0], n // 2)[:, None] ** rng.integers(0, 2, (n, 1))
+    width = rng.uniform(0.02, 0.05, m)
+    return CorrectionProblem(
+        composite=comp, deviation=np.round(rng.uniform(-0.04, 0.04, m), 3), lower=-width, upper=width,
+        lb=np.full(n, -3 * h), ub=np.full(n, 3 * h), resolution=h,
+        register_ids=tuple(f"R{i}" for i in range(n)), dimension_ids=tuple(f"D{j}" for j in range(m)))
+
+
+def brute_lex(problem: CorrectionProblem) -> tuple[np.ndarray, int, bool]:
+    """The lexicographically smallest grid point among those of the least norm at the best margin, how
+    many points tie there, and whether that margin is ≥ 0 (else the solver triages)."""
+    axes = [np.arange(lo, hi + 1) for lo, hi in zip(problem.kmin, problem.kmax, strict=True)]
+    k = np.array(list(itertools.product(*axes)), dtype=float)
+    f1, _, _ = problem.evaluate(k * problem.resolution)
+    reach = bool(f1.max() >= 0)
+    k = k[f1 >= f1.max() - 1e-12]
+    f = np.sum(problem.cost * k**2, axis=1)
+    k = k[f == f.min()]
+    return k[np.lexsort(k.T[::-1])[0]], k.shape[0], reach
+
+
+#: Each way the least norm is proved (no NNLS rows: no listing in the grid-optimum stage; no registers for
+#: the ellipsoid: no listing in the least-norm stage).
+TIE_PATHS = {
+    "listing": ExactSettings(),
+    "QP + listing": ExactSettings(nnls_max_rows=0),
+    "box MILPs": ExactSettings(nnls_max_rows=0, ellipsoid_max_registers=0),
+    "lazy chord MILP": ExactSettings(nnls_max_rows=0, ellipsoid_max_registers=0, box_proof_max_registers=0),
+}
+
+
+@pytest.mark.parametrize("path", list(TIE_PATHS))
+@pytest.mark.parametrize("network", [False, True])
+def test_ties_go_to_the_lexicographically_smallest_correction(path, network, monkeypatch):
+    """Brute force over the whole grid, on problems built to tie, on every proof path (network LP on and off)."""
+    tied = 0
+    for seed in range(12):
+        problem = tied_problem(seed, network)
+        want, ties, reach = brute_lex(problem)
+        if not reach:  # triage: another objective
+            continue
+        for lp in (True, False):
+            monkeypatch.setattr(least_norm_stage, "NETWORK_LP", lp)
+            result = get_optimizer("exact", settings=TIE_PATHS[path]).solve(problem)
+            assert result.status == "optimal"
+            np.testing.assert_array_equal(np.rint(result.x / problem.resolution), want)
+        tied += ties > 1
+    assert tied >= 4  # the problems do tie
+
+
+def brute_tu(a: np.ndarray) -> bool:
+    """Total unimodularity by every square submatrix's determinant (small a only)."""
+    r, n = a.shape
+    for size in range(1, min(r, n) + 1):
+        for rows in itertools.combinations(range(r), size):
+            for cols in itertools.combinations(range(n), size):
+                if round(abs(np.linalg.det(a[np.ix_(rows, cols)]))) > 1:
+                    return False
+    return True
+
+
+@pytest.mark.parametrize("seed", range(40))
+def test_network_rows_is_exact_on_two_entry_rows(seed):
+    """On rows of one or two ±1 entries the test agrees with total unimodularity (all minors); other rows
+    (three entries, a 2) are never taken for network rows."""
+    rng = np.random.default_rng(seed)
+    r, n = 5, 4
+    a = np.zeros((r, n))
+    for j in range(r):
+        cols = rng.choice(n, size=rng.integers(1, 3), replace=False)
+        a[j, cols] = rng.choice([-1.0, 1.0], cols.size)
+    assert network_rows(a, np.zeros(r)) == brute_tu(a)
+    assert not network_rows(a, np.full(r, 0.5))  # a fractional right side
+    b = a.copy()
+    b[0, np.flatnonzero(b[0])[0]] = 2.0
+    assert not network_rows(b, np.zeros(r))
+    c = a.copy()
+    c[0] = [1.0, -1.0, 1.0, 0.0]
+    assert not network_rows(c, np.zeros(r))
+
+
+@pytest.mark.parametrize("seed", range(8))
+def test_network_rows_are_proved_by_one_chord_lp_equal_to_brute_force(seed):
+    problem = tied_problem(seed, network=True)
+    want, _, reach = brute_lex(problem)
+    # no listing first (in the grid-optimum stage of small problems, in the least-norm stage up to 120
+    # registers), which proves the least norm before the LP where it closes
+    settings = ExactSettings(nnls_max_rows=0, ellipsoid_max_registers=0)
+    result = get_optimizer("exact", settings=settings).solve(problem)
+    assert result.status == "optimal"
+    assert ("one LP over the chords" in str(result.extra["path"])) == reach  # else triage
+    if reach:
+        np.testing.assert_array_equal(np.rint(result.x / problem.resolution), want)
+
+
+def test_shop_rows_without_differences_take_the_network_lp_and_agree_with_the_listing(monkeypatch):
+    """60 × 400 with every dimension one WKS and one tool: the LP's answer equals the other paths'."""
+    for seed in range(2):
+        problem = network_shop_problem(60, 400, seed)
+        lp = get_optimizer("exact", time_limit=30.0, settings=ExactSettings(ellipsoid_max_registers=0)).solve(problem)
+        monkeypatch.setattr(least_norm_stage, "NETWORK_LP", False)
+        other = get_optimizer("exact", time_limit=30.0).solve(problem)
+        monkeypatch.setattr(least_norm_stage, "NETWORK_LP", True)
+        assert lp.status == other.status == "optimal"
+        assert "one LP over the chords" in str(lp.extra["path"])
+        assert lp.norm == pytest.approx(other.norm, rel=1e-12)
+        if "the tie is not broken" not in str(lp.extra["path"]) + str(other.extra["path"]):
+            np.testing.assert_array_equal(lp.x, other.x)  # the same tie pick
+
+
+def network_shop_problem(n: int, m: int, seed: int) -> CorrectionProblem:
+    """shop_problem without the 30 % differences of two features: network rows."""
+    rng = np.random.default_rng(seed)
+    n_wks = 2 * n // 3
+    comp = np.zeros((n, m))
+    sign = rng.choice([-1.0, 1.0], m)
+    comp[rng.integers(0, n_wks, m), np.arange(m)] = sign
+    comp[n_wks + rng.integers(0, n - n_wks, m), np.arange(m)] = sign
+    lower = -np.round(rng.uniform(0.02, 0.1, m) / 0.005) * 0.005
+    upper = np.round(rng.uniform(0.02, 0.1, m) / 0.005) * 0.005
+    dev = np.round(0.03 * (1 - 2 * rng.random(n)) @ comp + 0.01 * (1 - 2 * rng.random(m)), 4)
+    return CorrectionProblem(composite=comp, deviation=dev, lower=lower, upper=upper, lb=np.full(n, -0.1),
+                             ub=np.full(n, 0.1), resolution=0.001, register_ids=tuple(f"R{i}" for i in range(n)),
+                             dimension_ids=tuple(f"D{j}" for j in range(m)))
