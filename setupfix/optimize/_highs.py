@@ -258,6 +258,24 @@ class LinearModel:
         self._check(self.h.changeColsBounds(cols.size, cols, lo, hi), "changeColsBounds")
         self._col_lo[cols], self._col_hi[cols] = lo, hi
 
+    def set_column(self, col: int, rows: npt.NDArray[np.intp], values: Array) -> None:
+        """Set the coefficients of column ``col`` in ``rows`` (HiGHS and the model's own copy alike)."""
+        values = np.asarray(values, dtype=float)
+        for j, v in zip(np.asarray(rows, dtype=int), values, strict=True):
+            self._check(self.h.changeCoeff(int(j), int(col), float(v)), "changeCoeff")
+        a = self._a.tolil()
+        a[np.asarray(rows, dtype=int), int(col)] = values
+        self._a = csc_array(a)
+        self._abs_a = self._dense = None
+
+    def set_costs(self, cols: npt.NDArray[np.int32], costs: Array) -> None:
+        """Change the objective's linear costs of ``cols`` (HiGHS and the model's own copy alike)."""
+        cols = np.asarray(cols, dtype=np.int32)
+        costs = np.asarray(costs, dtype=float)
+        self._check(self.h.changeColsCost(cols.size, cols, costs), "changeColsCost")
+        self._c = self._c.copy()
+        self._c[cols] = costs
+
     def add_rows(self, a: object, lo: Array, hi: Array) -> None:
         """Append rows (lazy cuts); ``a`` has shape (k, n_cols)."""
         mat = csc_array(a).tocsr()

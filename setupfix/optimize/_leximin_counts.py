@@ -234,7 +234,7 @@ def count_least_norm(session: Session, row_dim: npt.NDArray[np.intp], counts: Co
     chords = [{0, int(abs(v)), max(int(abs(v)) - 1, 0)} for v in k]
     a_ch, rhs_ch = chord_rows([(i, j) for i, js in enumerate(chords) for j in sorted(js)], n, model.n_cols)
     model.add_rows(a_ch, np.full(rhs_ch.size, -INF), rhs_ch)
-    model.h.changeColsCost(n, np.arange(n, 2 * n, dtype=np.int32), np.asarray(cost, dtype=float))
+    model.set_costs(np.arange(n, 2 * n, dtype=np.int32), np.asarray(cost, dtype=float))
 
     def start(kk: Array) -> Array:
         m = rows.margins(kk)

@@ -106,8 +106,9 @@ class LevelModel:
     def _pattern(self, v: Array) -> None:
         """t's coefficient 1 on active rows, 0 on fixed ones (changed in place where it differs)."""
         want = np.where(np.isnan(self._floors(v)), 1.0, 0.0)
-        for j in np.flatnonzero(want != self._coef):
-            self._lp.h.changeCoeff(int(j), self.n, float(want[j]))
+        changed = np.flatnonzero(want != self._coef)
+        if changed.size:
+            self._lp.set_column(self.n, changed, want[changed])
         self._coef = want
 
     def rhs(self, v: Array) -> Array:

@@ -197,7 +197,7 @@ def test_ties_go_to_the_lexicographically_smallest_correction(path, network, mon
             continue
         for lp in (True, False):
             monkeypatch.setattr(least_norm_stage, "NETWORK_LP", lp)
-            result = get_optimizer("exact", settings=TIE_PATHS[path]).solve(problem)
+            result = get_optimizer("exact", settings=TIE_PATHS[path], objective="paper").solve(problem)
             assert result.status == "optimal"
             np.testing.assert_array_equal(np.rint(result.x / problem.resolution), want)
         tied += ties > 1
@@ -242,7 +242,7 @@ def test_network_rows_are_proved_by_one_chord_lp_equal_to_brute_force(seed):
     # no listing first (in the grid-optimum stage of small problems, in the least-norm stage up to 120
     # registers), which proves the least norm before the LP where it closes
     settings = ExactSettings(nnls_max_rows=0, ellipsoid_max_registers=0)
-    result = get_optimizer("exact", settings=settings).solve(problem)
+    result = get_optimizer("exact", settings=settings, objective="paper").solve(problem)
     assert result.status == "optimal"
     assert ("one LP over the chords" in str(result.extra["path"])) == reach  # else triage
     if reach:
@@ -253,9 +253,10 @@ def test_shop_rows_without_differences_take_the_network_lp_and_agree_with_the_li
     """60 × 400 with every dimension one WKS and one tool: the LP's answer equals the other paths'."""
     for seed in range(2):
         problem = network_shop_problem(60, 400, seed)
-        lp = get_optimizer("exact", time_limit=30.0, settings=ExactSettings(ellipsoid_max_registers=0)).solve(problem)
+        lp = get_optimizer("exact", objective="paper", time_limit=30.0,
+                           settings=ExactSettings(ellipsoid_max_registers=0)).solve(problem)
         monkeypatch.setattr(least_norm_stage, "NETWORK_LP", False)
-        other = get_optimizer("exact", time_limit=30.0).solve(problem)
+        other = get_optimizer("exact", objective="paper", time_limit=30.0).solve(problem)
         monkeypatch.setattr(least_norm_stage, "NETWORK_LP", True)
         assert lp.status == other.status == "optimal"
         assert "one LP over the chords" in str(lp.extra["path"])
