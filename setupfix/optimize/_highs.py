@@ -34,17 +34,8 @@ from typing import Any
 
 import numpy as np
 import numpy.typing as npt
-from highspy._core import (
-    HessianFormat,
-    HighsModelStatus,
-    HighsStatus,
-    HighsVarType,
-    MatrixFormat,
-    ObjSense,
-    _Highs,
-    cb,
-    kHighsInf,
-)
+from highspy._core import (HessianFormat, HighsModelStatus, HighsStatus, HighsVarType, MatrixFormat, ObjSense, _Highs,
+                           cb, kHighsInf)
 from scipy.sparse import csc_array, vstack
 
 __all__ = ["FEASIBILITY_TOL", "INF", "Colwise", "LinearModel", "Solve"]
@@ -259,22 +250,18 @@ class LinearModel:
         self._col_lo[cols], self._col_hi[cols] = lo, hi
 
     def set_column(self, col: int, rows: npt.NDArray[np.intp], values: Array) -> None:
-        """Set the coefficients of column ``col`` in ``rows`` (HiGHS and the model's own copy alike)."""
-        values = np.asarray(values, dtype=float)
-        for j, v in zip(np.asarray(rows, dtype=int), values, strict=True):
+        """Set column ``col``'s coefficients in ``rows`` (in HiGHS and in the copy :meth:`check` reads)."""
+        a, rows, values = self._a.tolil(), np.asarray(rows, dtype=int), np.asarray(values, dtype=float)
+        for j, v in zip(rows, values, strict=True):
             self._check(self.h.changeCoeff(int(j), int(col), float(v)), "changeCoeff")
-        a = self._a.tolil()
-        a[np.asarray(rows, dtype=int), int(col)] = values
-        self._a = csc_array(a)
-        self._abs_a = self._dense = None
+        a[rows, int(col)] = values
+        self._a, self._abs_a, self._dense = csc_array(a), None, None
 
     def set_costs(self, cols: npt.NDArray[np.int32], costs: Array) -> None:
-        """Change the objective's linear costs of ``cols`` (HiGHS and the model's own copy alike)."""
-        cols = np.asarray(cols, dtype=np.int32)
-        costs = np.asarray(costs, dtype=float)
-        self._check(self.h.changeColsCost(cols.size, cols, costs), "changeColsCost")
-        self._c = self._c.copy()
-        self._c[cols] = costs
+        """Change the linear costs of ``cols`` (in HiGHS and in the copy :meth:`check` reads)."""
+        cols, self._c = np.asarray(cols, dtype=np.int32), self._c.copy()
+        self._c[cols] = np.asarray(costs, dtype=float)
+        self._check(self.h.changeColsCost(cols.size, cols, self._c[cols]), "changeColsCost")
 
     def add_rows(self, a: object, lo: Array, hi: Array) -> None:
         """Append rows (lazy cuts); ``a`` has shape (k, n_cols)."""
