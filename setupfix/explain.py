@@ -13,7 +13,10 @@ The fit is ridge least squares, min ‖r + Cᵀx‖² + λ‖x‖² (r the devia
 tolerance middle, C the composite of eqs. 3–4, λ tiny: a register no other dimension
 sees stays at 0), and its leave-one-out residuals come in closed form,
 e_q / (1 − H_qq) with H = Cᵀ(CCᵀ + λI)⁻¹C (the hat matrix), one solve for all dimensions.
-Pure: arrays in, arrays out.
+A setup error is usually one register entered wrong, and the least-squares fit spreads its
+change over every register that moves the same dimensions (a WKS and the tools of its
+station); :func:`one_register` finds the single register that explains the dimensions
+best, which is named when it alone explains them.  Pure: arrays in, arrays out.
 """
 
 from __future__ import annotations
@@ -21,7 +24,7 @@ from __future__ import annotations
 import numpy as np
 import numpy.typing as npt
 
-__all__ = ["targets", "fit_registers", "leave_one_out"]
+__all__ = ["targets", "fit_registers", "one_register", "leave_one_out"]
 
 Array = npt.NDArray[np.float64]
 Mask = npt.NDArray[np.bool_]
@@ -74,6 +77,43 @@ def fit_registers(composite: Array, residual: Array, use: Mask | None = None) ->
         return np.zeros(0)
     a, _ = _system(c)
     return -np.linalg.solve(a, c @ r)
+
+
+def one_register(composite: Array, residual: Array, use: Mask | None = None) -> tuple[int, float, Array]:
+    """The one register whose change alone brings the used dimensions closest to their targets.
+
+    For each register j the best change a_j = −Σ C[j, q] r_q / Σ C[j, q]² (least squares
+    over the used dimensions q); the register with the least sum of squared residuals wins.
+
+    Parameters
+    ----------
+    composite : ndarray of shape (n, m)
+    residual : ndarray of shape (m,) [unit]
+        Deviation minus target.
+    use : bool ndarray of shape (m,), optional
+        Dimensions that enter the fit (default all).
+
+    Returns
+    -------
+    j : int
+        The register (−1 when no register moves a used dimension).
+    change : float [unit]
+        Its change a_j (the register "looks off" by −a_j).
+    after : ndarray of shape (m,) [unit]
+        Every dimension's residual r + C[j]·a_j.
+    """
+    c = np.asarray(composite, dtype=float)
+    r = np.asarray(residual, dtype=float)
+    mask = np.ones(r.size, bool) if use is None else np.asarray(use, bool)
+    cu, ru = c[:, mask], r[mask]
+    norms = np.sum(cu * cu, axis=1)
+    if c.shape[0] == 0 or not np.any(norms > 0):
+        return -1, 0.0, r.copy()
+    change = np.where(norms > 0, -(cu @ ru) / np.where(norms > 0, norms, 1.0), 0.0)
+    sse = np.sum((ru[None, :] + cu * change[:, None]) ** 2, axis=1)
+    j = int(np.argmin(np.where(norms > 0, sse, np.inf)))
+    after: Array = r + c[j] * change[j]
+    return j, float(change[j]), after
 
 
 def leave_one_out(composite: Array, residual: Array) -> Array:

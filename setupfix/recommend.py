@@ -15,7 +15,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 import numpy.typing as npt
 
-from setupfix.explain import fit_registers, leave_one_out, targets
+from setupfix.explain import fit_registers, leave_one_out, one_register, targets
 from setupfix.objective import error_budget, margins
 from setupfix.optimize import CorrectionProblem, OptimizeResult
 from setupfix.safety import (
@@ -207,6 +207,10 @@ def beyond_band(posed: PosedProblem, bad: Mask, optimizer: str, label: Callable[
     setup: RuleEffect | None = None
     if explained.any():
         x = fit_registers(problem.composite, residual, ~gross)
+        j, change, after = one_register(problem.composite, residual, ~gross)
+        if j >= 0 and not reject_mask(goal + after, lower, upper, policy.reject_band)[explained].any():
+            x = np.zeros_like(x)  # one register alone explains them: name it, not the fit's spread over many
+            x[j] = change
         h = problem.resolution
         moves = np.any(problem.composite[:, explained] != 0, axis=1)
         fixed = problem.ub <= problem.lb
