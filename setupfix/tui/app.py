@@ -19,6 +19,8 @@ from textual.app import App, ComposeResult
 from textual.binding import Binding, BindingType
 from textual.containers import Horizontal, Vertical
 from textual.widgets import DataTable, Footer, Header, Static, TabbedContent, TabPane
+from textual.markup import escape
+from textual.notifications import SeverityLevel
 from textual.worker import Worker, WorkerState
 
 from setupfix.errors import SetupfixError
@@ -34,6 +36,7 @@ from setupfix.tui.messages import CompareProgress
 from setupfix.tui.screens import ExportRequest, ExportScreen, HelpScreen, OpenFileScreen
 from setupfix.tui.widgets import (ComparePanel, DimensionTable, HistoryPanel, MatchTable, RegisterTable, SummaryBar,
                                   ThermalPanel)
+from setupfix.tui.widgets.plain import plain
 
 __all__ = ["SetupfixApp", "SORT_ORDER"]
 
@@ -205,6 +208,11 @@ class SetupfixApp(App[None]):
             elif worker.name == "thermal" and isinstance(worker.result, view.DriftView):
                 self.query_one(ThermalPanel).show(worker.result, source=str(self.inputs.temperatures))
 
+    def notify(self, message: str, *, title: str = "", severity: SeverityLevel = "information",
+               timeout: float | None = None, markup: bool = False) -> None:
+        """A toast; its text (names of files, reports, dimensions) is literal, not markup."""
+        super().notify(message, title=title, severity=severity, timeout=timeout, markup=markup)
+
     def _failed(self, what: str, error: BaseException | None) -> None:
         text = str(error) if isinstance(error, SetupfixError) else f"internal error: {type(error).__name__}: {error}"
         self.notify(text, title=f"{what} failed", severity="error", timeout=12)
@@ -228,13 +236,13 @@ class SetupfixApp(App[None]):
         self.opened = opened
         self.problem = ""
         self.part_index = min(self.part_index, max(len(opened.corrections) - 1, 0))
-        self.sub_title = f"{Path(opened.report).name} · {opened.format} · {Path(opened.model.source).name}"
+        self.sub_title = escape(f"{Path(opened.report).name} · {opened.format} · {Path(opened.model.source).name}")
         status = self.query_one("#match-status", Static)
         table = self.query_one(MatchTable)
         table.show(opened.matches)
         if not opened.corrections:
-            status.update(f"✗ {opened.problem}\nEach characteristic of the report, ✓ with the dimension it "
-                          "matches, ✗ with the closest dimension names:")
+            status.update(plain(f"✗ {opened.problem}\nEach characteristic of the report, ✓ with the dimension it "
+                                "matches, ✗ with the closest dimension names:"))
             self.query_one(TabbedContent).active = "match"
         elif opened.unmatched:
             status.update(f"⚠ {opened.unmatched} characteristic(s) of the report match no dimension "
@@ -314,7 +322,7 @@ class SetupfixApp(App[None]):
             rows = view.sort_rows(rows, self.sort_key)
         self.query_one(DimensionTable).show(rows, wide=self._wide)
         self.query_one(DimensionTable).border_title = (
-            f"dimensions · station {self.station or 'all'} · sort {self.sort_key or 'model'}")
+            escape(f"dimensions · station {self.station or 'all'} · sort {self.sort_key or 'model'}"))
         self.query_one(RegisterTable).show(view.register_rows(c, self.opened.current if self.opened else None),
                                            digits=grid_decimals(c.model.resolution))
         self.query_one(RegisterTable).border_title = f"recommendation [{c.model.unit}, axis {c.model.axis}]"

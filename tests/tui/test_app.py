@@ -25,7 +25,8 @@ def _notes(app):
 
 
 def _rows(table):
-    return [table.get_row(k) for k in table.rows]
+    """Every row's cells as the operator reads them (cells are literal Text, never markup)."""
+    return [[str(c) for c in table.get_row(k)] for k in table.rows]
 
 
 def test_open_sort_filter_export_then_a_bad_report(make_app, tmp_path):
@@ -297,5 +298,33 @@ def test_compare_solves_the_problem_correct_solves(make_app, tmp_path):
             # the real-limit problem is another one: its exact optimum is not what correct shows
             other = get_optimizer("exact", objective="paper").solve(c.problem)
             assert not np.array_equal(other.x, raw.x) or other.margin_after != raw.margin_after
+
+    run(scenario())
+
+
+def test_names_that_look_like_markup_are_shown_as_written(make_app, tmp_path):
+    """A dimension named ``D1 [/b] [red`` and a report ``cycle[1] [red.csv``: a DataTable reads a plain
+    string as markup (the closing tag raised a MarkupError and the screen died); every name is literal."""
+    model = tmp_path / "model.toml"
+    model.write_text(MODEL.read_text(encoding="utf-8").replace('name = "D1"', 'name = "D1 [/b] [red"'),
+                     encoding="utf-8")
+    report = tmp_path / "cycle[1] [red.csv"
+    report.write_text(CYCLE_01.read_text(encoding="utf-8").replace(" D1,", " D1 [/b] [red,"), encoding="utf-8")
+
+    async def scenario():
+        app = make_app(report=report, model=model)
+        async with app.run_test(size=(100, 30)) as pilot:
+            await settle(pilot)
+            assert app._current() is not None, _notes(app)
+            names = [r[1] for r in _rows(app.query_one("#dimensions"))]
+            assert "P1 D1 [/b] [red" in names and "P4 D1 [/b] [red" in names
+            assert "cycle[1] [red.csv" in app.sub_title.replace("\\[", "[")
+            app.notify("[/b] a name from a report")  # toasts are literal too
+            await pilot.pause()
+            await pilot.press("e")
+            await pilot.pause()
+            await pilot.press("ctrl+s")
+            await settle(pilot)
+            assert "cycle[1] [red.csv" in (tmp_path / "offsets.csv").read_text(encoding="utf-8")
 
     run(scenario())

@@ -12,6 +12,7 @@ from textual.app import ComposeResult
 from textual.containers import Vertical, VerticalScroll
 from textual.widgets import DataTable, Label, ProgressBar, Sparkline, Static
 
+from setupfix.tui.widgets.plain import PlainTable, plain
 from setupfix.pipeline.view import signed
 
 __all__ = ["ComparePanel"]
@@ -23,14 +24,14 @@ class ComparePanel(Vertical):
     def compose(self) -> ComposeResult:
         yield Static("Press c to compare the optimisers on this part (x cancels).", id="compare-status")
         yield ProgressBar(total=None, show_eta=False, id="compare-progress")
-        yield DataTable(id="compare-table", cursor_type="row", zebra_stripes=True)
+        yield PlainTable(id="compare-table", cursor_type="row", zebra_stripes=True)
         yield VerticalScroll(id="compare-curves")
 
     def on_mount(self) -> None:
         self.query_one(ProgressBar).display = False
 
     def status(self, text: str) -> None:
-        self.query_one("#compare-status", Static).update(text)
+        self.query_one("#compare-status", Static).update(plain(text))
 
     def progress(self, done: int, total: int, method: str) -> None:
         bar = self.query_one(ProgressBar)

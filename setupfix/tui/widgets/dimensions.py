@@ -5,8 +5,8 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 from rich.text import Text
-from textual.widgets import DataTable
 
+from setupfix.tui.widgets.plain import PlainTable
 from setupfix.pipeline.view import DimensionRow, limits_text, signed
 
 __all__ = ["DimensionTable"]
@@ -19,7 +19,7 @@ def _width(values: Sequence[str], header: str) -> int:
     return max([len(header), *(len(v) for v in values)])
 
 
-class DimensionTable(DataTable[Text | str]):
+class DimensionTable(PlainTable):
     """One row per measured dimension; click a header (or press s) to sort.
 
     Every column gets its width up front: measured lazily, the widths would change

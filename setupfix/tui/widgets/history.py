@@ -9,6 +9,7 @@ from textual.app import ComposeResult
 from textual.containers import VerticalScroll
 from textual.widgets import DataTable, Sparkline, Static
 
+from setupfix.tui.widgets.plain import PlainTable, plain
 from setupfix.pipeline.view import IN, OUT, CycleBudget, DiagnosisView, signed
 
 __all__ = ["HistoryPanel"]
@@ -23,9 +24,9 @@ class HistoryPanel(VerticalScroll):
     def compose(self) -> ComposeResult:
         yield Static("", id="history-status")
         yield Sparkline([], id="history-curve")
-        yield DataTable(id="history-cycles", cursor_type="row")
+        yield PlainTable(id="history-cycles", cursor_type="row")
         yield Static("", id="history-diagnosis")
-        yield DataTable(id="history-effects", cursor_type="row")
+        yield PlainTable(id="history-effects", cursor_type="row")
         yield Static("", id="history-walk")
 
     def on_mount(self) -> None:
@@ -33,7 +34,7 @@ class HistoryPanel(VerticalScroll):
             self.query_one(wid).display = False
 
     def status(self, text: str | Text) -> None:
-        self.query_one("#history-status", Static).update(text)
+        self.query_one("#history-status", Static).update(plain(text))
 
     def budgets(self, rows: Sequence[CycleBudget], *, unit: str, source: str) -> None:
         """δ of every cycle, oldest first; the table lists the last :data:`LAST_CYCLES`."""

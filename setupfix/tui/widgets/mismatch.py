@@ -5,14 +5,14 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 from rich.text import Text
-from textual.widgets import DataTable
 
+from setupfix.tui.widgets.plain import PlainTable
 from setupfix.pipeline.view import IN, OUT, MatchRow
 
 __all__ = ["MatchTable"]
 
 
-class MatchTable(DataTable[Text | str]):
+class MatchTable(PlainTable):
     """One row per report characteristic: ✓ with its dimension, or ✗ with suggestions."""
 
     def on_mount(self) -> None:

@@ -5,14 +5,14 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 from rich.text import Text
-from textual.widgets import DataTable
 
+from setupfix.tui.widgets.plain import PlainTable
 from setupfix.pipeline.view import RegisterRow, signed
 
 __all__ = ["RegisterTable"]
 
 
-class RegisterTable(DataTable[Text | str]):
+class RegisterTable(PlainTable):
     """Register, model ID, wear/geometry, delta, current and new value, flags and safety rules.
 
     Column widths are set up front, as in :class:`DimensionTable`.

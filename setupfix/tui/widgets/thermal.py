@@ -7,6 +7,7 @@ from textual.app import ComposeResult
 from textual.containers import Vertical
 from textual.widgets import Sparkline, Static
 
+from setupfix.tui.widgets.plain import plain
 from setupfix.pipeline.view import DriftView, signed
 
 __all__ = ["ThermalPanel"]
@@ -39,10 +40,10 @@ class ThermalPanel(Vertical):
                     f"from {signed(low)} (▁) to {signed(high)} (█) {unit}:")
         for note in view.notes:
             text.append(f"\n⚠ {note}", style="yellow")
-        self.query_one("#thermal-status", Static).update(text)
+        self.query_one("#thermal-status", Static).update(plain(text))
         curve = self.query_one("#thermal-curve", Sparkline)
         curve.display = True
         curve.data = [float(v) for v in view.recent]
 
     def feed_forward(self, text: str) -> None:
-        self.query_one("#thermal-feed", Static).update(text)
+        self.query_one("#thermal-feed", Static).update(plain(text))
