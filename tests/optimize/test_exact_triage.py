@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from setupfix.model import PartMeasurement
-from setupfix.optimize import CorrectionProblem, _triage_model, get_optimizer
+from setupfix.optimize import CorrectionProblem, _triage, _triage_model, get_optimizer
 from setupfix.pipeline.cycles import load_parts
 
 from .test_exact import random_problem
@@ -61,11 +61,14 @@ def check_triage(problem: CorrectionProblem, result) -> None:
     assert "given up" in result.message and "NC program or the process" in result.message
 
 
-@pytest.fixture(params=["listed", "milp"])
+@pytest.fixture(params=["listed", "forced", "milp"])
 def path(request, monkeypatch):
-    """Both ways of the triage: listing a small box, and the MILPs (listing switched off)."""
-    if request.param == "milp":
+    """Every way of the triage: listing a small box; the forced kept set (listing switched off), which
+    falls back to the MILPs where the kept set is not forced; the MILPs alone (both switched off)."""
+    if request.param in ("forced", "milp"):
         monkeypatch.setattr(_triage_model, "LIST_POINTS", 0)
+    if request.param == "milp":
+        monkeypatch.setattr(_triage, "FORCED", False)
     return request.param
 
 
