@@ -97,6 +97,8 @@ class Triaged:
         Certified lower bound on the least Σ c k² (None: not known), for a least norm not proved.
     calls : int
         Solver calls.
+    kept_lp : tuple of (ndarray of bool, float) or None
+        The kept set and the LP bound on its smallest margin with the held rows held, when known.
     """
 
     k: Array | None
@@ -108,6 +110,7 @@ class Triaged:
     stages: tuple[str, ...]
     lower: float | None = None
     calls: int = 0
+    kept_lp: tuple[npt.NDArray[np.bool_], float] | None = None
 
 
 def _checked(model: LinearModel, left: float, start: Array | None, n: int, value: Callable[[Array], float],
@@ -328,7 +331,8 @@ def triaged_result(problem: CorrectionProblem, session: Session, k_start: Array,
     held = np.isfinite(problem.held_floor)
     gone = ~held & (margins < -1e-12)
     given_up = tuple(d for d, g in zip(problem.dimension_ids, gone, strict=True) if g)
-    kept_bound = _kept_bound(t, ~gone, clock.left())
+    known = out.kept_lp is not None and np.array_equal(out.kept_lp[0], ~gone)
+    kept_bound = out.kept_lp[1] if out.kept_lp is not None and known else _kept_bound(t, ~gone, clock.left())
     n_held = int(held.sum())
     message = (f"no correction within the register limits brings every dimension into tolerance: "
                f"{len(given_up)} dimension(s) given up ({', '.join(given_up)}) need the NC program or the "
@@ -379,5 +383,5 @@ def _forced_outcome(forced: Forced, t: TriageRows, quantum: float) -> Triaged:
     else:
         why = why or f"least norm: {least.why}"
     return Triaged(least.k, int(t.kept(least.k).sum()), tuple(levels), complete, not why, why,
-                   (*stages, *forced.path), least.lower, forced.calls)
+                   (*stages, *forced.path), least.lower, forced.calls, (forced.keep, forced.bound))
 

@@ -66,6 +66,8 @@ class Forced:
         The leximin of K's margins (``lex.stopped``: the limit stopped its levels).
     least : LeastNorm
         The least Σ c k² among its optimal points (``least.k``: the answer).
+    bound : float
+        LP bound [steps] on the smallest margin of K (the held rows hold at it: it is ≥ 0 ≥ their floors).
     path : tuple of str
     calls : int
         Solver calls.
@@ -74,6 +76,7 @@ class Forced:
     keep: Mask
     lex: Leximin
     least: LeastNorm
+    bound: float
     path: tuple[str, ...]
     calls: int
 
@@ -182,4 +185,4 @@ def forced_triage(session: Session, t: TriageRows, k_start: Array, probe_end: fl
     k = least.k
     if not (t.hard_ok(k) and np.array_equal(t.kept(k), keep | t.held)):
         return None  # the answer does not keep exactly K (not expected): the MILPs decide
-    return Forced(keep, lex, least, tuple(path + list(lex.path) + list(least.path)), calls + lex.calls + 1)
+    return Forced(keep, lex, least, lp.t, tuple(path + list(lex.path) + list(least.path)), calls + lex.calls + 1)
