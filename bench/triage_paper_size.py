@@ -204,7 +204,7 @@ def main(argv: list[str] | None = None) -> None:
             before = run(tmp, args.reports, args.seed, args.limit)
         finally:
             subprocess.run(["git", "-C", str(ROOT), "worktree", "remove", "--force", str(tmp)], capture_output=True)
-        lines += summary(f"before ({args.before_commit})", before) + [""]
+        lines += [*summary(f"before ({args.before_commit})", before), ""]
     lines += summary("after (this checkout)", after)
     if before is not None:
         tri = np.array(after["triage_case"], dtype=bool) & np.array(before["triage_case"], dtype=bool)
