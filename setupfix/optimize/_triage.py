@@ -22,6 +22,13 @@ No point keeps more than N* dimensions, so every point meeting Σ z ≥ N* − h
 dimensions with z = 1 and the held ones; the dimensions given up are read from the final point.
 Each MILP is solved to a zero gap by HiGHS; every point it returns is checked exactly
 (:meth:`~setupfix.optimize._triage_model.TriageRows.meets`) before it is used.
+
+Order: a small box is listed whole (:func:`~setupfix.optimize._triage_model.listed_triage`); else,
+when the kept set is forced (every dimension not kept is proved out of tolerance at every no-harm
+point and the others all reach a margin ≥ 0 together), the three stages are the feasible case's
+leximin and least norm on the kept dimensions (:mod:`~setupfix.optimize._triage_forced`, no
+binaries); else the MILPs above.  Leximin levels left unproved (the time reserved for the least norm
+reached) make the result stopped (status ``time_limit``, ``extra["stopped"]``), never "optimal".
 """
 
 from __future__ import annotations
@@ -37,14 +44,17 @@ from setupfix.errors import Note
 from setupfix.optimize._base import make_result
 from setupfix.optimize._chords import chord_rows, lazy_chords
 from setupfix.optimize._highs import INF, LinearModel, Solve
+from setupfix.optimize._least_norm import lower_bound_ratio
 from setupfix.optimize._problem import CorrectionProblem, OptimizeResult
 from setupfix.optimize._session import Session
+from setupfix.optimize._triage_forced import Forced, forced_triage
 from setupfix.optimize._triage_model import (
     SLACK,
     Level,
     TriageRows,
     count_below,
     least_listed,
+    listable,
     listed_triage,
     lp_starts,
 )
@@ -53,9 +63,13 @@ __all__ = ["Triaged", "triage", "triaged_result"]
 
 Array = npt.NDArray[np.float64]
 
-#: Share of the time limit the triage's leximin levels after the first may take (the least norm
-#: needs the rest; the levels proved are stated in the result).
-LEXIMIN_SHARE = 0.2
+#: Share of the time limit the triage's leximin levels after the first may take (never the time
+#: reserved for the least norm); levels left unproved make the result stopped, so they get most of the rest.
+LEXIMIN_SHARE = 0.45
+#: Share of the time left that proving the kept set forced may take before the MILPs decide instead.
+FORCED_SHARE = 0.25
+#: Try the forced kept set before the MILPs (switched off by the tests that check the MILP path).
+FORCED = True
 
 
 @dataclass(frozen=True)
@@ -74,11 +88,17 @@ class Triaged:
     complete : bool
         Every kept position is fixed by the levels (the whole leximin vector is proved).
     proved : bool
-        Stage 1, level 1 and the least norm were solved to optimality.
+        Every stage was solved to optimality (the whole leximin vector and the least norm).
     why : str
         Which stage stopped and why (empty when proved).
     stages : tuple of str
         The stages completed, for the record.
+    lower : float or None
+        Certified lower bound on the least Σ c k² (None: not known), for a least norm not proved.
+    calls : int
+        Solver calls.
+    kept_lp : tuple of (ndarray of bool, float) or None
+        The kept set and the LP bound on its smallest margin with the held rows held, when known.
     """
 
     k: Array | None
@@ -88,6 +108,9 @@ class Triaged:
     proved: bool
     why: str
     stages: tuple[str, ...]
+    lower: float | None = None
+    calls: int = 0
+    kept_lp: tuple[npt.NDArray[np.bool_], float] | None = None
 
 
 def _checked(model: LinearModel, left: float, start: Array | None, n: int, value: Callable[[Array], float],
@@ -219,6 +242,9 @@ def triage(t: TriageRows, deadline: float, reserve: float, budget: float, start:
         t_lo = value + eps
         done.append(f"leximin level {len(levels) - 1}: {below} kept margin(s) at {value:+.4g} steps")
         complete = below >= t.positions(kept)
+    if not complete and not why:  # the levels' time is spent: the rest of the vector is not proved
+        why = (f"leximin: time limit after level {len(levels) - 1} (the {count_below(levels)} smallest kept "
+               "margins proved; the rest of the time is the least norm's)")
 
     # 3. least Σ c k² holding N* and the levels
     n = t.n
@@ -228,8 +254,7 @@ def triage(t: TriageRows, deadline: float, reserve: float, budget: float, start:
     least = least_listed(t, lo_k, hi_k, kept, levels)
     if least is not None and t.meets(least, kept, levels):  # a small box: listed, ties to the smallest k
         done.append("least norm (listed)")
-        proved = not why and (bool(levels) or complete)
-        return Triaged(least, kept, levels, complete, proved, "" if proved else why, tuple(done))
+        return Triaged(least, kept, levels, complete, not why, why, tuple(done))
     chords = [{0, *range(max(int(abs(v)) - 2, 0), int(abs(v)) + 2)} for v in best]
     pairs = [(i, j) for i, js in enumerate(chords) for j in sorted(js)]
     m4, _ = t.model(kept, levels, objective="norm")
@@ -244,8 +269,7 @@ def triage(t: TriageRows, deadline: float, reserve: float, budget: float, start:
     best = best if out.best is None else out.best
     if not out.proved:
         why = why or f"least norm: {out.why}"
-    proved = out.proved and not why and (bool(levels) or complete)
-    return Triaged(best, kept, levels, complete, proved, "" if proved else why, tuple(done))
+    return Triaged(best, kept, levels, complete, not why, why, tuple(done))
 
 
 def _kept_bound(t: TriageRows, keep: npt.NDArray[np.bool_], left: float) -> float | None:
@@ -279,7 +303,13 @@ def triaged_result(problem: CorrectionProblem, session: Session, k_start: Array,
     quantum = session.settings.quantum
     t = TriageRows(rows.g_rows, rows.g, row_dim, problem.held_floor / h, rows.kmin, rows.kmax, rows.cost)
     reserve = session.settings.least_norm_share * session.time_limit
-    out = triage(t, clock.deadline, reserve, LEXIMIN_SHARE * session.time_limit, k_start, quantum)
+    forced = None
+    if FORCED and not listable(t):  # a small box is listed whole
+        forced = forced_triage(session, t, k_start, time.perf_counter() + FORCED_SHARE * clock.left())
+    if forced is not None:
+        out = _forced_outcome(forced, t, quantum)
+    else:
+        out = triage(t, clock.deadline, reserve, LEXIMIN_SHARE * session.time_limit, k_start, quantum)
     clock.lap("triage")
     path.append("triage: " + ", ".join(out.stages) if out.stages else "triage")
     extra: dict[str, object] = {"lp_bound_all": bound}
@@ -301,7 +331,8 @@ def triaged_result(problem: CorrectionProblem, session: Session, k_start: Array,
     held = np.isfinite(problem.held_floor)
     gone = ~held & (margins < -1e-12)
     given_up = tuple(d for d, g in zip(problem.dimension_ids, gone, strict=True) if g)
-    kept_bound = _kept_bound(t, ~gone, clock.left())
+    known = out.kept_lp is not None and np.array_equal(out.kept_lp[0], ~gone)
+    kept_bound = out.kept_lp[1] if out.kept_lp is not None and known else _kept_bound(t, ~gone, clock.left())
     n_held = int(held.sum())
     message = (f"no correction within the register limits brings every dimension into tolerance: "
                f"{len(given_up)} dimension(s) given up ({', '.join(given_up)}) need the NC program or the "
@@ -315,19 +346,42 @@ def triaged_result(problem: CorrectionProblem, session: Session, k_start: Array,
                   "triage": {"refused": False, "kept": int((~gone).sum()), "held": n_held,
                              "leximin_levels": sum(1 for s in out.stages if s.startswith("leximin level")),
                              "leximin_complete": out.complete}})
-    if not out.complete and out.proved:
-        notes.append(Note(f"triage: leximin proved for the {out.levels[-1].below if out.levels else 0} smallest "
-                          "kept margins within the time reserved for the least norm; the rest by least norm",
-                          kind="solver"))
-    if not out.proved:
+    if not out.proved:  # a stage stopped (the leximin levels' time included): never "optimal"
         status = "time_limit" if "time limit" in out.why else "solver_error"
         notes.append(Note(f"triage not proved ({out.why})", kind="solver"))
         message += f"; not proved ({out.why})"
-        extra["stopped"] = {"stage": "triage", "reason": out.why}
-    result = make_result(problem, x, optimizer=name, evaluations=calls + 2 + 2 * len(out.levels),
+        extra["stopped"] = {"stage": "triage", "reason": "time limit" if status == "time_limit" else out.why,
+                            "detail": out.why}
+        if out.lower is not None and not out.why.startswith("leximin"):
+            extra["norm_ratio_max"] = lower_bound_ratio(float(np.sum(t.cost * out.k**2)), out.lower)
+    evaluations = calls + (out.calls if out.calls else 2 + 2 * len(out.levels))
+    result = make_result(problem, x, optimizer=name, evaluations=evaluations,
                          seconds=time.perf_counter() - clock.start, status=status,
                          bound=None if kept_bound is None else kept_bound * h, message=message, guard=False,
                          given_up=given_up)
     result.extra.update(extra)
     result.notes = tuple(notes)
     return result
+
+
+def _forced_outcome(forced: Forced, t: TriageRows, quantum: float) -> Triaged:
+    """:class:`Triaged` of the forced kept set: its leximin levels as triage levels, what stopped."""
+    lex, least = forced.lex, forced.least
+    eps = quantum / 2
+    levels: list[Level] = []
+    stages = [f"{int(forced.keep.sum())} of {t.n_dims} dimensions kept in tolerance ({int(t.held.sum())} "
+              "measured in tolerance held; the others proved out of reach without harm)"]
+    below = 0
+    for i, (value, count) in enumerate(lex.levels):
+        below += count
+        levels.append(Level(value + eps, below))
+        stages.append(f"leximin level {i + 1}: {below} kept margin(s) at {value:+.4g} steps")
+    complete = lex.stopped is None
+    why = "" if complete else f"leximin: {lex.stopped.reason}" if lex.stopped is not None else ""
+    if least.proved:
+        stages.append("least norm")
+    else:
+        why = why or f"least norm: {least.why}"
+    return Triaged(least.k, int(t.kept(least.k).sum()), tuple(levels), complete, not why, why,
+                   (*stages, *forced.path), least.lower, forced.calls, (forced.keep, forced.bound))
+

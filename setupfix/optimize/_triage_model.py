@@ -27,7 +27,8 @@ from scipy.sparse import coo_array, csr_array
 
 from setupfix.optimize._highs import INF, LinearModel
 
-__all__ = ["Level", "TriageRows", "SLACK", "LIST_POINTS", "count_below", "least_listed", "listed_triage", "lp_starts"]
+__all__ = ["Level", "TriageRows", "SLACK", "LIST_POINTS", "count_below", "least_listed", "listable", "listed_triage",
+           "lp_starts"]
 
 Array = npt.NDArray[np.float64]
 Mask = npt.NDArray[np.bool_]
@@ -351,6 +352,12 @@ def least_listed(t: TriageRows, lo: Array, hi: Array, count: int, levels: tuple[
     return best
 
 
+def listable(t: TriageRows) -> bool:
+    """Whether the whole box is small enough for :func:`listed_triage` (points × rows ≤ LIST_POINTS)."""
+    sizes = (t.kmax - t.kmin + 1).astype(float)
+    return bool(np.prod(sizes) * max(t.g.size, 1) <= LIST_POINTS)
+
+
 def listed_triage(t: TriageRows, quantum: float) -> tuple[Array, int] | None:
     """The whole triage by listing the box (None when its points × rows exceed LIST_POINTS).
 
@@ -358,8 +365,7 @@ def listed_triage(t: TriageRows, quantum: float) -> tuple[Array, int] | None:
     leximin of the kept margins (position by position, ties within ``quantum`` steps), then the least
     Σ c k², then the lexicographically smallest k.  Returns the point and its count.
     """
-    sizes = (t.kmax - t.kmin + 1).astype(float)
-    if np.prod(sizes) * max(t.g.size, 1) > LIST_POINTS:
+    if not listable(t):
         return None
     axes = [np.arange(a, b + 1, dtype=float) for a, b in zip(t.kmin, t.kmax, strict=True)]
     ks = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, t.n)

@@ -137,7 +137,10 @@ def test_no_grid_point_beats_the_exact_optimum(seed, n, m, steps):
     rng = np.random.default_rng(seed)
     k = rng.integers(problem.kmin, problem.kmax + 1, size=(2000, n))
     f1, _, _ = problem.evaluate(k * problem.resolution)
-    assert result.status == "optimal"
+    if result.given_up and result.status == "time_limit":  # a triage whose leximin levels outran the limit
+        assert result.extra["stopped"]["stage"] == "triage"  # says so (issue 22: never "optimal")
+    else:
+        assert result.status == "optimal"
     if result.given_up:  # triage: the kept dimensions are in tolerance, the others given up
         kept = ~np.isin(problem.dimension_ids, result.given_up)
         assert np.all(problem.margins(result.x)[kept] >= -1e-12) and f1.max() < 0

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from setupfix.model import PartMeasurement
-from setupfix.optimize import CorrectionProblem, _triage_model, get_optimizer
+from setupfix.optimize import CorrectionProblem, _triage, _triage_model, get_optimizer
 from setupfix.pipeline.cycles import load_parts
 
 from .test_exact import random_problem
@@ -61,11 +61,14 @@ def check_triage(problem: CorrectionProblem, result) -> None:
     assert "given up" in result.message and "NC program or the process" in result.message
 
 
-@pytest.fixture(params=["listed", "milp"])
+@pytest.fixture(params=["listed", "forced", "milp"])
 def path(request, monkeypatch):
-    """Both ways of the triage: listing a small box, and the MILPs (listing switched off)."""
-    if request.param == "milp":
+    """Every way of the triage: listing a small box; the forced kept set (listing switched off), which
+    falls back to the MILPs where the kept set is not forced; the MILPs alone (both switched off)."""
+    if request.param in ("forced", "milp"):
         monkeypatch.setattr(_triage_model, "LIST_POINTS", 0)
+    if request.param == "milp":
+        monkeypatch.setattr(_triage, "FORCED", False)
     return request.param
 
 
@@ -312,3 +315,100 @@ def test_bound_is_the_kept_dimensions_lp_and_seconds_the_whole_call(seed, path):
     assert result.seconds >= sum(result.extra["stages"].values()) - 1e-9
     assert result.status == "optimal" and result.extra["triage"]["leximin_complete"]
     assert ("listing" in str(result.extra["path"])) == (path == "listed")
+
+
+def gross_problem(seed: int, n: int = 4, m: int = 8) -> CorrectionProblem:
+    """Every dimension measured in tolerance but one or two grossly out (some within the box's reach,
+    some not): the shop's commonest triage."""
+    import dataclasses
+
+    rng = np.random.default_rng(5000 + seed)
+    base = random_problem(5000 + seed, n=n, m=m, limit_steps=3, spread=0.0)
+    dev = rng.uniform(0.3, 0.9, m) * np.where(rng.random(m) < 0.5, base.lower, base.upper)  # all inside
+    gross = rng.choice(m, size=1 + seed % 2, replace=False)
+    side = rng.choice([-1.0, 1.0], gross.size)
+    dev[gross] = np.where(side > 0, base.upper[gross], base.lower[gross]) + side * rng.uniform(0.02, 0.4, gross.size)
+    return dataclasses.replace(base, deviation=np.round(dev, 4))
+
+
+@pytest.mark.parametrize("seed", range(20))
+def test_gross_dimensions_triage_equals_brute_force(seed, path):
+    problem = gross_problem(seed)
+    result = get_optimizer("exact").solve(problem)
+    if brute_triage(problem)[0] == len(problem.dimension_ids):
+        assert result.given_up == ()
+        return
+    check_triage(problem, result)
+    assert ("kept set forced" in result.extra["path"]) == (path == "forced")  # everything measured in is kept
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_gross_dimensions_triage_equals_an_independent_milp(seed, monkeypatch):
+    monkeypatch.setattr(_triage_model, "LIST_POINTS", 0)
+    problem = gross_problem(seed, n=3, m=6)
+    result = get_optimizer("exact").solve(problem)
+    if not result.given_up:
+        pytest.skip("every dimension can be kept: no triage")
+    assert "kept set forced" in result.extra["path"]
+    count, sorted_kept, norm = milp_triage(problem)
+    margins = problem.margins(result.x)
+    kept = np.array([d not in result.given_up for d in problem.dimension_ids])
+    assert kept.sum() == count
+    assert np.sort(margins[kept]) == pytest.approx(sorted_kept, abs=1e-7)
+    assert np.sqrt(np.sum(problem.cost * result.x**2)) == pytest.approx(norm, abs=1e-7)
+
+
+def test_a_dimension_within_reach_only_by_harm_is_proved_lost(monkeypatch):
+    """The LP certificate: D0 can be brought in only by moving D1 (measured in) out."""
+    monkeypatch.setattr(_triage_model, "LIST_POINTS", 0)
+    from setupfix.optimize._lp_bound import margin_rows
+    from setupfix.optimize._triage_forced import lost_bound
+    from setupfix.optimize._triage_model import TriageRows
+
+    problem = CorrectionProblem(np.array([[1.0, 1.0]]), np.array([0.08, -0.03]), np.full(2, -0.05),
+                                np.full(2, 0.05), np.array([-0.1]), np.array([0.1]), 0.01, ("R0",), ("D0", "D1"))
+    g_rows, g = margin_rows(problem)
+    row_dim = np.r_[0, 1, 0, 1]
+    t = TriageRows(g_rows, g, row_dim, problem.held_floor / 0.01, problem.kmin.astype(float),
+                   problem.kmax.astype(float), problem.cost)
+    assert not t.lost[0]  # the box reaches it (k ≤ −3 steps) …
+    assert lost_bound(t, 0, 1.0) == pytest.approx(-1.0, abs=1e-5)  # … D1 stays in only for k ≥ −2: D0 at −1 step
+    result = get_optimizer("exact").solve(problem)
+    assert result.given_up == ("D0",) and result.status == "optimal"
+    assert "kept set forced" in result.extra["path"]
+    assert result.x == pytest.approx([0.03], abs=1e-12)  # D1 centred
+
+
+def test_guide_pins_gross_dimension_is_fast_and_complete(guide_pins_model):
+    """The commonest case at paper size: P1 D1 at −0.25 mm.  The kept set is forced: the whole leximin
+    vector and the least norm are proved well within the limit, and the correction is the one the MILP
+    path finds alone with a 120 s limit (bench/triage_paper_size.py --check)."""
+    (part,) = load_parts(guide_pins_model, GUIDE_PINS / "cycle_01.csv")
+    dev = part.deviation.copy()
+    dev[0] = -0.25
+    problem = CorrectionProblem.from_part(guide_pins_model, PartMeasurement("c", "r", None, dev, part.sources))
+    result = get_optimizer("exact").solve(problem)
+    assert result.status == "optimal" and "stopped" not in result.extra
+    assert result.extra["triage"]["leximin_complete"] and result.extra["triage"]["kept"] == 27
+    assert "kept set forced" in result.extra["path"]
+    assert result.x == pytest.approx([0.007, -0.002, -0.01, -0.004, 0.013, 0.027, 0.0, 0.012, 0.016, 0.03], abs=1e-12)
+    assert result.extra["stages"]["triage"] < 1.0  # 1.2–1.5 s before (MILPs); ~30 ms on an idle machine
+
+
+def test_an_incomplete_triage_leximin_is_a_stopped_solve(guide_pins_model, monkeypatch):
+    """Levels left unproved (their share of the limit spent) never read as optimal."""
+    from setupfix.recommend import stopped_rule
+
+    monkeypatch.setattr(_triage, "FORCED", False)
+    monkeypatch.setattr(_triage, "LEXIMIN_SHARE", 0.0)  # only level 1
+    (part,) = load_parts(guide_pins_model, GUIDE_PINS / "cycle_01.csv")
+    dev = part.deviation.copy()
+    dev[0] = -0.25
+    problem = CorrectionProblem.from_part(guide_pins_model, PartMeasurement("c", "r", None, dev, part.sources))
+    result = get_optimizer("exact").solve(problem)
+    assert not result.extra["triage"]["leximin_complete"]
+    assert result.status == "time_limit"
+    assert result.extra["stopped"]["stage"] == "triage" and result.extra["stopped"]["reason"] == "time limit"
+    assert "leximin" in result.extra["stopped"]["detail"]
+    assert result.given_up == ("P1D1",) and np.all(np.delete(problem.margins(result.x), 0) >= 0)
+    assert "triage stage stopped" in stopped_rule(result, recommended=True).message
