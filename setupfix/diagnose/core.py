@@ -120,8 +120,9 @@ class Diagnosis:
         That model's forecast of the next cycle (EWMA: the smoothed disturbance at the registers now).
     centred : ndarray of bool (n_registers,)
         Registers the next correction must not move: their dimensions sat within
-        ``centre_fraction`` half tolerances of the centre on the last two parts and are
-        forecast to stay there (:func:`~setupfix.diagnose.walk.centred_registers`).
+        ``centre_fraction`` half tolerances of the centre on the last two parts and a
+        model with effects does not forecast them to leave it
+        (:func:`~setupfix.diagnose.walk.centred_registers`).
     """
 
     layout: Layout
@@ -255,4 +256,7 @@ class Diagnoser(ValidatedParams):
         pending = s.pending if s.pending.size == lay.n_registers else np.zeros(lay.n_registers)
         last = slice(max(s.n_cycles - 2, 0), s.n_cycles)
         recent = s.deviation[last] + (s.applied[-1] + pending - s.applied[last]) @ C
-        return centred_registers(C, recent, chosen, lay.lower, lay.upper, fraction=self.centre_fraction)
+        predicts = (d.next_from.source == "augmented" and bool(d.effects)) or (
+            d.next_from.source == "declared" and bool(d.before.specs))
+        return centred_registers(C, recent, chosen if predicts else None, lay.lower, lay.upper,
+                                 fraction=self.centre_fraction)

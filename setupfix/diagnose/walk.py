@@ -331,22 +331,24 @@ def centre_half_width(lower: Array, upper: Array) -> Array:
     return out
 
 
-def centred_registers(composite: Array, recent: Array, forecast: Array, lower: Array, upper: Array, *,
+def centred_registers(composite: Array, recent: Array, forecast: Array | None, lower: Array, upper: Array, *,
                       fraction: float = CENTRE_FRACTION) -> npt.NDArray[np.bool_]:
-    """Registers whose dimensions all sat near their tolerance centre and are predicted to stay there.
+    """Registers whose dimensions all sat near their tolerance centre and are not predicted to leave it.
 
-    A register is held when every dimension it moves (C[i, q] ≠ 0) that was measured
-    lies within ``fraction`` × half tolerance of its centre (:func:`centre_half_width`)
-    on each of the ``recent`` parts (moved to the registers as they are now) and in the
-    ``forecast``; it must move at least one measured dimension.
+    A register is held when every dimension it moves (C[i, q] ≠ 0) lies within
+    ``fraction`` × half tolerance of its centre (:func:`centre_half_width`) on each of
+    the ``recent`` parts where measured (moved to the registers as they are now;
+    measured on at least one) and in the ``forecast`` of a model that predicts change
+    (effects found or declared); a forecast that is a smoothed past (EWMA, the declared
+    setup state alone) is ``None``: the latest parts say more about now than an average.
 
     Parameters
     ----------
     composite : ndarray (n_registers, n_dimensions)
     recent : ndarray (n_recent, n_dimensions) [unit]
         The latest parts' deviations at the current registers (NaN: not measured).
-    forecast : ndarray (n_dimensions,) [unit]
-        What the model the correction comes from predicts for the next part.
+    forecast : ndarray (n_dimensions,) [unit] or None
+        What the model the correction comes from predicts for the next part (None: no prediction of change).
     lower, upper : ndarray (n_dimensions,) [unit]
 
     Returns
@@ -355,10 +357,12 @@ def centred_registers(composite: Array, recent: Array, forecast: Array, lower: A
     """
     band = fraction * centre_half_width(lower, upper)
     t = targets(lower, upper)
-    rows = np.vstack([recent, forecast[None, :]])
+    rows = recent if forecast is None else np.vstack([recent, forecast[None, :]])
     seen = np.isfinite(rows)
     near = ~seen | (np.abs(rows - t) <= band)  # unmeasured cells say nothing
-    inside = near.all(axis=0) & seen[-1] & seen[:-1].any(axis=0)
+    inside = near.all(axis=0) & np.isfinite(recent).any(axis=0)
+    if forecast is not None:
+        inside &= np.isfinite(forecast)
     moves = composite != 0
     out: npt.NDArray[np.bool_] = (moves.any(axis=1) & ~np.any(moves & ~inside, axis=1))
     return out
