@@ -29,11 +29,11 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "tests"))
 
-from diagnose.helpers import guide_pins, one_effect, simulate  # noqa: E402
+from diagnose.helpers import guide_pins, one_effect, simulate
 
-from setupfix.diagnose import Diagnoser, Layout  # noqa: E402
-from setupfix.pipeline.diagnose import _next_correction  # noqa: E402
-from setupfix.pipeline.series import load_series  # noqa: E402
+from setupfix.diagnose import Diagnoser, Layout
+from setupfix.pipeline.diagnose import _next_correction
+from setupfix.pipeline.series import load_series
 
 OUT = ROOT / "bench" / "results" / "diagnose_walk.txt"
 MODEL = guide_pins(positions=False)

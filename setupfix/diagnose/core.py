@@ -97,6 +97,10 @@ def error_summary(residual: Array, lower: Array, upper: Array) -> ErrorSummary:
     )
 
 
+#: ``Diagnosis.next_from`` of a diagnosis built without a rule (the augmented model, as before the rule).
+UNSET = NextSource("augmented", "")
+
+
 @dataclass(frozen=True)
 class Diagnosis:
     """Everything ``setupfix diagnose`` reports about one series.
@@ -136,7 +140,7 @@ class Diagnosis:
     walk: WalkForward | None
     forecast: Array
     notes: tuple[str, ...]
-    next_from: NextSource = NextSource("augmented", "")
+    next_from: NextSource = UNSET
     next_forecast: Array | None = None
     centred: npt.NDArray[np.bool_] | None = None
 

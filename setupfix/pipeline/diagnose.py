@@ -191,7 +191,7 @@ def _ewma_history(model: ProcessModel, diagnosis: Diagnosis) -> tuple[History, P
     times = origin + np.round(s.time * 3.6e12).astype("timedelta64[ns]")
     pending = s.pending if s.pending.size == n_reg else np.zeros(n_reg)
     steps = np.diff(np.vstack([s.applied, s.applied[-1] + pending]), axis=0)  # (n, n_reg): after part k
-    when = np.concatenate([times[1:], times[-1:]]) - np.timedelta64(1, "ns")
+    when = (np.concatenate([times[1:], times[-1:]]) - np.timedelta64(1, "ns")).astype("datetime64[ns]")
     k, i = np.nonzero(steps)
     history = History(times[:-1], s.deviation[:-1].copy(), tuple(s.cycles[:-1]) if s.cycles else (),
                       when[k], i.astype(np.int64), steps[k, i].astype(float), np.zeros(k.size, dtype=bool))
