@@ -32,7 +32,7 @@ sys.path.insert(0, str(ROOT / "tests"))
 from diagnose.helpers import guide_pins, one_effect, simulate
 
 from setupfix.diagnose import Diagnoser, Layout
-from setupfix.pipeline.diagnose import _next_correction
+from setupfix.pipeline.diagnose import recommend_next
 from setupfix.pipeline.series import load_series
 
 OUT = ROOT / "bench" / "results" / "diagnose_walk.txt"
@@ -87,7 +87,7 @@ def section_b(lines: list[str]) -> None:
         series = dataclasses.replace(series, time=((stamps - stamps.iloc[0]).dt.total_seconds() / 3600).to_numpy(),
                                      origin=str(log["timestamp"].iloc[0]))
     d = Diagnoser().run(inp.layout, series)
-    cycle, _ = _next_correction(inp.model, d)
+    cycle, _ = recommend_next(inp.model, d)
     lines += [f"B. NIST MTC plate, {series.n_cycles} parts, per-cutter model, "
               f"{'machining times from plate_process.csv' if timed else 'cycle order (no times)'}",
               f"   effects found: {', '.join(e.target for e in d.effects) or 'none'}",
@@ -128,7 +128,7 @@ def section_c(lines: list[str]) -> None:
             t0 = time.perf_counter()
             d = Diagnoser().run(LAYOUT, series)
             t1 = time.perf_counter()
-            _next_correction(MODEL, d)
+            recommend_next(MODEL, d)
             t2 = time.perf_counter()
             best["walk"] = min(best["walk"], t1 - t0)
             best["walk + next"] = min(best["walk + next"], t2 - t0)

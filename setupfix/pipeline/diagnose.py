@@ -33,7 +33,7 @@ from setupfix.pipeline.writers import check_target, write_text
 from setupfix.safety import RuleEffect, short_list
 
 __all__ = ["DiagnoseRequest", "DiagnoseOutcome", "note_text", "diagnose_reports", "augmented_section",
-           "write_augmented", "forecast_model"]
+           "write_augmented", "forecast_model", "recommend_next", "series_history"]
 
 def augmented_section(diagnosis: Diagnosis, declared: EffectsSection) -> EffectsSection:
     """The ``[effects]`` section: the model's own effects, then those found (ids E1, E2, …)."""
@@ -178,7 +178,7 @@ def _hold(model: ProcessModel, diagnosis: Diagnosis, fraction: float) -> RuleEff
                       dimensions=dims)
 
 
-def _ewma_history(model: ProcessModel, diagnosis: Diagnosis) -> tuple[History, PartMeasurement]:
+def series_history(model: ProcessModel, diagnosis: Diagnosis) -> tuple[History, PartMeasurement]:
     """The series as the smoothing's history, and its last part at the registers the next cycle has.
 
     Parts get the series' times (cycle index as hours when it has none); the register
@@ -202,7 +202,7 @@ def _ewma_history(model: ProcessModel, diagnosis: Diagnosis) -> tuple[History, P
                                     sources=tuple("" for _ in dev))
 
 
-def _next_correction(model: ProcessModel, diagnosis: Diagnosis, solve: SolveOptions | None = None,
+def recommend_next(model: ProcessModel, diagnosis: Diagnosis, solve: SolveOptions | None = None,
                      diagnoser: Diagnoser | None = None) -> tuple[CycleCorrection | None, list[Note]]:
     """``correct`` for the next cycle, from the model that earned it (``diagnosis.next_from``).
 
@@ -218,7 +218,7 @@ def _next_correction(model: ProcessModel, diagnosis: Diagnosis, solve: SolveOpti
     hold = _hold(model, diagnosis, diagnoser.centre_fraction)
     request = CorrectRequest(forecast_model(model), solve=solve or SolveOptions())
     if source == "ewma":
-        history, part = _ewma_history(model, diagnosis)
+        history, part = series_history(model, diagnosis)
         lam = float(diagnoser.lam or 1.0)
         ewma_model = dataclasses.replace(request.model, safety=dataclasses.replace(request.model.safety, ewma=lam))
         request = dataclasses.replace(request, model=ewma_model, history=history)
@@ -255,7 +255,7 @@ def diagnose_reports(request: DiagnoseRequest) -> DiagnoseOutcome:
     inp = load_series(request.model, request.reports, corrections=request.corrections,
                       temperatures=request.temperatures, db=request.db, thermal=request.thermal, read=request.read)
     diagnosis = request.diagnoser.run(inp.layout, inp.series, declared=inp.declared)
-    cycle, more = _next_correction(inp.model, diagnosis, request.solve, request.diagnoser)
+    cycle, more = recommend_next(inp.model, diagnosis, request.solve, request.diagnoser)
     notes = (*inp.notes, *(Note(n, None, "diagnosis") for n in diagnosis.notes), *more)
     out = DiagnoseOutcome(inp, diagnosis, cycle.corrections if cycle is not None else {}, None, notes, cycle)
     if request.db is not None:

@@ -9,7 +9,7 @@ import numpy as np
 from setupfix.diagnose import Diagnoser, Layout
 from setupfix.diagnose.walk import NextSource, centred_registers, ewma_forecast
 from setupfix.pipeline.correct import correct_cycle
-from setupfix.pipeline.diagnose import _ewma_history, _next_correction, forecast_model
+from setupfix.pipeline.diagnose import series_history, recommend_next, forecast_model
 from setupfix.pipeline.requests import CorrectRequest
 
 from diagnose.helpers import guide_pins, one_effect, simulate
@@ -32,7 +32,7 @@ def test_ewma_recommendation_is_the_correct_use_case_on_the_smoothed_series():
     engine's own EWMA forecast -- two implementations of one estimate agree."""
     d = Diagnoser().run(LAYOUT, _random_walk(5))
     assert d.next_from.source == "ewma"
-    cycle, notes = _next_correction(MODEL, d)
+    cycle, notes = recommend_next(MODEL, d)
     assert cycle is not None
     assert "ewma" in [e.rule for e in cycle.posed.effects]
     measured = np.isfinite(d.next_forecast)
@@ -49,7 +49,7 @@ def test_ewma_recommendation_moves_the_earlier_parts_by_the_corrections_logged()
     d = Diagnoser(walk=False).run(LAYOUT, s)
     d = dataclasses.replace(d, next_from=NextSource("ewma", ""), next_forecast=ewma_forecast(LAYOUT, s, 0.3),
                             centred=None)
-    cycle, _ = _next_correction(MODEL, d)
+    cycle, _ = recommend_next(MODEL, d)
     assert cycle is not None
     np.testing.assert_allclose(cycle.posed.problem.deviation, d.next_forecast[np.isfinite(d.next_forecast)],
                                atol=1e-9)
@@ -58,7 +58,7 @@ def test_ewma_recommendation_moves_the_earlier_parts_by_the_corrections_logged()
 def test_augmented_recommendation_when_the_effect_earned_it():
     d = Diagnoser().run(LAYOUT, simulate(LAYOUT, [one_effect(LAYOUT, "drift")], seed=7).series)
     assert d.next_from.source == "augmented"
-    cycle, notes = _next_correction(MODEL, d)
+    cycle, notes = recommend_next(MODEL, d)
     assert cycle is not None and "ewma" not in [e.rule for e in cycle.posed.effects]
     np.testing.assert_allclose(cycle.posed.problem.deviation, d.forecast, atol=1e-12)
     assert not any("did not beat" in str(n) for n in notes)
@@ -70,7 +70,7 @@ def test_centre_rule_holds_the_registers_whose_dimensions_sat_at_the_centre():
     d = Diagnoser().run(LAYOUT, _random_walk(5))
     held = [rid for rid, h in zip(LAYOUT.register_ids, d.centred, strict=True) if h]
     assert held, "some registers sit at the centre"
-    cycle, notes = _next_correction(MODEL, d)
+    cycle, notes = recommend_next(MODEL, d)
     assert cycle is not None
     rule = next(r for r in cycle.recommendation.rules if r.rule == "centred")
     assert set(rule.registers) == set(held)
@@ -89,7 +89,7 @@ def test_centre_rule_holds_the_registers_whose_dimensions_sat_at_the_centre():
 
 def _free_cycle(d):
     """The same EWMA recommendation without the centre rule."""
-    history, part = _ewma_history(MODEL, d)
+    history, part = series_history(MODEL, d)
     model = forecast_model(MODEL)
     model = dataclasses.replace(model, safety=dataclasses.replace(model.safety, ewma=0.3))
     return correct_cycle(CorrectRequest(model, history=history), part, composite=LAYOUT.composite)

@@ -17,7 +17,7 @@ import pandas as pd
 import pytest
 
 from setupfix.diagnose import Diagnoser
-from setupfix.pipeline.diagnose import DiagnoseRequest, _next_correction, diagnose_reports
+from setupfix.pipeline.diagnose import DiagnoseRequest, recommend_next, diagnose_reports
 from setupfix.pipeline.series import load_series
 
 from conftest import SAMPLES
@@ -64,7 +64,7 @@ def test_plate_with_its_machining_times():
     assert d.next_from.source == "ewma"
     b = d.walk.budgets
     assert b["augmented"].centre_rms > b["ewma"].centre_rms
-    cycle, _ = _next_correction(inp.model, d)
+    cycle, _ = recommend_next(inp.model, d)
     assert cycle is not None
     for r in _centred_by_hand(MODEL, series.deviation):
         assert cycle.corrections.get(r, 0.0) == 0.0
