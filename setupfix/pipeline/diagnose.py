@@ -4,8 +4,10 @@ Shared by ``setupfix diagnose``, the TUI and the benches.  Steps: load the model
 its ``[effects]``) → the series (:mod:`setupfix.pipeline.series`: every report, one
 cycle per machined part, with the corrections in effect, the parts cut since each tool
 change and the temperatures) → the engine
-(:class:`setupfix.diagnose.Diagnoser`) → the next correction (exact optimiser on the
-forecast) → JSON per ``../shared/spec/cli-json.md`` and, with ``augment``, the model
+(:class:`setupfix.diagnose.Diagnoser`) → the next correction (:func:`recommend_next`:
+``correct_cycle`` on the forecast of the model that earned it in the walk forward —
+augmented, or EWMA over the series' :class:`History`, or declared — with the registers
+the centre rule holds fixed) → JSON per ``../shared/spec/cli-json.md`` and, with ``augment``, the model
 with the effects found written as its ``[effects]`` section.
 """
 
