@@ -291,7 +291,8 @@ def coverage(model: ProcessModel, part: PartMeasurement, composite: Array | None
 
 def pose_problem(model: ProcessModel, part: PartMeasurement, *, smoothed: Smoothed | None = None,
                  cumulative: Mapping[str, float] | None = None, composite: Array | None = None,
-                 policy: Policy | None = None, stand_in: Array | None = None) -> PosedProblem:
+                 policy: Policy | None = None, stand_in: Array | None = None,
+                 hold: RuleEffect | None = None) -> PosedProblem:
     """Pose the problem of one measured cycle in the module's order (steps 1–7).
 
     Parameters
@@ -311,8 +312,14 @@ def pose_problem(model: ProcessModel, part: PartMeasurement, *, smoothed: Smooth
     stand_in : ndarray of shape (n_dimensions,), optional
         Recent measurements from the history standing in for absent dimensions (coverage,
         step 1; NaN where none).
+    hold : RuleEffect, optional
+        A caller's rule holding its ``registers`` at 0 (step 7, fixed registers; the
+        diagnosis's centre rule), named in the rule list.
     """
     held_part, held, effects = coverage(model, part, composite, stand_in)
+    if hold is not None and hold.registers:
+        held = held | np.array([r.id in hold.registers for r in model.registers], dtype=bool)
+        effects.append(hold)
     if held_part is not part:  # stood-in dimensions are measured for the problem (and the smoothing skips them)
         part = held_part
         if smoothed is not None:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 from typing import ClassVar
 
@@ -11,7 +12,8 @@ import numpy.typing as npt
 from setupfix.diagnose.fit import Fit, fit_model, observations
 from setupfix.diagnose.select import Selection, select_effects
 from setupfix.diagnose.terms import EffectSpec, Layout, Series
-from setupfix.diagnose.walk import WalkForward, next_cycle, walk_forward
+from setupfix.diagnose.walk import (CENTRE_FRACTION, NextSource, WalkForward, centred_registers, ewma_forecast,
+                                    next_cycle, next_source, walk_forward)
 from setupfix.errors import ParameterError
 from setupfix.params import Constraint, Interval, ValidatedParams
 
@@ -95,6 +97,10 @@ def error_summary(residual: Array, lower: Array, upper: Array) -> ErrorSummary:
     )
 
 
+#: ``Diagnosis.next_from`` of a diagnosis built without a rule (the augmented model, as before the rule).
+UNSET = NextSource("augmented", "")
+
+
 @dataclass(frozen=True)
 class Diagnosis:
     """Everything ``setupfix diagnose`` reports about one series.
@@ -110,8 +116,17 @@ class Diagnosis:
     walk : WalkForward or None
         None for series too short to walk.
     forecast : ndarray (n_dimensions,) [model unit]
-        Deviations expected on the next cycle with the registers as they are.
+        Deviations the augmented model expects on the next cycle with the registers as they are.
     notes : tuple of str
+    next_from : NextSource
+        The model the next correction comes from (:func:`~setupfix.diagnose.walk.next_source`).
+    next_forecast : ndarray (n_dimensions,) [model unit]
+        That model's forecast of the next cycle (EWMA: the smoothed disturbance at the registers now).
+    centred : ndarray of bool (n_registers,)
+        Registers the next correction must not move: their dimensions sat within
+        ``centre_fraction`` half tolerances of the centre on the last two parts and a
+        model with effects does not forecast them to leave it
+        (:func:`~setupfix.diagnose.walk.centred_registers`).
     """
 
     layout: Layout
@@ -125,12 +140,23 @@ class Diagnosis:
     walk: WalkForward | None
     forecast: Array
     notes: tuple[str, ...]
+    next_from: NextSource = UNSET
+    next_forecast: Array | None = None
+    centred: npt.NDArray[np.bool_] | None = None
 
     def relation_matrix(self) -> Array:
         """Composite matrix the corrections are mapped through: C with the relations found whose
         register is named (:meth:`Fit.relation_matrix`; a relation shared by registers that moved
         together changes nothing)."""
         return self.after.relation_matrix(self.layout, self.selection.unnamed)
+
+    def next_matrix(self) -> Array:
+        """Composite matrix of the model the next correction comes from (``next_from``)."""
+        if self.next_from.source == "augmented":
+            return self.relation_matrix()
+        if self.next_from.source == "declared":
+            return self.before.relation_matrix(self.layout, ())
+        return self.layout.composite
 
 
 class Diagnoser(ValidatedParams):
@@ -147,8 +173,12 @@ class Diagnoser(ValidatedParams):
         Walk forward (cost: one selection every ``reselect_every`` cycles).
     min_train : int, default=5
     reselect_every : int or None
-    lam : float, default=0.3
-        EWMA weight of the run-to-run baseline.
+    lam : float or None, default=0.3
+        EWMA weight of the run-to-run baseline (None: no EWMA; the effects found then
+        have to beat the declared model).
+    centre_fraction : float, default=0.25
+        Half tolerances within which a dimension counts as centred (the next correction
+        holds a register whose dimensions all sat there on the last two parts).
     """
 
     _parameter_constraints: ClassVar[dict[str, list[Constraint]]] = {
@@ -158,11 +188,13 @@ class Diagnoser(ValidatedParams):
         "walk": [bool],
         "min_train": [Interval(int, 1, None)],
         "reselect_every": [Interval(int, 1, None), None],
-        "lam": [Interval(float, 0, 1, closed="right")],
+        "lam": [Interval(float, 0, 1, closed="right"), None],
+        "centre_fraction": [Interval(float, 0, 1, closed="both")],
     }
 
     def __init__(self, *, alpha: float = 0.01, max_effects: int = 4, n_folds: int = 5, walk: bool = True,
-                 min_train: int = 5, reselect_every: int | None = None, lam: float = 0.3) -> None:
+                 min_train: int = 5, reselect_every: int | None = None, lam: float | None = 0.3,
+                 centre_fraction: float = CENTRE_FRACTION) -> None:
         self.alpha = alpha
         self.max_effects = max_effects
         self.n_folds = n_folds
@@ -170,6 +202,7 @@ class Diagnoser(ValidatedParams):
         self.min_train = min_train
         self.reselect_every = reselect_every
         self.lam = lam
+        self.centre_fraction = centre_fraction
 
     def run(self, layout: Layout, series: Series, *, declared: tuple[EffectSpec, ...] = ()) -> Diagnosis:
         """Fit, trace, add, walk forward and forecast.
@@ -207,6 +240,27 @@ class Diagnoser(ValidatedParams):
             notes.append(f"{series.n_cycles} cycle(s): too few to walk forward (needs {self.min_train + 5}: "
                          f"{self.min_train} to fit, 5 to score)")
         forecast, _ = next_cycle(layout, series, after)
-        return Diagnosis(layout, series, before, after, selection, tuple(effects),
-                         error_summary(before.residual, layout.lower, layout.upper),
-                         error_summary(after.residual, layout.lower, layout.upper), walk, forecast, tuple(notes))
+        source = next_source(walk, bool(selection.found), ewma=self.lam is not None)
+        if source.source == "augmented":
+            chosen = forecast
+        elif source.source == "declared":
+            chosen = next_cycle(layout, series, before)[0]
+        else:
+            chosen = ewma_forecast(layout, series, float(self.lam or 1.0))
+        out = Diagnosis(layout, series, before, after, selection, tuple(effects),
+                        error_summary(before.residual, layout.lower, layout.upper),
+                        error_summary(after.residual, layout.lower, layout.upper), walk, forecast, tuple(notes),
+                        source, chosen)
+        return dataclasses.replace(out, centred=self._centred(out, chosen))
+
+    def _centred(self, d: Diagnosis, chosen: Array) -> npt.NDArray[np.bool_]:
+        """The centre rule: registers whose dimensions sat at the centre on the last two parts."""
+        s, lay = d.series, d.layout
+        C = d.next_matrix()
+        pending = s.pending if s.pending.size == lay.n_registers else np.zeros(lay.n_registers)
+        last = slice(max(s.n_cycles - 2, 0), s.n_cycles)
+        recent = s.deviation[last] + (s.applied[-1] + pending - s.applied[last]) @ C
+        predicts = (d.next_from.source == "augmented" and bool(d.effects)) or (
+            d.next_from.source == "declared" and bool(d.before.specs))
+        return centred_registers(C, recent, chosen if predicts else None, lay.lower, lay.upper,
+                                 fraction=self.centre_fraction)

@@ -2,9 +2,11 @@
 
 At each cycle k (from ``min_train`` on) every controller chooses the register state
 v_k from the cycles before k only; the cycle's actual deviations are then moved to
-what that state would have given, y'_k = y_k + (v_k − u_k) · C_s, and scored by the
-unilateral error budget (Stryczek 2014, f1: smallest distance of a deviation to its
-nearer limit).  C_s is the composite matrix with the relation effects found on the
+what that state would have given, y'_k = y_k + (v_k − u_k) · C_s, and scored as a shop
+scores parts: the distance of every dimension to its tolerance centre (RMS and mean
+|·|, one-sided limits: the finite limit's side of 0, :func:`setupfix.explain.targets`),
+the cells out of tolerance, and the unilateral error budget (Stryczek 2014, f1: smallest
+distance of a deviation to its nearer limit).  C_s is the composite matrix with the relation effects found on the
 whole series (the declared C when none was found), the best estimate of how the
 machine answers its registers.  The four controllers:
 
@@ -15,8 +17,9 @@ machine answers its registers.  The four controllers:
     disturbance estimate d ← λ (y − u · C) + (1 − λ) d, λ = ``lam``;
 (d) none — the registers stay as at the first scored cycle.
 
-Each maps its predicted deviation to a register state by least squares through its
-relation matrix (minimum-norm centring): the difference between (a)–(c) is the model,
+Each maps its predicted deviation to the register state that brings every dimension
+closest to its tolerance centre, by least squares through its relation matrix
+(minimum norm): the difference between (a)–(c) is the model,
 never the optimiser.  Effects are re-selected every ``reselect_every`` cycles on the
 cycles before (honest: no future data), coefficients refitted at every cycle.
 """
@@ -31,8 +34,10 @@ import numpy.typing as npt
 from setupfix.diagnose.fit import RELATION_T, Fit, row_space_basis
 from setupfix.diagnose.select import select_effects
 from setupfix.diagnose.terms import EffectSpec, Layout, Series, effect_field, typical_step
+from setupfix.explain import targets
 
-__all__ = ["Budget", "WalkForward", "walk_forward", "next_cycle", "margins_of"]
+__all__ = ["Budget", "WalkForward", "walk_forward", "next_cycle", "margins_of", "NextSource", "next_source",
+           "centred_registers", "CENTRE_FRACTION"]
 
 Array = npt.NDArray[np.float64]
 
@@ -49,9 +54,11 @@ class Budget:
         Unilateral error budget of each cycle (negative: out of tolerance).
     mean_budget, worst_budget : float
     rms : float
-        RMS of the deviations reached.
+        RMS of the deviations reached (from nominal).
     out_of_tolerance : int
         Cells outside their limits.
+    centre_rms, centre_mean_abs : float [model unit]
+        RMS and mean |·| of every reached dimension's distance to its tolerance centre.
     """
 
     budget: Array
@@ -59,6 +66,8 @@ class Budget:
     worst_budget: float
     rms: float
     out_of_tolerance: int
+    centre_rms: float = float("nan")
+    centre_mean_abs: float = float("nan")
 
 
 @dataclass(frozen=True)
@@ -79,14 +88,18 @@ def _score(dev: Array, lower: Array, upper: Array) -> Budget:
     m = margins_of(dev, lower, upper)
     budget = np.nanmin(np.where(np.isnan(m), np.inf, m), axis=1) if m.size else np.zeros(0)
     budget = np.where(np.isinf(budget), np.nan, budget)
+    off = dev - targets(lower, upper)
     return Budget(budget, float(np.nanmean(budget)), float(np.nanmin(budget)), float(np.sqrt(np.nanmean(dev ** 2))),
-                  int(np.sum(m < 0)))
+                  int(np.sum(m < 0)), float(np.sqrt(np.nanmean(off ** 2))), float(np.nanmean(np.abs(off))))
 
 
-def _state(pred: Array, C: Array) -> Array:
-    """Register state v minimising ‖pred + v · C‖ (minimum norm); absent dimensions ignored."""
+def _state(pred: Array, C: Array, target: Array) -> Array:
+    """Register state v minimising ‖pred + v · C − target‖ (minimum norm); absent dimensions ignored.
+
+    pred, target : ndarray (n_dimensions,) [model unit]; C : (n_registers, n_dimensions) → (n_registers,)
+    """
     ok = np.isfinite(pred)
-    out: Array = np.asarray(np.linalg.lstsq(C[:, ok].T, -pred[ok], rcond=None)[0], dtype=float)
+    out: Array = np.asarray(np.linalg.lstsq(C[:, ok].T, target[ok] - pred[ok], rcond=None)[0], dtype=float)
     return out
 
 
@@ -153,8 +166,8 @@ class _Running:
         self.n += int(ok.sum())
         self.seen = k
 
-    def state(self, k: int) -> Array:
-        """Register state the fitted model recommends for cycle ``k``."""
+    def state(self, k: int, target: Array) -> Array:
+        """Register state the fitted model recommends for cycle ``k`` (steering to ``target``)."""
         coef = np.linalg.lstsq(self.xtx, self.xtz, rcond=1e-12)[0]
         pred = self.G[k][:, ~self.slope] @ coef[~self.slope]
         C = self.C.copy()
@@ -165,11 +178,11 @@ class _Running:
             for col, i, q in self.relations:
                 if abs(coef[col]) > RELATION_T * np.sqrt(max(sigma2 * inv[col, col], 0.0)):
                     C[i, q] += coef[col]
-        return _state(pred, C)
+        return _state(pred, C, target)
 
 
 def walk_forward(layout: Layout, series: Series, *, score_composite: Array | None = None, min_train: int = 5,
-                 reselect_every: int | None = None, lam: float = 0.3, alpha: float = 0.01,
+                 reselect_every: int | None = None, lam: float | None = 0.3, alpha: float = 0.01,
                  declared: tuple[EffectSpec, ...] = ()) -> WalkForward:
     """Walk forward through ``series``; see the module text.
 
@@ -182,8 +195,8 @@ def walk_forward(layout: Layout, series: Series, *, score_composite: Array | Non
         Cycles before the first scored one.
     reselect_every : int, optional
         Cycles between effect selections (default max(5, n_cycles // 8)).
-    lam : float, default=0.3
-        EWMA weight.
+    lam : float or None, default=0.3
+        EWMA weight (None: no EWMA controller).
     alpha : float
         Level of the selection (as :func:`select_effects`).
     declared : tuple of EffectSpec
@@ -205,11 +218,14 @@ def walk_forward(layout: Layout, series: Series, *, score_composite: Array | Non
     y = series.deviation
     z_obs = y - series.applied @ C
     basis = row_space_basis(C)
+    target = targets(layout.lower, layout.upper)
     scored = list(range(min(min_train, n), n))
-    reached = {name: np.full((len(scored), layout.n_dimensions), np.nan) for name in CONTROLLERS}
+    names = tuple(c for c in CONTROLLERS if lam is not None or c != "ewma")
+    reached = {name: np.full((len(scored), layout.n_dimensions), np.nan) for name in names}
+    w = 1.0 if lam is None else lam
     ewma = np.where(np.isfinite(z_obs[0]), z_obs[0], 0.0)
     for k in range(1, min(min_train, n)):
-        ewma = np.where(np.isfinite(z_obs[k]), lam * z_obs[k] + (1 - lam) * ewma, ewma)
+        ewma = np.where(np.isfinite(z_obs[k]), w * z_obs[k] + (1 - w) * ewma, ewma)
     base_state = series.applied[scored[0]] if scored else np.zeros(layout.n_registers)
     decl = _Running(layout, series, declared, basis, z_obs, scored[0]) if scored else None
     aug = decl
@@ -222,10 +238,12 @@ def walk_forward(layout: Layout, series: Series, *, score_composite: Array | Non
             aug = _Running(layout, series, declared + specs, basis, z_obs, k, sel.unnamed) if specs else decl
         assert aug is not None
         aug.add_until(k)
-        states = {"declared": decl.state(k), "augmented": aug.state(k), "ewma": _state(ewma, C), "none": base_state}
+        states = {"declared": decl.state(k, target), "augmented": aug.state(k, target), "none": base_state}
+        if lam is not None:
+            states["ewma"] = _state(ewma, C, target)
         for name, v in states.items():
             reached[name][pos] = y[k] + (v - series.applied[k]) @ Cs
-        ewma = np.where(np.isfinite(z_obs[k]), lam * z_obs[k] + (1 - lam) * ewma, ewma)
+        ewma = np.where(np.isfinite(z_obs[k]), w * z_obs[k] + (1 - w) * ewma, ewma)
     budgets = {name: _score(dev, layout.lower, layout.upper) for name, dev in reached.items()}
     return WalkForward(tuple(scored), budgets)
 
@@ -252,3 +270,113 @@ def next_cycle(layout: Layout, series: Series, fit: Fit) -> tuple[Array, Series]
     z = fit.predict(layout, nxt)[0]
     dev: Array = z + applied @ layout.composite
     return dev, nxt
+
+
+#: Half tolerances within which a dimension counts as centred (:func:`centred_registers`).
+CENTRE_FRACTION = 0.25
+
+
+@dataclass(frozen=True)
+class NextSource:
+    """Which model the next correction is computed from, and why.
+
+    Attributes
+    ----------
+    source : {"augmented", "ewma", "declared"}
+    reason : str
+        The rule and the walk's numbers behind the choice (one line).
+    """
+
+    source: str
+    reason: str
+
+
+def next_source(walk: WalkForward | None, found: bool, *, ewma: bool = True) -> NextSource:
+    """The rule by which an effect earns its way into the next correction.
+
+    The augmented model (declared + effects found) is used only when, in the walk
+    forward, it beat EWMA: a smaller RMS distance to the tolerance centre **and** no
+    more cells out of tolerance.  Otherwise the next correction comes from EWMA (from
+    the declared model when no EWMA is configured, ``ewma=False``).  Without effects
+    found the declared model is the augmented one and is used as it is; without a walk
+    (series too short, or walk off) no effect has been proven and the declared model is
+    used.
+    """
+    if not found:
+        return NextSource("declared", "no effect found: next correction from the declared model")
+    fallback = "ewma" if ewma else "declared"
+    if walk is None:
+        return NextSource("declared", "the effects found are not proven on later parts (no walk forward): "
+                          "next correction from the declared model")
+    a = walk.budgets["augmented"]
+    other = walk.budgets.get(fallback, walk.budgets["declared"])
+    numbers = (f"walk forward over {len(walk.cycles)} cycle(s): augmented centre RMS {a.centre_rms:.4g}, "
+               f"{a.out_of_tolerance} out of tolerance; {fallback} {other.centre_rms:.4g}, {other.out_of_tolerance}")
+    if a.centre_rms < other.centre_rms and a.out_of_tolerance <= other.out_of_tolerance:
+        return NextSource("augmented", f"the effects found beat {fallback} ({numbers}): next correction from "
+                          "the augmented model")
+    return NextSource(fallback, f"the effects found did not beat {fallback} ({numbers}): next correction from "
+                      f"{'EWMA' if fallback == 'ewma' else 'the declared model'}, the effects left out")
+
+
+def centre_half_width(lower: Array, upper: Array) -> Array:
+    """Half tolerance around :func:`~setupfix.explain.targets` (one-sided: distance of the finite limit to it).
+
+    lower, upper : ndarray (m,) [unit] → ndarray (m,) [unit]
+    """
+    t = targets(lower, upper)
+    both = np.isfinite(lower) & np.isfinite(upper)
+    one = np.where(np.isfinite(lower), lower, upper)
+    out: Array = np.where(both, (upper - lower) / 2, np.abs(one - t))
+    return out
+
+
+def centred_registers(composite: Array, recent: Array, forecast: Array | None, lower: Array, upper: Array, *,
+                      fraction: float = CENTRE_FRACTION) -> npt.NDArray[np.bool_]:
+    """Registers whose dimensions all sat near their tolerance centre and are not predicted to leave it.
+
+    A register is held when every dimension it moves (C[i, q] ≠ 0) lies within
+    ``fraction`` × half tolerance of its centre (:func:`centre_half_width`) on each of
+    the ``recent`` parts where measured (moved to the registers as they are now;
+    measured on at least one) and in the ``forecast`` of a model that predicts change
+    (effects found or declared); a forecast that is a smoothed past (EWMA, the declared
+    setup state alone) is ``None``: the latest parts say more about now than an average.
+
+    Parameters
+    ----------
+    composite : ndarray (n_registers, n_dimensions)
+    recent : ndarray (n_recent, n_dimensions) [unit]
+        The latest parts' deviations at the current registers (NaN: not measured).
+    forecast : ndarray (n_dimensions,) [unit] or None
+        What the model the correction comes from predicts for the next part (None: no prediction of change).
+    lower, upper : ndarray (n_dimensions,) [unit]
+
+    Returns
+    -------
+    ndarray of bool (n_registers,)
+    """
+    band = fraction * centre_half_width(lower, upper)
+    t = targets(lower, upper)
+    rows = recent if forecast is None else np.vstack([recent, forecast[None, :]])
+    seen = np.isfinite(rows)
+    near = ~seen | (np.abs(rows - t) <= band)  # unmeasured cells say nothing
+    inside = near.all(axis=0) & np.isfinite(recent).any(axis=0)
+    if forecast is not None:
+        inside &= np.isfinite(forecast)
+    moves = composite != 0
+    out: npt.NDArray[np.bool_] = (moves.any(axis=1) & ~np.any(moves & ~inside, axis=1))
+    return out
+
+
+def ewma_forecast(layout: Layout, series: Series, lam: float) -> Array:
+    """The EWMA controller's forecast of the next part at the registers in effect for it.
+
+    d ← λ z + (1 − λ) d over z = y − u · C (as in the walk), then d + (u_last + pending) · C.
+    """
+    z = series.deviation - series.applied @ layout.composite
+    d = np.where(np.isfinite(z[0]), z[0], np.nan)
+    for k in range(1, series.n_cycles):
+        d = np.where(np.isfinite(z[k]), np.where(np.isfinite(d), lam * z[k] + (1 - lam) * d, z[k]), d)
+    pending = series.pending if series.pending.size == layout.n_registers else np.zeros(layout.n_registers)
+    out: Array = d + (series.applied[-1] + pending) @ layout.composite
+    return out

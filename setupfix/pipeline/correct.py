@@ -29,7 +29,7 @@ from setupfix.pipeline.requests import (CorrectOutcome, CorrectRequest, CurrentO
                                         History, ReadOptions, SolveOptions, ThermalInputs, load_thermal)
 from setupfix.pose import pose_problem
 from setupfix.recommend import budget, recommend
-from setupfix.safety import Recommendation, short_list
+from setupfix.safety import Recommendation, RuleEffect, short_list
 from setupfix.store import Store
 
 if TYPE_CHECKING:
@@ -96,17 +96,18 @@ def _feed_forward(thermal: ThermalInputs, cycle: CycleCorrection) -> ThermalFeed
 
 
 def correct_cycle(request: CorrectRequest, part: PartMeasurement, *,
-                  composite: np.ndarray | None = None) -> CycleCorrection:
+                  composite: np.ndarray | None = None, hold: RuleEffect | None = None) -> CycleCorrection:
     """Recommend the corrections of one measured cycle: optimum under the model's safety rules.
 
     ``composite`` replaces the model's relation matrix (the diagnosis's augmented one,
-    shape (n_registers, n_dimensions)).
+    shape (n_registers, n_dimensions)); ``hold`` holds its registers at 0 (the
+    diagnosis's centre rule, :func:`setupfix.pose.pose_problem`).
     """
     model = request.model
     cumulative = request.current.wear_totals(model) if request.current is not None else None
     stand_in = request.history.stand_in(model, part) if request.history is not None else None
     posed = pose_problem(model, part, smoothed=_smoothed(request, part), cumulative=cumulative, composite=composite,
-                         stand_in=stand_in)
+                         stand_in=stand_in, hold=hold)
     solve = request.solve
     opt = get_optimizer(solve.optimizer, seed=solve.seed, **solve.params())
     rec = recommend(posed, opt.solve, optimizer=solve.optimizer, names={d.id: d.name for d in model.dimensions},

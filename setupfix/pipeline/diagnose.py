@@ -4,8 +4,10 @@ Shared by ``setupfix diagnose``, the TUI and the benches.  Steps: load the model
 its ``[effects]``) → the series (:mod:`setupfix.pipeline.series`: every report, one
 cycle per machined part, with the corrections in effect, the parts cut since each tool
 change and the temperatures) → the engine
-(:class:`setupfix.diagnose.Diagnoser`) → the next correction (exact optimiser on the
-forecast) → JSON per ``../shared/spec/cli-json.md`` and, with ``augment``, the model
+(:class:`setupfix.diagnose.Diagnoser`) → the next correction (:func:`recommend_next`:
+``correct_cycle`` on the forecast of the model that earned it in the walk forward —
+augmented, or EWMA over the series' :class:`History`, or declared — with the registers
+the centre rule holds fixed) → JSON per ``../shared/spec/cli-json.md`` and, with ``augment``, the model
 with the effects found written as its ``[effects]`` section.
 """
 
@@ -27,12 +29,13 @@ from setupfix.errors import ExportError, ModelError, Note, SourceLocation
 from setupfix.model import PartMeasurement, ProcessModel, model_from_dict
 from setupfix.model.effects import EffectsSection, ModelEffect, effects_from_dict, with_effects
 from setupfix.pipeline.correct import correct_cycle
-from setupfix.pipeline.requests import CorrectRequest, CycleCorrection, ReadOptions, SolveOptions
+from setupfix.pipeline.requests import CorrectRequest, CycleCorrection, History, ReadOptions, SolveOptions
 from setupfix.pipeline.series import SeriesInput, load_series
 from setupfix.pipeline.writers import check_target, write_text
+from setupfix.safety import RuleEffect, short_list
 
 __all__ = ["DiagnoseRequest", "DiagnoseOutcome", "note_text", "diagnose_reports", "augmented_section",
-           "write_augmented", "forecast_model"]
+           "write_augmented", "forecast_model", "recommend_next", "series_history"]
 
 def augmented_section(diagnosis: Diagnosis, declared: EffectsSection) -> EffectsSection:
     """The ``[effects]`` section: the model's own effects, then those found (ids E1, E2, …)."""
@@ -141,7 +144,12 @@ class DiagnoseOutcome:
             "walk_forward": None if d.walk is None else {
                 "cycles_scored": len(d.walk.cycles),
                 **{name: {"mean_budget": r(b.mean_budget), "worst_budget": r(b.worst_budget), "rms": r(b.rms),
-                          "out_of_tolerance": b.out_of_tolerance} for name, b in d.walk.budgets.items()}},
+                          "out_of_tolerance": b.out_of_tolerance, "centre_rms": r(b.centre_rms),
+                          "centre_mean_abs": r(b.centre_mean_abs)} for name, b in d.walk.budgets.items()}},
+            "next_from": d.next_from.source,
+            "next_from_reason": d.next_from.reason,
+            "held_centred": [rid for rid, h in zip(lay.register_ids, d.centred, strict=True) if h]
+            if d.centred is not None else [],
             "augmented": self.augmented,
             "notes": [note_text(n) for n in self.notes],
         }
@@ -159,17 +167,74 @@ def forecast_model(model: ProcessModel) -> ProcessModel:
                                safety=dataclasses.replace(model.safety, ewma=1.0))
 
 
-def _next_correction(model: ProcessModel, diagnosis: Diagnosis, solve: SolveOptions | None = None
-                     ) -> tuple[CycleCorrection | None, list[Note]]:
-    """``correct`` on the forecast, through the augmented relations (:func:`correct_cycle`, exact optimiser)."""
-    fc = diagnosis.forecast
+def _hold(model: ProcessModel, diagnosis: Diagnosis, fraction: float) -> RuleEffect | None:
+    """The centre rule as the posed problem's fixed registers (None when it holds nothing)."""
+    if diagnosis.centred is None or not diagnosis.centred.any():
+        return None
+    regs = tuple(r for r, h in zip(model.registers, diagnosis.centred, strict=True) if h)
+    C = diagnosis.next_matrix()
+    dims = tuple(diagnosis.layout.dimension_ids[q] for q in np.flatnonzero(np.any(C[diagnosis.centred] != 0, axis=0)))
+    return RuleEffect("centred", f"{short_list(r.register for r in regs)} held: every dimension they move sat within "
+                      f"{fraction:g} of its half tolerance from the centre on the last two parts and is forecast to "
+                      "stay there (never move what sits at the centre)", registers=tuple(r.id for r in regs),
+                      dimensions=dims)
+
+
+def series_history(model: ProcessModel, diagnosis: Diagnosis) -> tuple[History, PartMeasurement]:
+    """The series as the smoothing's history, and its last part at the registers the next cycle has.
+
+    Parts get the series' times (cycle index as hours when it has none); the register
+    states between parts become the corrections log, with the logged changes after the
+    last part dated just before it (so every part is moved to the registers now).
+    """
+    s = diagnosis.series
+    n_reg = len(model.registers)
+    origin = np.datetime64(s.origin or "2000-01-01T00:00:00", "ns")
+    times = origin + np.round(s.time * 3.6e12).astype("timedelta64[ns]")
+    pending = s.pending if s.pending.size == n_reg else np.zeros(n_reg)
+    steps = np.diff(np.vstack([s.applied, s.applied[-1] + pending]), axis=0)  # (n, n_reg): after part k
+    when = (np.concatenate([times[1:], times[-1:]]) - np.timedelta64(1, "ns")).astype("datetime64[ns]")
+    k, i = np.nonzero(steps)
+    history = History(times[:-1], s.deviation[:-1].copy(), tuple(s.cycles[:-1]) if s.cycles else (),
+                      when[k], i.astype(np.int64), steps[k, i].astype(float), np.zeros(k.size, dtype=bool))
+    cycle = s.cycles[-1] if s.cycles else "last"
+    dev = s.deviation[-1] + pending @ diagnosis.layout.composite
+    stamp = str(times[-1].astype("datetime64[s]"))
+    return history, PartMeasurement(part=cycle, report="series", timestamp=stamp, deviation=dev,
+                                    sources=tuple("" for _ in dev))
+
+
+def recommend_next(model: ProcessModel, diagnosis: Diagnosis, solve: SolveOptions | None = None,
+                     diagnoser: Diagnoser | None = None) -> tuple[CycleCorrection | None, list[Note]]:
+    """``correct`` for the next cycle, from the model that earned it (``diagnosis.next_from``).
+
+    Augmented or declared: the model's forecast posed through its relation matrix; EWMA: the
+    last part smoothed over the series (the one use case, :func:`correct_cycle` with a
+    :class:`History`, λ the diagnoser's).  The centre rule holds its registers (``hold``).
+    """
+    source = diagnosis.next_from.source
+    fc = diagnosis.forecast if diagnosis.next_forecast is None else diagnosis.next_forecast
     if not np.isfinite(fc).any():
         return None, [Note("no forecast: nothing measured", None, "diagnosis")]
-    part = PartMeasurement(part="next", report="forecast", timestamp=None, deviation=fc,
-                           sources=tuple("" for _ in fc))
-    cycle = correct_cycle(CorrectRequest(forecast_model(model), solve=solve or SolveOptions()), part,
-                          composite=diagnosis.relation_matrix())
+    diagnoser = diagnoser or Diagnoser()
+    hold = _hold(model, diagnosis, diagnoser.centre_fraction)
+    request = CorrectRequest(forecast_model(model), solve=solve or SolveOptions())
+    if source == "ewma":
+        history, part = series_history(model, diagnosis)
+        lam = float(diagnoser.lam or 1.0)
+        ewma_model = dataclasses.replace(request.model, safety=dataclasses.replace(request.model.safety, ewma=lam))
+        request = dataclasses.replace(request, model=ewma_model, history=history)
+        composite = diagnosis.layout.composite
+    else:
+        part = PartMeasurement(part="next", report="forecast", timestamp=None, deviation=fc,
+                               sources=tuple("" for _ in fc))
+        composite = diagnosis.next_matrix()
+    cycle = correct_cycle(request, part, composite=composite, hold=hold)
     notes = list(cycle.notes)
+    if diagnosis.next_from.reason and source != "augmented" and diagnosis.effects:
+        notes.append(Note(f"next correction: {diagnosis.next_from.reason}", None, "diagnosis"))
+    if hold is not None:
+        notes.append(Note(f"next correction: {hold.message}", None, "diagnosis"))
     if cycle.verdict == "reject":
         notes.append(Note(f"next correction: {cycle.recommendation.alarm}", None, "safety"))
     elif not cycle.solved:
@@ -192,7 +257,7 @@ def diagnose_reports(request: DiagnoseRequest) -> DiagnoseOutcome:
     inp = load_series(request.model, request.reports, corrections=request.corrections,
                       temperatures=request.temperatures, db=request.db, thermal=request.thermal, read=request.read)
     diagnosis = request.diagnoser.run(inp.layout, inp.series, declared=inp.declared)
-    cycle, more = _next_correction(inp.model, diagnosis, request.solve)
+    cycle, more = recommend_next(inp.model, diagnosis, request.solve, request.diagnoser)
     notes = (*inp.notes, *(Note(n, None, "diagnosis") for n in diagnosis.notes), *more)
     out = DiagnoseOutcome(inp, diagnosis, cycle.corrections if cycle is not None else {}, None, notes, cycle)
     if request.db is not None:

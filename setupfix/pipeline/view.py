@@ -441,6 +441,9 @@ class DiagnosisView:
     next_correction: tuple[tuple[str, float], ...]  #: registers that move, model ID and change
     notes: tuple[str, ...]
     budgets: tuple[CycleBudget, ...]
+    walk_centre: tuple[tuple[str, float, float], ...] = ()  #: name, RMS and mean |·| from the tolerance centre
+    next_from: str = "augmented"  #: the model the next correction comes from (augmented, ewma, declared)
+    held: tuple[str, ...] = ()  #: registers the centre rule holds (model IDs)
 
 
 def diagnosis_view(outcome: DiagnoseOutcome) -> DiagnosisView:
@@ -456,4 +459,9 @@ def diagnosis_view(outcome: DiagnoseOutcome) -> DiagnosisView:
                       for e in d.effects),
         walk=walk, next_correction=tuple((k, v) for k, v in outcome.next_correction.items() if v != 0),
         notes=tuple(note_text(n) for n in outcome.notes),
-        budgets=tuple(cycle_budgets(outcome.input.model, outcome.input.parts)))
+        budgets=tuple(cycle_budgets(outcome.input.model, outcome.input.parts)),
+        walk_centre=() if d.walk is None else tuple(
+            (name, b.centre_rms, b.centre_mean_abs) for name, b in d.walk.budgets.items()),
+        next_from=d.next_from.source,
+        held=() if d.centred is None else tuple(r for r, h in zip(d.layout.register_ids, d.centred, strict=True)
+                                                if h))

@@ -167,3 +167,19 @@ def test_one_part_reported_twice_counts_once(tmp_path, capsys):
     assert doc["cycles"] == 2
     assert any("a.csv:cycle 02 and b.csv:cycle 02 are one part" in n and "differing by up to 0.01)" in n
                and "b.csv is used once" in n for n in doc["notes"])
+
+
+def test_diagnose_json_says_which_model_the_next_correction_comes_from(series, capsys):
+    """A real wear of T5: the augmented model beat EWMA on the centre distance with no more out of tolerance,
+    so the next correction comes from it; the walk's centre scores are in the JSON."""
+    code, out, err = run(capsys, "diagnose", "--model", MODEL, "--corrections", series / "corrections.csv",
+                         "--temperatures", series / "temperatures.csv", "--json", series / "measurements.csv")
+    assert code == 0, err
+    doc = json.loads(out)
+    wf = doc["walk_forward"]
+    for name in ("declared", "augmented", "ewma", "none"):
+        assert wf[name]["centre_mean_abs"] <= wf[name]["centre_rms"]
+    assert wf["augmented"]["centre_rms"] < wf["ewma"]["centre_rms"]
+    assert wf["augmented"]["out_of_tolerance"] <= wf["ewma"]["out_of_tolerance"]
+    assert doc["next_from"] == "augmented" and "beat ewma" in doc["next_from_reason"]
+    assert all(doc["next_correction"].get(r, 0.0) == 0.0 for r in doc["held_centred"])

@@ -2,11 +2,14 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 
 from setupfix.diagnose import Diagnoser, EffectSpec, Layout, fit_model, walk_forward
-from setupfix.diagnose.walk import margins_of, next_cycle
+from setupfix.diagnose.walk import (Budget, WalkForward, centred_registers, ewma_forecast, margins_of, next_cycle,
+                                    next_source)
 
 from diagnose.helpers import guide_pins, one_effect, simulate
 
@@ -58,3 +61,105 @@ def test_series_of_one_is_diagnosed_without_walking():
     d = Diagnoser().run(layout, sim.series)
     assert d.walk is None and any("too few to walk" in n for n in d.notes)
     assert np.isfinite(d.forecast).all()
+
+
+def _random_walk(layout, seed: int, step: float = 0.004):
+    """A series whose WKS wanders as a random walk: an effect fitted in hindsight, which EWMA tracks better."""
+    sim = simulate(layout, seed=seed, correct_every=0)
+    s = sim.series
+    rng = np.random.default_rng(seed)
+    wander = np.zeros((s.n_cycles, layout.n_registers))
+    wander[:, 0] = np.cumsum(rng.normal(0, step, size=s.n_cycles))
+    return dataclasses.replace(s, deviation=np.round(s.deviation + wander @ layout.composite, 4))
+
+
+def test_walk_steers_to_the_tolerance_centre_and_scores_every_dimension():
+    """Limits 0 … +0.1 mm: steering to nominal puts every dimension on its lower limit (half of them out);
+    steering to the centre (0.05) keeps them there, at the noise."""
+    base = Layout.from_model(guide_pins(positions=False))
+    layout = dataclasses.replace(base, lower=np.zeros_like(base.lower), upper=np.full_like(base.upper, 0.1))
+    sim = simulate(layout, seed=4)
+    b = walk_forward(layout, sim.series).budgets
+    for name in ("declared", "augmented", "ewma"):
+        assert b[name].centre_rms < 0.015 and b[name].out_of_tolerance == 0  # nominal: 0.05 away, half out
+        assert b[name].centre_mean_abs <= b[name].centre_rms
+    assert abs(b["declared"].rms - 0.05) < 0.005  # from nominal: the dimensions sit at the centre, 0.05 away
+    assert b["none"].centre_rms > 5 * b["declared"].centre_rms
+
+
+def test_one_sided_limits_steer_to_the_finite_limits_side_of_zero():
+    base = Layout.from_model(guide_pins(positions=False))
+    layout = dataclasses.replace(base, lower=np.full_like(base.lower, -np.inf), upper=np.full_like(base.upper, 0.1))
+    b = walk_forward(layout, simulate(layout, seed=5).series).budgets
+    assert b["declared"].centre_rms == pytest.approx(b["declared"].rms)  # the target is 0: nominal
+    assert b["declared"].centre_rms < 0.015
+
+
+def _walk(aug: tuple[float, int], other: tuple[float, int], name: str = "ewma") -> WalkForward:
+    def budget(centre: float, out: int) -> Budget:
+        return Budget(np.zeros(3), 0.0, 0.0, centre, out, centre, centre)
+
+    return WalkForward((5, 6, 7), {"declared": budget(1.0, 9), "augmented": budget(*aug), name: budget(*other),
+                                   "none": budget(2.0, 9)})
+
+
+@pytest.mark.parametrize(("aug", "ewma", "source"), [
+    ((0.10, 2), (0.12, 2), "augmented"),   # closer to the centre, no more out: earned
+    ((0.10, 3), (0.12, 2), "ewma"),        # closer, but one more out of tolerance: not earned
+    ((0.133, 30), (0.128, 30), "ewma"),    # the plate of issue 24: worse than EWMA
+    ((0.12, 2), (0.12, 2), "ewma"),        # a tie is not a win
+])
+def test_an_effect_enters_the_next_correction_only_if_it_beat_ewma(aug, ewma, source):
+    got = next_source(_walk(aug, ewma), True)
+    assert got.source == source
+    assert ("beat ewma" if source == "augmented" else "did not beat ewma") in got.reason
+    assert f"{ewma[0]:.4g}" in got.reason and f"{aug[0]:.4g}" in got.reason
+
+
+def test_without_ewma_or_effects_or_walk_the_declared_model_recommends():
+    walk = _walk((0.2, 2), (0.1, 2), "declared")
+    walk.budgets.pop("ewma", None)
+    assert next_source(walk, True, ewma=False).source == "declared"
+    assert next_source(_walk((0.05, 0), (0.1, 0)), False).source == "declared"
+    assert "not proven" in next_source(None, True).reason
+
+
+def test_random_walk_of_the_setup_recommends_from_ewma_and_says_so():
+    layout = Layout.from_model(guide_pins(positions=False))
+    d = Diagnoser().run(layout, _random_walk(layout, seed=5))
+    b = d.walk.budgets
+    assert d.effects and b["augmented"].centre_rms > b["ewma"].centre_rms
+    assert d.next_from.source == "ewma" and "did not beat ewma" in d.next_from.reason
+    np.testing.assert_allclose(d.next_forecast, ewma_forecast(layout, d.series, 0.3))
+
+
+def test_a_real_drift_earns_its_place():
+    layout = Layout.from_model(guide_pins(positions=False))
+    d = Diagnoser().run(layout, simulate(layout, [one_effect(layout, "drift")], seed=7).series)
+    assert d.next_from.source == "augmented" and "beat ewma" in d.next_from.reason
+    np.testing.assert_allclose(d.next_forecast, d.forecast)
+
+
+@pytest.mark.parametrize("with_forecast", [True, False])
+def test_centred_registers_brute_force(with_forecast):
+    """A register is held iff every measured dimension it moves is within the band on every recent part and in
+    the forecast (when the model predicts change): checked against a loop over registers and dimensions on
+    random cases."""
+    rng = np.random.default_rng(0)
+    for _ in range(200):
+        n, m = 4, 6
+        C = rng.choice([0.0, 1.0, -1.0], size=(n, m), p=[0.5, 0.25, 0.25])
+        lower, upper = -np.ones(m), np.ones(m) + rng.choice([0.0, 1.0], size=m)
+        centre = (lower + upper) / 2
+        recent = centre + rng.choice([0.1, 0.3, np.nan], size=(2, m), p=[0.6, 0.3, 0.1]) * rng.choice([-1, 1], (2, m))
+        forecast = centre + rng.choice([0.1, 0.3], size=m, p=[0.7, 0.3])
+        got = centred_registers(C, recent, forecast if with_forecast else None, lower, upper, fraction=0.25)
+        for i in range(n):
+            dims = [q for q in range(m) if C[i, q] != 0]
+            ok = bool(dims)
+            for q in dims:
+                half = (upper[q] - lower[q]) / 2
+                cells = [recent[0, q], recent[1, q]] + ([forecast[q]] if with_forecast else [])
+                ok &= all(np.isnan(c) or abs(c - centre[q]) <= 0.25 * half for c in cells)
+                ok &= np.isfinite(recent[:, q]).any()
+            assert got[i] == ok

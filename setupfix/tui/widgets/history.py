@@ -73,11 +73,17 @@ class HistoryPanel(VerticalScroll):
                           Text(f"{e.rms_after:.4f}", justify="right"))
         walk = Text()
         if view.walk:
-            walk.append("walk forward (error budget reached on later cycles: mean / worst):\n")
-            for name, mean, worst, rms, out in view.walk:
-                walk.append(f"  {name:<9} {signed(mean)} / {signed(worst)}  RMS {rms:.4f}  out {out}\n")
-        walk.append("next correction (augmented model): "
+            walk.append("walk forward (later cycles: distance to the tolerance centre RMS / mean |·|, "
+                        "error budget mean / worst):\n")
+            centre = {name: (c_rms, c_mean) for name, c_rms, c_mean in view.walk_centre}
+            for name, mean, worst, _rms, out in view.walk:
+                c_rms, c_mean = centre.get(name, (float("nan"), float("nan")))
+                walk.append(f"  {name:<9} centre {c_rms:.4f} / {c_mean:.4f}  budget {signed(mean)} / {signed(worst)}"
+                            f"  out {out}\n")
+        walk.append(f"next correction (from {view.next_from}): "
                     + (", ".join(f"{k} {signed(v, 3)}" for k, v in view.next_correction) or "none"))
+        if view.held:
+            walk.append(f"; held at the centre: {', '.join(view.held)}")
         for note in view.notes:
             walk.append(f"\n⚠ {note}", style="yellow")
         self.query_one("#history-walk", Static).update(walk)
