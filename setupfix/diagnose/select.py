@@ -93,13 +93,22 @@ class Selection:
         return tuple(s.spec for s in self.steps if s.accepted and s.spec.kind == "relation" and s.alike)
 
 
-def candidate_specs(layout: Layout, series: Series, *, taus: tuple[float, ...] = (0.1, 0.25, 0.5)) -> list[EffectSpec]:
+def candidate_specs(layout: Layout, series: Series, *, taus: tuple[float, ...] = (0.1, 0.25, 0.5),
+                    max_positions: int = 24, min_side: int = 2) -> list[EffectSpec]:
     """Every non-relation candidate the series' covariates allow.
 
     Parameters
     ----------
     taus : tuple of float
         Time constants of saturating drifts, as fractions of the series' time span.
+    max_positions : int, default=24
+        Level steps are tried at every cycle boundary with at least ``min_side`` cycles
+        on each side, thinned to this many evenly spread positions on long series; the
+        first cycle after a logged tool change is always a position.  Each position ×
+        register is one candidate, so the selection's Bonferroni factor counts every
+        position tried (a step found anywhere is held to the family-wise ``alpha``).
+    min_side : int, default=2
+        Cycles needed before and after a step (one cycle alone is an outlier, not a level).
     """
     out: list[EffectSpec] = []
     n = series.n_cycles
@@ -107,9 +116,10 @@ def candidate_specs(layout: Layout, series: Series, *, taus: tuple[float, ...] =
     if n >= 3 and span > 0:
         out.append(EffectSpec("drift", shape="linear"))
         out += [EffectSpec("drift", shape="saturating", tau=round(f * span, 3)) for f in taus]
+    process = set(series.process_channels)
     for c, name in enumerate(series.channels):
         col = series.temperature[:, c]
-        if n >= 3 and np.ptp(col) > 0:
+        if n >= 3 and np.ptp(col) > 0 and name not in process:
             out.append(EffectSpec("thermal", channel=name, reference=float(np.round(np.mean(col), 2))))
     for k, j in enumerate(layout.tools):
         if n >= 3 and np.ptp(series.parts[:, k]) > 0:
@@ -122,7 +132,27 @@ def candidate_specs(layout: Layout, series: Series, *, taus: tuple[float, ...] =
             out.append(EffectSpec("position", axis=axis))
     for g in dict.fromkeys(g for g in layout.groups if g is not None):
         out.append(EffectSpec("group", group=g))
+    targets: tuple[str | None, ...] = (None, *layout.register_ids)
+    for k in _level_positions(series, max_positions, min_side):
+        cyc = series.cycles[k] if series.cycles else f"cycle {k + 1}"
+        out += [EffectSpec("level", register=r, at=float(series.time[k]), cycle=cyc) for r in targets]
+    for c, name in enumerate(series.channels):
+        col = series.temperature[:, c]
+        if n >= 3 and np.ptp(col) > 0 and name in process:
+            ref = float(f"{np.mean(col):.4g}")
+            out += [EffectSpec("process", channel=name, register=r, reference=ref) for r in targets]
     return out
+
+
+def _level_positions(series: Series, max_positions: int, min_side: int) -> list[int]:
+    """Cycle indices a level step may start at (time strictly after the previous cycle's)."""
+    n = series.n_cycles
+    t = series.time
+    ok = [k for k in range(min_side, n - min_side + 1) if t[k] > t[k - 1]]
+    if len(ok) > max_positions:
+        ok = [ok[int(i)] for i in np.unique(np.round(np.linspace(0, len(ok) - 1, max_positions)))]
+    changed = {int(k) for k in np.flatnonzero((series.parts == 0).any(axis=1)) if 0 < k < n}
+    return sorted(set(ok) | {k for k in changed if t[k] > t[k - 1]})
 
 
 def _orth(X: Array) -> Array:
