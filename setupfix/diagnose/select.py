@@ -94,14 +94,14 @@ class Selection:
 
 
 def candidate_specs(layout: Layout, series: Series, *, taus: tuple[float, ...] = (0.1, 0.25, 0.5),
-                    max_positions: int = 24, min_side: int = 2) -> list[EffectSpec]:
+                    max_positions: int = 48, min_side: int = 2) -> list[EffectSpec]:
     """Every non-relation candidate the series' covariates allow.
 
     Parameters
     ----------
     taus : tuple of float
         Time constants of saturating drifts, as fractions of the series' time span.
-    max_positions : int, default=24
+    max_positions : int, default=48
         Level steps are tried at every cycle boundary with at least ``min_side`` cycles
         on each side, thinned to this many evenly spread positions on long series; the
         first cycle after a logged tool change is always a position.  Each position ×
@@ -151,7 +151,8 @@ def _level_positions(series: Series, max_positions: int, min_side: int) -> list[
     ok = [k for k in range(min_side, n - min_side + 1) if t[k] > t[k - 1]]
     if len(ok) > max_positions:
         ok = [ok[int(i)] for i in np.unique(np.round(np.linspace(0, len(ok) - 1, max_positions)))]
-    changed = {int(k) for k in np.flatnonzero((series.parts == 0).any(axis=1)) if 0 < k < n}
+    reset = (series.parts[1:] == 0) & (series.parts[:-1] > 0)  # a logged tool change restarted the count
+    changed = {int(k) + 1 for k in np.flatnonzero(reset.any(axis=1))} if n > 1 else set()
     return sorted(set(ok) | {k for k in changed if t[k] > t[k - 1]})
 
 
@@ -310,7 +311,8 @@ def select_effects(layout: Layout, series: Series, *, alpha: float = 0.01, max_e
                 # its free constant takes one dimension's offset: against the lack of fit when there is one
                 p_r = _pvalue(g_r, lof[0], lof[1], 2) if lof is not None else _pvalue(g_r, rss0, df0, 2)
                 cands.append((p_r, 2, spec, -1, g_r))
-        p, k, spec, di, gain = min(cands, key=lambda c: c[0])
+        # ties (p-values that underflow to 0 for strong effects) go to the larger ΔRSS
+        p, k, spec, di, gain = min(cands, key=lambda c: (c[0], -c[4]))
         p_adj = min(1.0, p * m)
         f_stat = (gain / k) / max((rss0 - gain) / max(df0 - k, 1), 1e-300)
         if spec.kind == "drift" and spec.shape == "saturating":

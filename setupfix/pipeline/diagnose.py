@@ -120,7 +120,10 @@ class DiagnoseOutcome:
             "effects": [{"kind": e.kind, "target": e.target, "estimate": r(e.estimate, 12),
                          "stderr": r(e.stderr, 12), "unit": e.unit, "rms_after": r(e.rms_after),
                          "alike": list(e.alike),
-                         **({"registers": list(e.registers)} if e.kind == "relation" else {})} for e in d.effects],
+                         **({"registers": list(e.registers)} if e.kind == "relation" else {}),
+                         **({"cycle": e.spec.cycle, "at_hours": e.spec.at} if e.kind == "level" else {}),
+                         **({"channel": e.spec.channel, "register": e.spec.register} if e.kind == "process" else {})}
+                        for e in d.effects],
             "next_correction": {k: round(v, 9) for k, v in self.next_correction.items()},
             "next_solved": self.next_cycle.solved if self.next_cycle is not None else None,
             "declared_effects": [e.target for e in self.input.declared],
