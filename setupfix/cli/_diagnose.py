@@ -23,7 +23,8 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
         "diagnose", help="find what the model lacks in a series of reports; error before and after",
         description="Fit the declared model to a series of reports (setup state, corrections in effect at each "
                     "part's timestamp), trace the residual to effects the model lacks (drift, thermal, wear, "
-                    "scale, position, relation, group, level, process) by forward selection with F-tests and cross-validation, "
+                    "scale, position, relation, group, level, process) by forward selection with F-tests and "
+                    "cross-validation, "
                     "report the error before and after, walk forward against EWMA and no correction, and "
                     "recommend the next correction.")
     p.add_argument("reports", nargs="*", metavar="REPORT",

@@ -72,9 +72,9 @@ def forecast_shift(section: EffectsSection, layout: Layout, *, time: float | Non
             out += e.estimate * step * common_tool_row(layout)
         elif e.kind == "wear" and e.register in layout.register_ids:
             out += e.estimate * layout.composite[layout.register_ids.index(e.register)]
-        elif e.kind == "process" and process_change and e.channel in process_change:
-            if e.register is None or e.register in layout.register_ids:
-                out += e.estimate * float(process_change[str(e.channel)]) * register_row(layout, e.register)
+        elif (e.kind == "process" and process_change and e.channel in process_change
+              and (e.register is None or e.register in layout.register_ids)):
+            out += e.estimate * float(process_change[str(e.channel)]) * register_row(layout, e.register)
     return out
 
 

@@ -94,14 +94,14 @@ class Selection:
 
 
 def candidate_specs(layout: Layout, series: Series, *, taus: tuple[float, ...] = (0.1, 0.25, 0.5),
-                    max_positions: int = 48, min_side: int = 2) -> list[EffectSpec]:
+                    max_positions: int = 32, min_side: int = 2) -> list[EffectSpec]:
     """Every non-relation candidate the series' covariates allow.
 
     Parameters
     ----------
     taus : tuple of float
         Time constants of saturating drifts, as fractions of the series' time span.
-    max_positions : int, default=48
+    max_positions : int, default=32
         Level steps are tried at every cycle boundary with at least ``min_side`` cycles
         on each side, thinned to this many evenly spread positions on long series; the
         first cycle after a logged tool change is always a position.  Each position ×
@@ -319,6 +319,9 @@ def select_effects(layout: Layout, series: Series, *, alpha: float = 0.01, max_e
             spec = _refine_tau(spec, layout, series, obs, Q, r)
             gain = _dense_scores(Q, r, effect_columns(spec, layout, series, obs))[0][0]
             f_stat = (gain / k) / max((rss0 - gain) / max(df0 - k, 1), 1e-300)
+        if spec.kind == "level" and p * m < alpha:  # the step's cycle between the positions tried
+            spec, gain = _refine_level(spec, layout, series, obs, Q, r, gain)
+            f_stat = (gain / k) / max((rss0 - gain) / max(df0 - k, 1), 1e-300)
         cols = Z[:, [di]] if di >= 0 and spec == specs[di] else effect_columns(spec, layout, series, obs)
         X1 = np.hstack([X, cols])
         cv0 = cv1 = float("nan")
@@ -452,6 +455,31 @@ def _relation_set(Q: Array, r: Array, obs: Observations, applied: Array, layout:
         if p * m >= alpha:
             out.append(f"relation: {spec.dimension} ~ {layout.register_ids[j]}")
     return tuple(out)
+
+
+def _refine_level(spec: EffectSpec, layout: Layout, series: Series, obs: Observations, Q: Array, r: Array,
+                  gain: float, min_side: int = 2) -> tuple[EffectSpec, float]:
+    """A level step moved to the cycle boundary, between its neighbouring positions tried, that explains most.
+
+    On long series :func:`candidate_specs` tries a thinned set of positions; the
+    accepted step (tested at its own position, counted in the Bonferroni factor) is
+    placed at the best boundary up to the next positions tried on either side.
+    """
+    n = series.n_cycles
+    t = series.time
+    k0 = int(np.searchsorted(t, spec.at, side="left"))
+    tried = sorted({float(c.at) for c in candidate_specs(layout, series) if c.kind == "level"})
+    i = tried.index(spec.at) if spec.at in tried else -1
+    lo = int(np.searchsorted(t, tried[i - 1], side="left")) + 1 if i > 0 else min_side
+    hi = int(np.searchsorted(t, tried[i + 1], side="left")) - 1 if 0 <= i < len(tried) - 1 else n - min_side
+    ks = [k for k in range(max(lo, min_side), min(hi, n - min_side) + 1) if k != k0 and t[k] > t[k - 1]]
+    if not ks:
+        return spec, gain
+    alts = [EffectSpec("level", register=spec.register, at=float(t[k]),
+                       cycle=series.cycles[k] if series.cycles else f"cycle {k + 1}") for k in ks]
+    g = _dense_scores(Q, r, np.column_stack([effect_columns(a, layout, series, obs)[:, 0] for a in alts]))[0]
+    best = int(np.argmax(g))
+    return (alts[best], float(g[best])) if g[best] > gain else (spec, gain)
 
 
 def _refine_tau(spec: EffectSpec, layout: Layout, series: Series, obs: Observations, Q: Array,

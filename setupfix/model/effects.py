@@ -253,7 +253,8 @@ def _validated(section: Mapping[str, Any] | None, model: ProcessModel,
             bad(f"{key}.tau", f"expected hours in (0, {TAU_HOURS:g}], found {_shown(raw['tau'])}")
         if kind == "process":
             if "reference" in raw and not (_num(raw["reference"]) and abs(raw["reference"]) <= PROCESS_VALUE):
-                bad(f"{key}.reference", f"expected a number within ±{PROCESS_VALUE:g}, found {_shown(raw['reference'])}")
+                bad(f"{key}.reference",
+                    f"expected a number within ±{PROCESS_VALUE:g}, found {_shown(raw['reference'])}")
         elif "reference" in raw and not (_num(raw["reference"])
                                          and REFERENCE_CELSIUS[0] <= raw["reference"] <= REFERENCE_CELSIUS[1]):
             bad(f"{key}.reference", f"expected °C in [{REFERENCE_CELSIUS[0]:g}, {REFERENCE_CELSIUS[1]:g}], "
@@ -269,7 +270,7 @@ def _validated(section: Mapping[str, Any] | None, model: ProcessModel,
                 bad(f"{key}.{k}", f"a {kind} effect needs {k} (a string)")
         if "at" in raw and not (_num(raw["at"]) and 0 <= raw["at"] <= AT_HOURS):
             bad(f"{key}.at", f"expected hours in [0, {AT_HOURS:g}], found {_shown(raw['at'])}")
-        span_raw = raw.get("span")
+        span_raw: Any = raw.get("span")
         if "span" in raw and not (_num(span_raw) and 0 < span_raw <= PROCESS_VALUE):
             bad(f"{key}.span", f"expected a number in (0, {PROCESS_VALUE:g}], found {_shown(span_raw)}")
         elif kind == "process" and _num(span_raw) and abs(est) * span_raw > bound:
