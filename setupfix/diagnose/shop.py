@@ -230,6 +230,10 @@ class ShopSimulator(ValidatedParams):
                 raise ParameterError("simulate: a position effect needs feature positions in the model "
                                      "([features.*] position = [x, y, z])")
         times = self._times()
+        for e in effects:
+            if e.spec.kind == "level" and not times[0] < e.spec.at <= times[-1]:
+                raise ParameterError(f"simulate: a level step at {e.spec.at:g} h is not within the series "
+                                     f"({times[0]:g} … {times[-1]:g} h): it would change no cycle or all alike")
         t_temp, temp = self._temperatures(times, rng)
         # tool changes: in turn, every tool_change_every cycles, 5 min before the cycle
         n_t = layout.tools.size

@@ -138,3 +138,12 @@ def test_bad_level_and_process_effects_are_named(table, key, guide_pins_model):
     with pytest.raises(ModelError) as err:
         effects_from_dict(table, guide_pins_model, "m.toml")
     assert f"m.toml: [{key}]" in str(err.value)
+
+
+@pytest.mark.parametrize("spec", [EffectSpec("level", register="T5"),  # at 0 h: every cycle alike, no step
+                                  EffectSpec("process", channel="speed_rpm", register="T5")])  # no channel recorded
+def test_simulator_refuses_an_effect_it_cannot_hide(spec):
+    from setupfix.errors import ParameterError
+
+    with pytest.raises(ParameterError):
+        ShopSimulator(n_cycles=10).run(LAYOUT, [HiddenEffect(spec, 0.01)])
