@@ -1,4 +1,10 @@
-"""Read a temperature log (CSV or ``.xlsx``) into numeric columns, every bad cell named.
+"""Read a temperature or process log (CSV or ``.xlsx``) into columns, every bad cell named.
+
+The one reader of time-stamped logs: a temperature log (numeric sensor columns) and a
+process log (``--process``: channels of any name and unit, numeric or categorical —
+spindle speed, tool stick-out, feed, a designed factor's level — tied to the parts by a
+``timestamp`` or a ``serial`` column).  With ``keep_text`` a text column is kept as
+text (a categorical channel) instead of being left out.
 
 A log has one column per temperature sensor (°C), optionally ``spindle_speed`` (rpm),
 an ambient column and a measured thermal-error column named on the command line.
@@ -78,6 +84,8 @@ class TemperatureLog:
         Worksheet title of an ``.xlsx`` log.
     notes : list of Note
         What was ignored or assumed while reading (warnings as data).
+    text : dict[str, list of (str or None)]
+        Text columns (categorical channels) when read with ``keep_text``; None for an empty cell.
     """
 
     source: str
@@ -87,10 +95,13 @@ class TemperatureLog:
     lines: npt.NDArray[np.int64] | None = None
     sheet: str | None = None
     notes: list[Note] = field(default_factory=list)
+    text: dict[str, list[str | None]] = field(default_factory=dict)
 
     @property
     def n(self) -> int:
-        return len(next(iter(self.columns.values()))) if self.columns else 0
+        if self.columns:
+            return len(next(iter(self.columns.values())))
+        return len(next(iter(self.text.values()))) if self.text else 0
 
     @property
     def sample_interval_s(self) -> float | None:
@@ -131,7 +142,7 @@ class TemperatureLog:
         secs = None if self.seconds is None else self.seconds[start:stop] - self.seconds[start]
         return TemperatureLog(self.source, {k: v[start:stop] for k, v in self.columns.items()}, secs,
                               self.timestamps[start:stop], None if self.lines is None else self.lines[start:stop],
-                              self.sheet, list(self.notes))
+                              self.sheet, list(self.notes), {k: v[start:stop] for k, v in self.text.items()})
 
     @classmethod
     def from_arrays(cls, source: str, columns: dict[str, npt.ArrayLike],
@@ -182,7 +193,7 @@ def _grid(data: bytes, source: str, sheet: str | None) -> tuple[list[Any], list[
 
 
 def read_temperature_log(path: str | Path, *, interval: float | None = None, require_time: bool = True,
-                         sheet: str | None = None) -> TemperatureLog:
+                         sheet: str | None = None, keep_text: bool = False) -> TemperatureLog:
     """Read a temperature log (CSV, or ``.xlsx`` through the table reader).
 
     Parameters
@@ -195,6 +206,9 @@ def read_temperature_log(path: str | Path, *, interval: float | None = None, req
         or count the time in samples.
     sheet : str, optional
         Worksheet of an ``.xlsx`` log (default the first).
+    keep_text : bool
+        Keep text columns (categorical channels of a process log) in ``text`` rather than
+        leaving them out with a note; a column mixing numbers and text is then text.
 
     Raises
     ------
@@ -240,6 +254,7 @@ def read_temperature_log(path: str | Path, *, interval: float | None = None, req
     i_idx = next((lower.index(c) for c in INDEX_COLUMNS if c in lower), None) if t_idx is None else None
     lines = np.array([line for line, _ in body], dtype=np.int64)
     columns: dict[str, Array] = {}
+    text: dict[str, list[str | None]] = {}
     for j, name in enumerate(header):
         cells = [(row[j] if j < len(row) else None) for _, row in body]
         cells = [None if c is None or (isinstance(c, str) and not c.strip()) else c for c in cells]
@@ -260,6 +275,9 @@ def read_temperature_log(path: str | Path, *, interval: float | None = None, req
             else:
                 values[i] = number
         filled = sum(c is not None for c in cells)
+        if bad and keep_text and j != i_idx:
+            text[name] = [None if c is None else str(c).strip() for c in cells]
+            continue
         if bad and len(bad) == filled and j != i_idx:
             notes.append(Note(f"column {name!r} is text: ignored", where(1), "parse"))
             continue  # a text column (operator notes): kept out of the numeric table
@@ -299,7 +317,7 @@ def read_temperature_log(path: str | Path, *, interval: float | None = None, req
                          hint="give the sampling interval with --interval SECONDS, or add a timestamp or sample column")
     else:
         notes.append(Note("no timestamp: time counted in samples", where(1), "parse"))
-    if not columns:
+    if not columns and not text:
         raise ParseError("no numeric columns", location=where(1))
     if seconds is not None and seconds.size > 2:
         steps = np.diff(seconds)
@@ -307,7 +325,7 @@ def read_temperature_log(path: str | Path, *, interval: float | None = None, req
         if np.max(np.abs(steps - med)) > 0.05 * med:
             notes.append(Note(f"sampling interval varies (median {med:g} s); grey and lumped-mass models "
                               "assume equal steps", where(1), "thermal"))
-    return TemperatureLog(source, columns, seconds, stamps, lines, title, notes)
+    return TemperatureLog(source, columns, seconds, stamps, lines, title, notes, text)
 
 
 def _check_increasing(values: Array, lines: npt.NDArray[np.int64], where: Any, what: str) -> None:

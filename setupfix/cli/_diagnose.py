@@ -23,7 +23,8 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
         "diagnose", help="find what the model lacks in a series of reports; error before and after",
         description="Fit the declared model to a series of reports (setup state, corrections in effect at each "
                     "part's timestamp), trace the residual to effects the model lacks (drift, thermal, wear, "
-                    "scale, position, relation, group) by forward selection with F-tests and cross-validation, "
+                    "scale, position, relation, group, level, process) by forward selection with F-tests and "
+                    "cross-validation, "
                     "report the error before and after, walk forward against EWMA and no correction, and "
                     "recommend the next correction.")
     p.add_argument("reports", nargs="*", metavar="REPORT",
@@ -37,6 +38,10 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
     p.add_argument("--corrections", metavar="CSV", default=None,
                    help="corrections log (timestamp,register,delta[,event]; header in any case)")
     p.add_argument("--temperatures", metavar="CSV", default=None, help="temperature log")
+    p.add_argument("--process", metavar="LOG.csv", default=None,
+                   help="process log: a 'serial' column (the parts' numbers) or a 'timestamp' column, and channels "
+                        "of any name and unit (numeric, or categorical: one 0/1 indicator per level), each tested "
+                        "as acting on one register or on every tool alike")
     p.add_argument("--thermal", metavar="MODEL.json", default=None,
                    help="thermal model saved by 'setupfix thermal fit': its predicted drift is tested as a channel")
     p.add_argument("--augment", metavar="OUT.toml", default=None,
@@ -96,6 +101,7 @@ def run(args: argparse.Namespace) -> int:
     out = diagnose_reports(DiagnoseRequest(
         args.model, tuple(args.reports), ReadOptions(lenient=args.lenient), corrections=args.corrections,
         temperatures=args.temperatures, db=args.db, thermal=args.thermal, augment=args.augment,
+        process=args.process,
         diagnoser=Diagnoser(alpha=args.alpha, walk=not args.no_walk), solve=SolveOptions(objective=args.objective)))
     if args.json:
         json.dump(out.to_json(), sys.stdout, indent=2)

@@ -4,7 +4,11 @@ A measured report shows the part as it was cut; the correction acts on the next
 cycle.  Between the two, a drift goes on for one cycle interval and every tool wears
 by one more cycle; the static effects (scale, position, group) are already in the
 measured deviations, and a thermal term needs the next temperature, which is not
-known (taken as unchanged).  The shift is added to the measured deviations before
+known (taken as unchanged).  A level step is in the measured deviations once a cycle
+after it was measured (nothing more to add).  A process effect needs the next cycle's
+value of its channel: when the caller knows it (a planned spindle speed, the next
+stick-out) the change from the measured cycle is forecast, β · Δx · C[i]; otherwise the
+channel is taken as unchanged.  The shift is added to the measured deviations before
 the correction is optimised.
 
 A relation is in the measured deviations too, but it also changes what a correction
@@ -17,7 +21,9 @@ import numpy as np
 import numpy.typing as npt
 
 from setupfix.diagnose.fit import RELATION_T
-from setupfix.diagnose.terms import EffectSpec, Layout, common_tool_row
+from collections.abc import Mapping
+
+from setupfix.diagnose.terms import EffectSpec, Layout, common_tool_row, register_row
 from setupfix.model.effects import EffectsSection, ModelEffect
 
 __all__ = ["spec_of", "forecast_shift", "relation_composite"]
@@ -29,11 +35,11 @@ def spec_of(effect: ModelEffect) -> EffectSpec:
     """The engine's term of a model-file effect."""
     return EffectSpec(effect.kind, register=effect.register, dimension=effect.dimension, axis=effect.axis,
                       group=effect.group, channel=effect.channel, shape=effect.shape, tau=effect.tau or 0.0,
-                      reference=effect.reference)
+                      reference=effect.reference, at=effect.at or 0.0, cycle=effect.cycle)
 
 
 def forecast_shift(section: EffectsSection, layout: Layout, *, time: float | None = None,
-                   ahead: float | None = None) -> Array:
+                   ahead: float | None = None, process_change: Mapping[str, float] | None = None) -> Array:
     """Change of every dimension expected from the measured cycle to the next one.
 
     Parameters
@@ -45,12 +51,16 @@ def forecast_shift(section: EffectsSection, layout: Layout, *, time: float | Non
         ``section.last_hours``, else 0); matters for a saturating drift only.
     ahead : float, optional [h]
         Interval to the next cycle (default ``section.cycle_hours``, else 0).
+    process_change : mapping of str to float, optional
+        Change of each process channel from the measured cycle to the next one (a
+        channel not given is taken as unchanged).
 
     Returns
     -------
     ndarray of shape (n_dimensions,) [model unit]
         drift (linear): β · Δt · c_T; drift (saturating): β · (e^{−t/τ} − e^{−(t+Δt)/τ}) · c_T;
-        wear: β · C[tool] (one more cycle); other kinds: 0.
+        wear: β · C[tool] (one more cycle); process: β · Δx · C[register] (or c_T);
+        other kinds (level included): 0.
     """
     t = time if time is not None else (section.last_hours or 0.0)
     dt = ahead if ahead is not None else (section.cycle_hours or 0.0)
@@ -62,6 +72,9 @@ def forecast_shift(section: EffectsSection, layout: Layout, *, time: float | Non
             out += e.estimate * step * common_tool_row(layout)
         elif e.kind == "wear" and e.register in layout.register_ids:
             out += e.estimate * layout.composite[layout.register_ids.index(e.register)]
+        elif (e.kind == "process" and process_change and e.channel in process_change
+              and (e.register is None or e.register in layout.register_ids)):
+            out += e.estimate * float(process_change[str(e.channel)]) * register_row(layout, e.register)
     return out
 
 

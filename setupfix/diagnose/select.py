@@ -93,13 +93,22 @@ class Selection:
         return tuple(s.spec for s in self.steps if s.accepted and s.spec.kind == "relation" and s.alike)
 
 
-def candidate_specs(layout: Layout, series: Series, *, taus: tuple[float, ...] = (0.1, 0.25, 0.5)) -> list[EffectSpec]:
+def candidate_specs(layout: Layout, series: Series, *, taus: tuple[float, ...] = (0.1, 0.25, 0.5),
+                    max_positions: int = 32, min_side: int = 2) -> list[EffectSpec]:
     """Every non-relation candidate the series' covariates allow.
 
     Parameters
     ----------
     taus : tuple of float
         Time constants of saturating drifts, as fractions of the series' time span.
+    max_positions : int, default=32
+        Level steps are tried at every cycle boundary with at least ``min_side`` cycles
+        on each side, thinned to this many evenly spread positions on long series; the
+        first cycle after a logged tool change is always a position.  Each position ×
+        register is one candidate, so the selection's Bonferroni factor counts every
+        position tried (a step found anywhere is held to the family-wise ``alpha``).
+    min_side : int, default=2
+        Cycles needed before and after a step (one cycle alone is an outlier, not a level).
     """
     out: list[EffectSpec] = []
     n = series.n_cycles
@@ -107,9 +116,10 @@ def candidate_specs(layout: Layout, series: Series, *, taus: tuple[float, ...] =
     if n >= 3 and span > 0:
         out.append(EffectSpec("drift", shape="linear"))
         out += [EffectSpec("drift", shape="saturating", tau=round(f * span, 3)) for f in taus]
+    process = set(series.process_channels)
     for c, name in enumerate(series.channels):
         col = series.temperature[:, c]
-        if n >= 3 and np.ptp(col) > 0:
+        if n >= 3 and np.ptp(col) > 0 and name not in process:
             out.append(EffectSpec("thermal", channel=name, reference=float(np.round(np.mean(col), 2))))
     for k, j in enumerate(layout.tools):
         if n >= 3 and np.ptp(series.parts[:, k]) > 0:
@@ -122,7 +132,28 @@ def candidate_specs(layout: Layout, series: Series, *, taus: tuple[float, ...] =
             out.append(EffectSpec("position", axis=axis))
     for g in dict.fromkeys(g for g in layout.groups if g is not None):
         out.append(EffectSpec("group", group=g))
+    targets: tuple[str | None, ...] = (None, *layout.register_ids)
+    for k in _level_positions(series, max_positions, min_side):
+        cyc = series.cycles[k] if series.cycles else f"cycle {k + 1}"
+        out += [EffectSpec("level", register=r, at=float(series.time[k]), cycle=cyc) for r in targets]
+    for c, name in enumerate(series.channels):
+        col = series.temperature[:, c]
+        if n >= 3 and np.ptp(col) > 0 and name in process:
+            ref = float(f"{np.mean(col):.4g}")
+            out += [EffectSpec("process", channel=name, register=r, reference=ref) for r in targets]
     return out
+
+
+def _level_positions(series: Series, max_positions: int, min_side: int) -> list[int]:
+    """Cycle indices a level step may start at (time strictly after the previous cycle's)."""
+    n = series.n_cycles
+    t = series.time
+    ok = [k for k in range(min_side, n - min_side + 1) if t[k] > t[k - 1]]
+    if len(ok) > max_positions:
+        ok = [ok[int(i)] for i in np.unique(np.round(np.linspace(0, len(ok) - 1, max_positions)))]
+    reset = (series.parts[1:] == 0) & (series.parts[:-1] > 0)  # a logged tool change restarted the count
+    changed = {int(k) + 1 for k in np.flatnonzero(reset.any(axis=1))} if n > 1 else set()
+    return sorted(set(ok) | {k for k in changed if t[k] > t[k - 1]})
 
 
 def _orth(X: Array) -> Array:
@@ -280,12 +311,16 @@ def select_effects(layout: Layout, series: Series, *, alpha: float = 0.01, max_e
                 # its free constant takes one dimension's offset: against the lack of fit when there is one
                 p_r = _pvalue(g_r, lof[0], lof[1], 2) if lof is not None else _pvalue(g_r, rss0, df0, 2)
                 cands.append((p_r, 2, spec, -1, g_r))
-        p, k, spec, di, gain = min(cands, key=lambda c: c[0])
+        # ties (p-values that underflow to 0 for strong effects) go to the larger ΔRSS
+        p, k, spec, di, gain = min(cands, key=lambda c: (c[0], -c[4]))
         p_adj = min(1.0, p * m)
         f_stat = (gain / k) / max((rss0 - gain) / max(df0 - k, 1), 1e-300)
         if spec.kind == "drift" and spec.shape == "saturating":
             spec = _refine_tau(spec, layout, series, obs, Q, r)
             gain = _dense_scores(Q, r, effect_columns(spec, layout, series, obs))[0][0]
+            f_stat = (gain / k) / max((rss0 - gain) / max(df0 - k, 1), 1e-300)
+        if spec.kind == "level" and p * m < alpha:  # the step's cycle between the positions tried
+            spec, gain = _refine_level(spec, layout, series, obs, Q, r, gain)
             f_stat = (gain / k) / max((rss0 - gain) / max(df0 - k, 1), 1e-300)
         cols = Z[:, [di]] if di >= 0 and spec == specs[di] else effect_columns(spec, layout, series, obs)
         X1 = np.hstack([X, cols])
@@ -420,6 +455,31 @@ def _relation_set(Q: Array, r: Array, obs: Observations, applied: Array, layout:
         if p * m >= alpha:
             out.append(f"relation: {spec.dimension} ~ {layout.register_ids[j]}")
     return tuple(out)
+
+
+def _refine_level(spec: EffectSpec, layout: Layout, series: Series, obs: Observations, Q: Array, r: Array,
+                  gain: float, min_side: int = 2) -> tuple[EffectSpec, float]:
+    """A level step moved to the cycle boundary, between its neighbouring positions tried, that explains most.
+
+    On long series :func:`candidate_specs` tries a thinned set of positions; the
+    accepted step (tested at its own position, counted in the Bonferroni factor) is
+    placed at the best boundary up to the next positions tried on either side.
+    """
+    n = series.n_cycles
+    t = series.time
+    k0 = int(np.searchsorted(t, spec.at, side="left"))
+    tried = sorted({float(c.at) for c in candidate_specs(layout, series) if c.kind == "level"})
+    i = tried.index(spec.at) if spec.at in tried else -1
+    lo = int(np.searchsorted(t, tried[i - 1], side="left")) + 1 if i > 0 else min_side
+    hi = int(np.searchsorted(t, tried[i + 1], side="left")) - 1 if 0 <= i < len(tried) - 1 else n - min_side
+    ks = [k for k in range(max(lo, min_side), min(hi, n - min_side) + 1) if k != k0 and t[k] > t[k - 1]]
+    if not ks:
+        return spec, gain
+    alts = [EffectSpec("level", register=spec.register, at=float(t[k]),
+                       cycle=series.cycles[k] if series.cycles else f"cycle {k + 1}") for k in ks]
+    g = _dense_scores(Q, r, np.column_stack([effect_columns(a, layout, series, obs)[:, 0] for a in alts]))[0]
+    best = int(np.argmax(g))
+    return (alts[best], float(g[best])) if g[best] > gain else (spec, gain)
 
 
 def _refine_tau(spec: EffectSpec, layout: Layout, series: Series, obs: Observations, Q: Array,

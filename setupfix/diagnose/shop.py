@@ -15,6 +15,12 @@ diagnosis and the simulator share one definition of every kind.
 
 A spindle temperature follows a first-order lag towards ambient + ``heat`` while
 the machine runs and towards ambient during pauses; ambient swings daily.
+
+With ``process`` > 0 the shop also records process channels per cycle, as a designed
+run would set them: ``speed_rpm`` (6000, 9000 or 12000, changed every 3 cycles),
+``stickout_mm`` (30 or 45, changed every 9 cycles) and ``feed`` (100–300 mm/min, every
+cycle); a hidden ``process`` effect acts through one of them, a hidden ``level`` is a step
+at a time (``EffectSpec.at``).
 """
 
 from __future__ import annotations
@@ -46,7 +52,8 @@ class HiddenEffect:
     magnitude : float
         Its coefficient: drift [unit/h] (linear) or amplitude [unit] (saturating),
         thermal [unit/°C], wear [unit/cycle], scale and position [unit/unit],
-        relation [weight change], group [unit].
+        relation [weight change], group [unit], level [unit], process [unit per unit of
+        the channel].
     """
 
     spec: EffectSpec
@@ -114,6 +121,8 @@ class ShopSimulator(ValidatedParams):
         registers then differ, so a wrong relation can be assigned to its register).
     decimals : int, default=4
         Deviations rounded as a CMM prints them.
+    process : int, default=0
+        Process channels recorded per cycle (0–3: ``speed_rpm``, ``stickout_mm``, ``feed``).
     seed : int or None
         Seed of the simulation; None means :data:`setupfix.search.DEFAULT_SEED` (never entropy).
     """
@@ -132,13 +141,15 @@ class ShopSimulator(ValidatedParams):
         "heat": [Interval(float, 0, None)],
         "sparse": [Interval(int, 0, None)],
         "decimals": [Interval(int, 0, 12)],
+        "process": [Interval(int, 0, 3)],
         "seed": [Interval(int, 0, None), None],
     }
 
     def __init__(self, *, n_cycles: int = 40, noise: float = 0.002, setup_error: float = 0.03,
                  cycle_minutes: float = 20.0, shift_cycles: int = 24, pause_hours: float = 8.0,
                  correct_every: int = 5, dead_time: float = 30.0, gain: float = 0.7, tool_change_every: int = 16,
-                 heat: float = 6.0, sparse: int = 0, decimals: int = 4, seed: int | None = None) -> None:
+                 heat: float = 6.0, sparse: int = 0, decimals: int = 4, process: int = 0,
+                 seed: int | None = None) -> None:
         self.n_cycles = n_cycles
         self.noise = noise
         self.setup_error = setup_error
@@ -152,6 +163,7 @@ class ShopSimulator(ValidatedParams):
         self.heat = heat
         self.sparse = sparse
         self.decimals = decimals
+        self.process = process
         self.seed = seed
 
     def validate_params(self) -> None:
@@ -186,6 +198,15 @@ class ShopSimulator(ValidatedParams):
         temp = np.column_stack([spindle, ambient]) + noise
         return t, np.round(temp, 2)
 
+    def _process(self, rng: np.random.Generator) -> tuple[Array, tuple[str, ...]]:
+        """Process channels per cycle, shape (n_cycles, process), and their names."""
+        k = np.arange(self.n_cycles)
+        speed = rng.choice([6000.0, 9000.0, 12000.0], size=k[-1] // 3 + 1)[k // 3]
+        stick = rng.choice([30.0, 45.0], size=k[-1] // 9 + 1)[k // 9]
+        feed = np.round(rng.uniform(100.0, 300.0, size=self.n_cycles))
+        cols = np.column_stack([speed, stick, feed])[:, :self.process]
+        return cols, ("speed_rpm", "stickout_mm", "feed")[:self.process]
+
     # -- run ------------------------------------------------------------------------------
     def run(self, layout: Layout, effects: tuple[HiddenEffect, ...] | list[HiddenEffect] = ()) -> SimulatedSeries:
         """Simulate the shop; return the series, its logs and the truth.
@@ -209,6 +230,10 @@ class ShopSimulator(ValidatedParams):
                 raise ParameterError("simulate: a position effect needs feature positions in the model "
                                      "([features.*] position = [x, y, z])")
         times = self._times()
+        for e in effects:
+            if e.spec.kind == "level" and not times[0] < e.spec.at <= times[-1]:
+                raise ParameterError(f"simulate: a level step at {e.spec.at:g} h is not within the series "
+                                     f"({times[0]:g} … {times[-1]:g} h): it would change no cycle or all alike")
         t_temp, temp = self._temperatures(times, rng)
         # tool changes: in turn, every tool_change_every cycles, 5 min before the cycle
         n_t = layout.tools.size
@@ -222,11 +247,17 @@ class ShopSimulator(ValidatedParams):
                 log.append((at, int(layout.tools[j]), 0.0, "tool_change"))
         parts = parts_since_change(times, [np.array(c) for c in changes])
         temp_at = temp[np.clip(np.searchsorted(t_temp, times, side="right") - 1, 0, len(t_temp) - 1)]
+        channels: tuple[str, ...] = ("spindle", "ambient")
+        names: tuple[str, ...] = ()
+        if self.process:
+            proc, names = self._process(generator(None if self.seed is None else self.seed + 7919))
+            temp_at = np.column_stack([temp_at, proc])
+            channels += names
         setup: Array = np.asarray(self.setup_error * (1.0 - 2.0 * rng.random(n_r)), dtype=float)  # eq. 12
         noise = rng.normal(0.0, self.noise, size=(self.n_cycles, n_d))
         # Effects that do not depend on the applied corrections are fixed in advance.
         probe = Series(np.zeros((self.n_cycles, n_d)), times, np.zeros((self.n_cycles, n_r)), parts, temp_at,
-                       ("spindle", "ambient"))
+                       channels, process_channels=names)
         static = np.zeros((self.n_cycles, n_d))
         rel = np.zeros_like(C)
         for e in effects:
@@ -269,8 +300,8 @@ class ShopSimulator(ValidatedParams):
         leftover: Array = np.sum([p[1] for p in pending], axis=0) if pending else np.zeros(n_r)
         dev = np.round(dev, self.decimals)
         log.sort(key=lambda r: r[0])
-        series = Series(dev, times, applied, parts, temp_at, ("spindle", "ambient"),
-                        tuple(f"cycle {k + 1:03d}" for k in range(self.n_cycles)), "", leftover)
+        series = Series(dev, times, applied, parts, temp_at, channels,
+                        tuple(f"cycle {k + 1:03d}" for k in range(self.n_cycles)), "", leftover, names)
         return SimulatedSeries(
             series=series,
             log_time=np.array([r[0] for r in log], dtype=float),

@@ -13,8 +13,15 @@ with C the composite register → dimension matrix, s the unknown setup state an
 the applied corrections.  An *effect* the model lacks adds a term β · z_k(q) on a
 covariate field z of shape (n_cycles, n_dimensions); :func:`effect_field` builds that
 field for every kind of ``../shared/spec/cli-json.md`` (drift, thermal, wear, scale,
-position, relation, group) so that the simulator, the diagnosis and the forecast use
-one definition.
+position, relation, group, level, process) so that the simulator, the diagnosis and
+the forecast use one definition.
+
+A *level* is a step at a cycle (a tool change, a new batch of stock, a process
+change): z_k = 1[t_k ≥ t_step] · C[i] (one register) or · c_T (every tool alike).  A
+*process* effect is a recorded process variable x (any channel of a process log: spindle
+speed, stick-out, feed, warm-up minutes, a categorical level as a 0/1 indicator) acting
+on one register, z_k = (x_k − x_ref) · C[i], or on every tool alike (· c_T); a variable
+acting on a set of registers with a coefficient each is one process effect per register.
 """
 
 from __future__ import annotations
@@ -28,12 +35,12 @@ from setupfix.model import ProcessModel
 from setupfix.relation import relation_matrices
 
 __all__ = ["KINDS", "Layout", "Series", "EffectSpec", "effect_field", "applied_at", "parts_since_change",
-           "join_temperatures", "common_tool_row", "typical_step"]
+           "join_temperatures", "common_tool_row", "register_row", "typical_step"]
 
 Array = npt.NDArray[np.float64]
 
 #: Effect kinds of the diagnose contract, in the order candidates are listed.
-KINDS: tuple[str, ...] = ("drift", "thermal", "wear", "scale", "position", "relation", "group")
+KINDS: tuple[str, ...] = ("drift", "thermal", "wear", "scale", "position", "relation", "group", "level", "process")
 
 AXES = ("x", "y", "z")
 
@@ -127,15 +134,21 @@ class Series:
         Sum of the logged register changes in effect when the cycle was machined.
     parts : ndarray of shape (n_cycles, n_tools)
         Cycles cut by each tool since its last change (0 right after a change).
-    temperature : ndarray of shape (n_cycles, n_channels) [°C]
-        Temperature sample at or just before each cycle (empty when no log).
+    temperature : ndarray of shape (n_cycles, n_channels)
+        Recorded channels per cycle: temperature samples [°C] at or just before each
+        cycle, then the process log's channels (any unit; a categorical level as a 0/1
+        indicator) joined per cycle (empty when no log).
     channels : tuple of str
+        Names of the columns of ``temperature``.
     cycles : tuple of str
         Cycle (part) identifiers.
     origin : str
         ISO timestamp of time 0 ("" when the series has no timestamps).
     pending : ndarray of shape (n_registers,) [model unit]
         Logged changes after the last cycle (in effect for the next one).
+    process_channels : tuple of str
+        The channels that come from a process log (candidates of the ``process`` kind;
+        the others are temperatures, candidates of the ``thermal`` kind).
     """
 
     deviation: Array
@@ -147,6 +160,7 @@ class Series:
     cycles: tuple[str, ...] = ()
     origin: str = ""
     pending: Array = field(default_factory=lambda: np.zeros(0))
+    process_channels: tuple[str, ...] = ()
 
     @property
     def n_cycles(self) -> int:
@@ -157,7 +171,8 @@ class Series:
         idx = np.asarray(rows)
         cycles = tuple(np.asarray(self.cycles, dtype=object)[idx]) if self.cycles else ()
         return Series(self.deviation[idx], self.time[idx], self.applied[idx], self.parts[idx],
-                      self.temperature[idx], self.channels, cycles, self.origin, self.pending)
+                      self.temperature[idx], self.channels, cycles, self.origin, self.pending,
+                      self.process_channels)
 
 
 @dataclass(frozen=True)
@@ -169,7 +184,7 @@ class EffectSpec:
     kind : str
         One of :data:`KINDS`.
     register : str, optional
-        Tool (wear) or register (relation).
+        Tool (wear) or register (relation; level and process: None for every tool alike).
     dimension : str, optional
         Dimension (relation).
     axis : str, optional
@@ -177,13 +192,18 @@ class EffectSpec:
     group : str, optional
         Station or setup (group).
     channel : str, optional
-        Temperature channel (thermal).
+        Temperature channel (thermal) or process channel (process).
     shape : str
         ``linear`` or ``saturating`` (drift).
     tau : float
         Time constant of a saturating drift [h].
     reference : float
-        Temperature the thermal term is zero at [°C].
+        Temperature the thermal term is zero at [°C]; value of the process channel the
+        process term is zero at [the channel's unit].
+    at : float
+        Time of a level step [h since the series' origin]: cycles at or after it are shifted.
+    cycle : str, optional
+        First cycle after a level step (for people).
     """
 
     kind: str
@@ -195,6 +215,8 @@ class EffectSpec:
     shape: str = "linear"
     tau: float = 0.0
     reference: float = 0.0
+    at: float = 0.0
+    cycle: str | None = None
 
     @property
     def target(self) -> str:
@@ -211,13 +233,18 @@ class EffectSpec:
             return str(self.axis)
         if self.kind == "relation":
             return f"{self.dimension} ~ {self.register}"
+        if self.kind == "level":
+            return f"{self.register or 'all tools'} step at {self.cycle or f'{self.at:g} h'}"
+        if self.kind == "process":
+            return f"{self.register or 'all tools'} ~ {self.channel}"
         return f"group {self.group}"
 
     def unit(self, length: str) -> str:
         """Unit of the effect's estimate (``length`` is the model unit)."""
         return {"drift": f"{length}/h" if self.shape == "linear" else length, "thermal": f"{length}/°C",
                 "wear": f"{length}/cycle", "scale": f"{length}/{length}", "position": f"{length}/{length}",
-                "relation": "1", "group": length}[self.kind]
+                "relation": "1", "group": length, "level": length,
+                "process": f"{length}/unit of {self.channel}"}[self.kind]
 
 
 def typical_step(time: Array) -> float:
@@ -288,7 +315,20 @@ def effect_field(spec: EffectSpec, layout: Layout, series: Series) -> Array:
         z = np.zeros((n, d))
         z[:, q] = series.applied[:, i]
         return z
+    if spec.kind == "level":
+        return np.outer((series.time >= spec.at).astype(float), register_row(layout, spec.register))
+    if spec.kind == "process":
+        ch = series.channels.index(str(spec.channel))
+        return np.outer(series.temperature[:, ch] - spec.reference, register_row(layout, spec.register))
     raise KeyError(spec.kind)
+
+
+def register_row(layout: Layout, register: str | None) -> Array:
+    """Dimension change per unit change of one register (C[i]), or of every tool alike (``None``)."""
+    if register is None:
+        return common_tool_row(layout)
+    out: Array = layout.composite[layout.register_ids.index(register)]
+    return out
 
 
 def applied_at(times: Array, log_times: Array, log_register: npt.NDArray[np.intp], log_delta: Array,

@@ -9,7 +9,7 @@ this section; a model without it loads as before.  Layout::
     last_hours = 13.0                # time of the last cycle diagnosed, from origin [h]
 
     [effects.E1]
-    kind = "drift"                   # drift | thermal | wear | scale | position | relation | group
+    kind = "drift"                   # drift | thermal | wear | scale | position | relation | group | level | process
     shape = "linear"                 # drift: linear | saturating (then tau [h])
     estimate = 0.0020                # coefficient, in `unit`
     stderr = 0.00001
@@ -18,7 +18,12 @@ this section; a model without it loads as before.  Layout::
 
 Keys by kind: thermal ``channel`` and ``reference`` [°C]; wear ``register`` (a tool);
 position ``axis``; relation ``register`` and ``dimension`` (and ``registers``, every
-register the series could not tell from it, when more than one); group ``group``.  Each
+register the series could not tell from it, when more than one); group ``group``; level
+``at`` [h from ``origin``: cycles cut at or after it are shifted], ``cycle`` (the first
+cycle after the step, for people) and ``register`` (absent: every tool alike); process
+``channel`` (a column of the process log, or ``name=level`` for a categorical level),
+``reference`` (the channel's value the term is zero at, in the channel's unit), ``span``
+(the channel's range over the series) and ``register`` (absent: every tool alike).  Each
 effect adds ``estimate`` × its covariate to the deviations (see
 :mod:`setupfix.diagnose.terms`).  Everything here is plain data: parse, validate
 against the model, and write.
@@ -36,7 +41,11 @@ thermal                  |β| ≤ 1 mm/°C     a 10 m steel part grows 0.12 mm/�
 wear                     |β| ≤ 1 mm/cycle  a tool losing a millimetre per part is broken
 scale, position          |β| ≤ 0.01        1 %: steel grows that much over 850 °C
 relation                 |β| ≤ 1000        the bound on every relation weight of the model
-group                    |β| ≤ 10 mm       the largest correction a register may take
+group, level             |β| ≤ 10 mm       the largest correction a register may take
+process                  |β|·span ≤ 10 mm  over the channel's range seen, at most a correction
+``span``                 0 < span ≤ 1e12   any unit (rpm, mm/min, minutes, 0/1)
+process ``reference``    |ref| ≤ 1e12      any unit
+``at``                   0 … 876,600 h     a hundred years after ``origin``
 ``stderr``               0 … 1000 × bound  a statistic: only absurd values are refused
 ``tau``                  0 < τ ≤ 100,000 h saturation over more than ~11 years is linear
 ``reference``            −50 … 200 °C      shop, coolant and spindle temperatures
@@ -66,12 +75,14 @@ if TYPE_CHECKING:  # the model holds its [effects] section: process imports this
 __all__ = ["ModelEffect", "EffectsSection", "effects_from_dict", "parse_effects", "load_effects",
            "effects_toml", "with_effects", "EFFECT_KINDS"]
 
-EFFECT_KINDS: tuple[str, ...] = ("drift", "thermal", "wear", "scale", "position", "relation", "group")
+EFFECT_KINDS: tuple[str, ...] = ("drift", "thermal", "wear", "scale", "position", "relation", "group", "level",
+                                 "process")
 
 _KEYS = {"kind", "shape", "tau", "estimate", "stderr", "unit", "target", "channel", "reference", "register",
-         "dimension", "axis", "group", "registers", "description", "comment", "note", "notes"}
+         "dimension", "axis", "group", "registers", "description", "comment", "note", "notes", "at", "cycle", "span"}
 _REQUIRED = {"drift": (), "thermal": ("channel",), "wear": ("register",), "scale": (), "position": ("axis",),
-             "relation": ("register", "dimension"), "group": ("group",)}
+             "relation": ("register", "dimension"), "group": ("group",), "level": ("at",),
+             "process": ("channel", "span")}
 
 
 @dataclass(frozen=True)
@@ -93,6 +104,9 @@ class ModelEffect:
     axis: str | None = None
     group: str | None = None
     registers: tuple[str, ...] = ()
+    at: float | None = None
+    cycle: str | None = None
+    span: float | None = None
 
 
 @dataclass(frozen=True)
@@ -119,12 +133,15 @@ ESTIMATE_BOUNDS: dict[str, tuple[float, bool]] = {
     # kind: (bound, is the bound a length that scales with the model unit)
     "drift": (1.0, True), "saturating": (10.0, True), "thermal": (1.0, True), "wear": (1.0, True),
     "scale": (0.01, False), "position": (0.01, False), "relation": (1000.0, False), "group": (10.0, True),
+    "level": (10.0, True), "process": (10.0, True),
 }
 #: Bounds of the section's time base and of the other numbers (module table).
 HEAD_BOUNDS: dict[str, tuple[float, float]] = {"cycle_hours": (0.0, 8784.0), "last_hours": (0.0, 876_600.0)}
 TAU_HOURS = 100_000.0
 REFERENCE_CELSIUS = (-50.0, 200.0)
 ORIGIN_YEARS = (1970, 2200)
+PROCESS_VALUE = 1e12
+AT_HOURS = 876_600.0
 STDERR_FACTOR = 1000.0
 
 
@@ -224,7 +241,7 @@ def _validated(section: Mapping[str, Any] | None, model: ProcessModel,
         shape_of = "saturating" if kind == "drift" and raw.get("shape") == "saturating" else str(kind)
         bound, scales = ESTIMATE_BOUNDS[shape_of]
         bound *= length if scales else 1.0
-        if abs(est) > bound:
+        if abs(est) > bound and kind != "process":
             per = {"drift": "/h", "thermal": "/°C", "wear": "/cycle"}.get(shape_of, "")
             what = f"{model.unit}{per}" if scales else "(a ratio)" if kind != "relation" else "(a weight)"
             label = "saturating drift" if shape_of == "saturating" else str(kind)
@@ -234,16 +251,31 @@ def _validated(section: Mapping[str, Any] | None, model: ProcessModel,
             bad(f"{key}.stderr", f"expected a number in [0, {STDERR_FACTOR * bound:g}], found {_shown(stderr_raw)}")
         if "tau" in raw and not (_num(raw["tau"]) and 0 < raw["tau"] <= TAU_HOURS):
             bad(f"{key}.tau", f"expected hours in (0, {TAU_HOURS:g}], found {_shown(raw['tau'])}")
-        if "reference" in raw and not (_num(raw["reference"])
-                                       and REFERENCE_CELSIUS[0] <= raw["reference"] <= REFERENCE_CELSIUS[1]):
+        if kind == "process":
+            if "reference" in raw and not (_num(raw["reference"]) and abs(raw["reference"]) <= PROCESS_VALUE):
+                bad(f"{key}.reference",
+                    f"expected a number within ±{PROCESS_VALUE:g}, found {_shown(raw['reference'])}")
+        elif "reference" in raw and not (_num(raw["reference"])
+                                         and REFERENCE_CELSIUS[0] <= raw["reference"] <= REFERENCE_CELSIUS[1]):
             bad(f"{key}.reference", f"expected °C in [{REFERENCE_CELSIUS[0]:g}, {REFERENCE_CELSIUS[1]:g}], "
                                     f"found {_shown(raw['reference'])}")
-        for name in ("unit", "target", "shape", "channel", "register", "dimension", "axis", "group"):
+        for name in ("unit", "target", "shape", "channel", "register", "dimension", "axis", "group", "cycle"):
             if name in raw and not isinstance(raw[name], str):
                 bad(f"{key}.{name}", f"expected a string, found {_shown(raw[name])}")
         for k in _REQUIRED[kind]:
-            if not isinstance(raw.get(k), str):
+            if k in ("at", "span"):
+                if k not in raw:
+                    bad(f"{key}.{k}", f"a {kind} effect needs {k} (a number)")
+            elif not isinstance(raw.get(k), str):
                 bad(f"{key}.{k}", f"a {kind} effect needs {k} (a string)")
+        if "at" in raw and not (_num(raw["at"]) and 0 <= raw["at"] <= AT_HOURS):
+            bad(f"{key}.at", f"expected hours in [0, {AT_HOURS:g}], found {_shown(raw['at'])}")
+        span_raw: Any = raw.get("span")
+        if "span" in raw and not (_num(span_raw) and 0 < span_raw <= PROCESS_VALUE):
+            bad(f"{key}.span", f"expected a number in (0, {PROCESS_VALUE:g}], found {_shown(span_raw)}")
+        elif kind == "process" and _num(span_raw) and abs(est) * span_raw > bound:
+            bad(f"{key}.estimate", f"estimate {est:g} over the channel's span {span_raw:g} moves "
+                                   f"{abs(est) * span_raw:g} {model.unit}, beyond the plausible ±{bound:g}")
         if problems:
             continue
         shape = raw.get("shape", "linear")
@@ -262,6 +294,8 @@ def _validated(section: Mapping[str, Any] | None, model: ProcessModel,
             alts = raw.get("registers", [])
             if not isinstance(alts, list) or not all(isinstance(r, str) and r in regs for r in alts):
                 bad(f"{key}.registers", f"expected a list of register IDs, found {alts!r}")
+        if kind in ("level", "process") and "register" in raw and raw["register"] not in regs:
+            bad(f"{key}.register", f"unknown register {raw['register']!r}")
         if kind == "group" and raw["group"] not in groups:
             bad(f"{key}.group", f"unknown group {raw['group']!r}")
         if kind == "position" and raw["axis"] not in ("x", "y", "z"):
@@ -275,7 +309,9 @@ def _validated(section: Mapping[str, Any] | None, model: ProcessModel,
             reference=float(raw["reference"]) if _num(raw.get("reference")) else 0.0,
             register=raw.get("register"), dimension=raw.get("dimension"), axis=raw.get("axis"),
             group=raw.get("group"),
-            registers=tuple(raw.get("registers", ())) if kind == "relation" else ()))
+            registers=tuple(raw.get("registers", ())) if kind == "relation" else (),
+            at=float(raw["at"]) if kind == "level" else None, cycle=raw.get("cycle") if kind == "level" else None,
+            span=float(raw["span"]) if kind == "process" else None))
     return EffectsSection(tuple(effects), origin, head.get("cycle_hours"), head.get("last_hours"))
 
 
@@ -340,7 +376,8 @@ def effects_toml(section: EffectsSection) -> str:
         "# estimate x its covariate to the deviations (drift: hours since origin, or",
         "# 1 - exp(-t/tau); thermal: channel - reference; wear: cycles since the tool's last",
         "# change; scale: nominal; position: the dimension's coordinate; relation: the",
-        "# register's change on that dimension; group: 1 on the group's dimensions).",
+        "# register's change on that dimension; group: 1 on the group's dimensions; level: 1",
+        "# from `at` hours after origin on; process: channel - reference, from the process log).",
         "# `setupfix correct` adds the drift and wear expected until the next cycle, and maps",
         "# corrections through a relation whose register is named (registers: the ones the",
         "# series could not tell apart; with more than one the weight is not used).",
@@ -358,14 +395,18 @@ def effects_toml(section: EffectsSection) -> str:
             out.append(f'shape = "{e.shape}"')
             if e.tau is not None:
                 out.append(f"tau = {e.tau!r}")
-        for name in ("channel", "register", "dimension", "axis", "group"):
+        for name in ("channel", "register", "dimension", "axis", "group", "cycle"):
             value = getattr(e, name)
             if value is not None:
                 out.append(f"{name} = {_value(value)}")
         if e.registers:
             out.append(f"registers = [{', '.join(_value(r) for r in e.registers)}]")
-        if e.kind == "thermal":
+        if e.kind in ("thermal", "process"):
             out.append(f"reference = {e.reference!r}")
+        if e.at is not None:
+            out.append(f"at = {e.at!r}")
+        if e.span is not None:
+            out.append(f"span = {e.span!r}")
         out.append(f"estimate = {e.estimate!r}")
         if e.stderr is not None:
             out.append(f"stderr = {e.stderr!r}")

@@ -30,7 +30,7 @@ from setupfix.model import PartMeasurement, ProcessModel, model_from_dict
 from setupfix.model.effects import EffectsSection, ModelEffect, effects_from_dict, with_effects
 from setupfix.pipeline.correct import correct_cycle
 from setupfix.pipeline.requests import CorrectRequest, CycleCorrection, History, ReadOptions, SolveOptions
-from setupfix.pipeline.series import SeriesInput, load_series
+from setupfix.pipeline.series import SeriesInput, channel_span, load_series
 from setupfix.pipeline.writers import check_target, write_text
 from setupfix.safety import RuleEffect, short_list
 
@@ -56,7 +56,9 @@ def augmented_section(diagnosis: Diagnosis, declared: EffectsSection) -> Effects
             id=f"E{n}", kind=sp.kind, estimate=float(f"{res.estimate:.6g}"), stderr=float(f"{res.stderr:.3g}"),
             unit=res.unit, target=target, shape=sp.shape, tau=sp.tau if sp.shape == "saturating" else None,
             channel=sp.channel, reference=sp.reference, register=sp.register, dimension=sp.dimension,
-            axis=sp.axis, group=sp.group, registers=res.registers if len(res.registers) > 1 else ()))
+            axis=sp.axis, group=sp.group, registers=res.registers if len(res.registers) > 1 else (),
+            at=sp.at if sp.kind == "level" else None, cycle=sp.cycle if sp.kind == "level" else None,
+            span=channel_span(s, sp) if sp.kind == "process" else None))
         used.add(f"E{n}")
     return EffectsSection(tuple(effects), s.origin or declared.origin, step if step else declared.cycle_hours,
                           float(s.time[-1]) if s.n_cycles else declared.last_hours)
@@ -81,6 +83,7 @@ class DiagnoseRequest:
     db: str | Path | None = None
     thermal: str | Path | None = None
     augment: str | Path | None = None
+    process: str | None = None  #: process log (channels of any name and unit, joined per cycle)
     diagnoser: Diagnoser = field(default_factory=Diagnoser)
     solve: SolveOptions = field(default_factory=SolveOptions)  #: the next correction's optimiser (objective)
 
@@ -120,7 +123,10 @@ class DiagnoseOutcome:
             "effects": [{"kind": e.kind, "target": e.target, "estimate": r(e.estimate, 12),
                          "stderr": r(e.stderr, 12), "unit": e.unit, "rms_after": r(e.rms_after),
                          "alike": list(e.alike),
-                         **({"registers": list(e.registers)} if e.kind == "relation" else {})} for e in d.effects],
+                         **({"registers": list(e.registers)} if e.kind == "relation" else {}),
+                         **({"cycle": e.spec.cycle, "at_hours": e.spec.at} if e.kind == "level" else {}),
+                         **({"channel": e.spec.channel, "register": e.spec.register} if e.kind == "process" else {})}
+                        for e in d.effects],
             "next_correction": {k: round(v, 9) for k, v in self.next_correction.items()},
             "next_solved": self.next_cycle.solved if self.next_cycle is not None else None,
             "declared_effects": [e.target for e in self.input.declared],
@@ -255,7 +261,8 @@ def diagnose_reports(request: DiagnoseRequest) -> DiagnoseOutcome:
     if request.augment:
         check_target(request.augment)  # a bad target costs nothing
     inp = load_series(request.model, request.reports, corrections=request.corrections,
-                      temperatures=request.temperatures, db=request.db, thermal=request.thermal, read=request.read)
+                      temperatures=request.temperatures, db=request.db, thermal=request.thermal, read=request.read,
+                      process=request.process)
     diagnosis = request.diagnoser.run(inp.layout, inp.series, declared=inp.declared)
     cycle, more = recommend_next(inp.model, diagnosis, request.solve, request.diagnoser)
     notes = (*inp.notes, *(Note(n, None, "diagnosis") for n in diagnosis.notes), *more)

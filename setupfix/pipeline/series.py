@@ -1,5 +1,6 @@
 """Reading a series for the diagnosis: reports (files, folders or a history store), the
-corrections log and the temperature log → the engine's :class:`~setupfix.diagnose.Series`.
+corrections log, the temperature log and the process log → the engine's
+:class:`~setupfix.diagnose.Series`.
 
 Folders are listed by the one policy of every command (:func:`parsers.expand_inputs`);
 the logs are read by their one reader each (:mod:`parsers.corrections`, checked against
@@ -10,7 +11,11 @@ Each report is read in any supported format and tied to the model, one cycle per
 machined part (a part reported in several files counts once), ordered by timestamp; the
 corrections in effect at each part's timestamp (every log row with timestamp ≤ t), the
 parts cut since each tool's last change and the temperature sample at or just before t
-are joined to it.  Used by :mod:`setupfix.pipeline.diagnose`.
+are joined to it.  A process log (read by the same reader as temperatures,
+:func:`parsers.temperature.read_temperature_log` with text columns kept) is joined per
+cycle by its ``serial`` column (the part's number) or else its ``timestamp`` (the row at
+or just before the part): every numeric column is a channel, every categorical column a
+0/1 indicator per level (one for two levels).  Used by :mod:`setupfix.pipeline.diagnose`.
 """
 
 from __future__ import annotations
@@ -37,13 +42,18 @@ from setupfix.pipeline.checks import check_parts
 from setupfix.pipeline.cycles import ReadOptions
 
 __all__ = ["SeriesInput", "TempLog", "load_series", "parse_times", "hours_since", "temperature_arrays",
-           "store_temperatures", "report_coordinates"]
+           "store_temperatures", "report_coordinates", "process_channels", "channel_span"]
 
 #: A temperature log as arrays: times, samples (n, channels), channel names.
 TempLog = tuple[pd.DatetimeIndex, np.ndarray, tuple[str, ...]]
 
 #: Columns of a temperature log that are not temperature channels.
 NOT_CHANNELS = ("spindle_speed",)
+
+#: Column of a process log holding the part's number (the join key when present).
+SERIAL = "serial"
+#: A categorical process channel with more levels than this is left out (a note says so).
+MAX_LEVELS = 8
 
 
 @dataclass(frozen=True)
@@ -59,6 +69,7 @@ class SeriesInput:
     corrections: str | None
     temperatures: str | None
     notes: tuple[Note, ...] = ()
+    process: str | None = None
 
 
 def parse_times(values: Sequence[object], where: str) -> pd.DatetimeIndex:
@@ -123,7 +134,7 @@ def hours_since(times: pd.DatetimeIndex, origin: pd.Timestamp) -> np.ndarray:
 def load_series(model: ProcessModel | str | Path, reports: Sequence[str | Path] = (), *,
                 corrections: str | None = None, temperatures: str | None = None,
                 db: str | Path | None = None, thermal: str | Path | None = None,
-                read: ReadOptions | None = None) -> SeriesInput:
+                read: ReadOptions | None = None, process: str | None = None) -> SeriesInput:
     """Read a series of reports (files, folders, or every report of a history store) with its logs.
 
     With ``db`` the store's reports, corrections log and temperatures are used (files
@@ -132,7 +143,8 @@ def load_series(model: ProcessModel | str | Path, reports: Sequence[str | Path] 
     predicted drift over the temperature log becomes one more channel, so the thermal
     candidate tests the thermal slice's model itself (its measured-error column is
     not used as a channel).  ``read``: the report reader's options (``lenient`` lets a
-    reader skip a self-contradicting row, a note names its line).
+    reader skip a self-contradicting row, a note names its line).  ``process``: a process
+    log (CSV or ``.xlsx``), its channels joined per cycle (:func:`process_channels`).
 
     Raises
     ------
@@ -210,7 +222,11 @@ def load_series(model: ProcessModel | str | Path, reports: Sequence[str | Path] 
                              location=SourceLocation(str(thermal)), hint="give --temperatures")
         temps, more_notes = _with_thermal_prediction(temps, str(thermal), temp_log)
         notes += more_notes
-    series, more = _assemble(model, parts, log, temps, where)
+    process_log = None
+    if process:
+        process_log = read_temperature_log(process, require_time=False, keep_text=True)
+        notes += process_log.notes
+    series, more = _assemble(model, parts, log, temps, where, process_log)
     notes += more
     declared = tuple(spec_of(e) for e in section.effects)
     for e in section.effects:
@@ -218,6 +234,10 @@ def load_series(model: ProcessModel | str | Path, reports: Sequence[str | Path] 
             raise MatchError(f"the model's thermal effect {e.id} needs temperature channel {e.channel!r}",
                              location=SourceLocation(model.source, key=f"effects.{e.id}.channel"),
                              hint="give --temperatures")
+        if e.kind == "process" and e.channel not in series.process_channels:
+            raise MatchError(f"the model's process effect {e.id} needs process channel {e.channel!r}",
+                             location=SourceLocation(model.source, key=f"effects.{e.id}.channel"),
+                             hint="give --process with the log it was found in")
     unmatched = sorted({u for p in parts for u in p.unmatched})
     if unmatched:
         notes.append(Note(f"{len(unmatched)} characteristic(s) match no dimension: {', '.join(unmatched[:6])}"
@@ -227,7 +247,7 @@ def load_series(model: ProcessModel | str | Path, reports: Sequence[str | Path] 
         notes.append(Note("dimension coordinates for position effects taken from the reports' x, y, z columns",
                           None, "series"))
     return SeriesInput(model, layout, series, tuple(_ordered(parts)), declared, section,
-                       corrections, temperatures, tuple(notes))
+                       corrections, temperatures, tuple(notes), process)
 
 
 def _no_log_note(reports: Sequence[str | Path]) -> str:
@@ -312,7 +332,8 @@ def _ordered(parts: list[PartMeasurement]) -> list[PartMeasurement]:
 
 def _assemble(model: ProcessModel, parts: list[PartMeasurement],
               log: RegisterLog | None,
-              temps: TempLog | None, where: str) -> tuple[Series, list[Note]]:
+              temps: TempLog | None, where: str,
+              process: TemperatureLog | None = None) -> tuple[Series, list[Note]]:
     """Parts in time order with the corrections in effect, parts since tool changes, temperatures."""
     notes: list[Note] = []
     layout = Layout.from_model(model)
@@ -360,6 +381,147 @@ def _assemble(model: ProcessModel, parts: list[PartMeasurement],
             notes.append(Note("the temperature log starts after the first part: its first sample is used before",
                               None, "thermal"))
         temp = join_temperatures(time, t_h, samples)
+    names: tuple[str, ...] = ()
+    if process is not None:
+        values, names, more = process_channels(process, [p.part for p in parts], time, origin)
+        notes += more
+        both = sorted(set(names) & set(channels))
+        if both:
+            raise ParseError(f"process log: channel {both[0]!r} is also a temperature channel",
+                             location=process.location(), hint="rename the column in one of the logs")
+        temp = np.column_stack([temp, values])
+        channels = (*channels, *names)
     series = Series(dev, time, applied, parts_cut, temp, channels, tuple(f"{p.report}:{p.part}" for p in parts),
-                    origin, pending)
+                    origin, pending, names)
     return series, notes
+
+
+def _serial_key(value: object) -> str:
+    """A part number as a join key: ``7``, ``7.0`` and `` 7`` are one part."""
+    text = str(value).strip()
+    try:
+        number = float(text)
+    except ValueError:
+        return text
+    return str(int(number)) if number.is_integer() else text
+
+
+def _process_rows(log: TemperatureLog, parts: Sequence[str], time: np.ndarray,
+                  origin: str) -> tuple[np.ndarray, list[Note]]:
+    """Row of the process log for each cycle: by serial (the part's number), else by timestamp."""
+    serial = next((c for c in (*log.columns, *log.text) if c.casefold() == SERIAL), None)
+    if serial is not None:
+        raw = log.columns[serial].tolist() if serial in log.columns else log.text[serial]
+        index: dict[str, int] = {}
+        for i, v in enumerate(raw):
+            if v is None or (isinstance(v, float) and not np.isfinite(v)):
+                raise ParseError("process log: empty serial", location=log.location(i))
+            key = _serial_key(v)
+            if key in index:
+                raise ParseError(f"process log: serial {key} appears twice", location=log.location(i),
+                                 hint="one row per part")
+            index[key] = i
+        rows = []
+        for name in parts:
+            key = _serial_key(name)
+            if key not in index:
+                raise MatchError(f"part {name or '(unnamed)'} has no row in the process log (column {serial!r})",
+                                 location=log.location(), hint="give every part of the series its row")
+            rows.append(index[key])
+        return np.array(rows, dtype=np.intp), []
+    if not log.timestamps:
+        raise ParseError("process log: needs a 'serial' column (the part numbers) or a 'timestamp' column",
+                         location=log.location())
+    if not origin:
+        raise MatchError("the reports carry no timestamps, so the process log cannot be tied to the parts by time",
+                         location=log.location(), hint="add a 'serial' column with the part numbers")
+    stamps = to_index([parse_timestamp(t, log.location(i)) for i, t in enumerate(log.timestamps)])
+    t_h = hours_since(stamps, pd.Timestamp(origin))
+    notes = []
+    if t_h[0] > time[0]:
+        notes.append(Note("the process log starts after the first part: its first row is used before", None,
+                          "series"))
+    idx = np.clip(np.searchsorted(t_h, time, side="right") - 1, 0, len(t_h) - 1)
+    return idx.astype(np.intp), notes
+
+
+def process_channels(log: TemperatureLog, parts: Sequence[str], time: np.ndarray,
+                     origin: str) -> tuple[np.ndarray, tuple[str, ...], list[Note]]:
+    """Every channel of a process log joined per cycle.
+
+    Parameters
+    ----------
+    log : TemperatureLog
+        Read by :func:`parsers.temperature.read_temperature_log` with ``keep_text``.
+    parts : sequence of str
+        Part name of each cycle (matched to a ``serial`` column).
+    time : ndarray (n_cycles,) [h since ``origin``]
+    origin : str
+        ISO time of hour 0 ("" when the reports carry no timestamps).
+
+    Returns
+    -------
+    values : ndarray (n_cycles, n_channels)
+        Numeric columns as written (any unit); a categorical column as 0/1 indicators
+        ``name=level``, one per level seen on at least two cycles (one indicator when
+        there are two levels); the product of two categorical columns' levels as
+        ``a=x & b=y`` (the interaction of a designed experiment's factors).  An indicator
+        on the same cycles as a channel already kept is left out (the first name stays).
+    names : tuple of str
+    notes : list of Note
+        Channels left out (an empty cell on a cycle, too many levels) and how rows were joined.
+    """
+    rows, notes = _process_rows(log, parts, time, origin)
+    cols: list[np.ndarray] = []
+    names: list[str] = []
+    factor: list[list[tuple[str, np.ndarray]]] = []
+    for name, col in log.columns.items():
+        if name.casefold() == SERIAL:
+            continue
+        v = col[rows]
+        if not np.isfinite(v).all():
+            k = int(np.flatnonzero(~np.isfinite(v))[0])
+            notes.append(Note(f"process channel {name!r} is empty for part {parts[k]}: left out",
+                              log.location(int(rows[k])), "series"))
+            continue
+        cols.append(v)
+        names.append(name)
+    for name, cells in log.text.items():
+        if name.casefold() == SERIAL:
+            continue
+        seen = [cells[i] for i in rows]
+        if any(c is None for c in seen):
+            k = seen.index(None)
+            notes.append(Note(f"process channel {name!r} is empty for part {parts[k]}: left out",
+                              log.location(int(rows[k])), "series"))
+            continue
+        counts: dict[str, int] = {}
+        for c in seen:
+            counts[str(c)] = counts.get(str(c), 0) + 1
+        if len(counts) > MAX_LEVELS:
+            notes.append(Note(f"process channel {name!r} has {len(counts)} levels (more than {MAX_LEVELS}): left out",
+                              log.location(), "series"))
+            continue
+        levels = [lv for lv, n in counts.items() if n >= 2 and n < len(seen)]
+        if len(counts) == 2:
+            levels = levels[1:] if len(levels) == 2 else levels
+        factor.append([(f"{name}={lv}", np.array([c == lv for c in seen], dtype=float)) for lv in levels])
+    # a designed experiment's factors act together: the product of two factors' levels is a channel too
+    pairs = [(f"{a} & {b}", ca * cb) for i, fa in enumerate(factor) for fb in factor[i + 1:]
+             for a, ca in fa for b, cb in fb]
+    seen_cols: list[np.ndarray] = list(cols)
+    for lv_name, col in [*(x for f in factor for x in f), *pairs]:
+        n_on = int(col.sum())
+        if n_on < 2 or n_on == len(col) or any(np.array_equal(col, c) for c in seen_cols):
+            continue  # one cycle, every cycle, or the same cycles as a channel already kept
+        seen_cols.append(col)
+        cols.append(col)
+        names.append(lv_name)
+    values = np.column_stack(cols) if cols else np.zeros((len(parts), 0))
+    return values, tuple(names), notes
+
+
+def channel_span(series: Series, spec: EffectSpec) -> float:
+    """Range of a spec's channel over the series (the span a process effect was found over)."""
+    c = series.channels.index(str(spec.channel))
+    return float(np.ptp(series.temperature[:, c])) if series.n_cycles else 0.0

@@ -1,0 +1,94 @@
+"""The NIST plate series (a designed experiment: tool stick-out × spindle speed) with its process log."""
+
+from __future__ import annotations
+
+import json
+import os
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from setupfix.diagnose import Diagnoser
+from setupfix.pipeline.diagnose import DiagnoseRequest, diagnose_reports
+from setupfix.pipeline.series import load_series
+
+from conftest import SAMPLES
+
+PLATE = SAMPLES / "qif" / "NIST_MTC_FAIR_Plate_Results_20parts.qif"
+MODEL = Path(__file__).parents[1] / "data" / "nist_plate_model.toml"
+LOG = Path(os.environ.get("SETUPFIX_SHARED", "/work/shared")) / "real-series" / "nist-mtc" / "plate_process.csv"
+
+needs_log = pytest.mark.skipif(not LOG.is_file(), reason="the NIST process log lives in the shared folder")
+
+
+@needs_log
+def test_process_log_is_joined_by_serial_with_factor_levels_and_their_products():
+    inp = load_series(MODEL, (PLATE,), process=str(LOG))
+    s = inp.series
+    ch = s.channels
+    assert s.process_channels == ch and "endmill_rpm" in ch and "gap_prev_min" not in ch  # empty for part 1
+    long = s.temperature[:, ch.index("doe_tool_length=Long")]
+    assert long.tolist() == [0.0] * 9 + [1.0] * 9 + [0.0] * 2  # serials 10-18, parts in QIF order 1-20
+    low = s.temperature[:, ch.index("doe_tool_length=Long & doe_speed=Low")]
+    assert np.flatnonzero(low).tolist() == [15, 16, 17]
+    rpm = s.temperature[:, ch.index("endmill_rpm")]
+    assert rpm[4] == 6000.0 and rpm[9] == 12000.0
+    assert any("gap_prev_min" in str(n) and "left out" in str(n) for n in inp.notes)
+
+
+@needs_log
+def test_the_designed_factors_are_named_per_cutter_not_wear_or_drift(tmp_path):
+    out = diagnose_reports(DiagnoseRequest(MODEL, (PLATE,), process=str(LOG), augment=str(tmp_path / "aug.toml"),
+                                           diagnoser=Diagnoser(walk=False)))
+    d = out.diagnosis
+    kinds = [e.kind for e in d.effects]
+    assert "wear" not in kinds and "drift" not in kinds
+    first = d.effects[0]
+    # the eight 4 mm holes answer the stick-out and its product with the spindle speed, on their cutter alone
+    assert first.kind == "process" and first.spec.register == "T5A" and "doe_tool_length=Long" in first.spec.channel
+    process = [e for e in d.effects if e.kind == "process"]
+    assert len(process) >= 2 and all(e.spec.register is not None for e in process)  # a coefficient per cutter
+    assert all(abs(e.estimate) > 5 * e.stderr for e in process)
+    assert d.error_after.rms < 0.4 * d.error_before.rms and d.error_after.out_of_tolerance < 5
+    doc = out.to_json()
+    assert doc["effects"][0]["kind"] == "process" and doc["effects"][0]["register"] == "T5A"
+    json.dumps(doc)
+    # the augmented model carries them; read with the same log it reproduces the fit
+    again = diagnose_reports(DiagnoseRequest(tmp_path / "aug.toml", (PLATE,), process=str(LOG),
+                                             diagnoser=Diagnoser(walk=False)))
+    assert [e.target for e in again.input.model.effects.effects] == [e.target for e in d.effects]
+    assert again.diagnosis.error_before.rms == pytest.approx(d.error_after.rms, rel=1e-6)
+
+
+@needs_log
+def test_a_model_with_process_effects_needs_the_log(tmp_path):
+    diagnose_reports(DiagnoseRequest(MODEL, (PLATE,), process=str(LOG), augment=str(tmp_path / "aug.toml"),
+                                     diagnoser=Diagnoser(walk=False)))
+    from setupfix.errors import MatchError
+
+    with pytest.raises(MatchError, match="needs process channel"):
+        load_series(tmp_path / "aug.toml", (PLATE,))
+
+
+def test_without_the_log_no_wear_or_drift_is_claimed():
+    d = diagnose_reports(DiagnoseRequest(MODEL, (PLATE,), diagnoser=Diagnoser(walk=False))).diagnosis
+    assert not {"wear", "drift"} & {e.kind for e in d.effects}
+
+
+@needs_log
+def test_cli_process_option_json_and_a_bad_log(tmp_path, capsys):
+    from setupfix.cli import main
+
+    code = main(["diagnose", "--model", str(MODEL), "--process", str(LOG), "--no-walk", "--json", str(PLATE)])
+    out, err = capsys.readouterr()
+    assert code == 0, err
+    doc = json.loads(out)
+    e = doc["effects"][0]
+    assert (e["kind"], e["register"]) == ("process", "T5A") and e["channel"].startswith("doe_tool_length=Long")
+    assert {"kind", "target", "estimate", "stderr", "unit", "rms_after"} <= e.keys()
+    bad = tmp_path / "bad.csv"
+    bad.write_text("serial,rpm\n1,9000\n1,6000\n", encoding="utf-8")
+    code = main(["diagnose", "--model", str(MODEL), "--process", str(bad), "--no-walk", str(PLATE)])
+    out, err = capsys.readouterr()
+    assert code != 0 and "bad.csv" in err and "serial 1 appears twice" in err and "Traceback" not in err
