@@ -38,10 +38,11 @@ import scipy.optimize
 import scipy.stats
 
 from setupfix.diagnose.fit import Observations, effect_columns, observations
+from setupfix.diagnose.inference import MIN_CYCLES, cell_pvalue, cluster_test, dimension_pvalue, lack_of_fit
 from setupfix.diagnose.terms import AXES, EffectSpec, Layout, Series
 from setupfix.relation import null_space_directions
 
-__all__ = ["Step", "Selection", "candidate_specs", "select_effects"]
+__all__ = ["Step", "Selection", "STATIC", "candidate_specs", "select_effects", "spread", "support_notes"]
 
 Array = npt.NDArray[np.float64]
 
@@ -114,15 +115,44 @@ def candidate_specs(layout: Layout, series: Series, *, taus: tuple[float, ...] =
     for k, j in enumerate(layout.tools):
         if n >= 3 and np.ptp(series.parts[:, k]) > 0:
             out.append(EffectSpec("wear", register=layout.register_ids[j]))
-    if np.ptp(layout.nominal) > 0:
+    if spread(layout.nominal):
         out.append(EffectSpec("scale"))
     for a, axis in enumerate(AXES):
         col = layout.coord[:, a]
-        if np.isfinite(col).all() and np.ptp(col) > 0:
+        if np.isfinite(col).all() and spread(col):
             out.append(EffectSpec("position", axis=axis))
     for g in dict.fromkeys(g for g in layout.groups if g is not None):
         out.append(EffectSpec("group", group=g))
     return out
+
+
+def spread(values: Array) -> bool:
+    """Support of a static slope: ≥ 3 distinct values and one in each third of their range.
+
+    A scale effect on what are in effect two nominal sizes (or a position effect on two
+    clusters of features) is one contrast between two groups, not a slope: a group
+    offset or a relation would fit it as well.
+    """
+    v = np.unique(np.round(np.asarray(values, dtype=float), 9))
+    if v.size < 3 or not np.isfinite(v).all():
+        return False
+    lo, hi = float(v[0]), float(v[-1])
+    third = np.minimum((3 * (v - lo) / (hi - lo)).astype(int), 2)
+    return bool(np.unique(third).size == 3)
+
+
+def support_notes(layout: Layout) -> list[str]:
+    """Why a static kind is not offered: nominal sizes or positions without spread."""
+    notes: list[str] = []
+    if np.ptp(layout.nominal) > 0 and not spread(layout.nominal):
+        notes.append("scale not tested: the nominal sizes are not spread over their range (needs at least three "
+                     "distinct sizes, one in each third of the range)")
+    for a, axis in enumerate(AXES):
+        col = layout.coord[:, a]
+        if np.isfinite(col).all() and np.ptp(col) > 0 and not spread(col):
+            notes.append(f"position {axis} not tested: the features' {axis} positions are not spread over their "
+                         "range (needs at least three distinct, one in each third of the range)")
+    return notes
 
 
 def _orth(X: Array) -> Array:
@@ -180,9 +210,8 @@ def _relation_scores(Q: Array, r: Array, obs: Observations, applied: Array,
     return gain, np.maximum(gain - const[None, :], 0.0)
 
 
-def _cv_sse(X: Array, z: Array, cycle: npt.NDArray[np.intp], n_folds: int) -> float:
-    """K-fold (interleaved cycles) cross-validated squared prediction error."""
-    fold = cycle % n_folds
+def _cv_sse(X: Array, z: Array, fold: npt.NDArray[np.intp], n_folds: int) -> float:
+    """K-fold cross-validated squared prediction error (``fold`` of each cell: its cycle's rank in time mod K)."""
     sse = 0.0
     for f in range(n_folds):
         test = fold == f
@@ -205,7 +234,7 @@ def select_effects(layout: Layout, series: Series, *, alpha: float = 0.01, max_e
         Family-wise level of each step (Bonferroni over the candidates tested).
     max_effects : int, default=4
     n_folds : int, default=5
-        Folds of the cross-validation over cycles.
+        Folds of the cross-validation over cycles (cycles dealt to folds in time order).
     relations : bool, default=True
         Test the relation candidates (register × dimension).
     declared : tuple of EffectSpec
@@ -221,24 +250,26 @@ def select_effects(layout: Layout, series: Series, *, alpha: float = 0.01, max_e
     Z = np.column_stack(dense) if dense else np.zeros((obs.n, 0))
     C = layout.composite
     n_r, n_d = C.shape
+    n_cyc = series.n_cycles
     # relation pairs: the register's applied change must take ≥ 2 values on the dimension's cells
     pairs_ok = np.zeros((n_r, n_d), dtype=bool)
-    if relations and series.n_cycles >= 3:
+    if relations and n_cyc >= 3:
         for q in range(n_d):
             cyc = np.unique(obs.cycle[obs.dim == q])
             if cyc.size >= 3:
                 pairs_ok[:, q] = np.ptp(series.applied[cyc], axis=0) > _TINY
-    notes: list[str] = []
+    notes: list[str] = support_notes(layout)
     X = np.hstack([obs.base] + [effect_columns(s, layout, series, obs) for s in declared])
     found: list[EffectSpec] = []
-    blocks: list[Array] = []
     steps: list[Step] = []
     unident: list[str] = []
-    folds = min(n_folds, series.n_cycles)
-    use_cv = series.n_cycles >= 4
-    if not use_cv:
-        notes.append(f"{series.n_cycles} cycle(s): effects are tested by the F-test only (no cross-validation "
-                     "over cycles); only static effects (scale, position, group) can be found")
+    folds = min(n_folds, n_cyc)
+    by_cycle = n_cyc >= MIN_CYCLES
+    if not by_cycle:
+        notes.append(f"{n_cyc} cycle(s): effects are tested by the F-test only, counting cells (no cross-validation "
+                     "over cycles, no test per part); only static effects (scale, position, group) can be found")
+    # folds deal the cycles in time order: the same folds whatever order the parts come in
+    fold_of = (np.argsort(np.argsort(series.time, kind="stable"), kind="stable") % max(folds, 1))[obs.cycle]
     active_dense = np.ones(len(specs), dtype=bool)
     active_rel = pairs_ok.copy()
     for s in declared:
@@ -260,16 +291,9 @@ def select_effects(layout: Layout, series: Series, *, alpha: float = 0.01, max_e
         m = int(np.sum(gain_d >= 0)) + (int(active_rel.sum()) if gain_r is not None else 0)
         if m == 0 or df0 <= 2:
             break
-        n_static = obs.base.shape[1] + sum(s.kind in _STATIC for s in (*declared, *found))
-        lof = _lack_of_fit(obs, r, n_static, alpha) if series.n_cycles >= 2 else None
-        cands: list[tuple[float, int, EffectSpec, int, float]] = []  # (p, k, spec, dense index or -1, ΔRSS)
-        for i in np.flatnonzero(gain_d >= 0):
-            if lof is not None and specs[i].kind in _STATIC:
-                # dimensions keep offsets beyond the noise: a static effect must explain them, not the noise
-                p_i = _pvalue(gain_d[i], lof[0], lof[1], 1)
-            else:
-                p_i = _pvalue(gain_d[i], rss0, df0, 1)
-            cands.append((p_i, 1, specs[i], int(i), float(gain_d[i])))
+        n_static = obs.base.shape[1] + sum(s.kind in STATIC for s in (*declared, *found))
+        lof = lack_of_fit(obs.dim, r, obs.n, n_static, alpha) if n_cyc >= 2 else None
+        cands = _tested(specs, gain_d, Q, r, Z, obs, n_cyc, lof, rss0, df0)
         if gain_r is not None and slope_r is not None:
             # the dimension most off (slope and constant), then the register whose changes it answers (slope)
             q_r = int(np.unravel_index(int(np.argmax(np.where(active_rel, gain_r, -1.0))), gain_r.shape)[1])
@@ -277,49 +301,69 @@ def select_effects(layout: Layout, series: Series, *, alpha: float = 0.01, max_e
             if active_rel[i_r, q_r]:
                 spec = EffectSpec("relation", register=layout.register_ids[i_r], dimension=layout.dimension_ids[q_r])
                 g_r = float(gain_r[i_r, q_r])
-                # its free constant takes one dimension's offset: against the lack of fit when there is one
-                p_r = _pvalue(g_r, lof[0], lof[1], 2) if lof is not None else _pvalue(g_r, rss0, df0, 2)
-                cands.append((p_r, 2, spec, -1, g_r))
-        p, k, spec, di, gain = min(cands, key=lambda c: c[0])
-        p_adj = min(1.0, p * m)
-        f_stat = (gain / k) / max((rss0 - gain) / max(df0 - k, 1), 1e-300)
-        if spec.kind == "drift" and spec.shape == "saturating":
-            spec = _refine_tau(spec, layout, series, obs, Q, r)
-            gain = _dense_scores(Q, r, effect_columns(spec, layout, series, obs))[0][0]
-            f_stat = (gain / k) / max((rss0 - gain) / max(df0 - k, 1), 1e-300)
-        cols = Z[:, [di]] if di >= 0 and spec == specs[di] else effect_columns(spec, layout, series, obs)
-        X1 = np.hstack([X, cols])
-        cv0 = cv1 = float("nan")
-        ok = p_adj < alpha
-        if ok and use_cv:
-            cv0 = _cv_sse(X, obs.z, obs.cycle, folds)
-            cv1 = _cv_sse(X1, obs.z, obs.cycle, folds)
-            ok = cv1 < cv0
-        if not ok:
-            alike: tuple[str, ...] = ()
-        elif di >= 0:
-            alike = _alike(Q, cols[:, 0], Z, specs, active_dense, di)
-        else:
-            alike = _relation_set(Q, r, obs, series.applied, layout, spec, alpha)
-        steps.append(Step(spec, float(f_stat), float(p), float(p_adj), m, cv0, cv1, ok, alike))
-        if not ok:
+                # its free constant takes one dimension's offset: against the lack of fit when there is one,
+                # else against that dimension's own variation (one cell per cycle)
+                if lof is not None:
+                    p_r = cell_pvalue(g_r, lof[0], lof[1], 2)
+                elif by_cycle:
+                    p_r = dimension_pvalue(g_r, r[obs.dim == q_r], 2)
+                else:
+                    p_r = cell_pvalue(g_r, rss0, df0, 2)
+                f_r = (g_r / 2) / max((rss0 - g_r) / max(df0 - 2, 1), 1e-300)
+                rank_r = p_r if lof is not None else cell_pvalue(g_r, rss0, df0, 2)
+                cands.append((rank_r, p_r, f_r, spec, -1))
+        # ranked by what each explains (cell-level p-value), accepted on the per-cycle test at α / m
+        # (Bonferroni holds for every candidate tried) and cross-validation
+        cands.sort(key=lambda c: (c[0], -c[2]))
+        cv0 = _cv_sse(X, obs.z, fold_of, folds) if by_cycle else float("nan")
+        accepted = refused = False
+        for _, p, f_stat, spec, di in cands:
+            # keep trying: a candidate refused passes the turn to the next in rank
+            p_adj = min(1.0, p * m)
+            if p_adj >= alpha:
+                if not refused:  # the best-ranked candidate the test refuses is reported
+                    steps.append(Step(spec, float(f_stat), float(p), float(p_adj), m, float("nan"), float("nan"),
+                                      False))
+                refused = True
+                continue
+            if spec.kind == "drift" and spec.shape == "saturating":
+                spec = _refine_tau(spec, layout, series, obs, Q, r)
+            cols = Z[:, [di]] if di >= 0 and spec == specs[di] else effect_columns(spec, layout, series, obs)
+            X1 = np.hstack([X, cols])
+            cv1 = float("nan")
+            # a static term is the same on every cycle: its evidence is the dimensions' offsets (the test),
+            # which held-out cycles cannot add to; time-dependent terms must also predict held-out cycles
+            ok = True
+            if by_cycle and spec.kind not in STATIC:
+                cv1 = _cv_sse(X1, obs.z, fold_of, folds)
+                ok = cv1 < cv0
+            if not ok:
+                steps.append(Step(spec, float(f_stat), float(p), float(p_adj), m, cv0, cv1, False))
+                continue
+            if di >= 0:
+                alike = _alike(Q, cols[:, 0], Z, specs, active_dense, di)
+            else:
+                alike = _relation_set(Q, r, obs, series.applied, layout, spec, alpha)
+            steps.append(Step(spec, float(f_stat), float(p), float(p_adj), m, cv0, cv1, True, alike))
+            found.append(spec)
+            X = X1
+            if di >= 0:
+                active_dense[di] = False
+                if spec.kind == "drift":  # one drift shape at most
+                    active_dense &= np.array([s.kind != "drift" for s in specs])
+            else:
+                active_rel[layout.register_ids.index(str(spec.register)),
+                           layout.dimension_ids.index(str(spec.dimension))] = False
+            accepted = True
             break
-        found.append(spec)
-        blocks.append(cols)
-        X = X1
-        if di >= 0:
-            active_dense[di] = False
-            if spec.kind == "drift":  # one drift shape at most
-                active_dense &= np.array([s.kind != "drift" for s in specs])
-        else:
-            active_rel[layout.register_ids.index(str(spec.register)),
-                       layout.dimension_ids.index(str(spec.dimension))] = False
+        if not accepted:
+            break
     lack = False
-    if series.n_cycles >= 2:
+    if n_cyc >= 2:
         Q = _orth(X)
         r = obs.z - Q @ (Q.T @ obs.z)
-        n_static = obs.base.shape[1] + sum(s.kind in _STATIC for s in (*declared, *found))
-        lack = _lack_of_fit(obs, r, n_static, alpha) is not None
+        n_static = obs.base.shape[1] + sum(s.kind in STATIC for s in (*declared, *found))
+        lack = lack_of_fit(obs.dim, r, obs.n, n_static, alpha) is not None
         if lack:
             notes.append("the dimensions keep constant offsets beyond the noise that no candidate explains "
                          "(lack of fit): a register or relation the model lacks on single dimensions?")
@@ -327,35 +371,34 @@ def select_effects(layout: Layout, series: Series, *, alpha: float = 0.01, max_e
     return Selection(tuple(found), tuple(steps), tuple(dict.fromkeys(unident)), tuple(notes), lack)
 
 
-_STATIC = ("scale", "position", "group")
+#: Kinds whose field is the same on every cycle.
+STATIC = ("scale", "position", "group")
 
 
-def _lack_of_fit(obs: Observations, r: Array, n_static: int, alpha: float) -> tuple[float, int] | None:
-    """(SS, df) of the per-dimension mean residuals when they exceed the cycle-to-cycle noise, else None.
-
-    The classic lack-of-fit test with the cycles as replicates: SS_lof = Σ_q n_q r̄_q²
-    on (dimensions − static parameters) df against the pure error Σ (r − r̄_q)².
-    """
-    n_q = np.bincount(obs.dim)
-    seen = n_q > 0
-    mean_q = np.bincount(obs.dim, weights=r)[seen] / n_q[seen]
-    ss_lof = float(np.sum(n_q[seen] * mean_q ** 2))
-    ss_pure = float(r @ r) - ss_lof
-    df_lof = int(seen.sum()) - n_static
-    df_pure = obs.n - int(seen.sum())
-    if df_lof <= 1 or df_pure <= 1 or ss_pure <= 0:
-        return None
-    p = float(scipy.stats.f.sf((ss_lof / df_lof) / (ss_pure / df_pure), df_lof, df_pure))
-    return (ss_lof, df_lof) if p < alpha else None
-
-
-def _pvalue(gain: float, rss0: float, df0: int, k: int) -> float:
-    df1 = df0 - k
-    if df1 <= 0:
-        return 1.0
-    rss1 = max(rss0 - gain, 1e-300)
-    f = (gain / k) / (rss1 / df1)
-    return float(scipy.stats.f.sf(f, k, df1))
+def _tested(specs: list[EffectSpec], gain: Array, Q: Array, r: Array, Z: Array, obs: Observations, n_cycles: int,
+            lof: tuple[float, int] | None, rss0: float, df0: int) -> list[tuple[float, float, float, EffectSpec, int]]:
+    """(rank, p, statistic, spec, column) of every active one-column candidate (``gain`` ≥ 0): ranked by the
+    cell-level p-value, tested per cycle (:mod:`setupfix.diagnose.inference`); static ones against the lack of
+    fit when there is one."""
+    idx = np.flatnonzero(gain >= 0)
+    out: list[tuple[float, float, float, EffectSpec, int]] = []
+    if idx.size == 0:
+        return out
+    if n_cycles >= MIN_CYCLES:
+        Zi = Z[:, idx]
+        stat, p = cluster_test(Zi - Q @ (Q.T @ Zi), r, obs.cycle, n_cycles)
+    for j, i in enumerate(idx):
+        f_cell = float(gain[i] / max((rss0 - gain[i]) / max(df0 - 1, 1), 1e-300))
+        p_cell = cell_pvalue(float(gain[i]), rss0, df0, 1)
+        if lof is not None and specs[i].kind in STATIC:
+            # dimensions keep offsets beyond the noise: a static effect must explain them, not the noise
+            p_lof = cell_pvalue(float(gain[i]), lof[0], lof[1], 1)
+            out.append((p_lof, p_lof, f_cell, specs[i], int(i)))
+        elif n_cycles >= MIN_CYCLES:
+            out.append((p_cell, float(p[j]), float(stat[j]), specs[i], int(i)))
+        else:
+            out.append((p_cell, p_cell, f_cell, specs[i], int(i)))
+    return out
 
 
 def _alike(Q: Array, col: Array, Z: Array, specs: list[EffectSpec], active: npt.NDArray[np.bool_],

@@ -114,6 +114,11 @@ class ShopSimulator(ValidatedParams):
         registers then differ, so a wrong relation can be assigned to its register).
     decimals : int, default=4
         Deviations rounded as a CMM prints them.
+    part_noise : float, default=0 [model unit]
+        Shared per-part variation: every tool register (every register when the model
+        has no tools) is off by its own N(0, part_noise²) offset, drawn anew each cycle,
+        so all dimensions a tool cuts move together on that part (the cells of a cycle
+        are correlated; real parts vary as a whole).
     seed : int or None
         Seed of the simulation; None means :data:`setupfix.search.DEFAULT_SEED` (never entropy).
     """
@@ -132,13 +137,15 @@ class ShopSimulator(ValidatedParams):
         "heat": [Interval(float, 0, None)],
         "sparse": [Interval(int, 0, None)],
         "decimals": [Interval(int, 0, 12)],
+        "part_noise": [Interval(float, 0, None)],
         "seed": [Interval(int, 0, None), None],
     }
 
     def __init__(self, *, n_cycles: int = 40, noise: float = 0.002, setup_error: float = 0.03,
                  cycle_minutes: float = 20.0, shift_cycles: int = 24, pause_hours: float = 8.0,
                  correct_every: int = 5, dead_time: float = 30.0, gain: float = 0.7, tool_change_every: int = 16,
-                 heat: float = 6.0, sparse: int = 0, decimals: int = 4, seed: int | None = None) -> None:
+                 heat: float = 6.0, sparse: int = 0, decimals: int = 4, part_noise: float = 0.0,
+                 seed: int | None = None) -> None:
         self.n_cycles = n_cycles
         self.noise = noise
         self.setup_error = setup_error
@@ -152,6 +159,7 @@ class ShopSimulator(ValidatedParams):
         self.heat = heat
         self.sparse = sparse
         self.decimals = decimals
+        self.part_noise = part_noise
         self.seed = seed
 
     def validate_params(self) -> None:
@@ -224,6 +232,9 @@ class ShopSimulator(ValidatedParams):
         temp_at = temp[np.clip(np.searchsorted(t_temp, times, side="right") - 1, 0, len(t_temp) - 1)]
         setup: Array = np.asarray(self.setup_error * (1.0 - 2.0 * rng.random(n_r)), dtype=float)  # eq. 12
         noise = rng.normal(0.0, self.noise, size=(self.n_cycles, n_d))
+        if self.part_noise > 0:  # drawn last: series without it keep their seeds' draws
+            rows = layout.tools if layout.tools.size else np.arange(n_r)
+            noise = noise + rng.normal(0.0, self.part_noise, size=(self.n_cycles, rows.size)) @ C[rows]
         # Effects that do not depend on the applied corrections are fixed in advance.
         probe = Series(np.zeros((self.n_cycles, n_d)), times, np.zeros((self.n_cycles, n_r)), parts, temp_at,
                        ("spindle", "ambient"))
