@@ -13,11 +13,11 @@ evidence counted per cycle:
   residual of the current model, z̃ the candidate's column residualised on it, the
   per-cycle scores s_k = Σ_q z̃_kq r_kq, w_k = Σ_q z̃_kq² and β̂ = Σ s_k / Σ w_k,
 
-      T = (Σ_k s_k)² / (K/(K−1) · Σ_k (s_k − β̂ w_k)²)    ~  F(1, ν),
+      T = (Σ_k s_k)² / (K/(K−1) · Σ_k (s_k − β̂ w_k)²)    ~  F(1, df),
 
-  ν = (Σ_k w_k)² / Σ_k w_k² − 1 (Satterthwaite / Kish effective number of cycles),
-  capped at K − 1.  The variance Σ s_k² holds whatever covariance
-  the cells of one cycle share, and ν shrinks when the column's leverage sits on few
+  df = (Σ_k w_k)² / Σ_k w_k² − 1 (Satterthwaite / Kish effective number of cycles),
+  capped at K − 1.  The sandwich variance holds whatever covariance
+  the cells of one cycle share, and df shrinks when the column's leverage sits on few
   cycles (a saturating drift with a short time constant, a tool worn on few parts);
 * **static kinds** (scale, position, group) — the same test when the dimensions keep
   no constant offsets beyond the cycle-to-cycle variation; otherwise against the lack
@@ -40,12 +40,28 @@ import numpy as np
 import numpy.typing as npt
 import scipy.stats
 
-__all__ = ["MIN_CYCLES", "cluster_test", "cell_pvalue", "dimension_pvalue", "lack_of_fit", "cycle_sums"]
+from setupfix.diagnose.fit import Observations
+from setupfix.diagnose.terms import EffectSpec, Layout
+
+__all__ = ["MIN_CYCLES", "cluster_test", "cell_pvalue", "dimension_pvalue", "lack_of_fit", "cycle_sums", "relation_set",
+           "orth"]
 
 Array = npt.NDArray[np.float64]
 
+_TINY = 1e-9
+
 #: Fewest cycles for the cycle-level tests (below: cell-level F-test).
 MIN_CYCLES = 4
+
+
+def orth(X: Array) -> Array:
+    """Orthonormal basis of the column space of X (SVD, tiny singular values dropped)."""
+    if X.shape[1] == 0:
+        return X
+    u, s, _ = np.linalg.svd(X, full_matrices=False)
+    keep = s > _TINY * max(1.0, float(s.max(initial=0.0)))
+    out: Array = u[:, keep]
+    return out
 
 
 def cycle_sums(values: Array, cycle: npt.NDArray[np.intp], n_cycles: int) -> Array:
@@ -130,3 +146,53 @@ def lack_of_fit(dim: npt.NDArray[np.intp], r: Array, n: int, n_static: int, alph
         return None
     p = float(scipy.stats.f.sf((ss_lof / df_lof) / (ss_pure / df_pure), df_lof, df_pure))
     return (ss_lof, df_lof) if p < alpha else None
+
+
+def relation_set(Q: Array, r: Array, obs: Observations, applied: Array, layout: Layout, spec: EffectSpec,
+                  alpha: float) -> tuple[str, ...]:
+    """Other registers the data cannot tell from the chosen one as the source of a relation effect.
+
+    The dimension q answers register i's corrections: z_q ≈ c + δ u_i.  Register j stays
+    a candidate unless the data reject "j alone" (c + δ_j u_j) in favour of both
+    (c + δ_i u_i + δ_j u_j): the encompassing F-test (Seber & Lee, §4.3; 1 and N − p − 3 df)
+    at ``alpha`` divided by the number of moved registers (Bonferroni over the register that
+    could have been chosen), so the set holds the true register with probability ≥ 1 − α.
+    A register never moved on q has u_j constant: "j alone" is the constant, which stays a
+    candidate when the slope on u_i is not significant — registers that moved together
+    (proportionally) always stay together.
+
+    Returns
+    -------
+    tuple of str
+        ``relation: q ~ j`` for every register j in the set but i, in register order.
+    """
+    q = layout.dimension_ids.index(str(spec.dimension))
+    i = layout.register_ids.index(str(spec.register))
+    rows = obs.dim == q
+    n_r = applied.shape[1]
+    M = np.zeros((obs.n, n_r + 1))
+    M[rows, :n_r] = applied[obs.cycle[rows]]
+    M[rows, n_r] = 1.0
+    P = M - Q @ (Q.T @ M)
+    rss0 = float(r @ r)
+    df = obs.n - Q.shape[1] - 3
+    if df <= 0:
+        return tuple(f"relation: {spec.dimension} ~ {rid}" for j, rid in enumerate(layout.register_ids) if j != i)
+
+    def rss(cols: list[int]) -> float:
+        B = orth(P[:, cols])
+        t = B.T @ r
+        return rss0 - float(t @ t)
+
+    moved = np.ptp(applied[np.unique(obs.cycle[rows])], axis=0) > _TINY
+    m = max(int(moved.sum()), 1)
+    out = []
+    for j in range(n_r):
+        if j == i:
+            continue
+        both = rss([i, j, n_r])
+        gain = rss([j, n_r]) - both
+        p = float(scipy.stats.f.sf(gain / max(both / df, 1e-300), 1, df)) if gain > 0 else 1.0
+        if p * m >= alpha:
+            out.append(f"relation: {spec.dimension} ~ {layout.register_ids[j]}")
+    return tuple(out)

@@ -25,7 +25,7 @@ The relation candidates (register i × dimension q) are scored from per-dimensio
 sums, without forming their N-row columns, so the cost stays linear in the cycles.
 The register of a relation found is reported as a confidence set: every register
 whose corrections the data cannot tell from the chosen one's (encompassing F-tests,
-:func:`_relation_set`); registers that moved together are never told apart.
+:func:`setupfix.diagnose.inference.relation_set`); registers that moved together are never told apart.
 """
 
 from __future__ import annotations
@@ -38,11 +38,12 @@ import scipy.optimize
 import scipy.stats
 
 from setupfix.diagnose.fit import Observations, effect_columns, observations
-from setupfix.diagnose.inference import MIN_CYCLES, cell_pvalue, cluster_test, dimension_pvalue, lack_of_fit
+from setupfix.diagnose.inference import (MIN_CYCLES, cell_pvalue, cluster_test, dimension_pvalue, lack_of_fit,
+                                         orth, relation_set)
+from setupfix.diagnose.support import register_notes, spread, support_notes
 from setupfix.diagnose.terms import AXES, EffectSpec, Layout, Series
-from setupfix.relation import null_space_directions
 
-__all__ = ["Step", "Selection", "STATIC", "candidate_specs", "select_effects", "spread", "support_notes"]
+__all__ = ["Step", "Selection", "STATIC", "candidate_specs", "select_effects"]
 
 Array = npt.NDArray[np.float64]
 
@@ -123,44 +124,6 @@ def candidate_specs(layout: Layout, series: Series, *, taus: tuple[float, ...] =
             out.append(EffectSpec("position", axis=axis))
     for g in dict.fromkeys(g for g in layout.groups if g is not None):
         out.append(EffectSpec("group", group=g))
-    return out
-
-
-def spread(values: Array) -> bool:
-    """Support of a static slope: ≥ 3 distinct values and one in each third of their range.
-
-    A scale effect on what are in effect two nominal sizes (or a position effect on two
-    clusters of features) is one contrast between two groups, not a slope: a group
-    offset or a relation would fit it as well.
-    """
-    v = np.unique(np.round(np.asarray(values, dtype=float), 9))
-    if v.size < 3 or not np.isfinite(v).all():
-        return False
-    lo, hi = float(v[0]), float(v[-1])
-    third = np.minimum((3 * (v - lo) / (hi - lo)).astype(int), 2)
-    return bool(np.unique(third).size == 3)
-
-
-def support_notes(layout: Layout) -> list[str]:
-    """Why a static kind is not offered: nominal sizes or positions without spread."""
-    notes: list[str] = []
-    if np.ptp(layout.nominal) > 0 and not spread(layout.nominal):
-        notes.append("scale not tested: the nominal sizes are not spread over their range (needs at least three "
-                     "distinct sizes, one in each third of the range)")
-    for a, axis in enumerate(AXES):
-        col = layout.coord[:, a]
-        if np.isfinite(col).all() and np.ptp(col) > 0 and not spread(col):
-            notes.append(f"position {axis} not tested: the features' {axis} positions are not spread over their "
-                         "range (needs at least three distinct, one in each third of the range)")
-    return notes
-
-
-def _orth(X: Array) -> Array:
-    if X.shape[1] == 0:
-        return X
-    u, s, _ = np.linalg.svd(X, full_matrices=False)
-    keep = s > _TINY * max(1.0, float(s.max(initial=0.0)))
-    out: Array = u[:, keep]
     return out
 
 
@@ -277,7 +240,7 @@ def select_effects(layout: Layout, series: Series, *, alpha: float = 0.01, max_e
             active_rel[layout.register_ids.index(str(s.register)), layout.dimension_ids.index(str(s.dimension))] = False
     first = True
     while len(found) < max_effects:
-        Q = _orth(X)
+        Q = orth(X)
         r = obs.z - Q @ (Q.T @ obs.z)
         rss0 = float(r @ r)
         df0 = obs.n - Q.shape[1]
@@ -343,7 +306,7 @@ def select_effects(layout: Layout, series: Series, *, alpha: float = 0.01, max_e
             if di >= 0:
                 alike = _alike(Q, cols[:, 0], Z, specs, active_dense, di)
             else:
-                alike = _relation_set(Q, r, obs, series.applied, layout, spec, alpha)
+                alike = relation_set(Q, r, obs, series.applied, layout, spec, alpha)
             steps.append(Step(spec, float(f_stat), float(p), float(p_adj), m, cv0, cv1, True, alike))
             found.append(spec)
             X = X1
@@ -360,14 +323,14 @@ def select_effects(layout: Layout, series: Series, *, alpha: float = 0.01, max_e
             break
     lack = False
     if n_cyc >= 2:
-        Q = _orth(X)
+        Q = orth(X)
         r = obs.z - Q @ (Q.T @ obs.z)
         n_static = obs.base.shape[1] + sum(s.kind in STATIC for s in (*declared, *found))
         lack = lack_of_fit(obs.dim, r, obs.n, n_static, alpha) is not None
         if lack:
             notes.append("the dimensions keep constant offsets beyond the noise that no candidate explains "
                          "(lack of fit): a register or relation the model lacks on single dimensions?")
-    notes += _register_notes(layout, series, obs)
+    notes += register_notes(layout, series, obs)
     return Selection(tuple(found), tuple(steps), tuple(dict.fromkeys(unident)), tuple(notes), lack)
 
 
@@ -415,56 +378,6 @@ def _alike(Q: Array, col: Array, Z: Array, specs: list[EffectSpec], active: npt.
                  if i != chosen)
 
 
-def _relation_set(Q: Array, r: Array, obs: Observations, applied: Array, layout: Layout, spec: EffectSpec,
-                  alpha: float) -> tuple[str, ...]:
-    """Other registers the data cannot tell from the chosen one as the source of a relation effect.
-
-    The dimension q answers register i's corrections: z_q ≈ c + δ u_i.  Register j stays
-    a candidate unless the data reject "j alone" (c + δ_j u_j) in favour of both
-    (c + δ_i u_i + δ_j u_j): the encompassing F-test (Seber & Lee, §4.3; 1 and N − p − 3 df)
-    at ``alpha`` divided by the number of moved registers (Bonferroni over the register that
-    could have been chosen), so the set holds the true register with probability ≥ 1 − α.
-    A register never moved on q has u_j constant: "j alone" is the constant, which stays a
-    candidate when the slope on u_i is not significant — registers that moved together
-    (proportionally) always stay together.
-
-    Returns
-    -------
-    tuple of str
-        ``relation: q ~ j`` for every register j in the set but i, in register order.
-    """
-    q = layout.dimension_ids.index(str(spec.dimension))
-    i = layout.register_ids.index(str(spec.register))
-    rows = obs.dim == q
-    n_r = applied.shape[1]
-    M = np.zeros((obs.n, n_r + 1))
-    M[rows, :n_r] = applied[obs.cycle[rows]]
-    M[rows, n_r] = 1.0
-    P = M - Q @ (Q.T @ M)
-    rss0 = float(r @ r)
-    df = obs.n - Q.shape[1] - 3
-    if df <= 0:
-        return tuple(f"relation: {spec.dimension} ~ {rid}" for j, rid in enumerate(layout.register_ids) if j != i)
-
-    def rss(cols: list[int]) -> float:
-        B = _orth(P[:, cols])
-        t = B.T @ r
-        return rss0 - float(t @ t)
-
-    moved = np.ptp(applied[np.unique(obs.cycle[rows])], axis=0) > _TINY
-    m = max(int(moved.sum()), 1)
-    out = []
-    for j in range(n_r):
-        if j == i:
-            continue
-        both = rss([i, j, n_r])
-        gain = rss([j, n_r]) - both
-        p = float(scipy.stats.f.sf(gain / max(both / df, 1e-300), 1, df)) if gain > 0 else 1.0
-        if p * m >= alpha:
-            out.append(f"relation: {spec.dimension} ~ {layout.register_ids[j]}")
-    return tuple(out)
-
-
 def _refine_tau(spec: EffectSpec, layout: Layout, series: Series, obs: Observations, Q: Array,
                 r: Array) -> EffectSpec:
     """Time constant of a saturating drift refined by a bounded 1-D search on the residual."""
@@ -478,28 +391,3 @@ def _refine_tau(spec: EffectSpec, layout: Layout, series: Series, obs: Observati
                                          options={"xatol": 1e-3})
     tau = float(np.exp(res.x)) if res.fun < loss(np.log(spec.tau)) else spec.tau
     return EffectSpec("drift", shape="saturating", tau=float(f"{tau:.4g}"))
-
-
-def _register_notes(layout: Layout, series: Series, obs: Observations) -> list[str]:
-    """Diagnosability of the registers from the applied corrections."""
-    notes: list[str] = []
-    u = series.applied - series.applied.mean(axis=0) if series.n_cycles else series.applied
-    moved = np.ptp(series.applied, axis=0) > _TINY if series.n_cycles else np.zeros(layout.n_registers, bool)
-    ids = layout.register_ids
-    if series.n_cycles >= 3:
-        still = [ids[i] for i in np.flatnonzero(~moved)]
-        if still:
-            notes.append("never corrected during the series, so how dimensions answer them cannot be checked: "
-                         + ", ".join(still))
-        idx = np.flatnonzero(moved)
-        for a_pos, a in enumerate(idx):
-            for b in idx[a_pos + 1:]:
-                na, nb = np.linalg.norm(u[:, a]), np.linalg.norm(u[:, b])
-                if abs(u[:, a] @ u[:, b]) > (1 - 1e-6) * na * nb:
-                    notes.append(f"{ids[a]} and {ids[b]} always moved together: a wrong relation of one "
-                                 "cannot be told from the other")
-    for row in null_space_directions(layout.composite):
-        terms = " ".join(f"{'+' if v > 0 else '-'}{'' if abs(v) == 1 else f'{abs(v):g}·'}{ids[i]}"
-                         for i, v in enumerate(row) if v != 0)
-        notes.append(f"the setup state is known only up to {terms.lstrip('+')} (moves no dimension)")
-    return notes

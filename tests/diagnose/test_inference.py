@@ -57,7 +57,7 @@ def test_level_holds_when_every_cell_of_a_cycle_shares_noise():
     often than α, the per-cycle test at most α (binomial bound over 400 draws)."""
     rng = np.random.default_rng(2)
     K, d = 30, 8
-    cycle, dim, base = _design(rng, K, d)
+    cycle, _, base = _design(rng, K, d)
     Q = np.linalg.qr(base)[0]
     t = np.arange(K, dtype=float)[cycle]
     zt = t - Q @ (Q.T @ t)
