@@ -264,16 +264,19 @@ def select_effects(layout: Layout, series: Series, *, alpha: float = 0.01, max_e
             if active_rel[i_r, q_r]:
                 spec = EffectSpec("relation", register=layout.register_ids[i_r], dimension=layout.dimension_ids[q_r])
                 g_r = float(gain_r[i_r, q_r])
-                # its free constant takes one dimension's offset: against the lack of fit when there is one,
-                # else against that dimension's own variation (one cell per cycle)
-                if lof is not None:
-                    p_r = cell_pvalue(g_r, lof[0], lof[1], 2)
-                elif by_cycle:
-                    p_r = dimension_pvalue(g_r, r[obs.dim == q_r], 2)
+                # two kinds of evidence, Bonferroni over both: the slope (the dimension answers the register's
+                # changes) against that dimension's own variation over cycles, and, when the dimensions keep
+                # offsets, its free constant (δ · s_i on one dimension) against the lack of fit
+                r_q = r[obs.dim == q_r]
+                slope = float(slope_r[i_r, q_r])
+                if by_cycle:
+                    p_r = dimension_pvalue(slope, r_q - r_q.mean(), 1)
+                    if lof is not None:
+                        p_r = min(1.0, 2.0 * min(p_r, cell_pvalue(g_r - slope, lof[0], lof[1], 1)))
+                    rank_r = p_r if lof is not None else cell_pvalue(g_r, rss0, df0, 2)
                 else:
-                    p_r = cell_pvalue(g_r, rss0, df0, 2)
+                    p_r = rank_r = cell_pvalue(g_r, rss0, df0, 2)
                 f_r = (g_r / 2) / max((rss0 - g_r) / max(df0 - 2, 1), 1e-300)
-                rank_r = p_r if lof is not None else cell_pvalue(g_r, rss0, df0, 2)
                 cands.append((rank_r, p_r, f_r, spec, -1))
         # ranked by what each explains (cell-level p-value), accepted on the per-cycle test at α / m
         # (Bonferroni holds for every candidate tried) and cross-validation
