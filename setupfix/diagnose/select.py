@@ -1,20 +1,29 @@
 """Trace the residual: candidate effects and forward selection with an honest criterion.
 
 Each candidate is a term on covariates the series carries (the kinds of
-:data:`setupfix.diagnose.terms.KINDS`).  Forward selection adds, one at a time, the
-candidate with the smallest p-value of the nested F-test
+:data:`setupfix.diagnose.terms.KINDS`).  Each step ranks the candidates by what they
+explain (the cell-level nested F-test F = (ΔRSS / k) / (RSS₁ / (N − p − k)), Seber & Lee,
+*Linear Regression Analysis*, §4.3; static kinds and relations against the lack of fit
+when the dimensions keep offsets beyond the cycle-to-cycle noise) and accepts the first,
+in that order, that
 
-    F = (ΔRSS / k) / (RSS₁ / (N − p − k))
+* passes its test with the evidence counted per cycle, not per cell
+  (:mod:`setupfix.diagnose.inference`: cluster-robust test with the cycle as the cluster
+  for every kind that changes between cycles, the lack of fit for static kinds, the
+  dimension's own variation for a relation), Bonferroni-adjusted over the candidates of
+  the step (p · m < ``alpha``; the union bound holds for every candidate tried), and
+* lowers the K-fold cross-validated prediction error over cycles, for the kinds that
+  change between cycles (folds deal the cycles in time order, so the parts' order does
+  not matter; static kinds are the same on every cycle and their evidence is the
+  dimensions' offsets, which held-out cycles cannot add to).
 
-(k columns added, Seber & Lee, *Linear Regression Analysis*, §4.3; a static effect —
-scale, position, group — is tested against the lack of fit, the per-dimension mean
-residuals, when those exceed the cycle-to-cycle noise: with cycles as replicates a
-static pattern must explain the dimensions' offsets, not the noise) as long as the
-Bonferroni-adjusted p-value (p · number of candidates tested in that step) stays
-below ``alpha`` *and* the term lowers the K-fold cross-validated prediction error
-over cycles (folds interleave the cycles; no CV for series of fewer than four
-cycles, said in the notes).  Under the declared model with Gaussian noise the
-chance of reporting any effect is therefore at most ``alpha``.
+A candidate refused passes the turn to the next (the selection keeps trying); a step
+ends with the first accepted or when none is left.  Series of fewer than four cycles:
+cell-level F-test only, no CV (said in the notes).  Under the declared model with
+Gaussian noise — independent or shared by the cells of a part — the chance of reporting
+any effect is therefore at most ``alpha`` (``bench/diagnose_calibration.py``).  Scale and
+position are offered only when the nominal sizes or positions are spread over their
+range (:mod:`setupfix.diagnose.support`).
 
 Candidates whose residualised columns are (nearly) zero cannot be identified from
 the series (they are absorbed by the registers or their covariate never moved);
@@ -40,7 +49,7 @@ import scipy.stats
 from setupfix.diagnose.fit import Observations, effect_columns, observations
 from setupfix.diagnose.inference import (MIN_CYCLES, cell_pvalue, cluster_test, dimension_pvalue, lack_of_fit,
                                          orth, relation_set)
-from setupfix.diagnose.support import register_notes, spread, support_notes
+from setupfix.diagnose.support import alike, register_notes, spread, support_notes
 from setupfix.diagnose.terms import AXES, EffectSpec, Layout, Series
 
 __all__ = ["Step", "Selection", "STATIC", "candidate_specs", "select_effects"]
@@ -52,7 +61,8 @@ _TINY = 1e-9
 
 @dataclass(frozen=True)
 class Step:
-    """One accepted (or the first rejected) candidate of the forward selection."""
+    """One candidate tried by the forward selection: accepted, refused by cross-validation, or the best-ranked
+    one its test refused in a step."""
 
     spec: EffectSpec
     f: float
@@ -74,7 +84,8 @@ class Selection:
     found : tuple of EffectSpec
         Accepted effects in order.
     steps : tuple of Step
-        Accepted steps, then the rejected best candidate (if any).
+        Every candidate tried, in order: accepted, refused by cross-validation, and per step the
+        best-ranked one its test refused.
     unidentifiable : tuple of str
         Targets the series cannot identify.
     notes : tuple of str
@@ -307,10 +318,10 @@ def select_effects(layout: Layout, series: Series, *, alpha: float = 0.01, max_e
                 steps.append(Step(spec, float(f_stat), float(p), float(p_adj), m, cv0, cv1, False))
                 continue
             if di >= 0:
-                alike = _alike(Q, cols[:, 0], Z, specs, active_dense, di)
+                same = alike(Q, cols[:, 0], Z, specs, active_dense, di)
             else:
-                alike = relation_set(Q, r, obs, series.applied, layout, spec, alpha)
-            steps.append(Step(spec, float(f_stat), float(p), float(p_adj), m, cv0, cv1, True, alike))
+                same = relation_set(Q, r, obs, series.applied, layout, spec, alpha)
+            steps.append(Step(spec, float(f_stat), float(p), float(p_adj), m, cv0, cv1, True, same))
             found.append(spec)
             X = X1
             if di >= 0:
@@ -365,20 +376,6 @@ def _tested(specs: list[EffectSpec], gain: Array, Q: Array, r: Array, Z: Array, 
         else:
             out.append((p_cell, p_cell, f_cell, specs[i], int(i)))
     return out
-
-
-def _alike(Q: Array, col: Array, Z: Array, specs: list[EffectSpec], active: npt.NDArray[np.bool_],
-           chosen: int, threshold: float = 0.98) -> tuple[str, ...]:
-    """Candidates whose residualised columns are nearly collinear with the chosen one."""
-    if Z.shape[1] == 0:
-        return ()
-    c = col - Q @ (Q.T @ col)
-    P = Z - Q @ (Q.T @ Z)
-    num = np.abs(P.T @ c)
-    den = np.linalg.norm(P, axis=0) * np.linalg.norm(c)
-    corr = np.where(den > _TINY, num / np.where(den > _TINY, den, 1.0), 0.0)
-    return tuple(f"{specs[i].kind}: {specs[i].target}" for i in np.flatnonzero((corr > threshold) & active)
-                 if i != chosen)
 
 
 def _refine_tau(spec: EffectSpec, layout: Layout, series: Series, obs: Observations, Q: Array,

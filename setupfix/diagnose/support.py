@@ -4,7 +4,8 @@ Support rules for the static kinds (:func:`spread`): a scale effect needs at lea
 distinct nominal sizes spread over their range, a position effect a spread of feature
 positions along its axis; otherwise the candidate is not offered and the notes say why
 (:func:`support_notes`).  Diagnosability of the registers from the applied corrections
-(:func:`register_notes`): never corrected, always moved together, null space of C.
+(:func:`register_notes`): never corrected, always moved together, null space of C;
+candidates the series cannot tell apart (:func:`alike`).
 """
 
 from __future__ import annotations
@@ -13,10 +14,10 @@ import numpy as np
 import numpy.typing as npt
 
 from setupfix.diagnose.fit import Observations
-from setupfix.diagnose.terms import AXES, Layout, Series
+from setupfix.diagnose.terms import AXES, EffectSpec, Layout, Series
 from setupfix.relation import null_space_directions
 
-__all__ = ["spread", "support_notes", "register_notes"]
+__all__ = ["spread", "support_notes", "register_notes", "alike"]
 
 Array = npt.NDArray[np.float64]
 
@@ -75,3 +76,17 @@ def register_notes(layout: Layout, series: Series, obs: Observations) -> list[st
                          for i, v in enumerate(row) if v != 0)
         notes.append(f"the setup state is known only up to {terms.lstrip('+')} (moves no dimension)")
     return notes
+
+
+def alike(Q: Array, col: Array, Z: Array, specs: list[EffectSpec], active: npt.NDArray[np.bool_],
+           chosen: int, threshold: float = 0.98) -> tuple[str, ...]:
+    """Candidates whose residualised columns are nearly collinear with the chosen one."""
+    if Z.shape[1] == 0:
+        return ()
+    c = col - Q @ (Q.T @ col)
+    P = Z - Q @ (Q.T @ Z)
+    num = np.abs(P.T @ c)
+    den = np.linalg.norm(P, axis=0) * np.linalg.norm(c)
+    corr = np.where(den > _TINY, num / np.where(den > _TINY, den, 1.0), 0.0)
+    return tuple(f"{specs[i].kind}: {specs[i].target}" for i in np.flatnonzero((corr > threshold) & active)
+                 if i != chosen)
