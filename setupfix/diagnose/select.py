@@ -1,20 +1,29 @@
 """Trace the residual: candidate effects and forward selection with an honest criterion.
 
 Each candidate is a term on covariates the series carries (the kinds of
-:data:`setupfix.diagnose.terms.KINDS`).  Forward selection adds, one at a time, the
-candidate with the smallest p-value of the nested F-test
+:data:`setupfix.diagnose.terms.KINDS`).  Each step ranks the candidates by what they
+explain (the cell-level nested F-test F = (ΔRSS / k) / (RSS₁ / (N − p − k)), Seber & Lee,
+*Linear Regression Analysis*, §4.3; static kinds and relations against the lack of fit
+when the dimensions keep offsets beyond the cycle-to-cycle noise) and accepts the first,
+in that order, that
 
-    F = (ΔRSS / k) / (RSS₁ / (N − p − k))
+* passes its test with the evidence counted per cycle, not per cell
+  (:mod:`setupfix.diagnose.inference`: cluster-robust test with the cycle as the cluster
+  for every kind that changes between cycles, the lack of fit for static kinds, the
+  dimension's own variation for a relation), Bonferroni-adjusted over the candidates of
+  the step (p · m < ``alpha``; the union bound holds for every candidate tried), and
+* lowers the K-fold cross-validated prediction error over cycles, for the kinds that
+  change between cycles (folds deal the cycles in time order, so the parts' order does
+  not matter; static kinds are the same on every cycle and their evidence is the
+  dimensions' offsets, which held-out cycles cannot add to).
 
-(k columns added, Seber & Lee, *Linear Regression Analysis*, §4.3; a static effect —
-scale, position, group — is tested against the lack of fit, the per-dimension mean
-residuals, when those exceed the cycle-to-cycle noise: with cycles as replicates a
-static pattern must explain the dimensions' offsets, not the noise) as long as the
-Bonferroni-adjusted p-value (p · number of candidates tested in that step) stays
-below ``alpha`` *and* the term lowers the K-fold cross-validated prediction error
-over cycles (folds interleave the cycles; no CV for series of fewer than four
-cycles, said in the notes).  Under the declared model with Gaussian noise the
-chance of reporting any effect is therefore at most ``alpha``.
+A candidate refused passes the turn to the next (the selection keeps trying); a step
+ends with the first accepted or when none is left.  Series of fewer than four cycles:
+cell-level F-test only, no CV (said in the notes).  Under the declared model with
+Gaussian noise — independent or shared by the cells of a part — the chance of reporting
+any effect is therefore at most ``alpha`` (``bench/diagnose_calibration.py``).  Scale and
+position are offered only when the nominal sizes or positions are spread over their
+range (:mod:`setupfix.diagnose.support`).
 
 Candidates whose residualised columns are (nearly) zero cannot be identified from
 the series (they are absorbed by the registers or their covariate never moved);
@@ -25,7 +34,7 @@ The relation candidates (register i × dimension q) are scored from per-dimensio
 sums, without forming their N-row columns, so the cost stays linear in the cycles.
 The register of a relation found is reported as a confidence set: every register
 whose corrections the data cannot tell from the chosen one's (encompassing F-tests,
-:func:`_relation_set`); registers that moved together are never told apart.
+:func:`setupfix.diagnose.inference.relation_set`); registers that moved together are never told apart.
 """
 
 from __future__ import annotations
@@ -38,10 +47,12 @@ import scipy.optimize
 import scipy.stats
 
 from setupfix.diagnose.fit import Observations, effect_columns, observations
+from setupfix.diagnose.inference import (MIN_CYCLES, cell_pvalue, cluster_test, dimension_pvalue, lack_of_fit,
+                                         orth, relation_set)
+from setupfix.diagnose.support import alike, register_notes, spread, support_notes
 from setupfix.diagnose.terms import AXES, EffectSpec, Layout, Series
-from setupfix.relation import null_space_directions
 
-__all__ = ["Step", "Selection", "candidate_specs", "select_effects"]
+__all__ = ["Step", "Selection", "STATIC", "candidate_specs", "select_effects"]
 
 Array = npt.NDArray[np.float64]
 
@@ -50,7 +61,8 @@ _TINY = 1e-9
 
 @dataclass(frozen=True)
 class Step:
-    """One accepted (or the first rejected) candidate of the forward selection."""
+    """One candidate tried by the forward selection: accepted, refused by cross-validation, or the best-ranked
+    one its test refused in a step."""
 
     spec: EffectSpec
     f: float
@@ -72,7 +84,8 @@ class Selection:
     found : tuple of EffectSpec
         Accepted effects in order.
     steps : tuple of Step
-        Accepted steps, then the rejected best candidate (if any).
+        Every candidate tried, in order: accepted, refused by cross-validation, and per step the
+        best-ranked one its test refused.
     unidentifiable : tuple of str
         Targets the series cannot identify.
     notes : tuple of str
@@ -124,11 +137,11 @@ def candidate_specs(layout: Layout, series: Series, *, taus: tuple[float, ...] =
     for k, j in enumerate(layout.tools):
         if n >= 3 and np.ptp(series.parts[:, k]) > 0:
             out.append(EffectSpec("wear", register=layout.register_ids[j]))
-    if np.ptp(layout.nominal) > 0:
+    if spread(layout.nominal):
         out.append(EffectSpec("scale"))
     for a, axis in enumerate(AXES):
         col = layout.coord[:, a]
-        if np.isfinite(col).all() and np.ptp(col) > 0:
+        if np.isfinite(col).all() and spread(col):
             out.append(EffectSpec("position", axis=axis))
     for g in dict.fromkeys(g for g in layout.groups if g is not None):
         out.append(EffectSpec("group", group=g))
@@ -154,15 +167,6 @@ def _level_positions(series: Series, max_positions: int, min_side: int) -> list[
     reset = (series.parts[1:] == 0) & (series.parts[:-1] > 0)  # a logged tool change restarted the count
     changed = {int(k) + 1 for k in np.flatnonzero(reset.any(axis=1))} if n > 1 else set()
     return sorted(set(ok) | {k for k in changed if t[k] > t[k - 1]})
-
-
-def _orth(X: Array) -> Array:
-    if X.shape[1] == 0:
-        return X
-    u, s, _ = np.linalg.svd(X, full_matrices=False)
-    keep = s > _TINY * max(1.0, float(s.max(initial=0.0)))
-    out: Array = u[:, keep]
-    return out
 
 
 def _dense_scores(Q: Array, r: Array, Z: Array) -> tuple[Array, Array]:
@@ -211,9 +215,8 @@ def _relation_scores(Q: Array, r: Array, obs: Observations, applied: Array,
     return gain, np.maximum(gain - const[None, :], 0.0)
 
 
-def _cv_sse(X: Array, z: Array, cycle: npt.NDArray[np.intp], n_folds: int) -> float:
-    """K-fold (interleaved cycles) cross-validated squared prediction error."""
-    fold = cycle % n_folds
+def _cv_sse(X: Array, z: Array, fold: npt.NDArray[np.intp], n_folds: int) -> float:
+    """K-fold cross-validated squared prediction error (``fold`` of each cell: its cycle's rank in time mod K)."""
     sse = 0.0
     for f in range(n_folds):
         test = fold == f
@@ -236,7 +239,7 @@ def select_effects(layout: Layout, series: Series, *, alpha: float = 0.01, max_e
         Family-wise level of each step (Bonferroni over the candidates tested).
     max_effects : int, default=4
     n_folds : int, default=5
-        Folds of the cross-validation over cycles.
+        Folds of the cross-validation over cycles (cycles dealt to folds in time order).
     relations : bool, default=True
         Test the relation candidates (register × dimension).
     declared : tuple of EffectSpec
@@ -252,24 +255,26 @@ def select_effects(layout: Layout, series: Series, *, alpha: float = 0.01, max_e
     Z = np.column_stack(dense) if dense else np.zeros((obs.n, 0))
     C = layout.composite
     n_r, n_d = C.shape
+    n_cyc = series.n_cycles
     # relation pairs: the register's applied change must take ≥ 2 values on the dimension's cells
     pairs_ok = np.zeros((n_r, n_d), dtype=bool)
-    if relations and series.n_cycles >= 3:
+    if relations and n_cyc >= 3:
         for q in range(n_d):
             cyc = np.unique(obs.cycle[obs.dim == q])
             if cyc.size >= 3:
                 pairs_ok[:, q] = np.ptp(series.applied[cyc], axis=0) > _TINY
-    notes: list[str] = []
+    notes: list[str] = support_notes(layout)
     X = np.hstack([obs.base] + [effect_columns(s, layout, series, obs) for s in declared])
     found: list[EffectSpec] = []
-    blocks: list[Array] = []
     steps: list[Step] = []
     unident: list[str] = []
-    folds = min(n_folds, series.n_cycles)
-    use_cv = series.n_cycles >= 4
-    if not use_cv:
-        notes.append(f"{series.n_cycles} cycle(s): effects are tested by the F-test only (no cross-validation "
-                     "over cycles); only static effects (scale, position, group) can be found")
+    folds = min(n_folds, n_cyc)
+    by_cycle = n_cyc >= MIN_CYCLES
+    if not by_cycle:
+        notes.append(f"{n_cyc} cycle(s): effects are tested by the F-test only, counting cells (no cross-validation "
+                     "over cycles, no test per part); only static effects (scale, position, group) can be found")
+    # folds deal the cycles in time order: the same folds whatever order the parts come in
+    fold_of = (np.argsort(np.argsort(series.time, kind="stable"), kind="stable") % max(folds, 1))[obs.cycle]
     active_dense = np.ones(len(specs), dtype=bool)
     active_rel = pairs_ok.copy()
     for s in declared:
@@ -277,7 +282,7 @@ def select_effects(layout: Layout, series: Series, *, alpha: float = 0.01, max_e
             active_rel[layout.register_ids.index(str(s.register)), layout.dimension_ids.index(str(s.dimension))] = False
     first = True
     while len(found) < max_effects:
-        Q = _orth(X)
+        Q = orth(X)
         r = obs.z - Q @ (Q.T @ obs.z)
         rss0 = float(r @ r)
         df0 = obs.n - Q.shape[1]
@@ -291,16 +296,9 @@ def select_effects(layout: Layout, series: Series, *, alpha: float = 0.01, max_e
         m = int(np.sum(gain_d >= 0)) + (int(active_rel.sum()) if gain_r is not None else 0)
         if m == 0 or df0 <= 2:
             break
-        n_static = obs.base.shape[1] + sum(s.kind in _STATIC for s in (*declared, *found))
-        lof = _lack_of_fit(obs, r, n_static, alpha) if series.n_cycles >= 2 else None
-        cands: list[tuple[float, int, EffectSpec, int, float]] = []  # (p, k, spec, dense index or -1, ΔRSS)
-        for i in np.flatnonzero(gain_d >= 0):
-            if lof is not None and specs[i].kind in _STATIC:
-                # dimensions keep offsets beyond the noise: a static effect must explain them, not the noise
-                p_i = _pvalue(gain_d[i], lof[0], lof[1], 1)
-            else:
-                p_i = _pvalue(gain_d[i], rss0, df0, 1)
-            cands.append((p_i, 1, specs[i], int(i), float(gain_d[i])))
+        n_static = obs.base.shape[1] + sum(s.kind in STATIC for s in (*declared, *found))
+        lof = lack_of_fit(obs.dim, r, obs.n, n_static, alpha) if n_cyc >= 2 else None
+        cands = _tested(specs, gain_d, Q, r, Z, obs, n_cyc, lof, rss0, df0)
         if gain_r is not None and slope_r is not None:
             # the dimension most off (slope and constant), then the register whose changes it answers (slope)
             q_r = int(np.unravel_index(int(np.argmax(np.where(active_rel, gain_r, -1.0))), gain_r.shape)[1])
@@ -308,153 +306,110 @@ def select_effects(layout: Layout, series: Series, *, alpha: float = 0.01, max_e
             if active_rel[i_r, q_r]:
                 spec = EffectSpec("relation", register=layout.register_ids[i_r], dimension=layout.dimension_ids[q_r])
                 g_r = float(gain_r[i_r, q_r])
-                # its free constant takes one dimension's offset: against the lack of fit when there is one
-                p_r = _pvalue(g_r, lof[0], lof[1], 2) if lof is not None else _pvalue(g_r, rss0, df0, 2)
-                cands.append((p_r, 2, spec, -1, g_r))
-        # ties (p-values that underflow to 0 for strong effects) go to the larger ΔRSS
-        p, k, spec, di, gain = min(cands, key=lambda c: (c[0], -c[4]))
-        p_adj = min(1.0, p * m)
-        f_stat = (gain / k) / max((rss0 - gain) / max(df0 - k, 1), 1e-300)
-        if spec.kind == "drift" and spec.shape == "saturating":
-            spec = _refine_tau(spec, layout, series, obs, Q, r)
-            gain = _dense_scores(Q, r, effect_columns(spec, layout, series, obs))[0][0]
-            f_stat = (gain / k) / max((rss0 - gain) / max(df0 - k, 1), 1e-300)
-        if spec.kind == "level" and p * m < alpha:  # the step's cycle between the positions tried
-            spec, gain = _refine_level(spec, layout, series, obs, Q, r, gain)
-            f_stat = (gain / k) / max((rss0 - gain) / max(df0 - k, 1), 1e-300)
-        cols = Z[:, [di]] if di >= 0 and spec == specs[di] else effect_columns(spec, layout, series, obs)
-        X1 = np.hstack([X, cols])
-        cv0 = cv1 = float("nan")
-        ok = p_adj < alpha
-        if ok and use_cv:
-            cv0 = _cv_sse(X, obs.z, obs.cycle, folds)
-            cv1 = _cv_sse(X1, obs.z, obs.cycle, folds)
-            ok = cv1 < cv0
-        if not ok:
-            alike: tuple[str, ...] = ()
-        elif di >= 0:
-            alike = _alike(Q, cols[:, 0], Z, specs, active_dense, di)
-        else:
-            alike = _relation_set(Q, r, obs, series.applied, layout, spec, alpha)
-        steps.append(Step(spec, float(f_stat), float(p), float(p_adj), m, cv0, cv1, ok, alike))
-        if not ok:
+                # two kinds of evidence, Bonferroni over both: the slope (the dimension answers the register's
+                # changes) against that dimension's own variation over cycles, and, when the dimensions keep
+                # offsets, its free constant (δ · s_i on one dimension) against the lack of fit
+                r_q = r[obs.dim == q_r]
+                slope = float(slope_r[i_r, q_r])
+                if by_cycle:
+                    p_r = dimension_pvalue(slope, r_q - r_q.mean(), 1)
+                    if lof is not None:
+                        p_r = min(1.0, 2.0 * min(p_r, cell_pvalue(g_r - slope, lof[0], lof[1], 1)))
+                    rank_r = p_r if lof is not None else cell_pvalue(g_r, rss0, df0, 2)
+                else:
+                    p_r = rank_r = cell_pvalue(g_r, rss0, df0, 2)
+                f_r = (g_r / 2) / max((rss0 - g_r) / max(df0 - 2, 1), 1e-300)
+                cands.append((rank_r, p_r, f_r, spec, -1))
+        # ranked by what each explains (cell-level p-value), accepted on the per-cycle test at α / m
+        # (Bonferroni holds for every candidate tried) and cross-validation
+        cands.sort(key=lambda c: (c[0], -c[2]))
+        cv0 = _cv_sse(X, obs.z, fold_of, folds) if by_cycle else float("nan")
+        accepted = refused = False
+        for _, p, f_stat, spec, di in cands:
+            # keep trying: a candidate refused passes the turn to the next in rank
+            p_adj = min(1.0, p * m)
+            if p_adj >= alpha:
+                if not refused:  # the best-ranked candidate the test refuses is reported
+                    steps.append(Step(spec, float(f_stat), float(p), float(p_adj), m, float("nan"), float("nan"),
+                                      False))
+                refused = True
+                continue
+            if spec.kind == "drift" and spec.shape == "saturating":
+                spec = _refine_tau(spec, layout, series, obs, Q, r)
+            if spec.kind == "level":  # the step's cycle between the positions tried
+                spec, _ = _refine_level(spec, layout, series, obs, Q, r,
+                                        float(_dense_scores(Q, r, effect_columns(spec, layout, series, obs))[0][0]))
+            cols = Z[:, [di]] if di >= 0 and spec == specs[di] else effect_columns(spec, layout, series, obs)
+            X1 = np.hstack([X, cols])
+            cv1 = float("nan")
+            # a static term is the same on every cycle: its evidence is the dimensions' offsets (the test),
+            # which held-out cycles cannot add to; time-dependent terms must also predict held-out cycles
+            ok = True
+            if by_cycle and spec.kind not in STATIC:
+                cv1 = _cv_sse(X1, obs.z, fold_of, folds)
+                ok = cv1 < cv0
+            if not ok:
+                steps.append(Step(spec, float(f_stat), float(p), float(p_adj), m, cv0, cv1, False))
+                continue
+            if di >= 0:
+                same = alike(Q, cols[:, 0], Z, specs, active_dense, di)
+            else:
+                same = relation_set(Q, r, obs, series.applied, layout, spec, alpha)
+            steps.append(Step(spec, float(f_stat), float(p), float(p_adj), m, cv0, cv1, True, same))
+            found.append(spec)
+            X = X1
+            if di >= 0:
+                active_dense[di] = False
+                if spec.kind == "drift":  # one drift shape at most
+                    active_dense &= np.array([s.kind != "drift" for s in specs])
+            else:
+                active_rel[layout.register_ids.index(str(spec.register)),
+                           layout.dimension_ids.index(str(spec.dimension))] = False
+            accepted = True
             break
-        found.append(spec)
-        blocks.append(cols)
-        X = X1
-        if di >= 0:
-            active_dense[di] = False
-            if spec.kind == "drift":  # one drift shape at most
-                active_dense &= np.array([s.kind != "drift" for s in specs])
-        else:
-            active_rel[layout.register_ids.index(str(spec.register)),
-                       layout.dimension_ids.index(str(spec.dimension))] = False
+        if not accepted:
+            break
     lack = False
-    if series.n_cycles >= 2:
-        Q = _orth(X)
+    if n_cyc >= 2:
+        Q = orth(X)
         r = obs.z - Q @ (Q.T @ obs.z)
-        n_static = obs.base.shape[1] + sum(s.kind in _STATIC for s in (*declared, *found))
-        lack = _lack_of_fit(obs, r, n_static, alpha) is not None
+        n_static = obs.base.shape[1] + sum(s.kind in STATIC for s in (*declared, *found))
+        lack = lack_of_fit(obs.dim, r, obs.n, n_static, alpha) is not None
         if lack:
             notes.append("the dimensions keep constant offsets beyond the noise that no candidate explains "
                          "(lack of fit): a register or relation the model lacks on single dimensions?")
-    notes += _register_notes(layout, series, obs)
+    notes += register_notes(layout, series, obs)
     return Selection(tuple(found), tuple(steps), tuple(dict.fromkeys(unident)), tuple(notes), lack)
 
 
-_STATIC = ("scale", "position", "group")
+#: Kinds whose field is the same on every cycle.
+STATIC = ("scale", "position", "group")
 
 
-def _lack_of_fit(obs: Observations, r: Array, n_static: int, alpha: float) -> tuple[float, int] | None:
-    """(SS, df) of the per-dimension mean residuals when they exceed the cycle-to-cycle noise, else None.
-
-    The classic lack-of-fit test with the cycles as replicates: SS_lof = Σ_q n_q r̄_q²
-    on (dimensions − static parameters) df against the pure error Σ (r − r̄_q)².
-    """
-    n_q = np.bincount(obs.dim)
-    seen = n_q > 0
-    mean_q = np.bincount(obs.dim, weights=r)[seen] / n_q[seen]
-    ss_lof = float(np.sum(n_q[seen] * mean_q ** 2))
-    ss_pure = float(r @ r) - ss_lof
-    df_lof = int(seen.sum()) - n_static
-    df_pure = obs.n - int(seen.sum())
-    if df_lof <= 1 or df_pure <= 1 or ss_pure <= 0:
-        return None
-    p = float(scipy.stats.f.sf((ss_lof / df_lof) / (ss_pure / df_pure), df_lof, df_pure))
-    return (ss_lof, df_lof) if p < alpha else None
-
-
-def _pvalue(gain: float, rss0: float, df0: int, k: int) -> float:
-    df1 = df0 - k
-    if df1 <= 0:
-        return 1.0
-    rss1 = max(rss0 - gain, 1e-300)
-    f = (gain / k) / (rss1 / df1)
-    return float(scipy.stats.f.sf(f, k, df1))
-
-
-def _alike(Q: Array, col: Array, Z: Array, specs: list[EffectSpec], active: npt.NDArray[np.bool_],
-           chosen: int, threshold: float = 0.98) -> tuple[str, ...]:
-    """Candidates whose residualised columns are nearly collinear with the chosen one."""
-    if Z.shape[1] == 0:
-        return ()
-    c = col - Q @ (Q.T @ col)
-    P = Z - Q @ (Q.T @ Z)
-    num = np.abs(P.T @ c)
-    den = np.linalg.norm(P, axis=0) * np.linalg.norm(c)
-    corr = np.where(den > _TINY, num / np.where(den > _TINY, den, 1.0), 0.0)
-    return tuple(f"{specs[i].kind}: {specs[i].target}" for i in np.flatnonzero((corr > threshold) & active)
-                 if i != chosen)
-
-
-def _relation_set(Q: Array, r: Array, obs: Observations, applied: Array, layout: Layout, spec: EffectSpec,
-                  alpha: float) -> tuple[str, ...]:
-    """Other registers the data cannot tell from the chosen one as the source of a relation effect.
-
-    The dimension q answers register i's corrections: z_q ≈ c + δ u_i.  Register j stays
-    a candidate unless the data reject "j alone" (c + δ_j u_j) in favour of both
-    (c + δ_i u_i + δ_j u_j): the encompassing F-test (Seber & Lee, §4.3; 1 and N − p − 3 df)
-    at ``alpha`` divided by the number of moved registers (Bonferroni over the register that
-    could have been chosen), so the set holds the true register with probability ≥ 1 − α.
-    A register never moved on q has u_j constant: "j alone" is the constant, which stays a
-    candidate when the slope on u_i is not significant — registers that moved together
-    (proportionally) always stay together.
-
-    Returns
-    -------
-    tuple of str
-        ``relation: q ~ j`` for every register j in the set but i, in register order.
-    """
-    q = layout.dimension_ids.index(str(spec.dimension))
-    i = layout.register_ids.index(str(spec.register))
-    rows = obs.dim == q
-    n_r = applied.shape[1]
-    M = np.zeros((obs.n, n_r + 1))
-    M[rows, :n_r] = applied[obs.cycle[rows]]
-    M[rows, n_r] = 1.0
-    P = M - Q @ (Q.T @ M)
-    rss0 = float(r @ r)
-    df = obs.n - Q.shape[1] - 3
-    if df <= 0:
-        return tuple(f"relation: {spec.dimension} ~ {rid}" for j, rid in enumerate(layout.register_ids) if j != i)
-
-    def rss(cols: list[int]) -> float:
-        B = _orth(P[:, cols])
-        t = B.T @ r
-        return rss0 - float(t @ t)
-
-    moved = np.ptp(applied[np.unique(obs.cycle[rows])], axis=0) > _TINY
-    m = max(int(moved.sum()), 1)
-    out = []
-    for j in range(n_r):
-        if j == i:
-            continue
-        both = rss([i, j, n_r])
-        gain = rss([j, n_r]) - both
-        p = float(scipy.stats.f.sf(gain / max(both / df, 1e-300), 1, df)) if gain > 0 else 1.0
-        if p * m >= alpha:
-            out.append(f"relation: {spec.dimension} ~ {layout.register_ids[j]}")
-    return tuple(out)
+def _tested(specs: list[EffectSpec], gain: Array, Q: Array, r: Array, Z: Array, obs: Observations, n_cycles: int,
+            lof: tuple[float, int] | None, rss0: float, df0: int) -> list[tuple[float, float, float, EffectSpec, int]]:
+    """(rank, p, statistic, spec, column) of every active one-column candidate (``gain`` ≥ 0): ranked by the
+    cell-level p-value, tested per cycle (:mod:`setupfix.diagnose.inference`); static ones against the lack of
+    fit when there is one."""
+    idx = np.flatnonzero(gain >= 0)
+    out: list[tuple[float, float, float, EffectSpec, int]] = []
+    if idx.size == 0:
+        return out
+    if n_cycles >= MIN_CYCLES:
+        Zi = Z[:, idx]
+        stat, p = cluster_test(Zi - Q @ (Q.T @ Zi), r, obs.cycle, n_cycles)
+    for j, i in enumerate(idx):
+        f_cell = float(gain[i] / max((rss0 - gain[i]) / max(df0 - 1, 1), 1e-300))
+        p_cell = cell_pvalue(float(gain[i]), rss0, df0, 1)
+        if lof is not None and specs[i].kind in STATIC:
+            # dimensions keep offsets beyond the noise: a static effect must explain them, not the noise
+            p_lof = cell_pvalue(float(gain[i]), lof[0], lof[1], 1)
+            out.append((p_lof, p_lof, f_cell, specs[i], int(i)))
+        elif n_cycles >= MIN_CYCLES:
+            out.append((p_cell, float(p[j]), float(stat[j]), specs[i], int(i)))
+        else:
+            out.append((p_cell, p_cell, f_cell, specs[i], int(i)))
+    return out
 
 
 def _refine_level(spec: EffectSpec, layout: Layout, series: Series, obs: Observations, Q: Array, r: Array,
@@ -495,28 +450,3 @@ def _refine_tau(spec: EffectSpec, layout: Layout, series: Series, obs: Observati
                                          options={"xatol": 1e-3})
     tau = float(np.exp(res.x)) if res.fun < loss(np.log(spec.tau)) else spec.tau
     return EffectSpec("drift", shape="saturating", tau=float(f"{tau:.4g}"))
-
-
-def _register_notes(layout: Layout, series: Series, obs: Observations) -> list[str]:
-    """Diagnosability of the registers from the applied corrections."""
-    notes: list[str] = []
-    u = series.applied - series.applied.mean(axis=0) if series.n_cycles else series.applied
-    moved = np.ptp(series.applied, axis=0) > _TINY if series.n_cycles else np.zeros(layout.n_registers, bool)
-    ids = layout.register_ids
-    if series.n_cycles >= 3:
-        still = [ids[i] for i in np.flatnonzero(~moved)]
-        if still:
-            notes.append("never corrected during the series, so how dimensions answer them cannot be checked: "
-                         + ", ".join(still))
-        idx = np.flatnonzero(moved)
-        for a_pos, a in enumerate(idx):
-            for b in idx[a_pos + 1:]:
-                na, nb = np.linalg.norm(u[:, a]), np.linalg.norm(u[:, b])
-                if abs(u[:, a] @ u[:, b]) > (1 - 1e-6) * na * nb:
-                    notes.append(f"{ids[a]} and {ids[b]} always moved together: a wrong relation of one "
-                                 "cannot be told from the other")
-    for row in null_space_directions(layout.composite):
-        terms = " ".join(f"{'+' if v > 0 else '-'}{'' if abs(v) == 1 else f'{abs(v):g}·'}{ids[i]}"
-                         for i, v in enumerate(row) if v != 0)
-        notes.append(f"the setup state is known only up to {terms.lstrip('+')} (moves no dimension)")
-    return notes

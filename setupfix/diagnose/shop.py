@@ -123,6 +123,11 @@ class ShopSimulator(ValidatedParams):
         Deviations rounded as a CMM prints them.
     process : int, default=0
         Process channels recorded per cycle (0–3: ``speed_rpm``, ``stickout_mm``, ``feed``).
+    part_noise : float, default=0 [model unit]
+        Shared per-part variation: every tool register (every register when the model
+        has no tools) is off by its own N(0, part_noise²) offset, drawn anew each cycle,
+        so all dimensions a tool cuts move together on that part (the cells of a cycle
+        are correlated; real parts vary as a whole).
     seed : int or None
         Seed of the simulation; None means :data:`setupfix.search.DEFAULT_SEED` (never entropy).
     """
@@ -142,13 +147,14 @@ class ShopSimulator(ValidatedParams):
         "sparse": [Interval(int, 0, None)],
         "decimals": [Interval(int, 0, 12)],
         "process": [Interval(int, 0, 3)],
+        "part_noise": [Interval(float, 0, None)],
         "seed": [Interval(int, 0, None), None],
     }
 
     def __init__(self, *, n_cycles: int = 40, noise: float = 0.002, setup_error: float = 0.03,
                  cycle_minutes: float = 20.0, shift_cycles: int = 24, pause_hours: float = 8.0,
                  correct_every: int = 5, dead_time: float = 30.0, gain: float = 0.7, tool_change_every: int = 16,
-                 heat: float = 6.0, sparse: int = 0, decimals: int = 4, process: int = 0,
+                 heat: float = 6.0, sparse: int = 0, decimals: int = 4, process: int = 0, part_noise: float = 0.0,
                  seed: int | None = None) -> None:
         self.n_cycles = n_cycles
         self.noise = noise
@@ -164,6 +170,7 @@ class ShopSimulator(ValidatedParams):
         self.sparse = sparse
         self.decimals = decimals
         self.process = process
+        self.part_noise = part_noise
         self.seed = seed
 
     def validate_params(self) -> None:
@@ -255,6 +262,9 @@ class ShopSimulator(ValidatedParams):
             channels += names
         setup: Array = np.asarray(self.setup_error * (1.0 - 2.0 * rng.random(n_r)), dtype=float)  # eq. 12
         noise = rng.normal(0.0, self.noise, size=(self.n_cycles, n_d))
+        if self.part_noise > 0:  # drawn last: series without it keep their seeds' draws
+            rows = layout.tools if layout.tools.size else np.arange(n_r)
+            noise = noise + rng.normal(0.0, self.part_noise, size=(self.n_cycles, rows.size)) @ C[rows]
         # Effects that do not depend on the applied corrections are fixed in advance.
         probe = Series(np.zeros((self.n_cycles, n_d)), times, np.zeros((self.n_cycles, n_r)), parts, temp_at,
                        channels, process_channels=names)

@@ -1,0 +1,198 @@
+"""Tests of a candidate effect with the cycle (the part) as the unit of evidence.
+
+Real parts vary as a whole: a part cut a little long is long on all its dimensions
+(shared per-part variation, e.g. every tool offset a little each cycle).  The cells of
+one cycle are then correlated and an F-test that counts every cell as independent
+evidence calls that shared variation an effect.  Here every candidate is tested on
+evidence counted per cycle:
+
+* **time-dependent kinds** (drift, thermal, wear and every kind whose field changes
+  between cycles) — a cluster-robust score test with the cycle as the cluster
+  (a Wald test with the CR1 sandwich variance, Liang & Zeger 1986; small-sample
+  degrees of freedom after Bell & McCaffrey 2002, Imbens & Kolesár 2016): with r the
+  residual of the current model, z̃ the candidate's column residualised on it, the
+  per-cycle scores s_k = Σ_q z̃_kq r_kq, w_k = Σ_q z̃_kq² and β̂ = Σ s_k / Σ w_k,
+
+      T = (Σ_k s_k)² / (K/(K−1) · Σ_k (s_k − β̂ w_k)²)    ~  F(1, df),
+
+  df = (Σ_k w_k)² / Σ_k w_k² − 1 (Satterthwaite / Kish effective number of cycles),
+  capped at K − 1.  The sandwich variance holds whatever covariance
+  the cells of one cycle share, and df shrinks when the column's leverage sits on few
+  cycles (a saturating drift with a short time constant, a tool worn on few parts);
+* **static kinds** (scale, position, group) — the same test when the dimensions keep
+  no constant offsets beyond the cycle-to-cycle variation; otherwise against the lack
+  of fit (:func:`lack_of_fit`, one value per dimension: the static pattern must
+  explain the dimensions' offsets);
+* **relations** (register i × dimension q, one cell per cycle) — the F-test on that
+  dimension's own residual variance (K − 3 df), so a dimension that shares more of the
+  per-part variation is not judged by the pooled noise of the others.
+
+Series of fewer than four cycles have no cycle-level variance worth the name: their
+candidates keep the cell-level F-test (:func:`cell_pvalue`), and the selection says so.
+
+Calibration: ``bench/diagnose_calibration.py`` (no effect hidden, shared per-part noise
+of 0.5–3× the cell noise: rate of any effect reported ≤ α within its binomial interval).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import numpy.typing as npt
+import scipy.stats
+
+from setupfix.diagnose.fit import Observations
+from setupfix.diagnose.terms import EffectSpec, Layout
+
+__all__ = ["MIN_CYCLES", "cluster_test", "cell_pvalue", "dimension_pvalue", "lack_of_fit", "cycle_sums", "relation_set",
+           "orth"]
+
+Array = npt.NDArray[np.float64]
+
+_TINY = 1e-9
+
+#: Fewest cycles for the cycle-level tests (below: cell-level F-test).
+MIN_CYCLES = 4
+
+
+def orth(X: Array) -> Array:
+    """Orthonormal basis of the column space of X (SVD, tiny singular values dropped)."""
+    if X.shape[1] == 0:
+        return X
+    u, s, _ = np.linalg.svd(X, full_matrices=False)
+    keep = s > _TINY * max(1.0, float(s.max(initial=0.0)))
+    out: Array = u[:, keep]
+    return out
+
+
+def cycle_sums(values: Array, cycle: npt.NDArray[np.intp], n_cycles: int) -> Array:
+    """Per-cycle sums of the rows of ``values`` (N, m) → (n_cycles, m)."""
+    if values.shape[0] and np.all(cycle[1:] >= cycle[:-1]):
+        starts = np.flatnonzero(np.r_[True, cycle[1:] != cycle[:-1]])
+        out = np.zeros((n_cycles, values.shape[1]))
+        out[cycle[starts]] = np.add.reduceat(values, starts, axis=0)
+        return out
+    out = np.zeros((n_cycles, values.shape[1]))
+    np.add.at(out, cycle, values)
+    return out
+
+
+def cluster_test(Zt: Array, r: Array, cycle: npt.NDArray[np.intp], n_cycles: int) -> tuple[Array, Array]:
+    """Cluster-robust score test (cycle = cluster) of one-column candidates.
+
+    Parameters
+    ----------
+    Zt : ndarray (N, m)
+        Candidate columns residualised on the current model.
+    r : ndarray (N,)
+        Residual of the current model.
+    cycle : ndarray of int (N,)
+        Cycle of each cell.
+    n_cycles : int
+
+    Returns
+    -------
+    stat, p : ndarray (m,)
+        T of the module text and its p-value (1 where the column is zero).
+    """
+    s = cycle_sums(Zt * r[:, None], cycle, n_cycles)
+    w = cycle_sums(Zt * Zt, cycle, n_cycles)
+    k = int(np.count_nonzero(w.sum(axis=1) > 0)) if w.size else 0
+    u = s.sum(axis=0)
+    wt = w.sum(axis=0)
+    beta = u / np.where(wt > 0, wt, 1.0)
+    e = s - beta[None, :] * w  # per-cycle scores of the residual with the candidate fitted
+    v = np.einsum("km,km->m", e, e) * k / max(k - 1, 1)
+    ww = np.einsum("km,km->m", w, w)
+    ok = (v > 0) & (wt > 0) & (k >= 2)
+    nu = np.where(ok, wt ** 2 / np.where(ok, ww, 1.0) - 1.0, 1.0)
+    nu = np.clip(nu, 1.0, max(k - 1, 1))
+    stat = np.where(ok, u ** 2 / np.where(ok, v, 1.0), 0.0)
+    p = np.where(ok, scipy.stats.f.sf(stat, 1, nu), 1.0)
+    return stat, p
+
+
+def cell_pvalue(gain: float, rss0: float, df0: int, k: int) -> float:
+    """Nested F-test counting cells (Seber & Lee §4.3): ΔRSS = ``gain`` on ``k`` columns."""
+    df1 = df0 - k
+    if df1 <= 0:
+        return 1.0
+    rss1 = max(rss0 - gain, 1e-300)
+    return float(scipy.stats.f.sf((gain / k) / (rss1 / df1), k, df1))
+
+
+def dimension_pvalue(gain: float, r_q: Array, k: int) -> float:
+    """F-test of ``k`` columns acting on one dimension against that dimension's residual (one cell per cycle)."""
+    df1 = r_q.size - 1 - k
+    if df1 <= 0:
+        return 1.0
+    rss1 = max(float(r_q @ r_q) - gain, 1e-300)
+    return float(scipy.stats.f.sf((gain / k) / (rss1 / df1), k, df1))
+
+
+def lack_of_fit(dim: npt.NDArray[np.intp], r: Array, n: int, n_static: int, alpha: float) -> tuple[float, int] | None:
+    """(SS, df) of the per-dimension mean residuals when they exceed the cycle-to-cycle noise, else None.
+
+    The classic lack-of-fit test with the cycles as replicates: SS_lof = Σ_q n_q r̄_q²
+    on (dimensions − static parameters) df against the pure error Σ (r − r̄_q)².
+    """
+    n_q = np.bincount(dim)
+    seen = n_q > 0
+    mean_q = np.bincount(dim, weights=r)[seen] / n_q[seen]
+    ss_lof = float(np.sum(n_q[seen] * mean_q ** 2))
+    ss_pure = float(r @ r) - ss_lof
+    df_lof = int(seen.sum()) - n_static
+    df_pure = n - int(seen.sum())
+    if df_lof <= 1 or df_pure <= 1 or ss_pure <= 0:
+        return None
+    p = float(scipy.stats.f.sf((ss_lof / df_lof) / (ss_pure / df_pure), df_lof, df_pure))
+    return (ss_lof, df_lof) if p < alpha else None
+
+
+def relation_set(Q: Array, r: Array, obs: Observations, applied: Array, layout: Layout, spec: EffectSpec,
+                  alpha: float) -> tuple[str, ...]:
+    """Other registers the data cannot tell from the chosen one as the source of a relation effect.
+
+    The dimension q answers register i's corrections: z_q ≈ c + δ u_i.  Register j stays
+    a candidate unless the data reject "j alone" (c + δ_j u_j) in favour of both
+    (c + δ_i u_i + δ_j u_j): the encompassing F-test (Seber & Lee, §4.3; 1 and N − p − 3 df)
+    at ``alpha`` divided by the number of moved registers (Bonferroni over the register that
+    could have been chosen), so the set holds the true register with probability ≥ 1 − α.
+    A register never moved on q has u_j constant: "j alone" is the constant, which stays a
+    candidate when the slope on u_i is not significant — registers that moved together
+    (proportionally) always stay together.
+
+    Returns
+    -------
+    tuple of str
+        ``relation: q ~ j`` for every register j in the set but i, in register order.
+    """
+    q = layout.dimension_ids.index(str(spec.dimension))
+    i = layout.register_ids.index(str(spec.register))
+    rows = obs.dim == q
+    n_r = applied.shape[1]
+    M = np.zeros((obs.n, n_r + 1))
+    M[rows, :n_r] = applied[obs.cycle[rows]]
+    M[rows, n_r] = 1.0
+    P = M - Q @ (Q.T @ M)
+    rss0 = float(r @ r)
+    df = obs.n - Q.shape[1] - 3
+    if df <= 0:
+        return tuple(f"relation: {spec.dimension} ~ {rid}" for j, rid in enumerate(layout.register_ids) if j != i)
+
+    def rss(cols: list[int]) -> float:
+        B = orth(P[:, cols])
+        t = B.T @ r
+        return rss0 - float(t @ t)
+
+    moved = np.ptp(applied[np.unique(obs.cycle[rows])], axis=0) > _TINY
+    m = max(int(moved.sum()), 1)
+    out = []
+    for j in range(n_r):
+        if j == i:
+            continue
+        both = rss([i, j, n_r])
+        gain = rss([j, n_r]) - both
+        p = float(scipy.stats.f.sf(gain / max(both / df, 1e-300), 1, df)) if gain > 0 else 1.0
+        if p * m >= alpha:
+            out.append(f"relation: {spec.dimension} ~ {layout.register_ids[j]}")
+    return tuple(out)

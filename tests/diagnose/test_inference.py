@@ -1,0 +1,110 @@
+"""Evidence counted per cycle: the cluster-robust test against the sandwich it stands for, its level
+under shared per-part noise, and the simulator's shared per-part variation."""
+
+from __future__ import annotations
+
+import numpy as np
+import scipy.stats
+
+from setupfix.diagnose import Layout
+from setupfix.diagnose.inference import cluster_test, cycle_sums, dimension_pvalue, lack_of_fit
+
+from diagnose.helpers import NOISE, guide_pins, simulate
+
+
+def _design(rng, n_cycles=12, n_dims=5):
+    cycle = np.repeat(np.arange(n_cycles), n_dims)
+    dim = np.tile(np.arange(n_dims), n_cycles)
+    base = np.eye(n_dims)[dim]  # one constant per dimension
+    return cycle, dim, base
+
+
+def test_cluster_test_is_the_sandwich_wald_test_of_the_full_regression():
+    rng = np.random.default_rng(0)
+    cycle, dim, base = _design(rng)
+    K = 12
+    z = rng.normal(size=cycle.size) + rng.normal(size=K)[cycle]  # shared per-cycle part
+    col = rng.normal(size=K)[cycle] * (1 + dim)  # a time-dependent candidate
+    Q = np.linalg.qr(base)[0]
+    r = z - Q @ (Q.T @ z)
+    zt = col - Q @ (Q.T @ col)
+    stat, p = cluster_test(zt[:, None], r, cycle, K)
+    # brute force: OLS with every column, CR1 sandwich (XᵀX)⁻¹ Σ_k X_kᵀ e_k e_kᵀ X_k (XᵀX)⁻¹ · K/(K − 1)
+    X = np.column_stack([base, col])
+    beta, *_ = np.linalg.lstsq(X, z, rcond=None)
+    e = z - X @ beta
+    bread = np.linalg.inv(X.T @ X)
+    meat = sum(np.outer(X[cycle == k].T @ e[cycle == k], X[cycle == k].T @ e[cycle == k]) for k in range(K))
+    V = bread @ meat @ bread * K / (K - 1)
+    assert stat[0] == np.float64(stat[0])
+    np.testing.assert_allclose(stat[0], beta[-1] ** 2 / V[-1, -1], rtol=1e-10)
+    w = np.array([np.sum(zt[cycle == k] ** 2) for k in range(K)])
+    nu = min(w.sum() ** 2 / (w @ w) - 1, K - 1)
+    np.testing.assert_allclose(p[0], scipy.stats.f.sf(stat[0], 1, nu), rtol=1e-10)
+
+
+def test_cycle_sums_do_not_depend_on_the_order_of_the_cells():
+    rng = np.random.default_rng(1)
+    cycle = np.sort(rng.integers(0, 7, 40))
+    v = rng.normal(size=(40, 3))
+    perm = rng.permutation(40)
+    np.testing.assert_allclose(cycle_sums(v, cycle, 9), cycle_sums(v[perm], cycle[perm], 9))
+    assert np.all(cycle_sums(v, cycle, 9)[7:] == 0)
+
+
+def test_level_holds_when_every_cell_of_a_cycle_shares_noise():
+    """Shared noise 2× the cell noise, a time-dependent column: the cell-level F-test rejects far more
+    often than α, the per-cycle test at most α (binomial bound over 400 draws)."""
+    rng = np.random.default_rng(2)
+    K, d = 30, 8
+    cycle, _, base = _design(rng, K, d)
+    Q = np.linalg.qr(base)[0]
+    t = np.arange(K, dtype=float)[cycle]
+    zt = t - Q @ (Q.T @ t)
+    alpha, n = 0.05, 400
+    per_cycle = cells = 0
+    for _ in range(n):
+        z = rng.normal(size=cycle.size) + 2.0 * rng.normal(size=K)[cycle]
+        r = z - Q @ (Q.T @ z)
+        per_cycle += cluster_test(zt[:, None], r, cycle, K)[1][0] < alpha
+        gain = (zt @ r) ** 2 / (zt @ zt)
+        df = cycle.size - d - 1
+        cells += scipy.stats.f.sf(gain / ((r @ r - gain) / df), 1, df) < alpha
+    bound = scipy.stats.binom.isf(0.001, n, alpha)
+    assert per_cycle <= bound < cells
+
+
+def test_dimension_test_uses_that_dimensions_own_variance():
+    rng = np.random.default_rng(3)
+    r_q = rng.normal(size=30)
+    u = rng.normal(size=30)
+    gain = (u @ r_q) ** 2 / (u @ u)
+    df = 30 - 1 - 1
+    want = scipy.stats.f.sf(gain / ((r_q @ r_q - gain) / df), 1, df)
+    assert dimension_pvalue(gain, r_q, 1) == np.float64(want)
+
+
+def test_lack_of_fit_sees_constant_offsets_not_noise():
+    rng = np.random.default_rng(4)
+    K, d = 20, 6
+    cycle, dim, _ = _design(rng, K, d)
+    noise = rng.normal(size=cycle.size) * 0.002
+    assert lack_of_fit(dim, noise - noise.mean(), cycle.size, 1, 0.01) is None
+    offsets = np.array([0.0, 0.01, -0.01, 0.005, 0.0, -0.005])[dim]
+    out = lack_of_fit(dim, noise + offsets, cycle.size, 1, 0.01)
+    assert out is not None and out[1] == d - 1
+
+
+def test_simulated_parts_vary_as_a_whole():
+    """part_noise: every tool off by its own offset each cycle, so the cells a tool cuts move together;
+    without it the seed's series is unchanged."""
+    layout = Layout.from_model(guide_pins())
+    plain = simulate(layout, seed=5, correct_every=0).series.deviation
+    shared = simulate(layout, seed=5, correct_every=0, part_noise=3 * NOISE).series.deviation
+    assert np.array_equal(plain, simulate(layout, seed=5, correct_every=0, part_noise=0.0).series.deviation)
+    extra = shared - plain
+    C_t = layout.composite[layout.tools]
+    # the extra part lies in the span of the tool rows of C, cycle by cycle
+    coef = np.linalg.lstsq(C_t.T, extra.T, rcond=None)[0]
+    assert np.abs(extra - coef.T @ C_t).max() < 1e-3
+    assert 2 * NOISE < np.std(coef) < 4 * NOISE
