@@ -158,15 +158,19 @@ def candidate_specs(layout: Layout, series: Series, *, taus: tuple[float, ...] =
 
 
 def _level_positions(series: Series, max_positions: int, min_side: int) -> list[int]:
-    """Cycle indices a level step may start at (time strictly after the previous cycle's)."""
+    """Cycles a level step may start at: indices into the series (in any reading order) of the cycles, taken
+    in time order, whose time is strictly after the previous cycle's, with ``min_side`` cycles on each side;
+    the first cycle after a logged tool change is always one."""
     n = series.n_cycles
-    t = series.time
-    ok = [k for k in range(min_side, n - min_side + 1) if t[k] > t[k - 1]]
+    order = np.argsort(series.time, kind="stable")
+    t = series.time[order]
+    ok = [j for j in range(min_side, n - min_side + 1) if t[j] > t[j - 1]]
     if len(ok) > max_positions:
         ok = [ok[int(i)] for i in np.unique(np.round(np.linspace(0, len(ok) - 1, max_positions)))]
-    reset = (series.parts[1:] == 0) & (series.parts[:-1] > 0)  # a logged tool change restarted the count
-    changed = {int(k) + 1 for k in np.flatnonzero(reset.any(axis=1))} if n > 1 else set()
-    return sorted(set(ok) | {k for k in changed if t[k] > t[k - 1]})
+    parts = series.parts[order]
+    reset = (parts[1:] == 0) & (parts[:-1] > 0)  # a logged tool change restarted the count
+    changed = {int(j) + 1 for j in np.flatnonzero(reset.any(axis=1))} if n > 1 else set()
+    return [int(order[j]) for j in sorted(set(ok) | {j for j in changed if t[j] > t[j - 1]})]
 
 
 def _dense_scores(Q: Array, r: Array, Z: Array) -> tuple[Array, Array]:
@@ -418,10 +422,12 @@ def _refine_level(spec: EffectSpec, layout: Layout, series: Series, obs: Observa
 
     On long series :func:`candidate_specs` tries a thinned set of positions; the
     accepted step (tested at its own position, counted in the Bonferroni factor) is
-    placed at the best boundary up to the next positions tried on either side.
+    placed at the best boundary up to the next positions tried on either side (cycles
+    taken in time order, whatever the reading order of the series).
     """
     n = series.n_cycles
-    t = series.time
+    order = np.argsort(series.time, kind="stable")
+    t = series.time[order]
     k0 = int(np.searchsorted(t, spec.at, side="left"))
     tried = sorted({float(c.at) for c in candidate_specs(layout, series) if c.kind == "level"})
     i = tried.index(spec.at) if spec.at in tried else -1
@@ -431,7 +437,8 @@ def _refine_level(spec: EffectSpec, layout: Layout, series: Series, obs: Observa
     if not ks:
         return spec, gain
     alts = [EffectSpec("level", register=spec.register, at=float(t[k]),
-                       cycle=series.cycles[k] if series.cycles else f"cycle {k + 1}") for k in ks]
+                       cycle=series.cycles[int(order[k])] if series.cycles else f"cycle {int(order[k]) + 1}")
+            for k in ks]
     g = _dense_scores(Q, r, np.column_stack([effect_columns(a, layout, series, obs)[:, 0] for a in alts]))[0]
     best = int(np.argmax(g))
     return (alts[best], float(g[best])) if g[best] > gain else (spec, gain)

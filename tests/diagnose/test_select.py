@@ -129,8 +129,8 @@ def test_selection_tries_the_next_candidate_after_one_is_refused():
     """A coolant channel that jumps on one part with a one-part jump of every tool ranks first (it explains
     the most) but is one part of evidence; the wear behind it must still be found (the selection used to
     stop at the first candidate refused)."""
-    layout = Layout.from_model(guide_pins())
-    s = simulate(layout, [one_effect(layout, "wear", 0.5)], seed=3).series
+    layout = Layout.from_model(guide_pins())  # wear at its full size: the level steps tried raise the count
+    s = simulate(layout, [one_effect(layout, "wear")], seed=3).series
     spike = np.zeros(s.n_cycles)
     spike[20] = 10.0
     dev = s.deviation.copy()
