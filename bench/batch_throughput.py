@@ -116,11 +116,11 @@ def stages(files: list[Path]) -> dict[str, float]:
     return {key: seconds / len(files) for key, seconds in total.items()}
 
 
-def run(folder: Path, out: Path, workers: int, tree: Path = ROOT) -> float:
+def run(folder: Path, out: Path, workers: int, tree: Path = ROOT, extra: tuple[str, ...] = ()) -> float:
     """Wall seconds of ``setupfix batch`` (the package of ``tree``) on ``folder``, as a whole process."""
     t = time.perf_counter()
     proc = subprocess.run([sys.executable, "-m", "setupfix", "batch", "--model", str(GUIDE / "model.toml"),
-                           str(folder), "--out", str(out), "--settle", "0", "--workers", str(workers)],
+                           str(folder), "--out", str(out), "--settle", "0", "--workers", str(workers), *extra],
                           cwd=tree, capture_output=True, text=True)
     seconds = time.perf_counter() - t
     if proc.returncode != 0:
