@@ -88,7 +88,7 @@ MAX_BYTES = 16 * 1024 * 1024
 
 _FREE_TEXT = {"description", "comment", "note", "notes"}
 _KEYS = {
-    "process": {"name", "axis", "unit", "resolution", "limit"} | _FREE_TEXT,
+    "process": {"name", "axis", "unit", "resolution", "limit", "draft"} | _FREE_TEXT,
     "machine": {"wks"} | _FREE_TEXT,
     "wks": {"register", "limit", "fixed"} | _FREE_TEXT,
     "tools": {"register", "limit", "fixed"} | _FREE_TEXT,
@@ -359,6 +359,11 @@ def model_from_dict(doc: Mapping[str, Any], source: str = "<model>", text: str |
     limit = _number(p, "process.limit", proc.get("limit", 0.1), positive=True, within=ranges.of["limit"],
                     unit=ranges.unit)
 
+    draft = proc.get("draft", False)
+    if not isinstance(draft, bool):
+        p.add("process.draft", f"expected true or false, found {_show(draft)}")
+        draft = False
+
     wks = _registers(p, doc, "wks", "wks", limit or 0.1, ranges)
     tools = _registers(p, doc, "tools", "tool", limit or 0.1, ranges)
     wks_ids = {r.id: r for r in wks}
@@ -415,6 +420,8 @@ def model_from_dict(doc: Mapping[str, Any], source: str = "<model>", text: str |
         features=tuple(features),
         dimensions=tuple(dimensions),
         source=source,
+        spindle=str(axis),
+        draft=draft,
     )
     if "effects" in doc:
         effects = parse_effects(doc["effects"], model, functools.partial(_report_in, p, "effects"))

@@ -61,6 +61,12 @@ class Register:
     policy : RegisterPolicy
         Its own settings: cost, offset type, controller slot, dead band, gain,
         cumulative limit (``None`` where the model-wide ``[safety]`` value applies).
+    component : {"X", "Y", "Z", "C", "R"} or None
+        In a multi-axis model (``../shared/spec/process-model.md``, *Multi-axis models*) each
+        correctable register component is one :class:`Register`: a WKS translation (``W1.X``,
+        component the axis), a WKS rotation about the spindle (``W1.C``, degrees), a tool length
+        (``T5``, component the spindle axis) or a tool radius (``T5.R``, register e.g. ``D5``).
+        ``None`` in a one-axis model, where every register acts along ``ProcessModel.axis``.
     """
 
     id: str
@@ -69,6 +75,7 @@ class Register:
     limit: float
     fixed: bool = False
     policy: RegisterPolicy = field(default_factory=RegisterPolicy)
+    component: str | None = None
 
     @property
     def cost(self) -> float:
@@ -151,6 +158,13 @@ class ProcessModel:
         The ``[safety]`` table, defaults filled in when the file has none.
     effects : EffectsSection
         The ``[effects]`` section ``diagnose --augment`` writes (empty when absent).
+    axes : tuple of str
+        ``process.axes`` of a multi-axis model (e.g. ``("X", "Y", "Z")``); empty in a one-axis model.
+    spindle : {"X", "Y", "Z"}
+        The spindle axis (tool lengths act along it); ``axis`` in a one-axis model.
+    draft : bool
+        ``[process] draft = true``: an unedited scaffold (``setupfix model init``); nothing is
+        recommended from it until the user removes the key.
     """
 
     name: str
@@ -166,6 +180,14 @@ class ProcessModel:
     source: str = "<model>"
     safety: SafetySettings = field(default_factory=SafetySettings)
     effects: EffectsSection = field(default_factory=EffectsSection)
+    axes: tuple[str, ...] = ()
+    spindle: str = "Z"
+    draft: bool = False
+
+    @property
+    def multi_axis(self) -> bool:
+        """True for a model with ``process.axes`` (register components, see :class:`Register`)."""
+        return bool(self.axes)
 
     @property
     def registers(self) -> tuple[Register, ...]:
