@@ -42,7 +42,8 @@ import numpy.typing as npt
 
 from setupfix.errors import Note
 from setupfix.optimize._base import make_result
-from setupfix.optimize._chords import chord_rows, lazy_chords
+from setupfix.optimize._chords import chord_rows, lazy_chords, smallest_tie
+from setupfix.optimize._grid_least_norm import TIE_MAX_REGISTERS
 from setupfix.optimize._highs import INF, LinearModel, Solve
 from setupfix.optimize._least_norm import lower_bound_ratio
 from setupfix.optimize._problem import CorrectionProblem, OptimizeResult
@@ -264,9 +265,12 @@ def triage(t: TriageRows, deadline: float, reserve: float, budget: float, start:
     m4.add_rows(a_ch, np.full(rhs_ch.size, -INF), rhs_ch)
     out = lazy_chords(m4, n, chords, t.cost, t.kmin, t.kmax, best, lambda k: t.meets(k, kept, levels), t.start,
                       deadline, integer=True)
+    best = best if out.best is None else out.best
     if out.proved:
         done.append("least norm")
-    best = best if out.best is None else out.best
+        best, tied = (smallest_tie(m4, n, chords, t.cost, best, lambda k: t.meets(k, kept, levels), t.start, deadline)
+                      if n <= TIE_MAX_REGISTERS else (best, False))
+        done.append("ties to the lexicographically smallest k" if tied else "the tie is not broken (limit or size)")
     if not out.proved:
         why = why or f"least norm: {out.why}"
     return Triaged(best, kept, levels, complete, not why, why, tuple(done))
