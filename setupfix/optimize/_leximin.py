@@ -55,7 +55,7 @@ from setupfix.optimize._grid_least_norm import LeastNorm, grid_least_norm
 from setupfix.optimize._grid_optimum import Stop
 from setupfix.optimize._leximin_counts import CountLevels, count_levels, count_least_norm
 from setupfix.optimize._leximin_level import LevelModel, LevelValue
-from setupfix.optimize._leximin_pins import dim_all, dim_margins, pinned_rows, span_closure
+from setupfix.optimize._leximin_pins import dim_all, dim_margins, excluded_alone, pinned_rows, span_closure
 from setupfix.optimize._session import GridRows, Session
 
 __all__ = ["Leximin", "leximin", "leximin_least_norm"]
@@ -202,7 +202,9 @@ def _fill(search: _Search, v: Array, k: Array, t: float, level: LevelValue | Non
             return [_stopped(search, v, k, path, stop)]
         # a row whose margin is proved within ε of t (integer: one lattice value) or pinned stays pinned, and
         # with it every row in their span: their dimensions' margins are the same at every point
-        pinned = span_closure(rows.g_rows, rows.d, pinned | pin | (sat & (rows.d > 0)), model.key)
+        grown = pinned | pin | (sat & (rows.d > 0))
+        if (grown & ~pinned).any():  # ``pinned`` is closed already: a new pin, a new closure
+            pinned = span_closure(rows.g_rows, rows.d, grown, model.key)
         m_k = search.margins(k)
         fix_sat = np.zeros(v.size, bool)
         fix_sat[row_dim[sat]] = True
@@ -283,7 +285,10 @@ def _conflict(search: _Search, v: Array, k: Array, t: float, path: list[str],
     the counts decide (:mod:`setupfix.optimize._leximin_counts`)."""
     model, eps = search.model, search.eps
     starts: list[tuple[int, Array]] = []
-    for q in np.flatnonzero(np.isnan(v)):
+    rows = search.session.rows
+    skip = (excluded_alone(rows, v[model.row_dim], model.row_dim, v.size, t, eps)
+            if search.session.small and rows.all_integer else np.zeros(v.size, bool))
+    for q in np.flatnonzero(np.isnan(v) & ~skip):
         found = model.alone_at(v, int(q), t, eps, search.stage_end)
         search.calls += 1
         if found is None:

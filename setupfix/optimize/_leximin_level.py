@@ -30,10 +30,11 @@ import numpy.typing as npt
 
 from setupfix.optimize._grid import TOL, rounded_rhs
 from setupfix.optimize._highs import INF, LinearModel
-from setupfix.optimize._leximin_pins import Certificates, best_rounding, farkas_weights, level_bound
+from setupfix.optimize._leximin_pins import (Certificates, Step, best_rounding, farkas_or_point, level_bound,
+                                             meeting_rounding)
 from setupfix.optimize._session import GridRows, Session
 
-__all__ = ["SPREAD", "LevelModel", "LevelValue", "Step"]
+__all__ = ["SPREAD", "LevelModel", "LevelValue"]
 
 #: Weight of Σ u_q (active margins) beside t in the level LP where a step proves the level: small enough to
 #: leave t at its maximum in practice; among the points at the level it takes one with the others high.
@@ -41,23 +42,8 @@ SPREAD = 1e-4
 
 Array = npt.NDArray[np.float64]
 
-
-@dataclass(frozen=True)
-class Step:
-    """A level by the rounded rows at a grid point's own level (:meth:`LevelModel.step`).
-
-    ``proved``: no grid point of the level set has every active margin ≥ t + ε, and
-    ``certificates`` are the LP's weights (they pin rows); else the best point reached (the
-    caller proves the level otherwise; ``stop``: the limit or HiGHS stopped the step).
-    """
-
-    t: float
-    k: Array
-    proved: bool
-    certificates: Certificates | None
-    stop: str | None
-    calls: int
-    x: Array | None = None  # the proving LP's point (k part): rounded, often the next level's point
+#: Ascents of one step by the rounded least-distance point of NNLS (no LP) before the level LP's point is rounded.
+NNLS_ASCENTS = 3
 
 
 @dataclass(frozen=True)
@@ -201,7 +187,7 @@ class LevelModel:
         rows = self.rows
         act = np.isnan(self._floors(v))
         small = self.session.small
-        calls, unrounded = 0, small
+        calls, unrounded, ascents = 0, small, 0
         last: Array | None = None  # the last LP's point (k part)
         t = self.level_of(k, v)
         for _ in range(tries):
@@ -214,11 +200,17 @@ class LevelModel:
                 break
             fin = np.isfinite(b)
             if small:
-                y = farkas_weights(rows, b_up)
+                y, x_ld = farkas_or_point(rows, b_up)
                 if y is not None:
                     cert = (y, np.where(fin, b, 0.0), np.zeros(b.size), True)
                     return Step(t, k, True, Certificates(rows.g_rows, rows.kmin, rows.kmax, (cert,)), None, calls,
                                 last)
+                if x_ld is not None and ascents < NNLS_ASCENTS:  # the rounded rows' least-distance point, rounded
+                    ascents += 1
+                    k_r, t_r = self.round_best(x_ld, v)
+                    if t_r >= t + eps - 1e-9:
+                        k, t = k_r, t_r
+                        continue
             if unrounded:  # a point of the level LP (unrounded rows): usually at the level or next to it
                 status, x, y = self._solve(self.rhs(v), v, stage_end - time.perf_counter(), SPREAD)
                 unrounded = False
@@ -360,10 +352,13 @@ class LevelModel:
                 return False
             if feas != "optimal":
                 return None
-            if kx is not None:
+            if kx is not None:  # the vertex rounded, else each floor/ceil choice of its fractional coordinates
                 k = np.clip(np.rint(kx), rows.kmin, rows.kmax)
                 if meets(k):
                     return k
+                k_met = meeting_rounding(rows, kx, f)
+                if k_met is not None:
+                    return k_met
         res = LinearModel(np.zeros(self.n), rows.g_rows[fin], np.full(int(fin.sum()), -INF), b[fin], rows.kmin,
                           rows.kmax, integer=np.ones(self.n, bool)).solve(stage_end - time.perf_counter())
         if res.status == "infeasible":

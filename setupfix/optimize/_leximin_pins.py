@@ -27,11 +27,11 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
-from setupfix.optimize._grid import TOL
+from setupfix.optimize._grid import TOL, rounded_rhs
 from setupfix.optimize._session import GridRows
 
-__all__ = ["Certificates", "best_rounding", "dim_all", "dim_margins", "farkas_weights", "level_bound", "pinned_rows",
-           "span_closure"]
+__all__ = ["Certificates", "Step", "best_rounding", "dim_all", "dim_margins", "excluded_alone", "farkas_or_point",
+           "farkas_weights", "level_bound", "meeting_rounding", "pinned_rows", "span_closure"]
 
 Array = npt.NDArray[np.float64]
 Mask = npt.NDArray[np.bool_]
@@ -59,6 +59,24 @@ class Certificates:
     kmin: Array
     kmax: Array
     certificates: tuple[tuple[Array, Array, Array, bool], ...]
+
+
+@dataclass(frozen=True)
+class Step:
+    """A level by the rounded rows at a grid point's own level (:meth:`LevelModel.step`).
+
+    ``proved``: no grid point of the level set has every active margin ≥ t + ε, and
+    ``certificates`` are the LP's weights (they pin rows); else the best point reached (the
+    caller proves the level otherwise; ``stop``: the limit or HiGHS stopped the step).
+    """
+
+    t: float
+    k: Array
+    proved: bool
+    certificates: Certificates | None
+    stop: str | None
+    calls: int
+    x: Array | None = None  # the proving LP's point (k part): rounded, often the next level's point
 
 
 def pinned_rows(level: Certificates, active_rows: Mask, eps: float, d: Array) -> tuple[Mask, Mask]:
@@ -141,11 +159,16 @@ def dim_all(rows_mask: Mask, row_dim: npt.NDArray[np.intp], n_dims: int) -> Mask
 
 
 def farkas_weights(rows: GridRows, b: Array) -> Array | None:
-    """Row weights y ≥ 0 (sum 1) proving that no k in the box meets G k ≤ b, or None.
+    """Row weights y ≥ 0 (sum 1) proving that no k in the box meets G k ≤ b, or None (:func:`farkas_or_point`)."""
+    return farkas_or_point(rows, b)[0]
 
-    From the NNLS least-distance system (:func:`~setupfix.optimize._grid.nnls_least_distance`, its
-    Farkas side); the proof is checked here: ``max over the box of Σ y_j (b_j − G_j k) < 0``.
-    None: a point exists, or NNLS did not decide.
+
+def farkas_or_point(rows: GridRows, b: Array) -> tuple[Array | None, Array | None]:
+    """Row weights y ≥ 0 (sum 1) proving that no k in the box meets G k ≤ b; else the least Σ c k² point.
+
+    From the NNLS least-distance system (:func:`~setupfix.optimize._grid.nnls_least_distance`): its
+    Farkas side, the proof checked here (``max over the box of Σ y_j (b_j − G_j k) < 0``), or its
+    point (continuous, a point to round; nothing is proved by it).  (None, None): NNLS did not decide.
     """
     from scipy.optimize import nnls
 
@@ -162,32 +185,35 @@ def farkas_weights(rows: GridRows, b: Array) -> Array | None:
     try:
         u, _ = nnls(e, f, maxiter=50 * e.shape[1])
     except RuntimeError:  # iteration limit
-        return None
-    if abs(float(e[-1] @ u) - 1.0) > 1e-9:  # the residual's last entry is not 0: a point exists
-        return None
+        return None, None
+    r = e @ u - f
+    if abs(r[-1]) > 1e-9:  # the residual's last entry is not 0: a point exists
+        return None, -r[:n] / r[-1] / np.sqrt(rows.cost)
     y = np.zeros(b.size)
     y[keep] = u[:n_rows]
     total = float(y.sum())
     if total <= 0:
-        return None
+        return None, None
     y /= total
     w = y @ rows.g_rows
     worst = float(y @ np.where(keep, b, 0.0) + np.sum(np.maximum(-w * rows.kmin, -w * rows.kmax)))
-    return y if worst < -1e-9 else None
+    return (y if worst < -1e-9 else None), None
 
 
 def best_rounding(rows: GridRows, x: Array, floors: Array, active_dims: Mask, order: npt.NDArray[np.intp],
-                  starts: npt.NDArray[np.intp], most: int = 10) -> tuple[Array, float]:
-    """The best of x's roundings and its level (min active margin; −inf below a fixed floor).
+                  starts: npt.NDArray[np.intp], most: int = 4) -> tuple[Array, float]:
+    """A good rounding of x and its level (min active margin; −inf below a fixed floor).
 
-    Every floor/ceil choice of up to ``most`` fractional coordinates (the others to the nearest
-    integer) is evaluated; ties by the active dimensions' sorted margins (leximin: a point for the
-    next levels too).  ``floors``: per row (NaN: active); ``order``/``starts``: the rows grouped by
-    dimension (for ``np.minimum.reduceat``); ``active_dims``: per group.
+    Every floor/ceil choice of the ``most`` fractional coordinates nearest ½ (the others to the
+    nearest integer) is evaluated — a point to try, nothing is proved by it; ties by the active
+    dimensions' sorted margins (leximin: a point for the next levels too).  ``floors``: per row
+    (NaN: active); ``order``/``starts``: the rows grouped by dimension (for ``np.minimum.reduceat``);
+    ``active_dims``: per group.
     """
     lo = np.clip(np.floor(x + 1e-9), rows.kmin, rows.kmax)
     near = np.clip(np.rint(x), rows.kmin, rows.kmax)
-    frac = np.flatnonzero(np.abs(x - near) > 1e-6)[:most]
+    frac = np.flatnonzero(np.abs(x - near) > 1e-6)
+    frac = frac[np.argsort(np.abs(x[frac] - lo[frac] - 0.5), kind="stable")[:most]]
     cand = np.repeat(near[None, :], 1 << frac.size, axis=0)
     if frac.size:
         bits = (np.arange(1 << frac.size)[:, None] >> np.arange(frac.size)) & 1
@@ -227,3 +253,54 @@ def dim_margins(g_rows: Array, g: Array, k: Array, row_dim: npt.NDArray[np.intp]
     out = np.full(n_dims, np.inf)
     np.minimum.at(out, row_dim, g - g_rows @ k)
     return out
+
+
+def excluded_alone(rows: GridRows, floors: Array, row_dim: npt.NDArray[np.intp], n_dims: int, t: float,
+                   eps: float) -> Mask:
+    """Active dimensions proved unable to be the only one left at level t, by one Farkas certificate.
+
+    ``floors``: per row (NaN: active).  b: every active row rounded at t + ε, fixed rows at their
+    floors; weights y ≥ 0 (sum 1) with ``max over the box of Σ y_j (b_j − G_j k) = W < 0``
+    (:func:`farkas_weights`) prove that no point meets G k ≤ b.  Lowering dimension q's rows to t
+    raises b_j by δ_j on them only, so the same weights still prove "no point" when
+    W + Σ_{j ∈ q} y_j δ_j < 0: no grid point has every active dimension but q above t + ε (q ≥ t).
+    Returns a mask of shape (n_dims,) (all False when NNLS finds no certificate).
+    """
+    out = np.zeros(n_dims, bool)
+    active = np.isnan(floors)
+    level = np.where(active, t + eps, floors)
+    fin = np.isfinite(level)
+    b_up = np.full(level.size, np.inf)
+    b_up[fin] = rounded_rhs(rows.g[fin], rows.d[fin], rows.zero[fin], level[fin])
+    y = farkas_weights(rows, b_up)
+    if y is None:
+        return out
+    b_at = b_up.copy()
+    b_at[active] = rounded_rhs(rows.g[active], rows.d[active], rows.zero[active], np.full(int(active.sum()), t))
+    w = y @ rows.g_rows
+    worst = float(y @ np.where(np.isfinite(b_up), b_up, 0.0) + np.sum(np.maximum(-w * rows.kmin, -w * rows.kmax)))
+    with np.errstate(invalid="ignore"):
+        rise = np.where(active & (y > 0), y * (b_at - b_up), 0.0)  # inf·0 never: y > 0 only on finite rows
+    extra = np.zeros(n_dims)
+    np.add.at(extra, row_dim, rise)
+    dims_active = np.zeros(n_dims, bool)
+    dims_active[row_dim[active]] = True
+    out = dims_active & (worst + extra < -1e-9)
+    return out
+
+
+def meeting_rounding(rows: GridRows, x: Array, f: Array, most: int = 10) -> Array | None:
+    """A floor/ceil rounding of x (up to ``most`` fractional coordinates; the others to the nearest
+    integer) with every row's margin ≥ f_j (shape (r,), −inf: no floor), or None — checked exactly."""
+    lo = np.clip(np.floor(x + 1e-9), rows.kmin, rows.kmax)
+    near = np.clip(np.rint(x), rows.kmin, rows.kmax)
+    frac = np.flatnonzero(np.abs(x - near) > 1e-6)[:most]
+    if frac.size == 0:
+        return None
+    cand = np.repeat(near[None, :], 1 << frac.size, axis=0)
+    bits = (np.arange(1 << frac.size)[:, None] >> np.arange(frac.size)) & 1
+    cand[:, frac] = np.clip(lo[frac] + bits, rows.kmin[frac], rows.kmax[frac])
+    fin = np.isfinite(f)
+    ok = np.all(rows.g[fin][None, :] - cand @ rows.g_rows[fin].T >= f[fin][None, :] - 1e-9, axis=1)
+    hit = np.flatnonzero(ok)
+    return cand[int(hit[0])] if hit.size else None

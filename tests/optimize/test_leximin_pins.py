@@ -84,3 +84,76 @@ def test_span_closure_adds_exactly_the_rows_in_the_span():
     closed = span_closure(g_rows, np.ones(6), np.array([True, True, False, False, False, False]), key)
     assert closed.tolist() == [True, True, True, True, False, True]
     assert dim_all(closed, np.array([0, 0, 1, 1, 2, 2]), 3).tolist() == [True, True, False]
+
+
+def _grid(rows) -> np.ndarray:
+    axes = [np.arange(lo, hi + 1) for lo, hi in zip(rows.kmin, rows.kmax, strict=True)]
+    return np.array(list(itertools.product(*axes)), dtype=float)
+
+
+def _dims(rows, row_dim, n_dims, pts) -> np.ndarray:
+    m_rows = rows.g[None, :] - pts @ rows.g_rows.T
+    m_dims = np.full((len(pts), n_dims), np.inf)
+    for j, q in enumerate(row_dim):
+        m_dims[:, q] = np.minimum(m_dims[:, q], m_rows[:, j])
+    return m_dims
+
+
+def test_a_dimension_excluded_from_a_conflict_is_never_alone_at_its_level(monkeypatch):
+    """The one Farkas certificate that spares the per-dimension tests of a discrete conflict: every
+    dimension it excludes has no grid point with the other active ones above t + ε (brute force), and
+    the search still finds the brute-force leximin."""
+    claims: list[int] = []
+    original = lexmod.excluded_alone
+
+    def checked(rows, floors, row_dim, n_dims, t, eps):
+        out = original(rows, floors, row_dim, n_dims, t, eps)
+        pts = _grid(rows)
+        m = _dims(rows, row_dim, n_dims, pts)
+        v = np.full(n_dims, np.nan)
+        v[row_dim] = floors
+        active, fixed = np.isnan(v), np.isfinite(v)
+        base = np.all(m[:, fixed] >= v[fixed] - 1e-9, axis=1)
+        for q in np.flatnonzero(out):
+            others = active.copy()
+            others[q] = False
+            alone = base & (m[:, q] >= t - 1e-9) & np.all(m[:, others] >= t + eps - 1e-9, axis=1)
+            assert not alone.any(), f"dimension {q} is alone at {t} at a grid point"
+        claims.append(int(out.sum()))
+        return out
+
+    monkeypatch.setattr(lexmod, "excluded_alone", checked)
+    for kind, seed in [("window", s) for s in range(1, 6)] + [("axis", s) for s in range(3, 40, 4)]:
+        problem = guide_pins_window(seed) if kind == "window" else one_axis_problem(seed)
+        best, norm, _ = brute_leximin(problem)
+        if best[0] < 0:
+            continue
+        _, k, sorted_m = solved_steps(problem)
+        np.testing.assert_allclose(sorted_m, best, atol=1e-6)
+        assert float(problem.cost[problem.free] @ k**2) == pytest.approx(norm, abs=1e-9)
+    assert claims and sum(claims) > 0  # conflicts were met and the certificate excluded dimensions
+
+
+@pytest.mark.parametrize("seed", range(20))
+def test_farkas_weights_or_a_point_match_the_grid(seed):
+    """NNLS on random rounded rows: weights only when no grid point meets them (brute force), else a
+    continuous point of the rows; a floor/ceil rounding that meets them is a real grid point."""
+    from setupfix.optimize._leximin_pins import farkas_or_point, meeting_rounding
+    from setupfix.optimize._session import GridRows
+
+    rng = np.random.default_rng(seed)
+    g_rows = rng.integers(-2, 3, size=(8, 3)).astype(float)
+    g = rng.uniform(-2.0, 4.0, 8)
+    rows = GridRows(g_rows, g, np.full(3, -3.0), np.full(3, 3.0), np.ones(3))
+    b = np.floor(g)
+    pts = _grid(rows)
+    feasible = np.all(pts @ g_rows.T <= b + 1e-9, axis=1)
+    y, x = farkas_or_point(rows, b)
+    if y is not None:
+        assert not feasible.any()
+    if x is not None:
+        assert np.all(g_rows @ x <= b + 1e-6) and np.all(np.abs(x) <= 3 + 1e-9)
+        k = meeting_rounding(rows, x, g - b)
+        if k is not None:
+            assert np.all(g - g_rows @ k >= g - b - 1e-9) and np.all(np.abs(k - x) < 1)
+    assert y is not None or x is not None or not feasible.any()
