@@ -11,7 +11,8 @@ the rows rounded at t + ε (:func:`~setupfix.optimize._grid.rounded_rhs`) hold n
 — every grid point better than it meets them — shown by a Farkas certificate from NNLS (small
 problems) or by the duals of the level LP on the rounded rows; each certificate is checked in
 numpy and its weights also pin rows (:mod:`setupfix.optimize._leximin_pins`).  Otherwise the
-level LP's point, rounded (:meth:`LevelModel.round_best`), is the next point to try.  What the steps
+next point to try is NNLS's least-distance point of those rows, rounded (small problems, no LP),
+else the level LP's point, rounded (:meth:`LevelModel.round_best`).  What the steps
 leave: :meth:`LevelModel.value` — the LP bound, the ascent on rounded rows (a feasible LP's vertex
 is a grid point where the rows are a network, :func:`~setupfix.optimize._grid.is_network`; else a
 feasibility MILP), last the MILP "max t, k integer" bracketed by the best point and the bound.

@@ -16,7 +16,8 @@ levels of :mod:`~setupfix.optimize._triage_model`, one lexicographic optimum in 
 3. **Least norm**: min Σ c_i k_i² subject to N* and every level proved, ties to the lexicographically
    smallest k: in the box c_i k_i² ≤ f(best point) listed when it is small
    (:func:`~setupfix.optimize._triage_model.least_listed`), else a MILP with k_i² as the upper envelope
-   of its chords (exact on integers), added lazily (:func:`~setupfix.optimize._chords.lazy_chords`).
+   of its chords (exact on integers), added lazily (:func:`~setupfix.optimize._chords.lazy_chords`), its
+   ties then decided coordinate by coordinate (:func:`~setupfix.optimize._chords.smallest_tie`).
 
 No point keeps more than N* dimensions, so every point meeting Σ z ≥ N* − held keeps exactly the
 dimensions with z = 1 and the held ones; the dimensions given up are read from the final point.
