@@ -27,7 +27,7 @@ from scipy.sparse import coo_array, csr_array
 
 from setupfix.optimize._highs import INF, LinearModel
 
-__all__ = ["ROOT_LP_MULTIPLE", "ChordProof", "chord_rows", "lazy_chords"]
+__all__ = ["ROOT_LP_MULTIPLE", "ChordProof", "chord_rows", "lazy_chords", "smallest_tie"]
 
 Array = npt.NDArray[np.float64]
 
@@ -162,3 +162,51 @@ def lazy_chords(model: LinearModel, n: int, chords: list[set[int]], cost: Array,
             chords[i].add(j)
         a_new, rhs_new = chord_rows(new, n, width)
         model.add_rows(a_new, np.full(rhs_new.size, -INF), rhs_new)
+
+
+def smallest_tie(model: LinearModel, n: int, chords: list[set[int]], cost: Array, best: Array,
+                 feasible: Callable[[Array], bool], start: Callable[[Array], Array], deadline: float
+                 ) -> tuple[Array, bool]:
+    """The lexicographically smallest grid point of ``model`` with Σ c k² ≤ f(best), f(best) proven least.
+
+    One coordinate at a time: min k_i subject to the model, Σ c_i s_i ≤ f(best) and the coordinates
+    before i fixed at their values.  The chords make the model a relaxation of "Σ c k² ≤ f(best)"
+    (s_i ≥ every chord, each ≤ k_i² on the integers), so its minimum is at most the true one; a
+    solution with no s_i short of k_i² (else its chords are added and it is solved again) meets
+    Σ c k² ≤ f(best) and so attains it.  Changes ``model`` (row, costs, bounds) and ``chords``.
+
+    Returns the point and whether every coordinate was decided (False: the limit or HiGHS stopped it,
+    ``best`` or the smallest point found so far is returned — it has the least norm either way).
+    """
+    width = model.n_cols
+    f = float(np.sum(cost * best**2))
+    row = np.zeros((1, width))
+    row[0, n:2 * n] = cost
+    model.add_rows(row, np.array([-INF]), np.array([f + 1e-9 * max(1.0, f)]))
+    cols = np.arange(width, dtype=np.int32)
+    cur = np.asarray(best, dtype=float).copy()
+    for i in range(n):
+        objective = np.zeros(width)
+        objective[i] = 1.0
+        model.set_costs(cols, objective)
+        while True:
+            left = deadline - time.perf_counter()
+            if left <= 0:
+                return cur, False
+            res = model.solve(left, start(cur))
+            if res.status != "optimal" or res.x is None:
+                return cur, False
+            k = np.rint(res.x[:n])
+            short = np.flatnonzero(res.x[n:2 * n] < k**2 - 1e-6)
+            if short.size == 0:
+                break
+            new = [(int(j), int(abs(k[j]))) for j in short]
+            for j, c in new:
+                chords[j].add(c)
+            a_new, rhs_new = chord_rows(new, n, width)
+            model.add_rows(a_new, np.full(rhs_new.size, -INF), rhs_new)
+        if not feasible(k) or float(np.sum(cost * k**2)) > f + 1e-9 * max(1.0, f) or k[i] > cur[i]:
+            return cur, False  # HiGHS's point fails the exact check: keep the proven point
+        cur = k
+        model.set_col_bounds(np.array([i], dtype=np.int32), cur[i:i + 1], cur[i:i + 1])
+    return cur, True

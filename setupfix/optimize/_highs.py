@@ -63,8 +63,7 @@ _INTERRUPTS = (cb.HighsCallbackType.kCallbackMipInterrupt, cb.HighsCallbackType.
 
 #: Model statuses that are answers (optimal, proven infeasible, time limit with or without a point).
 _STATUS_NAMES = {
-    HighsModelStatus.kOptimal: "optimal",
-    HighsModelStatus.kInfeasible: "infeasible",
+    HighsModelStatus.kOptimal: "optimal", HighsModelStatus.kInfeasible: "infeasible",
     HighsModelStatus.kUnboundedOrInfeasible: "infeasible",
     HighsModelStatus.kUnbounded: "unbounded",
     HighsModelStatus.kTimeLimit: "time_limit",
@@ -180,7 +179,7 @@ class LinearModel:
         self._col_lo, self._col_hi = np.asarray(col_lo, dtype=float).copy(), np.asarray(col_hi, dtype=float).copy()
         self._integer = kinds.astype(bool)
         self._hessian: Array | None = None
-        self._gap = 0.0
+        self._gap, self._warm = 0.0, False
         self.h = new_solver()
         if self.is_mip:
             self._mip_options()
@@ -223,6 +222,10 @@ class LinearModel:
         if not self.is_mip:
             self.is_mip = True
             self._mip_options()
+
+    def keep_basis(self) -> None:
+        """LP runs from the last basis, no presolve: faster, but the vertex may depend on earlier runs (one solve's)."""
+        self._warm = self.h.setOptionValue("presolve", "off") == HighsStatus.kOk
 
     def set_gap(self, gap: float) -> None:
         """Let HiGHS stop a MIP at this relative gap (an incumbent is wanted, not a proof)."""
@@ -366,7 +369,8 @@ class LinearModel:
         # the limit given is this run's own; the callbacks stop it by the wall clock as well
         h.setOptionValue("time_limit", float(h.getRunTime()) + allowance + HIGHS_LIMIT_SLACK)
         self._deadline[0] = time.perf_counter() + allowance
-        h.clearSolver()  # the answer depends on this model and start only, never on earlier runs
+        if self.is_mip or not self._warm:  # the answer depends on this model and start only, never on earlier runs
+            h.clearSolver()
         if start is not None and self.is_mip:
             h.setSolution(self.n_cols, self._cols, np.asarray(start, dtype=float))
         run = h.run()

@@ -14,14 +14,18 @@ Levels (progressive filling, each level proved on the grid)
 State: dimensions *fixed* with a floor v_q (every leximin-optimal point has M_q ≥ v_q and
 no point of the current level set has M_q above v_q + ε), the others *active*.
 
-1. Level value: t_i = max t over grid points with M_q ≥ v_q (fixed) and M_q ≥ t (active)
-   (:func:`~setupfix.optimize._leximin_level.level_value`: LP bound, rounded points, the
-   rounded-rows descent — one LP per level where the rows are totally unimodular — and the
-   bracketed MILP).
-2. Saturation: a weighted sum of the level's rows (the LP's duals, checked in numpy by weak
-   duality, :func:`pinned_dimensions`) proves that an active dimension cannot rise above
-   t_i + ε, or that its a_qᵀk is the same at every grid point of the level set (integer rows:
-   it cannot move by one lattice step).  Those dimensions are fixed.
+1. Level value, from the current grid point k (:func:`_level`): its own level t = min of the
+   active margins is proved when the rows rounded at t + ε hold no point of the box — a Farkas
+   certificate by NNLS for small problems, else the duals of the level LP on the rounded rows
+   (:meth:`~setupfix.optimize._leximin_level.LevelModel.step`).  Otherwise the level LP's point,
+   rounded (best of its floor/ceil choices), is the next k; the first level comes proved from the
+   paper's stage, and the level LP's ascent and bracketed MILP
+   (:func:`~setupfix.optimize._leximin_level.LevelModel.value`) remain for what the steps leave.
+2. Saturation and pins (:mod:`setupfix.optimize._leximin_pins`, checked in numpy): the proof's
+   row weights show that a row's margin cannot rise above t + ε (saturated) or, on rounded rows,
+   that G_j k takes one value on the whole level set (pinned).  Level sets only shrink, so pins
+   are kept, and every integer row in the span of pinned rows is pinned too; a dimension all of
+   whose rows are pinned is fixed at its margin at k, a saturated one at t.
 3. If neither proof fixes a dimension, each dimension at t_i is tested alone: the rounded rows
    with its rows at t_i + ε (an LP, a feasibility MILP) either hold no grid point (saturated:
    fixed) or do.  If every one can rise alone but not all together (a *discrete conflict*: e.g.
@@ -50,10 +54,11 @@ from setupfix.optimize._grid import TOL
 from setupfix.optimize._grid_least_norm import LeastNorm, grid_least_norm
 from setupfix.optimize._grid_optimum import Stop
 from setupfix.optimize._leximin_counts import CountLevels, count_levels, count_least_norm
-from setupfix.optimize._leximin_level import Certificates, LevelModel, LevelValue, dim_margins
+from setupfix.optimize._leximin_level import LevelModel, LevelValue
+from setupfix.optimize._leximin_pins import dim_all, dim_margins, excluded_alone, pinned_rows, span_closure
 from setupfix.optimize._session import GridRows, Session
 
-__all__ = ["Leximin", "leximin", "leximin_least_norm", "pinned_dimensions"]
+__all__ = ["Leximin", "leximin", "leximin_least_norm"]
 
 Array = npt.NDArray[np.float64]
 Mask = npt.NDArray[np.bool_]
@@ -90,53 +95,6 @@ class Leximin:
     path: tuple[str, ...]
     calls: int
     alternatives: tuple[Leximin, ...] = ()
-
-
-def pinned_dimensions(level: Certificates, row_dim: npt.NDArray[np.intp], active_rows: Mask, eps: float,
-                      d: Array) -> tuple[Mask, Mask]:
-    """Rows whose margin cannot rise above t + ε, and integer rows whose value G_j k is pinned.
-
-    Weak duality with the level LP's row weights y (≥ 0, over the active rows normalised to
-    sum 1) and the fixed rows' weights w: for every k in the box
-    ``Σ_A y_j (rhs_j − G_j k) + Σ_F w_j (rhs_j − G_j k) ≤ C`` with C computed here from y, w
-    and the box (not from the solver's objective).  On the level set every term is ≥ its floor,
-    so for an active row j: ``m_j(k) − t ≤ (C − t)/y_j`` (rhs = g_j; ``saturated`` when this is
-    ≤ ε).  For the rounded-rows LP (rhs = b_j, floors 0) and an integer row with gcd d_j:
-    ``b_j − G_j k ∈ d_j ℤ≥0`` is below d_j, so G_j k = b_j on every grid point (``pinned``).
-
-    Parameters
-    ----------
-    level : Certificates
-        The weights, the right-hand sides and the floors of the LPs the weights come from.
-    row_dim : ndarray of int, shape (r,)
-    active_rows : ndarray of bool, shape (r,)
-    eps : float
-        Tie threshold [steps].
-    d : ndarray of shape (r,)
-        Row gcds (0: not an integer row).
-
-    Returns
-    -------
-    saturated, pinned : ndarray of bool, shape (r,)
-    """
-    sat = np.zeros(active_rows.size, bool)
-    pin = np.zeros(active_rows.size, bool)
-    for weights, rhs, floor_a, rounded in level.certificates:
-        y = np.maximum(weights, 0.0)
-        total = float(y[active_rows].sum())
-        if not np.isfinite(total) or total <= 0:
-            continue
-        y = y / total
-        w = y @ level.g_rows
-        c = float(y @ rhs + np.sum(np.maximum(-w * level.kmin, -w * level.kmax)))
-        slack = c - floor_a  # Σ_A y_j (m_j − floor) ≤ slack on the level set
-        with np.errstate(divide="ignore", invalid="ignore"):
-            room = np.where(y > 0, slack / y, np.inf)
-        if rounded:
-            pin |= active_rows & (d > 0) & (room < d - 1e-7)
-        else:
-            sat |= active_rows & (room <= eps - 1e-9)
-    return sat, pin
 
 
 class _Search:
@@ -219,46 +177,39 @@ def _compare(a: Leximin, b: Leximin, eps: float) -> int:
 
 
 def _fill(search: _Search, v: Array, k: Array, t: float, level: LevelValue | None, path: list[str],
-          bound: Array | None = None) -> list[Leximin]:
+          bound: Array | None = None, pinned: Mask | None = None) -> list[Leximin]:
     """Progressive filling from this state; the tied-best outcomes (branches of discrete conflicts).
 
     ``bound``: the sorted margins of the best branch so far; a branch whose settled margins (the
     fixed ones up to its current level) already fall below it is dropped (empty list).
+    ``pinned``: rows whose G_j k is the same at every point of the current level set (level sets
+    only shrink, so a pin stays true for the rest of this branch and its sub-branches).
     """
     model, eps, rows = search.model, search.eps, search.session.rows
     row_dim = model.row_dim
     v = v.copy()
     path = list(path)
+    pinned = np.zeros(row_dim.size, bool) if pinned is None else pinned.copy()
     while True:
         active = np.isnan(v)
         if not active.any():
             break
-        if level is None:  # level i ≥ 2 (or a first level without its certificate)
-            if time.perf_counter() >= search.stage_end:
-                return [_stopped(search, v, k, path, "time limit")]
-            level = model.value(v, k, search.stage_end)
-            search.calls += level.calls
-            path.extend(level.path)
-            if level.stop is not None:
-                return [_stopped(search, v, level.k, path, level.stop)]
-            k, t = level.k, level.t
         active_rows = active[row_dim]
-        sat, pin = pinned_dimensions(model.certify(level, v), row_dim, active_rows, eps, rows.d)
-        if not (sat & active_rows).any() and rows.all_integer:  # the rounded rows' weights
-            sat2, pin = pinned_dimensions(model.certify_rounded(level, v, search.stage_end), row_dim, active_rows,
-                                          eps, rows.d)
-            sat |= sat2
-            search.calls += 1
-        # a row whose margin is proved within ε of t (integer: one lattice value) or pinned pins G_j k, and
-        # with it every row equal or opposite to it: their dimensions' margins are the same at every point
-        pin |= model.same_vector(sat | pin) & active_rows
+        if time.perf_counter() >= search.stage_end:
+            return [_stopped(search, v, k, path, "time limit")]
+        k, t, sat, pin, stop, hint = _level(search, v, k, level, active_rows, path)
+        if stop is not None:
+            return [_stopped(search, v, k, path, stop)]
+        # a row whose margin is proved within ε of t (integer: one lattice value) or pinned stays pinned, and
+        # with it every row in their span: their dimensions' margins are the same at every point
+        grown = pinned | pin | (sat & (rows.d > 0))
+        if (grown & ~pinned).any():  # ``pinned`` is closed already: a new pin, a new closure
+            pinned = span_closure(rows.g_rows, rows.d, grown, model.key)
         m_k = search.margins(k)
         fix_sat = np.zeros(v.size, bool)
         fix_sat[row_dim[sat]] = True
-        fix_pin = np.zeros(v.size, bool)
-        fix_pin[row_dim[pin]] = True
-        fix_pin &= active & ~fix_sat
         fix_sat &= active
+        fix_pin = dim_all(pinned, row_dim, v.size) & active & ~fix_sat
         if not (fix_sat.any() or fix_pin.any()):  # each dimension at t: can it rise alone?
             for q in np.flatnonzero(active & (m_k <= t + eps)):
                 rise = model.can_rise(v, int(q), t, eps, search.stage_end)
@@ -267,7 +218,7 @@ def _fill(search: _Search, v: Array, k: Array, t: float, level: LevelValue | Non
                     return [_stopped(search, v, k, path, "time limit")]
                 fix_sat[q] = not rise
             if not fix_sat.any():  # each can, not all together: a discrete conflict
-                return _conflict(search, v, k, t, path, bound)
+                return _conflict(search, v, k, t, path, bound, pinned)
             path.append("leximin: saturation proved by the rounded rows one dimension at a time")
         v[fix_sat] = t
         v[fix_pin] = m_k[fix_pin]
@@ -276,18 +227,68 @@ def _fill(search: _Search, v: Array, k: Array, t: float, level: LevelValue | Non
             path.append(f"leximin: {at_t} dimension(s) at {t:.4g} steps")
         if bound is not None and _worse(np.sort(v[np.isfinite(v) & (v <= t + eps)]), bound, eps):
             return []
+        if hint is not None and np.isnan(v).any():  # the proving LP's point, rounded: often the next level's
+            k_hint, t_hint = model.round_best(hint, v)
+            if t_hint > model.level_of(k, v) + 1e-9:
+                k = k_hint
         level = None
     return [Leximin(k, v, _levels(v), None, None, tuple(path), 0)]
 
 
+def _level(search: _Search, v: Array, k: Array, level: LevelValue | None, active_rows: Mask, path: list[str]
+           ) -> tuple[Array, float, Mask, Mask, str | None, Array | None]:
+    """The next level proved, from the point k: its point, t, saturated rows, pinned rows, and why it
+    stopped (None: proved; else the best point found), and a continuous point to round for the next level.
+
+    Cheapest first: the given level's LP weights (the first level's, from the paper's stage:
+    no solve); one LP on the rounded rows at k's own level (:meth:`LevelModel.step`); else the
+    level LP, its ascent and MILP (:meth:`LevelModel.value`) and the rounded rows' weights.
+    """
+    model, eps, rows = search.model, search.eps, search.session.rows
+    if level is not None:
+        sat, pin = pinned_rows(model.certify(level, v), active_rows, eps, rows.d)
+        if sat.any() or pin.any():
+            return level.k, level.t, sat, pin, None, None
+    none = np.zeros(active_rows.size, bool)
+    if rows.all_integer:  # one LP at k's own level (the first level: proved already)
+        tries = search.session.settings.level_steps
+        step = model.step(v, k if level is None else level.k, eps, search.stage_end, tries)
+        search.calls += step.calls
+        if step.stop is not None:
+            return step.k, step.t, none, none, step.stop, None
+        if step.proved and step.certificates is not None:
+            sat, pin = pinned_rows(step.certificates, active_rows, eps, rows.d)
+            return step.k, step.t, sat, pin, None, step.x
+        k = step.k
+    if level is None:
+        level = model.value(v, k, search.stage_end)
+        search.calls += level.calls
+        path.extend(level.path)
+        if level.stop is not None:
+            return level.k, level.t, none, none, level.stop, None
+        if level.certificates is not None:
+            sat, _ = pinned_rows(model.certify(level, v), active_rows, eps, rows.d)
+            _, pin = pinned_rows(level.certificates, active_rows, eps, rows.d)
+            return level.k, level.t, sat, pin, None, None
+    sat, pin = pinned_rows(model.certify(level, v), active_rows, eps, rows.d)
+    if not (sat & active_rows).any() and rows.all_integer:  # the rounded rows' weights
+        sat2, pin = pinned_rows(model.certify_rounded(level, v, search.stage_end), active_rows, eps, rows.d)
+        sat |= sat2
+        search.calls += 1
+    return level.k, level.t, sat, pin, None, None
+
+
 def _conflict(search: _Search, v: Array, k: Array, t: float, path: list[str],
-              bound: Array | None = None) -> list[Leximin]:
+              bound: Array | None = None, pinned: Mask | None = None) -> list[Leximin]:
     """A discrete conflict at level t: one branch per dimension that can be the only one left at t
     (every other active dimension above t + ε at some grid point); none, or too many branches:
     the counts decide (:mod:`setupfix.optimize._leximin_counts`)."""
     model, eps = search.model, search.eps
     starts: list[tuple[int, Array]] = []
-    for q in np.flatnonzero(np.isnan(v)):
+    rows = search.session.rows
+    skip = (excluded_alone(rows, v[model.row_dim], model.row_dim, v.size, t, eps)
+            if search.session.small and rows.all_integer else np.zeros(v.size, bool))
+    for q in np.flatnonzero(np.isnan(v) & ~skip):
         found = model.alone_at(v, int(q), t, eps, search.stage_end)
         search.calls += 1
         if found is None:
@@ -303,7 +304,7 @@ def _conflict(search: _Search, v: Array, k: Array, t: float, path: list[str],
         v_q[dim] = t
         branch = _fill(search, v_q, k_q, t, None,
                        [*path, f"leximin: discrete conflict at {t:.4g} steps, branch: dimension {dim} at it"],
-                       _vector(best[0]) if best else bound)
+                       _vector(best[0]) if best else bound, pinned)
         if not branch:  # pruned: below the best branch
             continue
         if branch[0].stopped is not None:

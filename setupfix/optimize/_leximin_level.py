@@ -6,17 +6,19 @@ dimensions and the others active, the level is
     t_i = max t  over integer k in the box  s.t.  G_j k + t ≤ g_j  (rows of active dimensions),
                                                   G_j k ≤ g_j − v_q(j)  (rows of fixed ones).
 
-Proof, cheapest first (as :func:`~setupfix.optimize._grid_optimum.grid_optimum` for level 1):
-the LP bound t_LP; a grid point (the previous level's, the LP point rounded) reaching it; the
-ascent on rounded rows: the rows rounded at t(best) + ε hold every grid point better than the
-best one (:func:`~setupfix.optimize._grid.rounded_rhs`), so an LP proving them empty proves the
-level, and where every row has at most two ±1 entries that a flip of columns makes opposite
-(:func:`~setupfix.optimize._grid.is_network`, totally unimodular) a feasible LP's vertex is itself
-a better grid point; else a feasibility MILP decides; last (after ``level_steps`` ascents) the
-MILP "max t, k integer" bracketed by the best point and the bound.
+Proof, cheapest first (:meth:`LevelModel.step`): a grid point's own level t is the level when
+the rows rounded at t + ε (:func:`~setupfix.optimize._grid.rounded_rhs`) hold no point of the box
+— every grid point better than it meets them — shown by a Farkas certificate from NNLS (small
+problems) or by the duals of the level LP on the rounded rows; each certificate is checked in
+numpy and its weights also pin rows (:mod:`setupfix.optimize._leximin_pins`).  Otherwise the
+next point to try is NNLS's least-distance point of those rows, rounded (small problems, no LP),
+else the level LP's point, rounded (:meth:`LevelModel.round_best`).  What the steps
+leave: :meth:`LevelModel.value` — the LP bound, the ascent on rounded rows (a feasible LP's vertex
+is a grid point where the rows are a network, :func:`~setupfix.optimize._grid.is_network`; else a
+feasibility MILP), last the MILP "max t, k integer" bracketed by the best point and the bound.
 
-One HiGHS model per solve holds [G | a] (a_j = 1 for active rows, 0 for fixed ones), changed in
-place from level to level (:class:`LevelModel`).
+One warm-started HiGHS model per solve holds the level LP with a column u_q per dimension (only
+bounds change from level to level, :attr:`LevelModel._lp`).
 """
 
 from __future__ import annotations
@@ -29,18 +31,20 @@ import numpy.typing as npt
 
 from setupfix.optimize._grid import TOL, rounded_rhs
 from setupfix.optimize._highs import INF, LinearModel
+from setupfix.optimize._leximin_pins import (Certificates, Step, best_rounding, farkas_or_point, level_bound,
+                                             meeting_rounding)
 from setupfix.optimize._session import GridRows, Session
 
-__all__ = ["Certificates", "LevelModel", "LevelValue", "dim_margins"]
+__all__ = ["SPREAD", "LevelModel", "LevelValue"]
+
+#: Weight of Σ u_q (active margins) beside t in the level LP where a step proves the level: small enough to
+#: leave t at its maximum in practice; among the points at the level it takes one with the others high.
+SPREAD = 1e-4
 
 Array = npt.NDArray[np.float64]
 
-
-def dim_margins(g_rows: Array, g: Array, k: Array, row_dim: npt.NDArray[np.intp], n_dims: int) -> Array:
-    """Margin of each dimension at k: the least of its rows' ``g_j − G_j k`` (inf: no row) — shape (n_dims,)."""
-    out = np.full(n_dims, np.inf)
-    np.minimum.at(out, row_dim, g - g_rows @ k)
-    return out
+#: Ascents of one step by the rounded least-distance point of NNLS (no LP) before the level LP's point is rounded.
+NNLS_ASCENTS = 3
 
 
 @dataclass(frozen=True)
@@ -54,16 +58,7 @@ class LevelValue:
     stop: str | None = None
     path: tuple[str, ...] = ()
     calls: int = 0
-
-
-@dataclass(frozen=True)
-class Certificates:
-    """Row weights to check by weak duality: (weights (r,), rhs (r,), floor of the active sum, rounded?)."""
-
-    g_rows: Array
-    kmin: Array
-    kmax: Array
-    certificates: tuple[tuple[Array, Array, float, bool], ...]
+    certificates: Certificates | None = None  # the rounded rows' weights, when a step proved the level
 
 
 class LevelModel:
@@ -74,63 +69,79 @@ class LevelModel:
         self.rows: GridRows = session.rows
         self.row_dim = row_dim
         self.n_dims = n_dims
-        r, n = self.rows.g_rows.shape
+        n = self.rows.g_rows.shape[1]
         self.n = n
-        self._lp = LinearModel(np.r_[np.zeros(n), -1.0], self.rows.derived.lp_matrix, np.full(r, -INF), self.rows.g,
-                               np.r_[self.rows.kmin, -INF], np.r_[self.rows.kmax, INF])
-        self._coef = np.ones(r)
+        self._model: LinearModel | None = None  # the level LP, built on first use
+        self._cost = np.zeros(n_dims)  # its costs on u
+        self._order = np.argsort(row_dim, kind="stable")  # rows grouped by dimension (for reduceat)
+        self._starts = np.flatnonzero(np.r_[True, np.diff(row_dim[self._order]) != 0])
+        self._dims = row_dim[self._order][self._starts]
         # rows keyed by a random integer projection: equal (or opposite) rows, equal (or opposite) keys
         weights = np.random.default_rng(0).integers(1, 2**20, n).astype(float)
-        self._key = self.rows.g_rows @ weights
+        self.key = self.rows.g_rows @ weights
 
-    def same_vector(self, rows_mask: npt.NDArray[np.bool_]) -> npt.NDArray[np.bool_]:
-        """Integer rows equal or opposite to one of ``rows_mask``'s integer rows (checked, not only keyed).
+    @property
+    def _lp(self) -> LinearModel:
+        """max t  s.t.  G_j k + u_q(j) ≤ rhs_j,  t − u_q ≤ 0 (active q),  k in the box — built on first use.
 
-        When G_j k is the same at every grid point of a level set, so is G_j' k for G_j' = ±G_j.
+        One column u_q per dimension: active, u_q is free and its row holds it at or above t; fixed,
+        its row is free and u_q ≥ its floor (so G_j k ≤ rhs_j − floor).  A level changes only bounds
+        (a warm start, no coefficient), and the rows' duals are the weights y of :meth:`certify`.
         """
-        rows = self.rows
-        out = np.zeros(rows_mask.size, bool)
-        integer = rows.d > 0
-        for j in np.flatnonzero(rows_mask & integer):
-            cand = np.flatnonzero(integer & ~out & (np.abs(self._key) == abs(self._key[j])))
-            same = np.all(rows.g_rows[cand] == rows.g_rows[j], axis=1) | np.all(
-                rows.g_rows[cand] == -rows.g_rows[j], axis=1)
-            out[cand[same]] = True
-        return out
+        if self._model is None:
+            r, n, m = self.rows.g_rows.shape[0], self.n, self.n_dims
+            a = np.zeros((r + m, n + 1 + m))
+            a[:r, :n] = self.rows.g_rows
+            a[np.arange(r), n + 1 + self.row_dim] = 1.0
+            a[r:, n] = 1.0
+            a[r + np.arange(m), n + 1 + np.arange(m)] = -1.0
+            self._model = LinearModel(np.r_[np.zeros(n), -1.0, np.zeros(m)], a, np.full(r + m, -INF),
+                                      np.r_[self.rows.g, np.zeros(m)], np.r_[self.rows.kmin, -INF, np.full(m, -INF)],
+                                      np.r_[self.rows.kmax, INF, np.full(m, INF)])
+            self._model.keep_basis()
+        return self._model
 
     # -- the model --------------------------------------------------------------------------------
     def _floors(self, v: Array) -> Array:
         """Per row: the floor of its dimension (NaN: active)."""
         return v[self.row_dim]
 
-    def _pattern(self, v: Array) -> None:
-        """t's coefficient 1 on active rows, 0 on fixed ones (changed in place where it differs)."""
-        want = np.where(np.isnan(self._floors(v)), 1.0, 0.0)
-        changed = np.flatnonzero(want != self._coef)
-        if changed.size:
-            self._lp.set_column(self.n, changed, want[changed])
-        self._coef = want
-
     def rhs(self, v: Array) -> Array:
         """g_j on active rows, g_j − v_q(j) on fixed ones (+inf: a dimension left out)."""
         f = self._floors(v)
         return np.where(np.isnan(f), self.rows.g, self.rows.g - f)
 
-    def _solve(self, hi: Array, time_limit: float) -> tuple[str, Array | None, Array | None]:
-        self._lp.set_row_bounds(np.full(hi.size, -INF), np.where(np.isfinite(hi), hi, INF))
-        res = self._lp.solve(max(time_limit, 1e-3))
-        y = None if res.row_dual is None else np.maximum(-res.row_dual, 0.0)
-        return res.status if res.status != "error" else f"HiGHS: {res.detail}", res.x, y
+    def _solve(self, hi: Array, v: Array, time_limit: float, spread: float = 0.0
+               ) -> tuple[str, Array | None, Array | None]:
+        """max t + spread·Σ_active u_q with rows ``hi`` (fixed rows' floors already in them, u_q ≥ 0 for
+        fixed q): status, (k, t) and the rows' weights y ≥ 0."""
+        lp, n, m = self._lp, self.n, self.n_dims
+        active = np.isnan(v)
+        cost = np.where(active, -spread, 0.0)
+        if not np.array_equal(cost, self._cost):
+            lp.set_costs(n + 1 + np.arange(m, dtype=np.int32), cost)
+            self._cost = cost
+        lp.set_row_bounds(np.full(hi.size + m, -INF), np.r_[np.where(np.isfinite(hi), hi, INF),
+                                                             np.where(active, 0.0, INF)])
+        lp.set_col_bounds(n + 1 + np.arange(m, dtype=np.int32), np.where(active, -INF, 0.0), np.full(m, INF))
+        res = lp.solve(max(time_limit, 1e-3))
+        y = None if res.row_dual is None else np.maximum(-res.row_dual[:hi.size], 0.0)
+        x = None if res.x is None else res.x[:n + 1]
+        return res.status if res.status != "error" else f"HiGHS: {res.detail}", x, y
 
     def _feasible(self, b: Array, time_limit: float) -> tuple[str, Array | None]:
-        """Whether G k ≤ b has a point in the box (t fixed at 0): status and HiGHS's (vertex) point."""
+        """Whether G k ≤ b has a point in the box (the session's LP, t fixed at 0): status and its vertex."""
+        lp = self.session.lp_model()
+        lp.keep_basis()
         col = np.array([self.n], dtype=np.int32)
-        self._lp.set_col_bounds(col, np.zeros(1), np.zeros(1))
+        lp.set_row_bounds(np.full(b.size, -INF), np.where(np.isfinite(b), b, INF))
+        lp.set_col_bounds(col, np.zeros(1), np.zeros(1))
         try:
-            status, x, _ = self._solve(b, time_limit)
+            res = lp.solve(max(time_limit, 1e-3))
         finally:
-            self._lp.set_col_bounds(col, np.array([-INF]), np.array([INF]))
-        return status, None if x is None else x[:self.n]
+            lp.set_col_bounds(col, np.array([-INF]), np.array([INF]))
+        status = res.status if res.status != "error" else f"HiGHS: {res.detail}"
+        return status, None if res.x is None else res.x[:self.n]
 
     # -- evaluation -------------------------------------------------------------------------------
     def level_of(self, k: Array, v: Array) -> float:
@@ -143,6 +154,10 @@ class LevelModel:
         act = m[~fixed]
         return float(act.min()) if act.size else np.inf
 
+    def round_best(self, x: Array, v: Array) -> tuple[Array, float]:
+        """The best rounding of x (:func:`~setupfix.optimize._leximin_pins.best_rounding`): (k, its level)."""
+        return best_rounding(self.rows, x, self._floors(v), np.isnan(v[self._dims]), self._order, self._starts)
+
     def rounded(self, v: Array, tau: float) -> Array:
         """Rows rounded at τ (active) and at their floors (fixed): they hold every grid point of the level set."""
         f = self._floors(v)
@@ -152,28 +167,111 @@ class LevelModel:
         b[fin] = rounded_rhs(self.rows.g[fin], self.rows.d[fin], self.rows.zero[fin], level[fin])
         return b
 
-    # -- the level --------------------------------------------------------------------------------
+    def step(self, v: Array, k: Array, eps: float, stage_end: float, tries: int = 1) -> Step:
+        """The level at k's own level t = min active margin, proved on the rounded rows; else a better point.
+
+        Integer rows only.  b: the rows rounded at t (active) and at the floors (fixed); D: the
+        active rows whose rounding at t + ε drops (by d_j); every grid point with all active margins
+        ≥ t + ε meets the rows rounded at t + ε.  Proofs that none does (the level), each with row
+        weights y that also pin rows (:func:`~setupfix.optimize._leximin_pins.pinned_rows`):
+
+        * small problems: a Farkas certificate of those rows by NNLS (no LP,
+          :func:`~setupfix.optimize._leximin_pins.farkas_weights`);
+        * else the level LP (:meth:`_solve`) on b_j (D and fixed rows) and b_j + S (the other active
+          rows), S = min_D d_j: it has t = S at every such grid point, so weights from its duals with
+          C = max over the box of Σ y_j (rhs_j − G_j k) < S·Σ_active y_j prove it.
+
+        Not proved: a point above t from an LP — the level LP on the unrounded rows first (its point
+        spread by ``SPREAD``), then the one on the rounded rows — rounded (:meth:`round_best`) is the
+        next point to try, at most ``tries`` times.
+        """
+        rows = self.rows
+        act = np.isnan(self._floors(v))
+        small = self.session.small
+        calls, unrounded, ascents = 0, small, 0
+        last: Array | None = None  # the last LP's point (k part)
+        t = self.level_of(k, v)
+        for _ in range(tries):
+            if time.perf_counter() >= stage_end:
+                return Step(t, k, False, None, "time limit", calls)
+            b = self.rounded(v, t)
+            b_up = self.rounded(v, t + eps)
+            drop = act & (b_up < b)
+            if not drop.any():
+                break
+            fin = np.isfinite(b)
+            if small:
+                y, x_ld = farkas_or_point(rows, b_up)
+                if y is not None:
+                    cert = (y, np.where(fin, b, 0.0), np.zeros(b.size), True)
+                    return Step(t, k, True, Certificates(rows.g_rows, rows.kmin, rows.kmax, (cert,)), None, calls,
+                                last)
+                if x_ld is not None and ascents < NNLS_ASCENTS:  # the rounded rows' least-distance point, rounded
+                    ascents += 1
+                    k_r, t_r = self.round_best(x_ld, v)
+                    if t_r >= t + eps - 1e-9:
+                        k, t = k_r, t_r
+                        continue
+            if unrounded:  # a point of the level LP (unrounded rows): usually at the level or next to it
+                status, x, y = self._solve(self.rhs(v), v, stage_end - time.perf_counter(), SPREAD)
+                unrounded = False
+            else:
+                gap = float(np.min(rows.d[drop]))
+                rhs = np.where(act & ~drop, b + gap, b)
+                status, x, y = self._solve(rhs, v, stage_end - time.perf_counter(), SPREAD)
+                if not small and status == "optimal" and x is not None and y is not None:
+                    y = np.where(np.isfinite(rhs), y, 0.0)
+                    rhs0 = np.where(np.isfinite(rhs), rhs, 0.0)
+                    w = y @ rows.g_rows
+                    bound = float(y @ rhs0 + np.sum(np.maximum(-w * rows.kmin, -w * rows.kmax)))
+                    total = float(y[act].sum())
+                    if total > 0 and bound < gap * total - 1e-9 * (1.0 + abs(bound)):
+                        cert = (y, rhs0, np.where(act & ~drop, gap, 0.0), True)
+                        return Step(t, k, True, Certificates(rows.g_rows, rows.kmin, rows.kmax, (cert,)), None,
+                                    calls + 1, x[:-1])
+            calls += 1
+            if status == "time_limit":
+                return Step(t, k, False, None, "time limit", calls)
+            if status != "optimal" or x is None:
+                break
+            last = x[:-1]
+            k_r, t_r = self.round_best(last, v)
+            if t_r < t + eps - 1e-9:
+                break
+            k, t = k_r, t_r
+        return Step(t, k, False, None, None, calls)
+
     def value(self, v: Array, k_prev: Array, stage_end: float) -> LevelValue:
         """The proved level t_i (or the best point when stopped) — see the module text."""
         rows, s = self.rows, self.session.settings
-        self._pattern(v)
-        status, x, y = self._solve(self.rhs(v), stage_end - time.perf_counter())
-        if status != "optimal" or x is None:
+        # with integer rows a step proves the level, so the LP may also spread the active margins (a
+        # point for the next levels as well); its bound is then the weights' (weak duality), not its t
+        spread = SPREAD if rows.all_integer else 0.0
+        status, x, y = self._solve(self.rhs(v), v, stage_end - time.perf_counter(), spread)
+        if status != "optimal" or x is None or y is None:
             reason = "time limit" if status == "time_limit" else status
             return LevelValue(self.level_of(k_prev, v), k_prev, np.inf, None, reason, (), 1)
-        t_lp = float(x[-1])
+        bound = level_bound(rows, y, self.rhs(v), np.isnan(v[self.row_dim])) if spread else -np.inf
+        t_lp = max(float(x[-1]), bound)
         k_best, t_best = k_prev, self.level_of(k_prev, v)
-        k_round = np.clip(np.rint(x[:-1]), rows.kmin, rows.kmax)
-        t_round = self.level_of(k_round, v)
+        k_round, t_round = self.round_best(x[:-1], v)
         if t_round > t_best:
             k_best, t_best = k_round, t_round
         calls, path = 1, list[str]()
         if t_best >= t_lp - TOL:
             return LevelValue(t_best, k_best, t_lp, y, None, (), calls)
+        eps = s.quantum / 2
+        if rows.all_integer:  # ascent by steps: each LP either proves the level (and pins rows) or rises
+            step = self.step(v, k_best, eps, stage_end, s.level_steps)
+            calls += step.calls
+            if step.stop is not None or step.proved:
+                return LevelValue(step.t, step.k, t_lp, y, step.stop, (), calls, step.certificates)
+            k_best, t_best = step.k, step.t
+            if t_best >= t_lp - TOL:
+                return LevelValue(t_best, k_best, t_lp, y, None, (), calls)
         # ascent: a grid point with every active margin ≥ t(best) + ε on the rounded rows (an LP, a feasibility
         # MILP), until none is left (proved) — the rounded LP point is usually at or next to the level
         f = self._floors(v)
-        eps = s.quantum / 2
         for _ in range(s.level_steps):
             if time.perf_counter() >= stage_end:
                 return LevelValue(t_best, k_best, t_lp, y, "time limit", tuple(path), calls)
@@ -197,7 +295,7 @@ class LevelModel:
         rows = self.rows
         r, n = rows.g_rows.shape
         hi = self.rhs(v)
-        a = np.hstack([rows.g_rows, self._coef[:, None]])
+        a = np.hstack([rows.g_rows, np.isnan(self._floors(v))[:, None].astype(float)])
         model = LinearModel(np.r_[np.zeros(n), -1.0], a, np.full(r, -INF), np.where(np.isfinite(hi), hi, INF),
                             np.r_[rows.kmin, t_best], np.r_[rows.kmax, upper],
                             integer=np.r_[np.ones(n, bool), False])
@@ -255,10 +353,13 @@ class LevelModel:
                 return False
             if feas != "optimal":
                 return None
-            if kx is not None:
+            if kx is not None:  # the vertex rounded, else each floor/ceil choice of its fractional coordinates
                 k = np.clip(np.rint(kx), rows.kmin, rows.kmax)
                 if meets(k):
                     return k
+                k_met = meeting_rounding(rows, kx, f)
+                if k_met is not None:
+                    return k_met
         res = LinearModel(np.zeros(self.n), rows.g_rows[fin], np.full(int(fin.sum()), -INF), b[fin], rows.kmin,
                           rows.kmax, integer=np.ones(self.n, bool)).solve(stage_end - time.perf_counter())
         if res.status == "infeasible":
@@ -271,22 +372,21 @@ class LevelModel:
     # -- certificates of saturation ---------------------------------------------------------------
     def certify(self, level: LevelValue, v: Array) -> Certificates:
         """The level LP's weights (rhs g on active rows, g − v on fixed rows; active floor t)."""
-        certs: tuple[tuple[Array, Array, float, bool], ...] = ()
+        certs: tuple[tuple[Array, Array, Array, bool], ...] = ()
         if level.y is not None:
             rhs = self.rhs(v)
             y = np.where(np.isfinite(rhs), level.y, 0.0)
-            total = float(y[np.isnan(self._floors(v))].sum())
-            if total > 0:
-                certs = ((y, np.where(np.isfinite(rhs), rhs, 0.0), level.t, False),)
+            active = np.isnan(self._floors(v))
+            if float(y[active].sum()) > 0:
+                certs = ((y, np.where(np.isfinite(rhs), rhs, 0.0), np.where(active, level.t, 0.0), False),)
         return Certificates(self.rows.g_rows, self.rows.kmin, self.rows.kmax, certs)
 
     def certify_rounded(self, level: LevelValue, v: Array, stage_end: float) -> Certificates:
         """max s s.t. G_j k + s ≤ b_j (active), G_j k ≤ b_j (fixed), b rounded at t: its weights pin rows."""
-        self._pattern(v)
         b = self.rounded(v, level.t)
-        status, _, y = self._solve(b, stage_end - time.perf_counter())
-        certs: tuple[tuple[Array, Array, float, bool], ...] = ()
+        status, _, y = self._solve(b, v, stage_end - time.perf_counter())
+        certs: tuple[tuple[Array, Array, Array, bool], ...] = ()
         if status == "optimal" and y is not None:
             y = np.where(np.isfinite(b), y, 0.0)
-            certs = ((y, np.where(np.isfinite(b), b, 0.0), 0.0, True),)
+            certs = ((y, np.where(np.isfinite(b), b, 0.0), np.zeros(b.size), True),)
         return Certificates(self.rows.g_rows, self.rows.kmin, self.rows.kmax, certs)

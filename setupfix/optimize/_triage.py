@@ -16,7 +16,8 @@ levels of :mod:`~setupfix.optimize._triage_model`, one lexicographic optimum in 
 3. **Least norm**: min Σ c_i k_i² subject to N* and every level proved, ties to the lexicographically
    smallest k: in the box c_i k_i² ≤ f(best point) listed when it is small
    (:func:`~setupfix.optimize._triage_model.least_listed`), else a MILP with k_i² as the upper envelope
-   of its chords (exact on integers), added lazily (:func:`~setupfix.optimize._chords.lazy_chords`).
+   of its chords (exact on integers), added lazily (:func:`~setupfix.optimize._chords.lazy_chords`), its
+   ties then decided coordinate by coordinate (:func:`~setupfix.optimize._chords.smallest_tie`).
 
 No point keeps more than N* dimensions, so every point meeting Σ z ≥ N* − held keeps exactly the
 dimensions with z = 1 and the held ones; the dimensions given up are read from the final point.
@@ -42,7 +43,8 @@ import numpy.typing as npt
 
 from setupfix.errors import Note
 from setupfix.optimize._base import make_result
-from setupfix.optimize._chords import chord_rows, lazy_chords
+from setupfix.optimize._chords import chord_rows, lazy_chords, smallest_tie
+from setupfix.optimize._grid_least_norm import TIE_MAX_REGISTERS
 from setupfix.optimize._highs import INF, LinearModel, Solve
 from setupfix.optimize._least_norm import lower_bound_ratio
 from setupfix.optimize._problem import CorrectionProblem, OptimizeResult
@@ -264,9 +266,12 @@ def triage(t: TriageRows, deadline: float, reserve: float, budget: float, start:
     m4.add_rows(a_ch, np.full(rhs_ch.size, -INF), rhs_ch)
     out = lazy_chords(m4, n, chords, t.cost, t.kmin, t.kmax, best, lambda k: t.meets(k, kept, levels), t.start,
                       deadline, integer=True)
+    best = best if out.best is None else out.best
     if out.proved:
         done.append("least norm")
-    best = best if out.best is None else out.best
+        best, tied = (smallest_tie(m4, n, chords, t.cost, best, lambda k: t.meets(k, kept, levels), t.start, deadline)
+                      if n <= TIE_MAX_REGISTERS else (best, False))
+        done.append("ties to the lexicographically smallest k" if tied else "the tie is not broken (limit or size)")
     if not out.proved:
         why = why or f"least norm: {out.why}"
     return Triaged(best, kept, levels, complete, not why, why, tuple(done))

@@ -1,0 +1,306 @@
+"""Which margins a leximin level set holds fixed: weak-duality certificates and the span of pinned rows.
+
+Grid units as in :mod:`setupfix.optimize._session`.  A *level set* L is the set of grid points
+with every fixed dimension at least its floor and every active one at least the level t
+(:mod:`setupfix.optimize._leximin`).  A row j is *pinned* on L when G_j k takes one value at every
+point of L; a dimension all of whose rows are pinned has the same margin at every point of L, so
+it can be fixed at that margin without losing any leximin-optimal point.  Both proofs here are
+checked in numpy, whatever the solver's tolerances:
+
+* :func:`pinned_rows` — weights y ≥ 0 from an LP on the rows (its duals) give, for every k in
+  the box, ``Σ y_j (rhs_j − G_j k) ≤ C`` with C computed here; on L each term is at least its
+  floor, so a row's term cannot exceed its floor by more than (C − Σ y floor)/y_j.  Below the
+  tie threshold ε on a level LP's active row: *saturated* (its margin is t on L).  Below the
+  row's gcd d_j on rounded rows (where ``rhs_j − G_j k`` is a multiple of d_j): *pinned*.
+* :func:`span_closure` — if every row in P is pinned on L, so is every row in the real span of
+  P: ``G_j = Σ λ_p G_p`` gives ``G_j k = Σ λ_p G_p k``.  For integer rows the test is exact: an
+  integer row outside span(P) is at distance ≥ 1/√det Gram(B) from it (B a basis of P's rows,
+  Gram integer), and Hadamard's inequality bounds det Gram(B) by the product of the rank largest
+  squared row norms; when that bound is too large to separate the two cases in floating point,
+  only rows equal or opposite to a pinned row are added.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import numpy.typing as npt
+
+from setupfix.optimize._grid import TOL, rounded_rhs
+from setupfix.optimize._session import GridRows
+
+__all__ = ["Certificates", "Step", "best_rounding", "dim_all", "dim_margins", "excluded_alone", "farkas_or_point",
+           "farkas_weights", "level_bound", "meeting_rounding", "pinned_rows", "span_closure"]
+
+Array = npt.NDArray[np.float64]
+Mask = npt.NDArray[np.bool_]
+
+#: Largest Hadamard bound on det Gram(B) for which the span test is decided in floating point
+#: (an integer row outside the span is then ≥ 1e-5 away; float error is ~1e-12).
+_HADAMARD_MAX = 1e10
+#: Absolute margin on a certificate's weighted sum (weights summing to 1) before it pins a row.
+_MARGIN = 1e-9
+
+
+@dataclass(frozen=True)
+class Certificates:
+    """Row weights to check by weak duality.
+
+    Attributes
+    ----------
+    g_rows : ndarray of shape (r, n); kmin, kmax : ndarray of shape (n,)
+    certificates : tuple of (weights (r,), rhs (r,), floors (r,), rounded)
+        ``rhs_j − G_j k ≥ floors_j`` at every point of the level set; ``rounded``: rhs on the
+        lattice of G_j k (``rhs_j − G_j k`` a multiple of d_j there).
+    """
+
+    g_rows: Array
+    kmin: Array
+    kmax: Array
+    certificates: tuple[tuple[Array, Array, Array, bool], ...]
+
+
+@dataclass(frozen=True)
+class Step:
+    """A level by the rounded rows at a grid point's own level (:meth:`LevelModel.step`).
+
+    ``proved``: no grid point of the level set has every active margin ≥ t + ε, and
+    ``certificates`` are the LP's weights (they pin rows); else the best point reached (the
+    caller proves the level otherwise; ``stop``: the limit or HiGHS stopped the step).
+    """
+
+    t: float
+    k: Array
+    proved: bool
+    certificates: Certificates | None
+    stop: str | None
+    calls: int
+    x: Array | None = None  # the proving LP's point (k part): rounded, often the next level's point
+
+
+def pinned_rows(level: Certificates, active_rows: Mask, eps: float, d: Array) -> tuple[Mask, Mask]:
+    """Active rows whose margin cannot rise above t + ε (saturated), and integer rows pinned on L.
+
+    For weights y (normalised to sum 1) and every k in the box
+    ``Σ_j y_j (rhs_j − G_j k) ≤ C = yᵀrhs + Σ_i max(−w_i kmin_i, −w_i kmax_i)``, w = Gᵀy.  On the
+    level set every term is ≥ y_j floor_j, so ``rhs_j − G_j k − floor_j ≤ (C − yᵀfloor)/y_j``.
+
+    Parameters
+    ----------
+    level : Certificates
+    active_rows : ndarray of bool, shape (r,)
+        Rows of active dimensions (only these can be saturated).
+    eps : float
+        Tie threshold [steps].
+    d : ndarray of shape (r,)
+        Row gcds (0: not an integer row).
+
+    Returns
+    -------
+    saturated, pinned : ndarray of bool, shape (r,)
+    """
+    sat = np.zeros(active_rows.size, bool)
+    pin = np.zeros(active_rows.size, bool)
+    for weights, rhs, floors, rounded in level.certificates:
+        y = np.maximum(weights, 0.0)
+        total = float(y.sum())
+        if not np.isfinite(total) or total <= 0:
+            continue
+        y = y / total
+        w = y @ level.g_rows
+        c = float(y @ rhs + np.sum(np.maximum(-w * level.kmin, -w * level.kmax)))
+        # slack and y_j·room compared with an absolute margin (y sums to 1, the numbers are ~1e2: the
+        # rounding error of slack is ~1e-12), so a weight of 1e-17 never turns a rounding error into a pin
+        slack = c - float(y @ floors) + _MARGIN
+        if rounded:
+            pin |= (d > 0) & (y * (d - 1e-7) > slack)
+        else:
+            sat |= active_rows & (y * (eps - 1e-9) >= slack)
+    return sat, pin
+
+
+def span_closure(g_rows: Array, d: Array, pinned: Mask, key: Array) -> Mask:
+    """Integer rows in the real span of the pinned integer rows (a superset of ``pinned``'s integer rows).
+
+    ``key``: a random integer projection of the rows (equal or opposite rows, equal |key|), used
+    when the span test cannot be decided exactly (see the module text).
+    """
+    integer = d > 0
+    base = pinned & integer
+    if not base.any():
+        return pinned.copy()
+    p = g_rows[base]
+    sq = np.sort(np.einsum("ij,ij->i", p, p))[::-1]
+    _, s, vt = np.linalg.svd(p, full_matrices=False)
+    rank = int(np.sum(s > 1e-9 * s[0]))
+    if float(np.prod(sq[:rank])) <= _HADAMARD_MAX:
+        basis = vt[:rank]
+        cand = integer & ~base
+        rest = g_rows[cand] - (g_rows[cand] @ basis.T) @ basis
+        out = pinned.copy()
+        out[cand] = np.einsum("ij,ij->i", rest, rest) < 0.25 / _HADAMARD_MAX
+        return out | pinned
+    out = pinned.copy()  # equal or opposite rows only (checked, not only keyed)
+    for j in np.flatnonzero(base):
+        idx = np.flatnonzero(integer & ~out & (np.abs(key) == abs(key[j])))
+        same = np.all(g_rows[idx] == g_rows[j], axis=1) | np.all(g_rows[idx] == -g_rows[j], axis=1)
+        out[idx[same]] = True
+    return out
+
+
+def dim_all(rows_mask: Mask, row_dim: npt.NDArray[np.intp], n_dims: int) -> Mask:
+    """Dimensions with at least one row, every one of them in ``rows_mask`` — shape (n_dims,)."""
+    has = np.zeros(n_dims, bool)
+    has[row_dim] = True
+    every = np.ones(n_dims, bool)
+    np.logical_and.at(every, row_dim, rows_mask)
+    return has & every
+
+
+def farkas_weights(rows: GridRows, b: Array) -> Array | None:
+    """Row weights y ≥ 0 (sum 1) proving that no k in the box meets G k ≤ b, or None (:func:`farkas_or_point`)."""
+    return farkas_or_point(rows, b)[0]
+
+
+def farkas_or_point(rows: GridRows, b: Array) -> tuple[Array | None, Array | None]:
+    """Row weights y ≥ 0 (sum 1) proving that no k in the box meets G k ≤ b; else the least Σ c k² point.
+
+    From the NNLS least-distance system (:func:`~setupfix.optimize._grid.nnls_least_distance`): its
+    Farkas side, the proof checked here (``max over the box of Σ y_j (b_j − G_j k) < 0``), or its
+    point (continuous, a point to round; nothing is proved by it).  (None, None): NNLS did not decide.
+    """
+    from scipy.optimize import nnls
+
+    n = rows.n_free
+    keep = np.isfinite(b)
+    n_rows = int(keep.sum())
+    _, e = rows.nnls_system(keep)
+    e = e.copy()
+    e[-1, :n_rows] = -b[keep]
+    e[-1, n_rows:n_rows + n] = rows.kmin
+    e[-1, n_rows + n:] = -rows.kmax
+    f = np.zeros(n + 1)
+    f[-1] = 1.0
+    try:
+        u, _ = nnls(e, f, maxiter=50 * e.shape[1])
+    except RuntimeError:  # iteration limit
+        return None, None
+    r = e @ u - f
+    if abs(r[-1]) > 1e-9:  # the residual's last entry is not 0: a point exists
+        return None, -r[:n] / r[-1] / np.sqrt(rows.cost)
+    y = np.zeros(b.size)
+    y[keep] = u[:n_rows]
+    total = float(y.sum())
+    if total <= 0:
+        return None, None
+    y /= total
+    w = y @ rows.g_rows
+    worst = float(y @ np.where(keep, b, 0.0) + np.sum(np.maximum(-w * rows.kmin, -w * rows.kmax)))
+    return (y if worst < -1e-9 else None), None
+
+
+def best_rounding(rows: GridRows, x: Array, floors: Array, active_dims: Mask, order: npt.NDArray[np.intp],
+                  starts: npt.NDArray[np.intp], most: int = 4) -> tuple[Array, float]:
+    """A good rounding of x and its level (min active margin; −inf below a fixed floor).
+
+    Every floor/ceil choice of the ``most`` fractional coordinates nearest ½ (the others to the
+    nearest integer) is evaluated — a point to try, nothing is proved by it; ties by the active
+    dimensions' sorted margins (leximin: a point for the next levels too).  ``floors``: per row
+    (NaN: active); ``order``/``starts``: the rows grouped by dimension (for ``np.minimum.reduceat``);
+    ``active_dims``: per group.
+    """
+    lo = np.clip(np.floor(x + 1e-9), rows.kmin, rows.kmax)
+    near = np.clip(np.rint(x), rows.kmin, rows.kmax)
+    frac = np.flatnonzero(np.abs(x - near) > 1e-6)
+    frac = frac[np.argsort(np.abs(x[frac] - lo[frac] - 0.5), kind="stable")[:most]]
+    cand = np.repeat(near[None, :], 1 << frac.size, axis=0)
+    if frac.size:
+        bits = (np.arange(1 << frac.size)[:, None] >> np.arange(frac.size)) & 1
+        cand[:, frac] = np.clip(lo[frac] + bits, rows.kmin[frac], rows.kmax[frac])
+    fixed = ~np.isnan(floors)
+    m = rows.g[None, :] - cand @ rows.g_rows.T
+    level = np.min(np.where(fixed[None, :], np.inf, m), axis=1) if (~fixed).any() else np.full(len(cand), np.inf)
+    level[np.any(m[:, fixed] < floors[fixed] - TOL, axis=1)] = -np.inf
+    top = np.flatnonzero(level >= level.max() - 1e-9)
+    i = int(top[0])
+    if top.size > 1 and np.isfinite(level[i]):
+        by_dim = np.minimum.reduceat(m[np.ix_(top, order)], starts, axis=1)
+        sorted_m = np.sort(by_dim[:, active_dims], axis=1)
+        i = int(top[np.lexsort(np.round(sorted_m, 6).T[::-1])[-1]])
+    return cand[i], float(level[i])
+
+
+def level_bound(rows: GridRows, y: Array, rhs: Array, active_rows: Mask) -> float:
+    """Bound on the level from row weights y ≥ 0 (weak duality).
+
+    ``rhs``: g_j on active rows, g_j − v_q(j) on fixed ones (+inf: left out).  Over the box
+    Σ_A y_j m_j + Σ_F y_j (rhs_j − G_j k) ≤ C; on the level set every term is ≥ t resp. 0, so
+    t ≤ C / Σ_A y_j.
+    """
+    fin = np.isfinite(rhs)
+    y = np.where(fin, np.maximum(y, 0.0), 0.0)
+    total = float(y[active_rows].sum())
+    if total <= 0:
+        return np.inf
+    w = y @ rows.g_rows
+    c = float(y @ np.where(fin, rhs, 0.0) + np.sum(np.maximum(-w * rows.kmin, -w * rows.kmax)))
+    return c / total
+
+
+def dim_margins(g_rows: Array, g: Array, k: Array, row_dim: npt.NDArray[np.intp], n_dims: int) -> Array:
+    """Margin of each dimension at k: the least of its rows' ``g_j − G_j k`` (inf: no row) — shape (n_dims,)."""
+    out = np.full(n_dims, np.inf)
+    np.minimum.at(out, row_dim, g - g_rows @ k)
+    return out
+
+
+def excluded_alone(rows: GridRows, floors: Array, row_dim: npt.NDArray[np.intp], n_dims: int, t: float,
+                   eps: float) -> Mask:
+    """Active dimensions proved unable to be the only one left at level t, by one Farkas certificate.
+
+    ``floors``: per row (NaN: active).  b: every active row rounded at t + ε, fixed rows at their
+    floors; weights y ≥ 0 (sum 1) with ``max over the box of Σ y_j (b_j − G_j k) = W < 0``
+    (:func:`farkas_weights`) prove that no point meets G k ≤ b.  Lowering dimension q's rows to t
+    raises b_j by δ_j on them only, so the same weights still prove "no point" when
+    W + Σ_{j ∈ q} y_j δ_j < 0: no grid point has every active dimension but q above t + ε (q ≥ t).
+    Returns a mask of shape (n_dims,) (all False when NNLS finds no certificate).
+    """
+    out = np.zeros(n_dims, bool)
+    active = np.isnan(floors)
+    level = np.where(active, t + eps, floors)
+    fin = np.isfinite(level)
+    b_up = np.full(level.size, np.inf)
+    b_up[fin] = rounded_rhs(rows.g[fin], rows.d[fin], rows.zero[fin], level[fin])
+    y = farkas_weights(rows, b_up)
+    if y is None:
+        return out
+    b_at = b_up.copy()
+    b_at[active] = rounded_rhs(rows.g[active], rows.d[active], rows.zero[active], np.full(int(active.sum()), t))
+    w = y @ rows.g_rows
+    worst = float(y @ np.where(np.isfinite(b_up), b_up, 0.0) + np.sum(np.maximum(-w * rows.kmin, -w * rows.kmax)))
+    with np.errstate(invalid="ignore"):
+        rise = np.where(active & (y > 0), y * (b_at - b_up), 0.0)  # inf·0 never: y > 0 only on finite rows
+    extra = np.zeros(n_dims)
+    np.add.at(extra, row_dim, rise)
+    dims_active = np.zeros(n_dims, bool)
+    dims_active[row_dim[active]] = True
+    out = dims_active & (worst + extra < -1e-9)
+    return out
+
+
+def meeting_rounding(rows: GridRows, x: Array, f: Array, most: int = 10) -> Array | None:
+    """A floor/ceil rounding of x (up to ``most`` fractional coordinates; the others to the nearest
+    integer) with every row's margin ≥ f_j (shape (r,), −inf: no floor), or None — checked exactly."""
+    lo = np.clip(np.floor(x + 1e-9), rows.kmin, rows.kmax)
+    near = np.clip(np.rint(x), rows.kmin, rows.kmax)
+    frac = np.flatnonzero(np.abs(x - near) > 1e-6)[:most]
+    if frac.size == 0:
+        return None
+    cand = np.repeat(near[None, :], 1 << frac.size, axis=0)
+    bits = (np.arange(1 << frac.size)[:, None] >> np.arange(frac.size)) & 1
+    cand[:, frac] = np.clip(lo[frac] + bits, rows.kmin[frac], rows.kmax[frac])
+    fin = np.isfinite(f)
+    ok = np.all(rows.g[fin][None, :] - cand @ rows.g_rows[fin].T >= f[fin][None, :] - 1e-9, axis=1)
+    hit = np.flatnonzero(ok)
+    return cand[int(hit[0])] if hit.size else None

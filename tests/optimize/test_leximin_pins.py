@@ -1,0 +1,159 @@
+"""Every level, pin and saturation the leximin search claims holds on the whole level set (brute force)."""
+
+from __future__ import annotations
+
+import itertools
+
+import numpy as np
+import pytest
+
+import setupfix.optimize._leximin as lexmod
+from setupfix.optimize._leximin_pins import Certificates, dim_all, pinned_rows, span_closure
+
+from .test_leximin import brute_leximin, guide_pins_window, one_axis_problem, solved_steps
+
+EPS = 5e-4  # half the input quantum [steps]
+
+
+def checked_levels(monkeypatch) -> list[int]:
+    """Wrap the search's level proofs: each claim is checked against every grid point of the box."""
+    grid: dict[str, np.ndarray] = {}
+    seen: list[int] = []
+    original = lexmod._level
+
+    def level(search, v, k, given, active_rows, path):
+        out = original(search, v, k, given, active_rows, path)
+        k_out, t, sat, pin, stop, _ = out
+        if stop is not None:
+            return out
+        rows, model = search.session.rows, search.model
+        if "k" not in grid:
+            axes = [np.arange(lo, hi + 1) for lo, hi in zip(rows.kmin, rows.kmax, strict=True)]
+            grid["k"] = np.array(list(itertools.product(*axes)), dtype=float)
+        pts = grid["k"]
+        m_rows = rows.g[None, :] - pts @ rows.g_rows.T
+        m_dims = np.full((len(pts), model.n_dims), np.inf)
+        for j, q in enumerate(model.row_dim):
+            m_dims[:, q] = np.minimum(m_dims[:, q], m_rows[:, j])
+        active, fixed = np.isnan(v), np.isfinite(v)
+        base = np.all(m_dims[:, fixed] >= v[fixed] - 1e-9, axis=1)
+        in_set = base & np.all(m_dims[:, active] >= t - 1e-9, axis=1)
+        assert not np.any(base & np.all(m_dims[:, active] >= t + EPS, axis=1)), "a grid point is above the level"
+        assert in_set[np.flatnonzero(np.all(pts == k_out, axis=1))[0]], "the level's point is not in its level set"
+        values = (pts[in_set] @ rows.g_rows.T)
+        assert np.all(np.ptp(values[:, pin], axis=0) < 1e-9), "a pinned row moves on the level set"
+        assert np.all(m_rows[in_set][:, sat] <= t + EPS + 1e-9), "a saturated row rises on the level set"
+        # the span closure of the pins is exact too
+        closed = span_closure(rows.g_rows, rows.d, pin, model.key)
+        assert np.all(np.ptp(values[:, closed], axis=0) < 1e-9), "a row in the span of pins moves"
+        seen.append(int(pin.sum() + sat.sum()))
+        return out
+
+    monkeypatch.setattr(lexmod, "_level", level)
+    return seen
+
+
+@pytest.mark.parametrize(("kind", "seed"), [("window", 1), ("window", 2), ("window", 3), ("window", 5),
+                                            ("axis", 5), ("axis", 37), ("axis", 3), ("axis", 11)])
+def test_every_claim_of_the_levels_holds_on_the_level_set(kind, seed, monkeypatch):
+    problem = guide_pins_window(seed) if kind == "window" else one_axis_problem(seed)
+    best, norm, _ = brute_leximin(problem)
+    if best[0] < 0:
+        pytest.skip("triage")
+    seen = checked_levels(monkeypatch)
+    _, k, sorted_m = solved_steps(problem)
+    assert seen and sum(seen) > 0  # the proofs did pin or saturate rows (the checks above ran on them)
+    np.testing.assert_allclose(sorted_m, best, atol=1e-6)
+    assert float(problem.cost[problem.free] @ k**2) == pytest.approx(norm, abs=1e-9)
+
+
+def test_a_rounding_error_with_a_tiny_weight_pins_nothing():
+    """Weights of 1e-17 with a weighted sum of ~1e-16 (a rounding error): no room below d is claimed."""
+    g_rows = np.array([[1.0, 0.0], [-1.0, 0.0], [0.0, 1.0]])
+    rhs = np.array([0.0, 0.0, 3.0])
+    y = np.array([0.5, 0.5, 1e-17])
+    cert = Certificates(g_rows, np.array([-5.0, -5.0]), np.array([5.0, 5.0]), ((y, rhs, np.zeros(3), True),))
+    _, pin = pinned_rows(cert, np.ones(3, bool), EPS, np.ones(3))
+    # rows 0 and 1 add up to 0 (x0 ≤ 0 and −x0 ≤ 0: pinned); row 2's tiny weight proves nothing about it
+    assert pin.tolist() == [True, True, False]
+
+
+def test_span_closure_adds_exactly_the_rows_in_the_span():
+    g_rows = np.array([[1.0, 1, 0], [0, 1, 1], [1, 2, 1], [1, 0, -1], [1, 0, 0], [-1, -2, -1]])
+    key = g_rows @ np.array([3.0, 7.0, 11.0])
+    closed = span_closure(g_rows, np.ones(6), np.array([True, True, False, False, False, False]), key)
+    assert closed.tolist() == [True, True, True, True, False, True]
+    assert dim_all(closed, np.array([0, 0, 1, 1, 2, 2]), 3).tolist() == [True, True, False]
+
+
+def _grid(rows) -> np.ndarray:
+    axes = [np.arange(lo, hi + 1) for lo, hi in zip(rows.kmin, rows.kmax, strict=True)]
+    return np.array(list(itertools.product(*axes)), dtype=float)
+
+
+def _dims(rows, row_dim, n_dims, pts) -> np.ndarray:
+    m_rows = rows.g[None, :] - pts @ rows.g_rows.T
+    m_dims = np.full((len(pts), n_dims), np.inf)
+    for j, q in enumerate(row_dim):
+        m_dims[:, q] = np.minimum(m_dims[:, q], m_rows[:, j])
+    return m_dims
+
+
+def test_a_dimension_excluded_from_a_conflict_is_never_alone_at_its_level(monkeypatch):
+    """The one Farkas certificate that spares the per-dimension tests of a discrete conflict: every
+    dimension it excludes has no grid point with the other active ones above t + ε (brute force), and
+    the search still finds the brute-force leximin."""
+    claims: list[int] = []
+    original = lexmod.excluded_alone
+
+    def checked(rows, floors, row_dim, n_dims, t, eps):
+        out = original(rows, floors, row_dim, n_dims, t, eps)
+        pts = _grid(rows)
+        m = _dims(rows, row_dim, n_dims, pts)
+        v = np.full(n_dims, np.nan)
+        v[row_dim] = floors
+        active, fixed = np.isnan(v), np.isfinite(v)
+        base = np.all(m[:, fixed] >= v[fixed] - 1e-9, axis=1)
+        for q in np.flatnonzero(out):
+            others = active.copy()
+            others[q] = False
+            alone = base & (m[:, q] >= t - 1e-9) & np.all(m[:, others] >= t + eps - 1e-9, axis=1)
+            assert not alone.any(), f"dimension {q} is alone at {t} at a grid point"
+        claims.append(int(out.sum()))
+        return out
+
+    monkeypatch.setattr(lexmod, "excluded_alone", checked)
+    for kind, seed in [("window", s) for s in range(1, 6)] + [("axis", s) for s in range(3, 40, 4)]:
+        problem = guide_pins_window(seed) if kind == "window" else one_axis_problem(seed)
+        best, norm, _ = brute_leximin(problem)
+        if best[0] < 0:
+            continue
+        _, k, sorted_m = solved_steps(problem)
+        np.testing.assert_allclose(sorted_m, best, atol=1e-6)
+        assert float(problem.cost[problem.free] @ k**2) == pytest.approx(norm, abs=1e-9)
+    assert claims and sum(claims) > 0  # conflicts were met and the certificate excluded dimensions
+
+
+@pytest.mark.parametrize("seed", range(20))
+def test_farkas_weights_or_a_point_match_the_grid(seed):
+    """NNLS on random rounded rows: weights only when no grid point meets them (brute force), else a
+    continuous point of the rows; a floor/ceil rounding that meets them is a real grid point."""
+    from setupfix.optimize._leximin_pins import farkas_or_point, meeting_rounding
+    from setupfix.optimize._session import GridRows
+
+    rng = np.random.default_rng(seed)
+    g_rows = rng.integers(-2, 3, size=(8, 3)).astype(float)
+    g = rng.uniform(-2.0, 4.0, 8)
+    rows = GridRows(g_rows, g, np.full(3, -3.0), np.full(3, 3.0), np.ones(3))
+    b = np.floor(g)
+    pts = _grid(rows)
+    feasible = np.all(pts @ g_rows.T <= b + 1e-9, axis=1)
+    y, x = farkas_or_point(rows, b)
+    if y is not None:
+        assert not feasible.any()
+    if x is not None:
+        assert np.all(g_rows @ x <= b + 1e-6) and np.all(np.abs(x) <= 3 + 1e-9)
+        k = meeting_rounding(rows, x, g - b)
+        if k is not None:
+            assert np.all(g - g_rows @ k >= g - b - 1e-9) and np.all(np.abs(k - x) < 1)
+    assert y is not None or x is not None or not feasible.any()
