@@ -123,10 +123,13 @@ def test_whole_solve_respects_the_time_limit_and_says_which_stage_stopped():
     result = get_optimizer("exact", objective="paper", time_limit=0.6).solve(problem)
     wall = time.perf_counter() - start
     assert wall < 0.6 + 1.0  # the limit bounds the whole solve (slack for HiGHS's clock and a busy machine)
-    assert result.margin_after <= result.bound + 1e-12
     assert result.margin_after >= problem.margin_before  # a stopped search still improves on nothing
     assert result.status == "time_limit"
-    assert result.extra["stopped"]["stage"] in ("grid optimum", "least norm")
+    if result.bound is None:  # a loaded machine can stop the LP bound itself: then no bound is claimed
+        assert result.extra["stopped"]["stage"] == "lp bound"
+    else:
+        assert result.margin_after <= result.bound + 1e-12
+        assert result.extra["stopped"]["stage"] in ("grid optimum", "least norm")
     assert any("time limit" in n.message for n in result.notes)
 
 
