@@ -26,7 +26,7 @@ from setupfix.optimize import OPTIMIZERS, CorrectionProblem, OptimizeResult, get
 from setupfix.pipeline.cycles import ReadOptions
 from setupfix.pipeline.smoothing import History
 from setupfix.pose import PosedProblem
-from setupfix.safety import Recommendation
+from setupfix.safety import Recommendation, RuleEffect
 
 if TYPE_CHECKING:  # the thermal modules bring scipy.signal (~0.5 s): loaded only with --thermal
     from parsers.temperature import TemperatureLog
@@ -294,6 +294,19 @@ class CycleCorrection:
     @property
     def norm(self) -> float:
         return float(np.linalg.norm(self.x))
+
+    @property
+    def given_up(self) -> tuple[str, ...]:
+        """The model dimensions given up (a zone once, never its polygon's facets)."""
+        return self.problem.dimension_of(self.recommendation.given_up)
+
+    @property
+    def rules(self) -> tuple[RuleEffect, ...]:
+        """The recommendation's rules with a zone's facets named by the zone."""
+        if self.problem.rows is None:
+            return self.recommendation.rules
+        return tuple(dataclasses.replace(r, dimensions=self.problem.dimension_of(r.dimensions)) if r.dimensions else r
+                     for r in self.recommendation.rules)
 
     @property
     def binding(self) -> tuple[str, ...]:
