@@ -256,12 +256,16 @@ class ProcessModel:
         return [d.id for d in self.dimensions]
 
     def register(self, key: str) -> Register:
-        """Look a register up by model ID or controller name (case-insensitive)."""
+        """Look a register up by model ID or controller name (case-insensitive).
+
+        In a multi-axis model a controller name shared by several components (``G54`` of
+        ``W1.X`` … ``W1.C``) names none of them: ``KeyError`` (give the component ID).
+        """
         for reg in self.registers:
             if reg.id == key:
                 return reg
         folded = key.strip().casefold()
-        for reg in self.registers:
-            if reg.register.casefold() == folded or reg.id.casefold() == folded:
-                return reg
+        found = [reg for reg in self.registers if reg.register.casefold() == folded or reg.id.casefold() == folded]
+        if len(found) == 1 or (found and not self.multi_axis):
+            return found[0]
         raise KeyError(key)
