@@ -38,10 +38,8 @@ def _features(rng: np.random.Generator, station: str) -> dict[str, dict]:
     feats = {}
     for i in range(6):
         pos = np.round(rng.uniform(-60, 60, 3), 1)
-        if rng.random() < 0.3:  # the 180° side of a tombstone
-            comp = {"x": -1.0, "y": 1.0, "z": -1.0, "c": -1.0}
-        else:
-            comp = {c: 1.0 for c in "xyzc"}
+        tombstone = rng.random() < 0.3  # the 180° side of a tombstone
+        comp = {"x": -1.0, "y": 1.0, "z": -1.0, "c": -1.0} if tombstone else dict.fromkeys("xyzc", 1.0)
         length = {"T1": 1.0} if i % 3 == 0 else ({"T2": 1.0} if i % 3 == 1 else {})
         radius = {"T1": float(rng.choice([-1.0, 1.0]))} if i % 2 == 0 else {}
         feats[f"{station}F{i}"] = {"pos": pos, "comp": comp, "length": length, "radius": radius,
@@ -120,7 +118,7 @@ def make_fixture(seed: int) -> Fixture:
         if d["kind"] == "position":
             dev = error @ d["columns"] + rng.normal(0, 0.004, 2)
             d["deviation"] = dev
-            rows += [(f"{d['name']} {a}", float(v), math.nan, math.nan) for a, v in zip(d["plane"], dev)]
+            rows += [(f"{d['name']} {a}", float(v), math.nan, math.nan) for a, v in zip(d["plane"], dev, strict=True)]
         else:
             dev = float(error @ d["column"] + rng.normal(0, 0.004))
             d["deviation"] = dev

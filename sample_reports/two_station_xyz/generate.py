@@ -101,14 +101,15 @@ def measured(station: str, err: dict[str, float], rng: random.Random) -> list[tu
         if kind == "position":
             for k, axis in enumerate(spec[2]):
                 n = AXES[axis]
-                d = sum(w * sum(a * b for a, b in zip(n, shift(station, f, err))) for f, w in feats.items())
+                d = sum(w * sum(a * b for a, b in zip(n, shift(station, f, err), strict=True))
+                        for f, w in feats.items())
                 rows.append((f"{station} {name} {'XY'[k]}", d + rng.gauss(0, 0.002), math.nan, math.nan))
             continue
         n = AXES[spec[2]] if isinstance(spec[2], str) else spec[2]
         d = 0.0
         for f, w in feats.items():
             radius = sum(v * err[f"{t}.R"] for t, v in FEATURES[f][2].items())
-            along = 0.0 if kind == "size" else sum(a * b for a, b in zip(n, shift(station, f, err)))
+            along = 0.0 if kind == "size" else sum(a * b for a, b in zip(n, shift(station, f, err), strict=True))
             d += w * (along + radius)
         rows.append((f"{station} {name}", d + rng.gauss(0, 0.002), spec[4], spec[5]))
     return rows

@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from collections.abc import Mapping
+from collections.abc import Collection, Mapping
 from dataclasses import dataclass
 from typing import Any
 
@@ -158,7 +158,7 @@ def expand_registers(p: Problems, doc: Mapping[str, Any], wks: list[Register], t
 
 
 def feature_relations(p: Problems, key: str, table: Mapping[str, Any], wks_ids: Mapping[str, Any],
-                      tool_ids: Mapping[str, Any], radius_ids: Mapping[str, Any]
+                      tool_ids: Mapping[str, Any], radius_ids: Collection[str]
                       ) -> tuple[dict[str, dict[str, float]], dict[str, float], dict[str, float]]:
     """A feature's ``wks`` (number or ``{x, y, z, c}`` per WKS), ``tools`` (length) and ``radius`` weights.
 
@@ -259,8 +259,9 @@ def dimension_geometry(p: Problems, key: str, table: Mapping[str, Any], default_
     components: tuple[str, ...] = ()
     if (not isinstance(names, list) or len(names) != 2
             or not all(isinstance(n, str) and n.strip() for n in names) or names[0].strip() == names[1].strip()):
-        p.add(f"{key}.components", f"expected the two report characteristics of the zone, e.g. "
-                                   f"[\"Hole 1 X\", \"Hole 1 Y\"], found {show(names) if names is not None else 'none'}")
+        found = show(names) if names is not None else "none"
+        p.add(f"{key}.components", "expected the two report characteristics of the zone, e.g. "
+                                   f"[\"Hole 1 X\", \"Hole 1 Y\"], found {found}")
     else:
         components = (names[0].strip(), names[1].strip())
     plane = _axis_list(p, f"{key}.axes", table.get("axes"), AXIS_NAMES, size=2) if "axes" in table else None

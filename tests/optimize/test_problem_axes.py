@@ -61,7 +61,7 @@ def test_zone_becomes_facets_mapped_back_to_one_dimension():
     assert len(problem.dimension_ids) == 2 + k and problem.rows is not None
     assert problem.dimension_of(problem.dimension_ids) == ("DY", "DX", "DP")
     assert 0 < problem.polygon <= 0.001
-    ids, dev, pred, lower, upper, margin = problem.dimension_table(np.zeros(3))
+    ids, dev, _, lower, upper, margin = problem.dimension_table(np.zeros(3))
     assert ids == ("DY", "DX", "DP")
     assert (dev[2], lower[2], upper[2], margin[2]) == pytest.approx((0.05, 0.0, 0.05, 0.0))
     x = np.array([-0.03, 0.04, 0.0])
