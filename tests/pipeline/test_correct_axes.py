@@ -133,3 +133,32 @@ def test_zone_with_one_component_missing_is_left_out(tmp_path):
     (cycle,) = correct_report(CorrectRequest(load_model(tmp_path / "model.toml")), tmp_path / "report.csv").cycles
     assert "D4" not in {row["id"] for row in cycle.dimension_rows()}
     assert any("only one of its components" in n.message for n in cycle.notes)
+
+
+def test_history_store_keyed_by_component(tmp_path):
+    from setupfix.errors import MatchError
+    from setupfix.pipeline.correct import load_request
+    from setupfix.pipeline.history import ImportRequest, import_history, record_recommendations
+    from setupfix.store import open_store
+
+    model = load_model(SAMPLE / "model.toml")
+    log = tmp_path / "log.csv"
+    log.write_text("timestamp,register,delta\n2026-11-21T09:00:00,W1.C,0.0012\n"
+                   "2026-11-21T09:00:00,T1.R,0.003\n", encoding="utf-8")
+    store_path = tmp_path / "h.db"
+    with open_store(store_path) as store:
+        summary = import_history(store, ImportRequest(reports=(str(SAMPLE / "cycle_01.csv"),),
+                                                      corrections=(str(log),), model=model))
+        assert summary.corrections == 2
+        # a controller name shared by a WKS's components names none of them
+        bad = tmp_path / "bad.csv"
+        bad.write_text("timestamp,register,delta\n2026-11-22T09:00:00,G54,0.001\n", encoding="utf-8")
+        with pytest.raises(MatchError, match="unknown register 'G54'.*W1.X"):
+            import_history(store, ImportRequest(corrections=(str(bad),), model=model))
+    request = load_request(model, store=store_path, solve=SolveOptions(time_limit=120))
+    (cycle,) = correct_report(request, SAMPLE / "cycle_02.csv").cycles
+    with open_store(store_path) as store:
+        record_recommendations(store, [cycle], model=SAMPLE / "model.toml", report=SAMPLE / "cycle_02.csv")
+        (stored,) = store.recommendations()
+    assert set(stored.result["corrections"]) == set(model.register_ids)
+    assert stored.result["corrections"]["W1.C"] == pytest.approx(cycle.corrections["W1.C"])
