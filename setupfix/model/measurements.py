@@ -261,7 +261,8 @@ def match_parts(model: ProcessModel, table: pd.DataFrame, *, source: str = "<rep
                 units=tuple(units[i] if i >= 0 else "" for i in row_of),
                 suggestions={name: suggestions[name] for name in unmatched},
                 stations=tuple(dict.fromkeys(s for i in rows if (s := stations[i]) is not None)),
-                names=tuple(names[i] if i >= 0 else "" for i in row_of),
+                names=tuple(" + ".join(names[zone_rows[(q, k)]] for k in (0, 1)) if (q, 1) in zone_rows and i >= 0
+                            else names[i] if i >= 0 else "" for q, i in enumerate(row_of)),
                 zone=zone if zones else None,
             )
         )

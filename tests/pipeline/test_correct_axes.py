@@ -162,3 +162,30 @@ def test_history_store_keyed_by_component(tmp_path):
         (stored,) = store.recommendations()
     assert set(stored.result["corrections"]) == set(model.register_ids)
     assert stored.result["corrections"]["W1.C"] == pytest.approx(cycle.corrections["W1.C"])
+
+
+def test_triage_with_a_zone_holds_instead_of_counting_facets(tmp_path):
+    from setupfix.model import model_from_dict
+
+    doc = {
+        "process": {"name": "zone out", "axes": ["X", "Y"]},
+        "wks": {"W1": {"register": "G54"}},
+        "features": {"F1": {"wks": {"W1": 1}}, "F2": {"wks": {"W1": {"x": 1, "y": -1}}}},
+        "dimensions": {
+            "A": {"name": "A", "axis": "X", "features": {"F1": 1}, "nominal": 0, "lower": -0.02, "upper": 0.02},
+            "H": {"name": "H", "kind": "position", "components": ["H X", "H Y"], "axes": ["X", "Y"],
+                  "diameter": 0.04, "features": {"F2": 1}},
+        },
+    }
+    model = model_from_dict(doc)
+    # A wants W1.X = −0.05; the zone wants W1.X = +0.05: no correction brings both in
+    path = tmp_path / "r.csv"
+    path.write_text("characteristic,nominal,actual,deviation,part\nA,0,0.05,0.05,p\nH X,0,-0.05,-0.05,p\n"
+                    "H Y,0,0,0.0,p\n", encoding="utf-8")
+    (cycle,) = correct_report(CorrectRequest(model, solve=SolveOptions(time_limit=120)), path).cycles
+    assert cycle.recommendation.result.given_up  # the triage ran (it counts the zone's facets, not the zone)
+    assert cycle.verdict == "hold" and not any(cycle.corrections.values())
+    assert any(r.rule == "zone_triage" for r in cycle.rules)
+    assert all("#" not in d for r in cycle.rules for d in r.dimensions)
+    assert cycle.margin_after == pytest.approx(min(row["margin"] for row in cycle.dimension_rows()
+                                                   if row["id"] not in cycle.given_up))
