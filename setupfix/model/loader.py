@@ -26,6 +26,12 @@ program line).  Names are free text (the process name, a dimension's ``name``,
 ``aliases`` and ``group`` match reports whose names may hold anything): they load as
 written and every text table escapes them.
 
+Multi-axis models (``[process] axes``, spec *Multi-axis models*): the keys that only they may
+hold are read by :mod:`setupfix.model.axes` (registers expanded to components, per-component
+feature weights, radius weights, measuring directions, sizes and position zones); in a one-axis
+file those keys are refused as multi-axis keys and everything loads exactly as before.  The
+shared readers and the problem list are :mod:`setupfix.model.validate`'s.
+
 Optional tables parsed into typed fields: ``[safety]`` (:func:`setupfix.model.safety.parse_safety`
 → ``ProcessModel.safety``), ``[effects]`` (:func:`setupfix.model.effects.parse_effects` →
 ``ProcessModel.effects``) and the per-register keys of ``[wks.*]`` / ``[tools.*]``
@@ -55,10 +61,9 @@ from setupfix.model.process import (
     RegisterKind,
 )
 from setupfix.model.safety import REGISTER_KEYS, parse_register_policy, parse_safety
-from setupfix.model.slots import register_slots
 from setupfix.model.stations import expand_stations
-from setupfix.model.validate import (RANGES_MM, Problems, Ranges, control_free, is_number, number, show, table_of,
-                                     weights)
+from setupfix.model.validate import (RANGES_MM, Problems, Ranges, check_slots, control_free, is_number, number,
+                                     section_of, show, table_of, weights)
 from setupfix.units import LENGTH_UNITS
 
 __all__ = [
@@ -128,36 +133,11 @@ def _registers(p: Problems, doc: dict[str, Any], section: str, kind: RegisterKin
     return regs
 
 
-def _section(reg: Register) -> str:
-    return f"{'wks' if reg.kind == 'wks' else 'tools'}.{reg.base}"
-
-
-def _check_slots(p: Problems, registers: list[Register]) -> None:
-    """Two registers addressing one controller slot (``H5``/``H05``, ``G110``/``G154 P1``, ``number``)."""
-    owner: dict[str, Register] = {}
-    seen: set[tuple[str, str]] = set()
-    for reg in registers:
-        if (reg.base, reg.register) in seen:  # the components of one WKS share its register
-            continue
-        seen.add((reg.base, reg.register))
-        number_ = None if reg.component == "R" else reg.policy.number  # a radius register names its own slot
-        for slot in sorted(register_slots(reg.kind, reg.register, number_, reg.policy.edge)):
-            first = owner.setdefault(slot, reg)
-            if first is not reg:
-                line = p.line_of(p._where(f"{_section(first)}.register"))
-                p.add(f"{_section(reg)}.register",
-                      f"register {reg.register!r} addresses the controller slot {slot}, also used by "
-                      f"{first.id} ([{_section(first)}]{f' line {line}' if line else ''}, register {first.register!r}"
-                      + (f", number = {first.policy.number}" if first.policy.number is not None else "")
-                      + "): a program would write both corrections to one offset")
-                break
-
-
 def _check_resolution(p: Problems, resolution: float, limit: float, registers: list[Register],
                       dimensions: list[Dimension], unit: str) -> None:
     """Resolution against the limits (the process's, then each register's own) and the tolerance bands."""
     checks = [("process.limit", limit)] + [
-        (f"{_section(reg)}.{'radius_limit' if reg.component == 'R' else 'limit'}", reg.limit)
+        (f"{section_of(reg)}.{'radius_limit' if reg.component == 'R' else 'limit'}", reg.limit)
         for reg in registers if reg.limit != limit and reg.component != "C"]  # a rotation: degrees (axes.py)
     checks = list(dict.fromkeys(checks))
     for key, lim in checks:
@@ -234,7 +214,7 @@ def model_from_dict(doc: Mapping[str, Any], source: str = "<model>", text: str |
         if doc.get("machine"):
             p.add("machine", "machine points are not supported in a multi-axis model (correct the WKS directly)")
     radius_ids = {r.base for r in tools if r.component == "R"}
-    _check_slots(p, [*wks, *tools])
+    check_slots(p, [*wks, *tools])
     if not wks and not tools:
         p.add("wks", "the model declares no WKS and no tool: nothing to correct")
 

@@ -17,10 +17,12 @@ from collections.abc import Mapping
 from typing import Any
 
 from setupfix.errors import ModelError, SourceLocation
+from setupfix.model.process import Register
+from setupfix.model.slots import register_slots
 from setupfix.units import length_factor
 
 __all__ = ["RANGES_MM", "MAX_WEIGHT", "Lines", "Problems", "show", "is_number", "number", "control_free",
-           "table_of", "weights", "Ranges"]
+           "table_of", "weights", "Ranges", "section_of", "check_slots"]
 
 #: Allowed ranges of lengths [mm], converted to the model unit when checked.
 RANGES_MM: dict[str, tuple[float, float]] = {
@@ -177,3 +179,29 @@ class Ranges:
         f = length_factor("mm", unit)
         self.unit = f" {unit}"
         self.of = {name: (lo * f, hi * f) for name, (lo, hi) in RANGES_MM.items()}
+
+
+def section_of(reg: Register) -> str:
+    """The table a register (component) comes from: ``wks.W1`` for ``W1.X``."""
+    return f"{'wks' if reg.kind == 'wks' else 'tools'}.{reg.base}"
+
+
+def check_slots(p: Problems, registers: list[Register]) -> None:
+    """Two registers addressing one controller slot (``H5``/``H05``, ``G110``/``G154 P1``, ``number``)."""
+    owner: dict[str, Register] = {}
+    seen: set[tuple[str, str]] = set()
+    for reg in registers:
+        if (reg.base, reg.register) in seen:  # the components of one WKS share its register
+            continue
+        seen.add((reg.base, reg.register))
+        number_ = None if reg.component == "R" else reg.policy.number  # a radius register names its own slot
+        for slot in sorted(register_slots(reg.kind, reg.register, number_, reg.policy.edge)):
+            first = owner.setdefault(slot, reg)
+            if first is not reg:
+                line = p.line_of(p._where(f"{section_of(first)}.register"))
+                p.add(f"{section_of(reg)}.register",
+                      f"register {reg.register!r} addresses the controller slot {slot}, also used by "
+                      f"{first.id} ([{section_of(first)}]{f' line {line}' if line else ''}, register {first.register!r}"
+                      + (f", number = {first.policy.number}" if first.policy.number is not None else "")
+                      + "): a program would write both corrections to one offset")
+                break
