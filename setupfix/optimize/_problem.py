@@ -11,11 +11,10 @@ problem in the same form as a one-axis one, so that every optimiser solves it un
 * **circular position zones** (margin R − ‖δ + d‖) become k one-sided rows, the facets of the
   regular k-gon inscribed in the circle: n_j · (δ + d) / cos(π/k) ≤ R, j = 0 … k−1, with
   n_j = (cos 2πj/k, sin 2πj/k) in the zone's plane.  The polygon margin min_j (R − n_j·v/cos(π/k))
-  is never above the circle's R − ‖v‖ and below it by at most ‖v‖ (1/cos(π/k) − 1); k is the
-  least (≥ 8) that keeps this at most :data:`ZONE_TOLERANCE_MM` for every ‖v‖ ≤ R − min(0, f1),
+  is never above the circle's R − ‖v‖ and below it by at most ‖v‖ (1/cos(π/k) − 1) (:mod:`setupfix.zones`);
+  k is the least (≥ 8) keeping this ≤ :data:`~setupfix.zones.ZONE_TOLERANCE_MM` for every ‖v‖ ≤ R − min(0, f1),
   f1 the true error budget before the correction (every correction at least as good as none):
-  :attr:`CorrectionProblem.polygon` is the bound, :attr:`CorrectionProblem.rows` maps each facet
-  row back to its zone.
+  :attr:`CorrectionProblem.polygon` is the bound, :attr:`CorrectionProblem.rows` maps facets to zones.
 """
 
 from __future__ import annotations

@@ -153,7 +153,7 @@ def test_history_store_keyed_by_component(tmp_path):
         # a controller name shared by a WKS's components names none of them
         bad = tmp_path / "bad.csv"
         bad.write_text("timestamp,register,delta\n2026-11-22T09:00:00,G54,0.001\n", encoding="utf-8")
-        with pytest.raises(MatchError, match="unknown register 'G54'.*W1.X"):
+        with pytest.raises(MatchError, match=r"unknown register 'G54'.*W1\.X"):
             import_history(store, ImportRequest(corrections=(str(bad),), model=model))
     request = load_request(model, store=store_path, solve=SolveOptions(time_limit=120))
     (cycle,) = correct_report(request, SAMPLE / "cycle_02.csv").cycles
