@@ -189,3 +189,23 @@ def test_triage_with_a_zone_holds_instead_of_counting_facets(tmp_path):
     assert all("#" not in d for r in cycle.rules for d in r.dimensions)
     assert cycle.margin_after == pytest.approx(min(row["margin"] for row in cycle.dimension_rows()
                                                    if row["id"] not in cycle.given_up))
+
+
+def test_view_and_text_rows_speak_components(tmp_path):
+    from setupfix.pipeline.present import format_correction
+    from setupfix.pipeline.view import dimension_rows, register_rows, summary
+
+    _, model, cycle = solve(tmp_path, 2)
+    regs = register_rows(cycle, current={"W1.C": 0.5, "G54": 9.0})
+    assert [r.id for r in regs] == model.register_ids
+    by = {r.id: r for r in regs}
+    assert by["W1.C"].component == "C" and by["W1.C"].current == 0.5
+    assert by["W1.X"].current is None  # G54 names every component of W1: none of them
+    assert by["W1.C"].delta == pytest.approx(cycle.corrections["W1.C"])
+    names = [r.name for r in dimension_rows(cycle)]
+    assert len(names) == len(set(names)) == len(model.dimensions)
+    assert summary(cycle).margin_after == pytest.approx(cycle.margin_after)
+    text = format_correction(cycle)
+    assert "per register component" in text
+    line = next(t for t in text.splitlines() if t.strip().startswith("W1.C"))
+    assert len(line.split()[2].split(".")[1]) == 4  # degrees on the 0.0001° grid
