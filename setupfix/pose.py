@@ -362,6 +362,9 @@ def pose_problem(model: ProcessModel, part: PartMeasurement, *, smoothed: Smooth
                else CorrectionProblem.from_part(model, dataclasses.replace(part, deviation=deviation), composite))
     if relation_note is not None:
         notes.append(relation_note)
+    if problem.circles is not None and deviation is not part.deviation:
+        notes.append(Note("position zones are corrected on their components as measured (the smoothing and the "
+                          "forecast act on the other dimensions only)", None, "zone"))
     if problem.polygon > 0:
         notes.append(Note(f"position zones solved on inscribed polygons: their margins are within "
                           f"{problem.polygon:.2g} {model.unit} of the circle's (every margin shown is the circle's)",
