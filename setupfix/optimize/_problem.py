@@ -129,7 +129,7 @@ class CorrectionProblem:
         # Bounds are snapped inwards onto the grid so that every grid point inside is allowed.
         lb = np.ceil(limits[:, 0] / h - 1e-9) * h
         ub = np.floor(limits[:, 1] / h + 1e-9) * h
-        comp = comp * scale[:, None]
+        comp = comp * scale[:, None] if np.any(scale != 1.0) else comp
         zone = part.zone
         is_zone = np.array([d.zone for d in model.dimensions], dtype=bool)
         keep = part.measured
