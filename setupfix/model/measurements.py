@@ -279,7 +279,8 @@ def suggest_names(model: ProcessModel, name: str, n: int = 3) -> tuple[str, ...]
     ``SP_00_Z`` / ``SP-00_Z``) come first, then the closest by
     :func:`difflib.get_close_matches` (ratio ≥ 0.6) when there is no such name.
     """
-    names = list(dict.fromkeys(n_ for d in model.dimensions for n_ in (d.name, *d.aliases)))
+    names = list(dict.fromkeys(n_ for d in model.dimensions
+                               for n_ in ((*d.components,) if d.zone else (d.name, *d.aliases))))
     skeleton = _PUNCT.sub("", name).casefold()
     exact = [m for m in names if _PUNCT.sub("", m).casefold() == skeleton] if skeleton else []
     if exact:

@@ -177,3 +177,21 @@ def test_direction_is_normalised_within_tolerance(tmp_path):
 def test_machine_points_refused_in_multi_axis(tmp_path):
     lines = refused(tmp_path, BASE + '\n[machine.M1]\nwks = { W1 = 1 }\n')
     assert any("machine" in line and "multi-axis" in line for line in lines)
+
+
+def test_zone_components_match_and_are_suggested(tmp_path):
+    import numpy as np
+    import pandas as pd
+
+    from setupfix.model import match_parts, suggest_names
+
+    m = load(tmp_path, BASE)
+    table = pd.DataFrame({"characteristic": ["hole  x", "HOLE Y", "Height", "Hole1 X"],
+                          "deviation": [0.03, -0.04, 0.01, 0.0], "unit": "mm"})
+    (part,) = match_parts(m, table)
+    q = [d.id for d in m.dimensions].index("D4")
+    assert part.zone is not None and part.zone[q].tolist() == [0.03, -0.04]
+    assert part.deviation[q] == pytest.approx(0.05)
+    assert np.isnan(part.zone[0]).all()
+    assert part.unmatched == ("Hole1 X",) and suggest_names(m, "Hole1 X")[0] == "Hole X"
+    assert part.names[q] == "hole  x + HOLE Y"
