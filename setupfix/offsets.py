@@ -91,6 +91,11 @@ def offset_rows(model: ProcessModel, corrections: Mapping[str, float], *, report
                 current: Mapping[str, float] | None = None, verdict: str = "") -> list[OffsetRow]:
     """Rows for every correctable (non-fixed) register of ``model``, in model order.
 
+    In a multi-axis model one row per register component: ``id`` the component ID (``W1.X``,
+    ``W1.C``, ``T5``, ``T5.R``), ``axis`` the component (X, Y, Z, C; a tool length the spindle axis;
+    R a radius), ``resolution`` :meth:`~setupfix.model.ProcessModel.resolution_of` (a C row in
+    degrees).
+
     ``current`` maps register IDs to the controller's current values (all of them:
     see :func:`parsers.current.read_current`); rows become ``set`` rows.
 
@@ -99,12 +104,13 @@ def offset_rows(model: ProcessModel, corrections: Mapping[str, float], *, report
     MatchError
         If ``current`` is given but lacks a correctable register.
     """
-    digits = grid_decimals(model.resolution)
     rows = []
     for reg in model.registers:
         if reg.fixed:
             continue
         policy = reg.policy
+        resolution = model.resolution_of(reg)
+        digits = grid_decimals(resolution)
         delta = round(float(corrections.get(reg.id, 0.0)), digits) + 0.0  # + 0.0 turns -0.0 into 0.0
         now = value = None
         if current is not None:
@@ -112,8 +118,8 @@ def offset_rows(model: ProcessModel, corrections: Mapping[str, float], *, report
                 raise MatchError(f"no current value for register {reg.register} ({reg.id}) in the current offsets")
             now = float(current[reg.id]) + 0.0
             value = round(now + delta, 9) + 0.0
-        rows.append(OffsetRow(report, part, reg.id, reg.register, reg.kind, model.axis, delta, model.unit,
-                              "add" if current is None else "set",
+        rows.append(OffsetRow(report, part, reg.id, reg.register, reg.kind, reg.component or model.axis, delta,
+                              model.unit, "add" if current is None else "set",
                               reg.offset, now, value,
-                              policy.number, policy.edge, model.resolution, verdict))
+                              policy.number, policy.edge, resolution, verdict))
     return rows

@@ -137,17 +137,22 @@ def policy_of(model: ProcessModel, dimension_ids: tuple[str, ...],
     s = model.safety
     regs = [r.policy for r in model.registers]
     band = s.dead_band if s.dead_band is not None else 2 * model.resolution
+    # A rotation component lives on the problem's grid scaled by h/ρ (CorrectionProblem.scale): its
+    # applied total is scaled alike, its dead band is two of its steps, it has no cumulative limit.
+    scale = np.array([model.resolution_of(r) / model.resolution for r in model.registers])
+    rotation = np.array([r.component == "C" for r in model.registers], dtype=bool)
     dims = {d.id: d for d in model.dimensions}
     width = np.array([dims[d].upper - dims[d].lower for d in dimension_ids])
     reject = np.array([s.dimension_reject_band.get(d, s.reject_band if s.reject_band is not None else w)
                        for d, w in zip(dimension_ids, width, strict=True)], dtype=float)
     cum_limit = [p.cumulative_limit if p.cumulative_limit is not None else s.cumulative_limit for p in regs]
     return Policy(
-        dead_band=np.array([p.dead_band if p.dead_band is not None else band for p in regs], dtype=float),
+        dead_band=np.where(rotation, 2 * model.resolution,
+                           np.array([p.dead_band if p.dead_band is not None else band for p in regs], dtype=float)),
         gain=np.array([p.gain if p.gain is not None else s.gain for p in regs], dtype=float),
-        cumulative_limit=np.array([np.inf if c is None or r.id not in (cumulative or {}) else c
+        cumulative_limit=np.array([np.inf if c is None or r.id not in (cumulative or {}) or r.component == "C" else c
                                    for c, r in zip(cum_limit, model.registers, strict=True)], dtype=float),
-        cumulative=np.array([float((cumulative or {}).get(r.id, 0.0)) for r in model.registers]),
+        cumulative=np.array([float((cumulative or {}).get(r.id, 0.0)) for r in model.registers]) / scale,
         cost=np.array([p.cost for p in regs], dtype=float),
         reject_band=np.nan_to_num(reject, nan=np.inf, posinf=np.inf),
         uncertainty=np.array([s.dimension_uncertainty.get(d, s.uncertainty) for d in dimension_ids], dtype=float),
@@ -260,14 +265,20 @@ def coverage(model: ProcessModel, part: PartMeasurement, composite: Array | None
         ``stand_in`` and ``coverage`` where they changed anything.
     """
     absent = ~part.measured
+    is_zone = np.array([d.zone for d in model.dimensions], dtype=bool)
+    if part.zone is not None and is_zone.any():  # a zone is measured only with both its components
+        absent = absent | (is_zone & np.isnan(part.zone).any(axis=1))
     rules: list[RuleEffect] = []
     if not absent.any():
         return part, np.zeros(len(model.registers), dtype=bool), rules
-    composite = relation_matrices(model).composite if composite is None else np.asarray(composite, dtype=float)
+    rel = relation_matrices(model)
+    composite = rel.composite if composite is None else np.asarray(composite, dtype=float)
+    if rel.zones is not None:  # a zone's column of C is zero: its components' columns say what moves it
+        composite = composite + np.abs(rel.zones).sum(axis=2)
     ids = np.array([d.id for d in model.dimensions], dtype=object)
     names = {d.id: d.name for d in model.dimensions}
     if stand_in is not None:
-        stands = absent & np.isfinite(stand_in)
+        stands = absent & np.isfinite(stand_in) & ~is_zone  # a radial distance alone cannot stand in for a zone
         if stands.any():
             part = dataclasses.replace(part, deviation=np.where(stands, stand_in, part.deviation))
             absent = absent & ~stands
@@ -325,8 +336,14 @@ def pose_problem(model: ProcessModel, part: PartMeasurement, *, smoothed: Smooth
         if smoothed is not None:
             smoothed = dataclasses.replace(smoothed, deviation=np.where(np.isnan(smoothed.deviation),
                                                                         part.deviation, smoothed.deviation))
+    if composite is None:  # 3. effects: relations (replacing C)
+        composite, note = effects_composite(model)
+        relation_note = note
+    else:
+        relation_note = None
+    raw = CorrectionProblem.from_part(model, part, composite)
     keep = part.measured
-    measured = part.deviation[keep].copy()
+    measured = raw.deviation
     deviation = part.deviation
     notes: list[Note] = list(smoothed.notes) if smoothed is not None else []
     dim_ids = tuple(d.id for d, k in zip(model.dimensions, keep, strict=True) if k)
@@ -341,13 +358,17 @@ def pose_problem(model: ProcessModel, part: PartMeasurement, *, smoothed: Smooth
         moved = tuple(d for d, v in zip(dim_ids, shift[keep], strict=True) if v != 0)
         effects.append(RuleEffect("forecast", "deviations forecast to the next cycle by the model's [effects] "
                                   "(drift, wear)", dimensions=moved))
-    problem = CorrectionProblem.from_part(model, dataclasses.replace(part, deviation=deviation))
-    if composite is None:  # … and relations
-        composite, note = effects_composite(model)
-        if note is not None:
-            notes.append(note)
-    if composite is not None:
-        problem = dataclasses.replace(problem, composite=np.asarray(composite, dtype=float)[:, keep])
-    policy = policy if policy is not None else policy_of(model, problem.dimension_ids, cumulative)
+    problem = (raw if deviation is part.deviation
+               else CorrectionProblem.from_part(model, dataclasses.replace(part, deviation=deviation), composite))
+    if relation_note is not None:
+        notes.append(relation_note)
+    if problem.circles is not None and deviation is not part.deviation:
+        notes.append(Note("position zones are corrected on their components as measured (the smoothing and the "
+                          "forecast act on the other dimensions only)", None, "zone"))
+    if problem.polygon > 0:
+        notes.append(Note(f"position zones solved on inscribed polygons: their margins are within "
+                          f"{problem.polygon:.2g} {model.unit} of the circle's (every margin shown is the circle's)",
+                          SourceLocation(model.source, key="dimensions"), "zone"))
+    policy = policy if policy is not None else policy_of(model, problem.rows or problem.dimension_ids, cumulative)
     return pose_policy(problem, policy, measured=measured, effects=tuple(effects), notes=tuple(notes),
                        held=held if held.any() else None)

@@ -10,13 +10,23 @@ compensation system") and predicts the shifts of features and dimensions by
 with row vectors M, W, T of register changes.  For the decision vector
 x = [W_1 … W_|W|, T_1 … T_|T|] both equations collapse into one composite matrix
 C = [R_WF · R_FD ; R_TF · R_FD] of shape (|W| + |T|, |D|), so that D = x · C.
-Everything here is a pure function on arrays.
+
+A multi-axis model (``../shared/spec/process-model.md``, *Multi-axis models*) has one
+register per component (``W1.X`` … ``W1.C``, ``T5``, ``T5.R``) and vector feature shifts:
+
+    p_f = Σ_W A_fW t_W + Σ_W c_fW θ_W (π/180) (s × x_f) + Σ_T w_fT h_T s
+    d_q = Σ_f w_qf (n_q · p_f + Σ_T ρ_fT r_T)         (a size keeps only the ρ terms)
+
+still linear in the components, so C exists as well (:func:`feature_shifts`,
+:func:`projected_composite`); a circular position zone is not linear (its margin is
+R − ‖δ + d‖): its column of C is zero and its two component columns (along its plane
+axes) are :attr:`RelationMatrices.zones`.  Everything here is a pure function on arrays.
 """
 
 from __future__ import annotations
 
 import threading
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from functools import cached_property
 
 import numpy as np
@@ -32,6 +42,8 @@ __all__ = [
     "predict_features",
     "predict_dimensions",
     "null_space_directions",
+    "feature_shifts",
+    "projected_composite",
 ]
 
 Array = npt.NDArray[np.float64]
@@ -49,6 +61,12 @@ class RelationMatrices:
     R_FD : ndarray of shape (|F|, |D|)
     machines, wks, tools, features, dimensions : list of str
         IDs labelling the rows and columns.
+    multi : ndarray of shape (|W| + |T|, |D|) or None
+        A multi-axis model's composite (:func:`projected_composite`; R_WF and R_TF then hold
+        each component's weight on each feature, R_FD the w_qf, and C is not their product).
+    zones : ndarray of shape (|W| + |T|, |D|, 2) or None
+        Per unit change of each register, the change of a position zone's two components (along
+        its plane axes, :func:`projected_composite`); zeros for other dimensions.  None without zones.
     """
 
     R_MW: Array
@@ -60,10 +78,14 @@ class RelationMatrices:
     tools: list[str]
     features: list[str]
     dimensions: list[str]
+    multi: Array | None = field(default=None)
+    zones: Array | None = field(default=None)
 
     @cached_property
     def composite(self) -> Array:
         """Composite matrix C, shape (|W| + |T|, |D|): D = [W, T] · C (computed once, read-only)."""
+        if self.multi is not None:
+            return self.multi
         return _read_only(composite_matrix(self.R_WF, self.R_TF, self.R_FD))
 
     @property
@@ -106,6 +128,8 @@ def relation_matrices(model: ProcessModel) -> RelationMatrices:
 
 
 def _relation_matrices(model: ProcessModel) -> RelationMatrices:
+    if model.multi_axis:
+        return _multi_axis_matrices(model)
     w_ix = {r.id: i for i, r in enumerate(model.wks)}
     t_ix = {r.id: i for i, r in enumerate(model.tools)}
     f_ix = {f.id: i for i, f in enumerate(model.features)}
@@ -245,3 +269,119 @@ def null_space_directions(composite: Array, tol: float = 1e-9) -> Array:
     rows = np.asarray(np.round(rows, 9) + 0.0, dtype=np.float64)
     rows[np.abs(rows) < tol] = 0.0
     return rows
+
+
+def feature_shifts(translation: Array, axis_unit: Array, rotation: Array, positions: Array, length: Array,
+                   spindle: Array) -> Array:
+    """Displacement of every feature per unit change of every register component.
+
+    p_f = Σ_W A_fW t_W + Σ_W c_fW θ_W (π/180) (s × x_f) + Σ_T w_fT h_T s (spec, *Multi-axis
+    models*), one row per component: a translation row has its weights in ``translation`` and its
+    axis in ``axis_unit``, a rotation row its weights in ``rotation``, a tool length row in ``length``.
+
+    Parameters
+    ----------
+    translation : ndarray of shape (R, F)
+        A_fW[a] for the translation component a of each row (0 elsewhere) [1].
+    axis_unit : ndarray of shape (R, 3)
+        Unit vector of each translation row's axis (any vector for the other rows) [1].
+    rotation : ndarray of shape (R, F)
+        c_fW of each rotation row (θ in degrees) [1].
+    positions : ndarray of shape (F, 3)
+        Nominal feature positions x_f in the WKS frame [unit]; NaN where unknown (only allowed
+        where ``rotation`` is 0: the loader refuses a rotated feature without a position).
+    length : ndarray of shape (R, F)
+        w_fT of each tool length row [1].
+    spindle : ndarray of shape (3,)
+        Unit vector s of the spindle axis.
+
+    Returns
+    -------
+    ndarray of shape (R, F, 3)
+        Feature displacement per unit of each component [unit per unit, unit per degree].
+    """
+    lever = np.cross(spindle, np.nan_to_num(positions)) * (np.pi / 180.0)  # (F, 3): s × x_f per degree
+    return (translation[:, :, None] * axis_unit[:, None, :] + rotation[:, :, None] * lever[None, :, :]
+            + length[:, :, None] * spindle[None, None, :])
+
+
+def projected_composite(shifts: Array, radius: Array, r_fd: Array, directions: Array, size: Array) -> Array:
+    """Dimension changes per unit of every component: d_q = Σ_f w_qf (n_q · p_f + Σ_T ρ_fT r_T).
+
+    Parameters
+    ----------
+    shifts : ndarray of shape (R, F, 3)
+        :func:`feature_shifts`.
+    radius : ndarray of shape (R, F)
+        ρ_fT of each tool radius row [1].
+    r_fd : ndarray of shape (F, Q)
+        w_qf, the features entering each dimension (or zone component).
+    directions : ndarray of shape (Q, 3)
+        Measuring direction n_q of each column (unit vectors).
+    size : bool ndarray of shape (Q,)
+        A size keeps only the radius terms.
+
+    Returns
+    -------
+    ndarray of shape (R, Q) [unit per unit or per degree]
+    """
+    moved = np.einsum("rfk,fq->rqk", shifts, r_fd)  # Σ_f w_qf p_f, (R, Q, 3)
+    along = np.einsum("rqk,qk->rq", moved, directions)
+    out: Array = np.where(size[None, :], 0.0, along) + radius @ r_fd
+    return out
+
+
+def _multi_axis_matrices(model: ProcessModel) -> RelationMatrices:
+    """The relation of a multi-axis model (module docstring): per-component weights and the composite."""
+    regs = model.registers
+    f_ix = {f.id: i for i, f in enumerate(model.features)}
+    n_r, n_f = len(regs), len(model.features)
+    translation, rotation, length, radius = (np.zeros((n_r, n_f)) for _ in range(4))
+    axis_unit = np.zeros((n_r, 3))
+    for r, reg in enumerate(regs):
+        for f, feat in enumerate(model.features):
+            if reg.kind == "wks":
+                weight = feat.components.get(reg.base, {}).get((reg.component or "").lower(), 0.0)
+                (rotation if reg.component == "C" else translation)[r, f] = weight
+            elif reg.component == "R":
+                radius[r, f] = feat.radius.get(reg.base, 0.0)
+            else:
+                length[r, f] = feat.tools.get(reg.base, 0.0)
+        if reg.component in _AXES:
+            axis_unit[r, _AXES.index(reg.component)] = 1.0
+    positions = np.array([f.position if f.position is not None else (np.nan,) * 3 for f in model.features],
+                         dtype=float).reshape(n_f, 3)
+    spindle = np.eye(3)[_AXES.index(model.spindle)]
+    shifts = feature_shifts(translation, axis_unit, rotation, positions, length, spindle)
+    dims = model.dimensions
+    r_fd = np.zeros((n_f, len(dims)))
+    for d, dim in enumerate(dims):
+        for fid, weight in dim.features.items():
+            r_fd[f_ix[fid], d] = weight
+    directions = np.array([dim.direction if dim.direction is not None else (0.0, 0.0, 0.0) for dim in dims],
+                          dtype=float).reshape(len(dims), 3)
+    size = np.array([dim.kind == "size" for dim in dims], dtype=bool)
+    composite = projected_composite(shifts, radius, r_fd, directions, size)
+    zones = None
+    is_zone = np.array([dim.zone for dim in dims], dtype=bool)
+    if is_zone.any():
+        composite[:, is_zone] = 0.0
+        zones = np.zeros((n_r, len(dims), 2))
+        for k in range(2):
+            plane = np.array([np.eye(3)[_AXES.index(dim.plane[k])] if dim.zone else np.zeros(3) for dim in dims])
+            zones[:, :, k] = np.where(is_zone[None, :],
+                                      projected_composite(shifts, radius, r_fd, plane, np.zeros(len(dims), bool)),
+                                      0.0)
+        zones = _read_only(zones)
+    return RelationMatrices(
+        R_MW=_read_only(np.zeros((0, len(model.wks)))),
+        R_WF=_read_only(translation[:len(model.wks)] + rotation[:len(model.wks)]),
+        R_TF=_read_only(length[len(model.wks):] + radius[len(model.wks):]),
+        R_FD=_read_only(r_fd),
+        machines=[], wks=[w.id for w in model.wks], tools=[t.id for t in model.tools],
+        features=[f.id for f in model.features], dimensions=[d.id for d in dims],
+        multi=_read_only(composite), zones=zones,
+    )
+
+
+_AXES = ("X", "Y", "Z")

@@ -26,6 +26,12 @@ program line).  Names are free text (the process name, a dimension's ``name``,
 ``aliases`` and ``group`` match reports whose names may hold anything): they load as
 written and every text table escapes them.
 
+Multi-axis models (``[process] axes``, spec *Multi-axis models*): the keys that only they may
+hold are read by :mod:`setupfix.model.axes` (registers expanded to components, per-component
+feature weights, radius weights, measuring directions, sizes and position zones); in a one-axis
+file those keys are refused as multi-axis keys and everything loads exactly as before.  The
+shared readers and the problem list are :mod:`setupfix.model.validate`'s.
+
 Optional tables parsed into typed fields: ``[safety]`` (:func:`setupfix.model.safety.parse_safety`
 → ``ProcessModel.safety``), ``[effects]`` (:func:`setupfix.model.effects.parse_effects` →
 ``ProcessModel.effects``) and the per-register keys of ``[wks.*]`` / ``[tools.*]``
@@ -37,15 +43,14 @@ from __future__ import annotations
 import functools
 import math
 import re
-import sys
 import tomllib
-import unicodedata
 from collections.abc import Mapping
 from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
 from setupfix.errors import ModelError, SourceLocation
+from setupfix.model import axes as multi_axis
 from setupfix.model.effects import parse_effects
 from setupfix.model.process import (
     Dimension,
@@ -56,9 +61,10 @@ from setupfix.model.process import (
     RegisterKind,
 )
 from setupfix.model.safety import REGISTER_KEYS, parse_register_policy, parse_safety
-from setupfix.model.slots import register_slots
 from setupfix.model.stations import expand_stations
-from setupfix.units import LENGTH_UNITS, length_factor
+from setupfix.model.validate import (RANGES_MM, Problems, Ranges, check_slots, control_free, is_number, number,
+                                     section_of, show, table_of, weights)
+from setupfix.units import LENGTH_UNITS
 
 __all__ = [
     "SECTIONS",
@@ -71,18 +77,8 @@ __all__ = [
 #: Optional top-level tables, each parsed into a typed field of the model (module docstring).
 SECTIONS: tuple[str, ...] = ("effects", "safety")
 
-#: Allowed ranges of lengths [mm], converted to the model unit when checked.
-RANGES_MM: dict[str, tuple[float, float]] = {
-    "resolution": (1e-6, 1.0),
-    "limit": (1e-6, 10.0),
-    "nominal": (-1e5, 1e5),
-    "tolerance": (-100.0, 100.0),
-    "position": (-1e5, 1e5),
-}
 #: Bound on ``limit / resolution``: register steps one correction may span.
 MAX_STEPS = 100_000
-#: Bound on the absolute value of a relation weight.
-MAX_WEIGHT = 1000.0
 #: A model file larger than this is refused before parsing.
 MAX_BYTES = 16 * 1024 * 1024
 
@@ -99,210 +95,51 @@ _KEYS = {
 _EXPANDED = {"stations", "template"}
 
 
-_HEADER = re.compile(r"^\s*\[\[?\s*([^\[\]]+?)\s*\]\]?\s*(?:#.*)?$")
-_ASSIGN = re.compile(r"""^\s*["']?([^"'=\s]+)["']?\s*=""")
-
-
-class _Lines:
-    """Line of a key path in the model's text: its own ``key =`` line, else its table's header.
-
-    Enough for the files people write (``[wks.W5]`` then ``register = …``); a key it
-    cannot place gets no line, only its key path.
-    """
-
-    def __init__(self, text: str | None) -> None:
-        self.tables: dict[str, int] = {}
-        self.assigned: dict[str, int] = {}
-        table = ""
-        for number, line in enumerate((text or "").splitlines(), 1):
-            header = _HEADER.match(line)
-            if header:
-                table = ".".join(part.strip().strip("\"'") for part in header.group(1).split("."))
-                self.tables.setdefault(table, number)
-                continue
-            assign = _ASSIGN.match(line)
-            if assign:
-                self.assigned.setdefault(f"{table}.{assign.group(1)}" if table else assign.group(1), number)
-
-    def __call__(self, key: str) -> int | None:
-        parts = key.split(".")
-        for n in range(len(parts), 0, -1):
-            head = ".".join(parts[:n])
-            if head in self.assigned:
-                return self.assigned[head]
-            if head in self.tables:
-                return self.tables[head]
-        return None
-
-
-class _Problems:
-    """Collects problems with their key paths (and lines, when the text is known)."""
-
-    def __init__(self, path: str, origin: Mapping[str, str] | None = None, text: str | None = None) -> None:
-        self.path = path
-        self.origin = origin or {}
-        self.items: list[ModelError] = []
-        self.line_of = _Lines(text)
-
-    def add(self, key: str, message: str) -> None:
-        where = self._where(key)
-        self.items.append(ModelError(message, location=SourceLocation(self.path, line=self.line_of(where),
-                                                                      key=where)))
-
-    def _where(self, key: str) -> str:
-        """Key path in the file as written (templated tables name their template and station)."""
-        parts = key.split(".")
-        for n in range(min(len(parts), 2), 1, -1):
-            head = ".".join(parts[:n])
-            if head in self.origin:
-                return ".".join([self.origin[head], *parts[n:]])
-        return key
-
-    def raise_if_any(self) -> None:
-        if self.items:
-            text = "\n".join(str(p) for p in self.items)
-            err = ModelError(text)
-            err.problems = tuple(self.items)
-            raise err
-
-
-def _show(value: Any) -> str:
-    """A value for a message: short, never failing (huge integers, deep tables)."""
-    if isinstance(value, int) and not isinstance(value, bool) and abs(value) > 10**15:
-        return f"an integer of {len(str(abs(value))) if value.bit_length() < 13000 else 'thousands of'} digits"
-    if isinstance(value, (dict, list)):
-        return f"a {'table' if isinstance(value, dict) else 'list'}"
-    text = repr(value)
-    return text if len(text) <= 60 else text[:57] + "..."
-
-
-def _is_number(value: Any) -> bool:
-    """A finite TOML number that fits a float."""
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
-        return False
-    if isinstance(value, int):
-        return abs(value) <= sys.float_info.max
-    return math.isfinite(value)
-
-
-def _number(p: _Problems, key: str, value: Any, *, positive: bool = False,
-            within: tuple[float, float] | None = None, unit: str = "") -> float | None:
-    if not _is_number(value):
-        why = "not finite or beyond the float range" if isinstance(value, (int, float)) and not isinstance(
-            value, bool) else "expected a number"
-        p.add(key, f"{why}, found {_show(value)}")
-        return None
-    number = float(value)
-    if positive and number <= 0:
-        p.add(key, f"must be > 0, found {_show(value)}")
-        return None
-    if within is not None and not within[0] <= number <= within[1]:
-        p.add(key, f"{number:g}{unit} is outside the allowed range [{within[0]:g}, {within[1]:g}]{unit}")
-        return None
-    return number
-
-
-def _control_free(p: _Problems, key: str, text: str, what: str) -> bool:
-    """An ID (table key, register name): no control character (a table row, a program line would break).
-
-    Control characters are Unicode categories Cc (tab, newline, escape …), Zl and Zp
-    (line and paragraph separators); other blanks (no-break space) are kept.
-    """
-    bad = next((c for c in text if unicodedata.category(c) in ("Cc", "Zl", "Zp")), None)
-    if bad is None:
-        return True
-    p.add(key, f"{what} {text!r} holds the control character U+{ord(bad):04X}; IDs and names are one "
-               "line of printable text")
-    return False
-
-
-def _table(p: _Problems, key: str, value: Any) -> dict[str, Any]:
-    if not isinstance(value, Mapping):
-        p.add(key, f"expected a table, found {type(value).__name__}")
-        return {}
-    return dict(value)
-
-
-def _check_keys(p: _Problems, section: str, key: str, table: Mapping[str, Any]) -> None:
+def _check_keys(p: Problems, section: str, key: str, table: Mapping[str, Any], multi: bool = False) -> None:
     allowed_here = _KEYS[section] | (set(REGISTER_KEYS) if section in ("wks", "tools") else set())
+    extra = multi_axis.MULTI_KEYS.get(section, frozenset())
+    if multi:
+        allowed_here = allowed_here | extra
     for name in table:
-        if name not in allowed_here:
+        if name in extra and not multi:
+            p.add(f"{key}.{name}", "a multi-axis key: only in a model whose [process] table has axes = [...]")
+        elif name not in allowed_here:
             allowed = ", ".join(sorted(allowed_here - _FREE_TEXT))
             p.add(f"{key}.{name}", f"unknown key (expected one of: {allowed})")
 
 
-def _weights(p: _Problems, key: str, value: Any, known: Mapping[str, Any], what: str) -> dict[str, float]:
-    out: dict[str, float] = {}
-    for ref, weight in _table(p, key, value).items():
-        if ref not in known:
-            p.add(f"{key}.{ref}", f"unknown {what} {ref!r}")
-            continue
-        w = _number(p, f"{key}.{ref}", weight, within=(-MAX_WEIGHT, MAX_WEIGHT))
-        if w is not None and w != 0.0:
-            out[ref] = w
-    return out
-
-
-class _Ranges:
-    """The sanity ranges converted to the model unit."""
-
-    def __init__(self, unit: str) -> None:
-        f = length_factor("mm", unit)
-        self.unit = f" {unit}"
-        self.of = {name: (lo * f, hi * f) for name, (lo, hi) in RANGES_MM.items()}
-
-
-def _registers(p: _Problems, doc: dict[str, Any], section: str, kind: RegisterKind, limit: float,
-               ranges: _Ranges) -> list[Register]:
+def _registers(p: Problems, doc: dict[str, Any], section: str, kind: RegisterKind, limit: float,
+               ranges: Ranges, multi: bool = False) -> list[Register]:
     regs = []
-    for rid, raw in _table(p, section, doc.get(section, {})).items():
+    for rid, raw in table_of(p, section, doc.get(section, {})).items():
         key = f"{section}.{rid}"
-        table = _table(p, key, raw)
-        _check_keys(p, section, key, table)
-        _control_free(p, key, rid, "ID")
+        table = table_of(p, key, raw)
+        _check_keys(p, section, key, table, multi)
+        control_free(p, key, rid, "ID")
         name = table.get("register", rid)
         if not isinstance(name, str) or not name.strip():
-            p.add(f"{key}.register", f"expected a register name, found {_show(name)}")
+            p.add(f"{key}.register", f"expected a register name, found {show(name)}")
             name = rid
-        elif "register" in table and not _control_free(p, f"{key}.register", name, "register name"):
+        elif "register" in table and not control_free(p, f"{key}.register", name, "register name"):
             name = rid
-        lim = (_number(p, f"{key}.limit", table["limit"], positive=True, within=ranges.of["limit"],
+        lim = (number(p, f"{key}.limit", table["limit"], positive=True, within=ranges.of["limit"],
                        unit=ranges.unit) if "limit" in table else limit)
         fixed = table.get("fixed", False)
         if not isinstance(fixed, bool):
-            p.add(f"{key}.fixed", f"expected true or false, found {_show(fixed)}")
+            p.add(f"{key}.fixed", f"expected true or false, found {show(fixed)}")
             fixed = False
         policy = parse_register_policy(table, functools.partial(_report_in, p, key))
         regs.append(Register(rid, kind, name.strip(), lim if lim is not None else limit, fixed, policy))
     return regs
 
 
-def _section(reg: Register) -> str:
-    return f"{'wks' if reg.kind == 'wks' else 'tools'}.{reg.id}"
-
-
-def _check_slots(p: _Problems, registers: list[Register]) -> None:
-    """Two registers addressing one controller slot (``H5``/``H05``, ``G110``/``G154 P1``, ``number``)."""
-    owner: dict[str, Register] = {}
-    for reg in registers:
-        for slot in sorted(register_slots(reg.kind, reg.register, reg.policy.number, reg.policy.edge)):
-            first = owner.setdefault(slot, reg)
-            if first is not reg:
-                line = p.line_of(p._where(f"{_section(first)}.register"))
-                p.add(f"{_section(reg)}.register",
-                      f"register {reg.register!r} addresses the controller slot {slot}, also used by "
-                      f"{first.id} ([{_section(first)}]{f' line {line}' if line else ''}, register {first.register!r}"
-                      + (f", number = {first.policy.number}" if first.policy.number is not None else "")
-                      + "): a program would write both corrections to one offset")
-                break
-
-
-def _check_resolution(p: _Problems, resolution: float, limit: float, registers: list[Register],
+def _check_resolution(p: Problems, resolution: float, limit: float, registers: list[Register],
                       dimensions: list[Dimension], unit: str) -> None:
     """Resolution against the limits (the process's, then each register's own) and the tolerance bands."""
     checks = [("process.limit", limit)] + [
-        (f"{'wks' if reg.kind == 'wks' else 'tools'}.{reg.id}.limit", reg.limit)
-        for reg in registers if reg.limit != limit]
+        (f"{section_of(reg)}.{'radius_limit' if reg.component == 'R' else 'limit'}", reg.limit)
+        for reg in registers if reg.limit != limit and reg.component != "C"]  # a rotation: degrees (axes.py)
+    checks = list(dict.fromkeys(checks))
     for key, lim in checks:
         if lim < resolution:
             p.add(key, f"limit {lim:g} {unit} is below the resolution {resolution:g} {unit}: no correction "
@@ -330,7 +167,7 @@ def model_from_dict(doc: Mapping[str, Any], source: str = "<model>", text: str |
         With one line per problem, each naming ``source`` and the key path.
     """
     expanded, origin, template_problems = expand_stations(doc)
-    p = _Problems(source, origin, text)
+    p = Problems(source, origin, text)
     for key, message in template_problems:
         p.add(key, message)
     doc = expanded
@@ -340,70 +177,85 @@ def model_from_dict(doc: Mapping[str, Any], source: str = "<model>", text: str |
             p.add(top, f"unknown table (expected one of: {', '.join(known)})")
     if "process" not in doc:
         p.add("process", "missing required table [process]")
-    proc = _table(p, "process", doc.get("process", {}))
-    _check_keys(p, "process", "process", proc)
+    proc = table_of(p, "process", doc.get("process", {}))
+    multi = "axes" in proc
+    _check_keys(p, "process", "process", proc, multi)
     name = proc.get("name")
     if "process" in doc and (not isinstance(name, str) or not name.strip()):
         p.add("process.name", "missing required process name")
     axis = proc.get("axis", "Z")
     if axis not in ("X", "Y", "Z"):
-        p.add("process.axis", f'expected "X", "Y" or "Z", found {_show(axis)}')
+        p.add("process.axis", f'expected "X", "Y" or "Z", found {show(axis)}')
     unit = proc.get("unit", "mm")
     if not isinstance(unit, str) or LENGTH_UNITS.get(unit.strip().lower()) is None:
-        p.add("process.unit", f'unknown unit {_show(unit)} (expected "mm" or "inch")')
+        p.add("process.unit", f'unknown unit {show(unit)} (expected "mm" or "inch")')
         unit = "mm"
     unit = LENGTH_UNITS[unit.strip().lower()]
-    ranges = _Ranges(unit)
-    resolution = _number(p, "process.resolution", proc.get("resolution", 0.001), positive=True,
+    ranges = Ranges(unit)
+    resolution = number(p, "process.resolution", proc.get("resolution", 0.001), positive=True,
                          within=ranges.of["resolution"], unit=ranges.unit)
-    limit = _number(p, "process.limit", proc.get("limit", 0.1), positive=True, within=ranges.of["limit"],
+    limit = number(p, "process.limit", proc.get("limit", 0.1), positive=True, within=ranges.of["limit"],
                     unit=ranges.unit)
 
     draft = proc.get("draft", False)
     if not isinstance(draft, bool):
-        p.add("process.draft", f"expected true or false, found {_show(draft)}")
+        p.add("process.draft", f"expected true or false, found {show(draft)}")
         draft = False
 
-    wks = _registers(p, doc, "wks", "wks", limit or 0.1, ranges)
-    tools = _registers(p, doc, "tools", "tool", limit or 0.1, ranges)
+    settings = multi_axis.parse_axes(p, proc) if multi else None
+    wks = _registers(p, doc, "wks", "wks", limit or 0.1, ranges, multi)
+    tools = _registers(p, doc, "tools", "tool", limit or 0.1, ranges, multi)
     wks_ids = {r.id: r for r in wks}
     tool_ids = {r.id: r for r in tools}
     for rid in wks_ids.keys() & tool_ids.keys():
         p.add(f"tools.{rid}", f"ID {rid!r} is declared both as a WKS and as a tool")
-    _check_slots(p, [*wks, *tools])
+    if settings is not None:
+        wks, tools = multi_axis.expand_registers(p, doc, wks, tools, settings, ranges)
+        if doc.get("machine"):
+            p.add("machine", "machine points are not supported in a multi-axis model (correct the WKS directly)")
+    radius_ids = {r.base for r in tools if r.component == "R"}
+    check_slots(p, [*wks, *tools])
     if not wks and not tools:
         p.add("wks", "the model declares no WKS and no tool: nothing to correct")
 
     machines = []
-    for mid, raw in _table(p, "machine", doc.get("machine", {})).items():
-        table = _table(p, f"machine.{mid}", raw)
-        _control_free(p, f"machine.{mid}", mid, "ID")
+    for mid, raw in table_of(p, "machine", doc.get("machine", {})).items():
+        table = table_of(p, f"machine.{mid}", raw)
+        control_free(p, f"machine.{mid}", mid, "ID")
         _check_keys(p, "machine", f"machine.{mid}", table)
-        machines.append(MachinePoint(mid, _weights(p, f"machine.{mid}.wks", table.get("wks", {}), wks_ids, "WKS")))
+        machines.append(MachinePoint(mid, weights(p, f"machine.{mid}.wks", table.get("wks", {}), wks_ids, "WKS")))
 
     features = []
-    for fid, raw in _table(p, "features", doc.get("features", {})).items():
+    for fid, raw in table_of(p, "features", doc.get("features", {})).items():
         key = f"features.{fid}"
-        table = _table(p, key, raw)
-        _control_free(p, key, fid, "ID")
-        _check_keys(p, "features", key, table)
-        fw = _weights(p, f"{key}.wks", table.get("wks", {}), wks_ids, "WKS")
-        ft = _weights(p, f"{key}.tools", table.get("tools", {}), tool_ids, "tool")
+        table = table_of(p, key, raw)
+        control_free(p, key, fid, "ID")
+        _check_keys(p, "features", key, table, multi)
+        fw: dict[str, float] = {}
+        components: dict[str, dict[str, float]] = {}
+        radius: dict[str, float] = {}
+        if multi:
+            components, ft, radius = multi_axis.feature_relations(p, key, table, wks_ids, tool_ids, radius_ids)
+        else:
+            fw = weights(p, f"{key}.wks", table.get("wks", {}), wks_ids, "WKS")
+            ft = weights(p, f"{key}.tools", table.get("tools", {}), tool_ids, "tool")
         pos = table.get("position")
         position = None
         if pos is not None:
             lo, hi = ranges.of["position"]
-            if isinstance(pos, list) and len(pos) == 3 and all(_is_number(v) and lo <= v <= hi for v in pos):
+            if isinstance(pos, list) and len(pos) == 3 and all(is_number(v) and lo <= v <= hi for v in pos):
                 position = (float(pos[0]), float(pos[1]), float(pos[2]))
             else:
                 p.add(f"{key}.position",
-                      f"expected [x, y, z] numbers within [{lo:g}, {hi:g}]{ranges.unit}, found {_show(pos)}")
-        features.append(Feature(fid, fw, ft, position))
+                      f"expected [x, y, z] numbers within [{lo:g}, {hi:g}]{ranges.unit}, found {show(pos)}")
+        features.append(Feature(fid, fw, ft, position, components, radius))
     feature_ids = {f.id: f for f in features}
     if not features:
         p.add("features", "the model declares no feature")
+    if multi:
+        multi_axis.check_rotation_positions(p, features, {r.base for r in wks if r.component == "C"})
 
-    dimensions = _dimensions(p, doc, feature_ids, ranges)
+    dimensions = _dimensions(p, doc, feature_ids, ranges, str(axis) if multi else None)
     if resolution is not None and not p.items:
         _check_resolution(p, resolution, limit or 0.1, [*wks, *tools], dimensions, unit)
     p.raise_if_any()
@@ -420,8 +272,11 @@ def model_from_dict(doc: Mapping[str, Any], source: str = "<model>", text: str |
         features=tuple(features),
         dimensions=tuple(dimensions),
         source=source,
-        spindle=str(axis),
+        axes=settings.axes if settings is not None else (),
+        spindle=settings.spindle if settings is not None else str(axis),
         draft=draft,
+        rotation_limit=settings.rotation_limit if settings is not None else 0.05,
+        rotation_resolution=settings.rotation_resolution if settings is not None else 0.0001,
     )
     if "effects" in doc:
         effects = parse_effects(doc["effects"], model, functools.partial(_report_in, p, "effects"))
@@ -433,49 +288,57 @@ def model_from_dict(doc: Mapping[str, Any], source: str = "<model>", text: str |
     return model
 
 
-def _report_in(p: _Problems, section: str, key: str, message: str) -> None:
+def _report_in(p: Problems, section: str, key: str, message: str) -> None:
     p.add(f"{section}.{key}" if key else section, message)
 
 
-def _dimensions(p: _Problems, doc: Mapping[str, Any], feature_ids: Mapping[str, Feature],
-                ranges: _Ranges) -> list[Dimension]:
+def _dimensions(p: Problems, doc: Mapping[str, Any], feature_ids: Mapping[str, Feature],
+                ranges: Ranges, axis: str | None = None) -> list[Dimension]:
+    """The ``[dimensions.*]`` tables; ``axis`` (the default measuring axis) only in a multi-axis model."""
+    multi = axis is not None
     dimensions = []
     seen_names: dict[tuple[str, str | None], str] = {}
-    for did, raw in _table(p, "dimensions", doc.get("dimensions", {})).items():
+    for did, raw in table_of(p, "dimensions", doc.get("dimensions", {})).items():
         key = f"dimensions.{did}"
-        table = _table(p, key, raw)
-        _check_keys(p, "dimensions", key, table)
-        _control_free(p, key, did, "ID")
+        table = table_of(p, key, raw)
+        _check_keys(p, "dimensions", key, table, multi)
+        control_free(p, key, did, "ID")
+        geometry = multi_axis.dimension_geometry(p, key, table, axis, ranges) if axis is not None else None
+        zone = geometry is not None and geometry.kind == "position"
         dname = table.get("name", did)
         if not isinstance(dname, str) or not dname.strip():
-            p.add(f"{key}.name", f"expected a name, found {_show(dname)}")
+            p.add(f"{key}.name", f"expected a name, found {show(dname)}")
             dname = did
         aliases = table.get("aliases", [])
         if not isinstance(aliases, list) or not all(isinstance(a, str) and a.strip() for a in aliases):
-            p.add(f"{key}.aliases", f"expected a list of names, found {_show(aliases)}")
+            p.add(f"{key}.aliases", f"expected a list of names, found {show(aliases)}")
             aliases = []
         group = table.get("group")
         if group is not None and not isinstance(group, str):
-            p.add(f"{key}.group", f"expected a string, found {_show(group)}")
+            p.add(f"{key}.group", f"expected a string, found {show(group)}")
             group = None
         sampled = table.get("sampled", False)  # not measured every cycle (coverage: pose_problem)
         if not isinstance(sampled, bool):
-            p.add(f"{key}.sampled", f"expected true or false, found {_show(sampled)}")
+            p.add(f"{key}.sampled", f"expected true or false, found {show(sampled)}")
             sampled = False
         if "features" not in table:
             p.add(f"{key}.features", "missing: which features enter this dimension")
-        fd = _weights(p, f"{key}.features", table.get("features", {}), feature_ids, "feature")
+        fd = weights(p, f"{key}.features", table.get("features", {}), feature_ids, "feature")
         values: dict[str, float | None] = {}
         for field_name in ("nominal", "lower", "upper"):
-            if field_name not in table:
+            if zone and (field_name != "nominal" or field_name not in table):
+                values[field_name] = 0.0 if field_name == "nominal" else None
+            elif field_name not in table:
                 what = "nominal value" if field_name == "nominal" else "tolerance limit"
                 p.add(f"{key}.{field_name}", f"missing {what}")
                 values[field_name] = None
             else:
                 within = ranges.of["nominal" if field_name == "nominal" else "tolerance"]
-                values[field_name] = _number(p, f"{key}.{field_name}", table[field_name], within=within,
+                values[field_name] = number(p, f"{key}.{field_name}", table[field_name], within=within,
                                              unit=ranges.unit)
         lo, up = values["lower"], values["upper"]
+        if geometry is not None and zone:
+            lo, up = 0.0, (geometry.diameter or 0.0) / 2 or None
         if lo is not None and up is not None and lo >= up:
             p.add(f"{key}.lower", f"lower limit {lo:g} must be below upper limit {up:g}")
         dim = Dimension(
@@ -489,7 +352,10 @@ def _dimensions(p: _Problems, doc: Mapping[str, Any], feature_ids: Mapping[str, 
             group=group,
             sampled=sampled,
         )
-        for k in dim.keys:
+        if geometry is not None:
+            dim = replace(dim, kind=geometry.kind, direction=geometry.direction, components=geometry.components,
+                          plane=geometry.plane, diameter=geometry.diameter)
+        for k in (*dim.keys, *dim.component_keys):
             if (k, group) in seen_names and seen_names[(k, group)] != did:
                 p.add(f"{key}.name", f"name {k!r} is also used by dimension {seen_names[(k, group)]}"
                       + (f" in group {group!r}" if group else ""))

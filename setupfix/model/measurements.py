@@ -76,6 +76,11 @@ class PartMeasurement:
         The parts (or stations) merged into this cycle, in report order.
     names : tuple of str
         The report's characteristic name matched to each dimension ("" where absent).
+    zone : ndarray of shape (n_dimensions, 2) or None
+        A multi-axis model's position zones: the signed deviations of each zone's two
+        component characteristics (along its plane axes, model unit); NaN for every other
+        dimension.  ``deviation`` holds the zone's radial distance ‖(δ1, δ2)‖.  None when the
+        model has no zone.
     """
 
     part: str
@@ -93,6 +98,7 @@ class PartMeasurement:
     suggestions: dict[str, tuple[str, ...]] = field(default_factory=dict)
     stations: tuple[str, ...] = ()
     names: tuple[str, ...] = ()
+    zone: npt.NDArray[np.float64] | None = None
 
     @property
     def measured(self) -> npt.NDArray[np.bool_]:
@@ -100,11 +106,15 @@ class PartMeasurement:
         return ~np.isnan(self.deviation)
 
 
-def _lookup(model: ProcessModel) -> dict[str, list[tuple[int, str | None]]]:
-    table: dict[str, list[tuple[int, str | None]]] = {}
+def _lookup(model: ProcessModel) -> dict[str, list[tuple[int, str | None, int]]]:
+    """Normalised name → (dimension index, group, component): component −1 for a dimension's own name,
+    0 or 1 for a position zone's component characteristic."""
+    table: dict[str, list[tuple[int, str | None, int]]] = {}
     for i, dim in enumerate(model.dimensions):
         for key in dim.keys:
-            table.setdefault(key, []).append((i, dim.group))
+            table.setdefault(key, []).append((i, dim.group, -1))
+        for k, key in enumerate(dim.component_keys):
+            table.setdefault(key, []).append((i, dim.group, k))
     return table
 
 
@@ -159,8 +169,11 @@ def match_parts(model: ProcessModel, table: pd.DataFrame, *, source: str = "<rep
     row_factor = np.array([factors[u] for u in units], dtype=float)
     suggestions: dict[str, tuple[str, ...]] = {}
     parts: list[PartMeasurement] = []
+    zones = any(d.zone for d in model.dimensions)
     for key, rows in rows_of.items():
         deviation = np.full(n, np.nan)
+        zone = np.full((n, 2), np.nan)
+        zone_rows: dict[tuple[int, int], int] = {}
         given = np.full((3, n), np.nan)
         row_of = [-1] * n  # the table row matched to each dimension
         unmatched: list[str] = []
@@ -181,10 +194,16 @@ def match_parts(model: ProcessModel, table: pd.DataFrame, *, source: str = "<rep
             if not candidates:
                 unmatched.append(name)
                 continue
-            idx = candidates[0][0]
+            idx, comp = candidates[0][0], candidates[0][2]
             value = float(values[i]) * factors[units[i]]
             if not np.isfinite(value):
                 raise MatchError(f"characteristic {name!r} has no measured value", location=SourceLocation(where))
+            if comp >= 0:  # a position zone's component: the later row wins, as for a dimension
+                if (idx, comp) in zone_rows and not _later(stamps[zone_rows[(idx, comp)]], stamps[i]):
+                    continue
+                zone[idx, comp] = value
+                zone_rows[(idx, comp)] = i
+                continue
             if row_of[idx] >= 0:
                 earlier = row_of[idx]
                 if _later(stamps[earlier], stamps[i]):
@@ -198,6 +217,15 @@ def match_parts(model: ProcessModel, table: pd.DataFrame, *, source: str = "<rep
                     continue
             deviation[idx] = value
             row_of[idx] = i
+        for (idx, comp), i in zone_rows.items():
+            if not np.isnan(zone[idx]).any():
+                deviation[idx] = float(np.hypot(zone[idx, 0], zone[idx, 1]))
+                row_of[idx] = i
+            elif comp == 0 or (idx, 0) not in zone_rows:
+                dim = model.dimensions[idx]
+                notes.append(Note(f"position zone {dim.id} ({dim.name}): only one of its components "
+                                  f"{dim.components[0]!r}, {dim.components[1]!r} is in part {key or '(report)'}; "
+                                  "the zone is left out", SourceLocation(wheres[i]), "match"))
         if np.isnan(deviation).all():
             raise MatchError(
                 f"no characteristic of part {key or '(report)'} matches a model dimension"
@@ -210,6 +238,8 @@ def match_parts(model: ProcessModel, table: pd.DataFrame, *, source: str = "<rep
         taken = np.asarray(row_of)[matched]
         for k, column in enumerate((nominals, lowers, uppers)):
             given[k, matched] = column[taken] * row_factor[taken]
+        given[:, [idx for idx, _ in zone_rows]] = np.nan  # a zone's limits are its diameter, not the rows'
+        zone[np.isnan(deviation)] = np.nan
         unmatched = list(dict.fromkeys(unmatched))
         for name in unmatched:
             if name not in suggestions:
@@ -231,7 +261,9 @@ def match_parts(model: ProcessModel, table: pd.DataFrame, *, source: str = "<rep
                 units=tuple(units[i] if i >= 0 else "" for i in row_of),
                 suggestions={name: suggestions[name] for name in unmatched},
                 stations=tuple(dict.fromkeys(s for i in rows if (s := stations[i]) is not None)),
-                names=tuple(names[i] if i >= 0 else "" for i in row_of),
+                names=tuple(" + ".join(names[zone_rows[(q, k)]] for k in (0, 1)) if (q, 1) in zone_rows and i >= 0
+                            else names[i] if i >= 0 else "" for q, i in enumerate(row_of)),
+                zone=zone if zones else None,
             )
         )
     return parts
@@ -247,7 +279,8 @@ def suggest_names(model: ProcessModel, name: str, n: int = 3) -> tuple[str, ...]
     ``SP_00_Z`` / ``SP-00_Z``) come first, then the closest by
     :func:`difflib.get_close_matches` (ratio ≥ 0.6) when there is no such name.
     """
-    names = list(dict.fromkeys(n_ for d in model.dimensions for n_ in (d.name, *d.aliases)))
+    names = list(dict.fromkeys(n_ for d in model.dimensions
+                               for n_ in ((*d.components,) if d.zone else (d.name, *d.aliases))))
     skeleton = _PUNCT.sub("", name).casefold()
     exact = [m for m in names if _PUNCT.sub("", m).casefold() == skeleton] if skeleton else []
     if exact:

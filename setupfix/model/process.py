@@ -67,6 +67,9 @@ class Register:
         component the axis), a WKS rotation about the spindle (``W1.C``, degrees), a tool length
         (``T5``, component the spindle axis) or a tool radius (``T5.R``, register e.g. ``D5``).
         ``None`` in a one-axis model, where every register acts along ``ProcessModel.axis``.
+    owner : str or None
+        In a multi-axis model the ``[wks.ID]`` / ``[tools.ID]`` table the component comes from
+        (``W1`` for ``W1.X``); ``None`` in a one-axis model (see :attr:`base`).
     """
 
     id: str
@@ -76,6 +79,12 @@ class Register:
     fixed: bool = False
     policy: RegisterPolicy = field(default_factory=RegisterPolicy)
     component: str | None = None
+    owner: str | None = None
+
+    @property
+    def base(self) -> str:
+        """The ``[wks.ID]`` / ``[tools.ID]`` table this register (component) comes from."""
+        return self.owner if self.owner is not None else self.id
 
     @property
     def cost(self) -> float:
@@ -96,14 +105,26 @@ class MachinePoint:
     wks: dict[str, float] = field(default_factory=dict)
 
 
+#: Component keys of a multi-axis feature's per-WKS weights (``wks = {W1 = {x = 1, y = -1}}``).
+WKS_COMPONENTS: tuple[str, ...] = ("x", "y", "z", "c")
+
+
 @dataclass(frozen=True, slots=True)
 class Feature:
-    """A machined feature: a column of R_WF and R_TF."""
+    """A machined feature: a column of R_WF and R_TF.
+
+    In a multi-axis model (``../shared/spec/process-model.md``, *Multi-axis models*) ``wks``
+    is empty and ``components`` holds, per WKS ID, the weights ``{"x", "y", "z", "c"}`` (a
+    number in the file fills all four); ``tools`` holds the length weights (along the spindle)
+    and ``radius`` the radius weights ρ_fT by tool ID.
+    """
 
     id: str
     wks: dict[str, float] = field(default_factory=dict)
     tools: dict[str, float] = field(default_factory=dict)
     position: tuple[float, float, float] | None = None
+    components: dict[str, dict[str, float]] = field(default_factory=dict)
+    radius: dict[str, float] = field(default_factory=dict)
 
 
 @dataclass(frozen=True, slots=True)
@@ -115,6 +136,12 @@ class Dimension:
     ``sampled`` (model key ``sampled = true``): the dimension is not measured every
     cycle (a sampling plan), so a report without it does not hold the registers that
     move it (:func:`setupfix.pose.pose_problem`, coverage).
+
+    Multi-axis models only: ``direction`` is the measuring direction n_q (a unit vector:
+    the dimension's ``axis`` or ``direction``); ``kind`` is ``"length"``, ``"size"`` (only
+    radius changes move it) or ``"position"`` (a circular zone: ``components`` are the two
+    report characteristics giving its deviations along the ``plane`` axes, ``diameter`` its
+    size; ``lower`` is 0 and ``upper`` the radius, limits of the radial distance).
     """
 
     id: str
@@ -126,11 +153,28 @@ class Dimension:
     aliases: tuple[str, ...] = ()
     group: str | None = None
     sampled: bool = False
+    kind: str = "length"
+    direction: tuple[float, float, float] | None = None
+    components: tuple[str, ...] = ()
+    plane: tuple[str, ...] = ()
+    diameter: float | None = None
 
     @property
     def keys(self) -> tuple[str, ...]:
-        """Normalised names this dimension answers to."""
+        """Normalised names this dimension answers to (a position zone: none, see :attr:`component_keys`)."""
+        if self.kind == "position":
+            return ()
         return tuple(dict.fromkeys(normalise_name(n) for n in (self.name, *self.aliases)))
+
+    @property
+    def component_keys(self) -> tuple[str, ...]:
+        """Normalised names of a position zone's two component characteristics (empty otherwise)."""
+        return tuple(normalise_name(n) for n in self.components)
+
+    @property
+    def zone(self) -> bool:
+        """True for a circular position zone (``kind = "position"``)."""
+        return self.kind == "position"
 
 
 @dataclass(frozen=True, slots=True)
@@ -165,6 +209,8 @@ class ProcessModel:
     draft : bool
         ``[process] draft = true``: an unedited scaffold (``setupfix model init``); nothing is
         recommended from it until the user removes the key.
+    rotation_limit, rotation_resolution : float
+        Bound and grid step of a WKS rotation component (``W1.C``) [degrees].
     """
 
     name: str
@@ -183,11 +229,18 @@ class ProcessModel:
     axes: tuple[str, ...] = ()
     spindle: str = "Z"
     draft: bool = False
+    rotation_limit: float = 0.05
+    rotation_resolution: float = 0.0001
 
     @property
     def multi_axis(self) -> bool:
         """True for a model with ``process.axes`` (register components, see :class:`Register`)."""
         return bool(self.axes)
+
+    def resolution_of(self, register: Register) -> float:
+        """Grid step of one register component: ``rotation_resolution`` [degrees] for a rotation
+        (component ``"C"``), ``resolution`` [unit] for everything else."""
+        return self.rotation_resolution if register.component == "C" else self.resolution
 
     @property
     def registers(self) -> tuple[Register, ...]:
@@ -203,12 +256,16 @@ class ProcessModel:
         return [d.id for d in self.dimensions]
 
     def register(self, key: str) -> Register:
-        """Look a register up by model ID or controller name (case-insensitive)."""
+        """Look a register up by model ID or controller name (case-insensitive).
+
+        In a multi-axis model a controller name shared by several components (``G54`` of
+        ``W1.X`` … ``W1.C``) names none of them: ``KeyError`` (give the component ID).
+        """
         for reg in self.registers:
             if reg.id == key:
                 return reg
         folded = key.strip().casefold()
-        for reg in self.registers:
-            if reg.register.casefold() == folded or reg.id.casefold() == folded:
-                return reg
+        found = [reg for reg in self.registers if reg.register.casefold() == folded or reg.id.casefold() == folded]
+        if len(found) == 1 or (found and not self.multi_axis):
+            return found[0]
         raise KeyError(key)

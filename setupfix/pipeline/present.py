@@ -98,12 +98,15 @@ def format_correction(pc: CycleCorrection) -> str:
         dim = next(d for d in pc.model.dimensions if d.id == did)
         lines.append(f"{_one_line(dim.group or ''):<{st}}"[:st]
                      + f"{_one_line(dim.name):<{w}}{'absent from report: not in the objective':>50}")
-    lines += ["", f"corrections [{unit}], axis {pc.model.axis}:"]
-    digits = grid_decimals(pc.model.resolution)
+    model = pc.model
+    lines += ["", f"corrections [{unit}], axis {model.axis}:" if not model.multi_axis else
+              f"corrections [{unit}; a rotation .C in degrees], per register component:"]
+    digits = {reg.id: grid_decimals(model.resolution_of(reg)) for reg in model.registers}
+    width = max([6] + [len(reg.id) for reg in model.registers])
     for reg in pc.register_rows():
         note = "fixed" if reg["fixed"] else ("at limit" if reg["at_limit"] else "")
-        lines.append(f"  {reg['id']:<6} {reg['register']:<10} {reg['delta']:+.{digits}f}  {reg['offset']:<8} {note}"
-                     .rstrip())
+        lines.append(f"  {reg['id']:<{width}} {reg['register']:<10} {reg['delta']:+.{digits[reg['id']]}f}  "
+                     f"{reg['offset']:<8} {note}".rstrip())
     if pc.thermal is not None:
         lines.append(pc.thermal.line())
     lines += [
@@ -116,12 +119,12 @@ def format_correction(pc: CycleCorrection) -> str:
     names = {d.id: _one_line(d.name) for d in pc.model.dimensions}
     if pc.binding:
         lines.append("binding (what stops a better correction): " + ", ".join(names[b] for b in pc.binding))
-    if pc.recommendation.given_up:
+    if pc.given_up:
         lines.append("given up (need the NC program or the process, not the setup): "
-                     + short_list((names[b] for b in pc.recommendation.given_up), TEXT_LIST))
+                     + short_list((names[b] for b in pc.given_up), TEXT_LIST))
     if pc.verdict != "reject":
         lines.append(r.message)
-    for rule in pc.recommendation.rules:
+    for rule in pc.rules:
         what = short_list([*rule.registers, *(names.get(d, d) for d in rule.dimensions)], TEXT_LIST)
         lines.append(f"rule {rule.rule}: {rule.message}" + (f" [{what}]" if what else ""))
     lines += note_lines(pc.notes)
@@ -149,14 +152,14 @@ def cycle_json(pc: CycleCorrection) -> dict[str, Any]:
         "bonus": round(pc.margin_after - pc.margin_before, digits),
         "norm": round(pc.norm, digits),
         "bound": None if r.bound is None else round(r.bound, digits),
-        "in_tolerance": pc.margin_after >= 0 and not rec.given_up,
+        "in_tolerance": pc.margin_after >= 0 and not pc.given_up,
         "message": r.message,
         "corrections": {k: round(v, digits) for k, v in pc.corrections.items()},
         "registers": [{**row, "delta": round(row["delta"], digits)} for row in pc.register_rows()],
         "binding": [names[b] for b in pc.binding],
-        "given_up": [names[b] for b in rec.given_up],
+        "given_up": [names[b] for b in pc.given_up],
         "at_limit": list(rec.at_limit),
-        "rules": [e.to_json() for e in rec.rules],
+        "rules": [e.to_json() for e in pc.rules],
         "dimensions": [
             {k: (round(v, digits) if isinstance(v, float) and np.isfinite(v) else
                  (None if isinstance(v, float) else v))
@@ -169,7 +172,8 @@ def cycle_json(pc: CycleCorrection) -> dict[str, Any]:
         "warnings": note_lines(pc.notes),
         "evaluations": r.evaluations,
         "seconds": round(r.seconds, 6),
-    } | ({"thermal": pc.thermal.to_json()} if pc.thermal is not None else {})
+    } | ({"thermal": pc.thermal.to_json()} if pc.thermal is not None else {}) | (
+        {"zone_polygon_error": pc.problem.polygon} if pc.problem.circles is not None else {})
 
 
 def _finite(value: object) -> float | None:

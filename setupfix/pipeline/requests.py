@@ -10,6 +10,7 @@ Every request is picklable (batch sends it to worker processes).
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -25,8 +26,7 @@ from setupfix.optimize import OPTIMIZERS, CorrectionProblem, OptimizeResult, get
 from setupfix.pipeline.cycles import ReadOptions
 from setupfix.pipeline.smoothing import History
 from setupfix.pose import PosedProblem
-from setupfix.recommend import budget
-from setupfix.safety import Recommendation
+from setupfix.safety import Recommendation, RuleEffect
 
 if TYPE_CHECKING:  # the thermal modules bring scipy.signal (~0.5 s): loaded only with --thermal
     from parsers.temperature import TemperatureLog
@@ -255,8 +255,17 @@ class CycleCorrection:
 
     @property
     def x(self) -> Array:
-        """Applied changes of every register (model order), zero unless the verdict is apply."""
+        """Applied changes of every register (model order) in problem units, zero unless the verdict is apply.
+
+        A rotation component is scaled onto the problem's grid (:attr:`CorrectionProblem.scale`);
+        :attr:`values` holds the register values (degrees for a rotation).
+        """
         return self.recommendation.x
+
+    @property
+    def values(self) -> Array:
+        """Applied changes as register values (model unit; degrees for a rotation ``W1.C``)."""
+        return self.problem.register_values(self.x)
 
     @property
     def measured(self) -> Array | None:
@@ -267,7 +276,7 @@ class CycleCorrection:
     def corrections(self) -> dict[str, float]:
         """Correction of every correctable register by model ID, zero included (thermal feed-forward
         added unless the verdict is reject)."""
-        out = {reg.id: float(v) for v, reg in zip(self.x, self.model.registers, strict=True) if not reg.fixed}
+        out = {reg.id: float(v) for v, reg in zip(self.values, self.model.registers, strict=True) if not reg.fixed}
         if self.thermal is not None and self.verdict != "reject":
             for rid, shift in self.thermal.corrections().items():
                 out[rid] = out.get(rid, 0.0) + shift
@@ -275,28 +284,42 @@ class CycleCorrection:
 
     @property
     def margin_before(self) -> float:
-        """δ before, over the dimensions kept (the triage's given-up ones are reported apart)."""
-        return budget(self.problem, np.zeros_like(self.x), self.recommendation.given_up)[0]
+        """δ before, over the dimensions kept (the triage's given-up ones are reported apart; zones: circles)."""
+        return self.problem.dimension_budget(np.zeros_like(self.x), self.recommendation.given_up)[0]
 
     @property
     def margin_after(self) -> float:
-        return budget(self.problem, self.x, self.recommendation.given_up)[0]
+        return self.problem.dimension_budget(self.x, self.recommendation.given_up)[0]
 
     @property
     def norm(self) -> float:
         return float(np.linalg.norm(self.x))
 
     @property
+    def given_up(self) -> tuple[str, ...]:
+        """The model dimensions given up (a zone once, never its polygon's facets)."""
+        return self.problem.dimension_of(self.recommendation.given_up)
+
+    @property
+    def rules(self) -> tuple[RuleEffect, ...]:
+        """The recommendation's rules with a zone's facets named by the zone."""
+        if self.problem.rows is None:
+            return self.recommendation.rules
+        return tuple(dataclasses.replace(r, dimensions=self.problem.dimension_of(r.dimensions)) if r.dimensions else r
+                     for r in self.recommendation.rules)
+
+    @property
     def binding(self) -> tuple[str, ...]:
-        """The dimensions that stop a better correction (none when rejected)."""
-        return self.result.binding
+        """The dimensions that stop a better correction (none when rejected; a zone once)."""
+        return self.problem.dimension_of(self.result.binding)
 
     def register_rows(self) -> list[dict[str, Any]]:
         """Every register, fixed ones included: id, register, kind, offset, delta, fixed, at_limit."""
         at = set(self.recommendation.at_limit)
         return [{"id": reg.id, "register": reg.register, "kind": reg.kind, "offset": reg.offset,
                  "delta": float(delta), "fixed": reg.fixed, "at_limit": reg.id in at}
-                for reg, delta in zip(self.model.registers, self.x, strict=True)]
+                | ({"component": reg.component} if reg.component is not None else {})
+                for reg, delta in zip(self.model.registers, self.values, strict=True)]
 
     def dimension_rows(self) -> list[dict[str, Any]]:
         """Per measured dimension: id, name, station, deviation, limits, predicted, margin, flags.
@@ -308,21 +331,24 @@ class CycleCorrection:
         """
         dims = {d.id: d for d in self.model.dimensions}
         problem = self.problem
-        predicted = problem.predicted(self.x)
-        margins = budget(problem, self.x)[1]
-        binding, given_up = set(self.binding), set(self.recommendation.given_up)
-        rejected = {d for r in self.recommendation.rules if r.rule == "reject" for d in r.dimensions}
-        guard = self.recommendation.problem
-        measured = self.measured
+        ids, deviation, predicted, _, _, margins = problem.dimension_table(self.x)
+        binding, given_up = set(self.binding), set(problem.dimension_of(self.recommendation.given_up))
+        rejected = set(problem.dimension_of([d for r in self.recommendation.rules if r.rule == "reject"
+                                             for d in r.dimensions]))
+        _, _, _, guard_lower, guard_upper, _ = self.recommendation.problem.dimension_table(self.x)
+        if self.measured is not None:  # the report's own deviations, per model dimension
+            measured: Array | None = dataclasses.replace(problem, deviation=self.measured).dimension_table(self.x)[1]
+        else:
+            measured = None
         rows = []
-        for i, did in enumerate(problem.dimension_ids):
+        for i, did in enumerate(ids):
             d = dims[did]
             flags = []
-            if not d.lower <= problem.deviation[i] <= d.upper:
+            if not d.lower <= deviation[i] <= d.upper:
                 flags.append("out_before")
             if margins[i] < -1e-12:
                 flags.append("out")
-            elif not guard.lower[i] - 1e-12 <= predicted[i] <= guard.upper[i] + 1e-12:
+            elif not guard_lower[i] - 1e-12 <= predicted[i] <= guard_upper[i] + 1e-12:
                 flags.append("guard")
             if did in binding:
                 flags.append("binding")
@@ -331,7 +357,7 @@ class CycleCorrection:
             if did in rejected:
                 flags.append("rejected")
             row: dict[str, Any] = {
-                "id": did, "name": d.name, "station": d.group, "deviation": float(problem.deviation[i]),
+                "id": did, "name": d.name, "station": d.group, "deviation": float(deviation[i]),
                 "predicted": float(predicted[i]), "lower": d.lower, "upper": d.upper,
                 "margin": float(margins[i]), "flags": flags,
             }

@@ -177,7 +177,11 @@ def sort_rows(rows: Sequence[DimensionRow], key: str, *, reverse: bool = False) 
 
 @dataclass(frozen=True)
 class RegisterRow:
-    """One register of the recommendation [model unit]."""
+    """One register (component) of the recommendation [model unit; a rotation ``W1.C`` in degrees].
+
+    ``component`` is the register component of a multi-axis model (X, Y, Z, C, R; a tool length
+    the spindle axis), ``None`` in a one-axis model.
+    """
 
     id: str
     register: str
@@ -188,6 +192,7 @@ class RegisterRow:
     at_limit: bool
     current: float | None = None
     rules: tuple[str, ...] = ()
+    component: str | None = None
 
     @property
     def new(self) -> float | None:
@@ -208,7 +213,7 @@ def register_rows(correction: CycleCorrection, current: Mapping[str, float] | No
     """
     current = current or {}
     rules: dict[str, list[str]] = {}
-    for effect in correction.recommendation.rules:
+    for effect in correction.rules:
         for rid in effect.registers:
             rules.setdefault(rid, []).append(effect.rule)
     exported = correction.corrections
@@ -217,11 +222,14 @@ def register_rows(correction: CycleCorrection, current: Mapping[str, float] | No
         rules.setdefault(rid, []).append("thermal")
     rows = []
     for reg in correction.register_rows():
-        cur = current.get(reg["id"], current.get(reg["register"]))
+        component = reg.get("component")
+        # a component's current value is its own: the register's name (G54) is shared by its components
+        cur = current.get(reg["id"], current.get(reg["register"]) if component is None else None)
         rows.append(RegisterRow(reg["id"], reg["register"], reg["kind"], str(reg.get("offset", "")),
                                 float(exported.get(reg["id"], reg["delta"])) + 0.0, bool(reg["fixed"]),
                                 bool(reg["at_limit"]),
-                                None if cur is None else float(cur), tuple(dict.fromkeys(rules.get(reg["id"], ())))))
+                                None if cur is None else float(cur), tuple(dict.fromkeys(rules.get(reg["id"], ()))),
+                                component))
     return rows
 
 
@@ -258,13 +266,13 @@ def summary(correction: CycleCorrection) -> Summary:
         report=correction.part.report, part=correction.part.part, unit=correction.model.unit,
         optimizer=r.optimizer, status=r.status, margin_before=correction.margin_before,
         margin_after=correction.margin_after, bonus=correction.margin_after - correction.margin_before,
-        norm=correction.norm, bound=r.bound, in_tolerance=correction.margin_after >= 0 and not rec.given_up,
+        norm=correction.norm, bound=r.bound, in_tolerance=correction.margin_after >= 0 and not correction.given_up,
         message=r.message,
         notes=tuple(str(n) for n in correction.notes), verdict=correction.verdict,
         rules=tuple(f"{e.rule}: {e.message}" for e in rec.rules),
         alarm=rec.alarm or ("" if rec.solved else
                             "NOT SOLVED: " + next(e.message for e in rec.rules if e.rule == "not_solved")),
-        given_up=tuple(names.get(d, d) for d in rec.given_up), solved=rec.solved)
+        given_up=tuple(names.get(d, d) for d in correction.given_up), solved=rec.solved)
 
 
 @dataclass(frozen=True)
