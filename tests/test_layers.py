@@ -18,6 +18,7 @@ LAYERS = {
     "setupfix.relation": 3, "setupfix.objective": 3, "setupfix.optimize": 3, "setupfix.thermal": 3,
     "setupfix.search": 3, "setupfix.simulate": 3, "setupfix.offsets": 3, "setupfix.plots": 3, "setupfix.diagnose": 3,
     "setupfix.safety": 3, "setupfix.ewma": 3, "setupfix.recommend": 3, "setupfix.pose": 3, "setupfix.explain": 3,
+    "setupfix.spc": 3,
     "setupfix.pipeline": 4, "setupfix.store": 4,
     "setupfix.cli": 5, "setupfix.tui": 5, "setupfix.__main__": 5,
 }
