@@ -8,6 +8,7 @@ import pytest
 from setupfix.errors import ParameterError
 from setupfix.spc import D4, Violation, chart_limits, moving_range, nelson
 from spc_examples import CONCENTRATION
+import itertools
 
 
 def test_limits_match_the_published_example():
@@ -115,4 +116,4 @@ def test_rules_agree_with_brute_force_on_random_series(seed):
     assert _covered(found) == _brute(list(x), lim.center, lim.sigma)
     for rule in (1, 2, 3, 4):  # stretches of one rule never touch: each is maximal
         spans = sorted((v.start, v.end) for v in found if v.rule == rule)
-        assert all(b[0] > a[1] for a, b in zip(spans, spans[1:], strict=False))
+        assert all(b[0] > a[1] for a, b in itertools.pairwise(spans))
