@@ -90,10 +90,10 @@ PIPELINE_RANKS = {
     "thermal": 2, "parse": 2, "simulate": 2, "scaffold": 2, "model": 2,
     "feedforward": 3, "series": 3, "batch_output": 3,
     "requests": 4,
-    "correct": 5, "compare": 5, "export": 5, "batch_records": 5,
+    "correct": 5, "compare": 5, "export": 5, "batch_records": 5, "spc": 5, "dfq": 1,
     "batch": 6, "diagnose": 6,
     "present": 7, "view": 7,
-    "history": 8, "session": 8,
+    "history": 8, "session": 8, "html_report": 8,
 }
 
 

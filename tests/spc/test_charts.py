@@ -2,13 +2,14 @@
 
 from __future__ import annotations
 
+import itertools
+
 import numpy as np
 import pytest
 
 from setupfix.errors import ParameterError
 from setupfix.spc import D4, Violation, chart_limits, moving_range, nelson
 from spc_examples import CONCENTRATION
-import itertools
 
 
 def test_limits_match_the_published_example():
