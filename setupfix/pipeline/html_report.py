@@ -99,7 +99,8 @@ def _series_chart(values: np.ndarray, centre: float, upper: float, lower: float 
                   flagged: set[int], splits: Sequence[int], height: int, kind: str, baseline: int = 0) -> str:
     """One chart of a series: points joined in order, centre line and limits, flagged points red."""
     left, right, top, bottom = 46.0, _W - 70.0, 8.0, height - 14.0
-    finite = [v for v in (*values.tolist(), centre, upper, *( [lower] if lower is not None else [])) if math.isfinite(v)]
+    bounds = [centre, upper] + ([lower] if lower is not None else [])
+    finite = [v for v in (*values.tolist(), *bounds) if math.isfinite(v)]
     a, b = _scale(min(finite, default=0.0), max(finite, default=1.0), top, bottom)
     n = len(values)
     step = (right - left) / max(n - 1, 1)

@@ -298,8 +298,9 @@ def spc_json(outcome: SpcOutcome) -> dict[str, Any]:
                       "mr_ucl": _num(d.limits.mr_ucl), "baseline": d.limits.baseline},
             "violations": [{"rule": v.rule, "text": v.text, "first": v.first, "last": v.last,
                             "parts": list(v.parts)} for v in d.violations],
-            "split_effects": [{"time": s.time, "source": s.source, "first_after": s.at, "before": capability_json(s.before),
-                               "after": capability_json(s.after)} for s in d.splits],
+            "split_effects": [{"time": s.time, "source": s.source, "first_after": s.at,
+                               "before": capability_json(s.before), "after": capability_json(s.after)}
+                              for s in d.splits],
             "parts": list(d.parts), "times": list(d.times), "values": [_num(v) for v in d.values],
         } for d in outcome.dimensions],
         "warnings": [str(n) for n in outcome.notes],

@@ -41,7 +41,7 @@ D2 = 1.128
 
 
 def _finite(x: ArrayLike) -> Array:
-    values = np.asarray(x, dtype=float).ravel()
+    values: Array = np.asarray(x, dtype=np.float64).ravel()
     return values[np.isfinite(values)]
 
 
