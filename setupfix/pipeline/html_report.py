@@ -267,7 +267,8 @@ def spc_page(outcome: SpcOutcome, title: str = "setupfix — process capability 
 def _cycle_section(pc: CycleCorrection, history: dict[str, DimensionSpc]) -> str:
     rows = pc.dimension_rows()
     unit = pc.model.unit
-    label = verdict_label(pc)
+    label, line = verdict_label(pc), verdict_line(pc)
+    said = line if line.startswith(label) else f"{label}: {line}"
     zone = tolerance_zone([(r["name"], r["lower"], r["upper"], [r["deviation"]], r["predicted"]) for r in rows],
                           unit)
     table = ["<tr><th>dimension</th><th>deviation</th><th>lower</th><th>upper</th><th>predicted</th>"
@@ -289,7 +290,7 @@ def _cycle_section(pc: CycleCorrection, history: dict[str, DimensionSpc]) -> str
                        if r.registers or r.dimensions else "") + "</li>" for r in pc.recommendation.rules)
     binding = ", ".join(names.get(b, b) for b in pc.binding) or "none"
     out = [f"<section><h2>{_e(pc.part.report)} — part {_e(pc.part.part or '—')}</h2>",
-           f'<p class="verdict {_e(pc.verdict)}">{_e(label)}: {_e(verdict_line(pc))}</p>',
+           f'<p class="verdict {_e(pc.verdict)}">{_e(said)}</p>',
            f"<p>Error budget before {_n(pc.margin_before, 4, True)} {_e(unit)}, after "
            f"{_n(pc.margin_after, 4, True)} {_e(unit)}; binding dimensions: {_e(binding)}.</p></section>",
            f"<section><h3>Tolerance zones: measured (dot) and predicted after the correction (diamond)</h3>{zone}"
