@@ -23,7 +23,7 @@ from typing import Any
 
 import numpy as np
 import pandas as pd
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 
 from parsers.timestamps import instant
 from setupfix.errors import MatchError, Note, ParameterError, SourceLocation, StoreError
@@ -33,7 +33,7 @@ from setupfix.spc import NELSON_RULES, Capability, ChartLimits, capability, char
 from setupfix.store import Store
 
 __all__ = ["SpcRequest", "SpcOutcome", "DimensionSpc", "RuleHit", "SplitEffect", "spc_report", "spc_json",
-           "format_spc", "DEFAULT_BASELINE"]
+           "format_spc", "capability_json", "sparkline", "capability_rows", "CapabilityRow", "DEFAULT_BASELINE"]
 
 #: Parts the control limits are computed from unless ``--baseline`` says otherwise.
 DEFAULT_BASELINE = 20
@@ -338,3 +338,48 @@ def format_spc(outcome: SpcOutcome) -> str:
                          f"{_f(s.after.cpk)} (n={s.after.n}), mean {_f(s.before.mean, 4)} → {_f(s.after.mean, 4)}")
     lines += [f"warning: {n}" for n in outcome.notes]
     return "\n".join(lines)
+
+
+#: Glyphs of a text sparkline, lowest to highest.
+SPARK = "▁▂▃▄▅▆▇█"
+
+
+def sparkline(values: ArrayLike, width: int = 30) -> str:
+    """The last ``width`` values as one line of block glyphs (lowest ▁ … highest █; all equal: ▄)."""
+    tail = np.asarray(values, dtype=float)[-width:]
+    tail = tail[np.isfinite(tail)]
+    if tail.size == 0:
+        return ""
+    low, high = float(tail.min()), float(tail.max())
+    if high <= low:
+        return SPARK[3] * tail.size
+    levels = np.minimum(((tail - low) / (high - low) * len(SPARK)).astype(int), len(SPARK) - 1)
+    return "".join(SPARK[i] for i in levels)
+
+
+@dataclass(frozen=True)
+class CapabilityRow:
+    """One line of the TUI's capability table: the characteristic's indices, sparkline and rule flags."""
+
+    name: str
+    n: int
+    cpk: str
+    interval: str
+    ppk: str
+    out: int
+    spark: str
+    rules: str
+    last_split: str
+
+
+def capability_rows(outcome: SpcOutcome, width: int = 30) -> list[CapabilityRow]:
+    """Rows of the capability table (TUI), one per characteristic, texts ready to show."""
+    rows = []
+    for d in outcome.dimensions:
+        c = d.capability
+        rules = " ".join(f"R{r}" for r in sorted({v.rule for v in d.violations})) or "—"
+        split = d.splits[-1] if d.splits else None
+        change = f"{_f(split.before.cpk)} → {_f(split.after.cpk)}" if split else "—"
+        rows.append(CapabilityRow(d.name, c.n, _f(c.cpk), f"{_f(c.cpk_low)}–{_f(c.cpk_high)}", _f(c.ppk),
+                                  c.out_of_tolerance, sparkline(d.values, width), rules, change))
+    return rows
