@@ -33,8 +33,9 @@ import pandas as pd
 from parsers.timestamps import parse_timestamp, utc_naive
 from setupfix.errors import ExportError, Note, SourceLocation
 from setupfix.pipeline.writers import write_text
+from setupfix.store import Store
 
-__all__ = ["dfq_text", "write_dfq", "DFQ_PART"]
+__all__ = ["dfq_text", "write_dfq", "export_dfq", "DFQ_PART"]
 
 #: K1001 part number of the exported file (the store keeps no part number of its own).
 DFQ_PART = "setupfix"
@@ -167,3 +168,20 @@ def write_dfq(table: pd.DataFrame, target: str | os.PathLike[str], source: str =
     text, notes = dfq_text(table, source)
     write_text(target, text)
     return notes
+
+
+def export_dfq(store: Store, target: str | os.PathLike[str]) -> tuple[int, tuple[Note, ...]]:
+    """``history export dfq``: every stored measurement (reference-only rows left out) as a DFQ file.
+
+    Returns the number of values written and the notes (what the format cannot carry).
+
+    Raises
+    ------
+    ExportError
+        A name that cannot be one DFQ field; the target cannot be written.
+    """
+    table = store.measurements()
+    if "reference" in table.columns:
+        table = table[~table["reference"].astype(bool)]
+    notes = write_dfq(table, target, f"{store.location}#measurements")
+    return len(table), notes

@@ -12,7 +12,7 @@ import pytest
 from parsers.qdas import read_aqdef
 from parsers.timestamps import utc_naive
 from setupfix.errors import ExportError
-from setupfix.pipeline.dfq import dfq_text, write_dfq
+from setupfix.pipeline.dfq import dfq_text, export_dfq, write_dfq
 from setupfix.pipeline.history import ImportRequest, import_history
 from setupfix.store import open_store
 from spc_examples import closed_loop_store
@@ -42,9 +42,12 @@ def assert_round_trip(original: pd.DataFrame, back: pd.DataFrame) -> None:
 
 
 def test_the_closed_loop_store_reads_back_through_setupfix_s_reader(tmp_path):
-    table = stored(closed_loop_store(tmp_path))
+    db = closed_loop_store(tmp_path)
+    table = stored(db)
     out = tmp_path / "history.dfq"
-    notes = write_dfq(table, out, "loop.db#measurements")
+    with open_store(db) as store:
+        n, notes = export_dfq(store, out)
+    assert n == len(table) == 1120
     assert [n.message for n in notes] == ["station(s) P1, P2, P3, P4 are not nest numbers (K0007 holds a whole "
                                           "number): left out"]
     back = read_aqdef(out)
