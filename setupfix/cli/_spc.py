@@ -7,7 +7,7 @@ import json
 import sys
 
 from setupfix.cli._common import whole_number
-from setupfix.errors import SourceLocation, StoreError
+from setupfix.errors import ParameterError, SourceLocation, StoreError
 
 
 def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
@@ -33,7 +33,8 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
                         "in the store)")
     p.add_argument("--json", action="store_true", help="machine-readable output")
     p.add_argument("--html", metavar="OUT", default=None,
-                   help="also write one self-contained HTML page (charts inline, prints on A4)")
+                   help="also write one self-contained HTML page (charts inline, prints on A4); '-': the page alone "
+                        "to standard output")
     p.set_defaults(run=run)
 
 
@@ -45,6 +46,9 @@ def run(args: argparse.Namespace) -> int:
     from setupfix.store import open_store
 
     path = default_db_path(args.db)
+    if args.html == "-" and args.json:
+        raise ParameterError("spc: --html - and --json would both write to standard output",
+                             hint="give --html a file name")
     if args.html:
         check_target(args.html)
     if not path.is_file():
@@ -56,6 +60,8 @@ def run(args: argparse.Namespace) -> int:
         outcome = spc_report(store, request)
     if args.html:
         write_text(args.html, spc_page(outcome))
+        if args.html == "-":  # the page is the output
+            return 0
     if args.json:
         json.dump(spc_json(outcome), sys.stdout, indent=2)
         sys.stdout.write("\n")

@@ -60,3 +60,11 @@ def test_a_missing_store_is_named(tmp_path, capsys):
     err = capsys.readouterr().err
     assert "none.db" in err and "no history store here" in err
     assert not (tmp_path / "none.db").exists()
+
+
+def test_the_page_alone_to_standard_output(db, capsys):
+    assert main(["spc", "--db", str(db), "--dimension", "P1 D1", "--html", "-"]) == 0
+    out = capsys.readouterr().out
+    assert out.startswith("<!DOCTYPE html>") and out.rstrip().endswith("</html>")
+    assert main(["spc", "--db", str(db), "--html", "-", "--json"]) == 1
+    assert "both write to standard output" in capsys.readouterr().err
