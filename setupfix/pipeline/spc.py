@@ -352,7 +352,7 @@ def sparkline(values: ArrayLike, width: int = 30) -> str:
         return ""
     low, high = float(tail.min()), float(tail.max())
     if high <= low:
-        return SPARK[3] * tail.size
+        return SPARK[3] * int(tail.size)
     levels = np.minimum(((tail - low) / (high - low) * len(SPARK)).astype(int), len(SPARK) - 1)
     return "".join(SPARK[i] for i in levels)
 
