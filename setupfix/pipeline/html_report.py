@@ -26,7 +26,7 @@ import numpy as np
 
 from setupfix.pipeline.present import format_flags, verdict_label, verdict_line
 from setupfix.pipeline.requests import CorrectOutcome, CycleCorrection
-from setupfix.pipeline.spc import TEXT_LIST, DimensionSpc, SpcOutcome
+from setupfix.pipeline.spc import TEXT_LIST, DimensionSpc, SpcOutcome, interval_text
 from setupfix.safety import short_list
 from setupfix.spc import NELSON_RULES, Capability
 
@@ -96,21 +96,25 @@ def _hline(y: float, x0: float, x1: float, colour: str, label: str, dash: str = 
 
 
 def _series_chart(values: np.ndarray, centre: float, upper: float, lower: float | None, labels: tuple[str, str, str],
-                  flagged: set[int], splits: Sequence[int], height: int, kind: str, baseline: int = 0) -> str:
-    """One chart of a series: points joined in order, centre line and limits, flagged points red."""
+                  flagged: set[int], splits: Sequence[int], height: int, kind: str, baseline: int = 0,
+                  first: int = 0, total: int | None = None) -> str:
+    """One chart of a series: points joined in order, centre line and limits, flagged points red.
+
+    ``values[i]`` belongs to part ``first + i`` of ``total`` (the moving range starts at the second part)."""
     left, right, top, bottom = 46.0, _W - 70.0, 8.0, height - 14.0
     bounds = [centre, upper] + ([lower] if lower is not None else [])
     finite = [v for v in (*values.tolist(), *bounds) if math.isfinite(v)]
     a, b = _scale(min(finite, default=0.0), max(finite, default=1.0), top, bottom)
     n = len(values)
-    step = (right - left) / max(n - 1, 1)
-    xs = [left + i * step for i in range(n)]
+    total = n + first if total is None else total
+    step = (right - left) / max(total - 1, 1)
+    xs = [left + (first + i) * step for i in range(n)]
     ys = [a * v + b for v in values]
     parts = [f'<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 {_W} {height}" role="img" '
              f'class="chart {kind}" aria-label="{_e(kind)} chart">',
              f'<rect x="{left}" y="{top}" width="{right - left}" height="{bottom - top}" fill="#fafafa" '
              'stroke="#999" stroke-width="0.5"/>']
-    if 1 < baseline < n:
+    if 1 < baseline < total:
         parts.append(f'<rect x="{left}" y="{top}" width="{(baseline - 1) * step + step / 2:.1f}" '
                      f'height="{bottom - top}" fill="#ddf4ff" class="baseline"/>')
     for at in splits:
@@ -134,7 +138,7 @@ def _series_chart(values: np.ndarray, centre: float, upper: float, lower: float 
     parts.append(f'<text x="{left - 3}" y="{top + 8}" font-size="8" text-anchor="end">{_n(hi, 4)}</text>'
                  f'<text x="{left - 3}" y="{bottom}" font-size="8" text-anchor="end">{_n(lo, 4)}</text>'
                  f'<text x="{left}" y="{height - 2}" font-size="8">1</text>'
-                 f'<text x="{right}" y="{height - 2}" font-size="8" text-anchor="end">{n}</text>')
+                 f'<text x="{right}" y="{height - 2}" font-size="8" text-anchor="end">{total}</text>')
     parts.append("</svg>")
     return "".join(parts)
 
@@ -146,9 +150,9 @@ def control_charts(d: DimensionSpc) -> str:
     splits = [s.at for s in d.splits]
     x_chart = _series_chart(d.values, lim.center, lim.ucl, lim.lcl, ("UCL", "CL", "LCL"), flagged, splits, 170,
                             "individuals", lim.baseline)
-    mr = np.r_[np.nan, np.abs(np.diff(d.values))] if len(d.values) else np.zeros(0)
-    mr_chart = _series_chart(np.nan_to_num(mr, nan=0.0), lim.mr_center, lim.mr_ucl, None, ("UCL", "MR̄", ""),
-                             set(), splits, 90, "moving-range")
+    mr = np.abs(np.diff(d.values))
+    mr_chart = _series_chart(mr, lim.mr_center, lim.mr_ucl, None, ("UCL", "MR̄", ""), set(), splits, 90,
+                             "moving-range", first=1, total=len(d.values))
     return x_chart + mr_chart
 
 
@@ -199,7 +203,7 @@ def tolerance_zone(rows: Sequence[tuple[str, float, float, Sequence[float], floa
 def _capability_rows(label: str, c: Capability) -> str:
     return (f"<tr><td>{_e(label)}</td><td>{c.n}</td><td>{_n(c.mean, 4, True)}</td><td>{_n(c.sigma_within, 4)}</td>"
             f"<td>{_n(c.sigma_overall, 4)}</td><td>{_n(c.cp, 2)}</td><td>{_n(c.cpk, 2)}</td>"
-            f"<td>{_n(c.cpk_low, 2)} – {_n(c.cpk_high, 2)}</td><td>{_n(c.pp, 2)}</td><td>{_n(c.ppk, 2)}</td>"
+            f"<td>{_e(interval_text(c))}</td><td>{_n(c.pp, 2)}</td><td>{_n(c.ppk, 2)}</td>"
             f"<td{_BAD if c.out_of_tolerance else ''}>{c.out_of_tolerance}</td></tr>")
 
 
@@ -238,7 +242,7 @@ def dimension_section(d: DimensionSpc) -> str:
     """One characteristic: tolerance zone, control charts, capability and rule violations."""
     zone = tolerance_zone([(d.name, d.lower, d.upper, d.values.tolist(), None)], d.unit)
     return (f'<section class="dimension"><h3>{_e(d.name)} <span class="muted">limits {_n(d.lower, 3, True)} / '
-            f"{_n(d.upper, 3, True)} {_e(d.unit)}, {len(d.values)} parts</span></h3>{zone}{control_charts(d)}"
+            f"{_n(d.upper, 3, True)} {_e(d.unit)}, {len(d.values)} part(s)</span></h3>{zone}{control_charts(d)}"
             f"{capability_table(d)}{_violations(d)}</section>")
 
 
@@ -250,7 +254,7 @@ def spc_page(outcome: SpcOutcome, title: str = "setupfix — process capability 
         c = d.capability
         rules = ", ".join(str(r) for r in sorted({v.rule for v in d.violations})) or "—"
         head.append(f"<tr><td>{_e(d.name)}</td><td>{c.n}</td><td>{_n(c.cpk, 2)}</td>"
-                    f"<td>{_n(c.cpk_low, 2)} – {_n(c.cpk_high, 2)}</td><td>{_n(c.ppk, 2)}</td>"
+                    f"<td>{_e(interval_text(c))}</td><td>{_n(c.ppk, 2)}</td>"
                     f"<td>{c.out_of_tolerance}</td><td>{rules}</td></tr>")
     body = [f"<h1>{_e(title)}</h1>",
             f"<p>Store {_e(outcome.store)}: {len(outcome.dimensions)} characteristic(s), values as deviations from "

@@ -33,7 +33,8 @@ from setupfix.spc import NELSON_RULES, Capability, ChartLimits, capability, char
 from setupfix.store import Store
 
 __all__ = ["SpcRequest", "SpcOutcome", "DimensionSpc", "RuleHit", "SplitEffect", "spc_report", "spc_json",
-           "format_spc", "capability_json", "sparkline", "capability_rows", "CapabilityRow", "DEFAULT_BASELINE"]
+           "format_spc", "capability_json", "interval_text", "sparkline", "capability_rows", "CapabilityRow",
+           "DEFAULT_BASELINE"]
 
 #: Parts the control limits are computed from unless ``--baseline`` says otherwise.
 DEFAULT_BASELINE = 20
@@ -311,6 +312,11 @@ def _f(value: float, digits: int = 2) -> str:
     return f"{value:.{digits}f}" if math.isfinite(value) else "—"
 
 
+def interval_text(c: Capability) -> str:
+    """The Cpk interval as ``low–high`` (``—`` when undefined)."""
+    return f"{_f(c.cpk_low)}–{_f(c.cpk_high)}" if math.isfinite(c.cpk_low) else "—"
+
+
 def format_spc(outcome: SpcOutcome) -> str:
     """The text table of ``spc``: one line per characteristic, then its rule violations and split effects."""
     width = max([14, *(len(d.name) + 2 for d in outcome.dimensions)])
@@ -321,7 +327,7 @@ def format_spc(outcome: SpcOutcome) -> str:
     for d in outcome.dimensions:
         c = d.capability
         rules = ",".join(str(r) for r in sorted({v.rule for v in d.violations})) or "—"
-        ci = f"{_f(c.cpk_low)}–{_f(c.cpk_high)}"
+        ci = interval_text(c)
         lines.append(f"{d.name:<{width}}{c.n:>5}{_f(c.mean, 4):>10}{_f(c.sigma_within, 4):>10}"
                      f"{_f(c.sigma_overall, 4):>10}{_f(c.cp):>7}{_f(c.cpk):>7}{ci:>15}{_f(c.pp):>7}"
                      f"{_f(c.ppk):>7}{c.out_of_tolerance:>5}  {rules}")
@@ -380,6 +386,6 @@ def capability_rows(outcome: SpcOutcome, width: int = 30) -> list[CapabilityRow]
         rules = " ".join(f"R{r}" for r in sorted({v.rule for v in d.violations})) or "—"
         split = d.splits[-1] if d.splits else None
         change = f"{_f(split.before.cpk)} → {_f(split.after.cpk)}" if split else "—"
-        rows.append(CapabilityRow(d.name, c.n, _f(c.cpk), f"{_f(c.cpk_low)}–{_f(c.cpk_high)}", _f(c.ppk),
+        rows.append(CapabilityRow(d.name, c.n, _f(c.cpk), interval_text(c), _f(c.ppk),
                                   c.out_of_tolerance, sparkline(d.values, width), rules, change))
     return rows
