@@ -10,7 +10,7 @@ import pytest
 
 from setupfix.spc import D2, capability, cpk_interval, sigma_overall, sigma_within, split_capability
 
-from spc_examples import CONCENTRATION
+from spc_examples import AMPS, CONCENTRATION
 
 
 def _direct(x: list[float], lsl: float, usl: float) -> dict[str, float]:
@@ -65,6 +65,13 @@ def test_cpk_interval_is_bissell():
     half = 1.959964 * math.sqrt(1 / (9 * 30) + 0.625 ** 2 / (2 * 29))
     assert (low, high) == pytest.approx((0.625 - half, 0.625 + half), abs=1e-6)
     assert (low, high) == pytest.approx((0.4247, 0.8253), abs=1e-4)
+
+
+def test_cpk_interval_matches_a_published_example():
+    # PROC CAPABILITY's Cpk uses the sample standard deviation: setupfix's Ppk.
+    c = capability(AMPS, 4.0, 6.0)
+    assert c.n == 75
+    assert cpk_interval(c.ppk, c.n, confidence=0.90) == pytest.approx((0.328, 0.496), abs=5e-4)
 
 
 def test_cpk_interval_covers_the_true_value_about_95_percent_of_the_time():
