@@ -143,3 +143,16 @@ def test_text_and_json_say_the_same(store_path):
     assert "D1: rule 1 (one point beyond 3σ): p028" in text
     assert "D1: rule 2 (nine points in a row on one side of the centre line): p036 … p044 (9 parts)" in text
     assert "D2: rule" not in text
+
+
+def test_reference_only_rows_are_left_out(tmp_path):
+    rows = ["characteristic,nominal,actual,lower,upper,part,timestamp,reference"]
+    rows += [f"D1,5,{5 + 0.001 * (i % 3)},-0.01,0.01,p{i},2026-01-01T0{i}:00:00,false" for i in range(6)]
+    rows.append("D1,5,5.009,-0.01,0.01,master,2026-01-01T09:00:00,true")
+    (tmp_path / "r.csv").write_text("\n".join(rows) + "\n", encoding="utf-8")
+    db = tmp_path / "h.db"
+    with open_store(db) as store:
+        import_history(store, ImportRequest(reports=(tmp_path / "r.csv",)))
+        assert store.measurements()["reference"].sum() == 1
+        (d,) = spc_report(store, SpcRequest()).dimensions
+    assert d.parts == tuple(f"p{i}" for i in range(6))

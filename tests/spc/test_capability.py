@@ -7,6 +7,8 @@ import statistics
 
 import numpy as np
 import pytest
+from hypothesis import assume, given, settings
+from hypothesis import strategies as st
 
 from setupfix.spc import D2, capability, cpk_interval, sigma_overall, sigma_within, split_capability
 
@@ -98,3 +100,16 @@ def test_split_capability_separates_before_and_after():
     assert before.mean == pytest.approx(0.05) and later.mean == pytest.approx(0.0, abs=1e-15)
     assert before.out_of_tolerance == 10 and later.out_of_tolerance == 0
     assert later.cpk > 1.33 > before.cpk
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.lists(st.floats(-1.0, 1.0), min_size=3, max_size=40), st.floats(-100.0, 100.0), st.floats(0.1, 10.0))
+def test_indices_do_not_change_when_values_and_limits_shift_and_scale_together(x, shift, scale):
+    assume(np.ptp(x) > 1e-3 and np.any(np.diff(x) != 0))
+    lsl, usl = -1.5, 1.2
+    a = capability(x, lsl, usl)
+    b = capability([shift + scale * v for v in x], shift + scale * lsl, shift + scale * usl)
+    for key in ("cp", "cpk", "pp", "ppk", "cpk_low", "cpk_high"):
+        assert getattr(b, key) == pytest.approx(getattr(a, key), rel=1e-6, abs=1e-9), key
+    assert b.out_of_tolerance == a.out_of_tolerance == 0
+    assert a.cpk <= a.cp + 1e-12 and a.ppk <= a.pp + 1e-12  # Cpk never exceeds Cp
