@@ -30,12 +30,16 @@ from setupfix.pipeline.spc import TEXT_LIST, DimensionSpc, SpcOutcome, interval_
 from setupfix.safety import short_list
 from setupfix.spc import NELSON_RULES, Capability
 
-__all__ = ["spc_page", "correction_page", "PAGE_CSS", "MAX_ZONE_ROWS"]
+__all__ = ["spc_page", "correction_page", "control_charts", "tolerance_zone", "capability_table", "dimension_section",
+           "PAGE_CSS", "MAX_ZONE_ROWS", "MAX_DOTS"]
 
 #: Dimensions one tolerance-zone chart draws (the table below it lists every one).
 MAX_ZONE_ROWS = 400
 
 _BAD = ' class="bad"'
+
+#: Points a chart draws as dots (above: the line alone, flagged points still as dots).
+MAX_DOTS = 500
 
 #: Width of every chart's view box (user units; the chart scales to the page).
 _W = 720
@@ -130,10 +134,12 @@ def _series_chart(values: np.ndarray, centre: float, upper: float, lower: float 
     if n:
         points = " ".join(f"{x:.1f},{y:.1f}" for x, y in zip(xs, ys, strict=True))
         parts.append(f'<polyline points="{points}" fill="none" stroke="#0550ae" stroke-width="1.2"/>')
+        dots = n <= MAX_DOTS  # a long series: the line, and dots only where a rule fired
         for i, (x, y) in enumerate(zip(xs, ys, strict=True)):
-            colour = "#cf222e" if i in flagged else "#0550ae"
-            r = 3.2 if i in flagged else 2.0
-            parts.append(f'<circle cx="{x:.1f}" cy="{y:.1f}" r="{r}" fill="{colour}"/>')
+            if i in flagged:
+                parts.append(f'<circle cx="{x:.1f}" cy="{y:.1f}" r="3.2" fill="#cf222e"/>')
+            elif dots:
+                parts.append(f'<circle cx="{x:.1f}" cy="{y:.1f}" r="2.0" fill="#0550ae"/>')
     lo, hi = (bottom - b) / a, (top - b) / a
     parts.append(f'<text x="{left - 3}" y="{top + 8}" font-size="8" text-anchor="end">{_n(hi, 4)}</text>'
                  f'<text x="{left - 3}" y="{bottom}" font-size="8" text-anchor="end">{_n(lo, 4)}</text>'
@@ -240,7 +246,10 @@ def _violations(d: DimensionSpc) -> str:
 
 def dimension_section(d: DimensionSpc) -> str:
     """One characteristic: tolerance zone, control charts, capability and rule violations."""
-    zone = tolerance_zone([(d.name, d.lower, d.upper, d.values.tolist(), None)], d.unit)
+    zone = tolerance_zone([(d.name, d.lower, d.upper, d.values[-MAX_DOTS:].tolist(), None)], d.unit)
+    if len(d.values) > MAX_DOTS:
+        zone += f'<p class="muted">Tolerance zone: the last {MAX_DOTS} parts.</p>'
+
     return (f'<section class="dimension"><h3>{_e(d.name)} <span class="muted">limits {_n(d.lower, 3, True)} / '
             f"{_n(d.upper, 3, True)} {_e(d.unit)}, {len(d.values)} part(s)</span></h3>{zone}{control_charts(d)}"
             f"{capability_table(d)}{_violations(d)}</section>")
