@@ -2,7 +2,7 @@
 
 The stored measurements (:meth:`setupfix.store.Store.measurements`, reference-only rows
 left out) become one series per characteristic: the deviation from nominal of every
-part, in time order (a part stored twice counts once, the last stored).  For each the
+part, in time order (a part stored twice counts once: same name, time and value).  For each the
 engine (:mod:`setupfix.spc`) gives the capability against the characteristic's limits,
 the individuals / moving-range chart limits from the first ``baseline`` parts, the
 Nelson-rule violations (each naming the parts it covers) and the capability before
@@ -28,6 +28,7 @@ from numpy.typing import ArrayLike, NDArray
 from parsers.timestamps import instant
 from setupfix.errors import MatchError, Note, ParameterError, SourceLocation, StoreError
 from setupfix.model import normalise_name
+from setupfix.pipeline.smoothing import IDENTITY_DECIMALS
 from setupfix.safety import short_list
 from setupfix.spc import NELSON_RULES, Capability, ChartLimits, capability, chart_limits, nelson, split_capability
 from setupfix.store import Store
@@ -171,9 +172,12 @@ def _series(store: Store, request: SpcRequest, notes: list[Note]) -> pd.DataFram
         frame = frame[frame["time"] <= until]
     if frame.empty:
         raise ParameterError("spc: no stored part lies between --since and --until")
-    doubles = frame.duplicated(["key", "part"], keep="last")
+    # a part stored twice (a report imported again under other bytes) counts once: the same identity as the
+    # smoothing history's (name, time, value rounded), so parts that share a name at other times all count
+    frame = frame.assign(ident=np.round(frame["value"].to_numpy(dtype=float), IDENTITY_DECIMALS))
+    doubles = frame.duplicated(["key", "part", "time", "ident"], keep="last")
     if doubles.any():
-        notes.append(Note(f"{int(doubles.sum())} value(s) of parts stored more than once: the last stored used",
+        notes.append(Note(f"{int(doubles.sum())} value(s) of parts stored more than once: counted once",
                           SourceLocation(where), kind="spc"))
         frame = frame[~doubles]
     return frame.sort_values(["time", "order"], kind="stable") if dated.all() else frame

@@ -156,3 +156,24 @@ def test_reference_only_rows_are_left_out(tmp_path):
         assert store.measurements()["reference"].sum() == 1
         (d,) = spc_report(store, SpcRequest()).dimensions
     assert d.parts == tuple(f"p{i}" for i in range(6))
+
+
+def test_a_part_stored_twice_counts_once_and_parts_sharing_a_name_all_count(tmp_path):
+    def report(name: str, day: int, crlf: bool = False) -> Path:
+        rows = ["characteristic,nominal,actual,lower,upper,part,timestamp"]
+        rows += [f"D1,5,{5 + 0.001 * ((i + day) % 3)},-0.01,0.01,cycle {i},2026-01-0{day}T0{i}:00:00"
+                 for i in range(4)]
+        path = tmp_path / name
+        path.write_bytes(("\r\n" if crlf else "\n").join(rows).encode() + b"\n")
+        return path
+
+    db = tmp_path / "h.db"
+    with open_store(db) as store:  # day 1, the same report again with other bytes, day 2 with the same part names
+        import_history(store, ImportRequest(reports=(report("a.csv", 1), report("a_crlf.csv", 1, crlf=True),
+                                                     report("b.csv", 2))))
+        out = spc_report(store, SpcRequest())
+    (d,) = out.dimensions
+    assert d.parts == tuple(f"cycle {i}" for i in range(4)) * 2
+    assert [n.message for n in out.notes] == ["4 value(s) of parts stored more than once: counted once",
+                                              "D1: 8 part(s), fewer than the baseline of 20: the limits come "
+                                              "from all of them"]
