@@ -18,7 +18,7 @@ LAYERS = {
     "setupfix.relation": 3, "setupfix.objective": 3, "setupfix.optimize": 3, "setupfix.thermal": 3,
     "setupfix.search": 3, "setupfix.simulate": 3, "setupfix.offsets": 3, "setupfix.plots": 3, "setupfix.diagnose": 3,
     "setupfix.safety": 3, "setupfix.ewma": 3, "setupfix.recommend": 3, "setupfix.pose": 3, "setupfix.explain": 3,
-    "setupfix.zones": 3,
+    "setupfix.zones": 3, "setupfix.spc": 3,
     "setupfix.pipeline": 4, "setupfix.store": 4,
     "setupfix.cli": 5, "setupfix.tui": 5, "setupfix.__main__": 5,
 }
@@ -90,10 +90,10 @@ PIPELINE_RANKS = {
     "thermal": 2, "parse": 2, "simulate": 2, "scaffold": 2, "model": 2,
     "feedforward": 3, "series": 3, "batch_output": 3,
     "requests": 4,
-    "correct": 5, "compare": 5, "export": 5, "batch_records": 5,
+    "correct": 5, "compare": 5, "export": 5, "batch_records": 5, "spc": 5, "dfq": 1,
     "batch": 6, "diagnose": 6,
     "present": 7, "view": 7,
-    "history": 8, "session": 8,
+    "history": 8, "session": 8, "html_report": 8,
 }
 
 

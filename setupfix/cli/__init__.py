@@ -37,6 +37,7 @@ COMMAND_MODULES: tuple[str, ...] = (
     "setupfix.cli._history",
     "setupfix.cli._simulate",
     "setupfix.cli._diagnose",
+    "setupfix.cli._spc",
     "setupfix.cli._tui",
 )
 

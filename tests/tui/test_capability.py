@@ -1,0 +1,52 @@
+"""The capability screen over a small host app: one row per stored characteristic, sparkline, rule flags."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from tui.conftest import run, settle
+
+from setupfix.pipeline.spc import SPARK, SpcRequest, capability_rows, sparkline, spc_report
+from setupfix.store import open_store
+from spc_examples import closed_loop_store
+
+
+def test_sparkline_maps_lowest_to_highest():
+    assert sparkline([0.0, 1.0, 0.5, 0.25]) == "▁█▅▃"
+    assert sparkline([2.0, 2.0]) == SPARK[3] * 2
+    assert sparkline(list(range(100)), width=5) == "▁▃▅▇█"  # eight equal bins of the last five: 95 … 99
+    assert sparkline([]) == ""
+
+
+def test_capability_screen_shows_every_characteristic(tmp_path: Path):
+    from textual.app import App
+
+    from setupfix.tui.screens.capability import COLUMNS, CapabilityScreen
+
+    with open_store(closed_loop_store(tmp_path)) as store:
+        outcome = spc_report(store, SpcRequest())
+    rows = capability_rows(outcome)
+    assert len(rows) == 28 and rows[0].name == "P1 D1"
+    assert rows[0].rules == "R1 R2 R3" and len(rows[0].spark) == 30
+    assert rows[0].last_split.count("→") == 1
+
+    class Host(App[None]):
+        def on_mount(self) -> None:
+            self.push_screen(CapabilityScreen(outcome))
+
+    async def scenario() -> None:
+        app = Host()
+        async with app.run_test(size=(160, 40)) as pilot:
+            await settle(pilot)
+            screen = app.screen
+            assert isinstance(screen, CapabilityScreen)
+            table = screen.query_one("#capability")
+            assert table.row_count == 28 and len(table.columns) == len(COLUMNS)
+            first = [str(c) for c in table.get_row_at(0)]
+            assert first[0] == "P1 D1" and first[2] == rows[0].cpk and first[7] == "R1 R2 R3"
+            assert set(first[6]) <= set(SPARK)
+            await pilot.press("escape")
+            await pilot.pause()
+            assert not isinstance(app.screen, CapabilityScreen)
+
+    run(scenario())
