@@ -32,14 +32,14 @@ import hashlib
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
-from parsers.names import visible_name
 from setupfix.errors import ExportError, SourceLocation
 from setupfix.offsets import OffsetRow, offset_rows
-from setupfix.pipeline.controllers import PROGRAM_NUMBERS, check_program_number, derived_program_number, render
+from setupfix.pipeline.controllers import (PROGRAM_NUMBERS, check_program_number, derived_program_number,
+                                           program_title, render)
 from setupfix.pipeline.requests import CycleCorrection
 from setupfix.pipeline.writers import write_text
 
-__all__ = ["Exported", "cycle_rows", "offsets_text", "export", "program_number_of", "program_title"]
+__all__ = ["Exported", "cycle_rows", "offsets_text", "export", "program_number_of"]
 
 
 @dataclass(frozen=True)
@@ -82,11 +82,6 @@ def _check(cycles: Sequence[CycleCorrection], controller: str) -> None:
         raise ExportError(f"{controller}: a program holds one correction, the report has {len(cycles)} cycles "
                           f"({', '.join(c.part.part or '—' for c in cycles)}): choose one with --part",
                           location=SourceLocation(report))
-
-
-def program_title(report: str, part: str) -> str:
-    """A program's title comment: the report and the part, on one line whatever the names hold."""
-    return visible_name(f"{report} {part}".strip())
 
 
 def program_number_of(cycles: Sequence[CycleCorrection], controller: str, program_number: int | None = None) -> int | None:

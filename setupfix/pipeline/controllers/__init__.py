@@ -43,7 +43,7 @@ from setupfix.pipeline.controllers.common import PROGRAM_NUMBERS, check_program_
 
 __all__ = ["CONTROLLERS", "render", "renderer", "Renderer", "write_offsets", "PROGRAM_SUFFIX", "NAME_MAX",
            "PROGRAM_NAME_MAX", "program_path", "fit_name", "PROGRAM_NUMBERS", "DERIVED_PROGRAMS",
-           "check_program_number", "derived_program_number"]
+           "check_program_number", "derived_program_number", "program_title"]
 
 
 class Renderer(Protocol):
@@ -104,6 +104,13 @@ def write_offsets(rows: Sequence[OffsetRow], target: str, *, controller: str = "
     from setupfix.pipeline.writers import write_text
 
     write_text(target, render(controller, rows, title, program_number=program_number, spindle=spindle))
+
+
+def program_title(report: str, part: str) -> str:
+    """A program's title comment: the report and the part, on one line whatever the names hold."""
+    from parsers.names import visible_name
+
+    return visible_name(f"{report} {part}".strip())
 
 
 #: The numbers :func:`derived_program_number` chooses from (inclusive).
