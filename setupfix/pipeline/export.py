@@ -84,7 +84,8 @@ def _check(cycles: Sequence[CycleCorrection], controller: str) -> None:
                           location=SourceLocation(report))
 
 
-def program_number_of(cycles: Sequence[CycleCorrection], controller: str, program_number: int | None = None) -> int | None:
+def program_number_of(cycles: Sequence[CycleCorrection], controller: str,
+                      program_number: int | None = None) -> int | None:
     """The number the program of ``cycles`` gets: ``program_number`` checked against the format, else derived
     from the first cycle's report and part; None for a format without a program name.
 

@@ -30,7 +30,7 @@ __all__ = ["render", "PRESET_COLUMNS"]
 PRESET_COLUMNS = {"X": "X", "Y": "Y", "Z": "Z", ROTATION: "SPC"}
 
 
-def _table(name: str, unit: str, columns: tuple[str, ...], rows: list[tuple[str, ...]]) -> list[str]:
+def _table(name: str, unit: str, columns: tuple[str, ...], rows: Sequence[tuple[str, ...]]) -> list[str]:
     widths = [max(len(c), *(len(r[i]) for r in rows)) + 2 for i, c in enumerate(columns)]
 
     def line(cells: tuple[str, ...]) -> str:
