@@ -10,8 +10,8 @@ the tool table (``TOOL.T``, row ``T`` = ``number`` or the T of ``T5``): length i
 ``L`` (geometry) or ``DL`` (wear), radius (component ``R``) in ``R`` or ``DR``.  Each
 table is written as ``BEGIN … MM`` / header / rows / ``[END]`` with only the columns
 changed, to merge into the control's table (TNCremo, table editor); presets with
-different columns, and each tool column, get a table block of their own, so that no
-cell is left blank.  The tables have no program name: a program number is not written.
+different columns, and tools with different columns, get a table block of their own, so
+that no cell is left blank (one tool-table row per tool, with its length and radius columns).  The tables have no program name: a program number is not written.
 """
 
 from __future__ import annotations
@@ -24,8 +24,10 @@ from setupfix.offsets import OffsetRow
 from setupfix.pipeline.controllers.common import (RADIUS, ROTATION, cannot, groups, length_unit, number,
                                                   one_mode, target)
 
-__all__ = ["render", "PRESET_COLUMNS"]
+__all__ = ["render", "PRESET_COLUMNS", "TOOL_COLUMNS"]
 
+#: Tool-table columns written, in table order: length geometry and wear, radius geometry and wear.
+TOOL_COLUMNS = ("L", "DL", "R", "DR")
 #: Preset-table column of each WKS component.
 PRESET_COLUMNS = {"X": "X", "Y": "Y", "Z": "Z", ROTATION: "SPC"}
 
@@ -53,7 +55,7 @@ def render(rows: Sequence[OffsetRow], title: str = "", *, program_number: int | 
                           "offsets (--current FILE)")
     presets: dict[tuple[str, ...], list[tuple[str, ...]]] = {}  # columns → rows of the preset table
     preset_columns: dict[str, list[str]] = {}  # the columns written, for the twice-check
-    tools: dict[str, list[tuple[str, str]]] = {"L": [], "DL": [], "R": [], "DR": []}
+    tools: dict[str, list[tuple[str, str]]] = {c: [] for c in TOOL_COLUMNS}  # column → (T, value)
     for group in groups(rows):
         if group[0].kind == "wks":
             for row in group:
@@ -84,7 +86,13 @@ def render(rows: Sequence[OffsetRow], title: str = "", *, program_number: int | 
     out: list[str] = []
     for columns, entries in presets.items():
         out += _table("PRESET.PR", unit, columns, entries)
+    by_tool: dict[str, dict[str, str]] = {}  # T → column → value: one table row per tool
     for column, values in tools.items():
-        if values:
-            out += _table("TOOL.T", unit, ("T", column), values)
+        for t, value in values:
+            by_tool.setdefault(t, {})[column] = value
+    blocks: dict[tuple[str, ...], list[tuple[str, ...]]] = {}
+    for t, cells in by_tool.items():
+        blocks.setdefault(tuple(cells), []).append((t, *cells.values()))
+    for columns in sorted(blocks, key=lambda cs: [TOOL_COLUMNS.index(c) for c in cs]):
+        out += _table("TOOL.T", unit, ("T", *columns), blocks[columns])
     return "\n".join(out) + "\n"
