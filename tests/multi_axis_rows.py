@@ -48,7 +48,8 @@ REGISTERS = {
 }
 
 
-def fixture_rows(controller: str, mode: str, *, rotation: float | None = None, wks_only: bool = False) -> list[OffsetRow]:
+def fixture_rows(controller: str, mode: str, *, rotation: float | None = None,
+                 wks_only: bool = False) -> list[OffsetRow]:
     """The rows of :data:`SPEC` with ``controller``'s registers, *add* or *set*; ``rotation`` replaces W1.C's
     change (None: keep it)."""
     out = []

@@ -9,9 +9,10 @@ and TNC7 (an iTNC 530 keeps it in ``ROT``: rename the column there).  Tool rows 
 the tool table (``TOOL.T``, row ``T`` = ``number`` or the T of ``T5``): length in
 ``L`` (geometry) or ``DL`` (wear), radius (component ``R``) in ``R`` or ``DR``.  Each
 table is written as ``BEGIN … MM`` / header / rows / ``[END]`` with only the columns
-changed, to merge into the control's table (TNCremo, table editor); presets with
-different columns, and tools with different columns, get a table block of their own, so
-that no cell is left blank (one tool-table row per tool, with its length and radius columns).  The tables have no program name: a program number is not written.
+changed, to merge into the control's table (TNCremo, table editor): one tool-table row per
+tool with its length and radius columns; presets with different columns, and tools with
+different columns, get a table block of their own, so that no cell is left blank.  The
+tables have no program name: a program number is not written.
 """
 
 from __future__ import annotations
