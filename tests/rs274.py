@@ -38,7 +38,7 @@ def rs274_path() -> Path:
     path = Path(named) if named else CACHE
     if path.is_file() and os.access(path, os.X_OK):
         return path
-    why = (f"LinuxCNC rs274 not found at {path} (SETUPFIX_RS274 {'=' + named if named else 'unset'}): "
+    why = (f"LinuxCNC rs274 not found at {path} ({'SETUPFIX_RS274=' + named if named else 'SETUPFIX_RS274 unset'}): "
            "run .ci/run once, or set SETUPFIX_RS274 to an unpacked linuxcnc-uspace's usr/bin/rs274")
     if os.environ.get("CI"):
         pytest.fail(why)
