@@ -62,3 +62,16 @@ def fixture_rows(controller: str, mode: str, *, rotation: float | None = None,
         out.append(row(cid, REGISTERS[controller][key], kind, axis, delta, current if mode == "set" else None,
                        offset=offset, resolution=resolution, unit="mm"))
     return out
+
+
+def multi_axis_model(unit: str = "mm"):  # -> ProcessModel (imported lazily: the rows need no model)
+    """A multi-axis model built directly (the loader of ``process.axes`` is another part's): G54 on X/Y/Z with its
+    rotation, G55 on X/Y/Z, tool 5 length (H5) and radius (D5), a fixed tool 7."""
+    from setupfix.model import ProcessModel, Register
+
+    def reg(id: str, kind: str, register: str, component: str, fixed: bool = False) -> Register:
+        return Register(id, kind, register, 0.5, fixed, component=component)  # type: ignore[arg-type]
+
+    wks = (*(reg(f"W1.{a}", "wks", "G54", a) for a in "XYZC"), *(reg(f"W2.{a}", "wks", "G55", a) for a in "XYZ"))
+    tools = (reg("T5", "tool", "H5", "Z"), reg("T5.R", "tool", "D5", "R"), reg("T7", "tool", "H7", "Z", fixed=True))
+    return ProcessModel("multi", "Z", unit, 0.001, 0.5, wks, tools, (), (), (), axes=("X", "Y", "Z"), spindle="Z")
