@@ -89,11 +89,11 @@ def render(rows: Sequence[OffsetRow], title: str = "", *, program_number: int | 
         out += _table("PRESET.PR", unit, columns, entries)
     by_tool: dict[str, dict[str, str]] = {}  # T → column → value: one table row per tool
     for column, values in tools.items():
-        for t, value in values:
-            by_tool.setdefault(t, {})[column] = value
+        for tool_row, value in values:
+            by_tool.setdefault(tool_row, {})[column] = value
     blocks: dict[tuple[str, ...], list[tuple[str, ...]]] = {}
-    for t, cells in by_tool.items():
-        blocks.setdefault(tuple(cells), []).append((t, *cells.values()))
+    for tool_row, cells in by_tool.items():
+        blocks.setdefault(tuple(cells), []).append((tool_row, *cells.values()))
     for columns in sorted(blocks, key=lambda cs: [TOOL_COLUMNS.index(c) for c in cs]):
         out += _table("TOOL.T", unit, ("T", *columns), blocks[columns])
     return "\n".join(out) + "\n"
