@@ -89,3 +89,47 @@ def test_an_inch_program_reads_back_in_inches(tmp_path):
     assert "\nG20\n" in program
     got = read_back(program, tmp_path, [(1, "X"), (1, "Y"), (1, "Z")], inch=True)
     assert got == pytest.approx({(1, "X"): 1.2349, (1, "Y"): -3.0012, (1, "Z"): -16.2422}, abs=5e-5)
+
+
+XYZ = ROOT / "sample_reports" / "two_station_xyz"
+XYZ_CURRENT = ("register,axis,value\nG54,X,-250.123\nG54,Y,120.5\nG54,Z,-412.53\nG55,X,50.0\nG55,Y,-0.5\n"
+               "G55,Z,-412.487\nH1,,-0.012\nD1,,0.002\nH2,,0.0\n")
+
+
+def test_the_two_station_sample_from_report_to_read_back(tmp_path):
+    """The whole door: a multi-axis report corrected, the Fanuc program written, read back on every axis."""
+    if not (XYZ / "model.toml").exists():
+        pytest.skip("sample_reports/two_station_xyz arrives with the multi-axis model loader (issue 23, axes part)")
+    import tomllib
+
+    from setupfix.errors import ExportError
+    from setupfix.model import model_from_dict
+    from setupfix.pipeline.correct import correct_report
+    from setupfix.pipeline.export import export
+    from setupfix.pipeline.requests import CorrectRequest, CurrentOffsets
+
+    doc = tomllib.loads((XYZ / "model.toml").read_text(encoding="utf-8"))
+    with_rotation = model_from_dict(doc)
+    (tmp_path / "c.csv").write_text(XYZ_CURRENT + "G54,C,0\nG55,C,0.01\n")
+    request = CorrectRequest(with_rotation, current=CurrentOffsets.read(tmp_path / "c.csv", with_rotation))
+    cycles = correct_report(request, XYZ / "cycle_01.csv").cycles
+    if any(c.corrections.get("W1.C") or c.corrections.get("W2.C") for c in cycles):
+        with pytest.raises(ExportError, match=r"fanuc: cannot express register 'G5[45]' \(W[12]\.C\): G10 L2 holds "
+                                              "no rotation"):
+            export(cycles, str(tmp_path / "r.nc"), controller="fanuc", current=request.current)
+        assert not (tmp_path / "r.nc").exists()
+    doc["process"]["rotation"] = False  # a fixture without the rotation: the Fanuc program holds it all
+    model = model_from_dict(doc)
+    (tmp_path / "c.csv").write_text(XYZ_CURRENT)
+    request = CorrectRequest(model, current=CurrentOffsets.read(tmp_path / "c.csv", model))
+    (cycle,) = correct_report(request, XYZ / "cycle_01.csv").cycles
+    done = export([cycle], str(tmp_path / "p.nc"), controller="fanuc", current=request.current, program_number=4321)
+    assert done.text.startswith("%\nO4321 (")
+    got = read_back(linuxcnc_text(done.text), tmp_path, [(p, a) for p in (1, 2) for a in "XYZ"])
+    for (p, axis), value in got.items():
+        cid = f"W{p}.{axis}"
+        want = request.current[cid] + cycle.corrections.get(cid, 0.0)
+        assert round(value, 3) == round(want, 3), cid
+    tools = run_g10(done.text)
+    assert tools[(11, 1, "R")] == pytest.approx(-0.012 + cycle.corrections.get("T1", 0.0), abs=5e-4)
+    assert tools[(13, 1, "R")] == pytest.approx(0.002 + cycle.corrections.get("T1.R", 0.0), abs=5e-4)
