@@ -10,6 +10,8 @@ from __future__ import annotations
 import re
 
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from g10 import run_g10
 from multi_axis_rows import SPEC, fixture_rows, row
@@ -154,3 +156,19 @@ def test_inch_rows_write_g20_even_when_a_rotation_comes_first():
             row("W1.X", "G54", "wks", "X", 0.0004, 1.0, unit="inch", resolution=0.0001)]
     program = render("fanuc", rows)
     assert "\nG20\n" in program and "G90 G10 L2 P1 X+1.0004 (G54 GEOMETRY W1)" in program
+
+
+_STEPS = st.integers(-99_999_999, 99_999_999)
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.lists(st.tuples(_STEPS, st.integers(-500, 500)), min_size=3, max_size=3), st.sampled_from(["fanuc", "haas"]))
+def test_any_values_on_the_grid_come_back_exactly(steps, name):
+    """Brute force over the grid: the set program's blocks hold current + change to the last digit."""
+    rows = [row(f"W1.{axis}", "G54", "wks", axis, d / 1000, c / 1000) for axis, (c, d) in zip("XYZ", steps,
+                                                                                              strict=True)]
+    state = run_g10(render(name, rows))
+    for axis, (c, d) in zip("XYZ", steps, strict=True):
+        assert round(state[(2, 1, axis)] * 1000) == c + d
+    siemens = siemens_state(render("siemens", rows), {})
+    assert [round(siemens[f"$P_UIFR[1,{a},TR]"] * 1000) for a in "XYZ"] == [c + d for c, d in steps]
