@@ -1,16 +1,25 @@
 """The controller's current offsets (``--current FILE``, ``cli-json.md`` "Current offsets"): the one reader.
 
-A CSV with the header ``register,value`` (any case; more columns after these two are
-ignored).  ``register`` is the controller register (``G54``, ``H5``) or the model ID
-(``W1``); ``value`` the register's current value in the model unit, written with a
-decimal point.  Every correctable register of the model must be listed, so that a
-*set* file is complete; a register the model does not know is an error (a typo would
-otherwise pass unnoticed).
+One-axis model: a CSV with the header ``register,value`` (any case; more columns after
+these two are ignored).  ``register`` is the controller register (``G54``, ``H5``) or the
+model ID (``W1``); ``value`` the register's current value in the model unit, written with
+a decimal point.
 
-Refused, naming the file and line: a row with more cells than the header (a decimal
-comma, ``G54,-412,5300``, would otherwise be read as −412 and its ``5300`` dropped), a
-value that is not a plain decimal number or that no control holds (not finite, or
-:data:`MAX_OFFSET_MM` or more in magnitude), an unknown or repeated register.
+Multi-axis model (``process.axes``): the header ``register,axis,value``, one row per
+register component.  A work offset's row names its axis — ``X``, ``Y``, ``Z`` or ``C``
+(its rotation about the spindle, degrees) — after the register (``G54``) or the WKS ID
+(``W1``); a tool's length register (``H5``) and radius register (``D5``) have the axis
+empty, each named by its own register name or component ID (``T5``, ``T5.R``).  Values
+are returned by component ID (``W1.X``, ``W1.C``, ``T5``, ``T5.R``).
+
+Either way every correctable register (component) of the model must be listed, so that a
+*set* file is complete; a register the model does not know is an error (a typo would
+otherwise pass unnoticed).  Refused, naming the file and line: a row with more cells than
+the header (a decimal comma, ``G54,-412,5300``, would otherwise be read as −412 and its
+``5300`` dropped), a value that is not a plain decimal number or that no control holds (not
+finite, or :data:`MAX_OFFSET_MM` or more in magnitude; a rotation :data:`MAX_OFFSET_MM`
+degrees), an unknown or repeated register (component), a work offset without its axis or a
+tool register with one.
 """
 
 from __future__ import annotations
@@ -20,7 +29,7 @@ from pathlib import Path
 from parsers._source import csv_records, read_text
 from parsers.numbers import try_number
 from setupfix.errors import ParseError, SourceLocation
-from setupfix.model import ProcessModel
+from setupfix.model import ProcessModel, Register
 from setupfix.units import length_factor
 
 __all__ = ["read_current", "MAX_OFFSET_MM"]
@@ -29,21 +38,57 @@ __all__ = ["read_current", "MAX_OFFSET_MM"]
 MAX_OFFSET_MM = 1e5
 
 
+def _base(reg: Register) -> str:
+    """``W1`` of ``W1.X``; a register without a component suffix is its own base."""
+    head, dot, tail = reg.id.rpartition(".")
+    return head if dot and tail == reg.component else reg.id
+
+
+def _component(model: ProcessModel, key: str, axis: str, where: SourceLocation) -> Register:
+    """The register component a multi-axis row names (register or ID, and axis)."""
+    folded = key.strip().casefold()
+    wks = [r for r in model.wks if folded in (r.register.strip().casefold(), _base(r).casefold(), r.id.casefold())]
+    tools = [r for r in model.tools if folded in (r.register.strip().casefold(), r.id.casefold())]
+    if wks:
+        if not axis:
+            raise ParseError(f"register {key!r} is a work offset: give its axis (X, Y, Z or C)", location=where)
+        exact = [r for r in wks if r.id.casefold() == folded]
+        found = exact or [r for r in wks if (r.component or "").upper() == axis.upper()]
+        if not found or (exact and (exact[0].component or "").upper() != axis.upper()):
+            have = ", ".join(r.component or "?" for r in wks)
+            raise ParseError(f"register {key!r} has no axis {axis!r} in the model (its axes: {have})", location=where)
+        return found[0]
+    if tools:
+        if axis:
+            raise ParseError(f"register {key!r} is a tool register: leave its axis empty (found {axis!r})",
+                             location=where)
+        return tools[0]
+    raise ParseError(f"register {key!r} is not in the model", location=where)
+
+
+def _label(reg: Register) -> str:
+    return f"{reg.register} {reg.component}" if reg.kind == "wks" and reg.component else reg.register
+
+
 def read_current(path: str | Path, model: ProcessModel) -> dict[str, float]:
-    """Current values by register ID, model unit.
+    """Current values by register ID (component ID in a multi-axis model), model unit (a rotation in degrees).
 
     Raises
     ------
     ParseError
         Naming the file and line: missing header, a row longer than the header, an
-        unknown or repeated register, a value that is not a plain decimal number or
-        that no control holds, a correctable register missing.
+        unknown or repeated register (component), a work offset's row without its axis
+        or a tool's with one, a value that is not a plain decimal number or that no
+        control holds, a correctable register (component) missing.
     """
     name = str(path)
+    multi = model.multi_axis
+    columns = ["register", "axis", "value"] if multi else ["register", "value"]
     records = csv_records(read_text(path), name)
     head = next(records, None)
-    if head is None or [c.strip().casefold() for c in head[1][:2]] != ["register", "value"]:
-        raise ParseError("expected the header 'register,value'", location=SourceLocation(name, line=1))
+    if head is None or [c.strip().casefold() for c in head[1][:len(columns)]] != columns:
+        why = " (a multi-axis model: one row per register component)" if multi else ""
+        raise ParseError(f"expected the header '{','.join(columns)}'{why}", location=SourceLocation(name, line=1))
     width = len(head[1])
     limit = MAX_OFFSET_MM * length_factor("mm", model.unit)
     out: dict[str, float] = {}
@@ -51,26 +96,33 @@ def read_current(path: str | Path, model: ProcessModel) -> dict[str, float]:
         if not any(c.strip() for c in cells):
             continue
         where = SourceLocation(name, line=line)
-        if len(cells) < 2:
-            raise ParseError("expected register,value", location=where)
+        if len(cells) < len(columns):
+            raise ParseError(f"expected {','.join(columns)}", location=where)
         if len(cells) > width:
             raise ParseError(f"{len(cells)} cells but {width} columns in the header", location=where,
                              hint="a decimal comma splits a number in two: write -412.53, not -412,53")
-        key, text = cells[0].strip(), cells[1].strip()
-        try:
-            reg = model.register(key)
-        except KeyError:
-            raise ParseError(f"register {key!r} is not in the model", location=where) from None
+        key, text = cells[0].strip(), cells[len(columns) - 1].strip()
+        if multi:
+            reg = _component(model, key, cells[1].strip(), where)
+            shown = f"{key} {reg.component}" if reg.kind == "wks" else key
+        else:
+            try:
+                reg = model.register(key)
+            except KeyError:
+                raise ParseError(f"register {key!r} is not in the model", location=where) from None
+            shown = key
         if reg.id in out:
-            raise ParseError(f"register {key!r} given twice", location=where)
+            raise ParseError(f"register {shown!r} given twice", location=where)
         value = try_number(text)  # the project's one strict number parser (decimal point, finite)
         if value is None:
             raise ParseError(f"expected a decimal number, found {text[:30]!r}", location=where)
-        if abs(value) >= limit:
-            raise ParseError(f"value {text[:30]} of {key} is beyond any control's offset range "
-                             f"(|value| < {limit:g} {model.unit})", location=where)
+        rotation = reg.component == "C" and reg.kind == "wks"
+        bound, unit = (MAX_OFFSET_MM, "degrees") if rotation else (limit, model.unit)
+        if abs(value) >= bound:
+            raise ParseError(f"value {text[:30]} of {shown} is beyond any control's offset range "
+                             f"(|value| < {bound:g} {unit})", location=where)
         out[reg.id] = value
-    missing = [r.register for r in model.registers if not r.fixed and r.id not in out]
+    missing = [_label(r) for r in model.registers if not r.fixed and r.id not in out]
     if missing:
         raise ParseError(f"no current value for {', '.join(missing)}", location=SourceLocation(name))
     return out

@@ -9,7 +9,8 @@ from types import FrameType
 from typing import TYPE_CHECKING
 
 from setupfix.cli._choices import CONTROLLERS, OPTIMIZERS
-from setupfix.cli._common import add_objective_option, add_report_options, add_thermal_options, shown, whole_number
+from setupfix.cli._common import (add_objective_option, add_program_number_option, add_report_options,
+                                  add_thermal_options, check_program_number, shown, whole_number)
 from setupfix.cli.exit_codes import NOT_SOLVED, OK, PARTIAL, REJECTED
 
 if TYPE_CHECKING:
@@ -30,7 +31,9 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
                    help="offsets CSV (with --controller other than csv: a folder, one program per cycle)")
     p.add_argument("--controller", default="csv", choices=sorted(CONTROLLERS), help="output syntax (default csv)")
     p.add_argument("--current", metavar="FILE", default=None,
-                   help="the controller's current offsets (CSV register,value): write absolute new values")
+                   help="the controller's current offsets (CSV register,value; register,axis,value in a "
+                        "multi-axis model): write absolute new values")
+    add_program_number_option(p)
     p.add_argument("--optimizer", default="exact", choices=sorted(OPTIMIZERS))
     p.add_argument("--seed", type=int, default=None)
     p.add_argument("--time-limit", type=float, default=None, metavar="SECONDS",
@@ -65,13 +68,14 @@ def run(args: argparse.Namespace) -> int:
 
     import json
 
+    check_program_number(args)
     request = correct_request(args)  # the very request ``correct`` builds from the same options
     previous = signal.signal(signal.SIGTERM, _terminate)
     try:
         with _Progress() as progress:
             summary = run_batch(request, args.folder, args.out, workers=args.workers, controller=args.controller,
                                 settle=args.settle, progress=progress, store=open_store(args.db) if args.db else None,
-                                force=args.force)
+                                force=args.force, program_number=args.program_number)
     finally:
         signal.signal(signal.SIGTERM, previous)
     for path, note in summary.notes:  # a note that names its file is printed as it is (not the path twice)

@@ -81,6 +81,23 @@ def add_thermal_options(p: argparse.ArgumentParser) -> None:
                    help="feed nothing forward below |D| (model unit; default one register step)")
 
 
+def add_program_number_option(p: Any) -> None:
+    """``--program-number N``: the written program's number (``correct``, ``batch``)."""
+    p.add_argument("--program-number", type=whole_number(1, 99_999_999), default=None, metavar="N",
+                   help="number (name) of the program written: the Fanuc/Haas O number (O1-O9999 / O1-O99999), "
+                        "the Siemens program SETUPFIX_N; batch numbers its programs N, N+1, ... in file order "
+                        "(default: derived from the report and part - batch: from each program's path, distinct "
+                        "in a run - in O1000-O7999)")
+
+
+def check_program_number(args: argparse.Namespace) -> None:
+    """Refuse a ``--program-number`` the chosen ``--controller`` cannot hold, before any work."""
+    if getattr(args, "program_number", None) is not None:
+        from setupfix.pipeline.controllers import check_program_number as check
+
+        check(args.controller, args.program_number)
+
+
 def add_lenient_option(group: Any) -> None:
     """``--lenient``: the reader skips a self-contradicting row (with a warning naming its line)."""
     group.add_argument("--lenient", action="store_true",

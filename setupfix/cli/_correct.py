@@ -8,8 +8,8 @@ import sys
 from typing import TYPE_CHECKING
 
 from setupfix.cli._choices import CONTROLLERS, OPTIMIZERS
-from setupfix.cli._common import (add_objective_option, add_report_options, add_thermal_options, cycles_of,
-                                  read_options)
+from setupfix.cli._common import (add_objective_option, add_program_number_option, add_report_options,
+                                  add_thermal_options, check_program_number, cycles_of, read_options)
 from setupfix.cli.exit_codes import NOT_SOLVED, OK, REJECTED
 
 if TYPE_CHECKING:
@@ -49,7 +49,9 @@ def add_offsets_options(p: argparse.ArgumentParser) -> None:
     p.add_argument("--controller", default="csv", choices=sorted(CONTROLLERS),
                    help="syntax of the offsets file (default csv)")
     p.add_argument("--current", metavar="FILE", default=None,
-                   help="the controller's current offsets (CSV register,value): write absolute new values")
+                   help="the controller's current offsets (CSV register,value; register,axis,value in a "
+                        "multi-axis model): write absolute new values")
+    add_program_number_option(p)
 
 
 def correct_request(args: argparse.Namespace) -> CorrectRequest:
@@ -71,12 +73,14 @@ def run(args: argparse.Namespace) -> int:
 
     if args.offsets:
         check_target(args.offsets)
+        check_program_number(args)
     request = correct_request(args)
     outcome = correct_report(request, args.report)
     cycles = outcome.cycles
     rejected, unsolved = bool(outcome.rejected), bool(outcome.unsolved)
     if args.offsets and not rejected and not unsolved:
-        export(cycles, args.offsets, controller=args.controller, current=request.current)
+        export(cycles, args.offsets, controller=args.controller, current=request.current,
+               program_number=args.program_number)
     for c in outcome.rejected:
         print(f"error: {c.part.report}: part {c.part.part or '—'}: {c.recommendation.alarm}", file=sys.stderr)
     for c in cycles:

@@ -234,7 +234,8 @@ def auto_workers(n_files: int) -> int:
 
 def run_batch(request: CorrectRequest, folder: str | Path, out: str | Path, *, workers: int | None = 1,
               controller: str = "csv", settle: float = 1.0, store: Store | None = None, force: bool = False,
-              progress: Callable[[int, int, Outcome], None] | None = None) -> BatchSummary:
+              progress: Callable[[int, int, Outcome], None] | None = None,
+              program_number: int | None = None) -> BatchSummary:
     """Correct every report below ``folder`` with ``request`` and write one offsets file ``out``.
 
     Parameters
@@ -265,6 +266,9 @@ def run_batch(request: CorrectRequest, folder: str | Path, out: str | Path, *, w
         ``request.history``) plus every report of the batch (:func:`batch_history`).
     progress : callable, optional
         Called after each report with (done, total, outcome).
+    program_number : int, optional
+        The first program's number (``--program-number``); default each program's own
+        derived number, distinct in the run (:class:`~setupfix.pipeline.batch_output.ProgramNumbers`).
 
     Returns
     -------
@@ -277,7 +281,8 @@ def run_batch(request: CorrectRequest, folder: str | Path, out: str | Path, *, w
     if workers is not None and not 1 <= workers <= 64:
         raise ParameterError(f"batch: workers must be an int in [1, 64], got {workers}")
     # An unknown controller, or a register it cannot express, fails before any work.
-    render(controller, offset_rows(model, {}, current=request.current))
+    render(controller, offset_rows(model, {}, current=request.current), program_number=program_number,
+           spindle=model.spindle)
     if store is not None:
         store.verify()  # a damaged store is refused before any work, not written into
     listing = find_reports(folder)
@@ -298,7 +303,8 @@ def run_batch(request: CorrectRequest, folder: str | Path, out: str | Path, *, w
     summary.notes += [(path, Note(f"symbolic link to {target}: read as a report", None, "folder"))
                       for path, target in listing.links]
     seen: dict[str, str] = {}
-    writer: CsvOut | ProgramsOut = CsvOut(out) if controller == "csv" else ProgramsOut(out, controller)
+    writer: CsvOut | ProgramsOut = (CsvOut(out) if controller == "csv" else
+                                    ProgramsOut(out, controller, program_number=program_number, spindle=model.spindle))
     claims = Claims(store, force) if store is not None else None
     work = _Work(request, record=store is not None, controller=controller)
     try:

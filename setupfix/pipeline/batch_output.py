@@ -5,7 +5,8 @@ its programs, and say at the end whether anything was written (``commit``).  The
 streamed into a temporary file renamed over the target (complete or absent; an existing
 output is left as it was when no report gave rows).  Programs go to
 :func:`~setupfix.pipeline.controllers.program_path` below the output folder, each written
-atomically, with a manifest (:data:`MANIFEST`) of which report each program was written for.
+atomically, with a manifest (:data:`MANIFEST`) of which report each program was written for,
+and numbered by :class:`ProgramNumbers` (distinct in a run).
 """
 
 from __future__ import annotations
@@ -20,10 +21,11 @@ from typing import Any
 from parsers.names import visible_name
 from setupfix.errors import ExportError, SourceLocation
 from setupfix.offsets import OffsetRow
-from setupfix.pipeline.controllers import program_path
+from setupfix.pipeline.controllers import (DERIVED_PROGRAMS, PROGRAM_NUMBERS, check_program_number,
+                                           derived_program_number, program_path, program_title, render)
 from setupfix.pipeline.writers import atomic_write, check_target, csv_header, csv_lines, write_text
 
-__all__ = ["CsvOut", "ProgramsOut", "MANIFEST"]
+__all__ = ["CsvOut", "ProgramsOut", "ProgramNumbers", "MANIFEST"]
 
 
 class CsvOut:
@@ -62,18 +64,71 @@ class _NothingWritten(Exception):
     pass
 
 
+class ProgramNumbers:
+    """The program numbers of one batch run: distinct, in the order the programs are written (file order).
+
+    Without a first number each program gets
+    :func:`~setupfix.pipeline.controllers.derived_program_number` of its path below the
+    output folder, or when an earlier program of the run has it the next free number of
+    :data:`~setupfix.pipeline.controllers.DERIVED_PROGRAMS` (wrapping round): the same
+    folder gives the same numbers run after run.  With ``first`` (``--program-number N``)
+    the programs are numbered N, N+1, … in file order.  A format without a program name
+    (HEIDENHAIN tables) gets None.
+    """
+
+    def __init__(self, controller: str, first: int | None = None) -> None:
+        self.controller = controller
+        self.first = None if first is None else check_program_number(controller, first)
+        self.used: set[int] = set()
+
+    def take(self, name: str) -> int | None:
+        """The number of the program ``name`` (its path below the output folder).
+
+        Raises
+        ------
+        ExportError
+            The run has more programs than the format (or the derived range) has numbers.
+        """
+        if self.controller not in PROGRAM_NUMBERS:
+            return None
+        if self.first is not None:
+            n = self.first + len(self.used)
+            try:
+                check_program_number(self.controller, n)
+            except ExportError as exc:
+                raise ExportError(f"{exc.message}: program {len(self.used) + 1} of the run ({visible_name(name)}) "
+                                  f"numbered from {self.first}; give a lower --program-number") from None
+        else:
+            low, high = DERIVED_PROGRAMS
+            if len(self.used) > high - low:
+                raise ExportError(f"{self.controller}: more than {high - low + 1} programs in one run: number them "
+                                  "with --program-number (or split the folder)")
+            n = derived_program_number(name)
+            while n in self.used:
+                n = low if n == high else n + 1
+        self.used.add(n)
+        return n
+
+
 class ProgramsOut:
     """One controller program per corrected cycle at :func:`~setupfix.pipeline.controllers.program_path`.
 
     The folder keeps a manifest (:data:`MANIFEST`: report → the programs written for it), so
     that a report corrected again replaces exactly its own programs: one that no longer
     yields a program (rejected, refused, …) leaves none of an earlier run behind.  Only
-    files the manifest names are ever removed.
+    files the manifest names are ever removed.  Each program is rendered from its cycle's
+    rows with the run's number (:class:`ProgramNumbers`; ``program_number`` the first)
+    and the report's path below the batch folder as its title; the text a worker rendered
+    is the proof that the cycle's rows are expressible, the program differs from it only
+    in its number and title.
     """
 
-    def __init__(self, folder: str | Path, controller: str) -> None:
+    def __init__(self, folder: str | Path, controller: str, *, program_number: int | None = None,
+                 spindle: str = "Z") -> None:
         self.folder = Path(folder)
         self.controller = controller
+        self.spindle = spindle
+        self.numbers = ProgramNumbers(controller, program_number)
         if self.folder.exists() and not self.folder.is_dir():
             raise ExportError("with --controller other than csv, --out is a folder for one program per cycle",
                               location=SourceLocation(visible_name(str(folder))))
@@ -97,6 +152,9 @@ class ProgramsOut:
                                     self.controller).as_posix()
                 self._owner[name] = (rel, part)
             target = self.folder / name
+            own = [r for r in rows if r.part == part]
+            text = render(self.controller, own, program_title(rel, part), program_number=self.numbers.take(name),
+                          spindle=self.spindle) if own else text
             target.parent.mkdir(parents=True, exist_ok=True)
             write_text(target, text)
             names.append(name)

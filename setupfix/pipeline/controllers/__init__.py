@@ -6,7 +6,21 @@ programs), ``siemens`` (840D part program with system variables) and
 ``heidenhain`` (preset and tool table values).  Every renderer raises
 :class:`~setupfix.errors.ExportError` naming a register it cannot express, so no
 file is written half right.  :func:`parsers.current.read_current` reads the controller's current
-offsets (``register,value``) that turn *add* rows into absolute *set* rows.
+offsets (``register,value``; ``register,axis,value`` in a multi-axis model) that turn *add*
+rows into absolute *set* rows.  In a multi-axis model the rows are register components
+(:mod:`setupfix.offsets`); the renderers group them by register, so one block or table row
+holds every axis of a WKS.
+
+Program numbers: a program is named by ``program_number`` where its format has a name
+(:data:`~setupfix.pipeline.controllers.common.PROGRAM_NUMBERS`: the Fanuc/Haas ``O`` word,
+the Siemens program name; the HEIDENHAIN tables and the CSV have none).  Without one the
+renderers write ``O4501`` (Fanuc/Haas) and no Siemens name; the doors always give one:
+``--program-number N``, else :func:`derived_program_number` of the correction's report and
+part (``correct``, the TUI) — the same report and part always get the same number, others
+one of :data:`DERIVED_PROGRAMS` (O1000…O7999: below the O8000/O9000 ranges a Fanuc control
+may keep edit-protected, above the low numbers a shop numbers its own programs with) — and
+in ``batch`` distinct numbers per program of a run
+(:class:`~setupfix.pipeline.batch_output.ProgramsOut`).
 
 ``batch --controller`` writes one program per cycle into a folder; :func:`program_path`
 names it after the report's path below the batch folder (unique by construction:
@@ -19,16 +33,26 @@ from __future__ import annotations
 import hashlib
 import importlib
 import os
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from pathlib import PurePosixPath
+from typing import Protocol
 
 from setupfix.errors import ParameterError
 from setupfix.offsets import OffsetRow
+from setupfix.pipeline.controllers.common import PROGRAM_NUMBERS, check_program_number
 
 __all__ = ["CONTROLLERS", "render", "renderer", "Renderer", "write_offsets", "PROGRAM_SUFFIX", "NAME_MAX",
-           "PROGRAM_NAME_MAX", "program_path", "fit_name"]
+           "PROGRAM_NAME_MAX", "program_path", "fit_name", "PROGRAM_NUMBERS", "DERIVED_PROGRAMS",
+           "check_program_number", "derived_program_number", "program_title"]
 
-Renderer = Callable[[Sequence[OffsetRow], str], str]
+
+class Renderer(Protocol):
+    """A controller format: the rows' text, ``title`` in a comment, ``program_number`` its name where it has one,
+    ``spindle`` the axis a WKS rotation turns about."""
+
+    def __call__(self, rows: Sequence[OffsetRow], title: str = "", *, program_number: int | None = None,
+                 spindle: str = "Z") -> str: ...
+
 
 #: Registry: controller name → "module:function" (imported on use).
 CONTROLLERS: dict[str, str] = {
@@ -57,12 +81,21 @@ def renderer(name: str) -> Renderer:
     return fn
 
 
-def render(name: str, rows: Sequence[OffsetRow], title: str = "") -> str:
-    """Text of ``rows`` in controller format ``name``; ``title`` goes in a comment where the format has one."""
-    return renderer(name)(rows, title)
+def render(name: str, rows: Sequence[OffsetRow], title: str = "", *, program_number: int | None = None,
+           spindle: str = "Z") -> str:
+    """Text of ``rows`` in controller format ``name``; ``title`` goes in a comment where the format has one,
+    ``program_number`` names the program where the format has a name (see the module text).
+
+    Raises
+    ------
+    ExportError
+        A register (or a rotation) the format cannot express, or a program number it cannot hold.
+    """
+    return renderer(name)(rows, title, program_number=program_number, spindle=spindle)
 
 
-def write_offsets(rows: Sequence[OffsetRow], target: str, *, controller: str = "csv", title: str = "") -> None:
+def write_offsets(rows: Sequence[OffsetRow], target: str, *, controller: str = "csv", title: str = "",
+                  program_number: int | None = None, spindle: str = "Z") -> None:
     """Render ``rows`` and write them atomically to ``target`` (``-``: standard output).
 
     The text is complete before the file is opened: a register the format cannot
@@ -70,7 +103,26 @@ def write_offsets(rows: Sequence[OffsetRow], target: str, *, controller: str = "
     """
     from setupfix.pipeline.writers import write_text
 
-    write_text(target, render(controller, rows, title))
+    write_text(target, render(controller, rows, title, program_number=program_number, spindle=spindle))
+
+
+def program_title(report: str, part: str) -> str:
+    """A program's title comment: the report and the part, on one line whatever the names hold."""
+    from parsers.names import visible_name
+
+    return visible_name(f"{report} {part}".strip())
+
+
+#: The numbers :func:`derived_program_number` chooses from (inclusive).
+DERIVED_PROGRAMS = (1000, 7999)
+
+
+def derived_program_number(*keys: str) -> int:
+    """A program number in :data:`DERIVED_PROGRAMS` from ``keys`` (report, part): the same keys give the same
+    number, different keys one of 7,000 numbers by a hash (SHA-256), so that two corrections rarely share one."""
+    low, high = DERIVED_PROGRAMS
+    digest = hashlib.sha256(os.fsencode("\0".join(keys))).digest()
+    return low + int.from_bytes(digest[:8], "big") % (high - low + 1)
 
 
 #: File suffix of a program by controller (every format but ``csv``).
