@@ -37,6 +37,10 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
                    help="history store: earlier reports and the corrections log for the EWMA smoothing "
                         "(model [safety] ewma < 1) and for the recent measurements that stand in for dimensions "
                         "the report lacks")
+    p.add_argument("--html", metavar="OUT", default=None,
+                   help="also write one self-contained HTML page of the correction (verdict, tolerance zones with "
+                        "measured and predicted positions, registers, rules; with --store the control charts of "
+                        "the stored series); prints on A4")
     add_offsets_options(p)
     add_report_options(p)
     add_thermal_options(p)
@@ -68,12 +72,15 @@ def correct_request(args: argparse.Namespace) -> CorrectRequest:
 def run(args: argparse.Namespace) -> int:
     from setupfix.pipeline.correct import correct_report
     from setupfix.pipeline.export import export
+    from setupfix.pipeline.html_report import write_correction_page
     from setupfix.pipeline.present import format_correction, note_lines, outcome_json, verdict_line
     from setupfix.pipeline.writers import check_target
 
     if args.offsets:
         check_target(args.offsets)
         check_program_number(args)
+    if args.html:
+        check_target(args.html)
     request = correct_request(args)
     outcome = correct_report(request, args.report)
     cycles = outcome.cycles
@@ -81,6 +88,8 @@ def run(args: argparse.Namespace) -> int:
     if args.offsets and not rejected and not unsolved:
         export(cycles, args.offsets, controller=args.controller, current=request.current,
                program_number=args.program_number)
+    if args.html:
+        write_correction_page(outcome, args.html, store=args.store)
     for c in outcome.rejected:
         print(f"error: {c.part.report}: part {c.part.part or '—'}: {c.recommendation.alarm}", file=sys.stderr)
     for c in cycles:

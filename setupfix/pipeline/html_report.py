@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import html
 import math
+from pathlib import Path
 from collections.abc import Iterable, Sequence
 
 import numpy as np
@@ -334,3 +335,22 @@ def correction_page(outcome: CorrectOutcome | CycleCorrection, history: SpcOutco
         body += [f"<p class=\"muted\">{_e(n)}</p>" for n in outcome.notes]
     body += [_cycle_section(pc, known) for pc in cycles]
     return _page(title, body)
+
+
+def write_correction_page(outcome: CorrectOutcome, target: str, store: str | None = None) -> None:
+    """``correct --html``: :func:`correction_page` written atomically to ``target`` (``-``: standard output).
+
+    With ``store`` (``correct --store``, an existing history store) the page also holds the control
+    charts and capability of the report's dimensions from the stored series.
+    """
+    from setupfix.pipeline.spc import SpcRequest, spc_report
+    from setupfix.pipeline.writers import write_text
+
+    history = None
+    if store is not None and Path(store).is_file():
+        from setupfix.store import open_store
+
+        names = tuple(dict.fromkeys(d.name for c in outcome.cycles for d in c.model.dimensions))
+        with open_store(store) as opened:
+            history = spc_report(opened, SpcRequest(dimensions=names))
+    write_text(target, correction_page(outcome, history))
