@@ -55,8 +55,8 @@ def _applied_result(problem: CorrectionProblem, rec: Recommendation) -> Optimize
         binding = problem.binding(x)
     message = raw.message
     if rec.verdict == "hold":
-        message = "hold: " + next((r.message for r in rec.rules if r.rule in ("not_solved", "dead_band", "no_harm")),
-                                  "no change needed")
+        message = "hold: " + next((r.message for r in rec.rules
+                                   if r.rule in ("not_solved", "dead_band", "no_harm", "draft")), "no change needed")
     return dataclasses.replace(raw, x=x.copy(), margin_before=budget(problem, 0 * x, rec.given_up)[0],
                                margin_after=budget(problem, x, rec.given_up)[0], norm=float(np.linalg.norm(x)),
                                binding=binding, message=message)
@@ -111,7 +111,8 @@ def correct_cycle(request: CorrectRequest, part: PartMeasurement, *,
     solve = request.solve
     opt = get_optimizer(solve.optimizer, seed=solve.seed, **solve.params())
     rec = recommend(posed, opt.solve, optimizer=solve.optimizer, names={d.id: d.name for d in model.dimensions},
-                    registers={r.id: r.register for r in model.registers}, unit=model.unit)
+                    registers={r.id: r.register for r in model.registers}, unit=model.unit,
+                    draft=model.source if model.draft else None)
     notes = [*part.notes, *posed.notes, *(n for n in rec.result.notes if n.message != rec.result.message)]
     if part.absent:
         notes.append(Note(f"{len(part.absent)} dimension(s) absent from the report, left out: "
