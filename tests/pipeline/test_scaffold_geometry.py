@@ -138,7 +138,7 @@ def test_every_sample_with_vectors_gets_the_axes_and_weights_it_states():
     if (SHARED / "cmm-samples").is_dir():
         assert {"DMO_Impeller_6_Blades_Part_1.dmo", "DMO_Example1_PiezaDemo.dmo",
                 "CALYPSO_chr_PruefplanValidierungsbauteil1_16.txt"} <= done.keys()
-        assert sum(done.values()) > 3000
+        assert sum(done.values()) > 2500
 
 
 @pytest.mark.needs_shared
