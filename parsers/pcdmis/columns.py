@@ -183,8 +183,8 @@ def read_columns(text: str, name: str, default_unit: str | None) -> pd.DataFrame
     }, columns=list(CANONICAL_COLUMNS))
     letters = np.char.upper(np.char.strip(axes.astype(str)))
     along = np.isin(letters, ["X", "Y", "Z"])
-    for column, letter in zip(DIRECTION_COLUMNS, "XYZ", strict=True):  # as text_report.geometry_of, by column
-        frame[column] = np.where(letters == letter, 1.0, np.where(along, 0.0, np.nan))
+    for direction, letter in zip(DIRECTION_COLUMNS, "XYZ", strict=True):  # as text_report.geometry_of, by column
+        frame[direction] = np.where(letters == letter, 1.0, np.where(along, 0.0, np.nan))
     frame["feature"] = ""
     frame["size"] = np.where(letters == "D", "diameter", np.where(letters == "R", "radius", "")).astype(object)
     frame["side"] = ""

@@ -24,7 +24,6 @@ until the user has checked the physics and removed the key.
 from __future__ import annotations
 
 import json
-import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
