@@ -14,6 +14,7 @@ from setupfix.pipeline.batch import run_batch
 from setupfix.pipeline.correct import correct_report
 from setupfix.pipeline.requests import CorrectRequest
 from setupfix.pipeline.session import open_report
+from setupfix.pipeline.view import summary as headline
 from tests.conftest import GUIDE_PINS
 
 
@@ -70,6 +71,9 @@ def test_batch_and_the_tui_session_hold_a_draft_too(tmp_path):
     opened = open_report(CorrectRequest(model), GUIDE_PINS / "cycle_02.csv")
     assert [c.verdict for c in opened.corrections] == ["hold"]
     assert [r.rule for r in opened.corrections[0].recommendation.rules] == ["draft"]
+    shown = headline(opened.corrections[0])  # what the TUI's headline shows
+    assert shown.verdict == "hold" and shown.alarm.startswith("DRAFT MODEL: edit the model (draft)")
+    assert shown.rules[0].startswith("draft: edit the model (draft)")
 
 
 def test_removing_the_key_recommends_again(tmp_path):

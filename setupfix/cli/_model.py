@@ -66,8 +66,9 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
     init.add_argument("-o", "--out", required=True, metavar="MODEL",
                       help="model TOML to write ('-': stdout); written atomically")
     init.add_argument("--axis", choices=("X", "Y", "Z"), default=None,
-                      help="keep the characteristics along this axis (as the report states it, else the name) "
-                           "and those with none; default: keep all, process axis = the one most state")
+                      help="a one-axis model: keep the characteristics along this axis (as the report states it, "
+                           "else the name) and those with none; default: keep all, a multi-axis model when the "
+                           "reports measure several axes, else a one-axis model on the one they state")
     init.add_argument("--name", default=None, help="process name (default: from the report file names)")
     init.add_argument("--parts-are-stations", action="store_true",
                       help="the report's parts are the fixture's stations (one workpiece each): group = part "
