@@ -97,3 +97,15 @@ def test_calypso_coordinate_symbols_state_their_axis(tmp_path):
     x, r = row(table, "X1"), row(table, "R1")
     assert (x["nx"], x["ny"], x["nz"], x["size"]) == (1.0, 0.0, 0.0, "")
     assert r["size"] == "radius" and math.isnan(r["nx"])
+
+
+@pytest.mark.needs_shared
+def test_korean_items_and_element_words():
+    path = SHARED / "cmm-samples" / "korean_cmm_txt" / "KR_45926-4G100_240113_night_2-2-1_NG.cp949.txt"
+    if not path.exists():
+        pytest.skip(f"{path} absent")
+    table = read(path)
+    bore = row(table, "원1(I).D")  # 원 circle, (I) internal, D its diameter
+    assert (bore["feature"], bore["size"], bore["side"]) == ("circle", "diameter", "inner")
+    y = row(table, "점2.Y")  # 점 point, Y its coordinate
+    assert (y["nx"], y["ny"], y["nz"], y["feature"], y["size"]) == (0.0, 1.0, 0.0, "point", "")
