@@ -1,6 +1,8 @@
 """The rules after the solve: from an optimum to a recommendation with its verdict.
 
-Order (:func:`recommend`): reject band on the part as measured (:func:`beyond_band` tells
+Order (:func:`recommend`): a draft model (``[process] draft = true``, an unedited
+``model init`` scaffold) holds before anything else (:func:`draft_hold`: nothing is
+solved); then the reject band on the part as measured (:func:`beyond_band` tells
 gross deviations from setup errors; no solve at all) → solve → gain → no harm → given up
 (read from the answer) → dead band → clamp report → stopped solve (:func:`stopped_rule`).
 The rules that shape the problem before the solve are :func:`setupfix.pose.pose_problem`'s;
@@ -32,7 +34,10 @@ from setupfix.safety import (
 if TYPE_CHECKING:  # pose builds the problem with the rules; recommend takes what it built
     from setupfix.pose import PosedProblem
 
-__all__ = ["recommend", "stopped_rule", "beyond_band", "budget"]
+__all__ = ["recommend", "stopped_rule", "beyond_band", "budget", "draft_hold", "DRAFT_KEY"]
+
+#: The key of a draft model, as the user removes it: ``[process] draft = true``.
+DRAFT_KEY = "draft = true"
 
 Array = npt.NDArray[np.float64]
 Mask = npt.NDArray[np.bool_]
@@ -52,8 +57,11 @@ def _inside(values: Array, lower: Array, upper: Array) -> Mask:
 
 def recommend(posed: PosedProblem, solve: Callable[[CorrectionProblem], OptimizeResult], *,
               optimizer: str = "exact", names: Mapping[str, str] | None = None,
-              registers: Mapping[str, str] | None = None, unit: str = "") -> Recommendation:
+              registers: Mapping[str, str] | None = None, unit: str = "",
+              draft: str | None = None) -> Recommendation:
     """The rules after the solve, around ``solve(posed.guarded)``.
+
+    A draft model (``draft``: its file) holds before any rule or solve (:func:`draft_hold`).
 
     Order: reject band (on the part as measured: no solve at all; :func:`beyond_band`
     tells gross deviations from setup errors) → solve → gain → no harm (the triage's
@@ -73,7 +81,12 @@ def recommend(posed: PosedProblem, solve: Callable[[CorrectionProblem], Optimize
         Register ID → controller register (``G55``), for the messages.
     unit : str
         Length unit, for the messages.
+    draft : str, optional
+        The model file when the model is a draft (``ProcessModel.draft``): hold with the
+        rule ``draft``, nothing solved.
     """
+    if draft is not None:
+        return draft_hold(posed, draft, optimizer)
     shown = names or {}
 
     def label(ids: Iterable[str]) -> str:
@@ -144,6 +157,23 @@ def recommend(posed: PosedProblem, solve: Callable[[CorrectionProblem], Optimize
         rules.append(stopped)
         solved = stopped.rule != "not_solved"
     return Recommendation(verdict, x + 0.0, result, guarded, tuple(rules), given_up, at_limit, solved=solved)
+
+
+def draft_hold(posed: PosedProblem, model_file: str, optimizer: str = "exact") -> Recommendation:
+    """The decision on any part corrected with a draft model: **hold**, every change 0, nothing solved.
+
+    A draft is a scaffold ``setupfix model init`` wrote from the reports: its relations
+    (which registers move which feature, with which weight) are a guess until the user
+    has checked them, and a correction from guessed physics is worse than none.  The
+    rule ``draft`` and the alarm name the model file and the key to remove; the verdict
+    is ``hold`` (the hold conventions: exit status 0, an alarm on stderr, offsets of 0).
+    """
+    message = (f"edit the model (draft): {model_file} is a scaffold whose relations are a guess; check which "
+               f"registers move which feature and with which weight, then remove '{DRAFT_KEY}' from its [process] "
+               "table")
+    result = _zero_result(posed.problem, optimizer, "draft", f"hold: {message}")
+    return Recommendation("hold", result.x, result, posed.guarded, (RuleEffect("draft", message),),
+                          alarm=f"DRAFT MODEL: {message}")
 
 
 def stopped_rule(result: OptimizeResult, *, recommended: bool) -> RuleEffect:

@@ -12,7 +12,7 @@ import numpy as np
 import pandas as pd
 
 GOLDEN = Path(__file__).resolve().parent / "parsers" / "golden"
-NUMERIC = ["nominal", "actual", "deviation", "lower", "upper", "x", "y", "z"]
+NUMERIC = ["nominal", "actual", "deviation", "lower", "upper", "x", "y", "z", "nx", "ny", "nz"]
 
 
 def assert_golden(table: pd.DataFrame, golden: Path, prefix: str) -> None:

@@ -6,6 +6,10 @@ Latin-1/CP1252 text (German ``Lotlänge``).  Columns are found by header name be
 customers add their own fields; data rows are ragged (the header names 45 columns +
 a trailing TAB, rows stop after ``unit``), so a missing trailing cell is empty.
 ``uppertol``/``lowertol`` are signed offsets from nominal already.
+
+The stable ``idsymbol`` states the geometry columns (:mod:`parsers.geometry`) where it
+can: ``xValue``/``yValue``/``zValue`` a coordinate along that axis, ``diameter`` and
+``radius`` a size; the table states no feature type (``featureid`` is a user's name).
 """
 
 from __future__ import annotations
@@ -17,12 +21,17 @@ from pathlib import Path
 import pandas as pd
 
 from parsers._source import csv_records, read_text
+from parsers.geometry import axis_vector, geometry_cells
 from parsers.numbers import parse_number
 from parsers.canonical import DEVIATION_TOLERANCE_MM, finish_table
 from setupfix.errors import ParseError, SourceLocation
 from setupfix.units import LENGTH_UNITS, length_factor
 
 __all__ = ["read_calypso", "sniff_calypso", "REQUIRED"]
+
+#: ``idsymbol`` → (axis of a coordinate, size) it states.
+_SYMBOLS = {"xvalue": ("X", ""), "yvalue": ("Y", ""), "zvalue": ("Z", ""), "diameter": ("", "diameter"),
+            "radius": ("", "radius")}
 
 #: Columns without which a row cannot be read.
 REQUIRED = ("id", "actual", "nominal")
@@ -107,7 +116,14 @@ def read_calypso(path: str | Path, *, unit: str | None = None, encoding: str | N
             "z": _length(_value(record, index, "featureposz"), "featurePosZ", where) * f,
             "status": f"exceed {exceed}" if exceed else "",
             "source": f"{name}:{line}",
+            **_geometry(_value(record, index, "idsymbol")),
         })
     if not rows:
         raise ParseError("no characteristic rows", location=SourceLocation(name))
     return finish_table(rows, name)
+
+
+def _geometry(symbol: str) -> dict[str, object]:
+    """The geometry columns an ``idsymbol`` states (direction of a coordinate, a size)."""
+    axis, size = _SYMBOLS.get(symbol.strip().lower(), ("", ""))
+    return geometry_cells(axis_vector(axis), size=size)

@@ -26,6 +26,7 @@ from parsers._notes import note
 from parsers._source import point_number, read_text
 from parsers.axes import axis_word, vector_axis
 from parsers.canonical import finish_table
+from parsers.geometry import axis_vector, geometry_cells, unit_vector
 from parsers.dmis.statements import Statement, parse_statement, split_statements
 from parsers.numbers import is_number
 from setupfix.errors import ParseError, SourceLocation
@@ -58,6 +59,13 @@ class _Feature:
     kind: str
     values: list[str]
     tolerances: list[str] = field(default_factory=list)
+    #: ``INNER`` / ``OUTER`` (a bore / a boss) where the statement says so, else "".
+    side: str = ""
+
+
+def _side(words: tuple[str, ...]) -> str:
+    upper = {w.strip().upper() for w in words}
+    return "inner" if "INNER" in upper else "outer" if "OUTER" in upper else ""
 
 
 def _numbers_after_cart(words: tuple[str, ...]) -> list[str]:
@@ -132,7 +140,7 @@ def read_dmis(path: str | Path, *, unit: str | None = None, encoding: str | None
                 current_f = label
         elif st.major == "FEAT" and st.kind in ("F", "FA"):
             kind = st.words[0].upper() if st.words else ""
-            feature = _Feature(st.line, kind, _numbers_after_cart(st.words))
+            feature = _Feature(st.line, kind, _numbers_after_cart(st.words), side=_side(st.words))
             if st.kind == "F":
                 nominal[st.label], current_f = feature, st.label
             else:
@@ -245,7 +253,34 @@ def _result_row(st: Statement, feat: str, nominal: dict[str, _Feature], actual: 
         x, y, z = (point_number(v, loc) for v in f_nom.values[:3])
     return {"characteristic": st.label, "nominal": nom, "actual": act, "lower": lower, "upper": upper,
             "x": x, "y": y, "z": z, "status": status, "source": f"{name}:{st.line}",
-            "axis": _axis(kind, values, f_nom, name)}
+            "axis": _axis(kind, values, f_nom, name), **_geometry_cells(kind, values, f_nom or f_act, name)}
+
+
+#: DMIS feature words → the ``feature`` column (:mod:`parsers.geometry`).
+_FEATURE_WORDS = {"POINT": "point", "EDGEPT": "edgepoint", "PLANE": "plane", "LINE": "line", "CIRCLE": "circle",
+                  "ARC": "arc", "CYLNDR": "cylinder", "CYLINDER": "cylinder", "CONE": "cone", "SPHERE": "sphere",
+                  "CPARLN": "slot", "PARPLN": "slot", "TORUS": "torus"}
+#: ``CORTOL`` words and tolerance types that give a size → the ``size`` column.
+_SIZE_WORDS = {"DIAMETER": "diameter", "DIAM": "diameter", "RADIUS": "radius", "RAD": "radius", "WIDTH": "width",
+               "LENGTH": "length"}
+
+
+def _geometry_cells(kind: str, values: list[str], feature: _Feature | None, name: str) -> dict[str, object]:
+    """The geometry columns of a result: a ``CORTOL`` axis word's unit vector or a point profile's nominal
+    normal (also when oblique) as the direction; the feature's type and ``INNER``/``OUTER`` side; the size a
+    ``CORTOL,DIAMETER|RADIUS|WIDTH`` or ``DIAM``/``RAD`` result measures."""
+    word = values[0].upper() if kind == "CORTOL" and values else ""
+    direction: tuple[float, float, float] | None = None
+    if word:
+        direction = axis_vector(axis_word(word))
+    elif kind == "PROFP" and feature is not None and feature.kind in _NORMAL_FEATURES and len(feature.values) >= 6:
+        loc = SourceLocation(name, line=feature.line)
+        direction = unit_vector([point_number(v, loc) for v in feature.values[3:6]])
+    feature_word = _FEATURE_WORDS.get(feature.kind, "") if feature is not None else ""
+    size = _SIZE_WORDS.get(word or kind, "")
+    if size == "length" and feature_word != "slot":
+        size = ""
+    return geometry_cells(direction, feature_word, size, feature.side if feature is not None else "")
 
 
 #: Features whose nominal ``FEAT/…,CART,x,y,z,i,j,k`` gives the surface normal (i, j, k) at x, y, z.

@@ -28,6 +28,7 @@ import pandas as pd
 from parsers._notes import note
 from parsers._rows import SkipLog, finish_rows, parse_number, unit_factor, unit_or_none
 from parsers._source import Source, read_text
+from parsers.geometry import axis_vector, geometry_cells
 from parsers.canonical import DEVIATION_TOLERANCE_MM
 from setupfix.errors import ParseError, SourceLocation
 
@@ -42,6 +43,25 @@ _EDGES = (("item", 18), ("actual", 31), ("nominal", 45), ("upper", 59), ("lower"
 _ELEMENT = re.compile(r"^\s{0,6}(\d+)\s+(\S+)")
 _STAMP = re.compile(r"(\d{4})\.(\d{1,2})\.(\d{1,2})\.?\s+(\d{1,2}):(\d{2}):(\d{2})")
 _BAR = re.compile(r"^[-+|]+$")
+
+
+#: Element words (the name's letters before its number) → the ``feature`` column (:mod:`parsers.geometry`):
+#: 원 circle, 원통 cylinder, 평면 plane, 점 point, 직선 line, 구 sphere, 원추 cone, 장공 slot.
+_FEATURE_WORDS = {"원": "circle", "원통": "cylinder", "평면": "plane", "점": "point", "직선": "line", "구": "sphere",
+                  "원추": "cone", "장공": "slot"}
+_ELEMENT_WORD = re.compile(r"^([^\d(#<\s]+)")
+#: Items that state a size of the element.
+_SIZE_ITEMS = {"D": "diameter", "R": "radius"}
+
+
+def _geometry(element: str, item: str) -> dict[str, object]:
+    """The geometry columns of an item row: X/Y/Z a direction, D/R a size; the element's type and
+    ``(I)``/``(E)`` side (internal, external)."""
+    word = _ELEMENT_WORD.match(element)
+    feature = _FEATURE_WORDS.get(word.group(1), "") if word else ""
+    side = "inner" if "(I)" in element else "outer" if "(E)" in element else ""
+    key = item.upper()
+    return geometry_cells(axis_vector(key), feature, _SIZE_ITEMS.get(key, ""), side)
 
 
 def sniff_korean(text: str) -> bool:
@@ -221,7 +241,7 @@ def read_korean(path: str | Path | Source, *, unit: str | None = None, encoding:
         rows.append({
             "characteristic": f"{element}.{item}", "nominal": nominal, "actual": actual, "deviation": deviation,
             "lower": lower, "upper": upper, "part": part, "timestamp": stamp, "station": "",
-            "status": status, "source": f"{name}:{number}",
+            "status": status, "source": f"{name}:{number}", **_geometry(element, item),
         })
     if not in_table:
         raise ParseError("no 측정값/기준값 heading found", location=SourceLocation(name))

@@ -25,6 +25,7 @@ from parsers._rows import (
     unit_or_none,
     warn_assumed_mm,
 )
+from parsers.geometry import DIRECTION_COLUMNS
 from parsers.pcdmis.axes import ANGLE_AXES, NON_LENGTH_AXES
 from setupfix.errors import ParseError, SourceLocation
 from setupfix.model.measurements import CANONICAL_COLUMNS
@@ -180,6 +181,13 @@ def read_columns(text: str, name: str, default_unit: str | None) -> pd.DataFrame
         "status": np.where(np.isnan(outtol[usable]), "", np.where(outtol[usable] != 0, "out", "ok")),
         "source": [f"{name}:{line}" for line in lines_kept[usable]],
     }, columns=list(CANONICAL_COLUMNS))
+    letters = np.char.upper(np.char.strip(axes.astype(str)))
+    along = np.isin(letters, ["X", "Y", "Z"])
+    for direction, letter in zip(DIRECTION_COLUMNS, "XYZ", strict=True):  # as text_report.geometry_of, by column
+        frame[direction] = np.where(letters == letter, 1.0, np.where(along, 0.0, np.nan))
+    frame["feature"] = ""
+    frame["size"] = np.where(letters == "D", "diameter", np.where(letters == "R", "radius", "")).astype(object)
+    frame["side"] = ""
     skipped.warn()
     unstated = units[usable] == ""
     if unstated.any():

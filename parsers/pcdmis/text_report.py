@@ -40,6 +40,7 @@ from parsers._rows import (
     warn_assumed_mm,
 )
 from parsers._source import read_text
+from parsers.geometry import axis_vector, geometry_cells
 from parsers.pcdmis.axes import ANGLE_AXES, NON_LENGTH_AXES
 from setupfix.errors import ParseError, SourceLocation
 
@@ -104,6 +105,7 @@ def _collect(text: str, name: str, default_unit: str | None, skipped: SkipLog) -
         match = _DIM.match(line)
         if match:
             dim, spans = match.group("name"), []
+            feature = _feature_of(match.group("rest"))
             found = _UNITS.search(match.group("rest"))
             unit = unit_or_none(found.group("unit")) if found else default_unit
             if found and unit is None:
@@ -129,8 +131,29 @@ def _collect(text: str, name: str, default_unit: str | None, skipped: SkipLog) -
             skipped.add(f"non-length characteristic(s) (axis {axis})" if axis.upper() in NON_LENGTH_AXES else
                         "angle characteristic(s) (setupfix corrects lengths)", number)
             continue
-        raws.append(_Raw(dim, axis, cells, unit or "", _part_label(header, max(parts_seen, 1)), where))
+        raws.append(_Raw(dim, axis, cells, unit or "", _part_label(header, max(parts_seen, 1)), where,
+                         {"feature": feature} if feature else {}))
     return raws
+
+
+#: ``LOCATION OF CIRCLE CIR1``: the feature word of a location dimension → the ``feature`` column.
+_OF_FEATURE = re.compile(r"\bLOCATION\s+OF\s+(?P<word>[A-Z]+)", re.IGNORECASE)
+_FEATURE_WORDS = {"CIRCLE": "circle", "CYLINDER": "cylinder", "SPHERE": "sphere", "CONE": "cone", "PLANE": "plane",
+                  "POINT": "point", "LINE": "line", "SLOT": "slot"}
+#: Axis letters that state a size (Hexagon help, *Location Axes*: D diameter, R radius).
+_SIZE_LETTERS = {"D": "diameter", "R": "radius"}
+
+
+def _feature_of(text: str) -> str:
+    """The feature type a ``DIM … = LOCATION OF <type> …`` header states, else ""."""
+    found = _OF_FEATURE.search(text)
+    return _FEATURE_WORDS.get(found.group("word").upper(), "") if found else ""
+
+
+def geometry_of(axis: str, feature: str = "") -> dict[str, object]:
+    """The geometry columns of an axis row: X/Y/Z a direction, D/R a size (:mod:`parsers.geometry`)."""
+    letter = axis.strip().upper()
+    return geometry_cells(axis_vector(letter), feature, _SIZE_LETTERS.get(letter, ""))
 
 
 def _value(cells: dict[str, str], key: str, where: SourceLocation) -> float | None:
@@ -194,7 +217,7 @@ def rows_from_raw(raws: list[_Raw], name: str, skipped: SkipLog, *, what: str) -
             "lower": lower, "upper": upper, "part": raw.part,
             "timestamp": raw.extra.get("timestamp", ""), "station": "",
             "status": "" if outtol is None else ("out" if outtol != 0 else "ok"),
-            "source": f"{name}:{where.line}",
+            "source": f"{name}:{where.line}", **geometry_of(raw.axis, raw.extra.get("feature", "")),
         })
     if rows and unstated:
         first_line = next(r.where.line for r in raws if not r.unit)

@@ -13,12 +13,14 @@ from dataclasses import dataclass
 from lxml import etree
 
 from parsers.axes import AXIS_COSINE, axis_word, cross, vector_axis
+from parsers.geometry import axis_vector, unit_vector
 from parsers.numbers import parse_number, try_number
 from parsers.qif.external import IdIndex
 from parsers.qif.units import file_unit_factor, unit_factor
 from setupfix.errors import ParseError, SourceLocation
 
-__all__ = ["PROFILE_KINDS", "Doc", "Item", "item_info", "item_axis", "local", "number", "child_text", "raw_float"]
+__all__ = ["PROFILE_KINDS", "Doc", "Item", "item_info", "item_axis", "item_geometry", "local", "number", "child_text",
+           "raw_float"]
 
 
 #: Profile kinds: the value is a signed deviation from the true profile, the zone is
@@ -154,6 +156,70 @@ def item_axis(kind: str, item: etree._Element, nom: etree._Element, owner: Doc) 
     return ""
 
 
+#: Feature nominal element → the ``feature`` word (:mod:`parsers.geometry`).
+_FEATURE_WORDS = {
+    "PointFeatureNominal": "point", "EdgePointFeatureNominal": "edgepoint", "PlaneFeatureNominal": "plane",
+    "LineFeatureNominal": "line", "CircleFeatureNominal": "circle", "CircularArcFeatureNominal": "arc",
+    "CylinderFeatureNominal": "cylinder", "ConeFeatureNominal": "cone", "SphereFeatureNominal": "sphere",
+    "OppositeParallelLinesFeatureNominal": "slot", "OppositeParallelPlanesFeatureNominal": "slot",
+    "TorusFeatureNominal": "torus",
+}
+#: Characteristic kinds that are a size of their feature → the ``size`` word.
+_SIZE_KINDS = {"Diameter": "diameter", "SphericalDiameter": "diameter", "Radius": "radius",
+               "SphericalRadius": "radius", "Width": "width"}
+
+
+def item_geometry(kind: str, item: etree._Element, nom: etree._Element, owner: Doc
+                  ) -> tuple[tuple[float, float, float] | None, str, str, str]:
+    """(measuring direction, feature, size, side) of a characteristic, as :mod:`parsers.geometry` defines them.
+
+    The direction follows :func:`item_axis` but keeps the vector (an oblique one too):
+    the ``Direction`` word's unit vector, the ``AnalysisVector``, a point profile's
+    surface normal, the common normal of a distance's planes (when they are parallel
+    within 5°), a slot's across (width) or along (length) direction.  The feature is
+    the type of the item's first feature nominal; the side its definition's
+    ``InternalExternal``.
+    """
+    ns = owner.ns
+    features = _features(item, owner)
+    first = features[0] if features else None
+    feature = _FEATURE_WORDS.get(local(first.tag), "") if first is not None else ""
+    size = _SIZE_KINDS.get(kind, "")
+    if kind == "Length" and feature == "slot":
+        size = "length"
+    side = ""
+    if first is not None:
+        definition = owner.index.local.get(child_text(first, ns, "FeatureDefinitionId"))
+        side = {"INTERNAL": "inner", "EXTERNAL": "outer"}.get(child_text(definition, ns, "InternalExternal"), "")
+    direction: tuple[float, float, float] | None = None
+    word = child_text(nom, ns, "Direction")
+    analysis = _child(nom, ns, "AnalysisVector")
+    if word:
+        direction = axis_vector(axis_word(word))
+    elif analysis is not None:
+        direction = unit_vector(_vector(analysis))
+    elif kind == "PointProfile":
+        if len(features) == 1 and first is not None and local(first.tag) in _SURFACES:
+            direction = unit_vector(_vector(_child(first, ns, "Normal")))
+    elif kind in _DISTANCES:
+        normals = [unit_vector(_vector(_child(f, ns, "Normal")))
+                   for f in features if f is not None and local(f.tag) == "PlaneFeatureNominal"]
+        if normals and all(n is not None for n in normals):
+            head = normals[0]
+            assert head is not None
+            if all(abs(sum(a * b for a, b in zip(head, n, strict=True))) >= AXIS_COSINE
+                   for n in normals if n is not None):
+                direction = head
+    elif kind in ("Width", "Length") and feature == "slot" and first is not None:
+        normal = _unit(_vector(_child(first, ns, "Normal")))
+        along = _unit(_vector(first.find(f"{{{ns}}}CenterLine/{{{ns}}}Vector")))
+        if normal is not None and along is not None:
+            across = cross(normal, along)
+            if math.sqrt(sum(v * v for v in across)) >= AXIS_COSINE:
+                direction = unit_vector(across if kind == "Width" else along)
+    return direction, feature, size, side
+
+
 def _limits(kind: str, definition: etree._Element, owner: Doc, nominal: float, mm: float, notes: set[str]
             ) -> tuple[float, float, bool] | None:
     """(lower, upper, reference) as signed deviations; None when the nominal is needed but absent."""
@@ -202,6 +268,13 @@ class Item:
     y: float
     z: float
     axis: str
+    #: The geometry columns (:mod:`parsers.geometry`): measuring direction, feature type, size, side.
+    nx: float = math.nan
+    ny: float = math.nan
+    nz: float = math.nan
+    feature: str = ""
+    size: str = ""
+    side: str = ""
 
 
 def item_info(kind: str, item: etree._Element, nom: etree._Element, definition: etree._Element, owner: Doc,
@@ -225,7 +298,10 @@ def item_info(kind: str, item: etree._Element, nom: etree._Element, definition: 
                                                  element=f"{local(definition.tag)} id={definition.get('id')}"))
     label = (child_text(item, owner.ns, "Name") or child_text(definition, owner.ns, "Name")
              or f"{kind} {item.get('id', '?')}")
-    return Item(label, nominal, lower, upper, reference, x, y, z, item_axis(kind, item, nom, owner))
+    direction, feature, size, side = item_geometry(kind, item, nom, owner)
+    nx, ny, nz = direction if direction is not None else (math.nan, math.nan, math.nan)
+    return Item(label, nominal, lower, upper, reference, x, y, z, item_axis(kind, item, nom, owner),
+                nx, ny, nz, feature, size, side)
 
 
 def raw_float(text: str) -> float:

@@ -37,6 +37,8 @@ NON_LENGTH_KINDS = frozenset({
 })
 
 _SUFFIXES = ("CharacteristicMeasurement", "CharacteristicActual")
+#: Text fields of :class:`~parsers.qif.items.Item` (the others are numbers).
+_TEXT_FIELDS = ("label", "axis", "feature", "size", "side")
 
 
 def sniff_qif(text: str) -> bool:
@@ -164,7 +166,7 @@ def read_qif(path: str | Path | Source, *, unit: str | None = None) -> pd.DataFr
     station_of = np.asarray([p[1] for p in parts], dtype=object)[kept["results"].to_numpy()]
     columns: dict[str, object] = {
         field: np.asarray([getattr(infos[k], field) for k in known],
-                          dtype=object if field in ("label", "axis") else None)[code]
+                          dtype=object if field in _TEXT_FIELDS else None)[code]
         for field in Item.__dataclass_fields__
     }
     labels = pd.Series(columns.pop("label"), dtype=object)

@@ -88,7 +88,7 @@ def expanded_model_toml() -> str:
         for d in range(1, 8):
             feats = ", ".join(f"P{p}F{f} = {w}" for f, w in sorted(R_FD[d].items(), reverse=True))
             out += [
-                f"[dimensions.P{p}D{d}]", f'name = "P{p} D{d}"', f"features = {{ {feats} }}",
+                f"[dimensions.P{p}D{d}]", f'name = "P{p} D{d}"', f'aliases = ["D{d}"]', f"features = {{ {feats} }}",
                 f"nominal = {NOMINALS[d - 1]}", f"lower = {-TOL}", f"upper = {TOL}", f'group = "P{p}"', "",
             ]
     return "\n".join(out)

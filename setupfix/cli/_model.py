@@ -50,11 +50,15 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
     add_report_options(check)
     check.set_defaults(run=run_check)
 
-    init = msub.add_parser("init", help="write a model scaffold from reports (then edit it)",
+    init = msub.add_parser("init", help="write a draft model scaffold from reports (then check and edit it)",
                            description="Every toleranced length characteristic of the reports becomes a "
                                        "dimension (name, nominal, limits, group = station) with a feature of its "
-                                       "own moved by one WKS (W1, G54) and one tool (T1, H1). The file loads as "
-                                       "written and 'correct' runs with it; its comments say what to edit.")
+                                       "own moved by one WKS (W1, G54), measured along the axis or direction the "
+                                       "report states; sizes move only with a tool radius (D1) where the report's "
+                                       "feature type says they are interpolated; tool lengths (H1) act along the "
+                                       "spindle only. Several measured axes give a multi-axis model. The file is "
+                                       "marked draft = true: 'correct' holds until you have checked its physics "
+                                       "and removed the key; its comments say what to check.")
     init.add_argument("reports", nargs="+", metavar="REPORT",
                       help="CMM report(s) in any supported format; a folder stands for the reports in it and its "
                            "sub-folders (hidden, partial and log files and models left out; a link to a folder or "
@@ -62,8 +66,9 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
     init.add_argument("-o", "--out", required=True, metavar="MODEL",
                       help="model TOML to write ('-': stdout); written atomically")
     init.add_argument("--axis", choices=("X", "Y", "Z"), default=None,
-                      help="keep the characteristics along this axis (as the report states it, else the name) "
-                           "and those with none; default: keep all, process axis = the one most state")
+                      help="a one-axis model: keep the characteristics along this axis (as the report states it, "
+                           "else the name) and those with none; default: keep all, a multi-axis model when the "
+                           "reports measure several axes, else a one-axis model on the one they state")
     init.add_argument("--name", default=None, help="process name (default: from the report file names)")
     init.add_argument("--parts-are-stations", action="store_true",
                       help="the report's parts are the fixture's stations (one workpiece each): group = part "
@@ -91,10 +96,12 @@ def run_init(args: argparse.Namespace) -> int:
         origins = ", ".join(f"{n} {what}" for what, n in (
             ("stated by the report", scaffold.axes_from.get("report", 0)),
             ("from names", scaffold.axes_from.get("name", 0)), ("with none", scaffold.axes_from.get("none", 0))) if n)
-        print(f"wrote {args.out}: {scaffold.dimensions} dimension(s) (axes: {origins}), process axis {scaffold.axis}, "
-              f"{len(scaffold.skipped)} characteristic(s) left out (listed in its head); "
-              "edit its registers and relations, then 'setupfix model check' and 'setupfix correct'",
-              file=sys.stderr)
+        axes = (f"axes {', '.join(scaffold.axes)} (multi-axis)" if scaffold.axes else f"process axis {scaffold.axis}")
+        sizes = f", {scaffold.sizes} size(s)" if scaffold.sizes else ""
+        print(f"wrote {args.out}: {scaffold.dimensions} dimension(s) (axes: {origins}{sizes}), {axes}, "
+              f"{len(scaffold.skipped)} characteristic(s) left out (listed in its head); it is a draft "
+              "('correct' holds until you remove 'draft = true'): check its registers and relations, then "
+              "'setupfix model check' and 'setupfix correct'", file=sys.stderr)
     return 0
 
 

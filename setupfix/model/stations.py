@@ -19,8 +19,11 @@ dimensions with other work coordinate systems.  Instead of copying the tables::
     upper = 0.1
 
 expands, station by station in file order, to ``[features.P1F1]``, ``[dimensions.P1D1]``
-(``name = "P1 D1"``, ``group = "P1"``) and so on: feature and dimension IDs are the
-station ID followed by the template ID; template features referenced by a template
+(``name = "P1 D1"``, ``aliases = ["D1"]``, ``group = "P1"``) and so on: feature and dimension IDs are the
+station ID followed by the template ID; each copy also answers to the name (and aliases)
+as written — an ordinary per-part report naming it ``D1`` matches the copy of its station
+(the report's ``station`` column or ``--stations P2``: :func:`setupfix.model.match_parts`
+tells equal names apart by group); template features referenced by a template
 dimension are that station's copies.  ``[stations.*] tools = {…}`` maps template tool
 names the same way.  Tables written without templates are untouched, and may be mixed
 with templated ones.  The expansion is plain data → plain data; the loader validates
@@ -152,11 +155,17 @@ def expand_stations(doc: Mapping[str, Any]) -> tuple[dict[str, Any], dict[str, s
             new_id = f"{sid}{did}"
             table = dict(dtable)
             name = dtable.get("name", did)
+            plain: list[str] = []  # the names as written, matched with the report's station (per-part reports)
             if isinstance(name, str):
                 table["name"] = _name(name, sid)
+                plain += [name] if "{station}" not in name else []
             aliases = dtable.get("aliases")
             if isinstance(aliases, list):
                 table["aliases"] = [_name(a, sid) if isinstance(a, str) else a for a in aliases]
+                plain += [a for a in aliases if isinstance(a, str) and "{station}" not in a]
+            if plain:
+                known = {table.get("name"), *table.get("aliases", [])}
+                table["aliases"] = [*table.get("aliases", []), *(a for a in dict.fromkeys(plain) if a not in known)]
             refs = dtable.get("features")
             if isinstance(refs, Mapping):
                 table["features"] = {(f"{sid}{ref}" if ref in t_features else ref): w for ref, w in refs.items()}

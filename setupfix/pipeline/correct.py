@@ -55,8 +55,8 @@ def _applied_result(problem: CorrectionProblem, rec: Recommendation) -> Optimize
         binding = problem.binding(x)
     message = raw.message
     if rec.verdict == "hold":
-        message = "hold: " + next((r.message for r in rec.rules if r.rule in ("not_solved", "dead_band", "no_harm")),
-                                  "no change needed")
+        message = "hold: " + next((r.message for r in rec.rules
+                                   if r.rule in ("not_solved", "dead_band", "no_harm", "draft")), "no change needed")
     return dataclasses.replace(raw, x=x.copy(), margin_before=problem.dimension_budget(0 * x, rec.given_up)[0],
                                margin_after=problem.dimension_budget(x, rec.given_up)[0],
                                norm=float(np.linalg.norm(x)), binding=problem.dimension_of(binding), message=message)
@@ -132,7 +132,8 @@ def correct_cycle(request: CorrectRequest, part: PartMeasurement, *,
     if posed.problem.rows is not None:  # a zone's facets are named by the zone
         names |= {c: names[r] for c, r in zip(posed.problem.dimension_ids, posed.problem.rows, strict=True)}
     rec = _zone_triage(posed, recommend(posed, opt.solve, optimizer=solve.optimizer, names=names,
-                                        registers={r.id: r.register for r in model.registers}, unit=model.unit))
+                                        registers={r.id: r.register for r in model.registers}, unit=model.unit,
+                                        draft=model.source if model.draft else None))
     notes = [*part.notes, *posed.notes, *(n for n in rec.result.notes if n.message != rec.result.message)]
     if part.absent:
         notes.append(Note(f"{len(part.absent)} dimension(s) absent from the report, left out: "

@@ -11,6 +11,7 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
+from setupfix.errors import MatchError
 from setupfix.model import Dimension, PartMeasurement, ProcessModel, load_model, normalise_name
 from setupfix.pipeline.checks import difference_threshold
 from setupfix.pipeline.cycles import Stations, load_parts
@@ -114,6 +115,22 @@ def check_report(model: ProcessModel | str | Path, report: str | Path, *, format
     """Read a report and tie it to the model without correcting: the match table of ``model check``."""
     if not isinstance(model, ProcessModel):
         model = load_model(model)
-    parts = load_parts(model, report, format=format, unit=unit, encoding=encoding, columns=columns,
-                       stations=stations, parts_per_cycle=parts_per_cycle, strict=strict, lenient=lenient)
+    try:
+        parts = load_parts(model, report, format=format, unit=unit, encoding=encoding, columns=columns,
+                           stations=stations, parts_per_cycle=parts_per_cycle, strict=strict, lenient=lenient)
+    except MatchError as exc:
+        if not exc.message.startswith("no characteristic of part"):
+            raise
+        # the matcher's hint sends the user here ('model check'): say instead what the model's names are
+        raise MatchError(exc.message, location=exc.location, hint=_names_hint(model)) from None
     return MatchTable(model, str(report), parts)
+
+
+def _names_hint(model: ProcessModel) -> str:
+    """What to do when no report name is a model name: the model's names, and the two ways to tie them."""
+    names = ", ".join(repr(d.name) for d in model.dimensions[:3]) + (", …" if len(model.dimensions) > 3 else "")
+    grouped = any(d.group for d in model.dimensions)
+    return (f"the model's dimensions are named {names}: add the report's names as aliases = [\"…\"] in "
+            "[dimensions.*]" + ("; a per-part report of a fixture station matches its station's dimensions by "
+                                "their names as written with --stations <station> (station templates)"
+                                if grouped else ""))

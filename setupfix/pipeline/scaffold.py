@@ -1,23 +1,26 @@
-"""Use case "model init": a process-model scaffold from CMM reports.
+"""Use case "model init": a process-model scaffold from CMM reports, drawn from their own geometry.
 
 Every toleranced length characteristic of the reports becomes a dimension (its name,
 nominal and limits as the report states them, ``group`` = the report's station, or its
-part with ``parts_are_stations``), each
-entered by a feature of its own, and every feature moved by one WKS (``W1``, G54) and
-one tool (``T1``, H1): a starting topology that loads at once and with which
-``setupfix correct`` runs on the same reports.  The comments in the file say what to
-edit (which registers move which feature, with which sign).
+part with ``parts_are_stations``), each entered by a feature of its own; the relations
+are written from what the report states (:mod:`setupfix.pipeline.scaffold_toml`):
 
-The axis of a characteristic is, first, the one the report states — the ``axis`` column
-of the canonical table (:mod:`parsers.axes`: a DMIS ``CORTOL`` axis word, a QIF
-``LinearCoordinate`` direction or ``AnalysisVector``, a plane or point normal within 5°
-of an axis) — and, where the report states none, the one its name states (a token
-``X``, ``Y`` or ``Z``: ``SP_00_Z``, ``Cono_9_X``, ``Step 5.Z Location``, ``Distanz X
-4mm``).  When both state one and they differ, the report's vector wins and the
-dimension's comment names both.  Each dimension's comment says where its axis came
-from.  ``axis=`` keeps one axis (and the characteristics whose axis neither tells);
-the process axis is that axis, else the one most dimensions state (``Z`` on a tie or
-when none does).
+* the axis or direction a characteristic is measured along — first the report's (the
+  ``axis`` column and the measuring direction ``nx, ny, nz`` of :mod:`parsers.geometry`:
+  a DMIS ``CORTOL`` axis word or point normal, a QIF ``Direction``, ``AnalysisVector``
+  or surface normal, a CALYPSO ``xValue``, a PC-DMIS axis letter), else the one its name
+  states (a token ``X``, ``Y`` or ``Z``: ``SP_00_Z``, ``Cono_9_X``, ``Distanz X 4mm``).
+  When both state one and they differ, the report's wins and the comment names both;
+* sizes (diameter, radius, width, the length of a slot) as the report states them, with
+  its feature type (circle, cylinder, slot … cut by interpolation: a tool radius moves
+  them; others: nothing does) and side (bore or boss);
+* the feature's nominal location as its ``position``.
+
+A report measuring one axis gets a one-axis model on that axis; one that measures
+several (or has interpolated sizes) a multi-axis model over the axes it measures.
+``axis=`` keeps one axis (and the characteristics whose axis neither tells) in a
+one-axis model.  Every scaffold is ``draft = true``: nothing is recommended from it
+until the user has checked its physics and removed the key.
 
 Left out, each listed in the file's head with its reason: reference-only rows, rows
 with no limit or only one (the contract needs both; none is invented), form and
@@ -28,7 +31,6 @@ values outside the model's sanity ranges, and other axes with ``axis=``.
 from __future__ import annotations
 
 import dataclasses
-import json
 import math
 import re
 from collections import Counter
@@ -40,11 +42,13 @@ from typing import Any
 import pandas as pd
 
 import parsers
-from parsers.axes import AXES, AXIS_COLUMN
+from parsers.axes import AXES, AXIS_COLUMN, vector_axis
+from parsers.geometry import DIRECTION_COLUMNS, FEATURE_COLUMN, SIDE_COLUMN, SIZE_COLUMN, unit_vector
 from setupfix.errors import ModelError, Note, ParseError, SetupfixError, SourceLocation
 from setupfix.model import normalise_name
 from setupfix.model.loader import RANGES_MM
 from setupfix.pipeline.cycles import ReadOptions
+from setupfix.pipeline.scaffold_toml import SPINDLE, ScaffoldDimension, render_scaffold
 
 __all__ = ["Scaffold", "scaffold_model", "scaffold_from_tables", "name_axis", "FORM_WORDS"]
 
@@ -67,46 +71,6 @@ def name_axis(name: str) -> str | None:
 def _is_form(name: str) -> bool:
     folded = name.casefold()
     return any(word in folded for word in FORM_WORDS)
-
-
-def _toml_string(text: str) -> str:
-    """A TOML basic string (JSON escapes are TOML escapes; DEL is escaped too)."""
-    return json.dumps(text, ensure_ascii=False).replace("\x7f", "\\u007f")
-
-
-def _comment(text: str) -> str:
-    """Text safe inside a TOML comment (one line, no control characters)."""
-    return "".join(c if c.isprintable() else "?" for c in text)
-
-
-def _number(value: float) -> str:
-    text = f"{value:.12g}"
-    return text if any(c in text for c in ".en") else text + ".0"
-
-
-@dataclass
-class _Dim:
-    name: str
-    group: str | None
-    nominal: float
-    lower: float
-    upper: float
-    axis: str | None
-    source: str
-    #: Where ``axis`` came from: "report" (the axis column), "name", "" (neither states one), or
-    #: why there is none although reports state one ("the reports state X and Y").
-    axis_from: str = ""
-    #: The axis the name states when it differs from the report's.
-    name_says: str | None = None
-
-    def axis_note(self) -> str:
-        """The comment on the dimension's axis: which one, and from what."""
-        if self.axis is None:
-            return f"no axis: {self.axis_from}" if self.axis_from else "no axis stated"
-        if self.axis_from == "report":
-            return f"axis {self.axis} stated by the report" + (
-                f" (its name says {self.name_says}: the report's vector wins)" if self.name_says else "")
-        return f"axis {self.axis} from the name"
 
 
 def _stated_axis(value: Any, where: str, report: str) -> str | None:
@@ -135,6 +99,10 @@ class Scaffold:
     notes: tuple[Note, ...] = ()
     #: How many dimensions took their axis from the report, from the name, or have none.
     axes_from: Mapping[str, int] = field(default_factory=dict)
+    #: ``process.axes`` of a multi-axis scaffold (the axes the reports measure); () for a one-axis one.
+    axes: tuple[str, ...] = ()
+    #: How many dimensions are sizes (diameters, widths, …) as the reports state them.
+    sizes: int = 0
 
 
 def _resolution(narrowest: float | None) -> float:
@@ -145,9 +113,34 @@ def _resolution(narrowest: float | None) -> float:
     return res
 
 
+def _geometry(table: pd.DataFrame) -> list[tuple[tuple[float, float, float] | None, str, str, str,
+                                                 tuple[float, float, float] | None]]:
+    """Per row: (measuring direction, size, feature, side, position) as the report states them
+    (:mod:`parsers.geometry`; the ``x, y, z`` location), None / "" where it states none."""
+    n = len(table)
+
+    def numbers(name: str) -> list[float]:
+        if name not in table:
+            return [math.nan] * n
+        return pd.to_numeric(table[name], errors="coerce").astype(float).tolist()
+
+    def words(name: str) -> list[str]:
+        if name not in table:
+            return [""] * n
+        return [str(v).strip().lower() if isinstance(v, str) else "" for v in table[name].tolist()]
+
+    out = []
+    for nx, ny, nz, size, feature, side, x, y, z in zip(
+            *(numbers(c) for c in DIRECTION_COLUMNS), words(SIZE_COLUMN), words(FEATURE_COLUMN), words(SIDE_COLUMN),
+            numbers("x"), numbers("y"), numbers("z"), strict=True):
+        position = (x, y, z) if all(math.isfinite(v) for v in (x, y, z)) else None
+        out.append((unit_vector((nx, ny, nz)), size, feature, side, position))
+    return out
+
+
 def _collect(tables: Sequence[tuple[str, pd.DataFrame]], axis: str | None,
-             group_column: str = "station") -> tuple[list[_Dim], list[tuple[str, str]]]:
-    dims: dict[tuple[str, str | None], _Dim] = {}
+             group_column: str = "station") -> tuple[list[ScaffoldDimension], list[tuple[str, str]]]:
+    dims: dict[tuple[str, str | None], ScaffoldDimension] = {}
     skipped: dict[str, str] = {}
     nom_lo, nom_hi = RANGES_MM["nominal"]
     tol_lo, tol_hi = RANGES_MM["tolerance"]
@@ -157,14 +150,17 @@ def _collect(tables: Sequence[tuple[str, pd.DataFrame]], axis: str | None,
         def col(name: str, rows: int = count, frame: pd.DataFrame = table) -> list[Any]:
             return frame[name].tolist() if name in frame else [None] * rows
 
-        for name, nominal, lower, upper, station, reference, where, stated in zip(
+        for name, nominal, lower, upper, station, reference, where, stated, geometry in zip(
                 col("characteristic"), col("nominal"), col("lower"), col("upper"), col(group_column),
-                col("reference"), col("source"), col(AXIS_COLUMN), strict=True):
+                col("reference"), col("source"), col(AXIS_COLUMN), _geometry(table), strict=True):
             name = str(name).strip()
             if not name or name in skipped:
                 continue
             where = str(where) if where is not None and where == where else report
-            from_report, from_name = _stated_axis(stated, where, report), name_axis(name)
+            direction, size, feature, side, position = geometry
+            from_report = _stated_axis(stated, where, report) or (vector_axis(direction) or None if direction
+                                                                  else None)
+            from_name = None if size else name_axis(name)
             dim_axis = from_report or from_name
             nominal, lower, upper = (float(v) if v is not None and v == v else math.nan
                                      for v in (nominal, lower, upper))
@@ -191,14 +187,25 @@ def _collect(tables: Sequence[tuple[str, pd.DataFrame]], axis: str | None,
             group = None if station is None or station != station or str(station).strip() == "" else str(station)
             key = (normalise_name(name), normalise_name(group) if group else None)
             if key not in dims:
-                dims[key] = _Dim(name, group, nominal, lower, upper, dim_axis, where,
-                                 "report" if from_report else "name" if from_name else "",
-                                 from_name if from_report and from_name not in (None, from_report) else None)
+                dims[key] = ScaffoldDimension(
+                    name, group, nominal, lower, upper, dim_axis, where,
+                    "report" if from_report else "name" if from_name else "",
+                    from_name if from_report and from_name not in (None, from_report) else None,
+                    direction, size, feature, side, position)
                 continue
             known = dims[key]
+            known.size, known.feature, known.side = known.size or size, known.feature or feature, known.side or side
+            known.position = known.position or position
+            if direction is not None and known.direction is None:
+                known.direction = direction
+            elif direction is not None and known.direction is not None and any(
+                    abs(a - b) > 1e-6 for a, b in zip(direction, known.direction, strict=True)):
+                known.direction = None  # two reports state different directions: neither is taken
+                known.axis_from, known.axis = "the reports state different directions", None
             if from_report and known.axis_from == "report" and known.axis != from_report:
                 # two reports state different axes for one dimension: neither is taken
                 known.axis_from, known.axis = f"the reports state {known.axis} and {from_report}", None
+                known.direction = None
             elif from_report and known.axis_from in ("", "name") and axis in (None, from_report):
                 known.name_says = from_name if from_name not in (None, from_report) else None
                 known.axis, known.axis_from = from_report, "report"
@@ -265,70 +272,17 @@ def scaffold_from_tables(tables: Sequence[tuple[str, pd.DataFrame]], *, axis: st
         raise ModelError(f"no toleranced length characteristic to make a dimension of ({why})",
                          location=SourceLocation(", ".join(reports)))
     stated = Counter(d.axis for d in dims if d.axis)
-    model_axis = axis or max(("Z", "X", "Y"), key=lambda a: stated[a])  # most stated; Z on a tie or none
+    measured = set().union(*(d.measured_axes() for d in dims))
+    interpolated = any(d.interpolated for d in dims)
+    axes: tuple[str, ...] = ()
+    if axis is None and (len(measured) >= 2 or interpolated):
+        axes = tuple(a for a in AXES if a in measured or (interpolated and a == SPINDLE))
+    model_axis = axis or (SPINDLE if axes else max(("Z", "X", "Y"), key=lambda a: stated[a]))  # Z on a tie / none
     bands = [d.upper - d.lower for d in dims]
     resolution = _resolution(min(bands))
-    text = _render(dims, skipped, reports, model_axis, resolution, name, axis)
+    text = render_scaffold(dims, skipped, reports, axis=model_axis, axes=axes, resolution=resolution, name=name,
+                           only_axis=axis)
     origins = Counter(d.axis_from if d.axis_from in ("report", "name") else "none" for d in dims)
     return Scaffold(text, len(dims), model_axis, tuple(skipped),
-                    axes_from={k: origins[k] for k in ("report", "name", "none") if origins[k]})
-
-
-def _render(dims: list[_Dim], skipped: list[tuple[str, str]], reports: Sequence[str | Path], axis: str,
-            resolution: float, name: str | None, only_axis: str | None) -> str:
-    sources = ", ".join(Path(r).name for r in reports)
-    title = name or f"Scaffold from {sources}"
-    out = [
-        f"# Process model scaffold written by `setupfix model init` from: {_comment(sources)}",
-        "# It loads as written and `setupfix correct` runs with it, but its relations are a guess:",
-        "#   every feature below is moved by W1 (G54) and T1 (H1) with weight +1 (a feature along",
-        "#   another axis than the process's by none). Edit",
-        "#   1. [wks.*] and [tools.*]: the registers your NC program really uses (one table each);",
-        "#   2. [features.*]: which WKS and tools move each feature, +1 or -1 (a feature cut by",
-        "#      the tool's tip facing -axis gets -1), and remove features no offset moves;",
-        "#   3. [dimensions.*] features: a distance between two features is { Fa = 1, Fb = -1 };",
-        "#   4. group = \"P1\" … where a fixture holds the part at several stations.",
-        "# Then `setupfix model show` prints the matrices and `setupfix model check` the match table.",
-        f"# {len(dims)} dimension(s); axis {axis}"
-        + (f" (kept: dimensions along {only_axis} or with no axis stated)" if only_axis else
-           " (the one most dimensions state; other axes are kept: delete them or use --axis)"),
-        "# Each dimension's axis is the one the report states (CORTOL axis, QIF direction or vector,",
-        "#   a plane or point normal), else the one its name states; its comment says which.",
-    ]
-    if skipped:
-        out.append(f"# Left out ({len(skipped)}):")
-        for char, reason in skipped[:200]:
-            out.append(f"#   {_comment(char)}: {reason}")
-        if len(skipped) > 200:
-            out.append(f"#   … and {len(skipped) - 200} more")
-    out += [
-        "",
-        "[process]",
-        f"name = {_toml_string(title)}",
-        f'axis = "{axis}"',
-        'unit = "mm"             # every length below is in mm (the reports were converted)',
-        f"{'resolution = ' + _number(resolution):<24}# the controller's offset step",
-        "limit = 0.1             # bound on |correction| of every register; per register: limit = …",
-        "",
-        "[wks.W1]",
-        'register = "G54"        # rename; add [wks.W2] register = "G55" … per work offset',
-        "",
-        "[tools.T1]",
-        'register = "H1"         # rename; add [tools.T2] … per tool length offset',
-        "",
-    ]
-    for i, d in enumerate(dims, start=1):
-        if d.axis in (None, axis):
-            out += [f"[features.F{i}]", "wks = { W1 = 1 }", "tools = { T1 = 1 }", ""]
-        else:  # a length along another axis: a shift along this one does not change it
-            out += [f"[features.F{i}]  # axis {d.axis}: no {axis} offset moves it (nothing to correct here)",
-                    "wks = {}", "tools = {}", ""]
-    for i, d in enumerate(dims, start=1):
-        out += [f"[dimensions.D{i}]  # {_comment(d.source)}; {_comment(d.axis_note())}",
-                f"name = {_toml_string(d.name)}",
-                f"features = {{ F{i} = 1 }}", f"nominal = {_number(d.nominal)}", f"lower = {_number(d.lower)}",
-                f"upper = {_number(d.upper)}"]
-        if d.group:
-            out.append(f"group = {_toml_string(d.group)}")
-        out.append("")
-    return "\n".join(out)
+                    axes_from={k: origins[k] for k in ("report", "name", "none") if origins[k]}, axes=axes,
+                    sizes=sum(1 for d in dims if d.size))

@@ -32,6 +32,8 @@ def setup(tmp_path_factory) -> tuple[Path, Path, Path]:
     bad.write_bytes("\n".join(lines).encode("cp949"))
     model = folder / "model.toml"
     assert main(["model", "init", str(sample), "-o", str(model), "--axis", "Y"]) == 0
+    # the scaffold is a draft (correct holds with the rule "draft"): the rules below are those of the model checked
+    model.write_text(model.read_text(encoding="utf-8").replace("\ndraft = true", "\ndraft = false"), encoding="utf-8")
     return sample, bad, model
 
 
@@ -47,9 +49,10 @@ def test_correct_refuses_then_skips_the_row_with_a_warning(setup, capsys):
     assert main(["correct", "--model", str(model), "--json", "--lenient", str(bad)]) == 0
     out = json.loads(capsys.readouterr().out)
     # issue 22 (coverage): the skipped row's dimension is absent, so the registers that move it (in this scaffold
-    # every feature is moved by W1 and T1) are held at 0 and the rule says so -- no longer an "apply"
+    # every feature is moved by W1; issue 23: no tool length along Y, the spindle being Z) are held at 0 and the
+    # rule says so -- no longer an "apply"
     (coverage,) = [r for r in out["rules"] if r["rule"] == "coverage"]
-    assert out["verdict"] == "hold" and set(coverage["registers"]) == {"W1", "T1"} and coverage["dimensions"]
+    assert out["verdict"] == "hold" and set(coverage["registers"]) == {"W1"} and coverage["dimensions"]
     assert any(w.startswith(f"{bad}:32: ") and "contradicting themselves" in w for w in out["warnings"])
     # the skipped row is a model dimension: absent, listed, never guessed
     skipped = [d["id"] for d in out["dimensions"] if d["name"] == "점2.Y"]

@@ -67,7 +67,8 @@ def test_expansion_names_groups_shared_and_mapped_registers():
     assert [f.id for f in model.features] == ["AF1", "AF2", "BF1", "BF2"]
     assert model.features[2].wks == {"W2": 1.0} and model.features[3].wks == {"W3": 1.0}
     d = model.dimensions[1]
-    assert (d.id, d.name, d.aliases, d.group, d.features) == ("BD1", "B-D1", ("B D1",), "B",
+    # the alias as written ("D1") too: a per-part report of station B names it so (issue 23)
+    assert (d.id, d.name, d.aliases, d.group, d.features) == ("BD1", "B-D1", ("B D1", "D1"), "B",
                                                               {"BF1": 1.0, "BF2": -1.0})
 
 
@@ -119,3 +120,60 @@ def test_tools_mapped_per_station():
     d["stations"]["B"]["tools"] = {"cutter": "T2"}
     model = model_from_dict(d)
     assert model.features[0].tools == {"T1": 1.0} and model.features[2].tools == {"T2": 1.0}
+
+
+def _per_part_report(tmp_path: Path, station: str, *, with_station: bool) -> Path:
+    """One station's rows of guide-pins cycle 1 as an ordinary per-part report writes them: "D1", not "P2 D1"."""
+    import csv
+
+    with open(GUIDE_PINS / "cycle_01.csv", newline="", encoding="utf-8") as f:
+        rows = [r for r in csv.DictReader(f) if r["station"] == station]
+    path = tmp_path / f"part_{station}.csv"
+    with open(path, "w", newline="", encoding="utf-8") as f:
+        out = csv.writer(f)
+        out.writerow(["characteristic", "nominal", "actual", "lower", "upper", "part"]
+                     + (["station"] if with_station else []))
+        for r in rows:
+            out.writerow([r["characteristic"].removeprefix(f"{station} "), r["nominal"], r["actual"], r["lower"],
+                          r["upper"], "serial 17"] + ([station] if with_station else []))
+    return path
+
+
+@pytest.mark.parametrize("with_station", [True, False])
+def test_a_template_matches_a_per_part_report_without_the_station_prefix(tmp_path, with_station):
+    from setupfix.pipeline.correct import correct_report
+    from setupfix.pipeline.requests import CorrectRequest, CycleOptions
+
+    model = load_model(GUIDE_PINS / "model.toml")
+    report = _per_part_report(tmp_path, "P2", with_station=with_station)
+    cycles = CycleOptions() if with_station else CycleOptions.of(["P2"])
+    (cycle,) = correct_report(CorrectRequest(model, cycles=cycles), report).cycles
+    matched = [d.id for d, v in zip(model.dimensions, cycle.part.deviation, strict=True) if v == v]
+    assert matched == [f"P2D{i}" for i in range(1, 8)] and not cycle.part.unmatched
+    # the same numbers as the fixture report's P2 rows (named "P2 D1" …)
+    (whole,) = correct_report(CorrectRequest(model), GUIDE_PINS / "cycle_01.csv").cycles
+    np.testing.assert_array_equal(cycle.part.deviation[7:14], whole.part.deviation[7:14])
+
+
+def test_a_per_part_report_without_its_station_is_refused_naming_the_way_to_give_it(tmp_path, capsys):
+    from setupfix.cli import main
+
+    report = _per_part_report(tmp_path, "P2", with_station=False)
+    assert main(["correct", "--model", str(GUIDE_PINS / "model.toml"), str(report)]) != 0
+    err = capsys.readouterr().err
+    assert "'D1' names several dimensions" in err and "--stations" in err and "model check" not in err
+    assert main(["correct", "--model", str(GUIDE_PINS / "model.toml"), "--stations", "P2", str(report)]) == 0
+
+
+def test_model_check_does_not_send_the_user_to_model_check(tmp_path, capsys):
+    from setupfix.cli import main
+
+    report = tmp_path / "other.csv"
+    report.write_text("characteristic,nominal,actual,lower,upper\nBore 1,10,10.01,-0.1,0.1\n", encoding="utf-8")
+    assert main(["model", "check", str(GUIDE_PINS / "model.toml"), str(report)]) != 0
+    err = capsys.readouterr().err
+    assert "no characteristic of part" in err and "model check" not in err
+    assert "'P1 D1'" in err and "aliases" in err and "--stations" in err
+    # correct's message still points at model check (a different command)
+    assert main(["correct", "--model", str(GUIDE_PINS / "model.toml"), str(report)]) != 0
+    assert "model check" in capsys.readouterr().err

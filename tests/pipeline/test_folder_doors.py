@@ -45,7 +45,8 @@ def shop(tmp_path: Path) -> tuple[Path, Path]:
     os.symlink(outside / "bracket_minus_negative.txt", root / "linked.txt")
     os.symlink(outside, root / "folder_link")
     model = tmp_path / "model.toml"
-    model.write_text(scaffold_model([PCDMIS / "bracket_two_parts.txt"]).text, encoding="utf-8")
+    # one axis (Z): a multi-axis scaffold of the X/Y/Z report would need the multi-axis loader (issue 23)
+    model.write_text(scaffold_model([PCDMIS / "bracket_two_parts.txt"], axis="Z").text, encoding="utf-8")
     shutil.copy(model, root / "model.toml")
     (root / "corrections.csv").write_text("Timestamp,Register,Delta\n2026-11-02T07:00:00,W1,0.01\n", encoding="utf-8")
     (root / "temperatures.csv").write_text("timestamp,spindle\n2026-11-02T06:00:00,20.1\n", encoding="utf-8")
