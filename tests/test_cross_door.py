@@ -314,14 +314,8 @@ def self_modelled_cases(tmp: Path) -> Iterator[Case]:
 
 
 def _modelled(name: str, report: Path) -> Iterator[Case]:
-    from setupfix.model import ProcessModel
-
     model = report.parent.parent / f"{report.parent.name}.model.toml"
     code, _, _ = cli("model", "init", report, "-o", model)
-    if code == 0 and not hasattr(ProcessModel, "resolution_of") and "\naxes = [" in model.read_text(encoding="utf-8"):
-        # a report measuring several axes gets a multi-axis scaffold (issue 23); until the loader reads those,
-        # its one-axis scaffold goes through the doors
-        code, _, _ = cli("model", "init", report, "-o", model, "--axis", "Z", "--force")
     if code == 0:
         # a scaffold is a draft, which every door holds (tests/test_recommend_draft.py): the doors are compared
         # on its relations, as after the user has checked them

@@ -3,8 +3,7 @@
 The property test reads every sample that states geometry (a measuring direction or a
 size: QIF, DMIS, CALYPSO, PC-DMIS) and checks each dimension of its scaffold against the
 report's own row, computed here from the canonical table's columns, not from the
-scaffold's code.  Multi-axis scaffolds are checked as TOML; loading and correcting them
-waits for the multi-axis loader (skipped with the reason until it is there).
+scaffold's code.  Multi-axis scaffolds are checked as TOML, then loaded and corrected.
 """
 
 from __future__ import annotations
@@ -22,14 +21,12 @@ import pytest
 import parsers
 from parsers.geometry import INTERPOLATED
 from setupfix.errors import ModelError, SetupfixError
-from setupfix.model import ProcessModel, load_model, model_from_dict
+from setupfix.model import load_model, model_from_dict
 from setupfix.pipeline.correct import correct_report
 from setupfix.pipeline.requests import CorrectRequest
 from setupfix.pipeline.scaffold import scaffold_from_tables, scaffold_model
 from tests.conftest import SAMPLES, SHARED
 
-MULTI_AXIS_LOADS = hasattr(ProcessModel, "resolution_of")
-NO_MULTI_AXIS_LOADER = "the model loader does not read multi-axis models (process.axes) yet"
 AXES = ("X", "Y", "Z")
 DMIS = SHARED / "cmm-samples" / "dmis_dmo"
 
@@ -243,7 +240,6 @@ def test_the_calypso_sample_is_multi_axis_and_its_y_distances_have_no_tool_lengt
     assert "radius" not in raw["tools"]["T1"]
 
 
-@pytest.mark.skipif(not MULTI_AXIS_LOADS, reason=NO_MULTI_AXIS_LOADER)
 def test_a_multi_axis_scaffold_loads_and_holds_as_a_draft_and_solves_without_the_key(tmp_path):
     report = SAMPLES / "qif" / "NIST_MTC_Incoming_PlateResults_20_samples.QIF"
     out = tmp_path / "plate.toml"
