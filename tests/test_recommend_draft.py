@@ -81,3 +81,22 @@ def test_removing_the_key_recommends_again(tmp_path):
     (cycle,) = correct_report(CorrectRequest(dataclasses.replace(model, draft=False)),
                               GUIDE_PINS / "cycle_01.csv").cycles
     assert cycle.verdict == "apply"
+
+
+def test_a_batch_with_a_store_leaves_a_drafts_reports_unprocessed(tmp_path):
+    from setupfix.store import open_store
+
+    model = load_model(draft_copy(tmp_path))
+    folder = tmp_path / "reports"
+    folder.mkdir()
+    shutil.copy(GUIDE_PINS / "cycle_01.csv", folder / "cycle_01.csv")
+    with open_store(tmp_path / "h.db") as store:
+        held = run_batch(CorrectRequest(model), folder, tmp_path / "held.csv", settle=0, store=store)
+        assert held.verdicts["hold"] == 1
+        # the user edits the model (removes the key): the next run corrects the report, it is not "already processed"
+        edited = run_batch(CorrectRequest(dataclasses.replace(model, draft=False)), folder, tmp_path / "o.csv",
+                           settle=0, store=store)
+        assert edited.verdicts["apply"] == 1 and not edited.skipped
+        again = run_batch(CorrectRequest(dataclasses.replace(model, draft=False)), folder, tmp_path / "o2.csv",
+                          settle=0, store=store)
+        assert again.parts == 0 and len(again.skipped) == 1  # processed now: skipped as before

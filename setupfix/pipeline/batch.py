@@ -320,7 +320,7 @@ def run_batch(request: CorrectRequest, folder: str | Path, out: str | Path, *, w
                     writer.add(rel, outcome.rows, outcome.programs)
                     if claims is not None:
                         try:
-                            claims.record(outcome, request.solve)
+                            claims.record(outcome, request.solve, final=not model.draft)
                         except SetupfixError as exc:  # its offsets stand; it is corrected again next run
                             note = Note(exc.message, exc.location, "store")
                             outcome.notes.append(note)

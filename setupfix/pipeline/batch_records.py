@@ -132,8 +132,10 @@ class Claims:
         refused = self.store.claim_reports([h for _, _, _, h, _ in hashed if h], self.claimant, again=self.force)
         return [(p, n, m, h, refused.get(h, "")) for p, n, m, h, _ in hashed]
 
-    def record(self, outcome: Outcome, solve: SolveOptions) -> None:
-        self.pending.append((outcome.sha256, _record(self.store, outcome, solve), all(outcome.solved)))
+    def record(self, outcome: Outcome, solve: SolveOptions, *, final: bool = True) -> None:
+        """Keep ``outcome``'s recommendations for :meth:`finish`; ``final=False`` (a draft model's holds)
+        stores them but leaves the report unprocessed, so the run after the model's edit corrects it."""
+        self.pending.append((outcome.sha256, _record(self.store, outcome, solve), all(outcome.solved) and final))
 
     def finish(self) -> None:
         try:
