@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+from pathlib import Path
 import json
 import sys
 
@@ -18,10 +19,11 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
                                    "parts; Nelson rules 1-4 with the parts each violation covers; the "
                                    "capability before and after each --split time (default: each correction "
                                    "in the store's log).  Values are deviations from nominal.")
-    p.add_argument("--db", metavar="STORE", default=None, help="history store (default: setupfix.db here)")
-    p.add_argument("--machine", metavar="M", default=None,
-                   help="one machine's parts (the store keeps no machine per part yet: refused until the "
-                        "multi-machine history, issue 25)")
+    p.add_argument("--db", metavar="STORE", default=None,
+                   help="history store: a file (SQLite) or a postgresql:// URL (default: $SETUPFIX_DB, else "
+                        "setupfix.db here)")
+    p.add_argument("--machine", metavar="NAME", default=None,
+                   help="the machine whose series are read (default: 'default')")
     p.add_argument("--since", metavar="TIME", default=None, help="only parts made at or after TIME (ISO 8601)")
     p.add_argument("--until", metavar="TIME", default=None, help="only parts made at or before TIME (ISO 8601)")
     p.add_argument("--dimension", metavar="NAME", nargs="+", action="extend", default=[],
@@ -39,24 +41,24 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
 
 
 def run(args: argparse.Namespace) -> int:
-    from setupfix.pipeline.history import default_db_path
+    from setupfix.pipeline.history import store_location
     from setupfix.pipeline.html_report import spc_page
     from setupfix.pipeline.spc import SpcRequest, format_spc, spc_json, spc_report
     from setupfix.pipeline.writers import check_target, write_text
-    from setupfix.store import open_store
+    from setupfix.store import is_server, open_store
 
-    path = default_db_path(args.db)
+    location = store_location(args.db)
     if args.html == "-" and args.json:
         raise ParameterError("spc: --html - and --json would both write to standard output",
                              hint="give --html a file name")
     if args.html:
         check_target(args.html)
-    if not path.is_file():
-        raise StoreError("no history store here", location=SourceLocation(str(path)),
+    if not is_server(location) and not Path(location).is_file():
+        raise StoreError("no history store here", location=SourceLocation(location),
                          hint="create it with 'setupfix history import', or give --db")
     request = SpcRequest(since=args.since, until=args.until, dimensions=tuple(args.dimension),
-                         baseline=args.baseline, splits=tuple(args.split), machine=args.machine)
-    with open_store(path) as store:
+                         baseline=args.baseline, splits=tuple(args.split))
+    with open_store(location, machine=args.machine) as store:
         outcome = spc_report(store, request)
     if args.html:
         write_text(args.html, spc_page(outcome))

@@ -1,4 +1,4 @@
-"""Use cases of the history store: import files, summarise, export the canonical tables.
+"""Use cases of the history store: import files, summarise, export the canonical tables and the audit, migrate.
 
 Shared by ``setupfix history`` and, later, batch and the TUI.  An import reads and
 checks every file first (reports through :mod:`parsers`, the corrections log and the
@@ -9,6 +9,7 @@ it was.
 
 from __future__ import annotations
 
+import dataclasses
 import hashlib
 import os
 from collections.abc import Sequence
@@ -22,26 +23,30 @@ from parsers._source import read_bytes
 from parsers.corrections import EVENTS, check_corrections, read_corrections_log
 from parsers.temperature import read_temperature_log
 from parsers.timestamps import iso_text
-from setupfix.errors import Note, ParameterError, ParseError, UnknownFormatError
+from setupfix.errors import Note, ParameterError, ParseError, SourceLocation, StoreError, UnknownFormatError
 from setupfix.model import CANONICAL_COLUMNS, ProcessModel
 from setupfix.pipeline.present import cycle_json
 from setupfix.pipeline.requests import CycleCorrection, ReadOptions
 from setupfix.pipeline.writers import write_canonical_csv, write_table_csv
-from setupfix.store import Recommendation, Store
+from setupfix.store import DB_ENV, Recommendation, Store
+from setupfix.store._audit import TABLES
 
-__all__ = ["DEFAULT_DB", "default_db_path", "import_history", "ImportRequest", "ImportSummary",
-           "history_summary", "export_history", "record_recommendations", "EXPORTS", "EVENTS"]
+__all__ = ["DEFAULT_DB", "store_location", "import_history", "ImportRequest", "ImportSummary",
+           "history_summary", "export_history", "record_recommendations", "migrate_history", "EXPORTS", "EVENTS"]
 
 DEFAULT_DB = "setupfix.db"
-#: Tables ``history export`` writes.
-EXPORTS = ("measurements", "corrections", "temperatures")
+#: Tables ``history export`` writes (``recommendations``: the audit trail, one row per register component).
+EXPORTS = ("measurements", "corrections", "temperatures", "recommendations")
 
 
-def default_db_path(db: str | None, model: str | None = None) -> Path:
-    """``--db`` if given, else ``setupfix.db`` beside the model, else in the current folder."""
+def store_location(db: str | None, model: str | None = None) -> str:
+    """Where the store is: ``--db`` if given, else ``$SETUPFIX_DB``, else ``setupfix.db`` beside the model, else
+    in the current folder.  A ``postgresql://`` URL is a server store (:func:`setupfix.store.open_store`)."""
     if db:
-        return Path(db)
-    return (Path(model).parent if model else Path(".")) / DEFAULT_DB
+        return db
+    if os.environ.get(DB_ENV):
+        return os.environ[DB_ENV]
+    return str((Path(model).parent if model else Path(".")) / DEFAULT_DB)
 
 
 def _temperature_frame(path: str | os.PathLike[str]) -> pd.DataFrame:
@@ -140,13 +145,19 @@ def import_history(store: Store, request: ImportRequest) -> ImportSummary:
     return ImportSummary(tuple(new_reports), tuple(known_reports), n_corrections, n_temperatures, tuple(notes))
 
 
-def history_summary(store: Store) -> dict[str, object]:
-    """Reports (name, reader, rows, parts, first and last timestamp), corrections, tool changes, temperatures.
+def history_summary(store: Store, *, every_machine: bool = True) -> dict[str, object]:
+    """What the store holds for each machine, and, unless ``every_machine``, the detail of the handle's machine:
+    its reports (name, reader, rows, parts, first and last timestamp), corrections, tool changes, temperatures.
 
-    The store is checked whole first (:meth:`~setupfix.store.Store.verify`): a damaged one is refused, not
-    summarised from what happens to be readable.
+    The per-machine summary is one aggregate query per table (:meth:`~setupfix.store.Store.machines`); the
+    detail reads that machine's rows.  The store is checked whole first (:meth:`~setupfix.store.Store.verify`):
+    a damaged one is refused, not summarised from what happens to be readable.
     """
     store.verify()
+    summary: dict[str, object] = {"store": store.location,
+                                  "machines": [dataclasses.asdict(m) for m in store.machines()]}
+    if every_machine:
+        return summary
     rows = store.measurements()
     reports = []
     for rec in store.reports():
@@ -159,7 +170,7 @@ def history_summary(store: Store) -> dict[str, object]:
                         "imported": rec.imported_at})
     log = store.corrections()
     temps = store.temperatures()
-    return {"store": store.location, "reports": reports,
+    return {**summary, "machine": store.machine, "reports": reports,
             "corrections": int((log["event"] == "correction").sum()),
             "tool_changes": int((log["event"] == "tool_change").sum()),
             "registers": sorted(log["register"].unique().tolist()),
@@ -167,11 +178,12 @@ def history_summary(store: Store) -> dict[str, object]:
             "recommendations": len(store.recommendations())}
 
 
-def export_history(store: Store, table: str, target: str | os.PathLike[str]) -> int:
-    """Write one stored table as its canonical CSV (``-``: standard output); the number of rows.
+def export_history(store: Store, table: str, target: str | os.PathLike[str], *, every_machine: bool = False) -> int:
+    """Write one stored table of the handle's machine as its canonical CSV (``-``: standard output); the rows.
 
-    The store is checked whole first (:meth:`~setupfix.store.Store.verify`): a damaged one is refused, never
-    exported in part.
+    ``recommendations`` is the audit trail (:data:`setupfix.store.AUDIT_COLUMNS`, one row per register
+    component), of every machine with ``every_machine``.  The store is checked whole first
+    (:meth:`~setupfix.store.Store.verify`): a damaged one is refused, never exported in part.
     """
     store.verify()
     if table == "measurements":
@@ -182,6 +194,9 @@ def export_history(store: Store, table: str, target: str | os.PathLike[str]) -> 
         write_table_csv(frame, target)
     elif table == "temperatures":
         frame = store.temperatures()
+        write_table_csv(frame, target)
+    elif table == "recommendations":
+        frame = store.audit(every_machine=every_machine)
         write_table_csv(frame, target)
     else:
         raise ParameterError(f"history export: table must be one of {', '.join(EXPORTS)}, got {table!r}")
@@ -204,3 +219,29 @@ def record_recommendations(store: Store, results: Sequence[CycleCorrection], *, 
                       "report_sha256": hashes["report"], "part": result.get("part"), "seed": seed}
             ids.append(store.add_recommendation(Recommendation(result["optimizer"], inputs, result)))
     return ids
+
+
+def migrate_history(source: Store, target: Store) -> dict[str, int]:
+    """Copy every row of every table of ``source`` (all machines) into the empty store ``target``, one
+    transaction; the rows copied per table (each checked equal to the source's count).
+
+    Raises
+    ------
+    StoreError
+        If ``target`` already holds rows (a copy never merges into a store in use), or a table's count
+        differs after the copy (nothing is kept then).
+    """
+    held = [t for t, _, _ in TABLES if target.count(t)]
+    if held:
+        raise StoreError(f"the target store already holds {', '.join(held)} rows: migrate into an empty store",
+                         location=SourceLocation(target.location), hint="give a new database with --db")
+    source.verify()
+    copied: dict[str, int] = {}
+    with target.transaction():
+        for table, _, _ in TABLES:
+            target.restore(table, source.dump(table))
+            copied[table] = target.count(table)
+            if copied[table] != source.count(table):
+                raise StoreError(f"{table}: {copied[table]} rows copied of {source.count(table)}; nothing kept",
+                                 location=SourceLocation(target.location))
+    return copied

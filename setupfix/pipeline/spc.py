@@ -60,8 +60,6 @@ class SpcRequest:
     splits : tuple of str
         ISO 8601 times to compare the capability before and after; empty: every applied
         correction of the store's log.
-    machine : str, optional
-        A machine; the store keeps no machine per part yet, so giving one is refused.
     """
 
     since: str | None = None
@@ -69,7 +67,6 @@ class SpcRequest:
     dimensions: tuple[str, ...] = ()
     baseline: int = DEFAULT_BASELINE
     splits: tuple[str, ...] = ()
-    machine: str | None = None
 
 
 @dataclass(frozen=True)
@@ -131,15 +128,12 @@ def _series(store: Store, request: SpcRequest, notes: list[Note]) -> pd.DataFram
     """The stored rows as one series table: characteristic, part, time, value, limits, in time order."""
     rows = store.measurements()
     where = f"{store.location}#measurements"
-    if request.machine is not None:
-        if "machine" not in rows.columns:
-            raise ParameterError(f"spc: --machine {request.machine}: this store records no machine per part",
-                                 hint="machines in the store come with the multi-machine history (issue 25)")
-        rows = rows[rows["machine"].astype(str) == request.machine]
     rows = rows[~rows["reference"].astype(bool)] if "reference" in rows.columns else rows
     if rows.empty:
-        raise StoreError("no measurements stored", location=SourceLocation(store.location),
-                         hint="store reports with 'setupfix history import'")
+        raise StoreError(f"no measurements stored for machine {store.machine!r}",
+                         location=SourceLocation(store.location),
+                         hint="store reports with 'setupfix history import --machine NAME'; "
+                              "'setupfix history show' lists the machines")
     stamps = rows["timestamp"].fillna("").astype(str).str.strip()
     dated = stamps != ""
     bounded = request.since or request.until or request.splits

@@ -1,10 +1,19 @@
 """History store: every report, correction, tool change, temperature and recommendation.
 
-Callers see only the :class:`Store` protocol and :func:`open_store`; the embedded
-default is one SQLite file (:mod:`setupfix.store._sqlite`, stdlib ``sqlite3``, WAL
-mode, schema versioned with migrations).  A server database can be added later as
-another implementation of the same protocol, chosen by :func:`open_store` from the
-location given, without touching callers.
+Callers see only the :class:`Store` protocol and :func:`open_store`.  Two back ends
+keep the same rules, schema version and migrations: one SQLite file (:mod:`._sqlite`,
+stdlib ``sqlite3``, WAL mode) -- the embedded default, no server needed -- and a
+PostgreSQL database (:mod:`._postgres`, psycopg 3, the ``plant`` extra), chosen by the
+location: a ``postgresql://`` (or ``postgres://``) URL is a server, anything else a file.
+Their common queries are in :mod:`._sql`.
+
+A store handle belongs to one machine (``machine``, default :data:`DEFAULT_MACHINE`) and
+one operator (``operator``, default the login name): every report, correction,
+temperature sample and recommendation it writes is that machine's, every read sees only
+that machine's rows; :meth:`Store.machines` and ``audit(every_machine=True)`` see the
+whole plant.  A recommendation is stored with its audit columns
+(:mod:`._audit`: operator, report name and hash, part, verdict, rules, one delta per
+register component, applied and exported program).
 
 Rules every implementation keeps:
 
@@ -22,8 +31,10 @@ Rules every implementation keeps:
   forced.  A claim names its run (random token), host, pid, the process's start mark
   and time; a claim whose process is gone (same host: the pid is not running or is
   another process; another host: older than :data:`CLAIM_STALE_S`) is taken over;
-* every failure of the file (damaged, read-only, locked beyond the busy timeout, full)
-  is a :class:`StoreError` naming the store, never a bare database error.
+* a report belongs to one machine: the same bytes given for another machine are refused;
+* every failure (a damaged, read-only, locked or full file; a server that is down, refuses
+  the login or is unknown; a bad URL) is a :class:`StoreError` naming the store (a URL
+  without its password), never a bare database error.
 
 Tables come and go as :class:`pandas.DataFrame` with the columns of
 ``../shared/spec/measurements.md`` (measurement table, corrections log, temperature
@@ -32,24 +43,32 @@ log).
 
 from __future__ import annotations
 
+import getpass
 import os
 import secrets
 import socket
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterable, Iterator, Mapping, Sequence
 from contextlib import AbstractContextManager
 from dataclasses import dataclass
 from typing import Any, Protocol
 
+import numpy as np
 import pandas as pd
 
 from parsers.corrections import COLUMNS as CORRECTION_COLUMNS
 from parsers.corrections import RegisterLog, check_corrections, log_from_frame
 from setupfix.atomic import process_alive, process_started
 from setupfix.model import ProcessModel
+from setupfix.store._audit import AUDIT_COLUMNS
 
-__all__ = ["Store", "ReportRecord", "Recommendation", "Claimant", "open_store", "report_tables",
-           "stored_corrections", "CORRECTION_COLUMNS", "CLAIM_STALE_S", "ALREADY_PROCESSED",
-           "HELD_ELSEWHERE"]
+__all__ = ["Store", "ReportRecord", "Recommendation", "Claimant", "MachineSummary", "open_store", "report_tables",
+           "stored_corrections", "is_server", "login_name", "CORRECTION_COLUMNS", "AUDIT_COLUMNS", "CLAIM_STALE_S",
+           "ALREADY_PROCESSED", "HELD_ELSEWHERE", "DEFAULT_MACHINE", "DB_ENV"]
+
+#: The machine of a store handle opened without one (and of every row stored before machines were kept).
+DEFAULT_MACHINE = "default"
+#: The environment variable that names the store when no ``--db`` is given (a file path or a URL).
+DB_ENV = "SETUPFIX_DB"
 
 #: A claim from another host (whose process cannot be looked at) is stale after this long, seconds.
 CLAIM_STALE_S = 12 * 3600.0
@@ -92,7 +111,7 @@ class Claimant:
 
 @dataclass(frozen=True)
 class ReportRecord:
-    """One stored report: its content hash, name, reader, size, rows and import time."""
+    """One stored report: its content hash, name, reader, size, rows, import time and machine."""
 
     sha256: str
     name: str
@@ -100,6 +119,25 @@ class ReportRecord:
     size: int
     rows: int
     imported_at: str
+    machine: str = DEFAULT_MACHINE
+
+
+@dataclass(frozen=True)
+class MachineSummary:
+    """What the store holds for one machine (``history show``): counts and first/last times (ISO text)."""
+
+    machine: str
+    reports: int = 0
+    rows: int = 0
+    first_measured: str | None = None
+    last_measured: str | None = None
+    last_import: str | None = None
+    corrections: int = 0
+    tool_changes: int = 0
+    temperature_samples: int = 0
+    temperature_channels: int = 0
+    recommendations: int = 0
+    last_recommendation: str | None = None
 
 
 @dataclass(frozen=True)
@@ -116,18 +154,24 @@ class Recommendation:
         The result as written by ``--json`` (``cli-json.md``), JSON-able.
     created_at : str
         ISO 8601 time of the recommendation; set by the store when empty.
+    machine, operator : str
+        Whose it is; set by the store (its handle's machine and operator) -- given values are ignored.
     """
 
     optimizer: str
     inputs: Mapping[str, Any]
     result: Mapping[str, Any]
     created_at: str = ""
+    machine: str = ""
+    operator: str = ""
 
 
 class Store(Protocol):
-    """What the rest of setupfix may ask of a history store."""
+    """What the rest of setupfix may ask of a history store (of one machine, written by one operator)."""
 
     location: str
+    machine: str
+    operator: str
 
     def transaction(self) -> AbstractContextManager[None]:
         """Everything inside is committed together at the end, or rolled back on any exception."""
@@ -170,7 +214,28 @@ class Store(Protocol):
         ...
 
     def recommendations(self) -> list[Recommendation]:
-        """Every stored recommendation, oldest first."""
+        """Every stored recommendation of this machine, oldest first."""
+        ...
+
+    def audit(self, *, every_machine: bool = False) -> pd.DataFrame:
+        """The audit trail (:data:`AUDIT_COLUMNS`): one row per register component of each recommendation
+        (one row with no register for a recommendation without one), oldest first; this machine's, or the plant's."""
+        ...
+
+    def machines(self) -> list[MachineSummary]:
+        """What the store holds for each machine, by machine name (one aggregate query per table)."""
+        ...
+
+    def dump(self, table: str) -> Iterator[tuple[Any, ...]]:
+        """Every row of one table as stored, every machine (``history migrate``)."""
+        ...
+
+    def count(self, table: str) -> int:
+        """Rows of one table, every machine."""
+        ...
+
+    def restore(self, table: str, rows: Iterable[Sequence[Any]]) -> None:
+        """Insert rows :meth:`dump` gave, as they are, ids included (inside the caller's transaction when open)."""
         ...
 
     def claim_reports(self, keys: Sequence[str], claimant: Claimant, *, again: bool = False) -> dict[str, str]:
@@ -209,18 +274,50 @@ class Store(Protocol):
         ...
 
 
-def open_store(path: str | os.PathLike[str]) -> Store:
-    """Open (creating and migrating when needed) the history store at ``path``.
+def is_server(location: str | os.PathLike[str]) -> bool:
+    """Whether ``location`` names a PostgreSQL database (a ``postgresql://`` or ``postgres://`` URL)."""
+    return str(location).startswith(("postgresql://", "postgres://"))
+
+
+def login_name() -> str:
+    """The operator of a store handle opened without one: the login name ("" when the system cannot say)."""
+    try:
+        return getpass.getuser()
+    except (OSError, KeyError):
+        return ""
+
+
+def open_store(location: str | os.PathLike[str], *, machine: str | None = None,
+               operator: str | None = None) -> Store:
+    """Open (creating and migrating when needed) the history store at ``location``, for one machine.
+
+    Parameters
+    ----------
+    location : str or path
+        A file (SQLite) or a ``postgresql://user:password@host:port/database`` URL.
+    machine : str, optional
+        The machine every row written belongs to and every read is limited to;
+        :data:`DEFAULT_MACHINE` when None or empty.
+    operator : str, optional
+        Who writes (stored with each recommendation); the login name when None.
 
     Raises
     ------
     StoreError
-        If the file is not a setupfix store, was written by a newer setupfix, is damaged,
-        or cannot be opened or created (read-only, locked, full), naming the file.
+        Naming the store: a file that is not a setupfix store, was written by a newer
+        setupfix, is damaged or cannot be opened or created (read-only, locked, full); a
+        server that cannot be reached, refuses the login or has no such database; a URL
+        that cannot be read; psycopg not installed (the ``plant`` extra).
     """
+    who = (machine or "").strip() or DEFAULT_MACHINE
+    by = login_name() if operator is None else operator
+    if is_server(location):
+        from setupfix.store._postgres import PostgresStore
+
+        return PostgresStore(str(location), machine=who, operator=by)
     from setupfix.store._sqlite import SQLiteStore
 
-    return SQLiteStore(os.fspath(path))
+    return SQLiteStore(os.fspath(location), machine=who, operator=by)
 
 
 def report_tables(store: Store) -> list[tuple[ReportRecord, pd.DataFrame]]:
@@ -230,9 +327,13 @@ def report_tables(store: Store) -> list[tuple[ReportRecord, pd.DataFrame]]:
     ``diagnose --db``, the TUI's history).
     """
     records = {r.sha256: r for r in store.reports()}
-    rows = store.measurements()
-    return [(records[str(sha)], table.drop(columns=["report_sha256"]))
-            for sha, table in rows.groupby("report_sha256", sort=False)]
+    rows = store.measurements()  # in import order, each report's rows together
+    keys = rows.pop("report_sha256").to_numpy()
+    if not len(keys):
+        return []
+    starts = np.flatnonzero(np.r_[True, keys[1:] != keys[:-1]])
+    ends = np.r_[starts[1:], len(keys)]
+    return [(records[str(keys[a])], rows.iloc[a:b]) for a, b in zip(starts, ends, strict=True)]
 
 
 def stored_corrections(store: Store, model: ProcessModel) -> RegisterLog | None:

@@ -114,8 +114,94 @@ def _v3(db: sqlite3.Connection) -> None:
     db.executemany("INSERT INTO batch_claim (report_sha256, done) VALUES (?, 1)", sorted((d,) for d in done))
 
 
+#: What migration 4 adds, the same on both back ends (the PostgreSQL store writes it with its own types).
+V4_TABLES = """
+    CREATE TABLE recommendation_delta (
+        recommendation_id INTEGER NOT NULL REFERENCES recommendation(id),
+        register TEXT NOT NULL,
+        delta REAL,
+        PRIMARY KEY (recommendation_id, register)
+    );
+    CREATE INDEX report_machine ON report(machine, id);
+    CREATE INDEX recommendation_machine ON recommendation(machine, id);
+    CREATE INDEX batch_claim_owner ON batch_claim(owner)
+"""
+
+
+def _v4(db: sqlite3.Connection) -> None:
+    """Machine identity and the audit trail.
+
+    Every report, correction, temperature sample and recommendation belongs to one machine
+    (rows stored before take ``'default'``, :data:`setupfix.store.DEFAULT_MACHINE`); the
+    corrections and temperature keys gain the machine.  A report keeps its row count and
+    first and last measured time (a plant summary without reading every row).  A
+    recommendation gains its operator and its audit columns (:func:`setupfix.store._audit.audit_of`,
+    filled here from the JSON already stored) and one ``recommendation_delta`` row per
+    register component.
+    """
+    from setupfix.store._audit import audit_of
+
+    _script(db, """
+        ALTER TABLE report ADD COLUMN machine TEXT NOT NULL DEFAULT 'default';
+        ALTER TABLE report ADD COLUMN rows INTEGER NOT NULL DEFAULT 0;
+        ALTER TABLE report ADD COLUMN first_measured TEXT;
+        ALTER TABLE report ADD COLUMN last_measured TEXT;
+        UPDATE report SET rows = (SELECT count(*) FROM measurement m WHERE m.report_id = report.id),
+            first_measured = (SELECT min(timestamp) FROM measurement m WHERE m.report_id = report.id),
+            last_measured = (SELECT max(timestamp) FROM measurement m WHERE m.report_id = report.id);
+        CREATE TABLE correction_v4 (
+            id INTEGER PRIMARY KEY,
+            machine TEXT NOT NULL DEFAULT 'default',
+            timestamp TEXT NOT NULL,
+            register TEXT NOT NULL,
+            delta REAL,
+            event TEXT NOT NULL,
+            UNIQUE (machine, timestamp, register, event)
+        );
+        INSERT INTO correction_v4 (timestamp, register, delta, event)
+            SELECT timestamp, register, delta, event FROM correction ORDER BY rowid;
+        DROP TABLE correction;
+        ALTER TABLE correction_v4 RENAME TO correction;
+        CREATE TABLE temperature_v4 (
+            machine TEXT NOT NULL DEFAULT 'default',
+            timestamp TEXT NOT NULL,
+            channel TEXT NOT NULL,
+            value REAL NOT NULL,
+            PRIMARY KEY (machine, timestamp, channel)
+        );
+        INSERT INTO temperature_v4 (timestamp, channel, value) SELECT timestamp, channel, value FROM temperature;
+        DROP TABLE temperature;
+        ALTER TABLE temperature_v4 RENAME TO temperature;
+        ALTER TABLE recommendation ADD COLUMN machine TEXT NOT NULL DEFAULT 'default';
+        ALTER TABLE recommendation ADD COLUMN operator TEXT NOT NULL DEFAULT '';
+        ALTER TABLE recommendation ADD COLUMN report TEXT NOT NULL DEFAULT '';
+        ALTER TABLE recommendation ADD COLUMN report_sha256 TEXT NOT NULL DEFAULT '';
+        ALTER TABLE recommendation ADD COLUMN part TEXT NOT NULL DEFAULT '';
+        ALTER TABLE recommendation ADD COLUMN verdict TEXT NOT NULL DEFAULT '';
+        ALTER TABLE recommendation ADD COLUMN rules TEXT NOT NULL DEFAULT '[]';
+        ALTER TABLE recommendation ADD COLUMN applied INTEGER NOT NULL DEFAULT 0;
+        ALTER TABLE recommendation ADD COLUMN exported_to TEXT NOT NULL DEFAULT '';
+        ALTER TABLE recommendation ADD COLUMN export_sha256 TEXT NOT NULL DEFAULT ''
+    """)
+    _script(db, V4_TABLES)
+    names = dict(db.execute("SELECT sha256, name FROM report").fetchall())
+    for rec_id, inputs, result in db.execute("SELECT id, inputs, result FROM recommendation").fetchall():
+        try:
+            given, got = json.loads(inputs), json.loads(result)
+        except ValueError:
+            continue
+        if not isinstance(given, dict) or not isinstance(got, dict):
+            continue
+        a = audit_of(given, got)
+        db.execute("UPDATE recommendation SET report = ?, report_sha256 = ?, part = ?, verdict = ?, rules = ?, "
+                   "applied = ?, exported_to = ?, export_sha256 = ? WHERE id = ?",
+                   (a.report or names.get(a.report_sha256, ""), a.report_sha256, a.part, a.verdict, a.rules,
+                    int(a.applied), a.exported_to, a.export_sha256, rec_id))
+        db.executemany("INSERT INTO recommendation_delta VALUES (?, ?, ?)", [(rec_id, r, d) for r, d in a.deltas])
+
+
 #: Migrations in order; migration i (1-based) brings a store from version i − 1 to i.
-MIGRATIONS: tuple[Callable[[sqlite3.Connection], None], ...] = (_v1, _v2, _v3)
+MIGRATIONS: tuple[Callable[[sqlite3.Connection], None], ...] = (_v1, _v2, _v3, _v4)
 SCHEMA_VERSION = len(MIGRATIONS)
 
 

@@ -41,7 +41,7 @@ def test_text_with_a_given_split(db, capsys):
 
 
 @pytest.mark.parametrize(("args", "message"), [
-    (["--machine", "M1"], "this store records no machine per part"),
+    (["--machine", "M1"], "no measurements stored for machine 'M1'"),
     (["--dimension", "nope"], "no stored characteristic 'nope'"),
     (["--since", "last week"], "--since: timestamp 'last week' is not ISO 8601"),
     (["--baseline", "1"], "--baseline: must be in [2,"),

@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from setupfix.errors import MatchError, ParameterError, ParseError
+from setupfix.errors import StoreError, MatchError, ParameterError, ParseError
 from setupfix.pipeline.history import ImportRequest, import_history
 from setupfix.pipeline.spc import SpcRequest, format_spc, spc_json, spc_report
 from setupfix.store import open_store
@@ -115,12 +115,16 @@ def test_given_splits_and_a_time_window(store_path):
     assert second.before.n == 10 and second.after.n == len(window) - 18
 
 
+def test_another_machines_handle_sees_none_of_the_series(store_path):
+    with open_store(store_path, machine="M1") as store, \
+            pytest.raises(StoreError, match="no measurements stored for machine 'M1'"):
+        spc_report(store, SpcRequest())
+
+
 def test_refusals(store_path):
     with open_store(store_path) as store:
         with pytest.raises(MatchError, match=r"no stored characteristic 'D9'.*stored: D1, D2"):
             spc_report(store, SpcRequest(dimensions=("D9",)))
-        with pytest.raises(ParameterError, match="records no machine"):
-            spc_report(store, SpcRequest(machine="M1"))
         with pytest.raises(ParameterError, match="between --since and --until"):
             spc_report(store, SpcRequest(since="2030-01-01T00:00:00"))
         with pytest.raises(ParseError, match=r"--split: timestamp 'yesterday' is not ISO 8601"):

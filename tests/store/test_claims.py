@@ -19,6 +19,7 @@ import pytest
 
 from setupfix.store import ALREADY_PROCESSED, Claimant, open_store
 
+
 ROOT = Path(__file__).resolve().parents[2]
 GUIDE = ROOT / "sample_reports" / "guide_pins"
 ENV = {**os.environ, "PYTHONPATH": str(ROOT) + os.pathsep + os.environ.get("PYTHONPATH", "")}
@@ -47,11 +48,18 @@ def stored_batch_reports(db: Path) -> list[str]:
         return [str(r.inputs["report"]) for r in store.recommendations() if r.inputs.get("use") == "batch"]
 
 
-def test_two_batches_at_once_correct_every_report_exactly_once(tmp_path):
+def claims_of(db) -> tuple[int, int, int]:
+    """(claim rows, reports processed, claims held) of the store ``db``."""
+    with open_store(db) as store:
+        rows = list(store.dump("batch_claim"))
+    return len(rows), sum(r[1] for r in rows), sum(r[2] is not None for r in rows)
+
+
+def test_two_batches_at_once_correct_every_report_exactly_once(tmp_path, location):
     n = 40
     folder = tmp_path / "reports"
     reports(folder, n)
-    db = tmp_path / "h.db"
+    db = location
     open_store(db).close()  # both runs find the store (its creation at once is another test)
     runs = [batch(folder, db, tmp_path / f"out{i}.csv", "--workers", "1") for i in (1, 2)]
     results = [p.communicate(timeout=600) for p in runs]
@@ -69,9 +77,7 @@ def test_two_batches_at_once_correct_every_report_exactly_once(tmp_path):
     assert len(per_report) == n  # every report has its rows in exactly one of the outputs
     stored = stored_batch_reports(db)
     assert len(stored) == n and len(set(stored)) == n  # one recommendation each: corrected once in total
-    with sqlite3.connect(db) as con:
-        assert con.execute("SELECT count(*), sum(done), count(owner) FROM batch_claim").fetchone() == (n, n, 0)
-    con.close()
+    assert claims_of(db) == (n, n, 0)
 
 
 def _children(pid: int) -> list[int]:
@@ -101,10 +107,10 @@ def _running(pid: int) -> bool:
 
 
 @pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="looks the workers up in /proc")
-def test_sigkill_of_a_batch_leaves_no_worker_and_its_claims_are_taken_over(tmp_path):
+def test_sigkill_of_a_batch_leaves_no_worker_and_its_claims_are_taken_over(tmp_path, location):
     folder = tmp_path / "reports"
     reports(folder, 60)
-    db = tmp_path / "h.db"
+    db = location
     run = batch(folder, db, tmp_path / "out.csv", "--workers", "2")
     deadline = time.monotonic() + 120
     workers: list[int] = []
@@ -124,10 +130,7 @@ def test_sigkill_of_a_batch_leaves_no_worker_and_its_claims_are_taken_over(tmp_p
     run.stdout.close()  # type: ignore[union-attr]
     run.stderr.close()  # type: ignore[union-attr]
     assert not survivors, "workers outlived the killed batch"
-    with sqlite3.connect(db) as con:
-        held = con.execute("SELECT count(*) FROM batch_claim WHERE owner IS NOT NULL").fetchone()[0]
-    con.close()
-    assert held > 0  # the kill left claims behind ...
+    assert claims_of(db)[2] > 0  # the kill left claims behind ...
     again = batch(folder, db, tmp_path / "again.csv", "--workers", "1")
     out, err = again.communicate(timeout=600)
     assert again.returncode == 0, err
@@ -135,8 +138,8 @@ def test_sigkill_of_a_batch_leaves_no_worker_and_its_claims_are_taken_over(tmp_p
     assert summary["reports"] == 60 and summary["skipped"] == []  # ... which the next run takes over
 
 
-def test_claims_refuse_a_live_holder_and_processed_reports_take_over_a_dead_one(tmp_path):
-    store = open_store(tmp_path / "h.db")
+def test_claims_refuse_a_live_holder_and_processed_reports_take_over_a_dead_one(location):
+    store = open_store(location)
     me = Claimant.this_run()
     other_live = Claimant("other", me.host, os.getppid(), "")  # pytest's parent runs
     dead = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"], capture_output=True, text=True)
@@ -156,11 +159,11 @@ def test_claims_refuse_a_live_holder_and_processed_reports_take_over_a_dead_one(
     store.release_claims(me)
     assert store.claim_reports(["z"], far) == {}
     assert "another run" in store.claim_reports(["z"], me).get("z", "")  # another host: stale only when old
+    with store.transaction():  # the far claim grows old
+        store._execute("UPDATE batch_claim SET claimed_at = '2000-01-01T00:00:00+00:00' "  # type: ignore[attr-defined]
+                       "WHERE owner = 'far'")
     store.close()
-    with sqlite3.connect(tmp_path / "h.db") as con:
-        con.execute("UPDATE batch_claim SET claimed_at = '2000-01-01T00:00:00+00:00' WHERE owner = 'far'")
-    con.close()
-    with open_store(tmp_path / "h.db") as store:
+    with open_store(location) as store:
         assert store.claim_reports(["z"], me) == {}
 
 

@@ -234,8 +234,8 @@ def test_sqlite_s_own_full_is_one_line_naming_the_store(tmp_path, capsys, monkey
     before = counts(db)
     real = sqlite_store.SQLiteStore.__init__
 
-    def capped(self, path):  # type: ignore[no-untyped-def]
-        real(self, path)
+    def capped(self, path, **handle):  # type: ignore[no-untyped-def]
+        real(self, path, **handle)
         pages = self.db.execute("PRAGMA page_count").fetchone()[0]
         self.db.execute(f"PRAGMA max_page_count = {pages}")
 

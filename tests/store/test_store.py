@@ -1,4 +1,8 @@
-"""The history store: idempotent imports, one transaction per import, migrations, concurrent readers."""
+"""The history store: idempotent imports, one transaction per import, migrations, concurrent readers.
+
+Every test that takes ``location`` runs on both back ends (a file, and a new database on the test
+PostgreSQL server: :mod:`pgserver`); the others are about the SQLite file itself.
+"""
 
 from __future__ import annotations
 
@@ -21,6 +25,7 @@ from setupfix.pipeline.parse import parse_reports
 from setupfix.store import Recommendation, open_store
 from setupfix.store._schema import SCHEMA_VERSION, migrate, version_of
 
+
 ROOT = Path(__file__).resolve().parents[2]
 GUIDE = ROOT / "sample_reports" / "guide_pins"
 REPORTS = sorted(GUIDE.glob("cycle_0*.csv"))
@@ -38,8 +43,8 @@ def _log(tmp_path, text=LOG, name="corr.csv"):
     return tmp_path / name
 
 
-def test_import_twice_changes_nothing_and_rows_come_back(tmp_path):
-    db, log = tmp_path / "h.db", _log(tmp_path)
+def test_import_twice_changes_nothing_and_rows_come_back(tmp_path, location):
+    db, log = location, _log(tmp_path)
     with open_store(db) as store:
         first = import_history(store, ImportRequest(tuple(REPORTS), (log,), (TEMPS,)))
         again = import_history(store, ImportRequest(tuple(REPORTS), (log,), (TEMPS,)))
@@ -55,8 +60,8 @@ def test_import_twice_changes_nothing_and_rows_come_back(tmp_path):
     assert _counts(db) == (5, 140, 2, len(pd.read_csv(TEMPS)))
 
 
-def test_logs_round_trip_and_contradictions_are_refused(tmp_path):
-    db = tmp_path / "h.db"
+def test_logs_round_trip_and_contradictions_are_refused(tmp_path, location):
+    db = location
     with open_store(db) as store:
         import_history(store, ImportRequest(corrections=(_log(tmp_path),), temperatures=(TEMPS,)))
         log = store.corrections()
@@ -76,10 +81,10 @@ def test_logs_round_trip_and_contradictions_are_refused(tmp_path):
     assert _counts(db)[:3] == (0, 0, 2)  # the reports of the refused import were not stored either
 
 
-def test_a_bad_file_stores_nothing(tmp_path):
+def test_a_bad_file_stores_nothing(tmp_path, location):
     bad = tmp_path / "bad.csv"
     bad.write_text("characteristic,nominal,actual\nD1,1.0,abc\n")
-    with open_store(tmp_path / "h.db") as store:
+    with open_store(location) as store:
         with pytest.raises(ParseError, match=r"bad.csv:2"):
             import_history(store, ImportRequest((*REPORTS, bad)))
         with pytest.raises(ParseError, match=r"corr.csv:3: unknown event"):
@@ -101,16 +106,17 @@ with store.transaction():  # what one import does: reports, then the logs
 """
 
 
-def test_kill_during_import_leaves_the_store_as_it_was(tmp_path):
-    db = tmp_path / "h.db"
+def test_kill_during_import_leaves_the_store_as_it_was(location):
+    db = location
     with open_store(db) as store:
         import_history(store, ImportRequest(tuple(REPORTS[:1])))
     args = [sys.executable, "-c", KILL, str(db)]
     proc = subprocess.run(args, cwd=ROOT, capture_output=True, text=True, timeout=60)
     assert proc.returncode == -signal.SIGKILL, proc.stderr
     assert _counts(db) == (1, 28, 0, 0)
-    with sqlite3.connect(db) as raw:
-        assert raw.execute("PRAGMA integrity_check").fetchone() == ("ok",)
+    if not db.startswith("postgresql://"):
+        with sqlite3.connect(db) as raw:
+            assert raw.execute("PRAGMA integrity_check").fetchone() == ("ok",)
 
 
 READER = """
@@ -121,14 +127,14 @@ with open_store(sys.argv[1]) as s:
 """
 
 
-def test_readers_see_the_last_commit_while_another_process_writes(tmp_path):
-    db = tmp_path / "h.db"
+def test_readers_see_the_last_commit_while_another_process_writes(location):
+    db = location
     with open_store(db) as store:
         import_history(store, ImportRequest(tuple(REPORTS[:1])))
         with store.transaction():
             store.add_report(REPORTS[1].read_bytes(), "c2", "canonical", parse_reports(REPORTS[1:2]).table)
             out = subprocess.run([sys.executable, "-c", READER, str(db)], cwd=ROOT, capture_output=True,
-                                 text=True, timeout=20)  # must not wait for the writer (WAL)
+                                 text=True, timeout=20)  # must not wait for the writer (WAL, MVCC)
             assert out.stdout.split() == ["1", "28"], out.stderr
         with open_store(db) as reader:
             assert len(reader.reports()) == 2 and len(reader.measurements()) == 56
@@ -167,17 +173,17 @@ def test_what_is_not_a_store_is_refused(tmp_path):
         open_store(tmp_path / "missing" / "h.db")
 
 
-def test_recommendations_round_trip(tmp_path):
-    with open_store(tmp_path / "h.db") as store:
+def test_recommendations_round_trip(location):
+    with open_store(location, machine="M7", operator="ana") as store:
         rec = Recommendation("exact", {"report": "abc", "part": "1", "seed": None}, {"corrections": {"G54": 0.01}})
         store.add_recommendation(rec)
         (back,) = store.recommendations()
         assert (back.optimizer, back.inputs, back.result) == (rec.optimizer, rec.inputs, rec.result)
-        assert back.created_at
+        assert back.created_at and (back.machine, back.operator) == ("M7", "ana")
 
 
-def test_cli_import_show_export(tmp_path, capsys):
-    db = str(tmp_path / "h.db")
+def test_cli_import_show_export(tmp_path, capsys, location):
+    db = location
     assert main(["history", "import", "--db", db, *map(str, REPORTS), "--corrections", str(_log(tmp_path))]) == 0
     assert main(["history", "show", "--db", db, "--json"]) == 0
     capsys.readouterr()
@@ -190,7 +196,7 @@ def test_cli_import_show_export(tmp_path, capsys):
     assert "folder" in capsys.readouterr().err
 
 
-def test_recommendations_of_a_correct_run_are_stored(tmp_path):
+def test_recommendations_of_a_correct_run_are_stored(location):
     from setupfix.model import load_model
     from setupfix.pipeline.correct import correct_report
     from setupfix.pipeline.history import record_recommendations
@@ -198,17 +204,17 @@ def test_recommendations_of_a_correct_run_are_stored(tmp_path):
     from setupfix.pipeline.requests import CorrectRequest
 
     results = correct_report(CorrectRequest(load_model(GUIDE / "model.toml")), REPORTS[0]).cycles
-    with open_store(tmp_path / "h.db") as store:
+    with open_store(location) as store:
         record_recommendations(store, results, model=GUIDE / "model.toml", report=REPORTS[0])
         (rec,) = store.recommendations()
     assert rec.optimizer == "exact" and rec.result["corrections"] == cycle_json(results[0])["corrections"]
     assert rec.inputs["report_sha256"] == hashlib.sha256(REPORTS[0].read_bytes()).hexdigest()
 
 
-def test_a_truncated_report_is_refused_and_nothing_stored(tmp_path):
+def test_a_truncated_report_is_refused_and_nothing_stored(tmp_path, location):
     cut = tmp_path / "cut.csv"
     cut.write_bytes(REPORTS[0].read_bytes()[:322])  # ends inside a row: "P1 D4,30.0000,29."
-    with open_store(tmp_path / "h.db") as store:
+    with open_store(location) as store:
         with pytest.raises(ParseError, match=r"cut.csv.*truncated"):
             import_history(store, ImportRequest((REPORTS[1], cut)))
         assert store.reports() == []
