@@ -85,7 +85,7 @@ def test_parsers_is_ours():
 # one export; 6 use cases that run correct (batch on a folder, the diagnosis's next correction);
 # 7 renderers (text/JSON, TUI rows); 8 the doors' sessions (TUI session, history store).
 PIPELINE_RANKS = {
-    "writers": 0, "checks": 0, "smoothing": 0,
+    "writers": 0, "checks": 0, "smoothing": 0, "stores": 0,
     "controllers": 1, "thermal_files": 1, "cycles": 1, "scaffold_toml": 1,
     "thermal": 2, "parse": 2, "simulate": 2, "scaffold": 2, "model": 2,
     "feedforward": 3, "series": 3, "batch_output": 3,

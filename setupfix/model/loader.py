@@ -84,7 +84,7 @@ MAX_BYTES = 16 * 1024 * 1024
 
 _FREE_TEXT = {"description", "comment", "note", "notes"}
 _KEYS = {
-    "process": {"name", "axis", "unit", "resolution", "limit", "draft"} | _FREE_TEXT,
+    "process": {"name", "axis", "unit", "resolution", "limit", "draft", "machine"} | _FREE_TEXT,
     "machine": {"wks"} | _FREE_TEXT,
     "wks": {"register", "limit", "fixed"} | _FREE_TEXT,
     "tools": {"register", "limit", "fixed"} | _FREE_TEXT,
@@ -201,6 +201,12 @@ def model_from_dict(doc: Mapping[str, Any], source: str = "<model>", text: str |
     if not isinstance(draft, bool):
         p.add("process.draft", f"expected true or false, found {show(draft)}")
         draft = False
+    machine = proc.get("machine")
+    if machine is not None and (not isinstance(machine, str) or not machine.strip()):
+        p.add("process.machine", f"expected a machine name, found {show(machine)}")
+        machine = None
+    elif machine is not None and not control_free(p, "process.machine", machine, "machine name"):
+        machine = None
 
     settings = multi_axis.parse_axes(p, proc) if multi else None
     wks = _registers(p, doc, "wks", "wks", limit or 0.1, ranges, multi)
@@ -275,6 +281,7 @@ def model_from_dict(doc: Mapping[str, Any], source: str = "<model>", text: str |
         axes=settings.axes if settings is not None else (),
         spindle=settings.spindle if settings is not None else str(axis),
         draft=draft,
+        machine=machine.strip() if machine else None,
         rotation_limit=settings.rotation_limit if settings is not None else 0.05,
         rotation_resolution=settings.rotation_resolution if settings is not None else 0.0001,
     )

@@ -209,6 +209,9 @@ class ProcessModel:
     draft : bool
         ``[process] draft = true``: an unedited scaffold (``setupfix model init``); nothing is
         recommended from it until the user removes the key.
+    machine : str, optional
+        ``[process] machine``: the machine this process runs on, the history store's default
+        machine for its records (``--machine`` overrides it).
     rotation_limit, rotation_resolution : float
         Bound and grid step of a WKS rotation component (``W1.C``) [degrees].
     """
@@ -229,6 +232,7 @@ class ProcessModel:
     axes: tuple[str, ...] = ()
     spindle: str = "Z"
     draft: bool = False
+    machine: str | None = None
     rotation_limit: float = 0.05
     rotation_resolution: float = 0.0001
 

@@ -28,25 +28,15 @@ from setupfix.model import CANONICAL_COLUMNS, ProcessModel
 from setupfix.pipeline.present import cycle_json
 from setupfix.pipeline.requests import CycleCorrection, ReadOptions
 from setupfix.pipeline.writers import write_canonical_csv, write_table_csv
-from setupfix.store import DB_ENV, Recommendation, Store
+from setupfix.pipeline.stores import DEFAULT_DB, store_location
+from setupfix.store import Recommendation, Store
 from setupfix.store._audit import TABLES
 
 __all__ = ["DEFAULT_DB", "store_location", "import_history", "ImportRequest", "ImportSummary",
            "history_summary", "export_history", "record_recommendations", "migrate_history", "EXPORTS", "EVENTS"]
 
-DEFAULT_DB = "setupfix.db"
 #: Tables ``history export`` writes (``recommendations``: the audit trail, one row per register component).
 EXPORTS = ("measurements", "corrections", "temperatures", "recommendations")
-
-
-def store_location(db: str | None, model: str | None = None) -> str:
-    """Where the store is: ``--db`` if given, else ``$SETUPFIX_DB``, else ``setupfix.db`` beside the model, else
-    in the current folder.  A ``postgresql://`` URL is a server store (:func:`setupfix.store.open_store`)."""
-    if db:
-        return db
-    if os.environ.get(DB_ENV):
-        return os.environ[DB_ENV]
-    return str((Path(model).parent if model else Path(".")) / DEFAULT_DB)
 
 
 def _temperature_frame(path: str | os.PathLike[str]) -> pd.DataFrame:
