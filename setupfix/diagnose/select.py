@@ -252,7 +252,7 @@ def select_effects(layout: Layout, series: Series, *, alpha: float = 0.01, max_e
                                       members))
                     continue
             if di >= 0:
-                same = alike(Q, cols[:, 0], Z, specs, active_dense, di)
+                same = alike(Q, cols[:, 0], Z, specs, active_dense, di, g)
             elif di == -1:
                 same = relation_set(Q, r, obs, series.applied, layout, spec, alpha)
             else:

@@ -82,14 +82,18 @@ def register_notes(layout: Layout, series: Series, obs: Observations) -> list[st
 
 
 def alike(Q: Array, col: Array, Z: Array, specs: list[EffectSpec], active: npt.NDArray[np.bool_],
-           chosen: int, threshold: float = 0.98) -> tuple[str, ...]:
-    """Candidates whose residualised columns are nearly collinear with the chosen one."""
+          chosen: int, norms2: Array, threshold: float = 0.98) -> tuple[str, ...]:
+    """Candidates whose residualised columns are nearly collinear with the chosen one.
+
+    ``norms2`` holds the residualised columns' squared norms (as :func:`~setupfix.diagnose.scores.dense_scores`
+    gives them): with c the chosen column residualised on Q, the correlation of column j is
+    |Z_jᵀc| / (‖Z_j − QQᵀZ_j‖ ‖c‖), no residualised copy of Z formed.
+    """
     if Z.shape[1] == 0:
         return ()
     c = col - Q @ (Q.T @ col)
-    P = Z - Q @ (Q.T @ Z)
-    num = np.abs(P.T @ c)
-    den = np.linalg.norm(P, axis=0) * np.linalg.norm(c)
+    num = np.abs(Z.T @ c)
+    den = np.sqrt(np.maximum(norms2, 0.0)) * np.linalg.norm(c)
     corr = np.where(den > _TINY, num / np.where(den > _TINY, den, 1.0), 0.0)
     return tuple(f"{specs[i].kind}: {specs[i].target}" for i in np.flatnonzero((corr > threshold) & active)
                  if i != chosen)

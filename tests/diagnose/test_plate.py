@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from setupfix.diagnose import Diagnoser
+from setupfix.diagnose import Diagnoser, select_effects
 from setupfix.pipeline.diagnose import DiagnoseRequest, diagnose_reports
 from setupfix.pipeline.series import load_series
 
@@ -100,3 +100,21 @@ def test_cli_process_option_json_and_a_bad_log(tmp_path, capsys):
     code = main(["diagnose", "--model", str(MODEL), "--process", str(bad), "--no-walk", str(PLATE)])
     out, err = capsys.readouterr()
     assert code != 0 and "bad.csv" in err and "serial 1 appears twice" in err and "Traceback" not in err
+
+
+@needs_log
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_shuffled_machining_times_give_no_time_effect(seed):
+    """The plate's machining times dealt to the parts at random (without the log's channels): whatever the
+    parts differ by no longer follows time, so no drift, thermal, wear or level may be named
+    (``bench/diagnose_real.py``: 0 of 100 shuffles); in machining order a level at part 10 (the first long
+    stick-out) is what the times alone support."""
+    import dataclasses
+
+    inp = load_series(MODEL, (PLATE,), process=str(LOG))
+    s = dataclasses.replace(inp.series, temperature=inp.series.temperature[:, :0], channels=(), process_channels=())
+    in_order = select_effects(inp.layout, s).found
+    assert [(e.kind, e.register, str(e.cycle).rsplit(":", 1)[1]) for e in in_order] == [("level", "T4A", "10")]
+    perm = np.random.default_rng(seed).permutation(s.n_cycles)
+    found = select_effects(inp.layout, dataclasses.replace(s, time=s.time[perm])).found
+    assert not [e for e in found if e.kind in ("drift", "thermal", "wear", "level")]

@@ -24,7 +24,7 @@ from conftest import SAMPLES
 
 PLATE = SAMPLES / "qif" / "NIST_MTC_FAIR_Plate_Results_20parts.qif"
 MODEL = Path(__file__).parent / "data" / "nist_plate.toml"
-PROCESS = Path(os.environ.get("SETUPFIX_SHARED", "../shared")) / "real-series" / "nist-mtc" / "plate_process.csv"
+PROCESS = Path(os.environ.get("SETUPFIX_SHARED", "/work/shared")) / "real-series" / "nist-mtc" / "plate_process.csv"
 
 
 def _centred_by_hand(model_path: Path, deviation: np.ndarray, fraction: float = 0.25) -> set[str]:
