@@ -118,3 +118,20 @@ def test_shuffled_machining_times_give_no_time_effect(seed):
     perm = np.random.default_rng(seed).permutation(s.n_cycles)
     found = select_effects(inp.layout, dataclasses.replace(s, time=s.time[perm])).found
     assert not [e for e in found if e.kind in ("drift", "thermal", "wear", "level")]
+
+
+@needs_log
+def test_the_tui_diagnosis_takes_the_process_log():
+    """``setupfix tui --process LOG``: the history panel's diagnosis (its worker, through the use case) joins
+    the log per part and names the process effects, as ``diagnose --process`` does."""
+    from setupfix.tui import workers
+
+    with_log = workers.diagnose(MODEL, PLATE, False, LOG)
+    without = workers.diagnose(MODEL, PLATE, False)
+    assert {e.kind for e in with_log.effects} == {"process"}
+    assert "process" not in {e.kind for e in without.effects}
+    assert with_log.after[0] < without.after[0]
+    from setupfix.cli import build_parser
+
+    args = build_parser().parse_args(["tui", "--model", str(MODEL), "--process", str(LOG), str(PLATE)])
+    assert args.process == LOG
