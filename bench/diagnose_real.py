@@ -2,7 +2,7 @@
 
 Data: ``cmm-samples/qif/NIST_MTC_FAIR_{Plate,Box}_Results_*.qif`` with the machining logs of
 ``real-series/nist-mtc/`` (timestamps per serial, the plate's designed factors).  Models:
-``tests/data/nist_plate_model.toml`` (a register per hole pattern) and
+``tests/data/nist_plate.toml`` (a register per cutter and hole pattern, W1 for the distances) and
 ``tests/diagnose/data/nist_box.toml`` (the scaffold of the box report).
 
 A. Each series without and with its process log: residual before / after (RMS, out of
@@ -37,7 +37,7 @@ if not (SHARED / "real-series").is_dir():
     SHARED = Path("/work/shared")
 OUT = ROOT / "bench" / "results" / "diagnose_real.txt"
 SERIES = {
-    "plate": (ROOT / "tests" / "data" / "nist_plate_model.toml",
+    "plate": (ROOT / "tests" / "data" / "nist_plate.toml",
               SHARED / "cmm-samples" / "qif" / "NIST_MTC_FAIR_Plate_Results_20parts.qif",
               SHARED / "real-series" / "nist-mtc" / "plate_process.csv"),
     "box": (ROOT / "tests" / "diagnose" / "data" / "nist_box.toml",
