@@ -93,6 +93,10 @@ def right(found, hidden) -> bool:
     for e in found:
         if e.kind != hidden.spec.kind:
             continue
+        if hidden.spec.kind == "level":  # the register, and the first cycle cut at or after the step (20 min)
+            if e.spec.register == hidden.spec.register and hidden.spec.at <= e.spec.at < hidden.spec.at + 0.5:
+                return True
+            continue
         if hidden.spec.kind == "drift":
             if e.spec.shape == hidden.spec.shape:
                 return True

@@ -88,7 +88,7 @@ def section_b(lines: list[str]) -> None:
                                      origin=str(log["timestamp"].iloc[0]))
     d = Diagnoser().run(inp.layout, series)
     cycle, _ = recommend_next(inp.model, d)
-    lines += [f"B. NIST MTC plate, {series.n_cycles} parts, per-cutter model, "
+    lines += [f"B. NIST MTC plate, {series.n_cycles} parts, model tests/data/nist_plate.toml, "
               f"{'machining times from plate_process.csv' if timed else 'cycle order (no times)'}",
               f"   effects found: {', '.join(e.target for e in d.effects) or 'none'}",
               f"   walk forward over {len(d.walk.cycles) if d.walk else 0} part(s):",

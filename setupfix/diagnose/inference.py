@@ -27,8 +27,8 @@ evidence counted per cycle:
   columns) — the multi-column form of the same test (:func:`cluster_wald`): with B an
   orthonormal basis of the residualised block, U = Bᵀr, per-cycle scores
   e_k = B_kᵀ(r_k − B_k U) and V = K/(K−1) Σ_k e_k e_kᵀ, the Wald statistic
-  W = Uᵀ V⁺ U is referred to Hotelling's T² as F = W (ν − q + 1)/(ν q) ~ F(q, ν − q + 1)
-  (ν the smallest effective number of cycles of the block's columns); q = 1 is the
+  W = Uᵀ V⁺ U is referred to Hotelling's T² as F = W (df − q + 1)/(df q) ~ F(q, df − q + 1)
+  (df the smallest effective number of cycles of the block's columns); q = 1 is the
   test above;
 * **relations** (register i × dimension q, one cell per cycle) — the F-test on that
   dimension's own residual variance (K − 3 df), so a dimension that shares more of the
@@ -50,8 +50,8 @@ import scipy.stats
 from setupfix.diagnose.fit import Observations
 from setupfix.diagnose.terms import EffectSpec, Layout
 
-__all__ = ["MIN_CYCLES", "cluster_test", "cluster_wald", "cell_pvalue", "dimension_pvalue", "lack_of_fit", "cycle_sums", "relation_set",
-           "orth"]
+__all__ = ["MIN_CYCLES", "cluster_test", "cluster_wald", "cell_pvalue", "dimension_pvalue", "lack_of_fit", "cycle_sums",
+           "relation_set", "orth"]
 
 Array = npt.NDArray[np.float64]
 
@@ -133,9 +133,9 @@ def cluster_wald(Zt: Array, r: Array, cycle: npt.NDArray[np.intp], n_cycles: int
     Returns
     -------
     F : float
-        Hotelling-scaled statistic, W (ν − q + 1) / (ν q).
+        Hotelling-scaled statistic, W (df − q + 1) / (df q).
     p : float
-        Its p-value on F(q, ν − q + 1); 1 when the block is empty or the cycles too few.
+        Its p-value on F(q, df − q + 1); 1 when the block is empty or the cycles too few.
     q : int
         Rank of the block.
     """

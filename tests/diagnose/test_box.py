@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from setupfix.diagnose import Diagnoser, select_effects
+from setupfix.diagnose import select_effects
 from setupfix.pipeline.diagnose import DiagnoseRequest, diagnose_reports
 from setupfix.pipeline.series import load_series
 
