@@ -21,7 +21,11 @@ in that order, that
   dimensions' offsets, which held-out cycles cannot add to).
 
 A candidate refused passes the turn to the next (the selection keeps trying); a step
-ends with the first accepted or when none is left.  Series of fewer than four cycles:
+ends with the first accepted or when none is left (of the one-column candidates the 64
+best-ranked are tested per cycle, :data:`setupfix.diagnose.scores.TRIES`; the Bonferroni
+factor counts them all).  An accepted per-register set keeps the registers that earn their
+coefficient (:func:`setupfix.diagnose.scores.prune_set`), again once every effect is in.
+Series of fewer than four cycles:
 cell-level F-test only, no CV (said in the notes).  Under the declared model with
 Gaussian noise — independent or shared by the cells of a part — the chance of reporting
 any effect is therefore at most ``alpha`` (``bench/diagnose_calibration.py``).  Scale and
@@ -49,7 +53,7 @@ import numpy as np
 import numpy.typing as npt
 
 from setupfix.diagnose.candidates import STATIC, candidate_specs, process_sets, refine_level, refine_tau
-from setupfix.diagnose.fit import Observations, effect_columns, observations
+from setupfix.diagnose.fit import Observations, dense_columns, effect_columns, observations
 from setupfix.diagnose.inference import MIN_CYCLES, cell_pvalue, dimension_pvalue, lack_of_fit, orth, relation_set
 from setupfix.diagnose.scores import Candidate, cv_sse, dense_scores, prune_set, relation_scores, tested, tested_sets
 from setupfix.diagnose.support import alike, alike_sets, register_notes, spread, support_notes
@@ -153,10 +157,9 @@ def select_effects(layout: Layout, series: Series, *, alpha: float = 0.01, max_e
     """
     obs = observations(layout, series) if obs is None else obs
     specs = [s for s in candidate_specs(layout, series) if s not in declared]
-    dense = [effect_columns(s, layout, series, obs)[:, 0] for s in specs]
-    Z = np.column_stack(dense) if dense else np.zeros((obs.n, 0))
+    Z = dense_columns(specs, layout, series, obs)
     sets = [m for m in process_sets(layout, series) if not set(m) & set(declared)]
-    blocks = [np.column_stack([effect_columns(s, layout, series, obs)[:, 0] for s in m]) for m in sets]
+    blocks = [dense_columns(list(m), layout, series, obs) for m in sets]
     active_set = np.ones(len(sets), dtype=bool)
     C = layout.composite
     n_r, n_d = C.shape

@@ -34,8 +34,8 @@ import numpy.typing as npt
 from setupfix.model import ProcessModel
 from setupfix.relation import relation_matrices
 
-__all__ = ["KINDS", "Layout", "Series", "EffectSpec", "effect_field", "applied_at", "parts_since_change",
-           "join_temperatures", "common_tool_row", "register_row", "typical_step"]
+__all__ = ["KINDS", "Layout", "Series", "EffectSpec", "effect_field", "field_factors", "applied_at",
+           "parts_since_change", "join_temperatures", "common_tool_row", "register_row", "typical_step"]
 
 Array = npt.NDArray[np.float64]
 
@@ -288,38 +288,50 @@ def effect_field(spec: EffectSpec, layout: Layout, series: Series) -> Array:
     KeyError
         If the register, dimension, group, channel or axis is unknown.
     """
-    n, d = series.n_cycles, layout.n_dimensions
+    factors = field_factors(spec, layout, series)
+    if factors is not None:
+        return np.outer(*factors)
+    if spec.kind == "relation":
+        i = layout.register_ids.index(str(spec.register))
+        q = layout.dimension_ids.index(str(spec.dimension))
+        z = np.zeros((series.n_cycles, layout.n_dimensions))
+        z[:, q] = series.applied[:, i]
+        return z
+    raise KeyError(spec.kind)
+
+
+def field_factors(spec: EffectSpec, layout: Layout, series: Series) -> tuple[Array, Array] | None:
+    """The field of every kind but a relation is an outer product z = a bᵀ: per cycle a (n_cycles,), per
+    dimension b (n_dimensions,).  None for a relation.  Raises KeyError as :func:`effect_field`."""
+    n = series.n_cycles
+    ones = np.ones(n)
     if spec.kind == "drift":
         t = series.time if spec.shape == "linear" else 1.0 - np.exp(-series.time / spec.tau)
-        return np.outer(t, common_tool_row(layout))
+        return t, common_tool_row(layout)
     if spec.kind == "thermal":
         ch = series.channels.index(str(spec.channel))
-        return np.outer(series.temperature[:, ch] - spec.reference, common_tool_row(layout))
+        return series.temperature[:, ch] - spec.reference, common_tool_row(layout)
     if spec.kind == "wear":
         j = layout.register_ids.index(str(spec.register))
         k = int(np.flatnonzero(layout.tools == j)[0])
-        return np.outer(series.parts[:, k], layout.composite[j])
+        return series.parts[:, k], layout.composite[j]
     if spec.kind == "scale":
-        return np.broadcast_to(layout.nominal, (n, d)).copy()
+        return ones, layout.nominal
     if spec.kind == "position":
         a = AXES.index(str(spec.axis))
-        return np.broadcast_to(np.nan_to_num(layout.coord[:, a]), (n, d)).copy()
+        return ones, np.nan_to_num(layout.coord[:, a])
     if spec.kind == "group":
         mask = np.array([g == spec.group for g in layout.groups], dtype=float)
         if not mask.any():
             raise KeyError(spec.group)
-        return np.broadcast_to(mask, (n, d)).copy()
-    if spec.kind == "relation":
-        i = layout.register_ids.index(str(spec.register))
-        q = layout.dimension_ids.index(str(spec.dimension))
-        z = np.zeros((n, d))
-        z[:, q] = series.applied[:, i]
-        return z
+        return ones, mask
     if spec.kind == "level":
-        return np.outer((series.time >= spec.at).astype(float), register_row(layout, spec.register))
+        return (series.time >= spec.at).astype(float), register_row(layout, spec.register)
     if spec.kind == "process":
         ch = series.channels.index(str(spec.channel))
-        return np.outer(series.temperature[:, ch] - spec.reference, register_row(layout, spec.register))
+        return series.temperature[:, ch] - spec.reference, register_row(layout, spec.register)
+    if spec.kind == "relation":
+        return None
     raise KeyError(spec.kind)
 
 
