@@ -24,7 +24,7 @@ from typing import Any
 import numpy as np
 
 from setupfix.diagnose import Diagnoser, Diagnosis
-from setupfix.diagnose.terms import typical_step
+from setupfix.diagnose.covariates import typical_step
 from setupfix.errors import ExportError, ModelError, Note, SourceLocation
 from setupfix.model import PartMeasurement, ProcessModel, model_from_dict
 from setupfix.model.effects import EffectsSection, ModelEffect, effects_from_dict, with_effects

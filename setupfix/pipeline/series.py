@@ -36,7 +36,8 @@ from parsers.temperature import TemperatureLog, read_temperature_log
 from parsers.timestamps import parse_timestamp, to_index
 from setupfix.diagnose import Layout, Series
 from setupfix.diagnose.forecast import spec_of
-from setupfix.diagnose.terms import EffectSpec, applied_at, join_temperatures, parts_since_change
+from setupfix.diagnose.covariates import applied_at, join_temperatures, parts_since_change
+from setupfix.diagnose.terms import EffectSpec
 from setupfix.errors import MatchError, Note, ParseError, SourceLocation, UnknownFormatError
 from setupfix.model import PartMeasurement, ProcessModel, load_model, match_parts, normalise_name
 from setupfix.model.effects import EffectsSection
