@@ -4,7 +4,7 @@ A. Simulated guide-pins series (40 × 28, 8 seeds each): a hidden drift or wear 
    the next correction), nothing hidden, and a WKS wandering as a random walk (an effect is found in hindsight,
    EWMA tracks it better).  Per case: walk-forward distance to the tolerance centre (RMS) of the declared model,
    the augmented model and EWMA, out-of-tolerance cells, and how often the next correction comes from each model.
-B. The real NIST MTC plate (20 parts, per-cutter model tests/pipeline/data/nist_plate.toml; parts in machining
+B. The real NIST MTC plate (20 parts, model tests/data/nist_plate.toml; parts in machining
    order, times from ../shared/real-series/nist-mtc/plate_process.csv when present): the walk's numbers, the
    verdict, the registers the centre rule holds and the next correction.
 C. Speed: ``diagnose`` of 40 × 28 with the walk forward and the next correction (correct_cycle), best of 5,
@@ -39,7 +39,7 @@ OUT = ROOT / "bench" / "results" / "diagnose_walk.txt"
 MODEL = guide_pins(positions=False)
 LAYOUT = Layout.from_model(MODEL)
 PLATE = ROOT / "sample_reports" / "qif" / "NIST_MTC_FAIR_Plate_Results_20parts.qif"
-PLATE_MODEL = ROOT / "tests" / "pipeline" / "data" / "nist_plate.toml"
+PLATE_MODEL = ROOT / "tests" / "data" / "nist_plate.toml"
 PROCESS = Path(os.environ.get("SETUPFIX_SHARED", ROOT.parent / "shared")) / "real-series" / "nist-mtc" / \
     "plate_process.csv"
 
@@ -88,7 +88,7 @@ def section_b(lines: list[str]) -> None:
                                      origin=str(log["timestamp"].iloc[0]))
     d = Diagnoser().run(inp.layout, series)
     cycle, _ = recommend_next(inp.model, d)
-    lines += [f"B. NIST MTC plate, {series.n_cycles} parts, per-cutter model, "
+    lines += [f"B. NIST MTC plate, {series.n_cycles} parts, model tests/data/nist_plate.toml, "
               f"{'machining times from plate_process.csv' if timed else 'cycle order (no times)'}",
               f"   effects found: {', '.join(e.target for e in d.effects) or 'none'}",
               f"   walk forward over {len(d.walk.cycles) if d.walk else 0} part(s):",

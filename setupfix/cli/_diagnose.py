@@ -78,10 +78,14 @@ def format_diagnosis(out: DiagnoseOutcome) -> str:
         lines.append("no effect found" + ("" if d.selection.lack_of_fit else
                                           ": the declared model explains the series to its noise"))
     if d.walk is not None:
-        lines.append(f"walk forward over {len(d.walk.cycles)} cycle(s) (error budget: mean / worst, RMS reached):")
+        lines.append(f"walk forward over {len(d.walk.cycles)} cycle(s) (error budget: mean / worst; RMS reached; "
+                     "distance to the tolerance centre: RMS / mean |.|):")
         for name, b in d.walk.budgets.items():
             lines.append(f"  {name:9s} {_f(b.mean_budget)} / {_f(b.worst_budget)}   RMS {_f(b.rms)}   "
+                         f"centre {_f(b.centre_rms)} / {_f(b.centre_mean_abs)}   "
                          f"out of tolerance {b.out_of_tolerance}")
+    lines.append(f"next correction from: {d.next_from.source}"
+                 + (f" ({d.next_from.reason})" if d.next_from.reason else ""))
     moves = {k: v for k, v in out.next_correction.items() if v != 0}
     lines.append("next correction: " + (", ".join(f"{k} {v:+.4f}" for k, v in moves.items()) or "none"))
     if out.augmented:

@@ -26,7 +26,8 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
                         "magnitude=0.02 | kind=thermal,magnitude=0.003 | kind=wear,register=T5,magnitude=-0.001 | "
                         "kind=scale,magnitude=2e-4 | kind=position,axis=x,magnitude=1e-4 | "
                         "kind=relation,register=T23,dimension=P2D3,magnitude=0.5 | kind=group,group=P3,"
-                        "magnitude=0.01 (repeatable)")
+                        "magnitude=0.01 | kind=level,register=T5,at=20,magnitude=0.01 (a step from cycle 20 on) "
+                        "(repeatable)")
     p.add_argument("--cycles", type=int, default=40, help="fixture cycles (default 40)")
     p.add_argument("--noise", type=float, default=0.002, help="measurement noise sigma, model unit (default 0.002)")
     p.add_argument("--setup-error", type=float, default=0.03, help="w1 of eq. 12: setup errors in ±w1 (0.03)")

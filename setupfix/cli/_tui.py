@@ -26,6 +26,9 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
     p.add_argument("--trials", type=int, default=12, help="trials per method in the compare view (default 12)")
     p.add_argument("--offsets", metavar="FILE", default="offsets.csv",
                    help="file the export offers to write (default offsets.csv)")
+    p.add_argument("--process", metavar="LOG", type=Path, default=None,
+                   help="process log (CSV or .xlsx, a row per part by serial or timestamp) the diagnosis (key d) "
+                        "joins per part, as 'diagnose --process'")
     add_report_options(p)
     add_thermal_options(p)
     p.set_defaults(run=run)
@@ -36,7 +39,8 @@ def run(args: argparse.Namespace) -> int:
 
     SetupfixApp(Inputs(model=args.model, report=args.report, db=args.db, current=args.current,
                        thermal=Path(args.thermal) if args.thermal else None,
-                       temperatures=Path(args.temperatures) if args.temperatures else None, at=args.at,
+                       temperatures=Path(args.temperatures) if args.temperatures else None, process=args.process,
+                       at=args.at,
                        thermal_dead_band=args.thermal_dead_band, read=read_options(args), cycles=cycles_of(args),
                        optimizer=args.optimizer, objective=args.objective, seed=args.seed, trials=args.trials,
                        offsets=args.offsets)).run()

@@ -5,8 +5,13 @@ Engine (layer 3, arrays in and out, no file I/O):
 * :mod:`~setupfix.diagnose.terms` — the series, the layout and the effect terms;
 * :mod:`~setupfix.diagnose.fit` — least squares of the declared model (setup state
   on the row space of C) with or without effects;
-* :mod:`~setupfix.diagnose.select` — candidates and forward selection (nested F-tests,
-  Bonferroni, cross-validation over cycles), diagnosability;
+* :mod:`~setupfix.diagnose.candidates` — the candidates a series allows (one-column terms,
+  per-register process sets, refined level and saturating-drift positions);
+* :mod:`~setupfix.diagnose.scores` — what each candidate explains and its per-cycle test;
+* :mod:`~setupfix.diagnose.inference` — the tests with the cycle as the unit of evidence;
+* :mod:`~setupfix.diagnose.support` — support rules and diagnosability;
+* :mod:`~setupfix.diagnose.select` — forward selection (ranked by what each explains, accepted on
+  its per-cycle test with Bonferroni and cross-validation over cycles; keeps trying);
 * :mod:`~setupfix.diagnose.walk` — walk forward (declared, augmented, EWMA, none) and
   the next-cycle forecast;
 * :mod:`~setupfix.diagnose.forecast` — the change an ``[effects]`` section predicts

@@ -223,13 +223,13 @@ class Diagnoser(ValidatedParams):
         before = fit_model(layout, series, declared, obs=obs)
         after = fit_model(layout, series, declared + selection.found, obs=obs)
         effects = []
-        accepted = [s for s in selection.steps if s.accepted]
+        alike = selection.alike_of_found()
         for i, spec in enumerate(selection.found):
             est, se = after.estimate(len(declared) + i)
             partial: Fit = fit_model(layout, series, declared + selection.found[:i + 1], obs=obs)
             effects.append(EffectResult(spec, est, se, spec.unit(layout.unit),
                                         error_summary(partial.residual, layout.lower, layout.upper).rms,
-                                        accepted[i].alike))
+                                        alike[i]))
         walk = None
         notes = list(selection.notes)
         if self.walk and series.n_cycles >= self.min_train + 5:

@@ -20,9 +20,10 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
-from setupfix.diagnose.terms import EffectSpec, Layout, Series, effect_field
+from setupfix.diagnose.terms import EffectSpec, Layout, Series, effect_field, field_factors
 
-__all__ = ["Observations", "Fit", "observations", "row_space_basis", "effect_columns", "fit_model", "RELATION_T"]
+__all__ = ["Observations", "Fit", "observations", "row_space_basis", "effect_columns", "dense_columns",
+           "fit_model", "RELATION_T"]
 
 #: A relation weight changes the matrix corrections are mapped through only when |δ| > RELATION_T · s.e.
 RELATION_T = 3.0
@@ -70,6 +71,21 @@ def observations(layout: Layout, series: Series, basis: Array | None = None) -> 
     z_full = series.deviation - series.applied @ layout.composite
     cycle, dim = np.nonzero(np.isfinite(z_full))
     return Observations(z_full[cycle, dim], cycle.astype(np.intp), dim.astype(np.intp), basis[:, dim].T.copy())
+
+
+def dense_columns(specs: list[EffectSpec], layout: Layout, series: Series, obs: Observations) -> Array:
+    """One column per (non-relation) effect at the observed cells, shape (N, len(specs)): the fields'
+    factors (:func:`~setupfix.diagnose.terms.field_factors`) evaluated at each cell's cycle and dimension."""
+    if not specs:
+        return np.zeros((obs.n, 0))
+    pairs = [field_factors(s, layout, series) for s in specs]
+    if any(p is None for p in pairs):
+        raise ValueError("dense_columns: a relation has two columns (effect_columns)")
+    out: Array = np.empty((obs.n, len(specs)), order="F")  # column by column, each contiguous
+    for j, p in enumerate(pairs):
+        if p is not None:
+            np.multiply(p[0][obs.cycle], p[1][obs.dim], out=out[:, j])
+    return out
 
 
 def effect_columns(spec: EffectSpec, layout: Layout, series: Series, obs: Observations) -> Array:

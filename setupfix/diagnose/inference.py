@@ -23,6 +23,13 @@ evidence counted per cycle:
   no constant offsets beyond the cycle-to-cycle variation; otherwise against the lack
   of fit (:func:`lack_of_fit`, one value per dimension: the static pattern must
   explain the dimensions' offsets);
+* **per-register sets** (one process channel on every tool, a coefficient each: q
+  columns) — the multi-column form of the same test (:func:`cluster_wald`): with B an
+  orthonormal basis of the residualised block, U = Bᵀr, per-cycle scores
+  e_k = B_kᵀ(r_k − B_k U) and V = K/(K−1) Σ_k e_k e_kᵀ, the Wald statistic
+  W = Uᵀ V⁺ U is referred to Hotelling's T² as F = W (df − q + 1)/(df q) ~ F(q, df − q + 1)
+  (df the smallest effective number of cycles of the block's columns); q = 1 is the
+  test above;
 * **relations** (register i × dimension q, one cell per cycle) — the F-test on that
   dimension's own residual variance (K − 3 df), so a dimension that shares more of the
   per-part variation is not judged by the pooled noise of the others.
@@ -43,8 +50,8 @@ import scipy.stats
 from setupfix.diagnose.fit import Observations
 from setupfix.diagnose.terms import EffectSpec, Layout
 
-__all__ = ["MIN_CYCLES", "cluster_test", "cell_pvalue", "dimension_pvalue", "lack_of_fit", "cycle_sums", "relation_set",
-           "orth"]
+__all__ = ["MIN_CYCLES", "cluster_test", "cluster_wald", "cell_pvalue", "dimension_pvalue", "lack_of_fit", "cycle_sums",
+           "relation_set", "orth"]
 
 Array = npt.NDArray[np.float64]
 
@@ -109,6 +116,50 @@ def cluster_test(Zt: Array, r: Array, cycle: npt.NDArray[np.intp], n_cycles: int
     stat = np.where(ok, u ** 2 / np.where(ok, v, 1.0), 0.0)
     p = np.where(ok, scipy.stats.f.sf(stat, 1, nu), 1.0)
     return stat, p
+
+
+def cluster_wald(Zt: Array, r: Array, cycle: npt.NDArray[np.intp], n_cycles: int) -> tuple[float, float, int]:
+    """Cluster-robust Wald test (cycle = cluster) of a block of candidate columns (module text).
+
+    Parameters
+    ----------
+    Zt : ndarray (N, q)
+        The block's columns residualised on the current model.
+    r : ndarray (N,)
+        Residual of the current model.
+    cycle : ndarray of int (N,)
+    n_cycles : int
+
+    Returns
+    -------
+    F : float
+        Hotelling-scaled statistic, W (df − q + 1) / (df q).
+    p : float
+        Its p-value on F(q, df − q + 1); 1 when the block is empty or the cycles too few.
+    q : int
+        Rank of the block.
+    """
+    B = orth(Zt)
+    q = int(B.shape[1])
+    if q == 0:
+        return 0.0, 1.0, 0
+    u = B.T @ r  # (q,): Σ_k s_k with B orthonormal (β̂ = u)
+    s = cycle_sums(B * r[:, None], cycle, n_cycles)  # (K, q)
+    gram = cycle_sums(np.einsum("ni,nj->nij", B, B).reshape(B.shape[0], q * q), cycle, n_cycles)
+    gram = gram.reshape(n_cycles, q, q)
+    seen = gram.reshape(n_cycles, -1).any(axis=1)
+    k = int(seen.sum())
+    e = s - np.einsum("kij,j->ki", gram, u)
+    V = (e.T @ e) * k / max(k - 1, 1)
+    w = np.einsum("kii->ki", gram)  # per-cycle weight of each column
+    wt, ww = w.sum(axis=0), np.einsum("ki,ki->i", w, w)
+    nu = float(np.clip(np.min(wt ** 2 / np.where(ww > 0, ww, 1.0)) - 1.0, 1.0, max(k - 1, 1)))
+    df2 = nu - q + 1
+    if k < 2 or df2 < 1:
+        return 0.0, 1.0, q
+    stat = float(u @ np.linalg.pinv(V, rcond=1e-12, hermitian=True) @ u)
+    f = stat * df2 / (nu * q)
+    return f, float(scipy.stats.f.sf(f, q, df2)), q
 
 
 def cell_pvalue(gain: float, rss0: float, df0: int, k: int) -> float:

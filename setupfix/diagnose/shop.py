@@ -25,13 +25,16 @@ at a time (``EffectSpec.at``).
 
 from __future__ import annotations
 
+import dataclasses
+
 from dataclasses import dataclass, field
 from typing import Any, ClassVar
 
 import numpy as np
 import numpy.typing as npt
 
-from setupfix.diagnose.terms import AXES, KINDS, EffectSpec, Layout, Series, effect_field, parts_since_change
+from setupfix.diagnose.covariates import parts_since_change
+from setupfix.diagnose.terms import AXES, KINDS, EffectSpec, Layout, Series, effect_field
 from setupfix.errors import ParameterError
 from setupfix.params import Constraint, Interval, ValidatedParams, validate_params
 from setupfix.search import generator
@@ -237,6 +240,7 @@ class ShopSimulator(ValidatedParams):
                 raise ParameterError("simulate: a position effect needs feature positions in the model "
                                      "([features.*] position = [x, y, z])")
         times = self._times()
+        effects = tuple(_at_cycle(e, times) for e in effects)
         for e in effects:
             if e.spec.kind == "level" and not times[0] < e.spec.at <= times[-1]:
                 raise ParameterError(f"simulate: a level step at {e.spec.at:g} h is not within the series "
@@ -361,3 +365,14 @@ def random_topology(seed: int | None = None, *, positions: bool = True) -> dict[
                                           "nominal": float(np.round(rng.uniform(5, 120), 1)),
                                           "lower": -0.1, "upper": 0.1, "group": f"S{d % n_g + 1}"}
     return doc
+
+
+def _at_cycle(e: HiddenEffect, times: Array) -> HiddenEffect:
+    """A level step given by its cycle (``cycle = "cycle N"``, ``at`` unset) placed at that cycle's time."""
+    c = e.spec.cycle or ""
+    if e.spec.kind != "level" or e.spec.at or not c.startswith("cycle ") or not c[6:].isdigit():
+        return e
+    k = int(c[6:])
+    if not 1 <= k <= len(times):
+        raise ParameterError(f"simulate: a level step at cycle {k} is not within the series (1 … {len(times)})")
+    return dataclasses.replace(e, spec=dataclasses.replace(e.spec, at=float(times[k - 1])))

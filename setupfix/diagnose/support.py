@@ -17,11 +17,14 @@ from setupfix.diagnose.fit import Observations
 from setupfix.diagnose.terms import AXES, EffectSpec, Layout, Series
 from setupfix.relation import null_space_directions
 
-__all__ = ["spread", "support_notes", "register_notes", "alike"]
+__all__ = ["STATIC", "spread", "support_notes", "register_notes", "alike", "alike_sets"]
 
 Array = npt.NDArray[np.float64]
 
 _TINY = 1e-9
+
+#: Kinds whose field is the same on every cycle.
+STATIC = ("scale", "position", "group")
 
 
 def spread(values: Array) -> bool:
@@ -79,14 +82,42 @@ def register_notes(layout: Layout, series: Series, obs: Observations) -> list[st
 
 
 def alike(Q: Array, col: Array, Z: Array, specs: list[EffectSpec], active: npt.NDArray[np.bool_],
-           chosen: int, threshold: float = 0.98) -> tuple[str, ...]:
-    """Candidates whose residualised columns are nearly collinear with the chosen one."""
+          chosen: int, norms2: Array, threshold: float = 0.98) -> tuple[str, ...]:
+    """Candidates whose residualised columns are nearly collinear with the chosen one.
+
+    ``norms2`` holds the residualised columns' squared norms (as :func:`~setupfix.diagnose.scores.dense_scores`
+    gives them): with c the chosen column residualised on Q, the correlation of column j is
+    |Z_jᵀc| / (‖Z_j − QQᵀZ_j‖ ‖c‖), no residualised copy of Z formed.
+    """
     if Z.shape[1] == 0:
         return ()
     c = col - Q @ (Q.T @ col)
-    P = Z - Q @ (Q.T @ Z)
-    num = np.abs(P.T @ c)
-    den = np.linalg.norm(P, axis=0) * np.linalg.norm(c)
+    num = np.abs(Z.T @ c)
+    den = np.sqrt(np.maximum(norms2, 0.0)) * np.linalg.norm(c)
     corr = np.where(den > _TINY, num / np.where(den > _TINY, den, 1.0), 0.0)
     return tuple(f"{specs[i].kind}: {specs[i].target}" for i in np.flatnonzero((corr > threshold) & active)
                  if i != chosen)
+
+
+def alike_sets(Q: Array, chosen: int, blocks: list[Array], sets: list[tuple[EffectSpec, ...]],
+               active: npt.NDArray[np.bool_], threshold: float = 0.98) -> tuple[str, ...]:
+    """Per-register sets whose residualised blocks span nearly the same space as the chosen one's (every
+    principal angle's cosine above ``threshold``): channels the series cannot tell apart per register."""
+    def basis(B: Array) -> Array:
+        P = B - Q @ (Q.T @ B)
+        u, sv, _ = np.linalg.svd(P, full_matrices=False)
+        out: Array = u[:, sv > 1e-9 * max(1.0, float(sv.max(initial=0.0)))]
+        return out
+
+    a = basis(blocks[chosen])
+    out = []
+    for i in np.flatnonzero(active):
+        if i == chosen:
+            continue
+        b = basis(blocks[i])
+        if b.shape[1] != a.shape[1] or a.shape[1] == 0:
+            continue
+        if float(np.linalg.svd(a.T @ b, compute_uv=False).min()) > threshold:
+            regs = ", ".join(str(t.register) for t in sets[i])
+            out.append(f"process: {regs} ~ {sets[i][0].channel} (a coefficient each)")
+    return tuple(out)

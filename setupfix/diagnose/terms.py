@@ -34,8 +34,8 @@ import numpy.typing as npt
 from setupfix.model import ProcessModel
 from setupfix.relation import relation_matrices
 
-__all__ = ["KINDS", "Layout", "Series", "EffectSpec", "effect_field", "applied_at", "parts_since_change",
-           "join_temperatures", "common_tool_row", "register_row", "typical_step"]
+__all__ = ["KINDS", "Layout", "Series", "EffectSpec", "effect_field", "field_factors", "common_tool_row",
+           "register_row"]
 
 Array = npt.NDArray[np.float64]
 
@@ -247,15 +247,6 @@ class EffectSpec:
                 "process": f"{length}/unit of {self.channel}"}[self.kind]
 
 
-def typical_step(time: Array) -> float:
-    """Typical interval between cycles [h]: the median gap within shifts (gaps ≤ 1 h), else of all gaps."""
-    gaps = np.diff(time)
-    short = gaps[gaps <= 1.0]
-    if short.size:
-        return float(np.median(short))
-    return float(np.median(gaps)) if gaps.size else 0.0
-
-
 def common_tool_row(layout: Layout) -> Array:
     """Dimension change per unit growth of every tool at once, shape (n_dimensions,).
 
@@ -288,38 +279,50 @@ def effect_field(spec: EffectSpec, layout: Layout, series: Series) -> Array:
     KeyError
         If the register, dimension, group, channel or axis is unknown.
     """
-    n, d = series.n_cycles, layout.n_dimensions
+    factors = field_factors(spec, layout, series)
+    if factors is not None:
+        return np.outer(*factors)
+    if spec.kind == "relation":
+        i = layout.register_ids.index(str(spec.register))
+        q = layout.dimension_ids.index(str(spec.dimension))
+        z = np.zeros((series.n_cycles, layout.n_dimensions))
+        z[:, q] = series.applied[:, i]
+        return z
+    raise KeyError(spec.kind)
+
+
+def field_factors(spec: EffectSpec, layout: Layout, series: Series) -> tuple[Array, Array] | None:
+    """The field of every kind but a relation is an outer product z = a bᵀ: per cycle a (n_cycles,), per
+    dimension b (n_dimensions,).  None for a relation.  Raises KeyError as :func:`effect_field`."""
+    n = series.n_cycles
+    ones = np.ones(n)
     if spec.kind == "drift":
         t = series.time if spec.shape == "linear" else 1.0 - np.exp(-series.time / spec.tau)
-        return np.outer(t, common_tool_row(layout))
+        return t, common_tool_row(layout)
     if spec.kind == "thermal":
         ch = series.channels.index(str(spec.channel))
-        return np.outer(series.temperature[:, ch] - spec.reference, common_tool_row(layout))
+        return series.temperature[:, ch] - spec.reference, common_tool_row(layout)
     if spec.kind == "wear":
         j = layout.register_ids.index(str(spec.register))
         k = int(np.flatnonzero(layout.tools == j)[0])
-        return np.outer(series.parts[:, k], layout.composite[j])
+        return series.parts[:, k], layout.composite[j]
     if spec.kind == "scale":
-        return np.broadcast_to(layout.nominal, (n, d)).copy()
+        return ones, layout.nominal
     if spec.kind == "position":
         a = AXES.index(str(spec.axis))
-        return np.broadcast_to(np.nan_to_num(layout.coord[:, a]), (n, d)).copy()
+        return ones, np.nan_to_num(layout.coord[:, a])
     if spec.kind == "group":
         mask = np.array([g == spec.group for g in layout.groups], dtype=float)
         if not mask.any():
             raise KeyError(spec.group)
-        return np.broadcast_to(mask, (n, d)).copy()
-    if spec.kind == "relation":
-        i = layout.register_ids.index(str(spec.register))
-        q = layout.dimension_ids.index(str(spec.dimension))
-        z = np.zeros((n, d))
-        z[:, q] = series.applied[:, i]
-        return z
+        return ones, mask
     if spec.kind == "level":
-        return np.outer((series.time >= spec.at).astype(float), register_row(layout, spec.register))
+        return (series.time >= spec.at).astype(float), register_row(layout, spec.register)
     if spec.kind == "process":
         ch = series.channels.index(str(spec.channel))
-        return np.outer(series.temperature[:, ch] - spec.reference, register_row(layout, spec.register))
+        return series.temperature[:, ch] - spec.reference, register_row(layout, spec.register)
+    if spec.kind == "relation":
+        return None
     raise KeyError(spec.kind)
 
 
@@ -328,82 +331,4 @@ def register_row(layout: Layout, register: str | None) -> Array:
     if register is None:
         return common_tool_row(layout)
     out: Array = layout.composite[layout.register_ids.index(register)]
-    return out
-
-
-def applied_at(times: Array, log_times: Array, log_register: npt.NDArray[np.intp], log_delta: Array,
-               n_registers: int) -> Array:
-    """Register changes in effect at each time: every log row with timestamp ≤ t.
-
-    Parameters
-    ----------
-    times : ndarray of shape (n_cycles,) [h]
-    log_times : ndarray of shape (n_rows,) [h]
-    log_register : ndarray of int, shape (n_rows,)
-        Row of the register in the composite matrix.
-    log_delta : ndarray of shape (n_rows,) [model unit]
-    n_registers : int
-
-    Returns
-    -------
-    ndarray of shape (n_cycles, n_registers) [model unit]
-    """
-    out = np.zeros((len(times), n_registers))
-    if len(log_times) == 0:
-        return out
-    order = np.argsort(log_times, kind="stable")
-    steps = np.zeros((len(order), n_registers))
-    steps[np.arange(len(order)), log_register[order]] = log_delta[order]
-    cum = np.vstack([np.zeros((1, n_registers)), np.cumsum(steps, axis=0)])
-    idx = np.searchsorted(log_times[order], times, side="right")
-    out[:] = cum[idx]
-    return out
-
-
-def parts_since_change(times: Array, change_times: list[Array]) -> Array:
-    """Cycles of the series cut by each tool since its last change before each cycle.
-
-    Parameters
-    ----------
-    times : ndarray of shape (n_cycles,) [h]
-    change_times : list of ndarray
-        Per tool, the times of its changes.
-
-    Returns
-    -------
-    ndarray of shape (n_cycles, n_tools)
-        For cycle k, the number of earlier cycles machined after the tool's last
-        change at or before t_k.
-    """
-    order = np.argsort(times, kind="stable")
-    sorted_t = times[order]
-    out = np.zeros((len(times), len(change_times)))
-    for j, changes in enumerate(change_times):
-        ch = np.sort(np.asarray(changes, dtype=float))
-        last = np.full(len(times), -np.inf)
-        if ch.size:
-            pos = np.searchsorted(ch, times, side="right") - 1
-            last = np.where(pos >= 0, ch[np.maximum(pos, 0)], -np.inf)
-        # cycles strictly before t_k and at or after the last change
-        before = np.searchsorted(sorted_t, times, side="left")
-        after_change = np.searchsorted(sorted_t, last, side="left")
-        out[:, j] = before - after_change
-    return out
-
-
-def join_temperatures(times: Array, sample_times: Array, samples: Array) -> Array:
-    """Temperature sample at or just before each time (the first sample before the log starts).
-
-    Parameters
-    ----------
-    times : ndarray of shape (n_cycles,) [h]
-    sample_times : ndarray of shape (n_samples,) [h], sorted
-    samples : ndarray of shape (n_samples, n_channels) [°C]
-
-    Returns
-    -------
-    ndarray of shape (n_cycles, n_channels)
-    """
-    idx = np.searchsorted(sample_times, times, side="right") - 1
-    out: Array = samples[np.clip(idx, 0, len(sample_times) - 1)]
     return out

@@ -33,7 +33,8 @@ import numpy.typing as npt
 
 from setupfix.diagnose.fit import RELATION_T, Fit, row_space_basis
 from setupfix.diagnose.select import select_effects
-from setupfix.diagnose.terms import EffectSpec, Layout, Series, effect_field, typical_step
+from setupfix.diagnose.covariates import typical_step
+from setupfix.diagnose.terms import EffectSpec, Layout, Series, effect_field
 from setupfix.explain import targets
 
 __all__ = ["Budget", "WalkForward", "walk_forward", "next_cycle", "margins_of", "NextSource", "next_source",

@@ -24,7 +24,7 @@ from typing import Any
 import numpy as np
 
 from setupfix.diagnose import Diagnoser, Diagnosis
-from setupfix.diagnose.terms import typical_step
+from setupfix.diagnose.covariates import typical_step
 from setupfix.errors import ExportError, ModelError, Note, SourceLocation
 from setupfix.model import PartMeasurement, ProcessModel, model_from_dict
 from setupfix.model.effects import EffectsSection, ModelEffect, effects_from_dict, with_effects
@@ -130,7 +130,7 @@ class DiagnoseOutcome:
             "next_correction": {k: round(v, 9) for k, v in self.next_correction.items()},
             "next_solved": self.next_cycle.solved if self.next_cycle is not None else None,
             "declared_effects": [e.target for e in self.input.declared],
-            "rejected": [{"kind": s.spec.kind, "target": s.spec.target, "p_adjusted": r(s.p_adjusted, 6),
+            "rejected": [{"kind": s.spec.kind, "target": s.target, "p_adjusted": r(s.p_adjusted, 6),
                           "cv_before": r(s.cv_before), "cv_after": r(s.cv_after)}
                          for s in d.selection.steps if not s.accepted],
             "unidentifiable": list(d.selection.unidentifiable),

@@ -20,6 +20,8 @@ or just before the part): every numeric column is a channel, every categorical c
 
 from __future__ import annotations
 
+import dataclasses
+
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -34,7 +36,8 @@ from parsers.temperature import TemperatureLog, read_temperature_log
 from parsers.timestamps import parse_timestamp, to_index
 from setupfix.diagnose import Layout, Series
 from setupfix.diagnose.forecast import spec_of
-from setupfix.diagnose.terms import EffectSpec, applied_at, join_temperatures, parts_since_change
+from setupfix.diagnose.covariates import applied_at, join_temperatures, parts_since_change
+from setupfix.diagnose.terms import EffectSpec
 from setupfix.errors import MatchError, Note, ParseError, SourceLocation, UnknownFormatError
 from setupfix.model import PartMeasurement, ProcessModel, load_model, match_parts, normalise_name
 from setupfix.model.effects import EffectsSection
@@ -338,6 +341,16 @@ def _assemble(model: ProcessModel, parts: list[PartMeasurement],
     notes: list[Note] = []
     layout = Layout.from_model(model)
     stamps = [p.timestamp for p in parts]
+    if all(s is None for s in stamps) and process is not None and process.timestamps and _has_serial(process):
+        # the reports carry no time: the parts were machined when the process log says (joined by serial)
+        rows, _ = _process_rows(process, [p.part for p in parts], np.zeros(len(parts)), "")
+        for i in rows:  # a bad one named by its line
+            parse_timestamp(process.timestamps[int(i)], process.location(int(i)))
+        parts = [dataclasses.replace(p, timestamp=str(process.timestamps[int(i)])) for p, i in zip(parts, rows,
+                                                                                                  strict=True)]
+        stamps = [p.timestamp for p in parts]
+        notes.append(Note("the reports carry no timestamps: each part's machining time is the process log's "
+                          "timestamp of its serial", process.location(), "series"))
     if all(s is None for s in stamps):
         if log is not None or temps is not None:
             raise MatchError("the reports carry no timestamps, so the corrections or temperature log cannot be "
@@ -404,6 +417,10 @@ def _serial_key(value: object) -> str:
     except ValueError:
         return text
     return str(int(number)) if number.is_integer() else text
+
+
+def _has_serial(log: TemperatureLog) -> bool:
+    return any(c.casefold() == SERIAL for c in (*log.columns, *log.text))
 
 
 def _process_rows(log: TemperatureLog, parts: Sequence[str], time: np.ndarray,

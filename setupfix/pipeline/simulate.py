@@ -30,7 +30,7 @@ from setupfix.pipeline.writers import atomic_write, check_target
 __all__ = ["parse_effect", "SimulateOutcome", "simulate_series", "write_series"]
 
 _EFFECT_KEYS = ("kind", "magnitude", "register", "dimension", "axis", "group", "channel", "shape", "tau",
-                "reference")
+                "reference", "at")
 START = "2026-11-02T06:00:00"
 
 
@@ -39,7 +39,7 @@ def parse_effect(text: str) -> HiddenEffect:
 
     Keys: kind (required), magnitude (required), register, dimension, axis, group,
     channel (default spindle), shape (linear | saturating), tau [h], reference [°C,
-    default 20].
+    default 20], at (a level step: the cycle, counted from 1, it starts at).
 
     Raises
     ------
@@ -73,9 +73,17 @@ def parse_effect(text: str) -> HiddenEffect:
     if not (np.isfinite(magnitude) and np.isfinite(tau) and tau > 0):
         raise ParameterError(f"--effect {text!r}: magnitude and tau must be finite, tau > 0")
     channel = items.get("channel", "spindle" if kind == "thermal" else None)
+    cycle = None
+    if kind == "level":
+        at = items.get("at", "")
+        if not at.isdigit() or int(at) < 1:
+            raise ParameterError(f"--effect {text!r}: a level step needs at=N, the cycle it starts at (1, 2, …)")
+        cycle = f"cycle {int(at)}"
+    elif "at" in items:
+        raise ParameterError(f"--effect {text!r}: at= is for a level step only")
     spec = EffectSpec(kind, register=items.get("register"), dimension=items.get("dimension"),
                       axis=items.get("axis"), group=items.get("group"), channel=channel, shape=shape, tau=tau,
-                      reference=reference)
+                      reference=reference, cycle=cycle)
     return HiddenEffect(spec, magnitude)
 
 

@@ -56,6 +56,7 @@ class Inputs:
     current: Path | None = None
     thermal: Path | None = None
     temperatures: Path | None = None
+    process: Path | None = None  #: process log the diagnosis joins per part (``--process``)
     at: str | None = None  #: time of the correction for the feed-forward (default: the log's last sample)
     thermal_dead_band: float | None = None
     read: ReadOptions = field(default_factory=ReadOptions)  #: the reader's options, as ``correct`` takes them
@@ -402,7 +403,7 @@ class SetupfixApp(App[None]):
             return
         self.query_one(HistoryPanel).status(f"diagnosing the reports in {self._series_source()} …")
         self.run_worker(partial(workers.diagnose, self.model_path, Path(self._series_source()),
-                                self.inputs.db is not None),
+                                self.inputs.db is not None, self.inputs.process),
                         name="diagnose", group="diagnose", thread=True, exclusive=True, exit_on_error=False)
 
     def _series_source(self) -> str:

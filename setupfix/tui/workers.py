@@ -64,8 +64,11 @@ def history(model: ProcessModel, db: Path) -> tuple[list[view.CycleBudget], list
     return view.cycle_budgets(model, parts), notes
 
 
-def diagnose(model: Path, source: Path, store: bool) -> view.DiagnosisView:
-    """Thread worker: ``setupfix diagnose`` over the history store or a folder of reports (and its logs)."""
-    request = DiagnoseRequest(model, db=source) if store else DiagnoseRequest(model, (source,))
+def diagnose(model: Path, source: Path, store: bool, process: Path | None = None) -> view.DiagnosisView:
+    """Thread worker: ``setupfix diagnose`` over the history store or a folder of reports (and its logs), with
+    the process log given (``--process``) joined per part."""
+    proc = str(process) if process is not None else None
+    request = (DiagnoseRequest(model, db=source, process=proc) if store
+               else DiagnoseRequest(model, (source,), process=proc))
     outcome = diagnose_reports(request)
     return view.diagnosis_view(outcome)

@@ -80,7 +80,9 @@ def test_bad_corrections_log_is_refused_with_its_line(series, tmp_path, capsys):
 
 
 @pytest.mark.parametrize("effect", ["kind=creep,magnitude=1", "kind=drift", "kind=drift,magnitude=x",
-                                    "kind=wear,register=T99,magnitude=0.001", "kind=position,axis=x,magnitude=1e-4"])
+                                    "kind=wear,register=T99,magnitude=0.001", "kind=position,axis=x,magnitude=1e-4",
+                                    "kind=level,register=T5,magnitude=0.01", "kind=level,at=0,magnitude=0.01",
+                                    "kind=level,at=99,magnitude=0.01", "kind=drift,at=3,magnitude=0.001"])
 def test_simulate_refuses_bad_effects(effect, tmp_path, capsys):
     code, _out, err = run(capsys, "simulate", "--model", MODEL, "--out", tmp_path / "o", "--effect", effect)
     assert code == 1 and err.startswith("error: ") and err.count("\n") == 1
@@ -183,3 +185,30 @@ def test_diagnose_json_says_which_model_the_next_correction_comes_from(series, c
     assert wf["augmented"]["out_of_tolerance"] <= wf["ewma"]["out_of_tolerance"]
     assert doc["next_from"] == "augmented" and "beat ewma" in doc["next_from_reason"]
     assert all(doc["next_correction"].get(r, 0.0) == 0.0 for r in doc["held_centred"])
+
+
+def test_diagnose_text_prints_the_centre_scores_and_where_the_next_correction_comes_from(series, capsys):
+    code, out, err = run(capsys, "diagnose", "--model", MODEL, "--corrections", series / "corrections.csv",
+                         "--temperatures", series / "temperatures.csv", series / "measurements.csv")
+    assert code == 0, err
+    code, js, _ = run(capsys, "diagnose", "--model", MODEL, "--corrections", series / "corrections.csv",
+                      "--temperatures", series / "temperatures.csv", "--json", series / "measurements.csv")
+    doc = json.loads(js)
+    aug = doc["walk_forward"]["augmented"]
+    line = next(ln for ln in out.splitlines() if ln.startswith("  augmented"))
+    assert f"centre {aug['centre_rms']:.4f} / {aug['centre_mean_abs']:.4f}" in line
+    assert f"next correction from: {doc['next_from']} ({doc['next_from_reason']})" in out
+
+
+def test_simulate_level_step_at_a_cycle_is_found_there(tmp_path, capsys):
+    out = tmp_path / "s"
+    code, _o, err = run(capsys, "simulate", "--model", MODEL, "--out", out, "--seed", "2", "--cycles", "30",
+                        "--effect", "kind=level,register=T5,at=18,magnitude=0.02", "--json")
+    assert code == 0, err
+    truth = json.loads((out / "truth.json").read_text())
+    code, js, err = run(capsys, "diagnose", "--model", MODEL, "--corrections", out / "corrections.csv",
+                        "--no-walk", "--json", out / "measurements.csv")
+    assert code == 0, err
+    level = [e for e in json.loads(js)["effects"] if e["kind"] == "level"]
+    assert truth["hidden_effects"][0]["kind"] == "level"
+    assert level and level[0]["target"].startswith("T5 step at") and level[0]["cycle"].endswith("18")

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from setupfix.diagnose.terms import applied_at, join_temperatures, parts_since_change
+from setupfix.diagnose.covariates import applied_at, join_temperatures, parts_since_change
 
 
 def test_applied_at_takes_every_row_at_or_before_the_part():
