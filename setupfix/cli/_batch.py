@@ -9,8 +9,9 @@ from types import FrameType
 from typing import TYPE_CHECKING
 
 from setupfix.cli._choices import CONTROLLERS, OPTIMIZERS
-from setupfix.cli._common import (add_objective_option, add_program_number_option, add_report_options,
-                                  add_thermal_options, check_program_number, shown, whole_number)
+from setupfix.cli._common import (add_machine_options, add_objective_option, add_program_number_option,
+                                  add_report_options, add_thermal_options, check_program_number, shown, store_ref,
+                                  whole_number)
 from setupfix.cli.exit_codes import NOT_SOLVED, OK, PARTIAL, REJECTED
 
 if TYPE_CHECKING:
@@ -45,9 +46,11 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
     p.add_argument("--settle", type=float, default=1.0, metavar="SECONDS",
                    help="a file must be unchanged this long before it is read (default 1)")
     p.add_argument("--store", metavar="DB", default=None, dest="db",
-                   help="history store: reports it already holds are skipped, new ones are added; with the "
+                   help="history store (a file, or a postgresql:// URL shared by many machines and runs): reports "
+                        "it already holds are skipped, new ones are added with their recommendations; with the "
                         "model's EWMA (ewma < 1) every report is smoothed over the store's parts and the batch's "
                         "machined before it")
+    add_machine_options(p)
     p.add_argument("--force", action="store_true", help="correct reports the store already holds again")
     p.add_argument("--json", action="store_true", help="the summary as JSON on stdout")
     add_report_options(p)
@@ -64,18 +67,19 @@ def run(args: argparse.Namespace) -> int:
     from setupfix.cli._correct import correct_request
     from setupfix.pipeline.batch import run_batch
     from setupfix.pipeline.present import format_batch_summary
-    from setupfix.store import open_store
-
     import json
+    from contextlib import nullcontext
 
     check_program_number(args)
     request = correct_request(args)  # the very request ``correct`` builds from the same options
+    ref = store_ref(args, args.db)
     previous = signal.signal(signal.SIGTERM, _terminate)
     try:
-        with _Progress() as progress:
+        with (ref.for_model(request.model).open(existing=False) if ref else nullcontext()) as store, \
+                _Progress() as progress:
             summary = run_batch(request, args.folder, args.out, workers=args.workers, controller=args.controller,
-                                settle=args.settle, progress=progress, store=open_store(args.db) if args.db else None,
-                                force=args.force, program_number=args.program_number)
+                                settle=args.settle, progress=progress, store=store, force=args.force,
+                                program_number=args.program_number)
     finally:
         signal.signal(signal.SIGTERM, previous)
     for path, note in summary.notes:  # a note that names its file is printed as it is (not the path twice)

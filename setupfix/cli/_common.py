@@ -81,6 +81,23 @@ def add_thermal_options(p: argparse.ArgumentParser) -> None:
                    help="feed nothing forward below |D| (model unit; default one register step)")
 
 
+def add_machine_options(p: Any) -> None:
+    """``--machine`` and ``--operator``: whose records the history store reads and writes (issue 25)."""
+    p.add_argument("--machine", default=None, metavar="NAME",
+                   help="the machine whose history is read and written (default: the model's [process] machine, "
+                        "else 'default')")
+    p.add_argument("--operator", default=None, metavar="NAME",
+                   help="who is recorded with the stored recommendations (default: the login name)")
+
+
+def store_ref(args: argparse.Namespace, db: str | None) -> Any:
+    """The :class:`~setupfix.pipeline.stores.StoreRef` of ``db`` (a file or a postgresql:// URL) for
+    ``--machine``/``--operator``; ``None`` without ``db``."""
+    from setupfix.pipeline.stores import StoreRef
+
+    return None if db is None else StoreRef(str(db), args.machine, args.operator)
+
+
 def add_program_number_option(p: Any) -> None:
     """``--program-number N``: the written program's number (``correct``, ``batch``)."""
     p.add_argument("--program-number", type=whole_number(1, 99_999_999), default=None, metavar="N",

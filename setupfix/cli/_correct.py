@@ -8,11 +8,13 @@ import sys
 from typing import TYPE_CHECKING
 
 from setupfix.cli._choices import CONTROLLERS, OPTIMIZERS
-from setupfix.cli._common import (add_objective_option, add_program_number_option, add_report_options,
-                                  add_thermal_options, check_program_number, cycles_of, read_options)
+from setupfix.cli._common import (add_machine_options, add_objective_option, add_program_number_option,
+                                  add_report_options, add_thermal_options, check_program_number, cycles_of,
+                                  read_options, store_ref)
 from setupfix.cli.exit_codes import NOT_SOLVED, OK, REJECTED
 
 if TYPE_CHECKING:
+    from setupfix.pipeline.export import Exported
     from setupfix.pipeline.requests import CorrectRequest
 
 
@@ -34,9 +36,11 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
     p.add_argument("--part", default=None, metavar="ID", help="correct only this part / cycle of the report")
     p.add_argument("--json", action="store_true", help="machine-readable output (shared/spec/cli-json.md)")
     p.add_argument("--store", metavar="DB", default=None,
-                   help="history store: earlier reports and the corrections log for the EWMA smoothing "
-                        "(model [safety] ewma < 1) and for the recent measurements that stand in for dimensions "
-                        "the report lacks")
+                   help="history store (a file, or a postgresql:// URL): earlier reports and the corrections log "
+                        "for the EWMA smoothing (model [safety] ewma < 1) and for the recent measurements that "
+                        "stand in for dimensions the report lacks; the recommendation is recorded in it (the "
+                        "audit trail: machine, operator, report hash, verdict, deltas, where it was exported)")
+    add_machine_options(p)
     p.add_argument("--html", metavar="OUT", default=None,
                    help="also write one self-contained HTML page of the correction (verdict, tolerance zones with "
                         "measured and predicted positions, registers, rules; with --store the control charts of "
@@ -65,13 +69,14 @@ def correct_request(args: argparse.Namespace) -> CorrectRequest:
 
     return load_request(args.model, read=read_options(args), cycles=cycles_of(args),
                         solve=SolveOptions(args.optimizer, args.seed, args.time_limit, args.objective),
-                        current=args.current, store=args.store, thermal=args.thermal,
+                        current=args.current, store=store_ref(args, args.store), thermal=args.thermal,
                         temperatures=args.temperatures, at=args.at, thermal_dead_band=args.thermal_dead_band)
 
 
 def run(args: argparse.Namespace) -> int:
     from setupfix.pipeline.correct import correct_report
     from setupfix.pipeline.export import export
+    from setupfix.pipeline.history import record_correction
     from setupfix.pipeline.html_report import write_correction_page
     from setupfix.pipeline.present import format_correction, note_lines, outcome_json, verdict_line
     from setupfix.pipeline.writers import check_target
@@ -85,9 +90,18 @@ def run(args: argparse.Namespace) -> int:
     outcome = correct_report(request, args.report)
     cycles = outcome.cycles
     rejected, unsolved = bool(outcome.rejected), bool(outcome.unsolved)
-    if args.offsets and not rejected and not unsolved:
-        export(cycles, args.offsets, controller=args.controller, current=request.current,
-               program_number=args.program_number)
+
+    def write() -> Exported | None:
+        if not args.offsets or rejected or unsolved:
+            return None
+        return export(cycles, args.offsets, controller=args.controller, current=request.current,
+                      program_number=args.program_number)
+
+    if args.store:  # the recommendation goes into the audit trail; the offsets are written only with it
+        record_correction(store_ref(args, args.store), request.model, cycles, report=args.report, seed=args.seed,
+                          write=write)
+    else:
+        write()
     if args.html:
         write_correction_page(outcome, args.html, store=args.store)
     for c in outcome.rejected:

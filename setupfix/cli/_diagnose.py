@@ -8,7 +8,7 @@ import math
 import sys
 from typing import TYPE_CHECKING
 
-from setupfix.cli._common import add_lenient_option, add_objective_option
+from setupfix.cli._common import add_lenient_option, add_machine_options, add_objective_option, store_ref
 from setupfix.cli.exit_codes import OK
 from setupfix.errors import SetupfixError
 
@@ -33,7 +33,8 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
                         "unreadable one named in a note) and its corrections.csv / temperatures.csv are used "
                         "unless --corrections / --temperatures are given")
     p.add_argument("--db", metavar="STORE", default=None,
-                   help="history store: its reports, corrections log and temperatures (see 'setupfix history')")
+                   help="history store (a file, or a postgresql:// URL): the machine's reports, corrections log and "
+                        "temperatures (see 'setupfix history')")
     p.add_argument("--model", required=True, metavar="MODEL", help="process model TOML")
     p.add_argument("--corrections", metavar="CSV", default=None,
                    help="corrections log (timestamp,register,delta[,event]; header in any case)")
@@ -51,6 +52,7 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
     add_lenient_option(p)
     p.add_argument("--json", action="store_true", help="machine-readable output (shared/spec/cli-json.md)")
     add_objective_option(p)
+    add_machine_options(p)
     p.set_defaults(run=run)
 
 
@@ -104,7 +106,7 @@ def run(args: argparse.Namespace) -> int:
         raise SetupfixError("diagnose: give REPORT files or folders, or --db STORE")
     out = diagnose_reports(DiagnoseRequest(
         args.model, tuple(args.reports), ReadOptions(lenient=args.lenient), corrections=args.corrections,
-        temperatures=args.temperatures, db=args.db, thermal=args.thermal, augment=args.augment,
+        temperatures=args.temperatures, db=store_ref(args, args.db), thermal=args.thermal, augment=args.augment,
         process=args.process,
         diagnoser=Diagnoser(alpha=args.alpha, walk=not args.no_walk), solve=SolveOptions(objective=args.objective)))
     if args.json:

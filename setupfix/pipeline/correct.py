@@ -20,11 +20,12 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 import parsers
-from setupfix.errors import ExportError, Note, ParameterError, SetupfixError, SourceLocation
+from setupfix.errors import Note, ParameterError, SetupfixError
 from setupfix.ewma import Smoothed
 from setupfix.model import PartMeasurement, ProcessModel, load_model
 from setupfix.optimize import CorrectionProblem, OptimizeResult, get_optimizer
 from setupfix.pipeline.cycles import read_parts
+from setupfix.pipeline.stores import StoreRef
 from setupfix.pipeline.requests import (CorrectOutcome, CorrectRequest, CurrentOffsets, CycleCorrection, CycleOptions,
                                         History, ReadOptions, SolveOptions, ThermalInputs, load_thermal)
 from setupfix.pose import PosedProblem, pose_problem
@@ -173,7 +174,7 @@ def correct_report(request: CorrectRequest, report: str | Path | parsers.Source)
 
 def load_request(model: ProcessModel | str | Path, *, read: ReadOptions | None = None,
                  cycles: CycleOptions | None = None, solve: SolveOptions | None = None,
-                 current: str | Path | None = None, store: str | Path | None = None,
+                 current: str | Path | None = None, store: str | Path | StoreRef | None = None,
                  thermal: str | Path | None = None, temperatures: str | Path | None = None, at: str | None = None,
                  thermal_dead_band: float | None = None) -> CorrectRequest:
     """A :class:`CorrectRequest` with every input file read once (the CLI's and the TUI's way to build one).
@@ -191,9 +192,9 @@ def load_request(model: ProcessModel | str | Path, *, read: ReadOptions | None =
     """
     if (thermal is None) != (temperatures is None):
         raise SetupfixError("--thermal and --temperatures go together")
-    history_store = open_history(store) if store is not None else None
     if not isinstance(model, ProcessModel):
         model = load_model(model)
+    history_store = open_history(store, model) if store is not None else None
     offsets = CurrentOffsets.read(current, model) if current is not None else None
     history = None
     if history_store is not None:
@@ -205,11 +206,6 @@ def load_request(model: ProcessModel | str | Path, *, read: ReadOptions | None =
                           history, inputs)
 
 
-def open_history(path: str | Path) -> Store:
-    """Open an existing history store (a missing file is an error, not a new empty store)."""
-    from setupfix.store import open_store
-
-    if not Path(path).is_file():
-        raise ExportError("no history store here (import reports with 'setupfix history import')",
-                          location=SourceLocation(str(path)))
-    return open_store(path)
+def open_history(store: str | Path | StoreRef, model: ProcessModel) -> Store:
+    """Open an existing history store for the model's machine (a missing file is an error, not a new empty store)."""
+    return StoreRef.of(store).for_model(model).open()

@@ -31,6 +31,7 @@ from setupfix.model.effects import EffectsSection, ModelEffect, effects_from_dic
 from setupfix.pipeline.correct import correct_cycle
 from setupfix.pipeline.requests import CorrectRequest, CycleCorrection, History, ReadOptions, SolveOptions
 from setupfix.pipeline.series import SeriesInput, channel_span, load_series
+from setupfix.pipeline.stores import StoreRef
 from setupfix.pipeline.writers import check_target, write_text
 from setupfix.safety import RuleEffect, short_list
 
@@ -80,7 +81,7 @@ class DiagnoseRequest:
     read: ReadOptions = field(default_factory=ReadOptions)
     corrections: str | None = None
     temperatures: str | None = None
-    db: str | Path | None = None
+    db: str | Path | StoreRef | None = None
     thermal: str | Path | None = None
     augment: str | Path | None = None
     process: str | None = None  #: process log (channels of any name and unit, joined per cycle)
@@ -275,11 +276,11 @@ def diagnose_reports(request: DiagnoseRequest) -> DiagnoseOutcome:
     return out
 
 
-def _record(db: str | Path, model: ProcessModel, out: DiagnoseOutcome) -> None:
+def _record(db: str | Path | StoreRef, model: ProcessModel, out: DiagnoseOutcome) -> None:
     """Keep the recommended next correction in the history store, with what it was computed from."""
     import hashlib
 
-    from setupfix.store import Recommendation, open_store
+    from setupfix.store import Recommendation
 
     doc = out.to_json()
     result = {k: doc[k] for k in ("cycles", "rms_before", "rms_after", "max_before", "max_after", "effects",
@@ -288,7 +289,7 @@ def _record(db: str | Path, model: ProcessModel, out: DiagnoseOutcome) -> None:
                               "corrections": out.input.corrections, "temperatures": out.input.temperatures}
     if Path(model.source).is_file():
         inputs["model_sha256"] = hashlib.sha256(Path(model.source).read_bytes()).hexdigest()
-    with open_store(db) as store, store.transaction():
+    with StoreRef.of(db).for_model(model).open() as store, store.transaction():
         store.add_recommendation(Recommendation("exact", inputs, result))
 
 

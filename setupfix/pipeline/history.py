@@ -12,7 +12,7 @@ from __future__ import annotations
 import dataclasses
 import hashlib
 import os
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -20,20 +20,23 @@ import pandas as pd
 
 import parsers
 from parsers._source import read_bytes
+from parsers.names import visible_name
 from parsers.corrections import EVENTS, check_corrections, read_corrections_log
 from parsers.temperature import read_temperature_log
 from parsers.timestamps import iso_text
 from setupfix.errors import Note, ParameterError, ParseError, SourceLocation, StoreError, UnknownFormatError
 from setupfix.model import CANONICAL_COLUMNS, ProcessModel
+from setupfix.pipeline.export import Exported
 from setupfix.pipeline.present import cycle_json
 from setupfix.pipeline.requests import CycleCorrection, ReadOptions
 from setupfix.pipeline.writers import write_canonical_csv, write_table_csv
-from setupfix.pipeline.stores import DEFAULT_DB, store_location
+from setupfix.pipeline.stores import DEFAULT_DB, StoreRef, store_location
 from setupfix.store import Recommendation, Store
 from setupfix.store._audit import TABLES
 
 __all__ = ["DEFAULT_DB", "store_location", "import_history", "ImportRequest", "ImportSummary",
-           "history_summary", "export_history", "record_recommendations", "migrate_history", "EXPORTS", "EVENTS"]
+           "history_summary", "export_history", "record_recommendations", "record_correction", "migrate_history",
+           "EXPORTS", "EVENTS"]
 
 #: Tables ``history export`` writes (``recommendations``: the audit trail, one row per register component).
 EXPORTS = ("measurements", "corrections", "temperatures", "recommendations")
@@ -194,10 +197,13 @@ def export_history(store: Store, table: str, target: str | os.PathLike[str], *, 
 
 
 def record_recommendations(store: Store, results: Sequence[CycleCorrection], *, model: str | os.PathLike[str],
-                           report: str | os.PathLike[str], seed: int | None = None) -> list[int]:
+                           report: str | os.PathLike[str], seed: int | None = None,
+                           exported: Exported | None = None) -> list[int]:
     """Store the recommendations of one ``correct`` run (its cycles), one transaction.
 
-    Inputs kept: the SHA-256 of the model and report files, their names, part and seed;
+    Inputs kept: the SHA-256 of the model and report files, their names, part and seed, and
+    with ``exported`` where the offsets went (file, controller, SHA-256 of the text: the audit's
+    ``exported_to``; not ``applied``: a written program is not yet on the machine);
     the result is the ``correct --json`` object of each part.  Returns the stored ids.
     """
     hashes = {k: hashlib.sha256(read_bytes(str(p))).hexdigest() for k, p in (("model", model), ("report", report))}
@@ -207,8 +213,34 @@ def record_recommendations(store: Store, results: Sequence[CycleCorrection], *, 
             result = cycle_json(r)
             inputs = {"model": str(model), "model_sha256": hashes["model"], "report": str(report),
                       "report_sha256": hashes["report"], "part": result.get("part"), "seed": seed}
+            if exported is not None and r.part.part in exported.parts:
+                inputs["export"] = {"target": visible_name(exported.target), "controller": exported.controller,
+                                    "sha256": exported.sha256}
             ids.append(store.add_recommendation(Recommendation(result["optimizer"], inputs, result)))
     return ids
+
+
+def record_correction(ref: StoreRef, model: ProcessModel, results: Sequence[CycleCorrection], *,
+                      report: str | os.PathLike[str], seed: int | None = None,
+                      write: Callable[[], Exported | None] = lambda: None) -> Exported | None:
+    """``correct --store``: the recommendations recorded for the model's machine, and the offsets written.
+
+    ``write`` (the export, if any) runs inside the store's transaction, after the store has taken
+    its write lock: a store that cannot take the record (locked, read-only, down) refuses before
+    anything is written, and a failed write records nothing.  Should the commit itself fail, the
+    written file is removed: a program is on disk only with its audit record in the store.
+    """
+    exported = None
+    try:
+        with ref.for_model(model).open() as store, store.transaction():
+            exported = write()
+            record_recommendations(store, results, model=model.source, report=report, seed=seed,
+                                   exported=exported)
+    except StoreError:
+        if exported is not None and exported.target != "-":
+            Path(exported.target).unlink(missing_ok=True)
+        raise
+    return exported
 
 
 def migrate_history(source: Store, target: Store) -> dict[str, int]:

@@ -43,6 +43,7 @@ from setupfix.model import PartMeasurement, ProcessModel, load_model, match_part
 from setupfix.model.effects import EffectsSection
 from setupfix.pipeline.checks import check_parts
 from setupfix.pipeline.cycles import ReadOptions
+from setupfix.pipeline.stores import StoreRef
 
 __all__ = ["SeriesInput", "TempLog", "load_series", "parse_times", "hours_since", "temperature_arrays",
            "store_temperatures", "report_coordinates", "process_channels", "channel_span"]
@@ -136,7 +137,7 @@ def hours_since(times: pd.DatetimeIndex, origin: pd.Timestamp) -> np.ndarray:
 
 def load_series(model: ProcessModel | str | Path, reports: Sequence[str | Path] = (), *,
                 corrections: str | None = None, temperatures: str | None = None,
-                db: str | Path | None = None, thermal: str | Path | None = None,
+                db: str | Path | StoreRef | None = None, thermal: str | Path | None = None,
                 read: ReadOptions | None = None, process: str | None = None) -> SeriesInput:
     """Read a series of reports (files, folders, or every report of a history store) with its logs.
 
@@ -162,24 +163,21 @@ def load_series(model: ProcessModel | str | Path, reports: Sequence[str | Path] 
     parts: list[PartMeasurement] = []
     tables: list[pd.DataFrame] = []
     log = temps = None
-    where = str(db) if db is not None else ""
+    where = StoreRef.of(db).location if db is not None else ""
     if db is not None:
-        from setupfix.store import open_store, report_tables, stored_corrections
+        from setupfix.store import report_tables, stored_corrections
 
-        if not Path(db).is_file():
-            raise ParseError("no such history store", location=SourceLocation(str(db)),
-                             hint="create it with 'setupfix history import'")
-        with open_store(db) as store:
+        with StoreRef.of(db).for_model(model).open() as store:
             for rec, table in report_tables(store):
                 table = table[~table["reference"]]
-                parts += match_parts(model, table, source=f"{db}#{rec.name}")
+                parts += match_parts(model, table, source=f"{where}#{rec.name}")
                 tables.append(table)
             if corrections is None:
                 log = stored_corrections(store, model)
             if temperatures is None:
                 stored_t = store.temperatures()
                 if len(stored_t.columns) > 1 and not stored_t.empty:
-                    temps = store_temperatures(stored_t, f"{db}#temperatures")
+                    temps = store_temperatures(stored_t, f"{where}#temperatures")
     if reports:
         inputs = parsers.expand_inputs(reports)
         notes += inputs.notes()

@@ -169,11 +169,15 @@ def test_a_store_locked_beyond_the_busy_timeout_is_one_line_naming_it(tmp_path, 
         assert holder.stdout.readline().strip() == "held"  # type: ignore[union-attr]
         monkeypatch.setattr(sqlite_store, "BUSY_TIMEOUT_S", 0.5)
         if command == "correct":
+            # correct --store records its recommendation (the audit trail): it refuses in one line and writes no
+            # offsets when the store cannot take the record
             out = tmp_path / "c.csv"
             argv = [a.format(db=db, out=out, dir="", ewma=ewma_model(tmp_path)) for a in COMMANDS["correct"]]
-            assert main(argv) == 0 and out.exists()  # readers are not blocked by a writer (WAL)
-            return
-        line = run(command, db, tmp_path, capsys)
+            assert main(argv) == 1 and not out.exists()
+            line = capsys.readouterr().err.strip()
+            assert len(line.splitlines()) == 1 and str(db) in line
+        else:
+            line = run(command, db, tmp_path, capsys)
         assert "locked by another process" in line
     finally:
         holder.communicate("")
