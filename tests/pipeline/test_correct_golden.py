@@ -49,6 +49,15 @@ def without_forecast(doc):
     return {**doc, "rules": [r for r in rules if r["rule"] != "forecast"]}
 
 
+def without_work(doc):
+    """The JSON without ``evaluations`` (how many solver calls the exact path made: the proofs of issue 22's
+    speed work take fewer; a count of work, not a number of the recommendation), checked to be a count."""
+    if "parts" in doc:
+        return {"parts": [without_work(p) for p in doc["parts"]]}
+    assert isinstance(doc["evaluations"], int) and doc["evaluations"] >= 0  # 0: rejected before any solve
+    return {k: v for k, v in doc.items() if k != "evaluations"}
+
+
 @pytest.mark.parametrize("name", NAMES)
 def test_json_text_and_offsets_equal_the_goldens(name, cases):
     tmp, table = cases
@@ -63,7 +72,7 @@ def test_json_text_and_offsets_equal_the_goldens(name, cases):
     assert code == want["exit"], err
     if name.startswith("effects"):
         got = without_forecast(got)
-    assert got == want["json"]
+    assert without_work(got) == without_work(want["json"])
     assert list(got) == list(want["json"])  # key order too: the contract's text is byte-identical
 
     target = tmp / f"{name}.o.csv"
