@@ -12,7 +12,7 @@ OPTIMIZERS: tuple[str, ...] = ("coa", "cripso", "cs", "exact", "ga", "pso")
 #: setupfix.pipeline.controllers.CONTROLLERS
 CONTROLLERS: tuple[str, ...] = ("csv", "fanuc", "haas", "heidenhain", "siemens")
 #: setupfix.pipeline.history.EXPORTS
-HISTORY_EXPORTS: tuple[str, ...] = ("measurements", "corrections", "temperatures", "recommendations")
+HISTORY_EXPORTS: tuple[str, ...] = ("measurements", "corrections", "temperatures", "recommendations", "dfq")
 #: setupfix.thermal.registry.methods()
 THERMAL_METHODS: tuple[str, ...] = ("mra", "grey-ls", "grey-cs", "grey-pso", "kalman")
 #: setupfix.pipeline.simulate.START

@@ -54,8 +54,10 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
                              description="measurements, corrections, temperatures: the machine's rows; "
                                          "recommendations: the audit trail, one row per register component "
                                          "(every machine unless --machine is given)")
-    exp.add_argument("table", choices=HISTORY_EXPORTS, help="which table")
-    exp.add_argument("--out", required=True, metavar="CSV", help="output CSV ('-': stdout)")
+    exp.add_argument("table", choices=HISTORY_EXPORTS,
+                     help="which table (recommendations: the audit trail; dfq: the measurements as an AQDEF/Q-DAS "
+                          "DFQ file for SPC tools)")
+    exp.add_argument("--out", required=True, metavar="FILE", help="output file: CSV, or DFQ for dfq ('-': stdout)")
     mig = actions.add_parser("migrate", parents=[common], help="copy a SQLite store into an empty server store",
                              description="Copy every row of every machine of --from into the empty store --db "
                                          "(one transaction; the row counts are checked).")
@@ -105,8 +107,10 @@ def run(args: argparse.Namespace) -> int:
             else:
                 sys.stdout.write(_format(summary) + "\n")
         else:
-            n = export_history(store, args.table, args.out,
-                               every_machine=args.machine is None and args.table == "recommendations")
+            n, notes = export_history(store, args.table, args.out,
+                                      every_machine=args.machine is None and args.table == "recommendations")
+            for note in notes:
+                print(f"warning: {note}", file=sys.stderr)
             if args.out != "-":
                 print(f"{n} {args.table} row(s) → {args.out}", file=sys.stderr)
     return 0

@@ -26,6 +26,7 @@ from parsers.temperature import read_temperature_log
 from parsers.timestamps import iso_text
 from setupfix.errors import Note, ParameterError, ParseError, SourceLocation, StoreError, UnknownFormatError
 from setupfix.model import CANONICAL_COLUMNS, ProcessModel
+from setupfix.pipeline.dfq import export_dfq
 from setupfix.pipeline.export import Exported
 from setupfix.pipeline.present import cycle_json
 from setupfix.pipeline.requests import CycleCorrection, ReadOptions
@@ -39,7 +40,7 @@ __all__ = ["DEFAULT_DB", "store_location", "import_history", "ImportRequest", "I
            "EXPORTS", "EVENTS"]
 
 #: Tables ``history export`` writes (``recommendations``: the audit trail, one row per register component).
-EXPORTS = ("measurements", "corrections", "temperatures", "recommendations")
+EXPORTS = ("measurements", "corrections", "temperatures", "recommendations", "dfq")
 
 
 def _temperature_frame(path: str | os.PathLike[str]) -> pd.DataFrame:
@@ -171,11 +172,14 @@ def history_summary(store: Store, *, every_machine: bool = True) -> dict[str, ob
             "recommendations": len(store.recommendations())}
 
 
-def export_history(store: Store, table: str, target: str | os.PathLike[str], *, every_machine: bool = False) -> int:
-    """Write one stored table of the handle's machine as its canonical CSV (``-``: standard output); the rows.
+def export_history(store: Store, table: str, target: str | os.PathLike[str], *,
+                   every_machine: bool = False) -> tuple[int, tuple[Note, ...]]:
+    """Write one stored table of the handle's machine as its canonical CSV (``-``: standard output); the rows
+    written and the notes (what the target format cannot carry).
 
     ``recommendations`` is the audit trail (:data:`setupfix.store.AUDIT_COLUMNS`, one row per register
-    component), of every machine with ``every_machine``.  The store is checked whole first
+    component), of every machine with ``every_machine``; ``dfq`` the measurements as an AQDEF (Q-DAS) file
+    for the SPC tools a shop runs (:func:`setupfix.pipeline.dfq.export_dfq`).  The store is checked whole first
     (:meth:`~setupfix.store.Store.verify`): a damaged one is refused, never exported in part.
     """
     store.verify()
@@ -191,9 +195,11 @@ def export_history(store: Store, table: str, target: str | os.PathLike[str], *, 
     elif table == "recommendations":
         frame = store.audit(every_machine=every_machine)
         write_table_csv(frame, target)
+    elif table == "dfq":
+        return export_dfq(store, target)
     else:
         raise ParameterError(f"history export: table must be one of {', '.join(EXPORTS)}, got {table!r}")
-    return len(frame)
+    return len(frame), ()
 
 
 def record_recommendations(store: Store, results: Sequence[CycleCorrection], *, model: str | os.PathLike[str],
