@@ -1,0 +1,205 @@
+"""A position zone is ONE dimension for leximin and the triage (issue 23): brute force on small zone problems.
+
+Each generated problem has a model with WKS X/Y/Z and a tool length on a ±3-step grid (2,401 grid
+points), lengths along an axis and two circular position zones.  The brute force looks at every grid
+point of the problem's own rows (the polygon the optimiser is given) with each zone's margin the
+least of its facets' and each zone counted once: most dimensions in tolerance without harm (a zone
+measured inside its circle keeps every facet at least min(0, its margin before)), then the leximin
+of the kept margins (ties within the solver's quantum), then the least norm, then the smallest k.
+"""
+
+from __future__ import annotations
+
+import itertools
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from setupfix.model import match_parts, model_from_dict
+from setupfix.optimize import CorrectionProblem, _triage, _triage_model, get_optimizer, harmed_columns
+from setupfix.optimize._dimensions import dimension_floor, dimension_of_rows, model_dimensions
+
+RES = 0.001
+EPS = 5e-7  # half the input quantum (1/1000 step) in mm: margins closer than this are ties
+
+
+def zone_problem(seed: int, spread: float = 0.006) -> CorrectionProblem:
+    rng = np.random.default_rng(seed)
+    features = {}
+    for i in range(4):
+        w = {a: float(rng.choice([-1.0, 1.0])) for a in "xyz"}
+        features[f"F{i}"] = {"wks": {"W1": w}, "position": [float(v) for v in rng.uniform(-50, 50, 3)]}
+        if i % 2 == 0:
+            features[f"F{i}"]["tools"] = {"T1": 1.0}
+    dims: dict[str, dict] = {}
+    for i in range(3):
+        tol = float(rng.choice([0.002, 0.003, 0.004]))
+        dims[f"L{i}"] = {"name": f"L{i}", "axis": "XYZ"[int(rng.integers(3))], "features": {f"F{i}": 1},
+                         "nominal": 0, "lower": -tol, "upper": tol}
+    for i, plane in enumerate((["X", "Y"], ["X", "Z"])):
+        dims[f"P{i}"] = {"name": f"P{i}", "kind": "position", "components": [f"P{i} {plane[0]}", f"P{i} {plane[1]}"],
+                         "axes": plane, "diameter": float(rng.choice([0.004, 0.006, 0.008])),
+                         "features": {f"F{i + 2}": 1}}
+    model = model_from_dict({
+        "process": {"name": "zones", "axes": ["X", "Y", "Z"], "resolution": RES, "limit": 3 * RES},
+        "wks": {"W1": {"register": "G54"}}, "tools": {"T1": {"register": "H1"}},
+        "features": features, "dimensions": dims})
+    values = {}
+    for d in dims.values():
+        names = d.get("components", [d["name"]])
+        values |= {n: float(v) for n, v in zip(names, rng.uniform(-spread, spread, len(names)), strict=True)}
+    table = pd.DataFrame({"characteristic": list(values), "deviation": list(values.values()), "unit": "mm"})
+    (part,) = match_parts(model, table)
+    problem = CorrectionProblem.from_part(model, part)
+    assert problem.circles is not None and len(problem.circles.ids) == 2
+    return problem
+
+
+def _grid(problem: CorrectionProblem) -> np.ndarray:
+    axes = [np.arange(lo, hi + 1) for lo, hi in zip(problem.kmin, problem.kmax, strict=True)]
+    return np.array(list(itertools.product(*axes)), dtype=float)
+
+
+def _dimension_margins(problem: CorrectionProblem, x: np.ndarray) -> tuple[tuple[str, ...], np.ndarray]:
+    """(ids, margins of shape (p, n_dims)): a zone's the least of its facet columns', by the rows' names."""
+    rows = problem.rows or problem.dimension_ids
+    ids = tuple(dict.fromkeys(rows))
+    m = problem.margins(x)
+    return ids, np.stack([m[:, [r == d for r in rows]].min(axis=1) for d in ids], axis=1)
+
+
+def _floors(problem: CorrectionProblem, ids: tuple[str, ...]) -> np.ndarray:
+    """No harm by hand: a length inside its limits keeps margin ≥ 0; a zone inside its circle keeps its
+    polygon margin ≥ min(0, polygon margin before); the others none (−inf)."""
+    assert problem.circles is not None
+    _, m0 = _dimension_margins(problem, np.zeros((1, problem.n_registers)))
+    circle0 = dict(zip(problem.circles.ids, problem.circles.margins(np.zeros(problem.n_registers)), strict=True))
+    out = np.full(len(ids), -np.inf)
+    for q, d in enumerate(ids):
+        inside = circle0[d] >= 0 if d in circle0 else m0[0, q] >= 0
+        if inside:
+            out[q] = min(0.0, m0[0, q])
+    return out
+
+
+def _leximin_filter(cands: np.ndarray, vectors: list[np.ndarray]) -> np.ndarray:
+    """Candidates whose sorted vectors are leximin-best, position by position, ties within EPS."""
+    length = min(v.size for v in vectors) if vectors else 0
+    keep = np.arange(len(vectors))
+    for i in range(length):
+        vals = np.array([vectors[j][i] for j in keep])
+        keep = keep[vals >= vals.max() - EPS]
+    return cands[keep]
+
+
+def brute(problem: CorrectionProblem) -> dict[str, object]:
+    """The lexicographic optimum over the whole grid (see the module docstring)."""
+    k = _grid(problem)
+    x = k * problem.resolution
+    ids, m = _dimension_margins(problem, x)
+    floor = _floors(problem, ids)
+    held = np.isfinite(floor)
+    ok = np.all(m[:, held] >= floor[held] - 1e-12, axis=1)
+    kept = held[None, :] | (m >= -1e-12)
+    count = np.where(ok, kept.sum(axis=1), -1)
+    cands = np.flatnonzero(count == count.max())
+    vectors = [np.sort(m[i][kept[i]]) for i in cands]
+    cands = _leximin_filter(cands, vectors)
+    norms = np.sum(problem.cost * x[cands] ** 2, axis=1)
+    least = cands[norms <= norms.min() + 1e-15]
+    best = min(map(tuple, k[least]))
+    i = int(np.flatnonzero(np.all(k == best, axis=1))[0])
+    return {"count": int(count.max()), "sorted": np.sort(m[i][kept[i]]), "norm": float(np.sqrt(norms.min())),
+            "k": best, "gone": tuple(d for d, kp in zip(ids, kept[i], strict=True) if not kp), "ids": ids}
+
+
+def _check(problem: CorrectionProblem, result, want: dict[str, object]) -> None:
+    ids, m = _dimension_margins(problem, result.x[None, :])
+    floor = _floors(problem, ids)
+    held = np.isfinite(floor)
+    kept = held | (m[0] >= -1e-12)
+    assert result.status == "optimal"
+    assert np.all(m[0, held] >= floor[held] - 1e-12)  # no harm, a zone as a whole
+    assert int(kept.sum()) == want["count"]  # each zone counted once
+    assert np.sort(m[0][kept]) == pytest.approx(want["sorted"], abs=2 * EPS)  # the whole leximin vector
+    assert np.sqrt(np.sum(problem.cost * result.x**2)) == pytest.approx(want["norm"], abs=1e-12)
+    assert tuple(np.rint(result.x / problem.resolution)) == want["k"]
+    # given up: whole dimensions, every facet of a zone given up, named by the problem's columns
+    gone = tuple(d for d, kp in zip(ids, kept, strict=True) if not kp)
+    assert gone == want["gone"]
+    rows = problem.rows or problem.dimension_ids
+    assert set(result.given_up) == {c for c, r in zip(problem.dimension_ids, rows, strict=True) if r in gone}
+    if gone:
+        assert set(result.extra["given_up"]) == set(gone)
+        assert result.extra["triage"]["kept"] == len(ids) - len(gone)
+        assert result.margin_after == pytest.approx(want["sorted"][0], abs=2 * EPS)  # δ over the kept ones
+
+
+@pytest.mark.parametrize("seed", range(16))
+def test_leximin_counts_a_zone_once(seed):
+    problem = zone_problem(seed, spread=0.004)
+    want = brute(problem)
+    result = get_optimizer("exact").solve(problem)
+    _check(problem, result, want)
+    if not want["gone"]:  # the levels are per dimension: as many as the dimensions (a zone once)
+        assert sum(c for _, c in result.extra["leximin"]) == len(want["ids"])
+
+
+@pytest.fixture(params=["listed", "forced", "milp"])
+def path(request, monkeypatch):
+    """Every way of the triage (as in test_exact_triage): listing, the forced kept set, the MILPs."""
+    if request.param in ("forced", "milp"):
+        monkeypatch.setattr(_triage_model, "LIST_POINTS", 0)
+    if request.param == "milp":
+        monkeypatch.setattr(_triage, "FORCED", False)
+    return request.param
+
+
+@pytest.mark.parametrize("seed", range(12))
+def test_triage_keeps_or_gives_up_whole_zones(seed, path):
+    problem = zone_problem(100 + seed, spread=0.009)
+    want = brute(problem)
+    result = get_optimizer("exact", time_limit=30.0).solve(problem)
+    _check(problem, result, want)
+
+
+def test_generated_triage_cases_give_up_zones():
+    """The generator reaches what the tests are for: triage cases, and zones given up and kept among them."""
+    gone = [brute(zone_problem(100 + s, spread=0.009))["gone"] for s in range(12)]
+    assert sum(bool(g) for g in gone) >= 6
+    assert any(d.startswith("P") for g in gone for d in g)
+    assert any(g and not all(d.startswith("P") for d in g) for g in gone)
+
+
+def test_one_axis_problems_keep_one_dimension_per_column():
+    from .test_exact import random_problem
+
+    problem = random_problem(3, n=3, m=7, limit_steps=2, spread=0.3)
+    ids, column_dim = model_dimensions(problem)
+    assert ids == problem.dimension_ids and column_dim.tolist() == list(range(7))
+    upper, lower = np.isfinite(problem.upper), np.isfinite(problem.lower)
+    assert dimension_of_rows(problem).tolist() == [*np.flatnonzero(upper), *np.flatnonzero(lower)]
+    assert np.array_equal(dimension_floor(problem), problem.held_floor)
+    x = problem.snap(np.full(3, 0.002))
+    inside = (problem.deviation >= problem.lower) & (problem.deviation <= problem.upper)
+    assert np.array_equal(harmed_columns(problem, x), inside & (problem.margins(x) < -1e-12))
+
+
+def test_zone_harm_is_judged_on_the_zone():
+    """A zone measured outside its circle cannot be harmed, whatever its facets do; one inside can."""
+    problem = zone_problem(7)
+    assert problem.circles is not None and problem.rows is not None
+    inside = problem.circles.margins(np.zeros(problem.n_registers)) >= 0
+    for x in _grid(problem)[::37] * RES:
+        harmed = harmed_columns(problem, x)
+        circle_after = problem.circles.margins(x)
+        for z, (d, was_in) in enumerate(zip(problem.circles.ids, inside, strict=True)):
+            cols = np.array([r == d for r in problem.rows])
+            facets = problem.margins(x)[cols]
+            if not was_in:
+                assert not harmed[cols].any()
+            elif facets.min() < min(0.0, problem.margins(np.zeros_like(x))[cols].min()) - 1e-12:
+                assert harmed[cols].any()
+            else:
+                assert not harmed[cols].any() and circle_after[z] >= facets.min() - 1e-12
