@@ -270,9 +270,10 @@ class LevelModel:
             if t_best >= t_lp - TOL:
                 return LevelValue(t_best, k_best, t_lp, y, None, (), calls)
         # ascent: a grid point with every active margin ≥ t(best) + ε on the rounded rows (an LP, a feasibility
-        # MILP), until none is left (proved) — the rounded LP point is usually at or next to the level
+        # MILP), until none is left (proved) — the rounded LP point is usually at or next to the level.  Rows
+        # not all integer (a zone's facets) have no LP test: each step would be a MILP, the level MILP is one
         f = self._floors(v)
-        for _ in range(s.level_steps):
+        for _ in range(s.level_steps if rows.all_integer else 0):
             if time.perf_counter() >= stage_end:
                 return LevelValue(t_best, k_best, t_lp, y, "time limit", tuple(path), calls)
             found = self.point_above(np.where(np.isnan(f), t_best + eps, f), stage_end)
