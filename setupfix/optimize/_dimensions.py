@@ -15,7 +15,7 @@ import numpy.typing as npt
 
 from setupfix.optimize._problem import CorrectionProblem
 
-__all__ = ["dimension_floor", "dimension_of_rows", "harmed_columns", "model_dimensions"]
+__all__ = ["dimension_floor", "dimension_margins", "dimension_of_rows", "harmed_columns", "model_dimensions"]
 
 Array = npt.NDArray[np.float64]
 
@@ -36,6 +36,23 @@ def model_dimensions(problem: CorrectionProblem) -> tuple[tuple[str, ...], npt.N
     ids = tuple(dict.fromkeys(problem.rows))
     where = {d: i for i, d in enumerate(ids)}
     return ids, np.array([where[r] for r in problem.rows], dtype=np.intp)
+
+
+def dimension_margins(problem: CorrectionProblem, x: Array) -> Array:
+    """Margin of each model dimension after corrections x [unit], shape (..., n_dims).
+
+    The least of its columns' margins (:meth:`~setupfix.optimize._problem.CorrectionProblem.margins`):
+    for a zone its polygon's, what the optimisers hold (within
+    :attr:`~setupfix.optimize._problem.CorrectionProblem.polygon` below the circle's).
+
+    x : ndarray of shape (..., n_registers) [problem units]
+    """
+    ids, column_dim = model_dimensions(problem)
+    m = problem.margins(np.asarray(x, dtype=float))
+    out = np.full((*m.shape[:-1], len(ids)), np.inf)
+    for q in range(len(ids)):
+        out[..., q] = m[..., column_dim == q].min(axis=-1)
+    return out
 
 
 def dimension_of_rows(problem: CorrectionProblem) -> npt.NDArray[np.intp]:
@@ -90,3 +107,4 @@ def harmed_columns(problem: CorrectionProblem, x: Array) -> npt.NDArray[np.bool_
     zone = np.isin(np.array(problem.rows, dtype=object), np.array(problem.circles.ids, dtype=object))
     out[zone] = (np.isfinite(floor) & (problem.margins(np.asarray(x, dtype=float)) < floor - 1e-12))[zone]
     return out
+

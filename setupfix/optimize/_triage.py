@@ -47,7 +47,7 @@ from setupfix.optimize._chords import chord_rows, lazy_chords, smallest_tie
 from setupfix.optimize._grid_least_norm import TIE_MAX_REGISTERS
 from setupfix.optimize._highs import INF, LinearModel, Solve
 from setupfix.optimize._least_norm import lower_bound_ratio
-from setupfix.optimize._dimensions import dimension_floor, dimension_of_rows, model_dimensions
+from setupfix.optimize._dimensions import dimension_floor, dimension_margins, dimension_of_rows, model_dimensions
 from setupfix.optimize._problem import CorrectionProblem, OptimizeResult
 from setupfix.optimize._session import Session
 from setupfix.optimize._triage_forced import Forced, forced_triage
@@ -333,8 +333,7 @@ def triaged_result(problem: CorrectionProblem, session: Session, k_start: Array,
         result.notes = tuple(notes)
         return result
     x[problem.free] = out.k * h
-    margins = np.full(len(ids), np.inf)  # per model dimension: a zone's is its polygon's, the least of its facets'
-    np.minimum.at(margins, column_dim, problem.margins(x))
+    margins = dimension_margins(problem, x)  # a zone's: its polygon's, the least of its facets'
     held = np.isfinite(floor)
     gone = ~held & (margins < -1e-12)
     # every column of a dimension given up (all of a zone's facets): none of them counts in δ or the bound

@@ -40,7 +40,7 @@ def lexicographic_maxmin(a: np.ndarray, b: np.ndarray, row_dim: np.ndarray, n_di
     for p in range(1, stages + 1):
         width = n + (len(blocks) + 1) * (1 + n_dims)
         rows, lo, hi = [], [], []
-        for i, (pp, _) in enumerate([*blocks, (p, np.nan)]):
+        for i in range(len(blocks) + 1):
             off = n + i * (1 + n_dims)
             # s_q − r ≥ −margin_j ⇔ a_j k − r + s_q ≥ −b_j … written as  −a_j k + r − s_q ≤ b_j
             left = csr_array((r, off - n))
