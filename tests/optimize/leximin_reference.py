@@ -17,13 +17,14 @@ from scipy.sparse import csr_array, hstack, vstack
 
 
 def lexicographic_maxmin(a: np.ndarray, b: np.ndarray, row_dim: np.ndarray, n_dims: int, kmin: np.ndarray,
-                         kmax: np.ndarray, stages: int | None = None, tol: float = 1e-7,
+                         kmax: np.ndarray, stages: int | None = None, tol: float = 1e-6,
                          time_limit: float = 120.0) -> tuple[np.ndarray, np.ndarray]:
     """Lexicographically maximal sorted margins over integer k in [kmin, kmax].
 
     Parameters
     ----------
     a, b : margin_j(k) = b_j − a_j · k, shapes (r, n) and (r,)
+        (one variable u_q ≤ each margin of q stands for M_q: every S_p grows with each M_q, so this is exact)
     row_dim : dimension of each row, shape (r,)
     stages : how many smallest positions to fix (default all n_dims)
 
@@ -33,38 +34,41 @@ def lexicographic_maxmin(a: np.ndarray, b: np.ndarray, row_dim: np.ndarray, n_di
     """
     r, n = a.shape
     stages = n_dims if stages is None else stages
+    # columns: k (n, integer) | u (n_dims): u_q ≤ every margin of q | per stage i: r_i, s_i (n_dims ≥ 0)
     one_hot = csr_array((np.ones(r), (np.arange(r), row_dim)), shape=(r, n_dims))
+    eye = csr_array(np.eye(n_dims))
     blocks: list[tuple[int, float]] = []  # (p, S_p*) fixed so far
     k_best = np.zeros(n)
     sums = []
     for p in range(1, stages + 1):
-        width = n + (len(blocks) + 1) * (1 + n_dims)
-        rows, lo, hi = [], [], []
-        for i in range(len(blocks) + 1):
-            off = n + i * (1 + n_dims)
-            # s_q − r ≥ −margin_j ⇔ a_j k − r + s_q ≥ −b_j … written as  −a_j k + r − s_q ≤ b_j
-            left = csr_array((r, off - n))
-            right = csr_array((r, width - off - 1 - n_dims))
-            rows.append(hstack([csr_array(-a), left, csr_array(np.ones((r, 1))), -one_hot, right]))
-            lo.append(np.full(r, -np.inf))
-            hi.append(b)
-        for i, (pp, s_star) in enumerate(blocks):
-            off = n + i * (1 + n_dims)
+        nb = len(blocks) + 1
+        width = n + n_dims + nb * (1 + n_dims)
+        rows = [hstack([csr_array(a), one_hot, csr_array((r, width - n - n_dims))])]  # a_j k + u_q ≤ b_j
+        lo, hi = [np.full(r, -np.inf)], [b]
+        for i in range(nb):  # r_i − s_iq − u_q ≤ 0
+            off = n + n_dims + i * (1 + n_dims)
+            rows.append(hstack([csr_array((n_dims, n)), -eye, csr_array((n_dims, off - n - n_dims)),
+                                csr_array(np.ones((n_dims, 1))), -eye,
+                                csr_array((n_dims, width - off - 1 - n_dims))]))
+            lo.append(np.full(n_dims, -np.inf))
+            hi.append(np.zeros(n_dims))
+        for i, (pp, s_star) in enumerate(blocks):  # p_i r_i − Σ s_i ≥ S_i* − tol
+            off = n + n_dims + i * (1 + n_dims)
             row = np.zeros(width)
             row[off] = pp
             row[off + 1:off + 1 + n_dims] = -1.0
             rows.append(csr_array(row[None, :]))
             lo.append(np.array([s_star - tol]))
             hi.append(np.array([np.inf]))
-        off = n + len(blocks) * (1 + n_dims)
+        off = n + n_dims + len(blocks) * (1 + n_dims)
         cost = np.zeros(width)
         cost[off] = -p
         cost[off + 1:off + 1 + n_dims] = 1.0
-        lower = np.full(width, 0.0)
-        upper = np.full(width, np.inf)
+        lower, upper = np.zeros(width), np.full(width, np.inf)
         lower[:n], upper[:n] = kmin, kmax
-        for i in range(len(blocks) + 1):
-            lower[n + i * (1 + n_dims)] = -np.inf  # r is free
+        lower[n:n + n_dims] = -np.inf
+        for i in range(nb):
+            lower[n + n_dims + i * (1 + n_dims)] = -np.inf  # r_i is free
         integrality = np.zeros(width)
         integrality[:n] = 1
         res = milp(cost, constraints=LinearConstraint(vstack(rows).tocsr(), np.concatenate(lo), np.concatenate(hi)),
