@@ -19,6 +19,10 @@ levels of :mod:`~setupfix.optimize._triage_model`, one lexicographic optimum in 
    of its chords (exact on integers), added lazily (:func:`~setupfix.optimize._chords.lazy_chords`), its
    ties then decided coordinate by coordinate (:func:`~setupfix.optimize._chords.smallest_tie`).
 
+A dimension is a model dimension (:mod:`~setupfix.optimize._dimensions`): a circular position zone's
+polygon facets are its rows, so it is kept (every facet's margin ≥ 0, or ≥ its no-harm floor when held)
+or given up (none of its facets constrains) as a whole, and counts once in N* and in the levels.
+
 No point keeps more than N* dimensions, so every point meeting Σ z ≥ N* − held keeps exactly the
 dimensions with z = 1 and the held ones; the dimensions given up are read from the final point.
 Each MILP is solved to a zero gap by HiGHS; every point it returns is checked exactly
@@ -297,8 +301,9 @@ def triaged_result(problem: CorrectionProblem, session: Session, k_start: Array,
                    notes: list[Note], calls: int, bound: float, name: str) -> OptimizeResult:
     """The triage stage: no correction brings every dimension into tolerance, so :func:`triage` decides.
 
-    Everything the result states is read from the final answer: the dimensions given up (not held
-    and predicted out of tolerance, ``extra["given_up"]`` with their margins), δ, the bonus and the
+    Everything the result states is read from the final answer: the dimensions given up (not held and
+    predicted out of tolerance; ``given_up`` names every column of them, all of a zone's facets;
+    ``extra["given_up"]`` each once with its margin, a zone's the circle's), δ, the bonus and the
     binding dimensions over the dimensions kept, the LP bound of those (``bound``; the whole problem's
     LP bound ``bound`` passed in stays in ``extra["lp_bound_all"]``), status and seconds of this call.
     """
