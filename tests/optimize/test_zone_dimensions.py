@@ -284,3 +284,32 @@ def test_fixture_leximin_against_an_independent_solver_on_the_circles(tmp_path, 
     apart = np.flatnonzero(np.abs(ours - ref) > bound)
     assert apart.size == 0 or ours[apart[0]] > ref[apart[0]], (ours, ref)
     assert ours[0] >= ref[0] - bound  # the paper's δ (leximin's first level) on the circles
+
+
+def test_zone_inside_its_circle_but_outside_its_polygon_is_held():
+    """δ = (0.0499, 0) in a zone of radius 0.05: inside the circle (margin +0.1 µm), outside the inscribed
+    polygon (its facet at angle 0 is at R·cos(π/k)).  It is held (no harm) at its polygon margin before, not
+    given up; a length A out of reach forces the triage."""
+    model = model_from_dict({
+        "process": {"name": "edge", "axes": ["X", "Y"], "resolution": RES, "limit": 3 * RES},
+        "wks": {"W1": {"register": "G54"}},
+        "features": {"F1": {"wks": {"W1": 1}}, "F2": {"wks": {"W1": 1}}},
+        "dimensions": {
+            "A": {"name": "A", "axis": "X", "features": {"F1": 1}, "nominal": 0, "lower": -0.01, "upper": 0.01},
+            "H": {"name": "H", "kind": "position", "components": ["H X", "H Y"], "axes": ["X", "Y"],
+                  "diameter": 0.1, "features": {"F2": 1}},
+        },
+    })
+    table = pd.DataFrame({"characteristic": ["A", "H X", "H Y"], "deviation": [0.02, 0.0499, 0.0], "unit": "mm"})
+    (part,) = match_parts(model, table)
+    problem = CorrectionProblem.from_part(model, part)
+    assert problem.circles is not None and problem.circles.margins(np.zeros(2))[0] == pytest.approx(1e-4)
+    floor = dimension_floor(problem)
+    polygon_before = problem.margins(np.zeros(2))[1:].min()
+    assert polygon_before < 0 and floor[1] == pytest.approx(polygon_before)  # held at its polygon margin
+    assert floor[0] == -np.inf  # A is out: not held
+    want = brute(problem)
+    result = get_optimizer("exact").solve(problem)
+    _check(problem, result, want)
+    assert want["gone"] == ("A",)
+    assert not harmed_columns(problem, result.x).any()

@@ -203,6 +203,27 @@ def test_triage_gives_a_zone_up_whole(tmp_path):
     assert "1 dimension(s) given up (H)" in raw.message
 
 
+def test_triage_keeps_a_zone_whole_and_applies(tmp_path):
+    """With the zone's diameter 0.06 (margin up to 0.03 kept, against A's 0.02) the leximin of the kept
+    margins keeps the zone: A is given up, the correction W1.X = +0.05 is applied, the zone in its circle."""
+    from setupfix.model import model_from_dict
+
+    doc = {**ZONE_OUT, "dimensions": {**ZONE_OUT["dimensions"],
+                                      "H": {**ZONE_OUT["dimensions"]["H"], "diameter": 0.06}}}
+    model = model_from_dict(doc)
+    path = tmp_path / "r.csv"
+    path.write_text("characteristic,nominal,actual,deviation,part\nA,0,0.05,0.05,p\nH X,0,-0.05,-0.05,p\n"
+                    "H Y,0,0,0.0,p\n", encoding="utf-8")
+    (cycle,) = correct_report(CorrectRequest(model, solve=SolveOptions()), path).cycles
+    assert cycle.recommendation.result.status == "optimal"
+    assert cycle.verdict == "apply" and cycle.given_up == ("A",)
+    assert cycle.corrections["W1.X"] == pytest.approx(0.05) and cycle.corrections["W1.Y"] == 0
+    rows = {row["id"]: row for row in cycle.dimension_rows()}
+    assert rows["H"]["margin"] == pytest.approx(0.03)  # the circle's, centred
+    assert cycle.margin_after == pytest.approx(0.03)  # δ over the kept dimensions: the zone
+    assert all("#" not in d for r in cycle.rules for d in r.dimensions)
+
+
 @pytest.mark.xfail(strict=True, reason="setupfix/recommend.py checks no harm column by column: a zone measured "
                    "out of its circle has facets measured inside that the correction moves out, and the "
                    "recommendation holds (no_harm); setupfix.optimize.harmed_columns is the check per dimension")
