@@ -5,8 +5,9 @@ points), lengths along an axis and two circular position zones.  The brute force
 point of the problem's own rows (the polygon the optimiser is given) with each zone's margin the
 least of its facets' and each zone counted once: most dimensions in tolerance without harm (a zone
 measured inside its circle keeps every facet at least min(0, its margin before)), then the leximin
-of the kept margins, then the least norm, then the smallest k — on the rows the optimiser solves (deviations
-rounded to its input quantum, 1/1000 step, which decides near-ties below it).
+of the kept margins level by level (a margin within half the input quantum above a level counts at it), then
+the least norm, then the smallest k — on the rows the optimiser solves (deviations rounded to its input
+quantum, 1/1000 step, which decides near-ties below it).
 """
 
 from __future__ import annotations
@@ -26,6 +27,7 @@ from setupfix.optimize._lp_bound import margin_rows
 from .leximin_reference import lexicographic_maxmin, prefix_sums
 
 RES = 0.001
+TIE = 5e-4  # steps: half the input quantum; a margin less than this above a level counts at the level
 
 
 def zone_problem(seed: int, spread: float = 0.006) -> CorrectionProblem:
@@ -91,8 +93,9 @@ def brute(problem: CorrectionProblem) -> dict[str, object]:
     """The lexicographic optimum over the whole grid (module docstring), in grid steps on the rows the
     optimiser solves: deviations rounded to the input quantum (``margin_rows``; the rounding is the
     optimiser's documented input, and decides near-ties below it), held rows ≥ min(floor, their margin
-    at k = 0), comparisons exact to 1e-6 steps.  Returns the count, the sorted kept margins [steps], the
-    norm, the smallest optimal k and the dimensions given up."""
+    at k = 0), levels as the optimiser defines them: each the best next-smallest kept margin (exact to 1e-6
+    steps), then the fewest kept margins less than TIE above it.  Returns the count, the sorted kept margins
+    [steps], the norm, the smallest optimal k and the dimensions given up."""
     g_rows, g = margin_rows(problem)
     row_dim = dimension_of_rows(problem)
     ids = tuple(dict.fromkeys(problem.rows or problem.dimension_ids))
@@ -107,10 +110,15 @@ def brute(problem: CorrectionProblem) -> dict[str, object]:
     kept = held[None, :] | (m >= -1e-6)
     count = np.where(ok, kept.sum(axis=1), -1)
     cands = np.flatnonzero(count == count.max())
-    vectors = [np.sort(m[i][kept[i]]) for i in cands]
-    keys = [tuple(np.round(v, 6)) for v in vectors]
-    top = max(keys)
-    cands = np.array([i for i, key in zip(cands, keys, strict=True) if key == top])
+    sorted_kept = np.sort(np.where(kept[cands], m[cands], np.inf), axis=1)
+    alive, j = np.ones(cands.size, bool), 0
+    while j < sorted_kept.shape[1] and np.isfinite(sorted_kept[alive, j]).any():
+        value = sorted_kept[alive, j].max()  # the next level: the best j-th smallest kept margin …
+        alive &= sorted_kept[:, j] >= value - 1e-6
+        at = np.sum(sorted_kept < value + TIE - 1e-7, axis=1)  # … then the fewest margins within TIE above it
+        alive &= at == at[alive].min()
+        j = max(int(at[alive].min()), j + 1)
+    cands = cands[alive]
     norms = np.sum(problem.cost[free] * k[cands] ** 2, axis=1)
     least = cands[norms <= norms.min() + 1e-9]
     best = min(map(tuple, k[least]))
