@@ -12,6 +12,13 @@ optimiser sets it).
 
     python bench/leximin_speed.py                     # 5 cycles + 100 random sets; 180 x 2000, 3 seeds
     python bench/leximin_speed.py --sets 20 --shop-seeds 1
+    python bench/leximin_speed.py --only-multi-axis   # the multi-axis set alone
+
+Multi-axis set (issue 23): the three cycles of ``sample_reports/two_station_xyz`` and generated
+two-station fixtures (``tests/multi_axis_fixtures.py``, seeds 1..``--fixtures``): X/Y/Z, rotation,
+radius, sizes and circular position zones (each zone one dimension, its polygon's facets its rows).
+Each is solved with the default 2 s limit and again with 120 s: "same" says the 2 s answer is the
+proved one.
 
 Writes ``bench/results/leximin_speed.txt`` (with the command).
 """
@@ -36,6 +43,7 @@ sys.path.insert(0, str(ROOT / "bench"))
 from exact_per_report import problems
 from exact_scaling import shop_problem
 
+from setupfix.model import load_model
 from setupfix.optimize import CorrectionProblem, get_optimizer
 from setupfix.optimize._lp_bound import lp_bound, margin_rows
 from setupfix.optimize._session import GridRows, Session
@@ -69,6 +77,70 @@ def timed(problem: CorrectionProblem, objective: str, limit: float) -> tuple[flo
     return time.perf_counter() - t, result.status, kind
 
 
+def multi_axis_problems(fixtures: int) -> list[tuple[str, CorrectionProblem]]:
+    """The two-station sample's cycles and generated multi-axis fixtures, as the exact optimiser gets them."""
+    import tempfile
+
+    sys.path.insert(0, str(ROOT / "tests"))
+    from multi_axis_fixtures import make_fixture, report_csv
+
+    from setupfix.pipeline.cycles import load_parts
+
+    out = []
+    sample = ROOT / "sample_reports" / "two_station_xyz"
+    model = load_model(sample / "model.toml")
+    for report in sorted(sample.glob("cycle_*.csv")):
+        out += [(f"two_station_xyz/{report.name}", CorrectionProblem.from_part(model, part))
+                for part in load_parts(model, report)]
+    with tempfile.TemporaryDirectory() as tmp:
+        for seed in range(1, fixtures + 1):
+            fx = make_fixture(seed)
+            (Path(tmp) / "model.toml").write_text(fx.text, encoding="utf-8")
+            (Path(tmp) / "report.csv").write_text(report_csv(fx), encoding="utf-8")
+            model = load_model(Path(tmp) / "model.toml")
+            out += [(f"fixture seed {seed}", CorrectionProblem.from_part(model, part))
+                    for part in load_parts(model, Path(tmp) / "report.csv")]
+    return out
+
+
+def multi_axis(fixtures: int, limit: float) -> list[str]:
+    """Time per multi-axis report (leximin, paper) as ratios to one LP solve, wall and CPU."""
+    for key in list(CPU):
+        CPU[key] = []
+    probs = multi_axis_problems(fixtures)
+    lines = ["", f"multi-axis: two_station_xyz (3 cycles) + {fixtures} generated fixtures "
+             f"(tests/multi_axis_fixtures.py), time limit {limit:g} s; zones as one dimension each"]
+    rows: dict[str, list[float]] = {"leximin": [], "paper": [], "lp": []}
+    same = 0
+    for name, problem in probs:
+        lp = lp_seconds(problem)
+        rows["lp"].append(lp)
+        cpu_lp = CPU["lp"][-1]
+        text = []
+        for objective in ("paper", "leximin"):
+            sec, st, _ = timed(problem, objective, limit)
+            rows[objective].append(sec)
+            text.append(f"{objective} {sec * 1e3:7.1f} ms wall = {sec / lp:6.1f}x LP, "
+                        f"CPU {CPU[objective][-1] * 1e3:6.1f} ms = {CPU[objective][-1] / cpu_lp:6.1f}x LP ({st})")
+        x2 = get_optimizer("exact", time_limit=limit).solve(problem).x
+        proved = get_optimizer("exact", time_limit=120.0).solve(problem)
+        ok = bool(np.array_equal(x2, proved.x)) and proved.status == "optimal"
+        same += ok
+        sides = problem.circles.sides if problem.circles is not None else ()
+        lines.append(f"  {name:30s} {problem.n_registers} registers, {len(problem.dimension_ids)} rows (zone facets "
+                     f"{'/'.join(map(str, sides))}); LP {lp * 1e3:.2f} ms wall, {cpu_lp * 1e3:.2f} ms CPU")
+        lines.append("      " + "; ".join(text) + f"; same as 120 s: {'yes' if ok else 'NO'}")
+    for objective in ("paper", "leximin"):
+        wall = np.array(rows[objective]) / np.array(rows["lp"])
+        cpu = np.array(CPU[objective]) / np.array(CPU["lp"])
+        lines.append(f"  {objective:8s} median {np.median(rows[objective]) * 1e3:7.1f} ms wall "
+                     f"({np.median(wall):.1f}x LP), "
+                     f"max {max(rows[objective]) * 1e3:7.1f} ms; CPU median {np.median(CPU[objective]) * 1e3:.1f} ms "
+                     f"({np.median(cpu):.1f}x LP), max {max(CPU[objective]) * 1e3:.1f} ms")
+    lines.append(f"  the {limit:g} s answer is the proved one (120 s) on {same} of {len(probs)}")
+    return lines
+
+
 def main(argv: list[str] | None = None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--sets", type=int, default=100)
@@ -77,6 +149,8 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("--shop", default="180x2000")
     ap.add_argument("--shop-seeds", type=int, default=3)
     ap.add_argument("--shop-limit", type=float, default=60.0)
+    ap.add_argument("--fixtures", type=int, default=6, help="generated multi-axis fixtures")
+    ap.add_argument("--only-multi-axis", action="store_true")
     args = ap.parse_args(argv)
     lines = ["Leximin centring: time per report (exact optimiser, objective leximin vs paper)",
              "command : python bench/leximin_speed.py " + " ".join(sys.argv[1:] if argv is None else argv),
@@ -86,6 +160,13 @@ def main(argv: list[str] | None = None) -> None:
              f"load    : 1-min load average {os.getloadavg()[0]:.2f} at the start"]
     with threadpool_limits(limits=1):
         get_optimizer("exact").solve(problems(1, 0)[0][1])  # warm-up: imports, first HiGHS object
+        if args.only_multi_axis:
+            lines += multi_axis(args.fixtures, args.limit)
+            lines.append(f"load    : 1-min load average {os.getloadavg()[0]:.2f} at the end")
+            text = "\n".join(lines) + "\n"
+            (RESULTS / "leximin_speed_multi_axis.txt").write_text(text, encoding="utf-8")
+            sys.stdout.write(text)
+            return
         probs = problems(args.sets, args.seed)
         rows: dict[str, list[float]] = {"leximin": [], "paper": [], "lp": []}
         status: dict[str, Counter[str]] = {"leximin": Counter(), "paper": Counter()}
@@ -140,6 +221,7 @@ def main(argv: list[str] | None = None) -> None:
         ok = proved == len(times) and float(np.median(times)) <= 5.0
         lines.append(f"  target (issue 22): {n} x {m} proved <= 5 s median: {'met' if ok else 'MISSED'} "
                      f"({proved} of {len(times)} proved within {args.shop_limit:g} s)")
+        lines += multi_axis(args.fixtures, args.limit)
     lines.append(f"load    : 1-min load average {os.getloadavg()[0]:.2f} at the end")
     text = "\n".join(lines) + "\n"
     RESULTS.mkdir(exist_ok=True)

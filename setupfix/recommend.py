@@ -19,13 +19,12 @@ import numpy.typing as npt
 
 from setupfix.explain import fit_registers, leave_one_out, one_register, targets
 from setupfix.objective import error_budget, margins
-from setupfix.optimize import CorrectionProblem, OptimizeResult
+from setupfix.optimize import CorrectionProblem, OptimizeResult, harmed_columns
 from setupfix.safety import (
     STOPPED,
     Recommendation,
     RuleEffect,
     apply_gain,
-    harmed_mask,
     in_dead_band,
     reject_mask,
     short_list,
@@ -95,7 +94,7 @@ def recommend(posed: PosedProblem, solve: Callable[[CorrectionProblem], Optimize
     problem, guarded, policy = posed.problem, posed.guarded, posed.policy
     ids = np.array(problem.register_ids, dtype=object)
     dims = np.array(problem.dimension_ids, dtype=object)
-    dev, lower, upper = problem.deviation, problem.lower, problem.upper
+    lower, upper = problem.lower, problem.upper
 
     bad = reject_mask(posed.measured, lower, upper, policy.reject_band)
     if bad.any():
@@ -121,7 +120,7 @@ def recommend(posed: PosedProblem, solve: Callable[[CorrectionProblem], Optimize
         rules.append(RuleEffect("no_harm", "not even the dimensions measured in tolerance can all be kept in it "
                                 "within the register limits: nothing changed"))
         x = np.zeros_like(x)
-    harmed = harmed_mask(dev, problem.predicted(x), lower, upper)
+    harmed = harmed_columns(problem, x)  # a position zone as a whole, never facet by facet
     if harmed.any():
         kept = tuple(dims[harmed])
         rules.append(RuleEffect("no_harm", f"the correction would move {label(kept)} (measured in tolerance) out "

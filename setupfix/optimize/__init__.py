@@ -13,6 +13,7 @@ from typing import Any
 
 from setupfix.errors import ParameterError
 from setupfix.optimize._base import Evaluator, Metaheuristic, Optimizer, make_result
+from setupfix.optimize._dimensions import dimension_floor, harmed_columns, model_dimensions
 from setupfix.optimize._problem import CorrectionProblem, OptimizeResult
 
 __all__ = [
@@ -22,8 +23,11 @@ __all__ = [
     "Metaheuristic",
     "OptimizeResult",
     "Optimizer",
+    "dimension_floor",
     "get_optimizer",
+    "harmed_columns",
     "make_result",
+    "model_dimensions",
 ]
 
 #: Registry: name → "module:Class".  Imported lazily so one broken optimiser never

@@ -66,10 +66,11 @@ Objective
 paper's δ, eq. 8, leximin's first level) held, the next smallest dimension margin is raised as far
 as the grid allows, then the next, and so on — every dimension centred as far as the others allow
 (:mod:`setupfix.optimize._leximin`: each level proved by an LP bound, rounded rows or a MILP; a
-discrete conflict by branches or counts) — and stage 3 runs among the leximin-optimal grid points
-(every dimension's margin at least its level); the levels may use all but ``leximin_norm_share`` of the
-limit.  ``objective="paper"`` stops after stage 2 and runs
-stage 3 at t* (eqs. 8–9 exactly, what ``compare`` and the paper's validation use).
+discrete conflict by branches or counts; a position zone is one dimension, its margin the least of
+its polygon's facets, :func:`~setupfix.optimize._dimensions.dimension_of_rows`) — and stage 3 runs among
+the leximin-optimal grid points (every dimension's margin at least its level); the levels may use all
+but ``leximin_norm_share`` of the limit.  ``objective="paper"`` stops after stage 2 and runs stage 3 at t*
+(eqs. 8–9 exactly, what ``compare`` and the paper's validation use).
 
 One ``time_limit`` bounds the wall time of the whole solve, counted from the solve's own
 start (each solve has its own session; nothing of an earlier solve's clock carries over).  The
@@ -98,7 +99,8 @@ from setupfix.optimize._grid_optimum import GridOptimum, Stop, grid_optimum
 from setupfix.optimize._least_norm import lower_bound_ratio
 from setupfix.optimize._leximin import leximin, leximin_least_norm
 from setupfix.optimize._leximin_level import LevelValue
-from setupfix.optimize._lp_bound import LPBound, dimension_of_rows, lp_bound, margin_rows, rows_to_dimensions
+from setupfix.optimize._dimensions import dimension_of_rows, model_dimensions
+from setupfix.optimize._lp_bound import LPBound, lp_bound, margin_rows, rows_to_dimensions
 from setupfix.optimize._problem import CorrectionProblem, OptimizeResult
 from setupfix.optimize._session import Clock, GridRows, Session
 from setupfix.optimize._settings import ExactSettings
@@ -221,9 +223,9 @@ class ExactOptimizer(Optimizer):
                  bound: float, binding: tuple[str, ...]) -> OptimizeResult:
         """Levels 2, 3 … after the proved first level (the paper's δ), then the least norm among the
         leximin-optimal grid points (:mod:`setupfix.optimize._leximin`)."""
-        row_dim = dimension_of_rows(problem)
+        row_dim = dimension_of_rows(problem)  # a zone's facets are one dimension: its margin, their least
         stage_end = session.clock.deadline - self.settings.leximin_norm_share * self.time_limit
-        lex = leximin(session, row_dim, len(problem.dimension_ids), opt.k, opt.t,
+        lex = leximin(session, row_dim, len(model_dimensions(problem)[0]), opt.k, opt.t,
                       first=LevelValue(opt.t, opt.k, lp.t, lp.y), stage_end=stage_end)
         session.clock.lap("leximin")
         share = self.settings.box_share if lex.stopped is None else self.settings.stopped_box_share

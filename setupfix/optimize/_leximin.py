@@ -1,7 +1,9 @@
 """Leximin centring on the register grid: every dimension as far inside its tolerance as the others allow.
 
 Grid units as in :mod:`setupfix.optimize._session`.  Each dimension q has the margin
-``M_q(k) = min_{j ∈ q} (g_j − G_j k)`` (its rows, eqs. 5–6); the objective orders the
+``M_q(k) = min_{j ∈ q} (g_j − G_j k)`` (its rows: the two limits, eqs. 5–6; a circular position zone's
+polygon facets, :func:`~setupfix.optimize._dimensions.dimension_of_rows`, so a zone is one dimension
+and one position of the vector, fixed when all its facets are); the objective orders the
 grid points by the vector of these margins sorted ascending, compared lexicographically
 (the *leximin* order; margins within ``ε`` = half the input quantum are ties), and among
 the leximin-optimal points takes the least Σ c_i k_i² (eq. 9), ties to the lexicographically

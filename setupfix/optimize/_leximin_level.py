@@ -76,6 +76,8 @@ class LevelModel:
         self._order = np.argsort(row_dim, kind="stable")  # rows grouped by dimension (for reduceat)
         self._starts = np.flatnonzero(np.r_[True, np.diff(row_dim[self._order]) != 0])
         self._dims = row_dim[self._order][self._starts]
+        # a dimension with more than two rows: a position zone's polygon (one-axis problems have at most two)
+        self.polygons = bool(row_dim.size and np.bincount(row_dim).max() > 2)
         # rows keyed by a random integer projection: equal (or opposite) rows, equal (or opposite) keys
         weights = np.random.default_rng(0).integers(1, 2**20, n).astype(float)
         self.key = self.rows.g_rows @ weights
@@ -270,9 +272,11 @@ class LevelModel:
             if t_best >= t_lp - TOL:
                 return LevelValue(t_best, k_best, t_lp, y, None, (), calls)
         # ascent: a grid point with every active margin ≥ t(best) + ε on the rounded rows (an LP, a feasibility
-        # MILP), until none is left (proved) — the rounded LP point is usually at or next to the level
+        # MILP), until none is left (proved) — the rounded LP point is usually at or next to the level.  A
+        # zone's facet rows (irrational, more than two rows to a dimension) have no LP test: each step would
+        # be a feasibility MILP rising by a little; the level MILP is one
         f = self._floors(v)
-        for _ in range(s.level_steps):
+        for _ in range(0 if self.polygons and not rows.all_integer else s.level_steps):
             if time.perf_counter() >= stage_end:
                 return LevelValue(t_best, k_best, t_lp, y, "time limit", tuple(path), calls)
             found = self.point_above(np.where(np.isnan(f), t_best + eps, f), stage_end)

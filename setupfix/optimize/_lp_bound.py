@@ -19,7 +19,7 @@ from setupfix.optimize._highs import INF
 from setupfix.optimize._problem import CorrectionProblem
 from setupfix.optimize._session import Session
 
-__all__ = ["LPBound", "dimension_of_rows", "lp_bound", "margin_rows", "rows_to_dimensions"]
+__all__ = ["LPBound", "lp_bound", "margin_rows", "rows_to_dimensions"]
 
 Array = npt.NDArray[np.float64]
 
@@ -48,13 +48,6 @@ def margin_rows(problem: CorrectionProblem, quantum: float = 1e-3) -> tuple[Arra
     g = np.concatenate([(problem.upper / h)[upper_ok] - dev[upper_ok],
                         dev[lower_ok] - (problem.lower / h)[lower_ok]])
     return g_rows, g
-
-
-def dimension_of_rows(problem: CorrectionProblem) -> npt.NDArray[np.intp]:
-    """Index of the dimension (in ``problem.dimension_ids``) of each margin row of :func:`margin_rows`, shape (r,)."""
-    rows: npt.NDArray[np.intp] = np.concatenate([np.flatnonzero(np.isfinite(problem.upper)),
-                                                 np.flatnonzero(np.isfinite(problem.lower))]).astype(np.intp)
-    return rows
 
 
 def rows_to_dimensions(problem: CorrectionProblem, rows: npt.NDArray[np.bool_]) -> tuple[str, ...]:

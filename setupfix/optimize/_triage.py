@@ -19,6 +19,10 @@ levels of :mod:`~setupfix.optimize._triage_model`, one lexicographic optimum in 
    of its chords (exact on integers), added lazily (:func:`~setupfix.optimize._chords.lazy_chords`), its
    ties then decided coordinate by coordinate (:func:`~setupfix.optimize._chords.smallest_tie`).
 
+A dimension is a model dimension (:mod:`~setupfix.optimize._dimensions`): a circular position zone's
+polygon facets are its rows, so it is kept (every facet's margin ≥ 0, or ≥ its no-harm floor when held)
+or given up (none of its facets constrains) as a whole, and counts once in N* and in the levels.
+
 No point keeps more than N* dimensions, so every point meeting Σ z ≥ N* − held keeps exactly the
 dimensions with z = 1 and the held ones; the dimensions given up are read from the final point.
 Each MILP is solved to a zero gap by HiGHS; every point it returns is checked exactly
@@ -47,6 +51,7 @@ from setupfix.optimize._chords import chord_rows, lazy_chords, smallest_tie
 from setupfix.optimize._grid_least_norm import TIE_MAX_REGISTERS
 from setupfix.optimize._highs import INF, LinearModel, Solve
 from setupfix.optimize._least_norm import lower_bound_ratio
+from setupfix.optimize._dimensions import dimension_floor, dimension_margins, dimension_of_rows, model_dimensions
 from setupfix.optimize._problem import CorrectionProblem, OptimizeResult
 from setupfix.optimize._session import Session
 from setupfix.optimize._triage_forced import Forced, forced_triage
@@ -296,17 +301,18 @@ def triaged_result(problem: CorrectionProblem, session: Session, k_start: Array,
                    notes: list[Note], calls: int, bound: float, name: str) -> OptimizeResult:
     """The triage stage: no correction brings every dimension into tolerance, so :func:`triage` decides.
 
-    Everything the result states is read from the final answer: the dimensions given up (not held
-    and predicted out of tolerance, ``extra["given_up"]`` with their margins), δ, the bonus and the
+    Everything the result states is read from the final answer: the dimensions given up (not held and
+    predicted out of tolerance; ``given_up`` names every column of them, all of a zone's facets;
+    ``extra["given_up"]`` each once with its margin, a zone's the circle's), δ, the bonus and the
     binding dimensions over the dimensions kept, the LP bound of those (``bound``; the whole problem's
     LP bound ``bound`` passed in stays in ``extra["lp_bound_all"]``), status and seconds of this call.
     """
     rows, clock = session.rows, session.clock
-    upper_ok, lower_ok = np.isfinite(problem.upper), np.isfinite(problem.lower)
-    row_dim = np.r_[np.flatnonzero(upper_ok), np.flatnonzero(lower_ok)]
+    ids, column_dim = model_dimensions(problem)  # a position zone is one dimension: kept or given up whole
     h = problem.resolution
     quantum = session.settings.quantum
-    t = TriageRows(rows.g_rows, rows.g, row_dim, problem.held_floor / h, rows.kmin, rows.kmax, rows.cost)
+    floor = dimension_floor(problem)
+    t = TriageRows(rows.g_rows, rows.g, dimension_of_rows(problem), floor / h, rows.kmin, rows.kmax, rows.cost)
     reserve = session.settings.least_norm_share * session.time_limit
     forced = None
     if FORCED and not listable(t):  # a small box is listed whole
@@ -332,22 +338,24 @@ def triaged_result(problem: CorrectionProblem, session: Session, k_start: Array,
         result.notes = tuple(notes)
         return result
     x[problem.free] = out.k * h
-    margins = problem.margins(x)
-    held = np.isfinite(problem.held_floor)
+    margins = dimension_margins(problem, x)  # a zone's: its polygon's, the least of its facets'
+    held = np.isfinite(floor)
     gone = ~held & (margins < -1e-12)
-    given_up = tuple(d for d, g in zip(problem.dimension_ids, gone, strict=True) if g)
+    # every column of a dimension given up (all of a zone's facets): none of them counts in δ or the bound
+    given_up = tuple(d for d, q in zip(problem.dimension_ids, column_dim, strict=True) if gone[q])
+    names = tuple(d for d, g in zip(ids, gone, strict=True) if g)
     known = out.kept_lp is not None and np.array_equal(out.kept_lp[0], ~gone)
     kept_bound = out.kept_lp[1] if out.kept_lp is not None and known else _kept_bound(t, ~gone, clock.left())
     n_held = int(held.sum())
     message = (f"no correction within the register limits brings every dimension into tolerance: "
-               f"{len(given_up)} dimension(s) given up ({', '.join(given_up)}) need the NC program or the "
+               f"{len(names)} dimension(s) given up ({', '.join(names)}) need the NC program or the "
                f"process, not the setup; the {int((~gone).sum())} others (the {n_held} measured in tolerance "
                "among them) are kept in tolerance, centred level by level, with the smallest correction")
     notes.append(Note(message, kind="solver"))
     status = "optimal"
+    shown = problem.dimension_table(x)[5]  # a zone's margin as the circle's
     extra.update({"stages": dict(clock.stages), "path": "; ".join(path),
-                  "given_up": {d: float(v) for d, v, g in zip(problem.dimension_ids, margins, gone, strict=True)
-                               if g},
+                  "given_up": {d: float(v) for d, v, g in zip(ids, shown, gone, strict=True) if g},
                   "triage": {"refused": False, "kept": int((~gone).sum()), "held": n_held,
                              "leximin_levels": sum(1 for s in out.stages if s.startswith("leximin level")),
                              "leximin_complete": out.complete}})

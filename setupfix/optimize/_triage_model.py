@@ -362,7 +362,8 @@ def listed_triage(t: TriageRows, quantum: float) -> tuple[Array, int] | None:
     """The whole triage by listing the box (None when its points × rows exceed LIST_POINTS).
 
     Every grid point: the held dimensions kept (no harm), the most dimensions in tolerance, then the
-    leximin of the kept margins (position by position, ties within ``quantum`` steps), then the least
+    leximin of the kept margins as the MILPs' levels (each level's value, then the fewest kept margins
+    within ``quantum``/2 above it, :func:`triage`), then the least
     Σ c k², then the lexicographically smallest k.  Returns the point and its count.
     """
     if not listable(t):
@@ -382,12 +383,13 @@ def listed_triage(t: TriageRows, quantum: float) -> tuple[Array, int] | None:
     m = t.margins_many(ks)
     kept = t.held[None, :] | (m >= -1e-6)
     s = np.sort(np.where(kept & np.isfinite(m), m, np.inf), axis=1)
-    alive = np.ones(ks.shape[0], bool)
-    for j in range(s.shape[1]):  # the leximin: position by position, ties within the quantum
-        col = s[:, j]
-        if not np.isfinite(col[alive]).any():
-            break
-        alive &= col >= col[alive].max() - quantum / 2
+    alive, j = np.ones(ks.shape[0], bool), 0
+    while j < s.shape[1] and np.isfinite(s[alive, j]).any():  # as the MILPs' levels: value, multiplicity
+        value = s[alive, j].max()
+        alive &= s[:, j] >= value - 1e-6
+        below = np.sum(s < value + quantum / 2 - SLACK, axis=1)  # margins within the quantum above it
+        alive &= below == below[alive].min()
+        j = max(int(below[alive].min()), j + 1)
     ks = ks[alive]
     norm = ks**2 @ t.cost
     return ks[np.lexsort((*ks.T[::-1], norm))[0]], int(counts.max())

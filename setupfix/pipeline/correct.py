@@ -28,7 +28,7 @@ from setupfix.pipeline.cycles import read_parts
 from setupfix.pipeline.stores import StoreRef
 from setupfix.pipeline.requests import (CorrectOutcome, CorrectRequest, CurrentOffsets, CycleCorrection, CycleOptions,
                                         History, ReadOptions, SolveOptions, ThermalInputs, load_thermal)
-from setupfix.pose import PosedProblem, pose_problem
+from setupfix.pose import pose_problem
 from setupfix.recommend import recommend
 from setupfix.safety import Recommendation, RuleEffect, short_list
 from setupfix.store import Store
@@ -61,24 +61,6 @@ def _applied_result(problem: CorrectionProblem, rec: Recommendation) -> Optimize
     return dataclasses.replace(raw, x=x.copy(), margin_before=problem.dimension_budget(0 * x, rec.given_up)[0],
                                margin_after=problem.dimension_budget(x, rec.given_up)[0],
                                norm=float(np.linalg.norm(x)), binding=problem.dimension_of(binding), message=message)
-
-
-def _zone_triage(posed: PosedProblem, rec: Recommendation) -> Recommendation:
-    """Hold when the triage gave anything up in a problem with position zones.
-
-    The triage counts the dimensions it keeps in tolerance; a zone enters the problem as the
-    facets of its polygon, so a zone counts as many times as it has facets and a facet may be
-    given up alone: the count, and so what is given up, would be wrong.  Nothing is recommended
-    instead (a refusal, not a wrong number).
-    """
-    if posed.problem.circles is None or not rec.given_up or rec.verdict != "apply":
-        return rec
-    gone = posed.problem.dimension_of(rec.given_up)
-    rule = RuleEffect("zone_triage", "no correction brings every dimension into tolerance, and the triage cannot "
-                      "give a position zone up as a whole (it counts its polygon's facets): nothing is "
-                      "recommended; correct by hand or leave the zone(s) out of the model", dimensions=gone)
-    return dataclasses.replace(rec, verdict="hold", x=np.zeros_like(rec.x), rules=(*rec.rules, rule), given_up=gone,
-                               at_limit=())
 
 
 def _smoothed(request: CorrectRequest, part: PartMeasurement) -> Smoothed | None:
@@ -132,9 +114,9 @@ def correct_cycle(request: CorrectRequest, part: PartMeasurement, *,
     names = {d.id: d.name for d in model.dimensions}
     if posed.problem.rows is not None:  # a zone's facets are named by the zone
         names |= {c: names[r] for c, r in zip(posed.problem.dimension_ids, posed.problem.rows, strict=True)}
-    rec = _zone_triage(posed, recommend(posed, opt.solve, optimizer=solve.optimizer, names=names,
-                                        registers={r.id: r.register for r in model.registers}, unit=model.unit,
-                                        draft=model.source if model.draft else None))
+    rec = recommend(posed, opt.solve, optimizer=solve.optimizer, names=names,
+                    registers={r.id: r.register for r in model.registers}, unit=model.unit,
+                    draft=model.source if model.draft else None)
     notes = [*part.notes, *posed.notes, *(n for n in rec.result.notes if n.message != rec.result.message)]
     if part.absent:
         notes.append(Note(f"{len(part.absent)} dimension(s) absent from the report, left out: "

@@ -11,7 +11,8 @@ from scipy.optimize import Bounds, LinearConstraint, milp
 
 from setupfix.errors import ParameterError
 from setupfix.optimize import CorrectionProblem, get_optimizer
-from setupfix.optimize._lp_bound import dimension_of_rows, margin_rows
+from setupfix.optimize._dimensions import dimension_of_rows
+from setupfix.optimize._lp_bound import margin_rows
 
 from .test_exact import random_problem
 

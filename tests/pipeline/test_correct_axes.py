@@ -164,28 +164,72 @@ def test_history_store_keyed_by_component(tmp_path):
     assert stored.result["corrections"]["W1.C"] == pytest.approx(cycle.corrections["W1.C"])
 
 
-def test_triage_with_a_zone_holds_instead_of_counting_facets(tmp_path):
+ZONE_OUT = {
+    "process": {"name": "zone out", "axes": ["X", "Y"]},
+    "wks": {"W1": {"register": "G54"}},
+    "features": {"F1": {"wks": {"W1": 1}}, "F2": {"wks": {"W1": {"x": 1, "y": -1}}}},
+    "dimensions": {
+        "A": {"name": "A", "axis": "X", "features": {"F1": 1}, "nominal": 0, "lower": -0.02, "upper": 0.02},
+        "H": {"name": "H", "kind": "position", "components": ["H X", "H Y"], "axes": ["X", "Y"],
+              "diameter": 0.04, "features": {"F2": 1}},
+    },
+}
+
+
+def _zone_out(tmp_path: Path):
     from setupfix.model import model_from_dict
 
-    doc = {
-        "process": {"name": "zone out", "axes": ["X", "Y"]},
-        "wks": {"W1": {"register": "G54"}},
-        "features": {"F1": {"wks": {"W1": 1}}, "F2": {"wks": {"W1": {"x": 1, "y": -1}}}},
-        "dimensions": {
-            "A": {"name": "A", "axis": "X", "features": {"F1": 1}, "nominal": 0, "lower": -0.02, "upper": 0.02},
-            "H": {"name": "H", "kind": "position", "components": ["H X", "H Y"], "axes": ["X", "Y"],
-                  "diameter": 0.04, "features": {"F2": 1}},
-        },
-    }
-    model = model_from_dict(doc)
+    model = model_from_dict(ZONE_OUT)
     # A wants W1.X = −0.05; the zone wants W1.X = +0.05: no correction brings both in
     path = tmp_path / "r.csv"
     path.write_text("characteristic,nominal,actual,deviation,part\nA,0,0.05,0.05,p\nH X,0,-0.05,-0.05,p\n"
                     "H Y,0,0,0.0,p\n", encoding="utf-8")
-    (cycle,) = correct_report(CorrectRequest(model, solve=SolveOptions(time_limit=120)), path).cycles
-    assert cycle.recommendation.result.given_up  # the triage ran (it counts the zone's facets, not the zone)
-    assert cycle.verdict == "hold" and not any(cycle.corrections.values())
-    assert any(r.rule == "zone_triage" for r in cycle.rules)
+    (cycle,) = correct_report(CorrectRequest(model, solve=SolveOptions()), path).cycles
+    return cycle
+
+
+def test_triage_gives_a_zone_up_whole(tmp_path):
+    """The triage counts the zone once: A or H can be kept, not both; equal counts, equal margins 0.02 and
+    equal norms 0.05, so the tie goes to the smallest k (W1.X = −0.05): A kept, the zone given up whole."""
+    cycle = _zone_out(tmp_path)
+    raw = cycle.recommendation.result
+    assert raw.status == "optimal"
+    assert raw.x.tolist() == pytest.approx([-0.05, 0.0])
+    facets = {d for d in cycle.problem.dimension_ids if d.startswith("H#")}
+    assert set(raw.given_up) == facets  # every facet of the zone, none of A
+    assert raw.extra["triage"]["kept"] == 1
+    assert raw.extra["given_up"] == {"H": pytest.approx(0.02 - 0.1)}  # the circle's margin at ‖(−0.1, 0)‖
+    assert raw.margin_after == pytest.approx(0.02)  # δ over A alone
+    assert "1 dimension(s) given up (H)" in raw.message
+
+
+def test_triage_keeps_a_zone_whole_and_applies(tmp_path):
+    """With the zone's diameter 0.06 (margin up to 0.03 kept, against A's 0.02) the leximin of the kept
+    margins keeps the zone: A is given up, the correction W1.X = +0.05 is applied, the zone in its circle."""
+    from setupfix.model import model_from_dict
+
+    doc = {**ZONE_OUT, "dimensions": {**ZONE_OUT["dimensions"],
+                                      "H": {**ZONE_OUT["dimensions"]["H"], "diameter": 0.06}}}
+    model = model_from_dict(doc)
+    path = tmp_path / "r.csv"
+    path.write_text("characteristic,nominal,actual,deviation,part\nA,0,0.05,0.05,p\nH X,0,-0.05,-0.05,p\n"
+                    "H Y,0,0,0.0,p\n", encoding="utf-8")
+    (cycle,) = correct_report(CorrectRequest(model, solve=SolveOptions()), path).cycles
+    assert cycle.recommendation.result.status == "optimal"
+    assert cycle.verdict == "apply" and cycle.given_up == ("A",)
+    assert cycle.corrections["W1.X"] == pytest.approx(0.05) and cycle.corrections["W1.Y"] == 0
+    rows = {row["id"]: row for row in cycle.dimension_rows()}
+    assert rows["H"]["margin"] == pytest.approx(0.03)  # the circle's, centred
+    assert cycle.margin_after == pytest.approx(0.03)  # δ over the kept dimensions: the zone
+    assert all("#" not in d for r in cycle.rules for d in r.dimensions)
+
+
+def test_triage_with_a_zone_given_up_applies(tmp_path):
+    cycle = _zone_out(tmp_path)
+    assert cycle.verdict == "apply"
+    assert cycle.corrections["W1.X"] == pytest.approx(-0.05) and cycle.corrections["W1.Y"] == 0
+    assert cycle.given_up == ("H",)
+    assert not any(r.rule == "no_harm" and r.dimensions for r in cycle.rules)
     assert all("#" not in d for r in cycle.rules for d in r.dimensions)
     assert cycle.margin_after == pytest.approx(min(row["margin"] for row in cycle.dimension_rows()
                                                    if row["id"] not in cycle.given_up))
