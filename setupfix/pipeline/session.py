@@ -28,8 +28,9 @@ from setupfix.pipeline.cycles import assign_stations
 from setupfix.pipeline.export import Exported
 from setupfix.pipeline.present import cycle_json
 from setupfix.pipeline.requests import CorrectOutcome, CorrectRequest, CurrentOffsets, CycleCorrection
+from setupfix.pipeline.stores import StoreRef
 from setupfix.pipeline.view import MatchRow, match_rows, matched_rows
-from setupfix.store import CORRECTION_COLUMNS, Recommendation, open_store, report_tables
+from setupfix.store import CORRECTION_COLUMNS, Recommendation, report_tables
 
 __all__ = ["OpenedReport", "open_report", "export_cycles", "newest_report", "FolderWatch",
            "compare_steps", "store_parts", "record_applied"]
@@ -175,14 +176,14 @@ class FolderWatch:
         return None
 
 
-def store_parts(model: ProcessModel, db: str | Path) -> tuple[list[PartMeasurement], list[str]]:
+def store_parts(model: ProcessModel, db: str | Path | StoreRef) -> tuple[list[PartMeasurement], list[str]]:
     """Every cycle stored in the history store ``db``, tied to ``model``, oldest first.
 
     A stored report that does not match the model is left out and named in the notes.
     """
     notes: list[str] = []
     parts: list[PartMeasurement] = []
-    with open_store(db) as store:
+    with StoreRef.of(db).for_model(model).open(existing=False) as store:
         tables = report_tables(store)
     for record, table in tables:
         try:
@@ -193,7 +194,7 @@ def store_parts(model: ProcessModel, db: str | Path) -> tuple[list[PartMeasureme
     return parts, notes
 
 
-def record_applied(db: str | Path, exported: Exported, cycles: Sequence[CycleCorrection], *,
+def record_applied(db: str | Path | StoreRef, exported: Exported, cycles: Sequence[CycleCorrection], *,
                    when: str | None = None) -> int:
     """Record what ``exported`` wrote as applied now, in one transaction: its non-zero rows
     in the corrections log (by controller register name) and, for each exported cycle
@@ -207,7 +208,9 @@ def record_applied(db: str | Path, exported: Exported, cycles: Sequence[CycleCor
     stamp = when or datetime.now().replace(microsecond=0).isoformat()
     rows = [(stamp, row.register, float(row.delta), "correction") for row in exported.rows if row.delta != 0.0]
     written = [c for c in cycles if c.part.part in exported.parts]
-    with open_store(db) as store, store.transaction():
+    model = cycles[0].model if cycles else None
+    ref = StoreRef.of(db) if model is None else StoreRef.of(db).for_model(model)
+    with ref.open(existing=False) as store, store.transaction():
         added = store.add_corrections(pd.DataFrame(rows, columns=list(CORRECTION_COLUMNS)))
         for c in written:
             store.add_recommendation(Recommendation(
