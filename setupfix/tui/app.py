@@ -267,7 +267,10 @@ class SetupfixApp(App[None]):
         else:
             status.update("✓ every characteristic of the report matches a dimension of the model.")
         self._show()
-        if self.inputs.db is not None:
+        if self.inputs.db is not None and not self.inputs.db.is_file():  # reading never creates it
+            self.query_one(HistoryPanel).status(f"no history store at {self.inputs.db} yet: the first export "
+                                                "creates it")
+        elif self.inputs.db is not None:
             self.run_worker(partial(workers.history, opened.model, self.inputs.db), name="history", group="history",
                             thread=True, exclusive=True, exit_on_error=False)
 
