@@ -27,7 +27,7 @@ HELP = """\
 | `s` | sort the dimensions (model order, margin after, deviation, name, station); or click a header |
 | `[` `]` | previous / next part (cycle) of the report |
 | `Home` `End` | the first / the latest part (cycle) of a multi-cycle report |
-| `e` | export the offsets (choose the controller format — the file name's suffix follows it —, see the exact text, confirm) |
+| `e` | export the offsets (choose the controller format, the file's suffix follows it; see the text, confirm) |
 | `d` | diagnose the history (one key) |
 | `k` | capability of the history store (`--db`): Cpk per dimension, individuals sparkline, Nelson rule flags |
 | `1`…`5` | correction · compare · thermal · history · match tabs |
