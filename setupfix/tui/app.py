@@ -357,7 +357,7 @@ class SetupfixApp(App[None]):
         self.query_one(RegisterTable).show(view.register_rows(c, self.opened.current if self.opened else None),
                                            unit=m.unit, digits=grid_decimals(m.resolution),
                                            rotation_digits=grid_decimals(m.rotation_resolution))
-        where = f"axes {' '.join(m.axes)}, spindle {m.spindle}" if m.multi_axis else f"axis {m.axis}"
+        where = f"axes {' '.join(m.axes)}" if m.multi_axis else f"axis {m.axis}"
         self.query_one(RegisterTable).border_title = escape(
             f"recommendation [{m.unit}, {where}]" + (" · --current does not fit: changes only" if current else ""))
 

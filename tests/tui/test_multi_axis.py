@@ -12,6 +12,7 @@ from tui.conftest import run, settle
 
 from setupfix.pipeline.controllers import PROGRAM_SUFFIX, derived_program_number
 from setupfix.pipeline.export import offsets_text
+from setupfix.tui.widgets.summary import VERDICT_STYLE
 
 XYZ = SAMPLES / "two_station_xyz"
 MODEL = XYZ / "model.toml"
@@ -84,7 +85,7 @@ def test_multi_axis_at_80x24_home_end_and_the_export_name_per_controller(make_ap
             assert out == ["P1 Face"]  # the sample's cycle 01: the face, 0.0509 against ±0.040
             lines = _screen(app)
             text = "\n".join(lines)
-            assert "APPLY" in lines[2] and "δ before" in lines[3]
+            assert lines[2].lstrip().startswith(VERDICT_STYLE[c.verdict][0]) and "δ before" in lines[3]
             dims = [r[1] for r in _rows(app.query_one("#dimensions"))]
             assert dims[0] == "P1 Face" and len(dims) == 16
             assert any(line.lstrip().startswith("✗✓    P1 Face") for line in lines)

@@ -24,7 +24,8 @@ HELP = """\
 | `c` | compare every optimiser on this part (progress; `x` cancels) |
 | `x` | cancel the running work |
 | `f` | filter the dimensions by station (all → P1 → P2 …) |
-| `s` | sort the dimensions (model order, margin after, deviation, name, station); or click a header |
+| `s` | sort the dimensions: model order (below 120×30 out of tolerance first), margin after, deviation, … |
+| click | a column header sorts by it |
 | `[` `]` | previous / next part (cycle) of the report |
 | `Home` `End` | the first / the latest part (cycle) of a multi-cycle report |
 | `e` | export the offsets (choose the controller format, the file's suffix follows it; see the text, confirm) |
