@@ -222,10 +222,11 @@ def door_session(case: Case, tmp: Path) -> Decisions:
     db = _store_copy(case, tmp, "session")
     out: Decisions = {}
     for report in case.reports:
-        opened = open_report(case.model, report, read=ReadOptions(columns=str(case.columns) if case.columns else None),
-                             cycles=CycleOptions.of(case.stations), solve=SolveOptions(), db=db, current=case.current,
-                             thermal=(*case.thermal, AT, None) if case.thermal else None)
-        assert not opened.problem, opened.problem
+        opened, unfit = open_report(case.model, report,
+                                    read=ReadOptions(columns=str(case.columns) if case.columns else None),
+                                    cycles=CycleOptions.of(case.stations), solve=SolveOptions(), db=db,
+                                    current=case.current, thermal=(*case.thermal, AT, None) if case.thermal else None)
+        assert not opened.problem and not unfit, (opened.problem, unfit)  # the case's --current fits its model
         for c in opened.corrections:
             out[report.name, c.part.part] = _decision(c.verdict, c.corrections)
     return out
@@ -510,8 +511,8 @@ def test_a_stopped_solve_is_not_solved_through_every_door(tmp_path):
     from setupfix.errors import ExportError
     from setupfix.tui.workers import open_report
 
-    opened = open_report(model, report, read=ReadOptions(), cycles=CycleOptions(),
-                         solve=SolveOptions("exact", None, 1e-5), db=None, current=None, thermal=None)
+    opened, _ = open_report(model, report, read=ReadOptions(), cycles=CycleOptions(),
+                            solve=SolveOptions("exact", None, 1e-5), db=None, current=None, thermal=None)
     (c,) = opened.corrections
     head = summary(c)
     assert c.verdict == "hold" and not head.solved and head.alarm.startswith("NOT SOLVED: not solved within")

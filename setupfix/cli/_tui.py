@@ -19,7 +19,10 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
     p.add_argument("--model", metavar="MODEL", type=Path, default=None, help="process model TOML")
     p.add_argument("--db", metavar="STORE", type=Path, default=None, help="history store (SQLite file)")
     p.add_argument("--current", metavar="FILE", type=Path, default=None,
-                   help="the controller's current offsets (CSV register,value): new values and absolute exports")
+                   help="the controller's current offsets (CSV register,value; a multi-axis model: "
+                        "register,axis,value, one row per component): new values and absolute exports; re-read "
+                        "when the model is switched in the app (when it does not fit, the app says so and exports "
+                        "changes)")
     p.add_argument("--optimizer", default="exact", choices=sorted(OPTIMIZERS), help="optimiser to start with")
     add_objective_option(p)
     p.add_argument("--seed", type=int, default=0, help="seed of the metaheuristics and the comparison (default 0)")

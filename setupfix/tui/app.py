@@ -16,11 +16,13 @@ from typing import ClassVar
 
 from textual import events, on
 from textual.app import App, ComposeResult
+from textual.actions import SkipAction
 from textual.binding import Binding, BindingType
 from textual.containers import Horizontal, Vertical
 from textual.widgets import DataTable, Footer, Header, Static, TabbedContent, TabPane
 from textual.markup import escape
 from textual.notifications import SeverityLevel
+from textual.screen import ModalScreen
 from textual.worker import Worker, WorkerState
 
 from setupfix.errors import SetupfixError
@@ -30,10 +32,11 @@ from setupfix.pipeline import view
 from setupfix.pipeline.compare import DEFAULT_METHODS, Comparison
 from setupfix.pipeline.requests import CycleCorrection, CycleOptions, ReadOptions, SolveOptions
 from setupfix.pipeline.session import FolderWatch, OpenedReport, record_applied
+from setupfix.pipeline.spc import SpcOutcome
 from setupfix.tui import workers
-from setupfix.tui.exporting import CONTROLLERS, preview, write_offsets
+from setupfix.tui.exporting import CONTROLLERS, export_name, preview, write_offsets
 from setupfix.tui.messages import CompareProgress
-from setupfix.tui.screens import ExportRequest, ExportScreen, HelpScreen, OpenFileScreen
+from setupfix.tui.screens import CapabilityScreen, ExportRequest, ExportScreen, HelpScreen, OpenFileScreen
 from setupfix.tui.widgets import (ComparePanel, DimensionTable, HistoryPanel, MatchTable, RegisterTable, SummaryBar,
                                   ThermalPanel)
 from setupfix.tui.widgets.plain import plain
@@ -42,6 +45,8 @@ __all__ = ["SetupfixApp", "SORT_ORDER"]
 
 #: Columns from which the recommendation sits beside the dimensions and margins are shown.
 WIDE = 120
+#: Lines below which the screen is short: a compact summary, the dimensions out of tolerance first.
+TALL = 30
 
 #: What ``s`` cycles through: None is the model's order.
 SORT_ORDER: tuple[str | None, ...] = (None, "margin_after", "deviation", "name", "station")
@@ -78,7 +83,7 @@ class SetupfixApp(App[None]):
     TITLE = "setupfix"
     # Textual declares these as class-level lists (its own annotation); RUF012 cannot see the base class.
     HORIZONTAL_BREAKPOINTS = [(0, "-narrow"), (WIDE, "-wide")]  # noqa: RUF012 - Textual's declared type
-    VERTICAL_BREAKPOINTS = [(0, "-short"), (30, "-tall")]  # noqa: RUF012 - Textual's declared type
+    VERTICAL_BREAKPOINTS = [(0, "-short"), (TALL, "-tall")]  # noqa: RUF012 - Textual's declared type
     BINDINGS: ClassVar[list[BindingType]] = [
         Binding("o", "open_report", "Open"),
         Binding("m", "open_model", "Model", show=False),
@@ -92,6 +97,10 @@ class SetupfixApp(App[None]):
         Binding("d", "diagnose", "Diagnose", show=False),
         Binding("left_square_bracket", "part(-1)", "Prev part", show=False),
         Binding("right_square_bracket", "part(1)", "Next part", show=False),
+        # priority: a focused table would scroll instead (a modal screen's field keeps them, see action_cycle)
+        Binding("home", "cycle('first')", "First cycle", show=False, priority=True),
+        Binding("end", "cycle('latest')", "Latest cycle", show=False, priority=True),
+        Binding("k", "capability", "Capability", show=False),
         Binding("1", "tab('correct')", "Correction", show=False),
         Binding("2", "tab('compare')", "Compare", show=False),
         Binding("3", "tab('thermal')", "Thermal", show=False),
@@ -115,6 +124,8 @@ class SetupfixApp(App[None]):
         self.folder_watch: FolderWatch | None = None
         self.problem = ""
         self._wide = False
+        self._short = False
+        self.current_problem = ""  #: why --current does not fit the model opened ("" when it fits or is not given)
 
     # ----------------------------------------------------------------- layout
     def compose(self) -> ComposeResult:
@@ -138,6 +149,7 @@ class SetupfixApp(App[None]):
 
     def on_mount(self) -> None:
         self._wide = self.size.width >= WIDE
+        self._short = self.size.height < TALL
         self._show()
         self._start_thermal()
         self.query_one(HistoryPanel).status(
@@ -195,8 +207,13 @@ class SetupfixApp(App[None]):
         elif event.state == WorkerState.CANCELLED and worker.name == "compare":
             self.query_one(ComparePanel).stopped("comparison cancelled")
         elif event.state == WorkerState.SUCCESS:
-            if worker.name == "open" and isinstance(worker.result, OpenedReport):
-                self._opened(worker.result)
+            if worker.name == "open" and isinstance(worker.result, tuple):
+                opened, self.current_problem = worker.result
+                if self.current_problem:
+                    self.notify(self.current_problem, title="current offsets", severity="warning", timeout=12)
+                self._opened(opened)
+            elif worker.name == "capability" and isinstance(worker.result, SpcOutcome):
+                self.push_screen(CapabilityScreen(worker.result))
             elif worker.name == "compare":
                 self._compared(worker.result)
             elif worker.name == "history" and isinstance(worker.result, tuple):
@@ -228,7 +245,7 @@ class SetupfixApp(App[None]):
             self.query_one(ComparePanel).stopped(f"✗ {text}")
         elif what == "thermal":
             self.query_one(ThermalPanel).not_available(text)
-        elif what in ("history", "diagnose"):
+        elif what in ("history", "diagnose", "capability"):
             self.query_one(HistoryPanel).status(f"✗ {text}")
 
     def _opened(self, opened: OpenedReport) -> None:
@@ -251,7 +268,10 @@ class SetupfixApp(App[None]):
         else:
             status.update("✓ every characteristic of the report matches a dimension of the model.")
         self._show()
-        if self.inputs.db is not None:
+        if self.inputs.db is not None and not self.inputs.db.is_file():  # reading never creates it
+            self.query_one(HistoryPanel).status(f"no history store at {self.inputs.db} yet: the first export "
+                                                "creates it")
+        elif self.inputs.db is not None:
             self.run_worker(partial(workers.history, opened.model, self.inputs.db), name="history", group="history",
                             thread=True, exclusive=True, exit_on_error=False)
 
@@ -313,28 +333,41 @@ class SetupfixApp(App[None]):
         part = f"part {c.part.part or '—'}" + (f" ({self.part_index + 1}/{n}, [ ] to change)" if n > 1 else "")
         head = view.summary(c)
         reader = tuple(f"⚠ {n}" for n in self.opened.notes) if self.opened else ()
+        current = f"⚠ {self.current_problem}; exports are changes (add)" if self.current_problem else ""
         summary.show(head, optimizer=self.optimizer, part=part,
-                     problem="\n".join(t for t in (self.problem, c.thermal.line() if c.thermal else "", *reader) if t))
+                     problem="\n".join(t for t in (current, self.problem, c.thermal.line() if c.thermal else "",
+                                                   *reader) if t))
         if self.inputs.thermal is not None and self.inputs.temperatures is not None:
             self.query_one(ThermalPanel).feed_forward(
                 self._feed_text() or f"no feed-forward for {c.part.report} {c.part.part}".rstrip())
         rows = view.filter_rows(view.dimension_rows(c), self.station)
+        small = self._short or not self._wide
+        out = [r for r in rows if not (r.in_before and r.in_after)]
         if self.sort_key is not None:
             rows = view.sort_rows(rows, self.sort_key)
-        self.query_one(DimensionTable).show(rows, wide=self._wide)
-        self.query_one(DimensionTable).border_title = (
-            escape(f"dimensions · station {self.station or 'all'} · sort {self.sort_key or 'model'}"))
+        elif small:  # a small screen shows what needs the operator first: out of tolerance, before or after
+            rows = out + [r for r in rows if r.in_before and r.in_after]
+        dims = self.query_one(DimensionTable)
+        dims.show(rows, wide=self._wide)
+        order = self.sort_key or ("out of tolerance first" if small else "model")
+        dims.border_title = escape(f"dimensions · station {self.station or 'all'} · sort {order}")
+        # short and narrow: the table holds the dimensions out of tolerance (at least 2 rows; with its border,
+        # header and scroll bar), the registers the rest
+        dims.styles.height = 3 + max(2, len(out)) if self._short and not self._wide else None
+        m = c.model
         self.query_one(RegisterTable).show(view.register_rows(c, self.opened.current if self.opened else None),
-                                           digits=grid_decimals(c.model.resolution))
-        self.query_one(RegisterTable).border_title = f"recommendation [{c.model.unit}, axis {c.model.axis}]"
+                                           unit=m.unit, digits=grid_decimals(m.resolution),
+                                           rotation_digits=grid_decimals(m.rotation_resolution))
+        where = f"axes {' '.join(m.axes)}" if m.multi_axis else f"axis {m.axis}"
+        self.query_one(RegisterTable).border_title = escape(
+            f"recommendation [{m.unit}, {where}]" + (" · --current does not fit: changes only" if current else ""))
 
     def on_resize(self, event: events.Resize) -> None:
-        # Rebuild the tables only when the layout changes between narrow and wide.
-        wide = event.size.width >= WIDE
-        if wide != self._wide:
-            self._wide = wide
-            if self._current() is not None:
-                self._show()
+        # Rebuild the tables only when the layout changes between narrow and wide, short and tall.
+        wide, short = event.size.width >= WIDE, event.size.height < TALL
+        if (wide, short) != (self._wide, self._short):
+            self._wide, self._short = wide, short
+            self._show()
 
     @on(DataTable.HeaderSelected, "#dimensions")
     def _header(self, event: DataTable.HeaderSelected) -> None:
@@ -388,6 +421,24 @@ class SetupfixApp(App[None]):
         if self.opened and self.opened.corrections:
             self.part_index = (self.part_index + step) % len(self.opened.corrections)
             self._show()
+
+    def action_cycle(self, which: str) -> None:
+        """Home/End: the first or the latest cycle (part) of a multi-cycle report, in report order."""
+        if isinstance(self.screen, ModalScreen):
+            raise SkipAction  # the key is the dialog's (a text field's Home/End)
+        if self.opened and self.opened.corrections:
+            self.part_index = 0 if which == "first" else len(self.opened.corrections) - 1
+            self._show()
+
+    def action_capability(self) -> None:
+        """Capability per stored dimension (``setupfix spc`` of the history store), over the screen."""
+        if self.inputs.db is None:
+            self.notify("no history store given: start with --db STORE (capability is computed from the stored "
+                        "measurements)", title="capability", severity="warning", timeout=8)
+            return
+        self.notify(f"computing capability from {self.inputs.db} …", timeout=3)
+        self.run_worker(partial(workers.capability, self.inputs.db), name="capability", group="capability",
+                        thread=True, exclusive=True, exit_on_error=False)
 
     def action_tab(self, tab: str) -> None:
         self.query_one(TabbedContent).active = tab
@@ -446,7 +497,8 @@ class SetupfixApp(App[None]):
             self.notify("nothing to export: open a report that matches the model first", severity="warning")
             return
         # A controller program holds one correction: the cycle on screen ([ ] changes it).
-        self.push_screen(ExportScreen(CONTROLLERS, preview(self.opened, self.part_index), self.inputs.offsets),
+        self.push_screen(ExportScreen(CONTROLLERS, preview(self.opened, self.part_index), self.inputs.offsets,
+                                      rename=export_name),
                          partial(self._export_confirmed, self.opened, self.part_index))
 
     def _export_confirmed(self, opened: OpenedReport, cycle: int, request: ExportRequest | None) -> None:
@@ -458,7 +510,8 @@ class SetupfixApp(App[None]):
         except SetupfixError as exc:
             self.notify(str(exc), title="export failed", severity="error", timeout=12)
             return
-        self.notify(f"wrote {request.controller} offsets to {request.path}", title="export")
+        program = "" if exported.program_number is None else f" (program {exported.program_number})"
+        self.notify(f"wrote {request.controller} offsets{program} to {request.path}", title="export")
         if self.inputs.db is not None:
             try:  # exactly what was written: its rows, and the cycles it holds
                 added = record_applied(self.inputs.db, exported, opened.corrections)

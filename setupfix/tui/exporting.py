@@ -10,18 +10,34 @@ is byte for byte what lands in the file, and what ``setupfix correct --offsets``
 from __future__ import annotations
 
 from collections.abc import Callable
+from pathlib import PurePath
 
 from setupfix.errors import ExportError
 from setupfix.pipeline.controllers import CONTROLLERS as _REGISTRY
+from setupfix.pipeline.controllers import PROGRAM_SUFFIX
 from setupfix.pipeline.export import Exported, export, offsets_text
 from setupfix.pipeline.session import OpenedReport, export_cycles
 from setupfix.pipeline.writers import check_target
 from setupfix.tui.screens.export import ExportRequest
 
-__all__ = ["CONTROLLERS", "preview", "write_offsets"]
+__all__ = ["CONTROLLERS", "SUFFIXES", "export_name", "preview", "write_offsets"]
 
 #: Controller formats offered, in menu order (the pipeline's registry).
 CONTROLLERS: tuple[str, ...] = tuple(_REGISTRY)
+#: File suffix by controller: a program's (:data:`~setupfix.pipeline.controllers.PROGRAM_SUFFIX`), the CSV's.
+SUFFIXES: dict[str, str] = {"csv": ".csv", **PROGRAM_SUFFIX}
+
+
+def export_name(path: str, controller: str) -> str:
+    """``path`` with the suffix of ``controller`` (``offsets.csv`` → ``offsets.nc`` for fanuc) when it ends in
+    one of the export suffixes or has none; any other name is the operator's and is kept."""
+    if not path.strip():
+        return path
+    name = PurePath(path).name
+    stem, dot, suffix = name.rpartition(".")
+    if dot and f".{suffix.lower()}" not in SUFFIXES.values():
+        return path
+    return path[:len(path) - len(name)] + (stem if dot else name) + SUFFIXES.get(controller, "")
 
 
 def preview(opened: OpenedReport, cycle: int) -> Callable[[str], str]:

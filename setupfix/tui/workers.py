@@ -12,33 +12,43 @@ from pathlib import Path
 from textual.app import App
 from textual.worker import get_current_worker
 
-from setupfix.model import ProcessModel
+from setupfix.errors import SetupfixError
+from setupfix.model import ProcessModel, load_model
 from setupfix.optimize import CorrectionProblem
 from setupfix.pipeline import session, view
 from setupfix.pipeline.compare import Comparison
 from setupfix.pipeline.diagnose import DiagnoseRequest, diagnose_reports
-from setupfix.pipeline.correct import load_request
-from setupfix.pipeline.requests import CycleOptions, ReadOptions, SolveOptions
+from setupfix.pipeline.correct import load_request, open_history
+from setupfix.pipeline.requests import CurrentOffsets, CycleOptions, ReadOptions, SolveOptions
 from setupfix.pipeline.session import compare_steps, store_parts
+from setupfix.pipeline.spc import SpcOutcome, SpcRequest, spc_report
 from setupfix.pipeline.thermal import predict_drift
 from setupfix.tui.messages import CompareProgress
 
-__all__ = ["open_report", "drift", "compare", "history", "diagnose"]
+__all__ = ["open_report", "drift", "compare", "history", "diagnose", "capability"]
 
 
 def open_report(model: Path, report: Path, *, read: ReadOptions, cycles: CycleOptions, solve: SolveOptions,
                 db: Path | None, current: Path | None,
-                thermal: tuple[Path, Path, str | None, float | None] | None) -> session.OpenedReport:
-    """Thread worker: the request ``correct`` builds from these inputs (every file read once,
-    :func:`~setupfix.pipeline.correct.load_request`), and the report opened with it.
+                thermal: tuple[Path, Path, str | None, float | None] | None) -> tuple[session.OpenedReport, str]:
+    """Thread worker: the request ``correct`` builds from these inputs
+    (:func:`~setupfix.pipeline.correct.load_request`), the report opened with it, and "" — or, when
+    ``current`` does not fit ``model`` (the operator switched to another model), the report opened
+    without it and the one-line reason.
 
     A history store not created yet (the first export creates it) holds no history.
     """
     saved, log, at, dead_band = thermal if thermal is not None else (None, None, None, None)
-    request = load_request(model, read=read, cycles=cycles, solve=solve, current=current,
+    loaded, problem = load_model(model), ""
+    if current is not None:  # re-read against this model: a mismatch is said, not fatal
+        try:
+            CurrentOffsets.read(current, loaded)
+        except SetupfixError as exc:
+            problem, current = " ".join(f"--current does not fit {model.name}: {exc}".split()), None
+    request = load_request(loaded, read=read, cycles=cycles, solve=solve, current=current,
                            store=db if db is not None and db.is_file() else None, thermal=saved, temperatures=log,
                            at=at, thermal_dead_band=dead_band)
-    return session.open_report(request, report)
+    return session.open_report(request, report), problem
 
 
 def drift(model: Path, log: Path) -> view.DriftView:
@@ -72,3 +82,10 @@ def diagnose(model: Path, source: Path, store: bool, process: Path | None = None
                else DiagnoseRequest(model, (source,), process=proc))
     outcome = diagnose_reports(request)
     return view.diagnosis_view(outcome)
+
+
+def capability(db: Path) -> SpcOutcome:
+    """Thread worker: ``setupfix spc`` of the history store (capability, control charts, rule flags);
+    a store that does not exist is an error naming it (never created here)."""
+    with open_history(db) as store:
+        return spc_report(store, SpcRequest())

@@ -50,3 +50,44 @@ def test_capability_screen_shows_every_characteristic(tmp_path: Path):
             assert not isinstance(app.screen, CapabilityScreen)
 
     run(scenario())
+
+
+def test_k_opens_the_capability_of_the_history_store_and_says_when_there_is_none(make_app, tmp_path: Path):
+    from setupfix.tui.screens.capability import CapabilityScreen
+    from setupfix.tui.screens.help import HELP
+
+    db = closed_loop_store(tmp_path)
+    with open_store(db) as store:
+        expected = capability_rows(spc_report(store, SpcRequest()))
+    assert "| `k` |" in HELP and "| `Home` `End` |" in HELP
+
+    async def scenario() -> None:
+        app = make_app(db=db)
+        async with app.run_test(size=(120, 40)) as pilot:
+            await settle(pilot)
+            await pilot.press("k")
+            await settle(pilot)
+            screen = app.screen
+            assert isinstance(screen, CapabilityScreen), [n.message for n in app._notifications]
+            table = screen.query_one("#capability")
+            shown = [[str(c) for c in table.get_row_at(i)] for i in range(table.row_count)]
+            assert [(r[0], r[2], r[7]) for r in shown] == [(r.name, r.cpk, r.rules) for r in expected]
+            await pilot.press("escape")
+            await pilot.pause()
+            assert not isinstance(app.screen, CapabilityScreen)
+        # no store given: a message, no screen; a store that is not there: named, and not created
+        for kwargs in ({}, {"db": tmp_path / "missing.db"}):
+            app = make_app(**kwargs)
+            async with app.run_test(size=(80, 24)) as pilot:
+                await settle(pilot)
+                await pilot.press("k")
+                await settle(pilot)
+                assert not isinstance(app.screen, CapabilityScreen) and app.is_running
+                notes = [(n.title, n.message) for n in app._notifications]
+                if kwargs:
+                    assert any(t == "capability failed" and str(kwargs["db"]) in m for t, m in notes), notes
+                    assert not kwargs["db"].exists()
+                else:
+                    assert any(t == "capability" and "--db STORE" in m for t, m in notes), notes
+
+    run(scenario())

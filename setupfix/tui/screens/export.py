@@ -29,15 +29,20 @@ class ExportRequest:
 
 
 class ExportScreen(ModalScreen[ExportRequest | None]):
-    """Shows the text ``render(controller)`` returns; ctrl+s (or Write) writes it, escape cancels."""
+    """Shows the text ``render(controller)`` returns; ctrl+s (or Write) writes it, escape cancels.
+
+    ``rename(path, controller)``, when given, is the file name that follows a newly chosen controller.
+    """
 
     BINDINGS: ClassVar[list[BindingType]] = [Binding("ctrl+s", "write", "Write"), Binding("escape", "cancel", "Cancel")]
 
-    def __init__(self, controllers: Sequence[str], render: Callable[[str], str], path: str) -> None:
+    def __init__(self, controllers: Sequence[str], render: Callable[[str], str], path: str, *,
+                 rename: Callable[[str, str], str] | None = None) -> None:
         super().__init__()
         self.controllers = list(controllers)
         self.render_text = render
-        self.path = path
+        self.rename = rename
+        self.path = rename(path, self.controllers[0]) if rename else path
         self.refusal = ""
         self.text = ""  #: exactly what Write writes
 
@@ -60,6 +65,9 @@ class ExportScreen(ModalScreen[ExportRequest | None]):
     @on(Select.Changed, "#export-controller")
     def _controller(self, event: Select.Changed) -> None:
         self.query_one("#export-text", Static).update(Text(self._text(str(event.value)), no_wrap=True))
+        if self.rename is not None:
+            field = self.query_one("#export-path", Input)
+            field.value = self.rename(field.value, str(event.value))
 
     def _text(self, controller: str) -> str:
         """The text to write, or the reason there is none (then Write refuses)."""

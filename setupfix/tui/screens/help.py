@@ -24,10 +24,13 @@ HELP = """\
 | `c` | compare every optimiser on this part (progress; `x` cancels) |
 | `x` | cancel the running work |
 | `f` | filter the dimensions by station (all → P1 → P2 …) |
-| `s` | sort the dimensions (model order, margin after, deviation, name, station); or click a header |
+| `s` | sort the dimensions: model order (below 120×30 out of tolerance first), margin after, deviation, … |
+| click | a column header sorts by it |
 | `[` `]` | previous / next part (cycle) of the report |
-| `e` | export the offsets (choose the controller format, see the exact text, confirm) |
+| `Home` `End` | the first / the latest part (cycle) of a multi-cycle report |
+| `e` | export the offsets (choose the controller format, the file's suffix follows it; see the text, confirm) |
 | `d` | diagnose the history (one key) |
+| `k` | capability of the history store (`--db`): Cpk per dimension, individuals sparkline, Nelson rule flags |
 | `1`…`5` | correction · compare · thermal · history · match tabs |
 | `?` | this help |
 | `q` | quit |
@@ -43,6 +46,7 @@ HELP = """\
 | `⚑` | given up: no setup correction brings it in (the NC program or the process must) |
 | `├──●──┼──┤` | the tolerance zone: limits, nominal, the value; `◀` `▶` beyond a limit |
 | `◆limit` | the register is at its limit |
+| `W1.X` `W1.C` `T5.R` | register components of a multi-axis model: WKS axis, WKS rotation (degrees, °), tool radius |
 
 δ is the error budget: the smallest distance of any dimension to its nearer limit
 (negative when one is out). The bonus is δ after − δ before.

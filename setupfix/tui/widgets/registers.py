@@ -1,4 +1,4 @@
-"""The recommendation: one row per register, what to change and the rules that changed it."""
+"""The recommendation: one row per register (component), what to change and the rules that changed it."""
 
 from __future__ import annotations
 
@@ -9,11 +9,15 @@ from rich.text import Text
 from setupfix.tui.widgets.plain import PlainTable
 from setupfix.pipeline.view import RegisterRow, signed
 
-__all__ = ["RegisterTable"]
+__all__ = ["RegisterTable", "DEGREES"]
+
+#: The unit of a WKS rotation component (``W1.C``): the model's rotation is in degrees.
+DEGREES = "°"
 
 
 class RegisterTable(PlainTable):
-    """Register, model ID, wear/geometry, delta, current and new value, flags and safety rules.
+    """Controller register, model ID (a component ``W1.X`` / ``W1.C`` / ``T5.R`` in a multi-axis model),
+    wear/geometry, delta, current and new value, unit, flags and safety rules.
 
     Column widths are set up front, as in :class:`DimensionTable`.
     """
@@ -21,18 +25,24 @@ class RegisterTable(PlainTable):
     def on_mount(self) -> None:
         self.cursor_type = "row"
 
-    def show(self, rows: Sequence[RegisterRow], *, digits: int = 3) -> None:
+    def show(self, rows: Sequence[RegisterRow], *, unit: str, digits: int = 3, rotation_digits: int = 4) -> None:
+        """``unit`` is the model's length unit; a rotation component (``C``) is in degrees, shown with
+        ``rotation_digits`` decimals (its own grid)."""
         self.clear(columns=True)
-        cells = [[r.register, r.id, r.offset, signed(r.delta, digits), signed(r.current, digits),
-                  signed(r.new, digits), r.flags, "; ".join(r.rules)] for r in rows]
+        cells = []
+        for r in rows:
+            rotation = r.component == "C"
+            d = rotation_digits if rotation else digits
+            cells.append([r.register, r.id, r.offset, signed(r.delta, d), signed(r.current, d), signed(r.new, d),
+                          DEGREES if rotation else unit, r.flags, "; ".join(r.rules)])
         for i, (label, key) in enumerate((("reg", "register"), ("id", "id"), ("offset", "offset"), ("Δ", "delta"),
-                                          ("current", "current"), ("new", "new"), ("", "flags"),
-                                          ("rules", "rules"))):
+                                          ("current", "current"), ("new", "new"), ("unit", "unit"),
+                                          ("", "flags"), ("rules", "rules"))):
             self.add_column(label, key=key, width=max([len(label), *(len(c[i]) for c in cells)]))
         for r, c in zip(rows, cells, strict=True):
             moved = r.delta != 0.0
             self.add_row(
                 Text(c[0], style="bold" if moved else "dim"), c[1], c[2],
                 Text(c[3], style="bold" if moved else "dim", justify="right"),
-                Text(c[4], justify="right"), Text(c[5], justify="right"),
-                Text(c[6], style="bold yellow" if r.at_limit else "dim"), c[7], key=r.id)
+                Text(c[4], justify="right"), Text(c[5], justify="right"), c[6],
+                Text(c[7], style="bold yellow" if r.at_limit else "dim"), c[8], key=r.id)
