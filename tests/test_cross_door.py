@@ -217,6 +217,7 @@ def door_batch(case: Case, tmp: Path) -> Decisions:
 
 def door_session(case: Case, tmp: Path) -> Decisions:
     """The TUI's session: its open worker with the inputs ``setupfix tui`` gives it, report by report."""
+    from setupfix.pipeline.stores import StoreRef
     from setupfix.tui.workers import open_report
 
     db = _store_copy(case, tmp, "session")
@@ -224,7 +225,8 @@ def door_session(case: Case, tmp: Path) -> Decisions:
     for report in case.reports:
         opened, unfit = open_report(case.model, report,
                                     read=ReadOptions(columns=str(case.columns) if case.columns else None),
-                                    cycles=CycleOptions.of(case.stations), solve=SolveOptions(), db=db,
+                                    cycles=CycleOptions.of(case.stations), solve=SolveOptions(),
+                                    db=StoreRef(str(db)) if db is not None else None,
                                     current=case.current, thermal=(*case.thermal, AT, None) if case.thermal else None)
         assert not opened.problem and not unfit, (opened.problem, unfit)  # the case's --current fits its model
         for c in opened.corrections:

@@ -6,7 +6,8 @@ import argparse
 from pathlib import Path
 
 from setupfix.cli._choices import OPTIMIZERS
-from setupfix.cli._common import add_objective_option, add_report_options, add_thermal_options, cycles_of, read_options
+from setupfix.cli._common import (add_machine_options, add_objective_option, add_report_options, add_thermal_options,
+                                  cycles_of, read_options)
 
 
 def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
@@ -17,7 +18,9 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
     p.add_argument("report", metavar="REPORT", nargs="?", type=Path, default=None,
                    help="CMM report in any supported format, or a folder to watch")
     p.add_argument("--model", metavar="MODEL", type=Path, default=None, help="process model TOML")
-    p.add_argument("--db", metavar="STORE", type=Path, default=None, help="history store (SQLite file)")
+    p.add_argument("--db", metavar="STORE", default=None,
+                   help="history store: a file (SQLite) or a postgresql:// URL; exports are recorded in it")
+    add_machine_options(p)
     p.add_argument("--current", metavar="FILE", type=Path, default=None,
                    help="the controller's current offsets (CSV register,value; a multi-axis model: "
                         "register,axis,value, one row per component): new values and absolute exports; re-read "
@@ -40,7 +43,8 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
 def run(args: argparse.Namespace) -> int:
     from setupfix.tui.app import Inputs, SetupfixApp  # deferred: the CLI never loads textual otherwise
 
-    SetupfixApp(Inputs(model=args.model, report=args.report, db=args.db, current=args.current,
+    SetupfixApp(Inputs(model=args.model, report=args.report, db=args.db, machine=args.machine,
+                       operator=args.operator, current=args.current,
                        thermal=Path(args.thermal) if args.thermal else None,
                        temperatures=Path(args.temperatures) if args.temperatures else None, process=args.process,
                        at=args.at,

@@ -54,6 +54,9 @@ class StoreRef:
     machine: str | None = None
     operator: str | None = None
 
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "location", os.fspath(self.location))  # a path object is kept as its text
+
     @classmethod
     def of(cls, location: str | os.PathLike[str] | StoreRef) -> StoreRef:
         """``location`` as a reference (a reference is returned as it is)."""
@@ -65,6 +68,14 @@ class StoreRef:
             return self
         return StoreRef(self.location, model.machine, self.operator)
 
+    @property
+    def exists(self) -> bool:
+        """Whether the store is there to read: a file that exists (a server database is checked on connecting)."""
+        return is_server(self.location) or Path(self.location).is_file()
+
+    def __str__(self) -> str:
+        return self.location
+
     def open(self, *, existing: bool = True) -> Store:
         """Open the store for this machine and operator.
 
@@ -74,7 +85,7 @@ class StoreRef:
             ``existing`` and the file does not exist (a server database is checked on connecting), or the
             store cannot be opened.
         """
-        if existing and not is_server(self.location) and not Path(self.location).is_file():
+        if existing and not self.exists:
             raise StoreError("no history store here (import reports with 'setupfix history import')",
                              location=SourceLocation(self.location))
         return open_store(self.location, machine=self.machine, operator=self.operator)

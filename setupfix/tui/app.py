@@ -33,6 +33,7 @@ from setupfix.pipeline.compare import DEFAULT_METHODS, Comparison
 from setupfix.pipeline.requests import CycleCorrection, CycleOptions, ReadOptions, SolveOptions
 from setupfix.pipeline.session import FolderWatch, OpenedReport, record_applied
 from setupfix.pipeline.spc import SpcOutcome
+from setupfix.pipeline.stores import StoreRef
 from setupfix.tui import workers
 from setupfix.tui.exporting import CONTROLLERS, export_name, preview, write_offsets
 from setupfix.tui.messages import CompareProgress
@@ -57,7 +58,9 @@ class Inputs:
 
     model: Path | None = None
     report: Path | None = None
-    db: Path | None = None
+    db: str | None = None  #: history store: a file or a postgresql:// URL
+    machine: str | None = None  #: ``--machine`` (default: the model's ``[process] machine``)
+    operator: str | None = None  #: ``--operator`` (default: the login name)
     current: Path | None = None
     thermal: Path | None = None
     temperatures: Path | None = None
@@ -72,6 +75,11 @@ class Inputs:
     trials: int = 12
     offsets: str = "offsets.csv"
     poll_seconds: float = 2.0
+
+    @property
+    def store(self) -> StoreRef | None:
+        """The history store with its machine and operator (None without ``--db``)."""
+        return None if self.db is None else StoreRef(self.db, self.machine, self.operator)
 
 
 class SetupfixApp(App[None]):
@@ -178,7 +186,7 @@ class SetupfixApp(App[None]):
         self.run_worker(partial(workers.open_report, self.model_path, self.report_path, read=i.read, cycles=i.cycles,
                                 solve=SolveOptions(self.optimizer, i.seed, None,
                                                    i.objective if self.optimizer == "exact" else None),
-                                db=i.db, current=i.current,
+                                db=i.store, current=i.current,
                                 thermal=thermal),
                         name="open", group="open", thread=True, exclusive=True, exit_on_error=False)
 
@@ -268,11 +276,12 @@ class SetupfixApp(App[None]):
         else:
             status.update("✓ every characteristic of the report matches a dimension of the model.")
         self._show()
-        if self.inputs.db is not None and not self.inputs.db.is_file():  # reading never creates it
+        store = self.inputs.store
+        if store is not None and not store.exists:  # reading never creates it
             self.query_one(HistoryPanel).status(f"no history store at {self.inputs.db} yet: the first export "
                                                 "creates it")
-        elif self.inputs.db is not None:
-            self.run_worker(partial(workers.history, opened.model, self.inputs.db), name="history", group="history",
+        elif store is not None:
+            self.run_worker(partial(workers.history, opened.model, store), name="history", group="history",
                             thread=True, exclusive=True, exit_on_error=False)
 
     def _compared(self, comparison: object) -> None:
@@ -432,12 +441,12 @@ class SetupfixApp(App[None]):
 
     def action_capability(self) -> None:
         """Capability per stored dimension (``setupfix spc`` of the history store), over the screen."""
-        if self.inputs.db is None:
+        if self.inputs.store is None:
             self.notify("no history store given: start with --db STORE (capability is computed from the stored "
                         "measurements)", title="capability", severity="warning", timeout=8)
             return
         self.notify(f"computing capability from {self.inputs.db} …", timeout=3)
-        self.run_worker(partial(workers.capability, self.inputs.db), name="capability", group="capability",
+        self.run_worker(partial(workers.capability, self.inputs.store), name="capability", group="capability",
                         thread=True, exclusive=True, exit_on_error=False)
 
     def action_tab(self, tab: str) -> None:
@@ -453,8 +462,8 @@ class SetupfixApp(App[None]):
             self.notify("open a model and a report first", severity="warning")
             return
         self.query_one(HistoryPanel).status(f"diagnosing the reports in {self._series_source()} …")
-        self.run_worker(partial(workers.diagnose, self.model_path, Path(self._series_source()),
-                                self.inputs.db is not None, self.inputs.process),
+        source = self.inputs.store or Path(self._series_source())
+        self.run_worker(partial(workers.diagnose, self.model_path, source, self.inputs.process),
                         name="diagnose", group="diagnose", thread=True, exclusive=True, exit_on_error=False)
 
     def _series_source(self) -> str:
@@ -512,9 +521,9 @@ class SetupfixApp(App[None]):
             return
         program = "" if exported.program_number is None else f" (program {exported.program_number})"
         self.notify(f"wrote {request.controller} offsets{program} to {request.path}", title="export")
-        if self.inputs.db is not None:
+        if self.inputs.store is not None:
             try:  # exactly what was written: its rows, and the cycles it holds
-                added = record_applied(self.inputs.db, exported, opened.corrections)
+                added = record_applied(self.inputs.store, exported, opened.corrections)
             except SetupfixError as exc:
                 self.notify(str(exc), title="history store", severity="error", timeout=12)
                 return

@@ -18,7 +18,8 @@ from setupfix.optimize import CorrectionProblem
 from setupfix.pipeline import session, view
 from setupfix.pipeline.compare import Comparison
 from setupfix.pipeline.diagnose import DiagnoseRequest, diagnose_reports
-from setupfix.pipeline.correct import load_request, open_history
+from setupfix.pipeline.correct import load_request
+from setupfix.pipeline.stores import StoreRef
 from setupfix.pipeline.requests import CurrentOffsets, CycleOptions, ReadOptions, SolveOptions
 from setupfix.pipeline.session import compare_steps, store_parts
 from setupfix.pipeline.spc import SpcOutcome, SpcRequest, spc_report
@@ -29,7 +30,7 @@ __all__ = ["open_report", "drift", "compare", "history", "diagnose", "capability
 
 
 def open_report(model: Path, report: Path, *, read: ReadOptions, cycles: CycleOptions, solve: SolveOptions,
-                db: Path | None, current: Path | None,
+                db: StoreRef | None, current: Path | None,
                 thermal: tuple[Path, Path, str | None, float | None] | None) -> tuple[session.OpenedReport, str]:
     """Thread worker: the request ``correct`` builds from these inputs
     (:func:`~setupfix.pipeline.correct.load_request`), the report opened with it, and "" — or, when
@@ -46,7 +47,7 @@ def open_report(model: Path, report: Path, *, read: ReadOptions, cycles: CycleOp
         except SetupfixError as exc:
             problem, current = " ".join(f"--current does not fit {model.name}: {exc}".split()), None
     request = load_request(loaded, read=read, cycles=cycles, solve=solve, current=current,
-                           store=db if db is not None and db.is_file() else None, thermal=saved, temperatures=log,
+                           store=db if db is not None and db.exists else None, thermal=saved, temperatures=log,
                            at=at, thermal_dead_band=dead_band)
     return session.open_report(request, report), problem
 
@@ -68,24 +69,24 @@ def compare(app: App[None], problem: CorrectionProblem, trials: int, seed: int) 
     return result
 
 
-def history(model: ProcessModel, db: Path) -> tuple[list[view.CycleBudget], list[str]]:
+def history(model: ProcessModel, db: StoreRef) -> tuple[list[view.CycleBudget], list[str]]:
     """Thread worker: the error budget of every cycle in the history store."""
     parts, notes = store_parts(model, db)
     return view.cycle_budgets(model, parts), notes
 
 
-def diagnose(model: Path, source: Path, store: bool, process: Path | None = None) -> view.DiagnosisView:
+def diagnose(model: Path, source: Path | StoreRef, process: Path | None = None) -> view.DiagnosisView:
     """Thread worker: ``setupfix diagnose`` over the history store or a folder of reports (and its logs), with
     the process log given (``--process``) joined per part."""
     proc = str(process) if process is not None else None
-    request = (DiagnoseRequest(model, db=source, process=proc) if store
+    request = (DiagnoseRequest(model, db=source, process=proc) if isinstance(source, StoreRef)
                else DiagnoseRequest(model, (source,), process=proc))
     outcome = diagnose_reports(request)
     return view.diagnosis_view(outcome)
 
 
-def capability(db: Path) -> SpcOutcome:
+def capability(db: StoreRef) -> SpcOutcome:
     """Thread worker: ``setupfix spc`` of the history store (capability, control charts, rule flags);
     a store that does not exist is an error naming it (never created here)."""
-    with open_history(db) as store:
+    with db.open() as store:
         return spc_report(store, SpcRequest())

@@ -127,8 +127,8 @@ def test_the_tui_diagnosis_takes_the_process_log():
     the log per part and names the process effects, as ``diagnose --process`` does."""
     from setupfix.tui import workers
 
-    with_log = workers.diagnose(MODEL, PLATE, False, LOG)
-    without = workers.diagnose(MODEL, PLATE, False)
+    with_log = workers.diagnose(MODEL, PLATE, LOG)
+    without = workers.diagnose(MODEL, PLATE)
     assert {e.kind for e in with_log.effects} == {"process"}
     assert "process" not in {e.kind for e in without.effects}
     assert with_log.after[0] < without.after[0]
