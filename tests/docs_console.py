@@ -90,7 +90,7 @@ def matches(expected: str, actual: str) -> bool:
             parts = [re.escape(p) for p in line.rstrip().split("…")]
             pattern.append("[^\n]*".join(parts) + r"[ \t]*\n")
     regex = "".join(pattern)
-    text = "\n".join(l.rstrip() for l in actual.rstrip("\n").split("\n")) + "\n" if actual.strip() else ""
+    text = "\n".join(line.rstrip() for line in actual.rstrip("\n").split("\n")) + "\n" if actual.strip() else ""
     return re.fullmatch(regex, text) is not None
 
 

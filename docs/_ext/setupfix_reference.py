@@ -9,6 +9,7 @@ the sources, so the site can never describe a parser that is not the one install
 from __future__ import annotations
 
 import argparse
+import contextlib
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
@@ -57,10 +58,8 @@ def _describe(action: argparse.Action, parser: argparse.ArgumentParser) -> str:
     params: dict[str, Any] = {**vars(action), "prog": parser.prog}
     if isinstance(params.get("choices"), dict | list | tuple | set | frozenset):
         params["choices"] = ", ".join(map(str, params["choices"]))
-    try:
+    with contextlib.suppress(KeyError, TypeError, ValueError):
         text = text % params
-    except (KeyError, TypeError, ValueError):
-        pass
     extra = []
     if action.choices is not None and not isinstance(action, argparse._SubParsersAction):
         extra.append("choices: " + ", ".join(f"`{c}`" for c in action.choices))
