@@ -128,12 +128,17 @@ def key_tables() -> dict[str, dict[str, frozenset[str]]]:
         "tables": base,
         "multi-axis": {s: frozenset(k) for s, k in axes.MULTI_KEYS.items()},
         "sections": {"safety": frozenset(safety.SAFETY_KEYS), "safety.dimensions.ID": frozenset(safety.DIMENSION_KEYS),
+                     # the head of [effects]: literal in effects.py (tested in tests/docs/test_reference.py)
+                     "effects": EFFECTS_HEAD,
                      "effects.ID": frozenset(effects._KEYS) - free},
         "stations": {"stations.ID": frozenset(stations._STATION_KEYS) - free,
                      "template": frozenset(stations._TEMPLATE_KEYS)},
         "free": {"any table": free},
     }
 
+
+#: The keys of the ``[effects]`` table itself (its sub-tables are the effects).
+EFFECTS_HEAD = frozenset({"origin", "cycle_hours", "last_hours"})
 
 _TABLE_NAME = {"process": "[process]", "machine": "[machine.ID]", "wks": "[wks.ID]", "tools": "[tools.ID]",
                "features": "[features.ID]", "dimensions": "[dimensions.ID]"}

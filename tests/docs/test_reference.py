@@ -85,3 +85,17 @@ def test_every_effect_kind_is_in_the_reference() -> None:
     text = gen.KEYS_PAGE.read_text(encoding="utf-8")
     for kind in EFFECT_KINDS:
         assert f"`{kind}`" in text
+
+
+def test_the_effects_head_keys_are_the_loaders() -> None:
+    """The [effects] head keys the generator lists load, and a key beside them is refused."""
+    import tomllib
+
+    from setupfix.errors import ModelError
+    from setupfix.model.loader import model_from_dict
+    base = tomllib.loads((ROOT / "sample_reports/guide_pins/model.toml").read_text(encoding="utf-8"))
+    head = {"origin": "2026-11-02T06:00:00", "cycle_hours": 0.5, "last_hours": 2.0}
+    assert set(head) == gen.EFFECTS_HEAD
+    model_from_dict({**base, "effects": head})
+    with pytest.raises(ModelError):
+        model_from_dict({**base, "effects": {**head, "origin_time": 1.0}})
