@@ -20,7 +20,7 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 DOCS = ROOT / "docs"
-PAGES = sorted([*DOCS.rglob("*.md"), ROOT / "README.md"])
+PAGES = sorted([*(p for p in DOCS.rglob("*.md") if "_build" not in p.parts), ROOT / "README.md"])
 
 _FENCE = re.compile(r"^(`{3,})(\S*)[^\n]*$")
 _FILE = re.compile(r"^<!-- file: (\S+) -->$")
