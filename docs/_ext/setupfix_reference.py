@@ -74,12 +74,17 @@ def _describe(action: argparse.Action, parser: argparse.ArgumentParser) -> str:
 def _form(action: argparse.Action) -> str:
     if not action.option_strings:
         meta = action.metavar or action.dest
-        return f"`{meta}`" + (" …" if action.nargs in ("*", "+") else "")
+        return f"`{_cell(str(meta))}`" + (" …" if action.nargs in ("*", "+") else "")
     meta = ""
     if action.nargs != 0:
         m = action.metavar or action.dest.upper()
         meta = " " + (" ".join(m) if isinstance(m, tuple) else str(m))
-    return ", ".join(f"`{o}{meta}`" for o in action.option_strings)
+    return ", ".join(f"`{o}{_cell(meta)}`" for o in action.option_strings)
+
+
+def _cell(code: str) -> str:
+    """Code in a table cell: a ``|`` would end the cell (``--db PATH|URL``)."""
+    return code.replace("|", "\\|")
 
 
 def cli_markdown() -> str:

@@ -20,3 +20,5 @@ def test_site_builds_with_warnings_as_errors(tmp_path: Path) -> None:
     assert done.returncode == 0, done.stderr
     html = (tmp_path / "html" / "reference" / "cli.html").read_text(encoding="utf-8")
     assert "--program-number" in html and "setupfix history migrate" in html
+    assert "<p>`" not in html, "a table cell split inside code (an unescaped | ?)"
+    assert "PATH|URL</span>" in html
