@@ -1,4 +1,4 @@
-"""Regenerate the README's screenshots of ``setupfix tui`` (Textual's SVG export).
+"""Regenerate the documentation's screenshots of ``setupfix tui`` (Textual's SVG export).
 
     python docs/tui_screenshots.py
 
