@@ -103,7 +103,7 @@ def run(args: argparse.Namespace) -> int:
     else:
         write()
     if args.html:
-        write_correction_page(outcome, args.html, store=args.store)
+        write_correction_page(outcome, args.html, store=store_ref(args, args.store))
     for c in outcome.rejected:
         print(f"error: {c.part.report}: part {c.part.part or '—'}: {c.recommendation.alarm}", file=sys.stderr)
     for c in cycles:

@@ -20,13 +20,13 @@ from __future__ import annotations
 
 import html
 import math
-from pathlib import Path
 from collections.abc import Iterable, Sequence
 
 import numpy as np
 
 from setupfix.pipeline.present import format_flags, verdict_label, verdict_line
 from setupfix.pipeline.requests import CorrectOutcome, CycleCorrection
+from setupfix.pipeline.stores import StoreRef
 from setupfix.pipeline.spc import TEXT_LIST, DimensionSpc, SpcOutcome, interval_text
 from setupfix.safety import short_list
 from setupfix.spc import NELSON_RULES, Capability
@@ -337,20 +337,19 @@ def correction_page(outcome: CorrectOutcome | CycleCorrection, history: SpcOutco
     return _page(title, body)
 
 
-def write_correction_page(outcome: CorrectOutcome, target: str, store: str | None = None) -> None:
+def write_correction_page(outcome: CorrectOutcome, target: str, store: StoreRef | None = None) -> None:
     """``correct --html``: :func:`correction_page` written atomically to ``target`` (``-``: standard output).
 
-    With ``store`` (``correct --store``, an existing history store) the page also holds the control
-    charts and capability of the report's dimensions from the stored series.
+    With ``store`` (``correct --store``: a file or a server, for its machine) the page also holds the
+    control charts and capability of the report's dimensions from the stored series.
     """
     from setupfix.pipeline.spc import SpcRequest, spc_report
     from setupfix.pipeline.writers import write_text
 
     history = None
-    if store is not None and Path(store).is_file():
-        from setupfix.store import open_store
-
-        names = tuple(dict.fromkeys(d.name for c in outcome.cycles for d in c.model.dimensions))
-        with open_store(store) as opened:
+    if store is not None and store.exists and outcome.cycles:
+        model = outcome.cycles[0].model
+        names = tuple(dict.fromkeys(d.name for d in model.dimensions))
+        with store.for_model(model).open() as opened:
             history = spc_report(opened, SpcRequest(dimensions=names))
     write_text(target, correction_page(outcome, history))
