@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import contextlib
 import sqlite3
+import time
 from collections.abc import Iterable, Sequence
 from pathlib import Path
 from typing import Any
@@ -60,6 +61,37 @@ def _failure(exc: BaseException, path: str) -> StoreError:
     return StoreError(f"history store: {text}", location=SourceLocation(path))
 
 
+def _connect(path: str) -> sqlite3.Connection:
+    """Open, switch to WAL and migrate ``path``; retried while another process creates it.
+
+    SQLite answers ``SQLITE_BUSY`` at once, without its busy handler, to a connection
+    that reads a WAL file another process is still setting up (the journal-mode switch
+    of a new store, the recovery of a WAL index).  Every step here is idempotent, so
+    the whole open is tried again with a growing pause until :data:`BUSY_TIMEOUT_S`.
+    """
+    deadline = time.monotonic() + BUSY_TIMEOUT_S
+    pause = 0.01
+    while True:
+        db: sqlite3.Connection | None = None
+        try:
+            db = sqlite3.connect(path, timeout=BUSY_TIMEOUT_S, isolation_level=None)
+            db.execute("PRAGMA journal_mode = WAL")
+            db.execute("PRAGMA synchronous = FULL")
+            db.execute("PRAGMA foreign_keys = ON")
+            migrate(db, path)
+            return db
+        except BaseException as exc:
+            if db is not None:
+                db.close()
+            if not isinstance(exc, sqlite3.Error):
+                raise
+            busy = str(getattr(exc, "sqlite_errorname", "")).startswith(("SQLITE_BUSY", "SQLITE_LOCKED"))
+            if not busy or time.monotonic() + pause > deadline:
+                raise _failure(exc, path) from None
+        time.sleep(pause)
+        pause = min(2 * pause, 0.5)
+
+
 class SQLiteStore(ClaimingStore):
     """:class:`~setupfix.store.Store` in one SQLite file (created and migrated on open)."""
 
@@ -73,20 +105,7 @@ class SQLiteStore(ClaimingStore):
             raise StoreError(f"folder {str(Path(path).parent)!r} does not exist", location=self._where)
         if path != ":memory:" and Path(path).exists() and not Path(path).is_file():
             raise StoreError("the history store is not a file", location=self._where, hint="give a file (--db)")
-        db: sqlite3.Connection | None = None
-        try:
-            db = sqlite3.connect(path, timeout=BUSY_TIMEOUT_S, isolation_level=None)
-            db.execute("PRAGMA journal_mode = WAL")
-            db.execute("PRAGMA synchronous = FULL")
-            db.execute("PRAGMA foreign_keys = ON")
-            migrate(db, path)
-        except BaseException as exc:
-            if db is not None:
-                db.close()
-            if isinstance(exc, sqlite3.Error):
-                raise _failure(exc, path) from None
-            raise
-        self.db = db
+        self.db = _connect(path)
 
     def _execute(self, sql: str, args: Sequence[Any] = ()) -> sqlite3.Cursor:
         return self.db.execute(sql, args)
