@@ -160,7 +160,9 @@ def _model(rows: _Rows, blocks: list[tuple[float, int]], extra: int, question: t
     col_hi = np.r_[rows.kmax, np.full(extra, INF), [top] if with_t else [], np.ones(nb * na)]
     integer = np.r_[np.ones(n, bool), np.zeros(extra + (1 if with_t else 0), bool), np.ones(nb * na, bool)]
     a = vstack(parts).tocsr()
-    return LinearModel(c, a, np.concatenate(lo), np.concatenate(hi), col_lo, col_hi, integer=integer), off
+    model = LinearModel(c, a, np.concatenate(lo), np.concatenate(hi), col_lo, col_hi, integer=integer)
+    model.skip_presolve()
+    return model, off
 
 
 def count_levels(session: Session, row_dim: npt.NDArray[np.intp], n_dims: int, floors: Array, k: Array, t0: float,
