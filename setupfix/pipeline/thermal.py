@@ -21,7 +21,8 @@ import numpy.typing as npt
 from parsers.temperature import TemperatureLog, read_temperature_log
 from setupfix.errors import Note, ParameterError, ParseError, SourceLocation
 from setupfix.thermal.metrics import Scores, score
-from setupfix.thermal.models import DEFAULT_SEED, KalmanFusionModel, rebase
+from setupfix.thermal.estimator import DEFAULT_SEED, rebase
+from setupfix.thermal.kalman_model import KalmanFusionModel
 from setupfix.thermal.persist import UNITS, SavedModel
 from setupfix.thermal.registry import get_method, methods
 

@@ -13,7 +13,7 @@ from setupfix.errors import ExportError, ParameterError, ParseError
 from setupfix.pipeline import thermal as pipe
 from setupfix.pipeline.thermal_files import load_model, save_model
 from setupfix.thermal.metrics import score
-from setupfix.thermal.models import MRAModel
+from setupfix.thermal.estimator import MRAModel
 from setupfix.thermal.persist import SavedModel
 from setupfix.thermal.registry import get_method, make_model, methods
 
