@@ -386,7 +386,8 @@ def run_app(case: Case, report: Path, db: Path, offsets: Path) -> tuple[dict[str
     """The TUI (``setupfix tui`` with the case's options) on ``report``: its decisions and what its export wrote."""
     import asyncio
 
-    from setupfix.tui.app import Inputs, SetupfixApp
+    from setupfix.tui.app import SetupfixApp
+    from setupfix.tui.state import Inputs
 
     app = SetupfixApp(Inputs(model=case.model, report=report, db=db, current=case.current,
                              thermal=case.thermal[0] if case.thermal else None,
