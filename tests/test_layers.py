@@ -92,7 +92,7 @@ PIPELINE_RANKS = {
     "requests": 4,
     "correct": 5, "compare": 5, "export": 5, "batch_records": 5, "spc": 5, "dfq": 1,
     "batch": 6, "diagnose": 6,
-    "present": 7, "view": 7,
+    "present": 7, "view": 7, "analysis_view": 7,
     "history": 8, "session": 8, "html_report": 8,
 }
 

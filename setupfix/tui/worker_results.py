@@ -16,7 +16,7 @@ from textual.markup import escape
 from textual.worker import Worker, WorkerState
 
 from setupfix.errors import SetupfixError
-from setupfix.pipeline import view
+from setupfix.pipeline import analysis_view
 from setupfix.pipeline.compare import Comparison
 from setupfix.pipeline.requests import SolveOptions
 from setupfix.pipeline.session import OpenedReport
@@ -83,9 +83,9 @@ class WorkerResults(CorrectionDisplay):
                 self.query_one(HistoryPanel).budgets(budgets, unit=self._unit(), source=str(self.inputs.db))
                 for note in notes:
                     self.notify(note, title="history", severity="warning")
-            elif worker.name == "diagnose" and isinstance(worker.result, view.DiagnosisView):
+            elif worker.name == "diagnose" and isinstance(worker.result, analysis_view.DiagnosisView):
                 self.query_one(HistoryPanel).diagnosis(worker.result, source=self._series_source())
-            elif worker.name == "thermal" and isinstance(worker.result, view.DriftView):
+            elif worker.name == "thermal" and isinstance(worker.result, analysis_view.DriftView):
                 self.query_one(ThermalPanel).show(worker.result, source=str(self.inputs.temperatures))
 
     def _failed(self, what: str, error: BaseException | None) -> None:
@@ -143,7 +143,7 @@ class WorkerResults(CorrectionDisplay):
             panel.stopped("that comparison was for a previous report: press c to compare this one")
             return
         self.comparison = comparison
-        panel.show(view.compare_rows(comparison), view.convergence(comparison, 60),
+        panel.show(analysis_view.compare_rows(comparison), analysis_view.convergence(comparison, 60),
                    exact_f1=comparison.exact.margin_after, unit=self._unit(),
                    heading=f"{comparison.trials} seeded trials per method (seed {comparison.seed})"
                            + (f" on {c.part.report} {c.part.part}" if c else ""))
