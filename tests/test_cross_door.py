@@ -118,7 +118,7 @@ def current_offsets(path: Path) -> Path:
 @pytest.fixture(scope="module")
 def thermal(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Path]:
     """A grey-box thermal model fitted on the bundled training log, and the test log moved to cycle 01's day."""
-    from setupfix.pipeline.thermal import fit_file
+    from setupfix.pipeline.thermal_fit import fit_file
 
     d = tmp_path_factory.mktemp("thermal")
     saved = d / "drift.json"

@@ -86,9 +86,9 @@ def test_parsers_is_ours():
 # 7 renderers (text/JSON, TUI rows); 8 the doors' sessions (TUI session, history store).
 PIPELINE_RANKS = {
     "writers": 0, "checks": 0, "smoothing": 0, "stores": 0,
-    "controllers": 1, "thermal_files": 1, "cycles": 1, "scaffold_toml": 1,
+    "controllers": 1, "thermal_files": 1, "thermal_columns": 1, "cycles": 1, "scaffold_toml": 1,
     "thermal": 2, "parse": 2, "simulate": 2, "scaffold": 2, "model": 2,
-    "feedforward": 3, "series": 3, "batch_output": 3,
+    "feedforward": 3, "series": 3, "thermal_fit": 3, "batch_output": 3,
     "requests": 4,
     "correct": 5, "compare": 5, "export": 5, "batch_records": 5, "spc": 5, "dfq": 1,
     "batch": 6, "diagnose": 6,
