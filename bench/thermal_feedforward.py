@@ -37,7 +37,8 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from parsers.temperature import read_temperature_log
-from setupfix.pipeline.thermal import fit_log, predict_log
+from setupfix.pipeline.thermal import predict_log
+from setupfix.pipeline.thermal_fit import fit_log
 from setupfix.thermal.feedforward import drift_change
 from setupfix.thermal.registry import methods
 

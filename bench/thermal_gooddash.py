@@ -24,7 +24,8 @@ import pandas as pd
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from setupfix.thermal.metrics import score
-from setupfix.thermal.models import GreyModel, MRAModel
+from setupfix.thermal.estimator import MRAModel
+from setupfix.thermal.grey_model import GreyModel
 
 SHARED = Path(os.environ.get("SETUPFIX_SHARED", Path(__file__).resolve().parents[2] / "shared"))
 DATA = SHARED / "thermal-data" / "gooddash"

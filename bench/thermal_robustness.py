@@ -21,7 +21,9 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from setupfix.thermal.metrics import score
-from setupfix.thermal.models import GreyModel, KalmanFusionModel, MRAModel
+from setupfix.thermal.estimator import MRAModel
+from setupfix.thermal.grey_model import GreyModel
+from setupfix.thermal.kalman_model import KalmanFusionModel
 from setupfix.thermal.simulator import (
     add_sensor_error,
     constant_error,

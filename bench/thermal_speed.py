@@ -18,7 +18,8 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from setupfix.thermal import grey
-from setupfix.thermal.models import GreyModel, KalmanFusionModel
+from setupfix.thermal.grey_model import GreyModel
+from setupfix.thermal.kalman_model import KalmanFusionModel
 from setupfix.thermal.simulator import simulate, speed_profile
 
 

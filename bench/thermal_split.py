@@ -10,7 +10,7 @@ predicted as a log of its own — it starts warm, which is what the stored refer
 state is for.  Yardstick: a plain least-squares regression with intercept on the
 temperatures.  "old mra" is the behaviour before the reference state (rises from the
 test log's own first sample).  Every method through the registry and the pipeline
-(`pipeline.thermal.fit_log` / `predict_log`), kalman through its documented fallback
+(`pipeline.thermal_fit.fit_log` / `pipeline.thermal.predict_log`), kalman through its documented fallback
 (no spindle speed, no ambient column).  Grey methods with both response forms (eq. 2
 trapezoid and Tien's).  RMSE on the test part without its first sample, µm.
 "Diverges" = a prediction beyond 10× the largest measured |E|.  BLAS threads limited to 1
@@ -31,7 +31,8 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from parsers.temperature import read_temperature_log
-from setupfix.pipeline.thermal import fit_log, predict_log
+from setupfix.pipeline.thermal import predict_log
+from setupfix.pipeline.thermal_fit import fit_log
 from setupfix.thermal.metrics import score
 from setupfix.thermal.registry import methods
 

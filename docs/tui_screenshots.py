@@ -17,7 +17,8 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 os.chdir(ROOT)
 
-from setupfix.tui.app import Inputs, SetupfixApp  # noqa: E402
+from setupfix.tui.app import SetupfixApp  # noqa: E402
+from setupfix.tui.state import Inputs  # noqa: E402
 
 MODEL = Path("sample_reports/guide_pins/model.toml")
 REPORT = Path("sample_reports/guide_pins/cycle_01.csv")

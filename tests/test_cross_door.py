@@ -118,7 +118,7 @@ def current_offsets(path: Path) -> Path:
 @pytest.fixture(scope="module")
 def thermal(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Path]:
     """A grey-box thermal model fitted on the bundled training log, and the test log moved to cycle 01's day."""
-    from setupfix.pipeline.thermal import fit_file
+    from setupfix.pipeline.thermal_fit import fit_file
 
     d = tmp_path_factory.mktemp("thermal")
     saved = d / "drift.json"
@@ -386,7 +386,8 @@ def run_app(case: Case, report: Path, db: Path, offsets: Path) -> tuple[dict[str
     """The TUI (``setupfix tui`` with the case's options) on ``report``: its decisions and what its export wrote."""
     import asyncio
 
-    from setupfix.tui.app import Inputs, SetupfixApp
+    from setupfix.tui.app import SetupfixApp
+    from setupfix.tui.state import Inputs
 
     app = SetupfixApp(Inputs(model=case.model, report=report, db=db, current=case.current,
                              thermal=case.thermal[0] if case.thermal else None,

@@ -124,9 +124,9 @@ def cli_markdown() -> str:
 
 def key_tables() -> dict[str, dict[str, frozenset[str]]]:
     """Every key the model loader accepts, by table: ``{"one-axis": {"process": {...}}, ...}``."""
-    from setupfix.model import axes, effects, loader, safety, stations
-    free = frozenset(loader._FREE_TEXT)
-    base = {section: frozenset(keys) - free for section, keys in loader._KEYS.items()}
+    from setupfix.model import axes, effects, safety, stations, tables
+    free = frozenset(tables._FREE_TEXT)
+    base = {section: frozenset(keys) - free for section, keys in tables._KEYS.items()}
     for section in ("wks", "tools"):
         base[section] = base[section] | safety.REGISTER_KEYS
     return {
@@ -154,7 +154,7 @@ def keys_markdown() -> str:
     from setupfix.model import effects
     t = key_tables()
     lines = ["# Model keys", "",
-             "Generated from the model loader's key tables (`setupfix/model/loader.py` `_KEYS`,",
+             "Generated from the model loader's key tables (`setupfix/model/tables.py` `_KEYS`,",
              "`setupfix/model/axes.py` `MULTI_KEYS`, `setupfix/model/safety.py`, `setupfix/model/effects.py`,",
              "`setupfix/model/stations.py`) at every build; do not edit by hand. What each key means is in",
              "[the process model file](process-model.md); a key not listed here is refused by the loader",

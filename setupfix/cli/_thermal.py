@@ -132,15 +132,16 @@ def _warn(notes: Iterable[Note]) -> list[str]:
 
 
 def run(args: argparse.Namespace) -> int:
-    """Dispatch to :mod:`setupfix.pipeline.thermal`; printing only."""
+    """Dispatch to :mod:`setupfix.pipeline.thermal` and :mod:`setupfix.pipeline.thermal_fit`; printing only."""
     from setupfix.pipeline import thermal as pipe
+    from setupfix.pipeline import thermal_fit
     from setupfix.pipeline.thermal_files import check_target, prediction_csv, write_text
 
     if getattr(args, "output", None):
         check_target(args.output)  # a folder, device, FIFO or link is refused before any work
     if args.action == "fit":
-        result = pipe.fit_file(args.data, args.method, target=args.target, out=args.output,
-                               axis=args.axis, registers=_columns(args.registers), **_fit_options(args))
+        result = thermal_fit.fit_file(args.data, args.method, target=args.target, out=args.output,
+                                      axis=args.axis, registers=_columns(args.registers), **_fit_options(args))
         saved, tr = result.saved, result.saved.train
         warnings = _warn(result.notes)
         if args.json:
@@ -176,8 +177,8 @@ def run(args: argparse.Namespace) -> int:
         return OK
     anchor = pipe.parse_anchor(args.anchor) if args.anchor else None
     opts = _fit_options(args)
-    ev = pipe.evaluate_files(args.train, args.test, args.method, target=args.target, anchor=anchor,
-                             interval=opts.pop("interval"), sheet=opts.pop("sheet"), **opts)
+    ev = thermal_fit.evaluate_files(args.train, args.test, args.method, target=args.target, anchor=anchor,
+                                    interval=opts.pop("interval"), sheet=opts.pop("sheet"), **opts)
     _warn(ev.notes)
     if args.json:
         print(json.dumps({k: (_num(v) if isinstance(v, float) else v) for k, v in ev.as_json().items()}))

@@ -41,7 +41,8 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
 
 
 def run(args: argparse.Namespace) -> int:
-    from setupfix.tui.app import Inputs, SetupfixApp  # deferred: the CLI never loads textual otherwise
+    from setupfix.tui.app import SetupfixApp  # deferred: the CLI never loads textual otherwise
+    from setupfix.tui.state import Inputs
 
     SetupfixApp(Inputs(model=args.model, report=args.report, db=args.db, machine=args.machine,
                        operator=args.operator, current=args.current,

@@ -3,8 +3,8 @@
 :class:`Problems` gathers every problem of a model file (key path, line when the text is
 known) before one :class:`~setupfix.errors.ModelError` is raised; the small readers below
 (:func:`number`, :func:`weights`, :func:`table_of` …) add a problem and return a fallback
-instead of raising, so one pass reports everything.  Used by :mod:`setupfix.model.loader`
-(one-axis and common keys) and :mod:`setupfix.model.axes` (multi-axis keys).
+instead of raising, so one pass reports everything.  Used by :mod:`setupfix.model.loader` and
+:mod:`setupfix.model.tables` (one-axis and common keys) and :mod:`setupfix.model.axes` (multi-axis keys).
 """
 
 from __future__ import annotations

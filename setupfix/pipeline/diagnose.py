@@ -27,7 +27,8 @@ from setupfix.diagnose import Diagnoser, Diagnosis
 from setupfix.diagnose.covariates import typical_step
 from setupfix.errors import ExportError, ModelError, Note, SourceLocation
 from setupfix.model import PartMeasurement, ProcessModel, model_from_dict
-from setupfix.model.effects import EffectsSection, ModelEffect, effects_from_dict, with_effects
+from setupfix.model.effects import EffectsSection, ModelEffect, effects_from_dict
+from setupfix.model.effects_toml import with_effects
 from setupfix.pipeline.correct import correct_cycle
 from setupfix.pipeline.requests import CorrectRequest, CycleCorrection, History, ReadOptions, SolveOptions
 from setupfix.pipeline.series import SeriesInput, channel_span, load_series

@@ -1,192 +1,39 @@
-"""Thermal-drift use cases: fit a model on a temperature log, evaluate it, predict drift.
+"""Thermal-drift use case: predict the drift of a saved model over a temperature log.
 
 Shared by ``setupfix thermal fit|predict|evaluate``, ``setupfix correct --thermal``
 and the operator TUI.  Nothing here prints: notes (warnings) come back as data with
-each result.  Column roles, plausibility of the values (temperatures within
-[−273.15, 2000] °C, errors and speeds within ±1e6) and the quality gates (E < 0 on
-the training or test log) are checked here, before and after the engine runs.
+each result.  Column roles and the plausibility of the values are checked by
+:mod:`setupfix.pipeline.thermal_columns` before the engine runs; fitting and evaluating a
+model (with its quality gates) is :mod:`setupfix.pipeline.thermal_fit`.
 """
 
-from __future__ import annotations
-
-from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from datetime import datetime
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 import numpy.typing as npt
 
 from parsers.temperature import TemperatureLog, read_temperature_log
 from setupfix.errors import Note, ParameterError, ParseError, SourceLocation
-from setupfix.thermal.metrics import Scores, score
-from setupfix.thermal.models import DEFAULT_SEED, KalmanFusionModel, rebase
-from setupfix.thermal.persist import UNITS, SavedModel
-from setupfix.thermal.registry import get_method, methods
+from setupfix.pipeline.thermal_columns import Selection, _drive_arrays
+from setupfix.thermal.estimator import rebase
+from setupfix.thermal.kalman_model import KalmanFusionModel
+from setupfix.thermal.persist import SavedModel
+from setupfix.thermal.registry import methods
 
 __all__ = [
     "methods",
-    "Selection",
-    "select_columns",
     "Anchor",
     "parse_anchor",
-    "FitResult",
-    "fit_log",
-    "fit_file",
     "predict_log",
     "predict_drift",
     "DriftPrediction",
-    "Evaluation",
-    "evaluate_logs",
-    "evaluate_files",
 ]
 
 Array = npt.NDArray[np.float64]
-SPEED = "spindle_speed"
-AMBIENT = "ambient"
-#: Plausible range of a temperature (°C or K of rise); outside it a cell is refused.
-TEMPERATURE_RANGE = (-273.15, 2000.0)
-#: Largest magnitude of a thermal error or a spindle speed accepted.
-VALUE_LIMIT = 1e6
 #: Distance from the reference state (K) beyond which ``evaluate`` warns.
 FAR_FROM_REFERENCE_K = 2.0
-
-
-@dataclass(frozen=True)
-class Selection:
-    """Which columns of a log play which role."""
-
-    inputs: tuple[str, ...]
-    target: str | None
-    ambient: str | None = None
-    speed: str | None = None
-
-
-def select_columns(log: TemperatureLog, *, target: str | None, inputs: Sequence[str] | None = None,
-                   ambient: str | None = None, speed: str | None = None, drives: bool = False) -> Selection:
-    """Resolve the roles of the columns (``cli-json.md``, ``thermal evaluate``).
-
-    Temperature inputs are every numeric column but the target, the speed and the
-    ambient one unless ``inputs`` names them.  With ``drives`` (kalman) the speed column
-    defaults to ``spindle_speed`` and the ambient one to ``ambient`` when present;
-    either may be absent (the model's documented fallback).  A column may play one
-    role only.
-    """
-    loc = log.location()
-    if target is not None and target not in log.columns:
-        raise ParseError(f"target column {target!r} not found or not numeric", location=loc,
-                         hint=f"numeric columns: {', '.join(log.columns)}")
-    for role, name in (("speed", speed), ("ambient", ambient)):
-        if name is not None and name not in log.columns:
-            raise ParseError(f"{role} column {name!r} not found or not numeric", location=loc,
-                             hint=f"numeric columns: {', '.join(log.columns)}")
-    if drives:
-        speed = speed or (SPEED if SPEED in log.columns else None)
-        ambient = ambient or (AMBIENT if AMBIENT in log.columns else None)
-    elif ambient is not None or speed is not None:
-        raise ParameterError("--ambient and --speed are inputs of the kalman method only")
-    if inputs:
-        missing = [c for c in inputs if c not in log.columns]
-        if missing:
-            raise ParseError(f"input column {missing[0]!r} not found or not numeric", location=loc,
-                             hint=f"numeric columns: {', '.join(log.columns)}")
-        if len(set(inputs)) != len(inputs):
-            raise ParameterError(f"an input column is named twice in {', '.join(inputs)}")
-        chosen = tuple(inputs)
-    else:
-        skip = {target, speed, ambient, SPEED}
-        chosen = tuple(c for c in log.columns if c not in skip)
-    roles = {"target": target, "speed": speed, "ambient": ambient}
-    for role, name in roles.items():
-        if name is not None and name in chosen:
-            raise ParameterError(f"column {name!r} is both the {role} and a temperature input",
-                                 hint="a column plays one role only")
-    if target is not None and target in (speed, ambient):
-        raise ParameterError(f"column {target!r} is both the target and a drive")
-    if not chosen:
-        raise ParseError("no temperature columns", location=loc)
-    return Selection(chosen, target, ambient, speed)
-
-
-def _checked(log: TemperatureLog, name: str, *, gaps: bool, low: float, high: float, what: str) -> Array:
-    values = log.column(name) if gaps else log.require_finite(name)
-    bad = np.flatnonzero(np.isfinite(values) & ((values < low) | (values > high)))
-    if bad.size:
-        i = int(bad[0])
-        raise ParseError(f"{what} {values[i]:g} in column {name!r} is outside [{low:g}, {high:g}]",
-                         location=log.location(i), hint="a sensor fault or a wrong column")
-    return values
-
-
-def _drive_arrays(log: TemperatureLog, sel: Selection, *, gaps: bool) -> dict[str, Any]:
-    T = np.column_stack([_checked(log, c, gaps=gaps, low=TEMPERATURE_RANGE[0], high=TEMPERATURE_RANGE[1],
-                                  what="temperature") for c in sel.inputs])
-    ambient = None if sel.ambient is None else _checked(log, sel.ambient, gaps=False, low=TEMPERATURE_RANGE[0],
-                                                          high=TEMPERATURE_RANGE[1], what="temperature")
-    speed = None if sel.speed is None else _checked(log, sel.speed, gaps=False, low=-VALUE_LIMIT,
-                                                      high=VALUE_LIMIT, what="speed")
-    return {"T": T, "ambient": ambient, "speed": speed}
-
-
-def _target(log: TemperatureLog, name: str) -> Array:
-    return _checked(log, name, gaps=False, low=-VALUE_LIMIT, high=VALUE_LIMIT, what="error")
-
-
-@dataclass
-class FitResult:
-    """A fitted, saved-form model and the notes of the fit."""
-
-    saved: SavedModel
-    notes: list[Note] = field(default_factory=list)
-
-
-def _quality_notes(where: str, scores: Scores, source: str) -> list[Note]:
-    if np.isnan(scores.efficiency):
-        return [Note(f"{where} target is constant: efficiency E undefined", SourceLocation(source), "thermal")]
-    if scores.efficiency < 0:
-        return [Note(f"{where} efficiency E = {scores.efficiency:.3g} < 0: the model predicts worse than the "
-                     "mean of the measured error", SourceLocation(source), "quality")]
-    return []
-
-
-def fit_log(log: TemperatureLog, method: str, *, target: str, inputs: Sequence[str] | None = None,
-            ambient: str | None = None, speed: str | None = None, unit: str | None = None,
-            params: dict[str, Any] | None = None, axis: str = "Z",
-            registers: Sequence[str] | None = None) -> FitResult:
-    """Fit ``method`` on a log; the result carries its column roles, unit and training scores.
-
-    ``params`` are the method's hyper-parameters (validated before any work); a
-    stochastic method without ``seed`` gets :data:`DEFAULT_SEED`.
-    """
-    spec = get_method(method)
-    params = dict(params or {})
-    if spec.stochastic:
-        params.setdefault("seed", DEFAULT_SEED)
-    model = spec.make(**params)
-    if unit is not None and unit not in UNITS:
-        raise ParameterError(f"unit must be one of {', '.join(UNITS)}, got {unit!r}")
-    sel = select_columns(log, target=target, inputs=inputs, ambient=ambient, speed=speed, drives=spec.uses_drives)
-    data = _drive_arrays(log, sel, gaps=False)
-    y = _target(log, target)
-    if len(y) < 4:
-        raise ParseError(f"{len(y)} samples are too few to fit a model", location=log.location())
-    if np.ptp(y) <= 1e-12 * max(float(np.max(np.abs(y))), 1e-300):
-        raise ParseError(f"target column {target!r} is constant ({y[0]:g}): there is no thermal error to model",
-                         location=log.location(), hint="check the --target column")
-    drives = {"ambient": data["ambient"], "speed": data["speed"]} if spec.uses_drives else {}
-    with np.errstate(all="ignore"):
-        model.fit(data["T"], y, **drives)
-    saved = SavedModel(model, sel.inputs, target, sel.ambient, sel.speed, log.sample_interval_s,
-                       unit=unit, axis=axis, registers=None if registers is None else tuple(registers))
-    notes = list(log.notes) + list(getattr(model, "fit_notes_", []))
-    notes += _drive_notes(saved, log.source)
-    fitted = predict_log(saved, log)[0]
-    scores = score(y, fitted)
-    saved.train = {"source": Path(log.source).name, "n": len(y), "seed": params.get("seed"),
-                   **scores.as_dict()}
-    notes += _quality_notes("training", scores, log.source)
-    return FitResult(saved, notes)
 
 
 def _drive_notes(saved: SavedModel, source: str) -> list[Note]:
@@ -201,17 +48,6 @@ def _drive_notes(saved: SavedModel, source: str) -> list[Note]:
                         f"{saved.model.ambient_const_:.4g} (median reference temperature)", SourceLocation(source),
                         "fallback"))
     return out
-
-
-def fit_file(path: str | Path, method: str, *, target: str, out: str | Path | None = None,
-             interval: float | None = None, sheet: str | None = None, **kwargs: Any) -> FitResult:
-    """Read a temperature log, fit, and save to ``out`` when given."""
-    from setupfix.pipeline.thermal_files import save_model
-
-    result = fit_log(read_temperature_log(path, interval=interval, sheet=sheet), method, target=target, **kwargs)
-    if out is not None:
-        save_model(result.saved, out)
-    return result
 
 
 @dataclass(frozen=True)
@@ -353,53 +189,3 @@ def predict_drift(model: str | Path | SavedModel, log: str | Path | TemperatureL
     measured = data.columns.get(saved.target)
     return DriftPrediction(saved.model.name, saved.target, saved.unit, list(data.timestamps), data.seconds, drift,
                            measured, tuple(notes))
-
-
-@dataclass(frozen=True)
-class Evaluation:
-    """Training fit and test prediction of one method (``cli-json.md``, ``thermal evaluate``)."""
-
-    method: str
-    train: Scores
-    test: Scores
-    saved: SavedModel = field(repr=False)
-    notes: tuple[Note, ...] = ()
-
-    def as_json(self) -> dict[str, Any]:
-        return {
-            "method": self.method,
-            "rmse": self.test.rmse,
-            "max_residual": self.test.max_residual,
-            "efficiency": self.test.efficiency,
-            "n_test": self.test.n,
-            "rmsv": self.test.rmsv,
-            "train_rmse": self.train.rmse,
-            "train_efficiency": self.train.efficiency,
-            "n_train": self.train.n,
-            "inputs": list(self.saved.inputs),
-            "unit": self.saved.unit,
-            "seed": self.saved.train.get("seed"),
-            "warnings": [str(n) for n in self.notes if n.kind in ("quality", "fallback", "thermal")],
-        }
-
-
-def evaluate_logs(train: TemperatureLog, test: TemperatureLog, method: str, *, target: str,
-                  sensors_failed: bool = False, anchor: Anchor | None = None, **kwargs: Any) -> Evaluation:
-    """Fit on ``train``, predict ``test`` relative to the reference state, score both."""
-    fitted = fit_log(train, method, target=target, **kwargs)
-    saved = fitted.saved
-    y = _target(test, target)
-    predicted, notes = predict_log(saved, test, sensors_failed=sensors_failed, anchor=anchor)
-    far = far_from_reference(saved, test)
-    train_scores = Scores(**{k: saved.train[k] for k in ("rmse", "rmsv", "max_residual", "efficiency", "n")})
-    test_scores = score(y, predicted)
-    all_notes = fitted.notes + list(test.notes) + notes + ([far] if far else [])
-    all_notes += _quality_notes("test", test_scores, test.source)
-    return Evaluation(saved.model.name, train_scores, test_scores, saved, tuple(all_notes))
-
-
-def evaluate_files(train: str | Path, test: str | Path, method: str, *, target: str, interval: float | None = None,
-                   sheet: str | None = None, **kwargs: Any) -> Evaluation:
-    """:func:`evaluate_logs` on two log files."""
-    return evaluate_logs(read_temperature_log(train, interval=interval, sheet=sheet),
-                         read_temperature_log(test, interval=interval, sheet=sheet), method, target=target, **kwargs)

@@ -7,7 +7,7 @@ fusion method of Kalman filter*.
 
 Modules: :mod:`~setupfix.thermal.grey` (pure Grey functions), :mod:`~.calibrate`
 (CS, PSO, GA), :mod:`~.lumped` (lumped-mass model), :mod:`~.kalman` (scalar filter),
-:mod:`~.mra`, :mod:`~.metrics`, :mod:`~.models` (estimator classes),
+:mod:`~.mra`, :mod:`~.metrics`, :mod:`~.estimator`, :mod:`~.grey_model`, :mod:`~.kalman_model` (estimator classes),
 :mod:`~.simulator`, :mod:`~.registry` (methods by name), :mod:`~.persist` (saved form),
 :mod:`~.feedforward` (drift fed forward into corrections).  Temperature logs are read
 by :mod:`parsers.temperature`; model files by :mod:`setupfix.pipeline.thermal_files`.
@@ -15,6 +15,8 @@ by :mod:`parsers.temperature`; model files by :mod:`setupfix.pipeline.thermal_fi
 
 from __future__ import annotations
 
-from setupfix.thermal.models import GreyModel, KalmanFusionModel, MRAModel, ThermalModel
+from setupfix.thermal.estimator import MRAModel, ThermalModel
+from setupfix.thermal.grey_model import GreyModel
+from setupfix.thermal.kalman_model import KalmanFusionModel
 
 __all__ = ["GreyModel", "KalmanFusionModel", "MRAModel", "ThermalModel"]

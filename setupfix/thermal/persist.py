@@ -15,7 +15,7 @@ import math
 from dataclasses import dataclass, field
 from typing import Any
 
-from setupfix.thermal.models import ThermalModel
+from setupfix.thermal.estimator import ThermalModel
 from setupfix.thermal.registry import model_from_dict
 
 __all__ = ["FORMAT", "VERSION", "UNITS", "SavedModel", "saved_from_dict"]

@@ -1,10 +1,11 @@
 """The thermal methods by name: one registry used by the CLI, the pipeline and model files.
 
-Each :class:`ThermalMethod` names an estimator class of :mod:`setupfix.thermal.models`
-and the hyper-parameters its name fixes (``grey-cs`` is a :class:`GreyModel` with
-``calibration="cs"``).  :func:`make_model` builds one and validates its parameters
-right after construction, before any data is read; :func:`model_from_dict` rebuilds
-a saved one.  A new method is one :func:`register` call.
+Each :class:`ThermalMethod` names an estimator class (:mod:`setupfix.thermal.estimator`,
+:mod:`~.grey_model`, :mod:`~.kalman_model`) and the hyper-parameters its name fixes
+(``grey-cs`` is a :class:`GreyModel` with ``calibration="cs"``).  :func:`make_model`
+builds one and validates its parameters right after construction, before any data is
+read; :func:`model_from_dict` rebuilds a saved one.  A new method is one :func:`register`
+call.
 """
 
 from __future__ import annotations
@@ -14,9 +15,14 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from setupfix.errors import ParameterError
-from setupfix.thermal.models import GreyModel, KalmanFusionModel, MRAModel, ThermalModel
+from setupfix.thermal.estimator import MRAModel, ThermalModel
+from setupfix.thermal.grey_model import GreyModel
+from setupfix.thermal.kalman_model import KalmanFusionModel
 
-__all__ = ["ThermalMethod", "register", "methods", "get_method", "make_model", "model_from_dict"]
+__all__ = ["ThermalMethod", "register", "methods", "get_method", "make_model", "model_from_dict", "AnyThermalModel"]
+
+#: Any of the fitted thermal models (what the pipeline makes, saves and loads).
+AnyThermalModel = MRAModel | GreyModel | KalmanFusionModel
 
 
 @dataclass(frozen=True)

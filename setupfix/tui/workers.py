@@ -15,7 +15,7 @@ from textual.worker import get_current_worker
 from setupfix.errors import SetupfixError
 from setupfix.model import ProcessModel, load_model
 from setupfix.optimize import CorrectionProblem
-from setupfix.pipeline import session, view
+from setupfix.pipeline import analysis_view, session
 from setupfix.pipeline.compare import Comparison
 from setupfix.pipeline.diagnose import DiagnoseRequest, diagnose_reports
 from setupfix.pipeline.correct import load_request
@@ -52,9 +52,9 @@ def open_report(model: Path, report: Path, *, read: ReadOptions, cycles: CycleOp
     return session.open_report(request, report), problem
 
 
-def drift(model: Path, log: Path) -> view.DriftView:
+def drift(model: Path, log: Path) -> analysis_view.DriftView:
     """Thread worker: the saved thermal model's drift over the log."""
-    return view.drift_view(predict_drift(model, log))
+    return analysis_view.drift_view(predict_drift(model, log))
 
 
 def compare(app: App[None], problem: CorrectionProblem, trials: int, seed: int) -> Comparison | None:
@@ -69,20 +69,20 @@ def compare(app: App[None], problem: CorrectionProblem, trials: int, seed: int) 
     return result
 
 
-def history(model: ProcessModel, db: StoreRef) -> tuple[list[view.CycleBudget], list[str]]:
+def history(model: ProcessModel, db: StoreRef) -> tuple[list[analysis_view.CycleBudget], list[str]]:
     """Thread worker: the error budget of every cycle in the history store."""
     parts, notes = store_parts(model, db)
-    return view.cycle_budgets(model, parts), notes
+    return analysis_view.cycle_budgets(model, parts), notes
 
 
-def diagnose(model: Path, source: Path | StoreRef, process: Path | None = None) -> view.DiagnosisView:
+def diagnose(model: Path, source: Path | StoreRef, process: Path | None = None) -> analysis_view.DiagnosisView:
     """Thread worker: ``setupfix diagnose`` over the history store or a folder of reports (and its logs), with
     the process log given (``--process``) joined per part."""
     proc = str(process) if process is not None else None
     request = (DiagnoseRequest(model, db=source, process=proc) if isinstance(source, StoreRef)
                else DiagnoseRequest(model, (source,), process=proc))
     outcome = diagnose_reports(request)
-    return view.diagnosis_view(outcome)
+    return analysis_view.diagnosis_view(outcome)
 
 
 def capability(db: StoreRef) -> SpcOutcome:

@@ -13,7 +13,8 @@ from setupfix.diagnose import Layout
 from setupfix.diagnose.forecast import forecast_shift, relation_composite
 from setupfix.errors import ModelError
 from setupfix.model import load_model, model_from_dict
-from setupfix.model.effects import EffectsSection, ModelEffect, effects_from_dict, with_effects
+from setupfix.model.effects import EffectsSection, ModelEffect, effects_from_dict
+from setupfix.model.effects_toml import with_effects
 
 from conftest import GUIDE_PINS
 

@@ -12,7 +12,8 @@ from setupfix.diagnose.forecast import forecast_shift, spec_of
 from setupfix.diagnose.terms import common_tool_row, effect_field
 from setupfix.errors import ModelError
 from setupfix.model import load_model
-from setupfix.model.effects import EffectsSection, ModelEffect, effects_from_dict, with_effects
+from setupfix.model.effects import EffectsSection, ModelEffect, effects_from_dict
+from setupfix.model.effects_toml import with_effects
 
 from conftest import GUIDE_PINS
 

@@ -69,14 +69,14 @@ def test_a_missing_option_is_caught() -> None:
 
 
 def test_every_model_key_is_in_the_reference() -> None:
-    from setupfix.model import axes, effects, loader, safety, stations
+    from setupfix.model import axes, effects, loader, safety, stations, tables
     text = gen.KEYS_PAGE.read_text(encoding="utf-8")
-    keys = set().union(*loader._KEYS.values(), *axes.MULTI_KEYS.values(), safety.SAFETY_KEYS,
+    keys = set().union(*tables._KEYS.values(), *axes.MULTI_KEYS.values(), safety.SAFETY_KEYS,
                        safety.REGISTER_KEYS, safety.DIMENSION_KEYS, effects._KEYS, stations._STATION_KEYS,
                        stations._TEMPLATE_KEYS)
     for key in sorted(keys):
         assert f"`{key}`" in text, f"model key {key} missing from docs/reference/model-keys.md"
-    for section in (*loader._KEYS, *loader.SECTIONS, *loader._EXPANDED):
+    for section in (*tables._KEYS, *loader.SECTIONS, *loader._EXPANDED):
         assert f"`[{section}" in text, f"model table [{section}] missing"
 
 

@@ -8,7 +8,7 @@ import pytest
 
 from setupfix.errors import ModelError
 from setupfix.model import load_model
-from setupfix.model.effects import effects_toml
+from setupfix.model.effects_toml import effects_toml
 from setupfix.model.process import ProcessModel
 from tests.model.test_loader import SPEC_EXAMPLE
 

@@ -7,7 +7,7 @@ import pytest
 
 from parsers.temperature import read_temperature_log
 from setupfix.errors import ParseError
-from setupfix.pipeline.thermal import select_columns
+from setupfix.pipeline.thermal_columns import select_columns
 
 GOOD = (
     "timestamp,T1,T2,spindle_speed,error,operator\n"

@@ -99,12 +99,12 @@ def test_thermal_feed_forward_is_a_step_of_the_use_case_and_requests_pickle(tmp_
     import pickle
 
     from parsers.temperature import read_temperature_log
-    from setupfix.pipeline import thermal as pipe
+    from setupfix.pipeline import thermal_fit
     from setupfix.pipeline.requests import ThermalInputs
 
     thermal = SAMPLES / "thermal"
-    saved = pipe.fit_log(read_temperature_log(thermal / "train_variable.csv"), "mra", target="error_z",
-                         inputs=["spindle_motor", "bearing"], unit="mm").saved
+    saved = thermal_fit.fit_log(read_temperature_log(thermal / "train_variable.csv"), "mra", target="error_z",
+                                inputs=["spindle_motor", "bearing"], unit="mm").saved
     log_path = tmp_path / "temps.csv"
     log_path.write_text((thermal / "test_variable.csv").read_text().replace("2026-01-05T", "2026-11-02T"))
     log = read_temperature_log(log_path, interval=saved.sample_interval_s)

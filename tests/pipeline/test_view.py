@@ -11,7 +11,7 @@ import pytest
 from conftest import GUIDE_PINS
 
 from setupfix.model import load_model
-from setupfix.pipeline import view
+from setupfix.pipeline import analysis_view, view
 from setupfix.pipeline.compare import compare_problem
 from setupfix.pipeline.correct import correct_report
 from setupfix.pipeline.requests import CorrectRequest, SolveOptions
@@ -132,12 +132,12 @@ def test_match_rows_suggest_close_dimension_names(guide_pins_model):
 
 def test_convergence_is_the_median_best_so_far_and_ends_at_the_final_results(correction):
     comp = compare_problem(correction.problem, methods=("pso", "ga"), trials=3, seed=1)
-    curves = view.convergence(comp, 20)
+    curves = analysis_view.convergence(comp, 20)
     for m in comp.methods:
         curve = curves[m.optimizer]
         assert curve.shape == (20,) and np.all(np.diff(curve) >= -1e-12)  # best-so-far never falls
         assert curve[-1] == pytest.approx(np.median(m.f1))
-    assert [r["optimizer"] for r in view.compare_rows(comp)] == ["exact", "pso", "ga"]
+    assert [r["optimizer"] for r in analysis_view.compare_rows(comp)] == ["exact", "pso", "ga"]
 
 
 def test_signed_and_limits_text():

@@ -11,6 +11,7 @@ from parsers.temperature import read_temperature_log
 from setupfix.errors import ParameterError, ParseError
 from setupfix.model import load_model as load_process_model
 from setupfix.pipeline import thermal as pipe
+from setupfix.pipeline import thermal_fit
 from setupfix.pipeline.feedforward import thermal_feed_forward
 from setupfix.pipeline.thermal_files import load_model
 from setupfix.thermal.feedforward import drift_change, feed_forward, sample_at_or_before
@@ -44,7 +45,7 @@ def test_feed_forward_sign_grid_and_dead_band():
 @pytest.fixture(scope="module")
 def fitted():
     log = read_temperature_log(SAMPLES / "train_variable.csv")
-    return pipe.fit_log(log, "mra", target="error_z", inputs=["spindle_motor", "bearing"], unit="mm").saved
+    return thermal_fit.fit_log(log, "mra", target="error_z", inputs=["spindle_motor", "bearing"], unit="mm").saved
 
 
 def test_guide_pins_feed_forward_on_a_simulated_log(fitted):
@@ -68,8 +69,8 @@ def test_guide_pins_feed_forward_on_a_simulated_log(fitted):
 def test_unit_conversion_and_refusals(fitted):
     model = load_process_model(GUIDE_PINS)
     log = read_temperature_log(SAMPLES / "test_variable.csv")
-    in_um = pipe.fit_log(read_temperature_log(SAMPLES / "train_variable.csv").slice(0, 1440), "mra",
-                         target="error_z", inputs=["spindle_motor", "bearing"], unit="um").saved
+    in_um = thermal_fit.fit_log(read_temperature_log(SAMPLES / "train_variable.csv").slice(0, 1440), "mra",
+                                target="error_z", inputs=["spindle_motor", "bearing"], unit="um").saved
     mm = thermal_feed_forward(model, fitted, log, measured_at=log.timestamps[100], dead_band=0.0)
     um = thermal_feed_forward(model, in_um, log, measured_at=log.timestamps[100], dead_band=0.0)
     assert um.delta == pytest.approx(mm.delta)  # the same numbers, read as µm…
@@ -81,8 +82,8 @@ def test_unit_conversion_and_refusals(fitted):
         thermal_feed_forward(model, fitted, log, measured_at="2026-01-01T00:00:00")
     with pytest.raises(ParameterError, match="report gives no timestamp"):
         thermal_feed_forward(model, fitted, log, measured_at=None)
-    fitted_x = pipe.fit_log(read_temperature_log(SAMPLES / "train_variable.csv"), "mra", target="error_z",
-                            unit="mm", axis="X").saved
+    fitted_x = thermal_fit.fit_log(read_temperature_log(SAMPLES / "train_variable.csv"), "mra", target="error_z",
+                                   unit="mm", axis="X").saved
     with pytest.raises(ParameterError, match="acts along X"):
         thermal_feed_forward(model, fitted_x, log, measured_at=log.timestamps[100])
 

@@ -8,7 +8,8 @@ import pandas as pd
 from conftest import shared_path
 from setupfix.thermal.grey import gmc_least_squares
 from setupfix.thermal.metrics import score
-from setupfix.thermal.models import GreyModel, MRAModel
+from setupfix.thermal.estimator import MRAModel
+from setupfix.thermal.grey_model import GreyModel
 
 SENSITIVE = [2, 6, 9, 12, 19, 20]  # the repo's own temperature-sensitive points (SOURCES.md)
 

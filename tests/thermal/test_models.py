@@ -7,9 +7,11 @@ import json
 import numpy as np
 import pytest
 
-from setupfix.errors import ParseError
+from setupfix.errors import NotFittedError, ParseError
 from setupfix.thermal.metrics import efficiency, max_residual, rmse, rmsv, score
-from setupfix.thermal.models import GreyModel, KalmanFusionModel, MRAModel, NotFittedError
+from setupfix.thermal.estimator import MRAModel
+from setupfix.thermal.grey_model import GreyModel
+from setupfix.thermal.kalman_model import KalmanFusionModel
 from setupfix.pipeline.thermal_files import load_model, save_model
 from setupfix.thermal.persist import SavedModel
 from setupfix.thermal.simulator import add_sensor_error, fail_sensor, sinusoidal_error

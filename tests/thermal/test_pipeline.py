@@ -11,9 +11,10 @@ import pytest
 from parsers.temperature import TemperatureLog, read_temperature_log
 from setupfix.errors import ExportError, ParameterError, ParseError
 from setupfix.pipeline import thermal as pipe
+from setupfix.pipeline import thermal_fit
 from setupfix.pipeline.thermal_files import load_model, save_model
 from setupfix.thermal.metrics import score
-from setupfix.thermal.models import MRAModel
+from setupfix.thermal.estimator import MRAModel
 from setupfix.thermal.persist import SavedModel
 from setupfix.thermal.registry import get_method, make_model, methods
 
@@ -28,8 +29,8 @@ def train_log():
 
 def test_fit_save_and_predict_drift(tmp_path):
     out = tmp_path / "mra.json"
-    saved = pipe.fit_file(SAMPLES / "train_variable.csv", "mra", target="error_z", out=out, inputs=SENSORS,
-                          unit="mm").saved
+    saved = thermal_fit.fit_file(SAMPLES / "train_variable.csv", "mra", target="error_z", out=out, inputs=SENSORS,
+                                 unit="mm").saved
     assert saved.train["n"] == 1439 and saved.sample_interval_s == 10.0
     drift = pipe.predict_drift(out, SAMPLES / "test_constant.csv")
     assert drift.drift.shape == (1440,) and drift.timestamps[0] == "2026-01-05T06:00:00" and drift.unit == "mm"
@@ -37,7 +38,7 @@ def test_fit_save_and_predict_drift(tmp_path):
 
 
 def test_reference_state_saved_and_reloaded(tmp_path, train_log):
-    saved = pipe.fit_log(train_log, "grey-ls", target="error_z", inputs=SENSORS, unit="um").saved
+    saved = thermal_fit.fit_log(train_log, "grey-ls", target="error_z", inputs=SENSORS, unit="um").saved
     np.testing.assert_array_equal(saved.model.T_ref_, [train_log.columns[c][0] for c in SENSORS])
     save_model(saved, tmp_path / "g.json")
     back = load_model(tmp_path / "g.json")
@@ -51,8 +52,8 @@ def test_reference_state_saved_and_reloaded(tmp_path, train_log):
 def test_log_starting_warm_is_predicted_as_if_continuous(train_log, method):
     """The second half of a log, read on its own, gets the prediction the whole log gives it."""
     short = train_log.head(720)
-    saved = pipe.fit_log(short, method, target="error_z", inputs=SENSORS,
-                         params={"generations": 5, "pop_size": 8} if method == "kalman" else None).saved
+    saved = thermal_fit.fit_log(short, method, target="error_z", inputs=SENSORS,
+                                params={"generations": 5, "pop_size": 8} if method == "kalman" else None).saved
     whole = pipe.predict_log(saved, train_log)[0]
     warm = pipe.predict_log(saved, train_log.slice(720, 1440))[0]
     y = train_log.columns["error_z"][720:]
@@ -65,7 +66,7 @@ def test_log_starting_warm_is_predicted_as_if_continuous(train_log, method):
 
 
 def test_anchor_rebases_on_a_measured_error(train_log):
-    saved = pipe.fit_log(train_log, "mra", target="error_z", inputs=SENSORS).saved
+    saved = thermal_fit.fit_log(train_log, "mra", target="error_z", inputs=SENSORS).saved
     plain = pipe.predict_log(saved, train_log)[0]
     anchored = pipe.predict_log(saved, train_log, anchor=pipe.parse_anchor("2026-01-05T07:00:05=0.5"))[0]
     i = 360  # 07:00:00 is the last sample at or before 07:00:05
@@ -83,14 +84,14 @@ def test_anchor_rebases_on_a_measured_error(train_log):
 def test_kalman_without_speed_falls_back_and_is_flagged(train_log):
     cols = {k: v[:300] for k, v in train_log.columns.items() if k not in ("spindle_speed", "ambient")}
     log = TemperatureLog.from_arrays("x.csv", cols)
-    result = pipe.fit_log(log, "kalman", target="error_z", params={"generations": 5, "pop_size": 8})
+    result = thermal_fit.fit_log(log, "kalman", target="error_z", params={"generations": 5, "pop_size": 8})
     assert result.saved.speed is None and not result.saved.model.uses_speed_
     assert {n.kind for n in result.notes} >= {"fallback"}
     assert any("without a spindle speed" in str(n) for n in result.notes)
     with pytest.raises(ParameterError, match="sensors_failed"):
         pipe.predict_log(result.saved, log, sensors_failed=True)
     with pytest.raises(ParameterError, match="kalman"):
-        pipe.predict_log(pipe.fit_log(log, "mra", target="error_z").saved, log, sensors_failed=True)
+        pipe.predict_log(thermal_fit.fit_log(log, "mra", target="error_z").saved, log, sensors_failed=True)
 
 
 def test_mra_refuses_gaps_and_implausible_values(train_log):
@@ -98,39 +99,39 @@ def test_mra_refuses_gaps_and_implausible_values(train_log):
     gappy["bearing"] = gappy["bearing"].copy()
     gappy["bearing"][5] = np.nan
     with pytest.raises(ParseError, match=r"x.csv:7: empty value in column 'bearing'"):
-        pipe.fit_log(TemperatureLog.from_arrays("x.csv", gappy), "mra", target="error_z")
+        thermal_fit.fit_log(TemperatureLog.from_arrays("x.csv", gappy), "mra", target="error_z")
     for value, what in ((1e300, "temperature"), (1e306, "temperature")):
         hot = dict(train_log.columns)
         hot["bearing"] = hot["bearing"].copy()
         hot["bearing"][9] = value
         with pytest.raises(ParseError, match=rf"x.csv:11: {what} 1e\+30\d in column 'bearing' is outside"):
-            pipe.fit_log(TemperatureLog.from_arrays("x.csv", hot), "grey-ls", target="error_z")
+            thermal_fit.fit_log(TemperatureLog.from_arrays("x.csv", hot), "grey-ls", target="error_z")
 
 
 def test_bad_roles_and_constant_target(train_log):
     with pytest.raises(ParameterError, match="both the target and a temperature input"):
-        pipe.fit_log(train_log, "mra", target="error_z", inputs=["error_z"])
+        thermal_fit.fit_log(train_log, "mra", target="error_z", inputs=["error_z"])
     const = dict(train_log.columns)
     const["error_z"] = np.full(train_log.n, 0.25)
     with pytest.raises(ParseError, match="constant"):
-        pipe.fit_log(TemperatureLog.from_arrays("c.csv", const), "mra", target="error_z")
+        thermal_fit.fit_log(TemperatureLog.from_arrays("c.csv", const), "mra", target="error_z")
 
 
 def test_other_sampling_interval_is_noted(train_log):
-    saved = pipe.fit_log(train_log, "grey-ls", target="error_z").saved
+    saved = thermal_fit.fit_log(train_log, "grey-ls", target="error_z").saved
     other = TemperatureLog.from_arrays("y.csv", train_log.columns, seconds=np.arange(train_log.n) * 60.0)
     _, notes = pipe.predict_log(saved, other)
     assert any("fitted on 10 s" in str(n) for n in notes)
 
 
 def test_quality_gate_and_default_seed(train_log):
-    ev = pipe.evaluate_logs(train_log.head(400), train_log.slice(400, 800), "grey-pso", target="error_z",
-                            params={"iterations": 3})
+    ev = thermal_fit.evaluate_logs(train_log.head(400), train_log.slice(400, 800), "grey-pso", target="error_z",
+                                   params={"iterations": 3})
     assert ev.saved.train["seed"] == 0
     assert ev.train.efficiency < 0 and any(n.kind == "quality" for n in ev.notes)
     assert any("training efficiency" in w for w in ev.as_json()["warnings"])
-    again = pipe.evaluate_logs(train_log.head(400), train_log.slice(400, 800), "grey-pso", target="error_z",
-                               params={"iterations": 3})
+    again = thermal_fit.evaluate_logs(train_log.head(400), train_log.slice(400, 800), "grey-pso", target="error_z",
+                                      params={"iterations": 3})
     assert again.test.rmse == ev.test.rmse  # reproducible without --seed
 
 
@@ -159,7 +160,7 @@ def test_non_finite_model_is_not_saved(tmp_path):
 @pytest.mark.parametrize("damage", ["byte", "coefficient", "reference", "method", "nan"])
 def test_corrupt_model_file_is_named(tmp_path, train_log, damage):
     path = tmp_path / "m.json"
-    save_model(pipe.fit_log(train_log, "mra", target="error_z", inputs=SENSORS).saved, path)
+    save_model(thermal_fit.fit_log(train_log, "mra", target="error_z", inputs=SENSORS).saved, path)
     text = path.read_text()
     if damage == "byte":
         path.write_bytes(text.encode()[:50] + b"\xff" + text.encode()[50:])
@@ -183,8 +184,8 @@ SMALL = {"grey-cs": {"iterations": 5}, "grey-pso": {"iterations": 5}, "kalman": 
 def test_every_method_is_deterministic_per_seed_and_refuses_bad_values(train_log, method):
     log = train_log.head(200)
     params = SMALL.get(method, {})
-    first = pipe.predict_log(pipe.fit_log(log, method, target="error_z", params=params).saved, log)[0]
-    again = pipe.predict_log(pipe.fit_log(log, method, target="error_z", params=params).saved, log)[0]
+    first = pipe.predict_log(thermal_fit.fit_log(log, method, target="error_z", params=params).saved, log)[0]
+    again = pipe.predict_log(thermal_fit.fit_log(log, method, target="error_z", params=params).saved, log)[0]
     np.testing.assert_array_equal(first, again)
     fixed = get_method(method).fixed
     for name, value in make_model(method).get_params().items():

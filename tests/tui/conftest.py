@@ -19,7 +19,8 @@ CYCLE_01 = GUIDE_PINS / "cycle_01.csv"
 @pytest.fixture
 def make_app(tmp_path: Path) -> Callable[..., Any]:
     """``make_app(report=…, **inputs)``: a SetupfixApp on the guide-pins model, exports into tmp_path."""
-    from setupfix.tui.app import Inputs, SetupfixApp
+    from setupfix.tui.app import SetupfixApp
+    from setupfix.tui.state import Inputs
 
     def make(report: Path | None = CYCLE_01, **kw: Any) -> SetupfixApp:
         kw.setdefault("model", MODEL)

@@ -216,7 +216,8 @@ def test_thermal_panel_shows_the_drift_and_the_feed_forward(make_app, tmp_path):
     from conftest import SAMPLES
 
     from setupfix.pipeline.feedforward import thermal_feed_forward
-    from setupfix.pipeline.thermal import fit_file, predict_drift
+    from setupfix.pipeline.thermal import predict_drift
+    from setupfix.pipeline.thermal_fit import fit_file
 
     saved = tmp_path / "grey.json"
     fit_file(SAMPLES / "thermal" / "train_variable.csv", "grey-ls", target="error_z", unit="mm", out=saved)

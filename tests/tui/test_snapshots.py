@@ -12,7 +12,8 @@ import pytest
 
 from conftest import ROOT
 
-from setupfix.tui.app import Inputs, SetupfixApp
+from setupfix.tui.app import SetupfixApp
+from setupfix.tui.state import Inputs
 
 MODEL = Path("sample_reports/guide_pins/model.toml")
 CYCLE_01 = Path("sample_reports/guide_pins/cycle_01.csv")

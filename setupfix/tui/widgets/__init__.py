@@ -1,4 +1,5 @@
-"""Widgets of the operator's screen; each lays out rows from :mod:`setupfix.pipeline.view`."""
+"""Widgets of the operator's screen; each lays out rows from :mod:`setupfix.pipeline.view` or
+:mod:`setupfix.pipeline.analysis_view`."""
 
 from __future__ import annotations
 

@@ -10,7 +10,8 @@ from textual.containers import VerticalScroll
 from textual.widgets import DataTable, Sparkline, Static
 
 from setupfix.tui.widgets.plain import PlainTable, plain
-from setupfix.pipeline.view import IN, OUT, CycleBudget, DiagnosisView, signed
+from setupfix.pipeline.analysis_view import CycleBudget, DiagnosisView
+from setupfix.pipeline.view import IN, OUT, signed
 
 __all__ = ["HistoryPanel"]
 

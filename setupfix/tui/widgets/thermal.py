@@ -8,7 +8,8 @@ from textual.containers import Vertical
 from textual.widgets import Sparkline, Static
 
 from setupfix.tui.widgets.plain import plain
-from setupfix.pipeline.view import DriftView, signed
+from setupfix.pipeline.analysis_view import DriftView
+from setupfix.pipeline.view import signed
 
 __all__ = ["ThermalPanel"]
 
