@@ -143,8 +143,9 @@ def plate_speed(say) -> None:
     ref = float(f"{series.temperature[:, series.channels.index(LONG)].mean():.4g}")
     tools = tuple(layout.register_ids[j] for j in layout.tools)
     every_long = tuple(EffectSpec("process", channel=LONG, register=r, reference=ref) for r in tools)
-    for label, found, ch in ((f"the stick-out found ({stick})", sel.found, stick),
-                             (f"the stick-out on every long part ({LONG}), a coefficient per cutter", every_long, LONG)):
+    cases = ((f"the stick-out found ({stick})", sel.found, stick),
+             (f"the stick-out on every long part ({LONG}), a coefficient per cutter", every_long, LONG))
+    for label, found, ch in cases:
         ps = speed_term_pvalues(layout, series, found, ch)
         say(f"    {speed_term(series, ch)[0]} after {label}:")
         say("      " + ", ".join(f"{r} p = {p:.2g} (x m = {min(1.0, p * m):.2g})" for r, p in ps.items()))
@@ -163,7 +164,8 @@ def plate_speed(say) -> None:
         s = dataclasses.replace(series, deviation=series.deviation + (k - 1.0) * contrib)
         found = [st.target for st in select_effects(layout, s).steps if st.accepted]
         best = min(speed_term_pvalues(layout, s, every_long, LONG).items(), key=lambda x: x[1])
-        say(f"    k = {k:g}: {'; '.join(found) or 'nothing named'}" + (f"  [term: {best[0]} p = {best[1]:.2g}]" if k else ""))
+        term = f"  [term: {best[0]} p = {best[1]:.2g}]" if k else ""
+        say(f"    k = {k:g}: {'; '.join(found) or 'nothing named'}{term}")
     say("    Without the speed (k = 0) the stick-out is named on all nine long parts; with it the channel of parts")
     say("    11-18 explains more (part 10, a long part at 12000 rpm, sits low), which is why the diagnosis names")
     say("    that one.  Were the stick-out x speed term a candidate of the search, it would pass its per-part test")
@@ -174,7 +176,8 @@ def plate_speed(say) -> None:
     rows = [("declared model (a constant per register)", residual_rms(layout, series, ())),
             (f"the diagnosis: + {stick} per cutter", residual_rms(layout, series, sel.found)),
             ("  + the stick-out x speed term per cutter register", residual_rms(layout, series, sel.found, stick)),
-            (f"{LONG} + the stick-out x speed term per cutter register", residual_rms(layout, series, every_long, LONG)),
+            (f"{LONG} + the stick-out x speed term per cutter register",
+             residual_rms(layout, series, every_long, LONG)),
             (f"a constant per dimension, {LONG} per dimension", residual_rms(layout, series, (), None, True)),
             ("  + the stick-out x speed term per dimension (the per-cutter model)",
              residual_rms(layout, series, (), LONG, True))]

@@ -75,8 +75,8 @@ def speed_tests(layout: Layout, series: Series) -> list[dict[str, float | str]]:
     out: list[dict[str, float | str]] = []
     for i, name in enumerate(names):
         y = y_all[doe, i]
-        f_any, *_, p_any = nested_f(y, stick, cells)
-        f_int, *_, p_int = nested_f(y, additive, cells)
+        p_any = nested_f(y, stick, cells)[3]
+        p_int = nested_f(y, additive, cells)[3]
         res = scipy.stats.linregress(rpm, y_all[on, i])
         out.append({"register": name, "p_speed": p_any, "p_interaction": p_int, "slope": float(res.slope),
                     "t": float(res.slope / res.stderr), "p_slope": float(res.pvalue), "df_slope": int(on.sum()) - 2})
