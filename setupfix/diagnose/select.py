@@ -288,6 +288,10 @@ def select_effects(layout: Layout, series: Series, *, alpha: float = 0.01, max_e
         if lack:
             notes.append("the dimensions keep constant offsets beyond the noise that no candidate explains "
                          "(lack of fit): a register or relation the model lacks on single dimensions?")
+    notes += list(dict.fromkeys(
+        f"{st.target}: ranked first in a step, but too few parts carry it to test {len(st.members)} coefficients "
+        "per part (the set's test has no degrees of freedom left): not claimed"
+        for st in steps if not st.accepted and len(st.members) > 1 and st.p >= 1.0 and st.f == 0.0))
     notes += register_notes(layout, series, obs)
     return Selection(tuple(found), tuple(steps), tuple(dict.fromkeys(unident)), tuple(notes), lack)
 

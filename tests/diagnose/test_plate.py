@@ -91,6 +91,7 @@ def test_the_spindle_speed_is_real_but_not_claimed_by_the_search():
     assert rows["T4A"]["p_speed"] > 0.1
     sel = select_effects(layout, s)
     assert not any("doe_speed" in str(e.channel) or RPM in str(e.channel) for e in sel.found)
+    assert any("doe_speed=Low" in n and "too few parts" in n for n in sel.notes)  # the report says why
     m = sel.steps[-1].tested
     ps = speed_term_pvalues(layout, s, sel.found, str(sel.found[0].channel))
     assert 0.01 / m < min(ps.values()) < 0.01 and min(ps, key=lambda r: ps[r]) == "T5A"
