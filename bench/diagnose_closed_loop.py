@@ -185,9 +185,9 @@ def section_a2(lines: list[str]) -> None:
               "   (the guide pins: 295 -> 647 candidates), and a relation is judged on its one dimension's own",
               "   variation over the cycles (K - 2 df) instead of the noise pooled over every cell.  The misses are",
               "   mostly relations the step ranks first but refuses once its p is multiplied by the number of",
-              "   candidates.  The older test is not calibrated when",
-              "   parts vary as a whole: a dimension a tool cuts carries that tool's per-part variation, the pool",
-              "   mixes it with dimensions that do not, and false relations exceed alpha = 1 % (last column).",
+              "   candidates.  The older test is not calibrated when parts vary as a whole: a dimension a tool",
+              "   cuts carries that tool's per-part variation, the pool mixes it with dimensions that do not, and",
+              "   false relations exceed alpha = 1 % (last column).",
               "   The drop is the price of the calibration and of the level kind, not a defect.", ""]
 
 
