@@ -35,7 +35,9 @@ range (:mod:`setupfix.diagnose.support`).
 Candidates whose residualised columns are (nearly) zero cannot be identified from
 the series (they are absorbed by the registers or their covariate never moved);
 candidates whose residualised columns are nearly collinear with the chosen one
-cannot be told apart from it.  Both are reported, never guessed.
+cannot be told apart from it.  Both are reported, never guessed; so is a per-register set that
+ranks first but leaves its per-part test no degrees of freedom (too few parts carry the channel
+for a coefficient per register), which is not claimed.
 
 The relation candidates (register i × dimension q) are scored from per-dimension
 sums, without forming their N-row columns, so the cost stays linear in the cycles.
