@@ -12,6 +12,16 @@ B. Shuffled timestamps: the plate's machining times (from its log) dealt to the 
    (seeded permutations), without the process log: a diagnosis that names a time-dependent
    effect (drift, thermal, wear, level) on shuffled times is a false alarm, since whatever the
    parts differ by no longer follows time.  The same for the box.
+C. The plate's second designed factor, the spindle speed: (1) the experiment analysed with the
+   part as the unit and the hypothesis stated in advance (``tests/diagnose/plate_doe.py``: the
+   2 x 3 factorial with three parts per cell, and the slope on the logged speed within the long
+   stick-out); (2) the same stick-out x speed term tested per part as the diagnosis tests a
+   one-column candidate, in the model it found, against the threshold its search must meet
+   (alpha over the candidates of the step); (3) the speed's effect scaled by k (0: removed, 2, 4)
+   in the measured deviations: what the diagnosis names then.
+D. The residual: the diagnosis's model, with the stick-out x speed term added per cutter register,
+   and the per-cutter model on the same channels (a constant and coefficients per dimension, the
+   0.025 mm the issue quotes).
 
     python bench/diagnose_real.py [shuffles]     # writes bench/results/diagnose_real.txt
 """
@@ -29,7 +39,11 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from setupfix.diagnose import Diagnoser, select_effects
+sys.path.insert(0, str(ROOT / "tests"))
+
+from diagnose.plate_doe import LONG, RPM, residual_rms, speed_term, speed_term_pvalues, speed_tests
+
+from setupfix.diagnose import Diagnoser, EffectSpec, select_effects
 from setupfix.pipeline.series import load_series
 
 SHARED = Path(os.environ.get("SETUPFIX_SHARED", ROOT.parent.parent / "shared"))
@@ -99,8 +113,94 @@ def main(n_shuffles: int) -> None:
                 hits.append(f"seed {seed}: {', '.join(named)}")
         say(f"{name}: {len(hits)} of {n_shuffles}" + ("" if not hits else "  (" + "; ".join(hits) + ")"))
     say()
+    plate_speed(say)
+    say()
     say(f"total {time.perf_counter() - t0:.0f} s")
     OUT.write_text("\n".join(lines) + "\n", encoding="utf-8")
+
+
+def plate_speed(say) -> None:
+    """Sections C and D (module text)."""
+    model, qif, log = SERIES["plate"]
+    inp = load_series(model, (qif,), process=str(log))
+    layout, series = inp.layout, inp.series
+    say("C. the plate's second designed factor: the spindle speed")
+    say("C1. the part as the unit, one hypothesis stated in advance (18 parts of the experiment; per part the mean")
+    say("    of the dimensions each cutter register alone moves; nested OLS F-tests; within the 9 long stick-out")
+    say("    parts the slope on the logged speed)")
+    say(f"{'register':>10}  {'speed, any (4, 12 df)':>22}  {'stick-out x speed (2, 12 df)':>29}  "
+        f"{'slope on long [mm/1000 rpm]':>28}  {'t':>6}  {'p (7 df)':>9}")
+    for row in speed_tests(layout, series):
+        say(f"{row['register']:>10}  {row['p_speed']:>22.2g}  {row['p_interaction']:>29.2g}  {row['slope']:>+28.4f}  "
+            f"{row['t']:>6.2f}  {row['p_slope']:>9.2g}")
+    sel = select_effects(layout, series)
+    stick = str(sel.found[0].channel)
+    m = sel.steps[-1].tested
+    alpha = 0.01
+    say("C2. the same term as the diagnosis tests a one-column candidate (cluster-robust, the part as the cluster,")
+    say(f"    small-sample df), in the model it found; its last step tried m = {m} candidates, so a claim needs")
+    say(f"    p < alpha / m = {alpha / m:.2g}")
+    ref = float(f"{series.temperature[:, series.channels.index(LONG)].mean():.4g}")
+    tools = tuple(layout.register_ids[j] for j in layout.tools)
+    every_long = tuple(EffectSpec("process", channel=LONG, register=r, reference=ref) for r in tools)
+    cases = ((f"the stick-out found ({stick})", sel.found, stick),
+             (f"the stick-out on every long part ({LONG}), a coefficient per cutter", every_long, LONG))
+    for label, found, ch in cases:
+        ps = speed_term_pvalues(layout, series, found, ch)
+        say(f"    {speed_term(series, ch)[0]} after {label}:")
+        say("      " + ", ".join(f"{r} p = {p:.2g} (x m = {min(1.0, p * m):.2g})" for r, p in ps.items()))
+    say("    Not claimed.  The speed acts only with the long stick-out, so its evidence is the nine long parts, and")
+    say("    within them the parts at 6000 and 12000 rpm (six parts: the test's df is 5).  The candidates the search")
+    say("    has cannot hold it better: a stick-out x speed-level indicator is on three parts, the speed channel")
+    say(f"    alone ({RPM}) acts on the short parts too; a per-register set of five coefficients on nine parts has no")
+    say("    df left (Hotelling's df = effective parts - 5 + 1 < 1).  Pre-specified (C1) the speed is plain; as the")
+    say("    result of a search over every channel, register and level position at family-wise alpha with the part")
+    say("    as the unit, it is not.")
+    say("C3. the speed's effect scaled by k in the measured deviations (the within-long slopes of C1): what the")
+    say("    diagnosis names, and the term's smallest per-part p (after the stick-out on every long part) against")
+    say(f"    alpha / m = {alpha / m:.2g}")
+    contrib = _speed_contribution(layout, series)
+    for k in (0.0, 1.0, 1.5, 2.0, 4.0):
+        s = dataclasses.replace(series, deviation=series.deviation + (k - 1.0) * contrib)
+        found = [st.target for st in select_effects(layout, s).steps if st.accepted]
+        best = min(speed_term_pvalues(layout, s, every_long, LONG).items(), key=lambda x: x[1])
+        term = f"  [term: {best[0]} p = {best[1]:.2g}]" if k else ""
+        say(f"    k = {k:g}: {'; '.join(found) or 'nothing named'}{term}")
+    say("    Without the speed (k = 0) the stick-out is named on all nine long parts; with it the channel of parts")
+    say("    11-18 explains more (part 10, a long part at 12000 rpm, sits low), which is why the diagnosis names")
+    say("    that one.  Were the stick-out x speed term a candidate of the search, it would pass its per-part test")
+    say("    at about twice the speed effect the plate shows (k = 2); no candidate the search has carries it, so")
+    say("    a larger speed effect still goes unnamed and the named stick-out thins out (k = 2, 4).")
+    say()
+    say("D. residual RMS of the plate with its log [mm] (the issue quotes 0.025 for a per-cutter model)")
+    rows = [("declared model (a constant per register)", residual_rms(layout, series, ())),
+            (f"the diagnosis: + {stick} per cutter", residual_rms(layout, series, sel.found)),
+            ("  + the stick-out x speed term per cutter register", residual_rms(layout, series, sel.found, stick)),
+            (f"{LONG} + the stick-out x speed term per cutter register",
+             residual_rms(layout, series, every_long, LONG)),
+            (f"a constant per dimension, {LONG} per dimension", residual_rms(layout, series, (), None, True)),
+            ("  + the stick-out x speed term per dimension (the per-cutter model)",
+             residual_rms(layout, series, (), LONG, True))]
+    for label, v in rows:
+        say(f"    {label:<78s} {v:.4f}")
+    say("    The gap from the diagnosis's 0.061 to 0.025 is the speed (C2: not claimed) and a constant and")
+    say("    coefficients per dimension where the model has one per register (the holes of one pattern differ")
+    say("    by more than the noise: the lack of fit).")
+
+
+def _speed_contribution(layout, series) -> np.ndarray:
+    """The stick-out x speed term with the within-long slope of C1 per register: (n_cycles, n_dimensions)."""
+    from diagnose.plate_doe import channel
+
+    slope = {row["register"]: float(row["slope"]) for row in speed_tests(layout, series)}
+    on = channel(series, LONG)
+    a = on * (channel(series, RPM) / 1000.0 - 9.0)
+    out = np.zeros_like(series.deviation)
+    for j in layout.tools:
+        rid = layout.register_ids[j]
+        if rid in slope:
+            out += np.outer(a, layout.composite[j]) * slope[rid]
+    return out
 
 
 if __name__ == "__main__":

@@ -35,7 +35,9 @@ range (:mod:`setupfix.diagnose.support`).
 Candidates whose residualised columns are (nearly) zero cannot be identified from
 the series (they are absorbed by the registers or their covariate never moved);
 candidates whose residualised columns are nearly collinear with the chosen one
-cannot be told apart from it.  Both are reported, never guessed.
+cannot be told apart from it.  Both are reported, never guessed; so is a per-register set that
+ranks first but leaves its per-part test no degrees of freedom (too few parts carry the channel
+for a coefficient per register), which is not claimed.
 
 The relation candidates (register i × dimension q) are scored from per-dimension
 sums, without forming their N-row columns, so the cost stays linear in the cycles.
@@ -288,6 +290,10 @@ def select_effects(layout: Layout, series: Series, *, alpha: float = 0.01, max_e
         if lack:
             notes.append("the dimensions keep constant offsets beyond the noise that no candidate explains "
                          "(lack of fit): a register or relation the model lacks on single dimensions?")
+    notes += list(dict.fromkeys(
+        f"{st.target}: ranked first in a step, but too few parts carry it to test {len(st.members)} coefficients "
+        "per part (the set's test has no degrees of freedom left): not claimed"
+        for st in steps if not st.accepted and len(st.members) > 1 and st.p >= 1.0 and st.f == 0.0))
     notes += register_notes(layout, series, obs)
     return Selection(tuple(found), tuple(steps), tuple(dict.fromkeys(unident)), tuple(notes), lack)
 

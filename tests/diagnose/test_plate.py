@@ -41,11 +41,11 @@ def test_process_log_is_joined_by_serial_with_factor_levels_and_their_products()
 def test_the_designed_factors_are_named_per_cutter_not_wear_or_drift(tmp_path):
     """The stick-out is named with a coefficient per cutter (one per-register set, tested per part by the
     multi-column cluster-robust Wald test): the 4 mm holes (T5A) grow and the 9.4 mm holes (T4A) shrink with
-    the long stick-out.  The channel chosen is the long stick-out on parts 11-18 (part 10, the first long one,
-    ran with another tool list and sits nearer the short parts).  The stick-out × speed cells (three parts
-    each) cannot carry five coefficients tested per part: not claimed; the residual drops from 0.097 to
-    0.061 mm and the out-of-tolerance cells from 23 to 4.  (The walk forward still prefers EWMA here: W1, the
-    distances' register, moves between parts and EWMA follows it; test_diagnose_plate.py.)"""
+    the long stick-out.  The channel chosen is the long stick-out on parts 11-18: part 10, a long part cut at
+    12000 rpm, sits low because the speed acts too, which the diagnosis does not claim (the next test).  The
+    residual drops from 0.097 to 0.061 mm and the out-of-tolerance cells from 23 to 4.  (The walk forward
+    still prefers EWMA here: W1, the distances' register, moves between parts and EWMA follows it;
+    test_diagnose_plate.py.)"""
     out = diagnose_reports(DiagnoseRequest(MODEL, (PLATE,), process=str(LOG), augment=str(tmp_path / "aug.toml"),
                                            diagnoser=Diagnoser(walk=False)))
     d = out.diagnosis
@@ -56,7 +56,7 @@ def test_the_designed_factors_are_named_per_cutter_not_wear_or_drift(tmp_path):
     assert regs["T5A"].estimate > 5 * regs["T5A"].stderr and regs["T4A"].estimate < -5 * regs["T4A"].stderr
     accepted = [s for s in d.selection.steps if s.accepted]
     assert len(accepted) == 1 and len(accepted[0].terms) == len(regs)  # one candidate, tested as a block
-    assert not any("doe_speed" in str(s.spec.channel) for s in accepted)
+    assert not any("doe_speed" in str(t.channel) or "rpm" in str(t.channel) for s in accepted for t in s.terms)
     assert d.error_before.rms == pytest.approx(0.0970, abs=5e-4)
     assert d.error_after.rms < 0.065
     assert d.error_before.out_of_tolerance == 23 and d.error_after.out_of_tolerance <= 5
@@ -68,6 +68,43 @@ def test_the_designed_factors_are_named_per_cutter_not_wear_or_drift(tmp_path):
                                              diagnoser=Diagnoser(walk=False)))
     assert [e.target for e in again.input.model.effects.effects] == [e.target for e in d.effects]
     assert again.diagnosis.error_before.rms == pytest.approx(d.error_after.rms, rel=1e-6)
+
+
+@needs_log
+def test_the_spindle_speed_is_real_but_not_claimed_by_the_search():
+    """The plate's second designed factor.  With the part as the unit and the hypothesis stated in advance
+    (the 2 x 3 factorial, three parts per cell; statsmodels gives the same p-values) the speed plainly acts
+    with the long stick-out: the 4 mm holes (T5A) grow by 0.06 mm per 1000 rpm less, the 9.4 mm holes (T4A)
+    do not follow it.  The diagnosis does not name it, and rightly at its level: the same term tested per part
+    as it tests a candidate (cluster-robust, six parts carry the contrast) has p between alpha and alpha / m,
+    m the candidates its search tries; without the speed in the data the stick-out channel is every long part
+    (``bench/diagnose_real.py`` C, D).  The speed is the gap to the per-cutter model's 0.025 mm."""
+    import dataclasses
+
+    from diagnose.plate_doe import LONG, RPM, channel, residual_rms, speed_term_pvalues, speed_tests
+
+    inp = load_series(MODEL, (PLATE,), process=str(LOG))
+    layout, s = inp.layout, inp.series
+    rows = {r["register"]: r for r in speed_tests(layout, s)}
+    assert rows["T5A"]["p_interaction"] < 1e-4 and rows["T5A"]["p_slope"] < 1e-3
+    assert rows["T5A"]["slope"] == pytest.approx(-0.0598, abs=5e-4)
+    assert rows["T4A"]["p_speed"] > 0.1
+    sel = select_effects(layout, s)
+    assert not any("doe_speed" in str(e.channel) or RPM in str(e.channel) for e in sel.found)
+    assert any("doe_speed=Low" in n and "too few parts" in n for n in sel.notes)  # the report says why
+    m = sel.steps[-1].tested
+    ps = speed_term_pvalues(layout, s, sel.found, str(sel.found[0].channel))
+    assert 0.01 / m < min(ps.values()) < 0.01 and min(ps, key=lambda r: ps[r]) == "T5A"
+    # the speed removed from the deviations (the within-long slopes): the stick-out is every long part
+    a = channel(s, LONG) * (channel(s, RPM) / 1000.0 - 9.0)
+    contrib = sum(np.outer(a, layout.composite[j]) * float(rows[layout.register_ids[j]]["slope"])
+                  for j in layout.tools)
+    quiet = select_effects(layout, dataclasses.replace(s, deviation=s.deviation - contrib))
+    assert {e.channel for e in quiet.found} == {LONG}
+    # the residual: the speed term per cutter closes most of the gap; per dimension it is the issue's 0.025
+    assert residual_rms(layout, s, sel.found) == pytest.approx(0.0607, abs=5e-4)
+    assert residual_rms(layout, s, sel.found, str(sel.found[0].channel)) < 0.04
+    assert residual_rms(layout, s, (), LONG, per_dimension=True) == pytest.approx(0.0252, abs=5e-4)
 
 
 @needs_log
