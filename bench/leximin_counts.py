@@ -1,15 +1,16 @@
-"""Leximin count MILPs with and without HiGHS's presolve (issue 22: the batch's long tail).
+"""Leximin count MILPs: HiGHS's presolve and the nested blocks' linking rows (issue 22: the batch's long tail).
 
 The varied guide-pins reports of ``bench/batch_throughput.py --vary`` (each actual moved by a
 seeded step in ±0.005 mm) are corrected once; those whose leximin reaches the counts
 (:mod:`setupfix.optimize._leximin_counts`, a discrete conflict that branches cannot decide) are
-then corrected again, alternately with the count MILPs presolved (HiGHS's default) and not
-(:meth:`~setupfix.optimize._highs.LinearModel.skip_presolve`, what the optimiser does), twice
-each.  Time is process CPU time (the box is shared; wall time would measure the load), given
-per report and as a ratio to the in-process reference of the same run (the mean over the five
-bundled cycles of ``correct_report``).  The corrections must be identical where both are proved.
+then corrected again in turn three ways: as before (presolved, HiGHS's default, and no linking
+rows), without presolve (:meth:`~setupfix.optimize._highs.LinearModel.skip_presolve`), and without
+presolve with the rows w_i,q ≤ w_(i−1),q that link the nested count blocks (what the optimiser does,
+:data:`setupfix.optimize._leximin_counts.LINK`).  Time is process CPU time (the box is shared; wall
+time would measure the load), with the in-process reference of the same run (the mean over the five
+bundled cycles of ``correct_report``).  The corrections must be identical where the ways are proved.
 
-    python bench/leximin_counts.py                 # 300 reports, 60 s limit
+    python bench/leximin_counts.py                 # 600 reports, 60 s limit
     python bench/leximin_counts.py --reports 100
 
 Threads: OPENBLAS/MKL/OMP = 1, HiGHS 1 thread.  Writes ``bench/results/leximin_counts.txt``.
@@ -33,6 +34,7 @@ import numpy as np
 from batch_throughput import GUIDE, make_reports, reference
 
 from setupfix.model import load_model
+from setupfix.optimize import _leximin_counts
 from setupfix.optimize._highs import LinearModel
 from setupfix.pipeline.correct import correct_report
 from setupfix.pipeline.requests import CorrectRequest, SolveOptions
@@ -41,9 +43,14 @@ RESULTS = ROOT / "bench" / "results"
 SKIP = LinearModel.skip_presolve
 
 
-def presolve(on: bool) -> None:
-    """Count MILPs presolved (HiGHS's default) or not (the optimiser's setting)."""
-    LinearModel.skip_presolve = (lambda self: None) if on else SKIP  # type: ignore[method-assign]
+#: The three ways: (name, presolve on, linking rows).
+WAYS = (("before", True, False), ("no presolve", False, False), ("+ links", False, True))
+
+
+def way(presolve: bool, link: bool) -> None:
+    """Count MILPs presolved (HiGHS's default) or not (the optimiser's setting), with or without the links."""
+    LinearModel.skip_presolve = (lambda self: None) if presolve else SKIP  # type: ignore[method-assign]
+    _leximin_counts.LINK = link
 
 
 def solve(request: CorrectRequest, path: Path) -> tuple[float, str, str, np.ndarray]:
@@ -56,7 +63,7 @@ def solve(request: CorrectRequest, path: Path) -> tuple[float, str, str, np.ndar
 
 def main() -> None:
     ap = argparse.ArgumentParser()
-    ap.add_argument("--reports", type=int, default=300)
+    ap.add_argument("--reports", type=int, default=600)
     ap.add_argument("--limit", type=float, default=60.0)
     args = ap.parse_args()
     request = CorrectRequest(load_model(GUIDE / "model.toml"), solve=SolveOptions(time_limit=args.limit))
@@ -66,42 +73,37 @@ def main() -> None:
         folder = Path(tmp)
         make_reports(folder, args.reports, vary=True)
         files = sorted(folder.glob("*.csv"))
-        presolve(False)
+        way(False, True)
         counted = [f for f in files if "the rest by counts" in solve(request, f)[2]]
         rows = []
         for f in counted:
-            runs: dict[bool, list[tuple[float, str, np.ndarray]]] = {True: [], False: []}
-            for _ in range(2):
-                for on in (True, False):
-                    presolve(on)
-                    cpu, status, _, x = solve(request, f)
-                    runs[on].append((cpu, status, x))
+            runs = {}
+            for name, presolve, link in WAYS:
+                way(presolve, link)
+                runs[name] = solve(request, f)
             rows.append((f.name, runs))
-        presolve(False)
+        way(False, True)
     lines = [
-        "Leximin count MILPs: HiGHS presolve on (default) vs off (the optimiser's setting), process CPU time",
+        "Leximin count MILPs: HiGHS presolve and the linking rows of the nested blocks, process CPU time",
         f"command : python bench/leximin_counts.py --reports {args.reports} --limit {args.limit:g}",
         "threads : OPENBLAS/MKL/OMP = 1, HiGHS threads = 1",
         f"load    : 1-min load average {load0:.2f} at the start, {os.getloadavg()[0]:.2f} at the end",
         f"reference: in-process correct_report of the five bundled cycles, mean {ref * 1e3:.2f} ms (wall)",
         f"reports : {args.reports} varied guide-pins reports; {len(counted)} reach the counts",
+        "ways    : before = presolve on, no links; no presolve; + links = no presolve and the links (the optimiser)",
         "",
-        f"{'report':<12}{'on: CPU s':>11}{'off: CPU s':>12}{'on/off':>8}  {'status on/off':<24}same",
+        f"{'report':<12}" + "".join(f"{name + ': CPU s':>20}" for name, _, _ in WAYS) + "  same answer (proved ways)",
     ]
-    ratios = []
+    totals = {name: 0.0 for name, _, _ in WAYS}
     for name, runs in rows:
-        on = min(c for c, _, _ in runs[True])
-        off = min(c for c, _, _ in runs[False])
-        s_on, s_off = runs[True][0][1], runs[False][0][1]
-        proved = s_on == "optimal" and s_off == "optimal"
-        same = np.array_equal(runs[True][0][2], runs[False][0][2]) if proved else None
-        if proved:
-            ratios.append(on / off)
-        lines.append(f"{name:<12}{on:>11.2f}{off:>12.2f}{on / off:>8.2f}  {s_on + '/' + s_off:<24}"
-                     f"{'yes' if same else 'NO' if same is False else '- (stopped: not compared)'}")
-    if ratios:
-        lines += ["", f"proved on both sides: {len(ratios)}; CPU on/off median {np.median(ratios):.2f}x, "
-                      f"min {min(ratios):.2f}x, max {max(ratios):.2f}x"]
+        cells = "".join(f"{runs[w][0]:>12.2f} {runs[w][1][:7]:>7}" for w, _, _ in WAYS)
+        proved = [runs[w][3] for w, _, _ in WAYS if runs[w][1] == "optimal"]
+        same = all(np.array_equal(proved[0], x) for x in proved[1:]) if proved else None
+        lines.append(f"{name:<12}{cells}  {'yes' if same else 'NO' if same is False else '-'}"
+                     f" ({len(proved)} of {len(WAYS)} proved)")
+        for w, _, _ in WAYS:
+            totals[w] += runs[w][0]
+    lines += ["", "total CPU s: " + ", ".join(f"{w} {t:.2f}" for w, t in totals.items())]
     text = "\n".join(lines) + "\n"
     RESULTS.mkdir(exist_ok=True)
     (RESULTS / "leximin_counts.txt").write_text(text)

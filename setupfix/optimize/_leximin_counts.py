@@ -33,6 +33,9 @@ from setupfix.optimize._session import Session
 
 __all__ = ["CountLevels", "count_least_norm", "count_levels"]
 
+#: Link the nested blocks' binaries (w_i,q ≤ w_(i−1),q); ``bench/leximin_counts.py`` compares without.
+LINK = True
+
 Array = npt.NDArray[np.float64]
 
 
@@ -151,6 +154,14 @@ def _model(rows: _Rows, blocks: list[tuple[float, int]], extra: int, question: t
             parts.append(csr_array(count[None, :]))
             lo.append(np.array([float(c_i)]))
             hi.append(np.array([INF]))
+    if nb > 1 and LINK:  # nested blocks (t rises block by block): w_i,q = 1 ⇒ M_q ≥ t_i ≥ t_(i−1), so
+        # w_i,q ≤ w_(i−1),q is valid (raise w_(i−1),q) and cuts the LP relaxation and symmetric branches
+        pairs = np.arange((nb - 1) * na)
+        link = coo_array((np.r_[np.ones(pairs.size), -np.ones(pairs.size)],
+                          (np.r_[pairs, pairs], np.r_[off + na + pairs, off + pairs])), shape=(pairs.size, width))
+        parts.append(csr_array(link))
+        lo.append(np.full(pairs.size, -INF))
+        hi.append(np.zeros(pairs.size))
     c = np.zeros(width)
     if objective == "count":
         c[off + len(blocks) * na: off + nb * na] = -1.0
