@@ -9,7 +9,7 @@ from typing import ClassVar
 import numpy as np
 import numpy.typing as npt
 
-from setupfix.diagnose.factors import FactorTests, Term, test_factors
+from setupfix.diagnose.factors import FactorTests, Term, factor_tests
 from setupfix.diagnose.fit import Fit, fit_model, observations
 from setupfix.diagnose.select import Selection, select_effects
 from setupfix.diagnose.terms import EffectSpec, Layout, Series
@@ -233,7 +233,7 @@ class Diagnoser(ValidatedParams):
         obs = observations(layout, series)
         if obs.n == 0:
             raise ParameterError("diagnose: the series has no measured dimension")
-        tests = (test_factors(layout, series, factors, alpha=self.alpha, obs=obs, declared=declared)
+        tests = (factor_tests(layout, series, factors, alpha=self.alpha, obs=obs, declared=declared)
                  if factors else None)
         pre = tests.found if tests is not None else ()
         selection = select_effects(layout, series, alpha=self.alpha, max_effects=self.max_effects,

@@ -45,7 +45,7 @@ from setupfix.diagnose.inference import MIN_CYCLES, cluster_wald, orth
 from setupfix.diagnose.terms import PRODUCT, EffectSpec, Layout, Series, channel_values
 
 __all__ = ["INTERACTION", "Term", "FactorTest", "FactorTests", "parse_terms", "factor_channels", "term_columns",
-           "test_factors"]
+           "factor_tests"]
 
 Array = npt.NDArray[np.float64]
 
@@ -200,7 +200,7 @@ def holm(p: Array) -> Array:
     return out
 
 
-def test_factors(layout: Layout, series: Series, terms: tuple[Term, ...], *, alpha: float = 0.01,
+def factor_tests(layout: Layout, series: Series, terms: tuple[Term, ...], *, alpha: float = 0.01,
                  obs: Observations | None = None, declared: tuple[EffectSpec, ...] = ()) -> FactorTests:
     """Test the declared terms per register with the part as the unit; Holm over the family (module text).
 

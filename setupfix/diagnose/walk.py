@@ -32,7 +32,7 @@ import numpy as np
 import numpy.typing as npt
 
 from setupfix.diagnose.fit import RELATION_T, Fit, row_space_basis
-from setupfix.diagnose.factors import Term, test_factors
+from setupfix.diagnose.factors import Term, factor_tests
 from setupfix.diagnose.select import select_effects
 from setupfix.diagnose.covariates import typical_step
 from setupfix.diagnose.terms import EffectSpec, Layout, Series, effect_field
@@ -239,7 +239,7 @@ def walk_forward(layout: Layout, series: Series, *, score_composite: Array | Non
         decl.add_until(k)
         if pos == 0 or (k - scored[0]) % every == 0:
             past = series.take(np.arange(k))
-            pre = test_factors(layout, past, factors, alpha=alpha, declared=declared).found if factors else ()
+            pre = factor_tests(layout, past, factors, alpha=alpha, declared=declared).found if factors else ()
             sel = select_effects(layout, past, alpha=alpha, declared=declared + pre)
             specs = pre + sel.found
             aug = _Running(layout, series, declared + specs, basis, z_obs, k, sel.unnamed) if specs else decl

@@ -132,7 +132,7 @@ class DiagnoseOutcome:
                          **({"registers": list(e.registers)} if e.kind == "relation" else {}),
                          **({"cycle": e.spec.cycle, "at_hours": e.spec.at} if e.kind == "level" else {}),
                          **({"channel": e.spec.channel, "register": e.spec.register} if e.kind == "process" else {}),
-                         "source": e.source, **({"p": r(e.p, 12)} if e.p is not None else {})}
+                         "source": e.source, "p": r(e.p, 12) if e.p is not None else None}
                         for e in d.effects],
             "declared_factors": [] if d.factors is None else [
                 {"term": t.term.name, "register": t.register, "channels": [str(s.channel) for s in t.specs],

@@ -1,0 +1,154 @@
+"""Declared design factors (``diagnose --factors``): the plate's experiment tested as stated, and silence on nulls."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from setupfix.diagnose import Diagnoser, Layout, Term, parse_terms, factor_tests
+from setupfix.diagnose.factors import holm, term_columns
+from setupfix.diagnose.terms import channel_values
+from setupfix.pipeline.diagnose import DiagnoseRequest, diagnose_reports
+from setupfix.pipeline.series import load_series
+
+from diagnose.helpers import NOISE, guide_pins, simulate
+from diagnose.test_plate import LOG, MODEL, PLATE, needs_log
+
+DESIGN = ("doe_tool_length", "doe_speed", "doe_tool_length*doe_speed")
+
+
+def test_terms_are_parsed_once_each_in_the_order_given():
+    assert parse_terms(" a, b ,a*b,a") == (Term(("a",)), Term(("b",)), Term(("a", "b")))
+    assert parse_terms(("a", "b*c")) == (Term(("a",)), Term(("b", "c")))
+    assert Term(("a", "b")).name == "a*b" and Term(("a", "b")).order == 2
+    for bad in ("a,,b", "a*", "a*a", ""):
+        with pytest.raises(ValueError):
+            parse_terms(bad)
+
+
+def test_holm_by_hand():
+    """Holm (1979): sorted p times (m - i + 1), running maximum; the same as the step-down rule applied by hand."""
+    p = np.array([0.01, 0.04, 0.03, 0.005])
+    assert holm(p).tolist() == pytest.approx([0.03, 0.06, 0.06, 0.02])
+    rng = np.random.default_rng(0)
+    for _ in range(50):
+        p = rng.uniform(0, 0.05, size=6)
+        adj = holm(p)
+        for alpha in (0.01, 0.02, 0.05):
+            order = np.argsort(p)
+            rejected = set()
+            for i, k in enumerate(order):  # step down: stop at the first that fails
+                if p[k] > alpha / (p.size - i):
+                    break
+                rejected.add(int(k))
+            assert {int(k) for k in np.flatnonzero(adj <= alpha)} == rejected
+
+
+def _design_series(seed: int, n: int = 18, part_noise: float = 0.0):
+    """A null series of the guide pins with a random 2 x 3 design in its process log (the log reader's channels:
+    one indicator for the two-level factor, one per level for the three-level one), balanced over the parts."""
+    layout = Layout.from_model(guide_pins())
+    s = simulate(layout, seed=seed, n_cycles=n, part_noise=part_noise).series
+    rng = np.random.default_rng(seed)
+    cells = rng.permutation(np.arange(n) % 6)
+    a, b = cells // 3, cells % 3
+    cols = [a == 1] + [b == k for k in range(3)]
+    names = ("A=hi", "B=lo", "B=mid", "B=hi")
+    s = dataclasses.replace(s, temperature=np.column_stack([s.temperature, *cols]).astype(float),
+                            channels=(*s.channels, *names), process_channels=names)
+    return layout, s
+
+
+def test_columns_keep_one_reference_level_and_the_interaction_what_the_main_effects_do_not_hold():
+    _, s = _design_series(1)
+    cols = term_columns(s, parse_terms(("A", "B", "A*B")))
+    assert cols[Term(("A",))] == (("A=hi",), ())
+    assert cols[Term(("B",))] == (("B=mid", "B=hi"), ())  # the first level is the reference
+    assert cols[Term(("A", "B"))] == (("A=hi & B=mid", "A=hi & B=hi"), ())
+    assert channel_values(s, "A=hi & B=hi").tolist() == (channel_values(s, "A=hi") * channel_values(s, "B=hi")).tolist()
+    with pytest.raises(KeyError):
+        term_columns(s, parse_terms("C"))
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_a_null_series_with_a_random_design_names_nothing(seed):
+    layout, s = _design_series(seed, part_noise=2 * NOISE)
+    ft = factor_tests(layout, s, parse_terms(("A", "B", "A*B")))
+    assert len(ft.tests) == 3 * len(layout.tools) and not ft.found
+    assert all(0 < t.p <= 1 for t in ft.tests)
+
+
+def test_a_hidden_interaction_on_one_tool_is_named_there():
+    """The design columns acting on one tool (a cell of the 2 x 3 design off by 0.01 mm, five times the noise)."""
+    layout, s = _design_series(4, n=24)
+    j = int(layout.tools[0])
+    cell = channel_values(s, "A=hi & B=hi")
+    s = dataclasses.replace(s, deviation=s.deviation + 0.01 * np.outer(cell, layout.composite[j]))
+    ft = factor_tests(layout, s, parse_terms(("A", "B", "A*B")))
+    assert {(t.term.name, t.register) for t in ft.tests if t.accepted} >= {("A*B", layout.register_ids[j])}
+    assert all(t.register == layout.register_ids[j] for t in ft.tests if t.accepted)
+
+
+@needs_log
+def test_the_plate_names_the_stick_out_and_the_speed_per_cutter_as_the_independent_analysis():
+    """Declared, the experiment's factors are tested as stated: the stick-out per cutter and the stick-out x
+    speed interaction on T5A, T1 and T5B, not on T4A (whose holes do not follow the speed), with per-part
+    p-values close to the pre-specified 2 x 3 factorial of ``plate_doe.speed_tests`` (there: part means, the
+    18 parts of the experiment; here: every cell, the part as the cluster, the operator's two parts a level of
+    their own)."""
+    from diagnose.plate_doe import speed_tests
+
+    inp = load_series(MODEL, (PLATE,), process=str(LOG))
+    ft = factor_tests(inp.layout, inp.series, parse_terms(DESIGN))
+    acc = {(t.term.name, t.register) for t in ft.tests if t.accepted}
+    for reg in ("T5A", "T1", "T5B"):
+        assert ("doe_tool_length*doe_speed", reg) in acc
+    assert ("doe_tool_length*doe_speed", "T4A") not in acc
+    assert {("doe_tool_length", r) for r in ("T5A", "T4A", "T1")} <= acc
+    indep = {r["register"]: r for r in speed_tests(inp.layout, inp.series)}
+    for t in ft.tests:
+        if t.term.order == 2:  # T4B: 0.008 here, 0.054 there (its two dimensions part-averaged); not accepted
+            ratio = t.p / float(indep[t.register]["p_interaction"])
+            assert 1 / 3 < ratio < 3 if t.register != "T4B" else 1 / 10 < ratio < 10, (t.register, t.p, ratio)
+    ps = {t.register: t.p_holm for t in ft.tests if t.term.order == 2}
+    assert ps["T5A"] < 1e-3 and ps["T4A"] > 0.1 and ps["T4B"] > 0.01
+    # the family is the 15 declared tests, not the search's hundreds
+    assert len(ft.tests) == 15 and all(t.p_holm <= min(1.0, 15 * t.p) + 1e-12 for t in ft.tests)
+
+
+@needs_log
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_the_plate_with_its_design_permuted_across_parts_names_nothing(seed):
+    inp = load_series(MODEL, (PLATE,), process=str(LOG))
+    s = inp.series
+    perm = np.random.default_rng(seed).permutation(s.n_cycles)
+    shuffled = dataclasses.replace(s, temperature=s.temperature[perm])
+    ft = factor_tests(inp.layout, shuffled, parse_terms(DESIGN))
+    assert not ft.found, [(t.term.name, t.register, t.p_holm) for t in ft.tests if t.accepted]
+
+
+@needs_log
+def test_declared_factors_enter_the_diagnosis_before_the_search(tmp_path):
+    out = diagnose_reports(DiagnoseRequest(MODEL, (PLATE,), process=str(LOG), factors=(",".join(DESIGN),),
+                                           augment=str(tmp_path / "aug.toml"), diagnoser=Diagnoser(walk=False)))
+    d = out.diagnosis
+    assert d.factors is not None
+    declared = [e for e in d.effects if e.source == "declared"]
+    assert declared and d.effects[:len(declared)] == tuple(declared)  # first, then what the search finds
+    t5a = {e.spec.channel: e for e in declared if e.spec.register == "T5A"}
+    low = t5a["doe_tool_length=Long & doe_speed=Low"]
+    assert low.estimate > 10 * low.stderr
+    assert t5a["doe_tool_length=Long"].p is not None and t5a["doe_tool_length=Long"].p < 0.01
+    assert t5a["doe_speed=Low"].p is None  # fitted with its accepted interaction, its own test not accepted
+    without = diagnose_reports(DiagnoseRequest(MODEL, (PLATE,), process=str(LOG), diagnoser=Diagnoser(walk=False)))
+    assert without.diagnosis.factors is None and all(e.source == "search" for e in without.diagnosis.effects)
+    assert d.error_after.rms < 0.035 < 0.06 < without.diagnosis.error_after.rms
+    assert d.error_after.out_of_tolerance < without.diagnosis.error_after.out_of_tolerance
+    doc = out.to_json()
+    assert len(doc["declared_factors"]) == 15 and {e["source"] for e in doc["effects"]} <= {"declared", "search"}
+    # the augmented model (product channels included) reloads with the same log and reproduces the fit
+    again = diagnose_reports(DiagnoseRequest(tmp_path / "aug.toml", (PLATE,), process=str(LOG),
+                                             diagnoser=Diagnoser(walk=False)))
+    assert again.diagnosis.error_before.rms == pytest.approx(d.error_after.rms, rel=1e-6)
