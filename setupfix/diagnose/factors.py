@@ -105,6 +105,9 @@ def factor_channels(series: Series, factor: str) -> tuple[str, ...]:
     return chans
 
 
+#: Leverage correction of the declared tests' variance (:func:`~setupfix.diagnose.inference.cluster_wald`).
+POWER = 0.5
+
 #: A factor's level seen on fewer parts than this is fitted (its own constant) but not tested.
 MIN_LEVEL_PARTS = 3
 
@@ -258,7 +261,7 @@ def factor_tests(layout: Layout, series: Series, terms: tuple[Term, ...], *, alp
                        if (u, i, b) != (t, j, True)]
             Q = orth(np.hstack([base, *context]))
             r = obs.z - Q @ (Q.T @ obs.z)
-            f, p, q = cluster_wald(block - Q @ (Q.T @ block), r, obs.cycle, series.n_cycles)
+            f, p, q = cluster_wald(block - Q @ (Q.T @ block), r, obs.cycle, series.n_cycles, Q=Q, power=POWER)
             raw.append((t, j, f, p, q))
     for t in terms:
         if not chans[t][0]:

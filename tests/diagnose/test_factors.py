@@ -93,27 +93,28 @@ def test_a_hidden_interaction_on_one_tool_is_named_there():
 
 @needs_log
 def test_the_plate_names_the_stick_out_and_the_speed_per_cutter_as_the_independent_analysis():
-    """Declared, the experiment's factors are tested as stated: the stick-out per cutter and the stick-out x
-    speed interaction on T5A, T1 and T5B, not on T4A (whose holes do not follow the speed), with per-part
-    p-values close to the pre-specified 2 x 3 factorial of ``plate_doe.speed_tests`` (there: part means, the
-    18 parts of the experiment; here: every cell, the part as the cluster, the operator's two parts a level of
-    their own)."""
+    """Declared, the experiment's factors are tested as stated.  At alpha = 0.01 the stick-out is named on the
+    cutters (T5B's holes move least: Holm 0.03) and the stick-out x speed interaction on T5A; at 0.05 on T5A, T1
+    and T5B, never on T4A (whose holes do not follow the speed), as the pre-specified 2 x 3 factorial on part
+    means says (``plate_doe.speed_tests``).  The per-part p-values rank the cutters as the factorial does and
+    are never more optimistic than it; they are larger (up to ~50x): the cluster-robust variance with its
+    small-sample correction (CR2, Bell-McCaffrey df ~ 8 for 20 parts) pays for not assuming every part alike,
+    the price of the calibration (``bench/diagnose_factors.py`` B, C)."""
     from diagnose.plate_doe import speed_tests
 
     inp = load_series(MODEL, (PLATE,), process=str(LOG))
     ft = factor_tests(inp.layout, inp.series, parse_terms(DESIGN))
     acc = {(t.term.name, t.register) for t in ft.tests if t.accepted}
-    for reg in ("T5A", "T1", "T5B"):
-        assert ("doe_tool_length*doe_speed", reg) in acc
-    assert ("doe_tool_length*doe_speed", "T4A") not in acc
-    assert {("doe_tool_length", r) for r in ("T5A", "T4A", "T1")} <= acc
-    indep = {r["register"]: r for r in speed_tests(inp.layout, inp.series)}
-    for t in ft.tests:
-        if t.term.order == 2:  # T4B: 0.008 here, 0.054 there (its two dimensions part-averaged); not accepted
-            ratio = t.p / float(indep[t.register]["p_interaction"])
-            assert 1 / 3 < ratio < 3 if t.register != "T4B" else 1 / 10 < ratio < 10, (t.register, t.p, ratio)
-    ps = {t.register: t.p_holm for t in ft.tests if t.term.order == 2}
-    assert ps["T5A"] < 1e-3 and ps["T4A"] > 0.1 and ps["T4B"] > 0.01
+    assert {("doe_tool_length", r) for r in ("T5A", "T4A", "T1", "T4B")} <= acc
+    assert {r for name, r in acc if name == "doe_tool_length*doe_speed"} == {"T5A"}
+    assert not {r for name, r in acc if name == "doe_speed"}
+    loose = factor_tests(inp.layout, inp.series, parse_terms(DESIGN), alpha=0.05)
+    assert {t.register for t in loose.tests if t.accepted and t.term.order == 2} == {"T5A", "T1", "T5B"}
+    indep = {r["register"]: float(r["p_interaction"]) for r in speed_tests(inp.layout, inp.series)}
+    ours = {t.register: t.p for t in ft.tests if t.term.order == 2}
+    assert sorted(ours, key=ours.__getitem__) == sorted(indep, key=indep.__getitem__)  # T5A, T1, T5B, T4B, T4A
+    for reg, p in ours.items():
+        assert indep[reg] / 3 < p < max(100 * indep[reg], 0.05), (reg, p, indep[reg])
     # the family is the 15 declared tests, not the search's hundreds
     assert len(ft.tests) == 15 and all(t.p_holm <= min(1.0, 15 * t.p) + 1e-12 for t in ft.tests)
 
@@ -139,7 +140,7 @@ def test_declared_factors_enter_the_diagnosis_before_the_search(tmp_path):
     assert declared and d.effects[:len(declared)] == tuple(declared)  # first, then what the search finds
     t5a = {e.spec.channel: e for e in declared if e.spec.register == "T5A"}
     low = t5a["doe_tool_length=Long & doe_speed=Low"]
-    assert low.estimate > 10 * low.stderr
+    assert low.estimate > 10 * low.stderr and low.p is not None and low.p < 0.01
     assert t5a["doe_tool_length=Long"].p is not None and t5a["doe_tool_length=Long"].p < 0.01
     assert t5a["doe_speed=Low"].p is None  # fitted with its accepted interaction, its own test not accepted
     without = diagnose_reports(DiagnoseRequest(MODEL, (PLATE,), process=str(LOG), diagnoser=Diagnoser(walk=False)))
