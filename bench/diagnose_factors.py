@@ -6,14 +6,16 @@ A. The NIST plate with its process log, the experiment declared (doe_tool_length
    (tests/diagnose/plate_doe.py).  The diagnosis with and without the declaration: residual, out of
    tolerance, walk forward.
 B. No real effect, the plate: the log's rows (every channel together, so the design stays a 2 x 3 with
-   the operator's parts) dealt to the parts at random, 100 seeded permutations: share with any declared
+   the operator's parts) dealt to the parts at random (seeded permutations): share with any declared
    test accepted (family-wise; nominal <= alpha = 0.01) and share of single tests accepted.
 C. No real effect, simulated: the guide pins (28 dimensions, cell noise 0.002 mm), a random balanced 2 x 3
    design over the parts (18 and 40 parts), shared per-part noise 0 and 2x the cell noise: the same rates.
 D. Detection: one cell of the design (A = hi, B = hi) off by a magnitude on one tool, 18 parts: share of
    seeds with the interaction accepted on that tool (and nothing on another).
+The declared tests: the multi-column cluster-robust Wald test with each part's residual corrected for its
+leverage (CR2) and Bell-McCaffrey degrees of freedom (setupfix/diagnose/inference.py, cluster_wald with Q).
 
-    python bench/diagnose_factors.py [series per setting]   # writes bench/results/diagnose_factors.txt
+    python bench/diagnose_factors.py [series per setting, default 300]   # writes bench/results/diagnose_factors.txt
 """
 
 from __future__ import annotations
@@ -79,6 +81,9 @@ def main(n_series: int) -> None:
         ref = f"{float(indep[t.register]['p_interaction']):.2g}" if t.term.order == 2 else ""
         say(f"  {t.term.name:<28}{t.register:<10}{t.q:>8}{t.p:>11.2g}{t.p_holm:>11.2g}  "
             f"{'yes' if t.accepted else 'no':<9}{ref:>11}")
+    loose = factor_tests(inp.layout, inp.series, terms, alpha=0.05)
+    say("  accepted at alpha = 0.05: " + ", ".join(f"{t.term.name} on {t.register}" for t in loose.tests
+                                                  if t.accepted))
     for label, factors in (("without --factors", ()), ("with --factors", (",".join(DESIGN),))):
         t = time.perf_counter()
         d = diagnose_reports(DiagnoseRequest(MODEL, (PLATE,), process=str(LOG), factors=factors)).diagnosis
@@ -146,4 +151,4 @@ def main(n_series: int) -> None:
 
 if __name__ == "__main__":
     with threadpool_limits(1):
-        main(int(sys.argv[1]) if len(sys.argv) > 1 else 100)
+        main(int(sys.argv[1]) if len(sys.argv) > 1 else 300)
