@@ -15,21 +15,24 @@ categorical factor) — the per-register ``process`` effect of
 
 * the columns of a term are those of its channels that add to the rank of the per-cycle
   design built so far (a constant, then the main effects, then the interactions, in the
-  order declared): one level of a factor is the reference, an interaction adds only
-  what its main effects do not hold;
+  order declared): the first level of a factor is the reference, an interaction adds only
+  what its main effects do not hold; a level seen on fewer than :data:`MIN_LEVEL_PARTS`
+  parts (off-design runs) gets its own constant, fitted but not tested;
 * the block of a term on register j is tested in the model of the declared model (its
   ``[effects]``) plus every declared term of the same or lower order on every register
   but that block (type II: main effects adjusted for each other, interactions for the main
   effects), by the multi-column cluster-robust Wald test with the part as the cluster
-  (:func:`setupfix.diagnose.inference.cluster_wald`, Hotelling-scaled F);
+  (:func:`setupfix.diagnose.inference.cluster_wald`, Hotelling-scaled F), each part's
+  residual corrected for its leverage (CR2) and Bell–McCaffrey degrees of freedom: a cell
+  of a design sits on few parts, and the plain variance (CR1) underrates them;
 * the family is the declared terms × registers, and Holm's step-down procedure
   (Holm 1979) holds its family-wise error at ``alpha``: p₍ᵢ₎ (m − i + 1), running maximum.
 
 A term accepted on a register enters the fit with the lower-order terms it contains (on
 that register: an interaction is read relative to its main effects).  The search of
-:mod:`setupfix.diagnose.select` then runs with them in its base.  Calibration: section F of
-``bench/diagnose_calibration.py`` (declared factors with no effect: design columns
-permuted across whole parts, and simulated series with a random design).
+:mod:`setupfix.diagnose.select` then runs with them in its base.  Calibration:
+``bench/diagnose_factors.py`` (declared factors with no effect: the plate's log rows
+permuted across whole parts, and simulated series with a random 2 × 3 design).
 """
 
 from __future__ import annotations
