@@ -153,3 +153,18 @@ def test_declared_factors_enter_the_diagnosis_before_the_search(tmp_path):
     again = diagnose_reports(DiagnoseRequest(tmp_path / "aug.toml", (PLATE,), process=str(LOG),
                                              diagnoser=Diagnoser(walk=False)))
     assert again.diagnosis.error_before.rms == pytest.approx(d.error_after.rms, rel=1e-6)
+
+
+@needs_log
+def test_with_the_declared_factors_the_walk_forward_prefers_the_augmented_model():
+    """Without the declaration the plate's augmented model loses to EWMA in the walk forward (the search's
+    stick-out alone); with it the walk, which tests the declared factors on the past parts at every
+    re-selection, comes closer to the centre with fewer cells out, and the next correction comes from it."""
+    out = diagnose_reports(DiagnoseRequest(MODEL, (PLATE,), process=str(LOG), factors=(",".join(DESIGN),)))
+    d = out.diagnosis
+    assert d.walk is not None and d.next_from.source == "augmented"
+    b = d.walk.budgets
+    assert b["augmented"].centre_rms < b["ewma"].centre_rms
+    assert b["augmented"].out_of_tolerance < b["ewma"].out_of_tolerance
+    without = diagnose_reports(DiagnoseRequest(MODEL, (PLATE,), process=str(LOG))).diagnosis
+    assert without.next_from.source == "ewma"
