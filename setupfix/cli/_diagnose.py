@@ -43,6 +43,11 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
                    help="process log: a 'serial' column (the parts' numbers) or a 'timestamp' column, and channels "
                         "of any name and unit (numeric, or categorical: one 0/1 indicator per level), each tested "
                         "as acting on one register or on every tool alike")
+    p.add_argument("--factors", metavar="A,B,A*B", default=None,
+                   help="declared design factors: process-log columns (numeric, or categorical: a coefficient per "
+                        "level but the first) and interactions written a*b, tested per tool register with the "
+                        "part as the unit, Holm over the declared terms x registers only; accepted ones enter the "
+                        "model, then the search runs for the rest")
     p.add_argument("--thermal", metavar="MODEL.json", default=None,
                    help="thermal model saved by 'setupfix thermal fit': its predicted drift is tested as a channel")
     p.add_argument("--augment", metavar="OUT.toml", default=None,
@@ -67,11 +72,19 @@ def format_diagnosis(out: DiagnoseOutcome) -> str:
     lines = [f"{d.series.n_cycles} cycle(s), {len(d.layout.dimension_ids)} dimension(s)",
              f"residual of the declared model: RMS {_f(d.error_before.rms)} {unit}, max {_f(d.error_before.max)}, "
              f"out of tolerance {d.error_before.out_of_tolerance}"]
+    if d.factors is not None:
+        lines.append(f"declared factors ({len(d.factors.tests)} tests, the part as the unit; "
+                     "p Holm-adjusted over them):")
+        for t in d.factors.tests:
+            lines.append(f"  {t.term.name:30s} {t.register:6s} p {t.p:.2g}, adjusted {t.p_holm:.2g}"
+                         + ("   accepted" if t.accepted else ""))
     if d.effects:
         lines.append("effects the model lacks:")
         for e in d.effects:
+            how = "" if e.source == "search" else (f"   declared, p {e.p:.2g}" if e.p is not None
+                                                   else "   declared, with its interaction")
             lines.append(f"  {e.kind:9s} {e.target:40s} {e.estimate:+.4g} ± {e.stderr:.2g} {e.unit}"
-                         f"   (RMS after {_f(e.rms_after)})")
+                         f"   (RMS after {_f(e.rms_after)}){how}")
             if e.alike:
                 lines.append(f"            cannot be told apart from: {', '.join(e.alike)}")
         lines.append(f"residual with them: RMS {_f(d.error_after.rms)} {unit}, max {_f(d.error_after.max)}, "
@@ -107,7 +120,7 @@ def run(args: argparse.Namespace) -> int:
     out = diagnose_reports(DiagnoseRequest(
         args.model, tuple(args.reports), ReadOptions(lenient=args.lenient), corrections=args.corrections,
         temperatures=args.temperatures, db=store_ref(args, args.db), thermal=args.thermal, augment=args.augment,
-        process=args.process,
+        process=args.process, factors=(args.factors,) if args.factors is not None else (),
         diagnoser=Diagnoser(alpha=args.alpha, walk=not args.no_walk), solve=SolveOptions(objective=args.objective)))
     if args.json:
         json.dump(out.to_json(), sys.stdout, indent=2)

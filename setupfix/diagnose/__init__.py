@@ -10,6 +10,7 @@ Engine (layer 3, arrays in and out, no file I/O):
 * :mod:`~setupfix.diagnose.scores` — what each candidate explains and its per-cycle test;
 * :mod:`~setupfix.diagnose.inference` — the tests with the cycle as the unit of evidence;
 * :mod:`~setupfix.diagnose.support` — support rules and diagnosability;
+* :mod:`~setupfix.diagnose.factors` — declared design factors, tested as a family of their own;
 * :mod:`~setupfix.diagnose.select` — forward selection (ranked by what each explains, accepted on
   its per-cycle test with Bonferroni and cross-validation over cycles; keeps trying);
 * :mod:`~setupfix.diagnose.walk` — walk forward (declared, augmented, EWMA, none) and
@@ -20,6 +21,7 @@ Engine (layer 3, arrays in and out, no file I/O):
 """
 
 from setupfix.diagnose.core import Diagnoser, Diagnosis, EffectResult, ErrorSummary, error_summary
+from setupfix.diagnose.factors import FactorTest, FactorTests, Term, parse_terms, factor_tests
 from setupfix.diagnose.fit import Fit, fit_model
 from setupfix.diagnose.select import Selection, candidate_specs, select_effects
 from setupfix.diagnose.shop import HiddenEffect, ShopSimulator, SimulatedSeries
@@ -27,7 +29,8 @@ from setupfix.diagnose.terms import KINDS, EffectSpec, Layout, Series
 from setupfix.diagnose.walk import WalkForward, next_cycle, walk_forward
 
 __all__ = [
-    "KINDS", "Diagnoser", "Diagnosis", "EffectResult", "EffectSpec", "ErrorSummary", "Fit", "HiddenEffect",
+    "KINDS", "Diagnoser", "Diagnosis", "EffectResult", "EffectSpec", "ErrorSummary", "FactorTest", "FactorTests",
+    "Fit", "HiddenEffect", "Term", "parse_terms", "factor_tests",
     "Layout", "Selection", "Series", "ShopSimulator", "SimulatedSeries", "WalkForward", "candidate_specs",
     "error_summary", "fit_model", "next_cycle", "select_effects", "walk_forward",
 ]

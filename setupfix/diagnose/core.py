@@ -9,6 +9,7 @@ from typing import ClassVar
 import numpy as np
 import numpy.typing as npt
 
+from setupfix.diagnose.factors import FactorTests, Term, factor_tests
 from setupfix.diagnose.fit import Fit, fit_model, observations
 from setupfix.diagnose.select import Selection, select_effects
 from setupfix.diagnose.terms import EffectSpec, Layout, Series
@@ -24,7 +25,12 @@ Array = npt.NDArray[np.float64]
 
 @dataclass(frozen=True)
 class EffectResult:
-    """One effect found: its term, estimate ± standard error, unit, and the RMS once added."""
+    """One effect found: its term, estimate ± standard error, unit, and the RMS once added.
+
+    ``source`` is ``search`` (found by the forward selection) or ``declared`` (a declared
+    design factor accepted by its own test; ``p`` its Holm-adjusted per-part p-value, None
+    for a lower-order term fitted with an accepted interaction).
+    """
 
     spec: EffectSpec
     estimate: float
@@ -32,6 +38,8 @@ class EffectResult:
     unit: str
     rms_after: float
     alike: tuple[str, ...] = ()
+    source: str = "search"
+    p: float | None = None
 
     @property
     def kind(self) -> str:
@@ -127,6 +135,8 @@ class Diagnosis:
         ``centre_fraction`` half tolerances of the centre on the last two parts and a
         model with effects does not forecast them to leave it
         (:func:`~setupfix.diagnose.walk.centred_registers`).
+    factors : FactorTests or None
+        The tests of the declared design factors (None when none were declared).
     """
 
     layout: Layout
@@ -143,6 +153,7 @@ class Diagnosis:
     next_from: NextSource = UNSET
     next_forecast: Array | None = None
     centred: npt.NDArray[np.bool_] | None = None
+    factors: FactorTests | None = None
 
     def relation_matrix(self) -> Array:
         """Composite matrix the corrections are mapped through: C with the relations found whose
@@ -204,10 +215,14 @@ class Diagnoser(ValidatedParams):
         self.lam = lam
         self.centre_fraction = centre_fraction
 
-    def run(self, layout: Layout, series: Series, *, declared: tuple[EffectSpec, ...] = ()) -> Diagnosis:
+    def run(self, layout: Layout, series: Series, *, declared: tuple[EffectSpec, ...] = (),
+            factors: tuple[Term, ...] = ()) -> Diagnosis:
         """Fit, trace, add, walk forward and forecast.
 
         ``declared`` effects (the model's ``[effects]``) belong to the declared model.
+        ``factors`` are declared design factors (:mod:`setupfix.diagnose.factors`): tested
+        first, as a family of their own (Holm at ``alpha``); those accepted enter the model
+        like effects found, and the search runs with them in its base.
 
         Raises
         ------
@@ -218,29 +233,35 @@ class Diagnoser(ValidatedParams):
         obs = observations(layout, series)
         if obs.n == 0:
             raise ParameterError("diagnose: the series has no measured dimension")
+        tests = (factor_tests(layout, series, factors, alpha=self.alpha, obs=obs, declared=declared)
+                 if factors else None)
+        pre = tests.found if tests is not None else ()
         selection = select_effects(layout, series, alpha=self.alpha, max_effects=self.max_effects,
-                                   n_folds=self.n_folds, obs=obs, declared=declared)
+                                   n_folds=self.n_folds, obs=obs, declared=declared + pre)
+        found = pre + selection.found
         before = fit_model(layout, series, declared, obs=obs)
-        after = fit_model(layout, series, declared + selection.found, obs=obs)
+        after = fit_model(layout, series, declared + found, obs=obs)
         effects = []
-        alike = selection.alike_of_found()
-        for i, spec in enumerate(selection.found):
+        alike = ((),) * len(pre) + selection.alike_of_found()
+        for i, spec in enumerate(found):
             est, se = after.estimate(len(declared) + i)
-            partial: Fit = fit_model(layout, series, declared + selection.found[:i + 1], obs=obs)
+            partial: Fit = fit_model(layout, series, declared + found[:i + 1], obs=obs)
+            test = tests.test_of(spec) if tests is not None and i < len(pre) else None
             effects.append(EffectResult(spec, est, se, spec.unit(layout.unit),
                                         error_summary(partial.residual, layout.lower, layout.upper).rms,
-                                        alike[i]))
+                                        alike[i], "declared" if i < len(pre) else "search",
+                                        test.p_holm if test is not None else None))
         walk = None
-        notes = list(selection.notes)
+        notes = list(selection.notes) + (list(tests.notes) if tests is not None else [])
         if self.walk and series.n_cycles >= self.min_train + 5:
             walk = walk_forward(layout, series, score_composite=after.relation_matrix(layout, selection.unnamed),
                                 min_train=self.min_train, reselect_every=self.reselect_every, lam=self.lam,
-                                alpha=self.alpha, declared=declared)
+                                alpha=self.alpha, declared=declared, factors=factors)
         elif self.walk:
             notes.append(f"{series.n_cycles} cycle(s): too few to walk forward (needs {self.min_train + 5}: "
                          f"{self.min_train} to fit, 5 to score)")
         forecast, _ = next_cycle(layout, series, after)
-        source = next_source(walk, bool(selection.found), ewma=self.lam is not None)
+        source = next_source(walk, bool(found), ewma=self.lam is not None)
         if source.source == "augmented":
             chosen = forecast
         elif source.source == "declared":
@@ -250,7 +271,7 @@ class Diagnoser(ValidatedParams):
         out = Diagnosis(layout, series, before, after, selection, tuple(effects),
                         error_summary(before.residual, layout.lower, layout.upper),
                         error_summary(after.residual, layout.lower, layout.upper), walk, forecast, tuple(notes),
-                        source, chosen)
+                        source, chosen, factors=tests)
         return dataclasses.replace(out, centred=self._centred(out, chosen))
 
     def _centred(self, d: Diagnosis, chosen: Array) -> npt.NDArray[np.bool_]:

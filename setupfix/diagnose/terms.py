@@ -35,7 +35,7 @@ from setupfix.model import ProcessModel
 from setupfix.relation import relation_matrices
 
 __all__ = ["KINDS", "Layout", "Series", "EffectSpec", "effect_field", "field_factors", "common_tool_row",
-           "register_row"]
+           "register_row", "channel_values", "PRODUCT"]
 
 Array = npt.NDArray[np.float64]
 
@@ -319,11 +319,37 @@ def field_factors(spec: EffectSpec, layout: Layout, series: Series) -> tuple[Arr
     if spec.kind == "level":
         return (series.time >= spec.at).astype(float), register_row(layout, spec.register)
     if spec.kind == "process":
-        ch = series.channels.index(str(spec.channel))
-        return series.temperature[:, ch] - spec.reference, register_row(layout, spec.register)
+        return channel_values(series, str(spec.channel)) - spec.reference, register_row(layout, spec.register)
     if spec.kind == "relation":
         return None
     raise KeyError(spec.kind)
+
+
+#: Separator of a product channel's factors (``a=x & b=y``: the interaction of two channels).
+PRODUCT = " & "
+
+
+def channel_values(series: Series, name: str) -> Array:
+    """Values of a recorded channel per cycle, shape (n_cycles,).
+
+    A name that is no channel of the series but joins channels with :data:`PRODUCT`
+    (``doe_tool_length=Long & endmill_rpm``) is their product: the interaction of
+    declared design factors (:mod:`setupfix.diagnose.factors`), whichever channels the
+    log reader kept.
+
+    Raises
+    ------
+    KeyError
+        If a channel is unknown.
+    """
+    if name in series.channels:
+        out: Array = series.temperature[:, series.channels.index(name)]
+        return out
+    parts = name.split(PRODUCT)
+    if len(parts) < 2:
+        raise KeyError(name)
+    prod: Array = np.prod([channel_values(series, p) for p in parts], axis=0)
+    return prod
 
 
 def register_row(layout: Layout, register: str | None) -> Array:

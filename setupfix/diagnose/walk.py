@@ -32,6 +32,7 @@ import numpy as np
 import numpy.typing as npt
 
 from setupfix.diagnose.fit import RELATION_T, Fit, row_space_basis
+from setupfix.diagnose.factors import Term, factor_tests
 from setupfix.diagnose.select import select_effects
 from setupfix.diagnose.covariates import typical_step
 from setupfix.diagnose.terms import EffectSpec, Layout, Series, effect_field
@@ -184,7 +185,7 @@ class _Running:
 
 def walk_forward(layout: Layout, series: Series, *, score_composite: Array | None = None, min_train: int = 5,
                  reselect_every: int | None = None, lam: float | None = 0.3, alpha: float = 0.01,
-                 declared: tuple[EffectSpec, ...] = ()) -> WalkForward:
+                 declared: tuple[EffectSpec, ...] = (), factors: tuple[Term, ...] = ()) -> WalkForward:
     """Walk forward through ``series``; see the module text.
 
     Parameters
@@ -202,6 +203,9 @@ def walk_forward(layout: Layout, series: Series, *, score_composite: Array | Non
         Level of the selection (as :func:`select_effects`).
     declared : tuple of EffectSpec
         Effects of the model's ``[effects]``: part of the declared model (a).
+    factors : tuple of Term
+        Declared design factors: tested on the past at each selection, those accepted
+        part of the augmented model (b) with the effects the search finds.
 
     Returns
     -------
@@ -234,8 +238,10 @@ def walk_forward(layout: Layout, series: Series, *, score_composite: Array | Non
         assert decl is not None
         decl.add_until(k)
         if pos == 0 or (k - scored[0]) % every == 0:
-            sel = select_effects(layout, series.take(np.arange(k)), alpha=alpha, declared=declared)
-            specs = sel.found
+            past = series.take(np.arange(k))
+            pre = factor_tests(layout, past, factors, alpha=alpha, declared=declared).found if factors else ()
+            sel = select_effects(layout, past, alpha=alpha, declared=declared + pre)
+            specs = pre + sel.found
             aug = _Running(layout, series, declared + specs, basis, z_obs, k, sel.unnamed) if specs else decl
         assert aug is not None
         aug.add_until(k)

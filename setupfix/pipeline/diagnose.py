@@ -25,7 +25,9 @@ import numpy as np
 
 from setupfix.diagnose import Diagnoser, Diagnosis
 from setupfix.diagnose.covariates import typical_step
-from setupfix.errors import ExportError, ModelError, Note, SourceLocation
+from setupfix.diagnose.factors import Term, factor_channels, parse_terms
+from setupfix.diagnose.terms import PRODUCT
+from setupfix.errors import ExportError, MatchError, ModelError, Note, ParameterError, SourceLocation
 from setupfix.model import PartMeasurement, ProcessModel, model_from_dict
 from setupfix.model.effects import EffectsSection, ModelEffect, effects_from_dict
 from setupfix.model.effects_toml import with_effects
@@ -36,7 +38,7 @@ from setupfix.pipeline.stores import StoreRef
 from setupfix.pipeline.writers import check_target, write_text
 from setupfix.safety import RuleEffect, short_list
 
-__all__ = ["DiagnoseRequest", "DiagnoseOutcome", "note_text", "diagnose_reports", "augmented_section",
+__all__ = ["DiagnoseRequest", "DiagnoseOutcome", "note_text", "diagnose_reports", "augmented_section", "declared_terms",
            "write_augmented", "forecast_model", "recommend_next", "series_history"]
 
 def augmented_section(diagnosis: Diagnosis, declared: EffectsSection) -> EffectsSection:
@@ -86,6 +88,8 @@ class DiagnoseRequest:
     thermal: str | Path | None = None
     augment: str | Path | None = None
     process: str | None = None  #: process log (channels of any name and unit, joined per cycle)
+    #: declared design factors, ``a``, ``b``, ``a*b`` (process-log columns; :mod:`setupfix.diagnose.factors`)
+    factors: tuple[str, ...] = ()
     diagnoser: Diagnoser = field(default_factory=Diagnoser)
     solve: SolveOptions = field(default_factory=SolveOptions)  #: the next correction's optimiser (objective)
 
@@ -127,8 +131,13 @@ class DiagnoseOutcome:
                          "alike": list(e.alike),
                          **({"registers": list(e.registers)} if e.kind == "relation" else {}),
                          **({"cycle": e.spec.cycle, "at_hours": e.spec.at} if e.kind == "level" else {}),
-                         **({"channel": e.spec.channel, "register": e.spec.register} if e.kind == "process" else {})}
+                         **({"channel": e.spec.channel, "register": e.spec.register} if e.kind == "process" else {}),
+                         "source": e.source, "p": r(e.p, 12) if e.p is not None else None}
                         for e in d.effects],
+            "declared_factors": [] if d.factors is None else [
+                {"term": t.term.name, "register": t.register, "channels": [str(s.channel) for s in t.specs],
+                 "f": r(t.f, 6), "p": r(t.p, 12), "p_holm": r(t.p_holm, 12), "df": t.q, "accepted": t.accepted}
+                for t in d.factors.tests],
             "next_correction": {k: round(v, 9) for k, v in self.next_correction.items()},
             "next_solved": self.next_cycle.solved if self.next_cycle is not None else None,
             "declared_effects": [e.target for e in self.input.declared],
@@ -265,7 +274,8 @@ def diagnose_reports(request: DiagnoseRequest) -> DiagnoseOutcome:
     inp = load_series(request.model, request.reports, corrections=request.corrections,
                       temperatures=request.temperatures, db=request.db, thermal=request.thermal, read=request.read,
                       process=request.process)
-    diagnosis = request.diagnoser.run(inp.layout, inp.series, declared=inp.declared)
+    diagnosis = request.diagnoser.run(inp.layout, inp.series, declared=inp.declared,
+                                      factors=declared_terms(request.factors, inp))
     cycle, more = recommend_next(inp.model, diagnosis, request.solve, request.diagnoser)
     notes = (*inp.notes, *(Note(n, None, "diagnosis") for n in diagnosis.notes), *more)
     out = DiagnoseOutcome(inp, diagnosis, cycle.corrections if cycle is not None else {}, None, notes, cycle)
@@ -275,6 +285,34 @@ def diagnose_reports(request: DiagnoseRequest) -> DiagnoseOutcome:
         written = write_augmented(inp.model, augmented_section(diagnosis, inp.effects), str(request.augment))
         out = dataclasses.replace(out, augmented=written)
     return out
+
+
+def declared_terms(factors: tuple[str, ...], inp: SeriesInput) -> tuple[Term, ...]:
+    """The declared design factors as terms, each factor a channel of the series' process log.
+
+    Raises
+    ------
+    ParameterError
+        If a term is malformed or factors are declared without a process log.
+    MatchError
+        If a factor is no column of the process log (the message names it and the log).
+    """
+    if not factors:
+        return ()
+    try:
+        terms = parse_terms(factors)
+    except ValueError as exc:
+        raise ParameterError(f"--factors: {exc}") from None
+    if not inp.process:
+        raise ParameterError("--factors names process-log columns: give the log with --process")
+    for f in dict.fromkeys(f for t in terms for f in t.factors):
+        try:
+            factor_channels(inp.series, f)
+        except KeyError:
+            known = sorted({c.split("=", 1)[0] for c in inp.series.process_channels if PRODUCT not in c})
+            raise MatchError(f"--factors: the process log has no usable column {f!r} (columns: {', '.join(known)})",
+                             location=SourceLocation(inp.process)) from None
+    return terms
 
 
 def _record(db: str | Path | StoreRef, model: ProcessModel, out: DiagnoseOutcome) -> None:

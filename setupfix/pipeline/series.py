@@ -37,7 +37,7 @@ from parsers.timestamps import parse_timestamp, to_index
 from setupfix.diagnose import Layout, Series
 from setupfix.diagnose.forecast import spec_of
 from setupfix.diagnose.covariates import applied_at, join_temperatures, parts_since_change
-from setupfix.diagnose.terms import EffectSpec
+from setupfix.diagnose.terms import PRODUCT, EffectSpec, channel_values
 from setupfix.errors import MatchError, Note, ParseError, SourceLocation, UnknownFormatError
 from setupfix.model import PartMeasurement, ProcessModel, load_model, match_parts, normalise_name
 from setupfix.model.effects import EffectsSection
@@ -235,7 +235,7 @@ def load_series(model: ProcessModel | str | Path, reports: Sequence[str | Path] 
             raise MatchError(f"the model's thermal effect {e.id} needs temperature channel {e.channel!r}",
                              location=SourceLocation(model.source, key=f"effects.{e.id}.channel"),
                              hint="give --temperatures")
-        if e.kind == "process" and e.channel not in series.process_channels:
+        if e.kind == "process" and not _has_channel(series, str(e.channel)):
             raise MatchError(f"the model's process effect {e.id} needs process channel {e.channel!r}",
                              location=SourceLocation(model.source, key=f"effects.{e.id}.channel"),
                              hint="give --process with the log it was found in")
@@ -249,6 +249,12 @@ def load_series(model: ProcessModel | str | Path, reports: Sequence[str | Path] 
                           None, "series"))
     return SeriesInput(model, layout, series, tuple(_ordered(parts)), declared, section,
                        corrections, temperatures, tuple(notes), process)
+
+
+def _has_channel(series: Series, name: str) -> bool:
+    """A process channel of the series, or a product of them (a declared interaction)."""
+    known = set(series.process_channels)
+    return name in known or (PRODUCT in name and all(p in known for p in name.split(PRODUCT)))
 
 
 def _no_log_note(reports: Sequence[str | Path]) -> str:
@@ -538,5 +544,4 @@ def process_channels(log: TemperatureLog, parts: Sequence[str], time: np.ndarray
 
 def channel_span(series: Series, spec: EffectSpec) -> float:
     """Range of a spec's channel over the series (the span a process effect was found over)."""
-    c = series.channels.index(str(spec.channel))
-    return float(np.ptp(series.temperature[:, c])) if series.n_cycles else 0.0
+    return float(np.ptp(channel_values(series, str(spec.channel)))) if series.n_cycles else 0.0
