@@ -225,7 +225,7 @@ class LinearModel:
         self._warm = self.h.setOptionValue("presolve", "off") == HighsStatus.kOk
 
     def skip_presolve(self) -> None:
-        """No presolve: the leximin count MILPs take 1.2–2.4× less CPU without it (``bench/leximin_counts.py``)."""
+        """No presolve: the leximin count MILPs take ~1.5× less CPU without it (``bench/leximin_counts.py``)."""
         self.h.setOptionValue("presolve", "off")
 
     def set_gap(self, gap: float) -> None:

@@ -14,6 +14,10 @@ from setupfix.pipeline.cycles import load_parts
 from .test_exact import random_problem
 from .test_exact_robust import GUIDE_PINS
 
+#: Seconds each solve compared with brute force or an independent MILP may take: the answers are the
+#: subject, and a loaded box can stop a 2 s solve (a stopped solve says so; other tests check that).
+SOLVE_LIMIT = 60.0
+
 
 def grid_points(problem: CorrectionProblem) -> np.ndarray:
     axes = [np.arange(lo, hi + 1) for lo, hi in zip(problem.kmin, problem.kmax, strict=True)]
@@ -75,7 +79,7 @@ def path(request, monkeypatch):
 @pytest.mark.parametrize("seed", range(24))
 def test_triage_equals_brute_force(seed, path):
     problem = random_problem(seed, n=3, m=7, limit_steps=2, spread=0.3)
-    result = get_optimizer("exact").solve(problem)
+    result = get_optimizer("exact", time_limit=SOLVE_LIMIT).solve(problem)
     if brute_triage(problem)[0] == len(problem.dimension_ids):  # everything can be kept: no triage
         assert result.given_up == ()
         return
@@ -94,7 +98,7 @@ def test_triage_ties_go_to_the_smallest_correction_on_every_path(seed, path):
     problem = dataclasses.replace(base, composite=composite)
     if brute_triage(problem)[0] == len(problem.dimension_ids):
         pytest.skip("everything can be kept: no triage")
-    check_triage(problem, get_optimizer("exact").solve(problem))
+    check_triage(problem, get_optimizer("exact", time_limit=SOLVE_LIMIT).solve(problem))
 
 
 @pytest.mark.parametrize("seed", range(12))
@@ -108,7 +112,7 @@ def test_triage_with_costs_fixed_registers_and_guard_floor_equals_brute_force(se
     inside = (base.deviation >= base.lower) & (base.deviation <= base.upper)
     floor = np.where(inside, np.minimum(floor, 0.0), -np.inf)
     problem = dataclasses.replace(base, cost=rng.uniform(0.5, 3.0, 4), floor=floor)
-    result = get_optimizer("exact").solve(problem)
+    result = get_optimizer("exact", time_limit=SOLVE_LIMIT).solve(problem)
     if brute_triage(problem)[0] == len(problem.dimension_ids) and result.margin_after >= 0:
         return
     if not result.given_up and result.margin_after >= 0:
@@ -223,7 +227,7 @@ def milp_triage(problem: CorrectionProblem) -> tuple[int, np.ndarray, float]:
 @pytest.mark.parametrize("seed", range(10))
 def test_triage_equals_an_independent_milp(seed, path):
     problem = random_problem(700 + seed, n=3, m=6, limit_steps=3, spread=0.3)
-    result = get_optimizer("exact").solve(problem)
+    result = get_optimizer("exact", time_limit=SOLVE_LIMIT).solve(problem)
     if not result.given_up:
         pytest.skip("every dimension can be kept: no triage")
     count, sorted_kept, norm = milp_triage(problem)
@@ -312,7 +316,7 @@ def test_bound_is_the_kept_dimensions_lp_and_seconds_the_whole_call(seed, path):
     from scipy.optimize import linprog
 
     problem = random_problem(seed, n=3, m=7, limit_steps=2, spread=0.3)
-    result = get_optimizer("exact").solve(problem)
+    result = get_optimizer("exact", time_limit=SOLVE_LIMIT).solve(problem)
     if not result.given_up:
         pytest.skip("every dimension can be kept: no triage")
     keep = ~np.isin(problem.dimension_ids, result.given_up)
@@ -349,7 +353,7 @@ def gross_problem(seed: int, n: int = 4, m: int = 8) -> CorrectionProblem:
 @pytest.mark.parametrize("seed", range(20))
 def test_gross_dimensions_triage_equals_brute_force(seed, path):
     problem = gross_problem(seed)
-    result = get_optimizer("exact").solve(problem)
+    result = get_optimizer("exact", time_limit=SOLVE_LIMIT).solve(problem)
     if brute_triage(problem)[0] == len(problem.dimension_ids):
         assert result.given_up == ()
         return
@@ -361,7 +365,7 @@ def test_gross_dimensions_triage_equals_brute_force(seed, path):
 def test_gross_dimensions_triage_equals_an_independent_milp(seed, monkeypatch):
     monkeypatch.setattr(_triage_model, "LIST_POINTS", 0)
     problem = gross_problem(seed, n=3, m=6)
-    result = get_optimizer("exact").solve(problem)
+    result = get_optimizer("exact", time_limit=SOLVE_LIMIT).solve(problem)
     if not result.given_up:
         pytest.skip("every dimension can be kept: no triage")
     assert "kept set forced" in result.extra["path"]
@@ -388,7 +392,7 @@ def test_a_dimension_within_reach_only_by_harm_is_proved_lost(monkeypatch):
                    problem.kmax.astype(float), problem.cost)
     assert not t.lost[0]  # the box reaches it (k ≤ −3 steps) …
     assert lost_bound(t, 0, 1.0) == pytest.approx(-1.0, abs=1e-5)  # … D1 stays in only for k ≥ −2: D0 at −1 step
-    result = get_optimizer("exact").solve(problem)
+    result = get_optimizer("exact", time_limit=SOLVE_LIMIT).solve(problem)
     assert result.given_up == ("D0",) and result.status == "optimal"
     assert "kept set forced" in result.extra["path"]
     assert result.x == pytest.approx([0.03], abs=1e-12)  # D1 centred
