@@ -79,16 +79,17 @@ def test_parsers_is_ours():
 
 # Sub-layers of setupfix.pipeline (layer 4).  A module imports only pipeline modules of a lower rank, so no
 # use case reaches into another one's module for a helper, and renderers and doors sit on top:
-# 0-1 file writers, checks, controller syntaxes, thermal-model files and log columns, report cycles; 2 use
-# cases that need no request (thermal predict, parse, simulate, model init/check); 3 the feed-forward step,
-# the series reader and thermal fit/evaluate; 4 the typed requests and outcomes; 5 the use cases on a
+# 0-1 file writers, checks, controller syntaxes, thermal-model files and log columns, report cycles, a
+# series' logs as arrays; 2 use cases that need no request (thermal predict, parse, simulate, model
+# init/check) and a series' cycles assembled; 3 the feed-forward step, the series reader and thermal
+# fit/evaluate; 4 the typed requests and outcomes; 5 the use cases on a
 # request (correct, compare) and the one export; 6 use cases that run correct (batch on a folder, the
 # diagnosis's next correction);
 # 7 renderers (text/JSON, TUI rows); 8 the doors' sessions (TUI session, history store).
 PIPELINE_RANKS = {
     "writers": 0, "checks": 0, "smoothing": 0, "stores": 0,
-    "controllers": 1, "thermal_files": 1, "thermal_columns": 1, "cycles": 1, "scaffold_toml": 1,
-    "thermal": 2, "parse": 2, "simulate": 2, "scaffold": 2, "model": 2,
+    "controllers": 1, "thermal_files": 1, "thermal_columns": 1, "cycles": 1, "scaffold_toml": 1, "series_logs": 1,
+    "thermal": 2, "parse": 2, "simulate": 2, "scaffold": 2, "model": 2, "series_assembly": 2,
     "feedforward": 3, "series": 3, "thermal_fit": 3, "batch_output": 3,
     "requests": 4,
     "correct": 5, "compare": 5, "export": 5, "batch_records": 5, "spc": 5, "dfq": 1,
