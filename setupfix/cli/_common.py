@@ -44,6 +44,20 @@ def add_objective_option(p: argparse.ArgumentParser) -> None:
                         "the metaheuristics optimise the paper's error budget")
 
 
+def add_factors_option(p: argparse.ArgumentParser) -> None:
+    """--factors: the declared design factors of the diagnosis (with ``--process``)."""
+    p.add_argument("--factors", metavar="A,B,A*B", default=None,
+                   help="declared design factors: process-log columns (numeric, or categorical: a coefficient per "
+                        "level but the first) and interactions written a*b, tested per tool register with the "
+                        "part as the unit, Holm over the declared terms x registers only; accepted ones enter the "
+                        "model, then the search runs for the rest")
+
+
+def factors_of(args: argparse.Namespace) -> tuple[str, ...]:
+    """The ``--factors`` text as the request's tuple (empty when not given)."""
+    return (args.factors,) if args.factors is not None else ()
+
+
 def add_reader_options(p: argparse.ArgumentParser) -> Any:
     """The reader's options (format, unit, encoding, column mapping, lenient) in a "report reading" group."""
     g = p.add_argument_group("report reading")

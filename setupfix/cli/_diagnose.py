@@ -8,7 +8,8 @@ import math
 import sys
 from typing import TYPE_CHECKING
 
-from setupfix.cli._common import add_lenient_option, add_machine_options, add_objective_option, store_ref
+from setupfix.cli._common import (add_factors_option, add_lenient_option, add_machine_options, add_objective_option,
+                                  factors_of, store_ref)
 from setupfix.cli.exit_codes import OK
 from setupfix.errors import SetupfixError
 
@@ -43,11 +44,7 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
                    help="process log: a 'serial' column (the parts' numbers) or a 'timestamp' column, and channels "
                         "of any name and unit (numeric, or categorical: one 0/1 indicator per level), each tested "
                         "as acting on one register or on every tool alike")
-    p.add_argument("--factors", metavar="A,B,A*B", default=None,
-                   help="declared design factors: process-log columns (numeric, or categorical: a coefficient per "
-                        "level but the first) and interactions written a*b, tested per tool register with the "
-                        "part as the unit, Holm over the declared terms x registers only; accepted ones enter the "
-                        "model, then the search runs for the rest")
+    add_factors_option(p)
     p.add_argument("--thermal", metavar="MODEL.json", default=None,
                    help="thermal model saved by 'setupfix thermal fit': its predicted drift is tested as a channel")
     p.add_argument("--augment", metavar="OUT.toml", default=None,
@@ -120,7 +117,7 @@ def run(args: argparse.Namespace) -> int:
     out = diagnose_reports(DiagnoseRequest(
         args.model, tuple(args.reports), ReadOptions(lenient=args.lenient), corrections=args.corrections,
         temperatures=args.temperatures, db=store_ref(args, args.db), thermal=args.thermal, augment=args.augment,
-        process=args.process, factors=(args.factors,) if args.factors is not None else (),
+        process=args.process, factors=factors_of(args),
         diagnoser=Diagnoser(alpha=args.alpha, walk=not args.no_walk), solve=SolveOptions(objective=args.objective)))
     if args.json:
         json.dump(out.to_json(), sys.stdout, indent=2)

@@ -6,8 +6,8 @@ import argparse
 from pathlib import Path
 
 from setupfix.cli._choices import OPTIMIZERS
-from setupfix.cli._common import (add_machine_options, add_objective_option, add_report_options, add_thermal_options,
-                                  cycles_of, read_options)
+from setupfix.cli._common import (add_factors_option, add_machine_options, add_objective_option, add_report_options,
+                                  add_thermal_options, cycles_of, factors_of, read_options)
 
 
 def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
@@ -35,6 +35,7 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
     p.add_argument("--process", metavar="LOG", type=Path, default=None,
                    help="process log (CSV or .xlsx, a row per part by serial or timestamp) the diagnosis (key d) "
                         "joins per part, as 'diagnose --process'")
+    add_factors_option(p)
     add_report_options(p)
     add_thermal_options(p)
     p.set_defaults(run=run)
@@ -48,7 +49,7 @@ def run(args: argparse.Namespace) -> int:
                        operator=args.operator, current=args.current,
                        thermal=Path(args.thermal) if args.thermal else None,
                        temperatures=Path(args.temperatures) if args.temperatures else None, process=args.process,
-                       at=args.at,
+                       factors=factors_of(args), at=args.at,
                        thermal_dead_band=args.thermal_dead_band, read=read_options(args), cycles=cycles_of(args),
                        optimizer=args.optimizer, objective=args.objective, seed=args.seed, trials=args.trials,
                        offsets=args.offsets)).run()

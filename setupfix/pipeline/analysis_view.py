@@ -131,6 +131,7 @@ class EffectRow:
     unit: str
     rms_after: float
     alike: tuple[str, ...]
+    source: str = "search"  #: ``search`` (found) or ``declared`` (a declared design factor, ``--factors``)
 
 
 @dataclass(frozen=True)
@@ -160,8 +161,8 @@ def diagnosis_view(outcome: DiagnoseOutcome) -> DiagnosisView:
     return DiagnosisView(
         cycles=d.series.n_cycles, unit=d.layout.unit,
         before=(eb.rms, eb.max, eb.out_of_tolerance), after=(ea.rms, ea.max, ea.out_of_tolerance),
-        effects=tuple(EffectRow(e.kind, e.target, e.estimate, e.stderr, e.unit, e.rms_after, tuple(e.alike))
-                      for e in d.effects),
+        effects=tuple(EffectRow(e.kind, e.target, e.estimate, e.stderr, e.unit, e.rms_after, tuple(e.alike),
+                                e.source) for e in d.effects),
         walk=walk, next_correction=tuple((k, v) for k, v in outcome.next_correction.items() if v != 0),
         notes=tuple(note_text(n) for n in outcome.notes),
         budgets=tuple(cycle_budgets(outcome.input.model, outcome.input.parts)),

@@ -108,7 +108,7 @@ class KeyActions(WorkerResults):
             return
         self.query_one(HistoryPanel).status(f"diagnosing the reports in {self._series_source()} …")
         source = self.inputs.store or Path(self._series_source())
-        self.run_worker(partial(workers.diagnose, self.model_path, source, self.inputs.process),
+        self.run_worker(partial(workers.diagnose, self.model_path, source, self.inputs.process, self.inputs.factors),
                         name="diagnose", group="diagnose", thread=True, exclusive=True, exit_on_error=False)
 
     def action_open_report(self) -> None:

@@ -33,6 +33,7 @@ class Inputs:
     thermal: Path | None = None
     temperatures: Path | None = None
     process: Path | None = None  #: process log the diagnosis joins per part (``--process``)
+    factors: tuple[str, ...] = ()  #: declared design factors of the diagnosis (``--factors``)
     at: str | None = None  #: time of the correction for the feed-forward (default: the log's last sample)
     thermal_dead_band: float | None = None
     read: ReadOptions = field(default_factory=ReadOptions)  #: the reader's options, as ``correct`` takes them

@@ -75,12 +75,13 @@ def history(model: ProcessModel, db: StoreRef) -> tuple[list[analysis_view.Cycle
     return analysis_view.cycle_budgets(model, parts), notes
 
 
-def diagnose(model: Path, source: Path | StoreRef, process: Path | None = None) -> analysis_view.DiagnosisView:
+def diagnose(model: Path, source: Path | StoreRef, process: Path | None = None,
+             factors: tuple[str, ...] = ()) -> analysis_view.DiagnosisView:
     """Thread worker: ``setupfix diagnose`` over the history store or a folder of reports (and its logs), with
-    the process log given (``--process``) joined per part."""
+    the process log given (``--process``) joined per part and its declared design factors (``--factors``)."""
     proc = str(process) if process is not None else None
-    request = (DiagnoseRequest(model, db=source, process=proc) if isinstance(source, StoreRef)
-               else DiagnoseRequest(model, (source,), process=proc))
+    request = (DiagnoseRequest(model, db=source, process=proc, factors=factors) if isinstance(source, StoreRef)
+               else DiagnoseRequest(model, (source,), process=proc, factors=factors))
     outcome = diagnose_reports(request)
     return analysis_view.diagnosis_view(outcome)
 

@@ -9,6 +9,8 @@ from __future__ import annotations
 import dataclasses
 import shutil
 
+import pytest
+
 from conftest import GUIDE_PINS, SAMPLES
 from tui.conftest import CYCLE_01, MODEL, run, settle
 
@@ -329,3 +331,36 @@ def test_names_that_look_like_markup_are_shown_as_written(make_app, tmp_path):
             assert "cycle[1] [red.csv" in (tmp_path / "offsets.csv").read_text(encoding="utf-8")
 
     run(scenario())
+
+
+def test_diagnose_key_tests_the_declared_factors_and_a_bad_one_is_a_notice(make_app, tmp_path):
+    """``tui --process LOG --factors …``: key d runs the same diagnosis as ``diagnose --factors`` (the effects
+    it declares marked so); an unknown factor is a notice naming it, and the app stays up."""
+    from diagnose.test_plate import LOG, MODEL as PLATE_MODEL, PLATE
+
+    if not LOG.is_file():
+        pytest.skip("the NIST process log lives in the shared folder")
+    folder = tmp_path / "plate"
+    folder.mkdir()
+    shutil.copy(PLATE, folder / PLATE.name)
+    design = ("doe_tool_length", "doe_speed", "doe_tool_length*doe_speed")
+
+    async def scenario(factors: tuple[str, ...]) -> tuple[list[list[object]], list[str]]:
+        app = make_app(report=folder / PLATE.name, model=PLATE_MODEL, process=LOG, factors=factors)
+        async with app.run_test(size=(120, 40)) as pilot:
+            await settle(pilot)
+            await pilot.press("d")
+            await settle(pilot)
+            rows = _rows(app.query_one("#history-effects"))
+            notes = [str(n.message) for n in app._notifications]
+            assert app.is_running
+        return rows, notes
+
+    async def both() -> None:
+        rows, _ = await scenario((",".join(design),))
+        declared = [r for r in rows if str(r[0]).endswith("(declared)")]
+        assert any("T5A" in str(r[1]) and "doe_speed" in str(r[1]) for r in declared), rows
+        _, notes = await scenario(("doe_tool_length,spindle_sped",))
+        assert any("'spindle_sped'" in n for n in notes), notes
+
+    run(both())

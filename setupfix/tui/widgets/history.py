@@ -69,7 +69,8 @@ class HistoryPanel(VerticalScroll):
         for label in ("effect", "on", "estimate", "± s.e.", "RMS after"):
             table.add_column(label)
         for e in view.effects:
-            table.add_row(e.kind, e.target + (f" (≈ {', '.join(e.alike)})" if e.alike else ""),
+            table.add_row(e.kind + (" (declared)" if e.source == "declared" else ""),
+                          e.target + (f" (≈ {', '.join(e.alike)})" if e.alike else ""),
                           Text(f"{e.estimate:+.4g} {e.unit}", justify="right"), f"{e.stderr:.2g}",
                           Text(f"{e.rms_after:.4f}", justify="right"))
         walk = Text()
