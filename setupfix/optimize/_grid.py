@@ -188,11 +188,12 @@ def rounded_rhs(g: Array, d: Array, zero: npt.NDArray[np.bool_], tau: float | Ar
     below an integer only relaxes); zero rows (``zero``): +inf when g ≥ τ, else −1
     (0 ≤ −1: empty); other rows: g − τ + TOL.
     """
-    tau = np.broadcast_to(np.asarray(tau, dtype=float), g.shape)
-    b = g - tau + TOL
-    m = d > 0
-    b[m] = d[m] * np.floor((g[m] - tau[m]) / d[m] + 1e-7)
-    b[zero] = np.where(g[zero] >= tau[zero] - TOL, np.inf, -1.0)
+    diff = g - tau  # shape (r,): one pass over every row (a level of −inf gives +inf: no row)
+    integer = d > 0
+    step = np.where(integer, d, 1.0)
+    b = np.where(integer, step * np.floor(diff / step + 1e-7), diff + TOL)
+    if zero.any():
+        b[zero] = np.where(diff[zero] >= -TOL, np.inf, -1.0)
     return b
 
 

@@ -4,10 +4,9 @@ Why highspy and not scipy's ``linprog``/``milp``: scipy rebuilds the whole model
 every option on each call; highspy keeps the solver model, so one solve can change only row bounds
 or add rows (lazy cuts) between runs.  Each run starts from a cleared solver (no basis or incumbent
 of an earlier run): where the least norm is attained at two grid points, the answer must depend on
-this model and start only.  HiGHS's run
-clock, though, is not cleared: it adds up over every run of one object, and its
-``time_limit`` applies to that sum, so :meth:`LinearModel.solve` sets the limit to the
-clock's reading plus the run's own allowance (and the exact optimiser keeps no model beyond
+this model and start only.  HiGHS's run clock, though, is not cleared: it adds up over every run of
+one object, and its ``time_limit`` applies to that sum, so :meth:`LinearModel.solve` sets the limit
+to the clock's reading plus the run's own allowance (and the exact optimiser keeps no model beyond
 one solve: :class:`~setupfix.optimize._session.Session`).
 
 Nothing HiGHS answers is taken on trust (:meth:`LinearModel.solve`): its point is checked
@@ -76,17 +75,15 @@ class Solve:
     Attributes
     ----------
     status : str
-        ``optimal``, ``infeasible``, ``unbounded``, ``time_limit`` or ``error`` (anything
-        else HiGHS answers, e.g. "Solve error"); ``detail`` gives HiGHS's own words.
-    x : ndarray of shape (n_cols,) or None
-        Primal point, when HiGHS has a feasible one.
-    objective : float
-        Objective of ``x`` (nan without a point).
+        ``optimal``, ``infeasible``, ``unbounded``, ``time_limit`` or ``error`` (anything else HiGHS
+        answers, e.g. "Solve error"); ``detail`` gives HiGHS's own words.
+    x : ndarray of shape (n_cols,) or None; objective : float
+        Primal point, when HiGHS has a feasible one; its objective (nan without a point).
     dual_bound : float
         Best bound proved (MIP: ``mip_dual_bound``; LP: the objective).
     row_dual, col_dual : ndarray of shape (n_rows,) / (n_cols,) or None
-        Duals of an LP or QP (HiGHS's signs: for a minimisation, ≤ 0 on a row or column at
-        its upper bound, ≥ 0 at its lower bound).
+        Duals of an LP or QP (HiGHS's signs: for a minimisation, ≤ 0 on a row or column at its upper
+        bound, ≥ 0 at its lower bound).
     seconds : float
         Wall time of the run (with its re-solve, if the first answer failed the check).
     """
@@ -117,10 +114,7 @@ class Colwise:
     ----------
     n_rows, n_cols : int
     start : ndarray of int32, shape (n_cols + 1,)
-        Where each column's entries start in ``index``/``value``.
-    index : ndarray of int32, shape (nnz,)
-        Row of each entry.
-    value : ndarray of shape (nnz,)
+        Where each column's entries start in ``index`` (row of each entry) and ``value``, shape (nnz,).
     """
 
     n_rows: int
@@ -166,8 +160,8 @@ class LinearModel:
         self.is_mip = integer is not None and bool(np.any(integer))
         kinds = np.zeros(self.n_cols, dtype=np.int32) if integer is None else np.asarray(integer, dtype=np.int32)
         self._c = np.asarray(c, dtype=float)
-        self._a = csc_array((mat.value, mat.index, mat.start), shape=(mat.n_rows, mat.n_cols))
-        self._abs_a: csc_array | None = None  # |A|, for the rows' sizes in check()
+        self._mat, self._csc = mat, None  # A column-wise; as a scipy array only where check() needs it
+        self._abs_a: Array | csc_array | None = None  # |A|, for the rows' sizes in check()
         self._dense: Array | None = None  # A as a dense array, where small (check() is then ~µs)
         if isinstance(a, np.ndarray) and a.size <= DENSE_CHECK_ELEMENTS:
             self._dense = np.asarray(a, dtype=float)
@@ -258,7 +252,7 @@ class LinearModel:
         for j, v in zip(rows, values, strict=True):
             self._check(self.h.changeCoeff(int(j), int(col), float(v)), "changeCoeff")
         a[rows, int(col)] = values
-        self._a, self._abs_a, self._dense = csc_array(a), None, None
+        self._csc, self._abs_a, self._dense = csc_array(a), None, None
 
     def set_costs(self, cols: npt.NDArray[np.int32], costs: Array) -> None:
         """Change the linear costs of ``cols`` (in HiGHS and in the copy :meth:`check` reads)."""
@@ -273,28 +267,32 @@ class LinearModel:
         lo, hi = np.asarray(lo, dtype=float), np.asarray(hi, dtype=float)
         self._check(self.h.addRows(k, lo, hi, mat.nnz, mat.indptr[:-1].astype(np.int32),
                                    mat.indices.astype(np.int32), mat.data.astype(float)), "addRows")
-        self._a = csc_array(vstack([self._a, mat]))
+        self._csc = csc_array(vstack([self._a, mat]))
         self._abs_a = self._dense = None
         self._finite = None
         self._row_lo, self._row_hi = np.r_[self._row_lo, lo], np.r_[self._row_hi, hi]
         self.n_rows += k
         self._rows = np.arange(self.n_rows, dtype=np.int32)
 
+    @property
+    def _a(self) -> csc_array:
+        if self._csc is None:
+            mat = self._mat
+            self._csc = csc_array((mat.value, mat.index, mat.start), shape=(mat.n_rows, mat.n_cols))
+        return self._csc
+
     def _matrix(self) -> Array | csc_array:
-        if self._a.shape[0] * self._a.shape[1] > DENSE_CHECK_ELEMENTS:
-            return self._a
-        if self._dense is None:
+        if self._dense is None and self.n_rows * self.n_cols <= DENSE_CHECK_ELEMENTS:
             self._dense = self._a.toarray()
-        return self._dense
+        return self._a if self._dense is None else self._dense
 
     def _row_finite(self) -> tuple[npt.NDArray[np.bool_], npt.NDArray[np.bool_]]:
-        if self._finite is None:
-            self._finite = (np.isfinite(self._row_lo), np.isfinite(self._row_hi))
+        self._finite = self._finite or (np.isfinite(self._row_lo), np.isfinite(self._row_hi))
         return self._finite
 
-    def _abs(self) -> csc_array:
+    def _abs(self) -> Array | csc_array:
         if self._abs_a is None:
-            self._abs_a = abs(self._a)
+            self._abs_a = abs(self._matrix())
         return self._abs_a
 
     def value(self, x: Array) -> float:
@@ -314,7 +312,7 @@ class LinearModel:
         tol = FEASIBILITY_TOL
         a = self._matrix()
         act = a @ x
-        size = 1.0 + np.abs(a) @ np.abs(x) if isinstance(a, np.ndarray) else 1.0 + self._abs() @ np.abs(x)
+        size = 1.0 + self._abs() @ np.abs(x)
         lo, hi = self._row_lo, self._row_hi
         lo_ok, hi_ok = self._row_finite()
         with np.errstate(invalid="ignore"):  # an infinite bound (left out) gives inf/inf

@@ -163,11 +163,7 @@ class LevelModel:
     def rounded(self, v: Array, tau: float) -> Array:
         """Rows rounded at τ (active) and at their floors (fixed): they hold every grid point of the level set."""
         f = self._floors(v)
-        level = np.where(np.isnan(f), tau, f)
-        fin = np.isfinite(level)
-        b = np.full(level.size, np.inf)
-        b[fin] = rounded_rhs(self.rows.g[fin], self.rows.d[fin], self.rows.zero[fin], level[fin])
-        return b
+        return rounded_rhs(self.rows.g, self.rows.d, self.rows.zero, np.where(np.isnan(f), tau, f))
 
     def step(self, v: Array, k: Array, eps: float, stage_end: float, tries: int = 1) -> Step:
         """The level at k's own level t = min active margin, proved on the rounded rows; else a better point.
@@ -345,8 +341,7 @@ class LevelModel:
         (the LP or MILP of the rounded rows is infeasible); None: the limit or HiGHS stopped it."""
         rows = self.rows
         fin = np.isfinite(f)
-        b = np.full(f.size, np.inf)
-        b[fin] = rounded_rhs(rows.g[fin], rows.d[fin], rows.zero[fin], f[fin])
+        b = rounded_rhs(rows.g, rows.d, rows.zero, f)  # +inf where f is −inf
 
         def meets(k: Array) -> bool:
             return bool(np.all((rows.g - rows.g_rows @ k)[fin] >= f[fin] - 1e-9))

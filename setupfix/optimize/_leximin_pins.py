@@ -39,6 +39,8 @@ Mask = npt.NDArray[np.bool_]
 #: Largest Hadamard bound on det Gram(B) for which the span test is decided in floating point
 #: (an integer row outside the span is then ≥ 1e-5 away; float error is ~1e-12).
 _HADAMARD_MAX = 1e10
+#: The floor/ceil choices of 0 … 5 fractional coordinates (one row per choice, bit i: coordinate i up).
+_BITS = [(np.arange(1 << f)[:, None] >> np.arange(f)) & 1 for f in range(6)]
 #: Absolute margin on a certificate's weighted sum (weights summing to 1) before it pins a row.
 _MARGIN = 1e-9
 
@@ -210,22 +212,26 @@ def best_rounding(rows: GridRows, x: Array, floors: Array, active_dims: Mask, or
     (NaN: active); ``order``/``starts``: the rows grouped by dimension (for ``np.minimum.reduceat``);
     ``active_dims``: per group.
     """
-    lo = np.clip(np.floor(x + 1e-9), rows.kmin, rows.kmax)
-    near = np.clip(np.rint(x), rows.kmin, rows.kmax)
+    kmin, kmax = rows.kmin, rows.kmax  # np.minimum/np.maximum: a few µs less than np.clip on these sizes
+    lo = np.minimum(np.maximum(np.floor(x + 1e-9), kmin), kmax)
+    near = np.minimum(np.maximum(np.rint(x), kmin), kmax)
     frac = np.flatnonzero(np.abs(x - near) > 1e-6)
-    frac = frac[np.argsort(np.abs(x[frac] - lo[frac] - 0.5), kind="stable")[:most]]
+    if frac.size > 1:
+        frac = frac[np.argsort(np.abs(x[frac] - lo[frac] - 0.5), kind="stable")[:most]]
     cand = np.repeat(near[None, :], 1 << frac.size, axis=0)
     if frac.size:
-        bits = (np.arange(1 << frac.size)[:, None] >> np.arange(frac.size)) & 1
-        cand[:, frac] = np.clip(lo[frac] + bits, rows.kmin[frac], rows.kmax[frac])
+        bits = _BITS[frac.size] if frac.size < len(_BITS) else (
+            (np.arange(1 << frac.size)[:, None] >> np.arange(frac.size)) & 1)
+        cand[:, frac] = np.minimum(np.maximum(lo[frac] + bits, kmin[frac]), kmax[frac])
     fixed = ~np.isnan(floors)
-    m = rows.g[None, :] - cand @ rows.g_rows.T
-    level = np.min(np.where(fixed[None, :], np.inf, m), axis=1) if (~fixed).any() else np.full(len(cand), np.inf)
-    level[np.any(m[:, fixed] < floors[fixed] - TOL, axis=1)] = -np.inf
+    m = rows.g - cand @ rows.g_rows.T
+    level = np.where(fixed, np.inf, m).min(axis=1)
+    with np.errstate(invalid="ignore"):  # NaN floors (active rows) compare False
+        level[(m < floors - TOL).any(axis=1)] = -np.inf
     top = np.flatnonzero(level >= level.max() - 1e-9)
     i = int(top[0])
     if top.size > 1 and np.isfinite(level[i]):
-        by_dim = np.minimum.reduceat(m[np.ix_(top, order)], starts, axis=1)
+        by_dim = np.minimum.reduceat(m[top][:, order], starts, axis=1)
         sorted_m = np.sort(by_dim[:, active_dims], axis=1)
         i = int(top[np.lexsort(np.round(sorted_m, 6).T[::-1])[-1]])
     return cand[i], float(level[i])

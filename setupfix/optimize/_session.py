@@ -74,6 +74,8 @@ class Derived:
         Opposite integer rows (:func:`~setupfix.optimize._grid.pair_structure`).
     lp_matrix : Colwise
         [G | 1], the matrix of the LP of eq. 8 (:meth:`Session.lp_model`).
+    all_integer : bool
+        Every row integer or zero (:attr:`GridRows.all_integer`).
     nnls : dict
         The b-independent NNLS systems (:func:`~setupfix.optimize._grid.least_distance_system`)
         per set of finite rows, filled on first use.
@@ -83,6 +85,7 @@ class Derived:
     zero: npt.NDArray[np.bool_]
     pairs: PairStructure | None
     lp_matrix: Colwise
+    all_integer: bool
     nnls: dict[bytes, tuple[Array, Array]] = field(default_factory=dict)
 
 
@@ -105,7 +108,8 @@ def derived(g_rows: Array, kmin: Array, kmax: Array, cost: Array) -> Derived:
     if found is None:
         pairs = pair_structure(g_rows, kmin, kmax)
         lp_matrix = Colwise.of(np.hstack([g_rows, np.ones((g_rows.shape[0], 1))]))
-        found = Derived(row_gcd(g_rows), ~np.any(g_rows != 0, axis=1), pairs, lp_matrix)
+        d, zero = row_gcd(g_rows), ~np.any(g_rows != 0, axis=1)
+        found = Derived(d, zero, pairs, lp_matrix, bool(np.all((d > 0) | zero)))
         _read_only(found.d, found.zero, lp_matrix.start, lp_matrix.index, lp_matrix.value)
         if pairs is not None:
             _read_only(pairs.inverse, pairs.ia, pairs.ib, pairs.d, pairs.zlo, pairs.zhi)
@@ -159,7 +163,7 @@ class GridRows:
     @property
     def all_integer(self) -> bool:
         """Every row integer or zero: an empty rounded system lowers the level (:func:`next_level`)."""
-        return bool(np.all((self.d > 0) | self.zero))
+        return self.derived.all_integer
 
     def rounded(self, level: float) -> Array:
         """Rows b with {G k ≤ b} ⊇ {grid k : t(k) ≥ level} (:func:`~setupfix.optimize._grid.rounded_rhs`)."""
@@ -236,6 +240,8 @@ class Session:
             self._lp = LinearModel(np.r_[np.zeros(self.rows.n_free), -1.0], self.rows.derived.lp_matrix,
                                    np.full(r, -INF), np.zeros(r), np.r_[self.rows.kmin, -INF],
                                    np.r_[self.rows.kmax, INF])
+            if self.small:  # presolve costs more than it saves on a few dozen rows (~0.2 ms of ~0.3 ms)
+                self._lp.skip_presolve()
         return self._lp
 
     def drop_lp(self) -> None:
