@@ -16,13 +16,14 @@ Levels (progressive filling, each level proved on the grid)
 State: dimensions *fixed* with a floor v_q (every leximin-optimal point has M_q ≥ v_q and
 no point of the current level set has M_q above v_q + ε), the others *active*.
 
-1. Level value, from the current grid point k (:func:`_level`): its own level t = min of the
-   active margins is proved when the rows rounded at t + ε hold no point of the box — a Farkas
-   certificate by NNLS for small problems, else the duals of the level LP on the rounded rows
-   (:meth:`~setupfix.optimize._leximin_level.LevelModel.step`).  Otherwise the level LP's point,
-   rounded (best of its floor/ceil choices), is the next k; the first level comes proved from the
-   paper's stage, and the level LP's ascent and bracketed MILP
-   (:func:`~setupfix.optimize._leximin_level.LevelModel.value`) remain for what the steps leave.
+1. Level value, from the current grid point k (:func:`_level`; small problems start each level from
+   the grid climb's point where it is higher, :mod:`setupfix.optimize._leximin_search`): its own
+   level t = min of the active margins is proved when the rows rounded at t + ε hold no point of
+   the box — a Farkas certificate by NNLS for small problems, else the duals of the level LP on the
+   rounded rows (:meth:`~setupfix.optimize._leximin_level.LevelModel.step`).  Otherwise the level
+   LP's point, rounded, is the next k; the first level comes proved from the paper's stage, and the
+   level LP's ascent and bracketed MILP (:meth:`~setupfix.optimize._leximin_level.LevelModel.value`)
+   remain for what the steps leave.
 2. Saturation and pins (:mod:`setupfix.optimize._leximin_pins`, checked in numpy): the proof's
    row weights show that a row's margin cannot rise above t + ε (saturated) or, on rounded rows,
    that G_j k takes one value on the whole level set (pinned).  Level sets only shrink, so pins
@@ -58,6 +59,7 @@ from setupfix.optimize._grid_optimum import Stop
 from setupfix.optimize._leximin_counts import CountLevels, count_levels, count_least_norm
 from setupfix.optimize._leximin_level import LevelModel, LevelValue
 from setupfix.optimize._leximin_pins import dim_all, dim_margins, excluded_alone, pinned_rows, span_closure
+from setupfix.optimize._leximin_search import MAX_REGISTERS, climb, lex_order
 from setupfix.optimize._session import GridRows, Session
 
 __all__ = ["Leximin", "leximin", "leximin_least_norm"]
@@ -100,13 +102,20 @@ class Leximin:
 
 
 class _Search:
-    """What one leximin search shares across its branches: the model, the deadline, the counters."""
+    """What one leximin search shares across its branches: the model, the deadline, the counters, and
+    whether each branch starts with a grid climb (small problems: :mod:`setupfix.optimize._leximin_search`)."""
 
     def __init__(self, session: Session, model: LevelModel, stage_end: float) -> None:
         self.session, self.model, self.stage_end = session, model, stage_end
         self.eps = session.settings.quantum / 2
-        self.leaves = 0
-        self.calls = 0
+        self.leaves = self.calls = 0
+        self.climb = session.small and session.rows.n_free <= MAX_REGISTERS
+        self.start: Array | None = None  # the root's climb, from the first level's point
+
+    def climbed(self, k: Array, v: Array) -> Array:
+        """The grid climb from k over the active dimensions (the fixed ones kept at their floors)."""
+        m, rows = self.model, self.session.rows
+        return climb(rows.g_rows, rows.g, k, rows.kmin, rows.kmax, m.order, m.starts, v[m.dims], self.eps)
 
     def margins(self, k: Array) -> Array:
         m = self.model
@@ -159,6 +168,8 @@ def leximin(session: Session, row_dim: npt.NDArray[np.intp], n_dims: int, k_firs
     if np.any(np.isnan(v) & constant):  # the first level was over them too: it is recomputed without them
         v[np.isnan(v) & constant] = m_first[np.isnan(v) & constant]
         first = None
+    if search.climb:  # before the first level's dimensions are fixed: no floor to check at each move
+        search.start = search.climbed(k_first, v)
     best = _fill(search, v, k_first, t_first, first, [])
     head = best[0]
     return Leximin(head.k, head.floors, head.levels, head.counts, head.stopped, head.path, search.calls,
@@ -167,15 +178,6 @@ def leximin(session: Session, row_dim: npt.NDArray[np.intp], n_dims: int, k_firs
 
 def _vector(lex: Leximin) -> Array:
     return np.repeat([a for a, _ in lex.levels], [b for _, b in lex.levels])
-
-
-def _compare(a: Leximin, b: Leximin, eps: float) -> int:
-    """+1 if a's sorted margins beat b's (leximin, ties within ε), −1 if worse, 0 if tied."""
-    va, vb = _vector(a), _vector(b)
-    for x, y in zip(va, vb, strict=False):
-        if abs(x - y) > eps:
-            return 1 if x > y else -1
-    return 0
 
 
 def _fill(search: _Search, v: Array, k: Array, t: float, level: LevelValue | None, path: list[str],
@@ -192,6 +194,7 @@ def _fill(search: _Search, v: Array, k: Array, t: float, level: LevelValue | Non
     v = v.copy()
     path = list(path)
     pinned = np.zeros(row_dim.size, bool) if pinned is None else pinned.copy()
+    k_climb: Array | None = None
     while True:
         active = np.isnan(v)
         if not active.any():
@@ -199,6 +202,10 @@ def _fill(search: _Search, v: Array, k: Array, t: float, level: LevelValue | Non
         active_rows = active[row_dim]
         if time.perf_counter() >= search.stage_end:
             return [_stopped(search, v, k, path, "time limit")]
+        if level is None and search.climb:  # the branch's climb (once): where higher, each level starts there
+            if k_climb is None:
+                k_climb, search.start = search.start if search.start is not None else search.climbed(k, v), None
+            k = k_climb if model.level_of(k_climb, v) > model.level_of(k, v) else k
         k, t, sat, pin, stop, hint = _level(search, v, k, level, active_rows, path)
         if stop is not None:
             return [_stopped(search, v, k, path, stop)]
@@ -227,7 +234,7 @@ def _fill(search: _Search, v: Array, k: Array, t: float, level: LevelValue | Non
         at_t = int(np.sum(fix_sat | (fix_pin & (m_k <= t + eps))))
         if at_t:
             path.append(f"leximin: {at_t} dimension(s) at {t:.4g} steps")
-        if bound is not None and _worse(np.sort(v[np.isfinite(v) & (v <= t + eps)]), bound, eps):
+        if bound is not None and lex_order(np.sort(v[np.isfinite(v) & (v <= t + eps)]), bound, eps) < 0:
             return []
         if hint is not None and np.isnan(v).any():  # the proving LP's point, rounded: often the next level's
             k_hint, t_hint = model.round_best(hint, v)
@@ -311,20 +318,12 @@ def _conflict(search: _Search, v: Array, k: Array, t: float, path: list[str],
             continue
         if branch[0].stopped is not None:
             return branch
-        order = 1 if not best else _compare(branch[0], best[0], eps)
+        order = 1 if not best else lex_order(_vector(branch[0]), _vector(best[0]), eps)
         if order > 0:
             best = branch
         elif order == 0:
             best = best + branch
     return best
-
-
-def _worse(settled: Array, bound: Array, eps: float) -> bool:
-    """Whether sorted margins ``settled`` (the smallest of a branch, final) fall below ``bound``'s start."""
-    for x, y in zip(settled, bound, strict=False):
-        if abs(x - y) > eps:
-            return bool(x < y)
-    return False
 
 
 def _levels(v: Array) -> tuple[tuple[float, int], ...]:

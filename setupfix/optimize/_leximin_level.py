@@ -73,9 +73,9 @@ class LevelModel:
         self.n = n
         self._model: LinearModel | None = None  # the level LP, built on first use
         self._cost = np.zeros(n_dims)  # its costs on u
-        self._order = np.argsort(row_dim, kind="stable")  # rows grouped by dimension (for reduceat)
-        self._starts = np.flatnonzero(np.r_[True, np.diff(row_dim[self._order]) != 0])
-        self._dims = row_dim[self._order][self._starts]
+        self.order = np.argsort(row_dim, kind="stable")  # rows grouped by dimension (for reduceat)
+        self.starts = np.flatnonzero(np.r_[True, np.diff(row_dim[self.order]) != 0])
+        self.dims = row_dim[self.order][self.starts]
         # a dimension with more than two rows: a position zone's polygon (one-axis problems have at most two)
         self.polygons = bool(row_dim.size and np.bincount(row_dim).max() > 2)
         # rows keyed by a random integer projection: equal (or opposite) rows, equal (or opposite) keys
@@ -158,7 +158,7 @@ class LevelModel:
 
     def round_best(self, x: Array, v: Array) -> tuple[Array, float]:
         """The best rounding of x (:func:`~setupfix.optimize._leximin_pins.best_rounding`): (k, its level)."""
-        return best_rounding(self.rows, x, self._floors(v), np.isnan(v[self._dims]), self._order, self._starts)
+        return best_rounding(self.rows, x, self._floors(v), np.isnan(v[self.dims]), self.order, self.starts)
 
     def rounded(self, v: Array, tau: float) -> Array:
         """Rows rounded at τ (active) and at their floors (fixed): they hold every grid point of the level set."""

@@ -1,0 +1,116 @@
+"""The grid climb of the leximin levels (issue 22): a start point only — never worse, locally optimal, and
+the proved answers are the same with it and without it."""
+
+from __future__ import annotations
+
+import itertools
+
+import numpy as np
+import pytest
+
+from setupfix.optimize import CorrectionProblem, get_optimizer
+from setupfix.optimize._dimensions import dimension_of_rows
+from setupfix.optimize._leximin_search import climb
+from setupfix.optimize._lp_bound import margin_rows
+
+from .test_exact import random_problem
+from .test_leximin import CASES, CONFLICTS, brute_leximin, make, one_axis_problem, solved_steps
+
+EPS = 0.0005  # half the input quantum [steps], as the optimiser's ties
+
+
+def grouped(problem: CorrectionProblem):
+    """The solver's rows and their grouping by dimension (order, starts, dimension of each group)."""
+    g_rows, g = margin_rows(problem)
+    row_dim = dimension_of_rows(problem)
+    order = np.argsort(row_dim, kind="stable")
+    starts = np.flatnonzero(np.r_[True, np.diff(row_dim[order]) != 0])
+    return g_rows, g, order, starts, row_dim[order][starts]
+
+
+def dim_margins(g_rows, g, order, starts, k):
+    """Each group's margin at k, by plain loops (independent of the climb's reduceat)."""
+    m = g - g_rows @ k
+    return np.array([min(m[order[a:b]]) for a, b in itertools.pairwise([*starts, len(order)])])
+
+
+def lex_better(a: np.ndarray, b: np.ndarray) -> bool:
+    """Sorted a above sorted b in the leximin order (ties within ε)."""
+    for x, y in zip(np.sort(a), np.sort(b), strict=True):
+        if abs(x - y) > EPS:
+            return bool(x > y)
+    return False
+
+
+def neighbours(n: int):
+    """Every move of one register by ±1 and of two registers by ±1 each (the climb's last scale)."""
+    for i in range(n):
+        for s in (1, -1):
+            d = np.zeros(n)
+            d[i] = s
+            yield d
+    for i, j in itertools.combinations(range(n), 2):
+        for si, sj in itertools.product((1, -1), repeat=2):
+            d = np.zeros(n)
+            d[i], d[j] = si, sj
+            yield d
+
+
+PROBLEMS = ([("random", s, {"n": 4, "m": 7}) for s in range(6)] + [("axis", s, {}) for s in range(8)]
+            + [("axis", s, {"n_wks": 3, "n_tools": 4, "m": 10, "limit": 8}) for s in range(8, 12)])
+
+
+@pytest.mark.parametrize(("kind", "seed", "kw"), PROBLEMS)
+def test_climb_is_never_worse_keeps_the_floors_and_stops_where_no_move_is_better(kind, seed, kw):
+    problem = random_problem(seed, **kw) if kind == "random" else one_axis_problem(seed, **kw)
+    g_rows, g, order, starts, _ = grouped(problem)
+    free = problem.free
+    kmin, kmax = problem.kmin[free].astype(float), problem.kmax[free].astype(float)
+    rng = np.random.default_rng(seed)
+    k0 = rng.integers(kmin, kmax + 1).astype(float)
+    m0 = dim_margins(g_rows, g, order, starts, k0)
+    floors = np.full(starts.size, np.nan)
+    fixed = rng.random(starts.size) < 0.3  # some groups fixed at their margin at the start
+    floors[fixed] = m0[fixed]
+    k = climb(g_rows, g, k0, kmin, kmax, order, starts, floors, EPS)
+    assert np.array_equal(k, np.rint(k)) and np.all(k >= kmin) and np.all(k <= kmax)
+    m = dim_margins(g_rows, g, order, starts, k)
+    assert np.all(m[fixed] >= floors[fixed] - 1e-9)
+    active = ~fixed
+    assert not lex_better(m0[active], m[active])  # never worse than the start
+    for d in neighbours(k.size):  # a local optimum of the last scale's moves
+        kk = k + d
+        if np.any(kk < kmin) or np.any(kk > kmax):
+            continue
+        mm = dim_margins(g_rows, g, order, starts, kk)
+        if np.all(mm[fixed] >= floors[fixed] - 1e-9):
+            assert not lex_better(mm[active], m[active]), d
+
+
+def test_climb_without_an_active_dimension_returns_the_start():
+    problem = one_axis_problem(0)
+    g_rows, g, order, starts, _ = grouped(problem)
+    free = problem.free
+    k0 = np.zeros(int(free.sum()))
+    k = climb(g_rows, g, k0, problem.kmin[free].astype(float), problem.kmax[free].astype(float), order, starts,
+              np.full(starts.size, -np.inf), EPS)
+    assert k is k0
+
+
+@pytest.mark.parametrize(("kind", "seed", "kw"), CASES[::3] + CONFLICTS)
+def test_leximin_without_the_climb_equals_brute_force(kind, seed, kw, monkeypatch):
+    """The levels prove every level whatever point they start from: with no climb (the ascent by roundings,
+    LPs and MILPs alone) the answer is brute force's, as with it."""
+    import setupfix.optimize._leximin as lexmod
+
+    problem = make(kind, seed, kw)
+    best, norm, _ = brute_leximin(problem)
+    if best[0] < 0:
+        pytest.skip("out of reach: triage")
+    with_climb = get_optimizer("exact", objective="leximin", time_limit=30.0).solve(problem)
+    monkeypatch.setattr(lexmod, "MAX_REGISTERS", 0)
+    result, k, sorted_m = solved_steps(problem)
+    assert result.status == "optimal", result.message
+    np.testing.assert_allclose(sorted_m, best, atol=1e-6)
+    assert float(problem.cost[problem.free] @ k**2) == pytest.approx(norm, abs=1e-9)
+    np.testing.assert_array_equal(result.x, with_climb.x)
