@@ -48,57 +48,22 @@ M_q ≥ v_q for every q, and the least norm among them is stage 3
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass
 
 import numpy as np
 import numpy.typing as npt
 
-from setupfix.optimize._grid import TOL
-from setupfix.optimize._grid_least_norm import LeastNorm, grid_least_norm
 from setupfix.optimize._grid_optimum import Stop
-from setupfix.optimize._leximin_counts import CountLevels, count_levels, count_least_norm
+from setupfix.optimize._leximin_counts import count_levels
 from setupfix.optimize._leximin_level import LevelModel, LevelValue
 from setupfix.optimize._leximin_pins import dim_all, dim_margins, excluded_alone, pinned_rows, span_closure
+from setupfix.optimize._leximin_result import Leximin, leximin_least_norm, leximin_vector, levels_of
 from setupfix.optimize._leximin_search import MAX_REGISTERS, climb, lex_order
-from setupfix.optimize._session import GridRows, Session
+from setupfix.optimize._session import Session
 
 __all__ = ["Leximin", "leximin", "leximin_least_norm"]
 
 Array = npt.NDArray[np.float64]
 Mask = npt.NDArray[np.bool_]
-
-
-@dataclass(frozen=True)
-class Leximin:
-    """Outcome of the leximin levels (before the least norm).
-
-    Attributes
-    ----------
-    k : ndarray of shape (n,)
-        A leximin-optimal grid point (the best found when ``stopped``).
-    floors : ndarray of shape (n_dims,)
-        v_q [steps]: the floor of each dimension (−inf for a dimension without rows).
-    levels : tuple of (float, int)
-        The leximin vector as distinct values [steps] and how many dimensions sit at each.
-    counts : CountLevels or None
-        The count constraints that decide the dimensions left when a discrete conflict
-        stopped the progressive filling (None: every dimension has its floor).
-    stopped : Stop or None
-    path : tuple of str
-    calls : int
-        Solver calls.
-    alternatives : tuple of Leximin
-        Other outcomes with the same leximin vector (branches of a discrete conflict that tie).
-    """
-
-    k: Array
-    floors: Array
-    levels: tuple[tuple[float, int], ...]
-    counts: CountLevels | None
-    stopped: Stop | None
-    path: tuple[str, ...]
-    calls: int
-    alternatives: tuple[Leximin, ...] = ()
 
 
 class _Search:
@@ -176,10 +141,6 @@ def leximin(session: Session, row_dim: npt.NDArray[np.intp], n_dims: int, k_firs
                    tuple(best[1:]))
 
 
-def _vector(lex: Leximin) -> Array:
-    return np.repeat([a for a, _ in lex.levels], [b for _, b in lex.levels])
-
-
 def _fill(search: _Search, v: Array, k: Array, t: float, level: LevelValue | None, path: list[str],
           bound: Array | None = None, pinned: Mask | None = None) -> list[Leximin]:
     """Progressive filling from this state; the tied-best outcomes (branches of discrete conflicts).
@@ -241,7 +202,7 @@ def _fill(search: _Search, v: Array, k: Array, t: float, level: LevelValue | Non
             if t_hint > model.level_of(k, v) + 1e-9:
                 k = k_hint
         level = None
-    return [Leximin(k, v, _levels(v), None, None, tuple(path), 0)]
+    return [Leximin(k, v, levels_of(v), None, None, tuple(path), 0)]
 
 
 def _level(search: _Search, v: Array, k: Array, level: LevelValue | None, active_rows: Mask, path: list[str]
@@ -313,24 +274,17 @@ def _conflict(search: _Search, v: Array, k: Array, t: float, path: list[str],
         v_q[dim] = t
         branch = _fill(search, v_q, k_q, t, None,
                        [*path, f"leximin: discrete conflict at {t:.4g} steps, branch: dimension {dim} at it"],
-                       _vector(best[0]) if best else bound, pinned)
+                       leximin_vector(best[0]) if best else bound, pinned)
         if not branch:  # pruned: below the best branch
             continue
         if branch[0].stopped is not None:
             return branch
-        order = 1 if not best else lex_order(_vector(branch[0]), _vector(best[0]), eps)
+        order = 1 if not best else lex_order(leximin_vector(branch[0]), leximin_vector(best[0]), eps)
         if order > 0:
             best = branch
         elif order == 0:
             best = best + branch
     return best
-
-
-def _levels(v: Array) -> tuple[tuple[float, int], ...]:
-    """The leximin vector as (value, count): every finite floor counted once at its value."""
-    finite = v[np.isfinite(v)]
-    values, counts = np.unique(np.round(finite, 9), return_counts=True)
-    return tuple((float(a), int(b)) for a, b in zip(values, counts, strict=True))
 
 
 def _stopped(search: _Search, v: Array, k: Array, path: list[str], reason: str) -> Leximin:
@@ -340,7 +294,7 @@ def _stopped(search: _Search, v: Array, k: Array, path: list[str], reason: str) 
     v = v.copy()
     if active.any():
         v[active] = float(np.min(m_k[active]))
-    return Leximin(k, v, _levels(v), None, Stop("leximin", reason), (*path, f"leximin: stopped ({reason})"), 0)
+    return Leximin(k, v, levels_of(v), None, Stop("leximin", reason), (*path, f"leximin: stopped ({reason})"), 0)
 
 
 def _counts(search: _Search, v: Array, k: Array, t: float, path: list[str]) -> Leximin:
@@ -353,47 +307,7 @@ def _counts(search: _Search, v: Array, k: Array, t: float, path: list[str]) -> L
     vv = v.copy()
     vv[np.isnan(vv)] = t  # every active dimension has at least t (the counts say which have more)
     stop = None if out.proved else Stop("leximin", out.why)
-    lex = tuple(sorted(list(_levels(v)) + list(out.levels)))
+    lex = tuple(sorted(list(levels_of(v)) + list(out.levels)))
     return Leximin(out.k, vv, lex, out, stop, tuple(path), 0)
 
 
-def leximin_least_norm(session: Session, lex: Leximin, row_dim: npt.NDArray[np.intp], box_share: float
-                       ) -> LeastNorm:
-    """The least Σ c k² among the leximin-optimal grid points (every margin at least its floor).
-
-    Floors for every dimension: stage 3 on the rows shifted by them (g_j − v_q(j) ≥ G_j k, level 0).
-    Count constraints left by a discrete conflict: :func:`~setupfix.optimize._leximin_counts.count_least_norm`.
-    Tied branches (``lex.alternatives``): the least over them (ties: the lexicographically smallest k).
-    """
-    best: LeastNorm | None = None
-    for option in (lex, *lex.alternatives):
-        least = _least_norm_of(session, option, row_dim, box_share)
-        if best is None or _better(least, best, session.rows.cost):
-            best = least if best is None else LeastNorm(least.k, least.proved and best.proved,
-                                                        least.why or best.why, min(least.lower, best.lower),
-                                                        best.path + least.path)
-        else:
-            best = LeastNorm(best.k, least.proved and best.proved, best.why or least.why,
-                             min(least.lower, best.lower), best.path + least.path)
-    assert best is not None
-    return best
-
-
-def _better(a: LeastNorm, b: LeastNorm, cost: Array) -> bool:
-    fa, fb = float(np.sum(cost * a.k**2)), float(np.sum(cost * b.k**2))
-    if abs(fa - fb) > 1e-9 * max(1.0, fb):
-        return fa < fb
-    return tuple(a.k) < tuple(b.k)
-
-
-def _least_norm_of(session: Session, lex: Leximin, row_dim: npt.NDArray[np.intp], box_share: float) -> LeastNorm:
-    rows = session.rows
-    if lex.counts is not None:
-        return count_least_norm(session, row_dim, lex.counts, lex.k)
-    floor_rows = lex.floors[row_dim]
-    g_shift = np.where(np.isfinite(floor_rows), rows.g - floor_rows, np.inf)
-    shifted = Session(GridRows(rows.g_rows, g_shift, rows.kmin, rows.kmax, rows.cost), session.settings,
-                      session.time_limit, session.clock)
-    b = shifted.rows.rounded(0.0)
-    b[~np.isfinite(g_shift)] = np.inf
-    return grid_least_norm(shifted, -TOL, b, lex.k, None, None, box_share)

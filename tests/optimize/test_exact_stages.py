@@ -24,7 +24,7 @@ OPTIMIZE = Path(__file__).resolve().parents[2] / "setupfix" / "optimize"
 RANKS = {"_settings": 0, "_highs": 0, "_problem": 0, "_dimensions": 1, "_base": 1, "_grid": 1, "_chords": 1,
          "_listing": 2, "_least_norm": 2, "_session": 3, "_lp_bound": 4, "_grid_optimum": 5, "_grid_least_norm": 5,
          "_triage_model": 1, "_leximin_search": 1, "_leximin_pins": 4, "_leximin_level": 5, "_leximin_counts": 6,
-         "_leximin": 7, "_triage_forced": 8, "_triage": 9, "_exact": 10}
+         "_leximin_result": 7, "_leximin": 8, "_triage_forced": 9, "_triage": 10, "_exact": 11}
 
 
 @pytest.mark.parametrize("module", sorted(RANKS))
