@@ -251,40 +251,66 @@ def _level(search: _Search, v: Array, k: Array, level: LevelValue | None, active
 def _conflict(search: _Search, v: Array, k: Array, t: float, path: list[str],
               bound: Array | None = None, pinned: Mask | None = None) -> list[Leximin]:
     """A discrete conflict at level t: one branch per dimension that can be the only one left at t
-    (every other active dimension above t + ε at some grid point); none, or too many branches:
-    the counts decide (:mod:`setupfix.optimize._leximin_counts`)."""
-    model, eps = search.model, search.eps
-    starts: list[tuple[int, Array]] = []
-    rows = search.session.rows
-    skip = (excluded_alone(rows, v[model.row_dim], model.row_dim, v.size, t, eps)
-            if search.session.small and rows.all_integer else np.zeros(v.size, bool))
-    for q in np.flatnonzero(np.isnan(v) & ~skip):
-        found = model.alone_at(v, int(q), t, eps, search.stage_end)
-        search.calls += 1
-        if found is None:
-            return [_stopped(search, v, k, path, "time limit")]
-        if found is not False:
-            starts.append((int(q), np.asarray(found, dtype=float)))
+    (every other active dimension above t + ε at some grid point); if none can, one per pair that can
+    be the only two left (every leximin-optimal point has the fewest dimensions at t); none, or too
+    many branches: the counts decide (:mod:`setupfix.optimize._leximin_counts`)."""
+    starts = _alone(search, v, t, 1)
+    if starts == []:
+        starts = _alone(search, v, t, 2)
+    if starts is None:
+        return [_stopped(search, v, k, path, "time limit")]
     if not starts or search.leaves + len(starts) > MAX_BRANCHES:
         return [_counts(search, v, k, t, path)]
     search.leaves += len(starts)
     best: list[Leximin] = []
-    for dim, k_q in starts:
+    for dims, k_q in starts:
         v_q = v.copy()
-        v_q[dim] = t
+        v_q[list(dims)] = t
+        which = f"dimension {dims[0]}" if len(dims) == 1 else "dimensions " + ", ".join(map(str, dims))
         branch = _fill(search, v_q, k_q, t, None,
-                       [*path, f"leximin: discrete conflict at {t:.4g} steps, branch: dimension {dim} at it"],
+                       [*path, f"leximin: discrete conflict at {t:.4g} steps, branch: {which} at it"],
                        leximin_vector(best[0]) if best else bound, pinned)
         if not branch:  # pruned: below the best branch
             continue
         if branch[0].stopped is not None:
             return branch
-        order = 1 if not best else lex_order(leximin_vector(branch[0]), leximin_vector(best[0]), eps)
+        order = 1 if not best else lex_order(leximin_vector(branch[0]), leximin_vector(best[0]), search.eps)
         if order > 0:
             best = branch
         elif order == 0:
             best = best + branch
     return best
+
+
+#: Most pairs of dimensions a discrete conflict tests (after the Farkas exclusion) before the counts decide.
+MAX_PAIR_TESTS = 60
+
+
+def _alone(search: _Search, v: Array, t: float, together: int) -> list[tuple[tuple[int, ...], Array]] | None:
+    """The sets of ``together`` (1 or 2) active dimensions that can be the only ones left at t, each with
+    a grid point; None: the limit stopped a test; [] also when there are more than MAX_PAIR_TESTS pairs."""
+    model, eps, rows = search.model, search.eps, search.session.rows
+    active = np.isnan(v)
+    certified = search.session.small and rows.all_integer
+    out = (excluded_alone(rows, v[model.row_dim], model.row_dim, v.size, t, eps, together) if certified
+           else np.zeros((v.size,) * together, bool))
+    sets: list[tuple[int, ...]]
+    if together == 1:
+        sets = [(int(q),) for q in np.flatnonzero(active & ~out)]
+    else:
+        a, b = np.nonzero(np.triu(active[:, None] & active[None, :] & ~out, 1))
+        sets = [(int(x), int(y)) for x, y in zip(a, b, strict=True)]
+        if len(sets) > MAX_PAIR_TESTS:
+            return []
+    starts: list[tuple[tuple[int, ...], Array]] = []
+    for dims in sets:
+        found = model.alone_at(v, dims, t, eps, search.stage_end)
+        search.calls += 1
+        if found is None:
+            return None
+        if found is not False:
+            starts.append((dims, np.asarray(found, dtype=float)))
+    return starts
 
 
 def _stopped(search: _Search, v: Array, k: Array, path: list[str], reason: str) -> Leximin:

@@ -328,12 +328,13 @@ class LevelModel:
         found = self.point_above(f, stage_end)
         return None if found is None else found is not False
 
-    def alone_at(self, v: Array, q: int, t: float, eps: float, stage_end: float) -> Array | bool | None:
-        """A grid point with every active dimension but q at t + ε or more (q ≥ t, fixed ≥ floors);
-        False: proved none; None: stopped."""
+    def alone_at(self, v: Array, dims: tuple[int, ...], t: float, eps: float, stage_end: float
+                 ) -> Array | bool | None:
+        """A grid point with every active dimension but ``dims`` at t + ε or more (those ≥ t, fixed ≥
+        floors); False: proved none; None: stopped."""
         f = self._floors(v).copy()
         f[np.isnan(f)] = t + eps
-        f[self.row_dim == q] = t
+        f[np.isin(self.row_dim, dims)] = t
         return self.point_above(f, stage_end)
 
     def point_above(self, f: Array, stage_end: float) -> Array | bool | None:

@@ -262,17 +262,20 @@ def dim_margins(g_rows: Array, g: Array, k: Array, row_dim: npt.NDArray[np.intp]
 
 
 def excluded_alone(rows: GridRows, floors: Array, row_dim: npt.NDArray[np.intp], n_dims: int, t: float,
-                   eps: float) -> Mask:
-    """Active dimensions proved unable to be the only one left at level t, by one Farkas certificate.
+                   eps: float, together: int = 1) -> Mask:
+    """Active dimensions (``together`` = 2: pairs of them) proved unable to be the only ones left at level t,
+    by one Farkas certificate.
 
     ``floors``: per row (NaN: active).  b: every active row rounded at t + ε, fixed rows at their
     floors; weights y ≥ 0 (sum 1) with ``max over the box of Σ y_j (b_j − G_j k) = W < 0``
     (:func:`farkas_weights`) prove that no point meets G k ≤ b.  Lowering dimension q's rows to t
     raises b_j by δ_j on them only, so the same weights still prove "no point" when
-    W + Σ_{j ∈ q} y_j δ_j < 0: no grid point has every active dimension but q above t + ε (q ≥ t).
-    Returns a mask of shape (n_dims,) (all False when NNLS finds no certificate).
+    W + Σ_{j ∈ q} y_j δ_j < 0: no grid point has every active dimension but q above t + ε (q ≥ t);
+    for a pair q, p (rows of one dimension only), W + Σ_{j ∈ q} y_j δ_j + Σ_{j ∈ p} y_j δ_j < 0.
+    Returns a mask of shape (n_dims,), or (n_dims, n_dims) for pairs (symmetric; all False when NNLS
+    finds no certificate).
     """
-    out = np.zeros(n_dims, bool)
+    out = np.zeros((n_dims,) * together, bool)
     active = np.isnan(floors)
     level = np.where(active, t + eps, floors)
     fin = np.isfinite(level)
@@ -291,8 +294,9 @@ def excluded_alone(rows: GridRows, floors: Array, row_dim: npt.NDArray[np.intp],
     np.add.at(extra, row_dim, rise)
     dims_active = np.zeros(n_dims, bool)
     dims_active[row_dim[active]] = True
-    out = dims_active & (worst + extra < -1e-9)
-    return out
+    if together == 2:
+        return dims_active[:, None] & dims_active[None, :] & (worst + extra[:, None] + extra[None, :] < -1e-9)
+    return dims_active & (worst + extra < -1e-9)
 
 
 def meeting_rounding(rows: GridRows, x: Array, f: Array, most: int = 10) -> Array | None:
