@@ -87,8 +87,9 @@ class _Search:
         return dim_margins(m.rows.g_rows, m.rows.g, k, m.row_dim, m.n_dims)
 
 
-#: Most branches a search may open on discrete conflicts before the counts decide the rest.
-MAX_BRANCHES = 12
+#: Most branches a search may open on discrete conflicts before the counts decide the rest (24: a branch costs
+#: milliseconds on the paper's example, the counts tenths of a second; bench/leximin_speed.py).
+MAX_BRANCHES = 24
 
 
 def leximin(session: Session, row_dim: npt.NDArray[np.intp], n_dims: int, k_first: Array, t_first: float,
