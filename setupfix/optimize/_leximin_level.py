@@ -12,10 +12,10 @@ the rows rounded at t + ε (:func:`~setupfix.optimize._grid.rounded_rhs`) hold n
 problems) or by the duals of the level LP on the rounded rows; each certificate is checked in
 numpy and its weights also pin rows (:mod:`setupfix.optimize._leximin_pins`).  Otherwise the
 next point to try is NNLS's least-distance point of those rows, rounded (small problems, no LP),
-else the level LP's point, rounded (:meth:`LevelModel.round_best`).  What the steps
-leave: :meth:`LevelModel.value` — the LP bound, the ascent on rounded rows (a feasible LP's vertex
-is a grid point where the rows are a network, :func:`~setupfix.optimize._grid.is_network`; else a
-feasibility MILP), last the MILP "max t, k integer" bracketed by the best point and the bound.
+else the level LP's point, rounded (:meth:`LevelModel.round_best`).  What the steps leave:
+:meth:`LevelModel.value` — the LP bound, the ascent on rounded rows (NNLS or an LP, a feasibility
+MILP last: :meth:`LevelModel.point_above`), last the MILP "max t, k integer" bracketed by the best
+point and the bound.
 
 One warm-started HiGHS model per solve holds the level LP with a column u_q per dimension (only
 bounds change from level to level, :attr:`LevelModel._lp`).
@@ -103,7 +103,6 @@ class LevelModel:
             self._model.keep_basis()
         return self._model
 
-    # -- the model --------------------------------------------------------------------------------
     def _floors(self, v: Array) -> Array:
         """Per row: the floor of its dimension (NaN: active)."""
         return v[self.row_dim]
@@ -145,7 +144,6 @@ class LevelModel:
         status = res.status if res.status != "error" else f"HiGHS: {res.detail}"
         return status, None if res.x is None else res.x[:self.n]
 
-    # -- evaluation -------------------------------------------------------------------------------
     def level_of(self, k: Array, v: Array) -> float:
         """min over active rows of g_j − G_j k, or −inf if a fixed row is below its floor."""
         f = self._floors(v)
@@ -339,7 +337,8 @@ class LevelModel:
 
     def point_above(self, f: Array, stage_end: float) -> Array | bool | None:
         """A grid point with every row's margin ≥ f_j (shape (r,), −inf: no floor); False: proved none
-        (the LP or MILP of the rounded rows is infeasible); None: the limit or HiGHS stopped it."""
+        (a Farkas certificate of NNLS, or the LP or MILP of the rounded rows infeasible); None: the limit or
+        HiGHS stopped it."""
         rows = self.rows
         fin = np.isfinite(f)
         b = rounded_rhs(rows.g, rows.d, rows.zero, f)  # +inf where f is −inf
@@ -347,6 +346,15 @@ class LevelModel:
         def meets(k: Array) -> bool:
             return bool(np.all((rows.g - rows.g_rows @ k)[fin] >= f[fin] - 1e-9))
 
+        if rows.all_integer and self.session.small:  # NNLS first (~0.1 ms): a proof, or a point to round
+            y, x_ld = farkas_or_point(rows, b)
+            if y is not None:
+                return False
+            if x_ld is not None:
+                k = np.clip(np.rint(x_ld), rows.kmin, rows.kmax)
+                k_met = k if meets(k) else meeting_rounding(rows, x_ld, f)
+                if k_met is not None:
+                    return k_met
         if rows.all_integer:
             feas, kx = self._feasible(b, stage_end - time.perf_counter())
             if feas == "infeasible":
