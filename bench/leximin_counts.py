@@ -1,4 +1,4 @@
-"""Leximin count MILPs: HiGHS's presolve and the nested blocks' linking rows (issue 22: the batch's long tail).
+"""Leximin count MILPs and the pair branches that spare them (issue 22: the batch's long tail).
 
 The varied guide-pins reports of ``bench/batch_throughput.py --vary`` (each actual moved by a
 seeded step in ±0.005 mm) are corrected once; those whose leximin reaches the counts
@@ -9,6 +9,10 @@ presolve with the rows w_i,q ≤ w_(i−1),q that link the nested count blocks (
 :data:`setupfix.optimize._leximin_counts.LINK`).  Time is process CPU time (the box is shared; wall
 time would measure the load), with the in-process reference of the same run (the mean over the five
 bundled cycles of ``correct_report``).  The corrections must be identical where the ways are proved.
+
+The reports whose conflict two dimensions must share are decided by branches on pairs
+(:func:`setupfix.optimize._leximin._alone`) before the counts: each of them is corrected again with
+the pairs switched off (``MAX_PAIR_TESTS`` = −1: the counts, as before), CPU time and answers compared.
 
     python bench/leximin_counts.py                 # 600 reports, 60 s limit
     python bench/leximin_counts.py --reports 100
@@ -34,13 +38,14 @@ import numpy as np
 from batch_throughput import GUIDE, make_reports, reference
 
 from setupfix.model import load_model
-from setupfix.optimize import _leximin_counts
+from setupfix.optimize import _leximin, _leximin_counts
 from setupfix.optimize._highs import LinearModel
 from setupfix.pipeline.correct import correct_report
 from setupfix.pipeline.requests import CorrectRequest, SolveOptions
 
 RESULTS = ROOT / "bench" / "results"
 SKIP = LinearModel.skip_presolve
+PAIRS = _leximin.MAX_PAIR_TESTS
 
 
 #: The three ways: (name, presolve on, linking rows).
@@ -74,7 +79,14 @@ def main() -> None:
         make_reports(folder, args.reports, vary=True)
         files = sorted(folder.glob("*.csv"))
         way(False, True)
-        counted = [f for f in files if "the rest by counts" in solve(request, f)[2]]
+        paths = {f: solve(request, f)[2] for f in files}
+        counted = [f for f in files if "the rest by counts" in paths[f]]
+        paired = []
+        for f in (f for f in files if "branch: dimensions" in paths[f]):
+            with_pairs = solve(request, f)
+            _leximin.MAX_PAIR_TESTS = -1
+            paired.append((f.name, with_pairs, solve(request, f)))
+            _leximin.MAX_PAIR_TESTS = PAIRS
         rows = []
         for f in counted:
             runs = {}
@@ -84,7 +96,7 @@ def main() -> None:
             rows.append((f.name, runs))
         way(False, True)
     lines = [
-        "Leximin count MILPs: HiGHS presolve and the linking rows of the nested blocks, process CPU time",
+        "Leximin count MILPs: HiGHS presolve, the nested blocks' linking rows and the pair branches, process CPU time",
         f"command : python bench/leximin_counts.py --reports {args.reports} --limit {args.limit:g}",
         "threads : OPENBLAS/MKL/OMP = 1, HiGHS threads = 1",
         f"load    : 1-min load average {load0:.2f} at the start, {os.getloadavg()[0]:.2f} at the end",
@@ -104,6 +116,16 @@ def main() -> None:
         for w, _, _ in WAYS:
             totals[w] += runs[w][0]
     lines += ["", "total CPU s: " + ", ".join(f"{w} {t:.2f}" for w, t in totals.items())]
+    lines += ["", f"pair branches: {len(paired)} of {args.reports} reports meet a conflict two dimensions must share; "
+              "each with the pairs (the optimiser) and without them (the counts, as before)",
+              f"{'report':<12}{'pairs: CPU s':>20}{'counts: CPU s':>20}  same answer (proved ways)"]
+    for name, (c_p, st_p, _, x_p), (c_c, st_c, _, x_c) in paired:
+        same = "yes" if st_p == st_c == "optimal" and np.array_equal(x_p, x_c) else (
+            "NO" if st_p == st_c == "optimal" else "-")
+        lines.append(f"{name:<12}{c_p:>12.2f} {st_p[:7]:>7}{c_c:>12.2f} {st_c[:7]:>7}  {same}")
+    if paired:
+        pairs_cpu, counts_cpu = sum(r[1][0] for r in paired), sum(r[2][0] for r in paired)
+        lines.append(f"total CPU s: pairs {pairs_cpu:.2f}, counts {counts_cpu:.2f}")
     text = "\n".join(lines) + "\n"
     RESULTS.mkdir(exist_ok=True)
     (RESULTS / "leximin_counts.txt").write_text(text)

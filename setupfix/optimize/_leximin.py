@@ -36,9 +36,11 @@ no point of the current level set has M_q above v_q + ε), the others *active*.
    dimensions that can be the only one left at t_i (every other one above it at some grid
    point) each open a branch with that dimension fixed at t_i; the branches' leximin vectors are
    compared (a branch already below the best is dropped), tied branches all go to the least
-   norm.  No such dimension (two or more must stay at t_i), or more than ``MAX_BRANCHES``
-   branches: the rest is decided by counts (:mod:`setupfix.optimize._leximin_counts`, always
-   correct, MILPs with binaries).
+   norm.  No such dimension: two or more must stay at t_i, and every leximin-optimal point has
+   the fewest there — the pairs that can be the only two left open the branches instead.  None
+   of those either (three or more), more than ``MAX_PAIR_TESTS`` pairs to test, or more than
+   ``MAX_BRANCHES`` branches: the rest is decided by counts (:mod:`setupfix.optimize._leximin_counts`,
+   always correct, MILPs with binaries).
 
 When every dimension is fixed, the leximin-optimal points are exactly the grid points with
 M_q ≥ v_q for every q, and the least norm among them is stage 3
