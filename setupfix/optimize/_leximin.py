@@ -82,7 +82,8 @@ class _Search:
     def climbed(self, k: Array, v: Array) -> Array:
         """The grid climb from k over the active dimensions (the fixed ones kept at their floors)."""
         m, rows = self.model, self.session.rows
-        return climb(rows.g_rows, rows.g, k, rows.kmin, rows.kmax, m.order, m.starts, v[m.dims], self.eps)
+        return climb(rows.g_rows, rows.g, k, rows.kmin, rows.kmax, m.order, m.starts, v[m.dims], self.eps,
+                     self.stage_end)
 
     def margins(self, k: Array) -> Array:
         m = self.model

@@ -20,6 +20,8 @@ over grouped rows with ties within ε, evaluated for a whole neighbourhood at on
 
 from __future__ import annotations
 
+import time
+
 import numpy as np
 import numpy.typing as npt
 
@@ -66,7 +68,7 @@ def _sorted_margins(m: Array, starts: npt.NDArray[np.intp], active: npt.NDArray[
 
 
 def climb(g_rows: Array, g: Array, k: Array, kmin: Array, kmax: Array, order: npt.NDArray[np.intp],
-          starts: npt.NDArray[np.intp], floors: Array, eps: float) -> Array:
+          starts: npt.NDArray[np.intp], floors: Array, eps: float, deadline: float = np.inf) -> Array:
     """A grid point at least as good as k in the leximin order of the active dimensions.
 
     Parameters
@@ -82,6 +84,8 @@ def climb(g_rows: Array, g: Array, k: Array, kmin: Array, kmax: Array, order: np
         below the floor is never taken; −inf: left out).
     eps : float
         Margins within ε are ties [steps].
+    deadline : float, optional
+        ``time.perf_counter()`` at which the climb stops where it is (the solve's limit).
 
     Returns
     -------
@@ -99,7 +103,7 @@ def climb(g_rows: Array, g: Array, k: Array, kmin: Array, kmax: Array, order: np
     cur = _sorted_margins(m_k[None, :], starts, active, fixed, below)[0]
     for s in SCALES:
         moved = True
-        while moved:
+        while moved and time.perf_counter() < deadline:
             moved = False
             for moves, d_rows in ((single, d_single), (double, d_double)):
                 m = m_k - s * d_rows

@@ -87,6 +87,17 @@ def test_climb_is_never_worse_keeps_the_floors_and_stops_where_no_move_is_better
             assert not lex_better(mm[active], m[active]), d
 
 
+def test_climb_stops_at_its_deadline():
+    problem = one_axis_problem(3)
+    g_rows, g, order, starts, _ = grouped(problem)
+    free = problem.free
+    kmin, kmax = problem.kmin[free].astype(float), problem.kmax[free].astype(float)
+    k0 = kmin.copy()  # a corner: some neighbour is better
+    floors = np.full(starts.size, np.nan)
+    assert not np.array_equal(climb(g_rows, g, k0, kmin, kmax, order, starts, floors, EPS), k0)
+    assert np.array_equal(climb(g_rows, g, k0, kmin, kmax, order, starts, floors, EPS, deadline=0.0), k0)
+
+
 def test_climb_without_an_active_dimension_returns_the_start():
     problem = one_axis_problem(0)
     g_rows, g, order, starts, _ = grouped(problem)
