@@ -127,7 +127,7 @@ def relax(session: Session, level: Level) -> Step:
     if session.small:
         status, relaxation = session.least_norm(level.b)
     else:  # large: whether the rounded rows are feasible (an LP), then their least-norm point
-        status = session.rounded_rows_feasible(level.b)
+        status, _ = session.rounded_rows_feasible(level.b)
         relaxation = session.least_norm(level.b)[1] if status == "optimal" else None
         if status == "optimal":
             return Step("undecided", relaxation=relaxation)

@@ -14,7 +14,7 @@ numpy and its weights also pin rows (:mod:`setupfix.optimize._leximin_pins`).  O
 next point to try is NNLS's least-distance point of those rows, rounded (small problems, no LP),
 else the level LP's point, rounded (:meth:`LevelModel.round_best`).  What the steps leave:
 :meth:`LevelModel.value` — the LP bound, the ascent on rounded rows (NNLS or an LP, a feasibility
-MILP last: :meth:`LevelModel.point_above`), last the MILP "max t, k integer" bracketed by the best
+MILP last: :func:`~setupfix.optimize._leximin_pins.point_above`), last the MILP "max t, k integer" bracketed by the best
 point and the bound.
 
 One warm-started HiGHS model per solve holds the level LP with a column u_q per dimension (only
@@ -32,7 +32,7 @@ import numpy.typing as npt
 from setupfix.optimize._grid import TOL, rounded_rhs
 from setupfix.optimize._highs import INF, LinearModel
 from setupfix.optimize._leximin_pins import (Certificates, Step, best_rounding, farkas_or_point, level_bound,
-                                             meeting_rounding)
+                                             point_above)
 from setupfix.optimize._session import GridRows, Session
 
 __all__ = ["SPREAD", "LevelModel", "LevelValue"]
@@ -129,20 +129,6 @@ class LevelModel:
         y = None if res.row_dual is None else np.maximum(-res.row_dual[:hi.size], 0.0)
         x = None if res.x is None else res.x[:n + 1]
         return res.status if res.status != "error" else f"HiGHS: {res.detail}", x, y
-
-    def _feasible(self, b: Array, time_limit: float) -> tuple[str, Array | None]:
-        """Whether G k ≤ b has a point in the box (the session's LP, t fixed at 0): status and its vertex."""
-        lp = self.session.lp_model()
-        lp.keep_basis()
-        col = np.array([self.n], dtype=np.int32)
-        lp.set_row_bounds(np.full(b.size, -INF), np.where(np.isfinite(b), b, INF))
-        lp.set_col_bounds(col, np.zeros(1), np.zeros(1))
-        try:
-            res = lp.solve(max(time_limit, 1e-3))
-        finally:
-            lp.set_col_bounds(col, np.array([-INF]), np.array([INF]))
-        status = res.status if res.status != "error" else f"HiGHS: {res.detail}"
-        return status, None if res.x is None else res.x[:self.n]
 
     def level_of(self, k: Array, v: Array) -> float:
         """min over active rows of g_j − G_j k, or −inf if a fixed row is below its floor."""
@@ -273,7 +259,7 @@ class LevelModel:
         for _ in range(0 if self.polygons and not rows.all_integer else s.level_steps):
             if time.perf_counter() >= stage_end:
                 return LevelValue(t_best, k_best, t_lp, y, "time limit", tuple(path), calls)
-            found = self.point_above(np.where(np.isnan(f), t_best + eps, f), stage_end)
+            found = point_above(self.session, np.where(np.isnan(f), t_best + eps, f), stage_end)
             calls += 1
             if found is False:
                 path.append("leximin: no grid point above the best one (rounded rows)")
@@ -323,7 +309,7 @@ class LevelModel:
         f = self._floors(v).copy()
         f[np.isnan(f)] = t
         f[self.row_dim == q] = t + eps
-        found = self.point_above(f, stage_end)
+        found = point_above(self.session, f, stage_end)
         return None if found is None else found is not False
 
     def alone_at(self, v: Array, dims: tuple[int, ...], t: float, eps: float, stage_end: float
@@ -333,49 +319,7 @@ class LevelModel:
         f = self._floors(v).copy()
         f[np.isnan(f)] = t + eps
         f[np.isin(self.row_dim, dims)] = t
-        return self.point_above(f, stage_end)
-
-    def point_above(self, f: Array, stage_end: float) -> Array | bool | None:
-        """A grid point with every row's margin ≥ f_j (shape (r,), −inf: no floor); False: proved none
-        (a Farkas certificate of NNLS, or the LP or MILP of the rounded rows infeasible); None: the limit or
-        HiGHS stopped it."""
-        rows = self.rows
-        fin = np.isfinite(f)
-        b = rounded_rhs(rows.g, rows.d, rows.zero, f)  # +inf where f is −inf
-
-        def meets(k: Array) -> bool:
-            return bool(np.all((rows.g - rows.g_rows @ k)[fin] >= f[fin] - 1e-9))
-
-        if rows.all_integer and self.session.small:  # NNLS first (~0.1 ms): a proof, or a point to round
-            y, x_ld = farkas_or_point(rows, b)
-            if y is not None:
-                return False
-            if x_ld is not None:
-                k = np.clip(np.rint(x_ld), rows.kmin, rows.kmax)
-                k_met = k if meets(k) else meeting_rounding(rows, x_ld, f)
-                if k_met is not None:
-                    return k_met
-        if rows.all_integer:
-            feas, kx = self._feasible(b, stage_end - time.perf_counter())
-            if feas == "infeasible":
-                return False
-            if feas != "optimal":
-                return None
-            if kx is not None:  # the vertex rounded, else each floor/ceil choice of its fractional coordinates
-                k = np.clip(np.rint(kx), rows.kmin, rows.kmax)
-                if meets(k):
-                    return k
-                k_met = meeting_rounding(rows, kx, f)
-                if k_met is not None:
-                    return k_met
-        res = LinearModel(np.zeros(self.n), rows.g_rows[fin], np.full(int(fin.sum()), -INF), b[fin], rows.kmin,
-                          rows.kmax, integer=np.ones(self.n, bool)).solve(stage_end - time.perf_counter())
-        if res.status == "infeasible":
-            return False
-        if res.x is not None:
-            k = np.clip(np.rint(res.x), rows.kmin, rows.kmax)
-            return k if meets(k) else None
-        return None
+        return point_above(self.session, f, stage_end)
 
     # -- certificates of saturation ---------------------------------------------------------------
     def certify(self, level: LevelValue, v: Array) -> Certificates:

@@ -18,20 +18,27 @@ checked in numpy, whatever the solver's tolerances:
   Gram integer), and Hadamard's inequality bounds det Gram(B) by the product of the rank largest
   squared row norms; when that bound is too large to separate the two cases in floating point,
   only rows equal or opposite to a pinned row are added.
+
+The tests of single grid points — whether one meets given floors (:func:`point_above`), Farkas
+weights or a point by NNLS (:func:`farkas_or_point`), roundings — answer with a point checked on
+the rows or a proof that none exists.
 """
 
 from __future__ import annotations
 
+import time
 from dataclasses import dataclass
 
 import numpy as np
 import numpy.typing as npt
 
 from setupfix.optimize._grid import TOL, rounded_rhs
-from setupfix.optimize._session import GridRows
+from setupfix.optimize._highs import INF, LinearModel
+from setupfix.optimize._session import GridRows, Session
 
 __all__ = ["Certificates", "Step", "best_rounding", "dim_all", "dim_margins", "excluded_alone", "farkas_or_point",
-           "farkas_weights", "level_bound", "meeting_rounding", "pinned_rows", "span_closure"]
+           "farkas_weights", "level_bound", "meeting_rounding", "pinned_rows", "point_above",
+           "span_closure"]
 
 Array = npt.NDArray[np.float64]
 Mask = npt.NDArray[np.bool_]
@@ -314,3 +321,60 @@ def meeting_rounding(rows: GridRows, x: Array, f: Array, most: int = 10) -> Arra
     ok = np.all(rows.g[fin][None, :] - cand @ rows.g_rows[fin].T >= f[fin][None, :] - 1e-9, axis=1)
     hit = np.flatnonzero(ok)
     return cand[int(hit[0])] if hit.size else None
+
+
+#: Rows within this many steps of the LP's vertex make the first, small MILP of :func:`point_above`.
+TIGHT_SLACK = 2.0
+
+
+def point_above(session: Session, f: Array, stage_end: float) -> Array | bool | None:
+    """A grid point with every row's margin ≥ f_j (shape (r,), −inf: no floor); False: proved none; None:
+    the limit or HiGHS stopped it.
+
+    Cheapest first, each answer checked: NNLS on the rows rounded at f (small problems: a Farkas
+    certificate, or a point to round); the LP of those rows (infeasible, or its vertex rounded);
+    then MILPs — first of the rows within ``TIGHT_SLACK`` steps of the vertex (no grid point meets
+    them: none meets all, in ~0.4 ms where the MILP of all rows takes ~5 ms on the paper's example;
+    a point of theirs that meets every row is one), then of all rows.
+    """
+    rows = session.rows
+    n = rows.n_free
+    fin = np.isfinite(f)
+    b = rounded_rhs(rows.g, rows.d, rows.zero, f)  # +inf where f is −inf
+
+    def meets(k: Array) -> bool:
+        return bool(np.all((rows.g - rows.g_rows @ k)[fin] >= f[fin] - 1e-9))
+
+    if rows.all_integer and session.small:  # NNLS first (~0.1 ms): a proof, or a point to round
+        y, x_ld = farkas_or_point(rows, b)
+        if y is not None:
+            return False
+        if x_ld is not None:
+            k = np.clip(np.rint(x_ld), rows.kmin, rows.kmax)
+            k_met = k if meets(k) else meeting_rounding(rows, x_ld, f)
+            if k_met is not None:
+                return k_met
+    kx = None
+    if rows.all_integer:
+        feas, kx = session.rounded_rows_feasible(b, stage_end - time.perf_counter(), warm=True)
+        if feas == "infeasible":
+            return False
+        if feas != "optimal":
+            return None
+        if kx is not None:  # the vertex rounded, else each floor/ceil choice of its fractional coordinates
+            k = np.clip(np.rint(kx), rows.kmin, rows.kmax)
+            k_met = k if meets(k) else meeting_rounding(rows, kx, f)
+            if k_met is not None:
+                return k_met
+    tight = fin & (b - rows.g_rows @ kx < TIGHT_SLACK) if kx is not None else fin
+    for keep in ((tight, fin) if tight.sum() < fin.sum() else (fin,)):
+        res = LinearModel(np.zeros(n), rows.g_rows[keep], np.full(int(keep.sum()), -INF), b[keep], rows.kmin,
+                          rows.kmax, integer=np.ones(n, bool)).solve(stage_end - time.perf_counter())
+        if res.status == "infeasible":
+            return False
+        k_mip = None if res.x is None else np.clip(np.rint(res.x), rows.kmin, rows.kmax)
+        if k_mip is not None and meets(k_mip):
+            return k_mip
+        if res.status == "time_limit" or time.perf_counter() >= stage_end:
+            return None
+    return None

@@ -248,16 +248,22 @@ class Session:
         """Forget the LP model (a retry from scratch after a HiGHS failure)."""
         self._lp = None
 
-    def rounded_rows_feasible(self, b: Array) -> str:
-        """Whether G k ≤ b has a solution in the box: the LP with t fixed at 0 (HiGHS's status)."""
+    def rounded_rows_feasible(self, b: Array, time_limit: float | None = None, warm: bool = False
+                              ) -> tuple[str, Array | None]:
+        """Whether G k ≤ b has a solution in the box: the LP with t fixed at 0 — HiGHS's status (its
+        words on an error) and the vertex.  ``warm``: from the last basis (the leximin levels' tests)."""
         lp = self.lp_model()
+        if warm:
+            lp.keep_basis()
         n = np.array([self.rows.n_free], dtype=np.int32)
         lp.set_row_bounds(np.full(b.size, -INF), np.where(np.isfinite(b), b, INF))
         lp.set_col_bounds(n, np.zeros(1), np.zeros(1))
         try:
-            return lp.solve(max(self.clock.left(), 1e-3)).status
+            res = lp.solve(max(self.clock.left() if time_limit is None else time_limit, 1e-3))
         finally:
             lp.set_col_bounds(n, np.array([-INF]), np.array([INF]))
+        status = res.status if res.status != "error" else f"HiGHS: {res.detail}"
+        return status, None if res.x is None else res.x[:-1]
 
     def least_norm(self, b: Array) -> tuple[str, Relaxation | None]:
         """Least Σ c k² with G k ≤ b in the box: ("optimal", relaxation), ("infeasible", None) …

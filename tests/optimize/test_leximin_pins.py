@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import itertools
+import time
 
 import numpy as np
 import pytest
@@ -159,3 +160,46 @@ def test_farkas_weights_or_a_point_match_the_grid(seed):
         if k is not None:
             assert np.all(g - g_rows @ k >= g - b - 1e-9) and np.all(np.abs(k - x) < 1)
     assert y is not None or x is not None or not feasible.any()
+
+
+@pytest.mark.parametrize("tight", [2.0, np.inf])
+def test_point_above_answers_as_the_grid_does(tight, monkeypatch):
+    """A point that meets the floors, or False exactly when no grid point of the box does (brute force) —
+    with the first MILP on the rows near the LP's vertex (TIGHT_SLACK) and with all rows at once."""
+    import setupfix.optimize._leximin_pins as pins
+    from setupfix.optimize._session import GridRows, Session
+    from setupfix.optimize._settings import ExactSettings
+
+    monkeypatch.setattr(pins, "TIGHT_SLACK", tight)
+    sizes: list[tuple[int, int]] = []
+
+    class Counted(pins.LinearModel):
+        def __init__(self, c, a, *args, **kw):
+            super().__init__(c, a, *args, **kw)
+            sizes.append((self.n_rows, self.n_cols))
+
+    monkeypatch.setattr(pins, "LinearModel", Counted)
+    answers = {"point": 0, "none": 0}
+    for seed in range(150):
+        rng = np.random.default_rng(seed)
+        n, r = 4, 9
+        g_rows = rng.integers(-2, 3, size=(r, n)).astype(float)
+        g_rows[rng.random((r, n)) < 0.4] = 0.0
+        rows = GridRows(g_rows, rng.uniform(-2, 6, r).round(1), np.full(n, -3.0), np.full(n, 3.0), np.ones(n))
+        session = Session(rows, ExactSettings(), 30.0)
+        f = np.where(rng.random(r) < 0.8, rng.uniform(-1, 3, r).round(1), -np.inf)
+        pts = _grid(rows)
+        fin = np.isfinite(f)
+        meets = np.all((rows.g - pts @ g_rows.T)[:, fin] >= f[fin] - 1e-9, axis=1)
+        got = pins.point_above(session, f, time.perf_counter() + 30.0)
+        if meets.any():
+            assert got is not False and got is not None, seed
+            assert np.all((rows.g - g_rows @ got)[fin] >= f[fin] - 1e-9), seed
+            answers["point"] += 1
+        else:
+            assert got is False, seed
+            answers["none"] += 1
+    assert answers["point"] > 20 and answers["none"] > 20
+    assert sizes  # some tests needed a MILP (neither NNLS nor the LP decided them)
+    if np.isfinite(tight):
+        assert any(rows_ < 9 for rows_, _ in sizes)  # … and the first one was on the tight rows only
