@@ -98,7 +98,7 @@ def climb_hits(probs: list[tuple[str, CorrectionProblem]], limit: float) -> tupl
             result = get_optimizer("exact", objective="leximin", time_limit=limit).solve(problem)
             if not seen or result.status != "optimal":
                 continue
-            (g_rows, g, _, _, _, order, starts, floors, _), k_c = seen[0]
+            (g_rows, g, _, _, _, order, starts, floors, *_), k_c = seen[0]
             k = np.rint(result.x[problem.free] / problem.resolution)
             by_dim = [np.minimum.reduceat((g - g_rows @ kk)[order], starts)[np.isnan(floors)] for kk in (k_c, k)]
             total += 1
