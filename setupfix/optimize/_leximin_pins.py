@@ -334,8 +334,8 @@ def point_above(session: Session, f: Array, stage_end: float) -> Array | bool | 
     Cheapest first, each answer checked: NNLS on the rows rounded at f (small problems: a Farkas
     certificate, or a point to round); the LP of those rows (infeasible, or its vertex rounded);
     then MILPs — first of the rows within ``TIGHT_SLACK`` steps of the vertex (no grid point meets
-    them: none meets all, in ~0.4 ms where the MILP of all rows takes ~5 ms on the paper's example;
-    a point of theirs that meets every row is one), then of all rows.
+    them: none meets all, in ~0.6 ms where the MILP of all rows takes ~6 ms on the paper's example,
+    ``bench/results/point_tests.txt``; a point of theirs that meets every row is one), then of all rows.
     """
     rows = session.rows
     n = rows.n_free
