@@ -9,7 +9,8 @@ is reported with the ratio this/commit, and the offsets files of the two trees a
 compared byte for byte.  OpenBLAS/MKL/OMP threads are pinned to 1.
 
     python bench/batch_vs_commit.py [--commit 990b710] [--reports 300] [--rounds 3] [--vary]
-    # writes bench/results/batch_vs_commit.txt
+                                    [--time-limit S] [--out FILE]
+    # writes bench/results/batch_vs_commit.txt (or FILE); rows differing between the trees are counted
 """
 
 from __future__ import annotations
@@ -48,7 +49,11 @@ def main() -> None:
     ap.add_argument("--reports", type=int, default=300)
     ap.add_argument("--rounds", type=int, default=3)
     ap.add_argument("--vary", action="store_true", help="every report with its own deviations")
+    ap.add_argument("--time-limit", type=float, default=None, help="each solve's limit in both trees")
+    ap.add_argument("--out", type=Path, default=OUT, help=f"the result file (default: {OUT.relative_to(ROOT)})")
     args = ap.parse_args()
+    args.out = args.out.resolve()
+    extra = () if args.time_limit is None else ("--time-limit", f"{args.time_limit:g}")
     with tempfile.TemporaryDirectory() as tmp:
         base = Path(tmp) / "base"
         base.mkdir()
@@ -62,7 +67,7 @@ def main() -> None:
             for workers in (1, 2):
                 for name, tree in ((short, base), ("this", ROOT)):
                     out = Path(tmp) / f"{name}_{workers}.csv"
-                    times.setdefault((name, workers), []).append(run(folder, out, workers, tree))
+                    times.setdefault((name, workers), []).append(run(folder, out, workers, tree, extra))
                     outputs[(name, workers)] = out.read_bytes()
     kind = "varied copies (own deviations)" if args.vary else "copies repeating five problems"
     lines = [f"setupfix batch on {args.reports} guide-pins reports ({kind}), this tree against {short}, "
@@ -72,9 +77,15 @@ def main() -> None:
         lines.append(f"workers {workers}: {short} {a:.2f} s, this {b:.2f} s; this/{short} = {b / a:.2f}")
     same = len(set(outputs.values())) == 1
     lines.append(f"offsets files of both trees and both worker counts: {'identical' if same else 'DIFFER'}")
+    for workers in (1, 2):
+        a, b = outputs[(short, workers)].decode().splitlines(), outputs[("this", workers)].decode().splitlines()
+        differing = sum(x != y for x, y in zip(a, b, strict=False)) + abs(len(a) - len(b))
+        lines.append(f"workers {workers}: {differing} of {len(a) - 1} offset rows differ between the trees")
     command = (f"$ python bench/batch_vs_commit.py --commit {args.commit} --reports {args.reports} "
-               f"--rounds {args.rounds}" + (" --vary" if args.vary else ""))
-    OUT.write_text(command + "\n" + "\n".join(lines) + "\n")
+               f"--rounds {args.rounds}" + (" --vary" if args.vary else "")
+               + ("" if args.time_limit is None else f" --time-limit {args.time_limit:g}")
+               + ("" if args.out == OUT else f" --out {args.out.relative_to(ROOT)}"))
+    args.out.write_text(command + "\n" + "\n".join(lines) + "\n")
     print("\n".join(lines))
 
 
