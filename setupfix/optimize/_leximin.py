@@ -77,7 +77,6 @@ class _Search:
         self.eps = session.settings.quantum / 2
         self.leaves = self.calls = 0
         self.climb = session.small and session.rows.n_free <= MAX_REGISTERS
-        self.start: Array | None = None  # the root's climb, from the first level's point
 
     def climbed(self, k: Array, v: Array) -> Array:
         """The grid climb from k over the active dimensions (the fixed ones kept at their floors)."""
@@ -91,7 +90,7 @@ class _Search:
 
 
 #: Most branches a search may open on discrete conflicts before the counts decide the rest (24: a branch costs
-#: milliseconds on the paper's example, the counts tenths of a second; bench/leximin_speed.py).
+#: milliseconds on the paper's example, the counts seconds; bench/results/leximin_counts.txt).
 MAX_BRANCHES = 24
 
 
@@ -137,16 +136,15 @@ def leximin(session: Session, row_dim: npt.NDArray[np.intp], n_dims: int, k_firs
     if np.any(np.isnan(v) & constant):  # the first level was over them too: it is recomputed without them
         v[np.isnan(v) & constant] = m_first[np.isnan(v) & constant]
         first = None
-    if search.climb:  # before the first level's dimensions are fixed: no floor to check at each move
-        search.start = search.climbed(k_first, v)
-    best = _fill(search, v, k_first, t_first, first, [])
+    # the root's climb starts before the first level's dimensions are fixed: no floor to check at each move
+    best = _fill(search, v, k_first, t_first, first, [], k_climb=search.climbed(k_first, v) if search.climb else None)
     head = best[0]
     return Leximin(head.k, head.floors, head.levels, head.counts, head.stopped, head.path, search.calls,
                    tuple(best[1:]))
 
 
 def _fill(search: _Search, v: Array, k: Array, t: float, level: LevelValue | None, path: list[str],
-          bound: Array | None = None, pinned: Mask | None = None) -> list[Leximin]:
+          bound: Array | None = None, pinned: Mask | None = None, k_climb: Array | None = None) -> list[Leximin]:
     """Progressive filling from this state; the tied-best outcomes (branches of discrete conflicts).
 
     ``bound``: the sorted margins of the best branch so far; a branch whose settled margins (the
@@ -159,7 +157,6 @@ def _fill(search: _Search, v: Array, k: Array, t: float, level: LevelValue | Non
     v = v.copy()
     path = list(path)
     pinned = np.zeros(row_dim.size, bool) if pinned is None else pinned.copy()
-    k_climb: Array | None = None
     while True:
         active = np.isnan(v)
         if not active.any():
@@ -168,8 +165,7 @@ def _fill(search: _Search, v: Array, k: Array, t: float, level: LevelValue | Non
         if time.perf_counter() >= search.stage_end:
             return [_stopped(search, v, k, path, "time limit")]
         if level is None and search.climb:  # the branch's climb (once): where higher, each level starts there
-            if k_climb is None:
-                k_climb, search.start = search.start if search.start is not None else search.climbed(k, v), None
+            k_climb = search.climbed(k, v) if k_climb is None else k_climb
             k = k_climb if model.level_of(k_climb, v) > model.level_of(k, v) else k
         k, t, sat, pin, stop, hint = _level(search, v, k, level, active_rows, path)
         if stop is not None:

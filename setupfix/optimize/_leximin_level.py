@@ -13,9 +13,9 @@ problems) or by the duals of the level LP on the rounded rows; each certificate 
 numpy and its weights also pin rows (:mod:`setupfix.optimize._leximin_pins`).  Otherwise the
 next point to try is NNLS's least-distance point of those rows, rounded (small problems, no LP),
 else the level LP's point, rounded (:meth:`LevelModel.round_best`).  What the steps leave:
-:meth:`LevelModel.value` — the LP bound, the ascent on rounded rows (NNLS or an LP, a feasibility
-MILP last: :func:`~setupfix.optimize._leximin_pins.point_above`), last the MILP "max t, k integer" bracketed by the best
-point and the bound.
+:meth:`LevelModel.value` — the LP bound, the ascent on rounded rows (NNLS or an LP, feasibility
+MILPs last: :func:`~setupfix.optimize._leximin_pins.point_above`), last the MILP "max t, k integer"
+bracketed by the best point and the bound.
 
 One warm-started HiGHS model per solve holds the level LP with a column u_q per dimension (only
 bounds change from level to level, :attr:`LevelModel._lp`).
