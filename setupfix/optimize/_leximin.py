@@ -59,7 +59,7 @@ from setupfix.optimize._leximin_counts import count_levels
 from setupfix.optimize._leximin_level import LevelModel, LevelValue
 from setupfix.optimize._leximin_pins import dim_all, dim_margins, excluded_alone, pinned_rows, span_closure
 from setupfix.optimize._leximin_result import Leximin, leximin_least_norm, leximin_vector, levels_of
-from setupfix.optimize._leximin_search import MAX_REGISTERS, climb, lex_order
+from setupfix.optimize._leximin_search import MAX_REGISTERS, climb, climb_moves, lex_order
 from setupfix.optimize._session import Session
 
 __all__ = ["Leximin", "leximin", "leximin_least_norm"]
@@ -81,12 +81,19 @@ class _Search:
     def climbed(self, k: Array, v: Array) -> Array:
         """The grid climb from k over the active dimensions (the fixed ones kept at their floors)."""
         m, rows = self.model, self.session.rows
+        moves = rows.memo(("climb moves", m.order.tobytes()), lambda: climb_moves(rows.g_rows, m.order))
         return climb(rows.g_rows, rows.g, k, rows.kmin, rows.kmax, m.order, m.starts, v[m.dims], self.eps,
-                     self.stage_end)
+                     self.stage_end, moves)
 
     def margins(self, k: Array) -> Array:
+        """Each dimension's margin at k, shape (n_dims,)."""
         m = self.model
-        return dim_margins(m.rows.g_rows, m.rows.g, k, m.row_dim, m.n_dims)
+        return dim_margins(m.rows.g_rows, m.rows.g, k, m.order, m.starts, m.dims, m.n_dims)
+
+    def all_rows(self, rows_mask: Mask) -> Mask:
+        """Dimensions all of whose rows are in ``rows_mask``, shape (n_dims,)."""
+        m = self.model
+        return dim_all(rows_mask, m.order, m.starts, m.dims, m.n_dims)
 
 
 #: Most branches a search may open on discrete conflicts before the counts decide the rest (24: a branch costs
@@ -166,7 +173,8 @@ def _fill(search: _Search, v: Array, k: Array, t: float, level: LevelValue | Non
             return [_stopped(search, v, k, path, "time limit")]
         if level is None and search.climb:  # the branch's climb (once): where higher, each level starts there
             k_climb = search.climbed(k, v) if k_climb is None else k_climb
-            k = k_climb if model.level_of(k_climb, v) > model.level_of(k, v) else k
+            if k is not k_climb and model.level_of(k_climb, v) > model.level_of(k, v):
+                k = k_climb
         k, t, sat, pin, stop, hint = _level(search, v, k, level, active_rows, path)
         if stop is not None:
             return [_stopped(search, v, k, path, stop)]
@@ -174,12 +182,13 @@ def _fill(search: _Search, v: Array, k: Array, t: float, level: LevelValue | Non
         # with it every row in their span: their dimensions' margins are the same at every point
         grown = pinned | pin | (sat & (rows.d > 0))
         if (grown & ~pinned).any():  # ``pinned`` is closed already: a new pin, a new closure
-            pinned = span_closure(rows.g_rows, rows.d, grown, model.key)
+            pinned = rows.memo(("span closure", grown.tobytes()),
+                               lambda: span_closure(rows.g_rows, rows.d, grown, model.key))
         m_k = search.margins(k)
         fix_sat = np.zeros(v.size, bool)
         fix_sat[row_dim[sat]] = True
         fix_sat &= active
-        fix_pin = dim_all(pinned, row_dim, v.size) & active & ~fix_sat
+        fix_pin = search.all_rows(pinned) & active & ~fix_sat
         if not (fix_sat.any() or fix_pin.any()):  # each dimension at t: can it rise alone?
             for q in np.flatnonzero(active & (m_k <= t + eps)):
                 rise = model.can_rise(v, int(q), t, eps, search.stage_end)
@@ -192,7 +201,7 @@ def _fill(search: _Search, v: Array, k: Array, t: float, level: LevelValue | Non
             path.append("leximin: saturation proved by the rounded rows one dimension at a time")
         v[fix_sat] = t
         v[fix_pin] = m_k[fix_pin]
-        at_t = int(np.sum(fix_sat | (fix_pin & (m_k <= t + eps))))
+        at_t = int(np.count_nonzero(fix_sat | (fix_pin & (m_k <= t + eps))))
         if at_t:
             path.append(f"leximin: {at_t} dimension(s) at {t:.4g} steps")
         if bound is not None and lex_order(np.sort(v[np.isfinite(v) & (v <= t + eps)]), bound, eps) < 0:

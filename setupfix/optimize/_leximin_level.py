@@ -31,8 +31,8 @@ import numpy.typing as npt
 
 from setupfix.optimize._grid import TOL, rounded_rhs
 from setupfix.optimize._highs import INF, LinearModel
-from setupfix.optimize._leximin_pins import (Certificates, Step, best_rounding, farkas_or_point, level_bound,
-                                             point_above)
+from setupfix.optimize._farkas import farkas_or_point
+from setupfix.optimize._leximin_pins import Certificates, Step, best_rounding, level_bound, point_above
 from setupfix.optimize._session import GridRows, Session
 
 __all__ = ["SPREAD", "LevelModel", "LevelValue"]
@@ -61,6 +61,21 @@ class LevelValue:
     certificates: Certificates | None = None  # the rounded rows' weights, when a step proved the level
 
 
+def _grouping(g_rows: Array, row_dim: npt.NDArray[np.intp]
+              ) -> tuple[npt.NDArray[np.intp], npt.NDArray[np.intp], npt.NDArray[np.intp], bool, Array]:
+    """The rows grouped by dimension (order, group starts for reduceat, each group's dimension), whether
+    a dimension has more than two rows (a position zone's polygon; one-axis problems have at most two),
+    and the rows keyed by a random integer projection (equal or opposite rows, equal or opposite keys)."""
+    order = np.argsort(row_dim, kind="stable")
+    starts = np.flatnonzero(np.r_[True, np.diff(row_dim[order]) != 0])
+    weights = np.random.default_rng(0).integers(1, 2**20, g_rows.shape[1]).astype(float)
+    out = (order, starts, row_dim[order][starts], bool(row_dim.size and np.bincount(row_dim).max() > 2),
+           g_rows @ weights)
+    for a in (out[0], out[1], out[2], out[4]):
+        a.flags.writeable = False
+    return out
+
+
 class LevelModel:
     """The level LP of one solve, [G | a] in one HiGHS model, and the level proofs on it."""
 
@@ -73,14 +88,8 @@ class LevelModel:
         self.n = n
         self._model: LinearModel | None = None  # the level LP, built on first use
         self._cost = np.zeros(n_dims)  # its costs on u
-        self.order = np.argsort(row_dim, kind="stable")  # rows grouped by dimension (for reduceat)
-        self.starts = np.flatnonzero(np.r_[True, np.diff(row_dim[self.order]) != 0])
-        self.dims = row_dim[self.order][self.starts]
-        # a dimension with more than two rows: a position zone's polygon (one-axis problems have at most two)
-        self.polygons = bool(row_dim.size and np.bincount(row_dim).max() > 2)
-        # rows keyed by a random integer projection: equal (or opposite) rows, equal (or opposite) keys
-        weights = np.random.default_rng(0).integers(1, 2**20, n).astype(float)
-        self.key = self.rows.g_rows @ weights
+        self.order, self.starts, self.dims, self.polygons, self.key = self.rows.memo(
+            ("level rows", row_dim.tobytes()), lambda: _grouping(self.rows.g_rows, row_dim))
 
     @property
     def _lp(self) -> LinearModel:
@@ -134,11 +143,10 @@ class LevelModel:
         """min over active rows of g_j − G_j k, or −inf if a fixed row is below its floor."""
         f = self._floors(v)
         m = self.rows.g - self.rows.g_rows @ k
-        fixed = ~np.isnan(f)
-        if np.any(m[fixed] < f[fixed] - TOL):
+        if np.any(m - f < -TOL):  # fixed rows below their floor (an active row's NaN compares false)
             return -np.inf
-        act = m[~fixed]
-        return float(act.min()) if act.size else np.inf
+        act = np.isnan(f)
+        return float(m[act].min()) if act.any() else np.inf
 
     def round_best(self, x: Array, v: Array) -> tuple[Array, float]:
         """The best rounding of x (:func:`~setupfix.optimize._leximin_pins.best_rounding`): (k, its level)."""
@@ -158,7 +166,7 @@ class LevelModel:
         weights y that also pin rows (:func:`~setupfix.optimize._leximin_pins.pinned_rows`):
 
         * small problems: a Farkas certificate of those rows by NNLS (no LP,
-          :func:`~setupfix.optimize._leximin_pins.farkas_weights`);
+          :func:`~setupfix.optimize._farkas.farkas_weights`);
         * else the level LP (:meth:`_solve`) on b_j (D and fixed rows) and b_j + S (the other active
           rows), S = min_D d_j: it has t = S at every such grid point, so weights from its duals with
           C = max over the box of Σ y_j (rhs_j − G_j k) < S·Σ_active y_j prove it.
@@ -183,7 +191,7 @@ class LevelModel:
                 break
             fin = np.isfinite(b)
             if small:
-                y, x_ld = farkas_or_point(rows, b_up)
+                y, x_ld = farkas_or_point(rows, b_up, k)
                 if y is not None:
                     cert = (y, np.where(fin, b, 0.0), np.zeros(b.size), True)
                     return Step(t, k, True, Certificates(rows.g_rows, rows.kmin, rows.kmax, (cert,)), None, calls,

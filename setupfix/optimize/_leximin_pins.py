@@ -20,8 +20,8 @@ checked in numpy, whatever the solver's tolerances:
   only rows equal or opposite to a pinned row are added.
 
 The tests of single grid points — whether one meets given floors (:func:`point_above`), Farkas
-weights or a point by NNLS (:func:`farkas_or_point`), roundings — answer with a point checked on
-the rows or a proof that none exists.
+weights or a point by NNLS (:func:`~setupfix.optimize._farkas.farkas_or_point`), roundings — answer
+with a point checked on the rows or a proof that none exists.
 """
 
 from __future__ import annotations
@@ -32,13 +32,13 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
+from setupfix.optimize._farkas import farkas_or_point, farkas_weights
 from setupfix.optimize._grid import TOL, rounded_rhs
 from setupfix.optimize._highs import INF, LinearModel
 from setupfix.optimize._session import GridRows, Session
 
-__all__ = ["Certificates", "Step", "best_rounding", "dim_all", "dim_margins", "excluded_alone", "farkas_or_point",
-           "farkas_weights", "level_bound", "meeting_rounding", "pinned_rows", "point_above",
-           "span_closure"]
+__all__ = ["Certificates", "Step", "best_rounding", "dim_all", "dim_margins", "excluded_alone", "level_bound",
+           "meeting_rounding", "pinned_rows", "point_above", "span_closure"]
 
 Array = npt.NDArray[np.float64]
 Mask = npt.NDArray[np.bool_]
@@ -158,55 +158,15 @@ def span_closure(g_rows: Array, d: Array, pinned: Mask, key: Array) -> Mask:
     return out
 
 
-def dim_all(rows_mask: Mask, row_dim: npt.NDArray[np.intp], n_dims: int) -> Mask:
-    """Dimensions with at least one row, every one of them in ``rows_mask`` — shape (n_dims,)."""
-    has = np.zeros(n_dims, bool)
-    has[row_dim] = True
-    every = np.ones(n_dims, bool)
-    np.logical_and.at(every, row_dim, rows_mask)
-    return has & every
+def dim_all(rows_mask: Mask, order: npt.NDArray[np.intp], starts: npt.NDArray[np.intp],
+            dims: npt.NDArray[np.intp], n_dims: int) -> Mask:
+    """Dimensions with at least one row, every one of them in ``rows_mask`` — shape (n_dims,).
 
-
-def farkas_weights(rows: GridRows, b: Array) -> Array | None:
-    """Row weights y ≥ 0 (sum 1) proving that no k in the box meets G k ≤ b, or None (:func:`farkas_or_point`)."""
-    return farkas_or_point(rows, b)[0]
-
-
-def farkas_or_point(rows: GridRows, b: Array) -> tuple[Array | None, Array | None]:
-    """Row weights y ≥ 0 (sum 1) proving that no k in the box meets G k ≤ b; else the least Σ c k² point.
-
-    From the NNLS least-distance system (:func:`~setupfix.optimize._grid.nnls_least_distance`): its
-    Farkas side, the proof checked here (``max over the box of Σ y_j (b_j − G_j k) < 0``), or its
-    point (continuous, a point to round; nothing is proved by it).  (None, None): NNLS did not decide.
-    """
-    from scipy.optimize import nnls
-
-    n = rows.n_free
-    keep = np.isfinite(b)
-    n_rows = int(keep.sum())
-    _, e = rows.nnls_system(keep)
-    e = e.copy()
-    e[-1, :n_rows] = -b[keep]
-    e[-1, n_rows:n_rows + n] = rows.kmin
-    e[-1, n_rows + n:] = -rows.kmax
-    f = np.zeros(n + 1)
-    f[-1] = 1.0
-    try:
-        u, _ = nnls(e, f, maxiter=50 * e.shape[1])
-    except RuntimeError:  # iteration limit
-        return None, None
-    r = e @ u - f
-    if abs(r[-1]) > 1e-9:  # the residual's last entry is not 0: a point exists
-        return None, -r[:n] / r[-1] / np.sqrt(rows.cost)
-    y = np.zeros(b.size)
-    y[keep] = u[:n_rows]
-    total = float(y.sum())
-    if total <= 0:
-        return None, None
-    y /= total
-    w = y @ rows.g_rows
-    worst = float(y @ np.where(keep, b, 0.0) + np.sum(np.maximum(-w * rows.kmin, -w * rows.kmax)))
-    return (y if worst < -1e-9 else None), None
+    Rows grouped by dimension: ``order`` sorts them, group g starts at ``starts[g]`` and is
+    dimension ``dims[g]`` (:class:`~setupfix.optimize._leximin_level.LevelModel`)."""
+    out = np.zeros(n_dims, bool)
+    out[dims] = np.logical_and.reduceat(rows_mask[order], starts)
+    return out
 
 
 def best_rounding(rows: GridRows, x: Array, floors: Array, active_dims: Mask, order: npt.NDArray[np.intp],
@@ -261,10 +221,12 @@ def level_bound(rows: GridRows, y: Array, rhs: Array, active_rows: Mask) -> floa
     return c / total
 
 
-def dim_margins(g_rows: Array, g: Array, k: Array, row_dim: npt.NDArray[np.intp], n_dims: int) -> Array:
-    """Margin of each dimension at k: the least of its rows' ``g_j − G_j k`` (inf: no row) — shape (n_dims,)."""
+def dim_margins(g_rows: Array, g: Array, k: Array, order: npt.NDArray[np.intp], starts: npt.NDArray[np.intp],
+                dims: npt.NDArray[np.intp], n_dims: int) -> Array:
+    """Margin of each dimension at k: the least of its rows' ``g_j − G_j k`` (inf: no row) — shape (n_dims,);
+    rows grouped as in :func:`dim_all`."""
     out = np.full(n_dims, np.inf)
-    np.minimum.at(out, row_dim, g - g_rows @ k)
+    out[dims] = np.minimum.reduceat((g - g_rows @ k)[order], starts)
     return out
 
 

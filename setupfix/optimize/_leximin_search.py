@@ -25,7 +25,7 @@ import time
 import numpy as np
 import numpy.typing as npt
 
-__all__ = ["MAX_REGISTERS", "SCALES", "climb", "lex_order"]
+__all__ = ["MAX_REGISTERS", "SCALES", "Moves", "climb", "climb_moves", "lex_order"]
 
 Array = npt.NDArray[np.float64]
 
@@ -44,15 +44,33 @@ def lex_order(a: Array, b: Array, eps: float) -> int:
     return 0
 
 
-def _moves(g_rows: Array) -> tuple[Array, Array]:
-    """One-register moves ±e_i, shape (2n, n), and two-register moves ±e_i ± e_j for registers i < j
-    that share a row, shape (4p, n) — two registers with no row in common move as two single moves."""
+Moves = tuple[Array, Array, Array, Array]
+
+
+def climb_moves(g_rows: Array, order: npt.NDArray[np.intp]) -> Moves:
+    """The moves of :func:`climb` and their change of G k (rows in ``order``), from G alone.
+
+    Returns
+    -------
+    single : ndarray of shape (2n, n)
+        One-register moves ±e_i.
+    double : ndarray of shape (4p, n)
+        Two-register moves ±e_i ± e_j for registers i < j that share a row (two registers with
+        no row in common move as two single moves).
+    d_single, d_double : ndarray of shape (2n, r), (4p, r)
+        G_j times each move, rows grouped by dimension (``order``).
+    """
     n = g_rows.shape[1]
     nz = (g_rows != 0).astype(float)
     i, j = np.nonzero(np.triu(nz.T @ nz, 1))
     eye = np.eye(n)
     pairs = [si * eye[i] + sj * eye[j] for si in (1.0, -1.0) for sj in (1.0, -1.0)]
-    return np.vstack([eye, -eye]), np.vstack(pairs)
+    single, double = np.vstack([eye, -eye]), np.vstack(pairs)
+    grouped = g_rows[order]
+    out = (single, double, single @ grouped.T, double @ grouped.T)
+    for a in out:
+        a.flags.writeable = False
+    return out
 
 
 def _sorted_margins(m: Array, starts: npt.NDArray[np.intp], active: npt.NDArray[np.intp],
@@ -68,7 +86,8 @@ def _sorted_margins(m: Array, starts: npt.NDArray[np.intp], active: npt.NDArray[
 
 
 def climb(g_rows: Array, g: Array, k: Array, kmin: Array, kmax: Array, order: npt.NDArray[np.intp],
-          starts: npt.NDArray[np.intp], floors: Array, eps: float, deadline: float = np.inf) -> Array:
+          starts: npt.NDArray[np.intp], floors: Array, eps: float, deadline: float = np.inf,
+          moves: Moves | None = None) -> Array:
     """A grid point at least as good as k in the leximin order of the active dimensions.
 
     Parameters
@@ -86,6 +105,8 @@ def climb(g_rows: Array, g: Array, k: Array, kmin: Array, kmax: Array, order: np
         Margins within ε are ties [steps].
     deadline : float, optional
         ``time.perf_counter()`` at which the climb stops where it is (the solve's limit).
+    moves : tuple of ndarray, optional
+        :func:`climb_moves` of (g_rows, order), when the caller keeps them (one model, many reports).
 
     Returns
     -------
@@ -94,9 +115,8 @@ def climb(g_rows: Array, g: Array, k: Array, kmin: Array, kmax: Array, order: np
     """
     if k.size == 0 or not np.isnan(floors).any():
         return k
-    single, double = _moves(g_rows)
+    single, double, d_single, d_double = climb_moves(g_rows, order) if moves is None else moves
     g_rows, g = g_rows[order], g[order]  # rows grouped by dimension
-    d_single, d_double = single @ g_rows.T, double @ g_rows.T  # change of G k per move, (c, r)
     m_k = g - g_rows @ k
     active, fixed = np.flatnonzero(np.isnan(floors)), np.flatnonzero(np.isfinite(floors))
     below = floors[fixed] - 1e-9

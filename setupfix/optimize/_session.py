@@ -19,7 +19,9 @@ from __future__ import annotations
 
 import threading
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import TypeVar, cast
 
 import numpy as np
 import numpy.typing as npt
@@ -79,6 +81,10 @@ class Derived:
     nnls : dict
         The b-independent NNLS systems (:func:`~setupfix.optimize._grid.least_distance_system`)
         per set of finite rows, filled on first use.
+    memo : dict
+        Other results of G alone, keyed by the caller (:meth:`GridRows.memo`): the leximin
+        stage's span closures, climb moves and row grouping — a batch of one process model
+        computes each once, not once per report.
     """
 
     d: Array
@@ -87,11 +93,16 @@ class Derived:
     lp_matrix: Colwise
     all_integer: bool
     nnls: dict[bytes, tuple[Array, Array]] = field(default_factory=dict)
+    memo: dict[tuple[object, ...], object] = field(default_factory=dict)
 
 
 #: Derived data of the last few (G, box, cost): pure functions of those bytes, read-only arrays, so a
 #: memo can never change an answer (it only spares a batch of one process model recomputing them).
 _DERIVED: dict[tuple[object, ...], Derived] = {}
+#: Most entries of one :attr:`Derived.memo` (cleared when full: a long batch never grows it without bound).
+MEMO_MAX = 4096
+_MISSING = object()
+T = TypeVar("T")
 _DERIVED_MAX = 8
 _DERIVED_LOCK = threading.Lock()
 
@@ -172,6 +183,23 @@ class GridRows:
     def below(self, b: Array) -> float:
         """The next level down once the rounded rows ``b`` hold no grid point."""
         return next_level(self.g, self.d, b)
+
+    def memo(self, key: tuple[object, ...], make: Callable[[], T]) -> T:
+        """``make()``, computed once per G, box and costs for this key (at most ``MEMO_MAX`` kept).
+
+        ``make`` must depend on G, the box, the costs and the key only (never on g): the memo
+        is shared by every report of one process model, and by threads; arrays in it are read-only.
+        """
+        memo = self.derived.memo
+        found = memo.get(key, _MISSING)
+        if found is _MISSING:
+            found = make()
+            if isinstance(found, np.ndarray):
+                found.flags.writeable = False
+            if len(memo) >= MEMO_MAX:
+                memo.clear()
+            memo[key] = found
+        return cast(T, found)
 
     def nnls_system(self, keep: npt.NDArray[np.bool_]) -> tuple[Array, Array]:
         """The b-independent NNLS system of the rows ``keep`` (memoised with :class:`Derived`)."""

@@ -23,8 +23,8 @@ OPTIMIZE = Path(__file__).resolve().parents[2] / "setupfix" / "optimize"
 #: The exact solver's modules, bottom to top: each imports only solver modules of a lower rank.
 RANKS = {"_settings": 0, "_highs": 0, "_problem": 0, "_dimensions": 1, "_base": 1, "_grid": 1, "_chords": 1,
          "_listing": 2, "_least_norm": 2, "_session": 3, "_lp_bound": 4, "_grid_optimum": 5, "_grid_least_norm": 5,
-         "_triage_model": 1, "_leximin_search": 1, "_leximin_pins": 4, "_leximin_level": 5, "_leximin_counts": 6,
-         "_leximin_result": 7, "_leximin": 8, "_triage_forced": 9, "_triage": 10, "_exact": 11}
+         "_triage_model": 1, "_leximin_search": 1, "_farkas": 4, "_leximin_pins": 5, "_leximin_level": 6, "_leximin_counts": 7,
+         "_leximin_result": 8, "_leximin": 9, "_triage_forced": 10, "_triage": 11, "_exact": 12}
 
 
 @pytest.mark.parametrize("module", sorted(RANKS))
@@ -88,3 +88,30 @@ def test_stage_results_are_frozen_and_bracket_the_brute_force_optimum(seed):
     assert bound.t >= opt.upper - 1e-9  # LP bound ≥ grid bound ≥ grid optimum
     assert [s.__name__ for s in LEVEL_STRATEGIES] == ["relax", "rounded_relaxation", "listing", "unit_boxes",
                                                       "feasibility_milp"]
+
+
+def test_results_of_g_alone_are_computed_once_per_model_and_read_only(monkeypatch):
+    """Two reports of one model (same G, box, costs; other g) share the memo; another box does not; a full
+    memo is emptied, never grown without bound."""
+    import setupfix.optimize._session as session_mod
+    from setupfix.optimize._session import GridRows
+
+    rng = np.random.default_rng(5)
+    g_rows = rng.integers(-2, 3, size=(6, 3)).astype(float)
+    box = (np.full(3, -4.0), np.full(3, 4.0), np.ones(3))
+    made: list[int] = []
+
+    def make() -> np.ndarray:
+        made.append(1)
+        return g_rows.sum(axis=0)
+
+    first = GridRows(g_rows, rng.normal(size=6), *box).memo(("test",), make)
+    again = GridRows(g_rows.copy(), rng.normal(size=6), *box).memo(("test",), make)
+    assert made == [1] and again is first and not first.flags.writeable
+    GridRows(g_rows, rng.normal(size=6), np.full(3, -5.0), box[1], box[2]).memo(("test",), make)
+    assert made == [1, 1]
+    monkeypatch.setattr(session_mod, "MEMO_MAX", 3)
+    rows = GridRows(g_rows, rng.normal(size=6), *box)
+    for i in range(5):
+        rows.memo(("fill", i), make)
+    assert len(rows.derived.memo) <= 3

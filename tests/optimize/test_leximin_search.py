@@ -10,7 +10,7 @@ import pytest
 
 from setupfix.optimize import CorrectionProblem, get_optimizer
 from setupfix.optimize._dimensions import dimension_of_rows
-from setupfix.optimize._leximin_search import climb
+from setupfix.optimize._leximin_search import climb, climb_moves
 from setupfix.optimize._lp_bound import margin_rows
 
 from .test_exact import random_problem
@@ -125,3 +125,18 @@ def test_leximin_without_the_climb_equals_brute_force(kind, seed, kw, monkeypatc
     np.testing.assert_allclose(sorted_m, best, atol=1e-6)
     assert float(problem.cost[problem.free] @ k**2) == pytest.approx(norm, abs=1e-9)
     np.testing.assert_array_equal(result.x, with_climb.x)
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_climb_with_kept_moves_is_the_same_climb(seed):
+    """The moves a caller keeps for one model (climb_moves) give the climb it would take without them."""
+    problem = random_problem(seed)
+    g_rows, g, order, starts, _ = grouped(problem)
+    free = problem.free
+    kmin, kmax = problem.kmin[free].astype(float), problem.kmax[free].astype(float)
+    k0 = np.random.default_rng(seed).integers(kmin, kmax + 1).astype(float)
+    floors = np.full(starts.size, np.nan)
+    moves = climb_moves(g_rows, order)
+    assert all(not a.flags.writeable for a in moves)
+    np.testing.assert_array_equal(climb(g_rows, g, k0, kmin, kmax, order, starts, floors, EPS, moves=moves),
+                                  climb(g_rows, g, k0, kmin, kmax, order, starts, floors, EPS))

@@ -1,0 +1,71 @@
+"""Farkas weights by NNLS (setupfix.optimize._farkas): a proof only where no grid point exists (brute force),
+the same verdict and point whether the near rows are tried first or not, and every proof checked."""
+
+from __future__ import annotations
+
+import itertools
+
+import numpy as np
+import pytest
+
+import setupfix.optimize._farkas as farkas
+from setupfix.optimize._farkas import farkas_or_point
+from setupfix.optimize._session import GridRows
+
+
+def _rows(seed: int) -> tuple[GridRows, np.ndarray, np.ndarray]:
+    """Random integer rows over a 3-register box [-3, 3]³, their right-hand sides rounded down, every grid point."""
+    rng = np.random.default_rng(seed)
+    g_rows = rng.integers(-2, 3, size=(10, 3)).astype(float)
+    g = rng.uniform(-1.0, 5.0, 10)
+    rows = GridRows(g_rows, g, np.full(3, -3.0), np.full(3, 3.0), rng.uniform(0.5, 2.0, 3))
+    pts = np.array(list(itertools.product(range(-3, 4), repeat=3)), dtype=float)
+    return rows, np.floor(g), pts
+
+
+def _proves_empty(rows: GridRows, b: np.ndarray, y: np.ndarray) -> bool:
+    """max over the box of Σ y_j (b_j − G_j k) < 0, recomputed by listing the box's corners."""
+    corners = np.array(list(itertools.product(*zip(rows.kmin, rows.kmax, strict=True))), dtype=float)
+    fin = np.isfinite(b)
+    return bool(np.max((y[fin] @ b[fin]) - corners @ (y[fin] @ rows.g_rows[fin])) < 0)
+
+
+@pytest.mark.parametrize("seed", range(40))
+def test_near_rows_first_give_the_same_verdict_and_point(seed):
+    rows, b, pts = _rows(seed)
+    feasible = np.all(pts @ rows.g_rows.T <= b + 1e-9, axis=1)
+    k = pts[np.random.default_rng(seed).integers(len(pts))]  # any grid point: only where to look first
+    y_all, x_all = farkas_or_point(rows, b)
+    y_near, x_near = farkas_or_point(rows, b, k)
+    for y in (y_all, y_near):
+        if y is not None:
+            assert not feasible.any() and np.all(y >= 0) and y.sum() == pytest.approx(1.0)
+            assert _proves_empty(rows, b, y)
+    assert (y_all is None) == (y_near is None)  # a subsystem's proof, or the whole system's answer
+    if x_all is not None:
+        np.testing.assert_array_equal(x_near, x_all)  # the point always comes from the whole system
+        assert np.all(rows.g_rows @ x_all <= b + 1e-6)
+
+
+def test_a_proof_from_the_near_rows_alone_is_found_and_kept(monkeypatch):
+    """Two opposite rows next to k that cannot both hold (x ≤ −1 and x ≥ 1): the near subsystem proves it,
+    and the whole system is never solved."""
+    g_rows = np.array([[1.0, 0.0], [-1.0, 0.0], [0.0, 1.0], [0.0, -1.0]])
+    rows = GridRows(g_rows, np.zeros(4), np.full(2, -50.0), np.full(2, 50.0), np.ones(2))
+    b = np.array([-1.0, -1.0, 40.0, 40.0])
+    sizes: list[int] = []
+    solve = farkas._nnls_solve
+    monkeypatch.setattr(farkas, "_nnls_solve", lambda e: sizes.append(e.shape[1]) or solve(e))
+    y, x = farkas_or_point(rows, b, np.zeros(2))
+    assert x is None and y is not None and _proves_empty(rows, b, y)
+    assert sizes == [2]  # only the two rows within NEAR of k (the far rows and the box limits 50 away left out)
+    np.testing.assert_allclose(y, [0.5, 0.5, 0.0, 0.0])
+
+
+def test_weights_that_prove_nothing_are_refused():
+    """The check is done in numpy on every answer: weights on a system with a point are never a proof."""
+    rows, b, pts = _rows(3)
+    b = np.full(b.size, 100.0)  # every grid point meets these rows
+    keep = np.isfinite(b)
+    assert farkas._checked(rows, b, keep, np.ones(int(keep.sum()))) is None
+    assert farkas_or_point(rows, b, pts[0])[0] is None
