@@ -110,4 +110,5 @@ def _nnls() -> Callable[..., tuple[Array, float]]:
     scipy.optimize before its clock starts)."""
     from scipy.optimize import nnls
 
-    return nnls
+    solve: Callable[..., tuple[Array, float]] = nnls
+    return solve

@@ -49,6 +49,7 @@ M_q ≥ v_q for every q, and the least norm among them is stage 3
 
 from __future__ import annotations
 
+import functools
 import time
 
 import numpy as np
@@ -183,7 +184,7 @@ def _fill(search: _Search, v: Array, k: Array, t: float, level: LevelValue | Non
         grown = pinned | pin | (sat & (rows.d > 0))
         if (grown & ~pinned).any():  # ``pinned`` is closed already: a new pin, a new closure
             pinned = rows.memo(("span closure", grown.tobytes()),
-                               lambda: span_closure(rows.g_rows, rows.d, grown, model.key))
+                               functools.partial(span_closure, rows.g_rows, rows.d, grown, model.key))
         m_k = search.margins(k)
         fix_sat = np.zeros(v.size, bool)
         fix_sat[row_dim[sat]] = True

@@ -125,7 +125,7 @@ def climb(g_rows: Array, g: Array, k: Array, kmin: Array, kmax: Array, order: np
         moved = True
         while moved and time.perf_counter() < deadline:
             moved = False
-            for moves, d_rows in ((single, d_single), (double, d_double)):
+            for dirs, d_rows in ((single, d_single), (double, d_double)):
                 m = m_k - s * d_rows
                 sm = _sorted_margins(m, starts, active, fixed, below)
                 diff = sm - cur
@@ -134,7 +134,7 @@ def climb(g_rows: Array, g: Array, k: Array, kmin: Array, kmax: Array, order: np
                 rows = np.arange(len(sm))
                 up = np.flatnonzero(big[rows, first] & (diff[rows, first] > 0))
                 if up.size:  # the box is checked for the better points only (it rarely binds)
-                    cand = k + s * moves[up]
+                    cand = k + s * dirs[up]
                     inside = np.all((cand >= kmin) & (cand <= kmax), axis=1)
                     up, cand = up[inside], cand[inside]
                 if up.size:

@@ -23,8 +23,8 @@ OPTIMIZE = Path(__file__).resolve().parents[2] / "setupfix" / "optimize"
 #: The exact solver's modules, bottom to top: each imports only solver modules of a lower rank.
 RANKS = {"_settings": 0, "_highs": 0, "_problem": 0, "_dimensions": 1, "_base": 1, "_grid": 1, "_chords": 1,
          "_listing": 2, "_least_norm": 2, "_session": 3, "_lp_bound": 4, "_grid_optimum": 5, "_grid_least_norm": 5,
-         "_triage_model": 1, "_leximin_search": 1, "_farkas": 4, "_leximin_pins": 5, "_leximin_level": 6, "_leximin_counts": 7,
-         "_leximin_result": 8, "_leximin": 9, "_triage_forced": 10, "_triage": 11, "_exact": 12}
+         "_triage_model": 1, "_leximin_search": 1, "_farkas": 4, "_leximin_pins": 5, "_leximin_level": 6,
+         "_leximin_counts": 7, "_leximin_result": 8, "_leximin": 9, "_triage_forced": 10, "_triage": 11, "_exact": 12}
 
 
 @pytest.mark.parametrize("module", sorted(RANKS))
