@@ -97,7 +97,7 @@ from setupfix.optimize._grid import TOL
 from setupfix.optimize._grid_least_norm import LeastNorm, grid_least_norm
 from setupfix.optimize._grid_optimum import GridOptimum, Stop, grid_optimum
 from setupfix.optimize._least_norm import lower_bound_ratio
-from setupfix.optimize._leximin import leximin, leximin_least_norm
+from setupfix.optimize._leximin import leximin, leximin_least_norm, root_climb
 from setupfix.optimize._leximin_level import LevelValue
 from setupfix.optimize._dimensions import dimension_of_rows, model_dimensions
 from setupfix.optimize._lp_bound import LPBound, lp_bound, margin_rows, rows_to_dimensions
@@ -207,26 +207,39 @@ class ExactOptimizer(Optimizer):
             session.clock.lap("least norm")
             return make_result(problem, x, optimizer=self.name, evaluations=2, seconds=time.perf_counter() - start,
                                status="optimal", bound=bound, binding=binding)
-        opt = grid_optimum(session, lp)
+        climbed: list[Array] = []  # the leximin levels' first climb, where the grid optimum ran it
+        if self.objective == "leximin":
+            row_dim, n_dims = dimension_of_rows(problem), len(model_dimensions(problem)[0])
+
+            def climb(k: Array) -> Array | None:
+                out = root_climb(session, row_dim, n_dims, k)
+                climbed.extend([] if out is None else [out])
+                return out
+
+            opt = grid_optimum(session, lp, climb)
+        else:
+            opt = grid_optimum(session, lp)
         session.clock.lap("grid optimum")
         calls = 1 + opt.calls
         if opt.upper < -TOL or (opt.stopped is None and opt.t < -TOL):
             return triaged_result(problem, session, opt.k, list(opt.path), list(opt.notes), calls, bound, self.name)
         if self.objective == "leximin" and opt.stopped is None:
-            return self._leximin(problem, session, lp, opt, calls, bound, binding)
+            k_climb = climbed[-1] if climbed and np.array_equal(climbed[-1], opt.k) else None
+            return self._leximin(problem, session, lp, opt, calls, bound, binding, k_climb)
         least, calls = self._least_norm(session, opt, calls)
         session.clock.lap("least norm")
         x[free] = least.k * problem.resolution
         return self._result(problem, session, x, opt, least, calls, bound, binding)
 
     def _leximin(self, problem: CorrectionProblem, session: Session, lp: LPBound, opt: GridOptimum, calls: int,
-                 bound: float, binding: tuple[str, ...]) -> OptimizeResult:
+                 bound: float, binding: tuple[str, ...], k_climb: Array | None) -> OptimizeResult:
         """Levels 2, 3 … after the proved first level (the paper's δ), then the least norm among the
-        leximin-optimal grid points (:mod:`setupfix.optimize._leximin`)."""
+        leximin-optimal grid points (:mod:`setupfix.optimize._leximin`); ``k_climb``: the levels' first
+        climb where the grid-optimum stage ran it and took its point."""
         row_dim = dimension_of_rows(problem)  # a zone's facets are one dimension: its margin, their least
         stage_end = session.clock.deadline - self.settings.leximin_norm_share * self.time_limit
         lex = leximin(session, row_dim, len(model_dimensions(problem)[0]), opt.k, opt.t,
-                      first=LevelValue(opt.t, opt.k, lp.t, lp.y), stage_end=stage_end)
+                      first=LevelValue(opt.t, opt.k, lp.t, lp.y), stage_end=stage_end, k_climb=k_climb)
         session.clock.lap("leximin")
         share = self.settings.box_share if lex.stopped is None else self.settings.stopped_box_share
         least = leximin_least_norm(session, lex, row_dim, share)

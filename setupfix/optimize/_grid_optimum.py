@@ -39,7 +39,8 @@ from setupfix.optimize._listing import ellipsoid_search, lagrangian_ball
 from setupfix.optimize._lp_bound import LPBound
 from setupfix.optimize._session import Relaxation, Session
 
-__all__ = ["LEVEL_STRATEGIES", "GridOptimum", "Level", "Listed", "Step", "Stop", "UnitBox", "grid_optimum"]
+__all__ = ["LEVEL_STRATEGIES", "GridOptimum", "Level", "Listed", "Search", "Step", "Stop", "UnitBox", "grid_optimum",
+           "searched"]
 
 Array = npt.NDArray[np.float64]
 
@@ -225,9 +226,31 @@ def feasibility_milp(session: Session, level: Level) -> Step:
 LEVEL_STRATEGIES: tuple[Callable[[Session, Level], Step], ...] = (
     relax, rounded_relaxation, listing, unit_boxes, feasibility_milp)
 
+#: A caller's local search on the grid: from a grid point to a point at least as good (None: it does not search).
+Search = Callable[[Array], Array | None]
 
-def grid_optimum(session: Session, bound: LPBound) -> GridOptimum:
-    """Stage 2: the grid optimum t*, proved, or the best point when its share of the limit is spent."""
+
+def searched(search: Search) -> Callable[[Session, Level], Step]:
+    """A strategy from a caller's search (the leximin levels' grid climb), started at the relaxation's point
+    rounded; tried before the listing, which it spares where it reaches the level."""
+    def strategy(session: Session, level: Level) -> Step:
+        if level.relaxation is None:
+            return Step("undecided")
+        rows = session.rows
+        k = search(np.clip(np.rint(level.relaxation.k), rows.kmin, rows.kmax))
+        if k is None:
+            return Step("undecided")
+        return Step("reached" if _reaches(session, k, level.tau) else "undecided", k=k,
+                    text="grid optimum: the leximin levels' climb from the rounded rows' least-norm point attains "
+                         "the bound")
+    return strategy
+
+
+def grid_optimum(session: Session, bound: LPBound, search: Search | None = None) -> GridOptimum:
+    """Stage 2: the grid optimum t*, proved, or the best point when its share of the limit is spent.
+
+    ``search``: a caller's local search, tried after the rounded relaxation (:func:`searched`).
+    """
     rows, clock = session.rows, session.clock
     upper = min(dual_bound(rows.g_rows, rows.g, bound.y, rows.kmin, rows.kmax),
                 pair_bound(rows.g_rows, rows.g, rows.kmin, rows.kmax, rows.pairs))
@@ -243,6 +266,8 @@ def grid_optimum(session: Session, bound: LPBound) -> GridOptimum:
         return GridOptimum(k_best, t_best, upper, None, None, None, None,
                            ("grid optimum: rounded LP point attains the bound",), (), 0)
     stage_end = clock.deadline - session.settings.least_norm_share * session.time_limit
+    strategies = LEVEL_STRATEGIES if search is None else (
+        *LEVEL_STRATEGIES[:2], searched(search), *LEVEL_STRATEGIES[2:])
     tau, relaxation, listed, unit_box = upper, None, None, None
     path: list[str] = []
     calls, proved = 0, False
@@ -252,7 +277,7 @@ def grid_optimum(session: Session, bound: LPBound) -> GridOptimum:
         level = Level(tau, rows.rounded(tau), k_best, t_best, None, stage_end)
         calls += 1
         verdict: Verdict = "give_up"  # when every strategy is undecided
-        for strategy in LEVEL_STRATEGIES:
+        for strategy in strategies:
             step = strategy(session, level)
             calls += step.calls
             path.extend(step.path)

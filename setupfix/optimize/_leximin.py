@@ -63,7 +63,7 @@ from setupfix.optimize._leximin_result import Leximin, leximin_least_norm, lexim
 from setupfix.optimize._leximin_search import MAX_REGISTERS, climb, climb_moves, lex_order
 from setupfix.optimize._session import Session
 
-__all__ = ["Leximin", "leximin", "leximin_least_norm"]
+__all__ = ["Leximin", "leximin", "leximin_least_norm", "root_climb"]
 
 Array = npt.NDArray[np.float64]
 Mask = npt.NDArray[np.bool_]
@@ -103,7 +103,8 @@ MAX_BRANCHES = 24
 
 
 def leximin(session: Session, row_dim: npt.NDArray[np.intp], n_dims: int, k_first: Array, t_first: float,
-            first: LevelValue | None = None, floors: Array | None = None, stage_end: float | None = None) -> Leximin:
+            first: LevelValue | None = None, floors: Array | None = None, stage_end: float | None = None,
+            k_climb: Array | None = None) -> Leximin:
     """The leximin levels from a proved first level (t_first at the grid point k_first).
 
     Parameters
@@ -122,6 +123,8 @@ def leximin(session: Session, row_dim: npt.NDArray[np.intp], n_dims: int, k_firs
         (the triage) passes floors for it and −inf for dimensions it leaves out.
     stage_end : float, optional
         ``time.perf_counter()`` at which the levels stop (default: the solve's deadline).
+    k_climb : ndarray of shape (n,), optional
+        The root's grid climb, when the caller climbed first (:func:`root_climb`).
 
     Returns
     -------
@@ -129,26 +132,41 @@ def leximin(session: Session, row_dim: npt.NDArray[np.intp], n_dims: int, k_firs
         With ``alternatives``: other branches of a discrete conflict whose leximin vectors tie with it
         (the least norm is taken over all of them).
     """
-    rows = session.rows
     stage_end = session.clock.deadline if stage_end is None else stage_end
+    search, v, recomputed = _start(session, row_dim, n_dims, floors, k_first, stage_end)
+    if recomputed:  # the first level was over dimensions no register moves: it is recomputed without them
+        first = None
+    if k_climb is None and search.climb:  # the root's climb, before the first level's dimensions are fixed
+        k_climb = search.climbed(k_first, v)
+    best = _fill(search, v, k_first, t_first, first, [], k_climb=k_climb)
+    head = best[0]
+    return Leximin(head.k, head.floors, head.levels, head.counts, head.stopped, head.path, search.calls,
+                   tuple(best[1:]))
+
+
+def _start(session: Session, row_dim: npt.NDArray[np.intp], n_dims: int, floors: Array | None, k: Array,
+           stage_end: float) -> tuple[_Search, Array, bool]:
+    """The search and the floors it starts from: −inf for a dimension without rows, its margin for one no free
+    register moves (fixed from the start; True when such a dimension was active)."""
     v = np.full(n_dims, np.nan) if floors is None else np.asarray(floors, dtype=float).copy()
     has_rows = np.zeros(n_dims, bool)
     has_rows[row_dim] = True
     v[~has_rows] = -np.inf
-    # a dimension no free register moves keeps its margin: fixed at it from the start
     constant = np.zeros(n_dims, bool)
     np.logical_or.at(constant, row_dim, True)
-    np.logical_and.at(constant, row_dim, rows.zero)
+    np.logical_and.at(constant, row_dim, session.rows.zero)
     search = _Search(session, LevelModel(session, row_dim, n_dims), stage_end)
-    m_first = search.margins(k_first)
-    if np.any(np.isnan(v) & constant):  # the first level was over them too: it is recomputed without them
-        v[np.isnan(v) & constant] = m_first[np.isnan(v) & constant]
-        first = None
-    # the root's climb starts before the first level's dimensions are fixed: no floor to check at each move
-    best = _fill(search, v, k_first, t_first, first, [], k_climb=search.climbed(k_first, v) if search.climb else None)
-    head = best[0]
-    return Leximin(head.k, head.floors, head.levels, head.counts, head.stopped, head.path, search.calls,
-                   tuple(best[1:]))
+    recompute = np.isnan(v) & constant
+    if recompute.any():
+        v[recompute] = search.margins(k)[recompute]
+    return search, v, bool(recompute.any())
+
+
+def root_climb(session: Session, row_dim: npt.NDArray[np.intp], n_dims: int, k: Array) -> Array | None:
+    """The levels' first grid climb from k, over every dimension (None where the levels do not climb): run
+    before the grid-optimum stage, its point is that stage's incumbent and the levels' start."""
+    search, v, _ = _start(session, row_dim, n_dims, None, k, session.clock.deadline)
+    return search.climbed(k, v) if search.climb else None
 
 
 def _fill(search: _Search, v: Array, k: Array, t: float, level: LevelValue | None, path: list[str],

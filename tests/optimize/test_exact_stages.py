@@ -90,6 +90,50 @@ def test_stage_results_are_frozen_and_bracket_the_brute_force_optimum(seed):
                                                       "feasibility_milp"]
 
 
+@pytest.mark.parametrize("seed", range(12))
+def test_a_callers_search_in_the_grid_optimum_changes_no_optimum(seed, monkeypatch):
+    """The grid optimum with a caller's search (the leximin climb; here also one that answers badly) proves
+    the brute-force optimum; where the search's point reaches the level, the listing is never run."""
+    import setupfix.optimize._grid_optimum as go
+    from setupfix.optimize._dimensions import dimension_of_rows, model_dimensions
+    from setupfix.optimize._leximin import root_climb
+
+    problem = random_problem(200 + seed, n=4, m=8, limit_steps=6)
+    g_rows, g = margin_rows(problem)
+    free = problem.free
+    rows = GridRows(g_rows, g, problem.kmin[free].astype(float), problem.kmax[free].astype(float),
+                    problem.cost[free])
+    best, _ = brute_force(problem)
+    row_dim, n_dims = dimension_of_rows(problem), len(model_dimensions(problem)[0])
+    events: list[str] = []
+    listing = go.listing
+    monkeypatch.setattr(go, "LEVEL_STRATEGIES", tuple(
+        (lambda sess, level: events.append("listing") or listing(sess, level)) if f is listing else f
+        for f in go.LEVEL_STRATEGIES))
+    session = Session(rows, ExactSettings(), 10.0)
+    for search in (lambda k: root_climb(session, row_dim, n_dims, k), lambda k: np.array(rows.kmax)):
+        bound = lp_bound(session)
+        assert bound is not None
+        plain = go.grid_optimum(Session(rows, ExactSettings(), 10.0), bound)
+        if plain.upper < 0:  # no correction brings every dimension in: the triage's case, not this stage's
+            continue
+        opt_t = plain.t
+        events.clear()
+
+        def spy(k: np.ndarray, search=search, opt_t=opt_t) -> np.ndarray | None:
+            out = search(k)
+            events.append("reached" if out is not None and float(np.min(g - g_rows @ out)) >= opt_t - 1e-9
+                          else "search")
+            return out
+
+        opt = go.grid_optimum(session, bound, spy)
+        assert opt.stopped is None and opt.t == pytest.approx(opt_t) and opt.t * problem.resolution == pytest.approx(
+            best, abs=1e-12)
+        assert float(np.min(g - g_rows @ opt.k)) == pytest.approx(opt.t)
+        if "reached" in events:  # the search's point proves the optimum: no listing after it
+            assert "listing" not in events[events.index("reached"):]
+
+
 def test_results_of_g_alone_are_computed_once_per_model_and_read_only(monkeypatch):
     """Two reports of one model (same G, box, costs; other g) share the memo; another box does not; a full
     memo is emptied, never grown without bound."""
