@@ -1,4 +1,4 @@
-"""The point tests of the leximin levels: the MILP of the tight rows against the MILP of all rows (issue 22).
+"""The point tests and level proofs of the leximin levels: tight rows first, all rows where needed (issue 22).
 
 A point test asks whether a grid point has every row's margin at least its floor
 (:func:`setupfix.optimize._leximin_pins.point_above`: can a dimension rise alone, can it be the only
@@ -12,12 +12,17 @@ then times both MILPs on each (fresh models, HiGHS single-threaded), with the LP
 same report as the reference timed in the same run.  Every answer of the tight MILP must agree with
 the MILP of all rows where it decides.
 
+It also records every level proof by NNLS (:func:`setupfix.optimize._farkas.farkas_or_point` with the
+level's own point): how many of the proofs the rows and box limits within ``NEAR`` steps of the point
+hold, and the time of the call with the near columns first against the whole system (best of 5 each).
+
     python bench/point_tests.py [--sets 100]        # writes bench/results/point_tests.txt
 """
 
 from __future__ import annotations
 
 import argparse
+import functools
 import os
 import sys
 import time
@@ -33,11 +38,13 @@ sys.path.insert(0, str(ROOT / "bench"))
 from exact_per_report import problems
 from leximin_speed import lp_seconds
 
+import setupfix.optimize._farkas as farkas
 import setupfix.optimize._leximin_level as level_mod
 import setupfix.optimize._leximin_pins as pins
 from setupfix.optimize import get_optimizer
 from setupfix.optimize._grid import rounded_rhs
 from setupfix.optimize._highs import INF, LinearModel
+from setupfix.optimize._session import GridRows
 
 RESULTS = ROOT / "bench" / "results"
 
@@ -51,6 +58,54 @@ def milp(g_rows: np.ndarray, b: np.ndarray, kmin: np.ndarray, kmax: np.ndarray) 
     return res.status, time.perf_counter() - t
 
 
+def best_of(call, times: int = 5) -> float:
+    best = np.inf
+    for _ in range(times):
+        t = time.perf_counter()
+        call()
+        best = min(best, time.perf_counter() - t)
+    return best
+
+
+def level_proofs(proofs: list[tuple[GridRows, np.ndarray, np.ndarray]]) -> list[str]:
+    """The level proofs by NNLS: proofs held by the near columns, columns used, and the time of both calls."""
+    columns: list[int] = []
+    solve = farkas._nnls_solve
+
+    def counted(e: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
+        columns.append(e.shape[1])
+        return solve(e)
+
+    proved = near_proved = 0
+    near_cols, all_cols, t_near, t_all = [], [], [], []
+    farkas._nnls_solve = counted
+    try:
+        for rows, b, k in proofs:
+            columns.clear()
+            y, _ = farkas.farkas_or_point(rows, b, k)
+            whole = 2 * rows.n_free + int(np.isfinite(b).sum())
+            if y is not None:
+                proved += 1
+                near_proved += columns[0] < whole and len(columns) == 1
+            if columns[0] < whole:
+                near_cols.append(columns[0])
+            all_cols.append(whole)
+    finally:
+        farkas._nnls_solve = solve
+    for rows, b, k in proofs:
+        t_near.append(best_of(functools.partial(farkas.farkas_or_point, rows, b, k)))
+        t_all.append(best_of(functools.partial(farkas.farkas_or_point, rows, b)))
+    if not proofs:
+        return ["level proofs by NNLS: none recorded"]
+    return [
+        f"level proofs by NNLS at the level's point: {len(proofs)} calls, {proved} proofs; the rows and box limits "
+        f"within {farkas.NEAR:g} steps of the point hold {near_proved} of them",
+        f"  columns: near median {np.median(near_cols):.0f}, whole system median {np.median(all_cols):.0f}",
+        f"  time per call (best of 5): near first {np.sum(t_near) / len(proofs) * 1e6:.0f} us on average, the "
+        f"whole system only {np.sum(t_all) / len(proofs) * 1e6:.0f} us (ratio {np.sum(t_near) / np.sum(t_all):.2f})",
+    ]
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--sets", type=int, default=100)
@@ -60,6 +115,13 @@ def main() -> None:
     built: list[tuple[np.ndarray, np.ndarray]] = []  # (rows, right-hand sides) of each MILP a point test builds
     cases: list[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]] = []
     original, real = pins.LinearModel, level_mod.point_above
+    proofs: list[tuple[GridRows, np.ndarray, np.ndarray]] = []  # (rows, b, k) of each level proof by NNLS
+    real_farkas = level_mod.farkas_or_point
+
+    def farkas_spy(rows, b, k=None):
+        if k is not None:
+            proofs.append((rows, b.copy(), k.copy()))
+        return real_farkas(rows, b, k)
 
     class Recorded(original):  # type: ignore[misc, valid-type]
         def __init__(self, c, a, row_lo, row_hi, *rest, **kw):
@@ -80,7 +142,7 @@ def main() -> None:
     refs = []
     with threadpool_limits(limits=1):
         opt = get_optimizer("exact", objective="leximin", time_limit=30.0)
-        pins.LinearModel, level_mod.point_above = Recorded, spy
+        pins.LinearModel, level_mod.point_above, level_mod.farkas_or_point = Recorded, spy, farkas_spy
         try:
             for _, problem in probs:
                 before = len(cases)
@@ -88,12 +150,13 @@ def main() -> None:
                 if len(cases) > before:
                     refs.append(lp_seconds(problem))
         finally:
-            pins.LinearModel, level_mod.point_above = original, real
+            pins.LinearModel, level_mod.point_above, level_mod.farkas_or_point = original, real, real_farkas
         rows_out = []
         for a_tight, b_tight, a_all, b_all, kmin, kmax in cases:
             st_t, sec_t = milp(a_tight, b_tight, kmin, kmax)
             st_a, sec_a = milp(a_all, b_all, kmin, kmax)
             rows_out.append((a_tight.shape[0], a_all.shape[0], st_t, sec_t, st_a, sec_a))
+        near = level_proofs(proofs)
     ref = float(np.median(refs)) if refs else float("nan")
     decided = [r for r in rows_out if r[2] == "infeasible" and r[0] < r[1]]
     agree = all(r[4] == "infeasible" for r in decided)
@@ -118,6 +181,7 @@ def main() -> None:
             f"{sorted({r[4] for r in rows_out})}",
             f"agreement: every test the tight MILP decides is infeasible with all rows too: {'yes' if agree else 'NO'}",
         ]
+    lines += near
     text = "\n".join(lines) + "\n"
     RESULTS.mkdir(exist_ok=True)
     (RESULTS / "point_tests.txt").write_text(text, encoding="utf-8")
