@@ -34,6 +34,7 @@ import numpy.typing as npt
 
 from setupfix.optimize._farkas import farkas_or_point, farkas_weights
 from setupfix.optimize._grid import TOL, rounded_rhs
+from setupfix.optimize._leximin_search import group_min
 from setupfix.optimize._highs import INF, LinearModel
 from setupfix.optimize._session import GridRows, Session
 
@@ -176,7 +177,8 @@ def best_rounding(rows: GridRows, x: Array, floors: Array, active_dims: Mask, or
     Every floor/ceil choice of the ``most`` fractional coordinates nearest ½ (the others to the
     nearest integer) is evaluated — a point to try, nothing is proved by it; ties by the active
     dimensions' sorted margins (leximin: a point for the next levels too).  ``floors``: per row
-    (NaN: active); ``order``/``starts``: the rows grouped by dimension (for ``np.minimum.reduceat``);
+    (NaN: active); ``order``/``starts``: the rows grouped by dimension
+    (:func:`~setupfix.optimize._leximin_search.group_min`);
     ``active_dims``: per group.
     """
     kmin, kmax = rows.kmin, rows.kmax  # np.minimum/np.maximum: a few µs less than np.clip on these sizes
@@ -198,7 +200,7 @@ def best_rounding(rows: GridRows, x: Array, floors: Array, active_dims: Mask, or
     top = np.flatnonzero(level >= level.max() - 1e-9)
     i = int(top[0])
     if top.size > 1 and np.isfinite(level[i]):
-        by_dim = np.minimum.reduceat(m[top][:, order], starts, axis=1)
+        by_dim = group_min(m[top][:, order], starts)
         sorted_m = np.sort(by_dim[:, active_dims], axis=1)
         i = int(top[np.lexsort(np.round(sorted_m, 6).T[::-1])[-1]])
     return cand[i], float(level[i])

@@ -10,7 +10,7 @@ import pytest
 
 from setupfix.optimize import CorrectionProblem, get_optimizer
 from setupfix.optimize._dimensions import dimension_of_rows
-from setupfix.optimize._leximin_search import climb, climb_moves
+from setupfix.optimize._leximin_search import climb, climb_moves, group_min
 from setupfix.optimize._lp_bound import margin_rows
 
 from .test_exact import random_problem
@@ -140,3 +140,13 @@ def test_climb_with_kept_moves_is_the_same_climb(seed):
     assert all(not a.flags.writeable for a in moves)
     np.testing.assert_array_equal(climb(g_rows, g, k0, kmin, kmax, order, starts, floors, EPS, moves=moves),
                                   climb(g_rows, g, k0, kmin, kmax, order, starts, floors, EPS))
+
+
+@pytest.mark.parametrize("sizes", [(2, 2, 2, 2), (1, 2, 3), (2, 1, 2), (5,), (2,)])
+def test_group_min_is_the_least_of_each_group(sizes):
+    """The strided two-row path and the general one give each group's least (numpy's reduceat as reference)."""
+    rng = np.random.default_rng(len(sizes))
+    m = rng.normal(size=(7, sum(sizes)))
+    starts = np.r_[0, np.cumsum(sizes)[:-1]].astype(np.intp)
+    want = np.array([[row[a:a + n].min() for a, n in zip(starts, sizes, strict=True)] for row in m])
+    np.testing.assert_array_equal(group_min(m, starts), want)
