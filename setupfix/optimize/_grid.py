@@ -267,7 +267,7 @@ def least_distance(g_rows: Array, b: Array, kmin: Array, kmax: Array, cost: Arra
     e[-1, :n_rows] = -b[keep]
     e[-1, n_rows:n_rows + n] = kmin
     e[-1, n_rows + n:] = -kmax
-    status, k, u = nnls_least_distance(m_mat, e, cost, float(np.max(np.abs(np.r_[kmin, kmax]), initial=0.0)))
+    status, k, u = nnls_least_distance(m_mat, e, cost, float(np.max(np.abs(np.concatenate((kmin, kmax))), initial=0.0)))
     if status != "optimal" or k is None or u is None:
         return status, None
     lam = np.zeros(b.size)

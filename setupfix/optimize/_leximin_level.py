@@ -131,8 +131,8 @@ class LevelModel:
         if not np.array_equal(cost, self._cost):
             lp.set_costs(n + 1 + np.arange(m, dtype=np.int32), cost)
             self._cost = cost
-        lp.set_row_bounds(np.full(hi.size + m, -INF), np.r_[np.where(np.isfinite(hi), hi, INF),
-                                                             np.where(active, 0.0, INF)])
+        lp.set_row_bounds(np.full(hi.size + m, -INF), np.concatenate((np.where(np.isfinite(hi), hi, INF),
+                                                                      np.where(active, 0.0, INF))))
         lp.set_col_bounds(n + 1 + np.arange(m, dtype=np.int32), np.where(active, -INF, 0.0), np.full(m, INF))
         res = lp.solve(max(time_limit, 1e-3))
         y = None if res.row_dual is None else np.maximum(-res.row_dual[:hi.size], 0.0)
