@@ -72,7 +72,7 @@ def grid_margins(g_rows: Array, g: Array, k: Array) -> Array:
     if g.size == 0:
         return np.full(k.shape[:-1], np.inf) if k.ndim > 1 else np.array(np.inf)
     if k.ndim == 1:
-        return np.array(np.min(g - g_rows @ k))
+        return np.array((g - g_rows @ k).min())
     out = np.empty(k.shape[0])
     step = max(1, _BLOCK // max(g.size, 1))
     for s in range(0, k.shape[0], step):

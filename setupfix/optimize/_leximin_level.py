@@ -143,7 +143,7 @@ class LevelModel:
         """min over active rows of g_j − G_j k, or −inf if a fixed row is below its floor."""
         f = self._floors(v)
         m = self.rows.g - self.rows.g_rows @ k
-        if np.any(m - f < -TOL):  # fixed rows below their floor (an active row's NaN compares false)
+        if (m - f < -TOL).any():  # fixed rows below their floor (an active row's NaN compares false)
             return -np.inf
         act = np.isnan(f)
         return float(m[act].min()) if act.any() else np.inf

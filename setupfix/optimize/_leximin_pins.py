@@ -119,7 +119,7 @@ def pinned_rows(level: Certificates, active_rows: Mask, eps: float, d: Array) ->
             continue
         y = y / total
         w = y @ level.g_rows
-        c = float(y @ rhs + np.sum(np.maximum(-w * level.kmin, -w * level.kmax)))
+        c = float(y @ rhs + np.maximum(-w * level.kmin, -w * level.kmax).sum())
         # slack and y_j·room compared with an absolute margin (y sums to 1, the numbers are ~1e2: the
         # rounding error of slack is ~1e-12), so a weight of 1e-17 never turns a rounding error into a pin
         slack = c - float(y @ floors) + _MARGIN

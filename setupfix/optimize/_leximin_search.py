@@ -25,7 +25,7 @@ import time
 import numpy as np
 import numpy.typing as npt
 
-__all__ = ["MAX_REGISTERS", "SCALES", "Moves", "climb", "climb_moves", "group_min", "lex_order"]
+__all__ = ["MAX_REGISTERS", "SCALES", "Moves", "climb", "climb_moves", "group_min", "lex_order", "two_rows_each"]
 
 Array = npt.NDArray[np.float64]
 
@@ -73,22 +73,27 @@ def climb_moves(g_rows: Array, order: npt.NDArray[np.intp]) -> Moves:
     return out
 
 
-def group_min(m: Array, starts: npt.NDArray[np.intp]) -> Array:
+def two_rows_each(starts: npt.NDArray[np.intp], n_rows: int) -> bool:
+    """Whether the groups starting at ``starts`` are n_rows / 2 groups of two rows (:func:`group_min`)."""
+    return 2 * starts.size == n_rows and bool(np.all(starts == np.arange(0, n_rows, 2)))
+
+
+def group_min(m: Array, starts: npt.NDArray[np.intp], pairs: bool | None = None) -> Array:
     """Row margins (c, r), rows grouped by dimension (groups start at ``starts``) → each group's least,
-    shape (c, n_groups).  Groups of two rows each (a one-axis problem: every dimension's two limits) by
-    two strided views — ``np.minimum.reduceat`` along the second axis costs some ten times more."""
-    r = m.shape[1]
-    if 2 * starts.size == r and starts[-1] == r - 2 and not np.any(np.diff(starts) != 2):
+    shape (c, n_groups).  Groups of two rows each (a one-axis problem: every dimension's two limits;
+    ``pairs``: :func:`two_rows_each`, when the caller knows it) by two strided views —
+    ``np.minimum.reduceat`` along the second axis costs some ten times more."""
+    if two_rows_each(starts, m.shape[1]) if pairs is None else pairs:
         return np.minimum(m[:, 0::2], m[:, 1::2])
     return np.minimum.reduceat(m, starts, axis=1)
 
 
 def _sorted_margins(m: Array, starts: npt.NDArray[np.intp], active: npt.NDArray[np.intp],
-                    fixed: npt.NDArray[np.intp], floors: Array) -> Array:
+                    fixed: npt.NDArray[np.intp], floors: Array, pairs: bool | None = None) -> Array:
     """Row margins (c, r), rows grouped by dimension (groups start at ``starts``) → each point's margins
     of the groups ``active``, sorted ascending — shape (c, n_active); a point with a group ``fixed``
     below its floor (``floors``, one per fixed group) gets −inf throughout (never better)."""
-    by_dim = group_min(m, starts)
+    by_dim = group_min(m, starts, pairs)
     out = np.sort(by_dim if active.size == by_dim.shape[1] else by_dim[:, active], axis=1)
     if fixed.size:
         out[np.any(by_dim[:, fixed] < floors, axis=1)] = -np.inf
@@ -130,7 +135,8 @@ def climb(g_rows: Array, g: Array, k: Array, kmin: Array, kmax: Array, order: np
     m_k = g - g_rows @ k
     active, fixed = np.flatnonzero(np.isnan(floors)), np.flatnonzero(np.isfinite(floors))
     below = floors[fixed] - 1e-9
-    cur = _sorted_margins(m_k[None, :], starts, active, fixed, below)[0]
+    pairs = two_rows_each(starts, g_rows.shape[0])
+    cur = _sorted_margins(m_k[None, :], starts, active, fixed, below, pairs)[0]
     for s in SCALES:
         moved = True
         scaled = ((single, s * d_single), (double, s * d_double))
@@ -138,14 +144,14 @@ def climb(g_rows: Array, g: Array, k: Array, kmin: Array, kmax: Array, order: np
             moved = False
             for dirs, d_rows in scaled:
                 m = m_k - d_rows
-                sm = _sorted_margins(m, starts, active, fixed, below)
+                sm = _sorted_margins(m, starts, active, fixed, below, pairs)
                 diff = sm - cur
                 # better: the first margin that differs by more than ε is higher (no such margin: argmax is 0, a tie)
                 first = np.argmax(np.abs(diff) > eps, axis=1)
                 up = np.flatnonzero(diff[np.arange(first.size), first] > eps)
                 if up.size:  # the box is checked for the better points only (it rarely binds)
                     cand = k + s * dirs[up]
-                    if min(float(np.min(k - kmin)), float(np.min(kmax - k))) < s:  # a move of s can leave it
+                    if min(float((k - kmin).min()), float((kmax - k).min())) < s:  # a move of s can leave it
                         inside = np.all((cand >= kmin) & (cand <= kmax), axis=1)
                         up, cand = up[inside], cand[inside]
                 if up.size:
