@@ -1,13 +1,12 @@
 """Thin layer over HiGHS's own Python interface (highspy) for the exact optimiser.
 
-Why highspy and not scipy's ``linprog``/``milp``: scipy rebuilds the whole model and re-validates
-every option on each call; highspy keeps the solver model, so one solve can change only row bounds
-or add rows (lazy cuts) between runs.  Each run starts from a cleared solver (no basis or incumbent
-of an earlier run): where the least norm is attained at two grid points, the answer must depend on
-this model and start only.  HiGHS's run clock, though, is not cleared: it adds up over every run of
-one object, and its ``time_limit`` applies to that sum, so :meth:`LinearModel.solve` sets the limit
-to the clock's reading plus the run's own allowance (and the exact optimiser keeps no model beyond
-one solve: :class:`~setupfix.optimize._session.Session`).
+Why highspy and not scipy's ``linprog``/``milp``: scipy rebuilds the model and re-validates every
+option on each call; highspy keeps it, so a solve can change only row bounds or add rows (lazy cuts)
+between runs.  Each run starts from a cleared solver (no basis or incumbent of an earlier run: the
+answer depends on this model and start only).  HiGHS's run clock is not cleared — its
+``time_limit`` applies to the sum over every run of one object — so :meth:`LinearModel.solve` sets
+it to the clock's reading plus the run's own allowance (no model outlives one solve:
+:class:`~setupfix.optimize._session.Session`).
 
 Nothing HiGHS answers is taken on trust (:meth:`LinearModel.solve`): its point is checked
 against the model — rows, bounds and integrality to :data:`FEASIBILITY_TOL`, its objective
@@ -18,16 +17,15 @@ wall-clock limit is enforced by HiGHS's interrupt callbacks (MIP, simplex, IPM, 
 checking a ``time.perf_counter()`` deadline; and every MIP runs without the RINS and RENS
 sub-searches, which read neither the callbacks nor, reliably, the time limit.
 
-Every solver object is created silent (``output_flag`` off: nothing may reach stdout, which carries
-``--json``) and single-threaded (``threads`` = 1: the solves here are small; HiGHS's MIP thread pool
-costs more than it gains, and a batch runs its own workers).  The private ``_Highs`` class is used
-because the public ``Highs`` subclass prints a banner on stdout and installs callbacks we do not use.
+Every solver object is silent (nothing may reach stdout, which carries ``--json``) and single-threaded
+(the solves are small; a batch runs its own workers).  The private ``_Highs`` class is used because the
+public ``Highs`` prints a banner on stdout and installs callbacks we do not use.
 """
 
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -40,25 +38,19 @@ __all__ = ["FEASIBILITY_TOL", "INF", "Colwise", "LinearModel", "Solve"]
 
 Array = npt.NDArray[np.float64]
 INF = float(kHighsInf)
-
 #: A point HiGHS returns must meet each row, bound and integrality to this (relative to the row's
 #: size: 1 + |bound| + Σ|a_ij x_j|), and its objective must equal the one HiGHS reports to it.
 FEASIBILITY_TOL = 1e-6
 #: HiGHS's own ``mip_abs_gap``: an "optimal" MIP's objective may exceed its dual bound by this.
 MIP_ABS_GAP = 1e-6
-
 #: Models up to this many matrix elements are checked with a dense copy of the matrix.
 DENSE_CHECK_ELEMENTS = 20_000
-
 #: Seconds added to HiGHS's own ``time_limit`` beyond the run's allowance (0: both clocks stop it).
 HIGHS_LIMIT_SLACK = 0.0
-
-#: The interrupt callbacks checked against the wall clock (HiGHS's ``time_limit`` is not enough:
-#: it is read between the root's cut rounds and not at all in some sub-searches).
+#: Interrupts checked against the wall clock (HiGHS reads ``time_limit`` between cut rounds, not in sub-searches).
 _INTERRUPTS = (cb.HighsCallbackType.kCallbackMipInterrupt, cb.HighsCallbackType.kCallbackSimplexInterrupt,
                cb.HighsCallbackType.kCallbackIpmInterrupt,
                cb.HighsCallbackType.kHighsCallbackQpInterrupt)  # type: ignore[attr-defined]  # not in the stubs
-
 #: Model statuses that are answers (optimal, proven infeasible, time limit with or without a point).
 _STATUS_NAMES = {
     HighsModelStatus.kOptimal: "optimal", HighsModelStatus.kInfeasible: "infeasible",
@@ -77,10 +69,8 @@ class Solve:
     status : str
         ``optimal``, ``infeasible``, ``unbounded``, ``time_limit`` or ``error`` (anything else HiGHS
         answers, e.g. "Solve error"); ``detail`` gives HiGHS's own words.
-    x : ndarray of shape (n_cols,) or None; objective : float
-        Primal point, when HiGHS has a feasible one; its objective (nan without a point).
-    dual_bound : float
-        Best bound proved (MIP: ``mip_dual_bound``; LP: the objective).
+    x : ndarray of shape (n_cols,) or None; objective, dual_bound : float
+        Primal point (when HiGHS has one), its objective (nan without) and the best bound proved.
     row_dual, col_dual : ndarray of shape (n_rows,) / (n_cols,) or None
         Duals of an LP or QP (HiGHS's signs: for a minimisation, ≤ 0 on a row or column at its upper
         bound, ≥ 0 at its lower bound).
@@ -122,6 +112,16 @@ class Colwise:
     start: npt.NDArray[np.int32]
     index: npt.NDArray[np.int32]
     value: Array
+    cache: dict[str, Array] = field(default_factory=dict, compare=False, repr=False)  # :meth:`dense`
+
+    def dense(self) -> tuple[Array, Array]:
+        """The matrix and |matrix| as dense read-only arrays, built once (shared by every model on it)."""
+        if "dense" not in self.cache:
+            a = csc_array((self.value, self.index, self.start), shape=(self.n_rows, self.n_cols)).toarray()
+            self.cache["abs"], self.cache["dense"] = np.abs(a), a
+            for b in self.cache.values():
+                b.flags.writeable = False
+        return self.cache["dense"], self.cache["abs"]
 
     @classmethod
     def of(cls, a: object) -> Colwise:
@@ -228,8 +228,7 @@ class LinearModel:
         self.h.setOptionValue("mip_rel_gap", self._gap)
 
     def prefer_proof(self) -> None:
-        """A near-optimal start is known: pseudo-cost branching without strong-branching reliability,
-        which roughly halves the time to prove the least-norm MILPs at shop scale (``bench/exact_scaling.py``)."""
+        """Pseudo-costs without strong-branching reliability: about half the time to prove shop-scale least norms."""
         self.h.setOptionValue("mip_pscost_minreliable", 0)
 
     def set_row_bounds(self, lo: Array, hi: Array) -> None:
@@ -283,7 +282,10 @@ class LinearModel:
 
     def _matrix(self) -> Array | csc_array:
         if self._dense is None and self.n_rows * self.n_cols <= DENSE_CHECK_ELEMENTS:
-            self._dense = self._a.toarray()
+            if self._csc is None:  # the matrix as passed in (maybe shared): its dense copy is kept with it
+                self._dense, self._abs_a = self._mat.dense()
+            else:
+                self._dense = self._a.toarray()
         return self._a if self._dense is None else self._dense
 
     def _row_finite(self) -> tuple[npt.NDArray[np.bool_], npt.NDArray[np.bool_]]:

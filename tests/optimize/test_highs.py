@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from setupfix.optimize import _highs
-from setupfix.optimize._highs import LinearModel, Solve
+from setupfix.optimize._highs import INF, LinearModel, Solve
 
 
 def knapsack() -> tuple[LinearModel, np.ndarray, float]:
@@ -142,3 +142,23 @@ def test_a_stopped_run_with_a_wrong_point_stays_stopped_and_drops_the_point(monk
     monkeypatch.setattr(LinearModel, "_run", stopped_with_an_infeasible_point)
     res = model.solve(5.0, start)
     assert res.status == "time_limit" and res.x is None and "row" in res.detail
+
+
+def test_models_on_one_matrix_share_its_dense_copy_and_a_changed_model_checks_its_own():
+    """Two models on one Colwise check HiGHS's answers with one read-only dense copy of it; a model that adds
+    a row checks against its own matrix, and the shared copy stays as it was."""
+    from setupfix.optimize._highs import Colwise
+
+    shared = Colwise.of(np.array([[1.0, 1.0], [1.0, -1.0]]))
+    models = [LinearModel(np.array([-1.0, -1.0]), shared, np.full(2, -INF), np.array([4.0, 1.0]), np.zeros(2),
+                          np.full(2, 10.0)) for _ in range(2)]
+    for model in models:
+        assert model.solve(5.0).status == "optimal"
+    dense, absolute = shared.dense()
+    assert not dense.flags.writeable and not absolute.flags.writeable
+    np.testing.assert_array_equal(absolute, np.abs(dense))
+    models[1].add_rows(np.array([[1.0, 0.0]]), np.array([-INF]), np.array([1.0]))  # x0 ≤ 1
+    res = models[1].solve(5.0)
+    assert res.status == "optimal" and res.x is not None and res.x[0] <= 1.0 + 1e-9
+    assert res.objective == pytest.approx(-4.0)
+    assert shared.dense()[0].shape == (2, 2) and shared.dense()[0] is dense
