@@ -116,11 +116,11 @@ class Colwise:
 
     def dense(self) -> tuple[Array, Array]:
         """The matrix and |matrix| as dense read-only arrays, built once (shared by every model on it)."""
-        if "dense" not in self.cache:
+        if "dense" not in self.cache:  # frozen before it is shared (threads may build it at once: equal copies)
             a = csc_array((self.value, self.index, self.start), shape=(self.n_rows, self.n_cols)).toarray()
-            self.cache["abs"], self.cache["dense"] = np.abs(a), a
-            for b in self.cache.values():
-                b.flags.writeable = False
+            b = np.abs(a)
+            a.flags.writeable = b.flags.writeable = False
+            self.cache["abs"], self.cache["dense"] = b, a
         return self.cache["dense"], self.cache["abs"]
 
     @classmethod
