@@ -187,3 +187,30 @@ def test_the_answer_does_not_depend_on_the_reports_solved_before(guide_pins_mode
     after = opt.solve(CorrectionProblem.from_part(guide_pins_model, tie))
     assert fresh.status == after.status == "optimal"
     np.testing.assert_array_equal(after.x, fresh.x)
+
+
+def test_the_leximin_stage_ends_by_its_share_of_the_limit_and_leaves_the_least_norm_its_own():
+    """At 100 × 800 the single-dimension tests of a discrete conflict are hundreds of LPs: they stop when the
+    stage's share is spent (they used to run on, past the whole limit, and leave the least norm no time: a
+    correction of 0.67 mm where the least norm at the levels reached is 0.14 mm)."""
+    problem = shop_problem(100, 800, 1)
+    limit = 1.0
+    result = get_optimizer("exact", objective="leximin", time_limit=limit).solve(problem)
+    assert result.status == "time_limit" and result.extra["stopped"]["stage"] == "leximin"
+    share = (1 - ExactSettings().leximin_norm_share) * limit
+    assert result.extra["stages"]["leximin"] <= share + 0.1  # one point test past the share at most
+    paper = get_optimizer("exact", objective="paper", time_limit=10.0).solve(problem)
+    assert result.margin_after == pytest.approx(paper.margin_after, abs=1e-12)  # δ was proved before the levels
+
+
+def test_a_point_test_starts_no_solve_once_its_stage_is_over(monkeypatch):
+    from setupfix.optimize._leximin_pins import point_above
+    from setupfix.optimize._lp_bound import margin_rows
+    from setupfix.optimize._session import GridRows
+
+    problem = shop_problem(30, 100, 0)
+    g_rows, g = margin_rows(problem)
+    rows = GridRows(g_rows, g, problem.kmin.astype(float), problem.kmax.astype(float), problem.cost)
+    session = Session(rows, ExactSettings(), 5.0)
+    monkeypatch.setattr(Session, "rounded_rows_feasible", lambda *a, **k: pytest.fail("a solve was started"))
+    assert point_above(session, np.full(g.size, -np.inf), time.perf_counter() - 1e-6) is None
