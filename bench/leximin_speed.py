@@ -8,7 +8,11 @@ work: the LP of eq. 8 (max t s.t. every margin ≥ t, the register box) of the s
 the same HiGHS interface the optimiser uses.
 
 Threads: BLAS limited to 1 (threadpoolctl), HiGHS single-threaded (``threads`` = 1, as the
-optimiser sets it).
+optimiser sets it).  The paper-size set is timed in ``--passes`` passes (default 3); a report's time
+is its best pass (the box is shared and its speed drifts; the least of repeated timings of the same
+work is the least disturbed), each pass begins with no model's kept results of G
+(:meth:`~setupfix.optimize._session.GridRows.memo`, as in a new process), and the median of every
+pass alone is printed too.
 
     python bench/leximin_speed.py                     # 5 cycles + 100 random sets; 180 x 2000, 3 seeds
     python bench/leximin_speed.py --sets 20 --shop-seeds 1
@@ -46,6 +50,7 @@ from exact_scaling import shop_problem
 from setupfix.model import load_model
 from setupfix.optimize import CorrectionProblem, get_optimizer
 from setupfix.optimize._lp_bound import lp_bound, margin_rows
+import setupfix.optimize._session as session_mod
 from setupfix.optimize._session import GridRows, Session
 from setupfix.optimize._settings import ExactSettings
 
@@ -183,6 +188,7 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("--seed", type=int, default=2014)
     ap.add_argument("--limit", type=float, default=2.0, help="time limit per paper-size report [s]")
     ap.add_argument("--shop", default="180x2000")
+    ap.add_argument("--passes", type=int, default=3, help="passes over the paper-size set (each report: its best)")
     ap.add_argument("--shop-seeds", type=int, default=3)
     ap.add_argument("--shop-limit", type=float, default=60.0)
     ap.add_argument("--fixtures", type=int, default=6, help="generated multi-axis fixtures")
@@ -204,32 +210,47 @@ def main(argv: list[str] | None = None) -> None:
             sys.stdout.write(text)
             return
         probs = problems(args.sets, args.seed)
-        rows: dict[str, list[float]] = {"leximin": [], "paper": [], "lp": []}
         status: dict[str, Counter[str]] = {"leximin": Counter(), "paper": Counter()}
         kinds: Counter[str] = Counter()
-        for _, problem in probs:
-            rows["lp"].append(lp_seconds(problem))
-            for objective in ("paper", "leximin"):
-                sec, st, kind = timed(problem, objective, args.limit)
-                rows[objective].append(sec)
-                status[objective][st] += 1
-                if objective == "leximin":
-                    kinds[kind] += 1
+        wall = {key: np.zeros((args.passes, len(probs))) for key in ("lp", "paper", "leximin")}
+        cpu = {key: np.zeros((args.passes, len(probs))) for key in ("lp", "paper", "leximin")}
+        for run in range(args.passes):
+            # every pass starts as a new process would: no model's results of G kept from the pass before
+            session_mod._DERIVED.clear()
+            for key in list(CPU):
+                CPU[key] = []
+            for i, (_, problem) in enumerate(probs):
+                wall["lp"][run, i] = lp_seconds(problem)
+                for objective in ("paper", "leximin"):
+                    sec, st, kind = timed(problem, objective, args.limit)
+                    wall[objective][run, i] = sec
+                    if run == 0:
+                        status[objective][st] += 1
+                        if objective == "leximin":
+                            kinds[kind] += 1
+            for key in cpu:
+                cpu[key][run] = CPU[key]
+        rows = {key: list(wall[key].min(axis=0)) for key in wall}  # per report, its best pass
+        for key in cpu:
+            CPU[key] = list(cpu[key].min(axis=0))
         ref = float(np.median(rows["lp"]))
         lines += ["", f"paper size: guide-pins model, {len(probs)} reports (5 cycles + {args.sets} random sets, seed "
-                  f"{args.seed}), time limit {args.limit:g} s",
+                  f"{args.seed}), time limit {args.limit:g} s; {args.passes} passes over them, each report's time "
+                  "its best pass (each pass starts with no model's memo, as a new process would)",
                   f"reference: one LP of eq. 8 on the same report, median {ref * 1e3:.3f} ms"]
         for objective in ("paper", "leximin"):
             t = np.array(rows[objective])
+            firsts = ", ".join(f"{np.median(wall[objective][r]) * 1e3:.2f}" for r in range(args.passes))
             lines.append(f"  {objective:8s} median {np.median(t) * 1e3:8.2f} ms = {np.median(t) / ref:7.1f}x LP; "
                          f"p95 {np.percentile(t, 95) * 1e3:8.2f} ms; max {t.max() * 1e3:8.1f} ms; "
-                         f"status {dict(status[objective])}")
+                         f"status {dict(status[objective])}; each pass alone: median {firsts} ms")
         lines.append(f"  leximin paths: {dict(kinds)} (levels: progressive filling only; branches: a discrete "
                      "conflict decided by branches; counts: by the count MILPs)")
         for kind, runs in sorted(STAGES.items()):
             names = [n for n in runs[0] if n != "total"] + ["total"]
             shown = ", ".join(f"{n} {np.median([r.get(n, 0.0) for r in runs]) * 1e3:.2f}" for n in names)
-            lines.append(f"  {kind} ({len(runs)}): median ms by stage (the leximin stage holds the climbs): {shown}")
+            lines.append(f"  {kind} ({len(runs) // args.passes}): median ms by stage over the passes (the leximin "
+                         f"stage holds the climbs): {shown}")
         hits, total = climb_hits(probs, args.limit)
         lines.append(f"  grid climb (the levels' start point): reaches the proved leximin margins on {hits} of {total} "
                      "reports")
@@ -239,9 +260,11 @@ def main(argv: list[str] | None = None) -> None:
             f"{np.percentile(CPU[o], 95) * 1e3:.2f} ms" for o in ("paper", "leximin")))
         med = float(np.median(rows["leximin"]))
         med_cpu = float(np.median(CPU["leximin"]))
+        worst_pass = max(float(np.median(wall["leximin"][r])) for r in range(args.passes))
         lines.append(f"  target (issue 22): median <= 5 ms with leximin: {'met' if med <= 5e-3 else 'MISSED'} "
-                     f"(wall {med * 1e3:.2f} ms = {med / 5e-3:.1f}x the target; CPU {med_cpu * 1e3:.2f} ms = "
-                     f"{med_cpu / 5e-3:.1f}x)")
+                     f"(wall {med * 1e3:.2f} ms = {med / 5e-3:.2f}x the target; CPU {med_cpu * 1e3:.2f} ms = "
+                     f"{med_cpu / 5e-3:.2f}x; the slowest pass alone {worst_pass * 1e3:.2f} ms = "
+                     f"{worst_pass / 5e-3:.2f}x)")
         for key in list(CPU):
             CPU[key] = []
         n, m = (int(v) for v in args.shop.split("x"))
