@@ -144,18 +144,22 @@ def test_cli_time_limit_option(capsys):
     assert "--time-limit applies to the exact optimizer" in capsys.readouterr().err
 
 
-def test_threads_keep_their_own_solver_models(guide_pins_model):
-    """Solves in worker threads (batch, TUI) give the same corrections as one after another."""
+@pytest.mark.parametrize(("objective", "count", "threads"), [("paper", 8, 2), ("leximin", 24, 4)])
+def test_threads_keep_their_own_solver_models(guide_pins_model, objective, count, threads):
+    """Solves in worker threads (batch, TUI) give the same corrections as one after another — also while the
+    threads fill the per-model memo of results of G alone at once (it starts empty)."""
     from concurrent.futures import ThreadPoolExecutor
 
+    import setupfix.optimize._session as session_mod
     from setupfix.simulate import simulate_deviations
 
-    devs, _ = simulate_deviations(guide_pins_model, 8, seed=3)
+    devs, _ = simulate_deviations(guide_pins_model, count, seed=3)
     problems = [CorrectionProblem.from_part(guide_pins_model, PartMeasurement("c", "r", None, d, ("",) * d.size))
                 for d in devs]
-    alone = [get_optimizer("exact", objective="paper").solve(p).x for p in problems]
-    with ThreadPoolExecutor(max_workers=2) as pool:
-        threaded = list(pool.map(lambda p: get_optimizer("exact", objective="paper").solve(p).x, problems))
+    alone = [get_optimizer("exact", objective=objective).solve(p).x for p in problems]
+    session_mod._DERIVED.clear()
+    with ThreadPoolExecutor(max_workers=threads) as pool:
+        threaded = list(pool.map(lambda p: get_optimizer("exact", objective=objective).solve(p).x, problems))
     for a, b in zip(alone, threaded, strict=True):
         np.testing.assert_array_equal(a, b)
 
