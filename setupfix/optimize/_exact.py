@@ -208,8 +208,11 @@ class ExactOptimizer(Optimizer):
             return make_result(problem, x, optimizer=self.name, evaluations=2, seconds=time.perf_counter() - start,
                                status="optimal", bound=bound, binding=binding)
         climbed: list[Array] = []  # the leximin levels' first climb, where the grid optimum ran it
+        dims: tuple[npt.NDArray[np.intp], int] | None = None  # leximin: each row's dimension, how many
         if self.objective == "leximin":
-            row_dim, n_dims = dimension_of_rows(problem), len(model_dimensions(problem)[0])
+            row_dim = dimension_of_rows(problem)  # a zone's facets are one dimension: its margin, their least
+            n_dims = len(model_dimensions(problem)[0])
+            dims = (row_dim, n_dims)
 
             def climb(k: Array) -> Array | None:
                 out = root_climb(session, row_dim, n_dims, k)
@@ -223,22 +226,24 @@ class ExactOptimizer(Optimizer):
         calls = 1 + opt.calls
         if opt.upper < -TOL or (opt.stopped is None and opt.t < -TOL):
             return triaged_result(problem, session, opt.k, list(opt.path), list(opt.notes), calls, bound, self.name)
-        if self.objective == "leximin" and opt.stopped is None:
+        if dims is not None and opt.stopped is None:
             k_climb = climbed[-1] if climbed and np.array_equal(climbed[-1], opt.k) else None
-            return self._leximin(problem, session, lp, opt, calls, bound, binding, k_climb)
+            return self._leximin(problem, session, lp, opt, calls, bound, binding, dims, k_climb)
         least, calls = self._least_norm(session, opt, calls)
         session.clock.lap("least norm")
         x[free] = least.k * problem.resolution
         return self._result(problem, session, x, opt, least, calls, bound, binding)
 
     def _leximin(self, problem: CorrectionProblem, session: Session, lp: LPBound, opt: GridOptimum, calls: int,
-                 bound: float, binding: tuple[str, ...], k_climb: Array | None) -> OptimizeResult:
+                 bound: float, binding: tuple[str, ...], dims: tuple[npt.NDArray[np.intp], int],
+                 k_climb: Array | None) -> OptimizeResult:
         """Levels 2, 3 … after the proved first level (the paper's δ), then the least norm among the
-        leximin-optimal grid points (:mod:`setupfix.optimize._leximin`); ``k_climb``: the levels' first
-        climb where the grid-optimum stage ran it and took its point."""
-        row_dim = dimension_of_rows(problem)  # a zone's facets are one dimension: its margin, their least
+        leximin-optimal grid points (:mod:`setupfix.optimize._leximin`); ``dims``: each row's dimension and
+        how many there are; ``k_climb``: the levels' first climb where the grid-optimum stage ran it and
+        took its point."""
+        row_dim, n_dims = dims
         stage_end = session.clock.deadline - self.settings.leximin_norm_share * self.time_limit
-        lex = leximin(session, row_dim, len(model_dimensions(problem)[0]), opt.k, opt.t,
+        lex = leximin(session, row_dim, n_dims, opt.k, opt.t,
                       first=LevelValue(opt.t, opt.k, lp.t, lp.y), stage_end=stage_end, k_climb=k_climb)
         session.clock.lap("leximin")
         share = self.settings.box_share if lex.stopped is None else self.settings.stopped_box_share
