@@ -26,7 +26,7 @@ import numpy.typing as npt
 from scipy.sparse import coo_array, csr_array, hstack, vstack
 
 from setupfix.optimize._chords import chord_rows, lazy_chords
-from setupfix.optimize._grid import TOL
+from setupfix.optimize._grid import TOL, rounded_rhs
 from setupfix.optimize._grid_least_norm import LeastNorm
 from setupfix.optimize._highs import INF, LinearModel
 from setupfix.optimize._session import Session
@@ -85,7 +85,10 @@ class _Rows:
         self.act = np.isnan(f)
         self.fix = np.isfinite(f)
         self.col = pos[row_dim[self.act]]  # binary column (within a block) of each active row
-        self.base_hi = np.where(self.act, self.g - t0, self.g - np.where(self.fix, f, 0.0))
+        level = np.where(self.act, t0, np.where(self.fix, f, -np.inf))
+        self.base_hi = np.where(self.act | self.fix, rounded_rhs(self.g, rows.d, rows.zero, level), np.inf)
+        # the least margin an active row can have over the base rows (its lattice value at or above t0)
+        self.r = np.where(rows.zero, self.g, self.g - self.base_hi)[self.act]
         self.keep = self.act | self.fix
         self.f = f
         self.t0 = t0
@@ -118,6 +121,8 @@ class _Rows:
         level = top if t is None else t
         big = np.full(ga.size, max(level - self.t0, 0.0))
         rhs = ga + big - (0.0 if t is None else t)
+        if t is not None:
+            rhs = np.where(self.r < t - TOL, rhs, INF)  # a row whose lattice cannot be below t needs no big-M row
         w = csr_array(coo_array((big, (np.arange(self.act.sum()), self.col)), shape=(int(self.act.sum()),
                                                                                      self.n_active)))
         return w, big, rhs
@@ -167,7 +172,13 @@ def _model(rows: _Rows, blocks: list[tuple[float, int]], extra: int, question: t
         c[off + len(blocks) * na: off + nb * na] = -1.0
     elif objective == "value":
         c[n + extra] = -1.0
-    col_lo = np.r_[rows.kmin, np.zeros(extra), [t_lo] if with_t else [], np.zeros(nb * na)]
+    w_lo = np.zeros(nb * na)
+    for i, (t_i, _) in enumerate([*blocks, question]):
+        if t_i is not None:
+            need = np.zeros(na, bool)
+            need[rows.col[rows.r < t_i - TOL]] = True
+            w_lo[i * na:(i + 1) * na] = ~need
+    col_lo = np.r_[rows.kmin, np.zeros(extra), [t_lo] if with_t else [], w_lo]
     col_hi = np.r_[rows.kmax, np.full(extra, INF), [top] if with_t else [], np.ones(nb * na)]
     integer = np.r_[np.ones(n, bool), np.zeros(extra + (1 if with_t else 0), bool), np.ones(nb * na, bool)]
     a = vstack(parts).tocsr()

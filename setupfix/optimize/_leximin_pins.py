@@ -32,7 +32,7 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
-from setupfix.optimize._farkas import farkas_or_point, farkas_weights
+from setupfix.optimize._farkas import farkas_or_point
 from setupfix.optimize._grid import TOL, rounded_rhs
 from setupfix.optimize._leximin_search import group_min
 from setupfix.optimize._highs import INF, LinearModel
@@ -233,18 +233,22 @@ def dim_margins(g_rows: Array, g: Array, k: Array, order: npt.NDArray[np.intp], 
 
 
 def excluded_alone(rows: GridRows, floors: Array, row_dim: npt.NDArray[np.intp], n_dims: int, t: float,
-                   eps: float, together: int = 1) -> Mask:
+                   eps: float, together: int = 1, point: Array | None = None,
+                   whole: bool = True) -> Mask:
     """Active dimensions (``together`` = 2: pairs of them) proved unable to be the only ones left at level t,
     by one Farkas certificate.
 
     ``floors``: per row (NaN: active).  b: every active row rounded at t + ε, fixed rows at their
     floors; weights y ≥ 0 (sum 1) with ``max over the box of Σ y_j (b_j − G_j k) = W < 0``
-    (:func:`farkas_weights`) prove that no point meets G k ≤ b.  Lowering dimension q's rows to t
+    (:func:`~setupfix.optimize._farkas.farkas_or_point`) prove that no point meets G k ≤ b.  Lowering
+    dimension q's rows to t
     raises b_j by δ_j on them only, so the same weights still prove "no point" when
     W + Σ_{j ∈ q} y_j δ_j < 0: no grid point has every active dimension but q above t + ε (q ≥ t);
     for a pair q, p (rows of one dimension only), W + Σ_{j ∈ q} y_j δ_j + Σ_{j ∈ p} y_j δ_j < 0.
     Returns a mask of shape (n_dims,), or (n_dims, n_dims) for pairs (symmetric; all False when NNLS
-    finds no certificate).
+    finds no certificate).  ``point``: a grid point of the level set, near which the certificate is sought
+    first (``farkas_or_point``'s near rows: fewer columns, and weights on few rows exclude the most);
+    ``whole=False``: only there.
     """
     out = np.zeros((n_dims,) * together, bool)
     active = np.isnan(floors)
@@ -252,7 +256,7 @@ def excluded_alone(rows: GridRows, floors: Array, row_dim: npt.NDArray[np.intp],
     fin = np.isfinite(level)
     b_up = np.full(level.size, np.inf)
     b_up[fin] = rounded_rhs(rows.g[fin], rows.d[fin], rows.zero[fin], level[fin])
-    y = farkas_weights(rows, b_up)
+    y = farkas_or_point(rows, b_up, point, whole)[0]
     if y is None:
         return out
     b_at = b_up.copy()

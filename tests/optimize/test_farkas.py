@@ -69,3 +69,27 @@ def test_weights_that_prove_nothing_are_refused():
     keep = np.isfinite(b)
     assert farkas._checked(rows, b, keep, np.ones(int(keep.sum()))) is None
     assert farkas_or_point(rows, b, pts[0])[0] is None
+
+
+@pytest.mark.parametrize("seed", range(40))
+def test_near_rows_only_prove_a_subset_of_the_cases_and_never_solve_the_whole(seed, monkeypatch):
+    """``whole=False``: a proof only where the whole system has one (brute force), no point ever, and NNLS
+    never on every column; where the near rows prove nothing the answer is (None, None), not the whole's."""
+    rows, b, pts = _rows(seed)
+    feasible = np.all(pts @ rows.g_rows.T <= b + 1e-9, axis=1)
+    k = pts[np.random.default_rng(seed).integers(len(pts))]
+    sizes: list[int] = []
+    solve = farkas._nnls_solve
+    monkeypatch.setattr(farkas, "_nnls_solve", lambda e: sizes.append(e.shape[1]) or solve(e))
+    y, x = farkas_or_point(rows, b, k, whole=False)
+    assert x is None
+    if y is not None:
+        assert not feasible.any() and _proves_empty(rows, b, y)
+    n_cols = int(np.isfinite(b).sum()) + 2 * rows.n_free
+    assert all(size < n_cols for size in sizes)
+    g_rows = np.array([[1.0, 0.0], [-1.0, 0.0]])
+    far = GridRows(g_rows, np.zeros(2), np.full(2, -50.0), np.full(2, 50.0), np.ones(2))
+    b2, k2 = np.array([-1.0, -1.0]), np.array([30.0, 0.0])  # x ≤ −1 and x ≥ 1; only the first row near k2
+    assert farkas_or_point(far, b2, k2, whole=False) == (None, None)
+    y2 = farkas_or_point(far, b2, k2)[0]
+    assert y2 is not None and _proves_empty(far, b2, y2)

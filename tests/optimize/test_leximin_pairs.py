@@ -68,8 +68,8 @@ def test_pair_branches_equal_brute_force_on_windows(report, centre, monkeypatch)
     claims: list[int] = []
     original = lexmod.excluded_alone
 
-    def checked(rows, floors, row_dim, n_dims, t, eps, together=1):
-        out = original(rows, floors, row_dim, n_dims, t, eps, together)
+    def checked(rows, floors, row_dim, n_dims, t, eps, together=1, *near):
+        out = original(rows, floors, row_dim, n_dims, t, eps, together, *near)
         if together == 2:
             free = problem.free
             axes = [np.arange(lo, hi + 1) for lo, hi in zip(problem.kmin[free], problem.kmax[free], strict=True)]

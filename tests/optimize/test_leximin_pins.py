@@ -102,15 +102,21 @@ def _dims(rows, row_dim, n_dims, pts) -> np.ndarray:
     return m_dims
 
 
-def test_a_dimension_excluded_from_a_conflict_is_never_alone_at_its_level(monkeypatch):
+@pytest.mark.parametrize("large", [False, True], ids=["small", "as-if-large"])
+def test_a_dimension_excluded_from_a_conflict_is_never_alone_at_its_level(large, monkeypatch):
     """The one Farkas certificate that spares the per-dimension tests of a discrete conflict: every
     dimension it excludes has no grid point with the other active ones above t + ε (brute force), and
-    the search still finds the brute-force leximin."""
+    the search still finds the brute-force leximin — also on the path of problems too large for NNLS on
+    the whole system (the certificate from the rows near the level's point only)."""
+    if large:
+        from setupfix.optimize._session import Session
+
+        monkeypatch.setattr(Session, "small", property(lambda self: False))
     claims: list[int] = []
     original = lexmod.excluded_alone
 
-    def checked(rows, floors, row_dim, n_dims, t, eps, together=1):
-        out = original(rows, floors, row_dim, n_dims, t, eps, together)
+    def checked(rows, floors, row_dim, n_dims, t, eps, together=1, *near):
+        out = original(rows, floors, row_dim, n_dims, t, eps, together, *near)
         if together != 1:  # pairs: tests/optimize/test_leximin_pairs.py
             return out
         pts = _grid(rows)

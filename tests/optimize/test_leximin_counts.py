@@ -1,0 +1,63 @@
+"""The count MILPs of the leximin levels (:mod:`setupfix.optimize._leximin_counts`) against brute force."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import setupfix.optimize._leximin as lexmod
+import setupfix.optimize._leximin_counts as countmod
+from setupfix.optimize._grid import TOL
+
+from .test_leximin import CONFLICTS, brute_leximin, make, solved_steps
+from .test_leximin_pins import _grid
+
+
+@pytest.mark.parametrize(("kind", "seed", "kw"), CONFLICTS)
+def test_each_count_equals_the_grid_count_and_fixes_only_what_the_lattice_decides(kind, seed, kw, monkeypatch):
+    """Every count MILP's optimum is the most active dimensions with margin ≥ t + ε over the grid points
+    that meet the floors, t0 and the blocks found so far (brute force); a binary the model fixes at 1
+    (every row's lattice value at or above t0 is ≥ t) is ≥ t at every such point, and some are fixed."""
+    monkeypatch.setattr(lexmod, "MAX_BRANCHES", 0)
+    seen: list[tuple[countmod._Rows, list[tuple[float, int]], float, np.ndarray, float]] = []
+    original = countmod._model
+
+    def model(rows, blocks, extra, question, objective, top, t_lo):
+        out, off = original(rows, blocks, extra, question, objective, top, t_lo)
+        if objective == "count":
+            na = rows.n_active
+            fixed = out._col_lo[off + len(blocks) * na: off + (len(blocks) + 1) * na] >= 1
+            solve = out.solve
+
+            def recorded(limit, *start):
+                res = solve(limit, *start)
+                if res.status == "optimal":
+                    seen.append((rows, list(blocks), float(question[0]), fixed, -float(res.objective)))
+                return res
+
+            out.solve = recorded
+        return out, off
+
+    monkeypatch.setattr(countmod, "_model", model)
+    problem = make(kind, seed, kw)
+    best, norm, _ = brute_leximin(problem)
+    result, k, sorted_m = solved_steps(problem)
+    assert result.status == "optimal" and "the rest by counts" in result.extra["path"]
+    np.testing.assert_allclose(sorted_m, best, atol=1e-6)
+    assert float(problem.cost[problem.free] @ k**2) == pytest.approx(norm, abs=1e-9)
+    assert seen
+    n_fixed = 0
+    for rows, blocks, t, fixed, count in seen:
+        m_rows = rows.g[None, :] - _grid(rows) @ rows.g_rows.T
+        m = np.full((m_rows.shape[0], rows.n_active), np.inf)
+        for j, col in zip(np.flatnonzero(rows.act), rows.col, strict=True):
+            m[:, col] = np.minimum(m[:, col], m_rows[:, j])
+        ok = (np.all(m_rows[:, rows.fix] >= rows.f[rows.fix] - TOL, axis=1)
+              & np.all(m_rows[:, rows.act] >= rows.t0 - TOL, axis=1))
+        for t_i, c_i in blocks:
+            ok &= np.sum(m >= t_i - TOL, axis=1) >= c_i
+        m = m[ok]
+        assert count == pytest.approx(np.max(np.sum(m >= t - TOL, axis=1)))
+        assert np.all(m[:, fixed] >= t - TOL)
+        n_fixed += int(fixed.sum())
+    assert n_fixed > 0
