@@ -282,13 +282,22 @@ def meeting_rounding(rows: GridRows, x: Array, f: Array, most: int = 10) -> Arra
     frac = np.flatnonzero(np.abs(x - near) > 1e-6)[:most]
     if frac.size == 0:
         return None
-    cand = np.repeat(near[None, :], 1 << frac.size, axis=0)
     bits = (np.arange(1 << frac.size)[:, None] >> np.arange(frac.size)) & 1
-    cand[:, frac] = np.clip(lo[frac] + bits, rows.kmin[frac], rows.kmax[frac])
-    fin = np.isfinite(f)
-    ok = np.all(rows.g[fin][None, :] - cand @ rows.g_rows[fin].T >= f[fin][None, :] - 1e-9, axis=1)
-    hit = np.flatnonzero(ok)
-    return cand[int(hit[0])] if hit.size else None
+    choice = np.clip(lo[frac] + bits, rows.kmin[frac], rows.kmax[frac])  # (2^f, f)
+    # each candidate differs from ``near`` by at most one step on the fractional coordinates only: a row
+    # whose slack at ``near`` covers Σ|G_j,frac| holds for all (f = −inf: infinite slack); the others are
+    # checked on those coordinates, (2^f, f) @ (f, r') rather than (2^f, n) @ (n, r)
+    with np.errstate(invalid="ignore"):
+        slack = rows.g - rows.g_rows @ near - f
+    g_frac = rows.g_rows[:, frac]
+    at_risk = np.flatnonzero(slack < np.abs(g_frac).sum(axis=1) - 1e-9)
+    slack_c = slack[at_risk][None, :] - (choice - near[frac]) @ g_frac[at_risk].T
+    hit = np.flatnonzero(np.all(slack_c >= -1e-9, axis=1))
+    if not hit.size:
+        return None
+    out = near.copy()
+    out[frac] = choice[int(hit[0])]
+    return out
 
 
 #: Rows within this many steps of the LP's vertex make the first, small MILP of :func:`point_above`.

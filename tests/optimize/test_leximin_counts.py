@@ -16,27 +16,28 @@ from .test_leximin_pins import _grid
 @pytest.mark.parametrize(("kind", "seed", "kw"), CONFLICTS)
 def test_each_count_equals_the_grid_count_and_fixes_only_what_the_lattice_decides(kind, seed, kw, monkeypatch):
     """Every count MILP's optimum is the most active dimensions with margin ≥ t + ε over the grid points
-    that meet the floors, t0 and the blocks found so far (brute force); a binary the model fixes at 1
-    (every row's lattice value at or above t0 is ≥ t) is ≥ t at every such point, and some are fixed."""
+    that meet the floors, t0 and the blocks found so far (brute force); a dimension the model gives no
+    binary (every row's lattice value at or above t0 is ≥ t) is ≥ t at every such point, and some have none."""
     monkeypatch.setattr(lexmod, "MAX_BRANCHES", 0)
     seen: list[tuple[countmod._Rows, list[tuple[float, int]], float, np.ndarray, float]] = []
     original = countmod._model
 
     def model(rows, blocks, extra, question, objective, top, t_lo):
-        out, off = original(rows, blocks, extra, question, objective, top, t_lo)
+        out, layout = original(rows, blocks, extra, question, objective, top, t_lo)
         if objective == "count":
-            na = rows.n_active
-            fixed = out._col_lo[off + len(blocks) * na: off + (len(blocks) + 1) * na] >= 1
+            fixed = np.ones(rows.n_active, bool)
+            fixed[layout.dims[-1]] = False
             solve = out.solve
 
             def recorded(limit, *start):
                 res = solve(limit, *start)
                 if res.status == "optimal":
-                    seen.append((rows, list(blocks), float(question[0]), fixed, -float(res.objective)))
+                    count = -float(res.objective) + layout.above_anyway(len(blocks))
+                    seen.append((rows, list(blocks), float(question[0]), fixed, count))
                 return res
 
             out.solve = recorded
-        return out, off
+        return out, layout
 
     monkeypatch.setattr(countmod, "_model", model)
     problem = make(kind, seed, kw)
