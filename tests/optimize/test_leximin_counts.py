@@ -62,3 +62,32 @@ def test_each_count_equals_the_grid_count_and_fixes_only_what_the_lattice_decide
         assert np.all(m[:, fixed] >= t - TOL)
         n_fixed += int(fixed.sum())
     assert n_fixed > 0
+
+
+@pytest.mark.parametrize(("kind", "seed", "kw"), CONFLICTS)
+def test_counts_stopped_give_the_least_norm_at_the_conflict_level_not_the_counts_point(kind, seed, kw, monkeypatch):
+    """When the counts stop before their proof (here: no time for a second MILP), the answer is the least
+    Σ c k² over every grid point with each dimension at its floor — the active ones at the conflict's level
+    (brute force) — as where the levels stop, never the counts' unproved point."""
+    import setupfix.optimize._exact as exactmod
+
+    monkeypatch.setattr(lexmod, "MAX_BRANCHES", 0)
+    monkeypatch.setattr(countmod._Runs, "room", lambda self: self.calls == 0)
+    captured = []
+    original = exactmod.leximin_least_norm
+
+    def least(session, lex, row_dim, share):
+        captured.append((session.rows, lex, row_dim))
+        return original(session, lex, row_dim, share)
+
+    monkeypatch.setattr(exactmod, "leximin_least_norm", least)
+    problem = make(kind, seed, kw)
+    result, k, _ = solved_steps(problem)
+    assert result.status == "time_limit" and "the rest by counts" in result.extra["path"]
+    (rows, lex, row_dim), = captured
+    assert lex.counts is None and lex.stopped is not None
+    pts = _grid(rows)
+    m_rows = rows.g[None, :] - pts @ rows.g_rows.T
+    ok = np.all(m_rows >= lex.floors[row_dim][None, :] - 1e-9, axis=1)
+    norms = (pts[ok] ** 2) @ rows.cost
+    assert float(rows.cost @ k**2) == pytest.approx(norms.min(), abs=1e-9)
