@@ -319,14 +319,16 @@ def _alone(search: _Search, v: Array, k: Array, t: float, together: int
     """The sets of ``together`` (1 or 2) active dimensions that can be the only ones left at t, each with
     a grid point; None: the limit stopped a test; [] also when there are more than MAX_PAIR_TESTS pairs.
 
-    One Farkas certificate sought near k (the level's point) first excludes every dimension it does
-    not lean on (:func:`~setupfix.optimize._leximin_pins.excluded_alone`, integer rows; beyond a small
-    problem only the rows near k are searched, whose NNLS costs a fraction of the whole's): at
-    180 × 2,000 it leaves 5 of some 1,960 active dimensions to test alone, each test an LP.
+    One Farkas certificate excludes every dimension it does not lean on
+    (:func:`~setupfix.optimize._leximin_pins.excluded_alone`, integer rows): on a small problem from
+    the whole system, beyond one from the rows near k (the level's point) only, whose NNLS costs a
+    fraction of the whole's — at 180 × 2,000 it leaves 5 of some 1,960 active dimensions to test
+    alone, each test an LP.
     """
     model, eps, rows = search.model, search.eps, search.session.rows
     active = np.isnan(v)
-    out = (excluded_alone(rows, v[model.row_dim], model.row_dim, v.size, t, eps, together, k, search.session.small)
+    small = search.session.small  # the whole system at once (NNLS on the near rows first costs more there)
+    out = (excluded_alone(rows, v[model.row_dim], model.row_dim, v.size, t, eps, together, None if small else k, small)
            if rows.all_integer else np.zeros((v.size,) * together, bool))
     sets: list[tuple[int, ...]]
     if together == 1:
