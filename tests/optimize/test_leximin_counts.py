@@ -91,3 +91,35 @@ def test_counts_stopped_give_the_least_norm_at_the_conflict_level_not_the_counts
     ok = np.all(m_rows >= lex.floors[row_dim][None, :] - 1e-9, axis=1)
     norms = (pts[ok] ** 2) @ rows.cost
     assert float(rows.cost @ k**2) == pytest.approx(norms.min(), abs=1e-9)
+
+
+def test_a_run_starts_only_with_more_time_left_than_the_longest_took():
+    import time
+
+    runs = countmod._Runs(time.perf_counter() + 5.0)
+    assert runs.room()
+    runs.longest = 4.0
+    assert runs.room()
+    runs.longest = 6.0
+    assert not runs.room()
+    assert not countmod._Runs(time.perf_counter() - 1e-3).room()
+
+
+def test_no_least_norm_milp_starts_when_a_count_milp_took_longer_than_what_is_left(monkeypatch):
+    """Counts proved, but the time left is less than the longest count MILP took: the chord MILP of the least
+    norm is not started (HiGHS would run past the limit in its root's cut rounds); the answer says so."""
+    monkeypatch.setattr(lexmod, "MAX_BRANCHES", 0)
+    solve = countmod._Runs.solve
+
+    def slow(self, model):
+        res = solve(self, model)
+        self.longest = 1e6  # as if a count MILP had taken longer than any limit
+        return res
+
+    monkeypatch.setattr(countmod._Runs, "solve", slow)
+    monkeypatch.setattr(countmod._Runs, "room", lambda self: True)
+    monkeypatch.setattr(countmod, "lazy_chords", lambda *a, **k: pytest.fail("the chord MILP was started"))
+    kind, seed, kw = CONFLICTS[0]
+    result, _, _ = solved_steps(make(kind, seed, kw))
+    assert result.status == "time_limit"
+    assert "less time left than a count MILP took" in result.extra["path"]
