@@ -66,7 +66,7 @@ def farkas_or_point(rows: GridRows, b: Array, k: Array | None = None, whole: boo
     e[-1, n_rows:n_rows + n] = rows.kmin
     e[-1, n_rows + n:] = -rows.kmax
     if k is not None:
-        near = np.flatnonzero(np.concatenate((b[keep] - rows.g_rows[keep] @ k, k - rows.kmin, rows.kmax - k)) <= NEAR)
+        near = np.flatnonzero(np.concatenate(((b - rows.g_rows @ k)[keep], k - rows.kmin, rows.kmax - k)) <= NEAR)
         if 0 < near.size < e.shape[1]:
             sub = _nnls_solve(e[:, near])
             if sub is not None and abs(sub[1][-1]) <= 1e-9:
