@@ -213,3 +213,41 @@ def test_point_above_answers_as_the_grid_does(tight, monkeypatch):
             answers["none"] += 1
     assert answers["point"] > 20 and answers["none"] > 20
     assert (tight_first > 0) == bool(np.isfinite(tight))  # the tight-row MILP ran, and only where asked for
+
+
+def test_meeting_rounding_is_the_first_floor_ceil_choice_that_meets_the_floors():
+    """Against every floor/ceil choice listed in the same order (the lowest bits first), on 30 random cases
+    of both outcomes: the same point, or None exactly when no choice meets the floors; rows without a
+    floor (−inf) never refuse one."""
+    from setupfix.optimize._leximin_pins import meeting_rounding
+    from setupfix.optimize._session import GridRows
+
+    outcomes = []
+    for seed in range(30):
+        rng = np.random.default_rng(seed)
+        n, r = 6, 14
+        g_rows = rng.integers(-2, 3, size=(r, n)).astype(float)
+        rows = GridRows(g_rows, rng.uniform(-3.0, 3.0, r), np.full(n, -4.0), np.full(n, 4.0), np.ones(n))
+        x = rng.uniform(-3.5, 3.5, n)
+        x[: seed % 3] = np.round(x[: seed % 3])  # some coordinates already integer
+        frac = np.flatnonzero(np.abs(x - np.rint(x)) > 1e-6)
+        some = np.rint(x)
+        some[frac] = np.floor(x[frac]) + rng.integers(0, 2, frac.size)  # one choice: its margins, less a little
+        f = rows.g - g_rows @ some - rng.uniform(0.0, 0.5, r)
+        if seed % 2:  # raise a few floors: often no choice meets them any more
+            f[rng.integers(0, r, 3)] += 1.0
+        f[rng.random(r) < 0.3] = -np.inf
+        found = None
+        for bits in range(1 << frac.size):
+            cand = np.rint(x)
+            cand[frac] = np.floor(x[frac]) + ((bits >> np.arange(frac.size)) & 1)
+            if np.all(rows.g - g_rows @ cand >= f - 1e-9):
+                found = cand
+                break
+        got = meeting_rounding(rows, x, f)
+        if found is None:
+            assert got is None, seed
+        else:
+            np.testing.assert_array_equal(got, found)
+        outcomes.append(found is not None)
+    assert any(outcomes) and not all(outcomes)
