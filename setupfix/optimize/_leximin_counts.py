@@ -19,7 +19,7 @@ On integer rows the base rows are rounded (G_j k ≤ ⌊g_j − t0⌋ on the row
 margin is at least its lattice value r_j at or above t0 wherever they hold: a block at level t
 needs big-M rows only where r_j < t and binaries only for their dimensions; every other active
 dimension is above t anyway and enters the counts as a constant.  At 180 × 2,000 the first count
-has 208 binaries instead of 1,965 (``bench/exact_scaling.py --objective leximin``).
+has 208 binaries instead of 1,965 (``bench/results/leximin_shop_trace.txt``).
 """
 
 from __future__ import annotations
@@ -83,8 +83,9 @@ class _Runs:
     """A chain's MILP runs: the next starts only with more time left than the longest so far took.
 
     HiGHS looks at its clock (and the interrupt callback) only between the cut rounds of a MILP's
-    root node, and the chain's MILPs grow block by block: at 180 × 2,000 a count MILP given 1.45 s
-    ran 5.3 s.  Stopping the chain before such a run keeps the stage within its share of the limit.
+    root node, and the chain's MILPs grow block by block: at 180 × 2,000 one given 1.83 s ran 2.05 s
+    (``bench/results/leximin_shop_trace.txt``).  Stopping the chain before a run that cannot end in time
+    keeps the stage within its share of the limit.
     """
 
     def __init__(self, stage_end: float) -> None:
