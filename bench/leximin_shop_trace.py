@@ -68,10 +68,10 @@ def _traced(lines: list[str], whole_only: bool) -> Callable[[], None]:
     if whole_only:
         excluded = lexmod.excluded_alone
 
-        def no_near(rows, floors, row_dim, n_dims, t, eps, together=1, point=None, whole=True):  # type: ignore[no-untyped-def]
-            if not whole:  # the previous code sought no certificate beyond small problems
+        def no_near(rows, floors, row_dim, n_dims, t, eps, together=1, near=None):  # type: ignore[no-untyped-def]
+            if near is not None:  # the previous code sought no certificate beyond small problems
                 return np.zeros((n_dims,) * together, bool)
-            return excluded(rows, floors, row_dim, n_dims, t, eps, together, point, whole)
+            return excluded(rows, floors, row_dim, n_dims, t, eps, together, near)
 
         patch(lexmod, "excluded_alone", no_near)
     model = countmod._model

@@ -27,7 +27,7 @@ import numpy.typing as npt
 
 from setupfix.optimize._session import GridRows
 
-__all__ = ["NEAR", "farkas_or_point", "farkas_weights"]
+__all__ = ["NEAR", "farkas_or_point"]
 
 Array = npt.NDArray[np.float64]
 Mask = npt.NDArray[np.bool_]
@@ -35,11 +35,6 @@ Mask = npt.NDArray[np.bool_]
 #: Rows and box limits within this many steps of the given point are where :func:`farkas_or_point` first seeks
 #: a certificate [steps].
 NEAR = 2.0
-
-
-def farkas_weights(rows: GridRows, b: Array) -> Array | None:
-    """Row weights y ≥ 0 (sum 1) proving that no k in the box meets G k ≤ b, or None (:func:`farkas_or_point`)."""
-    return farkas_or_point(rows, b)[0]
 
 
 def farkas_or_point(rows: GridRows, b: Array, k: Array | None = None, whole: bool = True

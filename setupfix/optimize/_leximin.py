@@ -327,8 +327,8 @@ def _alone(search: _Search, v: Array, k: Array, t: float, together: int
     """
     model, eps, rows = search.model, search.eps, search.session.rows
     active = np.isnan(v)
-    small = search.session.small  # the whole system at once (NNLS on the near rows first costs more there)
-    out = (excluded_alone(rows, v[model.row_dim], model.row_dim, v.size, t, eps, together, None if small else k, small)
+    near = None if search.session.small else k  # small: the whole system (near rows first cost more there)
+    out = (excluded_alone(rows, v[model.row_dim], model.row_dim, v.size, t, eps, together, near)
            if rows.all_integer else np.zeros((v.size,) * together, bool))
     sets: list[tuple[int, ...]]
     if together == 1:

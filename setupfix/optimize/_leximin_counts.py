@@ -118,6 +118,7 @@ class _Rows:
         self.act = np.isnan(f)
         self.fix = np.isfinite(f)
         self.col = pos[row_dim[self.act]]  # binary column (within a block) of each active row
+        self.g_act = self.g[self.act]
         level = np.where(self.act, t0, np.where(self.fix, f, -np.inf))
         self.base_hi = np.where(self.act | self.fix, rounded_rhs(self.g, rows.d, rows.zero, level), np.inf)
         # the least margin an active row can have over the base rows (its lattice value at or above t0)
@@ -159,7 +160,7 @@ class _Rows:
         at = np.arange(self.r.size) if t is None else np.flatnonzero(self.r < t - TOL)
         dims = np.unique(self.col[at])
         big = np.full(at.size, max(level - self.t0, 0.0))
-        rhs = self.g[self.act][at] + big - (0.0 if t is None else t)
+        rhs = self.g_act[at] + big - (0.0 if t is None else t)
         w = csr_array(coo_array((big, (np.arange(at.size), np.searchsorted(dims, self.col[at]))),
                                 shape=(at.size, dims.size)))
         return at, dims, w, rhs
@@ -167,11 +168,10 @@ class _Rows:
 
 @dataclass(frozen=True)
 class _Layout:
-    """Where a count MILP keeps its binaries: block i's (the question last) on ``dims[i]`` (positions among
-    the active dimensions), from column ``starts[i]``; the others of a block are above its level anyway."""
+    """Which binaries a count MILP has: block i's (the question last) on ``dims[i]`` (positions among the
+    active dimensions), in that order after the other columns; the others of a block are above its level anyway."""
 
     dims: tuple[npt.NDArray[np.intp], ...]
-    starts: tuple[int, ...]
     n_active: int
 
     def above_anyway(self, i: int) -> int:
@@ -192,7 +192,7 @@ def _model(rows: _Rows, blocks: list[tuple[float, int]], extra: int, question: t
     made = [rows.block(t_i, top) for t_i, _ in [*blocks, question]]
     starts = tuple(int(v) for v in off + np.cumsum([0] + [d.size for _, d, _, _ in made[:-1]]))
     width = off + sum(d.size for _, d, _, _ in made)
-    layout = _Layout(tuple(d for _, d, _, _ in made), starts, rows.n_active)
+    layout = _Layout(tuple(d for _, d, _, _ in made), rows.n_active)
     parts, lo, hi = [], [], []
     g_keep = csr_array(rows.g_rows[rows.keep])
     parts.append(hstack([g_keep, csr_array((g_keep.shape[0], width - n))]))

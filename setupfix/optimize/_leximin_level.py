@@ -166,7 +166,7 @@ class LevelModel:
         weights y that also pin rows (:func:`~setupfix.optimize._leximin_pins.pinned_rows`):
 
         * small problems: a Farkas certificate of those rows by NNLS (no LP,
-          :func:`~setupfix.optimize._farkas.farkas_weights`);
+          :func:`~setupfix.optimize._farkas.farkas_or_point`);
         * else the level LP (:meth:`_solve`) on b_j (D and fixed rows) and b_j + S (the other active
           rows), S = min_D d_j: it has t = S at every such grid point, so weights from its duals with
           C = max over the box of Σ y_j (rhs_j − G_j k) < S·Σ_active y_j prove it.

@@ -233,22 +233,20 @@ def dim_margins(g_rows: Array, g: Array, k: Array, order: npt.NDArray[np.intp], 
 
 
 def excluded_alone(rows: GridRows, floors: Array, row_dim: npt.NDArray[np.intp], n_dims: int, t: float,
-                   eps: float, together: int = 1, point: Array | None = None,
-                   whole: bool = True) -> Mask:
+                   eps: float, together: int = 1, near: Array | None = None) -> Mask:
     """Active dimensions (``together`` = 2: pairs of them) proved unable to be the only ones left at level t,
     by one Farkas certificate.
 
     ``floors``: per row (NaN: active).  b: every active row rounded at t + ε, fixed rows at their
     floors; weights y ≥ 0 (sum 1) with ``max over the box of Σ y_j (b_j − G_j k) = W < 0``
     (:func:`~setupfix.optimize._farkas.farkas_or_point`) prove that no point meets G k ≤ b.  Lowering
-    dimension q's rows to t
-    raises b_j by δ_j on them only, so the same weights still prove "no point" when
+    dimension q's rows to t raises b_j by δ_j on them only, so the same weights still prove "no point" when
     W + Σ_{j ∈ q} y_j δ_j < 0: no grid point has every active dimension but q above t + ε (q ≥ t);
     for a pair q, p (rows of one dimension only), W + Σ_{j ∈ q} y_j δ_j + Σ_{j ∈ p} y_j δ_j < 0.
     Returns a mask of shape (n_dims,), or (n_dims, n_dims) for pairs (symmetric; all False when NNLS
-    finds no certificate).  ``point``: a grid point of the level set, near which the certificate is sought
-    first (``farkas_or_point``'s near rows: fewer columns, and weights on few rows exclude the most);
-    ``whole=False``: only there.
+    finds no certificate).  ``near``: a grid point of the level set; the certificate is then sought
+    among the rows near it only (``farkas_or_point(..., whole=False)``: NNLS on a fraction of the
+    columns, and weights on few rows exclude the most); None: on the whole system.
     """
     out = np.zeros((n_dims,) * together, bool)
     active = np.isnan(floors)
@@ -256,7 +254,7 @@ def excluded_alone(rows: GridRows, floors: Array, row_dim: npt.NDArray[np.intp],
     fin = np.isfinite(level)
     b_up = np.full(level.size, np.inf)
     b_up[fin] = rounded_rhs(rows.g[fin], rows.d[fin], rows.zero[fin], level[fin])
-    y = farkas_or_point(rows, b_up, point, whole)[0]
+    y = farkas_or_point(rows, b_up, near, whole=near is None)[0]
     if y is None:
         return out
     b_at = b_up.copy()
