@@ -48,7 +48,7 @@ class Chain:
 
     def __init__(self, problem: CorrectionProblem, cap: float) -> None:
         self.a = np.rint(problem.composite.T).astype(int)  # (m, n), entries in {-2..2}
-        step = int(round(problem.resolution / UNIT))
+        step = round(problem.resolution / UNIT)
         self.hi = np.rint((problem.upper - problem.deviation) / UNIT).astype(int)  # margin = hi - step·a k
         self.lo = np.rint((problem.deviation - problem.lower) / UNIT).astype(int)  # margin = lo + step·a k
         self.step, self.kmin, self.kmax, self.cap = step, problem.kmin, problem.kmax, cap
@@ -109,6 +109,56 @@ class Chain:
         return self._solve(mdl)
 
 
+def full_vector(chain: Chain, m: int) -> tuple[list[tuple[int, int]], bool, int, float]:
+    """The leximin vector by the chain: [(value in units, how many at it)], whether it is whole (False: a
+    question was not proved within the cap; the values before it are), questions, seconds."""
+    status, t, total = chain.value(None)
+    chain.t1, asked, out, prev = int(t), 1, [], m
+    while status == "OPTIMAL":
+        status, above, secs = chain.count(int(t))
+        total, asked = total + secs, asked + 1
+        if status != "OPTIMAL":
+            break
+        out.append((int(t), prev - int(above)))
+        prev = int(above)
+        if prev == 0:
+            return out, True, asked, total
+        status, t, secs = chain.value(prev)
+        total, asked = total + secs, asked + 1
+        chain.blocks.append((int(t), prev))
+    return out, False, asked, total
+
+
+def full(args: argparse.Namespace, lines: list[str]) -> None:
+    """``--full``: the optimiser's proved leximin vector against the whole chain on CP-SAT."""
+    lines.append(f"the whole leximin vector: the optimiser ({args.limit:g} s limit, proved answers only) against "
+                 f"the CP-SAT chain to its end (each question capped at {args.cap:g} s)")
+    lines.append(f"{'size':>10} {'seed':>4} {'optimiser':>10} {'wall s':>7} {'values':>6} {'questions':>9} "
+                 f"{'CP-SAT s':>8}  same vector")
+    for size in args.full.split(","):
+        n, m = (int(v) for v in size.split("x"))
+        for seed in range(args.seeds):
+            problem = shop_problem(n, m, seed)
+            with threadpool_limits(1):
+                began = time.perf_counter()
+                res = get_optimizer("exact", time_limit=args.limit).solve(problem)
+                wall = time.perf_counter() - began
+            units = np.rint(problem.margins(np.asarray(res.x)) / UNIT).astype(int)
+            mine = [(int(v), int(c)) for v, c in zip(*np.unique(units, return_counts=True), strict=True)]
+            theirs, whole, asked, secs = full_vector(Chain(problem, args.cap), m)
+            diff = next((i for i, (a, b) in enumerate(zip(mine, theirs, strict=False)) if a != b),
+                        None if len(mine) == len(theirs) or not whole else min(len(mine), len(theirs)))
+            if diff is not None:
+                verdict = f"NO: value {diff}: {mine[diff:diff + 1]} against {theirs[diff:diff + 1]} (units, count)"
+            else:
+                verdict = "yes" if whole else f"the first {len(theirs)} values (CP-SAT stopped at the next question)"
+            if res.status != "optimal":
+                verdict += f"; optimiser {res.status}"
+            lines.append(f"{n:>4} x {m:<4} {seed:>4} {res.status:>10} {wall:>7.2f} {len(mine):>6} {asked:>9} "
+                         f"{secs:>8.1f}  {verdict}")
+            print(lines[-1], flush=True)
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--size", default="180x2000")
@@ -116,27 +166,35 @@ def main() -> None:
     ap.add_argument("--questions", type=int, default=4, help="CP-SAT solves in the chain")
     ap.add_argument("--cap", type=float, default=150.0, help="seconds per CP-SAT solve")
     ap.add_argument("--limit", type=float, default=20.0, help="the optimiser's time limit [s]")
-    ap.add_argument("--out", default=str(RESULTS / "leximin_cpsat.txt"))
+    ap.add_argument("--full", default="", help="sizes (e.g. 10x28,30x100): whole vectors compared instead")
+    ap.add_argument("--seeds", type=int, default=5, help="seeds per size with --full")
+    ap.add_argument("--out", default="")
     args = ap.parse_args()
-    n, m = (int(v) for v in args.size.split("x"))
-    problem = shop_problem(n, m, args.seed)
-    lines = ["The leximin's count band on an independent engine (CP-SAT) against the optimiser",
+    args.out = args.out or str(RESULTS / ("leximin_cpsat_full.txt" if args.full else "leximin_cpsat.txt"))
+    lines = ["The leximin on an independent engine (CP-SAT) against the optimiser",
              f"command : python bench/{Path(__file__).name} " + " ".join(sys.argv[1:]),
              f"machine : {platform.machine()}, Python {platform.python_version()}, numpy {np.__version__}, "
              f"ortools {__import__('ortools').__version__}; {os.cpu_count()} CPUs",
              f"threads : CP-SAT {os.cpu_count()} workers; the optimiser BLAS 1 thread (threadpoolctl), HiGHS 1 thread",
-             f"load    : 1-min load average {os.getloadavg()[0]:.2f} at the start",
-             f"problem : bench/exact_scaling.py shop_problem({n}, {m}, seed {args.seed}); margins in 0.1 µm "
-             f"(the optimiser's steps are 1 µm = 10 units); each CP-SAT solve capped at {args.cap:g} s", ""]
+             f"load    : 1-min load average {os.getloadavg()[0]:.2f} at the start"]
+    if args.full:
+        full(args, lines)
+        _write(args, lines)
+        return
+    n, m = (int(v) for v in args.size.split("x"))
+    problem = shop_problem(n, m, args.seed)
+    lines += [f"problem : bench/exact_scaling.py shop_problem({n}, {m}, seed {args.seed}); margins in 0.1 µm "
+              f"(the optimiser's steps are 1 µm = 10 units); each CP-SAT solve capped at {args.cap:g} s", ""]
     with threadpool_limits(1):
         began = time.perf_counter()
         res = get_optimizer("exact", time_limit=args.limit).solve(problem)
         wall = time.perf_counter() - began
     units = np.sort(np.rint(problem.margins(np.asarray(res.x)) / UNIT).astype(int))
     values, counts = np.unique(units, return_counts=True)
-    lines.append(f"the optimiser ({args.limit:g} s limit): wall {wall:.2f} s, status {res.status}; its point's smallest "
-                 "margins [steps] x how many: " + ", ".join(f"{v / 10:g} x{c}" for v, c in zip(values[:12], counts[:12],
-                                                                                                strict=True)))
+    smallest = ", ".join(f"{v / 10:g} x{c}" for v, c in zip(values[:12], counts[:12], strict=True))
+    lines.append(f"the optimiser ({args.limit:g} s limit): wall {wall:.2f} s, status {res.status}; its point's "
+                 f"smallest margins [steps] x how many: {smallest}; {values.size} distinct margins in all (a proved "
+                 "leximin proves each)")
     lines.append("")
     lines.append("CP-SAT, question by question:")
     chain, total = Chain(problem, args.cap), 0.0
@@ -160,6 +218,10 @@ def main() -> None:
         lines.append(f"  value  of the {int(above)} above: {t / 10:g} steps ({status}) {secs:.2f} s")
         print(lines[-1], flush=True)
     lines.append(f"  CP-SAT total {total:.1f} s")
+    _write(args, lines)
+
+
+def _write(args: argparse.Namespace, lines: list[str]) -> None:
     lines.append(f"load    : 1-min load average {os.getloadavg()[0]:.2f} at the end")
     Path(args.out).write_text("\n".join(lines) + "\n", encoding="utf-8")
     print("\n".join(lines))
