@@ -29,9 +29,8 @@ __all__ = ["MAX_REGISTERS", "SCALES", "Moves", "climb", "climb_moves", "group_mi
 
 Array = npt.NDArray[np.float64]
 
-#: Steps of the moves, largest first [steps]; each scale climbs until no move improves.  (8, 2, 1) against
-#: (4, 1): 0.94x the median leximin solve on the paper-size set (bench/results/leximin_speed.txt), the same answers.
-SCALES = (8.0, 2.0, 1.0)
+#: Steps of the moves, largest first [steps]; each scale climbs until no move improves.
+SCALES = (4.0, 1.0)
 #: The search runs up to this many free registers (its two-register moves are 2·n·(n − 1) points).
 MAX_REGISTERS = 24
 
