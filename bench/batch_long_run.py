@@ -78,6 +78,7 @@ def warm_imports() -> None:
     import threadpoolctl  # noqa: F401
 
     import setupfix.optimize as optimize
+
     for info in pkgutil.iter_modules(optimize.__path__):
         importlib.import_module(f"setupfix.optimize.{info.name}")
 
@@ -100,8 +101,10 @@ def _pair(first: dict[str, tuple[list[tuple[Key, str, str]], list[str]]], key: K
 
 def batch_rows(out: Path) -> dict[Key, tuple[str, str]]:
     with out.open(newline="") as handle:
-        return {(Path(r["report"]).name, r["part"], r["id"]): (f"{float(r['delta']):.3f}", r["verdict"])
-                for r in csv.DictReader(handle)}
+        return {
+            (Path(r["report"]).name, r["part"], r["id"]): (f"{float(r['delta']):.3f}", r["verdict"])
+            for r in csv.DictReader(handle)
+        }
 
 
 def main() -> None:
@@ -128,11 +131,13 @@ def main() -> None:
         ref = reference()
         got = batch_rows(out)
         first = {Path(path).name: (rows, stats) for path, rows, stats in lone}
-        differing = sorted({k[0] for k, _, _ in (r for _, rows, _ in lone for r in rows)
-                            if got.get(k) != (_pair(first, k))})
+        differing = sorted(
+            {k[0] for k, _, _ in (r for _, rows, _ in lone for r in rows) if got.get(k) != (_pair(first, k))}
+        )
         with ctx.Pool(2, maxtasksperchild=1) as pool:  # each differing report alone again, with a long limit
-            again = pool.map(functools.partial(alone, limit=RECHECK_LIMIT),
-                             [str(folder / name) for name in differing], chunksize=1)
+            again = pool.map(
+                functools.partial(alone, limit=RECHECK_LIMIT), [str(folder / name) for name in differing], chunksize=1
+            )
     statuses: Counter[str] = Counter()
     expected: dict[Key, tuple[str, str]] = {}
     for _, rows, stats in lone:
@@ -141,13 +146,22 @@ def main() -> None:
     differ = [k for k in expected if got.get(k) != expected[k]]
     stopped_alone = [r for r in differing if any(st != "optimal" for st in first[r][1])]
     proved_again = {Path(path).name: (rows, stats) for path, rows, stats in again}
-    batch_right = [r for r in differing if all(st == "optimal" for st in proved_again[r][1])
-                   and all(got.get(k) == (d, v) for k, d, v in proved_again[r][0])]
+    batch_right = [
+        r
+        for r in differing
+        if all(st == "optimal" for st in proved_again[r][1])
+        and all(got.get(k) == (d, v) for k, d, v in proved_again[r][0])
+    ]
     # what is left: the recheck not proved (a 600 s limit on a loaded box), the batch's own solve stopped at
     # its limit (its answer is then the best found, said so by its status), or both proved and different
     not_proved = [r for r in differing if r not in batch_right and any(st != "optimal" for st in proved_again[r][1])]
-    batch_stopped = [r for r in differing if r not in batch_right and r not in not_proved
-                     and any(st != "optimal" for st in batch_status.get(r, ["missing"]))]
+    batch_stopped = [
+        r
+        for r in differing
+        if r not in batch_right
+        and r not in not_proved
+        and any(st != "optimal" for st in batch_status.get(r, ["missing"]))
+    ]
     wrong = [r for r in differing if r not in batch_right + not_proved + batch_stopped]
     missing_reports = {k[0] for k in expected} - {k[0] for k in got}
     first_bad = min((int(k[0][1:6]) for k in differ), default=None)
@@ -168,13 +182,17 @@ def main() -> None:
         f"of the rest: recheck not proved {len(not_proved)}, the batch's own solve stopped at its limit "
         f"{len(batch_stopped)}, both proved and different {len(wrong)}"
         + (f" ({', '.join(wrong[:10])})" if wrong else ""),
-        "verdict: " + ("every report gets exactly the answer it gets alone"
-                       if not differ and not missing_reports else
-                       "every difference is a lone solve stopped at its limit: the batch equals the proved answer"
-                       if not missing_reports and len(batch_right) == len(differing) == len(stopped_alone) else
-                       "every difference is a solve stopped at its limit (alone or in the batch, each said so by its "
-                       "status): no proved answer differs" if not missing_reports and not wrong else
-                       "DIFFERENT ANSWERS"),
+        "verdict: "
+        + (
+            "every report gets exactly the answer it gets alone"
+            if not differ and not missing_reports
+            else "every difference is a lone solve stopped at its limit: the batch equals the proved answer"
+            if not missing_reports and len(batch_right) == len(differing) == len(stopped_alone)
+            else "every difference is a solve stopped at its limit (alone or in the batch, each said so by its "
+            "status): no proved answer differs"
+            if not missing_reports and not wrong
+            else "DIFFERENT ANSWERS"
+        ),
     ]
     (RESULTS / "batch_long_run.txt").write_text("\n".join(lines) + "\n")
     print("\n".join(lines))

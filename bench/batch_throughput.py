@@ -104,8 +104,9 @@ def stages(files: list[Path]) -> dict[str, float]:
         t1 = time.perf_counter()
         table = parsers.read_report(source).table
         t2 = time.perf_counter()
-        parts = check_parts(model, match_parts(model, assign_stations(model, table), source=str(path)),
-                            source=str(path))
+        parts = check_parts(
+            model, match_parts(model, assign_stations(model, table), source=str(path)), source=str(path)
+        )
         t3 = time.perf_counter()
         results = [correct_cycle(request, part) for part in parts]
         t4 = time.perf_counter()
@@ -119,9 +120,27 @@ def stages(files: list[Path]) -> dict[str, float]:
 def run(folder: Path, out: Path, workers: int, tree: Path = ROOT, extra: tuple[str, ...] = ()) -> float:
     """Wall seconds of ``setupfix batch`` (the package of ``tree``) on ``folder``, as a whole process."""
     t = time.perf_counter()
-    proc = subprocess.run([sys.executable, "-m", "setupfix", "batch", "--model", str(GUIDE / "model.toml"),
-                           str(folder), "--out", str(out), "--settle", "0", "--workers", str(workers), *extra],
-                          cwd=tree, capture_output=True, text=True)
+    proc = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "setupfix",
+            "batch",
+            "--model",
+            str(GUIDE / "model.toml"),
+            str(folder),
+            "--out",
+            str(out),
+            "--settle",
+            "0",
+            "--workers",
+            str(workers),
+            *extra,
+        ],
+        cwd=tree,
+        capture_output=True,
+        text=True,
+    )
     seconds = time.perf_counter() - t
     if proc.returncode != 0:
         raise SystemExit(f"{tree}: {proc.stderr[-2000:]}")
@@ -137,10 +156,12 @@ def main() -> None:
     n = args.reports
     ref = reference()
     kind = "varied copies (own deviations)" if args.vary else "copies repeating five problems"
-    lines = [f"setupfix batch on {n} guide-pins reports (28 dimensions, 10 registers; {kind}), start-up "
-             "included; OPENBLAS/MKL/OMP threads = 1, HiGHS threads = 1",
-             f"reference: in-process correct_report (read + match + exact solve + rules), mean over the five "
-             f"cycles of the median of 5: {ref * 1000:.1f} ms"]
+    lines = [
+        f"setupfix batch on {n} guide-pins reports (28 dimensions, 10 registers; {kind}), start-up "
+        "included; OPENBLAS/MKL/OMP threads = 1, HiGHS threads = 1",
+        f"reference: in-process correct_report (read + match + exact solve + rules), mean over the five "
+        f"cycles of the median of 5: {ref * 1000:.1f} ms",
+    ]
     with tempfile.TemporaryDirectory() as tmp:
         folder = Path(tmp) / "reports"
         folder.mkdir()
@@ -150,27 +171,38 @@ def main() -> None:
         one.mkdir()
         (one / files[0].name).write_bytes(files[0].read_bytes())
         startup = statistics.median(run(one, Path(tmp) / "one.csv", 1) for _ in range(3))
-        lines.append(f"start-up: the command on a folder of one report, median of 3: {startup:.2f} s "
-                     f"= {startup / ref:.0f}× the reference")
+        lines.append(
+            f"start-up: the command on a folder of one report, median of 3: {startup:.2f} s "
+            f"= {startup / ref:.0f}× the reference"
+        )
         per = stages(files[: args.stages])
         shown = ", ".join(f"{k} {v * 1000:.2f} ms ({v / ref:.2f})" for k, v in per.items())
-        lines.append(f"per report in process, mean over {min(args.stages, n)} of these reports (× the reference): "
-                     f"{shown}; sum {sum(per.values()) * 1000:.2f} ms ({sum(per.values()) / ref:.2f})")
+        lines.append(
+            f"per report in process, mean over {min(args.stages, n)} of these reports (× the reference): "
+            f"{shown}; sum {sum(per.values()) * 1000:.2f} ms ({sum(per.values()) / ref:.2f})"
+        )
         outs, totals = [], {}
         for workers in (1, 2):
             out = Path(tmp) / f"offsets_{workers}.csv"
             seconds = totals[workers] = run(folder, out, workers)
             outs.append(out.read_bytes())
             per_report = seconds / n
-            lines.append(f"workers {workers}: {seconds:.1f} s total, {per_report * 1000:.1f} ms per report "
-                         f"= {per_report / ref:.2f}× the reference; {n / seconds:.0f} reports/s; after start-up "
-                         f"{(seconds - startup) / n * 1000:.1f} ms per report")
+            lines.append(
+                f"workers {workers}: {seconds:.1f} s total, {per_report * 1000:.1f} ms per report "
+                f"= {per_report / ref:.2f}× the reference; {n / seconds:.0f} reports/s; after start-up "
+                f"{(seconds - startup) / n * 1000:.1f} ms per report"
+            )
         a, b = outs[0].decode().splitlines(), outs[1].decode().splitlines()
         differing = sum(x != y for x, y in zip(a, b, strict=False)) + abs(len(a) - len(b))
-        lines.append(f"outputs of 1 and 2 workers: {'identical' if outs[0] == outs[1] else 'differ'} "
-                     f"({differing} of {len(a) - 1} rows differ)")
-        verdicts = [f"{w} worker{'s' if w > 1 else ''} {'met' if t / n <= 0.010 else 'MISSED'} "
-                    f"({t / n * 1000:.1f} ms per report)" for w, t in totals.items()]
+        lines.append(
+            f"outputs of 1 and 2 workers: {'identical' if outs[0] == outs[1] else 'differ'} "
+            f"({differing} of {len(a) - 1} rows differ)"
+        )
+        verdicts = [
+            f"{w} worker{'s' if w > 1 else ''} {'met' if t / n <= 0.010 else 'MISSED'} "
+            f"({t / n * 1000:.1f} ms per report)"
+            for w, t in totals.items()
+        ]
         lines.append("target (issues 15 and 22): 1,000 reports in ≤ 10 s → 10 ms per report: " + "; ".join(verdicts))
     suffix = "_vary" if args.vary else ""
     command = f"$ python bench/batch_throughput.py --reports {n}" + (" --vary" if args.vary else "")

@@ -39,8 +39,9 @@ def export(commit: str, target: Path) -> str:
     data = subprocess.run(["git", "archive", commit], cwd=ROOT, capture_output=True, check=True).stdout
     with tarfile.open(fileobj=io.BytesIO(data)) as tar:
         tar.extractall(target, filter="data")
-    return subprocess.run(["git", "rev-parse", "--short", commit], cwd=ROOT, capture_output=True, text=True,
-                          check=True).stdout.strip()
+    return subprocess.run(
+        ["git", "rev-parse", "--short", commit], cwd=ROOT, capture_output=True, text=True, check=True
+    ).stdout.strip()
 
 
 def main() -> None:
@@ -70,8 +71,10 @@ def main() -> None:
                     times.setdefault((name, workers), []).append(run(folder, out, workers, tree, extra))
                     outputs[(name, workers)] = out.read_bytes()
     kind = "varied copies (own deviations)" if args.vary else "copies repeating five problems"
-    lines = [f"setupfix batch on {args.reports} guide-pins reports ({kind}), this tree against {short}, "
-             f"interleaved, median of {args.rounds}; OPENBLAS/MKL/OMP threads = 1"]
+    lines = [
+        f"setupfix batch on {args.reports} guide-pins reports ({kind}), this tree against {short}, "
+        f"interleaved, median of {args.rounds}; OPENBLAS/MKL/OMP threads = 1"
+    ]
     for workers in (1, 2):
         a, b = statistics.median(times[(short, workers)]), statistics.median(times[("this", workers)])
         lines.append(f"workers {workers}: {short} {a:.2f} s, this {b:.2f} s; this/{short} = {b / a:.2f}")
@@ -81,10 +84,13 @@ def main() -> None:
         a, b = outputs[(short, workers)].decode().splitlines(), outputs[("this", workers)].decode().splitlines()
         differing = sum(x != y for x, y in zip(a, b, strict=False)) + abs(len(a) - len(b))
         lines.append(f"workers {workers}: {differing} of {len(a) - 1} offset rows differ between the trees")
-    command = (f"$ python bench/batch_vs_commit.py --commit {args.commit} --reports {args.reports} "
-               f"--rounds {args.rounds}" + (" --vary" if args.vary else "")
-               + ("" if args.time_limit is None else f" --time-limit {args.time_limit:g}")
-               + ("" if args.out == OUT else f" --out {args.out.relative_to(ROOT)}"))
+    command = (
+        f"$ python bench/batch_vs_commit.py --commit {args.commit} --reports {args.reports} "
+        f"--rounds {args.rounds}"
+        + (" --vary" if args.vary else "")
+        + ("" if args.time_limit is None else f" --time-limit {args.time_limit:g}")
+        + ("" if args.out == OUT else f" --out {args.out.relative_to(ROOT)}")
+    )
     args.out.write_text(command + "\n" + "\n".join(lines) + "\n")
     print("\n".join(lines))
 

@@ -63,8 +63,11 @@ def main(argv: list[str] | None = None) -> None:
         w, c = np.median(walls[name]), np.median(cpus[name])
         lines.append(f"{name:<22}{w:>10.3f}{w / ref_w:>8.2f}{c:>10.3f}{c / ref_c:>8.2f}")
     help_cpu = np.median(cpus["setupfix --help"])
-    lines += ["", f"target  : --help and --version <= 0.2 s (CPU {help_cpu:.3f} s: "
-              f"{'met' if help_cpu <= 0.2 else 'not met'}; wall depends on the machine's load)"]
+    lines += [
+        "",
+        f"target  : --help and --version <= 0.2 s (CPU {help_cpu:.3f} s: "
+        f"{'met' if help_cpu <= 0.2 else 'not met'}; wall depends on the machine's load)",
+    ]
     text = "\n".join(lines) + "\n"
     args.out.parent.mkdir(parents=True, exist_ok=True)
     args.out.write_text(text, encoding="utf-8")

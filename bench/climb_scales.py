@@ -45,14 +45,16 @@ def main() -> None:
     ap.add_argument("--out", default=str(RESULTS / "climb_scales.txt"))
     args = ap.parse_args()
     variants = [tuple(float(s) for s in v.split("/")) for v in args.variants.split(",")]
-    lines = ["The leximin levels' grid climb: move sizes against each other, interleaved in one process",
-             f"command : python bench/{Path(__file__).name} " + " ".join(sys.argv[1:]),
-             f"machine : {platform.machine()}, Python {platform.python_version()}, numpy {np.__version__}; "
-             f"{os.cpu_count()} CPUs; BLAS 1 thread (threadpoolctl), HiGHS 1 thread",
-             f"load    : 1-min load average {os.getloadavg()[0]:.2f} at the start",
-             f"reports : the {args.sets + 5} paper-size reports of bench/leximin_speed.py, objective leximin, 2 s "
-             f"limit; {args.passes} passes, each solving every report once per variant in turn; each report's time "
-             "its best"]
+    lines = [
+        "The leximin levels' grid climb: move sizes against each other, interleaved in one process",
+        f"command : python bench/{Path(__file__).name} " + " ".join(sys.argv[1:]),
+        f"machine : {platform.machine()}, Python {platform.python_version()}, numpy {np.__version__}; "
+        f"{os.cpu_count()} CPUs; BLAS 1 thread (threadpoolctl), HiGHS 1 thread",
+        f"load    : 1-min load average {os.getloadavg()[0]:.2f} at the start",
+        f"reports : the {args.sets + 5} paper-size reports of bench/leximin_speed.py, objective leximin, 2 s "
+        f"limit; {args.passes} passes, each solving every report once per variant in turn; each report's time "
+        "its best",
+    ]
     saved = search_mod.SCALES
     opt = get_optimizer("exact", objective="leximin", time_limit=2.0)
     with threadpool_limits(1):
@@ -80,9 +82,11 @@ def main() -> None:
         med = float(np.median(best[i]))
         same = sum(np.array_equal(a, b) for a, b in zip(answers[i], answers[0], strict=True))
         name = "/".join(f"{s:g}" for s in scales)
-        lines.append(f"  SCALES {name:>8}: median {med * 1e3:.3f} ms = {med / lp:.2f}x LP = {med / first:.3f}x "
-                     f"the first; mean {np.mean(best[i]) * 1e3:.3f} ms; the same correction as the first on {same} "
-                     f"of {len(probs)}")
+        lines.append(
+            f"  SCALES {name:>8}: median {med * 1e3:.3f} ms = {med / lp:.2f}x LP = {med / first:.3f}x "
+            f"the first; mean {np.mean(best[i]) * 1e3:.3f} ms; the same correction as the first on {same} "
+            f"of {len(probs)}"
+        )
     lines.append(f"load    : 1-min load average {os.getloadavg()[0]:.2f} at the end")
     Path(args.out).write_text("\n".join(lines) + "\n", encoding="utf-8")
     print("\n".join(lines))

@@ -52,23 +52,35 @@ def main() -> None:
     threadpool_limits(1)  # BLAS threads change timings 2x on this machine; stated in the output
     OUT.mkdir(parents=True, exist_ok=True)
     model = load_model(SAMPLE / "model.toml")
-    lines = ["# python bench/compare_guide_pins.py",
-             f"# {time.strftime('%Y-%m-%d %H:%M:%S')}, BLAS threads 1 (threadpoolctl)", ""]
-    pooled: dict[str, dict[str, list[float]]] = {m: {"gap": [], "sec": [], "ratio": [], "ev": []}
-                                                for m in DEFAULT_METHODS}
+    lines = [
+        "# python bench/compare_guide_pins.py",
+        f"# {time.strftime('%Y-%m-%d %H:%M:%S')}, BLAS threads 1 (threadpoolctl)",
+        "",
+    ]
+    pooled: dict[str, dict[str, list[float]]] = {
+        m: {"gap": [], "sec": [], "ratio": [], "ev": []} for m in DEFAULT_METHODS
+    }
     first = None
     for cycle in range(1, 6):
         part = load_parts(model, SAMPLE / f"cycle_{cycle:02d}.csv")[0]
         problem = CorrectionProblem.from_part(model, part)
-        comp = dataclasses.replace(compare_problem(problem, trials=12, seed=2014), part=part.part,
-                                   report=f"cycle_{cycle:02d}.csv", unit=model.unit)
+        comp = dataclasses.replace(
+            compare_problem(problem, trials=12, seed=2014),
+            part=part.part,
+            report=f"cycle_{cycle:02d}.csv",
+            unit=model.unit,
+        )
         first = first or comp
         e = comp.exact
-        lines.append(f"## cycle_{cycle:02d}: f1 before {e.margin_before:+.4f} mm, exact grid optimum "
-                     f"f1 {e.margin_after:+.4f} mm, f2 {e.norm:.4f} mm, f {e.fitness:+.4f} "
-                     f"({e.status}, {e.seconds * 1000:.0f} ms, LP bound {e.bound:+.4f})")
-        lines.append(f"{'method':<7} {'f1 best/med/worst [mm]':>24} {'f2 best/med/worst [mm]':>24} "
-                     f"{'f best/med/worst':>24} {'sol.':>6} {'ms':>6} {'gap med/worst [µm]':>19}")
+        lines.append(
+            f"## cycle_{cycle:02d}: f1 before {e.margin_before:+.4f} mm, exact grid optimum "
+            f"f1 {e.margin_after:+.4f} mm, f2 {e.norm:.4f} mm, f {e.fitness:+.4f} "
+            f"({e.status}, {e.seconds * 1000:.0f} ms, LP bound {e.bound:+.4f})"
+        )
+        lines.append(
+            f"{'method':<7} {'f1 best/med/worst [mm]':>24} {'f2 best/med/worst [mm]':>24} "
+            f"{'f best/med/worst':>24} {'sol.':>6} {'ms':>6} {'gap med/worst [µm]':>19}"
+        )
         for m in comp.methods:
             s = m.summary(e)
             ref = reference_seconds(problem, int(s["evaluations"]))
@@ -81,11 +93,14 @@ def main() -> None:
                 f"{m.optimizer:<7} {s['f1_best']:.4f}/{s['f1_median']:.4f}/{s['f1_worst']:.4f}   "
                 f"{s['f2_best']:.4f}/{s['f2_median']:.4f}/{s['f2_worst']:.4f}   "
                 f"{s['f_best']:.4f}/{s['f_median']:.4f}/{s['f_worst']:.4f} {s['evaluations']:>6.0f} "
-                f"{s['seconds'] * 1000:>6.1f} {np.median(gaps):>9.1f}/{gaps.max():<9.1f}")
+                f"{s['seconds'] * 1000:>6.1f} {np.median(gaps):>9.1f}/{gaps.max():<9.1f}"
+            )
         lines.append("")
     lines.append("## all five cycles pooled (60 trials per method)")
-    lines.append(f"{'method':<7} {'gap median':>10} {'gap p90':>8} {'gap worst':>9} {'at optimum':>10} "
-                 f"{'target':>7} {'sol.':>6} {'ms/trial':>8} {'paper s':>7} {'speed-up':>8} {'× 1 numpy eval':>14}")
+    lines.append(
+        f"{'method':<7} {'gap median':>10} {'gap p90':>8} {'gap worst':>9} {'at optimum':>10} "
+        f"{'target':>7} {'sol.':>6} {'ms/trial':>8} {'paper s':>7} {'speed-up':>8} {'× 1 numpy eval':>14}"
+    )
     for name, d in pooled.items():
         if not d["gap"]:
             continue
@@ -96,9 +111,13 @@ def main() -> None:
         lines.append(
             f"{name:<7} {np.median(g):>8.2f}µm {np.percentile(g, 90):>6.1f}µm {g.max():>7.1f}µm "
             f"{np.mean(g < 0.5) * 100:>9.0f}% {TARGET_UM[name]:>5.0f}µm {np.median(d['ev']):>6.0f} "
-            f"{sec * 1000:>8.1f} {paper if paper else '—':>7} {speed} {np.median(d['ratio']):>13.1f}×")
-    lines += ["", "gap = exact grid-optimum f1 − trial f1; 'at optimum' = gap < 0.5 µm; speed-up = paper seconds / "
-                  "our median seconds; last column = our time / one vectorised evaluation of as many solutions."]
+            f"{sec * 1000:>8.1f} {paper if paper else '—':>7} {speed} {np.median(d['ratio']):>13.1f}×"
+        )
+    lines += [
+        "",
+        "gap = exact grid-optimum f1 − trial f1; 'at optimum' = gap < 0.5 µm; speed-up = paper seconds / "
+        "our median seconds; last column = our time / one vectorised evaluation of as many solutions.",
+    ]
     text = "\n".join(lines) + "\n"
     (OUT / "compare_guide_pins.txt").write_text(text, encoding="utf-8")
     assert first is not None

@@ -43,8 +43,21 @@ from setupfix.diagnose import Diagnoser, Layout, select_effects
 
 OUT = ROOT / "bench" / "results" / "diagnose_calibration.txt"
 SHARED = [0.0, 0.5, 1.0, 2.0, 3.0]
-KINDS = ["drift", "saturating", "thermal", "wear", "scale", "position", "relation", "group", "level T5",
-         "level all", "process T23", "process W3", "process set"]
+KINDS = [
+    "drift",
+    "saturating",
+    "thermal",
+    "wear",
+    "scale",
+    "position",
+    "relation",
+    "group",
+    "level T5",
+    "level all",
+    "process T23",
+    "process W3",
+    "process set",
+]
 TIME_KINDS = ("drift", "thermal", "wear", "level", "process")
 SCALES = (1.0, 0.5, 0.25)
 
@@ -58,16 +71,16 @@ def hidden_of(layout, kind: str, scale: float) -> list:
     if kind == "level all":
         return [HiddenEffect(EffectSpec("level", at=18.0), -0.008 * scale)]
     if kind == "process T23":
-        return [HiddenEffect(EffectSpec("process", channel="stickout_mm", register="T23", reference=37.5),
-                             0.001 * scale)]
+        return [
+            HiddenEffect(EffectSpec("process", channel="stickout_mm", register="T23", reference=37.5), 0.001 * scale)
+        ]
     if kind == "process W3":
-        return [HiddenEffect(EffectSpec("process", channel="speed_rpm", register="W3", reference=9000.0),
-                             3e-6 * scale)]
+        return [HiddenEffect(EffectSpec("process", channel="speed_rpm", register="W3", reference=9000.0), 3e-6 * scale)]
     if kind == "process set":
-        return [HiddenEffect(EffectSpec("process", channel="stickout_mm", register="T5", reference=37.5),
-                             0.001 * scale),
-                HiddenEffect(EffectSpec("process", channel="stickout_mm", register="T23", reference=37.5),
-                             -0.0007 * scale)]
+        return [
+            HiddenEffect(EffectSpec("process", channel="stickout_mm", register="T5", reference=37.5), 0.001 * scale),
+            HiddenEffect(EffectSpec("process", channel="stickout_mm", register="T23", reference=37.5), -0.0007 * scale),
+        ]
     return [one_effect(layout, kind, scale)]
 
 
@@ -127,8 +140,10 @@ def main(n_series: int) -> None:
     say(__doc__.split("\n\n    python")[0])
     say()
     say(f"A. nothing hidden, {n_series} series per setting, alpha = 0.01 (95 % Clopper-Pearson intervals)")
-    say(f"{'shared / cell noise':>20}  {'any effect reported':<32}  {'time-dependent effect':<32}  "
-        f"{'any effect at alpha = 0.05':<32}  kinds reported (0.01)")
+    say(
+        f"{'shared / cell noise':>20}  {'any effect reported':<32}  {'time-dependent effect':<32}  "
+        f"{'any effect at alpha = 0.05':<32}  kinds reported (0.01)"
+    )
     for f in SHARED:
         anyf = timef = any05 = 0
         kinds: dict[str, int] = {}
@@ -141,8 +156,10 @@ def main(n_series: int) -> None:
             any05 += bool(select_effects(layout, series, alpha=0.05).found)
             for e in sel.found:
                 kinds[e.kind] = kinds.get(e.kind, 0) + 1
-        say(f"{f:>20g}  {rate(anyf, n_series):<32}  {rate(timef, n_series):<32}  {rate(any05, n_series):<32}  "
-            + (", ".join(f"{k} {v}" for k, v in kinds.items()) or "-"))
+        say(
+            f"{f:>20g}  {rate(anyf, n_series):<32}  {rate(timef, n_series):<32}  {rate(any05, n_series):<32}  "
+            + (", ".join(f"{k} {v}" for k, v in kinds.items()) or "-")
+        )
     say("   (before: the cell-level F-test reported a time-dependent effect in 16 of 40 such series at f = 2,")
     say("    tests/diagnose/test_select.py::test_nothing_found_when_parts_vary_as_a_whole)")
     say()
@@ -159,12 +176,16 @@ def main(n_series: int) -> None:
             timef += any(e.kind in TIME_KINDS for e in sel.found)
             for e in sel.found:
                 kinds[e.kind] = kinds.get(e.kind, 0) + 1
-        say(f"{f:>20g}  {rate(anyf, n_series):<32}  {rate(timef, n_series):<32}  "
-            + (", ".join(f"{k} {v}" for k, v in kinds.items()) or "-"))
+        say(
+            f"{f:>20g}  {rate(anyf, n_series):<32}  {rate(timef, n_series):<32}  "
+            + (", ".join(f"{k} {v}" for k, v in kinds.items()) or "-")
+        )
     say()
     n_det = max(10, n_series // 5)
-    say(f"B. detection limits on the guide pins (process log of three channels), {n_det} seeds each: share with "
-        "the right kind and target")
+    say(
+        f"B. detection limits on the guide pins (process log of three channels), {n_det} seeds each: share with "
+        "the right kind and target"
+    )
     say(f"{'kind':<12}{'magnitude':>12}  {'no shared noise':<32}  {'shared noise 2x':<32}")
     for kind in KINDS:
         for scale in SCALES:
@@ -180,8 +201,10 @@ def main(n_series: int) -> None:
             mag = "/".join(f"{h.magnitude:.3g}" for h in hidden)
             say(f"{kind:<12}{mag:>12}  {cells[0]:<32}  {cells[1]:<32}")
     say()
-    say("C. speed: diagnose with the walk forward (guide pins, 28 dimensions, wear hidden, shared noise 2x, "
-        "a process log of three channels; BLAS 1)")
+    say(
+        "C. speed: diagnose with the walk forward (guide pins, 28 dimensions, wear hidden, shared noise 2x, "
+        "a process log of three channels; BLAS 1)"
+    )
     ref = reference()
     say(f"reference: SVD of a 1000 x 300 matrix = {1e3 * ref:.1f} ms")
     for n, reps, target in ((40, 3, 2.0), (1000, 1, 30.0)):

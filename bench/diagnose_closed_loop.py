@@ -94,14 +94,16 @@ def verdict(effects, hidden) -> tuple[bool, bool, bool, bool, int]:
 
 
 def section_a(lines: list[str]) -> None:
-    lines += ["A. each kind hidden alone (5 guide-pins seeds + 5 random topologies)",
-              "   chosen: the right target is the one fitted; alone: it is named alone (a relation: the report",
-              "   names no other register); among: the true target is among those the report names as",
-              "   indistinguishable (a relation: the set of registers the data cannot tell apart, encompassing",
-              "   F-tests at 1 % / moved registers, so it holds the true one with probability >= 99 %);",
-              "   named: median count of targets named",
-              f"{'kind':11s} {'kind ok':>8s} {'chosen':>7s} {'alone':>6s} {'among':>6s} {'named':>6s} {'only it':>8s} "
-              f"{'RMS/σ med':>10s} {'RMS/σ max':>10s} {'≤1.3σ':>6s}"]
+    lines += [
+        "A. each kind hidden alone (5 guide-pins seeds + 5 random topologies)",
+        "   chosen: the right target is the one fitted; alone: it is named alone (a relation: the report",
+        "   names no other register); among: the true target is among those the report names as",
+        "   indistinguishable (a relation: the set of registers the data cannot tell apart, encompassing",
+        "   F-tests at 1 % / moved registers, so it holds the true one with probability >= 99 %);",
+        "   named: median count of targets named",
+        f"{'kind':11s} {'kind ok':>8s} {'chosen':>7s} {'alone':>6s} {'among':>6s} {'named':>6s} {'only it':>8s} "
+        f"{'RMS/σ med':>10s} {'RMS/σ max':>10s} {'≤1.3σ':>6s}",
+    ]
     misses: list[str] = []
     for kind in [*KINDS, *SPARSE]:
         rows = []
@@ -113,18 +115,26 @@ def section_a(lines: list[str]) -> None:
             k, c, t, a, n = verdict(d.effects, hidden)
             rows.append((k, c, t, a, n, len(d.effects) == 1, d.error_after.rms / NOISE))
             if kind == "position" and a and not t:
-                misses.append(f"position, {'guide pins' if i < 5 else f'topology {i}'} seed {100 + i}: "
-                              f"{d.effects[0].target} chosen, {', '.join(d.effects[0].alike)} alike; "
-                              f"{_axis_rank(layout)}")
+                misses.append(
+                    f"position, {'guide pins' if i < 5 else f'topology {i}'} seed {100 + i}: "
+                    f"{d.effects[0].target} chosen, {', '.join(d.effects[0].alike)} alike; "
+                    f"{_axis_rank(layout)}"
+                )
         r = np.array(rows, dtype=float)
-        lines.append(f"{kind:11s} {r[:, 0].mean():8.0%} {r[:, 1].mean():7.0%} {r[:, 2].mean():6.0%} "
-                     f"{r[:, 3].mean():6.0%} {np.median(r[:, 4]):6.0f} {r[:, 5].mean():8.0%} "
-                     f"{np.median(r[:, 6]):10.3f} {r[:, 6].max():10.3f} {(r[:, 6] <= 1.3).mean():6.0%}")
+        lines.append(
+            f"{kind:11s} {r[:, 0].mean():8.0%} {r[:, 1].mean():7.0%} {r[:, 2].mean():6.0%} "
+            f"{r[:, 3].mean():6.0%} {np.median(r[:, 4]):6.0f} {r[:, 5].mean():8.0%} "
+            f"{np.median(r[:, 6]):10.3f} {r[:, 6].max():10.3f} {(r[:, 6] <= 1.3).mean():6.0%}"
+        )
     lines.append(_coverage())
-    lines += ["relation: every register gets its least-norm share of each correction, so all move in proportion",
-              "and the data cannot say which one the dimension answers; relation*: the simulated operator",
-              "changes only the 2 largest registers per correction (sparse=2), relation**: only the largest",
-              "(sparse=1), so register histories differ", *misses, ""]
+    lines += [
+        "relation: every register gets its least-norm share of each correction, so all move in proportion",
+        "and the data cannot say which one the dimension answers; relation*: the simulated operator",
+        "changes only the 2 largest registers per correction (sparse=2), relation**: only the largest",
+        "(sparse=1), so register histories differ",
+        *misses,
+        "",
+    ]
 
 
 @contextlib.contextmanager
@@ -157,11 +167,17 @@ def _ablation(levels: bool, cell_level: bool):
 
 
 def section_a2(lines: list[str]) -> None:
-    lines += ["A2. relation rows of A (10 series each, weight 0.5) found with the right kind: the selection as it is,",
-              "    without the level candidates, with the relation's cell-level test of before, and both",
-              f"{'':34s} {'relation':>9s} {'relation*':>10s} {'relation**':>11s} {'false relations, f = 3':>23s}"]
-    variants = (("as it is", True, False), ("no level candidates", False, False),
-                ("cell-level relation test", True, True), ("both (the code of the old table)", False, True))
+    lines += [
+        "A2. relation rows of A (10 series each, weight 0.5) found with the right kind: the selection as it is,",
+        "    without the level candidates, with the relation's cell-level test of before, and both",
+        f"{'':34s} {'relation':>9s} {'relation*':>10s} {'relation**':>11s} {'false relations, f = 3':>23s}",
+    ]
+    variants = (
+        ("as it is", True, False),
+        ("no level candidates", False, False),
+        ("cell-level relation test", True, True),
+        ("both (the code of the old table)", False, True),
+    )
     for label, levels, cell in variants:
         hits = []
         with _ablation(levels, cell):
@@ -180,15 +196,18 @@ def section_a2(lines: list[str]) -> None:
                 series = simulate(layout, seed=3000 + s, part_noise=3 * NOISE).series
                 false += any(e.kind == "relation" for e in select_effects(layout, series).found)
         lines.append(f"{label:34s} {hits[0]:>6d}/10 {hits[1]:>7d}/10 {hits[2]:>8d}/10 {false:>19d}/100")
-    lines += ["   Both changes cost detection, neither is a defect: the level kind (issue 24) tries every cycle",
-              "   boundary on every register and on every tool alike, each counted in the step's Bonferroni factor",
-              "   (the guide pins: 295 -> 647 candidates), and a relation is judged on its one dimension's own",
-              "   variation over the cycles (K - 2 df) instead of the noise pooled over every cell.  The misses are",
-              "   mostly relations the step ranks first but refuses once its p is multiplied by the number of",
-              "   candidates.  The older test is not calibrated when parts vary as a whole: a dimension a tool",
-              "   cuts carries that tool's per-part variation, the pool mixes it with dimensions that do not, and",
-              "   false relations exceed alpha = 1 % (last column).",
-              "   The drop is the price of the calibration and of the level kind, not a defect.", ""]
+    lines += [
+        "   Both changes cost detection, neither is a defect: the level kind (issue 24) tries every cycle",
+        "   boundary on every register and on every tool alike, each counted in the step's Bonferroni factor",
+        "   (the guide pins: 295 -> 647 candidates), and a relation is judged on its one dimension's own",
+        "   variation over the cycles (K - 2 df) instead of the noise pooled over every cell.  The misses are",
+        "   mostly relations the step ranks first but refuses once its p is multiplied by the number of",
+        "   candidates.  The older test is not calibrated when parts vary as a whole: a dimension a tool",
+        "   cuts carries that tool's per-part variation, the pool mixes it with dimensions that do not, and",
+        "   false relations exceed alpha = 1 % (last column).",
+        "   The drop is the price of the calibration and of the level kind, not a defect.",
+        "",
+    ]
 
 
 def _coverage(n: int = 20) -> str:
@@ -204,8 +223,10 @@ def _coverage(n: int = 20) -> str:
             if rel:
                 found += 1
                 held += hidden.spec.register in rel[0].registers
-    return (f"coverage of the register set: the true register is in it in {held} of {found} relations found on "
-            f"the right dimension ({3 * n} further seeds, the three operators, weight 0.5; claimed >= 99 %)")
+    return (
+        f"coverage of the register set: the true register is in it in {held} of {found} relations found on "
+        f"the right dimension ({3 * n} further seeds, the three operators, weight 0.5; claimed >= 99 %)"
+    )
 
 
 def _axis_rank(layout: Layout) -> str:
@@ -215,8 +236,10 @@ def _axis_rank(layout: Layout) -> str:
     P = X - B.T @ (B @ X)
     s = np.linalg.svd(P, compute_uv=False)
     rank = int(np.sum(s > 1e-9 * s.max()))
-    return (f"the x, y, z patterns outside the setup state's reach span {rank} direction(s) "
-            f"(rank of C {B.shape[0]}, {layout.n_dimensions} dimensions): the data cannot tell the axes apart")
+    return (
+        f"the x, y, z patterns outside the setup state's reach span {rank} direction(s) "
+        f"(rank of C {B.shape[0]}, {layout.n_dimensions} dimensions): the data cannot tell the axes apart"
+    )
 
 
 def section_b(lines: list[str]) -> None:
@@ -224,20 +247,33 @@ def section_b(lines: list[str]) -> None:
     for i in range(40):
         layout = Layout.from_model(guide_pins() if i < 20 else topology(200 + i))
         clean.append(not select_effects(layout, simulate(layout, seed=300 + i).series).found)
-    lines += ["B. no hidden effect: nothing reported in "
-              f"{np.mean(clean):.0%} of 40 seeds ({sum(clean)}/40; 20 guide pins, 20 random topologies)", ""]
+    lines += [
+        "B. no hidden effect: nothing reported in "
+        f"{np.mean(clean):.0%} of 40 seeds ({sum(clean)}/40; 20 guide pins, 20 random topologies)",
+        "",
+    ]
 
 
 def section_c(lines: list[str]) -> None:
-    lines += ["C. detection limit (guide pins, 20 seeds per magnitude): smallest magnitude of the ladder found",
-              "   in >= 90 % of the seeds; found = right kind and the true target among those named (named:",
-              "   median count at the limit).  For a relation also: moved = seeds whose register was corrected",
-              "   during the series; alone|moved = smallest weight whose register is named alone in >= 90 % of",
-              "   those (a register never moved, with a setup error near 0, leaves nothing in the data)",
-              f"{'kind':11s} {'limit':>12s} {'unit':>10s} {'found at limit':>15s} {'named':>6s} {'moved':>6s} "
-              f"{'alone|moved':>12s}"]
-    units = {"drift": "mm/h", "saturating": "mm", "thermal": "mm/°C", "wear": "mm/cycle", "scale": "mm/mm",
-             "position": "mm/mm", "relation": "weight", "group": "mm"}
+    lines += [
+        "C. detection limit (guide pins, 20 seeds per magnitude): smallest magnitude of the ladder found",
+        "   in >= 90 % of the seeds; found = right kind and the true target among those named (named:",
+        "   median count at the limit).  For a relation also: moved = seeds whose register was corrected",
+        "   during the series; alone|moved = smallest weight whose register is named alone in >= 90 % of",
+        "   those (a register never moved, with a setup error near 0, leaves nothing in the data)",
+        f"{'kind':11s} {'limit':>12s} {'unit':>10s} {'found at limit':>15s} {'named':>6s} {'moved':>6s} "
+        f"{'alone|moved':>12s}",
+    ]
+    units = {
+        "drift": "mm/h",
+        "saturating": "mm",
+        "thermal": "mm/°C",
+        "wear": "mm/cycle",
+        "scale": "mm/mm",
+        "position": "mm/mm",
+        "relation": "weight",
+        "group": "mm",
+    }
     layout = Layout.from_model(guide_pins())
     for kind in [*KINDS, *SPARSE]:
         base = kind.rstrip("*")
@@ -252,7 +288,8 @@ def section_c(lines: list[str]) -> None:
                 series = simulate(layout, [hidden], seed=400 + s, sparse=sparse).series
                 d = Diagnoser(walk=False).run(layout, series)
                 moved = base == "relation" and bool(
-                    np.ptp(series.applied[:, layout.register_ids.index(hidden.spec.register)]) > 0)
+                    np.ptp(series.applied[:, layout.register_ids.index(hidden.spec.register)]) > 0
+                )
                 hits.append((*verdict(d.effects, hidden), moved))
             h = np.array(hits, dtype=float)
             if limit is None:
@@ -270,8 +307,9 @@ def section_c(lines: list[str]) -> None:
         rel = base == "relation"
         text_alone = "" if not rel else (f"{alone:.3g}" if alone is not None else f"> {top:.3g}")
         text_moved = f"{moved_share:.0%}" if rel else ""
-        lines.append(f"{kind:11s} {text:>12s} {units[base]:>10s} {rate:15.0%} {size:6.0f} {text_moved:>6s} "
-                     f"{text_alone:>12s}")
+        lines.append(
+            f"{kind:11s} {text:>12s} {units[base]:>10s} {rate:15.0%} {size:6.0f} {text_moved:>6s} {text_alone:>12s}"
+        )
     lines.append("")
 
 
@@ -284,18 +322,28 @@ def true_composite(layout: Layout, hidden) -> np.ndarray:
     return C
 
 
-D_ROWS = [("none", 1.0, 0.03), *((k, 1.0, 0.03) for k in KINDS), ("relation*", 1.0, 0.03), ("relation", 2.0, 0.03),
-          ("relation*", 2.0, 0.03), ("none", 1.0, 0.08), ("relation", 2.0, 0.08), ("relation*", 2.0, 0.08),
-          ("relation**", 2.0, 0.08)]
+D_ROWS = [
+    ("none", 1.0, 0.03),
+    *((k, 1.0, 0.03) for k in KINDS),
+    ("relation*", 1.0, 0.03),
+    ("relation", 2.0, 0.03),
+    ("relation*", 2.0, 0.03),
+    ("none", 1.0, 0.08),
+    ("relation", 2.0, 0.08),
+    ("relation*", 2.0, 0.08),
+    ("relation**", 2.0, 0.08),
+]
 
 
 def section_d(lines: list[str]) -> None:
-    lines += ["D. walk forward, guide pins, 5 seeds each: mean error budget [mm] (higher is better) / RMS [mm];",
-              "   each recommendation scored through the simulated machine's true relations; wins: augmented",
-              "   better than declared, EWMA and none to 4 decimals (=: equal to declared, not below EWMA);",
-              "   last columns: augmented minus declared, minus EWMA [µm of budget], paired over seeds ± s.e.",
-              f"{'hidden':19s} {'declared':>17s} {'augmented':>17s} {'EWMA':>17s} {'none':>17s} {'wins':>5s}  "
-              f"{'aug-decl µm':>13s} {'aug-EWMA µm':>13s}"]
+    lines += [
+        "D. walk forward, guide pins, 5 seeds each: mean error budget [mm] (higher is better) / RMS [mm];",
+        "   each recommendation scored through the simulated machine's true relations; wins: augmented",
+        "   better than declared, EWMA and none to 4 decimals (=: equal to declared, not below EWMA);",
+        "   last columns: augmented minus declared, minus EWMA [µm of budget], paired over seeds ± s.e.",
+        f"{'hidden':19s} {'declared':>17s} {'augmented':>17s} {'EWMA':>17s} {'none':>17s} {'wins':>5s}  "
+        f"{'aug-decl µm':>13s} {'aug-EWMA µm':>13s}",
+    ]
     layout = Layout.from_model(guide_pins())
     order = ("declared", "augmented", "ewma", "none")
     for kind, scale, setup in D_ROWS:
@@ -309,25 +357,37 @@ def section_d(lines: list[str]) -> None:
         mean = {c: float(np.mean([v[0] for v in acc[c]])) for c in order}
         cells = [f"{mean[c]:.4f} / {np.mean([v[1] for v in acc[c]]):.4f}" for c in order]
         # paired over the seeds: augmented minus declared and minus EWMA [µm], mean ± standard error
-        diff = {c: 1000 * (np.array([v[0] for v in acc["augmented"]]) - np.array([v[0] for v in acc[c]]))
-                for c in ("declared", "ewma")}
+        diff = {
+            c: 1000 * (np.array([v[0] for v in acc["augmented"]]) - np.array([v[0] for v in acc[c]]))
+            for c in ("declared", "ewma")
+        }
         shown = {c: round(m, 4) for c, m in mean.items()}
-        wins = ("yes" if all(shown["augmented"] > shown[c] for c in ("declared", "ewma", "none")) else
-                "=" if shown["augmented"] == shown["declared"] and shown["augmented"] >= shown["ewma"] else "no")
-        more = " ".join(f"{diff[c].mean():+6.2f} ± {diff[c].std(ddof=1) / np.sqrt(len(diff[c])):4.2f}"
-                        for c in ("declared", "ewma"))
-        label = kind if kind == "none" else \
-            f"{kind} {abs(one_effect(layout, kind.rstrip('*'), scale=scale).magnitude):g}"
+        wins = (
+            "yes"
+            if all(shown["augmented"] > shown[c] for c in ("declared", "ewma", "none"))
+            else "="
+            if shown["augmented"] == shown["declared"] and shown["augmented"] >= shown["ewma"]
+            else "no"
+        )
+        more = " ".join(
+            f"{diff[c].mean():+6.2f} ± {diff[c].std(ddof=1) / np.sqrt(len(diff[c])):4.2f}" for c in ("declared", "ewma")
+        )
+        label = (
+            kind if kind == "none" else f"{kind} {abs(one_effect(layout, kind.rstrip('*'), scale=scale).magnitude):g}"
+        )
         label += "" if setup == 0.03 else f" ±{setup:g}"
         lines.append(f"{label:19s} " + " ".join(f"{c:>17s}" for c in cells) + f" {wins:>5s}  {more}")
-    lines += ["   (relation magnitudes are weight errors; relation 1 = a missing relation of a whole register;",
-              "   ±0.08: setup errors ±0.08 mm instead of ±0.03 mm, so the loop's corrections are larger)",
-              "   scale, position, group: a constant pattern over the dimensions.  Its part in the reach of the",
-              "   registers (row space of C) is taken into the fitted setup state by the declared model too, and",
-              "   its part outside it no register state can remove, so a least-squares recommendation is the same",
-              "   with or without the effect: no gain is possible, and none is claimed.  drift, saturating, thermal,",
-              "   wear change between cycles, and a relation changes what a correction does: there the augmented",
-              "   model predicts what the declared one cannot.", ""]
+    lines += [
+        "   (relation magnitudes are weight errors; relation 1 = a missing relation of a whole register;",
+        "   ±0.08: setup errors ±0.08 mm instead of ±0.03 mm, so the loop's corrections are larger)",
+        "   scale, position, group: a constant pattern over the dimensions.  Its part in the reach of the",
+        "   registers (row space of C) is taken into the fitted setup state by the declared model too, and",
+        "   its part outside it no register state can remove, so a least-squares recommendation is the same",
+        "   with or without the effect: no gain is possible, and none is claimed.  drift, saturating, thermal,",
+        "   wear change between cycles, and a relation changes what a correction does: there the augmented",
+        "   model predicts what the declared one cannot.",
+        "",
+    ]
 
 
 def reference() -> float:
@@ -343,8 +403,10 @@ def reference() -> float:
 def section_e(lines: list[str]) -> None:
     layout = Layout.from_model(guide_pins())
     ref = reference()
-    lines += ["E. speed (guide pins, 28 dimensions, wear hidden; best of 3; BLAS threads 1)",
-              f"reference: SVD of a 1000 x 300 matrix = {ref * 1000:.1f} ms"]
+    lines += [
+        "E. speed (guide pins, 28 dimensions, wear hidden; best of 3; BLAS threads 1)",
+        f"reference: SVD of a 1000 x 300 matrix = {ref * 1000:.1f} ms",
+    ]
     for n, walk, target in ((40, True, 2.0), (40, False, None), (1000, True, 30.0), (1000, False, None)):
         series = simulate(layout, [one_effect(layout, "wear")], seed=1, n_cycles=n).series
         best = np.inf
@@ -353,8 +415,10 @@ def section_e(lines: list[str]) -> None:
             Diagnoser(walk=walk).run(layout, series)
             best = min(best, time.perf_counter() - t0)
         goal = f" (target <= {target:g} s)" if target else ""
-        lines.append(f"{n:5d} cycles, {'walk forward' if walk else 'no walk':12s}: {best:7.3f} s = "
-                     f"{best / ref:7.1f} x reference{goal}")
+        lines.append(
+            f"{n:5d} cycles, {'walk forward' if walk else 'no walk':12s}: {best:7.3f} s = "
+            f"{best / ref:7.1f} x reference{goal}"
+        )
     lines.append("")
 
 

@@ -33,11 +33,10 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "tests"))
 
-from diagnose_calibration import rate
-
 from diagnose.helpers import NOISE, guide_pins, simulate
 from diagnose.plate_doe import speed_tests
 from diagnose.test_plate import LOG, MODEL, PLATE
+from diagnose_calibration import rate
 
 from setupfix.diagnose import Diagnoser, Layout, factor_tests, parse_terms
 from setupfix.diagnose.terms import channel_values
@@ -57,8 +56,9 @@ def design_series(layout: Layout, seed: int, n: int, part_noise: float):
     a, b = cells // 3, cells % 3
     names = ("A=hi", "B=lo", "B=mid", "B=hi")
     cols = np.column_stack([a == 1] + [b == k for k in range(3)]).astype(float)
-    return dataclasses.replace(s, temperature=np.column_stack([s.temperature, cols]),
-                               channels=(*s.channels, *names), process_channels=names)
+    return dataclasses.replace(
+        s, temperature=np.column_stack([s.temperature, cols]), channels=(*s.channels, *names), process_channels=names
+    )
 
 
 def main(n_series: int) -> None:
@@ -75,27 +75,32 @@ def main(n_series: int) -> None:
     terms = parse_terms(DESIGN)
     ft = factor_tests(inp.layout, inp.series, terms)
     indep = {r["register"]: r for r in speed_tests(inp.layout, inp.series)}
-    say("A. the plate, declared: per-part p (Holm-adjusted over the 15 tests), and the 2 x 3 factorial on part "
-        "means (interaction, 2 and 12 df)")
+    say(
+        "A. the plate, declared: per-part p (Holm-adjusted over the 15 tests), and the 2 x 3 factorial on part "
+        "means (interaction, 2 and 12 df)"
+    )
     say(f"  {'term':<28}{'register':<10}{'columns':>8}{'p':>11}{'Holm':>11}  {'accepted':<9}{'factorial':>11}")
     for t in ft.tests:
         ref = f"{float(indep[t.register]['p_interaction']):.2g}" if t.term.order == 2 else ""
-        say(f"  {t.term.name:<28}{t.register:<10}{t.q:>8}{t.p:>11.2g}{t.p_holm:>11.2g}  "
-            f"{'yes' if t.accepted else 'no':<9}{ref:>11}")
+        say(
+            f"  {t.term.name:<28}{t.register:<10}{t.q:>8}{t.p:>11.2g}{t.p_holm:>11.2g}  "
+            f"{'yes' if t.accepted else 'no':<9}{ref:>11}"
+        )
     loose = factor_tests(inp.layout, inp.series, terms, alpha=0.05)
-    say("  accepted at alpha = 0.05: " + ", ".join(f"{t.term.name} on {t.register}" for t in loose.tests
-                                                  if t.accepted))
+    say("  accepted at alpha = 0.05: " + ", ".join(f"{t.term.name} on {t.register}" for t in loose.tests if t.accepted))
     for label, factors in (("without --factors", ()), ("with --factors", (",".join(DESIGN),))):
         t = time.perf_counter()
         d = diagnose_reports(DiagnoseRequest(MODEL, (PLATE,), process=str(LOG), factors=factors)).diagnosis
         dt = time.perf_counter() - t
         w = d.walk.budgets if d.walk is not None else {}
-        say(f"  {label}: residual RMS {d.error_before.rms:.4f} -> {d.error_after.rms:.4f} mm, out of tolerance "
+        say(
+            f"  {label}: residual RMS {d.error_before.rms:.4f} -> {d.error_after.rms:.4f} mm, out of tolerance "
             f"{d.error_before.out_of_tolerance} -> {d.error_after.out_of_tolerance}; "
             f"{sum(e.source == 'declared' for e in d.effects)} declared + "
             f"{sum(e.source == 'search' for e in d.effects)} searched effect terms; walk forward centre RMS "
             + ", ".join(f"{k} {b.centre_rms:.4f} ({b.out_of_tolerance} out)" for k, b in w.items())
-            + f"; next from {d.next_from.source}; {dt:.1f} s")
+            + f"; next from {d.next_from.source}; {dt:.1f} s"
+        )
         for e in d.effects:
             if e.source == "search":
                 say(f"    found by the search: {e.target} {e.estimate:+.4g} +- {e.stderr:.2g} {e.unit}")
@@ -109,12 +114,16 @@ def main(n_series: int) -> None:
         hits = sum(t.accepted for t in res.tests)
         anyf += hits > 0
         single += hits
-    say(f"  any declared test accepted: {rate(anyf, n_series)}; single tests accepted: "
-        f"{rate(single, n_series * len(ft.tests))}")
+    say(
+        f"  any declared test accepted: {rate(anyf, n_series)}; single tests accepted: "
+        f"{rate(single, n_series * len(ft.tests))}"
+    )
     say()
     layout = Layout.from_model(guide_pins())
-    say(f"C. simulated, nothing hidden (guide pins, random balanced 2 x 3 design: A, B, A*B on "
-        f"{len(layout.tools)} tools = {3 * len(layout.tools)} tests), {n_series} series per setting, alpha = 0.01")
+    say(
+        f"C. simulated, nothing hidden (guide pins, random balanced 2 x 3 design: A, B, A*B on "
+        f"{len(layout.tools)} tools = {3 * len(layout.tools)} tests), {n_series} series per setting, alpha = 0.01"
+    )
     say(f"  {'parts':>6}{'shared / cell noise':>22}  {'any declared test accepted':<32}  single tests accepted")
     for n in (18, 40):
         for f in (0.0, 2.0):
@@ -129,8 +138,10 @@ def main(n_series: int) -> None:
             say(f"  {n:>6}{f:>22g}  {rate(anyf, n_series):<32}  {rate(single, total)}")
     say()
     n_det = max(10, n_series // 5)
-    say(f"D. detection, 18 parts: the cell A = hi, B = hi off on tool {layout.tool_ids[0]}, {n_det} seeds: share "
-        "with A*B accepted on it (and no declared term on another tool)")
+    say(
+        f"D. detection, 18 parts: the cell A = hi, B = hi off on tool {layout.tool_ids[0]}, {n_det} seeds: share "
+        "with A*B accepted on it (and no declared term on another tool)"
+    )
     say(f"  {'magnitude [mm]':>15}  {'no shared noise':<32}  shared noise 2x")
     j = int(layout.tools[0])
     for mag in (0.0025, 0.005, 0.01, 0.02):
@@ -146,8 +157,10 @@ def main(n_series: int) -> None:
             cells.append(rate(hits, n_det))
         say(f"  {mag:>15g}  {cells[0]:<32}  {cells[1]}")
     say()
-    say("E. speed: diagnose with the walk forward (guide pins, 28 dimensions, the 2 x 3 design, shared noise 2x; "
-        "BLAS 1), best of 3 (1 for 1,000 cycles)")
+    say(
+        "E. speed: diagnose with the walk forward (guide pins, 28 dimensions, the 2 x 3 design, shared noise 2x; "
+        "BLAS 1), best of 3 (1 for 1,000 cycles)"
+    )
     for n, reps in ((40, 3), (1000, 1)):
         s = design_series(layout, 1, n, 2 * NOISE)
         cells = []

@@ -51,12 +51,16 @@ if not (SHARED / "real-series").is_dir():
     SHARED = Path("/work/shared")
 OUT = ROOT / "bench" / "results" / "diagnose_real.txt"
 SERIES = {
-    "plate": (ROOT / "tests" / "data" / "nist_plate.toml",
-              SHARED / "cmm-samples" / "qif" / "NIST_MTC_FAIR_Plate_Results_20parts.qif",
-              SHARED / "real-series" / "nist-mtc" / "plate_process.csv"),
-    "box": (ROOT / "tests" / "diagnose" / "data" / "nist_box.toml",
-            SHARED / "cmm-samples" / "qif" / "NIST_MTC_FAIR_Box_Results_19parts.qif",
-            SHARED / "real-series" / "nist-mtc" / "box_process.csv"),
+    "plate": (
+        ROOT / "tests" / "data" / "nist_plate.toml",
+        SHARED / "cmm-samples" / "qif" / "NIST_MTC_FAIR_Plate_Results_20parts.qif",
+        SHARED / "real-series" / "nist-mtc" / "plate_process.csv",
+    ),
+    "box": (
+        ROOT / "tests" / "diagnose" / "data" / "nist_box.toml",
+        SHARED / "cmm-samples" / "qif" / "NIST_MTC_FAIR_Box_Results_19parts.qif",
+        SHARED / "real-series" / "nist-mtc" / "box_process.csv",
+    ),
 }
 TIME_KINDS = ("drift", "thermal", "wear", "level")
 
@@ -70,8 +74,12 @@ def shuffled(series, seed: int):
 def without_process(series):
     """The series with the process channels dropped (times kept)."""
     keep = [i for i, c in enumerate(series.channels) if c not in series.process_channels]
-    return dataclasses.replace(series, temperature=series.temperature[:, keep],
-                               channels=tuple(series.channels[i] for i in keep), process_channels=())
+    return dataclasses.replace(
+        series,
+        temperature=series.temperature[:, keep],
+        channels=tuple(series.channels[i] for i in keep),
+        process_channels=(),
+    )
 
 
 def main(n_shuffles: int) -> None:
@@ -90,18 +98,25 @@ def main(n_shuffles: int) -> None:
         for label, series in (("without log", without_process(inp.series)), ("with log", inp.series)):
             d = Diagnoser().run(inp.layout, series)
             b = d.walk.budgets if d.walk is not None else {}
-            say(f"{name} {label}: {series.n_cycles} parts, RMS {d.error_before.rms:.4f} -> {d.error_after.rms:.4f} mm, "
+            say(
+                f"{name} {label}: {series.n_cycles} parts, RMS {d.error_before.rms:.4f} -> {d.error_after.rms:.4f} mm, "
                 f"out of tolerance {d.error_before.out_of_tolerance} -> {d.error_after.out_of_tolerance}; "
                 f"next from {d.next_from.source}"
-                + (f"; walk centre RMS augmented {b['augmented'].centre_rms:.4f}, ewma {b['ewma'].centre_rms:.4f}"
-                   if b else ""))
+                + (
+                    f"; walk centre RMS augmented {b['augmented'].centre_rms:.4f}, ewma {b['ewma'].centre_rms:.4f}"
+                    if b
+                    else ""
+                )
+            )
             for e in d.effects:
                 say(f"    {e.kind:8s} {e.target}  {e.estimate:+.4g} ± {e.stderr:.2g} {e.unit}")
             if not d.effects:
                 say("    no effect named")
     say()
-    say(f"B. shuffled timestamps, {n_shuffles} seeded permutations per series (seeds 0..{n_shuffles - 1}), "
-        "no process log: series with a time-dependent effect named")
+    say(
+        f"B. shuffled timestamps, {n_shuffles} seeded permutations per series (seeds 0..{n_shuffles - 1}), "
+        "no process log: series with a time-dependent effect named"
+    )
     for name, (model, qif, log) in SERIES.items():
         base = without_process(load_series(model, (qif,), process=str(log)).series)
         inp = load_series(model, (qif,), process=str(log))
@@ -128,11 +143,15 @@ def plate_speed(say) -> None:
     say("C1. the part as the unit, one hypothesis stated in advance (18 parts of the experiment; per part the mean")
     say("    of the dimensions each cutter register alone moves; nested OLS F-tests; within the 9 long stick-out")
     say("    parts the slope on the logged speed)")
-    say(f"{'register':>10}  {'speed, any (4, 12 df)':>22}  {'stick-out x speed (2, 12 df)':>29}  "
-        f"{'slope on long [mm/1000 rpm]':>28}  {'t':>6}  {'p (7 df)':>9}")
+    say(
+        f"{'register':>10}  {'speed, any (4, 12 df)':>22}  {'stick-out x speed (2, 12 df)':>29}  "
+        f"{'slope on long [mm/1000 rpm]':>28}  {'t':>6}  {'p (7 df)':>9}"
+    )
     for row in speed_tests(layout, series):
-        say(f"{row['register']:>10}  {row['p_speed']:>22.2g}  {row['p_interaction']:>29.2g}  {row['slope']:>+28.4f}  "
-            f"{row['t']:>6.2f}  {row['p_slope']:>9.2g}")
+        say(
+            f"{row['register']:>10}  {row['p_speed']:>22.2g}  {row['p_interaction']:>29.2g}  {row['slope']:>+28.4f}  "
+            f"{row['t']:>6.2f}  {row['p_slope']:>9.2g}"
+        )
     sel = select_effects(layout, series)
     stick = str(sel.found[0].channel)
     m = sel.steps[-1].tested
@@ -143,8 +162,10 @@ def plate_speed(say) -> None:
     ref = float(f"{series.temperature[:, series.channels.index(LONG)].mean():.4g}")
     tools = tuple(layout.register_ids[j] for j in layout.tools)
     every_long = tuple(EffectSpec("process", channel=LONG, register=r, reference=ref) for r in tools)
-    cases = ((f"the stick-out found ({stick})", sel.found, stick),
-             (f"the stick-out on every long part ({LONG}), a coefficient per cutter", every_long, LONG))
+    cases = (
+        (f"the stick-out found ({stick})", sel.found, stick),
+        (f"the stick-out on every long part ({LONG}), a coefficient per cutter", every_long, LONG),
+    )
     for label, found, ch in cases:
         ps = speed_term_pvalues(layout, series, found, ch)
         say(f"    {speed_term(series, ch)[0]} after {label}:")
@@ -173,14 +194,17 @@ def plate_speed(say) -> None:
     say("    a larger speed effect still goes unnamed and the named stick-out thins out (k = 2, 4).")
     say()
     say("D. residual RMS of the plate with its log [mm] (the issue quotes 0.025 for a per-cutter model)")
-    rows = [("declared model (a constant per register)", residual_rms(layout, series, ())),
-            (f"the diagnosis: + {stick} per cutter", residual_rms(layout, series, sel.found)),
-            ("  + the stick-out x speed term per cutter register", residual_rms(layout, series, sel.found, stick)),
-            (f"{LONG} + the stick-out x speed term per cutter register",
-             residual_rms(layout, series, every_long, LONG)),
-            (f"a constant per dimension, {LONG} per dimension", residual_rms(layout, series, (), None, True)),
-            ("  + the stick-out x speed term per dimension (the per-cutter model)",
-             residual_rms(layout, series, (), LONG, True))]
+    rows = [
+        ("declared model (a constant per register)", residual_rms(layout, series, ())),
+        (f"the diagnosis: + {stick} per cutter", residual_rms(layout, series, sel.found)),
+        ("  + the stick-out x speed term per cutter register", residual_rms(layout, series, sel.found, stick)),
+        (f"{LONG} + the stick-out x speed term per cutter register", residual_rms(layout, series, every_long, LONG)),
+        (f"a constant per dimension, {LONG} per dimension", residual_rms(layout, series, (), None, True)),
+        (
+            "  + the stick-out x speed term per dimension (the per-cutter model)",
+            residual_rms(layout, series, (), LONG, True),
+        ),
+    ]
     for label, v in rows:
         say(f"    {label:<78s} {v:.4f}")
     say("    The gap from the diagnosis's 0.061 to 0.025 is the speed (C2: not claimed) and a constant and")

@@ -40,8 +40,9 @@ MODEL = guide_pins(positions=False)
 LAYOUT = Layout.from_model(MODEL)
 PLATE = ROOT / "sample_reports" / "qif" / "NIST_MTC_FAIR_Plate_Results_20parts.qif"
 PLATE_MODEL = ROOT / "tests" / "data" / "nist_plate.toml"
-PROCESS = Path(os.environ.get("SETUPFIX_SHARED", ROOT.parent / "shared")) / "real-series" / "nist-mtc" / \
-    "plate_process.csv"
+PROCESS = (
+    Path(os.environ.get("SETUPFIX_SHARED", ROOT.parent / "shared")) / "real-series" / "nist-mtc" / "plate_process.csv"
+)
 
 
 def random_walk(seed: int, step: float = 0.004):
@@ -52,13 +53,17 @@ def random_walk(seed: int, step: float = 0.004):
 
 
 def section_a(lines: list[str]) -> None:
-    lines += ["A. simulated, guide pins 40 x 28, 8 seeds: walk forward distance to the tolerance centre, RMS [mm]",
-              "   (median over seeds), out-of-tolerance cells (sum), and where the next correction came from",
-              f"{'hidden':<12} {'declared':>9} {'augmented':>10} {'EWMA':>9} {'OOT d/a/e':>12}  next from"]
-    cases = {"none": lambda s: simulate(LAYOUT, seed=s).series,
-             "drift": lambda s: simulate(LAYOUT, [one_effect(LAYOUT, "drift")], seed=s).series,
-             "wear": lambda s: simulate(LAYOUT, [one_effect(LAYOUT, "wear")], seed=s).series,
-             "random walk": random_walk}
+    lines += [
+        "A. simulated, guide pins 40 x 28, 8 seeds: walk forward distance to the tolerance centre, RMS [mm]",
+        "   (median over seeds), out-of-tolerance cells (sum), and where the next correction came from",
+        f"{'hidden':<12} {'declared':>9} {'augmented':>10} {'EWMA':>9} {'OOT d/a/e':>12}  next from",
+    ]
+    cases = {
+        "none": lambda s: simulate(LAYOUT, seed=s).series,
+        "drift": lambda s: simulate(LAYOUT, [one_effect(LAYOUT, "drift")], seed=s).series,
+        "wear": lambda s: simulate(LAYOUT, [one_effect(LAYOUT, "wear")], seed=s).series,
+        "random walk": random_walk,
+    }
     for name, make in cases.items():
         rms = {k: [] for k in ("declared", "augmented", "ewma")}
         oot = Counter()
@@ -69,9 +74,11 @@ def section_a(lines: list[str]) -> None:
                 rms[k].append(d.walk.budgets[k].centre_rms)
                 oot[k] += d.walk.budgets[k].out_of_tolerance
             came[d.next_from.source] += 1
-        lines.append(f"{name:<12} {np.median(rms['declared']):9.4f} {np.median(rms['augmented']):10.4f} "
-                     f"{np.median(rms['ewma']):9.4f} {oot['declared']:>4}/{oot['augmented']}/{oot['ewma']:<5}  "
-                     + ", ".join(f"{k} {v}" for k, v in sorted(came.items())))
+        lines.append(
+            f"{name:<12} {np.median(rms['declared']):9.4f} {np.median(rms['augmented']):10.4f} "
+            f"{np.median(rms['ewma']):9.4f} {oot['declared']:>4}/{oot['augmented']}/{oot['ewma']:<5}  "
+            + ", ".join(f"{k} {v}" for k, v in sorted(came.items()))
+        )
     lines.append("")
 
 
@@ -84,25 +91,34 @@ def section_b(lines: list[str]) -> None:
     if timed:
         log = pd.read_csv(PROCESS)
         stamps = pd.to_datetime(log["timestamp"])
-        series = dataclasses.replace(series, time=((stamps - stamps.iloc[0]).dt.total_seconds() / 3600).to_numpy(),
-                                     origin=str(log["timestamp"].iloc[0]))
+        series = dataclasses.replace(
+            series,
+            time=((stamps - stamps.iloc[0]).dt.total_seconds() / 3600).to_numpy(),
+            origin=str(log["timestamp"].iloc[0]),
+        )
     d = Diagnoser().run(inp.layout, series)
     cycle, _ = recommend_next(inp.model, d)
-    lines += [f"B. NIST MTC plate, {series.n_cycles} parts, model tests/data/nist_plate.toml, "
-              f"{'machining times from plate_process.csv' if timed else 'cycle order (no times)'}",
-              f"   effects found: {', '.join(e.target for e in d.effects) or 'none'}",
-              f"   walk forward over {len(d.walk.cycles) if d.walk else 0} part(s):",
-              f"   {'model':<10} {'centre RMS':>10} {'centre |.|':>10} {'OOT':>5} {'budget mean':>12}"]
+    lines += [
+        f"B. NIST MTC plate, {series.n_cycles} parts, model tests/data/nist_plate.toml, "
+        f"{'machining times from plate_process.csv' if timed else 'cycle order (no times)'}",
+        f"   effects found: {', '.join(e.target for e in d.effects) or 'none'}",
+        f"   walk forward over {len(d.walk.cycles) if d.walk else 0} part(s):",
+        f"   {'model':<10} {'centre RMS':>10} {'centre |.|':>10} {'OOT':>5} {'budget mean':>12}",
+    ]
     assert d.walk is not None
     for name, b in d.walk.budgets.items():
-        lines.append(f"   {name:<10} {b.centre_rms:10.4f} {b.centre_mean_abs:10.4f} {b.out_of_tolerance:5d} "
-                     f"{b.mean_budget:+12.4f}")
-    held = [r for r, h in zip(inp.layout.register_ids, d.centred if d.centred is not None else [], strict=True)
-            if h]
-    lines += [f"   next from: {d.next_from.source} -- {d.next_from.reason}",
-              f"   held by the centre rule: {', '.join(held) or 'none'}",
-              "   next correction: " + (", ".join(f"{k} {v:+.3f}" for k, v in cycle.corrections.items())
-                                       if cycle is not None else "none"), ""]
+        lines.append(
+            f"   {name:<10} {b.centre_rms:10.4f} {b.centre_mean_abs:10.4f} {b.out_of_tolerance:5d} "
+            f"{b.mean_budget:+12.4f}"
+        )
+    held = [r for r, h in zip(inp.layout.register_ids, d.centred if d.centred is not None else [], strict=True) if h]
+    lines += [
+        f"   next from: {d.next_from.source} -- {d.next_from.reason}",
+        f"   held by the centre rule: {', '.join(held) or 'none'}",
+        "   next correction: "
+        + (", ".join(f"{k} {v:+.3f}" for k, v in cycle.corrections.items()) if cycle is not None else "none"),
+        "",
+    ]
 
 
 def reference() -> float:
@@ -117,11 +133,14 @@ def reference() -> float:
 
 def section_c(lines: list[str]) -> None:
     ref = reference()
-    lines += ["C. speed (guide pins 40 x 28, wear hidden; best of 5; BLAS threads 1)",
-              f"   reference: SVD of a 1000 x 300 matrix = {ref * 1000:.1f} ms"]
-    for label, make in (("wear (next from augmented)", lambda: simulate(LAYOUT, [one_effect(LAYOUT, "wear")],
-                                                                         seed=1).series),
-                        ("random walk (next from EWMA)", lambda: random_walk(5))):
+    lines += [
+        "C. speed (guide pins 40 x 28, wear hidden; best of 5; BLAS threads 1)",
+        f"   reference: SVD of a 1000 x 300 matrix = {ref * 1000:.1f} ms",
+    ]
+    for label, make in (
+        ("wear (next from augmented)", lambda: simulate(LAYOUT, [one_effect(LAYOUT, "wear")], seed=1).series),
+        ("random walk (next from EWMA)", lambda: random_walk(5)),
+    ):
         series = make()
         best = {"walk": np.inf, "walk + next": np.inf}
         for _ in range(5):

@@ -62,8 +62,12 @@ def cases() -> Iterator[Case]:
         yield Case(f"parse-{i:02d}", (("parse", report, "--out", "-"),))
         yield Case(f"model-init-{i:02d}", (("model", "init", report, "-o", "model.toml"),))
     corrections = [
-        (f"{GUIDE}/model.toml", [f"{GUIDE}/cycle_0{k}.csv" for k in range(1, 6)]
-         + [f"{GUIDE}/cycle_01.dmo", f"{GUIDE}/cycle_01.qif", "sample_reports/tables/cycle_01_de.csv"], None),
+        (
+            f"{GUIDE}/model.toml",
+            [f"{GUIDE}/cycle_0{k}.csv" for k in range(1, 6)]
+            + [f"{GUIDE}/cycle_01.dmo", f"{GUIDE}/cycle_01.qif", "sample_reports/tables/cycle_01_de.csv"],
+            None,
+        ),
         (f"{XYZ}/model.toml", [f"{XYZ}/cycle_0{k}.csv" for k in range(1, 4)], None),
         (f"{CTRL}/model.toml", [f"{CTRL}/report.csv"], f"{CTRL}/current.csv"),
     ]
@@ -78,30 +82,77 @@ def cases() -> Iterator[Case]:
                 yield Case(f"correct-{controller}-{tag}", ((*base, *out),))
                 if current:
                     yield Case(f"correct-{controller}-current-{tag}", ((*base, *out, "--current", current),))
-    yield Case("correct-columns-shop", (("correct", "--model", f"{GUIDE}/model.toml",
-                                          "sample_reports/tables/cycle_01_shop.csv", "--columns",
-                                          "sample_reports/tables/cycle_01_shop.columns.toml", "--json"),))
+    yield Case(
+        "correct-columns-shop",
+        (
+            (
+                "correct",
+                "--model",
+                f"{GUIDE}/model.toml",
+                "sample_reports/tables/cycle_01_shop.csv",
+                "--columns",
+                "sample_reports/tables/cycle_01_shop.columns.toml",
+                "--json",
+            ),
+        ),
+    )
     for folder in (GUIDE, XYZ):
         model = f"{folder}/model.toml"
         for controller in CONTROLLERS:
             out = "out.csv" if controller == "csv" else "programs/O1000.nc"
-            yield Case(f"batch-{controller}-{Path(folder).name}",
-                       (("batch", "--model", model, folder, "--out", out, "--controller", controller,
-                         "--workers", "1"),))
-        yield Case(f"batch-json-{Path(folder).name}",
-                   (("batch", "--model", model, folder, "--out", "out.csv", "--json", "--workers", "1"),))
-    store = ("batch", "--model", f"{GUIDE}/model.toml", GUIDE, "--out", "out.csv", "--store", "shop.db",
-             "--workers", "1")
+            yield Case(
+                f"batch-{controller}-{Path(folder).name}",
+                (("batch", "--model", model, folder, "--out", out, "--controller", controller, "--workers", "1"),),
+            )
+        yield Case(
+            f"batch-json-{Path(folder).name}",
+            (("batch", "--model", model, folder, "--out", "out.csv", "--json", "--workers", "1"),),
+        )
+    store = (
+        "batch",
+        "--model",
+        f"{GUIDE}/model.toml",
+        GUIDE,
+        "--out",
+        "out.csv",
+        "--store",
+        "shop.db",
+        "--workers",
+        "1",
+    )
     yield Case("spc-store", (store, ("spc", "--db", "shop.db"), ("spc", "--db", "shop.db", "--json")))
-    yield Case("diagnose-store", (store, ("diagnose", "--db", "shop.db", "--model", f"{GUIDE}/model.toml"),
-                                  ("diagnose", "--db", "shop.db", "--model", f"{GUIDE}/model.toml", "--json")))
-    loop = ("diagnose", "--model", f"{GUIDE}/model.toml", f"{LOOP}/measurements.csv",
-            "--corrections", f"{LOOP}/corrections.csv")
+    yield Case(
+        "diagnose-store",
+        (
+            store,
+            ("diagnose", "--db", "shop.db", "--model", f"{GUIDE}/model.toml"),
+            ("diagnose", "--db", "shop.db", "--model", f"{GUIDE}/model.toml", "--json"),
+        ),
+    )
+    loop = (
+        "diagnose",
+        "--model",
+        f"{GUIDE}/model.toml",
+        f"{LOOP}/measurements.csv",
+        "--corrections",
+        f"{LOOP}/corrections.csv",
+    )
     yield Case("diagnose-loop", (loop, (*loop, "--json")))
     yield Case("diagnose-loop-thermal", ((*loop, "--temperatures", f"{LOOP}/temperatures.csv", "--json"),))
-    yield Case("diagnose-sheet-metal", (("diagnose", "--model", f"{LOOP}/sheet_metal/model.toml",
-                                         "sample_reports/qif/QIF3_SheetMetal_Results_6_samples.QIF",
-                                         "--alpha", "0.05", "--json"),))
+    yield Case(
+        "diagnose-sheet-metal",
+        (
+            (
+                "diagnose",
+                "--model",
+                f"{LOOP}/sheet_metal/model.toml",
+                "sample_reports/qif/QIF3_SheetMetal_Results_6_samples.QIF",
+                "--alpha",
+                "0.05",
+                "--json",
+            ),
+        ),
+    )
     for report in (f"{GUIDE}/cycle_01.csv", f"{GUIDE}/cycle_03.csv"):
         base = ("compare", "--model", f"{GUIDE}/model.toml", report, "--trials", "3")
         yield Case(f"compare-{Path(report).name}", (base, (*base, "--json")))
@@ -118,7 +169,9 @@ def normalised(data: bytes) -> bytes:
     data = TIME_KEYS.sub(rb"\1: <t>", data)
     data = TIMES.sub(b"<t>", data)
     # compare's table: the seconds column of each method row (the fourth number from the end)
-    return re.sub(rb"(?m)^((?:exact|cripso|pso|ga|coa|cs)\s.*\s)\d+\.\d+(\s+-?\d+\.\d+\s+-?\d+\.\d+)$", rb"\1<t>\2", data)
+    return re.sub(
+        rb"(?m)^((?:exact|cripso|pso|ga|coa|cs)\s.*\s)\d+\.\d+(\s+-?\d+\.\d+\s+-?\d+\.\d+)$", rb"\1<t>\2", data
+    )
 
 
 def digest(data: bytes) -> str:
@@ -132,10 +185,15 @@ def run(case: Case, scratch: Path, keep: Path | None) -> list[str]:
     env = {**os.environ, "COLUMNS": "100", "NO_COLOR": "1", "PYTHONHASHSEED": "0"}
     lines = []
     for k, command in enumerate(case.commands):
-        done = subprocess.run([sys.executable, "-m", "setupfix", *command], cwd=folder, env=env,
-                              capture_output=True, timeout=900, check=False)
-        lines.append(f"{case.name}#{k} rc={done.returncode} stdout={digest(done.stdout)} "
-                     f"stderr={digest(done.stderr)}")
+        done = subprocess.run(
+            [sys.executable, "-m", "setupfix", *command],
+            cwd=folder,
+            env=env,
+            capture_output=True,
+            timeout=900,
+            check=False,
+        )
+        lines.append(f"{case.name}#{k} rc={done.returncode} stdout={digest(done.stdout)} stderr={digest(done.stderr)}")
         if keep is not None:
             (keep / case.name).mkdir(parents=True, exist_ok=True)
             (keep / case.name / f"{k}.stdout").write_bytes(done.stdout)

@@ -59,13 +59,19 @@ def main(argv: list[str] | None = None) -> None:
     args = parser.parse_args(argv)
     model = load_model(ROOT / "sample_reports" / "guide_pins" / "model.toml")
     devs, _ = simulate_deviations(model, args.sets, w1=0.03, w2=0.02, seed=args.seed)
-    problems = [CorrectionProblem.from_part(model, PartMeasurement(f"set {i + 1}", "eqs. 12-13", None, d,
-                                                                   ("",) * d.size)) for i, d in enumerate(devs)]
+    problems = [
+        CorrectionProblem.from_part(model, PartMeasurement(f"set {i + 1}", "eqs. 12-13", None, d, ("",) * d.size))
+        for i, d in enumerate(devs)
+    ]
     with tempfile.TemporaryDirectory() as tmp:
         src, dst = Path(tmp) / "p.pkl", Path(tmp) / "a.pkl"
         src.write_bytes(pickle.dumps(problems))
-        subprocess.run([sys.executable, "-c", FRESH, str(src), str(dst)], check=True, cwd=ROOT,
-                       env={**os.environ, "PYTHONPATH": str(ROOT)})
+        subprocess.run(
+            [sys.executable, "-c", FRESH, str(src), str(dst)],
+            check=True,
+            cwd=ROOT,
+            env={**os.environ, "PYTHONPATH": str(ROOT)},
+        )
         fresh = pickle.loads(dst.read_bytes())
     optimizer = get_optimizer("exact")
     rng = np.random.default_rng(0)
@@ -95,15 +101,21 @@ def main(argv: list[str] | None = None) -> None:
     lines = [
         "Exact optimiser: a long run in one process against a fresh process (issue 21, item 1)",
         f"command : python bench/exact_long_run.py --reports {args.reports} --sets {args.sets} --seed {args.seed}",
-        (f"machine : {platform.machine()}, Python {platform.python_version()}, numpy {np.__version__}; "
-         f"wall time {wall:.1f} s; 1-min load average {os.getloadavg()[0]:.2f} at the end ({os.cpu_count()} cores)"),
-        (f"reports : {args.reports} in one process, one optimiser instance, default time limit; "
-         f"{args.sets} distinct sets (eqs. 12-13, seed {args.seed}) in turn"),
+        (
+            f"machine : {platform.machine()}, Python {platform.python_version()}, numpy {np.__version__}; "
+            f"wall time {wall:.1f} s; 1-min load average {os.getloadavg()[0]:.2f} at the end ({os.cpu_count()} cores)"
+        ),
+        (
+            f"reports : {args.reports} in one process, one optimiser instance, default time limit; "
+            f"{args.sets} distinct sets (eqs. 12-13, seed {args.seed}) in turn"
+        ),
         f"fresh   : statuses of the distinct sets in a fresh process {dict(Counter(s for _, s in fresh))}",
         f"status  : {dict(statuses)}; first report not optimal: {first_stop or 'none'}",
         f"answers : {differ} of {args.reports} differ from the fresh process's",
-        (f"time    : median {np.median(t) * 1e3:.2f} ms = {np.median(t) / ref:.2f}x reference "
-         f"({ref * 1e3:.3f} ms); last 500 reports median {np.median(t[-500:]) * 1e3:.2f} ms"),
+        (
+            f"time    : median {np.median(t) * 1e3:.2f} ms = {np.median(t) / ref:.2f}x reference "
+            f"({ref * 1e3:.3f} ms); last 500 reports median {np.median(t[-500:]) * 1e3:.2f} ms"
+        ),
     ]
     text = "\n".join(lines) + "\n"
     print(text, end="")

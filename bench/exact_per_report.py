@@ -30,8 +30,8 @@ Writes ``bench/results/exact_per_report.txt`` (with the command).
 from __future__ import annotations
 
 import argparse
-import os
 import cProfile
+import os
 import platform
 import pstats
 import re
@@ -68,8 +68,9 @@ def problems(sets: int, seed: int) -> list[tuple[str, CorrectionProblem]]:
             out.append((f"cycle_{i:02d}", CorrectionProblem.from_part(model, part)))
     devs, _ = simulate_deviations(model, sets, w1=0.03, w2=0.02, seed=seed)
     for s, dev in enumerate(devs):
-        part = PartMeasurement(part=f"set {s + 1}", report="eqs. 12-13", timestamp=None, deviation=dev,
-                               sources=("",) * dev.size)
+        part = PartMeasurement(
+            part=f"set {s + 1}", report="eqs. 12-13", timestamp=None, deviation=dev, sources=("",) * dev.size
+        )
         out.append((f"set {s + 1}", CorrectionProblem.from_part(model, part)))
     return out
 
@@ -160,8 +161,9 @@ def main(argv: list[str] | None = None) -> None:
         f"machine : {platform.machine()}, Python {platform.python_version()}, numpy {np.__version__}; "
         f"wall time {wall:.1f} s",
         f"threads : BLAS limited to 1 by threadpoolctl ({blas})",
-        "malloc  : " + (", ".join(f"{k}={os.environ.get(k)}" for k in MALLOC) if platform.system() == "Linux"
-                        else "system default") + " (pinned: see MALLOC in the script)",
+        "malloc  : "
+        + (", ".join(f"{k}={os.environ.get(k)}" for k in MALLOC) if platform.system() == "Linux" else "system default")
+        + " (pinned: see MALLOC in the script)",
         f"load    : 1-min load average {load_start:.2f} at the start, {os.getloadavg()[0]:.2f} at the end "
         f"({os.cpu_count()} cores; other processes share them when it exceeds about 1)",
         f"reports : {n} (5 bundled cycles from CSV + {args.sets} random sets by eqs. 12-13, seed {args.seed}), "
@@ -187,11 +189,14 @@ def main(argv: list[str] | None = None) -> None:
     lines += ["", "paths taken (which stages were needed):"]
     lines += [f"  {k:<40} {v}" for k, v in paths.most_common()]
     medians = {name: float(np.median(v)) for name, v in cycle_times.items()}
-    lines += ["", f"bundled guide-pins cycles, in turn as the batch bench feeds them ({args.rounds} rounds; "
-              "median per cycle):"]
+    lines += [
+        "",
+        f"bundled guide-pins cycles, in turn as the batch bench feeds them ({args.rounds} rounds; median per cycle):",
+    ]
     for name, med in medians.items():
-        lines.append(f"  {name}  {med * 1e3:7.2f} ms = {med / ref:5.2f}x reference   "
-                     f"{'; '.join(cycle_paths[name])[:160]}")
+        lines.append(
+            f"  {name}  {med * 1e3:7.2f} ms = {med / ref:5.2f}x reference   {'; '.join(cycle_paths[name])[:160]}"
+        )
     mean = float(np.mean(list(medians.values())))
     lines.append(f"  mean of the five medians {mean * 1e3:7.2f} ms = {mean / ref:5.2f}x reference")
     total = split["total"]

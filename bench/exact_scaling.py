@@ -70,9 +70,17 @@ def shop_problem(n: int, m: int, seed: int) -> CorrectionProblem:
     upper = np.round(rng.uniform(0.02, 0.1, m) / 0.005) * 0.005
     setup = 0.03 * (1 - 2 * rng.random(n))
     dev = np.round(setup @ comp + 0.01 * (1 - 2 * rng.random(m)), 4)
-    return CorrectionProblem(composite=comp, deviation=dev, lower=lower, upper=upper, lb=np.full(n, -0.1),
-                             ub=np.full(n, 0.1), resolution=0.001, register_ids=tuple(f"R{i}" for i in range(n)),
-                             dimension_ids=tuple(f"D{j}" for j in range(m)))
+    return CorrectionProblem(
+        composite=comp,
+        deviation=dev,
+        lower=lower,
+        upper=upper,
+        lb=np.full(n, -0.1),
+        ub=np.full(n, 0.1),
+        resolution=0.001,
+        register_ids=tuple(f"R{i}" for i in range(n)),
+        dimension_ids=tuple(f"D{j}" for j in range(m)),
+    )
 
 
 def register_blocks(problem: CorrectionProblem) -> int:
@@ -87,8 +95,12 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--long", type=float, default=60.0, help="limit [s] of the proven least-norm reference")
     parser.add_argument("--max-size", type=int, default=len(SIZES), help="only the first N sizes")
     parser.add_argument("--min-size", type=int, default=1, help="from the N-th size on (1: the first)")
-    parser.add_argument("--limit", type=float, default=None,
-                        help="time limit [s] of every solve (default: 2 s up to 180 x 2,000, 10 s above)")
+    parser.add_argument(
+        "--limit",
+        type=float,
+        default=None,
+        help="time limit [s] of every solve (default: 2 s up to 180 x 2,000, 10 s above)",
+    )
     parser.add_argument("--out", type=Path, default=RESULTS / "exact_scaling.txt")
     parser.add_argument("--objective", choices=("paper", "leximin"), default="paper")
     args = parser.parse_args(argv)
@@ -101,12 +113,14 @@ def main(argv: list[str] | None = None) -> None:
         refs = []
         get_optimizer("exact").solve(shop_problem(10, 28, 99))  # warm-up: one-time imports and BLAS scan
         load_start = os.getloadavg()
-        header = (f"{'size':>11} {'seed':>4} {'limit':>5} {'wall s':>7} {'cpu s':>6} {'lp':>6} {'grid':>6} {'lex':>6} "
-                  f"{'norm':>6} "
-                  f"{'status':<11} {'stopped':<26} {'gap µm':>7} {'‖x‖ mm':>8} {'least mm':>8} {'cert ≤':>6}  path")
+        header = (
+            f"{'size':>11} {'seed':>4} {'limit':>5} {'wall s':>7} {'cpu s':>6} {'lp':>6} {'grid':>6} {'lex':>6} "
+            f"{'norm':>6} "
+            f"{'status':<11} {'stopped':<26} {'gap µm':>7} {'‖x‖ mm':>8} {'least mm':>8} {'cert ≤':>6}  path"
+        )
         lines.append(header)
         summary: list[tuple[int, int, float, list[float], int, list[float], int]] = []
-        for n, m in SIZES[args.min_size - 1: args.max_size]:
+        for n, m in SIZES[args.min_size - 1 : args.max_size]:
             limit = args.limit or (2.0 if n * m <= 180 * 2000 else 10.0)
             times = []
             excess = []
@@ -142,8 +156,7 @@ def main(argv: list[str] | None = None) -> None:
                         least = result.norm
                     else:
                         try:
-                            long = get_optimizer("exact", time_limit=args.long,
-                                                 objective=args.objective).solve(problem)
+                            long = get_optimizer("exact", time_limit=args.long, objective=args.objective).solve(problem)
                             least = long.norm if long.status == "optimal" else float("nan")
                         except SetupfixError:
                             least = float("nan")
@@ -151,21 +164,25 @@ def main(argv: list[str] | None = None) -> None:
                     excess.append(result.norm / least)
                 cert = result.extra.get("norm_ratio_max")
                 cert_text = f"{cert:>6.4f}" if isinstance(cert, float) else f"{'-':>6}"
-                lines.append(f"{n:>4} x {m:<5} {seed:>4} {limit:>5.0f} {sec:>7.3f} {cpu:>6.3f} "
-                             f"{st.get('lp bound', 0):>6.3f} "
-                             f"{st.get('grid optimum', 0):>6.3f} {st.get('leximin', 0):>6.3f} "
-                             f"{st.get('least norm', 0):>6.3f} "
-                             f"{result.status:<11} {stop_text:<26} {gap:>7.2f} {result.norm:>8.4f} {least:>8.4f} "
-                             f"{cert_text}  {result.extra.get('path', '')}")
+                lines.append(
+                    f"{n:>4} x {m:<5} {seed:>4} {limit:>5.0f} {sec:>7.3f} {cpu:>6.3f} "
+                    f"{st.get('lp bound', 0):>6.3f} "
+                    f"{st.get('grid optimum', 0):>6.3f} {st.get('leximin', 0):>6.3f} "
+                    f"{st.get('least norm', 0):>6.3f} "
+                    f"{result.status:<11} {stop_text:<26} {gap:>7.2f} {result.norm:>8.4f} {least:>8.4f} "
+                    f"{cert_text}  {result.extra.get('path', '')}"
+                )
                 print(lines[-1], flush=True)
             summary.append((n, m, limit, times, proved, excess, max(blocks)))
     ref = float(np.median(refs))
-    summary_lines = [f"{n:>4} x {m:<5} limit {limit:>4.0f} s: median wall {np.median(times):6.3f} s "
-                     f"= {np.median(times) / ref:6.2f}x ref, max {np.max(times):6.3f} s; every stage proved "
-                     f"{proved}/{len(times)}; norm / proven least norm: "
-                     + (f"max {max(excess):.4f}" if excess else "n/a")
-                     + f"; independent register blocks, most: {blocks}"
-                     for n, m, limit, times, proved, excess, blocks in summary]
+    summary_lines = [
+        f"{n:>4} x {m:<5} limit {limit:>4.0f} s: median wall {np.median(times):6.3f} s "
+        f"= {np.median(times) / ref:6.2f}x ref, max {np.max(times):6.3f} s; every stage proved "
+        f"{proved}/{len(times)}; norm / proven least norm: "
+        + (f"max {max(excess):.4f}" if excess else "n/a")
+        + f"; independent register blocks, most: {blocks}"
+        for n, m, limit, times, proved, excess, blocks in summary
+    ]
     head = [
         "Exact optimiser at shop scale (random multi-part fixtures; times in seconds of wall time)",
         f"command : python bench/exact_scaling.py --seeds {args.seeds} --long {args.long:g}"
@@ -174,7 +191,8 @@ def main(argv: list[str] | None = None) -> None:
         + (f" --limit {args.limit:g}" if args.limit else "")
         + (f" --objective {args.objective}" if args.objective != "paper" else ""),
         f"objective: {args.objective} (stages: LP bound, grid optimum"
-        + (", leximin levels" if args.objective == "leximin" else "") + ", least norm)",
+        + (", leximin levels" if args.objective == "leximin" else "")
+        + ", least norm)",
         f"machine : {platform.machine()}, Python {platform.python_version()}, numpy {np.__version__}; "
         f"wall time {time.perf_counter() - wall:.0f} s; BLAS 1 thread (threadpoolctl)",
         f"load    : 1-min load average {load_start[0]:.2f} at the start, {os.getloadavg()[0]:.2f} at the end "

@@ -80,8 +80,9 @@ def main(argv: list[str] | None = None) -> None:
     statuses: dict[str, int] = {}
     wall = time.perf_counter()
     for s, dev in enumerate(devs):
-        part = PartMeasurement(part=f"set {s + 1}", report="eqs. 12-13", timestamp=None, deviation=dev,
-                               sources=("",) * m)
+        part = PartMeasurement(
+            part=f"set {s + 1}", report="eqs. 12-13", timestamp=None, deviation=dev, sources=("",) * m
+        )
         problem = CorrectionProblem.from_part(model, part)
         x_ref = problem.snap(ref_rng.uniform(problem.lb, problem.ub, (5000, problem.n_registers)))
         t_ref.append(reference_seconds(problem, x_ref))
@@ -117,8 +118,7 @@ def main(argv: list[str] | None = None) -> None:
         f"CRIPSO {args.runs} runs per set, 100 polyps, w = 0.75, eq. 11, 5,000 solutions",
         "",
         f"{'quantity':<44}{'this run':>26}{'paper':>18}",
-        f"{'initial δ = f1 range [mm]':<44}{f'{before.min():.3f} … {before.max():.3f}':>26}"
-        f"{'-0.011 … 0.063':>18}",
+        f"{'initial δ = f1 range [mm]':<44}{f'{before.min():.3f} … {before.max():.3f}':>26}{'-0.011 … 0.063':>18}",
         f"{'exact grid optimum δ range [mm]':<44}{f'{optimum.min():.3f} … {optimum.max():.3f}':>26}{'-':>18}",
         f"{'CRIPSO δ range [mm]':<44}{f'{found.min():.3f} … {found.max():.3f}':>26}{'-':>18}",
         f"{'exact solver status':<44}{', '.join(f'{k} {v}' for k, v in sorted(statuses.items())):>26}{'-':>18}",
@@ -126,8 +126,7 @@ def main(argv: list[str] | None = None) -> None:
         f"{'  p95':<44}{um(np.percentile(gap, 95)):>26}{'-':>18}",
         f"{'  max':<44}{um(gap.max()):>26}{'-':>18}",
         f"{'  runs reaching the optimum δ (gap < 0.5 µm)':<44}{f'{np.mean(gap < 0.5):.1%}':>26}{'-':>18}",
-        f"{'  sets with median gap ≤ 1 µm':<44}{f'{np.mean(np.median(gap, axis=1) <= 1.0 + 1e-9):.1%}':>26}"
-        f"{'-':>18}",
+        f"{'  sets with median gap ≤ 1 µm':<44}{f'{np.mean(np.median(gap, axis=1) <= 1.0 + 1e-9):.1%}':>26}{'-':>18}",
         f"{'  norm f2 above exact, runs at optimum δ':<44}{um(np.median(norm_excess)) + ' (median)':>26}{'-':>18}",
         f"{'runs with f = 10·f1 − f2 ≥ exact f':<44}{f'{np.mean(f_found >= f_exact[:, None] - 1e-12):.1%}':>26}"
         f"{'-':>18}",
@@ -162,8 +161,15 @@ def plot(before: np.ndarray, optimum: np.ndarray, found: np.ndarray, path: Path)
     ax.plot(series, before[order], "o-", ms=3, lw=1, color="tab:gray", label="initial δ (measured)")
     ax.plot(series, optimum[order], "-", lw=1.5, color="tab:blue", label="grid optimum (exact)")
     runs = found[order]
-    ax.plot(np.repeat(series, runs.shape[1]), runs.ravel(), "x", ms=4, color="tab:red", alpha=0.6,
-            label=f"CRIPSO, {runs.shape[1]} runs per set")
+    ax.plot(
+        np.repeat(series, runs.shape[1]),
+        runs.ravel(),
+        "x",
+        ms=4,
+        color="tab:red",
+        alpha=0.6,
+        label=f"CRIPSO, {runs.shape[1]} runs per set",
+    )
     ax.axhline(0.0, color="k", lw=0.6)
     ax.set_xlabel("measurement set, sorted by initial δ")
     ax.set_ylabel("error budget δ = f1 [mm]")

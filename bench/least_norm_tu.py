@@ -57,9 +57,17 @@ def network_problem(n: int, m: int, seed: int) -> CorrectionProblem:
     lower = -np.round(rng.uniform(0.02, 0.1, m) / 0.005) * 0.005
     upper = np.round(rng.uniform(0.02, 0.1, m) / 0.005) * 0.005
     dev = np.round(0.03 * (1 - 2 * rng.random(n)) @ comp + 0.01 * (1 - 2 * rng.random(m)), 4)
-    return CorrectionProblem(composite=comp, deviation=dev, lower=lower, upper=upper, lb=np.full(n, -0.1),
-                             ub=np.full(n, 0.1), resolution=0.001, register_ids=tuple(f"R{i}" for i in range(n)),
-                             dimension_ids=tuple(f"D{j}" for j in range(m)))
+    return CorrectionProblem(
+        composite=comp,
+        deviation=dev,
+        lower=lower,
+        upper=upper,
+        lb=np.full(n, -0.1),
+        ub=np.full(n, 0.1),
+        resolution=0.001,
+        register_ids=tuple(f"R{i}" for i in range(n)),
+        dimension_ids=tuple(f"D{j}" for j in range(m)),
+    )
 
 
 def one_lp(problem: CorrectionProblem) -> float:
@@ -67,16 +75,23 @@ def one_lp(problem: CorrectionProblem) -> float:
     g_rows, g = margin_rows(problem)
     lo, hi = problem.kmin.astype(float), problem.kmax.astype(float)
     r, n = g_rows.shape
-    model = LinearModel(np.r_[np.zeros(n), -1.0], np.hstack([g_rows, np.ones((r, 1))]), np.full(r, -INF), g,
-                        np.r_[lo, -INF], np.r_[hi, INF])
+    model = LinearModel(
+        np.r_[np.zeros(n), -1.0],
+        np.hstack([g_rows, np.ones((r, 1))]),
+        np.full(r, -INF),
+        g,
+        np.r_[lo, -INF],
+        np.r_[hi, INF],
+    )
     start = time.perf_counter()
     res = model.solve(60.0)
     assert res.status == "optimal"
     return time.perf_counter() - start
 
 
-def solve(problem: CorrectionProblem, network: bool, limit: float, listing: bool = True
-          ) -> tuple[float, float, str, np.ndarray, str]:
+def solve(
+    problem: CorrectionProblem, network: bool, limit: float, listing: bool = True
+) -> tuple[float, float, str, np.ndarray, str]:
     stage.NETWORK_LP = network
     settings = ExactSettings() if listing else ExactSettings(ellipsoid_max_registers=0)
     try:
@@ -95,11 +110,13 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--limit", type=float, default=30.0, help="time limit [s] of each solve")
     parser.add_argument("--out", type=Path, default=RESULTS / "least_norm_tu.txt")
     args = parser.parse_args(argv)
-    lines = [f"$ python bench/least_norm_tu.py {' '.join(argv if argv is not None else sys.argv[1:])}".rstrip(),
-             f"# {platform.processor() or platform.machine()}, {os.cpu_count()} CPUs, Python "
-             f"{platform.python_version()}; load at start {os.getloadavg()[0]:.2f}",
-             f"{'size':>11} {'seed':>4} {'1 LP ms':>8} {'LP ms':>8} {'LP/1LP':>6} {'old ms':>8} {'old/1LP':>7} "
-             f"{'now ms':>8} {'now/1LP':>7} {'same':>5}  old path (least norm)"]
+    lines = [
+        f"$ python bench/least_norm_tu.py {' '.join(argv if argv is not None else sys.argv[1:])}".rstrip(),
+        f"# {platform.processor() or platform.machine()}, {os.cpu_count()} CPUs, Python "
+        f"{platform.python_version()}; load at start {os.getloadavg()[0]:.2f}",
+        f"{'size':>11} {'seed':>4} {'1 LP ms':>8} {'LP ms':>8} {'LP/1LP':>6} {'old ms':>8} {'old/1LP':>7} "
+        f"{'now ms':>8} {'now/1LP':>7} {'same':>5}  old path (least norm)",
+    ]
     print("\n".join(lines), flush=True)
     summary = []
     with threadpool_limits(limits=1):
@@ -117,29 +134,38 @@ def main(argv: list[str] | None = None) -> None:
                 lp.append(one_lp(problem))
                 ref = float(np.median(lp))
                 untied = "the tie is not broken" not in path_lp + path_old + path_now
-                same = (st_lp == st_old == st_now == "optimal" and abs(norm_lp - norm_old) <= 1e-12
-                        and abs(norm_now - norm_old) <= 1e-12
-                        and (not untied or (np.array_equal(x_lp, x_old) and np.array_equal(x_now, x_old))))
+                same = (
+                    st_lp == st_old == st_now == "optimal"
+                    and abs(norm_lp - norm_old) <= 1e-12
+                    and abs(norm_now - norm_old) <= 1e-12
+                    and (not untied or (np.array_equal(x_lp, x_old) and np.array_equal(x_now, x_old)))
+                )
                 old_steps = "; ".join(p for p in path_old.split("; ") if p.startswith("least norm"))
-                lines.append(f"{n:>4} x {m:<5} {seed:>4} {ref * 1e3:>8.2f} {t_lp * 1e3:>8.2f} {t_lp / ref:>6.1f} "
-                             f"{t_old * 1e3:>8.2f} {t_old / ref:>7.1f} {t_now * 1e3:>8.2f} {t_now / ref:>7.1f} "
-                             f"{same!s:>5}  {old_steps[:100]}")
+                lines.append(
+                    f"{n:>4} x {m:<5} {seed:>4} {ref * 1e3:>8.2f} {t_lp * 1e3:>8.2f} {t_lp / ref:>6.1f} "
+                    f"{t_old * 1e3:>8.2f} {t_old / ref:>7.1f} {t_now * 1e3:>8.2f} {t_now / ref:>7.1f} "
+                    f"{same!s:>5}  {old_steps[:100]}"
+                )
                 print(lines[-1], flush=True)
                 if "one LP over the chords" not in path_lp:
                     lines.append(f"    network LP not taken: {path_lp}")
                 if not untied:
                     lines.append("    a tie too large to list (the corrections may differ; the norms may not)")
                 if not same:
-                    lines.append(f"    DIFFERENT: norms {norm_lp!r} / {norm_old!r} / {norm_now!r}, "
-                                 f"status {st_lp} / {st_old} / {st_now}")
+                    lines.append(
+                        f"    DIFFERENT: norms {norm_lp!r} / {norm_old!r} / {norm_now!r}, "
+                        f"status {st_lp} / {st_old} / {st_now}"
+                    )
                 ratios["lp"].append(t_lp / ref)
                 ratios["old"].append(t_old / ref)
                 ratios["now"].append(t_now / ref)
-            summary.append(f"{n:>4} x {m:<5} least-norm stage / one LP, median: network LP first "
-                           f"{np.median(ratios['lp']):6.1f}x, without it {np.median(ratios['old']):6.1f}x, "
-                           f"as shipped {np.median(ratios['now']):6.1f}x")
+            summary.append(
+                f"{n:>4} x {m:<5} least-norm stage / one LP, median: network LP first "
+                f"{np.median(ratios['lp']):6.1f}x, without it {np.median(ratios['old']):6.1f}x, "
+                f"as shipped {np.median(ratios['now']):6.1f}x"
+            )
     lines += ["", "summary (medians over the seeds):", *summary]
-    print("\n".join(lines[-len(summary) - 2:]))
+    print("\n".join(lines[-len(summary) - 2 :]))
     args.out.parent.mkdir(parents=True, exist_ok=True)
     args.out.write_text("\n".join(lines) + "\n", encoding="utf-8")
 

@@ -111,17 +111,25 @@ def main() -> None:
         cells = "".join(f"{runs[w][0]:>12.2f} {runs[w][1][:7]:>7}" for w, _, _ in WAYS)
         proved = [runs[w][3] for w, _, _ in WAYS if runs[w][1] == "optimal"]
         same = all(np.array_equal(proved[0], x) for x in proved[1:]) if proved else None
-        lines.append(f"{name:<12}{cells}  {'yes' if same else 'NO' if same is False else '-'}"
-                     f" ({len(proved)} of {len(WAYS)} proved)")
+        lines.append(
+            f"{name:<12}{cells}  {'yes' if same else 'NO' if same is False else '-'}"
+            f" ({len(proved)} of {len(WAYS)} proved)"
+        )
         for w, _, _ in WAYS:
             totals[w] += runs[w][0]
     lines += ["", "total CPU s: " + ", ".join(f"{w} {t:.2f}" for w, t in totals.items())]
-    lines += ["", f"pair branches: {len(paired)} of {args.reports} reports meet a conflict two dimensions must share; "
-              "each with the pairs (the optimiser) and without them (the counts, as before)",
-              f"{'report':<12}{'pairs: CPU s':>20}{'counts: CPU s':>20}  same answer (proved ways)"]
+    lines += [
+        "",
+        f"pair branches: {len(paired)} of {args.reports} reports meet a conflict two dimensions must share; "
+        "each with the pairs (the optimiser) and without them (the counts, as before)",
+        f"{'report':<12}{'pairs: CPU s':>20}{'counts: CPU s':>20}  same answer (proved ways)",
+    ]
     for name, (c_p, st_p, _, x_p), (c_c, st_c, _, x_c) in paired:
-        same = "yes" if st_p == st_c == "optimal" and np.array_equal(x_p, x_c) else (
-            "NO" if st_p == st_c == "optimal" else "-")
+        same = (
+            "yes"
+            if st_p == st_c == "optimal" and np.array_equal(x_p, x_c)
+            else ("NO" if st_p == st_c == "optimal" else "-")
+        )
         lines.append(f"{name:<12}{c_p:>12.2f} {st_p[:7]:>7}{c_c:>12.2f} {st_c[:7]:>7}  {same}")
     if paired:
         pairs_cpu, counts_cpu = sum(r[1][0] for r in paired), sum(r[2][0] for r in paired)

@@ -58,8 +58,9 @@ class Chain:
     def _model(self) -> tuple[cp_model.CpModel, list[cp_model.LinearExpr]]:
         mdl = cp_model.CpModel()
         k = [mdl.NewIntVar(int(a), int(b), f"k{j}") for j, (a, b) in enumerate(zip(self.kmin, self.kmax, strict=True))]
-        moved = [sum(int(self.step * self.a[i, j]) * k[j] for j in np.flatnonzero(self.a[i]))
-                 for i in range(self.a.shape[0])]
+        moved = [
+            sum(int(self.step * self.a[i, j]) * k[j] for j in np.flatnonzero(self.a[i])) for i in range(self.a.shape[0])
+        ]
         return mdl, moved
 
     def _above(self, mdl: cp_model.CpModel, moved: list[cp_model.LinearExpr], level: object) -> list[cp_model.IntVar]:
@@ -91,7 +92,7 @@ class Chain:
 
     def value(self, count: int | None) -> tuple[str, float, float]:
         mdl, moved = self._model()
-        t = mdl.NewIntVar(-10**6, 10**6, "t")
+        t = mdl.NewIntVar(-(10**6), 10**6, "t")
         if count is None:
             for i, e in enumerate(moved):
                 mdl.Add(self.hi[i] - e >= t)
@@ -131,10 +132,14 @@ def full_vector(chain: Chain, m: int) -> tuple[list[tuple[int, int]], bool, int,
 
 def full(args: argparse.Namespace, lines: list[str]) -> None:
     """``--full``: the optimiser's proved leximin vector against the whole chain on CP-SAT."""
-    lines.append(f"the whole leximin vector: the optimiser ({args.limit:g} s limit, proved answers only) against "
-                 f"the CP-SAT chain to its end (each question capped at {args.cap:g} s)")
-    lines.append(f"{'size':>10} {'seed':>4} {'optimiser':>10} {'wall s':>7} {'values':>6} {'questions':>9} "
-                 f"{'CP-SAT s':>8}  same vector")
+    lines.append(
+        f"the whole leximin vector: the optimiser ({args.limit:g} s limit, proved answers only) against "
+        f"the CP-SAT chain to its end (each question capped at {args.cap:g} s)"
+    )
+    lines.append(
+        f"{'size':>10} {'seed':>4} {'optimiser':>10} {'wall s':>7} {'values':>6} {'questions':>9} "
+        f"{'CP-SAT s':>8}  same vector"
+    )
     for size in args.full.split(","):
         n, m = (int(v) for v in size.split("x"))
         for seed in range(args.seeds):
@@ -146,16 +151,20 @@ def full(args: argparse.Namespace, lines: list[str]) -> None:
             units = np.rint(problem.margins(np.asarray(res.x)) / UNIT).astype(int)
             mine = [(int(v), int(c)) for v, c in zip(*np.unique(units, return_counts=True), strict=True)]
             theirs, whole, asked, secs = full_vector(Chain(problem, args.cap), m)
-            diff = next((i for i, (a, b) in enumerate(zip(mine, theirs, strict=False)) if a != b),
-                        None if len(mine) == len(theirs) or not whole else min(len(mine), len(theirs)))
+            diff = next(
+                (i for i, (a, b) in enumerate(zip(mine, theirs, strict=False)) if a != b),
+                None if len(mine) == len(theirs) or not whole else min(len(mine), len(theirs)),
+            )
             if diff is not None:
-                verdict = f"NO: value {diff}: {mine[diff:diff + 1]} against {theirs[diff:diff + 1]} (units, count)"
+                verdict = f"NO: value {diff}: {mine[diff : diff + 1]} against {theirs[diff : diff + 1]} (units, count)"
             else:
                 verdict = "yes" if whole else f"the first {len(theirs)} values (CP-SAT stopped at the next question)"
             if res.status != "optimal":
                 verdict += f"; optimiser {res.status}"
-            lines.append(f"{n:>4} x {m:<4} {seed:>4} {res.status:>10} {wall:>7.2f} {len(mine):>6} {asked:>9} "
-                         f"{secs:>8.1f}  {verdict}")
+            lines.append(
+                f"{n:>4} x {m:<4} {seed:>4} {res.status:>10} {wall:>7.2f} {len(mine):>6} {asked:>9} "
+                f"{secs:>8.1f}  {verdict}"
+            )
             print(lines[-1], flush=True)
 
 
@@ -171,20 +180,25 @@ def main() -> None:
     ap.add_argument("--out", default="")
     args = ap.parse_args()
     args.out = args.out or str(RESULTS / ("leximin_cpsat_full.txt" if args.full else "leximin_cpsat.txt"))
-    lines = ["The leximin on an independent engine (CP-SAT) against the optimiser",
-             f"command : python bench/{Path(__file__).name} " + " ".join(sys.argv[1:]),
-             f"machine : {platform.machine()}, Python {platform.python_version()}, numpy {np.__version__}, "
-             f"ortools {__import__('ortools').__version__}; {os.cpu_count()} CPUs",
-             f"threads : CP-SAT {os.cpu_count()} workers; the optimiser BLAS 1 thread (threadpoolctl), HiGHS 1 thread",
-             f"load    : 1-min load average {os.getloadavg()[0]:.2f} at the start"]
+    lines = [
+        "The leximin on an independent engine (CP-SAT) against the optimiser",
+        f"command : python bench/{Path(__file__).name} " + " ".join(sys.argv[1:]),
+        f"machine : {platform.machine()}, Python {platform.python_version()}, numpy {np.__version__}, "
+        f"ortools {__import__('ortools').__version__}; {os.cpu_count()} CPUs",
+        f"threads : CP-SAT {os.cpu_count()} workers; the optimiser BLAS 1 thread (threadpoolctl), HiGHS 1 thread",
+        f"load    : 1-min load average {os.getloadavg()[0]:.2f} at the start",
+    ]
     if args.full:
         full(args, lines)
         _write(args, lines)
         return
     n, m = (int(v) for v in args.size.split("x"))
     problem = shop_problem(n, m, args.seed)
-    lines += [f"problem : bench/exact_scaling.py shop_problem({n}, {m}, seed {args.seed}); margins in 0.1 µm "
-              f"(the optimiser's steps are 1 µm = 10 units); each CP-SAT solve capped at {args.cap:g} s", ""]
+    lines += [
+        f"problem : bench/exact_scaling.py shop_problem({n}, {m}, seed {args.seed}); margins in 0.1 µm "
+        f"(the optimiser's steps are 1 µm = 10 units); each CP-SAT solve capped at {args.cap:g} s",
+        "",
+    ]
     with threadpool_limits(1):
         began = time.perf_counter()
         res = get_optimizer("exact", time_limit=args.limit).solve(problem)
@@ -192,9 +206,11 @@ def main() -> None:
     units = np.sort(np.rint(problem.margins(np.asarray(res.x)) / UNIT).astype(int))
     values, counts = np.unique(units, return_counts=True)
     smallest = ", ".join(f"{v / 10:g} x{c}" for v, c in zip(values[:12], counts[:12], strict=True))
-    lines.append(f"the optimiser ({args.limit:g} s limit): wall {wall:.2f} s, status {res.status}; its point's "
-                 f"smallest margins [steps] x how many: {smallest}; {values.size} distinct margins in all (a proved "
-                 "leximin proves each)")
+    lines.append(
+        f"the optimiser ({args.limit:g} s limit): wall {wall:.2f} s, status {res.status}; its point's "
+        f"smallest margins [steps] x how many: {smallest}; {values.size} distinct margins in all (a proved "
+        "leximin proves each)"
+    )
     lines.append("")
     lines.append("CP-SAT, question by question:")
     chain, total = Chain(problem, args.cap), 0.0
@@ -207,8 +223,10 @@ def main() -> None:
     while status == "OPTIMAL" and asked < args.questions:
         status, above, secs = chain.count(int(t))
         total, asked = total + secs, asked + 1
-        lines.append(f"  count  at {t / 10:g} steps: {int(above)} of {m} above, {m - int(above)} at or below it "
-                     f"({status}) {secs:.2f} s; the optimiser's point: {int(np.sum(units > t))} above")
+        lines.append(
+            f"  count  at {t / 10:g} steps: {int(above)} of {m} above, {m - int(above)} at or below it "
+            f"({status}) {secs:.2f} s; the optimiser's point: {int(np.sum(units > t))} above"
+        )
         print(lines[-1], flush=True)
         if status != "OPTIMAL" or asked >= args.questions:
             break

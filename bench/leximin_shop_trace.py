@@ -59,9 +59,11 @@ def _traced(lines: list[str], whole_only: bool) -> Callable[[], None]:
     def traced_alone(search, v, k, t, together):  # type: ignore[no-untyped-def]
         calls, began = search.calls, time.perf_counter()
         out = alone(search, v, k, t, together)
-        lines.append(f"  alone tests ({'singles' if together == 1 else 'pairs'}) at {t:.4g} steps: "
-                     f"{search.calls - calls} tests, {time.perf_counter() - began:.3f} s, "
-                     f"{'stopped' if out is None else len(out)} found")
+        lines.append(
+            f"  alone tests ({'singles' if together == 1 else 'pairs'}) at {t:.4g} steps: "
+            f"{search.calls - calls} tests, {time.perf_counter() - began:.3f} s, "
+            f"{'stopped' if out is None else len(out)} found"
+        )
         return out
 
     patch(lexmod, "_alone", traced_alone)
@@ -83,10 +85,12 @@ def _traced(lines: list[str], whole_only: bool) -> Callable[[], None]:
         def timed(limit, *start):  # type: ignore[no-untyped-def]
             began = time.perf_counter()
             res = solve(limit, *start)
-            lines.append(f"  {objective:<8} MILP, {len(blocks)} block(s) before it: binaries "
-                         f"{int(layout.dims[-1].size)} of {rows.n_active} active dimensions in its own block, "
-                         f"{lp.n_rows} rows; given {limit:.2f} s, took {time.perf_counter() - began:.2f} s "
-                         f"({res.status})")
+            lines.append(
+                f"  {objective:<8} MILP, {len(blocks)} block(s) before it: binaries "
+                f"{int(layout.dims[-1].size)} of {rows.n_active} active dimensions in its own block, "
+                f"{lp.n_rows} rows; given {limit:.2f} s, took {time.perf_counter() - began:.2f} s "
+                f"({res.status})"
+            )
             return res
 
         lp.solve = timed
@@ -105,9 +109,11 @@ def _traced(lines: list[str], whole_only: bool) -> Callable[[], None]:
         near_s = time.perf_counter() - began
         began = time.perf_counter()
         whole_out = farkas(rows, b)
-        lines.append(f"  the conflict's certificate: NNLS on the rows near the point {near_s:.3f} s "
-                     f"({'a proof' if out[0] is not None else 'none'}), on the whole system "
-                     f"{time.perf_counter() - began:.3f} s ({'a proof' if whole_out[0] is not None else 'none'})")
+        lines.append(
+            f"  the conflict's certificate: NNLS on the rows near the point {near_s:.3f} s "
+            f"({'a proof' if out[0] is not None else 'none'}), on the whole system "
+            f"{time.perf_counter() - began:.3f} s ({'a proof' if whole_out[0] is not None else 'none'})"
+        )
         return out
 
     patch(pins, "farkas_or_point", near_and_whole)
@@ -149,8 +155,10 @@ def main(argv: list[str] | None = None) -> None:
     with threadpool_limits(limits=1):
         get_optimizer("exact").solve(shop_problem(10, 28, 99))  # warm-up: imports
         problem = shop_problem(180, 2000, args.seed)
-        for title, whole_only in (("the optimiser (near-row certificate beyond small problems)", False),
-                                  ("no certificate beyond small problems (the previous stop's way)", True)):
+        for title, whole_only in (
+            ("the optimiser (near-row certificate beyond small problems)", False),
+            ("no certificate beyond small problems (the previous stop's way)", True),
+        ):
             lines += ["", f"{title}:"]
             undo = _traced(lines, whole_only)
             began = time.perf_counter()
@@ -160,9 +168,11 @@ def main(argv: list[str] | None = None) -> None:
                 undo()
             path = str(result.extra.get("path", "")).split("; ")
             levels = [p for p in path if "dimension(s) at" in p or "counts:" in p]
-            lines.append(f"  wall {time.perf_counter() - began:.2f} s, status {result.status}, stages "
-                         + ", ".join(f"{k} {v:.2f} s" for k, v in dict(result.extra["stages"]).items())
-                         + f"; correction norm {result.norm:.4f} mm")
+            lines.append(
+                f"  wall {time.perf_counter() - began:.2f} s, status {result.status}, stages "
+                + ", ".join(f"{k} {v:.2f} s" for k, v in dict(result.extra["stages"]).items())
+                + f"; correction norm {result.norm:.4f} mm"
+            )
             lines.append(f"  levels proved ({len(levels)}): " + "; ".join(p.replace("leximin ", "") for p in levels))
             print("\n".join(lines), flush=True)
     lines.append(f"load    : 1-min load average {os.getloadavg()[0]:.2f} at the end")

@@ -47,10 +47,10 @@ sys.path.insert(0, str(ROOT / "bench"))
 from exact_per_report import problems
 from exact_scaling import shop_problem
 
+import setupfix.optimize._session as session_mod
 from setupfix.model import load_model
 from setupfix.optimize import CorrectionProblem, get_optimizer
 from setupfix.optimize._lp_bound import lp_bound, margin_rows
-import setupfix.optimize._session as session_mod
 from setupfix.optimize._session import GridRows, Session
 from setupfix.optimize._settings import ExactSettings
 
@@ -82,8 +82,11 @@ def timed(problem: CorrectionProblem, objective: str, limit: float) -> tuple[flo
     result = opt.solve(problem)
     CPU.setdefault(objective, []).append(time.process_time() - c)
     path = str(result.extra.get("path", ""))
-    kind = ("counts" if "the rest by counts" in path else "branches" if "branch:" in path else "levels"
-            ) if objective == "leximin" else "paper"
+    kind = (
+        ("counts" if "the rest by counts" in path else "branches" if "branch:" in path else "levels")
+        if objective == "leximin"
+        else "paper"
+    )
     seconds = time.perf_counter() - t
     if objective == "leximin":
         STAGES.setdefault(kind, []).append({**result.extra.get("stages", {}), "total": seconds})
@@ -139,16 +142,20 @@ def multi_axis_problems(fixtures: int) -> list[tuple[str, CorrectionProblem]]:
     sample = ROOT / "sample_reports" / "two_station_xyz"
     model = load_model(sample / "model.toml")
     for report in sorted(sample.glob("cycle_*.csv")):
-        out += [(f"two_station_xyz/{report.name}", CorrectionProblem.from_part(model, part))
-                for part in load_parts(model, report)]
+        out += [
+            (f"two_station_xyz/{report.name}", CorrectionProblem.from_part(model, part))
+            for part in load_parts(model, report)
+        ]
     with tempfile.TemporaryDirectory() as tmp:
         for seed in range(1, fixtures + 1):
             fx = make_fixture(seed)
             (Path(tmp) / "model.toml").write_text(fx.text, encoding="utf-8")
             (Path(tmp) / "report.csv").write_text(report_csv(fx), encoding="utf-8")
             model = load_model(Path(tmp) / "model.toml")
-            out += [(f"fixture seed {seed}", CorrectionProblem.from_part(model, part))
-                    for part in load_parts(model, Path(tmp) / "report.csv")]
+            out += [
+                (f"fixture seed {seed}", CorrectionProblem.from_part(model, part))
+                for part in load_parts(model, Path(tmp) / "report.csv")
+            ]
     return out
 
 
@@ -157,8 +164,11 @@ def multi_axis(fixtures: int, limit: float) -> list[str]:
     for key in list(CPU):
         CPU[key] = []
     probs = multi_axis_problems(fixtures)
-    lines = ["", f"multi-axis: two_station_xyz (3 cycles) + {fixtures} generated fixtures "
-             f"(tests/multi_axis_fixtures.py), time limit {limit:g} s; zones as one dimension each"]
+    lines = [
+        "",
+        f"multi-axis: two_station_xyz (3 cycles) + {fixtures} generated fixtures "
+        f"(tests/multi_axis_fixtures.py), time limit {limit:g} s; zones as one dimension each",
+    ]
     rows: dict[str, list[float]] = {"leximin": [], "paper": [], "lp": []}
     same = 0
     for name, problem in probs:
@@ -169,23 +179,29 @@ def multi_axis(fixtures: int, limit: float) -> list[str]:
         for objective in ("paper", "leximin"):
             sec, st, _ = timed(problem, objective, limit)
             rows[objective].append(sec)
-            text.append(f"{objective} {sec * 1e3:7.1f} ms wall = {sec / lp:6.1f}x LP, "
-                        f"CPU {CPU[objective][-1] * 1e3:6.1f} ms = {CPU[objective][-1] / cpu_lp:6.1f}x LP ({st})")
+            text.append(
+                f"{objective} {sec * 1e3:7.1f} ms wall = {sec / lp:6.1f}x LP, "
+                f"CPU {CPU[objective][-1] * 1e3:6.1f} ms = {CPU[objective][-1] / cpu_lp:6.1f}x LP ({st})"
+            )
         x2 = get_optimizer("exact", time_limit=limit).solve(problem).x
         proved = get_optimizer("exact", time_limit=120.0).solve(problem)
         ok = bool(np.array_equal(x2, proved.x)) and proved.status == "optimal"
         same += ok
         sides = problem.circles.sides if problem.circles is not None else ()
-        lines.append(f"  {name:30s} {problem.n_registers} registers, {len(problem.dimension_ids)} rows (zone facets "
-                     f"{'/'.join(map(str, sides))}); LP {lp * 1e3:.2f} ms wall, {cpu_lp * 1e3:.2f} ms CPU")
+        lines.append(
+            f"  {name:30s} {problem.n_registers} registers, {len(problem.dimension_ids)} rows (zone facets "
+            f"{'/'.join(map(str, sides))}); LP {lp * 1e3:.2f} ms wall, {cpu_lp * 1e3:.2f} ms CPU"
+        )
         lines.append("      " + "; ".join(text) + f"; same as 120 s: {'yes' if ok else 'NO'}")
     for objective in ("paper", "leximin"):
         wall = np.array(rows[objective]) / np.array(rows["lp"])
         cpu = np.array(CPU[objective]) / np.array(CPU["lp"])
-        lines.append(f"  {objective:8s} median {np.median(rows[objective]) * 1e3:7.1f} ms wall "
-                     f"({np.median(wall):.1f}x LP), "
-                     f"max {max(rows[objective]) * 1e3:7.1f} ms; CPU median {np.median(CPU[objective]) * 1e3:.1f} ms "
-                     f"({np.median(cpu):.1f}x LP), max {max(CPU[objective]) * 1e3:.1f} ms")
+        lines.append(
+            f"  {objective:8s} median {np.median(rows[objective]) * 1e3:7.1f} ms wall "
+            f"({np.median(wall):.1f}x LP), "
+            f"max {max(rows[objective]) * 1e3:7.1f} ms; CPU median {np.median(CPU[objective]) * 1e3:.1f} ms "
+            f"({np.median(cpu):.1f}x LP), max {max(CPU[objective]) * 1e3:.1f} ms"
+        )
     lines.append(f"  the {limit:g} s answer is the proved one (120 s) on {same} of {len(probs)}")
     return lines
 
@@ -202,12 +218,14 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("--fixtures", type=int, default=6, help="generated multi-axis fixtures")
     ap.add_argument("--only-multi-axis", action="store_true")
     args = ap.parse_args(argv)
-    lines = ["Leximin centring: time per report (exact optimiser, objective leximin vs paper)",
-             "command : python bench/leximin_speed.py " + " ".join(sys.argv[1:] if argv is None else argv),
-             f"machine : {platform.machine()}, Python {platform.python_version()}, numpy {np.__version__}; "
-             f"{os.cpu_count()} CPUs",
-             "threads : BLAS limited to 1 (threadpoolctl); HiGHS threads = 1",
-             f"load    : 1-min load average {os.getloadavg()[0]:.2f} at the start"]
+    lines = [
+        "Leximin centring: time per report (exact optimiser, objective leximin vs paper)",
+        "command : python bench/leximin_speed.py " + " ".join(sys.argv[1:] if argv is None else argv),
+        f"machine : {platform.machine()}, Python {platform.python_version()}, numpy {np.__version__}; "
+        f"{os.cpu_count()} CPUs",
+        "threads : BLAS limited to 1 (threadpoolctl); HiGHS threads = 1",
+        f"load    : 1-min load average {os.getloadavg()[0]:.2f} at the start",
+    ]
     with threadpool_limits(limits=1):
         get_optimizer("exact").solve(problems(1, 0)[0][1])  # warm-up: imports, first HiGHS object
         if args.only_multi_axis:
@@ -242,41 +260,61 @@ def main(argv: list[str] | None = None) -> None:
         for key in cpu:
             CPU[key] = list(cpu[key].min(axis=0))
         ref = float(np.median(rows["lp"]))
-        lines += ["", f"paper size: guide-pins model, {len(probs)} reports (5 cycles + {args.sets} random sets, seed "
-                  f"{args.seed}), time limit {args.limit:g} s; {args.passes} passes over them, each report's time "
-                  "its best pass (each pass starts with no model's memo, as a new process would)",
-                  f"reference: one LP of eq. 8 on the same report, median {ref * 1e3:.3f} ms"]
+        lines += [
+            "",
+            f"paper size: guide-pins model, {len(probs)} reports (5 cycles + {args.sets} random sets, seed "
+            f"{args.seed}), time limit {args.limit:g} s; {args.passes} passes over them, each report's time "
+            "its best pass (each pass starts with no model's memo, as a new process would)",
+            f"reference: one LP of eq. 8 on the same report, median {ref * 1e3:.3f} ms",
+        ]
         for objective in ("paper", "leximin"):
             t = np.array(rows[objective])
             firsts = ", ".join(f"{np.median(wall[objective][r]) * 1e3:.2f}" for r in range(args.passes))
-            lines.append(f"  {objective:8s} median {np.median(t) * 1e3:8.2f} ms = {np.median(t) / ref:7.1f}x LP; "
-                         f"p95 {np.percentile(t, 95) * 1e3:8.2f} ms; max {t.max() * 1e3:8.1f} ms; "
-                         f"status {dict(status[objective])}; each pass alone: median {firsts} ms")
-        lines.append(f"  leximin paths: {dict(kinds)} (levels: progressive filling only; branches: a discrete "
-                     "conflict decided by branches; counts: by the count MILPs)")
+            lines.append(
+                f"  {objective:8s} median {np.median(t) * 1e3:8.2f} ms = {np.median(t) / ref:7.1f}x LP; "
+                f"p95 {np.percentile(t, 95) * 1e3:8.2f} ms; max {t.max() * 1e3:8.1f} ms; "
+                f"status {dict(status[objective])}; each pass alone: median {firsts} ms"
+            )
+        lines.append(
+            f"  leximin paths: {dict(kinds)} (levels: progressive filling only; branches: a discrete "
+            "conflict decided by branches; counts: by the count MILPs)"
+        )
         for kind, runs in sorted(STAGES.items()):
             names = [n for n in runs[0] if n != "total"] + ["total"]
             shown = ", ".join(f"{n} {np.median([r.get(n, 0.0) for r in runs]) * 1e3:.2f}" for n in names)
-            lines.append(f"  {kind} ({len(runs) // args.passes}): median ms by stage over the passes (the leximin "
-                         f"stage holds the climbs): {shown}")
+            lines.append(
+                f"  {kind} ({len(runs) // args.passes}): median ms by stage over the passes (the leximin "
+                f"stage holds the climbs): {shown}"
+            )
         hits, total = climb_hits(probs, args.limit)
-        lines.append(f"  grid climb (the levels' start point): reaches the proved leximin margins on {hits} of {total} "
-                     f"reports; {len(CLIMBS)} climbs in that pass, median {np.median(CLIMBS) * 1e3:.2f} ms each")
-        lines.append(f"  grid optimum (all passes): the levels' climb proves it on {GRID['leximin climb']} leximin "
-                     f"solves and the dual ellipsoid's listing on {GRID['leximin listing']}; with the paper's "
-                     f"objective the listing proves it on {GRID['paper listing']} (of {args.passes * len(probs)} "
-                     "solves each)")
+        lines.append(
+            f"  grid climb (the levels' start point): reaches the proved leximin margins on {hits} of {total} "
+            f"reports; {len(CLIMBS)} climbs in that pass, median {np.median(CLIMBS) * 1e3:.2f} ms each"
+        )
+        lines.append(
+            f"  grid optimum (all passes): the levels' climb proves it on {GRID['leximin climb']} leximin "
+            f"solves and the dual ellipsoid's listing on {GRID['leximin listing']}; with the paper's "
+            f"objective the listing proves it on {GRID['paper listing']} (of {args.passes * len(probs)} "
+            "solves each)"
+        )
         cpu_ref = float(np.median(CPU["lp"]))
-        lines.append(f"  CPU time (process, the same calls): reference {cpu_ref * 1e3:.3f} ms; " + "; ".join(
-            f"{o} median {np.median(CPU[o]) * 1e3:.2f} ms = {np.median(CPU[o]) / cpu_ref:.1f}x LP, p95 "
-            f"{np.percentile(CPU[o], 95) * 1e3:.2f} ms" for o in ("paper", "leximin")))
+        lines.append(
+            f"  CPU time (process, the same calls): reference {cpu_ref * 1e3:.3f} ms; "
+            + "; ".join(
+                f"{o} median {np.median(CPU[o]) * 1e3:.2f} ms = {np.median(CPU[o]) / cpu_ref:.1f}x LP, p95 "
+                f"{np.percentile(CPU[o], 95) * 1e3:.2f} ms"
+                for o in ("paper", "leximin")
+            )
+        )
         med = float(np.median(rows["leximin"]))
         med_cpu = float(np.median(CPU["leximin"]))
         worst_pass = max(float(np.median(wall["leximin"][r])) for r in range(args.passes))
-        lines.append(f"  target (issue 22): median <= 5 ms with leximin: {'met' if med <= 5e-3 else 'MISSED'} "
-                     f"(wall {med * 1e3:.2f} ms = {med / 5e-3:.2f}x the target; CPU {med_cpu * 1e3:.2f} ms = "
-                     f"{med_cpu / 5e-3:.2f}x; the slowest pass alone {worst_pass * 1e3:.2f} ms = "
-                     f"{worst_pass / 5e-3:.2f}x)")
+        lines.append(
+            f"  target (issue 22): median <= 5 ms with leximin: {'met' if med <= 5e-3 else 'MISSED'} "
+            f"(wall {med * 1e3:.2f} ms = {med / 5e-3:.2f}x the target; CPU {med_cpu * 1e3:.2f} ms = "
+            f"{med_cpu / 5e-3:.2f}x; the slowest pass alone {worst_pass * 1e3:.2f} ms = "
+            f"{worst_pass / 5e-3:.2f}x)"
+        )
         for key in list(CPU):
             CPU[key] = []
         n, m = (int(v) for v in args.shop.split("x"))
@@ -290,15 +328,20 @@ def main(argv: list[str] | None = None) -> None:
             times.append(sec)
             stats[f"{st}/{kind}"] += 1
         ref = float(np.median(refs))
-        lines += ["", f"shop scale: {n} registers x {m} dimensions (bench/exact_scaling.py shop_problem), seeds "
-                  f"0..{args.shop_seeds - 1}, time limit {args.shop_limit:g} s",
-                  f"reference: one LP of eq. 8, median {ref:.3f} s",
-                  f"  leximin median {np.median(times):.3f} s = {np.median(times) / ref:.1f}x LP; max "
-                  f"{max(times):.3f} s; {dict(stats)} (time_limit: the levels were stopped, δ proved)"]
+        lines += [
+            "",
+            f"shop scale: {n} registers x {m} dimensions (bench/exact_scaling.py shop_problem), seeds "
+            f"0..{args.shop_seeds - 1}, time limit {args.shop_limit:g} s",
+            f"reference: one LP of eq. 8, median {ref:.3f} s",
+            f"  leximin median {np.median(times):.3f} s = {np.median(times) / ref:.1f}x LP; max "
+            f"{max(times):.3f} s; {dict(stats)} (time_limit: the levels were stopped, δ proved)",
+        ]
         proved = sum(v for k, v in stats.items() if k.startswith("optimal"))
         ok = proved == len(times) and float(np.median(times)) <= 5.0
-        lines.append(f"  target (issue 22): {n} x {m} proved <= 5 s median: {'met' if ok else 'MISSED'} "
-                     f"({proved} of {len(times)} proved within {args.shop_limit:g} s)")
+        lines.append(
+            f"  target (issue 22): {n} x {m} proved <= 5 s median: {'met' if ok else 'MISSED'} "
+            f"({proved} of {len(times)} proved within {args.shop_limit:g} s)"
+        )
         lines += multi_axis(args.fixtures, args.limit)
     lines.append(f"load    : 1-min load average {os.getloadavg()[0]:.2f} at the end")
     text = "\n".join(lines) + "\n"

@@ -50,8 +50,14 @@ print(json.dumps(out))
 
 def run_tree(root: Path, seeds: int) -> dict:
     env = {**os.environ, "OPENBLAS_NUM_THREADS": "1", "MKL_NUM_THREADS": "1", "OMP_NUM_THREADS": "1"}
-    done = subprocess.run([sys.executable, "-c", CHILD, str(root), str(seeds), ",".join(METHODS)], cwd=root,
-                          env=env, capture_output=True, text=True, check=True)
+    done = subprocess.run(
+        [sys.executable, "-c", CHILD, str(root), str(seeds), ",".join(METHODS)],
+        cwd=root,
+        env=env,
+        capture_output=True,
+        text=True,
+        check=True,
+    )
     return json.loads(done.stdout.strip().splitlines()[-1])
 
 
@@ -71,18 +77,22 @@ def main() -> None:
                 runs["this"].append(run_tree(ROOT, args.seeds))
         finally:
             subprocess.run(["git", "worktree", "remove", "--force", str(old)], cwd=ROOT, check=False)
-    head = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=ROOT, capture_output=True,
-                          text=True).stdout.strip()
-    lines = [f"$ python bench/optimizer_speed_vs_commit.py --base {args.base} --seeds {args.seeds} "
-             f"--rounds {args.rounds}",
-             f"guide-pins cycle 01; {args.seeds} seeds per method and round; {args.rounds} interleaved rounds; "
-             "BLAS threads 1; median ms per trial over all rounds",
-             f"{'method':<8}{'base ' + args.base:>16}{'this ' + head:>16}{'this / base':>13}   f1 base / this [mm]"]
+    head = subprocess.run(
+        ["git", "rev-parse", "--short", "HEAD"], cwd=ROOT, capture_output=True, text=True
+    ).stdout.strip()
+    lines = [
+        f"$ python bench/optimizer_speed_vs_commit.py --base {args.base} --seeds {args.seeds} --rounds {args.rounds}",
+        f"guide-pins cycle 01; {args.seeds} seeds per method and round; {args.rounds} interleaved rounds; "
+        "BLAS threads 1; median ms per trial over all rounds",
+        f"{'method':<8}{'base ' + args.base:>16}{'this ' + head:>16}{'this / base':>13}   f1 base / this [mm]",
+    ]
     for name in METHODS:
         b = statistics.median(t for r in runs["base"] for t in r[name]["seconds"]) * 1000
         t = statistics.median(t for r in runs["this"] for t in r[name]["seconds"]) * 1000
-        lines.append(f"{name:<8}{b:>16.1f}{t:>16.1f}{t / b:>13.2f}   "
-                     f"{runs['base'][-1][name]['f1']:.4f} / {runs['this'][-1][name]['f1']:.4f}")
+        lines.append(
+            f"{name:<8}{b:>16.1f}{t:>16.1f}{t / b:>13.2f}   "
+            f"{runs['base'][-1][name]['f1']:.4f} / {runs['this'][-1][name]['f1']:.4f}"
+        )
     text = "\n".join(lines) + "\n"
     OUT.write_text(text, encoding="utf-8")
     print(text, end="")

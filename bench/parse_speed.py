@@ -63,8 +63,13 @@ def _best(fn, repeat: int = REPEAT) -> float:
 
 
 def _write_inputs(folder: Path, rows: list[dict[str, str]]) -> dict[str, Path]:
-    paths = {"qif": folder / "big.qif", "canonical": folder / "big.csv", "table-csv": folder / "big_shop.csv",
-             "table-xlsx": folder / "big.xlsx", "calypso": folder / "big_chr.txt"}
+    paths = {
+        "qif": folder / "big.qif",
+        "canonical": folder / "big.csv",
+        "table-csv": folder / "big_shop.csv",
+        "table-xlsx": folder / "big.xlsx",
+        "calypso": folder / "big_chr.txt",
+    }
     _write_big_qif(paths["qif"], PARTS // 20)
     with open(paths["canonical"], "w", newline="", encoding="utf-8") as fh:
         w = csv.DictWriter(fh, fieldnames=list(rows[0]))
@@ -74,8 +79,10 @@ def _write_inputs(folder: Path, rows: list[dict[str, str]]) -> dict[str, Path]:
         fh.write("Merkmal;Sollwert;Istwert;UGW;OGW;Station;Teil\n")
         for r in rows:
             n = float(r["nominal"])
-            fh.write(f"{r['characteristic']};{r['nominal'].replace('.', ',')};{r['actual'].replace('.', ',')};"
-                     f"{n + float(r['lower']):.4f};{n + float(r['upper']):.4f};{r['station']};{r['part']}\n")
+            fh.write(
+                f"{r['characteristic']};{r['nominal'].replace('.', ',')};{r['actual'].replace('.', ',')};"
+                f"{n + float(r['lower']):.4f};{n + float(r['upper']):.4f};{r['station']};{r['part']}\n"
+            )
     book = openpyxl.Workbook(write_only=True)
     sheet = book.create_sheet("CMM")
     sheet.append(["Name", "Nom", "Meas", "Tol", "Part"])
@@ -83,11 +90,15 @@ def _write_inputs(folder: Path, rows: list[dict[str, str]]) -> dict[str, Path]:
         sheet.append([r["characteristic"], float(r["nominal"]), float(r["actual"]), 0.1, r["part"]])
     book.save(paths["table-xlsx"])
     with open(paths["calypso"], "w", encoding="cp1252") as fh:
-        fh.write("planid\tpartnb\tid\ttype\tidsymbol\tactual\tnominal\tuppertol\tlowertol\tdeviation\texceed\t"
-                 "featurePosX\tfeaturePosY\tfeaturePosZ\tunit\n")
+        fh.write(
+            "planid\tpartnb\tid\ttype\tidsymbol\tactual\tnominal\tuppertol\tlowertol\tdeviation\texceed\t"
+            "featurePosX\tfeaturePosY\tfeaturePosZ\tunit\n"
+        )
         for r in rows:
-            fh.write(f"Plan\t{r['part']}\t{r['characteristic']}\tLotlänge\tlengthOfAxis\t{r['actual']}\t"
-                     f"{r['nominal']}\t{r['upper']}\t{r['lower']}\t{r['deviation']}\t\t0\t0\t0\tmm\n")
+            fh.write(
+                f"Plan\t{r['part']}\t{r['characteristic']}\tLotlänge\tlengthOfAxis\t{r['actual']}\t"
+                f"{r['nominal']}\t{r['upper']}\t{r['lower']}\t{r['deviation']}\t\t0\t0\t0\tmm\n"
+            )
         fh.write("END\n")  # as CALYPSO ends every table (a file without it is refused as truncated)
     return paths
 
@@ -118,32 +129,41 @@ def _write_dmis(folder: Path, rows: list[dict[str, str]]) -> Path:
 def main() -> None:
     warnings.simplefilter("ignore")
     rows = _rows(PARTS)
-    lines = [f"# python bench/parse_speed.py  ({platform.python_version()}, pandas {pd.__version__}, "
-             f"{platform.machine()}, best of {REPEAT})", ""]
+    lines = [
+        f"# python bench/parse_speed.py  ({platform.python_version()}, pandas {pd.__version__}, "
+        f"{platform.machine()}, best of {REPEAT})",
+        "",
+    ]
     with tempfile.TemporaryDirectory() as tmp:
         folder = Path(tmp)
         paths = _write_inputs(folder, rows)
         paths["dmis"] = _write_dmis(folder, rows[: len(rows) // 10])
         reference = _best(lambda: pd.read_csv(paths["canonical"]))
-        lines.append(f"reference: pandas.read_csv of {len(rows)} rows: {reference:.3f} s "
-                     f"({len(rows) / reference:,.0f} rows/s)")
+        lines.append(
+            f"reference: pandas.read_csv of {len(rows)} rows: {reference:.3f} s ({len(rows) / reference:,.0f} rows/s)"
+        )
         lines.append("")
         lines.append(f"{'input':<44}{'rows':>8}{'seconds':>10}{'chars/s':>12}{'x read_csv':>12}")
-        cases = [("NIST FAIR Plate QIF 2.1, 20 parts (real)", NIST, {}),
-                 (f"QIF 2.1, NIST results x{PARTS // 20} ({PARTS} parts)", paths["qif"], {}),
-                 ("canonical CSV", paths["canonical"], {}),
-                 ("table CSV (';', decimal comma, CP1252)", paths["table-csv"], {}),
-                 ("table Excel .xlsx", paths["table-xlsx"], {"columns": "tolerance=Tol"}),
-                 ("CALYPSO _chr.txt", paths["calypso"], {}),
-                 ("DMIS .dmo (one part, F/T/FA/TA per row)", paths["dmis"], {})]
+        cases = [
+            ("NIST FAIR Plate QIF 2.1, 20 parts (real)", NIST, {}),
+            (f"QIF 2.1, NIST results x{PARTS // 20} ({PARTS} parts)", paths["qif"], {}),
+            ("canonical CSV", paths["canonical"], {}),
+            ("table CSV (';', decimal comma, CP1252)", paths["table-csv"], {}),
+            ("table Excel .xlsx", paths["table-xlsx"], {"columns": "tolerance=Tol"}),
+            ("CALYPSO _chr.txt", paths["calypso"], {}),
+            ("DMIS .dmo (one part, F/T/FA/TA per row)", paths["dmis"], {}),
+        ]
         for label, path, options in cases:
             n = len(parsers.read_report(path, **options).table)
             read = functools.partial(parsers.read_report, path, **options)
             seconds = _best(read, 3 if n > 50_000 else REPEAT)
             ref_rows = reference * n / len(rows)
             lines.append(f"{label:<44}{n:>8}{seconds:>10.3f}{n / seconds:>12,.0f}{seconds / ref_rows:>12.1f}")
-    lines += ["", "targets: NIST 20-part QIF < 0.2 s; QIF and tables >= 100,000 characteristics/s",
-              "x read_csv: time relative to pandas.read_csv of the same number of canonical rows"]
+    lines += [
+        "",
+        "targets: NIST 20-part QIF < 0.2 s; QIF and tables >= 100,000 characteristics/s",
+        "x read_csv: time relative to pandas.read_csv of the same number of canonical rows",
+    ]
     print("\n".join(lines))
 
 

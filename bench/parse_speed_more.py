@@ -43,10 +43,18 @@ def _qdas(folder: Path, rows: int) -> Path:
     chars = 10
     head = [f"K0100 {chars}", "K1001/1 BENCH"]
     for i in range(1, chars + 1):
-        head += [f"K2001/{i} C{i}", f"K2002/{i} Char {i}", f"K2101/{i} {10 * i}", f"K2110/{i} {10 * i - 0.05}",
-                 f"K2111/{i} {10 * i + 0.05}", f"K2142/{i} mm"]
-    line = "\x0f".join(f"{10 * i + 0.0123:.4f}\x140\x1417.05.2002/05:54:58\x14\x14\x140\x1449\x140\x14\x140"
-                       for i in range(1, chars + 1))
+        head += [
+            f"K2001/{i} C{i}",
+            f"K2002/{i} Char {i}",
+            f"K2101/{i} {10 * i}",
+            f"K2110/{i} {10 * i - 0.05}",
+            f"K2111/{i} {10 * i + 0.05}",
+            f"K2142/{i} mm",
+        ]
+    line = "\x0f".join(
+        f"{10 * i + 0.0123:.4f}\x140\x1417.05.2002/05:54:58\x14\x14\x140\x1449\x140\x14\x140"
+        for i in range(1, chars + 1)
+    )
     path = folder / "bench.dfq"
     path.write_text("\r\n".join(head + [line] * (rows // chars)) + "\r\n")
     return path
@@ -71,13 +79,18 @@ def _ogp_step(folder: Path, copies: int) -> Path | None:
 
 
 def _qvpak(folder: Path, rows: int) -> Path:
-    heading = ("        Elemento           Atual         Nominal          Desvio        Tol.sup.        Tol.inf."
-               "        De./Fora")
+    heading = (
+        "        Elemento           Atual         Nominal          Desvio        Tol.sup.        Tol.inf."
+        "        De./Fora"
+    )
     lines = ["", heading]
     for i in range(rows):
-        lines += [f"Distância: Dist-{i}(ID:{i}) entre Ponto-1(ID:1) e Ponto-2(ID:2)",
-                  "           DX =        44,158745       44,150000        0,008745        0,010000       -0,010000"
-                  "              De", ""]
+        lines += [
+            f"Distância: Dist-{i}(ID:{i}) entre Ponto-1(ID:1) e Ponto-2(ID:2)",
+            "           DX =        44,158745       44,150000        0,008745        0,010000       -0,010000"
+            "              De",
+            "",
+        ]
     path = folder / "qvpak.txt"
     path.write_bytes("\r\n".join(lines).encode("cp1252"))
     return path
@@ -111,25 +124,45 @@ def main() -> None:
         folder = Path(tmp)
         inputs: list[tuple[str, str, Path | None]] = [
             ("qdas", "qdas", _qdas(folder, args.rows)),
-            ("pcdmis", "pcdmis", _repeat_lines(SAMPLES / "pcdmis" / "bracket_two_parts.txt", folder, "pc.txt",
-                                               args.rows // 14, "ascii")),
-            ("pcdmis-csv", "pcdmis-csv", _repeat_lines(SAMPLES / "pcdmis" / "bracket_ncgage.csv", folder, "pc.csv",
-                                                       args.rows // 5, "ascii", keep_head=5)),
+            (
+                "pcdmis",
+                "pcdmis",
+                _repeat_lines(SAMPLES / "pcdmis" / "bracket_two_parts.txt", folder, "pc.txt", args.rows // 14, "ascii"),
+            ),
+            (
+                "pcdmis-csv",
+                "pcdmis-csv",
+                _repeat_lines(
+                    SAMPLES / "pcdmis" / "bracket_ncgage.csv", folder, "pc.csv", args.rows // 5, "ascii", keep_head=5
+                ),
+            ),
             ("piweb", "piweb", _piweb(folder, max(1, args.rows // 27_000))),
             ("qvpak", "qvpak", _qvpak(folder, args.rows)),
         ]
         run = SHARED / "ogp_measurex" / "OGP_L123_fixture_sho_multirun.txt"
-        inputs.append(("ogp run table", "ogp", _repeat_lines(run, folder, "run.txt", args.rows // 429, "ascii")
-                       if run.exists() else None))
+        inputs.append(
+            (
+                "ogp run table",
+                "ogp",
+                _repeat_lines(run, folder, "run.txt", args.rows // 429, "ascii") if run.exists() else None,
+            )
+        )
         inputs.append(("ogp step report", "ogp", _ogp_step(folder, args.rows // 42)))
         kr = SHARED / "korean_cmm_txt" / "KR_45926-4G100_240321_day_1-2-1_OK.cp949.txt"
-        inputs.append(("korean", "korean", _repeat_lines(kr, folder, "kr.txt", args.rows // 100, "cp949", keep_head=7)
-                       if kr.exists() else None))
-        lines = [f"$ python bench/parse_speed_more.py --rows {args.rows} --repeat {args.repeat}",
-                 f"python {sys.version.split()[0]}, pandas {pd.__version__}; best of {args.repeat}; "
-                 "ratio = reader time / pandas.read_csv time of the canonical CSV of the same rows",
-                 "",
-                 f"{'format':<16} {'chars':>8} {'seconds':>8} {'chars/s':>10} {'read_csv s':>10} {'ratio':>6}  kind"]
+        inputs.append(
+            (
+                "korean",
+                "korean",
+                _repeat_lines(kr, folder, "kr.txt", args.rows // 100, "cp949", keep_head=7) if kr.exists() else None,
+            )
+        )
+        lines = [
+            f"$ python bench/parse_speed_more.py --rows {args.rows} --repeat {args.repeat}",
+            f"python {sys.version.split()[0]}, pandas {pd.__version__}; best of {args.repeat}; "
+            "ratio = reader time / pandas.read_csv time of the canonical CSV of the same rows",
+            "",
+            f"{'format':<16} {'chars':>8} {'seconds':>8} {'chars/s':>10} {'read_csv s':>10} {'ratio':>6}  kind",
+        ]
         for label, fmt, path in inputs:
             if path is None:
                 lines.append(f"{label:<16} skipped: ../shared sample absent")
@@ -140,8 +173,10 @@ def main() -> None:
             table.to_csv(csv_path, index=False)
             reference = _best(functools.partial(pd.read_csv, csv_path), args.repeat)
             kind = "table-like" if label in TABLE_LIKE else "text report"
-            lines.append(f"{label:<16} {len(table):>8} {seconds:>8.3f} {len(table) / seconds:>10,.0f} "
-                         f"{reference:>10.3f} {seconds / reference:>6.1f}  {kind}")
+            lines.append(
+                f"{label:<16} {len(table):>8} {seconds:>8.3f} {len(table) / seconds:>10,.0f} "
+                f"{reference:>10.3f} {seconds / reference:>6.1f}  {kind}"
+            )
     OUT.parent.mkdir(parents=True, exist_ok=True)
     OUT.write_text("\n".join(lines) + "\n")
     print("\n".join(lines))

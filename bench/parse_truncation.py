@@ -47,14 +47,18 @@ def main() -> int:
         counts = collections.Counter(o.verdict for o in outcomes)
         totals.update(counts)
         rel = path.relative_to(ROOT) if path.is_relative_to(ROOT) else path.relative_to(args.shared)
-        print(f"{rel}: {len(data)} bytes, {counts['refused']} refused, {counts['subset']} subset, "
-              f"{counts['changed']} changed")
+        print(
+            f"{rel}: {len(data)} bytes, {counts['refused']} refused, {counts['subset']} subset, "
+            f"{counts['changed']} changed"
+        )
         for o in outcomes:
             if o.verdict == "changed":
                 print(f"    cut {o.cut}: {o.detail}")
-    print(f"TOTAL {files} readable samples x ({args.cuts} byte + {args.cuts} line-end) cuts: "
-          f"{totals['refused']} refused, "
-          f"{totals['subset']} subset, {totals['changed']} changed")
+    print(
+        f"TOTAL {files} readable samples x ({args.cuts} byte + {args.cuts} line-end) cuts: "
+        f"{totals['refused']} refused, "
+        f"{totals['subset']} subset, {totals['changed']} changed"
+    )
     return 0
 
 

@@ -53,8 +53,9 @@ def milp(g_rows: np.ndarray, b: np.ndarray, kmin: np.ndarray, kmax: np.ndarray) 
     """The feasibility MILP G k ≤ b, k integer in the box: its status and wall time (model built and solved)."""
     t = time.perf_counter()
     n = g_rows.shape[1]
-    res = LinearModel(np.zeros(n), g_rows, np.full(g_rows.shape[0], -INF), b, kmin, kmax,
-                      integer=np.ones(n, bool)).solve(60.0)
+    res = LinearModel(
+        np.zeros(n), g_rows, np.full(g_rows.shape[0], -INF), b, kmin, kmax, integer=np.ones(n, bool)
+    ).solve(60.0)
     return res.status, time.perf_counter() - t
 
 

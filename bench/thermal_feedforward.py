@@ -44,8 +44,12 @@ from setupfix.thermal.registry import methods
 
 DATA = Path(os.environ.get("SETUPFIX_SHARED", ROOT.parent / "shared")) / "thermal-data" / "gooddash"
 INTERVALS = (6, 12, 24)
-VARIANTS = [("mra", "mra", {})] + [(f"{m}/tien", m, {"form": "tien"}) for m in methods() if m.startswith("grey-")] \
-    + [(m, m, {}) for m in methods() if m.startswith("grey-")] + [("kalman", "kalman", {})]
+VARIANTS = (
+    [("mra", "mra", {})]
+    + [(f"{m}/tien", m, {"form": "tien"}) for m in methods() if m.startswith("grey-")]
+    + [(m, m, {}) for m in methods() if m.startswith("grey-")]
+    + [("kalman", "kalman", {})]
+)
 
 
 def residual(E: np.ndarray, drift: np.ndarray | None, N: int, mode: str) -> float:
@@ -76,8 +80,9 @@ def main() -> int:
         table.setdefault(label, {}).setdefault(N, []).append(value)
 
     for i, train in logs.items():
-        fitted = {label: fit_log(train, name, target="E", params=params, unit="um").saved
-                  for label, name, params in VARIANTS}
+        fitted = {
+            label: fit_log(train, name, target="E", params=params, unit="um").saved for label, name, params in VARIANTS
+        }
         for j, test in logs.items():
             if j == i:
                 continue
@@ -89,8 +94,10 @@ def main() -> int:
                     add(f"{label}: change since measured", N, residual(E, drift, N, "change"))
                 for label, drift in drifts.items():
                     add(f"{label}: absolute drift", N, residual(E, drift, N, "absolute"))
-    print("gooddash: train on one run, apply to the 4 others (20 pairs); one correction every N samples from the "
-          "report of the parts cut N samples before; RMS error left on the parts cut after the first correction, µm")
+    print(
+        "gooddash: train on one run, apply to the 4 others (20 pairs); one correction every N samples from the "
+        "report of the parts cut N samples before; RMS error left on the parts cut after the first correction, µm"
+    )
     print(f"{'feed-forward':40s}" + "".join(f"{'N = ' + str(N):>10s}" for N in INTERVALS))
     seen = set()
     for label, by_n in table.items():

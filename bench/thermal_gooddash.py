@@ -23,9 +23,9 @@ import pandas as pd
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from setupfix.thermal.metrics import score
 from setupfix.thermal.estimator import MRAModel
 from setupfix.thermal.grey_model import GreyModel
+from setupfix.thermal.metrics import score
 
 SHARED = Path(os.environ.get("SETUPFIX_SHARED", Path(__file__).resolve().parents[2] / "shared"))
 DATA = SHARED / "thermal-data" / "gooddash"
@@ -71,18 +71,24 @@ def main() -> int:
                     results[name].append((tr, te, seed, s))
                     if name == "MRA":
                         mra_rmse[(tr, te)] = s.rmse
-    print(f"gooddash: 5 runs (73/73/73/73/57 samples), 6 inputs, train on one, test on the 4 others; "
-          f"stochastic methods over seeds 0..{args.seeds - 1}")
-    print(f"{'method':<18} {'RMSE µm':>8} {'median':>7} {'MR µm':>7} {'E':>7} {'E median':>8} "
-          f"{'beats MRA':>10} {'fit s':>6}")
+    print(
+        f"gooddash: 5 runs (73/73/73/73/57 samples), 6 inputs, train on one, test on the 4 others; "
+        f"stochastic methods over seeds 0..{args.seeds - 1}"
+    )
+    print(
+        f"{'method':<18} {'RMSE µm':>8} {'median':>7} {'MR µm':>7} {'E':>7} {'E median':>8} "
+        f"{'beats MRA':>10} {'fit s':>6}"
+    )
     for name, rows in results.items():
         rmse = np.array([s.rmse for *_, s in rows])
         mr = np.array([s.max_residual for *_, s in rows])
         eff = np.array([s.efficiency for *_, s in rows])
         wins = sum(s.rmse < mra_rmse[(tr, te)] for tr, te, _, s in rows)
         fits = 5 * (args.seeds if name in stochastic else 1)
-        print(f"{name:<18} {np.mean(rmse):>8.2f} {np.median(rmse):>7.2f} {np.mean(mr):>7.2f} {np.mean(eff):>7.2f} "
-              f"{np.median(eff):>8.2f} {wins:>4}/{len(rows):<5} {seconds[name] / fits:>6.3f}")
+        print(
+            f"{name:<18} {np.mean(rmse):>8.2f} {np.median(rmse):>7.2f} {np.mean(mr):>7.2f} {np.mean(eff):>7.2f} "
+            f"{np.median(eff):>8.2f} {wins:>4}/{len(rows):<5} {seconds[name] / fits:>6.3f}"
+        )
     print()
     print("per training run, mean test RMSE µm (seed-averaged):")
     print(f"{'method':<18} " + " ".join(f"{'ex' + str(i):>6}" for i in runs))

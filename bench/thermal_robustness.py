@@ -20,10 +20,10 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from setupfix.thermal.metrics import score
 from setupfix.thermal.estimator import MRAModel
 from setupfix.thermal.grey_model import GreyModel
 from setupfix.thermal.kalman_model import KalmanFusionModel
+from setupfix.thermal.metrics import score
 from setupfix.thermal.simulator import (
     add_sensor_error,
     constant_error,
@@ -37,8 +37,12 @@ N = 1440
 
 
 def arrays(frame):
-    return (frame[SENSORS].to_numpy(), frame["error_z"].to_numpy(), frame["ambient"].to_numpy(),
-            frame["spindle_speed"].to_numpy())
+    return (
+        frame[SENSORS].to_numpy(),
+        frame["error_z"].to_numpy(),
+        frame["ambient"].to_numpy(),
+        frame["spindle_speed"].to_numpy(),
+    )
 
 
 def step_error(t):
@@ -73,8 +77,10 @@ def main() -> None:
     mra_rmsv, grey_rmsv = score(y, mra.predict(T)).rmsv, score(y, gls.predict(T, y0=y[0])).rmsv
     print(f"fit RMSV mm: kalman {kalman_rmsv:.4f}  mra {mra_rmsv:.4f}  grey-ls {grey_rmsv:.4f}")
     print()
-    print(f"{'case':<19} {'condition':<26} {'RMSV fused':>10} {'RMSV MRA':>9} {'RMSV GMC-LS':>11} "
-          f"{'MR fused':>9} {'MR MRA':>8}")
+    print(
+        f"{'case':<19} {'condition':<26} {'RMSV fused':>10} {'RMSV MRA':>9} {'RMSV GMC-LS':>11} "
+        f"{'MR fused':>9} {'MR MRA':>8}"
+    )
     for cname, run in cases.items():
         for kname, corrupt in conditions.items():
             frame = run.frame if corrupt is None else corrupt(run.frame)
@@ -86,9 +92,11 @@ def main() -> None:
             else:
                 mra_s = score(y2, mra.predict(T2))
                 gls_s = score(y2, gls.predict(T2, y0=y2[0]))
-            print(f"{cname:<19} {kname:<26} {np.mean([s.rmsv for s in kf]):>10.4f} {fmt(mra_s, 'rmsv'):>9} "
-                  f"{fmt(gls_s, 'rmsv'):>11} {np.mean([s.max_residual for s in kf]):>9.4f} "
-                  f"{fmt(mra_s, 'max_residual'):>8}")
+            print(
+                f"{cname:<19} {kname:<26} {np.mean([s.rmsv for s in kf]):>10.4f} {fmt(mra_s, 'rmsv'):>9} "
+                f"{fmt(gls_s, 'rmsv'):>11} {np.mean([s.max_residual for s in kf]):>9.4f} "
+                f"{fmt(mra_s, 'max_residual'):>8}"
+            )
 
 
 def fmt(scores: object | None, metric: str) -> str:

@@ -38,12 +38,13 @@ def main() -> None:
         for test in ("test_variable.csv", "test_constant.csv"):
             t0 = time.perf_counter()
             params = {"seed": 1, **opts} if method not in ("mra", "grey-ls") else dict(opts)
-            ev = evaluate_files(SAMPLES / "train_variable.csv", SAMPLES / test, method, target="error_z",
-                                params=params)
+            ev = evaluate_files(SAMPLES / "train_variable.csv", SAMPLES / test, method, target="error_z", params=params)
             dt = time.perf_counter() - t0
             t = ev.test
-            print(f"{method:<10} {label:<28} {test.removesuffix('.csv'):<14} {t.rmse:>8.4f} {t.max_residual:>7.4f} "
-                  f"{t.efficiency:>7.3f} {dt:>6.2f}")
+            print(
+                f"{method:<10} {label:<28} {test.removesuffix('.csv'):<14} {t.rmse:>8.4f} {t.max_residual:>7.4f} "
+                f"{t.efficiency:>7.3f} {dt:>6.2f}"
+            )
 
 
 if __name__ == "__main__":

@@ -76,8 +76,12 @@ def main() -> None:
 
     train = simulate(speed_profile("variable", 1440, rng=np.random.default_rng(1)), seed=1).frame
     cols = ["spindle_motor", "bearing"]
-    model = KalmanFusionModel(seed=0).fit(train[cols].to_numpy(), train["error_z"].to_numpy(),
-                                          ambient=train["ambient"].to_numpy(), speed=train["spindle_speed"].to_numpy())
+    model = KalmanFusionModel(seed=0).fit(
+        train[cols].to_numpy(),
+        train["error_z"].to_numpy(),
+        ambient=train["ambient"].to_numpy(),
+        speed=train["spindle_speed"].to_numpy(),
+    )
     print()
     print("Kalman fusion prediction, 2 sensors")
     for length in (1_000, 10_000, 50_000):
@@ -86,8 +90,10 @@ def main() -> None:
 
         t_stream = best_of(functools.partial(_stream, model, T, te, sp), repeat=1) / length
         t_batch = best_of(functools.partial(model.predict, T, ambient=te, speed=sp), repeat=3) / length
-        print(f"  {length:>6} samples: streaming {t_stream * 1e6:6.1f} us/sample, batch {t_batch * 1e6:5.1f} us/sample "
-              f"(streaming/batch {t_stream / t_batch:.1f})")
+        print(
+            f"  {length:>6} samples: streaming {t_stream * 1e6:6.1f} us/sample, batch {t_batch * 1e6:5.1f} us/sample "
+            f"(streaming/batch {t_stream / t_batch:.1f})"
+        )
 
 
 if __name__ == "__main__":

@@ -86,20 +86,28 @@ def main() -> int:
                 half = 0.5 * (T[k:] - saved.model.T_ref_) @ theta[1:-1]
                 gap = np.max(np.abs((pred - saved.model.y_ref_ - half)[3:]))
                 static.setdefault(label, []).append(f"b1 {theta[0]:7.3g} gap {gap:8.2g}")
-    print(f"gooddash runs, 22 temperatures, E in µm; fit on the first {SPLIT:.0%}, predict the rest; "
-          "test RMSE µm (first test sample excluded)")
-    print(f"{'method':38s}" + "".join(f"{r:>15s}" for r in runs) + f"{'mean':>8s}{'vs regr.':>10s}"
-          f"{'diverges':>10s}{'fit time':>10s}")
+    print(
+        f"gooddash runs, 22 temperatures, E in µm; fit on the first {SPLIT:.0%}, predict the rest; "
+        "test RMSE µm (first test sample excluded)"
+    )
+    print(
+        f"{'method':38s}" + "".join(f"{r:>15s}" for r in runs) + f"{'mean':>8s}{'vs regr.':>10s}"
+        f"{'diverges':>10s}{'fit time':>10s}"
+    )
     ref = np.mean(rows["regression (yardstick)"])
     t_ref = np.mean(times["mra"])
     for label, vals in rows.items():
-        extra = (f"{diverged[label]:>7d}/5{np.mean(times[label]) / t_ref:>9.0f}x" if label in diverged else "")
-        print(f"{label:38s}" + "".join(f"{v:15.2f}" for v in vals) + f"{np.mean(vals):8.2f}"
-              f"{np.mean(vals) / ref - 1:+10.1%}" + extra)
+        extra = f"{diverged[label]:>7d}/5{np.mean(times[label]) / t_ref:>9.0f}x" if label in diverged else ""
+        print(
+            f"{label:38s}" + "".join(f"{v:15.2f}" for v in vals) + f"{np.mean(vals):8.2f}"
+            f"{np.mean(vals) / ref - 1:+10.1%}" + extra
+        )
     print("fit time: mean over the runs as a multiple of the mra fit (same run, 1 BLAS thread)")
     print()
-    print("static limit of eq. (2): fitted b1 (per sample) and max |prediction - 1/2 sum_j b_j dT_j| "
-          "from the 4th test sample on, µm")
+    print(
+        "static limit of eq. (2): fitted b1 (per sample) and max |prediction - 1/2 sum_j b_j dT_j| "
+        "from the 4th test sample on, µm"
+    )
     for label, vals in static.items():
         print(f"{label:20s}" + "  ".join(vals))
     return 0

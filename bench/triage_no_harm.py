@@ -56,9 +56,17 @@ def hard_problem(n: int, m: int, seed: int, noise: float):  # -> CorrectionProbl
     upper = np.round(rng.uniform(0.02, 0.1, m) / 0.005) * 0.005
     setup = 0.03 * (1 - 2 * rng.random(n))
     dev = np.round(setup @ comp + noise * (1 - 2 * rng.random(m)), 4)
-    return CorrectionProblem(composite=comp, deviation=dev, lower=lower, upper=upper, lb=np.full(n, -0.1),
-                             ub=np.full(n, 0.1), resolution=0.001, register_ids=tuple(f"R{i}" for i in range(n)),
-                             dimension_ids=tuple(f"D{j}" for j in range(m)))
+    return CorrectionProblem(
+        composite=comp,
+        deviation=dev,
+        lower=lower,
+        upper=upper,
+        lb=np.full(n, -0.1),
+        ub=np.full(n, 0.1),
+        resolution=0.001,
+        register_ids=tuple(f"R{i}" for i in range(n)),
+        dimension_ids=tuple(f"D{j}" for j in range(m)),
+    )
 
 
 def one_lp_seconds(problem) -> float:
@@ -70,8 +78,14 @@ def one_lp_seconds(problem) -> float:
     free = problem.free
     a = np.hstack([g_rows, np.ones((g.size, 1))])
     start = time.perf_counter()
-    model = LinearModel(np.r_[np.zeros(int(free.sum())), -1.0], a, np.full(g.size, -INF), g,
-                        np.r_[problem.kmin[free], -INF], np.r_[problem.kmax[free], INF])
+    model = LinearModel(
+        np.r_[np.zeros(int(free.sum())), -1.0],
+        a,
+        np.full(g.size, -INF),
+        g,
+        np.r_[problem.kmin[free], -INF],
+        np.r_[problem.kmax[free], INF],
+    )
     model.solve(60.0)
     return time.perf_counter() - start
 
@@ -99,11 +113,22 @@ def run(sizes: list[tuple[int, int]], seeds: int, noise: float, limit: float) ->
                 margins = p.margins(rec.x)
                 inside = (p.deviation >= p.lower) & (p.deviation <= p.upper)
                 triage = rec.result.extra.get("triage")
-                out.append({"n": n, "m": m, "seed": seed, "measured_in": int(inside.sum()),
-                            "kept": int((margins >= -1e-12).sum()), "given_up": len(rec.given_up),
-                            "harmed": int(harmed_mask(p.deviation, p.predicted(rec.x), p.lower, p.upper).sum()),
-                            "verdict": rec.verdict, "status": rec.result.status, "seconds": sec, "lp": lp,
-                            "levels": triage.get("leximin_levels", 0) if isinstance(triage, dict) else 0})
+                out.append(
+                    {
+                        "n": n,
+                        "m": m,
+                        "seed": seed,
+                        "measured_in": int(inside.sum()),
+                        "kept": int((margins >= -1e-12).sum()),
+                        "given_up": len(rec.given_up),
+                        "harmed": int(harmed_mask(p.deviation, p.predicted(rec.x), p.lower, p.upper).sum()),
+                        "verdict": rec.verdict,
+                        "status": rec.result.status,
+                        "seconds": sec,
+                        "lp": lp,
+                        "levels": triage.get("leximin_levels", 0) if isinstance(triage, dict) else 0,
+                    }
+                )
     return out
 
 
@@ -126,21 +151,36 @@ def main(argv: list[str] | None = None) -> None:
     new = run(sizes, args.seeds, args.noise, args.limit)
     old: list[dict[str, object]] = []
     if str(args.old):
-        cmd = [sys.executable, str(Path(__file__).resolve()), "--worker", "--seeds", str(args.seeds), "--noise",
-               str(args.noise), "--limit", str(args.limit), "--max-size", str(args.max_size)]
+        cmd = [
+            sys.executable,
+            str(Path(__file__).resolve()),
+            "--worker",
+            "--seeds",
+            str(args.seeds),
+            "--noise",
+            str(args.noise),
+            "--limit",
+            str(args.limit),
+            "--max-size",
+            str(args.max_size),
+        ]
         env = {**os.environ, "PYTHONPATH": str(args.old)}
         done = subprocess.run(cmd, env=env, capture_output=True, text=True, check=True, cwd=str(args.old))
         old = json.loads(done.stdout)
     load_end = os.getloadavg()
-    lines = [f"{'size':>11} {'seed':>4} {'in before':>9} {'kept new':>8} {'kept old':>8} {'harm':>4} "
-             f"{'status new':<11} {'status old':<11} {'levels':>6} {'s new':>7} {'s old':>7} {'LP ms':>6} "
-             f"{'new/LP':>7}"]
+    lines = [
+        f"{'size':>11} {'seed':>4} {'in before':>9} {'kept new':>8} {'kept old':>8} {'harm':>4} "
+        f"{'status new':<11} {'status old':<11} {'levels':>6} {'s new':>7} {'s old':>7} {'LP ms':>6} "
+        f"{'new/LP':>7}"
+    ]
     for i, r in enumerate(new):
         o = old[i] if i < len(old) else {}
-        lines.append(f"{r['n']:>4} x {r['m']:<5} {r['seed']:>4} {r['measured_in']:>9} {r['kept']:>8} "
-                     f"{o.get('kept', '-'):>8} {r['harmed']:>4} {r['status']:<11} {o.get('status', '-')!s:<11} "
-                     f"{r['levels']:>6} {r['seconds']:>7.3f} {o.get('seconds', float('nan')):>7.3f} "
-                     f"{1e3 * float(r['lp']):>6.1f} {float(r['seconds']) / float(r['lp']):>7.0f}")
+        lines.append(
+            f"{r['n']:>4} x {r['m']:<5} {r['seed']:>4} {r['measured_in']:>9} {r['kept']:>8} "
+            f"{o.get('kept', '-'):>8} {r['harmed']:>4} {r['status']:<11} {o.get('status', '-')!s:<11} "
+            f"{r['levels']:>6} {r['seconds']:>7.3f} {o.get('seconds', float('nan')):>7.3f} "
+            f"{1e3 * float(r['lp']):>6.1f} {float(r['seconds']) / float(r['lp']):>7.0f}"
+        )
     lines.append("")
     for n, m in sizes:
         rs = [r for r in new if r["n"] == n]
@@ -148,18 +188,28 @@ def main(argv: list[str] | None = None) -> None:
         kept_new = [int(r["kept"]) for r in rs]
         kept_old = [int(o["kept"]) for o in os_]
         fewer_old = sum(int(o["kept"]) < int(r["kept"]) for r, o in zip(rs, os_, strict=False))
-        lines.append(f"{n} x {m}: kept new median {np.median(kept_new):.0f} (range {min(kept_new)}–{max(kept_new)})"
-                     + (f", old median {np.median(kept_old):.0f} (range {min(kept_old)}–{max(kept_old)}), "
-                        f"old keeps fewer in {fewer_old} of {len(rs)}" if kept_old else "")
-                     + f"; new median {np.median([float(r['seconds']) for r in rs]):.3f} s = "
-                     f"{np.median([float(r['seconds']) / float(r['lp']) for r in rs]):.0f}× one LP; "
-                     f"proved {sum(r['status'] == 'optimal' for r in rs)} of {len(rs)}; "
-                     f"harmful answers {sum(int(r['harmed']) > 0 for r in rs)}")
+        lines.append(
+            f"{n} x {m}: kept new median {np.median(kept_new):.0f} (range {min(kept_new)}–{max(kept_new)})"
+            + (
+                f", old median {np.median(kept_old):.0f} (range {min(kept_old)}–{max(kept_old)}), "
+                f"old keeps fewer in {fewer_old} of {len(rs)}"
+                if kept_old
+                else ""
+            )
+            + f"; new median {np.median([float(r['seconds']) for r in rs]):.3f} s = "
+            f"{np.median([float(r['seconds']) / float(r['lp']) for r in rs]):.0f}× one LP; "
+            f"proved {sum(r['status'] == 'optimal' for r in rs)} of {len(rs)}; "
+            f"harmful answers {sum(int(r['harmed']) > 0 for r in rs)}"
+        )
     lines.append("")
-    lines.append(f"noise ±{args.noise} mm, time limit {args.limit} s per solve; 'kept' = dimensions predicted in "
-                 "tolerance after the recommended correction; 'harm' = measured in tolerance, predicted out")
-    lines.append(f"machine: {platform.processor() or platform.machine()}, {os.cpu_count()} CPUs, "
-                 f"load average {load_start[0]:.2f} → {load_end[0]:.2f}")
+    lines.append(
+        f"noise ±{args.noise} mm, time limit {args.limit} s per solve; 'kept' = dimensions predicted in "
+        "tolerance after the recommended correction; 'harm' = measured in tolerance, predicted out"
+    )
+    lines.append(
+        f"machine: {platform.processor() or platform.machine()}, {os.cpu_count()} CPUs, "
+        f"load average {load_start[0]:.2f} → {load_end[0]:.2f}"
+    )
     lines.append("command: python bench/triage_no_harm.py " + " ".join(argv or sys.argv[1:]))
     text = "\n".join(lines) + "\n"
     print(text)

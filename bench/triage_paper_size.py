@@ -78,13 +78,15 @@ def worker(n: int, seed: int, limit: float) -> dict[str, object]:
         free = problem.free
         g_rows, g = margin_rows(problem)
         t = time.perf_counter()
-        rows = GridRows(g_rows, g, problem.kmin[free].astype(float), problem.kmax[free].astype(float),
-                        problem.cost[free])
+        rows = GridRows(
+            g_rows, g, problem.kmin[free].astype(float), problem.kmax[free].astype(float), problem.cost[free]
+        )
         lp_bound(Session(rows, ExactSettings(), 60.0))
         return time.perf_counter() - t
 
-    out: dict[str, list[object]] = {k: [] for k in ("lp", "solve", "triage", "status", "triage_case", "complete",
-                                                     "forced", "given_up", "x")}
+    out: dict[str, list[object]] = {
+        k: [] for k in ("lp", "solve", "triage", "status", "triage_case", "complete", "forced", "given_up", "x")
+    }
     with threadpool_limits(limits=1):
         items = reports(n, seed)
         opt = get_optimizer("exact", time_limit=limit)
@@ -130,16 +132,30 @@ def check(limit: float) -> list[str]:
         _triage.FORCED, _triage.LEXIMIN_SHARE = forced, share
     same = np.array_equal(fast.x, slow.x)
     gap = float(np.max(np.abs(np.sort(problem.margins(fast.x)) - np.sort(problem.margins(slow.x)))))
-    return ["", f"check: cycle_01, P1 D1 at -0.25 mm; MILP path alone (forced kept set off), limit {limit:g} s: "
-            f"{sec:.1f} s, status {slow.status}, leximin complete {slow.extra['triage']['leximin_complete']}",
-            f"  default: {fast.seconds * 1e3:.1f} ms, status {fast.status}; same correction: {same}; largest "
-            f"difference of the sorted margins {gap:.2e} mm"]
+    return [
+        "",
+        f"check: cycle_01, P1 D1 at -0.25 mm; MILP path alone (forced kept set off), limit {limit:g} s: "
+        f"{sec:.1f} s, status {slow.status}, leximin complete {slow.extra['triage']['leximin_complete']}",
+        f"  default: {fast.seconds * 1e3:.1f} ms, status {fast.status}; same correction: {same}; largest "
+        f"difference of the sorted margins {gap:.2e} mm",
+    ]
 
 
 def run(code: Path, n: int, seed: int, limit: float) -> dict[str, list[object]]:
     env = {**os.environ, **MALLOC, "PYTHONPATH": str(code), "OMP_NUM_THREADS": "1"}
-    cmd = [sys.executable, str(Path(__file__).resolve()), "--worker", "--reports", str(n), "--seed", str(seed),
-           "--limit", str(limit), "--code", str(code)]
+    cmd = [
+        sys.executable,
+        str(Path(__file__).resolve()),
+        "--worker",
+        "--reports",
+        str(n),
+        "--seed",
+        str(seed),
+        "--limit",
+        str(limit),
+        "--code",
+        str(code),
+    ]
     out = subprocess.run(cmd, env=env, capture_output=True, text=True, check=True)
     data: dict[str, list[object]] = json.loads(out.stdout.strip().splitlines()[-1])
     return data
@@ -160,14 +176,19 @@ def summary(name: str, d: dict[str, list[object]]) -> list[str]:
     def row(label: str, t: np.ndarray) -> str:
         if t.size == 0:
             return f"  {label:22s} -"
-        return (f"  {label:22s} median {np.median(t) * 1e3:8.2f} ms = {np.median(t) / ref:7.1f}x LP; "
-                f"p95 {np.percentile(t, 95) * 1e3:8.2f} ms; max {t.max() * 1e3:8.1f} ms")
+        return (
+            f"  {label:22s} median {np.median(t) * 1e3:8.2f} ms = {np.median(t) / ref:7.1f}x LP; "
+            f"p95 {np.percentile(t, 95) * 1e3:8.2f} ms; max {t.max() * 1e3:8.1f} ms"
+        )
 
-    return [f"{name}: reference one LP of eq. 8, median {ref * 1e3:.3f} ms",
-            row("solve, all reports", solve), row("solve, triage cases", solve[tri]),
-            row("triage stage", stage[tri]),
-            f"  {int(tri.sum())} triage cases of {tri.size}; status {statuses}; leximin complete in {complete} "
-            f"of {int(tri.sum())}; forced kept set in {forced} of {int(tri.sum())}"]
+    return [
+        f"{name}: reference one LP of eq. 8, median {ref * 1e3:.3f} ms",
+        row("solve, all reports", solve),
+        row("solve, triage cases", solve[tri]),
+        row("triage stage", stage[tri]),
+        f"  {int(tri.sum())} triage cases of {tri.size}; status {statuses}; leximin complete in {complete} "
+        f"of {int(tri.sum())}; forced kept set in {forced} of {int(tri.sum())}",
+    ]
 
 
 def main(argv: list[str] | None = None) -> None:
@@ -185,21 +206,27 @@ def main(argv: list[str] | None = None) -> None:
         sys.path.insert(0, str(args.code))
         print(json.dumps(worker(args.reports, args.seed, args.limit)))
         return
-    lines = ["Triage at paper size: guide-pins cycles with 1 or 2 gross dimensions (exact optimiser, leximin)",
-             "command : python bench/triage_paper_size.py " + " ".join(sys.argv[1:] if argv is None else argv),
-             f"machine : {platform.machine()}, Python {platform.python_version()}, numpy {np.__version__}; "
-             f"{os.cpu_count()} CPUs",
-             "threads : BLAS limited to 1 (threadpoolctl); HiGHS threads = 1; one subprocess per version",
-             f"load    : 1-min load average {os.getloadavg()[0]:.2f} at the start",
-             f"reports : {args.reports} (cycles 1-5 in turn, 1 or 2 random dimensions at +-0.2-0.4 mm, seed "
-             f"{args.seed}), time limit {args.limit:g} s", ""]
+    lines = [
+        "Triage at paper size: guide-pins cycles with 1 or 2 gross dimensions (exact optimiser, leximin)",
+        "command : python bench/triage_paper_size.py " + " ".join(sys.argv[1:] if argv is None else argv),
+        f"machine : {platform.machine()}, Python {platform.python_version()}, numpy {np.__version__}; "
+        f"{os.cpu_count()} CPUs",
+        "threads : BLAS limited to 1 (threadpoolctl); HiGHS threads = 1; one subprocess per version",
+        f"load    : 1-min load average {os.getloadavg()[0]:.2f} at the start",
+        f"reports : {args.reports} (cycles 1-5 in turn, 1 or 2 random dimensions at +-0.2-0.4 mm, seed "
+        f"{args.seed}), time limit {args.limit:g} s",
+        "",
+    ]
     after = run(ROOT, args.reports, args.seed, args.limit)
     before = None
     if not args.no_before:
         tmp = Path("/tmp") / f"triage_before_{args.before_commit}"
         if not tmp.exists():
-            subprocess.run(["git", "-C", str(ROOT), "worktree", "add", "--detach", str(tmp), args.before_commit],
-                           check=True, capture_output=True)
+            subprocess.run(
+                ["git", "-C", str(ROOT), "worktree", "add", "--detach", str(tmp), args.before_commit],
+                check=True,
+                capture_output=True,
+            )
         try:
             before = run(tmp, args.reports, args.seed, args.limit)
         finally:
@@ -209,11 +236,18 @@ def main(argv: list[str] | None = None) -> None:
     if before is not None:
         tri = np.array(after["triage_case"], dtype=bool) & np.array(before["triage_case"], dtype=bool)
         same = sum(1 for a, b, t in zip(after["x"], before["x"], tri, strict=True) if t and a == b)
-        ratio = np.median(np.array(before["solve"], dtype=float)[tri]) / np.median(
-            np.array(after["solve"], dtype=float)[tri]) if tri.any() else float("nan")
-        lines += ["", f"triage cases: median solve time before / after = {ratio:.1f}; the same correction in "
-                  f"{same} of {int(tri.sum())} (before: leximin often incomplete within the limit, so its "
-                  "correction can differ)"]
+        ratio = (
+            np.median(np.array(before["solve"], dtype=float)[tri])
+            / np.median(np.array(after["solve"], dtype=float)[tri])
+            if tri.any()
+            else float("nan")
+        )
+        lines += [
+            "",
+            f"triage cases: median solve time before / after = {ratio:.1f}; the same correction in "
+            f"{same} of {int(tri.sum())} (before: leximin often incomplete within the limit, so its "
+            "correction can differ)",
+        ]
     if args.check > 0:
         sys.path.insert(0, str(ROOT))
         lines += check(args.check)

@@ -41,9 +41,17 @@ SIZES = [(60, 400), (100, 800), (180, 2000)]
 def triage_problem(n: int, m: int, seed: int) -> CorrectionProblem:
     p = shop_problem(n, m, seed)
     dev = p.deviation + np.round(np.random.default_rng(seed).normal(0.0, 0.06, m), 4)
-    return CorrectionProblem(composite=p.composite, deviation=dev, lower=p.lower, upper=p.upper, lb=p.lb,
-                             ub=p.ub, resolution=p.resolution, register_ids=p.register_ids,
-                             dimension_ids=p.dimension_ids)
+    return CorrectionProblem(
+        composite=p.composite,
+        deviation=dev,
+        lower=p.lower,
+        upper=p.upper,
+        lb=p.lb,
+        ub=p.ub,
+        resolution=p.resolution,
+        register_ids=p.register_ids,
+        dimension_ids=p.dimension_ids,
+    )
 
 
 def main(argv: list[str] | None = None) -> None:
@@ -52,11 +60,13 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--limits", type=float, nargs="+", default=[0.5, 2.0])
     parser.add_argument("--out", type=Path, default=RESULTS / "triage_time_limit.txt")
     args = parser.parse_args(argv)
-    lines = [f"$ python bench/triage_time_limit.py {' '.join(argv if argv is not None else sys.argv[1:])}".rstrip(),
-             f"# {platform.processor() or platform.machine()}, {os.cpu_count()} CPUs, Python "
-             f"{platform.python_version()}; load at start {os.getloadavg()[0]:.2f}",
-             f"{'size':>11} {'seed':>4} {'limit':>5} {'wall s':>7} {'cpu s':>6} {'over s':>7} {'status':<11} "
-             f"{'given up':>8}  stopped"]
+    lines = [
+        f"$ python bench/triage_time_limit.py {' '.join(argv if argv is not None else sys.argv[1:])}".rstrip(),
+        f"# {platform.processor() or platform.machine()}, {os.cpu_count()} CPUs, Python "
+        f"{platform.python_version()}; load at start {os.getloadavg()[0]:.2f}",
+        f"{'size':>11} {'seed':>4} {'limit':>5} {'wall s':>7} {'cpu s':>6} {'over s':>7} {'status':<11} "
+        f"{'given up':>8}  stopped",
+    ]
     print("\n".join(lines), flush=True)
     over: list[float] = []
     with threadpool_limits(limits=1):
@@ -71,12 +81,17 @@ def main(argv: list[str] | None = None) -> None:
                     over.append(wall - limit)
                     stopped = result.extra.get("stopped")
                     why = f"{stopped['stage']}: {stopped['reason']}" if isinstance(stopped, dict) else "-"
-                    lines.append(f"{n:>4} x {m:<5} {seed:>4} {limit:>5.1f} {wall:>7.3f} {cpu:>6.3f} "
-                                 f"{wall - limit:>+7.3f} {result.status:<11} {len(result.given_up or ()):>8}  "
-                                 f"{why[:90]}")
+                    lines.append(
+                        f"{n:>4} x {m:<5} {seed:>4} {limit:>5.1f} {wall:>7.3f} {cpu:>6.3f} "
+                        f"{wall - limit:>+7.3f} {result.status:<11} {len(result.given_up or ()):>8}  "
+                        f"{why[:90]}"
+                    )
                     print(lines[-1], flush=True)
-    lines += ["", f"overrun beyond the limit: max {max(over):+.3f} s, median {np.median(over):+.3f} s "
-                  f"over {len(over)} solves (wall clock; load at end {os.getloadavg()[0]:.2f})"]
+    lines += [
+        "",
+        f"overrun beyond the limit: max {max(over):+.3f} s, median {np.median(over):+.3f} s "
+        f"over {len(over)} solves (wall clock; load at end {os.getloadavg()[0]:.2f})",
+    ]
     print(lines[-1])
     args.out.parent.mkdir(parents=True, exist_ok=True)
     args.out.write_text("\n".join(lines) + "\n", encoding="utf-8")

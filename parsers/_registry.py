@@ -7,6 +7,7 @@ list of formats tried.
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
@@ -14,15 +15,20 @@ from typing import Any
 
 import pandas as pd
 
-import warnings
-
 from parsers._notes import collecting
 from parsers._rowkeys import row_keys
-from parsers._verdicts import verdict_notes
 from parsers._source import NO_FINAL_LINE_BREAK, Peek, Source, load_source, peek
+from parsers._verdicts import verdict_notes
 from parsers.names import visible_name
-from setupfix.errors import (Note, ParameterError, ParseError, ParseWarning, SetupfixError, SourceLocation,
-                             UnknownFormatError)
+from setupfix.errors import (
+    Note,
+    ParameterError,
+    ParseError,
+    ParseWarning,
+    SetupfixError,
+    SourceLocation,
+    UnknownFormatError,
+)
 
 __all__ = ["FormatSpec", "ReadResult", "register", "formats", "find_format", "read", "read_report", "OPTIONS"]
 
@@ -147,8 +153,19 @@ def find_format(path: str | Path | Source, format: str | None = None) -> FormatS
 #: history store and its journals, pictures, the logs ``setupfix diagnose`` reads beside
 #: a series, the hidden truth ``setupfix simulate`` writes beside one, and a folder's read-me.
 #: Folder listings (:mod:`parsers.folders`) leave them out.
-NOT_REPORT_SUFFIXES: tuple[str, ...] = (".toml", ".md", ".py", ".pyc", ".db", ".db-wal", ".db-shm", ".db-journal",
-                                        ".sqlite", ".svg", ".png")
+NOT_REPORT_SUFFIXES: tuple[str, ...] = (
+    ".toml",
+    ".md",
+    ".py",
+    ".pyc",
+    ".db",
+    ".db-wal",
+    ".db-shm",
+    ".db-journal",
+    ".sqlite",
+    ".svg",
+    ".png",
+)
 NOT_REPORT_NAMES: tuple[str, ...] = ("corrections.csv", "temperatures.csv", "truth.json", "readme.txt")
 
 
@@ -229,8 +246,11 @@ def read_report(path: str | Path | Source, *, format: str | None = None, **optio
         if missing and exc.message.startswith(missing):
             raise
         if missing:
-            raise ParseError(f"{exc.message}; and the file {missing}, so it may be truncated", location=exc.location,
-                             hint="read it again once it is complete") from None
+            raise ParseError(
+                f"{exc.message}; and the file {missing}, so it may be truncated",
+                location=exc.location,
+                hint="read it again once it is complete",
+            ) from None
         raise
     if missing and missing != NO_FINAL_LINE_BREAK:
         raise _truncated(spec, source, missing)
@@ -238,9 +258,11 @@ def read_report(path: str | Path | Source, *, format: str | None = None, **optio
 
 
 def _truncated(spec: FormatSpec, source: Source, missing: str) -> ParseError:
-    return ParseError(f"{missing}: the {spec.name} file may be truncated (still being written, or an "
-                      "interrupted copy)", location=SourceLocation(source.name),
-                      hint="read it again once it is complete")
+    return ParseError(
+        f"{missing}: the {spec.name} file may be truncated (still being written, or an interrupted copy)",
+        location=SourceLocation(source.name),
+        hint="read it again once it is complete",
+    )
 
 
 def _last_line_holds_no_data(spec: FormatSpec, source: Source, options: dict[str, Any], table: pd.DataFrame) -> bool:

@@ -9,8 +9,21 @@ import pandas as pd
 __all__ = ["ROW_COLUMNS", "row_keys"]
 
 #: The columns a row is compared on (``source``/``report`` name the place, not the value).
-ROW_COLUMNS = ("characteristic", "part", "station", "nominal", "actual", "deviation", "lower", "upper",
-               "x", "y", "z", "status", "reference")
+ROW_COLUMNS = (
+    "characteristic",
+    "part",
+    "station",
+    "nominal",
+    "actual",
+    "deviation",
+    "lower",
+    "upper",
+    "x",
+    "y",
+    "z",
+    "status",
+    "reference",
+)
 
 
 def _cell(value: object) -> object:

@@ -102,9 +102,7 @@ def checked_deviation(
         return deviation
     if magnitude_ok and abs(stated - (abs(actual) - abs(nominal))) <= DEVIATION_TOLERANCE_MM:
         return None if actual * nominal < 0 else deviation
-    raise ParseError(
-        f"stated deviation {stated:g} mm contradicts actual - nominal = {deviation:g} mm", location=where
-    )
+    raise ParseError(f"stated deviation {stated:g} mm contradicts actual - nominal = {deviation:g} mm", location=where)
 
 
 @dataclass
@@ -182,8 +180,11 @@ def split_columns(line: str, spans: list[tuple[str, int, int]]) -> dict[str, str
 def warn_assumed_mm(path: str, first_line: int | str) -> None:
     """Warn once that a report states no unit and its lengths were taken as mm."""
     line = first_line if isinstance(first_line, int) else None
-    note("no length unit stated; values taken as mm (give the unit with --unit to override)",
-         SourceLocation(path, line=line), "unit")
+    note(
+        "no length unit stated; values taken as mm (give the unit with --unit to override)",
+        SourceLocation(path, line=line),
+        "unit",
+    )
 
 
 def finish_rows(rows: list[dict[str, object]], path: str, skipped: SkipLog, *, what: str) -> pd.DataFrame:

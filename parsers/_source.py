@@ -17,8 +17,23 @@ from parsers import numbers
 from parsers.names import visible_name
 from setupfix.errors import ParseError, SourceLocation
 
-__all__ = ["Peek", "Source", "check_encoding", "STDIN", "load_source", "peek", "peek_file", "decode", "read_bytes",
-           "read_text", "parse_number", "point_number", "csv_records", "final_line_break", "end_statement"]
+__all__ = [
+    "Peek",
+    "Source",
+    "check_encoding",
+    "STDIN",
+    "load_source",
+    "peek",
+    "peek_file",
+    "decode",
+    "read_bytes",
+    "read_text",
+    "parse_number",
+    "point_number",
+    "csv_records",
+    "final_line_break",
+    "end_statement",
+]
 
 #: Largest report accepted [bytes]; a CMM text report is kilobytes, a JSON export megabytes.
 MAX_REPORT_BYTES = 256 * 1024 * 1024
@@ -65,13 +80,17 @@ def check_encoding(encoding: str, where: str = "") -> str:
     usable = getattr(info, "_is_text_encoding", True) and info.name not in _TRANSFORMS
     if usable and not info.name.startswith(("utf-16", "utf-32")):
         try:
-            usable = (_PROBE.encode(info.name).decode(info.name) == _PROBE
-                      and _PROBE.encode("ascii").decode(info.name) == _PROBE)
+            usable = (
+                _PROBE.encode(info.name).decode(info.name) == _PROBE
+                and _PROBE.encode("ascii").decode(info.name) == _PROBE
+            )
         except (UnicodeError, ValueError):
             usable = False
     if not usable:
-        raise ParseError(f"encoding {encoding!r} is not a character set a report is written in "
-                         "(e.g. utf-8, cp1252, cp949, utf-16)", location=location)
+        raise ParseError(
+            f"encoding {encoding!r} is not a character set a report is written in (e.g. utf-8, cp1252, cp949, utf-16)",
+            location=location,
+        )
     return info.name
 
 
@@ -233,8 +252,7 @@ NO_FINAL_LINE_BREAK = "does not end with a line break"
 
 def end_statement(word: str) -> Callable[[bytes], str | None]:
     """A completeness check: the last non-blank line is ``word`` (``ENDFIL``, ``END``), case-insensitive."""
-    pattern = re.compile(rb"(?:^|[\r\n])[ \t]*" + re.escape(word.encode()) + rb"[ \t]*[\r\n\x00\x1a]*\Z",
-                         re.IGNORECASE)
+    pattern = re.compile(rb"(?:^|[\r\n])[ \t]*" + re.escape(word.encode()) + rb"[ \t]*[\r\n\x00\x1a]*\Z", re.IGNORECASE)
 
     def check(data: bytes) -> str | None:
         return None if pattern.search(data.rstrip(b"\x00")) else f"does not end with its {word} line"
@@ -258,8 +276,9 @@ def csv_records(text: str, path: str, **fmtparams: object) -> Iterator[tuple[int
         except StopIteration:
             return
         except csv.Error as exc:
-            raise ParseError(f"unreadable line: {exc}", location=SourceLocation(path, line=reader.line_num + 1)) \
-                from None
+            raise ParseError(
+                f"unreadable line: {exc}", location=SourceLocation(path, line=reader.line_num + 1)
+            ) from None
         yield reader.line_num, record
 
 
@@ -270,8 +289,11 @@ def peek(source: Source) -> Peek:
         text = head.decode("utf-8-sig")
     except UnicodeDecodeError as exc:
         # A multi-byte character may be cut at PEEK_BYTES; decode what is whole.
-        text = head[: exc.start].decode("utf-8-sig", errors="replace") if exc.start > PEEK_BYTES - 4 else \
-            head.decode("cp1252", errors="replace")
+        text = (
+            head[: exc.start].decode("utf-8-sig", errors="replace")
+            if exc.start > PEEK_BYTES - 4
+            else head.decode("cp1252", errors="replace")
+        )
     return Peek(path=source.path, head=head, text=text)
 
 

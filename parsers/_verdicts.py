@@ -85,9 +85,16 @@ def verdict_notes(table: pd.DataFrame, path: str, limit: int = 8) -> list[Note]:
     shown = []
     for i in bad[:limit]:
         row = table.iloc[int(i)]
-        shown.append(f"{row['characteristic']} says {row['status']} at deviation {dev[i]:+.4g} mm "
-                     f"on [{lo[i]:+.4g}, {up[i]:+.4g}]")
+        shown.append(
+            f"{row['characteristic']} says {row['status']} at deviation {dev[i]:+.4g} mm "
+            f"on [{lo[i]:+.4g}, {up[i]:+.4g}]"
+        )
     more = f" (and {bad.size - limit} more)" if bad.size > limit else ""
     first = str(table["source"].iloc[int(bad[0])]) if "source" in table else ""
-    return [Note(f"{bad.size} row(s) whose own verdict contradicts their numbers: " + "; ".join(shown) + more,
-                 _location(first, path), "verdict")]
+    return [
+        Note(
+            f"{bad.size} row(s) whose own verdict contradicts their numbers: " + "; ".join(shown) + more,
+            _location(first, path),
+            "verdict",
+        )
+    ]

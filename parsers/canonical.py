@@ -104,8 +104,11 @@ def _columns(rows: list[dict[str, object]] | dict[str, object]) -> dict[str, _Co
     """
     if isinstance(rows, dict):
         values = list(rows.values())
-        if values and all(isinstance(v, (list, np.ndarray)) and np.ndim(v) == 1 for v in values) \
-                and len({len(v) for v in values}) == 1:  # type: ignore[arg-type]  # lists or arrays: tested
+        if (
+            values
+            and all(isinstance(v, (list, np.ndarray)) and np.ndim(v) == 1 for v in values)
+            and len({len(v) for v in values}) == 1  # type: ignore[arg-type]  # lists or arrays: tested
+        ):
             return dict(rows)  # type: ignore[arg-type]  # columns of equal length: tested
     elif rows and all(type(r) is dict for r in rows):
         keys = list(dict.fromkeys(k for r in rows for k in r))
@@ -176,7 +179,7 @@ def clean_deviation(actual: np.ndarray, nominal: np.ndarray) -> np.ndarray:
         difference = actual - nominal
         scale = np.maximum(np.abs(actual), np.abs(nominal)) * _NOISE
         decimals = np.clip(np.floor(-np.log10(np.where(scale > 0, scale, 1e-300))), 0, 15)
-        factor = 10.0 ** decimals
+        factor = 10.0**decimals
         rounded = np.round(difference * factor) / factor
     out: np.ndarray = np.where(np.isfinite(rounded), rounded, difference)
     return out
@@ -190,8 +193,10 @@ def _check_magnitudes(lengths: dict[str, np.ndarray], source: _Column, path: str
             bad = np.flatnonzero(np.abs(values) > MAX_LENGTH_MM)
         if bad.size:
             i = int(bad[0])
-            raise ParseError(f"{col} {values[i]:g} mm is beyond any measurable length",
-                             location=_location_of(str(_values(source)[i]), path))
+            raise ParseError(
+                f"{col} {values[i]:g} mm is beyond any measurable length",
+                location=_location_of(str(_values(source)[i]), path),
+            )
 
 
 def _location_of(source: str, path: str) -> SourceLocation:
@@ -214,8 +219,9 @@ def _flag(text: str, where: SourceLocation) -> bool:
         raise ParseError(f"column 'reference': expected True or False, found {text!r}", location=where) from None
 
 
-def read_canonical(path: str | Path | Source, *, text: str | None = None, unit: str | None = None,
-                   encoding: str | None = None) -> pd.DataFrame:
+def read_canonical(
+    path: str | Path | Source, *, text: str | None = None, unit: str | None = None, encoding: str | None = None
+) -> pd.DataFrame:
     """Read a canonical measurement CSV into the canonical table (lengths in mm).
 
     Parameters
@@ -271,7 +277,7 @@ def read_canonical(path: str | Path | Source, *, text: str | None = None, unit: 
             raise ParseError(f"{len(record)} fields, header has {width}", location=SourceLocation(name, line=line_num))
         # A short row: the columns past its end are filled below.
         row: dict[str, object] = dict(zip(header, [_unescaped(c.strip()) for c in record], strict=False))
-        for col in header[len(record):]:
+        for col in header[len(record) :]:
             row[col] = ""
         if not row["characteristic"]:
             raise ParseError("empty characteristic name", location=SourceLocation(name, line=line_num))
@@ -279,8 +285,9 @@ def read_canonical(path: str | Path | Source, *, text: str | None = None, unit: 
         factor = factors.get(row_unit)
         if factor is None:
             if row_unit.strip().lower() not in LENGTH_UNITS:
-                raise ParseError(f"unknown unit {row_unit!r} (expected mm or inch)",
-                                 location=SourceLocation(name, line=line_num))
+                raise ParseError(
+                    f"unknown unit {row_unit!r} (expected mm or inch)", location=SourceLocation(name, line=line_num)
+                )
             factor = factors[row_unit] = length_factor(row_unit, "mm")
         for col in lengths_here:
             cell = str(row[col])
@@ -299,13 +306,16 @@ def read_canonical(path: str | Path | Source, *, text: str | None = None, unit: 
         if math.isnan(actual):
             actual = nominal + stated
         elif not math.isnan(stated) and abs(stated - (actual - nominal)) > DEVIATION_TOLERANCE_MM:
-            raise ParseError(f"deviation {stated:g} mm contradicts actual - nominal = {actual - nominal:g} mm",
-                             location=SourceLocation(name, line=line_num))
+            raise ParseError(
+                f"deviation {stated:g} mm contradicts actual - nominal = {actual - nominal:g} mm",
+                location=SourceLocation(name, line=line_num),
+            )
         row["actual"], row["deviation"] = actual, actual - nominal
         lo, up = float(row.get("lower", math.nan)), float(row.get("upper", math.nan))  # type: ignore[arg-type]  # numbers by now
         if not math.isnan(lo) and not math.isnan(up) and lo >= up:
-            raise ParseError(f"lower limit {lo:g} is not below upper limit {up:g}",
-                             location=SourceLocation(name, line=line_num))
+            raise ParseError(
+                f"lower limit {lo:g} is not below upper limit {up:g}", location=SourceLocation(name, line=line_num)
+            )
         if "reference" in row:
             row["reference"] = _flag(str(row["reference"]), SourceLocation(name, line=line_num))
         row["source"] = f"{name}:{line_num}"

@@ -38,8 +38,17 @@ from parsers.timestamps import parse_timestamp, to_index, utc_naive
 from setupfix.errors import MatchError, ParseError, SourceLocation
 from setupfix.model import ProcessModel
 
-__all__ = ["CorrectionRow", "CorrectionsLog", "RegisterLog", "read_corrections_log", "log_from_frame",
-           "check_corrections", "EVENTS", "COLUMNS", "REQUIRED"]
+__all__ = [
+    "CorrectionRow",
+    "CorrectionsLog",
+    "RegisterLog",
+    "read_corrections_log",
+    "log_from_frame",
+    "check_corrections",
+    "EVENTS",
+    "COLUMNS",
+    "REQUIRED",
+]
 
 #: Kinds of rows: a change of a register, or a tool change (the tool's wear restarts).
 EVENTS: tuple[str, ...] = ("correction", "tool_change")
@@ -127,8 +136,11 @@ def _row(cells: Mapping[str, str], where: SourceLocation) -> CorrectionRow | Non
     if event == "correction" and math.isnan(delta):
         raise ParseError("a correction needs a delta", location=where)
     if event == "tool_change" and not (math.isnan(delta) or delta == 0):
-        raise ParseError(f"a tool change carries no delta (found {delta:g})", location=where,
-                         hint="leave delta empty, and give a correction on a row of its own")
+        raise ParseError(
+            f"a tool change carries no delta (found {delta:g})",
+            location=where,
+            hint="leave delta empty, and give a correction on a row of its own",
+        )
     return CorrectionRow(moment, register, math.nan if event == "tool_change" else delta, event, where)
 
 
@@ -147,9 +159,12 @@ def _once(rows: list[CorrectionRow], source: str) -> CorrectionsLog:
     for row in rows:
         key = (utc_naive(row.moment), row.register, row.event)
         if key in seen:
-            raise ParseError(f"{row.register} {row.event.replace('_', ' ')} at {row.timestamp} given twice "
-                             f"(also at {_place(seen[key].where)})", location=row.where,
-                             hint="give one row with the total change")
+            raise ParseError(
+                f"{row.register} {row.event.replace('_', ' ')} at {row.timestamp} given twice "
+                f"(also at {_place(seen[key].where)})",
+                location=row.where,
+                hint="give one row with the total change",
+            )
         seen[key] = row
     return CorrectionsLog(source, tuple(rows))
 
@@ -163,8 +178,11 @@ def _header(cells: list[str], where: SourceLocation) -> list[str]:
         seen[name] = j
     missing = [c for c in REQUIRED if c not in seen]
     if missing:
-        raise ParseError(f"not a corrections log: missing column(s) {', '.join(missing)}", location=where,
-                         hint=f"the header names {', '.join(COLUMNS)} (event optional)")
+        raise ParseError(
+            f"not a corrections log: missing column(s) {', '.join(missing)}",
+            location=where,
+            hint=f"the header names {', '.join(COLUMNS)} (event optional)",
+        )
     return header
 
 
@@ -181,8 +199,11 @@ def read_corrections_log(path: str | os.PathLike[str]) -> CorrectionsLog:
     try:
         text = data.decode("utf-8-sig")
     except UnicodeDecodeError as exc:
-        raise ParseError("not UTF-8 text", location=SourceLocation(name, line=data[: exc.start].count(b"\n") + 1),
-                         hint="save the log as UTF-8 (measurements.md)") from None
+        raise ParseError(
+            "not UTF-8 text",
+            location=SourceLocation(name, line=data[: exc.start].count(b"\n") + 1),
+            hint="save the log as UTF-8 (measurements.md)",
+        ) from None
     records = csv_records(text, name)
     first = next(records, None)
     if first is None:
@@ -191,9 +212,12 @@ def read_corrections_log(path: str | os.PathLike[str]) -> CorrectionsLog:
     rows = []
     for line, cells in records:
         where = SourceLocation(name, line=line)
-        if len(cells) > len(header) and any(c.strip() for c in cells[len(header):]):
-            raise ParseError(f"{len(cells)} cells but {len(header)} columns in the header", location=where,
-                             hint="a decimal comma splits a number in two: write 0.05, not 0,05")
+        if len(cells) > len(header) and any(c.strip() for c in cells[len(header) :]):
+            raise ParseError(
+                f"{len(cells)} cells but {len(header)} columns in the header",
+                location=where,
+                hint="a decimal comma splits a number in two: write 0.05, not 0,05",
+            )
         row = _row(dict(zip(header, cells, strict=False)), where)  # a short row: its missing cells are empty
         if row is not None:
             rows.append(row)
@@ -232,17 +256,22 @@ def check_corrections(log: CorrectionsLog, model: ProcessModel) -> RegisterLog:
         try:
             reg = model.register(row.register)
         except KeyError:
-            raise MatchError(f"unknown register {row.register!r} (model registers: {', '.join(ids)})",
-                             location=row.where) from None
+            raise MatchError(
+                f"unknown register {row.register!r} (model registers: {', '.join(ids)})", location=row.where
+            ) from None
         if row.event == "tool_change" and reg.kind != "tool":
             raise MatchError(f"tool change of {reg.id}, which is not a tool", location=row.where)
         key = (utc_naive(row.moment), reg.id, row.event)
         if key in seen:  # the same register by its ID and its register name
-            raise MatchError(f"{reg.id} ({reg.register}) {row.event.replace('_', ' ')} at {row.timestamp} given "
-                             f"twice (also at {_place(seen[key].where)})", location=row.where,
-                             hint="give one row with the total change")
+            raise MatchError(
+                f"{reg.id} ({reg.register}) {row.event.replace('_', ' ')} at {row.timestamp} given "
+                f"twice (also at {_place(seen[key].where)})",
+                location=row.where,
+                hint="give one row with the total change",
+            )
         seen[key] = row
         regs.append(ids.index(reg.id))
     deltas = np.array([0.0 if r.event == "tool_change" else r.delta for r in log.rows], dtype=float)
-    return RegisterLog(to_index([r.moment for r in log.rows]), np.array(regs, dtype=np.intp), deltas,
-                       tuple(r.event for r in log.rows))
+    return RegisterLog(
+        to_index([r.moment for r in log.rows]), np.array(regs, dtype=np.intp), deltas, tuple(r.event for r in log.rows)
+    )

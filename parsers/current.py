@@ -60,8 +60,9 @@ def _component(model: ProcessModel, key: str, axis: str, where: SourceLocation) 
         return found[0]
     if tools:
         if axis:
-            raise ParseError(f"register {key!r} is a tool register: leave its axis empty (found {axis!r})",
-                             location=where)
+            raise ParseError(
+                f"register {key!r} is a tool register: leave its axis empty (found {axis!r})", location=where
+            )
         return tools[0]
     raise ParseError(f"register {key!r} is not in the model", location=where)
 
@@ -86,7 +87,7 @@ def read_current(path: str | Path, model: ProcessModel) -> dict[str, float]:
     columns = ["register", "axis", "value"] if multi else ["register", "value"]
     records = csv_records(read_text(path), name)
     head = next(records, None)
-    if head is None or [c.strip().casefold() for c in head[1][:len(columns)]] != columns:
+    if head is None or [c.strip().casefold() for c in head[1][: len(columns)]] != columns:
         why = " (a multi-axis model: one row per register component)" if multi else ""
         raise ParseError(f"expected the header '{','.join(columns)}'{why}", location=SourceLocation(name, line=1))
     width = len(head[1])
@@ -99,8 +100,11 @@ def read_current(path: str | Path, model: ProcessModel) -> dict[str, float]:
         if len(cells) < len(columns):
             raise ParseError(f"expected {','.join(columns)}", location=where)
         if len(cells) > width:
-            raise ParseError(f"{len(cells)} cells but {width} columns in the header", location=where,
-                             hint="a decimal comma splits a number in two: write -412.53, not -412,53")
+            raise ParseError(
+                f"{len(cells)} cells but {width} columns in the header",
+                location=where,
+                hint="a decimal comma splits a number in two: write -412.53, not -412,53",
+            )
         key, text = cells[0].strip(), cells[len(columns) - 1].strip()
         if multi:
             reg = _component(model, key, cells[1].strip(), where)
@@ -119,8 +123,10 @@ def read_current(path: str | Path, model: ProcessModel) -> dict[str, float]:
         rotation = reg.component == "C" and reg.kind == "wks"
         bound, unit = (MAX_OFFSET_MM, "degrees") if rotation else (limit, model.unit)
         if abs(value) >= bound:
-            raise ParseError(f"value {text[:30]} of {shown} is beyond any control's offset range "
-                             f"(|value| < {bound:g} {unit})", location=where)
+            raise ParseError(
+                f"value {text[:30]} of {shown} is beyond any control's offset range (|value| < {bound:g} {unit})",
+                location=where,
+            )
         out[reg.id] = value
     missing = [_label(r) for r in model.registers if not r.fixed and r.id not in out]
     if missing:

@@ -34,8 +34,8 @@ from __future__ import annotations
 import errno
 import os
 import stat
-from dataclasses import dataclass
 from collections.abc import Sequence
+from dataclasses import dataclass
 from pathlib import Path
 
 from parsers._registry import NOT_REPORT_NAMES, never_a_report
@@ -127,9 +127,9 @@ def _reason(exc: OSError) -> str:
 
 
 def _notes(problems: Sequence[tuple[str, str]], links: Sequence[tuple[str, str]]) -> list[Note]:
-    return ([Note(f"{reason}; left out", SourceLocation(path), "folder") for path, reason in problems]
-            + [Note(f"symbolic link to {target}: read as a report", SourceLocation(path), "folder")
-               for path, target in links])
+    return [Note(f"{reason}; left out", SourceLocation(path), "folder") for path, reason in problems] + [
+        Note(f"symbolic link to {target}: read as a report", SourceLocation(path), "folder") for path, target in links
+    ]
 
 
 def _hidden(parts: Sequence[str]) -> bool:
@@ -186,8 +186,7 @@ def list_reports(root: str | os.PathLike[str], *, recursive: bool = True) -> Lis
             try:
                 st = os.stat(path)  # follows a link: a linked report is read as a report
             except OSError as exc:
-                problems.append((shown, _reason(exc) if not is_link or exc.errno == errno.ELOOP
-                                 else "broken link"))
+                problems.append((shown, _reason(exc) if not is_link or exc.errno == errno.ELOOP else "broken link"))
                 continue
             if stat.S_ISDIR(st.st_mode):
                 if entry.name.startswith("."):

@@ -28,8 +28,20 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 
-__all__ = ["DIRECTION_COLUMNS", "FEATURE_COLUMN", "SIZE_COLUMN", "SIDE_COLUMN", "GEOMETRY_COLUMNS", "FEATURES",
-           "SIZES", "INTERPOLATED", "unit_vector", "axis_vector", "geometry_cells", "no_geometry"]
+__all__ = [
+    "DIRECTION_COLUMNS",
+    "FEATURE_COLUMN",
+    "SIZE_COLUMN",
+    "SIDE_COLUMN",
+    "GEOMETRY_COLUMNS",
+    "FEATURES",
+    "SIZES",
+    "INTERPOLATED",
+    "unit_vector",
+    "axis_vector",
+    "geometry_cells",
+    "no_geometry",
+]
 
 DIRECTION_COLUMNS = ("nx", "ny", "nz")
 FEATURE_COLUMN = "feature"
@@ -67,8 +79,9 @@ def axis_vector(axis: str) -> tuple[float, float, float] | None:
     return tuple(1.0 if a == axis else 0.0 for a in _AXES)  # type: ignore[return-value]  # three items
 
 
-def geometry_cells(direction: Sequence[float] | None = None, feature: str = "", size: str = "",
-                   side: str = "") -> dict[str, object]:
+def geometry_cells(
+    direction: Sequence[float] | None = None, feature: str = "", size: str = "", side: str = ""
+) -> dict[str, object]:
     """The geometry columns of one row (``nx, ny, nz`` NaN without a direction)."""
     unit = unit_vector(direction)
     nx, ny, nz = unit if unit is not None else (math.nan, math.nan, math.nan)

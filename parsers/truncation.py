@@ -18,6 +18,7 @@ from setupfix.errors import SetupfixError
 
 __all__ = ["ROW_COLUMNS", "row_keys", "cut_points", "line_cut_points", "CutOutcome", "check_prefixes"]
 
+
 def cut_points(size: int, n: int = 40) -> list[int]:
     """``n`` deterministic cut lengths in ``[1, size)``, evenly spread (fewer for tiny files)."""
     if size <= 1:

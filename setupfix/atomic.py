@@ -78,8 +78,7 @@ def check_target(target: str | os.PathLike[str]) -> Path | None:
         raise ExportError(f"cannot write here: {exc.strerror}", location=where) from None
     for test, kind, hint in _KINDS:
         if test(mode):
-            raise ExportError(f"refusing to write: the target is {kind}, not a regular file", location=where,
-                              hint=hint)
+            raise ExportError(f"refusing to write: the target is {kind}, not a regular file", location=where, hint=hint)
     return path
 
 
@@ -94,7 +93,7 @@ def process_started(pid: int) -> str:
             stat_line = f.read().decode("ascii", "replace")
     except OSError:
         return ""
-    fields = stat_line[stat_line.rfind(")") + 2:].split()  # after the command name, which may hold spaces
+    fields = stat_line[stat_line.rfind(")") + 2 :].split()  # after the command name, which may hold spaces
     if len(fields) < 20 or fields[0] == "Z":  # a zombie has ended
         return ""
     return fields[19]
@@ -163,8 +162,9 @@ def _create_temp(path: Path) -> tuple[int, Path]:
 
 
 @contextlib.contextmanager
-def atomic_write(target: str | os.PathLike[str], *, newline: str | None = "",
-                 binary: bool = False) -> Iterator[IO[Any]]:
+def atomic_write(
+    target: str | os.PathLike[str], *, newline: str | None = "", binary: bool = False
+) -> Iterator[IO[Any]]:
     """Open a stream whose content replaces ``target`` only on success.
 
     ``target == "-"`` writes to standard output instead.  ``binary=True`` gives a
@@ -209,8 +209,11 @@ def atomic_write(target: str | os.PathLike[str], *, newline: str | None = "",
         _discard(tmp)
         if in_body and exc.errno not in _WRITE_FAILURES:
             raise  # the caller's own error (e.g. reading another file), not this write's
-        raise ExportError(f"cannot write: {exc.strerror or exc}; nothing written", location=SourceLocation(str(path)),
-                          hint=_WRITE_HINTS.get(exc.errno or 0)) from None
+        raise ExportError(
+            f"cannot write: {exc.strerror or exc}; nothing written",
+            location=SourceLocation(str(path)),
+            hint=_WRITE_HINTS.get(exc.errno or 0),
+        ) from None
     except BaseException:
         _discard(tmp)
         raise
@@ -219,9 +222,12 @@ def atomic_write(target: str | os.PathLike[str], *, newline: str | None = "",
 #: errno values that only a write gives (a full disk, a file size limit, a quota, a read-only file system):
 #: raised while the caller writes the stream, they are this write's failure and named with its target.
 _WRITE_FAILURES = frozenset({errno.ENOSPC, errno.EFBIG, errno.EDQUOT, errno.EROFS})
-_WRITE_HINTS = {errno.ENOSPC: "the disk is full: free space and run again",
-                errno.EFBIG: "the file is larger than this process may write (ulimit -f) or the file system holds",
-                errno.EDQUOT: "the disk quota is used up", errno.EROFS: "the file system is mounted read-only"}
+_WRITE_HINTS = {
+    errno.ENOSPC: "the disk is full: free space and run again",
+    errno.EFBIG: "the file is larger than this process may write (ulimit -f) or the file system holds",
+    errno.EDQUOT: "the disk quota is used up",
+    errno.EROFS: "the file system is mounted read-only",
+}
 
 
 def _discard(tmp: Path) -> None:

@@ -81,9 +81,20 @@ class Smoothed:
     notes: tuple[Note, ...] = ()
 
 
-def ewma_history(deviation: Array, now: np.datetime64 | None, times: npt.NDArray[np.datetime64], earlier: Array,
-                 log_times: npt.NDArray[np.datetime64], log_register: npt.NDArray[np.int64], log_delta: Array,
-                 log_reset: Mask, composite: Array, lam: float, *, limit: int = 50) -> Smoothed:
+def ewma_history(
+    deviation: Array,
+    now: np.datetime64 | None,
+    times: npt.NDArray[np.datetime64],
+    earlier: Array,
+    log_times: npt.NDArray[np.datetime64],
+    log_register: npt.NDArray[np.int64],
+    log_delta: Array,
+    log_reset: Mask,
+    composite: Array,
+    lam: float,
+    *,
+    limit: int = 50,
+) -> Smoothed:
     """EWMA of a cycle's deviations over the earlier parts, each shifted to the machine as it is now.
 
     An earlier part's deviation y_k becomes y_k + Σ Δx·C over the corrections logged
@@ -113,9 +124,17 @@ def ewma_history(deviation: Array, now: np.datetime64 | None, times: npt.NDArray
     return Smoothed(np.where(np.isnan(deviation), np.nan, smoothed), int(rows.shape[0]), lam)
 
 
-def shifted_history(now: np.datetime64, times: npt.NDArray[np.datetime64], earlier: Array,
-                    log_times: npt.NDArray[np.datetime64], log_register: npt.NDArray[np.int64], log_delta: Array,
-                    log_reset: Mask, composite: Array, limit: int = 50) -> Array:
+def shifted_history(
+    now: np.datetime64,
+    times: npt.NDArray[np.datetime64],
+    earlier: Array,
+    log_times: npt.NDArray[np.datetime64],
+    log_register: npt.NDArray[np.int64],
+    log_delta: Array,
+    log_reset: Mask,
+    composite: Array,
+    limit: int = 50,
+) -> Array:
     """The last ``limit`` parts machined before ``now``, oldest first, each moved to the machine as it is now.
 
     y_k + Σ Δx·C over the corrections logged after part k and up to ``now`` (eqs. 3–4);

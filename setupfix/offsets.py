@@ -21,8 +21,21 @@ from setupfix.model import ProcessModel
 __all__ = ["grid_decimals", "format_value", "OFFSET_COLUMNS", "OffsetRow", "offset_rows"]
 
 #: Columns of the offsets CSV, the spec's first (``../shared/spec/cli-json.md``).
-OFFSET_COLUMNS = ("report", "part", "id", "register", "kind", "axis", "delta", "unit", "mode",
-                  "offset", "current", "value", "verdict")
+OFFSET_COLUMNS = (
+    "report",
+    "part",
+    "id",
+    "register",
+    "kind",
+    "axis",
+    "delta",
+    "unit",
+    "mode",
+    "offset",
+    "current",
+    "value",
+    "verdict",
+)
 
 
 def grid_decimals(resolution: float) -> int:
@@ -83,12 +96,32 @@ class OffsetRow:
         def num(v: float | None) -> str:
             return "" if v is None else format_value(v, d)
 
-        return [self.report, self.part, self.id, self.register, self.kind, self.axis, num(self.delta), self.unit,
-                self.mode, self.offset, num(self.current), num(self.value), self.verdict]
+        return [
+            self.report,
+            self.part,
+            self.id,
+            self.register,
+            self.kind,
+            self.axis,
+            num(self.delta),
+            self.unit,
+            self.mode,
+            self.offset,
+            num(self.current),
+            num(self.value),
+            self.verdict,
+        ]
 
 
-def offset_rows(model: ProcessModel, corrections: Mapping[str, float], *, report: str = "", part: str = "",
-                current: Mapping[str, float] | None = None, verdict: str = "") -> list[OffsetRow]:
+def offset_rows(
+    model: ProcessModel,
+    corrections: Mapping[str, float],
+    *,
+    report: str = "",
+    part: str = "",
+    current: Mapping[str, float] | None = None,
+    verdict: str = "",
+) -> list[OffsetRow]:
     """Rows for every correctable (non-fixed) register of ``model``, in model order.
 
     In a multi-axis model one row per register component: ``id`` the component ID (``W1.X``,
@@ -118,8 +151,24 @@ def offset_rows(model: ProcessModel, corrections: Mapping[str, float], *, report
                 raise MatchError(f"no current value for register {reg.register} ({reg.id}) in the current offsets")
             now = float(current[reg.id]) + 0.0
             value = round(now + delta, 9) + 0.0
-        rows.append(OffsetRow(report, part, reg.id, reg.register, reg.kind, reg.component or model.axis, delta,
-                              model.unit, "add" if current is None else "set",
-                              reg.offset, now, value,
-                              policy.number, policy.edge, resolution, verdict))
+        rows.append(
+            OffsetRow(
+                report,
+                part,
+                reg.id,
+                reg.register,
+                reg.kind,
+                reg.component or model.axis,
+                delta,
+                model.unit,
+                "add" if current is None else "set",
+                reg.offset,
+                now,
+                value,
+                policy.number,
+                policy.edge,
+                resolution,
+                verdict,
+            )
+        )
     return rows

@@ -29,8 +29,7 @@ from typing import Any, ClassVar
 
 from setupfix.errors import ParameterError
 
-__all__ = ["Interval", "Options", "Predicate", "Constraint", "ValidatedParams", "validate_params",
-           "describe"]
+__all__ = ["Interval", "Options", "Predicate", "Constraint", "ValidatedParams", "validate_params", "describe"]
 
 
 @dataclass(frozen=True)
@@ -57,8 +56,9 @@ class Interval:
         v = float(value) if self.type is not int else int(value)
         if self.left is not None and (v < self.left or (v == self.left and self.closed in ("right", "neither"))):
             return False
-        return not (self.right is not None
-                    and (v > self.right or (v == self.right and self.closed in ("left", "neither"))))
+        return not (
+            self.right is not None and (v > self.right or (v == self.right and self.closed in ("left", "neither")))
+        )
 
     def __str__(self) -> str:
         lo = "-inf" if self.left is None else f"{self.left:g}"

@@ -37,9 +37,14 @@ def _colour(i: int) -> str:
     return f"C{i % 10}"
 
 
-def comparison_figure(histories: Mapping[str, Sequence[Array]], finals: Mapping[str, Mapping[str, Array]], *,
-                      exact: tuple[float, float, float] | None = None, unit: str = "mm",
-                      title: str = "") -> Figure:
+def comparison_figure(
+    histories: Mapping[str, Sequence[Array]],
+    finals: Mapping[str, Mapping[str, Array]],
+    *,
+    exact: tuple[float, float, float] | None = None,
+    unit: str = "mm",
+    title: str = "",
+) -> Figure:
     """Convergence (top row) and spread (bottom row) of several optimisers.
 
     Parameters
@@ -71,8 +76,15 @@ def comparison_figure(histories: Mapping[str, Sequence[Array]], finals: Mapping[
             typical = int(np.argsort(final_f)[len(final_f) // 2])
             for j, h in enumerate(runs):
                 bold = j == typical
-                ax.step(h[:, 0], h[:, k], where="post", color=_colour(i), lw=1.8 if bold else 0.6,
-                        alpha=1.0 if bold else 0.25, label=name if bold else None)
+                ax.step(
+                    h[:, 0],
+                    h[:, k],
+                    where="post",
+                    color=_colour(i),
+                    lw=1.8 if bold else 0.6,
+                    alpha=1.0 if bold else 0.25,
+                    label=name if bold else None,
+                )
         if exact is not None:
             ax.axhline(exact[col], color="k", ls="--", lw=1, label="exact (grid optimum)")
         ax.set_xscale("log")
@@ -102,8 +114,9 @@ def comparison_figure(histories: Mapping[str, Sequence[Array]], finals: Mapping[
     return fig
 
 
-def validation_figure(initial: Array, exact: Array, results: Mapping[str, Array], *, unit: str = "mm",
-                      title: str = "") -> Figure:
+def validation_figure(
+    initial: Array, exact: Array, results: Mapping[str, Array], *, unit: str = "mm", title: str = ""
+) -> Figure:
     """Sorted results over many measurement sets (Fig. 18) with the exact optimum beside them.
 
     Parameters
@@ -154,6 +167,8 @@ def figure_format(path: str | os.PathLike[str]) -> str:
     path = Path(path)
     fmt = FORMATS.get(path.suffix.lower())
     if fmt is None:
-        raise ExportError(f"plot format {path.suffix or '(none)'!r} not supported; use .png or .svg",
-                          location=SourceLocation(str(path)))
+        raise ExportError(
+            f"plot format {path.suffix or '(none)'!r} not supported; use .png or .svg",
+            location=SourceLocation(str(path)),
+        )
     return fmt

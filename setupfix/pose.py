@@ -49,8 +49,16 @@ from setupfix.optimize import CorrectionProblem
 from setupfix.relation import relation_matrices
 from setupfix.safety import Policy, RuleEffect, cumulative_bounds, guard_limits, no_harm_floor, short_list
 
-__all__ = ["PosedProblem", "forecast_of", "effects_composite", "policy_of", "pose_problem", "pose_policy",
-           "coverage", "hours_between"]
+__all__ = [
+    "PosedProblem",
+    "forecast_of",
+    "effects_composite",
+    "policy_of",
+    "pose_problem",
+    "pose_policy",
+    "coverage",
+    "hours_between",
+]
 
 Array = npt.NDArray[np.float64]
 Mask = npt.NDArray[np.bool_]
@@ -91,9 +99,12 @@ def forecast_of(model: ProcessModel, timestamp: str | None, report: str = "") ->
     time = hours_between(timestamp, section.origin, report) if section.origin and timestamp else None
     shift = forecast_shift(section, Layout.from_model(model), time=time)
     kinds = sorted({e.kind for e in section.effects if e.kind in ("drift", "wear")})
-    note = Note(f"the model's [effects] ({', '.join(kinds)}) forecast the next cycle: up to "
-                f"{np.max(np.abs(shift)):.4f} {model.unit} added to the measured deviations",
-                SourceLocation(model.source, key="effects"), "forecast")
+    note = Note(
+        f"the model's [effects] ({', '.join(kinds)}) forecast the next cycle: up to "
+        f"{np.max(np.abs(shift)):.4f} {model.unit} added to the measured deviations",
+        SourceLocation(model.source, key="effects"),
+        "forecast",
+    )
     return shift, note
 
 
@@ -119,15 +130,21 @@ def effects_composite(model: ProcessModel) -> tuple[Array | None, Note | None]:
     changed = np.argwhere(layout.composite != C)
     if changed.size == 0:
         return None, None
-    what = ", ".join(f"{layout.dimension_ids[q]} ~ {layout.register_ids[i]} {layout.composite[i, q]:g} → {C[i, q]:.4g}"
-                     for i, q in changed)
-    note = Note(f"the model's [effects] relation(s) map the correction: {what}",
-                SourceLocation(model.source, key="effects"), "relation")
+    what = ", ".join(
+        f"{layout.dimension_ids[q]} ~ {layout.register_ids[i]} {layout.composite[i, q]:g} → {C[i, q]:.4g}"
+        for i, q in changed
+    )
+    note = Note(
+        f"the model's [effects] relation(s) map the correction: {what}",
+        SourceLocation(model.source, key="effects"),
+        "relation",
+    )
     return C, note
 
 
-def policy_of(model: ProcessModel, dimension_ids: tuple[str, ...],
-              cumulative: Mapping[str, float] | None = None) -> Policy:
+def policy_of(
+    model: ProcessModel, dimension_ids: tuple[str, ...], cumulative: Mapping[str, float] | None = None
+) -> Policy:
     """The model's safety settings as arrays aligned with the problem's dimensions (defaults filled in).
 
     ``cumulative`` gives, by register ID, the change applied since the last reset
@@ -143,15 +160,28 @@ def policy_of(model: ProcessModel, dimension_ids: tuple[str, ...],
     rotation = np.array([r.component == "C" for r in model.registers], dtype=bool)
     dims = {d.id: d for d in model.dimensions}
     width = np.array([dims[d].upper - dims[d].lower for d in dimension_ids])
-    reject = np.array([s.dimension_reject_band.get(d, s.reject_band if s.reject_band is not None else w)
-                       for d, w in zip(dimension_ids, width, strict=True)], dtype=float)
+    reject = np.array(
+        [
+            s.dimension_reject_band.get(d, s.reject_band if s.reject_band is not None else w)
+            for d, w in zip(dimension_ids, width, strict=True)
+        ],
+        dtype=float,
+    )
     cum_limit = [p.cumulative_limit if p.cumulative_limit is not None else s.cumulative_limit for p in regs]
     return Policy(
-        dead_band=np.where(rotation, 2 * model.resolution,
-                           np.array([p.dead_band if p.dead_band is not None else band for p in regs], dtype=float)),
+        dead_band=np.where(
+            rotation,
+            2 * model.resolution,
+            np.array([p.dead_band if p.dead_band is not None else band for p in regs], dtype=float),
+        ),
         gain=np.array([p.gain if p.gain is not None else s.gain for p in regs], dtype=float),
-        cumulative_limit=np.array([np.inf if c is None or r.id not in (cumulative or {}) or r.component == "C" else c
-                                   for c, r in zip(cum_limit, model.registers, strict=True)], dtype=float),
+        cumulative_limit=np.array(
+            [
+                np.inf if c is None or r.id not in (cumulative or {}) or r.component == "C" else c
+                for c, r in zip(cum_limit, model.registers, strict=True)
+            ],
+            dtype=float,
+        ),
         cumulative=np.array([float((cumulative or {}).get(r.id, 0.0)) for r in model.registers]) / scale,
         cost=np.array([p.cost for p in regs], dtype=float),
         reject_band=np.nan_to_num(reject, nan=np.inf, posinf=np.inf),
@@ -197,9 +227,15 @@ class PosedProblem:
         return any(e.rule in ("ewma", "forecast") for e in self.effects)
 
 
-def pose_policy(problem: CorrectionProblem, policy: Policy, *, measured: Array | None = None,
-                effects: tuple[RuleEffect, ...] = (), notes: tuple[Note, ...] = (),
-                held: Mask | None = None) -> PosedProblem:
+def pose_policy(
+    problem: CorrectionProblem,
+    policy: Policy,
+    *,
+    measured: Array | None = None,
+    effects: tuple[RuleEffect, ...] = (),
+    notes: tuple[Note, ...] = (),
+    held: Mask | None = None,
+) -> PosedProblem:
     """Steps 4–7 on a problem already holding its deviations and composite (steps 1–3).
 
     Parameters
@@ -224,29 +260,39 @@ def pose_policy(problem: CorrectionProblem, policy: Policy, *, measured: Array |
         floor = no_harm_floor(problem.deviation, problem.lower, problem.upper, lo, up)  # no harm on the real limits
         guarded = dataclasses.replace(guarded, lower=lo, upper=up, floor=floor)
         shrunk = tuple(dims[policy.uncertainty > 0])
-        rules.append(RuleEffect("guard_band", f"limits of {len(shrunk)} dimension(s) shrunk by "
-                                f"{policy.guard_band:g}·U (ISO 14253-1)", dimensions=shrunk))
+        rules.append(
+            RuleEffect(
+                "guard_band",
+                f"limits of {len(shrunk)} dimension(s) shrunk by {policy.guard_band:g}·U (ISO 14253-1)",
+                dimensions=shrunk,
+            )
+        )
     lb, ub = problem.lb, problem.ub
     if np.any(np.isfinite(policy.cumulative_limit)):  # 5. cumulative bounds
         lb, ub = cumulative_bounds(lb, ub, policy.cumulative, policy.cumulative_limit, problem.resolution)
         tightened = (lb > problem.lb) | (ub < problem.ub)
         if tightened.any():
-            rules.append(RuleEffect("cumulative_limit", "step bounds tightened so that the total since the last "
-                                    "reset stays within the cumulative limit", registers=tuple(ids[tightened])))
+            rules.append(
+                RuleEffect(
+                    "cumulative_limit",
+                    "step bounds tightened so that the total since the last reset stays within the cumulative limit",
+                    registers=tuple(ids[tightened]),
+                )
+            )
     cost = np.asarray(policy.cost, dtype=float)  # 6. costs
     fixed = problem.ub <= problem.lb  # 7. fixed registers (and registers without room) …
     if held is not None:
         fixed = fixed | held  # … and those coverage holds
     lb, ub = np.where(fixed, 0.0, lb), np.where(fixed, 0.0, ub)
-    if not (np.array_equal(lb, guarded.lb) and np.array_equal(ub, guarded.ub)
-            and np.array_equal(cost, guarded.cost)):
+    if not (np.array_equal(lb, guarded.lb) and np.array_equal(ub, guarded.ub) and np.array_equal(cost, guarded.cost)):
         guarded = dataclasses.replace(guarded, lb=lb, ub=ub, cost=cost)
     raw = problem.deviation if measured is None else np.asarray(measured, dtype=float)
     return PosedProblem(problem, guarded, policy, raw, tuple(rules), notes)
 
 
-def coverage(model: ProcessModel, part: PartMeasurement, composite: Array | None = None,
-             stand_in: Array | None = None) -> tuple[PartMeasurement, Mask, list[RuleEffect]]:
+def coverage(
+    model: ProcessModel, part: PartMeasurement, composite: Array | None = None, stand_in: Array | None = None
+) -> tuple[PartMeasurement, Mask, list[RuleEffect]]:
     """Step 1's coverage: the part with stand-ins for absent dimensions, the registers held at 0, the rules.
 
     Parameters
@@ -282,28 +328,46 @@ def coverage(model: ProcessModel, part: PartMeasurement, composite: Array | None
         if stands.any():
             part = dataclasses.replace(part, deviation=np.where(stands, stand_in, part.deviation))
             absent = absent & ~stands
-            rules.append(RuleEffect("stand_in", f"{int(stands.sum())} dimension(s) absent from the report stood in "
-                                    f"for by their last measurement in the history, moved by the corrections "
-                                    f"applied since: {short_list(names[d] for d in ids[stands])}",
-                                    dimensions=tuple(ids[stands])))
+            rules.append(
+                RuleEffect(
+                    "stand_in",
+                    f"{int(stands.sum())} dimension(s) absent from the report stood in "
+                    f"for by their last measurement in the history, moved by the corrections "
+                    f"applied since: {short_list(names[d] for d in ids[stands])}",
+                    dimensions=tuple(ids[stands]),
+                )
+            )
     sampled = np.array([d.sampled for d in model.dimensions], dtype=bool)
     blind = absent & ~sampled
     held = np.any(composite[:, blind] != 0, axis=1)
     if held.any():
         regs = tuple(r.id for r, h in zip(model.registers, held, strict=True) if h)
         shown = short_list(r.register for r, h in zip(model.registers, held, strict=True) if h)
-        rules.append(RuleEffect("coverage", f"{shown} held at 0: they move {int(blind.sum())} dimension(s) absent "
-                                f"from the report ({short_list(names[d] for d in ids[blind])}) with no recent "
-                                "measurement in the history; a correction never moves what was not measured "
-                                "(mark a dimension not measured every cycle with sampled = true)",
-                                registers=regs, dimensions=tuple(ids[blind])))
+        rules.append(
+            RuleEffect(
+                "coverage",
+                f"{shown} held at 0: they move {int(blind.sum())} dimension(s) absent "
+                f"from the report ({short_list(names[d] for d in ids[blind])}) with no recent "
+                "measurement in the history; a correction never moves what was not measured "
+                "(mark a dimension not measured every cycle with sampled = true)",
+                registers=regs,
+                dimensions=tuple(ids[blind]),
+            )
+        )
     return part, held, rules
 
 
-def pose_problem(model: ProcessModel, part: PartMeasurement, *, smoothed: Smoothed | None = None,
-                 cumulative: Mapping[str, float] | None = None, composite: Array | None = None,
-                 policy: Policy | None = None, stand_in: Array | None = None,
-                 hold: RuleEffect | None = None) -> PosedProblem:
+def pose_problem(
+    model: ProcessModel,
+    part: PartMeasurement,
+    *,
+    smoothed: Smoothed | None = None,
+    cumulative: Mapping[str, float] | None = None,
+    composite: Array | None = None,
+    policy: Policy | None = None,
+    stand_in: Array | None = None,
+    hold: RuleEffect | None = None,
+) -> PosedProblem:
     """Pose the problem of one measured cycle in the module's order (steps 1–7).
 
     Parameters
@@ -334,8 +398,9 @@ def pose_problem(model: ProcessModel, part: PartMeasurement, *, smoothed: Smooth
     if held_part is not part:  # stood-in dimensions are measured for the problem (and the smoothing skips them)
         part = held_part
         if smoothed is not None:
-            smoothed = dataclasses.replace(smoothed, deviation=np.where(np.isnan(smoothed.deviation),
-                                                                        part.deviation, smoothed.deviation))
+            smoothed = dataclasses.replace(
+                smoothed, deviation=np.where(np.isnan(smoothed.deviation), part.deviation, smoothed.deviation)
+            )
     if composite is None:  # 3. effects: relations (replacing C)
         composite, note = effects_composite(model)
         relation_note = note
@@ -349,26 +414,56 @@ def pose_problem(model: ProcessModel, part: PartMeasurement, *, smoothed: Smooth
     dim_ids = tuple(d.id for d, k in zip(model.dimensions, keep, strict=True) if k)
     if smoothed is not None and smoothed.used:  # 2. smoothing
         deviation = smoothed.deviation
-        effects.append(RuleEffect("ewma", f"deviations smoothed over {smoothed.used} earlier part(s), "
-                                  f"λ = {smoothed.lam:g}", dimensions=dim_ids))
+        effects.append(
+            RuleEffect(
+                "ewma",
+                f"deviations smoothed over {smoothed.used} earlier part(s), λ = {smoothed.lam:g}",
+                dimensions=dim_ids,
+            )
+        )
     shift, note = forecast_of(model, part.timestamp, part.report)  # 3. effects: forecast …
     if note is not None:
         deviation = deviation + shift
         notes.append(note)
         moved = tuple(d for d, v in zip(dim_ids, shift[keep], strict=True) if v != 0)
-        effects.append(RuleEffect("forecast", "deviations forecast to the next cycle by the model's [effects] "
-                                  "(drift, wear)", dimensions=moved))
-    problem = (raw if deviation is part.deviation
-               else CorrectionProblem.from_part(model, dataclasses.replace(part, deviation=deviation), composite))
+        effects.append(
+            RuleEffect(
+                "forecast",
+                "deviations forecast to the next cycle by the model's [effects] (drift, wear)",
+                dimensions=moved,
+            )
+        )
+    problem = (
+        raw
+        if deviation is part.deviation
+        else CorrectionProblem.from_part(model, dataclasses.replace(part, deviation=deviation), composite)
+    )
     if relation_note is not None:
         notes.append(relation_note)
     if problem.circles is not None and deviation is not part.deviation:
-        notes.append(Note("position zones are corrected on their components as measured (the smoothing and the "
-                          "forecast act on the other dimensions only)", None, "zone"))
+        notes.append(
+            Note(
+                "position zones are corrected on their components as measured (the smoothing and the "
+                "forecast act on the other dimensions only)",
+                None,
+                "zone",
+            )
+        )
     if problem.polygon > 0:
-        notes.append(Note(f"position zones solved on inscribed polygons: their margins are within "
-                          f"{problem.polygon:.2g} {model.unit} of the circle's (every margin shown is the circle's)",
-                          SourceLocation(model.source, key="dimensions"), "zone"))
+        notes.append(
+            Note(
+                f"position zones solved on inscribed polygons: their margins are within "
+                f"{problem.polygon:.2g} {model.unit} of the circle's (every margin shown is the circle's)",
+                SourceLocation(model.source, key="dimensions"),
+                "zone",
+            )
+        )
     policy = policy if policy is not None else policy_of(model, problem.rows or problem.dimension_ids, cumulative)
-    return pose_policy(problem, policy, measured=measured, effects=tuple(effects), notes=tuple(notes),
-                       held=held if held.any() else None)
+    return pose_policy(
+        problem,
+        policy,
+        measured=measured,
+        effects=tuple(effects),
+        notes=tuple(notes),
+        held=held if held.any() else None,
+    )

@@ -45,19 +45,34 @@ Mask = npt.NDArray[np.bool_]
 def _zero_result(problem: CorrectionProblem, optimizer: str, status: str, message: str) -> OptimizeResult:
     x = np.zeros(problem.n_registers)
     budget = problem.margin_before
-    return OptimizeResult(x=x, margin_before=budget, margin_after=budget, norm=0.0, optimizer=optimizer,
-                          evaluations=0, seconds=0.0, status=status, message=message,
-                          binding=problem.binding(x))
+    return OptimizeResult(
+        x=x,
+        margin_before=budget,
+        margin_after=budget,
+        norm=0.0,
+        optimizer=optimizer,
+        evaluations=0,
+        seconds=0.0,
+        status=status,
+        message=message,
+        binding=problem.binding(x),
+    )
 
 
 def _inside(values: Array, lower: Array, upper: Array) -> Mask:
     return (values >= lower - 1e-12) & (values <= upper + 1e-12)
 
 
-def recommend(posed: PosedProblem, solve: Callable[[CorrectionProblem], OptimizeResult], *,
-              optimizer: str = "exact", names: Mapping[str, str] | None = None,
-              registers: Mapping[str, str] | None = None, unit: str = "",
-              draft: str | None = None) -> Recommendation:
+def recommend(
+    posed: PosedProblem,
+    solve: Callable[[CorrectionProblem], OptimizeResult],
+    *,
+    optimizer: str = "exact",
+    names: Mapping[str, str] | None = None,
+    registers: Mapping[str, str] | None = None,
+    unit: str = "",
+    draft: str | None = None,
+) -> Recommendation:
     """The rules after the solve, around ``solve(posed.guarded)``.
 
     A draft model (``draft``: its file) holds before any rule or solve (:func:`draft_hold`).
@@ -109,47 +124,68 @@ def recommend(posed: PosedProblem, solve: Callable[[CorrectionProblem], Optimize
 
     xg = apply_gain(x, policy.gain, problem.resolution)
     if np.any(xg != x):
-        rules.append(RuleEffect("gain", "only the feedback fraction of the optimum is applied",
-                                registers=tuple(ids[xg != x])))
+        rules.append(
+            RuleEffect("gain", "only the feedback fraction of the optimum is applied", registers=tuple(ids[xg != x]))
+        )
     x = xg
 
     # no harm: the exact triage keeps every dimension measured in tolerance in it inside its optimum
     # (CorrectionProblem.floor); this checks the answer of any optimiser and refuses a harmful one
     triaged = result.extra.get("triage")
     if isinstance(triaged, dict) and triaged.get("refused"):
-        rules.append(RuleEffect("no_harm", "not even the dimensions measured in tolerance can all be kept in it "
-                                "within the register limits: nothing changed"))
+        rules.append(
+            RuleEffect(
+                "no_harm",
+                "not even the dimensions measured in tolerance can all be kept in it "
+                "within the register limits: nothing changed",
+            )
+        )
         x = np.zeros_like(x)
     harmed = harmed_columns(problem, x)  # a position zone as a whole, never facet by facet
     if harmed.any():
         kept = tuple(dims[harmed])
-        rules.append(RuleEffect("no_harm", f"the correction would move {label(kept)} (measured in tolerance) out "
-                                "of it: nothing changed", dimensions=kept))
+        rules.append(
+            RuleEffect(
+                "no_harm",
+                f"the correction would move {label(kept)} (measured in tolerance) out of it: nothing changed",
+                dimensions=kept,
+            )
+        )
         x = np.zeros_like(x)
         given_up = ()
     elif given_up and isinstance(triaged, dict) and triaged.get("held"):
-        rules.append(RuleEffect("no_harm", f"the triage kept the {triaged['held']} dimension(s) measured in "
-                                "tolerance in it and gave up only what no such correction brings in"))
+        rules.append(
+            RuleEffect(
+                "no_harm",
+                f"the triage kept the {triaged['held']} dimension(s) measured in "
+                "tolerance in it and gave up only what no such correction brings in",
+            )
+        )
     out_after = ~_inside(problem.predicted(x), lower, upper)  # read from the answer applied (gain included)
     given_up = tuple(d for d, out in zip(dims, out_after, strict=True) if out and d in set(given_up))
     if given_up:
-        rules.append(RuleEffect("given_up", "no setup correction brings these into tolerance: they need the NC "
-                                "program or the process", dimensions=given_up))
+        rules.append(
+            RuleEffect(
+                "given_up",
+                "no setup correction brings these into tolerance: they need the NC program or the process",
+                dimensions=given_up,
+            )
+        )
 
     verdict = "apply"
     if not np.any(x):
         verdict = "hold"
     elif in_dead_band(x, policy.dead_band):
-        rules.append(RuleEffect("dead_band", "every change is within its dead band: hold",
-                                registers=tuple(ids[x != 0])))
+        rules.append(
+            RuleEffect("dead_band", "every change is within its dead band: hold", registers=tuple(ids[x != 0]))
+        )
         x = np.zeros_like(x)
         verdict = "hold"
 
     at = (x != 0) & ((x >= guarded.ub - 1e-12) | (x <= guarded.lb + 1e-12))
     at_limit = tuple(ids[at])
     if at_limit:
-        rules.append(RuleEffect("clamp", "change at the register's per-step or cumulative limit",
-                                registers=at_limit))
+        rules.append(RuleEffect("clamp", "change at the register's per-step or cumulative limit", registers=at_limit))
     solved = True
     if result.status in STOPPED:
         stopped = stopped_rule(result, recommended=verdict == "apply")
@@ -167,12 +203,15 @@ def draft_hold(posed: PosedProblem, model_file: str, optimizer: str = "exact") -
     rule ``draft`` and the alarm name the model file and the key to remove; the verdict
     is ``hold`` (the hold conventions: exit status 0, an alarm on stderr, offsets of 0).
     """
-    message = (f"edit the model (draft): {model_file} is a scaffold whose relations are a guess; check which "
-               f"registers move which feature and with which weight, then remove '{DRAFT_KEY}' from its [process] "
-               "table")
+    message = (
+        f"edit the model (draft): {model_file} is a scaffold whose relations are a guess; check which "
+        f"registers move which feature and with which weight, then remove '{DRAFT_KEY}' from its [process] "
+        "table"
+    )
     result = _zero_result(posed.problem, optimizer, "draft", f"hold: {message}")
-    return Recommendation("hold", result.x, result, posed.guarded, (RuleEffect("draft", message),),
-                          alarm=f"DRAFT MODEL: {message}")
+    return Recommendation(
+        "hold", result.x, result, posed.guarded, (RuleEffect("draft", message),), alarm=f"DRAFT MODEL: {message}"
+    )
 
 
 def stopped_rule(result: OptimizeResult, *, recommended: bool) -> RuleEffect:
@@ -188,25 +227,40 @@ def stopped_rule(result: OptimizeResult, *, recommended: bool) -> RuleEffect:
     reason = where.get("reason", "") if isinstance(where, dict) else ""
     at = f" (the {stage} stage stopped)" if stage else ""
     if not recommended:
-        what = ("not solved within the time limit" if result.status == "time_limit"
-                else f"not solved: the solver failed{f' ({reason})' if reason else ''}")
-        return RuleEffect("not_solved", f"{what}{at}: no proven correction, nothing is recommended (this is not "
-                          "'no change needed'); allow more time (--time-limit) or check the model")
+        what = (
+            "not solved within the time limit"
+            if result.status == "time_limit"
+            else f"not solved: the solver failed{f' ({reason})' if reason else ''}"
+        )
+        return RuleEffect(
+            "not_solved",
+            f"{what}{at}: no proven correction, nothing is recommended (this is not "
+            "'no change needed'); allow more time (--time-limit) or check the model",
+        )
     ratio = result.extra.get("norm_ratio_max")
     certified = []
     if stage != "least norm" and result.bound is not None and np.isfinite(result.bound):
-        certified.append(f"the error budget {result.margin_after:+.4f} is within "
-                         f"{max(result.bound - result.margin_after, 0.0):.4f} of the best possible (LP bound "
-                         f"{result.bound:+.4f})")
+        certified.append(
+            f"the error budget {result.margin_after:+.4f} is within "
+            f"{max(result.bound - result.margin_after, 0.0):.4f} of the best possible (LP bound "
+            f"{result.bound:+.4f})"
+        )
     if isinstance(ratio, float) and np.isfinite(ratio):
         certified.append(f"the correction's weighted norm is at most {ratio:.3f}× the least norm")
     first = "solve stopped by the time limit" if result.status == "time_limit" else "solve stopped by a solver error"
-    return RuleEffect("stopped", f"{first}{at}: {result.message}"
-                      + (f"; certified: {' and '.join(certified)}" if certified else ""))
+    return RuleEffect(
+        "stopped", f"{first}{at}: {result.message}" + (f"; certified: {' and '.join(certified)}" if certified else "")
+    )
 
 
-def beyond_band(posed: PosedProblem, bad: Mask, optimizer: str, label: Callable[[Iterable[str]], str],
-                registers: Mapping[str, str], unit: str) -> Recommendation | None:
+def beyond_band(
+    posed: PosedProblem,
+    bad: Mask,
+    optimizer: str,
+    label: Callable[[Iterable[str]], str],
+    registers: Mapping[str, str],
+    unit: str,
+) -> Recommendation | None:
     """The decision on a part with deviations beyond the reject band (``bad``), before any solve.
 
     * **gross** — a deviation whose residual after the best correction of the *other*
@@ -246,23 +300,37 @@ def beyond_band(posed: PosedProblem, bad: Mask, optimizer: str, label: Callable[
         over = moves & ((x > problem.ub + h / 2) | (x < problem.lb - h / 2)) & (np.abs(x) >= h)
         if over.any():
             digits = max(0, int(-np.floor(np.log10(h) + 1e-9)))
-            parts = [f"{registers.get(r, r)} looks off by {v:+.{digits}f}{f' {unit}' if unit else ''}; "
-                     + ("fixed in the model" if f else f"beyond the per-step limit {max(abs(lo), hi):g}")
-                     for r, v, lo, hi, f in zip(ids[over], x[over], problem.lb[over], problem.ub[over],
-                                                fixed[over], strict=True)]
-            setup = RuleEffect("setup_error", "; ".join(parts) + f" (it explains {label(dims[explained])}): a "
-                               "register entered wrong? no correction — check it at the control",
-                               registers=tuple(ids[over]), dimensions=tuple(dims[explained]))
+            parts = [
+                f"{registers.get(r, r)} looks off by {v:+.{digits}f}{f' {unit}' if unit else ''}; "
+                + ("fixed in the model" if f else f"beyond the per-step limit {max(abs(lo), hi):g}")
+                for r, v, lo, hi, f in zip(
+                    ids[over], x[over], problem.lb[over], problem.ub[over], fixed[over], strict=True
+                )
+            ]
+            setup = RuleEffect(
+                "setup_error",
+                "; ".join(parts) + f" (it explains {label(dims[explained])}): a "
+                "register entered wrong? no correction — check it at the control",
+                registers=tuple(ids[over]),
+                dimensions=tuple(dims[explained]),
+            )
     rules = [e for e in posed.effects if e.rule in ("ewma", "forecast")]
     if gross.any():
         gross_ids = tuple(dims[gross])
-        alarm = (f"REJECT: {len(gross_ids)} dimension(s) beyond the reject band that no setup correction explains: "
-                 f"{label(gross_ids)} (a broken tool, a bad measurement or a wrong part?) — no correction; check "
-                 "the part and the measurement")
+        alarm = (
+            f"REJECT: {len(gross_ids)} dimension(s) beyond the reject band that no setup correction explains: "
+            f"{label(gross_ids)} (a broken tool, a bad measurement or a wrong part?) — no correction; check "
+            "the part and the measurement"
+        )
         if setup is not None:
             alarm += f"; also {setup.message.split(' (it explains')[0]}"
-        rules.append(RuleEffect("reject", "deviation beyond the reject band, not explained by any setup "
-                                "correction: no correction", dimensions=gross_ids))
+        rules.append(
+            RuleEffect(
+                "reject",
+                "deviation beyond the reject band, not explained by any setup correction: no correction",
+                dimensions=gross_ids,
+            )
+        )
         rules += [setup] if setup is not None else []
         result = _zero_result(problem, optimizer, "rejected", alarm)
         return Recommendation("reject", result.x, result, problem, tuple(rules), alarm=alarm)

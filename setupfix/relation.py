@@ -149,7 +149,10 @@ def _relation_matrices(model: ProcessModel) -> RelationMatrices:
         for fid, weight in dim.features.items():
             r_fd[f_ix[fid], d] = weight
     return RelationMatrices(
-        R_MW=_read_only(r_mw), R_WF=_read_only(r_wf), R_TF=_read_only(r_tf), R_FD=_read_only(r_fd),
+        R_MW=_read_only(r_mw),
+        R_WF=_read_only(r_wf),
+        R_TF=_read_only(r_tf),
+        R_FD=_read_only(r_fd),
         machines=[m.id for m in model.machines],
         wks=[w.id for w in model.wks],
         tools=[t.id for t in model.tools],
@@ -186,8 +189,9 @@ def composite_matrix(r_wf: Array, r_tf: Array, r_fd: Array) -> Array:
     return out
 
 
-def predict_features(w: Array, t: Array, r_wf: Array, r_tf: Array,
-                     m: Array | None = None, r_mw: Array | None = None) -> Array:
+def predict_features(
+    w: Array, t: Array, r_wf: Array, r_tf: Array, m: Array | None = None, r_mw: Array | None = None
+) -> Array:
     """Feature shifts F = (M · R_MW + W) · R_WF + T · R_TF (eq. 3).
 
     Parameters
@@ -271,8 +275,9 @@ def null_space_directions(composite: Array, tol: float = 1e-9) -> Array:
     return rows
 
 
-def feature_shifts(translation: Array, axis_unit: Array, rotation: Array, positions: Array, length: Array,
-                   spindle: Array) -> Array:
+def feature_shifts(
+    translation: Array, axis_unit: Array, rotation: Array, positions: Array, length: Array, spindle: Array
+) -> Array:
     """Displacement of every feature per unit change of every register component.
 
     p_f = Σ_W A_fW t_W + Σ_W c_fW θ_W (π/180) (s × x_f) + Σ_T w_fT h_T s (spec, *Multi-axis
@@ -301,8 +306,11 @@ def feature_shifts(translation: Array, axis_unit: Array, rotation: Array, positi
         Feature displacement per unit of each component [unit per unit, unit per degree].
     """
     lever = np.cross(spindle, np.nan_to_num(positions)) * (np.pi / 180.0)  # (F, 3): s × x_f per degree
-    return (translation[:, :, None] * axis_unit[:, None, :] + rotation[:, :, None] * lever[None, :, :]
-            + length[:, :, None] * spindle[None, None, :])
+    return (
+        translation[:, :, None] * axis_unit[:, None, :]
+        + rotation[:, :, None] * lever[None, :, :]
+        + length[:, :, None] * spindle[None, None, :]
+    )
 
 
 def projected_composite(shifts: Array, radius: Array, r_fd: Array, directions: Array, size: Array) -> Array:
@@ -349,8 +357,9 @@ def _multi_axis_matrices(model: ProcessModel) -> RelationMatrices:
                 length[r, f] = feat.tools.get(reg.base, 0.0)
         if reg.component in _AXES:
             axis_unit[r, _AXES.index(reg.component)] = 1.0
-    positions = np.array([f.position if f.position is not None else (np.nan,) * 3 for f in model.features],
-                         dtype=float).reshape(n_f, 3)
+    positions = np.array(
+        [f.position if f.position is not None else (np.nan,) * 3 for f in model.features], dtype=float
+    ).reshape(n_f, 3)
     spindle = np.eye(3)[_AXES.index(model.spindle)]
     shifts = feature_shifts(translation, axis_unit, rotation, positions, length, spindle)
     dims = model.dimensions
@@ -358,8 +367,9 @@ def _multi_axis_matrices(model: ProcessModel) -> RelationMatrices:
     for d, dim in enumerate(dims):
         for fid, weight in dim.features.items():
             r_fd[f_ix[fid], d] = weight
-    directions = np.array([dim.direction if dim.direction is not None else (0.0, 0.0, 0.0) for dim in dims],
-                          dtype=float).reshape(len(dims), 3)
+    directions = np.array(
+        [dim.direction if dim.direction is not None else (0.0, 0.0, 0.0) for dim in dims], dtype=float
+    ).reshape(len(dims), 3)
     size = np.array([dim.kind == "size" for dim in dims], dtype=bool)
     composite = projected_composite(shifts, radius, r_fd, directions, size)
     zones = None
@@ -369,18 +379,22 @@ def _multi_axis_matrices(model: ProcessModel) -> RelationMatrices:
         zones = np.zeros((n_r, len(dims), 2))
         for k in range(2):
             plane = np.array([np.eye(3)[_AXES.index(dim.plane[k])] if dim.zone else np.zeros(3) for dim in dims])
-            zones[:, :, k] = np.where(is_zone[None, :],
-                                      projected_composite(shifts, radius, r_fd, plane, np.zeros(len(dims), bool)),
-                                      0.0)
+            zones[:, :, k] = np.where(
+                is_zone[None, :], projected_composite(shifts, radius, r_fd, plane, np.zeros(len(dims), bool)), 0.0
+            )
         zones = _read_only(zones)
     return RelationMatrices(
         R_MW=_read_only(np.zeros((0, len(model.wks)))),
-        R_WF=_read_only(translation[:len(model.wks)] + rotation[:len(model.wks)]),
-        R_TF=_read_only(length[len(model.wks):] + radius[len(model.wks):]),
+        R_WF=_read_only(translation[: len(model.wks)] + rotation[: len(model.wks)]),
+        R_TF=_read_only(length[len(model.wks) :] + radius[len(model.wks) :]),
         R_FD=_read_only(r_fd),
-        machines=[], wks=[w.id for w in model.wks], tools=[t.id for t in model.tools],
-        features=[f.id for f in model.features], dimensions=[d.id for d in dims],
-        multi=_read_only(composite), zones=zones,
+        machines=[],
+        wks=[w.id for w in model.wks],
+        tools=[t.id for t in model.tools],
+        features=[f.id for f in model.features],
+        dimensions=[d.id for d in dims],
+        multi=_read_only(composite),
+        zones=zones,
     )
 
 

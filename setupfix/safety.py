@@ -35,8 +35,21 @@ import numpy.typing as npt
 
 from setupfix.optimize import CorrectionProblem, OptimizeResult
 
-__all__ = ["RuleEffect", "Policy", "Recommendation", "reject_mask", "guard_limits", "cumulative_bounds",
-           "apply_gain", "harmed_mask", "no_harm_floor", "in_dead_band", "VERDICTS", "STOPPED", "short_list"]
+__all__ = [
+    "RuleEffect",
+    "Policy",
+    "Recommendation",
+    "reject_mask",
+    "guard_limits",
+    "cumulative_bounds",
+    "apply_gain",
+    "harmed_mask",
+    "no_harm_floor",
+    "in_dead_band",
+    "VERDICTS",
+    "STOPPED",
+    "short_list",
+]
 
 Array = npt.NDArray[np.float64]
 Mask = npt.NDArray[np.bool_]
@@ -69,8 +82,12 @@ class RuleEffect:
     dimensions: tuple[str, ...] = ()
 
     def to_json(self) -> dict[str, object]:
-        return {"rule": self.rule, "message": self.message, "registers": list(self.registers),
-                "dimensions": list(self.dimensions)}
+        return {
+            "rule": self.rule,
+            "message": self.message,
+            "registers": list(self.registers),
+            "dimensions": list(self.dimensions),
+        }
 
 
 @dataclass(frozen=True)
@@ -101,9 +118,15 @@ class Policy:
     def neutral(cls, problem: CorrectionProblem) -> Policy:
         """No rule active: dead band 0, gain 1, no limits but the problem's, reject band ∞."""
         n, m = problem.n_registers, problem.deviation.shape[0]
-        return cls(dead_band=np.zeros(n), gain=np.ones(n), cumulative_limit=np.full(n, np.inf),
-                   cumulative=np.zeros(n), cost=np.ones(n), reject_band=np.full(m, np.inf),
-                   uncertainty=np.zeros(m))
+        return cls(
+            dead_band=np.zeros(n),
+            gain=np.ones(n),
+            cumulative_limit=np.full(n, np.inf),
+            cumulative=np.zeros(n),
+            cost=np.ones(n),
+            reject_band=np.full(m, np.inf),
+            uncertainty=np.zeros(m),
+        )
 
 
 @dataclass

@@ -21,9 +21,15 @@ from setupfix.search import generator
 __all__ = ["simulate_deviations", "HiddenEffect", "ShopSimulator", "SimulatedSeries"]
 
 
-def simulate_deviations(model: ProcessModel, n_sets: int, *, w1: float = 0.03, w2: float = 0.02,
-                        seed: int | None = None, decimals: int | None = 4,
-                        ) -> tuple[npt.NDArray[np.float64], npt.NDArray[np.float64]]:
+def simulate_deviations(
+    model: ProcessModel,
+    n_sets: int,
+    *,
+    w1: float = 0.03,
+    w2: float = 0.02,
+    seed: int | None = None,
+    decimals: int | None = 4,
+) -> tuple[npt.NDArray[np.float64], npt.NDArray[np.float64]]:
     """Draw measurement sets by eqs. 12–13.
 
     Parameters
@@ -55,4 +61,3 @@ def simulate_deviations(model: ProcessModel, n_sets: int, *, w1: float = 0.03, w
     if decimals is not None:
         dev = np.round(dev, decimals)
     return dev, setup
-

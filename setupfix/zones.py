@@ -16,8 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
-__all__ = ["ZONE_TOLERANCE_MM", "MAX_SIDES", "Circles", "polygon_sides", "facet_rows", "zone_margins",
-           "polygon_error"]
+__all__ = ["ZONE_TOLERANCE_MM", "MAX_SIDES", "Circles", "polygon_sides", "facet_rows", "zone_margins", "polygon_error"]
 
 Array = npt.NDArray[np.float64]
 

@@ -59,7 +59,7 @@ def steps(page: Path) -> list[Step]:
         j = i + 1
         while j < len(lines) and not lines[j].startswith(ticks):
             j += 1
-        body = lines[i + 1:j]
+        body = lines[i + 1 : j]
         if pending_file is not None:
             out.append(Step(start + 1, None, "\n".join(body) + "\n", pending_file))
         elif info == "console":
@@ -96,11 +96,24 @@ def matches(expected: str, actual: str) -> bool:
 
 def run(command: str, cwd: Path) -> str:
     """Run one documented command in ``cwd`` with this checkout's package; its output, both streams."""
-    env = {**os.environ, "PYTHONPATH": str(ROOT), "PYTHONUNBUFFERED": "1", "COLUMNS": "100",
-           "SETUPFIX_DB": "", "PATH": f"{Path(sys.executable).parent}{os.pathsep}{os.environ.get('PATH', '')}"}
+    env = {
+        **os.environ,
+        "PYTHONPATH": str(ROOT),
+        "PYTHONUNBUFFERED": "1",
+        "COLUMNS": "100",
+        "SETUPFIX_DB": "",
+        "PATH": f"{Path(sys.executable).parent}{os.pathsep}{os.environ.get('PATH', '')}",
+    }
     env.pop("SETUPFIX_DB")
-    done = subprocess.run(["bash", "-c", command], cwd=cwd, env=env, stdout=subprocess.PIPE,
-                          stderr=subprocess.STDOUT, text=True, timeout=120)
+    done = subprocess.run(
+        ["bash", "-c", command],
+        cwd=cwd,
+        env=env,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.STDOUT,
+        text=True,
+        timeout=120,
+    )
     return done.stdout
 
 

@@ -3,9 +3,8 @@
 from __future__ import annotations
 
 import re
-from contextlib import contextmanager
-
 from collections.abc import Callable
+from contextlib import contextmanager
 from pathlib import Path
 
 import numpy as np
@@ -42,10 +41,12 @@ DERIVED = ["line", "part_no", "nominal", "actual", "deviation", "lower", "upper"
 
 def derived(table: pd.DataFrame) -> pd.DataFrame:
     """The numbers of a canonical table, without text taken from the report."""
-    out = pd.DataFrame({
-        "line": table["source"].str.rsplit(":", n=1).str[-1].astype(int),
-        "part_no": pd.factorize(table["part"])[0] + 1,
-    })
+    out = pd.DataFrame(
+        {
+            "line": table["source"].str.rsplit(":", n=1).str[-1].astype(int),
+            "part_no": pd.factorize(table["part"])[0] + 1,
+        }
+    )
     for col in DERIVED[2:]:
         out[col] = table[col]
     return out

@@ -42,8 +42,13 @@ def _features(rng: np.random.Generator, station: str) -> dict[str, dict]:
         comp = {"x": -1.0, "y": 1.0, "z": -1.0, "c": -1.0} if tombstone else dict.fromkeys("xyzc", 1.0)
         length = {"T1": 1.0} if i % 3 == 0 else ({"T2": 1.0} if i % 3 == 1 else {})
         radius = {"T1": float(rng.choice([-1.0, 1.0]))} if i % 2 == 0 else {}
-        feats[f"{station}F{i}"] = {"pos": pos, "comp": comp, "length": length, "radius": radius,
-                                   "wks": f"W{station[1]}"}
+        feats[f"{station}F{i}"] = {
+            "pos": pos,
+            "comp": comp,
+            "length": length,
+            "radius": radius,
+            "wks": f"W{station[1]}",
+        }
     return feats
 
 
@@ -60,13 +65,38 @@ def _dimensions(rng: np.random.Generator, station: str, feats: dict[str, dict]) 
             axis = AXES[int(rng.integers(3))]
             direction, n = axis, UNIT[axis]
         tol = float(rng.choice([0.04, 0.05, 0.08]))
-        out.append({"name": f"{station} L{k}", "kind": "length", "features": fs, "n": n, "direction": direction,
-                    "lower": -tol, "upper": tol})
-    out.append({"name": f"{station} S0", "kind": "size", "features": {ids[0]: 2.0}, "n": None, "direction": None,
-                "lower": -0.03, "upper": 0.03})
+        out.append(
+            {
+                "name": f"{station} L{k}",
+                "kind": "length",
+                "features": fs,
+                "n": n,
+                "direction": direction,
+                "lower": -tol,
+                "upper": tol,
+            }
+        )
+    out.append(
+        {
+            "name": f"{station} S0",
+            "kind": "size",
+            "features": {ids[0]: 2.0},
+            "n": None,
+            "direction": None,
+            "lower": -0.03,
+            "upper": 0.03,
+        }
+    )
     for k, plane in enumerate((("X", "Y"), ("X", "Z"))):
-        out.append({"name": f"{station} Z{k}", "kind": "position", "features": {ids[4 + k]: 1.0}, "plane": plane,
-                    "diameter": float(rng.choice([0.08, 0.1, 0.14]))})
+        out.append(
+            {
+                "name": f"{station} Z{k}",
+                "kind": "position",
+                "features": {ids[4 + k]: 1.0},
+                "plane": plane,
+                "diameter": float(rng.choice([0.08, 0.1, 0.14])),
+            }
+        )
     return out
 
 
@@ -89,9 +119,18 @@ def change_matrix(registers: list[str], feats: dict, dims: list[dict]) -> None:
     """Each dimension's column(s): d_q = Σ_f w_qf (n_q·p_f + Σ ρ r) per unit register (sizes: ρ only)."""
     for d in dims:
         if d["kind"] == "position":
-            d["columns"] = np.array([[sum(w * (UNIT[a] @ _shift(feats[f], r)[0] + _shift(feats[f], r)[1])
-                                          for f, w in d["features"].items()) for a in d["plane"]]
-                                     for r in registers])  # (R, 2)
+            d["columns"] = np.array(
+                [
+                    [
+                        sum(
+                            w * (UNIT[a] @ _shift(feats[f], r)[0] + _shift(feats[f], r)[1])
+                            for f, w in d["features"].items()
+                        )
+                        for a in d["plane"]
+                    ]
+                    for r in registers
+                ]
+            )  # (R, 2)
             continue
         col = []
         for r in registers:
@@ -109,8 +148,9 @@ def make_fixture(seed: int) -> Fixture:
     dims = _dimensions(rng, "P1", feats) + _dimensions(rng, "P2", feats)
     registers = [f"W{s}.{c}" for s in "12" for c in "XYZC"] + ["T1", "T1.R", "T2"]
     steps = np.array([ROT_RES if r.endswith(".C") else RES for r in registers])
-    limits = np.array([ROT_LIMIT if r.endswith(".C") else RADIUS_LIMIT if r.endswith(".R") else LIMIT
-                       for r in registers])
+    limits = np.array(
+        [ROT_LIMIT if r.endswith(".C") else RADIUS_LIMIT if r.endswith(".R") else LIMIT for r in registers]
+    )
     change_matrix(registers, feats, dims)
     error = rng.uniform(-0.6, 0.6, len(registers)) * limits  # a setup error the registers can undo
     rows = []
@@ -127,15 +167,28 @@ def make_fixture(seed: int) -> Fixture:
 
 
 def _toml(feats: dict, dims: list[dict]) -> str:
-    out = ["[process]", 'name = "generated two-station fixture"', 'axes = ["X", "Y", "Z"]', "rotation = true",
-           f"resolution = {RES}", f"limit = {LIMIT}", f"rotation_limit = {ROT_LIMIT}",
-           f"rotation_resolution = {ROT_RES}", "",
-           '[wks.W1]\nregister = "G54"', '[wks.W2]\nregister = "G55"',
-           f'[tools.T1]\nregister = "H1"\nradius = "D1"\nradius_limit = {RADIUS_LIMIT}', '[tools.T2]\nregister = "H2"']
+    out = [
+        "[process]",
+        'name = "generated two-station fixture"',
+        'axes = ["X", "Y", "Z"]',
+        "rotation = true",
+        f"resolution = {RES}",
+        f"limit = {LIMIT}",
+        f"rotation_limit = {ROT_LIMIT}",
+        f"rotation_resolution = {ROT_RES}",
+        "",
+        '[wks.W1]\nregister = "G54"',
+        '[wks.W2]\nregister = "G55"',
+        f'[tools.T1]\nregister = "H1"\nradius = "D1"\nradius_limit = {RADIUS_LIMIT}',
+        '[tools.T2]\nregister = "H2"',
+    ]
     for fid, f in feats.items():
         comp = ", ".join(f"{k} = {v}" for k, v in f["comp"].items())
-        out += [f"[features.{fid}]", f"wks = {{ {f['wks']} = {{ {comp} }} }}",
-                f"position = [{f['pos'][0]}, {f['pos'][1]}, {f['pos'][2]}]"]
+        out += [
+            f"[features.{fid}]",
+            f"wks = {{ {f['wks']} = {{ {comp} }} }}",
+            f"position = [{f['pos'][0]}, {f['pos'][1]}, {f['pos'][2]}]",
+        ]
         if f["length"]:
             out.append("tools = { " + ", ".join(f"{t} = {w}" for t, w in f["length"].items()) + " }")
         if f["radius"]:
@@ -144,8 +197,12 @@ def _toml(feats: dict, dims: list[dict]) -> str:
         fs = "{ " + ", ".join(f"{f} = {w}" for f, w in d["features"].items()) + " }"
         out += [f"[dimensions.D{i}]", f'name = "{d["name"]}"', f"features = {fs}"]
         if d["kind"] == "position":
-            out += ['kind = "position"', f'components = ["{d["name"]} {d["plane"][0]}", "{d["name"]} {d["plane"][1]}"]',
-                    f'axes = ["{d["plane"][0]}", "{d["plane"][1]}"]', f"diameter = {d['diameter']}"]
+            out += [
+                'kind = "position"',
+                f'components = ["{d["name"]} {d["plane"][0]}", "{d["name"]} {d["plane"][1]}"]',
+                f'axes = ["{d["plane"][0]}", "{d["plane"][1]}"]',
+                f"diameter = {d['diameter']}",
+            ]
             continue
         if d["kind"] == "size":
             out.append('kind = "size"')
@@ -209,7 +266,12 @@ def independent_optimum(fx: Fixture) -> tuple[float, np.ndarray]:
     A = np.array(rows)
     cost = np.zeros(n + 1)
     cost[-1] = -1.0
-    res = milp(cost, constraints=LinearConstraint(A, lo, hi), integrality=np.r_[np.ones(n), 0],
-               bounds=Bounds(np.r_[-kmax, -1.0], np.r_[kmax, 1.0]), options={"mip_rel_gap": 0, "time_limit": 60})
+    res = milp(
+        cost,
+        constraints=LinearConstraint(A, lo, hi),
+        integrality=np.r_[np.ones(n), 0],
+        bounds=Bounds(np.r_[-kmax, -1.0], np.r_[kmax, 1.0]),
+        options={"mip_rel_gap": 0, "time_limit": 60},
+    )
     assert res.status == 0, res.message
     return float(-res.fun), np.rint(res.x[:n]) * fx.steps

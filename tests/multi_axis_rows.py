@@ -8,13 +8,40 @@ from setupfix.offsets import OffsetRow
 __all__ = ["row", "fixture_rows", "SPEC"]
 
 
-def row(id: str, register: str, kind: str, axis: str, delta: float, current: float | None = None, *,
-        offset: str = "geometry", resolution: float = 0.001, unit: str = "mm", number: int | None = None,
-        edge: int | None = None) -> OffsetRow:
+def row(
+    id: str,
+    register: str,
+    kind: str,
+    axis: str,
+    delta: float,
+    current: float | None = None,
+    *,
+    offset: str = "geometry",
+    resolution: float = 0.001,
+    unit: str = "mm",
+    number: int | None = None,
+    edge: int | None = None,
+) -> OffsetRow:
     """One component's row: *add* without ``current``, else *set* with value = current + delta."""
     value = None if current is None else round(current + delta, 9) + 0.0
-    return OffsetRow("r.csv", "P1", id, register, kind, axis, delta, unit, "add" if current is None else "set",
-                     offset, current, value, number, edge, resolution, "apply")
+    return OffsetRow(
+        "r.csv",
+        "P1",
+        id,
+        register,
+        kind,
+        axis,
+        delta,
+        unit,
+        "add" if current is None else "set",
+        offset,
+        current,
+        value,
+        number,
+        edge,
+        resolution,
+        "apply",
+    )
 
 
 #: (component id, kind, axis, delta, current, offset, resolution) of a two-station fixture: G54 and G55 on
@@ -40,16 +67,31 @@ SPEC = [
 REGISTERS = {
     "fanuc": {"W1": "G54", "W2": "G55", "W3": "G54.1 P7", "T5": "H5", "T5.R": "D5", "T12": "H12", "T12.R": "D12"},
     "haas": {"W1": "G54", "W2": "G55", "W3": "G154 P7", "T5": "H5", "T5.R": "D5", "T12": "H12", "T12.R": "D12"},
-    "siemens": {"W1": "G54", "W2": "G55", "W3": "G505", "T5": "T5 D1", "T5.R": "T5 D1", "T12": "T12 D2",
-                "T12.R": "T12 D2"},
-    "heidenhain": {"W1": "PRESET 1", "W2": "PRESET 2", "W3": "PRESET 7", "T5": "T5", "T5.R": "T5", "T12": "T12",
-                   "T12.R": "T12"},
+    "siemens": {
+        "W1": "G54",
+        "W2": "G55",
+        "W3": "G505",
+        "T5": "T5 D1",
+        "T5.R": "T5 D1",
+        "T12": "T12 D2",
+        "T12.R": "T12 D2",
+    },
+    "heidenhain": {
+        "W1": "PRESET 1",
+        "W2": "PRESET 2",
+        "W3": "PRESET 7",
+        "T5": "T5",
+        "T5.R": "T5",
+        "T12": "T12",
+        "T12.R": "T12",
+    },
     "csv": {"W1": "G54", "W2": "G55", "W3": "G54.1 P7", "T5": "H5", "T5.R": "D5", "T12": "H12", "T12.R": "D12"},
 }
 
 
-def fixture_rows(controller: str, mode: str, *, rotation: float | None = None,
-                 wks_only: bool = False) -> list[OffsetRow]:
+def fixture_rows(
+    controller: str, mode: str, *, rotation: float | None = None, wks_only: bool = False
+) -> list[OffsetRow]:
     """The rows of :data:`SPEC` with ``controller``'s registers, *add* or *set*; ``rotation`` replaces W1.C's
     change (None: keep it)."""
     out = []
@@ -59,8 +101,19 @@ def fixture_rows(controller: str, mode: str, *, rotation: float | None = None,
         if cid == "W1.C" and rotation is not None:
             delta = rotation
         key = cid if cid in REGISTERS[controller] else cid.split(".")[0]
-        out.append(row(cid, REGISTERS[controller][key], kind, axis, delta, current if mode == "set" else None,
-                       offset=offset, resolution=resolution, unit="mm"))
+        out.append(
+            row(
+                cid,
+                REGISTERS[controller][key],
+                kind,
+                axis,
+                delta,
+                current if mode == "set" else None,
+                offset=offset,
+                resolution=resolution,
+                unit="mm",
+            )
+        )
     return out
 
 

@@ -38,8 +38,10 @@ def rs274_path() -> Path:
     path = Path(named) if named else CACHE
     if path.is_file() and os.access(path, os.X_OK):
         return path
-    why = (f"LinuxCNC rs274 not found at {path} ({'SETUPFIX_RS274=' + named if named else 'SETUPFIX_RS274 unset'}): "
-           "run .ci/run once, or set SETUPFIX_RS274 to an unpacked linuxcnc-uspace's usr/bin/rs274")
+    why = (
+        f"LinuxCNC rs274 not found at {path} ({'SETUPFIX_RS274=' + named if named else 'SETUPFIX_RS274 unset'}): "
+        "run .ci/run once, or set SETUPFIX_RS274 to an unpacked linuxcnc-uspace's usr/bin/rs274"
+    )
     if os.environ.get("CI"):
         pytest.fail(why)
     pytest.skip(why)
@@ -65,14 +67,26 @@ def run_rs274(program: str, folder: Path, parameters: dict[int, float] | None = 
     (folder / "run.var").write_text("".join(f"{k}\t{v:.6f}\n" for k, v in sorted((parameters or {}).items())))
     (folder / "program.ngc").write_text(program)
     env = {**os.environ, "LD_LIBRARY_PATH": _libraries(binary)}
-    done = subprocess.run([str(binary), "-t", "tool.tbl", "-v", "run.var", "-g", "program.ngc"], cwd=folder,
-                          env=env, capture_output=True, text=True, timeout=60)
+    done = subprocess.run(
+        [str(binary), "-t", "tool.tbl", "-v", "run.var", "-g", "program.ngc"],
+        cwd=folder,
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=60,
+    )
     assert done.returncode == 0, f"rs274 refused the program: {done.stderr.strip() or done.stdout[-2000:]}"
     return re.findall(r'MESSAGE\("(.*)"\)', done.stdout)
 
 
-def read_back(program: str, folder: Path, offsets: list[tuple[int, str]], *, inch: bool = False,
-              parameters: dict[int, float] | None = None) -> dict[tuple[int, str], float]:
+def read_back(
+    program: str,
+    folder: Path,
+    offsets: list[tuple[int, str]],
+    *,
+    inch: bool = False,
+    parameters: dict[int, float] | None = None,
+) -> dict[tuple[int, str], float]:
     """The work offsets ``offsets`` ((P, axis): ``(1, "X")`` = G54 X) after running ``program`` in rs274.
 
     The reads are appended before ``M30`` (values in the program's unit: parameters ×25.4 unless ``inch``).

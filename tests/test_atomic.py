@@ -48,6 +48,7 @@ def test_missing_folder_is_an_export_error(tmp_path):
 
 # -- output targets (issue 10): only '-' or a regular file ----------------------------------------
 
+
 def _fifo(p):
     os.mkfifo(p)
     return p
@@ -68,12 +69,15 @@ def _socket(p):
     return p
 
 
-@pytest.mark.parametrize(("make", "kind"), [
-    (lambda p: (p.mkdir(), p)[1], "folder"),
-    (_fifo, "FIFO"),
-    (_link, "symbolic link"),
-    (_socket, "socket"),
-])
+@pytest.mark.parametrize(
+    ("make", "kind"),
+    [
+        (lambda p: (p.mkdir(), p)[1], "folder"),
+        (_fifo, "FIFO"),
+        (_link, "symbolic link"),
+        (_socket, "socket"),
+    ],
+)
 def test_non_regular_targets_are_refused_and_left_alone(tmp_path, make, kind):
     target = make(tmp_path / "out.csv")
     before = os.lstat(target).st_mode
@@ -111,9 +115,11 @@ def test_existing_file_keeps_its_permissions(tmp_path):
 
 # -- threads: no umask toggling, every file complete -----------------------------------------------
 
+
 def test_many_threads_at_once_get_plain_permissions_and_whole_files(tmp_path):
     old = os.umask(0o027)
     try:
+
         def work(i):
             write_text(tmp_path / f"f{i % 8}.csv", f"{i}\n" * 500)
             plain = tmp_path / f"plain{i}.txt"  # created meanwhile with open(): must see the umask too
@@ -135,12 +141,15 @@ def test_many_threads_at_once_get_plain_permissions_and_whole_files(tmp_path):
 
 # -- stale temporary files of killed writes ---------------------------------------------------------
 
+
 def test_kill_mid_write_leaves_old_content_and_next_write_cleans_up(tmp_path):
     target = tmp_path / "out.csv"
     target.write_text("old\n")
-    code = ("import os, signal, sys; from setupfix.atomic import atomic_write\n"
-            "with atomic_write(sys.argv[1]) as s:\n"
-            "    s.write('half'); s.flush(); os.kill(os.getpid(), signal.SIGKILL)\n")
+    code = (
+        "import os, signal, sys; from setupfix.atomic import atomic_write\n"
+        "with atomic_write(sys.argv[1]) as s:\n"
+        "    s.write('half'); s.flush(); os.kill(os.getpid(), signal.SIGKILL)\n"
+    )
     proc = subprocess.run([sys.executable, "-c", code, str(target)], cwd=ROOT, capture_output=True)
     assert proc.returncode == -signal.SIGKILL
     assert target.read_text() == "old\n"
@@ -157,4 +166,5 @@ def test_kill_mid_write_leaves_old_content_and_next_write_cleans_up(tmp_path):
     write_text(target, "new\n")
     assert target.read_text() == "new\n"
     assert sorted(p.name for p in tmp_path.iterdir() if p.name.endswith(".tmp")) == sorted(
-        [live.name, legacy_new.name, other.name])
+        [live.name, legacy_new.name, other.name]
+    )

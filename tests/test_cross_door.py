@@ -30,14 +30,20 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-
 from conftest import SAMPLES
 
 from setupfix.cli import main
 from setupfix.model import load_model
 from setupfix.pipeline.correct import correct_report
-from setupfix.pipeline.requests import (CorrectRequest, CurrentOffsets, CycleOptions, History, ReadOptions,
-                                        SolveOptions, load_thermal)
+from setupfix.pipeline.requests import (
+    CorrectRequest,
+    CurrentOffsets,
+    CycleOptions,
+    History,
+    ReadOptions,
+    SolveOptions,
+    load_thermal,
+)
 from setupfix.store import open_store
 
 GUIDE = SAMPLES / "guide_pins"
@@ -97,9 +103,13 @@ def generated_reports(folder: Path, *, seed: int = 20, n: int = 6, stations: boo
                 dev = 0.0004 * e / 0.02
             if k == n - 1 and row["characteristic"] == "P1 D1":
                 dev = -0.9
-            row = dict(row, deviation=f"{dev:.4f}", actual=f"{float(row['nominal']) + dev:.4f}",
-                       part=f"gen {k + 1:02d}", timestamp=f"2026-11-02T{8 + (10 + 20 * k) // 60:02d}:"
-                                                          f"{(10 + 20 * k) % 60:02d}:00")
+            row = dict(
+                row,
+                deviation=f"{dev:.4f}",
+                actual=f"{float(row['nominal']) + dev:.4f}",
+                part=f"gen {k + 1:02d}",
+                timestamp=f"2026-11-02T{8 + (10 + 20 * k) // 60:02d}:{(10 + 20 * k) % 60:02d}:00",
+            )
             if stations:
                 row["part"] = "A" + row.pop("station")[1:]
             rows.append(row)
@@ -110,8 +120,12 @@ def generated_reports(folder: Path, *, seed: int = 20, n: int = 6, stations: boo
 def current_offsets(path: Path) -> Path:
     """The guide-pins controller's current offsets (absolute rows, the wear totals of the tools)."""
     regs = ["G54", "G55", "G56", "G57", "G58", "G59", "G54.1P1", "G54.1P2", "H5", "H23"]
-    path.write_text("register,value\n" + "".join(f"{r},{-400 + i * 0.25:.4f}\n" for i, r in enumerate(regs[:-2]))
-                    + "H5,0.0120\nH23,-0.0040\n", encoding="utf-8")
+    path.write_text(
+        "register,value\n"
+        + "".join(f"{r},{-400 + i * 0.25:.4f}\n" for i, r in enumerate(regs[:-2]))
+        + "H5,0.0120\nH23,-0.0040\n",
+        encoding="utf-8",
+    )
     return path
 
 
@@ -124,8 +138,10 @@ def thermal(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Path]:
     saved = d / "drift.json"
     fit_file(SAMPLES / "thermal" / "train_variable.csv", "grey-ls", target="error_z", unit="mm", out=saved)
     log = d / "temperatures.log.csv"
-    log.write_text((SAMPLES / "thermal" / "test_variable.csv").read_text(encoding="utf-8")
-                   .replace("2026-01-05T", "2026-11-02T"), encoding="utf-8")
+    log.write_text(
+        (SAMPLES / "thermal" / "test_variable.csv").read_text(encoding="utf-8").replace("2026-01-05T", "2026-11-02T"),
+        encoding="utf-8",
+    )
     return saved, log
 
 
@@ -162,10 +178,15 @@ class Case:
         if db is not None:
             with open_store(db) as store:
                 history = History.from_store(model, store)
-        return CorrectRequest(model, ReadOptions(columns=str(self.columns) if self.columns else None),
-                              CycleOptions.of(self.stations), SolveOptions(),
-                              CurrentOffsets.read(self.current, model) if self.current else None, history,
-                              load_thermal(*self.thermal, at=AT) if self.thermal else None)
+        return CorrectRequest(
+            model,
+            ReadOptions(columns=str(self.columns) if self.columns else None),
+            CycleOptions.of(self.stations),
+            SolveOptions(),
+            CurrentOffsets.read(self.current, model) if self.current else None,
+            history,
+            load_thermal(*self.thermal, at=AT) if self.thermal else None,
+        )
 
 
 # -- the doors ----------------------------------------------------------------------------------
@@ -188,8 +209,9 @@ def door_correct(case: Case, tmp: Path) -> Decisions:
     db = _store_copy(case, tmp, "correct")
     out: Decisions = {}
     for report in case.reports:
-        code, text, err = cli("correct", "--model", case.model, report, "--json", *case.options(),
-                              *(["--store", db] if db else []))
+        code, text, err = cli(
+            "correct", "--model", case.model, report, "--json", *case.options(), *(["--store", db] if db else [])
+        )
         assert code in (0, 5), err
         doc = json.loads(text)
         for part in doc.get("parts", [doc]):
@@ -202,8 +224,19 @@ def door_batch(case: Case, tmp: Path) -> Decisions:
     folder = case.reports[0].parent
     assert all(r.parent == folder for r in case.reports)
     offsets = tmp / "batch.csv"
-    code, _, err = cli("batch", folder, "--model", case.model, "--out", offsets, "--settle", "0", "--json",
-                       *case.options(), *(["--store", db] if db else []))
+    code, _, err = cli(
+        "batch",
+        folder,
+        "--model",
+        case.model,
+        "--out",
+        offsets,
+        "--settle",
+        "0",
+        "--json",
+        *case.options(),
+        *(["--store", db] if db else []),
+    )
     assert code in (0, 4, 5), err  # 4: a file beside the reports that is none (PiWeb's characteristics)
     found: dict[tuple[str, str], tuple[str, dict[str, float]]] = {}
     for row in _rows(offsets):
@@ -223,11 +256,16 @@ def door_session(case: Case, tmp: Path) -> Decisions:
     db = _store_copy(case, tmp, "session")
     out: Decisions = {}
     for report in case.reports:
-        opened, unfit = open_report(case.model, report,
-                                    read=ReadOptions(columns=str(case.columns) if case.columns else None),
-                                    cycles=CycleOptions.of(case.stations), solve=SolveOptions(),
-                                    db=StoreRef(str(db)) if db is not None else None,
-                                    current=case.current, thermal=(*case.thermal, AT, None) if case.thermal else None)
+        opened, unfit = open_report(
+            case.model,
+            report,
+            read=ReadOptions(columns=str(case.columns) if case.columns else None),
+            cycles=CycleOptions.of(case.stations),
+            solve=SolveOptions(),
+            db=StoreRef(str(db)) if db is not None else None,
+            current=case.current,
+            thermal=(*case.thermal, AT, None) if case.thermal else None,
+        )
         assert not opened.problem and not unfit, (opened.problem, unfit)  # the case's --current fits its model
         for c in opened.corrections:
             out[report.name, c.part.part] = _decision(c.verdict, c.corrections)
@@ -272,20 +310,32 @@ def _copy(folder: Path, *reports: Path) -> list[Path]:
 
 def bundled_cases(tmp: Path) -> Iterator[Case]:
     """Every bundled sample that a bundled model matches, with the options it needs."""
-    yield Case("guide pins, cycles 1-5 in three formats", GUIDE_MODEL,
-               _copy(tmp / "guide", *sorted(GUIDE.glob("cycle_0?.csv")), GUIDE / "cycle_01.dmo",
-                     GUIDE / "cycle_01.qif"))
+    yield Case(
+        "guide pins, cycles 1-5 in three formats",
+        GUIDE_MODEL,
+        _copy(tmp / "guide", *sorted(GUIDE.glob("cycle_0?.csv")), GUIDE / "cycle_01.dmo", GUIDE / "cycle_01.qif"),
+    )
     controllers = SAMPLES / "controllers"
-    yield Case("controllers, current offsets", controllers / "model.toml",
-               _copy(tmp / "controllers", controllers / "report.csv"), current=controllers / "current.csv")
+    yield Case(
+        "controllers, current offsets",
+        controllers / "model.toml",
+        _copy(tmp / "controllers", controllers / "report.csv"),
+        current=controllers / "current.csv",
+    )
     tables = SAMPLES / "tables"
-    yield Case("shop table, column mapping", GUIDE_MODEL, _copy(tmp / "shop", tables / "cycle_01_shop.csv"),
-               columns=tables / "cycle_01_shop.columns.toml")
+    yield Case(
+        "shop table, column mapping",
+        GUIDE_MODEL,
+        _copy(tmp / "shop", tables / "cycle_01_shop.csv"),
+        columns=tables / "cycle_01_shop.columns.toml",
+    )
     yield Case("German table", GUIDE_MODEL, _copy(tmp / "de", tables / "cycle_01_de.csv"))
-    yield Case("closed loop, 40 cycles", GUIDE_MODEL,
-               _copy(tmp / "loop", SAMPLES / "closed_loop" / "measurements.csv"))
-    yield Case("sheet metal QIF, 6 parts", SAMPLES / "closed_loop" / "sheet_metal" / "model.toml",
-               _copy(tmp / "qif", SAMPLES / "qif" / "QIF3_SheetMetal_Results_6_samples.QIF"))
+    yield Case("closed loop, 40 cycles", GUIDE_MODEL, _copy(tmp / "loop", SAMPLES / "closed_loop" / "measurements.csv"))
+    yield Case(
+        "sheet metal QIF, 6 parts",
+        SAMPLES / "closed_loop" / "sheet_metal" / "model.toml",
+        _copy(tmp / "qif", SAMPLES / "qif" / "QIF3_SheetMetal_Results_6_samples.QIF"),
+    )
 
 
 #: Samples corrected with a bundled model above; every other report sample gets a model of its own.
@@ -358,27 +408,50 @@ def test_every_bundled_sample_through_every_door(tmp_path):
         work.mkdir()
         assert_same_through_every_door(case, work)
     names = {c.name.split(" ")[0] for c in cases}
-    assert len(cases) >= 20 and {"pcdmis/bracket_two_parts.txt",
-                                 "qdas/diribet_basicDfq_singlePart_threeCharacteristics.dfq",
-                                 "qif/QIF3_WIDGET_QIF_RESULTS.QIF", "piweb,"} <= names
+    assert (
+        len(cases) >= 20
+        and {
+            "pcdmis/bracket_two_parts.txt",
+            "qdas/diribet_basicDfq_singlePart_threeCharacteristics.dfq",
+            "qif/QIF3_WIDGET_QIF_RESULTS.QIF",
+            "piweb,",
+        }
+        <= names
+    )
 
 
 def test_generated_reports_with_everything_switched_on(tmp_path, thermal):
     """Costs, safety, effects, EWMA over a store, current offsets and the feed-forward, on seeded reports."""
     model = everything_model(tmp_path)
-    case = Case("generated, everything on", model, generated_reports(tmp_path / "gen"),
-                current=current_offsets(tmp_path / "current.csv"), store=seeded_store(tmp_path, model), thermal=thermal)
+    case = Case(
+        "generated, everything on",
+        model,
+        generated_reports(tmp_path / "gen"),
+        current=current_offsets(tmp_path / "current.csv"),
+        store=seeded_store(tmp_path, model),
+        thermal=thermal,
+    )
     decisions = assert_same_through_every_door(case, tmp_path)
     verdicts = [decisions[key][0] for key in sorted(decisions)]
     assert verdicts == ["apply"] * 5 + ["reject"]  # the near-nominal report's estimate keeps half the earlier ones
     # the real Textual app, on the store ``correct`` used: the same decision on screen, the same offsets written
     report = case.reports[2]
-    code, _, err = cli("correct", "--model", case.model, report, *case.options(), "--store",
-                       tmp_path / "correct" / "correct.db", "--offsets", tmp_path / "cli.csv")
+    code, _, err = cli(
+        "correct",
+        "--model",
+        case.model,
+        report,
+        *case.options(),
+        "--store",
+        tmp_path / "correct" / "correct.db",
+        "--offsets",
+        tmp_path / "cli.csv",
+    )
     assert code == 0, err
     app_cycles, written = run_app(case, report, tmp_path / "correct" / "correct.db", tmp_path / "tui.csv")
     assert {(report.name, part): d for part, d in app_cycles.items()} == {
-        key: d for key, d in decisions.items() if key[0] == report.name}
+        key: d for key, d in decisions.items() if key[0] == report.name
+    }
     assert written == (tmp_path / "cli.csv").read_text(encoding="utf-8")
 
 
@@ -389,11 +462,20 @@ def run_app(case: Case, report: Path, db: Path, offsets: Path) -> tuple[dict[str
     from setupfix.tui.app import SetupfixApp
     from setupfix.tui.state import Inputs
 
-    app = SetupfixApp(Inputs(model=case.model, report=report, db=db, current=case.current,
-                             thermal=case.thermal[0] if case.thermal else None,
-                             temperatures=case.thermal[1] if case.thermal else None, at=AT,
-                             read=ReadOptions(columns=str(case.columns) if case.columns else None),
-                             cycles=CycleOptions.of(case.stations), offsets=str(offsets)))
+    app = SetupfixApp(
+        Inputs(
+            model=case.model,
+            report=report,
+            db=db,
+            current=case.current,
+            thermal=case.thermal[0] if case.thermal else None,
+            temperatures=case.thermal[1] if case.thermal else None,
+            at=AT,
+            read=ReadOptions(columns=str(case.columns) if case.columns else None),
+            cycles=CycleOptions.of(case.stations),
+            offsets=str(offsets),
+        )
+    )
 
     async def scenario() -> dict[str, tuple[str, dict[str, float]]]:
         async with app.run_test(size=(100, 30)) as pilot:
@@ -415,8 +497,13 @@ def test_generated_reports_with_stations(tmp_path, thermal):
     model = everything_model(tmp_path)
     plain = model.with_name("no_ewma.toml")
     plain.write_text(model.read_text(encoding="utf-8").replace("ewma = 0.5\n", ""), encoding="utf-8")
-    case = Case("generated, stations", plain, generated_reports(tmp_path / "gen", seed=7, n=3, stations=True),
-                stations=("P1", "P2", "P3", "P4"), thermal=thermal)
+    case = Case(
+        "generated, stations",
+        plain,
+        generated_reports(tmp_path / "gen", seed=7, n=3, stations=True),
+        stations=("P1", "P2", "P3", "P4"),
+        thermal=thermal,
+    )
     decisions = assert_same_through_every_door(case, tmp_path)
     assert {part for _, part in decisions} == {"A1+A2+A3+A4"}
     # the second report held with the paper's objective (δ could not rise: x = 0); leximin (issue 22) centres
@@ -430,8 +517,13 @@ def test_generated_reports_with_stations(tmp_path, thermal):
 def report_folder(tmp: Path) -> tuple[Path, set[str]]:
     """Reports (CSV, QIF, a PC-DMIS .txt) beside a hidden file, a model, a partial download and a log."""
     folder = tmp / "in"
-    _copy(folder, GUIDE / "cycle_01.csv", GUIDE / "cycle_01.qif", SAMPLES / "pcdmis" / "bracket_two_parts.txt",
-          GUIDE_MODEL)
+    _copy(
+        folder,
+        GUIDE / "cycle_01.csv",
+        GUIDE / "cycle_01.qif",
+        SAMPLES / "pcdmis" / "bracket_two_parts.txt",
+        GUIDE_MODEL,
+    )
     shutil.copy(GUIDE / "cycle_03.csv", folder / ".cycle_03.csv")
     shutil.copy(GUIDE / "cycle_04.csv", folder / "cycle_04.csv.part")
     shutil.copy(SAMPLES / "closed_loop" / "corrections.csv", folder / "corrections.csv")
@@ -441,8 +533,9 @@ def report_folder(tmp: Path) -> tuple[Path, set[str]]:
 def seen_by_batch(folder: Path, tmp: Path) -> set[str]:
     code, _, err = cli("batch", folder, "--model", GUIDE_MODEL, "--out", tmp / "o.csv", "--settle", "0")
     assert code == 4 and "bracket_two_parts.txt" in err  # read, and refused: it does not match the model
-    return {line.split("] ", 1)[1].split(": ", 1)[0].rsplit("/", 1)[-1]
-            for line in err.splitlines() if line.startswith("[")}
+    return {
+        line.split("] ", 1)[1].split(": ", 1)[0].rsplit("/", 1)[-1] for line in err.splitlines() if line.startswith("[")
+    }
 
 
 def seen_by_the_folder_watch(folder: Path, tmp: Path) -> set[str]:
@@ -495,27 +588,50 @@ def test_a_stopped_solve_is_not_solved_through_every_door(tmp_path):
 
     db = tmp_path / "history.db"
     for run in (1, 2):  # stored, but not as done: the second run corrects it again
-        code, text, err = cli("batch", report.parent, "--model", model, "--out", tmp_path / "b.csv", "--settle", "0",
-                              "--json", "--store", db, *limit)
+        code, text, err = cli(
+            "batch",
+            report.parent,
+            "--model",
+            model,
+            "--out",
+            tmp_path / "b.csv",
+            "--settle",
+            "0",
+            "--json",
+            "--store",
+            db,
+            *limit,
+        )
         s = json.loads(text)
         assert code == 6, (run, err)
         assert (s["reports"], s["unsolved"], s["verdicts"], s["skipped"]) == (1, 1, {"hold": 1}, []), run
-    code, text, err = cli("batch", report.parent, "--model", model, "--out", tmp_path / "b.csv", "--settle", "0",
-                          *limit)
+    code, text, err = cli(
+        "batch", report.parent, "--model", model, "--out", tmp_path / "b.csv", "--settle", "0", *limit
+    )
     assert code == 6 and "1 of the holds not solved within the time limit" in text and "NOT SOLVED" in err
-    code, text, _ = cli("batch", report.parent, "--model", model, "--out", tmp_path / "b.csv", "--settle", "0",
-                        "--json", "--store", db)
+    code, text, _ = cli(
+        "batch", report.parent, "--model", model, "--out", tmp_path / "b.csv", "--settle", "0", "--json", "--store", db
+    )
     assert code == 0 and json.loads(text)["unsolved"] == 0  # solved with the default limit: stored as done …
-    code, text, _ = cli("batch", report.parent, "--model", model, "--out", tmp_path / "b.csv", "--settle", "0",
-                        "--json", "--store", db)
+    code, text, _ = cli(
+        "batch", report.parent, "--model", model, "--out", tmp_path / "b.csv", "--settle", "0", "--json", "--store", db
+    )
     assert json.loads(text)["skipped"][0]["reason"].startswith("already processed")  # … and skipped next time
 
-    from setupfix.pipeline.export import export
     from setupfix.errors import ExportError
+    from setupfix.pipeline.export import export
     from setupfix.tui.workers import open_report
 
-    opened, _ = open_report(model, report, read=ReadOptions(), cycles=CycleOptions(),
-                            solve=SolveOptions("exact", None, 1e-5), db=None, current=None, thermal=None)
+    opened, _ = open_report(
+        model,
+        report,
+        read=ReadOptions(),
+        cycles=CycleOptions(),
+        solve=SolveOptions("exact", None, 1e-5),
+        db=None,
+        current=None,
+        thermal=None,
+    )
     (c,) = opened.corrections
     head = summary(c)
     assert c.verdict == "hold" and not head.solved and head.alarm.startswith("NOT SOLVED: not solved within")

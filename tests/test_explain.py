@@ -23,9 +23,13 @@ def test_leave_one_out_equals_refitting_without_each_dimension():
 def test_one_register_names_the_register_that_alone_explains_a_shift():
     """A WKS entered 0.35 wrong: least squares spreads it over the WKS and the tool that moves the same
     dimensions; the one-register fit finds the WKS and the whole amount, with nothing left over."""
-    c = np.array([[1.0, 1.0, 1.0, 0.0, 0.0],    # W: the station's three dimensions
-                  [1.0, 1.0, 1.0, 1.0, 1.0],    # T: those and two of another station
-                  [0.0, 0.0, 0.0, 1.0, 1.0]])   # W': the other station
+    c = np.array(
+        [
+            [1.0, 1.0, 1.0, 0.0, 0.0],  # W: the station's three dimensions
+            [1.0, 1.0, 1.0, 1.0, 1.0],  # T: those and two of another station
+            [0.0, 0.0, 0.0, 1.0, 1.0],
+        ]
+    )  # W': the other station
     r = np.array([0.35, 0.35, 0.35, 0.0, 0.0])
     spread = fit_registers(c, r)
     assert np.count_nonzero(np.abs(spread) > 1e-3) > 1  # the fit's minimum norm is not one register
@@ -41,5 +45,6 @@ def test_one_register_names_the_register_that_alone_explains_a_shift():
 def test_one_register_with_nothing_to_move_and_targets_of_one_sided_limits():
     j, change, after = one_register(np.zeros((2, 3)), np.ones(3))
     assert (j, change) == (-1, 0.0) and np.array_equal(after, np.ones(3))
-    assert np.array_equal(targets(np.array([-0.1, -np.inf, 0.0]), np.array([0.1, 0.2, np.inf])),
-                          np.array([0.0, 0.0, 0.0]))
+    assert np.array_equal(
+        targets(np.array([-0.1, -np.inf, 0.0]), np.array([0.1, 0.2, np.inf])), np.array([0.0, 0.0, 0.0])
+    )

@@ -13,14 +13,33 @@ ROOT = Path(__file__).resolve().parents[1]
 
 # Layer of each top-level module prefix; a module may import only layers <= its own.
 LAYERS = {
-    "setupfix.errors": 1, "setupfix.units": 1, "setupfix.model": 1, "setupfix.atomic": 1, "setupfix.params": 1,
+    "setupfix.errors": 1,
+    "setupfix.units": 1,
+    "setupfix.model": 1,
+    "setupfix.atomic": 1,
+    "setupfix.params": 1,
     "parsers": 2,
-    "setupfix.relation": 3, "setupfix.objective": 3, "setupfix.optimize": 3, "setupfix.thermal": 3,
-    "setupfix.search": 3, "setupfix.simulate": 3, "setupfix.offsets": 3, "setupfix.plots": 3, "setupfix.diagnose": 3,
-    "setupfix.safety": 3, "setupfix.ewma": 3, "setupfix.recommend": 3, "setupfix.pose": 3, "setupfix.explain": 3,
-    "setupfix.zones": 3, "setupfix.spc": 3,
-    "setupfix.pipeline": 4, "setupfix.store": 4,
-    "setupfix.cli": 5, "setupfix.tui": 5, "setupfix.__main__": 5,
+    "setupfix.relation": 3,
+    "setupfix.objective": 3,
+    "setupfix.optimize": 3,
+    "setupfix.thermal": 3,
+    "setupfix.search": 3,
+    "setupfix.simulate": 3,
+    "setupfix.offsets": 3,
+    "setupfix.plots": 3,
+    "setupfix.diagnose": 3,
+    "setupfix.safety": 3,
+    "setupfix.ewma": 3,
+    "setupfix.recommend": 3,
+    "setupfix.pose": 3,
+    "setupfix.explain": 3,
+    "setupfix.zones": 3,
+    "setupfix.spc": 3,
+    "setupfix.pipeline": 4,
+    "setupfix.store": 4,
+    "setupfix.cli": 5,
+    "setupfix.tui": 5,
+    "setupfix.__main__": 5,
 }
 
 
@@ -87,15 +106,41 @@ def test_parsers_is_ours():
 # diagnosis's next correction);
 # 7 renderers (text/JSON, TUI rows); 8 the doors' sessions (TUI session, history store).
 PIPELINE_RANKS = {
-    "writers": 0, "checks": 0, "smoothing": 0, "stores": 0,
-    "controllers": 1, "thermal_files": 1, "thermal_columns": 1, "cycles": 1, "scaffold_toml": 1, "series_logs": 1,
-    "thermal": 2, "parse": 2, "simulate": 2, "scaffold": 2, "model": 2, "series_assembly": 2,
-    "feedforward": 3, "series": 3, "thermal_fit": 3, "batch_output": 3,
+    "writers": 0,
+    "checks": 0,
+    "smoothing": 0,
+    "stores": 0,
+    "controllers": 1,
+    "thermal_files": 1,
+    "thermal_columns": 1,
+    "cycles": 1,
+    "scaffold_toml": 1,
+    "series_logs": 1,
+    "thermal": 2,
+    "parse": 2,
+    "simulate": 2,
+    "scaffold": 2,
+    "model": 2,
+    "series_assembly": 2,
+    "feedforward": 3,
+    "series": 3,
+    "thermal_fit": 3,
+    "batch_output": 3,
     "requests": 4,
-    "correct": 5, "compare": 5, "export": 5, "batch_records": 5, "spc": 5, "dfq": 1,
-    "batch": 6, "diagnose": 6,
-    "present": 7, "view": 7, "analysis_view": 7,
-    "history": 8, "session": 8, "html_report": 8,
+    "correct": 5,
+    "compare": 5,
+    "export": 5,
+    "batch_records": 5,
+    "spc": 5,
+    "dfq": 1,
+    "batch": 6,
+    "diagnose": 6,
+    "present": 7,
+    "view": 7,
+    "analysis_view": 7,
+    "history": 8,
+    "session": 8,
+    "html_report": 8,
 }
 
 
@@ -105,8 +150,11 @@ def _pipeline_module(module: str) -> str | None:
 
 
 def test_every_pipeline_module_has_a_rank():
-    names = {p.stem if p.suffix else p.name for p in (ROOT / "setupfix" / "pipeline").iterdir()
-             if (p.suffix == ".py" and p.stem != "__init__") or (p.is_dir() and (p / "__init__.py").exists())}
+    names = {
+        p.stem if p.suffix else p.name
+        for p in (ROOT / "setupfix" / "pipeline").iterdir()
+        if (p.suffix == ".py" and p.stem != "__init__") or (p.is_dir() and (p / "__init__.py").exists())
+    }
     assert names == set(PIPELINE_RANKS)
 
 
@@ -120,8 +168,13 @@ def test_pipeline_modules_import_only_lower_ranks(name):
         for node in ast.walk(tree):
             if not isinstance(node, ast.ImportFrom) or not node.module or node.level:
                 continue
-            targets = ([_pipeline_module(node.module)] if _pipeline_module(node.module)
-                       else [a.name for a in node.names] if node.module == "setupfix.pipeline" else [])
+            targets = (
+                [_pipeline_module(node.module)]
+                if _pipeline_module(node.module)
+                else [a.name for a in node.names]
+                if node.module == "setupfix.pipeline"
+                else []
+            )
             for target in targets:
                 if target is None or target == name:
                     continue

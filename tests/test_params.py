@@ -29,20 +29,23 @@ def test_defaults_pass():
     _Est().validate_params()
 
 
-@pytest.mark.parametrize(("kw", "text"), [
-    ({"n": -5}, "n must be an int in [1, 100], got -5"),
-    ({"n": 2.0}, "n must be an int"),
-    ({"n": True}, "n must be an int"),
-    ({"pa": 1.0}, "pa must be a number in (0, 1), got 1.0"),
-    ({"pa": math.nan}, "pa must be a number"),
-    ({"pa": math.inf}, "pa must be a number"),
-    ({"kind": "c"}, "kind must be one of 'a', 'b', got 'c'"),
-    ({"kind": ["a"]}, "kind must be one of"),
-    ({"seed": -1}, "seed must be an int in [0, inf) or None, got -1"),
-    ({"flag": 1}, "flag must be a bool, got 1"),
-    ({"even": 3}, "even must be an even number, got 3"),
-    ({"even": "x"}, "even must be an even number"),
-])
+@pytest.mark.parametrize(
+    ("kw", "text"),
+    [
+        ({"n": -5}, "n must be an int in [1, 100], got -5"),
+        ({"n": 2.0}, "n must be an int"),
+        ({"n": True}, "n must be an int"),
+        ({"pa": 1.0}, "pa must be a number in (0, 1), got 1.0"),
+        ({"pa": math.nan}, "pa must be a number"),
+        ({"pa": math.inf}, "pa must be a number"),
+        ({"kind": "c"}, "kind must be one of 'a', 'b', got 'c'"),
+        ({"kind": ["a"]}, "kind must be one of"),
+        ({"seed": -1}, "seed must be an int in [0, inf) or None, got -1"),
+        ({"flag": 1}, "flag must be a bool, got 1"),
+        ({"even": 3}, "even must be an even number, got 3"),
+        ({"even": "x"}, "even must be an even number"),
+    ],
+)
 def test_out_of_range_names_owner_parameter_and_range(kw, text):
     with pytest.raises(ParameterError) as info:
         _Est(**kw).validate_params()

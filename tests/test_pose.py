@@ -26,8 +26,10 @@ def model(safety=None, w1=None, w2=None, t5=None, effects=None):
         "wks": {"W1": {"register": "G54", **(w1 or {})}, "W2": {"register": "G55", **(w2 or {})}},
         "tools": {"T5": {"register": "H5", **(t5 or {})}},
         "features": {"F1": {"wks": {"W1": 1, "W2": 1}}, "F2": {"tools": {"T5": 1}}},
-        "dimensions": {"D1": {"features": {"F1": 1}, "nominal": 10, "lower": -0.01, "upper": 0.01},
-                       "D2": {"features": {"F2": 1}, "nominal": 5, "lower": -0.02, "upper": 0.02}},
+        "dimensions": {
+            "D1": {"features": {"F1": 1}, "nominal": 10, "lower": -0.01, "upper": 0.01},
+            "D2": {"features": {"F2": 1}, "nominal": 5, "lower": -0.02, "upper": 0.02},
+        },
     }
     if safety:
         doc["safety"] = safety
@@ -38,8 +40,9 @@ def model(safety=None, w1=None, w2=None, t5=None, effects=None):
 
 def part(m, deviation, timestamp=None, name="A1"):
     dev = np.asarray(deviation, dtype=float)
-    return PartMeasurement(part=name, report="r.csv", timestamp=timestamp, deviation=dev,
-                           sources=tuple("" for _ in dev))
+    return PartMeasurement(
+        part=name, report="r.csv", timestamp=timestamp, deviation=dev, sources=tuple("" for _ in dev)
+    )
 
 
 def brute_force(problem: CorrectionProblem):
@@ -48,7 +51,7 @@ def brute_force(problem: CorrectionProblem):
     grid = np.array(list(itertools.product(*axes)))
     f1 = problem.evaluate(grid)[0]
     best = grid[f1 >= f1.max() - 1e-12]
-    weighted = (best ** 2 * problem.cost).sum(axis=1)
+    weighted = (best**2 * problem.cost).sum(axis=1)
     return f1.max(), best[weighted <= weighted.min() + 1e-15]
 
 
@@ -71,15 +74,17 @@ def test_costs_pick_the_least_weighted_norm_as_brute_force_says(costs):
 def test_ewma_equals_the_formula_with_corrections_and_a_tool_change():
     m = model()
     C = relation_matrices(m).composite
-    t = np.array(["2026-01-01T08:00", "2026-01-01T09:00", "2026-01-01T07:00", "2026-01-01T11:00"],
-                 dtype="datetime64[ns]")
+    t = np.array(
+        ["2026-01-01T08:00", "2026-01-01T09:00", "2026-01-01T07:00", "2026-01-01T11:00"], dtype="datetime64[ns]"
+    )
     earlier = np.array([[0.004, 0.010], [0.006, 0.012], [0.002, 0.008], [0.5, 0.5]])  # the last is later: out
     log_t = np.array(["2026-01-01T08:30", "2026-01-01T09:30"], dtype="datetime64[ns]")
     now = np.datetime64("2026-01-01T10:00", "ns")
     y = np.array([0.007, 0.011])
     lam = 0.4
-    got = ewma_history(y, now, t, earlier, log_t, np.array([0, 2]), np.array([-0.003, 0.0]),
-                       np.array([False, True]), C, lam)
+    got = ewma_history(
+        y, now, t, earlier, log_t, np.array([0, 2]), np.array([-0.003, 0.0]), np.array([False, True]), C, lam
+    )
     # in time order 07:00, 08:00, 09:00; W1 −0.003 at 08:30 shifts the first two on D1; T5 changed at 09:30: D2 reset
     rows = [earlier[2] + np.array([-0.003, 0.0]), earlier[0] + np.array([-0.003, 0.0]), earlier[1]]
     a = np.array([rows[0][0], np.nan])
@@ -95,10 +100,14 @@ def test_ewma_equals_the_formula_with_corrections_and_a_tool_change():
 
 
 def test_forecast_equals_forecast_shift_and_relations_replace_the_composite():
-    effects = {"origin": "2026-01-01T06:00:00", "cycle_hours": 0.5, "last_hours": 1.0,
-               "E1": {"kind": "drift", "estimate": 0.004, "unit": "mm/h"},
-               "E2": {"kind": "wear", "register": "T5", "estimate": -0.0005},
-               "E3": {"kind": "relation", "register": "W1", "dimension": "D1", "estimate": 0.5}}
+    effects = {
+        "origin": "2026-01-01T06:00:00",
+        "cycle_hours": 0.5,
+        "last_hours": 1.0,
+        "E1": {"kind": "drift", "estimate": 0.004, "unit": "mm/h"},
+        "E2": {"kind": "wear", "register": "T5", "estimate": -0.0005},
+        "E3": {"kind": "relation", "register": "W1", "dimension": "D1", "estimate": 0.5},
+    }
     m = model(effects=effects)
     y = np.array([0.003, -0.004])
     posed = pose_problem(m, part(m, y, timestamp="2026-01-01T08:00:00"))
@@ -117,12 +126,20 @@ def test_forecast_equals_forecast_shift_and_relations_replace_the_composite():
 
 
 def test_guard_band_cumulative_bounds_and_fixed_registers_in_order():
-    m = model(safety={"uncertainty": 0.002, "guard_band": 0.5, "cumulative_limit": 0.005},
-              w2={"cost": 2.0}, t5={"offset": "wear"})
-    m = m.__class__(**{**{f: getattr(m, f) for f in m.__dataclass_fields__},
-                       "wks": (m.wks[0], type(m.wks[1])(**{**{f: getattr(m.wks[1], f)
-                                                              for f in m.wks[1].__dataclass_fields__},
-                                                           "fixed": True}))})
+    m = model(
+        safety={"uncertainty": 0.002, "guard_band": 0.5, "cumulative_limit": 0.005},
+        w2={"cost": 2.0},
+        t5={"offset": "wear"},
+    )
+    m = m.__class__(
+        **{
+            **{f: getattr(m, f) for f in m.__dataclass_fields__},
+            "wks": (
+                m.wks[0],
+                type(m.wks[1])(**{**{f: getattr(m.wks[1], f) for f in m.wks[1].__dataclass_fields__}, "fixed": True}),
+            ),
+        }
+    )
     posed = pose_problem(m, part(m, [0.009, -0.015]), cumulative={"T5": -0.003})
     np.testing.assert_allclose(posed.guarded.lower, [-0.009, -0.019])
     np.testing.assert_allclose(posed.guarded.upper, [0.009, 0.019])
@@ -197,7 +214,7 @@ def test_a_dimension_marked_sampled_leaves_its_registers_free(tmp_path):
     assert "coverage" not in [r.rule for r in cycle.recommendation.rules]
     assert all(d.sampled == (d.id[-2:] in ("D1", "D2", "D3", "D4")) for d in cycle.model.dimensions)
     bad = tmp_path / "bad.toml"
-    bad.write_text(text.replace("sampled = true", "sampled = \"yes\"", 1), encoding="utf-8")
+    bad.write_text(text.replace("sampled = true", 'sampled = "yes"', 1), encoding="utf-8")
     from setupfix.errors import SetupfixError
     from setupfix.model import load_model
 
@@ -215,8 +232,19 @@ def test_a_recent_measurement_in_the_history_stands_in_moved_by_the_corrections_
     log = tmp_path / "corrections.csv"  # G55 moved by +0.010 between cycle 01 and cycle 02
     log.write_text("timestamp,register,delta,event\n2026-11-02T12:00:00,G55,0.010,correction\n", encoding="utf-8")
     with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()) as err:
-        code = main(["history", "import", "--db", str(db), "--model", str(GUIDE_PINS / "model.toml"),
-                     str(GUIDE_PINS / "cycle_01.csv"), "--corrections", str(log)])
+        code = main(
+            [
+                "history",
+                "import",
+                "--db",
+                str(db),
+                "--model",
+                str(GUIDE_PINS / "model.toml"),
+                str(GUIDE_PINS / "cycle_01.csv"),
+                "--corrections",
+                str(log),
+            ]
+        )
     assert code == 0, err.getvalue()
     cycle = corrected(truncated_copy(tmp_path), store=db)
     rules = {r.rule: r for r in cycle.recommendation.rules}

@@ -78,8 +78,9 @@ def test_batch_and_the_tui_session_hold_a_draft_too(tmp_path):
 
 def test_removing_the_key_recommends_again(tmp_path):
     model = load_model(draft_copy(tmp_path))
-    (cycle,) = correct_report(CorrectRequest(dataclasses.replace(model, draft=False)),
-                              GUIDE_PINS / "cycle_01.csv").cycles
+    (cycle,) = correct_report(
+        CorrectRequest(dataclasses.replace(model, draft=False)), GUIDE_PINS / "cycle_01.csv"
+    ).cycles
     assert cycle.verdict == "apply"
 
 
@@ -94,9 +95,11 @@ def test_a_batch_with_a_store_leaves_a_drafts_reports_unprocessed(tmp_path):
         held = run_batch(CorrectRequest(model), folder, tmp_path / "held.csv", settle=0, store=store)
         assert held.verdicts["hold"] == 1
         # the user edits the model (removes the key): the next run corrects the report, it is not "already processed"
-        edited = run_batch(CorrectRequest(dataclasses.replace(model, draft=False)), folder, tmp_path / "o.csv",
-                           settle=0, store=store)
+        edited = run_batch(
+            CorrectRequest(dataclasses.replace(model, draft=False)), folder, tmp_path / "o.csv", settle=0, store=store
+        )
         assert edited.verdicts["apply"] == 1 and not edited.skipped
-        again = run_batch(CorrectRequest(dataclasses.replace(model, draft=False)), folder, tmp_path / "o2.csv",
-                          settle=0, store=store)
+        again = run_batch(
+            CorrectRequest(dataclasses.replace(model, draft=False)), folder, tmp_path / "o2.csv", settle=0, store=store
+        )
         assert again.parts == 0 and len(again.skipped) == 1  # processed now: skipped as before

@@ -47,10 +47,13 @@ def test_features_by_eq3_including_the_machine_level():
     doc = {
         "process": {"name": "illustration"},
         "machine": {"M1": {"wks": {"W1": -1, "W2": -1}}},
-        "wks": {"W1": {}, "W2": {}}, "tools": {"T1": {}},
+        "wks": {"W1": {}, "W2": {}},
+        "tools": {"T1": {}},
         "features": {"F1": {"wks": {"W1": 1}, "tools": {"T1": 1}}, "F2": {"wks": {"W2": 1}, "tools": {"T1": -1}}},
-        "dimensions": {"D1": {"features": {"F1": 1}, "nominal": 1, "lower": -1, "upper": 1},
-                       "D2": {"features": {"F1": 1, "F2": -1}, "nominal": 1, "lower": -1, "upper": 1}},
+        "dimensions": {
+            "D1": {"features": {"F1": 1}, "nominal": 1, "lower": -1, "upper": 1},
+            "D2": {"features": {"F1": 1, "F2": -1}, "nominal": 1, "lower": -1, "upper": 1},
+        },
     }
     rm = relation_matrices(model_from_dict(doc))
     m, w, t = np.array([0.3]), np.array([0.01, 0.02]), np.array([0.005])
@@ -103,15 +106,20 @@ def test_matrices_are_kept_per_model_object_and_never_stale(guide_pins_model):
     feature = next(iter(d0.features))
     changed = dataclasses.replace(
         guide_pins_model,
-        dimensions=(dataclasses.replace(d0, features={**d0.features, feature: 2.0 * d0.features[feature]}),
-                    *guide_pins_model.dimensions[1:]))
+        dimensions=(
+            dataclasses.replace(d0, features={**d0.features, feature: 2.0 * d0.features[feature]}),
+            *guide_pins_model.dimensions[1:],
+        ),
+    )
     other = relation_matrices(changed)
     assert other is not first
     np.testing.assert_array_equal(other.R_FD[:, 1:], first.R_FD[:, 1:])
     assert other.R_FD[[f.id for f in changed.features].index(feature), 0] == 2.0 * d0.features[feature]
     # More models than are kept: each still gets its own matrices, never another's.
-    models = [dataclasses.replace(guide_pins_model, dimensions=guide_pins_model.dimensions[:k])
-              for k in range(1, relation._RECENT_SIZE + 3)]
+    models = [
+        dataclasses.replace(guide_pins_model, dimensions=guide_pins_model.dimensions[:k])
+        for k in range(1, relation._RECENT_SIZE + 3)
+    ]
     for _ in range(2):
         for m in models:
             assert relation_matrices(m).R_FD.shape == (len(m.features), len(m.dimensions))

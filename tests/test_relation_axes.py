@@ -16,17 +16,26 @@ DOC = {
     "tools": {"T1": {"register": "H1", "radius": "D1"}},
     "features": {
         "F1": {"wks": {"W1": 1}, "position": [30.0, 40.0, 5.0], "tools": {"T1": 1}},
-        "F2": {"wks": {"W1": {"x": -1, "y": 1, "z": -1, "c": 2}}, "position": [-10.0, 0.0, 0.0],
-               "radius": {"T1": 1}},
+        "F2": {"wks": {"W1": {"x": -1, "y": 1, "z": -1, "c": 2}}, "position": [-10.0, 0.0, 0.0], "radius": {"T1": 1}},
         "F3": {"wks": {"W1": 1}, "position": [0.0, 20.0, 0.0], "radius": {"T1": -1}},
     },
     "dimensions": {
         "DZ": {"axis": "Z", "features": {"F1": 1}, "nominal": 0, "lower": -0.1, "upper": 0.1},
-        "DN": {"direction": [0.6, 0.8, 0.0], "features": {"F1": 1, "F2": -1}, "nominal": 0, "lower": -0.1,
-               "upper": 0.1},
+        "DN": {
+            "direction": [0.6, 0.8, 0.0],
+            "features": {"F1": 1, "F2": -1},
+            "nominal": 0,
+            "lower": -0.1,
+            "upper": 0.1,
+        },
         "DS": {"kind": "size", "features": {"F2": 1, "F3": -1}, "nominal": 10, "lower": -0.1, "upper": 0.1},
-        "DP": {"kind": "position", "components": ["P X", "P Y"], "axes": ["X", "Y"], "diameter": 0.2,
-               "features": {"F1": 1}},
+        "DP": {
+            "kind": "position",
+            "components": ["P X", "P Y"],
+            "axes": ["X", "Y"],
+            "diameter": 0.2,
+            "features": {"F1": 1},
+        },
     },
 }
 
@@ -87,9 +96,13 @@ def test_projected_composite_is_the_spec_sum():
 
 
 def test_one_axis_relation_unchanged():
-    doc = {"process": {"name": "one"}, "wks": {"W1": {}}, "tools": {"T1": {}},
-           "features": {"F1": {"wks": {"W1": 1}, "tools": {"T1": -1}}},
-           "dimensions": {"D1": {"features": {"F1": 2}, "nominal": 0, "lower": -0.1, "upper": 0.1}}}
+    doc = {
+        "process": {"name": "one"},
+        "wks": {"W1": {}},
+        "tools": {"T1": {}},
+        "features": {"F1": {"wks": {"W1": 1}, "tools": {"T1": -1}}},
+        "dimensions": {"D1": {"features": {"F1": 2}, "nominal": 0, "lower": -0.1, "upper": 0.1}},
+    }
     rel = relation_matrices(model_from_dict(doc))
     assert rel.multi is None and rel.zones is None
     assert rel.composite == pytest.approx(np.array([[2.0], [-2.0]]))

@@ -20,15 +20,23 @@ SOLVE = get_optimizer("exact").solve
 def problem(composite, deviation, lower, upper, limit=0.1, h=0.001):
     c = np.atleast_2d(np.asarray(composite, dtype=float))
     n, m = c.shape
-    return CorrectionProblem(composite=c, deviation=np.asarray(deviation, float), lower=np.asarray(lower, float),
-                             upper=np.asarray(upper, float), lb=np.full(n, -limit), ub=np.full(n, limit),
-                             resolution=h, register_ids=tuple(f"R{i}" for i in range(n)),
-                             dimension_ids=tuple(f"D{j}" for j in range(m)))
+    return CorrectionProblem(
+        composite=c,
+        deviation=np.asarray(deviation, float),
+        lower=np.asarray(lower, float),
+        upper=np.asarray(upper, float),
+        lb=np.full(n, -limit),
+        ub=np.full(n, limit),
+        resolution=h,
+        register_ids=tuple(f"R{i}" for i in range(n)),
+        dimension_ids=tuple(f"D{j}" for j in range(m)),
+    )
 
 
 def policy(p, **kw):
-    return dataclasses.replace(Policy.neutral(p), **{k: np.asarray(v, float) if k != "guard_band" else v
-                                                    for k, v in kw.items()})
+    return dataclasses.replace(
+        Policy.neutral(p), **{k: np.asarray(v, float) if k != "guard_band" else v for k, v in kw.items()}
+    )
 
 
 def recommend(p, pol, solve, *, measured=None, **kw):
@@ -140,8 +148,11 @@ def test_register_cost_moves_the_cheap_register():
 
 
 def test_reject_mask_and_ewma():
-    assert reject_mask(np.array([0.31, -0.2, 0.0]), np.full(3, -0.1), np.full(3, 0.1), np.full(3, 0.2)).tolist() \
-        == [True, False, False]
+    assert reject_mask(np.array([0.31, -0.2, 0.0]), np.full(3, -0.1), np.full(3, 0.1), np.full(3, 0.2)).tolist() == [
+        True,
+        False,
+        False,
+    ]
     y, prev = np.array([0.04, 0.0]), np.array([0.0, np.nan])
     assert ewma(y, prev, 0.25) == pytest.approx([0.01, 0.0])
     assert ewma(y, None, 0.25) == pytest.approx(y)
@@ -149,6 +160,7 @@ def test_reject_mask_and_ewma():
 
 
 # --- no harm inside the triage's optimum (issue 22) -------------------------------------------------------
+
 
 def fourteen_and_seventeen():
     """R0 moves A1…A14 (measured +0.09, in) and B1…B15 (−0.15, out); R1 moves C1…C3 (−0.12, out).
@@ -206,8 +218,7 @@ def test_given_up_never_names_a_dimension_predicted_in_tolerance(seed):
     rng = np.random.default_rng(seed)
     n, m = 3, 9
     comp = rng.integers(-1, 2, size=(n, m)).astype(float)
-    p = problem(comp, np.round(rng.uniform(-0.2, 0.2, m), 4), np.full(m, -0.05), np.full(m, 0.05), limit=0.03,
-                h=0.005)
+    p = problem(comp, np.round(rng.uniform(-0.2, 0.2, m), 4), np.full(m, -0.05), np.full(m, 0.05), limit=0.03, h=0.005)
     pol = policy(p, uncertainty=rng.uniform(0, 0.01, m), gain=rng.choice([1.0, 0.5], n))
     rec = recommend(p, pol, SOLVE)
     predicted = p.predicted(rec.x)

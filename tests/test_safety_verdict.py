@@ -29,8 +29,9 @@ def test_a_solve_stopped_before_any_proof_is_not_solved_never_no_change_needed()
     (rule,) = [r for r in rec.rules if r.rule == "not_solved"]
     assert "not solved within the time limit" in rule.message and "no change needed" in rule.message  # "not ..."
     # the paper's objective: proved within the limit at this size (leximin's later levels are bench work)
-    done = recommend(pose_policy(problem, Policy.neutral(problem)),
-                     get_optimizer("exact", objective="paper", time_limit=60).solve)
+    done = recommend(
+        pose_policy(problem, Policy.neutral(problem)), get_optimizer("exact", objective="paper", time_limit=60).solve
+    )
     assert done.solved and done.result.status == "optimal" and "not_solved" not in [r.rule for r in done.rules]
 
 
@@ -71,11 +72,11 @@ def test_stopped_rule_states_the_certified_norm_ratio():
     assert "the solver failed" in stopped_rule(result, recommended=False).message
 
 
-@pytest.mark.parametrize(("n", "text"), [(0, ""), (1, "A0"), (4, "A0, A1, A2, A3"),
-                                         (744, "A0, A1, A2, … and 741 more")])
+@pytest.mark.parametrize(
+    ("n", "text"), [(0, ""), (1, "A0"), (4, "A0, A1, A2, A3"), (744, "A0, A1, A2, … and 741 more")]
+)
 def test_short_list_names_the_first_few_and_counts_the_rest(n, text):
     assert short_list(f"A{i}" for i in range(n)) == text
-
 
 
 # -- deviations beyond the reject band: gross, or a setup error the registers explain -----------------------------
@@ -107,8 +108,11 @@ def test_a_wks_entered_wrong_is_named_with_its_amount_not_rejected_as_a_broken_t
     # the correction that centres P2's dimensions: −0.35 plus what cycle 01 itself needs there (a few hundredths)
     assert amount == pytest.approx(-0.35, abs=0.05)
     assert rec.alarm.startswith("SETUP ERROR: G55 looks off by")
-    assert set(rule.dimensions) == {d for d, v in zip(cycle.problem.dimension_ids, part.deviation + 0.35 * composite[j],
-                                                       strict=True) if abs(v) > 0.3}
+    assert set(rule.dimensions) == {
+        d
+        for d, v in zip(cycle.problem.dimension_ids, part.deviation + 0.35 * composite[j], strict=True)
+        if abs(v) > 0.3
+    }
 
 
 def test_a_single_broken_dimension_still_rejects_without_a_setup_error():
@@ -145,8 +149,7 @@ def test_an_alarm_over_hundreds_of_dimensions_is_one_short_line_the_json_keeps_t
     cycle = corrected(model, parts[0], deviation)
     rec = cycle.recommendation
     assert rec.verdict == "reject" and len(rec.alarm) < 300 and "\n" not in rec.alarm
-    assert re.search(r"600 dimension\(s\) beyond the reject band .*: SP_000, SP_001, SP_002, … and 597 more",
-                     rec.alarm)
+    assert re.search(r"600 dimension\(s\) beyond the reject band .*: SP_000, SP_001, SP_002, … and 597 more", rec.alarm)
     assert len(rec.rules[-1].dimensions) == 600
 
     from setupfix.pipeline.present import cycle_json, format_correction

@@ -20,11 +20,13 @@ CLI_PAGE = REFERENCE / "cli.md"
 KEYS_PAGE = REFERENCE / "model-keys.md"
 
 
-def commands(parser: argparse.ArgumentParser | None = None,
-             path: tuple[str, ...] = ()) -> Iterator[tuple[tuple[str, ...], argparse.ArgumentParser]]:
+def commands(
+    parser: argparse.ArgumentParser | None = None, path: tuple[str, ...] = ()
+) -> Iterator[tuple[tuple[str, ...], argparse.ArgumentParser]]:
     """Every (sub)command of the parser, depth first: ``(("model", "init"), parser)``."""
     if parser is None:
         from setupfix.cli import build_parser
+
         parser = build_parser()
     yield path, parser
     for action in parser._actions:
@@ -63,8 +65,7 @@ def _describe(action: argparse.Action, parser: argparse.ArgumentParser) -> str:
     extra = []
     if action.choices is not None and not isinstance(action, argparse._SubParsersAction):
         extra.append("choices: " + ", ".join(f"`{c}`" for c in action.choices))
-    if (action.default not in (None, False, argparse.SUPPRESS) and action.option_strings
-            and "default" not in text):
+    if action.default not in (None, False, argparse.SUPPRESS) and action.option_strings and "default" not in text:
         extra.append(f"default: `{action.default}`")
     if extra:
         text = f"{text} ({'; '.join(extra)})" if text else "; ".join(extra)
@@ -89,9 +90,13 @@ def _cell(code: str) -> str:
 
 def cli_markdown() -> str:
     """The command-line reference page (MyST Markdown)."""
-    lines = ["# Command-line reference", "",
-             "Generated from the argument parser (`setupfix.cli.build_parser`) by `docs/_ext/setupfix_reference.py`",
-             "at every build; do not edit by hand. Each command also answers `--help`.", ""]
+    lines = [
+        "# Command-line reference",
+        "",
+        "Generated from the argument parser (`setupfix.cli.build_parser`) by `docs/_ext/setupfix_reference.py`",
+        "at every build; do not edit by hand. Each command also answers `--help`.",
+        "",
+    ]
     for path, parser in commands():
         if not path:
             lines += ["## `setupfix`", "", "Global options:", ""]
@@ -125,6 +130,7 @@ def cli_markdown() -> str:
 def key_tables() -> dict[str, dict[str, frozenset[str]]]:
     """Every key the model loader accepts, by table: ``{"one-axis": {"process": {...}}, ...}``."""
     from setupfix.model import axes, effects, safety, stations, tables
+
     free = frozenset(tables._FREE_TEXT)
     base = {section: frozenset(keys) - free for section, keys in tables._KEYS.items()}
     for section in ("wks", "tools"):
@@ -132,12 +138,17 @@ def key_tables() -> dict[str, dict[str, frozenset[str]]]:
     return {
         "tables": base,
         "multi-axis": {s: frozenset(k) for s, k in axes.MULTI_KEYS.items()},
-        "sections": {"safety": frozenset(safety.SAFETY_KEYS), "safety.dimensions.ID": frozenset(safety.DIMENSION_KEYS),
-                     # the head of [effects]: literal in effects.py (tested in tests/docs/test_reference.py)
-                     "effects": EFFECTS_HEAD,
-                     "effects.ID": frozenset(effects._KEYS) - free},
-        "stations": {"stations.ID": frozenset(stations._STATION_KEYS) - free,
-                     "template": frozenset(stations._TEMPLATE_KEYS)},
+        "sections": {
+            "safety": frozenset(safety.SAFETY_KEYS),
+            "safety.dimensions.ID": frozenset(safety.DIMENSION_KEYS),
+            # the head of [effects]: literal in effects.py (tested in tests/docs/test_reference.py)
+            "effects": EFFECTS_HEAD,
+            "effects.ID": frozenset(effects._KEYS) - free,
+        },
+        "stations": {
+            "stations.ID": frozenset(stations._STATION_KEYS) - free,
+            "template": frozenset(stations._TEMPLATE_KEYS),
+        },
         "free": {"any table": free},
     }
 
@@ -145,39 +156,66 @@ def key_tables() -> dict[str, dict[str, frozenset[str]]]:
 #: The keys of the ``[effects]`` table itself (its sub-tables are the effects).
 EFFECTS_HEAD = frozenset({"origin", "cycle_hours", "last_hours"})
 
-_TABLE_NAME = {"process": "[process]", "machine": "[machine.ID]", "wks": "[wks.ID]", "tools": "[tools.ID]",
-               "features": "[features.ID]", "dimensions": "[dimensions.ID]"}
+_TABLE_NAME = {
+    "process": "[process]",
+    "machine": "[machine.ID]",
+    "wks": "[wks.ID]",
+    "tools": "[tools.ID]",
+    "features": "[features.ID]",
+    "dimensions": "[dimensions.ID]",
+}
 
 
 def keys_markdown() -> str:
     """The model-key reference page (MyST Markdown)."""
     from setupfix.model import effects
+
     t = key_tables()
-    lines = ["# Model keys", "",
-             "Generated from the model loader's key tables (`setupfix/model/tables.py` `_KEYS`,",
-             "`setupfix/model/axes.py` `MULTI_KEYS`, `setupfix/model/safety.py`, `setupfix/model/effects.py`,",
-             "`setupfix/model/stations.py`) at every build; do not edit by hand. What each key means is in",
-             "[the process model file](process-model.md); a key not listed here is refused by the loader",
-             "with the list of the keys it expected.", ""]
+    lines = [
+        "# Model keys",
+        "",
+        "Generated from the model loader's key tables (`setupfix/model/tables.py` `_KEYS`,",
+        "`setupfix/model/axes.py` `MULTI_KEYS`, `setupfix/model/safety.py`, `setupfix/model/effects.py`,",
+        "`setupfix/model/stations.py`) at every build; do not edit by hand. What each key means is in",
+        "[the process model file](process-model.md); a key not listed here is refused by the loader",
+        "with the list of the keys it expected.",
+        "",
+    ]
     lines += ["## Tables of every model", "", "| table | keys |", "|---|---|"]
     for s, keys in t["tables"].items():
         lines.append(f"| `{_TABLE_NAME.get(s, s)}` | {', '.join(f'`{k}`' for k in sorted(keys))} |")
-    lines += ["", "## Multi-axis keys", "",
-              "Accepted only in a model whose `[process]` table has `axes = [...]`; elsewhere refused as",
-              "\"a multi-axis key\".", "", "| table | keys |", "|---|---|"]
+    lines += [
+        "",
+        "## Multi-axis keys",
+        "",
+        "Accepted only in a model whose `[process]` table has `axes = [...]`; elsewhere refused as",
+        '"a multi-axis key".',
+        "",
+        "| table | keys |",
+        "|---|---|",
+    ]
     for s, keys in t["multi-axis"].items():
         lines.append(f"| `{_TABLE_NAME.get(s, s)}` | {', '.join(f'`{k}`' for k in sorted(keys))} |")
     lines += ["", "## Safety and effects", "", "| table | keys |", "|---|---|"]
     for s, keys in t["sections"].items():
         lines.append(f"| `[{s}]` | {', '.join(f'`{k}`' for k in sorted(keys))} |")
-    lines += ["", "Effect kinds (`kind` in `[effects.ID]`): "
-              + ", ".join(f"`{k}`" for k in effects.EFFECT_KINDS) + ".", ""]
+    lines += [
+        "",
+        "Effect kinds (`kind` in `[effects.ID]`): " + ", ".join(f"`{k}`" for k in effects.EFFECT_KINDS) + ".",
+        "",
+    ]
     lines += ["## Station templates", "", "| table | keys |", "|---|---|"]
     for s, keys in t["stations"].items():
         lines.append(f"| `[{s}]` | {', '.join(f'`{k}`' for k in sorted(keys))} |")
-    lines += ["", "## Free text", "",
-              "Any table may also hold " + ", ".join(f"`{k}`" for k in sorted(t["free"]["any table"]))
-              + ": text for people, ignored by the loader.", ""]
+    lines += [
+        "",
+        "## Free text",
+        "",
+        "Any table may also hold "
+        + ", ".join(f"`{k}`" for k in sorted(t["free"]["any table"]))
+        + ": text for people, ignored by the loader.",
+        "",
+    ]
     return "\n".join(lines).rstrip() + "\n"
 
 

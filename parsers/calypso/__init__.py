@@ -2,18 +2,20 @@
 
 from __future__ import annotations
 
-from parsers._source import end_statement
 from parsers._registry import FormatSpec, register
+from parsers._source import end_statement
 from parsers.calypso.reader import read_calypso, sniff_calypso
 
 __all__ = ["read_calypso", "sniff_calypso", "SPEC"]
 
-SPEC = register(FormatSpec(
-    name="calypso",
-    description="Zeiss CALYPSO characteristics table *_chr.txt (TAB separated, END line)",
-    extensions=(),
-    sniff=lambda peek: sniff_calypso(peek.text),
-    read=read_calypso,
-    priority=40,
-    complete=end_statement("END"),
-))
+SPEC = register(
+    FormatSpec(
+        name="calypso",
+        description="Zeiss CALYPSO characteristics table *_chr.txt (TAB separated, END line)",
+        extensions=(),
+        sniff=lambda peek: sniff_calypso(peek.text),
+        read=read_calypso,
+        priority=40,
+        complete=end_statement("END"),
+    )
+)

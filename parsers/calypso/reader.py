@@ -21,17 +21,22 @@ from pathlib import Path
 import pandas as pd
 
 from parsers._source import csv_records, read_text
+from parsers.canonical import DEVIATION_TOLERANCE_MM, finish_table
 from parsers.geometry import axis_vector, geometry_cells
 from parsers.numbers import parse_number
-from parsers.canonical import DEVIATION_TOLERANCE_MM, finish_table
 from setupfix.errors import ParseError, SourceLocation
 from setupfix.units import LENGTH_UNITS, length_factor
 
 __all__ = ["read_calypso", "sniff_calypso", "REQUIRED"]
 
 #: ``idsymbol`` → (axis of a coordinate, size) it states.
-_SYMBOLS = {"xvalue": ("X", ""), "yvalue": ("Y", ""), "zvalue": ("Z", ""), "diameter": ("", "diameter"),
-            "radius": ("", "radius")}
+_SYMBOLS = {
+    "xvalue": ("X", ""),
+    "yvalue": ("Y", ""),
+    "zvalue": ("Z", ""),
+    "diameter": ("", "diameter"),
+    "radius": ("", "radius"),
+}
 
 #: Columns without which a row cannot be read.
 REQUIRED = ("id", "actual", "nominal")
@@ -101,23 +106,30 @@ def read_calypso(path: str | Path, *, unit: str | None = None, encoding: str | N
             raise ParseError("a characteristic needs both actual and nominal", location=where)
         stated = _length(_value(record, index, "deviation"), "deviation", where) * f
         if not math.isnan(stated) and abs(stated - (actual - nominal)) > DEVIATION_TOLERANCE_MM:
-            raise ParseError(f"deviation {stated:g} mm contradicts actual - nominal = {actual - nominal:g} mm",
-                             location=where)
+            raise ParseError(
+                f"deviation {stated:g} mm contradicts actual - nominal = {actual - nominal:g} mm", location=where
+            )
         upper = _length(_value(record, index, "uppertol"), "uppertol", where) * f
         lower = _length(_value(record, index, "lowertol"), "lowertol", where) * f
         if not math.isnan(lower) and not math.isnan(upper) and lower > upper:
             raise ParseError(f"lowertol {lower:g} is above uppertol {upper:g}", location=where)
         exceed = _value(record, index, "exceed")
-        rows.append({
-            "characteristic": label, "nominal": nominal, "actual": actual, "lower": lower, "upper": upper,
-            "part": _value(record, index, "partnb"),
-            "x": _length(_value(record, index, "featureposx"), "featurePosX", where) * f,
-            "y": _length(_value(record, index, "featureposy"), "featurePosY", where) * f,
-            "z": _length(_value(record, index, "featureposz"), "featurePosZ", where) * f,
-            "status": f"exceed {exceed}" if exceed else "",
-            "source": f"{name}:{line}",
-            **_geometry(_value(record, index, "idsymbol")),
-        })
+        rows.append(
+            {
+                "characteristic": label,
+                "nominal": nominal,
+                "actual": actual,
+                "lower": lower,
+                "upper": upper,
+                "part": _value(record, index, "partnb"),
+                "x": _length(_value(record, index, "featureposx"), "featurePosX", where) * f,
+                "y": _length(_value(record, index, "featureposy"), "featurePosY", where) * f,
+                "z": _length(_value(record, index, "featureposz"), "featurePosZ", where) * f,
+                "status": f"exceed {exceed}" if exceed else "",
+                "source": f"{name}:{line}",
+                **_geometry(_value(record, index, "idsymbol")),
+            }
+        )
     if not rows:
         raise ParseError("no characteristic rows", location=SourceLocation(name))
     return finish_table(rows, name)

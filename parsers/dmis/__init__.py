@@ -2,18 +2,20 @@
 
 from __future__ import annotations
 
-from parsers._source import end_statement
 from parsers._registry import FormatSpec, register
+from parsers._source import end_statement
 from parsers.dmis.reader import read_dmis, sniff_dmis
 
 __all__ = ["read_dmis", "sniff_dmis", "SPEC"]
 
-SPEC = register(FormatSpec(
-    name="dmis",
-    description="DMIS output .dmo (F/T nominals, FA/TA results; one part per file)",
-    extensions=(".dmo", ".dmi", ".dms"),
-    sniff=lambda peek: sniff_dmis(peek.text),
-    read=read_dmis,
-    priority=50,
-    complete=end_statement("ENDFIL"),
-))
+SPEC = register(
+    FormatSpec(
+        name="dmis",
+        description="DMIS output .dmo (F/T nominals, FA/TA results; one part per file)",
+        extensions=(".dmo", ".dmi", ".dms"),
+        sniff=lambda peek: sniff_dmis(peek.text),
+        read=read_dmis,
+        priority=50,
+        complete=end_statement("ENDFIL"),
+    )
+)

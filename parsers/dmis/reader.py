@@ -26,8 +26,8 @@ from parsers._notes import note
 from parsers._source import point_number, read_text
 from parsers.axes import axis_word, vector_axis
 from parsers.canonical import finish_table
-from parsers.geometry import axis_vector, geometry_cells, unit_vector
 from parsers.dmis.statements import Statement, parse_statement, split_statements
+from parsers.geometry import axis_vector, geometry_cells, unit_vector
 from parsers.numbers import is_number
 from setupfix.errors import ParseError, SourceLocation
 from setupfix.units import LENGTH_UNITS, length_factor
@@ -41,8 +41,21 @@ _STATUS = {"INTOL", "OUTOL", "OUTTOL"}
 #: Tolerances whose result is a signed deviation from a profile (nominal 0).
 _PROFILE = {"PROFP", "PROFS", "PROFL"}
 #: Tolerances whose result is a zone size (nominal 0, upper limit = the zone).
-_ZONE = {"POS", "FLAT", "PERP", "PARLEL", "ANGLR", "CIRLTY", "CYLCTY", "STRGHT", "CONCEN", "COAXL",
-         "RNDOUT", "TRNOUT", "SYM"}
+_ZONE = {
+    "POS",
+    "FLAT",
+    "PERP",
+    "PARLEL",
+    "ANGLR",
+    "CIRLTY",
+    "CYLCTY",
+    "STRGHT",
+    "CONCEN",
+    "COAXL",
+    "RNDOUT",
+    "TRNOUT",
+    "SYM",
+}
 #: Tolerances whose result is the measured size itself.
 _SIZE = {"DIAM", "RAD"}
 
@@ -70,7 +83,7 @@ def _side(words: tuple[str, ...]) -> str:
 
 def _numbers_after_cart(words: tuple[str, ...]) -> list[str]:
     upper = [w.upper() for w in words]
-    return list(words[upper.index("CART") + 1:]) if "CART" in upper else []
+    return list(words[upper.index("CART") + 1 :]) if "CART" in upper else []
 
 
 def _geometry(feature: _Feature | None, axis: str, where: SourceLocation) -> float:
@@ -152,8 +165,10 @@ def read_dmis(path: str | Path, *, unit: str | None = None, encoding: str | None
         elif st.major == "TOL" and st.kind == "TA":
             results.append((st, current_fa, datum))
     if not results:
-        raise ParseError("no tolerance results (TA statements): a DMIS program or an output without results",
-                         location=SourceLocation(name))
+        raise ParseError(
+            "no tolerance results (TA statements): a DMIS program or an output without results",
+            location=SourceLocation(name),
+        )
     if factor is None:
         factor = length_factor(unit or "mm", "mm")
         if unit is None:
@@ -173,28 +188,45 @@ def read_dmis(path: str | Path, *, unit: str | None = None, encoding: str | None
         rows.append(row)
     if skipped:
         shown = ", ".join(skipped[:5]) + (", …" if len(skipped) > 5 else "")
-        note(f"skipped {len(skipped)} result(s) whose nominal the file does not give: {shown}",
-             SourceLocation(name), "skipped")
+        note(
+            f"skipped {len(skipped)} result(s) whose nominal the file does not give: {shown}",
+            SourceLocation(name),
+            "skipped",
+        )
     if not rows:
         raise ParseError("no tolerance result with a usable nominal", location=SourceLocation(name))
     return finish_table(rows, name)
 
 
-def _matching_tolerance(st: Statement, feat: str, nominal: dict[str, _Feature], tols: dict[str, Statement]
-                        ) -> Statement | None:
+def _matching_tolerance(
+    st: Statement, feat: str, nominal: dict[str, _Feature], tols: dict[str, Statement]
+) -> Statement | None:
     if st.label in tols:
         return tols[st.label]
     if feat not in nominal:
         return None
-    key = tuple(w.upper() for w in st.words[:2]) if st.words and st.words[0].upper() == "CORTOL" else \
-        tuple(w.upper() for w in st.words[:1])
-    same = [tols[t] for t in nominal[feat].tolerances
-            if t in tols and tuple(w.upper() for w in tols[t].words[:len(key)]) == key]
+    key = (
+        tuple(w.upper() for w in st.words[:2])
+        if st.words and st.words[0].upper() == "CORTOL"
+        else tuple(w.upper() for w in st.words[:1])
+    )
+    same = [
+        tols[t]
+        for t in nominal[feat].tolerances
+        if t in tols and tuple(w.upper() for w in tols[t].words[: len(key)]) == key
+    ]
     return same[0] if len(same) == 1 else None
 
 
-def _result_row(st: Statement, feat: str, nominal: dict[str, _Feature], actual: dict[str, _Feature],
-                tols: dict[str, Statement], name: str, tolerance: float) -> dict[str, object] | None:
+def _result_row(
+    st: Statement,
+    feat: str,
+    nominal: dict[str, _Feature],
+    actual: dict[str, _Feature],
+    tols: dict[str, Statement],
+    name: str,
+    tolerance: float,
+) -> dict[str, object] | None:
     where = SourceLocation(name, line=st.line)
     words = [w.strip() for w in st.words]
     kind = words[0].upper() if words else ""
@@ -225,8 +257,11 @@ def _result_row(st: Statement, feat: str, nominal: dict[str, _Feature], actual: 
         if not numeric:
             raise ParseError(f"{kind} result without a value", location=where)
         nom, act = 0.0, point_number(numeric[0], where)
-        limits = [point_number(v, SourceLocation(name, line=tol.line)) for v in tol.words[1:] if _is_number(v)] \
-            if tol is not None else []
+        limits = (
+            [point_number(v, SourceLocation(name, line=tol.line)) for v in tol.words[1:] if _is_number(v)]
+            if tol is not None
+            else []
+        )
         if kind in _PROFILE and len(limits) >= 2:
             lower, upper = limits[0], limits[1]
         elif kind in _PROFILE and len(limits) == 1:
@@ -239,8 +274,11 @@ def _result_row(st: Statement, feat: str, nominal: dict[str, _Feature], actual: 
         if not numeric or math.isnan(nom):
             return None
         act = point_number(numeric[0], where)
-        limits = [point_number(v, SourceLocation(name, line=tol.line)) for v in tol.words[1:] if _is_number(v)] \
-            if tol is not None else []
+        limits = (
+            [point_number(v, SourceLocation(name, line=tol.line)) for v in tol.words[1:] if _is_number(v)]
+            if tol is not None
+            else []
+        )
         if len(limits) >= 2:
             lower, upper = limits[0], limits[1]
     else:
@@ -251,18 +289,47 @@ def _result_row(st: Statement, feat: str, nominal: dict[str, _Feature], actual: 
     if f_nom is not None and len(f_nom.values) >= 3:
         loc = SourceLocation(name, line=f_nom.line)
         x, y, z = (point_number(v, loc) for v in f_nom.values[:3])
-    return {"characteristic": st.label, "nominal": nom, "actual": act, "lower": lower, "upper": upper,
-            "x": x, "y": y, "z": z, "status": status, "source": f"{name}:{st.line}",
-            "axis": _axis(kind, values, f_nom, name), **_geometry_cells(kind, values, f_nom or f_act, name)}
+    return {
+        "characteristic": st.label,
+        "nominal": nom,
+        "actual": act,
+        "lower": lower,
+        "upper": upper,
+        "x": x,
+        "y": y,
+        "z": z,
+        "status": status,
+        "source": f"{name}:{st.line}",
+        "axis": _axis(kind, values, f_nom, name),
+        **_geometry_cells(kind, values, f_nom or f_act, name),
+    }
 
 
 #: DMIS feature words → the ``feature`` column (:mod:`parsers.geometry`).
-_FEATURE_WORDS = {"POINT": "point", "EDGEPT": "edgepoint", "PLANE": "plane", "LINE": "line", "CIRCLE": "circle",
-                  "ARC": "arc", "CYLNDR": "cylinder", "CYLINDER": "cylinder", "CONE": "cone", "SPHERE": "sphere",
-                  "CPARLN": "slot", "PARPLN": "slot", "TORUS": "torus"}
+_FEATURE_WORDS = {
+    "POINT": "point",
+    "EDGEPT": "edgepoint",
+    "PLANE": "plane",
+    "LINE": "line",
+    "CIRCLE": "circle",
+    "ARC": "arc",
+    "CYLNDR": "cylinder",
+    "CYLINDER": "cylinder",
+    "CONE": "cone",
+    "SPHERE": "sphere",
+    "CPARLN": "slot",
+    "PARPLN": "slot",
+    "TORUS": "torus",
+}
 #: ``CORTOL`` words and tolerance types that give a size → the ``size`` column.
-_SIZE_WORDS = {"DIAMETER": "diameter", "DIAM": "diameter", "RADIUS": "radius", "RAD": "radius", "WIDTH": "width",
-               "LENGTH": "length"}
+_SIZE_WORDS = {
+    "DIAMETER": "diameter",
+    "DIAM": "diameter",
+    "RADIUS": "radius",
+    "RAD": "radius",
+    "WIDTH": "width",
+    "LENGTH": "length",
+}
 
 
 def _geometry_cells(kind: str, values: list[str], feature: _Feature | None, name: str) -> dict[str, object]:

@@ -2,9 +2,8 @@
 
 from __future__ import annotations
 
-from parsers._source import final_line_break
 from parsers._registry import FormatSpec, register
-from parsers._source import Peek, decode
+from parsers._source import Peek, decode, final_line_break
 from parsers.korean.report import read_korean, sniff_korean
 
 __all__ = ["read_korean", "sniff_korean"]
@@ -18,13 +17,15 @@ def _sniff(peek: Peek) -> bool:
         return False
 
 
-register(FormatSpec(
-    name="korean",
-    description="Korean production CMM text report (품명/측정값/기준값 layout, CP949)",
-    extensions=(),
-    sniff=_sniff,
-    read=read_korean,
-    options=("unit", "encoding", "lenient"),
-    priority=50,
-    complete=final_line_break,
-))
+register(
+    FormatSpec(
+        name="korean",
+        description="Korean production CMM text report (품명/측정값/기준값 layout, CP949)",
+        extensions=(),
+        sniff=_sniff,
+        read=read_korean,
+        options=("unit", "encoding", "lenient"),
+        priority=50,
+        complete=final_line_break,
+    )
+)

@@ -28,16 +28,17 @@ import pandas as pd
 from parsers._notes import note
 from parsers._rows import SkipLog, finish_rows, parse_number, unit_factor, unit_or_none
 from parsers._source import Source, read_text
-from parsers.geometry import axis_vector, geometry_cells
 from parsers.canonical import DEVIATION_TOLERANCE_MM
+from parsers.geometry import axis_vector, geometry_cells
 from setupfix.errors import ParseError, SourceLocation
 
 __all__ = ["read_korean", "sniff_korean"]
 
 _LENGTH_ITEMS = frozenset({"X", "Y", "Z", "D", "DS", "R", "L", "W", "H"})
 _ANGLE_ITEMS = frozenset({"ANG", "X/Y", "Y/X", "Z/X", "X/Z", "Y/Z", "Z/Y", "A"})
-_FORM_ITEMS = frozenset({"평면도", "원통도", "진원도", "동심도", "직각도", "평행도",
-                         "위치도", "진직도", "경사도", "대칭도", "윤곽도"})
+_FORM_ITEMS = frozenset(
+    {"평면도", "원통도", "진원도", "동심도", "직각도", "평행도", "위치도", "진직도", "경사도", "대칭도", "윤곽도"}
+)
 #: Right edges (display columns) of actual, nominal, upper, lower, deviation; judgement after.
 _EDGES = (("item", 18), ("actual", 31), ("nominal", 45), ("upper", 59), ("lower", 73), ("deviation", 86))
 _ELEMENT = re.compile(r"^\s{0,6}(\d+)\s+(\S+)")
@@ -47,8 +48,16 @@ _BAR = re.compile(r"^[-+|]+$")
 
 #: Element words (the name's letters before its number) → the ``feature`` column (:mod:`parsers.geometry`):
 #: 원 circle, 원통 cylinder, 평면 plane, 점 point, 직선 line, 구 sphere, 원추 cone, 장공 slot.
-_FEATURE_WORDS = {"원": "circle", "원통": "cylinder", "평면": "plane", "점": "point", "직선": "line", "구": "sphere",
-                  "원추": "cone", "장공": "slot"}
+_FEATURE_WORDS = {
+    "원": "circle",
+    "원통": "cylinder",
+    "평면": "plane",
+    "점": "point",
+    "직선": "line",
+    "구": "sphere",
+    "원추": "cone",
+    "장공": "slot",
+}
 _ELEMENT_WORD = re.compile(r"^([^\d(#<\s]+)")
 #: Items that state a size of the element.
 _SIZE_ITEMS = {"D": "diameter", "R": "radius"}
@@ -107,8 +116,9 @@ def _header_value(text: str, label: str) -> str:
     return match.group(1).strip() if match else ""
 
 
-def along_normal(nominal: float, actual: float, stated: float | None, lower: float, upper: float
-                 ) -> tuple[float, float, float] | None:
+def along_normal(
+    nominal: float, actual: float, stated: float | None, lower: float, upper: float
+) -> tuple[float, float, float] | None:
     """(nominal, lower, upper) of a row in coordinates, learning the report's sign convention.
 
     The report states each deviation along the feature's normal.  Where the normal
@@ -136,8 +146,9 @@ def along_normal(nominal: float, actual: float, stated: float | None, lower: flo
     return None
 
 
-def read_korean(path: str | Path | Source, *, unit: str | None = None, encoding: str | None = None,
-                lenient: bool = False) -> pd.DataFrame:
+def read_korean(
+    path: str | Path | Source, *, unit: str | None = None, encoding: str | None = None, lenient: bool = False
+) -> pd.DataFrame:
     """Read a Korean CMM text report into the canonical table.
 
     Parameters
@@ -226,8 +237,10 @@ def read_korean(path: str | Path | Source, *, unit: str | None = None, encoding:
             stated = parse_number(cells["deviation"], where, "편차") * factor if "deviation" in cells else None
             read = along_normal(nominal, actual, stated, lower, upper)
             if read is None:
-                message = (f"stated deviation {stated:g} mm fits neither actual - nominal = {actual - nominal:g} mm "
-                           "nor its negative (deviation along a reversed normal)")
+                message = (
+                    f"stated deviation {stated:g} mm fits neither actual - nominal = {actual - nominal:g} mm "
+                    "nor its negative (deviation along a reversed normal)"
+                )
                 if not lenient:
                     raise ParseError(message, location=where, hint="--lenient skips such rows")
                 skipped.add("row(s) contradicting themselves, skipped by --lenient", number)
@@ -238,11 +251,22 @@ def read_korean(path: str | Path | Source, *, unit: str | None = None, encoding:
             deviation = actual - nominal
         else:
             raise ParseError(f"unknown item {item!r}", location=where)
-        rows.append({
-            "characteristic": f"{element}.{item}", "nominal": nominal, "actual": actual, "deviation": deviation,
-            "lower": lower, "upper": upper, "part": part, "timestamp": stamp, "station": "",
-            "status": status, "source": f"{name}:{number}", **_geometry(element, item),
-        })
+        rows.append(
+            {
+                "characteristic": f"{element}.{item}",
+                "nominal": nominal,
+                "actual": actual,
+                "deviation": deviation,
+                "lower": lower,
+                "upper": upper,
+                "part": part,
+                "timestamp": stamp,
+                "station": "",
+                "status": status,
+                "source": f"{name}:{number}",
+                **_geometry(element, item),
+            }
+        )
     if not in_table:
         raise ParseError("no 측정값/기준값 heading found", location=SourceLocation(name))
     table = finish_rows(rows, name, skipped, what="Korean CMM")

@@ -44,9 +44,18 @@ from setupfix.errors import ParseError, SourceLocation
 __all__ = ["read_qvpak", "sniff_qvpak"]
 
 _HEADINGS = {
-    "ELEMENTO": "element", "ATUAL": "actual", "NOMINAL": "nominal", "DESVIO": "deviation",
-    "TOL.SUP.": "upper", "TOL.INF.": "lower", "DE./FORA": "verdict",
-    "ELEMENT": "element", "ACTUAL": "actual", "DEVIATION": "deviation", "UPPER": "upper", "LOWER": "lower",
+    "ELEMENTO": "element",
+    "ATUAL": "actual",
+    "NOMINAL": "nominal",
+    "DESVIO": "deviation",
+    "TOL.SUP.": "upper",
+    "TOL.INF.": "lower",
+    "DE./FORA": "verdict",
+    "ELEMENT": "element",
+    "ACTUAL": "actual",
+    "DEVIATION": "deviation",
+    "UPPER": "upper",
+    "LOWER": "lower",
 }
 _ELEMENT = re.compile(r"^(?P<type>[^\s:][^:]*):\s+(?P<name>[^\s(]+)")
 _VALUE = re.compile(r"^\s+(?P<label>[A-Za-z][A-Za-z0-9]*)\s+=")
@@ -105,7 +114,7 @@ def read_qvpak(path: str | Path, *, unit: str | None = None, encoding: str | Non
                 continue
             if label not in _LENGTHS:
                 raise ParseError(f"unknown quantity {label!r}", location=where)
-            cells = split_columns(line[value.end():].rjust(len(line)), spans)
+            cells = split_columns(line[value.end() :].rjust(len(line)), spans)
             cells.pop("element", None)
             raw.append((where, f"{element}.{label}", cells))
             continue
@@ -131,12 +140,21 @@ def read_qvpak(path: str | Path, *, unit: str | None = None, encoding: str | Non
         if not math.isnan(lower) and not math.isnan(upper) and lower >= upper:
             raise ParseError(f"lower limit {lower:g} is not below upper limit {upper:g}", location=where)
         verdict = cells.get("verdict", "").lower()
-        rows.append({
-            "characteristic": characteristic, "nominal": nominal, "actual": actual,
-            "deviation": checked_deviation(nominal, actual, stated, where), "lower": lower, "upper": upper,
-            "part": "", "timestamp": "", "station": "",
-            "status": {"de": "ok", "fora": "out"}.get(verdict, verdict), "source": f"{name}:{where.line}",
-        })
+        rows.append(
+            {
+                "characteristic": characteristic,
+                "nominal": nominal,
+                "actual": actual,
+                "deviation": checked_deviation(nominal, actual, stated, where),
+                "lower": lower,
+                "upper": upper,
+                "part": "",
+                "timestamp": "",
+                "station": "",
+                "status": {"de": "ok", "fora": "out"}.get(verdict, verdict),
+                "source": f"{name}:{where.line}",
+            }
+        )
     if rows and default is None:
         warn_assumed_mm(name, str(rows[0]["source"]).rsplit(":", 1)[-1])
     return finish_rows(rows, name, skipped, what="QVPAK")

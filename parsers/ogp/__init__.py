@@ -21,12 +21,15 @@ def _ogp_complete(data: bytes) -> str | None:
         return None if data.rstrip(b"\x00\r\n\t ")[-1:] == b"}" else "does not end with the RTF closing brace"
     return final_line_break(data)
 
-register(FormatSpec(
-    name="ogp",
-    description="OGP SmartScope / Measure-X step report (also RTF-wrapped) or run table",
-    extensions=(".rtf",),
-    sniff=_sniff,
-    read=read_ogp,
-    priority=50,
-    complete=_ogp_complete,
-))
+
+register(
+    FormatSpec(
+        name="ogp",
+        description="OGP SmartScope / Measure-X step report (also RTF-wrapped) or run table",
+        extensions=(".rtf",),
+        sniff=_sniff,
+        read=read_ogp,
+        priority=50,
+        complete=_ogp_complete,
+    )
+)

@@ -47,10 +47,25 @@ from setupfix.errors import ParseError, SourceLocation
 __all__ = ["read_ogp", "sniff_ogp"]
 
 _STEP = re.compile(r"^\s*Step:\s+(\d+)\s+(\S+)")
-_ROW = re.compile(r"^\s*(?:v\s+)?(?P<label>[A-Za-z0-9][A-Za-z0-9 ./#-]*?)"
-                  r"\s+(?P<nums>[+-]\d+\.\d+(?:\s+[+-]\d+\.\d+)*)\s*(?P<rest>.*)$")
-_FORM = ("flatness", "sphericity", "cylindricity", "circularity", "roundness", "straightness", "true position",
-         "position", "profile", "parallelism", "perpendicularity", "concentricity", "runout")
+_ROW = re.compile(
+    r"^\s*(?:v\s+)?(?P<label>[A-Za-z0-9][A-Za-z0-9 ./#-]*?)"
+    r"\s+(?P<nums>[+-]\d+\.\d+(?:\s+[+-]\d+\.\d+)*)\s*(?P<rest>.*)$"
+)
+_FORM = (
+    "flatness",
+    "sphericity",
+    "cylindricity",
+    "circularity",
+    "roundness",
+    "straightness",
+    "true position",
+    "position",
+    "profile",
+    "parallelism",
+    "perpendicularity",
+    "concentricity",
+    "runout",
+)
 _ANGLE = ("angle", "elevation", "azimuth")
 _WORD = re.compile(r"\S+")
 _RUN_STEP = re.compile(r"^Step\s+(\d+)\s+-\s*(.*)$")
@@ -118,8 +133,9 @@ def _step_report(lines: list[str], name: str, skipped: SkipLog) -> list[dict[str
             continue
         if table == "size":
             if len(nums) != 4:
-                raise ParseError(f"{label}: expected Actual Nominal Upper Lower, found {len(nums)} numbers",
-                                 location=where)
+                raise ParseError(
+                    f"{label}: expected Actual Nominal Upper Lower, found {len(nums)} numbers", location=where
+                )
             actual, nominal, upper, lower = nums
             if upper == 0 and lower == 0:
                 upper = lower = math.nan
@@ -137,11 +153,21 @@ def _step_report(lines: list[str], name: str, skipped: SkipLog) -> list[dict[str
             upper = nums[1] if nums[1] != 0 else math.nan
         if not math.isnan(lower) and not math.isnan(upper) and lower >= upper:
             raise ParseError(f"lower limit {lower:g} is not below upper limit {upper:g}", location=where)
-        rows.append({
-            "characteristic": f"Step {step}.{label}", "nominal": nominal, "actual": actual,
-            "deviation": actual - nominal, "lower": lower, "upper": upper, "part": "", "timestamp": "",
-            "station": "", "status": "", "source": f"{name}:{number}",
-        })
+        rows.append(
+            {
+                "characteristic": f"Step {step}.{label}",
+                "nominal": nominal,
+                "actual": actual,
+                "deviation": actual - nominal,
+                "lower": lower,
+                "upper": upper,
+                "part": "",
+                "timestamp": "",
+                "station": "",
+                "status": "",
+                "source": f"{name}:{number}",
+            }
+        )
     return rows
 
 
@@ -151,8 +177,10 @@ def _run_columns(line: str, where: SourceLocation) -> dict[str, str]:
         start = match.start()
         key = next((k for k, lo, hi in _RUN_COLUMNS if lo <= start < hi), None)
         if key is None or key in cells:
-            raise ParseError(f"value at column {start + 1} is in a column no sample shows filled "
-                             "(Unit, Tolerances or Exceeded)", location=where)
+            raise ParseError(
+                f"value at column {start + 1} is in a column no sample shows filled (Unit, Tolerances or Exceeded)",
+                location=where,
+            )
         cells[key] = match.group()
     return cells
 
@@ -207,11 +235,21 @@ def _run_table(lines: list[str], name: str, skipped: SkipLog, factor: float) -> 
         if deviation is None:
             skipped.add("row(s) whose actual and nominal differ in sign (magnitudes compared)", number)
             continue
-        rows.append({
-            "characteristic": f"Step {step}.{label}", "nominal": nominal, "actual": actual,
-            "deviation": deviation, "lower": math.nan, "upper": math.nan, "part": part, "timestamp": stamp,
-            "station": "", "status": "", "source": f"{name}:{number}",
-        })
+        rows.append(
+            {
+                "characteristic": f"Step {step}.{label}",
+                "nominal": nominal,
+                "actual": actual,
+                "deviation": deviation,
+                "lower": math.nan,
+                "upper": math.nan,
+                "part": part,
+                "timestamp": stamp,
+                "station": "",
+                "status": "",
+                "source": f"{name}:{number}",
+            }
+        )
     return rows
 
 

@@ -44,7 +44,7 @@ def rtf_lines(text: str) -> list[str]:
         pieces = []
         pos = 0
         for match in _CONTROL.finditer(line):
-            pieces.append(re.sub(r"[{}]", "", line[pos:match.start()]))
+            pieces.append(re.sub(r"[{}]", "", line[pos : match.start()]))
             pieces.append(_control(match))
             pos = match.end()
         pieces.append(re.sub(r"[{}]", "", line[pos:]))

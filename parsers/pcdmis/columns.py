@@ -33,9 +33,20 @@ from setupfix.model.measurements import CANONICAL_COLUMNS
 __all__ = ["STAMP", "heading_of", "read_columns"]
 
 _COLUMNS = {
-    "feature": "name", "id": "name", "axis": "axis", "axisletter": "axis", "nominal": "nominal",
-    "meas": "meas", "measured": "meas", "+tol": "plus", "plus": "plus", "-tol": "minus", "minus": "minus",
-    "dev": "dev", "outtol": "outtol", "unit": "unit",
+    "feature": "name",
+    "id": "name",
+    "axis": "axis",
+    "axisletter": "axis",
+    "nominal": "nominal",
+    "meas": "meas",
+    "measured": "meas",
+    "+tol": "plus",
+    "plus": "plus",
+    "-tol": "minus",
+    "minus": "minus",
+    "dev": "dev",
+    "outtol": "outtol",
+    "unit": "unit",
 }
 _LABELS = {"nominal": "NOMINAL", "meas": "MEAS", "plus": "PLUS", "minus": "MINUS", "dev": "DEV", "outtol": "OUTTOL"}
 #: NC Gage ``DateTime`` value, ``yyyyMMddhhmmssfff``.
@@ -58,8 +69,10 @@ def _numbers(cells: np.ndarray, lines: np.ndarray, name: str, key: str) -> np.nd
         bad = np.isinf(cells)
         if bad.any():
             i = int(np.argmax(bad))
-            raise ParseError(f"{_LABELS[key]}: expected a finite number, found {cells[i]!r}",
-                             location=SourceLocation(name, line=int(lines[i])))
+            raise ParseError(
+                f"{_LABELS[key]}: expected a finite number, found {cells[i]!r}",
+                location=SourceLocation(name, line=int(lines[i])),
+            )
         return cells
     values = np.full(len(cells), np.nan)
     filled = cells != ""
@@ -95,14 +108,23 @@ def read_columns(text: str, name: str, default_unit: str | None) -> pd.DataFrame
             meta[record[0].strip().lower()] = record[1].strip()
     if heading is None:
         return None
-    body = "\n".join(lines[heading_at + 1:])
-    line_numbers = np.array([heading_at + 2 + i for i, row in enumerate(lines[heading_at + 1:])
-                             if row.strip(" ,\r\t\"")])
+    body = "\n".join(lines[heading_at + 1 :])
+    line_numbers = np.array(
+        [heading_at + 2 + i for i, row in enumerate(lines[heading_at + 1 :]) if row.strip(' ,\r\t"')]
+    )
     try:
         # Numbers are converted by the C parser; text columns stay text. Only "" is missing.
         text_columns = {i: object for key, i in heading.items() if key in ("name", "axis", "unit")}
-        table = pd.read_csv(io.StringIO(body), header=None, dtype=text_columns, keep_default_na=False,
-                            na_values=[""], skip_blank_lines=True, skipinitialspace=True, engine="c")
+        table = pd.read_csv(
+            io.StringIO(body),
+            header=None,
+            dtype=text_columns,
+            keep_default_na=False,
+            na_values=[""],
+            skip_blank_lines=True,
+            skipinitialspace=True,
+            engine="c",
+        )
     except (pd.errors.ParserError, pd.errors.EmptyDataError, ValueError, OverflowError):
         return None
     if len(table):
@@ -134,8 +156,10 @@ def read_columns(text: str, name: str, default_unit: str | None) -> pd.DataFrame
         units = np.full(len(lines_kept), default_unit or "", dtype=object)
     factors = {u: unit_factor(u) if u else 1.0 for u in set(units.tolist())}
     factor = np.array([factors[u] for u in units], dtype=float)
-    num = {k: _numbers(cells[k], lines_kept, name, k) if k in cells else np.full(len(lines_kept), np.nan)
-           for k in ("nominal", "meas", "plus", "minus", "dev", "outtol")}
+    num = {
+        k: _numbers(cells[k], lines_kept, name, k) if k in cells else np.full(len(lines_kept), np.nan)
+        for k in ("nominal", "meas", "plus", "minus", "dev", "outtol")
+    }
     signed = bool((num["minus"] < 0).any())
     usable = ~(np.isnan(num["nominal"]) | np.isnan(num["meas"]))
     for line in lines_kept[~usable]:
@@ -152,8 +176,10 @@ def read_columns(text: str, name: str, default_unit: str | None) -> pd.DataFrame
     above = usable & (lower > upper)
     if above.any():
         i = int(np.argmax(above))
-        raise ParseError(f"-TOL {num['minus'][i]:g} lies above +TOL {num['plus'][i]:g}",
-                         location=SourceLocation(name, line=int(lines_kept[i])))
+        raise ParseError(
+            f"-TOL {num['minus'][i]:g} lies above +TOL {num['plus'][i]:g}",
+            location=SourceLocation(name, line=int(lines_kept[i])),
+        )
     with np.errstate(invalid="ignore"):
         expected = np.where(np.isnan(upper), 0.0, np.maximum(deviation - upper, 0.0))
         expected = np.where(~np.isnan(lower) & (deviation < lower), lower - deviation, expected)
@@ -162,25 +188,37 @@ def read_columns(text: str, name: str, default_unit: str | None) -> pd.DataFrame
         off = usable & ~np.isnan(outtol) & mismatch
     if off.any():
         i = int(np.argmax(off))
-        raise ParseError(f"OUTTOL {outtol[i]:g} contradicts the deviation and tolerances "
-                         f"(expected {expected[i] / factor[i]:g}); is -TOL signed?",
-                         location=SourceLocation(name, line=int(lines_kept[i])))
+        raise ParseError(
+            f"OUTTOL {outtol[i]:g} contradicts the deviation and tolerances "
+            f"(expected {expected[i] / factor[i]:g}); is -TOL signed?",
+            location=SourceLocation(name, line=int(lines_kept[i])),
+        )
     if not usable.any():
         return finish_rows([], name, skipped, what="PC-DMIS CSV")
     stamp = STAMP.match(meta.get("datetime", ""))
     names, axes = cells["name"][usable].astype(object), cells["axis"][usable].astype(object)
     n = int(usable.sum())
-    frame = pd.DataFrame({
-        "characteristic": [f"{a}.{b}" if b else a for a, b in zip(names, axes, strict=True)],
-        "nominal": nominal[usable], "actual": actual[usable], "deviation": deviation[usable],
-        "lower": lower[usable], "upper": upper[usable], "unit": "mm",
-        "part": meta.get("serial number") or f"{meta.get('part name', 'part')}#1",
-        "report": name.replace("\\", "/").rsplit("/", 1)[-1],
-        "timestamp": "{}-{}-{}T{}:{}:{}".format(*stamp.groups()) if stamp else "",
-        "station": "", "x": np.full(n, np.nan), "y": np.full(n, np.nan), "z": np.full(n, np.nan),
-        "status": np.where(np.isnan(outtol[usable]), "", np.where(outtol[usable] != 0, "out", "ok")),
-        "source": [f"{name}:{line}" for line in lines_kept[usable]],
-    }, columns=list(CANONICAL_COLUMNS))
+    frame = pd.DataFrame(
+        {
+            "characteristic": [f"{a}.{b}" if b else a for a, b in zip(names, axes, strict=True)],
+            "nominal": nominal[usable],
+            "actual": actual[usable],
+            "deviation": deviation[usable],
+            "lower": lower[usable],
+            "upper": upper[usable],
+            "unit": "mm",
+            "part": meta.get("serial number") or f"{meta.get('part name', 'part')}#1",
+            "report": name.replace("\\", "/").rsplit("/", 1)[-1],
+            "timestamp": "{}-{}-{}T{}:{}:{}".format(*stamp.groups()) if stamp else "",
+            "station": "",
+            "x": np.full(n, np.nan),
+            "y": np.full(n, np.nan),
+            "z": np.full(n, np.nan),
+            "status": np.where(np.isnan(outtol[usable]), "", np.where(outtol[usable] != 0, "out", "ok")),
+            "source": [f"{name}:{line}" for line in lines_kept[usable]],
+        },
+        columns=list(CANONICAL_COLUMNS),
+    )
     letters = np.char.upper(np.char.strip(axes.astype(str)))
     along = np.isin(letters, ["X", "Y", "Z"])
     for direction, letter in zip(DIRECTION_COLUMNS, "XYZ", strict=True):  # as text_report.geometry_of, by column

@@ -49,8 +49,17 @@ __all__ = ["read_pcdmis_text", "sniff_pcdmis_text"]
 _DIM = re.compile(r"^\s*DIM\s+(?P<name>[^=\s]+)\s*=\s*(?P<rest>.*)$")
 _UNITS = re.compile(r"UNITS\s*=\s*(?P<unit>[A-Za-z]+)")
 _HEADINGS = {
-    "AX": "axis", "NOMINAL": "nominal", "NOM": "nominal", "+TOL": "plus", "-TOL": "minus",
-    "MEAS": "meas", "DEV": "dev", "OUTTOL": "outtol", "OUT-TOL": "outtol", "MAX": "max", "MIN": "min",
+    "AX": "axis",
+    "NOMINAL": "nominal",
+    "NOM": "nominal",
+    "+TOL": "plus",
+    "-TOL": "minus",
+    "MEAS": "meas",
+    "DEV": "dev",
+    "OUTTOL": "outtol",
+    "OUT-TOL": "outtol",
+    "MAX": "max",
+    "MIN": "min",
     "BONUS": "bonus",
 }
 _HEADER_FIELD = re.compile(r"(PART NAME|REV NUMBER|SER NUMBER|STATS COUNT)\s*:[ \t]*(.*?)(?=\s{2,}|\t|$)")
@@ -128,18 +137,39 @@ def _collect(text: str, name: str, default_unit: str | None, skipped: SkipLog) -
         cells = split_columns(line, spans)
         axis = cells.get("axis", "")
         if axis.upper() in ANGLE_AXES or axis.upper() in NON_LENGTH_AXES:
-            skipped.add(f"non-length characteristic(s) (axis {axis})" if axis.upper() in NON_LENGTH_AXES else
-                        "angle characteristic(s) (setupfix corrects lengths)", number)
+            skipped.add(
+                f"non-length characteristic(s) (axis {axis})"
+                if axis.upper() in NON_LENGTH_AXES
+                else "angle characteristic(s) (setupfix corrects lengths)",
+                number,
+            )
             continue
-        raws.append(_Raw(dim, axis, cells, unit or "", _part_label(header, max(parts_seen, 1)), where,
-                         {"feature": feature} if feature else {}))
+        raws.append(
+            _Raw(
+                dim,
+                axis,
+                cells,
+                unit or "",
+                _part_label(header, max(parts_seen, 1)),
+                where,
+                {"feature": feature} if feature else {},
+            )
+        )
     return raws
 
 
 #: ``LOCATION OF CIRCLE CIR1``: the feature word of a location dimension → the ``feature`` column.
 _OF_FEATURE = re.compile(r"\bLOCATION\s+OF\s+(?P<word>[A-Z]+)", re.IGNORECASE)
-_FEATURE_WORDS = {"CIRCLE": "circle", "CYLINDER": "cylinder", "SPHERE": "sphere", "CONE": "cone", "PLANE": "plane",
-                  "POINT": "point", "LINE": "line", "SLOT": "slot"}
+_FEATURE_WORDS = {
+    "CIRCLE": "circle",
+    "CYLINDER": "cylinder",
+    "SPHERE": "sphere",
+    "CONE": "cone",
+    "PLANE": "plane",
+    "POINT": "point",
+    "LINE": "line",
+    "SLOT": "slot",
+}
 #: Axis letters that state a size (Hexagon help, *Location Axes*: D diameter, R radius).
 _SIZE_LETTERS = {"D": "diameter", "R": "radius"}
 
@@ -181,8 +211,9 @@ def rows_from_raw(raws: list[_Raw], name: str, skipped: SkipLog, *, what: str) -
         On a non-numeric value, a deviation or OUTTOL that contradicts the values, or
         when no length row is left.
     """
-    signed_minus = any((try_number(r.cells.get("minus", "").split()[0]) or 0.0) < 0
-                       for r in raws if r.cells.get("minus", "").split())
+    signed_minus = any(
+        (try_number(r.cells.get("minus", "").split()[0]) or 0.0) < 0 for r in raws if r.cells.get("minus", "").split()
+    )
     rows: list[dict[str, object]] = []
     unstated = False
     for raw in raws:
@@ -210,15 +241,25 @@ def rows_from_raw(raws: list[_Raw], name: str, skipped: SkipLog, *, what: str) -
             if abs(abs(outtol * factor) - expected) > max(0.0011, 0.00011 * factor):
                 raise ParseError(
                     f"OUTTOL {outtol:g} contradicts the deviation and tolerances "
-                    f"(expected {expected / factor:g}); is -TOL signed?", location=where)
-        rows.append({
-            "characteristic": f"{raw.name}.{raw.axis}" if raw.axis else raw.name,
-            "nominal": nominal, "actual": meas, "deviation": deviation,
-            "lower": lower, "upper": upper, "part": raw.part,
-            "timestamp": raw.extra.get("timestamp", ""), "station": "",
-            "status": "" if outtol is None else ("out" if outtol != 0 else "ok"),
-            "source": f"{name}:{where.line}", **geometry_of(raw.axis, raw.extra.get("feature", "")),
-        })
+                    f"(expected {expected / factor:g}); is -TOL signed?",
+                    location=where,
+                )
+        rows.append(
+            {
+                "characteristic": f"{raw.name}.{raw.axis}" if raw.axis else raw.name,
+                "nominal": nominal,
+                "actual": meas,
+                "deviation": deviation,
+                "lower": lower,
+                "upper": upper,
+                "part": raw.part,
+                "timestamp": raw.extra.get("timestamp", ""),
+                "station": "",
+                "status": "" if outtol is None else ("out" if outtol != 0 else "ok"),
+                "source": f"{name}:{where.line}",
+                **geometry_of(raw.axis, raw.extra.get("feature", "")),
+            }
+        )
     if rows and unstated:
         first_line = next(r.where.line for r in raws if not r.unit)
         assert first_line is not None  # _collect locates every row by its line number

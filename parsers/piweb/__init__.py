@@ -7,11 +7,13 @@ from parsers.piweb.rest_json import read_piweb, sniff_piweb
 
 __all__ = ["read_piweb", "sniff_piweb"]
 
-register(FormatSpec(
-    name="piweb",
-    description="ZEISS PiWeb REST JSON values file (nominals from the characteristics file beside it)",
-    extensions=(".json",),
-    sniff=lambda peek: sniff_piweb(peek.text),
-    read=read_piweb,
-    priority=50,
-))
+register(
+    FormatSpec(
+        name="piweb",
+        description="ZEISS PiWeb REST JSON values file (nominals from the characteristics file beside it)",
+        extensions=(".json",),
+        sniff=lambda peek: sniff_piweb(peek.text),
+        read=read_piweb,
+        priority=50,
+    )
+)

@@ -37,8 +37,10 @@ def sniff_piweb(text: str) -> bool:
         head = text.lstrip("\ufeff \r\n\t")
         if not head.startswith("["):
             return False
-        return bool(re.search(r'"(characteristics|partUuid)"\s*:', head[:4096]) or
-                    re.search(r'"path"\s*:\s*"(PC|P):/', head[:4096]))
+        return bool(
+            re.search(r'"(characteristics|partUuid)"\s*:', head[:4096])
+            or re.search(r'"path"\s*:\s*"(PC|P):/', head[:4096])
+        )
     except Exception:  # noqa: BLE001 - a sniffer never raises
         return False
 
@@ -129,15 +131,25 @@ def read_piweb(path: str | Path, *, unit: str | None = None, encoding: str | Non
         raise ParseError("not a PiWeb list of measurements", location=SourceLocation(name))
     if "characteristics" not in data[0] or not isinstance(data[0]["characteristics"], dict):
         first = data[0]
-        kind = ("parts" if "charChangeDate" in first else
-                "measurements (attributes, no values)" if "partUuid" in first else
-                "characteristics (nominals, no values)" if "path" in first else "JSON")
-        raise ParseError(f"PiWeb {kind} file holds no measured values", location=SourceLocation(name),
-                         hint="read the values file; its characteristics file beside it is used for nominals")
+        kind = (
+            "parts"
+            if "charChangeDate" in first
+            else "measurements (attributes, no values)"
+            if "partUuid" in first
+            else "characteristics (nominals, no values)"
+            if "path" in first
+            else "JSON"
+        )
+        raise ParseError(
+            f"PiWeb {kind} file holds no measured values",
+            location=SourceLocation(name),
+            hint="read the values file; its characteristics file beside it is used for nominals",
+        )
     chars_path = source.path.with_name(source.path.name.replace("values", "characteristics"))
     if chars_path == source.path or not chars_path.exists():
-        raise ParseError(f"characteristics file {chars_path.name} not found beside the values file",
-                         location=SourceLocation(name))
+        raise ParseError(
+            f"characteristics file {chars_path.name} not found beside the values file", location=SourceLocation(name)
+        )
     chars = _characteristics(_load(chars_path, encoding), str(chars_path))
     skipped = SkipLog(name)
     rows: list[dict[str, object]] = []
@@ -181,13 +193,22 @@ def read_piweb(path: str | Path, *, unit: str | None = None, encoding: str | Non
                 continue
             nominal *= factor
             lower, upper = _limits(cattr, nominal, factor, where)
-            rows.append({
-                "characteristic": char["name"], "nominal": nominal, "actual": actual * factor,
-                "deviation": actual * factor - nominal, "lower": lower, "upper": upper, "part": part,
-                "timestamp": stamp, "station": "" if nest in (None, "") else str(nest), "status": "",
-                **_position(cattr, factor, where),
-                "source": f"{name}#[{i}]/{char['name']}",
-            })
+            rows.append(
+                {
+                    "characteristic": char["name"],
+                    "nominal": nominal,
+                    "actual": actual * factor,
+                    "deviation": actual * factor - nominal,
+                    "lower": lower,
+                    "upper": upper,
+                    "part": part,
+                    "timestamp": stamp,
+                    "station": "" if nest in (None, "") else str(nest),
+                    "status": "",
+                    **_position(cattr, factor, where),
+                    "source": f"{name}#[{i}]/{char['name']}",
+                }
+            )
     if rows and unstated:
         warn_assumed_mm(name, "[0]")
     return finish_rows(rows, name, skipped, what="PiWeb")

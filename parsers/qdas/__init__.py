@@ -2,18 +2,20 @@
 
 from __future__ import annotations
 
-from parsers._source import final_line_break
 from parsers._registry import FormatSpec, register
+from parsers._source import final_line_break
 from parsers.qdas.aqdef import read_aqdef, sniff_aqdef
 
 __all__ = ["read_aqdef", "sniff_aqdef"]
 
-register(FormatSpec(
-    name="qdas",
-    description="Q-DAS AQDEF transfer file (.dfq, or .dfd + .dfx/.dfb pair)",
-    extensions=(".dfq", ".dfd", ".dfx", ".dfb"),
-    sniff=lambda peek: sniff_aqdef(peek.text, peek.suffix),
-    read=read_aqdef,
-    priority=50,
-    complete=final_line_break,
-))
+register(
+    FormatSpec(
+        name="qdas",
+        description="Q-DAS AQDEF transfer file (.dfq, or .dfd + .dfx/.dfb pair)",
+        extensions=(".dfq", ".dfd", ".dfx", ".dfb"),
+        sniff=lambda peek: sniff_aqdef(peek.text, peek.suffix),
+        read=read_aqdef,
+        priority=50,
+        complete=final_line_break,
+    )
+)

@@ -139,8 +139,10 @@ def _feed_kline(state: _State, key: str, index: int | None, value: str, where: S
             found = state.last_value.get(index)
             targets = [] if found is None else [found]
         if not targets and key == "K0004" and index and _variable(state, index):
-            raise ParseError(f"{key} (date) before a value of characteristic {index}: a K0004 line follows "
-                             "the K0001 line it dates", location=where)
+            raise ParseError(
+                f"{key} (date) before a value of characteristic {index}: a K0004 line follows the K0001 line it dates",
+                location=where,
+            )
         for target in targets:
             target.fields[key] = value
 
@@ -224,8 +226,11 @@ def _limits(char: _Char, nominal: float, factor: float, where: SourceLocation) -
     lower = lo_abs - nominal if lo_abs is not None else lo_rel
     upper = up_abs - nominal if up_abs is not None else up_rel
     for absolute, relative, key in ((lo_abs, lo_rel, "K2112"), (up_abs, up_rel, "K2113")):
-        if (absolute is not None and relative is not None
-                and abs(absolute - nominal - relative) > 1e-6 * max(1.0, abs(nominal))):
+        if (
+            absolute is not None
+            and relative is not None
+            and abs(absolute - nominal - relative) > 1e-6 * max(1.0, abs(nominal))
+        ):
             raise ParseError(f"{key} allowance contradicts the absolute limit", location=char.lines.get(key, where))
     lo = math.nan if lower is None else lower
     up = math.nan if upper is None else upper
@@ -269,12 +274,18 @@ def read_aqdef(path: str | Path, *, unit: str | None = None, encoding: str | Non
     lines: list[tuple[SourceLocation, str]] = []
     if suffix in (".dfd", ".dfx", ".dfb"):
         dfd = _beside(path, ".dfd") if suffix != ".dfd" else path
-        values = path if suffix != ".dfd" else (_beside(path, ".dfx") if _beside(path, ".dfx").exists()
-                                                 else _beside(path, ".dfb"))
+        values = (
+            path
+            if suffix != ".dfd"
+            else (_beside(path, ".dfx") if _beside(path, ".dfx").exists() else _beside(path, ".dfb"))
+        )
         for part in (dfd, values):
             if not part.exists() and part != path:
-                raise ParseError(f"{part.name} not found beside it", location=SourceLocation(name),
-                                 hint="a .dfd description and its .dfx (or .dfb) values are read together")
+                raise ParseError(
+                    f"{part.name} not found beside it",
+                    location=SourceLocation(name),
+                    hint="a .dfd description and its .dfx (or .dfb) values are read together",
+                )
             lines += _lines(read_text(source if part == path else part, encoding), str(part))
     else:
         lines = _lines(read_text(source, encoding), name)
@@ -328,8 +339,9 @@ def _rows(state: _State, name: str, default_unit: str | None) -> pd.DataFrame:
         if item.where.path != name:
             line = f"{Path(item.where.path).name}:{line}"
         if char is None:
-            raise ParseError(f"value of characteristic {item.char}, which the file does not describe",
-                             location=item.where)
+            raise ParseError(
+                f"value of characteristic {item.char}, which the file does not describe", location=item.where
+            )
         kind = char.fields.get("K2004", "0").strip() or "0"
         if kind != "0":
             skipped.add(f"value(s) of attributive characteristics (K2004={kind})", line)
@@ -352,16 +364,21 @@ def _rows(state: _State, name: str, default_unit: str | None) -> pd.DataFrame:
         actual = parse_number(raw, item.where, "K0001 value") * factor
         ident = item.fields.get("K0014", "").strip()
         nest = item.fields.get("K0007", "").strip()
-        rows.append({
-            "characteristic": characteristic,
-            "nominal": nominal, "actual": actual, "deviation": actual - nominal,
-            "lower": lower, "upper": upper,
-            "part": ident or f"{part_no}#{item.sample}",
-            "timestamp": _date(item.fields.get("K0004", ""), item.where),
-            "station": "" if nest in ("", "0") else nest,
-            "status": "",
-            "source": f"{item.where.path}:{line}",
-        })
+        rows.append(
+            {
+                "characteristic": characteristic,
+                "nominal": nominal,
+                "actual": actual,
+                "deviation": actual - nominal,
+                "lower": lower,
+                "upper": upper,
+                "part": ident or f"{part_no}#{item.sample}",
+                "timestamp": _date(item.fields.get("K0004", ""), item.where),
+                "station": "" if nest in ("", "0") else nest,
+                "status": "",
+                "source": f"{item.where.path}:{line}",
+            }
+        )
     valued = {item.char for item in state.values}
     for number, char in state.chars.items():
         kind = char.fields.get("K2004", "0").strip() or "0"

@@ -7,12 +7,14 @@ from parsers.qif.reader import read_qif, sniff_qif
 
 __all__ = ["read_qif", "sniff_qif", "SPEC"]
 
-SPEC = register(FormatSpec(
-    name="qif",
-    description="QIF 3.x / 2.x measurement results (XML; several parts per file)",
-    extensions=(".qif",),
-    sniff=lambda peek: sniff_qif(peek.text),
-    read=read_qif,
-    options=("unit",),
-    priority=50,
-))
+SPEC = register(
+    FormatSpec(
+        name="qif",
+        description="QIF 3.x / 2.x measurement results (XML; several parts per file)",
+        extensions=(".qif",),
+        sniff=lambda peek: sniff_qif(peek.text),
+        read=read_qif,
+        options=("unit",),
+        priority=50,
+    )
+)

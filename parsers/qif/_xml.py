@@ -83,7 +83,9 @@ def parse_xml(data: bytes, path: str) -> etree._Element:
     docinfo = root.getroottree().docinfo
     if docinfo.doctype or docinfo.internalDTD is not None:
         # A declaration in an encoding the byte check cannot see (EBCDIC, …): refuse all the same.
-        raise ParseError("document type or entity declarations are not accepted in a report",
-                         location=SourceLocation(path),
-                         hint="entity expansion and external entities are refused for safety")
+        raise ParseError(
+            "document type or entity declarations are not accepted in a report",
+            location=SourceLocation(path),
+            hint="entity expansion and external entities are refused for safety",
+        )
     return root

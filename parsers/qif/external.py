@@ -84,8 +84,9 @@ def beside(folder: Path, uri: str) -> Path | None:
         return None
 
 
-def resolve_external(root: etree._Element, ns: str, path: str, doc_id: str, where: SourceLocation
-                     ) -> tuple[str, etree._Element]:
+def resolve_external(
+    root: etree._Element, ns: str, path: str, doc_id: str, where: SourceLocation
+) -> tuple[str, etree._Element]:
     """Find and parse the external QIF document ``doc_id`` of ``root``.
 
     Returns
@@ -104,16 +105,21 @@ def resolve_external(root: etree._Element, ns: str, path: str, doc_id: str, wher
             declared = ext
             break
     if declared is None:
-        raise ParseError(f"refers to external QIF document {doc_id}, which ExternalQIFReferences does not declare",
-                         location=where)
+        raise ParseError(
+            f"refers to external QIF document {doc_id}, which ExternalQIFReferences does not declare", location=where
+        )
     uri = (declared.findtext(f"{{{ns}}}URI") or "").strip()
     qpid = (declared.findtext(f"{{{ns}}}QPId") or "").strip().lower()
     if "://" in uri and not uri.lower().startswith("file://"):
-        raise ParseError(f"external plan {uri!r} is not a local file; setupfix does not fetch it", location=where,
-                         hint="download the plan and put it beside the results")
+        raise ParseError(
+            f"external plan {uri!r} is not a local file; setupfix does not fetch it",
+            location=where,
+            hint="download the plan and put it beside the results",
+        )
     if path == STDIN:
-        raise ParseError("results read from standard input refer to an external plan; read them from their folder",
-                         location=where)
+        raise ParseError(
+            "results read from standard input refer to an external plan; read them from their folder", location=where
+        )
     folder = Path(path).parent.resolve()
     candidates: list[Path] = []
     named = beside(folder, uri) if uri else None
@@ -144,4 +150,6 @@ def resolve_external(root: etree._Element, ns: str, path: str, doc_id: str, wher
             return str(candidate), plan
     raise ParseError(
         f"results refer to characteristics in the external plan '{uri or qpid}', which is not beside the file",
-        location=where, hint="put the QIF plan in the same folder as the results")
+        location=where,
+        hint="put the QIF plan in the same folder as the results",
+    )

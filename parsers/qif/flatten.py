@@ -22,8 +22,7 @@ __all__ = ["Record", "measurement_table", "record", "results_elements", "COLUMNS
 
 #: Where QIF 3 (``Results``), QIF 2.1 and 2.0 (``MeasurementsResults``, with or without a
 #: ``MeasurementResultsSet``) keep the parts' results; the stylesheet uses the same path.
-RESULTS_XPATH = ("/q:QIFDocument/*/q:MeasurementResultsSet/q:MeasurementResults"
-                 " | /q:QIFDocument/*/q:MeasurementResults")
+RESULTS_XPATH = "/q:QIFDocument/*/q:MeasurementResultsSet/q:MeasurementResults | /q:QIFDocument/*/q:MeasurementResults"
 
 _STYLESHEET = """<xsl:stylesheet version="1.0" xmlns:xsl="http://www.w3.org/1999/XSL/Transform" xmlns:q="{ns}">
 <xsl:output method="text" encoding="UTF-8"/>
@@ -92,8 +91,9 @@ def _transform(ns: str) -> etree.XSLT:
 
 def results_elements(root: etree._Element, ns: str) -> list[etree._Element]:
     """The ``MeasurementResults`` elements (one per part) in document order, as the stylesheet sees them."""
-    found: list[etree._Element] = (root.xpath(RESULTS_XPATH, namespaces={"q": ns}) if ns
-                                   else root.xpath(RESULTS_XPATH.replace("q:", "")))
+    found: list[etree._Element] = (
+        root.xpath(RESULTS_XPATH, namespaces={"q": ns}) if ns else root.xpath(RESULTS_XPATH.replace("q:", ""))
+    )
     return found
 
 
@@ -107,8 +107,16 @@ def measurement_table(root: etree._Element, ns: str) -> pd.DataFrame:
     text = str(_transform(ns)(etree.ElementTree(root)))
     if not text.strip():
         return pd.DataFrame(columns=["results", *COLUMNS])
-    frame = pd.read_csv(io.StringIO(text), sep="\t", header=None, names=["results", *COLUMNS], dtype=str,
-                        keep_default_na=False, quoting=csv.QUOTE_NONE, engine="c")
+    frame = pd.read_csv(
+        io.StringIO(text),
+        sep="\t",
+        header=None,
+        names=["results", *COLUMNS],
+        dtype=str,
+        keep_default_na=False,
+        quoting=csv.QUOTE_NONE,
+        engine="c",
+    )
     frame["results"] = frame["results"].astype(int) - 1
     frame["has_item"] = frame["has_item"] != "0"
     frame["has_value"] = frame["has_value"] != "0"
@@ -119,5 +127,13 @@ def record(frame: pd.DataFrame, index: int) -> Record:
     """Row ``index`` of a :func:`measurement_table` as a :class:`Record`."""
     # The table's index labels are unique, so ``.loc`` gives one row (a Series), never a frame.
     row = cast("pd.Series[Any]", frame.loc[index])
-    return Record(int(row["results"]), row["tag"], row["id"], row["item"] if row["has_item"] else None,
-                  row["external"], row["value"] if row["has_value"] else None, row["unit"], row["status"])
+    return Record(
+        int(row["results"]),
+        row["tag"],
+        row["id"],
+        row["item"] if row["has_item"] else None,
+        row["external"],
+        row["value"] if row["has_value"] else None,
+        row["unit"],
+        row["status"],
+    )

@@ -19,8 +19,18 @@ from parsers.qif.external import IdIndex
 from parsers.qif.units import file_unit_factor, unit_factor
 from setupfix.errors import ParseError, SourceLocation
 
-__all__ = ["PROFILE_KINDS", "Doc", "Item", "item_info", "item_axis", "item_geometry", "local", "number", "child_text",
-           "raw_float"]
+__all__ = [
+    "PROFILE_KINDS",
+    "Doc",
+    "Item",
+    "item_info",
+    "item_axis",
+    "item_geometry",
+    "local",
+    "number",
+    "child_text",
+    "raw_float",
+]
 
 
 #: Profile kinds: the value is a signed deviation from the true profile, the zone is
@@ -55,8 +65,9 @@ def number(el: etree._Element | None, path: str, mm: float) -> float:
     if own:
         factor = unit_factor(own)
         if factor is None:
-            raise ParseError(f"unknown linearUnit {own!r}", location=SourceLocation(
-                path, line=el.sourceline, element=local(el.tag)))
+            raise ParseError(
+                f"unknown linearUnit {own!r}", location=SourceLocation(path, line=el.sourceline, element=local(el.tag))
+            )
         return value * factor
     return value * mm
 
@@ -140,11 +151,18 @@ def item_axis(kind: str, item: etree._Element, nom: etree._Element, owner: Doc) 
         surface = len(features) == 1 and features[0] is not None and local(features[0].tag) in _SURFACES
         return vector_axis(_vector(_child(features[0], ns, "Normal"))) if surface else ""
     if kind in _DISTANCES:
-        planes = {vector_axis(_vector(_child(f, ns, "Normal")))
-                  for f in features if f is not None and local(f.tag) == "PlaneFeatureNominal"}
+        planes = {
+            vector_axis(_vector(_child(f, ns, "Normal")))
+            for f in features
+            if f is not None and local(f.tag) == "PlaneFeatureNominal"
+        }
         return planes.pop() if len(planes) == 1 else ""
-    if kind in ("Width", "Length") and len(features) == 1 and features[0] is not None \
-            and local(features[0].tag) == "OppositeParallelLinesFeatureNominal":
+    if (
+        kind in ("Width", "Length")
+        and len(features) == 1
+        and features[0] is not None
+        and local(features[0].tag) == "OppositeParallelLinesFeatureNominal"
+    ):
         normal = _unit(_vector(_child(features[0], ns, "Normal")))
         along = _unit(_vector(features[0].find(f"{{{ns}}}CenterLine/{{{ns}}}Vector")))
         if normal is None or along is None:
@@ -158,19 +176,32 @@ def item_axis(kind: str, item: etree._Element, nom: etree._Element, owner: Doc) 
 
 #: Feature nominal element → the ``feature`` word (:mod:`parsers.geometry`).
 _FEATURE_WORDS = {
-    "PointFeatureNominal": "point", "EdgePointFeatureNominal": "edgepoint", "PlaneFeatureNominal": "plane",
-    "LineFeatureNominal": "line", "CircleFeatureNominal": "circle", "CircularArcFeatureNominal": "arc",
-    "CylinderFeatureNominal": "cylinder", "ConeFeatureNominal": "cone", "SphereFeatureNominal": "sphere",
-    "OppositeParallelLinesFeatureNominal": "slot", "OppositeParallelPlanesFeatureNominal": "slot",
+    "PointFeatureNominal": "point",
+    "EdgePointFeatureNominal": "edgepoint",
+    "PlaneFeatureNominal": "plane",
+    "LineFeatureNominal": "line",
+    "CircleFeatureNominal": "circle",
+    "CircularArcFeatureNominal": "arc",
+    "CylinderFeatureNominal": "cylinder",
+    "ConeFeatureNominal": "cone",
+    "SphereFeatureNominal": "sphere",
+    "OppositeParallelLinesFeatureNominal": "slot",
+    "OppositeParallelPlanesFeatureNominal": "slot",
     "TorusFeatureNominal": "torus",
 }
 #: Characteristic kinds that are a size of their feature → the ``size`` word.
-_SIZE_KINDS = {"Diameter": "diameter", "SphericalDiameter": "diameter", "Radius": "radius",
-               "SphericalRadius": "radius", "Width": "width"}
+_SIZE_KINDS = {
+    "Diameter": "diameter",
+    "SphericalDiameter": "diameter",
+    "Radius": "radius",
+    "SphericalRadius": "radius",
+    "Width": "width",
+}
 
 
-def item_geometry(kind: str, item: etree._Element, nom: etree._Element, owner: Doc
-                  ) -> tuple[tuple[float, float, float] | None, str, str, str]:
+def item_geometry(
+    kind: str, item: etree._Element, nom: etree._Element, owner: Doc
+) -> tuple[tuple[float, float, float] | None, str, str, str]:
     """(measuring direction, feature, size, side) of a characteristic, as :mod:`parsers.geometry` defines them.
 
     The direction follows :func:`item_axis` but keeps the vector (an oblique one too):
@@ -202,13 +233,17 @@ def item_geometry(kind: str, item: etree._Element, nom: etree._Element, owner: D
         if len(features) == 1 and first is not None and local(first.tag) in _SURFACES:
             direction = unit_vector(_vector(_child(first, ns, "Normal")))
     elif kind in _DISTANCES:
-        normals = [unit_vector(_vector(_child(f, ns, "Normal")))
-                   for f in features if f is not None and local(f.tag) == "PlaneFeatureNominal"]
+        normals = [
+            unit_vector(_vector(_child(f, ns, "Normal")))
+            for f in features
+            if f is not None and local(f.tag) == "PlaneFeatureNominal"
+        ]
         if normals and all(n is not None for n in normals):
             head = normals[0]
             assert head is not None
-            if all(abs(sum(a * b for a, b in zip(head, n, strict=True))) >= AXIS_COSINE
-                   for n in normals if n is not None):
+            if all(
+                abs(sum(a * b for a, b in zip(head, n, strict=True))) >= AXIS_COSINE for n in normals if n is not None
+            ):
                 direction = head
     elif kind in ("Width", "Length") and feature == "slot" and first is not None:
         normal = _unit(_vector(_child(first, ns, "Normal")))
@@ -220,8 +255,9 @@ def item_geometry(kind: str, item: etree._Element, nom: etree._Element, owner: D
     return direction, feature, size, side
 
 
-def _limits(kind: str, definition: etree._Element, owner: Doc, nominal: float, mm: float, notes: set[str]
-            ) -> tuple[float, float, bool] | None:
+def _limits(
+    kind: str, definition: etree._Element, owner: Doc, nominal: float, mm: float, notes: set[str]
+) -> tuple[float, float, bool] | None:
     """(lower, upper, reference) as signed deviations; None when the nominal is needed but absent."""
     ns, path = owner.ns, owner.path
     if _child(definition, ns, "NonTolerance") is not None:
@@ -277,13 +313,22 @@ class Item:
     side: str = ""
 
 
-def item_info(kind: str, item: etree._Element, nom: etree._Element, definition: etree._Element, owner: Doc,
-               doc: Doc, mm: float, notes: set[str]) -> Item | str:
+def item_info(
+    kind: str,
+    item: etree._Element,
+    nom: etree._Element,
+    definition: etree._Element,
+    owner: Doc,
+    doc: Doc,
+    mm: float,
+    notes: set[str],
+) -> Item | str:
     """Name, nominal, limits and location of one item; a skip reason when it has no nominal."""
     omm = mm if owner is doc else _owner_mm(owner, mm)
     geometric = _child(definition, owner.ns, "ToleranceValue") is not None
-    nominal = 0.0 if geometric or kind in PROFILE_KINDS else number(_child(nom, owner.ns, "TargetValue"),
-                                                                      owner.path, omm)
+    nominal = (
+        0.0 if geometric or kind in PROFILE_KINDS else number(_child(nom, owner.ns, "TargetValue"), owner.path, omm)
+    )
     x, y, z = _location(item, owner, omm)
     if math.isnan(nominal) and kind == "LinearCoordinate":
         # A coordinate dimension may leave its target to the feature's nominal location.
@@ -293,15 +338,36 @@ def item_info(kind: str, item: etree._Element, nom: etree._Element, definition: 
         return "without a nominal value"
     lower, upper, reference = limits
     if not math.isnan(lower) and not math.isnan(upper) and lower > upper:
-        raise ParseError(f"lower limit {lower:g} mm is above upper limit {upper:g} mm",
-                         location=SourceLocation(owner.path, line=definition.sourceline,
-                                                 element=f"{local(definition.tag)} id={definition.get('id')}"))
-    label = (child_text(item, owner.ns, "Name") or child_text(definition, owner.ns, "Name")
-             or f"{kind} {item.get('id', '?')}")
+        raise ParseError(
+            f"lower limit {lower:g} mm is above upper limit {upper:g} mm",
+            location=SourceLocation(
+                owner.path, line=definition.sourceline, element=f"{local(definition.tag)} id={definition.get('id')}"
+            ),
+        )
+    label = (
+        child_text(item, owner.ns, "Name")
+        or child_text(definition, owner.ns, "Name")
+        or f"{kind} {item.get('id', '?')}"
+    )
     direction, feature, size, side = item_geometry(kind, item, nom, owner)
     nx, ny, nz = direction if direction is not None else (math.nan, math.nan, math.nan)
-    return Item(label, nominal, lower, upper, reference, x, y, z, item_axis(kind, item, nom, owner),
-                nx, ny, nz, feature, size, side)
+    return Item(
+        label,
+        nominal,
+        lower,
+        upper,
+        reference,
+        x,
+        y,
+        z,
+        item_axis(kind, item, nom, owner),
+        nx,
+        ny,
+        nz,
+        feature,
+        size,
+        side,
+    )
 
 
 def raw_float(text: str) -> float:

@@ -29,12 +29,29 @@ from setupfix.errors import ParseError, SourceLocation
 __all__ = ["read_qif", "sniff_qif", "NON_LENGTH_KINDS"]
 
 #: Characteristic kinds whose value is not a length (angles, attributes, …): skipped.
-NON_LENGTH_KINDS = frozenset({
-    "Angle", "AngleBetween", "AngleFrom", "AngularCoordinate", "UserDefinedAngular",
-    "UserDefinedAttribute", "UserDefinedArea", "UserDefinedForce", "UserDefinedMass",
-    "UserDefinedPressure", "UserDefinedSpeed", "UserDefinedTemperature", "UserDefinedTime",
-    "Threaded", "SurfaceTexture", "Weld", "WeldBevel", "WeldFillet", "Note",
-})
+NON_LENGTH_KINDS = frozenset(
+    {
+        "Angle",
+        "AngleBetween",
+        "AngleFrom",
+        "AngularCoordinate",
+        "UserDefinedAngular",
+        "UserDefinedAttribute",
+        "UserDefinedArea",
+        "UserDefinedForce",
+        "UserDefinedMass",
+        "UserDefinedPressure",
+        "UserDefinedSpeed",
+        "UserDefinedTemperature",
+        "UserDefinedTime",
+        "Threaded",
+        "SurfaceTexture",
+        "Weld",
+        "WeldBevel",
+        "WeldFillet",
+        "Note",
+    }
+)
 
 _SUFFIXES = ("CharacteristicMeasurement", "CharacteristicActual")
 #: Text fields of :class:`~parsers.qif.items.Item` (the others are numbers).
@@ -104,19 +121,26 @@ def read_qif(path: str | Path | Source, *, unit: str | None = None) -> pd.DataFr
     name = str(path)
     root = parse_xml(read_bytes(path), name)
     if local(root.tag) != "QIFDocument":
-        raise ParseError(f"root element is <{local(root.tag)}>, not <QIFDocument>",
-                         location=SourceLocation(name, line=root.sourceline))
+        raise ParseError(
+            f"root element is <{local(root.tag)}>, not <QIFDocument>",
+            location=SourceLocation(name, line=root.sourceline),
+        )
     ns = etree.QName(root).namespace or ""
     doc = Doc(name, root, ns, build_index(root))
     results = results_elements(root, ns)
     if not results:
-        raise ParseError("no measurement results: this QIF document is a plan or product definition",
-                         location=SourceLocation(name), hint="give the QIF results file")
+        raise ParseError(
+            "no measurement results: this QIF document is a plan or product definition",
+            location=SourceLocation(name),
+            hint="give the QIF results file",
+        )
     declared = file_unit_factor(root, ns, name)
     table = measurement_table(root, ns)
     if table.empty:
-        raise ParseError("measurement results hold no characteristic values (only an inspection status)",
-                         location=SourceLocation(name, line=results[0].sourceline, element="MeasurementResults"))
+        raise ParseError(
+            "measurement results hold no characteristic values (only an inspection status)",
+            location=SourceLocation(name, line=results[0].sourceline, element="MeasurementResults"),
+        )
     parts = [_part_name(res, doc) for res in results]
     stamps = np.asarray([_report_date(res, root, ns) for res in results], dtype=object)
     missing = ~table["has_item"] | (table["item"] == "")
@@ -152,8 +176,9 @@ def read_qif(path: str | Path | Source, *, unit: str | None = None) -> pd.DataFr
             skipped[str(why)] = [i or "?" for i in ids]
     keep = (reason == "").to_numpy()
     if skipped:
-        what = "; ".join(f"{len(ids)} {k} (#{', #'.join(ids[:3])}{', …' if len(ids) > 3 else ''})"
-                         for k, ids in skipped.items())
+        what = "; ".join(
+            f"{len(ids)} {k} (#{', #'.join(ids[:3])}{', …' if len(ids) > 3 else ''})" for k, ids in skipped.items()
+        )
         note(f"skipped {what}", SourceLocation(name), "skipped")
     for text in sorted(notes):
         note(text, SourceLocation(name), "parse")
@@ -165,8 +190,9 @@ def read_qif(path: str | Path | Source, *, unit: str | None = None) -> pd.DataFr
     part_of = np.asarray([p[0] for p in parts], dtype=object)[kept["results"].to_numpy()]
     station_of = np.asarray([p[1] for p in parts], dtype=object)[kept["results"].to_numpy()]
     columns: dict[str, object] = {
-        field: np.asarray([getattr(infos[k], field) for k in known],
-                          dtype=object if field in _TEXT_FIELDS else None)[code]
+        field: np.asarray([getattr(infos[k], field) for k in known], dtype=object if field in _TEXT_FIELDS else None)[
+            code
+        ]
         for field in Item.__dataclass_fields__
     }
     labels = pd.Series(columns.pop("label"), dtype=object)
@@ -179,9 +205,17 @@ def read_qif(path: str | Path | Source, *, unit: str | None = None) -> pd.DataFr
     for i in np.flatnonzero(element_ids == ""):
         row = int(i)
         source[i] = f"{name}:{_find(results[int(results_of[row])], record(kept, kept.index[row]), ns).sourceline}"
-    columns.update({"characteristic": labels.to_numpy(), "actual": actual[keep].to_numpy(), "part": part_of,
-                    "station": station_of, "status": kept["status"].to_numpy(), "source": source,
-                    "timestamp": stamps[kept["results"].to_numpy()]})
+    columns.update(
+        {
+            "characteristic": labels.to_numpy(),
+            "actual": actual[keep].to_numpy(),
+            "part": part_of,
+            "station": station_of,
+            "status": kept["status"].to_numpy(),
+            "source": source,
+            "timestamp": stamps[kept["results"].to_numpy()],
+        }
+    )
     return finish_table(columns, name)
 
 
@@ -231,8 +265,9 @@ def _item_key(rec: Record, results: list[etree._Element], doc: Doc, plans: dict[
     return f"\0{rec.item}", rec.external
 
 
-def _chain(rec: Record, key: tuple[str, str], results: list[etree._Element], doc: Doc, plans: dict[str, Doc]
-           ) -> tuple[etree._Element, etree._Element, etree._Element, Doc]:
+def _chain(
+    rec: Record, key: tuple[str, str], results: list[etree._Element], doc: Doc, plans: dict[str, Doc]
+) -> tuple[etree._Element, etree._Element, etree._Element, Doc]:
     """(item, nominal, definition, document holding them) of one measurement."""
     owner = plans[key[0][1:]] if key[0].startswith("\0") else doc
     item_id = key[1]
@@ -241,10 +276,13 @@ def _chain(rec: Record, key: tuple[str, str], results: list[etree._Element], doc
         raise ParseError(f"CharacteristicItemId {item_id} refers to no element", location=_where(rec, results, doc))
     nominal = owner.index.local.get(child_text(item, owner.ns, "CharacteristicNominalId"))
     if nominal is None:
-        raise ParseError(f"characteristic item {item_id} has no valid CharacteristicNominalId",
-                         location=_where(rec, results, doc))
+        raise ParseError(
+            f"characteristic item {item_id} has no valid CharacteristicNominalId", location=_where(rec, results, doc)
+        )
     definition = owner.index.local.get(child_text(nominal, owner.ns, "CharacteristicDefinitionId"))
     if definition is None:
-        raise ParseError(f"characteristic nominal {nominal.get('id')} has no valid CharacteristicDefinitionId",
-                         location=_where(rec, results, doc))
+        raise ParseError(
+            f"characteristic nominal {nominal.get('id')} has no valid CharacteristicDefinitionId",
+            location=_where(rec, results, doc),
+        )
     return item, nominal, definition, owner

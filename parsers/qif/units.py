@@ -13,8 +13,8 @@ import math
 
 from lxml import etree
 
-from parsers.numbers import try_number
 from parsers._notes import note
+from parsers.numbers import try_number
 from setupfix.errors import ParseError, SourceLocation
 from setupfix.units import LENGTH_UNITS, length_factor
 
@@ -25,8 +25,17 @@ __all__ = ["unit_factor", "file_unit_factor", "choose_file_unit", "METRE_PLAUSIB
 METRE_PLAUSIBLE_MAX = 5.0
 
 #: Unit names seen in ``UnitName``/``linearUnit`` beyond :data:`LENGTH_UNITS`.
-_EXTRA_MM: dict[str, float] = {"m": 1000.0, "meter": 1000.0, "metre": 1000.0, "cm": 10.0,
-                               "micrometer": 0.001, "micron": 0.001, "um": 0.001, "ft": 304.8, "foot": 304.8}
+_EXTRA_MM: dict[str, float] = {
+    "m": 1000.0,
+    "meter": 1000.0,
+    "metre": 1000.0,
+    "cm": 10.0,
+    "micrometer": 0.001,
+    "micron": 0.001,
+    "um": 0.001,
+    "ft": 304.8,
+    "foot": 304.8,
+}
 
 
 def unit_factor(name: str) -> float | None:
@@ -63,8 +72,9 @@ def file_unit_factor(root: etree._Element, ns: str, path: str) -> float | None:
         si = (unit.findtext(f"{{{ns}}}SIUnitName") or "").strip().lower()
         if si in ("meter", "metre"):
             return 1000.0
-    raise ParseError(f"unknown linear unit {name!r}", location=SourceLocation(path, line=unit.sourceline,
-                                                                               element="FileUnits"))
+    raise ParseError(
+        f"unknown linear unit {name!r}", location=SourceLocation(path, line=unit.sourceline, element="FileUnits")
+    )
 
 
 def choose_file_unit(declared: float | None, nominals: list[float], path: str, unit: str | None) -> float:
@@ -95,8 +105,11 @@ def choose_file_unit(declared: float | None, nominals: list[float], path: str, u
         return factor
     largest = max((abs(v) for v in nominals if math.isfinite(v)), default=0.0)
     if largest > METRE_PLAUSIBLE_MAX:
-        note(f"no FileUnits; nominals up to {largest:g} cannot be metres, read as mm (give --unit to override)",
-             SourceLocation(path, element="FileUnits"), "unit")
+        note(
+            f"no FileUnits; nominals up to {largest:g} cannot be metres, read as mm (give --unit to override)",
+            SourceLocation(path, element="FileUnits"),
+            "unit",
+        )
         return 1.0
     raise ParseError(
         "no FileUnits: lengths would be metres by the QIF schema, but the values do not say which unit they are in",

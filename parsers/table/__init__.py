@@ -2,8 +2,8 @@
 
 from __future__ import annotations
 
-from parsers._source import final_line_break
 from parsers._registry import FormatSpec, register
+from parsers._source import final_line_break
 from parsers.table.mapping import KEYS, guess_columns, parse_columns
 from parsers.table.reader import load_grid, read_table, sniff_table
 
@@ -15,13 +15,15 @@ def _table_complete(data: bytes) -> str | None:
     return None if data[:2] == b"PK" else final_line_break(data)
 
 
-SPEC = register(FormatSpec(
-    name="table",
-    description="shop CSV/TSV or Excel .xlsx table; columns mapped with --columns KEY=HEADER,... or guessed",
-    extensions=(".xlsx", ".xlsm", ".csv", ".tsv"),
-    sniff=lambda peek: sniff_table(peek.head, peek.text),
-    read=read_table,
-    options=("unit", "encoding", "columns"),
-    priority=5,
-    complete=_table_complete,
-))
+SPEC = register(
+    FormatSpec(
+        name="table",
+        description="shop CSV/TSV or Excel .xlsx table; columns mapped with --columns KEY=HEADER,... or guessed",
+        extensions=(".xlsx", ".xlsm", ".csv", ".tsv"),
+        sniff=lambda peek: sniff_table(peek.head, peek.text),
+        read=read_table,
+        options=("unit", "encoding", "columns"),
+        priority=5,
+        complete=_table_complete,
+    )
+)

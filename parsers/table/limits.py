@@ -26,8 +26,10 @@ MAX_RATIO = 200
 #: Largest sheet area (rows × columns up to the last cell named) the grid reader may allocate.
 MAX_CELLS = 5_000_000
 
-_REF = re.compile(rb'<(?:c|row|dimension)\b[^>]*?\br(?:ef)?='
-                  rb'"\$?([A-Z]{0,3})\$?([0-9]{1,9})(?::\$?([A-Z]{0,3})\$?([0-9]{1,9}))?"')
+_REF = re.compile(
+    rb"<(?:c|row|dimension)\b[^>]*?\br(?:ef)?="
+    rb'"\$?([A-Z]{0,3})\$?([0-9]{1,9})(?::\$?([A-Z]{0,3})\$?([0-9]{1,9}))?"'
+)
 _CHUNK = 1 << 20
 
 
@@ -50,8 +52,10 @@ def _area(member: zipfile.ZipInfo, zf: zipfile.ZipFile, name: str) -> tuple[int,
                 break
             seen += len(chunk)
             if seen > MAX_UNPACKED_BYTES:
-                raise ParseError(f"worksheet {member.filename} unpacks to over {MAX_UNPACKED_BYTES // 2**20} MiB",
-                                 location=SourceLocation(name))
+                raise ParseError(
+                    f"worksheet {member.filename} unpacks to over {MAX_UNPACKED_BYTES // 2**20} MiB",
+                    location=SourceLocation(name),
+                )
             data = tail + chunk
             for m in _REF.finditer(data):
                 for letters, digits in ((m.group(1), m.group(2)), (m.group(3), m.group(4))):
@@ -78,18 +82,26 @@ def check_workbook(data: bytes, name: str) -> None:
             members = zf.infolist()
             total = sum(m.file_size for m in members)
             if total > MAX_UNPACKED_BYTES:
-                raise ParseError(f"workbook unpacks to {total // 2**20} MiB (limit {MAX_UNPACKED_BYTES // 2**20} MiB)",
-                                 location=where)
+                raise ParseError(
+                    f"workbook unpacks to {total // 2**20} MiB (limit {MAX_UNPACKED_BYTES // 2**20} MiB)",
+                    location=where,
+                )
             for m in members:
                 if m.file_size > 2**20 and m.file_size > MAX_RATIO * max(m.compress_size, 1):
-                    raise ParseError(f"{m.filename} is compressed {m.file_size // max(m.compress_size, 1)}:1: "
-                                     "a zip bomb, not a workbook", location=where)
+                    raise ParseError(
+                        f"{m.filename} is compressed {m.file_size // max(m.compress_size, 1)}:1: "
+                        "a zip bomb, not a workbook",
+                        location=where,
+                    )
             for m in members:
                 if m.filename.startswith("xl/worksheets/") and m.filename.endswith(".xml"):
                     rows, cols = _area(m, zf, name)
                     if rows * max(cols, 1) > MAX_CELLS:
-                        raise ParseError(f"sheet {m.filename.rsplit('/', 1)[-1]} spans {rows} rows x {cols} columns "
-                                         f"(limit {MAX_CELLS} cells): not a measurement table", location=where)
+                        raise ParseError(
+                            f"sheet {m.filename.rsplit('/', 1)[-1]} spans {rows} rows x {cols} columns "
+                            f"(limit {MAX_CELLS} cells): not a measurement table",
+                            location=where,
+                        )
     except ParseError:
         raise
     except (zipfile.BadZipFile, zipfile.LargeZipFile, EOFError, OSError, ValueError, NotImplementedError) as exc:

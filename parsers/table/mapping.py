@@ -18,15 +18,43 @@ __all__ = ["KEYS", "OPTION_KEYS", "parse_columns", "guess_columns"]
 
 #: Values a shop column may be mapped to: the canonical columns, plus absolute limits
 #: (``lsl``/``usl``) and a symmetric ± ``tolerance``.
-KEYS = ("characteristic", "nominal", "actual", "deviation", "lower", "upper", "lsl", "usl", "tolerance",
-        "unit", "part", "report", "timestamp", "station", "x", "y", "z", "status")
+KEYS = (
+    "characteristic",
+    "nominal",
+    "actual",
+    "deviation",
+    "lower",
+    "upper",
+    "lsl",
+    "usl",
+    "tolerance",
+    "unit",
+    "part",
+    "report",
+    "timestamp",
+    "station",
+    "x",
+    "y",
+    "z",
+    "status",
+)
 #: Options a mapping may carry besides columns.
 OPTION_KEYS = ("sheet",)
 
 #: Header spellings recognised without a mapping, lower case, spaces and punctuation removed.
 _SYNONYMS: dict[str, tuple[str, ...]] = {
-    "characteristic": ("characteristic", "name", "feature", "char", "merkmal", "label", "dimension",
-                       "description", "bezeichnung", "characteristicname"),
+    "characteristic": (
+        "characteristic",
+        "name",
+        "feature",
+        "char",
+        "merkmal",
+        "label",
+        "dimension",
+        "description",
+        "bezeichnung",
+        "characteristicname",
+    ),
     "nominal": ("nominal", "nom", "soll", "sollwert", "target", "nominalvalue"),
     "actual": ("actual", "meas", "measured", "measurement", "ist", "istwert", "measuredvalue", "actualvalue"),
     "deviation": ("deviation", "dev", "abw", "abweichung", "error"),
@@ -38,7 +66,9 @@ _SYNONYMS: dict[str, tuple[str, ...]] = {
     "part": ("part", "serial", "serialnumber", "partno", "partnb", "teil"),
     "station": ("station", "nest", "fixture"),
     "timestamp": ("timestamp", "date", "datetime", "time", "datum"),
-    "x": ("x",), "y": ("y",), "z": ("z",),
+    "x": ("x",),
+    "y": ("y",),
+    "z": ("z",),
     "status": ("status", "result", "verdict"),
 }
 
@@ -71,8 +101,7 @@ def parse_columns(spec: str | Path | Mapping[str, str] | None) -> dict[str, str]
     if spec is None:
         return {}
     if isinstance(spec, Mapping):
-        return _check({str(k).strip().lower(): str(v).strip() for k, v in spec.items()},
-                      SourceLocation("--columns"))
+        return _check({str(k).strip().lower(): str(v).strip() for k, v in spec.items()}, SourceLocation("--columns"))
     text = str(spec)
     candidate = Path(text)
     if "=" not in text or candidate.suffix.lower() in (".toml", ".txt", ".map", ".ini"):
@@ -99,7 +128,7 @@ def _read_mapping_file(path: Path) -> dict[str, str]:
             raise ParseError(f"bad TOML: {exc}", location=where) from None
         table = data.get("columns", data)
         if not isinstance(table, dict) or not all(isinstance(v, str) for v in table.values()):
-            raise ParseError("expected a [columns] table of KEY = \"header\"", location=where)
+            raise ParseError('expected a [columns] table of KEY = "header"', location=where)
         return _check({k.lower(): v for k, v in table.items()}, where)
     mapping: dict[str, str] = {}
     for number, line in enumerate(text.splitlines(), start=1):

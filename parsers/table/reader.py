@@ -61,8 +61,9 @@ def _delimiter(text: str) -> str:
         return max(",;\t|", key=first.count)
 
 
-def load_grid(path: str | Path, *, encoding: str | None = None, sheet: str | None = None,
-              mapping: Mapping[str, str] | None = None) -> tuple[pd.DataFrame, list[str]]:
+def load_grid(
+    path: str | Path, *, encoding: str | None = None, sheet: str | None = None, mapping: Mapping[str, str] | None = None
+) -> tuple[pd.DataFrame, list[str]]:
     """Read a table's cells as text/number objects with its header.
 
     Returns
@@ -85,8 +86,15 @@ def load_grid(path: str | Path, *, encoding: str | None = None, sheet: str | Non
         raise ParseError("empty file", location=SourceLocation(name, line=1))
     start, delimiter = _header_line(text, mapping or {})
     try:
-        frame = pd.read_csv(io.StringIO(text), sep=delimiter, dtype=str, keep_default_na=False,
-                            skip_blank_lines=False, skiprows=start, engine="c")
+        frame = pd.read_csv(
+            io.StringIO(text),
+            sep=delimiter,
+            dtype=str,
+            keep_default_na=False,
+            skip_blank_lines=False,
+            skiprows=start,
+            engine="c",
+        )
     except (pd.errors.ParserError, ValueError) as exc:
         raise ParseError(f"not a delimited table: {str(exc).splitlines()[0]}", location=SourceLocation(name)) from None
     frame = frame.fillna("")
@@ -156,18 +164,23 @@ def _excel_rows_openpyxl(data: bytes, name: str, sheet: str | None) -> tuple[str
         raise ParseError(f"not a readable Excel workbook: {exc}", location=SourceLocation(name)) from None
     try:
         if sheet is not None and sheet not in book.sheetnames:
-            raise ParseError(f"no sheet {sheet!r} (sheets: {', '.join(book.sheetnames)})",
-                             location=SourceLocation(name))
+            raise ParseError(
+                f"no sheet {sheet!r} (sheets: {', '.join(book.sheetnames)})", location=SourceLocation(name)
+            )
         ws = book[sheet] if sheet is not None else book.worksheets[0]
-        rows = [(r, list(v)) for r, v in enumerate(ws.iter_rows(values_only=True), start=1)
-                if any(c is not None and str(c).strip() for c in v)]
+        rows = [
+            (r, list(v))
+            for r, v in enumerate(ws.iter_rows(values_only=True), start=1)
+            if any(c is not None and str(c).strip() for c in v)
+        ]
         return ws.title, rows
     finally:
         book.close()
 
 
-def _load_excel(data: bytes, name: str, sheet: str | None, mapping: Mapping[str, str]
-                ) -> tuple[pd.DataFrame, list[str]]:
+def _load_excel(
+    data: bytes, name: str, sheet: str | None, mapping: Mapping[str, str]
+) -> tuple[pd.DataFrame, list[str]]:
     check_workbook(data, name)
     try:
         title, rows = _excel_rows_calamine(data, name, sheet)
@@ -181,9 +194,9 @@ def _load_excel(data: bytes, name: str, sheet: str | None, mapping: Mapping[str,
     _, header = rows[start]
     width = len(header)
     columns = ["" if h is None else str(h).strip() for h in header]
-    body = [[("" if c is None else c) for c in (v + [None] * width)[:width]] for _, v in rows[start + 1:]]
+    body = [[("" if c is None else c) for c in (v + [None] * width)[:width]] for _, v in rows[start + 1 :]]
     frame = pd.DataFrame(body, columns=columns, dtype=object)
-    return frame, [f"{name}#{title}!{r}" for r, _ in rows[start + 1:]]
+    return frame, [f"{name}#{title}!{r}" for r, _ in rows[start + 1 :]]
 
 
 def _numeric(series: pd.Series, column: str, sources: list[str]) -> np.ndarray:
@@ -196,8 +209,7 @@ def _numeric(series: pd.Series, column: str, sources: list[str]) -> np.ndarray:
     bad = (~spelled & (text != "").to_numpy()) | np.isinf(values)
     if bad.any():
         i = int(np.argmax(bad))
-        raise ParseError(f"column {column!r}: expected a number, found {series.iloc[i]!r}",
-                         location=_where(sources[i]))
+        raise ParseError(f"column {column!r}: expected a number, found {series.iloc[i]!r}", location=_where(sources[i]))
     return values
 
 
@@ -209,8 +221,13 @@ def _where(source: str) -> SourceLocation:
     return SourceLocation(path, element=cell)
 
 
-def read_table(path: str | Path, *, columns: str | Path | Mapping[str, str] | None = None,
-               unit: str | None = None, encoding: str | None = None) -> pd.DataFrame:
+def read_table(
+    path: str | Path,
+    *,
+    columns: str | Path | Mapping[str, str] | None = None,
+    unit: str | None = None,
+    encoding: str | None = None,
+) -> pd.DataFrame:
     """Read a shop's CSV or Excel table through a column mapping.
 
     Parameters
@@ -239,15 +256,20 @@ def read_table(path: str | Path, *, columns: str | Path | Mapping[str, str] | No
     lookup = {h.strip().lower(): h for h in headers}
     absent = [v for v in given.values() if v.strip().lower() not in lookup]
     if absent:
-        raise ParseError(f"mapped header(s) not in the table: {', '.join(map(repr, absent))} "
-                         f"(headers: {', '.join(headers)})", location=SourceLocation(name, line=1))
+        raise ParseError(
+            f"mapped header(s) not in the table: {', '.join(map(repr, absent))} (headers: {', '.join(headers)})",
+            location=SourceLocation(name, line=1),
+        )
     mapping = {k: lookup[v.strip().lower()] for k, v in guess_columns(headers, given).items()}
     missing = [k for k in ("characteristic", "nominal") if k not in mapping]
     if "actual" not in mapping and "deviation" not in mapping:
         missing.append("actual (or deviation)")
     if missing:
-        raise ParseError(f"no column for {', '.join(missing)} (headers: {', '.join(headers)})",
-                         location=SourceLocation(name, line=1), hint="map them with --columns KEY=HEADER,...")
+        raise ParseError(
+            f"no column for {', '.join(missing)} (headers: {', '.join(headers)})",
+            location=SourceLocation(name, line=1),
+            hint="map them with --columns KEY=HEADER,...",
+        )
     if grid.empty:
         raise ParseError("no measurement rows", location=SourceLocation(name))
     n = len(grid)
@@ -260,8 +282,11 @@ def read_table(path: str | Path, *, columns: str | Path | Mapping[str, str] | No
     _require(~(np.isnan(actual) & np.isnan(stated)), "neither actual nor deviation is given", sources)
     actual = np.where(np.isnan(actual), nominal + stated, actual)
     deviation = actual - nominal
-    _require(np.isnan(stated) | (np.abs(stated - deviation) <= DEVIATION_TOLERANCE_MM),
-             "stated deviation contradicts actual - nominal", sources)
+    _require(
+        np.isnan(stated) | (np.abs(stated - deviation) <= DEVIATION_TOLERANCE_MM),
+        "stated deviation contradicts actual - nominal",
+        sources,
+    )
     lower = np.where(np.isnan(values["lower"]), values["lsl"] - nominal, values["lower"])
     upper = np.where(np.isnan(values["upper"]), values["usl"] - nominal, values["upper"])
     tol = np.abs(values["tolerance"])
@@ -269,9 +294,18 @@ def read_table(path: str | Path, *, columns: str | Path | Mapping[str, str] | No
     _require(np.isnan(lower) | np.isnan(upper) | (lower <= upper), "lower limit is above upper limit", sources)
     names = grid[mapping["characteristic"]].astype(str).str.strip()
     _require((names != "").to_numpy(), "empty characteristic name", sources)
-    out: dict[str, object] = {"characteristic": names.to_numpy(), "nominal": nominal, "actual": actual,
-                              "deviation": deviation, "lower": lower, "upper": upper,
-                              "x": values["x"], "y": values["y"], "z": values["z"], "source": sources}
+    out: dict[str, object] = {
+        "characteristic": names.to_numpy(),
+        "nominal": nominal,
+        "actual": actual,
+        "deviation": deviation,
+        "lower": lower,
+        "upper": upper,
+        "x": values["x"],
+        "y": values["y"],
+        "z": values["z"],
+        "source": sources,
+    }
     for key in ("part", "report", "timestamp", "station", "status"):
         if key in mapping:
             out[key] = grid[mapping[key]].astype(str).str.strip().to_numpy()

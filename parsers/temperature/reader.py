@@ -120,12 +120,16 @@ class TemperatureLog:
     def column(self, name: str) -> Array:
         """One numeric column; :class:`ParseError` naming the file when it is absent."""
         if name not in self.columns:
-            raise ParseError(f"no numeric column {name!r}", location=self.location(),
-                             hint=f"numeric columns: {', '.join(self.columns) or 'none'}")
+            raise ParseError(
+                f"no numeric column {name!r}",
+                location=self.location(),
+                hint=f"numeric columns: {', '.join(self.columns) or 'none'}",
+            )
         return self.columns[name]
 
-    def require_finite(self, name: str, *,
-                       hint: str = "this model needs every reading; only the kalman model tolerates gaps") -> Array:
+    def require_finite(
+        self, name: str, *, hint: str = "this model needs every reading; only the kalman model tolerates gaps"
+    ) -> Array:
         """A column without empty cells; the first empty one is named by its line."""
         values = self.column(name)
         bad = np.flatnonzero(~np.isfinite(values))
@@ -140,18 +144,25 @@ class TemperatureLog:
     def slice(self, start: int, stop: int) -> TemperatureLog:
         """Samples ``start:stop`` as a log of its own (times re-based on its first sample)."""
         secs = None if self.seconds is None else self.seconds[start:stop] - self.seconds[start]
-        return TemperatureLog(self.source, {k: v[start:stop] for k, v in self.columns.items()}, secs,
-                              self.timestamps[start:stop], None if self.lines is None else self.lines[start:stop],
-                              self.sheet, list(self.notes), {k: v[start:stop] for k, v in self.text.items()})
+        return TemperatureLog(
+            self.source,
+            {k: v[start:stop] for k, v in self.columns.items()},
+            secs,
+            self.timestamps[start:stop],
+            None if self.lines is None else self.lines[start:stop],
+            self.sheet,
+            list(self.notes),
+            {k: v[start:stop] for k, v in self.text.items()},
+        )
 
     @classmethod
-    def from_arrays(cls, source: str, columns: dict[str, npt.ArrayLike],
-                    seconds: npt.ArrayLike | None = None) -> TemperatureLog:
+    def from_arrays(
+        cls, source: str, columns: dict[str, npt.ArrayLike], seconds: npt.ArrayLike | None = None
+    ) -> TemperatureLog:
         """A log built in memory (simulations, data without timestamps)."""
         cols = {k: np.asarray(v, dtype=float) for k, v in columns.items()}
         n = len(next(iter(cols.values())))
-        return cls(source, cols, None if seconds is None else np.asarray(seconds, dtype=float), [],
-                   np.arange(2, n + 2))
+        return cls(source, cols, None if seconds is None else np.asarray(seconds, dtype=float), [], np.arange(2, n + 2))
 
 
 def _letters(j: int) -> str:
@@ -179,8 +190,9 @@ def _grid(data: bytes, source: str, sheet: str | None) -> tuple[list[Any], list[
 
         frame, sources = load_grid(source, sheet=sheet)
         title = sources[0].split("#", 1)[1].rsplit("!", 1)[0] if sources else (sheet or "")
-        rows = [(int(s.rsplit("!", 1)[1]), list(r))
-                for s, r in zip(sources, frame.itertuples(index=False), strict=True)]
+        rows = [
+            (int(s.rsplit("!", 1)[1]), list(r)) for s, r in zip(sources, frame.itertuples(index=False), strict=True)
+        ]
         return list(frame.columns), rows, title
     if sheet is not None:
         raise ParseError("--sheet applies to .xlsx logs only", location=SourceLocation(source))
@@ -192,8 +204,14 @@ def _grid(data: bytes, source: str, sheet: str | None) -> tuple[list[Any], list[
     return list(header), body, None
 
 
-def read_temperature_log(path: str | Path, *, interval: float | None = None, require_time: bool = True,
-                         sheet: str | None = None, keep_text: bool = False) -> TemperatureLog:
+def read_temperature_log(
+    path: str | Path,
+    *,
+    interval: float | None = None,
+    require_time: bool = True,
+    sheet: str | None = None,
+    keep_text: bool = False,
+) -> TemperatureLog:
     """Read a temperature log (CSV, or ``.xlsx`` through the table reader).
 
     Parameters
@@ -219,8 +237,9 @@ def read_temperature_log(path: str | Path, *, interval: float | None = None, req
     """
     source = str(path)
     if interval is not None and not (math.isfinite(interval) and interval > 0):
-        raise ParseError(f"sampling interval must be a positive number of seconds, got {interval!r}",
-                         location=SourceLocation(source))
+        raise ParseError(
+            f"sampling interval must be a positive number of seconds, got {interval!r}", location=SourceLocation(source)
+        )
     raw_header, raw_body, title = _grid(read_bytes(path), source, sheet)
 
     def where(line: int) -> SourceLocation:
@@ -242,12 +261,15 @@ def read_temperature_log(path: str | Path, *, interval: float | None = None, req
     seen: dict[str, int] = {}
     for j, name in enumerate(header):
         if name and name.lower() in seen:
-            raise ParseError(f"column {name!r} appears twice (columns {seen[name.lower()] + 1} and {j + 1})",
-                             location=where(1), hint="rename one: a dropped sensor would change every prediction")
+            raise ParseError(
+                f"column {name!r} appears twice (columns {seen[name.lower()] + 1} and {j + 1})",
+                location=where(1),
+                hint="rename one: a dropped sensor would change every prediction",
+            )
         if name:
             seen[name.lower()] = j
     for line, row in body:
-        if len(row) > len(header) and any(c is not None and str(c).strip() for c in row[len(header):]):
+        if len(row) > len(header) and any(c is not None and str(c).strip() for c in row[len(header) :]):
             raise ParseError(f"{len(row)} cells but {len(header)} columns in the header", location=where(line))
     lower = [h.lower() for h in header]
     t_idx = lower.index(TIMESTAMP) if TIMESTAMP in lower else None
@@ -283,8 +305,11 @@ def read_temperature_log(path: str | Path, *, interval: float | None = None, req
             continue  # a text column (operator notes): kept out of the numeric table
         if bad:
             i = bad[0]
-            raise ParseError(f"non-numeric value {str(cells[i])[:30]!r} in column {name!r}",
-                             location=where(int(lines[i])), hint="numbers are written like 21.5 or 2.15e1")
+            raise ParseError(
+                f"non-numeric value {str(cells[i])[:30]!r} in column {name!r}",
+                location=where(int(lines[i])),
+                hint="numbers are written like 21.5 or 2.15e1",
+            )
         columns[name] = values
     seconds: Array | None = None
     stamps: list[str] = []
@@ -313,8 +338,11 @@ def read_temperature_log(path: str | Path, *, interval: float | None = None, req
     elif interval is not None:
         seconds = np.arange(len(body), dtype=float) * interval
     elif require_time:
-        raise ParseError("no 'timestamp' column", location=where(1),
-                         hint="give the sampling interval with --interval SECONDS, or add a timestamp or sample column")
+        raise ParseError(
+            "no 'timestamp' column",
+            location=where(1),
+            hint="give the sampling interval with --interval SECONDS, or add a timestamp or sample column",
+        )
     else:
         notes.append(Note("no timestamp: time counted in samples", where(1), "parse"))
     if not columns and not text:
@@ -323,14 +351,21 @@ def read_temperature_log(path: str | Path, *, interval: float | None = None, req
         steps = np.diff(seconds)
         med = float(np.median(steps))
         if np.max(np.abs(steps - med)) > 0.05 * med:
-            notes.append(Note(f"sampling interval varies (median {med:g} s); grey and lumped-mass models "
-                              "assume equal steps", where(1), "thermal"))
+            notes.append(
+                Note(
+                    f"sampling interval varies (median {med:g} s); grey and lumped-mass models assume equal steps",
+                    where(1),
+                    "thermal",
+                )
+            )
     return TemperatureLog(source, columns, seconds, stamps, lines, title, notes, text)
 
 
 def _check_increasing(values: Array, lines: npt.NDArray[np.int64], where: Any, what: str) -> None:
     back = np.flatnonzero(np.diff(values) <= 0)
     if back.size:
-        raise ParseError(f"{what} not after the previous one", location=where(int(lines[back[0] + 1])),
-                         hint="sort the log by time and remove repeated samples")
-
+        raise ParseError(
+            f"{what} not after the previous one",
+            location=where(int(lines[back[0] + 1])),
+            hint="sort the log by time and remove repeated samples",
+        )

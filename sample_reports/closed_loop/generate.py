@@ -19,9 +19,19 @@ def main() -> None:
     sys.path.insert(0, str(ROOT))
     from setupfix.cli import main as cli
 
-    code = cli(["simulate", "--model", str(ROOT / "sample_reports" / "guide_pins" / "model.toml"),
-                "--out", str(HERE), "--seed", "2026",
-                "--effect", "kind=thermal,channel=spindle,magnitude=0.003"])
+    code = cli(
+        [
+            "simulate",
+            "--model",
+            str(ROOT / "sample_reports" / "guide_pins" / "model.toml"),
+            "--out",
+            str(HERE),
+            "--seed",
+            "2026",
+            "--effect",
+            "kind=thermal,channel=spindle,magnitude=0.003",
+        ]
+    )
     raise SystemExit(code)
 
 

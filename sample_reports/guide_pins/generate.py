@@ -37,7 +37,11 @@ def _header(comments: list[str]) -> list[str]:
         *comments,
         "[process]",
         'name = "Rear axle guide pins, 4-part fixture, B0 and B180"',
-        'axis = "Z"', 'unit = "mm"', "resolution = 0.001", "limit = 0.1", "",
+        'axis = "Z"',
+        'unit = "mm"',
+        "resolution = 0.001",
+        "limit = 0.1",
+        "",
     ]
     for j, reg in enumerate(WKS_REGISTERS, start=1):
         p = (j - 1) % N_PARTS + 1
@@ -48,13 +52,17 @@ def _header(comments: list[str]) -> list[str]:
 
 def model_toml() -> str:
     """The model with the part declared once (a station template) and mapped to the 4 stations."""
-    out = _header([
-        "# The part is declared once ([template.*]); each station maps the template's two WKS",
-        "# (B0, B180) to its own. tests/model/data/guide_pins_expanded.toml is the same model",
-        "# written out table by table; both load to the same matrices (tested).",
-    ])
-    out += ["# Station P<p>: the part at fixture position p; its features and dimensions become",
-            "# P<p>F1 … P<p>F7 and P<p>D1 … P<p>D7, named \"P<p> D1\" …, group \"P<p>\"."]
+    out = _header(
+        [
+            "# The part is declared once ([template.*]); each station maps the template's two WKS",
+            "# (B0, B180) to its own. tests/model/data/guide_pins_expanded.toml is the same model",
+            "# written out table by table; both load to the same matrices (tested).",
+        ]
+    )
+    out += [
+        "# Station P<p>: the part at fixture position p; its features and dimensions become",
+        '# P<p>F1 … P<p>F7 and P<p>D1 … P<p>D7, named "P<p> D1" …, group "P<p>".',
+    ]
     for p in range(1, N_PARTS + 1):
         out += [f"[stations.P{p}]", f'wks = {{ B0 = "W{p}", B180 = "W{p + N_PARTS}" }}', ""]
     for f in range(1, 8):
@@ -67,8 +75,15 @@ def model_toml() -> str:
         out += [f"[template.features.F{f}]", f"wks = {_inline(wks)}", f"tools = {_inline(tools)}", ""]
     for d in range(1, 8):
         feats = {f"F{f}": w for f, w in sorted(R_FD[d].items(), reverse=True)}
-        out += [f"[template.dimensions.D{d}]", f'name = "D{d}"', f"features = {_inline(feats)}",
-                f"nominal = {NOMINALS[d - 1]}", f"lower = {-TOL}", f"upper = {TOL}", ""]
+        out += [
+            f"[template.dimensions.D{d}]",
+            f'name = "D{d}"',
+            f"features = {_inline(feats)}",
+            f"nominal = {NOMINALS[d - 1]}",
+            f"lower = {-TOL}",
+            f"upper = {TOL}",
+            "",
+        ]
     return "\n".join(out)
 
 
@@ -88,8 +103,15 @@ def expanded_model_toml() -> str:
         for d in range(1, 8):
             feats = ", ".join(f"P{p}F{f} = {w}" for f, w in sorted(R_FD[d].items(), reverse=True))
             out += [
-                f"[dimensions.P{p}D{d}]", f'name = "P{p} D{d}"', f'aliases = ["D{d}"]', f"features = {{ {feats} }}",
-                f"nominal = {NOMINALS[d - 1]}", f"lower = {-TOL}", f"upper = {TOL}", f'group = "P{p}"', "",
+                f"[dimensions.P{p}D{d}]",
+                f'name = "P{p} D{d}"',
+                f'aliases = ["D{d}"]',
+                f"features = {{ {feats} }}",
+                f"nominal = {NOMINALS[d - 1]}",
+                f"lower = {-TOL}",
+                f"upper = {TOL}",
+                f'group = "P{p}"',
+                "",
             ]
     return "\n".join(out)
 
@@ -110,12 +132,35 @@ def main() -> None:
     for cycle, dev in enumerate(devs, start=1):
         with open(HERE / f"cycle_{cycle:02d}.csv", "w", newline="", encoding="utf-8") as fh:
             writer = csv.writer(fh)
-            writer.writerow(["characteristic", "nominal", "actual", "deviation", "lower", "upper", "unit",
-                             "part", "station", "timestamp"])
+            writer.writerow(
+                [
+                    "characteristic",
+                    "nominal",
+                    "actual",
+                    "deviation",
+                    "lower",
+                    "upper",
+                    "unit",
+                    "part",
+                    "station",
+                    "timestamp",
+                ]
+            )
             for dim, e in zip(model.dimensions, dev, strict=True):
-                writer.writerow([dim.name, f"{dim.nominal:.4f}", f"{dim.nominal + e:.4f}", f"{e:.4f}",
-                                 dim.lower, dim.upper, "mm", f"cycle {cycle:02d}", dim.group,
-                                 f"2026-11-{cycle + 1:02d}T08:00:00"])
+                writer.writerow(
+                    [
+                        dim.name,
+                        f"{dim.nominal:.4f}",
+                        f"{dim.nominal + e:.4f}",
+                        f"{e:.4f}",
+                        dim.lower,
+                        dim.upper,
+                        "mm",
+                        f"cycle {cycle:02d}",
+                        dim.group,
+                        f"2026-11-{cycle + 1:02d}T08:00:00",
+                    ]
+                )
 
 
 if __name__ == "__main__":

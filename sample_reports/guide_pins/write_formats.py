@@ -106,16 +106,26 @@ def write_qif(rows: list[dict[str, str]], target: Path) -> None:
 def write_dmo(rows: list[dict[str, str]], target: Path) -> None:
     """Write the rows as DMIS 04.0 output (CRLF lines, as CMMs write them)."""
     stamp = rows[0]["timestamp"]
-    lines = [f"DMISMN/'{target.name}',04.0", "UNITS/MM,ANGDEC", f"FILNAM/'{target.name}'",
-             f"PARTSN/'{rows[0]['part']}'", f"DATE={stamp[:10].replace('-', '/')}", f"TIME={stamp[11:19]}", ""]
+    lines = [
+        f"DMISMN/'{target.name}',04.0",
+        "UNITS/MM,ANGDEC",
+        f"FILNAM/'{target.name}'",
+        f"PARTSN/'{rows[0]['part']}'",
+        f"DATE={stamp[:10].replace('-', '/')}",
+        f"TIME={stamp[11:19]}",
+        "",
+    ]
     station = ""
     for r in rows:
         n = r["characteristic"]
         if r["station"] != station:
             station = r["station"]
             lines.append(f"RECALL/D({station})")
-        lines += [f"OUTPUT/F({n}),T({n})", f"F({n})=FEAT/POINT,CART,0,0,{r['nominal']},0,0,1",
-                  f"T({n})=TOL/CORTOL,ZAXIS,{r['lower']},{r['upper']}"]
+        lines += [
+            f"OUTPUT/F({n}),T({n})",
+            f"F({n})=FEAT/POINT,CART,0,0,{r['nominal']},0,0,1",
+            f"T({n})=TOL/CORTOL,ZAXIS,{r['lower']},{r['upper']}",
+        ]
     station = ""
     for r in rows:
         n = r["characteristic"]
@@ -123,8 +133,11 @@ def write_dmo(rows: list[dict[str, str]], target: Path) -> None:
             station = r["station"]
             lines.append(f"RECALL/D({station})")
         ok = float(r["lower"]) <= float(r["deviation"]) <= float(r["upper"])
-        lines += [f"OUTPUT/FA({n}),TA({n})", f"FA({n})=FEAT/POINT,CART,0.0000,0.0000,{r['actual']},0,0,1",
-                  f"TA({n})=TOL/CORTOL,ZAXIS,{r['deviation']},{'INTOL' if ok else 'OUTOL'}"]
+        lines += [
+            f"OUTPUT/FA({n}),TA({n})",
+            f"FA({n})=FEAT/POINT,CART,0.0000,0.0000,{r['actual']},0,0,1",
+            f"TA({n})=TOL/CORTOL,ZAXIS,{r['deviation']},{'INTOL' if ok else 'OUTOL'}",
+        ]
     lines.append("ENDFIL")
     target.write_bytes(("\r\n".join(lines) + "\r\n").encode("utf-8"))
 

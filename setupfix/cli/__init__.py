@@ -55,8 +55,12 @@ class _UsageError(Exception):
 
 def build_parser() -> argparse.ArgumentParser:
     """The full argument parser with every registered sub-command."""
-    parser = _Parser(prog="setupfix", description=__doc__.splitlines()[0] if __doc__ else None,
-                     epilog=TERMS, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser = _Parser(
+        prog="setupfix",
+        description=__doc__.splitlines()[0] if __doc__ else None,
+        epilog=TERMS,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
     parser.add_argument("--version", action="version", version=f"setupfix {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
     for name in COMMAND_MODULES:
@@ -75,8 +79,14 @@ def _usage(parser: argparse.ArgumentParser) -> Callable[[argparse.Namespace], in
     return show
 
 
-def _one_line_warning(message: Warning | str, category: type[Warning], filename: str, lineno: int,
-                      file: TextIO | None = None, line: str | None = None) -> None:
+def _one_line_warning(
+    message: Warning | str,
+    category: type[Warning],
+    filename: str,
+    lineno: int,
+    file: TextIO | None = None,
+    line: str | None = None,
+) -> None:
     """Warnings reach the operator as one ``warning:`` line on stderr, without source code."""
     print(f"warning: {message}", file=sys.stderr)
 

@@ -9,7 +9,6 @@ from typing import Any
 
 from setupfix.errors import SetupfixError
 
-
 #: The terms of the output, explained once (``setupfix --help``; the README repeats them).
 TERMS = """\
 terms (lengths in the model unit):
@@ -37,20 +36,28 @@ def shown(path: object) -> str:
 
 def add_objective_option(p: argparse.ArgumentParser) -> None:
     """--objective: leximin (the exact optimiser's default) or paper (eqs. 8-9)."""
-    p.add_argument("--objective", default=None, choices=("leximin", "paper"),
-                   help="what the exact optimiser maximises: leximin (default: the smallest margin, then the "
-                        "next smallest, and so on - every dimension centred - then the least correction) or "
-                        "paper (Stryczek 2014 eqs. 8-9: the smallest margin, then the least correction); "
-                        "the metaheuristics optimise the paper's error budget")
+    p.add_argument(
+        "--objective",
+        default=None,
+        choices=("leximin", "paper"),
+        help="what the exact optimiser maximises: leximin (default: the smallest margin, then the "
+        "next smallest, and so on - every dimension centred - then the least correction) or "
+        "paper (Stryczek 2014 eqs. 8-9: the smallest margin, then the least correction); "
+        "the metaheuristics optimise the paper's error budget",
+    )
 
 
 def add_factors_option(p: argparse.ArgumentParser) -> None:
     """--factors: the declared design factors of the diagnosis (with ``--process``)."""
-    p.add_argument("--factors", metavar="A,B,A*B", default=None,
-                   help="declared design factors: process-log columns (numeric, or categorical: a coefficient per "
-                        "level but the first) and interactions written a*b, tested per tool register with the "
-                        "part as the unit, Holm over the declared terms x registers only; accepted ones enter the "
-                        "model, then the search runs for the rest")
+    p.add_argument(
+        "--factors",
+        metavar="A,B,A*B",
+        default=None,
+        help="declared design factors: process-log columns (numeric, or categorical: a coefficient per "
+        "level but the first) and interactions written a*b, tested per tool register with the "
+        "part as the unit, Holm over the declared terms x registers only; accepted ones enter the "
+        "model, then the search runs for the rest",
+    )
 
 
 def factors_of(args: argparse.Namespace) -> tuple[str, ...]:
@@ -64,8 +71,9 @@ def add_reader_options(p: argparse.ArgumentParser) -> Any:
     g.add_argument("--format", default=None, metavar="NAME", help="report format (default: sniffed; see 'formats')")
     g.add_argument("--unit", default=None, choices=("mm", "inch"), help="unit of values the report does not label")
     g.add_argument("--encoding", default=None, metavar="ENC", help="text encoding (default: sniffed)")
-    g.add_argument("--columns", default=None, metavar="MAP",
-                   help="column mapping for shop tables, e.g. actual=Meas,nominal=Nom")
+    g.add_argument(
+        "--columns", default=None, metavar="MAP", help="column mapping for shop tables, e.g. actual=Meas,nominal=Nom"
+    )
     add_lenient_option(g)
     return g
 
@@ -73,35 +81,63 @@ def add_reader_options(p: argparse.ArgumentParser) -> Any:
 def add_report_options(p: argparse.ArgumentParser) -> None:
     """Reader options (:func:`add_reader_options`), then stations, cycles and strictness."""
     g = add_reader_options(p)
-    g.add_argument("--stations", default=None, metavar="LIST",
-                   help="fixture stations of the report's parts, in order (P1,P2,…) or as part=station pairs; "
-                        "a subset of the fixture is allowed")
-    g.add_argument("--parts-per-cycle", type=whole_number(1, 10_000), default=None, metavar="N",
-                   help="group consecutive parts of the report N at a time into fixture loads (cycles), the k-th "
-                        "part of each load at the k-th of --stations (default: the model's groups when there are N)")
-    g.add_argument("--strict", action="store_true",
-                   help="refuse a report whose nominal or tolerance of a dimension differs from the model's "
-                        "(default: a warning naming both values)")
+    g.add_argument(
+        "--stations",
+        default=None,
+        metavar="LIST",
+        help="fixture stations of the report's parts, in order (P1,P2,…) or as part=station pairs; "
+        "a subset of the fixture is allowed",
+    )
+    g.add_argument(
+        "--parts-per-cycle",
+        type=whole_number(1, 10_000),
+        default=None,
+        metavar="N",
+        help="group consecutive parts of the report N at a time into fixture loads (cycles), the k-th "
+        "part of each load at the k-th of --stations (default: the model's groups when there are N)",
+    )
+    g.add_argument(
+        "--strict",
+        action="store_true",
+        help="refuse a report whose nominal or tolerance of a dimension differs from the model's "
+        "(default: a warning naming both values)",
+    )
 
 
 def add_thermal_options(p: argparse.ArgumentParser) -> None:
     """The thermal feed-forward's options (``correct``, ``batch``, ``tui``): model, log, time, dead band."""
     g = p.add_argument_group("thermal feed-forward (setupfix.pipeline.feedforward)")
-    g.add_argument("--thermal", metavar="MODEL.json", default=None,
-                   help="thermal model: add the drift since the measured parts were cut")
+    g.add_argument(
+        "--thermal",
+        metavar="MODEL.json",
+        default=None,
+        help="thermal model: add the drift since the measured parts were cut",
+    )
     g.add_argument("--temperatures", metavar="LOG", default=None, help="temperature log for --thermal")
     g.add_argument("--at", metavar="TIME", default=None, help="time of the correction (default: the log's last sample)")
-    g.add_argument("--thermal-dead-band", type=float, default=None, metavar="D",
-                   help="feed nothing forward below |D| (model unit; default one register step)")
+    g.add_argument(
+        "--thermal-dead-band",
+        type=float,
+        default=None,
+        metavar="D",
+        help="feed nothing forward below |D| (model unit; default one register step)",
+    )
 
 
 def add_machine_options(p: Any) -> None:
     """``--machine`` and ``--operator``: whose records the history store reads and writes (issue 25)."""
-    p.add_argument("--machine", default=None, metavar="NAME",
-                   help="the machine whose history is read and written (default: the model's [process] machine, "
-                        "else 'default')")
-    p.add_argument("--operator", default=None, metavar="NAME",
-                   help="who is recorded with the stored recommendations (default: the login name)")
+    p.add_argument(
+        "--machine",
+        default=None,
+        metavar="NAME",
+        help="the machine whose history is read and written (default: the model's [process] machine, else 'default')",
+    )
+    p.add_argument(
+        "--operator",
+        default=None,
+        metavar="NAME",
+        help="who is recorded with the stored recommendations (default: the login name)",
+    )
 
 
 def store_ref(args: argparse.Namespace, db: str | None) -> Any:
@@ -114,11 +150,16 @@ def store_ref(args: argparse.Namespace, db: str | None) -> Any:
 
 def add_program_number_option(p: Any) -> None:
     """``--program-number N``: the written program's number (``correct``, ``batch``)."""
-    p.add_argument("--program-number", type=whole_number(1, 99_999_999), default=None, metavar="N",
-                   help="number (name) of the program written: the Fanuc/Haas O number (O1-O9999 / O1-O99999), "
-                        "the Siemens program SETUPFIX_N; batch numbers its programs N, N+1, ... in file order "
-                        "(default: derived from the report and part - batch: from each program's path, distinct "
-                        "in a run - in O1000-O7999)")
+    p.add_argument(
+        "--program-number",
+        type=whole_number(1, 99_999_999),
+        default=None,
+        metavar="N",
+        help="number (name) of the program written: the Fanuc/Haas O number (O1-O9999 / O1-O99999), "
+        "the Siemens program SETUPFIX_N; batch numbers its programs N, N+1, ... in file order "
+        "(default: derived from the report and part - batch: from each program's path, distinct "
+        "in a run - in O1000-O7999)",
+    )
 
 
 def check_program_number(args: argparse.Namespace) -> None:
@@ -131,13 +172,17 @@ def check_program_number(args: argparse.Namespace) -> None:
 
 def add_lenient_option(group: Any) -> None:
     """``--lenient``: the reader skips a self-contradicting row (with a warning naming its line)."""
-    group.add_argument("--lenient", action="store_true",
-                       help="skip a row that contradicts itself (named in a warning) instead of refusing the "
-                            "report; readers without such rows (all but the Korean layout) ignore it")
+    group.add_argument(
+        "--lenient",
+        action="store_true",
+        help="skip a row that contradicts itself (named in a warning) instead of refusing the "
+        "report; readers without such rows (all but the Korean layout) ignore it",
+    )
 
 
 def whole_number(low: int, high: int, allowed: str | None = None) -> Callable[[str], int]:
     """argparse type: a whole number in [low, high] (``allowed`` words the range in the message)."""
+
     def parse(text: str) -> int:
         try:
             value = int(text)
@@ -152,6 +197,7 @@ def whole_number(low: int, high: int, allowed: str | None = None) -> Callable[[s
 
 def positive_number(high: float) -> Callable[[str], float]:
     """argparse type: a finite number in (0, high]."""
+
     def parse(text: str) -> float:
         try:
             value = float(text)
@@ -166,8 +212,7 @@ def positive_number(high: float) -> Callable[[str], float]:
 
 def cycle_options(args: argparse.Namespace) -> dict[str, Any]:
     """Stations, parts per cycle and strictness as keyword arguments of the use cases."""
-    return {"stations": parse_stations(args.stations), "parts_per_cycle": args.parts_per_cycle,
-            "strict": args.strict}
+    return {"stations": parse_stations(args.stations), "parts_per_cycle": args.parts_per_cycle, "strict": args.strict}
 
 
 def read_options(args: argparse.Namespace) -> Any:
@@ -181,13 +226,22 @@ def cycles_of(args: argparse.Namespace) -> Any:
     """Stations, parts per cycle, strictness and ``--part`` as a :class:`~setupfix.pipeline.requests.CycleOptions`."""
     from setupfix.pipeline.requests import CycleOptions
 
-    return CycleOptions.of(parse_stations(args.stations), parts_per_cycle=args.parts_per_cycle, strict=args.strict,
-                           part=getattr(args, "part", None))
+    return CycleOptions.of(
+        parse_stations(args.stations),
+        parts_per_cycle=args.parts_per_cycle,
+        strict=args.strict,
+        part=getattr(args, "part", None),
+    )
 
 
 def report_options(args: argparse.Namespace) -> dict[str, Any]:
-    return {"format": args.format, "unit": args.unit, "encoding": args.encoding, "columns": args.columns,
-            "lenient": args.lenient}
+    return {
+        "format": args.format,
+        "unit": args.unit,
+        "encoding": args.encoding,
+        "columns": args.columns,
+        "lenient": args.lenient,
+    }
 
 
 def parse_stations(text: str | None) -> list[str] | dict[str, str] | None:

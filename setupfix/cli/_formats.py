@@ -10,8 +10,11 @@ from setupfix.cli.exit_codes import OK
 
 
 def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
-    p = sub.add_parser("formats", help="list the supported report formats",
-                       description="List the report formats in the order their content is sniffed.")
+    p = sub.add_parser(
+        "formats",
+        help="list the supported report formats",
+        description="List the report formats in the order their content is sniffed.",
+    )
     p.add_argument("--json", action="store_true", help="machine-readable list")
     p.set_defaults(run=run)
 

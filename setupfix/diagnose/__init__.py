@@ -21,7 +21,7 @@ Engine (layer 3, arrays in and out, no file I/O):
 """
 
 from setupfix.diagnose.core import Diagnoser, Diagnosis, EffectResult, ErrorSummary, error_summary
-from setupfix.diagnose.factors import FactorTest, FactorTests, Term, parse_terms, factor_tests
+from setupfix.diagnose.factors import FactorTest, FactorTests, Term, factor_tests, parse_terms
 from setupfix.diagnose.fit import Fit, fit_model
 from setupfix.diagnose.select import Selection, candidate_specs, select_effects
 from setupfix.diagnose.shop import HiddenEffect, ShopSimulator, SimulatedSeries
@@ -29,8 +29,29 @@ from setupfix.diagnose.terms import KINDS, EffectSpec, Layout, Series
 from setupfix.diagnose.walk import WalkForward, next_cycle, walk_forward
 
 __all__ = [
-    "KINDS", "Diagnoser", "Diagnosis", "EffectResult", "EffectSpec", "ErrorSummary", "FactorTest", "FactorTests",
-    "Fit", "HiddenEffect", "Term", "parse_terms", "factor_tests",
-    "Layout", "Selection", "Series", "ShopSimulator", "SimulatedSeries", "WalkForward", "candidate_specs",
-    "error_summary", "fit_model", "next_cycle", "select_effects", "walk_forward",
+    "KINDS",
+    "Diagnoser",
+    "Diagnosis",
+    "EffectResult",
+    "EffectSpec",
+    "ErrorSummary",
+    "FactorTest",
+    "FactorTests",
+    "Fit",
+    "HiddenEffect",
+    "Term",
+    "parse_terms",
+    "factor_tests",
+    "Layout",
+    "Selection",
+    "Series",
+    "ShopSimulator",
+    "SimulatedSeries",
+    "WalkForward",
+    "candidate_specs",
+    "error_summary",
+    "fit_model",
+    "next_cycle",
+    "select_effects",
+    "walk_forward",
 ]

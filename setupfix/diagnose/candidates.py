@@ -25,8 +25,14 @@ __all__ = ["STATIC", "candidate_specs", "process_sets", "level_positions", "refi
 Array = npt.NDArray[np.float64]
 
 
-def candidate_specs(layout: Layout, series: Series, *, taus: tuple[float, ...] = (0.1, 0.25, 0.5),
-                    max_positions: int = 32, min_side: int = 2) -> list[EffectSpec]:
+def candidate_specs(
+    layout: Layout,
+    series: Series,
+    *,
+    taus: tuple[float, ...] = (0.1, 0.25, 0.5),
+    max_positions: int = 32,
+    min_side: int = 2,
+) -> list[EffectSpec]:
     """Every one-column candidate the series' covariates allow (relations and process sets aside).
 
     Parameters
@@ -113,8 +119,16 @@ def level_positions(series: Series, max_positions: int, min_side: int) -> list[i
     return [int(order[j]) for j in sorted(set(ok) | {j for j in changed if t[j] > t[j - 1]})]
 
 
-def refine_level(spec: EffectSpec, layout: Layout, series: Series, obs: Observations, Q: Array, r: Array,
-                 gain: float, min_side: int = 2) -> tuple[EffectSpec, float]:
+def refine_level(
+    spec: EffectSpec,
+    layout: Layout,
+    series: Series,
+    obs: Observations,
+    Q: Array,
+    r: Array,
+    gain: float,
+    min_side: int = 2,
+) -> tuple[EffectSpec, float]:
     """A level step moved to the cycle boundary, between its neighbouring positions tried, that explains most.
 
     On long series :func:`candidate_specs` tries a thinned set of positions; the
@@ -133,16 +147,21 @@ def refine_level(spec: EffectSpec, layout: Layout, series: Series, obs: Observat
     ks = [k for k in range(max(lo, min_side), min(hi, n - min_side) + 1) if k != k0 and t[k] > t[k - 1]]
     if not ks:
         return spec, gain
-    alts = [EffectSpec("level", register=spec.register, at=float(t[k]),
-                       cycle=series.cycles[int(order[k])] if series.cycles else f"cycle {int(order[k]) + 1}")
-            for k in ks]
+    alts = [
+        EffectSpec(
+            "level",
+            register=spec.register,
+            at=float(t[k]),
+            cycle=series.cycles[int(order[k])] if series.cycles else f"cycle {int(order[k]) + 1}",
+        )
+        for k in ks
+    ]
     g = dense_scores(Q, r, np.column_stack([effect_columns(a, layout, series, obs)[:, 0] for a in alts]))[0]
     best = int(np.argmax(g))
     return (alts[best], float(g[best])) if g[best] > gain else (spec, gain)
 
 
-def refine_tau(spec: EffectSpec, layout: Layout, series: Series, obs: Observations, Q: Array,
-               r: Array) -> EffectSpec:
+def refine_tau(spec: EffectSpec, layout: Layout, series: Series, obs: Observations, Q: Array, r: Array) -> EffectSpec:
     """Time constant of a saturating drift refined by a bounded 1-D search on the residual."""
     span = float(np.ptp(series.time))
 
@@ -150,7 +169,8 @@ def refine_tau(spec: EffectSpec, layout: Layout, series: Series, obs: Observatio
         s = EffectSpec("drift", shape="saturating", tau=float(np.exp(log_tau)))
         return -float(dense_scores(Q, r, effect_columns(s, layout, series, obs))[0][0])
 
-    res = scipy.optimize.minimize_scalar(loss, bounds=(np.log(0.02 * span), np.log(2.0 * span)), method="bounded",
-                                         options={"xatol": 1e-3})
+    res = scipy.optimize.minimize_scalar(
+        loss, bounds=(np.log(0.02 * span), np.log(2.0 * span)), method="bounded", options={"xatol": 1e-3}
+    )
     tau = float(np.exp(res.x)) if res.fun < loss(np.log(spec.tau)) else spec.tau
     return EffectSpec("drift", shape="saturating", tau=float(f"{tau:.4g}"))

@@ -13,8 +13,16 @@ from setupfix.diagnose.factors import FactorTests, Term, factor_tests
 from setupfix.diagnose.fit import Fit, fit_model, observations
 from setupfix.diagnose.select import Selection, select_effects
 from setupfix.diagnose.terms import EffectSpec, Layout, Series
-from setupfix.diagnose.walk import (CENTRE_FRACTION, NextSource, WalkForward, centred_registers, ewma_forecast,
-                                    next_cycle, next_source, walk_forward)
+from setupfix.diagnose.walk import (
+    CENTRE_FRACTION,
+    NextSource,
+    WalkForward,
+    centred_registers,
+    ewma_forecast,
+    next_cycle,
+    next_source,
+    walk_forward,
+)
 from setupfix.errors import ParameterError
 from setupfix.params import Constraint, Interval, ValidatedParams
 
@@ -203,9 +211,18 @@ class Diagnoser(ValidatedParams):
         "centre_fraction": [Interval(float, 0, 1, closed="both")],
     }
 
-    def __init__(self, *, alpha: float = 0.01, max_effects: int = 4, n_folds: int = 5, walk: bool = True,
-                 min_train: int = 5, reselect_every: int | None = None, lam: float | None = 0.3,
-                 centre_fraction: float = CENTRE_FRACTION) -> None:
+    def __init__(
+        self,
+        *,
+        alpha: float = 0.01,
+        max_effects: int = 4,
+        n_folds: int = 5,
+        walk: bool = True,
+        min_train: int = 5,
+        reselect_every: int | None = None,
+        lam: float | None = 0.3,
+        centre_fraction: float = CENTRE_FRACTION,
+    ) -> None:
         self.alpha = alpha
         self.max_effects = max_effects
         self.n_folds = n_folds
@@ -215,8 +232,9 @@ class Diagnoser(ValidatedParams):
         self.lam = lam
         self.centre_fraction = centre_fraction
 
-    def run(self, layout: Layout, series: Series, *, declared: tuple[EffectSpec, ...] = (),
-            factors: tuple[Term, ...] = ()) -> Diagnosis:
+    def run(
+        self, layout: Layout, series: Series, *, declared: tuple[EffectSpec, ...] = (), factors: tuple[Term, ...] = ()
+    ) -> Diagnosis:
         """Fit, trace, add, walk forward and forecast.
 
         ``declared`` effects (the model's ``[effects]``) belong to the declared model.
@@ -233,11 +251,17 @@ class Diagnoser(ValidatedParams):
         obs = observations(layout, series)
         if obs.n == 0:
             raise ParameterError("diagnose: the series has no measured dimension")
-        tests = (factor_tests(layout, series, factors, alpha=self.alpha, obs=obs, declared=declared)
-                 if factors else None)
+        tests = factor_tests(layout, series, factors, alpha=self.alpha, obs=obs, declared=declared) if factors else None
         pre = tests.found if tests is not None else ()
-        selection = select_effects(layout, series, alpha=self.alpha, max_effects=self.max_effects,
-                                   n_folds=self.n_folds, obs=obs, declared=declared + pre)
+        selection = select_effects(
+            layout,
+            series,
+            alpha=self.alpha,
+            max_effects=self.max_effects,
+            n_folds=self.n_folds,
+            obs=obs,
+            declared=declared + pre,
+        )
         found = pre + selection.found
         before = fit_model(layout, series, declared, obs=obs)
         after = fit_model(layout, series, declared + found, obs=obs)
@@ -245,21 +269,39 @@ class Diagnoser(ValidatedParams):
         alike = ((),) * len(pre) + selection.alike_of_found()
         for i, spec in enumerate(found):
             est, se = after.estimate(len(declared) + i)
-            partial: Fit = fit_model(layout, series, declared + found[:i + 1], obs=obs)
+            partial: Fit = fit_model(layout, series, declared + found[: i + 1], obs=obs)
             test = tests.test_of(spec) if tests is not None and i < len(pre) else None
-            effects.append(EffectResult(spec, est, se, spec.unit(layout.unit),
-                                        error_summary(partial.residual, layout.lower, layout.upper).rms,
-                                        alike[i], "declared" if i < len(pre) else "search",
-                                        test.p_holm if test is not None else None))
+            effects.append(
+                EffectResult(
+                    spec,
+                    est,
+                    se,
+                    spec.unit(layout.unit),
+                    error_summary(partial.residual, layout.lower, layout.upper).rms,
+                    alike[i],
+                    "declared" if i < len(pre) else "search",
+                    test.p_holm if test is not None else None,
+                )
+            )
         walk = None
         notes = list(selection.notes) + (list(tests.notes) if tests is not None else [])
         if self.walk and series.n_cycles >= self.min_train + 5:
-            walk = walk_forward(layout, series, score_composite=after.relation_matrix(layout, selection.unnamed),
-                                min_train=self.min_train, reselect_every=self.reselect_every, lam=self.lam,
-                                alpha=self.alpha, declared=declared, factors=factors)
+            walk = walk_forward(
+                layout,
+                series,
+                score_composite=after.relation_matrix(layout, selection.unnamed),
+                min_train=self.min_train,
+                reselect_every=self.reselect_every,
+                lam=self.lam,
+                alpha=self.alpha,
+                declared=declared,
+                factors=factors,
+            )
         elif self.walk:
-            notes.append(f"{series.n_cycles} cycle(s): too few to walk forward (needs {self.min_train + 5}: "
-                         f"{self.min_train} to fit, 5 to score)")
+            notes.append(
+                f"{series.n_cycles} cycle(s): too few to walk forward (needs {self.min_train + 5}: "
+                f"{self.min_train} to fit, 5 to score)"
+            )
         forecast, _ = next_cycle(layout, series, after)
         source = next_source(walk, bool(found), ewma=self.lam is not None)
         if source.source == "augmented":
@@ -268,10 +310,22 @@ class Diagnoser(ValidatedParams):
             chosen = next_cycle(layout, series, before)[0]
         else:
             chosen = ewma_forecast(layout, series, float(self.lam or 1.0))
-        out = Diagnosis(layout, series, before, after, selection, tuple(effects),
-                        error_summary(before.residual, layout.lower, layout.upper),
-                        error_summary(after.residual, layout.lower, layout.upper), walk, forecast, tuple(notes),
-                        source, chosen, factors=tests)
+        out = Diagnosis(
+            layout,
+            series,
+            before,
+            after,
+            selection,
+            tuple(effects),
+            error_summary(before.residual, layout.lower, layout.upper),
+            error_summary(after.residual, layout.lower, layout.upper),
+            walk,
+            forecast,
+            tuple(notes),
+            source,
+            chosen,
+            factors=tests,
+        )
         return dataclasses.replace(out, centred=self._centred(out, chosen))
 
     def _centred(self, d: Diagnosis, chosen: Array) -> npt.NDArray[np.bool_]:
@@ -282,6 +336,8 @@ class Diagnoser(ValidatedParams):
         last = slice(max(s.n_cycles - 2, 0), s.n_cycles)
         recent = s.deviation[last] + (s.applied[-1] + pending - s.applied[last]) @ C
         predicts = (d.next_from.source == "augmented" and bool(d.effects)) or (
-            d.next_from.source == "declared" and bool(d.before.specs))
-        return centred_registers(C, recent, chosen if predicts else None, lay.lower, lay.upper,
-                                 fraction=self.centre_fraction)
+            d.next_from.source == "declared" and bool(d.before.specs)
+        )
+        return centred_registers(
+            C, recent, chosen if predicts else None, lay.lower, lay.upper, fraction=self.centre_fraction
+        )

@@ -26,9 +26,9 @@ def typical_step(time: Array) -> float:
     return float(np.median(gaps)) if gaps.size else 0.0
 
 
-
-def applied_at(times: Array, log_times: Array, log_register: npt.NDArray[np.intp], log_delta: Array,
-               n_registers: int) -> Array:
+def applied_at(
+    times: Array, log_times: Array, log_register: npt.NDArray[np.intp], log_delta: Array, n_registers: int
+) -> Array:
     """Register changes in effect at each time: every log row with timestamp ≤ t.
 
     Parameters
@@ -54,7 +54,6 @@ def applied_at(times: Array, log_times: Array, log_register: npt.NDArray[np.intp
     idx = np.searchsorted(log_times[order], times, side="right")
     out[:] = cum[idx]
     return out
-
 
 
 def parts_since_change(times: Array, change_times: list[Array]) -> Array:
@@ -86,7 +85,6 @@ def parts_since_change(times: Array, change_times: list[Array]) -> Array:
         after_change = np.searchsorted(sorted_t, last, side="left")
         out[:, j] = before - after_change
     return out
-
 
 
 def join_temperatures(times: Array, sample_times: Array, samples: Array) -> Array:

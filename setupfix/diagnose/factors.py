@@ -47,8 +47,16 @@ from setupfix.diagnose.fit import Observations, effect_columns, observations
 from setupfix.diagnose.inference import MIN_CYCLES, cluster_wald, orth
 from setupfix.diagnose.terms import PRODUCT, EffectSpec, Layout, Series, channel_values
 
-__all__ = ["INTERACTION", "Term", "FactorTest", "FactorTests", "parse_terms", "factor_channels", "term_columns",
-           "factor_tests"]
+__all__ = [
+    "INTERACTION",
+    "Term",
+    "FactorTest",
+    "FactorTests",
+    "parse_terms",
+    "factor_channels",
+    "term_columns",
+    "factor_tests",
+]
 
 Array = npt.NDArray[np.float64]
 
@@ -101,8 +109,9 @@ def factor_channels(series: Series, factor: str) -> tuple[str, ...]:
     KeyError
         If the series has no such channel (the message names it).
     """
-    chans = tuple(c for c in series.process_channels
-                  if c == factor or (c.startswith(factor + "=") and PRODUCT not in c))
+    chans = tuple(
+        c for c in series.process_channels if c == factor or (c.startswith(factor + "=") and PRODUCT not in c)
+    )
     if not chans:
         raise KeyError(factor)
     return chans
@@ -206,8 +215,15 @@ def holm(p: Array) -> Array:
     return out
 
 
-def factor_tests(layout: Layout, series: Series, terms: tuple[Term, ...], *, alpha: float = 0.01,
-                 obs: Observations | None = None, declared: tuple[EffectSpec, ...] = ()) -> FactorTests:
+def factor_tests(
+    layout: Layout,
+    series: Series,
+    terms: tuple[Term, ...],
+    *,
+    alpha: float = 0.01,
+    obs: Observations | None = None,
+    declared: tuple[EffectSpec, ...] = (),
+) -> FactorTests:
     """Test the declared terms per register with the part as the unit; Holm over the family (module text).
 
     Parameters
@@ -242,12 +258,19 @@ def factor_tests(layout: Layout, series: Series, terms: tuple[Term, ...], *, alp
     for t in model_terms:
         for j in regs:
             for tested in (True, False):  # the block tested, the rare levels fitted only
-                sp = tuple(EffectSpec("process", channel=c, register=layout.register_ids[j],
-                                      reference=float(f"{np.mean(channel_values(series, c)):.4g}"))
-                           for c in chans[t][not tested])
+                sp = tuple(
+                    EffectSpec(
+                        "process",
+                        channel=c,
+                        register=layout.register_ids[j],
+                        reference=float(f"{np.mean(channel_values(series, c)):.4g}"),
+                    )
+                    for c in chans[t][not tested]
+                )
                 specs[(t, j, tested)] = sp
-                cols[(t, j, tested)] = (np.hstack([effect_columns(s, layout, series, obs) for s in sp]) if sp
-                                        else np.zeros((obs.n, 0)))
+                cols[(t, j, tested)] = (
+                    np.hstack([effect_columns(s, layout, series, obs) for s in sp]) if sp else np.zeros((obs.n, 0))
+                )
     base = np.hstack([obs.base] + [effect_columns(s, layout, series, obs) for s in declared])
     notes: list[str] = []
     by_part = series.n_cycles >= MIN_CYCLES
@@ -260,26 +283,38 @@ def factor_tests(layout: Layout, series: Series, terms: tuple[Term, ...], *, alp
             if not by_part or block.shape[1] == 0:
                 raw.append((t, j, 0.0, 1.0, 0))
                 continue
-            context = [cols[(u, i, b)] for u in model_terms if u.order <= t.order for i in regs for b in (True, False)
-                       if (u, i, b) != (t, j, True)]
+            context = [
+                cols[(u, i, b)]
+                for u in model_terms
+                if u.order <= t.order
+                for i in regs
+                for b in (True, False)
+                if (u, i, b) != (t, j, True)
+            ]
             Q = orth(np.hstack([base, *context]))
             r = obs.z - Q @ (Q.T @ obs.z)
             f, p, q = cluster_wald(block - Q @ (Q.T @ block), r, obs.cycle, series.n_cycles, Q=Q, power=POWER)
             raw.append((t, j, f, p, q))
     for t in terms:
         if not chans[t][0]:
-            notes.append(f"declared factor {t.name}: its channels do not vary beyond the terms before it: "
-                         "not testable")
+            notes.append(f"declared factor {t.name}: its channels do not vary beyond the terms before it: not testable")
     adj = holm(np.array([x[3] for x in raw])) if raw else np.zeros(0)
-    tests = tuple(FactorTest(t, layout.register_ids[j], specs[(t, j, True)], f, p, float(a), q,
-                             bool(a < alpha and q > 0))
-                  for (t, j, f, p, q), a in zip(raw, adj, strict=True))
+    tests = tuple(
+        FactorTest(t, layout.register_ids[j], specs[(t, j, True)], f, p, float(a), q, bool(a < alpha and q > 0))
+        for (t, j, f, p, q), a in zip(raw, adj, strict=True)
+    )
     keep: set[tuple[Term, int]] = set()
     for x in tests:
         if x.accepted:
             j = layout.register_ids.index(x.register)
             keep.add((x.term, j))
             keep |= {(Term((fa,)), j) for fa in x.term.factors if x.term.order > 1}
-    found = tuple(s for t in sorted(model_terms, key=lambda t: t.order) for j in regs if (t, j) in keep
-                  for b in (False, True) for s in specs[(t, j, b)])
+    found = tuple(
+        s
+        for t in sorted(model_terms, key=lambda t: t.order)
+        for j in regs
+        if (t, j) in keep
+        for b in (False, True)
+        for s in specs[(t, j, b)]
+    )
     return FactorTests(tuple(terms), tests, found, tuple(notes))

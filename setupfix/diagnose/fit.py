@@ -22,8 +22,16 @@ import numpy.typing as npt
 
 from setupfix.diagnose.terms import EffectSpec, Layout, Series, effect_field, field_factors
 
-__all__ = ["Observations", "Fit", "observations", "row_space_basis", "effect_columns", "dense_columns",
-           "fit_model", "RELATION_T"]
+__all__ = [
+    "Observations",
+    "Fit",
+    "observations",
+    "row_space_basis",
+    "effect_columns",
+    "dense_columns",
+    "fit_model",
+    "RELATION_T",
+]
 
 #: A relation weight changes the matrix corrections are mapped through only when |δ| > RELATION_T · s.e.
 RELATION_T = 3.0
@@ -132,7 +140,7 @@ class Fit:
 
     @property
     def rss(self) -> float:
-        return float(np.nansum(self.residual ** 2))
+        return float(np.nansum(self.residual**2))
 
     def estimate(self, i: int) -> tuple[float, float]:
         """(estimate, standard error) of effect ``i`` (the slope for a relation)."""
@@ -179,13 +187,16 @@ class Fit:
         for i, spec in enumerate(self.specs):
             est, se = self.estimate(i)
             if spec.kind == "relation" and spec not in skip and abs(est) > RELATION_T * se:
-                C[layout.register_ids.index(str(spec.register)),
-                  layout.dimension_ids.index(str(spec.dimension))] += est
+                C[layout.register_ids.index(str(spec.register)), layout.dimension_ids.index(str(spec.dimension))] += est
         return C
 
 
-def fit_model(layout: Layout, series: Series, specs: tuple[EffectSpec, ...] | list[EffectSpec] = (),
-              obs: Observations | None = None) -> Fit:
+def fit_model(
+    layout: Layout,
+    series: Series,
+    specs: tuple[EffectSpec, ...] | list[EffectSpec] = (),
+    obs: Observations | None = None,
+) -> Fit:
     """Least-squares fit of the declared model (setup state) plus the effects ``specs``.
 
     Parameters
@@ -219,8 +230,18 @@ def fit_model(layout: Layout, series: Series, specs: tuple[EffectSpec, ...] | li
     dof = max(obs.n - rank, 0)
     rss = float(resid @ resid)
     sigma = float(np.sqrt(rss / dof)) if dof > 0 else float("nan")
-    cov: Array = (sigma ** 2 if dof > 0 else np.nan) * (vt.T * inv ** 2) @ vt
+    cov: Array = (sigma**2 if dof > 0 else np.nan) * (vt.T * inv**2) @ vt
     field = np.full(series.deviation.shape, np.nan)
     field[obs.cycle, obs.dim] = resid
-    return Fit(specs, coef, cov, sigma, field, int(rank), dof, row_space_basis(layout.composite), tuple(spans),
-               layout.dimension_ids)
+    return Fit(
+        specs,
+        coef,
+        cov,
+        sigma,
+        field,
+        int(rank),
+        dof,
+        row_space_basis(layout.composite),
+        tuple(spans),
+        layout.dimension_ids,
+    )

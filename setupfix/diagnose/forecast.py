@@ -17,12 +17,12 @@ does: :func:`relation_composite` gives the matrix the correction is mapped throu
 
 from __future__ import annotations
 
+from collections.abc import Mapping
+
 import numpy as np
 import numpy.typing as npt
 
 from setupfix.diagnose.fit import RELATION_T
-from collections.abc import Mapping
-
 from setupfix.diagnose.terms import EffectSpec, Layout, common_tool_row, register_row
 from setupfix.model.effects import EffectsSection, ModelEffect
 
@@ -33,13 +33,29 @@ Array = npt.NDArray[np.float64]
 
 def spec_of(effect: ModelEffect) -> EffectSpec:
     """The engine's term of a model-file effect."""
-    return EffectSpec(effect.kind, register=effect.register, dimension=effect.dimension, axis=effect.axis,
-                      group=effect.group, channel=effect.channel, shape=effect.shape, tau=effect.tau or 0.0,
-                      reference=effect.reference, at=effect.at or 0.0, cycle=effect.cycle)
+    return EffectSpec(
+        effect.kind,
+        register=effect.register,
+        dimension=effect.dimension,
+        axis=effect.axis,
+        group=effect.group,
+        channel=effect.channel,
+        shape=effect.shape,
+        tau=effect.tau or 0.0,
+        reference=effect.reference,
+        at=effect.at or 0.0,
+        cycle=effect.cycle,
+    )
 
 
-def forecast_shift(section: EffectsSection, layout: Layout, *, time: float | None = None,
-                   ahead: float | None = None, process_change: Mapping[str, float] | None = None) -> Array:
+def forecast_shift(
+    section: EffectsSection,
+    layout: Layout,
+    *,
+    time: float | None = None,
+    ahead: float | None = None,
+    process_change: Mapping[str, float] | None = None,
+) -> Array:
     """Change of every dimension expected from the measured cycle to the next one.
 
     Parameters
@@ -72,8 +88,12 @@ def forecast_shift(section: EffectsSection, layout: Layout, *, time: float | Non
             out += e.estimate * step * common_tool_row(layout)
         elif e.kind == "wear" and e.register in layout.register_ids:
             out += e.estimate * layout.composite[layout.register_ids.index(e.register)]
-        elif (e.kind == "process" and process_change and e.channel in process_change
-              and (e.register is None or e.register in layout.register_ids)):
+        elif (
+            e.kind == "process"
+            and process_change
+            and e.channel in process_change
+            and (e.register is None or e.register in layout.register_ids)
+        ):
             out += e.estimate * float(process_change[str(e.channel)]) * register_row(layout, e.register)
     return out
 

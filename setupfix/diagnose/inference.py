@@ -50,8 +50,17 @@ import scipy.stats
 from setupfix.diagnose.fit import Observations
 from setupfix.diagnose.terms import EffectSpec, Layout
 
-__all__ = ["MIN_CYCLES", "cluster_test", "cluster_wald", "cell_pvalue", "dimension_pvalue", "lack_of_fit", "cycle_sums",
-           "relation_set", "orth"]
+__all__ = [
+    "MIN_CYCLES",
+    "cluster_test",
+    "cluster_wald",
+    "cell_pvalue",
+    "dimension_pvalue",
+    "lack_of_fit",
+    "cycle_sums",
+    "relation_set",
+    "orth",
+]
 
 Array = npt.NDArray[np.float64]
 
@@ -111,15 +120,16 @@ def cluster_test(Zt: Array, r: Array, cycle: npt.NDArray[np.intp], n_cycles: int
     v = np.einsum("km,km->m", e, e) * k / max(k - 1, 1)
     ww = np.einsum("km,km->m", w, w)
     ok = (v > 0) & (wt > 0) & (k >= 2)
-    nu = np.where(ok, wt ** 2 / np.where(ok, ww, 1.0) - 1.0, 1.0)
+    nu = np.where(ok, wt**2 / np.where(ok, ww, 1.0) - 1.0, 1.0)
     nu = np.clip(nu, 1.0, max(k - 1, 1))
-    stat = np.where(ok, u ** 2 / np.where(ok, v, 1.0), 0.0)
+    stat = np.where(ok, u**2 / np.where(ok, v, 1.0), 0.0)
     p = np.where(ok, scipy.stats.f.sf(stat, 1, nu), 1.0)
     return stat, p
 
 
-def cluster_wald(Zt: Array, r: Array, cycle: npt.NDArray[np.intp], n_cycles: int,
-                 Q: Array | None = None, power: float = 0.5) -> tuple[float, float, int]:
+def cluster_wald(
+    Zt: Array, r: Array, cycle: npt.NDArray[np.intp], n_cycles: int, Q: Array | None = None, power: float = 0.5
+) -> tuple[float, float, int]:
     """Cluster-robust Wald test (cycle = cluster) of a block of candidate columns (module text).
 
     Parameters
@@ -162,7 +172,7 @@ def cluster_wald(Zt: Array, r: Array, cycle: npt.NDArray[np.intp], n_cycles: int
     k = int(seen.sum())
     w = np.einsum("kii->ki", gram)  # per-cycle weight of each column
     wt, ww = w.sum(axis=0), np.einsum("ki,ki->i", w, w)
-    nu = float(np.clip(np.min(wt ** 2 / np.where(ww > 0, ww, 1.0)) - 1.0, 1.0, max(k - 1, 1)))
+    nu = float(np.clip(np.min(wt**2 / np.where(ww > 0, ww, 1.0)) - 1.0, 1.0, max(k - 1, 1)))
     if Q is None:
         e = s - np.einsum("kij,j->ki", gram, u)
         V = (e.T @ e) * k / max(k - 1, 1)
@@ -178,8 +188,7 @@ def cluster_wald(Zt: Array, r: Array, cycle: npt.NDArray[np.intp], n_cycles: int
     return f, float(scipy.stats.f.sf(f, q, df2)), q
 
 
-def _leverage_scores(B: Array, Q: Array, e: Array, cycle: npt.NDArray[np.intp],
-                     power: float) -> tuple[Array, float]:
+def _leverage_scores(B: Array, Q: Array, e: Array, cycle: npt.NDArray[np.intp], power: float) -> tuple[Array, float]:
     """Per-cycle scores B_kᵀ A_k e_k, A_k = (I − H_kk)^(−power), H_kk = Q_k Q_kᵀ + B_k B_kᵀ (:func:`cluster_wald`),
     shape (K_seen, q), and the Bell–McCaffrey degrees of freedom of the variance: per column c of B the
     Satterthwaite df of Σ_k (a_kcᵀ e_k)² under independent homoscedastic cells, with e = (I − H) ε,
@@ -237,7 +246,7 @@ def lack_of_fit(dim: npt.NDArray[np.intp], r: Array, n: int, n_static: int, alph
     n_q = np.bincount(dim)
     seen = n_q > 0
     mean_q = np.bincount(dim, weights=r)[seen] / n_q[seen]
-    ss_lof = float(np.sum(n_q[seen] * mean_q ** 2))
+    ss_lof = float(np.sum(n_q[seen] * mean_q**2))
     ss_pure = float(r @ r) - ss_lof
     df_lof = int(seen.sum()) - n_static
     df_pure = n - int(seen.sum())
@@ -247,8 +256,9 @@ def lack_of_fit(dim: npt.NDArray[np.intp], r: Array, n: int, n_static: int, alph
     return (ss_lof, df_lof) if p < alpha else None
 
 
-def relation_set(Q: Array, r: Array, obs: Observations, applied: Array, layout: Layout, spec: EffectSpec,
-                  alpha: float) -> tuple[str, ...]:
+def relation_set(
+    Q: Array, r: Array, obs: Observations, applied: Array, layout: Layout, spec: EffectSpec, alpha: float
+) -> tuple[str, ...]:
     """Other registers the data cannot tell from the chosen one as the source of a relation effect.
 
     The dimension q answers register i's corrections: z_q ≈ c + δ u_i.  Register j stays

@@ -51,12 +51,13 @@ def dense_scores(Q: Array, r: Array, Z: Array) -> tuple[Array, Array]:
     t = Z.T @ r
     scale = np.einsum("ij,ij->j", Z, Z)
     ok = g > 1e-8 * np.maximum(scale, _TINY)
-    gain = np.where(ok, t ** 2 / np.where(ok, g, 1.0), 0.0)
+    gain = np.where(ok, t**2 / np.where(ok, g, 1.0), 0.0)
     return gain, np.where(ok, g, 0.0)
 
 
-def relation_scores(Q: Array, r: Array, obs: Observations, applied: Array,
-                    pairs_ok: npt.NDArray[np.bool_]) -> tuple[Array, Array]:
+def relation_scores(
+    Q: Array, r: Array, obs: Observations, applied: Array, pairs_ok: npt.NDArray[np.bool_]
+) -> tuple[Array, Array]:
     """ΔRSS of every relation candidate (register i, dimension q), shape (n_registers, n_dimensions),
     and the part of it due to the slope (beyond the free constant on q alone).
 
@@ -86,7 +87,7 @@ def relation_scores(Q: Array, r: Array, obs: Observations, applied: Array,
         t = np.column_stack([ta, np.full(n_r, tb)])
         Gi = np.linalg.pinv(G, rcond=1e-10)
         gain[:, q] = np.where(pairs_ok[:, q], np.einsum("ri,rij,rj->r", t, Gi, t), 0.0)
-        const[q] = tb ** 2 / bb if bb > _TINY else 0.0
+        const[q] = tb**2 / bb if bb > _TINY else 0.0
     return gain, np.maximum(gain - const[None, :], 0.0)
 
 
@@ -101,8 +102,19 @@ def cv_sse(X: Array, z: Array, fold: npt.NDArray[np.intp], n_folds: int) -> floa
     return sse
 
 
-def tested(specs: list[EffectSpec], gain: Array, Q: Array, r: Array, Z: Array, obs: Observations, n_cycles: int,
-           lof: tuple[float, int] | None, rss0: float, df0: int, limit: int = TRIES) -> list[Candidate]:
+def tested(
+    specs: list[EffectSpec],
+    gain: Array,
+    Q: Array,
+    r: Array,
+    Z: Array,
+    obs: Observations,
+    n_cycles: int,
+    lof: tuple[float, int] | None,
+    rss0: float,
+    df0: int,
+    limit: int = TRIES,
+) -> list[Candidate]:
     """The ``limit`` best-ranked active one-column candidates (``gain`` ≥ 0): ranked by the cell-level p-value
     (static ones against the lack of fit when there is one), tested per cycle.
 
@@ -148,8 +160,17 @@ def _lof_p(gain: Array, lof: tuple[float, int]) -> Array:
     return out
 
 
-def tested_sets(sets: list[tuple[EffectSpec, ...]], blocks: list[Array], active: npt.NDArray[np.bool_], Q: Array,
-                r: Array, obs: Observations, n_cycles: int, rss0: float, df0: int) -> list[Candidate]:
+def tested_sets(
+    sets: list[tuple[EffectSpec, ...]],
+    blocks: list[Array],
+    active: npt.NDArray[np.bool_],
+    Q: Array,
+    r: Array,
+    obs: Observations,
+    n_cycles: int,
+    rss0: float,
+    df0: int,
+) -> list[Candidate]:
     """Every active per-register process set: ranked by its block's cell-level p-value, tested per cycle by the
     multi-column cluster-robust Wald test (:func:`~setupfix.diagnose.inference.cluster_wald`).  Sets are
     offered on series of at least ``MIN_CYCLES`` cycles only (a block needs cycles to be tested per cycle)."""

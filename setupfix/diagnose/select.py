@@ -133,9 +133,17 @@ class Selection:
         return tuple(s.alike for s in self.steps if s.accepted for _ in s.terms)
 
 
-def select_effects(layout: Layout, series: Series, *, alpha: float = 0.01, max_effects: int = 4,
-                   n_folds: int = 5, relations: bool = True, obs: Observations | None = None,
-                   declared: tuple[EffectSpec, ...] = ()) -> Selection:
+def select_effects(
+    layout: Layout,
+    series: Series,
+    *,
+    alpha: float = 0.01,
+    max_effects: int = 4,
+    n_folds: int = 5,
+    relations: bool = True,
+    obs: Observations | None = None,
+    declared: tuple[EffectSpec, ...] = (),
+) -> Selection:
     """Forward selection of the effects the declared model lacks.
 
     Parameters
@@ -181,8 +189,10 @@ def select_effects(layout: Layout, series: Series, *, alpha: float = 0.01, max_e
     folds = min(n_folds, n_cyc)
     by_cycle = n_cyc >= MIN_CYCLES
     if not by_cycle:
-        notes.append(f"{n_cyc} cycle(s): effects are tested by the F-test only, counting cells (no cross-validation "
-                     "over cycles, no test per part); only static effects (scale, position, group) can be found")
+        notes.append(
+            f"{n_cyc} cycle(s): effects are tested by the F-test only, counting cells (no cross-validation "
+            "over cycles, no test per part); only static effects (scale, position, group) can be found"
+        )
     # folds deal the cycles in time order: the same folds whatever order the parts come in
     fold_of = (np.argsort(np.argsort(series.time, kind="stable"), kind="stable") % max(folds, 1))[obs.cycle]
     active_dense = np.ones(len(specs), dtype=bool)
@@ -202,8 +212,7 @@ def select_effects(layout: Layout, series: Series, *, alpha: float = 0.01, max_e
             unident += [s.target for s, gi, a in zip(specs, g, active_dense, strict=True) if a and gi == 0.0]
             first = False
         gain_d = np.where(active_dense & (g > 0), gain_d, -1.0)
-        gain_r, slope_r = (relation_scores(Q, r, obs, series.applied, active_rel) if active_rel.any()
-                           else (None, None))
+        gain_r, slope_r = relation_scores(Q, r, obs, series.applied, active_rel) if active_rel.any() else (None, None)
         set_cands = tested_sets(sets, blocks, active_set, Q, r, obs, n_cyc, rss0, df0)
         m = int(np.sum(gain_d >= 0)) + len(set_cands) + (int(active_rel.sum()) if gain_r is not None else 0)
         if m == 0 or df0 <= 2:
@@ -227,15 +236,34 @@ def select_effects(layout: Layout, series: Series, *, alpha: float = 0.01, max_e
             p_adj = min(1.0, c.p * m)
             if p_adj >= alpha:
                 if not refused:  # the best-ranked candidate the test refuses is reported
-                    steps.append(Step(spec, float(c.stat), float(c.p), float(p_adj), m, float("nan"),
-                                      float("nan"), False, (), members))
+                    steps.append(
+                        Step(
+                            spec,
+                            float(c.stat),
+                            float(c.p),
+                            float(p_adj),
+                            m,
+                            float("nan"),
+                            float("nan"),
+                            False,
+                            (),
+                            members,
+                        )
+                    )
                 refused = True
                 continue
             if spec.kind == "drift" and spec.shape == "saturating":
                 spec = refine_tau(spec, layout, series, obs, Q, r)
             if spec.kind == "level":  # the step's cycle between the positions tried
-                spec, _ = refine_level(spec, layout, series, obs, Q, r,
-                                       float(dense_scores(Q, r, effect_columns(spec, layout, series, obs))[0][0]))
+                spec, _ = refine_level(
+                    spec,
+                    layout,
+                    series,
+                    obs,
+                    Q,
+                    r,
+                    float(dense_scores(Q, r, effect_columns(spec, layout, series, obs))[0][0]),
+                )
             if di <= -2:  # a per-register set: the members that earn their coefficient
                 keep = prune_set(X, blocks[-2 - di], obs, n_cyc, alpha) if by_cycle else list(range(len(members)))
                 cols = blocks[-2 - di][:, keep]
@@ -253,8 +281,7 @@ def select_effects(layout: Layout, series: Series, *, alpha: float = 0.01, max_e
             if by_cycle and spec.kind not in STATIC:
                 cv1 = cv_sse(X1, obs.z, fold_of, folds)
                 if not cv1 < cv0:
-                    steps.append(Step(spec, float(c.stat), float(c.p), float(p_adj), m, cv0, cv1, False, (),
-                                      members))
+                    steps.append(Step(spec, float(c.stat), float(c.p), float(p_adj), m, cv0, cv1, False, (), members))
                     continue
             if di >= 0:
                 same = alike(Q, cols[:, 0], Z, specs, active_dense, di, g)
@@ -270,8 +297,9 @@ def select_effects(layout: Layout, series: Series, *, alpha: float = 0.01, max_e
                 if spec.kind == "drift":  # one drift shape at most
                     active_dense &= np.array([s.kind != "drift" for s in specs])
             elif di == -1:
-                active_rel[layout.register_ids.index(str(spec.register)),
-                           layout.dimension_ids.index(str(spec.dimension))] = False
+                active_rel[
+                    layout.register_ids.index(str(spec.register)), layout.dimension_ids.index(str(spec.dimension))
+                ] = False
             else:
                 active_set[-2 - di] = False
             accepted = True
@@ -288,19 +316,34 @@ def select_effects(layout: Layout, series: Series, *, alpha: float = 0.01, max_e
         n_static = obs.base.shape[1] + sum(s.kind in STATIC for s in (*declared, *found))
         lack = lack_of_fit(obs.dim, r, obs.n, n_static, alpha) is not None
         if lack:
-            notes.append("the dimensions keep constant offsets beyond the noise that no candidate explains "
-                         "(lack of fit): a register or relation the model lacks on single dimensions?")
-    notes += list(dict.fromkeys(
-        f"{st.target}: ranked first in a step, but too few parts carry it to test {len(st.members)} coefficients "
-        "per part (the set's test has no degrees of freedom left): not claimed"
-        for st in steps if not st.accepted and len(st.members) > 1 and st.p >= 1.0 and st.f == 0.0))
+            notes.append(
+                "the dimensions keep constant offsets beyond the noise that no candidate explains "
+                "(lack of fit): a register or relation the model lacks on single dimensions?"
+            )
+    notes += list(
+        dict.fromkeys(
+            f"{st.target}: ranked first in a step, but too few parts carry it to test {len(st.members)} coefficients "
+            "per part (the set's test has no degrees of freedom left): not claimed"
+            for st in steps
+            if not st.accepted and len(st.members) > 1 and st.p >= 1.0 and st.f == 0.0
+        )
+    )
     notes += register_notes(layout, series, obs)
     return Selection(tuple(found), tuple(steps), tuple(dict.fromkeys(unident)), tuple(notes), lack)
 
 
-def _relation_candidate(layout: Layout, obs: Observations, gain_r: Array, slope_r: Array,
-                        active_rel: npt.NDArray[np.bool_], r: Array, rss0: float, df0: int, by_cycle: bool,
-                        lof: tuple[float, int] | None) -> Candidate | None:
+def _relation_candidate(
+    layout: Layout,
+    obs: Observations,
+    gain_r: Array,
+    slope_r: Array,
+    active_rel: npt.NDArray[np.bool_],
+    r: Array,
+    rss0: float,
+    df0: int,
+    by_cycle: bool,
+    lof: tuple[float, int] | None,
+) -> Candidate | None:
     """The best relation of the step: the dimension most off (slope and constant), then the register whose
     changes it answers (slope); tested on two kinds of evidence, Bonferroni over both: the slope against that
     dimension's own variation over cycles, and, when the dimensions keep offsets, its free constant
@@ -324,10 +367,18 @@ def _relation_candidate(layout: Layout, obs: Observations, gain_r: Array, slope_
     return Candidate(rank_r, p_r, f_r, (spec,), -1)
 
 
-def _reprune(layout: Layout, series: Series, obs: Observations, declared: tuple[EffectSpec, ...],
-             found: list[EffectSpec], steps: list[Step], alpha: float) -> tuple[list[EffectSpec], list[Step], Array]:
+def _reprune(
+    layout: Layout,
+    series: Series,
+    obs: Observations,
+    declared: tuple[EffectSpec, ...],
+    found: list[EffectSpec],
+    steps: list[Step],
+    alpha: float,
+) -> tuple[list[EffectSpec], list[Step], Array]:
     """Members of the per-register sets found pruned again with every other effect found in the model (a member
     that stood in for an effect found later drops out); returns the effects, the steps and the design."""
+
     def cols(terms: list[EffectSpec] | tuple[EffectSpec, ...]) -> Array:
         return np.hstack([obs.base] + [effect_columns(t, layout, series, obs) for t in (*declared, *terms)])
 

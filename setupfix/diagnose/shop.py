@@ -26,7 +26,6 @@ at a time (``EffectSpec.at``).
 from __future__ import annotations
 
 import dataclasses
-
 from dataclasses import dataclass, field
 from typing import Any, ClassVar
 
@@ -154,11 +153,26 @@ class ShopSimulator(ValidatedParams):
         "seed": [Interval(int, 0, None), None],
     }
 
-    def __init__(self, *, n_cycles: int = 40, noise: float = 0.002, setup_error: float = 0.03,
-                 cycle_minutes: float = 20.0, shift_cycles: int = 24, pause_hours: float = 8.0,
-                 correct_every: int = 5, dead_time: float = 30.0, gain: float = 0.7, tool_change_every: int = 16,
-                 heat: float = 6.0, sparse: int = 0, decimals: int = 4, process: int = 0, part_noise: float = 0.0,
-                 seed: int | None = None) -> None:
+    def __init__(
+        self,
+        *,
+        n_cycles: int = 40,
+        noise: float = 0.002,
+        setup_error: float = 0.03,
+        cycle_minutes: float = 20.0,
+        shift_cycles: int = 24,
+        pause_hours: float = 8.0,
+        correct_every: int = 5,
+        dead_time: float = 30.0,
+        gain: float = 0.7,
+        tool_change_every: int = 16,
+        heat: float = 6.0,
+        sparse: int = 0,
+        decimals: int = 4,
+        process: int = 0,
+        part_noise: float = 0.0,
+        seed: int | None = None,
+    ) -> None:
         self.n_cycles = n_cycles
         self.noise = noise
         self.setup_error = setup_error
@@ -214,8 +228,8 @@ class ShopSimulator(ValidatedParams):
         speed = rng.choice([6000.0, 9000.0, 12000.0], size=k[-1] // 3 + 1)[k // 3]
         stick = rng.choice([30.0, 45.0], size=k[-1] // 9 + 1)[k // 9]
         feed = np.round(rng.uniform(100.0, 300.0, size=self.n_cycles))
-        cols = np.column_stack([speed, stick, feed])[:, :self.process]
-        return cols, ("speed_rpm", "stickout_mm", "feed")[:self.process]
+        cols = np.column_stack([speed, stick, feed])[:, : self.process]
+        return cols, ("speed_rpm", "stickout_mm", "feed")[: self.process]
 
     # -- run ------------------------------------------------------------------------------
     def run(self, layout: Layout, effects: tuple[HiddenEffect, ...] | list[HiddenEffect] = ()) -> SimulatedSeries:
@@ -235,16 +249,21 @@ class ShopSimulator(ValidatedParams):
         for e in effects:
             if e.spec.kind not in KINDS:
                 raise ParameterError(f"simulate: unknown effect kind {e.spec.kind!r} (known: {', '.join(KINDS)})")
-            if e.spec.kind == "position" and (e.spec.axis not in AXES
-                                              or np.isnan(layout.coord[:, AXES.index(str(e.spec.axis))]).all()):
-                raise ParameterError("simulate: a position effect needs feature positions in the model "
-                                     "([features.*] position = [x, y, z])")
+            if e.spec.kind == "position" and (
+                e.spec.axis not in AXES or np.isnan(layout.coord[:, AXES.index(str(e.spec.axis))]).all()
+            ):
+                raise ParameterError(
+                    "simulate: a position effect needs feature positions in the model "
+                    "([features.*] position = [x, y, z])"
+                )
         times = self._times()
         effects = tuple(_at_cycle(e, times) for e in effects)
         for e in effects:
             if e.spec.kind == "level" and not times[0] < e.spec.at <= times[-1]:
-                raise ParameterError(f"simulate: a level step at {e.spec.at:g} h is not within the series "
-                                     f"({times[0]:g} … {times[-1]:g} h): it would change no cycle or all alike")
+                raise ParameterError(
+                    f"simulate: a level step at {e.spec.at:g} h is not within the series "
+                    f"({times[0]:g} … {times[-1]:g} h): it would change no cycle or all alike"
+                )
         t_temp, temp = self._temperatures(times, rng)
         # tool changes: in turn, every tool_change_every cycles, 5 min before the cycle
         n_t = layout.tools.size
@@ -270,8 +289,15 @@ class ShopSimulator(ValidatedParams):
             rows = layout.tools if layout.tools.size else np.arange(n_r)
             noise = noise + rng.normal(0.0, self.part_noise, size=(self.n_cycles, rows.size)) @ C[rows]
         # Effects that do not depend on the applied corrections are fixed in advance.
-        probe = Series(np.zeros((self.n_cycles, n_d)), times, np.zeros((self.n_cycles, n_r)), parts, temp_at,
-                       channels, process_channels=names)
+        probe = Series(
+            np.zeros((self.n_cycles, n_d)),
+            times,
+            np.zeros((self.n_cycles, n_r)),
+            parts,
+            temp_at,
+            channels,
+            process_channels=names,
+        )
         static = np.zeros((self.n_cycles, n_d))
         rel = np.zeros_like(C)
         for e in effects:
@@ -283,8 +309,9 @@ class ShopSimulator(ValidatedParams):
                 else:
                     static += e.magnitude * effect_field(e.spec, layout, probe)
             except (KeyError, ValueError, IndexError):
-                raise ParameterError(f"simulate: effect {e.spec.kind} names an unknown target "
-                                     f"({e.spec.target})") from None
+                raise ParameterError(
+                    f"simulate: effect {e.spec.kind} names an unknown target ({e.spec.target})"
+                ) from None
         true_C = C + rel
         pinv = np.linalg.pinv(C)  # (n_d, n_r): least-squares correction through the declared model
         state = np.zeros(n_r)  # sum of corrections applied so far
@@ -301,10 +328,10 @@ class ShopSimulator(ValidatedParams):
                 first = max(0, k + 1 - self.correct_every)
                 planned = state + sum((p[1] for p in pending), np.zeros(n_r))
                 # deviations as they would be with the registers already planned (no double correction)
-                seen = dev[first:k + 1] + (planned - applied[first:k + 1]) @ C
+                seen = dev[first : k + 1] + (planned - applied[first : k + 1]) @ C
                 delta = -self.gain * (seen.mean(axis=0) @ pinv)
                 if self.sparse and self.sparse < n_r:
-                    delta[np.argsort(-np.abs(delta))[self.sparse:]] = 0.0
+                    delta[np.argsort(-np.abs(delta))[self.sparse :]] = 0.0
                 delta = np.clip(np.round(delta / h) * h, -0.1, 0.1)
                 if np.any(delta != 0):
                     at = float(times[k] + self.dead_time / 60.0)
@@ -314,8 +341,18 @@ class ShopSimulator(ValidatedParams):
         leftover: Array = np.sum([p[1] for p in pending], axis=0) if pending else np.zeros(n_r)
         dev = np.round(dev, self.decimals)
         log.sort(key=lambda r: r[0])
-        series = Series(dev, times, applied, parts, temp_at, channels,
-                        tuple(f"cycle {k + 1:03d}" for k in range(self.n_cycles)), "", leftover, names)
+        series = Series(
+            dev,
+            times,
+            applied,
+            parts,
+            temp_at,
+            channels,
+            tuple(f"cycle {k + 1:03d}" for k in range(self.n_cycles)),
+            "",
+            leftover,
+            names,
+        )
         return SimulatedSeries(
             series=series,
             log_time=np.array([r[0] for r in log], dtype=float),
@@ -327,8 +364,9 @@ class ShopSimulator(ValidatedParams):
             setup_error=setup,
             effects=effects,
             noise=self.noise,
-            truth={"effects": [{"kind": e.spec.kind, "target": e.spec.target, "magnitude": e.magnitude}
-                               for e in effects]},
+            truth={
+                "effects": [{"kind": e.spec.kind, "target": e.spec.target, "magnitude": e.magnitude} for e in effects]
+            },
         )
 
 
@@ -343,16 +381,24 @@ def random_topology(seed: int | None = None, *, positions: bool = True) -> dict[
     n_w, n_t = int(rng.integers(2, 7)), int(rng.integers(1, 5))
     n_f, n_d = int(rng.integers(6, 17)), int(rng.integers(8, 25))
     n_g = int(rng.integers(2, 5))
-    doc: dict[str, Any] = {"process": {"name": f"random topology {seed}", "axis": "Z", "unit": "mm"},
-                           "wks": {f"W{i + 1}": {"register": f"G{54 + i}"} for i in range(n_w)},
-                           "tools": {f"T{i + 1}": {"register": f"H{i + 1}"} for i in range(n_t)},
-                           "features": {}, "dimensions": {}}
+    doc: dict[str, Any] = {
+        "process": {"name": f"random topology {seed}", "axis": "Z", "unit": "mm"},
+        "wks": {f"W{i + 1}": {"register": f"G{54 + i}"} for i in range(n_w)},
+        "tools": {f"T{i + 1}": {"register": f"H{i + 1}"} for i in range(n_t)},
+        "features": {},
+        "dimensions": {},
+    }
     for f in range(n_f):
-        feat: dict[str, Any] = {"wks": {f"W{int(rng.integers(n_w)) + 1}": int(rng.choice([-1, 1]))},
-                                "tools": {f"T{int(rng.integers(n_t)) + 1}": int(rng.choice([-1, 1]))}}
+        feat: dict[str, Any] = {
+            "wks": {f"W{int(rng.integers(n_w)) + 1}": int(rng.choice([-1, 1]))},
+            "tools": {f"T{int(rng.integers(n_t)) + 1}": int(rng.choice([-1, 1]))},
+        }
         if positions:
-            feat["position"] = [float(np.round(rng.uniform(0, 400), 1)), float(np.round(rng.uniform(0, 300), 1)),
-                                float(np.round(rng.uniform(0, 100), 1))]
+            feat["position"] = [
+                float(np.round(rng.uniform(0, 400), 1)),
+                float(np.round(rng.uniform(0, 300), 1)),
+                float(np.round(rng.uniform(0, 100), 1)),
+            ]
         doc["features"][f"F{f + 1}"] = feat
     for d in range(n_d):
         a = int(rng.integers(n_f))
@@ -361,9 +407,14 @@ def random_topology(seed: int | None = None, *, positions: bool = True) -> dict[
             b = int(rng.integers(n_f))
             if b != a:
                 feats[f"F{b + 1}"] = -1
-        doc["dimensions"][f"D{d + 1}"] = {"name": f"D{d + 1}", "features": feats,
-                                          "nominal": float(np.round(rng.uniform(5, 120), 1)),
-                                          "lower": -0.1, "upper": 0.1, "group": f"S{d % n_g + 1}"}
+        doc["dimensions"][f"D{d + 1}"] = {
+            "name": f"D{d + 1}",
+            "features": feats,
+            "nominal": float(np.round(rng.uniform(5, 120), 1)),
+            "lower": -0.1,
+            "upper": 0.1,
+            "group": f"S{d % n_g + 1}",
+        }
     return doc
 
 

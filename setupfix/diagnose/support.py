@@ -46,13 +46,17 @@ def support_notes(layout: Layout) -> list[str]:
     """Why a static kind is not offered: nominal sizes or positions without spread."""
     notes: list[str] = []
     if np.ptp(layout.nominal) > 0 and not spread(layout.nominal):
-        notes.append("scale not tested: the nominal sizes are not spread over their range (needs at least three "
-                     "distinct sizes, one in each third of the range)")
+        notes.append(
+            "scale not tested: the nominal sizes are not spread over their range (needs at least three "
+            "distinct sizes, one in each third of the range)"
+        )
     for a, axis in enumerate(AXES):
         col = layout.coord[:, a]
         if np.isfinite(col).all() and np.ptp(col) > 0 and not spread(col):
-            notes.append(f"position {axis} not tested: the features' {axis} positions are not spread over their "
-                         "range (needs at least three distinct, one in each third of the range)")
+            notes.append(
+                f"position {axis} not tested: the features' {axis} positions are not spread over their "
+                "range (needs at least three distinct, one in each third of the range)"
+            )
     return notes
 
 
@@ -65,24 +69,39 @@ def register_notes(layout: Layout, series: Series, obs: Observations) -> list[st
     if series.n_cycles >= 3:
         still = [ids[i] for i in np.flatnonzero(~moved)]
         if still:
-            notes.append("never corrected during the series, so how dimensions answer them cannot be checked: "
-                         + ", ".join(still))
+            notes.append(
+                "never corrected during the series, so how dimensions answer them cannot be checked: "
+                + ", ".join(still)
+            )
         idx = np.flatnonzero(moved)
         for a_pos, a in enumerate(idx):
-            for b in idx[a_pos + 1:]:
+            for b in idx[a_pos + 1 :]:
                 na, nb = np.linalg.norm(u[:, a]), np.linalg.norm(u[:, b])
                 if abs(u[:, a] @ u[:, b]) > (1 - 1e-6) * na * nb:
-                    notes.append(f"{ids[a]} and {ids[b]} always moved together: a wrong relation of one "
-                                 "cannot be told from the other")
+                    notes.append(
+                        f"{ids[a]} and {ids[b]} always moved together: a wrong relation of one "
+                        "cannot be told from the other"
+                    )
     for row in null_space_directions(layout.composite):
-        terms = " ".join(f"{'+' if v > 0 else '-'}{'' if abs(v) == 1 else f'{abs(v):g}·'}{ids[i]}"
-                         for i, v in enumerate(row) if v != 0)
+        terms = " ".join(
+            f"{'+' if v > 0 else '-'}{'' if abs(v) == 1 else f'{abs(v):g}·'}{ids[i]}"
+            for i, v in enumerate(row)
+            if v != 0
+        )
         notes.append(f"the setup state is known only up to {terms.lstrip('+')} (moves no dimension)")
     return notes
 
 
-def alike(Q: Array, col: Array, Z: Array, specs: list[EffectSpec], active: npt.NDArray[np.bool_],
-          chosen: int, norms2: Array, threshold: float = 0.98) -> tuple[str, ...]:
+def alike(
+    Q: Array,
+    col: Array,
+    Z: Array,
+    specs: list[EffectSpec],
+    active: npt.NDArray[np.bool_],
+    chosen: int,
+    norms2: Array,
+    threshold: float = 0.98,
+) -> tuple[str, ...]:
     """Candidates whose residualised columns are nearly collinear with the chosen one.
 
     ``norms2`` holds the residualised columns' squared norms (as :func:`~setupfix.diagnose.scores.dense_scores`
@@ -95,14 +114,22 @@ def alike(Q: Array, col: Array, Z: Array, specs: list[EffectSpec], active: npt.N
     num = np.abs(Z.T @ c)
     den = np.sqrt(np.maximum(norms2, 0.0)) * np.linalg.norm(c)
     corr = np.where(den > _TINY, num / np.where(den > _TINY, den, 1.0), 0.0)
-    return tuple(f"{specs[i].kind}: {specs[i].target}" for i in np.flatnonzero((corr > threshold) & active)
-                 if i != chosen)
+    return tuple(
+        f"{specs[i].kind}: {specs[i].target}" for i in np.flatnonzero((corr > threshold) & active) if i != chosen
+    )
 
 
-def alike_sets(Q: Array, chosen: int, blocks: list[Array], sets: list[tuple[EffectSpec, ...]],
-               active: npt.NDArray[np.bool_], threshold: float = 0.98) -> tuple[str, ...]:
+def alike_sets(
+    Q: Array,
+    chosen: int,
+    blocks: list[Array],
+    sets: list[tuple[EffectSpec, ...]],
+    active: npt.NDArray[np.bool_],
+    threshold: float = 0.98,
+) -> tuple[str, ...]:
     """Per-register sets whose residualised blocks span nearly the same space as the chosen one's (every
     principal angle's cosine above ``threshold``): channels the series cannot tell apart per register."""
+
     def basis(B: Array) -> Array:
         P = B - Q @ (Q.T @ B)
         u, sv, _ = np.linalg.svd(P, full_matrices=False)

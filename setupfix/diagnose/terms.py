@@ -34,8 +34,18 @@ import numpy.typing as npt
 from setupfix.model import ProcessModel
 from setupfix.relation import relation_matrices
 
-__all__ = ["KINDS", "Layout", "Series", "EffectSpec", "effect_field", "field_factors", "common_tool_row",
-           "register_row", "channel_values", "PRODUCT"]
+__all__ = [
+    "KINDS",
+    "Layout",
+    "Series",
+    "EffectSpec",
+    "effect_field",
+    "field_factors",
+    "common_tool_row",
+    "register_row",
+    "channel_values",
+    "PRODUCT",
+]
 
 Array = npt.NDArray[np.float64]
 
@@ -170,9 +180,18 @@ class Series:
         """The sub-series of the given cycle indices."""
         idx = np.asarray(rows)
         cycles = tuple(np.asarray(self.cycles, dtype=object)[idx]) if self.cycles else ()
-        return Series(self.deviation[idx], self.time[idx], self.applied[idx], self.parts[idx],
-                      self.temperature[idx], self.channels, cycles, self.origin, self.pending,
-                      self.process_channels)
+        return Series(
+            self.deviation[idx],
+            self.time[idx],
+            self.applied[idx],
+            self.parts[idx],
+            self.temperature[idx],
+            self.channels,
+            cycles,
+            self.origin,
+            self.pending,
+            self.process_channels,
+        )
 
 
 @dataclass(frozen=True)
@@ -241,10 +260,17 @@ class EffectSpec:
 
     def unit(self, length: str) -> str:
         """Unit of the effect's estimate (``length`` is the model unit)."""
-        return {"drift": f"{length}/h" if self.shape == "linear" else length, "thermal": f"{length}/°C",
-                "wear": f"{length}/cycle", "scale": f"{length}/{length}", "position": f"{length}/{length}",
-                "relation": "1", "group": length, "level": length,
-                "process": f"{length}/unit of {self.channel}"}[self.kind]
+        return {
+            "drift": f"{length}/h" if self.shape == "linear" else length,
+            "thermal": f"{length}/°C",
+            "wear": f"{length}/cycle",
+            "scale": f"{length}/{length}",
+            "position": f"{length}/{length}",
+            "relation": "1",
+            "group": length,
+            "level": length,
+            "process": f"{length}/unit of {self.channel}",
+        }[self.kind]
 
 
 def common_tool_row(layout: Layout) -> Array:

@@ -31,15 +31,24 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
-from setupfix.diagnose.fit import RELATION_T, Fit, row_space_basis
-from setupfix.diagnose.factors import Term, factor_tests
-from setupfix.diagnose.select import select_effects
 from setupfix.diagnose.covariates import typical_step
+from setupfix.diagnose.factors import Term, factor_tests
+from setupfix.diagnose.fit import RELATION_T, Fit, row_space_basis
+from setupfix.diagnose.select import select_effects
 from setupfix.diagnose.terms import EffectSpec, Layout, Series, effect_field
 from setupfix.explain import targets
 
-__all__ = ["Budget", "WalkForward", "walk_forward", "next_cycle", "margins_of", "NextSource", "next_source",
-           "centred_registers", "CENTRE_FRACTION"]
+__all__ = [
+    "Budget",
+    "WalkForward",
+    "walk_forward",
+    "next_cycle",
+    "margins_of",
+    "NextSource",
+    "next_source",
+    "centred_registers",
+    "CENTRE_FRACTION",
+]
 
 Array = npt.NDArray[np.float64]
 
@@ -91,8 +100,15 @@ def _score(dev: Array, lower: Array, upper: Array) -> Budget:
     budget = np.nanmin(np.where(np.isnan(m), np.inf, m), axis=1) if m.size else np.zeros(0)
     budget = np.where(np.isinf(budget), np.nan, budget)
     off = dev - targets(lower, upper)
-    return Budget(budget, float(np.nanmean(budget)), float(np.nanmin(budget)), float(np.sqrt(np.nanmean(dev ** 2))),
-                  int(np.sum(m < 0)), float(np.sqrt(np.nanmean(off ** 2))), float(np.nanmean(np.abs(off))))
+    return Budget(
+        budget,
+        float(np.nanmean(budget)),
+        float(np.nanmin(budget)),
+        float(np.sqrt(np.nanmean(dev**2))),
+        int(np.sum(m < 0)),
+        float(np.sqrt(np.nanmean(off**2))),
+        float(np.nanmean(np.abs(off))),
+    )
 
 
 def _state(pred: Array, C: Array, target: Array) -> Array:
@@ -105,8 +121,9 @@ def _state(pred: Array, C: Array, target: Array) -> Array:
     return out
 
 
-def _grid(layout: Layout, series: Series, specs: tuple[EffectSpec, ...], basis: Array,
-          unnamed: tuple[EffectSpec, ...] = ()) -> tuple[Array, npt.NDArray[np.bool_], list[tuple[int, int, int]]]:
+def _grid(
+    layout: Layout, series: Series, specs: tuple[EffectSpec, ...], basis: Array, unnamed: tuple[EffectSpec, ...] = ()
+) -> tuple[Array, npt.NDArray[np.bool_], list[tuple[int, int, int]]]:
     """Design of the model at every (cycle, dimension), measured or not.
 
     Returns
@@ -140,8 +157,16 @@ def _grid(layout: Layout, series: Series, specs: tuple[EffectSpec, ...], basis: 
 class _Running:
     """Least squares on the cycles seen so far, by accumulated normal equations (XᵀX, Xᵀz)."""
 
-    def __init__(self, layout: Layout, series: Series, specs: tuple[EffectSpec, ...], basis: Array,
-                 z: Array, upto: int, unnamed: tuple[EffectSpec, ...] = ()) -> None:
+    def __init__(
+        self,
+        layout: Layout,
+        series: Series,
+        specs: tuple[EffectSpec, ...],
+        basis: Array,
+        z: Array,
+        upto: int,
+        unnamed: tuple[EffectSpec, ...] = (),
+    ) -> None:
         self.G, self.slope, self.relations = _grid(layout, series, specs, basis, unnamed)
         self.z = z
         self.C = layout.composite
@@ -157,14 +182,14 @@ class _Running:
         """Take cycles ``seen … k − 1`` in."""
         if k <= self.seen:
             return
-        G = self.G[self.seen:k]
-        z = self.z[self.seen:k]
+        G = self.G[self.seen : k]
+        z = self.z[self.seen : k]
         ok = np.isfinite(z)
         Gm = np.where(ok[:, :, None], G, 0.0)
         zm = np.where(ok, z, 0.0)
         self.xtx += np.einsum("kdp,kdq->pq", Gm, Gm)
         self.xtz += np.einsum("kdp,kd->p", Gm, zm)
-        self.ztz += float(np.sum(zm ** 2))
+        self.ztz += float(np.sum(zm**2))
         self.n += int(ok.sum())
         self.seen = k
 
@@ -183,9 +208,18 @@ class _Running:
         return _state(pred, C, target)
 
 
-def walk_forward(layout: Layout, series: Series, *, score_composite: Array | None = None, min_train: int = 5,
-                 reselect_every: int | None = None, lam: float | None = 0.3, alpha: float = 0.01,
-                 declared: tuple[EffectSpec, ...] = (), factors: tuple[Term, ...] = ()) -> WalkForward:
+def walk_forward(
+    layout: Layout,
+    series: Series,
+    *,
+    score_composite: Array | None = None,
+    min_train: int = 5,
+    reselect_every: int | None = None,
+    lam: float | None = 0.3,
+    alpha: float = 0.01,
+    declared: tuple[EffectSpec, ...] = (),
+    factors: tuple[Term, ...] = (),
+) -> WalkForward:
     """Walk forward through ``series``; see the module text.
 
     Parameters
@@ -272,8 +306,16 @@ def next_cycle(layout: Layout, series: Series, fit: Fit) -> tuple[Array, Series]
     step = typical_step(series.time)
     pending = series.pending if series.pending.size == layout.n_registers else np.zeros(layout.n_registers)
     applied = series.applied[last] + pending
-    nxt = Series(np.full((1, layout.n_dimensions), np.nan), series.time[[last]] + step, applied[None, :],
-                 series.parts[[last]] + 1, series.temperature[[last]], series.channels, ("next",), series.origin)
+    nxt = Series(
+        np.full((1, layout.n_dimensions), np.nan),
+        series.time[[last]] + step,
+        applied[None, :],
+        series.parts[[last]] + 1,
+        series.temperature[[last]],
+        series.channels,
+        ("next",),
+        series.origin,
+    )
     z = fit.predict(layout, nxt)[0]
     dev: Array = z + applied @ layout.composite
     return dev, nxt
@@ -313,17 +355,26 @@ def next_source(walk: WalkForward | None, found: bool, *, ewma: bool = True) -> 
         return NextSource("declared", "no effect found: next correction from the declared model")
     fallback = "ewma" if ewma else "declared"
     if walk is None:
-        return NextSource("declared", "the effects found are not proven on later parts (no walk forward): "
-                          "next correction from the declared model")
+        return NextSource(
+            "declared",
+            "the effects found are not proven on later parts (no walk forward): "
+            "next correction from the declared model",
+        )
     a = walk.budgets["augmented"]
     other = walk.budgets.get(fallback, walk.budgets["declared"])
-    numbers = (f"walk forward over {len(walk.cycles)} cycle(s): augmented centre RMS {a.centre_rms:.4g}, "
-               f"{a.out_of_tolerance} out of tolerance; {fallback} {other.centre_rms:.4g}, {other.out_of_tolerance}")
+    numbers = (
+        f"walk forward over {len(walk.cycles)} cycle(s): augmented centre RMS {a.centre_rms:.4g}, "
+        f"{a.out_of_tolerance} out of tolerance; {fallback} {other.centre_rms:.4g}, {other.out_of_tolerance}"
+    )
     if a.centre_rms < other.centre_rms and a.out_of_tolerance <= other.out_of_tolerance:
-        return NextSource("augmented", f"the effects found beat {fallback} ({numbers}): next correction from "
-                          "the augmented model")
-    return NextSource(fallback, f"the effects found did not beat {fallback} ({numbers}): next correction from "
-                      f"{'EWMA' if fallback == 'ewma' else 'the declared model'}, the effects left out")
+        return NextSource(
+            "augmented", f"the effects found beat {fallback} ({numbers}): next correction from the augmented model"
+        )
+    return NextSource(
+        fallback,
+        f"the effects found did not beat {fallback} ({numbers}): next correction from "
+        f"{'EWMA' if fallback == 'ewma' else 'the declared model'}, the effects left out",
+    )
 
 
 def centre_half_width(lower: Array, upper: Array) -> Array:
@@ -338,8 +389,15 @@ def centre_half_width(lower: Array, upper: Array) -> Array:
     return out
 
 
-def centred_registers(composite: Array, recent: Array, forecast: Array | None, lower: Array, upper: Array, *,
-                      fraction: float = CENTRE_FRACTION) -> npt.NDArray[np.bool_]:
+def centred_registers(
+    composite: Array,
+    recent: Array,
+    forecast: Array | None,
+    lower: Array,
+    upper: Array,
+    *,
+    fraction: float = CENTRE_FRACTION,
+) -> npt.NDArray[np.bool_]:
     """Registers whose dimensions all sat near their tolerance centre and are not predicted to leave it.
 
     A register is held when every dimension it moves (C[i, q] ≠ 0) lies within
@@ -371,7 +429,7 @@ def centred_registers(composite: Array, recent: Array, forecast: Array | None, l
     if forecast is not None:
         inside &= np.isfinite(forecast)
     moves = composite != 0
-    out: npt.NDArray[np.bool_] = (moves.any(axis=1) & ~np.any(moves & ~inside, axis=1))
+    out: npt.NDArray[np.bool_] = moves.any(axis=1) & ~np.any(moves & ~inside, axis=1)
     return out
 
 

@@ -11,7 +11,6 @@ Nomenclature (lengths in the model unit unless stated):
 
 from setupfix.model.effects import EffectsSection
 from setupfix.model.loader import load_model, model_from_dict
-from setupfix.model.safety import RegisterPolicy, SafetySettings
 from setupfix.model.measurements import (
     CANONICAL_COLUMNS,
     LENGTH_COLUMNS,
@@ -27,6 +26,7 @@ from setupfix.model.process import (
     Register,
     normalise_name,
 )
+from setupfix.model.safety import RegisterPolicy, SafetySettings
 
 __all__ = [
     "CANONICAL_COLUMNS",

@@ -28,9 +28,19 @@ from typing import Any
 from setupfix.model.process import WKS_COMPONENTS, Feature, Register
 from setupfix.model.validate import MAX_WEIGHT, Problems, Ranges, is_number, number, show, table_of, weights
 
-__all__ = ["AXIS_NAMES", "MULTI_KEYS", "ROTATION_RANGES", "DIRECTION_TOLERANCE", "AxesSettings",
-           "parse_axes", "expand_registers", "feature_relations", "check_rotation_positions",
-           "dimension_geometry", "unit_vector"]
+__all__ = [
+    "AXIS_NAMES",
+    "MULTI_KEYS",
+    "ROTATION_RANGES",
+    "DIRECTION_TOLERANCE",
+    "AxesSettings",
+    "parse_axes",
+    "expand_registers",
+    "feature_relations",
+    "check_rotation_positions",
+    "dimension_geometry",
+    "unit_vector",
+]
 
 AXIS_NAMES: tuple[str, ...] = ("X", "Y", "Z")
 #: Keys a table may hold only in a multi-axis model.
@@ -42,8 +52,7 @@ MULTI_KEYS: dict[str, frozenset[str]] = {
     "dimensions": frozenset({"axis", "direction", "kind", "components", "axes", "diameter"}),
 }
 #: Allowed ranges of the rotation keys [degrees].
-ROTATION_RANGES: dict[str, tuple[float, float]] = {"rotation_limit": (1e-6, 10.0),
-                                                   "rotation_resolution": (1e-7, 1.0)}
+ROTATION_RANGES: dict[str, tuple[float, float]] = {"rotation_limit": (1e-6, 10.0), "rotation_resolution": (1e-7, 1.0)}
 #: A ``direction`` is refused when its length differs from 1 by more than this (it is then normalised).
 DIRECTION_TOLERANCE = 1e-3
 _MAX_STEPS = 100_000
@@ -65,10 +74,16 @@ def unit_vector(axis: str) -> tuple[float, float, float]:
     return (float(axis == "X"), float(axis == "Y"), float(axis == "Z"))
 
 
-def _axis_list(p: Problems, key: str, value: Any, allowed: tuple[str, ...], size: int | None = None
-               ) -> tuple[str, ...] | None:
-    if (not isinstance(value, list) or not value or not all(isinstance(a, str) and a in allowed for a in value)
-            or len(set(value)) != len(value) or (size is not None and len(value) != size)):
+def _axis_list(
+    p: Problems, key: str, value: Any, allowed: tuple[str, ...], size: int | None = None
+) -> tuple[str, ...] | None:
+    if (
+        not isinstance(value, list)
+        or not value
+        or not all(isinstance(a, str) and a in allowed for a in value)
+        or len(set(value)) != len(value)
+        or (size is not None and len(value) != size)
+    ):
         count = f"{size} distinct" if size is not None else "distinct"
         p.add(key, f"expected a list of {count} axes of {', '.join(repr(a) for a in allowed)}, found {show(value)}")
         return None
@@ -95,22 +110,35 @@ def parse_axes(p: Problems, proc: Mapping[str, Any]) -> AxesSettings:
     rotation = _flag(p, "process", proc, "rotation") or False
     values = {}
     for name, default in (("rotation_limit", 0.05), ("rotation_resolution", 0.0001)):
-        got = number(p, f"process.{name}", proc.get(name, default), positive=True, within=ROTATION_RANGES[name],
-                     unit=" degrees")
+        got = number(
+            p, f"process.{name}", proc.get(name, default), positive=True, within=ROTATION_RANGES[name], unit=" degrees"
+        )
         values[name] = got if got is not None else default
     lim, res = values["rotation_limit"], values["rotation_resolution"]
     if res > lim:
-        p.add("process.rotation_resolution", f"rotation resolution {res:g} degrees is above the rotation limit "
-                                             f"{lim:g} degrees: no rotation could be corrected")
+        p.add(
+            "process.rotation_resolution",
+            f"rotation resolution {res:g} degrees is above the rotation limit "
+            f"{lim:g} degrees: no rotation could be corrected",
+        )
     elif lim / res > _MAX_STEPS:
-        p.add("process.rotation_limit", f"rotation limit {lim:g} degrees spans {lim / res:.3g} steps of the "
-                                        f"rotation resolution {res:g}; at most {_MAX_STEPS:,} are allowed")
+        p.add(
+            "process.rotation_limit",
+            f"rotation limit {lim:g} degrees spans {lim / res:.3g} steps of the "
+            f"rotation resolution {res:g}; at most {_MAX_STEPS:,} are allowed",
+        )
     ordered = tuple(a for a in AXIS_NAMES if a in axes)
     return AxesSettings(ordered, str(spindle), rotation, lim, res)
 
 
-def expand_registers(p: Problems, doc: Mapping[str, Any], wks: list[Register], tools: list[Register],
-                     settings: AxesSettings, ranges: Ranges) -> tuple[list[Register], list[Register]]:
+def expand_registers(
+    p: Problems,
+    doc: Mapping[str, Any],
+    wks: list[Register],
+    tools: list[Register],
+    settings: AxesSettings,
+    ranges: Ranges,
+) -> tuple[list[Register], list[Register]]:
     """One register per component: WKS translations (and rotation), tool lengths (and radius).
 
     ``wks`` and ``tools`` are the loader's one-per-table registers (limit, fixed, policy read);
@@ -130,8 +158,9 @@ def expand_registers(p: Problems, doc: Mapping[str, Any], wks: list[Register], t
         for axis in own:
             out_wks.append(dataclasses.replace(reg, id=f"{reg.id}.{axis}", component=axis, owner=reg.id))
         if rotation if rotation is not None else settings.rotation:
-            out_wks.append(dataclasses.replace(reg, id=f"{reg.id}.C", component="C", owner=reg.id,
-                                               limit=settings.rotation_limit))
+            out_wks.append(
+                dataclasses.replace(reg, id=f"{reg.id}.C", component="C", owner=reg.id, limit=settings.rotation_limit)
+            )
     out_tools: list[Register] = []
     tool_tables = table_of(p, "tools", doc.get("tools", {}))
     for reg in tools:
@@ -140,26 +169,38 @@ def expand_registers(p: Problems, doc: Mapping[str, Any], wks: list[Register], t
         table = table if isinstance(table, Mapping) else {}
         out_tools.append(dataclasses.replace(reg, component=settings.spindle, owner=reg.id))
         if "radius_limit" in table and "radius" not in table:
-            p.add(f"{key}.radius_limit", "a radius limit without a radius register (radius = \"D…\")")
+            p.add(f"{key}.radius_limit", 'a radius limit without a radius register (radius = "D…")')
         if "radius" not in table:
             continue
         name = table["radius"]
         if not isinstance(name, str) or not name.strip() or any(ord(c) < 32 for c in name):
-            p.add(f"{key}.radius", f"expected a register name (e.g. \"D5\"), found {show(name)}")
+            p.add(f"{key}.radius", f'expected a register name (e.g. "D5"), found {show(name)}')
             continue
         limit = reg.limit
         if "radius_limit" in table:
-            got = number(p, f"{key}.radius_limit", table["radius_limit"], positive=True, within=ranges.of["limit"],
-                         unit=ranges.unit)
+            got = number(
+                p,
+                f"{key}.radius_limit",
+                table["radius_limit"],
+                positive=True,
+                within=ranges.of["limit"],
+                unit=ranges.unit,
+            )
             limit = got if got is not None else limit
-        out_tools.append(dataclasses.replace(reg, id=f"{reg.id}.R", register=name.strip(), component="R",
-                                             owner=reg.id, limit=limit))
+        out_tools.append(
+            dataclasses.replace(reg, id=f"{reg.id}.R", register=name.strip(), component="R", owner=reg.id, limit=limit)
+        )
     return out_wks, out_tools
 
 
-def feature_relations(p: Problems, key: str, table: Mapping[str, Any], wks_ids: Mapping[str, Any],
-                      tool_ids: Mapping[str, Any], radius_ids: Collection[str]
-                      ) -> tuple[dict[str, dict[str, float]], dict[str, float], dict[str, float]]:
+def feature_relations(
+    p: Problems,
+    key: str,
+    table: Mapping[str, Any],
+    wks_ids: Mapping[str, Any],
+    tool_ids: Mapping[str, Any],
+    radius_ids: Collection[str],
+) -> tuple[dict[str, dict[str, float]], dict[str, float], dict[str, float]]:
     """A feature's ``wks`` (number or ``{x, y, z, c}`` per WKS), ``tools`` (length) and ``radius`` weights.
 
     Returns
@@ -193,7 +234,7 @@ def feature_relations(p: Problems, key: str, table: Mapping[str, Any], wks_ids: 
     radius = {}
     for ref, w in weights(p, f"{key}.radius", table.get("radius", {}), tool_ids, "tool").items():
         if ref not in radius_ids:
-            p.add(f"{key}.radius.{ref}", f"tool {ref} has no radius register (add radius = \"D…\" to [tools.{ref}])")
+            p.add(f"{key}.radius.{ref}", f'tool {ref} has no radius register (add radius = "D…" to [tools.{ref}])')
             continue
         radius[ref] = w
     return components, length, radius
@@ -204,9 +245,11 @@ def check_rotation_positions(p: Problems, features: list[Feature], rotating: set
     for feat in features:
         turned = sorted(w for w, comp in feat.components.items() if w in rotating and comp.get("c", 0.0) != 0.0)
         if turned and feat.position is None:
-            p.add(f"features.{feat.id}.position",
-                  f"missing: the rotation of {', '.join(turned)} moves this feature by s × position (give its "
-                  "nominal [x, y, z] in the WKS frame, or c = 0 in its wks weights)")
+            p.add(
+                f"features.{feat.id}.position",
+                f"missing: the rotation of {', '.join(turned)} moves this feature by s × position (give its "
+                "nominal [x, y, z] in the WKS frame, or c = 0 in its wks weights)",
+            )
 
 
 @dataclass(frozen=True)
@@ -220,8 +263,7 @@ class Geometry:
     diameter: float | None = None
 
 
-def dimension_geometry(p: Problems, key: str, table: Mapping[str, Any], default_axis: str,
-                       ranges: Ranges) -> Geometry:
+def dimension_geometry(p: Problems, key: str, table: Mapping[str, Any], default_axis: str, ranges: Ranges) -> Geometry:
     """The keys ``kind``, ``axis``, ``direction``, ``components``, ``axes``, ``diameter`` of a dimension."""
     kind = table.get("kind", "length")
     if kind not in ("length", "size", "position"):
@@ -244,29 +286,43 @@ def dimension_geometry(p: Problems, key: str, table: Mapping[str, Any], default_
         else:
             length = math.sqrt(sum(float(v) ** 2 for v in raw))
             if abs(length - 1.0) > DIRECTION_TOLERANCE:
-                p.add(f"{key}.direction", f"not a unit vector (its length is {length:.6g}; expected 1 within "
-                                          f"{DIRECTION_TOLERANCE:g})")
+                p.add(
+                    f"{key}.direction",
+                    f"not a unit vector (its length is {length:.6g}; expected 1 within {DIRECTION_TOLERANCE:g})",
+                )
             else:
                 direction = (float(raw[0]) / length, float(raw[1]) / length, float(raw[2]) / length)
     if kind != "position":
         return Geometry(str(kind), direction)
     for name in ("axis", "direction", "lower", "upper"):
         if name in table:
-            p.add(f"{key}.{name}", "a position zone has no " + (
-                "measuring direction (its plane is axes = [a, b])" if name in ("axis", "direction")
-                else "lower/upper limit: its tolerance is the diameter"))
+            p.add(
+                f"{key}.{name}",
+                "a position zone has no "
+                + (
+                    "measuring direction (its plane is axes = [a, b])"
+                    if name in ("axis", "direction")
+                    else "lower/upper limit: its tolerance is the diameter"
+                ),
+            )
     names = table.get("components")
     components: tuple[str, ...] = ()
-    if (not isinstance(names, list) or len(names) != 2
-            or not all(isinstance(n, str) and n.strip() for n in names) or names[0].strip() == names[1].strip()):
+    if (
+        not isinstance(names, list)
+        or len(names) != 2
+        or not all(isinstance(n, str) and n.strip() for n in names)
+        or names[0].strip() == names[1].strip()
+    ):
         found = show(names) if names is not None else "none"
-        p.add(f"{key}.components", "expected the two report characteristics of the zone, e.g. "
-                                   f"[\"Hole 1 X\", \"Hole 1 Y\"], found {found}")
+        p.add(
+            f"{key}.components",
+            f'expected the two report characteristics of the zone, e.g. ["Hole 1 X", "Hole 1 Y"], found {found}',
+        )
     else:
         components = (names[0].strip(), names[1].strip())
     plane = _axis_list(p, f"{key}.axes", table.get("axes"), AXIS_NAMES, size=2) if "axes" in table else None
     if "axes" not in table:
-        p.add(f"{key}.axes", "missing: the plane of the zone, e.g. axes = [\"X\", \"Y\"]")
+        p.add(f"{key}.axes", 'missing: the plane of the zone, e.g. axes = ["X", "Y"]')
     diameter = None
     if "diameter" not in table:
         p.add(f"{key}.diameter", "missing: a position zone needs its diameter")

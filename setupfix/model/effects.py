@@ -73,14 +73,52 @@ if TYPE_CHECKING:  # the model holds its [effects] section: process imports this
 
 __all__ = ["ModelEffect", "EffectsSection", "effects_from_dict", "parse_effects", "load_effects", "EFFECT_KINDS"]
 
-EFFECT_KINDS: tuple[str, ...] = ("drift", "thermal", "wear", "scale", "position", "relation", "group", "level",
-                                 "process")
+EFFECT_KINDS: tuple[str, ...] = (
+    "drift",
+    "thermal",
+    "wear",
+    "scale",
+    "position",
+    "relation",
+    "group",
+    "level",
+    "process",
+)
 
-_KEYS = {"kind", "shape", "tau", "estimate", "stderr", "unit", "target", "channel", "reference", "register",
-         "dimension", "axis", "group", "registers", "description", "comment", "note", "notes", "at", "cycle", "span"}
-_REQUIRED = {"drift": (), "thermal": ("channel",), "wear": ("register",), "scale": (), "position": ("axis",),
-             "relation": ("register", "dimension"), "group": ("group",), "level": ("at",),
-             "process": ("channel", "span")}
+_KEYS = {
+    "kind",
+    "shape",
+    "tau",
+    "estimate",
+    "stderr",
+    "unit",
+    "target",
+    "channel",
+    "reference",
+    "register",
+    "dimension",
+    "axis",
+    "group",
+    "registers",
+    "description",
+    "comment",
+    "note",
+    "notes",
+    "at",
+    "cycle",
+    "span",
+}
+_REQUIRED = {
+    "drift": (),
+    "thermal": ("channel",),
+    "wear": ("register",),
+    "scale": (),
+    "position": ("axis",),
+    "relation": ("register", "dimension"),
+    "group": ("group",),
+    "level": ("at",),
+    "process": ("channel", "span"),
+}
 
 
 @dataclass(frozen=True)
@@ -122,16 +160,27 @@ class EffectsSection:
 
 
 def _num(value: Any) -> bool:
-    return (isinstance(value, (int, float)) and not isinstance(value, bool)
-            and abs(value) <= sys.float_info.max and math.isfinite(value))
+    return (
+        isinstance(value, (int, float))
+        and not isinstance(value, bool)
+        and abs(value) <= sys.float_info.max
+        and math.isfinite(value)
+    )
 
 
 #: Bound on |estimate| per kind (and drift shape), in mm-based units (module table).
 ESTIMATE_BOUNDS: dict[str, tuple[float, bool]] = {
     # kind: (bound, is the bound a length that scales with the model unit)
-    "drift": (1.0, True), "saturating": (10.0, True), "thermal": (1.0, True), "wear": (1.0, True),
-    "scale": (0.01, False), "position": (0.01, False), "relation": (1000.0, False), "group": (10.0, True),
-    "level": (10.0, True), "process": (10.0, True),
+    "drift": (1.0, True),
+    "saturating": (10.0, True),
+    "thermal": (1.0, True),
+    "wear": (1.0, True),
+    "scale": (0.01, False),
+    "position": (0.01, False),
+    "relation": (1000.0, False),
+    "group": (10.0, True),
+    "level": (10.0, True),
+    "process": (10.0, True),
 }
 #: Bounds of the section's time base and of the other numbers (module table).
 HEAD_BOUNDS: dict[str, tuple[float, float]] = {"cycle_hours": (0.0, 8784.0), "last_hours": (0.0, 876_600.0)}
@@ -169,8 +218,9 @@ def _shown(value: Any) -> str:
     return text if len(text) <= 60 else text[:57] + "..."
 
 
-def effects_from_dict(section: Mapping[str, Any] | None, model: ProcessModel,
-                      source: str = "<model>") -> EffectsSection:
+def effects_from_dict(
+    section: Mapping[str, Any] | None, model: ProcessModel, source: str = "<model>"
+) -> EffectsSection:
     """Validate an ``[effects]`` table against ``model``.
 
     Raises
@@ -189,8 +239,9 @@ def effects_from_dict(section: Mapping[str, Any] | None, model: ProcessModel,
     return section_read
 
 
-def _validated(section: Mapping[str, Any] | None, model: ProcessModel,
-               bad: Callable[[str, str], None]) -> EffectsSection:
+def _validated(
+    section: Mapping[str, Any] | None, model: ProcessModel, bad: Callable[[str, str], None]
+) -> EffectsSection:
     """The section read, every problem given to ``bad(key, message)`` (key from the document's top)."""
     if not section:
         return EffectsSection()
@@ -251,12 +302,17 @@ def _validated(section: Mapping[str, Any] | None, model: ProcessModel,
             bad(f"{key}.tau", f"expected hours in (0, {TAU_HOURS:g}], found {_shown(raw['tau'])}")
         if kind == "process":
             if "reference" in raw and not (_num(raw["reference"]) and abs(raw["reference"]) <= PROCESS_VALUE):
-                bad(f"{key}.reference",
-                    f"expected a number within ±{PROCESS_VALUE:g}, found {_shown(raw['reference'])}")
-        elif "reference" in raw and not (_num(raw["reference"])
-                                         and REFERENCE_CELSIUS[0] <= raw["reference"] <= REFERENCE_CELSIUS[1]):
-            bad(f"{key}.reference", f"expected °C in [{REFERENCE_CELSIUS[0]:g}, {REFERENCE_CELSIUS[1]:g}], "
-                                    f"found {_shown(raw['reference'])}")
+                bad(
+                    f"{key}.reference", f"expected a number within ±{PROCESS_VALUE:g}, found {_shown(raw['reference'])}"
+                )
+        elif "reference" in raw and not (
+            _num(raw["reference"]) and REFERENCE_CELSIUS[0] <= raw["reference"] <= REFERENCE_CELSIUS[1]
+        ):
+            bad(
+                f"{key}.reference",
+                f"expected °C in [{REFERENCE_CELSIUS[0]:g}, {REFERENCE_CELSIUS[1]:g}], "
+                f"found {_shown(raw['reference'])}",
+            )
         for name in ("unit", "target", "shape", "channel", "register", "dimension", "axis", "group", "cycle"):
             if name in raw and not isinstance(raw[name], str):
                 bad(f"{key}.{name}", f"expected a string, found {_shown(raw[name])}")
@@ -272,8 +328,11 @@ def _validated(section: Mapping[str, Any] | None, model: ProcessModel,
         if "span" in raw and not (_num(span_raw) and 0 < span_raw <= PROCESS_VALUE):
             bad(f"{key}.span", f"expected a number in (0, {PROCESS_VALUE:g}], found {_shown(span_raw)}")
         elif kind == "process" and _num(span_raw) and abs(est) * span_raw > bound:
-            bad(f"{key}.estimate", f"estimate {est:g} over the channel's span {span_raw:g} moves "
-                                   f"{abs(est) * span_raw:g} {model.unit}, beyond the plausible ±{bound:g}")
+            bad(
+                f"{key}.estimate",
+                f"estimate {est:g} over the channel's span {span_raw:g} moves "
+                f"{abs(est) * span_raw:g} {model.unit}, beyond the plausible ±{bound:g}",
+            )
         if problems:
             continue
         shape = raw.get("shape", "linear")
@@ -299,17 +358,28 @@ def _validated(section: Mapping[str, Any] | None, model: ProcessModel,
         if kind == "position" and raw["axis"] not in ("x", "y", "z"):
             bad(f"{key}.axis", f'expected "x", "y" or "z", found {raw["axis"]!r}')
         stderr = raw.get("stderr")
-        effects.append(ModelEffect(
-            id=str(eid), kind=str(kind), estimate=float(est or 0),
-            stderr=float(stderr or 0) if _num(stderr) else None,
-            unit=str(raw.get("unit", "")), target=str(raw.get("target", "")), shape=str(shape),
-            tau=float(tau or 0) if _num(tau) else None, channel=raw.get("channel"),
-            reference=float(raw["reference"]) if _num(raw.get("reference")) else 0.0,
-            register=raw.get("register"), dimension=raw.get("dimension"), axis=raw.get("axis"),
-            group=raw.get("group"),
-            registers=tuple(raw.get("registers", ())) if kind == "relation" else (),
-            at=float(raw["at"]) if kind == "level" else None, cycle=raw.get("cycle") if kind == "level" else None,
-            span=float(raw["span"]) if kind == "process" else None))
+        effects.append(
+            ModelEffect(
+                id=str(eid),
+                kind=str(kind),
+                estimate=float(est or 0),
+                stderr=float(stderr or 0) if _num(stderr) else None,
+                unit=str(raw.get("unit", "")),
+                target=str(raw.get("target", "")),
+                shape=str(shape),
+                tau=float(tau or 0) if _num(tau) else None,
+                channel=raw.get("channel"),
+                reference=float(raw["reference"]) if _num(raw.get("reference")) else 0.0,
+                register=raw.get("register"),
+                dimension=raw.get("dimension"),
+                axis=raw.get("axis"),
+                group=raw.get("group"),
+                registers=tuple(raw.get("registers", ())) if kind == "relation" else (),
+                at=float(raw["at"]) if kind == "level" else None,
+                cycle=raw.get("cycle") if kind == "level" else None,
+                span=float(raw["span"]) if kind == "process" else None,
+            )
+        )
     return EffectsSection(tuple(effects), origin, head.get("cycle_hours"), head.get("last_hours"))
 
 

@@ -89,7 +89,7 @@ def with_effects(model_text: str, section: EffectsSection) -> str:
                     block -= 1
                 marks = [i for i in range(block, len(kept)) if kept[i].startswith(_MARK)]
                 if marks:
-                    del kept[marks[0]:]
+                    del kept[marks[0] :]
         if not skipping:
             kept.append(line)
     body = "\n".join(kept).rstrip()

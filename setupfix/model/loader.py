@@ -56,8 +56,18 @@ from setupfix.model.process import Feature, MachinePoint, ProcessModel
 from setupfix.model.safety import parse_safety
 from setupfix.model.stations import expand_stations
 from setupfix.model.tables import _KEYS, _check_keys, _check_resolution, _dimensions, _registers, _report_in
-from setupfix.model.validate import (RANGES_MM, Problems, Ranges, check_slots, control_free, is_number, number,
-                                     show, table_of, weights)
+from setupfix.model.validate import (
+    RANGES_MM,
+    Problems,
+    Ranges,
+    check_slots,
+    control_free,
+    is_number,
+    number,
+    show,
+    table_of,
+    weights,
+)
 from setupfix.units import LENGTH_UNITS
 
 __all__ = [
@@ -111,10 +121,17 @@ def model_from_dict(doc: Mapping[str, Any], source: str = "<model>", text: str |
         unit = "mm"
     unit = LENGTH_UNITS[unit.strip().lower()]
     ranges = Ranges(unit)
-    resolution = number(p, "process.resolution", proc.get("resolution", 0.001), positive=True,
-                         within=ranges.of["resolution"], unit=ranges.unit)
-    limit = number(p, "process.limit", proc.get("limit", 0.1), positive=True, within=ranges.of["limit"],
-                    unit=ranges.unit)
+    resolution = number(
+        p,
+        "process.resolution",
+        proc.get("resolution", 0.001),
+        positive=True,
+        within=ranges.of["resolution"],
+        unit=ranges.unit,
+    )
+    limit = number(
+        p, "process.limit", proc.get("limit", 0.1), positive=True, within=ranges.of["limit"], unit=ranges.unit
+    )
 
     draft = proc.get("draft", False)
     if not isinstance(draft, bool):
@@ -171,8 +188,10 @@ def model_from_dict(doc: Mapping[str, Any], source: str = "<model>", text: str |
             if isinstance(pos, list) and len(pos) == 3 and all(is_number(v) and lo <= v <= hi for v in pos):
                 position = (float(pos[0]), float(pos[1]), float(pos[2]))
             else:
-                p.add(f"{key}.position",
-                      f"expected [x, y, z] numbers within [{lo:g}, {hi:g}]{ranges.unit}, found {show(pos)}")
+                p.add(
+                    f"{key}.position",
+                    f"expected [x, y, z] numbers within [{lo:g}, {hi:g}]{ranges.unit}, found {show(pos)}",
+                )
         features.append(Feature(fid, fw, ft, position, components, radius))
     feature_ids = {f.id: f for f in features}
     if not features:
@@ -208,8 +227,9 @@ def model_from_dict(doc: Mapping[str, Any], source: str = "<model>", text: str |
         effects = parse_effects(doc["effects"], model, functools.partial(_report_in, p, "effects"))
         model = replace(model, effects=effects)
     if "safety" in doc:
-        model = replace(model, safety=parse_safety(doc["safety"], model.dimension_ids,
-                                                   functools.partial(_report_in, p, "safety")))
+        model = replace(
+            model, safety=parse_safety(doc["safety"], model.dimension_ids, functools.partial(_report_in, p, "safety"))
+        )
     p.raise_if_any()
     return model
 
@@ -244,8 +264,7 @@ def load_model(path: str | Path) -> ProcessModel:
         line = int(found.group(1)) if found and found.group(1) else raw.count(b"\n") + 1 if found else None
         raise ModelError(f"TOML syntax: {msg}", location=SourceLocation(str(path), line=line)) from None
     except RecursionError:
-        raise ModelError("TOML nested too deeply (arrays or inline tables inside each other)",
-                         location=where) from None
+        raise ModelError("TOML nested too deeply (arrays or inline tables inside each other)", location=where) from None
     except ValueError as exc:  # an integer beyond Python's int/str conversion limit
         raise ModelError(f"TOML value out of range: {exc}", location=where) from None
     return model_from_dict(doc, source=str(path), text=text)

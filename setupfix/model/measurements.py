@@ -28,13 +28,26 @@ from setupfix.errors import MatchError, Note, SourceLocation
 from setupfix.model.process import ProcessModel, normalise_name
 from setupfix.units import length_factor
 
-
 __all__ = ["CANONICAL_COLUMNS", "LENGTH_COLUMNS", "PartMeasurement", "match_parts", "suggest_names"]
 
 #: Columns of the canonical measurement table, in the order writers emit them.
 CANONICAL_COLUMNS: Final[tuple[str, ...]] = (
-    "characteristic", "nominal", "actual", "deviation", "lower", "upper", "unit",
-    "part", "report", "timestamp", "station", "x", "y", "z", "status", "source",
+    "characteristic",
+    "nominal",
+    "actual",
+    "deviation",
+    "lower",
+    "upper",
+    "unit",
+    "part",
+    "report",
+    "timestamp",
+    "station",
+    "x",
+    "y",
+    "z",
+    "status",
+    "source",
 )
 
 #: Columns holding lengths (converted between units together).
@@ -183,8 +196,11 @@ def match_parts(model: ProcessModel, table: pd.DataFrame, *, source: str = "<rep
             candidates = lookup.get(keys[i], [])
             station = station_keys[i]
             if len(candidates) > 1:
-                candidates = [c for c in candidates if station is not None and c[1] is not None
-                              and normalise_name(c[1]) == station]
+                candidates = [
+                    c
+                    for c in candidates
+                    if station is not None and c[1] is not None and normalise_name(c[1]) == station
+                ]
                 if len(candidates) != 1:
                     raise MatchError(
                         f"characteristic {name!r} names several dimensions; give a station matching their group",
@@ -207,13 +223,25 @@ def match_parts(model: ProcessModel, table: pd.DataFrame, *, source: str = "<rep
             if row_of[idx] >= 0:
                 earlier = row_of[idx]
                 if _later(stamps[earlier], stamps[i]):
-                    notes.append(Note(f"dimension {model.dimensions[idx].id} ({name}) is measured twice in part "
-                                      f"{key or '(report)'}: the later measurement here is used, the one at "
-                                      f"{wheres[earlier]} ignored", SourceLocation(where), "match"))
+                    notes.append(
+                        Note(
+                            f"dimension {model.dimensions[idx].id} ({name}) is measured twice in part "
+                            f"{key or '(report)'}: the later measurement here is used, the one at "
+                            f"{wheres[earlier]} ignored",
+                            SourceLocation(where),
+                            "match",
+                        )
+                    )
                 else:
-                    notes.append(Note(f"dimension {model.dimensions[idx].id} ({name}) is measured twice in part "
-                                      f"{key or '(report)'}: the later measurement at {wheres[earlier]} is used, "
-                                      "this one ignored", SourceLocation(where), "match"))
+                    notes.append(
+                        Note(
+                            f"dimension {model.dimensions[idx].id} ({name}) is measured twice in part "
+                            f"{key or '(report)'}: the later measurement at {wheres[earlier]} is used, "
+                            "this one ignored",
+                            SourceLocation(where),
+                            "match",
+                        )
+                    )
                     continue
             deviation[idx] = value
             row_of[idx] = i
@@ -223,16 +251,22 @@ def match_parts(model: ProcessModel, table: pd.DataFrame, *, source: str = "<rep
                 row_of[idx] = i
             elif comp == 0 or (idx, 0) not in zone_rows:
                 dim = model.dimensions[idx]
-                notes.append(Note(f"position zone {dim.id} ({dim.name}): only one of its components "
-                                  f"{dim.components[0]!r}, {dim.components[1]!r} is in part {key or '(report)'}; "
-                                  "the zone is left out", SourceLocation(wheres[i]), "match"))
+                notes.append(
+                    Note(
+                        f"position zone {dim.id} ({dim.name}): only one of its components "
+                        f"{dim.components[0]!r}, {dim.components[1]!r} is in part {key or '(report)'}; "
+                        "the zone is left out",
+                        SourceLocation(wheres[i]),
+                        "match",
+                    )
+                )
         if np.isnan(deviation).all():
             raise MatchError(
                 f"no characteristic of part {key or '(report)'} matches a model dimension"
                 + (f" (report names e.g. {_examples(model, unmatched[:3])})" if unmatched else ""),
                 location=SourceLocation(source),
                 hint="check the dimension names and aliases in the model; 'setupfix model check MODEL REPORT' "
-                     "prints the match table",
+                "prints the match table",
             )
         matched = np.flatnonzero(np.asarray(row_of) >= 0)
         taken = np.asarray(row_of)[matched]
@@ -261,8 +295,14 @@ def match_parts(model: ProcessModel, table: pd.DataFrame, *, source: str = "<rep
                 units=tuple(units[i] if i >= 0 else "" for i in row_of),
                 suggestions={name: suggestions[name] for name in unmatched},
                 stations=tuple(dict.fromkeys(s for i in rows if (s := stations[i]) is not None)),
-                names=tuple(" + ".join(names[zone_rows[(q, k)]] for k in (0, 1)) if (q, 1) in zone_rows and i >= 0
-                            else names[i] if i >= 0 else "" for q, i in enumerate(row_of)),
+                names=tuple(
+                    " + ".join(names[zone_rows[(q, k)]] for k in (0, 1))
+                    if (q, 1) in zone_rows and i >= 0
+                    else names[i]
+                    if i >= 0
+                    else ""
+                    for q, i in enumerate(row_of)
+                ),
                 zone=zone if zones else None,
             )
         )
@@ -279,8 +319,9 @@ def suggest_names(model: ProcessModel, name: str, n: int = 3) -> tuple[str, ...]
     ``SP_00_Z`` / ``SP-00_Z``) come first, then the closest by
     :func:`difflib.get_close_matches` (ratio ≥ 0.6) when there is no such name.
     """
-    names = list(dict.fromkeys(n_ for d in model.dimensions
-                               for n_ in ((*d.components,) if d.zone else (d.name, *d.aliases))))
+    names = list(
+        dict.fromkeys(n_ for d in model.dimensions for n_ in ((*d.components,) if d.zone else (d.name, *d.aliases)))
+    )
     skeleton = _PUNCT.sub("", name).casefold()
     exact = [m for m in names if _PUNCT.sub("", m).casefold() == skeleton] if skeleton else []
     if exact:

@@ -34,14 +34,21 @@ from collections.abc import Callable, Collection, Mapping
 from dataclasses import dataclass, field
 from typing import Any, Literal
 
-__all__ = ["OffsetType", "RegisterPolicy", "SafetySettings", "SAFETY_KEYS", "REGISTER_KEYS", "DIMENSION_KEYS",
-           "parse_safety", "parse_register_policy"]
+__all__ = [
+    "OffsetType",
+    "RegisterPolicy",
+    "SafetySettings",
+    "SAFETY_KEYS",
+    "REGISTER_KEYS",
+    "DIMENSION_KEYS",
+    "parse_safety",
+    "parse_register_policy",
+]
 
 OffsetType = Literal["wear", "geometry"]
 
 #: Keys of the ``[safety]`` table.
-SAFETY_KEYS = frozenset({"dead_band", "gain", "reject_band", "cumulative_limit", "uncertainty", "guard_band",
-                         "ewma"})
+SAFETY_KEYS = frozenset({"dead_band", "gain", "reject_band", "cumulative_limit", "uncertainty", "guard_band", "ewma"})
 #: Extra keys a ``[wks.ID]`` or ``[tools.ID]`` table may hold.
 REGISTER_KEYS = frozenset({"cost", "offset", "number", "edge", "dead_band", "gain", "cumulative_limit"})
 #: Keys of a ``[safety.dimensions.ID]`` table.
@@ -88,8 +95,9 @@ class SafetySettings:
     dimension_reject_band: Mapping[str, float] = field(default_factory=dict)
 
 
-def _num(report: Callable[[str], None], value: Any, low: float, high: float = math.inf, *,
-         open_low: bool = False) -> float | None:
+def _num(
+    report: Callable[[str], None], value: Any, low: float, high: float = math.inf, *, open_low: bool = False
+) -> float | None:
     ok = isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
     if ok and (value > low or (not open_low and value == low)) and value <= high:
         return float(value)

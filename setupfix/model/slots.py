@@ -33,8 +33,7 @@ from __future__ import annotations
 
 import re
 
-__all__ = ["g_code", "wks_fanuc", "wks_haas", "wks_siemens", "tool_hd", "tool_edge", "preset_row",
-           "register_slots"]
+__all__ = ["g_code", "wks_fanuc", "wks_haas", "wks_siemens", "tool_hd", "tool_edge", "preset_row", "register_slots"]
 
 _G = re.compile(r"^G\s*(\d+)(?:\.(\d))?\s*(?:P\s*(\d+))?$", re.IGNORECASE)
 _HD = re.compile(r"^([HD])\s*(\d+)$", re.IGNORECASE)

@@ -113,8 +113,9 @@ def expand_stations(doc: Mapping[str, Any]) -> tuple[dict[str, Any], dict[str, s
                 problems.append((f"{key}.{k}", "unknown key (expected one of: tools, wks)"))
         stations[sid] = {kind: _mapping(raw.get(kind, {}), f"{key}.{kind}", problems) for kind in ("wks", "tools")}
 
-    declared = {kind: set(doc.get(kind, {})) if isinstance(doc.get(kind), Mapping) else set()
-                for kind in ("wks", "tools")}
+    declared = {
+        kind: set(doc.get(kind, {})) if isinstance(doc.get(kind), Mapping) else set() for kind in ("wks", "tools")
+    }
     # Every template name a feature uses must be a declared register or mapped by every station.
     for fid, ftable in t_features.items():
         for kind in ("wks", "tools"):
@@ -126,19 +127,28 @@ def expand_stations(doc: Mapping[str, Any]) -> tuple[dict[str, Any], dict[str, s
                     continue
                 missing = [sid for sid, maps in stations.items() if ref not in maps[kind]]
                 if missing:
-                    problems.append((f"template.features.{fid}.{kind}.{ref}",
-                                     f"{ref!r} is neither a declared {'WKS' if kind == 'wks' else 'tool'} nor "
-                                     f"mapped by station(s) {', '.join(missing)} ([stations.<ID>] {kind} = {{…}})"))
+                    problems.append(
+                        (
+                            f"template.features.{fid}.{kind}.{ref}",
+                            f"{ref!r} is neither a declared {'WKS' if kind == 'wks' else 'tool'} nor "
+                            f"mapped by station(s) {', '.join(missing)} ([stations.<ID>] {kind} = {{…}})",
+                        )
+                    )
     for sid, maps in stations.items():
-        used = {ref for f in t_features.values() for ref in (f.get("wks", {}) if isinstance(f.get("wks"), Mapping)
-                                                            else {})}
-        used |= {ref for f in t_features.values() for ref in (f.get("tools", {})
-                                                              if isinstance(f.get("tools"), Mapping) else {})}
+        used = {
+            ref for f in t_features.values() for ref in (f.get("wks", {}) if isinstance(f.get("wks"), Mapping) else {})
+        }
+        used |= {
+            ref
+            for f in t_features.values()
+            for ref in (f.get("tools", {}) if isinstance(f.get("tools"), Mapping) else {})
+        }
         for kind, mapping in maps.items():
             for ref in mapping:
                 if ref not in used:
-                    problems.append((f"stations.{sid}.{kind}.{ref}", f"template name {ref!r} is used by no "
-                                                                      "template feature"))
+                    problems.append(
+                        (f"stations.{sid}.{kind}.{ref}", f"template name {ref!r} is used by no template feature")
+                    )
 
     features = dict(out.get("features", {})) if isinstance(out.get("features"), Mapping) else {}
     dimensions = dict(out.get("dimensions", {})) if isinstance(out.get("dimensions"), Mapping) else {}
@@ -170,8 +180,12 @@ def expand_stations(doc: Mapping[str, Any]) -> tuple[dict[str, Any], dict[str, s
             if isinstance(refs, Mapping):
                 table["features"] = {(f"{sid}{ref}" if ref in t_features else ref): w for ref, w in refs.items()}
             if "group" in dtable:
-                problems.append((f"template.dimensions.{did}.group", "the group of a templated dimension is its "
-                                                                      "station; remove the key"))
+                problems.append(
+                    (
+                        f"template.dimensions.{did}.group",
+                        "the group of a templated dimension is its station; remove the key",
+                    )
+                )
             table["group"] = sid
             _place(dimensions, "dimensions", new_id, table, f"template.dimensions.{did}", origin, problems)
     out["features"] = features
@@ -179,8 +193,15 @@ def expand_stations(doc: Mapping[str, Any]) -> tuple[dict[str, Any], dict[str, s
     return out, origin, problems
 
 
-def _place(section: dict[str, Any], name: str, new_id: str, table: dict[str, Any], where: str,
-           origin: dict[str, str], problems: list[Problem]) -> None:
+def _place(
+    section: dict[str, Any],
+    name: str,
+    new_id: str,
+    table: dict[str, Any],
+    where: str,
+    origin: dict[str, str],
+    problems: list[Problem],
+) -> None:
     if new_id in section:
         problems.append((where, f"expands to [{name}.{new_id}], which is also declared in the file"))
         return

@@ -49,8 +49,15 @@ def _check_keys(p: Problems, section: str, key: str, table: Mapping[str, Any], m
             p.add(f"{key}.{name}", f"unknown key (expected one of: {allowed})")
 
 
-def _registers(p: Problems, doc: dict[str, Any], section: str, kind: RegisterKind, limit: float,
-               ranges: Ranges, multi: bool = False) -> list[Register]:
+def _registers(
+    p: Problems,
+    doc: dict[str, Any],
+    section: str,
+    kind: RegisterKind,
+    limit: float,
+    ranges: Ranges,
+    multi: bool = False,
+) -> list[Register]:
     regs = []
     for rid, raw in table_of(p, section, doc.get(section, {})).items():
         key = f"{section}.{rid}"
@@ -63,8 +70,11 @@ def _registers(p: Problems, doc: dict[str, Any], section: str, kind: RegisterKin
             name = rid
         elif "register" in table and not control_free(p, f"{key}.register", name, "register name"):
             name = rid
-        lim = (number(p, f"{key}.limit", table["limit"], positive=True, within=ranges.of["limit"],
-                       unit=ranges.unit) if "limit" in table else limit)
+        lim = (
+            number(p, f"{key}.limit", table["limit"], positive=True, within=ranges.of["limit"], unit=ranges.unit)
+            if "limit" in table
+            else limit
+        )
         fixed = table.get("fixed", False)
         if not isinstance(fixed, bool):
             p.add(f"{key}.fixed", f"expected true or false, found {show(fixed)}")
@@ -74,35 +84,47 @@ def _registers(p: Problems, doc: dict[str, Any], section: str, kind: RegisterKin
     return regs
 
 
-def _check_resolution(p: Problems, resolution: float, limit: float, registers: list[Register],
-                      dimensions: list[Dimension], unit: str) -> None:
+def _check_resolution(
+    p: Problems, resolution: float, limit: float, registers: list[Register], dimensions: list[Dimension], unit: str
+) -> None:
     """Resolution against the limits (the process's, then each register's own) and the tolerance bands."""
     checks = [("process.limit", limit)] + [
         (f"{section_of(reg)}.{'radius_limit' if reg.component == 'R' else 'limit'}", reg.limit)
-        for reg in registers if reg.limit != limit and reg.component != "C"]  # a rotation: degrees (axes.py)
+        for reg in registers
+        if reg.limit != limit and reg.component != "C"
+    ]  # a rotation: degrees (axes.py)
     checks = list(dict.fromkeys(checks))
     for key, lim in checks:
         if lim < resolution:
-            p.add(key, f"limit {lim:g} {unit} is below the resolution {resolution:g} {unit}: no correction "
-                       f"could be made (allowed: at least the resolution; fixed = true holds a register)")
+            p.add(
+                key,
+                f"limit {lim:g} {unit} is below the resolution {resolution:g} {unit}: no correction "
+                f"could be made (allowed: at least the resolution; fixed = true holds a register)",
+            )
         elif lim / resolution > MAX_STEPS:
-            p.add(key, f"limit {lim:g} {unit} spans {lim / resolution:.3g} steps of the resolution "
-                       f"{resolution:g} {unit}; at most {MAX_STEPS:,} are allowed")
+            p.add(
+                key,
+                f"limit {lim:g} {unit} spans {lim / resolution:.3g} steps of the resolution "
+                f"{resolution:g} {unit}; at most {MAX_STEPS:,} are allowed",
+            )
     bands = [(d.upper - d.lower, d) for d in dimensions if math.isfinite(d.upper - d.lower)]
     if bands:
         width, narrowest = min(bands, key=lambda b: b[0])
         if resolution > width / 2:
-            p.add("process.resolution",
-                  f"resolution {resolution:g} {unit} is coarser than half the narrowest tolerance band "
-                  f"({narrowest.name}: {width:g} {unit} wide); allowed: at most {width / 2:g} {unit}")
+            p.add(
+                "process.resolution",
+                f"resolution {resolution:g} {unit} is coarser than half the narrowest tolerance band "
+                f"({narrowest.name}: {width:g} {unit} wide); allowed: at most {width / 2:g} {unit}",
+            )
 
 
 def _report_in(p: Problems, section: str, key: str, message: str) -> None:
     p.add(f"{section}.{key}" if key else section, message)
 
 
-def _dimensions(p: Problems, doc: Mapping[str, Any], feature_ids: Mapping[str, Feature],
-                ranges: Ranges, axis: str | None = None) -> list[Dimension]:
+def _dimensions(
+    p: Problems, doc: Mapping[str, Any], feature_ids: Mapping[str, Feature], ranges: Ranges, axis: str | None = None
+) -> list[Dimension]:
     """The ``[dimensions.*]`` tables; ``axis`` (the default measuring axis) only in a multi-axis model."""
     multi = axis is not None
     dimensions = []
@@ -143,8 +165,9 @@ def _dimensions(p: Problems, doc: Mapping[str, Any], feature_ids: Mapping[str, F
                 values[field_name] = None
             else:
                 within = ranges.of["nominal" if field_name == "nominal" else "tolerance"]
-                values[field_name] = number(p, f"{key}.{field_name}", table[field_name], within=within,
-                                             unit=ranges.unit)
+                values[field_name] = number(
+                    p, f"{key}.{field_name}", table[field_name], within=within, unit=ranges.unit
+                )
         lo, up = values["lower"], values["upper"]
         if geometry is not None and zone:
             lo, up = 0.0, (geometry.diameter or 0.0) / 2 or None
@@ -162,12 +185,21 @@ def _dimensions(p: Problems, doc: Mapping[str, Any], feature_ids: Mapping[str, F
             sampled=sampled,
         )
         if geometry is not None:
-            dim = replace(dim, kind=geometry.kind, direction=geometry.direction, components=geometry.components,
-                          plane=geometry.plane, diameter=geometry.diameter)
+            dim = replace(
+                dim,
+                kind=geometry.kind,
+                direction=geometry.direction,
+                components=geometry.components,
+                plane=geometry.plane,
+                diameter=geometry.diameter,
+            )
         for k in (*dim.keys, *dim.component_keys):
             if (k, group) in seen_names and seen_names[(k, group)] != did:
-                p.add(f"{key}.name", f"name {k!r} is also used by dimension {seen_names[(k, group)]}"
-                      + (f" in group {group!r}" if group else ""))
+                p.add(
+                    f"{key}.name",
+                    f"name {k!r} is also used by dimension {seen_names[(k, group)]}"
+                    + (f" in group {group!r}" if group else ""),
+                )
             seen_names[(k, group)] = did
         dimensions.append(dim)
     if not dimensions:

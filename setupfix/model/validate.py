@@ -21,8 +21,21 @@ from setupfix.model.process import Register
 from setupfix.model.slots import register_slots
 from setupfix.units import length_factor
 
-__all__ = ["RANGES_MM", "MAX_WEIGHT", "Lines", "Problems", "show", "is_number", "number", "control_free",
-           "table_of", "weights", "Ranges", "section_of", "check_slots"]
+__all__ = [
+    "RANGES_MM",
+    "MAX_WEIGHT",
+    "Lines",
+    "Problems",
+    "show",
+    "is_number",
+    "number",
+    "control_free",
+    "table_of",
+    "weights",
+    "Ranges",
+    "section_of",
+    "check_slots",
+]
 
 #: Allowed ranges of lengths [mm], converted to the model unit when checked.
 RANGES_MM: dict[str, tuple[float, float]] = {
@@ -83,8 +96,7 @@ class Problems:
 
     def add(self, key: str, message: str) -> None:
         where = self._where(key)
-        self.items.append(ModelError(message, location=SourceLocation(self.path, line=self.line_of(where),
-                                                                      key=where)))
+        self.items.append(ModelError(message, location=SourceLocation(self.path, line=self.line_of(where), key=where)))
 
     def _where(self, key: str) -> str:
         """Key path in the file as written (templated tables name their template and station)."""
@@ -122,11 +134,21 @@ def is_number(value: Any) -> bool:
     return math.isfinite(value)
 
 
-def number(p: Problems, key: str, value: Any, *, positive: bool = False,
-            within: tuple[float, float] | None = None, unit: str = "") -> float | None:
+def number(
+    p: Problems,
+    key: str,
+    value: Any,
+    *,
+    positive: bool = False,
+    within: tuple[float, float] | None = None,
+    unit: str = "",
+) -> float | None:
     if not is_number(value):
-        why = "not finite or beyond the float range" if isinstance(value, (int, float)) and not isinstance(
-            value, bool) else "expected a number"
+        why = (
+            "not finite or beyond the float range"
+            if isinstance(value, (int, float)) and not isinstance(value, bool)
+            else "expected a number"
+        )
         p.add(key, f"{why}, found {show(value)}")
         return None
     number = float(value)
@@ -148,8 +170,10 @@ def control_free(p: Problems, key: str, text: str, what: str) -> bool:
     bad = next((c for c in text if unicodedata.category(c) in ("Cc", "Zl", "Zp")), None)
     if bad is None:
         return True
-    p.add(key, f"{what} {text!r} holds the control character U+{ord(bad):04X}; IDs and names are one "
-               "line of printable text")
+    p.add(
+        key,
+        f"{what} {text!r} holds the control character U+{ord(bad):04X}; IDs and names are one line of printable text",
+    )
     return False
 
 
@@ -199,9 +223,11 @@ def check_slots(p: Problems, registers: list[Register]) -> None:
             first = owner.setdefault(slot, reg)
             if first is not reg:
                 line = p.line_of(p._where(f"{section_of(first)}.register"))
-                p.add(f"{section_of(reg)}.register",
-                      f"register {reg.register!r} addresses the controller slot {slot}, also used by "
-                      f"{first.id} ([{section_of(first)}]{f' line {line}' if line else ''}, register {first.register!r}"
-                      + (f", number = {first.policy.number}" if first.policy.number is not None else "")
-                      + "): a program would write both corrections to one offset")
+                p.add(
+                    f"{section_of(reg)}.register",
+                    f"register {reg.register!r} addresses the controller slot {slot}, also used by "
+                    f"{first.id} ([{section_of(first)}]{f' line {line}' if line else ''}, register {first.register!r}"
+                    + (f", number = {first.policy.number}" if first.policy.number is not None else "")
+                    + "): a program would write both corrections to one offset",
+                )
                 break

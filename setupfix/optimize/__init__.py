@@ -59,8 +59,9 @@ def get_optimizer(name: str, **params: Any) -> Optimizer:
     known = set(inspect.signature(cls).parameters)
     unknown = sorted(set(params) - known)
     if unknown:
-        raise ParameterError(f"{cls.__name__}: unknown parameter {unknown[0]!r} (parameters: "
-                             f"{', '.join(sorted(known))})")
+        raise ParameterError(
+            f"{cls.__name__}: unknown parameter {unknown[0]!r} (parameters: {', '.join(sorted(known))})"
+        )
     optimizer: Optimizer = cls(**params)
     optimizer.validate_params()
     return optimizer

@@ -20,8 +20,19 @@ from setupfix.optimize._problem import CorrectionProblem, OptimizeResult
 from setupfix.params import Constraint, Interval, ValidatedParams
 from setupfix.search import generator
 
-__all__ = ["Optimizer", "Metaheuristic", "Evaluator", "GridSpace", "GridObjective", "make_result",
-           "NO_BETTER_THAN_NONE", "SEED", "SOLUTIONS", "POPULATION", "count"]
+__all__ = [
+    "Optimizer",
+    "Metaheuristic",
+    "Evaluator",
+    "GridSpace",
+    "GridObjective",
+    "make_result",
+    "NO_BETTER_THAN_NONE",
+    "SEED",
+    "SOLUTIONS",
+    "POPULATION",
+    "count",
+]
 
 Array = npt.NDArray[np.float64]
 
@@ -40,11 +51,21 @@ def count(low: int, high: int) -> list[Constraint]:
     return [Interval(int, low, high)]
 
 
-
-def make_result(problem: CorrectionProblem, x: Array, *, optimizer: str, evaluations: int, seconds: float,
-                status: str, history: Array | None = None, bound: float | None = None,
-                message: str | None = None, binding: tuple[str, ...] | None = None,
-                guard: bool = True, given_up: tuple[str, ...] = ()) -> OptimizeResult:
+def make_result(
+    problem: CorrectionProblem,
+    x: Array,
+    *,
+    optimizer: str,
+    evaluations: int,
+    seconds: float,
+    status: str,
+    history: Array | None = None,
+    bound: float | None = None,
+    message: str | None = None,
+    binding: tuple[str, ...] | None = None,
+    guard: bool = True,
+    given_up: tuple[str, ...] = (),
+) -> OptimizeResult:
     """Assemble an :class:`OptimizeResult` for corrections ``x`` (already on the grid).
 
     ``binding`` defaults to the dimensions at the minimum margin after ``x``; the
@@ -71,12 +92,17 @@ def make_result(problem: CorrectionProblem, x: Array, *, optimizer: str, evaluat
         before = problem.kept_margin(np.zeros_like(x), given_up)
         if binding is None:
             m = problem.margins(x)
-            binding = tuple(d for d, v, k in zip(problem.dimension_ids, m, keep, strict=True)
-                            if k and v <= after + problem.resolution / 4)
+            binding = tuple(
+                d
+                for d, v, k in zip(problem.dimension_ids, m, keep, strict=True)
+                if k and v <= after + problem.resolution / 4
+            )
     if guard and after < problem.margin_before:
-        message = (f"the {optimizer} search found no correction better than none (best found: error budget "
-                   f"{after:+.4g} against {problem.margin_before:+.4g} without correction); no correction is "
-                   "recommended")
+        message = (
+            f"the {optimizer} search found no correction better than none (best found: error budget "
+            f"{after:+.4g} against {problem.margin_before:+.4g} without correction); no correction is "
+            "recommended"
+        )
         x = np.zeros_like(x)
         f1, f2, _ = problem.evaluate(x)
         after, status, binding = float(f1), NO_BETTER_THAN_NONE, None
@@ -88,12 +114,22 @@ def make_result(problem: CorrectionProblem, x: Array, *, optimizer: str, evaluat
             "all measured dimensions predicted inside tolerance"
             if after >= 0
             else "no correction within the register limits brings every dimension into tolerance; "
-                 "this is the least-bad correction"
+            "this is the least-bad correction"
         )
     return OptimizeResult(
-        x=x, margin_before=before, margin_after=after, norm=float(f2), optimizer=optimizer,
-        evaluations=int(evaluations), seconds=float(seconds), status=status, message=message,
-        binding=problem.binding(x) if binding is None else binding, history=history, bound=bound, notes=notes,
+        x=x,
+        margin_before=before,
+        margin_after=after,
+        norm=float(f2),
+        optimizer=optimizer,
+        evaluations=int(evaluations),
+        seconds=float(seconds),
+        status=status,
+        message=message,
+        binding=problem.binding(x) if binding is None else binding,
+        history=history,
+        bound=bound,
+        notes=notes,
         given_up=given_up,
     )
 
@@ -230,6 +266,11 @@ class Metaheuristic(Optimizer):
         self._search(problem, rng, evaluate)
         seconds = time.perf_counter() - start
         return make_result(
-            problem, evaluate.best_x, optimizer=self.name, evaluations=evaluate.count, seconds=seconds,
-            status="budget", history=evaluate.history,
+            problem,
+            evaluate.best_x,
+            optimizer=self.name,
+            evaluations=evaluate.count,
+            seconds=seconds,
+            status="budget",
+            history=evaluate.history,
         )

@@ -89,9 +89,19 @@ class ChordProof:
     lower: float
 
 
-def lazy_chords(model: LinearModel, n: int, chords: list[set[int]], cost: Array, kmin: Array, kmax: Array,
-                best: Array | None, feasible: Callable[[Array], bool], start: Callable[[Array], Array],
-                deadline: float, integer: bool) -> ChordProof:
+def lazy_chords(
+    model: LinearModel,
+    n: int,
+    chords: list[set[int]],
+    cost: Array,
+    kmin: Array,
+    kmax: Array,
+    best: Array | None,
+    feasible: Callable[[Array], bool],
+    start: Callable[[Array], Array],
+    deadline: float,
+    integer: bool,
+) -> ChordProof:
     """Solve ``model`` adding chords of k² where a solution needs them, until none is short.
 
     Parameters
@@ -137,7 +147,7 @@ def lazy_chords(model: LinearModel, n: int, chords: list[set[int]], cost: Array,
         if res.x is None or res.status not in ("optimal", "time_limit"):
             why = "time limit" if res.status == "time_limit" else f"HiGHS: {res.detail}"
             return ChordProof(best, False, why, lower)
-        k_raw, s = res.x[:n], res.x[n:2 * n]
+        k_raw, s = res.x[:n], res.x[n : 2 * n]
         k = np.clip(np.rint(k_raw), kmin, kmax)
         f_k = float(np.sum(cost * k**2))
         ok = feasible(k)
@@ -147,8 +157,11 @@ def lazy_chords(model: LinearModel, n: int, chords: list[set[int]], cost: Array,
             return ChordProof(best, False, "time limit", lower)
         fractional = np.flatnonzero(np.abs(k_raw - k) > 1e-7)
         if not integer and fractional.size:
-            new = [(int(i), int(np.floor(abs(k_raw[i])))) for i in fractional
-                   if int(np.floor(abs(k_raw[i]))) not in chords[i]]
+            new = [
+                (int(i), int(np.floor(abs(k_raw[i]))))
+                for i in fractional
+                if int(np.floor(abs(k_raw[i]))) not in chords[i]
+            ]
             if not new:
                 model.make_integer(np.arange(n))
                 integer = True
@@ -164,9 +177,16 @@ def lazy_chords(model: LinearModel, n: int, chords: list[set[int]], cost: Array,
         model.add_rows(a_new, np.full(rhs_new.size, -INF), rhs_new)
 
 
-def smallest_tie(model: LinearModel, n: int, chords: list[set[int]], cost: Array, best: Array,
-                 feasible: Callable[[Array], bool], start: Callable[[Array], Array], deadline: float
-                 ) -> tuple[Array, bool]:
+def smallest_tie(
+    model: LinearModel,
+    n: int,
+    chords: list[set[int]],
+    cost: Array,
+    best: Array,
+    feasible: Callable[[Array], bool],
+    start: Callable[[Array], Array],
+    deadline: float,
+) -> tuple[Array, bool]:
     """The lexicographically smallest grid point of ``model`` with Σ c k² ≤ f(best), f(best) proven least.
 
     One coordinate at a time: min k_i subject to the model, Σ c_i s_i ≤ f(best) and the coordinates
@@ -181,7 +201,7 @@ def smallest_tie(model: LinearModel, n: int, chords: list[set[int]], cost: Array
     width = model.n_cols
     f = float(np.sum(cost * best**2))
     row = np.zeros((1, width))
-    row[0, n:2 * n] = cost
+    row[0, n : 2 * n] = cost
     model.add_rows(row, np.array([-INF]), np.array([f + 1e-9 * max(1.0, f)]))
     cols = np.arange(width, dtype=np.int32)
     cur = np.asarray(best, dtype=float).copy()
@@ -197,7 +217,7 @@ def smallest_tie(model: LinearModel, n: int, chords: list[set[int]], cost: Array
             if res.status != "optimal" or res.x is None:
                 return cur, False
             k = np.rint(res.x[:n])
-            short = np.flatnonzero(res.x[n:2 * n] < k**2 - 1e-6)
+            short = np.flatnonzero(res.x[n : 2 * n] < k**2 - 1e-6)
             if short.size == 0:
                 break
             new = [(int(j), int(abs(k[j]))) for j in short]
@@ -208,5 +228,5 @@ def smallest_tie(model: LinearModel, n: int, chords: list[set[int]], cost: Array
         if not feasible(k) or float(np.sum(cost * k**2)) > f + 1e-9 * max(1.0, f) or k[i] > cur[i]:
             return cur, False  # HiGHS's point fails the exact check: keep the proven point
         cur = k
-        model.set_col_bounds(np.array([i], dtype=np.int32), cur[i:i + 1], cur[i:i + 1])
+        model.set_col_bounds(np.array([i], dtype=np.int32), cur[i : i + 1], cur[i : i + 1])
     return cur, True

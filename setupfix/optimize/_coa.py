@@ -44,8 +44,7 @@ __all__ = ["COA", "lay_eggs", "kmeans", "immigrate"]
 Array = npt.NDArray[np.float64]
 
 
-def lay_eggs(centres: Array, n_eggs: npt.ArrayLike, span: Array, alpha: float,
-             rng: np.random.Generator) -> Array:
+def lay_eggs(centres: Array, n_eggs: npt.ArrayLike, span: Array, alpha: float, rng: np.random.Generator) -> Array:
     """Egg positions around each habitat (Rajabioun 2011, ELR and egg laying).
 
     Parameters
@@ -148,10 +147,20 @@ class COA(Metaheuristic):
         if self.min_eggs > self.max_eggs:
             raise ParameterError(f"COA: min_eggs must be at most max_eggs ({self.max_eggs}), got {self.min_eggs}")
 
-    def __init__(self, *, initial_cuckoos: int = 5, max_cuckoos: int = 40, min_eggs: int = 5,
-                 max_eggs: int = 10, radius_coeff: float = 5.0, motion_coeff: float = 2.0,
-                 n_clusters: int = 3, n_iterations: int = 100, n_solutions: int = 40_000,
-                 seed: int | None = None) -> None:
+    def __init__(
+        self,
+        *,
+        initial_cuckoos: int = 5,
+        max_cuckoos: int = 40,
+        min_eggs: int = 5,
+        max_eggs: int = 10,
+        radius_coeff: float = 5.0,
+        motion_coeff: float = 2.0,
+        n_clusters: int = 3,
+        n_iterations: int = 100,
+        n_solutions: int = 40_000,
+        seed: int | None = None,
+    ) -> None:
         super().__init__(n_solutions=n_solutions, seed=seed)
         self.initial_cuckoos = initial_cuckoos
         self.max_cuckoos = max_cuckoos

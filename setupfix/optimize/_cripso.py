@@ -106,9 +106,19 @@ def coefficient_schedule(n_solutions: int) -> Array:
     return acceleration(np.arange(1, total + 1), total)
 
 
-def planula_position(x: Array, plast: Array, pbest: Array, gbest: Array, *, inertia: float,
-                     c1: Array | float, c2: Array | float, r1: Array | float, r2: Array | float,
-                     out: Array | None = None) -> Array:
+def planula_position(
+    x: Array,
+    plast: Array,
+    pbest: Array,
+    gbest: Array,
+    *,
+    inertia: float,
+    c1: Array | float,
+    c2: Array | float,
+    r1: Array | float,
+    r2: Array | float,
+    out: Array | None = None,
+) -> Array:
     """Settlement point of a planula before snapping to the grid (eq. 1).
 
     x' = x + w (plast − x) + c1 r1 (pbest − x) + c2 r2 (gbest − x), evaluated term by
@@ -176,8 +186,9 @@ class CRIPSO(Metaheuristic):
         "inertia": [Interval(float, 0.0, 2.0)],
     }
 
-    def __init__(self, *, n_polyps: int = 100, n_solutions: int = 5000, inertia: float = 0.75,
-                 seed: int | None = None) -> None:
+    def __init__(
+        self, *, n_polyps: int = 100, n_solutions: int = 5000, inertia: float = 0.75, seed: int | None = None
+    ) -> None:
         super().__init__(n_solutions=n_solutions, seed=seed)
         self.n_polyps = n_polyps
         self.inertia = inertia
@@ -226,8 +237,18 @@ class CRIPSO(Metaheuristic):
             # Eq. 1 term by term, left to right.  The differences are whole grid steps, so a
             # vanishing term is exactly 0 and a settlement point exactly halfway between two
             # steps (frequent: w·2 = 1.5) is rounded by rint's rule, not by rounding noise.
-            planula_position(x, plast[win], sol[best[win]], sol[gbest_row], inertia=w, c1=c[t], c2=c[t],
-                             r1=r[0, t], r2=r[1, t], out=new)
+            planula_position(
+                x,
+                plast[win],
+                sol[best[win]],
+                sol[gbest_row],
+                inertia=w,
+                c1=c[t],
+                c2=c[t],
+                r1=r[0, t],
+                r2=r[1, t],
+                out=new,
+            )
             np.rint(new, out=new)
             np.maximum(new, kmin, out=new)
             np.minimum(new, kmax, out=new)

@@ -50,8 +50,16 @@ class CuckooSearch(Metaheuristic):
         "beta": [Interval(float, 0.0, 2.0, closed="right")],  # a Lévy-stable index
     }
 
-    def __init__(self, *, n_nests: int = 25, pa: float = 0.25, alpha: float = 0.01, beta: float = 1.5,
-                 n_solutions: int = 5_000, seed: int | None = None) -> None:
+    def __init__(
+        self,
+        *,
+        n_nests: int = 25,
+        pa: float = 0.25,
+        alpha: float = 0.01,
+        beta: float = 1.5,
+        n_solutions: int = 5_000,
+        seed: int | None = None,
+    ) -> None:
         super().__init__(n_solutions=n_solutions, seed=seed)
         self.n_nests = n_nests
         self.pa = pa
@@ -60,5 +68,14 @@ class CuckooSearch(Metaheuristic):
 
     def _search(self, problem: CorrectionProblem, rng: np.random.Generator, evaluate: Evaluator) -> None:
         objective = GridObjective(evaluate)
-        cuckoo_search(objective, GridSpace(problem), budget=evaluate.remaining, rng=rng, n_nests=self.n_nests,
-                      pa=self.pa, alpha=self.alpha, beta=self.beta, observe=objective.observe)
+        cuckoo_search(
+            objective,
+            GridSpace(problem),
+            budget=evaluate.remaining,
+            rng=rng,
+            n_nests=self.n_nests,
+            pa=self.pa,
+            alpha=self.alpha,
+            beta=self.beta,
+            observe=objective.observe,
+        )

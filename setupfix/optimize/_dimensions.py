@@ -82,8 +82,9 @@ def dimension_floor(problem: CorrectionProblem) -> Array:
         where = {d: i for i, d in enumerate(ids)}
         inside = np.zeros(len(ids), bool)
         inside[[where[z] for z in circles.ids]] = circles.margins(np.zeros(problem.n_registers)) >= 0
-        col = np.where(np.isfinite(col) | ~inside[column_dim], col,
-                       np.minimum(problem.margins(np.zeros(problem.n_registers)), 0.0))
+        col = np.where(
+            np.isfinite(col) | ~inside[column_dim], col, np.minimum(problem.margins(np.zeros(problem.n_registers)), 0.0)
+        )
     np.minimum.at(out, column_dim, col)
     return out
 
@@ -107,4 +108,3 @@ def harmed_columns(problem: CorrectionProblem, x: Array) -> npt.NDArray[np.bool_
     zone = np.isin(np.array(problem.rows, dtype=object), np.array(problem.circles.ids, dtype=object))
     out[zone] = (np.isfinite(floor) & (problem.margins(np.asarray(x, dtype=float)) < floor - 1e-12))[zone]
     return out
-

@@ -37,8 +37,9 @@ Mask = npt.NDArray[np.bool_]
 NEAR = 2.0
 
 
-def farkas_or_point(rows: GridRows, b: Array, k: Array | None = None, whole: bool = True
-                    ) -> tuple[Array | None, Array | None]:
+def farkas_or_point(
+    rows: GridRows, b: Array, k: Array | None = None, whole: bool = True
+) -> tuple[Array | None, Array | None]:
     """Row weights y ≥ 0 (sum 1) proving that no k in the box meets G k ≤ b; else the least Σ c k² point.
 
     From the NNLS least-distance system (:func:`~setupfix.optimize._grid.nnls_least_distance`): its
@@ -58,8 +59,8 @@ def farkas_or_point(rows: GridRows, b: Array, k: Array | None = None, whole: boo
     _, e = rows.nnls_system(keep)
     e = e.copy()
     e[-1, :n_rows] = -b[keep]
-    e[-1, n_rows:n_rows + n] = rows.kmin
-    e[-1, n_rows + n:] = -rows.kmax
+    e[-1, n_rows : n_rows + n] = rows.kmin
+    e[-1, n_rows + n :] = -rows.kmax
     if k is not None:
         near = np.flatnonzero(np.concatenate(((b - rows.g_rows @ k)[keep], k - rows.kmin, rows.kmax - k)) <= NEAR)
         if 0 < near.size < e.shape[1]:

@@ -45,8 +45,15 @@ class GA(Metaheuristic):
         "tournament_size": count(1, 1000),
     }
 
-    def __init__(self, *, population: int = 50, mutation_rate: float = 0.1, tournament_size: int = 2,
-                 n_solutions: int = 5_000, seed: int | None = None) -> None:
+    def __init__(
+        self,
+        *,
+        population: int = 50,
+        mutation_rate: float = 0.1,
+        tournament_size: int = 2,
+        n_solutions: int = 5_000,
+        seed: int | None = None,
+    ) -> None:
         super().__init__(n_solutions=n_solutions, seed=seed)
         self.population = population
         self.mutation_rate = mutation_rate
@@ -54,6 +61,13 @@ class GA(Metaheuristic):
 
     def _search(self, problem: CorrectionProblem, rng: np.random.Generator, evaluate: Evaluator) -> None:
         objective = GridObjective(evaluate)
-        tournament_ga(objective, GridSpace(problem), budget=evaluate.remaining, rng=rng,
-                      population=self.population, mutation_rate=self.mutation_rate,
-                      tournament_size=self.tournament_size, observe=objective.observe)
+        tournament_ga(
+            objective,
+            GridSpace(problem),
+            budget=evaluate.remaining,
+            rng=rng,
+            population=self.population,
+            mutation_rate=self.mutation_rate,
+            tournament_size=self.tournament_size,
+            observe=objective.observe,
+        )

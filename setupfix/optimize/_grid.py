@@ -76,7 +76,7 @@ def grid_margins(g_rows: Array, g: Array, k: Array) -> Array:
     out = np.empty(k.shape[0])
     step = max(1, _BLOCK // max(g.size, 1))
     for s in range(0, k.shape[0], step):
-        out[s:s + step] = np.min(g[None, :] - k[s:s + step] @ g_rows.T, axis=1)
+        out[s : s + step] = np.min(g[None, :] - k[s : s + step] @ g_rows.T, axis=1)
     return out
 
 
@@ -133,8 +133,9 @@ def pair_structure(g_rows: Array, kmin: Array, kmax: Array) -> PairStructure | N
         return None  # a collision: no pair bound (never wrong, only weaker)
     where = {float(k): i for i, k in enumerate(uniq)}
     negated = [where.get(float(-k), -1) for k in uniq]
-    pairs = [(i, j) for i, j in enumerate(negated)
-             if i < j and np.any(rows[i]) and np.array_equal(rows[j], -rows[i] + 0.0)]
+    pairs = [
+        (i, j) for i, j in enumerate(negated) if i < j and np.any(rows[i]) and np.array_equal(rows[j], -rows[i] + 0.0)
+    ]
     if not pairs:
         return None
     ia, ib = (np.array(v, dtype=np.intp) for v in zip(*pairs, strict=True))
@@ -242,9 +243,9 @@ def next_level(g: Array, d: Array, b: Array) -> float:
     return float(np.max(g[m] - b[m] - d[m])) if np.any(m) else -np.inf
 
 
-def least_distance(g_rows: Array, b: Array, kmin: Array, kmax: Array, cost: Array,
-                   system: tuple[Array, Array] | None = None
-                   ) -> tuple[str, tuple[Array, Array, Array, Array] | None]:
+def least_distance(
+    g_rows: Array, b: Array, kmin: Array, kmax: Array, cost: Array, system: tuple[Array, Array] | None = None
+) -> tuple[str, tuple[Array, Array, Array, Array] | None]:
     """Least Σ c k² subject to G k ≤ b and the box, by NNLS (Lawson & Hanson 1974, ch. 23).
 
     With k' = √c·k and the constraints written M k ≥ m, the least-distance problem
@@ -265,14 +266,14 @@ def least_distance(g_rows: Array, b: Array, kmin: Array, kmax: Array, cost: Arra
     m_mat, e = least_distance_system(g_rows[keep], cost) if system is None else system
     e = e.copy()
     e[-1, :n_rows] = -b[keep]
-    e[-1, n_rows:n_rows + n] = kmin
-    e[-1, n_rows + n:] = -kmax
+    e[-1, n_rows : n_rows + n] = kmin
+    e[-1, n_rows + n :] = -kmax
     status, k, u = nnls_least_distance(m_mat, e, cost, float(np.max(np.abs(np.concatenate((kmin, kmax))), initial=0.0)))
     if status != "optimal" or k is None or u is None:
         return status, None
     lam = np.zeros(b.size)
     lam[keep] = u[:n_rows]
-    return "optimal", (k, lam, u[n_rows:n_rows + n], u[n_rows + n:])
+    return "optimal", (k, lam, u[n_rows : n_rows + n], u[n_rows + n :])
 
 
 def nnls_least_distance(m_mat: Array, e: Array, cost: Array, box: float) -> tuple[str, Array | None, Array | None]:

@@ -93,8 +93,17 @@ def _ceil_bound(lower: float, cost: Array) -> float:
     return lower - 1e-9 * max(1.0, abs(lower))
 
 
-def chord_proof(session: Session, t_star: float, b: Array, lo: Array, hi: Array, best: Array | None,
-                k_cont: Array, time_limit: float, proof: bool = False) -> tuple[Array | None, bool, str, float]:
+def chord_proof(
+    session: Session,
+    t_star: float,
+    b: Array,
+    lo: Array,
+    hi: Array,
+    best: Array | None,
+    k_cont: Array,
+    time_limit: float,
+    proof: bool = False,
+) -> tuple[Array | None, bool, str, float]:
     """:func:`~setupfix.optimize._least_norm.chord_least_norm` in the box [lo, hi] for at most ``time_limit`` s."""
     rows = session.rows
     deadline = min(session.clock.deadline, time.perf_counter() + max(time_limit, 0.0))
@@ -138,8 +147,9 @@ def _good_incumbent(session: Session, t_star: float, b: Array, best: Array, rela
     return descend(rows.g_rows, b, best, rows.cost, time.perf_counter() + 0.03 * max(session.clock.left(), 0.0))
 
 
-def _smallest_tie(session: Session, t_star: float, b: Array, best: Array, relaxation: Relaxation | None
-                  ) -> tuple[Array, bool]:
+def _smallest_tie(
+    session: Session, t_star: float, b: Array, best: Array, relaxation: Relaxation | None
+) -> tuple[Array, bool]:
     """The lexicographically smallest grid point with t(k) ≥ t_star of norm f(best), f(best) proven least.
 
     Lists the grid points of norm ≤ f(best) in the dual ellipsoid (every one lies in it), within
@@ -152,19 +162,46 @@ def _smallest_tie(session: Session, t_star: float, b: Array, best: Array, relaxa
         return best, False
     fin = np.isfinite(b)
     if relaxation is not None:
-        centre, q = lagrangian_ball(rows.g_rows[fin], b[fin], rows.kmin, rows.kmax, rows.cost,
-                                    relaxation.lam_rows[fin], relaxation.lam_lo, relaxation.lam_hi)
+        centre, q = lagrangian_ball(
+            rows.g_rows[fin],
+            b[fin],
+            rows.kmin,
+            rows.kmax,
+            rows.cost,
+            relaxation.lam_rows[fin],
+            relaxation.lam_lo,
+            relaxation.lam_hi,
+        )
         multipliers = relaxation.multipliers()
     else:  # no multipliers: the ball f(k) ≤ f(best) itself
         centre, q, multipliers = np.zeros(rows.kmin.size), 0.0, None
-    found, proved, _ = ellipsoid_search(rows.g_rows, rows.g, t_star, centre, q, rows.cost, rows.kmin, rows.kmax,
-                                        float(np.sum(rows.cost * best**2)), s.enumeration_limit, b,
-                                        work_limit=min(s.enumeration_work, TIE_WORK), multipliers=multipliers)
+    found, proved, _ = ellipsoid_search(
+        rows.g_rows,
+        rows.g,
+        t_star,
+        centre,
+        q,
+        rows.cost,
+        rows.kmin,
+        rows.kmax,
+        float(np.sum(rows.cost * best**2)),
+        s.enumeration_limit,
+        b,
+        work_limit=min(s.enumeration_work, TIE_WORK),
+        multipliers=multipliers,
+    )
     return (best if found is None else found), proved
 
 
-def grid_least_norm(session: Session, t_star: float, b: Array, incumbent: Array, relaxation: Relaxation | None,
-                    unit_box: bool | None, box_share: float) -> LeastNorm:
+def grid_least_norm(
+    session: Session,
+    t_star: float,
+    b: Array,
+    incumbent: Array,
+    relaxation: Relaxation | None,
+    unit_box: bool | None,
+    box_share: float,
+) -> LeastNorm:
     """Least Σ c k² over grid points with every margin ≥ t_star (steps 1–5 of the module text).
 
     ``relaxation``: the continuous least norm over ``b``, if known.  ``unit_box``: the
@@ -194,12 +231,14 @@ def grid_least_norm(session: Session, t_star: float, b: Array, incumbent: Array,
         return LeastNorm(best, True, "", norm(best), tuple(path))
 
     def network_lp(best: Array) -> LeastNorm | None:  # rows of a network matrix: one chord LP proves it
-        if not (NETWORK_LP and np.all(kmin == np.rint(kmin)) and np.all(kmax == np.rint(kmax))
-                and network_rows(g_rows, b)):
+        if not (
+            NETWORK_LP and np.all(kmin == np.rint(kmin)) and np.all(kmax == np.rint(kmax)) and network_rows(g_rows, b)
+        ):
             return None
         k_cont = best if relaxation is None else relaxation.k
-        found, proved, _, _ = chord_proof(session, t_star, b, kmin, kmax, best, k_cont,
-                                          time_limit=clock.left() - reserve)
+        found, proved, _, _ = chord_proof(
+            session, t_star, b, kmin, kmax, best, k_cont, time_limit=clock.left() - reserve
+        )
         if proved and found is not None:
             path.append("least norm: one LP over the chords of k² (network rows: its vertex is on the grid)")
             return proven(found)
@@ -214,8 +253,9 @@ def grid_least_norm(session: Session, t_star: float, b: Array, incumbent: Array,
     if relaxation is None:  # no multipliers: the chord MILP over the whole box
         best = _good_incumbent(session, t_star, b, best, None)
         path.append("least norm: chords of k² (LP, then MILP)")
-        found, proved, why, lower = chord_proof(session, t_star, b, kmin, kmax, best, best,
-                                                time_limit=clock.left() - reserve)
+        found, proved, why, lower = chord_proof(
+            session, t_star, b, kmin, kmax, best, best, time_limit=clock.left() - reserve
+        )
         if proved and found is not None:
             return proven(found)
         return finish(best if found is None else found, proved, why, lower)
@@ -223,14 +263,27 @@ def grid_least_norm(session: Session, t_star: float, b: Array, incumbent: Array,
     if ok(rounded) and norm(rounded) < norm(best):
         best = rounded
     fin = np.isfinite(b)
-    centre, q = lagrangian_ball(g_rows[fin], b[fin], kmin, kmax, cost, relaxation.lam_rows[fin], relaxation.lam_lo,
-                                relaxation.lam_hi)
+    centre, q = lagrangian_ball(
+        g_rows[fin], b[fin], kmin, kmax, cost, relaxation.lam_rows[fin], relaxation.lam_lo, relaxation.lam_hi
+    )
     # A short list only: most reports end here, and where the list would be long the box MILPs
     # below are cheaper (bench/exact_per_report.py).
     if kmin.size <= s.ellipsoid_max_registers:  # beyond, the ellipsoid holds too many grid points
-        found, proved, listed = ellipsoid_search(g_rows, g, t_star, centre, q, cost, kmin, kmax, norm(best),
-                                                 s.enumeration_limit, b, work_limit=s.enumeration_work,
-                                                 multipliers=relaxation.multipliers())
+        found, proved, listed = ellipsoid_search(
+            g_rows,
+            g,
+            t_star,
+            centre,
+            q,
+            cost,
+            kmin,
+            kmax,
+            norm(best),
+            s.enumeration_limit,
+            b,
+            work_limit=s.enumeration_work,
+            multipliers=relaxation.multipliers(),
+        )
         best = best if found is None else found
         if proved:  # the list holds every tie: the pick is the smallest
             path.append(f"least norm: {listed} grid points in the dual ellipsoid")
@@ -243,7 +296,7 @@ def grid_least_norm(session: Session, t_star: float, b: Array, incumbent: Array,
     # A near-least incumbent: the least norm in the unit box around the continuous point (a MILP
     # with a linear objective), else in the box one step wider (unless stage 2 settled the unit box).
     floor_c, ceil_c = np.clip(np.floor(relaxation.k), kmin, kmax), np.clip(np.ceil(relaxation.k), kmin, kmax)
-    for widen in (() if unit_box else (1.0,) if unit_box is False else (0.0, 1.0)):
+    for widen in () if unit_box else (1.0,) if unit_box is False else (0.0, 1.0):
         lo, hi = np.maximum(floor_c - widen, kmin), np.minimum(ceil_c + widen, kmax)
         res, k = box_least_norm(g_rows, b, lo, hi, cost, box_share * clock.left(), best, gap=s.incumbent_gap)
         if k is not None and ok(k) and norm(k) < norm(best):
@@ -266,8 +319,9 @@ def grid_least_norm(session: Session, t_star: float, b: Array, incumbent: Array,
         chord_lower = res.dual_bound if np.isfinite(res.dual_bound) else 0.0
     else:
         path.append(f"least norm: chords of k² in the Lagrangian box ({values})")
-        found, proved, why, chord_lower = chord_proof(session, t_star, b, box_lo, box_hi, best, relaxation.k,
-                                                      time_limit=clock.left() - reserve, proof=True)
+        found, proved, why, chord_lower = chord_proof(
+            session, t_star, b, box_lo, box_hi, best, relaxation.k, time_limit=clock.left() - reserve, proof=True
+        )
     if found is not None and norm(found) <= norm(best):
         best = found
     if proved:

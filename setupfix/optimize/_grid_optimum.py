@@ -39,8 +39,18 @@ from setupfix.optimize._listing import ellipsoid_search, lagrangian_ball
 from setupfix.optimize._lp_bound import LPBound
 from setupfix.optimize._session import Relaxation, Session
 
-__all__ = ["LEVEL_STRATEGIES", "GridOptimum", "Level", "Listed", "Search", "Step", "Stop", "UnitBox", "grid_optimum",
-           "searched"]
+__all__ = [
+    "LEVEL_STRATEGIES",
+    "GridOptimum",
+    "Level",
+    "Listed",
+    "Search",
+    "Step",
+    "Stop",
+    "UnitBox",
+    "grid_optimum",
+    "searched",
+]
 
 Array = npt.NDArray[np.float64]
 
@@ -149,8 +159,11 @@ def rounded_relaxation(session: Session, level: Level) -> Step:
         return Step("undecided")
     k = np.clip(np.rint(level.relaxation.k), session.rows.kmin, session.rows.kmax)
     reached = _reaches(session, k, level.tau)
-    return Step("reached" if reached else "undecided", k=k,
-                text="grid optimum: least-norm point of the rounded rows attains the bound")
+    return Step(
+        "reached" if reached else "undecided",
+        k=k,
+        text="grid optimum: least-norm point of the rounded rows attains the bound",
+    )
 
 
 def listing(session: Session, level: Level) -> Step:
@@ -163,16 +176,32 @@ def listing(session: Session, level: Level) -> Step:
     if rel is None or not session.small:
         return Step("undecided")
     fin = np.isfinite(level.b)
-    centre, q = lagrangian_ball(rows.g_rows[fin], level.b[fin], rows.kmin, rows.kmax, rows.cost,
-                                rel.lam_rows[fin], rel.lam_lo, rel.lam_hi)
-    found, least, listed = ellipsoid_search(rows.g_rows, rows.g, level.tau, centre, q, rows.cost, rows.kmin,
-                                            rows.kmax, np.inf, s.search_limit, level.b, work_limit=s.search_work,
-                                            multipliers=rel.multipliers())
+    centre, q = lagrangian_ball(
+        rows.g_rows[fin], level.b[fin], rows.kmin, rows.kmax, rows.cost, rel.lam_rows[fin], rel.lam_lo, rel.lam_hi
+    )
+    found, least, listed = ellipsoid_search(
+        rows.g_rows,
+        rows.g,
+        level.tau,
+        centre,
+        q,
+        rows.cost,
+        rows.kmin,
+        rows.kmax,
+        np.inf,
+        s.search_limit,
+        level.b,
+        work_limit=s.search_work,
+        multipliers=rel.multipliers(),
+    )
     if found is not None:
         return Step("reached", k=found, text=_NEAR, listed=Listed(level.b, listed) if least else None)
     if least and rows.all_integer:
-        return Step("empty", text=_LOWERED,
-                    path=(f"grid optimum: no grid point at {level.tau:.4g} steps (the whole box listed)",))
+        return Step(
+            "empty",
+            text=_LOWERED,
+            path=(f"grid optimum: no grid point at {level.tau:.4g} steps (the whole box listed)",),
+        )
     return Step("undecided")
 
 
@@ -181,9 +210,15 @@ def unit_boxes(session: Session, level: Level) -> Step:
     rel, rows, s = level.relaxation, session.rows, session.settings
     if rel is None or session.small or level.left() <= 0:
         return Step("undecided")
-    res, found = box_least_norm(rows.g_rows, level.b, np.clip(np.floor(rel.k), rows.kmin, rows.kmax),
-                                np.clip(np.ceil(rel.k), rows.kmin, rows.kmax), rows.cost,
-                                level.left() * s.milp_share / 2, gap=s.incumbent_gap)
+    res, found = box_least_norm(
+        rows.g_rows,
+        level.b,
+        np.clip(np.floor(rel.k), rows.kmin, rows.kmax),
+        np.clip(np.ceil(rel.k), rows.kmin, rows.kmax),
+        rows.cost,
+        level.left() * s.milp_share / 2,
+        gap=s.incumbent_gap,
+    )
     path = [f"grid optimum: box MILP ±0 around the rounded rows' least-norm point ({res.status})"]
     found = found if _reaches(session, found, level.tau) else None
     settled = UnitBox(level.b, found is not None) if found is not None or res.status == "infeasible" else None
@@ -192,15 +227,28 @@ def unit_boxes(session: Session, level: Level) -> Step:
         fin = np.isfinite(level.b)
         lo = np.clip(np.floor(rel.k) - 1, rows.kmin, rows.kmax)
         hi = np.clip(np.ceil(rel.k) + 1, rows.kmin, rows.kmax)
-        wide = LinearModel(np.zeros(rows.n_free), rows.g_rows[fin], np.full(int(fin.sum()), -INF), level.b[fin],
-                           lo, hi, integer=np.ones(rows.n_free, bool)).solve(level.left() * s.milp_share / 2)
+        wide = LinearModel(
+            np.zeros(rows.n_free),
+            rows.g_rows[fin],
+            np.full(int(fin.sum()), -INF),
+            level.b[fin],
+            lo,
+            hi,
+            integer=np.ones(rows.n_free, bool),
+        ).solve(level.left() * s.milp_share / 2)
         calls += 1
         path.append(f"grid optimum: feasibility MILP ±1 around it ({wide.status})")
         if wide.x is not None:
             found = np.clip(np.rint(wide.x), lo, hi)
             found = found if _reaches(session, found, level.tau) else None
-    return Step("reached" if found is not None else "undecided", k=found, text=_NEAR, path=tuple(path),
-                calls=calls, unit_box=settled)
+    return Step(
+        "reached" if found is not None else "undecided",
+        k=found,
+        text=_NEAR,
+        path=tuple(path),
+        calls=calls,
+        unit_box=settled,
+    )
 
 
 def feasibility_milp(session: Session, level: Level) -> Step:
@@ -209,14 +257,25 @@ def feasibility_milp(session: Session, level: Level) -> Step:
     if level.left() <= 0:
         return Step("give_up")
     fin = np.isfinite(level.b)
-    feas = LinearModel(np.zeros(rows.n_free), rows.g_rows[fin], np.full(int(fin.sum()), -INF), level.b[fin],
-                       rows.kmin, rows.kmax, integer=np.ones(rows.n_free, bool)).solve(
-                           level.left() * session.settings.milp_share)
+    feas = LinearModel(
+        np.zeros(rows.n_free),
+        rows.g_rows[fin],
+        np.full(int(fin.sum()), -INF),
+        level.b[fin],
+        rows.kmin,
+        rows.kmax,
+        integer=np.ones(rows.n_free, bool),
+    ).solve(level.left() * session.settings.milp_share)
     path = (f"grid optimum: feasibility MILP at {level.tau:.4g} steps ({feas.status}, {feas.seconds:.2f} s)",)
     k = None if feas.x is None else np.clip(np.rint(feas.x), rows.kmin, rows.kmax)
     if _reaches(session, k, level.tau):
-        return Step("reached", k=k, path=path, calls=1,
-                    text="grid optimum: a feasibility MILP on the rounded rows reaches the bound")
+        return Step(
+            "reached",
+            k=k,
+            path=path,
+            calls=1,
+            text="grid optimum: a feasibility MILP on the rounded rows reaches the bound",
+        )
     if feas.status == "infeasible" and rows.all_integer:
         return Step("empty", k=k, path=path, calls=1, text=_LOWERED)
     return Step("give_up", k=k, path=path, calls=1)
@@ -224,7 +283,12 @@ def feasibility_milp(session: Session, level: Level) -> Step:
 
 #: The strategies tried at each level, in this order.
 LEVEL_STRATEGIES: tuple[Callable[[Session, Level], Step], ...] = (
-    relax, rounded_relaxation, listing, unit_boxes, feasibility_milp)
+    relax,
+    rounded_relaxation,
+    listing,
+    unit_boxes,
+    feasibility_milp,
+)
 
 #: A caller's local search on the grid: from a grid point to a point at least as good (None: it does not search).
 Search = Callable[[Array], Array | None]
@@ -233,6 +297,7 @@ Search = Callable[[Array], Array | None]
 def searched(search: Search) -> Callable[[Session, Level], Step]:
     """A strategy from a caller's search (the leximin levels' grid climb), started at the relaxation's point
     rounded; tried before the listing, which it spares where it reaches the level."""
+
     def strategy(session: Session, level: Level) -> Step:
         if level.relaxation is None:
             return Step("undecided")
@@ -240,9 +305,12 @@ def searched(search: Search) -> Callable[[Session, Level], Step]:
         k = search(np.clip(np.rint(level.relaxation.k), rows.kmin, rows.kmax))
         if k is None:
             return Step("undecided")
-        return Step("reached" if _reaches(session, k, level.tau) else "undecided", k=k,
-                    text="grid optimum: the leximin levels' climb from the rounded rows' least-norm point attains "
-                         "the bound")
+        return Step(
+            "reached" if _reaches(session, k, level.tau) else "undecided",
+            k=k,
+            text="grid optimum: the leximin levels' climb from the rounded rows' least-norm point attains the bound",
+        )
+
     return strategy
 
 
@@ -252,22 +320,36 @@ def grid_optimum(session: Session, bound: LPBound, search: Search | None = None)
     ``search``: a caller's local search, tried after the rounded relaxation (:func:`searched`).
     """
     rows, clock = session.rows, session.clock
-    upper = min(dual_bound(rows.g_rows, rows.g, bound.y, rows.kmin, rows.kmax),
-                pair_bound(rows.g_rows, rows.g, rows.kmin, rows.kmax, rows.pairs))
+    upper = min(
+        dual_bound(rows.g_rows, rows.g, bound.y, rows.kmin, rows.kmax),
+        pair_bound(rows.g_rows, rows.g, rows.kmin, rows.kmax, rows.pairs),
+    )
     k_best = np.clip(np.rint(bound.k), rows.kmin, rows.kmax)
     t_best = float(grid_margins(rows.g_rows, rows.g, k_best))
     zero = np.zeros_like(k_best)
     if float(grid_margins(rows.g_rows, rows.g, zero)) >= t_best:  # no correction at all is a grid point too
         k_best, t_best = zero, float(grid_margins(rows.g_rows, rows.g, zero))
     if upper < -TOL:
-        return GridOptimum(k_best, t_best, upper, None, None, None, None, (
-            "grid optimum: the bound is below 0 (no correction brings every dimension into tolerance)",), (), 0)
+        return GridOptimum(
+            k_best,
+            t_best,
+            upper,
+            None,
+            None,
+            None,
+            None,
+            ("grid optimum: the bound is below 0 (no correction brings every dimension into tolerance)",),
+            (),
+            0,
+        )
     if t_best >= upper - TOL:
-        return GridOptimum(k_best, t_best, upper, None, None, None, None,
-                           ("grid optimum: rounded LP point attains the bound",), (), 0)
+        return GridOptimum(
+            k_best, t_best, upper, None, None, None, None, ("grid optimum: rounded LP point attains the bound",), (), 0
+        )
     stage_end = clock.deadline - session.settings.least_norm_share * session.time_limit
-    strategies = LEVEL_STRATEGIES if search is None else (
-        *LEVEL_STRATEGIES[:2], searched(search), *LEVEL_STRATEGIES[2:])
+    strategies = (
+        LEVEL_STRATEGIES if search is None else (*LEVEL_STRATEGIES[:2], searched(search), *LEVEL_STRATEGIES[2:])
+    )
     tau, relaxation, listed, unit_box = upper, None, None, None
     path: list[str] = []
     calls, proved = 0, False
@@ -304,22 +386,45 @@ def grid_optimum(session: Session, bound: LPBound, search: Search | None = None)
     return _bracketed_milp(session, k_best, t_best, upper, stage_end, relaxation, listed, unit_box, path, calls)
 
 
-def _bracketed_milp(session: Session, k_best: Array, t_best: float, upper: float, stage_end: float,
-                    relaxation: Relaxation | None, listed: Listed | None, unit_box: UnitBox | None,
-                    path: list[str], calls: int) -> GridOptimum:
+def _bracketed_milp(
+    session: Session,
+    k_best: Array,
+    t_best: float,
+    upper: float,
+    stage_end: float,
+    relaxation: Relaxation | None,
+    listed: Listed | None,
+    unit_box: UnitBox | None,
+    path: list[str],
+    calls: int,
+) -> GridOptimum:
     """The MILP "max t, k integer" with t ∈ [t(best point), U], started from the best point."""
     rows = session.rows
     if time.perf_counter() >= stage_end:  # its share of the limit is spent: no MILP
         path.append("grid optimum: its share of the time limit spent before the MILP")
-        return GridOptimum(k_best, t_best, upper, Stop("grid optimum", "time limit"), relaxation, listed,
-                           unit_box, tuple(path), (), calls)
+        return GridOptimum(
+            k_best,
+            t_best,
+            upper,
+            Stop("grid optimum", "time limit"),
+            relaxation,
+            listed,
+            unit_box,
+            tuple(path),
+            (),
+            calls,
+        )
     notes: list[Note] = []
     res = session.max_margin_milp(t_best, upper, k_best, stage_end - time.perf_counter())
     calls += 1
     if res.status == "error":
-        notes.append(Note(f"HiGHS answered {res.detail!r} on the grid MILP bracketed by the best grid point "
-                          f"({t_best:.4g}) and the bound ({upper:.4g} steps); retried without the lower bracket",
-                          kind="solver"))
+        notes.append(
+            Note(
+                f"HiGHS answered {res.detail!r} on the grid MILP bracketed by the best grid point "
+                f"({t_best:.4g}) and the bound ({upper:.4g} steps); retried without the lower bracket",
+                kind="solver",
+            )
+        )
         calls += 1
         res = session.max_margin_milp(-INF, upper, None, stage_end - time.perf_counter())
     if res.x is not None:
@@ -331,5 +436,4 @@ def _bracketed_milp(session: Session, k_best: Array, t_best: float, upper: float
     stopped = None
     if res.status != "optimal":
         stopped = Stop("grid optimum", "time limit" if res.status == "time_limit" else f"HiGHS: {res.detail}")
-    return GridOptimum(k_best, t_best, upper, stopped, relaxation, listed, unit_box, tuple(path), tuple(notes),
-                       calls)
+    return GridOptimum(k_best, t_best, upper, stopped, relaxation, listed, unit_box, tuple(path), tuple(notes), calls)

@@ -30,8 +30,17 @@ from typing import Any
 
 import numpy as np
 import numpy.typing as npt
-from highspy._core import (HessianFormat, HighsModelStatus, HighsStatus, HighsVarType, MatrixFormat, ObjSense, _Highs,
-                           cb, kHighsInf)
+from highspy._core import (
+    HessianFormat,
+    HighsModelStatus,
+    HighsStatus,
+    HighsVarType,
+    MatrixFormat,
+    ObjSense,
+    _Highs,
+    cb,
+    kHighsInf,
+)
 from scipy.sparse import csc_array, vstack
 
 __all__ = ["FEASIBILITY_TOL", "INF", "Colwise", "LinearModel", "Solve"]
@@ -48,14 +57,20 @@ DENSE_CHECK_ELEMENTS = 20_000
 #: Seconds added to HiGHS's own ``time_limit`` beyond the run's allowance (0: both clocks stop it).
 HIGHS_LIMIT_SLACK = 0.0
 #: Interrupts checked against the wall clock (HiGHS reads ``time_limit`` between cut rounds, not in sub-searches).
-_INTERRUPTS = (cb.HighsCallbackType.kCallbackMipInterrupt, cb.HighsCallbackType.kCallbackSimplexInterrupt,
-               cb.HighsCallbackType.kCallbackIpmInterrupt,
-               cb.HighsCallbackType.kHighsCallbackQpInterrupt)  # type: ignore[attr-defined]  # not in the stubs
+_INTERRUPTS = (
+    cb.HighsCallbackType.kCallbackMipInterrupt,
+    cb.HighsCallbackType.kCallbackSimplexInterrupt,
+    cb.HighsCallbackType.kCallbackIpmInterrupt,
+    cb.HighsCallbackType.kHighsCallbackQpInterrupt,  # type: ignore[attr-defined]  # not in the stubs
+)
 #: Model statuses that are answers (optimal, proven infeasible, time limit with or without a point).
 _STATUS_NAMES = {
-    HighsModelStatus.kOptimal: "optimal", HighsModelStatus.kInfeasible: "infeasible",
-    HighsModelStatus.kUnboundedOrInfeasible: "infeasible", HighsModelStatus.kUnbounded: "unbounded",
-    HighsModelStatus.kTimeLimit: "time_limit", HighsModelStatus.kIterationLimit: "time_limit",
+    HighsModelStatus.kOptimal: "optimal",
+    HighsModelStatus.kInfeasible: "infeasible",
+    HighsModelStatus.kUnboundedOrInfeasible: "infeasible",
+    HighsModelStatus.kUnbounded: "unbounded",
+    HighsModelStatus.kTimeLimit: "time_limit",
+    HighsModelStatus.kIterationLimit: "time_limit",
     HighsModelStatus.kInterrupt: "time_limit",
 }
 
@@ -130,11 +145,21 @@ class Colwise:
             at = np.asarray(a, dtype=float).T
             nonzero = at != 0
             start = np.r_[0, np.cumsum(np.sum(nonzero, axis=1))]
-            return cls(int(at.shape[1]), int(at.shape[0]), start.astype(np.int32),
-                       np.nonzero(nonzero)[1].astype(np.int32), at[nonzero])
+            return cls(
+                int(at.shape[1]),
+                int(at.shape[0]),
+                start.astype(np.int32),
+                np.nonzero(nonzero)[1].astype(np.int32),
+                at[nonzero],
+            )
         mat = csc_array(a)
-        return cls(int(mat.shape[0]), int(mat.shape[1]), mat.indptr.astype(np.int32), mat.indices.astype(np.int32),
-                   np.asarray(mat.data, dtype=float))
+        return cls(
+            int(mat.shape[0]),
+            int(mat.shape[1]),
+            mat.indptr.astype(np.int32),
+            mat.indices.astype(np.int32),
+            np.asarray(mat.data, dtype=float),
+        )
 
 
 class LinearModel:
@@ -153,8 +178,16 @@ class LinearModel:
     (:meth:`check`).
     """
 
-    def __init__(self, c: Array, a: object, row_lo: Array, row_hi: Array, col_lo: Array, col_hi: Array,
-                 integer: npt.NDArray[np.bool_] | None = None) -> None:
+    def __init__(
+        self,
+        c: Array,
+        a: object,
+        row_lo: Array,
+        row_hi: Array,
+        col_lo: Array,
+        col_hi: Array,
+        integer: npt.NDArray[np.bool_] | None = None,
+    ) -> None:
         mat = a if isinstance(a, Colwise) else Colwise.of(a)
         self.n_cols, self.n_rows = mat.n_cols, mat.n_rows
         self.is_mip = integer is not None and bool(np.any(integer))
@@ -175,10 +208,26 @@ class LinearModel:
         if self.is_mip:
             self._mip_options()
         # the arrays go to HiGHS as they are (column-wise, minimise, no offset; integrality 0/1 per column)
-        self._check(self.h.passModel(  # the array overload
-            self.n_cols, self.n_rows, int(mat.value.size), int(MatrixFormat.kColwise), int(ObjSense.kMinimize), 0.0,
-            self._c, self._col_lo, self._col_hi, self._row_lo, self._row_hi, mat.start, mat.index, mat.value,
-            kinds), "passModel")
+        self._check(
+            self.h.passModel(  # the array overload
+                self.n_cols,
+                self.n_rows,
+                int(mat.value.size),
+                int(MatrixFormat.kColwise),
+                int(ObjSense.kMinimize),
+                0.0,
+                self._c,
+                self._col_lo,
+                self._col_hi,
+                self._row_lo,
+                self._row_hi,
+                mat.start,
+                mat.index,
+                mat.value,
+                kinds,
+            ),
+            "passModel",
+        )
         self._rows = np.arange(self.n_rows, dtype=np.int32)
         self._cols = np.arange(self.n_cols, dtype=np.int32)
         self._deadline = [np.inf]  # read by the interrupt callback
@@ -200,8 +249,10 @@ class LinearModel:
         """Make the objective cᵀx + ½ Σ diag_i x_i² (a convex QP; continuous columns only)."""
         diag = np.asarray(diag, dtype=float)
         idx = np.arange(diag.size, dtype=np.int32)
-        self._check(self.h.passHessian(diag.size, diag.size, int(HessianFormat.kTriangular), idx,
-                                       idx.copy(), diag), "passHessian")
+        self._check(
+            self.h.passHessian(diag.size, diag.size, int(HessianFormat.kTriangular), idx, idx.copy(), diag),
+            "passHessian",
+        )
         self._hessian = np.r_[diag, np.zeros(self.n_cols - diag.size)]
 
     def make_integer(self, cols: npt.NDArray[np.intp]) -> None:
@@ -234,8 +285,12 @@ class LinearModel:
     def set_row_bounds(self, lo: Array, hi: Array) -> None:
         """Change every row's bounds (the deviations of a new report enter here)."""
         lo, hi = np.asarray(lo, dtype=float), np.asarray(hi, dtype=float)
-        self._check(self.h.changeRowsBounds(  # type: ignore[attr-defined]  # in highspy, not its stubs
-            self.n_rows, self._rows, lo, hi), "changeRowsBounds")
+        self._check(
+            self.h.changeRowsBounds(  # type: ignore[attr-defined]  # in highspy, not its stubs
+                self.n_rows, self._rows, lo, hi
+            ),
+            "changeRowsBounds",
+        )
         self._row_lo, self._row_hi = lo.copy(), hi.copy()
         self._finite = None
 
@@ -264,8 +319,18 @@ class LinearModel:
         mat = csc_array(a).tocsr()
         k = int(mat.shape[0])
         lo, hi = np.asarray(lo, dtype=float), np.asarray(hi, dtype=float)
-        self._check(self.h.addRows(k, lo, hi, mat.nnz, mat.indptr[:-1].astype(np.int32),
-                                   mat.indices.astype(np.int32), mat.data.astype(float)), "addRows")
+        self._check(
+            self.h.addRows(
+                k,
+                lo,
+                hi,
+                mat.nnz,
+                mat.indptr[:-1].astype(np.int32),
+                mat.indices.astype(np.int32),
+                mat.data.astype(float),
+            ),
+            "addRows",
+        )
         self._csc = csc_array(vstack([self._a, mat]))
         self._abs_a = self._dense = None
         self._finite = None
@@ -318,8 +383,10 @@ class LinearModel:
         lo, hi = self._row_lo, self._row_hi
         lo_ok, hi_ok = self._row_finite()
         with np.errstate(invalid="ignore"):  # an infinite bound (left out) gives inf/inf
-            worst = max(float(np.max(((lo - act) / (size + np.abs(lo)))[lo_ok], initial=0.0)),
-                        float(np.max(((act - hi) / (size + np.abs(hi)))[hi_ok], initial=0.0)))
+            worst = max(
+                float(np.max(((lo - act) / (size + np.abs(lo)))[lo_ok], initial=0.0)),
+                float(np.max(((act - hi) / (size + np.abs(hi)))[hi_ok], initial=0.0)),
+            )
         if worst > tol:
             return f"a row is violated by {worst:.2g} (relative)"
         scale = 1.0 + np.abs(x)
@@ -358,8 +425,15 @@ class LinearModel:
                 x = None
             objective = float("nan") if x is None else self.value(x)
             status = "time_limit" if res.status == "time_limit" else "error"
-            res = replace(res, status=status, detail=f"HiGHS's answer fails its model: {why}", x=x,
-                          objective=objective, row_dual=None, col_dual=None)
+            res = replace(
+                res,
+                status=status,
+                detail=f"HiGHS's answer fails its model: {why}",
+                x=x,
+                objective=objective,
+                row_dual=None,
+                col_dual=None,
+            )
         return replace(res, seconds=time.perf_counter() - began)
 
     def _run(self, time_limit: float, start: Array | None) -> Solve:
@@ -389,12 +463,25 @@ class LinearModel:
             dual_bound = objective
             row_dual = np.array(sol.row_dual, dtype=float) if has_point else None
         col_dual = None if self.is_mip or not has_point else np.array(sol.col_dual, dtype=float)
-        return Solve(status=status, detail=h.modelStatusToString(model_status), x=x, objective=objective,
-                     dual_bound=dual_bound, row_dual=row_dual, col_dual=col_dual, seconds=0.0)
+        return Solve(
+            status=status,
+            detail=h.modelStatusToString(model_status),
+            x=x,
+            objective=objective,
+            dual_bound=dual_bound,
+            row_dual=row_dual,
+            col_dual=col_dual,
+            seconds=0.0,
+        )
 
 
-def _interrupt(kind: cb.HighsCallbackType, message: str, data_out: cb.HighsCallbackOutput,
-               data_in: cb.HighsCallbackInput, deadline: Any) -> None:
+def _interrupt(
+    kind: cb.HighsCallbackType,
+    message: str,
+    data_out: cb.HighsCallbackOutput,
+    data_in: cb.HighsCallbackInput,
+    deadline: Any,
+) -> None:
     """HiGHS's interrupt callback: stop once the wall clock passes the run's deadline (``deadline[0]``)."""
     if data_in is not None and time.perf_counter() > deadline[0]:
         data_in.user_interrupt = True

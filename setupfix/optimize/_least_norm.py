@@ -65,8 +65,7 @@ WORKING_SET_ADD = 100
 DENSE_MAX_ELEMENTS = 200_000
 
 
-def _nnls_least_distance(m_mat: Array, m_vec: Array, cost: Array, box: float
-                         ) -> tuple[str, Array | None, Array | None]:
+def _nnls_least_distance(m_mat: Array, m_vec: Array, cost: Array, box: float) -> tuple[str, Array | None, Array | None]:
     """min Σ c k² s.t. M k ≥ m by NNLS; ``box`` = max |k| over the true box (for the Farkas check).
 
     Returns ``(status, k, u)``: u ≥ 0 are the multipliers of the rows, up to one positive scale.
@@ -75,9 +74,9 @@ def _nnls_least_distance(m_mat: Array, m_vec: Array, cost: Array, box: float
     return nnls_least_distance(m_mat, e, cost, box)
 
 
-def least_distance_working_set(g_rows: Array, b: Array, kmin: Array, kmax: Array, cost: Array, deadline: float,
-                               add: int = WORKING_SET_ADD
-                               ) -> tuple[str, tuple[Array, Array, Array, Array] | None]:
+def least_distance_working_set(
+    g_rows: Array, b: Array, kmin: Array, kmax: Array, cost: Array, deadline: float, add: int = WORKING_SET_ADD
+) -> tuple[str, tuple[Array, Array, Array, Array] | None]:
     """Least Σ c k² subject to G k ≤ b and the box, by NNLS on a growing working set of rows.
 
     Parameters
@@ -128,7 +127,7 @@ def least_distance_working_set(g_rows: Array, b: Array, kmin: Array, kmax: Array
         if new.size == 0:
             lam = np.zeros(r + 2 * n)
             lam[work] = u
-            return "optimal", (k, lam[:r], lam[r + n:], lam[r:r + n])
+            return "optimal", (k, lam[:r], lam[r + n :], lam[r : r + n])
         if time.perf_counter() > deadline:
             return "unknown", None
         new = new[np.argsort(-viol[new], kind="stable")[:add]]
@@ -139,8 +138,9 @@ def least_distance_working_set(g_rows: Array, b: Array, kmin: Array, kmax: Array
         k, u = k_new, u_new
 
 
-def lagrangian_box(centre: Array, q: float, cost: Array, kmin: Array, kmax: Array, f_best: float
-                   ) -> tuple[Array, Array, float]:
+def lagrangian_box(
+    centre: Array, q: float, cost: Array, kmin: Array, kmax: Array, f_best: float
+) -> tuple[Array, Array, float]:
     """Box holding every grid point of norm ≤ ``f_best``, and the certified lower bound LB.
 
     Parameters
@@ -172,8 +172,17 @@ def lagrangian_box(centre: Array, q: float, cost: Array, kmin: Array, kmax: Arra
     return lo, hi, lower
 
 
-def box_least_norm(g_rows: Array, b: Array, lo: Array, hi: Array, cost: Array, time_limit: float,
-                   start: Array | None = None, proof: bool = False, gap: float = 0.0) -> tuple[Solve, Array | None]:
+def box_least_norm(
+    g_rows: Array,
+    b: Array,
+    lo: Array,
+    hi: Array,
+    cost: Array,
+    time_limit: float,
+    start: Array | None = None,
+    proof: bool = False,
+    gap: float = 0.0,
+) -> tuple[Solve, Array | None]:
     """Least Σ c k² over integer k in [lo, hi] with G k ≤ b, as one exact MILP.
 
     On each coordinate's integers k² is the upper envelope of the chords
@@ -199,8 +208,9 @@ def box_least_norm(g_rows: Array, b: Array, lo: Array, hi: Array, cost: Array, t
     chorded = np.flatnonzero(width >= 2)
     # two values: c·k² = c·(2·lo+1)·k − c·(lo² + lo); one value: the constant c·lo²
     linear = np.where(width == 1, cost * (2 * lo + 1), 0.0)
-    const = float(np.sum(np.where(width == 0, cost * lo**2, 0.0))
-                  - np.sum(np.where(width == 1, cost * (lo**2 + lo), 0.0)))
+    const = float(
+        np.sum(np.where(width == 0, cost * lo**2, 0.0)) - np.sum(np.where(width == 1, cost * (lo**2 + lo), 0.0))
+    )
     counts = width[chorded]
     i = np.repeat(chorded, counts)
     j = np.repeat(lo[chorded], counts) + np.arange(int(counts.sum())) - np.repeat(np.cumsum(counts) - counts, counts)
@@ -215,14 +225,23 @@ def box_least_norm(g_rows: Array, b: Array, lo: Array, hi: Array, cost: Array, t
         a[r + np.arange(m), i] = 2 * j + 1
         a[r + np.arange(m), col[i]] = -1.0
     else:
-        chords = csr_array(coo_array((np.r_[2 * j + 1, -np.ones(m)], (np.r_[np.arange(m), np.arange(m)],
-                                                                        np.r_[i, col[i]])),
-                                     shape=(m, n + chorded.size)))
+        chords = csr_array(
+            coo_array(
+                (np.r_[2 * j + 1, -np.ones(m)], (np.r_[np.arange(m), np.arange(m)], np.r_[i, col[i]])),
+                shape=(m, n + chorded.size),
+            )
+        )
         rows = hstack([csr_array(g_rows[fin]), csr_array((r, chorded.size))])
         a = vstack([rows, chords]).tocsr()
-    model = LinearModel(np.r_[linear, cost[chorded]], a, np.full(r + m, -INF), np.r_[b[fin], j * (j + 1)],
-                        np.r_[lo, np.zeros(chorded.size)], np.r_[hi, np.full(chorded.size, INF)],
-                        integer=np.r_[np.ones(n, bool), np.zeros(chorded.size, bool)])
+    model = LinearModel(
+        np.r_[linear, cost[chorded]],
+        a,
+        np.full(r + m, -INF),
+        np.r_[b[fin], j * (j + 1)],
+        np.r_[lo, np.zeros(chorded.size)],
+        np.r_[hi, np.full(chorded.size, INF)],
+        integer=np.r_[np.ones(n, bool), np.zeros(chorded.size, bool)],
+    )
     if proof:
         model.prefer_proof()
     if gap > 0:  # an incumbent is wanted, not a proof
@@ -283,9 +302,19 @@ def lower_bound_ratio(f_best: float, lower: float) -> float:
     return float(np.sqrt(f_best / lower))
 
 
-def chord_least_norm(g_rows: Array, g: Array, level: float, b: Array, kmin: Array, kmax: Array, cost: Array,
-                     best: Array | None, k_cont: Array, deadline: float, proof: bool = False
-                     ) -> tuple[Array | None, bool, str, float]:
+def chord_least_norm(
+    g_rows: Array,
+    g: Array,
+    level: float,
+    b: Array,
+    kmin: Array,
+    kmax: Array,
+    cost: Array,
+    best: Array | None,
+    k_cont: Array,
+    deadline: float,
+    proof: bool = False,
+) -> tuple[Array | None, bool, str, float]:
     """Exact least Σ c k² over grid points with t(k) ≥ level, by chords of k² (lazy).
 
     On integers k² is the upper envelope of the chords (2j+1)|k| − j(j+1), j ≥ 0,
@@ -328,16 +357,23 @@ def chord_least_norm(g_rows: Array, g: Array, level: float, b: Array, kmin: Arra
     a_chords, rhs = chord_rows([(i, j) for i, js in enumerate(chords) for j in sorted(js)], n, 2 * n)
     fin = np.isfinite(b)
     a = vstack([hstack([csr_array(g_rows[fin]), csr_array((int(fin.sum()), n))]), a_chords]).tocsr()
-    model = LinearModel(np.r_[np.zeros(n), cost], a, np.full(a.shape[0], -INF), np.r_[b[fin], rhs],
-                        np.r_[kmin, np.zeros(n)], np.r_[kmax, np.full(n, INF)])
+    model = LinearModel(
+        np.r_[np.zeros(n), cost],
+        a,
+        np.full(a.shape[0], -INF),
+        np.r_[b[fin], rhs],
+        np.r_[kmin, np.zeros(n)],
+        np.r_[kmax, np.full(n, INF)],
+    )
     if proof:
         model.prefer_proof()
 
     def feasible(k: Array) -> bool:
         return bool(grid_margins(g_rows, g, k) >= level - TOL)
 
-    out = lazy_chords(model, n, chords, cost, kmin, kmax, best, feasible, lambda k: np.r_[k, k**2], deadline,
-                      integer=False)
+    out = lazy_chords(
+        model, n, chords, cost, kmin, kmax, best, feasible, lambda k: np.r_[k, k**2], deadline, integer=False
+    )
     return out.best, out.proved, out.why, out.lower
 
 

@@ -59,7 +59,7 @@ from setupfix.optimize._grid_optimum import Stop
 from setupfix.optimize._leximin_counts import count_levels
 from setupfix.optimize._leximin_level import LevelModel, LevelValue
 from setupfix.optimize._leximin_pins import dim_all, dim_margins, excluded_alone, pinned_rows, span_closure
-from setupfix.optimize._leximin_result import Leximin, leximin_least_norm, leximin_vector, levels_of
+from setupfix.optimize._leximin_result import Leximin, levels_of, leximin_least_norm, leximin_vector
 from setupfix.optimize._leximin_search import MAX_REGISTERS, climb, climb_moves, lex_order
 from setupfix.optimize._session import Session
 
@@ -83,8 +83,9 @@ class _Search:
         """The grid climb from k over the active dimensions (the fixed ones kept at their floors)."""
         m, rows = self.model, self.session.rows
         moves = rows.memo(("climb moves", m.order.tobytes()), lambda: climb_moves(rows.g_rows, m.order))
-        return climb(rows.g_rows, rows.g, k, rows.kmin, rows.kmax, m.order, m.starts, v[m.dims], self.eps,
-                     self.stage_end, moves)
+        return climb(
+            rows.g_rows, rows.g, k, rows.kmin, rows.kmax, m.order, m.starts, v[m.dims], self.eps, self.stage_end, moves
+        )
 
     def margins(self, k: Array) -> Array:
         """Each dimension's margin at k, shape (n_dims,)."""
@@ -102,9 +103,17 @@ class _Search:
 MAX_BRANCHES = 24
 
 
-def leximin(session: Session, row_dim: npt.NDArray[np.intp], n_dims: int, k_first: Array, t_first: float,
-            first: LevelValue | None = None, floors: Array | None = None, stage_end: float | None = None,
-            k_climb: Array | None = None) -> Leximin:
+def leximin(
+    session: Session,
+    row_dim: npt.NDArray[np.intp],
+    n_dims: int,
+    k_first: Array,
+    t_first: float,
+    first: LevelValue | None = None,
+    floors: Array | None = None,
+    stage_end: float | None = None,
+    k_climb: Array | None = None,
+) -> Leximin:
     """The leximin levels from a proved first level (t_first at the grid point k_first).
 
     Parameters
@@ -140,12 +149,14 @@ def leximin(session: Session, row_dim: npt.NDArray[np.intp], n_dims: int, k_firs
         k_climb = search.climbed(k_first, v)
     best = _fill(search, v, k_first, t_first, first, [], k_climb=k_climb)
     head = best[0]
-    return Leximin(head.k, head.floors, head.levels, head.counts, head.stopped, head.path, search.calls,
-                   tuple(best[1:]))
+    return Leximin(
+        head.k, head.floors, head.levels, head.counts, head.stopped, head.path, search.calls, tuple(best[1:])
+    )
 
 
-def _start(session: Session, row_dim: npt.NDArray[np.intp], n_dims: int, floors: Array | None, k: Array,
-           stage_end: float) -> tuple[_Search, Array, bool]:
+def _start(
+    session: Session, row_dim: npt.NDArray[np.intp], n_dims: int, floors: Array | None, k: Array, stage_end: float
+) -> tuple[_Search, Array, bool]:
     """The search and the floors it starts from: −inf for a dimension without rows, its margin for one no free
     register moves (fixed from the start; True when such a dimension was active)."""
     v = np.full(n_dims, np.nan) if floors is None else np.asarray(floors, dtype=float).copy()
@@ -169,8 +180,17 @@ def root_climb(session: Session, row_dim: npt.NDArray[np.intp], n_dims: int, k: 
     return search.climbed(k, v) if search.climb else None
 
 
-def _fill(search: _Search, v: Array, k: Array, t: float, level: LevelValue | None, path: list[str],
-          bound: Array | None = None, pinned: Mask | None = None, k_climb: Array | None = None) -> list[Leximin]:
+def _fill(
+    search: _Search,
+    v: Array,
+    k: Array,
+    t: float,
+    level: LevelValue | None,
+    path: list[str],
+    bound: Array | None = None,
+    pinned: Mask | None = None,
+    k_climb: Array | None = None,
+) -> list[Leximin]:
     """Progressive filling from this state; the tied-best outcomes (branches of discrete conflicts).
 
     ``bound``: the sorted margins of the best branch so far; a branch whose settled margins (the
@@ -201,8 +221,10 @@ def _fill(search: _Search, v: Array, k: Array, t: float, level: LevelValue | Non
         # with it every row in their span: their dimensions' margins are the same at every point
         grown = pinned | pin | (sat & (rows.d > 0))
         if (grown & ~pinned).any():  # ``pinned`` is closed already: a new pin, a new closure
-            pinned = rows.memo(("span closure", grown.tobytes()),
-                               functools.partial(span_closure, rows.g_rows, rows.d, grown, model.key))
+            pinned = rows.memo(
+                ("span closure", grown.tobytes()),
+                functools.partial(span_closure, rows.g_rows, rows.d, grown, model.key),
+            )
         m_k = search.margins(k)
         fix_sat = np.zeros(v.size, bool)
         fix_sat[row_dim[sat]] = True
@@ -233,8 +255,9 @@ def _fill(search: _Search, v: Array, k: Array, t: float, level: LevelValue | Non
     return [Leximin(k, v, levels_of(v), None, None, tuple(path), 0)]
 
 
-def _level(search: _Search, v: Array, k: Array, level: LevelValue | None, active_rows: Mask, path: list[str]
-           ) -> tuple[Array, float, Mask, Mask, str | None, Array | None]:
+def _level(
+    search: _Search, v: Array, k: Array, level: LevelValue | None, active_rows: Mask, path: list[str]
+) -> tuple[Array, float, Mask, Mask, str | None, Array | None]:
     """The next level proved, from the point k: its point, t, saturated rows, pinned rows, and why it
     stopped (None: proved; else the best point found), and a continuous point to round for the next level.
 
@@ -276,8 +299,15 @@ def _level(search: _Search, v: Array, k: Array, level: LevelValue | None, active
     return level.k, level.t, sat, pin, None, None
 
 
-def _conflict(search: _Search, v: Array, k: Array, t: float, path: list[str],
-              bound: Array | None = None, pinned: Mask | None = None) -> list[Leximin]:
+def _conflict(
+    search: _Search,
+    v: Array,
+    k: Array,
+    t: float,
+    path: list[str],
+    bound: Array | None = None,
+    pinned: Mask | None = None,
+) -> list[Leximin]:
     """A discrete conflict at level t: one branch per dimension that can be the only one left at t
     (every other active dimension above t + ε at some grid point); if none can, one per pair that can
     be the only two left (every leximin-optimal point has the fewest dimensions at t); none, or too
@@ -295,9 +325,16 @@ def _conflict(search: _Search, v: Array, k: Array, t: float, path: list[str],
         v_q = v.copy()
         v_q[list(dims)] = t
         which = f"dimension {dims[0]}" if len(dims) == 1 else "dimensions " + ", ".join(map(str, dims))
-        branch = _fill(search, v_q, k_q, t, None,
-                       [*path, f"leximin: discrete conflict at {t:.4g} steps, branch: {which} at it"],
-                       leximin_vector(best[0]) if best else bound, pinned)
+        branch = _fill(
+            search,
+            v_q,
+            k_q,
+            t,
+            None,
+            [*path, f"leximin: discrete conflict at {t:.4g} steps, branch: {which} at it"],
+            leximin_vector(best[0]) if best else bound,
+            pinned,
+        )
         if not branch:  # pruned: below the best branch
             continue
         if branch[0].stopped is not None:
@@ -314,8 +351,7 @@ def _conflict(search: _Search, v: Array, k: Array, t: float, path: list[str],
 MAX_PAIR_TESTS = 60
 
 
-def _alone(search: _Search, v: Array, k: Array, t: float, together: int
-           ) -> list[tuple[tuple[int, ...], Array]] | None:
+def _alone(search: _Search, v: Array, k: Array, t: float, together: int) -> list[tuple[tuple[int, ...], Array]] | None:
     """The sets of ``together`` (1 or 2) active dimensions that can be the only ones left at t, each with
     a grid point; None: the limit stopped a test; [] also when there are more than MAX_PAIR_TESTS pairs.
 
@@ -328,8 +364,11 @@ def _alone(search: _Search, v: Array, k: Array, t: float, together: int
     model, eps, rows = search.model, search.eps, search.session.rows
     active = np.isnan(v)
     near = None if search.session.small else k  # small: the whole system (near rows first cost more there)
-    out = (excluded_alone(rows, v[model.row_dim], model.row_dim, v.size, t, eps, together, near)
-           if rows.all_integer else np.zeros((v.size,) * together, bool))
+    out = (
+        excluded_alone(rows, v[model.row_dim], model.row_dim, v.size, t, eps, together, near)
+        if rows.all_integer
+        else np.zeros((v.size,) * together, bool)
+    )
     sets: list[tuple[int, ...]]
     if together == 1:
         sets = [(int(q),) for q in np.flatnonzero(active & ~out)]
@@ -375,5 +414,3 @@ def _counts(search: _Search, v: Array, k: Array, t: float, path: list[str]) -> L
     vv[np.isnan(vv)] = t  # every active dimension has at least t (the counts say which have more)
     lex = tuple(sorted(list(levels_of(v)) + list(out.levels)))
     return Leximin(out.k, vv, lex, out, None, tuple(path), 0)
-
-

@@ -161,8 +161,9 @@ class _Rows:
         dims = np.unique(self.col[at])
         big = np.full(at.size, max(level - self.t0, 0.0))
         rhs = self.g_act[at] + big - (0.0 if t is None else t)
-        w = csr_array(coo_array((big, (np.arange(at.size), np.searchsorted(dims, self.col[at]))),
-                                shape=(at.size, dims.size)))
+        w = csr_array(
+            coo_array((big, (np.arange(at.size), np.searchsorted(dims, self.col[at]))), shape=(at.size, dims.size))
+        )
         return at, dims, w, rhs
 
 
@@ -183,8 +184,15 @@ class _Layout:
         return np.concatenate([(m[d] >= t - TOL).astype(float) for d, t in zip(self.dims, levels, strict=True)])
 
 
-def _model(rows: _Rows, blocks: list[tuple[float, int]], extra: int, question: tuple[float | None, int],
-           objective: str, top: float, t_lo: float) -> tuple[LinearModel, _Layout]:
+def _model(
+    rows: _Rows,
+    blocks: list[tuple[float, int]],
+    extra: int,
+    question: tuple[float | None, int],
+    objective: str,
+    top: float,
+    t_lo: float,
+) -> tuple[LinearModel, _Layout]:
     """The MILP: columns k (n), s (``extra``: the norm's), [t], the blocks' binaries and the question's."""
     n = rows.n
     with_t = question[0] is None
@@ -209,7 +217,7 @@ def _model(rows: _Rows, blocks: list[tuple[float, int]], extra: int, question: t
         hi.append(rhs)
         if i < len(blocks) or objective != "count":
             count = np.zeros(width)
-            count[starts[i]: starts[i] + dims.size] = 1.0
+            count[starts[i] : starts[i] + dims.size] = 1.0
             parts.append(csr_array(count[None, :]))
             lo.append(np.array([float(c_i - layout.above_anyway(i))]))
             hi.append(np.array([INF]))
@@ -225,13 +233,18 @@ def _model(rows: _Rows, blocks: list[tuple[float, int]], extra: int, question: t
             cols_i.append(np.r_[starts[i] + here, starts[i - 1] + there])
             vals.append(np.r_[np.ones(both.size), -np.ones(both.size)])
             n_link += both.size
-        parts.append(csr_array(coo_array((np.concatenate(vals), (np.concatenate(rows_i), np.concatenate(cols_i))),
-                                         shape=(n_link, width))))
+        parts.append(
+            csr_array(
+                coo_array(
+                    (np.concatenate(vals), (np.concatenate(rows_i), np.concatenate(cols_i))), shape=(n_link, width)
+                )
+            )
+        )
         lo.append(np.full(n_link, -INF))
         hi.append(np.zeros(n_link))
     c = np.zeros(width)
     if objective == "count":
-        c[starts[-1]:] = -1.0
+        c[starts[-1] :] = -1.0
     elif objective == "value":
         c[n + extra] = -1.0
     n_bin = width - off
@@ -244,8 +257,9 @@ def _model(rows: _Rows, blocks: list[tuple[float, int]], extra: int, question: t
     return model, layout
 
 
-def count_levels(session: Session, row_dim: npt.NDArray[np.intp], n_dims: int, floors: Array, k: Array, t0: float,
-                 stage_end: float) -> CountLevels:
+def count_levels(
+    session: Session, row_dim: npt.NDArray[np.intp], n_dims: int, floors: Array, k: Array, t0: float, stage_end: float
+) -> CountLevels:
     """The active dimensions' levels by counts from t0 (see the module text)."""
     del n_dims
     rows = _Rows(session, row_dim, floors, t0)
@@ -258,8 +272,9 @@ def count_levels(session: Session, row_dim: npt.NDArray[np.intp], n_dims: int, f
     best = k
 
     def out(proved: bool, why: str) -> CountLevels:
-        return CountLevels(best, floors.copy(), t0, tuple(blocks), tuple(levels), proved, why, tuple(path), runs.calls,
-                           runs.longest)
+        return CountLevels(
+            best, floors.copy(), t0, tuple(blocks), tuple(levels), proved, why, tuple(path), runs.calls, runs.longest
+        )
 
     while True:
         if not runs.room():
@@ -270,7 +285,7 @@ def count_levels(session: Session, row_dim: npt.NDArray[np.intp], n_dims: int, f
         res = runs.solve(model)
         c_best = int(np.sum(rows.margins(best) >= cur_t + eps - TOL))
         if res.x is not None:
-            kk = np.clip(np.rint(res.x[:rows.n]), rows.kmin, rows.kmax)
+            kk = np.clip(np.rint(res.x[: rows.n]), rows.kmin, rows.kmax)
             c_k = int(np.sum(rows.margins(kk) >= cur_t + eps - TOL))
             if rows.feasible(kk, blocks) and c_k > c_best:
                 best, c_best = kk, c_k
@@ -291,7 +306,7 @@ def count_levels(session: Session, row_dim: npt.NDArray[np.intp], n_dims: int, f
             res = runs.solve(model)
             if res.status == "infeasible":
                 break
-            k_new = None if res.x is None else np.clip(np.rint(res.x[:rows.n]), rows.kmin, rows.kmax)
+            k_new = None if res.x is None else np.clip(np.rint(res.x[: rows.n]), rows.kmin, rows.kmax)
             t_k = -np.inf if k_new is None else float(np.sort(rows.margins(k_new))[::-1][above - 1])
             if k_new is None or not rows.feasible(k_new, blocks) or t_k < tau + eps - TOL:
                 return out(False, "time limit" if res.status == "time_limit" else f"HiGHS: {res.detail}")
@@ -308,8 +323,13 @@ def count_least_norm(session: Session, row_dim: npt.NDArray[np.intp], counts: Co
     if not rows.feasible(k, blocks):
         return LeastNorm(k, False, "no feasible start", 0.0, ("least norm: no feasible start",))
     if session.clock.deadline - time.perf_counter() <= counts.longest:  # it would not end in time (:class:`_Runs`)
-        return LeastNorm(k, False, "time limit", 0.0, (f"least norm: less time left than a count MILP took "
-                                                       f"({counts.longest:.2f} s): the counts' point",))
+        return LeastNorm(
+            k,
+            False,
+            "time limit",
+            0.0,
+            (f"least norm: less time left than a count MILP took ({counts.longest:.2f} s): the counts' point",),
+        )
     top = float(np.max(rows.g[rows.act] - rows.lo_box[rows.act])) + 1.0 if rows.n_active else 0.0
     model, layout = _model(rows, blocks[:-1], n, blocks[-1] if blocks else (counts.t0, 0), "norm", top, 0.0)
     chords = [{0, int(abs(v)), max(int(abs(v)) - 1, 0)} for v in k]
@@ -321,8 +341,19 @@ def count_least_norm(session: Session, row_dim: npt.NDArray[np.intp], counts: Co
         return np.concatenate([kk, kk**2, layout.binaries(rows.margins(kk), [t for t, _ in blocks] or [counts.t0])])
 
     # no start point (best=None): given one, HiGHS 1.16 may hand it back with the optimum's objective
-    out = lazy_chords(model, n, chords, cost, rows.kmin, rows.kmax, None, lambda kk: rows.feasible(kk, blocks),
-                      start, session.clock.deadline, integer=True)
+    out = lazy_chords(
+        model,
+        n,
+        chords,
+        cost,
+        rows.kmin,
+        rows.kmax,
+        None,
+        lambda kk: rows.feasible(kk, blocks),
+        start,
+        session.clock.deadline,
+        integer=True,
+    )
     best = k
     if out.best is not None and float(np.sum(cost * out.best**2)) <= float(np.sum(cost * k**2)):
         best = out.best

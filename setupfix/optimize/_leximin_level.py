@@ -29,9 +29,9 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
+from setupfix.optimize._farkas import farkas_or_point
 from setupfix.optimize._grid import TOL, rounded_rhs
 from setupfix.optimize._highs import INF, LinearModel
-from setupfix.optimize._farkas import farkas_or_point
 from setupfix.optimize._leximin_pins import Certificates, Step, best_rounding, level_bound, point_above
 from setupfix.optimize._session import GridRows, Session
 
@@ -61,16 +61,22 @@ class LevelValue:
     certificates: Certificates | None = None  # the rounded rows' weights, when a step proved the level
 
 
-def _grouping(g_rows: Array, row_dim: npt.NDArray[np.intp]
-              ) -> tuple[npt.NDArray[np.intp], npt.NDArray[np.intp], npt.NDArray[np.intp], bool, Array]:
+def _grouping(
+    g_rows: Array, row_dim: npt.NDArray[np.intp]
+) -> tuple[npt.NDArray[np.intp], npt.NDArray[np.intp], npt.NDArray[np.intp], bool, Array]:
     """The rows grouped by dimension (order, group starts for reduceat, each group's dimension), whether
     a dimension has more than two rows (a position zone's polygon; one-axis problems have at most two),
     and the rows keyed by a random integer projection (equal or opposite rows, equal or opposite keys)."""
     order = np.argsort(row_dim, kind="stable")
     starts = np.flatnonzero(np.r_[True, np.diff(row_dim[order]) != 0])
     weights = np.random.default_rng(0).integers(1, 2**20, g_rows.shape[1]).astype(float)
-    out = (order, starts, row_dim[order][starts], bool(row_dim.size and np.bincount(row_dim).max() > 2),
-           g_rows @ weights)
+    out = (
+        order,
+        starts,
+        row_dim[order][starts],
+        bool(row_dim.size and np.bincount(row_dim).max() > 2),
+        g_rows @ weights,
+    )
     for a in (out[0], out[1], out[2], out[4]):
         a.flags.writeable = False
     return out
@@ -89,7 +95,8 @@ class LevelModel:
         self._model: LinearModel | None = None  # the level LP, built on first use
         self._cost = np.zeros(n_dims)  # its costs on u
         self.order, self.starts, self.dims, self.polygons, self.key = self.rows.memo(
-            ("level rows", row_dim.tobytes()), lambda: _grouping(self.rows.g_rows, row_dim))
+            ("level rows", row_dim.tobytes()), lambda: _grouping(self.rows.g_rows, row_dim)
+        )
 
     @property
     def _lp(self) -> LinearModel:
@@ -106,9 +113,14 @@ class LevelModel:
             a[np.arange(r), n + 1 + self.row_dim] = 1.0
             a[r:, n] = 1.0
             a[r + np.arange(m), n + 1 + np.arange(m)] = -1.0
-            self._model = LinearModel(np.r_[np.zeros(n), -1.0, np.zeros(m)], a, np.full(r + m, -INF),
-                                      np.r_[self.rows.g, np.zeros(m)], np.r_[self.rows.kmin, -INF, np.full(m, -INF)],
-                                      np.r_[self.rows.kmax, INF, np.full(m, INF)])
+            self._model = LinearModel(
+                np.r_[np.zeros(n), -1.0, np.zeros(m)],
+                a,
+                np.full(r + m, -INF),
+                np.r_[self.rows.g, np.zeros(m)],
+                np.r_[self.rows.kmin, -INF, np.full(m, -INF)],
+                np.r_[self.rows.kmax, INF, np.full(m, INF)],
+            )
             self._model.keep_basis()
         return self._model
 
@@ -121,8 +133,9 @@ class LevelModel:
         f = self._floors(v)
         return np.where(np.isnan(f), self.rows.g, self.rows.g - f)
 
-    def _solve(self, hi: Array, v: Array, time_limit: float, spread: float = 0.0
-               ) -> tuple[str, Array | None, Array | None]:
+    def _solve(
+        self, hi: Array, v: Array, time_limit: float, spread: float = 0.0
+    ) -> tuple[str, Array | None, Array | None]:
         """max t + spread·Σ_active u_q with rows ``hi`` (fixed rows' floors already in them, u_q ≥ 0 for
         fixed q): status, (k, t) and the rows' weights y ≥ 0."""
         lp, n, m = self._lp, self.n, self.n_dims
@@ -131,12 +144,13 @@ class LevelModel:
         if not np.array_equal(cost, self._cost):
             lp.set_costs(n + 1 + np.arange(m, dtype=np.int32), cost)
             self._cost = cost
-        lp.set_row_bounds(np.full(hi.size + m, -INF), np.concatenate((np.where(np.isfinite(hi), hi, INF),
-                                                                      np.where(active, 0.0, INF))))
+        lp.set_row_bounds(
+            np.full(hi.size + m, -INF), np.concatenate((np.where(np.isfinite(hi), hi, INF), np.where(active, 0.0, INF)))
+        )
         lp.set_col_bounds(n + 1 + np.arange(m, dtype=np.int32), np.where(active, -INF, 0.0), np.full(m, INF))
         res = lp.solve(max(time_limit, 1e-3))
-        y = None if res.row_dual is None else np.maximum(-res.row_dual[:hi.size], 0.0)
-        x = None if res.x is None else res.x[:n + 1]
+        y = None if res.row_dual is None else np.maximum(-res.row_dual[: hi.size], 0.0)
+        x = None if res.x is None else res.x[: n + 1]
         return res.status if res.status != "error" else f"HiGHS: {res.detail}", x, y
 
     def level_of(self, k: Array, v: Array) -> float:
@@ -194,8 +208,7 @@ class LevelModel:
                 y, x_ld = farkas_or_point(rows, b_up, k)
                 if y is not None:
                     cert = (y, np.where(fin, b, 0.0), np.zeros(b.size), True)
-                    return Step(t, k, True, Certificates(rows.g_rows, rows.kmin, rows.kmax, (cert,)), None, calls,
-                                last)
+                    return Step(t, k, True, Certificates(rows.g_rows, rows.kmin, rows.kmax, (cert,)), None, calls, last)
                 if x_ld is not None and ascents < NNLS_ASCENTS:  # the rounded rows' least-distance point, rounded
                     ascents += 1
                     k_r, t_r = self.round_best(x_ld, v)
@@ -217,8 +230,15 @@ class LevelModel:
                     total = float(y[act].sum())
                     if total > 0 and bound < gap * total - 1e-9 * (1.0 + abs(bound)):
                         cert = (y, rhs0, np.where(act & ~drop, gap, 0.0), True)
-                        return Step(t, k, True, Certificates(rows.g_rows, rows.kmin, rows.kmax, (cert,)), None,
-                                    calls + 1, x[:-1])
+                        return Step(
+                            t,
+                            k,
+                            True,
+                            Certificates(rows.g_rows, rows.kmin, rows.kmax, (cert,)),
+                            None,
+                            calls + 1,
+                            x[:-1],
+                        )
             calls += 1
             if status == "time_limit":
                 return Step(t, k, False, None, "time limit", calls)
@@ -281,20 +301,37 @@ class LevelModel:
         upper = t_lp
         return self._milp(v, k_best, t_best, upper, t_lp, y, stage_end, path, calls)
 
-    def _milp(self, v: Array, k_best: Array, t_best: float, upper: float, t_lp: float, y: Array | None,
-              stage_end: float, path: list[str], calls: int) -> LevelValue:
+    def _milp(
+        self,
+        v: Array,
+        k_best: Array,
+        t_best: float,
+        upper: float,
+        t_lp: float,
+        y: Array | None,
+        stage_end: float,
+        path: list[str],
+        calls: int,
+    ) -> LevelValue:
         """max t, k integer, t ∈ [t(best point), upper], started from the best point."""
         rows = self.rows
         r, n = rows.g_rows.shape
         hi = self.rhs(v)
         a = np.hstack([rows.g_rows, np.isnan(self._floors(v))[:, None].astype(float)])
-        model = LinearModel(np.r_[np.zeros(n), -1.0], a, np.full(r, -INF), np.where(np.isfinite(hi), hi, INF),
-                            np.r_[rows.kmin, t_best], np.r_[rows.kmax, upper],
-                            integer=np.r_[np.ones(n, bool), False])
+        model = LinearModel(
+            np.r_[np.zeros(n), -1.0],
+            a,
+            np.full(r, -INF),
+            np.where(np.isfinite(hi), hi, INF),
+            np.r_[rows.kmin, t_best],
+            np.r_[rows.kmax, upper],
+            integer=np.r_[np.ones(n, bool), False],
+        )
         res = model.solve(stage_end - time.perf_counter(), np.r_[k_best, t_best])
         calls += 1
         if res.x is not None and self.level_of(np.clip(np.rint(res.x[:-1]), rows.kmin, rows.kmax), v) < (
-                -res.objective - 1e-6):  # HiGHS 1.16 handed back the start with the optimum's objective
+            -res.objective - 1e-6
+        ):  # HiGHS 1.16 handed back the start with the optimum's objective
             res = model.solve(stage_end - time.perf_counter())
             calls += 1
         path.append(f"leximin: level MILP ({res.status})")
@@ -320,8 +357,7 @@ class LevelModel:
         found = point_above(self.session, f, stage_end)
         return None if found is None else found is not False
 
-    def alone_at(self, v: Array, dims: tuple[int, ...], t: float, eps: float, stage_end: float
-                 ) -> Array | bool | None:
+    def alone_at(self, v: Array, dims: tuple[int, ...], t: float, eps: float, stage_end: float) -> Array | bool | None:
         """A grid point with every active dimension but ``dims`` at t + ε or more (those ≥ t, fixed ≥
         floors); False: proved none; None: stopped."""
         f = self._floors(v).copy()

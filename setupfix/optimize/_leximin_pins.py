@@ -34,12 +34,23 @@ import numpy.typing as npt
 
 from setupfix.optimize._farkas import farkas_or_point
 from setupfix.optimize._grid import TOL, rounded_rhs
-from setupfix.optimize._leximin_search import group_min
 from setupfix.optimize._highs import INF, LinearModel
+from setupfix.optimize._leximin_search import group_min
 from setupfix.optimize._session import GridRows, Session
 
-__all__ = ["Certificates", "Step", "best_rounding", "dim_all", "dim_margins", "excluded_alone", "level_bound",
-           "meeting_rounding", "pinned_rows", "point_above", "span_closure"]
+__all__ = [
+    "Certificates",
+    "Step",
+    "best_rounding",
+    "dim_all",
+    "dim_margins",
+    "excluded_alone",
+    "level_bound",
+    "meeting_rounding",
+    "pinned_rows",
+    "point_above",
+    "span_closure",
+]
 
 Array = npt.NDArray[np.float64]
 Mask = npt.NDArray[np.bool_]
@@ -159,8 +170,9 @@ def span_closure(g_rows: Array, d: Array, pinned: Mask, key: Array) -> Mask:
     return out
 
 
-def dim_all(rows_mask: Mask, order: npt.NDArray[np.intp], starts: npt.NDArray[np.intp],
-            dims: npt.NDArray[np.intp], n_dims: int) -> Mask:
+def dim_all(
+    rows_mask: Mask, order: npt.NDArray[np.intp], starts: npt.NDArray[np.intp], dims: npt.NDArray[np.intp], n_dims: int
+) -> Mask:
     """Dimensions with at least one row, every one of them in ``rows_mask`` — shape (n_dims,).
 
     Rows grouped by dimension: ``order`` sorts them, group g starts at ``starts[g]`` and is
@@ -170,8 +182,15 @@ def dim_all(rows_mask: Mask, order: npt.NDArray[np.intp], starts: npt.NDArray[np
     return out
 
 
-def best_rounding(rows: GridRows, x: Array, floors: Array, active_dims: Mask, order: npt.NDArray[np.intp],
-                  starts: npt.NDArray[np.intp], most: int = 4) -> tuple[Array, float]:
+def best_rounding(
+    rows: GridRows,
+    x: Array,
+    floors: Array,
+    active_dims: Mask,
+    order: npt.NDArray[np.intp],
+    starts: npt.NDArray[np.intp],
+    most: int = 4,
+) -> tuple[Array, float]:
     """A good rounding of x and its level (min active margin; −inf below a fixed floor).
 
     Every floor/ceil choice of the ``most`` fractional coordinates nearest ½ (the others to the
@@ -189,8 +208,11 @@ def best_rounding(rows: GridRows, x: Array, floors: Array, active_dims: Mask, or
         frac = frac[np.argsort(np.abs(x[frac] - lo[frac] - 0.5), kind="stable")[:most]]
     cand = np.repeat(near[None, :], 1 << frac.size, axis=0)
     if frac.size:
-        bits = _BITS[frac.size] if frac.size < len(_BITS) else (
-            (np.arange(1 << frac.size)[:, None] >> np.arange(frac.size)) & 1)
+        bits = (
+            _BITS[frac.size]
+            if frac.size < len(_BITS)
+            else ((np.arange(1 << frac.size)[:, None] >> np.arange(frac.size)) & 1)
+        )
         cand[:, frac] = np.minimum(np.maximum(lo[frac] + bits, kmin[frac]), kmax[frac])
     fixed = ~np.isnan(floors)
     m = rows.g - cand @ rows.g_rows.T
@@ -223,8 +245,15 @@ def level_bound(rows: GridRows, y: Array, rhs: Array, active_rows: Mask) -> floa
     return c / total
 
 
-def dim_margins(g_rows: Array, g: Array, k: Array, order: npt.NDArray[np.intp], starts: npt.NDArray[np.intp],
-                dims: npt.NDArray[np.intp], n_dims: int) -> Array:
+def dim_margins(
+    g_rows: Array,
+    g: Array,
+    k: Array,
+    order: npt.NDArray[np.intp],
+    starts: npt.NDArray[np.intp],
+    dims: npt.NDArray[np.intp],
+    n_dims: int,
+) -> Array:
     """Margin of each dimension at k: the least of its rows' ``g_j − G_j k`` (inf: no row) — shape (n_dims,);
     rows grouped as in :func:`dim_all`."""
     out = np.full(n_dims, np.inf)
@@ -232,8 +261,16 @@ def dim_margins(g_rows: Array, g: Array, k: Array, order: npt.NDArray[np.intp], 
     return out
 
 
-def excluded_alone(rows: GridRows, floors: Array, row_dim: npt.NDArray[np.intp], n_dims: int, t: float,
-                   eps: float, together: int = 1, near: Array | None = None) -> Mask:
+def excluded_alone(
+    rows: GridRows,
+    floors: Array,
+    row_dim: npt.NDArray[np.intp],
+    n_dims: int,
+    t: float,
+    eps: float,
+    together: int = 1,
+    near: Array | None = None,
+) -> Mask:
     """Active dimensions (``together`` = 2: pairs of them) proved unable to be the only ones left at level t,
     by one Farkas certificate.
 
@@ -344,9 +381,16 @@ def point_above(session: Session, f: Array, stage_end: float) -> Array | bool | 
             if k_met is not None:
                 return k_met
     tight = fin & (b - rows.g_rows @ kx < TIGHT_SLACK) if kx is not None else fin
-    for keep in ((tight, fin) if tight.sum() < fin.sum() else (fin,)):
-        res = LinearModel(np.zeros(n), rows.g_rows[keep], np.full(int(keep.sum()), -INF), b[keep], rows.kmin,
-                          rows.kmax, integer=np.ones(n, bool)).solve(stage_end - time.perf_counter())
+    for keep in (tight, fin) if tight.sum() < fin.sum() else (fin,):
+        res = LinearModel(
+            np.zeros(n),
+            rows.g_rows[keep],
+            np.full(int(keep.sum()), -INF),
+            b[keep],
+            rows.kmin,
+            rows.kmax,
+            integer=np.ones(n, bool),
+        ).solve(stage_end - time.perf_counter())
         if res.status == "infeasible":
             return False
         k_mip = None if res.x is None else np.clip(np.rint(res.x), rows.kmin, rows.kmax)

@@ -71,8 +71,7 @@ def levels_of(v: Array) -> tuple[tuple[float, int], ...]:
     return tuple((float(a), int(b)) for a, b in zip(values, counts, strict=True))
 
 
-def leximin_least_norm(session: Session, lex: Leximin, row_dim: npt.NDArray[np.intp], box_share: float
-                       ) -> LeastNorm:
+def leximin_least_norm(session: Session, lex: Leximin, row_dim: npt.NDArray[np.intp], box_share: float) -> LeastNorm:
     """The least Σ c k² among the leximin-optimal grid points (every margin at least its floor).
 
     Floors for every dimension: stage 3 on the rows shifted by them (g_j − v_q(j) ≥ G_j k, level 0).
@@ -83,12 +82,25 @@ def leximin_least_norm(session: Session, lex: Leximin, row_dim: npt.NDArray[np.i
     for option in (lex, *lex.alternatives):
         least = _least_norm_of(session, option, row_dim, box_share)
         if best is None or _better(least, best, session.rows.cost):
-            best = least if best is None else LeastNorm(least.k, least.proved and best.proved,
-                                                        least.why or best.why, min(least.lower, best.lower),
-                                                        best.path + least.path)
+            best = (
+                least
+                if best is None
+                else LeastNorm(
+                    least.k,
+                    least.proved and best.proved,
+                    least.why or best.why,
+                    min(least.lower, best.lower),
+                    best.path + least.path,
+                )
+            )
         else:
-            best = LeastNorm(best.k, least.proved and best.proved, best.why or least.why,
-                             min(least.lower, best.lower), best.path + least.path)
+            best = LeastNorm(
+                best.k,
+                least.proved and best.proved,
+                best.why or least.why,
+                min(least.lower, best.lower),
+                best.path + least.path,
+            )
     assert best is not None
     return best
 
@@ -106,8 +118,12 @@ def _least_norm_of(session: Session, lex: Leximin, row_dim: npt.NDArray[np.intp]
         return count_least_norm(session, row_dim, lex.counts, lex.k)
     floor_rows = lex.floors[row_dim]
     g_shift = np.where(np.isfinite(floor_rows), rows.g - floor_rows, np.inf)
-    shifted = Session(GridRows(rows.g_rows, g_shift, rows.kmin, rows.kmax, rows.cost), session.settings,
-                      session.time_limit, session.clock)
+    shifted = Session(
+        GridRows(rows.g_rows, g_shift, rows.kmin, rows.kmax, rows.cost),
+        session.settings,
+        session.time_limit,
+        session.clock,
+    )
     b = shifted.rows.rounded(0.0)
     b[~np.isfinite(g_shift)] = np.inf
     return grid_least_norm(shifted, -TOL, b, lex.k, None, None, box_share)

@@ -88,8 +88,14 @@ def group_min(m: Array, starts: npt.NDArray[np.intp], pairs: bool | None = None)
     return np.minimum.reduceat(m, starts, axis=1)
 
 
-def _sorted_margins(m: Array, starts: npt.NDArray[np.intp], active: npt.NDArray[np.intp],
-                    fixed: npt.NDArray[np.intp], floors: Array, pairs: bool | None = None) -> Array:
+def _sorted_margins(
+    m: Array,
+    starts: npt.NDArray[np.intp],
+    active: npt.NDArray[np.intp],
+    fixed: npt.NDArray[np.intp],
+    floors: Array,
+    pairs: bool | None = None,
+) -> Array:
     """Row margins (c, r), rows grouped by dimension (groups start at ``starts``) → each point's margins
     of the groups ``active``, sorted ascending — shape (c, n_active); a point with a group ``fixed``
     below its floor (``floors``, one per fixed group) gets −inf throughout (never better)."""
@@ -100,9 +106,19 @@ def _sorted_margins(m: Array, starts: npt.NDArray[np.intp], active: npt.NDArray[
     return out
 
 
-def climb(g_rows: Array, g: Array, k: Array, kmin: Array, kmax: Array, order: npt.NDArray[np.intp],
-          starts: npt.NDArray[np.intp], floors: Array, eps: float, deadline: float = np.inf,
-          moves: Moves | None = None) -> Array:
+def climb(
+    g_rows: Array,
+    g: Array,
+    k: Array,
+    kmin: Array,
+    kmax: Array,
+    order: npt.NDArray[np.intp],
+    starts: npt.NDArray[np.intp],
+    floors: Array,
+    eps: float,
+    deadline: float = np.inf,
+    moves: Moves | None = None,
+) -> Array:
     """A grid point at least as good as k in the leximin order of the active dimensions.
 
     Parameters

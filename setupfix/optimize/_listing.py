@@ -30,8 +30,9 @@ Array = npt.NDArray[np.float64]
 WORK_LIMIT = 4_000_000
 
 
-def lagrangian_ball(g_rows: Array, b: Array, kmin: Array, kmax: Array, cost: Array, lam_rows: Array,
-                    lam_lo: Array, lam_hi: Array) -> tuple[Array, float]:
+def lagrangian_ball(
+    g_rows: Array, b: Array, kmin: Array, kmax: Array, cost: Array, lam_rows: Array, lam_lo: Array, lam_hi: Array
+) -> tuple[Array, float]:
     """Centre κ and value q of the Lagrangian bound f(k) ≥ Σ c_i (k_i − κ_i)² + q.
 
     Valid for every k with G k ≤ b and kmin ≤ k ≤ kmax, for any λ ≥ 0; the
@@ -59,10 +60,19 @@ def lagrangian_ball(g_rows: Array, b: Array, kmin: Array, kmax: Array, cost: Arr
     return -s * w / (2 * cost), c0 * c0 / (4 * a)
 
 
-def enumerate_ball(centre: Array, cost: Array, radius2: float, kmin: Array, kmax: Array, limit: int,
-                   rows: Array | None = None, rhs: Array | None = None, fmax: float = np.inf,
-                   work_limit: int = WORK_LIMIT,
-                   multipliers: tuple[Array, Array, Array] | None = None) -> npt.NDArray[np.float64] | None:
+def enumerate_ball(
+    centre: Array,
+    cost: Array,
+    radius2: float,
+    kmin: Array,
+    kmax: Array,
+    limit: int,
+    rows: Array | None = None,
+    rhs: Array | None = None,
+    fmax: float = np.inf,
+    work_limit: int = WORK_LIMIT,
+    multipliers: tuple[Array, Array, Array] | None = None,
+) -> npt.NDArray[np.float64] | None:
     """Every integer k in the box with Σ c_i (k_i − centre_i)² ≤ radius2 [rows·k ≤ rhs] [Σ c_i k_i² ≤ fmax].
 
     Coordinates are fixed one at a time, breadth first (all partial points of one depth
@@ -134,8 +144,10 @@ def enumerate_ball(centre: Array, cost: Array, radius2: float, kmin: Array, kmax
             rest_quad = after(w * w / (4 * c))
             rest_slack = float(lam @ rhs) + after(lam_hi * kmax[order] - lam_lo * kmin[order])
         # rows no point of the ellipsoid can violate are left out
-        top = np.minimum(np.sum(np.maximum(a * lo_o, a * hi_o), axis=1),
-                         a @ ce + np.sqrt(max(radius2, 0.0)) * np.sqrt(np.sum(a * a / c, axis=1)))
+        top = np.minimum(
+            np.sum(np.maximum(a * lo_o, a * hi_o), axis=1),
+            a @ ce + np.sqrt(max(radius2, 0.0)) * np.sqrt(np.sum(a * a / c, axis=1)),
+        )
         live = top > rhs + 1e-7
         a, rhs_live = a[live], rhs[live]
         limit = min(limit, max(1, (1 << 24) // max(a.shape[0], 1)))
@@ -199,10 +211,21 @@ def enumerate_ball(centre: Array, cost: Array, radius2: float, kmin: Array, kmax
     return pts
 
 
-def ellipsoid_search(g_rows: Array, g: Array, level: float, centre: Array, q: float, cost: Array, kmin: Array,
-                     kmax: Array, f_known: float, limit: int, b: Array | None = None,
-                     work_limit: int = WORK_LIMIT,
-                     multipliers: tuple[Array, Array, Array] | None = None) -> tuple[Array | None, bool, int]:
+def ellipsoid_search(
+    g_rows: Array,
+    g: Array,
+    level: float,
+    centre: Array,
+    q: float,
+    cost: Array,
+    kmin: Array,
+    kmax: Array,
+    f_known: float,
+    limit: int,
+    b: Array | None = None,
+    work_limit: int = WORK_LIMIT,
+    multipliers: tuple[Array, Array, Array] | None = None,
+) -> tuple[Array | None, bool, int]:
     """Least Σ c k² among grid points with t(k) ≥ level, by growing ellipsoids around ``centre``.
 
     Every feasible k satisfies Σ c (k − centre)² ≤ f(k) − q (:func:`lagrangian_ball`).
@@ -226,6 +249,7 @@ def ellipsoid_search(g_rows: Array, g: Array, level: float, centre: Array, q: fl
     listed : int
         Grid points listed in the last ellipsoid.
     """
+
     def room(f: float) -> float:
         return f - q + 1e-9 * max(1.0, abs(f)) if np.isfinite(f) else np.inf
 
@@ -242,8 +266,19 @@ def ellipsoid_search(g_rows: Array, g: Array, level: float, centre: Array, q: fl
             points = enumerate_ball(centre, cost, radius2, kmin, kmax, limit, fmax=f_cut, work_limit=work_limit)
         else:
             lam = None if multipliers is None else (multipliers[0][fin], multipliers[1], multipliers[2])
-            points = enumerate_ball(centre, cost, radius2, kmin, kmax, limit, g_rows[fin], b[fin], fmax=f_cut,
-                                    work_limit=work_limit, multipliers=lam)
+            points = enumerate_ball(
+                centre,
+                cost,
+                radius2,
+                kmin,
+                kmax,
+                limit,
+                g_rows[fin],
+                b[fin],
+                fmax=f_cut,
+                work_limit=work_limit,
+                multipliers=lam,
+            )
         if points is None:
             return best, False, listed
         listed = points.shape[0]
@@ -262,4 +297,3 @@ def ellipsoid_search(g_rows: Array, g: Array, level: float, centre: Array, q: fl
         if radius2 >= cap:
             return best, True, listed
         radius2 = min(radius2 * 4, cap)
-

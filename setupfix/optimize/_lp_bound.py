@@ -45,8 +45,7 @@ def margin_rows(problem: CorrectionProblem, quantum: float = 1e-3) -> tuple[Arra
     lower_ok = np.isfinite(problem.lower)
     dev = np.round(problem.deviation / h / quantum) * quantum
     g_rows = np.vstack([a[upper_ok], -a[lower_ok]])
-    g = np.concatenate([(problem.upper / h)[upper_ok] - dev[upper_ok],
-                        dev[lower_ok] - (problem.lower / h)[lower_ok]])
+    g = np.concatenate([(problem.upper / h)[upper_ok] - dev[upper_ok], dev[lower_ok] - (problem.lower / h)[lower_ok]])
     return g_rows, g
 
 
@@ -55,7 +54,7 @@ def rows_to_dimensions(problem: CorrectionProblem, rows: npt.NDArray[np.bool_]) 
     ids = np.array(problem.dimension_ids, dtype=object)
     upper_ids = ids[np.isfinite(problem.upper)]
     lower_ids = ids[np.isfinite(problem.lower)]
-    flagged = set(upper_ids[rows[: upper_ids.size]]) | set(lower_ids[rows[upper_ids.size:]])
+    flagged = set(upper_ids[rows[: upper_ids.size]]) | set(lower_ids[rows[upper_ids.size :]])
     return tuple(d for d in problem.dimension_ids if d in flagged)
 
 

@@ -35,6 +35,7 @@ __all__ = ["CorrectionProblem", "OptimizeResult"]
 
 Array = npt.NDArray[np.float64]
 
+
 @dataclass(frozen=True)
 class CorrectionProblem:
     """Maximise the error budget of one part by register corrections.
@@ -100,8 +101,9 @@ class CorrectionProblem:
         if self.floor is not None:
             floor = np.asarray(self.floor, dtype=float)
             if floor.shape != self.deviation.shape or np.any(np.isnan(floor)) or np.any(floor > 0):
-                raise ParameterError(f"no-harm floor must be {self.deviation.size} numbers ≤ 0 (−inf: none), "
-                                     f"got {self.floor!r}")
+                raise ParameterError(
+                    f"no-harm floor must be {self.deviation.size} numbers ≤ 0 (−inf: none), got {self.floor!r}"
+                )
             object.__setattr__(self, "floor", floor)
         cost = np.ones(n) if self.cost is None else np.asarray(self.cost, dtype=float)
         if cost.shape != (n,) or not np.all(np.isfinite(cost)) or not np.all(cost > 0):
@@ -109,8 +111,7 @@ class CorrectionProblem:
         object.__setattr__(self, "cost", cost)
 
     @classmethod
-    def from_part(cls, model: ProcessModel, part: PartMeasurement, composite: Array | None = None
-                  ) -> CorrectionProblem:
+    def from_part(cls, model: ProcessModel, part: PartMeasurement, composite: Array | None = None) -> CorrectionProblem:
         """The problem of one measured part of ``model``: eqs. 3–4 on its measured dimensions.
 
         Composite C of the model (or ``composite``, shape (n_registers, n_dimensions), in
@@ -152,8 +153,9 @@ class CorrectionProblem:
             return problem
         return problem._with_facets(model, zone, rel.zones * scale[:, None, None], keep)
 
-    def _with_facets(self, model: ProcessModel, zone: Array, zones: Array, keep: npt.NDArray[np.bool_]
-                     ) -> CorrectionProblem:
+    def _with_facets(
+        self, model: ProcessModel, zone: Array, zones: Array, keep: npt.NDArray[np.bool_]
+    ) -> CorrectionProblem:
         """Each kept zone column replaced by the rows of its inscribed polygon (module docstring)."""
         dims = [d for d, k in zip(model.dimensions, keep, strict=True) if k]
         index = np.flatnonzero(keep)
@@ -167,10 +169,10 @@ class CorrectionProblem:
         bound = 0.0
         for i, dim in enumerate(dims):
             if not dim.zone:
-                cols.append(self.composite[:, i:i + 1])
-                devs.append(self.deviation[i:i + 1])
-                lows.append(self.lower[i:i + 1])
-                ups.append(self.upper[i:i + 1])
+                cols.append(self.composite[:, i : i + 1])
+                devs.append(self.deviation[i : i + 1])
+                lows.append(self.lower[i : i + 1])
+                ups.append(self.upper[i : i + 1])
                 ids.append(dim.id)
                 rows.append(dim.id)
                 continue
@@ -186,11 +188,20 @@ class CorrectionProblem:
             ids += [f"{dim.id}#{j}" for j in range(sides)]
             rows += [dim.id] * sides
         z = index[is_zone]
-        circles = Circles(tuple(d.id for d in dims if d.zone), zone[z].copy(), zones[:, z, :].copy(),
-                          radius[is_zone], tuple(sides_of))
-        return replace(self, composite=np.hstack(cols), deviation=np.concatenate(devs), lower=np.concatenate(lows),
-                       upper=np.concatenate(ups), dimension_ids=tuple(ids), rows=tuple(rows), polygon=float(bound),
-                       circles=circles)
+        circles = Circles(
+            tuple(d.id for d in dims if d.zone), zone[z].copy(), zones[:, z, :].copy(), radius[is_zone], tuple(sides_of)
+        )
+        return replace(
+            self,
+            composite=np.hstack(cols),
+            deviation=np.concatenate(devs),
+            lower=np.concatenate(lows),
+            upper=np.concatenate(ups),
+            dimension_ids=tuple(ids),
+            rows=tuple(rows),
+            polygon=float(bound),
+            circles=circles,
+        )
 
     def dimension_of(self, ids: tuple[str, ...] | list[str]) -> tuple[str, ...]:
         """The model dimensions of problem columns (a zone's facets → the zone), each once, in order."""
@@ -213,8 +224,14 @@ class CorrectionProblem:
         """
         predicted = self.predicted(x)
         if self.rows is None or self.circles is None:
-            return (self.dimension_ids, self.deviation, predicted, self.lower, self.upper,
-                    margins(predicted, self.lower, self.upper))
+            return (
+                self.dimension_ids,
+                self.deviation,
+                predicted,
+                self.lower,
+                self.upper,
+                margins(predicted, self.lower, self.upper),
+            )
         ids = self.dimension_of(self.dimension_ids)
         first = {r: i for i, r in reversed(list(enumerate(self.rows)))}
         cols = np.array([first[d] for d in ids])

@@ -60,8 +60,15 @@ class PSO(Metaheuristic):
         "vmax_fraction": [Interval(float, 0.0, 1.0, closed="right")],
     }
 
-    def __init__(self, *, n_particles: int = 100, n_solutions: int = 10_000, inertia: float = 0.75,
-                 vmax_fraction: float = 0.2, seed: int | None = None) -> None:
+    def __init__(
+        self,
+        *,
+        n_particles: int = 100,
+        n_solutions: int = 10_000,
+        inertia: float = 0.75,
+        vmax_fraction: float = 0.2,
+        seed: int | None = None,
+    ) -> None:
         super().__init__(n_solutions=n_solutions, seed=seed)
         self.n_particles = n_particles
         self.inertia = inertia
@@ -69,6 +76,16 @@ class PSO(Metaheuristic):
 
     def _search(self, problem: CorrectionProblem, rng: np.random.Generator, evaluate: Evaluator) -> None:
         objective = GridObjective(evaluate)
-        particle_swarm(objective, GridSpace(problem), budget=evaluate.remaining, rng=rng,
-                       n_particles=self.n_particles, inertia=(self.inertia, self.inertia), coefficients=None,
-                       v_max=self.vmax_fraction, v_init=1.0, asynchronous=True, observe=objective.observe)
+        particle_swarm(
+            objective,
+            GridSpace(problem),
+            budget=evaluate.remaining,
+            rng=rng,
+            n_particles=self.n_particles,
+            inertia=(self.inertia, self.inertia),
+            coefficients=None,
+            v_max=self.vmax_fraction,
+            v_init=1.0,
+            asynchronous=True,
+            observe=objective.observe,
+        )

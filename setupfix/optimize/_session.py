@@ -265,9 +265,14 @@ class Session:
         """max t s.t. G k + t ≤ g, k in the box (eq. 8 as an LP; row bounds set per use)."""
         if self._lp is None:
             r = self.rows.g_rows.shape[0]
-            self._lp = LinearModel(np.r_[np.zeros(self.rows.n_free), -1.0], self.rows.derived.lp_matrix,
-                                   np.full(r, -INF), np.zeros(r), np.r_[self.rows.kmin, -INF],
-                                   np.r_[self.rows.kmax, INF])
+            self._lp = LinearModel(
+                np.r_[np.zeros(self.rows.n_free), -1.0],
+                self.rows.derived.lp_matrix,
+                np.full(r, -INF),
+                np.zeros(r),
+                np.r_[self.rows.kmin, -INF],
+                np.r_[self.rows.kmax, INF],
+            )
             if self.small:  # presolve costs more than it saves on a few dozen rows (the reference LP of
                 self._lp.skip_presolve()  # bench/leximin_speed.py: 1.126 ms with it, 0.698 ms without)
         return self._lp
@@ -276,8 +281,9 @@ class Session:
         """Forget the LP model (a retry from scratch after a HiGHS failure)."""
         self._lp = None
 
-    def rounded_rows_feasible(self, b: Array, time_limit: float | None = None, warm: bool = False
-                              ) -> tuple[str, Array | None]:
+    def rounded_rows_feasible(
+        self, b: Array, time_limit: float | None = None, warm: bool = False
+    ) -> tuple[str, Array | None]:
         """Whether G k ≤ b has a solution in the box: the LP with t fixed at 0 — HiGHS's status (its
         words on an error) and the vertex.  ``warm``: from the last basis (the leximin levels' tests)."""
         lp = self.lp_model()
@@ -317,13 +323,20 @@ class Session:
         res = self._qp.solve(max(self.clock.left(), 1e-3))
         if res.status != "optimal" or res.x is None or res.row_dual is None or res.col_dual is None:
             return res.status, None
-        return "optimal", Relaxation(b, res.x, np.maximum(-res.row_dual, 0.0), np.maximum(res.col_dual, 0.0),
-                                     np.maximum(-res.col_dual, 0.0))
+        return "optimal", Relaxation(
+            b, res.x, np.maximum(-res.row_dual, 0.0), np.maximum(res.col_dual, 0.0), np.maximum(-res.col_dual, 0.0)
+        )
 
     def max_margin_milp(self, t_lo: float, t_hi: float, start: Array | None, time_limit: float) -> Solve:
         """max t s.t. G k + t ≤ g, k integer in the box, t ∈ [t_lo, t_hi] (eq. 8 on the grid)."""
         g_rows, r, n = self.rows.g_rows, self.rows.g_rows.shape[0], self.rows.n_free
-        model = LinearModel(np.r_[np.zeros(n), -1.0], np.hstack([g_rows, np.ones((r, 1))]), np.full(r, -INF),
-                            self.rows.g, np.r_[self.rows.kmin, t_lo], np.r_[self.rows.kmax, t_hi],
-                            integer=np.r_[np.ones(n, bool), False])
+        model = LinearModel(
+            np.r_[np.zeros(n), -1.0],
+            np.hstack([g_rows, np.ones((r, 1))]),
+            np.full(r, -INF),
+            self.rows.g,
+            np.r_[self.rows.kmin, t_lo],
+            np.r_[self.rows.kmax, t_hi],
+            integer=np.r_[np.ones(n, bool), False],
+        )
         return model.solve(time_limit, None if start is None else np.r_[start, t_lo])

@@ -96,12 +96,24 @@ class ExactSettings:
 
     _constraints: ClassVar[dict[str, list[Constraint]]] = {
         "quantum": [Interval(float, 0.0, 1.0, closed="right")],
-        "ellipsoid_max_registers": _COUNT, "enumeration_limit": _COUNT, "enumeration_work": _COUNT,
-        "box_proof_max_registers": _COUNT, "box_proof_max_chords": _COUNT, "nnls_max_rows": _COUNT,
+        "ellipsoid_max_registers": _COUNT,
+        "enumeration_limit": _COUNT,
+        "enumeration_work": _COUNT,
+        "box_proof_max_registers": _COUNT,
+        "box_proof_max_chords": _COUNT,
+        "nnls_max_rows": _COUNT,
         "working_set_nnls": [bool],
-        "box_share": _SHARE, "stopped_box_share": _SHARE, "incumbent_gap": _FRACTION,
-        "descent_reserve": _FRACTION, "search_limit": _COUNT, "search_work": _COUNT, "ipm_min_rows": _COUNT,
-        "milp_share": _SHARE, "least_norm_share": _FRACTION, "leximin_norm_share": _FRACTION, "level_steps": _COUNT,
+        "box_share": _SHARE,
+        "stopped_box_share": _SHARE,
+        "incumbent_gap": _FRACTION,
+        "descent_reserve": _FRACTION,
+        "search_limit": _COUNT,
+        "search_work": _COUNT,
+        "ipm_min_rows": _COUNT,
+        "milp_share": _SHARE,
+        "least_norm_share": _FRACTION,
+        "leximin_norm_share": _FRACTION,
+        "level_steps": _COUNT,
     }
 
     def __post_init__(self) -> None:

@@ -48,10 +48,10 @@ import numpy.typing as npt
 from setupfix.errors import Note
 from setupfix.optimize._base import make_result
 from setupfix.optimize._chords import chord_rows, lazy_chords, smallest_tie
+from setupfix.optimize._dimensions import dimension_floor, dimension_margins, dimension_of_rows, model_dimensions
 from setupfix.optimize._grid_least_norm import TIE_MAX_REGISTERS
 from setupfix.optimize._highs import INF, LinearModel, Solve
 from setupfix.optimize._least_norm import lower_bound_ratio
-from setupfix.optimize._dimensions import dimension_floor, dimension_margins, dimension_of_rows, model_dimensions
 from setupfix.optimize._problem import CorrectionProblem, OptimizeResult
 from setupfix.optimize._session import Session
 from setupfix.optimize._triage_forced import Forced, forced_triage
@@ -120,13 +120,18 @@ class Triaged:
     kept_lp: tuple[npt.NDArray[np.bool_], float] | None = None
 
 
-def _checked(model: LinearModel, left: float, start: Array | None, n: int, value: Callable[[Array], float],
-             tol: float) -> Solve:
+def _checked(
+    model: LinearModel, left: float, start: Array | None, n: int, value: Callable[[Array], float], tol: float
+) -> Solve:
     """Solve from ``start``; when HiGHS says optimal but its point's exact objective ``value(k)`` is not
     the one it reports (it sometimes hands the start back as optimal), solve again without the start."""
     res = model.solve(left, start)
-    if (start is not None and res.status == "optimal" and res.x is not None
-            and not abs(value(np.rint(res.x[:n])) - res.objective) <= tol):
+    if (
+        start is not None
+        and res.status == "optimal"
+        and res.x is not None
+        and not abs(value(np.rint(res.x[:n])) - res.objective) <= tol
+    ):
         res = model.solve(left, None)
     return res
 
@@ -171,9 +176,19 @@ def triage(t: TriageRows, deadline: float, reserve: float, budget: float, start:
     listed = listed_triage(t, quantum)
     if listed is not None:  # a small box: every grid point looked at
         k, kept = listed
-        return Triaged(k, kept, (), True, True, "", (f"{kept} of {t.n_dims} dimensions kept in tolerance "
-                                                      f"({int(t.held.sum())} measured in tolerance held), "
-                                                      "leximin and least norm by listing the grid",))
+        return Triaged(
+            k,
+            kept,
+            (),
+            True,
+            True,
+            "",
+            (
+                f"{kept} of {t.n_dims} dimensions kept in tolerance "
+                f"({int(t.held.sum())} measured in tolerance held), "
+                "leximin and least norm by listing the grid",
+            ),
+        )
     best = zero
     for k in [start, *(lp_starts(t, 0.4 * first()) if t.cand.size else [])]:
         if t.hard_ok(k) and t.kept(k).sum() > t.kept(best).sum():
@@ -182,12 +197,18 @@ def triage(t: TriageRows, deadline: float, reserve: float, budget: float, start:
     # 1. most dimensions in tolerance, the held ones kept
     if t.cand.size:
         m1, _ = t.model(0, (), objective="count")
-        res = _checked(m1, first(), t.start(best) if t.hard_ok(best) else None, t.n,
-                       lambda k: float(t.held.sum() - t.kept(k).sum()) if t.hard_ok(k) else np.inf, 0.5)
+        res = _checked(
+            m1,
+            first(),
+            t.start(best) if t.hard_ok(best) else None,
+            t.n,
+            lambda k: float(t.held.sum() - t.kept(k).sum()) if t.hard_ok(k) else np.inf,
+            0.5,
+        )
         if res.status == "infeasible":
             return Triaged(None, 0, (), False, True, "", ("the dimensions measured in tolerance cannot all be kept",))
         if res.x is not None:
-            k = np.clip(np.rint(res.x[:t.n]), t.kmin, t.kmax)
+            k = np.clip(np.rint(res.x[: t.n]), t.kmin, t.kmax)
             if t.hard_ok(k) and t.kept(k).sum() > t.kept(best).sum():
                 best = k
         if res.status != "optimal" or t.kept(best).sum() < int(t.held.sum()) - res.objective - 0.5:
@@ -210,13 +231,13 @@ def triage(t: TriageRows, deadline: float, reserve: float, budget: float, start:
         m2, _ = t.model(kept, levels, objective="level", t_lo=min(t_lo, t.top))
         p = count_below(levels)
         v0 = float(t.sorted_kept(best)[p]) if t.sorted_kept(best).size > p else t.top
+
         def level_of(k: Array, p: int = p, levels: tuple[Level, ...] = levels) -> float:
             return -float(np.r_[t.sorted_kept(k), t.top][p]) if t.meets(k, kept, levels) else np.inf
 
-        res = _checked(m2, first(), t.start(best, min(max(v0, t_lo), t.top)), t.n,
-                       level_of, quantum / 10)
+        res = _checked(m2, first(), t.start(best, min(max(v0, t_lo), t.top)), t.n, level_of, quantum / 10)
         if res.x is not None:
-            k = np.clip(np.rint(res.x[:t.n]), t.kmin, t.kmax)
+            k = np.clip(np.rint(res.x[: t.n]), t.kmin, t.kmax)
             s = t.sorted_kept(k)
             if t.meets(k, kept, levels) and s.size > p and s[p] > v0:
                 best, v0 = k, float(s[p])
@@ -232,26 +253,30 @@ def triage(t: TriageRows, deadline: float, reserve: float, budget: float, start:
         below = int(np.sum(t.sorted_kept(best) < value + eps - SLACK))
         if below > p + 1:
             m3, _ = t.model(kept, levels, objective="multiplicity", at=value + eps)
+
             def count_of(k: Array, at: float = value + eps, levels: tuple[Level, ...] = levels) -> float:
                 return float(np.sum(t.sorted_kept(k) < at - SLACK)) if t.meets(k, kept, levels) else np.inf
 
             res = _checked(m3, first(), t.start(best), t.n, count_of, 0.5)
             if res.x is not None:
-                k = np.clip(np.rint(res.x[:t.n]), t.kmin, t.kmax)
+                k = np.clip(np.rint(res.x[: t.n]), t.kmin, t.kmax)
                 if t.meets(k, kept, levels) and np.sum(t.sorted_kept(k) < value + eps - SLACK) < below:
                     best = k
             below = int(np.sum(t.sorted_kept(best) < value + eps - SLACK))
             if res.status != "optimal" or below > round(res.objective):
                 why = f"leximin level {len(levels)} multiplicity: " + (
-                    _status_word(res.status) if res.status != "optimal" else "HiGHS's point does not reach its count")
+                    _status_word(res.status) if res.status != "optimal" else "HiGHS's point does not reach its count"
+                )
                 break
         levels = (*levels, Level(value + eps, below))
         t_lo = value + eps
         done.append(f"leximin level {len(levels) - 1}: {below} kept margin(s) at {value:+.4g} steps")
         complete = below >= t.positions(kept)
     if not complete and not why:  # the levels' time is spent: the rest of the vector is not proved
-        why = (f"leximin: time limit after level {len(levels) - 1} (the {count_below(levels)} smallest kept "
-               "margins proved; the rest of the time is the least norm's)")
+        why = (
+            f"leximin: time limit after level {len(levels) - 1} (the {count_below(levels)} smallest kept "
+            "margins proved; the rest of the time is the least norm's)"
+        )
 
     # 3. least Σ c k² holding N* and the levels
     n = t.n
@@ -269,13 +294,17 @@ def triage(t: TriageRows, deadline: float, reserve: float, budget: float, start:
     m4.prefer_proof()  # a feasible start is known: no RINS/RENS (they can overrun the limit)
     a_ch, rhs_ch = chord_rows(pairs, n, m4.n_cols)
     m4.add_rows(a_ch, np.full(rhs_ch.size, -INF), rhs_ch)
-    out = lazy_chords(m4, n, chords, t.cost, t.kmin, t.kmax, best, lambda k: t.meets(k, kept, levels), t.start,
-                      deadline, integer=True)
+    out = lazy_chords(
+        m4, n, chords, t.cost, t.kmin, t.kmax, best, lambda k: t.meets(k, kept, levels), t.start, deadline, integer=True
+    )
     best = best if out.best is None else out.best
     if out.proved:
         done.append("least norm")
-        best, tied = (smallest_tie(m4, n, chords, t.cost, best, lambda k: t.meets(k, kept, levels), t.start, deadline)
-                      if n <= TIE_MAX_REGISTERS else (best, False))
+        best, tied = (
+            smallest_tie(m4, n, chords, t.cost, best, lambda k: t.meets(k, kept, levels), t.start, deadline)
+            if n <= TIE_MAX_REGISTERS
+            else (best, False)
+        )
         done.append("ties to the lexicographically smallest k" if tied else "the tie is not broken (limit or size)")
     if not out.proved:
         why = why or f"least norm: {out.why}"
@@ -289,16 +318,34 @@ def _kept_bound(t: TriageRows, keep: npt.NDArray[np.bool_], left: float) -> floa
     rows = np.flatnonzero(keep[t.row_dim])
     if rows.size == 0:
         return None
-    a = hstack([csr_array(t.G[np.r_[rows, t.hard_rows]]),
-                csr_array(np.r_[np.ones(rows.size), np.zeros(t.hard_rows.size)][:, None])])
-    model = LinearModel(np.r_[np.zeros(t.n), -1.0], a, np.full(rows.size + t.hard_rows.size, -INF),
-                        np.r_[t.g[rows], t.g[t.hard_rows] - t.hard_min], np.r_[t.kmin, -INF], np.r_[t.kmax, INF])
+    a = hstack(
+        [
+            csr_array(t.G[np.r_[rows, t.hard_rows]]),
+            csr_array(np.r_[np.ones(rows.size), np.zeros(t.hard_rows.size)][:, None]),
+        ]
+    )
+    model = LinearModel(
+        np.r_[np.zeros(t.n), -1.0],
+        a,
+        np.full(rows.size + t.hard_rows.size, -INF),
+        np.r_[t.g[rows], t.g[t.hard_rows] - t.hard_min],
+        np.r_[t.kmin, -INF],
+        np.r_[t.kmax, INF],
+    )
     res = model.solve(max(left, 0.05))
     return -float(res.objective) if res.status == "optimal" else None
 
 
-def triaged_result(problem: CorrectionProblem, session: Session, k_start: Array, path: list[str],
-                   notes: list[Note], calls: int, bound: float, name: str) -> OptimizeResult:
+def triaged_result(
+    problem: CorrectionProblem,
+    session: Session,
+    k_start: Array,
+    path: list[str],
+    notes: list[Note],
+    calls: int,
+    bound: float,
+    name: str,
+) -> OptimizeResult:
     """The triage stage: no correction brings every dimension into tolerance, so :func:`triage` decides.
 
     Everything the result states is read from the final answer: the dimensions given up (not held and
@@ -326,14 +373,28 @@ def triaged_result(problem: CorrectionProblem, session: Session, k_start: Array,
     extra: dict[str, object] = {"lp_bound_all": bound}
     x = np.zeros(problem.n_registers)
     if out.k is None:
-        message = ("not even the dimensions measured in tolerance can all be kept within the register limits: "
-                   "no correction is recommended")
+        message = (
+            "not even the dimensions measured in tolerance can all be kept within the register limits: "
+            "no correction is recommended"
+        )
         notes.append(Note(message, kind="solver"))
-        extra.update({"stages": dict(clock.stages), "path": "; ".join(path),
-                      "triage": {"refused": True, "kept": 0, "held": int(t.held.sum())}})
-        result = make_result(problem, x, optimizer=name, evaluations=calls + 1,
-                             seconds=time.perf_counter() - clock.start, status="optimal", message=message,
-                             guard=False)
+        extra.update(
+            {
+                "stages": dict(clock.stages),
+                "path": "; ".join(path),
+                "triage": {"refused": True, "kept": 0, "held": int(t.held.sum())},
+            }
+        )
+        result = make_result(
+            problem,
+            x,
+            optimizer=name,
+            evaluations=calls + 1,
+            seconds=time.perf_counter() - clock.start,
+            status="optimal",
+            message=message,
+            guard=False,
+        )
         result.extra.update(extra)
         result.notes = tuple(notes)
         return result
@@ -347,31 +408,53 @@ def triaged_result(problem: CorrectionProblem, session: Session, k_start: Array,
     known = out.kept_lp is not None and np.array_equal(out.kept_lp[0], ~gone)
     kept_bound = out.kept_lp[1] if out.kept_lp is not None and known else _kept_bound(t, ~gone, clock.left())
     n_held = int(held.sum())
-    message = (f"no correction within the register limits brings every dimension into tolerance: "
-               f"{len(names)} dimension(s) given up ({', '.join(names)}) need the NC program or the "
-               f"process, not the setup; the {int((~gone).sum())} others (the {n_held} measured in tolerance "
-               "among them) are kept in tolerance, centred level by level, with the smallest correction")
+    message = (
+        f"no correction within the register limits brings every dimension into tolerance: "
+        f"{len(names)} dimension(s) given up ({', '.join(names)}) need the NC program or the "
+        f"process, not the setup; the {int((~gone).sum())} others (the {n_held} measured in tolerance "
+        "among them) are kept in tolerance, centred level by level, with the smallest correction"
+    )
     notes.append(Note(message, kind="solver"))
     status = "optimal"
     shown = problem.dimension_table(x)[5]  # a zone's margin as the circle's
-    extra.update({"stages": dict(clock.stages), "path": "; ".join(path),
-                  "given_up": {d: float(v) for d, v, g in zip(ids, shown, gone, strict=True) if g},
-                  "triage": {"refused": False, "kept": int((~gone).sum()), "held": n_held,
-                             "leximin_levels": sum(1 for s in out.stages if s.startswith("leximin level")),
-                             "leximin_complete": out.complete}})
+    extra.update(
+        {
+            "stages": dict(clock.stages),
+            "path": "; ".join(path),
+            "given_up": {d: float(v) for d, v, g in zip(ids, shown, gone, strict=True) if g},
+            "triage": {
+                "refused": False,
+                "kept": int((~gone).sum()),
+                "held": n_held,
+                "leximin_levels": sum(1 for s in out.stages if s.startswith("leximin level")),
+                "leximin_complete": out.complete,
+            },
+        }
+    )
     if not out.proved:  # a stage stopped (the leximin levels' time included): never "optimal"
         status = "time_limit" if "time limit" in out.why else "solver_error"
         notes.append(Note(f"triage not proved ({out.why})", kind="solver"))
         message += f"; not proved ({out.why})"
-        extra["stopped"] = {"stage": "triage", "reason": "time limit" if status == "time_limit" else out.why,
-                            "detail": out.why}
+        extra["stopped"] = {
+            "stage": "triage",
+            "reason": "time limit" if status == "time_limit" else out.why,
+            "detail": out.why,
+        }
         if out.lower is not None and not out.why.startswith("leximin"):
             extra["norm_ratio_max"] = lower_bound_ratio(float(np.sum(t.cost * out.k**2)), out.lower)
     evaluations = calls + (out.calls if out.calls else 2 + 2 * len(out.levels))
-    result = make_result(problem, x, optimizer=name, evaluations=evaluations,
-                         seconds=time.perf_counter() - clock.start, status=status,
-                         bound=None if kept_bound is None else kept_bound * h, message=message, guard=False,
-                         given_up=given_up)
+    result = make_result(
+        problem,
+        x,
+        optimizer=name,
+        evaluations=evaluations,
+        seconds=time.perf_counter() - clock.start,
+        status=status,
+        bound=None if kept_bound is None else kept_bound * h,
+        message=message,
+        guard=False,
+        given_up=given_up,
+    )
     result.extra.update(extra)
     result.notes = tuple(notes)
     return result
@@ -382,8 +465,10 @@ def _forced_outcome(forced: Forced, t: TriageRows, quantum: float) -> Triaged:
     lex, least = forced.lex, forced.least
     eps = quantum / 2
     levels: list[Level] = []
-    stages = [f"{int(forced.keep.sum())} of {t.n_dims} dimensions kept in tolerance ({int(t.held.sum())} "
-              "measured in tolerance held; the others proved out of reach without harm)"]
+    stages = [
+        f"{int(forced.keep.sum())} of {t.n_dims} dimensions kept in tolerance ({int(t.held.sum())} "
+        "measured in tolerance held; the others proved out of reach without harm)"
+    ]
     below = 0
     for i, (value, count) in enumerate(lex.levels):
         below += count
@@ -395,6 +480,15 @@ def _forced_outcome(forced: Forced, t: TriageRows, quantum: float) -> Triaged:
         stages.append("least norm")
     else:
         why = why or f"least norm: {least.why}"
-    return Triaged(least.k, int(t.kept(least.k).sum()), tuple(levels), complete, not why, why,
-                   (*stages, *forced.path), least.lower, forced.calls, (forced.keep, forced.bound))
-
+    return Triaged(
+        least.k,
+        int(t.kept(least.k).sum()),
+        tuple(levels),
+        complete,
+        not why,
+        why,
+        (*stages, *forced.path),
+        least.lower,
+        forced.calls,
+        (forced.keep, forced.bound),
+    )

@@ -94,22 +94,22 @@ def lost_bound(t: TriageRows, q: int, time_limit: float) -> float:
     hard = t.hard_rows
     if rows.size == 0:
         return np.inf
-    a = hstack([csr_array(t.G[np.r_[rows, hard]]),
-                csr_array(np.r_[np.ones(rows.size), np.zeros(hard.size)][:, None])])
+    a = hstack([csr_array(t.G[np.r_[rows, hard]]), csr_array(np.r_[np.ones(rows.size), np.zeros(hard.size)][:, None])])
     rhs = np.r_[t.g[rows], t.g[hard] - t.hard_min]
-    model = LinearModel(np.r_[np.zeros(t.n), -1.0], a, np.full(rhs.size, -INF), rhs, np.r_[t.kmin, -INF],
-                        np.r_[t.kmax, t.top + 1.0])
+    model = LinearModel(
+        np.r_[np.zeros(t.n), -1.0], a, np.full(rhs.size, -INF), rhs, np.r_[t.kmin, -INF], np.r_[t.kmax, t.top + 1.0]
+    )
     res = model.solve(max(time_limit, 1e-3))
     if res.status != "optimal" or res.row_dual is None:
         return np.inf
     weights = np.maximum(-res.row_dual, 0.0)
-    y, w = weights[:rows.size], weights[rows.size:]
+    y, w = weights[: rows.size], weights[rows.size :]
     total = float(y.sum())
     if not np.isfinite(total) or total <= 0:
         return np.inf
     y, w = y / total, w / total
     c = y @ t.G[rows] + w @ t.G[hard]
-    bound = float(y @ t.g[rows] + w @ rhs[rows.size:] + np.sum(np.maximum(-c * t.kmin, -c * t.kmax)))
+    bound = float(y @ t.g[rows] + w @ rhs[rows.size :] + np.sum(np.maximum(-c * t.kmin, -c * t.kmax)))
     return bound + KEPT_TOL * float(w.sum())
 
 
@@ -165,8 +165,10 @@ def forced_triage(session: Session, t: TriageRows, k_start: Array, probe_end: fl
         if not lost:
             return None  # K's LP bound is below 0 and no dimension it names is proved lost: not forced
         keep[lost] = False
-        path.append(f"triage: {len(lost)} dimension(s) proved out of tolerance at every point that keeps the "
-                    "held ones (LP, weak duality)")
+        path.append(
+            f"triage: {len(lost)} dimension(s) proved out of tolerance at every point that keeps the "
+            "held ones (LP, weak duality)"
+        )
     keep_rows = keep[t.row_dim]
     opt = grid_optimum(sub, lp)
     calls += opt.calls
@@ -175,8 +177,11 @@ def forced_triage(session: Session, t: TriageRows, k_start: Array, probe_end: fl
     y = np.zeros(t.g.size)
     y[keep_rows] = lp.y
     first = None if opt.stopped is not None else LevelValue(opt.t, opt.k, lp.t, y)
-    path += [*opt.path, f"triage: the {int(keep.sum())} dimensions that can be kept all reach {opt.t:+.4g} steps "
-             "(kept set forced: leximin of their margins, no binaries)"]
+    path += [
+        *opt.path,
+        f"triage: the {int(keep.sum())} dimensions that can be kept all reach {opt.t:+.4g} steps "
+        "(kept set forced: leximin of their margins, no binaries)",
+    ]
     floors = np.where(keep, np.nan, -np.inf)
     stage_end = clock.deadline - settings.leximin_norm_share * session.time_limit
     lex = leximin(session, t.row_dim, t.n_dims, opt.k, opt.t, first=first, floors=floors, stage_end=stage_end)

@@ -27,8 +27,17 @@ from scipy.sparse import coo_array, csr_array
 
 from setupfix.optimize._highs import INF, LinearModel
 
-__all__ = ["Level", "TriageRows", "SLACK", "LIST_POINTS", "count_below", "least_listed", "listable", "listed_triage",
-           "lp_starts"]
+__all__ = [
+    "Level",
+    "TriageRows",
+    "SLACK",
+    "LIST_POINTS",
+    "count_below",
+    "least_listed",
+    "listable",
+    "listed_triage",
+    "lp_starts",
+]
 
 Array = npt.NDArray[np.float64]
 Mask = npt.NDArray[np.bool_]
@@ -68,8 +77,16 @@ class TriageRows:
     kmin, kmax, cost : ndarray of shape (n,)
     """
 
-    def __init__(self, g_rows: Array, g: Array, row_dim: npt.NDArray[np.intp], floor: Array, kmin: Array,
-                 kmax: Array, cost: Array) -> None:
+    def __init__(
+        self,
+        g_rows: Array,
+        g: Array,
+        row_dim: npt.NDArray[np.intp],
+        floor: Array,
+        kmin: Array,
+        kmax: Array,
+        cost: Array,
+    ) -> None:
         self.G, self.g, self.row_dim = g_rows, g, row_dim
         self.n_dims, self.n = floor.size, g_rows.shape[1]
         self.kmin, self.kmax, self.cost = kmin, kmax, cost
@@ -98,8 +115,11 @@ class TriageRows:
         self.row_floor[self.hard_rows] = np.maximum(self.low[self.hard_rows], self.hard_min)
         self.rowless = int(np.sum(~has_rows))
         seen = np.zeros(g.size, np.int64)  # the how-many-th row of its dimension each row is
-        for q_rows in np.split(np.argsort(row_dim, kind="stable"),
-                               np.flatnonzero(np.diff(np.sort(row_dim))) + 1) if g.size else []:
+        for q_rows in (
+            np.split(np.argsort(row_dim, kind="stable"), np.flatnonzero(np.diff(np.sort(row_dim))) + 1)
+            if g.size
+            else []
+        ):
             seen[q_rows] = np.arange(q_rows.size)
         self._groups = [(np.flatnonzero(seen == i), row_dim[seen == i]) for i in range(int(seen.max(initial=-1)) + 1)]
 
@@ -163,8 +183,9 @@ class TriageRows:
         dims = self.keepable[low[self.keepable] < threshold - SLACK]  # kept, the others never fall below
         return _Block(dims, value, below, below is None or below > 0)
 
-    def model(self, count: int, levels: tuple[Level, ...], *, objective: str, at: float | None = None,
-              t_lo: float = 0.0) -> tuple[LinearModel, int]:
+    def model(
+        self, count: int, levels: tuple[Level, ...], *, objective: str, at: float | None = None, t_lo: float = 0.0
+    ) -> tuple[LinearModel, int]:
         """One MILP of the triage; returns the model and the offset of its z columns.
 
         Columns: k (n) | s (n, ``objective="norm"`` only) | z (candidates) | y of each block | t or nothing.
@@ -200,8 +221,12 @@ class TriageRows:
         hi_parts: list[Array] = []
         nrow = 0
 
-        def add(rows: npt.NDArray[np.intp], coef_extra: list[tuple[npt.NDArray[np.intp], Array, Mask]],
-                hi: Array, lo: Array | None = None) -> None:
+        def add(
+            rows: npt.NDArray[np.intp],
+            coef_extra: list[tuple[npt.NDArray[np.intp], Array, Mask]],
+            hi: Array,
+            lo: Array | None = None,
+        ) -> None:
             """Rows G[rows] k plus extra columns (cols, values, on which of the rows)."""
             nonlocal nrow
             sub = coo_array(self.G[rows]) if rows.size else coo_array((0, n))
@@ -252,44 +277,51 @@ class TriageRows:
             if b.binary and b.below is not None:
                 add_sum(y0 + np.arange(b.dims.size), -INF, float(b.below))
 
-        a = csr_array(coo_array((np.concatenate(trip_v), (np.concatenate(trip_r).astype(np.intp),
-                                                          np.concatenate(trip_c).astype(np.intp))),
-                                shape=(nrow, width)))
+        a = csr_array(
+            coo_array(
+                (
+                    np.concatenate(trip_v),
+                    (np.concatenate(trip_r).astype(np.intp), np.concatenate(trip_c).astype(np.intp)),
+                ),
+                shape=(nrow, width),
+            )
+        )
         c = np.zeros(width)
         col_lo, col_hi = np.zeros(width), np.ones(width)
         col_lo[:n], col_hi[:n] = self.kmin, self.kmax
         integer = np.ones(width, bool)
         if ns:
-            c[n:2 * n] = self.cost
-            col_lo[n:2 * n], col_hi[n:2 * n] = 0.0, INF
-            integer[n:2 * n] = False
+            c[n : 2 * n] = self.cost
+            col_lo[n : 2 * n], col_hi[n : 2 * n] = 0.0, INF
+            integer[n : 2 * n] = False
         if objective == "count":
-            c[z0:z0 + nc] = -1.0
+            c[z0 : z0 + nc] = -1.0
         elif objective == "level":
             c[tcol] = -1.0
             col_lo[tcol], col_hi[tcol] = t_lo, self.top
             integer[tcol] = False
         elif objective == "multiplicity":
             b = blocks[-1]
-            c[ycols[-1]:ycols[-1] + b.dims.size] = 1.0
+            c[ycols[-1] : ycols[-1] + b.dims.size] = 1.0
         self._layout = (blocks, ycols, tcol, z0, width)
-        return LinearModel(c, a, np.concatenate(lo_parts), np.concatenate(hi_parts), col_lo, col_hi,
-                           integer=integer), z0
+        return LinearModel(
+            c, a, np.concatenate(lo_parts), np.concatenate(hi_parts), col_lo, col_hi, integer=integer
+        ), z0
 
     def start(self, k: Array, t: float | None = None) -> Array:
         """The last model's column vector at grid point k (feasible when k meets its levels)."""
         blocks, ycols, tcol, z0, width = self._layout
         x = np.zeros(width)
-        x[:self.n] = k
+        x[: self.n] = k
         if z0 > self.n:
-            x[self.n:2 * self.n] = k**2
+            x[self.n : 2 * self.n] = k**2
         m = self.margins(k)
         kept = self.kept(k)
-        x[z0:z0 + self.cand.size] = kept[self.cand]
+        x[z0 : z0 + self.cand.size] = kept[self.cand]
         for b, y0 in zip(blocks, ycols, strict=True):
             if b.binary:
                 value = (t if t is not None else self.top) if b.value is None else b.value
-                x[y0:y0 + b.dims.size] = kept[b.dims] & (m[b.dims] < value - SLACK)
+                x[y0 : y0 + b.dims.size] = kept[b.dims] & (m[b.dims] < value - SLACK)
         if tcol >= 0 and t is not None:
             x[tcol] = t
         return x
@@ -314,12 +346,17 @@ def lp_starts(t: TriageRows, time_limit: float) -> list[Array]:  # time_limit: f
         a_hard = sparse_hstack([csr_array(t.G[hard]), csr_array((hard.size, 1))])
         from scipy.sparse import vstack as sparse_vstack
 
-        model = LinearModel(np.r_[np.zeros(t.n), -1.0], sparse_vstack([a, a_hard]).tocsr(),
-                            np.full(rows.size + hard.size, -INF), np.r_[t.g[rows], hi_hard],
-                            np.r_[t.kmin, -INF], np.r_[t.kmax, t.top])
+        model = LinearModel(
+            np.r_[np.zeros(t.n), -1.0],
+            sparse_vstack([a, a_hard]).tocsr(),
+            np.full(rows.size + hard.size, -INF),
+            np.r_[t.g[rows], hi_hard],
+            np.r_[t.kmin, -INF],
+            np.r_[t.kmax, t.top],
+        )
         res = model.solve(until - time.perf_counter())
         if res.x is not None:
-            k = np.clip(np.rint(res.x[:t.n]), t.kmin, t.kmax)
+            k = np.clip(np.rint(res.x[: t.n]), t.kmin, t.kmax)
             if t.hard_ok(k):
                 out.append(k)
     return out
@@ -342,7 +379,7 @@ def least_listed(t: TriageRows, lo: Array, hi: Array, count: int, levels: tuple[
     best: Array | None = None
     chunk = max(1, 4_000_000 // max(t.g.size, 1))
     for i in range(0, ks.shape[0], chunk):
-        part = ks[i:i + chunk]
+        part = ks[i : i + chunk]
         ok = part[t.meets_many(part, count, levels)]
         if ok.size:
             cand = ok if best is None else np.vstack([best[None, :], ok])
@@ -373,10 +410,10 @@ def listed_triage(t: TriageRows, quantum: float) -> tuple[Array, int] | None:
     chunk = max(1, 4_000_000 // max(t.g.size, t.n_dims, 1))
     counts = np.full(ks.shape[0], -1)
     for i in range(0, ks.shape[0], chunk):
-        part = ks[i:i + chunk]
+        part = ks[i : i + chunk]
         ok = np.all(t.g[t.hard_rows] - part @ t.G[t.hard_rows].T >= t.hard_min - 1e-6, axis=1)
         kept = t.held[None, :] | (t.margins_many(part) >= -1e-6)
-        counts[i:i + chunk] = np.where(ok, kept.sum(axis=1), -1)
+        counts[i : i + chunk] = np.where(ok, kept.sum(axis=1), -1)
     if counts.max() < 0:
         return None
     ks = ks[counts == counts.max()]

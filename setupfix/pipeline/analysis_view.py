@@ -23,8 +23,15 @@ from setupfix.pipeline.diagnose import DiagnoseOutcome, note_text
 from setupfix.pipeline.thermal import DriftPrediction
 
 __all__ = [
-    "convergence", "compare_rows", "DriftView", "drift_view",
-    "CycleBudget", "cycle_budgets", "EffectRow", "DiagnosisView", "diagnosis_view",
+    "convergence",
+    "compare_rows",
+    "DriftView",
+    "drift_view",
+    "CycleBudget",
+    "cycle_budgets",
+    "EffectRow",
+    "DiagnosisView",
+    "diagnosis_view",
 ]
 
 Array = npt.NDArray[np.float64]
@@ -88,11 +95,17 @@ def drift_view(prediction: DriftPrediction, recent: int = 120) -> DriftView:
     m_last = None
     if measured is not None and len(measured) and np.isfinite(measured[-1]):
         m_last = float(measured[-1])
-    return DriftView(prediction.method, prediction.target, (prediction.unit or "").replace("um", "µm"),
-                     prediction.latest,
-                     prediction.timestamps[-1] if prediction.timestamps else "",
-                     np.asarray(prediction.drift[-recent:], dtype=float), m_last, len(prediction.drift),
-                     tuple(str(n) for n in prediction.notes))
+    return DriftView(
+        prediction.method,
+        prediction.target,
+        (prediction.unit or "").replace("um", "µm"),
+        prediction.latest,
+        prediction.timestamps[-1] if prediction.timestamps else "",
+        np.asarray(prediction.drift[-recent:], dtype=float),
+        m_last,
+        len(prediction.drift),
+        tuple(str(n) for n in prediction.notes),
+    )
 
 
 @dataclass(frozen=True)
@@ -114,9 +127,15 @@ def cycle_budgets(model: ProcessModel, parts: Iterable[PartMeasurement]) -> list
     for p in parts:
         m = p.measured
         margins = objective_margins(p.deviation[m], lower[m], upper[m])
-        rows.append(CycleBudget(f"{p.report}:{p.part}" if p.part else p.report, p.timestamp or "",
-                                float(margins.min()) if margins.size else math.nan, int((margins < 0).sum()),
-                                int(m.sum())))
+        rows.append(
+            CycleBudget(
+                f"{p.report}:{p.part}" if p.part else p.report,
+                p.timestamp or "",
+                float(margins.min()) if margins.size else math.nan,
+                int((margins < 0).sum()),
+                int(m.sum()),
+            )
+        )
     return rows
 
 
@@ -156,18 +175,29 @@ def diagnosis_view(outcome: DiagnoseOutcome) -> DiagnosisView:
     """What the history panel shows of ``setupfix diagnose``'s outcome."""
     d = outcome.diagnosis
     eb, ea = d.error_before, d.error_after
-    walk = () if d.walk is None else tuple(
-        (name, b.mean_budget, b.worst_budget, b.rms, b.out_of_tolerance) for name, b in d.walk.budgets.items())
+    walk = (
+        ()
+        if d.walk is None
+        else tuple(
+            (name, b.mean_budget, b.worst_budget, b.rms, b.out_of_tolerance) for name, b in d.walk.budgets.items()
+        )
+    )
     return DiagnosisView(
-        cycles=d.series.n_cycles, unit=d.layout.unit,
-        before=(eb.rms, eb.max, eb.out_of_tolerance), after=(ea.rms, ea.max, ea.out_of_tolerance),
-        effects=tuple(EffectRow(e.kind, e.target, e.estimate, e.stderr, e.unit, e.rms_after, tuple(e.alike),
-                                e.source) for e in d.effects),
-        walk=walk, next_correction=tuple((k, v) for k, v in outcome.next_correction.items() if v != 0),
+        cycles=d.series.n_cycles,
+        unit=d.layout.unit,
+        before=(eb.rms, eb.max, eb.out_of_tolerance),
+        after=(ea.rms, ea.max, ea.out_of_tolerance),
+        effects=tuple(
+            EffectRow(e.kind, e.target, e.estimate, e.stderr, e.unit, e.rms_after, tuple(e.alike), e.source)
+            for e in d.effects
+        ),
+        walk=walk,
+        next_correction=tuple((k, v) for k, v in outcome.next_correction.items() if v != 0),
         notes=tuple(note_text(n) for n in outcome.notes),
         budgets=tuple(cycle_budgets(outcome.input.model, outcome.input.parts)),
-        walk_centre=() if d.walk is None else tuple(
-            (name, b.centre_rms, b.centre_mean_abs) for name, b in d.walk.budgets.items()),
+        walk_centre=()
+        if d.walk is None
+        else tuple((name, b.centre_rms, b.centre_mean_abs) for name, b in d.walk.budgets.items()),
         next_from=d.next_from.source,
-        held=() if d.centred is None else tuple(r for r, h in zip(d.layout.register_ids, d.centred, strict=True)
-                                                if h))
+        held=() if d.centred is None else tuple(r for r, h in zip(d.layout.register_ids, d.centred, strict=True) if h),
+    )

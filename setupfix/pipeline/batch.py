@@ -50,7 +50,6 @@ from concurrent.futures import Future, ProcessPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
 
-
 import parsers
 from parsers.names import visible_name
 from setupfix.atomic import process_alive, process_started
@@ -182,8 +181,12 @@ def chunk_size(n_files: int, workers: int) -> int:
     return max(1, min(CHUNK, -(-n_files // (8 * workers))))
 
 
-def _outcomes(files: list[tuple[Path, int, int]], work: _Work, workers: int,
-              claim: Callable[[list[Item]], list[Item]] | None = None) -> Iterator[Outcome]:
+def _outcomes(
+    files: list[tuple[Path, int, int]],
+    work: _Work,
+    workers: int,
+    claim: Callable[[list[Item]], list[Item]] | None = None,
+) -> Iterator[Outcome]:
     """Outcomes in file order.
 
     With several workers the request goes to each worker process once (its
@@ -196,15 +199,17 @@ def _outcomes(files: list[tuple[Path, int, int]], work: _Work, workers: int,
     if workers <= 1:
         _init(work)
         for start in range(0, len(items), CHUNK):
-            for item in take(items[start:start + CHUNK]):
+            for item in take(items[start : start + CHUNK]):
                 yield _correct_one(*item)
         return
     size = chunk_size(len(items), workers)
-    chunks = (take(items[i:i + size]) for i in range(0, len(items), size))
-    with ProcessPoolExecutor(max_workers=workers, initializer=_init_worker,
-                             initargs=(work, os.getpid(), process_started(os.getpid()))) as pool:
-        pending: deque[Future[list[Outcome]]] = deque(pool.submit(_correct_chunk, c)
-                                                      for c in itertools.islice(chunks, 2 * workers))
+    chunks = (take(items[i : i + size]) for i in range(0, len(items), size))
+    with ProcessPoolExecutor(
+        max_workers=workers, initializer=_init_worker, initargs=(work, os.getpid(), process_started(os.getpid()))
+    ) as pool:
+        pending: deque[Future[list[Outcome]]] = deque(
+            pool.submit(_correct_chunk, c) for c in itertools.islice(chunks, 2 * workers)
+        )
         while pending:
             done = pending.popleft()
             nxt = next(chunks, None)
@@ -232,10 +237,19 @@ def auto_workers(n_files: int) -> int:
     return max(1, min(cpus, AUTO_MAX_WORKERS))
 
 
-def run_batch(request: CorrectRequest, folder: str | Path, out: str | Path, *, workers: int | None = 1,
-              controller: str = "csv", settle: float = 1.0, store: Store | None = None, force: bool = False,
-              progress: Callable[[int, int, Outcome], None] | None = None,
-              program_number: int | None = None) -> BatchSummary:
+def run_batch(
+    request: CorrectRequest,
+    folder: str | Path,
+    out: str | Path,
+    *,
+    workers: int | None = 1,
+    controller: str = "csv",
+    settle: float = 1.0,
+    store: Store | None = None,
+    force: bool = False,
+    progress: Callable[[int, int, Outcome], None] | None = None,
+    program_number: int | None = None,
+) -> BatchSummary:
     """Correct every report below ``folder`` with ``request`` and write one offsets file ``out``.
 
     Parameters
@@ -281,8 +295,12 @@ def run_batch(request: CorrectRequest, folder: str | Path, out: str | Path, *, w
     if workers is not None and not 1 <= workers <= 64:
         raise ParameterError(f"batch: workers must be an int in [1, 64], got {workers}")
     # An unknown controller, or a register it cannot express, fails before any work.
-    render(controller, offset_rows(model, {}, current=request.current), program_number=program_number,
-           spindle=model.spindle)
+    render(
+        controller,
+        offset_rows(model, {}, current=request.current),
+        program_number=program_number,
+        spindle=model.spindle,
+    )
     if store is not None:
         store.verify()  # a damaged store is refused before any work, not written into
     listing = find_reports(folder)
@@ -300,11 +318,15 @@ def run_batch(request: CorrectRequest, folder: str | Path, out: str | Path, *, w
         request = dataclasses.replace(request, history=History.from_store(model, store))
     summary = Tally()
     summary.failed += listing.problems  # named, never dropped: an unreadable folder, a broken link, …
-    summary.notes += [(path, Note(f"symbolic link to {target}: read as a report", None, "folder"))
-                      for path, target in listing.links]
+    summary.notes += [
+        (path, Note(f"symbolic link to {target}: read as a report", None, "folder")) for path, target in listing.links
+    ]
     seen: dict[str, str] = {}
-    writer: CsvOut | ProgramsOut = (CsvOut(out) if controller == "csv" else
-                                    ProgramsOut(out, controller, program_number=program_number, spindle=model.spindle))
+    writer: CsvOut | ProgramsOut = (
+        CsvOut(out)
+        if controller == "csv"
+        else ProgramsOut(out, controller, program_number=program_number, spindle=model.spindle)
+    )
     claims = Claims(store, force) if store is not None else None
     work = _Work(request, record=store is not None, controller=controller)
     try:
@@ -351,5 +373,3 @@ def batch_history(request: CorrectRequest, base: History, files: Sequence[str | 
         except (SetupfixError, OSError):
             continue
     return base.with_parts(parts)
-
-

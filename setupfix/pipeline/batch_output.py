@@ -21,8 +21,15 @@ from typing import Any
 from parsers.names import visible_name
 from setupfix.errors import ExportError, SourceLocation
 from setupfix.offsets import OffsetRow
-from setupfix.pipeline.controllers import (DERIVED_PROGRAMS, PROGRAM_NUMBERS, check_program_number,
-                                           derived_program_number, program_path, program_title, render)
+from setupfix.pipeline.controllers import (
+    DERIVED_PROGRAMS,
+    PROGRAM_NUMBERS,
+    check_program_number,
+    derived_program_number,
+    program_path,
+    program_title,
+    render,
+)
 from setupfix.pipeline.writers import atomic_write, check_target, csv_header, csv_lines, write_text
 
 __all__ = ["CsvOut", "ProgramsOut", "ProgramNumbers", "MANIFEST"]
@@ -96,13 +103,17 @@ class ProgramNumbers:
             try:
                 check_program_number(self.controller, n)
             except ExportError as exc:
-                raise ExportError(f"{exc.message}: program {len(self.used) + 1} of the run ({visible_name(name)}) "
-                                  f"numbered from {self.first}; give a lower --program-number") from None
+                raise ExportError(
+                    f"{exc.message}: program {len(self.used) + 1} of the run ({visible_name(name)}) "
+                    f"numbered from {self.first}; give a lower --program-number"
+                ) from None
         else:
             low, high = DERIVED_PROGRAMS
             if len(self.used) > high - low:
-                raise ExportError(f"{self.controller}: more than {high - low + 1} programs in one run: number them "
-                                  "with --program-number (or split the folder)")
+                raise ExportError(
+                    f"{self.controller}: more than {high - low + 1} programs in one run: number them "
+                    "with --program-number (or split the folder)"
+                )
             n = derived_program_number(name)
             while n in self.used:
                 n = low if n == high else n + 1
@@ -123,15 +134,18 @@ class ProgramsOut:
     in its number and title.
     """
 
-    def __init__(self, folder: str | Path, controller: str, *, program_number: int | None = None,
-                 spindle: str = "Z") -> None:
+    def __init__(
+        self, folder: str | Path, controller: str, *, program_number: int | None = None, spindle: str = "Z"
+    ) -> None:
         self.folder = Path(folder)
         self.controller = controller
         self.spindle = spindle
         self.numbers = ProgramNumbers(controller, program_number)
         if self.folder.exists() and not self.folder.is_dir():
-            raise ExportError("with --controller other than csv, --out is a folder for one program per cycle",
-                              location=SourceLocation(visible_name(str(folder))))
+            raise ExportError(
+                "with --controller other than csv, --out is a folder for one program per cycle",
+                location=SourceLocation(visible_name(str(folder))),
+            )
         self.written = 0
         self.manifest = _read_manifest(self.folder / MANIFEST)
         self._owner: dict[str, tuple[str, str]] = {}  # program written in this run → (report, part)
@@ -148,13 +162,23 @@ class ProgramsOut:
         for part, text in programs:
             name = program_path(rel, part if several else None, self.controller).as_posix()
             if self._owner.setdefault(name, (rel, part)) != (rel, part):  # a report named like another's program
-                name = program_path(rel + "~" + _short_hash(rel, part), part if several else None,
-                                    self.controller).as_posix()
+                name = program_path(
+                    rel + "~" + _short_hash(rel, part), part if several else None, self.controller
+                ).as_posix()
                 self._owner[name] = (rel, part)
             target = self.folder / name
             own = [r for r in rows if r.part == part]
-            text = render(self.controller, own, program_title(rel, part), program_number=self.numbers.take(name),
-                          spindle=self.spindle) if own else text
+            text = (
+                render(
+                    self.controller,
+                    own,
+                    program_title(rel, part),
+                    program_number=self.numbers.take(name),
+                    spindle=self.spindle,
+                )
+                if own
+                else text
+            )
             target.parent.mkdir(parents=True, exist_ok=True)
             write_text(target, text)
             names.append(name)

@@ -70,12 +70,17 @@ class BatchSummary:
     unsolved: int = 0
 
     def to_json(self) -> dict[str, Any]:
-        return {"reports": self.reports, "parts": self.parts, "verdicts": dict(self.verdicts),
-                "unsolved": self.unsolved,
-                "failed": [{"file": f, "reason": r} for f, r in self.failed],
-                "skipped": [{"file": f, "reason": r} for f, r in self.skipped],
-                "notes": [{"file": f, "note": str(n)} for f, n in self.notes],
-                "seconds": round(self.seconds, 3), "written": self.written}
+        return {
+            "reports": self.reports,
+            "parts": self.parts,
+            "verdicts": dict(self.verdicts),
+            "unsolved": self.unsolved,
+            "failed": [{"file": f, "reason": r} for f, r in self.failed],
+            "skipped": [{"file": f, "reason": r} for f, r in self.skipped],
+            "notes": [{"file": f, "note": str(n)} for f, n in self.notes],
+            "seconds": round(self.seconds, 3),
+            "written": self.written,
+        }
 
 
 @dataclass
@@ -91,8 +96,17 @@ class Tally:
     unsolved: int = 0
 
     def summary(self, seconds: float, written: bool) -> BatchSummary:
-        return BatchSummary(self.reports, self.parts, Counter(self.verdicts), tuple(self.failed),
-                            tuple(self.skipped), seconds, written, tuple(self.notes), self.unsolved)
+        return BatchSummary(
+            self.reports,
+            self.parts,
+            Counter(self.verdicts),
+            tuple(self.failed),
+            tuple(self.skipped),
+            seconds,
+            written,
+            tuple(self.notes),
+            self.unsolved,
+        )
 
 
 #: One report for a worker: path, size and modification time when listed, the content hash it was
@@ -147,9 +161,12 @@ class Claims:
                 # claim and the next run corrects it again
                 self.store.finish_claims([sha for sha, _, solved in self.pending if solved], self.claimant)
         except StoreError as exc:
-            raise StoreError(exc.message, location=exc.location,
-                             hint="the output was written; its reports are not marked processed in the store and "
-                                  "are corrected again by the next run") from None
+            raise StoreError(
+                exc.message,
+                location=exc.location,
+                hint="the output was written; its reports are not marked processed in the store and "
+                "are corrected again by the next run",
+            ) from None
         self.pending = []
 
     def release(self) -> None:
@@ -169,10 +186,14 @@ def _record(store: Store, outcome: Outcome, solve: SolveOptions) -> list[StoreRe
         by_part.setdefault(row.part, {})[row.id] = row.delta
     # One recommendation per corrected part, its verdict beside it (a part with no offset row -- every
     # register fixed -- still gets its verdict, and no verdict slides onto the next part).
-    return [StoreRecommendation(optimizer=solve.optimizer,
-                                inputs={"use": "batch", "report": sha, "part": part, "seed": solve.seed},
-                                result={"verdict": verdict, "corrections": by_part.get(part, {}), "solved": solved})
-            for part, verdict, solved in zip(outcome.parts, outcome.verdicts, outcome.solved, strict=True)]
+    return [
+        StoreRecommendation(
+            optimizer=solve.optimizer,
+            inputs={"use": "batch", "report": sha, "part": part, "seed": solve.seed},
+            result={"verdict": verdict, "corrections": by_part.get(part, {}), "solved": solved},
+        )
+        for part, verdict, solved in zip(outcome.parts, outcome.verdicts, outcome.solved, strict=True)
+    ]
 
 
 def account(summary: Tally, outcome: Outcome, seen: dict[str, str]) -> None:

@@ -58,8 +58,9 @@ def _unit_error(model: ProcessModel, nominal: float, reported: float, threshold:
     return None
 
 
-def check_parts(model: ProcessModel, parts: list[PartMeasurement], *, strict: bool = False,
-                source: str = "<report>") -> list[PartMeasurement]:
+def check_parts(
+    model: ProcessModel, parts: list[PartMeasurement], *, strict: bool = False, source: str = "<report>"
+) -> list[PartMeasurement]:
     """Check each part's nominals, tolerances and coverage against the model.
 
     Parameters
@@ -96,8 +97,9 @@ def check_parts(model: ProcessModel, parts: list[PartMeasurement], *, strict: bo
     return out
 
 
-def _compare(model: ProcessModel, part: PartMeasurement, expected: np.ndarray, thr: np.ndarray, *,
-             strict: bool, source: str) -> list[Note]:
+def _compare(
+    model: ProcessModel, part: PartMeasurement, expected: np.ndarray, thr: np.ndarray, *, strict: bool, source: str
+) -> list[Note]:
     """Notes (and refusals) for one part; ``expected`` (3, n) model nominal/lower/upper, ``thr`` (n,)."""
     found: dict[str, list[tuple[str, SourceLocation]]] = {}  # difference text → dimensions showing it
     units: list[tuple[str, str, SourceLocation]] = []
@@ -115,40 +117,61 @@ def _compare(model: ProcessModel, part: PartMeasurement, expected: np.ndarray, t
         if off[0, i]:
             why = _unit_error(model, dim.nominal, reported, float(thr[i]))
             if why:
-                units.append((dim.name, f"report nominal {_fmt(reported)} {unit} against the model's "
-                                        f"{_fmt(dim.nominal)} {unit}: {why}", where))
+                units.append(
+                    (
+                        dim.name,
+                        f"report nominal {_fmt(reported)} {unit} against the model's {_fmt(dim.nominal)} {unit}: {why}",
+                        where,
+                    )
+                )
                 continue
-            text = (f"the report's nominal {_fmt(reported)} {unit} differs from the model's "
-                    f"{_fmt(dim.nominal)} {unit} (a drawing or program revision? the model's is used)")
+            text = (
+                f"the report's nominal {_fmt(reported)} {unit} differs from the model's "
+                f"{_fmt(dim.nominal)} {unit} (a drawing or program revision? the model's is used)"
+            )
             found.setdefault(text, []).append((dim.name, where))
         if off[1, i] or off[2, i]:
-            shown = (f"{_fmt(lo) if math.isfinite(lo) else 'none'}/{'+' if up > 0 else ''}"
-                     f"{_fmt(up) if math.isfinite(up) else 'none'}")
-            text = (f"the report's tolerance {shown} {unit} differs from the model's "
-                    f"{_fmt(dim.lower)}/+{_fmt(dim.upper)} {unit}; the error budget and 'inside tolerance' "
-                    "use the model's")
+            shown = (
+                f"{_fmt(lo) if math.isfinite(lo) else 'none'}/{'+' if up > 0 else ''}"
+                f"{_fmt(up) if math.isfinite(up) else 'none'}"
+            )
+            text = (
+                f"the report's tolerance {shown} {unit} differs from the model's "
+                f"{_fmt(dim.lower)}/+{_fmt(dim.upper)} {unit}; the error budget and 'inside tolerance' "
+                "use the model's"
+            )
             found.setdefault(text, []).append((dim.name, where))
     if units:
         name, message, where = units[0]
         more = f" ({len(units) - 1} more dimension(s) alike)" if len(units) > 1 else ""
-        raise MatchError(f"unit error at {name}: {message}{more}", location=where,
-                         hint="give --unit inch or --unit mm, or correct the report's unit")
+        raise MatchError(
+            f"unit error at {name}: {message}{more}",
+            location=where,
+            hint="give --unit inch or --unit mm, or correct the report's unit",
+        )
     notes = []
     for text, showing in found.items():
         names = [n for n, _ in showing]
-        label = names[0] if len(names) == 1 else (
-            f"{len(names)} dimensions ({', '.join(names[:4])}{', …' if len(names) > 4 else ''})")
+        label = (
+            names[0]
+            if len(names) == 1
+            else (f"{len(names)} dimensions ({', '.join(names[:4])}{', …' if len(names) > 4 else ''})")
+        )
         notes.append(Note(f"{label}: {text}", showing[0][1], "mismatch"))
     if strict and notes:
         first = notes[0]
         more = f" ({len(notes) - 1} more difference(s))" if len(notes) > 1 else ""
-        raise MatchError(f"{first.message}{more}; refused by --strict", location=first.location,
-                         hint="update the model to the drawing, or drop --strict to correct with the model's values")
+        raise MatchError(
+            f"{first.message}{more}; refused by --strict",
+            location=first.location,
+            hint="update the model to the drawing, or drop --strict to correct with the model's values",
+        )
     return notes
 
 
-def _coverage(model: ProcessModel, part: PartMeasurement, composite: np.ndarray, correctable: np.ndarray,
-              source: str) -> list[Note]:
+def _coverage(
+    model: ProcessModel, part: PartMeasurement, composite: np.ndarray, correctable: np.ndarray, source: str
+) -> list[Note]:
     measured = part.measured
     if measured.all() or not composite.size:
         return []
@@ -161,9 +184,17 @@ def _coverage(model: ProcessModel, part: PartMeasurement, composite: np.ndarray,
     hit = [d for d, t in zip(absent_dims, touched, strict=True) if t]
     groups = sorted({d.group for d in hit if d.group})
     regs = [r.id for r, s in zip(model.registers, shared, strict=True) if s]
-    where = f"stations {', '.join(groups)}" if groups else ", ".join(d.name for d in hit[:5]) + (
-        " …" if len(hit) > 5 else "")
-    return [Note(f"a correction of {', '.join(regs)} also moves {len(hit)} dimension(s) this report does not "
-                 f"measure ({where}): the error budget after holds for the measured dimensions only; "
-                 "measure the whole fixture, or hold those registers (fixed = true) for this report",
-                 SourceLocation(source), "coverage")]
+    where = (
+        f"stations {', '.join(groups)}"
+        if groups
+        else ", ".join(d.name for d in hit[:5]) + (" …" if len(hit) > 5 else "")
+    )
+    return [
+        Note(
+            f"a correction of {', '.join(regs)} also moves {len(hit)} dimension(s) this report does not "
+            f"measure ({where}): the error budget after holds for the measured dimensions only; "
+            "measure the whole fixture, or hold those registers (fixed = true) for this report",
+            SourceLocation(source),
+            "coverage",
+        )
+    ]

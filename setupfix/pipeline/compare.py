@@ -36,9 +36,18 @@ from setupfix.pipeline.cycles import read_parts
 from setupfix.pipeline.requests import CycleOptions, ReadOptions
 from setupfix.pose import pose_problem
 
-__all__ = ["DEFAULT_METHODS", "CompareRequest", "MethodTrials", "Comparison", "trial_seeds", "over_kept",
-           "compare_steps",
-           "compare_problem", "compare_report", "plot_comparison"]
+__all__ = [
+    "DEFAULT_METHODS",
+    "CompareRequest",
+    "MethodTrials",
+    "Comparison",
+    "trial_seeds",
+    "over_kept",
+    "compare_steps",
+    "compare_problem",
+    "compare_report",
+    "plot_comparison",
+]
 
 Array = npt.NDArray[np.float64]
 
@@ -148,12 +157,20 @@ class Comparison:
     def table(self) -> list[dict[str, Any]]:
         """One summary row per method (see :meth:`MethodTrials.summary`), exact first."""
         e = self.exact
-        rows: list[dict[str, Any]] = [{
-            "optimizer": "exact", **{f"{k}_{s}": v for k, v in (("f1", e.margin_after), ("f2", e.norm),
-                                                                ("f", e.fitness))
-                                     for s in ("best", "median", "worst")},
-            "gap_median": 0.0, "gap_worst": 0.0, "evaluations": float(e.evaluations), "seconds": e.seconds,
-        }]
+        rows: list[dict[str, Any]] = [
+            {
+                "optimizer": "exact",
+                **{
+                    f"{k}_{s}": v
+                    for k, v in (("f1", e.margin_after), ("f2", e.norm), ("f", e.fitness))
+                    for s in ("best", "median", "worst")
+                },
+                "gap_median": 0.0,
+                "gap_worst": 0.0,
+                "evaluations": float(e.evaluations),
+                "seconds": e.seconds,
+            }
+        ]
         rows += [{"optimizer": m.optimizer, **m.summary(e)} for m in self.methods]
         return rows
 
@@ -164,24 +181,32 @@ class Comparison:
         results: list[dict[str, Any]] = []
         for m in self.methods:
             s = m.summary(e)
-            results.append({
-                "optimizer": m.optimizer,
-                "margins": [round(float(v), d) for v in m.f1],
-                "norms": [round(float(v), d) for v in m.f2],
-                "fitness": [round(float(v), d) for v in m.f],
-                "gaps": [round(float(v), d) for v in m.gaps(e)],
-                "seeds": list(m.seeds),
-                "evaluations": int(s["evaluations"]),
-                "evaluations_per_trial": [int(v) for v in m.evaluations],
-                "seconds": round(s["seconds"], 6),
-                "seconds_per_trial": [round(float(v), 6) for v in m.seconds],
-                "summary": {k: round(v, d) for k, v in s.items()},
-            })
+            results.append(
+                {
+                    "optimizer": m.optimizer,
+                    "margins": [round(float(v), d) for v in m.f1],
+                    "norms": [round(float(v), d) for v in m.f2],
+                    "fitness": [round(float(v), d) for v in m.f],
+                    "gaps": [round(float(v), d) for v in m.gaps(e)],
+                    "seeds": list(m.seeds),
+                    "evaluations": int(s["evaluations"]),
+                    "evaluations_per_trial": [int(v) for v in m.evaluations],
+                    "seconds": round(s["seconds"], 6),
+                    "seconds_per_trial": [round(float(v), 6) for v in m.seconds],
+                    "summary": {k: round(v, d) for k, v in s.items()},
+                }
+            )
         return {
-            "part": self.part, "report": self.report, "unit": self.unit, "trials": self.trials, "seed": self.seed,
+            "part": self.part,
+            "report": self.report,
+            "unit": self.unit,
+            "trials": self.trials,
+            "seed": self.seed,
             "margin_before": round(e.margin_before, d),
-            "exact_margin": round(e.margin_after, d), "exact_norm": round(e.norm, d),
-            "exact_fitness": round(e.fitness, d), "exact_status": e.status,
+            "exact_margin": round(e.margin_after, d),
+            "exact_norm": round(e.norm, d),
+            "exact_fitness": round(e.fitness, d),
+            "exact_status": e.status,
             "exact_bound": None if e.bound is None else round(e.bound, d),
             "exact_seconds": round(e.seconds, 6),
             "exact_given_up": {d: round(float(v), d_) for d, v in self.given_up_margins().items()},
@@ -196,14 +221,23 @@ def over_kept(problem: CorrectionProblem, result: OptimizeResult, given_up: tupl
     if not given_up:
         return result
     x = np.asarray(result.x, dtype=float)
-    return dataclasses.replace(result, margin_before=problem.kept_margin(np.zeros_like(x), given_up),
-                               margin_after=problem.kept_margin(x, given_up),
-                               extra={**result.extra, "margin_all": result.margin_after})
+    return dataclasses.replace(
+        result,
+        margin_before=problem.kept_margin(np.zeros_like(x), given_up),
+        margin_after=problem.kept_margin(x, given_up),
+        extra={**result.extra, "margin_all": result.margin_after},
+    )
 
 
-def compare_steps(problem: CorrectionProblem, *, methods: Sequence[str] = DEFAULT_METHODS, trials: int = 12,
-                  seed: int = 0, params: Mapping[str, Mapping[str, Any]] | None = None,
-                  exact: OptimizeResult | None = None) -> Iterator[tuple[str, int, int, Comparison]]:
+def compare_steps(
+    problem: CorrectionProblem,
+    *,
+    methods: Sequence[str] = DEFAULT_METHODS,
+    trials: int = 12,
+    seed: int = 0,
+    params: Mapping[str, Mapping[str, Any]] | None = None,
+    exact: OptimizeResult | None = None,
+) -> Iterator[tuple[str, int, int, Comparison]]:
     """The comparison one trial at a time (the TUI shows progress and can stop within one trial).
 
     Yields ``(method, step, steps, comparison so far)`` after the exact optimum and
@@ -229,15 +263,20 @@ def compare_steps(problem: CorrectionProblem, *, methods: Sequence[str] = DEFAUL
         for s in seeds:
             runs = (*runs, over_kept(problem, get_optimizer(name, seed=s, **kw).solve(problem), exact.given_up))
             step += 1
-            partial = (*done, MethodTrials(optimizer=name, seeds=seeds[:len(runs)], results=runs))
-            yield name, step, steps, Comparison(problem=problem, exact=exact, methods=partial, seed=seed,
-                                                trials=trials)
+            partial = (*done, MethodTrials(optimizer=name, seeds=seeds[: len(runs)], results=runs))
+            yield name, step, steps, Comparison(problem=problem, exact=exact, methods=partial, seed=seed, trials=trials)
         done = (*done, MethodTrials(optimizer=name, seeds=seeds, results=runs))
 
 
-def compare_problem(problem: CorrectionProblem, *, methods: Sequence[str] = DEFAULT_METHODS, trials: int = 12,
-                    seed: int = 0, params: Mapping[str, Mapping[str, Any]] | None = None,
-                    exact: OptimizeResult | None = None) -> Comparison:
+def compare_problem(
+    problem: CorrectionProblem,
+    *,
+    methods: Sequence[str] = DEFAULT_METHODS,
+    trials: int = 12,
+    seed: int = 0,
+    params: Mapping[str, Mapping[str, Any]] | None = None,
+    exact: OptimizeResult | None = None,
+) -> Comparison:
     """Solve ``problem`` exactly once and with ``trials`` seeded runs of each method.
 
     Parameters
@@ -255,8 +294,7 @@ def compare_problem(problem: CorrectionProblem, *, methods: Sequence[str] = DEFA
     exact : OptimizeResult, optional
         A yardstick already solved for this problem.
     """
-    *_, (_, _, _, last) = compare_steps(problem, methods=methods, trials=trials, seed=seed, params=params,
-                                        exact=exact)
+    *_, (_, _, _, last) = compare_steps(problem, methods=methods, trials=trials, seed=seed, params=params, exact=exact)
     return last
 
 
@@ -271,10 +309,16 @@ def compare_report(request: CompareRequest, report: str | Path) -> Comparison:
     _, parts = read_parts(model, report, **request.read.kwargs(), **request.cycles.kwargs())
     measured = request.cycles.select(parts, report)[0]
     posed = pose_problem(model, measured)
-    result = compare_problem(posed.guarded, methods=request.methods, trials=request.trials, seed=request.seed,
-                             params=request.params)
-    return dataclasses.replace(result, part=measured.part, report=measured.report or str(report), unit=model.unit,
-                               notes=(*measured.notes, *posed.notes))
+    result = compare_problem(
+        posed.guarded, methods=request.methods, trials=request.trials, seed=request.seed, params=request.params
+    )
+    return dataclasses.replace(
+        result,
+        part=measured.part,
+        report=measured.report or str(report),
+        unit=model.unit,
+        notes=(*measured.notes, *posed.notes),
+    )
 
 
 def plot_comparison(comparison: Comparison, path: str | Path) -> None:
@@ -286,7 +330,8 @@ def plot_comparison(comparison: Comparison, path: str | Path) -> None:
     fig = comparison_figure(
         {m.optimizer: m.histories for m in comparison.methods},
         {m.optimizer: {"f1": m.f1, "f2": m.f2, "f": m.f} for m in comparison.methods},
-        exact=(e.margin_after, e.norm, e.fitness), unit=comparison.unit,
+        exact=(e.margin_after, e.norm, e.fitness),
+        unit=comparison.unit,
         title=f"{comparison.report} part {comparison.part or '—'}: {comparison.trials} trials per method",
     )
     write_figure(fig, path)

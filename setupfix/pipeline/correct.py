@@ -25,9 +25,19 @@ from setupfix.ewma import Smoothed
 from setupfix.model import PartMeasurement, ProcessModel, load_model
 from setupfix.optimize import CorrectionProblem, OptimizeResult, get_optimizer
 from setupfix.pipeline.cycles import read_parts
+from setupfix.pipeline.requests import (
+    CorrectOutcome,
+    CorrectRequest,
+    CurrentOffsets,
+    CycleCorrection,
+    CycleOptions,
+    History,
+    ReadOptions,
+    SolveOptions,
+    ThermalInputs,
+    load_thermal,
+)
 from setupfix.pipeline.stores import StoreRef
-from setupfix.pipeline.requests import (CorrectOutcome, CorrectRequest, CurrentOffsets, CycleCorrection, CycleOptions,
-                                        History, ReadOptions, SolveOptions, ThermalInputs, load_thermal)
 from setupfix.pose import pose_problem
 from setupfix.recommend import recommend
 from setupfix.safety import Recommendation, RuleEffect, short_list
@@ -56,11 +66,19 @@ def _applied_result(problem: CorrectionProblem, rec: Recommendation) -> Optimize
         binding = problem.binding(x)
     message = raw.message
     if rec.verdict == "hold":
-        message = "hold: " + next((r.message for r in rec.rules
-                                   if r.rule in ("not_solved", "dead_band", "no_harm", "draft")), "no change needed")
-    return dataclasses.replace(raw, x=x.copy(), margin_before=problem.dimension_budget(0 * x, rec.given_up)[0],
-                               margin_after=problem.dimension_budget(x, rec.given_up)[0],
-                               norm=float(np.linalg.norm(x)), binding=problem.dimension_of(binding), message=message)
+        message = "hold: " + next(
+            (r.message for r in rec.rules if r.rule in ("not_solved", "dead_band", "no_harm", "draft")),
+            "no change needed",
+        )
+    return dataclasses.replace(
+        raw,
+        x=x.copy(),
+        margin_before=problem.dimension_budget(0 * x, rec.given_up)[0],
+        margin_after=problem.dimension_budget(x, rec.given_up)[0],
+        norm=float(np.linalg.norm(x)),
+        binding=problem.dimension_of(binding),
+        message=message,
+    )
 
 
 def _smoothed(request: CorrectRequest, part: PartMeasurement) -> Smoothed | None:
@@ -84,20 +102,28 @@ def _feed_forward(thermal: ThermalInputs, cycle: CycleCorrection) -> ThermalFeed
     from setupfix.pipeline.feedforward import thermal_feed_forward  # scipy.signal: only with thermal inputs
 
     model = cycle.model
-    ff = thermal_feed_forward(model, thermal.saved, thermal.log, measured_at=cycle.part.timestamp, at=thermal.at,
-                              dead_band=thermal.dead_band)
+    ff = thermal_feed_forward(
+        model, thermal.saved, thermal.log, measured_at=cycle.part.timestamp, at=thermal.at, dead_band=thermal.dead_band
+    )
     setup = cycle.corrections  # the setup correction alone (verdict applied)
     for reg in model.registers:
         total = setup.get(reg.id, 0.0) + ff.corrections().get(reg.id, 0.0)
         if abs(total) > reg.limit + 1e-12:
-            raise ParameterError(f"setup correction plus thermal feed-forward on {reg.register} "
-                                 f"({total:+g} {model.unit}) exceeds its limit ±{reg.limit:g}",
-                                 hint=f"{thermal.source}: check the thermal model or the temperature log")
+            raise ParameterError(
+                f"setup correction plus thermal feed-forward on {reg.register} "
+                f"({total:+g} {model.unit}) exceeds its limit ±{reg.limit:g}",
+                hint=f"{thermal.source}: check the thermal model or the temperature log",
+            )
     return ff
 
 
-def correct_cycle(request: CorrectRequest, part: PartMeasurement, *,
-                  composite: np.ndarray | None = None, hold: RuleEffect | None = None) -> CycleCorrection:
+def correct_cycle(
+    request: CorrectRequest,
+    part: PartMeasurement,
+    *,
+    composite: np.ndarray | None = None,
+    hold: RuleEffect | None = None,
+) -> CycleCorrection:
     """Recommend the corrections of one measured cycle: optimum under the model's safety rules.
 
     ``composite`` replaces the model's relation matrix (the diagnosis's augmented one,
@@ -107,23 +133,46 @@ def correct_cycle(request: CorrectRequest, part: PartMeasurement, *,
     model = request.model
     cumulative = request.current.wear_totals(model) if request.current is not None else None
     stand_in = request.history.stand_in(model, part) if request.history is not None else None
-    posed = pose_problem(model, part, smoothed=_smoothed(request, part), cumulative=cumulative, composite=composite,
-                         stand_in=stand_in, hold=hold)
+    posed = pose_problem(
+        model,
+        part,
+        smoothed=_smoothed(request, part),
+        cumulative=cumulative,
+        composite=composite,
+        stand_in=stand_in,
+        hold=hold,
+    )
     solve = request.solve
     opt = get_optimizer(solve.optimizer, seed=solve.seed, **solve.params())
     names = {d.id: d.name for d in model.dimensions}
     if posed.problem.rows is not None:  # a zone's facets are named by the zone
         names |= {c: names[r] for c, r in zip(posed.problem.dimension_ids, posed.problem.rows, strict=True)}
-    rec = recommend(posed, opt.solve, optimizer=solve.optimizer, names=names,
-                    registers={r.id: r.register for r in model.registers}, unit=model.unit,
-                    draft=model.source if model.draft else None)
+    rec = recommend(
+        posed,
+        opt.solve,
+        optimizer=solve.optimizer,
+        names=names,
+        registers={r.id: r.register for r in model.registers},
+        unit=model.unit,
+        draft=model.source if model.draft else None,
+    )
     notes = [*part.notes, *posed.notes, *(n for n in rec.result.notes if n.message != rec.result.message)]
     if part.absent:
-        notes.append(Note(f"{len(part.absent)} dimension(s) absent from the report, left out: "
-                          f"{short_list(part.absent)}", None, "match"))
+        notes.append(
+            Note(
+                f"{len(part.absent)} dimension(s) absent from the report, left out: {short_list(part.absent)}",
+                None,
+                "match",
+            )
+        )
     if part.unmatched:
-        notes.append(Note(f"{len(part.unmatched)} characteristic(s) match no dimension: "
-                          f"{short_list(part.unmatched)}", None, "match"))
+        notes.append(
+            Note(
+                f"{len(part.unmatched)} characteristic(s) match no dimension: {short_list(part.unmatched)}",
+                None,
+                "match",
+            )
+        )
     cycle = CycleCorrection(model, part, posed, _applied_result(posed.problem, rec), rec, None, tuple(notes))
     if request.thermal is not None:
         cycle = dataclasses.replace(cycle, thermal=_feed_forward(request.thermal, cycle))
@@ -150,15 +199,29 @@ def correct_report(request: CorrectRequest, report: str | Path | parsers.Source)
     source = parsers.load_source(report)
     read, parts = read_parts(model, source, **request.read.kwargs(), **request.cycles.kwargs())
     cycles = tuple(correct_cycle(request, p) for p in request.cycles.select(parts, source.name))
-    return CorrectOutcome(report=source.name, format=read.format, sha256=hashlib.sha256(source.data).hexdigest(),
-                          table=read.table, cycles=cycles, notes=tuple(read.notes))
+    return CorrectOutcome(
+        report=source.name,
+        format=read.format,
+        sha256=hashlib.sha256(source.data).hexdigest(),
+        table=read.table,
+        cycles=cycles,
+        notes=tuple(read.notes),
+    )
 
 
-def load_request(model: ProcessModel | str | Path, *, read: ReadOptions | None = None,
-                 cycles: CycleOptions | None = None, solve: SolveOptions | None = None,
-                 current: str | Path | None = None, store: str | Path | StoreRef | None = None,
-                 thermal: str | Path | None = None, temperatures: str | Path | None = None, at: str | None = None,
-                 thermal_dead_band: float | None = None) -> CorrectRequest:
+def load_request(
+    model: ProcessModel | str | Path,
+    *,
+    read: ReadOptions | None = None,
+    cycles: CycleOptions | None = None,
+    solve: SolveOptions | None = None,
+    current: str | Path | None = None,
+    store: str | Path | StoreRef | None = None,
+    thermal: str | Path | None = None,
+    temperatures: str | Path | None = None,
+    at: str | None = None,
+    thermal_dead_band: float | None = None,
+) -> CorrectRequest:
     """A :class:`CorrectRequest` with every input file read once (the CLI's and the TUI's way to build one).
 
     ``current``: the controller's current offsets (``register,value``); ``store``: the
@@ -182,10 +245,14 @@ def load_request(model: ProcessModel | str | Path, *, read: ReadOptions | None =
     if history_store is not None:
         with history_store as opened:  # read once: the smoothing needs the earlier parts and the log
             history = History.from_store(model, opened)
-    inputs = (load_thermal(thermal, temperatures, at=at, dead_band=thermal_dead_band)
-              if thermal is not None and temperatures is not None else None)
-    return CorrectRequest(model, read or ReadOptions(), cycles or CycleOptions(), solve or SolveOptions(), offsets,
-                          history, inputs)
+    inputs = (
+        load_thermal(thermal, temperatures, at=at, dead_band=thermal_dead_band)
+        if thermal is not None and temperatures is not None
+        else None
+    )
+    return CorrectRequest(
+        model, read or ReadOptions(), cycles or CycleOptions(), solve or SolveOptions(), offsets, history, inputs
+    )
 
 
 def open_history(store: str | Path | StoreRef, model: ProcessModel) -> Store:

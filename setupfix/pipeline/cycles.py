@@ -53,8 +53,13 @@ class ReadOptions:
 
     def kwargs(self) -> dict[str, Any]:
         """As keyword arguments of :func:`read_parts` (and :func:`parsers.read_report`)."""
-        return {"format": self.format, "unit": self.unit, "encoding": self.encoding, "columns": self.columns,
-                "lenient": self.lenient}
+        return {
+            "format": self.format,
+            "unit": self.unit,
+            "encoding": self.encoding,
+            "columns": self.columns,
+            "lenient": self.lenient,
+        }
 
 
 def model_groups(model: ProcessModel) -> list[str]:
@@ -70,13 +75,17 @@ def cycle_name(parts: Sequence[str]) -> str:
 
 def _check_station(groups: Mapping[str, str], station: str, part: str, report: str) -> str:
     if normalise_name(station) not in groups:
-        raise MatchError(f"station {station!r} (for part {part!r}) is not a group of the model "
-                         f"(groups: {', '.join(sorted(set(groups.values())))})", location=SourceLocation(report))
+        raise MatchError(
+            f"station {station!r} (for part {part!r}) is not a group of the model "
+            f"(groups: {', '.join(sorted(set(groups.values())))})",
+            location=SourceLocation(report),
+        )
     return groups[normalise_name(station)]
 
 
-def assign_stations(model: ProcessModel, table: pd.DataFrame, stations: Stations | None = None, *,
-                    parts_per_cycle: int | None = None) -> pd.DataFrame:
+def assign_stations(
+    model: ProcessModel, table: pd.DataFrame, stations: Stations | None = None, *, parts_per_cycle: int | None = None
+) -> pd.DataFrame:
     """Map the parts of a multi-part report to fixture stations and cycles.
 
     Returns
@@ -92,8 +101,7 @@ def assign_stations(model: ProcessModel, table: pd.DataFrame, stations: Stations
         fit the number of parts (or ``parts_per_cycle``).
     """
     groups = {normalise_name(g): g for g in model_groups(model)}
-    parts = table["part"].fillna("").astype(str) if "part" in table else pd.Series([""] * len(table),
-                                                                                   index=table.index)
+    parts = table["part"].fillna("").astype(str) if "part" in table else pd.Series([""] * len(table), index=table.index)
     order = list(dict.fromkeys(parts))
     report = str(table["report"].iloc[0]) if "report" in table and len(table) else "<report>"
     if parts_per_cycle is not None:
@@ -107,13 +115,18 @@ def assign_stations(model: ProcessModel, table: pd.DataFrame, stations: Stations
         mapping = dict(stations)
         unknown = [p for p in mapping if p not in order]
         if unknown:
-            raise MatchError(f"--stations names part(s) {', '.join(map(repr, unknown))} the report does not hold "
-                             f"(parts: {', '.join(order)})", location=SourceLocation(report))
+            raise MatchError(
+                f"--stations names part(s) {', '.join(map(repr, unknown))} the report does not hold "
+                f"(parts: {', '.join(order)})",
+                location=SourceLocation(report),
+            )
     else:
         if len(stations) != len(order):
-            raise MatchError(f"{len(stations)} stations given for {len(order)} parts in the report "
-                             f"({', '.join(order)})", location=SourceLocation(report),
-                             hint="--parts-per-cycle N groups a long report into loads of N parts")
+            raise MatchError(
+                f"{len(stations)} stations given for {len(order)} parts in the report ({', '.join(order)})",
+                location=SourceLocation(report),
+                hint="--parts-per-cycle N groups a long report into loads of N parts",
+            )
         mapping = dict(zip(order, stations, strict=True))
     mapping = {part: _check_station(groups, station, part, report) for part, station in mapping.items()}
     out = table.copy()
@@ -122,32 +135,45 @@ def assign_stations(model: ProcessModel, table: pd.DataFrame, stations: Stations
     return out
 
 
-def _by_count(model: ProcessModel, table: pd.DataFrame, parts: pd.Series, order: list[str],
-              stations: Stations | None, n: int, groups: Mapping[str, str], report: str) -> pd.DataFrame:
+def _by_count(
+    model: ProcessModel,
+    table: pd.DataFrame,
+    parts: pd.Series,
+    order: list[str],
+    stations: Stations | None,
+    n: int,
+    groups: Mapping[str, str],
+    report: str,
+) -> pd.DataFrame:
     if n < 1:
         raise MatchError(f"--parts-per-cycle must be at least 1, got {n}", location=SourceLocation(report))
     if isinstance(stations, Mapping):
-        raise MatchError("--parts-per-cycle takes --stations as a list (P1,P2,…), one per position in a load",
-                         location=SourceLocation(report))
+        raise MatchError(
+            "--parts-per-cycle takes --stations as a list (P1,P2,…), one per position in a load",
+            location=SourceLocation(report),
+        )
     own = "station" in table and table["station"].notna().all() and (table["station"].astype(str) != "").all()
     if stations is not None:
         if len(stations) != n:
-            raise MatchError(f"{len(stations)} stations given for cycles of {n} parts",
-                             location=SourceLocation(report))
-        slots: list[str] | None = [_check_station(groups, s, f"position {k + 1}", report)
-                                   for k, s in enumerate(stations)]
+            raise MatchError(f"{len(stations)} stations given for cycles of {n} parts", location=SourceLocation(report))
+        slots: list[str] | None = [
+            _check_station(groups, s, f"position {k + 1}", report) for k, s in enumerate(stations)
+        ]
     elif own or n == 1:
         slots = None  # the report's own station column, or one part per load
     elif len(groups) == n:
         slots = list(groups.values())
     else:
-        raise MatchError(f"cannot tell the stations of {n} parts per cycle: the model has "
-                         f"{len(groups)} groups ({', '.join(groups.values()) or 'none'})",
-                         location=SourceLocation(report), hint="give --stations P1,P2,… in load order")
+        raise MatchError(
+            f"cannot tell the stations of {n} parts per cycle: the model has "
+            f"{len(groups)} groups ({', '.join(groups.values()) or 'none'})",
+            location=SourceLocation(report),
+            hint="give --stations P1,P2,… in load order",
+        )
     cycle_of: dict[str, str] = {}
     station_of: dict[str, str] = {}
     for start in range(0, len(order), n):
-        chunk = order[start:start + n]
+        chunk = order[start : start + n]
         name = cycle_name(chunk)
         for k, p in enumerate(chunk):
             cycle_of[p] = name
@@ -160,10 +186,19 @@ def _by_count(model: ProcessModel, table: pd.DataFrame, parts: pd.Series, order:
     return out
 
 
-def load_parts(model: ProcessModel, report: str | Path | Source, *, format: str | None = None, unit: str | None = None,
-               encoding: str | None = None, columns: str | None = None, stations: Stations | None = None,
-               parts_per_cycle: int | None = None, strict: bool = False,
-               lenient: bool = False) -> list[PartMeasurement]:
+def load_parts(
+    model: ProcessModel,
+    report: str | Path | Source,
+    *,
+    format: str | None = None,
+    unit: str | None = None,
+    encoding: str | None = None,
+    columns: str | None = None,
+    stations: Stations | None = None,
+    parts_per_cycle: int | None = None,
+    strict: bool = False,
+    lenient: bool = False,
+) -> list[PartMeasurement]:
     """Read a report in any supported format, group it into cycles, tie it to the model and check it.
 
     Raises
@@ -172,14 +207,33 @@ def load_parts(model: ProcessModel, report: str | Path | Source, *, format: str 
         See :func:`assign_stations`, :func:`setupfix.model.match_parts` and
         :func:`setupfix.pipeline.checks.check_parts` (unit error; any difference with ``strict``).
     """
-    return read_parts(model, report, format=format, unit=unit, encoding=encoding, columns=columns,
-                      stations=stations, parts_per_cycle=parts_per_cycle, strict=strict, lenient=lenient)[1]
+    return read_parts(
+        model,
+        report,
+        format=format,
+        unit=unit,
+        encoding=encoding,
+        columns=columns,
+        stations=stations,
+        parts_per_cycle=parts_per_cycle,
+        strict=strict,
+        lenient=lenient,
+    )[1]
 
 
-def read_parts(model: ProcessModel, report: str | Path | Source, *, format: str | None = None,
-               unit: str | None = None, encoding: str | None = None, columns: str | None = None,
-               stations: Stations | None = None, parts_per_cycle: int | None = None,
-               strict: bool = False, lenient: bool = False) -> tuple[parsers.ReadResult, list[PartMeasurement]]:
+def read_parts(
+    model: ProcessModel,
+    report: str | Path | Source,
+    *,
+    format: str | None = None,
+    unit: str | None = None,
+    encoding: str | None = None,
+    columns: str | None = None,
+    stations: Stations | None = None,
+    parts_per_cycle: int | None = None,
+    strict: bool = False,
+    lenient: bool = False,
+) -> tuple[parsers.ReadResult, list[PartMeasurement]]:
     """:func:`load_parts` that also returns what was read (table, format), e.g. for the history store."""
     options: dict[str, Any] = {"unit": unit, "encoding": encoding, "lenient": lenient}
     if columns:
@@ -192,8 +246,14 @@ def read_parts(model: ProcessModel, report: str | Path | Source, *, format: str 
         order = list(dict.fromkeys(table["part"].fillna("").astype(str))) if "part" in table else [""]
         if len(order) % parts_per_cycle:
             last = parts[-1]
-            parts[-1] = _with_note(last, Note(f"the last cycle {last.part} holds {len(order) % parts_per_cycle} "
-                                              f"of {parts_per_cycle} parts", SourceLocation(str(report)), "cycle"))
+            parts[-1] = _with_note(
+                last,
+                Note(
+                    f"the last cycle {last.part} holds {len(order) % parts_per_cycle} of {parts_per_cycle} parts",
+                    SourceLocation(str(report)),
+                    "cycle",
+                ),
+            )
     checked = check_parts(model, parts, strict=strict, source=str(report))
     # the reader's notes (skipped rows, assumed units) travel with every cycle they concern, as data
     return read, ([replace(p, notes=(*read.notes, *p.notes)) for p in checked] if read.notes else checked)

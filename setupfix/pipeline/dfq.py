@@ -50,8 +50,7 @@ def _number(value: float) -> str:
 def _field(text: str, what: str, where: SourceLocation) -> str:
     """A text field for one K-field line: one line, no surrounding blanks (the reader strips them)."""
     if any(c in text for c in "\r\n\x0f\x14") or not text.isprintable():
-        raise ExportError(f"{what} {text[:40]!r} holds a control character: a DFQ field is one line",
-                          location=where)
+        raise ExportError(f"{what} {text[:40]!r} holds a control character: a DFQ field is one line", location=where)
     return text.strip()
 
 
@@ -85,12 +84,17 @@ class _Value:
     @property
     def key(self) -> tuple[str, float, float, float]:
         """(name, nominal, lower, upper) with a missing limit as +inf (NaN would never equal itself)."""
-        return (self.name, self.nominal, self.lower if math.isfinite(self.lower) else math.inf,
-                self.upper if math.isfinite(self.upper) else math.inf)
+        return (
+            self.name,
+            self.nominal,
+            self.lower if math.isfinite(self.lower) else math.inf,
+            self.upper if math.isfinite(self.upper) else math.inf,
+        )
 
 
-def dfq_text(table: pd.DataFrame, source: str = "measurements", *,
-             title: str = "setupfix history") -> tuple[str, tuple[Note, ...]]:
+def dfq_text(
+    table: pd.DataFrame, source: str = "measurements", *, title: str = "setupfix history"
+) -> tuple[str, tuple[Note, ...]]:
     """The DFQ text of a canonical measurement table, and the notes (what could not be carried).
 
     Parameters
@@ -123,11 +127,20 @@ def dfq_text(table: pd.DataFrame, source: str = "measurements", *,
             stamp = parse_timestamp(str(r["timestamp"]).strip(), where)
             shifted |= stamp.tzinfo is not None
             moment = utc_naive(stamp)
-        values.append(_Value(
-            (moment or datetime.min, i), moment, _field(str(r["characteristic"]), "characteristic", where),
-            nominal, _limit(r.get("lower")), _limit(r.get("upper")), actual,
-            _field(_text(r.get("part")), "part", where), _field(_text(r.get("report")), "report", where),
-            _text(r.get("station"))))
+        values.append(
+            _Value(
+                (moment or datetime.min, i),
+                moment,
+                _field(str(r["characteristic"]), "characteristic", where),
+                nominal,
+                _limit(r.get("lower")),
+                _limit(r.get("upper")),
+                actual,
+                _field(_text(r.get("part")), "part", where),
+                _field(_text(r.get("report")), "report", where),
+                _text(r.get("station")),
+            )
+        )
     values.sort(key=lambda v: v.order)
     chars: dict[tuple[str, float, float, float], int] = {}
     for v in values:
@@ -155,11 +168,22 @@ def dfq_text(table: pd.DataFrame, source: str = "measurements", *,
         if v.part:
             lines.append(f"K0014/{k} {v.part}")
     if odd_stations:
-        notes.append(Note(f"station(s) {', '.join(sorted(odd_stations)[:5])} are not nest numbers (K0007 holds a "
-                          "whole number): left out", SourceLocation(source), kind="export"))
+        notes.append(
+            Note(
+                f"station(s) {', '.join(sorted(odd_stations)[:5])} are not nest numbers (K0007 holds a "
+                "whole number): left out",
+                SourceLocation(source),
+                kind="export",
+            )
+        )
     if shifted:
-        notes.append(Note("times with a UTC offset are written in UTC (K0004 holds no offset)",
-                          SourceLocation(source), kind="export"))
+        notes.append(
+            Note(
+                "times with a UTC offset are written in UTC (K0004 holds no offset)",
+                SourceLocation(source),
+                kind="export",
+            )
+        )
     return "\n".join(lines) + "\n", tuple(notes)
 
 

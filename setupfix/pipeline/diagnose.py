@@ -38,8 +38,19 @@ from setupfix.pipeline.stores import StoreRef
 from setupfix.pipeline.writers import check_target, write_text
 from setupfix.safety import RuleEffect, short_list
 
-__all__ = ["DiagnoseRequest", "DiagnoseOutcome", "note_text", "diagnose_reports", "augmented_section", "declared_terms",
-           "write_augmented", "forecast_model", "recommend_next", "series_history"]
+__all__ = [
+    "DiagnoseRequest",
+    "DiagnoseOutcome",
+    "note_text",
+    "diagnose_reports",
+    "augmented_section",
+    "declared_terms",
+    "write_augmented",
+    "forecast_model",
+    "recommend_next",
+    "series_history",
+]
+
 
 def augmented_section(diagnosis: Diagnosis, declared: EffectsSection) -> EffectsSection:
     """The ``[effects]`` section: the model's own effects, then those found (ids E1, E2, …)."""
@@ -54,18 +65,39 @@ def augmented_section(diagnosis: Diagnosis, declared: EffectsSection) -> Effects
         sp = res.spec
         target = sp.target
         if len(res.registers) > 1:  # the register is not named: the file must not pretend it is
-            target = (f"{sp.dimension} ~ one of {', '.join(res.registers)} "
-                      f"(the series cannot tell which; {sp.register} fitted)")
-        effects.append(ModelEffect(
-            id=f"E{n}", kind=sp.kind, estimate=float(f"{res.estimate:.6g}"), stderr=float(f"{res.stderr:.3g}"),
-            unit=res.unit, target=target, shape=sp.shape, tau=sp.tau if sp.shape == "saturating" else None,
-            channel=sp.channel, reference=sp.reference, register=sp.register, dimension=sp.dimension,
-            axis=sp.axis, group=sp.group, registers=res.registers if len(res.registers) > 1 else (),
-            at=sp.at if sp.kind == "level" else None, cycle=sp.cycle if sp.kind == "level" else None,
-            span=channel_span(s, sp) if sp.kind == "process" else None))
+            target = (
+                f"{sp.dimension} ~ one of {', '.join(res.registers)} "
+                f"(the series cannot tell which; {sp.register} fitted)"
+            )
+        effects.append(
+            ModelEffect(
+                id=f"E{n}",
+                kind=sp.kind,
+                estimate=float(f"{res.estimate:.6g}"),
+                stderr=float(f"{res.stderr:.3g}"),
+                unit=res.unit,
+                target=target,
+                shape=sp.shape,
+                tau=sp.tau if sp.shape == "saturating" else None,
+                channel=sp.channel,
+                reference=sp.reference,
+                register=sp.register,
+                dimension=sp.dimension,
+                axis=sp.axis,
+                group=sp.group,
+                registers=res.registers if len(res.registers) > 1 else (),
+                at=sp.at if sp.kind == "level" else None,
+                cycle=sp.cycle if sp.kind == "level" else None,
+                span=channel_span(s, sp) if sp.kind == "process" else None,
+            )
+        )
         used.add(f"E{n}")
-    return EffectsSection(tuple(effects), s.origin or declared.origin, step if step else declared.cycle_hours,
-                          float(s.time[-1]) if s.n_cycles else declared.last_hours)
+    return EffectsSection(
+        tuple(effects),
+        s.origin or declared.origin,
+        step if step else declared.cycle_hours,
+        float(s.time[-1]) if s.n_cycles else declared.last_hours,
+    )
 
 
 @dataclass(frozen=True)
@@ -122,51 +154,103 @@ class DiagnoseOutcome:
 
         out: dict[str, Any] = {
             "cycles": d.series.n_cycles,
-            "rms_before": r(d.error_before.rms), "rms_after": r(d.error_after.rms),
-            "max_before": r(d.error_before.max), "max_after": r(d.error_after.max),
+            "rms_before": r(d.error_before.rms),
+            "rms_after": r(d.error_after.rms),
+            "max_before": r(d.error_before.max),
+            "max_after": r(d.error_after.max),
             "out_of_tolerance_before": d.error_before.out_of_tolerance,
             "out_of_tolerance_after": d.error_after.out_of_tolerance,
-            "effects": [{"kind": e.kind, "target": e.target, "estimate": r(e.estimate, 12),
-                         "stderr": r(e.stderr, 12), "unit": e.unit, "rms_after": r(e.rms_after),
-                         "alike": list(e.alike),
-                         **({"registers": list(e.registers)} if e.kind == "relation" else {}),
-                         **({"cycle": e.spec.cycle, "at_hours": e.spec.at} if e.kind == "level" else {}),
-                         **({"channel": e.spec.channel, "register": e.spec.register} if e.kind == "process" else {}),
-                         "source": e.source, "p": r(e.p, 12) if e.p is not None else None}
-                        for e in d.effects],
-            "declared_factors": [] if d.factors is None else [
-                {"term": t.term.name, "register": t.register, "channels": [str(s.channel) for s in t.specs],
-                 "f": r(t.f, 6), "p": r(t.p, 12), "p_holm": r(t.p_holm, 12), "df": t.q, "accepted": t.accepted}
-                for t in d.factors.tests],
+            "effects": [
+                {
+                    "kind": e.kind,
+                    "target": e.target,
+                    "estimate": r(e.estimate, 12),
+                    "stderr": r(e.stderr, 12),
+                    "unit": e.unit,
+                    "rms_after": r(e.rms_after),
+                    "alike": list(e.alike),
+                    **({"registers": list(e.registers)} if e.kind == "relation" else {}),
+                    **({"cycle": e.spec.cycle, "at_hours": e.spec.at} if e.kind == "level" else {}),
+                    **({"channel": e.spec.channel, "register": e.spec.register} if e.kind == "process" else {}),
+                    "source": e.source,
+                    "p": r(e.p, 12) if e.p is not None else None,
+                }
+                for e in d.effects
+            ],
+            "declared_factors": []
+            if d.factors is None
+            else [
+                {
+                    "term": t.term.name,
+                    "register": t.register,
+                    "channels": [str(s.channel) for s in t.specs],
+                    "f": r(t.f, 6),
+                    "p": r(t.p, 12),
+                    "p_holm": r(t.p_holm, 12),
+                    "df": t.q,
+                    "accepted": t.accepted,
+                }
+                for t in d.factors.tests
+            ],
             "next_correction": {k: round(v, 9) for k, v in self.next_correction.items()},
             "next_solved": self.next_cycle.solved if self.next_cycle is not None else None,
             "declared_effects": [e.target for e in self.input.declared],
-            "rejected": [{"kind": s.spec.kind, "target": s.target, "p_adjusted": r(s.p_adjusted, 6),
-                          "cv_before": r(s.cv_before), "cv_after": r(s.cv_after)}
-                         for s in d.selection.steps if not s.accepted],
+            "rejected": [
+                {
+                    "kind": s.spec.kind,
+                    "target": s.target,
+                    "p_adjusted": r(s.p_adjusted, 6),
+                    "cv_before": r(s.cv_before),
+                    "cv_after": r(s.cv_after),
+                }
+                for s in d.selection.steps
+                if not s.accepted
+            ],
             "unidentifiable": list(d.selection.unidentifiable),
             "lack_of_fit": d.selection.lack_of_fit,
-            "dimensions": [{"id": did, "name": names[did],
-                            "rms_before": r(d.error_before.rms_by_dimension[q]),
-                            "rms_after": r(d.error_after.rms_by_dimension[q]),
-                            "max_before": r(d.error_before.max_by_dimension[q]),
-                            "max_after": r(d.error_after.max_by_dimension[q]),
-                            "forecast": r(d.forecast[q])}
-                           for q, did in enumerate(lay.dimension_ids)],
-            "per_cycle": [{"cycle": c, "rms_before": r(d.error_before.rms_by_cycle[k]),
-                           "rms_after": r(d.error_after.rms_by_cycle[k]),
-                           "max_before": r(d.error_before.max_by_cycle[k]),
-                           "max_after": r(d.error_after.max_by_cycle[k])}
-                          for k, c in enumerate(d.series.cycles)],
-            "walk_forward": None if d.walk is None else {
+            "dimensions": [
+                {
+                    "id": did,
+                    "name": names[did],
+                    "rms_before": r(d.error_before.rms_by_dimension[q]),
+                    "rms_after": r(d.error_after.rms_by_dimension[q]),
+                    "max_before": r(d.error_before.max_by_dimension[q]),
+                    "max_after": r(d.error_after.max_by_dimension[q]),
+                    "forecast": r(d.forecast[q]),
+                }
+                for q, did in enumerate(lay.dimension_ids)
+            ],
+            "per_cycle": [
+                {
+                    "cycle": c,
+                    "rms_before": r(d.error_before.rms_by_cycle[k]),
+                    "rms_after": r(d.error_after.rms_by_cycle[k]),
+                    "max_before": r(d.error_before.max_by_cycle[k]),
+                    "max_after": r(d.error_after.max_by_cycle[k]),
+                }
+                for k, c in enumerate(d.series.cycles)
+            ],
+            "walk_forward": None
+            if d.walk is None
+            else {
                 "cycles_scored": len(d.walk.cycles),
-                **{name: {"mean_budget": r(b.mean_budget), "worst_budget": r(b.worst_budget), "rms": r(b.rms),
-                          "out_of_tolerance": b.out_of_tolerance, "centre_rms": r(b.centre_rms),
-                          "centre_mean_abs": r(b.centre_mean_abs)} for name, b in d.walk.budgets.items()}},
+                **{
+                    name: {
+                        "mean_budget": r(b.mean_budget),
+                        "worst_budget": r(b.worst_budget),
+                        "rms": r(b.rms),
+                        "out_of_tolerance": b.out_of_tolerance,
+                        "centre_rms": r(b.centre_rms),
+                        "centre_mean_abs": r(b.centre_mean_abs),
+                    }
+                    for name, b in d.walk.budgets.items()
+                },
+            },
             "next_from": d.next_from.source,
             "next_from_reason": d.next_from.reason,
             "held_centred": [rid for rid, h in zip(lay.register_ids, d.centred, strict=True) if h]
-            if d.centred is not None else [],
+            if d.centred is not None
+            else [],
             "augmented": self.augmented,
             "notes": [note_text(n) for n in self.notes],
         }
@@ -180,8 +264,7 @@ def forecast_model(model: ProcessModel) -> ProcessModel:
     found or declared: the model's own ``[effects]`` forecast and the EWMA must not act
     on it a second time (its relations come in through the augmented matrix).
     """
-    return dataclasses.replace(model, effects=EffectsSection(),
-                               safety=dataclasses.replace(model.safety, ewma=1.0))
+    return dataclasses.replace(model, effects=EffectsSection(), safety=dataclasses.replace(model.safety, ewma=1.0))
 
 
 def _hold(model: ProcessModel, diagnosis: Diagnosis, fraction: float) -> RuleEffect | None:
@@ -191,10 +274,14 @@ def _hold(model: ProcessModel, diagnosis: Diagnosis, fraction: float) -> RuleEff
     regs = tuple(r for r, h in zip(model.registers, diagnosis.centred, strict=True) if h)
     C = diagnosis.next_matrix()
     dims = tuple(diagnosis.layout.dimension_ids[q] for q in np.flatnonzero(np.any(C[diagnosis.centred] != 0, axis=0)))
-    return RuleEffect("centred", f"{short_list(r.register for r in regs)} held: every dimension they move sat within "
-                      f"{fraction:g} of its half tolerance from the centre on the last two parts and is forecast to "
-                      "stay there (never move what sits at the centre)", registers=tuple(r.id for r in regs),
-                      dimensions=dims)
+    return RuleEffect(
+        "centred",
+        f"{short_list(r.register for r in regs)} held: every dimension they move sat within "
+        f"{fraction:g} of its half tolerance from the centre on the last two parts and is forecast to "
+        "stay there (never move what sits at the centre)",
+        registers=tuple(r.id for r in regs),
+        dimensions=dims,
+    )
 
 
 def series_history(model: ProcessModel, diagnosis: Diagnosis) -> tuple[History, PartMeasurement]:
@@ -212,17 +299,26 @@ def series_history(model: ProcessModel, diagnosis: Diagnosis) -> tuple[History, 
     steps = np.diff(np.vstack([s.applied, s.applied[-1] + pending]), axis=0)  # (n, n_reg): after part k
     when = (np.concatenate([times[1:], times[-1:]]) - np.timedelta64(1, "ns")).astype("datetime64[ns]")
     k, i = np.nonzero(steps)
-    history = History(times[:-1], s.deviation[:-1].copy(), tuple(s.cycles[:-1]) if s.cycles else (),
-                      when[k], i.astype(np.int64), steps[k, i].astype(float), np.zeros(k.size, dtype=bool))
+    history = History(
+        times[:-1],
+        s.deviation[:-1].copy(),
+        tuple(s.cycles[:-1]) if s.cycles else (),
+        when[k],
+        i.astype(np.int64),
+        steps[k, i].astype(float),
+        np.zeros(k.size, dtype=bool),
+    )
     cycle = s.cycles[-1] if s.cycles else "last"
     dev = s.deviation[-1] + pending @ diagnosis.layout.composite
     stamp = str(times[-1].astype("datetime64[s]"))
-    return history, PartMeasurement(part=cycle, report="series", timestamp=stamp, deviation=dev,
-                                    sources=tuple("" for _ in dev))
+    return history, PartMeasurement(
+        part=cycle, report="series", timestamp=stamp, deviation=dev, sources=tuple("" for _ in dev)
+    )
 
 
-def recommend_next(model: ProcessModel, diagnosis: Diagnosis, solve: SolveOptions | None = None,
-                     diagnoser: Diagnoser | None = None) -> tuple[CycleCorrection | None, list[Note]]:
+def recommend_next(
+    model: ProcessModel, diagnosis: Diagnosis, solve: SolveOptions | None = None, diagnoser: Diagnoser | None = None
+) -> tuple[CycleCorrection | None, list[Note]]:
     """``correct`` for the next cycle, from the model that earned it (``diagnosis.next_from``).
 
     Augmented or declared: the model's forecast posed through its relation matrix; EWMA: the
@@ -243,8 +339,9 @@ def recommend_next(model: ProcessModel, diagnosis: Diagnosis, solve: SolveOption
         request = dataclasses.replace(request, model=ewma_model, history=history)
         composite = diagnosis.layout.composite
     else:
-        part = PartMeasurement(part="next", report="forecast", timestamp=None, deviation=fc,
-                               sources=tuple("" for _ in fc))
+        part = PartMeasurement(
+            part="next", report="forecast", timestamp=None, deviation=fc, sources=tuple("" for _ in fc)
+        )
         composite = diagnosis.next_matrix()
     cycle = correct_cycle(request, part, composite=composite, hold=hold)
     notes = list(cycle.notes)
@@ -271,11 +368,19 @@ def diagnose_reports(request: DiagnoseRequest) -> DiagnoseOutcome:
     """
     if request.augment:
         check_target(request.augment)  # a bad target costs nothing
-    inp = load_series(request.model, request.reports, corrections=request.corrections,
-                      temperatures=request.temperatures, db=request.db, thermal=request.thermal, read=request.read,
-                      process=request.process)
-    diagnosis = request.diagnoser.run(inp.layout, inp.series, declared=inp.declared,
-                                      factors=declared_terms(request.factors, inp))
+    inp = load_series(
+        request.model,
+        request.reports,
+        corrections=request.corrections,
+        temperatures=request.temperatures,
+        db=request.db,
+        thermal=request.thermal,
+        read=request.read,
+        process=request.process,
+    )
+    diagnosis = request.diagnoser.run(
+        inp.layout, inp.series, declared=inp.declared, factors=declared_terms(request.factors, inp)
+    )
     cycle, more = recommend_next(inp.model, diagnosis, request.solve, request.diagnoser)
     notes = (*inp.notes, *(Note(n, None, "diagnosis") for n in diagnosis.notes), *more)
     out = DiagnoseOutcome(inp, diagnosis, cycle.corrections if cycle is not None else {}, None, notes, cycle)
@@ -310,8 +415,10 @@ def declared_terms(factors: tuple[str, ...], inp: SeriesInput) -> tuple[Term, ..
             factor_channels(inp.series, f)
         except KeyError:
             known = sorted({c.split("=", 1)[0] for c in inp.series.process_channels if PRODUCT not in c})
-            raise MatchError(f"--factors: the process log has no usable column {f!r} (columns: {', '.join(known)})",
-                             location=SourceLocation(inp.process)) from None
+            raise MatchError(
+                f"--factors: the process log has no usable column {f!r} (columns: {', '.join(known)})",
+                location=SourceLocation(inp.process),
+            ) from None
     return terms
 
 
@@ -322,10 +429,16 @@ def _record(db: str | Path | StoreRef, model: ProcessModel, out: DiagnoseOutcome
     from setupfix.store import Recommendation
 
     doc = out.to_json()
-    result = {k: doc[k] for k in ("cycles", "rms_before", "rms_after", "max_before", "max_after", "effects",
-                                  "next_correction")}
-    inputs: dict[str, Any] = {"command": "diagnose", "model": model.source,
-                              "corrections": out.input.corrections, "temperatures": out.input.temperatures}
+    result = {
+        k: doc[k]
+        for k in ("cycles", "rms_before", "rms_after", "max_before", "max_after", "effects", "next_correction")
+    }
+    inputs: dict[str, Any] = {
+        "command": "diagnose",
+        "model": model.source,
+        "corrections": out.input.corrections,
+        "temperatures": out.input.temperatures,
+    }
     if Path(model.source).is_file():
         inputs["model_sha256"] = hashlib.sha256(Path(model.source).read_bytes()).hexdigest()
     with StoreRef.of(db).for_model(model).open() as store, store.transaction():
@@ -343,8 +456,9 @@ def write_augmented(model: ProcessModel, section: EffectsSection, target: str) -
     try:
         text = Path(model.source).read_text(encoding="utf-8-sig")
     except OSError as exc:
-        raise ExportError(f"cannot read the model to augment: {exc.strerror}",
-                          location=SourceLocation(model.source)) from None
+        raise ExportError(
+            f"cannot read the model to augment: {exc.strerror}", location=SourceLocation(model.source)
+        ) from None
     new = with_effects(text, section)
     try:  # what is written must load, model and effects
         doc = tomllib.loads(new)

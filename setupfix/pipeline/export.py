@@ -34,8 +34,13 @@ from dataclasses import dataclass
 
 from setupfix.errors import ExportError, SourceLocation
 from setupfix.offsets import OffsetRow, offset_rows
-from setupfix.pipeline.controllers import (PROGRAM_NUMBERS, check_program_number, derived_program_number,
-                                           program_title, render)
+from setupfix.pipeline.controllers import (
+    PROGRAM_NUMBERS,
+    check_program_number,
+    derived_program_number,
+    program_title,
+    render,
+)
 from setupfix.pipeline.requests import CycleCorrection
 from setupfix.pipeline.writers import write_text
 
@@ -64,28 +69,41 @@ def cycle_rows(cycle: CycleCorrection, current: Mapping[str, float] | None = Non
     MatchError
         If ``current`` lacks a correctable register.
     """
-    return offset_rows(cycle.model, cycle.corrections, report=cycle.part.report, part=cycle.part.part,
-                       current=current, verdict=cycle.verdict)
+    return offset_rows(
+        cycle.model,
+        cycle.corrections,
+        report=cycle.part.report,
+        part=cycle.part.part,
+        current=current,
+        verdict=cycle.verdict,
+    )
 
 
 def _check(cycles: Sequence[CycleCorrection], controller: str) -> None:
     for c in cycles:
         if c.verdict == "reject":
-            raise ExportError(f"part {c.part.part or '—'} is rejected, nothing exported: {c.recommendation.alarm}",
-                              location=SourceLocation(c.part.report or "<report>"))
+            raise ExportError(
+                f"part {c.part.part or '—'} is rejected, nothing exported: {c.recommendation.alarm}",
+                location=SourceLocation(c.part.report or "<report>"),
+            )
         if not c.solved:
             why = next(r.message for r in c.recommendation.rules if r.rule == "not_solved")
-            raise ExportError(f"part {c.part.part or '—'} is not solved, nothing exported: {why}",
-                              location=SourceLocation(c.part.report or "<report>"))
+            raise ExportError(
+                f"part {c.part.part or '—'} is not solved, nothing exported: {why}",
+                location=SourceLocation(c.part.report or "<report>"),
+            )
     if controller != "csv" and len(cycles) > 1:
         report = cycles[0].part.report or "<report>"
-        raise ExportError(f"{controller}: a program holds one correction, the report has {len(cycles)} cycles "
-                          f"({', '.join(c.part.part or '—' for c in cycles)}): choose one with --part",
-                          location=SourceLocation(report))
+        raise ExportError(
+            f"{controller}: a program holds one correction, the report has {len(cycles)} cycles "
+            f"({', '.join(c.part.part or '—' for c in cycles)}): choose one with --part",
+            location=SourceLocation(report),
+        )
 
 
-def program_number_of(cycles: Sequence[CycleCorrection], controller: str,
-                      program_number: int | None = None) -> int | None:
+def program_number_of(
+    cycles: Sequence[CycleCorrection], controller: str, program_number: int | None = None
+) -> int | None:
     """The number the program of ``cycles`` gets: ``program_number`` checked against the format, else derived
     from the first cycle's report and part; None for a format without a program name.
 
@@ -102,8 +120,12 @@ def program_number_of(cycles: Sequence[CycleCorrection], controller: str,
     return derived_program_number(first.report or "", first.part or "") if first else None
 
 
-def offsets_text(cycles: Sequence[CycleCorrection], controller: str = "csv",
-                 current: Mapping[str, float] | None = None, program_number: int | None = None) -> str:
+def offsets_text(
+    cycles: Sequence[CycleCorrection],
+    controller: str = "csv",
+    current: Mapping[str, float] | None = None,
+    program_number: int | None = None,
+) -> str:
     """The exact text :func:`export` writes (offsets CSV or a controller program).
 
     Raises
@@ -123,8 +145,14 @@ def offsets_text(cycles: Sequence[CycleCorrection], controller: str = "csv",
     return render(controller, rows, title, program_number=number, spindle=cycles[0].model.spindle)
 
 
-def export(cycles: Sequence[CycleCorrection], target: str, *, controller: str = "csv",
-           current: Mapping[str, float] | None = None, program_number: int | None = None) -> Exported:
+def export(
+    cycles: Sequence[CycleCorrection],
+    target: str,
+    *,
+    controller: str = "csv",
+    current: Mapping[str, float] | None = None,
+    program_number: int | None = None,
+) -> Exported:
     """Write the offsets of ``cycles`` to ``target`` (``-``: standard output) atomically.
 
     ``current`` (the controller's current offsets by register ID) makes the rows
@@ -139,5 +167,12 @@ def export(cycles: Sequence[CycleCorrection], target: str, *, controller: str = 
     text = offsets_text(cycles, controller, current, program_number)
     write_text(target, text)
     rows = tuple(row for c in cycles for row in cycle_rows(c, current))
-    return Exported(str(target), controller, text, hashlib.sha256(text.encode("utf-8")).hexdigest(),
-                    tuple(c.part.part for c in cycles), rows, program_number_of(cycles, controller, program_number))
+    return Exported(
+        str(target),
+        controller,
+        text,
+        hashlib.sha256(text.encode("utf-8")).hexdigest(),
+        tuple(c.part.part for c in cycles),
+        rows,
+        program_number_of(cycles, controller, program_number),
+    )

@@ -30,8 +30,11 @@ _MM_PER: dict[str, float] = {"mm": 1.0, "inch": 25.4}
 def unit_factor(thermal_unit: str | None, process_unit: str, source: str = "thermal model") -> float:
     """Length of one thermal-model unit in the process model's unit (µm → mm: 0.001)."""
     if thermal_unit is None:
-        raise ParseError("the thermal model does not state the unit of its error", location=SourceLocation(source),
-                         hint="refit it with --unit um or --unit mm")
+        raise ParseError(
+            "the thermal model does not state the unit of its error",
+            location=SourceLocation(source),
+            hint="refit it with --unit um or --unit mm",
+        )
     return UNITS[thermal_unit] / _MM_PER[process_unit]
 
 
@@ -39,8 +42,10 @@ def moved_registers(model: ProcessModel, saved: SavedModel, source: str = "therm
     """Mask (R,) of the process-model registers the drift moves (default: every free tool register)."""
     regs = model.registers
     if saved.axis.upper() != str(model.axis).upper():
-        raise ParameterError(f"the thermal model acts along {saved.axis}, the process model along {model.axis}",
-                             hint=f"{source}: refit with --axis {model.axis} if the drift acts on this axis")
+        raise ParameterError(
+            f"the thermal model acts along {saved.axis}, the process model along {model.axis}",
+            hint=f"{source}: refit with --axis {model.axis} if the drift acts on this axis",
+        )
     if saved.registers is None:
         mask = np.array([r.kind == "tool" and not r.fixed for r in regs])
     else:
@@ -49,11 +54,15 @@ def moved_registers(model: ProcessModel, saved: SavedModel, source: str = "therm
         known = {r.id.lower() for r in regs} | {r.register.lower() for r in regs}
         unknown = sorted(names - known)
         if unknown:
-            raise ParseError(f"register {unknown[0]!r} of the thermal model is not in the process model",
-                             location=SourceLocation(source, key="registers"))
+            raise ParseError(
+                f"register {unknown[0]!r} of the thermal model is not in the process model",
+                location=SourceLocation(source, key="registers"),
+            )
     if not mask.any():
-        raise ParameterError("the thermal drift moves no free register of the process model",
-                             hint=f"{source}: name them with thermal fit --registers")
+        raise ParameterError(
+            "the thermal drift moves no free register of the process model",
+            hint=f"{source}: name them with thermal fit --registers",
+        )
     return mask
 
 
@@ -61,8 +70,10 @@ def _seconds(stamp: str, origin: datetime, what: str) -> float:
     try:
         return (datetime.fromisoformat(stamp.strip().replace("Z", "+00:00")) - origin).total_seconds()
     except (ValueError, TypeError):
-        raise ParameterError(f"{what} {stamp!r} is not an ISO 8601 time comparable with the temperature log's",
-                             hint="e.g. 2026-01-05T08:00:00, both with or both without a time zone") from None
+        raise ParameterError(
+            f"{what} {stamp!r} is not an ISO 8601 time comparable with the temperature log's",
+            hint="e.g. 2026-01-05T08:00:00, both with or both without a time zone",
+        ) from None
 
 
 @dataclass(frozen=True)
@@ -104,20 +115,34 @@ class ThermalFeedForward:
         unit = self.thermal_unit.replace("um", "µm")
         change = f"ΔE {self.delta:+.4g} {unit} since {self.measured_at} ({self.method}, to {self.at})"
         if not self.applied:
-            return (f"thermal feed-forward: none ({change} within the dead band "
-                    f"±{self.dead_band:g} {self.process_unit})")
+            return f"thermal feed-forward: none ({change} within the dead band ±{self.dead_band:g} {self.process_unit})"
         return f"thermal feed-forward {self.shift:+.4g} {self.process_unit} on {', '.join(self.names)} ({change})"
 
     def to_json(self) -> dict[str, Any]:
-        return {"method": self.method, "delta": self.delta, "delta_unit": self.thermal_unit, "shift": self.shift,
-                "unit": self.process_unit, "registers": list(self.registers), "applied": self.applied,
-                "measured_at": self.measured_at, "at": self.at, "dead_band": self.dead_band,
-                "corrections": self.corrections()}
+        return {
+            "method": self.method,
+            "delta": self.delta,
+            "delta_unit": self.thermal_unit,
+            "shift": self.shift,
+            "unit": self.process_unit,
+            "registers": list(self.registers),
+            "applied": self.applied,
+            "measured_at": self.measured_at,
+            "at": self.at,
+            "dead_band": self.dead_band,
+            "corrections": self.corrections(),
+        }
 
 
-def thermal_feed_forward(model: ProcessModel, thermal: str | Path | SavedModel, log: str | Path | TemperatureLog, *,
-                         measured_at: str | None, at: str | None = None,
-                         dead_band: float | None = None) -> ThermalFeedForward:
+def thermal_feed_forward(
+    model: ProcessModel,
+    thermal: str | Path | SavedModel,
+    log: str | Path | TemperatureLog,
+    *,
+    measured_at: str | None,
+    at: str | None = None,
+    dead_band: float | None = None,
+) -> ThermalFeedForward:
     """The feed-forward of a thermal model over a temperature log (module docstring).
 
     Parameters
@@ -148,11 +173,14 @@ def thermal_feed_forward(model: ProcessModel, thermal: str | Path | SavedModel, 
     mask = moved_registers(model, saved, source)
     data = log if isinstance(log, TemperatureLog) else read_temperature_log(log)
     if not data.timestamps:
-        raise ParseError("the temperature log has no timestamps: the measured parts cannot be joined to it",
-                         location=data.location())
+        raise ParseError(
+            "the temperature log has no timestamps: the measured parts cannot be joined to it", location=data.location()
+        )
     if not measured_at:
-        raise ParameterError("the report gives no timestamp for its parts: the thermal change since they were "
-                             "cut is unknown", hint="add a timestamp column to the report")
+        raise ParameterError(
+            "the report gives no timestamp for its parts: the thermal change since they were cut is unknown",
+            hint="add a timestamp column to the report",
+        )
     origin = datetime.fromisoformat(data.timestamps[0].replace("Z", "+00:00"))
     times = np.array([_seconds(s, origin, "log time") for s in data.timestamps])
     t_meas = _seconds(measured_at, origin, "part timestamp")
@@ -161,14 +189,26 @@ def thermal_feed_forward(model: ProcessModel, thermal: str | Path | SavedModel, 
     try:
         delta = float(drift_change(drift, times, t_meas, t_at))
     except ValueError as exc:
-        raise ParameterError(f"{exc} ({data.source}: {data.timestamps[0]} … {data.timestamps[-1]}; "
-                             f"parts cut {measured_at}{'' if at is None else f', correction at {at}'})") from None
+        raise ParameterError(
+            f"{exc} ({data.source}: {data.timestamps[0]} … {data.timestamps[-1]}; "
+            f"parts cut {measured_at}{'' if at is None else f', correction at {at}'})"
+        ) from None
     band = float(model.resolution if dead_band is None else dead_band)
     if not np.isfinite(band) or band < 0:
         raise ParameterError(f"the thermal dead band must be a number >= 0, got {band!r}")
     x = feed_forward(delta, mask, factor=factor, resolution=model.resolution, dead_band=band)
     regs = [r for r, m in zip(model.registers, mask, strict=True) if m]
     at_text = at if at is not None else data.timestamps[-1]
-    return ThermalFeedForward(saved.model.name, delta, str(saved.unit), float(x[mask][0]), model.unit,
-                              tuple(r.id for r in regs), tuple(r.register for r in regs), measured_at, at_text, band,
-                              tuple(list(data.notes) + notes))
+    return ThermalFeedForward(
+        saved.model.name,
+        delta,
+        str(saved.unit),
+        float(x[mask][0]),
+        model.unit,
+        tuple(r.id for r in regs),
+        tuple(r.register for r in regs),
+        measured_at,
+        at_text,
+        band,
+        tuple(list(data.notes) + notes),
+    )

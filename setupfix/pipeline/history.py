@@ -20,8 +20,8 @@ import pandas as pd
 
 import parsers
 from parsers._source import read_bytes
-from parsers.names import visible_name
 from parsers.corrections import EVENTS, check_corrections, read_corrections_log
+from parsers.names import visible_name
 from parsers.temperature import read_temperature_log
 from parsers.timestamps import iso_text
 from setupfix.errors import Note, ParameterError, ParseError, SourceLocation, StoreError, UnknownFormatError
@@ -30,14 +30,25 @@ from setupfix.pipeline.dfq import export_dfq
 from setupfix.pipeline.export import Exported
 from setupfix.pipeline.present import cycle_json
 from setupfix.pipeline.requests import CycleCorrection, ReadOptions
-from setupfix.pipeline.writers import write_canonical_csv, write_table_csv
 from setupfix.pipeline.stores import DEFAULT_DB, StoreRef, store_location
+from setupfix.pipeline.writers import write_canonical_csv, write_table_csv
 from setupfix.store import Recommendation, Store
 from setupfix.store._audit import TABLES
 
-__all__ = ["DEFAULT_DB", "store_location", "import_history", "ImportRequest", "ImportSummary",
-           "history_summary", "export_history", "record_recommendations", "record_correction", "migrate_history",
-           "EXPORTS", "EVENTS"]
+__all__ = [
+    "DEFAULT_DB",
+    "store_location",
+    "import_history",
+    "ImportRequest",
+    "ImportSummary",
+    "history_summary",
+    "export_history",
+    "record_recommendations",
+    "record_correction",
+    "migrate_history",
+    "EXPORTS",
+    "EVENTS",
+]
 
 #: Tables ``history export`` writes (``recommendations``: the audit trail, one row per register component).
 EXPORTS = ("measurements", "corrections", "temperatures", "recommendations", "dfq")
@@ -47,8 +58,11 @@ def _temperature_frame(path: str | os.PathLike[str]) -> pd.DataFrame:
     """A temperature log (:func:`parsers.temperature.read_temperature_log`) as the store keeps it."""
     log = read_temperature_log(Path(path))
     if not log.timestamps:
-        raise ParseError("a temperature log for the history store needs a 'timestamp' column",
-                         location=log.location(), hint="the store ties samples to parts by time")
+        raise ParseError(
+            "a temperature log for the history store needs a 'timestamp' column",
+            location=log.location(),
+            hint="the store ties samples to parts by time",
+        )
     stamps = [iso_text(t, log.location(i)) for i, t in enumerate(log.timestamps)]
     return pd.DataFrame({"timestamp": stamps, **log.columns})
 
@@ -104,8 +118,9 @@ def import_history(store: Store, request: ImportRequest) -> ImportSummary:
     for name, from_folder in inputs.files:
         source = parsers.load_source(name)  # read once: the bytes hashed are the bytes parsed
         try:
-            result = parsers.read_report(source, format=options.format, unit=options.unit,
-                                         encoding=options.encoding, lenient=options.lenient)
+            result = parsers.read_report(
+                source, format=options.format, unit=options.unit, encoding=options.encoding, lenient=options.lenient
+            )
         except UnknownFormatError as exc:
             if not from_folder or options.format:
                 raise
@@ -148,8 +163,10 @@ def history_summary(store: Store, *, every_machine: bool = True) -> dict[str, ob
     a damaged one is refused, not summarised from what happens to be readable.
     """
     store.verify()
-    summary: dict[str, object] = {"store": store.location,
-                                  "machines": [dataclasses.asdict(m) for m in store.machines()]}
+    summary: dict[str, object] = {
+        "store": store.location,
+        "machines": [dataclasses.asdict(m) for m in store.machines()],
+    }
     if every_machine:
         return summary
     rows = store.measurements()
@@ -157,23 +174,36 @@ def history_summary(store: Store, *, every_machine: bool = True) -> dict[str, ob
     for rec in store.reports():
         mine = rows[rows["report_sha256"] == rec.sha256]
         stamps = mine["timestamp"].dropna()
-        reports.append({"report": rec.name, "sha256": rec.sha256[:12], "format": rec.format, "rows": rec.rows,
-                        "parts": int(mine["part"].fillna("").nunique()),
-                        "first": str(stamps.min()) if len(stamps) else "",
-                        "last": str(stamps.max()) if len(stamps) else "",
-                        "imported": rec.imported_at})
+        reports.append(
+            {
+                "report": rec.name,
+                "sha256": rec.sha256[:12],
+                "format": rec.format,
+                "rows": rec.rows,
+                "parts": int(mine["part"].fillna("").nunique()),
+                "first": str(stamps.min()) if len(stamps) else "",
+                "last": str(stamps.max()) if len(stamps) else "",
+                "imported": rec.imported_at,
+            }
+        )
     log = store.corrections()
     temps = store.temperatures()
-    return {**summary, "machine": store.machine, "reports": reports,
-            "corrections": int((log["event"] == "correction").sum()),
-            "tool_changes": int((log["event"] == "tool_change").sum()),
-            "registers": sorted(log["register"].unique().tolist()),
-            "temperature_samples": len(temps), "temperature_channels": [c for c in temps.columns if c != "timestamp"],
-            "recommendations": len(store.recommendations())}
+    return {
+        **summary,
+        "machine": store.machine,
+        "reports": reports,
+        "corrections": int((log["event"] == "correction").sum()),
+        "tool_changes": int((log["event"] == "tool_change").sum()),
+        "registers": sorted(log["register"].unique().tolist()),
+        "temperature_samples": len(temps),
+        "temperature_channels": [c for c in temps.columns if c != "timestamp"],
+        "recommendations": len(store.recommendations()),
+    }
 
 
-def export_history(store: Store, table: str, target: str | os.PathLike[str], *,
-                   every_machine: bool = False) -> tuple[int, tuple[Note, ...]]:
+def export_history(
+    store: Store, table: str, target: str | os.PathLike[str], *, every_machine: bool = False
+) -> tuple[int, tuple[Note, ...]]:
     """Write one stored table of the handle's machine as its canonical CSV (``-``: standard output); the rows
     written and the notes (what the target format cannot carry).
 
@@ -202,9 +232,15 @@ def export_history(store: Store, table: str, target: str | os.PathLike[str], *,
     return len(frame), ()
 
 
-def record_recommendations(store: Store, results: Sequence[CycleCorrection], *, model: str | os.PathLike[str],
-                           report: str | os.PathLike[str], seed: int | None = None,
-                           exported: Exported | None = None) -> list[int]:
+def record_recommendations(
+    store: Store,
+    results: Sequence[CycleCorrection],
+    *,
+    model: str | os.PathLike[str],
+    report: str | os.PathLike[str],
+    seed: int | None = None,
+    exported: Exported | None = None,
+) -> list[int]:
     """Store the recommendations of one ``correct`` run (its cycles), one transaction.
 
     Inputs kept: the SHA-256 of the model and report files, their names, part and seed, and
@@ -217,18 +253,33 @@ def record_recommendations(store: Store, results: Sequence[CycleCorrection], *, 
     with store.transaction():
         for r in results:
             result = cycle_json(r)
-            inputs = {"model": str(model), "model_sha256": hashes["model"], "report": str(report),
-                      "report_sha256": hashes["report"], "part": result.get("part"), "seed": seed}
+            inputs = {
+                "model": str(model),
+                "model_sha256": hashes["model"],
+                "report": str(report),
+                "report_sha256": hashes["report"],
+                "part": result.get("part"),
+                "seed": seed,
+            }
             if exported is not None and r.part.part in exported.parts:
-                inputs["export"] = {"target": visible_name(exported.target), "controller": exported.controller,
-                                    "sha256": exported.sha256}
+                inputs["export"] = {
+                    "target": visible_name(exported.target),
+                    "controller": exported.controller,
+                    "sha256": exported.sha256,
+                }
             ids.append(store.add_recommendation(Recommendation(result["optimizer"], inputs, result)))
     return ids
 
 
-def record_correction(ref: StoreRef, model: ProcessModel, results: Sequence[CycleCorrection], *,
-                      report: str | os.PathLike[str], seed: int | None = None,
-                      write: Callable[[], Exported | None] = lambda: None) -> Exported | None:
+def record_correction(
+    ref: StoreRef,
+    model: ProcessModel,
+    results: Sequence[CycleCorrection],
+    *,
+    report: str | os.PathLike[str],
+    seed: int | None = None,
+    write: Callable[[], Exported | None] = lambda: None,
+) -> Exported | None:
     """``correct --store``: the recommendations recorded for the model's machine, and the offsets written.
 
     ``write`` (the export, if any) runs inside the store's transaction, after the store has taken
@@ -240,8 +291,7 @@ def record_correction(ref: StoreRef, model: ProcessModel, results: Sequence[Cycl
     try:
         with ref.for_model(model).open() as store, store.transaction():
             exported = write()
-            record_recommendations(store, results, model=model.source, report=report, seed=seed,
-                                   exported=exported)
+            record_recommendations(store, results, model=model.source, report=report, seed=seed, exported=exported)
     except StoreError:
         if exported is not None and exported.target != "-":
             Path(exported.target).unlink(missing_ok=True)
@@ -261,8 +311,11 @@ def migrate_history(source: Store, target: Store) -> dict[str, int]:
     """
     held = [t for t, _, _ in TABLES if target.count(t)]
     if held:
-        raise StoreError(f"the target store already holds {', '.join(held)} rows: migrate into an empty store",
-                         location=SourceLocation(target.location), hint="give a new database with --db")
+        raise StoreError(
+            f"the target store already holds {', '.join(held)} rows: migrate into an empty store",
+            location=SourceLocation(target.location),
+            hint="give a new database with --db",
+        )
     source.verify()
     copied: dict[str, int] = {}
     with target.transaction():
@@ -270,6 +323,8 @@ def migrate_history(source: Store, target: Store) -> dict[str, int]:
             target.restore(table, source.dump(table))
             copied[table] = target.count(table)
             if copied[table] != source.count(table):
-                raise StoreError(f"{table}: {copied[table]} rows copied of {source.count(table)}; nothing kept",
-                                 location=SourceLocation(target.location))
+                raise StoreError(
+                    f"{table}: {copied[table]} rows copied of {source.count(table)}; nothing kept",
+                    location=SourceLocation(target.location),
+                )
     return copied

@@ -20,8 +20,7 @@ from setupfix.model import CANONICAL_COLUMNS
 from setupfix.pipeline.cycles import ReadOptions
 from setupfix.pipeline.writers import FLOAT_FORMAT, write_canonical_csv  # noqa: F401 - re-exported
 
-__all__ = ["ParsedReport", "ParseOutcome", "parse_reports", "write_canonical_csv",
-           "OUTPUT_COLUMNS", "list_formats"]
+__all__ = ["ParsedReport", "ParseOutcome", "parse_reports", "write_canonical_csv", "OUTPUT_COLUMNS", "list_formats"]
 
 #: Columns ``setupfix parse`` writes: the canonical ones, then the reference-only flag.
 OUTPUT_COLUMNS: tuple[str, ...] = (*CANONICAL_COLUMNS, "reference")
@@ -94,8 +93,9 @@ def parse_reports(paths: Sequence[str | Path], read: ReadOptions | None = None) 
     """
     options = read if read is not None else ReadOptions()
     inputs = parsers.expand_inputs(paths)
-    failures: list[SetupfixError] = [ParseError("folder holds no report file", location=SourceLocation(folder))
-                                     for folder in inputs.empty]
+    failures: list[SetupfixError] = [
+        ParseError("folder holds no report file", location=SourceLocation(folder)) for folder in inputs.empty
+    ]
     skipped: list[Note] = []
     reports: list[ParsedReport] = []
     for name, from_folder in inputs.files:
@@ -116,5 +116,4 @@ def parse_reports(paths: Sequence[str | Path], read: ReadOptions | None = None) 
 
 def list_formats() -> list[dict[str, object]]:
     """Registered report formats in sniffing order: name, extensions, description."""
-    return [{"name": s.name, "extensions": list(s.extensions), "description": s.description}
-            for s in parsers.formats()]
+    return [{"name": s.name, "extensions": list(s.extensions), "description": s.description} for s in parsers.formats()]

@@ -44,8 +44,14 @@ def format_number(value: float, digits: int = 4) -> str:
     return f"{value:+.{digits}f}"
 
 
-_FLAG_TEXT = {"out": "OUT after", "out_before": "out before", "binding": "◀ binding", "given_up": "given up",
-              "rejected": "REJECT", "guard": "in guard band"}
+_FLAG_TEXT = {
+    "out": "OUT after",
+    "out_before": "out before",
+    "binding": "◀ binding",
+    "given_up": "given up",
+    "rejected": "REJECT",
+    "guard": "in guard band",
+}
 
 
 def format_flags(flags: list[str]) -> str:
@@ -68,8 +74,11 @@ def verdict_line(pc: CycleCorrection) -> str:
         why = next(r.message for r in rec.rules if r.rule == "not_solved")
         return f"leave the offsets as they are and correct again — {why}"
     if rec.verdict == "hold":
-        default = ("no change needed" if pc.margin_after >= 0 else
-                   "no setup correction improves it: out-of-tolerance dimensions need the NC program or the process")
+        default = (
+            "no change needed"
+            if pc.margin_after >= 0
+            else "no setup correction improves it: out-of-tolerance dimensions need the NC program or the process"
+        )
         why = next((r.message for r in rec.rules if r.rule in ("dead_band", "no_harm")), default)
         return f"HOLD: leave the offsets as they are ({why})"
     return "APPLY the corrections below"
@@ -80,33 +89,48 @@ def format_correction(pc: CycleCorrection) -> str:
     binding dimensions, rules and notes."""
     r = pc.result
     unit = pc.model.unit
-    lines = [f"{pc.part.report}  part {pc.part.part or '—'}  ({r.optimizer}, {r.status}, {r.seconds * 1000:.0f} ms)",
-             f"verdict: {verdict_label(pc)} — {verdict_line(pc)}", ""]
+    lines = [
+        f"{pc.part.report}  part {pc.part.part or '—'}  ({r.optimizer}, {r.status}, {r.seconds * 1000:.0f} ms)",
+        f"verdict: {verdict_label(pc)} — {verdict_line(pc)}",
+        "",
+    ]
     rows = pc.dimension_rows()
     w = max([14] + [len(row["name"]) + 2 for row in rows])
     st = 9 if any(row.get("station") for row in rows) else 0  # station column only for fixtures
-    head = (f"{'station':<{st}}"[:st]
-            + f"{'dimension':<{w}}{'deviation':>11}{'lower':>9}{'upper':>9}{'predicted':>11}{'margin':>9}  flags")
+    head = (
+        f"{'station':<{st}}"[:st]
+        + f"{'dimension':<{w}}{'deviation':>11}{'lower':>9}{'upper':>9}{'predicted':>11}{'margin':>9}  flags"
+    )
     lines += [head, "-" * len(head)]
     for row in rows:
-        lines.append(f"{_one_line(row.get('station') or ''):<{st}}"[:st]
-                     + f"{_one_line(row['name']):<{w}}{format_number(row['deviation']):>11}"
-                     f"{format_number(row['lower'], 3):>9}{format_number(row['upper'], 3):>9}"
-                     f"{format_number(row['predicted']):>11}{format_number(row['margin']):>9}"
-                     f"  {format_flags(row['flags'])}".rstrip())
+        lines.append(
+            f"{_one_line(row.get('station') or ''):<{st}}"[:st]
+            + f"{_one_line(row['name']):<{w}}{format_number(row['deviation']):>11}"
+            f"{format_number(row['lower'], 3):>9}{format_number(row['upper'], 3):>9}"
+            f"{format_number(row['predicted']):>11}{format_number(row['margin']):>9}"
+            f"  {format_flags(row['flags'])}".rstrip()
+        )
     for did in pc.part.absent:
         dim = next(d for d in pc.model.dimensions if d.id == did)
-        lines.append(f"{_one_line(dim.group or ''):<{st}}"[:st]
-                     + f"{_one_line(dim.name):<{w}}{'absent from report: not in the objective':>50}")
+        lines.append(
+            f"{_one_line(dim.group or ''):<{st}}"[:st]
+            + f"{_one_line(dim.name):<{w}}{'absent from report: not in the objective':>50}"
+        )
     model = pc.model
-    lines += ["", f"corrections [{unit}], axis {model.axis}:" if not model.multi_axis else
-              f"corrections [{unit}; a rotation .C in degrees], per register component:"]
+    lines += [
+        "",
+        f"corrections [{unit}], axis {model.axis}:"
+        if not model.multi_axis
+        else f"corrections [{unit}; a rotation .C in degrees], per register component:",
+    ]
     digits = {reg.id: grid_decimals(model.resolution_of(reg)) for reg in model.registers}
     width = max([6] + [len(reg.id) for reg in model.registers])
     for reg in pc.register_rows():
         note = "fixed" if reg["fixed"] else ("at limit" if reg["at_limit"] else "")
-        lines.append(f"  {reg['id']:<{width}} {reg['register']:<10} {reg['delta']:+.{digits[reg['id']]}f}  "
-                     f"{reg['offset']:<8} {note}".rstrip())
+        lines.append(
+            f"  {reg['id']:<{width}} {reg['register']:<10} {reg['delta']:+.{digits[reg['id']]}f}  "
+            f"{reg['offset']:<8} {note}".rstrip()
+        )
     if pc.thermal is not None:
         lines.append(pc.thermal.line())
     lines += [
@@ -120,8 +144,10 @@ def format_correction(pc: CycleCorrection) -> str:
     if pc.binding:
         lines.append("binding (what stops a better correction): " + ", ".join(names[b] for b in pc.binding))
     if pc.given_up:
-        lines.append("given up (need the NC program or the process, not the setup): "
-                     + short_list((names[b] for b in pc.given_up), TEXT_LIST))
+        lines.append(
+            "given up (need the NC program or the process, not the setup): "
+            + short_list((names[b] for b in pc.given_up), TEXT_LIST)
+        )
     if pc.verdict != "reject":
         lines.append(r.message)
     for rule in pc.rules:
@@ -137,43 +163,51 @@ def cycle_json(pc: CycleCorrection) -> dict[str, Any]:
     r = pc.result
     names = {d.id: d.name for d in pc.model.dimensions}
     rec = pc.recommendation
-    return {
-        "part": pc.part.part,
-        "report": pc.part.report,
-        "verdict": rec.verdict,
-        "alarm": rec.alarm or None,
-        "optimizer": r.optimizer,
-        "status": r.status,
-        "solved": rec.solved,
-        "stopped": r.extra.get("stopped") if r.status in STOPPED else None,
-        "norm_ratio_max": _finite(r.extra.get("norm_ratio_max")),
-        "margin_before": round(pc.margin_before, digits),
-        "margin_after": round(pc.margin_after, digits),
-        "bonus": round(pc.margin_after - pc.margin_before, digits),
-        "norm": round(pc.norm, digits),
-        "bound": None if r.bound is None else round(r.bound, digits),
-        "in_tolerance": pc.margin_after >= 0 and not pc.given_up,
-        "message": r.message,
-        "corrections": {k: round(v, digits) for k, v in pc.corrections.items()},
-        "registers": [{**row, "delta": round(row["delta"], digits)} for row in pc.register_rows()],
-        "binding": [names[b] for b in pc.binding],
-        "given_up": [names[b] for b in pc.given_up],
-        "at_limit": list(rec.at_limit),
-        "rules": [e.to_json() for e in pc.rules],
-        "dimensions": [
-            {k: (round(v, digits) if isinstance(v, float) and np.isfinite(v) else
-                 (None if isinstance(v, float) else v))
-             for k, v in row.items()}
-            for row in pc.dimension_rows()
-        ],
-        "absent": list(pc.part.absent),
-        "unmatched": list(pc.part.unmatched),
-        "suggestions": {name: list(near) for name, near in pc.part.suggestions.items()},
-        "warnings": note_lines(pc.notes),
-        "evaluations": r.evaluations,
-        "seconds": round(r.seconds, 6),
-    } | ({"thermal": pc.thermal.to_json()} if pc.thermal is not None else {}) | (
-        {"zone_polygon_error": pc.problem.polygon} if pc.problem.circles is not None else {})
+    return (
+        {
+            "part": pc.part.part,
+            "report": pc.part.report,
+            "verdict": rec.verdict,
+            "alarm": rec.alarm or None,
+            "optimizer": r.optimizer,
+            "status": r.status,
+            "solved": rec.solved,
+            "stopped": r.extra.get("stopped") if r.status in STOPPED else None,
+            "norm_ratio_max": _finite(r.extra.get("norm_ratio_max")),
+            "margin_before": round(pc.margin_before, digits),
+            "margin_after": round(pc.margin_after, digits),
+            "bonus": round(pc.margin_after - pc.margin_before, digits),
+            "norm": round(pc.norm, digits),
+            "bound": None if r.bound is None else round(r.bound, digits),
+            "in_tolerance": pc.margin_after >= 0 and not pc.given_up,
+            "message": r.message,
+            "corrections": {k: round(v, digits) for k, v in pc.corrections.items()},
+            "registers": [{**row, "delta": round(row["delta"], digits)} for row in pc.register_rows()],
+            "binding": [names[b] for b in pc.binding],
+            "given_up": [names[b] for b in pc.given_up],
+            "at_limit": list(rec.at_limit),
+            "rules": [e.to_json() for e in pc.rules],
+            "dimensions": [
+                {
+                    k: (
+                        round(v, digits)
+                        if isinstance(v, float) and np.isfinite(v)
+                        else (None if isinstance(v, float) else v)
+                    )
+                    for k, v in row.items()
+                }
+                for row in pc.dimension_rows()
+            ],
+            "absent": list(pc.part.absent),
+            "unmatched": list(pc.part.unmatched),
+            "suggestions": {name: list(near) for name, near in pc.part.suggestions.items()},
+            "warnings": note_lines(pc.notes),
+            "evaluations": r.evaluations,
+            "seconds": round(r.seconds, 6),
+        }
+        | ({"thermal": pc.thermal.to_json()} if pc.thermal is not None else {})
+        | ({"zone_polygon_error": pc.problem.polygon} if pc.problem.circles is not None else {})
+    )
 
 
 def _finite(value: object) -> float | None:
@@ -192,6 +226,7 @@ def format_matrix(matrix: np.ndarray, rows: list[str], cols: list[str], title: s
     Columns that do not fit in ``width`` characters continue in further blocks, each
     repeating the row labels and headed ``title (columns a–b of n)``.
     """
+
     def cell(v: float) -> str:
         return f"{int(v)}" if float(v).is_integer() else f"{v:.3g}"
 
@@ -223,14 +258,17 @@ def format_sparse(matrix: np.ndarray, rows: list[str], cols: list[str], title: s
     c, r = np.nonzero(matrix)
     order = np.argsort(r, kind="stable")  # column by column, rows in order within each
     r, c = r[order], c[order]
-    head = (f"{title}: {len(rows)} × {len(cols)}, {len(r)} non-zero entries; each column with its "
-            f"non-zero rows (columns without any: none shown)")
+    head = (
+        f"{title}: {len(rows)} × {len(cols)}, {len(r)} non-zero entries; each column with its "
+        f"non-zero rows (columns without any: none shown)"
+    )
     lines = [head]
     starts = np.flatnonzero(np.r_[True, r[1:] != r[:-1]]) if len(r) else np.zeros(0, dtype=int)
     for begin, end in zip(starts, [*starts[1:], len(r)], strict=True):
         terms = [_term(float(matrix[i, r[begin]]), rows[i]) for i in c[begin:end]]
-        lines.append(textwrap.fill(f"{cols[r[begin]]}: " + " ".join(terms), width, initial_indent="  ",
-                                   subsequent_indent="    "))
+        lines.append(
+            textwrap.fill(f"{cols[r[begin]]}: " + " ".join(terms), width, initial_indent="  ", subsequent_indent="    ")
+        )
     return "\n".join(lines)
 
 
@@ -256,8 +294,10 @@ def format_relations(rm: RelationMatrices, which: list[str], null: np.ndarray, r
             continue
         blocks.append(format_matrix(m, r, c, name) if m.size <= DENSE_CELLS else format_sparse(m, r, c, name))
     regs = rm.registers
-    lines = [f"composite C = [R_WF·R_FD ; R_TF·R_FD]: {len(regs)} registers × {len(rm.dimensions)} dimensions,",
-             f"rank {rank}"]
+    lines = [
+        f"composite C = [R_WF·R_FD ; R_TF·R_FD]: {len(regs)} registers × {len(rm.dimensions)} dimensions,",
+        f"rank {rank}",
+    ]
     if null.shape[0] == 0:
         lines.append("null space: none — every correction moves some dimension")
     else:
@@ -267,16 +307,23 @@ def format_relations(rm: RelationMatrices, which: list[str], null: np.ndarray, r
             lines.append(textwrap.fill(" ".join(terms), 100, initial_indent="  ", subsequent_indent="    "))
     blocks.append("\n".join(lines))
     return "\n\n".join(blocks)
+
+
 def format_batch_summary(summary: BatchSummary, out: str) -> str:
     """Reports, parts, verdicts, failures, skipped files and time of a batch run."""
     verdicts = ", ".join(f"{summary.verdicts.get(v, 0)} {v}" for v in ("apply", "hold", "reject"))
     rate = summary.reports / summary.seconds if summary.seconds > 0 else 0.0
-    unsolved = (f" ({summary.unsolved} of the holds not solved within the time limit: nothing proven; a "
-                "history store does not count them as done)" if summary.unsolved else "")
-    lines = [f"{summary.reports} report(s), {summary.parts} part(s): {verdicts}{unsolved}",
-             f"{len(summary.failed)} failed, {len(summary.skipped)} skipped; "
-             f"{summary.seconds:.1f} s ({rate:.0f} reports/s)",
-             f"offsets written to {out}" if summary.written else f"nothing new: {out} left as it was"]
+    unsolved = (
+        f" ({summary.unsolved} of the holds not solved within the time limit: nothing proven; a "
+        "history store does not count them as done)"
+        if summary.unsolved
+        else ""
+    )
+    lines = [
+        f"{summary.reports} report(s), {summary.parts} part(s): {verdicts}{unsolved}",
+        f"{len(summary.failed)} failed, {len(summary.skipped)} skipped; {summary.seconds:.1f} s ({rate:.0f} reports/s)",
+        f"offsets written to {out}" if summary.written else f"nothing new: {out} left as it was",
+    ]
     for path, reason in summary.skipped:
         if not reason.startswith("still being written"):
             lines.append(f"skipped {path}: {reason}")
@@ -295,16 +342,22 @@ def format_comparison(c: Comparison) -> str:
         "",
         f"{'':8}{'f1 [' + unit + ']':^24}{'f2 [' + unit + ']':^24}{'f = 10·f1 − f2':^24}"
         f"{'':>9}{'':>9}{'gap f1 [' + gap_unit + ']':^14}",
-        f"{'method':<8}" + f"{'best':>8}{'median':>8}{'worst':>8}" * 3
+        f"{'method':<8}"
+        + f"{'best':>8}{'median':>8}{'worst':>8}" * 3
         + f"{'solutions':>10}{'seconds':>8}{'median':>7}{'worst':>7}",
     ]
     lines.append("-" * len(lines[-1]))
     for row in c.table():
         cells = "".join(f"{row[f'{k}_{s}']:>8.4f}" for k in ("f1", "f2", "f") for s in ("best", "median", "worst"))
-        lines.append(f"{row['optimizer']:<8}{cells}{row['evaluations']:>10.0f}{row['seconds']:>8.3f}"
-                     f"{row['gap_median'] * scale:>7.1f}{row['gap_worst'] * scale:>7.1f}")
-    lines += ["", "best/median/worst over the trials (best f1 and f largest, best f2 smallest); solutions and "
-                  "seconds are medians per trial (exact: solver calls); gap = exact f1 − trial f1."]
+        lines.append(
+            f"{row['optimizer']:<8}{cells}{row['evaluations']:>10.0f}{row['seconds']:>8.3f}"
+            f"{row['gap_median'] * scale:>7.1f}{row['gap_worst'] * scale:>7.1f}"
+        )
+    lines += [
+        "",
+        "best/median/worst over the trials (best f1 and f largest, best f2 smallest); solutions and "
+        "seconds are medians per trial (exact: solver calls); gap = exact f1 − trial f1.",
+    ]
     for name, reason in c.skipped.items():
         lines.append(f"skipped {name}: {reason}")
     return "\n".join(lines)

@@ -33,8 +33,18 @@ if TYPE_CHECKING:  # the thermal modules bring scipy.signal (~0.5 s): loaded onl
     from setupfix.pipeline.feedforward import ThermalFeedForward
     from setupfix.thermal.persist import SavedModel
 
-__all__ = ["ReadOptions", "CycleOptions", "SolveOptions", "ThermalInputs", "load_thermal", "CurrentOffsets",
-           "History", "CorrectRequest", "CycleCorrection", "CorrectOutcome"]
+__all__ = [
+    "ReadOptions",
+    "CycleOptions",
+    "SolveOptions",
+    "ThermalInputs",
+    "load_thermal",
+    "CurrentOffsets",
+    "History",
+    "CorrectRequest",
+    "CycleCorrection",
+    "CorrectOutcome",
+]
 
 Array = npt.NDArray[np.float64]
 
@@ -53,8 +63,14 @@ class CycleOptions:
     part: str | None = None
 
     @classmethod
-    def of(cls, stations: Sequence[str] | Mapping[str, str] | None = None, *, parts_per_cycle: int | None = None,
-           strict: bool = False, part: str | None = None) -> CycleOptions:
+    def of(
+        cls,
+        stations: Sequence[str] | Mapping[str, str] | None = None,
+        *,
+        parts_per_cycle: int | None = None,
+        strict: bool = False,
+        part: str | None = None,
+    ) -> CycleOptions:
         """From a list or a mapping of stations (made hashable)."""
         st: tuple[str, ...] | tuple[tuple[str, str], ...] | None = None
         if isinstance(stations, Mapping):
@@ -87,9 +103,10 @@ class CycleOptions:
             return list(parts)
         chosen = [p for p in parts if p.part == self.part]
         if not chosen:
-            raise MatchError(f"no part {self.part!r} in the report "
-                             f"(parts: {', '.join(p.part or '(none)' for p in parts)})",
-                             location=SourceLocation(str(report)))
+            raise MatchError(
+                f"no part {self.part!r} in the report (parts: {', '.join(p.part or '(none)' for p in parts)})",
+                location=SourceLocation(str(report)),
+            )
         return chosen
 
 
@@ -122,8 +139,10 @@ class SolveOptions:
         if self.objective not in (None, "leximin", "paper"):
             raise ParameterError(f"unknown objective {self.objective!r} (known: leximin, paper)")
         if self.objective == "leximin" and self.optimizer != "exact":
-            raise ParameterError(f"--objective leximin applies to the exact optimizer; {self.optimizer!r} "
-                                 "optimises the paper's error budget f1 (use --objective paper or omit it)")
+            raise ParameterError(
+                f"--objective leximin applies to the exact optimizer; {self.optimizer!r} "
+                "optimises the paper's error budget f1 (use --objective paper or omit it)"
+            )
         get_optimizer(self.optimizer, seed=self.seed, **self.params())  # the optimiser's declared constraints
 
     @property
@@ -152,8 +171,9 @@ class ThermalInputs:
     dead_band: float | None = None
 
 
-def load_thermal(thermal: str | Path, temperatures: str | Path, *, at: str | None = None,
-                 dead_band: float | None = None) -> ThermalInputs:
+def load_thermal(
+    thermal: str | Path, temperatures: str | Path, *, at: str | None = None, dead_band: float | None = None
+) -> ThermalInputs:
     """Read the thermal model (``thermal fit``) and the temperature log once.
 
     Raises
@@ -305,8 +325,10 @@ class CycleCorrection:
         """The recommendation's rules with a zone's facets named by the zone."""
         if self.problem.rows is None:
             return self.recommendation.rules
-        return tuple(dataclasses.replace(r, dimensions=self.problem.dimension_of(r.dimensions)) if r.dimensions else r
-                     for r in self.recommendation.rules)
+        return tuple(
+            dataclasses.replace(r, dimensions=self.problem.dimension_of(r.dimensions)) if r.dimensions else r
+            for r in self.recommendation.rules
+        )
 
     @property
     def binding(self) -> tuple[str, ...]:
@@ -316,10 +338,19 @@ class CycleCorrection:
     def register_rows(self) -> list[dict[str, Any]]:
         """Every register, fixed ones included: id, register, kind, offset, delta, fixed, at_limit."""
         at = set(self.recommendation.at_limit)
-        return [{"id": reg.id, "register": reg.register, "kind": reg.kind, "offset": reg.offset,
-                 "delta": float(delta), "fixed": reg.fixed, "at_limit": reg.id in at}
-                | ({"component": reg.component} if reg.component is not None else {})
-                for reg, delta in zip(self.model.registers, self.values, strict=True)]
+        return [
+            {
+                "id": reg.id,
+                "register": reg.register,
+                "kind": reg.kind,
+                "offset": reg.offset,
+                "delta": float(delta),
+                "fixed": reg.fixed,
+                "at_limit": reg.id in at,
+            }
+            | ({"component": reg.component} if reg.component is not None else {})
+            for reg, delta in zip(self.model.registers, self.values, strict=True)
+        ]
 
     def dimension_rows(self) -> list[dict[str, Any]]:
         """Per measured dimension: id, name, station, deviation, limits, predicted, margin, flags.
@@ -333,8 +364,9 @@ class CycleCorrection:
         problem = self.problem
         ids, deviation, predicted, _, _, margins = problem.dimension_table(self.x)
         binding, given_up = set(self.binding), set(problem.dimension_of(self.recommendation.given_up))
-        rejected = set(problem.dimension_of([d for r in self.recommendation.rules if r.rule == "reject"
-                                             for d in r.dimensions]))
+        rejected = set(
+            problem.dimension_of([d for r in self.recommendation.rules if r.rule == "reject" for d in r.dimensions])
+        )
         _, _, _, guard_lower, guard_upper, _ = self.recommendation.problem.dimension_table(self.x)
         if self.measured is not None:  # the report's own deviations, per model dimension
             measured: Array | None = dataclasses.replace(problem, deviation=self.measured).dimension_table(self.x)[1]
@@ -357,9 +389,15 @@ class CycleCorrection:
             if did in rejected:
                 flags.append("rejected")
             row: dict[str, Any] = {
-                "id": did, "name": d.name, "station": d.group, "deviation": float(deviation[i]),
-                "predicted": float(predicted[i]), "lower": d.lower, "upper": d.upper,
-                "margin": float(margins[i]), "flags": flags,
+                "id": did,
+                "name": d.name,
+                "station": d.group,
+                "deviation": float(deviation[i]),
+                "predicted": float(predicted[i]),
+                "lower": d.lower,
+                "upper": d.upper,
+                "margin": float(margins[i]),
+                "flags": flags,
             }
             if measured is not None:  # smoothed or forecast: the estimate is what was corrected
                 row["estimate"], row["deviation"] = row["deviation"], float(measured[i])

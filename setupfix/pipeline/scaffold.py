@@ -54,10 +54,35 @@ __all__ = ["Scaffold", "scaffold_model", "scaffold_from_tables", "name_axis", "F
 
 #: Words naming a form or orientation tolerance (English, German, Korean): no setup offset moves them.
 FORM_WORDS = (
-    "flatness", "straightness", "roundness", "circularity", "cylindricity", "sphericity", "parallelism",
-    "perpendicularity", "angularity", "runout", "concentricity", "symmetry", "ebenheit", "geradheit",
-    "rundheit", "zylindrizität", "parallelität", "rechtwinkligkeit", "neigung", "lauf", "평면도", "진원도",
-    "진직도", "원통도", "평행도", "직각도", "경사도", "흔들림", "동심도",
+    "flatness",
+    "straightness",
+    "roundness",
+    "circularity",
+    "cylindricity",
+    "sphericity",
+    "parallelism",
+    "perpendicularity",
+    "angularity",
+    "runout",
+    "concentricity",
+    "symmetry",
+    "ebenheit",
+    "geradheit",
+    "rundheit",
+    "zylindrizität",
+    "parallelität",
+    "rechtwinkligkeit",
+    "neigung",
+    "lauf",
+    "평면도",
+    "진원도",
+    "진직도",
+    "원통도",
+    "평행도",
+    "직각도",
+    "경사도",
+    "흔들림",
+    "동심도",
 )
 _TOKENS = re.compile(r"[\s_.\-/:;,()\[\]#]+")
 
@@ -113,8 +138,9 @@ def _resolution(narrowest: float | None) -> float:
     return res
 
 
-def _geometry(table: pd.DataFrame) -> list[tuple[tuple[float, float, float] | None, str, str, str,
-                                                 tuple[float, float, float] | None]]:
+def _geometry(
+    table: pd.DataFrame,
+) -> list[tuple[tuple[float, float, float] | None, str, str, str, tuple[float, float, float] | None]]:
     """Per row: (measuring direction, size, feature, side, position) as the report states them
     (:mod:`parsers.geometry`; the ``x, y, z`` location), None / "" where it states none."""
     n = len(table)
@@ -131,15 +157,23 @@ def _geometry(table: pd.DataFrame) -> list[tuple[tuple[float, float, float] | No
 
     out = []
     for nx, ny, nz, size, feature, side, x, y, z in zip(
-            *(numbers(c) for c in DIRECTION_COLUMNS), words(SIZE_COLUMN), words(FEATURE_COLUMN), words(SIDE_COLUMN),
-            numbers("x"), numbers("y"), numbers("z"), strict=True):
+        *(numbers(c) for c in DIRECTION_COLUMNS),
+        words(SIZE_COLUMN),
+        words(FEATURE_COLUMN),
+        words(SIDE_COLUMN),
+        numbers("x"),
+        numbers("y"),
+        numbers("z"),
+        strict=True,
+    ):
         position = (x, y, z) if all(math.isfinite(v) for v in (x, y, z)) else None
         out.append((unit_vector((nx, ny, nz)), size, feature, side, position))
     return out
 
 
-def _collect(tables: Sequence[tuple[str, pd.DataFrame]], axis: str | None,
-             group_column: str = "station") -> tuple[list[ScaffoldDimension], list[tuple[str, str]]]:
+def _collect(
+    tables: Sequence[tuple[str, pd.DataFrame]], axis: str | None, group_column: str = "station"
+) -> tuple[list[ScaffoldDimension], list[tuple[str, str]]]:
     dims: dict[tuple[str, str | None], ScaffoldDimension] = {}
     skipped: dict[str, str] = {}
     nom_lo, nom_hi = RANGES_MM["nominal"]
@@ -151,19 +185,28 @@ def _collect(tables: Sequence[tuple[str, pd.DataFrame]], axis: str | None,
             return frame[name].tolist() if name in frame else [None] * rows
 
         for name, nominal, lower, upper, station, reference, where, stated, geometry in zip(
-                col("characteristic"), col("nominal"), col("lower"), col("upper"), col(group_column),
-                col("reference"), col("source"), col(AXIS_COLUMN), _geometry(table), strict=True):
+            col("characteristic"),
+            col("nominal"),
+            col("lower"),
+            col("upper"),
+            col(group_column),
+            col("reference"),
+            col("source"),
+            col(AXIS_COLUMN),
+            _geometry(table),
+            strict=True,
+        ):
             name = str(name).strip()
             if not name or name in skipped:
                 continue
             where = str(where) if where is not None and where == where else report
             direction, size, feature, side, position = geometry
-            from_report = _stated_axis(stated, where, report) or (vector_axis(direction) or None if direction
-                                                                  else None)
+            from_report = _stated_axis(stated, where, report) or (vector_axis(direction) or None if direction else None)
             from_name = None if size else name_axis(name)
             dim_axis = from_report or from_name
-            nominal, lower, upper = (float(v) if v is not None and v == v else math.nan
-                                     for v in (nominal, lower, upper))
+            nominal, lower, upper = (
+                float(v) if v is not None and v == v else math.nan for v in (nominal, lower, upper)
+            )
             reason = None
             if str(reference).strip().lower() in ("true", "1", "yes"):
                 reason = "reference only"
@@ -188,18 +231,32 @@ def _collect(tables: Sequence[tuple[str, pd.DataFrame]], axis: str | None,
             key = (normalise_name(name), normalise_name(group) if group else None)
             if key not in dims:
                 dims[key] = ScaffoldDimension(
-                    name, group, nominal, lower, upper, dim_axis, where,
+                    name,
+                    group,
+                    nominal,
+                    lower,
+                    upper,
+                    dim_axis,
+                    where,
                     "report" if from_report else "name" if from_name else "",
                     from_name if from_report and from_name not in (None, from_report) else None,
-                    direction, size, feature, side, position)
+                    direction,
+                    size,
+                    feature,
+                    side,
+                    position,
+                )
                 continue
             known = dims[key]
             known.size, known.feature, known.side = known.size or size, known.feature or feature, known.side or side
             known.position = known.position or position
             if direction is not None and known.direction is None:
                 known.direction = direction
-            elif direction is not None and known.direction is not None and any(
-                    abs(a - b) > 1e-6 for a, b in zip(direction, known.direction, strict=True)):
+            elif (
+                direction is not None
+                and known.direction is not None
+                and any(abs(a - b) > 1e-6 for a, b in zip(direction, known.direction, strict=True))
+            ):
                 known.direction = None  # two reports state different directions: neither is taken
                 known.axis_from, known.axis = "the reports state different directions", None
             if from_report and known.axis_from == "report" and known.axis != from_report:
@@ -212,8 +269,14 @@ def _collect(tables: Sequence[tuple[str, pd.DataFrame]], axis: str | None,
     return list(dims.values()), list(skipped.items())
 
 
-def scaffold_model(reports: Sequence[str | Path], *, axis: str | None = None, name: str | None = None,
-                   parts_are_stations: bool = False, read: ReadOptions | None = None) -> Scaffold:
+def scaffold_model(
+    reports: Sequence[str | Path],
+    *,
+    axis: str | None = None,
+    name: str | None = None,
+    parts_are_stations: bool = False,
+    read: ReadOptions | None = None,
+) -> Scaffold:
     """Write a process-model scaffold (TOML text) from the reports' toleranced length characteristics.
 
     ``reports`` may name folders: their reports and those of their sub-folders, as
@@ -234,8 +297,11 @@ def scaffold_model(reports: Sequence[str | Path], *, axis: str | None = None, na
     options = (read if read is not None else ReadOptions()).kwargs()
     inputs = parsers.expand_inputs(reports)
     if inputs.empty:
-        raise ParseError("folder holds no report file", location=SourceLocation(inputs.empty[0]),
-                         hint="; ".join(inputs.warnings()[:3]) or None)
+        raise ParseError(
+            "folder holds no report file",
+            location=SourceLocation(inputs.empty[0]),
+            hint="; ".join(inputs.warnings()[:3]) or None,
+        )
     reads: list[tuple[str, parsers.ReadResult]] = []
     left_out: list[Note] = inputs.notes()
     for report, from_folder in inputs.files:
@@ -248,15 +314,24 @@ def scaffold_model(reports: Sequence[str | Path], *, axis: str | None = None, na
             hint = f" ({exc.hint})" if exc.hint else ""
             left_out.append(Note(f"{exc.message}{hint}; left out", exc.location, "skipped"))
     if not reads:
-        raise ParseError(f"no file of {', '.join(map(str, reports))} is a readable report",
-                         location=SourceLocation(str(reports[0])), hint=str(left_out[0]) if left_out else None)
-    scaffold = scaffold_from_tables([(r, read.table) for r, read in reads], axis=axis,
-                                    name=name, parts_are_stations=parts_are_stations)
+        raise ParseError(
+            f"no file of {', '.join(map(str, reports))} is a readable report",
+            location=SourceLocation(str(reports[0])),
+            hint=str(left_out[0]) if left_out else None,
+        )
+    scaffold = scaffold_from_tables(
+        [(r, read.table) for r, read in reads], axis=axis, name=name, parts_are_stations=parts_are_stations
+    )
     return dataclasses.replace(scaffold, notes=(*left_out, *(n for _, read in reads for n in read.notes)))
 
 
-def scaffold_from_tables(tables: Sequence[tuple[str, pd.DataFrame]], *, axis: str | None = None,
-                         name: str | None = None, parts_are_stations: bool = False) -> Scaffold:
+def scaffold_from_tables(
+    tables: Sequence[tuple[str, pd.DataFrame]],
+    *,
+    axis: str | None = None,
+    name: str | None = None,
+    parts_are_stations: bool = False,
+) -> Scaffold:
     """:func:`scaffold_model` on canonical tables already read, as (report name, table) pairs.
 
     ``parts_are_stations``: the report's parts are the fixture's stations (one workpiece
@@ -269,8 +344,10 @@ def scaffold_from_tables(tables: Sequence[tuple[str, pd.DataFrame]], *, axis: st
     if not dims:
         reasons = Counter(reason for _, reason in skipped)
         why = "; ".join(f"{n} × {r}" for r, n in reasons.most_common(4)) or "the reports hold no characteristic"
-        raise ModelError(f"no toleranced length characteristic to make a dimension of ({why})",
-                         location=SourceLocation(", ".join(reports)))
+        raise ModelError(
+            f"no toleranced length characteristic to make a dimension of ({why})",
+            location=SourceLocation(", ".join(reports)),
+        )
     stated = Counter(d.axis for d in dims if d.axis)
     measured = set().union(*(d.measured_axes() for d in dims))
     interpolated = any(d.interpolated for d in dims)
@@ -280,9 +357,16 @@ def scaffold_from_tables(tables: Sequence[tuple[str, pd.DataFrame]], *, axis: st
     model_axis = axis or (SPINDLE if axes else max(("Z", "X", "Y"), key=lambda a: stated[a]))  # Z on a tie / none
     bands = [d.upper - d.lower for d in dims]
     resolution = _resolution(min(bands))
-    text = render_scaffold(dims, skipped, reports, axis=model_axis, axes=axes, resolution=resolution, name=name,
-                           only_axis=axis)
+    text = render_scaffold(
+        dims, skipped, reports, axis=model_axis, axes=axes, resolution=resolution, name=name, only_axis=axis
+    )
     origins = Counter(d.axis_from if d.axis_from in ("report", "name") else "none" for d in dims)
-    return Scaffold(text, len(dims), model_axis, tuple(skipped),
-                    axes_from={k: origins[k] for k in ("report", "name", "none") if origins[k]}, axes=axes,
-                    sizes=sum(1 for d in dims if d.size))
+    return Scaffold(
+        text,
+        len(dims),
+        model_axis,
+        tuple(skipped),
+        axes_from={k: origins[k] for k in ("report", "name", "none") if origins[k]},
+        axes=axes,
+        sizes=sum(1 for d in dims if d.size),
+    )

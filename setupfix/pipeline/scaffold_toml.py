@@ -100,7 +100,8 @@ class ScaffoldDimension:
             return f"no axis: {self.axis_from}" if self.axis_from else "no axis stated"
         if self.axis_from == "report":
             return f"axis {self.axis} stated by the report" + (
-                f" (its name says {self.name_says}: the report's vector wins)" if self.name_says else "")
+                f" (its name says {self.name_says}: the report's vector wins)" if self.name_says else ""
+            )
         return f"axis {self.axis} from the name"
 
     def vector(self) -> tuple[float, float, float] | None:
@@ -127,12 +128,16 @@ class ScaffoldDimension:
         return per_wall * (1 if self.size == "radius" else 2)
 
 
-def _head(sources: str, dims: Sequence[ScaffoldDimension], skipped: Sequence[tuple[str, str]], lines: list[str],
-          ) -> list[str]:
+def _head(
+    sources: str,
+    dims: Sequence[ScaffoldDimension],
+    skipped: Sequence[tuple[str, str]],
+    lines: list[str],
+) -> list[str]:
     out = [
         f"# Process model scaffold written by `setupfix model init` from: {comment(sources)}",
         "# DRAFT: its relations are a guess from the reports' geometry. `setupfix correct` holds with",
-        "#   \"edit the model (draft)\" and recommends nothing until you have checked them and removed",
+        '#   "edit the model (draft)" and recommends nothing until you have checked them and removed',
         "#   `draft = true` from [process]. Check",
         *lines,
         "# Then `setupfix model show` prints the matrices and `setupfix model check` the match table.",
@@ -164,9 +169,15 @@ def _process(title: str, resolution: float, axes_line: list[str]) -> list[str]:
 
 
 def _dimension(i: int, d: ScaffoldDimension, lines: list[str]) -> list[str]:
-    out = [f"[dimensions.D{i}]  # {comment(d.source)}; {comment(d.axis_note())}", f"name = {toml_string(d.name)}",
-           f"features = {{ F{i} = 1 }}", *lines, f"nominal = {_number(d.nominal)}", f"lower = {_number(d.lower)}",
-           f"upper = {_number(d.upper)}"]
+    out = [
+        f"[dimensions.D{i}]  # {comment(d.source)}; {comment(d.axis_note())}",
+        f"name = {toml_string(d.name)}",
+        f"features = {{ F{i} = 1 }}",
+        *lines,
+        f"nominal = {_number(d.nominal)}",
+        f"lower = {_number(d.lower)}",
+        f"upper = {_number(d.upper)}",
+    ]
     if d.group:
         out.append(f"group = {toml_string(d.group)}")
     return [*out, ""]
@@ -178,9 +189,17 @@ def _position(d: ScaffoldDimension) -> list[str]:
     return [f"position = [{', '.join(_number(v) for v in d.position)}]"]
 
 
-def render_scaffold(dims: Sequence[ScaffoldDimension], skipped: Sequence[tuple[str, str]],
-                    reports: Sequence[str | Path], *, axis: str, axes: Sequence[str], resolution: float,
-                    name: str | None, only_axis: str | None) -> str:
+def render_scaffold(
+    dims: Sequence[ScaffoldDimension],
+    skipped: Sequence[tuple[str, str]],
+    reports: Sequence[str | Path],
+    *,
+    axis: str,
+    axes: Sequence[str],
+    resolution: float,
+    name: str | None,
+    only_axis: str | None,
+) -> str:
     """The scaffold's TOML text: one-axis on ``axis`` when ``axes`` is empty, else multi-axis over ``axes``."""
     sources = ", ".join(Path(r).name for r in reports)
     title = name or f"Scaffold from {sources}"
@@ -189,68 +208,117 @@ def render_scaffold(dims: Sequence[ScaffoldDimension], skipped: Sequence[tuple[s
     return _one_axis(dims, skipped, sources, title, axis, resolution, only_axis)
 
 
-def _one_axis(dims: Sequence[ScaffoldDimension], skipped: Sequence[tuple[str, str]], sources: str, title: str,
-              axis: str, resolution: float, only_axis: str | None) -> str:
+def _one_axis(
+    dims: Sequence[ScaffoldDimension],
+    skipped: Sequence[tuple[str, str]],
+    sources: str,
+    title: str,
+    axis: str,
+    resolution: float,
+    only_axis: str | None,
+) -> str:
     tools = axis == SPINDLE
-    out = _head(sources, dims, skipped, [
-        f"#   1. [wks.*]{' and [tools.*]' if tools else ''}: the registers your NC program really uses;",
-        "#   2. [features.*]: which WKS and tools move each feature and with which weight (the weight",
-        "#      written is the component of the report's measuring direction along the axis, +1 where",
-        "#      only an axis word or the name states it), and remove features no offset moves;",
-        "#   3. [dimensions.*] features: a distance between two features is { Fa = 1, Fb = -1 };",
-        "#   4. group = \"P1\" … where a fixture holds the part at several stations.",
-        f"# {len(dims)} dimension(s); axis {axis}"
-        + (f" (kept: dimensions along {only_axis} or with no axis stated)" if only_axis else
-           " (the one most dimensions state; other axes are kept: delete them or use --axis)"),
-        "# Each dimension's axis is the one the report states (CORTOL axis, QIF direction or vector,",
-        "#   a plane or point normal), else the one its name states; its comment says which.",
-    ])
+    out = _head(
+        sources,
+        dims,
+        skipped,
+        [
+            f"#   1. [wks.*]{' and [tools.*]' if tools else ''}: the registers your NC program really uses;",
+            "#   2. [features.*]: which WKS and tools move each feature and with which weight (the weight",
+            "#      written is the component of the report's measuring direction along the axis, +1 where",
+            "#      only an axis word or the name states it), and remove features no offset moves;",
+            "#   3. [dimensions.*] features: a distance between two features is { Fa = 1, Fb = -1 };",
+            '#   4. group = "P1" … where a fixture holds the part at several stations.',
+            f"# {len(dims)} dimension(s); axis {axis}"
+            + (
+                f" (kept: dimensions along {only_axis} or with no axis stated)"
+                if only_axis
+                else " (the one most dimensions state; other axes are kept: delete them or use --axis)"
+            ),
+            "# Each dimension's axis is the one the report states (CORTOL axis, QIF direction or vector,",
+            "#   a plane or point normal), else the one its name states; its comment says which.",
+        ],
+    )
     out += _process(title, resolution, [f'axis = "{axis}"'])
     if tools:
         out += ["[tools.T1]", 'register = "H1"         # rename; add [tools.T2] … per tool length offset', ""]
     else:
-        out += [f"# No tool length register: a tool length offset acts along the spindle ({SPINDLE} assumed), not",
-                f"#   along {axis}. On a machine whose spindle is {axis}, add [tools.T1] register = \"H1\".", ""]
+        out += [
+            f"# No tool length register: a tool length offset acts along the spindle ({SPINDLE} assumed), not",
+            f'#   along {axis}. On a machine whose spindle is {axis}, add [tools.T1] register = "H1".',
+            "",
+        ]
     for i, d in enumerate(dims, start=1):
         vec = d.vector()
         k = _AXES.index(axis)
         if d.size:
-            out += [f"[features.F{i}]  # a {d.size}: no WKS or tool length offset moves it (a tool radius does where "
-                    "it is interpolated: a multi-axis model holds radius registers)", "wks = {}", "tools = {}",
-                    *_position(d), ""]
+            out += [
+                f"[features.F{i}]  # a {d.size}: no WKS or tool length offset moves it (a tool radius does where "
+                "it is interpolated: a multi-axis model holds radius registers)",
+                "wks = {}",
+                "tools = {}",
+                *_position(d),
+                "",
+            ]
         elif d.axis not in (None, axis) or (vec is not None and abs(vec[k]) <= _ZERO):
-            out += [f"[features.F{i}]  # axis {d.axis or 'oblique'}: no {axis} offset moves it (nothing to correct "
-                    "here)", "wks = {}", "tools = {}", *_position(d), ""]
+            out += [
+                f"[features.F{i}]  # axis {d.axis or 'oblique'}: no {axis} offset moves it (nothing to correct here)",
+                "wks = {}",
+                "tools = {}",
+                *_position(d),
+                "",
+            ]
         else:
             w = _weight(vec[k]) if vec is not None else "1"
-            out += [f"[features.F{i}]", f"wks = {{ W1 = {w} }}", f"tools = {{ T1 = {w} }}" if tools else "tools = {}",
-                    *_position(d), ""]
+            out += [
+                f"[features.F{i}]",
+                f"wks = {{ W1 = {w} }}",
+                f"tools = {{ T1 = {w} }}" if tools else "tools = {}",
+                *_position(d),
+                "",
+            ]
     for i, d in enumerate(dims, start=1):
         out += _dimension(i, d, [])
     return "\n".join(out)
 
 
-def _multi_axis(dims: Sequence[ScaffoldDimension], skipped: Sequence[tuple[str, str]], sources: str, title: str,
-                axes: list[str], resolution: float) -> str:
+def _multi_axis(
+    dims: Sequence[ScaffoldDimension],
+    skipped: Sequence[tuple[str, str]],
+    sources: str,
+    title: str,
+    axes: list[str],
+    resolution: float,
+) -> str:
     length = any(SPINDLE in d.measured_axes() for d in dims)
     radius = any(d.interpolated for d in dims)
-    out = _head(sources, dims, skipped, [
-        "#   1. [wks.*] and [tools.*]: the registers your NC program really uses (W1 moves every feature",
-        f"#      in {', '.join(axes)}; tool lengths act along the spindle, {SPINDLE} assumed: set `spindle`);",
-        "#   2. [features.*]: which WKS and tools move each feature (a table {x = .., y = .., z = ..}",
-        "#      per axis for a WKS seen from another side) and remove features no offset moves;",
-        "#   3. [dimensions.*]: each is measured along the axis or direction the report states",
-        "#      (a normal's components are its weights); a distance between two features is",
-        "#      { Fa = 1, Fb = -1 }; sizes move only with a tool radius where the report's feature",
-        "#      type says it is interpolated (bore -2, boss 2): a drilled hole's size moves with none;",
-        "#   4. group = \"P1\" … where a fixture holds the part at several stations; rotation = true",
-        "#      corrects each WKS's rotation about the spindle too (the positions below are the report's).",
-        f"# {len(dims)} dimension(s); axes {', '.join(axes)} (the ones the reports measure).",
-    ])
-    out += _process(title, resolution, [f"axes = [{', '.join(toml_string(a) for a in axes)}]"
-                                        "   # the axes the reports measure: W1 is corrected in each",
-                                        f'spindle = "{SPINDLE}"          # assumed (a vertical machining centre): '
-                                        "tool lengths act along it only"])
+    out = _head(
+        sources,
+        dims,
+        skipped,
+        [
+            "#   1. [wks.*] and [tools.*]: the registers your NC program really uses (W1 moves every feature",
+            f"#      in {', '.join(axes)}; tool lengths act along the spindle, {SPINDLE} assumed: set `spindle`);",
+            "#   2. [features.*]: which WKS and tools move each feature (a table {x = .., y = .., z = ..}",
+            "#      per axis for a WKS seen from another side) and remove features no offset moves;",
+            "#   3. [dimensions.*]: each is measured along the axis or direction the report states",
+            "#      (a normal's components are its weights); a distance between two features is",
+            "#      { Fa = 1, Fb = -1 }; sizes move only with a tool radius where the report's feature",
+            "#      type says it is interpolated (bore -2, boss 2): a drilled hole's size moves with none;",
+            '#   4. group = "P1" … where a fixture holds the part at several stations; rotation = true',
+            "#      corrects each WKS's rotation about the spindle too (the positions below are the report's).",
+            f"# {len(dims)} dimension(s); axes {', '.join(axes)} (the ones the reports measure).",
+        ],
+    )
+    out += _process(
+        title,
+        resolution,
+        [
+            f"axes = [{', '.join(toml_string(a) for a in axes)}]"
+            "   # the axes the reports measure: W1 is corrected in each",
+            f'spindle = "{SPINDLE}"          # assumed (a vertical machining centre): tool lengths act along it only',
+        ],
+    )
     if length or radius:
         out += ["[tools.T1]", 'register = "H1"         # its length offset; rename, add [tools.T2] … per tool']
         if radius:
@@ -258,16 +326,28 @@ def _multi_axis(dims: Sequence[ScaffoldDimension], skipped: Sequence[tuple[str, 
         out.append("")
     for i, d in enumerate(dims, start=1):
         if d.size and d.interpolated:
-            out += [f"[features.F{i}]  # a {d.size} of a{'n' if d.feature[0] in 'aeiou' else ''} {d.feature}"
-                    + (f" ({d.side})" if d.side else " (the report does not say bore or boss: a bore assumed)"),
-                    f"radius = {{ T1 = {d.radius_weight()} }}", *_position(d), ""]
+            out += [
+                f"[features.F{i}]  # a {d.size} of a{'n' if d.feature[0] in 'aeiou' else ''} {d.feature}"
+                + (f" ({d.side})" if d.side else " (the report does not say bore or boss: a bore assumed)"),
+                f"radius = {{ T1 = {d.radius_weight()} }}",
+                *_position(d),
+                "",
+            ]
         elif d.size:
             what = f"a {d.feature}" if d.feature else "a feature of no stated type (drilled or reamed?)"
-            out += [f"[features.F{i}]  # the {d.size} of {what}: moved by no offset register, uncorrectable",
-                    "wks = {}", *_position(d), ""]
+            out += [
+                f"[features.F{i}]  # the {d.size} of {what}: moved by no offset register, uncorrectable",
+                "wks = {}",
+                *_position(d),
+                "",
+            ]
         elif d.vector() is None:
-            out += [f"[features.F{i}]  # no axis or direction stated: give its dimension axis = … and its relations",
-                    "wks = {}", *_position(d), ""]
+            out += [
+                f"[features.F{i}]  # no axis or direction stated: give its dimension axis = … and its relations",
+                "wks = {}",
+                *_position(d),
+                "",
+            ]
         else:
             out += [f"[features.F{i}]", "wks = { W1 = 1 }"]
             out += ["tools = { T1 = 1 }"] if SPINDLE in d.measured_axes() else []

@@ -38,6 +38,7 @@ from setupfix.pipeline.stores import StoreRef
 
 __all__ = ["SeriesInput", "load_series", "channel_span"]
 
+
 @dataclass(frozen=True)
 class SeriesInput:
     """A series read from files, in the engine's terms."""
@@ -59,10 +60,17 @@ def _corrections(path: str, model: ProcessModel) -> RegisterLog:
     return check_corrections(read_corrections_log(path), model)
 
 
-def load_series(model: ProcessModel | str | Path, reports: Sequence[str | Path] = (), *,
-                corrections: str | None = None, temperatures: str | None = None,
-                db: str | Path | StoreRef | None = None, thermal: str | Path | None = None,
-                read: ReadOptions | None = None, process: str | None = None) -> SeriesInput:
+def load_series(
+    model: ProcessModel | str | Path,
+    reports: Sequence[str | Path] = (),
+    *,
+    corrections: str | None = None,
+    temperatures: str | None = None,
+    db: str | Path | StoreRef | None = None,
+    thermal: str | Path | None = None,
+    read: ReadOptions | None = None,
+    process: str | None = None,
+) -> SeriesInput:
     """Read a series of reports (files, folders, or every report of a history store) with its logs.
 
     With ``db`` the store's reports, corrections log and temperatures are used (files
@@ -106,8 +114,11 @@ def load_series(model: ProcessModel | str | Path, reports: Sequence[str | Path] 
         inputs = parsers.expand_inputs(reports)
         notes += inputs.notes()
         if not inputs.files:
-            raise ParseError("no report found", location=SourceLocation(", ".join(str(p) for p in reports)),
-                             hint="; ".join(inputs.warnings()[:3]) or None)
+            raise ParseError(
+                "no report found",
+                location=SourceLocation(", ".join(str(p) for p in reports)),
+                hint="; ".join(inputs.warnings()[:3]) or None,
+            )
         where = where or inputs.files[0][0]
         found_log, found_temp = inputs.log("corrections"), inputs.log("temperatures")
         if corrections is None and found_log and log is None:
@@ -143,8 +154,11 @@ def load_series(model: ProcessModel | str | Path, reports: Sequence[str | Path] 
         temps = temperature_arrays(temp_log)
     if thermal is not None:
         if temp_log is None or temps is None:
-            raise ParseError("a thermal model needs the temperature log it predicts from",
-                             location=SourceLocation(str(thermal)), hint="give --temperatures")
+            raise ParseError(
+                "a thermal model needs the temperature log it predicts from",
+                location=SourceLocation(str(thermal)),
+                hint="give --temperatures",
+            )
         temps, more_notes = _with_thermal_prediction(temps, str(thermal), temp_log)
         notes += more_notes
     process_log = None
@@ -156,23 +170,44 @@ def load_series(model: ProcessModel | str | Path, reports: Sequence[str | Path] 
     declared = tuple(spec_of(e) for e in section.effects)
     for e in section.effects:
         if e.kind == "thermal" and e.channel not in series.channels:
-            raise MatchError(f"the model's thermal effect {e.id} needs temperature channel {e.channel!r}",
-                             location=SourceLocation(model.source, key=f"effects.{e.id}.channel"),
-                             hint="give --temperatures")
+            raise MatchError(
+                f"the model's thermal effect {e.id} needs temperature channel {e.channel!r}",
+                location=SourceLocation(model.source, key=f"effects.{e.id}.channel"),
+                hint="give --temperatures",
+            )
         if e.kind == "process" and not _has_channel(series, str(e.channel)):
-            raise MatchError(f"the model's process effect {e.id} needs process channel {e.channel!r}",
-                             location=SourceLocation(model.source, key=f"effects.{e.id}.channel"),
-                             hint="give --process with the log it was found in")
+            raise MatchError(
+                f"the model's process effect {e.id} needs process channel {e.channel!r}",
+                location=SourceLocation(model.source, key=f"effects.{e.id}.channel"),
+                hint="give --process with the log it was found in",
+            )
     unmatched = sorted({u for p in parts for u in p.unmatched})
     if unmatched:
-        notes.append(Note(f"{len(unmatched)} characteristic(s) match no dimension: {', '.join(unmatched[:6])}"
-                          + (" …" if len(unmatched) > 6 else ""), None, "match"))
+        notes.append(
+            Note(
+                f"{len(unmatched)} characteristic(s) match no dimension: {', '.join(unmatched[:6])}"
+                + (" …" if len(unmatched) > 6 else ""),
+                None,
+                "match",
+            )
+        )
     layout = Layout.from_model(model, coord=report_coordinates(model, tables))
     if np.isfinite(layout.coord).all() and not all(f.position for f in model.features):
-        notes.append(Note("dimension coordinates for position effects taken from the reports' x, y, z columns",
-                          None, "series"))
-    return SeriesInput(model, layout, series, tuple(_ordered(parts)), declared, section,
-                       corrections, temperatures, tuple(notes), process)
+        notes.append(
+            Note("dimension coordinates for position effects taken from the reports' x, y, z columns", None, "series")
+        )
+    return SeriesInput(
+        model,
+        layout,
+        series,
+        tuple(_ordered(parts)),
+        declared,
+        section,
+        corrections,
+        temperatures,
+        tuple(notes),
+        process,
+    )
 
 
 def _has_channel(series: Series, name: str) -> bool:
@@ -183,10 +218,19 @@ def _has_channel(series: Series, name: str) -> bool:
 
 def _no_log_note(reports: Sequence[str | Path]) -> str:
     """The note for a series read without a corrections log (naming a log file lying beside a report)."""
-    beside = sorted({str(Path(r).parent / n) for r in reports if not Path(r).is_dir()
-                     for n, kind in LOG_NAMES.items() if kind == "corrections" and (Path(r).parent / n).is_file()})
-    text = ("no corrections log: every part is taken as cut with the same offsets, so a correction applied "
-            "during the series would show as drift or a step")
+    beside = sorted(
+        {
+            str(Path(r).parent / n)
+            for r in reports
+            if not Path(r).is_dir()
+            for n, kind in LOG_NAMES.items()
+            if kind == "corrections" and (Path(r).parent / n).is_file()
+        }
+    )
+    text = (
+        "no corrections log: every part is taken as cut with the same offsets, so a correction applied "
+        "during the series would show as drift or a step"
+    )
     return text + (f"; {beside[0]} lies beside the reports: give it with --corrections" if beside else "")
 
 
@@ -199,8 +243,14 @@ def _with_thermal_prediction(temps: TempLog, thermal: str, log: TemperatureLog) 
     keep = [j for j, c in enumerate(channels) if c != pred.target]
     name = f"{pred.method} prediction"
     notes = list(pred.notes)
-    notes.append(Note(f"thermal model {thermal} ({pred.method}, {pred.unit or 'unit not stated'}): its prediction "
-                      f"is the channel {name!r}", None, "thermal"))
+    notes.append(
+        Note(
+            f"thermal model {thermal} ({pred.method}, {pred.unit or 'unit not stated'}): its prediction "
+            f"is the channel {name!r}",
+            None,
+            "thermal",
+        )
+    )
     return (times, np.column_stack([samples[:, keep], pred.drift]), (*(channels[j] for j in keep), name)), notes
 
 

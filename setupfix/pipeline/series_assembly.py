@@ -11,7 +11,6 @@ dimensions' coordinates the reports give are read here too.  Used by
 from __future__ import annotations
 
 import dataclasses
-
 from collections.abc import Sequence
 
 import numpy as np
@@ -24,10 +23,17 @@ from setupfix.diagnose import Layout, Series
 from setupfix.diagnose.covariates import applied_at, join_temperatures, parts_since_change
 from setupfix.errors import MatchError, Note, ParseError, SourceLocation
 from setupfix.model import PartMeasurement, ProcessModel, normalise_name
-from setupfix.pipeline.series_logs import (TempLog, _has_serial, _process_rows, hours_since, parse_times,
-                                          process_channels)
+from setupfix.pipeline.series_logs import (
+    TempLog,
+    _has_serial,
+    _process_rows,
+    hours_since,
+    parse_times,
+    process_channels,
+)
 
 __all__ = ["report_coordinates"]
+
 
 def report_coordinates(model: ProcessModel, tables: Sequence[pd.DataFrame]) -> np.ndarray:
     """Nominal location (x, y, z) of each dimension as the reports give it, NaN where none does.
@@ -52,7 +58,6 @@ def report_coordinates(model: ProcessModel, tables: Sequence[pd.DataFrame]) -> n
     return out
 
 
-
 def _one_per_part(parts: list[PartMeasurement]) -> tuple[list[PartMeasurement], list[Note]]:
     """Each machined part once: reports of the same part and time (the same cycle exported twice, or
     measured twice) would count as independent cycles and make any effect look significant.
@@ -75,8 +80,14 @@ def _one_per_part(parts: list[PartMeasurement]) -> tuple[list[PartMeasurement], 
         both = np.isfinite(p.deviation) & np.isfinite(q.deviation)
         gap = float(np.max(np.abs(p.deviation[both] - q.deviation[both]), initial=0.0))
         same = "the same deviations" if gap <= 1e-9 else f"deviations differing by up to {gap:.4g}"
-        notes.append(Note(f"{p.report}:{p.part} and {q.report}:{q.part} are one part (same name and time "
-                          f"{p.timestamp}, {same}): {q.report} is used once", None, "series"))
+        notes.append(
+            Note(
+                f"{p.report}:{p.part} and {q.report}:{q.part} are one part (same name and time "
+                f"{p.timestamp}, {same}): {q.report} is used once",
+                None,
+                "series",
+            )
+        )
     return keep, notes
 
 
@@ -87,10 +98,14 @@ def _ordered(parts: list[PartMeasurement]) -> list[PartMeasurement]:
     return [parts[i] for i in np.argsort(ts.values, kind="stable")]
 
 
-def _assemble(model: ProcessModel, parts: list[PartMeasurement],
-              log: RegisterLog | None,
-              temps: TempLog | None, where: str,
-              process: TemperatureLog | None = None) -> tuple[Series, list[Note]]:
+def _assemble(
+    model: ProcessModel,
+    parts: list[PartMeasurement],
+    log: RegisterLog | None,
+    temps: TempLog | None,
+    where: str,
+    process: TemperatureLog | None = None,
+) -> tuple[Series, list[Note]]:
     """Parts in time order with the corrections in effect, parts since tool changes, temperatures."""
     notes: list[Note] = []
     layout = Layout.from_model(model)
@@ -100,15 +115,25 @@ def _assemble(model: ProcessModel, parts: list[PartMeasurement],
         rows, _ = _process_rows(process, [p.part for p in parts], np.zeros(len(parts)), "")
         for i in rows:  # a bad one named by its line
             parse_timestamp(process.timestamps[int(i)], process.location(int(i)))
-        parts = [dataclasses.replace(p, timestamp=str(process.timestamps[int(i)])) for p, i in zip(parts, rows,
-                                                                                                  strict=True)]
+        parts = [
+            dataclasses.replace(p, timestamp=str(process.timestamps[int(i)])) for p, i in zip(parts, rows, strict=True)
+        ]
         stamps = [p.timestamp for p in parts]
-        notes.append(Note("the reports carry no timestamps: each part's machining time is the process log's "
-                          "timestamp of its serial", process.location(), "series"))
+        notes.append(
+            Note(
+                "the reports carry no timestamps: each part's machining time is the process log's "
+                "timestamp of its serial",
+                process.location(),
+                "series",
+            )
+        )
     if all(s is None for s in stamps):
         if log is not None or temps is not None:
-            raise MatchError("the reports carry no timestamps, so the corrections or temperature log cannot be "
-                             "tied to the parts", location=SourceLocation(where), hint="add a timestamp column")
+            raise MatchError(
+                "the reports carry no timestamps, so the corrections or temperature log cannot be tied to the parts",
+                location=SourceLocation(where),
+                hint="add a timestamp column",
+            )
         time = np.arange(len(parts), dtype=float)
         origin = ""
         notes.append(Note("no timestamps: cycles are taken in input order, one hour apart", None, "series"))
@@ -116,8 +141,10 @@ def _assemble(model: ProcessModel, parts: list[PartMeasurement],
     else:
         missing = [p for p in parts if p.timestamp is None]
         if missing:
-            raise MatchError(f"part {missing[0].part or '(report)'} has no timestamp while others have",
-                             location=SourceLocation(missing[0].report))
+            raise MatchError(
+                f"part {missing[0].part or '(report)'} has no timestamp while others have",
+                location=SourceLocation(missing[0].report),
+            )
         ts = parse_times(stamps, parts[0].report)
         order = np.argsort(ts.values, kind="stable")
         origin_ts = ts[order[0]]
@@ -145,8 +172,11 @@ def _assemble(model: ProcessModel, parts: list[PartMeasurement],
         t_times, samples, channels = temps
         t_h = hours_since(t_times, pd.Timestamp(origin))
         if t_h[0] > time[0]:
-            notes.append(Note("the temperature log starts after the first part: its first sample is used before",
-                              None, "thermal"))
+            notes.append(
+                Note(
+                    "the temperature log starts after the first part: its first sample is used before", None, "thermal"
+                )
+            )
         temp = join_temperatures(time, t_h, samples)
     names: tuple[str, ...] = ()
     if process is not None:
@@ -154,10 +184,23 @@ def _assemble(model: ProcessModel, parts: list[PartMeasurement],
         notes += more
         both = sorted(set(names) & set(channels))
         if both:
-            raise ParseError(f"process log: channel {both[0]!r} is also a temperature channel",
-                             location=process.location(), hint="rename the column in one of the logs")
+            raise ParseError(
+                f"process log: channel {both[0]!r} is also a temperature channel",
+                location=process.location(),
+                hint="rename the column in one of the logs",
+            )
         temp = np.column_stack([temp, values])
         channels = (*channels, *names)
-    series = Series(dev, time, applied, parts_cut, temp, channels, tuple(f"{p.report}:{p.part}" for p in parts),
-                    origin, pending, names)
+    series = Series(
+        dev,
+        time,
+        applied,
+        parts_cut,
+        temp,
+        channels,
+        tuple(f"{p.report}:{p.part}" for p in parts),
+        origin,
+        pending,
+        names,
+    )
     return series, notes

@@ -59,8 +59,11 @@ def temperature_arrays(log: TemperatureLog) -> TempLog:
         No timestamp column, no channel, an empty reading.
     """
     if not log.timestamps:
-        raise ParseError("temperature log: missing column 'timestamp'", location=log.location(),
-                         hint="the diagnosis ties each part to the sample at or before its timestamp")
+        raise ParseError(
+            "temperature log: missing column 'timestamp'",
+            location=log.location(),
+            hint="the diagnosis ties each part to the sample at or before its timestamp",
+        )
     channels = tuple(c for c in log.columns if c.casefold() not in NOT_CHANNELS)
     if not channels:
         raise ParseError("temperature log: no sensor column", location=log.location())
@@ -82,8 +85,9 @@ def store_temperatures(table: pd.DataFrame, source: str) -> TempLog:
     channels = tuple(str(c) for c in table.columns if c != "timestamp" and str(c).casefold() not in NOT_CHANNELS)
     if not channels:
         raise ParseError("temperature log: no sensor column", location=where)
-    values = np.column_stack([pd.to_numeric(table[c], errors="coerce").ffill().bfill().to_numpy(dtype=float)
-                              for c in channels])
+    values = np.column_stack(
+        [pd.to_numeric(table[c], errors="coerce").ffill().bfill().to_numpy(dtype=float) for c in channels]
+    )
     order = np.argsort(times.values, kind="stable")
     return times[order], values[order], channels
 
@@ -102,8 +106,9 @@ def _has_serial(log: TemperatureLog) -> bool:
     return any(c.casefold() == SERIAL for c in (*log.columns, *log.text))
 
 
-def _process_rows(log: TemperatureLog, parts: Sequence[str], time: np.ndarray,
-                  origin: str) -> tuple[np.ndarray, list[Note]]:
+def _process_rows(
+    log: TemperatureLog, parts: Sequence[str], time: np.ndarray, origin: str
+) -> tuple[np.ndarray, list[Note]]:
     """Row of the process log for each cycle: by serial (the part's number), else by timestamp."""
     serial = next((c for c in (*log.columns, *log.text) if c.casefold() == SERIAL), None)
     if serial is not None:
@@ -114,35 +119,43 @@ def _process_rows(log: TemperatureLog, parts: Sequence[str], time: np.ndarray,
                 raise ParseError("process log: empty serial", location=log.location(i))
             key = _serial_key(v)
             if key in index:
-                raise ParseError(f"process log: serial {key} appears twice", location=log.location(i),
-                                 hint="one row per part")
+                raise ParseError(
+                    f"process log: serial {key} appears twice", location=log.location(i), hint="one row per part"
+                )
             index[key] = i
         rows = []
         for name in parts:
             key = _serial_key(name)
             if key not in index:
-                raise MatchError(f"part {name or '(unnamed)'} has no row in the process log (column {serial!r})",
-                                 location=log.location(), hint="give every part of the series its row")
+                raise MatchError(
+                    f"part {name or '(unnamed)'} has no row in the process log (column {serial!r})",
+                    location=log.location(),
+                    hint="give every part of the series its row",
+                )
             rows.append(index[key])
         return np.array(rows, dtype=np.intp), []
     if not log.timestamps:
-        raise ParseError("process log: needs a 'serial' column (the part numbers) or a 'timestamp' column",
-                         location=log.location())
+        raise ParseError(
+            "process log: needs a 'serial' column (the part numbers) or a 'timestamp' column", location=log.location()
+        )
     if not origin:
-        raise MatchError("the reports carry no timestamps, so the process log cannot be tied to the parts by time",
-                         location=log.location(), hint="add a 'serial' column with the part numbers")
+        raise MatchError(
+            "the reports carry no timestamps, so the process log cannot be tied to the parts by time",
+            location=log.location(),
+            hint="add a 'serial' column with the part numbers",
+        )
     stamps = to_index([parse_timestamp(t, log.location(i)) for i, t in enumerate(log.timestamps)])
     t_h = hours_since(stamps, pd.Timestamp(origin))
     notes = []
     if t_h[0] > time[0]:
-        notes.append(Note("the process log starts after the first part: its first row is used before", None,
-                          "series"))
+        notes.append(Note("the process log starts after the first part: its first row is used before", None, "series"))
     idx = np.clip(np.searchsorted(t_h, time, side="right") - 1, 0, len(t_h) - 1)
     return idx.astype(np.intp), notes
 
 
-def process_channels(log: TemperatureLog, parts: Sequence[str], time: np.ndarray,
-                     origin: str) -> tuple[np.ndarray, tuple[str, ...], list[Note]]:
+def process_channels(
+    log: TemperatureLog, parts: Sequence[str], time: np.ndarray, origin: str
+) -> tuple[np.ndarray, tuple[str, ...], list[Note]]:
     """Every channel of a process log joined per cycle.
 
     Parameters
@@ -177,8 +190,13 @@ def process_channels(log: TemperatureLog, parts: Sequence[str], time: np.ndarray
         v = col[rows]
         if not np.isfinite(v).all():
             k = int(np.flatnonzero(~np.isfinite(v))[0])
-            notes.append(Note(f"process channel {name!r} is empty for part {parts[k]}: left out",
-                              log.location(int(rows[k])), "series"))
+            notes.append(
+                Note(
+                    f"process channel {name!r} is empty for part {parts[k]}: left out",
+                    log.location(int(rows[k])),
+                    "series",
+                )
+            )
             continue
         cols.append(v)
         names.append(name)
@@ -188,23 +206,34 @@ def process_channels(log: TemperatureLog, parts: Sequence[str], time: np.ndarray
         seen = [cells[i] for i in rows]
         if any(c is None for c in seen):
             k = seen.index(None)
-            notes.append(Note(f"process channel {name!r} is empty for part {parts[k]}: left out",
-                              log.location(int(rows[k])), "series"))
+            notes.append(
+                Note(
+                    f"process channel {name!r} is empty for part {parts[k]}: left out",
+                    log.location(int(rows[k])),
+                    "series",
+                )
+            )
             continue
         counts: dict[str, int] = {}
         for c in seen:
             counts[str(c)] = counts.get(str(c), 0) + 1
         if len(counts) > MAX_LEVELS:
-            notes.append(Note(f"process channel {name!r} has {len(counts)} levels (more than {MAX_LEVELS}): left out",
-                              log.location(), "series"))
+            notes.append(
+                Note(
+                    f"process channel {name!r} has {len(counts)} levels (more than {MAX_LEVELS}): left out",
+                    log.location(),
+                    "series",
+                )
+            )
             continue
         levels = [lv for lv, n in counts.items() if n >= 2 and n < len(seen)]
         if len(counts) == 2:
             levels = levels[1:] if len(levels) == 2 else levels
         factor.append([(f"{name}={lv}", np.array([c == lv for c in seen], dtype=float)) for lv in levels])
     # a designed experiment's factors act together: the product of two factors' levels is a channel too
-    pairs = [(f"{a} & {b}", ca * cb) for i, fa in enumerate(factor) for fb in factor[i + 1:]
-             for a, ca in fa for b, cb in fb]
+    pairs = [
+        (f"{a} & {b}", ca * cb) for i, fa in enumerate(factor) for fb in factor[i + 1 :] for a, ca in fa for b, cb in fb
+    ]
     seen_cols: list[np.ndarray] = list(cols)
     for lv_name, col in [*(x for f in factor for x in f), *pairs]:
         n_on = int(col.sum())

@@ -32,8 +32,16 @@ from setupfix.pipeline.stores import StoreRef
 from setupfix.pipeline.view import MatchRow, match_rows, matched_rows
 from setupfix.store import CORRECTION_COLUMNS, Recommendation, report_tables
 
-__all__ = ["OpenedReport", "open_report", "export_cycles", "newest_report", "FolderWatch",
-           "compare_steps", "store_parts", "record_applied"]
+__all__ = [
+    "OpenedReport",
+    "open_report",
+    "export_cycles",
+    "newest_report",
+    "FolderWatch",
+    "compare_steps",
+    "store_parts",
+    "record_applied",
+]
 
 
 @dataclass(frozen=True)
@@ -92,11 +100,22 @@ def open_report(request: CorrectRequest, report: str | Path) -> OpenedReport:
         outcome = correct_report(request, source)
     except MatchError as exc:  # the match table from the same bytes: what matches, what is close
         read = parsers.read_report(source, **request.read.kwargs())
-        return OpenedReport(request, source.name, read.format, matches=tuple(match_rows(request.model, read.table)),
-                            problem=str(exc), notes=tuple(read.notes))
-    return OpenedReport(request, source.name, outcome.format, outcome,
-                        matches=tuple(matched_rows(request.model, [c.part for c in outcome.cycles])),
-                        notes=outcome.notes)
+        return OpenedReport(
+            request,
+            source.name,
+            read.format,
+            matches=tuple(match_rows(request.model, read.table)),
+            problem=str(exc),
+            notes=tuple(read.notes),
+        )
+    return OpenedReport(
+        request,
+        source.name,
+        outcome.format,
+        outcome,
+        matches=tuple(matched_rows(request.model, [c.part for c in outcome.cycles])),
+        notes=outcome.notes,
+    )
 
 
 def export_cycles(opened: OpenedReport, controller: str, cycle: int | None = None) -> tuple[CycleCorrection, ...]:
@@ -194,8 +213,9 @@ def store_parts(model: ProcessModel, db: str | Path | StoreRef) -> tuple[list[Pa
     return parts, notes
 
 
-def record_applied(db: str | Path | StoreRef, exported: Exported, cycles: Sequence[CycleCorrection], *,
-                   when: str | None = None) -> int:
+def record_applied(
+    db: str | Path | StoreRef, exported: Exported, cycles: Sequence[CycleCorrection], *, when: str | None = None
+) -> int:
     """Record what ``exported`` wrote as applied now, in one transaction: its non-zero rows
     in the corrections log (by controller register name) and, for each exported cycle
     (``exported.parts``; the others of ``cycles`` are left out), its recommendation.
@@ -213,10 +233,22 @@ def record_applied(db: str | Path | StoreRef, exported: Exported, cycles: Sequen
     with ref.open(existing=False) as store, store.transaction():
         added = store.add_corrections(pd.DataFrame(rows, columns=list(CORRECTION_COLUMNS)))
         for c in written:
-            store.add_recommendation(Recommendation(
-                optimizer=c.result.optimizer, created_at=stamp,
-                inputs={"model": c.model.source, "report": c.part.report, "part": c.part.part, "applied": True,
-                        "export": {"target": visible_name(exported.target), "controller": exported.controller,
-                                   "sha256": exported.sha256}},
-                result=cycle_json(c)))
+            store.add_recommendation(
+                Recommendation(
+                    optimizer=c.result.optimizer,
+                    created_at=stamp,
+                    inputs={
+                        "model": c.model.source,
+                        "report": c.part.report,
+                        "part": c.part.part,
+                        "applied": True,
+                        "export": {
+                            "target": visible_name(exported.target),
+                            "controller": exported.controller,
+                            "sha256": exported.sha256,
+                        },
+                    },
+                    result=cycle_json(c),
+                )
+            )
     return added

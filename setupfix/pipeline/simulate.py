@@ -29,8 +29,19 @@ from setupfix.pipeline.writers import atomic_write, check_target
 
 __all__ = ["parse_effect", "SimulateOutcome", "simulate_series", "write_series"]
 
-_EFFECT_KEYS = ("kind", "magnitude", "register", "dimension", "axis", "group", "channel", "shape", "tau",
-                "reference", "at")
+_EFFECT_KEYS = (
+    "kind",
+    "magnitude",
+    "register",
+    "dimension",
+    "axis",
+    "group",
+    "channel",
+    "shape",
+    "tau",
+    "reference",
+    "at",
+)
 START = "2026-11-02T06:00:00"
 
 
@@ -81,9 +92,18 @@ def parse_effect(text: str) -> HiddenEffect:
         cycle = f"cycle {int(at)}"
     elif "at" in items:
         raise ParameterError(f"--effect {text!r}: at= is for a level step only")
-    spec = EffectSpec(kind, register=items.get("register"), dimension=items.get("dimension"),
-                      axis=items.get("axis"), group=items.get("group"), channel=channel, shape=shape, tau=tau,
-                      reference=reference, cycle=cycle)
+    spec = EffectSpec(
+        kind,
+        register=items.get("register"),
+        dimension=items.get("dimension"),
+        axis=items.get("axis"),
+        group=items.get("group"),
+        channel=channel,
+        shape=shape,
+        tau=tau,
+        reference=reference,
+        cycle=cycle,
+    )
     return HiddenEffect(spec, magnitude)
 
 
@@ -97,8 +117,9 @@ class SimulateOutcome:
     start: str
 
 
-def simulate_series(model: ProcessModel | str | Path, effects: list[HiddenEffect] | tuple[HiddenEffect, ...] = (),
-                    **params: Any) -> tuple[ProcessModel, Layout, SimulatedSeries]:
+def simulate_series(
+    model: ProcessModel | str | Path, effects: list[HiddenEffect] | tuple[HiddenEffect, ...] = (), **params: Any
+) -> tuple[ProcessModel, Layout, SimulatedSeries]:
     """Run the shop simulator on a model (path or loaded)."""
     if not isinstance(model, ProcessModel):
         model = load_model(model)
@@ -111,9 +132,16 @@ def _stamp(start: datetime, hours: float) -> str:
     return (start + timedelta(hours=float(hours))).isoformat(timespec="seconds")
 
 
-def write_series(model: ProcessModel, layout: Layout, sim: SimulatedSeries, out_dir: str | Path, *,
-                 per_cycle: bool = False, start: str = START,
-                 settings: dict[str, Any] | None = None) -> tuple[str, ...]:
+def write_series(
+    model: ProcessModel,
+    layout: Layout,
+    sim: SimulatedSeries,
+    out_dir: str | Path,
+    *,
+    per_cycle: bool = False,
+    start: str = START,
+    settings: dict[str, Any] | None = None,
+) -> tuple[str, ...]:
     """Write the series into ``out_dir`` (created if needed); return the files written.
 
     Raises
@@ -136,8 +164,18 @@ def write_series(model: ProcessModel, layout: Layout, sim: SimulatedSeries, out_
     for name in [*names, "corrections.csv", "temperatures.csv", "truth.json"]:
         check_target(out / name)
     s = sim.series
-    header = ["characteristic", "nominal", "actual", "deviation", "lower", "upper", "unit", "part", "timestamp",
-              "station"]
+    header = [
+        "characteristic",
+        "nominal",
+        "actual",
+        "deviation",
+        "lower",
+        "upper",
+        "unit",
+        "part",
+        "timestamp",
+        "station",
+    ]
     has_xyz = np.isfinite(layout.coord).all()
     if has_xyz:
         header += ["x", "y", "z"]
@@ -147,8 +185,18 @@ def write_series(model: ProcessModel, layout: Layout, sim: SimulatedSeries, out_
         r = []
         for q, dim in enumerate(model.dimensions):
             dev = s.deviation[k, q]
-            row = [dim.name, f"{dim.nominal:.6f}", f"{dim.nominal + dev:.6f}", f"{dev:.6f}", f"{dim.lower:g}",
-                   f"{dim.upper:g}", model.unit, s.cycles[k], _stamp(t0, s.time[k]), dim.group or ""]
+            row = [
+                dim.name,
+                f"{dim.nominal:.6f}",
+                f"{dim.nominal + dev:.6f}",
+                f"{dev:.6f}",
+                f"{dim.lower:g}",
+                f"{dim.upper:g}",
+                model.unit,
+                s.cycles[k],
+                _stamp(t0, s.time[k]),
+                dim.group or "",
+            ]
             if has_xyz:
                 row += [f"{v:.6g}" for v in layout.coord[q]]
             r.append(row)

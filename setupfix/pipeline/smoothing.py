@@ -67,8 +67,11 @@ def part_identity(name: str, time: np.datetime64, deviation: Array) -> tuple[obj
     have two.
     """
     rounded = np.round(np.asarray(deviation, dtype=float), IDENTITY_DECIMALS)
-    return (name, int(np.asarray(time, dtype="datetime64[ns]").astype(np.int64)),
-            tuple(None if np.isnan(v) else float(v) + 0.0 for v in rounded))
+    return (
+        name,
+        int(np.asarray(time, dtype="datetime64[ns]").astype(np.int64)),
+        tuple(None if np.isnan(v) else float(v) + 0.0 for v in rounded),
+    )
 
 
 def history_parts(model: ProcessModel, table: pd.DataFrame, *, source: str) -> list[PartMeasurement]:
@@ -120,8 +123,15 @@ class History:
     @classmethod
     def empty(cls, model: ProcessModel) -> History:
         t = np.array([], dtype="datetime64[ns]")
-        return cls(t, np.zeros((0, len(model.dimensions))), (), t.copy(), np.zeros(0, dtype=np.int64), np.zeros(0),
-                   np.zeros(0, dtype=bool))
+        return cls(
+            t,
+            np.zeros((0, len(model.dimensions))),
+            (),
+            t.copy(),
+            np.zeros(0, dtype=np.int64),
+            np.zeros(0),
+            np.zeros(0, dtype=bool),
+        )
 
     @classmethod
     def from_store(cls, model: ProcessModel, store: Store) -> History:
@@ -154,9 +164,15 @@ class History:
         log = stored_corrections(store, model)
         if log is None:
             return out
-        return cls(out.times, out.deviations, out.keys, log.times.values.astype("datetime64[ns]"),
-                   log.registers.astype(np.int64), log.deltas.astype(float),
-                   np.array([e == "tool_change" for e in log.events], dtype=bool))
+        return cls(
+            out.times,
+            out.deviations,
+            out.keys,
+            log.times.values.astype("datetime64[ns]"),
+            log.registers.astype(np.int64),
+            log.deltas.astype(float),
+            np.array([e == "tool_change" for e in log.events], dtype=bool),
+        )
 
     def with_parts(self, parts: Sequence[PartMeasurement]) -> History:
         """This history plus ``parts`` (those with a timestamp, not already held: same :func:`part_identity`)."""
@@ -177,9 +193,15 @@ class History:
             devs.append(np.asarray(p.deviation, dtype=float))
             keys.append(p.part)
         width = self.deviations.shape[1]
-        return History(np.array(times, dtype="datetime64[ns]"),
-                       np.vstack(devs) if devs else np.zeros((0, width)), tuple(keys), self.log_times,
-                       self.log_register, self.log_delta, self.log_reset)
+        return History(
+            np.array(times, dtype="datetime64[ns]"),
+            np.vstack(devs) if devs else np.zeros((0, width)),
+            tuple(keys),
+            self.log_times,
+            self.log_register,
+            self.log_delta,
+            self.log_reset,
+        )
 
     def stand_in(self, model: ProcessModel, part: PartMeasurement) -> Array | None:
         """For the dimensions ``part`` lacks, their last measurement among the :data:`HISTORY` parts machined
@@ -188,8 +210,17 @@ class History:
         now = _stamp(part)
         if now is None or not np.isnan(part.deviation).any():
             return None
-        rows = shifted_history(now, self.times, self.deviations, self.log_times, self.log_register, self.log_delta,
-                               self.log_reset, relation_matrices(model).composite, HISTORY)
+        rows = shifted_history(
+            now,
+            self.times,
+            self.deviations,
+            self.log_times,
+            self.log_register,
+            self.log_delta,
+            self.log_reset,
+            relation_matrices(model).composite,
+            HISTORY,
+        )
         return np.where(np.isnan(part.deviation), last_measured(rows), np.nan)
 
     def smooth(self, model: ProcessModel, part: PartMeasurement, lam: float) -> Smoothed:
@@ -198,5 +229,16 @@ class History:
         now = _stamp(part)
         if lam < 1.0 and now is None:
             return Smoothed(part.deviation, 0, lam, (Note("no timestamp in the report: not smoothed", None, "ewma"),))
-        return ewma_history(part.deviation, now, self.times, self.deviations, self.log_times, self.log_register,
-                            self.log_delta, self.log_reset, relation_matrices(model).composite, lam, limit=HISTORY)
+        return ewma_history(
+            part.deviation,
+            now,
+            self.times,
+            self.deviations,
+            self.log_times,
+            self.log_register,
+            self.log_delta,
+            self.log_reset,
+            relation_matrices(model).composite,
+            lam,
+            limit=HISTORY,
+        )

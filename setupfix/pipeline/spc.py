@@ -33,9 +33,22 @@ from setupfix.safety import short_list
 from setupfix.spc import NELSON_RULES, Capability, ChartLimits, capability, chart_limits, nelson, split_capability
 from setupfix.store import Store
 
-__all__ = ["SpcRequest", "SpcOutcome", "DimensionSpc", "RuleHit", "SplitEffect", "spc_report", "spc_json",
-           "format_spc", "capability_json", "interval_text", "sparkline", "capability_rows", "CapabilityRow",
-           "DEFAULT_BASELINE"]
+__all__ = [
+    "SpcRequest",
+    "SpcOutcome",
+    "DimensionSpc",
+    "RuleHit",
+    "SplitEffect",
+    "spc_report",
+    "spc_json",
+    "format_spc",
+    "capability_json",
+    "interval_text",
+    "sparkline",
+    "capability_rows",
+    "CapabilityRow",
+    "DEFAULT_BASELINE",
+]
 
 #: Parts the control limits are computed from unless ``--baseline`` says otherwise.
 DEFAULT_BASELINE = 20
@@ -130,35 +143,50 @@ def _series(store: Store, request: SpcRequest, notes: list[Note]) -> pd.DataFram
     where = f"{store.location}#measurements"
     rows = rows[~rows["reference"].astype(bool)] if "reference" in rows.columns else rows
     if rows.empty:
-        raise StoreError(f"no measurements stored for machine {store.machine!r}",
-                         location=SourceLocation(store.location),
-                         hint="store reports with 'setupfix history import --machine NAME'; "
-                              "'setupfix history show' lists the machines")
+        raise StoreError(
+            f"no measurements stored for machine {store.machine!r}",
+            location=SourceLocation(store.location),
+            hint="store reports with 'setupfix history import --machine NAME'; "
+            "'setupfix history show' lists the machines",
+        )
     stamps = rows["timestamp"].fillna("").astype(str).str.strip()
     dated = stamps != ""
     bounded = request.since or request.until or request.splits
     if not dated.all():
         first = rows.loc[~dated, "report"].iloc[0]
         if bounded:
-            raise ParameterError(f"spc: parts of {first!s} have no timestamp: --since, --until and --split "
-                                 "need the time of every part", hint="give the reports a timestamp column")
+            raise ParameterError(
+                f"spc: parts of {first!s} have no timestamp: --since, --until and --split need the time of every part",
+                hint="give the reports a timestamp column",
+            )
         if dated.any():
-            raise ParameterError(f"spc: parts of {first!s} have no timestamp while others have one: no order",
-                                 hint="give every report a timestamp, or store them in order without any")
-        notes.append(Note("no part has a timestamp: the parts are in the order they were stored",
-                          SourceLocation(where), kind="spc"))
-    frame = pd.DataFrame({
-        "characteristic": rows["characteristic"].astype(str).to_numpy(),
-        "key": [normalise_name(c) for c in rows["characteristic"].astype(str)],
-        "part": rows["part"].fillna("").astype(str).to_numpy(),
-        "time": pd.DatetimeIndex([instant(t, SourceLocation(where)) for t in stamps]) if dated.all()
-        else pd.DatetimeIndex([pd.NaT] * len(rows)),
-        "stamp": stamps.to_numpy(),
-        "value": np.where(rows["deviation"].notna(), rows["deviation"], rows["actual"] - rows["nominal"]),
-        "lower": rows["lower"].astype(float).to_numpy(), "upper": rows["upper"].astype(float).to_numpy(),
-        "unit": rows["unit"].fillna("mm").astype(str).to_numpy(),
-        "order": np.arange(len(rows)),
-    })
+            raise ParameterError(
+                f"spc: parts of {first!s} have no timestamp while others have one: no order",
+                hint="give every report a timestamp, or store them in order without any",
+            )
+        notes.append(
+            Note(
+                "no part has a timestamp: the parts are in the order they were stored",
+                SourceLocation(where),
+                kind="spc",
+            )
+        )
+    frame = pd.DataFrame(
+        {
+            "characteristic": rows["characteristic"].astype(str).to_numpy(),
+            "key": [normalise_name(c) for c in rows["characteristic"].astype(str)],
+            "part": rows["part"].fillna("").astype(str).to_numpy(),
+            "time": pd.DatetimeIndex([instant(t, SourceLocation(where)) for t in stamps])
+            if dated.all()
+            else pd.DatetimeIndex([pd.NaT] * len(rows)),
+            "stamp": stamps.to_numpy(),
+            "value": np.where(rows["deviation"].notna(), rows["deviation"], rows["actual"] - rows["nominal"]),
+            "lower": rows["lower"].astype(float).to_numpy(),
+            "upper": rows["upper"].astype(float).to_numpy(),
+            "unit": rows["unit"].fillna("mm").astype(str).to_numpy(),
+            "order": np.arange(len(rows)),
+        }
+    )
     since, until = _time(request.since, "--since"), _time(request.until, "--until")
     if since is not None:
         frame = frame[frame["time"] >= since]
@@ -171,8 +199,13 @@ def _series(store: Store, request: SpcRequest, notes: list[Note]) -> pd.DataFram
     frame = frame.assign(ident=np.round(frame["value"].to_numpy(dtype=float), IDENTITY_DECIMALS))
     doubles = frame.duplicated(["key", "part", "time", "ident"], keep="last")
     if doubles.any():
-        notes.append(Note(f"{int(doubles.sum())} value(s) of parts stored more than once: counted once",
-                          SourceLocation(where), kind="spc"))
+        notes.append(
+            Note(
+                f"{int(doubles.sum())} value(s) of parts stored more than once: counted once",
+                SourceLocation(where),
+                kind="spc",
+            )
+        )
         frame = frame[~doubles]
     return frame.sort_values(["time", "order"], kind="stable") if dated.all() else frame
 
@@ -186,8 +219,10 @@ def _selected(frame: pd.DataFrame, names: Sequence[str]) -> list[str]:
     unknown = [n for n, k in zip(names, wanted, strict=True) if k not in keys]
     if unknown:
         shown = ", ".join(dict.fromkeys(frame["characteristic"]).keys())
-        raise MatchError(f"spc: no stored characteristic {unknown[0]!r}",
-                         hint=f"stored: {shown[:300]}{'…' if len(shown) > 300 else ''}")
+        raise MatchError(
+            f"spc: no stored characteristic {unknown[0]!r}",
+            hint=f"stored: {shown[:300]}{'…' if len(shown) > 300 else ''}",
+        )
     return list(dict.fromkeys(wanted))
 
 
@@ -202,8 +237,9 @@ def _split_times(store: Store, request: SpcRequest) -> tuple[list[datetime], lis
     return times, [t.isoformat() for t in times], "correction"
 
 
-def _effects(group: pd.DataFrame, splits: list[datetime], labels: list[str], source: str,
-             lower: float, upper: float) -> tuple[SplitEffect, ...]:
+def _effects(
+    group: pd.DataFrame, splits: list[datetime], labels: list[str], source: str, lower: float, upper: float
+) -> tuple[SplitEffect, ...]:
     """Capability of the parts since the previous split against the parts up to the next, for each split."""
     if group["time"].isna().any():
         return ()
@@ -255,19 +291,42 @@ def spc_report(store: Store, request: SpcRequest) -> SpcOutcome:
         lower, upper = float(last["lower"]), float(last["upper"])
         limits_seen = group[["lower", "upper"]].drop_duplicates()
         if len(limits_seen) > 1:
-            notes.append(Note(f"{name}: its limits changed over the series; the last ones "
-                              f"({lower:g}, {upper:g}) are used", kind="spc"))
+            notes.append(
+                Note(
+                    f"{name}: its limits changed over the series; the last ones ({lower:g}, {upper:g}) are used",
+                    kind="spc",
+                )
+            )
         values = group["value"].to_numpy(dtype=float)
         parts = tuple(group["part"])
         if len(values) < request.baseline:
-            notes.append(Note(f"{name}: {len(values)} part(s), fewer than the baseline of {request.baseline}: "
-                              "the limits come from all of them", kind="spc"))
+            notes.append(
+                Note(
+                    f"{name}: {len(values)} part(s), fewer than the baseline of {request.baseline}: "
+                    "the limits come from all of them",
+                    kind="spc",
+                )
+            )
         limits = chart_limits(values, request.baseline)
-        hits = tuple(RuleHit(v.rule, NELSON_RULES[v.rule], v.start, v.end, parts[v.start:v.end + 1])
-                     for v in nelson(values, limits.center, limits.sigma))
-        dims.append(DimensionSpc(name, str(last["unit"]), lower, upper, parts, tuple(group["stamp"]), values,
-                                 capability(values, lower, upper), limits, hits,
-                                 _effects(group, splits, labels, source, lower, upper)))
+        hits = tuple(
+            RuleHit(v.rule, NELSON_RULES[v.rule], v.start, v.end, parts[v.start : v.end + 1])
+            for v in nelson(values, limits.center, limits.sigma)
+        )
+        dims.append(
+            DimensionSpc(
+                name,
+                str(last["unit"]),
+                lower,
+                upper,
+                parts,
+                tuple(group["stamp"]),
+                values,
+                capability(values, lower, upper),
+                limits,
+                hits,
+                _effects(group, splits, labels, source, lower, upper),
+            )
+        )
     return SpcOutcome(store.location, request.baseline, tuple(dims), tuple(labels), tuple(notes))
 
 
@@ -277,10 +336,18 @@ def _num(value: float) -> float | None:
 
 def capability_json(c: Capability) -> dict[str, Any]:
     """One :class:`~setupfix.spc.Capability` as JSON (NaN as null)."""
-    return {"n": c.n, "mean": _num(c.mean), "sigma_within": _num(c.sigma_within),
-            "sigma_overall": _num(c.sigma_overall), "cp": _num(c.cp), "cpk": _num(c.cpk),
-            "cpk_ci95": [_num(c.cpk_low), _num(c.cpk_high)], "pp": _num(c.pp), "ppk": _num(c.ppk),
-            "out_of_tolerance": c.out_of_tolerance}
+    return {
+        "n": c.n,
+        "mean": _num(c.mean),
+        "sigma_within": _num(c.sigma_within),
+        "sigma_overall": _num(c.sigma_overall),
+        "cp": _num(c.cp),
+        "cpk": _num(c.cpk),
+        "cpk_ci95": [_num(c.cpk_low), _num(c.cpk_high)],
+        "pp": _num(c.pp),
+        "ppk": _num(c.ppk),
+        "out_of_tolerance": c.out_of_tolerance,
+    }
 
 
 def spc_json(outcome: SpcOutcome) -> dict[str, Any]:
@@ -289,19 +356,42 @@ def spc_json(outcome: SpcOutcome) -> dict[str, Any]:
         "store": outcome.store,
         "baseline": outcome.baseline,
         "splits": list(outcome.splits),
-        "dimensions": [{
-            "name": d.name, "unit": d.unit, "lower": _num(d.lower), "upper": _num(d.upper),
-            **capability_json(d.capability),
-            "chart": {"center": _num(d.limits.center), "sigma": _num(d.limits.sigma), "ucl": _num(d.limits.ucl),
-                      "lcl": _num(d.limits.lcl), "mr_center": _num(d.limits.mr_center),
-                      "mr_ucl": _num(d.limits.mr_ucl), "baseline": d.limits.baseline},
-            "violations": [{"rule": v.rule, "text": v.text, "first": v.first, "last": v.last,
-                            "parts": list(v.parts)} for v in d.violations],
-            "split_effects": [{"time": s.time, "source": s.source, "first_after": s.at,
-                               "before": capability_json(s.before), "after": capability_json(s.after)}
-                              for s in d.splits],
-            "parts": list(d.parts), "times": list(d.times), "values": [_num(v) for v in d.values],
-        } for d in outcome.dimensions],
+        "dimensions": [
+            {
+                "name": d.name,
+                "unit": d.unit,
+                "lower": _num(d.lower),
+                "upper": _num(d.upper),
+                **capability_json(d.capability),
+                "chart": {
+                    "center": _num(d.limits.center),
+                    "sigma": _num(d.limits.sigma),
+                    "ucl": _num(d.limits.ucl),
+                    "lcl": _num(d.limits.lcl),
+                    "mr_center": _num(d.limits.mr_center),
+                    "mr_ucl": _num(d.limits.mr_ucl),
+                    "baseline": d.limits.baseline,
+                },
+                "violations": [
+                    {"rule": v.rule, "text": v.text, "first": v.first, "last": v.last, "parts": list(v.parts)}
+                    for v in d.violations
+                ],
+                "split_effects": [
+                    {
+                        "time": s.time,
+                        "source": s.source,
+                        "first_after": s.at,
+                        "before": capability_json(s.before),
+                        "after": capability_json(s.after),
+                    }
+                    for s in d.splits
+                ],
+                "parts": list(d.parts),
+                "times": list(d.times),
+                "values": [_num(v) for v in d.values],
+            }
+            for d in outcome.dimensions
+        ],
         "warnings": [str(n) for n in outcome.notes],
     }
 
@@ -318,28 +408,42 @@ def interval_text(c: Capability) -> str:
 def format_spc(outcome: SpcOutcome) -> str:
     """The text table of ``spc``: one line per characteristic, then its rule violations and split effects."""
     width = max([14, *(len(d.name) + 2 for d in outcome.dimensions)])
-    head = (f"{'dimension':<{width}}{'n':>5}{'mean':>10}{'σ within':>10}{'σ overall':>10}"
-            f"{'Cp':>7}{'Cpk':>7}{'Cpk 95 % CI':>15}{'Pp':>7}{'Ppk':>7}{'out':>5}  rules")
-    lines = [f"{outcome.store}: {len(outcome.dimensions)} characteristic(s); control limits from the first "
-             f"{outcome.baseline} part(s); deviations from nominal", "", head, "-" * len(head)]
+    head = (
+        f"{'dimension':<{width}}{'n':>5}{'mean':>10}{'σ within':>10}{'σ overall':>10}"
+        f"{'Cp':>7}{'Cpk':>7}{'Cpk 95 % CI':>15}{'Pp':>7}{'Ppk':>7}{'out':>5}  rules"
+    )
+    lines = [
+        f"{outcome.store}: {len(outcome.dimensions)} characteristic(s); control limits from the first "
+        f"{outcome.baseline} part(s); deviations from nominal",
+        "",
+        head,
+        "-" * len(head),
+    ]
     for d in outcome.dimensions:
         c = d.capability
         rules = ",".join(str(r) for r in sorted({v.rule for v in d.violations})) or "—"
         ci = interval_text(c)
-        lines.append(f"{d.name:<{width}}{c.n:>5}{_f(c.mean, 4):>10}{_f(c.sigma_within, 4):>10}"
-                     f"{_f(c.sigma_overall, 4):>10}{_f(c.cp):>7}{_f(c.cpk):>7}{ci:>15}{_f(c.pp):>7}"
-                     f"{_f(c.ppk):>7}{c.out_of_tolerance:>5}  {rules}")
+        lines.append(
+            f"{d.name:<{width}}{c.n:>5}{_f(c.mean, 4):>10}{_f(c.sigma_within, 4):>10}"
+            f"{_f(c.sigma_overall, 4):>10}{_f(c.cp):>7}{_f(c.cpk):>7}{ci:>15}{_f(c.pp):>7}"
+            f"{_f(c.ppk):>7}{c.out_of_tolerance:>5}  {rules}"
+        )
     for d in outcome.dimensions:
         for rule in sorted({v.rule for v in d.violations}):
-            spans = [v.parts[0] if len(v.parts) == 1 else f"{v.parts[0]} … {v.parts[-1]} ({len(v.parts)} parts)"
-                     for v in d.violations if v.rule == rule]
+            spans = [
+                v.parts[0] if len(v.parts) == 1 else f"{v.parts[0]} … {v.parts[-1]} ({len(v.parts)} parts)"
+                for v in d.violations
+                if v.rule == rule
+            ]
             lines.append(f"{d.name}: rule {rule} ({NELSON_RULES[rule]}): {short_list(spans, TEXT_LIST)}")
     effects = [(d, s) for d in outcome.dimensions for s in d.splits]
     if effects:
         lines += ["", "capability before → after each split (Cpk, parts since the previous split / up to the next):"]
         for d, s in effects:
-            lines.append(f"{d.name:<{width}}{s.source} {s.time}: Cpk {_f(s.before.cpk)} (n={s.before.n}) → "
-                         f"{_f(s.after.cpk)} (n={s.after.n}), mean {_f(s.before.mean, 4)} → {_f(s.after.mean, 4)}")
+            lines.append(
+                f"{d.name:<{width}}{s.source} {s.time}: Cpk {_f(s.before.cpk)} (n={s.before.n}) → "
+                f"{_f(s.after.cpk)} (n={s.after.n}), mean {_f(s.before.mean, 4)} → {_f(s.after.mean, 4)}"
+            )
     lines += [f"warning: {n}" for n in outcome.notes]
     return "\n".join(lines)
 
@@ -384,6 +488,17 @@ def capability_rows(outcome: SpcOutcome, width: int = 30) -> list[CapabilityRow]
         rules = " ".join(f"R{r}" for r in sorted({v.rule for v in d.violations})) or "—"
         split = d.splits[-1] if d.splits else None
         change = f"{_f(split.before.cpk)} → {_f(split.after.cpk)}" if split else "—"
-        rows.append(CapabilityRow(d.name, c.n, _f(c.cpk), interval_text(c), _f(c.ppk),
-                                  c.out_of_tolerance, sparkline(d.values, width), rules, change))
+        rows.append(
+            CapabilityRow(
+                d.name,
+                c.n,
+                _f(c.cpk),
+                interval_text(c),
+                _f(c.ppk),
+                c.out_of_tolerance,
+                sparkline(d.values, width),
+                rules,
+                change,
+            )
+        )
     return rows

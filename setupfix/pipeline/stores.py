@@ -86,6 +86,8 @@ class StoreRef:
             store cannot be opened.
         """
         if existing and not self.exists:
-            raise StoreError("no history store here (import reports with 'setupfix history import')",
-                             location=SourceLocation(self.location))
+            raise StoreError(
+                "no history store here (import reports with 'setupfix history import')",
+                location=SourceLocation(self.location),
+            )
         return open_store(self.location, machine=self.machine, operator=self.operator)

@@ -41,12 +41,23 @@ def _drive_notes(saved: SavedModel, source: str) -> list[Note]:
         return []
     out = []
     if saved.speed is None:
-        out.append(Note("kalman without a spindle speed: lumped masses exchange heat with the ambient only "
-                        "(no heat input); give --speed COL when the log has one", SourceLocation(source), "fallback"))
+        out.append(
+            Note(
+                "kalman without a spindle speed: lumped masses exchange heat with the ambient only "
+                "(no heat input); give --speed COL when the log has one",
+                SourceLocation(source),
+                "fallback",
+            )
+        )
     if saved.ambient is None:
-        out.append(Note(f"kalman without an ambient column: ambient taken as constant "
-                        f"{saved.model.ambient_const_:.4g} (median reference temperature)", SourceLocation(source),
-                        "fallback"))
+        out.append(
+            Note(
+                f"kalman without an ambient column: ambient taken as constant "
+                f"{saved.model.ambient_const_:.4g} (median reference temperature)",
+                SourceLocation(source),
+                "fallback",
+            )
+        )
     return out
 
 
@@ -68,8 +79,9 @@ def parse_anchor(text: str) -> Anchor:
 
     number = strict_number(value) if sep else None
     if not time.strip() or number is None:
-        raise ParameterError(f"--anchor must be 'first' or TIME=ERROR, got {text!r}",
-                             hint="e.g. --anchor 2026-01-05T08:00:00=0.004")
+        raise ParameterError(
+            f"--anchor must be 'first' or TIME=ERROR, got {text!r}", hint="e.g. --anchor 2026-01-05T08:00:00=0.004"
+        )
     return Anchor(time.strip(), number)
 
 
@@ -79,11 +91,21 @@ def sample_at(log: TemperatureLog, time: str) -> int:
         try:
             when = datetime.fromisoformat(time.replace("Z", "+00:00"))
             stamps = [datetime.fromisoformat(s.replace("Z", "+00:00")) for s in log.timestamps]
-            idx = int(np.searchsorted(np.array([(s - stamps[0]).total_seconds() for s in stamps]),
-                                      (when - stamps[0]).total_seconds(), side="right")) - 1
+            idx = (
+                int(
+                    np.searchsorted(
+                        np.array([(s - stamps[0]).total_seconds() for s in stamps]),
+                        (when - stamps[0]).total_seconds(),
+                        side="right",
+                    )
+                )
+                - 1
+            )
         except (ValueError, TypeError):
-            raise ParameterError(f"time {time!r} is not an ISO 8601 time comparable with the log's timestamps",
-                                 hint="e.g. 2026-01-05T08:00:00") from None
+            raise ParameterError(
+                f"time {time!r} is not an ISO 8601 time comparable with the log's timestamps",
+                hint="e.g. 2026-01-05T08:00:00",
+            ) from None
     else:
         if not time.isdigit():
             raise ParameterError(f"the log has no timestamps: give a sample number, not {time!r}")
@@ -93,8 +115,9 @@ def sample_at(log: TemperatureLog, time: str) -> int:
     return idx
 
 
-def predict_log(saved: SavedModel, log: TemperatureLog, *, anchor: Anchor | None = None,
-                sensors_failed: bool = False) -> tuple[Array, list[Note]]:
+def predict_log(
+    saved: SavedModel, log: TemperatureLog, *, anchor: Anchor | None = None, sensors_failed: bool = False
+) -> tuple[Array, list[Note]]:
     """Predicted thermal error for every sample of ``log`` (the target's unit) and the notes.
 
     Relative to the model's reference state; ``anchor`` re-bases it on a measured
@@ -105,8 +128,14 @@ def predict_log(saved: SavedModel, log: TemperatureLog, *, anchor: Anchor | None
     interval = log.sample_interval_s
     trained = saved.sample_interval_s
     if trained and interval and abs(interval - trained) > 0.05 * trained:
-        notes.append(Note(f"sampled every {interval:g} s but the model was fitted on {trained:g} s; "
-                          "its time constants are per sample", log.location(), "thermal"))
+        notes.append(
+            Note(
+                f"sampled every {interval:g} s but the model was fitted on {trained:g} s; "
+                "its time constants are per sample",
+                log.location(),
+                "thermal",
+            )
+        )
     sel = Selection(saved.inputs, None, saved.ambient, saved.speed)
     data = _drive_arrays(log, sel, gaps=isinstance(saved.model, KalmanFusionModel))
     drives = {"ambient": data["ambient"], "speed": data["speed"]} if isinstance(saved.model, KalmanFusionModel) else {}
@@ -116,14 +145,19 @@ def predict_log(saved: SavedModel, log: TemperatureLog, *, anchor: Anchor | None
         if anchor.time == "first":
             measured = log.columns.get(saved.target)
             if measured is None or not np.isfinite(measured[0]):
-                raise ParseError(f"--anchor first needs the error column {saved.target!r} at the first sample",
-                                 location=log.location(0))
+                raise ParseError(
+                    f"--anchor first needs the error column {saved.target!r} at the first sample",
+                    location=log.location(0),
+                )
             pred = rebase(pred, 0, float(measured[0]))
         else:
             pred = rebase(pred, sample_at(log, anchor.time), float(anchor.error))  # type: ignore[arg-type]  # anchor.time is a timestamp on this branch
     if not np.all(np.isfinite(pred)):
-        raise ParseError(f"the {saved.model.name} model diverges on this log (non-finite prediction)",
-                         location=log.location(), hint="refit, or use mra")
+        raise ParseError(
+            f"the {saved.model.name} model diverges on this log (non-finite prediction)",
+            location=log.location(),
+            hint="refit, or use mra",
+        )
     return pred, notes
 
 
@@ -133,9 +167,12 @@ def far_from_reference(saved: SavedModel, log: TemperatureLog) -> Note | None:
     gap = np.abs(first - saved.model.T_ref_)
     if np.any(np.isfinite(gap)) and np.nanmax(gap) > FAR_FROM_REFERENCE_K:
         j = int(np.nanargmax(gap))
-        return Note(f"the log starts {gap[j]:.3g} K from the model's reference state ({saved.inputs[j]}): "
-                    "predicted relative to the reference; dynamic models start from these temperatures",
-                    log.location(0), "thermal")
+        return Note(
+            f"the log starts {gap[j]:.3g} K from the model's reference state ({saved.inputs[j]}): "
+            "predicted relative to the reference; dynamic models start from these temperatures",
+            log.location(0),
+            "thermal",
+        )
     return None
 
 
@@ -172,20 +209,36 @@ class DriftPrediction:
         return float(score(self.measured, self.drift).rmse)
 
 
-def predict_drift(model: str | Path | SavedModel, log: str | Path | TemperatureLog, *,
-                  sensors_failed: bool = False, anchor: Anchor | None = None,
-                  interval: float | None = None) -> DriftPrediction:
+def predict_drift(
+    model: str | Path | SavedModel,
+    log: str | Path | TemperatureLog,
+    *,
+    sensors_failed: bool = False,
+    anchor: Anchor | None = None,
+    interval: float | None = None,
+) -> DriftPrediction:
     """Load a saved model (or take one) and predict the drift over a temperature log."""
     from setupfix.pipeline.thermal_files import load_model
 
     saved = model if isinstance(model, SavedModel) else load_model(model)
-    data = log if isinstance(log, TemperatureLog) else read_temperature_log(
-        log, interval=interval if interval is not None else saved.sample_interval_s, require_time=False)
+    data = (
+        log
+        if isinstance(log, TemperatureLog)
+        else read_temperature_log(
+            log, interval=interval if interval is not None else saved.sample_interval_s, require_time=False
+        )
+    )
     drift, notes = predict_log(saved, data, sensors_failed=sensors_failed, anchor=anchor)
     notes = list(data.notes) + _drive_notes(saved, data.source) + notes
     if not data.timestamps and interval is None and saved.sample_interval_s is not None:
-        notes.append(Note(f"no timestamp: samples taken {saved.sample_interval_s:g} s apart, as in training",
-                          data.location(), "thermal"))
+        notes.append(
+            Note(
+                f"no timestamp: samples taken {saved.sample_interval_s:g} s apart, as in training",
+                data.location(),
+                "thermal",
+            )
+        )
     measured = data.columns.get(saved.target)
-    return DriftPrediction(saved.model.name, saved.target, saved.unit, list(data.timestamps), data.seconds, drift,
-                           measured, tuple(notes))
+    return DriftPrediction(
+        saved.model.name, saved.target, saved.unit, list(data.timestamps), data.seconds, drift, measured, tuple(notes)
+    )

@@ -40,8 +40,15 @@ class Selection:
     speed: str | None = None
 
 
-def select_columns(log: TemperatureLog, *, target: str | None, inputs: Sequence[str] | None = None,
-                   ambient: str | None = None, speed: str | None = None, drives: bool = False) -> Selection:
+def select_columns(
+    log: TemperatureLog,
+    *,
+    target: str | None,
+    inputs: Sequence[str] | None = None,
+    ambient: str | None = None,
+    speed: str | None = None,
+    drives: bool = False,
+) -> Selection:
     """Resolve the roles of the columns (``cli-json.md``, ``thermal evaluate``).
 
     Temperature inputs are every numeric column but the target, the speed and the
@@ -52,12 +59,18 @@ def select_columns(log: TemperatureLog, *, target: str | None, inputs: Sequence[
     """
     loc = log.location()
     if target is not None and target not in log.columns:
-        raise ParseError(f"target column {target!r} not found or not numeric", location=loc,
-                         hint=f"numeric columns: {', '.join(log.columns)}")
+        raise ParseError(
+            f"target column {target!r} not found or not numeric",
+            location=loc,
+            hint=f"numeric columns: {', '.join(log.columns)}",
+        )
     for role, name in (("speed", speed), ("ambient", ambient)):
         if name is not None and name not in log.columns:
-            raise ParseError(f"{role} column {name!r} not found or not numeric", location=loc,
-                             hint=f"numeric columns: {', '.join(log.columns)}")
+            raise ParseError(
+                f"{role} column {name!r} not found or not numeric",
+                location=loc,
+                hint=f"numeric columns: {', '.join(log.columns)}",
+            )
     if drives:
         speed = speed or (SPEED if SPEED in log.columns else None)
         ambient = ambient or (AMBIENT if AMBIENT in log.columns else None)
@@ -66,8 +79,11 @@ def select_columns(log: TemperatureLog, *, target: str | None, inputs: Sequence[
     if inputs:
         missing = [c for c in inputs if c not in log.columns]
         if missing:
-            raise ParseError(f"input column {missing[0]!r} not found or not numeric", location=loc,
-                             hint=f"numeric columns: {', '.join(log.columns)}")
+            raise ParseError(
+                f"input column {missing[0]!r} not found or not numeric",
+                location=loc,
+                hint=f"numeric columns: {', '.join(log.columns)}",
+            )
         if len(set(inputs)) != len(inputs):
             raise ParameterError(f"an input column is named twice in {', '.join(inputs)}")
         chosen = tuple(inputs)
@@ -77,8 +93,9 @@ def select_columns(log: TemperatureLog, *, target: str | None, inputs: Sequence[
     roles = {"target": target, "speed": speed, "ambient": ambient}
     for role, name in roles.items():
         if name is not None and name in chosen:
-            raise ParameterError(f"column {name!r} is both the {role} and a temperature input",
-                                 hint="a column plays one role only")
+            raise ParameterError(
+                f"column {name!r} is both the {role} and a temperature input", hint="a column plays one role only"
+            )
     if target is not None and target in (speed, ambient):
         raise ParameterError(f"column {target!r} is both the target and a drive")
     if not chosen:
@@ -91,18 +108,33 @@ def _checked(log: TemperatureLog, name: str, *, gaps: bool, low: float, high: fl
     bad = np.flatnonzero(np.isfinite(values) & ((values < low) | (values > high)))
     if bad.size:
         i = int(bad[0])
-        raise ParseError(f"{what} {values[i]:g} in column {name!r} is outside [{low:g}, {high:g}]",
-                         location=log.location(i), hint="a sensor fault or a wrong column")
+        raise ParseError(
+            f"{what} {values[i]:g} in column {name!r} is outside [{low:g}, {high:g}]",
+            location=log.location(i),
+            hint="a sensor fault or a wrong column",
+        )
     return values
 
 
 def _drive_arrays(log: TemperatureLog, sel: Selection, *, gaps: bool) -> dict[str, Any]:
-    T = np.column_stack([_checked(log, c, gaps=gaps, low=TEMPERATURE_RANGE[0], high=TEMPERATURE_RANGE[1],
-                                  what="temperature") for c in sel.inputs])
-    ambient = None if sel.ambient is None else _checked(log, sel.ambient, gaps=False, low=TEMPERATURE_RANGE[0],
-                                                          high=TEMPERATURE_RANGE[1], what="temperature")
-    speed = None if sel.speed is None else _checked(log, sel.speed, gaps=False, low=-VALUE_LIMIT,
-                                                      high=VALUE_LIMIT, what="speed")
+    T = np.column_stack(
+        [
+            _checked(log, c, gaps=gaps, low=TEMPERATURE_RANGE[0], high=TEMPERATURE_RANGE[1], what="temperature")
+            for c in sel.inputs
+        ]
+    )
+    ambient = (
+        None
+        if sel.ambient is None
+        else _checked(
+            log, sel.ambient, gaps=False, low=TEMPERATURE_RANGE[0], high=TEMPERATURE_RANGE[1], what="temperature"
+        )
+    )
+    speed = (
+        None
+        if sel.speed is None
+        else _checked(log, sel.speed, gaps=False, low=-VALUE_LIMIT, high=VALUE_LIMIT, what="speed")
+    )
     return {"T": T, "ambient": ambient, "speed": speed}
 
 

@@ -29,9 +29,11 @@ def save_model(saved: SavedModel, path: str | Path) -> None:
     try:
         text = json.dumps(saved.to_dict(), indent=2, allow_nan=False, default=_plain)
     except ValueError:
-        raise ExportError("the fitted model has non-finite coefficients and is not saved",
-                          location=SourceLocation(str(path)),
-                          hint="the calibration diverged; try grey-ls or mra") from None
+        raise ExportError(
+            "the fitted model has non-finite coefficients and is not saved",
+            location=SourceLocation(str(path)),
+            hint="the calibration diverged; try grey-ls or mra",
+        ) from None
     write_text(path, text + "\n", newline="\n")
 
 
@@ -59,8 +61,10 @@ def load_model(path: str | Path) -> SavedModel:
     try:
         text = data.decode("utf-8")
     except UnicodeDecodeError as exc:
-        raise ParseError("not UTF-8 text: not a setupfix thermal model",
-                         location=SourceLocation(source, line=data[: exc.start].count(b"\n") + 1)) from None
+        raise ParseError(
+            "not UTF-8 text: not a setupfix thermal model",
+            location=SourceLocation(source, line=data[: exc.start].count(b"\n") + 1),
+        ) from None
     try:
         doc = json.loads(text, parse_constant=_no_constant)
     except json.JSONDecodeError as exc:
@@ -71,8 +75,9 @@ def load_model(path: str | Path) -> SavedModel:
         return saved_from_dict(doc)
     except ValueError as exc:
         key, reason = exc.args if len(exc.args) == 2 else ("model", str(exc))
-        raise ParseError(str(reason), location=SourceLocation(source, key=str(key)),
-                         hint="write one with 'setupfix thermal fit'") from None
+        raise ParseError(
+            str(reason), location=SourceLocation(source, key=str(key)), hint="write one with 'setupfix thermal fit'"
+        ) from None
     except ParameterError as exc:
         raise ParseError(exc.message, location=SourceLocation(source, key="model")) from None
 

@@ -16,8 +16,8 @@ from parsers.temperature import TemperatureLog, read_temperature_log
 from setupfix.errors import Note, ParameterError, ParseError, SourceLocation
 from setupfix.pipeline.thermal import Anchor, _drive_notes, far_from_reference, predict_log
 from setupfix.pipeline.thermal_columns import _drive_arrays, _target, select_columns
-from setupfix.thermal.metrics import Scores, score
 from setupfix.thermal.estimator import DEFAULT_SEED
+from setupfix.thermal.metrics import Scores, score
 from setupfix.thermal.persist import UNITS, SavedModel
 from setupfix.thermal.registry import get_method
 
@@ -43,15 +43,30 @@ def _quality_notes(where: str, scores: Scores, source: str) -> list[Note]:
     if np.isnan(scores.efficiency):
         return [Note(f"{where} target is constant: efficiency E undefined", SourceLocation(source), "thermal")]
     if scores.efficiency < 0:
-        return [Note(f"{where} efficiency E = {scores.efficiency:.3g} < 0: the model predicts worse than the "
-                     "mean of the measured error", SourceLocation(source), "quality")]
+        return [
+            Note(
+                f"{where} efficiency E = {scores.efficiency:.3g} < 0: the model predicts worse than the "
+                "mean of the measured error",
+                SourceLocation(source),
+                "quality",
+            )
+        ]
     return []
 
 
-def fit_log(log: TemperatureLog, method: str, *, target: str, inputs: Sequence[str] | None = None,
-            ambient: str | None = None, speed: str | None = None, unit: str | None = None,
-            params: dict[str, Any] | None = None, axis: str = "Z",
-            registers: Sequence[str] | None = None) -> FitResult:
+def fit_log(
+    log: TemperatureLog,
+    method: str,
+    *,
+    target: str,
+    inputs: Sequence[str] | None = None,
+    ambient: str | None = None,
+    speed: str | None = None,
+    unit: str | None = None,
+    params: dict[str, Any] | None = None,
+    axis: str = "Z",
+    registers: Sequence[str] | None = None,
+) -> FitResult:
     """Fit ``method`` on a log; the result carries its column roles, unit and training scores.
 
     ``params`` are the method's hyper-parameters (validated before any work); a
@@ -70,25 +85,44 @@ def fit_log(log: TemperatureLog, method: str, *, target: str, inputs: Sequence[s
     if len(y) < 4:
         raise ParseError(f"{len(y)} samples are too few to fit a model", location=log.location())
     if np.ptp(y) <= 1e-12 * max(float(np.max(np.abs(y))), 1e-300):
-        raise ParseError(f"target column {target!r} is constant ({y[0]:g}): there is no thermal error to model",
-                         location=log.location(), hint="check the --target column")
+        raise ParseError(
+            f"target column {target!r} is constant ({y[0]:g}): there is no thermal error to model",
+            location=log.location(),
+            hint="check the --target column",
+        )
     drives = {"ambient": data["ambient"], "speed": data["speed"]} if spec.uses_drives else {}
     with np.errstate(all="ignore"):
         model.fit(data["T"], y, **drives)
-    saved = SavedModel(model, sel.inputs, target, sel.ambient, sel.speed, log.sample_interval_s,
-                       unit=unit, axis=axis, registers=None if registers is None else tuple(registers))
+    saved = SavedModel(
+        model,
+        sel.inputs,
+        target,
+        sel.ambient,
+        sel.speed,
+        log.sample_interval_s,
+        unit=unit,
+        axis=axis,
+        registers=None if registers is None else tuple(registers),
+    )
     notes = list(log.notes) + list(getattr(model, "fit_notes_", []))
     notes += _drive_notes(saved, log.source)
     fitted = predict_log(saved, log)[0]
     scores = score(y, fitted)
-    saved.train = {"source": Path(log.source).name, "n": len(y), "seed": params.get("seed"),
-                   **scores.as_dict()}
+    saved.train = {"source": Path(log.source).name, "n": len(y), "seed": params.get("seed"), **scores.as_dict()}
     notes += _quality_notes("training", scores, log.source)
     return FitResult(saved, notes)
 
 
-def fit_file(path: str | Path, method: str, *, target: str, out: str | Path | None = None,
-             interval: float | None = None, sheet: str | None = None, **kwargs: Any) -> FitResult:
+def fit_file(
+    path: str | Path,
+    method: str,
+    *,
+    target: str,
+    out: str | Path | None = None,
+    interval: float | None = None,
+    sheet: str | None = None,
+    **kwargs: Any,
+) -> FitResult:
     """Read a temperature log, fit, and save to ``out`` when given."""
     from setupfix.pipeline.thermal_files import save_model
 
@@ -126,8 +160,16 @@ class Evaluation:
         }
 
 
-def evaluate_logs(train: TemperatureLog, test: TemperatureLog, method: str, *, target: str,
-                  sensors_failed: bool = False, anchor: Anchor | None = None, **kwargs: Any) -> Evaluation:
+def evaluate_logs(
+    train: TemperatureLog,
+    test: TemperatureLog,
+    method: str,
+    *,
+    target: str,
+    sensors_failed: bool = False,
+    anchor: Anchor | None = None,
+    **kwargs: Any,
+) -> Evaluation:
     """Fit on ``train``, predict ``test`` relative to the reference state, score both."""
     fitted = fit_log(train, method, target=target, **kwargs)
     saved = fitted.saved
@@ -141,8 +183,21 @@ def evaluate_logs(train: TemperatureLog, test: TemperatureLog, method: str, *, t
     return Evaluation(saved.model.name, train_scores, test_scores, saved, tuple(all_notes))
 
 
-def evaluate_files(train: str | Path, test: str | Path, method: str, *, target: str, interval: float | None = None,
-                   sheet: str | None = None, **kwargs: Any) -> Evaluation:
+def evaluate_files(
+    train: str | Path,
+    test: str | Path,
+    method: str,
+    *,
+    target: str,
+    interval: float | None = None,
+    sheet: str | None = None,
+    **kwargs: Any,
+) -> Evaluation:
     """:func:`evaluate_logs` on two log files."""
-    return evaluate_logs(read_temperature_log(train, interval=interval, sheet=sheet),
-                         read_temperature_log(test, interval=interval, sheet=sheet), method, target=target, **kwargs)
+    return evaluate_logs(
+        read_temperature_log(train, interval=interval, sheet=sheet),
+        read_temperature_log(test, interval=interval, sheet=sheet),
+        method,
+        target=target,
+        **kwargs,
+    )

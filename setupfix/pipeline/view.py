@@ -34,10 +34,29 @@ from setupfix.objective import margins as objective_margins
 from setupfix.pipeline.requests import CycleCorrection
 
 __all__ = [
-    "IN", "OUT", "BINDING", "PREDICTED_OUT", "GIVEN_UP", "GUARD", "REJECTED",
-    "DimensionRow", "dimension_rows", "stations", "filter_rows", "sort_rows", "SORT_KEYS",
-    "zone_bar", "RegisterRow", "register_rows", "Summary", "summary",
-    "MatchRow", "match_rows", "matched_rows", "signed", "limits_text",
+    "IN",
+    "OUT",
+    "BINDING",
+    "PREDICTED_OUT",
+    "GIVEN_UP",
+    "GUARD",
+    "REJECTED",
+    "DimensionRow",
+    "dimension_rows",
+    "stations",
+    "filter_rows",
+    "sort_rows",
+    "SORT_KEYS",
+    "zone_bar",
+    "RegisterRow",
+    "register_rows",
+    "Summary",
+    "summary",
+    "MatchRow",
+    "match_rows",
+    "matched_rows",
+    "signed",
+    "limits_text",
 ]
 
 IN, OUT, BINDING, PREDICTED_OUT, GIVEN_UP, GUARD, REJECTED = "✓", "✗", "●", "▲", "⚑", "◇", "⊘"
@@ -131,20 +150,33 @@ class DimensionRow:
 
     def bars(self, width: int = 11) -> tuple[str, str]:
         """Tolerance-zone bars before and after the correction."""
-        return (zone_bar(self.deviation, self.lower, self.upper, width),
-                zone_bar(self.predicted, self.lower, self.upper, width))
+        return (
+            zone_bar(self.deviation, self.lower, self.upper, width),
+            zone_bar(self.predicted, self.lower, self.upper, width),
+        )
 
 
 def dimension_rows(correction: CycleCorrection) -> list[DimensionRow]:
     """Rows of the dimension table, in model order."""
     rows = []
     for row in correction.dimension_rows():
-        before = float(objective_margins(np.array([row["deviation"]]), np.array([row["lower"]]),
-                                         np.array([row["upper"]]))[0])
-        rows.append(DimensionRow(
-            id=row["id"], name=row["name"], station=row.get("station") or "", deviation=row["deviation"],
-            lower=row["lower"], upper=row["upper"], predicted=row["predicted"], margin_before=before,
-            margin_after=row["margin"], flags_=tuple(row.get("flags", ()))))
+        before = float(
+            objective_margins(np.array([row["deviation"]]), np.array([row["lower"]]), np.array([row["upper"]]))[0]
+        )
+        rows.append(
+            DimensionRow(
+                id=row["id"],
+                name=row["name"],
+                station=row.get("station") or "",
+                deviation=row["deviation"],
+                lower=row["lower"],
+                upper=row["upper"],
+                predicted=row["predicted"],
+                margin_before=before,
+                margin_after=row["margin"],
+                flags_=tuple(row.get("flags", ())),
+            )
+        )
     return rows
 
 
@@ -160,8 +192,12 @@ def filter_rows(rows: Sequence[DimensionRow], station: str | None) -> list[Dimen
 
 #: Sort keys of the dimension table: column key → row attribute.
 SORT_KEYS: dict[str, str] = {
-    "name": "name", "station": "station", "deviation": "deviation", "predicted": "predicted",
-    "margin_before": "margin_before", "margin_after": "margin_after",
+    "name": "name",
+    "station": "station",
+    "deviation": "deviation",
+    "predicted": "predicted",
+    "margin_before": "margin_before",
+    "margin_after": "margin_after",
 }
 
 
@@ -220,11 +256,20 @@ def register_rows(correction: CycleCorrection, current: Mapping[str, float] | No
         component = reg.get("component")
         # a component's current value is its own: the register's name (G54) is shared by its components
         cur = current.get(reg["id"], current.get(reg["register"]) if component is None else None)
-        rows.append(RegisterRow(reg["id"], reg["register"], reg["kind"], str(reg.get("offset", "")),
-                                float(exported.get(reg["id"], reg["delta"])) + 0.0, bool(reg["fixed"]),
-                                bool(reg["at_limit"]),
-                                None if cur is None else float(cur), tuple(dict.fromkeys(rules.get(reg["id"], ()))),
-                                component))
+        rows.append(
+            RegisterRow(
+                reg["id"],
+                reg["register"],
+                reg["kind"],
+                str(reg.get("offset", "")),
+                float(exported.get(reg["id"], reg["delta"])) + 0.0,
+                bool(reg["fixed"]),
+                bool(reg["at_limit"]),
+                None if cur is None else float(cur),
+                tuple(dict.fromkeys(rules.get(reg["id"], ()))),
+                component,
+            )
+        )
     return rows
 
 
@@ -258,16 +303,26 @@ def summary(correction: CycleCorrection) -> Summary:
     rec = correction.recommendation
     names = {d.id: d.name for d in correction.model.dimensions}
     return Summary(
-        report=correction.part.report, part=correction.part.part, unit=correction.model.unit,
-        optimizer=r.optimizer, status=r.status, margin_before=correction.margin_before,
-        margin_after=correction.margin_after, bonus=correction.margin_after - correction.margin_before,
-        norm=correction.norm, bound=r.bound, in_tolerance=correction.margin_after >= 0 and not correction.given_up,
+        report=correction.part.report,
+        part=correction.part.part,
+        unit=correction.model.unit,
+        optimizer=r.optimizer,
+        status=r.status,
+        margin_before=correction.margin_before,
+        margin_after=correction.margin_after,
+        bonus=correction.margin_after - correction.margin_before,
+        norm=correction.norm,
+        bound=r.bound,
+        in_tolerance=correction.margin_after >= 0 and not correction.given_up,
         message=r.message,
-        notes=tuple(str(n) for n in correction.notes), verdict=correction.verdict,
+        notes=tuple(str(n) for n in correction.notes),
+        verdict=correction.verdict,
         rules=tuple(f"{e.rule}: {e.message}" for e in rec.rules),
-        alarm=rec.alarm or ("" if rec.solved else
-                            "NOT SOLVED: " + next(e.message for e in rec.rules if e.rule == "not_solved")),
-        given_up=tuple(names.get(d, d) for d in correction.given_up), solved=rec.solved)
+        alarm=rec.alarm
+        or ("" if rec.solved else "NOT SOLVED: " + next(e.message for e in rec.rules if e.rule == "not_solved")),
+        given_up=tuple(names.get(d, d) for d in correction.given_up),
+        solved=rec.solved,
+    )
 
 
 @dataclass(frozen=True)
@@ -297,8 +352,15 @@ def match_rows(model: ProcessModel, table: pd.DataFrame, *, limit: int = 3) -> l
     for rec in table.to_dict("records"):
         name = str(rec.get("characteristic", ""))
         dim = keys.get(normalise_name(name), "")
-        rows.append(MatchRow(name, _text(rec.get("part")), _text(rec.get("station")), dim,
-                             () if dim else suggest_names(model, name, limit)))
+        rows.append(
+            MatchRow(
+                name,
+                _text(rec.get("part")),
+                _text(rec.get("station")),
+                dim,
+                () if dim else suggest_names(model, name, limit),
+            )
+        )
     return rows
 
 

@@ -29,16 +29,30 @@ from typing import TYPE_CHECKING
 
 import pandas as pd
 
-from setupfix.atomic import atomic_write, check_target, write_bytes, write_text
 from parsers.names import visible_name
+from setupfix.atomic import atomic_write, check_target, write_bytes, write_text
 from setupfix.offsets import OFFSET_COLUMNS, OffsetRow
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
-__all__ = ["check_target", "write_text", "write_bytes", "atomic_write", "write_offsets_csv", "offsets_csv_text",
-           "csv_header", "csv_lines", "csv_cell", "write_canonical_csv", "escape_formulas", "write_figure",
-           "write_table_csv", "FLOAT_FORMAT", "FORMULA_START"]
+__all__ = [
+    "check_target",
+    "write_text",
+    "write_bytes",
+    "atomic_write",
+    "write_offsets_csv",
+    "offsets_csv_text",
+    "csv_header",
+    "csv_lines",
+    "csv_cell",
+    "write_canonical_csv",
+    "escape_formulas",
+    "write_figure",
+    "write_table_csv",
+    "FLOAT_FORMAT",
+    "FORMULA_START",
+]
 
 Target = str | os.PathLike[str]
 

@@ -28,6 +28,19 @@ from setupfix.search._ga import roulette_ga, tournament_ga
 from setupfix.search._pso import acceleration, particle_swarm
 from setupfix.search._space import DEFAULT_SEED, Box, Objective, Observer, SearchResult, Space, generator
 
-__all__ = ["DEFAULT_SEED", "generator", "Space", "Box", "Objective", "Observer", "SearchResult", "cuckoo_search",
-           "particle_swarm",
-           "tournament_ga", "roulette_ga", "levy_steps", "mantegna_sigma", "acceleration"]
+__all__ = [
+    "DEFAULT_SEED",
+    "generator",
+    "Space",
+    "Box",
+    "Objective",
+    "Observer",
+    "SearchResult",
+    "cuckoo_search",
+    "particle_swarm",
+    "tournament_ga",
+    "roulette_ga",
+    "levy_steps",
+    "mantegna_sigma",
+    "acceleration",
+]

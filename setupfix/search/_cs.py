@@ -56,9 +56,19 @@ def _replace(tally: Tally, x: Array, f: Array, x_new: Array) -> tuple[Array, Arr
     return np.vstack([head_x, x[m:]]), np.concatenate([head_f, f[m:]])
 
 
-def cuckoo_search(objective: Objective, space: Space, *, budget: int, rng: np.random.Generator,
-                  n_nests: int = 25, pa: float = 0.25, alpha: float = 0.01, beta: float = 1.5,
-                  x0: npt.ArrayLike | None = None, observe: Observer | None = None) -> SearchResult:
+def cuckoo_search(
+    objective: Objective,
+    space: Space,
+    *,
+    budget: int,
+    rng: np.random.Generator,
+    n_nests: int = 25,
+    pa: float = 0.25,
+    alpha: float = 0.01,
+    beta: float = 1.5,
+    x0: npt.ArrayLike | None = None,
+    observe: Observer | None = None,
+) -> SearchResult:
     """Minimise ``objective`` over ``space`` by cuckoo search with Lévy flights.
 
     Parameters

@@ -52,9 +52,18 @@ def survive(x: Array, values: Array, mu: int) -> tuple[Array, Array]:
     return x[keep], values[keep]
 
 
-def tournament_ga(objective: Objective, space: Space, *, budget: int, rng: np.random.Generator,
-                  population: int = 50, mutation_rate: float = 0.1, tournament_size: int = 2,
-                  x0: npt.ArrayLike | None = None, observe: Observer | None = None) -> SearchResult:
+def tournament_ga(
+    objective: Objective,
+    space: Space,
+    *,
+    budget: int,
+    rng: np.random.Generator,
+    population: int = 50,
+    mutation_rate: float = 0.1,
+    tournament_size: int = 2,
+    x0: npt.ArrayLike | None = None,
+    observe: Observer | None = None,
+) -> SearchResult:
     """Minimise ``objective`` over ``space`` by the elitist (μ + λ) GA, λ = μ = ``population``.
 
     Returns
@@ -75,10 +84,19 @@ def tournament_ga(objective: Objective, space: Space, *, budget: int, rng: np.ra
     return SearchResult(x[0].copy(), float(f[0]), np.asarray(history), tally.count)
 
 
-def roulette_ga(objective: Objective, space: Space, *, budget: int, rng: np.random.Generator,
-                pop_size: int = 40, p_crossover: float = 0.7, p_mutation: float = 0.02,
-                mutation_scale: float = 0.1, x0: npt.ArrayLike | None = None,
-                observe: Observer | None = None) -> SearchResult:
+def roulette_ga(
+    objective: Objective,
+    space: Space,
+    *,
+    budget: int,
+    rng: np.random.Generator,
+    pop_size: int = 40,
+    p_crossover: float = 0.7,
+    p_mutation: float = 0.02,
+    mutation_scale: float = 0.1,
+    x0: npt.ArrayLike | None = None,
+    observe: Observer | None = None,
+) -> SearchResult:
     """Minimise ``objective`` over ``space`` with the floating-point GA of Wang et al. (2017), §3.4.
 
     Each generation: roulette selection on a windowed fitness (worst − F; plain 1/F
@@ -109,9 +127,9 @@ def roulette_ga(objective: Objective, space: Space, *, budget: int, rng: np.rand
         n_pairs = size // 2
         cross = rng.random(n_pairs) < p_crossover
         sig = rng.random((n_pairs, 1))
-        a, b = parents[0:2 * n_pairs:2], parents[1:2 * n_pairs:2]
-        children[0:2 * n_pairs:2] = np.where(cross[:, None], sig * a + (1 - sig) * b, a)
-        children[1:2 * n_pairs:2] = np.where(cross[:, None], (1 - sig) * a + sig * b, b)
+        a, b = parents[0 : 2 * n_pairs : 2], parents[1 : 2 * n_pairs : 2]
+        children[0 : 2 * n_pairs : 2] = np.where(cross[:, None], sig * a + (1 - sig) * b, a)
+        children[1 : 2 * n_pairs : 2] = np.where(cross[:, None], (1 - sig) * a + sig * b, b)
         mask = rng.random(children.shape) < p_mutation
         trial = children + beta * rng.normal(size=children.shape)
         for _retry in range(20):

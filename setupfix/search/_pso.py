@@ -51,8 +51,9 @@ def acceleration(solution_number: npt.ArrayLike, budget: int) -> Array:
     return np.cos(0.5 * np.pi * ratio)
 
 
-def velocity(x: Array, v: Array, pbest: Array, gbest: Array, c1: Array, c2: Array, r1: Array, r2: Array,
-             w: float, vmax: Array) -> Array:
+def velocity(
+    x: Array, v: Array, pbest: Array, gbest: Array, c1: Array, c2: Array, r1: Array, r2: Array, w: float, vmax: Array
+) -> Array:
     """New velocities of a block of particles (inertia PSO, Poli et al. 2007).
 
     Parameters
@@ -76,11 +77,21 @@ def velocity(x: Array, v: Array, pbest: Array, gbest: Array, c1: Array, c2: Arra
     return np.clip(w * v + c1 * r1 * (pbest - x) + c2 * r2 * (gbest - x), -vmax, vmax)
 
 
-def particle_swarm(objective: Objective, space: Space, *, budget: int, rng: np.random.Generator,
-                   n_particles: int = 25, inertia: tuple[float, float] = (0.9, 0.4),
-                   coefficients: tuple[float, float] | None = (2.0, 2.0), v_max: float = 0.2,
-                   v_init: float = 0.5, asynchronous: bool = False, x0: npt.ArrayLike | None = None,
-                   observe: Observer | None = None) -> SearchResult:
+def particle_swarm(
+    objective: Objective,
+    space: Space,
+    *,
+    budget: int,
+    rng: np.random.Generator,
+    n_particles: int = 25,
+    inertia: tuple[float, float] = (0.9, 0.4),
+    coefficients: tuple[float, float] | None = (2.0, 2.0),
+    v_max: float = 0.2,
+    v_init: float = 0.5,
+    asynchronous: bool = False,
+    x0: npt.ArrayLike | None = None,
+    observe: Observer | None = None,
+) -> SearchResult:
     """Minimise ``objective`` over ``space`` by inertia PSO.
 
     Parameters

@@ -53,8 +53,9 @@ class Box:
         lo = np.asarray(lower, dtype=float)
         hi = np.asarray(upper, dtype=float)
         if lo.shape != hi.shape or lo.ndim != 1 or not np.all(hi >= lo) or not np.all(np.isfinite(lo + hi)):
-            raise ParameterError("search box: lower and upper must be finite 1-D arrays of equal length "
-                                 "with lower <= upper")
+            raise ParameterError(
+                "search box: lower and upper must be finite 1-D arrays of equal length with lower <= upper"
+            )
         return cls(lo, hi)
 
     def sample(self, rng: np.random.Generator, count: int) -> Array:
@@ -143,12 +144,22 @@ MAX_BUDGET = 10_000_000
 def check_budget(owner: str, budget: int, population: int) -> None:
     """Budget in [1, MAX_BUDGET] and a positive population (a search without them returns nothing)."""
     if not 1 <= int(budget) <= MAX_BUDGET or int(population) < 1:
-        raise ParameterError(f"{owner}: budget must be an int in [1, {MAX_BUDGET}] and population at least 1, "
-                             f"got {budget} and {population}")
+        raise ParameterError(
+            f"{owner}: budget must be an int in [1, {MAX_BUDGET}] and population at least 1, "
+            f"got {budget} and {population}"
+        )
 
 
-def launch(owner: str, objective: Objective, space: Space, rng: np.random.Generator, budget: int, population: int,
-           x0: npt.ArrayLike | None, observe: Observer | None) -> tuple[Tally, Array, Array]:
+def launch(
+    owner: str,
+    objective: Objective,
+    space: Space,
+    rng: np.random.Generator,
+    budget: int,
+    population: int,
+    x0: npt.ArrayLike | None,
+    observe: Observer | None,
+) -> tuple[Tally, Array, Array]:
     """The start every search shares: budget checked, start population drawn and evaluated.
 
     Returns

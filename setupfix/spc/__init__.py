@@ -24,5 +24,19 @@ from setupfix.spc.charts import (
     nelson,
 )
 
-__all__ = ["D2", "D4", "Capability", "capability", "cpk_interval", "sigma_overall", "sigma_within",
-           "split_capability", "NELSON_RULES", "ChartLimits", "Violation", "chart_limits", "moving_range", "nelson"]
+__all__ = [
+    "D2",
+    "D4",
+    "Capability",
+    "capability",
+    "cpk_interval",
+    "sigma_overall",
+    "sigma_within",
+    "split_capability",
+    "NELSON_RULES",
+    "ChartLimits",
+    "Violation",
+    "chart_limits",
+    "moving_range",
+    "nelson",
+]

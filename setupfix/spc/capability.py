@@ -76,8 +76,14 @@ def _indices(mean: float, sigma: float, lower: float, upper: float) -> tuple[flo
         return math.nan, math.nan
     both = math.isfinite(lower) and math.isfinite(upper)
     spread = (upper - lower) / (6 * sigma) if both else math.nan
-    sides = [s for s, ok in (((upper - mean) / (3 * sigma), math.isfinite(upper)),
-                             ((mean - lower) / (3 * sigma), math.isfinite(lower))) if ok]
+    sides = [
+        s
+        for s, ok in (
+            ((upper - mean) / (3 * sigma), math.isfinite(upper)),
+            ((mean - lower) / (3 * sigma), math.isfinite(lower)),
+        )
+        if ok
+    ]
     return spread, (min(sides) if sides else math.nan)
 
 
@@ -161,8 +167,21 @@ def capability(x: ArrayLike, lower: float, upper: float, *, confidence: float = 
     low, high = cpk_interval(cpk, n, confidence)
     below = values < lower if math.isfinite(lower) else np.zeros(n, dtype=bool)
     above = values > upper if math.isfinite(upper) else np.zeros(n, dtype=bool)
-    return Capability(n, mean, s_within, s_overall, cp, cpk, pp, ppk, low, high,
-                      int(np.count_nonzero(below | above)), float(lower), float(upper))
+    return Capability(
+        n,
+        mean,
+        s_within,
+        s_overall,
+        cp,
+        cpk,
+        pp,
+        ppk,
+        low,
+        high,
+        int(np.count_nonzero(below | above)),
+        float(lower),
+        float(upper),
+    )
 
 
 def split_capability(x: ArrayLike, after: ArrayLike, lower: float, upper: float) -> tuple[Capability, Capability]:

@@ -61,9 +61,25 @@ from setupfix.atomic import process_alive, process_started
 from setupfix.model import ProcessModel
 from setupfix.store._audit import AUDIT_COLUMNS
 
-__all__ = ["Store", "ReportRecord", "Recommendation", "Claimant", "MachineSummary", "open_store", "report_tables",
-           "stored_corrections", "is_server", "login_name", "CORRECTION_COLUMNS", "AUDIT_COLUMNS", "CLAIM_STALE_S",
-           "ALREADY_PROCESSED", "HELD_ELSEWHERE", "DEFAULT_MACHINE", "DB_ENV"]
+__all__ = [
+    "Store",
+    "ReportRecord",
+    "Recommendation",
+    "Claimant",
+    "MachineSummary",
+    "open_store",
+    "report_tables",
+    "stored_corrections",
+    "is_server",
+    "login_name",
+    "CORRECTION_COLUMNS",
+    "AUDIT_COLUMNS",
+    "CLAIM_STALE_S",
+    "ALREADY_PROCESSED",
+    "HELD_ELSEWHERE",
+    "DEFAULT_MACHINE",
+    "DB_ENV",
+]
 
 #: The machine of a store handle opened without one (and of every row stored before machines were kept).
 DEFAULT_MACHINE = "default"
@@ -106,7 +122,6 @@ class Claimant:
 
     def __str__(self) -> str:
         return f"process {self.pid} on {self.host}"
-
 
 
 @dataclass(frozen=True)
@@ -264,14 +279,11 @@ class Store(Protocol):
         """
         ...
 
-    def close(self) -> None:
-        ...
+    def close(self) -> None: ...
 
-    def __enter__(self) -> Store:
-        ...
+    def __enter__(self) -> Store: ...
 
-    def __exit__(self, *exc: object) -> None:
-        ...
+    def __exit__(self, *exc: object) -> None: ...
 
 
 def is_server(location: str | os.PathLike[str]) -> bool:
@@ -287,8 +299,7 @@ def login_name() -> str:
         return ""
 
 
-def open_store(location: str | os.PathLike[str], *, machine: str | None = None,
-               operator: str | None = None) -> Store:
+def open_store(location: str | os.PathLike[str], *, machine: str | None = None, operator: str | None = None) -> Store:
     """Open (creating and migrating when needed) the history store at ``location``, for one machine.
 
     Parameters

@@ -30,21 +30,76 @@ from typing import Any
 __all__ = ["Audit", "audit_of", "AUDIT_COLUMNS", "TABLES"]
 
 #: Columns of ``history export recommendations``: one row per register component of each recommendation.
-AUDIT_COLUMNS = ("created_at", "machine", "operator", "report", "report_sha256", "part", "optimizer", "verdict",
-                 "register", "delta", "applied", "exported_to")
+AUDIT_COLUMNS = (
+    "created_at",
+    "machine",
+    "operator",
+    "report",
+    "report_sha256",
+    "part",
+    "optimizer",
+    "verdict",
+    "register",
+    "delta",
+    "applied",
+    "exported_to",
+)
 
 #: Every table of a store with its columns, in the order a copy fills them (parents before children).
 TABLES: tuple[tuple[str, tuple[str, ...], str], ...] = (
-    ("report", ("id", "sha256", "name", "format", "size", "imported_at", "machine", "rows", "first_measured",
-                "last_measured"), "id"),
-    ("measurement", ("report_id", "row", "characteristic", "nominal", "actual", "deviation", "lower", "upper",
-                     "unit", "part", "report", "timestamp", "station", "x", "y", "z", "status", "source",
-                     "reference"), "report_id, row"),
+    (
+        "report",
+        ("id", "sha256", "name", "format", "size", "imported_at", "machine", "rows", "first_measured", "last_measured"),
+        "id",
+    ),
+    (
+        "measurement",
+        (
+            "report_id",
+            "row",
+            "characteristic",
+            "nominal",
+            "actual",
+            "deviation",
+            "lower",
+            "upper",
+            "unit",
+            "part",
+            "report",
+            "timestamp",
+            "station",
+            "x",
+            "y",
+            "z",
+            "status",
+            "source",
+            "reference",
+        ),
+        "report_id, row",
+    ),
     ("correction", ("id", "machine", "timestamp", "register", "delta", "event"), "id"),
     ("temperature", ("machine", "timestamp", "channel", "value"), "machine, timestamp, channel"),
-    ("recommendation", ("id", "created_at", "optimizer", "inputs", "result", "machine", "operator", "report",
-                        "report_sha256", "part", "verdict", "rules", "applied", "exported_to", "export_sha256"),
-     "id"),
+    (
+        "recommendation",
+        (
+            "id",
+            "created_at",
+            "optimizer",
+            "inputs",
+            "result",
+            "machine",
+            "operator",
+            "report",
+            "report_sha256",
+            "part",
+            "verdict",
+            "rules",
+            "applied",
+            "exported_to",
+            "export_sha256",
+        ),
+        "id",
+    ),
     ("recommendation_delta", ("recommendation_id", "register", "delta"), "recommendation_id, register"),
     ("batch_claim", ("report_sha256", "done", "owner", "host", "pid", "started", "claimed_at"), "report_sha256"),
 )
@@ -91,8 +146,14 @@ def audit_of(inputs: Mapping[str, Any], result: Mapping[str, Any]) -> Audit:
     export = inputs.get("export")
     export = export if isinstance(export, Mapping) else {}
     rules = result.get("rules")
-    return Audit(report=name, report_sha256=sha, part=_text(inputs.get("part") or result.get("part")),
-                 verdict=_text(result.get("verdict")),
-                 rules=json.dumps(rules if isinstance(rules, list) else [], sort_keys=True),
-                 applied=bool(inputs.get("applied")), exported_to=_text(export.get("target")),
-                 export_sha256=_text(export.get("sha256")), deltas=pairs)
+    return Audit(
+        report=name,
+        report_sha256=sha,
+        part=_text(inputs.get("part") or result.get("part")),
+        verdict=_text(result.get("verdict")),
+        rules=json.dumps(rules if isinstance(rules, list) else [], sort_keys=True),
+        applied=bool(inputs.get("applied")),
+        exported_to=_text(export.get("target")),
+        export_sha256=_text(export.get("sha256")),
+        deltas=pairs,
+    )

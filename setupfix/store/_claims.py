@@ -29,7 +29,6 @@ def age_s(at: str | None) -> float:
     return (datetime.now(UTC) - then).total_seconds()
 
 
-
 class ClaimingStore(SQLStore):
     """:class:`SQLStore` with the batch claims (the back ends derive from this)."""
 
@@ -39,11 +38,16 @@ class ClaimingStore(SQLStore):
         refused: dict[str, str] = {}
         wanted = sorted(dict.fromkeys(keys))
         with self.transaction():
-            self._executemany("INSERT INTO batch_claim (report_sha256, done) VALUES (?, 0) "
-                              "ON CONFLICT (report_sha256) DO NOTHING", [(k,) for k in wanted])
+            self._executemany(
+                "INSERT INTO batch_claim (report_sha256, done) VALUES (?, 0) ON CONFLICT (report_sha256) DO NOTHING",
+                [(k,) for k in wanted],
+            )
             for key in wanted:
-                row = self._one("SELECT done, owner, host, pid, started, claimed_at FROM batch_claim "
-                                f"WHERE report_sha256 = ?{self.lock}", (key,))
+                row = self._one(
+                    "SELECT done, owner, host, pid, started, claimed_at FROM batch_claim "
+                    f"WHERE report_sha256 = ?{self.lock}",
+                    (key,),
+                )
                 if row is not None:
                     done, owner, host, pid, started, at = row
                     if owner is not None and owner != claimant.token:
@@ -54,26 +58,34 @@ class ClaimingStore(SQLStore):
                     if done and not again and owner != claimant.token:
                         refused[key] = ALREADY_PROCESSED
                         continue
-                self._execute("UPDATE batch_claim SET owner = ?, host = ?, pid = ?, started = ?, claimed_at = ? "
-                              "WHERE report_sha256 = ?",
-                              (claimant.token, claimant.host, claimant.pid, claimant.started, now(), key))
-            self._executemany("DELETE FROM batch_claim WHERE report_sha256 = ? AND owner IS NULL AND done = 0",
-                              [(k,) for k in wanted])
+                self._execute(
+                    "UPDATE batch_claim SET owner = ?, host = ?, pid = ?, started = ?, claimed_at = ? "
+                    "WHERE report_sha256 = ?",
+                    (claimant.token, claimant.host, claimant.pid, claimant.started, now(), key),
+                )
+            self._executemany(
+                "DELETE FROM batch_claim WHERE report_sha256 = ? AND owner IS NULL AND done = 0", [(k,) for k in wanted]
+            )
         return {k: refused[k] for k in dict.fromkeys(keys) if k in refused}
 
     @guarded
     def finish_claims(self, keys: Sequence[str], claimant: Claimant) -> None:
         with self.transaction():
-            self._executemany("UPDATE batch_claim SET done = 1, owner = NULL, host = NULL, pid = NULL, "
-                              "started = NULL, claimed_at = NULL WHERE report_sha256 = ? AND owner = ?",
-                              [(k, claimant.token) for k in sorted(dict.fromkeys(keys))])
+            self._executemany(
+                "UPDATE batch_claim SET done = 1, owner = NULL, host = NULL, pid = NULL, "
+                "started = NULL, claimed_at = NULL WHERE report_sha256 = ? AND owner = ?",
+                [(k, claimant.token) for k in sorted(dict.fromkeys(keys))],
+            )
 
     @guarded
     def release_claims(self, claimant: Claimant) -> None:
         with self.transaction():
-            held = self._all("SELECT report_sha256 FROM batch_claim WHERE owner = ? ORDER BY report_sha256",
-                             (claimant.token,))
-            self._executemany("UPDATE batch_claim SET owner = NULL, host = NULL, pid = NULL, started = NULL, "
-                              "claimed_at = NULL WHERE report_sha256 = ? AND owner = ?",
-                              [(k, claimant.token) for (k,) in held])
+            held = self._all(
+                "SELECT report_sha256 FROM batch_claim WHERE owner = ? ORDER BY report_sha256", (claimant.token,)
+            )
+            self._executemany(
+                "UPDATE batch_claim SET owner = NULL, host = NULL, pid = NULL, started = NULL, "
+                "claimed_at = NULL WHERE report_sha256 = ? AND owner = ?",
+                [(k, claimant.token) for (k,) in held],
+            )
             self._executemany("DELETE FROM batch_claim WHERE report_sha256 = ? AND owner IS NULL AND done = 0", held)

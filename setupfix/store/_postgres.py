@@ -118,15 +118,21 @@ class PostgresStore(ClaimingStore):
         try:
             import psycopg
         except ImportError:
-            raise StoreError("a PostgreSQL store needs psycopg, which is not installed",
-                             location=SourceLocation(self.location),
-                             hint="pip install 'setupfix[plant]' (or give a file for an SQLite store)") from None
+            raise StoreError(
+                "a PostgreSQL store needs psycopg, which is not installed",
+                location=SourceLocation(self.location),
+                hint="pip install 'setupfix[plant]' (or give a file for an SQLite store)",
+            ) from None
         self._psycopg = psycopg
         self.errors = (psycopg.Error,)
         try:
-            self.conn = psycopg.connect(url, autocommit=True, connect_timeout=CONNECT_TIMEOUT_S,
-                                        application_name="setupfix",
-                                        options=f"-c lock_timeout={int(LOCK_TIMEOUT_S * 1000)}")
+            self.conn = psycopg.connect(
+                url,
+                autocommit=True,
+                connect_timeout=CONNECT_TIMEOUT_S,
+                application_name="setupfix",
+                options=f"-c lock_timeout={int(LOCK_TIMEOUT_S * 1000)}",
+            )
         except (psycopg.Error, ValueError) as exc:  # ValueError: a URL the driver cannot split
             raise self._failure(exc, opening=True) from None
         try:
@@ -153,14 +159,21 @@ class PostgresStore(ClaimingStore):
             self._execute("SELECT pg_advisory_xact_lock(hashtext('setupfix history store schema'))")
             version = self._version()
             if version > SCHEMA_VERSION:
-                raise StoreError(f"store schema version {version} is newer than this setupfix reads "
-                                 f"({SCHEMA_VERSION})", location=where, hint="update setupfix")
+                raise StoreError(
+                    f"store schema version {version} is newer than this setupfix reads ({SCHEMA_VERSION})",
+                    location=where,
+                    hint="update setupfix",
+                )
             if version == 0:
-                tables = {r[0] for r in self._all("SELECT tablename FROM pg_tables "
-                                                  "WHERE schemaname = current_schema()")}
+                tables = {
+                    r[0] for r in self._all("SELECT tablename FROM pg_tables WHERE schemaname = current_schema()")
+                }
                 if tables - {"schema_version"}:
-                    raise StoreError("not a setupfix history store (the database holds other tables)",
-                                     location=where, hint="give an empty database, or another schema")
+                    raise StoreError(
+                        "not a setupfix history store (the database holds other tables)",
+                        location=where,
+                        hint="give an empty database, or another schema",
+                    )
                 self._execute("CREATE TABLE IF NOT EXISTS schema_version (version INTEGER NOT NULL)")
                 self._execute("DELETE FROM schema_version")
                 self._execute("INSERT INTO schema_version VALUES (0)")
@@ -207,8 +220,10 @@ class PostgresStore(ClaimingStore):
     def _restore(self, table: str, columns: Sequence[str], rows: Iterable[Sequence[Any]]) -> None:
         self._load(table, columns, rows)
         if table in _IDENTITY:
-            self._execute(f"SELECT setval(pg_get_serial_sequence('{table}', 'id'), "
-                          f"(SELECT coalesce(max(id), 0) + 1 FROM {table}), false)")
+            self._execute(
+                f"SELECT setval(pg_get_serial_sequence('{table}', 'id'), "
+                f"(SELECT coalesce(max(id), 0) + 1 FROM {table}), false)"
+            )
 
     def _failure(self, exc: BaseException, *, opening: bool = False) -> StoreError:
         """A psycopg failure as one :class:`StoreError` naming the store (never its password)."""
@@ -227,21 +242,30 @@ class PostgresStore(ClaimingStore):
     @guarded
     def verify(self) -> None:
         if self._version() != SCHEMA_VERSION:
-            raise StoreError("the history store's schema changed while it was open",
-                             location=SourceLocation(self.location), hint="run again")
+            raise StoreError(
+                "the history store's schema changed while it was open",
+                location=SourceLocation(self.location),
+                hint="run again",
+            )
 
 
 #: (SQLSTATE prefix, what is wrong, hint) for failures the server names.
 _STATES: tuple[tuple[str, str, str | None], ...] = (
-    ("28", "the database server refused the login (user or password)",
-     "check the user and password of the URL (or ~/.pgpass / PGPASSWORD)"),
+    (
+        "28",
+        "the database server refused the login (user or password)",
+        "check the user and password of the URL (or ~/.pgpass / PGPASSWORD)",
+    ),
     ("3D000", "the database server has no such database", "create it (createdb) or fix the URL's database name"),
     ("42501", "this database user may not read or write the history store", "grant it the rights on the tables"),
     ("25006", "the history store is read-only (a read-only transaction or standby server)", None),
     ("53100", "the history store cannot grow: the database server's disk is full", "free space on the server"),
     ("53", "the database server is out of resources", "run again later"),
-    ("55P03", f"the history store is locked by another process (waited {LOCK_TIMEOUT_S:g} s)",
-     "another setupfix is writing the same rows: run again when it is done"),
+    (
+        "55P03",
+        f"the history store is locked by another process (waited {LOCK_TIMEOUT_S:g} s)",
+        "another setupfix is writing the same rows: run again when it is done",
+    ),
     ("40P01", "the history store's writers waited for each other (deadlock); nothing was stored", "run again"),
     ("40001", "another process wrote the same rows at once; nothing was stored", "run again"),
     ("57P", "the database server shut down", "run again when it is back"),
@@ -264,18 +288,28 @@ def _diagnose(exc: BaseException, url: str, opening: bool) -> tuple[str, str | N
     if password:
         text = text.replace(password, "***")
     lowered = text.lower()
-    if isinstance(exc, ValueError) or "invalid dsn" in lowered or " in uri" in lowered or ("invalid " in lowered \
-            and "value" in lowered):
-        return (f"not a PostgreSQL URL setupfix can read ({text.rstrip('.')})",
-                "postgresql://user:password@host:port/database")
+    if (
+        isinstance(exc, ValueError)
+        or "invalid dsn" in lowered
+        or " in uri" in lowered
+        or ("invalid " in lowered and "value" in lowered)
+    ):
+        return (
+            f"not a PostgreSQL URL setupfix can read ({text.rstrip('.')})",
+            "postgresql://user:password@host:port/database",
+        )
     if "does not exist" in lowered and "database" in lowered:
         return "the database server has no such database", "create it (createdb) or fix the URL's database name"
     if opening:
         if "password" in lowered or "authentication" in lowered:
-            return ("the database server refused the login (user or password)",
-                    "check the user and password of the URL (or ~/.pgpass / PGPASSWORD)")
-        return ("cannot reach the database server (" + text.rstrip(".") + ")",
-                "is the server running, and the host and port right?")
+            return (
+                "the database server refused the login (user or password)",
+                "check the user and password of the URL (or ~/.pgpass / PGPASSWORD)",
+            )
+        return (
+            "cannot reach the database server (" + text.rstrip(".") + ")",
+            "is the server running, and the host and port right?",
+        )
     if "closed" in lowered or "terminat" in lowered or "consuming input failed" in lowered or "server" in lowered:
         return "the connection to the database server was lost; nothing of the current import was stored", "run again"
     return f"history store: {text}", None

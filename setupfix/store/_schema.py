@@ -22,7 +22,7 @@ import json
 import sqlite3
 from collections.abc import Callable
 
-from setupfix.errors import StoreError, SourceLocation
+from setupfix.errors import SourceLocation, StoreError
 
 __all__ = ["MIGRATIONS", "SCHEMA_VERSION", "migrate", "version_of", "rollback"]
 
@@ -40,7 +40,9 @@ def _script(db: sqlite3.Connection, script: str) -> None:
 
 def _v1(db: sqlite3.Connection) -> None:
     """The first schema: reports, their rows, corrections log, temperatures, recommendations."""
-    _script(db, """
+    _script(
+        db,
+        """
         CREATE TABLE report (
             id INTEGER PRIMARY KEY,
             sha256 TEXT NOT NULL UNIQUE,
@@ -77,15 +79,19 @@ def _v1(db: sqlite3.Connection) -> None:
             inputs TEXT NOT NULL,
             result TEXT NOT NULL
         );
-    """)
+    """,
+    )
 
 
 def _v2(db: sqlite3.Connection) -> None:
     """The reference-only flag of a row (``setupfix parse``'s extra column); lookup by part and time."""
-    _script(db, """
+    _script(
+        db,
+        """
         ALTER TABLE measurement ADD COLUMN reference INTEGER NOT NULL DEFAULT 0;
         CREATE INDEX measurement_part ON measurement(part, timestamp);
-    """)
+    """,
+    )
 
 
 def _v3(db: sqlite3.Connection) -> None:
@@ -96,13 +102,16 @@ def _v3(db: sqlite3.Connection) -> None:
     mark) and ``claimed_at`` while a run holds it.  Filled from the batch recommendations
     already stored (what ``batch --store`` used to read to skip processed reports).
     """
-    _script(db, """
+    _script(
+        db,
+        """
         CREATE TABLE batch_claim (
             report_sha256 TEXT PRIMARY KEY,
             done INTEGER NOT NULL DEFAULT 0,
             owner TEXT, host TEXT, pid INTEGER, started TEXT, claimed_at TEXT
         )
-    """)
+    """,
+    )
     done = set()
     for (inputs,) in db.execute("SELECT inputs FROM recommendation"):
         try:
@@ -141,7 +150,9 @@ def _v4(db: sqlite3.Connection) -> None:
     """
     from setupfix.store._audit import audit_of
 
-    _script(db, """
+    _script(
+        db,
+        """
         ALTER TABLE report ADD COLUMN machine TEXT NOT NULL DEFAULT 'default';
         ALTER TABLE report ADD COLUMN rows INTEGER NOT NULL DEFAULT 0;
         ALTER TABLE report ADD COLUMN first_measured TEXT;
@@ -182,7 +193,8 @@ def _v4(db: sqlite3.Connection) -> None:
         ALTER TABLE recommendation ADD COLUMN applied INTEGER NOT NULL DEFAULT 0;
         ALTER TABLE recommendation ADD COLUMN exported_to TEXT NOT NULL DEFAULT '';
         ALTER TABLE recommendation ADD COLUMN export_sha256 TEXT NOT NULL DEFAULT ''
-    """)
+    """,
+    )
     _script(db, V4_TABLES)
     names = dict(db.execute("SELECT sha256, name FROM report").fetchall())
     for rec_id, inputs, result in db.execute("SELECT id, inputs, result FROM recommendation").fetchall():
@@ -193,10 +205,21 @@ def _v4(db: sqlite3.Connection) -> None:
         if not isinstance(given, dict) or not isinstance(got, dict):
             continue
         a = audit_of(given, got)
-        db.execute("UPDATE recommendation SET report = ?, report_sha256 = ?, part = ?, verdict = ?, rules = ?, "
-                   "applied = ?, exported_to = ?, export_sha256 = ? WHERE id = ?",
-                   (a.report or names.get(a.report_sha256, ""), a.report_sha256, a.part, a.verdict, a.rules,
-                    int(a.applied), a.exported_to, a.export_sha256, rec_id))
+        db.execute(
+            "UPDATE recommendation SET report = ?, report_sha256 = ?, part = ?, verdict = ?, rules = ?, "
+            "applied = ?, exported_to = ?, export_sha256 = ? WHERE id = ?",
+            (
+                a.report or names.get(a.report_sha256, ""),
+                a.report_sha256,
+                a.part,
+                a.verdict,
+                a.rules,
+                int(a.applied),
+                a.exported_to,
+                a.export_sha256,
+                rec_id,
+            ),
+        )
         db.executemany("INSERT INTO recommendation_delta VALUES (?, ?, ?)", [(rec_id, r, d) for r, d in a.deltas])
 
 
@@ -228,8 +251,11 @@ def migrate(db: sqlite3.Connection, path: str, *, upto: int = SCHEMA_VERSION) ->
     where = SourceLocation(path)
     current = version_of(db)  # a reader does not take the write lock when nothing is to be done
     if current > SCHEMA_VERSION:
-        raise StoreError(f"store schema version {current} is newer than this setupfix reads "
-                         f"({SCHEMA_VERSION})", location=where, hint="update setupfix")
+        raise StoreError(
+            f"store schema version {current} is newer than this setupfix reads ({SCHEMA_VERSION})",
+            location=where,
+            hint="update setupfix",
+        )
     if current >= upto:
         return current
     db.execute("BEGIN IMMEDIATE")

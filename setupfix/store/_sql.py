@@ -162,14 +162,26 @@ class SQLStore(Store):
             inserted = self._one(
                 "INSERT INTO report (sha256, name, format, size, imported_at, machine, rows, first_measured, "
                 "last_measured) VALUES (?,?,?,?,?,?,?,?,?) ON CONFLICT (sha256) DO NOTHING RETURNING id",
-                (sha, name, format, len(data), now(), self.machine, len(frame), min(stamps, default=None),
-                 max(stamps, default=None)))
+                (
+                    sha,
+                    name,
+                    format,
+                    len(data),
+                    now(),
+                    self.machine,
+                    len(frame),
+                    min(stamps, default=None),
+                    max(stamps, default=None),
+                ),
+            )
             if inserted is None:  # stored before (or by another process meanwhile, which committed)
                 self._known(sha, name)
                 return sha, False
             flags = [int(str(v).strip().lower() in ("true", "1", "1.0")) for v in frame["reference"]]
-            rows = [(inserted[0], i, *(_cell(v, c in _TEXT) for c, v in zip(cols, values, strict=True)), flag)
-                    for i, (values, flag) in enumerate(zip(frame[cols].itertuples(index=False), flags, strict=True))]
+            rows = [
+                (inserted[0], i, *(_cell(v, c in _TEXT) for c, v in zip(cols, values, strict=True)), flag)
+                for i, (values, flag) in enumerate(zip(frame[cols].itertuples(index=False), flags, strict=True))
+            ]
             self._load("measurement", ["report_id", "row", *cols, "reference"], rows)
         return sha, True
 
@@ -177,9 +189,11 @@ class SQLStore(Store):
         """A stored report is this machine's (for another it is refused)."""
         row = self._one("SELECT machine FROM report WHERE sha256 = ?", (sha,))
         if row is not None and row[0] != self.machine:
-            raise StoreError(f"report {name} is already stored for machine {row[0]!r}, not {self.machine!r}",
-                             location=SourceLocation(self.location),
-                             hint="a report belongs to one machine: give the --machine it was measured for")
+            raise StoreError(
+                f"report {name} is already stored for machine {row[0]!r}, not {self.machine!r}",
+                location=SourceLocation(self.location),
+                hint="a report belongs to one machine: give the --machine it was measured for",
+            )
 
     @guarded
     def report(self, sha256: str) -> ReportRecord | None:
@@ -191,16 +205,22 @@ class SQLStore(Store):
         return self._reports("", ())
 
     def _reports(self, where: str, args: Sequence[Any]) -> list[ReportRecord]:
-        rows = self._all("SELECT sha256, name, format, size, rows, imported_at, machine FROM report "
-                         f"WHERE machine = ? {where} ORDER BY id", (self.machine, *args))
+        rows = self._all(
+            "SELECT sha256, name, format, size, rows, imported_at, machine FROM report "
+            f"WHERE machine = ? {where} ORDER BY id",
+            (self.machine, *args),
+        )
         return [ReportRecord(*row) for row in rows]
 
     @guarded
     def measurements(self, sha256: str | None = None) -> pd.DataFrame:
         cols = ", ".join(f"m.{c}" for c in CANONICAL_COLUMNS)
         where, args = ("AND r.sha256 = ?", (self.machine, sha256)) if sha256 else ("", (self.machine,))
-        cur = self._execute(f"SELECT {cols}, m.reference, r.sha256 FROM report r JOIN measurement m "
-                            f"ON m.report_id = r.id WHERE r.machine = ? {where} ORDER BY r.id, m.row", args)
+        cur = self._execute(
+            f"SELECT {cols}, m.reference, r.sha256 FROM report r JOIN measurement m "
+            f"ON m.report_id = r.id WHERE r.machine = ? {where} ORDER BY r.id, m.row",
+            args,
+        )
         frame = pd.DataFrame.from_records(cur.fetchall(), columns=[*CANONICAL_COLUMNS, "reference", "report_sha256"])
         for c in NUMERIC:
             frame[c] = pd.to_numeric(frame[c], errors="coerce").astype(float)
@@ -211,16 +231,22 @@ class SQLStore(Store):
     @guarded
     def add_corrections(self, log: pd.DataFrame) -> int:
         frame = log.reindex(columns=list(CORRECTION_COLUMNS))
-        rows = [(self.machine, str(t), str(r), _cell(d, False), str(e or "correction"))
-                for t, r, d, e in frame.itertuples(index=False)]
-        return self._merge("correction", ("machine", *CORRECTION_COLUMNS), ("machine", "timestamp", "register",
-                                                                           "event"), rows)
+        rows = [
+            (self.machine, str(t), str(r), _cell(d, False), str(e or "correction"))
+            for t, r, d, e in frame.itertuples(index=False)
+        ]
+        return self._merge(
+            "correction", ("machine", *CORRECTION_COLUMNS), ("machine", "timestamp", "register", "event"), rows
+        )
 
     @guarded
     def corrections(self, event: str | None = None) -> pd.DataFrame:
         where, args = ("AND event = ?", (self.machine, event)) if event else ("", (self.machine,))
-        rows = self._all(f"SELECT timestamp, register, delta, event FROM correction WHERE machine = ? {where} "
-                         "ORDER BY timestamp, id", args)
+        rows = self._all(
+            f"SELECT timestamp, register, delta, event FROM correction WHERE machine = ? {where} "
+            "ORDER BY timestamp, id",
+            args,
+        )
         frame = pd.DataFrame.from_records(rows, columns=list(CORRECTION_COLUMNS))
         frame["delta"] = pd.to_numeric(frame["delta"], errors="coerce").astype(float)
         return frame
@@ -231,13 +257,15 @@ class SQLStore(Store):
             raise StoreError("a temperature log needs a timestamp column", location=SourceLocation(self.location))
         long = log.melt(id_vars=["timestamp"], var_name="channel", value_name="value").dropna(subset=["value"])
         rows = [(self.machine, str(t), str(c), float(v)) for t, c, v in long.itertuples(index=False)]
-        return self._merge("temperature", ("machine", "timestamp", "channel", "value"),
-                           ("machine", "timestamp", "channel"), rows)
+        return self._merge(
+            "temperature", ("machine", "timestamp", "channel", "value"), ("machine", "timestamp", "channel"), rows
+        )
 
     @guarded
     def temperatures(self) -> pd.DataFrame:
-        rows = self._all("SELECT timestamp, channel, value FROM temperature WHERE machine = ? ORDER BY timestamp",
-                         (self.machine,))
+        rows = self._all(
+            "SELECT timestamp, channel, value FROM temperature WHERE machine = ? ORDER BY timestamp", (self.machine,)
+        )
         if not rows:
             return pd.DataFrame(columns=["timestamp"])
         long = pd.DataFrame.from_records(rows, columns=["timestamp", "channel", "value"])
@@ -256,22 +284,31 @@ class SQLStore(Store):
         differ = " OR ".join(f"i.{v} {self.distinct} t.{v}" for v in values)
         key_cols = ", ".join(keys)
         with self.transaction():
-            self._execute(f"CREATE TEMP TABLE IF NOT EXISTS incoming_{table} AS SELECT {cols} FROM {table} "
-                          "WHERE 1 = 0")
+            self._execute(f"CREATE TEMP TABLE IF NOT EXISTS incoming_{table} AS SELECT {cols} FROM {table} WHERE 1 = 0")
             self._execute(f"DELETE FROM incoming_{table}")
             self._load(f"incoming_{table}", columns, rows)
-            twice = self._one(f"SELECT {key_cols} FROM incoming_{table} GROUP BY {key_cols} HAVING "
-                              + " OR ".join(f"count(DISTINCT {self._as_text(v)}) > 1" for v in values) + " LIMIT 1")
+            twice = self._one(
+                f"SELECT {key_cols} FROM incoming_{table} GROUP BY {key_cols} HAVING "
+                + " OR ".join(f"count(DISTINCT {self._as_text(v)}) > 1" for v in values)
+                + " LIMIT 1"
+            )
             new = 0
             if twice is None:
-                new = self._execute(f"INSERT INTO {table} ({cols}) SELECT DISTINCT {cols} FROM incoming_{table} "
-                                    f"WHERE 1 = 1 ON CONFLICT ({key_cols}) DO NOTHING").rowcount
-            clash = twice or self._one(f"SELECT {', '.join(f'i.{k}' for k in keys)} FROM incoming_{table} i "
-                                       f"JOIN {table} t ON {on} WHERE {differ} LIMIT 1")
+                new = self._execute(
+                    f"INSERT INTO {table} ({cols}) SELECT DISTINCT {cols} FROM incoming_{table} "
+                    f"WHERE 1 = 1 ON CONFLICT ({key_cols}) DO NOTHING"
+                ).rowcount
+            clash = twice or self._one(
+                f"SELECT {', '.join(f'i.{k}' for k in keys)} FROM incoming_{table} i "
+                f"JOIN {table} t ON {on} WHERE {differ} LIMIT 1"
+            )
             if clash:
                 what = ", ".join(f"{k} {v}" for k, v in zip(keys, clash, strict=True) if k != "machine")
-                raise StoreError(f"{table} at {what} contradicts " + ("itself" if twice else "the stored one"),
-                                 location=SourceLocation(self.location), hint="a stored row is never changed")
+                raise StoreError(
+                    f"{table} at {what} contradicts " + ("itself" if twice else "the stored one"),
+                    location=SourceLocation(self.location),
+                    hint="a stored row is never changed",
+                )
             self._execute(f"DELETE FROM incoming_{table}")
         return int(new)
 
@@ -288,28 +325,51 @@ class SQLStore(Store):
                 "INSERT INTO recommendation (created_at, optimizer, inputs, result, machine, operator, report, "
                 "report_sha256, part, verdict, rules, applied, exported_to, export_sha256) "
                 "VALUES (?,?,?,?,?,?,?,?,?,?,?,?,?,?) RETURNING id",
-                (rec.created_at or now(), rec.optimizer, json.dumps(rec.inputs, sort_keys=True),
-                 json.dumps(rec.result, sort_keys=True), self.machine, self.operator, name, a.report_sha256,
-                 a.part, a.verdict, a.rules, int(a.applied), a.exported_to, a.export_sha256))
+                (
+                    rec.created_at or now(),
+                    rec.optimizer,
+                    json.dumps(rec.inputs, sort_keys=True),
+                    json.dumps(rec.result, sort_keys=True),
+                    self.machine,
+                    self.operator,
+                    name,
+                    a.report_sha256,
+                    a.part,
+                    a.verdict,
+                    a.rules,
+                    int(a.applied),
+                    a.exported_to,
+                    a.export_sha256,
+                ),
+            )
             assert row is not None
             if a.deltas:
-                self._load("recommendation_delta", ("recommendation_id", "register", "delta"),
-                           [(row[0], r, d) for r, d in a.deltas])
+                self._load(
+                    "recommendation_delta",
+                    ("recommendation_id", "register", "delta"),
+                    [(row[0], r, d) for r, d in a.deltas],
+                )
         return int(row[0])
 
     @guarded
     def recommendations(self) -> list[Recommendation]:
-        rows = self._all("SELECT optimizer, inputs, result, created_at, machine, operator FROM recommendation "
-                         "WHERE machine = ? ORDER BY id", (self.machine,))
+        rows = self._all(
+            "SELECT optimizer, inputs, result, created_at, machine, operator FROM recommendation "
+            "WHERE machine = ? ORDER BY id",
+            (self.machine,),
+        )
         return [Recommendation(o, json.loads(i), json.loads(r), c, m, op) for o, i, r, c, m, op in rows]
 
     @guarded
     def audit(self, *, every_machine: bool = False) -> pd.DataFrame:
         where, args = ("", ()) if every_machine else ("WHERE r.machine = ?", (self.machine,))
-        rows = self._all("SELECT r.created_at, r.machine, r.operator, r.report, r.report_sha256, r.part, "
-                         "r.optimizer, r.verdict, d.register, d.delta, r.applied, r.exported_to FROM recommendation r "
-                         f"LEFT JOIN recommendation_delta d ON d.recommendation_id = r.id {where} "
-                         "ORDER BY r.id, d.register", args)
+        rows = self._all(
+            "SELECT r.created_at, r.machine, r.operator, r.report, r.report_sha256, r.part, "
+            "r.optimizer, r.verdict, d.register, d.delta, r.applied, r.exported_to FROM recommendation r "
+            f"LEFT JOIN recommendation_delta d ON d.recommendation_id = r.id {where} "
+            "ORDER BY r.id, d.register",
+            args,
+        )
         frame = pd.DataFrame.from_records(rows, columns=list(AUDIT_COLUMNS))
         frame["delta"] = pd.to_numeric(frame["delta"], errors="coerce").astype(float)
         frame["applied"] = frame["applied"].astype(bool)
@@ -324,18 +384,34 @@ class SQLStore(Store):
             for machine, *values in rows:
                 found.setdefault(str(machine), {}).update(zip(names, values, strict=True))
 
-        put(self._all("SELECT machine, count(*), sum(rows), min(first_measured), max(last_measured), "
-                      "max(imported_at) FROM report GROUP BY machine"),
-            "reports", "rows", "first_measured", "last_measured", "last_import")
+        put(
+            self._all(
+                "SELECT machine, count(*), sum(rows), min(first_measured), max(last_measured), "
+                "max(imported_at) FROM report GROUP BY machine"
+            ),
+            "reports",
+            "rows",
+            "first_measured",
+            "last_measured",
+            "last_import",
+        )
         for machine, event, n in self._all("SELECT machine, event, count(*) FROM correction GROUP BY machine, event"):
             put([(machine, n)], "tool_changes" if event == "tool_change" else "corrections")
-        put(self._all("SELECT machine, count(DISTINCT timestamp), count(DISTINCT channel) FROM temperature "
-                      "GROUP BY machine"), "temperature_samples", "temperature_channels")
-        put(self._all("SELECT machine, count(*), max(created_at) FROM recommendation GROUP BY machine"),
-            "recommendations", "last_recommendation")
+        put(
+            self._all(
+                "SELECT machine, count(DISTINCT timestamp), count(DISTINCT channel) FROM temperature GROUP BY machine"
+            ),
+            "temperature_samples",
+            "temperature_channels",
+        )
+        put(
+            self._all("SELECT machine, count(*), max(created_at) FROM recommendation GROUP BY machine"),
+            "recommendations",
+            "last_recommendation",
+        )
         counts: dict[str, dict[str, Any]] = {
-            m: {k: (v if k.startswith(("first", "last")) else int(v or 0)) for k, v in found[m].items()}
-            for m in found}
+            m: {k: (v if k.startswith(("first", "last")) else int(v or 0)) for k, v in found[m].items()} for m in found
+        }
         return [MachineSummary(m, **counts[m]) for m in sorted(counts)]
 
     # -- a whole copy (history migrate) -------------------------------------------------------

@@ -25,8 +25,8 @@ from typing import Any
 import pandas as pd
 
 from setupfix.errors import SourceLocation, StoreError
-from setupfix.store._schema import migrate, rollback
 from setupfix.store._claims import ClaimingStore
+from setupfix.store._schema import migrate, rollback
 from setupfix.store._sql import guarded
 
 __all__ = ["SQLiteStore", "BUSY_TIMEOUT_S"]
@@ -36,17 +36,32 @@ BUSY_TIMEOUT_S = 30.0
 
 #: (SQLite result code prefix, what is wrong, hint) in the order they are tried.
 _FAILURES: tuple[tuple[tuple[str, ...], str, str | None], ...] = (
-    (("SQLITE_BUSY", "SQLITE_LOCKED"), "the history store is locked by another process (waited {timeout:g} s)",
-     "another setupfix or a database tool is writing it: run again when it is done"),
-    (("SQLITE_READONLY",), "the history store cannot be written (read-only file, folder or file system)",
-     "SQLite writes the file and a -wal and -shm file beside it: allow writing both"),
+    (
+        ("SQLITE_BUSY", "SQLITE_LOCKED"),
+        "the history store is locked by another process (waited {timeout:g} s)",
+        "another setupfix or a database tool is writing it: run again when it is done",
+    ),
+    (
+        ("SQLITE_READONLY",),
+        "the history store cannot be written (read-only file, folder or file system)",
+        "SQLite writes the file and a -wal and -shm file beside it: allow writing both",
+    ),
     (("SQLITE_FULL",), "the history store cannot grow: its disk is full", "free space and run again"),
-    (("SQLITE_IOERR",), "the history store cannot be read or written (disk I/O error)",
-     "is the disk full, a file size limit (ulimit -f) reached, or the disk failing?"),
-    (("SQLITE_CORRUPT", "SQLITE_NOTADB"), "the history store is damaged (not a readable SQLite database)",
-     "restore it from a backup, or give another --db/--store"),
-    (("SQLITE_CANTOPEN", "SQLITE_PERM", "SQLITE_AUTH"), "the history store cannot be opened or created",
-     "is the path a file, and may this user write its folder?"),
+    (
+        ("SQLITE_IOERR",),
+        "the history store cannot be read or written (disk I/O error)",
+        "is the disk full, a file size limit (ulimit -f) reached, or the disk failing?",
+    ),
+    (
+        ("SQLITE_CORRUPT", "SQLITE_NOTADB"),
+        "the history store is damaged (not a readable SQLite database)",
+        "restore it from a backup, or give another --db/--store",
+    ),
+    (
+        ("SQLITE_CANTOPEN", "SQLITE_PERM", "SQLITE_AUTH"),
+        "the history store cannot be opened or created",
+        "is the path a file, and may this user write its folder?",
+    ),
 )
 
 
@@ -136,5 +151,8 @@ class SQLiteStore(ClaimingStore):
     def verify(self) -> None:
         problems = [str(r[0]) for r in self.db.execute("PRAGMA quick_check")]
         if problems != ["ok"]:
-            raise StoreError("the history store is damaged (not a readable SQLite database)",
-                             location=self._where, hint="restore it from a backup, or give another --db/--store")
+            raise StoreError(
+                "the history store is damaged (not a readable SQLite database)",
+                location=self._where,
+                hint="restore it from a backup, or give another --db/--store",
+            )

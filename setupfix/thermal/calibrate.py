@@ -24,10 +24,9 @@ from collections.abc import Callable
 import numpy as np
 import numpy.typing as npt
 
-from setupfix.search import Box, SearchResult, generator, mantegna_sigma
+from setupfix.search import Box, SearchResult, generator, mantegna_sigma, roulette_ga
 from setupfix.search import cuckoo_search as _cs
 from setupfix.search import particle_swarm as _pso
-from setupfix.search import roulette_ga
 
 __all__ = ["SearchResult", "cuckoo_search", "particle_swarm", "genetic_algorithm", "mantegna_sigma"]
 
@@ -35,10 +34,19 @@ Array = npt.NDArray[np.float64]
 Objective = Callable[[Array], Array]
 
 
-def cuckoo_search(objective: Objective, lower: npt.ArrayLike, upper: npt.ArrayLike, *,
-                  rng: np.random.Generator | int | None = None, n_nests: int = 25, pa: float = 0.25,
-                  n_iter: int = 100, alpha: float = 0.01, beta: float = 1.5,
-                  x0: npt.ArrayLike | None = None) -> SearchResult:
+def cuckoo_search(
+    objective: Objective,
+    lower: npt.ArrayLike,
+    upper: npt.ArrayLike,
+    *,
+    rng: np.random.Generator | int | None = None,
+    n_nests: int = 25,
+    pa: float = 0.25,
+    n_iter: int = 100,
+    alpha: float = 0.01,
+    beta: float = 1.5,
+    x0: npt.ArrayLike | None = None,
+) -> SearchResult:
     """Minimise ``objective`` by cuckoo search with Lévy flights (Yang & Deb 2009).
 
     Abdulshahed (2017), Algorithm 1; see :func:`setupfix.search.cuckoo_search`.
@@ -67,15 +75,34 @@ def cuckoo_search(objective: Objective, lower: npt.ArrayLike, upper: npt.ArrayLi
     SearchResult
         History: best value after the start nests and after each of the ``n_iter`` iterations.
     """
-    return _cs(objective, Box.of(lower, upper), budget=n_nests * (1 + 2 * n_iter), rng=generator(rng),
-               n_nests=n_nests, pa=pa, alpha=alpha, beta=beta, x0=x0)
+    return _cs(
+        objective,
+        Box.of(lower, upper),
+        budget=n_nests * (1 + 2 * n_iter),
+        rng=generator(rng),
+        n_nests=n_nests,
+        pa=pa,
+        alpha=alpha,
+        beta=beta,
+        x0=x0,
+    )
 
 
-def particle_swarm(objective: Objective, lower: npt.ArrayLike, upper: npt.ArrayLike, *,
-                   rng: np.random.Generator | int | None = None, n_particles: int = 25, n_iter: int = 100,
-                   w_start: float = 0.9, w_end: float = 0.4,
-                   c1: float = 2.0, c2: float = 2.0, v_max: float = 0.2,
-                   x0: npt.ArrayLike | None = None) -> SearchResult:
+def particle_swarm(
+    objective: Objective,
+    lower: npt.ArrayLike,
+    upper: npt.ArrayLike,
+    *,
+    rng: np.random.Generator | int | None = None,
+    n_particles: int = 25,
+    n_iter: int = 100,
+    w_start: float = 0.9,
+    w_end: float = 0.4,
+    c1: float = 2.0,
+    c2: float = 2.0,
+    v_max: float = 0.2,
+    x0: npt.ArrayLike | None = None,
+) -> SearchResult:
     """Minimise ``objective`` by synchronous inertia-weight particle swarm optimisation.
 
     ``v ← w v + c1 r1 ⊙ (pbest − x) + c2 r2 ⊙ (gbest − x); x ← x + v`` with the inertia
@@ -105,15 +132,34 @@ def particle_swarm(objective: Objective, lower: npt.ArrayLike, upper: npt.ArrayL
     -------
     SearchResult
     """
-    return _pso(objective, Box.of(lower, upper), budget=n_particles * (1 + n_iter), rng=generator(rng),
-                n_particles=n_particles, inertia=(w_start, w_end), coefficients=(c1, c2), v_max=v_max,
-                v_init=0.5, asynchronous=False, x0=x0)
+    return _pso(
+        objective,
+        Box.of(lower, upper),
+        budget=n_particles * (1 + n_iter),
+        rng=generator(rng),
+        n_particles=n_particles,
+        inertia=(w_start, w_end),
+        coefficients=(c1, c2),
+        v_max=v_max,
+        v_init=0.5,
+        asynchronous=False,
+        x0=x0,
+    )
 
 
-def genetic_algorithm(objective: Objective, lower: npt.ArrayLike, upper: npt.ArrayLike, *,
-                      rng: np.random.Generator | int | None = None, pop_size: int = 40, n_gen: int = 60,
-                      p_crossover: float = 0.7, p_mutation: float = 0.02, mutation_scale: float = 0.1,
-                      x0: npt.ArrayLike | None = None) -> SearchResult:
+def genetic_algorithm(
+    objective: Objective,
+    lower: npt.ArrayLike,
+    upper: npt.ArrayLike,
+    *,
+    rng: np.random.Generator | int | None = None,
+    pop_size: int = 40,
+    n_gen: int = 60,
+    p_crossover: float = 0.7,
+    p_mutation: float = 0.02,
+    mutation_scale: float = 0.1,
+    x0: npt.ArrayLike | None = None,
+) -> SearchResult:
     """Minimise ``objective`` with the floating-point GA of Wang et al. (2017), §3.4.
 
     Roulette selection, arithmetic crossover (eq. 14), Gaussian mutation (eq. 15),
@@ -138,6 +184,14 @@ def genetic_algorithm(objective: Objective, lower: npt.ArrayLike, upper: npt.Arr
     -------
     SearchResult
     """
-    return roulette_ga(objective, Box.of(lower, upper), budget=pop_size * (1 + n_gen), rng=generator(rng),
-                       pop_size=pop_size, p_crossover=p_crossover, p_mutation=p_mutation,
-                       mutation_scale=mutation_scale, x0=x0)
+    return roulette_ga(
+        objective,
+        Box.of(lower, upper),
+        budget=pop_size * (1 + n_gen),
+        rng=generator(rng),
+        pop_size=pop_size,
+        p_crossover=p_crossover,
+        p_mutation=p_mutation,
+        mutation_scale=mutation_scale,
+        x0=x0,
+    )

@@ -97,13 +97,26 @@ class ThermalModel(ValidatedParams):
         """Hyper-parameters as given to ``__init__``."""
         return {k: v for k, v in vars(self).items() if not k.endswith("_") and not k.startswith("_")}
 
-    def fit(self, T: npt.ArrayLike, y: npt.ArrayLike, *, ambient: npt.ArrayLike | None = None,
-            speed: npt.ArrayLike | None = None) -> Self:
+    def fit(
+        self,
+        T: npt.ArrayLike,
+        y: npt.ArrayLike,
+        *,
+        ambient: npt.ArrayLike | None = None,
+        speed: npt.ArrayLike | None = None,
+    ) -> Self:
         """Fit on temperatures ``T`` (n, S) and the measured error ``y`` (n,); store the reference state."""
         raise NotImplementedError
 
-    def predict(self, T: npt.ArrayLike, *, ambient: npt.ArrayLike | None = None, speed: npt.ArrayLike | None = None,
-                y0: float | None = None, sensors_failed: bool = False) -> Array:
+    def predict(
+        self,
+        T: npt.ArrayLike,
+        *,
+        ambient: npt.ArrayLike | None = None,
+        speed: npt.ArrayLike | None = None,
+        y0: float | None = None,
+        sensors_failed: bool = False,
+    ) -> Array:
         """Predicted error (n,) relative to the reference state; ``y0`` re-bases it at the first sample."""
         raise NotImplementedError
 
@@ -125,16 +138,19 @@ class ThermalModel(ValidatedParams):
     def _rises(self, T: npt.ArrayLike) -> Array:
         T2 = _as_2d(T)
         if T2.shape[1] != self.T_ref_.size:
-            raise ParameterError(f"{self.name}: {T2.shape[1]} temperature inputs given, the model has "
-                                 f"{self.T_ref_.size}")
+            raise ParameterError(
+                f"{self.name}: {T2.shape[1]} temperature inputs given, the model has {self.T_ref_.size}"
+            )
         return rises_from(T2, self.T_ref_)
 
     def _refuse_extras(self, ambient: Any, speed: Any, sensors_failed: bool) -> None:
         if ambient is not None or speed is not None:
             raise ParameterError(f"{self.name}: ambient and speed are inputs of the kalman model only")
         if sensors_failed:
-            raise ParameterError(f"{self.name}: sensors_failed applies to the kalman model only "
-                                 "(the others have no model of the temperatures)")
+            raise ParameterError(
+                f"{self.name}: sensors_failed applies to the kalman model only "
+                "(the others have no model of the temperatures)"
+            )
 
     @staticmethod
     def _finish(pred: Array, y0: float | None) -> Array:
@@ -207,15 +223,28 @@ class MRAModel(ThermalModel):
     def __init__(self, *, intercept: bool = False) -> None:
         self.intercept = intercept
 
-    def fit(self, T: npt.ArrayLike, y: npt.ArrayLike, *, ambient: npt.ArrayLike | None = None,
-            speed: npt.ArrayLike | None = None) -> MRAModel:
+    def fit(
+        self,
+        T: npt.ArrayLike,
+        y: npt.ArrayLike,
+        *,
+        ambient: npt.ArrayLike | None = None,
+        speed: npt.ArrayLike | None = None,
+    ) -> MRAModel:
         self._refuse_extras(ambient, speed, False)
         dT, dy = self._set_reference(_as_2d(T), np.asarray(y, dtype=float))
         self.beta_ = mra_fit(dT, dy, intercept=self.intercept)
         return self
 
-    def predict(self, T: npt.ArrayLike, *, ambient: npt.ArrayLike | None = None, speed: npt.ArrayLike | None = None,
-                y0: float | None = None, sensors_failed: bool = False) -> Array:
+    def predict(
+        self,
+        T: npt.ArrayLike,
+        *,
+        ambient: npt.ArrayLike | None = None,
+        speed: npt.ArrayLike | None = None,
+        y0: float | None = None,
+        sensors_failed: bool = False,
+    ) -> Array:
         """Predicted error (n,); ``y0`` re-bases it on a measured error at the first sample."""
         self._check_fitted()
         self._refuse_extras(ambient, speed, sensors_failed)

@@ -49,8 +49,9 @@ def sample_at_or_before(times: npt.ArrayLike, when: npt.ArrayLike) -> npt.NDArra
     return np.searchsorted(t, np.asarray(when, dtype=float), side="right") - 1
 
 
-def drift_change(drift: npt.ArrayLike, times: npt.ArrayLike, measured_at: npt.ArrayLike,
-                 at: float | None = None) -> Array:
+def drift_change(
+    drift: npt.ArrayLike, times: npt.ArrayLike, measured_at: npt.ArrayLike, at: float | None = None
+) -> Array:
     """Predicted thermal change ΔE since the measured parts were cut (module docstring).
 
     Parameters
@@ -88,8 +89,9 @@ def drift_change(drift: npt.ArrayLike, times: npt.ArrayLike, measured_at: npt.Ar
     return np.asarray(e[i_at] - e[i_meas], dtype=float)
 
 
-def feed_forward(delta: float, moves: npt.ArrayLike, *, factor: float = 1.0, resolution: float = 0.0,
-                 dead_band: float = 0.0) -> Array:
+def feed_forward(
+    delta: float, moves: npt.ArrayLike, *, factor: float = 1.0, resolution: float = 0.0, dead_band: float = 0.0
+) -> Array:
     """Register corrections that cancel a thermal change ΔE (module docstring).
 
     Parameters

@@ -186,8 +186,9 @@ def _convolve_exp(f: Array, decay: Array) -> Array:
     return out
 
 
-def gmc_response(theta: npt.ArrayLike, y0: float | npt.ArrayLike, X1: npt.ArrayLike,
-                 form: ResponseForm = "trapezoid") -> Array:
+def gmc_response(
+    theta: npt.ArrayLike, y0: float | npt.ArrayLike, X1: npt.ArrayLike, form: ResponseForm = "trapezoid"
+) -> Array:
     """Time response :math:`\\hat x_1^{(1)}(k)` of GMC(1,N), k = 1…n.
 
     Abdulshahed et al. (2017) eq. (2) (``form="trapezoid"``)::
@@ -240,8 +241,14 @@ def gmc_response(theta: npt.ArrayLike, y0: float | npt.ArrayLike, X1: npt.ArrayL
     return x1hat[0] if single else x1hat
 
 
-def gmc_predict(theta: npt.ArrayLike, y0: float | npt.ArrayLike, X: npt.ArrayLike, *, delay: int = 0,
-                form: ResponseForm = "trapezoid") -> Array:
+def gmc_predict(
+    theta: npt.ArrayLike,
+    y0: float | npt.ArrayLike,
+    X: npt.ArrayLike,
+    *,
+    delay: int = 0,
+    form: ResponseForm = "trapezoid",
+) -> Array:
     """Predicted target :math:`\\hat x_1^{(0)}` from raw drivers: lag, 1-AGO, eq. (2), IAGO.
 
     Parameters

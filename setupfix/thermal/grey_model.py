@@ -76,9 +76,20 @@ class GreyModel(ThermalModel):
         "seed": _SEED,
     }
 
-    def __init__(self, *, calibration: str = "cs", kind: str = "gmc", form: str = "trapezoid", delay: int = 0,
-                 bound: float = 100.0, b1_min: float = 1e-6, population: int = 25, iterations: int = 100,
-                 pa: float = 0.25, seed: int = DEFAULT_SEED) -> None:
+    def __init__(
+        self,
+        *,
+        calibration: str = "cs",
+        kind: str = "gmc",
+        form: str = "trapezoid",
+        delay: int = 0,
+        bound: float = 100.0,
+        b1_min: float = 1e-6,
+        population: int = 25,
+        iterations: int = 100,
+        pa: float = 0.25,
+        seed: int = DEFAULT_SEED,
+    ) -> None:
         self.calibration = calibration
         self.kind = kind
         self.form = form
@@ -99,8 +110,14 @@ class GreyModel(ThermalModel):
             return grey.gm1n_response(theta, y0, X1)
         return grey.gmc_response(theta, y0, X1, self.form)  # type: ignore[arg-type]  # form checked by validate_params
 
-    def fit(self, T: npt.ArrayLike, y: npt.ArrayLike, *, ambient: npt.ArrayLike | None = None,
-            speed: npt.ArrayLike | None = None) -> GreyModel:
+    def fit(
+        self,
+        T: npt.ArrayLike,
+        y: npt.ArrayLike,
+        *,
+        ambient: npt.ArrayLike | None = None,
+        speed: npt.ArrayLike | None = None,
+    ) -> GreyModel:
         self._refuse_extras(ambient, speed, False)
         dT, dy = self._set_reference(_as_2d(T), np.asarray(y, dtype=float))
         X = grey.lag_drivers(dT, self.delay)
@@ -121,6 +138,7 @@ class GreyModel(ThermalModel):
             theta = lsq_linear(B, Y, bounds=(lo, hi)).x
             self.n_evaluations_ = 1
         else:
+
             def objective(pop: Array) -> Array:
                 resid = grey.iago(self._response(pop, y0, X1)) - dy
                 sse: Array = np.sum(resid[:, 1:] ** 2, axis=1)  # k = 1 is exact by construction
@@ -129,11 +147,13 @@ class GreyModel(ThermalModel):
             rng = generator(self.seed)
             with np.errstate(over="ignore", invalid="ignore"):
                 if self.calibration == "cs":
-                    res: SearchResult = cuckoo_search(objective, lo, hi, n_nests=self.population, pa=self.pa,
-                                                      n_iter=self.iterations, rng=rng)
+                    res: SearchResult = cuckoo_search(
+                        objective, lo, hi, n_nests=self.population, pa=self.pa, n_iter=self.iterations, rng=rng
+                    )
                 else:
-                    res = particle_swarm(objective, lo, hi, n_particles=self.population, n_iter=self.iterations,
-                                         rng=rng)
+                    res = particle_swarm(
+                        objective, lo, hi, n_particles=self.population, n_iter=self.iterations, rng=rng
+                    )
             theta = res.x
             self.n_evaluations_ = res.n_evaluations
             self.history_ = res.history
@@ -145,8 +165,15 @@ class GreyModel(ThermalModel):
             self.fit_notes_.append(Note("grey model response is not finite on its training data", kind="thermal"))
         return self
 
-    def predict(self, T: npt.ArrayLike, *, ambient: npt.ArrayLike | None = None, speed: npt.ArrayLike | None = None,
-                y0: float | None = None, sensors_failed: bool = False) -> Array:
+    def predict(
+        self,
+        T: npt.ArrayLike,
+        *,
+        ambient: npt.ArrayLike | None = None,
+        speed: npt.ArrayLike | None = None,
+        y0: float | None = None,
+        sensors_failed: bool = False,
+    ) -> Array:
         """Predicted error (n,), the response started from the static estimate at the first sample."""
         self._check_fitted()
         self._refuse_extras(ambient, speed, sensors_failed)

@@ -26,8 +26,15 @@ __all__ = ["predict", "update", "steady_state", "fuse", "FusionFilter"]
 Array = npt.NDArray[np.float64]
 
 
-def predict(x_post: npt.ArrayLike, P_post: npt.ArrayLike, A: npt.ArrayLike, B: npt.ArrayLike,
-            ambient: npt.ArrayLike, c: npt.ArrayLike, N: npt.ArrayLike) -> tuple[Array, Array]:
+def predict(
+    x_post: npt.ArrayLike,
+    P_post: npt.ArrayLike,
+    A: npt.ArrayLike,
+    B: npt.ArrayLike,
+    ambient: npt.ArrayLike,
+    c: npt.ArrayLike,
+    N: npt.ArrayLike,
+) -> tuple[Array, Array]:
     """Prediction stage, eqs. (5)–(6).
 
     ``T_P = A T_F + B T_e + C`` and ``P_P = A² P_F + N`` (element-wise, broadcasting).
@@ -50,14 +57,18 @@ def predict(x_post: npt.ArrayLike, P_post: npt.ArrayLike, A: npt.ArrayLike, B: n
     x_prior, P_prior : ndarray
     """
     A = np.asarray(A, dtype=float)
-    x_prior = A * np.asarray(x_post, dtype=float) + np.asarray(B, dtype=float) * np.asarray(ambient, dtype=float) \
+    x_prior = (
+        A * np.asarray(x_post, dtype=float)
+        + np.asarray(B, dtype=float) * np.asarray(ambient, dtype=float)
         + np.asarray(c, dtype=float)
+    )
     P_prior = A * A * P_post + N
     return np.asarray(x_prior, dtype=float), np.asarray(P_prior, dtype=float)
 
 
-def update(x_prior: npt.ArrayLike, P_prior: npt.ArrayLike, z: npt.ArrayLike, R: npt.ArrayLike,
-           use: npt.ArrayLike = True) -> tuple[Array, Array, Array]:
+def update(
+    x_prior: npt.ArrayLike, P_prior: npt.ArrayLike, z: npt.ArrayLike, R: npt.ArrayLike, use: npt.ArrayLike = True
+) -> tuple[Array, Array, Array]:
     """Update stage, eqs. (7)–(9), with gain forced to 0 where ``use`` is False.
 
     ``K = P_P / (P_P + R)``, ``T_F = T_P + K (T_M − T_P)``, ``P_F = P_P − K P_P``.
@@ -101,9 +112,18 @@ def steady_state(A: npt.ArrayLike, N: npt.ArrayLike, R: npt.ArrayLike = 1.0) -> 
     return P, P / (P + R)
 
 
-def fuse(measured: npt.ArrayLike, ambient: npt.ArrayLike, A: npt.ArrayLike, B: npt.ArrayLike, C: npt.ArrayLike,
-         q: npt.ArrayLike, *, jump: float = np.inf, p0: float = 1.0,
-         x0: npt.ArrayLike | None = None) -> tuple[Array, Array]:
+def fuse(
+    measured: npt.ArrayLike,
+    ambient: npt.ArrayLike,
+    A: npt.ArrayLike,
+    B: npt.ArrayLike,
+    C: npt.ArrayLike,
+    q: npt.ArrayLike,
+    *,
+    jump: float = np.inf,
+    p0: float = 1.0,
+    x0: npt.ArrayLike | None = None,
+) -> tuple[Array, Array]:
     """Run the filter over a whole log: fused temperatures and gains.
 
     Vectorised over sensors and over candidate parameter sets (the trailing axes of
@@ -183,8 +203,9 @@ class FusionFilter:
         Sensors latched as failed.
     """
 
-    def __init__(self, A: npt.ArrayLike, B: npt.ArrayLike, q: npt.ArrayLike, *, jump: float = np.inf,
-                 p0: float = 1.0) -> None:
+    def __init__(
+        self, A: npt.ArrayLike, B: npt.ArrayLike, q: npt.ArrayLike, *, jump: float = np.inf, p0: float = 1.0
+    ) -> None:
         self.A = np.asarray(A, dtype=float)
         self.B = np.asarray(B, dtype=float)
         self.q = np.asarray(q, dtype=float)
@@ -225,7 +246,8 @@ class FusionFilter:
         jumped = ok & np.isfinite(self._prev) & (np.abs(z - np.nan_to_num(self._prev)) > self.jump)
         self.failed |= jumped
         self.x_prior, self.P_prior = predict(self.x_post, self.P_post, self.A, self.B, ambient, c, self.q)
-        self.x_post, self.P_post, self.K = update(self.x_prior, self.P_prior, np.where(ok, z, 0.0), 1.0,
-                                                  ok & ~self.failed)
+        self.x_post, self.P_post, self.K = update(
+            self.x_prior, self.P_prior, np.where(ok, z, 0.0), 1.0, ok & ~self.failed
+        )
         self._prev = np.where(ok, z, self._prev)
         return self.x_post.copy()

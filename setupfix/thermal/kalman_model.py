@@ -62,22 +62,33 @@ class KalmanFusionModel(ThermalModel):
     _learned = ("A_", "B_", "v_", "q_", "beta_", "uses_speed_", "ambient_const_")
     _parameter_constraints: ClassVar[dict[str, list[Constraint]]] = {
         "gearbox_breaks": [Predicate(lambda v: all(np.isfinite(b) and b > 0 for b in v), "positive speeds")],
-        "gearbox_ratios": [Predicate(lambda v: len(v) >= 1 and all(np.isfinite(r) and r > 0 for r in v),
-                                     "positive ratios")],
+        "gearbox_ratios": [
+            Predicate(lambda v: len(v) >= 1 and all(np.isfinite(r) and r > 0 for r in v), "positive ratios")
+        ],
         "jump": [Interval(float, 0, None, closed="neither")],
         "pop_size": [Interval(int, 2, 10_000)],
         "generations": [Interval(int, 1, 100_000)],
         "p_crossover": [Interval(float, 0, 1)],
         "p_mutation": [Interval(float, 0, 1)],
-        "log10_q_bounds": [Predicate(lambda v: len(v) == 2 and -30 <= v[0] < v[1] <= 30,
-                                     "two numbers lo < hi in [-30, 30]")],
+        "log10_q_bounds": [
+            Predicate(lambda v: len(v) == 2 and -30 <= v[0] < v[1] <= 30, "two numbers lo < hi in [-30, 30]")
+        ],
         "seed": _SEED,
     }
 
-    def __init__(self, *, gearbox_breaks: tuple[float, ...] | list[float] = (),
-                 gearbox_ratios: tuple[float, ...] | list[float] = (1.0,), jump: float = 2.0, pop_size: int = 40,
-                 generations: int = 60, p_crossover: float = 0.7, p_mutation: float = 0.02,
-                 log10_q_bounds: tuple[float, float] | list[float] = (-8.0, 2.0), seed: int = DEFAULT_SEED) -> None:
+    def __init__(
+        self,
+        *,
+        gearbox_breaks: tuple[float, ...] | list[float] = (),
+        gearbox_ratios: tuple[float, ...] | list[float] = (1.0,),
+        jump: float = 2.0,
+        pop_size: int = 40,
+        generations: int = 60,
+        p_crossover: float = 0.7,
+        p_mutation: float = 0.02,
+        log10_q_bounds: tuple[float, float] | list[float] = (-8.0, 2.0),
+        seed: int = DEFAULT_SEED,
+    ) -> None:
         self.gearbox_breaks = tuple(gearbox_breaks)
         self.gearbox_ratios = tuple(gearbox_ratios)
         self.jump = jump
@@ -107,27 +118,47 @@ class KalmanFusionModel(ThermalModel):
     def _drives(self, T: Array, ambient: npt.ArrayLike | None, speed: npt.ArrayLike | None) -> tuple[Array, Array]:
         n = T.shape[0]
         if (speed is not None) != bool(self.uses_speed_):
-            raise ParameterError("kalman: the model was fitted " + ("with" if self.uses_speed_ else "without")
-                                 + " a spindle speed; predict the same way")
+            raise ParameterError(
+                "kalman: the model was fitted "
+                + ("with" if self.uses_speed_ else "without")
+                + " a spindle speed; predict the same way"
+            )
         sp = np.zeros(n) if speed is None else np.asarray(speed, dtype=float)
         te = np.full(n, self.ambient_const_) if ambient is None else np.asarray(ambient, dtype=float)
         return te, sp
 
-    def fit(self, T: npt.ArrayLike, y: npt.ArrayLike, *, ambient: npt.ArrayLike | None = None,
-            speed: npt.ArrayLike | None = None) -> KalmanFusionModel:
+    def fit(
+        self,
+        T: npt.ArrayLike,
+        y: npt.ArrayLike,
+        *,
+        ambient: npt.ArrayLike | None = None,
+        speed: npt.ArrayLike | None = None,
+    ) -> KalmanFusionModel:
         T = _as_2d(T)
         y = np.asarray(y, dtype=float)
         _, dy = self._set_reference(T, y)
         self.uses_speed_ = speed is not None
         self.ambient_const_ = float(np.median(self.T_ref_))
-        te, sp = (np.asarray(ambient, dtype=float) if ambient is not None else np.full(len(y), self.ambient_const_),
-                  np.zeros(len(y)) if speed is None else np.asarray(speed, dtype=float))
+        te, sp = (
+            np.asarray(ambient, dtype=float) if ambient is not None else np.full(len(y), self.ambient_const_),
+            np.zeros(len(y)) if speed is None else np.asarray(speed, dtype=float),
+        )
         rng = generator(self.seed)
         S = T.shape[1]
         v = np.zeros((S, 3))
         for i in range(S):  # step 1: lumped-mass parameters, eq. (12)
-            params, _ = fit_lumped(T[:, i], te, sp, gearbox=self.gearbox, rng=rng, pop_size=self.pop_size,
-                                   n_gen=self.generations, p_crossover=self.p_crossover, p_mutation=self.p_mutation)
+            params, _ = fit_lumped(
+                T[:, i],
+                te,
+                sp,
+                gearbox=self.gearbox,
+                rng=rng,
+                pop_size=self.pop_size,
+                n_gen=self.generations,
+                p_crossover=self.p_crossover,
+                p_mutation=self.p_mutation,
+            )
             v[i] = params.v1, params.v2, params.v3
         self.v_ = v
         self.A_ = 1.0 / (1.0 + v[:, 0])
@@ -135,7 +166,7 @@ class KalmanFusionModel(ThermalModel):
         C = self._heat_input(sp)
 
         def objective(pop: Array) -> Array:  # step 2: noise ratios, eq. (13)
-            fused, _ = fuse(T, te, self.A_, self.B_, C, 10.0 ** pop)  # (P, n, S)
+            fused, _ = fuse(T, te, self.A_, self.B_, C, 10.0**pop)  # (P, n, S)
             dT = fused - self.T_ref_
             out = np.empty(len(pop))
             for p in range(len(pop)):
@@ -150,15 +181,29 @@ class KalmanFusionModel(ThermalModel):
             # No heat input: the lumped-mass prediction knows nothing of a heating, so the
             # filter must weigh the readings at least as much as the model (N/R >= 1).
             lo = np.minimum(np.maximum(lo, 0.0), hi)
-        res = genetic_algorithm(objective, lo, hi, pop_size=self.pop_size, n_gen=self.generations,
-                                p_crossover=self.p_crossover, p_mutation=self.p_mutation, rng=rng)
-        self.q_ = 10.0 ** res.x
+        res = genetic_algorithm(
+            objective,
+            lo,
+            hi,
+            pop_size=self.pop_size,
+            n_gen=self.generations,
+            p_crossover=self.p_crossover,
+            p_mutation=self.p_mutation,
+            rng=rng,
+        )
+        self.q_ = 10.0**res.x
         fused, _ = fuse(T, te, self.A_, self.B_, C, self.q_)
         self.beta_ = mra_fit(fused - self.T_ref_, dy)
         return self
 
-    def fused_temperatures(self, T: npt.ArrayLike, *, ambient: npt.ArrayLike | None = None,
-                           speed: npt.ArrayLike | None = None, sensors_failed: bool = False) -> tuple[Array, Array]:
+    def fused_temperatures(
+        self,
+        T: npt.ArrayLike,
+        *,
+        ambient: npt.ArrayLike | None = None,
+        speed: npt.ArrayLike | None = None,
+        sensors_failed: bool = False,
+    ) -> tuple[Array, Array]:
         """Fused temperatures (n, S) and gains (n, S); ``sensors_failed`` forces gain 0 throughout."""
         self._check_fitted()
         T = _as_2d(T)
@@ -168,14 +213,23 @@ class KalmanFusionModel(ThermalModel):
         C = self._heat_input(sp)
         if sensors_failed:
             if not self.uses_speed_:
-                raise ParameterError("kalman: sensors_failed needs a model fitted with a spindle speed "
-                                     "(without one the lumped masses have no heat input to follow)")
+                raise ParameterError(
+                    "kalman: sensors_failed needs a model fitted with a spindle speed "
+                    "(without one the lumped masses have no heat input to follow)"
+                )
             x0 = np.where(np.isfinite(T[0]), T[0], te[0])
             return fuse(np.full_like(T, np.nan), te, self.A_, self.B_, C, self.q_, x0=x0)
         return fuse(T, te, self.A_, self.B_, C, self.q_, jump=self.jump)
 
-    def predict(self, T: npt.ArrayLike, *, ambient: npt.ArrayLike | None = None, speed: npt.ArrayLike | None = None,
-                y0: float | None = None, sensors_failed: bool = False) -> Array:
+    def predict(
+        self,
+        T: npt.ArrayLike,
+        *,
+        ambient: npt.ArrayLike | None = None,
+        speed: npt.ArrayLike | None = None,
+        y0: float | None = None,
+        sensors_failed: bool = False,
+    ) -> Array:
         """Predicted error, eq. (10) on the fused rises from the reference state."""
         fused, _gains = self.fused_temperatures(T, ambient=ambient, speed=speed, sensors_failed=sensors_failed)
         return self._finish(self.y_ref_ + mra_predict(self.beta_, fused - self.T_ref_), y0)
@@ -203,8 +257,9 @@ class KalmanStream:
     def step(self, measured: npt.ArrayLike, ambient: float | None = None, speed: float | None = None) -> float:
         """Fuse one sample and return the predicted thermal error (relative to the reference state)."""
         m = self.model
-        te, sp = m._drives(np.zeros((1, m.T_ref_.size)), None if ambient is None else [ambient],
-                           None if speed is None else [speed])
+        te, sp = m._drives(
+            np.zeros((1, m.T_ref_.size)), None if ambient is None else [ambient], None if speed is None else [speed]
+        )
         c = m._heat_input(sp)[:, 0]
         fused = self.filter.step(measured, float(te[0]), c)
         return float(m.y_ref_ + mra_predict(m.beta_, fused - m.T_ref_))

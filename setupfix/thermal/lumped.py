@@ -96,8 +96,9 @@ def heat_inputs(speed: npt.ArrayLike, gearbox: Gearbox | None = None) -> Array:
     return np.column_stack([n, n / f])
 
 
-def lumped_coefficients(v1: npt.ArrayLike, v2: npt.ArrayLike, v3: npt.ArrayLike,
-                        heat: npt.ArrayLike) -> tuple[Array, Array, Array]:
+def lumped_coefficients(
+    v1: npt.ArrayLike, v2: npt.ArrayLike, v3: npt.ArrayLike, heat: npt.ArrayLike
+) -> tuple[Array, Array, Array]:
     """``A``, ``B`` and the per-sample input ``C^j`` of eq. (5) from ``v`` (eq. (4), M = 1).
 
     Parameters
@@ -120,8 +121,9 @@ def lumped_coefficients(v1: npt.ArrayLike, v2: npt.ArrayLike, v3: npt.ArrayLike,
     return A, B, C
 
 
-def lumped_simulate(A: npt.ArrayLike, B: npt.ArrayLike, C: npt.ArrayLike, ambient: npt.ArrayLike,
-                    t0: npt.ArrayLike) -> Array:
+def lumped_simulate(
+    A: npt.ArrayLike, B: npt.ArrayLike, C: npt.ArrayLike, ambient: npt.ArrayLike, t0: npt.ArrayLike
+) -> Array:
     """Open-loop temperatures of eq. (4) from the initial value ``t0``.
 
     ``T^0 = t0``, ``T^j = A T^{j-1} + B T_e^j + C^j`` for j = 1…n-1; a first-order IIR
@@ -155,8 +157,9 @@ def lumped_simulate(A: npt.ArrayLike, B: npt.ArrayLike, C: npt.ArrayLike, ambien
     return out[0] if single else out
 
 
-def lumped_equation_error(measured: npt.ArrayLike, ambient: npt.ArrayLike, heat: npt.ArrayLike,
-                          n_genes: int = 2) -> Array:
+def lumped_equation_error(
+    measured: npt.ArrayLike, ambient: npt.ArrayLike, heat: npt.ArrayLike, n_genes: int = 2
+) -> Array:
     """Equation-error estimate of ``v`` from eq. (4) rearranged as a linear regression.
 
     With M = 1, eq. (4) reads ``T^j − T^{j−1} = v1 (T_e^j − T^j) + v2 n^j + v3 n^j / f``,
@@ -171,17 +174,26 @@ def lumped_equation_error(measured: npt.ArrayLike, ambient: npt.ArrayLike, heat:
     T = np.asarray(measured, dtype=float)
     te = np.asarray(ambient, dtype=float)
     heat = np.asarray(heat, dtype=float)
-    X = np.column_stack([te[1:] - T[1:], heat[1:, :n_genes - 1]])
+    X = np.column_stack([te[1:] - T[1:], heat[1:, : n_genes - 1]])
     tiny = 1e-9
     res = lsq_linear(X, np.diff(T), bounds=(np.full(n_genes, tiny), np.full(n_genes, np.inf)))
     rates: Array = np.maximum(res.x, tiny)
     return rates
 
 
-def fit_lumped(measured: npt.ArrayLike, ambient: npt.ArrayLike, speed: npt.ArrayLike, *,
-               gearbox: Gearbox | None = None, rng: np.random.Generator | None = None,
-               pop_size: int = 40, n_gen: int = 60, p_crossover: float = 0.7, p_mutation: float = 0.02,
-               log10_bounds: tuple[float, float] = (-6.0, 1.0)) -> tuple[LumpedParams, SearchResult]:
+def fit_lumped(
+    measured: npt.ArrayLike,
+    ambient: npt.ArrayLike,
+    speed: npt.ArrayLike,
+    *,
+    gearbox: Gearbox | None = None,
+    rng: np.random.Generator | None = None,
+    pop_size: int = 40,
+    n_gen: int = 60,
+    p_crossover: float = 0.7,
+    p_mutation: float = 0.02,
+    log10_bounds: tuple[float, float] = (-6.0, 1.0),
+) -> tuple[LumpedParams, SearchResult]:
     """Fit ``v1, v2 (, v3)`` of one lumped mass by the GA on F1 (Wang et al. 2017, eq. (12)).
 
     The genes are ``log10 v``: the coefficients are positive (a conductance and heat
@@ -216,7 +228,7 @@ def fit_lumped(measured: npt.ArrayLike, ambient: npt.ArrayLike, speed: npt.Array
     n_genes = 2 if gearbox.trivial else 3
 
     def objective(pop: Array) -> Array:
-        v = 10.0 ** pop
+        v = 10.0**pop
         v3 = v[:, 2] if n_genes == 3 else np.zeros(len(pop))
         A, B, C = lumped_coefficients(v[:, 0], v[:, 1], v3, heat)
         return rmsv(T, lumped_simulate(A, B, C, te, T[0]))  # F1 of eq. (12) = RMSV of eq. (13)
@@ -224,8 +236,17 @@ def fit_lumped(measured: npt.ArrayLike, ambient: npt.ArrayLike, speed: npt.Array
     lo = np.full(n_genes, log10_bounds[0])
     hi = np.full(n_genes, log10_bounds[1])
     seed_x = np.clip(np.log10(lumped_equation_error(T, te, heat, n_genes)), lo, hi)
-    res = genetic_algorithm(objective, lo, hi, pop_size=pop_size, n_gen=n_gen, p_crossover=p_crossover,
-                            p_mutation=p_mutation, rng=rng, x0=seed_x)
-    v = 10.0 ** res.x
+    res = genetic_algorithm(
+        objective,
+        lo,
+        hi,
+        pop_size=pop_size,
+        n_gen=n_gen,
+        p_crossover=p_crossover,
+        p_mutation=p_mutation,
+        rng=rng,
+        x0=seed_x,
+    )
+    v = 10.0**res.x
     params = LumpedParams(float(v[0]), float(v[1]), float(v[2]) if n_genes == 3 else 0.0, gearbox)
     return params, res

@@ -91,8 +91,11 @@ def saved_from_dict(data: Any) -> SavedModel:
         raise ValueError("format", "not a setupfix thermal model")
     version = data.get("version")
     if not isinstance(version, int) or isinstance(version, bool) or version != VERSION:
-        raise ValueError("version", f"model format version {version!r} is not supported (this setupfix reads "
-                         f"version {VERSION}; refit older models: they have no reference state)")
+        raise ValueError(
+            "version",
+            f"model format version {version!r} is not supported (this setupfix reads "
+            f"version {VERSION}; refit older models: they have no reference state)",
+        )
     try:
         inputs = data["inputs"]
         if not isinstance(inputs, list) or not inputs or not all(isinstance(c, str) and c for c in inputs):
@@ -112,15 +115,25 @@ def saved_from_dict(data: Any) -> SavedModel:
         if registers is not None and not (isinstance(registers, list) and all(isinstance(r, str) for r in registers)):
             raise ValueError("registers", "must be a list of register IDs or null")
         interval = data.get("sample_interval_s")
-        if interval is not None and not (isinstance(interval, (int, float)) and not isinstance(interval, bool)
-                                         and math.isfinite(interval) and interval > 0):
+        if interval is not None and not (
+            isinstance(interval, (int, float))
+            and not isinstance(interval, bool)
+            and math.isfinite(interval)
+            and interval > 0
+        ):
             raise ValueError("sample_interval_s", "must be a positive number")
         train = data.get("train", {})
-        return SavedModel(model, tuple(inputs), str(_text(data.get("target"), "target")),
-                          _text(data.get("ambient"), "ambient", optional=True),
-                          _text(data.get("speed"), "speed", optional=True),
-                          None if interval is None else float(interval), train if isinstance(train, dict) else {},
-                          unit, str(_text(data.get("axis", "Z"), "axis")),
-                          None if registers is None else tuple(registers))
+        return SavedModel(
+            model,
+            tuple(inputs),
+            str(_text(data.get("target"), "target")),
+            _text(data.get("ambient"), "ambient", optional=True),
+            _text(data.get("speed"), "speed", optional=True),
+            None if interval is None else float(interval),
+            train if isinstance(train, dict) else {},
+            unit,
+            str(_text(data.get("axis", "Z"), "axis")),
+            None if registers is None else tuple(registers),
+        )
     except KeyError as exc:
         raise ValueError(str(exc.args[0]), "missing") from None

@@ -62,8 +62,10 @@ class ThermalMethod:
         except TypeError:
             known = sorted(set(self.cls().get_params()) - set(self.fixed))
             unknown = sorted(set(params) - set(known))
-            raise ParameterError(f"thermal method {self.name!r} has no parameter {', '.join(unknown)}",
-                                 hint=f"its parameters: {', '.join(known)}") from None
+            raise ParameterError(
+                f"thermal method {self.name!r} has no parameter {', '.join(unknown)}",
+                hint=f"its parameters: {', '.join(known)}",
+            ) from None
         model.validate_params()
         return model
 
@@ -113,11 +115,35 @@ def model_from_dict(data: Mapping[str, Any]) -> ThermalModel:
 
 
 register(ThermalMethod("mra", MRAModel, summary="multivariate regression on temperature rises (Wang 2017 eq. 16)"))
-register(ThermalMethod("grey-ls", GreyModel, {"calibration": "ls"},
-                       summary="Grey GMC(1,N), bounded least squares on the grey equation"))
-register(ThermalMethod("grey-cs", GreyModel, {"calibration": "cs"}, stochastic=True,
-                       summary="Grey GMC(1,N) calibrated by cuckoo search (Abdulshahed 2017)"))
-register(ThermalMethod("grey-pso", GreyModel, {"calibration": "pso"}, stochastic=True,
-                       summary="Grey GMC(1,N) calibrated by PSO (Abdulshahed 2017)"))
-register(ThermalMethod("kalman", KalmanFusionModel, stochastic=True, uses_drives=True,
-                       summary="lumped-mass + Kalman fusion + regression (Wang 2017)"))
+register(
+    ThermalMethod(
+        "grey-ls", GreyModel, {"calibration": "ls"}, summary="Grey GMC(1,N), bounded least squares on the grey equation"
+    )
+)
+register(
+    ThermalMethod(
+        "grey-cs",
+        GreyModel,
+        {"calibration": "cs"},
+        stochastic=True,
+        summary="Grey GMC(1,N) calibrated by cuckoo search (Abdulshahed 2017)",
+    )
+)
+register(
+    ThermalMethod(
+        "grey-pso",
+        GreyModel,
+        {"calibration": "pso"},
+        stochastic=True,
+        summary="Grey GMC(1,N) calibrated by PSO (Abdulshahed 2017)",
+    )
+)
+register(
+    ThermalMethod(
+        "kalman",
+        KalmanFusionModel,
+        stochastic=True,
+        uses_drives=True,
+        summary="lumped-mass + Kalman fusion + regression (Wang 2017)",
+    )
+)

@@ -101,8 +101,9 @@ class SimulatedRun:
     config: MachineConfig = field(repr=False, default_factory=MachineConfig)
 
 
-def speed_profile(kind: str, n: int, *, dt_s: float = 10.0, level: float = 1300.0,
-                  rng: np.random.Generator | None = None) -> Array:
+def speed_profile(
+    kind: str, n: int, *, dt_s: float = 10.0, level: float = 1300.0, rng: np.random.Generator | None = None
+) -> Array:
     """Spindle speed per sample (rpm).
 
     ``"constant"`` runs at ``level`` (Wang 2017, Case 1 at 1300 rpm); ``"variable"``
@@ -121,14 +122,15 @@ def speed_profile(kind: str, n: int, *, dt_s: float = 10.0, level: float = 1300.
         i = 0
         while i < n:
             hold = int(rng.uniform(900.0, 2700.0) / dt_s)
-            out[i:i + hold] = rng.choice([0.0, 500.0, 1000.0, 1500.0, 2000.0, 2500.0, 3000.0])
+            out[i : i + hold] = rng.choice([0.0, 500.0, 1000.0, 1500.0, 2000.0, 2500.0, 3000.0])
             i += max(hold, 1)
         return out
     raise ValueError(f"unknown speed profile {kind!r}")
 
 
-def simulate(speed: npt.ArrayLike, config: MachineConfig | None = None, *, seed: int | None = None,
-             initial_rise_c: float = 0.0) -> SimulatedRun:
+def simulate(
+    speed: npt.ArrayLike, config: MachineConfig | None = None, *, seed: int | None = None, initial_rise_c: float = 0.0
+) -> SimulatedRun:
     """Simulate one run of the machine for a speed profile.
 
     Parameters

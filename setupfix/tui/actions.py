@@ -6,8 +6,8 @@ from functools import partial
 from pathlib import Path
 
 from textual.actions import SkipAction
-from textual.widgets import TabbedContent
 from textual.screen import ModalScreen
+from textual.widgets import TabbedContent
 
 from setupfix.errors import SetupfixError
 from setupfix.optimize import OPTIMIZERS
@@ -50,8 +50,14 @@ class KeyActions(WorkerResults):
         self.query_one(TabbedContent).active = "compare"
         self.query_one(ComparePanel).progress(0, 1 + len(DEFAULT_METHODS) * self.inputs.trials, "exact")
         # the problem correct solves (guard band, cumulative bounds, costs, fixed registers): exact = the correction
-        self.run_worker(partial(workers.compare, self, c.posed.guarded, self.inputs.trials, self.inputs.seed),
-                        name="compare", group="compare", thread=True, exclusive=True, exit_on_error=False)
+        self.run_worker(
+            partial(workers.compare, self, c.posed.guarded, self.inputs.trials, self.inputs.seed),
+            name="compare",
+            group="compare",
+            thread=True,
+            exclusive=True,
+            exit_on_error=False,
+        )
 
     def action_cancel(self) -> None:
         running = [w for w in self.workers if w.is_running]
@@ -87,12 +93,22 @@ class KeyActions(WorkerResults):
     def action_capability(self) -> None:
         """Capability per stored dimension (``setupfix spc`` of the history store), over the screen."""
         if self.inputs.store is None:
-            self.notify("no history store given: start with --db STORE (capability is computed from the stored "
-                        "measurements)", title="capability", severity="warning", timeout=8)
+            self.notify(
+                "no history store given: start with --db STORE (capability is computed from the stored measurements)",
+                title="capability",
+                severity="warning",
+                timeout=8,
+            )
             return
         self.notify(f"computing capability from {self.inputs.db} …", timeout=3)
-        self.run_worker(partial(workers.capability, self.inputs.store), name="capability", group="capability",
-                        thread=True, exclusive=True, exit_on_error=False)
+        self.run_worker(
+            partial(workers.capability, self.inputs.store),
+            name="capability",
+            group="capability",
+            thread=True,
+            exclusive=True,
+            exit_on_error=False,
+        )
 
     def action_tab(self, tab: str) -> None:
         self.query_one(TabbedContent).active = tab
@@ -108,17 +124,25 @@ class KeyActions(WorkerResults):
             return
         self.query_one(HistoryPanel).status(f"diagnosing the reports in {self._series_source()} …")
         source = self.inputs.store or Path(self._series_source())
-        self.run_worker(partial(workers.diagnose, self.model_path, source, self.inputs.process, self.inputs.factors),
-                        name="diagnose", group="diagnose", thread=True, exclusive=True, exit_on_error=False)
+        self.run_worker(
+            partial(workers.diagnose, self.model_path, source, self.inputs.process, self.inputs.factors),
+            name="diagnose",
+            group="diagnose",
+            thread=True,
+            exclusive=True,
+            exit_on_error=False,
+        )
 
     def action_open_report(self) -> None:
         start = self.report_path or Path.cwd()
-        self.push_screen(OpenFileScreen("Open a report (any supported format) or a folder to watch", start),
-                         self._picked_report)
+        self.push_screen(
+            OpenFileScreen("Open a report (any supported format) or a folder to watch", start), self._picked_report
+        )
 
     def action_open_model(self) -> None:
-        self.push_screen(OpenFileScreen("Open a process model (TOML)", self.model_path or Path.cwd()),
-                         self._picked_model)
+        self.push_screen(
+            OpenFileScreen("Open a process model (TOML)", self.model_path or Path.cwd()), self._picked_model
+        )
 
     def _picked_report(self, path: Path | None) -> None:
         if path is None:
@@ -143,9 +167,10 @@ class KeyActions(WorkerResults):
             self.notify("nothing to export: open a report that matches the model first", severity="warning")
             return
         # A controller program holds one correction: the cycle on screen ([ ] changes it).
-        self.push_screen(ExportScreen(CONTROLLERS, preview(self.opened, self.part_index), self.inputs.offsets,
-                                      rename=export_name),
-                         partial(self._export_confirmed, self.opened, self.part_index))
+        self.push_screen(
+            ExportScreen(CONTROLLERS, preview(self.opened, self.part_index), self.inputs.offsets, rename=export_name),
+            partial(self._export_confirmed, self.opened, self.part_index),
+        )
 
     def _export_confirmed(self, opened: OpenedReport, cycle: int, request: ExportRequest | None) -> None:
         if request is None:

@@ -22,10 +22,17 @@ from textual.containers import Horizontal, Vertical
 from textual.widgets import Footer, Header, Static, TabbedContent, TabPane
 
 from setupfix.pipeline.session import FolderWatch
-from setupfix.tui.widgets import (ComparePanel, DimensionTable, HistoryPanel, MatchTable, RegisterTable, SummaryBar,
-                                  ThermalPanel)
 from setupfix.tui.actions import KeyActions
 from setupfix.tui.display import TALL, WIDE
+from setupfix.tui.widgets import (
+    ComparePanel,
+    DimensionTable,
+    HistoryPanel,
+    MatchTable,
+    RegisterTable,
+    SummaryBar,
+    ThermalPanel,
+)
 
 __all__ = ["SetupfixApp"]
 
@@ -93,7 +100,9 @@ class SetupfixApp(KeyActions):
         self._start_thermal()
         self.query_one(HistoryPanel).status(
             "no history store given (--db STORE): d diagnoses the reports in the current report's folder"
-            if self.inputs.db is None else f"reading the history store {self.inputs.db} …")
+            if self.inputs.db is None
+            else f"reading the history store {self.inputs.db} …"
+        )
         report = self.inputs.report
         if report is not None and report.is_dir():
             self.folder_watch = FolderWatch(report, settle=self.inputs.poll_seconds)

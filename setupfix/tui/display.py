@@ -3,13 +3,13 @@
 from __future__ import annotations
 
 from textual import events, on
-from textual.widgets import DataTable
 from textual.markup import escape
+from textual.widgets import DataTable
 
 from setupfix.offsets import grid_decimals
 from setupfix.pipeline import view
-from setupfix.tui.widgets import DimensionTable, RegisterTable, SummaryBar, ThermalPanel
 from setupfix.tui.state import AppState
+from setupfix.tui.widgets import DimensionTable, RegisterTable, SummaryBar, ThermalPanel
 
 __all__ = ["CorrectionDisplay", "WIDE", "TALL"]
 
@@ -28,8 +28,9 @@ class CorrectionDisplay(AppState):
         c = self._current()
         summary = self.query_one(SummaryBar)
         if c is None:
-            reason = self.problem or (f"✗ {self.opened.problem} (tab 5 shows the match table)"
-                                      if self.opened and self.opened.problem else "")
+            reason = self.problem or (
+                f"✗ {self.opened.problem} (tab 5 shows the match table)" if self.opened and self.opened.problem else ""
+            )
             summary.show(None, optimizer=self.optimizer, problem=reason)
             self.query_one(DimensionTable).clear(columns=True)
             self.query_one(RegisterTable).clear(columns=True)
@@ -39,12 +40,16 @@ class CorrectionDisplay(AppState):
         head = view.summary(c)
         reader = tuple(f"⚠ {n}" for n in self.opened.notes) if self.opened else ()
         current = f"⚠ {self.current_problem}; exports are changes (add)" if self.current_problem else ""
-        summary.show(head, optimizer=self.optimizer, part=part,
-                     problem="\n".join(t for t in (current, self.problem, c.thermal.line() if c.thermal else "",
-                                                   *reader) if t))
+        summary.show(
+            head,
+            optimizer=self.optimizer,
+            part=part,
+            problem="\n".join(t for t in (current, self.problem, c.thermal.line() if c.thermal else "", *reader) if t),
+        )
         if self.inputs.thermal is not None and self.inputs.temperatures is not None:
             self.query_one(ThermalPanel).feed_forward(
-                self._feed_text() or f"no feed-forward for {c.part.report} {c.part.part}".rstrip())
+                self._feed_text() or f"no feed-forward for {c.part.report} {c.part.part}".rstrip()
+            )
         rows = view.filter_rows(view.dimension_rows(c), self.station)
         small = self._short or not self._wide
         out = [r for r in rows if not (r.in_before and r.in_after)]
@@ -60,12 +65,16 @@ class CorrectionDisplay(AppState):
         # header and scroll bar), the registers the rest
         dims.styles.height = 3 + max(2, len(out)) if self._short and not self._wide else None
         m = c.model
-        self.query_one(RegisterTable).show(view.register_rows(c, self.opened.current if self.opened else None),
-                                           unit=m.unit, digits=grid_decimals(m.resolution),
-                                           rotation_digits=grid_decimals(m.rotation_resolution))
+        self.query_one(RegisterTable).show(
+            view.register_rows(c, self.opened.current if self.opened else None),
+            unit=m.unit,
+            digits=grid_decimals(m.resolution),
+            rotation_digits=grid_decimals(m.rotation_resolution),
+        )
         where = f"axes {' '.join(m.axes)}" if m.multi_axis else f"axis {m.axis}"
         self.query_one(RegisterTable).border_title = escape(
-            f"recommendation [{m.unit}, {where}]" + (" · --current does not fit: changes only" if current else ""))
+            f"recommendation [{m.unit}, {where}]" + (" · --current does not fit: changes only" if current else "")
+        )
 
     def on_resize(self, event: events.Resize) -> None:
         # Rebuild the tables only when the layout changes between narrow and wide, short and tall.

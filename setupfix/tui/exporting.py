@@ -37,11 +37,12 @@ def export_name(path: str, controller: str) -> str:
     stem, dot, suffix = name.rpartition(".")
     if dot and f".{suffix.lower()}" not in SUFFIXES.values():
         return path
-    return path[:len(path) - len(name)] + (stem if dot else name) + SUFFIXES.get(controller, "")
+    return path[: len(path) - len(name)] + (stem if dot else name) + SUFFIXES.get(controller, "")
 
 
 def preview(opened: OpenedReport, cycle: int) -> Callable[[str], str]:
     """The text an export of ``opened`` writes in a controller's syntax (``cycle``: the one on screen)."""
+
     def text(controller: str) -> str:
         return offsets_text(export_cycles(opened, controller, cycle), controller, opened.current)
 
@@ -59,5 +60,9 @@ def write_offsets(request: ExportRequest, opened: OpenedReport, cycle: int) -> E
         raise ExportError("standard output is the screen here: give a file name")
     check_target(request.path)
     # the same cycles through the same function as preview(): the text shown is the text written
-    return export(export_cycles(opened, request.controller, cycle), request.path, controller=request.controller,
-                  current=opened.current)
+    return export(
+        export_cycles(opened, request.controller, cycle),
+        request.path,
+        controller=request.controller,
+        current=opened.current,
+    )

@@ -78,8 +78,15 @@ class AppState(App[None]):
             return ""
         return c.thermal.line() + "; added to the exported offsets"
 
-    def notify(self, message: str, *, title: str = "", severity: SeverityLevel = "information",
-               timeout: float | None = None, markup: bool = False) -> None:
+    def notify(
+        self,
+        message: str,
+        *,
+        title: str = "",
+        severity: SeverityLevel = "information",
+        timeout: float | None = None,
+        markup: bool = False,
+    ) -> None:
         """A toast; its text (names of files, reports, dimensions) is literal, not markup."""
         super().notify(message, title=title, severity=severity, timeout=timeout, markup=markup)
 

@@ -11,8 +11,8 @@ from functools import partial
 from pathlib import Path
 
 from textual import on
-from textual.widgets import Static, TabbedContent
 from textual.markup import escape
+from textual.widgets import Static, TabbedContent
 from textual.worker import Worker, WorkerState
 
 from setupfix.errors import SetupfixError
@@ -22,11 +22,11 @@ from setupfix.pipeline.requests import SolveOptions
 from setupfix.pipeline.session import OpenedReport
 from setupfix.pipeline.spc import SpcOutcome
 from setupfix.tui import workers
+from setupfix.tui.display import CorrectionDisplay
 from setupfix.tui.messages import CompareProgress
 from setupfix.tui.screens import CapabilityScreen
 from setupfix.tui.widgets import ComparePanel, HistoryPanel, MatchTable, ThermalPanel
 from setupfix.tui.widgets.plain import plain
-from setupfix.tui.display import CorrectionDisplay
 
 __all__ = ["WorkerResults"]
 
@@ -36,20 +36,35 @@ class WorkerResults(CorrectionDisplay):
 
     def _start_open(self) -> None:
         if self.model_path is None or self.report_path is None:
-            self.problem = ("No model: press m to open the process model." if self.model_path is None
-                            else "No report: press o to open one.")
+            self.problem = (
+                "No model: press m to open the process model."
+                if self.model_path is None
+                else "No report: press o to open one."
+            )
             self._show()
             return
         self.problem = f"opening {self.report_path} …"
         self._show()
         i = self.inputs
         thermal = (i.thermal, i.temperatures, i.at, i.thermal_dead_band) if i.thermal and i.temperatures else None
-        self.run_worker(partial(workers.open_report, self.model_path, self.report_path, read=i.read, cycles=i.cycles,
-                                solve=SolveOptions(self.optimizer, i.seed, None,
-                                                   i.objective if self.optimizer == "exact" else None),
-                                db=i.store, current=i.current,
-                                thermal=thermal),
-                        name="open", group="open", thread=True, exclusive=True, exit_on_error=False)
+        self.run_worker(
+            partial(
+                workers.open_report,
+                self.model_path,
+                self.report_path,
+                read=i.read,
+                cycles=i.cycles,
+                solve=SolveOptions(self.optimizer, i.seed, None, i.objective if self.optimizer == "exact" else None),
+                db=i.store,
+                current=i.current,
+                thermal=thermal,
+            ),
+            name="open",
+            group="open",
+            thread=True,
+            exclusive=True,
+            exit_on_error=False,
+        )
 
     def _start_thermal(self) -> None:
         panel = self.query_one(ThermalPanel)
@@ -58,8 +73,14 @@ class WorkerResults(CorrectionDisplay):
             panel.not_available(f"no thermal model and log given ({missing})")
             return
         panel.not_available(f"predicting drift from {self.inputs.temperatures} …")
-        self.run_worker(partial(workers.drift, self.inputs.thermal, self.inputs.temperatures), name="thermal",
-                        group="thermal", thread=True, exclusive=True, exit_on_error=False)
+        self.run_worker(
+            partial(workers.drift, self.inputs.thermal, self.inputs.temperatures),
+            name="thermal",
+            group="thermal",
+            thread=True,
+            exclusive=True,
+            exit_on_error=False,
+        )
 
     def on_worker_state_changed(self, event: Worker.StateChanged) -> None:
         """The error boundary and the one place results reach the screen."""
@@ -116,22 +137,35 @@ class WorkerResults(CorrectionDisplay):
         table = self.query_one(MatchTable)
         table.show(opened.matches)
         if not opened.corrections:
-            status.update(plain(f"✗ {opened.problem}\nEach characteristic of the report, ✓ with the dimension it "
-                                "matches, ✗ with the closest dimension names:"))
+            status.update(
+                plain(
+                    f"✗ {opened.problem}\nEach characteristic of the report, ✓ with the dimension it "
+                    "matches, ✗ with the closest dimension names:"
+                )
+            )
             self.query_one(TabbedContent).active = "match"
         elif opened.unmatched:
-            status.update(f"⚠ {opened.unmatched} characteristic(s) of the report match no dimension "
-                          "(✗ below, with the closest dimension names); they are left out.")
+            status.update(
+                f"⚠ {opened.unmatched} characteristic(s) of the report match no dimension "
+                "(✗ below, with the closest dimension names); they are left out."
+            )
         else:
             status.update("✓ every characteristic of the report matches a dimension of the model.")
         self._show()
         store = self.inputs.store
         if store is not None and not store.exists:  # reading never creates it
-            self.query_one(HistoryPanel).status(f"no history store at {self.inputs.db} yet: the first export "
-                                                "creates it")
+            self.query_one(HistoryPanel).status(
+                f"no history store at {self.inputs.db} yet: the first export creates it"
+            )
         elif store is not None:
-            self.run_worker(partial(workers.history, opened.model, store), name="history", group="history",
-                            thread=True, exclusive=True, exit_on_error=False)
+            self.run_worker(
+                partial(workers.history, opened.model, store),
+                name="history",
+                group="history",
+                thread=True,
+                exclusive=True,
+                exit_on_error=False,
+            )
 
     def _compared(self, comparison: object) -> None:
         panel = self.query_one(ComparePanel)
@@ -143,10 +177,14 @@ class WorkerResults(CorrectionDisplay):
             panel.stopped("that comparison was for a previous report: press c to compare this one")
             return
         self.comparison = comparison
-        panel.show(analysis_view.compare_rows(comparison), analysis_view.convergence(comparison, 60),
-                   exact_f1=comparison.exact.margin_after, unit=self._unit(),
-                   heading=f"{comparison.trials} seeded trials per method (seed {comparison.seed})"
-                           + (f" on {c.part.report} {c.part.part}" if c else ""))
+        panel.show(
+            analysis_view.compare_rows(comparison),
+            analysis_view.convergence(comparison, 60),
+            exact_f1=comparison.exact.margin_after,
+            unit=self._unit(),
+            heading=f"{comparison.trials} seeded trials per method (seed {comparison.seed})"
+            + (f" on {c.part.report} {c.part.part}" if c else ""),
+        )
 
     @on(CompareProgress)
     def _compare_progress(self, message: CompareProgress) -> None:

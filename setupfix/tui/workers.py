@@ -17,21 +17,29 @@ from setupfix.model import ProcessModel, load_model
 from setupfix.optimize import CorrectionProblem
 from setupfix.pipeline import analysis_view, session
 from setupfix.pipeline.compare import Comparison
-from setupfix.pipeline.diagnose import DiagnoseRequest, diagnose_reports
 from setupfix.pipeline.correct import load_request
-from setupfix.pipeline.stores import StoreRef
+from setupfix.pipeline.diagnose import DiagnoseRequest, diagnose_reports
 from setupfix.pipeline.requests import CurrentOffsets, CycleOptions, ReadOptions, SolveOptions
 from setupfix.pipeline.session import compare_steps, store_parts
 from setupfix.pipeline.spc import SpcOutcome, SpcRequest, spc_report
+from setupfix.pipeline.stores import StoreRef
 from setupfix.pipeline.thermal import predict_drift
 from setupfix.tui.messages import CompareProgress
 
 __all__ = ["open_report", "drift", "compare", "history", "diagnose", "capability"]
 
 
-def open_report(model: Path, report: Path, *, read: ReadOptions, cycles: CycleOptions, solve: SolveOptions,
-                db: StoreRef | None, current: Path | None,
-                thermal: tuple[Path, Path, str | None, float | None] | None) -> tuple[session.OpenedReport, str]:
+def open_report(
+    model: Path,
+    report: Path,
+    *,
+    read: ReadOptions,
+    cycles: CycleOptions,
+    solve: SolveOptions,
+    db: StoreRef | None,
+    current: Path | None,
+    thermal: tuple[Path, Path, str | None, float | None] | None,
+) -> tuple[session.OpenedReport, str]:
     """Thread worker: the request ``correct`` builds from these inputs
     (:func:`~setupfix.pipeline.correct.load_request`), the report opened with it, and "" — or, when
     ``current`` does not fit ``model`` (the operator switched to another model), the report opened
@@ -46,9 +54,18 @@ def open_report(model: Path, report: Path, *, read: ReadOptions, cycles: CycleOp
             CurrentOffsets.read(current, loaded)
         except SetupfixError as exc:
             problem, current = " ".join(f"--current does not fit {model.name}: {exc}".split()), None
-    request = load_request(loaded, read=read, cycles=cycles, solve=solve, current=current,
-                           store=db if db is not None and db.exists else None, thermal=saved, temperatures=log,
-                           at=at, thermal_dead_band=dead_band)
+    request = load_request(
+        loaded,
+        read=read,
+        cycles=cycles,
+        solve=solve,
+        current=current,
+        store=db if db is not None and db.exists else None,
+        thermal=saved,
+        temperatures=log,
+        at=at,
+        thermal_dead_band=dead_band,
+    )
     return session.open_report(request, report), problem
 
 
@@ -75,13 +92,17 @@ def history(model: ProcessModel, db: StoreRef) -> tuple[list[analysis_view.Cycle
     return analysis_view.cycle_budgets(model, parts), notes
 
 
-def diagnose(model: Path, source: Path | StoreRef, process: Path | None = None,
-             factors: tuple[str, ...] = ()) -> analysis_view.DiagnosisView:
+def diagnose(
+    model: Path, source: Path | StoreRef, process: Path | None = None, factors: tuple[str, ...] = ()
+) -> analysis_view.DiagnosisView:
     """Thread worker: ``setupfix diagnose`` over the history store or a folder of reports (and its logs), with
     the process log given (``--process``) joined per part and its declared design factors (``--factors``)."""
     proc = str(process) if process is not None else None
-    request = (DiagnoseRequest(model, db=source, process=proc, factors=factors) if isinstance(source, StoreRef)
-               else DiagnoseRequest(model, (source,), process=proc, factors=factors))
+    request = (
+        DiagnoseRequest(model, db=source, process=proc, factors=factors)
+        if isinstance(source, StoreRef)
+        else DiagnoseRequest(model, (source,), process=proc, factors=factors)
+    )
     outcome = diagnose_reports(request)
     return analysis_view.diagnosis_view(outcome)
 

@@ -6,9 +6,9 @@ import json
 import shutil
 import signal
 
-from setupfix.cli import main
-
 from conftest import GUIDE_PINS
+
+from setupfix.cli import main
 
 MODEL = str(GUIDE_PINS / "model.toml")
 
@@ -23,12 +23,12 @@ def test_exit_status_summary_and_bad_file_named(capsys, tmp_path):
     d = tmp_path / "in"
     d.mkdir()
     shutil.copy(GUIDE_PINS / "cycle_01.csv", d / "a.csv")
-    code, out, err = run(capsys, "batch", "--model", MODEL, str(d), "--out", str(tmp_path / "o.csv"),
-                         "--settle", "0", "--json")
+    code, out, err = run(
+        capsys, "batch", "--model", MODEL, str(d), "--out", str(tmp_path / "o.csv"), "--settle", "0", "--json"
+    )
     assert code == 0 and json.loads(out)["verdicts"] == {"apply": 1} and "[1/1]" in err
     (d / "broken.csv").write_text("characteristic,nominal,actual\nP1 D1,25,abc\n")
-    code, out, err = run(capsys, "batch", "--model", MODEL, str(d), "--out", str(tmp_path / "o.csv"),
-                         "--settle", "0")
+    code, out, err = run(capsys, "batch", "--model", MODEL, str(d), "--out", str(tmp_path / "o.csv"), "--settle", "0")
     assert code == 4
     assert "1 report(s), 1 part(s): 1 apply, 0 hold, 0 reject" in out and "1 failed" in out
     assert "broken.csv:2: column 'actual'" in err and "Traceback" not in err
@@ -71,11 +71,23 @@ def test_batch_store_smooths_as_correct_store_does(capsys, tmp_path):
     d = tmp_path / "in"
     d.mkdir()
     reports = [shutil.copy(GUIDE_PINS / f"cycle_0{i}.csv", d / f"cycle_0{i}.csv") for i in range(1, 6)]
-    code, _, err = run(capsys, "batch", "--model", str(model), str(d), "--out", str(tmp_path / "batch.csv"),
-                       "--settle", "0", "--store", str(tmp_path / "batch.db"))
+    code, _, err = run(
+        capsys,
+        "batch",
+        "--model",
+        str(model),
+        str(d),
+        "--out",
+        str(tmp_path / "batch.csv"),
+        "--settle",
+        "0",
+        "--store",
+        str(tmp_path / "batch.db"),
+    )
     assert code == 0 and "needs the history store" not in err
-    code, _, err = run(capsys, "history", "import", "--db", str(tmp_path / "h.db"), "--model", str(model),
-                       *map(str, reports))
+    code, _, err = run(
+        capsys, "history", "import", "--db", str(tmp_path / "h.db"), "--model", str(model), *map(str, reports)
+    )
     assert code == 0, err
     expected, plain = {}, {}
     for report in reports:
@@ -92,9 +104,33 @@ def test_bad_thermal_inputs_are_refused_before_any_work(capsys, tmp_path):
     d.mkdir()
     shutil.copy(GUIDE_PINS / "cycle_01.csv", d / "a.csv")
     out = tmp_path / "o.csv"
-    code, _, err = run(capsys, "batch", "--model", MODEL, str(d), "--out", str(out), "--settle", "0",
-                       "--thermal", str(tmp_path / "missing.json"))
+    code, _, err = run(
+        capsys,
+        "batch",
+        "--model",
+        MODEL,
+        str(d),
+        "--out",
+        str(out),
+        "--settle",
+        "0",
+        "--thermal",
+        str(tmp_path / "missing.json"),
+    )
     assert code == 1 and "go together" in err and not out.exists()
-    code, _, err = run(capsys, "batch", "--model", MODEL, str(d), "--out", str(out), "--settle", "0",
-                       "--thermal", str(tmp_path / "missing.json"), "--temperatures", str(GUIDE_PINS / "cycle_01.csv"))
+    code, _, err = run(
+        capsys,
+        "batch",
+        "--model",
+        MODEL,
+        str(d),
+        "--out",
+        str(out),
+        "--settle",
+        "0",
+        "--thermal",
+        str(tmp_path / "missing.json"),
+        "--temperatures",
+        str(GUIDE_PINS / "cycle_01.csv"),
+    )
     assert code == 1 and "missing.json" in err and "Traceback" not in err and not out.exists()

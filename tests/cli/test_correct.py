@@ -7,10 +7,9 @@ import json
 import shutil
 
 import pytest
+from conftest import GUIDE_PINS
 
 from setupfix.cli import main
-
-from conftest import GUIDE_PINS
 
 MODEL = str(GUIDE_PINS / "model.toml")
 REPORT = str(GUIDE_PINS / "cycle_01.csv")
@@ -67,8 +66,12 @@ def test_human_output_names_everything(capsys):
 
 
 def test_cripso_reproducible_per_seed(capsys):
-    outs = [json.loads(run(capsys, "correct", "--model", MODEL, "--optimizer", "cripso", "--seed", "4", "--json",
-                           REPORT)[1]) for _ in range(2)]
+    outs = [
+        json.loads(
+            run(capsys, "correct", "--model", MODEL, "--optimizer", "cripso", "--seed", "4", "--json", REPORT)[1]
+        )
+        for _ in range(2)
+    ]
     assert outs[0]["corrections"] == outs[1]["corrections"]
     assert outs[0]["optimizer"] == "cripso"
 
@@ -102,10 +105,14 @@ def test_absent_dimension_left_out_and_reported(capsys, tmp_path):
     [
         (lambda d: (d / "model.toml").write_text("[process\n"), "model.toml:1: TOML syntax"),
         (lambda d: (d / "model.toml").unlink(), "cannot read model"),
-        (lambda d: (d / "r.csv").write_text("characteristic,nominal,actual\nP1 D1,25,abc\n"),
-         "r.csv:2: column 'actual': expected a number, found 'abc'"),
-        (lambda d: (d / "r.csv").write_text("characteristic,nominal,actual\nBore 9,25,25.1\n"),
-         "no characteristic of part"),
+        (
+            lambda d: (d / "r.csv").write_text("characteristic,nominal,actual\nP1 D1,25,abc\n"),
+            "r.csv:2: column 'actual': expected a number, found 'abc'",
+        ),
+        (
+            lambda d: (d / "r.csv").write_text("characteristic,nominal,actual\nBore 9,25,25.1\n"),
+            "no characteristic of part",
+        ),
         (lambda d: (d / "r.csv").write_bytes(b"\x00\x01binary\xff"), "r.csv"),
     ],
 )
@@ -114,8 +121,9 @@ def test_bad_input_one_line_exit_1_no_output_file(capsys, tmp_path, mutate, expe
     shutil.copy(REPORT, tmp_path / "r.csv")
     mutate(tmp_path)
     target = tmp_path / "offsets.csv"
-    code, out, err = run(capsys, "correct", "--model", str(tmp_path / "model.toml"), "--offsets", str(target),
-                         str(tmp_path / "r.csv"))
+    code, out, err = run(
+        capsys, "correct", "--model", str(tmp_path / "model.toml"), "--offsets", str(target), str(tmp_path / "r.csv")
+    )
     assert code == 1
     assert expected in err and len(err.strip().splitlines()) == 1 and "Traceback" not in err
     assert not target.exists() and out == ""
@@ -178,8 +186,9 @@ def test_gross_error_is_given_up_not_paid_for_by_good_dimensions(capsys, tmp_pat
 
 def test_reject_exit_status_json_still_printed_no_offsets(capsys, tmp_path):
     target = tmp_path / "offsets.csv"
-    code, out, err = run(capsys, "correct", "--model", MODEL, "--json", "--offsets", str(target),
-                         str(gross_copy(tmp_path, -0.50)))
+    code, out, err = run(
+        capsys, "correct", "--model", MODEL, "--json", "--offsets", str(target), str(gross_copy(tmp_path, -0.50))
+    )
     assert code == 5
     doc = json.loads(out)
     assert doc["verdict"] == "reject" and not any(doc["corrections"].values())
@@ -212,8 +221,7 @@ def test_fixed_register_listed_with_zero_and_dead_band_hold(capsys, tmp_path):
     text = (GUIDE_PINS / "model.toml").read_text()
     text = text.replace('register = "H23"', 'register = "H23"\nfixed = true')
     (tmp_path / "m.toml").write_text(text + "\n[safety]\ndead_band = 0.05\n")
-    code, out, _ = run(capsys, "correct", "--objective", "paper", "--model", str(tmp_path / "m.toml"), "--json",
-                       REPORT)
+    code, out, _ = run(capsys, "correct", "--objective", "paper", "--model", str(tmp_path / "m.toml"), "--json", REPORT)
     doc = json.loads(out)
     assert code == 0 and doc["verdict"] == "hold" and [r["rule"] for r in doc["rules"]] == ["dead_band"]
     t23 = next(r for r in doc["registers"] if r["id"] == "T23")
@@ -226,11 +234,13 @@ def test_controller_program_needs_one_cycle(capsys, tmp_path):
     both = tmp_path / "two.csv"
     lines = (GUIDE_PINS / "cycle_01.csv").read_text().splitlines()
     both.write_text("\n".join(lines + (GUIDE_PINS / "cycle_02.csv").read_text().splitlines()[1:]) + "\n")
-    code, _, err = run(capsys, "correct", "--model", MODEL, "--controller", "fanuc", "--offsets",
-                       str(tmp_path / "o.nc"), str(both))
+    code, _, err = run(
+        capsys, "correct", "--model", MODEL, "--controller", "fanuc", "--offsets", str(tmp_path / "o.nc"), str(both)
+    )
     assert code == 1 and "choose one with --part" in err and not (tmp_path / "o.nc").exists()
-    code, _, err = run(capsys, "correct", "--model", MODEL, "--controller", "siemens", "--offsets",
-                       str(tmp_path / "o.mpf"), REPORT)
+    code, _, err = run(
+        capsys, "correct", "--model", MODEL, "--controller", "siemens", "--offsets", str(tmp_path / "o.mpf"), REPORT
+    )
     assert code == 1 and "siemens: cannot express register 'G58' (W5)" in err
 
 
@@ -239,17 +249,39 @@ def test_current_offsets_give_absolute_program_and_feed_the_cumulative_limit(cap
 
     sample = SAMPLES / "controllers"
     target = tmp_path / "o.nc"
-    code, _, err = run(capsys, "correct", "--model", str(sample / "model.toml"), "--controller", "fanuc",
-                       "--current", str(sample / "current.csv"), "--offsets", str(target), str(sample / "report.csv"))
+    code, _, err = run(
+        capsys,
+        "correct",
+        "--model",
+        str(sample / "model.toml"),
+        "--controller",
+        "fanuc",
+        "--current",
+        str(sample / "current.csv"),
+        "--offsets",
+        str(target),
+        str(sample / "report.csv"),
+    )
     assert code == 0, err
     text = target.read_text()
     assert "G91" not in text.replace("G90", "") and "SAFE TO RUN AGAIN" in text
     # H5 wear is at −0.012: with a cumulative limit of 0.015 it may move by −0.003 at most
     model = tmp_path / "m.toml"
-    model.write_text((sample / "model.toml").read_text().replace("limit = 0.1\n", "limit = 0.1\n\n[safety]\n"
-                                                                 "cumulative_limit = 0.015\n", 1))
-    code, out, _ = run(capsys, "correct", "--model", str(model), "--current", str(sample / "current.csv"), "--json",
-                       str(sample / "report.csv"))
+    model.write_text(
+        (sample / "model.toml")
+        .read_text()
+        .replace("limit = 0.1\n", "limit = 0.1\n\n[safety]\ncumulative_limit = 0.015\n", 1)
+    )
+    code, out, _ = run(
+        capsys,
+        "correct",
+        "--model",
+        str(model),
+        "--current",
+        str(sample / "current.csv"),
+        "--json",
+        str(sample / "report.csv"),
+    )
     doc = json.loads(out)
     assert doc["corrections"]["T5"] >= -0.003 - 1e-12 and "T5" in doc["at_limit"]
     assert any(r["rule"] == "cumulative_limit" and "T5" in r["registers"] for r in doc["rules"])

@@ -4,8 +4,9 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from setupfix.cli import main
 from spc_examples import GUIDE_PINS, closed_loop_store
+
+from setupfix.cli import main
 from tests.pipeline.test_html_report import EXTERNAL, tags
 
 

@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import json
 
-from setupfix.cli import main
-
 from diagnose.test_plate import LOG, MODEL, PLATE, needs_log
+
+from setupfix.cli import main
 
 DESIGN = "doe_tool_length,doe_speed,doe_tool_length*doe_speed"
 
@@ -19,8 +19,9 @@ def run(capsys, *argv):
 
 @needs_log
 def test_factors_are_tested_listed_and_marked_declared(capsys):
-    code, out, err = run(capsys, "diagnose", "--model", MODEL, "--process", LOG, "--factors", DESIGN, "--no-walk",
-                         PLATE)
+    code, out, err = run(
+        capsys, "diagnose", "--model", MODEL, "--process", LOG, "--factors", DESIGN, "--no-walk", PLATE
+    )
     assert code == 0, err
     assert "declared factors (15 tests" in out
     line = next(ln for ln in out.splitlines() if ln.lstrip().startswith("doe_tool_length*doe_speed") and "T5A" in ln)
@@ -28,8 +29,9 @@ def test_factors_are_tested_listed_and_marked_declared(capsys):
     t4a = next(ln for ln in out.splitlines() if ln.lstrip().startswith("doe_tool_length*doe_speed") and "T4A" in ln)
     assert "accepted" not in t4a
     assert "T5A ~ doe_tool_length=Long & doe_speed=Low" in out and "declared, p " in out
-    code, out, err = run(capsys, "diagnose", "--model", MODEL, "--process", LOG, "--factors", DESIGN, "--no-walk",
-                         "--json", PLATE)
+    code, out, err = run(
+        capsys, "diagnose", "--model", MODEL, "--process", LOG, "--factors", DESIGN, "--no-walk", "--json", PLATE
+    )
     assert code == 0, err
     doc = json.loads(out)
     rows = {(r["term"], r["register"]): r for r in doc["declared_factors"]}
@@ -42,8 +44,9 @@ def test_factors_are_tested_listed_and_marked_declared(capsys):
 
 @needs_log
 def test_an_unknown_factor_is_one_line_naming_it(capsys):
-    code, out, err = run(capsys, "diagnose", "--model", MODEL, "--process", LOG, "--factors",
-                         "doe_tool_length,spindle_sped", PLATE)
+    code, out, err = run(
+        capsys, "diagnose", "--model", MODEL, "--process", LOG, "--factors", "doe_tool_length,spindle_sped", PLATE
+    )
     assert code != 0 and out == ""
     lines = [ln for ln in err.splitlines() if ln.strip()]
     assert len(lines) == 1 and "'spindle_sped'" in lines[0] and "plate_process.csv" in lines[0]

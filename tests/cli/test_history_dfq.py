@@ -2,9 +2,10 @@
 
 from __future__ import annotations
 
+from spc_examples import closed_loop_store
+
 import parsers
 from setupfix.cli import main
-from spc_examples import closed_loop_store
 
 
 def test_export_dfq_reads_back_every_value(tmp_path, capsys):  # type: ignore[no-untyped-def]

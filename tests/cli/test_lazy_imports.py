@@ -10,15 +10,18 @@ ROOT = Path(__file__).resolve().parents[2]
 
 
 def test_import_and_parser_load_no_numeric_stack():
-    code = ("import sys, setupfix.cli as c; c.build_parser(); "
-            "print(','.join(m for m in ('numpy', 'pandas', 'scipy', 'highspy') if m in sys.modules))")
+    code = (
+        "import sys, setupfix.cli as c; c.build_parser(); "
+        "print(','.join(m for m in ('numpy', 'pandas', 'scipy', 'highspy') if m in sys.modules))"
+    )
     out = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True, text=True, check=True)
     assert out.stdout.strip() == ""
 
 
 def test_help_and_version_exit_zero_without_the_numeric_stack():
-    code = ("import sys, setupfix.cli as c; s = c.main(['--version']); "
-            "assert s == 0, s; assert 'numpy' not in sys.modules")
+    code = (
+        "import sys, setupfix.cli as c; s = c.main(['--version']); assert s == 0, s; assert 'numpy' not in sys.modules"
+    )
     subprocess.run([sys.executable, "-c", code], cwd=ROOT, check=True, capture_output=True)
 
 

@@ -62,10 +62,10 @@ def test_correct_refuses_then_skips_the_row_with_a_warning(setup, capsys):
 def test_compare_check_init_and_batch_take_lenient_too(setup, capsys, tmp_path):
     _, bad, model = setup
     for argv, lenient_ok in (
-            (["compare", "--model", str(model), "--trials", "1", "--json", str(bad)], "warnings"),
-            (["model", "check", str(model), "--json", str(bad)], "notes"),
-            (["model", "init", str(bad), "-o", str(tmp_path / "m.toml")], None),
-            (["diagnose", "--model", str(model), "--no-walk", "--json", str(bad)], "diagnose"),
+        (["compare", "--model", str(model), "--trials", "1", "--json", str(bad)], "warnings"),
+        (["model", "check", str(model), "--json", str(bad)], "notes"),
+        (["model", "init", str(bad), "-o", str(tmp_path / "m.toml")], None),
+        (["diagnose", "--model", str(model), "--no-walk", "--json", str(bad)], "diagnose"),
     ):
         _refused(capsys, argv)
         assert main([*argv, "--lenient"]) == 0

@@ -31,7 +31,10 @@ def test_check_lists_unmatched_with_closest_and_absent_with_closest(tmp_path, ca
     obj = json.loads(capsys.readouterr().out)
     (part,) = obj["parts"]
     assert {u["name"]: u["closest"][:1] for u in part["unmatched"]} == {
-        "P1D1": ["P1 D1"], "P2-D3": ["P2 D3"], "Flatness A": []}
+        "P1D1": ["P1 D1"],
+        "P2-D3": ["P2 D3"],
+        "Flatness A": [],
+    }
     row = next(r for r in part["dimensions"] if r["id"] == "P1D2")
     assert row["characteristic"] == "P1 D2" and row["report_nominal"] == 40.0 and row["station"] == "P1"
     assert row["source"].endswith("r.csv:3") and row["differs"] is False
@@ -45,8 +48,11 @@ def test_correct_json_lists_suggestions(tmp_path, capsys):
 
 
 def test_check_marks_differences_and_strict_refuses(tmp_path, capsys):
-    text = (GUIDE_PINS / "cycle_01.csv").read_text(encoding="utf-8").replace("P1 D4,30.0000,29.9253",
-                                                                              "P1 D4,31.0000,30.9253")
+    text = (
+        (GUIDE_PINS / "cycle_01.csv")
+        .read_text(encoding="utf-8")
+        .replace("P1 D4,30.0000,29.9253", "P1 D4,31.0000,30.9253")
+    )
     path = tmp_path / "r.csv"
     path.write_text(text, encoding="utf-8")
     assert main(["model", "check", MODEL, str(path)]) == 0

@@ -79,8 +79,16 @@ def test_unit_option_reaches_the_reader(tmp_path: Path) -> None:
 
 def test_columns_and_encoding_options(tmp_path: Path) -> None:
     out = tmp_path / "o.csv"
-    status = main(["parse", "--columns", str(TABLES / "cycle_01_shop.columns.toml"),
-                   str(TABLES / "cycle_01_shop.csv"), "--out", str(out)])
+    status = main(
+        [
+            "parse",
+            "--columns",
+            str(TABLES / "cycle_01_shop.columns.toml"),
+            str(TABLES / "cycle_01_shop.csv"),
+            "--out",
+            str(out),
+        ]
+    )
     assert status == OK and rows_of(out)[3]["deviation"] == "-0.0747"
     assert main(["parse", "--encoding", "cp1252", str(TABLES / "cycle_01_de.csv"), "--out", str(out)]) == OK
     assert rows_of(out)[0]["lower"] == "-0.1"
@@ -123,8 +131,11 @@ def test_a_folder_stands_for_its_reports(tmp_path: Path, capsys: pytest.CaptureF
     err = capsys.readouterr().err
     assert "README.md" not in err  # never a report: left out by the folder policy (parsers.folders)
     assert "from 3 of 3 file(s)" in err
-    assert {r["report"] for r in rows_of(out)} == {"bracket_minus_negative.txt", "bracket_ncgage.csv",
-                                                  "bracket_two_parts.txt"}
+    assert {r["report"] for r in rows_of(out)} == {
+        "bracket_minus_negative.txt",
+        "bracket_ncgage.csv",
+        "bracket_two_parts.txt",
+    }
     empty = tmp_path / "empty"
     empty.mkdir()
     assert main(["parse", str(empty), "--out", str(tmp_path / "x.csv")]) == ERROR

@@ -6,9 +6,9 @@ import json
 from pathlib import Path
 
 import pytest
+from spc_examples import closed_loop_store
 
 from setupfix.cli import main
-from spc_examples import closed_loop_store
 
 
 @pytest.fixture(scope="module")
@@ -18,8 +18,22 @@ def db(tmp_path_factory) -> Path:  # type: ignore[no-untyped-def]
 
 def test_json_and_html(db, tmp_path, capsys):
     page = tmp_path / "spc.html"
-    code = main(["spc", "--db", str(db), "--dimension", "P1 D1", "--dimension", "p2  d3", "--baseline", "10",
-                 "--json", "--html", str(page)])
+    code = main(
+        [
+            "spc",
+            "--db",
+            str(db),
+            "--dimension",
+            "P1 D1",
+            "--dimension",
+            "p2  d3",
+            "--baseline",
+            "10",
+            "--json",
+            "--html",
+            str(page),
+        ]
+    )
     out, err = capsys.readouterr()
     assert code == 0, err
     data = json.loads(out)
@@ -40,12 +54,15 @@ def test_text_with_a_given_split(db, capsys):
     assert "correction 2026" not in out
 
 
-@pytest.mark.parametrize(("args", "message"), [
-    (["--machine", "M1"], "no measurements stored for machine 'M1'"),
-    (["--dimension", "nope"], "no stored characteristic 'nope'"),
-    (["--since", "last week"], "--since: timestamp 'last week' is not ISO 8601"),
-    (["--baseline", "1"], "--baseline: must be in [2,"),
-])
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        (["--machine", "M1"], "no measurements stored for machine 'M1'"),
+        (["--dimension", "nope"], "no stored characteristic 'nope'"),
+        (["--since", "last week"], "--since: timestamp 'last week' is not ISO 8601"),
+        (["--baseline", "1"], "--baseline: must be in [2,"),
+    ],
+)
 def test_bad_input_is_one_line(db, tmp_path, capsys, args, message):
     page = tmp_path / "never.html"
     code = main(["spc", "--db", str(db), "--html", str(page), *args])

@@ -38,8 +38,23 @@ def short_train(tmp_path_factory):
 def test_evaluate_json_contract(capsys, method, short_train):
     budget = ["--iterations", "20"] if method == "kalman" else []
     train = short_train if method == "kalman" else TRAIN
-    code, out, err = run(capsys, "thermal", "evaluate", "--method", method, "--train", train, "--test", TEST,
-                         "--target", "error_z", "--seed", "1", "--json", *budget)
+    code, out, err = run(
+        capsys,
+        "thermal",
+        "evaluate",
+        "--method",
+        method,
+        "--train",
+        train,
+        "--test",
+        TEST,
+        "--target",
+        "error_z",
+        "--seed",
+        "1",
+        "--json",
+        *budget,
+    )
     assert code == 0, err
     doc = json.loads(out)
     assert {"method", "rmse", "max_residual", "efficiency", "n_test"} <= doc.keys()
@@ -50,8 +65,22 @@ def test_evaluate_json_contract(capsys, method, short_train):
 
 def test_fit_then_predict(capsys, tmp_path, short_train):
     model = tmp_path / "kalman.json"
-    code, out, err = run(capsys, "thermal", "fit", "--method", "kalman", short_train, "--target", "error_z",
-                         "-o", str(model), "--seed", "0", "--iterations", "20")
+    code, out, err = run(
+        capsys,
+        "thermal",
+        "fit",
+        "--method",
+        "kalman",
+        short_train,
+        "--target",
+        "error_z",
+        "-o",
+        str(model),
+        "--seed",
+        "0",
+        "--iterations",
+        "20",
+    )
     assert code == 0, err
     assert "model written" in out
     assert json.loads(model.read_text())["format"] == "setupfix-thermal-model"
@@ -71,16 +100,18 @@ def test_bad_input_is_one_line_with_file_and_line(capsys, tmp_path):
     text = (SAMPLES / "train_variable.csv").read_text().splitlines()
     text[36] = text[36].replace(text[36].split(",")[1], "n/a", 1)
     bad.write_text("\n".join(text) + "\n")
-    code, out, err = run(capsys, "thermal", "fit", "--method", "mra", str(bad), "--target", "error_z",
-                         "-o", str(tmp_path / "m.json"))
+    code, out, err = run(
+        capsys, "thermal", "fit", "--method", "mra", str(bad), "--target", "error_z", "-o", str(tmp_path / "m.json")
+    )
     assert code == 1 and out == ""
     assert err.count("\n") == 1 and "log.csv:37: non-numeric value 'n/a' in column 'spindle_motor'" in err
     assert not (tmp_path / "m.json").exists()
 
 
 def test_missing_columns_and_usage(capsys, tmp_path):
-    code, _, err = run(capsys, "thermal", "evaluate", "--method", "mra", "--train", TRAIN, "--test", TEST,
-                       "--target", "nope")
+    code, _, err = run(
+        capsys, "thermal", "evaluate", "--method", "mra", "--train", TRAIN, "--test", TEST, "--target", "nope"
+    )
     assert code == 1 and "target column 'nope'" in err
     code, _, err = run(capsys, "thermal", "fit", "--method", "magic", TRAIN, "--target", "error_z", "-o", "x.json")
     assert code == 2
@@ -114,19 +145,27 @@ def test_bad_options_are_refused(capsys, tmp_path, argv, code, message):
     if "--method" in argv:
         i = argv.index("--method")
         args[3] = argv[i + 1]
-        argv = argv[:i] + argv[i + 2:]
+        argv = argv[:i] + argv[i + 2 :]
     got, out, err = run(capsys, *args, *argv)
     assert got == code and message in err and out == ""
     assert not (tmp_path / "m.json").exists()
 
 
-@pytest.mark.parametrize(("value", "message"), [("1e308", "outside [-273.15, 2000]"), ("1e300", "outside"),
-                                                 ("1e306", "outside"), ("2_1", "non-numeric value '2_1'"),
-                                                 ("nan", "non-numeric value 'nan'")])
+@pytest.mark.parametrize(
+    ("value", "message"),
+    [
+        ("1e308", "outside [-273.15, 2000]"),
+        ("1e300", "outside"),
+        ("1e306", "outside"),
+        ("2_1", "non-numeric value '2_1'"),
+        ("nan", "non-numeric value 'nan'"),
+    ],
+)
 def test_hostile_cells_are_one_line(capsys, tmp_path, value, message):
     log = _log_with(tmp_path, 40, 1, value)
-    code, out, err = run(capsys, "thermal", "fit", "--method", "grey-ls", log, "--target", "error_z",
-                         "-o", str(tmp_path / "m.json"))
+    code, out, err = run(
+        capsys, "thermal", "fit", "--method", "grey-ls", log, "--target", "error_z", "-o", str(tmp_path / "m.json")
+    )
     assert code == 1 and out == "" and err.count("\n") == 1
     assert "log.csv:40:" in err and message in err
 
@@ -135,18 +174,36 @@ def test_constant_target_and_directory_output(capsys, tmp_path):
     rows = (SAMPLES / "train_variable.csv").read_text().splitlines()[:100]
     const = tmp_path / "c.csv"
     const.write_text("\n".join(rows[:1] + [",".join([*r.split(",")[:-1], "0.1"]) for r in rows[1:]]) + "\n")
-    code, _out, err = run(capsys, "thermal", "fit", "--method", "mra", str(const), "--target", "error_z",
-                         "-o", str(tmp_path / "m.json"))
+    code, _out, err = run(
+        capsys, "thermal", "fit", "--method", "mra", str(const), "--target", "error_z", "-o", str(tmp_path / "m.json")
+    )
     assert code == 1 and "constant" in err and "e+29" not in err
-    code, _out, err = run(capsys, "thermal", "fit", "--method", "mra", TRAIN, "--target", "error_z",
-                          "-o", str(tmp_path))
+    code, _out, err = run(
+        capsys, "thermal", "fit", "--method", "mra", TRAIN, "--target", "error_z", "-o", str(tmp_path)
+    )
     assert code == 1 and "internal error" not in err
 
 
 def test_units_seed_and_corrupt_model(capsys, tmp_path):
     model = tmp_path / "g.json"
-    code, out, err = run(capsys, "thermal", "fit", "--method", "grey-pso", "--iterations", "2", TRAIN,
-                         "--target", "error_z", "--unit", "mm", "--inputs", "spindle_motor,bearing", "-o", str(model))
+    code, out, err = run(
+        capsys,
+        "thermal",
+        "fit",
+        "--method",
+        "grey-pso",
+        "--iterations",
+        "2",
+        TRAIN,
+        "--target",
+        "error_z",
+        "--unit",
+        "mm",
+        "--inputs",
+        "spindle_motor,bearing",
+        "-o",
+        str(model),
+    )
     assert code == 0 and "seed 0" in out and " mm" in out
     assert "warning:" in err and "E = " in err  # two PSO iterations fit worse than the mean: flagged
     code, out, _ = run(capsys, "thermal", "predict", "--model", str(model), TEST)
@@ -160,8 +217,21 @@ def test_warm_test_log_anchor_and_interval(capsys, tmp_path):
     rows = (SAMPLES / "train_variable.csv").read_text().splitlines()
     (tmp_path / "a.csv").write_text("\n".join(rows[:721]) + "\n")
     (tmp_path / "b.csv").write_text("\n".join(rows[:1] + rows[721:]) + "\n")
-    args = ["thermal", "evaluate", "--method", "mra", "--train", str(tmp_path / "a.csv"), "--test",
-            str(tmp_path / "b.csv"), "--target", "error_z", "--unit", "mm", "--json"]
+    args = [
+        "thermal",
+        "evaluate",
+        "--method",
+        "mra",
+        "--train",
+        str(tmp_path / "a.csv"),
+        "--test",
+        str(tmp_path / "b.csv"),
+        "--target",
+        "error_z",
+        "--unit",
+        "mm",
+        "--json",
+    ]
     code, out, err = run(capsys, *args)
     doc = json.loads(out)
     assert code == 0 and doc["unit"] == "mm" and doc["rmse"] < 0.012  # as if continuous; the drift there is ~0.036
@@ -170,11 +240,33 @@ def test_warm_test_log_anchor_and_interval(capsys, tmp_path):
     assert code == 0 and json.loads(out)["rmse"] < 0.012
     plain = tmp_path / "plain.csv"  # no timestamp: the interval gives the time
     plain.write_text("\n".join(",".join(r.split(",")[1:]) for r in rows[:300]) + "\n")
-    code, _, err = run(capsys, "thermal", "fit", "--method", "grey-ls", str(plain), "--target", "error_z",
-                       "-o", str(tmp_path / "m.json"))
+    code, _, err = run(
+        capsys,
+        "thermal",
+        "fit",
+        "--method",
+        "grey-ls",
+        str(plain),
+        "--target",
+        "error_z",
+        "-o",
+        str(tmp_path / "m.json"),
+    )
     assert code == 1 and "--interval SECONDS" in err
-    code, _, err = run(capsys, "thermal", "fit", "--method", "grey-ls", str(plain), "--target", "error_z",
-                       "--interval", "10", "-o", str(tmp_path / "m.json"))
+    code, _, err = run(
+        capsys,
+        "thermal",
+        "fit",
+        "--method",
+        "grey-ls",
+        str(plain),
+        "--target",
+        "error_z",
+        "--interval",
+        "10",
+        "-o",
+        str(tmp_path / "m.json"),
+    )
     assert code == 0, err
     assert json.loads((tmp_path / "m.json").read_text())["sample_interval_s"] == 10.0
 
@@ -184,9 +276,24 @@ def test_real_xlsx_logs(capsys):
     from conftest import shared_path
 
     folder = shared_path("thermal-data", "gooddash")
-    code, out, err = run(capsys, "thermal", "evaluate", "--method", "mra", "--train", str(folder / "data_ex1.xlsx"),
-                         "--test", str(folder / "data_ex2.xlsx"), "--target", "W", "--interval", "60",
-                         "--unit", "um", "--json")
+    code, out, err = run(
+        capsys,
+        "thermal",
+        "evaluate",
+        "--method",
+        "mra",
+        "--train",
+        str(folder / "data_ex1.xlsx"),
+        "--test",
+        str(folder / "data_ex2.xlsx"),
+        "--target",
+        "W",
+        "--interval",
+        "60",
+        "--unit",
+        "um",
+        "--json",
+    )
     assert code == 0, err
     doc = json.loads(out)
     assert len(doc["inputs"]) == 22 and doc["n_test"] == 72 and doc["rmse"] < 2.5  # µm, as from the CSV copies

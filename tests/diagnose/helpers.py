@@ -5,12 +5,11 @@ from __future__ import annotations
 import tomllib
 
 import numpy as np
+from conftest import GUIDE_PINS
 
 from setupfix.diagnose import EffectSpec, HiddenEffect, Layout, ShopSimulator
 from setupfix.diagnose.shop import random_topology
 from setupfix.model import ProcessModel, model_from_dict
-
-from conftest import GUIDE_PINS
 
 NOISE = 0.002
 EXPANDED = GUIDE_PINS.parents[1] / "tests" / "model" / "data" / "guide_pins_expanded.toml"

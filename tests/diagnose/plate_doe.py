@@ -47,6 +47,7 @@ def part_means(layout: Layout, series: Series) -> tuple[np.ndarray, tuple[str, .
 
 def nested_f(y: np.ndarray, small: np.ndarray, big: np.ndarray) -> tuple[float, int, int, float]:
     """F-test of the columns ``big`` adds to ``small`` (both contain the constant): F, df1, df2, p."""
+
     def rss(A: np.ndarray) -> tuple[float, int]:
         coef, *_ = np.linalg.lstsq(A, y, rcond=None)
         e = y - A @ coef
@@ -78,8 +79,17 @@ def speed_tests(layout: Layout, series: Series) -> list[dict[str, float | str]]:
         p_any = nested_f(y, stick, cells)[3]
         p_int = nested_f(y, additive, cells)[3]
         res = scipy.stats.linregress(rpm, y_all[on, i])
-        out.append({"register": name, "p_speed": p_any, "p_interaction": p_int, "slope": float(res.slope),
-                    "t": float(res.slope / res.stderr), "p_slope": float(res.pvalue), "df_slope": int(on.sum()) - 2})
+        out.append(
+            {
+                "register": name,
+                "p_speed": p_any,
+                "p_interaction": p_int,
+                "slope": float(res.slope),
+                "t": float(res.slope / res.stderr),
+                "p_slope": float(res.pvalue),
+                "df_slope": int(on.sum()) - 2,
+            }
+        )
     return out
 
 
@@ -103,8 +113,9 @@ def speed_term_pvalues(layout: Layout, series: Series, found: tuple[EffectSpec, 
     return out
 
 
-def residual_rms(layout: Layout, series: Series, found: tuple[EffectSpec, ...], stick: str | None = None,
-                 per_dimension: bool = False) -> float:
+def residual_rms(
+    layout: Layout, series: Series, found: tuple[EffectSpec, ...], stick: str | None = None, per_dimension: bool = False
+) -> float:
     """Cell residual RMS of the model of ``found`` [mm]; with ``stick``, plus the stick-out × speed term on
     every tool register (a coefficient each); ``per_dimension``: every dimension its own constant and its
     own coefficients on the stick-out and the stick-out × speed (the per-cutter model on the same channels)."""

@@ -25,8 +25,7 @@ BOX = SHARED / "cmm-samples" / "qif" / "NIST_MTC_FAIR_Box_Results_19parts.qif"
 LOG = SHARED / "real-series" / "nist-mtc" / "box_process.csv"
 MODEL = Path(__file__).parent / "data" / "nist_box.toml"
 
-pytestmark = pytest.mark.skipif(not (BOX.is_file() and LOG.is_file()), reason="the NIST box lives in the shared "
-                                "folder")
+pytestmark = pytest.mark.skipif(not (BOX.is_file() and LOG.is_file()), reason="the NIST box lives in the shared folder")
 
 
 def test_the_box_is_put_in_machining_order_by_its_log():

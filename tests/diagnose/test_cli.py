@@ -6,10 +6,9 @@ import json
 import tomllib
 
 import pytest
+from conftest import GUIDE_PINS
 
 from setupfix.cli import main
-
-from conftest import GUIDE_PINS
 
 MODEL = str(GUIDE_PINS / "model.toml")
 CONTRACT = {"cycles", "rms_before", "rms_after", "max_before", "max_after", "effects", "next_correction"}
@@ -24,8 +23,21 @@ def run(capsys, *argv):
 @pytest.fixture(scope="module")
 def series(tmp_path_factory):
     out = tmp_path_factory.mktemp("series")
-    code = main(["simulate", "--model", MODEL, "--out", str(out), "--seed", "4", "--cycles", "30",
-                 "--effect", "kind=wear,register=T5,magnitude=-0.001"])
+    code = main(
+        [
+            "simulate",
+            "--model",
+            MODEL,
+            "--out",
+            str(out),
+            "--seed",
+            "4",
+            "--cycles",
+            "30",
+            "--effect",
+            "kind=wear,register=T5,magnitude=-0.001",
+        ]
+    )
     assert code == 0
     return out
 
@@ -42,9 +54,20 @@ def test_simulate_writes_the_canonical_files(series):
 
 def test_diagnose_json_contract_and_augment(series, tmp_path, capsys):
     aug = tmp_path / "aug.toml"
-    code, out, err = run(capsys, "diagnose", "--model", MODEL, "--corrections", series / "corrections.csv",
-                         "--temperatures", series / "temperatures.csv", "--augment", aug, "--json",
-                         series / "measurements.csv")
+    code, out, err = run(
+        capsys,
+        "diagnose",
+        "--model",
+        MODEL,
+        "--corrections",
+        series / "corrections.csv",
+        "--temperatures",
+        series / "temperatures.csv",
+        "--augment",
+        aug,
+        "--json",
+        series / "measurements.csv",
+    )
     assert code == 0, err
     doc = json.loads(out)
     assert doc.keys() >= CONTRACT
@@ -72,17 +95,28 @@ def test_bad_corrections_log_is_refused_with_its_line(series, tmp_path, capsys):
     bad = tmp_path / "log.csv"
     bad.write_text("timestamp,register,delta\n2026-11-02T06:00:00,W1,0.01\n2026-11-02T07:00:00,G99,0.01\n")
     aug = tmp_path / "aug.toml"
-    code, out, err = run(capsys, "diagnose", "--model", MODEL, "--corrections", bad, "--augment", aug,
-                         series / "measurements.csv")
+    code, out, err = run(
+        capsys, "diagnose", "--model", MODEL, "--corrections", bad, "--augment", aug, series / "measurements.csv"
+    )
     assert code == 1
     assert err.startswith(f"error: {bad}:3: unknown register 'G99'") and err.count("\n") == 1
     assert not aug.exists() and out == ""
 
 
-@pytest.mark.parametrize("effect", ["kind=creep,magnitude=1", "kind=drift", "kind=drift,magnitude=x",
-                                    "kind=wear,register=T99,magnitude=0.001", "kind=position,axis=x,magnitude=1e-4",
-                                    "kind=level,register=T5,magnitude=0.01", "kind=level,at=0,magnitude=0.01",
-                                    "kind=level,at=99,magnitude=0.01", "kind=drift,at=3,magnitude=0.001"])
+@pytest.mark.parametrize(
+    "effect",
+    [
+        "kind=creep,magnitude=1",
+        "kind=drift",
+        "kind=drift,magnitude=x",
+        "kind=wear,register=T99,magnitude=0.001",
+        "kind=position,axis=x,magnitude=1e-4",
+        "kind=level,register=T5,magnitude=0.01",
+        "kind=level,at=0,magnitude=0.01",
+        "kind=level,at=99,magnitude=0.01",
+        "kind=drift,at=3,magnitude=0.001",
+    ],
+)
 def test_simulate_refuses_bad_effects(effect, tmp_path, capsys):
     code, _out, err = run(capsys, "simulate", "--model", MODEL, "--out", tmp_path / "o", "--effect", effect)
     assert code == 1 and err.startswith("error: ") and err.count("\n") == 1
@@ -98,8 +132,19 @@ def test_bad_timestamp_in_temperatures(series, tmp_path, capsys):
 
 def test_diagnose_from_the_history_store_equals_the_files(series, tmp_path, capsys):
     db = tmp_path / "h.db"
-    code = main(["history", "import", "--db", str(db), "--corrections", str(series / "corrections.csv"),
-                 "--temperatures", str(series / "temperatures.csv"), str(series / "measurements.csv")])
+    code = main(
+        [
+            "history",
+            "import",
+            "--db",
+            str(db),
+            "--corrections",
+            str(series / "corrections.csv"),
+            "--temperatures",
+            str(series / "temperatures.csv"),
+            str(series / "measurements.csv"),
+        ]
+    )
     assert code == 0
     capsys.readouterr()
     code, out, err = run(capsys, "diagnose", "--model", MODEL, "--db", db, "--json", "--no-walk")
@@ -127,16 +172,49 @@ def test_thermal_model_prediction_is_a_candidate_channel(tmp_path, capsys):
     log = tmp_path / "temps.csv"
     temps.to_csv(log, index=False)
     saved = tmp_path / "mra.json"
-    assert main(["thermal", "fit", "--method", "mra", "--target", "error_z", "--unit", "mm", "--inputs", "spindle",
-                 "-o", str(saved), str(log)]) == 0
+    assert (
+        main(
+            [
+                "thermal",
+                "fit",
+                "--method",
+                "mra",
+                "--target",
+                "error_z",
+                "--unit",
+                "mm",
+                "--inputs",
+                "spindle",
+                "-o",
+                str(saved),
+                str(log),
+            ]
+        )
+        == 0
+    )
     capsys.readouterr()
-    code, out, err = run(capsys, "diagnose", "--model", MODEL, "--corrections", loop / "corrections.csv",
-                         "--temperatures", log, "--thermal", saved, "--json", "--no-walk", loop / "measurements.csv")
+    code, out, err = run(
+        capsys,
+        "diagnose",
+        "--model",
+        MODEL,
+        "--corrections",
+        loop / "corrections.csv",
+        "--temperatures",
+        log,
+        "--thermal",
+        saved,
+        "--json",
+        "--no-walk",
+        loop / "measurements.csv",
+    )
     assert code == 0, err
     effects = json.loads(out)["effects"]
     assert [e["kind"] for e in effects] == ["thermal"]
-    assert {effects[0]["target"], *(a.split(": ", 1)[1] for a in effects[0]["alike"])} == \
-        {"all tools ~ spindle", "all tools ~ mra prediction"}
+    assert {effects[0]["target"], *(a.split(": ", 1)[1] for a in effects[0]["alike"])} == {
+        "all tools ~ spindle",
+        "all tools ~ mra prediction",
+    }
 
 
 def test_a_series_without_its_corrections_log_says_so_and_names_the_log_beside_it(series, capsys):
@@ -167,15 +245,29 @@ def test_one_part_reported_twice_counts_once(tmp_path, capsys):
     assert code == 0, err
     doc = json.loads(out)
     assert doc["cycles"] == 2
-    assert any("a.csv:cycle 02 and b.csv:cycle 02 are one part" in n and "differing by up to 0.01)" in n
-               and "b.csv is used once" in n for n in doc["notes"])
+    assert any(
+        "a.csv:cycle 02 and b.csv:cycle 02 are one part" in n
+        and "differing by up to 0.01)" in n
+        and "b.csv is used once" in n
+        for n in doc["notes"]
+    )
 
 
 def test_diagnose_json_says_which_model_the_next_correction_comes_from(series, capsys):
     """A real wear of T5: the augmented model beat EWMA on the centre distance with no more out of tolerance,
     so the next correction comes from it; the walk's centre scores are in the JSON."""
-    code, out, err = run(capsys, "diagnose", "--model", MODEL, "--corrections", series / "corrections.csv",
-                         "--temperatures", series / "temperatures.csv", "--json", series / "measurements.csv")
+    code, out, err = run(
+        capsys,
+        "diagnose",
+        "--model",
+        MODEL,
+        "--corrections",
+        series / "corrections.csv",
+        "--temperatures",
+        series / "temperatures.csv",
+        "--json",
+        series / "measurements.csv",
+    )
     assert code == 0, err
     doc = json.loads(out)
     wf = doc["walk_forward"]
@@ -188,11 +280,30 @@ def test_diagnose_json_says_which_model_the_next_correction_comes_from(series, c
 
 
 def test_diagnose_text_prints_the_centre_scores_and_where_the_next_correction_comes_from(series, capsys):
-    code, out, err = run(capsys, "diagnose", "--model", MODEL, "--corrections", series / "corrections.csv",
-                         "--temperatures", series / "temperatures.csv", series / "measurements.csv")
+    code, out, err = run(
+        capsys,
+        "diagnose",
+        "--model",
+        MODEL,
+        "--corrections",
+        series / "corrections.csv",
+        "--temperatures",
+        series / "temperatures.csv",
+        series / "measurements.csv",
+    )
     assert code == 0, err
-    code, js, _ = run(capsys, "diagnose", "--model", MODEL, "--corrections", series / "corrections.csv",
-                      "--temperatures", series / "temperatures.csv", "--json", series / "measurements.csv")
+    code, js, _ = run(
+        capsys,
+        "diagnose",
+        "--model",
+        MODEL,
+        "--corrections",
+        series / "corrections.csv",
+        "--temperatures",
+        series / "temperatures.csv",
+        "--json",
+        series / "measurements.csv",
+    )
     doc = json.loads(js)
     aug = doc["walk_forward"]["augmented"]
     line = next(ln for ln in out.splitlines() if ln.startswith("  augmented"))
@@ -202,12 +313,34 @@ def test_diagnose_text_prints_the_centre_scores_and_where_the_next_correction_co
 
 def test_simulate_level_step_at_a_cycle_is_found_there(tmp_path, capsys):
     out = tmp_path / "s"
-    code, _o, err = run(capsys, "simulate", "--model", MODEL, "--out", out, "--seed", "2", "--cycles", "30",
-                        "--effect", "kind=level,register=T5,at=18,magnitude=0.02", "--json")
+    code, _o, err = run(
+        capsys,
+        "simulate",
+        "--model",
+        MODEL,
+        "--out",
+        out,
+        "--seed",
+        "2",
+        "--cycles",
+        "30",
+        "--effect",
+        "kind=level,register=T5,at=18,magnitude=0.02",
+        "--json",
+    )
     assert code == 0, err
     truth = json.loads((out / "truth.json").read_text())
-    code, js, err = run(capsys, "diagnose", "--model", MODEL, "--corrections", out / "corrections.csv",
-                        "--no-walk", "--json", out / "measurements.csv")
+    code, js, err = run(
+        capsys,
+        "diagnose",
+        "--model",
+        MODEL,
+        "--corrections",
+        out / "corrections.csv",
+        "--no-walk",
+        "--json",
+        out / "measurements.csv",
+    )
     assert code == 0, err
     level = [e for e in json.loads(js)["effects"] if e["kind"] == "level"]
     assert truth["hidden_effects"][0]["kind"] == "level"

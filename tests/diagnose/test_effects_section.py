@@ -3,11 +3,11 @@
 from __future__ import annotations
 
 import dataclasses
-
 import tomllib
 
 import numpy as np
 import pytest
+from conftest import GUIDE_PINS
 
 from setupfix.diagnose import Layout
 from setupfix.diagnose.forecast import forecast_shift, relation_composite
@@ -16,18 +16,30 @@ from setupfix.model import load_model, model_from_dict
 from setupfix.model.effects import EffectsSection, ModelEffect, effects_from_dict
 from setupfix.model.effects_toml import with_effects
 
-from conftest import GUIDE_PINS
-
 SECTION = EffectsSection(
-    (ModelEffect("E1", "drift", 0.002, 1e-5, "mm/h", "all tools ~ time"),
-     ModelEffect("E2", "drift", 0.01, 1e-4, "mm", "sat", shape="saturating", tau=2.5),
-     ModelEffect("E3", "wear", -0.0008, 1e-5, "mm/cycle", "T5 ~ parts since change", register="T5"),
-     ModelEffect("E4", "relation", 0.5, 0.01, "1", "P2D3 ~ T23", register="T23", dimension="P2D3"),
-     ModelEffect("E5", "group", 0.01, 0.001, "mm", "group P3", group="P3"),
-     ModelEffect("E6", "thermal", 0.003, 1e-4, "mm/°C", "all tools ~ spindle", channel="spindle", reference=21.5),
-     ModelEffect("E7", "relation", 0.4, 0.01, "1", "P1D1 ~ one of W1, W2", register="W1", dimension="P1D1",
-                 registers=("W1", "W2"))),
-    origin="2026-11-02T06:00:00", cycle_hours=1 / 3, last_hours=10.0)
+    (
+        ModelEffect("E1", "drift", 0.002, 1e-5, "mm/h", "all tools ~ time"),
+        ModelEffect("E2", "drift", 0.01, 1e-4, "mm", "sat", shape="saturating", tau=2.5),
+        ModelEffect("E3", "wear", -0.0008, 1e-5, "mm/cycle", "T5 ~ parts since change", register="T5"),
+        ModelEffect("E4", "relation", 0.5, 0.01, "1", "P2D3 ~ T23", register="T23", dimension="P2D3"),
+        ModelEffect("E5", "group", 0.01, 0.001, "mm", "group P3", group="P3"),
+        ModelEffect("E6", "thermal", 0.003, 1e-4, "mm/°C", "all tools ~ spindle", channel="spindle", reference=21.5),
+        ModelEffect(
+            "E7",
+            "relation",
+            0.4,
+            0.01,
+            "1",
+            "P1D1 ~ one of W1, W2",
+            register="W1",
+            dimension="P1D1",
+            registers=("W1", "W2"),
+        ),
+    ),
+    origin="2026-11-02T06:00:00",
+    cycle_hours=1 / 3,
+    last_hours=10.0,
+)
 
 
 def test_written_section_reloads_equal_and_the_model_still_loads(tmp_path, guide_pins_model):
@@ -50,15 +62,20 @@ def test_augmenting_twice_replaces_the_section_and_keeps_the_rest():
     assert twice.startswith(base.rstrip())
 
 
-@pytest.mark.parametrize(("table", "key"), [
-    ({"E1": {"kind": "creep", "estimate": 1.0}}, "effects.E1.kind"),
-    ({"E1": {"kind": "wear", "estimate": 1.0, "register": "W1"}}, "effects.E1.register"),
-    ({"E1": {"kind": "relation", "estimate": 1.0, "register": "T5", "dimension": "D99"}}, "effects.E1.dimension"),
-    ({"E1": {"kind": "drift", "estimate": "x"}}, "effects.E1.estimate"),
-    ({"E1": {"kind": "relation", "estimate": 1.0, "register": "T5", "dimension": "P1D1", "registers": ["X9"]}},
-     "effects.E1.registers"),
-    ({"E1": {"kind": "drift", "shape": "saturating", "estimate": 1.0}}, "effects.E1.tau"),
-])
+@pytest.mark.parametrize(
+    ("table", "key"),
+    [
+        ({"E1": {"kind": "creep", "estimate": 1.0}}, "effects.E1.kind"),
+        ({"E1": {"kind": "wear", "estimate": 1.0, "register": "W1"}}, "effects.E1.register"),
+        ({"E1": {"kind": "relation", "estimate": 1.0, "register": "T5", "dimension": "D99"}}, "effects.E1.dimension"),
+        ({"E1": {"kind": "drift", "estimate": "x"}}, "effects.E1.estimate"),
+        (
+            {"E1": {"kind": "relation", "estimate": 1.0, "register": "T5", "dimension": "P1D1", "registers": ["X9"]}},
+            "effects.E1.registers",
+        ),
+        ({"E1": {"kind": "drift", "shape": "saturating", "estimate": 1.0}}, "effects.E1.tau"),
+    ],
+)
 def test_bad_effects_are_named_with_their_key(table, key, guide_pins_model):
     with pytest.raises(ModelError) as err:
         effects_from_dict(table, guide_pins_model, "m.toml")
@@ -70,8 +87,9 @@ def test_forecast_shift_adds_drift_and_wear_until_the_next_cycle(guide_pins_mode
     C = layout.composite
     c_t = C[layout.tools].sum(axis=0)
     t, dt = 10.0, 1 / 3
-    want = (0.002 * dt + 0.01 * (np.exp(-t / 2.5) - np.exp(-(t + dt) / 2.5))) * c_t \
-        - 0.0008 * C[layout.register_ids.index("T5")]
+    want = (0.002 * dt + 0.01 * (np.exp(-t / 2.5) - np.exp(-(t + dt) / 2.5))) * c_t - 0.0008 * C[
+        layout.register_ids.index("T5")
+    ]
     np.testing.assert_allclose(forecast_shift(SECTION, layout), want, atol=1e-15)
     assert not forecast_shift(EffectsSection(), layout).any()
 
@@ -97,8 +115,13 @@ def test_correct_maps_through_a_named_relation_only(tmp_path, guide_pins_model):
     weak = EffectsSection((dataclasses.replace(SECTION.effects[3], stderr=0.2),))  # 0.5 ± 0.2: not known to a third
     np.testing.assert_array_equal(relation_composite(weak, layout), layout.composite)
     path = tmp_path / "aug.toml"
-    path.write_text(with_effects((GUIDE_PINS / "model.toml").read_text(encoding="utf-8"),
-                                 EffectsSection(SECTION.effects[3:4] + SECTION.effects[6:])), encoding="utf-8")
+    path.write_text(
+        with_effects(
+            (GUIDE_PINS / "model.toml").read_text(encoding="utf-8"),
+            EffectsSection(SECTION.effects[3:4] + SECTION.effects[6:]),
+        ),
+        encoding="utf-8",
+    )
     plain = correct_report(CorrectRequest(load_model(GUIDE_PINS / "model.toml")), GUIDE_PINS / "cycle_01.csv").cycles[0]
     aug = correct_report(CorrectRequest(load_model(path)), GUIDE_PINS / "cycle_01.csv").cycles[0]
     keep = plain.part.measured

@@ -6,15 +6,14 @@ import dataclasses
 
 import numpy as np
 import pytest
+from diagnose.helpers import NOISE, guide_pins, simulate
+from diagnose.test_plate import LOG, MODEL, PLATE, needs_log
 
-from setupfix.diagnose import Diagnoser, Layout, Term, parse_terms, factor_tests
+from setupfix.diagnose import Diagnoser, Layout, Term, factor_tests, parse_terms
 from setupfix.diagnose.factors import holm, term_columns
 from setupfix.diagnose.terms import channel_values
 from setupfix.pipeline.diagnose import DiagnoseRequest, diagnose_reports
 from setupfix.pipeline.series import load_series
-
-from diagnose.helpers import NOISE, guide_pins, simulate
-from diagnose.test_plate import LOG, MODEL, PLATE, needs_log
 
 DESIGN = ("doe_tool_length", "doe_speed", "doe_tool_length*doe_speed")
 
@@ -56,8 +55,12 @@ def _design_series(seed: int, n: int = 18, part_noise: float = 0.0):
     a, b = cells // 3, cells % 3
     cols = [a == 1] + [b == k for k in range(3)]
     names = ("A=hi", "B=lo", "B=mid", "B=hi")
-    s = dataclasses.replace(s, temperature=np.column_stack([s.temperature, *cols]).astype(float),
-                            channels=(*s.channels, *names), process_channels=names)
+    s = dataclasses.replace(
+        s,
+        temperature=np.column_stack([s.temperature, *cols]).astype(float),
+        channels=(*s.channels, *names),
+        process_channels=names,
+    )
     return layout, s
 
 
@@ -132,12 +135,20 @@ def test_the_plate_with_its_design_permuted_across_parts_names_nothing(seed):
 
 @needs_log
 def test_declared_factors_enter_the_diagnosis_before_the_search(tmp_path):
-    out = diagnose_reports(DiagnoseRequest(MODEL, (PLATE,), process=str(LOG), factors=(",".join(DESIGN),),
-                                           augment=str(tmp_path / "aug.toml"), diagnoser=Diagnoser(walk=False)))
+    out = diagnose_reports(
+        DiagnoseRequest(
+            MODEL,
+            (PLATE,),
+            process=str(LOG),
+            factors=(",".join(DESIGN),),
+            augment=str(tmp_path / "aug.toml"),
+            diagnoser=Diagnoser(walk=False),
+        )
+    )
     d = out.diagnosis
     assert d.factors is not None
     declared = [e for e in d.effects if e.source == "declared"]
-    assert declared and d.effects[:len(declared)] == tuple(declared)  # first, then what the search finds
+    assert declared and d.effects[: len(declared)] == tuple(declared)  # first, then what the search finds
     t5a = {e.spec.channel: e for e in declared if e.spec.register == "T5A"}
     low = t5a["doe_tool_length=Long & doe_speed=Low"]
     assert low.estimate > 10 * low.stderr and low.p is not None and low.p < 0.01
@@ -150,8 +161,9 @@ def test_declared_factors_enter_the_diagnosis_before_the_search(tmp_path):
     doc = out.to_json()
     assert len(doc["declared_factors"]) == 15 and {e["source"] for e in doc["effects"]} <= {"declared", "search"}
     # the augmented model (product channels included) reloads with the same log and reproduces the fit
-    again = diagnose_reports(DiagnoseRequest(tmp_path / "aug.toml", (PLATE,), process=str(LOG),
-                                             diagnoser=Diagnoser(walk=False)))
+    again = diagnose_reports(
+        DiagnoseRequest(tmp_path / "aug.toml", (PLATE,), process=str(LOG), diagnoser=Diagnoser(walk=False))
+    )
     assert again.diagnosis.error_before.rms == pytest.approx(d.error_after.rms, rel=1e-6)
 
 

@@ -4,12 +4,11 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from diagnose.helpers import guide_pins, simulate
 
 from setupfix.diagnose import Layout, Series, fit_model
 from setupfix.diagnose.fit import row_space_basis
 from setupfix.relation import null_space_directions
-
-from diagnose.helpers import guide_pins, simulate
 
 
 def _series(dev, applied):

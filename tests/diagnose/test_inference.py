@@ -5,11 +5,10 @@ from __future__ import annotations
 
 import numpy as np
 import scipy.stats
+from diagnose.helpers import NOISE, guide_pins, simulate
 
 from setupfix.diagnose import Layout
 from setupfix.diagnose.inference import cluster_test, cycle_sums, dimension_pvalue, lack_of_fit
-
-from diagnose.helpers import NOISE, guide_pins, simulate
 
 
 def _design(rng, n_cycles=12, n_dims=5):
@@ -133,7 +132,7 @@ def test_cluster_wald_is_the_sandwich_wald_test_of_a_block_and_reduces_to_the_on
     W = beta[-3:] @ np.linalg.solve(V, beta[-3:])
     assert q == 3
     w = np.column_stack([np.bincount(cycle, Zt[:, j] ** 2, K) for j in range(3)])
-    nu = min(np.clip(w.sum(0) ** 2 / (w ** 2).sum(0) - 1, 1, K - 1))
+    nu = min(np.clip(w.sum(0) ** 2 / (w**2).sum(0) - 1, 1, K - 1))
     np.testing.assert_allclose(f, W * (nu - 2) / (nu * 3), rtol=1e-6)
     np.testing.assert_allclose(p, scipy.stats.f.sf(f, 3, nu - 2), rtol=1e-9)
     one_f, one_p, _ = cluster_wald(Zt[:, :1], r, cycle, K)

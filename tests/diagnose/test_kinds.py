@@ -6,6 +6,7 @@ import tomllib
 
 import numpy as np
 import pytest
+from conftest import GUIDE_PINS
 
 from setupfix.diagnose import Diagnoser, EffectSpec, HiddenEffect, Layout, Series, ShopSimulator, candidate_specs
 from setupfix.diagnose.forecast import forecast_shift, spec_of
@@ -15,17 +16,24 @@ from setupfix.model import load_model
 from setupfix.model.effects import EffectsSection, ModelEffect, effects_from_dict
 from setupfix.model.effects_toml import with_effects
 
-from conftest import GUIDE_PINS
-
 LAYOUT = Layout.from_model(load_model(GUIDE_PINS / "model.toml"))
 
 
 def _series(n: int = 6) -> Series:
     time = np.arange(n, dtype=float) / 2.0
     proc = np.column_stack([np.arange(n, dtype=float) * 1000.0, np.arange(n) % 2])
-    return Series(np.zeros((n, LAYOUT.n_dimensions)), time, np.zeros((n, LAYOUT.n_registers)),
-                  np.zeros((n, LAYOUT.tools.size)), proc, ("speed", "batch=B"), (), "", np.zeros(0),
-                  ("speed", "batch=B"))
+    return Series(
+        np.zeros((n, LAYOUT.n_dimensions)),
+        time,
+        np.zeros((n, LAYOUT.n_registers)),
+        np.zeros((n, LAYOUT.tools.size)),
+        proc,
+        ("speed", "batch=B"),
+        (),
+        "",
+        np.zeros(0),
+        ("speed", "batch=B"),
+    )
 
 
 def test_level_field_is_the_register_row_from_the_step_on():
@@ -57,17 +65,19 @@ def test_candidates_count_every_position_and_register_and_keep_process_off_therm
     proc = [c for c in specs if c.kind == "process"]
     assert {c.channel for c in proc} == {"speed", "batch=B"} and len(proc) == 2 * (LAYOUT.n_registers + 1)
     assert not [c for c in specs if c.kind == "thermal"]  # process channels are not temperatures
-    assert len({c.at for c in candidate_specs(LAYOUT, _series(200), max_positions=10)
-                if c.kind == "level"}) == 10
+    assert len({c.at for c in candidate_specs(LAYOUT, _series(200), max_positions=10) if c.kind == "level"}) == 10
 
 
 @pytest.mark.parametrize("seed", [0, 1, 2])
-@pytest.mark.parametrize(("spec", "magnitude"), [
-    (EffectSpec("level", register="T5", at=5.0), 0.01),
-    (EffectSpec("level", at=18.0), -0.008),
-    (EffectSpec("process", channel="stickout_mm", register="T23", reference=37.5), 0.001),
-    (EffectSpec("process", channel="speed_rpm", register="W3", reference=9000.0), 3e-6),
-])
+@pytest.mark.parametrize(
+    ("spec", "magnitude"),
+    [
+        (EffectSpec("level", register="T5", at=5.0), 0.01),
+        (EffectSpec("level", at=18.0), -0.008),
+        (EffectSpec("process", channel="stickout_mm", register="T23", reference=37.5), 0.001),
+        (EffectSpec("process", channel="speed_rpm", register="W3", reference=9000.0), 3e-6),
+    ],
+)
 def test_hidden_level_and_process_effects_are_found_with_their_target(seed, spec, magnitude):
     sim = ShopSimulator(n_cycles=40, process=3, seed=seed).run(LAYOUT, [HiddenEffect(spec, magnitude)])
     d = Diagnoser(walk=False).run(LAYOUT, sim.series)
@@ -83,14 +93,18 @@ def test_hidden_level_and_process_effects_are_found_with_their_target(seed, spec
 
 
 def test_process_channels_and_nothing_hidden_give_no_effect():
-    found = [Diagnoser(walk=False).run(LAYOUT, ShopSimulator(n_cycles=40, process=3, seed=s).run(LAYOUT)
-                                       .series).effects for s in range(10, 16)]
+    found = [
+        Diagnoser(walk=False).run(LAYOUT, ShopSimulator(n_cycles=40, process=3, seed=s).run(LAYOUT).series).effects
+        for s in range(10, 16)
+    ]
     assert found == [()] * 6
 
 
 def test_a_set_of_registers_gets_a_coefficient_each():
-    hidden = [HiddenEffect(EffectSpec("process", channel="stickout_mm", register="W2", reference=37.5), 0.0012),
-              HiddenEffect(EffectSpec("process", channel="stickout_mm", register="T23", reference=37.5), -0.0007)]
+    hidden = [
+        HiddenEffect(EffectSpec("process", channel="stickout_mm", register="W2", reference=37.5), 0.0012),
+        HiddenEffect(EffectSpec("process", channel="stickout_mm", register="T23", reference=37.5), -0.0007),
+    ]
     sim = ShopSimulator(n_cycles=40, process=3, seed=5).run(LAYOUT, hidden)
     d = Diagnoser(walk=False).run(LAYOUT, sim.series)
     got = {e.spec.register: e for e in d.effects}
@@ -101,13 +115,37 @@ def test_a_set_of_registers_gets_a_coefficient_each():
 
 
 SECTION = EffectsSection(
-    (ModelEffect("E1", "level", 0.02, 0.001, "mm", "T5 step at P9", register="T5", at=3.0, cycle="P9"),
-     ModelEffect("E2", "level", -0.01, 0.001, "mm", "all tools step at P4", at=1.0, cycle="P4"),
-     ModelEffect("E3", "process", 2e-6, 1e-7, "mm/unit of rpm", "W1 ~ rpm", channel="rpm", register="W1",
-                 reference=9000.0, span=6000.0),
-     ModelEffect("E4", "process", 0.03, 0.002, "mm/unit of len=Long", "all tools ~ len=Long",
-                 channel="len=Long", reference=0.5, span=1.0)),
-    origin="2026-11-02T06:00:00", cycle_hours=0.5, last_hours=10.0)
+    (
+        ModelEffect("E1", "level", 0.02, 0.001, "mm", "T5 step at P9", register="T5", at=3.0, cycle="P9"),
+        ModelEffect("E2", "level", -0.01, 0.001, "mm", "all tools step at P4", at=1.0, cycle="P4"),
+        ModelEffect(
+            "E3",
+            "process",
+            2e-6,
+            1e-7,
+            "mm/unit of rpm",
+            "W1 ~ rpm",
+            channel="rpm",
+            register="W1",
+            reference=9000.0,
+            span=6000.0,
+        ),
+        ModelEffect(
+            "E4",
+            "process",
+            0.03,
+            0.002,
+            "mm/unit of len=Long",
+            "all tools ~ len=Long",
+            channel="len=Long",
+            reference=0.5,
+            span=1.0,
+        ),
+    ),
+    origin="2026-11-02T06:00:00",
+    cycle_hours=0.5,
+    last_hours=10.0,
+)
 
 
 def test_level_and_process_round_trip_and_forecast(tmp_path):
@@ -124,25 +162,35 @@ def test_level_and_process_round_trip_and_forecast(tmp_path):
     np.testing.assert_allclose(got, want)
 
 
-@pytest.mark.parametrize(("table", "key"), [
-    ({"E1": {"kind": "level", "estimate": 0.1}}, "effects.E1.at"),
-    ({"E1": {"kind": "level", "estimate": 0.1, "at": -1.0}}, "effects.E1.at"),
-    ({"E1": {"kind": "level", "estimate": 11.0, "at": 1.0}}, "effects.E1.estimate"),
-    ({"E1": {"kind": "level", "estimate": 0.1, "at": 1.0, "register": "X9"}}, "effects.E1.register"),
-    ({"E1": {"kind": "process", "estimate": 0.1, "channel": "rpm"}}, "effects.E1.span"),
-    ({"E1": {"kind": "process", "estimate": 0.01, "channel": "rpm", "span": 6000.0}}, "effects.E1.estimate"),
-    ({"E1": {"kind": "process", "estimate": 0.01, "channel": "rpm", "span": 0.0}}, "effects.E1.span"),
-    ({"E1": {"kind": "process", "estimate": 0.01, "channel": "rpm", "span": 1.0, "reference": 1e13}},
-     "effects.E1.reference"),
-])
+@pytest.mark.parametrize(
+    ("table", "key"),
+    [
+        ({"E1": {"kind": "level", "estimate": 0.1}}, "effects.E1.at"),
+        ({"E1": {"kind": "level", "estimate": 0.1, "at": -1.0}}, "effects.E1.at"),
+        ({"E1": {"kind": "level", "estimate": 11.0, "at": 1.0}}, "effects.E1.estimate"),
+        ({"E1": {"kind": "level", "estimate": 0.1, "at": 1.0, "register": "X9"}}, "effects.E1.register"),
+        ({"E1": {"kind": "process", "estimate": 0.1, "channel": "rpm"}}, "effects.E1.span"),
+        ({"E1": {"kind": "process", "estimate": 0.01, "channel": "rpm", "span": 6000.0}}, "effects.E1.estimate"),
+        ({"E1": {"kind": "process", "estimate": 0.01, "channel": "rpm", "span": 0.0}}, "effects.E1.span"),
+        (
+            {"E1": {"kind": "process", "estimate": 0.01, "channel": "rpm", "span": 1.0, "reference": 1e13}},
+            "effects.E1.reference",
+        ),
+    ],
+)
 def test_bad_level_and_process_effects_are_named(table, key, guide_pins_model):
     with pytest.raises(ModelError) as err:
         effects_from_dict(table, guide_pins_model, "m.toml")
     assert f"m.toml: [{key}]" in str(err.value)
 
 
-@pytest.mark.parametrize("spec", [EffectSpec("level", register="T5"),  # at 0 h: every cycle alike, no step
-                                  EffectSpec("process", channel="speed_rpm", register="T5")])  # no channel recorded
+@pytest.mark.parametrize(
+    "spec",
+    [
+        EffectSpec("level", register="T5"),  # at 0 h: every cycle alike, no step
+        EffectSpec("process", channel="speed_rpm", register="T5"),
+    ],
+)  # no channel recorded
 def test_simulator_refuses_an_effect_it_cannot_hide(spec):
     from setupfix.errors import ParameterError
 

@@ -8,12 +8,11 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import SAMPLES
 
 from setupfix.diagnose import Diagnoser, select_effects
 from setupfix.pipeline.diagnose import DiagnoseRequest, diagnose_reports
 from setupfix.pipeline.series import load_series
-
-from conftest import SAMPLES
 
 PLATE = SAMPLES / "qif" / "NIST_MTC_FAIR_Plate_Results_20parts.qif"
 MODEL = Path(__file__).parents[1] / "data" / "nist_plate.toml"
@@ -46,8 +45,11 @@ def test_the_designed_factors_are_named_per_cutter_not_wear_or_drift(tmp_path):
     residual drops from 0.097 to 0.061 mm and the out-of-tolerance cells from 23 to 4.  (The walk forward
     still prefers EWMA here: W1, the distances' register, moves between parts and EWMA follows it;
     test_diagnose_plate.py.)"""
-    out = diagnose_reports(DiagnoseRequest(MODEL, (PLATE,), process=str(LOG), augment=str(tmp_path / "aug.toml"),
-                                           diagnoser=Diagnoser(walk=False)))
+    out = diagnose_reports(
+        DiagnoseRequest(
+            MODEL, (PLATE,), process=str(LOG), augment=str(tmp_path / "aug.toml"), diagnoser=Diagnoser(walk=False)
+        )
+    )
     d = out.diagnosis
     assert {e.kind for e in d.effects} == {"process"}
     assert {e.spec.channel for e in d.effects} == {"tools=7 15 3 4 5 1 23 & doe_tool_length=Long"}
@@ -64,8 +66,9 @@ def test_the_designed_factors_are_named_per_cutter_not_wear_or_drift(tmp_path):
     assert {e["kind"] for e in doc["effects"]} == {"process"}
     json.dumps(doc)
     # the augmented model carries them; read with the same log it reproduces the fit
-    again = diagnose_reports(DiagnoseRequest(tmp_path / "aug.toml", (PLATE,), process=str(LOG),
-                                             diagnoser=Diagnoser(walk=False)))
+    again = diagnose_reports(
+        DiagnoseRequest(tmp_path / "aug.toml", (PLATE,), process=str(LOG), diagnoser=Diagnoser(walk=False))
+    )
     assert [e.target for e in again.input.model.effects.effects] == [e.target for e in d.effects]
     assert again.diagnosis.error_before.rms == pytest.approx(d.error_after.rms, rel=1e-6)
 
@@ -97,8 +100,7 @@ def test_the_spindle_speed_is_real_but_not_claimed_by_the_search():
     assert 0.01 / m < min(ps.values()) < 0.01 and min(ps, key=lambda r: ps[r]) == "T5A"
     # the speed removed from the deviations (the within-long slopes): the stick-out is every long part
     a = channel(s, LONG) * (channel(s, RPM) / 1000.0 - 9.0)
-    contrib = sum(np.outer(a, layout.composite[j]) * float(rows[layout.register_ids[j]]["slope"])
-                  for j in layout.tools)
+    contrib = sum(np.outer(a, layout.composite[j]) * float(rows[layout.register_ids[j]]["slope"]) for j in layout.tools)
     quiet = select_effects(layout, dataclasses.replace(s, deviation=s.deviation - contrib))
     assert {e.channel for e in quiet.found} == {LONG}
     # the residual: the speed term per cutter closes most of the gap; per dimension it is the issue's 0.025
@@ -109,8 +111,11 @@ def test_the_spindle_speed_is_real_but_not_claimed_by_the_search():
 
 @needs_log
 def test_a_model_with_process_effects_needs_the_log(tmp_path):
-    diagnose_reports(DiagnoseRequest(MODEL, (PLATE,), process=str(LOG), augment=str(tmp_path / "aug.toml"),
-                                     diagnoser=Diagnoser(walk=False)))
+    diagnose_reports(
+        DiagnoseRequest(
+            MODEL, (PLATE,), process=str(LOG), augment=str(tmp_path / "aug.toml"), diagnoser=Diagnoser(walk=False)
+        )
+    )
     from setupfix.errors import MatchError
 
     with pytest.raises(MatchError, match="needs process channel"):

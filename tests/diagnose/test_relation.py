@@ -4,13 +4,12 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from diagnose.helpers import NOISE, guide_pins
 
 from setupfix.diagnose import Diagnoser, Layout, Series, walk_forward
 from setupfix.diagnose.forecast import relation_composite
 from setupfix.model.effects import EffectsSection
 from setupfix.pipeline.diagnose import augmented_section
-
-from diagnose.helpers import NOISE, guide_pins
 
 N = 40
 
@@ -29,9 +28,9 @@ def _steps(n_registers: int, seed: int) -> np.ndarray:
     """Corrections in effect: every 5 cycles each register takes its own random step."""
     rng = np.random.default_rng(seed)
     steps = np.zeros((N, n_registers))
-    steps[5::5] = rng.choice([-1.0, 1.0], (len(range(5, N, 5)), n_registers)) * rng.uniform(0.005, 0.02,
-                                                                                              (len(range(5, N, 5)),
-                                                                                               n_registers))
+    steps[5::5] = rng.choice([-1.0, 1.0], (len(range(5, N, 5)), n_registers)) * rng.uniform(
+        0.005, 0.02, (len(range(5, N, 5)), n_registers)
+    )
     return np.cumsum(steps, axis=0)
 
 
@@ -54,8 +53,11 @@ def test_distinguishable_histories_name_the_register(seed):
     delta = d.relation_matrix() - layout.composite
     assert np.flatnonzero(delta).tolist() == [layout.register_ids.index(reg) * layout.n_dimensions]
     # and so does the augmented model file, for `correct`
-    np.testing.assert_allclose(relation_composite(augmented_section(d, EffectsSection()), layout),
-                               d.relation_matrix(), atol=1e-5 * abs(e.estimate))
+    np.testing.assert_allclose(
+        relation_composite(augmented_section(d, EffectsSection()), layout),
+        d.relation_matrix(),
+        atol=1e-5 * abs(e.estimate),
+    )
 
 
 def test_registers_that_moved_together_are_named_together_and_not_guessed():

@@ -4,18 +4,24 @@ from __future__ import annotations
 
 import json
 
+from conftest import GUIDE_PINS, SAMPLES
+
 from setupfix.diagnose import Diagnoser
 from setupfix.pipeline.diagnose import DiagnoseRequest, diagnose_reports
-
-from conftest import GUIDE_PINS, SAMPLES
 
 LOOP = SAMPLES / "closed_loop"
 
 
 def test_simulated_series_reveals_its_undeclared_thermal_effect():
-    out = diagnose_reports(DiagnoseRequest(
-        GUIDE_PINS / "model.toml", (LOOP / "measurements.csv",), corrections=str(LOOP / "corrections.csv"),
-        temperatures=str(LOOP / "temperatures.csv"), diagnoser=Diagnoser(walk=False)))
+    out = diagnose_reports(
+        DiagnoseRequest(
+            GUIDE_PINS / "model.toml",
+            (LOOP / "measurements.csv",),
+            corrections=str(LOOP / "corrections.csv"),
+            temperatures=str(LOOP / "temperatures.csv"),
+            diagnoser=Diagnoser(walk=False),
+        )
+    )
     truth = json.loads((LOOP / "truth.json").read_text())["hidden_effects"]
     found = [(e.kind, e.target) for e in out.diagnosis.effects]
     assert found == [(t["kind"], t["target"]) for t in truth]
@@ -40,8 +46,7 @@ def test_real_sheet_metal_offset_only_model_leaves_a_tilt():
 def test_positions_from_the_reports_when_the_model_has_none(tmp_path):
     text = (LOOP / "sheet_metal" / "model.toml").read_text(encoding="utf-8")
     bare = tmp_path / "model.toml"
-    bare.write_text("\n".join(line for line in text.splitlines() if not line.startswith("position")),
-                    encoding="utf-8")
+    bare.write_text("\n".join(line for line in text.splitlines() if not line.startswith("position")), encoding="utf-8")
     report = SAMPLES / "qif" / "QIF3_SheetMetal_Results_6_samples.QIF"
     out = diagnose_reports(DiagnoseRequest(bare, (report,), diagnoser=Diagnoser(walk=False, alpha=0.05)))
     assert [(e.kind, e.target) for e in out.diagnosis.effects] == [("position", "x"), ("position", "z")]

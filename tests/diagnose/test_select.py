@@ -7,12 +7,11 @@ import dataclasses
 import numpy as np
 import pytest
 import scipy.stats
+from diagnose.helpers import NOISE, guide_pins, one_effect, simulate, topology
 
 from setupfix.diagnose import Diagnoser, EffectSpec, HiddenEffect, Layout, Series, candidate_specs, select_effects
 from setupfix.diagnose.select import STATIC, spread
 from setupfix.diagnose.terms import common_tool_row
-
-from diagnose.helpers import NOISE, guide_pins, one_effect, simulate, topology
 
 KINDS = ["drift", "saturating", "thermal", "wear", "scale", "position", "relation", "group"]
 
@@ -121,8 +120,7 @@ def test_static_effects_do_not_depend_on_the_order_of_the_parts(static, seed):
         assert {f for f in again.found if f.kind in STATIC} == static
         # the whole selection is the same: folds deal the cycles in time order, not in reading order
         assert [(s.spec, s.accepted) for s in again.steps] == [(s.spec, s.accepted) for s in first.steps]
-        np.testing.assert_allclose([s.cv_before for s in again.steps], [s.cv_before for s in first.steps],
-                                   rtol=1e-9)
+        np.testing.assert_allclose([s.cv_before for s in again.steps], [s.cv_before for s in first.steps], rtol=1e-9)
 
 
 def test_selection_tries_the_next_candidate_after_one_is_refused():
@@ -135,8 +133,7 @@ def test_selection_tries_the_next_candidate_after_one_is_refused():
     spike[20] = 10.0
     dev = s.deviation.copy()
     dev[20] += 0.03 * common_tool_row(layout)
-    series = Series(dev, s.time, s.applied, s.parts, np.column_stack([s.temperature, spike]),
-                    (*s.channels, "coolant"))
+    series = Series(dev, s.time, s.applied, s.parts, np.column_stack([s.temperature, spike]), (*s.channels, "coolant"))
     sel = select_effects(layout, series)
     assert sel.steps[0].spec.channel == "coolant" and not sel.steps[0].accepted
     assert [(f.kind, f.register) for f in sel.found] == [("wear", layout.tool_ids[0])]

@@ -6,12 +6,18 @@ import dataclasses
 
 import numpy as np
 import pytest
+from diagnose.helpers import guide_pins, one_effect, simulate
 
 from setupfix.diagnose import Diagnoser, EffectSpec, Layout, fit_model, walk_forward
-from setupfix.diagnose.walk import (Budget, WalkForward, centred_registers, ewma_forecast, margins_of, next_cycle,
-                                    next_source)
-
-from diagnose.helpers import guide_pins, one_effect, simulate
+from setupfix.diagnose.walk import (
+    Budget,
+    WalkForward,
+    centred_registers,
+    ewma_forecast,
+    margins_of,
+    next_cycle,
+    next_source,
+)
 
 
 @pytest.mark.parametrize("kind", ["drift", "wear"])
@@ -99,16 +105,20 @@ def _walk(aug: tuple[float, int], other: tuple[float, int], name: str = "ewma") 
     def budget(centre: float, out: int) -> Budget:
         return Budget(np.zeros(3), 0.0, 0.0, centre, out, centre, centre)
 
-    return WalkForward((5, 6, 7), {"declared": budget(1.0, 9), "augmented": budget(*aug), name: budget(*other),
-                                   "none": budget(2.0, 9)})
+    return WalkForward(
+        (5, 6, 7), {"declared": budget(1.0, 9), "augmented": budget(*aug), name: budget(*other), "none": budget(2.0, 9)}
+    )
 
 
-@pytest.mark.parametrize(("aug", "ewma", "source"), [
-    ((0.10, 2), (0.12, 2), "augmented"),   # closer to the centre, no more out: earned
-    ((0.10, 3), (0.12, 2), "ewma"),        # closer, but one more out of tolerance: not earned
-    ((0.133, 30), (0.128, 30), "ewma"),    # the plate of issue 24: worse than EWMA
-    ((0.12, 2), (0.12, 2), "ewma"),        # a tie is not a win
-])
+@pytest.mark.parametrize(
+    ("aug", "ewma", "source"),
+    [
+        ((0.10, 2), (0.12, 2), "augmented"),  # closer to the centre, no more out: earned
+        ((0.10, 3), (0.12, 2), "ewma"),  # closer, but one more out of tolerance: not earned
+        ((0.133, 30), (0.128, 30), "ewma"),  # the plate of issue 24: worse than EWMA
+        ((0.12, 2), (0.12, 2), "ewma"),  # a tie is not a win
+    ],
+)
 def test_an_effect_enters_the_next_correction_only_if_it_beat_ewma(aug, ewma, source):
     got = next_source(_walk(aug, ewma), True)
     assert got.source == source

@@ -30,8 +30,9 @@ def _run_page(page: Path, folder: Path) -> list[str]:
             continue
         actual = run(step.command, cwd)
         if not matches(step.text, actual):
-            failures.append(f"{_name(page)}:{step.line}: $ {step.command}\n--- expected\n{step.text}\n"
-                            f"--- got\n{actual}")
+            failures.append(
+                f"{_name(page)}:{step.line}: $ {step.command}\n--- expected\n{step.text}\n--- got\n{actual}"
+            )
     return failures
 
 
@@ -46,8 +47,13 @@ def outcomes(tmp_path_factory: pytest.TempPathFactory) -> dict[Path, list[str]]:
 def test_the_pages_hold_examples() -> None:
     """The README and the tutorials are tested, not skipped by a parser that finds nothing."""
     names = {p.relative_to(ROOT).as_posix() for p in _WITH_EXAMPLES}
-    assert {"README.md", "docs/tutorials/first-correction.md", "docs/tutorials/own-report.md",
-            "docs/tutorials/multi-station.md", "docs/tutorials/closing-the-loop.md"} <= names
+    assert {
+        "README.md",
+        "docs/tutorials/first-correction.md",
+        "docs/tutorials/own-report.md",
+        "docs/tutorials/multi-station.md",
+        "docs/tutorials/closing-the-loop.md",
+    } <= names
 
 
 def test_the_matcher_is_strict() -> None:

@@ -31,8 +31,8 @@ def _section(text: str, path: tuple[str, ...]) -> str:
     title = "`setupfix" + "".join(f" {p}" for p in path) + "`"
     m = re.search(rf"^#+ {re.escape(title)}$", text, re.M)
     assert m, f"no heading for {title}"
-    nxt = re.search(r"^#+ `setupfix", text[m.end():], re.M)
-    return text[m.end(): m.end() + nxt.start() if nxt else len(text)]
+    nxt = re.search(r"^#+ `setupfix", text[m.end() :], re.M)
+    return text[m.end() : m.end() + nxt.start() if nxt else len(text)]
 
 
 def test_committed_pages_are_the_generated_ones() -> None:
@@ -44,6 +44,7 @@ def test_committed_pages_are_the_generated_ones() -> None:
 
 def test_every_command_and_option_is_in_the_reference() -> None:
     from setupfix.cli import build_parser
+
     text = gen.CLI_PAGE.read_text(encoding="utf-8")
     seen = 0
     for path, parser in gen.commands(build_parser()):
@@ -70,10 +71,18 @@ def test_a_missing_option_is_caught() -> None:
 
 def test_every_model_key_is_in_the_reference() -> None:
     from setupfix.model import axes, effects, loader, safety, stations, tables
+
     text = gen.KEYS_PAGE.read_text(encoding="utf-8")
-    keys = set().union(*tables._KEYS.values(), *axes.MULTI_KEYS.values(), safety.SAFETY_KEYS,
-                       safety.REGISTER_KEYS, safety.DIMENSION_KEYS, effects._KEYS, stations._STATION_KEYS,
-                       stations._TEMPLATE_KEYS)
+    keys = set().union(
+        *tables._KEYS.values(),
+        *axes.MULTI_KEYS.values(),
+        safety.SAFETY_KEYS,
+        safety.REGISTER_KEYS,
+        safety.DIMENSION_KEYS,
+        effects._KEYS,
+        stations._STATION_KEYS,
+        stations._TEMPLATE_KEYS,
+    )
     for key in sorted(keys):
         assert f"`{key}`" in text, f"model key {key} missing from docs/reference/model-keys.md"
     for section in (*tables._KEYS, *loader.SECTIONS, *loader._EXPANDED):
@@ -82,6 +91,7 @@ def test_every_model_key_is_in_the_reference() -> None:
 
 def test_every_effect_kind_is_in_the_reference() -> None:
     from setupfix.model.effects import EFFECT_KINDS
+
     text = gen.KEYS_PAGE.read_text(encoding="utf-8")
     for kind in EFFECT_KINDS:
         assert f"`{kind}`" in text
@@ -93,6 +103,7 @@ def test_the_effects_head_keys_are_the_loaders() -> None:
 
     from setupfix.errors import ModelError
     from setupfix.model.loader import model_from_dict
+
     base = tomllib.loads((ROOT / "sample_reports/guide_pins/model.toml").read_text(encoding="utf-8"))
     head = {"origin": "2026-11-02T06:00:00", "cycle_hours": 0.5, "last_hours": 2.0}
     assert set(head) == gen.EFFECTS_HEAD

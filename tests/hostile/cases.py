@@ -72,37 +72,54 @@ def _zip_bomb() -> bytes:
 
 
 def _qif(body: str, encoding: str = "utf-8", doctype: str = "") -> bytes:
-    text = (f'<?xml version="1.0" encoding="{encoding.upper()}"?>\n{doctype}'
-            f'<QIFDocument xmlns="http://qifstandards.org/xsd/qif3" versionQIF="3.0.0">{body}</QIFDocument>\n')
+    text = (
+        f'<?xml version="1.0" encoding="{encoding.upper()}"?>\n{doctype}'
+        f'<QIFDocument xmlns="http://qifstandards.org/xsd/qif3" versionQIF="3.0.0">{body}</QIFDocument>\n'
+    )
     return text.encode(encoding)
 
 
 _DTD = '<!DOCTYPE QIFDocument [<!ENTITY x SYSTEM "file:///etc/passwd">]>\n'
-_EXTERNAL = ('<ExternalQIFReferences><ExternalQIFDocument id="9"><URI>{uri}</URI></ExternalQIFDocument>'
-             '</ExternalQIFReferences><Results><MeasurementResultsSet><MeasurementResults id="1">'
-             '<MeasuredCharacteristics><CharacteristicMeasurements>'
-             '<DiameterCharacteristicMeasurement id="2"><CharacteristicItemId xId="5">9</CharacteristicItemId>'
-             '<Value>1</Value></DiameterCharacteristicMeasurement></CharacteristicMeasurements>'
-             '</MeasuredCharacteristics></MeasurementResults></MeasurementResultsSet></Results>')
+_EXTERNAL = (
+    '<ExternalQIFReferences><ExternalQIFDocument id="9"><URI>{uri}</URI></ExternalQIFDocument>'
+    '</ExternalQIFReferences><Results><MeasurementResultsSet><MeasurementResults id="1">'
+    "<MeasuredCharacteristics><CharacteristicMeasurements>"
+    '<DiameterCharacteristicMeasurement id="2"><CharacteristicItemId xId="5">9</CharacteristicItemId>'
+    "<Value>1</Value></DiameterCharacteristicMeasurement></CharacteristicMeasurements>"
+    "</MeasuredCharacteristics></MeasurementResults></MeasurementResultsSet></Results>"
+)
 
 CASES: list[Case] = [
     Case("truncated_cycle.csv", _cut(GUIDE / "cycle_01.csv", 322), "may be truncated"),
     Case("truncated_cycle.dmo", _cut(GUIDE / "cycle_01.dmo", 4000), "may be truncated"),
     Case("truncated_cycle.qif", _cut(GUIDE / "cycle_01.qif", 20000), "not well-formed XML"),
-    Case("underscore.csv", lambda: _canonical("P1 D1,25,-0_0309,-0.1,0.1,cycle\n"),
-         "expected a number, found '-0_0309'"),
+    Case(
+        "underscore.csv", lambda: _canonical("P1 D1,25,-0_0309,-0.1,0.1,cycle\n"), "expected a number, found '-0_0309'"
+    ),
     Case("nan_limit.csv", lambda: _canonical("P1 D1,25,24.97,-0.1,NaN,cycle\n"), "expected a number, found 'NaN'"),
     Case("inf_actual.csv", lambda: _canonical("P1 D1,25,inf,-0.1,0.1,cycle\n"), "expected a number, found 'inf'"),
     Case("huge_actual.csv", lambda: _canonical("P1 D1,25,1e308,-0.1,0.1,cycle\n"), "beyond any measurable length"),
     Case("digits401.csv", lambda: _canonical(f"P1 D1,{'9' * 401},25,-0.1,0.1,cycle\n"), "expected a number"),
     Case("hex.csv", lambda: _canonical("P1 D1,0x19,25,-0.1,0.1,cycle\n"), "expected a number, found '0x19'"),
-    Case("inch_overflow.dmo", lambda: b"UNITS/INCH,ANGDEC\nF(P)=FEAT/POINT,CART,1e307,0,0,0,0,1\n"
-         b"T(P_X)=TOL/CORTOL,XAXIS,-0.1,0.1\nFA(P)=FEAT/POINT,CART,1e307,0,0,0,0,1\n"
-         b"TA(P_X)=TOL/CORTOL,XAXIS,0,INTOL\nENDFIL\n", "beyond"),
-    Case("qif_underscore.qif", _edit(GUIDE / "cycle_01.qif", b"<Value>24.9691</Value>", b"<Value>24_9691</Value>"),
-         "Value.*expected a number, found '24_9691'"),
-    Case("qif_nan_limit.qif", _edit(GUIDE / "cycle_01.qif", b"<MaxValue>0.1</MaxValue>", b"<MaxValue>NaN</MaxValue>"),
-         "MaxValue.*expected a number, found 'NaN'"),
+    Case(
+        "inch_overflow.dmo",
+        lambda: (
+            b"UNITS/INCH,ANGDEC\nF(P)=FEAT/POINT,CART,1e307,0,0,0,0,1\n"
+            b"T(P_X)=TOL/CORTOL,XAXIS,-0.1,0.1\nFA(P)=FEAT/POINT,CART,1e307,0,0,0,0,1\n"
+            b"TA(P_X)=TOL/CORTOL,XAXIS,0,INTOL\nENDFIL\n"
+        ),
+        "beyond",
+    ),
+    Case(
+        "qif_underscore.qif",
+        _edit(GUIDE / "cycle_01.qif", b"<Value>24.9691</Value>", b"<Value>24_9691</Value>"),
+        "Value.*expected a number, found '24_9691'",
+    ),
+    Case(
+        "qif_nan_limit.qif",
+        _edit(GUIDE / "cycle_01.qif", b"<MaxValue>0.1</MaxValue>", b"<MaxValue>NaN</MaxValue>"),
+        "MaxValue.*expected a number, found 'NaN'",
+    ),
     Case("dtd_utf16be.qif", lambda: _qif("", "utf-16-be", _DTD), "document type or entity declarations"),
     Case("dtd_utf32.qif", lambda: _qif("", "utf-32", _DTD), "document type or entity declarations"),
     Case("plan_passwd.qif", lambda: _qif(_EXTERNAL.format(uri="file:///etc/passwd")), "not beside the file"),
@@ -111,8 +128,7 @@ CASES: list[Case] = [
     Case("cell_XFD1048576.xlsx", lambda: _xlsx("XFD1048576"), "spans 1048576 rows x 16384 columns"),
     Case("cell_ZZ200000.xlsx", lambda: _xlsx("ZZ200000"), "spans 200000 rows"),
     Case("zip_bomb.xlsx", _zip_bomb, "zip bomb"),
-    Case("punycode.csv", lambda: _canonical("P1 D1,25,24.97,-0.1,0.1,cycle\n"), "punycode",
-         ("--encoding", "punycode")),
+    Case("punycode.csv", lambda: _canonical("P1 D1,25,24.97,-0.1,0.1,cycle\n"), "punycode", ("--encoding", "punycode")),
     Case("empty.csv", lambda: b"", "empty file"),
     Case("blank.dmo", lambda: b"\r\n \n", "empty file"),
     Case("binary.dmo", lambda: bytes(range(256)) * 4, "ENDFIL|no tolerance|not|truncated"),
@@ -120,14 +136,25 @@ CASES: list[Case] = [
 
 
 #: File names a command must show escaped, never choke on (and must not run as a spreadsheet formula).
-HOSTILE_NAMES: tuple[str, ...] = ("=HYPERLINK(0).csv", "+sum.csv", "-minus.csv", "@at.csv", "\ttab.csv",
-                                  "\rcr_first.csv", "cr\rinside.csv", "line\nfeed.csv",
-                                  os.fsdecode(b"not_utf8_\xff\xfe.csv"))
+HOSTILE_NAMES: tuple[str, ...] = (
+    "=HYPERLINK(0).csv",
+    "+sum.csv",
+    "-minus.csv",
+    "@at.csv",
+    "\ttab.csv",
+    "\rcr_first.csv",
+    "cr\rinside.csv",
+    "line\nfeed.csv",
+    os.fsdecode(b"not_utf8_\xff\xfe.csv"),
+)
 
 CASES += [
     Case("decimal_comma.csv", lambda: _canonical("P1 D1,25,24,9691,-0.1,0.1,cycle\n"), "7 fields, header has 6"),
-    Case("decimal_comma_quoted.csv", lambda: _canonical('P1 D1,25,"24,9691",-0.1,0.1,cycle\n'),
-         "expected a number, found '24,9691'"),
+    Case(
+        "decimal_comma_quoted.csv",
+        lambda: _canonical('P1 D1,25,"24,9691",-0.1,0.1,cycle\n'),
+        "expected a number, found '24,9691'",
+    ),
     Case("huge_1e300.csv", lambda: _canonical("P1 D1,25,1e300,-0.1,0.1,cycle\n"), "beyond any measurable length"),
     Case("binary.csv", lambda: bytes(range(256)) * 8, "no reader accepts|not|empty"),
     Case("nul_only.csv", lambda: b"\x00" * 64, "empty file"),

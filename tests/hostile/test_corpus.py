@@ -22,8 +22,7 @@ MODEL = str(GUIDE / "model.toml")
 COMMANDS = {
     "parse": lambda path, out: ["parse", str(path), "--out", str(out)],
     "correct": lambda path, out: ["correct", "--model", MODEL, str(path), "--offsets", str(out)],
-    "compare": lambda path, out: ["compare", "--model", MODEL, "--trials", "1", "--plot", str(out) + ".png",
-                                  str(path)],
+    "compare": lambda path, out: ["compare", "--model", MODEL, "--trials", "1", "--plot", str(out) + ".png", str(path)],
     "model-init": lambda path, out: ["model", "init", str(path), "-o", str(out)],
     "model-check": lambda path, out: ["model", "check", MODEL, str(path)],
     "diagnose": lambda path, out: ["diagnose", "--model", MODEL, "--augment", str(out), str(path)],
@@ -31,8 +30,7 @@ COMMANDS = {
 }
 #: Commands that take every case (the cases' extra options are theirs).
 ALL_CASES = ("parse", "correct", "history-import")
-PAIRS = [(command, case) for command in sorted(COMMANDS) for case in CASES
-         if command in ALL_CASES or not case.options]
+PAIRS = [(command, case) for command in sorted(COMMANDS) for case in CASES if command in ALL_CASES or not case.options]
 
 
 def case_id(value: object) -> str:
@@ -40,8 +38,9 @@ def case_id(value: object) -> str:
 
 
 @pytest.mark.parametrize(("command", "case"), PAIRS, ids=case_id)
-def test_hostile_report_is_refused_in_one_line(case: Case, command: str, tmp_path: Path,
-                                               capsys: pytest.CaptureFixture[str]) -> None:
+def test_hostile_report_is_refused_in_one_line(
+    case: Case, command: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     path = tmp_path / case.name
     path.write_bytes(case.make())
     out = tmp_path / "out.csv"

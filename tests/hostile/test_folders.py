@@ -87,8 +87,11 @@ def test_parse_and_history_import_of_the_folder(tmp_path, capsys):
 @pytest.mark.parametrize("command", ["diagnose", "model-init"])
 def test_series_commands_on_the_folder(command, tmp_path, capsys):
     d = corpus_folder(tmp_path)
-    args = (["diagnose", "--model", MODEL, "--no-walk", str(d)] if command == "diagnose"
-            else ["model", "init", str(d), "-o", str(tmp_path / "m.toml")])
+    args = (
+        ["diagnose", "--model", MODEL, "--no-walk", str(d)]
+        if command == "diagnose"
+        else ["model", "init", str(d), "-o", str(tmp_path / "m.toml")]
+    )
     try:
         code = main(args)
     finally:

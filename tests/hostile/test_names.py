@@ -68,12 +68,22 @@ def test_one_report_commands(name: str, tmp_path: Path, capsys: pytest.CaptureFi
     assert code == 0 and {r["report"] for r in csv_rows(tmp_path / "o.csv")} == {csv_cell(shown)}
     code, out, _ = run(capsys, "correct", "--model", MODEL, str(path), "--json")
     assert code == 0 and json.loads(out)["report"] == shown
-    code, _, _ = run(capsys, "correct", "--model", MODEL, str(path), "--controller", "fanuc", "--offsets",
-                     str(tmp_path / "o.nc"))
+    code, _, _ = run(
+        capsys, "correct", "--model", MODEL, str(path), "--controller", "fanuc", "--offsets", str(tmp_path / "o.nc")
+    )
     program = (tmp_path / "o.nc").read_bytes().decode("utf-8").split("\n")
     (tmp_path / "plain.csv").write_bytes(path.read_bytes())
-    run(capsys, "correct", "--model", MODEL, str(tmp_path / "plain.csv"), "--controller", "fanuc", "--offsets",
-        str(tmp_path / "plain.nc"))
+    run(
+        capsys,
+        "correct",
+        "--model",
+        MODEL,
+        str(tmp_path / "plain.csv"),
+        "--controller",
+        "fanuc",
+        "--offsets",
+        str(tmp_path / "plain.nc"),
+    )
     plain = (tmp_path / "plain.nc").read_text().split("\n")
     assert code == 0 and len(program) == len(plain) and program[2:] == plain[2:]  # no line break from the name
     code, _, _ = run(capsys, "model", "check", MODEL, str(path))
@@ -113,8 +123,9 @@ def test_many_report_commands(tmp_path: Path, capsys: pytest.CaptureFixture[str]
     assert {r["report"] for r in csv_rows(tmp_path / "m.csv")} == {csv_cell(n) for n in shown}
     back = parsers.read_report(tmp_path / "m.csv").table  # the project's reader removes the formula prefix
     assert set(back["report"]) == shown
-    code, _, _ = run(capsys, "batch", str(tmp_path / "in"), "--model", MODEL, "--out", str(tmp_path / "b.csv"),
-                     "--settle", "0")
+    code, _, _ = run(
+        capsys, "batch", str(tmp_path / "in"), "--model", MODEL, "--out", str(tmp_path / "b.csv"), "--settle", "0"
+    )
     assert code == 0 and {r["report"] for r in csv_rows(tmp_path / "b.csv")} == {csv_cell(n) for n in shown}
     code, _, _ = run(capsys, "history", "import", "--db", str(tmp_path / "h.db"), *paths)
     assert code == 0

@@ -28,7 +28,8 @@ def _held(db: Path) -> tuple[int, int, int]:
 
 @pytest.mark.parametrize("case", CASES, ids=lambda c: c.name)
 def test_history_import_refuses_a_hostile_report_in_one_line_and_stores_nothing(
-        case: Case, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    case: Case, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     db = tmp_path / "h.db"
     assert main(["history", "import", "--db", str(db), str(GUIDE / "cycle_01.csv")]) == 0
     before = _held(db)
@@ -52,15 +53,30 @@ def test_history_import_refuses_a_hostile_report_in_one_line_and_stores_nothing(
 
 @pytest.mark.parametrize("case", [c for c in CASES if not c.options], ids=lambda c: c.name)
 def test_batch_store_names_a_hostile_report_and_stores_only_the_good_one(
-        case: Case, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    case: Case, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     folder = tmp_path / "reports"
     folder.mkdir()
     shutil.copy(GUIDE / "cycle_02.csv", folder / "cycle_02.csv")
     (folder / case.name).write_bytes(case.make())
     db, out = tmp_path / "h.db", tmp_path / "out.csv"
     capsys.readouterr()
-    status = main(["batch", str(folder), "--model", MODEL, "--out", str(out), "--store", str(db), "--settle", "0",
-                   "--workers", "1"])
+    status = main(
+        [
+            "batch",
+            str(folder),
+            "--model",
+            MODEL,
+            "--out",
+            str(out),
+            "--store",
+            str(db),
+            "--settle",
+            "0",
+            "--workers",
+            "1",
+        ]
+    )
     err = capsys.readouterr().err
     assert "internal error" not in err and "Traceback" not in err
     errors = [line for line in err.splitlines() if line.startswith("error")]

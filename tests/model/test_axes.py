@@ -10,7 +10,7 @@ import pytest
 from setupfix.errors import ModelError
 from setupfix.model import load_model
 
-BASE = '''
+BASE = """
 [process]
 name = "two axes"
 axes = ["X", "Y", "Z"]
@@ -71,7 +71,7 @@ components = ["Hole X", "Hole Y"]
 axes = ["X", "Y"]
 diameter = 0.1
 features = { F1 = 1 }
-'''
+"""
 
 
 def load(tmp_path: Path, text: str):
@@ -110,42 +110,51 @@ def test_components_are_registers_in_file_order(tmp_path):
 
 
 def test_one_axis_file_unchanged(tmp_path):
-    text = "\n".join(line for line in BASE.splitlines()
-                     if not line.startswith(("axes", "rotation", "radius", "direction", "kind", "components",
-                                             "diameter", "axis")))
+    text = "\n".join(
+        line
+        for line in BASE.splitlines()
+        if not line.startswith(("axes", "rotation", "radius", "direction", "kind", "components", "diameter", "axis"))
+    )
     text = text.replace("{ W1 = { x = -1, y = 1, z = -1, c = 0 }, W2 = 1 }", "{ W1 = -1, W2 = 1 }")
-    text = text.replace('[dimensions.D4]\nname = "Hole"\n', '[dimensions.D4]\nname = "Hole"\nnominal = 0\n'
-                        'lower = -0.05\nupper = 0.05\n')
+    text = text.replace(
+        '[dimensions.D4]\nname = "Hole"\n', '[dimensions.D4]\nname = "Hole"\nnominal = 0\nlower = -0.05\nupper = 0.05\n'
+    )
     m = load(tmp_path, text)
     assert not m.multi_axis and m.register_ids == ["W1", "W2", "T1", "T2"]
     assert all(r.component is None and r.owner is None for r in m.registers)
     assert m.features[1].wks == {"W1": -1.0, "W2": 1.0} and m.features[1].components == {}
 
 
-@pytest.mark.parametrize(("edit", "key", "words"), [
-    (('axes = ["X", "Y", "Z"]', 'axes = ["X", "X"]'), "process.axes", "distinct"),
-    (('axes = ["X", "Y", "Z"]', 'axes = ["X", "Y", "Z"]\nspindle = "B"'), "process.spindle", '"X", "Y" or "Z"'),
-    (("rotation_limit = 0.02", "rotation_limit = -1"), "process.rotation_limit", "> 0"),
-    (("rotation_resolution = 0.0002", "rotation_resolution = 0.5"), "process.rotation_resolution", "above"),
-    (('axes = ["Z", "X"]', 'axes = ["Z", "B"]'), "wks.W2.axes", "axes"),
-    (("rotation = false", "rotation = 1"), "wks.W2.rotation", "true or false"),
-    (('radius = "D1"', "radius = 5"), "tools.T1.radius", "register name"),
-    (("radius_limit = 0.03", "radius_limit = 0"), "tools.T1.radius_limit", "> 0"),
-    (("radius = { T1 = -1 }", "radius = { T2 = -1 }"), "features.F1.radius.T2", "no radius register"),
-    (("c = 0 }", "q = 0 }"), "features.F2.wks.W1.q", "unknown component"),
-    (("direction = [0.6, 0.0, 0.8]", "direction = [1.0, 1.0, 0.0]"), "dimensions.D2.direction", "unit vector"),
-    (("direction = [0.6, 0.0, 0.8]", 'direction = "up"'), "dimensions.D2.direction", "[nx, ny, nz]"),
-    (('axis = "Z"', 'axis = "W"'), "dimensions.D1.axis", '"X", "Y" or "Z"'),
-    (('kind = "size"', 'kind = "volume"'), "dimensions.D3.kind", '"size" or "position"'),
-    (("diameter = 0.1\n", ""), "dimensions.D4.diameter", "needs its diameter"),
-    (("diameter = 0.1", "diameter = -0.1"), "dimensions.D4.diameter", "> 0"),
-    (('components = ["Hole X", "Hole Y"]', 'components = ["Hole X"]'), "dimensions.D4.components", "two"),
-    (('axes = ["X", "Y"]\n', ""), "dimensions.D4.axes", "plane"),
-    (("diameter = 0.1", "diameter = 0.1\nlower = -0.1"), "dimensions.D4.lower", "diameter"),
-    (('nominal = 10.0\nlower = -0.02', 'nominal = 10.0\ndiameter = 1\nlower = -0.02'), "dimensions.D3.diameter",
-     "only a position zone"),
-    (("position = [10.0, 20.0, 0.0]\n", ""), "features.F1.position", "rotation of W1"),
-])
+@pytest.mark.parametrize(
+    ("edit", "key", "words"),
+    [
+        (('axes = ["X", "Y", "Z"]', 'axes = ["X", "X"]'), "process.axes", "distinct"),
+        (('axes = ["X", "Y", "Z"]', 'axes = ["X", "Y", "Z"]\nspindle = "B"'), "process.spindle", '"X", "Y" or "Z"'),
+        (("rotation_limit = 0.02", "rotation_limit = -1"), "process.rotation_limit", "> 0"),
+        (("rotation_resolution = 0.0002", "rotation_resolution = 0.5"), "process.rotation_resolution", "above"),
+        (('axes = ["Z", "X"]', 'axes = ["Z", "B"]'), "wks.W2.axes", "axes"),
+        (("rotation = false", "rotation = 1"), "wks.W2.rotation", "true or false"),
+        (('radius = "D1"', "radius = 5"), "tools.T1.radius", "register name"),
+        (("radius_limit = 0.03", "radius_limit = 0"), "tools.T1.radius_limit", "> 0"),
+        (("radius = { T1 = -1 }", "radius = { T2 = -1 }"), "features.F1.radius.T2", "no radius register"),
+        (("c = 0 }", "q = 0 }"), "features.F2.wks.W1.q", "unknown component"),
+        (("direction = [0.6, 0.0, 0.8]", "direction = [1.0, 1.0, 0.0]"), "dimensions.D2.direction", "unit vector"),
+        (("direction = [0.6, 0.0, 0.8]", 'direction = "up"'), "dimensions.D2.direction", "[nx, ny, nz]"),
+        (('axis = "Z"', 'axis = "W"'), "dimensions.D1.axis", '"X", "Y" or "Z"'),
+        (('kind = "size"', 'kind = "volume"'), "dimensions.D3.kind", '"size" or "position"'),
+        (("diameter = 0.1\n", ""), "dimensions.D4.diameter", "needs its diameter"),
+        (("diameter = 0.1", "diameter = -0.1"), "dimensions.D4.diameter", "> 0"),
+        (('components = ["Hole X", "Hole Y"]', 'components = ["Hole X"]'), "dimensions.D4.components", "two"),
+        (('axes = ["X", "Y"]\n', ""), "dimensions.D4.axes", "plane"),
+        (("diameter = 0.1", "diameter = 0.1\nlower = -0.1"), "dimensions.D4.lower", "diameter"),
+        (
+            ("nominal = 10.0\nlower = -0.02", "nominal = 10.0\ndiameter = 1\nlower = -0.02"),
+            "dimensions.D3.diameter",
+            "only a position zone",
+        ),
+        (("position = [10.0, 20.0, 0.0]\n", ""), "features.F1.position", "rotation of W1"),
+    ],
+)
 def test_each_new_key_refused_on_one_line(tmp_path, edit, key, words):
     old, new = edit
     assert old in BASE
@@ -175,7 +184,7 @@ def test_direction_is_normalised_within_tolerance(tmp_path):
 
 
 def test_machine_points_refused_in_multi_axis(tmp_path):
-    lines = refused(tmp_path, BASE + '\n[machine.M1]\nwks = { W1 = 1 }\n')
+    lines = refused(tmp_path, BASE + "\n[machine.M1]\nwks = { W1 = 1 }\n")
     assert any("machine" in line and "multi-axis" in line for line in lines)
 
 
@@ -186,8 +195,13 @@ def test_zone_components_match_and_are_suggested(tmp_path):
     from setupfix.model import match_parts, suggest_names
 
     m = load(tmp_path, BASE)
-    table = pd.DataFrame({"characteristic": ["hole  x", "HOLE Y", "Height", "Hole1 X"],
-                          "deviation": [0.03, -0.04, 0.01, 0.0], "unit": "mm"})
+    table = pd.DataFrame(
+        {
+            "characteristic": ["hole  x", "HOLE Y", "Height", "Hole1 X"],
+            "deviation": [0.03, -0.04, 0.01, 0.0],
+            "unit": "mm",
+        }
+    )
     (part,) = match_parts(m, table)
     q = [d.id for d in m.dimensions].index("D4")
     assert part.zone is not None and part.zone[q].tolist() == [0.03, -0.04]

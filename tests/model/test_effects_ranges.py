@@ -48,16 +48,25 @@ def refusal(tmp_path, extra: str, base: str = SPEC_EXAMPLE) -> str:
         (DRIFT + "stderr = -0.1\n", "effects.E1.stderr", "expected a number in [0, 1000]"),
         (DRIFT.replace('"drift"', '"drift"\nshape = "saturating"\ntau = 0.0'), "effects.E1.tau", "(0, 100000]"),
         (DRIFT.replace('"drift"', '"drift"\nshape = "saturating"\ntau = 1e9'), "effects.E1.tau", "(0, 100000]"),
-        (DRIFT.replace('"drift"', '"drift"\nshape = "saturating"\ntau = 2.0').replace("0.002", "50.0"),
-         "effects.E1.estimate", "±10 mm of a saturating drift effect"),
-        ('[effects.E2]\nkind = "thermal"\nchannel = "spindle"\nreference = 1e5\nestimate = 0.001\n',
-         "effects.E2.reference", "°C in [-50, 200]"),
+        (
+            DRIFT.replace('"drift"', '"drift"\nshape = "saturating"\ntau = 2.0').replace("0.002", "50.0"),
+            "effects.E1.estimate",
+            "±10 mm of a saturating drift effect",
+        ),
+        (
+            '[effects.E2]\nkind = "thermal"\nchannel = "spindle"\nreference = 1e5\nestimate = 0.001\n',
+            "effects.E2.reference",
+            "°C in [-50, 200]",
+        ),
         ('[effects.E2]\nkind = "thermal"\nchannel = "spindle"\nestimate = 5.0\n', "effects.E2.estimate", "±1 mm/°C"),
         ('[effects.E3]\nkind = "wear"\nregister = "T5"\nestimate = -3.0\n', "effects.E3.estimate", "±1 mm/cycle"),
         ('[effects.E4]\nkind = "scale"\nestimate = 0.5\n', "effects.E4.estimate", "±0.01 (a ratio)"),
         ('[effects.E5]\nkind = "position"\naxis = "x"\nestimate = -0.2\n', "effects.E5.estimate", "±0.01"),
-        ('[effects.E6]\nkind = "relation"\nregister = "T5"\ndimension = "D1"\nestimate = 1e4\n',
-         "effects.E6.estimate", "±1000 (a weight)"),
+        (
+            '[effects.E6]\nkind = "relation"\nregister = "T5"\ndimension = "D1"\nestimate = 1e4\n',
+            "effects.E6.estimate",
+            "±1000 (a weight)",
+        ),
         (DRIFT + "unit = 3\n", "effects.E1", ""),  # TOML: a key twice is a syntax error (checked below)
     ][:-1],
 )
@@ -79,9 +88,12 @@ def test_bounds_follow_the_model_unit(tmp_path):
 
 
 def test_plausible_section_loads_and_round_trips(tmp_path):
-    text = ('[effects]\norigin = 2026-11-02T08:00:00\ncycle_hours = 0.333\nlast_hours = 13.0\n' + DRIFT
-            + 'stderr = 0.0001\n[effects.E2]\nkind = "thermal"\nchannel = "spindle"\nreference = 20.0\n'
-              'estimate = -0.0011\n[effects.E3]\nkind = "wear"\nregister = "T5"\nestimate = 0.0004\n')
+    text = (
+        "[effects]\norigin = 2026-11-02T08:00:00\ncycle_hours = 0.333\nlast_hours = 13.0\n"
+        + DRIFT
+        + 'stderr = 0.0001\n[effects.E2]\nkind = "thermal"\nchannel = "spindle"\nreference = 20.0\n'
+        'estimate = -0.0011\n[effects.E3]\nkind = "wear"\nregister = "T5"\nestimate = 0.0004\n'
+    )
     model = load(tmp_path, text)
     section = model.effects
     assert [e.kind for e in section.effects] == ["drift", "thermal", "wear"]

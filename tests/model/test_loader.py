@@ -10,7 +10,7 @@ import pytest
 from setupfix.errors import ModelError
 from setupfix.model import load_model
 
-SPEC_EXAMPLE = '''
+SPEC_EXAMPLE = """
 [process]
 name = "Rear axle guide pins, 4-part fixture, B0 and B180"
 axis = "Z"
@@ -51,7 +51,7 @@ features = { F4 = 1, F3 = -1 }   # so D4 moves with W1 + W5 + 2*T23
 nominal = 30.0
 lower = -0.1
 upper = 0.1
-'''
+"""
 
 
 def write(tmp_path: Path, text: str) -> Path:
@@ -83,13 +83,21 @@ def test_guide_pins_sample_loads(guide_pins_model):
 @pytest.mark.parametrize(
     ("old", "new", "key", "words"),
     [
-        ("features = { F4 = 1, F3 = -1 }", "features = { F4 = 1, F9 = -1 }", "dimensions.D4.features.F9",
-         "unknown feature"),
+        (
+            "features = { F4 = 1, F3 = -1 }",
+            "features = { F4 = 1, F9 = -1 }",
+            "dimensions.D4.features.F9",
+            "unknown feature",
+        ),
         ("wks = { W5 = -1 }", "wks = { W7 = -1 }", "features.F3.wks.W7", "unknown WKS"),
         ("tools = { T5 = 1 }", 'tools = { T5 = "one" }', "features.F1.tools.T5", "expected a number"),
         ("nominal = 30.0\nlower = -0.1\n", "nominal = 30.0\n", "dimensions.D4.lower", "missing tolerance limit"),
-        ("lower = -0.1\nupper = 0.1\n\n[dimensions.D4]", "lower = 0.1\nupper = 0.1\n\n[dimensions.D4]",
-         "dimensions.D1.lower", "must be below upper limit"),
+        (
+            "lower = -0.1\nupper = 0.1\n\n[dimensions.D4]",
+            "lower = 0.1\nupper = 0.1\n\n[dimensions.D4]",
+            "dimensions.D1.lower",
+            "must be below upper limit",
+        ),
         ('unit = "mm"', 'unit = "furlong"', "process.unit", "unknown unit"),
         ('name = "P1 D4"', 'name = "p1  d1"', "dimensions.D4.name", "also used by dimension D1"),
         ('register = "H23"', 'register = "H5"', "tools.T23.register", "also used by T5"),
@@ -126,7 +134,8 @@ def test_missing_file(tmp_path):
 
 def test_fixed_register_and_own_limit(tmp_path):
     text = SPEC_EXAMPLE.replace('register = "H23"', 'register = "H23"\nfixed = true').replace(
-        'register = "G54"', 'register = "G54"\nlimit = 0.05')
+        'register = "G54"', 'register = "G54"\nlimit = 0.05'
+    )
     model = load_model(write(tmp_path, text))
     assert model.register("H23").fixed and model.register("W1").limit == 0.05
     assert model.register("g54").id == "W1"

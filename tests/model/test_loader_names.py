@@ -53,8 +53,10 @@ def test_names_are_free_text_and_escaped_in_the_correct_table(tmp_path):
     model = load_model(path)
     assert model.dimensions[0].name == "P1\nD1" and model.dimensions[0].group == "A\x1b[2JB"
     report = tmp_path / "r.csv"
-    report.write_text("characteristic,nominal,actual,lower,upper\n"
-                      'P1 D1,25.0,25.05,-0.1,0.1\nP1 D4,30.0,30.0,-0.1,0.1\n', encoding="utf-8")
+    report.write_text(
+        "characteristic,nominal,actual,lower,upper\nP1 D1,25.0,25.05,-0.1,0.1\nP1 D4,30.0,30.0,-0.1,0.1\n",
+        encoding="utf-8",
+    )
     out = io.StringIO()
     with redirect_stdout(out):
         assert main(["correct", "--model", str(path), str(report)]) == 0

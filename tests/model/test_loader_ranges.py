@@ -28,14 +28,22 @@ def lines_of(tmp_path: Path, text: str) -> list[str]:
         ("resolution = 0.001", "resolution = 1e-11", "process.resolution", "allowed range"),
         ("resolution = 0.001", "resolution = 0.5", "process.limit", "below the resolution 0.5 mm"),
         ('register = "G54"', 'register = "G54"\nlimit = 0.0005', "wks.W1.limit", "below the resolution 0.001 mm"),
-        ("resolution = 0.001\nlimit = 0.1", "resolution = 0.15\nlimit = 1.0", "process.resolution",
-         "coarser than half the narrowest tolerance band (P1 D1: 0.2 mm wide)"),
+        (
+            "resolution = 0.001\nlimit = 0.1",
+            "resolution = 0.15\nlimit = 1.0",
+            "process.resolution",
+            "coarser than half the narrowest tolerance band (P1 D1: 0.2 mm wide)",
+        ),
         ("resolution = 0.001\nlimit = 0.1", "resolution = 0.00001\nlimit = 9.0", "process.limit", "at most 100,000"),
         ("nominal = 25.0", "nominal = 1e307", "dimensions.D1.nominal", "allowed range"),
         ("nominal = 25.0", "nominal = " + "9" * 401, "dimensions.D1.nominal", "an integer of 401 digits"),
         ("nominal = 25.0", "nominal = inf", "dimensions.D1.nominal", "not finite"),
-        ("lower = -0.1\nupper = 0.1\n\n[dimensions.D4]", "lower = -1000.0\nupper = 0.1\n\n[dimensions.D4]",
-         "dimensions.D1.lower", "allowed range [-100, 100] mm"),
+        (
+            "lower = -0.1\nupper = 0.1\n\n[dimensions.D4]",
+            "lower = -1000.0\nupper = 0.1\n\n[dimensions.D4]",
+            "dimensions.D1.lower",
+            "allowed range [-100, 100] mm",
+        ),
         ("tools = { T5 = 1 }", "tools = { T5 = 1e9 }", "features.F1.tools.T5", "[-1000, 1000]"),
         ('register = "G54"', 'register = "G54"\nlimit = nan', "wks.W1.limit", "not finite"),
     ],
@@ -81,6 +89,7 @@ def test_safety_and_register_settings_are_typed_fields_with_key_paths(tmp_path):
     assert "[safety.gain]" in line and "expected a number in (0, 1]" in line
     (line,) = lines_of(tmp_path, text.replace("gain = 0.5", "band = 1"))
     assert "[safety.band]" in line and "unknown key" in line
+
 
 def test_unknown_section_still_refused(tmp_path):
     # ([safety] itself is registered by setupfix.model.safety)

@@ -39,10 +39,19 @@ def test_defaults_without_safety_table():
 
 
 def test_values_are_read():
-    m = model_from_dict(doc(safety__gain=0.7, safety__dead_band=0.003, safety__uncertainty=0.002,
-                            tools__T5__cost=4, tools__T5__offset="geometry", tools__T5__number=5,
-                            wks__W1__cumulative_limit=0.3, safety__dimensions__D1__uncertainty=0.004,
-                            safety__dimensions__D1__reject_band=0.5))
+    m = model_from_dict(
+        doc(
+            safety__gain=0.7,
+            safety__dead_band=0.003,
+            safety__uncertainty=0.002,
+            tools__T5__cost=4,
+            tools__T5__offset="geometry",
+            tools__T5__number=5,
+            wks__W1__cumulative_limit=0.3,
+            safety__dimensions__D1__uncertainty=0.004,
+            safety__dimensions__D1__reject_band=0.5,
+        )
+    )
     s = m.safety
     assert (s.gain, s.dead_band, s.uncertainty) == (0.7, 0.003, 0.002)
     t5 = m.register("T5").policy
@@ -55,15 +64,29 @@ def test_bad_values_are_listed_with_their_key_paths():
     with pytest.raises(ModelError) as info:
         model_from_dict(doc(tools__T5__cost=0, tools__T5__offset="both", tools__T5__number=-1), source="m.toml")
     text = str(info.value)
-    for expected in ("m.toml: [tools.T5.cost]: expected a number in (0, ∞)", '[tools.T5.offset]: expected "wear" or',
-                     "[tools.T5.number]: expected a whole number"):
+    for expected in (
+        "m.toml: [tools.T5.cost]: expected a number in (0, ∞)",
+        '[tools.T5.offset]: expected "wear" or',
+        "[tools.T5.number]: expected a whole number",
+    ):
         assert expected in text
     assert len(text.splitlines()) == 3
     with pytest.raises(ModelError) as info:
-        model_from_dict(doc(safety__gain=1.5, safety__deadband=1, safety__dimensions__D1__uncertainty="x",
-                            safety__dimensions__D9__uncertainty=0.1), source="m.toml")
+        model_from_dict(
+            doc(
+                safety__gain=1.5,
+                safety__deadband=1,
+                safety__dimensions__D1__uncertainty="x",
+                safety__dimensions__D9__uncertainty=0.1,
+            ),
+            source="m.toml",
+        )
     text = str(info.value)
-    for expected in ("m.toml: [safety.gain]: expected a number in (0, 1]", "[safety.deadband]: unknown key",
-                     "[safety.dimensions.D1.uncertainty]: expected a number", "[safety.dimensions.D9]: unknown"):
+    for expected in (
+        "m.toml: [safety.gain]: expected a number in (0, 1]",
+        "[safety.deadband]: unknown key",
+        "[safety.dimensions.D1.uncertainty]: expected a number",
+        "[safety.dimensions.D9]: unknown",
+    ):
         assert expected in text
     assert len(text.splitlines()) == 4

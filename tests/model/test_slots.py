@@ -20,22 +20,79 @@ from setupfix.offsets import OffsetRow
 from setupfix.pipeline.controllers import render
 from tests.model.test_loader import SPEC_EXAMPLE
 
-WKS = [("G54", None), ("G054", None), ("g 54", None), ("G55", None), ("G59", None), ("G54.1 P1", None),
-       ("G54.1P1", None), ("G54.1 P01", None), ("g54.1 p1", None), ("G54.1 P2", None), ("G110", None),
-       ("G111", None), ("G129", None), ("G154 P1", None), ("G154P1", None), ("G154 P02", None), ("G154 P20", None),
-       ("G500", None), ("G505", None), ("G57", None), ("PRESET 1", None), ("PR 1", None), ("PRESET #1", None),
-       ("PRESET 2", None), ("G54", 1), ("G55", 1), ("G54", 2), ("PRESET 1", 2), ("Fixture A", None),
-       ("fixture  a", None)]
-TOOLS = [("H5", None, None), ("H05", None, None), ("h 5", None, None), ("D5", None, None), ("D05", None, None),
-         ("H6", None, None), ("T5", None, None), ("T05", None, None), ("T5 D1", None, None), ("T5D1", None, None),
-         ("T05 D01", None, None), ("T5 D2", None, None), ("T6 D1", None, None), ("L1", 5, None), ("L2", 5, 1),
-         ("H7", 5, None), ("T9", None, 1), ("T9 D1", None, None), ("Spindle", None, None), ("SPINDLE", None, None)]
+WKS = [
+    ("G54", None),
+    ("G054", None),
+    ("g 54", None),
+    ("G55", None),
+    ("G59", None),
+    ("G54.1 P1", None),
+    ("G54.1P1", None),
+    ("G54.1 P01", None),
+    ("g54.1 p1", None),
+    ("G54.1 P2", None),
+    ("G110", None),
+    ("G111", None),
+    ("G129", None),
+    ("G154 P1", None),
+    ("G154P1", None),
+    ("G154 P02", None),
+    ("G154 P20", None),
+    ("G500", None),
+    ("G505", None),
+    ("G57", None),
+    ("PRESET 1", None),
+    ("PR 1", None),
+    ("PRESET #1", None),
+    ("PRESET 2", None),
+    ("G54", 1),
+    ("G55", 1),
+    ("G54", 2),
+    ("PRESET 1", 2),
+    ("Fixture A", None),
+    ("fixture  a", None),
+]
+TOOLS = [
+    ("H5", None, None),
+    ("H05", None, None),
+    ("h 5", None, None),
+    ("D5", None, None),
+    ("D05", None, None),
+    ("H6", None, None),
+    ("T5", None, None),
+    ("T05", None, None),
+    ("T5 D1", None, None),
+    ("T5D1", None, None),
+    ("T05 D01", None, None),
+    ("T5 D2", None, None),
+    ("T6 D1", None, None),
+    ("L1", 5, None),
+    ("L2", 5, 1),
+    ("H7", 5, None),
+    ("T9", None, 1),
+    ("T9 D1", None, None),
+    ("Spindle", None, None),
+    ("SPINDLE", None, None),
+]
 
 
 def address(controller: str, kind: str, name: str, number: int | None, edge: int | None) -> str | None:
     """The offset a one-row program of ``controller`` writes for this register (None: not expressible)."""
-    row = OffsetRow(report="r", part="p", id="X", register=name, kind=kind, axis="Z", delta=0.001, mode="set",
-                    current=0.0, value=0.001, number=number, edge=edge, offset="geometry")
+    row = OffsetRow(
+        report="r",
+        part="p",
+        id="X",
+        register=name,
+        kind=kind,
+        axis="Z",
+        delta=0.001,
+        mode="set",
+        current=0.0,
+        value=0.001,
+        number=number,
+        edge=edge,
+        offset="geometry",
+    )
     try:
         text = render(controller, [row])
     except ExportError:
@@ -78,8 +135,9 @@ def test_slots_agree_with_every_controller_program(kind, registers):
         families = collide(kind, a3, b3)
         if families == {"heidenhain"} and kind == "tool" and (has_edge(a3[0], a3[2]) or has_edge(b3[0], b3[2])):
             continue  # two edges of one tool: Siemens keeps them apart, the HEIDENHAIN renderer refuses them
-        nowhere = all(address(c, kind, *x) is None for c in ("fanuc", "haas", "siemens", "heidenhain")
-                      for x in (a3, b3))
+        nowhere = all(
+            address(c, kind, *x) is None for c in ("fanuc", "haas", "siemens", "heidenhain") for x in (a3, b3)
+        )
         same_name = " ".join(a3[0].split()).upper() == " ".join(b3[0].split()).upper()
         if bool(slots) != (bool(families) or (nowhere and same_name)):
             disagree.append((a3, b3, sorted(slots), sorted(families)))
@@ -88,24 +146,27 @@ def test_slots_agree_with_every_controller_program(kind, registers):
 
 @pytest.mark.parametrize(
     ("kind", "first", "second"),
-    [("wks", 'register = "G54.1P1"', 'register = "G54.1 P1"'),
-     ("wks", 'register = "G54.1 P1"', 'register = "G54.1 P01"'),
-     ("wks", 'register = "G110"', 'register = "G154 P1"'),
-     ("wks", 'register = "G129"', 'register = "G154P20"'),
-     ("wks", 'register = "G54"', 'register = "G054"'),
-     ("wks", 'register = "PRESET 3"', 'register = "G55"\nnumber = 3'),
-     ("wks", 'register = "G54"\nnumber = 1', 'register = "G55"\nnumber = 1'),
-     ("tools", 'register = "H5"', 'register = "H05"'),
-     ("tools", 'register = "D7"', 'register = "d 07"'),
-     ("tools", 'register = "H5"', 'register = "Probe"\nnumber = 5'),
-     ("tools", 'register = "T5 D1"', 'register = "T05D01"'),
-     ("tools", 'register = "T5"\nedge = 1', 'register = "T5 D1"'),
-     ("tools", 'register = "H1"\nnumber = 8', 'register = "H2"\nnumber = 8')],
+    [
+        ("wks", 'register = "G54.1P1"', 'register = "G54.1 P1"'),
+        ("wks", 'register = "G54.1 P1"', 'register = "G54.1 P01"'),
+        ("wks", 'register = "G110"', 'register = "G154 P1"'),
+        ("wks", 'register = "G129"', 'register = "G154P20"'),
+        ("wks", 'register = "G54"', 'register = "G054"'),
+        ("wks", 'register = "PRESET 3"', 'register = "G55"\nnumber = 3'),
+        ("wks", 'register = "G54"\nnumber = 1', 'register = "G55"\nnumber = 1'),
+        ("tools", 'register = "H5"', 'register = "H05"'),
+        ("tools", 'register = "D7"', 'register = "d 07"'),
+        ("tools", 'register = "H5"', 'register = "Probe"\nnumber = 5'),
+        ("tools", 'register = "T5 D1"', 'register = "T05D01"'),
+        ("tools", 'register = "T5"\nedge = 1', 'register = "T5 D1"'),
+        ("tools", 'register = "H1"\nnumber = 8', 'register = "H2"\nnumber = 8'),
+    ],
 )
 def test_two_registers_of_one_slot_refuse_the_model_naming_both(tmp_path, kind, first, second):
     if kind == "wks":
         text = SPEC_EXAMPLE.replace('[wks.W1]\nregister = "G54"', f"[wks.W1]\n{first}").replace(
-            '[wks.W5]\nregister = "G58"', f"[wks.W5]\n{second}")
+            '[wks.W5]\nregister = "G58"', f"[wks.W5]\n{second}"
+        )
         ids = ("W1", "W5")
     else:
         text = SPEC_EXAMPLE.replace('register = "H5"', first).replace('register = "H23"', second)
@@ -127,8 +188,10 @@ def test_two_registers_of_one_slot_refuse_the_model_naming_both(tmp_path, kind, 
     assert repr(name_a) in line and repr(name_b) in line
 
 
-@pytest.mark.parametrize(("first", "second"), [("G54", "G55"), ("G54.1 P1", "G54.1 P2"), ("G110", "G154 P2"),
-                                               ("G54", "G54.1 P1"), ("G57", "G505")])
+@pytest.mark.parametrize(
+    ("first", "second"),
+    [("G54", "G55"), ("G54.1 P1", "G54.1 P2"), ("G110", "G154 P2"), ("G54", "G54.1 P1"), ("G57", "G505")],
+)
 def test_distinct_slots_load(tmp_path, first, second):
     text = SPEC_EXAMPLE.replace('"G54"', f'"{first}"').replace('"G58"', f'"{second}"')
     path = tmp_path / "model.toml"
@@ -141,15 +204,37 @@ def test_tool_edges_load_and_heidenhain_refuses_two_rows_of_one_tool(tmp_path):
     path = tmp_path / "model.toml"
     path.write_text(text, encoding="utf-8")
     model = load_model(path)
-    rows = [OffsetRow(report="r", part="p", id=r.id, register=r.register, kind="tool", axis="Z", delta=0.001,
-                      mode="set", current=0.0, value=0.001) for r in model.tools]
+    rows = [
+        OffsetRow(
+            report="r",
+            part="p",
+            id=r.id,
+            register=r.register,
+            kind="tool",
+            axis="Z",
+            delta=0.001,
+            mode="set",
+            current=0.0,
+            value=0.001,
+        )
+        for r in model.tools
+    ]
     assert "$TC_DP3[5,1]" in render("siemens", rows) and "$TC_DP3[5,2]" in render("siemens", rows)
     with pytest.raises(ExportError, match="two registers write tool L row 5"):
         render("heidenhain", rows)
 
 
-@pytest.mark.parametrize(("name", "slot"), [("G54.1 P07", "G54.1 P7"), ("G115", "G54.1 P6"), ("G154 P99", "G54.1 P99"),
-                                            ("H005", "H5"), ("T005 D002", "T5 D2"), ("PR #4", "PRESET 4")])
+@pytest.mark.parametrize(
+    ("name", "slot"),
+    [
+        ("G54.1 P07", "G54.1 P7"),
+        ("G115", "G54.1 P6"),
+        ("G154 P99", "G54.1 P99"),
+        ("H005", "H5"),
+        ("T005 D002", "T5 D2"),
+        ("PR #4", "PRESET 4"),
+    ],
+)
 def test_canonical_slot_names(name, slot):
     kind = "tool" if name[0] in "HT" else "wks"
     assert slot in register_slots(kind, name)

@@ -45,8 +45,16 @@ def doc(**changes):
         "stations": {"A": {"wks": {"own": "W1"}}, "B": {"wks": {"own": "W2"}}},
         "template": {
             "features": {"F1": {"wks": {"own": 1}, "tools": {"T1": 1}}, "F2": {"wks": {"W3": 1}}},
-            "dimensions": {"D1": {"name": "{station}-D1", "aliases": ["D1"], "features": {"F1": 1, "F2": -1},
-                                  "nominal": 5, "lower": -0.1, "upper": 0.1}},
+            "dimensions": {
+                "D1": {
+                    "name": "{station}-D1",
+                    "aliases": ["D1"],
+                    "features": {"F1": 1, "F2": -1},
+                    "nominal": 5,
+                    "lower": -0.1,
+                    "upper": 0.1,
+                }
+            },
         },
     }
     for key, value in changes.items():
@@ -68,8 +76,13 @@ def test_expansion_names_groups_shared_and_mapped_registers():
     assert model.features[2].wks == {"W2": 1.0} and model.features[3].wks == {"W3": 1.0}
     d = model.dimensions[1]
     # the alias as written ("D1") too: a per-part report of station B names it so (issue 23)
-    assert (d.id, d.name, d.aliases, d.group, d.features) == ("BD1", "B-D1", ("B D1", "D1"), "B",
-                                                              {"BF1": 1.0, "BF2": -1.0})
+    assert (d.id, d.name, d.aliases, d.group, d.features) == (
+        "BD1",
+        "B-D1",
+        ("B D1", "D1"),
+        "B",
+        {"BF1": 1.0, "BF2": -1.0},
+    )
 
 
 def problems(document) -> list[str]:
@@ -131,11 +144,21 @@ def _per_part_report(tmp_path: Path, station: str, *, with_station: bool) -> Pat
     path = tmp_path / f"part_{station}.csv"
     with open(path, "w", newline="", encoding="utf-8") as f:
         out = csv.writer(f)
-        out.writerow(["characteristic", "nominal", "actual", "lower", "upper", "part"]
-                     + (["station"] if with_station else []))
+        out.writerow(
+            ["characteristic", "nominal", "actual", "lower", "upper", "part"] + (["station"] if with_station else [])
+        )
         for r in rows:
-            out.writerow([r["characteristic"].removeprefix(f"{station} "), r["nominal"], r["actual"], r["lower"],
-                          r["upper"], "serial 17"] + ([station] if with_station else []))
+            out.writerow(
+                [
+                    r["characteristic"].removeprefix(f"{station} "),
+                    r["nominal"],
+                    r["actual"],
+                    r["lower"],
+                    r["upper"],
+                    "serial 17",
+                ]
+                + ([station] if with_station else [])
+            )
     return path
 
 

@@ -16,9 +16,17 @@ from scipy.optimize import Bounds, LinearConstraint, milp
 from scipy.sparse import csr_array, hstack, vstack
 
 
-def lexicographic_maxmin(a: np.ndarray, b: np.ndarray, row_dim: np.ndarray, n_dims: int, kmin: np.ndarray,
-                         kmax: np.ndarray, stages: int | None = None, tol: float = 1e-6,
-                         time_limit: float = 120.0) -> tuple[np.ndarray, np.ndarray]:
+def lexicographic_maxmin(
+    a: np.ndarray,
+    b: np.ndarray,
+    row_dim: np.ndarray,
+    n_dims: int,
+    kmin: np.ndarray,
+    kmax: np.ndarray,
+    stages: int | None = None,
+    tol: float = 1e-6,
+    time_limit: float = 120.0,
+) -> tuple[np.ndarray, np.ndarray]:
     """Lexicographically maximal sorted margins over integer k in [kmin, kmax].
 
     Parameters
@@ -47,33 +55,46 @@ def lexicographic_maxmin(a: np.ndarray, b: np.ndarray, row_dim: np.ndarray, n_di
         lo, hi = [np.full(r, -np.inf)], [b]
         for i in range(nb):  # r_i − s_iq − u_q ≤ 0
             off = n + n_dims + i * (1 + n_dims)
-            rows.append(hstack([csr_array((n_dims, n)), -eye, csr_array((n_dims, off - n - n_dims)),
-                                csr_array(np.ones((n_dims, 1))), -eye,
-                                csr_array((n_dims, width - off - 1 - n_dims))]))
+            rows.append(
+                hstack(
+                    [
+                        csr_array((n_dims, n)),
+                        -eye,
+                        csr_array((n_dims, off - n - n_dims)),
+                        csr_array(np.ones((n_dims, 1))),
+                        -eye,
+                        csr_array((n_dims, width - off - 1 - n_dims)),
+                    ]
+                )
+            )
             lo.append(np.full(n_dims, -np.inf))
             hi.append(np.zeros(n_dims))
         for i, (pp, s_star) in enumerate(blocks):  # p_i r_i − Σ s_i ≥ S_i* − tol
             off = n + n_dims + i * (1 + n_dims)
             row = np.zeros(width)
             row[off] = pp
-            row[off + 1:off + 1 + n_dims] = -1.0
+            row[off + 1 : off + 1 + n_dims] = -1.0
             rows.append(csr_array(row[None, :]))
             lo.append(np.array([s_star - tol]))
             hi.append(np.array([np.inf]))
         off = n + n_dims + len(blocks) * (1 + n_dims)
         cost = np.zeros(width)
         cost[off] = -p
-        cost[off + 1:off + 1 + n_dims] = 1.0
+        cost[off + 1 : off + 1 + n_dims] = 1.0
         lower, upper = np.zeros(width), np.full(width, np.inf)
         lower[:n], upper[:n] = kmin, kmax
-        lower[n:n + n_dims] = -np.inf
+        lower[n : n + n_dims] = -np.inf
         for i in range(nb):
             lower[n + n_dims + i * (1 + n_dims)] = -np.inf  # r_i is free
         integrality = np.zeros(width)
         integrality[:n] = 1
-        res = milp(cost, constraints=LinearConstraint(vstack(rows).tocsr(), np.concatenate(lo), np.concatenate(hi)),
-                   integrality=integrality, bounds=Bounds(lower, upper),
-                   options={"mip_rel_gap": 0, "time_limit": time_limit})
+        res = milp(
+            cost,
+            constraints=LinearConstraint(vstack(rows).tocsr(), np.concatenate(lo), np.concatenate(hi)),
+            integrality=integrality,
+            bounds=Bounds(lower, upper),
+            options={"mip_rel_gap": 0, "time_limit": time_limit},
+        )
         assert res.status == 0, res.message
         s_p = float(-res.fun)
         blocks.append((p, s_p))

@@ -49,10 +49,11 @@ def test_immigration_moves_towards_the_goal() -> None:
 
 
 def test_paper_run_length() -> None:
+    from pathlib import Path
+
     from setupfix.model import load_model
     from setupfix.optimize import CorrectionProblem
     from setupfix.pipeline.cycles import load_parts
-    from pathlib import Path
 
     here = Path(__file__).resolve().parents[2] / "sample_reports" / "guide_pins"
     model = load_model(here / "model.toml")

@@ -20,8 +20,13 @@ from tests.optimize.test_metaheuristics_common import RecordingProblem, small_pr
 
 NAMES = sorted(OPTIMIZERS)
 #: Small budgets: every check here runs in well under a second per optimiser.
-FAST = {"cs": {"n_nests": 10}, "pso": {"n_particles": 10}, "ga": {"population": 10},
-        "coa": {"max_cuckoos": 10, "n_iterations": 20}, "cripso": {"n_polyps": 10}}
+FAST = {
+    "cs": {"n_nests": 10},
+    "pso": {"n_particles": 10},
+    "ga": {"population": 10},
+    "coa": {"max_cuckoos": 10, "n_iterations": 20},
+    "cripso": {"n_polyps": 10},
+}
 
 
 def make(name: str, seed: int = 0, budget: int = 300, **extra):
@@ -36,9 +41,17 @@ def centred_problem() -> CorrectionProblem:
     rng = np.random.default_rng(7)
     comp = rng.integers(-1, 2, size=(4, 9)).astype(float)
     comp[:, :4] += np.eye(4)
-    return CorrectionProblem(composite=comp, deviation=np.zeros(9), lower=np.full(9, -0.1), upper=np.full(9, 0.1),
-                             lb=np.full(4, -0.1), ub=np.full(4, 0.1), resolution=0.001,
-                             register_ids=("W1", "W2", "T1", "T2"), dimension_ids=tuple(f"D{i}" for i in range(9)))
+    return CorrectionProblem(
+        composite=comp,
+        deviation=np.zeros(9),
+        lower=np.full(9, -0.1),
+        upper=np.full(9, 0.1),
+        lb=np.full(4, -0.1),
+        ub=np.full(4, 0.1),
+        resolution=0.001,
+        register_ids=("W1", "W2", "T1", "T2"),
+        dimension_ids=tuple(f"D{i}" for i in range(9)),
+    )
 
 
 @pytest.mark.parametrize("name", NAMES)
@@ -73,7 +86,7 @@ def test_budget_counted_and_result_on_the_grid_within_limits(name):
 
 def _bad_value(constraints):
     """A value every constraint of a parameter refuses."""
-    for value in (-1, -10**9, 10**12, 0.5, 2.5, math.nan, "no such value", None):
+    for value in (-1, -(10**9), 10**12, 0.5, 2.5, math.nan, "no such value", None):
         if not any(_accepts(c, value) for c in constraints):
             return value
     raise AssertionError(f"no value outside {constraints}")
@@ -102,8 +115,14 @@ def test_every_declared_parameter_refuses_a_value_out_of_range(name):
 
 
 def test_the_issue_cases_and_unknown_names():
-    for name, params in [("pso", {"n_particles": -5}), ("coa", {"initial_cuckoos": 0}), ("ga", {"population": 0}),
-                         ("cs", {"pa": 7}), ("pso", {"n_solutions": 10**9}), ("cripso", {"n_polyps": 1})]:
+    for name, params in [
+        ("pso", {"n_particles": -5}),
+        ("coa", {"initial_cuckoos": 0}),
+        ("ga", {"population": 0}),
+        ("cs", {"pa": 7}),
+        ("pso", {"n_solutions": 10**9}),
+        ("cripso", {"n_polyps": 1}),
+    ]:
         with pytest.raises(ParameterError, match=next(iter(params))):
             get_optimizer(name, **params)
     with pytest.raises(ParameterError, match=r"must be one of .*cripso.*got 'psoo'"):

@@ -9,8 +9,7 @@ import numpy as np
 import pytest
 
 from setupfix.model import PartMeasurement, load_model
-from setupfix.optimize import CorrectionProblem, Evaluator, get_optimizer
-from setupfix.optimize import _base
+from setupfix.optimize import CorrectionProblem, Evaluator, _base, get_optimizer
 from setupfix.optimize._cripso import CRIPSO, coefficient_schedule, planula_position
 from setupfix.simulate import simulate_deviations
 
@@ -21,11 +20,15 @@ def make_problem(composite, deviation, half_tol, lb, ub, resolution=0.001) -> Co
     composite = np.asarray(composite, dtype=float)
     n, m = composite.shape
     return CorrectionProblem(
-        composite=composite, deviation=np.asarray(deviation, dtype=float),
+        composite=composite,
+        deviation=np.asarray(deviation, dtype=float),
         lower=-np.broadcast_to(np.asarray(half_tol, dtype=float), (m,)).copy(),
         upper=np.broadcast_to(np.asarray(half_tol, dtype=float), (m,)).copy(),
-        lb=np.asarray(lb, dtype=float), ub=np.asarray(ub, dtype=float), resolution=resolution,
-        register_ids=tuple(f"R{i}" for i in range(n)), dimension_ids=tuple(f"D{j}" for j in range(m)),
+        lb=np.asarray(lb, dtype=float),
+        ub=np.asarray(ub, dtype=float),
+        resolution=resolution,
+        register_ids=tuple(f"R{i}" for i in range(n)),
+        dimension_ids=tuple(f"D{j}" for j in range(m)),
     )
 
 
@@ -52,9 +55,12 @@ def guide_pins_problems(n_sets: int, seed: int) -> list[CorrectionProblem]:
     model = load_model(GUIDE_PINS / "model.toml")
     devs, _ = simulate_deviations(model, n_sets, w1=0.03, w2=0.02, seed=seed)
     m = len(model.dimensions)
-    return [CorrectionProblem.from_part(model, PartMeasurement(part=f"s{i}", report="eqs. 12-13", timestamp=None,
-                                                                deviation=d, sources=("",) * m))
-            for i, d in enumerate(devs)]
+    return [
+        CorrectionProblem.from_part(
+            model, PartMeasurement(part=f"s{i}", report="eqs. 12-13", timestamp=None, deviation=d, sources=("",) * m)
+        )
+        for i, d in enumerate(devs)
+    ]
 
 
 @pytest.fixture
@@ -72,6 +78,7 @@ def recorded(monkeypatch):
 
 
 # -- reproducibility -------------------------------------------------------------------------------
+
 
 def test_same_seed_gives_identical_run():
     problem = guide_pins_problems(1, seed=5)[0]
@@ -97,10 +104,16 @@ def test_different_seeds_find_different_optima_of_a_tied_problem():
 
 # -- grid, bounds, budget, history ------------------------------------------------------------------
 
+
 @pytest.mark.parametrize(("n_solutions", "n_polyps"), [(1500, 100), (257, 16), (7, 10), (3, 2)])
 def test_every_solution_on_grid_within_bounds_and_budget_exact(recorded, n_solutions, n_polyps):
-    problem = make_problem([[1, 0, 1], [1, -1, 0], [0, 1, 1], [2, 1, -1]], [0.03, -0.02, 0.011], 0.04,
-                           lb=[-0.005, -0.02, 0.0, -0.01], ub=[0.013, 0.004, 0.0, 0.01])
+    problem = make_problem(
+        [[1, 0, 1], [1, -1, 0], [0, 1, 1], [2, 1, -1]],
+        [0.03, -0.02, 0.011],
+        0.04,
+        lb=[-0.005, -0.02, 0.0, -0.01],
+        ub=[0.013, 0.004, 0.0, 0.01],
+    )
     result = CRIPSO(seed=2, n_solutions=n_solutions, n_polyps=n_polyps).solve(problem)
     x = np.concatenate(recorded)
     assert x.shape == (n_solutions, 4)
@@ -130,6 +143,7 @@ def test_history_is_the_best_so_far_of_the_evaluated_sequence(recorded):
 
 # -- eq. 1 and eq. 11 ----------------------------------------------------------------------------------
 
+
 def test_eq11_coefficient_schedule():
     c = coefficient_schedule(5000)
     assert c.shape == (5000,)
@@ -140,13 +154,23 @@ def test_eq11_coefficient_schedule():
 
 
 def test_eq1_planula_position():
-    x = planula_position(np.array([0.0, 1.0]), np.array([2.0, 1.0]), np.array([4.0, 3.0]), np.array([-4.0, 0.0]),
-                         inertia=0.5, c1=0.5, c2=0.5, r1=np.array([1.0, 0.0]), r2=np.array([0.5, 1.0]))
+    x = planula_position(
+        np.array([0.0, 1.0]),
+        np.array([2.0, 1.0]),
+        np.array([4.0, 3.0]),
+        np.array([-4.0, 0.0]),
+        inertia=0.5,
+        c1=0.5,
+        c2=0.5,
+        r1=np.array([1.0, 0.0]),
+        r2=np.array([0.5, 1.0]),
+    )
     np.testing.assert_allclose(x, [0.0 + 1.0 + 2.0 - 1.0, 1.0 + 0.0 + 0.0 - 0.5])
 
 
-def reference_cripso(problem: CorrectionProblem, seed: int, n_polyps: int, n_solutions: int,
-                     inertia: float) -> np.ndarray:
+def reference_cripso(
+    problem: CorrectionProblem, seed: int, n_polyps: int, n_solutions: int, inertia: float
+) -> np.ndarray:
     """Slow, literal CRIPSO in grid units: eq. 1 via planula_position, f via problem.evaluate.
 
     Follows the decisions documented in setupfix.optimize._cripso and its order of random draws.
@@ -169,8 +193,9 @@ def reference_cripso(problem: CorrectionProblem, seed: int, n_polyps: int, n_sol
         win, lose = (i, j) if fx[i] >= fx[j] else (j, i)
         if lose == gb:
             gb = win
-        new = planula_position(x[win], plast[win], pbest[win], x[gb], inertia=inertia, c1=c[P + t], c2=c[P + t],
-                               r1=r[0, t], r2=r[1, t])
+        new = planula_position(
+            x[win], plast[win], pbest[win], x[gb], inertia=inertia, c1=c[P + t], c2=c[P + t], r1=r[0, t], r2=r[1, t]
+        )
         new = np.clip(np.rint(new), problem.kmin, problem.kmax)
         fn = float(problem.evaluate(new * h)[2])
         child_plast = 2 * new - x[win]  # inertia of the child: parent → settlement point
@@ -184,13 +209,17 @@ def reference_cripso(problem: CorrectionProblem, seed: int, n_polyps: int, n_sol
     return np.array(out)
 
 
-@pytest.mark.parametrize(("seed", "inertia", "tied"), [(0, 0.75, False), (1, 0.75, False), (2, 0.4, False),
-                                                       (3, 0.75, True)])
+@pytest.mark.parametrize(
+    ("seed", "inertia", "tied"), [(0, 0.75, False), (1, 0.75, False), (2, 0.4, False), (3, 0.75, True)]
+)
 def test_search_equals_a_literal_reference_of_the_paper(recorded, seed, inertia, tied):
     # ``tied``: a small grid where planulae often land on their parents, so equal f (and the tie
     # rules of the tournament and of gbest) occur many times.
-    problem = (make_problem([[1.0], [1.0], [1.0]], [0.001], 0.05, [-0.003] * 3, [0.003] * 3) if tied
-               else guide_pins_problems(1, seed=seed + 40)[0])
+    problem = (
+        make_problem([[1.0], [1.0], [1.0]], [0.001], 0.05, [-0.003] * 3, [0.003] * 3)
+        if tied
+        else guide_pins_problems(1, seed=seed + 40)[0]
+    )
     CRIPSO(seed=seed, n_polyps=20, n_solutions=800, inertia=inertia).solve(problem)
     k = np.rint(np.concatenate(recorded) / problem.resolution)
     np.testing.assert_array_equal(k, reference_cripso(problem, seed, 20, 800, inertia))
@@ -222,6 +251,7 @@ def test_rejects_a_colony_without_tournaments():
 
 
 # -- quality ----------------------------------------------------------------------------------------
+
 
 @pytest.mark.parametrize("seed", range(4))
 def test_small_problem_reaches_brute_force_optimum(seed):

@@ -15,8 +15,9 @@ from setupfix.optimize import CorrectionProblem, get_optimizer
 from setupfix.simulate import simulate_deviations
 
 
-def random_problem(seed: int, n: int = 3, m: int = 6, limit_steps: int = 5, fixed: tuple[int, ...] = (),
-                   spread: float = 0.06) -> CorrectionProblem:
+def random_problem(
+    seed: int, n: int = 3, m: int = 6, limit_steps: int = 5, fixed: tuple[int, ...] = (), spread: float = 0.06
+) -> CorrectionProblem:
     rng = np.random.default_rng(seed)
     comp = rng.integers(-1, 2, size=(n, m)).astype(float)
     comp[0, 0] = 2.0  # a weight-2 relation like D4 ← 2·T23
@@ -26,9 +27,15 @@ def random_problem(seed: int, n: int = 3, m: int = 6, limit_steps: int = 5, fixe
     lb[list(fixed)] = ub[list(fixed)] = 0.0
     width = rng.uniform(0.03, 0.1, m)
     return CorrectionProblem(
-        composite=comp, deviation=np.round(rng.uniform(-spread, spread, m), 4), lower=-width,
-        upper=width * rng.uniform(0.5, 1.5, m), lb=lb, ub=ub, resolution=h,
-        register_ids=tuple(f"R{i}" for i in range(n)), dimension_ids=tuple(f"D{j}" for j in range(m)),
+        composite=comp,
+        deviation=np.round(rng.uniform(-spread, spread, m), 4),
+        lower=-width,
+        upper=width * rng.uniform(0.5, 1.5, m),
+        lb=lb,
+        ub=ub,
+        resolution=h,
+        register_ids=tuple(f"R{i}" for i in range(n)),
+        dimension_ids=tuple(f"D{j}" for j in range(m)),
     )
 
 
@@ -87,9 +94,17 @@ def test_binding_dimensions_prove_the_bound():
     assert result.binding
     # Relaxing every non-binding limit cannot raise the LP bound: the binding set alone explains it.
     keep = np.isin(problem.dimension_ids, result.binding)
-    relaxed = CorrectionProblem(problem.composite[:, keep], problem.deviation[keep], problem.lower[keep],
-                                problem.upper[keep], problem.lb, problem.ub, problem.resolution,
-                                problem.register_ids, tuple(np.array(problem.dimension_ids)[keep]))
+    relaxed = CorrectionProblem(
+        problem.composite[:, keep],
+        problem.deviation[keep],
+        problem.lower[keep],
+        problem.upper[keep],
+        problem.lb,
+        problem.ub,
+        problem.resolution,
+        problem.register_ids,
+        tuple(np.array(problem.dimension_ids)[keep]),
+    )
     assert get_optimizer("exact", objective="paper").solve(relaxed).bound == pytest.approx(result.bound, abs=1e-9)
 
 
@@ -126,7 +141,6 @@ def test_continuous_mode_is_the_lp_optimum():
     problem = random_problem(4)
     cont = get_optimizer("exact", objective="paper", grid=False).solve(problem)
     assert cont.margin_after == pytest.approx(cont.bound, abs=1e-9)
-
 
 
 @settings(max_examples=25, deadline=None)

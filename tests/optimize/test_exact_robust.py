@@ -69,8 +69,9 @@ def test_solver_error_is_retried_without_the_lower_bracket_and_reported(monkeypa
 
     monkeypatch.setattr(Session, "max_margin_milp", failing_once)
     problem = random_problem(1, n=4, m=8, limit_steps=6)  # in reach, and the rounded LP point is not optimal
-    result = get_optimizer("exact", objective="paper",
-                           settings=ExactSettings(level_steps=0, search_limit=0)).solve(problem)
+    result = get_optimizer("exact", objective="paper", settings=ExactSettings(level_steps=0, search_limit=0)).solve(
+        problem
+    )
     assert len(brackets) == 2 and brackets[1] < brackets[0]  # the retry drops the lower bracket
     assert result.status == "optimal"
     assert result.margin_after == pytest.approx(brute_force(problem)[0], abs=1e-12)
@@ -112,9 +113,17 @@ def shop_problem(n: int, m: int, seed: int) -> CorrectionProblem:
     lower = -np.round(rng.uniform(0.02, 0.1, m) / 0.005) * 0.005
     upper = np.round(rng.uniform(0.02, 0.1, m) / 0.005) * 0.005
     dev = np.round(0.03 * (1 - 2 * rng.random(n)) @ comp + 0.01 * (1 - 2 * rng.random(m)), 4)
-    return CorrectionProblem(composite=comp, deviation=dev, lower=lower, upper=upper, lb=np.full(n, -0.1),
-                             ub=np.full(n, 0.1), resolution=0.001, register_ids=tuple(f"R{i}" for i in range(n)),
-                             dimension_ids=tuple(f"D{j}" for j in range(m)))
+    return CorrectionProblem(
+        composite=comp,
+        deviation=dev,
+        lower=lower,
+        upper=upper,
+        lb=np.full(n, -0.1),
+        ub=np.full(n, 0.1),
+        resolution=0.001,
+        register_ids=tuple(f"R{i}" for i in range(n)),
+        dimension_ids=tuple(f"D{j}" for j in range(m)),
+    )
 
 
 def test_whole_solve_respects_the_time_limit_and_says_which_stage_stopped():
@@ -154,8 +163,9 @@ def test_threads_keep_their_own_solver_models(guide_pins_model, objective, count
     from setupfix.simulate import simulate_deviations
 
     devs, _ = simulate_deviations(guide_pins_model, count, seed=3)
-    problems = [CorrectionProblem.from_part(guide_pins_model, PartMeasurement("c", "r", None, d, ("",) * d.size))
-                for d in devs]
+    problems = [
+        CorrectionProblem.from_part(guide_pins_model, PartMeasurement("c", "r", None, d, ("",) * d.size)) for d in devs
+    ]
     alone = [get_optimizer("exact", objective=objective).solve(p).x for p in problems]
     session_mod._DERIVED.clear()
     with ThreadPoolExecutor(max_workers=threads) as pool:

@@ -21,10 +21,32 @@ from .test_exact import brute_force, random_problem
 OPTIMIZE = Path(__file__).resolve().parents[2] / "setupfix" / "optimize"
 
 #: The exact solver's modules, bottom to top: each imports only solver modules of a lower rank.
-RANKS = {"_settings": 0, "_highs": 0, "_problem": 0, "_dimensions": 1, "_base": 1, "_grid": 1, "_chords": 1,
-         "_listing": 2, "_least_norm": 2, "_session": 3, "_lp_bound": 4, "_grid_optimum": 5, "_grid_least_norm": 5,
-         "_triage_model": 1, "_leximin_search": 1, "_farkas": 4, "_leximin_pins": 5, "_leximin_level": 6,
-         "_leximin_counts": 7, "_leximin_result": 8, "_leximin": 9, "_triage_forced": 10, "_triage": 11, "_exact": 12}
+RANKS = {
+    "_settings": 0,
+    "_highs": 0,
+    "_problem": 0,
+    "_dimensions": 1,
+    "_base": 1,
+    "_grid": 1,
+    "_chords": 1,
+    "_listing": 2,
+    "_least_norm": 2,
+    "_session": 3,
+    "_lp_bound": 4,
+    "_grid_optimum": 5,
+    "_grid_least_norm": 5,
+    "_triage_model": 1,
+    "_leximin_search": 1,
+    "_farkas": 4,
+    "_leximin_pins": 5,
+    "_leximin_level": 6,
+    "_leximin_counts": 7,
+    "_leximin_result": 8,
+    "_leximin": 9,
+    "_triage_forced": 10,
+    "_triage": 11,
+    "_exact": 12,
+}
 
 
 @pytest.mark.parametrize("module", sorted(RANKS))
@@ -42,8 +64,10 @@ def test_solver_modules_keep_a_sensible_size():
         assert 100 <= lines <= 400, (module, lines)
 
 
-@pytest.mark.parametrize(("field", "value"), [("quantum", 0.0), ("level_steps", -1), ("box_share", 1.5),
-                                              ("working_set_nnls", 1), ("search_limit", 2.5)])
+@pytest.mark.parametrize(
+    ("field", "value"),
+    [("quantum", 0.0), ("level_steps", -1), ("box_share", 1.5), ("working_set_nnls", 1), ("search_limit", 2.5)],
+)
 def test_settings_are_validated_naming_the_field(field, value):
     with pytest.raises(ParameterError, match=f"ExactSettings: {field}"):
         ExactSettings(**{field: value})
@@ -71,8 +95,7 @@ def test_stage_results_are_frozen_and_bracket_the_brute_force_optimum(seed):
     problem = random_problem(100 + seed, n=4, m=8, limit_steps=6)
     g_rows, g = margin_rows(problem)
     free = problem.free
-    rows = GridRows(g_rows, g, problem.kmin[free].astype(float), problem.kmax[free].astype(float),
-                    problem.cost[free])
+    rows = GridRows(g_rows, g, problem.kmin[free].astype(float), problem.kmax[free].astype(float), problem.cost[free])
     session = Session(rows, ExactSettings(), 10.0)
     bound = lp_bound(session)
     assert bound is not None
@@ -86,8 +109,13 @@ def test_stage_results_are_frozen_and_bracket_the_brute_force_optimum(seed):
     assert opt.t * problem.resolution == pytest.approx(best, abs=1e-12)  # t* in steps, proved
     assert opt.stopped is None and opt.upper >= opt.t - 1e-9
     assert bound.t >= opt.upper - 1e-9  # LP bound ≥ grid bound ≥ grid optimum
-    assert [s.__name__ for s in LEVEL_STRATEGIES] == ["relax", "rounded_relaxation", "listing", "unit_boxes",
-                                                      "feasibility_milp"]
+    assert [s.__name__ for s in LEVEL_STRATEGIES] == [
+        "relax",
+        "rounded_relaxation",
+        "listing",
+        "unit_boxes",
+        "feasibility_milp",
+    ]
 
 
 @pytest.mark.parametrize("seed", range(12))
@@ -101,15 +129,19 @@ def test_a_callers_search_in_the_grid_optimum_changes_no_optimum(seed, monkeypat
     problem = random_problem(200 + seed, n=4, m=8, limit_steps=6)
     g_rows, g = margin_rows(problem)
     free = problem.free
-    rows = GridRows(g_rows, g, problem.kmin[free].astype(float), problem.kmax[free].astype(float),
-                    problem.cost[free])
+    rows = GridRows(g_rows, g, problem.kmin[free].astype(float), problem.kmax[free].astype(float), problem.cost[free])
     best, _ = brute_force(problem)
     row_dim, n_dims = dimension_of_rows(problem), len(model_dimensions(problem)[0])
     events: list[str] = []
     listing = go.listing
-    monkeypatch.setattr(go, "LEVEL_STRATEGIES", tuple(
-        (lambda sess, level: events.append("listing") or listing(sess, level)) if f is listing else f
-        for f in go.LEVEL_STRATEGIES))
+    monkeypatch.setattr(
+        go,
+        "LEVEL_STRATEGIES",
+        tuple(
+            (lambda sess, level: events.append("listing") or listing(sess, level)) if f is listing else f
+            for f in go.LEVEL_STRATEGIES
+        ),
+    )
     session = Session(rows, ExactSettings(), 10.0)
     for search in (lambda k: root_climb(session, row_dim, n_dims, k), lambda k: np.array(rows.kmax)):
         bound = lp_bound(session)
@@ -122,16 +154,20 @@ def test_a_callers_search_in_the_grid_optimum_changes_no_optimum(seed, monkeypat
 
         def spy(k: np.ndarray, search=search, opt_t=opt_t) -> np.ndarray | None:
             out = search(k)
-            events.append("reached" if out is not None and float(np.min(g - g_rows @ out)) >= opt_t - 1e-9
-                          else "search")
+            events.append(
+                "reached" if out is not None and float(np.min(g - g_rows @ out)) >= opt_t - 1e-9 else "search"
+            )
             return out
 
         opt = go.grid_optimum(session, bound, spy)
-        assert opt.stopped is None and opt.t == pytest.approx(opt_t) and opt.t * problem.resolution == pytest.approx(
-            best, abs=1e-12)
+        assert (
+            opt.stopped is None
+            and opt.t == pytest.approx(opt_t)
+            and opt.t * problem.resolution == pytest.approx(best, abs=1e-12)
+        )
         assert float(np.min(g - g_rows @ opt.k)) == pytest.approx(opt.t)
         if "reached" in events:  # the search's point proves the optimum: no listing after it
-            assert "listing" not in events[events.index("reached"):]
+            assert "listing" not in events[events.index("reached") :]
 
 
 def test_results_of_g_alone_are_computed_once_per_model_and_read_only(monkeypatch):

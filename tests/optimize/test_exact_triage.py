@@ -140,15 +140,16 @@ def milp_triage(problem: CorrectionProblem) -> tuple[int, np.ndarray, float]:
 
     def idd(ell: int) -> int:
         return ir(ell) + 1
+
     kx = np.zeros((n, width))  # k_i as a row over the columns
     start = 0
     for i, v in enumerate(values):
-        kx[i, start:start + v.size] = v
+        kx[i, start : start + v.size] = v
         start += v.size
     one_hot = np.zeros((n, width))
     start = 0
     for i, v in enumerate(values):
-        one_hot[i, start:start + v.size] = 1
+        one_hot[i, start : start + v.size] = 1
         start += v.size
     comp = problem.composite
     dev = problem.deviation / h
@@ -194,30 +195,35 @@ def milp_triage(problem: CorrectionProblem) -> tuple[int, np.ndarray, float]:
     bounds = Bounds(lb, ub)
 
     def solve(c, extra):
-        res = milp(c, constraints=cons + extra, integrality=integrality, bounds=bounds,
-                   options={"mip_rel_gap": 0, "presolve": True})
+        res = milp(
+            c,
+            constraints=cons + extra,
+            integrality=integrality,
+            bounds=bounds,
+            options={"mip_rel_gap": 0, "presolve": True},
+        )
         assert res.status == 0, res.message
         return res
 
     zsum = np.zeros(width)
-    zsum[iz:iz + m] = 1
+    zsum[iz : iz + m] = 1
     c = np.zeros(width)
-    c[iz:iz + m] = -1
+    c[iz : iz + m] = -1
     count = round(-solve(c, []).fun)
     fixed = [LinearConstraint(zsum[None], count, np.inf)]
     thetas = []
     for ell in range(1, count + 1):
         c = np.zeros(width)
-        c[ir(ell)], c[idd(ell):idd(ell) + m] = -ell, 1
+        c[ir(ell)], c[idd(ell) : idd(ell) + m] = -ell, 1
         theta = -solve(c, fixed).fun
         thetas.append(theta)
         row = np.zeros(width)
-        row[ir(ell)], row[idd(ell):idd(ell) + m] = ell, -1
+        row[ir(ell)], row[idd(ell) : idd(ell) + m] = ell, -1
         fixed.append(LinearConstraint(row[None], theta - 1e-7, np.inf))
     cost = np.zeros(width)
     start = 0
     for i, v in enumerate(values):
-        cost[start:start + v.size] = problem.cost[i] * v.astype(float) ** 2
+        cost[start : start + v.size] = problem.cost[i] * v.astype(float) ** 2
         start += v.size
     norm = solve(cost, fixed).fun
     sorted_kept = np.diff(np.r_[0.0, thetas]) * h
@@ -255,9 +261,17 @@ def test_one_gross_error_does_not_push_good_dimensions_out(guide_pins_model):
 def test_a_costlier_register_moves_less_among_equally_good_corrections():
     """Two registers that move the dimensions alike: the cheap one takes the shift."""
     comp = np.array([[1.0, 1.0, -1.0], [1.0, 1.0, -1.0], [0.0, 1.0, 1.0]])
-    base = dict(composite=comp, deviation=np.array([0.03, 0.03, -0.03]), lower=np.full(3, -0.05),
-                upper=np.full(3, 0.05), lb=np.full(3, -0.05), ub=np.full(3, 0.05), resolution=0.001,
-                register_ids=("G54", "H5", "H6"), dimension_ids=("D1", "D2", "D3"))
+    base = dict(
+        composite=comp,
+        deviation=np.array([0.03, 0.03, -0.03]),
+        lower=np.full(3, -0.05),
+        upper=np.full(3, 0.05),
+        lb=np.full(3, -0.05),
+        ub=np.full(3, 0.05),
+        resolution=0.001,
+        register_ids=("G54", "H5", "H6"),
+        dimension_ids=("D1", "D2", "D3"),
+    )
     plain = get_optimizer("exact", objective="paper").solve(CorrectionProblem(**base))
     paper = get_optimizer("exact", objective="paper")
     tool_dear = paper.solve(CorrectionProblem(**base, cost=np.array([1.0, 10.0, 1.0])))
@@ -271,9 +285,18 @@ def test_a_costlier_register_moves_less_among_equally_good_corrections():
 def test_weighted_least_norm_equals_brute_force(seed):
     problem = random_problem(200 + seed, n=4, m=6, limit_steps=4)
     cost = np.random.default_rng(seed).uniform(0.2, 5.0, problem.n_registers)
-    weighted = CorrectionProblem(problem.composite, problem.deviation, problem.lower, problem.upper, problem.lb,
-                                 problem.ub, problem.resolution, problem.register_ids, problem.dimension_ids,
-                                 cost=cost)
+    weighted = CorrectionProblem(
+        problem.composite,
+        problem.deviation,
+        problem.lower,
+        problem.upper,
+        problem.lb,
+        problem.ub,
+        problem.resolution,
+        problem.register_ids,
+        problem.dimension_ids,
+        cost=cost,
+    )
     result = get_optimizer("exact", objective="paper").solve(weighted)
     x = grid_points(weighted)
     f1, _, _ = weighted.evaluate(x)
@@ -291,8 +314,18 @@ def test_register_cost_must_be_positive_and_finite(cost):
 
     problem = random_problem(0, n=3)
     with pytest.raises(ParameterError, match="register cost"):
-        CorrectionProblem(problem.composite, problem.deviation, problem.lower, problem.upper, problem.lb,
-                          problem.ub, problem.resolution, problem.register_ids, problem.dimension_ids, cost=cost)
+        CorrectionProblem(
+            problem.composite,
+            problem.deviation,
+            problem.lower,
+            problem.upper,
+            problem.lb,
+            problem.ub,
+            problem.resolution,
+            problem.register_ids,
+            problem.dimension_ids,
+            cost=cost,
+        )
 
 
 def test_metaheuristics_give_nothing_up():
@@ -323,11 +356,20 @@ def test_bound_is_the_kept_dimensions_lp_and_seconds_the_whole_call(seed, path):
     held = np.isfinite(problem.held_floor)
     ct = problem.composite.T  # (m, n)
     dev, up, lo, fl = problem.deviation, problem.upper, problem.lower, problem.held_floor
-    a = np.r_[np.c_[ct[keep], np.ones(keep.sum())], np.c_[-ct[keep], np.ones(keep.sum())],
-              np.c_[ct[held], np.zeros(held.sum())], np.c_[-ct[held], np.zeros(held.sum())]]
+    a = np.r_[
+        np.c_[ct[keep], np.ones(keep.sum())],
+        np.c_[-ct[keep], np.ones(keep.sum())],
+        np.c_[ct[held], np.zeros(held.sum())],
+        np.c_[-ct[held], np.zeros(held.sum())],
+    ]
     b = np.r_[(up - dev)[keep], (dev - lo)[keep], (up - dev - fl)[held], (dev - lo - fl)[held]]
-    lp = linprog(np.r_[np.zeros(problem.n_registers), -1.0], A_ub=a, b_ub=b,
-                 bounds=[*zip(problem.lb, problem.ub, strict=True), (None, None)], method="highs")
+    lp = linprog(
+        np.r_[np.zeros(problem.n_registers), -1.0],
+        A_ub=a,
+        b_ub=b,
+        bounds=[*zip(problem.lb, problem.ub, strict=True), (None, None)],
+        method="highs",
+    )
     assert result.bound == pytest.approx(-lp.fun, abs=1e-9)
     assert result.bound >= result.margin_after - 1e-12
     assert result.extra["lp_bound_all"] < result.bound  # the whole problem's, given-up dimensions included
@@ -384,12 +426,28 @@ def test_a_dimension_within_reach_only_by_harm_is_proved_lost(monkeypatch):
     from setupfix.optimize._triage_forced import lost_bound
     from setupfix.optimize._triage_model import TriageRows
 
-    problem = CorrectionProblem(np.array([[1.0, 1.0]]), np.array([0.08, -0.03]), np.full(2, -0.05),
-                                np.full(2, 0.05), np.array([-0.1]), np.array([0.1]), 0.01, ("R0",), ("D0", "D1"))
+    problem = CorrectionProblem(
+        np.array([[1.0, 1.0]]),
+        np.array([0.08, -0.03]),
+        np.full(2, -0.05),
+        np.full(2, 0.05),
+        np.array([-0.1]),
+        np.array([0.1]),
+        0.01,
+        ("R0",),
+        ("D0", "D1"),
+    )
     g_rows, g = margin_rows(problem)
     row_dim = np.r_[0, 1, 0, 1]
-    t = TriageRows(g_rows, g, row_dim, problem.held_floor / 0.01, problem.kmin.astype(float),
-                   problem.kmax.astype(float), problem.cost)
+    t = TriageRows(
+        g_rows,
+        g,
+        row_dim,
+        problem.held_floor / 0.01,
+        problem.kmin.astype(float),
+        problem.kmax.astype(float),
+        problem.cost,
+    )
     assert not t.lost[0]  # the box reaches it (k ≤ −3 steps) …
     assert lost_bound(t, 0, 1.0) == pytest.approx(-1.0, abs=1e-5)  # … D1 stays in only for k ≥ −2: D0 at −1 step
     result = get_optimizer("exact", time_limit=SOLVE_LIMIT).solve(problem)

@@ -41,8 +41,19 @@ def test_enumerate_ball_lists_exactly_the_points_of_brute_force(seed):
         assert expected  # the points of least norm at least
         scaled = tuple(rng.uniform(0, 2, v.size) for v in (lam, lam_lo, lam_hi))
         for multipliers in (None, (lam, lam_lo, lam_hi), scaled):
-            listed = enumerate_ball(centre, cost, radius2, kmin, kmax, 10**6, g_rows, b, fmax=fmax,
-                                    work_limit=10**9, multipliers=multipliers)
+            listed = enumerate_ball(
+                centre,
+                cost,
+                radius2,
+                kmin,
+                kmax,
+                10**6,
+                g_rows,
+                b,
+                fmax=fmax,
+                work_limit=10**9,
+                multipliers=multipliers,
+            )
             assert {tuple(p) for p in listed} == expected
     # an arbitrary centre and radius, rows only
     centre = rng.uniform(-3, 3, kmin.size)
@@ -56,8 +67,21 @@ def test_ellipsoid_search_finds_the_least_norm_of_brute_force(seed):
     g_rows, b, kmin, kmax, cost = small_system(seed, n=5, r=10, steps=4)
     _, (_k, lam, lam_lo, lam_hi) = least_distance(g_rows, b, kmin, kmax, cost)
     centre, q = lagrangian_ball(g_rows, b, kmin, kmax, cost, lam, lam_lo, lam_hi)
-    best, proved, _ = ellipsoid_search(g_rows, b, 0.0, centre, q, cost, kmin, kmax, np.inf, 10**6, b,
-                                       work_limit=10**9, multipliers=(lam, lam_lo, lam_hi))
+    best, proved, _ = ellipsoid_search(
+        g_rows,
+        b,
+        0.0,
+        centre,
+        q,
+        cost,
+        kmin,
+        kmax,
+        np.inf,
+        10**6,
+        b,
+        work_limit=10**9,
+        multipliers=(lam, lam_lo, lam_hi),
+    )
     pts = grid_points(kmin, kmax)
     feasible = pts[np.all(pts @ g_rows.T <= b + 1e-9, axis=1)]
     f = np.sum(cost * feasible**2, axis=1)

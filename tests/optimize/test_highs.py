@@ -18,8 +18,9 @@ def knapsack() -> tuple[LinearModel, np.ndarray, float]:
     rng = np.random.default_rng(3)
     value, weight = rng.integers(1, 30, 8).astype(float), rng.integers(1, 20, 8).astype(float)
     cap = float(np.floor(weight.sum() / 2))
-    model = LinearModel(-value, weight[None, :], np.array([-np.inf]), np.array([cap]), np.zeros(8), np.ones(8),
-                        integer=np.ones(8, bool))
+    model = LinearModel(
+        -value, weight[None, :], np.array([-np.inf]), np.array([cap]), np.zeros(8), np.ones(8), integer=np.ones(8, bool)
+    )
     points = np.array(list(itertools.product((0.0, 1.0), repeat=8)))
     best = float(np.min(np.where(points @ weight <= cap, -(points @ value), np.inf)))
     return model, np.zeros(8), best
@@ -41,10 +42,15 @@ def test_the_check_names_each_contradiction():
     # the start with its own value, but a dual bound below it: not optimal at a zero gap
     assert "dual bound" in model.check(start, 0.0, best, "optimal")
     assert "row" in model.check(np.ones(8), model.value(np.ones(8)), best, "optimal")
-    assert "fractional" in model.check(np.r_[0.5, np.zeros(7)], model.value(np.r_[0.5, np.zeros(7)]),
-                                       model.value(np.r_[0.5, np.zeros(7)]), "optimal")
-    assert "bounds" in model.check(np.r_[-1.0, np.zeros(7)], model.value(np.r_[-1.0, np.zeros(7)]),
-                                   model.value(np.r_[-1.0, np.zeros(7)]), "optimal")
+    assert "fractional" in model.check(
+        np.r_[0.5, np.zeros(7)], model.value(np.r_[0.5, np.zeros(7)]), model.value(np.r_[0.5, np.zeros(7)]), "optimal"
+    )
+    assert "bounds" in model.check(
+        np.r_[-1.0, np.zeros(7)],
+        model.value(np.r_[-1.0, np.zeros(7)]),
+        model.value(np.r_[-1.0, np.zeros(7)]),
+        "optimal",
+    )
 
 
 def test_a_wrong_optimal_answer_is_solved_again_without_the_start(monkeypatch):
@@ -86,8 +92,9 @@ def test_an_answer_that_stays_wrong_is_an_error_never_optimal(monkeypatch):
 def test_lp_and_qp_answers_pass_the_check():
     rng = np.random.default_rng(1)
     a = rng.normal(size=(6, 4))
-    lp = LinearModel(rng.normal(size=4), a, np.full(6, -np.inf), np.abs(rng.normal(size=6)) + 1, np.full(4, -3.0),
-                     np.full(4, 3.0))
+    lp = LinearModel(
+        rng.normal(size=4), a, np.full(6, -np.inf), np.abs(rng.normal(size=6)) + 1, np.full(4, -3.0), np.full(4, 3.0)
+    )
     res = lp.solve(5.0)
     assert res.status == "optimal" and res.row_dual is not None
     qp = LinearModel(np.zeros(4), a, np.full(6, -np.inf), -np.ones(6), np.full(4, -9.0), np.full(4, 9.0))
@@ -150,8 +157,12 @@ def test_models_on_one_matrix_share_its_dense_copy_and_a_changed_model_checks_it
     from setupfix.optimize._highs import Colwise
 
     shared = Colwise.of(np.array([[1.0, 1.0], [1.0, -1.0]]))
-    models = [LinearModel(np.array([-1.0, -1.0]), shared, np.full(2, -INF), np.array([4.0, 1.0]), np.zeros(2),
-                          np.full(2, 10.0)) for _ in range(2)]
+    models = [
+        LinearModel(
+            np.array([-1.0, -1.0]), shared, np.full(2, -INF), np.array([4.0, 1.0]), np.zeros(2), np.full(2, 10.0)
+        )
+        for _ in range(2)
+    ]
     for model in models:
         assert model.solve(5.0).status == "optimal"
     dense, absolute = shared.dense()

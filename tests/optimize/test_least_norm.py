@@ -55,8 +55,9 @@ def test_working_set_nnls_equals_the_full_least_distance(seed):
 def test_working_set_nnls_proves_an_empty_system():
     g_rows = np.array([[1.0, 0.0], [-1.0, 0.0], [0.0, 1.0]])
     b = np.array([-1.0, -1.0, 5.0])  # k0 ≤ −1 and k0 ≥ 1
-    status, out = least_distance_working_set(g_rows, b, np.full(2, -9.0), np.full(2, 9.0), np.ones(2),
-                                             time.perf_counter() + 10, add=1)
+    status, out = least_distance_working_set(
+        g_rows, b, np.full(2, -9.0), np.full(2, 9.0), np.ones(2), time.perf_counter() + 10, add=1
+    )
     assert status == "infeasible" and out is None
 
 
@@ -133,11 +134,11 @@ def test_a_stopped_least_norm_proof_returns_a_certified_near_least_correction(mo
     assert 1.0 <= ratio < 1.1
     assert proven.norm - 1e-12 <= result.norm <= ratio * proven.norm + 1e-12
     x_steps = result.x / problem.resolution
-    assert grid_margins(*margin_rows(problem), x_steps[problem.free]) >= result.margin_after / \
-        problem.resolution - 1e-6
+    assert grid_margins(*margin_rows(problem), x_steps[problem.free]) >= result.margin_after / problem.resolution - 1e-6
 
 
 # --- ties and network rows ---------------------------------------------------------------------
+
 
 def tied_problem(seed: int, network: bool = False) -> CorrectionProblem:
     """Equal costs and registers in pairs with equal or opposite columns: the least norm is tied at many points.
@@ -157,9 +158,16 @@ def tied_problem(seed: int, network: bool = False) -> CorrectionProblem:
         comp = np.repeat(half, 2, axis=0) * np.tile([1.0, -1.0], n // 2)[:, None] ** rng.integers(0, 2, (n, 1))
     width = rng.uniform(0.02, 0.05, m)
     return CorrectionProblem(
-        composite=comp, deviation=np.round(rng.uniform(-0.04, 0.04, m), 3), lower=-width, upper=width,
-        lb=np.full(n, -3 * h), ub=np.full(n, 3 * h), resolution=h,
-        register_ids=tuple(f"R{i}" for i in range(n)), dimension_ids=tuple(f"D{j}" for j in range(m)))
+        composite=comp,
+        deviation=np.round(rng.uniform(-0.04, 0.04, m), 3),
+        lower=-width,
+        upper=width,
+        lb=np.full(n, -3 * h),
+        ub=np.full(n, 3 * h),
+        resolution=h,
+        register_ids=tuple(f"R{i}" for i in range(n)),
+        dimension_ids=tuple(f"D{j}" for j in range(m)),
+    )
 
 
 def brute_lex(problem: CorrectionProblem) -> tuple[np.ndarray, int, bool]:
@@ -253,8 +261,9 @@ def test_shop_rows_without_differences_take_the_network_lp_and_agree_with_the_li
     """60 × 400 with every dimension one WKS and one tool: the LP's answer equals the other paths'."""
     for seed in range(2):
         problem = network_shop_problem(60, 400, seed)
-        lp = get_optimizer("exact", objective="paper", time_limit=30.0,
-                           settings=ExactSettings(ellipsoid_max_registers=0)).solve(problem)
+        lp = get_optimizer(
+            "exact", objective="paper", time_limit=30.0, settings=ExactSettings(ellipsoid_max_registers=0)
+        ).solve(problem)
         monkeypatch.setattr(least_norm_stage, "NETWORK_LP", False)
         other = get_optimizer("exact", objective="paper", time_limit=30.0).solve(problem)
         monkeypatch.setattr(least_norm_stage, "NETWORK_LP", True)
@@ -276,6 +285,14 @@ def network_shop_problem(n: int, m: int, seed: int) -> CorrectionProblem:
     lower = -np.round(rng.uniform(0.02, 0.1, m) / 0.005) * 0.005
     upper = np.round(rng.uniform(0.02, 0.1, m) / 0.005) * 0.005
     dev = np.round(0.03 * (1 - 2 * rng.random(n)) @ comp + 0.01 * (1 - 2 * rng.random(m)), 4)
-    return CorrectionProblem(composite=comp, deviation=dev, lower=lower, upper=upper, lb=np.full(n, -0.1),
-                             ub=np.full(n, 0.1), resolution=0.001, register_ids=tuple(f"R{i}" for i in range(n)),
-                             dimension_ids=tuple(f"D{j}" for j in range(m)))
+    return CorrectionProblem(
+        composite=comp,
+        deviation=dev,
+        lower=lower,
+        upper=upper,
+        lb=np.full(n, -0.1),
+        ub=np.full(n, 0.1),
+        resolution=0.001,
+        register_ids=tuple(f"R{i}" for i in range(n)),
+        dimension_ids=tuple(f"D{j}" for j in range(m)),
+    )

@@ -50,8 +50,15 @@ def solved_steps(problem: CorrectionProblem, objective: str = "leximin"):
     return result, k, np.round(np.sort(steps_margins(problem, k[None, :])[0]), 6)
 
 
-def one_axis_problem(seed: int, n_wks: int = 2, n_tools: int = 3, m: int = 6, limit: int = 4,
-                     fixed: tuple[int, ...] = (), cost: bool = False) -> CorrectionProblem:
+def one_axis_problem(
+    seed: int,
+    n_wks: int = 2,
+    n_tools: int = 3,
+    m: int = 6,
+    limit: int = 4,
+    fixed: tuple[int, ...] = (),
+    cost: bool = False,
+) -> CorrectionProblem:
     """A one-axis fixture like the paper's: each dimension is cut by one tool in one WKS (±1), some are
     the difference of two such features (a step height)."""
     rng = np.random.default_rng(seed)
@@ -67,16 +74,25 @@ def one_axis_problem(seed: int, n_wks: int = 2, n_tools: int = 3, m: int = 6, li
     lb[list(fixed)] = ub[list(fixed)] = 0.0
     width = np.round(rng.uniform(0.004, 0.012, m), 4)
     return CorrectionProblem(
-        composite=comp, deviation=np.round(rng.uniform(-0.006, 0.006, m), 5), lower=-width,
-        upper=np.round(width * rng.uniform(0.6, 1.4, m), 4), lb=lb, ub=ub, resolution=h,
-        register_ids=tuple(f"R{i}" for i in range(n)), dimension_ids=tuple(f"D{j}" for j in range(m)),
-        cost=rng.uniform(0.5, 3.0, n) if cost else None)
+        composite=comp,
+        deviation=np.round(rng.uniform(-0.006, 0.006, m), 5),
+        lower=-width,
+        upper=np.round(width * rng.uniform(0.6, 1.4, m), 4),
+        lb=lb,
+        ub=ub,
+        resolution=h,
+        register_ids=tuple(f"R{i}" for i in range(n)),
+        dimension_ids=tuple(f"D{j}" for j in range(m)),
+        cost=rng.uniform(0.5, 3.0, n) if cost else None,
+    )
 
 
-CASES = ([("random", s, {}) for s in range(10)]
-         + [("random", s, {"fixed": (1,), "n": 4, "m": 5, "limit_steps": 3}) for s in range(10, 14)]
-         + [("axis", s, {}) for s in range(14)]
-         + [("axis", s, {"cost": True, "fixed": (0,)}) for s in range(14, 20)])
+CASES = (
+    [("random", s, {}) for s in range(10)]
+    + [("random", s, {"fixed": (1,), "n": 4, "m": 5, "limit_steps": 3}) for s in range(10, 14)]
+    + [("axis", s, {}) for s in range(14)]
+    + [("axis", s, {"cost": True, "fixed": (0,)}) for s in range(14, 20)]
+)
 
 
 @pytest.mark.parametrize(("kind", "seed", "kw"), CASES)
@@ -131,15 +147,20 @@ def ordered_outcomes(problem: CorrectionProblem) -> np.ndarray:
                 rows.append(a), lo.append(0.0), hi.append(np.inf)
             if i < ell - 1:  # θ_i ≥ θ_i*
                 a = np.zeros(width)
-                a[base], a[base + 1: base + 1 + m] = i + 1, -1.0
+                a[base], a[base + 1 : base + 1 + m] = i + 1, -1.0
                 rows.append(a), lo.append(fixed_theta[i] - 1e-7), hi.append(np.inf)
         c = np.zeros(width)
         last = n + m + (ell - 1) * (1 + m)
-        c[last], c[last + 1: last + 1 + m] = -ell, 1.0
+        c[last], c[last + 1 : last + 1 + m] = -ell, 1.0
         lb = np.r_[problem.kmin[free], np.full(m, -np.inf), np.tile(np.r_[-np.inf, np.zeros(m)], ell)]
         ub = np.r_[problem.kmax[free], np.full(m, np.inf), np.full(ell * (1 + m), np.inf)]
-        res = milp(c, constraints=LinearConstraint(np.array(rows), lo, hi), bounds=Bounds(lb, ub),
-                   integrality=np.r_[np.ones(n), np.zeros(width - n)], options={"mip_rel_gap": 0})
+        res = milp(
+            c,
+            constraints=LinearConstraint(np.array(rows), lo, hi),
+            bounds=Bounds(lb, ub),
+            integrality=np.r_[np.ones(n), np.zeros(width - n)],
+            options={"mip_rel_gap": 0},
+        )
         assert res.status == 0
         fixed_theta.append(-res.fun)
         sorted_m.append(fixed_theta[-1] - (fixed_theta[-2] if ell > 1 else 0.0))
@@ -148,8 +169,9 @@ def ordered_outcomes(problem: CorrectionProblem) -> np.ndarray:
 
 @pytest.mark.parametrize("seed", range(8))
 def test_leximin_equals_an_independent_ordered_outcome_milp(seed):
-    problem = one_axis_problem(100 + seed, n_wks=3, n_tools=4, m=8, limit=12, cost=seed % 2 == 1,
-                               fixed=(2,) if seed % 3 == 0 else ())
+    problem = one_axis_problem(
+        100 + seed, n_wks=3, n_tools=4, m=8, limit=12, cost=seed % 2 == 1, fixed=(2,) if seed % 3 == 0 else ()
+    )
     expected = ordered_outcomes(problem)
     if expected[0] < 0:
         pytest.skip("triage")
@@ -166,8 +188,13 @@ def test_objective_is_validated_and_metaheuristics_refuse_leximin():
 
 
 #: Generated problems with a discrete conflict (found by running the solver on seeds 0-150 of both families).
-CONFLICTS = [("axis", 5, {}), ("axis", 37, {}), ("axis", 139, {}), ("axis", 5, {"cost": True, "fixed": (0,)}),
-             ("guide", 5, {})]
+CONFLICTS = [
+    ("axis", 5, {}),
+    ("axis", 37, {}),
+    ("axis", 139, {}),
+    ("axis", 5, {"cost": True, "fixed": (0,)}),
+    ("guide", 5, {}),
+]
 
 
 def guide_pins_window(cycle: int) -> CorrectionProblem:

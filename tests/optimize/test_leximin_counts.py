@@ -53,8 +53,9 @@ def test_each_count_equals_the_grid_count_and_fixes_only_what_the_lattice_decide
         m = np.full((m_rows.shape[0], rows.n_active), np.inf)
         for j, col in zip(np.flatnonzero(rows.act), rows.col, strict=True):
             m[:, col] = np.minimum(m[:, col], m_rows[:, j])
-        ok = (np.all(m_rows[:, rows.fix] >= rows.f[rows.fix] - TOL, axis=1)
-              & np.all(m_rows[:, rows.act] >= rows.t0 - TOL, axis=1))
+        ok = np.all(m_rows[:, rows.fix] >= rows.f[rows.fix] - TOL, axis=1) & np.all(
+            m_rows[:, rows.act] >= rows.t0 - TOL, axis=1
+        )
         for t_i, c_i in blocks:
             ok &= np.sum(m >= t_i - TOL, axis=1) >= c_i
         m = m[ok]
@@ -84,7 +85,7 @@ def test_counts_stopped_give_the_least_norm_at_the_conflict_level_not_the_counts
     problem = make(kind, seed, kw)
     result, k, _ = solved_steps(problem)
     assert result.status == "time_limit" and "the rest by counts" in result.extra["path"]
-    (rows, lex, row_dim), = captured
+    ((rows, lex, row_dim),) = captured
     assert lex.counts is None and lex.stopped is not None
     pts = _grid(rows)
     m_rows = rows.g[None, :] - pts @ rows.g_rows.T

@@ -6,8 +6,8 @@ import json
 
 import numpy as np
 import pytest
-
 from conftest import GUIDE_PINS
+
 from setupfix.cli import main
 from setupfix.errors import ParameterError
 from setupfix.model import load_model
@@ -76,6 +76,7 @@ def test_compare_measures_the_metaheuristics_against_the_papers_optimum():
 def test_diagnose_next_correction_follows_the_objective(objective):
     """``diagnose --objective``: the next correction is ``correct``'s on the forecast with that objective."""
     from conftest import SAMPLES
+
     from setupfix.diagnose import Diagnoser
     from setupfix.model import PartMeasurement
     from setupfix.pipeline.correct import correct_cycle
@@ -84,13 +85,20 @@ def test_diagnose_next_correction_follows_the_objective(objective):
 
     loop = SAMPLES / "closed_loop"
     solve = SolveOptions(objective=objective)
-    out = diagnose_reports(DiagnoseRequest(
-        GUIDE_PINS / "model.toml", (loop / "measurements.csv",), corrections=str(loop / "corrections.csv"),
-        temperatures=str(loop / "temperatures.csv"), diagnoser=Diagnoser(walk=False), solve=solve))
+    out = diagnose_reports(
+        DiagnoseRequest(
+            GUIDE_PINS / "model.toml",
+            (loop / "measurements.csv",),
+            corrections=str(loop / "corrections.csv"),
+            temperatures=str(loop / "temperatures.csv"),
+            diagnoser=Diagnoser(walk=False),
+            solve=solve,
+        )
+    )
     fc = out.diagnosis.forecast
-    part = PartMeasurement(part="next", report="forecast", timestamp=None, deviation=fc,
-                           sources=tuple("" for _ in fc))
-    again = correct_cycle(CorrectRequest(forecast_model(out.input.model), solve=solve), part,
-                          composite=out.diagnosis.relation_matrix())
+    part = PartMeasurement(part="next", report="forecast", timestamp=None, deviation=fc, sources=tuple("" for _ in fc))
+    again = correct_cycle(
+        CorrectRequest(forecast_model(out.input.model), solve=solve), part, composite=out.diagnosis.relation_matrix()
+    )
     assert out.next_cycle is not None
     np.testing.assert_array_equal(out.next_cycle.x, again.x)

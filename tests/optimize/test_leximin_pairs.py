@@ -30,8 +30,7 @@ def window(problem: CorrectionProblem, objective: str) -> CorrectionProblem:
     """Every register limited to the objective's answer ± 1 step: 3^10 grid points (brute force)."""
     x = get_optimizer("exact", objective=objective, time_limit=30.0).solve(problem).x
     h = problem.resolution
-    return dataclasses.replace(problem, lb=np.where(problem.free, x - h, 0.0),
-                               ub=np.where(problem.free, x + h, 0.0))
+    return dataclasses.replace(problem, lb=np.where(problem.free, x - h, 0.0), ub=np.where(problem.free, x + h, 0.0))
 
 
 def test_the_bundled_pair_conflicts_are_three():
@@ -58,8 +57,11 @@ def test_pair_branches_decide_the_whole_report_as_the_counts_would(report, monke
     np.testing.assert_allclose(np.sort(steps_margins(problem, k)), np.sort(steps_margins(problem, k_c)))
 
 
-@pytest.mark.parametrize(("report", "centre"), [(r, c) for r in REPORTS for c in ("paper", "leximin")],
-                         ids=lambda v: v.stem if isinstance(v, Path) else v)
+@pytest.mark.parametrize(
+    ("report", "centre"),
+    [(r, c) for r in REPORTS for c in ("paper", "leximin")],
+    ids=lambda v: v.stem if isinstance(v, Path) else v,
+)
 def test_pair_branches_equal_brute_force_on_windows(report, centre, monkeypatch):
     """Windows of ±1 step around the paper's or the leximin answer; every pair the Farkas certificate
     excludes is checked on the grid: no point has every other active dimension above t + ε."""
@@ -85,8 +87,12 @@ def test_pair_branches_equal_brute_force_on_windows(report, centre, monkeypatch)
             for a, b in zip(*np.nonzero(np.triu(out, 1)), strict=True):
                 others = active.copy()
                 others[[a, b]] = False
-                alone = (base & (m[:, a] >= t - 1e-9) & (m[:, b] >= t - 1e-9)
-                         & np.all(m[:, others] >= t + eps - 1e-9, axis=1))
+                alone = (
+                    base
+                    & (m[:, a] >= t - 1e-9)
+                    & (m[:, b] >= t - 1e-9)
+                    & np.all(m[:, others] >= t + eps - 1e-9, axis=1)
+                )
                 assert not alone.any(), f"dimensions {a}, {b} are the only ones at {t} at a grid point"
             claims.append(int(np.triu(out, 1).sum()))
         return out

@@ -41,7 +41,7 @@ def checked_levels(monkeypatch) -> list[int]:
         in_set = base & np.all(m_dims[:, active] >= t - 1e-9, axis=1)
         assert not np.any(base & np.all(m_dims[:, active] >= t + EPS, axis=1)), "a grid point is above the level"
         assert in_set[np.flatnonzero(np.all(pts == k_out, axis=1))[0]], "the level's point is not in its level set"
-        values = (pts[in_set] @ rows.g_rows.T)
+        values = pts[in_set] @ rows.g_rows.T
         assert np.all(np.ptp(values[:, pin], axis=0) < 1e-9), "a pinned row moves on the level set"
         assert np.all(m_rows[in_set][:, sat] <= t + EPS + 1e-9), "a saturated row rises on the level set"
         # the span closure of the pins is exact too
@@ -54,8 +54,10 @@ def checked_levels(monkeypatch) -> list[int]:
     return seen
 
 
-@pytest.mark.parametrize(("kind", "seed"), [("window", 1), ("window", 2), ("window", 3), ("window", 5),
-                                            ("axis", 5), ("axis", 37), ("axis", 3), ("axis", 11)])
+@pytest.mark.parametrize(
+    ("kind", "seed"),
+    [("window", 1), ("window", 2), ("window", 3), ("window", 5), ("axis", 5), ("axis", 37), ("axis", 3), ("axis", 11)],
+)
 def test_every_claim_of_the_levels_holds_on_the_level_set(kind, seed, monkeypatch):
     problem = guide_pins_window(seed) if kind == "window" else one_axis_problem(seed)
     best, norm, _ = brute_leximin(problem)

@@ -56,8 +56,11 @@ def neighbours(n: int):
             yield d
 
 
-PROBLEMS = ([("random", s, {"n": 4, "m": 7}) for s in range(6)] + [("axis", s, {}) for s in range(8)]
-            + [("axis", s, {"n_wks": 3, "n_tools": 4, "m": 10, "limit": 8}) for s in range(8, 12)])
+PROBLEMS = (
+    [("random", s, {"n": 4, "m": 7}) for s in range(6)]
+    + [("axis", s, {}) for s in range(8)]
+    + [("axis", s, {"n_wks": 3, "n_tools": 4, "m": 10, "limit": 8}) for s in range(8, 12)]
+)
 
 
 @pytest.mark.parametrize(("kind", "seed", "kw"), PROBLEMS)
@@ -103,8 +106,17 @@ def test_climb_without_an_active_dimension_returns_the_start():
     g_rows, g, order, starts, _ = grouped(problem)
     free = problem.free
     k0 = np.zeros(int(free.sum()))
-    k = climb(g_rows, g, k0, problem.kmin[free].astype(float), problem.kmax[free].astype(float), order, starts,
-              np.full(starts.size, -np.inf), EPS)
+    k = climb(
+        g_rows,
+        g,
+        k0,
+        problem.kmin[free].astype(float),
+        problem.kmax[free].astype(float),
+        order,
+        starts,
+        np.full(starts.size, -np.inf),
+        EPS,
+    )
     assert k is k0
 
 
@@ -138,8 +150,10 @@ def test_climb_with_kept_moves_is_the_same_climb(seed):
     floors = np.full(starts.size, np.nan)
     moves = climb_moves(g_rows, order)
     assert all(not a.flags.writeable for a in moves)
-    np.testing.assert_array_equal(climb(g_rows, g, k0, kmin, kmax, order, starts, floors, EPS, moves=moves),
-                                  climb(g_rows, g, k0, kmin, kmax, order, starts, floors, EPS))
+    np.testing.assert_array_equal(
+        climb(g_rows, g, k0, kmin, kmax, order, starts, floors, EPS, moves=moves),
+        climb(g_rows, g, k0, kmin, kmax, order, starts, floors, EPS),
+    )
 
 
 @pytest.mark.parametrize("sizes", [(2, 2, 2, 2), (1, 2, 3), (2, 1, 2), (5,), (2,)])
@@ -148,5 +162,5 @@ def test_group_min_is_the_least_of_each_group(sizes):
     rng = np.random.default_rng(len(sizes))
     m = rng.normal(size=(7, sum(sizes)))
     starts = np.r_[0, np.cumsum(sizes)[:-1]].astype(np.intp)
-    want = np.array([[row[a:a + n].min() for a, n in zip(starts, sizes, strict=True)] for row in m])
+    want = np.array([[row[a : a + n].min() for a, n in zip(starts, sizes, strict=True)] for row in m])
     np.testing.assert_array_equal(group_min(m, starts), want)

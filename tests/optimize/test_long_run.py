@@ -49,8 +49,9 @@ def fresh_process(problems: list[CorrectionProblem], tmp_path: Path) -> list[tup
 
 def test_a_long_run_never_runs_out_of_time_and_equals_a_fresh_process(guide_pins_model, tmp_path):
     devs, _ = simulate_deviations(guide_pins_model, 16, seed=3)
-    problems = [CorrectionProblem.from_part(guide_pins_model, PartMeasurement("c", "r", None, d, ("",) * d.size))
-                for d in devs]
+    problems = [
+        CorrectionProblem.from_part(guide_pins_model, PartMeasurement("c", "r", None, d, ("",) * d.size)) for d in devs
+    ]
     fresh = fresh_process(problems, tmp_path)
     # the reports a fresh process proves without a MILP (a few ms each: far from the limit on a busy machine)
     quick = [i for i, (_, status, path) in enumerate(fresh) if status == "optimal" and "MILP" not in path]
@@ -67,8 +68,14 @@ def test_each_run_of_one_highs_model_has_its_own_time_limit():
     """Runs of one model within a solve (lazy cuts, levels) each get the limit they are given."""
     from setupfix.optimize._highs import INF, LinearModel
 
-    model = LinearModel(np.array([0.0, -1.0]), np.array([[1.0, 1.0], [-1.0, 1.0]]), np.full(2, -INF),
-                        np.array([1.0, 1.0]), np.array([-5.0, -INF]), np.array([5.0, INF]))
+    model = LinearModel(
+        np.array([0.0, -1.0]),
+        np.array([[1.0, 1.0], [-1.0, 1.0]]),
+        np.full(2, -INF),
+        np.array([1.0, 1.0]),
+        np.array([-5.0, -INF]),
+        np.array([5.0, INF]),
+    )
     statuses = set()
     while model.h.getRunTime() < 0.1:  # HiGHS's own clock, summed over the runs: twice the limit below
         run = model.solve(0.05)

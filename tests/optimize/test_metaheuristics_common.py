@@ -44,10 +44,17 @@ def small_problem(seed: int = 0, cls: type[CorrectionProblem] = CorrectionProble
     rng = np.random.default_rng(seed)
     comp = rng.integers(-1, 2, size=(5, 8)).astype(float)
     comp[:, :4] = np.vstack([np.eye(4), np.ones(4)])  # every register acts somewhere
-    return cls(composite=comp, deviation=rng.uniform(-0.12, 0.12, 8), lower=np.full(8, -0.1),
-               upper=np.full(8, 0.1), lb=np.array([-0.1, -0.1, -0.1, -0.1, 0.0]),
-               ub=np.array([0.1, 0.1, 0.1, 0.1, 0.0]), resolution=0.01,
-               register_ids=("W1", "W2", "W3", "T1", "T2"), dimension_ids=tuple(f"D{i}" for i in range(8)))
+    return cls(
+        composite=comp,
+        deviation=rng.uniform(-0.12, 0.12, 8),
+        lower=np.full(8, -0.1),
+        upper=np.full(8, 0.1),
+        lb=np.array([-0.1, -0.1, -0.1, -0.1, 0.0]),
+        ub=np.array([0.1, 0.1, 0.1, 0.1, 0.0]),
+        resolution=0.01,
+        register_ids=("W1", "W2", "W3", "T1", "T2"),
+        dimension_ids=tuple(f"D{i}" for i in range(8)),
+    )
 
 
 def brute_force(problem: CorrectionProblem) -> float:

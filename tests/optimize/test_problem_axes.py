@@ -3,25 +3,39 @@
 from __future__ import annotations
 
 import numpy as np
+import pandas as pd
 import pytest
 
 from setupfix.model import match_parts, model_from_dict
 from setupfix.optimize import CorrectionProblem, get_optimizer
 from setupfix.relation import relation_matrices
 
-import pandas as pd
-
 DOC = {
-    "process": {"name": "rot", "axes": ["X", "Y"], "rotation": True, "resolution": 0.001, "limit": 0.1,
-                "rotation_limit": 0.0333, "rotation_resolution": 0.0001},
+    "process": {
+        "name": "rot",
+        "axes": ["X", "Y"],
+        "rotation": True,
+        "resolution": 0.001,
+        "limit": 0.1,
+        "rotation_limit": 0.0333,
+        "rotation_resolution": 0.0001,
+    },
     "wks": {"W1": {"register": "G54"}},
-    "features": {"F1": {"wks": {"W1": 1}, "position": [100.0, 0.0, 0.0]},
-                 "F2": {"wks": {"W1": 1}, "position": [0.0, 50.0, 0.0]}},
+    "features": {
+        "F1": {"wks": {"W1": 1}, "position": [100.0, 0.0, 0.0]},
+        "F2": {"wks": {"W1": 1}, "position": [0.0, 50.0, 0.0]},
+    },
     "dimensions": {
         "DY": {"name": "Y at F1", "axis": "Y", "features": {"F1": 1}, "nominal": 0, "lower": -0.05, "upper": 0.05},
         "DX": {"name": "X at F2", "axis": "X", "features": {"F2": 1}, "nominal": 0, "lower": -0.05, "upper": 0.05},
-        "DP": {"name": "hole", "kind": "position", "components": ["hole X", "hole Y"], "axes": ["X", "Y"],
-               "diameter": 0.1, "features": {"F1": 1}},
+        "DP": {
+            "name": "hole",
+            "kind": "position",
+            "components": ["hole X", "hole Y"],
+            "axes": ["X", "Y"],
+            "diameter": 0.1,
+            "features": {"F1": 1},
+        },
     },
 }
 

@@ -13,13 +13,22 @@ def _problem(seed: int = 0) -> CorrectionProblem:
     rng = np.random.default_rng(seed)
     comp = rng.integers(-1, 2, size=(6, 12)).astype(float)
     comp[:, :6] += np.eye(6)
-    return CorrectionProblem(composite=comp, deviation=rng.uniform(-0.09, 0.09, 12), lower=np.full(12, -0.1),
-                             upper=np.full(12, 0.1), lb=np.r_[np.full(5, -0.1), 0.0], ub=np.r_[np.full(5, 0.1), 0.0],
-                             resolution=0.001, register_ids=tuple("ABCDEF"), dimension_ids=tuple("abcdefghijkl"))
+    return CorrectionProblem(
+        composite=comp,
+        deviation=rng.uniform(-0.09, 0.09, 12),
+        lower=np.full(12, -0.1),
+        upper=np.full(12, 0.1),
+        lb=np.r_[np.full(5, -0.1), 0.0],
+        ub=np.r_[np.full(5, 0.1), 0.0],
+        resolution=0.001,
+        register_ids=tuple("ABCDEF"),
+        dimension_ids=tuple("abcdefghijkl"),
+    )
 
 
-def plain_async_pso(problem: CorrectionProblem, *, n_particles: int, n_solutions: int, inertia: float,
-                    vmax_fraction: float, seed: int) -> tuple[np.ndarray, float]:
+def plain_async_pso(
+    problem: CorrectionProblem, *, n_particles: int, n_solutions: int, inertia: float, vmax_fraction: float, seed: int
+) -> tuple[np.ndarray, float]:
     """Particle-by-particle asynchronous PSO with the same random draws (the reference)."""
     rng = np.random.default_rng(seed)
     n = problem.n_registers

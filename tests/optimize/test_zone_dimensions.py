@@ -41,16 +41,32 @@ def zone_problem(seed: int, spread: float = 0.006) -> CorrectionProblem:
     dims: dict[str, dict] = {}
     for i in range(3):
         tol = float(rng.choice([0.002, 0.003, 0.004]))
-        dims[f"L{i}"] = {"name": f"L{i}", "axis": "XYZ"[int(rng.integers(3))], "features": {f"F{i}": 1},
-                         "nominal": 0, "lower": -tol, "upper": tol}
+        dims[f"L{i}"] = {
+            "name": f"L{i}",
+            "axis": "XYZ"[int(rng.integers(3))],
+            "features": {f"F{i}": 1},
+            "nominal": 0,
+            "lower": -tol,
+            "upper": tol,
+        }
     for i, plane in enumerate((["X", "Y"], ["X", "Z"])):
-        dims[f"P{i}"] = {"name": f"P{i}", "kind": "position", "components": [f"P{i} {plane[0]}", f"P{i} {plane[1]}"],
-                         "axes": plane, "diameter": float(rng.choice([0.004, 0.006, 0.008])),
-                         "features": {f"F{i + 2}": 1}}
-    model = model_from_dict({
-        "process": {"name": "zones", "axes": ["X", "Y", "Z"], "resolution": RES, "limit": 3 * RES},
-        "wks": {"W1": {"register": "G54"}}, "tools": {"T1": {"register": "H1"}},
-        "features": features, "dimensions": dims})
+        dims[f"P{i}"] = {
+            "name": f"P{i}",
+            "kind": "position",
+            "components": [f"P{i} {plane[0]}", f"P{i} {plane[1]}"],
+            "axes": plane,
+            "diameter": float(rng.choice([0.004, 0.006, 0.008])),
+            "features": {f"F{i + 2}": 1},
+        }
+    model = model_from_dict(
+        {
+            "process": {"name": "zones", "axes": ["X", "Y", "Z"], "resolution": RES, "limit": 3 * RES},
+            "wks": {"W1": {"register": "G54"}},
+            "tools": {"T1": {"register": "H1"}},
+            "features": features,
+            "dimensions": dims,
+        }
+    )
     values = {}
     for d in dims.values():
         names = d.get("components", [d["name"]])
@@ -123,8 +139,14 @@ def brute(problem: CorrectionProblem) -> dict[str, object]:
     least = cands[norms <= norms.min() + 1e-9]
     best = min(map(tuple, k[least]))
     i = int(np.flatnonzero(np.all(k == best, axis=1))[0])
-    return {"count": int(count.max()), "sorted": np.sort(m[i][kept[i]]), "norm": float(np.sqrt(norms.min())),
-            "k": best, "gone": tuple(d for d, kp in zip(ids, kept[i], strict=True) if not kp), "ids": ids}
+    return {
+        "count": int(count.max()),
+        "sorted": np.sort(m[i][kept[i]]),
+        "norm": float(np.sqrt(norms.min())),
+        "k": best,
+        "gone": tuple(d for d, kp in zip(ids, kept[i], strict=True) if not kp),
+        "ids": ids,
+    }
 
 
 def _check(problem: CorrectionProblem, result, want: dict[str, object]) -> None:
@@ -157,14 +179,31 @@ def half_step_problem(seed: int) -> CorrectionProblem:
     dims: dict[str, dict] = {}
     for i in range(3):
         tol = float(rng.choice([0.002, 0.003]))
-        dims[f"L{i}"] = {"name": f"L{i}", "axis": "XY"[int(rng.integers(2))], "features": {f"F{i}": 1},
-                         "nominal": 0, "lower": -tol, "upper": tol}
+        dims[f"L{i}"] = {
+            "name": f"L{i}",
+            "axis": "XY"[int(rng.integers(2))],
+            "features": {f"F{i}": 1},
+            "nominal": 0,
+            "lower": -tol,
+            "upper": tol,
+        }
     for i in range(2):
-        dims[f"P{i}"] = {"name": f"P{i}", "kind": "position", "components": [f"P{i} X", f"P{i} Y"],
-                         "axes": ["X", "Y"], "diameter": float(rng.choice([0.004, 0.006])),
-                         "features": {f"F{i + 3}": 1}}
-    model = model_from_dict({"process": {"name": "half", "axes": ["X", "Y"], "resolution": RES, "limit": 4 * RES},
-                             "wks": {"W1": {"register": "G54"}}, "features": features, "dimensions": dims})
+        dims[f"P{i}"] = {
+            "name": f"P{i}",
+            "kind": "position",
+            "components": [f"P{i} X", f"P{i} Y"],
+            "axes": ["X", "Y"],
+            "diameter": float(rng.choice([0.004, 0.006])),
+            "features": {f"F{i + 3}": 1},
+        }
+    model = model_from_dict(
+        {
+            "process": {"name": "half", "axes": ["X", "Y"], "resolution": RES, "limit": 4 * RES},
+            "wks": {"W1": {"register": "G54"}},
+            "features": features,
+            "dimensions": dims,
+        }
+    )
     values = {n: float(rng.integers(-6, 7)) * RES / 2 for d in dims.values() for n in d.get("components", [d["name"]])}
     table = pd.DataFrame({"characteristic": list(values), "deviation": list(values.values()), "unit": "mm"})
     (part,) = match_parts(model, table)
@@ -268,8 +307,9 @@ def test_sample_leximin_equals_an_independent_solver_on_its_rows():
     row_dim = dimension_of_rows(problem)
     n_dims = len(model_dimensions(problem)[0])
     free = problem.free
-    sums, _ = lexicographic_maxmin(g_rows, g, row_dim, n_dims, problem.kmin[free].astype(float),
-                                   problem.kmax[free].astype(float))
+    sums, _ = lexicographic_maxmin(
+        g_rows, g, row_dim, n_dims, problem.kmin[free].astype(float), problem.kmax[free].astype(float)
+    )
     result = get_optimizer("exact", time_limit=60.0).solve(problem)  # a loaded test box; the bench times 2 s
     assert result.status == "optimal"
     k = result.x[free] / problem.resolution
@@ -332,16 +372,24 @@ def test_zone_inside_its_circle_but_outside_its_polygon_is_held():
     """δ = (0.0499, 0) in a zone of radius 0.05: inside the circle (margin +0.1 µm), outside the inscribed
     polygon (its facet at angle 0 is at R·cos(π/k)).  It is held (no harm) at its polygon margin before, not
     given up; a length A out of reach forces the triage."""
-    model = model_from_dict({
-        "process": {"name": "edge", "axes": ["X", "Y"], "resolution": RES, "limit": 3 * RES},
-        "wks": {"W1": {"register": "G54"}},
-        "features": {"F1": {"wks": {"W1": 1}}, "F2": {"wks": {"W1": 1}}},
-        "dimensions": {
-            "A": {"name": "A", "axis": "X", "features": {"F1": 1}, "nominal": 0, "lower": -0.01, "upper": 0.01},
-            "H": {"name": "H", "kind": "position", "components": ["H X", "H Y"], "axes": ["X", "Y"],
-                  "diameter": 0.1, "features": {"F2": 1}},
-        },
-    })
+    model = model_from_dict(
+        {
+            "process": {"name": "edge", "axes": ["X", "Y"], "resolution": RES, "limit": 3 * RES},
+            "wks": {"W1": {"register": "G54"}},
+            "features": {"F1": {"wks": {"W1": 1}}, "F2": {"wks": {"W1": 1}}},
+            "dimensions": {
+                "A": {"name": "A", "axis": "X", "features": {"F1": 1}, "nominal": 0, "lower": -0.01, "upper": 0.01},
+                "H": {
+                    "name": "H",
+                    "kind": "position",
+                    "components": ["H X", "H Y"],
+                    "axes": ["X", "Y"],
+                    "diameter": 0.1,
+                    "features": {"F2": 1},
+                },
+            },
+        }
+    )
     table = pd.DataFrame({"characteristic": ["A", "H X", "H Y"], "deviation": [0.02, 0.0499, 0.0], "unit": "mm"})
     (part,) = match_parts(model, table)
     problem = CorrectionProblem.from_part(model, part)

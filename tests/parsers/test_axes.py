@@ -129,6 +129,6 @@ def test_axis_round_trips_through_parse_and_the_canonical_reader(tmp_path):
     direct = parsers.read_report(report).table
     assert back.columns[-1] == "axis" and len(back) == len(direct) + 28
     assert back["axis"].iloc[: len(direct)].tolist() == direct["axis"].tolist()
-    assert set(back["axis"].iloc[len(direct):]) == {""}  # the CSV states none
+    assert set(back["axis"].iloc[len(direct) :]) == {""}  # the CSV states none
     written = pd.read_csv(out, dtype=str, keep_default_na=False)
     assert written.columns[-1] == "axis"

@@ -5,14 +5,16 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
+from conftest import shared_path
 
 import parsers
-from conftest import shared_path
 from parsers.calypso import read_calypso, sniff_calypso
 from setupfix.errors import ParseError
 
-HEADER = ("planid\tpartnb\tid\ttype\tidsymbol\tactual\tnominal\tuppertol\tlowertol\tdeviation\texceed\t"
-          "featurePosX\tfeaturePosY\tfeaturePosZ\tunit\tgroup1\tgroup2\t")
+HEADER = (
+    "planid\tpartnb\tid\ttype\tidsymbol\tactual\tnominal\tuppertol\tlowertol\tdeviation\texceed\t"
+    "featurePosX\tfeaturePosY\tfeaturePosZ\tunit\tgroup1\tgroup2\t"
+)
 
 
 def write(tmp_path: Path, rows: list[str], *, end: bool = True, encoding: str = "cp1252") -> Path:
@@ -28,15 +30,23 @@ def test_sniffer_needs_the_calypso_header() -> None:
 
 def test_ragged_rows_latin1_and_end_line(tmp_path: Path) -> None:
     # Rows stop after `unit` (no group cells), as in the real file; "Lotlänge" is CP1252.
-    path = write(tmp_path, ["Plan\t16\tDistanz Z 8mm\tLotlänge\tlengthOfAxis\t9.2153484\t8.0000000\t0.1\t-0.1\t"
-                            "1.2153484\t1.1153484\t2.45\t-0.49\t-4.61\tmm",
-                            "Plan\t16\tD 9\tDurchmesser\tdiameter\t8.9973025\t9\t0.1\t-0.1\t-0.0026975\t\t"
-                            "1\t2\t3\tmm"])
+    path = write(
+        tmp_path,
+        [
+            "Plan\t16\tDistanz Z 8mm\tLotlänge\tlengthOfAxis\t9.2153484\t8.0000000\t0.1\t-0.1\t"
+            "1.2153484\t1.1153484\t2.45\t-0.49\t-4.61\tmm",
+            "Plan\t16\tD 9\tDurchmesser\tdiameter\t8.9973025\t9\t0.1\t-0.1\t-0.0026975\t\t1\t2\t3\tmm",
+        ],
+    )
     assert parsers.find_format(path).name == "calypso"
     table = read_calypso(path)
     first = table.iloc[0]
-    assert (first["characteristic"], first["nominal"], first["lower"], first["upper"]) == ("Distanz Z 8mm", 8.0,
-                                                                                           -0.1, 0.1)
+    assert (first["characteristic"], first["nominal"], first["lower"], first["upper"]) == (
+        "Distanz Z 8mm",
+        8.0,
+        -0.1,
+        0.1,
+    )
     assert first["deviation"] == pytest.approx(1.2153484) and first["status"] == "exceed 1.1153484"
     assert (first["part"], first["x"], first["source"].endswith("plan_chr.txt:2")) == ("16", 2.45, True)
     assert table.iloc[1]["status"] == ""
@@ -62,8 +72,13 @@ def test_contradicting_deviation_names_the_line(tmp_path: Path) -> None:
 
 
 def test_bad_number_names_line_and_column(tmp_path: Path) -> None:
-    path = write(tmp_path, ["P\t1\tA\tt\tdiameter\t10.0\t10\t0.1\t-0.1\t0\t\t\t\t\tmm",
-                            "P\t1\tB\tt\tdiameter\tn/a\t10\t0.1\t-0.1\t\t\t\t\t\tmm"])
+    path = write(
+        tmp_path,
+        [
+            "P\t1\tA\tt\tdiameter\t10.0\t10\t0.1\t-0.1\t0\t\t\t\t\tmm",
+            "P\t1\tB\tt\tdiameter\tn/a\t10\t0.1\t-0.1\t\t\t\t\t\tmm",
+        ],
+    )
     with pytest.raises(ParseError, match=r"plan_chr\.txt:3: column 'actual': expected a number, found 'n/a'"):
         read_calypso(path)
 

@@ -21,11 +21,48 @@ from setupfix.errors import SetupfixError
 
 ROOT = Path(__file__).resolve().parents[2]
 
-HEADERS = ("actual", "deviation", "lower", "upper", "unit", "part", "station", "status", "timestamp",
-           "reference", "report", "x", "y", "z", "source", "extra")
+HEADERS = (
+    "actual",
+    "deviation",
+    "lower",
+    "upper",
+    "unit",
+    "part",
+    "station",
+    "status",
+    "timestamp",
+    "reference",
+    "report",
+    "x",
+    "y",
+    "z",
+    "source",
+    "extra",
+)
 #: Cells a length may hold: good ones (escaped by our CSV writer, padded, exponents) and damage.
-NUMBERS = ("", " 25.1 ", "'-0.1", "1.5E-3", ".5", "5.", "+00020.262", "-0", "1e6", "1e7", "1e8", "-0_0309",
-           "NaN", "inf", "0x10", "1e400", "1e307", "1" * 41, "44,15", "abc", "'=1")
+NUMBERS = (
+    "",
+    " 25.1 ",
+    "'-0.1",
+    "1.5E-3",
+    ".5",
+    "5.",
+    "+00020.262",
+    "-0",
+    "1e6",
+    "1e7",
+    "1e8",
+    "-0_0309",
+    "NaN",
+    "inf",
+    "0x10",
+    "1e400",
+    "1e307",
+    "1" * 41,
+    "44,15",
+    "abc",
+    "'=1",
+)
 TEXTS = ("'=SUM(A1)", "'@x", " padded ", "a\u3000b", "\u3000", "x\x1by", "P1\tD1", "'", "é", "")
 UNITS = ("mm", "inch", "MM", " Inch", "", "mm", "inch", "µm")
 FLAGS = ("true", "0", "", "YES", " no ", "false", "1", "maybe")
@@ -34,11 +71,26 @@ FLAGS = ("true", "0", "", "YES", " no ", "false", "1", "maybe")
 def _cell(rng: random.Random, column: str, i: int, nominal: float, actual: float) -> str:
     if rng.random() < 0.03:
         return rng.choice(NUMBERS if column in canonical.LENGTH_COLUMNS else TEXTS)
-    return {"characteristic": f"P1 D{i}", "nominal": f"{nominal}", "actual": f"{actual}",
-            "deviation": f"{actual - nominal:.4f}", "lower": "-0.1", "upper": "0.1", "unit": rng.choice(UNITS),
-            "part": rng.choice(("p", "", "q")), "station": "P1", "status": rng.choice(("", "OK", "NG")),
-            "timestamp": "", "reference": rng.choice(FLAGS), "report": rng.choice(("", "r.csv")), "x": "1",
-            "y": "", "z": "-2.5", "source": "s:1", "extra": "e"}[column]
+    return {
+        "characteristic": f"P1 D{i}",
+        "nominal": f"{nominal}",
+        "actual": f"{actual}",
+        "deviation": f"{actual - nominal:.4f}",
+        "lower": "-0.1",
+        "upper": "0.1",
+        "unit": rng.choice(UNITS),
+        "part": rng.choice(("p", "", "q")),
+        "station": "P1",
+        "status": rng.choice(("", "OK", "NG")),
+        "timestamp": "",
+        "reference": rng.choice(FLAGS),
+        "report": rng.choice(("", "r.csv")),
+        "x": "1",
+        "y": "",
+        "z": "-2.5",
+        "source": "s:1",
+        "extra": "e",
+    }[column]
 
 
 def random_report(seed: int) -> bytes:
@@ -103,8 +155,11 @@ def test_random_files_read_alike_by_both_paths(monkeypatch):
     assert 60 < sum(taken) < len(taken) - 60  # fast path taken for 87 of 405 reads
 
 
-CANONICAL_SAMPLES = [p for p in sorted((ROOT / "sample_reports").rglob("*.csv"))
-                     if canonical.sniff_canonical(p.read_bytes()[:4096].decode("utf-8", "replace"))]
+CANONICAL_SAMPLES = [
+    p
+    for p in sorted((ROOT / "sample_reports").rglob("*.csv"))
+    if canonical.sniff_canonical(p.read_bytes()[:4096].decode("utf-8", "replace"))
+]
 
 
 @pytest.mark.parametrize("path", CANONICAL_SAMPLES, ids=lambda p: p.name)
@@ -112,11 +167,17 @@ def test_bundled_canonical_reports_read_alike(path, monkeypatch):
     assert _same(path.read_bytes(), str(path), monkeypatch)
 
 
-@pytest.mark.parametrize("cell, message", [
-    ("-0_0309", "expected a number, found '-0_0309'"), ("NaN", "expected a number, found 'NaN'"),
-    ("0x10", "expected a number, found '0x10'"), ("1e400", "expected a number, found '1e400'"),
-    ("1e8", "beyond any measurable length"), ("1" * 401, "expected a number"),
-])
+@pytest.mark.parametrize(
+    "cell, message",
+    [
+        ("-0_0309", "expected a number, found '-0_0309'"),
+        ("NaN", "expected a number, found 'NaN'"),
+        ("0x10", "expected a number, found '0x10'"),
+        ("1e400", "expected a number, found '1e400'"),
+        ("1e8", "beyond any measurable length"),
+        ("1" * 401, "expected a number"),
+    ],
+)
 def test_damaged_numbers_are_refused_at_their_line_by_both_paths(cell, message, monkeypatch):
     text = (ROOT / "sample_reports" / "guide_pins" / "cycle_01.csv").read_text().splitlines(keepends=True)
     cells = text[5].split(",")
@@ -127,10 +188,16 @@ def test_damaged_numbers_are_refused_at_their_line_by_both_paths(cell, message, 
         assert isinstance(result, str) and message in result and "c.csv:6" in result
 
 
-@pytest.mark.parametrize("column, cell, message", [
-    (4, "0.1", "lower limit 0.1 is not below upper limit 0.1"), (3, "0.02", "deviation 0.02 mm contradicts"),
-    (6, "µm", "unknown unit 'µm'"), (0, "", "empty characteristic name"), (1, "", "empty nominal value"),
-])
+@pytest.mark.parametrize(
+    "column, cell, message",
+    [
+        (4, "0.1", "lower limit 0.1 is not below upper limit 0.1"),
+        (3, "0.02", "deviation 0.02 mm contradicts"),
+        (6, "µm", "unknown unit 'µm'"),
+        (0, "", "empty characteristic name"),
+        (1, "", "empty nominal value"),
+    ],
+)
 def test_row_checks_refuse_at_their_line_by_both_paths(column, cell, message, monkeypatch):
     text = (ROOT / "sample_reports" / "guide_pins" / "cycle_01.csv").read_text().splitlines(keepends=True)
     cells = text[5].split(",")

@@ -30,11 +30,19 @@ def _write(path: Path, text: str) -> Path:
 
 # -- the reader -----------------------------------------------------------------------------------
 
+
 def test_rows_keep_their_lines_and_the_register_as_written(tmp_path):
-    log = read_corrections_log(_write(tmp_path / "c.csv", HEAD + GOOD_ROW + "\n\n"
-                                      '2026-11-02T09:00:00+01:00,"H5",,tool_change\n2026-11-02T10:00:00,G55,-2e-3,\n'))
+    log = read_corrections_log(
+        _write(
+            tmp_path / "c.csv",
+            HEAD + GOOD_ROW + '\n\n2026-11-02T09:00:00+01:00,"H5",,tool_change\n2026-11-02T10:00:00,G55,-2e-3,\n',
+        )
+    )
     assert [(r.where.line, r.register, r.event) for r in log.rows] == [
-        (2, "W1", "correction"), (5, "H5", "tool_change"), (6, "G55", "correction")]
+        (2, "W1", "correction"),
+        (5, "H5", "tool_change"),
+        (6, "G55", "correction"),
+    ]
     assert math.isnan(log.rows[1].delta) and log.rows[2].delta == -0.002
     frame = log.frame()
     assert list(frame.columns) == ["timestamp", "register", "delta", "event"]
@@ -52,22 +60,30 @@ def test_the_header_is_matched_whatever_its_case(tmp_path, header):
     assert [(r.register, r.delta, r.event) for r in log.rows] == [("G54", 0.01, "correction")]
 
 
-@pytest.mark.parametrize(("text", "message"), [
-    ("", "c.csv:1: empty file"),
-    ("timestamp,register\n", "c.csv:1: not a corrections log: missing column(s) delta"),
-    ("timestamp,register,delta,Delta\n", "c.csv:1: column 'delta' appears twice"),
-    ("timestamp,register,delta\nyesterday,G54,0.1\n", "c.csv:2: timestamp 'yesterday' is not ISO 8601"),
-    ("timestamp,register,delta\n,G54,0.1\n", "c.csv:2: empty timestamp"),
-    ("timestamp,register,delta\n2026-01-01T00:00:00,,0.1\n", "c.csv:2: empty register"),
-    ("timestamp,register,delta\n2026-01-01T00:00:00,G54,\n", "c.csv:2: a correction needs a delta"),
-    ("timestamp,register,delta\n2026-01-01T00:00:00,G54,nan\n", "c.csv:2: column 'delta': expected a number"),
-    ("timestamp,register,delta\n2026-01-01T00:00:00,G54,1_0\n", "c.csv:2: column 'delta': expected a number"),
-    ("timestamp,register,delta\n2026-01-01T00:00:00,G54,0,05\n", "c.csv:2: 4 cells but 3 columns in the header"),
-    ("timestamp,register,delta,event\n2026-01-01T00:00:00,H5,0.1,tool_change\n", "c.csv:2: a tool change carries no"),
-    ("timestamp,register,delta,event\n2026-01-01T00:00:00,H5,,wear\n", "c.csv:2: unknown event 'wear'"),
-    ("timestamp,register,delta\n2026-01-01T00:00:00,G54,0.1\n2026-01-01T01:00:00+01:00,G54,0.1\n",
-     "c.csv:3: G54 correction at 2026-01-01T01:00:00+01:00 given twice (also at line 2)"),
-])
+@pytest.mark.parametrize(
+    ("text", "message"),
+    [
+        ("", "c.csv:1: empty file"),
+        ("timestamp,register\n", "c.csv:1: not a corrections log: missing column(s) delta"),
+        ("timestamp,register,delta,Delta\n", "c.csv:1: column 'delta' appears twice"),
+        ("timestamp,register,delta\nyesterday,G54,0.1\n", "c.csv:2: timestamp 'yesterday' is not ISO 8601"),
+        ("timestamp,register,delta\n,G54,0.1\n", "c.csv:2: empty timestamp"),
+        ("timestamp,register,delta\n2026-01-01T00:00:00,,0.1\n", "c.csv:2: empty register"),
+        ("timestamp,register,delta\n2026-01-01T00:00:00,G54,\n", "c.csv:2: a correction needs a delta"),
+        ("timestamp,register,delta\n2026-01-01T00:00:00,G54,nan\n", "c.csv:2: column 'delta': expected a number"),
+        ("timestamp,register,delta\n2026-01-01T00:00:00,G54,1_0\n", "c.csv:2: column 'delta': expected a number"),
+        ("timestamp,register,delta\n2026-01-01T00:00:00,G54,0,05\n", "c.csv:2: 4 cells but 3 columns in the header"),
+        (
+            "timestamp,register,delta,event\n2026-01-01T00:00:00,H5,0.1,tool_change\n",
+            "c.csv:2: a tool change carries no",
+        ),
+        ("timestamp,register,delta,event\n2026-01-01T00:00:00,H5,,wear\n", "c.csv:2: unknown event 'wear'"),
+        (
+            "timestamp,register,delta\n2026-01-01T00:00:00,G54,0.1\n2026-01-01T01:00:00+01:00,G54,0.1\n",
+            "c.csv:3: G54 correction at 2026-01-01T01:00:00+01:00 given twice (also at line 2)",
+        ),
+    ],
+)
 def test_a_bad_log_is_named_at_its_line(tmp_path, text, message):
     with pytest.raises(ParseError, match=re.escape(message)):
         read_corrections_log(_write(tmp_path / "c.csv", text))
@@ -85,8 +101,11 @@ def test_the_model_check_names_the_row(tmp_path):
     with pytest.raises(MatchError, match=r"c.csv:3: tool change of W1, which is not a tool"):
         check_corrections(log, model)
     twice = read_corrections_log(_write(tmp_path / "t.csv", HEAD + GOOD_ROW + "2026-11-02T07:00:00,G54,0.02,\n"))
-    with pytest.raises(MatchError, match=r"t.csv:3: W1 \(G54\) correction at 2026-11-02T07:00:00 given twice "
-                                         r"\(also at line 2\)"):
+    with pytest.raises(
+        MatchError,
+        match=r"t.csv:3: W1 \(G54\) correction at 2026-11-02T07:00:00 given twice "
+        r"\(also at line 2\)",
+    ):
         check_corrections(twice, model)
     stored = log_from_frame(log.frame().iloc[:1].assign(register="G99"), "h.db#corrections")
     with pytest.raises(MatchError, match=r"h.db#corrections: <row 1>: unknown register 'G99'"):
@@ -119,8 +138,17 @@ def _door(door: str, tmp_path: Path, log: Path) -> list[str]:
     if door == "diagnose --db":
         assert main(["history", "import", "--db", str(db), *map(str, REPORTS)]) == 0
     return {
-        "history import": ["history", "import", "--db", str(db), "--model", str(MODEL), "--corrections", str(log),
-                           *map(str, REPORTS)],
+        "history import": [
+            "history",
+            "import",
+            "--db",
+            str(db),
+            "--model",
+            str(MODEL),
+            "--corrections",
+            str(log),
+            *map(str, REPORTS),
+        ],
         "history import folder": ["history", "import", "--db", str(db), "--model", str(MODEL), str(folder)],
         "diagnose": ["diagnose", "--model", str(MODEL), "--no-walk", "--corrections", str(log), *map(str, REPORTS)],
         "diagnose folder": ["diagnose", "--model", str(MODEL), "--no-walk", str(folder)],
@@ -129,8 +157,9 @@ def _door(door: str, tmp_path: Path, log: Path) -> list[str]:
 
 
 @pytest.mark.parametrize("bad", list(BAD_ROWS))
-@pytest.mark.parametrize("door", ["history import", "history import folder", "diagnose", "diagnose folder",
-                                  "diagnose --db"])
+@pytest.mark.parametrize(
+    "door", ["history import", "history import folder", "diagnose", "diagnose folder", "diagnose --db"]
+)
 def test_one_bad_row_one_message_one_line_through_every_door(tmp_path, capsys, door, bad):
     log = _write(tmp_path / "log.csv", HEAD + GOOD_ROW + "\n" + BAD_ROWS[bad])  # the bad row is line 4
     argv = _door(door, tmp_path, log)
@@ -170,8 +199,21 @@ def test_the_capitalised_header_is_accepted_by_every_door_with_the_same_result(t
     upper = _write(tmp_path / "upper.csv", text.replace(HEAD, "Timestamp,Register,Delta,Event\n"))
     outs = []
     for log in (lower, upper):
-        assert main(["diagnose", "--model", str(MODEL), "--no-walk", "--json", "--corrections", str(log),
-                     *map(str, REPORTS)]) == 0
+        assert (
+            main(
+                [
+                    "diagnose",
+                    "--model",
+                    str(MODEL),
+                    "--no-walk",
+                    "--json",
+                    "--corrections",
+                    str(log),
+                    *map(str, REPORTS),
+                ]
+            )
+            == 0
+        )
         outs.append(capsys.readouterr().out)
     assert outs[0] == outs[1]
     db = tmp_path / "h.db"

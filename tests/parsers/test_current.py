@@ -19,24 +19,26 @@ GOOD = "register,value\nG54,-412.53\nG55,-412.487\nH5,-0.012\nH12,0.0035\n"
 
 
 def test_the_sample_is_read_by_register_id():
-    assert read_current(SAMPLE / "current.csv", MODEL) == {"W1": -412.53, "W2": -412.487, "T5": -0.012,
-                                                           "T12": 0.0035}
+    assert read_current(SAMPLE / "current.csv", MODEL) == {"W1": -412.53, "W2": -412.487, "T5": -0.012, "T12": 0.0035}
 
 
-@pytest.mark.parametrize(("text", "message"), [
-    ("reg,val\nG54,1\n", "c.csv:1: expected the header 'register,value'"),
-    ("register,value\nG99,1\n", "c.csv:2: register 'G99' is not in the model"),
-    ("register,value\nG54,1_0\n", "c.csv:2: expected a decimal number, found '1_0'"),
-    ("register,value\nG54,1\nG55,1\nH5,0\n", "no current value for H12"),
-    ("register,value\nG54,1\nW1,2\n", "c.csv:3: register 'W1' given twice"),
-    # a decimal comma: read as -412 before, 0.53 mm wrong
-    (GOOD.replace("G54,-412.53", "G54,-412,5300"), "c.csv:2: 3 cells but 2 columns in the header"),
-    (GOOD.replace("H5,-0.012", "H5,nan"), "c.csv:4: expected a decimal number, found 'nan'"),
-    (GOOD.replace("H5,-0.012", "H5,-inf"), "c.csv:4: expected a decimal number, found '-inf'"),
-    (GOOD.replace("H5,-0.012", "H5,1e400"), "c.csv:4: expected a decimal number, found '1e400'"),
-    (GOOD.replace("G55,-412.487", "G55,-100000"), "c.csv:3: value -100000 of G55 is beyond any control's offset"),
-    (GOOD.replace("G55,-412.487", "G55,4.2e7"), "c.csv:3: value 4.2e7 of G55 is beyond any control's offset"),
-])
+@pytest.mark.parametrize(
+    ("text", "message"),
+    [
+        ("reg,val\nG54,1\n", "c.csv:1: expected the header 'register,value'"),
+        ("register,value\nG99,1\n", "c.csv:2: register 'G99' is not in the model"),
+        ("register,value\nG54,1_0\n", "c.csv:2: expected a decimal number, found '1_0'"),
+        ("register,value\nG54,1\nG55,1\nH5,0\n", "no current value for H12"),
+        ("register,value\nG54,1\nW1,2\n", "c.csv:3: register 'W1' given twice"),
+        # a decimal comma: read as -412 before, 0.53 mm wrong
+        (GOOD.replace("G54,-412.53", "G54,-412,5300"), "c.csv:2: 3 cells but 2 columns in the header"),
+        (GOOD.replace("H5,-0.012", "H5,nan"), "c.csv:4: expected a decimal number, found 'nan'"),
+        (GOOD.replace("H5,-0.012", "H5,-inf"), "c.csv:4: expected a decimal number, found '-inf'"),
+        (GOOD.replace("H5,-0.012", "H5,1e400"), "c.csv:4: expected a decimal number, found '1e400'"),
+        (GOOD.replace("G55,-412.487", "G55,-100000"), "c.csv:3: value -100000 of G55 is beyond any control's offset"),
+        (GOOD.replace("G55,-412.487", "G55,4.2e7"), "c.csv:3: value 4.2e7 of G55 is beyond any control's offset"),
+    ],
+)
 def test_bad_current_file(tmp_path, text, message):
     (tmp_path / "c.csv").write_text(text)
     with pytest.raises(ParseError, match=re.escape(message)):
@@ -44,13 +46,18 @@ def test_bad_current_file(tmp_path, text, message):
 
 
 def test_more_header_columns_allow_as_many_cells_and_the_limit_follows_the_model_unit(tmp_path):
-    (tmp_path / "c.csv").write_text(GOOD.replace("register,value", "register,value,comment")
-                                    .replace("G54,-412.53", "G54,-412.53,checked"))
+    (tmp_path / "c.csv").write_text(
+        GOOD.replace("register,value", "register,value,comment").replace("G54,-412.53", "G54,-412.53,checked")
+    )
     assert read_current(tmp_path / "c.csv", MODEL)["W1"] == -412.53
-    inch = model_from_dict({
-        "process": {"name": "t", "unit": "inch"}, "wks": {"W1": {"register": "G54"}},
-        "features": {"F": {"wks": {"W1": 1}}},
-        "dimensions": {"D": {"features": {"F": 1}, "nominal": 1, "lower": -0.01, "upper": 0.01}}})
+    inch = model_from_dict(
+        {
+            "process": {"name": "t", "unit": "inch"},
+            "wks": {"W1": {"register": "G54"}},
+            "features": {"F": {"wks": {"W1": 1}}},
+            "dimensions": {"D": {"features": {"F": 1}, "nominal": 1, "lower": -0.01, "upper": 0.01}},
+        }
+    )
     (tmp_path / "i.csv").write_text("register,value\nG54,3937.1\n")  # 100,002 mm
     with pytest.raises(ParseError, match=re.escape("i.csv:2: value 3937.1 of G54 is beyond")):
         read_current(tmp_path / "i.csv", inch)
@@ -62,27 +69,44 @@ def test_correct_refuses_a_decimal_comma_in_current_with_file_and_line(tmp_path,
     bad = tmp_path / "c.csv"
     bad.write_text(GOOD.replace("G54,-412.53", "G54,-412,5300"))
     out = tmp_path / "o.csv"
-    code = main(["correct", "--model", str(SAMPLE / "model.toml"), "--current", str(bad), "--offsets", str(out),
-                 str(SAMPLE / "report.csv")])
+    code = main(
+        [
+            "correct",
+            "--model",
+            str(SAMPLE / "model.toml"),
+            "--current",
+            str(bad),
+            "--offsets",
+            str(out),
+            str(SAMPLE / "report.csv"),
+        ]
+    )
     err = capsys.readouterr().err
     assert code != 0 and err.startswith(f"error: {bad}:2: 3 cells but 2 columns") and err.count("\n") == 1
     assert not out.exists()
 
 
-ONE = model_from_dict({
-    "process": {"name": "one register"}, "wks": {"W1": {"register": "G54"}},
-    "features": {"F": {"wks": {"W1": 1}}},
-    "dimensions": {"D": {"features": {"F": 1}, "nominal": 1, "lower": -0.01, "upper": 0.01}}})
+ONE = model_from_dict(
+    {
+        "process": {"name": "one register"},
+        "wks": {"W1": {"register": "G54"}},
+        "features": {"F": {"wks": {"W1": 1}}},
+        "dimensions": {"D": {"features": {"F": 1}, "nominal": 1, "lower": -0.01, "upper": 0.01}},
+    }
+)
 
 
-@pytest.mark.parametrize(("rows", "message"), [
-    ("G54,-412,5300", "c.csv:2: 3 cells but 2 columns in the header"),
-    ("G54,-412,53", "c.csv:2: 3 cells but 2 columns in the header"),
-    ("G54,1e6", "c.csv:2: value 1e6 of G54 is beyond any control's offset"),
-    ("G54,1e300", "c.csv:2: value 1e300 of G54 is beyond any control's offset"),
-    ("G54,-1e300", "c.csv:2: value -1e300 of G54 is beyond any control's offset"),
-    ("G54,inf", "c.csv:2: expected a decimal number, found 'inf'"),
-])
+@pytest.mark.parametrize(
+    ("rows", "message"),
+    [
+        ("G54,-412,5300", "c.csv:2: 3 cells but 2 columns in the header"),
+        ("G54,-412,53", "c.csv:2: 3 cells but 2 columns in the header"),
+        ("G54,1e6", "c.csv:2: value 1e6 of G54 is beyond any control's offset"),
+        ("G54,1e300", "c.csv:2: value 1e300 of G54 is beyond any control's offset"),
+        ("G54,-1e300", "c.csv:2: value -1e300 of G54 is beyond any control's offset"),
+        ("G54,inf", "c.csv:2: expected a decimal number, found 'inf'"),
+    ],
+)
 @pytest.mark.parametrize("end", ["\n", "", "\r\n"])
 def test_one_row_files_are_refused_like_longer_ones(tmp_path, rows, message, end):
     """A file of one register row (no second row to compare with) and its last row without a line end."""

@@ -5,16 +5,27 @@ from __future__ import annotations
 import re
 
 import pytest
-
 from multi_axis_rows import multi_axis_model
+
 from parsers.current import read_current
 from setupfix.errors import ParseError
 
 MODEL = multi_axis_model()
-GOOD = ("register,axis,value\nG54,X,-250.123\nG54,Y,120.5\nG54,Z,-412.53\nG54,C,0.25\n"
-        "G55,X,50\nG55,Y,-0.5\nG55,Z,-412.487\nH5,,-0.012\nD5,,0.002\n")
-WANT = {"W1.X": -250.123, "W1.Y": 120.5, "W1.Z": -412.53, "W1.C": 0.25, "W2.X": 50.0, "W2.Y": -0.5,
-        "W2.Z": -412.487, "T5": -0.012, "T5.R": 0.002}
+GOOD = (
+    "register,axis,value\nG54,X,-250.123\nG54,Y,120.5\nG54,Z,-412.53\nG54,C,0.25\n"
+    "G55,X,50\nG55,Y,-0.5\nG55,Z,-412.487\nH5,,-0.012\nD5,,0.002\n"
+)
+WANT = {
+    "W1.X": -250.123,
+    "W1.Y": 120.5,
+    "W1.Z": -412.53,
+    "W1.C": 0.25,
+    "W2.X": 50.0,
+    "W2.Y": -0.5,
+    "W2.Z": -412.487,
+    "T5": -0.012,
+    "T5.R": 0.002,
+}
 
 
 def test_every_component_by_its_id(tmp_path):
@@ -23,28 +34,38 @@ def test_every_component_by_its_id(tmp_path):
 
 
 def test_model_ids_lower_case_axes_and_a_fixed_register(tmp_path):
-    text = (GOOD.replace("G54,X,", "W1,x,").replace("H5,,", "T5,,").replace("D5,,", "T5.R,,")
-            .replace("register,axis,value", "Register,Axis,Value,comment") + "H7,,1.5,fixed tool\n")
+    text = (
+        GOOD.replace("G54,X,", "W1,x,")
+        .replace("H5,,", "T5,,")
+        .replace("D5,,", "T5.R,,")
+        .replace("register,axis,value", "Register,Axis,Value,comment")
+        + "H7,,1.5,fixed tool\n"
+    )
     (tmp_path / "c.csv").write_text(text)
     assert read_current(tmp_path / "c.csv", MODEL) == {**WANT, "T7": 1.5}
 
 
-@pytest.mark.parametrize(("text", "message"), [
-    ("register,value\nG54,1\n", "c.csv:1: expected the header 'register,axis,value' (a multi-axis model"),
-    (GOOD + "G99,X,1\n", "c.csv:11: register 'G99' is not in the model"),
-    (GOOD.replace("G54,Y,", "G54,,"), "c.csv:3: register 'G54' is a work offset: give its axis (X, Y, Z or C)"),
-    (GOOD.replace("G55,Z,", "G55,C,"), "c.csv:8: register 'G55' has no axis 'C' in the model (its axes: X, Y, Z)"),
-    (GOOD.replace("H5,,", "H5,Z,"), "c.csv:9: register 'H5' is a tool register: leave its axis empty"),
-    (GOOD + "G54,Z,1\n", "c.csv:11: register 'G54 Z' given twice"),
-    (GOOD + "T5.R,,0\n", "c.csv:11: register 'T5.R' given twice"),
-    (GOOD.replace("G55,Z,-412.487\n", "").replace("D5,,0.002\n", ""), "c.csv: no current value for G55 Z, D5"),
-    (GOOD.replace("G54,Z,-412.53", "G54,Z,-412,53"), "c.csv:4: 4 cells but 3 columns in the header"),
-    (GOOD.replace("G54,C,0.25", "G54,C,nan"), "c.csv:5: expected a decimal number, found 'nan'"),
-    (GOOD.replace("G55,X,50", "G55,X,-100000"), "c.csv:6: value -100000 of G55 X is beyond any control's offset"),
-    (GOOD.replace("G54,C,0.25", "G54,C,1e5"), "c.csv:5: value 1e5 of G54 C is beyond any control's offset range "
-                                              "(|value| < 100000 degrees)"),
-    (GOOD.replace("D5,,0.002", "D5,"), "c.csv:10: expected register,axis,value"),
-])
+@pytest.mark.parametrize(
+    ("text", "message"),
+    [
+        ("register,value\nG54,1\n", "c.csv:1: expected the header 'register,axis,value' (a multi-axis model"),
+        (GOOD + "G99,X,1\n", "c.csv:11: register 'G99' is not in the model"),
+        (GOOD.replace("G54,Y,", "G54,,"), "c.csv:3: register 'G54' is a work offset: give its axis (X, Y, Z or C)"),
+        (GOOD.replace("G55,Z,", "G55,C,"), "c.csv:8: register 'G55' has no axis 'C' in the model (its axes: X, Y, Z)"),
+        (GOOD.replace("H5,,", "H5,Z,"), "c.csv:9: register 'H5' is a tool register: leave its axis empty"),
+        (GOOD + "G54,Z,1\n", "c.csv:11: register 'G54 Z' given twice"),
+        (GOOD + "T5.R,,0\n", "c.csv:11: register 'T5.R' given twice"),
+        (GOOD.replace("G55,Z,-412.487\n", "").replace("D5,,0.002\n", ""), "c.csv: no current value for G55 Z, D5"),
+        (GOOD.replace("G54,Z,-412.53", "G54,Z,-412,53"), "c.csv:4: 4 cells but 3 columns in the header"),
+        (GOOD.replace("G54,C,0.25", "G54,C,nan"), "c.csv:5: expected a decimal number, found 'nan'"),
+        (GOOD.replace("G55,X,50", "G55,X,-100000"), "c.csv:6: value -100000 of G55 X is beyond any control's offset"),
+        (
+            GOOD.replace("G54,C,0.25", "G54,C,1e5"),
+            "c.csv:5: value 1e5 of G54 C is beyond any control's offset range (|value| < 100000 degrees)",
+        ),
+        (GOOD.replace("D5,,0.002", "D5,"), "c.csv:10: expected register,axis,value"),
+    ],
+)
 def test_refused_naming_file_and_line(tmp_path, text, message):
     (tmp_path / "c.csv").write_text(text)
     with pytest.raises(ParseError, match=re.escape(message)):

@@ -60,7 +60,8 @@ def test_links_unreadable_folders_and_vanished_files_are_named(tmp_path, monkeyp
     assert root / "b" / "outside.csv" in listing.paths
     assert listing.links == ((str(root / "b" / "outside.csv"), str(outside.resolve())),)
     assert [str(n) for n in listing.notes() if "symbolic link" in str(n)] == [
-        f"{root / 'b' / 'outside.csv'}: symbolic link to {outside.resolve()}: read as a report"]
+        f"{root / 'b' / 'outside.csv'}: symbolic link to {outside.resolve()}: read as a report"
+    ]
     problems = dict(listing.problems)
     assert problems[str(root / "b" / "folder_link")] == "link to a folder: not followed"
     assert problems[str(root / "b" / "broken.csv")] == "broken link"
@@ -98,10 +99,12 @@ def test_link_loops_are_named_never_followed(tmp_path):
     os.symlink(tmp_path / "pong.csv", tmp_path / "ping.csv")
     os.symlink(tmp_path / "ping.csv", tmp_path / "pong.csv")
     problems = dict(list_reports(tmp_path).problems)
-    assert problems == {str(tmp_path / "sub" / "up"): "link to a folder: not followed",
-                        str(tmp_path / "self.csv"): "symbolic link loop",
-                        str(tmp_path / "ping.csv"): "symbolic link loop",
-                        str(tmp_path / "pong.csv"): "symbolic link loop"}
+    assert problems == {
+        str(tmp_path / "sub" / "up"): "link to a folder: not followed",
+        str(tmp_path / "self.csv"): "symbolic link loop",
+        str(tmp_path / "ping.csv"): "symbolic link loop",
+        str(tmp_path / "pong.csv"): "symbolic link loop",
+    }
 
 
 @pytest.mark.skipif(os.geteuid() == 0, reason="root reads a chmod 000 folder")
@@ -143,9 +146,14 @@ def test_expand_inputs_takes_files_as_given_and_folders_by_the_policy(tmp_path):
     (tmp_path / "empty").mkdir()
     given = root / ".r5.csv"  # hidden, but named: taken as given
     inputs = expand_inputs([given, "-", root, tmp_path / "empty", tmp_path / "missing.csv"])
-    assert inputs.files == ((str(given), False), ("-", False), (str(root / "a" / "r1.csv"), True),
-                            (str(root / "a" / "report.txt"), True), (str(root / "b" / "r2.qif"), True),
-                            (str(tmp_path / "missing.csv"), False))  # a missing file: its reader names it
+    assert inputs.files == (
+        (str(given), False),
+        ("-", False),
+        (str(root / "a" / "r1.csv"), True),
+        (str(root / "a" / "report.txt"), True),
+        (str(root / "b" / "r2.qif"), True),
+        (str(tmp_path / "missing.csv"), False),
+    )  # a missing file: its reader names it
     assert inputs.empty == (str(tmp_path / "empty"),)
     assert inputs.log("corrections") == str(root / "corrections.csv")
     assert inputs.warnings() == [f"{root / 'b' / 'folder_link'}: link to a folder: not followed; left out"]

@@ -16,12 +16,12 @@ from pathlib import Path
 
 import pandas as pd
 import pytest
+from conftest import SHARED as SHARED_ROOT
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import parsers
 from setupfix.errors import SetupfixError
-from conftest import SHARED as SHARED_ROOT
 
 ROOT = Path(__file__).resolve().parents[2]
 SHARED_SAMPLES = SHARED_ROOT / "cmm-samples"
@@ -62,13 +62,13 @@ def mutate(data: bytes, mutations: list[tuple]) -> bytes:
             data = data[: int(where * len(data))]
         elif kind == "flip" and data:
             i = min(int(where * len(data)), len(data) - 1)
-            data = data[:i] + bytes([mutation[2]]) + data[i + 1:]
+            data = data[:i] + bytes([mutation[2]]) + data[i + 1 :]
         else:
             lines = data.splitlines(keepends=True)
             if not lines:
                 continue
             i = min(int(where * len(lines)), len(lines) - 1)
-            lines[i:i + 1] = [] if kind == "delete_line" else [lines[i], lines[i]]
+            lines[i : i + 1] = [] if kind == "delete_line" else [lines[i], lines[i]]
             data = b"".join(lines)
     return data
 
@@ -95,9 +95,13 @@ def test_mutated_sample_reads_or_fails_cleanly(sample: Path, tmp_path: Path) -> 
     target = tmp_path / sample.name
     start_peak = _peak_mib()
 
-    @settings(max_examples=EXAMPLES, deadline=None, derandomize=True, database=None,
-              suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow,
-                                     HealthCheck.data_too_large])
+    @settings(
+        max_examples=EXAMPLES,
+        deadline=None,
+        derandomize=True,
+        database=None,
+        suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow, HealthCheck.data_too_large],
+    )
     @given(st.lists(_MUTATION, min_size=1, max_size=3))
     def check(mutations: list[tuple]) -> None:
         target.write_bytes(mutate(original, mutations))

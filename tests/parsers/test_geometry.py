@@ -35,8 +35,9 @@ def test_helpers():
 def test_qif_states_vectors_oblique_ones_too_feature_types_and_sides():
     table = read(SAMPLES / "qif" / "QIF3_WIDGET_QIF_RESULTS.QIF")
     tilted = row(table, "1")  # the widget's 10°-tilted face: a distance along its normal (0, cos 10°, sin 10°)
-    assert (tilted["nx"], tilted["ny"], tilted["nz"]) == pytest.approx((0.0, math.cos(math.radians(10)),
-                                                                        math.sin(math.radians(10))), abs=1e-6)
+    assert (tilted["nx"], tilted["ny"], tilted["nz"]) == pytest.approx(
+        (0.0, math.cos(math.radians(10)), math.sin(math.radians(10))), abs=1e-6
+    )
     assert tilted["axis"] == "" and tilted["feature"] == "plane"
     down = row(table, "109")  # a point profile on a face whose normal is -Z
     assert (down["nx"], down["ny"], down["nz"], down["axis"]) == (0.0, 0.0, -1.0, "Z")
@@ -91,8 +92,11 @@ def test_calypso_idsymbol_states_sizes():
 def test_calypso_coordinate_symbols_state_their_axis(tmp_path):
     path = tmp_path / "plan_chr.txt"
     head = "planid\tpartnb\tid\ttype\tidsymbol\tactual\tnominal\tuppertol\tlowertol\tdeviation\tunit\n"
-    path.write_text(head + "p\t1\tX1\tX-Wert\txValue\t10.01\t10\t0.1\t-0.1\t0.01\tmm\n"
-                    "p\t1\tR1\tRadius\tradius\t4.99\t5\t0.1\t-0.1\t-0.01\tmm\nEND\n", encoding="cp1252")
+    path.write_text(
+        head + "p\t1\tX1\tX-Wert\txValue\t10.01\t10\t0.1\t-0.1\t0.01\tmm\n"
+        "p\t1\tR1\tRadius\tradius\t4.99\t5\t0.1\t-0.1\t-0.01\tmm\nEND\n",
+        encoding="cp1252",
+    )
     table = read(path)
     x, r = row(table, "X1"), row(table, "R1")
     assert (x["nx"], x["ny"], x["nz"], x["size"]) == (1.0, 0.0, 0.0, "")

@@ -62,8 +62,18 @@ REFUSED: list[tuple[str, str, str]] = [
     ("qif", "QIF3_Mixed_Exploded_Results1.QIF", "external plan '.\\Exploded-form_only_Plan.QIF'"),
 ]
 
-SUMMARY_COLUMNS = ["part", "rows", "with_lower", "with_upper", "outside", "reference", "sum_nominal",
-                   "sum_deviation", "min_deviation", "max_deviation"]
+SUMMARY_COLUMNS = [
+    "part",
+    "rows",
+    "with_lower",
+    "with_upper",
+    "outside",
+    "reference",
+    "sum_nominal",
+    "sum_deviation",
+    "min_deviation",
+    "max_deviation",
+]
 
 
 def sample_path(folder: str, name: str, kind: str) -> Path:
@@ -106,11 +116,20 @@ def render_summary(table: pd.DataFrame) -> str:
     for part, rows in table.groupby(table["part"].astype(str), sort=False):
         dev, lo, up = rows["deviation"], rows["lower"], rows["upper"]
         outside = ((dev < lo) & lo.notna()) | ((dev > up) & up.notna())
-        out.append({"part": part, "rows": len(rows), "with_lower": int(lo.notna().sum()),
-                    "with_upper": int(up.notna().sum()), "outside": int(outside.sum()),
-                    "reference": int(ref[rows.index].astype(bool).sum()),
-                    "sum_nominal": rows["nominal"].sum(), "sum_deviation": dev.sum(),
-                    "min_deviation": dev.min(), "max_deviation": dev.max()})
+        out.append(
+            {
+                "part": part,
+                "rows": len(rows),
+                "with_lower": int(lo.notna().sum()),
+                "with_upper": int(up.notna().sum()),
+                "outside": int(outside.sum()),
+                "reference": int(ref[rows.index].astype(bool).sum()),
+                "sum_nominal": rows["nominal"].sum(),
+                "sum_deviation": dev.sum(),
+                "min_deviation": dev.min(),
+                "max_deviation": dev.max(),
+            }
+        )
         if axes:
             out[-1].update({f"axis_{a.lower()}": int((rows["axis"] == a).sum()) for a in "XYZ"})
     buffer = io.StringIO()

@@ -9,13 +9,14 @@ from pathlib import Path
 
 import pandas as pd
 import pytest
+from conftest import SAMPLES
+from conftest import SHARED as SHARED_ROOT
+from goldens import GOLDEN, assert_derived_golden, read_warned
 
 import parsers
-from goldens import GOLDEN, assert_derived_golden, read_warned
 from parsers.korean import read_korean
 from parsers.korean.report import along_normal
 from setupfix.errors import ParameterError, ParseError
-from conftest import SAMPLES, SHARED as SHARED_ROOT
 
 SHARED = SHARED_ROOT / "cmm-samples" / "korean_cmm_txt"
 NAMES = sorted(p.name for p in SHARED.glob("KR_*.txt")) or ["KR_45926-4G100_240113_night_2-2-1_NG.cp949.txt"]
@@ -47,12 +48,15 @@ def test_ng_report_out_of_tolerance_and_sign_quirk() -> None:
     assert (row["nominal"], row["actual"], row["deviation"]) == (-10.9, -10.912, pytest.approx(-0.012))
 
 
-@pytest.mark.parametrize(("nominal", "actual", "stated", "limits", "expected"), [
-    (5.0, 5.1, 0.1, (-0.1, 0.2), (5.0, -0.1, 0.2)),          # normal along the axis: as written
-    (-2.4, -2.5, 0.1, (-0.1, 0.2), (-2.4, -0.2, 0.1)),       # reversed normal: limits mirrored
-    (10.9, -10.912, 0.012, (-0.1, 0.2), (-10.9, -0.2, 0.1)),  # nominal also along the reversed normal
-    (5.0, 5.1, 0.3, (-0.1, 0.2), None),                       # contradicts itself
-])
+@pytest.mark.parametrize(
+    ("nominal", "actual", "stated", "limits", "expected"),
+    [
+        (5.0, 5.1, 0.1, (-0.1, 0.2), (5.0, -0.1, 0.2)),  # normal along the axis: as written
+        (-2.4, -2.5, 0.1, (-0.1, 0.2), (-2.4, -0.2, 0.1)),  # reversed normal: limits mirrored
+        (10.9, -10.912, 0.012, (-0.1, 0.2), (-10.9, -0.2, 0.1)),  # nominal also along the reversed normal
+        (5.0, 5.1, 0.3, (-0.1, 0.2), None),  # contradicts itself
+    ],
+)
 def test_deviation_along_the_feature_normal(nominal, actual, stated, limits, expected):
     assert along_normal(nominal, actual, stated, *limits) == (pytest.approx(expected) if expected else None)
 

@@ -7,17 +7,18 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
+from conftest import SHARED as SHARED_ROOT
+from goldens import expect_note
 
 import parsers
 from parsers.mitutoyo import read_qvpak
 from setupfix.errors import ParseError
-from goldens import expect_note
-from conftest import SHARED as SHARED_ROOT
 
 SHARED = SHARED_ROOT / "cmm-samples" / "mitutoyo"
 
-HEADING = ("        Elemento           Atual         Nominal          Desvio        Tol.sup.        Tol.inf."
-           "        De./Fora")
+HEADING = (
+    "        Elemento           Atual         Nominal          Desvio        Tol.sup.        Tol.inf.        De./Fora"
+)
 
 
 def shared(name: str) -> Path:

@@ -5,23 +5,52 @@ from __future__ import annotations
 import math
 
 import pytest
-from hypothesis import given, strategies as st
+from hypothesis import given
+from hypothesis import strategies as st
 
 from parsers.numbers import parse_number, try_number
 from setupfix.errors import ParseError, SourceLocation
 
 
-@pytest.mark.parametrize(("text", "decimal", "value"), [
-    ("-0.0309", ".", -0.0309), ("+00020.262", ".", 20.262), (".1000", ".", 0.1), ("1.5E-3", ".", 0.0015),
-    ("2.49960000000000E+0002", ".", 249.96), ("44,158745", ",", 44.158745), ("44,158745", "auto", 44.158745),
-    ("  7  ", ".", 7.0), ("-,5", "auto", -0.5),
-])
+@pytest.mark.parametrize(
+    ("text", "decimal", "value"),
+    [
+        ("-0.0309", ".", -0.0309),
+        ("+00020.262", ".", 20.262),
+        (".1000", ".", 0.1),
+        ("1.5E-3", ".", 0.0015),
+        ("2.49960000000000E+0002", ".", 249.96),
+        ("44,158745", ",", 44.158745),
+        ("44,158745", "auto", 44.158745),
+        ("  7  ", ".", 7.0),
+        ("-,5", "auto", -0.5),
+    ],
+)
 def test_reads_what_reports_write(text, decimal, value):
     assert parse_number(text, decimal=decimal) == pytest.approx(value, rel=1e-15)
 
 
-@pytest.mark.parametrize("text", ["25_000.0", "-0_0309", "24_9691", "NaN", "nan", "inf", "-Infinity", "0x10",
-                                  "1" * 401, "1,5", "1.2.3", "", "1e", "e5", "١٢", "1 000"])
+@pytest.mark.parametrize(
+    "text",
+    [
+        "25_000.0",
+        "-0_0309",
+        "24_9691",
+        "NaN",
+        "nan",
+        "inf",
+        "-Infinity",
+        "0x10",
+        "1" * 401,
+        "1,5",
+        "1.2.3",
+        "",
+        "1e",
+        "e5",
+        "١٢",
+        "1 000",
+    ],
+)
 def test_refuses_what_no_metrology_file_writes(text):
     where = SourceLocation("r.csv", line=7)
     with pytest.raises(ParseError) as err:

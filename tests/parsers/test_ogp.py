@@ -10,13 +10,13 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import SHARED as SHARED_ROOT
+from goldens import GOLDEN, assert_derived_golden, read_warned
 
 import parsers
-from goldens import GOLDEN, assert_derived_golden, read_warned
 from parsers.ogp import read_ogp
 from parsers.ogp.rtf import rtf_lines
 from setupfix.errors import ParseError
-from conftest import SHARED as SHARED_ROOT
 
 SHARED = SHARED_ROOT / "cmm-samples" / "ogp_measurex"
 
@@ -28,8 +28,13 @@ def shared(name: str) -> Path:
     return path
 
 
-NAMES = ["OGP_L0_axial_top_module1_1.rtf.txt", "OGP_L123_fixture_sho_multirun.txt", "OGP_empty_fixture0.txt",
-         "OGP_transitionPlate_ogp_coords.txt", "OGP_uchannel_empty_bottom_1.rtf.txt"]
+NAMES = [
+    "OGP_L0_axial_top_module1_1.rtf.txt",
+    "OGP_L123_fixture_sho_multirun.txt",
+    "OGP_empty_fixture0.txt",
+    "OGP_transitionPlate_ogp_coords.txt",
+    "OGP_uchannel_empty_bottom_1.rtf.txt",
+]
 
 
 @pytest.mark.parametrize("name", NAMES)

@@ -6,19 +6,23 @@ from pathlib import Path
 
 import pandas as pd
 import pytest
+from goldens import GOLDEN, assert_golden, expect_note
 
 import parsers
-from goldens import GOLDEN, assert_golden
 from parsers.pcdmis import read_pcdmis_csv, read_pcdmis_text
 from setupfix.errors import ParseError
-from goldens import expect_note
 
 SAMPLES = Path(__file__).resolve().parents[2] / "sample_reports" / "pcdmis"
 
 
-@pytest.mark.parametrize("name, fmt", [
-    ("bracket_two_parts.txt", "pcdmis"), ("bracket_minus_negative.txt", "pcdmis"), ("bracket_ncgage.csv", "pcdmis-csv"),
-])
+@pytest.mark.parametrize(
+    "name, fmt",
+    [
+        ("bracket_two_parts.txt", "pcdmis"),
+        ("bracket_minus_negative.txt", "pcdmis"),
+        ("bracket_ncgage.csv", "pcdmis-csv"),
+    ],
+)
 def test_fixture_matches_golden(name: str, fmt: str) -> None:
     assert parsers.find_format(SAMPLES / name).name == fmt
     table = parsers.read_report(SAMPLES / name).table
@@ -79,19 +83,22 @@ def test_unknown_units_and_garbage_number(tmp_path: Path) -> None:
 
 
 def test_csv_column_reader_equals_row_reader() -> None:
-    from parsers.pcdmis.csv_export import read_columns, read_rows
     from parsers._source import read_text as read_report_text
+    from parsers.pcdmis.csv_export import read_columns, read_rows
 
     name = str(SAMPLES / "bracket_ncgage.csv")
     text = read_report_text(name)
     pd.testing.assert_frame_equal(read_columns(text, name, None), read_rows(text, name, None))
 
 
-@pytest.mark.parametrize("old, new, message", [
-    ('"29.9811"', '"29.98x1"', r"bad\.csv:8: MEAS: expected a number"),
-    ('"-.0189"', '"-.0289"', r"bad\.csv:8: stated deviation"),
-    ('".0030"', '".0000"', r"bad\.csv:9: OUTTOL"),
-])
+@pytest.mark.parametrize(
+    "old, new, message",
+    [
+        ('"29.9811"', '"29.98x1"', r"bad\.csv:8: MEAS: expected a number"),
+        ('"-.0189"', '"-.0289"', r"bad\.csv:8: stated deviation"),
+        ('".0030"', '".0000"', r"bad\.csv:9: OUTTOL"),
+    ],
+)
 def test_csv_errors_name_the_line(tmp_path: Path, old: str, new: str, message: str) -> None:
     # A blank line is inserted after line 6, so the edited rows 7 and 8 become lines 8 and 9.
     lines = (SAMPLES / "bracket_ncgage.csv").read_text().replace(old, new, 1).splitlines()

@@ -7,9 +7,9 @@ from pathlib import Path
 
 import pandas as pd
 import pytest
+from goldens import GOLDEN, assert_golden
 
 import parsers
-from goldens import GOLDEN, assert_golden
 from parsers.piweb import read_piweb
 from setupfix.errors import ParseError
 
@@ -38,10 +38,15 @@ def test_values_file_shape_and_totals(values: pd.DataFrame) -> None:
     assert set(values["station"]) <= {"1", "2", "3", "4", ""} and values["timestamp"].str.endswith("Z").all()
 
 
-@pytest.mark.parametrize("name, reason", [
-    ("PiWebApi_sample_characteristics.json", "characteristics"), ("PiWebApi_sample_measurements.json", "measurements"),
-    ("PiWebApi_sample_parts.json", "parts"), ("PiWebApi_sample_configuration.json", "not a PiWeb list"),
-])
+@pytest.mark.parametrize(
+    "name, reason",
+    [
+        ("PiWebApi_sample_characteristics.json", "characteristics"),
+        ("PiWebApi_sample_measurements.json", "measurements"),
+        ("PiWebApi_sample_parts.json", "parts"),
+        ("PiWebApi_sample_configuration.json", "not a PiWeb list"),
+    ],
+)
 def test_files_without_values_are_refused(name: str, reason: str) -> None:
     with pytest.raises(ParseError, match=reason):
         read_piweb(SAMPLES / name)

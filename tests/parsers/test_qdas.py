@@ -5,22 +5,24 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
+from goldens import GOLDEN, assert_golden, expect_note
 
 import parsers
-from goldens import GOLDEN, assert_golden
 from parsers.qdas import read_aqdef
 from setupfix.errors import ParseError
-from goldens import expect_note
 from setupfix.model.measurements import CANONICAL_COLUMNS
 
 SAMPLES = Path(__file__).resolve().parents[2] / "sample_reports" / "qdas"
 
 
-@pytest.mark.parametrize("name", [
-    "diribet_basicDfq_singlePart_threeCharacteristics.dfq",
-    "diribet_basicDfq_threeParts_differentNumberOfCharacteristics.dfq",
-    "successfactory_testmeasures.dfq",
-])
+@pytest.mark.parametrize(
+    "name",
+    [
+        "diribet_basicDfq_singlePart_threeCharacteristics.dfq",
+        "diribet_basicDfq_threeParts_differentNumberOfCharacteristics.dfq",
+        "successfactory_testmeasures.dfq",
+    ],
+)
 def test_sample_matches_golden(name: str) -> None:
     table = parsers.read_report(SAMPLES / name).table
     assert tuple(table.columns[: len(CANONICAL_COLUMNS)]) == CANONICAL_COLUMNS
@@ -53,14 +55,16 @@ def test_attributive_file_is_refused_with_reason() -> None:
 @pytest.mark.parametrize("name", ["j4ggr_2604020002.dfd", "j4ggr_2604020002.dfx"])
 def test_dfd_dfx_pair_of_forces_is_refused(name: str) -> None:
     # Force 1/2 are in N and "Meas ID" is an error-log characteristic: nothing is a length.
-    with pytest.raises(ParseError,
-                       match=r"2 value\(s\) in a non-length unit \(K2142=N\) \(line (j4ggr_2604020002\.dfx:)?1, "):
+    with pytest.raises(
+        ParseError, match=r"2 value\(s\) in a non-length unit \(K2142=N\) \(line (j4ggr_2604020002\.dfx:)?1, "
+    ):
         read_aqdef(SAMPLES / name)
 
 
 def test_dfd_dfx_pair_is_read_together(tmp_path: Path) -> None:
-    (tmp_path / "p.dfd").write_text("K0100 1\nK1001 P-1\nK2002/1 Bore\nK2101/1 10,0\nK2112/1 -0,02\nK2113/1 0,03\n"
-                                    "K2142/1 mm\n")
+    (tmp_path / "p.dfd").write_text(
+        "K0100 1\nK1001 P-1\nK2002/1 Bore\nK2101/1 10,0\nK2112/1 -0,02\nK2113/1 0,03\nK2142/1 mm\n"
+    )
     (tmp_path / "p.dfx").write_bytes(b"10,012\x14\x14" + b"01.02.2024/08:00:00\x14\x14\x14\x14\r\n9,99\r\n")
     table = read_aqdef(tmp_path / "p.dfx")
     assert table["deviation"].round(6).tolist() == [0.012, -0.01]
@@ -71,8 +75,10 @@ def test_dfd_dfx_pair_is_read_together(tmp_path: Path) -> None:
 
 def test_slash_zero_applies_to_all_characteristics_and_explicit_wins(tmp_path: Path) -> None:
     path = tmp_path / "z.dfq"
-    path.write_text("K0100 2\nK2142/0 mm\nK2110/0 0\nK2001/1 A\nK2101/1 1\nK2001/2 B\nK2101/2 2\n"
-                    "K2110/2 1.5\nK0001/1 1.1\nK0001/2 2.1\n")
+    path.write_text(
+        "K0100 2\nK2142/0 mm\nK2110/0 0\nK2001/1 A\nK2101/1 1\nK2001/2 B\nK2101/2 2\n"
+        "K2110/2 1.5\nK0001/1 1.1\nK0001/2 2.1\n"
+    )
     table = read_aqdef(path)
     assert table["lower"].tolist() == pytest.approx([-1.0, -0.5])
 
@@ -84,8 +90,15 @@ def test_contradicting_allowance_names_the_line(tmp_path: Path) -> None:
         read_aqdef(path)
 
 
-@pytest.mark.parametrize("text", ["K0100 1\nK2001/1 A\nK0001/1 1\ngarbage here\n", "K0001 3\n",
-                                  "K0100 1\nK2101/1 abc\nK0001/1 1\nK2142/1 mm\n", "K0001/7 1.0\n"])
+@pytest.mark.parametrize(
+    "text",
+    [
+        "K0100 1\nK2001/1 A\nK0001/1 1\ngarbage here\n",
+        "K0001 3\n",
+        "K0100 1\nK2101/1 abc\nK0001/1 1\nK2142/1 mm\n",
+        "K0001/7 1.0\n",
+    ],
+)
 def test_garbage_raises_parse_error(tmp_path: Path, text: str) -> None:
     path = tmp_path / "g.dfq"
     path.write_text(text)
@@ -104,4 +117,5 @@ def test_dfd_with_dfb_values_reads_like_the_dfq(tmp_path: Path) -> None:
         got = parsers.read_report(tmp_path / given)
         assert got.format == "qdas"
         assert got.table[["characteristic", "nominal", "actual", "lower", "upper"]].equals(
-            want[["characteristic", "nominal", "actual", "lower", "upper"]])
+            want[["characteristic", "nominal", "actual", "lower", "upper"]]
+        )

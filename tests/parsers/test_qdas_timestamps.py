@@ -30,9 +30,14 @@ def variant(tmp_path: Path, text: str) -> Path:
     return path
 
 
-@pytest.mark.parametrize("name", ["diribet_basicDfq_singlePart_threeCharacteristics.dfq",
-                                  "diribet_basicDfq_threeParts_differentNumberOfCharacteristics.dfq",
-                                  "successfactory_testmeasures.dfq"])
+@pytest.mark.parametrize(
+    "name",
+    [
+        "diribet_basicDfq_singlePart_threeCharacteristics.dfq",
+        "diribet_basicDfq_threeParts_differentNumberOfCharacteristics.dfq",
+        "successfactory_testmeasures.dfq",
+    ],
+)
 def test_every_row_of_the_real_samples_has_its_date(name):
     table = read_aqdef(SAMPLES / name)
     assert len(table) and (table["timestamp"].str.match(r"^\d{4}-\d\d-\d\dT\d\d:\d\d:\d\d$")).all()
@@ -58,22 +63,32 @@ def test_rewritten_sample_keeps_every_date(tmp_path, how, rewrite):
     assert stamps(variant(tmp_path, changed)) == EXPECTED, how
 
 
-HEAD = ("K0100 2\nK1001 P1\nK2001/1 A\nK2101/1 10\nK2110/1 9\nK2111/1 11\n"
-        "K2001/2 B\nK2101/2 20\nK2110/2 19\nK2111/2 21\n")
+HEAD = (
+    "K0100 2\nK1001 P1\nK2001/1 A\nK2101/1 10\nK2110/1 9\nK2111/1 11\nK2001/2 B\nK2101/2 20\nK2110/2 19\nK2111/2 21\n"
+)
 
 
 def test_interleaved_values_dated_by_slash_zero_and_by_unindexed_lines(tmp_path):
-    text = HEAD + ("K0001/1 10.1\nK0001/2 20.1\nK0004/0 01.01.2013/15:18:31\n"
-                   "K0001/1 10.2\nK0004 02.01.2013/15:18:31\nK0001/2 20.2\nK0004 03.01.2013/15:18:31\n")
+    text = HEAD + (
+        "K0001/1 10.1\nK0001/2 20.1\nK0004/0 01.01.2013/15:18:31\n"
+        "K0001/1 10.2\nK0004 02.01.2013/15:18:31\nK0001/2 20.2\nK0004 03.01.2013/15:18:31\n"
+    )
     assert stamps(variant(tmp_path, text)) == [
-        ("A", "2013-01-01T15:18:31"), ("B", "2013-01-01T15:18:31"),
-        ("A", "2013-01-02T15:18:31"), ("B", "2013-01-03T15:18:31")]
+        ("A", "2013-01-01T15:18:31"),
+        ("B", "2013-01-01T15:18:31"),
+        ("A", "2013-01-02T15:18:31"),
+        ("B", "2013-01-03T15:18:31"),
+    ]
 
 
 def test_unindexed_date_after_an_uncoded_value_line_dates_the_whole_line(tmp_path):
     text = HEAD + "10.1\x0f20.1\nK0004 04.01.2013/06:00:00\n10.2\x140\x1405.01.2013/07:00\x0f20.2\n"
     assert stamps(variant(tmp_path, text)) == [
-        ("A", "2013-01-04T06:00:00"), ("B", "2013-01-04T06:00:00"), ("A", "2013-01-05T07:00:00"), ("B", "")]
+        ("A", "2013-01-04T06:00:00"),
+        ("B", "2013-01-04T06:00:00"),
+        ("A", "2013-01-05T07:00:00"),
+        ("B", ""),
+    ]
 
 
 @pytest.mark.parametrize("line", ["K0004/1 01.01.2013/15:18:31", "K0004/02 01.01.2013/15:18:31"])

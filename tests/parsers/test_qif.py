@@ -9,12 +9,11 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from goldens import expect_note
 
 import parsers
 from parsers.qif import read_qif, sniff_qif
 from setupfix.errors import ParseError
-from goldens import expect_note
-
 
 ROOT = Path(__file__).resolve().parents[2]
 QIF = ROOT / "sample_reports" / "qif"
@@ -26,13 +25,24 @@ def _row(table, name):
     return rows.iloc[0]
 
 
-def qif_doc(*, units: str = "mm", tolerance: str = "<MaxValue>0.2</MaxValue><MinValue>-0.1</MinValue>"
-            "<DefinedAsLimit>false</DefinedAsLimit>", target: str = "<TargetValue>40</TargetValue>",
-            value: str = "40.05", kind: str = "Diameter", extra_def: str = "") -> str:
+def qif_doc(
+    *,
+    units: str = "mm",
+    tolerance: str = "<MaxValue>0.2</MaxValue><MinValue>-0.1</MinValue><DefinedAsLimit>false</DefinedAsLimit>",
+    target: str = "<TargetValue>40</TargetValue>",
+    value: str = "40.05",
+    kind: str = "Diameter",
+    extra_def: str = "",
+) -> str:
     """A minimal QIF 3 results document with one characteristic (id chain 1→2→3, measured as 5)."""
-    file_units = "" if units == "" else (
-        f"<FileUnits><PrimaryUnits><LinearUnit><SIUnitName>meter</SIUnitName><UnitName>{units}</UnitName>"
-        "</LinearUnit></PrimaryUnits></FileUnits>")
+    file_units = (
+        ""
+        if units == ""
+        else (
+            f"<FileUnits><PrimaryUnits><LinearUnit><SIUnitName>meter</SIUnitName><UnitName>{units}</UnitName>"
+            "</LinearUnit></PrimaryUnits></FileUnits>"
+        )
+    )
     tol = f"<Tolerance>{tolerance}</Tolerance>" if tolerance else ""
     return f"""<?xml version="1.0" encoding="UTF-8"?>
 <QIFDocument xmlns="http://qifstandards.org/xsd/qif3" versionQIF="3.0.0">
@@ -100,25 +110,35 @@ def test_qif2_vocabulary_is_read_like_qif3() -> None:
 
 
 def test_defined_as_limit_true_becomes_signed_deviations(tmp_path: Path) -> None:
-    path = write(tmp_path, qif_doc(tolerance="<MaxValue>40.2</MaxValue><MinValue>39.9</MinValue>"
-                                             "<DefinedAsLimit>true</DefinedAsLimit>"))
+    path = write(
+        tmp_path,
+        qif_doc(tolerance="<MaxValue>40.2</MaxValue><MinValue>39.9</MinValue><DefinedAsLimit>true</DefinedAsLimit>"),
+    )
     row = read_qif(path).iloc[0]
     assert row["lower"] == pytest.approx(-0.1) and row["upper"] == pytest.approx(0.2)
     assert row["deviation"] == pytest.approx(0.05)
 
 
 def test_one_sided_and_missing_tolerances_stay_empty(tmp_path: Path) -> None:
-    one = read_qif(write(tmp_path, qif_doc(tolerance="<MaxValue>0.2</MaxValue>"
-                                                     "<DefinedAsLimit>false</DefinedAsLimit>"))).iloc[0]
+    one = read_qif(
+        write(tmp_path, qif_doc(tolerance="<MaxValue>0.2</MaxValue><DefinedAsLimit>false</DefinedAsLimit>"))
+    ).iloc[0]
     assert math.isnan(one["lower"]) and one["upper"] == 0.2
     none = read_qif(write(tmp_path, qif_doc(tolerance=""), "b.qif")).iloc[0]
     assert math.isnan(none["lower"]) and math.isnan(none["upper"])
 
 
 def test_per_value_linear_unit_overrides_file_units(tmp_path: Path) -> None:
-    path = write(tmp_path, qif_doc(units="inch", target="<TargetValue>2</TargetValue>", value="2.001",
-                                   tolerance='<MaxValue linearUnit="mm">0.05</MaxValue>'
-                                             '<MinValue>-0.002</MinValue><DefinedAsLimit>false</DefinedAsLimit>'))
+    path = write(
+        tmp_path,
+        qif_doc(
+            units="inch",
+            target="<TargetValue>2</TargetValue>",
+            value="2.001",
+            tolerance='<MaxValue linearUnit="mm">0.05</MaxValue>'
+            "<MinValue>-0.002</MinValue><DefinedAsLimit>false</DefinedAsLimit>",
+        ),
+    )
     row = read_qif(path).iloc[0]
     assert row["nominal"] == pytest.approx(50.8) and row["actual"] == pytest.approx(50.8254)
     assert row["upper"] == pytest.approx(0.05) and row["lower"] == pytest.approx(-0.0508)
@@ -158,8 +178,13 @@ def test_negative_zone_is_read_as_its_size_with_a_warning() -> None:
 
 
 def test_limits_without_target_are_skipped_not_guessed(tmp_path: Path) -> None:
-    path = write(tmp_path, qif_doc(target="", tolerance="<MaxValue>40.2</MaxValue><MinValue>39.9</MinValue>"
-                                                        "<DefinedAsLimit>true</DefinedAsLimit>"))
+    path = write(
+        tmp_path,
+        qif_doc(
+            target="",
+            tolerance="<MaxValue>40.2</MaxValue><MinValue>39.9</MinValue><DefinedAsLimit>true</DefinedAsLimit>",
+        ),
+    )
     with pytest.raises(ParseError, match="no length characteristics"), warnings.catch_warnings():
         warnings.simplefilter("ignore")
         read_qif(path)
@@ -179,8 +204,9 @@ def test_external_plan_missing_is_a_clear_error(tmp_path: Path) -> None:
 
 
 def test_broken_id_reference_names_the_element(tmp_path: Path) -> None:
-    text = qif_doc().replace("<CharacteristicItemId>3</CharacteristicItemId>",
-                             "<CharacteristicItemId>99</CharacteristicItemId>")
+    text = qif_doc().replace(
+        "<CharacteristicItemId>3</CharacteristicItemId>", "<CharacteristicItemId>99</CharacteristicItemId>"
+    )
     with pytest.raises(ParseError, match=r"r\.qif:\d+: <DiameterCharacteristicMeasurement id=5>: .*99"):
         read_qif(write(tmp_path, text))
 

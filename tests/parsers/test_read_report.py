@@ -18,8 +18,10 @@ from setupfix.errors import ParameterError, ParseError
 
 ROOT = Path(__file__).resolve().parents[2]
 SAMPLES = ROOT / "sample_reports"
-DMIS_NO_UNITS = (b"F(P)=FEAT/POINT,CART,1,0,0,0,0,1\nFA(P)=FEAT/POINT,CART,1.5,0,0,0,0,1\n"
-                 b"TA(P_X)=TOL/CORTOL,XAXIS,0.5,OUTOL\nENDFIL\n")
+DMIS_NO_UNITS = (
+    b"F(P)=FEAT/POINT,CART,1,0,0,0,0,1\nFA(P)=FEAT/POINT,CART,1.5,0,0,0,0,1\n"
+    b"TA(P_X)=TOL/CORTOL,XAXIS,0.5,OUTOL\nENDFIL\n"
+)
 DMIS_INCH = b"UNITS/INCH,ANGDEC\n" + DMIS_NO_UNITS
 
 
@@ -88,15 +90,23 @@ def test_size_limit_is_one_reader_for_all(monkeypatch):
 
 def test_stdin_and_pipes_keep_their_first_bytes(tmp_path):
     # Over 8 KiB: a sniff then a second open of a pipe would lose UNITS/INCH (issue 10).
-    body = b"".join(b"F(P%d)=FEAT/POINT,CART,1,0,0,0,0,1\nFA(P%d)=FEAT/POINT,CART,1.5,0,0,0,0,1\n"
-                    b"TA(P%d_X)=TOL/CORTOL,XAXIS,0.5,OUTOL\n" % (i, i, i) for i in range(120))
+    body = b"".join(
+        b"F(P%d)=FEAT/POINT,CART,1,0,0,0,0,1\nFA(P%d)=FEAT/POINT,CART,1.5,0,0,0,0,1\n"
+        b"TA(P%d_X)=TOL/CORTOL,XAXIS,0.5,OUTOL\n" % (i, i, i)
+        for i in range(120)
+    )
     data = b"UNITS/INCH,ANGDEC\n" + body + b"ENDFIL\n"
     assert len(data) > 8192
     report = tmp_path / "r.dmo"
     report.write_bytes(data)
     for args, stdin in ((["-"], data), (["/dev/stdin"], data)):
-        out = subprocess.run([sys.executable, "-m", "setupfix", "parse", *args, "--out", "-"], input=stdin,
-                             capture_output=True, cwd=ROOT, timeout=60)
+        out = subprocess.run(
+            [sys.executable, "-m", "setupfix", "parse", *args, "--out", "-"],
+            input=stdin,
+            capture_output=True,
+            cwd=ROOT,
+            timeout=60,
+        )
         assert out.returncode == 0, out.stderr.decode()
         lines = out.stdout.decode().splitlines()
         assert lines[1].split(",")[1:3] == ["25.4", "38.1"], lines  # nominal and actual in mm from inch
@@ -104,8 +114,10 @@ def test_stdin_and_pipes_keep_their_first_bytes(tmp_path):
 
 
 def test_verdict_contradicting_the_numbers_is_a_note():
-    data = (b"characteristic,nominal,actual,lower,upper,status\n"
-            b"D1,10,14.4,-0.254,0.254,PASS\nD2,10,10.01,-0.254,0.254,PASS\nD3,10,10.0,-0.254,0.254,FAIL\n")
+    data = (
+        b"characteristic,nominal,actual,lower,upper,status\n"
+        b"D1,10,14.4,-0.254,0.254,PASS\nD2,10,10.01,-0.254,0.254,PASS\nD3,10,10.0,-0.254,0.254,FAIL\n"
+    )
     [note] = [n for n in parsers.read_report(Source("box.csv", data)).notes if n.kind == "verdict"]
     assert note.location.line == 2 and note.message.startswith("2 row(s) whose own verdict contradicts")
     assert "D1 says PASS at deviation +4.4 mm" in note.message and "D3 says FAIL" in note.message
@@ -113,7 +125,9 @@ def test_verdict_contradicting_the_numbers_is_a_note():
 
 
 def test_lengths_carry_no_binary_noise():
-    data = b"UNITS/INCH,ANGDEC\nF(P)=FEAT/POINT,CART,1,0,0,0,0,1\nFA(P)=FEAT/POINT,CART,1.0001,0,0,0,0,1\n" \
-           b"TA(P_X)=TOL/CORTOL,XAXIS,0.0001,INTOL\nENDFIL\n"
+    data = (
+        b"UNITS/INCH,ANGDEC\nF(P)=FEAT/POINT,CART,1,0,0,0,0,1\nFA(P)=FEAT/POINT,CART,1.0001,0,0,0,0,1\n"
+        b"TA(P_X)=TOL/CORTOL,XAXIS,0.0001,INTOL\nENDFIL\n"
+    )
     row = parsers.read_report(Source("r.dmo", data)).table.iloc[0]
     assert (row["nominal"], row["actual"], row["deviation"]) == (25.4, 25.40254, 0.00254)

@@ -25,8 +25,9 @@ def test_my_formats_are_registered_with_sniffers_and_readers() -> None:
     assert order.index("qif") < order.index("canonical") < order.index("table")
 
 
-@pytest.mark.parametrize(("file", "expected"), [("cycle_01.csv", "canonical"), ("cycle_01.qif", "qif"),
-                                                ("cycle_01.dmo", "dmis")])
+@pytest.mark.parametrize(
+    ("file", "expected"), [("cycle_01.csv", "canonical"), ("cycle_01.qif", "qif"), ("cycle_01.dmo", "dmis")]
+)
 def test_content_sniffing_picks_the_reader(file: str, expected: str) -> None:
     assert parsers.find_format(GUIDE / file).name == expected
 
@@ -75,13 +76,16 @@ def test_missing_file_is_a_parse_error(tmp_path: Path) -> None:
         parsers.read_report(tmp_path / "absent.qif").table
 
 
-@pytest.mark.parametrize(("data", "text"), [
-    ("Lotlänge".encode(), "Lotlänge"),
-    (b"\xef\xbb\xbf" + "Lotlänge".encode(), "Lotlänge"),
-    ("Lotlänge".encode("cp1252"), "Lotlänge"),
-    ("측정값 기준값".encode("cp949"), "측정값 기준값"),
-    ("Ø 10".encode("utf-16"), "Ø 10"),
-])
+@pytest.mark.parametrize(
+    ("data", "text"),
+    [
+        ("Lotlänge".encode(), "Lotlänge"),
+        (b"\xef\xbb\xbf" + "Lotlänge".encode(), "Lotlänge"),
+        ("Lotlänge".encode("cp1252"), "Lotlänge"),
+        ("측정값 기준값".encode("cp949"), "측정값 기준값"),
+        ("Ø 10".encode("utf-16"), "Ø 10"),
+    ],
+)
 def test_encodings_are_sniffed(data: bytes, text: str) -> None:
     assert decode(data, "f") == text
 
@@ -94,8 +98,9 @@ def test_encoding_override_and_its_errors() -> None:
         decode(b"ok\n\xff", "f", "utf-8")
 
 
-@pytest.mark.parametrize(("text", "value"), [("44,158745", 44.158745), ("-0,5", -0.5), ("1.5", 1.5),
-                                             (" 2 ", 2.0), ("1e-3", 0.001)])
+@pytest.mark.parametrize(
+    ("text", "value"), [("44,158745", 44.158745), ("-0,5", -0.5), ("1.5", 1.5), (" 2 ", 2.0), ("1e-3", 0.001)]
+)
 def test_parse_number_accepts_decimal_commas(text: str, value: float) -> None:
     assert parse_number(text) == value
 

@@ -109,8 +109,10 @@ def test_parser_itself_resolves_nothing_even_past_the_byte_check(tmp_path: Path,
 
     secret = tmp_path / "secret.txt"
     secret.write_text("TOP-SECRET", encoding="utf-8")
-    doc = (f'<!DOCTYPE r [<!ENTITY s SYSTEM "file://{secret}">'
-           f'<!ENTITY % p SYSTEM "http://127.0.0.1:{listener.getsockname()[1]}/x"> %p;]><r>&s;</r>').encode()
+    doc = (
+        f'<!DOCTYPE r [<!ENTITY s SYSTEM "file://{secret}">'
+        f'<!ENTITY % p SYSTEM "http://127.0.0.1:{listener.getsockname()[1]}/x"> %p;]><r>&s;</r>'
+    ).encode()
     try:
         root = etree.fromstring(doc, _parser())
         text = etree.tostring(root).decode()
@@ -123,8 +125,10 @@ def test_parser_itself_resolves_nothing_even_past_the_byte_check(tmp_path: Path,
 def test_deep_nesting_is_refused_not_recursed(tmp_path: Path) -> None:
     depth = 100_000
     path = tmp_path / "deep.qif"
-    path.write_text('<QIFDocument xmlns="http://qifstandards.org/xsd/qif3">' + "<a>" * depth + "</a>" * depth
-                    + "</QIFDocument>", encoding="utf-8")
+    path.write_text(
+        '<QIFDocument xmlns="http://qifstandards.org/xsd/qif3">' + "<a>" * depth + "</a>" * depth + "</QIFDocument>",
+        encoding="utf-8",
+    )
     assert "not well-formed XML" in _refused(path)
 
 

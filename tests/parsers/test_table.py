@@ -29,7 +29,7 @@ def same_as_canonical(table) -> None:
 def test_parse_columns_forms(tmp_path: Path) -> None:
     assert parse_columns("actual=Meas, nominal=Nom") == {"actual": "Meas", "nominal": "Nom"}
     mapping = tmp_path / "m.txt"
-    mapping.write_text("# shop A\nactual = Meas\nnominal = \"Nom\"\n", encoding="utf-8")
+    mapping.write_text('# shop A\nactual = Meas\nnominal = "Nom"\n', encoding="utf-8")
     assert parse_columns(str(mapping)) == {"actual": "Meas", "nominal": "Nom"}
     with pytest.raises(ParseError, match="unknown column key"):
         parse_columns("actuel=Meas")
@@ -39,8 +39,13 @@ def test_parse_columns_forms(tmp_path: Path) -> None:
 
 def test_guess_columns_knows_common_spellings_and_leaves_ambiguity() -> None:
     guessed = guess_columns(["Merkmal", "Sollwert", "Istwert", "UGW", "OGW"], {})
-    assert guessed == {"characteristic": "Merkmal", "nominal": "Sollwert", "actual": "Istwert", "lsl": "UGW",
-                       "usl": "OGW"}
+    assert guessed == {
+        "characteristic": "Merkmal",
+        "nominal": "Sollwert",
+        "actual": "Istwert",
+        "lsl": "UGW",
+        "usl": "OGW",
+    }
     assert "actual" not in guess_columns(["Name", "Nom", "Meas", "Measured"], {})
 
 
@@ -141,8 +146,9 @@ def test_columns_option_selects_the_table_reader_for_a_canonical_looking_file(tm
 
 def test_title_block_above_a_csv_header_is_skipped(tmp_path: Path) -> None:
     path = tmp_path / "export.csv"
-    path.write_text("Inspection report, cycle 7\nOperator: J. Smith\n\nFeature;Nominal;Actual\nA;10;10,02\n",
-                    encoding="utf-8")
+    path.write_text(
+        "Inspection report, cycle 7\nOperator: J. Smith\n\nFeature;Nominal;Actual\nA;10;10,02\n", encoding="utf-8"
+    )
     table = read_table(path)
     assert table["deviation"].tolist() == pytest.approx([0.02])
     assert table["source"].iloc[0].endswith("export.csv:5")

@@ -52,8 +52,10 @@ def test_non_numbers_are_refused_with_the_line(tmp_path, cell):
         (lambda r: r.__setitem__(3, r[3].replace("06:00:20", "06:00:05")), r":4: timestamp not after"),
         (lambda r: r.__setitem__(2, r[2] + ",extra,cell"), r":3: 8 cells but 6 columns"),
         (lambda r: r.__setitem__(0, r[0].replace("T2", "t1")), r":1: column 't1' appears twice \(columns 2 and 3\)"),
-        (lambda r: r.__setitem__(2, r[2].replace("20.5", "9" * 140_000)),
-         r"log\.csv:\d+: unreadable line: field larger than field limit"),
+        (
+            lambda r: r.__setitem__(2, r[2].replace("20.5", "9" * 140_000)),
+            r"log\.csv:\d+: unreadable line: field larger than field limit",
+        ),
     ],
 )
 def test_structural_errors(tmp_path, edit, message):
@@ -116,21 +118,25 @@ _GUIDE = __import__("pathlib").Path(__file__).resolve().parents[2] / "sample_rep
 _TEMPS = "timestamp,spindle\n2026-11-02T06:00:00,20.1\n\n"
 
 
-@pytest.mark.parametrize(("row", "message"), [
-    ("yesterday,20.2", "timestamp 'yesterday' is not ISO 8601"),
-    ("2026-11-02T07:00:00,2_0", "non-numeric value '2_0' in column 'spindle'"),
-    ("2026-11-02T07:00:00,20.2,21", "3 cells but 2 columns in the header"),
-    ("2026-11-02T05:00:00,20.2", "timestamp not after the previous one"),
-])
+@pytest.mark.parametrize(
+    ("row", "message"),
+    [
+        ("yesterday,20.2", "timestamp 'yesterday' is not ISO 8601"),
+        ("2026-11-02T07:00:00,2_0", "non-numeric value '2_0' in column 'spindle'"),
+        ("2026-11-02T07:00:00,20.2,21", "3 cells but 2 columns in the header"),
+        ("2026-11-02T05:00:00,20.2", "timestamp not after the previous one"),
+    ],
+)
 def test_a_bad_temperature_row_is_named_alike_by_history_import_and_diagnose(tmp_path, capsys, row, message):
     from setupfix.cli import main
 
     log = write(tmp_path, _TEMPS + row + "\n")  # the bad row is line 4
     reports = [str(p) for p in sorted(_GUIDE.glob("cycle_0*.csv"))]
     errors = []
-    for argv in (["history", "import", "--db", str(tmp_path / "h.db"), "--temperatures", str(log), *reports],
-                 ["diagnose", "--model", str(_GUIDE / "model.toml"), "--no-walk", "--temperatures", str(log),
-                  *reports]):
+    for argv in (
+        ["history", "import", "--db", str(tmp_path / "h.db"), "--temperatures", str(log), *reports],
+        ["diagnose", "--model", str(_GUIDE / "model.toml"), "--no-walk", "--temperatures", str(log), *reports],
+    ):
         assert main(argv) == 1
         errors.append(capsys.readouterr().err)
     assert errors[0] == errors[1] and errors[0].startswith(f"error: {log}:4: {message}")

@@ -13,8 +13,9 @@ from setupfix.pose import hours_between
 HERE = SourceLocation("r.csv", line=3)
 
 
-@pytest.mark.parametrize("text", ["2026-11-02T08:00:00", "2026-11-02T09:00:00+01:00", "2026-11-02T08:00:00Z",
-                                  "2026-11-02 03:00:00-05:00"])
+@pytest.mark.parametrize(
+    "text", ["2026-11-02T08:00:00", "2026-11-02T09:00:00+01:00", "2026-11-02T08:00:00Z", "2026-11-02 03:00:00-05:00"]
+)
 def test_one_instant_however_written(text):
     assert instant(text, HERE) == datetime(2026, 11, 2, 8, 0, 0)
 
@@ -24,8 +25,9 @@ def test_a_local_time_is_kept_as_written():
     assert list(to_index([parse_timestamp("2026-11-02T09:00:00+01:00", HERE)])) == [datetime(2026, 11, 2, 8)]
 
 
-@pytest.mark.parametrize(("text", "message"), [("04.11.2026 08:00", "timestamp '04.11.2026 08:00' is not ISO 8601"),
-                                               ("", "empty timestamp")])
+@pytest.mark.parametrize(
+    ("text", "message"), [("04.11.2026 08:00", "timestamp '04.11.2026 08:00' is not ISO 8601"), ("", "empty timestamp")]
+)
 def test_not_iso_is_named_with_its_place(text, message):
     with pytest.raises(ParseError, match=f"r.csv:3: {message}"):
         instant(text, HERE)

@@ -11,9 +11,9 @@ import hashlib
 from pathlib import Path
 
 import pytest
+from conftest import SHARED
 
 import parsers
-from conftest import SHARED
 from parsers.truncation import check_prefixes, cut_points, line_cut_points
 from setupfix.errors import ParseError, SetupfixError
 
@@ -53,11 +53,18 @@ def test_a_prefix_is_refused_or_a_subset(path: Path) -> None:
     assert not changed, f"{path.name}: prefix of {changed[0].cut} bytes yields {changed[0].detail}"
 
 
-@pytest.mark.parametrize(("name", "data", "message"), [
-    ("r.csv", b"characteristic,nominal,actual\nP1 D4,30.0000,29.", "does not end with a line break"),
-    ("r.dmo", b"UNITS/MM,ANGDEC\nF(P)=FEAT/POINT,CART,1,0,0,0,0,1\nFA(P)=FEAT/POINT,CART,1.5,0,0,0,0,1\n"
-              b"TA(P_X)=TOL/CORTOL,XAXIS,0.5,OUTOL\n", "does not end with its ENDFIL line"),
-])
+@pytest.mark.parametrize(
+    ("name", "data", "message"),
+    [
+        ("r.csv", b"characteristic,nominal,actual\nP1 D4,30.0000,29.", "does not end with a line break"),
+        (
+            "r.dmo",
+            b"UNITS/MM,ANGDEC\nF(P)=FEAT/POINT,CART,1,0,0,0,0,1\nFA(P)=FEAT/POINT,CART,1.5,0,0,0,0,1\n"
+            b"TA(P_X)=TOL/CORTOL,XAXIS,0.5,OUTOL\n",
+            "does not end with its ENDFIL line",
+        ),
+    ],
+)
 def test_the_issue_examples_are_refused_with_a_clear_message(name: str, data: bytes, message: str) -> None:
     with pytest.raises(ParseError, match=f"{message}: the .* file may be truncated"):
         parsers.read_report(parsers.Source(name, data))

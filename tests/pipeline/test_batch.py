@@ -41,8 +41,12 @@ def test_good_bad_and_duplicate_reports(tmp_path):
     assert [(Path(f).name, r) for f, r in s.skipped] == [("copy_of_02.csv", f"same content as {d / 'cycle_02.csv'}")]
     lines = out.read_text().splitlines()
     assert len(lines) == 1 + 4 * 10  # header + 10 registers per report
-    assert {line.split(",")[0] for line in lines[1:]} == {"cycle_01.csv", "cycle_02.csv", "cycle_03.csv",
-                                                          "sub/cycle_01.qif"}
+    assert {line.split(",")[0] for line in lines[1:]} == {
+        "cycle_01.csv",
+        "cycle_02.csv",
+        "cycle_03.csv",
+        "sub/cycle_01.qif",
+    }
     # the QIF and the CSV of cycle 01 are the same measurements: the same corrections
     rows = [line.split(",") for line in lines[1:]]
     assert [r[6] for r in rows if r[0] == "cycle_01.csv"] == [r[6] for r in rows if r[0] == "sub/cycle_01.qif"]
@@ -97,8 +101,7 @@ def test_one_program_per_cycle(tmp_path):
     d.mkdir()
     shutil.copy(sample / "report.csv", d / "a.csv")
     request = CorrectRequest(load_model(sample / "model.toml"), solve=SolveOptions(objective="paper"))  # README's
-    s = run_batch(request, d, tmp_path / "programs", settle=0,
-                  controller="fanuc")
+    s = run_batch(request, d, tmp_path / "programs", settle=0, controller="fanuc")
     assert s.written and sorted(p.name for p in (tmp_path / "programs").iterdir()) == [MANIFEST, "a.csv.nc"]
     assert "G91 G10 L2 P1 Z-0.022" in (tmp_path / "programs" / "a.csv.nc").read_text()
 
@@ -121,7 +124,8 @@ def test_store_records_what_was_corrected_without_reading_again(tmp_path, monkey
         assert s.reports == 4 and len(store.reports()) == 4
         stored = store.measurements(store.reports()[0].sha256)
     assert sorted(Path(c).name for c in calls) == sorted(
-        ["cycle_01.csv", "cycle_02.csv", "cycle_03.csv", "cycle_01.qif", "copy_of_02.csv", "notes.txt"])
+        ["cycle_01.csv", "cycle_02.csv", "cycle_03.csv", "cycle_01.qif", "copy_of_02.csv", "notes.txt"]
+    )
     table = real(GUIDE / "cycle_01.csv").table
     assert stored["characteristic"].tolist() == table["characteristic"].tolist()
     assert stored["deviation"].tolist() == pytest.approx(table["deviation"].tolist(), abs=0)
@@ -139,8 +143,14 @@ def test_many_reports_in_chunks_give_the_same_output_and_progress_order(tmp_path
     assert chunk_size(45, 2) == 3 and chunk_size(1000, 2) == 16 and chunk_size(1, 2) == 1
     seen: dict[int, list[str]] = {1: [], 2: []}
     for workers in (1, 2):
-        s = run_batch(REQUEST, d, tmp_path / f"w{workers}.csv", settle=0, workers=workers,
-                      progress=lambda done, total, o, w=workers: seen[w].append(Path(o.path).name))
+        s = run_batch(
+            REQUEST,
+            d,
+            tmp_path / f"w{workers}.csv",
+            settle=0,
+            workers=workers,
+            progress=lambda done, total, o, w=workers: seen[w].append(Path(o.path).name),
+        )
         assert (s.reports, len(s.failed)) == (44, 1) and "r020.csv" in s.failed[0][0]
     assert seen[1] == seen[2] == sorted(p.name for p in d.iterdir())
     assert (tmp_path / "w1.csv").read_bytes() == (tmp_path / "w2.csv").read_bytes()
@@ -154,13 +164,27 @@ def test_files_kept_beside_reports_are_not_read_as_reports(tmp_path: Path) -> No
 
     d = tmp_path / "in"
     d.mkdir()
-    for name in ("model.toml", "README.md", "generate.py", "setupfix.db", "setupfix.db-wal", "corrections.csv",
-                 "TEMPERATURES.csv", "r1.csv", "r2.qif", "values.json", "k.txt", "odd.report", "r3.csv.part"):
+    for name in (
+        "model.toml",
+        "README.md",
+        "generate.py",
+        "setupfix.db",
+        "setupfix.db-wal",
+        "corrections.csv",
+        "TEMPERATURES.csv",
+        "r1.csv",
+        "r2.qif",
+        "values.json",
+        "k.txt",
+        "odd.report",
+        "r3.csv.part",
+    ):
         (d / name).write_text("x")
     os.symlink(d / "missing.csv", d / "gone.csv")
     s = run_batch(REQUEST, d, tmp_path / "out.csv", settle=0)
     assert sorted(Path(f).name for f, _ in s.failed) == sorted(
-        ["gone.csv", "r1.csv", "r2.qif", "values.json", "k.txt", "odd.report"])
+        ["gone.csv", "r1.csv", "r2.qif", "values.json", "k.txt", "odd.report"]
+    )
     assert dict(s.failed)[str(d / "gone.csv")] == "broken link"
     summary = run_batch(REQUEST, GUIDE, tmp_path / "out.csv", settle=0)
     assert summary.reports == 7 and not summary.failed
@@ -202,8 +226,9 @@ def test_ewma_over_the_store_and_the_batch_does_not_depend_on_workers(tmp_path):
     assert (tmp_path / "plain.csv").read_bytes() != (tmp_path / "w1.csv").read_bytes()
     with open_store(tmp_path / "w1.db") as store:  # now holding the five reports
         full = dataclasses.replace(request, history=History.from_store(request.model, store))
-    rows = [row for i in range(1, 6) for c in correct_report(full, d / f"cycle_0{i}.csv").cycles
-            for row in cycle_rows(c)]
+    rows = [
+        row for i in range(1, 6) for c in correct_report(full, d / f"cycle_0{i}.csv").cycles for row in cycle_rows(c)
+    ]
     lines = (tmp_path / "w1.csv").read_text().splitlines()[1:]
     assert [line.split(",")[1:] for line in lines] == [line.split(",")[1:] for line in csv_lines(rows).splitlines()]
 

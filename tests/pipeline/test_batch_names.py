@@ -107,7 +107,8 @@ def test_links_and_unreadable_folders_are_said(tmp_path):
     s = run_batch(REQUEST, d, tmp_path / "o.csv", settle=0)
     assert s.reports == 2
     assert [(f, str(n)) for f, n in s.notes if "symbolic link" in str(n)] == [
-        (str(d / "linked.csv"), f"symbolic link to {(tmp_path / 'elsewhere.csv').resolve()}: read as a report")]
+        (str(d / "linked.csv"), f"symbolic link to {(tmp_path / 'elsewhere.csv').resolve()}: read as a report")
+    ]
     assert (str(d / "sub" / "loop"), "link to a folder: not followed") in s.failed
 
 

@@ -70,8 +70,8 @@ def test_a_report_that_no_longer_yields_a_program_leaves_none_behind(tmp_path):
 def test_a_name_too_long_for_the_file_system_is_shortened_not_fatal(tmp_path):
     d = tmp_path / "in"
     d.mkdir()
-    long_a = "x" * 250 + "_a.csv"[:255 - 250]  # 255 bytes: the longest name a file may have
-    long_b = "x" * 250 + "_b.csv"[:255 - 250]
+    long_a = "x" * 250 + "_a.csv"[: 255 - 250]  # 255 bytes: the longest name a file may have
+    long_b = "x" * 250 + "_b.csv"[: 255 - 250]
     shutil.copy(GUIDE / "cycle_01.csv", d / long_a)
     shutil.copy(GUIDE / "cycle_02.csv", d / long_b)
     out = tmp_path / "programs"

@@ -40,8 +40,11 @@ def inch_values(i, row):
 
 def test_inch_values_labelled_mm_are_a_unit_error(tmp_path, guide_pins_model):
     path = rewrite(tmp_path, inch_values)
-    with pytest.raises(MatchError, match=r"r\.csv:2: unit error at P1 D1: .*0\.98425 mm .* 25 mm.*inch values read "
-                                         r"as mm \(27 more"):
+    with pytest.raises(
+        MatchError,
+        match=r"r\.csv:2: unit error at P1 D1: .*0\.98425 mm .* 25 mm.*inch values read "
+        r"as mm \(27 more",
+    ):
         cycles(guide_pins_model, path)
     # labelled as what it is, the same report corrects like the original (to the register grid)
     labelled = rewrite(tmp_path, lambda i, r: {**inch_values(i, r), "unit": "inch"})

@@ -12,10 +12,10 @@ from pathlib import Path
 
 import pytest
 
+from parsers.current import read_current
 from setupfix.errors import ExportError
 from setupfix.model import load_model, model_from_dict
 from setupfix.offsets import offset_rows
-from parsers.current import read_current
 from setupfix.pipeline.controllers import CONTROLLERS, render
 from setupfix.pipeline.correct import correct_report
 from setupfix.pipeline.requests import CorrectRequest, SolveOptions

@@ -14,6 +14,7 @@ from setupfix.pipeline.requests import CorrectRequest, CycleOptions
 def correct(model, path, stations=None):
     return correct_report(CorrectRequest(model, cycles=CycleOptions.of(stations)), path).cycles
 
+
 MODEL = {
     "process": {"name": "two stations", "resolution": 0.001, "limit": 0.1},
     "wks": {"W1": {"register": "G54"}, "W2": {"register": "G55"}},
@@ -28,8 +29,9 @@ MODEL = {
 
 def report(tmp_path, parts=("s1", "s2")):
     path = tmp_path / "r.csv"
-    path.write_text("characteristic,nominal,actual,part\n"
-                    f"Depth,10,10.040,{parts[0]}\nDepth,10,9.990,{parts[1]}\n", encoding="utf-8")
+    path.write_text(
+        f"characteristic,nominal,actual,part\nDepth,10,10.040,{parts[0]}\nDepth,10,9.990,{parts[1]}\n", encoding="utf-8"
+    )
     return path
 
 

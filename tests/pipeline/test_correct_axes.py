@@ -10,8 +10,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-
 from multi_axis_fixtures import independent_optimum, make_fixture, report_csv, true_margins
+
 from setupfix.model import load_model
 from setupfix.offsets import offset_rows
 from setupfix.pipeline.correct import correct_report
@@ -46,8 +46,7 @@ def test_generated_fixture_solved_to_the_independent_optimum(tmp_path, seed):
     assert np.all(np.abs(ours) <= fx.limits + 1e-12)
     ours_margin = true_margins(fx, ours).min()
     # the independent optimum is a lower bound of the true one, within the 720-gon's error of it
-    slack = max(d["diameter"] / 2 - best for d in fx.dims if d["kind"] == "position") * (
-        1 / np.cos(np.pi / 720) - 1)
+    slack = max(d["diameter"] / 2 - best for d in fx.dims if d["kind"] == "position") * (1 / np.cos(np.pi / 720) - 1)
     assert true_margins(fx, best_values).min() >= best - 1e-9
     assert ours_margin >= best - MICRON  # ours: exact on the polygon, the polygon within 1 µm of the circle
     assert ours_margin <= best + slack + 1e-9  # nobody beats the optimum
@@ -111,14 +110,39 @@ def test_offsets_rows_speak_components(tmp_path):
 
 def test_sample_two_station_xyz_solves_through_the_cli():
     env_path = str(ROOT)
-    out = subprocess.run([sys.executable, "-m", "setupfix", "correct", "--model", str(SAMPLE / "model.toml"),
-                          str(SAMPLE / "cycle_01.csv"), "--json"], capture_output=True, text=True, cwd=ROOT,
-                         env={"PYTHONPATH": env_path, "PATH": "/usr/bin:/bin"}, timeout=300)
+    out = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "setupfix",
+            "correct",
+            "--model",
+            str(SAMPLE / "model.toml"),
+            str(SAMPLE / "cycle_01.csv"),
+            "--json",
+        ],
+        capture_output=True,
+        text=True,
+        cwd=ROOT,
+        env={"PYTHONPATH": env_path, "PATH": "/usr/bin:/bin"},
+        timeout=300,
+    )
     assert out.returncode == 0, out.stderr
     data = json.loads(out.stdout)
     assert data["verdict"] == "apply" and data["in_tolerance"]
-    assert set(data["corrections"]) == {"W1.X", "W1.Y", "W1.Z", "W1.C", "W2.X", "W2.Y", "W2.Z", "W2.C", "T1",
-                                        "T1.R", "T2"}
+    assert set(data["corrections"]) == {
+        "W1.X",
+        "W1.Y",
+        "W1.Z",
+        "W1.C",
+        "W2.X",
+        "W2.Y",
+        "W2.Z",
+        "W2.C",
+        "T1",
+        "T1.R",
+        "T2",
+    }
     assert 0 < data["zone_polygon_error"] <= MICRON
     zone = next(r for r in data["dimensions"] if r["name"] == "P1 Hole 1")
     assert zone["lower"] == 0 and zone["upper"] == 0.05 and zone["predicted"] >= 0
@@ -143,12 +167,14 @@ def test_history_store_keyed_by_component(tmp_path):
 
     model = load_model(SAMPLE / "model.toml")
     log = tmp_path / "log.csv"
-    log.write_text("timestamp,register,delta\n2026-11-21T09:00:00,W1.C,0.0012\n"
-                   "2026-11-21T09:00:00,T1.R,0.003\n", encoding="utf-8")
+    log.write_text(
+        "timestamp,register,delta\n2026-11-21T09:00:00,W1.C,0.0012\n2026-11-21T09:00:00,T1.R,0.003\n", encoding="utf-8"
+    )
     store_path = tmp_path / "h.db"
     with open_store(store_path) as store:
-        summary = import_history(store, ImportRequest(reports=(str(SAMPLE / "cycle_01.csv"),),
-                                                      corrections=(str(log),), model=model))
+        summary = import_history(
+            store, ImportRequest(reports=(str(SAMPLE / "cycle_01.csv"),), corrections=(str(log),), model=model)
+        )
         assert summary.corrections == 2
         # a controller name shared by a WKS's components names none of them
         bad = tmp_path / "bad.csv"
@@ -170,8 +196,14 @@ ZONE_OUT = {
     "features": {"F1": {"wks": {"W1": 1}}, "F2": {"wks": {"W1": {"x": 1, "y": -1}}}},
     "dimensions": {
         "A": {"name": "A", "axis": "X", "features": {"F1": 1}, "nominal": 0, "lower": -0.02, "upper": 0.02},
-        "H": {"name": "H", "kind": "position", "components": ["H X", "H Y"], "axes": ["X", "Y"],
-              "diameter": 0.04, "features": {"F2": 1}},
+        "H": {
+            "name": "H",
+            "kind": "position",
+            "components": ["H X", "H Y"],
+            "axes": ["X", "Y"],
+            "diameter": 0.04,
+            "features": {"F2": 1},
+        },
     },
 }
 
@@ -182,8 +214,10 @@ def _zone_out(tmp_path: Path):
     model = model_from_dict(ZONE_OUT)
     # A wants W1.X = −0.05; the zone wants W1.X = +0.05: no correction brings both in
     path = tmp_path / "r.csv"
-    path.write_text("characteristic,nominal,actual,deviation,part\nA,0,0.05,0.05,p\nH X,0,-0.05,-0.05,p\n"
-                    "H Y,0,0,0.0,p\n", encoding="utf-8")
+    path.write_text(
+        "characteristic,nominal,actual,deviation,part\nA,0,0.05,0.05,p\nH X,0,-0.05,-0.05,p\nH Y,0,0,0.0,p\n",
+        encoding="utf-8",
+    )
     (cycle,) = correct_report(CorrectRequest(model, solve=SolveOptions()), path).cycles
     return cycle
 
@@ -208,12 +242,13 @@ def test_triage_keeps_a_zone_whole_and_applies(tmp_path):
     margins keeps the zone: A is given up, the correction W1.X = +0.05 is applied, the zone in its circle."""
     from setupfix.model import model_from_dict
 
-    doc = {**ZONE_OUT, "dimensions": {**ZONE_OUT["dimensions"],
-                                      "H": {**ZONE_OUT["dimensions"]["H"], "diameter": 0.06}}}
+    doc = {**ZONE_OUT, "dimensions": {**ZONE_OUT["dimensions"], "H": {**ZONE_OUT["dimensions"]["H"], "diameter": 0.06}}}
     model = model_from_dict(doc)
     path = tmp_path / "r.csv"
-    path.write_text("characteristic,nominal,actual,deviation,part\nA,0,0.05,0.05,p\nH X,0,-0.05,-0.05,p\n"
-                    "H Y,0,0,0.0,p\n", encoding="utf-8")
+    path.write_text(
+        "characteristic,nominal,actual,deviation,part\nA,0,0.05,0.05,p\nH X,0,-0.05,-0.05,p\nH Y,0,0,0.0,p\n",
+        encoding="utf-8",
+    )
     (cycle,) = correct_report(CorrectRequest(model, solve=SolveOptions()), path).cycles
     assert cycle.recommendation.result.status == "optimal"
     assert cycle.verdict == "apply" and cycle.given_up == ("A",)
@@ -231,8 +266,9 @@ def test_triage_with_a_zone_given_up_applies(tmp_path):
     assert cycle.given_up == ("H",)
     assert not any(r.rule == "no_harm" and r.dimensions for r in cycle.rules)
     assert all("#" not in d for r in cycle.rules for d in r.dimensions)
-    assert cycle.margin_after == pytest.approx(min(row["margin"] for row in cycle.dimension_rows()
-                                                   if row["id"] not in cycle.given_up))
+    assert cycle.margin_after == pytest.approx(
+        min(row["margin"] for row in cycle.dimension_rows() if row["id"] not in cycle.given_up)
+    )
 
 
 def test_view_and_text_rows_speak_components(tmp_path):

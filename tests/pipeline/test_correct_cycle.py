@@ -7,8 +7,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-
 from conftest import GUIDE_PINS, SAMPLES
+
 from setupfix.diagnose import Diagnoser
 from setupfix.model import PartMeasurement, load_model
 from setupfix.pipeline.compare import CompareRequest, compare_report
@@ -44,12 +44,17 @@ def test_compare_exact_is_corrects_raw_optimum_with_costs(costed, report):
 
 def test_diagnosis_next_correction_is_correct_on_its_forecast():
     loop = SAMPLES / "closed_loop"
-    out = diagnose_reports(DiagnoseRequest(
-        GUIDE_PINS / "model.toml", (loop / "measurements.csv",), corrections=str(loop / "corrections.csv"),
-        temperatures=str(loop / "temperatures.csv"), diagnoser=Diagnoser(walk=False)))
+    out = diagnose_reports(
+        DiagnoseRequest(
+            GUIDE_PINS / "model.toml",
+            (loop / "measurements.csv",),
+            corrections=str(loop / "corrections.csv"),
+            temperatures=str(loop / "temperatures.csv"),
+            diagnoser=Diagnoser(walk=False),
+        )
+    )
     fc = out.diagnosis.forecast
-    part = PartMeasurement(part="next", report="forecast", timestamp=None, deviation=fc,
-                           sources=tuple("" for _ in fc))
+    part = PartMeasurement(part="next", report="forecast", timestamp=None, deviation=fc, sources=tuple("" for _ in fc))
     model = forecast_model(out.input.model)
     again = correct_cycle(CorrectRequest(model), part, composite=out.diagnosis.relation_matrix())
     assert out.next_cycle is not None and out.next_correction == again.corrections
@@ -103,8 +108,13 @@ def test_thermal_feed_forward_is_a_step_of_the_use_case_and_requests_pickle(tmp_
     from setupfix.pipeline.requests import ThermalInputs
 
     thermal = SAMPLES / "thermal"
-    saved = thermal_fit.fit_log(read_temperature_log(thermal / "train_variable.csv"), "mra", target="error_z",
-                                inputs=["spindle_motor", "bearing"], unit="mm").saved
+    saved = thermal_fit.fit_log(
+        read_temperature_log(thermal / "train_variable.csv"),
+        "mra",
+        target="error_z",
+        inputs=["spindle_motor", "bearing"],
+        unit="mm",
+    ).saved
     log_path = tmp_path / "temps.csv"
     log_path.write_text((thermal / "test_variable.csv").read_text().replace("2026-01-05T", "2026-11-02T"))
     log = read_temperature_log(log_path, interval=saved.sample_interval_s)

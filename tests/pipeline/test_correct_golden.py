@@ -67,8 +67,7 @@ def test_json_text_and_offsets_equal_the_goldens(name, cases):
     code, out, err = golden.run([*args, "--objective", "paper", "--json"])  # pinned before leximin (issue 22)
     want = json.loads((DATA / "correct_golden" / f"{name}.json").read_text())
     got = json.loads(json.dumps(golden.blank(json.loads(out)), ensure_ascii=False).replace(str(tmp), "TMP"))
-    got = ({"parts": [without_solve_state(p) for p in got["parts"]]} if "parts" in got
-           else without_solve_state(got))
+    got = {"parts": [without_solve_state(p) for p in got["parts"]]} if "parts" in got else without_solve_state(got)
     assert code == want["exit"], err
     if name.startswith("effects"):
         got = without_forecast(got)

@@ -30,8 +30,9 @@ def long_report(tmp_path: Path, cycles=(1, 2, 3), station_order=("P1", "P2", "P3
                 for r in rows:
                     if r["station"] == station:
                         name = r["characteristic"].split(" ", 1)[1]  # "D4": the station is the position
-                        writer.writerow([name, r["nominal"], r["actual"], r["deviation"], r["lower"], r["upper"],
-                                         f"A{n}"])
+                        writer.writerow(
+                            [name, r["nominal"], r["actual"], r["deviation"], r["lower"], r["upper"], f"A{n}"]
+                        )
         for row in extra:
             writer.writerow(row)
     return out
@@ -123,8 +124,9 @@ def test_cli_parts_per_cycle_json_and_station_column(tmp_path, capsys):
     path.write_text("\n".join(out) + "\n", encoding="utf-8")
     assert main(["correct", "--model", str(GUIDE_PINS / "model.toml"), "--json", str(path)]) == 0
     assert len(json.loads(capsys.readouterr().out)["parts"]) == 4
-    assert main(["correct", "--model", str(GUIDE_PINS / "model.toml"), "--parts-per-cycle", "4", "--json",
-                 str(path)]) == 0
+    assert (
+        main(["correct", "--model", str(GUIDE_PINS / "model.toml"), "--parts-per-cycle", "4", "--json", str(path)]) == 0
+    )
     obj = json.loads(capsys.readouterr().out)
     assert obj["part"] == "A1+A2+A3+A4" and obj["dimensions"][7]["station"] == "P2"
     assert main(["correct", "--model", str(GUIDE_PINS / "model.toml"), "--parts-per-cycle", "0", str(path)]) == 2

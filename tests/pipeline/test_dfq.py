@@ -8,6 +8,7 @@ from pathlib import Path
 
 import pandas as pd
 import pytest
+from spc_examples import closed_loop_store
 
 from parsers.qdas import read_aqdef
 from parsers.timestamps import utc_naive
@@ -15,7 +16,6 @@ from setupfix.errors import ExportError
 from setupfix.pipeline.dfq import dfq_text, export_dfq, write_dfq
 from setupfix.pipeline.history import ImportRequest, import_history
 from setupfix.store import open_store
-from spc_examples import closed_loop_store
 
 
 def stored(db: Path) -> pd.DataFrame:
@@ -48,8 +48,9 @@ def test_the_closed_loop_store_reads_back_through_setupfix_s_reader(tmp_path):
     with open_store(db) as store:
         n, notes = export_dfq(store, out)
     assert n == len(table) == 1120
-    assert [n.message for n in notes] == ["station(s) P1, P2, P3, P4 are not nest numbers (K0007 holds a whole "
-                                          "number): left out"]
+    assert [n.message for n in notes] == [
+        "station(s) P1, P2, P3, P4 are not nest numbers (K0007 holds a whole number): left out"
+    ]
     back = read_aqdef(out)
     assert_round_trip(table, back)
     text = out.read_text(encoding="utf-8")
@@ -60,12 +61,14 @@ def test_the_closed_loop_store_reads_back_through_setupfix_s_reader(tmp_path):
 def odd_report(folder: Path) -> Path:
     """Dates whose day is past 12 (unambiguous to a month-first reader), numeric stations, one-sided and
     tiny and long numbers, a time with an offset."""
-    rows = ["characteristic,nominal,actual,lower,upper,part,timestamp,station",
-            "Bore A,0,0.00001,-0.00005,0.00005,s1,2026-03-14T07:00:00,1",
-            "Bore A,0,-0.0000123,-0.00005,0.00005,s2,2026-03-15T07:30:15,2",
-            "Flat,1234.56789012345,1234.5679012345678,,0.02,s1,2026-03-14T07:00:00,1",
-            "Flat,1234.56789012345,1234.5601,,0.02,s2,2026-03-15T07:30:15,2",
-            "Len,40,40.0123,-0.05,0.05,s3,2026-03-16T09:00:00+02:00,1"]
+    rows = [
+        "characteristic,nominal,actual,lower,upper,part,timestamp,station",
+        "Bore A,0,0.00001,-0.00005,0.00005,s1,2026-03-14T07:00:00,1",
+        "Bore A,0,-0.0000123,-0.00005,0.00005,s2,2026-03-15T07:30:15,2",
+        "Flat,1234.56789012345,1234.5679012345678,,0.02,s1,2026-03-14T07:00:00,1",
+        "Flat,1234.56789012345,1234.5601,,0.02,s2,2026-03-15T07:30:15,2",
+        "Len,40,40.0123,-0.05,0.05,s3,2026-03-16T09:00:00+02:00,1",
+    ]
     path = folder / "odd.csv"
     path.write_text("\n".join(rows) + "\n", encoding="utf-8")
     return path
@@ -113,8 +116,19 @@ def test_aqdefreader_reads_every_value(tmp_path, capsys):
 
 @pytest.mark.parametrize("name", ["two\nlines", "tab\tin", "shift\x0fin"])
 def test_a_name_that_cannot_be_one_field_is_refused(name):
-    table = pd.DataFrame({"characteristic": [name], "nominal": [1.0], "actual": [1.1], "deviation": [0.1],
-                          "lower": [-0.2], "upper": [0.2], "part": ["p"], "report": ["r"], "timestamp": [""],
-                          "station": [""]})
+    table = pd.DataFrame(
+        {
+            "characteristic": [name],
+            "nominal": [1.0],
+            "actual": [1.1],
+            "deviation": [0.1],
+            "lower": [-0.2],
+            "upper": [0.2],
+            "part": ["p"],
+            "report": ["r"],
+            "timestamp": [""],
+            "station": [""],
+        }
+    )
     with pytest.raises(ExportError, match="control character"):
         dfq_text(table, "t")

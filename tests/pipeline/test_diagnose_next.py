@@ -5,14 +5,13 @@ from __future__ import annotations
 import dataclasses
 
 import numpy as np
+from diagnose.helpers import guide_pins, one_effect, simulate
 
 from setupfix.diagnose import Diagnoser, Layout
 from setupfix.diagnose.walk import NextSource, centred_registers, ewma_forecast
 from setupfix.pipeline.correct import correct_cycle
-from setupfix.pipeline.diagnose import series_history, recommend_next, forecast_model
+from setupfix.pipeline.diagnose import forecast_model, recommend_next, series_history
 from setupfix.pipeline.requests import CorrectRequest
-
-from diagnose.helpers import guide_pins, one_effect, simulate
 
 MODEL = guide_pins(positions=False)
 LAYOUT = Layout.from_model(MODEL)
@@ -47,12 +46,12 @@ def test_ewma_recommendation_moves_the_earlier_parts_by_the_corrections_logged()
     sim = simulate(LAYOUT, seed=11, correct_every=3)
     s = dataclasses.replace(sim.series, pending=np.where(np.arange(LAYOUT.n_registers) == 2, 0.01, 0.0))
     d = Diagnoser(walk=False).run(LAYOUT, s)
-    d = dataclasses.replace(d, next_from=NextSource("ewma", ""), next_forecast=ewma_forecast(LAYOUT, s, 0.3),
-                            centred=None)
+    d = dataclasses.replace(
+        d, next_from=NextSource("ewma", ""), next_forecast=ewma_forecast(LAYOUT, s, 0.3), centred=None
+    )
     cycle, _ = recommend_next(MODEL, d)
     assert cycle is not None
-    np.testing.assert_allclose(cycle.posed.problem.deviation, d.next_forecast[np.isfinite(d.next_forecast)],
-                               atol=1e-9)
+    np.testing.assert_allclose(cycle.posed.problem.deviation, d.next_forecast[np.isfinite(d.next_forecast)], atol=1e-9)
 
 
 def test_augmented_recommendation_when_the_effect_earned_it():

@@ -16,12 +16,11 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import pytest
+from conftest import SAMPLES
 
 from setupfix.diagnose import Diagnoser
-from setupfix.pipeline.diagnose import DiagnoseRequest, recommend_next, diagnose_reports
+from setupfix.pipeline.diagnose import DiagnoseRequest, diagnose_reports, recommend_next
 from setupfix.pipeline.series import load_series
-
-from conftest import SAMPLES
 
 PLATE = SAMPLES / "qif" / "NIST_MTC_FAIR_Plate_Results_20parts.qif"
 MODEL = Path(__file__).parents[1] / "data" / "nist_plate.toml"

@@ -6,8 +6,8 @@ import dataclasses
 import hashlib
 
 import pytest
-
 from conftest import GUIDE_PINS, SAMPLES
+
 from setupfix.errors import ExportError
 from setupfix.model import load_model
 from setupfix.pipeline.correct import correct_report

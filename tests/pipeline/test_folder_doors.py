@@ -56,8 +56,11 @@ def shop(tmp_path: Path) -> tuple[Path, Path]:
 def _expected(root: Path) -> list[str]:
     listing = list_reports(root)
     names = [str(p) for p in listing.paths]
-    assert [Path(n).relative_to(root).as_posix() for n in names] == \
-        ["bracket_two_parts.txt", "linked.txt", "sub/again.txt"]  # the policy itself, pinned
+    assert [Path(n).relative_to(root).as_posix() for n in names] == [
+        "bracket_two_parts.txt",
+        "linked.txt",
+        "sub/again.txt",
+    ]  # the policy itself, pinned
     assert dict(listing.problems) == {str(root / "folder_link"): "link to a folder: not followed"}
     assert listing.log("corrections") == str(root / "corrections.csv")
     return names

@@ -6,18 +6,18 @@ import re
 from html.parser import HTMLParser
 
 import pytest
+from spc_examples import GUIDE_PINS, closed_loop_store
 
 from setupfix.pipeline.correct import correct_report, load_request
 from setupfix.pipeline.history import ImportRequest, import_history
 from setupfix.pipeline.html_report import correction_page, spc_page
 from setupfix.pipeline.spc import SpcRequest, spc_report
 from setupfix.store import open_store
-from spc_examples import GUIDE_PINS, closed_loop_store
-
 
 #: What would make a page load something from elsewhere (the SVG namespace URI is a name, not a load).
-EXTERNAL = re.compile(r"\b(src|href|action|poster|srcset)\s*=|url\(|@import|<script|<link|<iframe|<img|<object",
-                      re.IGNORECASE)
+EXTERNAL = re.compile(
+    r"\b(src|href|action|poster|srcset)\s*=|url\(|@import|<script|<link|<iframe|<img|<object", re.IGNORECASE
+)
 
 
 class _Tags(HTMLParser):
@@ -86,11 +86,13 @@ def test_spc_page_marks_every_violating_point_and_lists_every_split(loop_spc):
 
 
 def test_names_are_escaped(tmp_path):
-    hostile = "D1 <script>alert(1)</script> & \"x\""
+    hostile = 'D1 <script>alert(1)</script> & "x"'
     csv = tmp_path / "r.csv"
     rows = ["characteristic,nominal,actual,lower,upper,part,timestamp"]
-    rows += [f'"{hostile.replace(chr(34), chr(34) * 2)}",5,{5 + 0.001 * (i % 3)},-0.01,0.01,p{i},2026-01-01T0{i}:00:00'
-             for i in range(5)]
+    rows += [
+        f'"{hostile.replace(chr(34), chr(34) * 2)}",5,{5 + 0.001 * (i % 3)},-0.01,0.01,p{i},2026-01-01T0{i}:00:00'
+        for i in range(5)
+    ]
     csv.write_text("\n".join(rows) + "\n", encoding="utf-8")
     db = tmp_path / "h.db"
     with open_store(db) as store:

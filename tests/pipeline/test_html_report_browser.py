@@ -19,16 +19,24 @@ from typing import Any
 
 import numpy as np
 import pytest
+from spc_examples import GUIDE_PINS, closed_loop_store
 
 from setupfix.pipeline.correct import correct_report, load_request
 from setupfix.pipeline.html_report import correction_page, spc_page
 from setupfix.pipeline.spc import SpcRequest, spc_report
 from setupfix.store import open_store
-from spc_examples import GUIDE_PINS, closed_loop_store
 
 CHROMIUM = os.environ.get("SETUPFIX_CHROMIUM", "/usr/bin/chromium")
-ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
-        "--disable-background-networking", "--disable-component-update", "--disable-sync"]
+ARGS = [
+    "--headless",
+    "--no-sandbox",
+    "--disable-gpu",
+    "--disable-quic",
+    "--no-first-run",
+    "--disable-background-networking",
+    "--disable-component-update",
+    "--disable-sync",
+]
 
 
 def _missing() -> str | None:
@@ -64,7 +72,8 @@ def render(playwright: Any, page_html: str, folder: Path, shot: Path | None = No
     target.write_text(page_html, encoding="utf-8")
     profile = folder / "profile"
     context = playwright.chromium.launch_persistent_context(
-        str(profile), executable_path=CHROMIUM, args=ARGS, headless=True, viewport={"width": 900, "height": 1300})
+        str(profile), executable_path=CHROMIUM, args=ARGS, headless=True, viewport={"width": 900, "height": 1300}
+    )
     try:
         page = context.new_page()
         errors: list[str] = []
@@ -94,11 +103,13 @@ def coloured(png: bytes) -> dict[str, int]:
     rgb = np.asarray(Image.open(io.BytesIO(png)).convert("RGB")).astype(int)
     r, g, b = rgb[..., 0], rgb[..., 1], rgb[..., 2]
     white = ((r == 255) & (g == 255) & (b == 255)) | ((r == 250) & (g == 250) & (b == 250))
-    return {"ink": int((~white).sum()),
-            "blue": int(((b > 150) & (r < 90) & (g < 150)).sum()),
-            "purple": int(((b > 190) & (r > 100) & (r < 160) & (g < 110)).sum()),
-            "red": int(((r > 180) & (g < 80) & (b < 80)).sum()),
-            "green": int(((g > 200) & (r < 235) & (b < 235) & (g > r + 10)).sum())}
+    return {
+        "ink": int((~white).sum()),
+        "blue": int(((b > 150) & (r < 90) & (g < 150)).sum()),
+        "purple": int(((b > 190) & (r > 100) & (r < 160) & (g < 110)).sum()),
+        "red": int(((r > 180) & (g < 80) & (b < 80)).sum()),
+        "green": int(((g > 200) & (r < 235) & (b < 235) & (g > r + 10)).sum()),
+    }
 
 
 def check(result: dict[str, Any], chart_selectors: tuple[str, ...]) -> None:

@@ -26,13 +26,18 @@ N = 3000
 
 def model_text(n: int, n_wks: int = 10, n_tools: int = 40) -> str:
     """``n`` features and dimensions, dimension j = F_j − F_(j+1)."""
-    out = ['[process]', 'name = "generated"', 'axis = "Z"', 'unit = "mm"', 'resolution = 0.001', 'limit = 0.1']
+    out = ["[process]", 'name = "generated"', 'axis = "Z"', 'unit = "mm"', "resolution = 0.001", "limit = 0.1"]
     out += [f'[wks.W{i}]\nregister = "G54.1 P{i}"' for i in range(1, n_wks + 1)]
     out += [f'[tools.T{i}]\nregister = "H{i}"' for i in range(1, n_tools + 1)]
-    out += [f'[features.F{j}]\nwks = {{ W{j % n_wks + 1} = 1 }}\ntools = {{ T{j % n_tools + 1} = 1 }}'
-            for j in range(1, n + 1)]
-    out += [f'[dimensions.D{j}]\nname = "dim {j}"\nfeatures = {{ F{j} = 1, F{j % n + 1} = -1 }}\n'
-            f'nominal = 10.0\nlower = -0.1\nupper = 0.1' for j in range(1, n + 1)]
+    out += [
+        f"[features.F{j}]\nwks = {{ W{j % n_wks + 1} = 1 }}\ntools = {{ T{j % n_tools + 1} = 1 }}"
+        for j in range(1, n + 1)
+    ]
+    out += [
+        f'[dimensions.D{j}]\nname = "dim {j}"\nfeatures = {{ F{j} = 1, F{j % n + 1} = -1 }}\n'
+        f"nominal = 10.0\nlower = -0.1\nupper = 0.1"
+        for j in range(1, n + 1)
+    ]
     return "\n".join(out) + "\n"
 
 
@@ -58,6 +63,7 @@ def test_model_show_output_grows_with_the_entries_not_the_grid(large):
     # C = [R_WF·R_FD ; R_TF·R_FD]: D17 = F17 − F18, F17 on W8 and T18, F18 on W9 and T19.
     assert "\n  D17: +W8 −W9 +T18 −T19\n" in text
     assert f"\n  D{N}: +W1 −W2 +T1 −T2\n" in text  # F3000 on W1, T1; F1 on W2, T2
+
 
 def test_small_models_keep_the_grid(tmp_path):
     path = tmp_path / "model.toml"

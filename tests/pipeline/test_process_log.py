@@ -4,12 +4,11 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from conftest import GUIDE_PINS, SAMPLES
 
 from parsers.temperature import read_temperature_log
 from setupfix.errors import MatchError, ParseError
 from setupfix.pipeline.series import load_series
-
-from conftest import GUIDE_PINS, SAMPLES
 
 LOOP = SAMPLES / "closed_loop"
 REPORT = LOOP / "measurements.csv"
@@ -46,8 +45,9 @@ def test_joined_by_timestamp_at_or_before_each_part(tmp_path):
 def test_joined_by_serial_and_a_missing_part_is_named(tmp_path):
     cycles = _cycles()
     f = tmp_path / "process.csv"
-    f.write_text("serial,rpm\n" + "".join(f"{p},{6000 + 100 * i}\n" for i, (_, p) in enumerate(cycles)),
-                 encoding="utf-8")
+    f.write_text(
+        "serial,rpm\n" + "".join(f"{p},{6000 + 100 * i}\n" for i, (_, p) in enumerate(cycles)), encoding="utf-8"
+    )
     s = load_series(GUIDE_PINS / "model.toml", (REPORT,), process=str(f)).series
     np.testing.assert_array_equal(s.temperature[:, 0], 6000 + 100 * np.arange(len(cycles)))
     f.write_text("serial,rpm\n" + "".join(f"{p},1\n" for _, p in cycles[1:]), encoding="utf-8")

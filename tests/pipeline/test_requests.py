@@ -5,8 +5,8 @@ from __future__ import annotations
 import pickle
 
 import pytest
-
 from conftest import SAMPLES
+
 from setupfix.errors import ParameterError
 from setupfix.model import load_model
 from setupfix.pipeline.requests import CorrectRequest, CurrentOffsets, CycleOptions, ReadOptions, SolveOptions
@@ -29,8 +29,9 @@ def test_current_offsets_are_a_frozen_mapping_with_their_source():
     model = load_model(SAMPLES / "controllers" / "model.toml")
     current = CurrentOffsets.read(SAMPLES / "controllers" / "current.csv", model)
     assert set(current) == set(model.register_ids) and len(current) == len(model.register_ids)
-    assert current.source.endswith("current.csv") and hash(current) == hash(CurrentOffsets.of(dict(current),
-                                                                                                  current.source))
+    assert current.source.endswith("current.csv") and hash(current) == hash(
+        CurrentOffsets.of(dict(current), current.source)
+    )
     with pytest.raises(KeyError):
         current["W9"]
     # wear registers only: their value is the total since the last reset
@@ -39,7 +40,12 @@ def test_current_offsets_are_a_frozen_mapping_with_their_source():
 
 def test_a_request_pickles_to_an_equal_one():
     model = load_model(SAMPLES / "controllers" / "model.toml")
-    req = CorrectRequest(model, ReadOptions(unit="mm"), CycleOptions.of({"A": "P1"}, part="A"),
-                         SolveOptions("pso", seed=3), CurrentOffsets.of({"W1": 0.5}, "c.csv"))
+    req = CorrectRequest(
+        model,
+        ReadOptions(unit="mm"),
+        CycleOptions.of({"A": "P1"}, part="A"),
+        SolveOptions("pso", seed=3),
+        CurrentOffsets.of({"W1": 0.5}, "c.csv"),
+    )
     again = pickle.loads(pickle.dumps(req))
     assert again == req and again.cycles.station_map() == {"A": "P1"}

@@ -22,9 +22,20 @@ from setupfix.pipeline.scaffold import name_axis, scaffold_from_tables
 from tests.conftest import GUIDE_PINS, SAMPLES, shared_path
 
 
-@pytest.mark.parametrize(("name", "axis"), [("SP_00_Z", "Z"), ("Cono_9_X", "X"), ("Step 5.Z Location", "Z"),
-                                            ("Distanz X 4mm", "X"), ("점2.Y", "Y"), ("X_CIRCLE1", "X"),
-                                            ("P1 D4", None), ("XY plane", None), ("Pos X Y", None)])
+@pytest.mark.parametrize(
+    ("name", "axis"),
+    [
+        ("SP_00_Z", "Z"),
+        ("Cono_9_X", "X"),
+        ("Step 5.Z Location", "Z"),
+        ("Distanz X 4mm", "X"),
+        ("점2.Y", "Y"),
+        ("X_CIRCLE1", "X"),
+        ("P1 D4", None),
+        ("XY plane", None),
+        ("Pos X Y", None),
+    ],
+)
 def test_axis_from_the_name(name, axis):
     assert name_axis(name) == axis
 
@@ -78,11 +89,21 @@ def test_guide_pins_scaffold_matches_every_dimension(tmp_path):
 
 #: Every bundled report but near-copies (guide-pins cycles 2–5, the QIF 3 twin of the 2.1 sample, the second
 #: exploded result) and the shop table that needs its column mapping.
-_COPIES = {"cycle_02.csv", "cycle_03.csv", "cycle_04.csv", "cycle_05.csv", "QIF3_Results_Sample.QIF",
-           "QIF3_Exploded_Results2.QIF", "cycle_01_shop.csv"}
-BUNDLED = sorted(p for folder in ("guide_pins", "qif", "qdas", "pcdmis", "tables", "piweb")
-                 for p in (SAMPLES / folder).iterdir()
-                 if p.suffix.lower() in (".csv", ".qif", ".dmo", ".txt", ".dfq", ".json") and p.name not in _COPIES)
+_COPIES = {
+    "cycle_02.csv",
+    "cycle_03.csv",
+    "cycle_04.csv",
+    "cycle_05.csv",
+    "QIF3_Results_Sample.QIF",
+    "QIF3_Exploded_Results2.QIF",
+    "cycle_01_shop.csv",
+}
+BUNDLED = sorted(
+    p
+    for folder in ("guide_pins", "qif", "qdas", "pcdmis", "tables", "piweb")
+    for p in (SAMPLES / folder).iterdir()
+    if p.suffix.lower() in (".csv", ".qif", ".dmo", ".txt", ".dfq", ".json") and p.name not in _COPIES
+)
 
 
 def _read(path: Path) -> pd.DataFrame | None:
@@ -130,23 +151,34 @@ def test_scaffold_on_every_shared_sample_with_tolerances():
             z = scaffold_from_tables([(str(path), table)], axis="Z")
             names = [d.name for d in model_from_dict(tomllib.loads(z.text)).dimensions]
             assert z.axis == "Z" and len(names) == 473 and sum(n.endswith("_Z") for n in names) == 158
-            assert len(z.skipped) == 316 and all(r in ("axis X stated by the report (--axis Z)",
-                                                       "axis Y stated by the report (--axis Z)") for _, r in z.skipped)
+            assert len(z.skipped) == 316 and all(
+                r in ("axis X stated by the report (--axis Z)", "axis Y stated by the report (--axis Z)")
+                for _, r in z.skipped
+            )
     # Q-DAS "Diameter 2500 ± 500" is beyond the model's ±100 mm tolerance range: refused with the reason
     assert [(n, "limits beyond ±100 mm" in e) for n, e in refused] == [("successfactory_testmeasures.dfq", True)]
     assert len(done) >= 30 and "DMO_Impeller_6_Blades_Part_1.dmo" in done and "PiWebApi_sample_values.json" in done
 
 
 def test_left_out_rows_are_listed_with_reasons():
-    table = pd.DataFrame({
-        "characteristic": ["A_Z", "Flatness 1", "B", "C", "D_X"],
-        "nominal": [10.0, 0.0, 5.0, 5.0, 3.0], "actual": [10.01, 0.01, 5.0, 5.0, 3.0],
-        "deviation": [0.01, 0.01, 0.0, 0.0, 0.0], "lower": [-0.1, 0.0, np.nan, np.nan, -0.05],
-        "upper": [0.1, 0.05, np.nan, 0.2, 0.05], "part": ["1"] * 5,
-    })
+    table = pd.DataFrame(
+        {
+            "characteristic": ["A_Z", "Flatness 1", "B", "C", "D_X"],
+            "nominal": [10.0, 0.0, 5.0, 5.0, 3.0],
+            "actual": [10.01, 0.01, 5.0, 5.0, 3.0],
+            "deviation": [0.01, 0.01, 0.0, 0.0, 0.0],
+            "lower": [-0.1, 0.0, np.nan, np.nan, -0.05],
+            "upper": [0.1, 0.05, np.nan, 0.2, 0.05],
+            "part": ["1"] * 5,
+        }
+    )
     scaffold = scaffold_from_tables([("r.csv", table)], axis="Z")
-    assert dict(scaffold.skipped) == {"Flatness 1": "form or orientation tolerance (no offset moves it)",
-                                      "B": "no tolerance", "C": "one-sided tolerance", "D_X": "axis X (--axis Z)"}
+    assert dict(scaffold.skipped) == {
+        "Flatness 1": "form or orientation tolerance (no offset moves it)",
+        "B": "no tolerance",
+        "C": "one-sided tolerance",
+        "D_X": "axis X (--axis Z)",
+    }
     assert "#   Flatness 1: form or orientation tolerance" in scaffold.text
     model = model_from_dict(tomllib.loads(scaffold.text))
     assert [d.name for d in model.dimensions] == ["A_Z"]
@@ -155,9 +187,16 @@ def test_left_out_rows_are_listed_with_reasons():
 
 
 def test_narrow_tolerance_gets_a_finer_resolution_and_hostile_names_stay_toml():
-    table = pd.DataFrame({"characteristic": ['Bore "A"\\x7f\n#1', "Z"], "nominal": [10.0, 4.0],
-                          "actual": [10.0, 4.0], "deviation": [0.0, 0.0], "lower": [-0.0004, -1.0],
-                          "upper": [0.0004, 1.0]})
+    table = pd.DataFrame(
+        {
+            "characteristic": ['Bore "A"\\x7f\n#1', "Z"],
+            "nominal": [10.0, 4.0],
+            "actual": [10.0, 4.0],
+            "deviation": [0.0, 0.0],
+            "lower": [-0.0004, -1.0],
+            "upper": [0.0004, 1.0],
+        }
+    )
     model = model_from_dict(tomllib.loads(scaffold_from_tables([("r.csv", table)]).text))
     assert model.resolution == pytest.approx(0.0001)
     assert model.dimensions[0].name == 'Bore "A"\\x7f\n#1'
@@ -195,13 +234,20 @@ def test_several_reports_make_one_scaffold():
 
 def test_parts_as_stations_scaffold_corrects_one_fixture_cycle(tmp_path):
     path = tmp_path / "r.csv"
-    path.write_text("characteristic,nominal,actual,lower,upper,part\n"
-                    "Depth_Z,10,10.04,-0.05,0.05,S1\nWidth_Z,20,19.99,-0.05,0.05,S1\n"
-                    "Depth_Z,10,9.98,-0.05,0.05,S2\nWidth_Z,20,20.01,-0.05,0.05,S2\n", encoding="utf-8")
+    path.write_text(
+        "characteristic,nominal,actual,lower,upper,part\n"
+        "Depth_Z,10,10.04,-0.05,0.05,S1\nWidth_Z,20,19.99,-0.05,0.05,S1\n"
+        "Depth_Z,10,9.98,-0.05,0.05,S2\nWidth_Z,20,20.01,-0.05,0.05,S2\n",
+        encoding="utf-8",
+    )
     table = parsers.read(path)
     model = model_from_dict(tomllib.loads(scaffold_from_tables([(str(path), table)], parts_are_stations=True).text))
-    assert [(d.name, d.group) for d in model.dimensions] == [("Depth_Z", "S1"), ("Width_Z", "S1"),
-                                                             ("Depth_Z", "S2"), ("Width_Z", "S2")]
+    assert [(d.name, d.group) for d in model.dimensions] == [
+        ("Depth_Z", "S1"),
+        ("Width_Z", "S1"),
+        ("Depth_Z", "S2"),
+        ("Width_Z", "S2"),
+    ]
     (pc,) = correct_report(CorrectRequest(model), path).cycles
     assert pc.part.part == "S1+S2" and pc.part.measured.all()
     plain = model_from_dict(tomllib.loads(scaffold_from_tables([(str(path), table)]).text))
@@ -212,17 +258,27 @@ def test_parts_as_stations_scaffold_corrects_one_fixture_cycle(tmp_path):
 def _dimension_comments(text: str) -> dict[str, str]:
     """name → the comment on its [dimensions.*] header."""
     model = tomllib.loads(text)
-    heads = {line.split("]")[0] + "]": line.partition("#")[2] for line in text.splitlines()
-             if line.startswith("[dimensions.")}
+    heads = {
+        line.split("]")[0] + "]": line.partition("#")[2]
+        for line in text.splitlines()
+        if line.startswith("[dimensions.")
+    }
     return {d["name"]: heads[f"[dimensions.{key}]"] for key, d in model["dimensions"].items()}
 
 
 def test_axis_from_the_report_first_then_the_name_and_the_report_wins():
-    table = pd.DataFrame({
-        "characteristic": ["Depth_X", "Step", "Bore_Y", "Hole"], "nominal": [10.0, 5.0, 3.0, 4.0],
-        "actual": [10.01, 5.0, 3.0, 4.0], "lower": [-0.1] * 4, "upper": [0.1] * 4, "part": ["1"] * 4,
-        "axis": ["Z", "Z", "", ""], "source": [f"r.csv:{i}" for i in range(2, 6)],
-    })
+    table = pd.DataFrame(
+        {
+            "characteristic": ["Depth_X", "Step", "Bore_Y", "Hole"],
+            "nominal": [10.0, 5.0, 3.0, 4.0],
+            "actual": [10.01, 5.0, 3.0, 4.0],
+            "lower": [-0.1] * 4,
+            "upper": [0.1] * 4,
+            "part": ["1"] * 4,
+            "axis": ["Z", "Z", "", ""],
+            "source": [f"r.csv:{i}" for i in range(2, 6)],
+        }
+    )
     scaffold = scaffold_from_tables([("r.csv", table)])
     comments = _dimension_comments(scaffold.text)
     assert comments["Depth_X"].endswith("axis Z stated by the report (its name says X: the report's vector wins)")
@@ -234,21 +290,36 @@ def test_axis_from_the_report_first_then_the_name_and_the_report_wins():
     # Hole states no axis: uncorrectable until the user gives one
     assert scaffold.axes == ("Y", "Z") and raw["process"]["axes"] == ["Y", "Z"]
     moved = {d["name"]: raw["features"][next(iter(d["features"]))] for d in raw["dimensions"].values()}
-    assert moved == {"Depth_X": {"wks": {"W1": 1}, "tools": {"T1": 1}}, "Step": {"wks": {"W1": 1}, "tools": {"T1": 1}},
-                     "Bore_Y": {"wks": {"W1": 1}}, "Hole": {"wks": {}}}
+    assert moved == {
+        "Depth_X": {"wks": {"W1": 1}, "tools": {"T1": 1}},
+        "Step": {"wks": {"W1": 1}, "tools": {"T1": 1}},
+        "Bore_Y": {"wks": {"W1": 1}},
+        "Hole": {"wks": {}},
+    }
     assert [d.get("axis") for d in raw["dimensions"].values()] == ["Z", "Z", "Y", None]
     # --axis keeps the report's axis too: Depth_X stays (Z), Bore_Y goes (name), Hole stays (none)
     kept = scaffold_from_tables([("r.csv", table)], axis="Z")
     assert dict(kept.skipped) == {"Bore_Y": "axis Y (--axis Z)"}
     only_x = scaffold_from_tables([("r.csv", table)], axis="X")
-    assert dict(only_x.skipped) == {"Depth_X": "axis Z stated by the report (--axis X)",
-                                    "Step": "axis Z stated by the report (--axis X)", "Bore_Y": "axis Y (--axis X)"}
+    assert dict(only_x.skipped) == {
+        "Depth_X": "axis Z stated by the report (--axis X)",
+        "Step": "axis Z stated by the report (--axis X)",
+        "Bore_Y": "axis Y (--axis X)",
+    }
 
 
 def test_an_axis_cell_that_is_not_an_axis_is_refused_with_its_line():
-    table = pd.DataFrame({"characteristic": ["A", "B"], "nominal": [1.0, 2.0], "actual": [1.0, 2.0],
-                          "lower": [-0.1, -0.1], "upper": [0.1, 0.1], "axis": ["z", "W"],
-                          "source": ["r.csv:2", "r.csv:3"]})
+    table = pd.DataFrame(
+        {
+            "characteristic": ["A", "B"],
+            "nominal": [1.0, 2.0],
+            "actual": [1.0, 2.0],
+            "lower": [-0.1, -0.1],
+            "upper": [0.1, 0.1],
+            "axis": ["z", "W"],
+            "source": ["r.csv:2", "r.csv:3"],
+        }
+    )
     with pytest.raises(SetupfixError, match=r"^r\.csv:3: column 'axis': expected X, Y, Z or empty, found 'W'"):
         scaffold_from_tables([("r.csv", table)])
     assert "axis Z stated by the report" in scaffold_from_tables([("r.csv", table.iloc[:1])]).text  # any case
@@ -260,16 +331,19 @@ def test_model_init_on_a_qif_takes_the_axes_from_its_vectors(tmp_path, capsys):
     report = SAMPLES / "qif" / "NIST_MTC_Incoming_PlateResults_20_samples.QIF"
     out = tmp_path / "plate.toml"
     assert main(["model", "init", str(report), "-o", str(out)]) == 0
-    assert ("(axes: 8 stated by the report, 20 with none, 24 size(s)), axes X, Y, Z (multi-axis)"
-            in capsys.readouterr().err)
+    assert (
+        "(axes: 8 stated by the report, 20 with none, 24 size(s)), axes X, Y, Z (multi-axis)" in capsys.readouterr().err
+    )
     text = out.read_text(encoding="utf-8")
     comments = _dimension_comments(text)
     # DS002 <AnalysisVector>1 0 0, DS003 0 1 0; the slot's width and length are sizes of a slot (a tool radius
     # moves them), the cylinders' diameters sizes of a cylinder
-    assert (comments["DS002"].endswith("axis X stated by the report")
-            and comments["DS003"].endswith("axis Y stated by the report")
-            and comments["WIDTH1"].endswith("a width of a slot stated by the report")
-            and comments["LENGTH1"].endswith("a length of a slot stated by the report"))
+    assert (
+        comments["DS002"].endswith("axis X stated by the report")
+        and comments["DS003"].endswith("axis Y stated by the report")
+        and comments["WIDTH1"].endswith("a width of a slot stated by the report")
+        and comments["LENGTH1"].endswith("a length of a slot stated by the report")
+    )
     assert comments["DIAMETER4"].endswith("a diameter of a cylinder stated by the report")
     raw = tomllib.loads(text)
     dims = {d["name"]: d for d in raw["dimensions"].values()}
@@ -281,8 +355,10 @@ def test_model_init_on_a_qif_takes_the_axes_from_its_vectors(tmp_path, capsys):
     table = _read(report)
     scaffold_and_correct(report, table)
     z = scaffold_and_correct(report, table, axis="Z")[0]
-    assert {r for _, r in z.skipped if r.startswith("axis")} == {"axis X stated by the report (--axis Z)",
-                                                                  "axis Y stated by the report (--axis Z)"}
+    assert {r for _, r in z.skipped if r.startswith("axis")} == {
+        "axis X stated by the report (--axis Z)",
+        "axis Y stated by the report (--axis Z)",
+    }
 
 
 def test_a_folder_stands_for_its_files_and_unreadable_ones_are_left_out_with_a_note(tmp_path):
@@ -303,8 +379,16 @@ def test_a_folder_stands_for_its_files_and_unreadable_ones_are_left_out_with_a_n
 
 def test_reports_stating_different_axes_for_one_dimension_give_none():
     def table(axis: str) -> pd.DataFrame:
-        return pd.DataFrame({"characteristic": ["Step", "Bore_X"], "nominal": [5.0, 3.0], "actual": [5.0, 3.0],
-                             "lower": [-0.1, -0.1], "upper": [0.1, 0.1], "axis": [axis, axis]})
+        return pd.DataFrame(
+            {
+                "characteristic": ["Step", "Bore_X"],
+                "nominal": [5.0, 3.0],
+                "actual": [5.0, 3.0],
+                "lower": [-0.1, -0.1],
+                "upper": [0.1, 0.1],
+                "axis": [axis, axis],
+            }
+        )
 
     scaffold = scaffold_from_tables([("a.csv", table("Z")), ("b.csv", table("Y")), ("c.csv", table(""))])
     comments = _dimension_comments(scaffold.text)
@@ -312,4 +396,5 @@ def test_reports_stating_different_axes_for_one_dimension_give_none():
     assert comments["Bore_X"].endswith("no axis: the reports state Z and Y")
     later = scaffold_from_tables([("c.csv", table("")), ("a.csv", table("Z"))])  # a later report states it
     assert _dimension_comments(later.text)["Bore_X"].endswith(
-        "axis Z stated by the report (its name says X: the report's vector wins)")
+        "axis Z stated by the report (its name says X: the report's vector wins)"
+    )

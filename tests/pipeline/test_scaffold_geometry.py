@@ -102,16 +102,23 @@ def check_scaffold(raw: dict, table: pd.DataFrame) -> int:
                 tools = {"T1": feature["wks"]["W1"]} if process["axis"] == "Z" else {}
                 assert feature["tools"] == tools, dim
     if multi:
-        assert measured <= set(process["axes"]) <= measured | {"Z"} | set(
-            d.get("axis") for d in raw["dimensions"].values())
+        assert (
+            measured
+            <= set(process["axes"])
+            <= measured | {"Z"} | set(d.get("axis") for d in raw["dimensions"].values())
+        )
         assert ("radius" in raw.get("tools", {}).get("T1", {})) == radius
     return checked
 
 
 def _samples() -> list[Path]:
     roots = [SAMPLES] + ([SHARED / "cmm-samples"] if (SHARED / "cmm-samples").is_dir() else [])
-    return sorted(p for root in roots for p in root.glob("*/*")
-                  if p.suffix.lower() in (".qif", ".dmo", ".txt", ".csv") and "SOURCES" not in p.name)
+    return sorted(
+        p
+        for root in roots
+        for p in root.glob("*/*")
+        if p.suffix.lower() in (".qif", ".dmo", ".txt", ".csv") and "SOURCES" not in p.name
+    )
 
 
 def test_every_sample_with_vectors_gets_the_axes_and_weights_it_states():
@@ -129,12 +136,20 @@ def test_every_sample_with_vectors_gets_the_axes_and_weights_it_states():
         if not scaffold.axes:  # a one-axis scaffold loads today
             model_from_dict(raw)
     # the formats that state geometry: QIF, DMIS, PC-DMIS always; CALYPSO where ../shared is present
-    assert {"cycle_01.dmo", "QIF3_WIDGET_QIF_RESULTS.QIF", "bracket_two_parts.txt", "bracket_ncgage.csv",
-            "NIST_MTC_Incoming_PlateResults_20_samples.QIF"} <= done.keys()
+    assert {
+        "cycle_01.dmo",
+        "QIF3_WIDGET_QIF_RESULTS.QIF",
+        "bracket_two_parts.txt",
+        "bracket_ncgage.csv",
+        "NIST_MTC_Incoming_PlateResults_20_samples.QIF",
+    } <= done.keys()
     assert sum(done.values()) > 150
     if (SHARED / "cmm-samples").is_dir():
-        assert {"DMO_Impeller_6_Blades_Part_1.dmo", "DMO_Example1_PiezaDemo.dmo",
-                "CALYPSO_chr_PruefplanValidierungsbauteil1_16.txt"} <= done.keys()
+        assert {
+            "DMO_Impeller_6_Blades_Part_1.dmo",
+            "DMO_Example1_PiezaDemo.dmo",
+            "CALYPSO_chr_PruefplanValidierungsbauteil1_16.txt",
+        } <= done.keys()
         assert sum(done.values()) > 2500
 
 
@@ -159,12 +174,14 @@ def test_an_oblique_dmis_normal_gives_its_components_not_one():
 
 def test_a_normal_facing_minus_z_gives_minus_one_in_a_one_axis_scaffold(tmp_path):
     path = tmp_path / "down.dmo"
-    path.write_text("DMISMN/'down',04.0\nUNITS/MM,ANGDEC\n"
-                    "F(TOP)=FEAT/POINT,CART,0,0,10,0,0,1\nT(TOP_DN)=TOL/PROFP,-0.05,0.05\n"
-                    "F(BOT)=FEAT/POINT,CART,0,0,0,0,0,-1\nT(BOT_DN)=TOL/PROFP,-0.05,0.05\n"
-                    "FA(TOP)=FEAT/POINT,CART,0,0,10.01,0,0,1\nTA(TOP_DN)=TOL/PROFP,0.01,INTOL\n"
-                    "FA(BOT)=FEAT/POINT,CART,0,0,0.02,0,0,-1\nTA(BOT_DN)=TOL/PROFP,-0.02,INTOL\nENDFIL\n",
-                    encoding="utf-8")
+    path.write_text(
+        "DMISMN/'down',04.0\nUNITS/MM,ANGDEC\n"
+        "F(TOP)=FEAT/POINT,CART,0,0,10,0,0,1\nT(TOP_DN)=TOL/PROFP,-0.05,0.05\n"
+        "F(BOT)=FEAT/POINT,CART,0,0,0,0,0,-1\nT(BOT_DN)=TOL/PROFP,-0.05,0.05\n"
+        "FA(TOP)=FEAT/POINT,CART,0,0,10.01,0,0,1\nTA(TOP_DN)=TOL/PROFP,0.01,INTOL\n"
+        "FA(BOT)=FEAT/POINT,CART,0,0,0.02,0,0,-1\nTA(BOT_DN)=TOL/PROFP,-0.02,INTOL\nENDFIL\n",
+        encoding="utf-8",
+    )
     scaffold = scaffold_model([path])
     raw = tomllib.loads(scaffold.text)
     assert not scaffold.axes and raw["process"]["axis"] == "Z"
@@ -193,25 +210,45 @@ def test_sizes_move_only_by_a_radius_and_only_where_interpolated():
 
 
 def test_a_drilled_hole_and_a_boss_without_feature_type_or_with_one():
-    table = pd.DataFrame({
-        "characteristic": ["Hole 1 D", "Boss D", "Bore D", "Step Z"], "nominal": [6.0, 20.0, 12.0, 5.0],
-        "actual": [6.01, 20.0, 12.0, 5.0], "lower": [-0.05] * 4, "upper": [0.05] * 4,
-        "nx": [np.nan, np.nan, np.nan, 0.0], "ny": [np.nan, np.nan, np.nan, 0.0], "nz": [np.nan, np.nan, np.nan, 1.0],
-        "size": ["diameter", "diameter", "diameter", ""], "feature": ["", "cylinder", "circle", "plane"],
-        "side": ["", "outer", "inner", ""]})
+    table = pd.DataFrame(
+        {
+            "characteristic": ["Hole 1 D", "Boss D", "Bore D", "Step Z"],
+            "nominal": [6.0, 20.0, 12.0, 5.0],
+            "actual": [6.01, 20.0, 12.0, 5.0],
+            "lower": [-0.05] * 4,
+            "upper": [0.05] * 4,
+            "nx": [np.nan, np.nan, np.nan, 0.0],
+            "ny": [np.nan, np.nan, np.nan, 0.0],
+            "nz": [np.nan, np.nan, np.nan, 1.0],
+            "size": ["diameter", "diameter", "diameter", ""],
+            "feature": ["", "cylinder", "circle", "plane"],
+            "side": ["", "outer", "inner", ""],
+        }
+    )
     scaffold = scaffold_from_tables([("r.csv", table)])
     raw = tomllib.loads(scaffold.text)
     features = {d["name"]: raw["features"][next(iter(d["features"]))] for d in raw["dimensions"].values()}
-    assert features == {"Hole 1 D": {"wks": {}}, "Boss D": {"radius": {"T1": 2}}, "Bore D": {"radius": {"T1": -2}},
-                        "Step Z": {"wks": {"W1": 1}, "tools": {"T1": 1}}}
+    assert features == {
+        "Hole 1 D": {"wks": {}},
+        "Boss D": {"radius": {"T1": 2}},
+        "Bore D": {"radius": {"T1": -2}},
+        "Step Z": {"wks": {"W1": 1}, "tools": {"T1": 1}},
+    }
     assert "no stated type (drilled or reamed?)" in scaffold.text and scaffold.sizes == 3
     # a multi-axis scaffold only to hold the radius register: axes = the spindle
     assert scaffold.axes == ("Z",)
 
 
 def test_a_report_measuring_y_gets_no_tool_length_register():
-    table = pd.DataFrame({"characteristic": ["Distanz Y 5mm", "Distanz Y 33mm"], "nominal": [5.0, 33.0],
-                          "actual": [5.01, 33.0], "lower": [-0.1, -0.1], "upper": [0.1, 0.1]})
+    table = pd.DataFrame(
+        {
+            "characteristic": ["Distanz Y 5mm", "Distanz Y 33mm"],
+            "nominal": [5.0, 33.0],
+            "actual": [5.01, 33.0],
+            "lower": [-0.1, -0.1],
+            "upper": [0.1, 0.1],
+        }
+    )
     scaffold = scaffold_from_tables([("calypso.txt", table)])
     raw = tomllib.loads(scaffold.text)
     assert raw["process"]["axis"] == "Y" and "tools" not in raw and not scaffold.axes
@@ -251,6 +288,5 @@ def test_a_multi_axis_scaffold_loads_and_holds_as_a_draft_and_solves_without_the
     assert {c.verdict for c in outcome.cycles} == {"hold"}
     assert all(not any(c.recommendation.x) for c in outcome.cycles)
     solved = correct_report(CorrectRequest(dataclasses.replace(model, draft=False)), report)
-    assert all(c.result.status in ("optimal", "rounded", "time_limit") or c.verdict == "reject"
-               for c in solved.cycles)
+    assert all(c.result.status in ("optimal", "rounded", "time_limit") or c.verdict == "reject" for c in solved.cycles)
     assert all(math.isfinite(c.result.margin_after) for c in solved.cycles)

@@ -6,15 +6,13 @@ import os
 import time
 
 import pytest
-
 from conftest import GUIDE_PINS
-
-from setupfix.pipeline.requests import ReadOptions
 
 from setupfix.errors import ParseError
 from setupfix.pipeline.compare import compare_problem
-from setupfix.pipeline.export import export, offsets_text
 from setupfix.pipeline.correct import load_request
+from setupfix.pipeline.export import export, offsets_text
+from setupfix.pipeline.requests import ReadOptions
 from setupfix.pipeline.session import FolderWatch, compare_steps, export_cycles, newest_report, open_report
 
 MODEL = GUIDE_PINS / "model.toml"
@@ -37,8 +35,7 @@ def test_open_report_corrects_every_cycle():
 
 def test_a_report_of_another_part_gives_the_match_table_not_an_error(tmp_path):
     other = tmp_path / "other.csv"
-    other.write_text((GUIDE_PINS / "cycle_01.csv").read_text(encoding="utf-8").replace(" D", " Dx"),
-                     encoding="utf-8")
+    other.write_text((GUIDE_PINS / "cycle_01.csv").read_text(encoding="utf-8").replace(" D", " Dx"), encoding="utf-8")
     opened = opened_report(other)
     assert opened.corrections == () and "matches a model dimension" in opened.problem
     assert opened.unmatched == 28
@@ -62,8 +59,15 @@ def test_newest_report_skips_hidden_partial_and_folders(tmp_path):
     _touch(tmp_path / "d.csv.part", "x", 0)
     (tmp_path / "sub").mkdir()
     assert newest_report(tmp_path) == tmp_path / "b.csv"
-    for name in ("model.toml", "README.md", "generate.py", "setupfix.db", "setupfix.db-wal", "corrections.csv",
-                 "Temperatures.CSV"):  # kept beside reports, never reports
+    for name in (
+        "model.toml",
+        "README.md",
+        "generate.py",
+        "setupfix.db",
+        "setupfix.db-wal",
+        "corrections.csv",
+        "Temperatures.CSV",
+    ):  # kept beside reports, never reports
         _touch(tmp_path / name, "x", 0)
     assert newest_report(tmp_path) == tmp_path / "b.csv"
     _touch(tmp_path / "e.json", "x", 0)  # a PiWeb report
@@ -100,12 +104,33 @@ def test_the_export_text_is_what_correct_writes(tmp_path, controller):
     from setupfix.cli import main
 
     current = tmp_path / "current.csv"
-    current.write_text("register,value\n" + "".join(f"{r},{i * 0.5}\n" for i, r in enumerate(
-        ["G54", "G55", "G56", "G57", "G58", "G59", "G54.1P1", "G54.1P2", "H5", "H23"])), encoding="utf-8")
+    current.write_text(
+        "register,value\n"
+        + "".join(
+            f"{r},{i * 0.5}\n"
+            for i, r in enumerate(["G54", "G55", "G56", "G57", "G58", "G59", "G54.1P1", "G54.1P2", "H5", "H23"])
+        ),
+        encoding="utf-8",
+    )
     opened = opened_report(GUIDE_PINS / "cycle_01.csv", current=current)
     assert opened.current["W2"] == 0.5
-    assert main(["correct", "--model", str(MODEL), str(GUIDE_PINS / "cycle_01.csv"), "--offsets",
-                 str(tmp_path / "cli.txt"), "--controller", controller, "--current", str(current)]) == 0
+    assert (
+        main(
+            [
+                "correct",
+                "--model",
+                str(MODEL),
+                str(GUIDE_PINS / "cycle_01.csv"),
+                "--offsets",
+                str(tmp_path / "cli.txt"),
+                "--controller",
+                controller,
+                "--current",
+                str(current),
+            ]
+        )
+        == 0
+    )
     assert export_text(opened, controller) == (tmp_path / "cli.txt").read_text(encoding="utf-8")
 
 
@@ -113,8 +138,12 @@ def test_a_rejected_report_cannot_be_exported(tmp_path):
     from setupfix.errors import ExportError
 
     gross = tmp_path / "gross.csv"
-    gross.write_text((GUIDE_PINS / "cycle_01.csv").read_text(encoding="utf-8")
-                     .replace("P1 D1,25.0000,24.9691,-0.0309", "P1 D1,25.0000,24.5000,-0.5000"), encoding="utf-8")
+    gross.write_text(
+        (GUIDE_PINS / "cycle_01.csv")
+        .read_text(encoding="utf-8")
+        .replace("P1 D1,25.0000,24.9691,-0.0309", "P1 D1,25.0000,24.5000,-0.5000"),
+        encoding="utf-8",
+    )
     opened = opened_report(gross)
     assert opened.corrections[0].verdict == "reject"
     with pytest.raises(ExportError, match="rejected"):
@@ -132,8 +161,9 @@ def test_the_readers_options_and_notes_come_as_data():
     opened = opened_report(GUIDE_PINS.parent / "pcdmis" / "bracket_two_parts.txt")
     assert opened.format == "pcdmis" and any("angle" in str(n) and ":27" in str(n) for n in opened.notes)
     tables = GUIDE_PINS.parent / "tables"
-    shop = opened_report(tables / "cycle_01_shop.csv",
-                         read=ReadOptions(columns=str(tables / "cycle_01_shop.columns.toml")))
+    shop = opened_report(
+        tables / "cycle_01_shop.csv", read=ReadOptions(columns=str(tables / "cycle_01_shop.columns.toml"))
+    )
     plain = opened_report(GUIDE_PINS / "cycle_01.csv")
     assert shop.corrections[0].corrections == plain.corrections[0].corrections
 
@@ -143,8 +173,13 @@ def test_the_report_is_read_once(monkeypatch):
 
     files, reads = [], []
     load, read = parsers.load_source, parsers.read_report
-    monkeypatch.setattr(parsers, "load_source", lambda source, *a, **k: (
-        files.append(source) if not isinstance(source, parsers.Source) else None) or load(source, *a, **k))
+    monkeypatch.setattr(
+        parsers,
+        "load_source",
+        lambda source, *a, **k: (
+            (files.append(source) if not isinstance(source, parsers.Source) else None) or load(source, *a, **k)
+        ),
+    )
     monkeypatch.setattr(parsers, "read_report", lambda source, *a, **k: reads.append(source) or read(source, *a, **k))
     assert opened_report(GUIDE_PINS / "cycle_01.csv").corrections
     assert len(files) == 1 and len(reads) == 1

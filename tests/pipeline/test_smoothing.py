@@ -107,8 +107,11 @@ def test_store_log_is_read_and_checked_as_diagnose_reads_it(tmp_path, capsys):
     by_id = store_with(tmp_path, [("2026-11-02T12:00:00", "W1", 0.010, "correction")])
     (ided,) = correct(model, GUIDE / "cycle_03.csv", by_id)
     assert p1d1(ided)["estimate"] == p1d1(named)["estimate"] != p1d1(ided)["deviation"]
-    by_id.add_corrections(pd.DataFrame([("2026-11-03T12:00:00", "H99", 0.002, "correction")],
-                                       columns=["timestamp", "register", "delta", "event"]))
+    by_id.add_corrections(
+        pd.DataFrame(
+            [("2026-11-03T12:00:00", "H99", 0.002, "correction")], columns=["timestamp", "register", "delta", "event"]
+        )
+    )
     by_id.close()
     db = str(tmp_path / "h.db")
     where = f"{db}#corrections: <row 2>: unknown register 'H99'"
@@ -156,8 +159,9 @@ def test_every_stored_report_counts_not_the_newest_imports(tmp_path):
     (a,) = correct_report(CorrectRequest(model, history=stored), GUIDE / "cycle_03.csv").cycles
     (b,) = correct_report(CorrectRequest(model, history=given), GUIDE / "cycle_03.csv").cycles
     assert "50 earlier part(s)" in a.recommendation.rules[0].message
-    assert [r["estimate"] for r in a.dimension_rows()] == pytest.approx([r["estimate"] for r in b.dimension_rows()],
-                                                                        abs=1e-12)
+    assert [r["estimate"] for r in a.dimension_rows()] == pytest.approx(
+        [r["estimate"] for r in b.dimension_rows()], abs=1e-12
+    )
     assert a.corrections == b.corrections
     # the 50 earliest alone (what the newest 50 imports held) give another estimate
     early = History.empty(model).with_parts([p for path in paths[10:] for p in load_parts(model, path)])

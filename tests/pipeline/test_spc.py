@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from setupfix.errors import StoreError, MatchError, ParameterError, ParseError
+from setupfix.errors import MatchError, ParameterError, ParseError, StoreError
 from setupfix.pipeline.history import ImportRequest, import_history
 from setupfix.pipeline.spc import SpcRequest, format_spc, spc_json, spc_report
 from setupfix.store import open_store
@@ -31,8 +31,7 @@ def planted() -> tuple[list[float], dict[int, list[tuple[int, int]]]]:
     return x, where
 
 
-def write_report(folder: Path, name: str, series: dict[str, list[float]], start: int = 0,
-                 hours: float = 1.0) -> Path:
+def write_report(folder: Path, name: str, series: dict[str, list[float]], start: int = 0, hours: float = 1.0) -> Path:
     lines = ["characteristic,nominal,actual,lower,upper,part,timestamp"]
     n = len(next(iter(series.values())))
     for i in range(n):
@@ -50,12 +49,17 @@ def store_path(tmp_path: Path) -> Path:
     clean = (CLEAN * 9)[:60]
     write_report(tmp_path, "a.csv", {"D1": x[:30], "D2": clean[:30]})
     write_report(tmp_path, "b.csv", {"D1": x[30:], "D2": clean[30:]}, start=30)
-    (tmp_path / "corrections.csv").write_text("timestamp,register,delta\n2026-03-03T05:30:00,W1,0.01\n",
-                                              encoding="utf-8")
+    (tmp_path / "corrections.csv").write_text(
+        "timestamp,register,delta\n2026-03-03T05:30:00,W1,0.01\n", encoding="utf-8"
+    )
     db = tmp_path / "h.db"
     with open_store(db) as store:
-        import_history(store, ImportRequest(reports=(tmp_path / "a.csv", tmp_path / "b.csv"),
-                                            corrections=(tmp_path / "corrections.csv",)))
+        import_history(
+            store,
+            ImportRequest(
+                reports=(tmp_path / "a.csv", tmp_path / "b.csv"), corrections=(tmp_path / "corrections.csv",)
+            ),
+        )
     return db
 
 
@@ -63,8 +67,13 @@ def direct(values: list[float], lsl: float, usl: float) -> dict[str, float]:
     mean = statistics.fmean(values)
     within = statistics.fmean(abs(b - a) for a, b in itertools.pairwise(values)) / 1.128
     overall = statistics.stdev(values)
-    return {"mean": mean, "cp": (usl - lsl) / (6 * within), "cpk": min(usl - mean, mean - lsl) / (3 * within),
-            "pp": (usl - lsl) / (6 * overall), "ppk": min(usl - mean, mean - lsl) / (3 * overall)}
+    return {
+        "mean": mean,
+        "cp": (usl - lsl) / (6 * within),
+        "cpk": min(usl - mean, mean - lsl) / (3 * within),
+        "pp": (usl - lsl) / (6 * overall),
+        "ppk": min(usl - mean, mean - lsl) / (3 * overall),
+    }
 
 
 def test_capability_equals_an_independent_computation_and_rules_are_where_planted(store_path):
@@ -102,9 +111,15 @@ def test_each_stored_correction_splits_the_series(store_path):
 def test_given_splits_and_a_time_window(store_path):
     x, _ = planted()
     with open_store(store_path) as store:
-        out = spc_report(store, SpcRequest(dimensions=("D1",), since="2026-03-02T16:00:00",
-                                           until="2026-03-04T12:00:00", splits=("2026-03-03T00:00:00",
-                                                                                "2026-03-03T10:00:00")))
+        out = spc_report(
+            store,
+            SpcRequest(
+                dimensions=("D1",),
+                since="2026-03-02T16:00:00",
+                until="2026-03-04T12:00:00",
+                splits=("2026-03-03T00:00:00", "2026-03-03T10:00:00"),
+            ),
+        )
     d = out.dimensions[0]
     assert d.parts[0] == "p010" and d.parts[-1] == "p054"
     first, second = d.splits
@@ -116,8 +131,10 @@ def test_given_splits_and_a_time_window(store_path):
 
 
 def test_another_machines_handle_sees_none_of_the_series(store_path):
-    with open_store(store_path, machine="M1") as store, \
-            pytest.raises(StoreError, match="no measurements stored for machine 'M1'"):
+    with (
+        open_store(store_path, machine="M1") as store,
+        pytest.raises(StoreError, match="no measurements stored for machine 'M1'"),
+    ):
         spc_report(store, SpcRequest())
 
 
@@ -165,19 +182,20 @@ def test_reference_only_rows_are_left_out(tmp_path):
 def test_a_part_stored_twice_counts_once_and_parts_sharing_a_name_all_count(tmp_path):
     def report(name: str, day: int, crlf: bool = False) -> Path:
         rows = ["characteristic,nominal,actual,lower,upper,part,timestamp"]
-        rows += [f"D1,5,{5 + 0.001 * ((i + day) % 3)},-0.01,0.01,cycle {i},2026-01-0{day}T0{i}:00:00"
-                 for i in range(4)]
+        rows += [f"D1,5,{5 + 0.001 * ((i + day) % 3)},-0.01,0.01,cycle {i},2026-01-0{day}T0{i}:00:00" for i in range(4)]
         path = tmp_path / name
         path.write_bytes(("\r\n" if crlf else "\n").join(rows).encode() + b"\n")
         return path
 
     db = tmp_path / "h.db"
     with open_store(db) as store:  # day 1, the same report again with other bytes, day 2 with the same part names
-        import_history(store, ImportRequest(reports=(report("a.csv", 1), report("a_crlf.csv", 1, crlf=True),
-                                                     report("b.csv", 2))))
+        import_history(
+            store, ImportRequest(reports=(report("a.csv", 1), report("a_crlf.csv", 1, crlf=True), report("b.csv", 2)))
+        )
         out = spc_report(store, SpcRequest())
     (d,) = out.dimensions
     assert d.parts == tuple(f"cycle {i}" for i in range(4)) * 2
-    assert [n.message for n in out.notes] == ["4 value(s) of parts stored more than once: counted once",
-                                              "D1: 8 part(s), fewer than the baseline of 20: the limits come "
-                                              "from all of them"]
+    assert [n.message for n in out.notes] == [
+        "4 value(s) of parts stored more than once: counted once",
+        "D1: 8 part(s), fewer than the baseline of 20: the limits come from all of them",
+    ]

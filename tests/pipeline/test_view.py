@@ -7,7 +7,6 @@ import math
 import numpy as np
 import pandas as pd
 import pytest
-
 from conftest import GUIDE_PINS
 
 from setupfix.model import load_model
@@ -25,16 +24,19 @@ def correction():
     return correct_report(REQUEST, GUIDE_PINS / "cycle_01.csv").cycles[0]
 
 
-@pytest.mark.parametrize(("value", "expected"), [
-    (0.0, "├────┼────┤".replace("┼", "●")),
-    (-0.1, "●────┼────┤"),
-    (0.1, "├────┼────●"),
-    (-0.2, "◀────┼────┤"),
-    (0.2, "├────┼────▶"),
-    (0.05, "├────┼──●─┤"),
-    (-0.05, "├─●──┼────┤"),
-    (math.nan, "├────┼────┤"),
-])
+@pytest.mark.parametrize(
+    ("value", "expected"),
+    [
+        (0.0, "├────┼────┤".replace("┼", "●")),
+        (-0.1, "●────┼────┤"),
+        (0.1, "├────┼────●"),
+        (-0.2, "◀────┼────┤"),
+        (0.2, "├────┼────▶"),
+        (0.05, "├────┼──●─┤"),
+        (-0.05, "├─●──┼────┤"),
+        (math.nan, "├────┼────┤"),
+    ],
+)
 def test_zone_bar_marks_the_value_in_the_tolerance_zone(value, expected):
     assert view.zone_bar(value, -0.1, 0.1, 11) == expected
 
@@ -57,9 +59,18 @@ def test_dimension_rows_carry_the_correction_and_its_symbols(correction):
 
 
 def test_an_out_of_tolerance_dimension_predicted_out_is_marked():
-    r = view.DimensionRow("D1", "D1", "", deviation=0.3, lower=-0.1, upper=0.1, predicted=0.2,
-                          margin_before=-0.2, margin_after=-0.1,
-                          flags_=("out_before", "out", "binding", "given_up", "rejected"))
+    r = view.DimensionRow(
+        "D1",
+        "D1",
+        "",
+        deviation=0.3,
+        lower=-0.1,
+        upper=0.1,
+        predicted=0.2,
+        margin_before=-0.2,
+        margin_after=-0.1,
+        flags_=("out_before", "out", "binding", "given_up", "rejected"),
+    )
     assert r.flags == "✗▲●⚑⊘" and not r.in_before and not r.in_after
     guarded = view.DimensionRow("D2", "D2", "", 0.0, -0.1, 0.1, 0.095, 0.1, 0.005, ("guard",))
     assert guarded.flags == "✓◇"
@@ -91,8 +102,18 @@ def test_register_rows_show_what_the_export_writes_feed_forward_included(correct
     from setupfix.pipeline.export import cycle_rows
     from setupfix.pipeline.feedforward import ThermalFeedForward
 
-    feed = ThermalFeedForward("grey", 4.2, "um", -0.004, "mm", ("T5", "T23"), ("H5", "H23"),
-                              "2026-11-02T08:00:00", "2026-11-02T09:00:00", 0.001)
+    feed = ThermalFeedForward(
+        "grey",
+        4.2,
+        "um",
+        -0.004,
+        "mm",
+        ("T5", "T23"),
+        ("H5", "H23"),
+        "2026-11-02T08:00:00",
+        "2026-11-02T09:00:00",
+        0.001,
+    )
     fed = dataclasses.replace(correction, thermal=feed)
     rows = view.register_rows(fed, {"H5": 0.5})
     written = {r.id: r.delta for r in cycle_rows(fed)}
@@ -111,8 +132,12 @@ def test_summary_is_the_headline_of_the_result(correction):
 
 def test_a_gross_error_is_rejected_and_its_rules_and_flags_shown(tmp_path):
     gross = tmp_path / "gross.csv"
-    gross.write_text((GUIDE_PINS / "cycle_01.csv").read_text(encoding="utf-8")
-                     .replace("P1 D1,25.0000,24.9691,-0.0309", "P1 D1,25.0000,24.5000,-0.5000"), encoding="utf-8")
+    gross.write_text(
+        (GUIDE_PINS / "cycle_01.csv")
+        .read_text(encoding="utf-8")
+        .replace("P1 D1,25.0000,24.9691,-0.0309", "P1 D1,25.0000,24.5000,-0.5000"),
+        encoding="utf-8",
+    )
     c = correct_report(REQUEST, gross).cycles[0]
     s = view.summary(c)
     assert s.verdict == "reject" and s.alarm and any(r.startswith("reject") for r in s.rules)
@@ -124,8 +149,7 @@ def test_a_gross_error_is_rejected_and_its_rules_and_flags_shown(tmp_path):
 def test_match_rows_suggest_close_dimension_names(guide_pins_model):
     table = pd.DataFrame({"characteristic": ["p1  d1", "Pin1 D2", "xyz"], "part": ["c", "c", None]})
     rows = view.match_rows(guide_pins_model, table)
-    assert rows[0].matched and rows[0].dimension == next(d.id for d in guide_pins_model.dimensions
-                                                          if d.name == "P1 D1")
+    assert rows[0].matched and rows[0].dimension == next(d.id for d in guide_pins_model.dimensions if d.name == "P1 D1")
     assert not rows[1].matched and rows[1].suggestions[0] == "P1 D2"
     assert rows[2].suggestions == () and rows[2].part == ""
 

@@ -17,8 +17,14 @@ from setupfix.pipeline.correct import correct_report
 from setupfix.pipeline.export import cycle_rows
 from setupfix.pipeline.parse import parse_reports
 from setupfix.pipeline.requests import CorrectRequest
-from setupfix.pipeline.writers import (check_target, write_bytes, write_canonical_csv, write_figure,
-                                       write_offsets_csv, write_text)
+from setupfix.pipeline.writers import (
+    check_target,
+    write_bytes,
+    write_canonical_csv,
+    write_figure,
+    write_offsets_csv,
+    write_text,
+)
 
 ROOT = Path(__file__).resolve().parents[2]
 GUIDE = ROOT / "sample_reports" / "guide_pins"

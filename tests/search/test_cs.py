@@ -26,4 +26,3 @@ def test_greedy_keeps_equal_or_better() -> None:
     kept, kept_f = greedy(x, np.array([1.0, 2.0, 3.0]), x_new, np.array([1.5, 2.0, 2.5]))
     assert kept.tolist() == [[0, 0], [1, 1], [1, 1]]
     assert kept_f.tolist() == [1.0, 2.0, 2.5]
-

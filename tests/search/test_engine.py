@@ -26,8 +26,9 @@ def _run(name, seed, budget):
         assert np.all(x >= BOX.lower) and np.all(x <= BOX.upper)
         return np.sum((x - TARGET) ** 2, axis=1)
 
-    res = SEARCHES[name](objective=objective, space=BOX, budget=budget, rng=generator(seed),
-                         observe=lambda x, v: seen.append(len(x)))
+    res = SEARCHES[name](
+        objective=objective, space=BOX, budget=budget, rng=generator(seed), observe=lambda x, v: seen.append(len(x))
+    )
     return res, sum(seen)
 
 

@@ -40,4 +40,3 @@ def test_survival_keeps_the_best() -> None:
     kept, kept_f = survive(x, f, 3)
     assert kept_f.tolist() == [-9.0, -9.0, -7.0]
     assert kept.tolist() == [[2.0, 3.0], [6.0, 7.0], [8.0, 9.0]]
-

@@ -9,10 +9,9 @@ import numpy as np
 import pytest
 from hypothesis import assume, given, settings
 from hypothesis import strategies as st
+from spc_examples import AMPS, CONCENTRATION
 
 from setupfix.spc import D2, capability, cpk_interval, sigma_overall, sigma_within, split_capability
-
-from spc_examples import AMPS, CONCENTRATION
 
 
 def _direct(x: list[float], lsl: float, usl: float) -> dict[str, float]:
@@ -22,10 +21,16 @@ def _direct(x: list[float], lsl: float, usl: float) -> dict[str, float]:
     mr = sum(abs(x[i] - x[i - 1]) for i in range(1, n)) / (n - 1)
     within = mr / 1.128
     overall = math.sqrt(sum((v - mean) ** 2 for v in x) / (n - 1))
-    return {"mean": mean, "within": within, "overall": overall,
-            "cp": (usl - lsl) / (6 * within), "cpk": min(usl - mean, mean - lsl) / (3 * within),
-            "pp": (usl - lsl) / (6 * overall), "ppk": min(usl - mean, mean - lsl) / (3 * overall),
-            "out": sum(1 for v in x if v < lsl or v > usl)}
+    return {
+        "mean": mean,
+        "within": within,
+        "overall": overall,
+        "cp": (usl - lsl) / (6 * within),
+        "cpk": min(usl - mean, mean - lsl) / (3 * within),
+        "pp": (usl - lsl) / (6 * overall),
+        "ppk": min(usl - mean, mean - lsl) / (3 * overall),
+        "out": sum(1 for v in x if v < lsl or v > usl),
+    }
 
 
 def test_sigma_within_matches_the_published_example():
@@ -64,7 +69,7 @@ def test_one_sided_limits_leave_cp_undefined():
 def test_cpk_interval_is_bissell():
     # Bissell's approximation written out for Ĉpk = 0.625, n = 30 (x̄ = 97, s = 1.6, limits 90 and 100).
     low, high = cpk_interval(0.625, 30)
-    half = 1.959964 * math.sqrt(1 / (9 * 30) + 0.625 ** 2 / (2 * 29))
+    half = 1.959964 * math.sqrt(1 / (9 * 30) + 0.625**2 / (2 * 29))
     assert (low, high) == pytest.approx((0.625 - half, 0.625 + half), abs=1e-6)
     assert (low, high) == pytest.approx((0.4247, 0.8253), abs=1e-4)
 

@@ -6,10 +6,10 @@ import itertools
 
 import numpy as np
 import pytest
+from spc_examples import CONCENTRATION
 
 from setupfix.errors import ParameterError
 from setupfix.spc import D4, Violation, chart_limits, moving_range, nelson
-from spc_examples import CONCENTRATION
 
 
 def test_limits_match_the_published_example():
@@ -40,15 +40,15 @@ def _brute(x, c, s):
         if abs(x[i] - c) > 3 * s:
             hits[1].add(i)
     for i in range(n - 8):
-        w = x[i:i + 9]
+        w = x[i : i + 9]
         if all(v > c for v in w) or all(v < c for v in w):
             hits[2].update(range(i, i + 9))
     for i in range(n - 5):
-        w = x[i:i + 6]
+        w = x[i : i + 6]
         if all(w[k + 1] > w[k] for k in range(5)) or all(w[k + 1] < w[k] for k in range(5)):
             hits[3].update(range(i, i + 6))
     for i in range(n - 13):
-        w = x[i:i + 14]
+        w = x[i : i + 14]
         d = [w[k + 1] - w[k] for k in range(13)]
         if all(d[k] * d[k + 1] < 0 for k in range(12)):
             hits[4].update(range(i, i + 14))

@@ -19,7 +19,6 @@ import pytest
 
 from setupfix.store import ALREADY_PROCESSED, Claimant, open_store
 
-
 ROOT = Path(__file__).resolve().parents[2]
 GUIDE = ROOT / "sample_reports" / "guide_pins"
 ENV = {**os.environ, "PYTHONPATH": str(ROOT) + os.pathsep + os.environ.get("PYTHONPATH", "")}
@@ -40,10 +39,31 @@ def reports(folder: Path, n: int) -> list[Path]:
 def batch(folder: Path, db: Path, out: Path, *extra: str) -> subprocess.Popen[str]:
     """``batch --store`` with a 60 s solve limit: the claims are the subject here, and on a loaded box the
     default 2 s may stop a solve (exit 6, the report left unprocessed: right, but another test's subject)."""
-    return subprocess.Popen([sys.executable, "-m", "setupfix", "batch", str(folder), "--model",
-                             str(GUIDE / "model.toml"), "--out", str(out), "--store", str(db), "--settle", "0",
-                             "--time-limit", "60", "--json", *extra], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                            text=True, env=ENV)
+    return subprocess.Popen(
+        [
+            sys.executable,
+            "-m",
+            "setupfix",
+            "batch",
+            str(folder),
+            "--model",
+            str(GUIDE / "model.toml"),
+            "--out",
+            str(out),
+            "--store",
+            str(db),
+            "--settle",
+            "0",
+            "--time-limit",
+            "60",
+            "--json",
+            *extra,
+        ],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        env=ENV,
+    )
 
 
 def stored_batch_reports(db: Path) -> list[str]:
@@ -74,8 +94,12 @@ def test_two_batches_at_once_correct_every_report_exactly_once(tmp_path, locatio
     for s in summaries:
         assert s["failed"] == []
         assert all("another run" in k["reason"] or k["reason"] == ALREADY_PROCESSED for k in s["skipped"]), s
-    named = [line.split(",")[0] for i in (1, 2) if (tmp_path / f"out{i}.csv").exists()
-             for line in (tmp_path / f"out{i}.csv").read_text().splitlines()[1:]]
+    named = [
+        line.split(",")[0]
+        for i in (1, 2)
+        if (tmp_path / f"out{i}.csv").exists()
+        for line in (tmp_path / f"out{i}.csv").read_text().splitlines()[1:]
+    ]
     per_report = {name for name in named}
     assert len(per_report) == n  # every report has its rows in exactly one of the outputs
     stored = stored_batch_reports(db)
@@ -95,7 +119,7 @@ def _children(pid: int) -> list[int]:
                     stat = Path(f"/proc/{entry}/stat").read_text()
                 except OSError:
                     continue
-                if int(stat[stat.rfind(")") + 2:].split()[1]) == pid:
+                if int(stat[stat.rfind(")") + 2 :].split()[1]) == pid:
                     kids.append(int(entry))
         return kids
     return [c.pid for c in psutil.Process(pid).children(recursive=True)]
@@ -106,7 +130,7 @@ def _running(pid: int) -> bool:
         stat = Path(f"/proc/{pid}/stat").read_text()
     except OSError:
         return False
-    return stat[stat.rfind(")") + 2:].split()[0] != "Z"  # a zombie has ended
+    return stat[stat.rfind(")") + 2 :].split()[0] != "Z"  # a zombie has ended
 
 
 @pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="looks the workers up in /proc")
@@ -163,8 +187,10 @@ def test_claims_refuse_a_live_holder_and_processed_reports_take_over_a_dead_one(
     assert store.claim_reports(["z"], far) == {}
     assert "another run" in store.claim_reports(["z"], me).get("z", "")  # another host: stale only when old
     with store.transaction():  # the far claim grows old
-        store._execute("UPDATE batch_claim SET claimed_at = '2000-01-01T00:00:00+00:00' "  # type: ignore[attr-defined]
-                       "WHERE owner = 'far'")
+        store._execute(
+            "UPDATE batch_claim SET claimed_at = '2000-01-01T00:00:00+00:00' "  # type: ignore[attr-defined]
+            "WHERE owner = 'far'"
+        )
     store.close()
     with open_store(location) as store:
         assert store.claim_reports(["z"], me) == {}
@@ -180,9 +206,11 @@ def test_a_store_of_older_batches_keeps_its_processed_reports(tmp_path):
     migrate(con, str(path), upto=2)
     con.close()
     with sqlite3.connect(path) as con:
-        con.execute("INSERT INTO recommendation (created_at, optimizer, inputs, result) VALUES "
-                    "('2026-01-01', 'exact', '{\"use\": \"batch\", \"report\": \"abc\"}', '{}'), "
-                    "('2026-01-01', 'exact', '{\"report\": \"def\"}', '{}')")
+        con.execute(
+            "INSERT INTO recommendation (created_at, optimizer, inputs, result) VALUES "
+            "('2026-01-01', 'exact', '{\"use\": \"batch\", \"report\": \"abc\"}', '{}'), "
+            "('2026-01-01', 'exact', '{\"report\": \"def\"}', '{}')"
+        )
     con.close()
     with open_store(path) as store:
         me = Claimant.this_run()
@@ -191,7 +219,8 @@ def test_a_store_of_older_batches_keeps_its_processed_reports(tmp_path):
 
 
 def test_a_store_that_cannot_finish_the_claims_says_the_output_stands_and_the_next_run_redoes_them(
-        tmp_path, capsys, monkeypatch):
+    tmp_path, capsys, monkeypatch
+):
     """The store fills up after the output is written: one line naming the store, the offsets in place, and
     no report marked processed (SQLITE_FULL from SQLite's page limit, set just before the claims finish)."""
     from setupfix.cli import main
@@ -208,8 +237,18 @@ def test_a_store_that_cannot_finish_the_claims_says_the_output_stands_and_the_ne
         return real(self)
 
     monkeypatch.setattr(batch_records.Claims, "finish", full)
-    argv = ["batch", str(folder), "--model", str(GUIDE / "model.toml"), "--out", str(out), "--store", str(db),
-            "--settle", "0"]
+    argv = [
+        "batch",
+        str(folder),
+        "--model",
+        str(GUIDE / "model.toml"),
+        "--out",
+        str(out),
+        "--store",
+        str(db),
+        "--settle",
+        "0",
+    ]
     assert main(argv) == 1
     err = capsys.readouterr().err
     line = next(x for x in err.splitlines() if x.startswith("error:"))

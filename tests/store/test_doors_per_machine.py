@@ -32,14 +32,34 @@ def test_correct_records_its_recommendation_and_the_program_it_wrote(tmp_path, l
     db = created(location)
     report = GUIDE / "cycle_01.csv"
     program = tmp_path / "o.nc"
-    assert main(["correct", "--model", str(MODEL), str(report), "--store", db, "--machine", "M1",
-                 "--operator", "alice", "--offsets", str(program), "--controller", "fanuc"]) == 0
+    assert (
+        main(
+            [
+                "correct",
+                "--model",
+                str(MODEL),
+                str(report),
+                "--store",
+                db,
+                "--machine",
+                "M1",
+                "--operator",
+                "alice",
+                "--offsets",
+                str(program),
+                "--controller",
+                "fanuc",
+            ]
+        )
+        == 0
+    )
     rows = audit(capsys, db, "--machine", "M1")
     registers = {r.id for r in load_model(MODEL).registers}
     assert {r["register"] for r in rows} == registers  # one row per register component, zero included
     sha = hashlib.sha256(report.read_bytes()).hexdigest()
     assert {(r["machine"], r["operator"], r["report_sha256"], r["verdict"]) for r in rows} == {
-        ("M1", "alice", sha, "apply")}
+        ("M1", "alice", sha, "apply")
+    }
     assert {r["exported_to"] for r in rows} == {str(program)}
     assert len({r["applied"] for r in rows}) == 1 and rows[0]["applied"] in ("0", "false", "False")
     text = program.read_text(encoding="utf-8")
@@ -55,8 +75,10 @@ def test_the_models_machine_is_the_default(tmp_path, location, capsys):
     model.write_text(text.replace("[process]\n", '[process]\nmachine = "VMC-7"\n', 1), encoding="utf-8")
     assert main(["correct", "--model", str(model), str(GUIDE / "cycle_02.csv"), "--store", location]) == 0
     assert {r["machine"] for r in audit(capsys, location)} == {"VMC-7"}
-    assert main(["correct", "--model", str(model), str(GUIDE / "cycle_03.csv"), "--store", location,
-                 "--machine", "VMC-8"]) == 0  # --machine overrides the model's
+    assert (
+        main(["correct", "--model", str(model), str(GUIDE / "cycle_03.csv"), "--store", location, "--machine", "VMC-8"])
+        == 0
+    )  # --machine overrides the model's
     assert {r["machine"] for r in audit(capsys, location)} == {"VMC-7", "VMC-8"}
 
 
@@ -64,15 +86,34 @@ def test_batch_and_diagnose_see_only_their_machine(tmp_path, location, capsys):
     for machine in ("A", "B"):
         folder = tmp_path / machine
         machine_reports(folder, machine, 6 if machine == "A" else 4)
-        assert main(["batch", str(folder), "--model", str(MODEL), "--out", str(tmp_path / f"{machine}.csv"),
-                     "--store", location, "--machine", machine, "--settle", "0"]) == 0
+        assert (
+            main(
+                [
+                    "batch",
+                    str(folder),
+                    "--model",
+                    str(MODEL),
+                    "--out",
+                    str(tmp_path / f"{machine}.csv"),
+                    "--store",
+                    location,
+                    "--machine",
+                    machine,
+                    "--settle",
+                    "0",
+                ]
+            )
+            == 0
+        )
     with open_store(location) as store:
         summary = {m.machine: m.reports for m in store.machines()}
     assert summary == {"A": 6, "B": 4}
     for machine, cycles in (("A", 6), ("B", 4)):
         capsys.readouterr()
-        assert main(["diagnose", "--model", str(MODEL), "--db", location, "--machine", machine, "--json",
-                     "--no-walk"]) == 0
+        assert (
+            main(["diagnose", "--model", str(MODEL), "--db", location, "--machine", machine, "--json", "--no-walk"])
+            == 0
+        )
         assert json.loads(capsys.readouterr().out)["cycles"] == cycles
     capsys.readouterr()
     assert main(["diagnose", "--model", str(MODEL), "--db", location, "--machine", "C", "--no-walk"]) != 0

@@ -91,6 +91,7 @@ def run(name: str, db: Path, tmp_path: Path, capsys) -> str:
 
 # -- damaged -------------------------------------------------------------------------------------
 
+
 @pytest.mark.parametrize("command", sorted(COMMANDS))
 @pytest.mark.parametrize("damage", ["garbage", "page"])
 def test_a_damaged_store_is_one_line_naming_it(tmp_path, capsys, command, damage):
@@ -111,6 +112,7 @@ def test_a_damaged_store_is_one_line_naming_it(tmp_path, capsys, command, damage
 
 # -- read-only -----------------------------------------------------------------------------------
 
+
 @contextlib.contextmanager
 def read_only(path: Path):
     """``path`` made unwritable for this process: mode 0444/0555, or as root the immutable flag."""
@@ -122,8 +124,7 @@ def read_only(path: Path):
         finally:
             path.chmod(mode)
         return
-    if shutil.which("chattr") is None or subprocess.run(["chattr", "+i", str(path)],
-                                                        capture_output=True).returncode:
+    if shutil.which("chattr") is None or subprocess.run(["chattr", "+i", str(path)], capture_output=True).returncode:
         pytest.skip("root, and this file system has no immutable flag: nothing is read-only to root")
     try:
         yield
@@ -154,17 +155,26 @@ def test_a_store_in_a_read_only_folder_is_one_line_naming_it(tmp_path, capsys, e
 
 # -- locked --------------------------------------------------------------------------------------
 
+
 @pytest.mark.parametrize("command", ["import", "batch", "diagnose", "correct"])
 def test_a_store_locked_beyond_the_busy_timeout_is_one_line_naming_it(tmp_path, capsys, monkeypatch, command):
     import setupfix.store._sqlite as sqlite_store
 
     db = store_of(tmp_path)
     before = counts(db)
-    holder = subprocess.Popen([sys.executable, "-c", "import sqlite3, sys, time\n"
-                               f"c = sqlite3.connect({str(db)!r}, isolation_level=None)\n"
-                               "c.execute('BEGIN IMMEDIATE'); c.execute('CREATE TABLE held (x)')\n"
-                               "print('held', flush=True); sys.stdin.read()"],
-                              stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
+    holder = subprocess.Popen(
+        [
+            sys.executable,
+            "-c",
+            "import sqlite3, sys, time\n"
+            f"c = sqlite3.connect({str(db)!r}, isolation_level=None)\n"
+            "c.execute('BEGIN IMMEDIATE'); c.execute('CREATE TABLE held (x)')\n"
+            "print('held', flush=True); sys.stdin.read()",
+        ],
+        stdin=subprocess.PIPE,
+        stdout=subprocess.PIPE,
+        text=True,
+    )
     try:
         assert holder.stdout.readline().strip() == "held"  # type: ignore[union-attr]
         monkeypatch.setattr(sqlite_store, "BUSY_TIMEOUT_S", 0.5)
@@ -186,16 +196,24 @@ def test_a_store_locked_beyond_the_busy_timeout_is_one_line_naming_it(tmp_path, 
 
 # -- full ----------------------------------------------------------------------------------------
 
+
 def _limited(limit: int):
     def apply() -> None:
         resource.setrlimit(resource.RLIMIT_FSIZE, (limit, limit))
         signal.signal(signal.SIGXFSZ, signal.SIG_IGN)  # the write fails with EFBIG instead of killing
+
     return apply
 
 
 def cli(args: list[str], *, limit: int | None = None, cwd: Path | None = None) -> subprocess.CompletedProcess[str]:
-    return subprocess.run([sys.executable, "-m", "setupfix", *map(str, args)], capture_output=True, text=True,
-                          env=ENV, cwd=cwd, preexec_fn=_limited(limit) if limit is not None else None)
+    return subprocess.run(
+        [sys.executable, "-m", "setupfix", *map(str, args)],
+        capture_output=True,
+        text=True,
+        env=ENV,
+        cwd=cwd,
+        preexec_fn=_limited(limit) if limit is not None else None,
+    )
 
 
 def many_reports(d: Path, n: int) -> Path:
@@ -212,8 +230,11 @@ def test_a_full_store_is_one_line_naming_it_and_keeps_what_it_held(tmp_path, com
     before = counts(db)
     d = many_reports(tmp_path / "many", 40)
     limit = max(db.stat().st_size, 32768) + 8192  # room for the -shm index, not for 40 reports
-    args = (["history", "import", "--db", db, d] if command == "import" else
-            ["batch", d, "--model", MODEL, "--out", tmp_path / "o.csv", "--store", db, "--settle", "0"])
+    args = (
+        ["history", "import", "--db", db, d]
+        if command == "import"
+        else ["batch", d, "--model", MODEL, "--out", tmp_path / "o.csv", "--store", db, "--settle", "0"]
+    )
     r = cli(args, limit=limit)
     assert r.returncode != 0
     line = one_line(r.stderr, db.name)
@@ -256,16 +277,27 @@ def test_sqlite_s_own_full_is_one_line_naming_the_store(tmp_path, capsys, monkey
 #: (the store's 32 KiB -shm index for ``history export``).
 OUTPUTS = {
     "offsets CSV (correct)": (["correct", "--model", MODEL, REPORTS[0], "--offsets", "{t}/old.csv"], "old.csv", 64),
-    "program (correct)": (["correct", "--model", MODEL, REPORTS[0], "--offsets", "{t}/old.nc", "--controller",
-                           "fanuc"], "old.nc", 64),
-    "offsets CSV (batch)": (["batch", "{t}/many", "--model", MODEL, "--out", "{t}/old.csv", "--settle", "0"],
-                            "old.csv", 64),
-    "program (batch)": (["batch", "{t}/many", "--model", MODEL, "--out", "{t}/progs", "--settle", "0",
-                         "--controller", "fanuc"], "progs/r000.csv.nc", 64),
-    "export CSV": (["history", "export", "measurements", "--db", "{t}/h.db", "--out", "{t}/old.csv"], "old.csv",
-                   36000),
-    "CSV and JSON (simulate)": (["simulate", "--model", MODEL, "--out", "{t}/sim", "--cycles", "30"],
-                                "sim/measurements.csv", 64),
+    "program (correct)": (
+        ["correct", "--model", MODEL, REPORTS[0], "--offsets", "{t}/old.nc", "--controller", "fanuc"],
+        "old.nc",
+        64,
+    ),
+    "offsets CSV (batch)": (
+        ["batch", "{t}/many", "--model", MODEL, "--out", "{t}/old.csv", "--settle", "0"],
+        "old.csv",
+        64,
+    ),
+    "program (batch)": (
+        ["batch", "{t}/many", "--model", MODEL, "--out", "{t}/progs", "--settle", "0", "--controller", "fanuc"],
+        "progs/r000.csv.nc",
+        64,
+    ),
+    "export CSV": (["history", "export", "measurements", "--db", "{t}/h.db", "--out", "{t}/old.csv"], "old.csv", 36000),
+    "CSV and JSON (simulate)": (
+        ["simulate", "--model", MODEL, "--out", "{t}/sim", "--cycles", "30"],
+        "sim/measurements.csv",
+        64,
+    ),
 }
 
 
@@ -288,15 +320,22 @@ def test_a_full_disk_under_any_output_is_one_line_naming_it_and_the_old_file_sta
 
 # -- creation ------------------------------------------------------------------------------------
 
+
 def test_a_store_created_by_many_processes_at_once_is_a_store(tmp_path):
     for round_ in range(3):
         db = tmp_path / f"new{round_}.db"
         start = time.time() + 1.5
-        code = ("import sys, time\nfrom setupfix.store import open_store\n"
-                f"time.sleep(max(0.0, {start} - time.time()))\n"
-                f"with open_store({str(db)!r}) as s:\n    print(len(s.reports()))\n")
-        procs = [subprocess.Popen([sys.executable, "-c", code], env=ENV, stdout=subprocess.PIPE,
-                                  stderr=subprocess.PIPE, text=True) for _ in range(6)]
+        code = (
+            "import sys, time\nfrom setupfix.store import open_store\n"
+            f"time.sleep(max(0.0, {start} - time.time()))\n"
+            f"with open_store({str(db)!r}) as s:\n    print(len(s.reports()))\n"
+        )
+        procs = [
+            subprocess.Popen(
+                [sys.executable, "-c", code], env=ENV, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True
+            )
+            for _ in range(6)
+        ]
         results = [p.communicate(timeout=120) for p in procs]
         assert [p.returncode for p in procs] == [0] * 6, [err for _, err in results]
         assert counts(db) == (0, 0)
@@ -304,11 +343,13 @@ def test_a_store_created_by_many_processes_at_once_is_a_store(tmp_path):
 
 def test_a_store_killed_while_it_is_created_is_created_by_the_next_open(tmp_path):
     db = tmp_path / "killed.db"
-    code = ("import os, signal\nimport setupfix.store._schema as s\n"
-            "def die(db):\n    os.kill(os.getpid(), signal.SIGKILL)\n"
-            "s.MIGRATIONS = (s.MIGRATIONS[0], die, *s.MIGRATIONS[2:])\n"
-            "from setupfix.store import open_store\n"
-            f"open_store({str(db)!r})\n")
+    code = (
+        "import os, signal\nimport setupfix.store._schema as s\n"
+        "def die(db):\n    os.kill(os.getpid(), signal.SIGKILL)\n"
+        "s.MIGRATIONS = (s.MIGRATIONS[0], die, *s.MIGRATIONS[2:])\n"
+        "from setupfix.store import open_store\n"
+        f"open_store({str(db)!r})\n"
+    )
     r = subprocess.run([sys.executable, "-c", code], env=ENV, capture_output=True, text=True)
     assert r.returncode == -signal.SIGKILL and db.exists()
     assert main(["history", "import", "--db", str(db), str(REPORTS[0])]) == 0

@@ -48,8 +48,9 @@ def _ewma(part):
 @pytest.mark.parametrize("named", [True, False])
 def test_crlf_copy_and_export_import_do_not_change_the_ewma(tmp_path, capsys, named):
     model = _model(tmp_path)
-    reports = [GUIDE / "cycle_01.csv", GUIDE / "cycle_02.csv"] if named else [_unnamed(tmp_path, 1),
-                                                                              _unnamed(tmp_path, 2)]
+    reports = (
+        [GUIDE / "cycle_01.csv", GUIDE / "cycle_02.csv"] if named else [_unnamed(tmp_path, 1), _unnamed(tmp_path, 2)]
+    )
     base = tmp_path / "base.db"
     assert main(["history", "import", "--db", str(base), *map(str, reports)]) == 0
     want = _estimates(tmp_path, model, base, capsys)
@@ -68,15 +69,16 @@ def test_crlf_copy_and_export_import_do_not_change_the_ewma(tmp_path, capsys, na
     for db in (copy_db, round_db):
         got = _estimates(tmp_path, model, db, capsys)
         assert got["dimensions"] == want["dimensions"], db.name
-        assert [r for r in got.get("rules", []) if "earlier part" in str(r)] == \
-            [r for r in want.get("rules", []) if "earlier part" in str(r)], db.name
+        assert [r for r in got.get("rules", []) if "earlier part" in str(r)] == [
+            r for r in want.get("rules", []) if "earlier part" in str(r)
+        ], db.name
 
 
 def test_two_unnamed_parts_of_one_time_that_measured_differently_both_count(tmp_path):
     """Within a report's time resolution two unnamed parts are told apart by their values (the former
     (name, time) key kept only one)."""
-    from setupfix.model import load_model, match_parts
     import parsers
+    from setupfix.model import load_model, match_parts
     from setupfix.pipeline.requests import History
 
     model = load_model(_model(tmp_path))

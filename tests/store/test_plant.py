@@ -26,7 +26,6 @@ from setupfix.store import AUDIT_COLUMNS, Recommendation, open_store, report_tab
 from setupfix.store._audit import TABLES
 from setupfix.store._schema import migrate
 
-
 ROOT = Path(__file__).resolve().parents[2]
 GUIDE = ROOT / "sample_reports" / "guide_pins"
 MODEL = GUIDE / "model.toml"
@@ -48,8 +47,10 @@ def machine_reports(folder: Path, machine: str, n: int) -> list[Path]:
 
 def log_of(folder: Path, machine: str) -> Path:
     path = folder / f"{machine}_corrections.csv"
-    path.write_text(f"timestamp,register,delta,event\n2026-11-01T06:00:00,G54,{0.001 * (1 + len(machine))},\n"
-                    "2026-11-03T07:00:00,T23,,tool_change\n")
+    path.write_text(
+        f"timestamp,register,delta,event\n2026-11-01T06:00:00,G54,{0.001 * (1 + len(machine))},\n"
+        "2026-11-03T07:00:00,T23,,tool_change\n"
+    )
     return path
 
 
@@ -80,9 +81,15 @@ def test_eight_processes_importing_into_one_server_lose_and_double_nothing(tmp_p
         for i in range(8):
             m = machines[i % 4]
             files = given[m][:8] if i < 4 else given[m][4:]  # the two processes of a machine overlap in 4 reports
-            procs.append(subprocess.Popen([sys.executable, "-c", IMPORT, pg_url, m, str(start),
-                                           str(log_of(tmp_path, m)), *map(str, files)],
-                                          env=ENV, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True))
+            procs.append(
+                subprocess.Popen(
+                    [sys.executable, "-c", IMPORT, pg_url, m, str(start), str(log_of(tmp_path, m)), *map(str, files)],
+                    env=ENV,
+                    stdout=subprocess.PIPE,
+                    stderr=subprocess.PIPE,
+                    text=True,
+                )
+            )
         results = [p.communicate(timeout=300) for p in procs]
         assert [p.returncode for p in procs] == [0] * 8, [err for _, err in results]
         return [tuple(map(int, out.split())) for out, _ in results]  # type: ignore[misc]
@@ -113,10 +120,33 @@ def test_eight_batches_at_once_on_one_server_correct_each_report_once_and_a_reru
     open_store(pg_url).close()
 
     def run_all() -> list[dict[str, object]]:
-        procs = [subprocess.Popen([sys.executable, "-m", "setupfix", "batch", str(folder), "--model", str(MODEL),
-                                   "--out", str(tmp_path / f"out{i}.csv"), "--store", pg_url, "--settle", "0",
-                                   "--workers", "1", "--json"], env=ENV, stdout=subprocess.PIPE,
-                                  stderr=subprocess.PIPE, text=True) for i in range(BATCH_MACHINES)]
+        procs = [
+            subprocess.Popen(
+                [
+                    sys.executable,
+                    "-m",
+                    "setupfix",
+                    "batch",
+                    str(folder),
+                    "--model",
+                    str(MODEL),
+                    "--out",
+                    str(tmp_path / f"out{i}.csv"),
+                    "--store",
+                    pg_url,
+                    "--settle",
+                    "0",
+                    "--workers",
+                    "1",
+                    "--json",
+                ],
+                env=ENV,
+                stdout=subprocess.PIPE,
+                stderr=subprocess.PIPE,
+                text=True,
+            )
+            for i in range(BATCH_MACHINES)
+        ]
         results = [p.communicate(timeout=600) for p in procs]
         assert [p.returncode for p in procs] == [0] * BATCH_MACHINES, [err for _, err in results]
         return [json.loads(out) for out, _ in results]
@@ -143,8 +173,9 @@ def test_each_machine_reads_only_its_own_rows(tmp_path, location):
         log.write_text(f"timestamp,register,delta,event\n2026-11-02T07:00:00,G54,{delta},\n")
         with open_store(location, machine=m) as store:
             import_history(store, ImportRequest(tuple(machine_reports(tmp_path / m, m, 3)), (log,), (temps,)))
-            store.add_recommendation(Recommendation("exact", {"part": f"{m} part 000"},
-                                                    {"corrections": {"G54": delta}}))
+            store.add_recommendation(
+                Recommendation("exact", {"part": f"{m} part 000"}, {"corrections": {"G54": delta}})
+            )
     from setupfix.model import load_model
 
     model = load_model(MODEL)
@@ -161,8 +192,10 @@ def test_each_machine_reads_only_its_own_rows(tmp_path, location):
         assert store.reports() == [] and store.measurements().empty and store.corrections().empty
         summary = {s.machine: s for s in store.machines()}
     assert sorted(summary) == ["M1", "M2"]
-    assert all((s.reports, s.rows, s.corrections, s.temperature_samples, s.recommendations) == (3, 84, 1, 1, 1)
-               for s in summary.values())
+    assert all(
+        (s.reports, s.rows, s.corrections, s.temperature_samples, s.recommendations) == (3, 84, 1, 1, 1)
+        for s in summary.values()
+    )
 
 
 def test_a_report_belongs_to_one_machine(tmp_path, location):
@@ -177,12 +210,20 @@ def _fill(db: str, tmp_path: Path) -> None:
     """A store with every kind of row: reports of two machines, logs, recommendations of three doors, claims."""
     for m in ("M1", "M2"):
         with open_store(db, machine=m, operator="ana") as store:
-            import_history(store, ImportRequest(tuple(machine_reports(tmp_path / m, m, 3)), (log_of(tmp_path, m),),
-                                                (ROOT / "sample_reports" / "thermal" / "test_constant.csv",)))
+            import_history(
+                store,
+                ImportRequest(
+                    tuple(machine_reports(tmp_path / m, m, 3)),
+                    (log_of(tmp_path, m),),
+                    (ROOT / "sample_reports" / "thermal" / "test_constant.csv",),
+                ),
+            )
     out = tmp_path / "o.csv"
     machine_reports(tmp_path / "B", "B", 3)
-    assert main(["batch", str(tmp_path / "B"), "--model", str(MODEL), "--out", str(out), "--store", db,
-                 "--settle", "0"]) == 0  # (batch's --machine comes with the wiring: its rows are 'default')
+    assert (
+        main(["batch", str(tmp_path / "B"), "--model", str(MODEL), "--out", str(out), "--store", db, "--settle", "0"])
+        == 0
+    )  # (batch's --machine comes with the wiring: its rows are 'default')
     from setupfix.model import load_model
     from setupfix.pipeline.correct import correct_report
     from setupfix.pipeline.history import record_recommendations
@@ -192,10 +233,18 @@ def _fill(db: str, tmp_path: Path) -> None:
     results = correct_report(CorrectRequest(load_model(MODEL)), report).cycles
     with open_store(db, machine="M2", operator="bo") as store:
         record_recommendations(store, results, model=MODEL, report=report)
-        store.add_recommendation(Recommendation(
-            "exact", {"report": "M2_000.csv", "part": "M2 part 000", "applied": True,
-                      "export": {"target": "o.nc", "controller": "fanuc", "sha256": "ab" * 32}},
-            {"verdict": "apply", "corrections": {"W1": 0.01, "T5": -0.002}}))
+        store.add_recommendation(
+            Recommendation(
+                "exact",
+                {
+                    "report": "M2_000.csv",
+                    "part": "M2 part 000",
+                    "applied": True,
+                    "export": {"target": "o.nc", "controller": "fanuc", "sha256": "ab" * 32},
+                },
+                {"verdict": "apply", "corrections": {"W1": 0.01, "T5": -0.002}},
+            )
+        )
 
 
 def test_migrate_copies_every_row(tmp_path, pg_url, capsys):
@@ -215,7 +264,8 @@ def test_migrate_copies_every_row(tmp_path, pg_url, capsys):
         for table, _, _ in TABLES:
             with open_store(pg_url) as b:
                 assert raw.execute(f"SELECT count(*) FROM {table}").fetchone()[0] == b.count(table) - (
-                    table == "recommendation")
+                    table == "recommendation"
+                )
     raw.close()
     assert main(["history", "migrate", "--from", source, "--db", pg_url]) == 1  # never into a store in use
     assert "already holds" in capsys.readouterr().err
@@ -243,7 +293,9 @@ def test_the_audit_export_holds_every_recommendation(tmp_path, location, capsys)
     assert {r["operator"] for r in by_machine["M2"]} == {"bo"} and {r["verdict"] for r in correct_rows} == {"apply"}
     applied = [r for r in by_machine["M2"] if r["applied"] == "True"]
     assert sorted((r["register"], float(r["delta"]), r["exported_to"]) for r in applied) == [
-        ("T5", -0.002, "o.nc"), ("W1", 0.01, "o.nc")]
+        ("T5", -0.002, "o.nc"),
+        ("W1", 0.01, "o.nc"),
+    ]
     capsys.readouterr()
     assert main(["history", "export", "recommendations", "--db", location, "--machine", "M2", "--out", "-"]) == 0
     only = pd.read_csv(io.StringIO(capsys.readouterr().out))
@@ -252,8 +304,20 @@ def test_the_audit_export_holds_every_recommendation(tmp_path, location, capsys)
 
 def test_history_show_summarises_per_machine(tmp_path, location, capsys):
     for m in ("M1", "M2"):
-        assert main(["history", "import", "--db", location, "--machine", m,
-                     *map(str, machine_reports(tmp_path / m, m, 2 + (m == "M2")))]) == 0
+        assert (
+            main(
+                [
+                    "history",
+                    "import",
+                    "--db",
+                    location,
+                    "--machine",
+                    m,
+                    *map(str, machine_reports(tmp_path / m, m, 2 + (m == "M2"))),
+                ]
+            )
+            == 0
+        )
     capsys.readouterr()
     assert main(["history", "show", "--db", location, "--json"]) == 0
     shown = json.loads(capsys.readouterr().out)
@@ -270,13 +334,17 @@ def test_a_v3_store_migrates_with_its_audit(tmp_path):
     con = sqlite3.connect(path, isolation_level=None)
     migrate(con, str(path), upto=3)
     con.execute("INSERT INTO report VALUES (1, ?, 'c1.csv', 'canonical', 10, '2026-01-01T00:00:00')", ("a" * 64,))
-    con.execute("INSERT INTO measurement (report_id, row, characteristic, deviation, timestamp) "
-                "VALUES (1, 0, 'D1', 0.5, '2026-01-01T08:00:00')")
+    con.execute(
+        "INSERT INTO measurement (report_id, row, characteristic, deviation, timestamp) "
+        "VALUES (1, 0, 'D1', 0.5, '2026-01-01T08:00:00')"
+    )
     con.execute("INSERT INTO correction VALUES ('2026-01-01T00:00:00', 'G54', 0.1, 'correction')")
     con.execute("INSERT INTO temperature VALUES ('2026-01-01T00:00:00', 'spindle', 21.5)")
-    con.execute("INSERT INTO recommendation (created_at, optimizer, inputs, result) VALUES ('2026-01-02', 'exact', "
-                f"'{json.dumps({'use': 'batch', 'report': 'a' * 64, 'part': 'p1'})}', "
-                f"'{json.dumps({'verdict': 'hold', 'corrections': {'G54': 0.003, 'T5': 0.0}})}')")
+    con.execute(
+        "INSERT INTO recommendation (created_at, optimizer, inputs, result) VALUES ('2026-01-02', 'exact', "
+        f"'{json.dumps({'use': 'batch', 'report': 'a' * 64, 'part': 'p1'})}', "
+        f"'{json.dumps({'verdict': 'hold', 'corrections': {'G54': 0.003, 'T5': 0.0}})}')"
+    )
     con.close()
     with open_store(path) as store:
         assert [r.machine for r in store.reports()] == ["default"] and store.reports()[0].rows == 1
@@ -284,7 +352,9 @@ def test_a_v3_store_migrates_with_its_audit(tmp_path):
         assert store.temperatures()["spindle"].tolist() == [21.5]
         audit = store.audit()
     assert audit[["report", "report_sha256", "part", "verdict", "register", "delta"]].values.tolist() == [
-        ["c1.csv", "a" * 64, "p1", "hold", "G54", 0.003], ["c1.csv", "a" * 64, "p1", "hold", "T5", 0.0]]
+        ["c1.csv", "a" * 64, "p1", "hold", "G54", 0.003],
+        ["c1.csv", "a" * 64, "p1", "hold", "T5", 0.0],
+    ]
 
 
 def test_what_is_not_a_store_on_a_server_is_refused(pg_url):
@@ -309,11 +379,18 @@ def test_server_failures_are_one_line_naming_the_store_without_its_password(pg_u
     assert password
     wrong = pg_url.replace(f":{password}@", ":not-the-password@")
     down = "postgresql://setupfix:s3cret-pw@127.0.0.1:1/setupfix_test"
-    cases = {"refused the login": wrong, "cannot reach": down, "no such database": pg_url.rsplit("/", 1)[0] + "/nope",
-             "not a PostgreSQL URL": "postgresql://setupfix:s3cret-pw@[::1/x"}
+    cases = {
+        "refused the login": wrong,
+        "cannot reach": down,
+        "no such database": pg_url.rsplit("/", 1)[0] + "/nope",
+        "not a PostgreSQL URL": "postgresql://setupfix:s3cret-pw@[::1/x",
+    }
     for what, url in cases.items():
-        for argv in (["history", "show", "--db", url], ["history", "import", "--db", url, str(GUIDE / "cycle_01.csv")],
-                     ["batch", str(GUIDE), "--model", str(MODEL), "--out", "-", "--store", url]):
+        for argv in (
+            ["history", "show", "--db", url],
+            ["history", "import", "--db", url, str(GUIDE / "cycle_01.csv")],
+            ["batch", str(GUIDE), "--model", str(MODEL), "--out", "-", "--store", url],
+        ):
             capsys.readouterr()
             assert main(argv) == 1, (what, argv)
             err = capsys.readouterr().err

@@ -25,7 +25,6 @@ from setupfix.pipeline.parse import parse_reports
 from setupfix.store import Recommendation, open_store
 from setupfix.store._schema import SCHEMA_VERSION, migrate, version_of
 
-
 ROOT = Path(__file__).resolve().parents[2]
 GUIDE = ROOT / "sample_reports" / "guide_pins"
 REPORTS = sorted(GUIDE.glob("cycle_0*.csv"))
@@ -75,8 +74,11 @@ def test_logs_round_trip_and_contradictions_are_refused(tmp_path, location):
         with pytest.raises(StoreError, match=r"G54.*contradicts the stored one"):
             import_history(store, ImportRequest(tuple(REPORTS), (other,)))
         twice = _log(tmp_path, LOG + "2026-11-02T09:00:00,G54,0.02,\n", "twice.csv")
-        with pytest.raises(ParseError, match=r"twice.csv:4: G54 correction at 2026-11-02T09:00:00 given twice "
-                                             r"\(also at line 2\)"):  # the reader names it, as every door does
+        with pytest.raises(
+            ParseError,
+            match=r"twice.csv:4: G54 correction at 2026-11-02T09:00:00 given twice "
+            r"\(also at line 2\)",
+        ):  # the reader names it, as every door does
             import_history(store, ImportRequest(corrections=(twice,)))
     assert _counts(db)[:3] == (0, 0, 2)  # the reports of the refused import were not stored either
 
@@ -133,8 +135,9 @@ def test_readers_see_the_last_commit_while_another_process_writes(location):
         import_history(store, ImportRequest(tuple(REPORTS[:1])))
         with store.transaction():
             store.add_report(REPORTS[1].read_bytes(), "c2", "canonical", parse_reports(REPORTS[1:2]).table)
-            out = subprocess.run([sys.executable, "-c", READER, str(db)], cwd=ROOT, capture_output=True,
-                                 text=True, timeout=20)  # must not wait for the writer (WAL, MVCC)
+            out = subprocess.run(
+                [sys.executable, "-c", READER, str(db)], cwd=ROOT, capture_output=True, text=True, timeout=20
+            )  # must not wait for the writer (WAL, MVCC)
             assert out.stdout.split() == ["1", "28"], out.stderr
         with open_store(db) as reader:
             assert len(reader.reports()) == 2 and len(reader.measurements()) == 56
@@ -190,8 +193,10 @@ def test_cli_import_show_export(tmp_path, capsys, location):
     assert main(["history", "export", "measurements", "--db", db, "--out", str(tmp_path / "m.csv")]) == 0
     assert main(["history", "export", "corrections", "--db", db, "--out", "-"]) == 0
     assert capsys.readouterr().out.splitlines()[1] == "2026-11-02T09:00:00,G54,0.012,correction"
-    assert main(["correct", "--model", str(GUIDE / "model.toml"), str(tmp_path / "m.csv"), "--part", "cycle 03",
-                 "--json"]) == 0
+    assert (
+        main(["correct", "--model", str(GUIDE / "model.toml"), str(tmp_path / "m.csv"), "--part", "cycle 03", "--json"])
+        == 0
+    )
     assert main(["history", "export", "corrections", "--db", db, "--out", str(tmp_path)]) == 1
     assert "folder" in capsys.readouterr().err
 

@@ -69,8 +69,13 @@ def test_guide_pins_feed_forward_on_a_simulated_log(fitted):
 def test_unit_conversion_and_refusals(fitted):
     model = load_process_model(GUIDE_PINS)
     log = read_temperature_log(SAMPLES / "test_variable.csv")
-    in_um = thermal_fit.fit_log(read_temperature_log(SAMPLES / "train_variable.csv").slice(0, 1440), "mra",
-                                target="error_z", inputs=["spindle_motor", "bearing"], unit="um").saved
+    in_um = thermal_fit.fit_log(
+        read_temperature_log(SAMPLES / "train_variable.csv").slice(0, 1440),
+        "mra",
+        target="error_z",
+        inputs=["spindle_motor", "bearing"],
+        unit="um",
+    ).saved
     mm = thermal_feed_forward(model, fitted, log, measured_at=log.timestamps[100], dead_band=0.0)
     um = thermal_feed_forward(model, in_um, log, measured_at=log.timestamps[100], dead_band=0.0)
     assert um.delta == pytest.approx(mm.delta)  # the same numbers, read as µm…
@@ -82,8 +87,9 @@ def test_unit_conversion_and_refusals(fitted):
         thermal_feed_forward(model, fitted, log, measured_at="2026-01-01T00:00:00")
     with pytest.raises(ParameterError, match="report gives no timestamp"):
         thermal_feed_forward(model, fitted, log, measured_at=None)
-    fitted_x = thermal_fit.fit_log(read_temperature_log(SAMPLES / "train_variable.csv"), "mra", target="error_z",
-                                   unit="mm", axis="X").saved
+    fitted_x = thermal_fit.fit_log(
+        read_temperature_log(SAMPLES / "train_variable.csv"), "mra", target="error_z", unit="mm", axis="X"
+    ).saved
     with pytest.raises(ParameterError, match="acts along X"):
         thermal_feed_forward(model, fitted_x, log, measured_at=log.timestamps[100])
 
@@ -98,8 +104,26 @@ def test_correct_with_thermal_feed_forward(tmp_path, monkeypatch, capsys):
     log = tmp_path / "temps.csv"
     log.write_text((SAMPLES / "test_variable.csv").read_text().replace("2026-01-05T", "2026-11-02T"))
     model = tmp_path / "drift.json"
-    assert cli.main(["thermal", "fit", "--method", "mra", str(SAMPLES / "train_variable.csv"), "--target", "error_z",
-                     "--inputs", "spindle_motor,bearing", "--unit", "mm", "-o", str(model)]) == 0
+    assert (
+        cli.main(
+            [
+                "thermal",
+                "fit",
+                "--method",
+                "mra",
+                str(SAMPLES / "train_variable.csv"),
+                "--target",
+                "error_z",
+                "--inputs",
+                "spindle_motor,bearing",
+                "--unit",
+                "mm",
+                "-o",
+                str(model),
+            ]
+        )
+        == 0
+    )
     report = str(ROOT / "sample_reports" / "guide_pins" / "cycle_01.csv")
     base = ["correct", "--model", str(GUIDE_PINS), report, "--json"]
     capsys.readouterr()
@@ -114,8 +138,9 @@ def test_correct_with_thermal_feed_forward(tmp_path, monkeypatch, capsys):
     for reg in ("T5", "T23"):
         assert fed["corrections"][reg] == pytest.approx(plain["corrections"][reg] + th["shift"])
     assert fed["corrections"]["W1"] == plain["corrections"]["W1"]
-    assert cli.main([*base[:-1], "--thermal", str(model), "--temperatures", str(log),
-                     "--at", "2026-11-02T09:00:00"]) == 0
+    assert (
+        cli.main([*base[:-1], "--thermal", str(model), "--temperatures", str(log), "--at", "2026-11-02T09:00:00"]) == 0
+    )
     assert "thermal feed-forward" in capsys.readouterr().out
     assert cli.main([*base, "--thermal", str(model)]) == 1
     assert "go together" in capsys.readouterr().err

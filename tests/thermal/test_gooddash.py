@@ -4,12 +4,12 @@ from __future__ import annotations
 
 import numpy as np
 import pandas as pd
-
 from conftest import shared_path
-from setupfix.thermal.grey import gmc_least_squares
-from setupfix.thermal.metrics import score
+
 from setupfix.thermal.estimator import MRAModel
+from setupfix.thermal.grey import gmc_least_squares
 from setupfix.thermal.grey_model import GreyModel
+from setupfix.thermal.metrics import score
 
 SENSITIVE = [2, 6, 9, 12, 19, 20]  # the repo's own temperature-sensitive points (SOURCES.md)
 

@@ -57,8 +57,9 @@ def test_ga_recovers_simulated_machine():
     cfg = MachineConfig(sources=(HeatSource("s", tau_s=1500.0, rise_per_krpm=4.0, error_mm_per_k=0.004),))
     run = simulate(speed_profile("variable", 600, rng=np.random.default_rng(4)), cfg, seed=4)
     fr = run.frame
-    params, res = fit_lumped(fr["s"].to_numpy(), fr["ambient"].to_numpy(), fr["spindle_speed"].to_numpy(),
-                             rng=np.random.default_rng(0))
+    params, res = fit_lumped(
+        fr["s"].to_numpy(), fr["ambient"].to_numpy(), fr["spindle_speed"].to_numpy(), rng=np.random.default_rng(0)
+    )
     v1, v2 = cfg.sources[0].coefficients(cfg.dt_s)
     assert params.v1 == pytest.approx(v1, rel=0.1)
     assert params.v2 / params.v1 == pytest.approx(v2 / v1, rel=0.05)  # steady rise per 1000 rpm

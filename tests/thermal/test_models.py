@@ -8,11 +8,11 @@ import numpy as np
 import pytest
 
 from setupfix.errors import NotFittedError, ParseError
-from setupfix.thermal.metrics import efficiency, max_residual, rmse, rmsv, score
+from setupfix.pipeline.thermal_files import load_model, save_model
 from setupfix.thermal.estimator import MRAModel
 from setupfix.thermal.grey_model import GreyModel
 from setupfix.thermal.kalman_model import KalmanFusionModel
-from setupfix.pipeline.thermal_files import load_model, save_model
+from setupfix.thermal.metrics import efficiency, max_residual, rmse, rmsv, score
 from setupfix.thermal.persist import SavedModel
 from setupfix.thermal.simulator import add_sensor_error, fail_sensor, sinusoidal_error
 
@@ -20,8 +20,12 @@ SENSORS = ["spindle_motor", "bearing"]
 
 
 def arrays(frame):
-    return (frame[SENSORS].to_numpy(), frame["error_z"].to_numpy(), frame["ambient"].to_numpy(),
-            frame["spindle_speed"].to_numpy())
+    return (
+        frame[SENSORS].to_numpy(),
+        frame["error_z"].to_numpy(),
+        frame["ambient"].to_numpy(),
+        frame["spindle_speed"].to_numpy(),
+    )
 
 
 def test_metrics_by_hand():
@@ -131,8 +135,11 @@ def test_streaming_prediction_matches_batch(fitted, sim_runs):
 def test_json_round_trip(kind, fitted, sim_runs, tmp_path):
     _, test = sim_runs
     T, y, te, sp = arrays(test.frame)
-    model = {"mra": fitted[1], "kalman": fitted[0],
-             "grey": GreyModel(calibration="pso", iterations=5, seed=3).fit(T, y)}[kind]
+    model = {
+        "mra": fitted[1],
+        "kalman": fitted[0],
+        "grey": GreyModel(calibration="pso", iterations=5, seed=3).fit(T, y),
+    }[kind]
     path = tmp_path / "m.json"
     save_model(SavedModel(model, tuple(SENSORS), "error_z", "ambient", "spindle_speed", 10.0), path)
     back = load_model(path)

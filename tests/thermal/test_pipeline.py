@@ -13,8 +13,8 @@ from setupfix.errors import ExportError, ParameterError, ParseError
 from setupfix.pipeline import thermal as pipe
 from setupfix.pipeline import thermal_fit
 from setupfix.pipeline.thermal_files import load_model, save_model
-from setupfix.thermal.metrics import score
 from setupfix.thermal.estimator import MRAModel
+from setupfix.thermal.metrics import score
 from setupfix.thermal.persist import SavedModel
 from setupfix.thermal.registry import get_method, make_model, methods
 
@@ -29,8 +29,9 @@ def train_log():
 
 def test_fit_save_and_predict_drift(tmp_path):
     out = tmp_path / "mra.json"
-    saved = thermal_fit.fit_file(SAMPLES / "train_variable.csv", "mra", target="error_z", out=out, inputs=SENSORS,
-                                 unit="mm").saved
+    saved = thermal_fit.fit_file(
+        SAMPLES / "train_variable.csv", "mra", target="error_z", out=out, inputs=SENSORS, unit="mm"
+    ).saved
     assert saved.train["n"] == 1439 and saved.sample_interval_s == 10.0
     drift = pipe.predict_drift(out, SAMPLES / "test_constant.csv")
     assert drift.drift.shape == (1440,) and drift.timestamps[0] == "2026-01-05T06:00:00" and drift.unit == "mm"
@@ -52,8 +53,13 @@ def test_reference_state_saved_and_reloaded(tmp_path, train_log):
 def test_log_starting_warm_is_predicted_as_if_continuous(train_log, method):
     """The second half of a log, read on its own, gets the prediction the whole log gives it."""
     short = train_log.head(720)
-    saved = thermal_fit.fit_log(short, method, target="error_z", inputs=SENSORS,
-                                params={"generations": 5, "pop_size": 8} if method == "kalman" else None).saved
+    saved = thermal_fit.fit_log(
+        short,
+        method,
+        target="error_z",
+        inputs=SENSORS,
+        params={"generations": 5, "pop_size": 8} if method == "kalman" else None,
+    ).saved
     whole = pipe.predict_log(saved, train_log)[0]
     warm = pipe.predict_log(saved, train_log.slice(720, 1440))[0]
     y = train_log.columns["error_z"][720:]
@@ -125,13 +131,15 @@ def test_other_sampling_interval_is_noted(train_log):
 
 
 def test_quality_gate_and_default_seed(train_log):
-    ev = thermal_fit.evaluate_logs(train_log.head(400), train_log.slice(400, 800), "grey-pso", target="error_z",
-                                   params={"iterations": 3})
+    ev = thermal_fit.evaluate_logs(
+        train_log.head(400), train_log.slice(400, 800), "grey-pso", target="error_z", params={"iterations": 3}
+    )
     assert ev.saved.train["seed"] == 0
     assert ev.train.efficiency < 0 and any(n.kind == "quality" for n in ev.notes)
     assert any("training efficiency" in w for w in ev.as_json()["warnings"])
-    again = thermal_fit.evaluate_logs(train_log.head(400), train_log.slice(400, 800), "grey-pso", target="error_z",
-                                      params={"iterations": 3})
+    again = thermal_fit.evaluate_logs(
+        train_log.head(400), train_log.slice(400, 800), "grey-pso", target="error_z", params={"iterations": 3}
+    )
     assert again.test.rmse == ev.test.rmse  # reproducible without --seed
 
 

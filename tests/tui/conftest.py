@@ -9,7 +9,6 @@ from pathlib import Path
 from typing import Any
 
 import pytest
-
 from conftest import GUIDE_PINS
 
 MODEL = GUIDE_PINS / "model.toml"

@@ -10,7 +10,6 @@ import dataclasses
 import shutil
 
 import pytest
-
 from conftest import GUIDE_PINS, SAMPLES
 from tui.conftest import CYCLE_01, MODEL, run, settle
 
@@ -33,8 +32,10 @@ def _rows(table):
 
 def test_open_sort_filter_export_then_a_bad_report(make_app, tmp_path):
     bad = tmp_path / "bad.csv"
-    bad.write_text("characteristic,nominal,actual,deviation,lower,upper,unit,part\n"
-                   "P1 D1,25,abc,x,-0.1,0.1,mm,c1\n", encoding="utf-8")
+    bad.write_text(
+        "characteristic,nominal,actual,deviation,lower,upper,unit,part\nP1 D1,25,abc,x,-0.1,0.1,mm,c1\n",
+        encoding="utf-8",
+    )
 
     async def scenario():
         app = make_app()
@@ -110,8 +111,9 @@ def test_optimiser_choice_and_compare_with_cancel(make_app):
             await settle(pilot)
             c = app._current()
             assert app.optimizer == "cripso" and c.result.optimizer == "cripso"
-            expected = correct_report(CorrectRequest(load_model(MODEL), solve=SolveOptions("cripso", 0)),
-                                      CYCLE_01).cycles[0]
+            expected = correct_report(
+                CorrectRequest(load_model(MODEL), solve=SolveOptions("cripso", 0)), CYCLE_01
+            ).cycles[0]
             assert c.result.margin_after == expected.result.margin_after
             assert "cripso" in str(app.query_one("#summary").render())
             await pilot.press("c")
@@ -133,8 +135,14 @@ def test_optimiser_choice_and_compare_with_cancel(make_app):
 
 def test_reports_that_do_not_match_show_the_match_table(make_app, tmp_path):
     none = tmp_path / "none.csv"
-    none.write_text(CYCLE_01.read_text(encoding="utf-8").replace("P1 D", "Pin1 D").replace("P2 D", "Pin2 D")
-                    .replace("P3 D", "Pin3 D").replace("P4 D", "Pin4 D"), encoding="utf-8")
+    none.write_text(
+        CYCLE_01.read_text(encoding="utf-8")
+        .replace("P1 D", "Pin1 D")
+        .replace("P2 D", "Pin2 D")
+        .replace("P3 D", "Pin3 D")
+        .replace("P4 D", "Pin4 D"),
+        encoding="utf-8",
+    )
     some = tmp_path / "some.csv"
     some.write_text(CYCLE_01.read_text(encoding="utf-8").replace("P1 D", "Pin1 D"), encoding="utf-8")
 
@@ -225,8 +233,10 @@ def test_thermal_panel_shows_the_drift_and_the_feed_forward(make_app, tmp_path):
     fit_file(SAMPLES / "thermal" / "train_variable.csv", "grey-ls", target="error_z", unit="mm", out=saved)
     # the simulated test log, moved to the day of cycle 01 (parts cut 2026-11-02T08:00)
     log = tmp_path / "temps.csv"
-    log.write_text((SAMPLES / "thermal" / "test_variable.csv").read_text(encoding="utf-8")
-                   .replace("2026-01-05T", "2026-11-02T"), encoding="utf-8")
+    log.write_text(
+        (SAMPLES / "thermal" / "test_variable.csv").read_text(encoding="utf-8").replace("2026-01-05T", "2026-11-02T"),
+        encoding="utf-8",
+    )
     expected = predict_drift(saved, log)
     feed = thermal_feed_forward(load_model(MODEL), saved, log, measured_at="2026-11-02T08:00:00")
 
@@ -247,8 +257,23 @@ def test_thermal_panel_shows_the_drift_and_the_feed_forward(make_app, tmp_path):
             await pilot.pause()
             await pilot.press("ctrl+s")
             await settle(pilot)
-            assert main(["correct", "--model", str(MODEL), str(CYCLE_01), "--offsets", str(tmp_path / "cli.csv"),
-                         "--thermal", str(saved), "--temperatures", str(log)]) == 0
+            assert (
+                main(
+                    [
+                        "correct",
+                        "--model",
+                        str(MODEL),
+                        str(CYCLE_01),
+                        "--offsets",
+                        str(tmp_path / "cli.csv"),
+                        "--thermal",
+                        str(saved),
+                        "--temperatures",
+                        str(log),
+                    ]
+                )
+                == 0
+            )
             written = (tmp_path / "offsets.csv").read_text(encoding="utf-8")
             assert written == (tmp_path / "cli.csv").read_text(encoding="utf-8")
             assert feed.applied and app._current().corrections["T5"] == app._current().x[8] + feed.shift
@@ -263,14 +288,42 @@ def test_the_command_line_gives_the_app_correct_s_reader_cycle_and_thermal_optio
 
     started = []
     monkeypatch.setattr(SetupfixApp, "run", lambda self: started.append(self.inputs))
-    assert main(["tui", str(CYCLE_01), "--model", str(MODEL), "--columns", "actual=Meas", "--unit", "inch",
-                 "--lenient", "--stations", "P1,P2,P3,P4", "--strict", "--thermal", "t.json", "--temperatures",
-                 "log.csv", "--at", "2026-11-02T09:00:00", "--thermal-dead-band", "0.002"]) == 0
+    assert (
+        main(
+            [
+                "tui",
+                str(CYCLE_01),
+                "--model",
+                str(MODEL),
+                "--columns",
+                "actual=Meas",
+                "--unit",
+                "inch",
+                "--lenient",
+                "--stations",
+                "P1,P2,P3,P4",
+                "--strict",
+                "--thermal",
+                "t.json",
+                "--temperatures",
+                "log.csv",
+                "--at",
+                "2026-11-02T09:00:00",
+                "--thermal-dead-band",
+                "0.002",
+            ]
+        )
+        == 0
+    )
     inputs = started[0]
     assert inputs.read == ReadOptions(unit="inch", columns="actual=Meas", lenient=True)
     assert inputs.cycles == CycleOptions(("P1", "P2", "P3", "P4"), strict=True)
     assert (str(inputs.thermal), str(inputs.temperatures), inputs.at, inputs.thermal_dead_band) == (
-        "t.json", "log.csv", "2026-11-02T09:00:00", 0.002)
+        "t.json",
+        "log.csv",
+        "2026-11-02T09:00:00",
+        0.002,
+    )
 
 
 def test_compare_solves_the_problem_correct_solves(make_app, tmp_path):
@@ -281,8 +334,9 @@ def test_compare_solves_the_problem_correct_solves(make_app, tmp_path):
     from setupfix.optimize import get_optimizer
 
     model = tmp_path / "m.toml"
-    model.write_text((CONTROLLERS / "model.toml").read_text(encoding="utf-8") + "\n[safety]\nuncertainty = 0.004\n",
-                     encoding="utf-8")
+    model.write_text(
+        (CONTROLLERS / "model.toml").read_text(encoding="utf-8") + "\n[safety]\nuncertainty = 0.004\n", encoding="utf-8"
+    )
 
     async def scenario():
         # compare measures against the paper's objective (issue 22): the correction shown is that one when asked
@@ -309,8 +363,9 @@ def test_names_that_look_like_markup_are_shown_as_written(make_app, tmp_path):
     """A dimension named ``D1 [/b] [red`` and a report ``cycle[1] [red.csv``: a DataTable reads a plain
     string as markup (the closing tag raised a MarkupError and the screen died); every name is literal."""
     model = tmp_path / "model.toml"
-    model.write_text(MODEL.read_text(encoding="utf-8").replace('name = "D1"', 'name = "D1 [/b] [red"'),
-                     encoding="utf-8")
+    model.write_text(
+        MODEL.read_text(encoding="utf-8").replace('name = "D1"', 'name = "D1 [/b] [red"'), encoding="utf-8"
+    )
     report = tmp_path / "cycle[1] [red.csv"
     report.write_text(CYCLE_01.read_text(encoding="utf-8").replace(" D1,", " D1 [/b] [red,"), encoding="utf-8")
 
@@ -336,7 +391,8 @@ def test_names_that_look_like_markup_are_shown_as_written(make_app, tmp_path):
 def test_diagnose_key_tests_the_declared_factors_and_a_bad_one_is_a_notice(make_app, tmp_path):
     """``tui --process LOG --factors …``: key d runs the same diagnosis as ``diagnose --factors`` (the effects
     it declares marked so); an unknown factor is a notice naming it, and the app stays up."""
-    from diagnose.test_plate import LOG, MODEL as PLATE_MODEL, PLATE
+    from diagnose.test_plate import LOG, PLATE
+    from diagnose.test_plate import MODEL as PLATE_MODEL
 
     if not LOG.is_file():
         pytest.skip("the NIST process log lives in the shared folder")

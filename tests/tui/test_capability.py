@@ -4,11 +4,11 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from spc_examples import closed_loop_store
 from tui.conftest import run, settle
 
 from setupfix.pipeline.spc import SPARK, SpcRequest, capability_rows, sparkline, spc_report
 from setupfix.store import open_store
-from spc_examples import closed_loop_store
 
 
 def test_sparkline_maps_lowest_to_highest():

@@ -6,7 +6,6 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
-
 from conftest import SAMPLES
 from tui.conftest import run, settle
 
@@ -42,10 +41,12 @@ def two_models(tmp_path):
     """The sample's model with the controller numbers a Siemens program needs (frames 1, 2; T1 D1, T2 D1),
     the same without the rotation, and a --current file for the first."""
     text = MODEL.read_text(encoding="utf-8")
-    for old, new in (('"G54"  # station P1', '"G54"  # station P1\nnumber = 1'),
-                     ('"G55"  # station P2', '"G55"  # station P2\nnumber = 2'),
-                     ('register = "H1"\n', 'register = "H1"\nnumber = 1\nedge = 1\n'),
-                     ('register = "H2"\n', 'register = "H2"\nnumber = 2\nedge = 1\n')):
+    for old, new in (
+        ('"G54"  # station P1', '"G54"  # station P1\nnumber = 1'),
+        ('"G55"  # station P2', '"G55"  # station P2\nnumber = 2'),
+        ('register = "H1"\n', 'register = "H1"\nnumber = 1\nedge = 1\n'),
+        ('register = "H2"\n', 'register = "H2"\nnumber = 2\nedge = 1\n'),
+    ):
         assert old in text
         text = text.replace(old, new)
     numbered = tmp_path / "numbered.toml"
@@ -74,14 +75,23 @@ def test_multi_axis_at_80x24_home_end_and_the_export_name_per_controller(make_ap
             # registers: every component with its controller register; the rotation in degrees, on its own grid
             regs = {r[1]: r for r in _rows(app.query_one("#registers"))}
             assert list(regs) == ["W1.X", "W1.Y", "W1.Z", "W1.C", "W2.X", "W2.Y", "W2.Z", "W2.C", "T1", "T1.R", "T2"]
-            assert [regs[k][0] for k in ("W1.X", "W1.C", "W2.Z", "T1", "T1.R", "T2")] == ["G54", "G54", "G55", "H1",
-                                                                                           "D1", "H2"]
+            assert [regs[k][0] for k in ("W1.X", "W1.C", "W2.Z", "T1", "T1.R", "T2")] == [
+                "G54",
+                "G54",
+                "G55",
+                "H1",
+                "D1",
+                "H2",
+            ]
             assert regs["W1.C"][6] == "°" and regs["W1.X"][6] == "mm" and regs["T1.R"][6] == "mm"
             assert regs["W1.C"][3] == f"{c.corrections['W1.C']:+.4f}"  # rotation_resolution 0.0001°
             assert regs["W1.X"][3] == f"{c.corrections['W1.X']:+.3f}"  # resolution 0.001 mm
             # the first screen: the verdict, every dimension out of tolerance (measured or predicted), every register
-            out = [d.name for d, dev in zip(c.model.dimensions, c.part.deviation, strict=True)
-                   if dev < d.lower or dev > d.upper]
+            out = [
+                d.name
+                for d, dev in zip(c.model.dimensions, c.part.deviation, strict=True)
+                if dev < d.lower or dev > d.upper
+            ]
             assert out == ["P1 Face"]  # the sample's cycle 01: the face, 0.0509 against ±0.040
             lines = _screen(app)
             text = "\n".join(lines)
@@ -105,8 +115,11 @@ def test_multi_axis_at_80x24_home_end_and_the_export_name_per_controller(make_ap
             # a resize to a large terminal: model order, the margins, the recommendation beside the dimensions
             await pilot.resize_terminal(160, 48)
             await pilot.pause()
-            assert [r[1] for r in _rows(app.query_one("#dimensions"))][:3] == ["P1 Height", "P1 Hole 1 depth",
-                                                                             "P1 Wall X"]
+            assert [r[1] for r in _rows(app.query_one("#dimensions"))][:3] == [
+                "P1 Height",
+                "P1 Hole 1 depth",
+                "P1 Wall X",
+            ]
             await pilot.resize_terminal(80, 24)
             await pilot.pause()
             # export: the file name follows the controller; the program is the one the use case writes
@@ -132,8 +145,10 @@ def test_multi_axis_at_80x24_home_end_and_the_export_name_per_controller(make_ap
             await pilot.press("ctrl+s")
             await settle(pilot)
             assert (tmp_path / "offsets.mpf").read_text(encoding="utf-8") == expected
-            assert any(n.message == f"wrote siemens offsets (program {number}) to {tmp_path / 'offsets.mpf'}"
-                       for n in app._notifications)
+            assert any(
+                n.message == f"wrote siemens offsets (program {number}) to {tmp_path / 'offsets.mpf'}"
+                for n in app._notifications
+            )
             # a controller that cannot hold the rotation: refused, named, nothing written
             await pilot.press("e")
             await pilot.pause()
@@ -143,8 +158,9 @@ def test_multi_axis_at_80x24_home_end_and_the_export_name_per_controller(make_ap
             await pilot.pause()
             rotated = [k for k, v in cycle.corrections.items() if k.endswith(".C") and v != 0]
             assert rotated  # the case needs a rotation to refuse
-            assert any(n.title == "export refused" and rotated[0] in n.message for n in app._notifications), \
-                [(n.title, n.message) for n in app._notifications]
+            assert any(n.title == "export refused" and rotated[0] in n.message for n in app._notifications), [
+                (n.title, n.message) for n in app._notifications
+            ]
             assert not (tmp_path / "offsets.nc").exists()
 
     run(scenario())
@@ -187,8 +203,10 @@ def test_switching_the_model_re_reads_current_and_a_mismatch_is_a_message(make_a
             await pilot.press("ctrl+s")
             await settle(pilot)
             assert (tmp_path / "offsets.nc").read_text(encoding="utf-8") == expected
-            assert any(n.message == f"wrote fanuc offsets (program {number}) to {tmp_path / 'offsets.nc'}"
-                       for n in app._notifications)
+            assert any(
+                n.message == f"wrote fanuc offsets (program {number}) to {tmp_path / 'offsets.nc'}"
+                for n in app._notifications
+            )
             # back to the model it fits: read again, absolute values again
             app._picked_model(model)
             await settle(pilot)

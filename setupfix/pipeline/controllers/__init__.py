@@ -41,17 +41,32 @@ from setupfix.errors import ParameterError
 from setupfix.offsets import OffsetRow
 from setupfix.pipeline.controllers.common import PROGRAM_NUMBERS, check_program_number
 
-__all__ = ["CONTROLLERS", "render", "renderer", "Renderer", "write_offsets", "PROGRAM_SUFFIX", "NAME_MAX",
-           "PROGRAM_NAME_MAX", "program_path", "fit_name", "PROGRAM_NUMBERS", "DERIVED_PROGRAMS",
-           "check_program_number", "derived_program_number", "program_title"]
+__all__ = [
+    "CONTROLLERS",
+    "render",
+    "renderer",
+    "Renderer",
+    "write_offsets",
+    "PROGRAM_SUFFIX",
+    "NAME_MAX",
+    "PROGRAM_NAME_MAX",
+    "program_path",
+    "fit_name",
+    "PROGRAM_NUMBERS",
+    "DERIVED_PROGRAMS",
+    "check_program_number",
+    "derived_program_number",
+    "program_title",
+]
 
 
 class Renderer(Protocol):
     """A controller format: the rows' text, ``title`` in a comment, ``program_number`` its name where it has one,
     ``spindle`` the axis a WKS rotation turns about."""
 
-    def __call__(self, rows: Sequence[OffsetRow], title: str = "", *, program_number: int | None = None,
-                 spindle: str = "Z") -> str: ...
+    def __call__(
+        self, rows: Sequence[OffsetRow], title: str = "", *, program_number: int | None = None, spindle: str = "Z"
+    ) -> str: ...
 
 
 #: Registry: controller name → "module:function" (imported on use).
@@ -75,14 +90,14 @@ def renderer(name: str) -> Renderer:
     try:
         module, func = CONTROLLERS[name].split(":")
     except KeyError:
-        raise ParameterError(f"--controller: unknown controller {name!r} "
-                             f"(known: {', '.join(CONTROLLERS)})") from None
+        raise ParameterError(f"--controller: unknown controller {name!r} (known: {', '.join(CONTROLLERS)})") from None
     fn: Renderer = getattr(importlib.import_module(module), func)
     return fn
 
 
-def render(name: str, rows: Sequence[OffsetRow], title: str = "", *, program_number: int | None = None,
-           spindle: str = "Z") -> str:
+def render(
+    name: str, rows: Sequence[OffsetRow], title: str = "", *, program_number: int | None = None, spindle: str = "Z"
+) -> str:
     """Text of ``rows`` in controller format ``name``; ``title`` goes in a comment where the format has one,
     ``program_number`` names the program where the format has a name (see the module text).
 
@@ -94,8 +109,15 @@ def render(name: str, rows: Sequence[OffsetRow], title: str = "", *, program_num
     return renderer(name)(rows, title, program_number=program_number, spindle=spindle)
 
 
-def write_offsets(rows: Sequence[OffsetRow], target: str, *, controller: str = "csv", title: str = "",
-                  program_number: int | None = None, spindle: str = "Z") -> None:
+def write_offsets(
+    rows: Sequence[OffsetRow],
+    target: str,
+    *,
+    controller: str = "csv",
+    title: str = "",
+    program_number: int | None = None,
+    spindle: str = "Z",
+) -> None:
     """Render ``rows`` and write them atomically to ``target`` (``-``: standard output).
 
     The text is complete before the file is opened: a register the format cannot
@@ -152,7 +174,7 @@ def fit_name(name: str, suffix: str = "", limit: int = NAME_MAX) -> str:
     room = limit - len(os.fsencode(tail))
     head = name
     while len(os.fsencode(head)) > room:  # cut whole characters (an encoded character is never split)
-        head = head[:max(0, min(len(head) - 1, room))]
+        head = head[: max(0, min(len(head) - 1, room))]
     return head + tail
 
 

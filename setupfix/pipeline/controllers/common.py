@@ -8,8 +8,21 @@ from collections.abc import Sequence
 from setupfix.errors import ExportError
 from setupfix.offsets import OffsetRow, format_value, grid_decimals
 
-__all__ = ["number", "target", "cannot", "one_mode", "comment_text", "groups", "length_unit", "base_id",
-           "ROTATION", "RADIUS", "DEFAULT_PROGRAM", "PROGRAM_NUMBERS", "check_program_number"]
+__all__ = [
+    "number",
+    "target",
+    "cannot",
+    "one_mode",
+    "comment_text",
+    "groups",
+    "length_unit",
+    "base_id",
+    "ROTATION",
+    "RADIUS",
+    "DEFAULT_PROGRAM",
+    "PROGRAM_NUMBERS",
+    "check_program_number",
+]
 
 #: The component of a WKS rotation about the spindle axis (degrees) and of a tool radius.
 ROTATION, RADIUS = "C", "R"

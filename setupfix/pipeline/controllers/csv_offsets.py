@@ -10,7 +10,6 @@ from setupfix.pipeline.writers import offsets_csv_text
 __all__ = ["render"]
 
 
-def render(rows: Sequence[OffsetRow], title: str = "", *, program_number: int | None = None,
-           spindle: str = "Z") -> str:
+def render(rows: Sequence[OffsetRow], title: str = "", *, program_number: int | None = None, spindle: str = "Z") -> str:
     """The CSV has no program: ``title`` and ``program_number`` are not written."""
     return offsets_csv_text(rows)

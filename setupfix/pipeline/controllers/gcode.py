@@ -23,11 +23,22 @@ from __future__ import annotations
 
 from collections.abc import Callable, Sequence
 
-from setupfix.offsets import OffsetRow
-from setupfix.pipeline.controllers.common import (DEFAULT_PROGRAM, RADIUS, ROTATION, base_id, cannot,
-                                                  check_program_number, comment_text, groups, length_unit,
-                                                  number, one_mode, target)
 from setupfix.model.slots import tool_hd, wks_fanuc, wks_haas
+from setupfix.offsets import OffsetRow
+from setupfix.pipeline.controllers.common import (
+    DEFAULT_PROGRAM,
+    RADIUS,
+    ROTATION,
+    base_id,
+    cannot,
+    check_program_number,
+    comment_text,
+    groups,
+    length_unit,
+    number,
+    one_mode,
+    target,
+)
 
 __all__ = ["render_fanuc", "render_haas"]
 
@@ -50,8 +61,14 @@ def _was(row: OffsetRow) -> str:
     return f"WAS {number(row, row.current or 0.0)} CHANGE {number(row, row.delta)}"
 
 
-def _wks_blocks(controller: str, group: list[OffsetRow], mode: str, g: str,
-                wks: Callable[[str], tuple[int, int] | None], wks_forms: str) -> list[str]:
+def _wks_blocks(
+    controller: str,
+    group: list[OffsetRow],
+    mode: str,
+    g: str,
+    wks: Callable[[str], tuple[int, int] | None],
+    wks_forms: str,
+) -> list[str]:
     for row in group:
         if row.offset == "wear":
             raise cannot(controller, row, 'a work offset has no wear register here: use offset = "geometry"')
@@ -63,11 +80,17 @@ def _wks_blocks(controller: str, group: list[OffsetRow], mode: str, g: str,
     for row in group:
         if row.axis == ROTATION:
             if row.delta != 0.0:
-                raise cannot(controller, row, f"G10 L{lp[0]} holds no rotation (change {number(row, row.delta)} "
-                                              "degrees): choose a controller with frame rotation (siemens, "
-                                              "heidenhain) or fix the rotation in the model")
-            why = f"{row.register} {row.id} rotation not written - G10 L{lp[0]} holds none - change " \
-                  f"{number(row, row.delta)}"
+                raise cannot(
+                    controller,
+                    row,
+                    f"G10 L{lp[0]} holds no rotation (change {number(row, row.delta)} "
+                    "degrees): choose a controller with frame rotation (siemens, "
+                    "heidenhain) or fix the rotation in the model",
+                )
+            why = (
+                f"{row.register} {row.id} rotation not written - G10 L{lp[0]} holds none - change "
+                f"{number(row, row.delta)}"
+            )
             out.append(f"({comment_text(why)})")
     if not moved:
         return out
@@ -81,9 +104,15 @@ def _wks_blocks(controller: str, group: list[OffsetRow], mode: str, g: str,
     return [*out, f"{g} G10 L{lp[0]} P{lp[1]} {words} ({comment_text(note)})"]
 
 
-def _render(controller: str, rows: Sequence[OffsetRow], title: str,
-            wks: Callable[[str], tuple[int, int] | None], wks_forms: str, tool_top: int,
-            program_number: int | None) -> str:
+def _render(
+    controller: str,
+    rows: Sequence[OffsetRow],
+    title: str,
+    wks: Callable[[str], tuple[int, int] | None],
+    wks_forms: str,
+    tool_top: int,
+    program_number: int | None,
+) -> str:
     mode = one_mode(rows)
     g = "G90" if mode == "set" else "G91"
     program = check_program_number(controller, DEFAULT_PROGRAM if program_number is None else program_number)
@@ -106,13 +135,15 @@ def _render(controller: str, rows: Sequence[OffsetRow], title: str,
     return "\n".join([*head, unit, *blocks, "G90", "M30", "%"]) + "\n"
 
 
-def render_fanuc(rows: Sequence[OffsetRow], title: str = "", *, program_number: int | None = None,
-                 spindle: str = "Z") -> str:
+def render_fanuc(
+    rows: Sequence[OffsetRow], title: str = "", *, program_number: int | None = None, spindle: str = "Z"
+) -> str:
     """Fanuc M-series G10 program (0i/16i/18i/21i/30i, tool offset memory C)."""
     return _render("fanuc", rows, title, wks_fanuc, "G54…G59 or G54.1 P1…P300", 999, program_number)
 
 
-def render_haas(rows: Sequence[OffsetRow], title: str = "", *, program_number: int | None = None,
-                spindle: str = "Z") -> str:
+def render_haas(
+    rows: Sequence[OffsetRow], title: str = "", *, program_number: int | None = None, spindle: str = "Z"
+) -> str:
     """Haas mill G10 program."""
     return _render("haas", rows, title, wks_haas, "G54…G59, G110…G129 or G154 P1…P99", 200, program_number)

@@ -22,8 +22,7 @@ from collections.abc import Sequence
 from setupfix.errors import ExportError
 from setupfix.model.slots import preset_row, tool_edge
 from setupfix.offsets import OffsetRow
-from setupfix.pipeline.controllers.common import (RADIUS, ROTATION, cannot, groups, length_unit, number,
-                                                  one_mode, target)
+from setupfix.pipeline.controllers.common import RADIUS, ROTATION, cannot, groups, length_unit, number, one_mode, target
 
 __all__ = ["render", "PRESET_COLUMNS", "TOOL_COLUMNS"]
 
@@ -45,15 +44,17 @@ def _table(name: str, unit: str, columns: tuple[str, ...], rows: Sequence[tuple[
 def _twice(table: str, seen: list[str]) -> None:
     twice = sorted({n for n in seen if seen.count(n) > 1})
     if twice:  # two edges of one tool (T5 D1, T5 D2): the tool table has one row per tool
-        raise ExportError(f"heidenhain: two registers write {table} row {twice[0]}; the table holds one "
-                          "value per row (give each register its own number)")
+        raise ExportError(
+            f"heidenhain: two registers write {table} row {twice[0]}; the table holds one "
+            "value per row (give each register its own number)"
+        )
 
 
-def render(rows: Sequence[OffsetRow], title: str = "", *, program_number: int | None = None,
-           spindle: str = "Z") -> str:
+def render(rows: Sequence[OffsetRow], title: str = "", *, program_number: int | None = None, spindle: str = "Z") -> str:
     if rows and one_mode(rows) != "set":
-        raise ExportError("heidenhain: the preset and tool tables hold absolute values: give the current "
-                          "offsets (--current FILE)")
+        raise ExportError(
+            "heidenhain: the preset and tool tables hold absolute values: give the current offsets (--current FILE)"
+        )
     presets: dict[tuple[str, ...], list[tuple[str, ...]]] = {}  # columns → rows of the preset table
     preset_columns: dict[str, list[str]] = {}  # the columns written, for the twice-check
     tools: dict[str, list[tuple[str, str]]] = {c: [] for c in TOOL_COLUMNS}  # column → (T, value)

@@ -22,10 +22,18 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 
-from setupfix.offsets import OffsetRow
-from setupfix.pipeline.controllers.common import (RADIUS, ROTATION, cannot, check_program_number, length_unit,
-                                                  number, one_mode, target)
 from setupfix.model.slots import tool_edge, wks_siemens
+from setupfix.offsets import OffsetRow
+from setupfix.pipeline.controllers.common import (
+    RADIUS,
+    ROTATION,
+    cannot,
+    check_program_number,
+    length_unit,
+    number,
+    one_mode,
+    target,
+)
 
 __all__ = ["render", "program_name"]
 
@@ -56,8 +64,7 @@ def _variable(row: OffsetRow, spindle: str) -> str:
     return f"$TC_DP{12 if wear else 3}[{t},{d}]"
 
 
-def render(rows: Sequence[OffsetRow], title: str = "", *, program_number: int | None = None,
-           spindle: str = "Z") -> str:
+def render(rows: Sequence[OffsetRow], title: str = "", *, program_number: int | None = None, spindle: str = "Z") -> str:
     mode = one_mode(rows)
     unit = length_unit(rows)
     lines = []
@@ -73,8 +80,10 @@ def render(rows: Sequence[OffsetRow], title: str = "", *, program_number: int | 
     for row in rows:
         var = _variable(row, spindle)
         if mode == "set":
-            lines.append(f"{var}={number(row, target(row))} ; {row.id} {row.register} {row.offset} was "
-                         f"{number(row, row.current or 0.0)} change {number(row, row.delta)}")
+            lines.append(
+                f"{var}={number(row, target(row))} ; {row.id} {row.register} {row.offset} was "
+                f"{number(row, row.current or 0.0)} change {number(row, row.delta)}"
+            )
         else:
             lines.append(f"{var}={var}{number(row, row.delta)} ; {row.id} {row.register} {row.offset}")
     lines.append("M30")

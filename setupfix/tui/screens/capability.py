@@ -21,8 +21,7 @@ from setupfix.pipeline.spc import SpcOutcome, capability_rows
 __all__ = ["CapabilityScreen", "COLUMNS"]
 
 #: Column headers of the capability table.
-COLUMNS = ("dimension", "n", "Cpk", "Cpk 95 % CI", "Ppk", "out", "individuals (last 30)", "rules",
-           "Cpk at last split")
+COLUMNS = ("dimension", "n", "Cpk", "Cpk 95 % CI", "Ppk", "out", "individuals (last 30)", "rules", "Cpk at last split")
 
 
 class CapabilityScreen(ModalScreen[None]):
@@ -41,9 +40,13 @@ class CapabilityScreen(ModalScreen[None]):
 
     def compose(self) -> ComposeResult:
         with Vertical(id="capability-box"):
-            yield Static(Text(f"capability — {self.outcome.store}: {len(self.outcome.dimensions)} characteristic(s), "
-                              f"limits from the first {self.outcome.baseline} parts (R1…R4: Nelson rules violated)"),
-                         id="capability-title")
+            yield Static(
+                Text(
+                    f"capability — {self.outcome.store}: {len(self.outcome.dimensions)} characteristic(s), "
+                    f"limits from the first {self.outcome.baseline} parts (R1…R4: Nelson rules violated)"
+                ),
+                id="capability-title",
+            )
             yield DataTable(id="capability", zebra_stripes=True, cursor_type="row")
 
     def on_mount(self) -> None:
@@ -51,9 +54,17 @@ class CapabilityScreen(ModalScreen[None]):
         table.add_columns(*COLUMNS)
         for row in capability_rows(self.outcome):
             flagged = row.rules != "—"
-            table.add_row(Text(row.name), str(row.n), row.cpk, row.interval, row.ppk,
-                          Text(str(row.out), style="bold red" if row.out else ""), Text(row.spark),
-                          Text(row.rules, style="bold red" if flagged else ""), row.last_split)
+            table.add_row(
+                Text(row.name),
+                str(row.n),
+                row.cpk,
+                row.interval,
+                row.ppk,
+                Text(str(row.out), style="bold red" if row.out else ""),
+                Text(row.spark),
+                Text(row.rules, style="bold red" if flagged else ""),
+                row.last_split,
+            )
 
     def action_dismiss(self, result: None = None) -> None:  # type: ignore[override]  # returns nothing
         self.dismiss(None)

@@ -36,8 +36,14 @@ class ExportScreen(ModalScreen[ExportRequest | None]):
 
     BINDINGS: ClassVar[list[BindingType]] = [Binding("ctrl+s", "write", "Write"), Binding("escape", "cancel", "Cancel")]
 
-    def __init__(self, controllers: Sequence[str], render: Callable[[str], str], path: str, *,
-                 rename: Callable[[str, str], str] | None = None) -> None:
+    def __init__(
+        self,
+        controllers: Sequence[str],
+        render: Callable[[str], str],
+        path: str,
+        *,
+        rename: Callable[[str, str], str] | None = None,
+    ) -> None:
         super().__init__()
         self.controllers = list(controllers)
         self.render_text = render
@@ -50,8 +56,12 @@ class ExportScreen(ModalScreen[ExportRequest | None]):
         with Vertical(id="export-box"):
             yield Label("Export the offsets — this exact text will be written:", id="export-title")
             with Horizontal(id="export-options"):
-                yield Select([(c, c) for c in self.controllers], value=self.controllers[0], allow_blank=False,
-                             id="export-controller")
+                yield Select(
+                    [(c, c) for c in self.controllers],
+                    value=self.controllers[0],
+                    allow_blank=False,
+                    id="export-controller",
+                )
                 yield Input(self.path, id="export-path")
             with ScrollableContainer(id="export-scroll"):
                 yield Static(Text(self._text(self.controllers[0]), no_wrap=True), id="export-text")

@@ -11,5 +11,12 @@ from setupfix.tui.widgets.registers import RegisterTable
 from setupfix.tui.widgets.summary import SummaryBar
 from setupfix.tui.widgets.thermal import ThermalPanel
 
-__all__ = ["ComparePanel", "DimensionTable", "HistoryPanel", "MatchTable", "RegisterTable", "SummaryBar",
-           "ThermalPanel"]
+__all__ = [
+    "ComparePanel",
+    "DimensionTable",
+    "HistoryPanel",
+    "MatchTable",
+    "RegisterTable",
+    "SummaryBar",
+    "ThermalPanel",
+]

@@ -12,8 +12,8 @@ from textual.app import ComposeResult
 from textual.containers import Vertical, VerticalScroll
 from textual.widgets import DataTable, Label, ProgressBar, Sparkline, Static
 
-from setupfix.tui.widgets.plain import PlainTable, plain
 from setupfix.pipeline.view import signed
+from setupfix.tui.widgets.plain import PlainTable, plain
 
 __all__ = ["ComparePanel"]
 
@@ -43,8 +43,15 @@ class ComparePanel(Vertical):
         self.query_one(ProgressBar).display = False
         self.status(text)
 
-    def show(self, rows: Sequence[Mapping[str, Any]], curves: Mapping[str, npt.NDArray[np.float64]], *,
-             exact_f1: float, unit: str, heading: str) -> None:
+    def show(
+        self,
+        rows: Sequence[Mapping[str, Any]],
+        curves: Mapping[str, npt.NDArray[np.float64]],
+        *,
+        exact_f1: float,
+        unit: str,
+        heading: str,
+    ) -> None:
         """Results table (exact first; skipped methods with their reason) and the curves."""
         self.stopped(heading)
         table = self.query_one("#compare-table", DataTable)
@@ -55,16 +62,22 @@ class ComparePanel(Vertical):
             if "skipped" in r:
                 table.add_row(r["optimizer"], Text(f"not available: {r['skipped']}", style="dim"))
                 continue
-            table.add_row(r["optimizer"], *(Text(signed(r[k]), justify="right")
-                                            for k in ("f1_best", "f1_median", "f1_worst")),
-                          *(Text(f"{r[k] * 1000:.1f}", justify="right") for k in ("gap_median", "gap_worst")),
-                          Text(f"{r['evaluations']:.0f}", justify="right"),
-                          Text(f"{r['seconds'] * 1000:.0f}", justify="right"))
+            table.add_row(
+                r["optimizer"],
+                *(Text(signed(r[k]), justify="right") for k in ("f1_best", "f1_median", "f1_worst")),
+                *(Text(f"{r[k] * 1000:.1f}", justify="right") for k in ("gap_median", "gap_worst")),
+                Text(f"{r['evaluations']:.0f}", justify="right"),
+                Text(f"{r['seconds'] * 1000:.0f}", justify="right"),
+            )
         box = self.query_one("#compare-curves", VerticalScroll)
         box.remove_children()
         widgets: list[Label | Sparkline] = []
         for name, curve in curves.items():
-            widgets.append(Label(f"{name:<7} median f1 {signed(float(curve[0]))} → {signed(float(curve[-1]))} {unit}"
-                                 f"  (exact {signed(exact_f1)})"))
+            widgets.append(
+                Label(
+                    f"{name:<7} median f1 {signed(float(curve[0]))} → {signed(float(curve[-1]))} {unit}"
+                    f"  (exact {signed(exact_f1)})"
+                )
+            )
             widgets.append(Sparkline([float(v) for v in curve], classes="curve"))
         box.mount_all(widgets)

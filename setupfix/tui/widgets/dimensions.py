@@ -6,8 +6,8 @@ from collections.abc import Sequence
 
 from rich.text import Text
 
-from setupfix.tui.widgets.plain import PlainTable
 from setupfix.pipeline.view import DimensionRow, limits_text, signed
+from setupfix.tui.widgets.plain import PlainTable
 
 __all__ = ["DimensionTable"]
 
@@ -50,10 +50,15 @@ class DimensionTable(PlainTable):
             style = "" if r.in_before else "red"
             after_style = "bold red" if not r.in_after else ("bold" if r.binding else "")
             cells: list[Text | str] = [
-                Text(r.flags, style=after_style), r.name, r.station,
-                Text(signed(r.deviation), style=style, justify="right"), lim,
-                Text(before, style=style), Text(signed(r.predicted), style=after_style, justify="right"),
-                Text(after, style=after_style)]
+                Text(r.flags, style=after_style),
+                r.name,
+                r.station,
+                Text(signed(r.deviation), style=style, justify="right"),
+                lim,
+                Text(before, style=style),
+                Text(signed(r.predicted), style=after_style, justify="right"),
+                Text(after, style=after_style),
+            ]
             if wide:
                 cells += [Text(signed(r.margin_before), justify="right"), Text(signed(r.margin_after), justify="right")]
             self.add_row(*cells, key=r.id)

@@ -9,9 +9,9 @@ from textual.app import ComposeResult
 from textual.containers import VerticalScroll
 from textual.widgets import DataTable, Sparkline, Static
 
-from setupfix.tui.widgets.plain import PlainTable, plain
 from setupfix.pipeline.analysis_view import CycleBudget, DiagnosisView
 from setupfix.pipeline.view import IN, OUT, signed
+from setupfix.tui.widgets.plain import PlainTable, plain
 
 __all__ = ["HistoryPanel"]
 
@@ -49,17 +49,24 @@ class HistoryPanel(VerticalScroll):
         for label in ("", "cycle", "time", "δ", "out"):
             table.add_column(label)
         for r in rows[-LAST_CYCLES:]:
-            table.add_row(Text(IN if r.out_of_tolerance == 0 else OUT), r.cycle, r.timestamp,
-                          Text(signed(r.budget), justify="right"), str(r.out_of_tolerance))
+            table.add_row(
+                Text(IN if r.out_of_tolerance == 0 else OUT),
+                r.cycle,
+                r.timestamp,
+                Text(signed(r.budget), justify="right"),
+                str(r.out_of_tolerance),
+            )
 
     def diagnosis(self, view: DiagnosisView, *, source: str) -> None:
         u = view.unit
         self.budgets(view.budgets, unit=u, source=source)
         text = Text()
         text.append(f"diagnosis of {view.cycles} cycle(s): ", style="bold")
-        text.append(f"residual RMS {view.before[0]:.4f} → {view.after[0]:.4f} {u}, "
-                    f"max {view.before[1]:.4f} → {view.after[1]:.4f}, "
-                    f"out of tolerance {view.before[2]} → {view.after[2]}")
+        text.append(
+            f"residual RMS {view.before[0]:.4f} → {view.after[0]:.4f} {u}, "
+            f"max {view.before[1]:.4f} → {view.after[1]:.4f}, "
+            f"out of tolerance {view.before[2]} → {view.after[2]}"
+        )
         if not view.effects:
             text.append("\nno effect found: the declared model explains the series to its noise")
         self.query_one("#history-diagnosis", Static).update(text)
@@ -69,21 +76,30 @@ class HistoryPanel(VerticalScroll):
         for label in ("effect", "on", "estimate", "± s.e.", "RMS after"):
             table.add_column(label)
         for e in view.effects:
-            table.add_row(e.kind + (" (declared)" if e.source == "declared" else ""),
-                          e.target + (f" (≈ {', '.join(e.alike)})" if e.alike else ""),
-                          Text(f"{e.estimate:+.4g} {e.unit}", justify="right"), f"{e.stderr:.2g}",
-                          Text(f"{e.rms_after:.4f}", justify="right"))
+            table.add_row(
+                e.kind + (" (declared)" if e.source == "declared" else ""),
+                e.target + (f" (≈ {', '.join(e.alike)})" if e.alike else ""),
+                Text(f"{e.estimate:+.4g} {e.unit}", justify="right"),
+                f"{e.stderr:.2g}",
+                Text(f"{e.rms_after:.4f}", justify="right"),
+            )
         walk = Text()
         if view.walk:
-            walk.append("walk forward (later cycles: distance to the tolerance centre RMS / mean |·|, "
-                        "error budget mean / worst):\n")
+            walk.append(
+                "walk forward (later cycles: distance to the tolerance centre RMS / mean |·|, "
+                "error budget mean / worst):\n"
+            )
             centre = {name: (c_rms, c_mean) for name, c_rms, c_mean in view.walk_centre}
             for name, mean, worst, _rms, out in view.walk:
                 c_rms, c_mean = centre.get(name, (float("nan"), float("nan")))
-                walk.append(f"  {name:<9} centre {c_rms:.4f} / {c_mean:.4f}  budget {signed(mean)} / {signed(worst)}"
-                            f"  out {out}\n")
-        walk.append(f"next correction (from {view.next_from}): "
-                    + (", ".join(f"{k} {signed(v, 3)}" for k, v in view.next_correction) or "none"))
+                walk.append(
+                    f"  {name:<9} centre {c_rms:.4f} / {c_mean:.4f}  budget {signed(mean)} / {signed(worst)}"
+                    f"  out {out}\n"
+                )
+        walk.append(
+            f"next correction (from {view.next_from}): "
+            + (", ".join(f"{k} {signed(v, 3)}" for k, v in view.next_correction) or "none")
+        )
         if view.held:
             walk.append(f"; held at the centre: {', '.join(view.held)}")
         for note in view.notes:

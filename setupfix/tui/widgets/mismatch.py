@@ -6,8 +6,8 @@ from collections.abc import Sequence
 
 from rich.text import Text
 
-from setupfix.tui.widgets.plain import PlainTable
 from setupfix.pipeline.view import IN, OUT, MatchRow
+from setupfix.tui.widgets.plain import PlainTable
 
 __all__ = ["MatchTable"]
 
@@ -23,5 +23,11 @@ class MatchTable(PlainTable):
         for label in ("", "characteristic", "part", "station", "dimension", "did you mean"):
             self.add_column(label)
         for r in rows:
-            self.add_row(Text(IN if r.matched else OUT, style="green" if r.matched else "red"), r.characteristic,
-                         r.part, r.station, r.dimension or "—", ", ".join(r.suggestions))
+            self.add_row(
+                Text(IN if r.matched else OUT, style="green" if r.matched else "red"),
+                r.characteristic,
+                r.part,
+                r.station,
+                r.dimension or "—",
+                ", ".join(r.suggestions),
+            )

@@ -6,8 +6,8 @@ from collections.abc import Sequence
 
 from rich.text import Text
 
-from setupfix.tui.widgets.plain import PlainTable
 from setupfix.pipeline.view import RegisterRow, signed
+from setupfix.tui.widgets.plain import PlainTable
 
 __all__ = ["RegisterTable", "DEGREES"]
 
@@ -33,16 +33,44 @@ class RegisterTable(PlainTable):
         for r in rows:
             rotation = r.component == "C"
             d = rotation_digits if rotation else digits
-            cells.append([r.register, r.id, r.offset, signed(r.delta, d), signed(r.current, d), signed(r.new, d),
-                          DEGREES if rotation else unit, r.flags, "; ".join(r.rules)])
-        for i, (label, key) in enumerate((("reg", "register"), ("id", "id"), ("offset", "offset"), ("Δ", "delta"),
-                                          ("current", "current"), ("new", "new"), ("unit", "unit"),
-                                          ("", "flags"), ("rules", "rules"))):
+            cells.append(
+                [
+                    r.register,
+                    r.id,
+                    r.offset,
+                    signed(r.delta, d),
+                    signed(r.current, d),
+                    signed(r.new, d),
+                    DEGREES if rotation else unit,
+                    r.flags,
+                    "; ".join(r.rules),
+                ]
+            )
+        for i, (label, key) in enumerate(
+            (
+                ("reg", "register"),
+                ("id", "id"),
+                ("offset", "offset"),
+                ("Δ", "delta"),
+                ("current", "current"),
+                ("new", "new"),
+                ("unit", "unit"),
+                ("", "flags"),
+                ("rules", "rules"),
+            )
+        ):
             self.add_column(label, key=key, width=max([len(label), *(len(c[i]) for c in cells)]))
         for r, c in zip(rows, cells, strict=True):
             moved = r.delta != 0.0
             self.add_row(
-                Text(c[0], style="bold" if moved else "dim"), c[1], c[2],
+                Text(c[0], style="bold" if moved else "dim"),
+                c[1],
+                c[2],
                 Text(c[3], style="bold" if moved else "dim", justify="right"),
-                Text(c[4], justify="right"), Text(c[5], justify="right"), c[6],
-                Text(c[7], style="bold yellow" if r.at_limit else "dim"), c[8], key=r.id)
+                Text(c[4], justify="right"),
+                Text(c[5], justify="right"),
+                c[6],
+                Text(c[7], style="bold yellow" if r.at_limit else "dim"),
+                c[8],
+                key=r.id,
+            )

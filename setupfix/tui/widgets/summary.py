@@ -11,7 +11,9 @@ __all__ = ["SummaryBar"]
 
 #: Verdict → (symbol, style).  The symbol carries the state on a monochrome terminal.
 VERDICT_STYLE: dict[str, tuple[str, str]] = {
-    "apply": ("✓ APPLY", "bold green"), "hold": ("● HOLD", "bold yellow"), "reject": ("✗ REJECT", "bold red"),
+    "apply": ("✓ APPLY", "bold green"),
+    "hold": ("● HOLD", "bold yellow"),
+    "reject": ("✗ REJECT", "bold red"),
     "not_solved": ("✗ NOT SOLVED", "bold red"),
 }
 
@@ -48,8 +50,9 @@ class SummaryBar(Static):
         else:
             text.append("\n" + ("✓ " if summary.in_tolerance else "✗ ") + summary.message)
         if summary.given_up:
-            text.append(f"\n⚑ given up (NC program or process, not the setup): {', '.join(summary.given_up)}",
-                        style="yellow")
+            text.append(
+                f"\n⚑ given up (NC program or process, not the setup): {', '.join(summary.given_up)}", style="yellow"
+            )
         for rule in summary.rules:
             text.append(f"\n• {rule}")
         if problem:

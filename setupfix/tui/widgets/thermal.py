@@ -7,9 +7,9 @@ from textual.app import ComposeResult
 from textual.containers import Vertical
 from textual.widgets import Sparkline, Static
 
-from setupfix.tui.widgets.plain import plain
 from setupfix.pipeline.analysis_view import DriftView
 from setupfix.pipeline.view import signed
+from setupfix.tui.widgets.plain import plain
 
 __all__ = ["ThermalPanel"]
 
@@ -37,8 +37,9 @@ class ThermalPanel(Vertical):
         if view.measured_latest is not None:
             text.append(f"; measured {signed(view.measured_latest)} {unit}")
         low, high = view.recent_range
-        text.append(f"\nrecent curve, last {len(view.recent)} samples, "
-                    f"from {signed(low)} (▁) to {signed(high)} (█) {unit}:")
+        text.append(
+            f"\nrecent curve, last {len(view.recent)} samples, from {signed(low)} (▁) to {signed(high)} (█) {unit}:"
+        )
         for note in view.notes:
             text.append(f"\n⚠ {note}", style="yellow")
         self.query_one("#thermal-status", Static).update(plain(text))

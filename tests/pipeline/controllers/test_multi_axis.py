@@ -10,17 +10,16 @@ from __future__ import annotations
 import re
 
 import pytest
+from g10 import run_g10
 from hypothesis import given, settings
 from hypothesis import strategies as st
-
-from g10 import run_g10
 from multi_axis_rows import SPEC, fixture_rows, row
+
 from setupfix.errors import ExportError
 from setupfix.pipeline.controllers import render
 
 #: (L, P) of each WKS and tool register of the Fanuc/Haas fixture.
-SLOTS = {"W1": (2, 1), "W2": (2, 2), "W3": (20, 7), "T5": (11, 5), "T5.R": (13, 5), "T12": (10, 12),
-         "T12.R": (12, 12)}
+SLOTS = {"W1": (2, 1), "W2": (2, 2), "W3": (20, 7), "T5": (11, 5), "T5.R": (13, 5), "T12": (10, 12), "T12.R": (12, 12)}
 START = {cid: current for cid, _, _, _, current, _, _ in SPEC}
 DELTA = {cid: delta for cid, _, _, delta, _, _, _ in SPEC}
 
@@ -59,8 +58,11 @@ def test_g10_program_holds_current_plus_change_on_every_axis(name, mode):
 @pytest.mark.parametrize("name", ["fanuc", "haas"])
 @pytest.mark.parametrize("mode", ["set", "add"])
 def test_a_rotation_g10_cannot_hold_is_refused_naming_register_and_format(name, mode):
-    with pytest.raises(ExportError, match=rf"^{name}: cannot express register 'G54' \(W1\.C\): G10 L2 holds no "
-                                          r"rotation \(change \+0\.015 degrees\)"):
+    with pytest.raises(
+        ExportError,
+        match=rf"^{name}: cannot express register 'G54' \(W1\.C\): G10 L2 holds no "
+        r"rotation \(change \+0\.015 degrees\)",
+    ):
         render(name, fixture_rows(name, mode))
 
 
@@ -76,10 +78,22 @@ def siemens_state(program: str, state: dict[str, float]) -> dict[str, float]:
     return out
 
 
-SIEMENS = {"W1.X": "$P_UIFR[1,X,TR]", "W1.Y": "$P_UIFR[1,Y,TR]", "W1.Z": "$P_UIFR[1,Z,TR]", "W1.C": "$P_UIFR[1,Z,RT]",
-           "W2.X": "$P_UIFR[2,X,TR]", "W2.Y": "$P_UIFR[2,Y,TR]", "W2.Z": "$P_UIFR[2,Z,TR]",
-           "W3.X": "$P_UIFR[5,X,TR]", "W3.Y": "$P_UIFR[5,Y,TR]", "W3.Z": "$P_UIFR[5,Z,TR]",
-           "T5": "$TC_DP12[5,1]", "T5.R": "$TC_DP15[5,1]", "T12": "$TC_DP3[12,2]", "T12.R": "$TC_DP6[12,2]"}
+SIEMENS = {
+    "W1.X": "$P_UIFR[1,X,TR]",
+    "W1.Y": "$P_UIFR[1,Y,TR]",
+    "W1.Z": "$P_UIFR[1,Z,TR]",
+    "W1.C": "$P_UIFR[1,Z,RT]",
+    "W2.X": "$P_UIFR[2,X,TR]",
+    "W2.Y": "$P_UIFR[2,Y,TR]",
+    "W2.Z": "$P_UIFR[2,Z,TR]",
+    "W3.X": "$P_UIFR[5,X,TR]",
+    "W3.Y": "$P_UIFR[5,Y,TR]",
+    "W3.Z": "$P_UIFR[5,Z,TR]",
+    "T5": "$TC_DP12[5,1]",
+    "T5.R": "$TC_DP15[5,1]",
+    "T12": "$TC_DP3[12,2]",
+    "T12.R": "$TC_DP6[12,2]",
+}
 
 
 @pytest.mark.parametrize("mode", ["set", "add"])
@@ -98,8 +112,11 @@ def test_siemens_rotation_turns_about_the_models_spindle_and_has_no_fine_part():
     rows = [row("W1.C", "G54", "wks", "C", 0.01, 0.0)]
     assert "$P_UIFR[1,X,RT]=+0.010" in render("siemens", rows, spindle="X")
     wear = [row("W1.C", "G54", "wks", "C", 0.01, 0.0, offset="wear")]
-    with pytest.raises(ExportError, match=r"siemens: cannot express register 'G54' \(W1\.C\): a frame rotation "
-                                          "has no fine offset"):
+    with pytest.raises(
+        ExportError,
+        match=r"siemens: cannot express register 'G54' \(W1\.C\): a frame rotation "
+        "has no fine offset",
+    ):
         render("siemens", wear)
 
 
@@ -124,11 +141,22 @@ def heidenhain_tables(text: str) -> dict[tuple[str, str, str], str]:
 def test_heidenhain_preset_columns_and_tool_radius():
     text = render("heidenhain", fixture_rows("heidenhain", "set"), "r.csv P1")
     cells = heidenhain_tables(text)
-    want = {("PRESET.PR", "X", "1"): "W1.X", ("PRESET.PR", "Y", "1"): "W1.Y", ("PRESET.PR", "Z", "1"): "W1.Z",
-            ("PRESET.PR", "SPC", "1"): "W1.C", ("PRESET.PR", "X", "2"): "W2.X", ("PRESET.PR", "Y", "2"): "W2.Y",
-            ("PRESET.PR", "Z", "2"): "W2.Z", ("PRESET.PR", "X", "7"): "W3.X", ("PRESET.PR", "Y", "7"): "W3.Y",
-            ("PRESET.PR", "Z", "7"): "W3.Z", ("TOOL.T", "DL", "5"): "T5", ("TOOL.T", "DR", "5"): "T5.R",
-            ("TOOL.T", "L", "12"): "T12", ("TOOL.T", "R", "12"): "T12.R"}
+    want = {
+        ("PRESET.PR", "X", "1"): "W1.X",
+        ("PRESET.PR", "Y", "1"): "W1.Y",
+        ("PRESET.PR", "Z", "1"): "W1.Z",
+        ("PRESET.PR", "SPC", "1"): "W1.C",
+        ("PRESET.PR", "X", "2"): "W2.X",
+        ("PRESET.PR", "Y", "2"): "W2.Y",
+        ("PRESET.PR", "Z", "2"): "W2.Z",
+        ("PRESET.PR", "X", "7"): "W3.X",
+        ("PRESET.PR", "Y", "7"): "W3.Y",
+        ("PRESET.PR", "Z", "7"): "W3.Z",
+        ("TOOL.T", "DL", "5"): "T5",
+        ("TOOL.T", "DR", "5"): "T5.R",
+        ("TOOL.T", "L", "12"): "T12",
+        ("TOOL.T", "R", "12"): "T12.R",
+    }
     assert set(cells) == set(want)
     for key, cid in want.items():
         assert float(cells[key]) == pytest.approx(START[cid] + DELTA[cid], abs=1e-9), key
@@ -152,8 +180,10 @@ def test_radius_on_an_h_register_and_a_csv_of_components():
 
 
 def test_inch_rows_write_g20_even_when_a_rotation_comes_first():
-    rows = [row("W1.C", "G54", "wks", "C", 0.0, 0.0, unit="inch"),
-            row("W1.X", "G54", "wks", "X", 0.0004, 1.0, unit="inch", resolution=0.0001)]
+    rows = [
+        row("W1.C", "G54", "wks", "C", 0.0, 0.0, unit="inch"),
+        row("W1.X", "G54", "wks", "X", 0.0004, 1.0, unit="inch", resolution=0.0001),
+    ]
     program = render("fanuc", rows)
     assert "\nG20\n" in program and "G90 G10 L2 P1 X+1.0004 (G54 GEOMETRY W1)" in program
 
@@ -165,8 +195,9 @@ _STEPS = st.integers(-99_999_999, 99_999_999)
 @given(st.lists(st.tuples(_STEPS, st.integers(-500, 500)), min_size=3, max_size=3), st.sampled_from(["fanuc", "haas"]))
 def test_any_values_on_the_grid_come_back_exactly(steps, name):
     """Brute force over the grid: the set program's blocks hold current + change to the last digit."""
-    rows = [row(f"W1.{axis}", "G54", "wks", axis, d / 1000, c / 1000) for axis, (c, d) in zip("XYZ", steps,
-                                                                                              strict=True)]
+    rows = [
+        row(f"W1.{axis}", "G54", "wks", axis, d / 1000, c / 1000) for axis, (c, d) in zip("XYZ", steps, strict=True)
+    ]
     state = run_g10(render(name, rows))
     for axis, (c, d) in zip("XYZ", steps, strict=True):
         assert round(state[(2, 1, axis)] * 1000) == c + d

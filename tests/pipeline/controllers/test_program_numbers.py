@@ -8,9 +8,9 @@ import shutil
 from pathlib import Path
 
 import pytest
-
 from conftest import GUIDE_PINS
 from multi_axis_rows import fixture_rows
+
 from setupfix.cli import main
 from setupfix.errors import ExportError
 from setupfix.model import load_model
@@ -30,15 +30,22 @@ def o_number(program: str) -> int:
     return int(m.group(1))
 
 
-@pytest.mark.parametrize(("name", "n", "word"), [("fanuc", 1, "O0001"), ("fanuc", 9999, "O9999"),
-                                                 ("haas", 12, "O0012"), ("haas", 99999, "O99999")])
+@pytest.mark.parametrize(
+    ("name", "n", "word"),
+    [("fanuc", 1, "O0001"), ("fanuc", 9999, "O9999"), ("haas", 12, "O0012"), ("haas", 99999, "O99999")],
+)
 def test_the_o_word(name, n, word):
-    assert render(name, fixture_rows(name, "set", rotation=0.0), program_number=n).split("\n")[1].startswith(
-        word + " (SETUPFIX)")
+    assert (
+        render(name, fixture_rows(name, "set", rotation=0.0), program_number=n)
+        .split("\n")[1]
+        .startswith(word + " (SETUPFIX)")
+    )
 
 
-@pytest.mark.parametrize(("name", "n", "span"), [("fanuc", 10000, "1…9999"), ("fanuc", 0, "1…9999"),
-                                                 ("haas", 100000, "1…99999"), ("siemens", 10**8, "1…99999999")])
+@pytest.mark.parametrize(
+    ("name", "n", "span"),
+    [("fanuc", 10000, "1…9999"), ("fanuc", 0, "1…9999"), ("haas", 100000, "1…99999"), ("siemens", 10**8, "1…99999999")],
+)
 def test_a_number_the_format_cannot_hold_is_refused(name, n, span):
     with pytest.raises(ExportError, match=f"^{name}: program number {n} outside {span}"):
         render(name, fixture_rows(name, "set", rotation=0.0), program_number=n)
@@ -122,15 +129,53 @@ def test_batch_writes_distinct_numbers_stable_run_after_run(tmp_path):
 
 def test_cli_refuses_a_number_the_controller_cannot_hold_before_any_work(capsys, tmp_path):
     model, report = str(GUIDE_PINS / "model.toml"), str(GUIDE_PINS / "cycle_01.csv")
-    code = main(["correct", "--model", model, "--offsets", str(tmp_path / "o.nc"), "--controller", "fanuc",
-                 "--program-number", "10000", report])
+    code = main(
+        [
+            "correct",
+            "--model",
+            model,
+            "--offsets",
+            str(tmp_path / "o.nc"),
+            "--controller",
+            "fanuc",
+            "--program-number",
+            "10000",
+            report,
+        ]
+    )
     err = capsys.readouterr().err
     assert code != 0 and "fanuc: program number 10000 outside 1…9999" in err and len(err.strip().splitlines()) == 1
     assert not (tmp_path / "o.nc").exists()
-    code = main(["batch", "--model", model, "--out", str(tmp_path / "p"), "--controller", "haas",
-                 "--program-number", "100000", "--settle", "0", str(Path(report).parent)])
+    code = main(
+        [
+            "batch",
+            "--model",
+            model,
+            "--out",
+            str(tmp_path / "p"),
+            "--controller",
+            "haas",
+            "--program-number",
+            "100000",
+            "--settle",
+            "0",
+            str(Path(report).parent),
+        ]
+    )
     assert code != 0 and "haas: program number 100000 outside 1…99999" in capsys.readouterr().err
     assert not (tmp_path / "p").exists()
-    code = main(["correct", "--model", model, "--offsets", str(tmp_path / "o.nc"), "--controller", "fanuc",
-                 "--program-number", "321", report])
+    code = main(
+        [
+            "correct",
+            "--model",
+            model,
+            "--offsets",
+            str(tmp_path / "o.nc"),
+            "--controller",
+            "fanuc",
+            "--program-number",
+            "321",
+            report,
+        ]
+    )
     assert code == 0 and o_number((tmp_path / "o.nc").read_text()) == 321

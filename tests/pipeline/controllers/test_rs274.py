@@ -14,13 +14,13 @@ import re
 from pathlib import Path
 
 import pytest
-
 from g10 import run_g10
 from multi_axis_rows import SPEC, fixture_rows, row
 from rs274 import read_back, run_rs274
+
+from parsers.current import read_current
 from setupfix.model import load_model
 from setupfix.offsets import offset_rows
-from parsers.current import read_current
 from setupfix.pipeline.controllers import render
 
 ROOT = Path(__file__).resolve().parents[3]
@@ -82,9 +82,11 @@ def test_the_one_axis_sample_program_reads_back(tmp_path):
 
 
 def test_an_inch_program_reads_back_in_inches(tmp_path):
-    rows = [row("W1.X", "G54", "wks", "X", 0.0004, 1.2345, unit="inch", resolution=0.0001),
-            row("W1.Y", "G54", "wks", "Y", -0.0012, -3.0, unit="inch", resolution=0.0001),
-            row("W1.Z", "G54", "wks", "Z", 0.0, -16.2422, unit="inch", resolution=0.0001)]
+    rows = [
+        row("W1.X", "G54", "wks", "X", 0.0004, 1.2345, unit="inch", resolution=0.0001),
+        row("W1.Y", "G54", "wks", "Y", -0.0012, -3.0, unit="inch", resolution=0.0001),
+        row("W1.Z", "G54", "wks", "Z", 0.0, -16.2422, unit="inch", resolution=0.0001),
+    ]
     program = render("haas", rows)
     assert "\nG20\n" in program
     got = read_back(program, tmp_path, [(1, "X"), (1, "Y"), (1, "Z")], inch=True)
@@ -92,8 +94,10 @@ def test_an_inch_program_reads_back_in_inches(tmp_path):
 
 
 XYZ = ROOT / "sample_reports" / "two_station_xyz"
-XYZ_CURRENT = ("register,axis,value\nG54,X,-250.123\nG54,Y,120.5\nG54,Z,-412.53\nG55,X,50.0\nG55,Y,-0.5\n"
-               "G55,Z,-412.487\nH1,,-0.012\nD1,,0.002\nH2,,0.0\n")
+XYZ_CURRENT = (
+    "register,axis,value\nG54,X,-250.123\nG54,Y,120.5\nG54,Z,-412.53\nG55,X,50.0\nG55,Y,-0.5\n"
+    "G55,Z,-412.487\nH1,,-0.012\nD1,,0.002\nH2,,0.0\n"
+)
 
 
 def test_the_two_station_sample_from_report_to_read_back(tmp_path):
@@ -114,8 +118,11 @@ def test_the_two_station_sample_from_report_to_read_back(tmp_path):
     request = CorrectRequest(with_rotation, current=CurrentOffsets.read(tmp_path / "c.csv", with_rotation))
     cycles = correct_report(request, XYZ / "cycle_01.csv").cycles
     if any(c.corrections.get("W1.C") or c.corrections.get("W2.C") for c in cycles):
-        with pytest.raises(ExportError, match=r"fanuc: cannot express register 'G5[45]' \(W[12]\.C\): G10 L2 holds "
-                                              "no rotation"):
+        with pytest.raises(
+            ExportError,
+            match=r"fanuc: cannot express register 'G5[45]' \(W[12]\.C\): G10 L2 holds "
+            "no rotation",
+        ):
             export(cycles, str(tmp_path / "r.nc"), controller="fanuc", current=request.current)
         assert not (tmp_path / "r.nc").exists()
     doc["process"]["rotation"] = False  # a fixture without the rotation: the Fanuc program holds it all

@@ -101,8 +101,9 @@ def ewma_store(tmp: Path) -> tuple[Path, Path]:
     model = tmp / "model_ewma.toml"
     model.write_text((GUIDE / "model.toml").read_text() + "\n[safety]\newma = 0.5\n")
     db = tmp / "history.db"
-    code, _, err = run(["history", "import", "--db", db, "--model", model,
-                        *(GUIDE / f"cycle_0{k}.csv" for k in range(1, 6))])
+    code, _, err = run(
+        ["history", "import", "--db", db, "--model", model, *(GUIDE / f"cycle_0{k}.csv" for k in range(1, 6))]
+    )
     assert code == 0, err
     return model, db
 
@@ -123,8 +124,14 @@ def cases(tmp: Path) -> dict[str, list[str]]:
     out["format_dmo"] = ["correct", "--model", GUIDE / "model.toml", GUIDE / "cycle_01.dmo"]
     out["format_qif"] = ["correct", "--model", GUIDE / "model.toml", GUIDE / "cycle_01.qif"]
     out["table_de"] = ["correct", "--model", GUIDE / "model.toml", tables / "cycle_01_de.csv"]
-    out["table_shop"] = ["correct", "--model", GUIDE / "model.toml", tables / "cycle_01_shop.csv",
-                         "--columns", tables / "cycle_01_shop.columns.toml"]
+    out["table_shop"] = [
+        "correct",
+        "--model",
+        GUIDE / "model.toml",
+        tables / "cycle_01_shop.csv",
+        "--columns",
+        tables / "cycle_01_shop.columns.toml",
+    ]
     two = tmp / "two_cycles.csv"
     lines = (GUIDE / "cycle_01.csv").read_text().splitlines()
     two.write_text("\n".join(lines + (GUIDE / "cycle_02.csv").read_text().splitlines()[1:]) + "\n")
@@ -136,8 +143,14 @@ def cases(tmp: Path) -> dict[str, list[str]]:
         wide.write_text(calypso.read_text().replace("limit = 0.1\n", "limit = 0.1\n\n[safety]\nreject_band = 5.0\n", 1))
         out["calypso_reject"] = ["correct", "--model", calypso, CALYPSO]
         out["calypso_wide"] = ["correct", "--model", wide, CALYPSO]
-    out["controllers"] = ["correct", "--model", CONTROLLERS / "model.toml", CONTROLLERS / "report.csv",
-                          "--current", CONTROLLERS / "current.csv"]
+    out["controllers"] = [
+        "correct",
+        "--model",
+        CONTROLLERS / "model.toml",
+        CONTROLLERS / "report.csv",
+        "--current",
+        CONTROLLERS / "current.csv",
+    ]
     return out
 
 
