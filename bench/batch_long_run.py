@@ -39,9 +39,9 @@ os.environ.update(OPENBLAS_NUM_THREADS="1", MKL_NUM_THREADS="1", OMP_NUM_THREADS
 from batch_throughput import GUIDE, make_reports, reference, run
 
 from setupfix.model import load_model
-from setupfix.pipeline.correct import correct_report
-from setupfix.pipeline.export import cycle_rows
-from setupfix.pipeline.requests import CorrectRequest, SolveOptions
+from setupfix.usecases.correct import correct_report
+from setupfix.usecases.export import cycle_rows
+from setupfix.usecases.requests import CorrectRequest, SolveOptions
 
 RESULTS = ROOT / "bench" / "results"
 #: Seconds each exact solve may take, on both sides. The question here is whether a long run changes an

@@ -44,12 +44,12 @@ sys.path.insert(0, str(ROOT))
 os.environ.update(OPENBLAS_NUM_THREADS="1", MKL_NUM_THREADS="1", OMP_NUM_THREADS="1")
 
 import parsers
+from setupfix.inputs.checks import check_parts
+from setupfix.inputs.cycles import assign_stations
 from setupfix.model import load_model, match_parts
-from setupfix.pipeline.checks import check_parts
-from setupfix.pipeline.correct import correct_cycle, correct_report
-from setupfix.pipeline.cycles import assign_stations
-from setupfix.pipeline.export import cycle_rows
-from setupfix.pipeline.requests import CorrectRequest
+from setupfix.usecases.correct import correct_cycle, correct_report
+from setupfix.usecases.export import cycle_rows
+from setupfix.usecases.requests import CorrectRequest
 
 GUIDE = ROOT / "sample_reports" / "guide_pins"
 RESULTS = ROOT / "bench" / "results"

@@ -1,6 +1,6 @@
 """The leximin levels' grid climb: its move sizes (``SCALES``) against each other, interleaved in one process.
 
-The climb (:mod:`setupfix.optimize._leximin_search`) moves s·e_i and s·(±e_i ± e_j) with s from
+The climb (:mod:`setupfix.optimize.exact.leximin.search`) moves s·e_i and s·(±e_i ± e_j) with s from
 ``SCALES`` down to 1; it only gives the levels a start, so the answers must not depend on it.  The
 box's speed drifts by more than a tenth between runs of ``bench/leximin_speed.py``, so the variants
 are timed here in turns: every pass solves the 105 paper-size reports of ``leximin_speed.py`` once
@@ -30,8 +30,8 @@ from exact_per_report import problems
 from leximin_speed import lp_seconds
 from threadpoolctl import threadpool_limits
 
-import setupfix.optimize._leximin_search as search_mod
-import setupfix.optimize._session as session_mod
+import setupfix.optimize.exact.leximin.search as search_mod
+import setupfix.optimize.exact.session as session_mod
 from setupfix.optimize import get_optimizer
 
 RESULTS = ROOT / "bench" / "results"

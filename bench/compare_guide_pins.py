@@ -22,10 +22,10 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
+from setupfix.inputs.cycles import load_parts
 from setupfix.model import load_model
 from setupfix.optimize import CorrectionProblem
-from setupfix.pipeline.compare import DEFAULT_METHODS, compare_problem, plot_comparison
-from setupfix.pipeline.cycles import load_parts
+from setupfix.usecases.compare import DEFAULT_METHODS, compare_problem, plot_comparison
 
 SAMPLE = ROOT / "sample_reports" / "guide_pins"
 OUT = ROOT / "bench" / "results"

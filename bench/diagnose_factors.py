@@ -40,8 +40,8 @@ from diagnose_calibration import rate
 
 from setupfix.diagnose import Diagnoser, Layout, factor_tests, parse_terms
 from setupfix.diagnose.terms import channel_values
-from setupfix.pipeline.diagnose import DiagnoseRequest, diagnose_reports
-from setupfix.pipeline.series import load_series
+from setupfix.inputs.series import load_series
+from setupfix.usecases.diagnosis import DiagnoseRequest, diagnose_reports
 
 OUT = ROOT / "bench" / "results" / "diagnose_factors.txt"
 DESIGN = ("doe_tool_length", "doe_speed", "doe_tool_length*doe_speed")

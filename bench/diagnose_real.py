@@ -44,7 +44,7 @@ sys.path.insert(0, str(ROOT / "tests"))
 from diagnose.plate_doe import LONG, RPM, residual_rms, speed_term, speed_term_pvalues, speed_tests
 
 from setupfix.diagnose import Diagnoser, EffectSpec, select_effects
-from setupfix.pipeline.series import load_series
+from setupfix.inputs.series import load_series
 
 SHARED = Path(os.environ.get("SETUPFIX_SHARED", ROOT.parent.parent / "shared"))
 if not (SHARED / "real-series").is_dir():

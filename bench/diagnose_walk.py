@@ -32,8 +32,8 @@ sys.path.insert(0, str(ROOT / "tests"))
 from diagnose.helpers import guide_pins, one_effect, simulate
 
 from setupfix.diagnose import Diagnoser, Layout
-from setupfix.pipeline.diagnose import recommend_next
-from setupfix.pipeline.series import load_series
+from setupfix.inputs.series import load_series
+from setupfix.usecases.diagnosis import recommend_next
 
 OUT = ROOT / "bench" / "results" / "diagnose_walk.txt"
 MODEL = guide_pins(positions=False)

@@ -34,9 +34,9 @@ from threadpoolctl import threadpool_limits
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
+from setupfix.correction.synthetic import simulate_deviations
 from setupfix.model import PartMeasurement, load_model
 from setupfix.optimize import CorrectionProblem, get_optimizer
-from setupfix.simulate import simulate_deviations
 
 #: The allocator pinned as in bench/exact_per_report.py (the reference's page faults otherwise depend on
 #: what the process freed before); Linux only, the bench re-executes itself with them.

@@ -46,10 +46,10 @@ from threadpoolctl import threadpool_info, threadpool_limits
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
+from setupfix.correction.synthetic import simulate_deviations
+from setupfix.inputs.cycles import load_parts
 from setupfix.model import PartMeasurement, load_model
 from setupfix.optimize import CorrectionProblem, get_optimizer
-from setupfix.pipeline.cycles import load_parts
-from setupfix.simulate import simulate_deviations
 
 RESULTS = ROOT / "bench" / "results"
 SAMPLE = ROOT / "sample_reports" / "guide_pins"

@@ -46,7 +46,7 @@ from threadpoolctl import threadpool_limits
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from setupfix.errors import SetupfixError
+from setupfix.core.errors import SetupfixError
 from setupfix.optimize import CorrectionProblem, get_optimizer
 
 RESULTS = ROOT / "bench" / "results"

@@ -31,9 +31,9 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
+from setupfix.correction.synthetic import simulate_deviations
 from setupfix.model import PartMeasurement, load_model
 from setupfix.optimize import CorrectionProblem, get_optimizer
-from setupfix.simulate import simulate_deviations
 
 RESULTS = ROOT / "bench" / "results"
 MODEL = ROOT / "sample_reports" / "guide_pins" / "model.toml"

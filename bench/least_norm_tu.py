@@ -4,7 +4,7 @@ Problems: random multi-part fixtures as ``bench/exact_scaling.py`` but every dim
 feature, cut by one tool in one WKS (weights ±1, no differences of two features): the margin rows
 are a network matrix after flipping the tool columns, totally unimodular, and the rounded rows b are
 integral, so the least Σ c k² over the grid is the vertex of one LP over the chords of k²
-(:func:`setupfix.optimize._least_norm.network_rows`).
+(:func:`setupfix.optimize.exact.least_norm.shop.network_rows`).
 
 For each size and seed the exact solve runs three times in the same process: the network LP
 first (``NETWORK_LP`` on, no listing before it: ``ellipsoid_max_registers`` = 0), without it
@@ -36,11 +36,11 @@ from threadpoolctl import threadpool_limits
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-import setupfix.optimize._grid_least_norm as stage
+import setupfix.optimize.exact.least_norm.grid as stage
 from setupfix.optimize import CorrectionProblem, get_optimizer
-from setupfix.optimize._highs import INF, LinearModel
-from setupfix.optimize._lp_bound import margin_rows
-from setupfix.optimize._settings import ExactSettings
+from setupfix.optimize.exact.highs import INF, LinearModel
+from setupfix.optimize.exact.lp_bound import margin_rows
+from setupfix.optimize.exact.settings import ExactSettings
 
 RESULTS = ROOT / "bench" / "results"
 SIZES = [(10, 28), (30, 100), (60, 400), (100, 800), (180, 2000), (300, 5000)]

@@ -2,16 +2,16 @@
 
 The varied guide-pins reports of ``bench/batch_throughput.py --vary`` (each actual moved by a
 seeded step in ±0.005 mm) are corrected once; those whose leximin reaches the counts
-(:mod:`setupfix.optimize._leximin_counts`, a discrete conflict that branches cannot decide) are
+(:mod:`setupfix.optimize.exact.leximin.counts`, a discrete conflict that branches cannot decide) are
 then corrected again in turn three ways: as before (presolved, HiGHS's default, and no linking
-rows), without presolve (:meth:`~setupfix.optimize._highs.LinearModel.skip_presolve`), and without
+rows), without presolve (:meth:`~setupfix.optimize.exact.highs.LinearModel.skip_presolve`), and without
 presolve with the rows w_i,q ≤ w_(i−1),q that link the nested count blocks (what the optimiser does,
-:data:`setupfix.optimize._leximin_counts.LINK`).  Time is process CPU time (the box is shared; wall
+:data:`setupfix.optimize.exact.leximin.counts.LINK`).  Time is process CPU time (the box is shared; wall
 time would measure the load), with the in-process reference of the same run (the mean over the five
 bundled cycles of ``correct_report``).  The corrections must be identical where the ways are proved.
 
 The reports whose conflict two dimensions must share are decided by branches on pairs
-(:func:`setupfix.optimize._leximin._alone`) before the counts: each of them is corrected again with
+(:func:`setupfix.optimize.exact.leximin.levels._alone`) before the counts: each of them is corrected again with
 the pairs switched off (``MAX_PAIR_TESTS`` = −1: the counts, as before), CPU time and answers compared.
 
     python bench/leximin_counts.py                 # 600 reports, 60 s limit
@@ -38,10 +38,11 @@ import numpy as np
 from batch_throughput import GUIDE, make_reports, reference
 
 from setupfix.model import load_model
-from setupfix.optimize import _leximin, _leximin_counts
-from setupfix.optimize._highs import LinearModel
-from setupfix.pipeline.correct import correct_report
-from setupfix.pipeline.requests import CorrectRequest, SolveOptions
+from setupfix.optimize.exact.highs import LinearModel
+from setupfix.optimize.exact.leximin import counts as _leximin_counts
+from setupfix.optimize.exact.leximin import levels as _leximin
+from setupfix.usecases.correct import correct_report
+from setupfix.usecases.requests import CorrectRequest, SolveOptions
 
 RESULTS = ROOT / "bench" / "results"
 SKIP = LinearModel.skip_presolve

@@ -1,7 +1,7 @@
 """The leximin's count band at shop scale on an independent engine: Google OR-Tools' CP-SAT.
 
 Whether a stronger off-the-shelf solver would put a proved leximin at 180 x 2,000 within reach.
-CP-SAT solves the same chain of questions as :mod:`setupfix.optimize._leximin_counts`, on the
+CP-SAT solves the same chain of questions as :mod:`setupfix.optimize.exact.leximin.counts`, on the
 integer model itself (units of 0.1 µm: deviations are rounded to it, tolerances are 5 µm
 multiples, a register step is 1 µm, so every margin is an integer):
 

@@ -4,7 +4,7 @@ One 180 x 2,000 problem of ``bench/exact_scaling.py`` (seed 1: a discrete confli
 counts decide), solved with the default objective and a 20 s limit, twice:
 
 * as the optimiser does it: one Farkas certificate from the rows near the level's point rules out the
-  dimensions it does not lean on before any alone test (:func:`setupfix.optimize._leximin._alone`);
+  dimensions it does not lean on before any alone test (:func:`setupfix.optimize.exact.leximin.levels._alone`);
 * with that certificate switched off beyond small problems (how the previous stop's code ran): every
   active dimension at the level is tested alone, each test an LP or MILP.
 
@@ -37,9 +37,9 @@ import numpy as np
 from exact_scaling import shop_problem
 from threadpoolctl import threadpool_limits
 
-import setupfix.optimize._leximin as lexmod
-import setupfix.optimize._leximin_counts as countmod
-import setupfix.optimize._leximin_pins as pins
+import setupfix.optimize.exact.leximin.counts as countmod
+import setupfix.optimize.exact.leximin.levels as lexmod
+import setupfix.optimize.exact.leximin.pins as pins
 from setupfix.optimize import get_optimizer
 
 RESULTS = ROOT / "bench" / "results"

@@ -11,7 +11,7 @@ Threads: BLAS limited to 1 (threadpoolctl), HiGHS single-threaded (``threads`` =
 optimiser sets it).  The paper-size set is timed in ``--passes`` passes (default 3); a report's time
 is its best pass (the box is shared and its speed drifts; the least of repeated timings of the same
 work is the least disturbed), each pass begins with no model's kept results of G
-(:meth:`~setupfix.optimize._session.GridRows.memo`, as in a new process), and the median of every
+(:meth:`~setupfix.optimize.exact.session.GridRows.memo`, as in a new process), and the median of every
 pass alone is printed too.
 
     python bench/leximin_speed.py                     # 5 cycles + 100 random sets; 180 x 2000, 3 seeds
@@ -47,12 +47,12 @@ sys.path.insert(0, str(ROOT / "bench"))
 from exact_per_report import problems
 from exact_scaling import shop_problem
 
-import setupfix.optimize._session as session_mod
+import setupfix.optimize.exact.session as session_mod
 from setupfix.model import load_model
 from setupfix.optimize import CorrectionProblem, get_optimizer
-from setupfix.optimize._lp_bound import lp_bound, margin_rows
-from setupfix.optimize._session import GridRows, Session
-from setupfix.optimize._settings import ExactSettings
+from setupfix.optimize.exact.lp_bound import lp_bound, margin_rows
+from setupfix.optimize.exact.session import GridRows, Session
+from setupfix.optimize.exact.settings import ExactSettings
 
 RESULTS = ROOT / "bench" / "results"
 
@@ -96,10 +96,10 @@ def timed(problem: CorrectionProblem, objective: str, limit: float) -> tuple[flo
 
 
 def climb_hits(probs: list[tuple[str, CorrectionProblem]], limit: float) -> tuple[int, int]:
-    """How often the root's grid climb (:mod:`setupfix.optimize._leximin_search`) already reaches the proved
+    """How often the root's grid climb (:mod:`setupfix.optimize.exact.leximin.search`) already reaches the proved
     leximin margins of the dimensions it orders (an untimed pass; the levels prove them either way).  Each
     climb's wall time goes to ``CLIMBS``."""
-    import setupfix.optimize._leximin as lexmod
+    import setupfix.optimize.exact.leximin.levels as lexmod
 
     seen: list[tuple[tuple, np.ndarray]] = []
     original = lexmod.climb
@@ -136,7 +136,7 @@ def multi_axis_problems(fixtures: int) -> list[tuple[str, CorrectionProblem]]:
     sys.path.insert(0, str(ROOT / "tests"))
     from multi_axis_fixtures import make_fixture, report_csv
 
-    from setupfix.pipeline.cycles import load_parts
+    from setupfix.inputs.cycles import load_parts
 
     out = []
     sample = ROOT / "sample_reports" / "two_station_xyz"

@@ -29,9 +29,9 @@ import json, sys, time
 sys.path.insert(0, sys.argv[1])
 from setupfix.model import load_model
 try:
-    from setupfix.pipeline.cycles import load_parts
+    from setupfix.inputs.cycles import load_parts
 except ImportError:  # a base commit older than pipeline/cycles.py (ab2835b)
-    from setupfix.pipeline.correct import load_parts
+    from setupfix.usecases.correct import load_parts
 from setupfix.optimize import CorrectionProblem, get_optimizer
 root, seeds, methods = sys.argv[1], int(sys.argv[2]), sys.argv[3].split(",")
 model = load_model(root + "/sample_reports/guide_pins/model.toml")

@@ -18,7 +18,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from parsers.truncation import check_prefixes, cut_points, line_cut_points
-from setupfix.errors import SetupfixError
+from setupfix.core.errors import SetupfixError
 
 SKIP_SUFFIXES = {".md", ".py", ".toml", ".png"}
 

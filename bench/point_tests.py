@@ -1,7 +1,7 @@
 """The point tests and level proofs of the leximin levels: tight rows first, all rows where needed (issue 22).
 
 A point test asks whether a grid point has every row's margin at least its floor
-(:func:`setupfix.optimize._leximin_pins.point_above`: can a dimension rise alone, can it be the only
+(:func:`setupfix.optimize.exact.leximin.pins.point_above`: can a dimension rise alone, can it be the only
 one left at a level, is there a point above the level).  NNLS and the LP answer most; where only a
 MILP can tell, the optimiser first solves the MILP of the rows within ``TIGHT_SLACK`` steps of the
 LP's vertex, and the MILP of all rows only where that one does not decide.
@@ -12,7 +12,7 @@ then times both MILPs on each (fresh models, HiGHS single-threaded), with the LP
 same report as the reference timed in the same run.  Every answer of the tight MILP must agree with
 the MILP of all rows where it decides.
 
-It also records every level proof by NNLS (:func:`setupfix.optimize._farkas.farkas_or_point` with the
+It also records every level proof by NNLS (:func:`setupfix.optimize.exact.farkas.farkas_or_point` with the
 level's own point): how many of the proofs the rows and box limits within ``NEAR`` steps of the point
 hold, and the time of the call with the near columns first against the whole system (best of 5 each).
 
@@ -38,13 +38,13 @@ sys.path.insert(0, str(ROOT / "bench"))
 from exact_per_report import problems
 from leximin_speed import lp_seconds
 
-import setupfix.optimize._farkas as farkas
-import setupfix.optimize._leximin_level as level_mod
-import setupfix.optimize._leximin_pins as pins
+import setupfix.optimize.exact.farkas as farkas
+import setupfix.optimize.exact.leximin.level as level_mod
+import setupfix.optimize.exact.leximin.pins as pins
 from setupfix.optimize import get_optimizer
-from setupfix.optimize._grid import rounded_rhs
-from setupfix.optimize._highs import INF, LinearModel
-from setupfix.optimize._session import GridRows
+from setupfix.optimize.exact.grid import rounded_rhs
+from setupfix.optimize.exact.highs import INF, LinearModel
+from setupfix.optimize.exact.session import GridRows
 
 RESULTS = ROOT / "bench" / "results"
 

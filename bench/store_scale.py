@@ -38,8 +38,8 @@ import numpy as np
 import pandas as pd
 
 from setupfix.model import CANONICAL_COLUMNS
-from setupfix.pipeline.parse import parse_reports
 from setupfix.store import open_store, report_tables
+from setupfix.usecases.parse import parse_reports
 
 OUT = ROOT / "bench" / "results" / "store_scale.txt"
 HOURS = 8760

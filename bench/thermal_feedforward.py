@@ -37,10 +37,10 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from parsers.temperature import read_temperature_log
-from setupfix.pipeline.thermal import predict_log
-from setupfix.pipeline.thermal_fit import fit_log
 from setupfix.thermal.feedforward import drift_change
+from setupfix.thermal.prediction import predict_log
 from setupfix.thermal.registry import methods
+from setupfix.usecases.thermal_fit import fit_log
 
 DATA = Path(os.environ.get("SETUPFIX_SHARED", ROOT.parent / "shared")) / "thermal-data" / "gooddash"
 INTERVALS = (6, 12, 24)

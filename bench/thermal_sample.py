@@ -15,7 +15,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from setupfix.pipeline.thermal_fit import evaluate_files
+from setupfix.usecases.thermal_fit import evaluate_files
 
 SAMPLES = Path(__file__).resolve().parents[1] / "sample_reports" / "thermal"
 RUNS = [

@@ -31,10 +31,10 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from parsers.temperature import read_temperature_log
-from setupfix.pipeline.thermal import predict_log
-from setupfix.pipeline.thermal_fit import fit_log
 from setupfix.thermal.metrics import score
+from setupfix.thermal.prediction import predict_log
 from setupfix.thermal.registry import methods
+from setupfix.usecases.thermal_fit import fit_log
 
 DATA = Path(os.environ.get("SETUPFIX_SHARED", ROOT.parent / "shared")) / "thermal-data" / "gooddash"
 SPLIT = 0.4

@@ -5,12 +5,12 @@ tools, 30 % difference dimensions, ±0.1 mm limits on a 0.001 mm grid) with a la
 of each deviation (``--noise``, default ±0.045 mm on top of eq. 12's setup error), so that about a
 tenth of the dimensions are measured out of tolerance and no correction brings all of them in.
 
-Each problem goes through ``setupfix.recommend.recommend`` (neutral policy) twice: in this tree and
+Each problem goes through ``setupfix.correction.recommend.recommend`` (neutral policy) twice: in this tree and
 in ``--old`` (a checkout of the tree before issue 22, run in a subprocess), both under the same
 time limit.  Stated per problem: dimensions measured in tolerance, kept in tolerance after the
 recommended correction (new, old), whether the answer moves a dimension measured in tolerance out
 (must be 0), the status, the wall time, and its ratio to one LP (max t, every margin ≥ t, the
-register bounds; HiGHS through ``setupfix.optimize._highs``) solved in the same process just
+register bounds; HiGHS through ``setupfix.optimize.exact.highs``) solved in the same process just
 before.  BLAS single-threaded; the load average is recorded (the machine may be shared).
 
     python bench/triage_no_harm.py                          # 30 x 100, 60 x 400, 180 x 2,000; 5 seeds
@@ -71,8 +71,8 @@ def hard_problem(n: int, m: int, seed: int, noise: float):  # -> CorrectionProbl
 
 def one_lp_seconds(problem) -> float:
     """Wall time of one LP: max t s.t. every margin ≥ t, register bounds (HiGHS, as the solver uses it)."""
-    from setupfix.optimize._highs import INF, LinearModel
-    from setupfix.optimize._lp_bound import margin_rows
+    from setupfix.optimize.exact.highs import INF, LinearModel
+    from setupfix.optimize.exact.lp_bound import margin_rows
 
     g_rows, g = margin_rows(problem)
     free = problem.free
@@ -94,10 +94,10 @@ def run(sizes: list[tuple[int, int]], seeds: int, noise: float, limit: float) ->
     """Every problem through recommend in the tree on sys.path; one record per problem."""
     from threadpoolctl import threadpool_limits
 
+    from setupfix.correction.pose import pose_policy
+    from setupfix.correction.recommend import recommend
+    from setupfix.correction.safety import Policy, harmed_mask
     from setupfix.optimize import get_optimizer
-    from setupfix.pose import pose_policy
-    from setupfix.recommend import recommend
-    from setupfix.safety import Policy, harmed_mask
 
     out = []
     with threadpool_limits(limits=1):

@@ -43,8 +43,8 @@ BEFORE = "933f99e"
 
 def reports(n: int, seed: int) -> list[tuple[str, np.ndarray]]:
     """(label, deviation) of n reports: cycles 1-5 in turn, each with 1 or 2 gross dimensions."""
+    from setupfix.inputs.cycles import load_parts
     from setupfix.model import load_model
-    from setupfix.pipeline.cycles import load_parts
 
     sample = ROOT / "sample_reports" / "guide_pins"
     model = load_model(sample / "model.toml")
@@ -65,9 +65,9 @@ def worker(n: int, seed: int, limit: float) -> dict[str, object]:
 
     from setupfix.model import PartMeasurement, load_model
     from setupfix.optimize import CorrectionProblem, get_optimizer
-    from setupfix.optimize._lp_bound import lp_bound, margin_rows
-    from setupfix.optimize._session import GridRows, Session
-    from setupfix.optimize._settings import ExactSettings
+    from setupfix.optimize.exact.lp_bound import lp_bound, margin_rows
+    from setupfix.optimize.exact.session import GridRows, Session
+    from setupfix.optimize.exact.settings import ExactSettings
 
     model = load_model(ROOT / "sample_reports" / "guide_pins" / "model.toml")
 
@@ -111,9 +111,10 @@ def worker(n: int, seed: int, limit: float) -> dict[str, object]:
 
 def check(limit: float) -> list[str]:
     """cycle_01, P1 D1 at -0.25 mm: the default answer against the MILP path alone with a long limit."""
+    from setupfix.inputs.cycles import load_parts
     from setupfix.model import PartMeasurement, load_model
-    from setupfix.optimize import CorrectionProblem, _triage, get_optimizer
-    from setupfix.pipeline.cycles import load_parts
+    from setupfix.optimize import CorrectionProblem, get_optimizer
+    from setupfix.optimize.exact.triage import solve as _triage
 
     sample = ROOT / "sample_reports" / "guide_pins"
     model = load_model(sample / "model.toml")

@@ -6,7 +6,7 @@ Problems: the random multi-part fixtures of ``bench/exact_scaling.py`` with a no
 whose RINS/RENS sub-searches ran past the limit.  Each is solved with a short limit; reported
 are the wall time, the overrun beyond the limit, the status and the stage that stopped.  HiGHS
 runs with its interrupt callbacks on the wall clock and without RINS/RENS
-(:mod:`setupfix.optimize._highs`).
+(:mod:`setupfix.optimize.exact.highs`).
 
     python bench/triage_time_limit.py             # 3 sizes x 3 seeds x limits 0.5 and 2 s
     python bench/triage_time_limit.py --seeds 1

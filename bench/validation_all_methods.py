@@ -21,12 +21,12 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
+from setupfix.correction.synthetic import simulate_deviations
 from setupfix.model import PartMeasurement, load_model
 from setupfix.optimize import CorrectionProblem
-from setupfix.pipeline.compare import DEFAULT_METHODS, compare_problem
-from setupfix.pipeline.writers import write_figure
-from setupfix.plots import validation_figure
-from setupfix.simulate import simulate_deviations
+from setupfix.outputs.plots import validation_figure
+from setupfix.outputs.writers import write_figure
+from setupfix.usecases.compare import DEFAULT_METHODS, compare_problem
 
 OUT = ROOT / "bench" / "results"
 TARGET_UM = {"cripso": 2.0, "pso": 10.0, "ga": 10.0, "coa": 25.0, "cs": 25.0}

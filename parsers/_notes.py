@@ -13,7 +13,7 @@ from collections.abc import Iterator
 from contextlib import contextmanager
 from contextvars import ContextVar
 
-from setupfix.errors import Note, SourceLocation
+from setupfix.core.errors import Note, SourceLocation
 
 __all__ = ["note", "collecting"]
 

@@ -20,7 +20,7 @@ from parsers._rowkeys import row_keys
 from parsers._source import NO_FINAL_LINE_BREAK, Peek, Source, load_source, peek
 from parsers._verdicts import verdict_notes
 from parsers.names import visible_name
-from setupfix.errors import (
+from setupfix.core.errors import (
     Note,
     ParameterError,
     ParseError,
@@ -286,7 +286,7 @@ def read(path: str | Path, *, format: str | None = None, **options: Any) -> pd.D
     """Read one report into the canonical table (the table of :func:`read_report`).
 
     Kept for callers written before :func:`read_report`: the notes are re-issued as
-    :class:`~setupfix.errors.ParseWarning` so that they are not lost.  New code uses
+    :class:`~setupfix.core.errors.ParseWarning` so that they are not lost.  New code uses
     :func:`read_report` and its ``notes``, which never touch the process-global
     :mod:`warnings` state.
 

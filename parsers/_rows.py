@@ -22,8 +22,8 @@ import pandas as pd
 from parsers import numbers
 from parsers._notes import note
 from parsers.canonical import DEVIATION_TOLERANCE_MM, finish_table
-from setupfix.errors import ParseError, SourceLocation
-from setupfix.units import LENGTH_UNITS
+from setupfix.core.errors import ParseError, SourceLocation
+from setupfix.core.units import LENGTH_UNITS
 
 __all__ = [
     "SkipLog",

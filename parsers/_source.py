@@ -15,7 +15,7 @@ from typing import BinaryIO
 
 from parsers import numbers
 from parsers.names import visible_name
-from setupfix.errors import ParseError, SourceLocation
+from setupfix.core.errors import ParseError, SourceLocation
 
 __all__ = [
     "Peek",

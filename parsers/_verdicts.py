@@ -13,7 +13,7 @@ import numpy as np
 import pandas as pd
 
 from parsers.canonical import DEVIATION_TOLERANCE_MM
-from setupfix.errors import Note, SourceLocation
+from setupfix.core.errors import Note, SourceLocation
 
 __all__ = ["verdict_notes", "PASS_WORDS", "FAIL_WORDS"]
 

@@ -18,9 +18,9 @@ import pandas as pd
 
 from parsers._source import Source, csv_records, decode, point_number, read_bytes
 from parsers.numbers import MAX_NUMBER_CHARS, number_pattern, try_number
-from setupfix.errors import ParseError, SourceLocation
+from setupfix.core.errors import ParseError, SourceLocation
+from setupfix.core.units import LENGTH_UNITS, length_factor
 from setupfix.model.measurements import CANONICAL_COLUMNS, LENGTH_COLUMNS
-from setupfix.units import LENGTH_UNITS, length_factor
 
 __all__ = ["read_canonical", "sniff_canonical", "finish_table", "DEVIATION_TOLERANCE_MM"]
 
@@ -31,7 +31,7 @@ DEVIATION_TOLERANCE_MM = 0.0011
 
 
 def _unescaped(cell: str) -> str:
-    """A text cell as written before :func:`setupfix.pipeline.writers.escape_formulas` prefixed it."""
+    """A text cell as written before :func:`setupfix.outputs.writers.escape_formulas` prefixed it."""
     return cell[1:] if cell[:1] == "'" and cell[1:2] in ("=", "+", "-", "@", "\t", "\r") else cell
 
 

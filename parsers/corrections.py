@@ -35,7 +35,7 @@ import pandas as pd
 from parsers import numbers
 from parsers._source import csv_records, read_bytes
 from parsers.timestamps import parse_timestamp, to_index, utc_naive
-from setupfix.errors import MatchError, ParseError, SourceLocation
+from setupfix.core.errors import MatchError, ParseError, SourceLocation
 from setupfix.model import ProcessModel
 
 __all__ = [

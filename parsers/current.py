@@ -28,9 +28,9 @@ from pathlib import Path
 
 from parsers._source import csv_records, read_text
 from parsers.numbers import try_number
-from setupfix.errors import ParseError, SourceLocation
+from setupfix.core.errors import ParseError, SourceLocation
+from setupfix.core.units import length_factor
 from setupfix.model import ProcessModel, Register
-from setupfix.units import length_factor
 
 __all__ = ["read_current", "MAX_OFFSET_MM"]
 

@@ -40,7 +40,7 @@ from pathlib import Path
 
 from parsers._registry import NOT_REPORT_NAMES, never_a_report
 from parsers.names import visible_name
-from setupfix.errors import Note, SourceLocation
+from setupfix.core.errors import Note, SourceLocation
 
 __all__ = ["FoundFile", "Listing", "list_reports", "Inputs", "expand_inputs", "PARTIAL_SUFFIXES", "LOG_NAMES"]
 

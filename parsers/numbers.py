@@ -20,7 +20,7 @@ import math
 import re
 from typing import Literal
 
-from setupfix.errors import ParseError, SourceLocation
+from setupfix.core.errors import ParseError, SourceLocation
 
 __all__ = ["parse_number", "try_number", "is_number", "number_pattern", "Decimal", "MAX_NUMBER_CHARS"]
 

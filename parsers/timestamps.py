@@ -14,7 +14,7 @@ from typing import Any
 
 import pandas as pd
 
-from setupfix.errors import ParseError, SourceLocation
+from setupfix.core.errors import ParseError, SourceLocation
 
 __all__ = ["parse_timestamp", "iso_text", "utc_naive", "instant", "to_index", "TIMESTAMP_HINT"]
 

@@ -14,7 +14,7 @@ from dataclasses import dataclass
 from parsers._registry import read_report
 from parsers._rowkeys import ROW_COLUMNS, row_keys
 from parsers._source import Source
-from setupfix.errors import SetupfixError
+from setupfix.core.errors import SetupfixError
 
 __all__ = ["ROW_COLUMNS", "row_keys", "cut_points", "line_cut_points", "CutOutcome", "check_prefixes"]
 

@@ -2,10 +2,10 @@
 
 Layers, bottom to top (each imports only those below it):
 
-1. :mod:`setupfix.model`, :mod:`setupfix.errors`, :mod:`setupfix.units` — plain data;
+1. :mod:`setupfix.model`, :mod:`setupfix.core.errors`, :mod:`setupfix.core.units` — plain data;
 2. :mod:`parsers` — report readers producing the canonical measurement table;
-3. engine — :mod:`setupfix.relation`, :mod:`setupfix.objective`, :mod:`setupfix.optimize`,
-   :mod:`setupfix.thermal`, :mod:`setupfix.offsets`;
+3. engine — :mod:`setupfix.correction.relation`, :mod:`setupfix.correction.objective`, :mod:`setupfix.optimize`,
+   :mod:`setupfix.thermal`, :mod:`setupfix.correction.offsets`;
 4. :mod:`setupfix.pipeline` — the use cases shared by the CLI, batch and TUI;
 5. :mod:`setupfix.cli`, :mod:`setupfix.tui`.
 """

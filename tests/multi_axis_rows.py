@@ -1,9 +1,9 @@
-"""Hand-built offset rows of a multi-axis correction (the rows :func:`setupfix.offsets.offset_rows` gives a
+"""Hand-built offset rows of a multi-axis correction (the rows :func:`setupfix.correction.offsets.offset_rows` gives a
 multi-axis model: one per register component), for the controller tests."""
 
 from __future__ import annotations
 
-from setupfix.offsets import OffsetRow
+from setupfix.correction.offsets import OffsetRow
 
 __all__ = ["row", "fixture_rows", "SPEC"]
 

@@ -36,8 +36,8 @@ CONCENTRATION = [
 
 def closed_loop_store(folder: Path) -> Path:
     """A history store of the closed-loop sample (40 cycles of the guide pins, its corrections log)."""
-    from setupfix.pipeline.history import ImportRequest, import_history
     from setupfix.store import open_store
+    from setupfix.usecases.history import ImportRequest, import_history
 
     db = folder / "loop.db"
     with open_store(db) as store:

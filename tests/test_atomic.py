@@ -13,8 +13,8 @@ from pathlib import Path
 
 import pytest
 
-from setupfix.atomic import STALE_AGE_S, atomic_write, check_target, write_text
-from setupfix.errors import ExportError
+from setupfix.core.atomic import STALE_AGE_S, atomic_write, check_target, write_text
+from setupfix.core.errors import ExportError
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -146,7 +146,7 @@ def test_kill_mid_write_leaves_old_content_and_next_write_cleans_up(tmp_path):
     target = tmp_path / "out.csv"
     target.write_text("old\n")
     code = (
-        "import os, signal, sys; from setupfix.atomic import atomic_write\n"
+        "import os, signal, sys; from setupfix.core.atomic import atomic_write\n"
         "with atomic_write(sys.argv[1]) as s:\n"
         "    s.write('half'); s.flush(); os.kill(os.getpid(), signal.SIGKILL)\n"
     )

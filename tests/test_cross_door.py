@@ -5,9 +5,9 @@ deviations of cycle 01 perturbed by a seeded generator), the four doors
 
 * ``setupfix correct --json`` (the CLI, in this process),
 * ``setupfix batch`` (its offsets CSV),
-* the TUI's session (:func:`setupfix.pipeline.session.open_report`; once the real
+* the TUI's session (:func:`setupfix.tui.session.open_report`; once the real
   Textual app too), and
-* the library call (:func:`setupfix.pipeline.correct.correct_report`)
+* the library call (:func:`setupfix.usecases.correct.correct_report`)
 
 give the same verdict and the same corrections for every cycle — with register costs,
 every safety setting, an augmented model's effects, EWMA smoothing over a history
@@ -34,8 +34,9 @@ from conftest import SAMPLES
 
 from setupfix.cli import main
 from setupfix.model import load_model
-from setupfix.pipeline.correct import correct_report
-from setupfix.pipeline.requests import (
+from setupfix.store import open_store
+from setupfix.usecases.correct import correct_report
+from setupfix.usecases.requests import (
     CorrectRequest,
     CurrentOffsets,
     CycleOptions,
@@ -44,7 +45,6 @@ from setupfix.pipeline.requests import (
     SolveOptions,
     load_thermal,
 )
-from setupfix.store import open_store
 
 GUIDE = SAMPLES / "guide_pins"
 GUIDE_MODEL = GUIDE / "model.toml"
@@ -132,7 +132,7 @@ def current_offsets(path: Path) -> Path:
 @pytest.fixture(scope="module")
 def thermal(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Path]:
     """A grey-box thermal model fitted on the bundled training log, and the test log moved to cycle 01's day."""
-    from setupfix.pipeline.thermal_fit import fit_file
+    from setupfix.usecases.thermal_fit import fit_file
 
     d = tmp_path_factory.mktemp("thermal")
     saved = d / "drift.json"
@@ -250,7 +250,7 @@ def door_batch(case: Case, tmp: Path) -> Decisions:
 
 def door_session(case: Case, tmp: Path) -> Decisions:
     """The TUI's session: its open worker with the inputs ``setupfix tui`` gives it, report by report."""
-    from setupfix.pipeline.stores import StoreRef
+    from setupfix.inputs.stores import StoreRef
     from setupfix.tui.workers import open_report
 
     db = _store_copy(case, tmp, "session")
@@ -540,7 +540,7 @@ def seen_by_batch(folder: Path, tmp: Path) -> set[str]:
 
 def seen_by_the_folder_watch(folder: Path, tmp: Path) -> set[str]:
     """Every report the TUI's folder watch hands out, newest first (each taken away once handed out)."""
-    from setupfix.pipeline.session import FolderWatch
+    from setupfix.tui.session import FolderWatch
 
     watch, seen, taken = FolderWatch(folder, settle=0.0), set(), tmp / "taken"
     taken.mkdir()
@@ -559,7 +559,7 @@ def test_batch_and_the_tui_folder_watch_see_the_same_reports(tmp_path):
 
 
 def test_parse_sees_the_same_reports(tmp_path):
-    from setupfix.pipeline.parse import parse_reports
+    from setupfix.usecases.parse import parse_reports
 
     folder, reports = report_folder(tmp_path)
     outcome = parse_reports([folder])
@@ -574,7 +574,7 @@ def test_a_stopped_solve_is_not_solved_through_every_door(tmp_path):
     "no change needed": exit 6, ``"solved": false``, the batch counts it and its store does not skip it next run."""
     from shop_model import write_shop
 
-    from setupfix.pipeline.view import summary
+    from setupfix.views.correction import summary
 
     model, report = write_shop(tmp_path / "shop")  # 60 registers × 600 dimensions: the LP bound alone > 1e-5 s
     limit = ["--time-limit", "1e-5"]
@@ -618,9 +618,9 @@ def test_a_stopped_solve_is_not_solved_through_every_door(tmp_path):
     )
     assert json.loads(text)["skipped"][0]["reason"].startswith("already processed")  # … and skipped next time
 
-    from setupfix.errors import ExportError
-    from setupfix.pipeline.export import export
+    from setupfix.core.errors import ExportError
     from setupfix.tui.workers import open_report
+    from setupfix.usecases.export import export
 
     opened, _ = open_report(
         model,

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from setupfix.errors import ParseError, SourceLocation
+from setupfix.core.errors import ParseError, SourceLocation
 
 
 def test_location_names_file_line_key_and_element():

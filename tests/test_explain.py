@@ -1,11 +1,11 @@
-"""setupfix.explain: leave-one-out residuals against explicit refits, and the one-register explanation."""
+"""setupfix.correction.explain: leave-one-out residuals against explicit refits, and the one-register explanation."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from setupfix.explain import fit_registers, leave_one_out, one_register, targets
+from setupfix.correction.explain import fit_registers, leave_one_out, one_register, targets
 
 
 def test_leave_one_out_equals_refitting_without_each_dimension():

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from setupfix.objective import correction_norm, error_budget, fitness, margins
+from setupfix.correction.objective import correction_norm, error_budget, fitness, margins
 
 
 def test_margin_is_distance_to_nearer_limit():

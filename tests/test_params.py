@@ -7,8 +7,8 @@ from typing import ClassVar
 
 import pytest
 
-from setupfix.errors import ParameterError, SetupfixError
-from setupfix.params import Constraint, Interval, Options, Predicate, ValidatedParams, validate_params
+from setupfix.core.errors import ParameterError, SetupfixError
+from setupfix.core.params import Constraint, Interval, Options, Predicate, ValidatedParams, validate_params
 
 
 class _Est(ValidatedParams):

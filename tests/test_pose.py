@@ -1,4 +1,4 @@
-"""setupfix.pose: the one problem builder, step by step, against the formulas and brute force."""
+"""setupfix.correction.pose: the one problem builder, step by step, against the formulas and brute force."""
 
 from __future__ import annotations
 
@@ -7,14 +7,14 @@ import itertools
 import numpy as np
 import pytest
 
+from setupfix.correction.ewma import ewma_history
+from setupfix.correction.pose import pose_problem
+from setupfix.correction.recommend import recommend
+from setupfix.correction.relation import relation_matrices
 from setupfix.diagnose.forecast import forecast_shift
 from setupfix.diagnose.terms import Layout
-from setupfix.ewma import ewma_history
 from setupfix.model import PartMeasurement, model_from_dict
 from setupfix.optimize import CorrectionProblem, get_optimizer
-from setupfix.pose import pose_problem
-from setupfix.recommend import recommend
-from setupfix.relation import relation_matrices
 
 SOLVE = get_optimizer("exact").solve
 
@@ -176,7 +176,7 @@ def truncated_copy(tmp_path, name="cycle_02.csv", drop=TRUNCATED):
 
 
 def corrected(report, model_path=GUIDE_PINS / "model.toml", **inputs):
-    from setupfix.pipeline.correct import correct_report, load_request
+    from setupfix.usecases.correct import correct_report, load_request
 
     (cycle,) = correct_report(load_request(model_path, **inputs), report).cycles
     return cycle
@@ -215,7 +215,7 @@ def test_a_dimension_marked_sampled_leaves_its_registers_free(tmp_path):
     assert all(d.sampled == (d.id[-2:] in ("D1", "D2", "D3", "D4")) for d in cycle.model.dimensions)
     bad = tmp_path / "bad.toml"
     bad.write_text(text.replace("sampled = true", 'sampled = "yes"', 1), encoding="utf-8")
-    from setupfix.errors import SetupfixError
+    from setupfix.core.errors import SetupfixError
     from setupfix.model import load_model
 
     with pytest.raises(SetupfixError, match="sampled"):

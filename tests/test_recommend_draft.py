@@ -10,11 +10,11 @@ from pathlib import Path
 import numpy as np
 
 from setupfix.model import load_model
-from setupfix.pipeline.batch import run_batch
-from setupfix.pipeline.correct import correct_report
-from setupfix.pipeline.requests import CorrectRequest
-from setupfix.pipeline.session import open_report
-from setupfix.pipeline.view import summary as headline
+from setupfix.tui.session import open_report
+from setupfix.usecases.batch import run_batch
+from setupfix.usecases.correct import correct_report
+from setupfix.usecases.requests import CorrectRequest
+from setupfix.views.correction import summary as headline
 from tests.conftest import GUIDE_PINS
 
 

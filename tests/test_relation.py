@@ -5,13 +5,13 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from setupfix.model import model_from_dict
-from setupfix.relation import (
+from setupfix.correction.relation import (
     null_space_directions,
     predict_dimensions,
     predict_features,
     relation_matrices,
 )
+from setupfix.model import model_from_dict
 
 # Printed matrices of the practical example for one workpiece (Stryczek 2014).
 PAPER_R_TF = np.array([[1, 1, 0, 0, -1, -1, -1], [0, 0, -1, 1, 0, 0, 0]])
@@ -94,7 +94,7 @@ def test_matrices_are_kept_per_model_object_and_never_stale(guide_pins_model):
     and a different model, even one equal in all but one weight, gets its own."""
     import dataclasses
 
-    from setupfix import relation
+    from setupfix.correction import relation
 
     first = relation_matrices(guide_pins_model)
     assert relation_matrices(guide_pins_model) is first

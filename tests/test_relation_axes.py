@@ -7,8 +7,8 @@ import math
 import numpy as np
 import pytest
 
+from setupfix.correction.relation import feature_shifts, projected_composite, relation_matrices
 from setupfix.model import model_from_dict
-from setupfix.relation import feature_shifts, projected_composite, relation_matrices
 
 DOC = {
     "process": {"name": "hand", "axes": ["X", "Y", "Z"], "rotation": True},

@@ -1,5 +1,7 @@
-"""Each safety rule's effect on a recommendation (setupfix.safety, posed by setupfix.pose), on small problems
-solved exactly."""
+"""Each safety rule's effect on a recommendation, on small problems solved exactly.
+
+The rules are :mod:`setupfix.correction.safety`; the problems are posed by :mod:`setupfix.correction.pose`.
+"""
 
 from __future__ import annotations
 
@@ -8,11 +10,11 @@ import dataclasses
 import numpy as np
 import pytest
 
-from setupfix.ewma import ewma
+from setupfix.correction.ewma import ewma
+from setupfix.correction.pose import pose_policy
+from setupfix.correction.recommend import recommend as recommend_posed
+from setupfix.correction.safety import Policy, apply_gain, cumulative_bounds, guard_limits, harmed_mask, reject_mask
 from setupfix.optimize import CorrectionProblem, get_optimizer
-from setupfix.pose import pose_policy
-from setupfix.recommend import recommend as recommend_posed
-from setupfix.safety import Policy, apply_gain, cumulative_bounds, guard_limits, harmed_mask, reject_mask
 
 SOLVE = get_optimizer("exact").solve
 
@@ -40,7 +42,7 @@ def policy(p, **kw):
 
 
 def recommend(p, pol, solve, *, measured=None, **kw):
-    """The rules around ``solve`` on ``p`` posed with ``pol`` (setupfix.pose: guard band, bounds, costs)."""
+    """The rules around ``solve`` on ``p`` posed with ``pol`` (setupfix.correction.pose: guard band, bounds, costs)."""
     return recommend_posed(pose_policy(p, pol, measured=measured), solve, **kw)
 
 

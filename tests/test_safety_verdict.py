@@ -1,5 +1,5 @@
 """The verdict around a solve that did not finish, on real problems stopped by a tiny time limit
-(setupfix.recommend.recommend, stopped_rule)."""
+(setupfix.correction.recommend.recommend, stopped_rule)."""
 
 from __future__ import annotations
 
@@ -12,13 +12,13 @@ from conftest import GUIDE_PINS
 from optimize.test_exact_robust import shop_problem
 
 import parsers
-from setupfix.explain import fit_registers, leave_one_out
+from setupfix.correction.explain import fit_registers, leave_one_out
+from setupfix.correction.pose import pose_policy, pose_problem
+from setupfix.correction.recommend import recommend, stopped_rule
+from setupfix.correction.safety import STOPPED, Policy, short_list
+from setupfix.inputs.cycles import read_parts
 from setupfix.model import load_model
 from setupfix.optimize import CorrectionProblem, get_optimizer
-from setupfix.pipeline.cycles import read_parts
-from setupfix.pose import pose_policy, pose_problem
-from setupfix.recommend import recommend, stopped_rule
-from setupfix.safety import STOPPED, Policy, short_list
 
 
 def test_a_solve_stopped_before_any_proof_is_not_solved_never_no_change_needed():
@@ -89,8 +89,8 @@ def guide_part():
 
 
 def corrected(model, part, deviation):
-    from setupfix.pipeline.correct import correct_cycle
-    from setupfix.pipeline.requests import CorrectRequest
+    from setupfix.usecases.correct import correct_cycle
+    from setupfix.usecases.requests import CorrectRequest
 
     return correct_cycle(CorrectRequest(model), dataclasses.replace(part, deviation=deviation))
 
@@ -152,7 +152,8 @@ def test_an_alarm_over_hundreds_of_dimensions_is_one_short_line_the_json_keeps_t
     assert re.search(r"600 dimension\(s\) beyond the reject band .*: SP_000, SP_001, SP_002, … and 597 more", rec.alarm)
     assert len(rec.rules[-1].dimensions) == 600
 
-    from setupfix.pipeline.present import cycle_json, format_correction
+    from setupfix.usecases.contract import cycle_json
+    from setupfix.views.present import format_correction
 
     assert len(cycle_json(cycle)["rules"][-1]["dimensions"]) == 600
     assert max(len(line) for line in format_correction(cycle).splitlines()) < 400

@@ -24,8 +24,8 @@ from parsers._source import csv_records, read_text
 from parsers.canonical import DEVIATION_TOLERANCE_MM, finish_table
 from parsers.geometry import axis_vector, geometry_cells
 from parsers.numbers import parse_number
-from setupfix.errors import ParseError, SourceLocation
-from setupfix.units import LENGTH_UNITS, length_factor
+from setupfix.core.errors import ParseError, SourceLocation
+from setupfix.core.units import LENGTH_UNITS, length_factor
 
 __all__ = ["read_calypso", "sniff_calypso", "REQUIRED"]
 

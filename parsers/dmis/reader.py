@@ -29,8 +29,8 @@ from parsers.canonical import finish_table
 from parsers.dmis.statements import Statement, parse_statement, split_statements
 from parsers.geometry import axis_vector, geometry_cells, unit_vector
 from parsers.numbers import is_number
-from setupfix.errors import ParseError, SourceLocation
-from setupfix.units import LENGTH_UNITS, length_factor
+from setupfix.core.errors import ParseError, SourceLocation
+from setupfix.core.units import LENGTH_UNITS, length_factor
 
 __all__ = ["read_dmis", "sniff_dmis"]
 

@@ -30,7 +30,7 @@ from parsers._rows import SkipLog, finish_rows, parse_number, unit_factor, unit_
 from parsers._source import Source, read_text
 from parsers.canonical import DEVIATION_TOLERANCE_MM
 from parsers.geometry import axis_vector, geometry_cells
-from setupfix.errors import ParseError, SourceLocation
+from setupfix.core.errors import ParseError, SourceLocation
 
 __all__ = ["read_korean", "sniff_korean"]
 

@@ -39,7 +39,7 @@ from parsers._rows import (
     warn_assumed_mm,
 )
 from parsers._source import read_text
-from setupfix.errors import ParseError, SourceLocation
+from setupfix.core.errors import ParseError, SourceLocation
 
 __all__ = ["read_qvpak", "sniff_qvpak"]
 

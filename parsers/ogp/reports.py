@@ -42,7 +42,7 @@ from parsers._rows import (
 )
 from parsers._source import read_text
 from parsers.ogp.rtf import is_rtf, rtf_lines
-from setupfix.errors import ParseError, SourceLocation
+from setupfix.core.errors import ParseError, SourceLocation
 
 __all__ = ["read_ogp", "sniff_ogp"]
 

@@ -27,7 +27,7 @@ from parsers._rows import (
 )
 from parsers.geometry import DIRECTION_COLUMNS
 from parsers.pcdmis.axes import ANGLE_AXES, NON_LENGTH_AXES
-from setupfix.errors import ParseError, SourceLocation
+from setupfix.core.errors import ParseError, SourceLocation
 from setupfix.model.measurements import CANONICAL_COLUMNS
 
 __all__ = ["STAMP", "heading_of", "read_columns"]

@@ -22,7 +22,7 @@ from parsers._source import read_text
 from parsers.pcdmis.axes import ANGLE_AXES, NON_LENGTH_AXES
 from parsers.pcdmis.columns import STAMP, heading_of, read_columns
 from parsers.pcdmis.text_report import _Raw, rows_from_raw
-from setupfix.errors import ParseError, SourceLocation
+from setupfix.core.errors import ParseError, SourceLocation
 
 __all__ = ["read_pcdmis_csv", "sniff_pcdmis_csv"]
 

@@ -42,7 +42,7 @@ from parsers._rows import (
 from parsers._source import read_text
 from parsers.geometry import axis_vector, geometry_cells
 from parsers.pcdmis.axes import ANGLE_AXES, NON_LENGTH_AXES
-from setupfix.errors import ParseError, SourceLocation
+from setupfix.core.errors import ParseError, SourceLocation
 
 __all__ = ["read_pcdmis_text", "sniff_pcdmis_text"]
 

@@ -34,7 +34,7 @@ from parsers._rows import (
     warn_assumed_mm,
 )
 from parsers._source import load_source, read_text
-from setupfix.errors import ParseError, SourceLocation
+from setupfix.core.errors import ParseError, SourceLocation
 
 __all__ = ["read_aqdef", "sniff_aqdef"]
 
@@ -47,7 +47,7 @@ _INVALID_ATTRIBUTES = {"255", "256"}
 _DATE = re.compile(r"^(\d{1,2})\.(\d{1,2})\.(\d{4})(?:[/ T](\d{1,2}):(\d{2})(?::(\d{2}))?)?$")
 #: Dates already converted (a value file repeats the same few thousand stamps).
 _DATES: dict[str, str] = {}
-#: Units that are lengths but not in setupfix.units: micrometres.
+#: Units that are lengths but not in setupfix.core.units: micrometres.
 _MICRO = {"µm", "um", "μm"}
 
 

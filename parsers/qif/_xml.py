@@ -13,7 +13,7 @@ import re
 
 from lxml import etree
 
-from setupfix.errors import ParseError, SourceLocation
+from setupfix.core.errors import ParseError, SourceLocation
 
 __all__ = ["parse_xml"]
 

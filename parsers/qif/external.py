@@ -18,7 +18,7 @@ from lxml import etree
 
 from parsers._source import STDIN, read_bytes
 from parsers.qif._xml import parse_xml
-from setupfix.errors import ParseError, SourceLocation
+from setupfix.core.errors import ParseError, SourceLocation
 
 __all__ = ["IdIndex", "build_index", "resolve_external", "beside"]
 

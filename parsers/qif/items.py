@@ -17,7 +17,7 @@ from parsers.geometry import axis_vector, unit_vector
 from parsers.numbers import parse_number, try_number
 from parsers.qif.external import IdIndex
 from parsers.qif.units import file_unit_factor, unit_factor
-from setupfix.errors import ParseError, SourceLocation
+from setupfix.core.errors import ParseError, SourceLocation
 
 __all__ = [
     "PROFILE_KINDS",

@@ -24,7 +24,7 @@ from parsers.qif.external import build_index, resolve_external
 from parsers.qif.flatten import Record, measurement_table, record, results_elements
 from parsers.qif.items import Doc, Item, child_text, item_info, local, number, raw_float
 from parsers.qif.units import choose_file_unit, file_unit_factor
-from setupfix.errors import ParseError, SourceLocation
+from setupfix.core.errors import ParseError, SourceLocation
 
 __all__ = ["read_qif", "sniff_qif", "NON_LENGTH_KINDS"]
 

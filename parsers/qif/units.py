@@ -15,8 +15,8 @@ from lxml import etree
 
 from parsers._notes import note
 from parsers.numbers import try_number
-from setupfix.errors import ParseError, SourceLocation
-from setupfix.units import LENGTH_UNITS, length_factor
+from setupfix.core.errors import ParseError, SourceLocation
+from setupfix.core.units import LENGTH_UNITS, length_factor
 
 __all__ = ["unit_factor", "file_unit_factor", "choose_file_unit", "METRE_PLAUSIBLE_MAX"]
 

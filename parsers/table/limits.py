@@ -15,7 +15,7 @@ import io
 import re
 import zipfile
 
-from setupfix.errors import ParseError, SourceLocation
+from setupfix.core.errors import ParseError, SourceLocation
 
 __all__ = ["check_workbook", "MAX_UNPACKED_BYTES", "MAX_CELLS", "MAX_RATIO"]
 

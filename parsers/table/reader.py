@@ -25,8 +25,8 @@ from parsers.canonical import DEVIATION_TOLERANCE_MM, finish_table
 from parsers.numbers import MAX_NUMBER_CHARS, number_pattern
 from parsers.table.limits import check_workbook
 from parsers.table.mapping import guess_columns, parse_columns
-from setupfix.errors import ParseError, SourceLocation
-from setupfix.units import LENGTH_UNITS, length_factor
+from setupfix.core.errors import ParseError, SourceLocation
+from setupfix.core.units import LENGTH_UNITS, length_factor
 
 __all__ = ["read_table", "sniff_table", "load_grid"]
 

@@ -44,7 +44,7 @@ import numpy.typing as npt
 from parsers._source import csv_records, decode, read_bytes
 from parsers.numbers import try_number
 from parsers.timestamps import parse_timestamp
-from setupfix.errors import Note, ParseError, SourceLocation
+from setupfix.core.errors import Note, ParseError, SourceLocation
 
 __all__ = ["TemperatureLog", "read_temperature_log", "TIMESTAMP", "INDEX_COLUMNS", "strict_number"]
 

@@ -120,8 +120,8 @@ def main() -> None:
     import sys
 
     sys.path.insert(0, str(HERE.parents[1]))
+    from setupfix.correction.synthetic import simulate_deviations
     from setupfix.model import load_model
-    from setupfix.simulate import simulate_deviations
 
     (HERE / "model.toml").write_text(model_toml(), encoding="utf-8")
     expanded = HERE.parents[1] / "tests" / "model" / "data" / "guide_pins_expanded.toml"

@@ -15,7 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
-from setupfix.atomic import atomic_write
+from setupfix.core.atomic import atomic_write
 from setupfix.thermal.simulator import simulate, speed_profile
 
 HERE = Path(__file__).resolve().parent

@@ -1,11 +1,11 @@
 """Command line: ``setupfix <command> …``.
 
-This module is the single error boundary: a :class:`~setupfix.errors.SetupfixError`
+This module is the single error boundary: a :class:`~setupfix.core.errors.SetupfixError`
 becomes one line on stderr and exit status 1, a usage error exit status 2, an
 unexpected exception one line naming it and exit status 3 (never a traceback),
 Ctrl-C exit status 130.  Sub-commands live one per module, each with
 ``add_parser(subparsers)`` and ``run(args) -> int``; they hold no computation, only
-calls into :mod:`setupfix.pipeline`.
+calls into :mod:`setupfix.usecases`.
 """
 
 from __future__ import annotations
@@ -19,26 +19,26 @@ from collections.abc import Callable, Sequence
 from typing import TextIO
 
 from setupfix import __version__
-from setupfix.cli._common import TERMS
+from setupfix.cli.common import TERMS
 from setupfix.cli.exit_codes import ERROR, INTERRUPTED, UNEXPECTED, USAGE
-from setupfix.errors import SetupfixError
+from setupfix.core.errors import SetupfixError
 
 __all__ = ["main", "build_parser"]
 
 #: Sub-command modules, in the order ``--help`` lists them.
 COMMAND_MODULES: tuple[str, ...] = (
-    "setupfix.cli._correct",
-    "setupfix.cli._batch",
-    "setupfix.cli._parse",
-    "setupfix.cli._formats",
-    "setupfix.cli._compare",
-    "setupfix.cli._model",
-    "setupfix.cli._thermal",
-    "setupfix.cli._history",
-    "setupfix.cli._simulate",
-    "setupfix.cli._diagnose",
-    "setupfix.cli._spc",
-    "setupfix.cli._tui",
+    "setupfix.cli.correct",
+    "setupfix.cli.batch",
+    "setupfix.cli.parse",
+    "setupfix.cli.formats",
+    "setupfix.cli.compare",
+    "setupfix.cli.model",
+    "setupfix.cli.thermal",
+    "setupfix.cli.history",
+    "setupfix.cli.simulate",
+    "setupfix.cli.diagnose",
+    "setupfix.cli.spc",
+    "setupfix.cli.tui",
 )
 
 
@@ -94,7 +94,7 @@ def _one_line_warning(
 def _safe_streams() -> None:
     """Standard output and error never fail on a character they cannot encode (a file name that
     is not UTF-8 is shown escaped, never an ``internal error``); names the commands print go through
-    :func:`setupfix.cli._common.shown` first, this is the net below it."""
+    :func:`setupfix.cli.common.shown` first, this is the net below it."""
     for stream in (sys.stdout, sys.stderr):
         reconfigure = getattr(stream, "reconfigure", None)
         if reconfigure is not None and getattr(stream, "errors", "") in ("strict", None):

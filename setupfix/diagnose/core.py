@@ -9,6 +9,8 @@ from typing import ClassVar
 import numpy as np
 import numpy.typing as npt
 
+from setupfix.core.errors import ParameterError
+from setupfix.core.params import Constraint, Interval, ValidatedParams
 from setupfix.diagnose.factors import FactorTests, Term, factor_tests
 from setupfix.diagnose.fit import Fit, fit_model, observations
 from setupfix.diagnose.select import Selection, select_effects
@@ -23,8 +25,6 @@ from setupfix.diagnose.walk import (
     next_source,
     walk_forward,
 )
-from setupfix.errors import ParameterError
-from setupfix.params import Constraint, Interval, ValidatedParams
 
 __all__ = ["EffectResult", "ErrorSummary", "Diagnosis", "Diagnoser", "error_summary"]
 

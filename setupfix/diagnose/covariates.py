@@ -4,7 +4,7 @@ The corrections in effect at each cycle (:func:`applied_at`: every log row at or
 its time), the parts cut by each tool since its last change (:func:`parts_since_change`),
 the temperature sample at or just before each cycle (:func:`join_temperatures`) and the
 typical interval between cycles (:func:`typical_step`).  Used by the use case that loads a
-series (:mod:`setupfix.pipeline.series_assembly`), the shop simulator and the walk forward.
+series (:mod:`setupfix.inputs.series_assembly`), the shop simulator and the walk forward.
 """
 
 from __future__ import annotations

@@ -32,10 +32,10 @@ from typing import Any, ClassVar
 import numpy as np
 import numpy.typing as npt
 
+from setupfix.core.errors import ParameterError
+from setupfix.core.params import Constraint, Interval, ValidatedParams, validate_params
 from setupfix.diagnose.covariates import parts_since_change
 from setupfix.diagnose.terms import AXES, KINDS, EffectSpec, Layout, Series, effect_field
-from setupfix.errors import ParameterError
-from setupfix.params import Constraint, Interval, ValidatedParams, validate_params
 from setupfix.search import generator
 
 __all__ = ["HiddenEffect", "ShopSimulator", "SimulatedSeries", "random_topology"]

@@ -13,9 +13,9 @@ from __future__ import annotations
 import numpy as np
 import numpy.typing as npt
 
+from setupfix.correction.relation import null_space_directions
 from setupfix.diagnose.fit import Observations
 from setupfix.diagnose.terms import AXES, EffectSpec, Layout, Series
-from setupfix.relation import null_space_directions
 
 __all__ = ["STATIC", "spread", "support_notes", "register_notes", "alike", "alike_sets"]
 

@@ -31,8 +31,8 @@ from dataclasses import dataclass, field
 import numpy as np
 import numpy.typing as npt
 
+from setupfix.correction.relation import relation_matrices
 from setupfix.model import ProcessModel
-from setupfix.relation import relation_matrices
 
 __all__ = [
     "KINDS",

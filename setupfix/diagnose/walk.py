@@ -4,7 +4,7 @@ At each cycle k (from ``min_train`` on) every controller chooses the register st
 v_k from the cycles before k only; the cycle's actual deviations are then moved to
 what that state would have given, y'_k = y_k + (v_k − u_k) · C_s, and scored as a shop
 scores parts: the distance of every dimension to its tolerance centre (RMS and mean
-|·|, one-sided limits: the finite limit's side of 0, :func:`setupfix.explain.targets`),
+|·|, one-sided limits: the finite limit's side of 0, :func:`setupfix.correction.explain.targets`),
 the cells out of tolerance, and the unilateral error budget (Stryczek 2014, f1: smallest
 distance of a deviation to its nearer limit).  C_s is the composite matrix with the relation effects found on the
 whole series (the declared C when none was found), the best estimate of how the
@@ -31,12 +31,12 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
+from setupfix.correction.explain import targets
 from setupfix.diagnose.covariates import typical_step
 from setupfix.diagnose.factors import Term, factor_tests
 from setupfix.diagnose.fit import RELATION_T, Fit, row_space_basis
 from setupfix.diagnose.select import select_effects
 from setupfix.diagnose.terms import EffectSpec, Layout, Series, effect_field
-from setupfix.explain import targets
 
 __all__ = [
     "Budget",
@@ -378,7 +378,9 @@ def next_source(walk: WalkForward | None, found: bool, *, ewma: bool = True) -> 
 
 
 def centre_half_width(lower: Array, upper: Array) -> Array:
-    """Half tolerance around :func:`~setupfix.explain.targets` (one-sided: distance of the finite limit to it).
+    """Half tolerance around :func:`~setupfix.correction.explain.targets`.
+
+    One-sided: the distance of the finite limit to it.
 
     lower, upper : ndarray (m,) [unit] → ndarray (m,) [unit]
     """

@@ -65,8 +65,8 @@ from datetime import date, datetime
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from setupfix.errors import ModelError, SourceLocation
-from setupfix.units import length_factor
+from setupfix.core.errors import ModelError, SourceLocation
+from setupfix.core.units import length_factor
 
 if TYPE_CHECKING:  # the model holds its [effects] section: process imports this module
     from setupfix.model.process import ProcessModel

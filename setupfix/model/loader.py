@@ -1,7 +1,7 @@
 """Load and validate a process model file (``../shared/spec/process-model.md``).
 
 Every problem is collected with its key path before anything is raised, so the
-engineer fixes the file in one pass: :class:`~setupfix.errors.ModelError` carries
+engineer fixes the file in one pass: :class:`~setupfix.core.errors.ModelError` carries
 the list in ``problems`` and its text has one line per problem.
 
 Sanity ranges (a correction goes into a machine: an absurd model must not load).
@@ -49,7 +49,8 @@ from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
-from setupfix.errors import ModelError, SourceLocation
+from setupfix.core.errors import ModelError, SourceLocation
+from setupfix.core.units import LENGTH_UNITS
 from setupfix.model import axes as multi_axis
 from setupfix.model.effects import parse_effects
 from setupfix.model.process import Feature, MachinePoint, ProcessModel
@@ -68,7 +69,6 @@ from setupfix.model.validate import (
     table_of,
     weights,
 )
-from setupfix.units import LENGTH_UNITS
 
 __all__ = [
     "SECTIONS",

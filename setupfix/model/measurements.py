@@ -24,9 +24,9 @@ import numpy as np
 import numpy.typing as npt
 import pandas as pd
 
-from setupfix.errors import MatchError, Note, SourceLocation
+from setupfix.core.errors import MatchError, Note, SourceLocation
+from setupfix.core.units import length_factor
 from setupfix.model.process import ProcessModel, normalise_name
-from setupfix.units import length_factor
 
 __all__ = ["CANONICAL_COLUMNS", "LENGTH_COLUMNS", "PartMeasurement", "match_parts", "suggest_names"]
 
@@ -77,7 +77,7 @@ class PartMeasurement:
         IDs of model dimensions the report does not contain.
     notes : tuple of Note
         What matching assumed (a dimension measured twice, …) and, after
-        :func:`setupfix.pipeline.checks.check_parts`, how the report differs from the model.
+        :func:`setupfix.inputs.checks.check_parts`, how the report differs from the model.
     nominal, lower, upper : ndarray of shape (n_dimensions,) [model unit]
         The report's own nominal and limits of each matched dimension (NaN where
         absent or not given), kept to check the report against the model.

@@ -3,7 +3,7 @@
 A :class:`ProcessModel` is the six-tuple PM = (M, W, T, F, D, R) of Stryczek (2014),
 with the relations R stored sparsely on the elements that receive them (a feature
 knows which WKS and tools move it, a dimension which features enter it).  The dense
-matrices R_MW, R_WF, R_TF, R_FD are built by :mod:`setupfix.relation`.
+matrices R_MW, R_WF, R_TF, R_FD are built by :mod:`setupfix.correction.relation`.
 
 All lengths are in ``ProcessModel.unit``.
 """
@@ -135,7 +135,7 @@ class Dimension:
     (``lower < upper``); either may be infinite for a one-sided tolerance.
     ``sampled`` (model key ``sampled = true``): the dimension is not measured every
     cycle (a sampling plan), so a report without it does not hold the registers that
-    move it (:func:`setupfix.pose.pose_problem`, coverage).
+    move it (:func:`setupfix.correction.pose.pose_problem`, coverage).
 
     Multi-axis models only: ``direction`` is the measuring direction n_q (a unit vector:
     the dimension's ``axis`` or ``direction``); ``kind`` is ``"length"``, ``"size"`` (only

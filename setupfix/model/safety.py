@@ -1,7 +1,7 @@
 """Safety settings of a process model: the ``[safety]`` table and per-register extras.
 
 Plain data and its validation; the rules themselves are pure functions in
-:mod:`setupfix.safety`.  Every length is in the model unit.  Defaults (documented in
+:mod:`setupfix.correction.safety`.  Every length is in the model unit.  Defaults (documented in
 the README, section *Safety rules*):
 
 =====================  =========================  =======================================

@@ -2,7 +2,7 @@
 
 The one reading of register names (``G54``, ``G54.1 P7``, ``G154 P12``, ``G110``,
 ``H05``, ``T5 D1``, ``PRESET 3``) and of the model's explicit ``number`` / ``edge``.
-The controller renderers (:mod:`setupfix.pipeline.controllers`) turn a slot into
+The controller renderers (:mod:`setupfix.outputs.controllers`) turn a slot into
 their program words with the per-controller functions below; the loader calls
 :func:`register_slots` to refuse a model whose registers share a slot.
 

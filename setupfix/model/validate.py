@@ -1,7 +1,7 @@
 """Checks shared by the model loaders: problems collected with key paths and lines, typed values.
 
 :class:`Problems` gathers every problem of a model file (key path, line when the text is
-known) before one :class:`~setupfix.errors.ModelError` is raised; the small readers below
+known) before one :class:`~setupfix.core.errors.ModelError` is raised; the small readers below
 (:func:`number`, :func:`weights`, :func:`table_of` …) add a problem and return a fallback
 instead of raising, so one pass reports everything.  Used by :mod:`setupfix.model.loader` and
 :mod:`setupfix.model.tables` (one-axis and common keys) and :mod:`setupfix.model.axes` (multi-axis keys).
@@ -16,10 +16,10 @@ import unicodedata
 from collections.abc import Mapping
 from typing import Any
 
-from setupfix.errors import ModelError, SourceLocation
+from setupfix.core.errors import ModelError, SourceLocation
+from setupfix.core.units import length_factor
 from setupfix.model.process import Register
 from setupfix.model.slots import register_slots
-from setupfix.units import length_factor
 
 __all__ = [
     "RANGES_MM",

@@ -11,10 +11,10 @@ import importlib
 import inspect
 from typing import Any
 
-from setupfix.errors import ParameterError
-from setupfix.optimize._base import Evaluator, Metaheuristic, Optimizer, make_result
-from setupfix.optimize._dimensions import dimension_floor, harmed_columns, model_dimensions
-from setupfix.optimize._problem import CorrectionProblem, OptimizeResult
+from setupfix.core.errors import ParameterError
+from setupfix.optimize.base import Evaluator, Metaheuristic, Optimizer, make_result
+from setupfix.optimize.dimensions import dimension_floor, harmed_columns, model_dimensions
+from setupfix.optimize.problem import CorrectionProblem, OptimizeResult
 
 __all__ = [
     "OPTIMIZERS",
@@ -33,12 +33,12 @@ __all__ = [
 #: Registry: name → "module:Class".  Imported lazily so one broken optimiser never
 #: stops the others.
 OPTIMIZERS: dict[str, str] = {
-    "exact": "setupfix.optimize._exact:ExactOptimizer",
-    "cripso": "setupfix.optimize._cripso:CRIPSO",
-    "pso": "setupfix.optimize._pso:PSO",
-    "ga": "setupfix.optimize._ga:GA",
-    "coa": "setupfix.optimize._coa:COA",
-    "cs": "setupfix.optimize._cs:CuckooSearch",
+    "exact": "setupfix.optimize.exact.solve:ExactOptimizer",
+    "cripso": "setupfix.optimize.heuristics.cripso:CRIPSO",
+    "pso": "setupfix.optimize.heuristics.pso:PSO",
+    "ga": "setupfix.optimize.heuristics.ga:GA",
+    "coa": "setupfix.optimize.heuristics.coa:COA",
+    "cs": "setupfix.optimize.heuristics.cs:CuckooSearch",
 }
 
 

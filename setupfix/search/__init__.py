@@ -9,7 +9,7 @@ points is spent.  Two spaces use them:
   :mod:`setupfix.thermal.calibrate`);
 * the register grid of a :class:`~setupfix.optimize.CorrectionProblem` (snapped
   onto the resolution grid inside the register limits), the adaptor in
-  :mod:`setupfix.optimize._base` for the setup-correction optimisers (which
+  :mod:`setupfix.optimize.base` for the setup-correction optimisers (which
   maximise f = 10·f1 − f2 and so minimise −f here).
 
 Algorithms: :func:`cuckoo_search` (Yang & Deb 2009), :func:`particle_swarm`
@@ -23,10 +23,10 @@ published algorithms.
 
 from __future__ import annotations
 
-from setupfix.search._cs import cuckoo_search, levy_steps, mantegna_sigma
-from setupfix.search._ga import roulette_ga, tournament_ga
-from setupfix.search._pso import acceleration, particle_swarm
-from setupfix.search._space import DEFAULT_SEED, Box, Objective, Observer, SearchResult, Space, generator
+from setupfix.search.cs import cuckoo_search, levy_steps, mantegna_sigma
+from setupfix.search.ga import roulette_ga, tournament_ga
+from setupfix.search.pso import acceleration, particle_swarm
+from setupfix.search.space import DEFAULT_SEED, Box, Objective, Observer, SearchResult, Space, generator
 
 __all__ = [
     "DEFAULT_SEED",

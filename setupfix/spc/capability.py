@@ -30,7 +30,7 @@ from statistics import NormalDist
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from setupfix.errors import ParameterError
+from setupfix.core.errors import ParameterError
 
 __all__ = ["D2", "Capability", "capability", "cpk_interval", "sigma_within", "sigma_overall", "split_capability"]
 

@@ -27,7 +27,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from setupfix.errors import ParameterError
+from setupfix.core.errors import ParameterError
 from setupfix.spc.capability import D2
 
 __all__ = ["D4", "NELSON_RULES", "ChartLimits", "Violation", "chart_limits", "moving_range", "nelson"]

@@ -57,9 +57,9 @@ import pandas as pd
 
 from parsers.corrections import COLUMNS as CORRECTION_COLUMNS
 from parsers.corrections import RegisterLog, check_corrections, log_from_frame
-from setupfix.atomic import process_alive, process_started
+from setupfix.core.atomic import process_alive, process_started
 from setupfix.model import ProcessModel
-from setupfix.store._audit import AUDIT_COLUMNS
+from setupfix.store.audit import AUDIT_COLUMNS
 
 __all__ = [
     "Store",
@@ -98,7 +98,7 @@ HELD_ELSEWHERE = "being corrected by another run"
 class Claimant:
     """Who holds a claim: one run of one process (``token`` is random per run).
 
-    ``host``, ``pid`` and ``started`` (:func:`setupfix.atomic.process_started`) tell whether
+    ``host``, ``pid`` and ``started`` (:func:`setupfix.core.atomic.process_started`) tell whether
     its process still runs, for a claim left by a run that was killed.
     """
 
@@ -323,10 +323,10 @@ def open_store(location: str | os.PathLike[str], *, machine: str | None = None, 
     who = (machine or "").strip() or DEFAULT_MACHINE
     by = login_name() if operator is None else operator
     if is_server(location):
-        from setupfix.store._postgres import PostgresStore
+        from setupfix.store.postgres import PostgresStore
 
         return PostgresStore(str(location), machine=who, operator=by)
-    from setupfix.store._sqlite import SQLiteStore
+    from setupfix.store.sqlite import SQLiteStore
 
     return SQLiteStore(os.fspath(location), machine=who, operator=by)
 

@@ -10,7 +10,7 @@ Modules: :mod:`~setupfix.thermal.grey` (pure Grey functions), :mod:`~.calibrate`
 :mod:`~.mra`, :mod:`~.metrics`, :mod:`~.estimator`, :mod:`~.grey_model`, :mod:`~.kalman_model` (estimator classes),
 :mod:`~.simulator`, :mod:`~.registry` (methods by name), :mod:`~.persist` (saved form),
 :mod:`~.feedforward` (drift fed forward into corrections).  Temperature logs are read
-by :mod:`parsers.temperature`; model files by :mod:`setupfix.pipeline.thermal_files`.
+by :mod:`parsers.temperature`; model files by :mod:`setupfix.inputs.thermal_files`.
 """
 
 from __future__ import annotations

@@ -43,8 +43,8 @@ from typing import Any, ClassVar, Self
 import numpy as np
 import numpy.typing as npt
 
-from setupfix.errors import NotFittedError, ParameterError
-from setupfix.params import Constraint, Interval, ValidatedParams
+from setupfix.core.errors import NotFittedError, ParameterError
+from setupfix.core.params import Constraint, Interval, ValidatedParams
 from setupfix.thermal.mra import mra_fit, mra_predict, reference_state, rises_from
 
 __all__ = ["ThermalModel", "MRAModel", "rebase", "DEFAULT_SEED"]

@@ -16,7 +16,7 @@ unless ``|ΔE|`` is below the dead band::
     x_r = −round(f·ΔE / q)·q   for r in moved registers, if |f·ΔE| ≥ dead band, else 0
 
 (``f`` the unit factor, ``q`` the register resolution).  Used by ``setupfix correct
---thermal`` (:mod:`setupfix.pipeline.feedforward`), the closed-loop diagnosis (its
+--thermal`` (:mod:`setupfix.usecases.thermal_feedforward`), the closed-loop diagnosis (its
 thermal candidate) and the operator TUI.
 """
 

@@ -12,8 +12,8 @@ import numpy as np
 import numpy.typing as npt
 from scipy.optimize import lsq_linear
 
-from setupfix.errors import Note
-from setupfix.params import Constraint, Interval, Options
+from setupfix.core.errors import Note
+from setupfix.core.params import Constraint, Interval, Options
 from setupfix.search import generator
 from setupfix.thermal import grey
 from setupfix.thermal.calibrate import SearchResult, cuckoo_search, particle_swarm

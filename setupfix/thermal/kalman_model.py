@@ -11,8 +11,8 @@ from typing import ClassVar
 import numpy as np
 import numpy.typing as npt
 
-from setupfix.errors import ParameterError
-from setupfix.params import Constraint, Interval, Predicate
+from setupfix.core.errors import ParameterError
+from setupfix.core.params import Constraint, Interval, Predicate
 from setupfix.search import generator
 from setupfix.thermal.calibrate import genetic_algorithm
 from setupfix.thermal.estimator import _SEED, DEFAULT_SEED, ThermalModel, _as_2d, _shape

@@ -6,7 +6,7 @@ was fitted with (temperature inputs, target, ambient and speed columns), the sam
 interval (Grey and lumped-mass coefficients are per sample), the target's length unit,
 and where its drift acts on the machine (axis and registers) for the feed-forward of
 :mod:`setupfix.thermal.feedforward`.  Reading and writing the file is done by
-:mod:`setupfix.pipeline.thermal_files` (no file I/O at this layer).
+:mod:`setupfix.inputs.thermal_files` (no file I/O at this layer).
 """
 
 from __future__ import annotations

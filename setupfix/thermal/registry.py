@@ -14,7 +14,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
-from setupfix.errors import ParameterError
+from setupfix.core.errors import ParameterError
 from setupfix.thermal.estimator import MRAModel, ThermalModel
 from setupfix.thermal.grey_model import GreyModel
 from setupfix.thermal.kalman_model import KalmanFusionModel

@@ -9,16 +9,16 @@ from textual.actions import SkipAction
 from textual.screen import ModalScreen
 from textual.widgets import TabbedContent
 
-from setupfix.errors import SetupfixError
+from setupfix.core.errors import SetupfixError
 from setupfix.optimize import OPTIMIZERS
-from setupfix.pipeline import view
-from setupfix.pipeline.compare import DEFAULT_METHODS
-from setupfix.pipeline.session import FolderWatch, OpenedReport, record_applied
 from setupfix.tui import workers
 from setupfix.tui.exporting import CONTROLLERS, export_name, preview, write_offsets
 from setupfix.tui.screens import ExportRequest, ExportScreen, HelpScreen, OpenFileScreen
+from setupfix.tui.session import FolderWatch, OpenedReport, record_applied
 from setupfix.tui.widgets import ComparePanel, HistoryPanel
 from setupfix.tui.worker_results import WorkerResults
+from setupfix.usecases.compare import DEFAULT_METHODS
+from setupfix.views import correction as view
 
 __all__ = ["KeyActions", "SORT_ORDER"]
 

@@ -1,4 +1,4 @@
-"""The operator's screen: one App, thin; every number from :mod:`setupfix.pipeline`.
+"""The operator's screen: one App, thin; every number from :mod:`setupfix.usecases`.
 
 The app is built in layers, each a module: its inputs and state (:mod:`~setupfix.tui.state`), the
 correction tab on screen (:mod:`~setupfix.tui.display`), the workers and their results
@@ -21,9 +21,9 @@ from textual.binding import Binding, BindingType
 from textual.containers import Horizontal, Vertical
 from textual.widgets import Footer, Header, Static, TabbedContent, TabPane
 
-from setupfix.pipeline.session import FolderWatch
 from setupfix.tui.actions import KeyActions
 from setupfix.tui.display import TALL, WIDE
+from setupfix.tui.session import FolderWatch
 from setupfix.tui.widgets import (
     ComparePanel,
     DimensionTable,

@@ -6,10 +6,10 @@ from textual import events, on
 from textual.markup import escape
 from textual.widgets import DataTable
 
-from setupfix.offsets import grid_decimals
-from setupfix.pipeline import view
+from setupfix.correction.offsets import grid_decimals
 from setupfix.tui.state import AppState
 from setupfix.tui.widgets import DimensionTable, RegisterTable, SummaryBar, ThermalPanel
+from setupfix.views import correction as view
 
 __all__ = ["CorrectionDisplay", "WIDE", "TALL"]
 

@@ -1,8 +1,8 @@
 """Export glue: the controller formats the screen offers, the text it shows and the write.
 
-The text shown is :func:`setupfix.pipeline.export.offsets_text` and the write is
-:func:`setupfix.pipeline.export.export` of the same cycles
-(:func:`setupfix.pipeline.session.export_cycles`): what the confirmation screen displays
+The text shown is :func:`setupfix.usecases.export.offsets_text` and the write is
+:func:`setupfix.usecases.export.export` of the same cycles
+(:func:`setupfix.tui.session.export_cycles`): what the confirmation screen displays
 is byte for byte what lands in the file, and what ``setupfix correct --offsets`` writes
 (the thermal feed-forward included).
 """
@@ -12,19 +12,19 @@ from __future__ import annotations
 from collections.abc import Callable
 from pathlib import PurePath
 
-from setupfix.errors import ExportError
-from setupfix.pipeline.controllers import CONTROLLERS as _REGISTRY
-from setupfix.pipeline.controllers import PROGRAM_SUFFIX
-from setupfix.pipeline.export import Exported, export, offsets_text
-from setupfix.pipeline.session import OpenedReport, export_cycles
-from setupfix.pipeline.writers import check_target
+from setupfix.core.errors import ExportError
+from setupfix.outputs.controllers import CONTROLLERS as _REGISTRY
+from setupfix.outputs.controllers import PROGRAM_SUFFIX
+from setupfix.outputs.writers import check_target
 from setupfix.tui.screens.export import ExportRequest
+from setupfix.tui.session import OpenedReport, export_cycles
+from setupfix.usecases.export import Exported, export, offsets_text
 
 __all__ = ["CONTROLLERS", "SUFFIXES", "export_name", "preview", "write_offsets"]
 
 #: Controller formats offered, in menu order (the pipeline's registry).
 CONTROLLERS: tuple[str, ...] = tuple(_REGISTRY)
-#: File suffix by controller: a program's (:data:`~setupfix.pipeline.controllers.PROGRAM_SUFFIX`), the CSV's.
+#: File suffix by controller: a program's (:data:`~setupfix.outputs.controllers.PROGRAM_SUFFIX`), the CSV's.
 SUFFIXES: dict[str, str] = {"csv": ".csv", **PROGRAM_SUFFIX}
 
 
@@ -53,7 +53,7 @@ def write_offsets(request: ExportRequest, opened: OpenedReport, cycle: int) -> E
     """Write what the operator confirmed, atomically (a file is complete or not there).
 
     Only a regular file (new or existing) is written; a folder, device, FIFO or link
-    is refused with an :class:`~setupfix.errors.ExportError` naming it.  ``-`` (standard
+    is refused with an :class:`~setupfix.core.errors.ExportError` naming it.  ``-`` (standard
     output) is refused too: the terminal belongs to the screen.
     """
     if request.path.strip() == "-":

@@ -12,10 +12,10 @@ from pathlib import Path
 from textual.app import App
 from textual.notifications import SeverityLevel
 
-from setupfix.pipeline.compare import Comparison
-from setupfix.pipeline.requests import CycleCorrection, CycleOptions, ReadOptions
-from setupfix.pipeline.session import FolderWatch, OpenedReport
-from setupfix.pipeline.stores import StoreRef
+from setupfix.inputs.stores import StoreRef
+from setupfix.tui.session import FolderWatch, OpenedReport
+from setupfix.usecases.compare import Comparison
+from setupfix.usecases.requests import CycleCorrection, CycleOptions, ReadOptions
 
 __all__ = ["Inputs", "AppState"]
 

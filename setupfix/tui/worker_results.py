@@ -15,18 +15,18 @@ from textual.markup import escape
 from textual.widgets import Static, TabbedContent
 from textual.worker import Worker, WorkerState
 
-from setupfix.errors import SetupfixError
-from setupfix.pipeline import analysis_view
-from setupfix.pipeline.compare import Comparison
-from setupfix.pipeline.requests import SolveOptions
-from setupfix.pipeline.session import OpenedReport
-from setupfix.pipeline.spc import SpcOutcome
+from setupfix.core.errors import SetupfixError
 from setupfix.tui import workers
 from setupfix.tui.display import CorrectionDisplay
 from setupfix.tui.messages import CompareProgress
 from setupfix.tui.screens import CapabilityScreen
+from setupfix.tui.session import OpenedReport
 from setupfix.tui.widgets import ComparePanel, HistoryPanel, MatchTable, ThermalPanel
 from setupfix.tui.widgets.plain import plain
+from setupfix.usecases.compare import Comparison
+from setupfix.usecases.requests import SolveOptions
+from setupfix.usecases.spc_report import SpcOutcome
+from setupfix.views import analysis as analysis_view
 
 __all__ = ["WorkerResults"]
 

@@ -12,19 +12,20 @@ from pathlib import Path
 from textual.app import App
 from textual.worker import get_current_worker
 
-from setupfix.errors import SetupfixError
+from setupfix.core.errors import SetupfixError
+from setupfix.inputs.stores import StoreRef
+from setupfix.inputs.thermal_files import predict_drift
 from setupfix.model import ProcessModel, load_model
 from setupfix.optimize import CorrectionProblem
-from setupfix.pipeline import analysis_view, session
-from setupfix.pipeline.compare import Comparison
-from setupfix.pipeline.correct import load_request
-from setupfix.pipeline.diagnose import DiagnoseRequest, diagnose_reports
-from setupfix.pipeline.requests import CurrentOffsets, CycleOptions, ReadOptions, SolveOptions
-from setupfix.pipeline.session import compare_steps, store_parts
-from setupfix.pipeline.spc import SpcOutcome, SpcRequest, spc_report
-from setupfix.pipeline.stores import StoreRef
-from setupfix.pipeline.thermal import predict_drift
+from setupfix.tui import session
 from setupfix.tui.messages import CompareProgress
+from setupfix.tui.session import compare_steps, store_parts
+from setupfix.usecases.compare import Comparison
+from setupfix.usecases.correct import load_request
+from setupfix.usecases.diagnosis import DiagnoseRequest, diagnose_reports
+from setupfix.usecases.requests import CurrentOffsets, CycleOptions, ReadOptions, SolveOptions
+from setupfix.usecases.spc_report import SpcOutcome, SpcRequest, spc_report
+from setupfix.views import analysis as analysis_view
 
 __all__ = ["open_report", "drift", "compare", "history", "diagnose", "capability"]
 
@@ -41,7 +42,7 @@ def open_report(
     thermal: tuple[Path, Path, str | None, float | None] | None,
 ) -> tuple[session.OpenedReport, str]:
     """Thread worker: the request ``correct`` builds from these inputs
-    (:func:`~setupfix.pipeline.correct.load_request`), the report opened with it, and "" — or, when
+    (:func:`~setupfix.usecases.correct.load_request`), the report opened with it, and "" — or, when
     ``current`` does not fit ``model`` (the operator switched to another model), the report opened
     without it and the one-line reason.
 

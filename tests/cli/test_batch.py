@@ -40,10 +40,10 @@ def test_killed_run_leaves_no_partial_file(tmp_path):
     """SIGTERM becomes KeyboardInterrupt (the CLI's handler), which unwinds the atomic writer."""
     import pytest
 
-    from setupfix.cli._batch import _terminate
+    from setupfix.cli.batch import _terminate
     from setupfix.model import load_model
-    from setupfix.pipeline.batch import run_batch
-    from setupfix.pipeline.requests import CorrectRequest
+    from setupfix.usecases.batch import run_batch
+    from setupfix.usecases.requests import CorrectRequest
 
     d = tmp_path / "in"
     d.mkdir()

@@ -23,7 +23,7 @@ def _run_json(capsys: pytest.CaptureFixture[str], *extra: str) -> dict:
 def test_json_contract_and_exact_yardstick(capsys: pytest.CaptureFixture[str]) -> None:
     out = _run_json(capsys, "--seed", "7")
     from setupfix.optimize import get_optimizer
-    from setupfix.pipeline.compare import CompareRequest, compare_report
+    from setupfix.usecases.compare import CompareRequest, compare_report
 
     assert set(out) >= {"exact_margin", "results"}
     names = [r["optimizer"] for r in out["results"]]
@@ -43,9 +43,9 @@ def test_json_contract_and_exact_yardstick(capsys: pytest.CaptureFixture[str]) -
 
 
 def exact_problem():
+    from setupfix.inputs.cycles import load_parts
     from setupfix.model import load_model
     from setupfix.optimize import CorrectionProblem
-    from setupfix.pipeline.cycles import load_parts
 
     model = load_model(MODEL)
     return CorrectionProblem.from_part(model, load_parts(model, REPORT)[0])
@@ -88,8 +88,8 @@ def test_usage_errors(capsys: pytest.CaptureFixture[str]) -> None:
 
 
 def test_pipeline_seeds_and_unknown_methods() -> None:
-    from setupfix.errors import ParameterError
-    from setupfix.pipeline.compare import compare_problem, trial_seeds
+    from setupfix.core.errors import ParameterError
+    from setupfix.usecases.compare import compare_problem, trial_seeds
 
     assert trial_seeds(5, 4) == trial_seeds(5, 4) and trial_seeds(5, 4)[:2] == trial_seeds(5, 2)
     assert len(set(trial_seeds(5, 12))) == 12

@@ -26,12 +26,12 @@ def test_help_and_version_exit_zero_without_the_numeric_stack():
 
 
 def test_parser_choices_match_the_registries():
-    from setupfix.cli import _choices
+    from setupfix.cli import choices as _choices
     from setupfix.optimize import OPTIMIZERS
-    from setupfix.pipeline.controllers import CONTROLLERS
-    from setupfix.pipeline.history import EXPORTS
-    from setupfix.pipeline.simulate import START
+    from setupfix.outputs.controllers import CONTROLLERS
     from setupfix.thermal.registry import methods
+    from setupfix.usecases.history import EXPORTS
+    from setupfix.usecases.simulate import START
 
     assert set(_choices.OPTIMIZERS) == set(OPTIMIZERS)
     assert set(_choices.CONTROLLERS) == set(CONTROLLERS)

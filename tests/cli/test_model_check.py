@@ -64,7 +64,7 @@ def test_check_marks_differences_and_strict_refuses(tmp_path, capsys):
 
 
 def test_wide_characters_keep_columns_aligned():
-    from setupfix.cli._model import _cells, _cut
+    from setupfix.cli.model import _cells, _cut
 
     assert _cells("원통1(I).D") == 10 and _cut("원통1(I).D", 12) == "원통1(I).D  "
     assert _cells(_cut("원통1(I).D", 7)) == 7 and _cut("원통1(I).D", 7).endswith("…")

@@ -17,7 +17,7 @@ TEST = str(SAMPLES / "test_variable.csv")
 @pytest.fixture(autouse=True)
 def only_thermal(monkeypatch):
     # Other sub-commands are written in parallel; test this one on its own.
-    monkeypatch.setattr(cli, "COMMAND_MODULES", ("setupfix.cli._thermal",))
+    monkeypatch.setattr(cli, "COMMAND_MODULES", ("setupfix.cli.thermal",))
 
 
 def run(capsys, *argv):

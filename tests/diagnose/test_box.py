@@ -17,8 +17,8 @@ import numpy as np
 import pytest
 
 from setupfix.diagnose import select_effects
-from setupfix.pipeline.diagnose import DiagnoseRequest, diagnose_reports
-from setupfix.pipeline.series import load_series
+from setupfix.inputs.series import load_series
+from setupfix.usecases.diagnosis import DiagnoseRequest, diagnose_reports
 
 SHARED = Path(os.environ.get("SETUPFIX_SHARED", "/work/shared"))
 BOX = SHARED / "cmm-samples" / "qif" / "NIST_MTC_FAIR_Box_Results_19parts.qif"

@@ -9,9 +9,9 @@ import numpy as np
 import pytest
 from conftest import GUIDE_PINS
 
+from setupfix.core.errors import ModelError
 from setupfix.diagnose import Layout
 from setupfix.diagnose.forecast import forecast_shift, relation_composite
-from setupfix.errors import ModelError
 from setupfix.model import load_model, model_from_dict
 from setupfix.model.effects import EffectsSection, ModelEffect, effects_from_dict
 from setupfix.model.effects_toml import with_effects
@@ -103,9 +103,9 @@ def test_model_without_effects_loads_as_before(guide_pins_model):
 
 def test_correct_maps_through_a_named_relation_only(tmp_path, guide_pins_model):
     """A relation whose register is named changes what the correction does; a shared one does not."""
-    from setupfix.pipeline.correct import correct_report
-    from setupfix.pipeline.present import note_lines
-    from setupfix.pipeline.requests import CorrectRequest
+    from setupfix.usecases.contract import note_lines
+    from setupfix.usecases.correct import correct_report
+    from setupfix.usecases.requests import CorrectRequest
 
     layout = Layout.from_model(guide_pins_model)
     C = relation_composite(SECTION, layout)

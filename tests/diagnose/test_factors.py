@@ -12,8 +12,8 @@ from diagnose.test_plate import LOG, MODEL, PLATE, needs_log
 from setupfix.diagnose import Diagnoser, Layout, Term, factor_tests, parse_terms
 from setupfix.diagnose.factors import holm, term_columns
 from setupfix.diagnose.terms import channel_values
-from setupfix.pipeline.diagnose import DiagnoseRequest, diagnose_reports
-from setupfix.pipeline.series import load_series
+from setupfix.inputs.series import load_series
+from setupfix.usecases.diagnosis import DiagnoseRequest, diagnose_reports
 
 DESIGN = ("doe_tool_length", "doe_speed", "doe_tool_length*doe_speed")
 

@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 from diagnose.helpers import guide_pins, simulate
 
+from setupfix.correction.relation import null_space_directions
 from setupfix.diagnose import Layout, Series, fit_model
 from setupfix.diagnose.fit import row_space_basis
-from setupfix.relation import null_space_directions
 
 
 def _series(dev, applied):

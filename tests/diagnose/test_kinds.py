@@ -8,10 +8,10 @@ import numpy as np
 import pytest
 from conftest import GUIDE_PINS
 
+from setupfix.core.errors import ModelError
 from setupfix.diagnose import Diagnoser, EffectSpec, HiddenEffect, Layout, Series, ShopSimulator, candidate_specs
 from setupfix.diagnose.forecast import forecast_shift, spec_of
 from setupfix.diagnose.terms import common_tool_row, effect_field
-from setupfix.errors import ModelError
 from setupfix.model import load_model
 from setupfix.model.effects import EffectsSection, ModelEffect, effects_from_dict
 from setupfix.model.effects_toml import with_effects
@@ -192,7 +192,7 @@ def test_bad_level_and_process_effects_are_named(table, key, guide_pins_model):
     ],
 )  # no channel recorded
 def test_simulator_refuses_an_effect_it_cannot_hide(spec):
-    from setupfix.errors import ParameterError
+    from setupfix.core.errors import ParameterError
 
     with pytest.raises(ParameterError):
         ShopSimulator(n_cycles=10).run(LAYOUT, [HiddenEffect(spec, 0.01)])

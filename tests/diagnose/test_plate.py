@@ -11,8 +11,8 @@ import pytest
 from conftest import SAMPLES
 
 from setupfix.diagnose import Diagnoser, select_effects
-from setupfix.pipeline.diagnose import DiagnoseRequest, diagnose_reports
-from setupfix.pipeline.series import load_series
+from setupfix.inputs.series import load_series
+from setupfix.usecases.diagnosis import DiagnoseRequest, diagnose_reports
 
 PLATE = SAMPLES / "qif" / "NIST_MTC_FAIR_Plate_Results_20parts.qif"
 MODEL = Path(__file__).parents[1] / "data" / "nist_plate.toml"
@@ -116,7 +116,7 @@ def test_a_model_with_process_effects_needs_the_log(tmp_path):
             MODEL, (PLATE,), process=str(LOG), augment=str(tmp_path / "aug.toml"), diagnoser=Diagnoser(walk=False)
         )
     )
-    from setupfix.errors import MatchError
+    from setupfix.core.errors import MatchError
 
     with pytest.raises(MatchError, match="needs process channel"):
         load_series(tmp_path / "aug.toml", (PLATE,))

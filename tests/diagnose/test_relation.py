@@ -9,7 +9,7 @@ from diagnose.helpers import NOISE, guide_pins
 from setupfix.diagnose import Diagnoser, Layout, Series, walk_forward
 from setupfix.diagnose.forecast import relation_composite
 from setupfix.model.effects import EffectsSection
-from setupfix.pipeline.diagnose import augmented_section
+from setupfix.usecases.diagnosis import augmented_section
 
 N = 40
 

@@ -7,7 +7,7 @@ import json
 from conftest import GUIDE_PINS, SAMPLES
 
 from setupfix.diagnose import Diagnoser
-from setupfix.pipeline.diagnose import DiagnoseRequest, diagnose_reports
+from setupfix.usecases.diagnosis import DiagnoseRequest, diagnose_reports
 
 LOOP = SAMPLES / "closed_loop"
 

@@ -101,7 +101,7 @@ def test_the_effects_head_keys_are_the_loaders() -> None:
     """The [effects] head keys the generator lists load, and a key beside them is refused."""
     import tomllib
 
-    from setupfix.errors import ModelError
+    from setupfix.core.errors import ModelError
     from setupfix.model.loader import model_from_dict
 
     base = tomllib.loads((ROOT / "sample_reports/guide_pins/model.toml").read_text(encoding="utf-8"))

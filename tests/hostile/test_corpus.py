@@ -15,7 +15,7 @@ import pytest
 
 from parsers.names import visible_name
 from setupfix.cli import main
-from setupfix.errors import SetupfixError
+from setupfix.core.errors import SetupfixError
 from tests.hostile.cases import CASES, GUIDE, Case
 
 MODEL = str(GUIDE / "model.toml")
@@ -67,7 +67,7 @@ def test_hostile_report_is_refused_in_one_line(
 
 @pytest.mark.parametrize("case", [c for c in CASES if not c.options], ids=case_id)
 def test_the_tui_session_refuses_in_one_line(case: Case, tmp_path: Path) -> None:
-    from setupfix.pipeline.session import open_report
+    from setupfix.tui.session import open_report
 
     path = tmp_path / case.name
     path.write_bytes(case.make())
@@ -80,7 +80,7 @@ def test_the_tui_session_refuses_in_one_line(case: Case, tmp_path: Path) -> None
 
 def _request():  # type: ignore[no-untyped-def]
     from setupfix.model import load_model
-    from setupfix.pipeline.requests import CorrectRequest
+    from setupfix.usecases.requests import CorrectRequest
 
     return CorrectRequest(load_model(MODEL))
 

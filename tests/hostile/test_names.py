@@ -4,7 +4,7 @@ The names (:data:`tests.hostile.cases.HOSTILE_NAMES`) start with a formula chara
 hold a tab, CR, line feed or bytes that are not UTF-8.  Every output (offsets CSV,
 canonical CSV, program, JSON, history store, stderr) must be valid UTF-8 text with the
 name in its printable form (:func:`parsers.names.visible_name`), every CSV cell through
-:func:`setupfix.pipeline.writers.csv_cell`, every CSV reading back row for row with the
+:func:`setupfix.outputs.writers.csv_cell`, every CSV reading back row for row with the
 project's reader and pandas.
 """
 
@@ -22,7 +22,7 @@ import pytest
 import parsers
 from parsers.names import visible_name
 from setupfix.cli import main
-from setupfix.pipeline.writers import csv_cell
+from setupfix.outputs.writers import csv_cell
 from tests.hostile.cases import GUIDE, HOSTILE_NAMES
 
 MODEL = str(GUIDE / "model.toml")
@@ -95,10 +95,10 @@ def test_one_report_commands(name: str, tmp_path: Path, capsys: pytest.CaptureFi
 @pytest.mark.parametrize("name", HOSTILE_NAMES, ids=visible_name)
 def test_the_tui_session_opens_exports_and_records(name: str, tmp_path: Path) -> None:
     from setupfix.model import load_model
-    from setupfix.pipeline.export import export
-    from setupfix.pipeline.requests import CorrectRequest
-    from setupfix.pipeline.session import export_cycles, open_report, record_applied
     from setupfix.store import open_store
+    from setupfix.tui.session import export_cycles, open_report, record_applied
+    from setupfix.usecases.export import export
+    from setupfix.usecases.requests import CorrectRequest
 
     path = write_named(tmp_path / "in")[HOSTILE_NAMES.index(name)]
     opened = open_report(CorrectRequest(load_model(MODEL)), path)

@@ -1,7 +1,7 @@
 """Every hostile case through every reader of the registry (``--format NAME``): a table or one clear line.
 
 A reader forced on a file that is not its format must refuse it with a
-:class:`~setupfix.errors.SetupfixError` naming the file (printable, one line), never
+:class:`~setupfix.core.errors.SetupfixError` naming the file (printable, one line), never
 another exception; what it does read is a canonical table.
 """
 
@@ -13,7 +13,7 @@ import pytest
 
 import parsers
 from parsers.names import visible_name
-from setupfix.errors import SetupfixError
+from setupfix.core.errors import SetupfixError
 from setupfix.model import CANONICAL_COLUMNS
 from tests.hostile.cases import CASES, Case
 

@@ -6,7 +6,7 @@ import re
 
 import pytest
 
-from setupfix.errors import ModelError
+from setupfix.core.errors import ModelError
 from setupfix.model import load_model
 from setupfix.model.effects_toml import effects_toml
 from setupfix.model.process import ProcessModel

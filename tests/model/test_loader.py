@@ -7,7 +7,7 @@ from pathlib import Path
 
 import pytest
 
-from setupfix.errors import ModelError
+from setupfix.core.errors import ModelError
 from setupfix.model import load_model
 
 SPEC_EXAMPLE = """

@@ -12,7 +12,7 @@ from contextlib import redirect_stdout
 import pytest
 
 from setupfix.cli import main
-from setupfix.errors import ModelError
+from setupfix.core.errors import ModelError
 from setupfix.model import load_model
 from tests.model.test_loader import SPEC_EXAMPLE
 

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import pytest
 
-from setupfix.errors import ModelError
+from setupfix.core.errors import ModelError
 from setupfix.model import load_model
 from tests.model.test_loader import SPEC_EXAMPLE
 

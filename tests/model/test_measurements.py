@@ -6,7 +6,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from setupfix.errors import MatchError
+from setupfix.core.errors import MatchError
 from setupfix.model import match_parts, model_from_dict
 
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from setupfix.errors import ModelError
+from setupfix.core.errors import ModelError
 from setupfix.model import model_from_dict
 from setupfix.model.safety import RegisterPolicy, SafetySettings
 

@@ -13,11 +13,11 @@ from pathlib import Path
 
 import pytest
 
-from setupfix.errors import ExportError, ModelError
+from setupfix.core.errors import ExportError, ModelError
+from setupfix.correction.offsets import OffsetRow
 from setupfix.model import load_model
 from setupfix.model.slots import register_slots
-from setupfix.offsets import OffsetRow
-from setupfix.pipeline.controllers import render
+from setupfix.outputs.controllers import render
 from tests.model.test_loader import SPEC_EXAMPLE
 
 WKS = [

@@ -8,9 +8,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from setupfix.errors import ModelError
+from setupfix.core.errors import ModelError
+from setupfix.correction.relation import relation_matrices
 from setupfix.model import load_model, model_from_dict
-from setupfix.relation import relation_matrices
 from tests.conftest import GUIDE_PINS
 
 EXPANDED = Path(__file__).parent / "data" / "guide_pins_expanded.toml"
@@ -164,8 +164,8 @@ def _per_part_report(tmp_path: Path, station: str, *, with_station: bool) -> Pat
 
 @pytest.mark.parametrize("with_station", [True, False])
 def test_a_template_matches_a_per_part_report_without_the_station_prefix(tmp_path, with_station):
-    from setupfix.pipeline.correct import correct_report
-    from setupfix.pipeline.requests import CorrectRequest, CycleOptions
+    from setupfix.usecases.correct import correct_report
+    from setupfix.usecases.requests import CorrectRequest, CycleOptions
 
     model = load_model(GUIDE_PINS / "model.toml")
     report = _per_part_report(tmp_path, "P2", with_station=with_station)

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from setupfix.optimize._coa import COA, immigrate, kmeans, lay_eggs
+from setupfix.optimize.heuristics.coa import COA, immigrate, kmeans, lay_eggs
 
 
 def test_eggs_lie_within_the_egg_laying_radius() -> None:
@@ -51,9 +51,9 @@ def test_immigration_moves_towards_the_goal() -> None:
 def test_paper_run_length() -> None:
     from pathlib import Path
 
+    from setupfix.inputs.cycles import load_parts
     from setupfix.model import load_model
     from setupfix.optimize import CorrectionProblem
-    from setupfix.pipeline.cycles import load_parts
 
     here = Path(__file__).resolve().parents[2] / "sample_reports" / "guide_pins"
     model = load_model(here / "model.toml")

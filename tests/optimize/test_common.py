@@ -12,10 +12,10 @@ import math
 import numpy as np
 import pytest
 
-from setupfix.errors import ParameterError
+from setupfix.core.errors import ParameterError
+from setupfix.core.params import _accepts
 from setupfix.optimize import OPTIMIZERS, CorrectionProblem, get_optimizer
-from setupfix.optimize._base import NO_BETTER_THAN_NONE, Metaheuristic, make_result
-from setupfix.params import _accepts
+from setupfix.optimize.base import NO_BETTER_THAN_NONE, Metaheuristic, make_result
 from tests.optimize.test_metaheuristics_common import RecordingProblem, small_problem
 
 NAMES = sorted(OPTIMIZERS)

@@ -8,10 +8,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from setupfix.correction.synthetic import simulate_deviations
 from setupfix.model import PartMeasurement, load_model
-from setupfix.optimize import CorrectionProblem, Evaluator, _base, get_optimizer
-from setupfix.optimize._cripso import CRIPSO, coefficient_schedule, planula_position
-from setupfix.simulate import simulate_deviations
+from setupfix.optimize import CorrectionProblem, Evaluator, get_optimizer
+from setupfix.optimize import base as _base
+from setupfix.optimize.heuristics.cripso import CRIPSO, coefficient_schedule, planula_position
 
 GUIDE_PINS = Path(__file__).resolve().parents[2] / "sample_reports" / "guide_pins"
 
@@ -173,7 +174,7 @@ def reference_cripso(
 ) -> np.ndarray:
     """Slow, literal CRIPSO in grid units: eq. 1 via planula_position, f via problem.evaluate.
 
-    Follows the decisions documented in setupfix.optimize._cripso and its order of random draws.
+    Follows the decisions documented in setupfix.optimize.heuristics.cripso and its order of random draws.
     """
     rng = np.random.default_rng(seed)
     h, n, P, L = problem.resolution, problem.n_registers, n_polyps, n_solutions

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from setupfix.optimize._cs import CuckooSearch
+from setupfix.optimize.heuristics.cs import CuckooSearch
 
 
 def test_defaults() -> None:

@@ -10,9 +10,9 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from setupfix.correction.synthetic import simulate_deviations
 from setupfix.model import PartMeasurement
 from setupfix.optimize import CorrectionProblem, get_optimizer
-from setupfix.simulate import simulate_deviations
 
 
 def random_problem(

@@ -8,12 +8,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from setupfix.inputs.cycles import load_parts
 from setupfix.model import PartMeasurement
 from setupfix.optimize import CorrectionProblem, get_optimizer
-from setupfix.optimize._highs import Solve
-from setupfix.optimize._session import Session
-from setupfix.optimize._settings import ExactSettings
-from setupfix.pipeline.cycles import load_parts
+from setupfix.optimize.exact.highs import Solve
+from setupfix.optimize.exact.session import Session
+from setupfix.optimize.exact.settings import ExactSettings
 
 from .test_exact import brute_force, random_problem
 
@@ -45,7 +45,7 @@ def test_every_proof_path_equals_brute_force(path, seed):
 def test_solve_error_repro_is_optimal():
     """The report on which HiGHS once answered "Solve error": optimum and least norm, proved."""
     # The solver itself: the repro's random deviations lie beyond the default reject band of
-    # the safety rules (setupfix.safety), so `correct` would refuse the report before solving.
+    # the safety rules (setupfix.correction.safety), so `correct` would refuse the report before solving.
     from setupfix.model import load_model
 
     model = load_model(DATA / "model.toml")
@@ -159,8 +159,8 @@ def test_threads_keep_their_own_solver_models(guide_pins_model, objective, count
     threads fill the per-model memo of results of G alone at once (it starts empty)."""
     from concurrent.futures import ThreadPoolExecutor
 
-    import setupfix.optimize._session as session_mod
-    from setupfix.simulate import simulate_deviations
+    import setupfix.optimize.exact.session as session_mod
+    from setupfix.correction.synthetic import simulate_deviations
 
     devs, _ = simulate_deviations(guide_pins_model, count, seed=3)
     problems = [
@@ -218,9 +218,9 @@ def test_the_leximin_stage_ends_by_its_share_of_the_limit_and_leaves_the_least_n
 
 
 def test_a_point_test_starts_no_solve_once_its_stage_is_over(monkeypatch):
-    from setupfix.optimize._leximin_pins import point_above
-    from setupfix.optimize._lp_bound import margin_rows
-    from setupfix.optimize._session import GridRows
+    from setupfix.optimize.exact.leximin.pins import point_above
+    from setupfix.optimize.exact.lp_bound import margin_rows
+    from setupfix.optimize.exact.session import GridRows
 
     problem = shop_problem(30, 100, 0)
     g_rows, g = margin_rows(problem)

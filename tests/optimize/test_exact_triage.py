@@ -7,9 +7,11 @@ import itertools
 import numpy as np
 import pytest
 
+from setupfix.inputs.cycles import load_parts
 from setupfix.model import PartMeasurement
-from setupfix.optimize import CorrectionProblem, _triage, _triage_model, get_optimizer
-from setupfix.pipeline.cycles import load_parts
+from setupfix.optimize import CorrectionProblem, get_optimizer
+from setupfix.optimize.exact.triage import model as _triage_model
+from setupfix.optimize.exact.triage import solve as _triage
 
 from .test_exact import random_problem
 from .test_exact_robust import GUIDE_PINS
@@ -310,7 +312,7 @@ def test_weighted_least_norm_equals_brute_force(seed):
 
 @pytest.mark.parametrize("cost", [np.array([1.0, 0.0, 1.0]), np.array([1.0, np.inf, 1.0]), np.ones(2)])
 def test_register_cost_must_be_positive_and_finite(cost):
-    from setupfix.errors import ParameterError
+    from setupfix.core.errors import ParameterError
 
     problem = random_problem(0, n=3)
     with pytest.raises(ParameterError, match="register cost"):
@@ -422,9 +424,9 @@ def test_gross_dimensions_triage_equals_an_independent_milp(seed, monkeypatch):
 def test_a_dimension_within_reach_only_by_harm_is_proved_lost(monkeypatch):
     """The LP certificate: D0 can be brought in only by moving D1 (measured in) out."""
     monkeypatch.setattr(_triage_model, "LIST_POINTS", 0)
-    from setupfix.optimize._lp_bound import margin_rows
-    from setupfix.optimize._triage_forced import lost_bound
-    from setupfix.optimize._triage_model import TriageRows
+    from setupfix.optimize.exact.lp_bound import margin_rows
+    from setupfix.optimize.exact.triage.forced import lost_bound
+    from setupfix.optimize.exact.triage.model import TriageRows
 
     problem = CorrectionProblem(
         np.array([[1.0, 1.0]]),
@@ -474,7 +476,7 @@ def test_guide_pins_gross_dimension_is_fast_and_complete(guide_pins_model):
 
 def test_an_incomplete_triage_leximin_is_a_stopped_solve(guide_pins_model, monkeypatch):
     """Levels left unproved (their share of the limit spent) never read as optimal."""
-    from setupfix.recommend import stopped_rule
+    from setupfix.correction.recommend import stopped_rule
 
     monkeypatch.setattr(_triage, "FORCED", False)
     monkeypatch.setattr(_triage, "LEXIMIN_SHARE", 0.0)  # only level 1

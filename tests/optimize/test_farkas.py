@@ -1,4 +1,4 @@
-"""Farkas weights by NNLS (setupfix.optimize._farkas): a proof only where no grid point exists (brute force),
+"""Farkas weights by NNLS (setupfix.optimize.exact.farkas): a proof only where no grid point exists (brute force),
 the same verdict and point whether the near rows are tried first or not, and every proof checked."""
 
 from __future__ import annotations
@@ -8,9 +8,9 @@ import itertools
 import numpy as np
 import pytest
 
-import setupfix.optimize._farkas as farkas
-from setupfix.optimize._farkas import farkas_or_point
-from setupfix.optimize._session import GridRows
+import setupfix.optimize.exact.farkas as farkas
+from setupfix.optimize.exact.farkas import farkas_or_point
+from setupfix.optimize.exact.session import GridRows
 
 
 def _rows(seed: int) -> tuple[GridRows, np.ndarray, np.ndarray]:

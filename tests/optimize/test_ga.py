@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from setupfix.optimize._ga import GA
+from setupfix.optimize.heuristics.ga import GA
 
 
 def test_paper_settings_are_the_defaults() -> None:

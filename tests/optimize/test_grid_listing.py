@@ -5,12 +5,12 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from setupfix.inputs.cycles import load_parts
 from setupfix.model import load_model
 from setupfix.optimize import CorrectionProblem, get_optimizer
-from setupfix.optimize._grid import least_distance
-from setupfix.optimize._listing import ellipsoid_search, enumerate_ball, lagrangian_ball
-from setupfix.optimize._settings import ExactSettings
-from setupfix.pipeline.cycles import load_parts
+from setupfix.optimize.exact.grid import least_distance
+from setupfix.optimize.exact.least_norm.listing import ellipsoid_search, enumerate_ball, lagrangian_ball
+from setupfix.optimize.exact.settings import ExactSettings
 
 from .test_exact import brute_force, random_problem
 from .test_exact_robust import GUIDE_PINS

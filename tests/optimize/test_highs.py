@@ -9,8 +9,8 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from setupfix.optimize import _highs
-from setupfix.optimize._highs import INF, LinearModel, Solve
+from setupfix.optimize.exact import highs as _highs
+from setupfix.optimize.exact.highs import INF, LinearModel, Solve
 
 
 def knapsack() -> tuple[LinearModel, np.ndarray, float]:
@@ -154,7 +154,7 @@ def test_a_stopped_run_with_a_wrong_point_stays_stopped_and_drops_the_point(monk
 def test_models_on_one_matrix_share_its_dense_copy_and_a_changed_model_checks_its_own():
     """Two models on one Colwise check HiGHS's answers with one read-only dense copy of it; a model that adds
     a row checks against its own matrix, and the shared copy stays as it was."""
-    from setupfix.optimize._highs import Colwise
+    from setupfix.optimize.exact.highs import Colwise
 
     shared = Colwise.of(np.array([[1.0, 1.0], [1.0, -1.0]]))
     models = [

@@ -8,10 +8,11 @@ import time
 import numpy as np
 import pytest
 
-import setupfix.optimize._grid_least_norm as least_norm_stage
+import setupfix.optimize.exact.least_norm.grid as least_norm_stage
 from setupfix.optimize import CorrectionProblem, get_optimizer
-from setupfix.optimize._grid import grid_margins, least_distance
-from setupfix.optimize._least_norm import (
+from setupfix.optimize.exact.grid import grid_margins, least_distance
+from setupfix.optimize.exact.least_norm.listing import lagrangian_ball
+from setupfix.optimize.exact.least_norm.shop import (
     box_least_norm,
     descend,
     lagrangian_box,
@@ -19,9 +20,8 @@ from setupfix.optimize._least_norm import (
     lower_bound_ratio,
     network_rows,
 )
-from setupfix.optimize._listing import lagrangian_ball
-from setupfix.optimize._lp_bound import margin_rows
-from setupfix.optimize._settings import ExactSettings
+from setupfix.optimize.exact.lp_bound import margin_rows
+from setupfix.optimize.exact.settings import ExactSettings
 
 from .test_exact_robust import shop_problem
 

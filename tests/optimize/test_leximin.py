@@ -9,10 +9,10 @@ import numpy as np
 import pytest
 from scipy.optimize import Bounds, LinearConstraint, milp
 
-from setupfix.errors import ParameterError
+from setupfix.core.errors import ParameterError
 from setupfix.optimize import CorrectionProblem, get_optimizer
-from setupfix.optimize._dimensions import dimension_of_rows
-from setupfix.optimize._lp_bound import margin_rows
+from setupfix.optimize.dimensions import dimension_of_rows
+from setupfix.optimize.exact.lp_bound import margin_rows
 
 from .test_exact import random_problem
 
@@ -202,8 +202,8 @@ def guide_pins_window(cycle: int) -> CorrectionProblem:
     ± 1 step: 3^10 grid points, few enough for brute force."""
     from pathlib import Path
 
+    from setupfix.inputs.cycles import load_parts
     from setupfix.model import load_model
-    from setupfix.pipeline.cycles import load_parts
 
     folder = Path(__file__).resolve().parents[2] / "sample_reports" / "guide_pins"
     model = load_model(folder / "model.toml")
@@ -242,7 +242,7 @@ def test_discrete_conflicts_by_branches_equal_brute_force(kind, seed, kw):
 @pytest.mark.parametrize(("kind", "seed", "kw"), CONFLICTS)
 def test_counts_alone_decide_discrete_conflicts_as_brute_force(kind, seed, kw, monkeypatch):
     """With no branching allowed, every discrete conflict goes to the count MILPs: same optimum."""
-    import setupfix.optimize._leximin as lexmod
+    import setupfix.optimize.exact.leximin.levels as lexmod
 
     monkeypatch.setattr(lexmod, "MAX_BRANCHES", 0)
     problem = make(kind, seed, kw)
@@ -257,7 +257,7 @@ def test_counts_alone_decide_discrete_conflicts_as_brute_force(kind, seed, kw, m
 def test_is_network_recognises_one_wks_and_one_tool_per_row():
     """±1 rows with two entries that a flip of columns makes opposite: totally unimodular (an LP's vertex on the
     grid); a row with a 2, three entries, or an odd cycle of equal signs is not."""
-    from setupfix.optimize._grid import is_network
+    from setupfix.optimize.exact.grid import is_network
 
     wks_tool = np.array([[1.0, 0, 1, 0], [0, 1, 0, -1], [1, 0, 0, 1], [-1, 0, -1, 0]])
     assert is_network(wks_tool)

@@ -1,13 +1,13 @@
-"""The count MILPs of the leximin levels (:mod:`setupfix.optimize._leximin_counts`) against brute force."""
+"""The count MILPs of the leximin levels (:mod:`setupfix.optimize.exact.leximin.counts`) against brute force."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-import setupfix.optimize._leximin as lexmod
-import setupfix.optimize._leximin_counts as countmod
-from setupfix.optimize._grid import TOL
+import setupfix.optimize.exact.leximin.counts as countmod
+import setupfix.optimize.exact.leximin.levels as lexmod
+from setupfix.optimize.exact.grid import TOL
 
 from .test_leximin import CONFLICTS, brute_leximin, make, solved_steps
 from .test_leximin_pins import _grid
@@ -70,7 +70,7 @@ def test_counts_stopped_give_the_least_norm_at_the_conflict_level_not_the_counts
     """When the counts stop before their proof (here: no time for a second MILP), the answer is the least
     Σ c k² over every grid point with each dimension at its floor — the active ones at the conflict's level
     (brute force) — as where the levels stop, never the counts' unproved point."""
-    import setupfix.optimize._exact as exactmod
+    import setupfix.optimize.exact.solve as exactmod
 
     monkeypatch.setattr(lexmod, "MAX_BRANCHES", 0)
     monkeypatch.setattr(countmod._Runs, "room", lambda self: self.calls == 0)

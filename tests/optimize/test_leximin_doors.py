@@ -9,12 +9,12 @@ import pytest
 from conftest import GUIDE_PINS
 
 from setupfix.cli import main
-from setupfix.errors import ParameterError
+from setupfix.core.errors import ParameterError
+from setupfix.inputs.cycles import load_parts
 from setupfix.model import load_model
 from setupfix.optimize import CorrectionProblem, get_optimizer
-from setupfix.pipeline.compare import CompareRequest, compare_report
-from setupfix.pipeline.cycles import load_parts
-from setupfix.pipeline.requests import SolveOptions
+from setupfix.usecases.compare import CompareRequest, compare_report
+from setupfix.usecases.requests import SolveOptions
 
 MODEL = str(GUIDE_PINS / "model.toml")
 REPORT = str(GUIDE_PINS / "cycle_01.csv")
@@ -79,9 +79,9 @@ def test_diagnose_next_correction_follows_the_objective(objective):
 
     from setupfix.diagnose import Diagnoser
     from setupfix.model import PartMeasurement
-    from setupfix.pipeline.correct import correct_cycle
-    from setupfix.pipeline.diagnose import DiagnoseRequest, diagnose_reports, forecast_model
-    from setupfix.pipeline.requests import CorrectRequest
+    from setupfix.usecases.correct import correct_cycle
+    from setupfix.usecases.diagnosis import DiagnoseRequest, diagnose_reports, forecast_model
+    from setupfix.usecases.requests import CorrectRequest
 
     loop = SAMPLES / "closed_loop"
     solve = SolveOptions(objective=objective)

@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-import setupfix.optimize._leximin as lexmod
+import setupfix.optimize.exact.leximin.levels as lexmod
 from setupfix.model import load_model
 from setupfix.optimize import CorrectionProblem, get_optimizer
 
@@ -20,7 +20,7 @@ REPORTS = sorted((Path(__file__).parent / "data" / "pair_conflicts").glob("*.csv
 
 
 def report_problem(path: Path) -> CorrectionProblem:
-    from setupfix.pipeline.cycles import load_parts
+    from setupfix.inputs.cycles import load_parts
 
     model = load_model(ROOT / "sample_reports" / "guide_pins" / "model.toml")
     return CorrectionProblem.from_part(model, load_parts(model, path)[0])

@@ -8,8 +8,8 @@ import time
 import numpy as np
 import pytest
 
-import setupfix.optimize._leximin as lexmod
-from setupfix.optimize._leximin_pins import Certificates, dim_all, pinned_rows, span_closure
+import setupfix.optimize.exact.leximin.levels as lexmod
+from setupfix.optimize.exact.leximin.pins import Certificates, dim_all, pinned_rows, span_closure
 
 from .test_leximin import brute_leximin, guide_pins_window, one_axis_problem, solved_steps
 
@@ -111,7 +111,7 @@ def test_a_dimension_excluded_from_a_conflict_is_never_alone_at_its_level(large,
     the search still finds the brute-force leximin — also on the path of problems too large for NNLS on
     the whole system (the certificate from the rows near the level's point only)."""
     if large:
-        from setupfix.optimize._session import Session
+        from setupfix.optimize.exact.session import Session
 
         monkeypatch.setattr(Session, "small", property(lambda self: False))
     claims: list[int] = []
@@ -151,9 +151,9 @@ def test_a_dimension_excluded_from_a_conflict_is_never_alone_at_its_level(large,
 def test_farkas_weights_or_a_point_match_the_grid(seed):
     """NNLS on random rounded rows: weights only when no grid point meets them (brute force), else a
     continuous point of the rows; a floor/ceil rounding that meets them is a real grid point."""
-    from setupfix.optimize._farkas import farkas_or_point
-    from setupfix.optimize._leximin_pins import meeting_rounding
-    from setupfix.optimize._session import GridRows
+    from setupfix.optimize.exact.farkas import farkas_or_point
+    from setupfix.optimize.exact.leximin.pins import meeting_rounding
+    from setupfix.optimize.exact.session import GridRows
 
     rng = np.random.default_rng(seed)
     g_rows = rng.integers(-2, 3, size=(8, 3)).astype(float)
@@ -177,9 +177,9 @@ def test_farkas_weights_or_a_point_match_the_grid(seed):
 def test_point_above_answers_as_the_grid_does(tight, monkeypatch):
     """A point that meets the floors, or False exactly when no grid point of the box does (brute force) —
     with the first MILP on the rows near the LP's vertex (TIGHT_SLACK) and with all rows at once."""
-    import setupfix.optimize._leximin_pins as pins
-    from setupfix.optimize._session import GridRows, Session
-    from setupfix.optimize._settings import ExactSettings
+    import setupfix.optimize.exact.leximin.pins as pins
+    from setupfix.optimize.exact.session import GridRows, Session
+    from setupfix.optimize.exact.settings import ExactSettings
 
     monkeypatch.setattr(pins, "TIGHT_SLACK", tight)
     sizes: list[tuple[int, int]] = []
@@ -221,8 +221,8 @@ def test_meeting_rounding_is_the_first_floor_ceil_choice_that_meets_the_floors()
     """Against every floor/ceil choice listed in the same order (the lowest bits first), on 30 random cases
     of both outcomes: the same point, or None exactly when no choice meets the floors; rows without a
     floor (−inf) never refuse one."""
-    from setupfix.optimize._leximin_pins import meeting_rounding
-    from setupfix.optimize._session import GridRows
+    from setupfix.optimize.exact.leximin.pins import meeting_rounding
+    from setupfix.optimize.exact.session import GridRows
 
     outcomes = []
     for seed in range(30):

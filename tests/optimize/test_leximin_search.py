@@ -9,9 +9,9 @@ import numpy as np
 import pytest
 
 from setupfix.optimize import CorrectionProblem, get_optimizer
-from setupfix.optimize._dimensions import dimension_of_rows
-from setupfix.optimize._leximin_search import climb, climb_moves, group_min
-from setupfix.optimize._lp_bound import margin_rows
+from setupfix.optimize.dimensions import dimension_of_rows
+from setupfix.optimize.exact.leximin.search import climb, climb_moves, group_min
+from setupfix.optimize.exact.lp_bound import margin_rows
 
 from .test_exact import random_problem
 from .test_leximin import CASES, CONFLICTS, brute_leximin, make, one_axis_problem, solved_steps
@@ -124,7 +124,7 @@ def test_climb_without_an_active_dimension_returns_the_start():
 def test_leximin_without_the_climb_equals_brute_force(kind, seed, kw, monkeypatch):
     """The levels prove every level whatever point they start from: with no climb (the ascent by roundings,
     LPs and MILPs alone) the answer is brute force's, as with it."""
-    import setupfix.optimize._leximin as lexmod
+    import setupfix.optimize.exact.leximin.levels as lexmod
 
     problem = make(kind, seed, kw)
     best, norm, _ = brute_leximin(problem)

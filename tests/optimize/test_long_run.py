@@ -18,9 +18,9 @@ from pathlib import Path
 
 import numpy as np
 
+from setupfix.correction.synthetic import simulate_deviations
 from setupfix.model import PartMeasurement
 from setupfix.optimize import CorrectionProblem, get_optimizer
-from setupfix.simulate import simulate_deviations
 
 ROOT = Path(__file__).resolve().parents[2]
 LIMIT = 0.3
@@ -66,7 +66,7 @@ def test_a_long_run_never_runs_out_of_time_and_equals_a_fresh_process(guide_pins
 
 def test_each_run_of_one_highs_model_has_its_own_time_limit():
     """Runs of one model within a solve (lazy cuts, levels) each get the limit they are given."""
-    from setupfix.optimize._highs import INF, LinearModel
+    from setupfix.optimize.exact.highs import INF, LinearModel
 
     model = LinearModel(
         np.array([0.0, -1.0]),
@@ -92,10 +92,10 @@ def test_the_first_solve_of_a_process_imports_before_its_clock_starts():
 
     code = """
 import sys
-import setupfix.optimize._exact as exact
+import setupfix.optimize.exact.solve as exact
 from setupfix.model import load_model
 from setupfix.optimize import CorrectionProblem, get_optimizer
-from setupfix.pipeline.cycles import load_parts
+from setupfix.inputs.cycles import load_parts
 seen = []
 class Watched(exact.Clock):
     def __init__(self, limit):

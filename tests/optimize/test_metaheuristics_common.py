@@ -65,8 +65,8 @@ def brute_force(problem: CorrectionProblem) -> float:
 
 
 def guide_pins_problem(cycle: int) -> CorrectionProblem:
+    from setupfix.inputs.cycles import load_parts
     from setupfix.model import load_model
-    from setupfix.pipeline.cycles import load_parts
 
     model = load_model(GUIDE_PINS / "model.toml")
     part = load_parts(model, GUIDE_PINS / f"cycle_{cycle:02d}.csv")[0]
@@ -93,7 +93,7 @@ TARGET = {"pso": 0.010, "ga": 0.010, "coa": 0.025, "cs": 0.025}
 
 @pytest.mark.parametrize("name", METHODS)
 def test_paper_size_gap_to_exact_optimum(name: str) -> None:
-    exact_cls = pytest.importorskip("setupfix.optimize._exact").ExactOptimizer
+    exact_cls = pytest.importorskip("setupfix.optimize.exact.solve").ExactOptimizer
     for cycle in (1, 2):
         problem = guide_pins_problem(cycle)
         exact = exact_cls().solve(problem)

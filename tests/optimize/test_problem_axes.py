@@ -6,9 +6,9 @@ import numpy as np
 import pandas as pd
 import pytest
 
+from setupfix.correction.relation import relation_matrices
 from setupfix.model import match_parts, model_from_dict
 from setupfix.optimize import CorrectionProblem, get_optimizer
-from setupfix.relation import relation_matrices
 
 DOC = {
     "process": {

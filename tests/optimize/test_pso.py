@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from setupfix.optimize import CorrectionProblem
-from setupfix.optimize._pso import PSO, acceleration
+from setupfix.optimize.heuristics.pso import PSO, acceleration
 
 
 def _problem(seed: int = 0) -> CorrectionProblem:

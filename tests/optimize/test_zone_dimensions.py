@@ -20,9 +20,11 @@ import pandas as pd
 import pytest
 
 from setupfix.model import match_parts, model_from_dict
-from setupfix.optimize import CorrectionProblem, _triage, _triage_model, get_optimizer, harmed_columns
-from setupfix.optimize._dimensions import dimension_floor, dimension_of_rows, model_dimensions
-from setupfix.optimize._lp_bound import margin_rows
+from setupfix.optimize import CorrectionProblem, get_optimizer, harmed_columns
+from setupfix.optimize.dimensions import dimension_floor, dimension_of_rows, model_dimensions
+from setupfix.optimize.exact.lp_bound import margin_rows
+from setupfix.optimize.exact.triage import model as _triage_model
+from setupfix.optimize.exact.triage import solve as _triage
 
 from .leximin_reference import lexicographic_maxmin, prefix_sums
 
@@ -298,8 +300,8 @@ SAMPLE = Path(__file__).resolve().parents[2] / "sample_reports" / "two_station_x
 def test_sample_leximin_equals_an_independent_solver_on_its_rows():
     """two_station_xyz cycle 1 (11 registers, 4 zones of 18–19 facets): the whole leximin vector over the
     16 dimensions (a zone once) equals scipy's stage-by-stage optimum on the same rows."""
+    from setupfix.inputs.cycles import load_parts
     from setupfix.model import load_model
-    from setupfix.pipeline.cycles import load_parts
 
     model = load_model(SAMPLE / "model.toml")
     problem = CorrectionProblem.from_part(model, load_parts(model, SAMPLE / "cycle_01.csv")[0])
@@ -346,8 +348,8 @@ def test_fixture_leximin_against_an_independent_solver_on_the_circles(tmp_path, 
     first position where the two sorted vectors differ by more than that bound, ours must be the larger."""
     from multi_axis_fixtures import make_fixture, report_csv, true_margins
 
+    from setupfix.inputs.cycles import load_parts
     from setupfix.model import load_model
-    from setupfix.pipeline.cycles import load_parts
 
     fx = make_fixture(seed)
     (tmp_path / "model.toml").write_text(fx.text, encoding="utf-8")

@@ -17,8 +17,8 @@ from hypothesis import strategies as st
 
 import parsers
 from parsers.axes import AXIS_ANGLE_DEG, axis_word, vector_axis
-from setupfix.errors import SetupfixError
-from setupfix.pipeline.scaffold import name_axis
+from setupfix.core.errors import SetupfixError
+from setupfix.usecases.model_init import name_axis
 from tests.conftest import SAMPLES, shared_path
 
 

@@ -9,7 +9,7 @@ from conftest import shared_path
 
 import parsers
 from parsers.calypso import read_calypso, sniff_calypso
-from setupfix.errors import ParseError
+from setupfix.core.errors import ParseError
 
 HEADER = (
     "planid\tpartnb\tid\ttype\tidsymbol\tactual\tnominal\tuppertol\tlowertol\tdeviation\texceed\t"

@@ -17,7 +17,7 @@ import pytest
 import parsers
 import parsers.canonical as canonical
 from parsers import Source
-from setupfix.errors import SetupfixError
+from setupfix.core.errors import SetupfixError
 
 ROOT = Path(__file__).resolve().parents[2]
 

@@ -11,7 +11,7 @@ import pytest
 
 from parsers.corrections import check_corrections, log_from_frame, read_corrections_log
 from setupfix.cli import main
-from setupfix.errors import MatchError, ParseError
+from setupfix.core.errors import MatchError, ParseError
 from setupfix.model import load_model
 from setupfix.store import open_store
 

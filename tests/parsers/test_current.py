@@ -9,7 +9,7 @@ import pytest
 
 from parsers.current import read_current
 from setupfix.cli import main
-from setupfix.errors import ParseError
+from setupfix.core.errors import ParseError
 from setupfix.model import load_model, model_from_dict
 
 ROOT = Path(__file__).resolve().parents[2]

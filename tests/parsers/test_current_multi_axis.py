@@ -8,7 +8,7 @@ import pytest
 from multi_axis_rows import multi_axis_model
 
 from parsers.current import read_current
-from setupfix.errors import ParseError
+from setupfix.core.errors import ParseError
 
 MODEL = multi_axis_model()
 GOOD = (

@@ -11,7 +11,7 @@ from goldens import expect_note
 
 from parsers.dmis import read_dmis, sniff_dmis
 from parsers.dmis.statements import parse_statement, split_statements
-from setupfix.errors import ParseError
+from setupfix.core.errors import ParseError
 
 
 def write(tmp_path: Path, lines: list[str], name: str = "p.dmo") -> Path:

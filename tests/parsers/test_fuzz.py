@@ -21,7 +21,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import parsers
-from setupfix.errors import SetupfixError
+from setupfix.core.errors import SetupfixError
 
 ROOT = Path(__file__).resolve().parents[2]
 SHARED_SAMPLES = SHARED_ROOT / "cmm-samples"

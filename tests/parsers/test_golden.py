@@ -97,7 +97,7 @@ def read_quietly(path: Path) -> pd.DataFrame:
 def render_full(table: pd.DataFrame) -> str:
     """The canonical table as `setupfix parse` writes it (the ``axis`` column last where the
     reader states axes), provenance reduced to the file name."""
-    from setupfix.pipeline.parse import FLOAT_FORMAT, ParsedReport, ParseOutcome
+    from setupfix.usecases.parse import FLOAT_FORMAT, ParsedReport, ParseOutcome
 
     table = table.copy()
     table["source"] = table["source"].map(lambda s: Path(str(s)).name)
@@ -154,7 +154,7 @@ def test_sample_matches_golden(folder: str, shared: str, name: str, kind: str) -
 @pytest.mark.parametrize(("folder", "name", "reason"), REFUSED, ids=[r[1] for r in REFUSED])
 def test_sample_refused_with_reason(folder: str, name: str, reason: str) -> None:
     import parsers
-    from setupfix.errors import ParseError
+    from setupfix.core.errors import ParseError
 
     copy = COPIED / "qif" / name
     path = copy if copy.exists() else SHARED_SAMPLES / folder / name

@@ -16,7 +16,7 @@ from goldens import GOLDEN, assert_derived_golden, read_warned
 import parsers
 from parsers.korean import read_korean
 from parsers.korean.report import along_normal
-from setupfix.errors import ParameterError, ParseError
+from setupfix.core.errors import ParameterError, ParseError
 
 SHARED = SHARED_ROOT / "cmm-samples" / "korean_cmm_txt"
 NAMES = sorted(p.name for p in SHARED.glob("KR_*.txt")) or ["KR_45926-4G100_240113_night_2-2-1_NG.cp949.txt"]

@@ -12,7 +12,7 @@ from goldens import expect_note
 
 import parsers
 from parsers.mitutoyo import read_qvpak
-from setupfix.errors import ParseError
+from setupfix.core.errors import ParseError
 
 SHARED = SHARED_ROOT / "cmm-samples" / "mitutoyo"
 

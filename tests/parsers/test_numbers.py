@@ -9,7 +9,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from parsers.numbers import parse_number, try_number
-from setupfix.errors import ParseError, SourceLocation
+from setupfix.core.errors import ParseError, SourceLocation
 
 
 @pytest.mark.parametrize(

@@ -16,7 +16,7 @@ from goldens import GOLDEN, assert_derived_golden, read_warned
 import parsers
 from parsers.ogp import read_ogp
 from parsers.ogp.rtf import rtf_lines
-from setupfix.errors import ParseError
+from setupfix.core.errors import ParseError
 
 SHARED = SHARED_ROOT / "cmm-samples" / "ogp_measurex"
 

@@ -10,7 +10,7 @@ from goldens import GOLDEN, assert_golden, expect_note
 
 import parsers
 from parsers.pcdmis import read_pcdmis_csv, read_pcdmis_text
-from setupfix.errors import ParseError
+from setupfix.core.errors import ParseError
 
 SAMPLES = Path(__file__).resolve().parents[2] / "sample_reports" / "pcdmis"
 

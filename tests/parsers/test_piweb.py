@@ -11,7 +11,7 @@ from goldens import GOLDEN, assert_golden
 
 import parsers
 from parsers.piweb import read_piweb
-from setupfix.errors import ParseError
+from setupfix.core.errors import ParseError
 
 SAMPLES = Path(__file__).resolve().parents[2] / "sample_reports" / "piweb"
 

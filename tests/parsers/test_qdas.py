@@ -9,7 +9,7 @@ from goldens import GOLDEN, assert_golden, expect_note
 
 import parsers
 from parsers.qdas import read_aqdef
-from setupfix.errors import ParseError
+from setupfix.core.errors import ParseError
 from setupfix.model.measurements import CANONICAL_COLUMNS
 
 SAMPLES = Path(__file__).resolve().parents[2] / "sample_reports" / "qdas"

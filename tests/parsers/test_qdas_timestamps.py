@@ -12,7 +12,7 @@ from pathlib import Path
 import pytest
 
 from parsers.qdas import read_aqdef
-from setupfix.errors import ParseError
+from setupfix.core.errors import ParseError
 
 SAMPLES = Path(__file__).resolve().parents[2] / "sample_reports" / "qdas"
 SINGLE = SAMPLES / "diribet_basicDfq_singlePart_threeCharacteristics.dfq"

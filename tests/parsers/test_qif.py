@@ -13,7 +13,7 @@ from goldens import expect_note
 
 import parsers
 from parsers.qif import read_qif, sniff_qif
-from setupfix.errors import ParseError
+from setupfix.core.errors import ParseError
 
 ROOT = Path(__file__).resolve().parents[2]
 QIF = ROOT / "sample_reports" / "qif"

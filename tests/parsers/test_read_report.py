@@ -14,7 +14,7 @@ import pytest
 
 import parsers
 from parsers._source import MAX_REPORT_BYTES, Source
-from setupfix.errors import ParameterError, ParseError
+from setupfix.core.errors import ParameterError, ParseError
 
 ROOT = Path(__file__).resolve().parents[2]
 SAMPLES = ROOT / "sample_reports"

@@ -9,7 +9,7 @@ import pytest
 import parsers
 from parsers import _registry
 from parsers._source import decode, parse_number
-from setupfix.errors import ParseError, UnknownFormatError
+from setupfix.core.errors import ParseError, UnknownFormatError
 
 ROOT = Path(__file__).resolve().parents[2]
 GUIDE = ROOT / "sample_reports" / "guide_pins"

@@ -11,7 +11,7 @@ import pytest
 
 import parsers
 from parsers.qif._xml import _parser, parse_xml
-from setupfix.errors import ParseError
+from setupfix.core.errors import ParseError
 
 BILLION_LAUGHS = """<?xml version="1.0"?>
 <!DOCTYPE lolz [

@@ -11,7 +11,7 @@ import pytest
 
 import parsers
 from parsers.table import guess_columns, parse_columns, read_table
-from setupfix.errors import ParseError
+from setupfix.core.errors import ParseError
 
 ROOT = Path(__file__).resolve().parents[2]
 TABLES = ROOT / "sample_reports" / "tables"

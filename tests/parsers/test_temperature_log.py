@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 
 from parsers.temperature import read_temperature_log
-from setupfix.errors import ParseError
-from setupfix.pipeline.thermal_columns import select_columns
+from setupfix.core.errors import ParseError
+from setupfix.thermal.columns import select_columns
 
 GOOD = (
     "timestamp,T1,T2,spindle_speed,error,operator\n"

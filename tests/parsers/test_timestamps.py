@@ -7,8 +7,8 @@ from datetime import datetime
 import pytest
 
 from parsers.timestamps import instant, iso_text, parse_timestamp, to_index
-from setupfix.errors import ParseError, SourceLocation
-from setupfix.pose import hours_between
+from setupfix.core.errors import ParseError, SourceLocation
+from setupfix.correction.pose import hours_between
 
 HERE = SourceLocation("r.csv", line=3)
 

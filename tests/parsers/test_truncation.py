@@ -15,7 +15,7 @@ from conftest import SHARED
 
 import parsers
 from parsers.truncation import check_prefixes, cut_points, line_cut_points
-from setupfix.errors import ParseError, SetupfixError
+from setupfix.core.errors import ParseError, SetupfixError
 
 ROOT = Path(__file__).resolve().parents[2]
 SKIP = {".md", ".py", ".toml", ".png"}

@@ -9,10 +9,10 @@ from pathlib import Path
 import pytest
 
 from setupfix.model import load_model
-from setupfix.pipeline.batch import run_batch
-from setupfix.pipeline.batch_output import MANIFEST
-from setupfix.pipeline.requests import CorrectRequest, SolveOptions
+from setupfix.outputs.batch_output import MANIFEST
 from setupfix.store import open_store
+from setupfix.usecases.batch import run_batch
+from setupfix.usecases.requests import CorrectRequest, SolveOptions
 
 ROOT = Path(__file__).resolve().parents[2]
 GUIDE = ROOT / "sample_reports" / "guide_pins"
@@ -88,7 +88,7 @@ def test_file_changing_during_the_run_is_not_read(tmp_path):
 
 
 def test_bad_controller_register_fails_before_any_work(tmp_path):
-    from setupfix.errors import ExportError
+    from setupfix.core.errors import ExportError
 
     with pytest.raises(ExportError, match=r"haas: cannot express register 'G54.1P1'"):
         run_batch(REQUEST, folder(tmp_path), tmp_path / "programs", settle=0, controller="haas")
@@ -132,7 +132,7 @@ def test_store_records_what_was_corrected_without_reading_again(tmp_path, monkey
 
 
 def test_many_reports_in_chunks_give_the_same_output_and_progress_order(tmp_path):
-    from setupfix.pipeline.batch import chunk_size
+    from setupfix.usecases.batch import chunk_size
 
     d = tmp_path / "reports"
     d.mkdir()
@@ -192,7 +192,7 @@ def test_files_kept_beside_reports_are_not_read_as_reports(tmp_path: Path) -> No
 
 def test_automatic_worker_count(monkeypatch) -> None:
     """Without --workers: one process per CPU the batch may use (at most 8), one for a small folder."""
-    from setupfix.pipeline import batch
+    from setupfix.usecases import batch
 
     monkeypatch.setattr(batch.os, "sched_getaffinity", lambda pid: set(range(12)), raising=False)
     assert batch.auto_workers(31) == 1
@@ -205,10 +205,10 @@ def test_ewma_over_the_store_and_the_batch_does_not_depend_on_workers(tmp_path):
     """With λ < 1 and a store, each report is smoothed over every earlier part (store and batch): the same
     output for 1 and 2 workers, different from the unsmoothed one, and equal to correcting each report with
     the history of the store holding them all."""
-    from setupfix.pipeline.correct import correct_report
-    from setupfix.pipeline.export import cycle_rows
-    from setupfix.pipeline.requests import History
-    from setupfix.pipeline.writers import csv_lines
+    from setupfix.outputs.writers import csv_lines
+    from setupfix.usecases.correct import correct_report
+    from setupfix.usecases.export import cycle_rows
+    from setupfix.usecases.requests import History
 
     model_path = tmp_path / "ewma.toml"
     model_path.write_text((GUIDE / "model.toml").read_text() + "\n[safety]\newma = 0.5\n")
@@ -235,8 +235,8 @@ def test_ewma_over_the_store_and_the_batch_does_not_depend_on_workers(tmp_path):
 
 def test_a_report_the_store_refuses_is_said_in_the_summary(tmp_path, monkeypatch):
     """Its offsets stand (it is corrected again next run), and the summary names why it was not stored."""
-    from setupfix.errors import StoreError
-    from setupfix.pipeline import batch_records
+    from setupfix.core.errors import StoreError
+    from setupfix.usecases import batch_records
 
     d = folder(tmp_path)
     real = batch_records._record

@@ -13,8 +13,8 @@ import pytest
 
 from setupfix.cli import main
 from setupfix.model import load_model
-from setupfix.pipeline.batch import run_batch
-from setupfix.pipeline.requests import CorrectRequest
+from setupfix.usecases.batch import run_batch
+from setupfix.usecases.requests import CorrectRequest
 
 ROOT = Path(__file__).resolve().parents[2]
 GUIDE = ROOT / "sample_reports" / "guide_pins"

@@ -7,10 +7,10 @@ import shutil
 from pathlib import Path
 
 from setupfix.model import load_model
-from setupfix.pipeline.batch import run_batch
-from setupfix.pipeline.batch_output import MANIFEST
-from setupfix.pipeline.controllers import NAME_MAX, PROGRAM_NAME_MAX, fit_name, program_path
-from setupfix.pipeline.requests import CorrectRequest
+from setupfix.outputs.batch_output import MANIFEST
+from setupfix.outputs.controllers import NAME_MAX, PROGRAM_NAME_MAX, fit_name, program_path
+from setupfix.usecases.batch import run_batch
+from setupfix.usecases.requests import CorrectRequest
 
 ROOT = Path(__file__).resolve().parents[2]
 GUIDE = ROOT / "sample_reports" / "guide_pins"

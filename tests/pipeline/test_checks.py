@@ -7,10 +7,10 @@ from pathlib import Path
 
 import pytest
 
-from setupfix.errors import MatchError
-from setupfix.pipeline.correct import correct_report
-from setupfix.pipeline.present import note_lines
-from setupfix.pipeline.requests import CorrectRequest, CycleOptions
+from setupfix.core.errors import MatchError
+from setupfix.usecases.contract import note_lines
+from setupfix.usecases.correct import correct_report
+from setupfix.usecases.requests import CorrectRequest, CycleOptions
 from tests.conftest import GUIDE_PINS
 
 CYCLE = GUIDE_PINS / "cycle_01.csv"

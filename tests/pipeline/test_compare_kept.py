@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from setupfix.model import load_model
-from setupfix.pipeline.compare import CompareRequest, compare_report
+from setupfix.usecases.compare import CompareRequest, compare_report
 from tests.conftest import shared_path
 
 ROOT = Path(__file__).resolve().parents[2]

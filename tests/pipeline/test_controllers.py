@@ -13,12 +13,12 @@ from pathlib import Path
 import pytest
 
 from parsers.current import read_current
-from setupfix.errors import ExportError
+from setupfix.core.errors import ExportError
+from setupfix.correction.offsets import offset_rows
 from setupfix.model import load_model, model_from_dict
-from setupfix.offsets import offset_rows
-from setupfix.pipeline.controllers import CONTROLLERS, render
-from setupfix.pipeline.correct import correct_report
-from setupfix.pipeline.requests import CorrectRequest, SolveOptions
+from setupfix.outputs.controllers import CONTROLLERS, render
+from setupfix.usecases.correct import correct_report
+from setupfix.usecases.requests import CorrectRequest, SolveOptions
 
 ROOT = Path(__file__).resolve().parents[2]
 SAMPLE = ROOT / "sample_reports" / "controllers"

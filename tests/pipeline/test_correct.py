@@ -4,11 +4,11 @@ from __future__ import annotations
 
 import pytest
 
-from setupfix.errors import MatchError
+from setupfix.core.errors import MatchError
 from setupfix.model import load_model, model_from_dict
-from setupfix.pipeline.correct import correct_report
-from setupfix.pipeline.present import cycle_json
-from setupfix.pipeline.requests import CorrectRequest, CycleOptions
+from setupfix.usecases.contract import cycle_json
+from setupfix.usecases.correct import correct_report
+from setupfix.usecases.requests import CorrectRequest, CycleOptions
 
 
 def correct(model, path, stations=None):

@@ -12,11 +12,11 @@ import numpy as np
 import pytest
 from multi_axis_fixtures import independent_optimum, make_fixture, report_csv, true_margins
 
+from setupfix.correction.offsets import offset_rows
 from setupfix.model import load_model
-from setupfix.offsets import offset_rows
-from setupfix.pipeline.correct import correct_report
-from setupfix.pipeline.present import cycle_json
-from setupfix.pipeline.requests import CorrectRequest, SolveOptions
+from setupfix.usecases.contract import cycle_json
+from setupfix.usecases.correct import correct_report
+from setupfix.usecases.requests import CorrectRequest, SolveOptions
 
 ROOT = Path(__file__).resolve().parents[2]
 SAMPLE = ROOT / "sample_reports" / "two_station_xyz"
@@ -78,7 +78,7 @@ def test_paper_objective_reaches_the_same_optimum(tmp_path):
 
 
 def test_polygon_error_bound_against_the_circle():
-    from setupfix.zones import facet_rows, polygon_error, polygon_sides
+    from setupfix.correction.zones import facet_rows, polygon_error, polygon_sides
 
     rng = np.random.default_rng(0)
     for radius in (0.02, 0.05, 0.3, 2.0):
@@ -160,10 +160,10 @@ def test_zone_with_one_component_missing_is_left_out(tmp_path):
 
 
 def test_history_store_keyed_by_component(tmp_path):
-    from setupfix.errors import MatchError
-    from setupfix.pipeline.correct import load_request
-    from setupfix.pipeline.history import ImportRequest, import_history, record_recommendations
+    from setupfix.core.errors import MatchError
     from setupfix.store import open_store
+    from setupfix.usecases.correct import load_request
+    from setupfix.usecases.history import ImportRequest, import_history, record_recommendations
 
     model = load_model(SAMPLE / "model.toml")
     log = tmp_path / "log.csv"
@@ -272,8 +272,8 @@ def test_triage_with_a_zone_given_up_applies(tmp_path):
 
 
 def test_view_and_text_rows_speak_components(tmp_path):
-    from setupfix.pipeline.present import format_correction
-    from setupfix.pipeline.view import dimension_rows, register_rows, summary
+    from setupfix.views.correction import dimension_rows, register_rows, summary
+    from setupfix.views.present import format_correction
 
     _, model, cycle = solve(tmp_path, 2)
     regs = register_rows(cycle, current={"W1.C": 0.5, "G54": 9.0})

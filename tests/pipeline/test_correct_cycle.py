@@ -10,13 +10,13 @@ import pytest
 from conftest import GUIDE_PINS, SAMPLES
 
 from setupfix.diagnose import Diagnoser
+from setupfix.inputs.cycles import load_parts
 from setupfix.model import PartMeasurement, load_model
-from setupfix.pipeline.compare import CompareRequest, compare_report
-from setupfix.pipeline.correct import correct_cycle, correct_report
-from setupfix.pipeline.cycles import load_parts
-from setupfix.pipeline.diagnose import DiagnoseRequest, diagnose_reports, forecast_model
-from setupfix.pipeline.requests import CorrectRequest, History, SolveOptions
 from setupfix.store import open_store
+from setupfix.usecases.compare import CompareRequest, compare_report
+from setupfix.usecases.correct import correct_cycle, correct_report
+from setupfix.usecases.diagnosis import DiagnoseRequest, diagnose_reports, forecast_model
+from setupfix.usecases.requests import CorrectRequest, History, SolveOptions
 
 sys.path.insert(0, str(Path(__file__).resolve().parent / "data"))
 import make_correct_goldens as golden
@@ -104,8 +104,8 @@ def test_thermal_feed_forward_is_a_step_of_the_use_case_and_requests_pickle(tmp_
     import pickle
 
     from parsers.temperature import read_temperature_log
-    from setupfix.pipeline import thermal_fit
-    from setupfix.pipeline.requests import ThermalInputs
+    from setupfix.usecases import thermal_fit
+    from setupfix.usecases.requests import ThermalInputs
 
     thermal = SAMPLES / "thermal"
     saved = thermal_fit.fit_log(
@@ -129,15 +129,15 @@ def test_thermal_feed_forward_is_a_step_of_the_use_case_and_requests_pickle(tmp_
     np.testing.assert_array_equal(fed.x, plain.x)  # the setup correction itself is unchanged
     again = correct_report(pickle.loads(pickle.dumps(request)), CYCLES[0]).cycles[0]
     assert again.corrections == fed.corrections
-    from setupfix.pipeline.present import format_correction
+    from setupfix.views.present import format_correction
 
     text = format_correction(fed)
     assert ff.line() in text and text.index(ff.line()) < text.index("error budget before")
 
 
 def test_load_request_reads_each_input_once_and_only_what_the_model_uses(tmp_path):
-    from setupfix.errors import SetupfixError
-    from setupfix.pipeline.correct import load_request
+    from setupfix.core.errors import SetupfixError
+    from setupfix.usecases.correct import load_request
 
     controllers = SAMPLES / "controllers"
     req = load_request(controllers / "model.toml", current=controllers / "current.csv")

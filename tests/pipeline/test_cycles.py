@@ -8,10 +8,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from setupfix.errors import MatchError
-from setupfix.pipeline.correct import correct_report
-from setupfix.pipeline.cycles import cycle_name, load_parts, model_groups
-from setupfix.pipeline.requests import CorrectRequest, CycleOptions
+from setupfix.core.errors import MatchError
+from setupfix.inputs.cycles import cycle_name, load_parts, model_groups
+from setupfix.usecases.correct import correct_report
+from setupfix.usecases.requests import CorrectRequest, CycleOptions
 from tests.conftest import GUIDE_PINS
 
 

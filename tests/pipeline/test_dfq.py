@@ -12,10 +12,10 @@ from spc_examples import closed_loop_store
 
 from parsers.qdas import read_aqdef
 from parsers.timestamps import utc_naive
-from setupfix.errors import ExportError
-from setupfix.pipeline.dfq import dfq_text, export_dfq, write_dfq
-from setupfix.pipeline.history import ImportRequest, import_history
+from setupfix.core.errors import ExportError
+from setupfix.outputs.dfq import dfq_text, export_dfq, write_dfq
 from setupfix.store import open_store
+from setupfix.usecases.history import ImportRequest, import_history
 
 
 def stored(db: Path) -> pd.DataFrame:

@@ -9,9 +9,9 @@ from diagnose.helpers import guide_pins, one_effect, simulate
 
 from setupfix.diagnose import Diagnoser, Layout
 from setupfix.diagnose.walk import NextSource, centred_registers, ewma_forecast
-from setupfix.pipeline.correct import correct_cycle
-from setupfix.pipeline.diagnose import forecast_model, recommend_next, series_history
-from setupfix.pipeline.requests import CorrectRequest
+from setupfix.usecases.correct import correct_cycle
+from setupfix.usecases.diagnosis import forecast_model, recommend_next, series_history
+from setupfix.usecases.requests import CorrectRequest
 
 MODEL = guide_pins(positions=False)
 LAYOUT = Layout.from_model(MODEL)

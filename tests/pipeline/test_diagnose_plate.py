@@ -19,8 +19,8 @@ import pytest
 from conftest import SAMPLES
 
 from setupfix.diagnose import Diagnoser
-from setupfix.pipeline.diagnose import DiagnoseRequest, diagnose_reports, recommend_next
-from setupfix.pipeline.series import load_series
+from setupfix.inputs.series import load_series
+from setupfix.usecases.diagnosis import DiagnoseRequest, diagnose_reports, recommend_next
 
 PLATE = SAMPLES / "qif" / "NIST_MTC_FAIR_Plate_Results_20parts.qif"
 MODEL = Path(__file__).parents[1] / "data" / "nist_plate.toml"

@@ -1,4 +1,4 @@
-"""setupfix.pipeline.export: apply/hold/reject policy, one cycle per program, atomic writing."""
+"""setupfix.usecases.export: apply/hold/reject policy, one cycle per program, atomic writing."""
 
 from __future__ import annotations
 
@@ -8,11 +8,11 @@ import hashlib
 import pytest
 from conftest import GUIDE_PINS, SAMPLES
 
-from setupfix.errors import ExportError
+from setupfix.core.errors import ExportError
 from setupfix.model import load_model
-from setupfix.pipeline.correct import correct_report
-from setupfix.pipeline.export import export, offsets_text
-from setupfix.pipeline.requests import CorrectRequest, CurrentOffsets
+from setupfix.usecases.correct import correct_report
+from setupfix.usecases.export import export, offsets_text
+from setupfix.usecases.requests import CorrectRequest, CurrentOffsets
 
 CONTROLLERS = SAMPLES / "controllers"
 

@@ -16,14 +16,14 @@ import pytest
 
 from parsers import list_reports
 from setupfix.cli import main
-from setupfix.errors import MatchError
+from setupfix.core.errors import MatchError
+from setupfix.inputs.series import load_series
 from setupfix.model import load_model
-from setupfix.pipeline.diagnose import note_text
-from setupfix.pipeline.history import ImportRequest, import_history
-from setupfix.pipeline.parse import parse_reports
-from setupfix.pipeline.scaffold import scaffold_model
-from setupfix.pipeline.series import load_series
 from setupfix.store import open_store
+from setupfix.usecases.diagnosis import note_text
+from setupfix.usecases.history import ImportRequest, import_history
+from setupfix.usecases.model_init import scaffold_model
+from setupfix.usecases.parse import parse_reports
 
 ROOT = Path(__file__).resolve().parents[2]
 PCDMIS = ROOT / "sample_reports" / "pcdmis"

@@ -8,11 +8,11 @@ from html.parser import HTMLParser
 import pytest
 from spc_examples import GUIDE_PINS, closed_loop_store
 
-from setupfix.pipeline.correct import correct_report, load_request
-from setupfix.pipeline.history import ImportRequest, import_history
-from setupfix.pipeline.html_report import correction_page, spc_page
-from setupfix.pipeline.spc import SpcRequest, spc_report
 from setupfix.store import open_store
+from setupfix.usecases.correct import correct_report, load_request
+from setupfix.usecases.history import ImportRequest, import_history
+from setupfix.usecases.spc_report import SpcRequest, spc_report
+from setupfix.views.html import correction_page, spc_page
 
 #: What would make a page load something from elsewhere (the SVG namespace URI is a name, not a load).
 EXTERNAL = re.compile(

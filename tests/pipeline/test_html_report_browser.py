@@ -21,10 +21,10 @@ import numpy as np
 import pytest
 from spc_examples import GUIDE_PINS, closed_loop_store
 
-from setupfix.pipeline.correct import correct_report, load_request
-from setupfix.pipeline.html_report import correction_page, spc_page
-from setupfix.pipeline.spc import SpcRequest, spc_report
 from setupfix.store import open_store
+from setupfix.usecases.correct import correct_report, load_request
+from setupfix.usecases.spc_report import SpcRequest, spc_report
+from setupfix.views.html import correction_page, spc_page
 
 CHROMIUM = os.environ.get("SETUPFIX_CHROMIUM", "/usr/bin/chromium")
 ARGS = [

@@ -16,10 +16,10 @@ import numpy as np
 import pytest
 
 from setupfix.cli import main
+from setupfix.correction.relation import composite_matrix, null_space_directions
 from setupfix.model import load_model
-from setupfix.pipeline.model import describe_model
-from setupfix.pipeline.present import DENSE_CELLS
-from setupfix.relation import composite_matrix, null_space_directions
+from setupfix.usecases.model_check import describe_model
+from setupfix.views.present import DENSE_CELLS
 
 N = 3000
 

@@ -7,8 +7,8 @@ import pytest
 from conftest import GUIDE_PINS, SAMPLES
 
 from parsers.temperature import read_temperature_log
-from setupfix.errors import MatchError, ParseError
-from setupfix.pipeline.series import load_series
+from setupfix.core.errors import MatchError, ParseError
+from setupfix.inputs.series import load_series
 
 LOOP = SAMPLES / "closed_loop"
 REPORT = LOOP / "measurements.csv"

@@ -1,4 +1,4 @@
-"""setupfix.pipeline.requests: the typed, frozen, hashable options of a request, checked when made."""
+"""setupfix.usecases.requests: the typed, frozen, hashable options of a request, checked when made."""
 
 from __future__ import annotations
 
@@ -7,9 +7,9 @@ import pickle
 import pytest
 from conftest import SAMPLES
 
-from setupfix.errors import ParameterError
+from setupfix.core.errors import ParameterError
 from setupfix.model import load_model
-from setupfix.pipeline.requests import CorrectRequest, CurrentOffsets, CycleOptions, ReadOptions, SolveOptions
+from setupfix.usecases.requests import CorrectRequest, CurrentOffsets, CycleOptions, ReadOptions, SolveOptions
 
 
 def test_requests_are_hashable_options_and_checked():

@@ -13,12 +13,12 @@ import pandas as pd
 import pytest
 
 import parsers
-from setupfix.errors import ModelError, SetupfixError
+from setupfix.core.errors import ModelError, SetupfixError
+from setupfix.inputs.checks import check_parts
 from setupfix.model import ProcessModel, load_model, match_parts, model_from_dict
-from setupfix.pipeline.checks import check_parts
-from setupfix.pipeline.correct import correct_cycle, correct_report
-from setupfix.pipeline.requests import CorrectRequest
-from setupfix.pipeline.scaffold import name_axis, scaffold_from_tables
+from setupfix.usecases.correct import correct_cycle, correct_report
+from setupfix.usecases.model_init import name_axis, scaffold_from_tables
+from setupfix.usecases.requests import CorrectRequest
 from tests.conftest import GUIDE_PINS, SAMPLES, shared_path
 
 
@@ -70,7 +70,7 @@ def scaffold_and_correct(path: Path, table: pd.DataFrame | None = None, **kwargs
     assert held.verdict == "hold" and [r.rule for r in held.recommendation.rules] == ["draft"]
     assert not np.any(held.recommendation.x)
     pc = correct_cycle(CorrectRequest(dataclasses.replace(model, draft=False)), part)
-    # a gross deviation (beyond the reject band, setupfix.safety) is refused, not corrected
+    # a gross deviation (beyond the reject band, setupfix.correction.safety) is refused, not corrected
     assert pc.result.status in ("optimal", "time_limit", "rounded") or pc.verdict == "reject"
     assert part.measured.sum() >= 1 and not [n for n in part.notes if n.kind == "mismatch"]
     return scaffold, model, pc
@@ -223,7 +223,7 @@ def test_cli_init_then_correct(tmp_path, capsys):
 
 
 def test_several_reports_make_one_scaffold():
-    from setupfix.pipeline.scaffold import scaffold_model
+    from setupfix.usecases.model_init import scaffold_model
 
     reports = [GUIDE_PINS / "cycle_01.csv", GUIDE_PINS / "cycle_02.csv", GUIDE_PINS / "cycle_01.qif"]
     scaffold = scaffold_model(reports, name="guide pins", axis="Z")
@@ -362,7 +362,7 @@ def test_model_init_on_a_qif_takes_the_axes_from_its_vectors(tmp_path, capsys):
 
 
 def test_a_folder_stands_for_its_files_and_unreadable_ones_are_left_out_with_a_note(tmp_path):
-    from setupfix.pipeline.scaffold import scaffold_model
+    from setupfix.usecases.model_init import scaffold_model
 
     folder = tmp_path / "reports"
     folder.mkdir()

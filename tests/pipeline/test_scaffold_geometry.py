@@ -20,11 +20,11 @@ import pytest
 
 import parsers
 from parsers.geometry import INTERPOLATED
-from setupfix.errors import ModelError, SetupfixError
+from setupfix.core.errors import ModelError, SetupfixError
 from setupfix.model import load_model, model_from_dict
-from setupfix.pipeline.correct import correct_report
-from setupfix.pipeline.requests import CorrectRequest
-from setupfix.pipeline.scaffold import scaffold_from_tables, scaffold_model
+from setupfix.usecases.correct import correct_report
+from setupfix.usecases.model_init import scaffold_from_tables, scaffold_model
+from setupfix.usecases.requests import CorrectRequest
 from tests.conftest import SAMPLES, SHARED
 
 AXES = ("X", "Y", "Z")

@@ -8,12 +8,12 @@ import time
 import pytest
 from conftest import GUIDE_PINS
 
-from setupfix.errors import ParseError
-from setupfix.pipeline.compare import compare_problem
-from setupfix.pipeline.correct import load_request
-from setupfix.pipeline.export import export, offsets_text
-from setupfix.pipeline.requests import ReadOptions
-from setupfix.pipeline.session import FolderWatch, compare_steps, export_cycles, newest_report, open_report
+from setupfix.core.errors import ParseError
+from setupfix.tui.session import FolderWatch, compare_steps, export_cycles, newest_report, open_report
+from setupfix.usecases.compare import compare_problem
+from setupfix.usecases.correct import load_request
+from setupfix.usecases.export import export, offsets_text
+from setupfix.usecases.requests import ReadOptions
 
 MODEL = GUIDE_PINS / "model.toml"
 
@@ -135,7 +135,7 @@ def test_the_export_text_is_what_correct_writes(tmp_path, controller):
 
 
 def test_a_rejected_report_cannot_be_exported(tmp_path):
-    from setupfix.errors import ExportError
+    from setupfix.core.errors import ExportError
 
     gross = tmp_path / "gross.csv"
     gross.write_text(
@@ -151,7 +151,7 @@ def test_a_rejected_report_cannot_be_exported(tmp_path):
 
 
 def test_a_register_the_format_cannot_express_is_named():
-    from setupfix.errors import ExportError
+    from setupfix.core.errors import ExportError
 
     with pytest.raises(ExportError, match="G58"):
         export_text(opened_report(GUIDE_PINS / "cycle_01.csv"), "siemens")
@@ -187,9 +187,9 @@ def test_the_report_is_read_once(monkeypatch):
 
 def test_a_program_holds_the_chosen_cycle_and_only_it_is_recorded_as_applied(tmp_path):
     """Issue 21 item 5: recording an export recorded every cycle's corrections; now exactly what was written."""
-    from setupfix.errors import ExportError
-    from setupfix.pipeline.session import record_applied
+    from setupfix.core.errors import ExportError
     from setupfix.store import open_store
+    from setupfix.tui.session import record_applied
 
     opened = opened_report(GUIDE_PINS.parent / "closed_loop" / "measurements.csv")
     assert len(opened.corrections) == 40

@@ -9,12 +9,12 @@ import pandas as pd
 import pytest
 
 import parsers
-from setupfix.errors import MatchError, ParseError
+from setupfix.core.errors import MatchError, ParseError
+from setupfix.inputs.cycles import load_parts
 from setupfix.model import load_model
-from setupfix.pipeline.correct import correct_report
-from setupfix.pipeline.cycles import load_parts
-from setupfix.pipeline.requests import CorrectRequest, History
 from setupfix.store import open_store
+from setupfix.usecases.correct import correct_report
+from setupfix.usecases.requests import CorrectRequest, History
 
 GUIDE = Path(__file__).resolve().parents[2] / "sample_reports" / "guide_pins"
 

@@ -10,10 +10,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from setupfix.errors import MatchError, ParameterError, ParseError, StoreError
-from setupfix.pipeline.history import ImportRequest, import_history
-from setupfix.pipeline.spc import SpcRequest, format_spc, spc_json, spc_report
+from setupfix.core.errors import MatchError, ParameterError, ParseError, StoreError
 from setupfix.store import open_store
+from setupfix.usecases.history import ImportRequest, import_history
+from setupfix.usecases.spc_report import SpcRequest, format_spc, spc_json, spc_report
 
 #: A clean stretch (deviations, mm): no Nelson rule fires on it or across its joins.
 CLEAN = [0.003, -0.005, 0.004, 0.0045, -0.002, 0.001, -0.0055]

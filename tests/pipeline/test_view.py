@@ -10,10 +10,11 @@ import pytest
 from conftest import GUIDE_PINS
 
 from setupfix.model import load_model
-from setupfix.pipeline import analysis_view, view
-from setupfix.pipeline.compare import compare_problem
-from setupfix.pipeline.correct import correct_report
-from setupfix.pipeline.requests import CorrectRequest, SolveOptions
+from setupfix.usecases.compare import compare_problem
+from setupfix.usecases.correct import correct_report
+from setupfix.usecases.requests import CorrectRequest, SolveOptions
+from setupfix.views import analysis as analysis_view
+from setupfix.views import correction as view
 
 #: The README's cycle-1 numbers are the paper's objective's (issue 22 made leximin the default).
 REQUEST = CorrectRequest(load_model(GUIDE_PINS / "model.toml"), solve=SolveOptions(objective="paper"))
@@ -99,8 +100,8 @@ def test_register_rows_list_every_register_with_new_values_when_current_known(co
 def test_register_rows_show_what_the_export_writes_feed_forward_included(correction):
     import dataclasses
 
-    from setupfix.pipeline.export import cycle_rows
-    from setupfix.pipeline.feedforward import ThermalFeedForward
+    from setupfix.usecases.export import cycle_rows
+    from setupfix.usecases.thermal_feedforward import ThermalFeedForward
 
     feed = ThermalFeedForward(
         "grey",

@@ -1,4 +1,4 @@
-"""Every writer of setupfix.pipeline.writers: write → read gives the same content back."""
+"""Every writer of setupfix.outputs.writers: write → read gives the same content back."""
 
 from __future__ import annotations
 
@@ -11,13 +11,9 @@ import pandas as pd
 import pytest
 
 from parsers.canonical import read_canonical
-from setupfix.errors import ExportError, ParseError
+from setupfix.core.errors import ExportError, ParseError
 from setupfix.model import CANONICAL_COLUMNS, load_model
-from setupfix.pipeline.correct import correct_report
-from setupfix.pipeline.export import cycle_rows
-from setupfix.pipeline.parse import parse_reports
-from setupfix.pipeline.requests import CorrectRequest
-from setupfix.pipeline.writers import (
+from setupfix.outputs.writers import (
     check_target,
     write_bytes,
     write_canonical_csv,
@@ -25,6 +21,10 @@ from setupfix.pipeline.writers import (
     write_offsets_csv,
     write_text,
 )
+from setupfix.usecases.correct import correct_report
+from setupfix.usecases.export import cycle_rows
+from setupfix.usecases.parse import parse_reports
+from setupfix.usecases.requests import CorrectRequest
 
 ROOT = Path(__file__).resolve().parents[2]
 GUIDE = ROOT / "sample_reports" / "guide_pins"

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from setupfix.search._cs import greedy, levy_steps, mantegna_sigma
+from setupfix.search.cs import greedy, levy_steps, mantegna_sigma
 
 
 def test_mantegna_sigma_for_beta_one_and_a_half() -> None:

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from setupfix.errors import ParameterError
+from setupfix.core.errors import ParameterError
 from setupfix.search import Box, cuckoo_search, generator, particle_swarm, roulette_ga, tournament_ga
 
 SEARCHES = {

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from setupfix.search._ga import mutate, recombine, survive, tournament
+from setupfix.search.ga import mutate, recombine, survive, tournament
 
 
 def test_binary_tournament_frequencies() -> None:

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from spc_examples import CONCENTRATION
 
-from setupfix.errors import ParameterError
+from setupfix.core.errors import ParameterError
 from setupfix.spc import D4, Violation, chart_limits, moving_range, nelson
 
 

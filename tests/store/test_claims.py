@@ -199,7 +199,7 @@ def test_claims_refuse_a_live_holder_and_processed_reports_take_over_a_dead_one(
 def test_a_store_of_older_batches_keeps_its_processed_reports(tmp_path):
     """Migration 3 marks the reports older batch recommendations name as processed."""
     from setupfix.store import Recommendation
-    from setupfix.store._schema import migrate
+    from setupfix.store.schema import migrate
 
     path = tmp_path / "old.db"
     con = sqlite3.connect(path, isolation_level=None)
@@ -224,7 +224,7 @@ def test_a_store_that_cannot_finish_the_claims_says_the_output_stands_and_the_ne
     """The store fills up after the output is written: one line naming the store, the offsets in place, and
     no report marked processed (SQLITE_FULL from SQLite's page limit, set just before the claims finish)."""
     from setupfix.cli import main
-    from setupfix.pipeline import batch_records
+    from setupfix.usecases import batch_records
 
     folder = tmp_path / "reports"
     reports(folder, 60)  # their recommendations need pages the store does not have

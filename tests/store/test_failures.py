@@ -158,7 +158,7 @@ def test_a_store_in_a_read_only_folder_is_one_line_naming_it(tmp_path, capsys, e
 
 @pytest.mark.parametrize("command", ["import", "batch", "diagnose", "correct"])
 def test_a_store_locked_beyond_the_busy_timeout_is_one_line_naming_it(tmp_path, capsys, monkeypatch, command):
-    import setupfix.store._sqlite as sqlite_store
+    import setupfix.store.sqlite as sqlite_store
 
     db = store_of(tmp_path)
     before = counts(db)
@@ -253,7 +253,7 @@ def test_a_full_store_is_one_line_naming_it_and_keeps_what_it_held(tmp_path, com
 
 def test_sqlite_s_own_full_is_one_line_naming_the_store(tmp_path, capsys, monkeypatch):
     """SQLITE_FULL (the page limit here, a full disk in the field) through the CLI."""
-    import setupfix.store._sqlite as sqlite_store
+    import setupfix.store.sqlite as sqlite_store
 
     db = store_of(tmp_path)
     before = counts(db)
@@ -344,7 +344,7 @@ def test_a_store_created_by_many_processes_at_once_is_a_store(tmp_path):
 def test_a_store_killed_while_it_is_created_is_created_by_the_next_open(tmp_path):
     db = tmp_path / "killed.db"
     code = (
-        "import os, signal\nimport setupfix.store._schema as s\n"
+        "import os, signal\nimport setupfix.store.schema as s\n"
         "def die(db):\n    os.kill(os.getpid(), signal.SIGKILL)\n"
         "s.MIGRATIONS = (s.MIGRATIONS[0], die, *s.MIGRATIONS[2:])\n"
         "from setupfix.store import open_store\n"

@@ -1,7 +1,7 @@
 """Issue 21 item 7: a part stored twice (a CRLF copy, an export imported again) counts once in the EWMA.
 
 Identity is the part -- name, time, deviations -- not the bytes of the file that brought it
-(:func:`setupfix.pipeline.smoothing.part_identity`, applied on read by ``History``).
+(:func:`setupfix.inputs.smoothing.part_identity`, applied on read by ``History``).
 """
 
 from __future__ import annotations
@@ -79,7 +79,7 @@ def test_two_unnamed_parts_of_one_time_that_measured_differently_both_count(tmp_
     (name, time) key kept only one)."""
     import parsers
     from setupfix.model import load_model, match_parts
-    from setupfix.pipeline.requests import History
+    from setupfix.usecases.requests import History
 
     model = load_model(_model(tmp_path))
     a = _unnamed(tmp_path, 1)

@@ -20,11 +20,11 @@ import pandas as pd
 import pytest
 
 from setupfix.cli import main
-from setupfix.errors import StoreError
-from setupfix.pipeline.history import ImportRequest, import_history
+from setupfix.core.errors import StoreError
 from setupfix.store import AUDIT_COLUMNS, Recommendation, open_store, report_tables, stored_corrections
-from setupfix.store._audit import TABLES
-from setupfix.store._schema import migrate
+from setupfix.store.audit import TABLES
+from setupfix.store.schema import migrate
+from setupfix.usecases.history import ImportRequest, import_history
 
 ROOT = Path(__file__).resolve().parents[2]
 GUIDE = ROOT / "sample_reports" / "guide_pins"
@@ -57,7 +57,7 @@ def log_of(folder: Path, machine: str) -> Path:
 IMPORT = """
 import sys, time
 from pathlib import Path
-from setupfix.pipeline.history import ImportRequest, import_history
+from setupfix.usecases.history import ImportRequest, import_history
 from setupfix.store import open_store
 url, machine, start, log, *files = sys.argv[1:]
 time.sleep(max(0.0, float(start) - time.time()))
@@ -225,9 +225,9 @@ def _fill(db: str, tmp_path: Path) -> None:
         == 0
     )  # (batch's --machine comes with the wiring: its rows are 'default')
     from setupfix.model import load_model
-    from setupfix.pipeline.correct import correct_report
-    from setupfix.pipeline.history import record_recommendations
-    from setupfix.pipeline.requests import CorrectRequest
+    from setupfix.usecases.correct import correct_report
+    from setupfix.usecases.history import record_recommendations
+    from setupfix.usecases.requests import CorrectRequest
 
     report = tmp_path / "M2" / "M2_000.csv"
     results = correct_report(CorrectRequest(load_model(MODEL)), report).cycles

@@ -18,12 +18,12 @@ import pandas as pd
 import pytest
 
 from setupfix.cli import main
-from setupfix.errors import ParseError, StoreError
+from setupfix.core.errors import ParseError, StoreError
 from setupfix.model import CANONICAL_COLUMNS
-from setupfix.pipeline.history import ImportRequest, import_history
-from setupfix.pipeline.parse import parse_reports
 from setupfix.store import Recommendation, open_store
-from setupfix.store._schema import SCHEMA_VERSION, migrate, version_of
+from setupfix.store.schema import SCHEMA_VERSION, migrate, version_of
+from setupfix.usecases.history import ImportRequest, import_history
+from setupfix.usecases.parse import parse_reports
 
 ROOT = Path(__file__).resolve().parents[2]
 GUIDE = ROOT / "sample_reports" / "guide_pins"
@@ -203,10 +203,10 @@ def test_cli_import_show_export(tmp_path, capsys, location):
 
 def test_recommendations_of_a_correct_run_are_stored(location):
     from setupfix.model import load_model
-    from setupfix.pipeline.correct import correct_report
-    from setupfix.pipeline.history import record_recommendations
-    from setupfix.pipeline.present import cycle_json
-    from setupfix.pipeline.requests import CorrectRequest
+    from setupfix.usecases.contract import cycle_json
+    from setupfix.usecases.correct import correct_report
+    from setupfix.usecases.history import record_recommendations
+    from setupfix.usecases.requests import CorrectRequest
 
     results = correct_report(CorrectRequest(load_model(GUIDE / "model.toml")), REPORTS[0]).cycles
     with open_store(location) as store:

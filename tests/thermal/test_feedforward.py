@@ -8,13 +8,13 @@ import numpy as np
 import pytest
 
 from parsers.temperature import read_temperature_log
-from setupfix.errors import ParameterError, ParseError
+from setupfix.core.errors import ParameterError, ParseError
+from setupfix.inputs.thermal_files import load_model
 from setupfix.model import load_model as load_process_model
-from setupfix.pipeline import thermal as pipe
-from setupfix.pipeline import thermal_fit
-from setupfix.pipeline.feedforward import thermal_feed_forward
-from setupfix.pipeline.thermal_files import load_model
+from setupfix.thermal import prediction as pipe
 from setupfix.thermal.feedforward import drift_change, feed_forward, sample_at_or_before
+from setupfix.usecases import thermal_fit
+from setupfix.usecases.thermal_feedforward import thermal_feed_forward
 
 ROOT = Path(__file__).resolve().parents[2]
 SAMPLES = ROOT / "sample_reports" / "thermal"
@@ -100,7 +100,7 @@ def test_correct_with_thermal_feed_forward(tmp_path, monkeypatch, capsys):
 
     import setupfix.cli as cli
 
-    monkeypatch.setattr(cli, "COMMAND_MODULES", ("setupfix.cli._correct", "setupfix.cli._thermal"))
+    monkeypatch.setattr(cli, "COMMAND_MODULES", ("setupfix.cli.correct", "setupfix.cli.thermal"))
     log = tmp_path / "temps.csv"
     log.write_text((SAMPLES / "test_variable.csv").read_text().replace("2026-01-05T", "2026-11-02T"))
     model = tmp_path / "drift.json"

@@ -7,8 +7,8 @@ import json
 import numpy as np
 import pytest
 
-from setupfix.errors import NotFittedError, ParseError
-from setupfix.pipeline.thermal_files import load_model, save_model
+from setupfix.core.errors import NotFittedError, ParseError
+from setupfix.inputs.thermal_files import load_model, save_model
 from setupfix.thermal.estimator import MRAModel
 from setupfix.thermal.grey_model import GreyModel
 from setupfix.thermal.kalman_model import KalmanFusionModel

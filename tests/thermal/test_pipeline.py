@@ -9,14 +9,14 @@ import numpy as np
 import pytest
 
 from parsers.temperature import TemperatureLog, read_temperature_log
-from setupfix.errors import ExportError, ParameterError, ParseError
-from setupfix.pipeline import thermal as pipe
-from setupfix.pipeline import thermal_fit
-from setupfix.pipeline.thermal_files import load_model, save_model
+from setupfix.core.errors import ExportError, ParameterError, ParseError
+from setupfix.inputs.thermal_files import load_model, predict_drift, save_model
+from setupfix.thermal import prediction as pipe
 from setupfix.thermal.estimator import MRAModel
 from setupfix.thermal.metrics import score
 from setupfix.thermal.persist import SavedModel
 from setupfix.thermal.registry import get_method, make_model, methods
+from setupfix.usecases import thermal_fit
 
 SAMPLES = Path(__file__).resolve().parents[2] / "sample_reports" / "thermal"
 SENSORS = ["spindle_motor", "bearing"]
@@ -33,7 +33,7 @@ def test_fit_save_and_predict_drift(tmp_path):
         SAMPLES / "train_variable.csv", "mra", target="error_z", out=out, inputs=SENSORS, unit="mm"
     ).saved
     assert saved.train["n"] == 1439 and saved.sample_interval_s == 10.0
-    drift = pipe.predict_drift(out, SAMPLES / "test_constant.csv")
+    drift = predict_drift(out, SAMPLES / "test_constant.csv")
     assert drift.drift.shape == (1440,) and drift.timestamps[0] == "2026-01-05T06:00:00" and drift.unit == "mm"
     assert score(drift.measured, drift.drift).rmse < 0.015  # mm; MRA generalises poorly to constant speed
 

@@ -15,8 +15,8 @@ from tui.conftest import CYCLE_01, MODEL, run, settle
 
 from setupfix.cli import main
 from setupfix.model import load_model
-from setupfix.pipeline.correct import correct_report
-from setupfix.pipeline.requests import CorrectRequest, SolveOptions
+from setupfix.usecases.correct import correct_report
+from setupfix.usecases.requests import CorrectRequest, SolveOptions
 
 CONTROLLERS = SAMPLES / "controllers"
 
@@ -189,8 +189,8 @@ def test_a_folder_is_watched_and_the_newest_finished_report_opened(make_app, tmp
 
 
 def test_history_from_the_store_one_key_diagnose_and_the_export_recorded(make_app, tmp_path):
-    from setupfix.pipeline.history import ImportRequest, import_history
     from setupfix.store import open_store
+    from setupfix.usecases.history import ImportRequest, import_history
 
     db = tmp_path / "h.db"
     with open_store(db) as store:
@@ -225,9 +225,9 @@ def test_history_from_the_store_one_key_diagnose_and_the_export_recorded(make_ap
 def test_thermal_panel_shows_the_drift_and_the_feed_forward(make_app, tmp_path):
     from conftest import SAMPLES
 
-    from setupfix.pipeline.feedforward import thermal_feed_forward
-    from setupfix.pipeline.thermal import predict_drift
-    from setupfix.pipeline.thermal_fit import fit_file
+    from setupfix.inputs.thermal_files import predict_drift
+    from setupfix.usecases.thermal_feedforward import thermal_feed_forward
+    from setupfix.usecases.thermal_fit import fit_file
 
     saved = tmp_path / "grey.json"
     fit_file(SAMPLES / "thermal" / "train_variable.csv", "grey-ls", target="error_z", unit="mm", out=saved)
@@ -283,8 +283,8 @@ def test_thermal_panel_shows_the_drift_and_the_feed_forward(make_app, tmp_path):
 
 def test_the_command_line_gives_the_app_correct_s_reader_cycle_and_thermal_options(monkeypatch, tmp_path):
     """``setupfix tui`` takes the options of ``correct`` (same adders) and hands them to the app unchanged."""
-    from setupfix.pipeline.requests import CycleOptions, ReadOptions
     from setupfix.tui.app import SetupfixApp
+    from setupfix.usecases.requests import CycleOptions, ReadOptions
 
     started = []
     monkeypatch.setattr(SetupfixApp, "run", lambda self: started.append(self.inputs))

@@ -7,8 +7,8 @@ from pathlib import Path
 from spc_examples import closed_loop_store
 from tui.conftest import run, settle
 
-from setupfix.pipeline.spc import SPARK, SpcRequest, capability_rows, sparkline, spc_report
 from setupfix.store import open_store
+from setupfix.usecases.spc_report import SPARK, SpcRequest, capability_rows, sparkline, spc_report
 
 
 def test_sparkline_maps_lowest_to_highest():

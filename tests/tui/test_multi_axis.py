@@ -9,9 +9,9 @@ import pytest
 from conftest import SAMPLES
 from tui.conftest import run, settle
 
-from setupfix.pipeline.controllers import PROGRAM_SUFFIX, derived_program_number
-from setupfix.pipeline.export import offsets_text
+from setupfix.outputs.controllers import PROGRAM_SUFFIX, derived_program_number
 from setupfix.tui.widgets.summary import VERDICT_STYLE
+from setupfix.usecases.export import offsets_text
 
 XYZ = SAMPLES / "two_station_xyz"
 MODEL = XYZ / "model.toml"

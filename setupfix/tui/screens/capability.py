@@ -1,8 +1,8 @@
 """The capability screen: Cpk per stored characteristic, a sparkline of its individuals chart, its rule flags.
 
 Opened over the main screen with the SPC of the history store
-(:func:`setupfix.pipeline.spc.spc_report`, run in a worker by the caller); the rows come
-from :func:`setupfix.pipeline.spc.capability_rows`, nothing is computed here.
+(:func:`setupfix.usecases.spc_report.spc_report`, run in a worker by the caller); the rows come
+from :func:`setupfix.usecases.spc_report.capability_rows`, nothing is computed here.
 """
 
 from __future__ import annotations
@@ -16,7 +16,7 @@ from textual.containers import Vertical
 from textual.screen import ModalScreen
 from textual.widgets import DataTable, Static
 
-from setupfix.pipeline.spc import SpcOutcome, capability_rows
+from setupfix.usecases.spc_report import SpcOutcome, capability_rows
 
 __all__ = ["CapabilityScreen", "COLUMNS"]
 

@@ -14,7 +14,7 @@ from textual.containers import Horizontal, ScrollableContainer, Vertical
 from textual.screen import ModalScreen
 from textual.widgets import Button, Input, Label, Select, Static
 
-from setupfix.errors import SetupfixError
+from setupfix.core.errors import SetupfixError
 
 __all__ = ["ExportRequest", "ExportScreen"]
 

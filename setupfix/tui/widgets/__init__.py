@@ -1,5 +1,5 @@
-"""Widgets of the operator's screen; each lays out rows from :mod:`setupfix.pipeline.view` or
-:mod:`setupfix.pipeline.analysis_view`."""
+"""Widgets of the operator's screen; each lays out rows from :mod:`setupfix.views.correction` or
+:mod:`setupfix.views.analysis`."""
 
 from __future__ import annotations
 

@@ -12,8 +12,8 @@ from textual.app import ComposeResult
 from textual.containers import Vertical, VerticalScroll
 from textual.widgets import DataTable, Label, ProgressBar, Sparkline, Static
 
-from setupfix.pipeline.view import signed
 from setupfix.tui.widgets.plain import PlainTable, plain
+from setupfix.views.correction import signed
 
 __all__ = ["ComparePanel"]
 

@@ -6,8 +6,8 @@ from collections.abc import Sequence
 
 from rich.text import Text
 
-from setupfix.pipeline.view import DimensionRow, limits_text, signed
 from setupfix.tui.widgets.plain import PlainTable
+from setupfix.views.correction import DimensionRow, limits_text, signed
 
 __all__ = ["DimensionTable"]
 

@@ -9,9 +9,9 @@ from textual.app import ComposeResult
 from textual.containers import VerticalScroll
 from textual.widgets import DataTable, Sparkline, Static
 
-from setupfix.pipeline.analysis_view import CycleBudget, DiagnosisView
-from setupfix.pipeline.view import IN, OUT, signed
 from setupfix.tui.widgets.plain import PlainTable, plain
+from setupfix.views.analysis import CycleBudget, DiagnosisView
+from setupfix.views.correction import IN, OUT, signed
 
 __all__ = ["HistoryPanel"]
 

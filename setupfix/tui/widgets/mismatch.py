@@ -6,8 +6,8 @@ from collections.abc import Sequence
 
 from rich.text import Text
 
-from setupfix.pipeline.view import IN, OUT, MatchRow
 from setupfix.tui.widgets.plain import PlainTable
+from setupfix.views.correction import IN, OUT, MatchRow
 
 __all__ = ["MatchTable"]
 

@@ -6,8 +6,8 @@ from collections.abc import Sequence
 
 from rich.text import Text
 
-from setupfix.pipeline.view import RegisterRow, signed
 from setupfix.tui.widgets.plain import PlainTable
+from setupfix.views.correction import RegisterRow, signed
 
 __all__ = ["RegisterTable", "DEGREES"]
 

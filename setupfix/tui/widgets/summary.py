@@ -5,7 +5,7 @@ from __future__ import annotations
 from rich.text import Text
 from textual.widgets import Static
 
-from setupfix.pipeline.view import Summary, signed
+from setupfix.views.correction import Summary, signed
 
 __all__ = ["SummaryBar"]
 

@@ -7,9 +7,9 @@ from textual.app import ComposeResult
 from textual.containers import Vertical
 from textual.widgets import Sparkline, Static
 
-from setupfix.pipeline.analysis_view import DriftView
-from setupfix.pipeline.view import signed
 from setupfix.tui.widgets.plain import plain
+from setupfix.views.analysis import DriftView
+from setupfix.views.correction import signed
 
 __all__ = ["ThermalPanel"]
 

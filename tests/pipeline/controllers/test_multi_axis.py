@@ -15,8 +15,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from multi_axis_rows import SPEC, fixture_rows, row
 
-from setupfix.errors import ExportError
-from setupfix.pipeline.controllers import render
+from setupfix.core.errors import ExportError
+from setupfix.outputs.controllers import render
 
 #: (L, P) of each WKS and tool register of the Fanuc/Haas fixture.
 SLOTS = {"W1": (2, 1), "W2": (2, 2), "W3": (20, 7), "T5": (11, 5), "T5.R": (13, 5), "T12": (10, 12), "T12.R": (12, 12)}

@@ -12,14 +12,14 @@ from conftest import GUIDE_PINS
 from multi_axis_rows import fixture_rows
 
 from setupfix.cli import main
-from setupfix.errors import ExportError
+from setupfix.core.errors import ExportError
 from setupfix.model import load_model
-from setupfix.pipeline.batch import run_batch
-from setupfix.pipeline.batch_output import MANIFEST, ProgramNumbers
-from setupfix.pipeline.controllers import DERIVED_PROGRAMS, derived_program_number, render
-from setupfix.pipeline.correct import correct_report
-from setupfix.pipeline.export import export, offsets_text
-from setupfix.pipeline.requests import CorrectRequest
+from setupfix.outputs.batch_output import MANIFEST, ProgramNumbers
+from setupfix.outputs.controllers import DERIVED_PROGRAMS, derived_program_number, render
+from setupfix.usecases.batch import run_batch
+from setupfix.usecases.correct import correct_report
+from setupfix.usecases.export import export, offsets_text
+from setupfix.usecases.requests import CorrectRequest
 
 REQUEST = CorrectRequest(load_model(GUIDE_PINS / "model.toml"))
 

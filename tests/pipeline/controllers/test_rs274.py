@@ -19,9 +19,9 @@ from multi_axis_rows import SPEC, fixture_rows, row
 from rs274 import read_back, run_rs274
 
 from parsers.current import read_current
+from setupfix.correction.offsets import offset_rows
 from setupfix.model import load_model
-from setupfix.offsets import offset_rows
-from setupfix.pipeline.controllers import render
+from setupfix.outputs.controllers import render
 
 ROOT = Path(__file__).resolve().parents[3]
 SAMPLE = ROOT / "sample_reports" / "controllers"
@@ -106,11 +106,11 @@ def test_the_two_station_sample_from_report_to_read_back(tmp_path):
         pytest.skip("sample_reports/two_station_xyz arrives with the multi-axis model loader (issue 23, axes part)")
     import tomllib
 
-    from setupfix.errors import ExportError
+    from setupfix.core.errors import ExportError
     from setupfix.model import model_from_dict
-    from setupfix.pipeline.correct import correct_report
-    from setupfix.pipeline.export import export
-    from setupfix.pipeline.requests import CorrectRequest, CurrentOffsets
+    from setupfix.usecases.correct import correct_report
+    from setupfix.usecases.export import export
+    from setupfix.usecases.requests import CorrectRequest, CurrentOffsets
 
     doc = tomllib.loads((XYZ / "model.toml").read_text(encoding="utf-8"))
     with_rotation = model_from_dict(doc)

@@ -1,0 +1,257 @@
+"""``setupfix model show | check | init``: inspect a process model, tie a report to it, scaffold one."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+import textwrap
+import unicodedata
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+from setupfix.cli.common import add_reader_options, add_report_options, cycle_options, read_options, report_options
+from setupfix.core.errors import ExportError, SourceLocation
+
+if TYPE_CHECKING:
+    from setupfix.usecases.model_check import MatchTable
+
+MATRICES = ("R_MW", "R_WF", "R_TF", "R_FD", "C")
+#: Terminal width the human tables are laid out for.
+WIDTH = 100
+
+
+def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
+    p = sub.add_parser(
+        "model",
+        help="inspect a process model, check a report against it, or scaffold one",
+        description="Process model files (shared/spec/process-model.md): show its matrices, "
+        "check how a report matches it, or write a scaffold from reports.",
+    )
+    msub = p.add_subparsers(dest="model_command", metavar="ACTION", parser_class=type(p))
+    show = msub.add_parser(
+        "show",
+        help="print R_MW, R_WF, R_TF, R_FD, the composite, its rank and null space",
+        description="The relation matrices of the model (Stryczek 2014, eqs. 3-4) labelled "
+        "like the paper, the composite C (registers x dimensions), its rank and the "
+        "corrections that move no dimension (null space).",
+    )
+    show.add_argument("model", metavar="MODEL", help="process model TOML")
+    show.add_argument(
+        "--matrix", action="append", choices=MATRICES, default=None, help="only this matrix (repeatable; default all)"
+    )
+    show.add_argument("--json", action="store_true", help="matrices, rank and null space as JSON")
+    show.set_defaults(run=run_show)
+
+    check = msub.add_parser(
+        "check",
+        help="the match table of a report against the model (nothing corrected)",
+        description="Ties every characteristic of the report to a model dimension as "
+        "'correct' would and prints, per dimension, the report's name, nominal "
+        "and limits beside the model's; unmatched report names with the closest "
+        "model names; absent dimensions with the closest report names; and the "
+        "differences 'correct' warns about.",
+    )
+    check.add_argument("model", metavar="MODEL", help="process model TOML")
+    check.add_argument("report", metavar="REPORT", help="CMM report in any supported format")
+    check.add_argument("--json", action="store_true", help="the match table as JSON (every name, in full)")
+    add_report_options(check)
+    check.set_defaults(run=run_check)
+
+    init = msub.add_parser(
+        "init",
+        help="write a draft model scaffold from reports (then check and edit it)",
+        description="Every toleranced length characteristic of the reports becomes a "
+        "dimension (name, nominal, limits, group = station) with a feature of its "
+        "own moved by one WKS (W1, G54), measured along the axis or direction the "
+        "report states; sizes move only with a tool radius (D1) where the report's "
+        "feature type says they are interpolated; tool lengths (H1) act along the "
+        "spindle only. Several measured axes give a multi-axis model. The file is "
+        "marked draft = true: 'correct' holds until you have checked its physics "
+        "and removed the key; its comments say what to check.",
+    )
+    init.add_argument(
+        "reports",
+        nargs="+",
+        metavar="REPORT",
+        help="CMM report(s) in any supported format; a folder stands for the reports in it and its "
+        "sub-folders (hidden, partial and log files and models left out; a link to a folder or "
+        "an unreadable one named in a warning)",
+    )
+    init.add_argument(
+        "-o", "--out", required=True, metavar="MODEL", help="model TOML to write ('-': stdout); written atomically"
+    )
+    init.add_argument(
+        "--axis",
+        choices=("X", "Y", "Z"),
+        default=None,
+        help="a one-axis model: keep the characteristics along this axis (as the report states it, "
+        "else the name) and those with none; default: keep all, a multi-axis model when the "
+        "reports measure several axes, else a one-axis model on the one they state",
+    )
+    init.add_argument("--name", default=None, help="process name (default: from the report file names)")
+    init.add_argument(
+        "--parts-are-stations",
+        action="store_true",
+        help="the report's parts are the fixture's stations (one workpiece each): group = part "
+        "(default: group = the report's station, if it gives one)",
+    )
+    init.add_argument(
+        "--force",
+        action="store_true",
+        help="replace MODEL if it exists (default: refuse, so an edited model is never overwritten)",
+    )
+    add_reader_options(init)
+    init.set_defaults(run=run_init)
+
+
+def run_init(args: argparse.Namespace) -> int:
+    from setupfix.outputs.writers import check_target, write_text
+    from setupfix.usecases.model_init import scaffold_model
+
+    check_target(args.out)
+    if args.out != "-" and Path(args.out).exists() and not args.force:
+        raise ExportError(
+            "exists: a scaffold would replace it (give --force, or another -o)", location=SourceLocation(args.out)
+        )
+    scaffold = scaffold_model(
+        args.reports,
+        axis=args.axis,
+        name=args.name,
+        parts_are_stations=args.parts_are_stations,
+        read=read_options(args),
+    )
+    for note in scaffold.notes:
+        print(f"warning: {note}", file=sys.stderr)
+    write_text(args.out, scaffold.text + "\n")
+    if args.out != "-":
+        origins = ", ".join(
+            f"{n} {what}"
+            for what, n in (
+                ("stated by the report", scaffold.axes_from.get("report", 0)),
+                ("from names", scaffold.axes_from.get("name", 0)),
+                ("with none", scaffold.axes_from.get("none", 0)),
+            )
+            if n
+        )
+        axes = f"axes {', '.join(scaffold.axes)} (multi-axis)" if scaffold.axes else f"process axis {scaffold.axis}"
+        sizes = f", {scaffold.sizes} size(s)" if scaffold.sizes else ""
+        print(
+            f"wrote {args.out}: {scaffold.dimensions} dimension(s) (axes: {origins}{sizes}), {axes}, "
+            f"{len(scaffold.skipped)} characteristic(s) left out (listed in its head); it is a draft "
+            "('correct' holds until you remove 'draft = true'): check its registers and relations, then "
+            "'setupfix model check' and 'setupfix correct'",
+            file=sys.stderr,
+        )
+    return 0
+
+
+def run_show(args: argparse.Namespace) -> int:
+    from setupfix.usecases.model_check import describe_model
+    from setupfix.views.present import format_relations
+
+    desc = describe_model(args.model)
+    if args.json:
+        json.dump(desc.to_json(), sys.stdout, indent=1)
+        sys.stdout.write("\n")
+        return 0
+    which = args.matrix or [m for m in MATRICES if m != "R_MW" or desc.matrices.R_MW.size]
+    sys.stdout.write(
+        f"{_safe(desc.model.name)}  (axis {desc.model.axis}, unit {desc.model.unit}, "
+        f"resolution {desc.model.resolution:g})\n\n"
+    )
+    sys.stdout.write(format_relations(desc.matrices, which, desc.null_space, desc.rank) + "\n")
+    return 0
+
+
+def run_check(args: argparse.Namespace) -> int:
+    from setupfix.usecases.model_check import check_report
+
+    table = check_report(args.model, args.report, **cycle_options(args), **report_options(args))
+    if args.json:
+        json.dump(table.to_json(), sys.stdout, indent=1)
+        sys.stdout.write("\n")
+    else:
+        sys.stdout.write(format_match_table(table) + "\n")
+    return 0
+
+
+def _safe(text: str) -> str:
+    """Report text for the terminal: control characters (escape sequences) shown as "?"."""
+    return "".join(c if c.isprintable() else "?" for c in text)
+
+
+def _cells(text: str) -> int:
+    """Terminal cells of a text: East Asian wide and full-width characters take two."""
+    return sum(2 if unicodedata.east_asian_width(c) in "WF" else 1 for c in text)
+
+
+def _cut(text: str | None, width: int) -> str:
+    """The text cut to ``width`` terminal cells (with "…") and padded to exactly that width."""
+    text = "—" if not text else "".join(c if c.isprintable() else "?" for c in text)
+    if _cells(text) > width:
+        while _cells(text) > width - 1:
+            text = text[:-1]
+        text += "…"
+    return text + " " * (width - _cells(text))
+
+
+def _n(value: float | None) -> str:
+    return "—" if value is None or not math.isfinite(value) else f"{value:.6g}"
+
+
+def _limits(lower: float | None, upper: float | None) -> str:
+    return f"{_n(lower)}/{'+' if upper is not None and upper > 0 else ''}{_n(upper)}"
+
+
+def format_match_table(table: MatchTable) -> str:
+    """The match table, one block per part, at most :data:`WIDTH` columns."""
+    unit = table.model.unit
+    blocks = []
+    for part in table.parts:
+        rows = table.rows(part)
+        n_dims = len(rows)
+        lines = [
+            _safe(f"{table.report}  part {part.part or '—'}:"),
+            f"{int(part.measured.sum())} of {n_dims} model dimensions matched, "
+            f"{len(part.unmatched)} report characteristic(s) unmatched",
+            "",
+        ]
+        name_w = min(22, max([len("dimension")] + [_cells(r["name"]) for r in rows]))
+        char_w = min(22, max([len("report name")] + [_cells(r["characteristic"] or "") for r in rows]))
+        longest = max([0] + [len(r["station"] or "") for r in rows])
+        st_w = min(10, max(len("station"), longest)) + 1 if longest else 0
+        head = (
+            f"{'station':<{st_w}}"[:st_w] + f"{'dimension':<{name_w}} {'report name':<{char_w}} "
+            f"{'nominal':>10} {'report':>10}  {'limits [' + unit + ']':<15} {'report':<15}"
+        )
+        lines += [head.rstrip(), "-" * min(WIDTH, len(head.rstrip()))]
+        for r in rows:
+            lead = (_cut(r["station"], st_w - 1) + " " if st_w else "") + _cut(r["name"], name_w) + " "
+            if not r["matched"]:
+                near = _safe(", ".join(r["closest"]))
+                lines.append(lead + "absent from the report" + (f"; closest report names: {near}" if near else ""))
+                continue
+            lines.append(
+                (
+                    lead + f"{_cut(r['characteristic'], char_w)} {_n(r['nominal']):>10} "
+                    f"{_n(r['report_nominal']):>10}  {_limits(r['lower'], r['upper']):<15} "
+                    f"{_limits(r['report_lower'], r['report_upper']):<15}" + (" ≠" if r["differs"] else "")
+                ).rstrip()
+            )
+        if part.unmatched:
+            lines += ["", "report characteristics matching no dimension (closest model names):"]
+            for unmatched in part.unmatched:
+                closest = part.suggestions.get(unmatched, ())
+                lines.append(
+                    f"  {_safe(unmatched)}"
+                    + (f"  →  {', '.join(map(_safe, closest))}" if closest else "  (nothing close)")
+                )
+        if part.notes:
+            lines += [""] + [
+                textwrap.fill(_safe(f"warning: {n}"), WIDTH, subsequent_indent="  ", break_on_hyphens=False)
+                for n in part.notes
+            ]
+        blocks.append("\n".join(lines))
+    return "\n\n".join(blocks)

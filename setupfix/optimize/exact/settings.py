@@ -1,0 +1,120 @@
+"""Settings of the exact optimiser: which proof is tried, how much it may list, how time is shared.
+
+One frozen, validated :class:`ExactSettings` replaces the module constants the solver
+used to read; an :class:`~setupfix.optimize.exact.solve.ExactOptimizer` takes one
+(``settings=``), so a test or a bench that wants a fallback path (no listing, no NNLS …)
+passes settings instead of patching globals.  None of these values changes *what* is
+proved optimal — only which proof gets there and how fast; the defaults are the
+measured ones (``bench/exact_per_report.py``, ``bench/exact_scaling.py``).
+
+Units: counts are points, array elements, registers, rows or chords; shares are
+fractions of a time in (0, 1]; ``quantum`` is a fraction of the register resolution.
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass
+from typing import ClassVar
+
+from setupfix.core.params import Constraint, Interval, validate_params
+
+__all__ = ["ExactSettings"]
+
+_COUNT: list[Constraint] = [Interval(int, 0, None)]
+_SHARE: list[Constraint] = [Interval(float, 0.0, 1.0, closed="right")]
+_FRACTION: list[Constraint] = [Interval(float, 0.0, 1.0, closed="left")]
+
+
+@dataclass(frozen=True)
+class ExactSettings:
+    """How the exact optimiser chooses among its proofs (every field validated on creation).
+
+    Attributes
+    ----------
+    quantum : float
+        Deviations are rounded to this fraction of the register resolution before solving
+        (1e-3: 1 nm on a 0.001 mm grid), so the answer does not depend on their last bits.
+    ellipsoid_max_registers : int
+        Most free registers for which the least-norm proof lists the grid points of the
+        dual ellipsoid (eq. 9 by exhaustion).
+    enumeration_limit, enumeration_work : int
+        Largest list of (partial) integer points per coordinate, and most array elements
+        touched in all, that the least-norm listing may use before the MILPs take over.
+    box_proof_max_registers, box_proof_max_chords : int
+        The least-norm proof in the Lagrangian box is one MILP with every chord up to these
+        sizes; beyond, chords of k² are added lazily.
+    nnls_max_rows : int
+        Largest constraint count (rows + 2·registers) whose continuous least-norm point is
+        found by NNLS on the whole system.
+    working_set_nnls : bool
+        Larger problems: NNLS on a working set of rows (False: HiGHS's QP solver at once).
+    box_share, stopped_box_share : float
+        Share of the time left that each box MILP around the rounded continuous point may
+        use in the least-norm stage (the second when the grid-optimum stage was stopped).
+    incumbent_gap : float
+        Relative gap at which those box MILPs stop (they look for an incumbent).
+    descent_reserve : float
+        Share of the whole time limit kept back for coordinate descent when a least-norm
+        proof stops at the limit.
+    search_limit, search_work : int
+        Limits of the grid-optimum stage's listing of the ellipsoids around the rounded
+        rows' least-norm point (as ``enumeration_limit``/``enumeration_work``).
+    ipm_min_rows : int
+        An LP with more rows than this is solved by HiGHS's interior-point method (with
+        crossover: the duals are a basis').
+    milp_share : float
+        Share of the grid-optimum stage's time that one feasibility MILP may use.
+    leximin_norm_share : float
+        Share of the whole time limit kept for the least-norm stage after the leximin levels
+        (smaller than ``least_norm_share``: with every dimension at its floor the least norm is
+        confined to a small region and usually listed at once).
+    least_norm_share : float
+        Share of the whole time limit kept for the least-norm stage.
+    level_steps : int
+        Levels the grid-optimum stage may descend by rounded rows before the bracketed MILP.
+    """
+
+    quantum: float = 1e-3
+    ellipsoid_max_registers: int = 120
+    enumeration_limit: int = 20_000
+    enumeration_work: int = 400_000
+    box_proof_max_registers: int = 40
+    box_proof_max_chords: int = 20_000
+    nnls_max_rows: int = 600
+    working_set_nnls: bool = True
+    box_share: float = 0.25
+    stopped_box_share: float = 0.8
+    incumbent_gap: float = 1e-4
+    descent_reserve: float = 0.03
+    search_limit: int = 20_000
+    search_work: int = 400_000
+    ipm_min_rows: int = 2000
+    milp_share: float = 0.5
+    least_norm_share: float = 0.5
+    leximin_norm_share: float = 0.15
+    level_steps: int = 40
+
+    _constraints: ClassVar[dict[str, list[Constraint]]] = {
+        "quantum": [Interval(float, 0.0, 1.0, closed="right")],
+        "ellipsoid_max_registers": _COUNT,
+        "enumeration_limit": _COUNT,
+        "enumeration_work": _COUNT,
+        "box_proof_max_registers": _COUNT,
+        "box_proof_max_chords": _COUNT,
+        "nnls_max_rows": _COUNT,
+        "working_set_nnls": [bool],
+        "box_share": _SHARE,
+        "stopped_box_share": _SHARE,
+        "incumbent_gap": _FRACTION,
+        "descent_reserve": _FRACTION,
+        "search_limit": _COUNT,
+        "search_work": _COUNT,
+        "ipm_min_rows": _COUNT,
+        "milp_share": _SHARE,
+        "least_norm_share": _FRACTION,
+        "leximin_norm_share": _FRACTION,
+        "level_steps": _COUNT,
+    }
+
+    def __post_init__(self) -> None:
+        validate_params("ExactSettings", asdict(self), self._constraints)

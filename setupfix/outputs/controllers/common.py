@@ -1,0 +1,102 @@
+"""Helpers shared by the controller renderers: numbers, modes, register groups, program numbers and errors."""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Sequence
+
+from setupfix.core.errors import ExportError
+from setupfix.correction.offsets import OffsetRow, format_value, grid_decimals
+
+__all__ = [
+    "number",
+    "target",
+    "cannot",
+    "one_mode",
+    "comment_text",
+    "groups",
+    "length_unit",
+    "base_id",
+    "ROTATION",
+    "RADIUS",
+    "DEFAULT_PROGRAM",
+    "PROGRAM_NUMBERS",
+    "check_program_number",
+]
+
+#: The component of a WKS rotation about the spindle axis (degrees) and of a tool radius.
+ROTATION, RADIUS = "C", "R"
+
+#: Program number written when the caller gives none (the renderers' own default; the doors —
+#: :func:`setupfix.usecases.export.export`, batch — always give one, derived so programs do not collide).
+DEFAULT_PROGRAM = 4501
+
+#: Program numbers each format can hold (inclusive); a format missing here has no program name.
+#: Fanuc ``O1``…``O9999`` (four digits); Haas ``O1``…``O99999`` (five digits); Siemens names the
+#: program ``SETUPFIX_<n>`` (a name of at most 24 characters: up to 15 digits, held to 8 here).
+PROGRAM_NUMBERS: dict[str, tuple[int, int]] = {"fanuc": (1, 9999), "haas": (1, 99999), "siemens": (1, 99_999_999)}
+
+
+def check_program_number(controller: str, n: int) -> int:
+    """``n`` when format ``controller`` can hold it (any number for a format without a program name).
+
+    Raises
+    ------
+    ExportError
+        Naming the format and the numbers it holds.
+    """
+    span = PROGRAM_NUMBERS.get(controller)
+    if span is not None and not span[0] <= n <= span[1]:
+        raise ExportError(f"{controller}: program number {n} outside {span[0]}…{span[1]} (--program-number)")
+    return n
+
+
+def number(row: OffsetRow, value: float) -> str:
+    """``value`` signed, with a decimal point always (a bare ``5`` is 5 increments on a Fanuc)."""
+    text = format_value(value, max(1, grid_decimals(row.resolution)))
+    return text if text.startswith("-") else "+" + text
+
+
+def target(row: OffsetRow) -> float:
+    """What the line writes: the new absolute value (set) or the change (add)."""
+    return row.value if row.mode == "set" and row.value is not None else row.delta
+
+
+def cannot(controller: str, row: OffsetRow, why: str) -> ExportError:
+    return ExportError(f"{controller}: cannot express register {row.register!r} ({row.id}): {why}")
+
+
+def one_mode(rows: Sequence[OffsetRow]) -> str:
+    """``add`` or ``set`` — one program never mixes them."""
+    modes = {r.mode for r in rows}
+    if len(modes) > 1:
+        raise ExportError("offsets mix add and set rows: give the current value of every register")
+    return modes.pop() if modes else "add"
+
+
+def groups(rows: Sequence[OffsetRow]) -> list[list[OffsetRow]]:
+    """Rows grouped by (kind, register), in order of first appearance: the components of one WKS
+    (``W1.X``, ``W1.Y``, ``W1.Z``, ``W1.C``) together; a one-axis row is a group of its own."""
+    out: dict[tuple[str, str], list[OffsetRow]] = {}
+    for row in rows:
+        out.setdefault((row.kind, row.register.strip().casefold()), []).append(row)
+    return list(out.values())
+
+
+def base_id(row: OffsetRow) -> str:
+    """The register's model ID without its component (``W1`` of ``W1.X``)."""
+    head, dot, tail = row.id.rpartition(".")
+    return head if dot and tail == row.axis else row.id
+
+
+def length_unit(rows: Sequence[OffsetRow]) -> str:
+    """The length unit of the rows (a rotation row's degrees do not count), ``mm`` when none has one."""
+    return next((r.unit for r in rows if r.axis != ROTATION), "mm")
+
+
+_UNSAFE = re.compile(r"[^A-Z0-9 .+\-_/#]")
+
+
+def comment_text(text: str) -> str:
+    """Text safe inside a G-code comment: upper case, no parentheses or control characters."""
+    return _UNSAFE.sub("_", text.upper())

@@ -1,0 +1,100 @@
+"""HEIDENHAIN TNC: values for the preset table and the tool table.
+
+A TNC table holds absolute values, so this format needs the current offsets
+(``--current``).  WKS rows go to the preset table (``PRESET.PR``, row ``NO`` =
+``number`` in the model, or the digits of a register named ``PRESET 3``), one column
+per axis of the WKS (``X``, ``Y``, ``Z``) and its rotation about the tool axis
+(component ``C``, degrees) in ``SPC`` — the basic rotation's column on the TNC 640
+and TNC7 (an iTNC 530 keeps it in ``ROT``: rename the column there).  Tool rows go to
+the tool table (``TOOL.T``, row ``T`` = ``number`` or the T of ``T5``): length in
+``L`` (geometry) or ``DL`` (wear), radius (component ``R``) in ``R`` or ``DR``.  Each
+table is written as ``BEGIN … MM`` / header / rows / ``[END]`` with only the columns
+changed, to merge into the control's table (TNCremo, table editor): one tool-table row per
+tool with its length and radius columns; presets with different columns, and tools with
+different columns, get a table block of their own, so that no cell is left blank.  The
+tables have no program name: a program number is not written.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+from setupfix.core.errors import ExportError
+from setupfix.correction.offsets import OffsetRow
+from setupfix.model.slots import preset_row, tool_edge
+from setupfix.outputs.controllers.common import RADIUS, ROTATION, cannot, groups, length_unit, number, one_mode, target
+
+__all__ = ["render", "PRESET_COLUMNS", "TOOL_COLUMNS"]
+
+#: Tool-table columns written, in table order: length geometry and wear, radius geometry and wear.
+TOOL_COLUMNS = ("L", "DL", "R", "DR")
+#: Preset-table column of each WKS component.
+PRESET_COLUMNS = {"X": "X", "Y": "Y", "Z": "Z", ROTATION: "SPC"}
+
+
+def _table(name: str, unit: str, columns: tuple[str, ...], rows: Sequence[tuple[str, ...]]) -> list[str]:
+    widths = [max(len(c), *(len(r[i]) for r in rows)) + 2 for i, c in enumerate(columns)]
+
+    def line(cells: tuple[str, ...]) -> str:
+        return "".join(f"{c:<{w}}" for c, w in zip(cells, widths, strict=True)).rstrip()
+
+    return [f"BEGIN {name} {'MM' if unit == 'mm' else 'INCH'}", line(columns), *(line(r) for r in rows), "[END]"]
+
+
+def _twice(table: str, seen: list[str]) -> None:
+    twice = sorted({n for n in seen if seen.count(n) > 1})
+    if twice:  # two edges of one tool (T5 D1, T5 D2): the tool table has one row per tool
+        raise ExportError(
+            f"heidenhain: two registers write {table} row {twice[0]}; the table holds one "
+            "value per row (give each register its own number)"
+        )
+
+
+def render(rows: Sequence[OffsetRow], title: str = "", *, program_number: int | None = None, spindle: str = "Z") -> str:
+    if rows and one_mode(rows) != "set":
+        raise ExportError(
+            "heidenhain: the preset and tool tables hold absolute values: give the current offsets (--current FILE)"
+        )
+    presets: dict[tuple[str, ...], list[tuple[str, ...]]] = {}  # columns → rows of the preset table
+    preset_columns: dict[str, list[str]] = {}  # the columns written, for the twice-check
+    tools: dict[str, list[tuple[str, str]]] = {c: [] for c in TOOL_COLUMNS}  # column → (T, value)
+    for group in groups(rows):
+        if group[0].kind == "wks":
+            for row in group:
+                if row.offset == "wear":
+                    raise cannot("heidenhain", row, 'the preset table has no wear column: use offset = "geometry"')
+            row = group[0]
+            n = row.number if row.number is not None else preset_row(row.register)
+            if n is None:
+                raise cannot("heidenhain", row, "give the preset row: number = n in the model (or name it PRESET n)")
+            columns = tuple(PRESET_COLUMNS.get(r.axis, r.axis) for r in group)
+            for c in columns:
+                preset_columns.setdefault(c, []).append(str(n))
+            presets.setdefault(("NO", *columns), []).append((str(n), *(number(r, target(r)) for r in group)))
+            continue
+        for row in group:
+            found = tool_edge(row.register)
+            t = row.number if row.number is not None else (found[0] if found else None)
+            if t is None:
+                raise cannot("heidenhain", row, "give the tool number: number = n in the model (or name it Tn)")
+            wear = row.offset == "wear"
+            column = ("DR" if wear else "R") if row.axis == RADIUS else ("DL" if wear else "L")
+            tools[column].append((str(t), number(row, target(row))))
+    for column, seen in preset_columns.items():
+        _twice("preset" if len(preset_columns) == 1 else f"preset {column}", seen)
+    for column, values in tools.items():
+        _twice("tool " + column, [n for n, _ in values])
+    unit = length_unit(rows)
+    out: list[str] = []
+    for columns, entries in presets.items():
+        out += _table("PRESET.PR", unit, columns, entries)
+    by_tool: dict[str, dict[str, str]] = {}  # T → column → value: one table row per tool
+    for column, values in tools.items():
+        for tool_row, value in values:
+            by_tool.setdefault(tool_row, {})[column] = value
+    blocks: dict[tuple[str, ...], list[tuple[str, ...]]] = {}
+    for tool_row, cells in by_tool.items():
+        blocks.setdefault(tuple(cells), []).append((tool_row, *cells.values()))
+    for columns in sorted(blocks, key=lambda cs: [TOOL_COLUMNS.index(c) for c in cs]):
+        out += _table("TOOL.T", unit, ("T", *columns), blocks[columns])
+    return "\n".join(out) + "\n"

@@ -1,0 +1,90 @@
+"""Siemens SINUMERIK 840D sl / 828D: a part program of system-variable assignments.
+
+Work offsets: the settable frames ``$P_UIFR[n]`` (G500 → 0, G54…G57 → 1…4,
+G505…G599 → 5…99); geometry writes the coarse translation ``TR``, wear the fine
+offset ``FI``, of the row's axis (``$P_UIFR[1,X,TR]``, one assignment per axis of a
+WKS).  A WKS rotation (component ``C``, degrees) is the frame's rotation about the
+spindle axis, ``$P_UIFR[n,Z,RT]`` (``Z`` the model's spindle); a rotation has no fine
+part, so a rotation with ``offset = "wear"`` is refused.  Tool offsets of tool T,
+cutting edge D: ``$TC_DP3[T,D]`` / ``$TC_DP12[T,D]`` length 1 geometry / wear,
+``$TC_DP6[T,D]`` / ``$TC_DP15[T,D]`` radius geometry / wear (component ``R``).  The
+tool is named ``T5 D1`` in the model, or given by ``number`` (T) and ``edge`` (D).
+With current offsets the assignments are absolute; without them they read
+``x = x + change`` and the header says the program is one-shot.  A changed frame
+takes effect when it is next selected (G54…), which the program does not do.
+
+With a program number the text begins in the punched-tape form that names the program
+on loading: ``%_N_SETUPFIX_<n>_MPF`` and ``;$PATH=/_N_MPF_DIR`` (part programs); without
+one it has no name line (the file name names it).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+from setupfix.correction.offsets import OffsetRow
+from setupfix.model.slots import tool_edge, wks_siemens
+from setupfix.outputs.controllers.common import (
+    RADIUS,
+    ROTATION,
+    cannot,
+    check_program_number,
+    length_unit,
+    number,
+    one_mode,
+    target,
+)
+
+__all__ = ["render", "program_name"]
+
+
+def program_name(n: int) -> str:
+    """The part program's name for program number ``n`` (letters first, at most 24 characters)."""
+    return f"SETUPFIX_{n}"
+
+
+def _variable(row: OffsetRow, spindle: str) -> str:
+    if row.kind == "wks":
+        n = wks_siemens(row.register)
+        if n is None:
+            raise cannot("siemens", row, "a work offset is G500, G54…G57 or G505…G599")
+        if row.axis == ROTATION:
+            if row.offset == "wear":
+                raise cannot("siemens", row, 'a frame rotation has no fine offset: use offset = "geometry"')
+            return f"$P_UIFR[{n},{spindle},RT]"
+        return f"$P_UIFR[{n},{row.axis},{'FI' if row.offset == 'wear' else 'TR'}]"
+    found = tool_edge(row.register)
+    t, d = found if found else (row.number, None)
+    d = d if d is not None else row.edge
+    if t is None or d is None:
+        raise cannot("siemens", row, "a tool is named T5 D1, or give number = T and edge = D in the model")
+    wear = row.offset == "wear"
+    if row.axis == RADIUS:
+        return f"$TC_DP{15 if wear else 6}[{t},{d}]"
+    return f"$TC_DP{12 if wear else 3}[{t},{d}]"
+
+
+def render(rows: Sequence[OffsetRow], title: str = "", *, program_number: int | None = None, spindle: str = "Z") -> str:
+    mode = one_mode(rows)
+    unit = length_unit(rows)
+    lines = []
+    if program_number is not None:
+        lines += [f"%_N_{program_name(check_program_number('siemens', program_number))}_MPF", ";$PATH=/_N_MPF_DIR"]
+    lines += [f"; SETUPFIX {title}".rstrip(), f"; values in {unit}"]
+    if any(r.axis == ROTATION for r in rows):
+        lines.append("; rotations (RT) in degrees")
+    if mode == "set":
+        lines.append("; absolute values = current + change: safe to run again")
+    else:
+        lines.append("; incremental changes: run once only - each run adds them again")
+    for row in rows:
+        var = _variable(row, spindle)
+        if mode == "set":
+            lines.append(
+                f"{var}={number(row, target(row))} ; {row.id} {row.register} {row.offset} was "
+                f"{number(row, row.current or 0.0)} change {number(row, row.delta)}"
+            )
+        else:
+            lines.append(f"{var}={var}{number(row, row.delta)} ; {row.id} {row.register} {row.offset}")
+    lines.append("M30")
+    return "\n".join(lines) + "\n"
