@@ -11,9 +11,9 @@ built-in readers.
 from __future__ import annotations
 
 from parsers import canonical as _canonical
-from parsers._registry import FormatSpec, ReadResult, find_format, formats, never_a_report, read, read_report, register
-from parsers._source import STDIN, Source, final_line_break, load_source
 from parsers.folders import FoundFile, Inputs, Listing, expand_inputs, list_reports
+from parsers.registry import FormatSpec, ReadResult, find_format, formats, never_a_report, read, read_report, register
+from parsers.source import STDIN, Source, final_line_break, load_source
 
 __all__ = [
     "FormatSpec",

@@ -16,8 +16,8 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from parsers._source import Source, csv_records, decode, point_number, read_bytes
 from parsers.numbers import MAX_NUMBER_CHARS, number_pattern, try_number
+from parsers.source import Source, csv_records, decode, point_number, read_bytes
 from setupfix.core.errors import ParseError, SourceLocation
 from setupfix.core.units import LENGTH_UNITS, length_factor
 from setupfix.model.measurements import CANONICAL_COLUMNS, LENGTH_COLUMNS

@@ -33,7 +33,7 @@ import numpy.typing as npt
 import pandas as pd
 
 from parsers import numbers
-from parsers._source import csv_records, read_bytes
+from parsers.source import csv_records, read_bytes
 from parsers.timestamps import parse_timestamp, to_index, utc_naive
 from setupfix.core.errors import MatchError, ParseError, SourceLocation
 from setupfix.model import ProcessModel

@@ -26,8 +26,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from parsers._source import csv_records, read_text
 from parsers.numbers import try_number
+from parsers.source import csv_records, read_text
 from setupfix.core.errors import ParseError, SourceLocation
 from setupfix.core.units import length_factor
 from setupfix.model import ProcessModel, Register

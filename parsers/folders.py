@@ -38,8 +38,8 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
-from parsers._registry import NOT_REPORT_NAMES, never_a_report
 from parsers.names import visible_name
+from parsers.registry import NOT_REPORT_NAMES, never_a_report
 from setupfix.core.errors import Note, SourceLocation
 
 __all__ = ["FoundFile", "Listing", "list_reports", "Inputs", "expand_inputs", "PARTIAL_SUFFIXES", "LOG_NAMES"]

@@ -11,9 +11,9 @@ from __future__ import annotations
 from collections.abc import Iterable
 from dataclasses import dataclass
 
-from parsers._registry import read_report
-from parsers._rowkeys import ROW_COLUMNS, row_keys
-from parsers._source import Source
+from parsers.registry import read_report
+from parsers.rowkeys import ROW_COLUMNS, row_keys
+from parsers.source import Source
 from setupfix.core.errors import SetupfixError
 
 __all__ = ["ROW_COLUMNS", "row_keys", "cut_points", "line_cut_points", "CutOutcome", "check_prefixes"]

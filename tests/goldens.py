@@ -70,7 +70,7 @@ def note_text(notes) -> str:
 
 def read_warned(read: Callable[[Path], pd.DataFrame], path: Path) -> tuple[pd.DataFrame, str]:
     """Read ``path``, returning the table and the reader's notes joined."""
-    from parsers._notes import collecting
+    from parsers.notes import collecting
 
     with collecting() as notes:
         table = read(path)
@@ -80,7 +80,7 @@ def read_warned(read: Callable[[Path], pd.DataFrame], path: Path) -> tuple[pd.Da
 @contextmanager
 def expect_note(pattern: str = ""):
     """Assert that the reads inside the block leave a note matching ``pattern``."""
-    from parsers._notes import collecting
+    from parsers.notes import collecting
 
     with collecting() as notes:
         yield notes

@@ -2,9 +2,9 @@
 
 from __future__ import annotations
 
-from parsers._registry import FormatSpec, register
-from parsers._source import end_statement
 from parsers.calypso.reader import read_calypso, sniff_calypso
+from parsers.registry import FormatSpec, register
+from parsers.source import end_statement
 
 __all__ = ["read_calypso", "sniff_calypso", "SPEC"]
 

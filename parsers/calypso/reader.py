@@ -20,10 +20,10 @@ from pathlib import Path
 
 import pandas as pd
 
-from parsers._source import csv_records, read_text
 from parsers.canonical import DEVIATION_TOLERANCE_MM, finish_table
 from parsers.geometry import axis_vector, geometry_cells
 from parsers.numbers import parse_number
+from parsers.source import csv_records, read_text
 from setupfix.core.errors import ParseError, SourceLocation
 from setupfix.core.units import LENGTH_UNITS, length_factor
 

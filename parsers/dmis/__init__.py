@@ -2,9 +2,9 @@
 
 from __future__ import annotations
 
-from parsers._registry import FormatSpec, register
-from parsers._source import end_statement
 from parsers.dmis.reader import read_dmis, sniff_dmis
+from parsers.registry import FormatSpec, register
+from parsers.source import end_statement
 
 __all__ = ["read_dmis", "sniff_dmis", "SPEC"]
 

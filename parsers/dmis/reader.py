@@ -22,13 +22,13 @@ from pathlib import Path
 
 import pandas as pd
 
-from parsers._notes import note
-from parsers._source import point_number, read_text
 from parsers.axes import axis_word, vector_axis
 from parsers.canonical import finish_table
 from parsers.dmis.statements import Statement, parse_statement, split_statements
 from parsers.geometry import axis_vector, geometry_cells, unit_vector
+from parsers.notes import note
 from parsers.numbers import is_number
+from parsers.source import point_number, read_text
 from setupfix.core.errors import ParseError, SourceLocation
 from setupfix.core.units import LENGTH_UNITS, length_factor
 

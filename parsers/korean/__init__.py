@@ -2,9 +2,9 @@
 
 from __future__ import annotations
 
-from parsers._registry import FormatSpec, register
-from parsers._source import Peek, decode, final_line_break
 from parsers.korean.report import read_korean, sniff_korean
+from parsers.registry import FormatSpec, register
+from parsers.source import Peek, decode, final_line_break
 
 __all__ = ["read_korean", "sniff_korean"]
 

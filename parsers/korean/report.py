@@ -25,11 +25,11 @@ from pathlib import Path
 
 import pandas as pd
 
-from parsers._notes import note
-from parsers._rows import SkipLog, finish_rows, parse_number, unit_factor, unit_or_none
-from parsers._source import Source, read_text
 from parsers.canonical import DEVIATION_TOLERANCE_MM
 from parsers.geometry import axis_vector, geometry_cells
+from parsers.notes import note
+from parsers.rows import SkipLog, finish_rows, parse_number, unit_factor, unit_or_none
+from parsers.source import Source, read_text
 from setupfix.core.errors import ParseError, SourceLocation
 
 __all__ = ["read_korean", "sniff_korean"]

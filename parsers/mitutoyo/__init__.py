@@ -2,9 +2,9 @@
 
 from __future__ import annotations
 
-from parsers._registry import FormatSpec, register
-from parsers._source import final_line_break
 from parsers.mitutoyo.qvpak import read_qvpak, sniff_qvpak
+from parsers.registry import FormatSpec, register
+from parsers.source import final_line_break
 
 __all__ = ["read_qvpak", "sniff_qvpak"]
 

@@ -26,7 +26,7 @@ from pathlib import Path
 
 import pandas as pd
 
-from parsers._rows import (
+from parsers.rows import (
     SkipLog,
     checked_deviation,
     finish_rows,
@@ -38,7 +38,7 @@ from parsers._rows import (
     unit_or_none,
     warn_assumed_mm,
 )
-from parsers._source import read_text
+from parsers.source import read_text
 from setupfix.core.errors import ParseError, SourceLocation
 
 __all__ = ["read_qvpak", "sniff_qvpak"]

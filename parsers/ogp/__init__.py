@@ -2,10 +2,10 @@
 
 from __future__ import annotations
 
-from parsers._registry import FormatSpec, register
-from parsers._source import Peek, final_line_break
 from parsers.ogp.reports import read_ogp, sniff_ogp
 from parsers.ogp.rtf import is_rtf, rtf_lines
+from parsers.registry import FormatSpec, register
+from parsers.source import Peek, final_line_break
 
 __all__ = ["read_ogp", "sniff_ogp"]
 

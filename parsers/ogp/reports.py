@@ -9,7 +9,7 @@ each opened by ``Routine Name  Run #  Date & Time``, paginated with a repeated
 ``Machine Serial Number … Page:`` header, rows ``label nominal actual deviation`` in
 fixed columns under ``Step n - comment`` groups.
 
-Vendor conventions handled (see :mod:`parsers._rows` for the shared rules):
+Vendor conventions handled (see :mod:`parsers.rows` for the shared rules):
 
 * zero ``Upper``/``Lower`` (``+00.00000 -00.00000``) mean *no tolerance*, not a zero zone;
 * a size/location row whose nominal equals the actual with no tolerance was taught
@@ -31,7 +31,8 @@ from pathlib import Path
 
 import pandas as pd
 
-from parsers._rows import (
+from parsers.ogp.rtf import is_rtf, rtf_lines
+from parsers.rows import (
     SkipLog,
     checked_deviation,
     finish_rows,
@@ -40,8 +41,7 @@ from parsers._rows import (
     unit_or_none,
     warn_assumed_mm,
 )
-from parsers._source import read_text
-from parsers.ogp.rtf import is_rtf, rtf_lines
+from parsers.source import read_text
 from setupfix.core.errors import ParseError, SourceLocation
 
 __all__ = ["read_ogp", "sniff_ogp"]

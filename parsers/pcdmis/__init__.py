@@ -2,10 +2,10 @@
 
 from __future__ import annotations
 
-from parsers._registry import FormatSpec, register
-from parsers._source import final_line_break
 from parsers.pcdmis.csv_export import read_pcdmis_csv, sniff_pcdmis_csv
 from parsers.pcdmis.text_report import read_pcdmis_text, sniff_pcdmis_text
+from parsers.registry import FormatSpec, register
+from parsers.source import final_line_break
 
 __all__ = ["read_pcdmis_csv", "read_pcdmis_text"]
 

@@ -16,7 +16,9 @@ import re
 import numpy as np
 import pandas as pd
 
-from parsers._rows import (
+from parsers.geometry import DIRECTION_COLUMNS
+from parsers.pcdmis.axes import ANGLE_AXES, NON_LENGTH_AXES
+from parsers.rows import (
     SkipLog,
     checked_deviation,
     finish_rows,
@@ -25,8 +27,6 @@ from parsers._rows import (
     unit_or_none,
     warn_assumed_mm,
 )
-from parsers.geometry import DIRECTION_COLUMNS
-from parsers.pcdmis.axes import ANGLE_AXES, NON_LENGTH_AXES
 from setupfix.core.errors import ParseError, SourceLocation
 from setupfix.model.measurements import CANONICAL_COLUMNS
 

@@ -17,11 +17,11 @@ from pathlib import Path
 
 import pandas as pd
 
-from parsers._rows import SkipLog, unit_or_none
-from parsers._source import read_text
 from parsers.pcdmis.axes import ANGLE_AXES, NON_LENGTH_AXES
 from parsers.pcdmis.columns import STAMP, heading_of, read_columns
-from parsers.pcdmis.text_report import _Raw, rows_from_raw
+from parsers.pcdmis.text_report import RawRecord, rows_from_raw
+from parsers.rows import SkipLog, unit_or_none
+from parsers.source import read_text
 from setupfix.core.errors import ParseError, SourceLocation
 
 __all__ = ["read_pcdmis_csv", "sniff_pcdmis_csv"]
@@ -69,7 +69,7 @@ def read_rows(text: str, name: str, default_unit: str | None) -> pd.DataFrame:
     skipped = SkipLog(name)
     meta: dict[str, str] = {}
     cols: dict[str, int] | None = None
-    raws: list[_Raw] = []
+    raws: list[RawRecord] = []
     part: str | None = None
     getter: Callable[[list[str]], tuple[str, ...]] | None = None
     keys: list[str] = []
@@ -105,7 +105,7 @@ def read_rows(text: str, name: str, default_unit: str | None) -> pd.DataFrame:
                 part = meta.get("serial number") or f"{meta.get('part name', 'part')}#1"
                 stamp = STAMP.match(meta.get("datetime", ""))
                 extra = {"timestamp": "{}-{}-{}T{}:{}:{}".format(*stamp.groups())} if stamp else {}
-            raws.append(_Raw(cells.get("name", ""), axis, cells, row_unit or "", part, where, extra))
+            raws.append(RawRecord(cells.get("name", ""), axis, cells, row_unit or "", part, where, extra))
     except csv.Error as exc:
         raise ParseError(f"malformed CSV: {exc}", location=SourceLocation(name, line=reader.line_num)) from None
     if cols is None:

@@ -27,7 +27,9 @@ from pathlib import Path
 
 import pandas as pd
 
-from parsers._rows import (
+from parsers.geometry import axis_vector, geometry_cells
+from parsers.pcdmis.axes import ANGLE_AXES, NON_LENGTH_AXES
+from parsers.rows import (
     SkipLog,
     checked_deviation,
     finish_rows,
@@ -39,9 +41,7 @@ from parsers._rows import (
     unit_or_none,
     warn_assumed_mm,
 )
-from parsers._source import read_text
-from parsers.geometry import axis_vector, geometry_cells
-from parsers.pcdmis.axes import ANGLE_AXES, NON_LENGTH_AXES
+from parsers.source import read_text
 from setupfix.core.errors import ParseError, SourceLocation
 
 __all__ = ["read_pcdmis_text", "sniff_pcdmis_text"]
@@ -75,7 +75,7 @@ def sniff_pcdmis_text(text: str) -> bool:
 
 
 @dataclass
-class _Raw:
+class RawRecord:
     """One axis row before the report-wide minus-tolerance convention is known."""
 
     name: str
@@ -95,8 +95,8 @@ def _part_label(header: dict[str, str], count: int) -> str:
     return f"{base}#{stats or count}"
 
 
-def _collect(text: str, name: str, default_unit: str | None, skipped: SkipLog) -> list[_Raw]:
-    raws: list[_Raw] = []
+def _collect(text: str, name: str, default_unit: str | None, skipped: SkipLog) -> list[RawRecord]:
+    raws: list[RawRecord] = []
     header: dict[str, str] = {}
     parts_seen = 0
     dim: str | None = None
@@ -145,7 +145,7 @@ def _collect(text: str, name: str, default_unit: str | None, skipped: SkipLog) -
             )
             continue
         raws.append(
-            _Raw(
+            RawRecord(
                 dim,
                 axis,
                 cells,
@@ -202,7 +202,7 @@ def _value(cells: dict[str, str], key: str, where: SourceLocation) -> float | No
     return parse_number(text[0], where, key.upper())
 
 
-def rows_from_raw(raws: list[_Raw], name: str, skipped: SkipLog, *, what: str) -> pd.DataFrame:
+def rows_from_raw(raws: list[RawRecord], name: str, skipped: SkipLog, *, what: str) -> pd.DataFrame:
     """Turn axis rows into canonical rows (shared with the CSV reader).
 
     Raises

@@ -2,8 +2,8 @@
 
 from __future__ import annotations
 
-from parsers._registry import FormatSpec, register
 from parsers.piweb.rest_json import read_piweb, sniff_piweb
+from parsers.registry import FormatSpec, register
 
 __all__ = ["read_piweb", "sniff_piweb"]
 

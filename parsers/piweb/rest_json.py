@@ -21,9 +21,9 @@ from pathlib import Path
 
 import pandas as pd
 
-from parsers._rows import SkipLog, finish_rows, unit_factor, unit_or_none, warn_assumed_mm
-from parsers._source import Source, load_source, read_text
 from parsers.numbers import MAX_NUMBER_CHARS, parse_number
+from parsers.rows import SkipLog, finish_rows, unit_factor, unit_or_none, warn_assumed_mm
+from parsers.source import Source, load_source, read_text
 from setupfix.core.errors import ParseError, SourceLocation
 
 __all__ = ["read_piweb", "sniff_piweb"]

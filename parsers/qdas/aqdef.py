@@ -24,7 +24,7 @@ from typing import NamedTuple
 
 import pandas as pd
 
-from parsers._rows import (
+from parsers.rows import (
     SkipLog,
     finish_rows,
     parse_number,
@@ -33,7 +33,7 @@ from parsers._rows import (
     unit_or_none,
     warn_assumed_mm,
 )
-from parsers._source import load_source, read_text
+from parsers.source import load_source, read_text
 from setupfix.core.errors import ParseError, SourceLocation
 
 __all__ = ["read_aqdef", "sniff_aqdef"]

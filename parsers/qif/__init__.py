@@ -2,8 +2,8 @@
 
 from __future__ import annotations
 
-from parsers._registry import FormatSpec, register
 from parsers.qif.reader import read_qif, sniff_qif
+from parsers.registry import FormatSpec, register
 
 __all__ = ["read_qif", "sniff_qif", "SPEC"]
 

@@ -16,8 +16,8 @@ from pathlib import Path
 
 from lxml import etree
 
-from parsers._source import STDIN, read_bytes
-from parsers.qif._xml import parse_xml
+from parsers.qif.xmltree import parse_xml
+from parsers.source import STDIN, read_bytes
 from setupfix.core.errors import ParseError, SourceLocation
 
 __all__ = ["IdIndex", "build_index", "resolve_external", "beside"]

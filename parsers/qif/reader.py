@@ -16,14 +16,14 @@ import numpy as np
 import pandas as pd
 from lxml import etree
 
-from parsers._notes import note
-from parsers._source import Source, read_bytes
 from parsers.canonical import finish_table
-from parsers.qif._xml import parse_xml
+from parsers.notes import note
 from parsers.qif.external import build_index, resolve_external
 from parsers.qif.flatten import Record, measurement_table, record, results_elements
 from parsers.qif.items import Doc, Item, child_text, item_info, local, number, raw_float
 from parsers.qif.units import choose_file_unit, file_unit_factor
+from parsers.qif.xmltree import parse_xml
+from parsers.source import Source, read_bytes
 from setupfix.core.errors import ParseError, SourceLocation
 
 __all__ = ["read_qif", "sniff_qif", "NON_LENGTH_KINDS"]

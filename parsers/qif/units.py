@@ -13,7 +13,7 @@ import math
 
 from lxml import etree
 
-from parsers._notes import note
+from parsers.notes import note
 from parsers.numbers import try_number
 from setupfix.core.errors import ParseError, SourceLocation
 from setupfix.core.units import LENGTH_UNITS, length_factor

@@ -2,8 +2,8 @@
 
 from __future__ import annotations
 
-from parsers._registry import FormatSpec, register
-from parsers._source import final_line_break
+from parsers.registry import FormatSpec, register
+from parsers.source import final_line_break
 from parsers.table.mapping import KEYS, guess_columns, parse_columns
 from parsers.table.reader import load_grid, read_table, sniff_table
 

@@ -20,9 +20,9 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from parsers._source import decode, read_bytes
 from parsers.canonical import DEVIATION_TOLERANCE_MM, finish_table
 from parsers.numbers import MAX_NUMBER_CHARS, number_pattern
+from parsers.source import decode, read_bytes
 from parsers.table.limits import check_workbook
 from parsers.table.mapping import guess_columns, parse_columns
 from setupfix.core.errors import ParseError, SourceLocation

@@ -26,7 +26,7 @@ decimal point): ``2_1``, ``nan``,
 ``inf`` and ``1,5`` are refused with the file and line, never read as 21 or as a
 silent gap; an empty cell is a gap.  A header naming a column twice is refused (a
 dropped sensor would change every prediction silently).  The file goes through the
-size-limited reader of :mod:`parsers._source`; a CSV field over the csv module's
+size-limited reader of :mod:`parsers.source`; a CSV field over the csv module's
 limit (131,072 characters) is refused with its line.
 """
 
@@ -41,8 +41,8 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
-from parsers._source import csv_records, decode, read_bytes
 from parsers.numbers import try_number
+from parsers.source import csv_records, decode, read_bytes
 from parsers.timestamps import parse_timestamp
 from setupfix.core.errors import Note, ParseError, SourceLocation
 

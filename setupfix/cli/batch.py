@@ -98,7 +98,7 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
     p.set_defaults(run=run, store=None)
 
 
-def _terminate(signum: int, frame: FrameType | None) -> None:
+def terminate(signum: int, frame: FrameType | None) -> None:
     raise KeyboardInterrupt  # unwinds the atomic writer: no partial output
 
 
@@ -113,7 +113,7 @@ def run(args: argparse.Namespace) -> int:
     check_program_number(args)
     request = correct_request(args)  # the very request ``correct`` builds from the same options
     ref = store_ref(args, args.db)
-    previous = signal.signal(signal.SIGTERM, _terminate)
+    previous = signal.signal(signal.SIGTERM, terminate)
     try:
         with (
             ref.for_model(request.model).open(existing=False) if ref else nullcontext() as store,

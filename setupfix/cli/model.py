@@ -182,19 +182,19 @@ def _safe(text: str) -> str:
     return "".join(c if c.isprintable() else "?" for c in text)
 
 
-def _cells(text: str) -> int:
+def cells(text: str) -> int:
     """Terminal cells of a text: East Asian wide and full-width characters take two."""
     return sum(2 if unicodedata.east_asian_width(c) in "WF" else 1 for c in text)
 
 
-def _cut(text: str | None, width: int) -> str:
+def cut(text: str | None, width: int) -> str:
     """The text cut to ``width`` terminal cells (with "…") and padded to exactly that width."""
     text = "—" if not text else "".join(c if c.isprintable() else "?" for c in text)
-    if _cells(text) > width:
-        while _cells(text) > width - 1:
+    if cells(text) > width:
+        while cells(text) > width - 1:
             text = text[:-1]
         text += "…"
-    return text + " " * (width - _cells(text))
+    return text + " " * (width - cells(text))
 
 
 def _n(value: float | None) -> str:
@@ -218,8 +218,8 @@ def format_match_table(table: MatchTable) -> str:
             f"{len(part.unmatched)} report characteristic(s) unmatched",
             "",
         ]
-        name_w = min(22, max([len("dimension")] + [_cells(r["name"]) for r in rows]))
-        char_w = min(22, max([len("report name")] + [_cells(r["characteristic"] or "") for r in rows]))
+        name_w = min(22, max([len("dimension")] + [cells(r["name"]) for r in rows]))
+        char_w = min(22, max([len("report name")] + [cells(r["characteristic"] or "") for r in rows]))
         longest = max([0] + [len(r["station"] or "") for r in rows])
         st_w = min(10, max(len("station"), longest)) + 1 if longest else 0
         head = (
@@ -228,14 +228,14 @@ def format_match_table(table: MatchTable) -> str:
         )
         lines += [head.rstrip(), "-" * min(WIDTH, len(head.rstrip()))]
         for r in rows:
-            lead = (_cut(r["station"], st_w - 1) + " " if st_w else "") + _cut(r["name"], name_w) + " "
+            lead = (cut(r["station"], st_w - 1) + " " if st_w else "") + cut(r["name"], name_w) + " "
             if not r["matched"]:
                 near = _safe(", ".join(r["closest"]))
                 lines.append(lead + "absent from the report" + (f"; closest report names: {near}" if near else ""))
                 continue
             lines.append(
                 (
-                    lead + f"{_cut(r['characteristic'], char_w)} {_n(r['nominal']):>10} "
+                    lead + f"{cut(r['characteristic'], char_w)} {_n(r['nominal']):>10} "
                     f"{_n(r['report_nominal']):>10}  {_limits(r['lower'], r['upper']):<15} "
                     f"{_limits(r['report_lower'], r['report_upper']):<15}" + (" ≠" if r["differs"] else "")
                 ).rstrip()

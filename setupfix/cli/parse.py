@@ -53,7 +53,7 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
 
 def _encoding(text: str) -> str:
     """argparse type: a usable character set (``--encoding punycode`` is refused with the reason)."""
-    from parsers._source import check_encoding  # here: importing the parsers loads pandas
+    from parsers.source import check_encoding  # here: importing the parsers loads pandas
 
     try:
         return check_encoding(text)

@@ -109,7 +109,7 @@ class Predicate:
 Constraint = Interval | Options | Predicate | type | None
 
 
-def _accepts(constraint: Constraint, value: Any) -> bool:
+def accepts(constraint: Constraint, value: Any) -> bool:
     if constraint is None:
         return value is None
     if isinstance(constraint, type):
@@ -155,7 +155,7 @@ def validate_params(owner: str, params: Mapping[str, Any], constraints: Mapping[
         allowed = constraints.get(name)
         if allowed is None:
             continue
-        if not any(_accepts(c, value) for c in allowed):
+        if not any(accepts(c, value) for c in allowed):
             raise ParameterError(f"{owner}: {name} must be {describe(allowed)}, got {value!r}")
 
 

@@ -30,7 +30,7 @@ from setupfix.diagnose.forecast import spec_of
 from setupfix.diagnose.terms import PRODUCT, EffectSpec, channel_values
 from setupfix.inputs.checks import check_parts
 from setupfix.inputs.cycles import ReadOptions
-from setupfix.inputs.series_assembly import _assemble, _one_per_part, _ordered, report_coordinates
+from setupfix.inputs.series_assembly import assemble, one_per_part, ordered_parts, report_coordinates
 from setupfix.inputs.series_logs import TempLog, store_temperatures, temperature_arrays
 from setupfix.inputs.stores import StoreRef
 from setupfix.model import PartMeasurement, ProcessModel, load_model, match_parts
@@ -141,7 +141,7 @@ def load_series(
             tables.append(table)
     if not parts:
         raise ParseError("no report in the series", location=SourceLocation(where or "<series>"))
-    parts, more = _one_per_part(parts)
+    parts, more = one_per_part(parts)
     notes += more
     if not corrections and log is None and len(parts) > 1:
         notes.append(Note(_no_log_note(reports), None, "series"))
@@ -165,7 +165,7 @@ def load_series(
     if process:
         process_log = read_temperature_log(process, require_time=False, keep_text=True)
         notes += process_log.notes
-    series, more = _assemble(model, parts, log, temps, where, process_log)
+    series, more = assemble(model, parts, log, temps, where, process_log)
     notes += more
     declared = tuple(spec_of(e) for e in section.effects)
     for e in section.effects:
@@ -200,7 +200,7 @@ def load_series(
         model,
         layout,
         series,
-        tuple(_ordered(parts)),
+        tuple(ordered_parts(parts)),
         declared,
         section,
         corrections,

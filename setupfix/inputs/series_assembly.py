@@ -24,11 +24,11 @@ from setupfix.diagnose import Layout, Series
 from setupfix.diagnose.covariates import applied_at, join_temperatures, parts_since_change
 from setupfix.inputs.series_logs import (
     TempLog,
-    _has_serial,
-    _process_rows,
+    has_serial,
     hours_since,
     parse_times,
     process_channels,
+    process_rows,
 )
 from setupfix.model import PartMeasurement, ProcessModel, normalise_name
 
@@ -58,7 +58,7 @@ def report_coordinates(model: ProcessModel, tables: Sequence[pd.DataFrame]) -> n
     return out
 
 
-def _one_per_part(parts: list[PartMeasurement]) -> tuple[list[PartMeasurement], list[Note]]:
+def one_per_part(parts: list[PartMeasurement]) -> tuple[list[PartMeasurement], list[Note]]:
     """Each machined part once: reports of the same part and time (the same cycle exported twice, or
     measured twice) would count as independent cycles and make any effect look significant.
 
@@ -91,14 +91,14 @@ def _one_per_part(parts: list[PartMeasurement]) -> tuple[list[PartMeasurement], 
     return keep, notes
 
 
-def _ordered(parts: list[PartMeasurement]) -> list[PartMeasurement]:
+def ordered_parts(parts: list[PartMeasurement]) -> list[PartMeasurement]:
     if all(p.timestamp is None for p in parts) or any(p.timestamp is None for p in parts):
         return parts
     ts = parse_times([p.timestamp for p in parts], parts[0].report)
     return [parts[i] for i in np.argsort(ts.values, kind="stable")]
 
 
-def _assemble(
+def assemble(
     model: ProcessModel,
     parts: list[PartMeasurement],
     log: RegisterLog | None,
@@ -110,9 +110,9 @@ def _assemble(
     notes: list[Note] = []
     layout = Layout.from_model(model)
     stamps = [p.timestamp for p in parts]
-    if all(s is None for s in stamps) and process is not None and process.timestamps and _has_serial(process):
+    if all(s is None for s in stamps) and process is not None and process.timestamps and has_serial(process):
         # the reports carry no time: the parts were machined when the process log says (joined by serial)
-        rows, _ = _process_rows(process, [p.part for p in parts], np.zeros(len(parts)), "")
+        rows, _ = process_rows(process, [p.part for p in parts], np.zeros(len(parts)), "")
         for i in rows:  # a bad one named by its line
             parse_timestamp(process.timestamps[int(i)], process.location(int(i)))
         parts = [

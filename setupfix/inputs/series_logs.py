@@ -102,11 +102,11 @@ def _serial_key(value: object) -> str:
     return str(int(number)) if number.is_integer() else text
 
 
-def _has_serial(log: TemperatureLog) -> bool:
+def has_serial(log: TemperatureLog) -> bool:
     return any(c.casefold() == SERIAL for c in (*log.columns, *log.text))
 
 
-def _process_rows(
+def process_rows(
     log: TemperatureLog, parts: Sequence[str], time: np.ndarray, origin: str
 ) -> tuple[np.ndarray, list[Note]]:
     """Row of the process log for each cycle: by serial (the part's number), else by timestamp."""
@@ -180,7 +180,7 @@ def process_channels(
     notes : list of Note
         Channels left out (an empty cell on a cycle, too many levels) and how rows were joined.
     """
-    rows, notes = _process_rows(log, parts, time, origin)
+    rows, notes = process_rows(log, parts, time, origin)
     cols: list[np.ndarray] = []
     names: list[str] = []
     factor: list[list[tuple[str, np.ndarray]]] = []

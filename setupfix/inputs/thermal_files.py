@@ -1,6 +1,6 @@
 """Thermal files at the edge: the model JSON (read and write), a prediction over a log file, the prediction CSV.
 
-Reading goes through the size-limited reader of :mod:`parsers._source`; every problem
+Reading goes through the size-limited reader of :mod:`parsers.source`; every problem
 of a model file (not UTF-8, not JSON, a missing or mistyped entry, coefficients that
 do not fit together) is one :class:`~setupfix.core.errors.ParseError` naming the file and
 the entry.  Writing goes through :mod:`setupfix.outputs.writers` (only ``-`` or a
@@ -15,7 +15,7 @@ import json
 from pathlib import Path
 from typing import Any
 
-from parsers._source import read_bytes
+from parsers.source import read_bytes
 from parsers.temperature import TemperatureLog, read_temperature_log
 from setupfix.core.errors import ExportError, Note, ParameterError, ParseError, SourceLocation
 from setupfix.outputs.writers import check_target, write_text

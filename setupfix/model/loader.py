@@ -56,7 +56,7 @@ from setupfix.model.effects import parse_effects
 from setupfix.model.process import Feature, MachinePoint, ProcessModel
 from setupfix.model.safety import parse_safety
 from setupfix.model.stations import expand_stations
-from setupfix.model.tables import _KEYS, _check_keys, _check_resolution, _dimensions, _registers, _report_in
+from setupfix.model.tables import TABLE_KEYS, check_keys, check_resolution, dimension_rows, register_rows, report_in
 from setupfix.model.validate import (
     RANGES_MM,
     Problems,
@@ -101,14 +101,14 @@ def model_from_dict(doc: Mapping[str, Any], source: str = "<model>", text: str |
         p.add(key, message)
     doc = expanded
     for top in doc:
-        if top not in _KEYS and top not in SECTIONS and top not in _EXPANDED:
-            known = [*_KEYS, *SECTIONS, *sorted(_EXPANDED)]
+        if top not in TABLE_KEYS and top not in SECTIONS and top not in _EXPANDED:
+            known = [*TABLE_KEYS, *SECTIONS, *sorted(_EXPANDED)]
             p.add(top, f"unknown table (expected one of: {', '.join(known)})")
     if "process" not in doc:
         p.add("process", "missing required table [process]")
     proc = table_of(p, "process", doc.get("process", {}))
     multi = "axes" in proc
-    _check_keys(p, "process", "process", proc, multi)
+    check_keys(p, "process", "process", proc, multi)
     name = proc.get("name")
     if "process" in doc and (not isinstance(name, str) or not name.strip()):
         p.add("process.name", "missing required process name")
@@ -145,8 +145,8 @@ def model_from_dict(doc: Mapping[str, Any], source: str = "<model>", text: str |
         machine = None
 
     settings = multi_axis.parse_axes(p, proc) if multi else None
-    wks = _registers(p, doc, "wks", "wks", limit or 0.1, ranges, multi)
-    tools = _registers(p, doc, "tools", "tool", limit or 0.1, ranges, multi)
+    wks = register_rows(p, doc, "wks", "wks", limit or 0.1, ranges, multi)
+    tools = register_rows(p, doc, "tools", "tool", limit or 0.1, ranges, multi)
     wks_ids = {r.id: r for r in wks}
     tool_ids = {r.id: r for r in tools}
     for rid in wks_ids.keys() & tool_ids.keys():
@@ -164,7 +164,7 @@ def model_from_dict(doc: Mapping[str, Any], source: str = "<model>", text: str |
     for mid, raw in table_of(p, "machine", doc.get("machine", {})).items():
         table = table_of(p, f"machine.{mid}", raw)
         control_free(p, f"machine.{mid}", mid, "ID")
-        _check_keys(p, "machine", f"machine.{mid}", table)
+        check_keys(p, "machine", f"machine.{mid}", table)
         machines.append(MachinePoint(mid, weights(p, f"machine.{mid}.wks", table.get("wks", {}), wks_ids, "WKS")))
 
     features = []
@@ -172,7 +172,7 @@ def model_from_dict(doc: Mapping[str, Any], source: str = "<model>", text: str |
         key = f"features.{fid}"
         table = table_of(p, key, raw)
         control_free(p, key, fid, "ID")
-        _check_keys(p, "features", key, table, multi)
+        check_keys(p, "features", key, table, multi)
         fw: dict[str, float] = {}
         components: dict[str, dict[str, float]] = {}
         radius: dict[str, float] = {}
@@ -199,9 +199,9 @@ def model_from_dict(doc: Mapping[str, Any], source: str = "<model>", text: str |
     if multi:
         multi_axis.check_rotation_positions(p, features, {r.base for r in wks if r.component == "C"})
 
-    dimensions = _dimensions(p, doc, feature_ids, ranges, str(axis) if multi else None)
+    dimensions = dimension_rows(p, doc, feature_ids, ranges, str(axis) if multi else None)
     if resolution is not None and not p.items:
-        _check_resolution(p, resolution, limit or 0.1, [*wks, *tools], dimensions, unit)
+        check_resolution(p, resolution, limit or 0.1, [*wks, *tools], dimensions, unit)
     p.raise_if_any()
     assert resolution is not None and limit is not None  # refused above otherwise
     model = ProcessModel(
@@ -224,11 +224,11 @@ def model_from_dict(doc: Mapping[str, Any], source: str = "<model>", text: str |
         rotation_resolution=settings.rotation_resolution if settings is not None else 0.0001,
     )
     if "effects" in doc:
-        effects = parse_effects(doc["effects"], model, functools.partial(_report_in, p, "effects"))
+        effects = parse_effects(doc["effects"], model, functools.partial(report_in, p, "effects"))
         model = replace(model, effects=effects)
     if "safety" in doc:
         model = replace(
-            model, safety=parse_safety(doc["safety"], model.dimension_ids, functools.partial(_report_in, p, "safety"))
+            model, safety=parse_safety(doc["safety"], model.dimension_ids, functools.partial(report_in, p, "safety"))
         )
     p.raise_if_any()
     return model

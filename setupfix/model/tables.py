@@ -1,8 +1,8 @@
 """The readers of a model file's register and dimension tables, and the keys each table accepts.
 
-Used by :mod:`setupfix.model.loader`, which assembles the model: :func:`_registers` reads ``[wks.*]`` and
-``[tools.*]``, :func:`_dimensions` reads ``[dimensions.*]``, :func:`_check_keys` refuses a key a table does
-not take (``_KEYS``, with the free-text keys every table may hold), and :func:`_check_resolution` checks the
+Used by :mod:`setupfix.model.loader`, which assembles the model: :func:`register_rows` reads ``[wks.*]`` and
+``[tools.*]``, :func:`dimension_rows` reads ``[dimensions.*]``, :func:`check_keys` refuses a key a table does
+not take (``TABLE_KEYS``, with the free-text keys every table may hold), and :func:`check_resolution` checks the
 resolution against the limits and the tolerance bands.  Every problem goes to the
 :class:`~setupfix.model.validate.Problems` of the file, with its key path.
 """
@@ -26,7 +26,7 @@ __all__ = ["MAX_STEPS"]
 MAX_STEPS = 100_000
 
 _FREE_TEXT = {"description", "comment", "note", "notes"}
-_KEYS = {
+TABLE_KEYS = {
     "process": {"name", "axis", "unit", "resolution", "limit", "draft", "machine"} | _FREE_TEXT,
     "machine": {"wks"} | _FREE_TEXT,
     "wks": {"register", "limit", "fixed"} | _FREE_TEXT,
@@ -36,8 +36,8 @@ _KEYS = {
 }
 
 
-def _check_keys(p: Problems, section: str, key: str, table: Mapping[str, Any], multi: bool = False) -> None:
-    allowed_here = _KEYS[section] | (set(REGISTER_KEYS) if section in ("wks", "tools") else set())
+def check_keys(p: Problems, section: str, key: str, table: Mapping[str, Any], multi: bool = False) -> None:
+    allowed_here = TABLE_KEYS[section] | (set(REGISTER_KEYS) if section in ("wks", "tools") else set())
     extra = multi_axis.MULTI_KEYS.get(section, frozenset())
     if multi:
         allowed_here = allowed_here | extra
@@ -49,7 +49,7 @@ def _check_keys(p: Problems, section: str, key: str, table: Mapping[str, Any], m
             p.add(f"{key}.{name}", f"unknown key (expected one of: {allowed})")
 
 
-def _registers(
+def register_rows(
     p: Problems,
     doc: dict[str, Any],
     section: str,
@@ -62,7 +62,7 @@ def _registers(
     for rid, raw in table_of(p, section, doc.get(section, {})).items():
         key = f"{section}.{rid}"
         table = table_of(p, key, raw)
-        _check_keys(p, section, key, table, multi)
+        check_keys(p, section, key, table, multi)
         control_free(p, key, rid, "ID")
         name = table.get("register", rid)
         if not isinstance(name, str) or not name.strip():
@@ -79,12 +79,12 @@ def _registers(
         if not isinstance(fixed, bool):
             p.add(f"{key}.fixed", f"expected true or false, found {show(fixed)}")
             fixed = False
-        policy = parse_register_policy(table, functools.partial(_report_in, p, key))
+        policy = parse_register_policy(table, functools.partial(report_in, p, key))
         regs.append(Register(rid, kind, name.strip(), lim if lim is not None else limit, fixed, policy))
     return regs
 
 
-def _check_resolution(
+def check_resolution(
     p: Problems, resolution: float, limit: float, registers: list[Register], dimensions: list[Dimension], unit: str
 ) -> None:
     """Resolution against the limits (the process's, then each register's own) and the tolerance bands."""
@@ -118,11 +118,11 @@ def _check_resolution(
             )
 
 
-def _report_in(p: Problems, section: str, key: str, message: str) -> None:
+def report_in(p: Problems, section: str, key: str, message: str) -> None:
     p.add(f"{section}.{key}" if key else section, message)
 
 
-def _dimensions(
+def dimension_rows(
     p: Problems, doc: Mapping[str, Any], feature_ids: Mapping[str, Feature], ranges: Ranges, axis: str | None = None
 ) -> list[Dimension]:
     """The ``[dimensions.*]`` tables; ``axis`` (the default measuring axis) only in a multi-axis model."""
@@ -132,7 +132,7 @@ def _dimensions(
     for did, raw in table_of(p, "dimensions", doc.get("dimensions", {})).items():
         key = f"dimensions.{did}"
         table = table_of(p, key, raw)
-        _check_keys(p, "dimensions", key, table, multi)
+        check_keys(p, "dimensions", key, table, multi)
         control_free(p, key, did, "ID")
         geometry = multi_axis.dimension_geometry(p, key, table, axis, ranges) if axis is not None else None
         zone = geometry is not None and geometry.kind == "position"

@@ -52,7 +52,7 @@ __all__ = ["ThermalModel", "MRAModel", "rebase", "DEFAULT_SEED"]
 Array = npt.NDArray[np.float64]
 #: Seed of the stochastic calibrations when none is given (results are reproducible by default).
 DEFAULT_SEED = 0
-_SEED: list[Constraint] = [Interval(int, 0, 2**63 - 1)]
+SEED: list[Constraint] = [Interval(int, 0, 2**63 - 1)]
 
 
 def rebase(predicted: npt.ArrayLike, index: int, error: float) -> Array:
@@ -136,7 +136,7 @@ class ThermalModel(ValidatedParams):
         return rises_from(T, self.T_ref_), y - self.y_ref_
 
     def _rises(self, T: npt.ArrayLike) -> Array:
-        T2 = _as_2d(T)
+        T2 = as_2d(T)
         if T2.shape[1] != self.T_ref_.size:
             raise ParameterError(
                 f"{self.name}: {T2.shape[1]} temperature inputs given, the model has {self.T_ref_.size}"
@@ -195,12 +195,12 @@ def _jsonable(params: dict[str, Any]) -> dict[str, Any]:
     return {k: list(v) if isinstance(v, tuple) else v for k, v in params.items()}
 
 
-def _as_2d(T: npt.ArrayLike) -> Array:
+def as_2d(T: npt.ArrayLike) -> Array:
     T = np.asarray(T, dtype=float)
     return T.reshape(T.shape[0], -1)
 
 
-def _shape(name: str, value: Any, shape: tuple[int, ...]) -> None:
+def check_shape(name: str, value: Any, shape: tuple[int, ...]) -> None:
     if np.shape(value) != shape:
         raise ValueError(f"learned {name!r} has shape {np.shape(value)}, expected {shape}")
 
@@ -232,7 +232,7 @@ class MRAModel(ThermalModel):
         speed: npt.ArrayLike | None = None,
     ) -> MRAModel:
         self._refuse_extras(ambient, speed, False)
-        dT, dy = self._set_reference(_as_2d(T), np.asarray(y, dtype=float))
+        dT, dy = self._set_reference(as_2d(T), np.asarray(y, dtype=float))
         self.beta_ = mra_fit(dT, dy, intercept=self.intercept)
         return self
 
@@ -252,4 +252,4 @@ class MRAModel(ThermalModel):
 
     def _check_shapes(self) -> None:
         super()._check_shapes()
-        _shape("beta_", self.beta_, (self.T_ref_.size + int(self.intercept),))
+        check_shape("beta_", self.beta_, (self.T_ref_.size + int(self.intercept),))

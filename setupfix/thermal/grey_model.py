@@ -17,7 +17,7 @@ from setupfix.core.params import Constraint, Interval, Options
 from setupfix.search import generator
 from setupfix.thermal import grey
 from setupfix.thermal.calibrate import SearchResult, cuckoo_search, particle_swarm
-from setupfix.thermal.estimator import _SEED, DEFAULT_SEED, ThermalModel, _as_2d, _shape
+from setupfix.thermal.estimator import DEFAULT_SEED, SEED, ThermalModel, as_2d, check_shape
 
 __all__ = ["GreyModel"]
 
@@ -73,7 +73,7 @@ class GreyModel(ThermalModel):
         "population": [Interval(int, 2, 10_000)],
         "iterations": [Interval(int, 1, 100_000)],
         "pa": [Interval(float, 0, 1)],
-        "seed": _SEED,
+        "seed": SEED,
     }
 
     def __init__(
@@ -119,7 +119,7 @@ class GreyModel(ThermalModel):
         speed: npt.ArrayLike | None = None,
     ) -> GreyModel:
         self._refuse_extras(ambient, speed, False)
-        dT, dy = self._set_reference(_as_2d(T), np.asarray(y, dtype=float))
+        dT, dy = self._set_reference(as_2d(T), np.asarray(y, dtype=float))
         X = grey.lag_drivers(dT, self.delay)
         if self.kind == "gm1n":
             B, Y = grey.gm1n_design(dy, X)
@@ -193,4 +193,4 @@ class GreyModel(ThermalModel):
     def _check_shapes(self) -> None:
         super()._check_shapes()
         S = self.T_ref_.size
-        _shape("theta_", self.theta_, (S + (1 if self.kind == "gm1n" else 2),))
+        check_shape("theta_", self.theta_, (S + (1 if self.kind == "gm1n" else 2),))

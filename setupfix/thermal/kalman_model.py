@@ -15,7 +15,7 @@ from setupfix.core.errors import ParameterError
 from setupfix.core.params import Constraint, Interval, Predicate
 from setupfix.search import generator
 from setupfix.thermal.calibrate import genetic_algorithm
-from setupfix.thermal.estimator import _SEED, DEFAULT_SEED, ThermalModel, _as_2d, _shape
+from setupfix.thermal.estimator import DEFAULT_SEED, SEED, ThermalModel, as_2d, check_shape
 from setupfix.thermal.kalman import FusionFilter, fuse
 from setupfix.thermal.lumped import Gearbox, fit_lumped, heat_inputs, lumped_coefficients
 from setupfix.thermal.mra import mra_fit, mra_predict
@@ -73,7 +73,7 @@ class KalmanFusionModel(ThermalModel):
         "log10_q_bounds": [
             Predicate(lambda v: len(v) == 2 and -30 <= v[0] < v[1] <= 30, "two numbers lo < hi in [-30, 30]")
         ],
-        "seed": _SEED,
+        "seed": SEED,
     }
 
     def __init__(
@@ -135,7 +135,7 @@ class KalmanFusionModel(ThermalModel):
         ambient: npt.ArrayLike | None = None,
         speed: npt.ArrayLike | None = None,
     ) -> KalmanFusionModel:
-        T = _as_2d(T)
+        T = as_2d(T)
         y = np.asarray(y, dtype=float)
         _, dy = self._set_reference(T, y)
         self.uses_speed_ = speed is not None
@@ -206,7 +206,7 @@ class KalmanFusionModel(ThermalModel):
     ) -> tuple[Array, Array]:
         """Fused temperatures (n, S) and gains (n, S); ``sensors_failed`` forces gain 0 throughout."""
         self._check_fitted()
-        T = _as_2d(T)
+        T = as_2d(T)
         if T.shape[1] != self.T_ref_.size:
             raise ParameterError(f"kalman: {T.shape[1]} temperature inputs given, the model has {self.T_ref_.size}")
         te, sp = self._drives(T, ambient, speed)
@@ -243,7 +243,7 @@ class KalmanFusionModel(ThermalModel):
         super()._check_shapes()
         S = self.T_ref_.size
         for name, shape in (("A_", (S,)), ("B_", (S,)), ("q_", (S,)), ("beta_", (S,)), ("v_", (S, 3))):
-            _shape(name, getattr(self, name), shape)
+            check_shape(name, getattr(self, name), shape)
         self.uses_speed_ = bool(self.uses_speed_)
 
 

@@ -19,9 +19,9 @@ from pathlib import Path
 import pandas as pd
 
 import parsers
-from parsers._source import read_bytes
 from parsers.corrections import EVENTS, check_corrections, read_corrections_log
 from parsers.names import visible_name
+from parsers.source import read_bytes
 from parsers.temperature import read_temperature_log
 from parsers.timestamps import iso_text
 from setupfix.core.errors import Note, ParameterError, ParseError, SourceLocation, StoreError, UnknownFormatError

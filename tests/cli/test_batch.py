@@ -40,7 +40,7 @@ def test_killed_run_leaves_no_partial_file(tmp_path):
     """SIGTERM becomes KeyboardInterrupt (the CLI's handler), which unwinds the atomic writer."""
     import pytest
 
-    from setupfix.cli.batch import _terminate
+    from setupfix.cli.batch import terminate
     from setupfix.model import load_model
     from setupfix.usecases.batch import run_batch
     from setupfix.usecases.requests import CorrectRequest
@@ -54,7 +54,7 @@ def test_killed_run_leaves_no_partial_file(tmp_path):
 
     def killed_after_first(done, total, outcome):
         assert any(p.name.endswith(".tmp") for p in tmp_path.iterdir())  # rows are being streamed …
-        _terminate(signal.SIGTERM, None)
+        terminate(signal.SIGTERM, None)
 
     with pytest.raises(KeyboardInterrupt):
         run_batch(CorrectRequest(load_model(MODEL)), d, out, settle=0, progress=killed_after_first)

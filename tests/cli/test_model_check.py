@@ -64,11 +64,11 @@ def test_check_marks_differences_and_strict_refuses(tmp_path, capsys):
 
 
 def test_wide_characters_keep_columns_aligned():
-    from setupfix.cli.model import _cells, _cut
+    from setupfix.cli.model import cells, cut
 
-    assert _cells("원통1(I).D") == 10 and _cut("원통1(I).D", 12) == "원통1(I).D  "
-    assert _cells(_cut("원통1(I).D", 7)) == 7 and _cut("원통1(I).D", 7).endswith("…")
-    assert _cut("a\x1b[31mb", 8) == "a?[31mb "  # control characters never reach the terminal
+    assert cells("원통1(I).D") == 10 and cut("원통1(I).D", 12) == "원통1(I).D  "
+    assert cells(cut("원통1(I).D", 7)) == 7 and cut("원통1(I).D", 7).endswith("…")
+    assert cut("a\x1b[31mb", 8) == "a?[31mb "  # control characters never reach the terminal
 
 
 def test_init_never_overwrites_an_edited_model(tmp_path, capsys):

@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from setupfix.core.errors import ParameterError
-from setupfix.core.params import _accepts
+from setupfix.core.params import accepts
 from setupfix.optimize import OPTIMIZERS, CorrectionProblem, get_optimizer
 from setupfix.optimize.base import NO_BETTER_THAN_NONE, Metaheuristic, make_result
 from tests.optimize.test_metaheuristics_common import RecordingProblem, small_problem
@@ -87,7 +87,7 @@ def test_budget_counted_and_result_on_the_grid_within_limits(name):
 def _bad_value(constraints):
     """A value every constraint of a parameter refuses."""
     for value in (-1, -(10**9), 10**12, 0.5, 2.5, math.nan, "no such value", None):
-        if not any(_accepts(c, value) for c in constraints):
+        if not any(accepts(c, value) for c in constraints):
             return value
     raise AssertionError(f"no value outside {constraints}")
 

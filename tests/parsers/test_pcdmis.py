@@ -83,8 +83,8 @@ def test_unknown_units_and_garbage_number(tmp_path: Path) -> None:
 
 
 def test_csv_column_reader_equals_row_reader() -> None:
-    from parsers._source import read_text as read_report_text
     from parsers.pcdmis.csv_export import read_columns, read_rows
+    from parsers.source import read_text as read_report_text
 
     name = str(SAMPLES / "bracket_ncgage.csv")
     text = read_report_text(name)

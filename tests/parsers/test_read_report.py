@@ -13,7 +13,7 @@ from pathlib import Path
 import pytest
 
 import parsers
-from parsers._source import MAX_REPORT_BYTES, Source
+from parsers.source import MAX_REPORT_BYTES, Source
 from setupfix.core.errors import ParameterError, ParseError
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -77,7 +77,7 @@ def _write(data: bytes) -> Path:
 
 
 def test_size_limit_is_one_reader_for_all(monkeypatch):
-    from parsers import _source
+    from parsers import source as _source
 
     monkeypatch.setattr(_source, "MAX_REPORT_BYTES", 100)
     big = _write(b"characteristic,nominal,actual\n" + b"D1,1.0,1.0\n" * 20)

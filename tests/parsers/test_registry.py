@@ -1,4 +1,4 @@
-"""Reader registry and dispatch; encodings and locale numbers of ``parsers._source``."""
+"""Reader registry and dispatch; encodings and locale numbers of ``parsers.source``."""
 
 from __future__ import annotations
 
@@ -7,8 +7,8 @@ from pathlib import Path
 import pytest
 
 import parsers
-from parsers import _registry
-from parsers._source import decode, parse_number
+from parsers import registry as _registry
+from parsers.source import decode, parse_number
 from setupfix.core.errors import ParseError, UnknownFormatError
 
 ROOT = Path(__file__).resolve().parents[2]

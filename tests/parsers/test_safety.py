@@ -10,7 +10,7 @@ from pathlib import Path
 import pytest
 
 import parsers
-from parsers.qif._xml import _parser, parse_xml
+from parsers.qif.xmltree import parse_xml, safe_parser
 from setupfix.core.errors import ParseError
 
 BILLION_LAUGHS = """<?xml version="1.0"?>
@@ -114,7 +114,7 @@ def test_parser_itself_resolves_nothing_even_past_the_byte_check(tmp_path: Path,
         f'<!ENTITY % p SYSTEM "http://127.0.0.1:{listener.getsockname()[1]}/x"> %p;]><r>&s;</r>'
     ).encode()
     try:
-        root = etree.fromstring(doc, _parser())
+        root = etree.fromstring(doc, safe_parser())
         text = etree.tostring(root).decode()
     except etree.XMLSyntaxError:
         text = ""

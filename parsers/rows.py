@@ -20,8 +20,8 @@ from dataclasses import dataclass, field
 import pandas as pd
 
 from parsers import numbers
-from parsers._notes import note
 from parsers.canonical import DEVIATION_TOLERANCE_MM, finish_table
+from parsers.notes import note
 from setupfix.core.errors import ParseError, SourceLocation
 from setupfix.core.units import LENGTH_UNITS
 
@@ -131,7 +131,7 @@ class SkipLog:
         return "; ".join(parts)
 
     def warn(self) -> None:
-        """Leave one note per reason (:func:`parsers._notes.note`), naming the lines."""
+        """Leave one note per reason (:func:`parsers.notes.note`), naming the lines."""
         for reason, lines in self.reasons.items():
             shown = ", ".join(str(n) for n in lines[:20]) + (f", … ({len(lines)} in all)" if len(lines) > 20 else "")
             first = lines[0] if isinstance(lines[0], int) else None

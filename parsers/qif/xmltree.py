@@ -23,7 +23,7 @@ _DTD = re.compile(rb"<!(?:DOCTYPE|ENTITY)", re.IGNORECASE)
 _POSITION = re.compile(r",? line \d+, column \d+.*$|\s*\(line \d+.*$")
 
 
-def _parser() -> etree.XMLParser:
+def safe_parser() -> etree.XMLParser:
     return etree.XMLParser(
         resolve_entities=False,
         no_network=True,
@@ -73,7 +73,7 @@ def parse_xml(data: bytes, path: str) -> etree._Element:
             hint="entity expansion and external entities are refused for safety",
         )
     try:
-        root = etree.fromstring(data, _parser())
+        root = etree.fromstring(data, safe_parser())
     except etree.XMLSyntaxError as exc:
         error_line = exc.lineno if exc.lineno and exc.lineno > 0 else None
         message = _POSITION.sub("", str(exc.msg or exc)).strip() or "not well-formed XML"

@@ -15,11 +15,11 @@ from typing import Any
 
 import pandas as pd
 
-from parsers._notes import collecting
-from parsers._rowkeys import row_keys
-from parsers._source import NO_FINAL_LINE_BREAK, Peek, Source, load_source, peek
-from parsers._verdicts import verdict_notes
 from parsers.names import visible_name
+from parsers.notes import collecting
+from parsers.rowkeys import row_keys
+from parsers.source import NO_FINAL_LINE_BREAK, Peek, Source, load_source, peek
+from parsers.verdicts import verdict_notes
 from setupfix.core.errors import (
     Note,
     ParameterError,
@@ -53,8 +53,8 @@ class FormatSpec:
     sniff : callable(Peek) -> bool
         Pure, cheap, never raises: True when the content is of this format.
     read : callable(source, **options) -> DataFrame
-        Reads the canonical measurement table from a :class:`~parsers._source.Source`
-        (the bytes read once); leaves its notes with :func:`parsers._notes.note`.
+        Reads the canonical measurement table from a :class:`~parsers.source.Source`
+        (the bytes read once); leaves its notes with :func:`parsers.notes.note`.
     priority : int
         Sniffers run in decreasing priority (specific formats before generic ones).
     options : tuple of str
