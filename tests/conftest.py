@@ -4,8 +4,12 @@ from __future__ import annotations
 
 import os
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import pytest
+
+if TYPE_CHECKING:
+    from setupfix.model import ProcessModel
 
 ROOT = Path(__file__).resolve().parents[1]
 SAMPLES = ROOT / "sample_reports"
@@ -15,7 +19,7 @@ GUIDE_PINS = SAMPLES / "guide_pins"
 
 
 @pytest.fixture
-def guide_pins_model():
+def guide_pins_model() -> ProcessModel:
     from setupfix.model import load_model
 
     return load_model(GUIDE_PINS / "model.toml")

@@ -3,12 +3,16 @@
 from __future__ import annotations
 
 import re
-from collections.abc import Callable
+from collections.abc import Callable, Iterable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pandas as pd
+
+if TYPE_CHECKING:
+    from setupfix.core.errors import Note
 
 GOLDEN = Path(__file__).resolve().parent / "parsers" / "golden"
 NUMERIC = ["nominal", "actual", "deviation", "lower", "upper", "x", "y", "z", "nx", "ny", "nz"]
@@ -63,7 +67,7 @@ def assert_derived_golden(table: pd.DataFrame, golden: Path) -> None:
         np.testing.assert_allclose(got[col].to_numpy(float), want[col].to_numpy(float), atol=1e-9, equal_nan=True)
 
 
-def note_text(notes) -> str:
+def note_text(notes: Iterable[Note]) -> str:
     """The notes of a read as lines ``file:line: message`` (as ``setupfix parse`` prints them)."""
     return "\n".join(f"{n.location}: {n.message}" if n.location else n.message for n in notes)
 
@@ -78,7 +82,7 @@ def read_warned(read: Callable[[Path], pd.DataFrame], path: Path) -> tuple[pd.Da
 
 
 @contextmanager
-def expect_note(pattern: str = ""):
+def expect_note(pattern: str = "") -> Iterator[list[Note]]:
     """Assert that the reads inside the block leave a note matching ``pattern``."""
     from parsers.notes import collecting
 

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Any, TypedDict
 
 import numpy as np
 from scipy.optimize import Bounds, LinearConstraint, milp
@@ -24,6 +25,19 @@ RES, LIMIT, ROT_RES, ROT_LIMIT, RADIUS_LIMIT = 0.001, 0.1, 0.0001, 0.03, 0.05
 SIDES = 720
 
 
+class Feature(TypedDict):
+    pos: np.ndarray  # x, y, z
+    comp: dict[str, float]  # per-component weight of its WKS (x, y, z, c)
+    length: dict[str, float]  # tool -> length weight
+    radius: dict[str, float]  # tool -> radius weight
+    wks: str
+
+
+#: A dimension: its keys depend on its kind (length, size or position) and the generator fills in its
+#: column(s) and deviation (a float, or a δ pair for a position), so a plain mapping by key.
+Dimension = dict[str, Any]
+
+
 @dataclass
 class Fixture:
     text: str  # the model TOML
@@ -31,11 +45,11 @@ class Fixture:
     registers: list[str]
     steps: np.ndarray  # grid step of each register (degrees for .C)
     limits: np.ndarray
-    dims: list[dict]  # name, kind, lower, upper | radius, deviation (or δ pair), column(s)
+    dims: list[Dimension]  # name, kind, lower, upper | radius, deviation (or δ pair), column(s)
 
 
-def _features(rng: np.random.Generator, station: str) -> dict[str, dict]:
-    feats = {}
+def _features(rng: np.random.Generator, station: str) -> dict[str, Feature]:
+    feats: dict[str, Feature] = {}
     for i in range(6):
         pos = np.round(rng.uniform(-60, 60, 3), 1)
         tombstone = rng.random() < 0.3  # the 180° side of a tombstone
@@ -52,11 +66,12 @@ def _features(rng: np.random.Generator, station: str) -> dict[str, dict]:
     return feats
 
 
-def _dimensions(rng: np.random.Generator, station: str, feats: dict[str, dict]) -> list[dict]:
+def _dimensions(rng: np.random.Generator, station: str, feats: dict[str, Feature]) -> list[Dimension]:
     ids = list(feats)
-    out = []
+    out: list[Dimension] = []
     for k in range(3):  # lengths along an axis or a direction
         fs = {ids[k]: 1.0} if k != 2 else {ids[2]: 1.0, ids[3]: -1.0}
+        direction: str | tuple[float, ...]  # an axis name or a unit vector
         if k == 1:
             v = rng.normal(size=3)
             direction = tuple(np.round(v / np.linalg.norm(v), 6))
@@ -100,7 +115,7 @@ def _dimensions(rng: np.random.Generator, station: str, feats: dict[str, dict]) 
     return out
 
 
-def _shift(f: dict, reg: str) -> tuple[np.ndarray, float]:
+def _shift(f: Feature, reg: str) -> tuple[np.ndarray, float]:
     """Displacement of feature f per unit of register component ``reg`` and its radius term (spec)."""
     s = UNIT["Z"]
     if reg.startswith("W"):
@@ -115,7 +130,7 @@ def _shift(f: dict, reg: str) -> tuple[np.ndarray, float]:
     return f["length"].get(reg, 0.0) * s, 0.0
 
 
-def change_matrix(registers: list[str], feats: dict, dims: list[dict]) -> None:
+def change_matrix(registers: list[str], feats: dict[str, Feature], dims: list[Dimension]) -> None:
     """Each dimension's column(s): d_q = Σ_f w_qf (n_q·p_f + Σ ρ r) per unit register (sizes: ρ only)."""
     for d in dims:
         if d["kind"] == "position":
@@ -166,7 +181,7 @@ def make_fixture(seed: int) -> Fixture:
     return Fixture(_toml(feats, dims), rows, registers, steps, limits, dims)
 
 
-def _toml(feats: dict, dims: list[dict]) -> str:
+def _toml(feats: dict[str, Feature], dims: list[Dimension]) -> str:
     out = [
         "[process]",
         'name = "generated two-station fixture"',

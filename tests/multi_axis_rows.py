@@ -3,7 +3,13 @@ multi-axis model: one per register component), for the controller tests."""
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 from setupfix.correction.offsets import OffsetRow
+
+if TYPE_CHECKING:
+    from setupfix.model import ProcessModel
+    from setupfix.model.process import RegisterKind
 
 __all__ = ["row", "fixture_rows", "SPEC"]
 
@@ -117,13 +123,13 @@ def fixture_rows(
     return out
 
 
-def multi_axis_model(unit: str = "mm"):  # -> ProcessModel (imported lazily: the rows need no model)
+def multi_axis_model(unit: str = "mm") -> ProcessModel:  # imported lazily: the rows need no model
     """A multi-axis model built directly (the loader of ``process.axes`` is another part's): G54 on X/Y/Z with its
     rotation, G55 on X/Y/Z, tool 5 length (H5) and radius (D5), a fixed tool 7."""
     from setupfix.model import ProcessModel, Register
 
-    def reg(id: str, kind: str, register: str, component: str, fixed: bool = False) -> Register:
-        return Register(id, kind, register, 0.5, fixed, component=component)  # type: ignore[arg-type]
+    def reg(id: str, kind: RegisterKind, register: str, component: str, fixed: bool = False) -> Register:
+        return Register(id, kind, register, 0.5, fixed, component=component)
 
     wks = (*(reg(f"W1.{a}", "wks", "G54", a) for a in "XYZC"), *(reg(f"W2.{a}", "wks", "G55", a) for a in "XYZ"))
     tools = (reg("T5", "tool", "H5", "Z"), reg("T5.R", "tool", "D5", "R"), reg("T7", "tool", "H7", "Z", fixed=True))
