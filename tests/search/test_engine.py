@@ -6,7 +6,16 @@ import numpy as np
 import pytest
 
 from setupfix.core.errors import ParameterError
-from setupfix.search import Box, cuckoo_search, generator, particle_swarm, roulette_ga, tournament_ga
+from setupfix.search import (
+    Box,
+    SearchResult,
+    cuckoo_search,
+    generator,
+    particle_swarm,
+    roulette_ga,
+    tournament_ga,
+)
+from setupfix.search.space import Array
 
 SEARCHES = {
     "cs": lambda **kw: cuckoo_search(n_nests=7, **kw),
@@ -19,12 +28,13 @@ BOX = Box.of([-1.3, -0.7, 0.0], [2.9, 1.1, 0.0])  # the last coordinate is fixed
 TARGET = np.array([0.3, 0.3, 0.0])
 
 
-def _run(name, seed, budget):
-    seen = []
+def _run(name: str, seed: int, budget: int) -> tuple[SearchResult, int]:
+    seen: list[int] = []
 
-    def objective(x):
+    def objective(x: Array) -> Array:
         assert np.all(x >= BOX.lower) and np.all(x <= BOX.upper)
-        return np.sum((x - TARGET) ** 2, axis=1)
+        values: Array = np.sum((x - TARGET) ** 2, axis=1)
+        return values
 
     res = SEARCHES[name](
         objective=objective, space=BOX, budget=budget, rng=generator(seed), observe=lambda x, v: seen.append(len(x))
@@ -33,7 +43,7 @@ def _run(name, seed, budget):
 
 
 @pytest.mark.parametrize("name", SEARCHES)
-def test_seeded_budgeted_and_inside_the_box(name):
+def test_seeded_budgeted_and_inside_the_box(name: str) -> None:
     a, counted = _run(name, 3, 101)
     b, _ = _run(name, 3, 101)
     c, _ = _run(name, 4, 101)
@@ -45,13 +55,13 @@ def test_seeded_budgeted_and_inside_the_box(name):
     assert a.fun < 0.05
 
 
-def test_no_unseeded_generator():
+def test_no_unseeded_generator() -> None:
     assert generator(None).random() == np.random.default_rng(0).random()
     g = np.random.default_rng(9)
     assert generator(g) is g
 
 
-def test_bad_box_and_budget_are_parameter_errors():
+def test_bad_box_and_budget_are_parameter_errors() -> None:
     with pytest.raises(ParameterError, match="lower <= upper"):
         Box.of([1.0], [0.0])
     with pytest.raises(ParameterError, match="budget must be an int in"):

@@ -33,14 +33,14 @@ def _direct(x: list[float], lsl: float, usl: float) -> dict[str, float]:
     }
 
 
-def test_sigma_within_matches_the_published_example():
+def test_sigma_within_matches_the_published_example() -> None:
     assert D2 == 1.128
     assert np.mean(CONCENTRATION) == pytest.approx(99.1, abs=0.005)
     assert sigma_within(CONCENTRATION) * D2 == pytest.approx(2.59, abs=0.005)
 
 
 @pytest.mark.parametrize("seed", range(5))
-def test_indices_equal_a_direct_computation(seed):
+def test_indices_equal_a_direct_computation(seed: int) -> None:
     rng = np.random.default_rng(seed)
     x = list(rng.normal(0.01 * seed, 0.004 + 0.001 * seed, size=30 + 7 * seed))
     lsl, usl = -0.012, 0.015
@@ -56,7 +56,7 @@ def test_indices_equal_a_direct_computation(seed):
     assert c.out_of_tolerance == d["out"]
 
 
-def test_one_sided_limits_leave_cp_undefined():
+def test_one_sided_limits_leave_cp_undefined() -> None:
     x = [0.1, 0.3, 0.2, 0.4, 0.25]
     c = capability(x, math.nan, 1.0)
     assert math.isnan(c.cp) and math.isnan(c.pp)
@@ -66,7 +66,7 @@ def test_one_sided_limits_leave_cp_undefined():
     assert none.n == 1 and math.isnan(none.cpk) and math.isnan(none.cpk_low)
 
 
-def test_cpk_interval_is_bissell():
+def test_cpk_interval_is_bissell() -> None:
     # Bissell's approximation written out for Ĉpk = 0.625, n = 30 (x̄ = 97, s = 1.6, limits 90 and 100).
     low, high = cpk_interval(0.625, 30)
     half = 1.959964 * math.sqrt(1 / (9 * 30) + 0.625**2 / (2 * 29))
@@ -74,14 +74,14 @@ def test_cpk_interval_is_bissell():
     assert (low, high) == pytest.approx((0.4247, 0.8253), abs=1e-4)
 
 
-def test_cpk_interval_matches_a_published_example():
+def test_cpk_interval_matches_a_published_example() -> None:
     # PROC CAPABILITY's Cpk uses the sample standard deviation: setupfix's Ppk.
     c = capability(AMPS, 4.0, 6.0)
     assert c.n == 75
     assert cpk_interval(c.ppk, c.n, confidence=0.90) == pytest.approx((0.328, 0.496), abs=5e-4)
 
 
-def test_cpk_interval_covers_the_true_value_about_95_percent_of_the_time():
+def test_cpk_interval_covers_the_true_value_about_95_percent_of_the_time() -> None:
     # A simulation independent of the formula: normal samples of a known process (true Cpk = 1.0).
     rng = np.random.default_rng(7)
     mu, sigma, lsl, usl, n = 0.0, 1.0, -3.5, 3.0, 60
@@ -97,7 +97,7 @@ def test_cpk_interval_covers_the_true_value_about_95_percent_of_the_time():
     assert 0.93 <= hits / trials <= 0.97
 
 
-def test_split_capability_separates_before_and_after():
+def test_split_capability_separates_before_and_after() -> None:
     x = np.r_[np.full(10, 0.05) + np.tile([0.001, -0.001], 5), np.tile([0.001, -0.001], 10)]
     after = np.r_[np.zeros(10, bool), np.ones(20, bool)]
     before, later = split_capability(x, after, -0.02, 0.02)
@@ -109,7 +109,9 @@ def test_split_capability_separates_before_and_after():
 
 @settings(max_examples=60, deadline=None)
 @given(st.lists(st.floats(-1.0, 1.0), min_size=3, max_size=40), st.floats(-100.0, 100.0), st.floats(0.1, 10.0))
-def test_indices_do_not_change_when_values_and_limits_shift_and_scale_together(x, shift, scale):
+def test_indices_do_not_change_when_values_and_limits_shift_and_scale_together(
+    x: list[float], shift: float, scale: float
+) -> None:
     assume(np.ptp(x) > 1e-3 and np.any(np.diff(x) != 0))
     lsl, usl = -1.5, 1.2
     a = capability(x, lsl, usl)

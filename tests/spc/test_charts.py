@@ -12,7 +12,7 @@ from setupfix.core.errors import ParameterError
 from setupfix.spc import D4, Violation, chart_limits, moving_range, nelson
 
 
-def test_limits_match_the_published_example():
+def test_limits_match_the_published_example() -> None:
     lim = chart_limits(CONCENTRATION, baseline=20)
     # Montgomery & Runger, Table 16-3: UCL 105.99, CL 99.1, LCL 92.21; MR chart UCL = 3.267 · 2.59.
     assert lim.ucl == pytest.approx(105.99, abs=0.01)
@@ -23,7 +23,7 @@ def test_limits_match_the_published_example():
     assert nelson(CONCENTRATION, lim.center, lim.sigma) == []  # "no indication of an out-of-control condition"
 
 
-def test_limits_come_from_the_baseline_only():
+def test_limits_come_from_the_baseline_only() -> None:
     x = np.r_[np.tile([1.0, 2.0], 10), np.full(10, 100.0)]
     lim = chart_limits(x, baseline=20)
     assert lim.center == pytest.approx(1.5) and lim.mr_center == pytest.approx(1.0)
@@ -32,7 +32,7 @@ def test_limits_come_from_the_baseline_only():
         chart_limits(x, baseline=1)
 
 
-def _brute(x, c, s):
+def _brute(x: list[float], c: float, s: float) -> dict[int, set[int]]:
     """Every rule by its words, point by point: each window that satisfies it, merged into stretches."""
     n = len(x)
     hits: dict[int, set[int]] = {1: set(), 2: set(), 3: set(), 4: set()}
@@ -88,14 +88,14 @@ def _planted() -> tuple[np.ndarray, dict[int, list[tuple[int, int]]]]:
     return np.asarray(parts), where
 
 
-def test_clean_data_flags_nothing():
+def test_clean_data_flags_nothing() -> None:
     x = np.asarray(CLEAN * 12)
     lim = chart_limits(x)
     assert nelson(x, lim.center, lim.sigma) == []
     assert all(not v for v in _brute(list(x), lim.center, lim.sigma).values())
 
 
-def test_planted_violations_are_flagged_where_they_are_and_nowhere_else():
+def test_planted_violations_are_flagged_where_they_are_and_nowhere_else() -> None:
     x, where = _planted()
     lim = chart_limits(x, baseline=21)
     found = nelson(x, lim.center, lim.sigma)
@@ -105,7 +105,7 @@ def test_planted_violations_are_flagged_where_they_are_and_nowhere_else():
 
 
 @pytest.mark.parametrize("seed", range(20))
-def test_rules_agree_with_brute_force_on_random_series(seed):
+def test_rules_agree_with_brute_force_on_random_series(seed: int) -> None:
     rng = np.random.default_rng(seed)
     x = np.round(rng.normal(0, 1, 120) + np.where(rng.random(120) < 0.05, 4, 0), 1)  # ties, spikes
     if seed % 3 == 0:
