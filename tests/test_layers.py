@@ -94,20 +94,47 @@ def test_packages_hold_few_modules_directly(folder: Path) -> None:
     assert len(own) <= MAX_MODULES, f"{folder} holds {len(own)} modules: split it along a seam"
 
 
+OURS = {"setupfix", "parsers", "bench", "tests"}
+
+
 def private_imports(path: Path) -> Iterator[str]:
-    """Private names (``_x``) a file imports from another module, and imports of private modules."""
-    for module, names in imports(path):
-        if module.split(".")[0] not in {"setupfix", "parsers", "bench", "tests"}:
-            continue
-        parts = module.split(".")
-        if any(p.startswith("_") and not p.startswith("__") for p in parts):
-            yield module
-        yield from (f"{module}.{n}" for n in names if n.startswith("_") and not n.startswith("__"))
+    """Private names (``_x``) a file takes from another module of ours.
+
+    Imports of private modules, private names imported, and private attributes read through a module of
+    ours imported under a name (``import setupfix.x as m; m._y``).
+    """
+    tree = ast.parse(path.read_text(encoding="utf-8"))
+    aliases: dict[str, str] = {}
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            for a in node.names:
+                if a.name.split(".")[0] in OURS:
+                    aliases[a.asname or a.name.split(".")[0]] = a.name
+        elif isinstance(node, ast.ImportFrom) and node.module and node.level == 0:
+            if node.module.split(".")[0] not in OURS:
+                continue
+            if any(p.startswith("_") and not p.startswith("__") for p in node.module.split(".")):
+                yield node.module
+            for a in node.names:
+                if a.name.startswith("_") and not a.name.startswith("__"):
+                    yield f"{node.module}.{a.name}"
+                else:
+                    aliases[a.asname or a.name] = f"{node.module}.{a.name}"
+    for node in ast.walk(tree):
+        if (
+            isinstance(node, ast.Attribute)
+            and isinstance(node.value, ast.Name)
+            and node.value.id in aliases
+            and not node.value.id[:1].isupper()  # a subclass extending its base's class attribute
+            and node.attr.startswith("_")
+            and not node.attr.startswith("__")
+        ):
+            yield f"{aliases[node.value.id]}.{node.attr}"
 
 
 SOURCES = sorted(
     p
-    for folder in ("setupfix", "parsers", "tests", "bench")
+    for folder in ("setupfix", "parsers", "tests", "bench", "docs")
     for p in (ROOT / folder).rglob("*.py")
     if "golden" not in p.parts
 )
@@ -134,7 +161,14 @@ def test_parsers_is_ours() -> None:
 def test_the_checks_catch_what_they_forbid(tmp_path: Path) -> None:
     """The checks above fail on a module that breaks them (so a passing run means something)."""
     bad = tmp_path / "bad.py"
-    bad.write_text("from setupfix.optimize.exact import _hidden\nfrom setupfix.usecases.correct import x\n")
-    assert list(private_imports(bad)) == ["setupfix.optimize.exact._hidden"]
+    bad.write_text(
+        "from setupfix.optimize.exact import _hidden\nfrom setupfix.usecases import correct\n"
+        "import setupfix.model.tables as t\nimport numpy as np\nt._KEYS, correct._x, np._priv, correct.ok\n"
+    )
+    assert list(private_imports(bad)) == [
+        "setupfix.optimize.exact._hidden",
+        "setupfix.model.tables._KEYS",
+        "setupfix.usecases.correct._x",
+    ]
     assert rank_of("setupfix.usecases.correct") > rank_of("setupfix.correction.pose")  # type: ignore[operator]
     assert rank_of("setupfix.views.present") > rank_of("setupfix.usecases.batch")  # type: ignore[operator]

@@ -131,8 +131,8 @@ def key_tables() -> dict[str, dict[str, frozenset[str]]]:
     """Every key the model loader accepts, by table: ``{"one-axis": {"process": {...}}, ...}``."""
     from setupfix.model import axes, effects, safety, stations, tables
 
-    free = frozenset(tables._FREE_TEXT)
-    base = {section: frozenset(keys) - free for section, keys in tables._KEYS.items()}
+    free = frozenset(tables.FREE_TEXT)
+    base = {section: frozenset(keys) - free for section, keys in tables.TABLE_KEYS.items()}
     for section in ("wks", "tools"):
         base[section] = base[section] | safety.REGISTER_KEYS
     return {
@@ -143,11 +143,11 @@ def key_tables() -> dict[str, dict[str, frozenset[str]]]:
             "safety.dimensions.ID": frozenset(safety.DIMENSION_KEYS),
             # the head of [effects]: literal in effects.py (tested in tests/docs/test_reference.py)
             "effects": EFFECTS_HEAD,
-            "effects.ID": frozenset(effects._KEYS) - free,
+            "effects.ID": frozenset(effects.EFFECT_KEYS) - free,
         },
         "stations": {
-            "stations.ID": frozenset(stations._STATION_KEYS) - free,
-            "template": frozenset(stations._TEMPLATE_KEYS),
+            "stations.ID": frozenset(stations.STATION_KEYS) - free,
+            "template": frozenset(stations.TEMPLATE_KEYS),
         },
         "free": {"any table": free},
     }
@@ -174,7 +174,7 @@ def keys_markdown() -> str:
     lines = [
         "# Model keys",
         "",
-        "Generated from the model loader's key tables (`setupfix/model/tables.py` `_KEYS`,",
+        "Generated from the model loader's key tables (`setupfix/model/tables.py` `TABLE_KEYS`,",
         "`setupfix/model/axes.py` `MULTI_KEYS`, `setupfix/model/safety.py`, `setupfix/model/effects.py`,",
         "`setupfix/model/stations.py`) at every build; do not edit by hand. What each key means is in",
         "[the process model file](process-model.md); a key not listed here is refused by the loader",

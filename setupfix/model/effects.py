@@ -85,7 +85,7 @@ EFFECT_KINDS: tuple[str, ...] = (
     "process",
 )
 
-_KEYS = {
+EFFECT_KEYS = {
     "kind",
     "shape",
     "tau",
@@ -277,8 +277,8 @@ def _validated(
             bad(key, f"expected a table [effects.{eid}] or one of origin, cycle_hours, last_hours")
             continue
         for k in raw:
-            if k not in _KEYS:
-                bad(f"{key}.{k}", f"unknown key (expected one of: {', '.join(sorted(_KEYS))})")
+            if k not in EFFECT_KEYS:
+                bad(f"{key}.{k}", f"unknown key (expected one of: {', '.join(sorted(EFFECT_KEYS))})")
         kind = raw.get("kind")
         if kind not in EFFECT_KINDS:
             bad(f"{key}.kind", f"expected one of {', '.join(EFFECT_KINDS)}, found {kind!r}")

@@ -82,7 +82,7 @@ SECTIONS: tuple[str, ...] = ("effects", "safety")
 #: A model file larger than this is refused before parsing.
 MAX_BYTES = 16 * 1024 * 1024
 #: Top-level tables consumed before validation (station templates, see ``stations``).
-_EXPANDED = {"stations", "template"}
+EXPANDED_SECTIONS = {"stations", "template"}
 
 
 def model_from_dict(doc: Mapping[str, Any], source: str = "<model>", text: str | None = None) -> ProcessModel:
@@ -101,8 +101,8 @@ def model_from_dict(doc: Mapping[str, Any], source: str = "<model>", text: str |
         p.add(key, message)
     doc = expanded
     for top in doc:
-        if top not in TABLE_KEYS and top not in SECTIONS and top not in _EXPANDED:
-            known = [*TABLE_KEYS, *SECTIONS, *sorted(_EXPANDED)]
+        if top not in TABLE_KEYS and top not in SECTIONS and top not in EXPANDED_SECTIONS:
+            known = [*TABLE_KEYS, *SECTIONS, *sorted(EXPANDED_SECTIONS)]
             p.add(top, f"unknown table (expected one of: {', '.join(known)})")
     if "process" not in doc:
         p.add("process", "missing required table [process]")

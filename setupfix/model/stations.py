@@ -37,8 +37,8 @@ from typing import Any
 
 __all__ = ["expand_stations"]
 
-_STATION_KEYS = {"wks", "tools", "description", "comment", "note", "notes"}
-_TEMPLATE_KEYS = {"features", "dimensions"}
+STATION_KEYS = {"wks", "tools", "description", "comment", "note", "notes"}
+TEMPLATE_KEYS = {"features", "dimensions"}
 
 Problem = tuple[str, str]
 
@@ -92,7 +92,7 @@ def expand_stations(doc: Mapping[str, Any]) -> tuple[dict[str, Any], dict[str, s
         problems.append(("template", f"expected a table, found {type(template).__name__}"))
         template = {}
     for key in template:
-        if key not in _TEMPLATE_KEYS:
+        if key not in TEMPLATE_KEYS:
             problems.append((f"template.{key}", "unknown key (expected one of: dimensions, features)"))
     t_features = template.get("features", {})
     t_dimensions = template.get("dimensions", {})
@@ -109,7 +109,7 @@ def expand_stations(doc: Mapping[str, Any]) -> tuple[dict[str, Any], dict[str, s
             problems.append((key, f"expected a table, found {type(raw).__name__}"))
             continue
         for k in raw:
-            if k not in _STATION_KEYS:
+            if k not in STATION_KEYS:
                 problems.append((f"{key}.{k}", "unknown key (expected one of: tools, wks)"))
         stations[sid] = {kind: _mapping(raw.get(kind, {}), f"{key}.{kind}", problems) for kind in ("wks", "tools")}
 

@@ -25,14 +25,14 @@ __all__ = ["MAX_STEPS"]
 #: Bound on ``limit / resolution``: register steps one correction may span.
 MAX_STEPS = 100_000
 
-_FREE_TEXT = {"description", "comment", "note", "notes"}
+FREE_TEXT = {"description", "comment", "note", "notes"}
 TABLE_KEYS = {
-    "process": {"name", "axis", "unit", "resolution", "limit", "draft", "machine"} | _FREE_TEXT,
-    "machine": {"wks"} | _FREE_TEXT,
-    "wks": {"register", "limit", "fixed"} | _FREE_TEXT,
-    "tools": {"register", "limit", "fixed"} | _FREE_TEXT,
-    "features": {"wks", "tools", "position"} | _FREE_TEXT,
-    "dimensions": {"name", "aliases", "features", "nominal", "lower", "upper", "group", "sampled"} | _FREE_TEXT,
+    "process": {"name", "axis", "unit", "resolution", "limit", "draft", "machine"} | FREE_TEXT,
+    "machine": {"wks"} | FREE_TEXT,
+    "wks": {"register", "limit", "fixed"} | FREE_TEXT,
+    "tools": {"register", "limit", "fixed"} | FREE_TEXT,
+    "features": {"wks", "tools", "position"} | FREE_TEXT,
+    "dimensions": {"name", "aliases", "features", "nominal", "lower", "upper", "group", "sampled"} | FREE_TEXT,
 }
 
 
@@ -45,7 +45,7 @@ def check_keys(p: Problems, section: str, key: str, table: Mapping[str, Any], mu
         if name in extra and not multi:
             p.add(f"{key}.{name}", "a multi-axis key: only in a model whose [process] table has axes = [...]")
         elif name not in allowed_here:
-            allowed = ", ".join(sorted(allowed_here - _FREE_TEXT))
+            allowed = ", ".join(sorted(allowed_here - FREE_TEXT))
             p.add(f"{key}.{name}", f"unknown key (expected one of: {allowed})")
 
 

@@ -1,18 +1,18 @@
 """History store: every report, correction, tool change, temperature and recommendation.
 
 Callers see only the :class:`Store` protocol and :func:`open_store`.  Two back ends
-keep the same rules, schema version and migrations: one SQLite file (:mod:`._sqlite`,
+keep the same rules, schema version and migrations: one SQLite file (:mod:`.sqlite`,
 stdlib ``sqlite3``, WAL mode) -- the embedded default, no server needed -- and a
-PostgreSQL database (:mod:`._postgres`, psycopg 3, the ``plant`` extra), chosen by the
+PostgreSQL database (:mod:`.postgres`, psycopg 3, the ``plant`` extra), chosen by the
 location: a ``postgresql://`` (or ``postgres://``) URL is a server, anything else a file.
-Their common queries are in :mod:`._sql`.
+Their common queries are in :mod:`.sql`.
 
 A store handle belongs to one machine (``machine``, default :data:`DEFAULT_MACHINE`) and
 one operator (``operator``, default the login name): every report, correction,
 temperature sample and recommendation it writes is that machine's, every read sees only
 that machine's rows; :meth:`Store.machines` and ``audit(every_machine=True)`` see the
 whole plant.  A recommendation is stored with its audit columns
-(:mod:`._audit`: operator, report name and hash, part, verdict, rules, one delta per
+(:mod:`.audit`: operator, report name and hash, part, verdict, rules, one delta per
 register component, applied and exported program).
 
 Rules every implementation keeps:

@@ -1,7 +1,7 @@
 """What both history stores do alike: the :class:`~setupfix.store.Store` rules in portable SQL.
 
-:class:`SQLStore` holds every query but the batch claims' (:mod:`._claims`); a back end
-(:mod:`._sqlite`, :mod:`._postgres`) gives the connection, how a transaction begins, how a
+:class:`SQLStore` holds every query but the batch claims' (:mod:`.claims`); a back end
+(:mod:`.sqlite`, :mod:`.postgres`) gives the connection, how a transaction begins, how a
 failure is named (:meth:`SQLStore._failure`), how many rows are loaded at once, and the few
 words its SQL spells otherwise.  Statements are written with ``?`` placeholders (the
 PostgreSQL store turns them into ``%s``).

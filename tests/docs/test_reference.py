@@ -74,18 +74,18 @@ def test_every_model_key_is_in_the_reference() -> None:
 
     text = gen.KEYS_PAGE.read_text(encoding="utf-8")
     keys = set().union(
-        *tables._KEYS.values(),
+        *tables.TABLE_KEYS.values(),
         *axes.MULTI_KEYS.values(),
         safety.SAFETY_KEYS,
         safety.REGISTER_KEYS,
         safety.DIMENSION_KEYS,
-        effects._KEYS,
-        stations._STATION_KEYS,
-        stations._TEMPLATE_KEYS,
+        effects.EFFECT_KEYS,
+        stations.STATION_KEYS,
+        stations.TEMPLATE_KEYS,
     )
     for key in sorted(keys):
         assert f"`{key}`" in text, f"model key {key} missing from docs/reference/model-keys.md"
-    for section in (*tables._KEYS, *loader.SECTIONS, *loader._EXPANDED):
+    for section in (*tables.TABLE_KEYS, *loader.SECTIONS, *loader.EXPANDED_SECTIONS):
         assert f"`[{section}" in text, f"model table [{section}] missing"
 
 
