@@ -221,7 +221,7 @@ def select_effects(
         lof = lack_of_fit(obs.dim, r, obs.n, n_static, alpha) if n_cyc >= 2 else None
         cands = tested(specs, gain_d, Q, r, Z, obs, n_cyc, lof, rss0, df0) + set_cands
         if gain_r is not None and slope_r is not None:
-            rel = _relation_candidate(layout, obs, gain_r, slope_r, active_rel, r, rss0, df0, by_cycle, lof)
+            rel = relation_candidate(layout, obs, gain_r, slope_r, active_rel, r, rss0, df0, by_cycle, lof)
             if rel is not None:
                 cands.append(rel)
         # ranked by what each explains (cell-level p-value), accepted on the per-cycle test at α / m
@@ -332,7 +332,7 @@ def select_effects(
     return Selection(tuple(found), tuple(steps), tuple(dict.fromkeys(unident)), tuple(notes), lack)
 
 
-def _relation_candidate(
+def relation_candidate(
     layout: Layout,
     obs: Observations,
     gain_r: Array,
