@@ -1,4 +1,4 @@
-"""``setupfix correct`` against the goldens the tree wrote before issue 20 (tests/pipeline/data).
+"""``setupfix correct`` against the goldens the tree wrote before issue 20 (tests/usecases/data).
 
 JSON, text and offsets of the guide-pins cycles 1–5 (plain; costs and every safety setting;
 [effects] drift, wear and a relation; EWMA over a store) and the controllers sample with its

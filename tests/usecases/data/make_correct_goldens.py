@@ -1,6 +1,6 @@
 """Write the goldens of ``setupfix correct`` (JSON, text, offsets) for the guide-pins cycles 1–5.
 
-Run from the repository root: ``PYTHONPATH=$PWD python tests/pipeline/data/make_correct_goldens.py``
+Run from the repository root: ``PYTHONPATH=$PWD python tests/usecases/data/make_correct_goldens.py``
 (``PYTHONPATH`` at a checkout of the tree the goldens should come from).
 The goldens were written by the tree *before* issue 20 (one use-case core) changed anything,
 so the test comparing with them pins that the refactoring kept every number.  Wall times

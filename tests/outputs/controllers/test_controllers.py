@@ -1,7 +1,7 @@
 """Controller formats: golden files, absolute output is idempotent, inexpressible registers refused.
 
 Regenerate the goldens after a deliberate change with
-``PYTHONPATH=. python tests/pipeline/test_controllers.py`` and review the diff.
+``PYTHONPATH=. python tests/outputs/controllers/test_controllers.py`` and review the diff.
 """
 
 from __future__ import annotations
@@ -20,9 +20,9 @@ from setupfix.outputs.controllers import CONTROLLERS, render
 from setupfix.usecases.correct import correct_report
 from setupfix.usecases.requests import CorrectRequest, SolveOptions
 
-ROOT = Path(__file__).resolve().parents[2]
+ROOT = Path(__file__).resolve().parents[3]
 SAMPLE = ROOT / "sample_reports" / "controllers"
-GOLDEN = Path(__file__).resolve().parent / "golden" / "controllers"
+GOLDEN = Path(__file__).resolve().parent / "golden"
 
 
 MODEL = load_model(SAMPLE / "model.toml")

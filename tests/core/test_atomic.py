@@ -16,7 +16,7 @@ import pytest
 from setupfix.core.atomic import STALE_AGE_S, atomic_write, check_target, write_text
 from setupfix.core.errors import ExportError
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 
 
 def test_failure_leaves_old_content_and_no_temp(tmp_path):
