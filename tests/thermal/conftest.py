@@ -4,9 +4,13 @@ from __future__ import annotations
 
 import os
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pytest
+
+if TYPE_CHECKING:
+    from setupfix.thermal.simulator import SimulatedRun
 
 SHARED = Path(os.environ.get("SETUPFIX_SHARED", Path(__file__).resolve().parents[3] / "shared"))
 SAMPLES = Path(__file__).resolve().parents[2] / "sample_reports" / "thermal"
@@ -21,7 +25,7 @@ def shared_path(*parts: str) -> Path:
 
 
 @pytest.fixture(scope="session")
-def sim_runs():
+def sim_runs() -> tuple[SimulatedRun, SimulatedRun]:
     """Two simulated runs (4 h at 10 s): variable-speed training and test.
 
     Shorter training logs leave the noise ratio N/R of the fusion model unconstrained

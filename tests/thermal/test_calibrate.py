@@ -2,19 +2,29 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
 import pytest
 
-from setupfix.thermal.calibrate import cuckoo_search, genetic_algorithm, mantegna_sigma, particle_swarm
+from setupfix.thermal.calibrate import (
+    Array,
+    SearchResult,
+    cuckoo_search,
+    genetic_algorithm,
+    mantegna_sigma,
+    particle_swarm,
+)
 
 SHIFT = np.array([1.5, -2.0, 0.5, 3.0])
 
 
-def sphere(pop):
-    return np.sum((pop - SHIFT) ** 2, axis=1)
+def sphere(pop: Array) -> Array:
+    values: Array = np.sum((pop - SHIFT) ** 2, axis=1)
+    return values
 
 
-def test_mantegna_sigma():
+def test_mantegna_sigma() -> None:
     assert mantegna_sigma(1.5) == pytest.approx(0.6966, abs=1e-4)
 
 
@@ -26,7 +36,9 @@ def test_mantegna_sigma():
         (genetic_algorithm, {"pop_size": 40, "n_gen": 200, "p_mutation": 0.1}, 1e-1),
     ],
 )
-def test_finds_shifted_sphere_minimum(search, kwargs, tol):
+def test_finds_shifted_sphere_minimum(
+    search: Callable[..., SearchResult], kwargs: dict[str, float], tol: float
+) -> None:
     lo, hi = np.full(4, -10.0), np.full(4, 10.0)
     res = search(sphere, lo, hi, rng=np.random.default_rng(0), **kwargs)
     assert res.fun < tol
@@ -36,11 +48,11 @@ def test_finds_shifted_sphere_minimum(search, kwargs, tol):
 
 
 @pytest.mark.parametrize("search", [cuckoo_search, particle_swarm, genetic_algorithm])
-def test_bounds_and_reproducibility(search):
+def test_bounds_and_reproducibility(search: Callable[..., SearchResult]) -> None:
     lo, hi = np.zeros(4), np.ones(4)  # optimum outside the box: the answer sits on its edge
-    seen = []
+    seen: list[Array] = []
 
-    def objective(pop):
+    def objective(pop: Array) -> Array:
         seen.append(pop.copy())
         return sphere(pop)
 
@@ -52,7 +64,7 @@ def test_bounds_and_reproducibility(search):
     np.testing.assert_allclose(a.x, [1.0, 0.0, 0.5, 1.0], atol=0.1)
 
 
-def test_paper_evaluation_counts():
+def test_paper_evaluation_counts() -> None:
     lo, hi = np.full(2, -1.0), np.full(2, 1.0)
     cs = cuckoo_search(sphere_2 := (lambda p: np.sum(p * p, axis=1)), lo, hi, rng=np.random.default_rng(0))
     assert cs.n_evaluations == 25 + 2 * 25 * 100 and cs.history.size == 101
@@ -60,9 +72,9 @@ def test_paper_evaluation_counts():
     assert pso.n_evaluations == 25 + 25 * 100
 
 
-def test_infinite_objective_values_lose():
-    def objective(pop):
-        out = np.sum(pop * pop, axis=1)
+def test_infinite_objective_values_lose() -> None:
+    def objective(pop: Array) -> Array:
+        out: Array = np.sum(pop * pop, axis=1)
         out[pop[:, 0] > 0] = np.inf  # a diverging half of the box
         return out
 

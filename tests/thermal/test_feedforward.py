@@ -13,6 +13,7 @@ from setupfix.inputs.thermal_files import load_model
 from setupfix.model import load_model as load_process_model
 from setupfix.thermal import prediction as pipe
 from setupfix.thermal.feedforward import drift_change, feed_forward, sample_at_or_before
+from setupfix.thermal.persist import SavedModel
 from setupfix.usecases import thermal_fit
 from setupfix.usecases.thermal_feedforward import thermal_feed_forward
 
@@ -21,7 +22,7 @@ SAMPLES = ROOT / "sample_reports" / "thermal"
 GUIDE_PINS = ROOT / "sample_reports" / "guide_pins" / "model.toml"
 
 
-def test_join_at_or_before_and_change_since_measured():
+def test_join_at_or_before_and_change_since_measured() -> None:
     times = np.array([0.0, 10.0, 20.0, 30.0])
     drift = np.array([0.0, 1.0, 3.0, 6.0])
     np.testing.assert_array_equal(sample_at_or_before(times, [-1, 0, 9.9, 10, 35]), [-1, 0, 0, 1, 3])
@@ -34,7 +35,7 @@ def test_join_at_or_before_and_change_since_measured():
         drift_change(drift, times, 25.0, at=12.0)
 
 
-def test_feed_forward_sign_grid_and_dead_band():
+def test_feed_forward_sign_grid_and_dead_band() -> None:
     moves = np.array([False, True, True])
     np.testing.assert_allclose(feed_forward(4.2, moves, factor=1e-3, resolution=0.001), [0, -0.004, -0.004])
     np.testing.assert_allclose(feed_forward(-2.6, moves, factor=1e-3, resolution=0.001), [0, 0.003, 0.003])
@@ -43,12 +44,12 @@ def test_feed_forward_sign_grid_and_dead_band():
 
 
 @pytest.fixture(scope="module")
-def fitted():
+def fitted() -> SavedModel:
     log = read_temperature_log(SAMPLES / "train_variable.csv")
     return thermal_fit.fit_log(log, "mra", target="error_z", inputs=["spindle_motor", "bearing"], unit="mm").saved
 
 
-def test_guide_pins_feed_forward_on_a_simulated_log(fitted):
+def test_guide_pins_feed_forward_on_a_simulated_log(fitted: SavedModel) -> None:
     model = load_process_model(GUIDE_PINS)
     log = read_temperature_log(SAMPLES / "test_variable.csv")
     drift = pipe.predict_log(fitted, log)[0]
@@ -66,7 +67,7 @@ def test_guide_pins_feed_forward_on_a_simulated_log(fitted):
     assert later.delta == pytest.approx(drift[-1] - drift[100])
 
 
-def test_unit_conversion_and_refusals(fitted):
+def test_unit_conversion_and_refusals(fitted: SavedModel) -> None:
     model = load_process_model(GUIDE_PINS)
     log = read_temperature_log(SAMPLES / "test_variable.csv")
     in_um = thermal_fit.fit_log(
@@ -94,7 +95,9 @@ def test_unit_conversion_and_refusals(fitted):
         thermal_feed_forward(model, fitted_x, log, measured_at=log.timestamps[100])
 
 
-def test_correct_with_thermal_feed_forward(tmp_path, monkeypatch, capsys):
+def test_correct_with_thermal_feed_forward(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
     """``setupfix correct --thermal --temperatures``: the guide-pins cycle cut at 08:00, corrected at 09:00."""
     import json
 

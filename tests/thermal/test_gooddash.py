@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
+import numpy.typing as npt
 import pandas as pd
 from conftest import shared_path
 
@@ -14,12 +15,12 @@ from setupfix.thermal.metrics import score
 SENSITIVE = [2, 6, 9, 12, 19, 20]  # the repo's own temperature-sensitive points (SOURCES.md)
 
 
-def run(i: int, cols=SENSITIVE):
+def run(i: int, cols: list[int] = SENSITIVE) -> tuple[npt.NDArray[np.float64], npt.NDArray[np.float64]]:
     frame = pd.read_csv(shared_path("thermal-data", "gooddash", f"data_ex{i}.csv"))
     return frame.iloc[:, cols].to_numpy(), frame["E"].to_numpy()
 
 
-def test_unconstrained_ls_diverges_and_the_bound_prevents_it():
+def test_unconstrained_ls_diverges_and_the_bound_prevents_it() -> None:
     """Notes §4.3 pitfall 1: two sensors, ex1 -> ex2, LS gives b1 < 0 and a useless response."""
     Xtr, ytr = run(1, [2, 6])
     Xte, yte = run(2, [2, 6])
@@ -30,7 +31,7 @@ def test_unconstrained_ls_diverges_and_the_bound_prevents_it():
     assert np.all(np.isfinite(pred)) and np.abs(pred).max() < 1e3
 
 
-def test_mra_and_grey_cs_on_real_runs():
+def test_mra_and_grey_cs_on_real_runs() -> None:
     Xtr, ytr = run(1)
     Xte, yte = run(2)
     mra = score(yte, MRAModel().fit(Xtr, ytr).predict(Xte))

@@ -10,14 +10,14 @@ import pytest
 from setupfix.thermal import grey
 
 
-def test_ago_iago_background_by_hand():
+def test_ago_iago_background_by_hand() -> None:
     x = np.array([1.0, 2.0, 4.0])
     assert grey.ago(x).tolist() == [1.0, 3.0, 7.0]
     assert grey.iago([1.0, 3.0, 7.0]).tolist() == [1.0, 2.0, 4.0]
     assert grey.background([1.0, 3.0, 7.0]).tolist() == [2.0, 5.0]
 
 
-def test_gmc_design_by_hand():
+def test_gmc_design_by_hand() -> None:
     y = [1.0, 2.0, 3.0]
     X = [[1.0], [1.0], [2.0]]
     B, Y = grey.gmc_design(y, X)
@@ -28,7 +28,7 @@ def test_gmc_design_by_hand():
     np.testing.assert_allclose(B, [[-2.0, 2.0], [-4.5, 4.0]])
 
 
-def test_gmc_response_hand_computed_three_samples():
+def test_gmc_response_hand_computed_three_samples() -> None:
     # b1 = ln 2 (decay 1/2), b2 = 1, u = 0, y0 = 1, drivers all 1 -> f = X1 = [1, 2, 3].
     theta = [math.log(2.0), 1.0, 0.0]
     X1 = [[1.0], [2.0], [3.0]]
@@ -41,7 +41,7 @@ def test_gmc_response_hand_computed_three_samples():
 
 
 @pytest.mark.parametrize("form", ["trapezoid", "tien"])
-def test_gmc_response_matches_direct_sums(form):
+def test_gmc_response_matches_direct_sums(form: grey.ResponseForm) -> None:
     rng = np.random.default_rng(3)
     n = 12
     X1 = grey.ago(rng.normal(1.0, 0.5, (n, 2)))
@@ -70,7 +70,7 @@ TIEN_X = np.array([1931, 1724, 1517, 1345, 1207, 1069, 952, 848, 745, 669], dtyp
 
 
 @pytest.mark.parametrize(("form", "fit_mape", "forecast_mape"), [("tien", 1.21, 1.11), ("trapezoid", 1.91, 0.51)])
-def test_tien_published_example(form, fit_mape, forecast_mape):
+def test_tien_published_example(form: grey.ResponseForm, fit_mape: float, forecast_mape: float) -> None:
     theta = grey.gmc_least_squares(TIEN_X[:5], TIEN_V[:5, None])
     np.testing.assert_allclose(theta, [0.3652, 0.8299, 2085.9], rtol=2e-4)
     pred = grey.gmc_predict(theta, TIEN_X[0], TIEN_V[:, None], form=form)
@@ -79,7 +79,7 @@ def test_tien_published_example(form, fit_mape, forecast_mape):
     assert ape[5:].mean() == pytest.approx(forecast_mape, abs=0.005)
 
 
-def test_gm1n_response_by_hand():
+def test_gm1n_response_by_hand() -> None:
     b1 = math.log(2.0)
     theta = [b1, 1.0]
     X1 = np.array([[1.0], [2.0], [3.0]])
@@ -90,7 +90,7 @@ def test_gm1n_response_by_hand():
 
 
 @pytest.mark.parametrize("form", ["trapezoid", "tien"])
-def test_least_squares_recovers_parameters_of_simulated_series(form):
+def test_least_squares_recovers_parameters_of_simulated_series(form: grey.ResponseForm) -> None:
     rng = np.random.default_rng(0)
     X = np.cumsum(rng.normal(0.5, 0.3, (60, 2)), axis=0)
     truth = np.array([0.3, 0.8, -0.4, 1.5])
@@ -99,7 +99,7 @@ def test_least_squares_recovers_parameters_of_simulated_series(form):
     np.testing.assert_allclose(grey.gmc_least_squares(y, X), truth, rtol=0.06)
 
 
-def test_lag_drivers():
+def test_lag_drivers() -> None:
     X = np.array([[1.0], [2.0], [3.0], [4.0]])
     assert grey.lag_drivers(X, 2)[:, 0].tolist() == [1.0, 1.0, 1.0, 2.0]
     assert grey.lag_drivers(X, 0)[:, 0].tolist() == [1.0, 2.0, 3.0, 4.0]
@@ -107,7 +107,7 @@ def test_lag_drivers():
         grey.lag_drivers(X, -1)
 
 
-def test_delay_shifts_the_prediction():
+def test_delay_shifts_the_prediction() -> None:
     X = np.zeros((8, 1))
     X[3:] = 1.0
     theta = [0.5, 1.0, 0.0]

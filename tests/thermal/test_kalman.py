@@ -8,10 +8,11 @@ import numpy as np
 import pytest
 
 from setupfix.thermal import kalman
+from setupfix.thermal.kalman import Array
 from setupfix.thermal.lumped import lumped_simulate
 
 
-def test_golden_ratio_steady_state():
+def test_golden_ratio_steady_state() -> None:
     # A = 1, N = R = 1: P² - P - 1 = 0 -> P = φ, K = φ/(φ+1) = 1/φ.
     phi = (1 + math.sqrt(5)) / 2
     P, K = kalman.steady_state(1.0, 1.0, 1.0)
@@ -20,8 +21,9 @@ def test_golden_ratio_steady_state():
 
 
 @pytest.mark.parametrize(("A", "N", "R"), [(0.99, 0.01, 1.0), (0.5, 2.0, 0.3), (0.999, 1e-5, 0.04)])
-def test_iterated_filter_reaches_closed_form(A, N, R):
-    x, P = 0.0, 10.0
+def test_iterated_filter_reaches_closed_form(A: float, N: float, R: float) -> None:
+    x: float | Array = 0.0
+    P: float | Array = 10.0
     for _ in range(20000):
         x, P_prior = kalman.predict(x, P, A, 1 - A, 20.0, 0.0, N)
         x, P, K = kalman.update(x, P_prior, 20.0, R)
@@ -32,12 +34,13 @@ def test_iterated_filter_reaches_closed_form(A, N, R):
     assert float(A * A * (P_inf - K_inf * P_inf) + N) == pytest.approx(float(P_inf), rel=1e-12)
 
 
-def test_estimates_depend_only_on_the_ratio():
+def test_estimates_depend_only_on_the_ratio() -> None:
     rng = np.random.default_rng(0)
     z = 20 + rng.normal(0, 0.5, 50)
     out = []
     for scale in (1.0, 7.5):
-        x, P = z[0], 1.0 * scale
+        x = z[0]
+        P: float | Array = 1.0 * scale
         xs = []
         for zj in z[1:]:
             x, P = kalman.predict(x, P, 0.95, 0.05, 20.0, 0.1, 0.01 * scale)
@@ -47,7 +50,7 @@ def test_estimates_depend_only_on_the_ratio():
     np.testing.assert_allclose(out[0], out[1], rtol=1e-12)
 
 
-def _setup(n=200):
+def _setup(n: int = 200) -> tuple[Array, Array, Array, Array, Array, Array]:
     rng = np.random.default_rng(2)
     te = np.full(n, 20.0)
     A, B = np.array([0.98, 0.99]), np.array([0.02, 0.01])
@@ -56,7 +59,7 @@ def _setup(n=200):
     return te, A, B, C, truth, truth + rng.normal(0, 0.3, truth.shape)
 
 
-def test_fusion_reduces_noise():
+def test_fusion_reduces_noise() -> None:
     te, A, B, C, truth, measured = _setup()
     fused, gain = kalman.fuse(measured, te, A, B, C, q=np.array([1e-3, 1e-3]))
     err_f = np.sqrt(np.mean((fused - truth)[50:] ** 2))
@@ -65,7 +68,7 @@ def test_fusion_reduces_noise():
     np.testing.assert_allclose(gain[-1], kalman.steady_state(A, 1e-3)[1], rtol=1e-4)
 
 
-def test_jump_sets_gain_to_zero_and_follows_the_model():
+def test_jump_sets_gain_to_zero_and_follows_the_model() -> None:
     te, A, B, C, truth, measured = _setup()
     broken = measured.copy()
     broken[120:, 0] = -200.0  # open PT100
@@ -77,7 +80,7 @@ def test_jump_sets_gain_to_zero_and_follows_the_model():
     assert abs(fused[-1, 0] - truth[-1, 0]) < 1.0
 
 
-def test_missing_reading_gets_zero_gain_for_that_sample_only():
+def test_missing_reading_gets_zero_gain_for_that_sample_only() -> None:
     te, A, B, C, _, measured = _setup()
     gapped = measured.copy()
     gapped[60, 1] = np.nan
@@ -85,7 +88,7 @@ def test_missing_reading_gets_zero_gain_for_that_sample_only():
     assert gain[60, 1] == 0 and gain[61, 1] > 0
 
 
-def test_streaming_matches_batch():
+def test_streaming_matches_batch() -> None:
     te, A, B, C, _, measured = _setup()
     measured[150:, 1] = 90.0
     q = np.array([1e-3, 1e-2])
@@ -94,4 +97,4 @@ def test_streaming_matches_batch():
     stream = np.array([f.step(measured[j], te[j], C[:, j]) for j in range(len(te))])
     np.testing.assert_allclose(stream, fused, rtol=1e-12)
     assert f.failed.tolist() == [False, True]
-    assert f.x_post is not None and f.P_prior.shape == (2,)
+    assert f.x_post is not None and np.shape(f.P_prior) == (2,)

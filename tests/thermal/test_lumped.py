@@ -16,7 +16,7 @@ from setupfix.thermal.lumped import (
 from setupfix.thermal.simulator import HeatSource, MachineConfig, simulate, speed_profile
 
 
-def test_simulate_matches_eq4_loop():
+def test_simulate_matches_eq4_loop() -> None:
     rng = np.random.default_rng(0)
     n = 30
     te = 20 + rng.normal(0, 0.1, n)
@@ -30,21 +30,21 @@ def test_simulate_matches_eq4_loop():
     assert float(A + B) == pytest.approx(1.0)
 
 
-def test_steady_state_rise():
+def test_steady_state_rise() -> None:
     n = 4000
     A, B, C = lumped_coefficients(0.01, 0.03, 0.0, heat_inputs(np.full(n, 2000.0)))
     T = lumped_simulate(A, B, C, np.full(n, 20.0), 20.0)
     assert T[-1] == pytest.approx(20.0 + 0.03 * 2.0 / 0.01, rel=1e-6)  # rise = v2 n / v1
 
 
-def test_gearbox_ratio_steps():
+def test_gearbox_ratio_steps() -> None:
     box = Gearbox((750.0,), (1102 / 2263, 464 / 3796))
     np.testing.assert_allclose(box.ratio([0, 700, 750, 3000]), [1102 / 2263] * 2 + [464 / 3796] * 2)
     with pytest.raises(ValueError):
         Gearbox((750.0,), (1.0,))
 
 
-def test_equation_error_exact_on_noise_free_data():
+def test_equation_error_exact_on_noise_free_data() -> None:
     speed = speed_profile("variable", 300, rng=np.random.default_rng(3))
     te = np.full(300, 20.0)
     heat = heat_inputs(speed)
@@ -53,7 +53,7 @@ def test_equation_error_exact_on_noise_free_data():
     np.testing.assert_allclose(lumped_equation_error(T, te, heat), [0.004, 0.02], rtol=1e-6)
 
 
-def test_ga_recovers_simulated_machine():
+def test_ga_recovers_simulated_machine() -> None:
     cfg = MachineConfig(sources=(HeatSource("s", tau_s=1500.0, rise_per_krpm=4.0, error_mm_per_k=0.004),))
     run = simulate(speed_profile("variable", 600, rng=np.random.default_rng(4)), cfg, seed=4)
     fr = run.frame

@@ -3,23 +3,27 @@
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
 import numpy as np
+import pandas as pd
 import pytest
 
 from setupfix.core.errors import NotFittedError, ParseError
 from setupfix.inputs.thermal_files import load_model, save_model
-from setupfix.thermal.estimator import MRAModel
+from setupfix.thermal.estimator import Array, MRAModel
 from setupfix.thermal.grey_model import GreyModel
 from setupfix.thermal.kalman_model import KalmanFusionModel
 from setupfix.thermal.metrics import efficiency, max_residual, rmse, rmsv, score
 from setupfix.thermal.persist import SavedModel
-from setupfix.thermal.simulator import add_sensor_error, fail_sensor, sinusoidal_error
+from setupfix.thermal.simulator import SimulatedRun, add_sensor_error, fail_sensor, sinusoidal_error
 
 SENSORS = ["spindle_motor", "bearing"]
+SimRuns = tuple[SimulatedRun, SimulatedRun]  # the sim_runs fixture: training and test
+Fitted = tuple[KalmanFusionModel, MRAModel]  # the fitted fixture
 
 
-def arrays(frame):
+def arrays(frame: pd.DataFrame) -> tuple[Array, Array, Array, Array]:
     return (
         frame[SENSORS].to_numpy(),
         frame["error_z"].to_numpy(),
@@ -28,7 +32,7 @@ def arrays(frame):
     )
 
 
-def test_metrics_by_hand():
+def test_metrics_by_hand() -> None:
     e, p = np.array([1.0, 2.0, 3.0]), np.array([1.0, 3.0, 2.0])
     assert rmse(e, p) == pytest.approx(np.sqrt(2 / 3))
     assert rmsv(e, p) == pytest.approx(1.0)
@@ -38,7 +42,7 @@ def test_metrics_by_hand():
     assert s.n == 3 and s.rmse == pytest.approx(np.sqrt(2 / 3))
 
 
-def test_mra_recovers_exact_coefficients():
+def test_mra_recovers_exact_coefficients() -> None:
     rng = np.random.default_rng(0)
     T = 20 + np.cumsum(rng.random((40, 2)), axis=0)
     y = (T - T[0]) @ [0.004, -0.002]
@@ -48,12 +52,12 @@ def test_mra_recovers_exact_coefficients():
     np.testing.assert_allclose(m.predict(T + 5.0, y0=y[0]), y, atol=1e-12)  # re-based on a measured error
 
 
-def test_predict_before_fit_raises():
+def test_predict_before_fit_raises() -> None:
     with pytest.raises(NotFittedError):
         MRAModel().predict(np.zeros((3, 1)))
 
 
-def test_grey_ls_keeps_development_coefficient_positive():
+def test_grey_ls_keeps_development_coefficient_positive() -> None:
     k = np.arange(20.0)
     y = 2.0 ** (k / 4) - 1  # growing series: unconstrained LS gives b1 < 0
     X = np.column_stack([k, np.ones(20)])
@@ -65,7 +69,7 @@ def test_grey_ls_keeps_development_coefficient_positive():
     assert np.all(np.isfinite(m.predict(np.vstack([X, X]), y0=0.0)))
 
 
-def test_grey_cs_fits_its_own_model():
+def test_grey_cs_fits_its_own_model() -> None:
     rng = np.random.default_rng(1)
     X = np.cumsum(rng.normal(0.5, 0.3, (80, 2)), axis=0)
     from setupfix.thermal.grey import gmc_predict
@@ -77,7 +81,7 @@ def test_grey_cs_fits_its_own_model():
     np.testing.assert_allclose(m.theta_, truth, rtol=1e-3)
 
 
-def test_kalman_fusion_recovers_lumped_parameters(fitted, sim_runs):
+def test_kalman_fusion_recovers_lumped_parameters(fitted: Fitted, sim_runs: SimRuns) -> None:
     train, _ = sim_runs
     T, y, te, sp = arrays(train.frame)
     m = fitted[0]
@@ -90,13 +94,13 @@ def test_kalman_fusion_recovers_lumped_parameters(fitted, sim_runs):
 
 
 @pytest.fixture(scope="module")
-def fitted(sim_runs):
+def fitted(sim_runs: SimRuns) -> Fitted:
     train, _ = sim_runs
     T, y, te, sp = arrays(train.frame)
     return (KalmanFusionModel(seed=0, generations=20).fit(T, y, ambient=te, speed=sp), MRAModel().fit(T, y))
 
 
-def test_robustness_to_sinusoidal_sensor_error(fitted, sim_runs):
+def test_robustness_to_sinusoidal_sensor_error(fitted: Fitted, sim_runs: SimRuns) -> None:
     """Wang (2017) §4: eq. (18) on the motor sensor raises the fused model's RMSV less than MRA's."""
     kf, mra = fitted
     _, test = sim_runs
@@ -110,7 +114,7 @@ def test_robustness_to_sinusoidal_sensor_error(fitted, sim_runs):
     assert growth_kf < 0.5 * growth_mra
 
 
-def test_prediction_with_failed_sensors(fitted, sim_runs):
+def test_prediction_with_failed_sensors(fitted: Fitted, sim_runs: SimRuns) -> None:
     kf, _ = fitted
     _, test = sim_runs
     T, y, te, sp = arrays(test.frame)
@@ -122,7 +126,7 @@ def test_prediction_with_failed_sensors(fitted, sim_runs):
     assert np.all(np.isfinite(pred)) and score(y, pred).efficiency > 0.8
 
 
-def test_streaming_prediction_matches_batch(fitted, sim_runs):
+def test_streaming_prediction_matches_batch(fitted: Fitted, sim_runs: SimRuns) -> None:
     kf, _ = fitted
     _, test = sim_runs
     T, y, te, sp = arrays(test.frame)
@@ -132,7 +136,7 @@ def test_streaming_prediction_matches_batch(fitted, sim_runs):
 
 
 @pytest.mark.parametrize("kind", ["mra", "grey", "kalman"])
-def test_json_round_trip(kind, fitted, sim_runs, tmp_path):
+def test_json_round_trip(kind: str, fitted: Fitted, sim_runs: SimRuns, tmp_path: Path) -> None:
     _, test = sim_runs
     T, y, te, sp = arrays(test.frame)
     model = {
@@ -143,8 +147,10 @@ def test_json_round_trip(kind, fitted, sim_runs, tmp_path):
     path = tmp_path / "m.json"
     save_model(SavedModel(model, tuple(SENSORS), "error_z", "ambient", "spindle_speed", 10.0), path)
     back = load_model(path)
-    kw = {"ambient": te, "speed": sp} if kind == "kalman" else {}
-    np.testing.assert_allclose(back.model.predict(T, **kw), model.predict(T, **kw), rtol=1e-12)
+    ambient, speed = (te, sp) if kind == "kalman" else (None, None)
+    np.testing.assert_allclose(
+        back.model.predict(T, ambient=ambient, speed=speed), model.predict(T, ambient=ambient, speed=speed), rtol=1e-12
+    )
     assert back.inputs == tuple(SENSORS) and back.sample_interval_s == 10.0
     doc = json.loads(path.read_text())
     doc["version"] = 99
