@@ -1,4 +1,4 @@
-"""Lint and type gates: ``ruff check .`` and mypy (settings in pyproject.toml) report nothing.
+"""Lint, format and type gates: ``ruff check .``, ``ruff format --check .`` and mypy report nothing.
 
 CI runs both as steps of their own in ``.ci/run`` (which sets ``CI``), before the suite; here
 they run only when ``CI`` is unset, so a developer's plain ``pytest`` still checks them and CI
@@ -25,6 +25,11 @@ def _run(*args: str) -> subprocess.CompletedProcess[str]:
 
 def test_ruff_finds_nothing() -> None:
     out = _run("ruff", "check", "--no-cache", ".")
+    assert out.returncode == 0, out.stdout[-4000:] + out.stderr[-2000:]
+
+
+def test_ruff_format_changes_nothing() -> None:
+    out = _run("ruff", "format", "--check", "--no-cache", ".")
     assert out.returncode == 0, out.stdout[-4000:] + out.stderr[-2000:]
 
 
