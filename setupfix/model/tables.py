@@ -20,7 +20,16 @@ from setupfix.model.process import Dimension, Feature, Register, RegisterKind
 from setupfix.model.safety import REGISTER_KEYS, parse_register_policy
 from setupfix.model.validate import Problems, Ranges, control_free, number, section_of, show, table_of, weights
 
-__all__ = ["MAX_STEPS"]
+__all__ = [
+    "MAX_STEPS",
+    "FREE_TEXT",
+    "TABLE_KEYS",
+    "check_keys",
+    "register_rows",
+    "check_resolution",
+    "report_in",
+    "dimension_rows",
+]
 
 #: Bound on ``limit / resolution``: register steps one correction may span.
 MAX_STEPS = 100_000
