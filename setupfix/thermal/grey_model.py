@@ -34,8 +34,7 @@ class GreyModel(ThermalModel):
     static regression ``½ Σ_j b_j x_j^{(0)}(k)`` after two or three samples, and b1, u and
     the initial value stop mattering.  Tien's form (``form="tien"``) weights every
     interval by ``e^{-b1/2}`` and has no such floor: at large b1 its response vanishes,
-    so its calibration is driven to a b1 where the dynamics matter
-    (``bench/thermal_grey_forms.py`` compares both).
+    so its calibration is driven to a b1 where the dynamics matter.
 
     Parameters
     ----------
