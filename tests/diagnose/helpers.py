@@ -3,11 +3,13 @@
 from __future__ import annotations
 
 import tomllib
+from collections.abc import Iterable
+from typing import Any, TypedDict, Unpack
 
 import numpy as np
 from conftest import GUIDE_PINS
 
-from setupfix.diagnose import EffectSpec, HiddenEffect, Layout, ShopSimulator
+from setupfix.diagnose import EffectSpec, HiddenEffect, Layout, ShopSimulator, SimulatedSeries
 from setupfix.diagnose.shop import random_topology
 from setupfix.model import ProcessModel, model_from_dict
 
@@ -15,7 +17,27 @@ NOISE = 0.002
 EXPANDED = GUIDE_PINS.parents[1] / "tests" / "model" / "data" / "guide_pins_expanded.toml"
 
 
-def guide_pins_doc(positions: bool = True) -> dict:
+class SimulatorParams(TypedDict, total=False):
+    """The keyword parameters of :class:`ShopSimulator` (the seed apart)."""
+
+    n_cycles: int
+    noise: float
+    setup_error: float
+    cycle_minutes: float
+    shift_cycles: int
+    pause_hours: float
+    correct_every: int
+    dead_time: float
+    gain: float
+    tool_change_every: int
+    heat: float
+    sparse: int
+    decimals: int
+    process: int
+    part_noise: float
+
+
+def guide_pins_doc(positions: bool = True) -> dict[str, Any]:
     """The bundled guide-pins model; with positions, part p sits at x = 150 (p − 1), feature f at +20 f."""
     doc = tomllib.loads(EXPANDED.read_text(encoding="utf-8"))  # the sample written table by table
     if positions:
@@ -58,6 +80,8 @@ def one_effect(layout: Layout, kind: str, scale: float = 1.0) -> HiddenEffect:
     raise KeyError(kind)
 
 
-def simulate(layout: Layout, effects=(), seed: int = 0, **params):
-    params = {"n_cycles": 40, "noise": NOISE, **params}
-    return ShopSimulator(seed=seed, **params).run(layout, tuple(effects))
+def simulate(
+    layout: Layout, effects: Iterable[HiddenEffect] = (), seed: int = 0, **params: Unpack[SimulatorParams]
+) -> SimulatedSeries:
+    given: SimulatorParams = {"n_cycles": 40, "noise": NOISE, **params}
+    return ShopSimulator(seed=seed, **given).run(layout, tuple(effects))

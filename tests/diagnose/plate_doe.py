@@ -16,6 +16,8 @@ Checked against statsmodels (OLS, ``anova_lm``, MANOVA) in a scratch analysis: t
 
 from __future__ import annotations
 
+from typing import TypedDict
+
 import numpy as np
 import scipy.stats
 
@@ -27,6 +29,18 @@ LONG = "doe_tool_length=Long"
 OPERATOR = "doe_tool_length=Operator"
 SPEEDS = ("doe_speed=High", "doe_speed=Medium", "doe_speed=Low")
 RPM = "endmill_rpm"
+
+
+class SpeedTest(TypedDict):
+    """One tool register's row of :func:`speed_tests`."""
+
+    register: str
+    p_speed: float
+    p_interaction: float
+    slope: float
+    t: float
+    p_slope: float
+    df_slope: int
 
 
 def channel(series: Series, name: str) -> np.ndarray:
@@ -60,7 +74,7 @@ def nested_f(y: np.ndarray, small: np.ndarray, big: np.ndarray) -> tuple[float, 
     return f, df1, df2, float(scipy.stats.f.sf(f, df1, df2))
 
 
-def speed_tests(layout: Layout, series: Series) -> list[dict[str, float | str]]:
+def speed_tests(layout: Layout, series: Series) -> list[SpeedTest]:
     """Per tool register: the speed in the factorial (any effect of speed, and the stick-out × speed
     interaction), and within the long stick-out the slope on the logged speed [mm per 1000 rpm]."""
     y_all, names = part_means(layout, series)
@@ -73,7 +87,7 @@ def speed_tests(layout: Layout, series: Series) -> list[dict[str, float | str]]:
     cells = np.column_stack([additive, spd * long[:, None]])
     on = channel(series, LONG) == 1
     rpm = channel(series, RPM)[on] / 1000.0
-    out: list[dict[str, float | str]] = []
+    out: list[SpeedTest] = []
     for i, name in enumerate(names):
         y = y_all[doe, i]
         p_any = nested_f(y, stick, cells)[3]

@@ -28,7 +28,7 @@ MODEL = Path(__file__).parent / "data" / "nist_box.toml"
 pytestmark = pytest.mark.skipif(not (BOX.is_file() and LOG.is_file()), reason="the NIST box lives in the shared folder")
 
 
-def test_the_box_is_put_in_machining_order_by_its_log():
+def test_the_box_is_put_in_machining_order_by_its_log() -> None:
     inp = load_series(MODEL, (BOX,), process=str(LOG))
     s = inp.series
     assert s.n_cycles == 19 and s.origin.startswith("2017-02-02T18:48:03")
@@ -38,7 +38,7 @@ def test_the_box_is_put_in_machining_order_by_its_log():
 
 
 @pytest.mark.parametrize("with_log", [False, True])
-def test_nothing_is_found_on_the_box(with_log):
+def test_nothing_is_found_on_the_box(with_log: bool) -> None:
     out = diagnose_reports(DiagnoseRequest(MODEL, (BOX,), process=str(LOG) if with_log else None))
     d = out.diagnosis
     assert d.effects == ()
@@ -46,7 +46,7 @@ def test_nothing_is_found_on_the_box(with_log):
     assert d.error_after.rms == d.error_before.rms
 
 
-def test_shuffled_times_give_no_time_effect_on_the_box():
+def test_shuffled_times_give_no_time_effect_on_the_box() -> None:
     inp = load_series(MODEL, (BOX,), process=str(LOG))
     s = dataclasses.replace(inp.series, temperature=inp.series.temperature[:, :0], channels=(), process_channels=())
     for seed in range(3):

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import tomllib
+from pathlib import Path
 
 import pytest
 from conftest import GUIDE_PINS
@@ -14,14 +15,14 @@ MODEL = str(GUIDE_PINS / "model.toml")
 CONTRACT = {"cycles", "rms_before", "rms_after", "max_before", "max_after", "effects", "next_correction"}
 
 
-def run(capsys, *argv):
+def run(capsys: pytest.CaptureFixture[str], *argv: object) -> tuple[int, str, str]:
     code = main([str(a) for a in argv])
     out, err = capsys.readouterr()
     return code, out, err
 
 
 @pytest.fixture(scope="module")
-def series(tmp_path_factory):
+def series(tmp_path_factory: pytest.TempPathFactory) -> Path:
     out = tmp_path_factory.mktemp("series")
     code = main(
         [
@@ -42,7 +43,7 @@ def series(tmp_path_factory):
     return out
 
 
-def test_simulate_writes_the_canonical_files(series):
+def test_simulate_writes_the_canonical_files(series: Path) -> None:
     names = sorted(p.name for p in series.iterdir())
     assert names == ["corrections.csv", "measurements.csv", "temperatures.csv", "truth.json"]
     head = (series / "corrections.csv").read_text().splitlines()[0]
@@ -52,7 +53,7 @@ def test_simulate_writes_the_canonical_files(series):
     assert truth["hidden_effects"][0]["kind"] == "wear"
 
 
-def test_diagnose_json_contract_and_augment(series, tmp_path, capsys):
+def test_diagnose_json_contract_and_augment(series: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     aug = tmp_path / "aug.toml"
     code, out, err = run(
         capsys,
@@ -91,7 +92,9 @@ def test_diagnose_json_contract_and_augment(series, tmp_path, capsys):
     assert row["estimate"] == pytest.approx(-0.0309 + effects["E1"]["estimate"])  # what was corrected
 
 
-def test_bad_corrections_log_is_refused_with_its_line(series, tmp_path, capsys):
+def test_bad_corrections_log_is_refused_with_its_line(
+    series: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     bad = tmp_path / "log.csv"
     bad.write_text("timestamp,register,delta\n2026-11-02T06:00:00,W1,0.01\n2026-11-02T07:00:00,G99,0.01\n")
     aug = tmp_path / "aug.toml"
@@ -117,20 +120,22 @@ def test_bad_corrections_log_is_refused_with_its_line(series, tmp_path, capsys):
         "kind=drift,at=3,magnitude=0.001",
     ],
 )
-def test_simulate_refuses_bad_effects(effect, tmp_path, capsys):
+def test_simulate_refuses_bad_effects(effect: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     code, _out, err = run(capsys, "simulate", "--model", MODEL, "--out", tmp_path / "o", "--effect", effect)
     assert code == 1 and err.startswith("error: ") and err.count("\n") == 1
     assert not (tmp_path / "o").exists()
 
 
-def test_bad_timestamp_in_temperatures(series, tmp_path, capsys):
+def test_bad_timestamp_in_temperatures(series: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     bad = tmp_path / "temps.csv"
     bad.write_text("timestamp,spindle\n2026-11-02T06:00:00,20.1\nyesterday,20.2\n")
     code, _, err = run(capsys, "diagnose", "--model", MODEL, "--temperatures", bad, series / "measurements.csv")
     assert code == 1 and f"{bad}:3: timestamp 'yesterday' is not ISO 8601" in err  # the one log reader
 
 
-def test_diagnose_from_the_history_store_equals_the_files(series, tmp_path, capsys):
+def test_diagnose_from_the_history_store_equals_the_files(
+    series: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     db = tmp_path / "h.db"
     code = main(
         [
@@ -160,7 +165,7 @@ def test_diagnose_from_the_history_store_equals_the_files(series, tmp_path, caps
     assert rec.inputs["command"] == "diagnose" and rec.result["next_correction"] == a["next_correction"]
 
 
-def test_thermal_model_prediction_is_a_candidate_channel(tmp_path, capsys):
+def test_thermal_model_prediction_is_a_candidate_channel(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     """A thermal model saved by `thermal fit` enters as one more channel; here it is linear in the
     spindle temperature, so the report says the two cannot be told apart."""
     import numpy as np
@@ -217,7 +222,9 @@ def test_thermal_model_prediction_is_a_candidate_channel(tmp_path, capsys):
     }
 
 
-def test_a_series_without_its_corrections_log_says_so_and_names_the_log_beside_it(series, capsys):
+def test_a_series_without_its_corrections_log_says_so_and_names_the_log_beside_it(
+    series: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     code, out, err = run(capsys, "diagnose", "--model", MODEL, "--json", "--no-walk", series / "measurements.csv")
     assert code == 0, err
     notes = [n for n in json.loads(out)["notes"] if n.startswith("no corrections log")]
@@ -227,7 +234,7 @@ def test_a_series_without_its_corrections_log_says_so_and_names_the_log_beside_i
     assert not [n for n in json.loads(out)["notes"] if n.startswith("no corrections log")]
 
 
-def test_one_part_reported_twice_counts_once(tmp_path, capsys):
+def test_one_part_reported_twice_counts_once(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     """The bundled cycle 01 comes as CSV, DMIS and QIF: three files, one machined part.  Counted three
     times it made drift and wear look significant; it counts once, said in a note."""
     code, out, err = run(capsys, "diagnose", "--model", MODEL, "--json", "--no-walk", GUIDE_PINS)
@@ -253,7 +260,9 @@ def test_one_part_reported_twice_counts_once(tmp_path, capsys):
     )
 
 
-def test_diagnose_json_says_which_model_the_next_correction_comes_from(series, capsys):
+def test_diagnose_json_says_which_model_the_next_correction_comes_from(
+    series: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     """A real wear of T5: the augmented model beat EWMA on the centre distance with no more out of tolerance,
     so the next correction comes from it; the walk's centre scores are in the JSON."""
     code, out, err = run(
@@ -279,7 +288,9 @@ def test_diagnose_json_says_which_model_the_next_correction_comes_from(series, c
     assert all(doc["next_correction"].get(r, 0.0) == 0.0 for r in doc["held_centred"])
 
 
-def test_diagnose_text_prints_the_centre_scores_and_where_the_next_correction_comes_from(series, capsys):
+def test_diagnose_text_prints_the_centre_scores_and_where_the_next_correction_comes_from(
+    series: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     code, out, err = run(
         capsys,
         "diagnose",
@@ -311,7 +322,7 @@ def test_diagnose_text_prints_the_centre_scores_and_where_the_next_correction_co
     assert f"next correction from: {doc['next_from']} ({doc['next_from_reason']})" in out
 
 
-def test_simulate_level_step_at_a_cycle_is_found_there(tmp_path, capsys):
+def test_simulate_level_step_at_a_cycle_is_found_there(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     out = tmp_path / "s"
     code, _o, err = run(
         capsys,

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import dataclasses
 import tomllib
+from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -12,7 +14,7 @@ from conftest import GUIDE_PINS
 from setupfix.core.errors import ModelError
 from setupfix.diagnose import Layout
 from setupfix.diagnose.forecast import forecast_shift, relation_composite
-from setupfix.model import load_model, model_from_dict
+from setupfix.model import ProcessModel, load_model, model_from_dict
 from setupfix.model.effects import EffectsSection, ModelEffect, effects_from_dict
 from setupfix.model.effects_toml import with_effects
 
@@ -42,7 +44,9 @@ SECTION = EffectsSection(
 )
 
 
-def test_written_section_reloads_equal_and_the_model_still_loads(tmp_path, guide_pins_model):
+def test_written_section_reloads_equal_and_the_model_still_loads(
+    tmp_path: Path, guide_pins_model: ProcessModel
+) -> None:
     text = with_effects((GUIDE_PINS / "model.toml").read_text(encoding="utf-8"), SECTION)
     path = tmp_path / "aug.toml"
     path.write_text(text, encoding="utf-8")
@@ -52,7 +56,7 @@ def test_written_section_reloads_equal_and_the_model_still_loads(tmp_path, guide
     assert back == SECTION
 
 
-def test_augmenting_twice_replaces_the_section_and_keeps_the_rest():
+def test_augmenting_twice_replaces_the_section_and_keeps_the_rest() -> None:
     base = (GUIDE_PINS / "model.toml").read_text(encoding="utf-8")
     once = with_effects(base, SECTION)
     smaller = EffectsSection(SECTION.effects[:1], SECTION.origin, SECTION.cycle_hours, SECTION.last_hours)
@@ -76,13 +80,13 @@ def test_augmenting_twice_replaces_the_section_and_keeps_the_rest():
         ({"E1": {"kind": "drift", "shape": "saturating", "estimate": 1.0}}, "effects.E1.tau"),
     ],
 )
-def test_bad_effects_are_named_with_their_key(table, key, guide_pins_model):
+def test_bad_effects_are_named_with_their_key(table: dict[str, Any], key: str, guide_pins_model: ProcessModel) -> None:
     with pytest.raises(ModelError) as err:
         effects_from_dict(table, guide_pins_model, "m.toml")
     assert f"m.toml: [{key}]" in str(err.value)
 
 
-def test_forecast_shift_adds_drift_and_wear_until_the_next_cycle(guide_pins_model):
+def test_forecast_shift_adds_drift_and_wear_until_the_next_cycle(guide_pins_model: ProcessModel) -> None:
     layout = Layout.from_model(guide_pins_model)
     C = layout.composite
     c_t = C[layout.tools].sum(axis=0)
@@ -94,14 +98,14 @@ def test_forecast_shift_adds_drift_and_wear_until_the_next_cycle(guide_pins_mode
     assert not forecast_shift(EffectsSection(), layout).any()
 
 
-def test_model_without_effects_loads_as_before(guide_pins_model):
+def test_model_without_effects_loads_as_before(guide_pins_model: ProcessModel) -> None:
     doc = tomllib.loads((GUIDE_PINS / "model.toml").read_text(encoding="utf-8"))
     empty = model_from_dict({**doc, "effects": {}})
     assert not empty.effects.effects and empty.effects == EffectsSection()
     assert model_from_dict(doc) == empty
 
 
-def test_correct_maps_through_a_named_relation_only(tmp_path, guide_pins_model):
+def test_correct_maps_through_a_named_relation_only(tmp_path: Path, guide_pins_model: ProcessModel) -> None:
     """A relation whose register is named changes what the correction does; a shared one does not."""
     from setupfix.usecases.contract import note_lines
     from setupfix.usecases.correct import correct_report

@@ -3,13 +3,14 @@
 from __future__ import annotations
 
 import dataclasses
+from pathlib import Path
 
 import numpy as np
 import pytest
 from diagnose.helpers import NOISE, guide_pins, simulate
 from diagnose.test_plate import LOG, MODEL, PLATE, needs_log
 
-from setupfix.diagnose import Diagnoser, Layout, Term, factor_tests, parse_terms
+from setupfix.diagnose import Diagnoser, Layout, Series, Term, factor_tests, parse_terms
 from setupfix.diagnose.factors import holm, term_columns
 from setupfix.diagnose.terms import channel_values
 from setupfix.inputs.series import load_series
@@ -18,7 +19,7 @@ from setupfix.usecases.diagnosis import DiagnoseRequest, diagnose_reports
 DESIGN = ("doe_tool_length", "doe_speed", "doe_tool_length*doe_speed")
 
 
-def test_terms_are_parsed_once_each_in_the_order_given():
+def test_terms_are_parsed_once_each_in_the_order_given() -> None:
     assert parse_terms(" a, b ,a*b,a") == (Term(("a",)), Term(("b",)), Term(("a", "b")))
     assert parse_terms(("a", "b*c")) == (Term(("a",)), Term(("b", "c")))
     assert Term(("a", "b")).name == "a*b" and Term(("a", "b")).order == 2
@@ -27,7 +28,7 @@ def test_terms_are_parsed_once_each_in_the_order_given():
             parse_terms(bad)
 
 
-def test_holm_by_hand():
+def test_holm_by_hand() -> None:
     """Holm (1979): sorted p times (m - i + 1), running maximum; the same as the step-down rule applied by hand."""
     p = np.array([0.01, 0.04, 0.03, 0.005])
     assert holm(p).tolist() == pytest.approx([0.03, 0.06, 0.06, 0.02])
@@ -45,7 +46,7 @@ def test_holm_by_hand():
             assert {int(k) for k in np.flatnonzero(adj <= alpha)} == rejected
 
 
-def _design_series(seed: int, n: int = 18, part_noise: float = 0.0):
+def _design_series(seed: int, n: int = 18, part_noise: float = 0.0) -> tuple[Layout, Series]:
     """A null series of the guide pins with a random 2 x 3 design in its process log (the log reader's channels:
     one indicator for the two-level factor, one per level for the three-level one), balanced over the parts."""
     layout = Layout.from_model(guide_pins())
@@ -64,7 +65,7 @@ def _design_series(seed: int, n: int = 18, part_noise: float = 0.0):
     return layout, s
 
 
-def test_columns_keep_one_reference_level_and_the_interaction_what_the_main_effects_do_not_hold():
+def test_columns_keep_one_reference_level_and_the_interaction_what_the_main_effects_do_not_hold() -> None:
     _, s = _design_series(1)
     cols = term_columns(s, parse_terms(("A", "B", "A*B")))
     assert cols[Term(("A",))] == (("A=hi",), ())
@@ -76,14 +77,14 @@ def test_columns_keep_one_reference_level_and_the_interaction_what_the_main_effe
 
 
 @pytest.mark.parametrize("seed", [0, 1, 2])
-def test_a_null_series_with_a_random_design_names_nothing(seed):
+def test_a_null_series_with_a_random_design_names_nothing(seed: int) -> None:
     layout, s = _design_series(seed, part_noise=2 * NOISE)
     ft = factor_tests(layout, s, parse_terms(("A", "B", "A*B")))
     assert len(ft.tests) == 3 * len(layout.tools) and not ft.found
     assert all(0 < t.p <= 1 for t in ft.tests)
 
 
-def test_a_hidden_interaction_on_one_tool_is_named_there():
+def test_a_hidden_interaction_on_one_tool_is_named_there() -> None:
     """The design columns acting on one tool (a cell of the 2 x 3 design off by 0.01 mm, five times the noise)."""
     layout, s = _design_series(4, n=24)
     j = int(layout.tools[0])
@@ -95,7 +96,7 @@ def test_a_hidden_interaction_on_one_tool_is_named_there():
 
 
 @needs_log
-def test_the_plate_names_the_stick_out_and_the_speed_per_cutter_as_the_independent_analysis():
+def test_the_plate_names_the_stick_out_and_the_speed_per_cutter_as_the_independent_analysis() -> None:
     """Declared, the experiment's factors are tested as stated.  At alpha = 0.01 the stick-out is named on the
     cutters (T5B's holes move least: Holm 0.03) and the stick-out x speed interaction on T5A; at 0.05 on T5A, T1
     and T5B, never on T4A (whose holes do not follow the speed), as the pre-specified 2 x 3 factorial on part
@@ -124,7 +125,7 @@ def test_the_plate_names_the_stick_out_and_the_speed_per_cutter_as_the_independe
 
 @needs_log
 @pytest.mark.parametrize("seed", [0, 1, 2])
-def test_the_plate_with_its_design_permuted_across_parts_names_nothing(seed):
+def test_the_plate_with_its_design_permuted_across_parts_names_nothing(seed: int) -> None:
     inp = load_series(MODEL, (PLATE,), process=str(LOG))
     s = inp.series
     perm = np.random.default_rng(seed).permutation(s.n_cycles)
@@ -134,7 +135,7 @@ def test_the_plate_with_its_design_permuted_across_parts_names_nothing(seed):
 
 
 @needs_log
-def test_declared_factors_enter_the_diagnosis_before_the_search(tmp_path):
+def test_declared_factors_enter_the_diagnosis_before_the_search(tmp_path: Path) -> None:
     out = diagnose_reports(
         DiagnoseRequest(
             MODEL,
@@ -168,7 +169,7 @@ def test_declared_factors_enter_the_diagnosis_before_the_search(tmp_path):
 
 
 @needs_log
-def test_with_the_declared_factors_the_walk_forward_prefers_the_augmented_model():
+def test_with_the_declared_factors_the_walk_forward_prefers_the_augmented_model() -> None:
     """Without the declaration the plate's augmented model loses to EWMA in the walk forward (the search's
     stick-out alone); with it the walk, which tests the declared factors on the past parts at every
     re-selection, comes closer to the centre with fewer cells out, and the next correction comes from it."""

@@ -8,15 +8,15 @@ from diagnose.helpers import guide_pins, simulate
 
 from setupfix.correction.relation import null_space_directions
 from setupfix.diagnose import Layout, Series, fit_model
-from setupfix.diagnose.fit import row_space_basis
+from setupfix.diagnose.fit import Array, row_space_basis
 
 
-def _series(dev, applied):
+def _series(dev: Array, applied: Array) -> Series:
     n = dev.shape[0]
     return Series(dev, np.arange(n, dtype=float), applied, np.zeros((n, 0)), np.zeros((n, 0)))
 
 
-def test_noise_free_closed_loop_is_explained_exactly_null_space_included():
+def test_noise_free_closed_loop_is_explained_exactly_null_space_included() -> None:
     layout = Layout.from_model(guide_pins())
     C = layout.composite
     rng = np.random.default_rng(3)
@@ -32,12 +32,12 @@ def test_noise_free_closed_loop_is_explained_exactly_null_space_included():
     np.testing.assert_allclose(fit2.offset(), fit.offset(), atol=1e-12)
 
 
-def test_declared_parameters_are_the_rank_of_c():
+def test_declared_parameters_are_the_rank_of_c() -> None:
     layout = Layout.from_model(guide_pins())
     assert row_space_basis(layout.composite).shape[0] == np.linalg.matrix_rank(layout.composite)
 
 
-def test_absent_dimensions_are_left_out_not_guessed():
+def test_absent_dimensions_are_left_out_not_guessed() -> None:
     layout = Layout.from_model(guide_pins())
     sim = simulate(layout, seed=4, n_cycles=10)
     dev = sim.series.deviation.copy()

@@ -4,6 +4,7 @@ under shared per-part noise, and the simulator's shared per-part variation."""
 from __future__ import annotations
 
 import numpy as np
+import numpy.typing as npt
 import scipy.stats
 from diagnose.helpers import NOISE, guide_pins, simulate
 
@@ -11,14 +12,16 @@ from setupfix.diagnose import Layout
 from setupfix.diagnose.inference import cluster_test, cycle_sums, dimension_pvalue, lack_of_fit
 
 
-def _design(rng, n_cycles=12, n_dims=5):
+def _design(
+    rng: np.random.Generator, n_cycles: int = 12, n_dims: int = 5
+) -> tuple[npt.NDArray[np.int_], npt.NDArray[np.int_], npt.NDArray[np.float64]]:
     cycle = np.repeat(np.arange(n_cycles), n_dims)
     dim = np.tile(np.arange(n_dims), n_cycles)
     base = np.eye(n_dims)[dim]  # one constant per dimension
     return cycle, dim, base
 
 
-def test_cluster_test_is_the_sandwich_wald_test_of_the_full_regression():
+def test_cluster_test_is_the_sandwich_wald_test_of_the_full_regression() -> None:
     rng = np.random.default_rng(0)
     cycle, dim, base = _design(rng)
     K = 12
@@ -42,7 +45,7 @@ def test_cluster_test_is_the_sandwich_wald_test_of_the_full_regression():
     np.testing.assert_allclose(p[0], scipy.stats.f.sf(stat[0], 1, nu), rtol=1e-10)
 
 
-def test_cycle_sums_do_not_depend_on_the_order_of_the_cells():
+def test_cycle_sums_do_not_depend_on_the_order_of_the_cells() -> None:
     rng = np.random.default_rng(1)
     cycle = np.sort(rng.integers(0, 7, 40))
     v = rng.normal(size=(40, 3))
@@ -51,7 +54,7 @@ def test_cycle_sums_do_not_depend_on_the_order_of_the_cells():
     assert np.all(cycle_sums(v, cycle, 9)[7:] == 0)
 
 
-def test_level_holds_when_every_cell_of_a_cycle_shares_noise():
+def test_level_holds_when_every_cell_of_a_cycle_shares_noise() -> None:
     """Shared noise 2× the cell noise, a time-dependent column: the cell-level F-test rejects far more
     often than α, the per-cycle test at most α (binomial bound over 400 draws)."""
     rng = np.random.default_rng(2)
@@ -73,17 +76,17 @@ def test_level_holds_when_every_cell_of_a_cycle_shares_noise():
     assert per_cycle <= bound < cells
 
 
-def test_dimension_test_uses_that_dimensions_own_variance():
+def test_dimension_test_uses_that_dimensions_own_variance() -> None:
     rng = np.random.default_rng(3)
     r_q = rng.normal(size=30)
     u = rng.normal(size=30)
-    gain = (u @ r_q) ** 2 / (u @ u)
+    gain = float((u @ r_q) ** 2 / (u @ u))
     df = 30 - 1 - 1
     want = scipy.stats.f.sf(gain / ((r_q @ r_q - gain) / df), 1, df)
     assert dimension_pvalue(gain, r_q, 1) == np.float64(want)
 
 
-def test_lack_of_fit_sees_constant_offsets_not_noise():
+def test_lack_of_fit_sees_constant_offsets_not_noise() -> None:
     rng = np.random.default_rng(4)
     K, d = 20, 6
     cycle, dim, _ = _design(rng, K, d)
@@ -94,7 +97,7 @@ def test_lack_of_fit_sees_constant_offsets_not_noise():
     assert out is not None and out[1] == d - 1
 
 
-def test_simulated_parts_vary_as_a_whole():
+def test_simulated_parts_vary_as_a_whole() -> None:
     """part_noise: every tool off by its own offset each cycle, so the cells a tool cuts move together;
     without it the seed's series is unchanged."""
     layout = Layout.from_model(guide_pins())
@@ -109,7 +112,7 @@ def test_simulated_parts_vary_as_a_whole():
     assert 2 * NOISE < np.std(coef) < 4 * NOISE
 
 
-def test_cluster_wald_is_the_sandwich_wald_test_of_a_block_and_reduces_to_the_one_column_test():
+def test_cluster_wald_is_the_sandwich_wald_test_of_a_block_and_reduces_to_the_one_column_test() -> None:
     from setupfix.diagnose.inference import cluster_wald, orth
 
     rng = np.random.default_rng(3)
@@ -140,7 +143,7 @@ def test_cluster_wald_is_the_sandwich_wald_test_of_a_block_and_reduces_to_the_on
     np.testing.assert_allclose([one_f, one_p], [stat[0], pp[0]], rtol=1e-8)
 
 
-def test_cluster_wald_holds_its_level_under_shared_per_part_noise():
+def test_cluster_wald_holds_its_level_under_shared_per_part_noise() -> None:
     from setupfix.diagnose.inference import cluster_wald, orth
 
     rng = np.random.default_rng(7)

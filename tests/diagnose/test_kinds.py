@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import tomllib
+from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -12,7 +14,7 @@ from setupfix.core.errors import ModelError
 from setupfix.diagnose import Diagnoser, EffectSpec, HiddenEffect, Layout, Series, ShopSimulator, candidate_specs
 from setupfix.diagnose.forecast import forecast_shift, spec_of
 from setupfix.diagnose.terms import common_tool_row, effect_field
-from setupfix.model import load_model
+from setupfix.model import ProcessModel, load_model
 from setupfix.model.effects import EffectsSection, ModelEffect, effects_from_dict
 from setupfix.model.effects_toml import with_effects
 
@@ -36,7 +38,7 @@ def _series(n: int = 6) -> Series:
     )
 
 
-def test_level_field_is_the_register_row_from_the_step_on():
+def test_level_field_is_the_register_row_from_the_step_on() -> None:
     s = _series()
     t5 = LAYOUT.register_ids.index("T5")
     z = effect_field(EffectSpec("level", register="T5", at=1.5), LAYOUT, s)
@@ -46,7 +48,7 @@ def test_level_field_is_the_register_row_from_the_step_on():
     np.testing.assert_array_equal(common[-1], common_tool_row(LAYOUT))
 
 
-def test_process_field_is_channel_minus_reference_times_the_register_row():
+def test_process_field_is_channel_minus_reference_times_the_register_row() -> None:
     s = _series()
     w2 = LAYOUT.register_ids.index("W2")
     z = effect_field(EffectSpec("process", channel="speed", register="W2", reference=2000.0), LAYOUT, s)
@@ -55,7 +57,7 @@ def test_process_field_is_channel_minus_reference_times_the_register_row():
     assert EffectSpec("level", at=2.0, cycle="P7").target == "all tools step at P7"
 
 
-def test_candidates_count_every_position_and_register_and_keep_process_off_thermal():
+def test_candidates_count_every_position_and_register_and_keep_process_off_thermal() -> None:
     s = _series(8)
     specs = candidate_specs(LAYOUT, s)
     levels = [c for c in specs if c.kind == "level"]
@@ -78,7 +80,9 @@ def test_candidates_count_every_position_and_register_and_keep_process_off_therm
         (EffectSpec("process", channel="speed_rpm", register="W3", reference=9000.0), 3e-6),
     ],
 )
-def test_hidden_level_and_process_effects_are_found_with_their_target(seed, spec, magnitude):
+def test_hidden_level_and_process_effects_are_found_with_their_target(
+    seed: int, spec: EffectSpec, magnitude: float
+) -> None:
     sim = ShopSimulator(n_cycles=40, process=3, seed=seed).run(LAYOUT, [HiddenEffect(spec, magnitude)])
     d = Diagnoser(walk=False).run(LAYOUT, sim.series)
     assert [e.kind for e in d.effects] == [spec.kind]
@@ -92,7 +96,7 @@ def test_hidden_level_and_process_effects_are_found_with_their_target(seed, spec
     assert abs(e.estimate - magnitude) < 4 * e.stderr
 
 
-def test_process_channels_and_nothing_hidden_give_no_effect():
+def test_process_channels_and_nothing_hidden_give_no_effect() -> None:
     found = [
         Diagnoser(walk=False).run(LAYOUT, ShopSimulator(n_cycles=40, process=3, seed=s).run(LAYOUT).series).effects
         for s in range(10, 16)
@@ -100,7 +104,7 @@ def test_process_channels_and_nothing_hidden_give_no_effect():
     assert found == [()] * 6
 
 
-def test_a_set_of_registers_gets_a_coefficient_each():
+def test_a_set_of_registers_gets_a_coefficient_each() -> None:
     hidden = [
         HiddenEffect(EffectSpec("process", channel="stickout_mm", register="W2", reference=37.5), 0.0012),
         HiddenEffect(EffectSpec("process", channel="stickout_mm", register="T23", reference=37.5), -0.0007),
@@ -148,7 +152,7 @@ SECTION = EffectsSection(
 )
 
 
-def test_level_and_process_round_trip_and_forecast(tmp_path):
+def test_level_and_process_round_trip_and_forecast(tmp_path: Path) -> None:
     text = with_effects((GUIDE_PINS / "model.toml").read_text(encoding="utf-8"), SECTION)
     path = tmp_path / "aug.toml"
     path.write_text(text, encoding="utf-8")
@@ -178,7 +182,9 @@ def test_level_and_process_round_trip_and_forecast(tmp_path):
         ),
     ],
 )
-def test_bad_level_and_process_effects_are_named(table, key, guide_pins_model):
+def test_bad_level_and_process_effects_are_named(
+    table: dict[str, Any], key: str, guide_pins_model: ProcessModel
+) -> None:
     with pytest.raises(ModelError) as err:
         effects_from_dict(table, guide_pins_model, "m.toml")
     assert f"m.toml: [{key}]" in str(err.value)
@@ -191,7 +197,7 @@ def test_bad_level_and_process_effects_are_named(table, key, guide_pins_model):
         EffectSpec("process", channel="speed_rpm", register="T5"),
     ],
 )  # no channel recorded
-def test_simulator_refuses_an_effect_it_cannot_hide(spec):
+def test_simulator_refuses_an_effect_it_cannot_hide(spec: EffectSpec) -> None:
     from setupfix.core.errors import ParameterError
 
     with pytest.raises(ParameterError):

@@ -22,7 +22,7 @@ needs_log = pytest.mark.skipif(not LOG.is_file(), reason="the NIST process log l
 
 
 @needs_log
-def test_process_log_is_joined_by_serial_with_factor_levels_and_their_products():
+def test_process_log_is_joined_by_serial_with_factor_levels_and_their_products() -> None:
     inp = load_series(MODEL, (PLATE,), process=str(LOG))
     s = inp.series
     ch = s.channels
@@ -37,7 +37,7 @@ def test_process_log_is_joined_by_serial_with_factor_levels_and_their_products()
 
 
 @needs_log
-def test_the_designed_factors_are_named_per_cutter_not_wear_or_drift(tmp_path):
+def test_the_designed_factors_are_named_per_cutter_not_wear_or_drift(tmp_path: Path) -> None:
     """The stick-out is named with a coefficient per cutter (one per-register set, tested per part by the
     multi-column cluster-robust Wald test): the 4 mm holes (T5A) grow and the 9.4 mm holes (T4A) shrink with
     the long stick-out.  The channel chosen is the long stick-out on parts 11-18: part 10, a long part cut at
@@ -74,7 +74,7 @@ def test_the_designed_factors_are_named_per_cutter_not_wear_or_drift(tmp_path):
 
 
 @needs_log
-def test_the_spindle_speed_is_real_but_not_claimed_by_the_search():
+def test_the_spindle_speed_is_real_but_not_claimed_by_the_search() -> None:
     """The plate's second designed factor.  With the part as the unit and the hypothesis stated in advance
     (the 2 x 3 factorial, three parts per cell; statsmodels gives the same p-values) the speed plainly acts
     with the long stick-out: the 4 mm holes (T5A) grow by 0.06 mm per 1000 rpm less, the 9.4 mm holes (T4A)
@@ -110,7 +110,7 @@ def test_the_spindle_speed_is_real_but_not_claimed_by_the_search():
 
 
 @needs_log
-def test_a_model_with_process_effects_needs_the_log(tmp_path):
+def test_a_model_with_process_effects_needs_the_log(tmp_path: Path) -> None:
     diagnose_reports(
         DiagnoseRequest(
             MODEL, (PLATE,), process=str(LOG), augment=str(tmp_path / "aug.toml"), diagnoser=Diagnoser(walk=False)
@@ -122,13 +122,13 @@ def test_a_model_with_process_effects_needs_the_log(tmp_path):
         load_series(tmp_path / "aug.toml", (PLATE,))
 
 
-def test_without_the_log_no_wear_or_drift_is_claimed():
+def test_without_the_log_no_wear_or_drift_is_claimed() -> None:
     d = diagnose_reports(DiagnoseRequest(MODEL, (PLATE,), diagnoser=Diagnoser(walk=False))).diagnosis
     assert not {"wear", "drift"} & {e.kind for e in d.effects}
 
 
 @needs_log
-def test_cli_process_option_json_and_a_bad_log(tmp_path, capsys):
+def test_cli_process_option_json_and_a_bad_log(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     from setupfix.cli import main
 
     code = main(["diagnose", "--model", str(MODEL), "--process", str(LOG), "--no-walk", "--json", str(PLATE)])
@@ -147,7 +147,7 @@ def test_cli_process_option_json_and_a_bad_log(tmp_path, capsys):
 
 @needs_log
 @pytest.mark.parametrize("seed", [0, 1, 2])
-def test_shuffled_machining_times_give_no_time_effect(seed):
+def test_shuffled_machining_times_give_no_time_effect(seed: int) -> None:
     """The plate's machining times dealt to the parts at random (without the log's channels): whatever the
     parts differ by no longer follows time, so no drift, thermal, wear or level may be named
     (``bench/diagnose_real.py``: 0 of 100 shuffles); in machining order a level at part 10 (the first long
@@ -164,7 +164,7 @@ def test_shuffled_machining_times_give_no_time_effect(seed):
 
 
 @needs_log
-def test_the_tui_diagnosis_takes_the_process_log():
+def test_the_tui_diagnosis_takes_the_process_log() -> None:
     """``setupfix tui --process LOG``: the history panel's diagnosis (its worker, through the use case) joins
     the log per part and names the process effects, as ``diagnose --process`` does."""
     from setupfix.tui import workers

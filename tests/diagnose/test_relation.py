@@ -40,7 +40,7 @@ def _free_registers(layout: Layout) -> list[str]:
 
 
 @pytest.mark.parametrize("seed", [1, 2])
-def test_distinguishable_histories_name_the_register(seed):
+def test_distinguishable_histories_name_the_register(seed: int) -> None:
     layout = Layout.from_model(guide_pins())
     reg = _free_registers(layout)[1]
     applied = _steps(layout.n_registers, seed)
@@ -60,7 +60,7 @@ def test_distinguishable_histories_name_the_register(seed):
     )
 
 
-def test_registers_that_moved_together_are_named_together_and_not_guessed():
+def test_registers_that_moved_together_are_named_together_and_not_guessed() -> None:
     layout = Layout.from_model(guide_pins())
     a, b = _free_registers(layout)[1:3]
     ia, ib = layout.register_ids.index(a), layout.register_ids.index(b)
@@ -85,7 +85,7 @@ def test_registers_that_moved_together_are_named_together_and_not_guessed():
         np.testing.assert_array_equal(relation_composite(section, layout), layout.composite)
 
 
-def test_a_named_relation_is_used_by_the_augmented_walk(monkeypatch):
+def test_a_named_relation_is_used_by_the_augmented_walk(monkeypatch: pytest.MonkeyPatch) -> None:
     """The augmented controller maps its recommendation through the relation found: it does better."""
     layout = Layout.from_model(guide_pins())
     reg = _free_registers(layout)[1]

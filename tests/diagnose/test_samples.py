@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
 from conftest import GUIDE_PINS, SAMPLES
 
@@ -12,7 +13,7 @@ from setupfix.usecases.diagnosis import DiagnoseRequest, diagnose_reports
 LOOP = SAMPLES / "closed_loop"
 
 
-def test_simulated_series_reveals_its_undeclared_thermal_effect():
+def test_simulated_series_reveals_its_undeclared_thermal_effect() -> None:
     out = diagnose_reports(
         DiagnoseRequest(
             GUIDE_PINS / "model.toml",
@@ -30,7 +31,7 @@ def test_simulated_series_reveals_its_undeclared_thermal_effect():
     assert out.diagnosis.error_after.rms < 0.0021 < 0.006 < out.diagnosis.error_before.rms
 
 
-def test_real_sheet_metal_offset_only_model_leaves_a_tilt():
+def test_real_sheet_metal_offset_only_model_leaves_a_tilt() -> None:
     """Six real parts: the 17 points keep their own form errors (lack of fit), so at the default
     α = 0.01 no tilt is claimed; at α = 0.05 the position effects in x and z are."""
     report = SAMPLES / "qif" / "QIF3_SheetMetal_Results_6_samples.QIF"
@@ -43,7 +44,7 @@ def test_real_sheet_metal_offset_only_model_leaves_a_tilt():
     assert d.error_after.rms < 0.7 * d.error_before.rms
 
 
-def test_positions_from_the_reports_when_the_model_has_none(tmp_path):
+def test_positions_from_the_reports_when_the_model_has_none(tmp_path: Path) -> None:
     text = (LOOP / "sheet_metal" / "model.toml").read_text(encoding="utf-8")
     bare = tmp_path / "model.toml"
     bare.write_text("\n".join(line for line in text.splitlines() if not line.startswith("position")), encoding="utf-8")

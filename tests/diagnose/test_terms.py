@@ -7,7 +7,7 @@ import numpy as np
 from setupfix.diagnose.covariates import applied_at, join_temperatures, parts_since_change
 
 
-def test_applied_at_takes_every_row_at_or_before_the_part():
+def test_applied_at_takes_every_row_at_or_before_the_part() -> None:
     rng = np.random.default_rng(1)
     log_t = np.round(rng.uniform(0, 10, 30), 1)
     regs = rng.integers(0, 4, 30)
@@ -22,7 +22,7 @@ def test_applied_at_takes_every_row_at_or_before_the_part():
         np.testing.assert_allclose(got[k], want, atol=1e-12)
 
 
-def test_parts_since_change_counts_earlier_cycles_after_the_last_change():
+def test_parts_since_change_counts_earlier_cycles_after_the_last_change() -> None:
     times = np.arange(10.0)
     changes = [np.array([3.5, 7.0]), np.array([])]
     got = parts_since_change(times, changes)
@@ -31,7 +31,7 @@ def test_parts_since_change_counts_earlier_cycles_after_the_last_change():
     assert got[:, 1].tolist() == list(range(10))
 
 
-def test_temperature_joined_at_or_just_before():
+def test_temperature_joined_at_or_just_before() -> None:
     st = np.array([0.0, 1.0, 2.0])
     samples = np.array([[10.0], [11.0], [12.0]])
     got = join_temperatures(np.array([-0.5, 0.0, 0.99, 1.0, 5.0]), st, samples)

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from diagnose.helpers import guide_pins, one_effect, simulate
 
-from setupfix.diagnose import Diagnoser, EffectSpec, Layout, fit_model, walk_forward
+from setupfix.diagnose import Diagnoser, EffectSpec, Layout, Series, fit_model, walk_forward
 from setupfix.diagnose.walk import (
     Budget,
     WalkForward,
@@ -21,7 +21,7 @@ from setupfix.diagnose.walk import (
 
 
 @pytest.mark.parametrize("kind", ["drift", "wear"])
-def test_augmented_beats_declared_ewma_and_none_with_a_hidden_effect(kind):
+def test_augmented_beats_declared_ewma_and_none_with_a_hidden_effect(kind: str) -> None:
     layout = Layout.from_model(guide_pins(positions=False))
     sim = simulate(layout, [one_effect(layout, kind)], seed=7)
     b = walk_forward(layout, sim.series).budgets
@@ -29,7 +29,7 @@ def test_augmented_beats_declared_ewma_and_none_with_a_hidden_effect(kind):
     assert b["augmented"].rms < min(b["declared"].rms, b["ewma"].rms, b["none"].rms)
 
 
-def test_augmented_is_the_declared_model_without_a_hidden_effect():
+def test_augmented_is_the_declared_model_without_a_hidden_effect() -> None:
     layout = Layout.from_model(guide_pins(positions=False))
     sim = simulate(layout, seed=8)
     b = walk_forward(layout, sim.series).budgets
@@ -37,7 +37,7 @@ def test_augmented_is_the_declared_model_without_a_hidden_effect():
     assert b["declared"].mean_budget > b["none"].mean_budget
 
 
-def test_counterfactual_of_keeping_the_registers_is_the_measured_series():
+def test_counterfactual_of_keeping_the_registers_is_the_measured_series() -> None:
     """Without corrections logged, 'none' keeps the registers: its deviations are the measured ones."""
     layout = Layout.from_model(guide_pins(positions=False))
     sim = simulate(layout, seed=9, correct_every=0, n_cycles=12)
@@ -47,7 +47,7 @@ def test_counterfactual_of_keeping_the_registers_is_the_measured_series():
     np.testing.assert_allclose(wf.budgets["none"].budget, m)
 
 
-def test_forecast_extrapolates_drift_one_cycle_ahead_with_pending_corrections():
+def test_forecast_extrapolates_drift_one_cycle_ahead_with_pending_corrections() -> None:
     layout = Layout.from_model(guide_pins(positions=False))
     sim = simulate(layout, [one_effect(layout, "drift")], seed=3, noise=0.0, decimals=12)
     s = sim.series
@@ -61,7 +61,7 @@ def test_forecast_extrapolates_drift_one_cycle_ahead_with_pending_corrections():
     np.testing.assert_allclose(dev, truth, atol=1e-9)
 
 
-def test_series_of_one_is_diagnosed_without_walking():
+def test_series_of_one_is_diagnosed_without_walking() -> None:
     layout = Layout.from_model(guide_pins())
     sim = simulate(layout, seed=2, n_cycles=1)
     d = Diagnoser().run(layout, sim.series)
@@ -69,7 +69,7 @@ def test_series_of_one_is_diagnosed_without_walking():
     assert np.isfinite(d.forecast).all()
 
 
-def _random_walk(layout, seed: int, step: float = 0.004):
+def _random_walk(layout: Layout, seed: int, step: float = 0.004) -> Series:
     """A series whose WKS wanders as a random walk: an effect fitted in hindsight, which EWMA tracks better."""
     sim = simulate(layout, seed=seed, correct_every=0)
     s = sim.series
@@ -79,7 +79,7 @@ def _random_walk(layout, seed: int, step: float = 0.004):
     return dataclasses.replace(s, deviation=np.round(s.deviation + wander @ layout.composite, 4))
 
 
-def test_walk_steers_to_the_tolerance_centre_and_scores_every_dimension():
+def test_walk_steers_to_the_tolerance_centre_and_scores_every_dimension() -> None:
     """Limits 0 … +0.1 mm: steering to nominal puts every dimension on its lower limit (half of them out);
     steering to the centre (0.05) keeps them there, at the noise."""
     base = Layout.from_model(guide_pins(positions=False))
@@ -93,7 +93,7 @@ def test_walk_steers_to_the_tolerance_centre_and_scores_every_dimension():
     assert b["none"].centre_rms > 5 * b["declared"].centre_rms
 
 
-def test_one_sided_limits_steer_to_the_finite_limits_side_of_zero():
+def test_one_sided_limits_steer_to_the_finite_limits_side_of_zero() -> None:
     base = Layout.from_model(guide_pins(positions=False))
     layout = dataclasses.replace(base, lower=np.full_like(base.lower, -np.inf), upper=np.full_like(base.upper, 0.1))
     b = walk_forward(layout, simulate(layout, seed=5).series).budgets
@@ -119,14 +119,16 @@ def _walk(aug: tuple[float, int], other: tuple[float, int], name: str = "ewma") 
         ((0.12, 2), (0.12, 2), "ewma"),  # a tie is not a win
     ],
 )
-def test_an_effect_enters_the_next_correction_only_if_it_beat_ewma(aug, ewma, source):
+def test_an_effect_enters_the_next_correction_only_if_it_beat_ewma(
+    aug: tuple[float, int], ewma: tuple[float, int], source: str
+) -> None:
     got = next_source(_walk(aug, ewma), True)
     assert got.source == source
     assert ("beat ewma" if source == "augmented" else "did not beat ewma") in got.reason
     assert f"{ewma[0]:.4g}" in got.reason and f"{aug[0]:.4g}" in got.reason
 
 
-def test_without_ewma_or_effects_or_walk_the_declared_model_recommends():
+def test_without_ewma_or_effects_or_walk_the_declared_model_recommends() -> None:
     walk = _walk((0.2, 2), (0.1, 2), "declared")
     walk.budgets.pop("ewma", None)
     assert next_source(walk, True, ewma=False).source == "declared"
@@ -134,24 +136,26 @@ def test_without_ewma_or_effects_or_walk_the_declared_model_recommends():
     assert "not proven" in next_source(None, True).reason
 
 
-def test_random_walk_of_the_setup_recommends_from_ewma_and_says_so():
+def test_random_walk_of_the_setup_recommends_from_ewma_and_says_so() -> None:
     layout = Layout.from_model(guide_pins(positions=False))
     d = Diagnoser().run(layout, _random_walk(layout, seed=5))
+    assert d.walk is not None and d.next_forecast is not None
     b = d.walk.budgets
     assert d.effects and b["augmented"].centre_rms > b["ewma"].centre_rms
     assert d.next_from.source == "ewma" and "did not beat ewma" in d.next_from.reason
     np.testing.assert_allclose(d.next_forecast, ewma_forecast(layout, d.series, 0.3))
 
 
-def test_a_real_drift_earns_its_place():
+def test_a_real_drift_earns_its_place() -> None:
     layout = Layout.from_model(guide_pins(positions=False))
     d = Diagnoser().run(layout, simulate(layout, [one_effect(layout, "drift")], seed=7).series)
     assert d.next_from.source == "augmented" and "beat ewma" in d.next_from.reason
+    assert d.next_forecast is not None
     np.testing.assert_allclose(d.next_forecast, d.forecast)
 
 
 @pytest.mark.parametrize("with_forecast", [True, False])
-def test_centred_registers_brute_force(with_forecast):
+def test_centred_registers_brute_force(with_forecast: bool) -> None:
     """A register is held iff every measured dimension it moves is within the band on every recent part and in
     the forecast (when the model predicts change): checked against a loop over registers and dimensions on
     random cases."""
