@@ -1,7 +1,9 @@
-"""What the app is started with (:class:`Inputs`) and what it holds: the base class of the app's state.
+"""What the app is started with (:class:`Inputs`) and what the operator's session holds (:class:`SessionState`).
 
-:class:`AppState` keeps the report opened, the cycle on screen, the station filter and sort, and answers the
-questions every part of the app asks of them (the cycle on screen, its unit, where its series comes from).
+Both are plain dataclasses, no Textual: the state holds the report opened, the cycle on screen, the station
+filter and sort, the last comparison and the folder watched, and answers the questions every part of the app
+asks of them (the cycle on screen, its unit, where its series comes from).  Its methods change only
+the state; the app pushes the state into the widgets afterwards.
 """
 
 from __future__ import annotations
@@ -9,15 +11,18 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from textual.app import App
-from textual.notifications import SeverityLevel
-
 from setupfix.inputs.stores import StoreRef
+from setupfix.optimize import OPTIMIZERS
 from setupfix.tui.session import FolderWatch, OpenedReport
 from setupfix.usecases.compare import Comparison
 from setupfix.usecases.requests import CycleCorrection, CycleOptions, ReadOptions
+from setupfix.views import correction as view
 
-__all__ = ["Inputs", "AppState"]
+__all__ = ["Inputs", "SessionState", "SORT_ORDER"]
+
+
+#: What ``s`` cycles through: None is the model's order.
+SORT_ORDER: tuple[str | None, ...] = (None, "margin_after", "deviation", "name", "station")
 
 
 @dataclass(frozen=True)
@@ -51,57 +56,98 @@ class Inputs:
         return None if self.db is None else StoreRef(self.db, self.machine, self.operator)
 
 
-class AppState(App[None]):
-    """The app's state and its accessors; :class:`~setupfix.tui.app.SetupfixApp` builds on it."""
+@dataclass
+class SessionState:
+    """The operator's session: what is opened, what is on screen, how it is filtered and sorted."""
 
-    def __init__(self, inputs: Inputs | None = None) -> None:
-        super().__init__()
-        self.inputs = inputs or Inputs()
-        self.model_path = self.inputs.model
-        self.report_path: Path | None = None
-        self.optimizer = self.inputs.optimizer
-        self.opened: OpenedReport | None = None
-        self.part_index = 0
-        self.station: str | None = None
-        self.sort_key: str | None = None
-        self.comparison: Comparison | None = None
-        self.folder_watch: FolderWatch | None = None
-        self.problem = ""
-        self._wide = False
-        self._short = False
-        self.current_problem = ""  #: why --current does not fit the model opened ("" when it fits or is not given)
+    inputs: Inputs
+    model_path: Path | None = None  #: the model opened (``--model``, or the one picked with m)
+    report_path: Path | None = None  #: the report opened (picked with o, or the newest of a watched folder)
+    optimizer: str = "exact"  #: the optimiser of the next run (p cycles through them)
+    opened: OpenedReport | None = None  #: the report as opened by the last run that succeeded
+    part_index: int = 0  #: the cycle (part) on screen, an index into ``opened.corrections``
+    station: str | None = None  #: the station filter (None: all)
+    sort_key: str | None = None  #: the sort of the dimensions (None: the model's order)
+    comparison: Comparison | None = None  #: the last comparison of the optimisers
+    folder_watch: FolderWatch | None = None  #: the folder watched for new reports
+    problem: str = ""  #: why nothing is on screen (no model, no report, a failure), or what is under way
+    current_problem: str = ""  #: why --current does not fit the model opened ("" when it fits or is not given)
 
-    def _feed_text(self) -> str:
-        """The cycle's thermal feed-forward (part of its corrections and of the exported offsets)."""
-        c = self._current()
-        if c is None or c.thermal is None:
-            return ""
-        return c.thermal.line() + "; added to the exported offsets"
+    @classmethod
+    def start(cls, inputs: Inputs) -> SessionState:
+        """The session as the command line opens it (the report itself is opened by the app)."""
+        return cls(inputs, model_path=inputs.model, optimizer=inputs.optimizer)
 
-    def notify(
-        self,
-        message: str,
-        *,
-        title: str = "",
-        severity: SeverityLevel = "information",
-        timeout: float | None = None,
-        markup: bool = False,
-    ) -> None:
-        """A toast; its text (names of files, reports, dimensions) is literal, not markup."""
-        super().notify(message, title=title, severity=severity, timeout=timeout, markup=markup)
-
-    def _current(self) -> CycleCorrection | None:
+    def current(self) -> CycleCorrection | None:
+        """The correction of the cycle on screen (None when nothing is corrected)."""
         if self.opened is None or not self.opened.corrections:
             return None
         return self.opened.corrections[self.part_index]
 
-    def _unit(self) -> str:
+    def unit(self) -> str:
+        """The model's length unit."""
         return self.opened.model.unit if self.opened is not None else "mm"
 
-    def _series_source(self) -> str:
+    def series_source(self) -> str:
         """The history store when given, else the watched folder or the report's folder."""
         if self.inputs.db is not None:
             return str(self.inputs.db)
         if self.folder_watch is not None:
             return str(self.folder_watch.folder)
         return str(self.report_path.parent) if self.report_path is not None else ""
+
+    def feed_text(self) -> str:
+        """The cycle's thermal feed-forward (part of its corrections and of the exported offsets)."""
+        c = self.current()
+        if c is None or c.thermal is None:
+            return ""
+        return c.thermal.line() + "; added to the exported offsets"
+
+    def next_optimizer(self) -> None:
+        """exact → cripso → … → exact (an unknown name starts again at exact)."""
+        names = list(OPTIMIZERS)
+        self.optimizer = names[(names.index(self.optimizer) + 1) % len(names)] if self.optimizer in names else "exact"
+
+    def next_station(self) -> bool:
+        """All stations → the first → … → all; False when nothing is corrected (then unchanged)."""
+        c = self.current()
+        if c is None:
+            return False
+        options: list[str | None] = [None, *view.stations(view.dimension_rows(c))]
+        self.station = options[(options.index(self.station) + 1) % len(options)] if self.station in options else None
+        return True
+
+    def next_sort(self) -> None:
+        """The next sort of :data:`SORT_ORDER`."""
+        self.sort_key = SORT_ORDER[(SORT_ORDER.index(self.sort_key) + 1) % len(SORT_ORDER)]
+
+    def sort_by(self, key: str) -> None:
+        """Sort by the column ``key`` (a header clicked); the same column again: the model's order."""
+        self.sort_key = None if self.sort_key == key else key
+
+    def step_part(self, step: int) -> bool:
+        """``step`` cycles forward (negative: back), round the report's cycles; False when there is none."""
+        if not (self.opened and self.opened.corrections):
+            return False
+        self.part_index = (self.part_index + step) % len(self.opened.corrections)
+        return True
+
+    def jump_part(self, which: str) -> bool:
+        """The ``"first"`` or the latest cycle of the report, in report order; False when there is none."""
+        if not (self.opened and self.opened.corrections):
+            return False
+        self.part_index = 0 if which == "first" else len(self.opened.corrections) - 1
+        return True
+
+    def report_opened(self, opened: OpenedReport) -> None:
+        """``opened`` is on screen now; the cycle on screen kept where the new report has it."""
+        self.opened = opened
+        self.problem = ""
+        self.part_index = min(self.part_index, max(len(opened.corrections) - 1, 0))
+
+    def open_failed(self, text: str) -> None:
+        """The report could not be opened: the previous correction goes with it."""
+        # showing (and exporting) the previous correction beside a failed report would invite applying stale
+        # offsets: it is no longer what the operator asked for
+        self.opened = None
+        self.problem = f"✗ {text}"

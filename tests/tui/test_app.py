@@ -42,7 +42,7 @@ def test_open_sort_filter_export_then_a_bad_report(make_app, tmp_path):
         async with app.run_test(size=(80, 24)) as pilot:
             await settle(pilot)
             # the sample: every dimension and register, README's δ and bonus, binding marked ●
-            c = app._current()
+            c = app.state.current()
             assert c is not None and c.result.optimizer == "exact"
             dims = app.query_one("#dimensions")
             assert dims.row_count == 28 and app.query_one("#registers").row_count == 10
@@ -86,10 +86,10 @@ def test_open_sort_filter_export_then_a_bad_report(make_app, tmp_path):
             await pilot.pause()
             assert any(n.title == "export failed" and str(tmp_path) in n.message for n in app._notifications)
             # a bad report: a notification naming file and line, the stale correction gone
-            app._picked_report(bad)
+            app.controller.report_picked(bad)
             await settle(pilot)
             assert any(f"{bad}:2:" in n for n in _notes(app))
-            assert app._current() is None and app.is_running
+            assert app.state.current() is None and app.is_running
             assert f"{bad}:2:" in str(app.query_one("#summary").render())
             await pilot.press("e")
             assert any("nothing to export" in n for n in _notes(app))
@@ -109,7 +109,7 @@ def test_optimiser_choice_and_compare_with_cancel(make_app):
             await settle(pilot)
             await pilot.press("p")
             await settle(pilot)
-            c = app._current()
+            c = app.state.current()
             assert app.optimizer == "cripso" and c.result.optimizer == "cripso"
             expected = correct_report(
                 CorrectRequest(load_model(MODEL), solve=SolveOptions("cripso", 0)), CYCLE_01
@@ -151,13 +151,13 @@ def test_reports_that_do_not_match_show_the_match_table(make_app, tmp_path):
         async with app.run_test() as pilot:
             await settle(pilot)
             assert app.query_one("TabbedContent").active == "match"
-            assert app._current() is None
+            assert app.state.current() is None
             rows = _rows(app.query_one("#match-table"))
             assert len(rows) == 28 and all(str(r[0]) == "✗" for r in rows)
             assert "P1 D1" in next(r for r in rows if r[1] == "Pin1 D1")[5]
-            app._picked_report(some)
+            app.controller.report_picked(some)
             await settle(pilot)
-            assert app._current() is not None  # corrected without P1; the table says which are left out
+            assert app.state.current() is not None  # corrected without P1; the table says which are left out
             rows = _rows(app.query_one("#match-table"))
             assert sum(str(r[0]) == "✗" for r in rows) == 7
             assert "7 characteristic(s)" in str(app.query_one("#match-status").render())
@@ -174,16 +174,16 @@ def test_a_folder_is_watched_and_the_newest_finished_report_opened(make_app, tmp
             for _ in range(40):
                 await pilot.pause(0.05)
                 await settle(pilot)
-                if app._current() is not None:
+                if app.state.current() is not None:
                     break
-            assert app._current().part.report.endswith("a.csv")
+            assert app.state.current().part.report.endswith("a.csv")
             shutil.copy(GUIDE_PINS / "cycle_02.csv", tmp_path / "b.csv")
             for _ in range(40):
                 await pilot.pause(0.05)
                 await settle(pilot)
-                if app._current() is not None and app._current().part.report.endswith("b.csv"):
+                if app.state.current() is not None and app.state.current().part.report.endswith("b.csv"):
                     break
-            assert app._current().part.report.endswith("b.csv")
+            assert app.state.current().part.report.endswith("b.csv")
 
     run(scenario())
 
@@ -213,7 +213,7 @@ def test_history_from_the_store_one_key_diagnose_and_the_export_recorded(make_ap
             await settle(pilot)
             with open_store(db) as store:
                 log = store.corrections()
-            x = app._current().result.x
+            x = app.state.current().result.x
             moved = {reg.register: v for reg, v in zip(app.opened.model.registers, x, strict=True) if v}
             logged = dict(zip(log["register"], log["delta"].round(6), strict=True))
             assert logged == {k: round(v, 6) for k, v in moved.items()}
@@ -276,7 +276,7 @@ def test_thermal_panel_shows_the_drift_and_the_feed_forward(make_app, tmp_path):
             )
             written = (tmp_path / "offsets.csv").read_text(encoding="utf-8")
             assert written == (tmp_path / "cli.csv").read_text(encoding="utf-8")
-            assert feed.applied and app._current().corrections["T5"] == app._current().x[8] + feed.shift
+            assert feed.applied and app.state.current().corrections["T5"] == app.state.current().x[8] + feed.shift
 
     run(scenario())
 
@@ -343,7 +343,7 @@ def test_compare_solves_the_problem_correct_solves(make_app, tmp_path):
         app = make_app(report=CONTROLLERS / "report.csv", model=model, objective="paper")
         async with app.run_test(size=(100, 30)) as pilot:
             await settle(pilot)
-            c = app._current()
+            c = app.state.current()
             await pilot.press("c")
             await settle(pilot)
             comp = app.comparison
@@ -373,7 +373,7 @@ def test_names_that_look_like_markup_are_shown_as_written(make_app, tmp_path):
         app = make_app(report=report, model=model)
         async with app.run_test(size=(100, 30)) as pilot:
             await settle(pilot)
-            assert app._current() is not None, _notes(app)
+            assert app.state.current() is not None, _notes(app)
             names = [r[1] for r in _rows(app.query_one("#dimensions"))]
             assert "P1 D1 [/b] [red" in names and "P4 D1 [/b] [red" in names
             assert "cycle[1] [red.csv" in app.sub_title.replace("\\[", "[")

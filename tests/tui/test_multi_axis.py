@@ -70,7 +70,7 @@ def test_multi_axis_at_80x24_home_end_and_the_export_name_per_controller(make_ap
         app = make_app(report=report, model=model, current=current)
         async with app.run_test(size=(80, 24)) as pilot:
             await settle(pilot)
-            c = app._current()
+            c = app.state.current()
             assert c is not None and c.part.part == "cycle 01" and len(app.opened.corrections) == 3
             # registers: every component with its controller register; the rotation in degrees, on its own grid
             regs = {r[1]: r for r in _rows(app.query_one("#registers"))}
@@ -104,11 +104,11 @@ def test_multi_axis_at_80x24_home_end_and_the_export_name_per_controller(make_ap
             assert "sort out of tolerance first" in text
             # Home/End: the latest and the first cycle ([ ] step one)
             await pilot.press("end")
-            assert app._current().part.part == "cycle 03"
+            assert app.state.current().part.part == "cycle 03"
             await pilot.press("home")
-            assert app._current().part.part == "cycle 01"
+            assert app.state.current().part.part == "cycle 01"
             await pilot.press("right_square_bracket")
-            assert app._current().part.part == "cycle 02"
+            assert app.state.current().part.part == "cycle 02"
             await pilot.press("end")
             await pilot.pause()
             assert "cycle 03 (3/3" in str(app.query_one("#summary").render())
@@ -135,10 +135,10 @@ def test_multi_axis_at_80x24_home_end_and_the_export_name_per_controller(make_ap
             # Home/End in the dialog's field are the field's, not the cycle's
             field.focus()
             await pilot.press("home")
-            assert app._current().part.part == "cycle 03" and field.cursor_position == 0
+            assert app.state.current().part.part == "cycle 03" and field.cursor_position == 0
             select.value = "siemens"  # frame rotation RT; absolute (the current offsets); the cycle on screen
             await pilot.pause()
-            cycle = app._current()
+            cycle = app.state.current()
             expected = offsets_text([cycle], "siemens", app.opened.current)
             number = derived_program_number(cycle.part.report, cycle.part.part)
             assert screen.text == expected and f"_N_SETUPFIX_{number}_MPF" in expected and "cycle 03" in expected
@@ -173,15 +173,15 @@ def test_switching_the_model_re_reads_current_and_a_mismatch_is_a_message(make_a
         app = make_app(report=XYZ / "cycle_01.csv", model=model, current=current)
         async with app.run_test(size=(80, 24)) as pilot:
             await settle(pilot)
-            c = app._current()
+            c = app.state.current()
             assert c is not None and app.current_problem == "" and app.opened.current is not None
             regs = {r[1]: r for r in _rows(app.query_one("#registers"))}
             assert regs["W1.X"][4] == "-400.000" and regs["W1.C"][4] == "+0.0000"
             assert regs["W1.X"][5] == f"{-400.0 + c.corrections['W1.X']:+.3f}"
             # another model: the file names a rotation that model does not have — said in one line, not fatal
-            app._picked_model(without)
+            app.controller.model_picked(without)
             await settle(pilot)
-            c = app._current()
+            c = app.state.current()
             assert c is not None and app.is_running, [n.message for n in app._notifications]
             assert c.model.source.endswith("no_rotation.toml") and "W1.C" not in c.corrections
             assert app.opened.current is None
@@ -208,7 +208,7 @@ def test_switching_the_model_re_reads_current_and_a_mismatch_is_a_message(make_a
                 for n in app._notifications
             )
             # back to the model it fits: read again, absolute values again
-            app._picked_model(model)
+            app.controller.model_picked(model)
             await settle(pilot)
             assert app.current_problem == "" and app.opened.current is not None
             assert "--current does not fit" not in "\n".join(_screen(app))

@@ -5,8 +5,9 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 from rich.text import Text
+from textual.widgets import DataTable
 
-from setupfix.tui.widgets.plain import PlainTable
+from setupfix.tui.widgets.plain import plain
 from setupfix.views.correction import DimensionRow, limits_text, signed
 
 __all__ = ["DimensionTable"]
@@ -19,7 +20,7 @@ def _width(values: Sequence[str], header: str) -> int:
     return max([len(header), *(len(v) for v in values)])
 
 
-class DimensionTable(PlainTable):
+class DimensionTable(DataTable[Text]):
     """One row per measured dimension; click a header (or press s) to sort.
 
     Every column gets its width up front: measured lazily, the widths would change
@@ -49,12 +50,12 @@ class DimensionTable(PlainTable):
             before, after = r.bars(BAR)
             style = "" if r.in_before else "red"
             after_style = "bold red" if not r.in_after else ("bold" if r.binding else "")
-            cells: list[Text | str] = [
+            cells = [
                 Text(r.flags, style=after_style),
-                r.name,
-                r.station,
+                plain(r.name),
+                plain(r.station),
                 Text(signed(r.deviation), style=style, justify="right"),
-                lim,
+                plain(lim),
                 Text(before, style=style),
                 Text(signed(r.predicted), style=after_style, justify="right"),
                 Text(after, style=after_style),

@@ -2,9 +2,10 @@
 
 Names come from reports and models (a dimension ``D1 [/b]``, a file ``cycle[1].csv``): a
 ``DataTable`` reads a plain ``str`` cell as markup, so such a name is mis-drawn or raises a
-markup error in the middle of the operator's screen.  Every table of the screen is a
-:class:`PlainTable` (each ``str`` cell becomes a :class:`~rich.text.Text`), and every other
-string from outside goes through :func:`plain` before a widget gets it.
+markup error in the middle of the operator's screen.  Every cell of a table of the screen is a
+:class:`~rich.text.Text` (the tables that lay out rows wrap each name with :func:`plain`; the others
+are a :class:`PlainTable`), and every other string from outside goes through :func:`plain` before a
+widget gets it.
 """
 
 from __future__ import annotations

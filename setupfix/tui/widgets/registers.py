@@ -5,8 +5,9 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 from rich.text import Text
+from textual.widgets import DataTable
 
-from setupfix.tui.widgets.plain import PlainTable
+from setupfix.tui.widgets.plain import plain
 from setupfix.views.correction import RegisterRow, signed
 
 __all__ = ["RegisterTable", "DEGREES"]
@@ -15,7 +16,7 @@ __all__ = ["RegisterTable", "DEGREES"]
 DEGREES = "°"
 
 
-class RegisterTable(PlainTable):
+class RegisterTable(DataTable[Text]):
     """Controller register, model ID (a component ``W1.X`` / ``W1.C`` / ``T5.R`` in a multi-axis model),
     wear/geometry, delta, current and new value, unit, flags and safety rules.
 
@@ -64,13 +65,13 @@ class RegisterTable(PlainTable):
             moved = r.delta != 0.0
             self.add_row(
                 Text(c[0], style="bold" if moved else "dim"),
-                c[1],
-                c[2],
+                plain(c[1]),
+                plain(c[2]),
                 Text(c[3], style="bold" if moved else "dim", justify="right"),
                 Text(c[4], justify="right"),
                 Text(c[5], justify="right"),
-                c[6],
+                plain(c[6]),
                 Text(c[7], style="bold yellow" if r.at_limit else "dim"),
-                c[8],
+                plain(c[8]),
                 key=r.id,
             )
