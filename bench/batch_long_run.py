@@ -10,8 +10,8 @@ forked from a parent that has imported the solver's modules but solved nothing),
 use case (``correct_report``) and offsets policy (``cycle_rows``). Every offset row (report, part,
 register, delta, verdict) is compared; the statuses of the lone solves are counted.
 
-    python bench/batch_long_run.py                # 6,000 reports
-    python bench/batch_long_run.py --reports 500
+    python -m bench.batch_long_run                # 6,000 reports
+    python -m bench.batch_long_run --reports 500
 
 Writes ``bench/results/batch_long_run.txt``. Threads: OPENBLAS/MKL/OMP = 1, HiGHS 1 thread.
 The reference timed in the same run is the in-process ``correct_report`` of
@@ -25,19 +25,16 @@ import csv
 import functools
 import multiprocessing as mp
 import os
-import sys
 import tempfile
 import time
 from collections import Counter
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
-sys.path.insert(0, str(ROOT / "bench"))
 os.environ.update(OPENBLAS_NUM_THREADS="1", MKL_NUM_THREADS="1", OMP_NUM_THREADS="1")
 
-from batch_throughput import GUIDE, make_reports, reference, run
-
+from bench.batch_throughput import reference, run
+from bench.problems import GUIDE, make_reports
 from setupfix.model import load_model
 from setupfix.usecases.correct import correct_report
 from setupfix.usecases.export import cycle_rows
@@ -166,7 +163,7 @@ def main() -> None:
     missing_reports = {k[0] for k in expected} - {k[0] for k in got}
     first_bad = min((int(k[0][1:6]) for k in differ), default=None)
     lines = [
-        f"$ python bench/batch_long_run.py --reports {n}",
+        f"$ python -m bench.batch_long_run --reports {n}",
         f"{n} guide-pins reports (28 dimensions, 10 registers), each with its own deviations; "
         f"OPENBLAS/MKL/OMP threads = 1, HiGHS 1 thread; machine: busy 2-core box; time limit {limit:g} s per "
         "solve on both sides",

@@ -21,17 +21,14 @@ and checking it, correcting it (exact solve and safety rules), and its offset ro
 step in ±0.005 mm, the stated deviation recomputed), so that no two reports pose the
 same problem to the solver; without it the copies repeat five problems.
 
-    python bench/batch_throughput.py [--reports 1000] [--vary]   # writes bench/results/batch_throughput[_vary].txt
+    python -m bench.batch_throughput [--reports 1000] [--vary]   # writes bench/results/batch_throughput[_vary].txt
 """
 
 from __future__ import annotations
 
 import argparse
-import csv
 import hashlib
-import io
 import os
-import random
 import statistics
 import subprocess
 import sys
@@ -40,10 +37,10 @@ import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
 os.environ.update(OPENBLAS_NUM_THREADS="1", MKL_NUM_THREADS="1", OMP_NUM_THREADS="1")
 
 import parsers
+from bench.problems import GUIDE, make_reports
 from setupfix.inputs.checks import check_parts
 from setupfix.inputs.cycles import assign_stations
 from setupfix.model import load_model, match_parts
@@ -51,30 +48,7 @@ from setupfix.usecases.correct import correct_cycle, correct_report
 from setupfix.usecases.export import cycle_rows
 from setupfix.usecases.requests import CorrectRequest
 
-GUIDE = ROOT / "sample_reports" / "guide_pins"
 RESULTS = ROOT / "bench" / "results"
-
-
-def _varied(text: str, rng: random.Random) -> str:
-    """The cycle with each actual moved by a uniform step in ±0.005 mm (4 decimals), deviation recomputed."""
-    rows = list(csv.DictReader(io.StringIO(text, newline="")))
-    for row in rows:
-        actual = round(float(row["actual"]) + rng.uniform(-0.005, 0.005), 4)
-        row["actual"] = f"{actual:.4f}"
-        row["deviation"] = f"{actual - float(row['nominal']):.4f}"
-    out = io.StringIO(newline="")
-    writer = csv.DictWriter(out, fieldnames=list(rows[0]), lineterminator="\n")
-    writer.writeheader()
-    writer.writerows(rows)
-    return out.getvalue()
-
-
-def make_reports(folder: Path, n: int, vary: bool = False) -> None:
-    texts = [(GUIDE / f"cycle_0{i}.csv").read_text() for i in range(1, 6)]
-    rng = random.Random(0)
-    for k in range(n):
-        text = texts[k % 5].replace("T08:00:00", f"T{8 + (k // 3600) % 12:02d}:{(k // 60) % 60:02d}:{k % 60:02d}")
-        (folder / f"r{k:05d}.csv").write_text(_varied(text, rng) if vary else text)
 
 
 def reference() -> float:
@@ -205,7 +179,7 @@ def main() -> None:
         ]
         lines.append("target (issues 15 and 22): 1,000 reports in ≤ 10 s → 10 ms per report: " + "; ".join(verdicts))
     suffix = "_vary" if args.vary else ""
-    command = f"$ python bench/batch_throughput.py --reports {n}" + (" --vary" if args.vary else "")
+    command = f"$ python -m bench.batch_throughput --reports {n}" + (" --vary" if args.vary else "")
     (RESULTS / f"batch_throughput{suffix}.txt").write_text(command + "\n" + "\n".join(lines) + "\n")
     print("\n".join(lines))
 

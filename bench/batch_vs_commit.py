@@ -3,12 +3,12 @@
 On a busy machine absolute times move by 2× from one minute to the next; running the
 two trees alternately on the same reports gives a ratio that does not.  The commit is
 exported with ``git archive`` into a temporary folder and both trees run
-``python -m setupfix batch`` from their own root (the current directory wins on
-sys.path), with 1 and 2 workers, ``--rounds`` times each; the median wall time of each
+``python -m setupfix batch`` from their own root (the current directory comes first
+on the import path), with 1 and 2 workers, ``--rounds`` times each; the median wall time of each
 is reported with the ratio this/commit, and the offsets files of the two trees are
 compared byte for byte.  OpenBLAS/MKL/OMP threads are pinned to 1.
 
-    python bench/batch_vs_commit.py [--commit 990b710] [--reports 300] [--rounds 3] [--vary]
+    python -m bench.batch_vs_commit [--commit 990b710] [--reports 300] [--rounds 3] [--vary]
                                     [--time-limit S] [--out FILE]
     # writes bench/results/batch_vs_commit.txt (or FILE); rows differing between the trees are counted
 """
@@ -20,16 +20,15 @@ import io
 import os
 import statistics
 import subprocess
-import sys
 import tarfile
 import tempfile
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "bench"))
 os.environ.update(OPENBLAS_NUM_THREADS="1", MKL_NUM_THREADS="1", OMP_NUM_THREADS="1")
 
-from batch_throughput import make_reports, run
+from bench.batch_throughput import run
+from bench.problems import make_reports
 
 OUT = ROOT / "bench" / "results" / "batch_vs_commit.txt"
 
@@ -85,7 +84,7 @@ def main() -> None:
         differing = sum(x != y for x, y in zip(a, b, strict=False)) + abs(len(a) - len(b))
         lines.append(f"workers {workers}: {differing} of {len(a) - 1} offset rows differ between the trees")
     command = (
-        f"$ python bench/batch_vs_commit.py --commit {args.commit} --reports {args.reports} "
+        f"$ python -m bench.batch_vs_commit --commit {args.commit} --reports {args.reports} "
         f"--rounds {args.rounds}"
         + (" --vary" if args.vary else "")
         + ("" if args.time_limit is None else f" --time-limit {args.time_limit:g}")

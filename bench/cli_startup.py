@@ -4,7 +4,7 @@ Each command runs ``--repeat`` times in a fresh interpreter (``python -m setupfi
 from the project root); the median wall and CPU times (children's user + system) are
 given, and each as a ratio to ``python -c pass`` timed interleaved in the same run.
 
-    python bench/cli_startup.py            # 15 repeats
+    python -m bench.cli_startup            # 15 repeats
 
 Writes ``bench/results/cli_startup.txt`` (with the command).
 """
@@ -54,7 +54,7 @@ def main(argv: list[str] | None = None) -> None:
     ref_w, ref_c = np.median(walls["python -c pass"]), np.median(cpus["python -c pass"])
     lines = [
         "CLI start-up: fresh interpreter per call, median of the repeats",
-        f"command : python bench/cli_startup.py --repeat {args.repeat}",
+        f"command : python -m bench.cli_startup --repeat {args.repeat}",
         f"machine : {platform.machine()}, Python {platform.python_version()}",
         "",
         f"{'command':<22}{'wall [s]':>10}{'x pass':>8}{'CPU [s]':>10}{'x pass':>8}",

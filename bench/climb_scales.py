@@ -8,7 +8,7 @@ per variant (each pass without the model's memo, as a new process), and each rep
 best pass.  The reference is one LP of eq. 8 per report, timed in the same run.  BLAS and HiGHS
 single-threaded.
 
-    python bench/climb_scales.py          # writes bench/results/climb_scales.txt
+    python -m bench.climb_scales          # writes bench/results/climb_scales.txt
 """
 
 from __future__ import annotations
@@ -21,17 +21,15 @@ import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
-sys.path.insert(0, str(ROOT / "bench"))
 os.environ.update(OPENBLAS_NUM_THREADS="1", MKL_NUM_THREADS="1", OMP_NUM_THREADS="1")
 
 import numpy as np
-from exact_per_report import problems
-from leximin_speed import lp_seconds
 from threadpoolctl import threadpool_limits
 
 import setupfix.optimize.exact.leximin.search as search_mod
 import setupfix.optimize.exact.session as session_mod
+from bench.leximin_speed import lp_seconds
+from bench.problems import guide_pins_problems
 from setupfix.optimize import get_optimizer
 
 RESULTS = ROOT / "bench" / "results"
@@ -47,7 +45,7 @@ def main() -> None:
     variants = [tuple(float(s) for s in v.split("/")) for v in args.variants.split(",")]
     lines = [
         "The leximin levels' grid climb: move sizes against each other, interleaved in one process",
-        f"command : python bench/{Path(__file__).name} " + " ".join(sys.argv[1:]),
+        f"command : python -m bench.{Path(__file__).stem} " + " ".join(sys.argv[1:]),
         f"machine : {platform.machine()}, Python {platform.python_version()}, numpy {np.__version__}; "
         f"{os.cpu_count()} CPUs; BLAS 1 thread (threadpoolctl), HiGHS 1 thread",
         f"load    : 1-min load average {os.getloadavg()[0]:.2f} at the start",
@@ -58,7 +56,7 @@ def main() -> None:
     saved = search_mod.SCALES
     opt = get_optimizer("exact", objective="leximin", time_limit=2.0)
     with threadpool_limits(1):
-        probs = problems(args.sets, 2014)
+        probs = guide_pins_problems(args.sets, 2014)
         lp = float(np.median([lp_seconds(p) for _, p in probs]))
         opt.solve(probs[0][1])  # warm-up (imports, first allocations)
         best = np.full((len(variants), len(probs)), np.inf)

@@ -7,20 +7,18 @@ ways: against the paper's timings (CRIPSO 0.58 s / 5,000 solutions, PSO 0.96 s /
 ratio to one vectorised numpy evaluation of the same number of random grid
 solutions measured in the same run (machine-independent).
 
-    python bench/compare_guide_pins.py            # writes bench/results/compare_guide_pins.{txt,png}
+    python -m bench.compare_guide_pins            # writes bench/results/compare_guide_pins.{txt,png}
 """
 
 from __future__ import annotations
 
 import dataclasses
-import sys
 import time
 from pathlib import Path
 
 import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
 
 from setupfix.inputs.cycles import load_parts
 from setupfix.model import load_model
@@ -53,7 +51,7 @@ def main() -> None:
     OUT.mkdir(parents=True, exist_ok=True)
     model = load_model(SAMPLE / "model.toml")
     lines = [
-        "# python bench/compare_guide_pins.py",
+        "# python -m bench.compare_guide_pins",
         f"# {time.strftime('%Y-%m-%d %H:%M:%S')}, BLAS threads 1 (threadpoolctl)",
         "",
     ]

@@ -20,7 +20,7 @@ C. Speed: diagnose with the walk forward at 40 × 28 and 1,000 × 28 (wear hidde
    of 3 (1 for 1,000), as ratios to a numpy reference (SVD of a 1000 × 300 matrix) timed in the
    same run.  BLAS threads: 1.
 
-    python bench/diagnose_calibration.py [series per setting]   # writes bench/results/diagnose_calibration.txt
+    python -m bench.diagnose_calibration [series per setting]   # writes bench/results/diagnose_calibration.txt
 """
 
 from __future__ import annotations
@@ -34,11 +34,8 @@ import scipy.stats
 from threadpoolctl import threadpool_limits
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
-sys.path.insert(0, str(ROOT / "tests"))
 
-from diagnose.helpers import NOISE, guide_pins, one_effect, simulate, topology
-
+from bench.diagnosis import NOISE, guide_pins, one_effect, simulate, svd_seconds, topology
 from setupfix.diagnose import Diagnoser, Layout, select_effects
 
 OUT = ROOT / "bench" / "results" / "diagnose_calibration.txt"
@@ -119,16 +116,6 @@ def right(found, hidden) -> bool:
     return False
 
 
-def reference() -> float:
-    a = np.random.default_rng(0).normal(size=(1000, 300))
-    best = np.inf
-    for _ in range(5):
-        t = time.perf_counter()
-        np.linalg.svd(a, full_matrices=False)
-        best = min(best, time.perf_counter() - t)
-    return best
-
-
 def main(n_series: int) -> None:
     lines: list[str] = []
 
@@ -205,7 +192,7 @@ def main(n_series: int) -> None:
         "C. speed: diagnose with the walk forward (guide pins, 28 dimensions, wear hidden, shared noise 2x, "
         "a process log of three channels; BLAS 1)"
     )
-    ref = reference()
+    ref = svd_seconds()
     say(f"reference: SVD of a 1000 x 300 matrix = {1e3 * ref:.1f} ms")
     for n, reps, target in ((40, 3, 2.0), (1000, 1, 30.0)):
         sim = simulate(layout, [one_effect(layout, "wear")], seed=9, n_cycles=n, part_noise=2 * NOISE, process=3)

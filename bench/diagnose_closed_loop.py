@@ -31,13 +31,12 @@ E. Speed: diagnose (all candidates, walk forward included) at 40 × 28 and
    1,000 × 28; each time also as a ratio to a fixed numpy reference (SVD of a
    1000 × 300 matrix) timed in the same run.  BLAS threads: 1 (threadpoolctl).
 
-    python bench/diagnose_closed_loop.py     # writes bench/results/diagnose_closed_loop.txt
+    python -m bench.diagnose_closed_loop     # writes bench/results/diagnose_closed_loop.txt
 """
 
 from __future__ import annotations
 
 import contextlib
-import sys
 import time
 from pathlib import Path
 
@@ -45,11 +44,8 @@ import numpy as np
 from threadpoolctl import threadpool_limits
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
-sys.path.insert(0, str(ROOT / "tests"))
 
-from diagnose.helpers import NOISE, guide_pins, one_effect, simulate, topology
-
+from bench.diagnosis import NOISE, guide_pins, one_effect, simulate, svd_seconds, topology
 from setupfix.diagnose import Diagnoser, EffectSpec, Layout, select_effects, walk_forward
 from setupfix.diagnose.fit import row_space_basis
 
@@ -390,19 +386,9 @@ def section_d(lines: list[str]) -> None:
     ]
 
 
-def reference() -> float:
-    a = np.random.default_rng(0).normal(size=(1000, 300))
-    best = np.inf
-    for _ in range(5):
-        t0 = time.perf_counter()
-        np.linalg.svd(a, full_matrices=False)
-        best = min(best, time.perf_counter() - t0)
-    return best
-
-
 def section_e(lines: list[str]) -> None:
     layout = Layout.from_model(guide_pins())
-    ref = reference()
+    ref = svd_seconds()
     lines += [
         "E. speed (guide pins, 28 dimensions, wear hidden; best of 3; BLAS threads 1)",
         f"reference: SVD of a 1000 x 300 matrix = {ref * 1000:.1f} ms",
@@ -424,7 +410,7 @@ def section_e(lines: list[str]) -> None:
 
 def main() -> None:
     t0 = time.perf_counter()
-    lines = ["python bench/diagnose_closed_loop.py", ""]
+    lines = ["python -m bench.diagnose_closed_loop", ""]
     with threadpool_limits(limits=1):
         for section in (section_a, section_a2, section_b, section_c, section_d, section_e):
             start = len(lines)

@@ -16,7 +16,7 @@ E. Speed: diagnose with the walk forward, with and without the declaration.
 The declared tests: the multi-column cluster-robust Wald test with each part's residual corrected for its
 leverage (CR2) and Bell-McCaffrey degrees of freedom (setupfix/diagnose/inference.py, cluster_wald with Q).
 
-    python bench/diagnose_factors.py [series per setting, default 300]   # writes bench/results/diagnose_factors.txt
+    python -m bench.diagnose_factors [series per setting, default 300]   # writes bench/results/diagnose_factors.txt
 """
 
 from __future__ import annotations
@@ -30,14 +30,9 @@ import numpy as np
 from threadpoolctl import threadpool_limits
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
-sys.path.insert(0, str(ROOT / "tests"))
 
-from diagnose.helpers import NOISE, guide_pins, simulate
-from diagnose.plate_doe import speed_tests
-from diagnose.test_plate import LOG, MODEL, PLATE
-from diagnose_calibration import rate
-
+from bench.diagnose_calibration import rate
+from bench.diagnosis import NOISE, PLATE, PLATE_LOG, PLATE_MODEL, guide_pins, simulate, speed_tests
 from setupfix.diagnose import Diagnoser, Layout, factor_tests, parse_terms
 from setupfix.diagnose.terms import channel_values
 from setupfix.inputs.series import load_series
@@ -71,7 +66,7 @@ def main(n_series: int) -> None:
     t0 = time.perf_counter()
     say(__doc__.split("\n\n    python")[0])
     say()
-    inp = load_series(MODEL, (PLATE,), process=str(LOG))
+    inp = load_series(PLATE_MODEL, (PLATE,), process=str(PLATE_LOG))
     terms = parse_terms(DESIGN)
     ft = factor_tests(inp.layout, inp.series, terms)
     indep = {r["register"]: r for r in speed_tests(inp.layout, inp.series)}
@@ -90,7 +85,7 @@ def main(n_series: int) -> None:
     say("  accepted at alpha = 0.05: " + ", ".join(f"{t.term.name} on {t.register}" for t in loose.tests if t.accepted))
     for label, factors in (("without --factors", ()), ("with --factors", (",".join(DESIGN),))):
         t = time.perf_counter()
-        d = diagnose_reports(DiagnoseRequest(MODEL, (PLATE,), process=str(LOG), factors=factors)).diagnosis
+        d = diagnose_reports(DiagnoseRequest(PLATE_MODEL, (PLATE,), process=str(PLATE_LOG), factors=factors)).diagnosis
         dt = time.perf_counter() - t
         w = d.walk.budgets if d.walk is not None else {}
         say(

@@ -23,7 +23,7 @@ D. The residual: the diagnosis's model, with the stick-out x speed term added pe
    and the per-cutter model on the same channels (a constant and coefficients per dimension, the
    0.025 mm the issue quotes).
 
-    python bench/diagnose_real.py [shuffles]     # writes bench/results/diagnose_real.txt
+    python -m bench.diagnose_real [shuffles]     # writes bench/results/diagnose_real.txt
 """
 
 from __future__ import annotations
@@ -37,12 +37,8 @@ from pathlib import Path
 import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
 
-sys.path.insert(0, str(ROOT / "tests"))
-
-from diagnose.plate_doe import LONG, RPM, residual_rms, speed_term, speed_term_pvalues, speed_tests
-
+from bench.diagnosis import LONG, RPM, channel, residual_rms, speed_term, speed_term_pvalues, speed_tests
 from setupfix.diagnose import Diagnoser, EffectSpec, select_effects
 from setupfix.inputs.series import load_series
 
@@ -214,8 +210,6 @@ def plate_speed(say) -> None:
 
 def _speed_contribution(layout, series) -> np.ndarray:
     """The stick-out x speed term with the within-long slope of C1 per register: (n_cycles, n_dimensions)."""
-    from diagnose.plate_doe import channel
-
     slope = {row["register"]: float(row["slope"]) for row in speed_tests(layout, series)}
     on = channel(series, LONG)
     a = on * (channel(series, RPM) / 1000.0 - 9.0)

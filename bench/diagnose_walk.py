@@ -10,14 +10,12 @@ B. The real NIST MTC plate (20 parts, model tests/data/nist_plate.toml; parts in
 C. Speed: ``diagnose`` of 40 × 28 with the walk forward and the next correction (correct_cycle), best of 5,
    BLAS threads 1, as a ratio to a reference timed in the same run (SVD of a 1000 × 300 matrix).
 
-Run: ``SETUPFIX_SHARED=../shared python bench/diagnose_walk.py`` → bench/results/diagnose_walk.txt
+Run: ``SETUPFIX_SHARED=../shared python -m bench.diagnose_walk`` → bench/results/diagnose_walk.txt
 """
 
 from __future__ import annotations
 
 import dataclasses
-import os
-import sys
 import time
 from collections import Counter
 from pathlib import Path
@@ -26,11 +24,8 @@ import numpy as np
 from threadpoolctl import threadpool_limits
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
-sys.path.insert(0, str(ROOT / "tests"))
 
-from diagnose.helpers import guide_pins, one_effect, simulate
-
+from bench.diagnosis import PLATE, PLATE_LOG, PLATE_MODEL, guide_pins, one_effect, simulate, svd_seconds
 from setupfix.diagnose import Diagnoser, Layout
 from setupfix.inputs.series import load_series
 from setupfix.usecases.diagnosis import recommend_next
@@ -38,11 +33,6 @@ from setupfix.usecases.diagnosis import recommend_next
 OUT = ROOT / "bench" / "results" / "diagnose_walk.txt"
 MODEL = guide_pins(positions=False)
 LAYOUT = Layout.from_model(MODEL)
-PLATE = ROOT / "sample_reports" / "qif" / "NIST_MTC_FAIR_Plate_Results_20parts.qif"
-PLATE_MODEL = ROOT / "tests" / "data" / "nist_plate.toml"
-PROCESS = (
-    Path(os.environ.get("SETUPFIX_SHARED", ROOT.parent / "shared")) / "real-series" / "nist-mtc" / "plate_process.csv"
-)
 
 
 def random_walk(seed: int, step: float = 0.004):
@@ -87,9 +77,9 @@ def section_b(lines: list[str]) -> None:
 
     inp = load_series(PLATE_MODEL, (PLATE,))
     series = inp.series
-    timed = PROCESS.is_file()
+    timed = PLATE_LOG.is_file()
     if timed:
-        log = pd.read_csv(PROCESS)
+        log = pd.read_csv(PLATE_LOG)
         stamps = pd.to_datetime(log["timestamp"])
         series = dataclasses.replace(
             series,
@@ -121,18 +111,8 @@ def section_b(lines: list[str]) -> None:
     ]
 
 
-def reference() -> float:
-    a = np.random.default_rng(0).normal(size=(1000, 300))
-    best = np.inf
-    for _ in range(5):
-        t0 = time.perf_counter()
-        np.linalg.svd(a, full_matrices=False)
-        best = min(best, time.perf_counter() - t0)
-    return best
-
-
 def section_c(lines: list[str]) -> None:
-    ref = reference()
+    ref = svd_seconds()
     lines += [
         "C. speed (guide pins 40 x 28, wear hidden; best of 5; BLAS threads 1)",
         f"   reference: SVD of a 1000 x 300 matrix = {ref * 1000:.1f} ms",
@@ -158,7 +138,7 @@ def section_c(lines: list[str]) -> None:
 
 def main() -> None:
     t0 = time.perf_counter()
-    lines = ["python bench/diagnose_walk.py", ""]
+    lines = ["python -m bench.diagnose_walk", ""]
     with threadpool_limits(limits=1):
         for section in (section_a, section_b, section_c):
             start = len(lines)

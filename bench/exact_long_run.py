@@ -7,8 +7,8 @@ solves ``--reports`` guide-pins reports (random sets by eqs. 12-13, drawn once a
 in turn) with one optimiser instance at the default limit, and compares each answer with
 the one a fresh process gives (a subprocess solving each distinct set once).
 
-    python bench/exact_long_run.py                 # 6,000 reports, 50 distinct sets
-    python bench/exact_long_run.py --reports 1000
+    python -m bench.exact_long_run                 # 6,000 reports, 50 distinct sets
+    python -m bench.exact_long_run --reports 1000
 
 Writes ``bench/results/exact_long_run.txt`` (with the command).  The time per report is
 given as a ratio to one vectorised ``problem.evaluate`` of 5,000 grid solutions (the
@@ -32,7 +32,6 @@ import numpy as np
 from threadpoolctl import threadpool_limits
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
 
 from setupfix.correction.synthetic import simulate_deviations
 from setupfix.model import PartMeasurement, load_model
@@ -100,7 +99,7 @@ def main(argv: list[str] | None = None) -> None:
     t, ref = np.array(times), float(np.median(refs))
     lines = [
         "Exact optimiser: a long run in one process against a fresh process (issue 21, item 1)",
-        f"command : python bench/exact_long_run.py --reports {args.reports} --sets {args.sets} --seed {args.seed}",
+        f"command : python -m bench.exact_long_run --reports {args.reports} --sets {args.sets} --seed {args.seed}",
         (
             f"machine : {platform.machine()}, Python {platform.python_version()}, numpy {np.__version__}; "
             f"wall time {wall:.1f} s; 1-min load average {os.getloadavg()[0]:.2f} at the end ({os.cpu_count()} cores)"
@@ -125,5 +124,7 @@ def main(argv: list[str] | None = None) -> None:
 
 if __name__ == "__main__":
     if platform.system() == "Linux" and any(os.environ.get(k) != v for k, v in MALLOC.items()):
-        os.execve(sys.executable, [sys.executable, *sys.argv], {**os.environ, **MALLOC})
+        os.execve(
+            sys.executable, [sys.executable, "-m", "bench.exact_long_run", *sys.argv[1:]], {**os.environ, **MALLOC}
+        )
     main()

@@ -21,8 +21,8 @@ Reported:
   1, 2, 3, 4, 5, 1, 2, …, ``--rounds`` times, one optimiser instance): the median per cycle,
   the mean of the five medians, each as a ratio to the same reference.
 
-    python bench/exact_per_report.py              # 5 cycles + 200 random sets, 40 rounds of the cycles
-    python bench/exact_per_report.py --sets 50 --rounds 10
+    python -m bench.exact_per_report              # 5 cycles + 200 random sets, 40 rounds of the cycles
+    python -m bench.exact_per_report --sets 50 --rounds 10
 
 Writes ``bench/results/exact_per_report.txt`` (with the command).
 """
@@ -44,11 +44,8 @@ import numpy as np
 from threadpoolctl import threadpool_info, threadpool_limits
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
 
-from setupfix.correction.synthetic import simulate_deviations
-from setupfix.inputs.cycles import load_parts
-from setupfix.model import PartMeasurement, load_model
+from bench.problems import guide_pins_problems
 from setupfix.optimize import CorrectionProblem, get_optimizer
 
 RESULTS = ROOT / "bench" / "results"
@@ -58,21 +55,6 @@ SAMPLE = ROOT / "sample_reports" / "guide_pins"
 #: previous version's solves and 4 ms after this one's (or with no solve at all).  Pinned here (Linux;
 #: the bench re-executes itself with them), so that both sides of every ratio see the same allocator.
 MALLOC = {"MALLOC_MMAP_THRESHOLD_": str(32 << 20), "MALLOC_TRIM_THRESHOLD_": str(64 << 20)}
-
-
-def problems(sets: int, seed: int) -> list[tuple[str, CorrectionProblem]]:
-    model = load_model(SAMPLE / "model.toml")
-    out = []
-    for i in range(1, 6):
-        for part in load_parts(model, SAMPLE / f"cycle_{i:02d}.csv"):
-            out.append((f"cycle_{i:02d}", CorrectionProblem.from_part(model, part)))
-    devs, _ = simulate_deviations(model, sets, w1=0.03, w2=0.02, seed=seed)
-    for s, dev in enumerate(devs):
-        part = PartMeasurement(
-            part=f"set {s + 1}", report="eqs. 12-13", timestamp=None, deviation=dev, sources=("",) * dev.size
-        )
-        out.append((f"set {s + 1}", CorrectionProblem.from_part(model, part)))
-    return out
 
 
 def reference_seconds(problem: CorrectionProblem, x: np.ndarray) -> float:
@@ -114,7 +96,7 @@ def main(argv: list[str] | None = None) -> None:
 
     with threadpool_limits(limits=1):
         blas = ", ".join(f"{i['internal_api']} {i['num_threads']} thread(s)" for i in threadpool_info()) or "none"
-        items = problems(args.sets, args.seed)
+        items = guide_pins_problems(args.sets, args.seed)
         exact = get_optimizer("exact")
         exact.solve(items[0][1])  # warm-up: imports, first solver set-up
         rng = np.random.default_rng(0)
@@ -157,7 +139,7 @@ def main(argv: list[str] | None = None) -> None:
     n = len(items)
     lines = [
         "Exact optimiser: time per report on the guide-pins model (paper's example)",
-        f"command : python bench/exact_per_report.py --sets {args.sets} --seed {args.seed} --rounds {args.rounds}",
+        f"command : python -m bench.exact_per_report --sets {args.sets} --seed {args.seed} --rounds {args.rounds}",
         f"machine : {platform.machine()}, Python {platform.python_version()}, numpy {np.__version__}; "
         f"wall time {wall:.1f} s",
         f"threads : BLAS limited to 1 by threadpoolctl ({blas})",
@@ -218,5 +200,7 @@ def main(argv: list[str] | None = None) -> None:
 
 if __name__ == "__main__":
     if platform.system() == "Linux" and any(os.environ.get(k) != v for k, v in MALLOC.items()):
-        os.execve(sys.executable, [sys.executable, *sys.argv], {**os.environ, **MALLOC})
+        os.execve(
+            sys.executable, [sys.executable, "-m", "bench.exact_per_report", *sys.argv[1:]], {**os.environ, **MALLOC}
+        )
     main()

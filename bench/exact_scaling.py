@@ -17,11 +17,11 @@ load average at the start and end are recorded (the machine may be shared).  The
 also counts the independent blocks of registers (no dimension joins two; more than one
 would let the problem decompose).
 
-    python bench/exact_scaling.py                    # sizes up to 300 x 5,000, 5 seeds
-    python bench/exact_scaling.py --seeds 2 --long 0
-    python bench/exact_scaling.py --objective leximin --seeds 3 --long 0 --max-size 5 \
+    python -m bench.exact_scaling                    # sizes up to 300 x 5,000, 5 seeds
+    python -m bench.exact_scaling --seeds 2 --long 0
+    python -m bench.exact_scaling --objective leximin --seeds 3 --long 0 --max-size 5 \
         --out bench/results/exact_scaling_leximin.txt   # the default objective, with its leximin stage
-    python bench/exact_scaling.py --objective leximin --seeds 3 --long 0 --min-size 5 --max-size 5 \
+    python -m bench.exact_scaling --objective leximin --seeds 3 --long 0 --min-size 5 --max-size 5 \
         --limit 20 --out bench/results/exact_scaling_leximin_20s.txt   # 180 x 2,000 with 20 s
 
 ``--objective`` is the paper's eqs. 8-9 unless given (the figures of ``exact_scaling.txt``).
@@ -34,7 +34,6 @@ from __future__ import annotations
 import argparse
 import os
 import platform
-import sys
 import time
 from pathlib import Path
 
@@ -44,43 +43,13 @@ from scipy.sparse.csgraph import connected_components
 from threadpoolctl import threadpool_limits
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
 
+from bench.problems import shop_problem
 from setupfix.core.errors import SetupfixError
 from setupfix.optimize import CorrectionProblem, get_optimizer
 
 RESULTS = ROOT / "bench" / "results"
 SIZES = [(10, 28), (30, 100), (60, 400), (100, 800), (180, 2000), (300, 5000)]
-
-
-def shop_problem(n: int, m: int, seed: int) -> CorrectionProblem:
-    """A random multi-part fixture with n registers and m measured dimensions."""
-    rng = np.random.default_rng(seed)
-    n_wks = max(1, 2 * n // 3)
-    n_feat = max(2, m)
-    feat = np.zeros((n, n_feat))
-    sign = rng.choice([-1.0, 1.0], n_feat)
-    feat[rng.integers(0, n_wks, n_feat), np.arange(n_feat)] = sign
-    feat[n_wks + rng.integers(0, n - n_wks, n_feat), np.arange(n_feat)] = sign
-    comp = feat[:, rng.permutation(n_feat)[:m]].copy()
-    pairs = rng.random(m) < 0.3
-    other = feat[:, rng.integers(0, n_feat, m)]
-    comp[:, pairs] -= other[:, pairs]
-    lower = -np.round(rng.uniform(0.02, 0.1, m) / 0.005) * 0.005
-    upper = np.round(rng.uniform(0.02, 0.1, m) / 0.005) * 0.005
-    setup = 0.03 * (1 - 2 * rng.random(n))
-    dev = np.round(setup @ comp + 0.01 * (1 - 2 * rng.random(m)), 4)
-    return CorrectionProblem(
-        composite=comp,
-        deviation=dev,
-        lower=lower,
-        upper=upper,
-        lb=np.full(n, -0.1),
-        ub=np.full(n, 0.1),
-        resolution=0.001,
-        register_ids=tuple(f"R{i}" for i in range(n)),
-        dimension_ids=tuple(f"D{j}" for j in range(m)),
-    )
 
 
 def register_blocks(problem: CorrectionProblem) -> int:
@@ -185,7 +154,7 @@ def main(argv: list[str] | None = None) -> None:
     ]
     head = [
         "Exact optimiser at shop scale (random multi-part fixtures; times in seconds of wall time)",
-        f"command : python bench/exact_scaling.py --seeds {args.seeds} --long {args.long:g}"
+        f"command : python -m bench.exact_scaling --seeds {args.seeds} --long {args.long:g}"
         + (f" --max-size {args.max_size}" if args.max_size != len(SIZES) else "")
         + (f" --min-size {args.min_size}" if args.min_size != 1 else "")
         + (f" --limit {args.limit:g}" if args.limit else "")

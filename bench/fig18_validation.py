@@ -11,8 +11,8 @@ Timing is reported as seconds and as a ratio to a reference measured in the same
 run, interleaved with the work (one vectorised ``problem.evaluate`` of 5,000 random
 grid solutions), because the machine is shared and noisy.
 
-    python bench/fig18_validation.py                 # 100 sets x 10 runs, a minute or two
-    python bench/fig18_validation.py --sets 20 --runs 3
+    python -m bench.fig18_validation                 # 100 sets x 10 runs, a minute or two
+    python -m bench.fig18_validation --sets 20 --runs 3
 
 Writes ``bench/results/fig18_validation.txt`` (the table, with the command) and
 ``bench/results/fig18_validation.png`` (sorted results, as Fig. 18).
@@ -22,14 +22,12 @@ from __future__ import annotations
 
 import argparse
 import platform
-import sys
 import time
 from pathlib import Path
 
 import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
 
 from setupfix.correction.synthetic import simulate_deviations
 from setupfix.model import PartMeasurement, load_model
@@ -109,7 +107,7 @@ def main(argv: list[str] | None = None) -> None:
     norm_excess = ((found_norm - optimum_norm[:, None]) * 1000.0)[at_optimum] if at_optimum.any() else np.zeros(1)
     lines = [
         "Fig. 18 validation: CRIPSO (Stryczek 2014) vs the exact grid optimum, guide-pins model",
-        f"command : python bench/fig18_validation.py --sets {args.sets} --runs {args.runs} --seed {args.seed}",
+        f"command : python -m bench.fig18_validation --sets {args.sets} --runs {args.runs} --seed {args.seed}",
         f"machine : {platform.machine()}, Python {platform.python_version()}, numpy {np.__version__}; "
         f"wall time {wall:.1f} s; BLAS threads 1 (threadpoolctl)",
         f"problem : {problem.n_registers} registers (8 WKS + 2 tools), {problem.composite.shape[1]} dimensions, "

@@ -15,8 +15,8 @@ a tie was too large to list) and the ratio of each stage time to one LP solve ti
 run, interleaved with the work (the max-min LP of the problem: min −t, G k + t ≤ g, box; HiGHS,
 single thread).  BLAS single-threaded.
 
-    python bench/least_norm_tu.py               # sizes up to 300 x 5,000, 3 seeds
-    python bench/least_norm_tu.py --seeds 1 --max-size 3
+    python -m bench.least_norm_tu               # sizes up to 300 x 5,000, 3 seeds
+    python -m bench.least_norm_tu --seeds 1 --max-size 3
 
 Writes ``bench/results/least_norm_tu.txt`` (with the command).
 """
@@ -34,7 +34,6 @@ import numpy as np
 from threadpoolctl import threadpool_limits
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
 
 import setupfix.optimize.exact.least_norm.grid as stage
 from setupfix.optimize import CorrectionProblem, get_optimizer
@@ -111,7 +110,7 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--out", type=Path, default=RESULTS / "least_norm_tu.txt")
     args = parser.parse_args(argv)
     lines = [
-        f"$ python bench/least_norm_tu.py {' '.join(argv if argv is not None else sys.argv[1:])}".rstrip(),
+        f"$ python -m bench.least_norm_tu {' '.join(argv if argv is not None else sys.argv[1:])}".rstrip(),
         f"# {platform.processor() or platform.machine()}, {os.cpu_count()} CPUs, Python "
         f"{platform.python_version()}; load at start {os.getloadavg()[0]:.2f}",
         f"{'size':>11} {'seed':>4} {'1 LP ms':>8} {'LP ms':>8} {'LP/1LP':>6} {'old ms':>8} {'old/1LP':>7} "

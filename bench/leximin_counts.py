@@ -14,8 +14,8 @@ The reports whose conflict two dimensions must share are decided by branches on 
 (:func:`setupfix.optimize.exact.leximin.levels._alone`) before the counts: each of them is corrected again with
 the pairs switched off (``MAX_PAIR_TESTS`` = −1: the counts, as before), CPU time and answers compared.
 
-    python bench/leximin_counts.py                 # 600 reports, 60 s limit
-    python bench/leximin_counts.py --reports 100
+    python -m bench.leximin_counts                 # 600 reports, 60 s limit
+    python -m bench.leximin_counts --reports 100
 
 Threads: OPENBLAS/MKL/OMP = 1, HiGHS 1 thread.  Writes ``bench/results/leximin_counts.txt``.
 """
@@ -24,19 +24,17 @@ from __future__ import annotations
 
 import argparse
 import os
-import sys
 import tempfile
 import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
-sys.path.insert(0, str(ROOT / "bench"))
 os.environ.update(OPENBLAS_NUM_THREADS="1", MKL_NUM_THREADS="1", OMP_NUM_THREADS="1")
 
 import numpy as np
-from batch_throughput import GUIDE, make_reports, reference
 
+from bench.batch_throughput import reference
+from bench.problems import GUIDE, make_reports
 from setupfix.model import load_model
 from setupfix.optimize.exact.highs import LinearModel
 from setupfix.optimize.exact.leximin import counts as _leximin_counts
@@ -98,7 +96,7 @@ def main() -> None:
         way(False, True)
     lines = [
         "Leximin count MILPs: HiGHS presolve, the nested blocks' linking rows and the pair branches, process CPU time",
-        f"command : python bench/leximin_counts.py --reports {args.reports} --limit {args.limit:g}",
+        f"command : python -m bench.leximin_counts --reports {args.reports} --limit {args.limit:g}",
         "threads : OPENBLAS/MKL/OMP = 1, HiGHS threads = 1",
         f"load    : 1-min load average {load0:.2f} at the start, {os.getloadavg()[0]:.2f} at the end",
         f"reference: in-process correct_report of the five bundled cycles, mean {ref * 1e3:.2f} ms (wall)",

@@ -16,7 +16,7 @@ and count CP-SAT proves as far as the optimiser's levels reached.
 
 Needs ``pip install ortools`` (not a dependency of setupfix; used here only as a reference).
 
-    python bench/leximin_cpsat.py          # writes bench/results/leximin_cpsat.txt
+    python -m bench.leximin_cpsat          # writes bench/results/leximin_cpsat.txt
 """
 
 from __future__ import annotations
@@ -29,14 +29,12 @@ import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
-sys.path.insert(0, str(ROOT / "bench"))
 
 import numpy as np
-from exact_scaling import shop_problem
 from ortools.sat.python import cp_model
 from threadpoolctl import threadpool_limits
 
+from bench.problems import shop_problem
 from setupfix.optimize import CorrectionProblem, get_optimizer
 
 RESULTS = ROOT / "bench" / "results"
@@ -182,7 +180,7 @@ def main() -> None:
     args.out = args.out or str(RESULTS / ("leximin_cpsat_full.txt" if args.full else "leximin_cpsat.txt"))
     lines = [
         "The leximin on an independent engine (CP-SAT) against the optimiser",
-        f"command : python bench/{Path(__file__).name} " + " ".join(sys.argv[1:]),
+        f"command : python -m bench.{Path(__file__).stem} " + " ".join(sys.argv[1:]),
         f"machine : {platform.machine()}, Python {platform.python_version()}, numpy {np.__version__}, "
         f"ortools {__import__('ortools').__version__}; {os.cpu_count()} CPUs",
         f"threads : CP-SAT {os.cpu_count()} workers; the optimiser BLAS 1 thread (threadpoolctl), HiGHS 1 thread",
@@ -195,7 +193,7 @@ def main() -> None:
     n, m = (int(v) for v in args.size.split("x"))
     problem = shop_problem(n, m, args.seed)
     lines += [
-        f"problem : bench/exact_scaling.py shop_problem({n}, {m}, seed {args.seed}); margins in 0.1 µm "
+        f"problem : bench/problems.py shop_problem({n}, {m}, seed {args.seed}); margins in 0.1 µm "
         f"(the optimiser's steps are 1 µm = 10 units); each CP-SAT solve capped at {args.cap:g} s",
         "",
     ]

@@ -13,7 +13,7 @@ timed against NNLS on the whole system), each count MILP (its binaries against t
 active dimensions, the time it was given and took), ``meeting_rounding``'s calls and seconds, the
 levels reached, the wall time and the correction's norm.  BLAS and HiGHS single-threaded.
 
-    python bench/leximin_shop_trace.py          # writes bench/results/leximin_shop_trace.txt
+    python -m bench.leximin_shop_trace          # writes bench/results/leximin_shop_trace.txt
 """
 
 from __future__ import annotations
@@ -22,24 +22,21 @@ import argparse
 import functools
 import os
 import platform
-import sys
 import time
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
-sys.path.insert(0, str(ROOT / "bench"))
 os.environ.update(OPENBLAS_NUM_THREADS="1", MKL_NUM_THREADS="1", OMP_NUM_THREADS="1")
 
 import numpy as np
-from exact_scaling import shop_problem
 from threadpoolctl import threadpool_limits
 
 import setupfix.optimize.exact.leximin.counts as countmod
 import setupfix.optimize.exact.leximin.levels as lexmod
 import setupfix.optimize.exact.leximin.pins as pins
+from bench.problems import shop_problem
 from setupfix.optimize import get_optimizer
 
 RESULTS = ROOT / "bench" / "results"
@@ -145,11 +142,11 @@ def main(argv: list[str] | None = None) -> None:
     args = parser.parse_args(argv)
     lines = [
         "Leximin at shop scale, traced: a discrete conflict's alone tests and the count MILPs",
-        f"command : python bench/leximin_shop_trace.py --seed {args.seed} --limit {args.limit:g}",
+        f"command : python -m bench.leximin_shop_trace --seed {args.seed} --limit {args.limit:g}",
         f"machine : {platform.machine()}, Python {platform.python_version()}, numpy {np.__version__}; "
         f"{os.cpu_count()} CPUs; BLAS 1 thread (threadpoolctl), HiGHS 1 thread",
         f"load    : 1-min load average {os.getloadavg()[0]:.2f} at the start",
-        f"problem : bench/exact_scaling.py shop_problem(180, 2000, seed {args.seed}), objective leximin, "
+        f"problem : bench/problems.py shop_problem(180, 2000, seed {args.seed}), objective leximin, "
         f"time limit {args.limit:g} s",
     ]
     with threadpool_limits(limits=1):

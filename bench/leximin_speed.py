@@ -14,9 +14,9 @@ work is the least disturbed), each pass begins with no model's kept results of G
 (:meth:`~setupfix.optimize.exact.session.GridRows.memo`, as in a new process), and the median of every
 pass alone is printed too.
 
-    python bench/leximin_speed.py                     # 5 cycles + 100 random sets; 180 x 2000, 3 seeds
-    python bench/leximin_speed.py --sets 20 --shop-seeds 1
-    python bench/leximin_speed.py --only-multi-axis   # the multi-axis set alone
+    python -m bench.leximin_speed                     # 5 cycles + 100 random sets; 180 x 2000, 3 seeds
+    python -m bench.leximin_speed --sets 20 --shop-seeds 1
+    python -m bench.leximin_speed --only-multi-axis   # the multi-axis set alone
 
 Multi-axis set (issue 23): the three cycles of ``sample_reports/two_station_xyz`` and generated
 two-station fixtures (``tests/multi_axis_fixtures.py``, seeds 1..``--fixtures``): X/Y/Z, rotation,
@@ -41,13 +41,9 @@ import numpy as np
 from threadpoolctl import threadpool_limits
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
-sys.path.insert(0, str(ROOT / "bench"))
-
-from exact_per_report import problems
-from exact_scaling import shop_problem
 
 import setupfix.optimize.exact.session as session_mod
+from bench.problems import guide_pins_problems, make_fixture, report_csv, shop_problem
 from setupfix.model import load_model
 from setupfix.optimize import CorrectionProblem, get_optimizer
 from setupfix.optimize.exact.lp_bound import lp_bound, margin_rows
@@ -133,9 +129,6 @@ def multi_axis_problems(fixtures: int) -> list[tuple[str, CorrectionProblem]]:
     """The two-station sample's cycles and generated multi-axis fixtures, as the exact optimiser gets them."""
     import tempfile
 
-    sys.path.insert(0, str(ROOT / "tests"))
-    from multi_axis_fixtures import make_fixture, report_csv
-
     from setupfix.inputs.cycles import load_parts
 
     out = []
@@ -220,14 +213,14 @@ def main(argv: list[str] | None = None) -> None:
     args = ap.parse_args(argv)
     lines = [
         "Leximin centring: time per report (exact optimiser, objective leximin vs paper)",
-        "command : python bench/leximin_speed.py " + " ".join(sys.argv[1:] if argv is None else argv),
+        "command : python -m bench.leximin_speed " + " ".join(sys.argv[1:] if argv is None else argv),
         f"machine : {platform.machine()}, Python {platform.python_version()}, numpy {np.__version__}; "
         f"{os.cpu_count()} CPUs",
         "threads : BLAS limited to 1 (threadpoolctl); HiGHS threads = 1",
         f"load    : 1-min load average {os.getloadavg()[0]:.2f} at the start",
     ]
     with threadpool_limits(limits=1):
-        get_optimizer("exact").solve(problems(1, 0)[0][1])  # warm-up: imports, first HiGHS object
+        get_optimizer("exact").solve(guide_pins_problems(1, 0)[0][1])  # warm-up: imports, first HiGHS object
         if args.only_multi_axis:
             lines += multi_axis(args.fixtures, args.limit)
             lines.append(f"load    : 1-min load average {os.getloadavg()[0]:.2f} at the end")
@@ -235,7 +228,7 @@ def main(argv: list[str] | None = None) -> None:
             (RESULTS / "leximin_speed_multi_axis.txt").write_text(text, encoding="utf-8")
             sys.stdout.write(text)
             return
-        probs = problems(args.sets, args.seed)
+        probs = guide_pins_problems(args.sets, args.seed)
         status: dict[str, Counter[str]] = {"leximin": Counter(), "paper": Counter()}
         kinds: Counter[str] = Counter()
         wall = {key: np.zeros((args.passes, len(probs))) for key in ("lp", "paper", "leximin")}

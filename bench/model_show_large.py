@@ -8,7 +8,7 @@ timed in the same run: a linear command gives ratios near the size ratio (10 for
 model took 87 s and 3.5 GB (dense 10,000 × 10,000 grids printed cell by cell, and a
 10,000 × 10,000 SVD factor for the null space).
 
-    python bench/model_show_large.py               # sizes 1000 2000 5000 10000
+    python -m bench.model_show_large               # sizes 1000 2000 5000 10000
 
 Writes ``bench/results/model_show_large.txt`` (with the command).
 """
@@ -86,7 +86,7 @@ def main(argv: list[str] | None = None) -> None:
     ref_n, _, ref_cpu, _ = rows[0]
     lines = [
         f"setupfix model show on generated models (reference: {ref_n} dimensions, same run)",
-        f"command : python bench/model_show_large.py {' '.join(sys.argv[1:])}".rstrip(),
+        f"command : python -m bench.model_show_large {' '.join(sys.argv[1:])}".rstrip(),
         f"machine : {platform.machine()}, Python {platform.python_version()}",
         "",
         f"{'dimensions':>10} {'wall [s]':>9} {'CPU [s]':>8} {'peak RSS [MB]':>14} {'x size':>7} {'x CPU':>7}",

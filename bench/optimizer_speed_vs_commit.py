@@ -5,7 +5,7 @@ the same problem (guide-pins cycle 01) with the same seeds, alternating A B A B,
 own process with OpenBLAS/MKL/OMP threads = 1.  The earlier commit is checked out into a
 temporary git worktree and removed afterwards.
 
-    python bench/optimizer_speed_vs_commit.py --base e62cc1d   # writes bench/results/optimizer_speed_vs_commit.txt
+    python -m bench.optimizer_speed_vs_commit --base e62cc1d   # writes bench/results/optimizer_speed_vs_commit.txt
 """
 
 from __future__ import annotations
@@ -23,10 +23,10 @@ ROOT = Path(__file__).resolve().parents[1]
 OUT = ROOT / "bench" / "results" / "optimizer_speed_vs_commit.txt"
 METHODS = ("cripso", "pso", "ga", "coa", "cs")
 
-# Runs inside each tree: medians of `seeds` trials per method, as JSON on stdout.
+# Runs inside each tree, from its root (the current directory: its setupfix is the one imported):
+# medians of `seeds` trials per method, as JSON on stdout.
 CHILD = r"""
 import json, sys, time
-sys.path.insert(0, sys.argv[1])
 from setupfix.model import load_model
 try:
     from setupfix.inputs.cycles import load_parts
@@ -81,7 +81,7 @@ def main() -> None:
         ["git", "rev-parse", "--short", "HEAD"], cwd=ROOT, capture_output=True, text=True
     ).stdout.strip()
     lines = [
-        f"$ python bench/optimizer_speed_vs_commit.py --base {args.base} --seeds {args.seeds} --rounds {args.rounds}",
+        f"$ python -m bench.optimizer_speed_vs_commit --base {args.base} --seeds {args.seeds} --rounds {args.rounds}",
         f"guide-pins cycle 01; {args.seeds} seeds per method and round; {args.rounds} interleaved rounds; "
         "BLAS threads 1; median ms per trial over all rounds",
         f"{'method':<8}{'base ' + args.base:>16}{'this ' + head:>16}{'this / base':>13}   f1 base / this [mm]",

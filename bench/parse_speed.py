@@ -1,6 +1,6 @@
 """Characteristics parsed per second, per report format.
 
-Run: ``python bench/parse_speed.py > bench/results/parse_speed.txt``
+Run: ``python -m bench.parse_speed > bench/results/parse_speed.txt``
 
 Inputs: the real 20-part NIST QIF file (``sample_reports/qif``), and large files
 written here from the guide-pins cycle (``sample_reports/guide_pins/cycle_01.csv``)
@@ -15,7 +15,6 @@ import csv
 import functools
 import importlib.util
 import platform
-import sys
 import tempfile
 import time
 import warnings
@@ -26,7 +25,6 @@ import openpyxl
 import pandas as pd
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
 
 import parsers
 
@@ -130,7 +128,7 @@ def main() -> None:
     warnings.simplefilter("ignore")
     rows = _rows(PARTS)
     lines = [
-        f"# python bench/parse_speed.py  ({platform.python_version()}, pandas {pd.__version__}, "
+        f"# python -m bench.parse_speed  ({platform.python_version()}, pandas {pd.__version__}, "
         f"{platform.machine()}, best of {REPEAT})",
         "",
     ]

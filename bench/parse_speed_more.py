@@ -6,7 +6,7 @@ timed (best of ``--repeat``) and set against ``pandas.read_csv`` of the canonica
 of the same rows, measured in the same run: the ratio is machine-independent.  Samples
 from ``../shared`` are used when present and their formats skipped otherwise.
 
-    python bench/parse_speed_more.py            # writes bench/results/parse_speed_more.txt
+    python -m bench.parse_speed_more            # writes bench/results/parse_speed_more.txt
 """
 
 from __future__ import annotations
@@ -25,7 +25,6 @@ from pathlib import Path
 import pandas as pd
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
 
 import parsers
 from parsers.ogp.rtf import rtf_lines
@@ -157,7 +156,7 @@ def main() -> None:
             )
         )
         lines = [
-            f"$ python bench/parse_speed_more.py --rows {args.rows} --repeat {args.repeat}",
+            f"$ python -m bench.parse_speed_more --rows {args.rows} --repeat {args.repeat}",
             f"python {sys.version.split()[0]}, pandas {pd.__version__}; best of {args.repeat}; "
             "ratio = reader time / pandas.read_csv time of the canonical CSV of the same rows",
             "",

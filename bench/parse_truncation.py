@@ -1,6 +1,6 @@
 """Truncation sweep (issue 10): every sample cut at 40 byte points and 40 line ends, each prefix refused or a subset.
 
-Run: ``python bench/parse_truncation.py > bench/results/parse_truncation.txt``
+Run: ``python -m bench.parse_truncation > bench/results/parse_truncation.txt``
 (``--shared DIR`` for the samples of ../shared/cmm-samples; default ../shared beside the project).
 
 A prefix "changed" when it yields a row that is not a row of the whole file: a wrong
@@ -15,7 +15,6 @@ import sys
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
 
 from parsers.truncation import check_prefixes, cut_points, line_cut_points
 from setupfix.core.errors import SetupfixError

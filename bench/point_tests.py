@@ -16,7 +16,7 @@ It also records every level proof by NNLS (:func:`setupfix.optimize.exact.farkas
 level's own point): how many of the proofs the rows and box limits within ``NEAR`` steps of the point
 hold, and the time of the call with the near columns first against the whole system (best of 5 each).
 
-    python bench/point_tests.py [--sets 100]        # writes bench/results/point_tests.txt
+    python -m bench.point_tests [--sets 100]        # writes bench/results/point_tests.txt
 """
 
 from __future__ import annotations
@@ -32,15 +32,12 @@ import numpy as np
 from threadpoolctl import threadpool_limits
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
-sys.path.insert(0, str(ROOT / "bench"))
-
-from exact_per_report import problems
-from leximin_speed import lp_seconds
 
 import setupfix.optimize.exact.farkas as farkas
 import setupfix.optimize.exact.leximin.level as level_mod
 import setupfix.optimize.exact.leximin.pins as pins
+from bench.leximin_speed import lp_seconds
+from bench.problems import guide_pins_problems
 from setupfix.optimize import get_optimizer
 from setupfix.optimize.exact.grid import rounded_rhs
 from setupfix.optimize.exact.highs import INF, LinearModel
@@ -112,7 +109,7 @@ def main() -> None:
     ap.add_argument("--sets", type=int, default=100)
     ap.add_argument("--seed", type=int, default=2014)
     args = ap.parse_args()
-    probs = problems(args.sets, args.seed)
+    probs = guide_pins_problems(args.sets, args.seed)
     built: list[tuple[np.ndarray, np.ndarray]] = []  # (rows, right-hand sides) of each MILP a point test builds
     cases: list[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]] = []
     original, real = pins.LinearModel, level_mod.point_above
@@ -165,7 +162,7 @@ def main() -> None:
     t_all = np.array([r[5] for r in rows_out])
     lines = [
         "Point tests of the leximin levels: the MILP of the tight rows against the MILP of all rows",
-        "command : python bench/point_tests.py " + " ".join(sys.argv[1:]),
+        "command : python -m bench.point_tests " + " ".join(sys.argv[1:]),
         f"threads : BLAS limited to 1 (threadpoolctl); HiGHS threads = 1; {os.cpu_count()} CPUs; 1-min load "
         f"{os.getloadavg()[0]:.2f} at the end",
         f"problems: the paper-size set of bench/leximin_speed.py ({len(probs)} reports, seed {args.seed}); "

@@ -16,7 +16,7 @@ holding one machine-year (the embedded store), and the stage-1 timings of the se
 What grows with the plant (show) is fitted linearly in the number of reports and
 extrapolated to 100 machines; what must stay flat (import, series) is compared stage by stage.
 
-    .ci/postgres python bench/store_scale.py [--budget 240] [--machines 100]
+    .ci/postgres python -m bench.store_scale [--budget 240] [--machines 100]
     # or --db postgresql://… ; writes bench/results/store_scale.txt
 """
 
@@ -32,7 +32,6 @@ import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
 
 import numpy as np
 import pandas as pd

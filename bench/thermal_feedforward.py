@@ -1,6 +1,6 @@
 """Issue 12: thermal drift fed forward into the corrections, on the real gooddash runs.
 
-    OPENBLAS_NUM_THREADS=1 python bench/thermal_feedforward.py | tee bench/results/thermal_feedforward.txt
+    OPENBLAS_NUM_THREADS=1 python -m bench.thermal_feedforward | tee bench/results/thermal_feedforward.txt
 
 Data: ../shared/thermal-data/gooddash (no licence: read in place; SETUPFIX_SHARED names the
 folder elsewhere); 22 temperature rises, error E in µm, one sample = one part cycle.
@@ -27,14 +27,12 @@ averaged over the pairs; no dead band (every change is fed forward).
 from __future__ import annotations
 
 import os
-import sys
 from pathlib import Path
 
 import numpy as np
 from threadpoolctl import threadpool_limits
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
 
 from parsers.temperature import read_temperature_log
 from setupfix.thermal.feedforward import drift_change

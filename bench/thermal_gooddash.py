@@ -1,6 +1,6 @@
 """Abdulshahed et al. (2017) Table II style comparison on the five real gooddash runs.
 
-    python bench/thermal_gooddash.py [--seeds 5] | tee bench/results/thermal_gooddash.txt
+    python -m bench.thermal_gooddash [--seeds 5] | tee bench/results/thermal_gooddash.txt
 
 Data: ../shared/thermal-data/gooddash (no licence: read in place, never copied).  Inputs:
 the repository's six temperature-sensitive points (0-based columns 2, 6, 9, 12, 19, 20);
@@ -20,8 +20,6 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
-
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from setupfix.thermal.estimator import MRAModel
 from setupfix.thermal.grey_model import GreyModel

@@ -1,6 +1,6 @@
 """Wang et al. (2017) §4 on the simulator: fused model vs MRA under sensor errors and failure.
 
-    python bench/thermal_robustness.py [--seeds 5] | tee bench/results/thermal_robustness.txt
+    python -m bench.thermal_robustness [--seeds 5] | tee bench/results/thermal_robustness.txt
 
 Training: 4 h variable-speed run (seed 1).  Test Case 1: 4 h at 1300 rpm; Case 2: 4 h of
 other random speed steps.  Sensor errors on the spindle-motor sensor: eq. (18)
@@ -12,13 +12,9 @@ other random speed steps.  Sensor errors on the spindle-motor sensor: eq. (18)
 from __future__ import annotations
 
 import argparse
-import sys
 import time
-from pathlib import Path
 
 import numpy as np
-
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from setupfix.thermal.estimator import MRAModel
 from setupfix.thermal.grey_model import GreyModel

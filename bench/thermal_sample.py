@@ -1,6 +1,6 @@
 """Every method on the bundled simulated sample, as ``setupfix thermal evaluate`` computes it.
 
-    python bench/thermal_sample.py | tee bench/results/thermal_sample.txt
+    python -m bench.thermal_sample | tee bench/results/thermal_sample.txt
 
 Train on ``sample_reports/thermal/train_variable.csv``, test on ``test_variable.csv`` and
 ``test_constant.csv``; target ``error_z`` (mm); default inputs (MRA/Grey: spindle_motor,
@@ -9,11 +9,8 @@ bearing, ambient; kalman: spindle_motor, bearing fused with the ambient); seed 1
 
 from __future__ import annotations
 
-import sys
 import time
 from pathlib import Path
-
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from setupfix.usecases.thermal_fit import evaluate_files
 

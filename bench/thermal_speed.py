@@ -1,6 +1,6 @@
 """Speed: GMC(1,N) cuckoo-search calibration on 500 samples × 9 sensors; streaming Kalman cost per sample.
 
-    python bench/thermal_speed.py | tee bench/results/thermal_speed.txt
+    python -m bench.thermal_speed | tee bench/results/thermal_speed.txt
 
 Reference in the same run: the GMC response by the direct O(n²) convolution sum (a
 lower-triangular kernel matrix) instead of the O(n) recursion used by the library.
@@ -9,13 +9,9 @@ lower-triangular kernel matrix) instead of the O(n) recursion used by the librar
 from __future__ import annotations
 
 import functools
-import sys
 import time
-from pathlib import Path
 
 import numpy as np
-
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from setupfix.thermal import grey
 from setupfix.thermal.grey_model import GreyModel

@@ -1,6 +1,6 @@
 """Issue 12: every thermal method on a real log split in time (fit on the first 40 %, predict the rest).
 
-    OPENBLAS_NUM_THREADS=1 python bench/thermal_split.py | tee bench/results/thermal_split.txt
+    OPENBLAS_NUM_THREADS=1 python -m bench.thermal_split | tee bench/results/thermal_split.txt
 
 Data: ../shared/thermal-data/gooddash (no licence: read in place; SETUPFIX_SHARED names the
 folder when the checkout is elsewhere).  Each of the five runs is one spindle log: 22
@@ -20,7 +20,6 @@ trapezoid and Tien's).  RMSE on the test part without its first sample, µm.
 from __future__ import annotations
 
 import os
-import sys
 import time
 from pathlib import Path
 
@@ -28,7 +27,6 @@ import numpy as np
 from threadpoolctl import threadpool_limits
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
 
 from parsers.temperature import read_temperature_log
 from setupfix.thermal.metrics import score

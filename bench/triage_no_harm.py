@@ -1,6 +1,6 @@
 """Triage with no harm inside the optimum against the old triage + re-solve (issue 22), on hard problems.
 
-Hard problems: the shop-shaped fixtures of ``bench/exact_scaling.py`` (two thirds WKS, one third
+Hard problems: the shop-shaped fixtures of ``bench.problems.shop_problem`` (two thirds WKS, one third
 tools, 30 % difference dimensions, ±0.1 mm limits on a 0.001 mm grid) with a larger random part
 of each deviation (``--noise``, default ±0.045 mm on top of eq. 12's setup error), so that about a
 tenth of the dimensions are measured out of tolerance and no correction brings all of them in.
@@ -13,8 +13,8 @@ recommended correction (new, old), whether the answer moves a dimension measured
 register bounds; HiGHS through ``setupfix.optimize.exact.highs``) solved in the same process just
 before.  BLAS single-threaded; the load average is recorded (the machine may be shared).
 
-    python bench/triage_no_harm.py                          # 30 x 100, 60 x 400, 180 x 2,000; 5 seeds
-    python bench/triage_no_harm.py --seeds 2 --old /work/main
+    python -m bench.triage_no_harm                          # 30 x 100, 60 x 400, 180 x 2,000; 5 seeds
+    python -m bench.triage_no_harm --seeds 2 --old /work/main
 
 Writes ``bench/results/triage_no_harm.txt`` (with the command).
 """
@@ -32,41 +32,11 @@ from pathlib import Path
 
 import numpy as np
 
+from bench.problems import shop_problem
+
 ROOT = Path(__file__).resolve().parents[1]
 RESULTS = ROOT / "bench" / "results"
 SIZES = [(30, 100), (60, 400), (180, 2000)]
-
-
-def hard_problem(n: int, m: int, seed: int, noise: float):  # -> CorrectionProblem (imported late: --tree)
-    """``exact_scaling.shop_problem`` with ±``noise`` mm of random deviation per dimension."""
-    from setupfix.optimize import CorrectionProblem
-
-    rng = np.random.default_rng(seed)
-    n_wks = max(1, 2 * n // 3)
-    n_feat = max(2, m)
-    feat = np.zeros((n, n_feat))
-    sign = rng.choice([-1.0, 1.0], n_feat)
-    feat[rng.integers(0, n_wks, n_feat), np.arange(n_feat)] = sign
-    feat[n_wks + rng.integers(0, n - n_wks, n_feat), np.arange(n_feat)] = sign
-    comp = feat[:, rng.permutation(n_feat)[:m]].copy()
-    pairs = rng.random(m) < 0.3
-    other = feat[:, rng.integers(0, n_feat, m)]
-    comp[:, pairs] -= other[:, pairs]
-    lower = -np.round(rng.uniform(0.02, 0.1, m) / 0.005) * 0.005
-    upper = np.round(rng.uniform(0.02, 0.1, m) / 0.005) * 0.005
-    setup = 0.03 * (1 - 2 * rng.random(n))
-    dev = np.round(setup @ comp + noise * (1 - 2 * rng.random(m)), 4)
-    return CorrectionProblem(
-        composite=comp,
-        deviation=dev,
-        lower=lower,
-        upper=upper,
-        lb=np.full(n, -0.1),
-        ub=np.full(n, 0.1),
-        resolution=0.001,
-        register_ids=tuple(f"R{i}" for i in range(n)),
-        dimension_ids=tuple(f"D{j}" for j in range(m)),
-    )
 
 
 def one_lp_seconds(problem) -> float:
@@ -91,7 +61,7 @@ def one_lp_seconds(problem) -> float:
 
 
 def run(sizes: list[tuple[int, int]], seeds: int, noise: float, limit: float) -> list[dict[str, object]]:
-    """Every problem through recommend in the tree on sys.path; one record per problem."""
+    """Every problem through recommend in the tree this process imports; one record per problem."""
     from threadpoolctl import threadpool_limits
 
     from setupfix.correction.pose import pose_policy
@@ -101,10 +71,10 @@ def run(sizes: list[tuple[int, int]], seeds: int, noise: float, limit: float) ->
 
     out = []
     with threadpool_limits(limits=1):
-        get_optimizer("exact").solve(hard_problem(10, 28, 99, noise))  # warm-up: imports, BLAS scan
+        get_optimizer("exact").solve(shop_problem(10, 28, 99, noise))  # warm-up: imports, BLAS scan
         for n, m in sizes:
             for seed in range(seeds):
-                p = hard_problem(n, m, seed, noise)
+                p = shop_problem(n, m, seed, noise)
                 lp = one_lp_seconds(p)
                 opt = get_optimizer("exact", time_limit=limit)
                 start = time.perf_counter()
@@ -146,7 +116,6 @@ def main(argv: list[str] | None = None) -> None:
     if args.worker:  # a subprocess in another tree: records as JSON on stdout
         print(json.dumps(run(sizes, args.seeds, args.noise, args.limit)))
         return
-    sys.path.insert(0, str(ROOT))
     load_start = os.getloadavg()
     new = run(sizes, args.seeds, args.noise, args.limit)
     old: list[dict[str, object]] = []
@@ -164,7 +133,8 @@ def main(argv: list[str] | None = None) -> None:
             "--max-size",
             str(args.max_size),
         ]
-        env = {**os.environ, "PYTHONPATH": str(args.old)}
+        # this file as a script, importing setupfix from --old and bench from this tree
+        env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(args.old), str(ROOT)])}
         done = subprocess.run(cmd, env=env, capture_output=True, text=True, check=True, cwd=str(args.old))
         old = json.loads(done.stdout)
     load_end = os.getloadavg()
@@ -210,7 +180,7 @@ def main(argv: list[str] | None = None) -> None:
         f"machine: {platform.processor() or platform.machine()}, {os.cpu_count()} CPUs, "
         f"load average {load_start[0]:.2f} → {load_end[0]:.2f}"
     )
-    lines.append("command: python bench/triage_no_harm.py " + " ".join(argv or sys.argv[1:]))
+    lines.append("command: python -m bench.triage_no_harm " + " ".join(argv or sys.argv[1:]))
     text = "\n".join(lines) + "\n"
     print(text)
     args.out.parent.mkdir(parents=True, exist_ok=True)

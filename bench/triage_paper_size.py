@@ -15,8 +15,8 @@ own time, the statuses, how many leximins were complete, and which triage path r
 ``--check``, cycle_01 with P1 D1 at -0.25 mm is also solved by the MILP path alone (the forced
 kept set switched off) with a long limit, and its correction compared with the default's.
 
-    python bench/triage_paper_size.py                      # 60 reports, before and after
-    python bench/triage_paper_size.py --reports 20 --no-before
+    python -m bench.triage_paper_size                      # 60 reports, before and after
+    python -m bench.triage_paper_size --reports 20 --no-before
 
 Writes ``bench/results/triage_paper_size.txt`` (with the command).
 """
@@ -60,7 +60,7 @@ def reports(n: int, seed: int) -> list[tuple[str, np.ndarray]]:
 
 
 def worker(n: int, seed: int, limit: float) -> dict[str, object]:
-    """Time every report in this process (the code on sys.path); returns the raw numbers."""
+    """Time every report in this process (the code on its PYTHONPATH); returns the raw numbers."""
     from threadpoolctl import threadpool_limits
 
     from setupfix.model import PartMeasurement, load_model
@@ -154,8 +154,6 @@ def run(code: Path, n: int, seed: int, limit: float) -> dict[str, list[object]]:
         str(seed),
         "--limit",
         str(limit),
-        "--code",
-        str(code),
     ]
     out = subprocess.run(cmd, env=env, capture_output=True, text=True, check=True)
     data: dict[str, list[object]] = json.loads(out.stdout.strip().splitlines()[-1])
@@ -201,15 +199,13 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("--no-before", action="store_true")
     ap.add_argument("--check", type=float, default=0.0, help="limit of the MILP-path check [s] (0: none)")
     ap.add_argument("--worker", action="store_true", help=argparse.SUPPRESS)
-    ap.add_argument("--code", type=Path, default=ROOT, help=argparse.SUPPRESS)
     args = ap.parse_args(argv)
     if args.worker:
-        sys.path.insert(0, str(args.code))
         print(json.dumps(worker(args.reports, args.seed, args.limit)))
         return
     lines = [
         "Triage at paper size: guide-pins cycles with 1 or 2 gross dimensions (exact optimiser, leximin)",
-        "command : python bench/triage_paper_size.py " + " ".join(sys.argv[1:] if argv is None else argv),
+        "command : python -m bench.triage_paper_size " + " ".join(sys.argv[1:] if argv is None else argv),
         f"machine : {platform.machine()}, Python {platform.python_version()}, numpy {np.__version__}; "
         f"{os.cpu_count()} CPUs",
         "threads : BLAS limited to 1 (threadpoolctl); HiGHS threads = 1; one subprocess per version",
@@ -250,7 +246,6 @@ def main(argv: list[str] | None = None) -> None:
             "correction can differ)",
         ]
     if args.check > 0:
-        sys.path.insert(0, str(ROOT))
         lines += check(args.check)
     lines.append(f"load    : 1-min load average {os.getloadavg()[0]:.2f} at the end")
     text = "\n".join(lines) + "\n"

@@ -8,8 +8,8 @@ are the wall time, the overrun beyond the limit, the status and the stage that s
 runs with its interrupt callbacks on the wall clock and without RINS/RENS
 (:mod:`setupfix.optimize.exact.highs`).
 
-    python bench/triage_time_limit.py             # 3 sizes x 3 seeds x limits 0.5 and 2 s
-    python bench/triage_time_limit.py --seeds 1
+    python -m bench.triage_time_limit             # 3 sizes x 3 seeds x limits 0.5 and 2 s
+    python -m bench.triage_time_limit --seeds 1
 
 Writes ``bench/results/triage_time_limit.txt`` (with the command).
 """
@@ -27,11 +27,8 @@ import numpy as np
 from threadpoolctl import threadpool_limits
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
-sys.path.insert(0, str(ROOT / "bench"))
 
-from exact_scaling import shop_problem
-
+from bench.problems import shop_problem
 from setupfix.optimize import CorrectionProblem, get_optimizer
 
 RESULTS = ROOT / "bench" / "results"
@@ -61,7 +58,7 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--out", type=Path, default=RESULTS / "triage_time_limit.txt")
     args = parser.parse_args(argv)
     lines = [
-        f"$ python bench/triage_time_limit.py {' '.join(argv if argv is not None else sys.argv[1:])}".rstrip(),
+        f"$ python -m bench.triage_time_limit {' '.join(argv if argv is not None else sys.argv[1:])}".rstrip(),
         f"# {platform.processor() or platform.machine()}, {os.cpu_count()} CPUs, Python "
         f"{platform.python_version()}; load at start {os.getloadavg()[0]:.2f}",
         f"{'size':>11} {'seed':>4} {'limit':>5} {'wall s':>7} {'cpu s':>6} {'over s':>7} {'status':<11} "

@@ -6,20 +6,18 @@ exact grid optimum of each set is the yardstick.  Writes the table to
 bench/results/validation_all_methods.txt and Fig. 18 with gaps to
 bench/results/validation_all_methods.png.
 
-    python bench/validation_all_methods.py [--sets 100] [--trials 10]
+    python -m bench.validation_all_methods [--sets 100] [--trials 10]
 """
 
 from __future__ import annotations
 
 import argparse
-import sys
 import time
 from pathlib import Path
 
 import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
 
 from setupfix.correction.synthetic import simulate_deviations
 from setupfix.model import PartMeasurement, load_model
@@ -67,7 +65,7 @@ def main() -> None:
     wall = time.perf_counter() - start
     ini, ex, exf = np.array(initial), np.array(exact_f1), np.array(exact_f)
     lines = [
-        f"# python bench/validation_all_methods.py --sets {args.sets} --trials {args.trials} --seed {args.seed}",
+        f"# python -m bench.validation_all_methods --sets {args.sets} --trials {args.trials} --seed {args.seed}",
         f"# {time.strftime('%Y-%m-%d %H:%M:%S')}, {wall:.0f} s wall, BLAS threads 1 (threadpoolctl)",
         "",
         f"{args.sets} sets by eqs. 12–13 (w1 = 0.03, w2 = 0.02 mm); f1 before correction from {ini.min():+.4f} "
