@@ -28,7 +28,7 @@ from setupfix.correction.safety import (
     reject_mask,
     short_list,
 )
-from setupfix.optimize import CorrectionProblem, OptimizeResult, harmed_columns
+from setupfix.optimize import CorrectionProblem, OptimizeResult, Status, harmed_columns
 
 if TYPE_CHECKING:  # pose builds the problem with the rules; recommend takes what it built
     from setupfix.correction.pose import PosedProblem
@@ -42,7 +42,7 @@ Array = npt.NDArray[np.float64]
 Mask = npt.NDArray[np.bool_]
 
 
-def _zero_result(problem: CorrectionProblem, optimizer: str, status: str, message: str) -> OptimizeResult:
+def _zero_result(problem: CorrectionProblem, optimizer: str, status: Status, message: str) -> OptimizeResult:
     x = np.zeros(problem.n_registers)
     budget = problem.margin_before
     return OptimizeResult(
@@ -131,8 +131,8 @@ def recommend(
 
     # no harm: the exact triage keeps every dimension measured in tolerance in it inside its optimum
     # (CorrectionProblem.floor); this checks the answer of any optimiser and refuses a harmful one
-    triaged = result.extra.get("triage")
-    if isinstance(triaged, dict) and triaged.get("refused"):
+    triaged = result.triage
+    if triaged is not None and triaged.refused:
         rules.append(
             RuleEffect(
                 "no_harm",
@@ -153,11 +153,11 @@ def recommend(
         )
         x = np.zeros_like(x)
         given_up = ()
-    elif given_up and isinstance(triaged, dict) and triaged.get("held"):
+    elif given_up and triaged is not None and triaged.held:
         rules.append(
             RuleEffect(
                 "no_harm",
-                f"the triage kept the {triaged['held']} dimension(s) measured in "
+                f"the triage kept the {triaged.held} dimension(s) measured in "
                 "tolerance in it and gave up only what no such correction brings in",
             )
         )
@@ -220,11 +220,11 @@ def stopped_rule(result: OptimizeResult, *, recommended: bool) -> RuleEffect:
     ``not_solved`` when nothing is recommended: "not solved within the time limit" (or
     "the solver failed"), naming the stage; ``stopped`` when a correction is still
     recommended: what was proved and the certified bound on the norm
-    (``result.extra["norm_ratio_max"]``: ‖x‖²_cost ≤ ratio · least norm).
+    (``result.norm_ratio_max``: ‖x‖²_cost ≤ ratio · least norm).
     """
-    where = result.extra.get("stopped")
-    stage = where.get("stage", "") if isinstance(where, dict) else ""
-    reason = where.get("reason", "") if isinstance(where, dict) else ""
+    where = result.stopped
+    stage = where.stage if where is not None else ""
+    reason = where.reason if where is not None else ""
     at = f" (the {stage} stage stopped)" if stage else ""
     if not recommended:
         what = (
@@ -237,7 +237,7 @@ def stopped_rule(result: OptimizeResult, *, recommended: bool) -> RuleEffect:
             f"{what}{at}: no proven correction, nothing is recommended (this is not "
             "'no change needed'); allow more time (--time-limit) or check the model",
         )
-    ratio = result.extra.get("norm_ratio_max")
+    ratio = result.norm_ratio_max
     certified = []
     if stage != "least norm" and result.bound is not None and np.isfinite(result.bound):
         certified.append(

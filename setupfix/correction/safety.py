@@ -156,7 +156,7 @@ class Recommendation:
         solved within the time limit", never "no change needed"; the rule ``not_solved``
         says so.  A stopped solve that still yields a correction (checked better than none,
         e.g. the grid optimum proved but not the least norm) is ``apply`` with the rule
-        ``stopped`` stating what is certified (``result.extra["norm_ratio_max"]``).
+        ``stopped`` stating what is certified (``result.norm_ratio_max``).
     """
 
     verdict: str

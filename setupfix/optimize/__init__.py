@@ -12,17 +12,21 @@ import inspect
 from typing import Any
 
 from setupfix.core.errors import ParameterError
-from setupfix.optimize.base import Evaluator, Metaheuristic, Optimizer, make_result
+from setupfix.optimize.base import NO_BETTER_THAN_NONE, Evaluator, Metaheuristic, Optimizer, make_result
 from setupfix.optimize.dimensions import dimension_floor, harmed_columns, model_dimensions
-from setupfix.optimize.problem import CorrectionProblem, OptimizeResult
+from setupfix.optimize.problem import CorrectionProblem, OptimizeResult, Status, Stopped, TriageRecord
 
 __all__ = [
     "OPTIMIZERS",
     "CorrectionProblem",
     "Evaluator",
     "Metaheuristic",
+    "NO_BETTER_THAN_NONE",
     "OptimizeResult",
     "Optimizer",
+    "Status",
+    "Stopped",
+    "TriageRecord",
     "dimension_floor",
     "get_optimizer",
     "harmed_columns",

@@ -10,14 +10,15 @@ from __future__ import annotations
 
 import time
 from abc import ABC, abstractmethod
-from typing import ClassVar
+from collections.abc import Mapping
+from typing import ClassVar, Final
 
 import numpy as np
 import numpy.typing as npt
 
 from setupfix.core.errors import Note
 from setupfix.core.params import Constraint, Interval, ValidatedParams
-from setupfix.optimize.problem import CorrectionProblem, OptimizeResult
+from setupfix.optimize.problem import CorrectionProblem, OptimizeResult, Status, Stopped, TriageRecord
 from setupfix.search import generator
 
 __all__ = [
@@ -37,7 +38,7 @@ __all__ = [
 Array = npt.NDArray[np.float64]
 
 #: Status of a result whose search found nothing better than no correction (x = 0 returned).
-NO_BETTER_THAN_NONE = "no_better_than_none"
+NO_BETTER_THAN_NONE: Final = "no_better_than_none"
 
 #: Declared ranges shared by the optimisers (``setupfix.core.params``).  Budgets and
 #: populations are bounded above so that no option makes a search run for hours.
@@ -58,13 +59,20 @@ def make_result(
     optimizer: str,
     evaluations: int,
     seconds: float,
-    status: str,
+    status: Status,
     history: Array | None = None,
     bound: float | None = None,
     message: str | None = None,
     binding: tuple[str, ...] | None = None,
     guard: bool = True,
     given_up: tuple[str, ...] = (),
+    notes: tuple[Note, ...] | None = None,
+    stopped: Stopped | None = None,
+    norm_ratio_max: float | None = None,
+    triage: TriageRecord | None = None,
+    leximin: tuple[tuple[float, int], ...] = (),
+    path: str = "",
+    stages: Mapping[str, float] | None = None,
 ) -> OptimizeResult:
     """Assemble an :class:`OptimizeResult` for corrections ``x`` (already on the grid).
 
@@ -80,6 +88,9 @@ def make_result(
 
     ``given_up`` (the triage's dimensions left to the NC program): δ before and after and the
     binding dimensions are those of the other dimensions, the kept ones; the result lists them.
+
+    ``notes`` (when given) are the result's, in place of the guard's; ``stopped``, ``norm_ratio_max``,
+    ``triage``, ``leximin``, ``path`` and ``stages``: the exact optimiser's record (:class:`OptimizeResult`).
     """
     x = np.asarray(x, dtype=float).copy()
     x[np.abs(x) < 1e-12] = 0.0  # no "-0.000" in outputs
@@ -106,9 +117,9 @@ def make_result(
         x = np.zeros_like(x)
         f1, f2, _ = problem.evaluate(x)
         after, status, binding = float(f1), NO_BETTER_THAN_NONE, None
-        notes: tuple[Note, ...] = (Note(message, kind="solver"),)
+        guarded: tuple[Note, ...] = (Note(message, kind="solver"),)
     else:
-        notes = ()
+        guarded = ()
     if message is None:
         message = (
             "all measured dimensions predicted inside tolerance"
@@ -129,8 +140,14 @@ def make_result(
         binding=problem.binding(x) if binding is None else binding,
         history=history,
         bound=bound,
-        notes=notes,
+        notes=guarded if notes is None else notes,
         given_up=given_up,
+        stopped=stopped,
+        norm_ratio_max=norm_ratio_max,
+        triage=triage,
+        leximin=leximin,
+        path=path,
+        stages={} if stages is None else dict(stages),
     )
 
 

@@ -20,7 +20,9 @@ problem in the same form as a one-axis one, so that every optimiser solves it un
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
+from typing import Literal
 
 import numpy as np
 import numpy.typing as npt
@@ -32,7 +34,7 @@ from setupfix.correction.relation import predict_dimensions, relation_matrices
 from setupfix.correction.zones import ZONE_TOLERANCE_MM, Circles, facet_rows, polygon_error, polygon_sides
 from setupfix.model import PartMeasurement, ProcessModel
 
-__all__ = ["CorrectionProblem", "OptimizeResult"]
+__all__ = ["CorrectionProblem", "OptimizeResult", "Status", "Stopped", "TriageRecord"]
 
 Array = npt.NDArray[np.float64]
 
@@ -347,9 +349,82 @@ class CorrectionProblem:
         return tuple(d for d, v in zip(self.dimension_ids, m, strict=True) if v <= m.min() + tol)
 
 
-@dataclass
+#: What a result's ``status`` says (every value some result is built with):
+#:
+#: * ``"optimal"``: proved (the exact optimiser; also its refusals and its triage, proved);
+#: * ``"time_limit"``: the exact optimiser stopped at the time limit (``stopped`` says where);
+#: * ``"solver_error"``: the exact optimiser stopped by a solver failure (``stopped`` says where);
+#: * ``"budget"``: a metaheuristic spent its solution budget;
+#: * ``"no_better_than_none"``: the search found nothing better than no correction (x = 0 returned,
+#:   :func:`setupfix.optimize.base.make_result`);
+#: * ``"draft"``, ``"rejected"``, ``"setup_error"``: nothing was solved (x = 0): a draft model holds,
+#:   the part is beyond the reject band, or it shows a setup error
+#:   (:mod:`setupfix.correction.recommend`).
+Status = Literal[
+    "optimal", "time_limit", "solver_error", "budget", "no_better_than_none", "draft", "rejected", "setup_error"
+]
+
+
+@dataclass(frozen=True)
+class Stopped:
+    """The stage that stopped a solve before its proof, and why (``correct --json``'s ``stopped``).
+
+    Attributes
+    ----------
+    stage : str
+        ``"lp bound"``, ``"grid optimum"``, ``"leximin"``, ``"least norm"`` or ``"triage"``.
+    reason : str
+        ``"time limit"`` or what the solver said.
+    detail : str, optional
+        The triage's own words on what stopped (its step and reason); None for the other stages.
+    """
+
+    stage: str
+    reason: str
+    detail: str | None = None
+
+    def to_json(self) -> dict[str, str]:
+        """``{"stage", "reason"[, "detail"]}``, as ``correct --json`` writes it."""
+        out = {"stage": self.stage, "reason": self.reason}
+        if self.detail is not None:
+            out["detail"] = self.detail
+        return out
+
+
+@dataclass(frozen=True)
+class TriageRecord:
+    """What the exact optimiser's triage decided (no correction brings every dimension in).
+
+    Attributes
+    ----------
+    refused : bool
+        Not even the dimensions measured in tolerance can all be kept: no correction.
+    kept, held : int
+        Model dimensions kept in tolerance, and those among them measured in tolerance (held).
+    lp_bound_all : float [model unit]
+        The LP bound of the whole problem, given-up dimensions included (the result's ``bound``
+        is the kept dimensions').
+    leximin_levels : int
+        Leximin levels of the kept margins proved (0 when refused).
+    leximin_complete : bool
+        Every kept margin's level proved (False when refused).
+    given_up : mapping of str to float [model unit]
+        Each model dimension given up, once, with its margin after the correction (a position
+        zone's: the circle's).
+    """
+
+    refused: bool
+    kept: int
+    held: int
+    lp_bound_all: float
+    leximin_levels: int = 0
+    leximin_complete: bool = False
+    given_up: Mapping[str, float] = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
 class OptimizeResult:
-    """What every optimiser returns.
+    """What every optimiser returns (frozen: built once, by :func:`setupfix.optimize.base.make_result`).
 
     Attributes
     ----------
@@ -357,7 +432,7 @@ class OptimizeResult:
         Corrections on the register grid.
     margin_before, margin_after : float
         Error budget δ = f1 before and after the correction; over the dimensions kept when some
-        are given up (``given_up``: the triage's margins of those are in ``extra["given_up"]``).
+        are given up (``given_up``: the triage's margins of those are in ``triage.given_up``).
     norm : float
         f2 = ‖x‖.
     optimizer : str
@@ -365,9 +440,11 @@ class OptimizeResult:
         Candidate solutions evaluated (metaheuristics) or solver calls (exact).
     seconds : float
         Wall time of the search.
-    status : str
-        ``"optimal"`` (proved), ``"time_limit"``, ``"rounded"`` (exact fallback) or
-        ``"budget"`` (metaheuristic spent its solution budget).
+    status : Status
+        One of :data:`Status`: ``"optimal"`` (proved), ``"time_limit"`` or ``"solver_error"``
+        (the exact optimiser stopped; ``stopped`` says where), ``"budget"`` (a metaheuristic spent
+        its solution budget), ``"no_better_than_none"`` (nothing better than no correction found,
+        x = 0), ``"draft"``, ``"rejected"`` or ``"setup_error"`` (nothing solved, x = 0).
     message : str
         One sentence for the operator.
     binding : tuple of str
@@ -384,6 +461,23 @@ class OptimizeResult:
         metaheuristics.
     notes : tuple of Note
         Warnings as data (solver retries, limits hit), never ``warnings.warn``.
+    stopped : Stopped, optional
+        The exact optimiser's stage that stopped before its proof and why (None: nothing stopped).
+    norm_ratio_max : float, optional
+        Certified bound on ‖x‖²_cost / least norm when the least-norm proof was stopped (may be
+        inf: no bound); None when not stated.
+    triage : TriageRecord, optional
+        The exact optimiser's triage (None when it did not run).
+    leximin : tuple of (float, int)
+        The exact optimiser's leximin levels, lowest first: (margin [model unit], how many
+        dimensions at it); empty for the paper's objective and the other optimisers.
+    path : str
+        The exact optimiser's steps, ``"; "``-separated (which proof decided each stage).
+    stages : mapping of str to float
+        The exact optimiser's wall time per stage [s].
+    margin_all : float, optional
+        ``compare``: a trial's error budget over every dimension, when ``margin_after`` is
+        restated over the dimensions the exact optimum keeps.
     """
 
     x: Array
@@ -393,14 +487,20 @@ class OptimizeResult:
     optimizer: str
     evaluations: int
     seconds: float
-    status: str
+    status: Status
     message: str = ""
     binding: tuple[str, ...] = ()
     history: Array | None = None
     bound: float | None = None
-    extra: dict[str, object] = field(default_factory=dict)
     given_up: tuple[str, ...] = ()
     notes: tuple[Note, ...] = ()
+    stopped: Stopped | None = None
+    norm_ratio_max: float | None = None
+    triage: TriageRecord | None = None
+    leximin: tuple[tuple[float, int], ...] = ()
+    path: str = ""
+    stages: Mapping[str, float] = field(default_factory=dict)
+    margin_all: float | None = None
 
     @property
     def bonus(self) -> float:

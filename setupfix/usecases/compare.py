@@ -11,7 +11,7 @@ f1 − trial f1 (≥ 0 up to rounding), in the model unit.
 When no correction brings every dimension into tolerance, the exact optimum gives some up (its
 triage: ``given_up``); then every f1 here — the exact one, each trial's and so each gap — is the
 error budget of the dimensions the exact optimum keeps (each trial's budget over all dimensions
-stays in its ``extra["margin_all"]``), and the given-up ones are listed apart (``exact_given_up``).
+stays in its ``margin_all``), and the given-up ones are listed apart (``exact_given_up``).
 
 Seeds: trial t of every method uses the t-th 32-bit word of
 ``numpy.random.SeedSequence(seed)``, so a run is reproducible from ``--seed``
@@ -225,7 +225,7 @@ def over_kept(problem: CorrectionProblem, result: OptimizeResult, given_up: tupl
         result,
         margin_before=problem.kept_margin(np.zeros_like(x), given_up),
         margin_after=problem.kept_margin(x, given_up),
-        extra={**result.extra, "margin_all": result.margin_after},
+        margin_all=result.margin_after,
     )
 
 

@@ -209,7 +209,7 @@ def test_no_harm_refuses_when_not_even_the_measured_in_tolerance_can_be_kept():
     c = problem([[1.0, 1.0]], [-0.3, 0.095], [-0.1, -0.1], [0.1, 0.1])
     p = dataclasses.replace(c, lb=np.array([0.01]), ub=np.array([0.05]))
     raw = SOLVE(p)
-    assert raw.extra["triage"]["refused"] and not raw.x.any()
+    assert raw.triage is not None and raw.triage.refused and not raw.x.any()
     rec = recommend(p, Policy.neutral(p), SOLVE)
     assert rec.verdict == "hold" and not rec.x.any() and rec.given_up == ()
     assert "no_harm" in rules(rec)
@@ -233,5 +233,5 @@ def test_given_up_never_names_a_dimension_predicted_in_tolerance(seed):
         kept = ~np.isin(rec.problem.dimension_ids, raw.given_up)
         assert raw.margin_after == pytest.approx(rec.problem.margins(raw.x)[kept].min(), abs=1e-12)
         assert raw.bound is not None and raw.bound >= raw.margin_after - 1e-9
-        assert raw.status == "optimal" and "stopped" not in raw.extra
-        assert set(raw.extra["given_up"]) == set(raw.given_up)
+        assert raw.status == "optimal" and raw.stopped is None
+        assert raw.triage is not None and set(raw.triage.given_up) == set(raw.given_up)

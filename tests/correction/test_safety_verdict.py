@@ -18,13 +18,13 @@ from setupfix.correction.recommend import recommend, stopped_rule
 from setupfix.correction.safety import STOPPED, Policy, short_list
 from setupfix.inputs.cycles import read_parts
 from setupfix.model import load_model
-from setupfix.optimize import CorrectionProblem, get_optimizer
+from setupfix.optimize import CorrectionProblem, Stopped, get_optimizer
 
 
 def test_a_solve_stopped_before_any_proof_is_not_solved_never_no_change_needed():
     problem = shop_problem(60, 600, 2)  # the LP bound alone takes longer than 1e-4 s
     rec = recommend(pose_policy(problem, Policy.neutral(problem)), get_optimizer("exact", time_limit=1e-4).solve)
-    assert rec.result.status == "time_limit" and rec.result.extra["stopped"]["stage"] == "lp bound"
+    assert rec.result.status == "time_limit" and rec.result.stopped == Stopped("lp bound", "time limit")
     assert rec.verdict == "hold" and not rec.solved and not np.any(rec.x)
     (rule,) = [r for r in rec.rules if r.rule == "not_solved"]
     assert "not solved within the time limit" in rule.message and "no change needed" in rule.message  # "not ..."
@@ -47,10 +47,12 @@ def test_a_stopped_solve_that_still_improves_is_applied_with_what_is_certified()
     # the first limit whose solve stops after the LP bound, in the grid-optimum stage
     for limit in (1e-9, 1e-6, 1e-5, 1e-4, 3e-4, 1e-3):
         rec = recommend(posed, get_optimizer("exact", time_limit=limit).solve)
-        stopped = rec.result.extra.get("stopped")
-        if isinstance(stopped, dict) and stopped["stage"] == "grid optimum":
+        stopped = rec.result.stopped
+        if stopped is not None and stopped.stage == "grid optimum":
             break
-    assert rec.result.status in STOPPED and rec.result.extra["stopped"]["stage"] == "grid optimum"
+    assert (
+        rec.result.status in STOPPED and rec.result.stopped is not None and rec.result.stopped.stage == "grid optimum"
+    )
     assert rec.verdict == "apply" and rec.solved
     (rule,) = [r for r in rec.rules if r.rule == "stopped"]
     gap = rec.result.bound - rec.result.margin_after
@@ -61,14 +63,15 @@ def test_a_stopped_solve_that_still_improves_is_applied_with_what_is_certified()
 def test_stopped_rule_states_the_certified_norm_ratio():
     posed = guide_posed()
     result = get_optimizer("exact").solve(posed.guarded)
-    result.status = "time_limit"
-    result.extra.update({"stopped": {"stage": "least norm", "reason": "time limit"}, "norm_ratio_max": 1.25})
+    result = dataclasses.replace(
+        result, status="time_limit", stopped=Stopped("least norm", "time limit"), norm_ratio_max=1.25
+    )
     rule = stopped_rule(result, recommended=True)
     assert rule.rule == "stopped" and "at most 1.250× the least norm" in rule.message
     assert "least norm stage" in rule.message and "best possible" not in rule.message
     failed = stopped_rule(result, recommended=False)
     assert failed.rule == "not_solved" and "not solved within the time limit" in failed.message
-    result.status = "solver_error"
+    result = dataclasses.replace(result, status="solver_error")
     assert "the solver failed" in stopped_rule(result, recommended=False).message
 
 

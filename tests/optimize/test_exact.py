@@ -116,7 +116,7 @@ def test_time_limit_falls_back_and_says_so():
         result = get_optimizer("exact", objective="paper", time_limit=1e-9).solve(problem)
     assert result.status == "time_limit"
     assert any(n.kind == "solver" and "time limit" in n.message for n in result.notes)
-    assert result.extra["stopped"]["reason"] == "time limit"
+    assert result.stopped.reason == "time limit"
     assert result.bound is None or result.margin_after <= result.bound + 1e-12  # None: stopped in the LP
     assert "not proved" in result.message
 
@@ -152,7 +152,7 @@ def test_no_grid_point_beats_the_exact_optimum(seed, n, m, steps):
     k = rng.integers(problem.kmin, problem.kmax + 1, size=(2000, n))
     f1, _, _ = problem.evaluate(k * problem.resolution)
     if result.given_up and result.status == "time_limit":  # a triage whose leximin levels outran the limit
-        assert result.extra["stopped"]["stage"] == "triage"  # says so (issue 22: never "optimal")
+        assert result.stopped.stage == "triage"  # says so (issue 22: never "optimal")
     else:
         assert result.status == "optimal"
     if result.given_up:  # triage: the kept dimensions are in tolerance, the others given up

@@ -135,10 +135,10 @@ def test_whole_solve_respects_the_time_limit_and_says_which_stage_stopped():
     assert result.margin_after >= problem.margin_before  # a stopped search still improves on nothing
     assert result.status == "time_limit"
     if result.bound is None:  # a loaded machine can stop the LP bound itself: then no bound is claimed
-        assert result.extra["stopped"]["stage"] == "lp bound"
+        assert result.stopped.stage == "lp bound"
     else:
         assert result.margin_after <= result.bound + 1e-12
-        assert result.extra["stopped"]["stage"] in ("grid optimum", "least norm")
+        assert result.stopped.stage in ("grid optimum", "least norm")
     assert any("time limit" in n.message for n in result.notes)
 
 
@@ -210,9 +210,9 @@ def test_the_leximin_stage_ends_by_its_share_of_the_limit_and_leaves_the_least_n
     problem = shop_problem(100, 800, 1)
     limit = 1.0
     result = get_optimizer("exact", objective="leximin", time_limit=limit).solve(problem)
-    assert result.status == "time_limit" and result.extra["stopped"]["stage"] == "leximin"
+    assert result.status == "time_limit" and result.stopped.stage == "leximin"
     share = (1 - ExactSettings().leximin_norm_share) * limit
-    assert result.extra["stages"]["leximin"] <= share + 0.1  # one point test past the share at most
+    assert result.stages["leximin"] <= share + 0.1  # one point test past the share at most
     paper = get_optimizer("exact", objective="paper", time_limit=10.0).solve(problem)
     assert result.margin_after == pytest.approx(paper.margin_after, abs=1e-12)  # δ was proved before the levels
 

@@ -374,10 +374,10 @@ def test_bound_is_the_kept_dimensions_lp_and_seconds_the_whole_call(seed, path):
     )
     assert result.bound == pytest.approx(-lp.fun, abs=1e-9)
     assert result.bound >= result.margin_after - 1e-12
-    assert result.extra["lp_bound_all"] < result.bound  # the whole problem's, given-up dimensions included
-    assert result.seconds >= sum(result.extra["stages"].values()) - 1e-9
-    assert result.status == "optimal" and result.extra["triage"]["leximin_complete"]
-    assert ("listing" in str(result.extra["path"])) == (path == "listed")
+    assert result.triage.lp_bound_all < result.bound  # the whole problem's, given-up dimensions included
+    assert result.seconds >= sum(result.stages.values()) - 1e-9
+    assert result.status == "optimal" and result.triage.leximin_complete
+    assert ("listing" in result.path) == (path == "listed")
 
 
 def gross_problem(seed: int, n: int = 4, m: int = 8) -> CorrectionProblem:
@@ -402,7 +402,7 @@ def test_gross_dimensions_triage_equals_brute_force(seed, path):
         assert result.given_up == ()
         return
     check_triage(problem, result)
-    assert ("kept set forced" in result.extra["path"]) == (path == "forced")  # everything measured in is kept
+    assert ("kept set forced" in result.path) == (path == "forced")  # everything measured in is kept
 
 
 @pytest.mark.parametrize("seed", range(6))
@@ -412,7 +412,7 @@ def test_gross_dimensions_triage_equals_an_independent_milp(seed, monkeypatch):
     result = get_optimizer("exact", time_limit=SOLVE_LIMIT).solve(problem)
     if not result.given_up:
         pytest.skip("every dimension can be kept: no triage")
-    assert "kept set forced" in result.extra["path"]
+    assert "kept set forced" in result.path
     count, sorted_kept, norm = milp_triage(problem)
     margins = problem.margins(result.x)
     kept = np.array([d not in result.given_up for d in problem.dimension_ids])
@@ -454,7 +454,7 @@ def test_a_dimension_within_reach_only_by_harm_is_proved_lost(monkeypatch):
     assert lost_bound(t, 0, 1.0) == pytest.approx(-1.0, abs=1e-5)  # … D1 stays in only for k ≥ −2: D0 at −1 step
     result = get_optimizer("exact", time_limit=SOLVE_LIMIT).solve(problem)
     assert result.given_up == ("D0",) and result.status == "optimal"
-    assert "kept set forced" in result.extra["path"]
+    assert "kept set forced" in result.path
     assert result.x == pytest.approx([0.03], abs=1e-12)  # D1 centred
 
 
@@ -467,11 +467,11 @@ def test_guide_pins_gross_dimension_is_fast_and_complete(guide_pins_model):
     dev[0] = -0.25
     problem = CorrectionProblem.from_part(guide_pins_model, PartMeasurement("c", "r", None, dev, part.sources))
     result = get_optimizer("exact").solve(problem)
-    assert result.status == "optimal" and "stopped" not in result.extra
-    assert result.extra["triage"]["leximin_complete"] and result.extra["triage"]["kept"] == 27
-    assert "kept set forced" in result.extra["path"]
+    assert result.status == "optimal" and result.stopped is None
+    assert result.triage.leximin_complete and result.triage.kept == 27
+    assert "kept set forced" in result.path
     assert result.x == pytest.approx([0.007, -0.002, -0.01, -0.004, 0.013, 0.027, 0.0, 0.012, 0.016, 0.03], abs=1e-12)
-    assert result.extra["stages"]["triage"] < 1.0  # 1.2–1.5 s before (MILPs); ~30 ms on an idle machine
+    assert result.stages["triage"] < 1.0  # 1.2–1.5 s before (MILPs); ~30 ms on an idle machine
 
 
 def test_an_incomplete_triage_leximin_is_a_stopped_solve(guide_pins_model, monkeypatch):
@@ -485,9 +485,9 @@ def test_an_incomplete_triage_leximin_is_a_stopped_solve(guide_pins_model, monke
     dev[0] = -0.25
     problem = CorrectionProblem.from_part(guide_pins_model, PartMeasurement("c", "r", None, dev, part.sources))
     result = get_optimizer("exact").solve(problem)
-    assert not result.extra["triage"]["leximin_complete"]
+    assert not result.triage.leximin_complete
     assert result.status == "time_limit"
-    assert result.extra["stopped"]["stage"] == "triage" and result.extra["stopped"]["reason"] == "time limit"
-    assert "leximin" in result.extra["stopped"]["detail"]
+    assert result.stopped.stage == "triage" and result.stopped.reason == "time limit"
+    assert "leximin" in result.stopped.detail
     assert result.given_up == ("P1D1",) and np.all(np.delete(problem.margins(result.x), 0) >= 0)
     assert "triage stage stopped" in stopped_rule(result, recommended=True).message

@@ -93,7 +93,7 @@ def test_ellipsoid_search_finds_the_least_norm_of_brute_force(seed):
 def test_a_level_with_no_grid_point_is_proved_by_listing_the_whole_box():
     problem = random_problem(101, n=4, m=8, limit_steps=6)
     result = get_optimizer("exact", objective="paper").solve(problem)
-    assert "the whole box listed" in result.extra["path"] and "MILP" not in result.extra["path"]
+    assert "the whole box listed" in result.path and "MILP" not in result.path
     best, norm = brute_force(problem)
     assert result.status == "optimal"
     assert result.margin_after == pytest.approx(best, abs=1e-12)
@@ -114,4 +114,4 @@ def test_guide_pins_cycles_equal_the_milp_proofs(cycle):
     assert fast.margin_after == pytest.approx(slow.margin_after, abs=1e-12)
     assert fast.norm == pytest.approx(slow.norm, abs=1e-12)
     if cycle == 4:
-        assert "MILP" not in fast.extra["path"] and "MILP" in slow.extra["path"]
+        assert "MILP" not in fast.path and "MILP" in slow.path

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 import setupfix.optimize.exact.least_norm.grid as least_norm_stage
-from setupfix.optimize import CorrectionProblem, get_optimizer
+from setupfix.optimize import CorrectionProblem, Stopped, get_optimizer
 from setupfix.optimize.exact.grid import grid_margins, least_distance
 from setupfix.optimize.exact.least_norm.listing import lagrangian_ball
 from setupfix.optimize.exact.least_norm.shop import (
@@ -127,10 +127,10 @@ def test_a_stopped_least_norm_proof_returns_a_certified_near_least_correction(mo
     monkeypatch.setattr(least_norm_stage, "chord_proof", out_of_time)
     result = get_optimizer("exact", objective="paper", time_limit=30.0).solve(problem)
     assert result.status == "time_limit"
-    assert result.extra["stopped"] == {"stage": "least norm", "reason": "time limit"}
+    assert result.stopped == Stopped("least norm", "time limit")
     assert "least-norm stage" in result.message and "certified" in result.message
     assert result.margin_after == pytest.approx(proven.margin_after, abs=1e-12)  # the grid optimum is kept
-    ratio = result.extra["norm_ratio_max"]
+    ratio = result.norm_ratio_max
     assert 1.0 <= ratio < 1.1
     assert proven.norm - 1e-12 <= result.norm <= ratio * proven.norm + 1e-12
     x_steps = result.x / problem.resolution
@@ -252,7 +252,7 @@ def test_network_rows_are_proved_by_one_chord_lp_equal_to_brute_force(seed):
     settings = ExactSettings(nnls_max_rows=0, ellipsoid_max_registers=0)
     result = get_optimizer("exact", settings=settings, objective="paper").solve(problem)
     assert result.status == "optimal"
-    assert ("one LP over the chords" in str(result.extra["path"])) == reach  # else triage
+    assert ("one LP over the chords" in result.path) == reach  # else triage
     if reach:
         np.testing.assert_array_equal(np.rint(result.x / problem.resolution), want)
 
@@ -268,9 +268,9 @@ def test_shop_rows_without_differences_take_the_network_lp_and_agree_with_the_li
         other = get_optimizer("exact", objective="paper", time_limit=30.0).solve(problem)
         monkeypatch.setattr(least_norm_stage, "NETWORK_LP", True)
         assert lp.status == other.status == "optimal"
-        assert "one LP over the chords" in str(lp.extra["path"])
+        assert "one LP over the chords" in lp.path
         assert lp.norm == pytest.approx(other.norm, rel=1e-12)
-        if "the tie is not broken" not in str(lp.extra["path"]) + str(other.extra["path"]):
+        if "the tie is not broken" not in lp.path + other.path:
             np.testing.assert_array_equal(lp.x, other.x)  # the same tie pick
 
 

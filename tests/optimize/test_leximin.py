@@ -105,7 +105,7 @@ def test_leximin_equals_brute_force(kind, seed, kw):
     assert result.status == "optimal", result.message
     np.testing.assert_allclose(sorted_m, best, atol=1e-6)
     assert float(problem.cost[problem.free] @ k**2) == pytest.approx(norm, abs=1e-9)
-    level_1 = result.extra["leximin"][0][0]
+    level_1 = result.leximin[0][0]
     assert level_1 == pytest.approx(result.margin_after, abs=1e-3 * problem.resolution)  # leximin's level 1 = δ
 
 
@@ -119,7 +119,7 @@ def test_first_level_is_the_papers_delta_and_paper_keeps_its_least_norm(seed):
     assert lex.margin_after == pytest.approx(paper.margin_after, abs=1e-12)
     assert tuple(s_lex) >= tuple(s_paper)  # leximin never loses to the paper's point in its own order
     assert paper.norm <= lex.norm + 1e-15
-    assert "leximin" not in paper.extra
+    assert not paper.leximin
 
 
 def ordered_outcomes(problem: CorrectionProblem) -> np.ndarray:
@@ -234,7 +234,7 @@ def test_discrete_conflicts_by_branches_equal_brute_force(kind, seed, kw):
     problem = make(kind, seed, kw)
     best, norm, _ = brute_leximin(problem)
     result, k, sorted_m = solved_steps(problem)
-    assert "discrete conflict" in result.extra["path"]
+    assert "discrete conflict" in result.path
     np.testing.assert_allclose(sorted_m, best, atol=1e-6)
     assert float(problem.cost[problem.free] @ k**2) == pytest.approx(norm, abs=1e-9)
 
@@ -249,7 +249,7 @@ def test_counts_alone_decide_discrete_conflicts_as_brute_force(kind, seed, kw, m
     best, norm, _ = brute_leximin(problem)
     result, k, sorted_m = solved_steps(problem)
     assert result.status == "optimal", result.message
-    assert "the rest by counts" in result.extra["path"]
+    assert "the rest by counts" in result.path
     np.testing.assert_allclose(sorted_m, best, atol=1e-6)
     assert float(problem.cost[problem.free] @ k**2) == pytest.approx(norm, abs=1e-9)
 

@@ -43,7 +43,7 @@ def test_each_count_equals_the_grid_count_and_fixes_only_what_the_lattice_decide
     problem = make(kind, seed, kw)
     best, norm, _ = brute_leximin(problem)
     result, k, sorted_m = solved_steps(problem)
-    assert result.status == "optimal" and "the rest by counts" in result.extra["path"]
+    assert result.status == "optimal" and "the rest by counts" in result.path
     np.testing.assert_allclose(sorted_m, best, atol=1e-6)
     assert float(problem.cost[problem.free] @ k**2) == pytest.approx(norm, abs=1e-9)
     assert seen
@@ -84,7 +84,7 @@ def test_counts_stopped_give_the_least_norm_at_the_conflict_level_not_the_counts
     monkeypatch.setattr(exactmod, "leximin_least_norm", least)
     problem = make(kind, seed, kw)
     result, k, _ = solved_steps(problem)
-    assert result.status == "time_limit" and "the rest by counts" in result.extra["path"]
+    assert result.status == "time_limit" and "the rest by counts" in result.path
     ((rows, lex, row_dim),) = captured
     assert lex.counts is None and lex.stopped is not None
     pts = _grid(rows)
@@ -123,4 +123,4 @@ def test_no_least_norm_milp_starts_when_a_count_milp_took_longer_than_what_is_le
     kind, seed, kw = CONFLICTS[0]
     result, _, _ = solved_steps(make(kind, seed, kw))
     assert result.status == "time_limit"
-    assert "less time left than a count MILP took" in result.extra["path"]
+    assert "less time left than a count MILP took" in result.path

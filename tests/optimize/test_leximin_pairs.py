@@ -45,12 +45,12 @@ def test_pair_branches_decide_the_whole_report_as_the_counts_would(report, monke
     problem = report_problem(report)
     result = get_optimizer("exact", objective="leximin", time_limit=2.0).solve(problem)
     assert result.status == "optimal", result.message
-    assert "branch: dimensions" in result.extra["path"] and "by counts" not in result.extra["path"]
+    assert "branch: dimensions" in result.path and "by counts" not in result.path
     if report.stem != "varied_r00264":  # the counts take 10-20 s on the other two (bench/leximin_speed.py)
         return
     monkeypatch.setattr(lexmod, "MAX_PAIR_TESTS", -1)
     counts = get_optimizer("exact", objective="leximin", time_limit=120.0).solve(problem)
-    assert counts.status == "optimal" and "by counts" in counts.extra["path"]
+    assert counts.status == "optimal" and "by counts" in counts.path
     np.testing.assert_array_equal(result.x, counts.x)
     k = np.rint(result.x[problem.free] / problem.resolution)[None, :]
     k_c = np.rint(counts.x[problem.free] / problem.resolution)[None, :]
@@ -102,5 +102,5 @@ def test_pair_branches_equal_brute_force_on_windows(report, centre, monkeypatch)
     assert result.status == "optimal", result.message
     np.testing.assert_allclose(sorted_m, best, atol=1e-6)
     assert float(problem.cost[problem.free] @ k**2) == pytest.approx(norm, abs=1e-9)
-    if "branch: dimensions" in result.extra["path"]:
+    if "branch: dimensions" in result.path:
         assert claims  # the pairs were filtered by the certificate before their tests

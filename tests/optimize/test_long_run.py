@@ -33,7 +33,7 @@ problems = pickle.load(open(sys.argv[1], "rb"))
 out = []
 for p in problems:
     r = get_optimizer("exact", objective="paper", time_limit=float(sys.argv[3])).solve(p)
-    out.append((r.x, r.status, str(r.extra.get("path", ""))))
+    out.append((r.x, r.status, r.path))
 pickle.dump(out, open(sys.argv[2], "wb"))
 """
 
@@ -60,7 +60,7 @@ def test_a_long_run_never_runs_out_of_time_and_equals_a_fresh_process(guide_pins
     for n in range(1200):
         i = quick[n % len(quick)]
         result = optimizer.solve(problems[i])
-        assert result.status == "optimal", (n, result.extra.get("stopped"))
+        assert result.status == "optimal", (n, result.stopped)
         np.testing.assert_array_equal(result.x, fresh[i][0])
 
 

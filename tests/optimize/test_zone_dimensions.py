@@ -169,8 +169,8 @@ def _check(problem: CorrectionProblem, result, want: dict[str, object]) -> None:
     rows = problem.rows or problem.dimension_ids
     assert set(result.given_up) == {c for c, r in zip(problem.dimension_ids, rows, strict=True) if r in gone}
     if gone:
-        assert set(result.extra["given_up"]) == set(gone)
-        assert result.extra["triage"]["kept"] == len(ids) - len(gone)
+        assert set(result.triage.given_up) == set(gone)
+        assert result.triage.kept == len(ids) - len(gone)
         assert result.margin_after / problem.resolution == pytest.approx(want["sorted"][0], abs=1e-3)  # δ kept
 
 
@@ -219,7 +219,7 @@ def test_leximin_counts_a_zone_once(seed):
     result = get_optimizer("exact").solve(problem)
     _check(problem, result, want)
     if not want["gone"]:  # the levels are per dimension: as many as the dimensions (a zone once)
-        assert sum(c for _, c in result.extra["leximin"]) == len(want["ids"])
+        assert sum(c for _, c in result.leximin) == len(want["ids"])
 
 
 @pytest.fixture(params=["listed", "forced", "milp"])
@@ -248,7 +248,7 @@ def test_half_step_ties_and_conflicts_against_brute_force(seed):
     result = get_optimizer("exact", time_limit=30.0).solve(problem)
     _check(problem, result, brute(problem))
     if seed == 280:
-        assert "branch:" in str(result.extra["path"])
+        assert "branch:" in result.path
 
 
 def test_generated_triage_cases_give_up_zones():
@@ -315,7 +315,7 @@ def test_sample_leximin_equals_an_independent_solver_on_its_rows():
     result = get_optimizer("exact", time_limit=60.0).solve(problem)  # a loaded test box; the bench times 2 s
     assert result.status == "optimal"
     k = result.x[free] / problem.resolution
-    assert n_dims == 16 and sum(c for _, c in result.extra["leximin"]) == 16
+    assert n_dims == 16 and sum(c for _, c in result.leximin) == 16
     m = np.full(n_dims, np.inf)
     np.minimum.at(m, row_dim, g - g_rows @ k)
     assert prefix_sums(m) == pytest.approx(sums, abs=1e-4)  # steps; ties within the quantum

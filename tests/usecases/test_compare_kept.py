@@ -10,7 +10,7 @@ import pytest
 
 from setupfix.model import load_model
 from setupfix.usecases.compare import CompareRequest, compare_report
-from tests.conftest import shared_path
+from conftest import shared_path
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -39,7 +39,7 @@ def test_gaps_and_bound_are_over_the_kept_dimensions(calypso_wide: tuple[Path, P
     for m in comparison.methods:
         for r in m.results:  # each trial's f1 over the same kept dimensions; its all-dimension f1 kept apart
             assert r.margin_after == pytest.approx(problem.margins(r.x)[kept].min(), abs=1e-12)
-            assert r.extra["margin_all"] == pytest.approx(problem.evaluate(r.x)[0], abs=1e-12)
+            assert r.margin_all == pytest.approx(problem.evaluate(r.x)[0], abs=1e-12)
         assert np.all(m.gaps(e) >= -1e-12), m.optimizer  # no metaheuristic beats the exact optimum
     out = comparison.to_json()
     assert out["exact_margin"] == pytest.approx(e.margin_after, abs=1e-9)

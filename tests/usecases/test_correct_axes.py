@@ -231,8 +231,8 @@ def test_triage_gives_a_zone_up_whole(tmp_path):
     assert raw.x.tolist() == pytest.approx([-0.05, 0.0])
     facets = {d for d in cycle.problem.dimension_ids if d.startswith("H#")}
     assert set(raw.given_up) == facets  # every facet of the zone, none of A
-    assert raw.extra["triage"]["kept"] == 1
-    assert raw.extra["given_up"] == {"H": pytest.approx(0.02 - 0.1)}  # the circle's margin at ‖(−0.1, 0)‖
+    assert raw.triage is not None and raw.triage.kept == 1
+    assert raw.triage.given_up == {"H": pytest.approx(0.02 - 0.1)}  # the circle's margin at ‖(−0.1, 0)‖
     assert raw.margin_after == pytest.approx(0.02)  # δ over A alone
     assert "1 dimension(s) given up (H)" in raw.message
 

@@ -58,7 +58,7 @@ shared: :class:`~setupfix.optimize.exact.settings.ExactSettings`.
    holds every point at most as large as the incumbent
    (:func:`~setupfix.optimize.exact.least_norm.shop.lagrangian_box`).  If the limit stops the
    proof, the best point is improved by coordinate descent and the result states a
-   certified bound on ‖x‖ / least norm (``extra["norm_ratio_max"]``).
+   certified bound on ‖x‖ / least norm (``norm_ratio_max``).
 
 Objective
 ---------
@@ -77,7 +77,7 @@ start (each solve has its own session; nothing of an earlier solve's clock carri
 grid-optimum stage stops when ``least_norm_share`` of the limit is left, so the least-norm stage always runs: if a
 stage stops at the limit, its best point is used, the least-norm stage still
 shrinks the correction at the error budget reached, and the status, the message,
-``notes`` and ``extra["stopped"]`` say which stage stopped and why.  The LP bound
+``notes`` and ``stopped`` say which stage stopped and why.  The LP bound
 is always reported.
 """
 

@@ -24,7 +24,7 @@ from setupfix.optimize.exact.lp_bound import LPBound, lp_bound, margin_rows, row
 from setupfix.optimize.exact.session import Clock, GridRows, Session
 from setupfix.optimize.exact.settings import ExactSettings
 from setupfix.optimize.exact.triage.solve import triaged_result
-from setupfix.optimize.problem import CorrectionProblem, OptimizeResult
+from setupfix.optimize.problem import CorrectionProblem, OptimizeResult, Status, Stopped
 
 __all__ = ["ExactOptimizer", "ExactSettings", "margin_rows"]
 
@@ -62,7 +62,7 @@ class ExactOptimizer(Optimizer):
     objective : {"leximin", "paper"}, default="leximin"
         ``"leximin"``: the sorted dimension margins maximised lexicographically (first level = the
         paper's δ), then the least Σ cost·x²; ``"paper"``: eqs. 8–9 (δ, then the least norm).
-        ``result.extra["leximin"]`` lists the leximin levels ([margin, how many dimensions]).
+        ``result.leximin`` lists the leximin levels ([margin, how many dimensions]).
 
     Every :meth:`solve` opens its own :class:`~setupfix.optimize.exact.session.Session`: no solver
     model or state outlives it, so a report's answer never depends on what was solved before.
@@ -95,7 +95,7 @@ class ExactOptimizer(Optimizer):
     def solve(self, problem: CorrectionProblem) -> OptimizeResult:
         # What the stages import lazily (to keep `import setupfix` light) is imported before the clock
         # starts: the first solve of a process would otherwise spend ~0.1 s of its time limit on it.
-        import scipy.optimize  # noqa: F401 - loaded for _grid.nnls_least_distance, outside the clock
+        import scipy.optimize  # noqa: F401 - loaded for grid.nnls_least_distance, outside the clock
 
         with _blas_single_thread():  # small solves: BLAS threads only contend
             return self._solve(problem)
@@ -127,7 +127,7 @@ class ExactOptimizer(Optimizer):
                 f"the LP bound was not proved within the time limit ({self.time_limit:g} s): no correction "
                 "is recommended; allow more time (--time-limit)"
             )
-            result = make_result(
+            return make_result(
                 problem,
                 x,
                 optimizer=self.name,
@@ -135,12 +135,10 @@ class ExactOptimizer(Optimizer):
                 seconds=time.perf_counter() - start,
                 status="time_limit",
                 message=text,
+                notes=(Note(text, kind="solver"),),
+                stopped=Stopped("lp bound", "time limit"),
+                path="lp bound: time limit",
             )
-            result.notes = (Note(text, kind="solver"),)
-            result.extra.update(
-                {"stopped": {"stage": "lp bound", "reason": "time limit"}, "path": "lp bound: time limit"}
-            )
-            return result
         binding = rows_to_dimensions(problem, lp.y > 1e-9)
         bound = lp.t * problem.resolution
         session.clock.lap("lp bound")
@@ -222,10 +220,9 @@ class ExactOptimizer(Optimizer):
         opt = GridOptimum(
             lex.k, opt.t, opt.upper, lex.stopped, None, None, None, opt.path + lex.path, opt.notes, calls + lex.calls
         )
-        result = self._result(problem, session, x, opt, least, calls + lex.calls, bound, binding)
         h = problem.resolution
-        result.extra["leximin"] = [[value * h, count] for value, count in lex.levels]
-        return result
+        levels = tuple((value * h, count) for value, count in lex.levels)
+        return self._result(problem, session, x, opt, least, calls + lex.calls, bound, binding, levels)
 
     def _least_norm(self, session: Session, opt: GridOptimum, calls: int) -> tuple[LeastNorm, int]:
         """Stage 3 at the error budget reached (also when stage 2 was stopped), unless stage 2 proved it."""
@@ -253,12 +250,15 @@ class ExactOptimizer(Optimizer):
         calls: int,
         bound: float,
         binding: tuple[str, ...],
+        leximin_levels: tuple[tuple[float, int], ...] = (),
     ) -> OptimizeResult:
-        """The result: status, message and notes say which stage stopped and why (none: optimal)."""
+        """The result: status, message and notes say which stage stopped and why (none: optimal);
+        ``leximin_levels``: the leximin levels reached ([margin, how many dimensions], model unit)."""
         stopped = opt.stopped if opt.stopped is not None or least.proved else Stop("least norm", least.why)
         notes = list(opt.notes)
-        status, message = "optimal", None
-        extra: dict[str, object] = {"stages": dict(session.clock.stages), "path": "; ".join(opt.path + least.path)}
+        status: Status = "optimal"
+        message: str | None = None
+        ratio: float | None = None
         if stopped is not None:
             status = "time_limit" if stopped.reason == "time limit" else "solver_error"
             if stopped.stage == "leximin":
@@ -279,15 +279,13 @@ class ExactOptimizer(Optimizer):
                 )
             if not least.proved:
                 ratio = lower_bound_ratio(float(np.sum(session.rows.cost * least.k**2)), least.lower)
-                extra["norm_ratio_max"] = ratio
                 message += (
                     f", at most {ratio:.3f}× the least norm (certified)"
                     if np.isfinite(ratio)
                     else ", with no bound on how far it is from the least norm"
                 )
             notes.append(Note(message, kind="solver"))
-            extra["stopped"] = {"stage": stopped.stage, "reason": stopped.reason}
-        result = make_result(
+        return make_result(
             problem,
             x,
             optimizer=self.name,
@@ -297,7 +295,10 @@ class ExactOptimizer(Optimizer):
             bound=bound,
             message=message,
             binding=binding,
+            notes=tuple(notes),
+            stopped=None if stopped is None else Stopped(stopped.stage, stopped.reason),
+            norm_ratio_max=ratio,
+            leximin=leximin_levels,
+            path="; ".join(opt.path + least.path),
+            stages=session.clock.stages,
         )
-        result.extra.update(extra)
-        result.notes = tuple(notes)
-        return result

@@ -76,7 +76,7 @@ class LeastNorm:
     lower : float
         Certified lower bound on the least Σ c k² (0 when none is known).
     path : tuple of str
-        The steps taken, for ``result.extra["path"]``.
+        The steps taken, for ``result.path``.
     """
 
     k: Array

@@ -33,7 +33,7 @@ when the kept set is forced (every dimension not kept is proved out of tolerance
 point and the others all reach a margin ≥ 0 together), the three stages are the feasible case's
 leximin and least norm on the kept dimensions (:mod:`~setupfix.optimize.exact.triage.forced`, no
 binaries); else the MILPs above.  Leximin levels left unproved (the time reserved for the least norm
-reached) make the result stopped (status ``time_limit``, ``extra["stopped"]``), never "optimal".
+reached) make the result stopped (status ``time_limit``, ``stopped``), never "optimal".
 """
 
 from __future__ import annotations
@@ -64,7 +64,7 @@ from setupfix.optimize.exact.triage.model import (
     listed_triage,
     lp_starts,
 )
-from setupfix.optimize.problem import CorrectionProblem, OptimizeResult
+from setupfix.optimize.problem import CorrectionProblem, OptimizeResult, Status, Stopped, TriageRecord
 
 __all__ = ["Triaged", "triage", "triaged_result"]
 
@@ -350,9 +350,9 @@ def triaged_result(
 
     Everything the result states is read from the final answer: the dimensions given up (not held and
     predicted out of tolerance; ``given_up`` names every column of them, all of a zone's facets;
-    ``extra["given_up"]`` each once with its margin, a zone's the circle's), δ, the bonus and the
+    ``triage.given_up`` each once with its margin, a zone's the circle's), δ, the bonus and the
     binding dimensions over the dimensions kept, the LP bound of those (``bound``; the whole problem's
-    LP bound ``bound`` passed in stays in ``extra["lp_bound_all"]``), status and seconds of this call.
+    LP bound ``bound`` passed in stays in ``triage.lp_bound_all``), status and seconds of this call.
     """
     rows, clock = session.rows, session.clock
     ids, column_dim = model_dimensions(problem)  # a position zone is one dimension: kept or given up whole
@@ -370,7 +370,6 @@ def triaged_result(
         out = triage(t, clock.deadline, reserve, LEXIMIN_SHARE * session.time_limit, k_start, quantum)
     clock.lap("triage")
     path.append("triage: " + ", ".join(out.stages) if out.stages else "triage")
-    extra: dict[str, object] = {"lp_bound_all": bound}
     x = np.zeros(problem.n_registers)
     if out.k is None:
         message = (
@@ -378,14 +377,7 @@ def triaged_result(
             "no correction is recommended"
         )
         notes.append(Note(message, kind="solver"))
-        extra.update(
-            {
-                "stages": dict(clock.stages),
-                "path": "; ".join(path),
-                "triage": {"refused": True, "kept": 0, "held": int(t.held.sum())},
-            }
-        )
-        result = make_result(
+        return make_result(
             problem,
             x,
             optimizer=name,
@@ -394,10 +386,11 @@ def triaged_result(
             status="optimal",
             message=message,
             guard=False,
+            notes=tuple(notes),
+            triage=TriageRecord(refused=True, kept=0, held=int(t.held.sum()), lp_bound_all=bound),
+            path="; ".join(path),
+            stages=clock.stages,
         )
-        result.extra.update(extra)
-        result.notes = tuple(notes)
-        return result
     x[problem.free] = out.k * h
     margins = dimension_margins(problem, x)  # a zone's: its polygon's, the least of its facets'
     held = np.isfinite(floor)
@@ -415,35 +408,29 @@ def triaged_result(
         "among them) are kept in tolerance, centred level by level, with the smallest correction"
     )
     notes.append(Note(message, kind="solver"))
-    status = "optimal"
+    status: Status = "optimal"
     shown = problem.dimension_table(x)[5]  # a zone's margin as the circle's
-    extra.update(
-        {
-            "stages": dict(clock.stages),
-            "path": "; ".join(path),
-            "given_up": {d: float(v) for d, v, g in zip(ids, shown, gone, strict=True) if g},
-            "triage": {
-                "refused": False,
-                "kept": int((~gone).sum()),
-                "held": n_held,
-                "leximin_levels": sum(1 for s in out.stages if s.startswith("leximin level")),
-                "leximin_complete": out.complete,
-            },
-        }
+    stages = dict(clock.stages)
+    record = TriageRecord(
+        refused=False,
+        kept=int((~gone).sum()),
+        held=n_held,
+        lp_bound_all=bound,
+        leximin_levels=sum(1 for s in out.stages if s.startswith("leximin level")),
+        leximin_complete=out.complete,
+        given_up={d: float(v) for d, v, g in zip(ids, shown, gone, strict=True) if g},
     )
+    stopped: Stopped | None = None
+    ratio: float | None = None
     if not out.proved:  # a stage stopped (the leximin levels' time included): never "optimal"
         status = "time_limit" if "time limit" in out.why else "solver_error"
         notes.append(Note(f"triage not proved ({out.why})", kind="solver"))
         message += f"; not proved ({out.why})"
-        extra["stopped"] = {
-            "stage": "triage",
-            "reason": "time limit" if status == "time_limit" else out.why,
-            "detail": out.why,
-        }
+        stopped = Stopped("triage", "time limit" if status == "time_limit" else out.why, detail=out.why)
         if out.lower is not None and not out.why.startswith("leximin"):
-            extra["norm_ratio_max"] = lower_bound_ratio(float(np.sum(t.cost * out.k**2)), out.lower)
+            ratio = lower_bound_ratio(float(np.sum(t.cost * out.k**2)), out.lower)
     evaluations = calls + (out.calls if out.calls else 2 + 2 * len(out.levels))
-    result = make_result(
+    return make_result(
         problem,
         x,
         optimizer=name,
@@ -454,10 +441,13 @@ def triaged_result(
         message=message,
         guard=False,
         given_up=given_up,
+        notes=tuple(notes),
+        stopped=stopped,
+        norm_ratio_max=ratio,
+        triage=record,
+        path="; ".join(path),
+        stages=stages,
     )
-    result.extra.update(extra)
-    result.notes = tuple(notes)
-    return result
 
 
 def _forced_outcome(forced: Forced, t: TriageRows, quantum: float) -> Triaged:
