@@ -12,11 +12,11 @@ Reported:
   reference timed in the same run, interleaved with the work: one vectorised
   ``problem.evaluate`` of 5,000 random grid solutions (the reference of
   ``bench/fig18_validation.py``);
-* the time per stage, as the optimiser records it in ``result.extra["stages"]``
+* the time per stage, as the optimiser records it in ``result.stages``
   (seconds per stage; absent in versions that do not record it);
 * a profile of the same solves: time inside HiGHS's solve calls, inside other
   compiled code the stages call (NNLS), and in Python around them;
-* how many reports each stage was needed for (``result.extra["path"]``);
+* how many reports each stage was needed for (``result.path``);
 * the five bundled guide-pins cycles as ``bench/batch_throughput.py`` feeds them (in turn:
   1, 2, 3, 4, 5, 1, 2, …, ``--rounds`` times, one optimiser instance): the median per cycle,
   the mean of the five medians, each as a ratio to the same reference.
@@ -115,9 +115,9 @@ def main(argv: list[str] | None = None) -> None:
             times.append(time.perf_counter() - start)
             cpu.append(time.process_time() - c0)
             statuses[result.status] += 1
-            for stage, sec in dict(result.extra.get("stages", {})).items():  # type: ignore[call-overload]  # a dict
+            for stage, sec in result.stages.items():
                 stages.setdefault(stage, []).append(float(sec))
-            paths[str(result.extra.get("path", "-"))] += 1
+            paths[result.path or "-"] += 1
         wall = time.perf_counter() - wall
         split = profile_split(exact.solve, items)
         cycles = items[:5]
@@ -130,7 +130,7 @@ def main(argv: list[str] | None = None) -> None:
                 start = time.perf_counter()
                 result = exact.solve(problem)
                 cycle_times[name].append(time.perf_counter() - start)
-                cycle_paths[name][str(result.extra.get("path", "-"))] += 1
+                cycle_paths[name][result.path or "-"] += 1
 
     t = np.array(times)
     tc = np.array(cpu)

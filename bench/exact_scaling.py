@@ -115,9 +115,9 @@ def main(argv: list[str] | None = None) -> None:
                 cpu = time.process_time() - cpu
                 times.append(sec)
                 proved += result.status == "optimal"
-                st = dict(result.extra.get("stages", {}))  # type: ignore[call-overload]  # a dict of stage seconds
-                stopped = result.extra.get("stopped")
-                stop_text = f"{stopped['stage']}: {stopped['reason']}" if isinstance(stopped, dict) else "-"
+                st = dict(result.stages)
+                stopped = result.stopped
+                stop_text = f"{stopped.stage}: {stopped.reason}" if stopped is not None else "-"
                 gap = (float(result.bound or 0.0) - result.margin_after) * 1e3
                 least = float("nan")
                 if args.long > 0:
@@ -131,7 +131,7 @@ def main(argv: list[str] | None = None) -> None:
                             least = float("nan")
                 if np.isfinite(least) and least > 0:
                     excess.append(result.norm / least)
-                cert = result.extra.get("norm_ratio_max")
+                cert = result.norm_ratio_max
                 cert_text = f"{cert:>6.4f}" if isinstance(cert, float) else f"{'-':>6}"
                 lines.append(
                     f"{n:>4} x {m:<5} {seed:>4} {limit:>5.0f} {sec:>7.3f} {cpu:>6.3f} "
@@ -139,7 +139,7 @@ def main(argv: list[str] | None = None) -> None:
                     f"{st.get('grid optimum', 0):>6.3f} {st.get('leximin', 0):>6.3f} "
                     f"{st.get('least norm', 0):>6.3f} "
                     f"{result.status:<11} {stop_text:<26} {gap:>7.2f} {result.norm:>8.4f} {least:>8.4f} "
-                    f"{cert_text}  {result.extra.get('path', '')}"
+                    f"{cert_text}  {result.path}"
                 )
                 print(lines[-1], flush=True)
             summary.append((n, m, limit, times, proved, excess, max(blocks)))

@@ -97,8 +97,8 @@ def solve(
         result = get_optimizer("exact", time_limit=limit, settings=settings).solve(problem)
     finally:
         stage.NETWORK_LP = True
-    stages = dict(result.extra.get("stages", {}))  # type: ignore[call-overload]
-    path = str(result.extra.get("path", ""))
+    stages = dict(result.stages)
+    path = result.path
     return float(stages.get("least norm", np.nan)), result.norm, result.status, result.x, path
 
 

@@ -62,7 +62,7 @@ def solve(request: CorrectRequest, path: Path) -> tuple[float, str, str, np.ndar
     outcome = correct_report(request, path)
     cpu = time.process_time() - t
     result = outcome.cycles[0].result
-    return cpu, result.status, str(result.extra.get("path", "")), np.round(result.x, 9)
+    return cpu, result.status, result.path, np.round(result.x, 9)
 
 
 def main() -> None:

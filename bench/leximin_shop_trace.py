@@ -163,11 +163,11 @@ def main(argv: list[str] | None = None) -> None:
                 result = get_optimizer("exact", objective="leximin", time_limit=args.limit).solve(problem)
             finally:
                 undo()
-            path = str(result.extra.get("path", "")).split("; ")
+            path = result.path.split("; ")
             levels = [p for p in path if "dimension(s) at" in p or "counts:" in p]
             lines.append(
                 f"  wall {time.perf_counter() - began:.2f} s, status {result.status}, stages "
-                + ", ".join(f"{k} {v:.2f} s" for k, v in dict(result.extra["stages"]).items())
+                + ", ".join(f"{k} {v:.2f} s" for k, v in result.stages.items())
                 + f"; correction norm {result.norm:.4f} mm"
             )
             lines.append(f"  levels proved ({len(levels)}): " + "; ".join(p.replace("leximin ", "") for p in levels))

@@ -77,7 +77,7 @@ def timed(problem: CorrectionProblem, objective: str, limit: float) -> tuple[flo
     t, c = time.perf_counter(), time.process_time()
     result = opt.solve(problem)
     CPU.setdefault(objective, []).append(time.process_time() - c)
-    path = str(result.extra.get("path", ""))
+    path = result.path
     kind = (
         ("counts" if "the rest by counts" in path else "branches" if "branch:" in path else "levels")
         if objective == "leximin"
@@ -85,7 +85,7 @@ def timed(problem: CorrectionProblem, objective: str, limit: float) -> tuple[flo
     )
     seconds = time.perf_counter() - t
     if objective == "leximin":
-        STAGES.setdefault(kind, []).append({**result.extra.get("stages", {}), "total": seconds})
+        STAGES.setdefault(kind, []).append({**result.stages, "total": seconds})
     GRID[objective + " climb"] += "levels' climb from the rounded rows" in path
     GRID[objective + " listing"] += "a grid point near the rounded rows' least-norm point attains" in path
     return seconds, result.status, kind

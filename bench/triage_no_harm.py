@@ -82,7 +82,7 @@ def run(sizes: list[tuple[int, int]], seeds: int, noise: float, limit: float) ->
                 sec = time.perf_counter() - start
                 margins = p.margins(rec.x)
                 inside = (p.deviation >= p.lower) & (p.deviation <= p.upper)
-                triage = rec.result.extra.get("triage")
+                triage = rec.result.triage
                 out.append(
                     {
                         "n": n,
@@ -96,7 +96,7 @@ def run(sizes: list[tuple[int, int]], seeds: int, noise: float, limit: float) ->
                         "status": rec.result.status,
                         "seconds": sec,
                         "lp": lp,
-                        "levels": triage.get("leximin_levels", 0) if isinstance(triage, dict) else 0,
+                        "levels": triage.leximin_levels if triage is not None else 0,
                     }
                 )
     return out

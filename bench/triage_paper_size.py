@@ -97,13 +97,13 @@ def worker(n: int, seed: int, limit: float) -> dict[str, object]:
             t = time.perf_counter()
             result = opt.solve(problem)
             out["solve"].append(time.perf_counter() - t)
-            stages = dict(result.extra.get("stages", {}))
-            tri = result.extra.get("triage")
+            stages = dict(result.stages)
+            tri = result.triage
             out["triage"].append(float(stages.get("triage", 0.0)))
             out["status"].append(result.status)
             out["triage_case"].append(tri is not None)
-            out["complete"].append(bool(tri.get("leximin_complete", False)) if isinstance(tri, dict) else None)
-            out["forced"].append("kept set forced" in str(result.extra.get("path", "")))
+            out["complete"].append(tri.leximin_complete if tri is not None else None)
+            out["forced"].append("kept set forced" in result.path)
             out["given_up"].append(len(result.given_up))
             out["x"].append([float(v) for v in result.x])
     return out
@@ -132,11 +132,12 @@ def check(limit: float) -> list[str]:
     finally:
         _triage.FORCED, _triage.LEXIMIN_SHARE = forced, share
     same = np.array_equal(fast.x, slow.x)
+    complete = slow.triage is not None and slow.triage.leximin_complete
     gap = float(np.max(np.abs(np.sort(problem.margins(fast.x)) - np.sort(problem.margins(slow.x)))))
     return [
         "",
         f"check: cycle_01, P1 D1 at -0.25 mm; MILP path alone (forced kept set off), limit {limit:g} s: "
-        f"{sec:.1f} s, status {slow.status}, leximin complete {slow.extra['triage']['leximin_complete']}",
+        f"{sec:.1f} s, status {slow.status}, leximin complete {complete}",
         f"  default: {fast.seconds * 1e3:.1f} ms, status {fast.status}; same correction: {same}; largest "
         f"difference of the sorted margins {gap:.2e} mm",
     ]

@@ -76,8 +76,8 @@ def main(argv: list[str] | None = None) -> None:
                     result = get_optimizer("exact", time_limit=limit).solve(problem)
                     wall, cpu = time.perf_counter() - start, time.process_time() - cpu
                     over.append(wall - limit)
-                    stopped = result.extra.get("stopped")
-                    why = f"{stopped['stage']}: {stopped['reason']}" if isinstance(stopped, dict) else "-"
+                    stopped = result.stopped
+                    why = f"{stopped.stage}: {stopped.reason}" if stopped is not None else "-"
                     lines.append(
                         f"{n:>4} x {m:<5} {seed:>4} {limit:>5.1f} {wall:>7.3f} {cpu:>6.3f} "
                         f"{wall - limit:>+7.3f} {result.status:<11} {len(result.given_up or ()):>8}  "
