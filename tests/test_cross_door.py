@@ -379,9 +379,10 @@ def _modelled(name: str, report: Path) -> Iterator[Case]:
 
 def everything_model(tmp: Path) -> Path:
     """Guide pins with register costs, every safety setting, effects and EWMA λ = 0.5."""
-    sys.path.insert(0, str(Path(__file__).parent / "pipeline" / "data"))
+    sys.path.insert(0, str(Path(__file__).parent / "usecases" / "data"))
     try:
-        from make_correct_goldens import EFFECTS, costed_model
+        # a script beside the goldens it writes, imported from its folder: not a module mypy can find
+        from make_correct_goldens import EFFECTS, costed_model  # type: ignore[import-not-found]
     finally:
         sys.path.pop(0)
     model = tmp / "everything.toml"
@@ -401,7 +402,7 @@ def seeded_store(tmp: Path, model: Path) -> Path:
 # -- the tests ----------------------------------------------------------------------------------
 
 
-def test_every_bundled_sample_through_every_door(tmp_path):
+def test_every_bundled_sample_through_every_door(tmp_path: Path) -> None:
     cases = [*bundled_cases(tmp_path / "reports"), *self_modelled_cases(tmp_path / "modelled")]
     for k, case in enumerate(cases):
         work = tmp_path / f"case{k}"
@@ -420,7 +421,7 @@ def test_every_bundled_sample_through_every_door(tmp_path):
     )
 
 
-def test_generated_reports_with_everything_switched_on(tmp_path, thermal):
+def test_generated_reports_with_everything_switched_on(tmp_path: Path, thermal: tuple[Path, Path]) -> None:
     """Costs, safety, effects, EWMA over a store, current offsets and the feed-forward, on seeded reports."""
     model = everything_model(tmp_path)
     case = Case(
@@ -466,7 +467,7 @@ def run_app(case: Case, report: Path, db: Path, offsets: Path) -> tuple[dict[str
         Inputs(
             model=case.model,
             report=report,
-            db=db,
+            db=str(db),
             current=case.current,
             thermal=case.thermal[0] if case.thermal else None,
             temperatures=case.thermal[1] if case.thermal else None,
@@ -492,7 +493,7 @@ def run_app(case: Case, report: Path, db: Path, offsets: Path) -> tuple[dict[str
     return asyncio.run(scenario()), offsets.read_text(encoding="utf-8")
 
 
-def test_generated_reports_with_stations(tmp_path, thermal):
+def test_generated_reports_with_stations(tmp_path: Path, thermal: tuple[Path, Path]) -> None:
     """Reports whose parts are the fixture's workpieces: one cycle only with ``--stations``."""
     model = everything_model(tmp_path)
     plain = model.with_name("no_ewma.toml")
@@ -552,13 +553,13 @@ def seen_by_the_folder_watch(folder: Path, tmp: Path) -> set[str]:
     return seen
 
 
-def test_batch_and_the_tui_folder_watch_see_the_same_reports(tmp_path):
+def test_batch_and_the_tui_folder_watch_see_the_same_reports(tmp_path: Path) -> None:
     folder, reports = report_folder(tmp_path)
     assert seen_by_batch(folder, tmp_path) == reports
     assert seen_by_the_folder_watch(folder, tmp_path) == reports
 
 
-def test_parse_sees_the_same_reports(tmp_path):
+def test_parse_sees_the_same_reports(tmp_path: Path) -> None:
     from setupfix.usecases.parse import parse_reports
 
     folder, reports = report_folder(tmp_path)
@@ -569,7 +570,7 @@ def test_parse_sees_the_same_reports(tmp_path):
     assert tried == reports == seen_by_batch(folder, tmp_path)
 
 
-def test_a_stopped_solve_is_not_solved_through_every_door(tmp_path):
+def test_a_stopped_solve_is_not_solved_through_every_door(tmp_path: Path) -> None:
     """Issue 21 #1: a solve stopped by its time limit with nothing proven is "not solved" at every door, never
     "no change needed": exit 6, ``"solved": false``, the batch counts it and its store does not skip it next run."""
     from shop_model import write_shop
