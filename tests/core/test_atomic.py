@@ -8,6 +8,7 @@ import stat
 import subprocess
 import sys
 import time
+from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
@@ -19,7 +20,7 @@ from setupfix.core.errors import ExportError
 ROOT = Path(__file__).resolve().parents[2]
 
 
-def test_failure_leaves_old_content_and_no_temp(tmp_path):
+def test_failure_leaves_old_content_and_no_temp(tmp_path: Path) -> None:
     target = tmp_path / "out.csv"
     target.write_text("old\n")
     with pytest.raises(RuntimeError), atomic_write(target) as stream:
@@ -29,7 +30,7 @@ def test_failure_leaves_old_content_and_no_temp(tmp_path):
     assert [p.name for p in tmp_path.iterdir()] == ["out.csv"]
 
 
-def test_text_and_binary_with_plain_permissions(tmp_path):
+def test_text_and_binary_with_plain_permissions(tmp_path: Path) -> None:
     with atomic_write(tmp_path / "a.txt") as stream:
         stream.write("ä\n")
     with atomic_write(tmp_path / "b.png", binary=True) as stream:
@@ -41,7 +42,7 @@ def test_text_and_binary_with_plain_permissions(tmp_path):
     assert stat.S_IMODE((tmp_path / "a.txt").stat().st_mode) == 0o666 & ~umask
 
 
-def test_missing_folder_is_an_export_error(tmp_path):
+def test_missing_folder_is_an_export_error(tmp_path: Path) -> None:
     with pytest.raises(ExportError, match="no-such-dir"), atomic_write(tmp_path / "no-such-dir" / "x.csv") as stream:
         stream.write("x")
 
@@ -49,19 +50,19 @@ def test_missing_folder_is_an_export_error(tmp_path):
 # -- output targets (issue 10): only '-' or a regular file ----------------------------------------
 
 
-def _fifo(p):
+def _fifo(p: Path) -> Path:
     os.mkfifo(p)
     return p
 
 
-def _link(p):
+def _link(p: Path) -> Path:
     real = p.parent / "real.csv"
     real.write_text("keep\n")
     p.symlink_to(real)
     return p
 
 
-def _socket(p):
+def _socket(p: Path) -> Path:
     import socket
 
     with socket.socket(socket.AF_UNIX) as s:  # the socket file stays after the socket is closed
@@ -78,7 +79,9 @@ def _socket(p):
         (_socket, "socket"),
     ],
 )
-def test_non_regular_targets_are_refused_and_left_alone(tmp_path, make, kind):
+def test_non_regular_targets_are_refused_and_left_alone(
+    tmp_path: Path, make: Callable[[Path], Path], kind: str
+) -> None:
     target = make(tmp_path / "out.csv")
     before = os.lstat(target).st_mode
     with pytest.raises(ExportError, match=f"out.csv.*{kind}"):
@@ -88,14 +91,14 @@ def test_non_regular_targets_are_refused_and_left_alone(tmp_path, make, kind):
 
 
 @pytest.mark.parametrize(("device", "kind"), [("/dev/null", "character device"), ("/dev/stdout", "symbolic link")])
-def test_devices_are_refused(device, kind):
+def test_devices_are_refused(device: str, kind: str) -> None:
     if not os.path.lexists(device):
         pytest.skip(f"{device} absent")
     with pytest.raises(ExportError, match=kind):
         check_target(device)
 
 
-def test_check_target_accepts_stdout_new_and_existing_regular_files(tmp_path):
+def test_check_target_accepts_stdout_new_and_existing_regular_files(tmp_path: Path) -> None:
     assert check_target("-") is None
     assert check_target(tmp_path / "new.csv") == tmp_path / "new.csv"
     (tmp_path / "old.csv").write_text("x")
@@ -104,7 +107,7 @@ def test_check_target_accepts_stdout_new_and_existing_regular_files(tmp_path):
         check_target(tmp_path / "missing" / "x.csv")
 
 
-def test_existing_file_keeps_its_permissions(tmp_path):
+def test_existing_file_keeps_its_permissions(tmp_path: Path) -> None:
     target = tmp_path / "private.csv"
     target.write_text("old")
     target.chmod(0o600)
@@ -116,11 +119,11 @@ def test_existing_file_keeps_its_permissions(tmp_path):
 # -- threads: no umask toggling, every file complete -----------------------------------------------
 
 
-def test_many_threads_at_once_get_plain_permissions_and_whole_files(tmp_path):
+def test_many_threads_at_once_get_plain_permissions_and_whole_files(tmp_path: Path) -> None:
     old = os.umask(0o027)
     try:
 
-        def work(i):
+        def work(i: int) -> int:
             write_text(tmp_path / f"f{i % 8}.csv", f"{i}\n" * 500)
             plain = tmp_path / f"plain{i}.txt"  # created meanwhile with open(): must see the umask too
             plain.write_text("p")
@@ -142,7 +145,7 @@ def test_many_threads_at_once_get_plain_permissions_and_whole_files(tmp_path):
 # -- stale temporary files of killed writes ---------------------------------------------------------
 
 
-def test_kill_mid_write_leaves_old_content_and_next_write_cleans_up(tmp_path):
+def test_kill_mid_write_leaves_old_content_and_next_write_cleans_up(tmp_path: Path) -> None:
     target = tmp_path / "out.csv"
     target.write_text("old\n")
     code = (

@@ -21,11 +21,19 @@ class _Est(ValidatedParams):
         "even": [Predicate(lambda v: v % 2 == 0, "an even number")],
     }
 
-    def __init__(self, n=1, pa=0.5, kind="a", seed=None, flag=False, even=2):
+    def __init__(
+        self,
+        n: object = 1,
+        pa: object = 0.5,
+        kind: object = "a",
+        seed: object = None,
+        flag: object = False,
+        even: object = 2,
+    ) -> None:
         self.n, self.pa, self.kind, self.seed, self.flag, self.even = n, pa, kind, seed, flag, even
 
 
-def test_defaults_pass():
+def test_defaults_pass() -> None:
     _Est().validate_params()
 
 
@@ -46,7 +54,7 @@ def test_defaults_pass():
         ({"even": "x"}, "even must be an even number"),
     ],
 )
-def test_out_of_range_names_owner_parameter_and_range(kw, text):
+def test_out_of_range_names_owner_parameter_and_range(kw: dict[str, object], text: str) -> None:
     with pytest.raises(ParameterError) as info:
         _Est(**kw).validate_params()
     assert str(info.value).startswith("_Est: ")
@@ -54,7 +62,7 @@ def test_out_of_range_names_owner_parameter_and_range(kw, text):
     assert isinstance(info.value, SetupfixError)
 
 
-def test_unlisted_parameters_are_not_checked_but_listed_ones_are():
+def test_unlisted_parameters_are_not_checked_but_listed_ones_are() -> None:
     validate_params("x", {"free": object()}, {})
     with pytest.raises(ParameterError):
         validate_params("x", {"n": 0}, {"n": [Interval(int, 1, None)]})

@@ -10,13 +10,17 @@ from __future__ import annotations
 
 import re
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import pytest
 
+from hostile.cases import CASES, GUIDE, Case
 from parsers.names import visible_name
 from setupfix.cli import main
 from setupfix.core.errors import SetupfixError
-from tests.hostile.cases import CASES, GUIDE, Case
+
+if TYPE_CHECKING:
+    from setupfix.usecases.requests import CorrectRequest
 
 MODEL = str(GUIDE / "model.toml")
 COMMANDS = {
@@ -46,7 +50,7 @@ def test_hostile_report_is_refused_in_one_line(
     out = tmp_path / "out.csv"
     args = COMMANDS[command](path, out)
     try:
-        status = main([*args, *case.options])
+        status: str | int | None = main([*args, *case.options])
     except SystemExit as exc:  # argparse refuses a bad option value
         status = exc.code
     err = capsys.readouterr().err
@@ -78,7 +82,7 @@ def test_the_tui_session_refuses_in_one_line(case: Case, tmp_path: Path) -> None
     assert re.search(case.expect, line), line
 
 
-def _request():  # type: ignore[no-untyped-def]
+def _request() -> CorrectRequest:
     from setupfix.model import load_model
     from setupfix.usecases.requests import CorrectRequest
 

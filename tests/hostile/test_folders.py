@@ -13,9 +13,9 @@ from pathlib import Path
 
 import pytest
 
+from hostile.cases import CASES, GUIDE, write_corpus
 from parsers.names import visible_name
 from setupfix.cli import main
-from tests.hostile.cases import CASES, GUIDE, write_corpus
 
 MODEL = str(GUIDE / "model.toml")
 
@@ -39,7 +39,9 @@ def unlock(d: Path) -> None:
         (d / "locked").chmod(0o755)
 
 
-def test_batch_names_every_hostile_file_and_writes_the_good_ones(tmp_path, capsys):
+def test_batch_names_every_hostile_file_and_writes_the_good_ones(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     d = corpus_folder(tmp_path)
     try:
         code = main(["batch", str(d), "--model", MODEL, "--out", str(tmp_path / "o.csv"), "--settle", "0"])
@@ -61,7 +63,7 @@ def test_batch_names_every_hostile_file_and_writes_the_good_ones(tmp_path, capsy
     assert {"good.csv", "linked.csv"} <= reports
 
 
-def test_parse_and_history_import_of_the_folder(tmp_path, capsys):
+def test_parse_and_history_import_of_the_folder(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     d = corpus_folder(tmp_path)
     try:
         parsed = main(["parse", str(d), "--out", str(tmp_path / "m.csv")])
@@ -85,7 +87,7 @@ def test_parse_and_history_import_of_the_folder(tmp_path, capsys):
 
 
 @pytest.mark.parametrize("command", ["diagnose", "model-init"])
-def test_series_commands_on_the_folder(command, tmp_path, capsys):
+def test_series_commands_on_the_folder(command: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     d = corpus_folder(tmp_path)
     args = (
         ["diagnose", "--model", MODEL, "--no-walk", str(d)]

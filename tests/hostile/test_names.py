@@ -20,10 +20,10 @@ import pandas as pd
 import pytest
 
 import parsers
+from hostile.cases import GUIDE, HOSTILE_NAMES
 from parsers.names import visible_name
 from setupfix.cli import main
 from setupfix.outputs.writers import csv_cell
-from tests.hostile.cases import GUIDE, HOSTILE_NAMES
 
 MODEL = str(GUIDE / "model.toml")
 REPORTS = sorted(GUIDE.glob("cycle_0*.csv"))

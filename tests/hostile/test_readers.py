@@ -12,10 +12,10 @@ from pathlib import Path
 import pytest
 
 import parsers
+from hostile.cases import CASES, Case
 from parsers.names import visible_name
 from setupfix.core.errors import SetupfixError
 from setupfix.model import CANONICAL_COLUMNS
-from tests.hostile.cases import CASES, Case
 
 READERS = [spec.name for spec in parsers.formats()]
 OPTIONS = {"--encoding": "encoding", "--unit": "unit", "--columns": "columns"}
@@ -33,7 +33,7 @@ def test_every_reader_reads_a_table_or_refuses_naming_the_file(case: Case, tmp_p
     refused = 0
     for reader in READERS:
         try:
-            result = parsers.read_report(path, format=reader, **options_of(case))  # type: ignore[arg-type]
+            result = parsers.read_report(path, format=reader, **options_of(case))
         except SetupfixError as exc:
             line = str(exc)
             assert "\n" not in line and line.isprintable(), (reader, line)

@@ -13,10 +13,10 @@ from pathlib import Path
 
 import pytest
 
+from hostile.cases import CASES, GUIDE, Case
 from parsers.names import visible_name
 from setupfix.cli import main
 from setupfix.store import open_store
-from tests.hostile.cases import CASES, GUIDE, Case
 
 MODEL = str(GUIDE / "model.toml")
 
@@ -37,7 +37,9 @@ def test_history_import_refuses_a_hostile_report_in_one_line_and_stores_nothing(
     path.write_bytes(case.make())
     capsys.readouterr()
     try:
-        status = main(["history", "import", "--db", str(db), str(path), str(GUIDE / "cycle_02.csv"), *case.options])
+        status: str | int | None = main(
+            ["history", "import", "--db", str(db), str(path), str(GUIDE / "cycle_02.csv"), *case.options]
+        )
     except SystemExit as exc:  # argparse refuses a bad option value
         status = exc.code
     err = capsys.readouterr().err
