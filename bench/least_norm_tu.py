@@ -7,8 +7,8 @@ integral, so the least Σ c k² over the grid is the vertex of one LP over the c
 (:func:`setupfix.optimize.exact.least_norm.shop.network_rows`).
 
 For each size and seed the exact solve runs three times in the same process: the network LP
-first (``NETWORK_LP`` on, no listing before it: ``ellipsoid_max_registers`` = 0), without it
-(``NETWORK_LP`` off: the listing, box MILPs and chord MILPs as before), and as shipped (the short
+first (``network_lp`` on, no listing before it: ``ellipsoid_max_registers`` = 0), without it
+(``network_lp`` off: the listing, box MILPs and chord MILPs as before), and as shipped (the short
 listing of up to 120 registers, then the network LP before any MILP).  Reported: the least-norm
 stage's time of each, whether the corrections are equal (norms must be; the correction too unless
 a tie was too large to list) and the ratio of each stage time to one LP solve timed in the same
@@ -35,7 +35,6 @@ from threadpoolctl import threadpool_limits
 
 ROOT = Path(__file__).resolve().parents[1]
 
-import setupfix.optimize.exact.least_norm.grid as stage
 from setupfix.optimize import CorrectionProblem, get_optimizer
 from setupfix.optimize.exact.highs import INF, LinearModel
 from setupfix.optimize.exact.lp_bound import margin_rows
@@ -91,12 +90,10 @@ def one_lp(problem: CorrectionProblem) -> float:
 def solve(
     problem: CorrectionProblem, network: bool, limit: float, listing: bool = True
 ) -> tuple[float, float, str, np.ndarray, str]:
-    stage.NETWORK_LP = network
-    settings = ExactSettings() if listing else ExactSettings(ellipsoid_max_registers=0)
-    try:
-        result = get_optimizer("exact", time_limit=limit, settings=settings).solve(problem)
-    finally:
-        stage.NETWORK_LP = True
+    settings = (
+        ExactSettings(network_lp=network) if listing else ExactSettings(network_lp=network, ellipsoid_max_registers=0)
+    )
+    result = get_optimizer("exact", time_limit=limit, settings=settings).solve(problem)
     stages = dict(result.stages)
     path = result.path
     return float(stages.get("least norm", np.nan)), result.norm, result.status, result.x, path

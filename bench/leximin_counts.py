@@ -12,7 +12,7 @@ bundled cycles of ``correct_report``).  The corrections must be identical where 
 
 The reports whose conflict two dimensions must share are decided by branches on pairs
 (:func:`setupfix.optimize.exact.leximin.levels._alone`) before the counts: each of them is corrected again with
-the pairs switched off (``MAX_PAIR_TESTS`` = −1: the counts, as before), CPU time and answers compared.
+the pairs switched off (``ExactSettings(max_pair_tests=0)``: the counts, as before), CPU time and answers compared.
 
     python -m bench.leximin_counts                 # 600 reports, 60 s limit
     python -m bench.leximin_counts --reports 100
@@ -23,10 +23,12 @@ Threads: OPENBLAS/MKL/OMP = 1, HiGHS 1 thread.  Writes ``bench/results/leximin_c
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import os
 import tempfile
 import time
 from pathlib import Path
+from typing import Any
 
 ROOT = Path(__file__).resolve().parents[1]
 os.environ.update(OPENBLAS_NUM_THREADS="1", MKL_NUM_THREADS="1", OMP_NUM_THREADS="1")
@@ -36,15 +38,14 @@ import numpy as np
 from bench.batch_throughput import reference
 from bench.problems import GUIDE, make_reports
 from setupfix.model import load_model
+from setupfix.optimize.exact import ExactSettings
 from setupfix.optimize.exact.highs import LinearModel
 from setupfix.optimize.exact.leximin import counts as _leximin_counts
-from setupfix.optimize.exact.leximin import levels as _leximin
 from setupfix.usecases.correct import correct_report
 from setupfix.usecases.requests import CorrectRequest, SolveOptions
 
 RESULTS = ROOT / "bench" / "results"
 SKIP = LinearModel.skip_presolve
-PAIRS = _leximin.MAX_PAIR_TESTS
 
 
 #: The three ways: (name, presolve on, linking rows).
@@ -55,6 +56,13 @@ def way(presolve: bool, link: bool) -> None:
     """Count MILPs presolved (HiGHS's default) or not (the optimiser's setting), with or without the links."""
     LinearModel.skip_presolve = (lambda self: None) if presolve else SKIP  # type: ignore[method-assign]
     _leximin_counts.LINK = link
+
+
+class NoPairs(SolveOptions):
+    """The exact optimiser with the pair branches switched off (the counts decide, as before)."""
+
+    def params(self) -> dict[str, Any]:
+        return {**super().params(), "settings": ExactSettings(max_pair_tests=0)}
 
 
 def solve(request: CorrectRequest, path: Path) -> tuple[float, str, str, np.ndarray]:
@@ -83,9 +91,8 @@ def main() -> None:
         paired = []
         for f in (f for f in files if "branch: dimensions" in paths[f]):
             with_pairs = solve(request, f)
-            _leximin.MAX_PAIR_TESTS = -1
-            paired.append((f.name, with_pairs, solve(request, f)))
-            _leximin.MAX_PAIR_TESTS = PAIRS
+            no_pairs = dataclasses.replace(request, solve=NoPairs(time_limit=args.limit))
+            paired.append((f.name, with_pairs, solve(no_pairs, f)))
         rows = []
         for f in counted:
             runs = {}

@@ -114,7 +114,7 @@ def check(limit: float) -> list[str]:
     from setupfix.inputs.cycles import load_parts
     from setupfix.model import PartMeasurement, load_model
     from setupfix.optimize import CorrectionProblem, get_optimizer
-    from setupfix.optimize.exact.triage import solve as _triage
+    from setupfix.optimize.exact import ExactSettings
 
     sample = ROOT / "sample_reports" / "guide_pins"
     model = load_model(sample / "model.toml")
@@ -123,14 +123,10 @@ def check(limit: float) -> list[str]:
     dev[0] = -0.25
     problem = CorrectionProblem.from_part(model, PartMeasurement("c", "r", None, dev, part.sources))
     fast = get_optimizer("exact").solve(problem)
-    forced, share = _triage.FORCED, _triage.LEXIMIN_SHARE
-    _triage.FORCED, _triage.LEXIMIN_SHARE = False, 0.9
-    try:
-        t = time.perf_counter()
-        slow = get_optimizer("exact", time_limit=limit).solve(problem)
-        sec = time.perf_counter() - t
-    finally:
-        _triage.FORCED, _triage.LEXIMIN_SHARE = forced, share
+    milp_path = ExactSettings(forced_triage=False, triage_leximin_share=0.9)
+    t = time.perf_counter()
+    slow = get_optimizer("exact", time_limit=limit, settings=milp_path).solve(problem)
+    sec = time.perf_counter() - t
     same = np.array_equal(fast.x, slow.x)
     complete = slow.triage is not None and slow.triage.leximin_complete
     gap = float(np.max(np.abs(np.sort(problem.margins(fast.x)) - np.sort(problem.margins(slow.x)))))

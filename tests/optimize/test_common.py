@@ -16,7 +16,8 @@ from setupfix.core.errors import ParameterError
 from setupfix.core.params import accepts
 from setupfix.optimize import OPTIMIZERS, CorrectionProblem, get_optimizer
 from setupfix.optimize.base import NO_BETTER_THAN_NONE, Metaheuristic, make_result
-from tests.optimize.test_metaheuristics_common import RecordingProblem, small_problem
+
+from .test_metaheuristics_common import RecordingProblem, small_problem
 
 NAMES = sorted(OPTIMIZERS)
 #: Small budgets: every check here runs in well under a second per optimiser.

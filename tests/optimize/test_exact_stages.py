@@ -177,12 +177,9 @@ def test_a_callers_search_in_the_grid_optimum_changes_no_optimum(seed, monkeypat
             assert "listing" not in events[events.index("reached") :]
 
 
-def test_results_of_g_alone_are_computed_once_per_model_and_read_only(monkeypatch):
+def test_results_of_g_alone_are_computed_once_per_model_and_read_only() -> None:
     """Two reports of one model (same G, box, costs; other g) share the memo; another box does not; a full
     memo is emptied, never grown without bound."""
-    import setupfix.optimize.exact.session as session_mod
-    from setupfix.optimize.exact.session import GridRows
-
     rng = np.random.default_rng(5)
     g_rows = rng.integers(-2, 3, size=(6, 3)).astype(float)
     box = (np.full(3, -4.0), np.full(3, 4.0), np.ones(3))
@@ -197,8 +194,7 @@ def test_results_of_g_alone_are_computed_once_per_model_and_read_only(monkeypatc
     assert made == [1] and again is first and not first.flags.writeable
     GridRows(g_rows, rng.normal(size=6), np.full(3, -5.0), box[1], box[2]).memo(("test",), make)
     assert made == [1, 1]
-    monkeypatch.setattr(session_mod, "MEMO_MAX", 3)
     rows = GridRows(g_rows, rng.normal(size=6), *box)
     for i in range(5):
-        rows.memo(("fill", i), make)
+        rows.memo(("fill", i), make, most=3)
     assert len(rows.derived.memo) <= 3

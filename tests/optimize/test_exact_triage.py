@@ -10,8 +10,7 @@ import pytest
 from setupfix.inputs.cycles import load_parts
 from setupfix.model import PartMeasurement
 from setupfix.optimize import CorrectionProblem, get_optimizer
-from setupfix.optimize.exact.triage import model as _triage_model
-from setupfix.optimize.exact.triage import solve as _triage
+from setupfix.optimize.exact import ExactSettings
 
 from .test_exact import random_problem
 from .test_exact_robust import GUIDE_PINS
@@ -67,21 +66,25 @@ def check_triage(problem: CorrectionProblem, result) -> None:
     assert "given up" in result.message and "NC program or the process" in result.message
 
 
+#: Every way of the triage: listing a small box; the forced kept set (listing switched off), which falls
+#: back to the MILPs where the kept set is not forced; the MILPs alone (both switched off).
+TRIAGE_PATHS = {
+    "listed": ExactSettings(),
+    "forced": ExactSettings(triage_list_points=0),
+    "milp": ExactSettings(triage_list_points=0, forced_triage=False),
+}
+
+
 @pytest.fixture(params=["listed", "forced", "milp"])
-def path(request, monkeypatch):
-    """Every way of the triage: listing a small box; the forced kept set (listing switched off), which
-    falls back to the MILPs where the kept set is not forced; the MILPs alone (both switched off)."""
-    if request.param in ("forced", "milp"):
-        monkeypatch.setattr(_triage_model, "LIST_POINTS", 0)
-    if request.param == "milp":
-        monkeypatch.setattr(_triage, "FORCED", False)
-    return request.param
+def path(request: pytest.FixtureRequest) -> str:
+    """The name of one way of the triage (:data:`TRIAGE_PATHS`)."""
+    return str(request.param)
 
 
 @pytest.mark.parametrize("seed", range(24))
 def test_triage_equals_brute_force(seed, path):
     problem = random_problem(seed, n=3, m=7, limit_steps=2, spread=0.3)
-    result = get_optimizer("exact", time_limit=SOLVE_LIMIT).solve(problem)
+    result = get_optimizer("exact", time_limit=SOLVE_LIMIT, settings=TRIAGE_PATHS[path]).solve(problem)
     if brute_triage(problem)[0] == len(problem.dimension_ids):  # everything can be kept: no triage
         assert result.given_up == ()
         return
@@ -100,7 +103,7 @@ def test_triage_ties_go_to_the_smallest_correction_on_every_path(seed, path):
     problem = dataclasses.replace(base, composite=composite)
     if brute_triage(problem)[0] == len(problem.dimension_ids):
         pytest.skip("everything can be kept: no triage")
-    check_triage(problem, get_optimizer("exact", time_limit=SOLVE_LIMIT).solve(problem))
+    check_triage(problem, get_optimizer("exact", time_limit=SOLVE_LIMIT, settings=TRIAGE_PATHS[path]).solve(problem))
 
 
 @pytest.mark.parametrize("seed", range(12))
@@ -114,7 +117,7 @@ def test_triage_with_costs_fixed_registers_and_guard_floor_equals_brute_force(se
     inside = (base.deviation >= base.lower) & (base.deviation <= base.upper)
     floor = np.where(inside, np.minimum(floor, 0.0), -np.inf)
     problem = dataclasses.replace(base, cost=rng.uniform(0.5, 3.0, 4), floor=floor)
-    result = get_optimizer("exact", time_limit=SOLVE_LIMIT).solve(problem)
+    result = get_optimizer("exact", time_limit=SOLVE_LIMIT, settings=TRIAGE_PATHS[path]).solve(problem)
     if brute_triage(problem)[0] == len(problem.dimension_ids) and result.margin_after >= 0:
         return
     if not result.given_up and result.margin_after >= 0:
@@ -235,7 +238,7 @@ def milp_triage(problem: CorrectionProblem) -> tuple[int, np.ndarray, float]:
 @pytest.mark.parametrize("seed", range(10))
 def test_triage_equals_an_independent_milp(seed, path):
     problem = random_problem(700 + seed, n=3, m=6, limit_steps=3, spread=0.3)
-    result = get_optimizer("exact", time_limit=SOLVE_LIMIT).solve(problem)
+    result = get_optimizer("exact", time_limit=SOLVE_LIMIT, settings=TRIAGE_PATHS[path]).solve(problem)
     if not result.given_up:
         pytest.skip("every dimension can be kept: no triage")
     count, sorted_kept, norm = milp_triage(problem)
@@ -351,7 +354,7 @@ def test_bound_is_the_kept_dimensions_lp_and_seconds_the_whole_call(seed, path):
     from scipy.optimize import linprog
 
     problem = random_problem(seed, n=3, m=7, limit_steps=2, spread=0.3)
-    result = get_optimizer("exact", time_limit=SOLVE_LIMIT).solve(problem)
+    result = get_optimizer("exact", time_limit=SOLVE_LIMIT, settings=TRIAGE_PATHS[path]).solve(problem)
     if not result.given_up:
         pytest.skip("every dimension can be kept: no triage")
     keep = ~np.isin(problem.dimension_ids, result.given_up)
@@ -397,7 +400,7 @@ def gross_problem(seed: int, n: int = 4, m: int = 8) -> CorrectionProblem:
 @pytest.mark.parametrize("seed", range(20))
 def test_gross_dimensions_triage_equals_brute_force(seed, path):
     problem = gross_problem(seed)
-    result = get_optimizer("exact", time_limit=SOLVE_LIMIT).solve(problem)
+    result = get_optimizer("exact", time_limit=SOLVE_LIMIT, settings=TRIAGE_PATHS[path]).solve(problem)
     if brute_triage(problem)[0] == len(problem.dimension_ids):
         assert result.given_up == ()
         return
@@ -406,10 +409,9 @@ def test_gross_dimensions_triage_equals_brute_force(seed, path):
 
 
 @pytest.mark.parametrize("seed", range(6))
-def test_gross_dimensions_triage_equals_an_independent_milp(seed, monkeypatch):
-    monkeypatch.setattr(_triage_model, "LIST_POINTS", 0)
+def test_gross_dimensions_triage_equals_an_independent_milp(seed):
     problem = gross_problem(seed, n=3, m=6)
-    result = get_optimizer("exact", time_limit=SOLVE_LIMIT).solve(problem)
+    result = get_optimizer("exact", time_limit=SOLVE_LIMIT, settings=TRIAGE_PATHS["forced"]).solve(problem)
     if not result.given_up:
         pytest.skip("every dimension can be kept: no triage")
     assert "kept set forced" in result.path
@@ -421,9 +423,8 @@ def test_gross_dimensions_triage_equals_an_independent_milp(seed, monkeypatch):
     assert np.sqrt(np.sum(problem.cost * result.x**2)) == pytest.approx(norm, abs=1e-7)
 
 
-def test_a_dimension_within_reach_only_by_harm_is_proved_lost(monkeypatch):
+def test_a_dimension_within_reach_only_by_harm_is_proved_lost():
     """The LP certificate: D0 can be brought in only by moving D1 (measured in) out."""
-    monkeypatch.setattr(_triage_model, "LIST_POINTS", 0)
     from setupfix.optimize.exact.lp_bound import margin_rows
     from setupfix.optimize.exact.triage.forced import lost_bound
     from setupfix.optimize.exact.triage.model import TriageRows
@@ -452,7 +453,7 @@ def test_a_dimension_within_reach_only_by_harm_is_proved_lost(monkeypatch):
     )
     assert not t.lost[0]  # the box reaches it (k ≤ −3 steps) …
     assert lost_bound(t, 0, 1.0) == pytest.approx(-1.0, abs=1e-5)  # … D1 stays in only for k ≥ −2: D0 at −1 step
-    result = get_optimizer("exact", time_limit=SOLVE_LIMIT).solve(problem)
+    result = get_optimizer("exact", time_limit=SOLVE_LIMIT, settings=TRIAGE_PATHS["forced"]).solve(problem)
     assert result.given_up == ("D0",) and result.status == "optimal"
     assert "kept set forced" in result.path
     assert result.x == pytest.approx([0.03], abs=1e-12)  # D1 centred
@@ -474,17 +475,16 @@ def test_guide_pins_gross_dimension_is_fast_and_complete(guide_pins_model):
     assert result.stages["triage"] < 1.0  # 1.2–1.5 s before (MILPs); ~30 ms on an idle machine
 
 
-def test_an_incomplete_triage_leximin_is_a_stopped_solve(guide_pins_model, monkeypatch):
+def test_an_incomplete_triage_leximin_is_a_stopped_solve(guide_pins_model):
     """Levels left unproved (their share of the limit spent) never read as optimal."""
     from setupfix.correction.recommend import stopped_rule
 
-    monkeypatch.setattr(_triage, "FORCED", False)
-    monkeypatch.setattr(_triage, "LEXIMIN_SHARE", 0.0)  # only level 1
     (part,) = load_parts(guide_pins_model, GUIDE_PINS / "cycle_01.csv")
     dev = part.deviation.copy()
     dev[0] = -0.25
     problem = CorrectionProblem.from_part(guide_pins_model, PartMeasurement("c", "r", None, dev, part.sources))
-    result = get_optimizer("exact").solve(problem)
+    only_level_1 = ExactSettings(forced_triage=False, triage_leximin_share=0.0)
+    result = get_optimizer("exact", settings=only_level_1).solve(problem)
     assert not result.triage.leximin_complete
     assert result.status == "time_limit"
     assert result.stopped.stage == "triage" and result.stopped.reason == "time limit"

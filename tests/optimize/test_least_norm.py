@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import itertools
 import time
 
@@ -195,7 +196,7 @@ TIE_PATHS = {
 
 @pytest.mark.parametrize("path", list(TIE_PATHS))
 @pytest.mark.parametrize("network", [False, True])
-def test_ties_go_to_the_lexicographically_smallest_correction(path, network, monkeypatch):
+def test_ties_go_to_the_lexicographically_smallest_correction(path, network):
     """Brute force over the whole grid, on problems built to tie, on every proof path (network LP on and off)."""
     tied = 0
     for seed in range(12):
@@ -204,8 +205,8 @@ def test_ties_go_to_the_lexicographically_smallest_correction(path, network, mon
         if not reach:  # triage: another objective
             continue
         for lp in (True, False):
-            monkeypatch.setattr(least_norm_stage, "NETWORK_LP", lp)
-            result = get_optimizer("exact", settings=TIE_PATHS[path], objective="paper").solve(problem)
+            settings = dataclasses.replace(TIE_PATHS[path], network_lp=lp)
+            result = get_optimizer("exact", settings=settings, objective="paper").solve(problem)
             assert result.status == "optimal"
             np.testing.assert_array_equal(np.rint(result.x / problem.resolution), want)
         tied += ties > 1
@@ -257,16 +258,15 @@ def test_network_rows_are_proved_by_one_chord_lp_equal_to_brute_force(seed):
         np.testing.assert_array_equal(np.rint(result.x / problem.resolution), want)
 
 
-def test_shop_rows_without_differences_take_the_network_lp_and_agree_with_the_listing(monkeypatch):
+def test_shop_rows_without_differences_take_the_network_lp_and_agree_with_the_listing():
     """60 × 400 with every dimension one WKS and one tool: the LP's answer equals the other paths'."""
     for seed in range(2):
         problem = network_shop_problem(60, 400, seed)
         lp = get_optimizer(
             "exact", objective="paper", time_limit=30.0, settings=ExactSettings(ellipsoid_max_registers=0)
         ).solve(problem)
-        monkeypatch.setattr(least_norm_stage, "NETWORK_LP", False)
-        other = get_optimizer("exact", objective="paper", time_limit=30.0).solve(problem)
-        monkeypatch.setattr(least_norm_stage, "NETWORK_LP", True)
+        no_lp = ExactSettings(network_lp=False)
+        other = get_optimizer("exact", objective="paper", time_limit=30.0, settings=no_lp).solve(problem)
         assert lp.status == other.status == "optimal"
         assert "one LP over the chords" in lp.path
         assert lp.norm == pytest.approx(other.norm, rel=1e-12)

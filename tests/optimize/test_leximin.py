@@ -6,15 +6,19 @@ import dataclasses
 import itertools
 
 import numpy as np
+import numpy.typing as npt
 import pytest
 from scipy.optimize import Bounds, LinearConstraint, milp
 
 from setupfix.core.errors import ParameterError
-from setupfix.optimize import CorrectionProblem, get_optimizer
+from setupfix.optimize import CorrectionProblem, OptimizeResult, get_optimizer
 from setupfix.optimize.dimensions import dimension_of_rows
+from setupfix.optimize.exact import ExactSettings
 from setupfix.optimize.exact.lp_bound import margin_rows
 
 from .test_exact import random_problem
+
+Array = npt.NDArray[np.float64]
 
 
 def steps_margins(problem: CorrectionProblem, k: np.ndarray) -> np.ndarray:
@@ -44,8 +48,16 @@ def brute_leximin(problem: CorrectionProblem) -> tuple[np.ndarray, float, np.nda
     return best, float(norm.min()), first
 
 
-def solved_steps(problem: CorrectionProblem, objective: str = "leximin"):
-    result = get_optimizer("exact", objective=objective, time_limit=30.0).solve(problem)
+#: No branch at a discrete conflict: the counts decide every one.
+NO_BRANCHES = ExactSettings(max_branches=0)
+
+
+def solved_steps(
+    problem: CorrectionProblem, objective: str = "leximin", settings: ExactSettings | None = None
+) -> tuple[OptimizeResult, Array, Array]:
+    """The exact optimum (``settings``: default ones when None), its point in steps and its sorted margins."""
+    settings = ExactSettings() if settings is None else settings
+    result = get_optimizer("exact", objective=objective, time_limit=30.0, settings=settings).solve(problem)
     k = np.rint(result.x[problem.free] / problem.resolution)
     return result, k, np.round(np.sort(steps_margins(problem, k[None, :])[0]), 6)
 
@@ -242,12 +254,9 @@ def test_discrete_conflicts_by_branches_equal_brute_force(kind, seed, kw):
 @pytest.mark.parametrize(("kind", "seed", "kw"), CONFLICTS)
 def test_counts_alone_decide_discrete_conflicts_as_brute_force(kind, seed, kw, monkeypatch):
     """With no branching allowed, every discrete conflict goes to the count MILPs: same optimum."""
-    import setupfix.optimize.exact.leximin.levels as lexmod
-
-    monkeypatch.setattr(lexmod, "MAX_BRANCHES", 0)
     problem = make(kind, seed, kw)
     best, norm, _ = brute_leximin(problem)
-    result, k, sorted_m = solved_steps(problem)
+    result, k, sorted_m = solved_steps(problem, settings=NO_BRANCHES)
     assert result.status == "optimal", result.message
     assert "the rest by counts" in result.path
     np.testing.assert_allclose(sorted_m, best, atol=1e-6)

@@ -6,10 +6,9 @@ import numpy as np
 import pytest
 
 import setupfix.optimize.exact.leximin.counts as countmod
-import setupfix.optimize.exact.leximin.levels as lexmod
 from setupfix.optimize.exact.grid import TOL
 
-from .test_leximin import CONFLICTS, brute_leximin, make, solved_steps
+from .test_leximin import CONFLICTS, NO_BRANCHES, brute_leximin, make, solved_steps
 from .test_leximin_pins import _grid
 
 
@@ -18,7 +17,6 @@ def test_each_count_equals_the_grid_count_and_fixes_only_what_the_lattice_decide
     """Every count MILP's optimum is the most active dimensions with margin ≥ t + ε over the grid points
     that meet the floors, t0 and the blocks found so far (brute force); a dimension the model gives no
     binary (every row's lattice value at or above t0 is ≥ t) is ≥ t at every such point, and some have none."""
-    monkeypatch.setattr(lexmod, "MAX_BRANCHES", 0)
     seen: list[tuple[countmod._Rows, list[tuple[float, int]], float, np.ndarray, float]] = []
     original = countmod._model
 
@@ -42,7 +40,7 @@ def test_each_count_equals_the_grid_count_and_fixes_only_what_the_lattice_decide
     monkeypatch.setattr(countmod, "_model", model)
     problem = make(kind, seed, kw)
     best, norm, _ = brute_leximin(problem)
-    result, k, sorted_m = solved_steps(problem)
+    result, k, sorted_m = solved_steps(problem, settings=NO_BRANCHES)
     assert result.status == "optimal" and "the rest by counts" in result.path
     np.testing.assert_allclose(sorted_m, best, atol=1e-6)
     assert float(problem.cost[problem.free] @ k**2) == pytest.approx(norm, abs=1e-9)
@@ -72,7 +70,6 @@ def test_counts_stopped_give_the_least_norm_at_the_conflict_level_not_the_counts
     (brute force) — as where the levels stop, never the counts' unproved point."""
     import setupfix.optimize.exact.solve as exactmod
 
-    monkeypatch.setattr(lexmod, "MAX_BRANCHES", 0)
     monkeypatch.setattr(countmod._Runs, "room", lambda self: self.calls == 0)
     captured = []
     original = exactmod.leximin_least_norm
@@ -83,7 +80,7 @@ def test_counts_stopped_give_the_least_norm_at_the_conflict_level_not_the_counts
 
     monkeypatch.setattr(exactmod, "leximin_least_norm", least)
     problem = make(kind, seed, kw)
-    result, k, _ = solved_steps(problem)
+    result, k, _ = solved_steps(problem, settings=NO_BRANCHES)
     assert result.status == "time_limit" and "the rest by counts" in result.path
     ((rows, lex, row_dim),) = captured
     assert lex.counts is None and lex.stopped is not None
@@ -109,7 +106,6 @@ def test_a_run_starts_only_with_more_time_left_than_the_longest_took():
 def test_no_least_norm_milp_starts_when_a_count_milp_took_longer_than_what_is_left(monkeypatch):
     """Counts proved, but the time left is less than the longest count MILP took: the chord MILP of the least
     norm is not started (HiGHS would run past the limit in its root's cut rounds); the answer says so."""
-    monkeypatch.setattr(lexmod, "MAX_BRANCHES", 0)
     solve = countmod._Runs.solve
 
     def slow(self, model):
@@ -121,6 +117,6 @@ def test_no_least_norm_milp_starts_when_a_count_milp_took_longer_than_what_is_le
     monkeypatch.setattr(countmod._Runs, "room", lambda self: True)
     monkeypatch.setattr(countmod, "lazy_chords", lambda *a, **k: pytest.fail("the chord MILP was started"))
     kind, seed, kw = CONFLICTS[0]
-    result, _, _ = solved_steps(make(kind, seed, kw))
+    result, _, _ = solved_steps(make(kind, seed, kw), settings=NO_BRANCHES)
     assert result.status == "time_limit"
     assert "less time left than a count MILP took" in result.path

@@ -12,6 +12,7 @@ import pytest
 import setupfix.optimize.exact.leximin.levels as lexmod
 from setupfix.model import load_model
 from setupfix.optimize import CorrectionProblem, get_optimizer
+from setupfix.optimize.exact import ExactSettings
 
 from .test_leximin import brute_leximin, solved_steps, steps_margins
 
@@ -48,8 +49,8 @@ def test_pair_branches_decide_the_whole_report_as_the_counts_would(report, monke
     assert "branch: dimensions" in result.path and "by counts" not in result.path
     if report.stem != "varied_r00264":  # the counts take 10-20 s on the other two (bench/leximin_speed.py)
         return
-    monkeypatch.setattr(lexmod, "MAX_PAIR_TESTS", -1)
-    counts = get_optimizer("exact", objective="leximin", time_limit=120.0).solve(problem)
+    no_pairs = ExactSettings(max_pair_tests=0)
+    counts = get_optimizer("exact", objective="leximin", time_limit=120.0, settings=no_pairs).solve(problem)
     assert counts.status == "optimal" and "by counts" in counts.path
     np.testing.assert_array_equal(result.x, counts.x)
     k = np.rint(result.x[problem.free] / problem.resolution)[None, :]

@@ -10,6 +10,7 @@ import pytest
 
 from setupfix.optimize import CorrectionProblem, get_optimizer
 from setupfix.optimize.dimensions import dimension_of_rows
+from setupfix.optimize.exact import ExactSettings
 from setupfix.optimize.exact.leximin.search import climb, climb_moves, group_min
 from setupfix.optimize.exact.lp_bound import margin_rows
 
@@ -124,15 +125,12 @@ def test_climb_without_an_active_dimension_returns_the_start():
 def test_leximin_without_the_climb_equals_brute_force(kind, seed, kw, monkeypatch):
     """The levels prove every level whatever point they start from: with no climb (the ascent by roundings,
     LPs and MILPs alone) the answer is brute force's, as with it."""
-    import setupfix.optimize.exact.leximin.levels as lexmod
-
     problem = make(kind, seed, kw)
     best, norm, _ = brute_leximin(problem)
     if best[0] < 0:
         pytest.skip("out of reach: triage")
     with_climb = get_optimizer("exact", objective="leximin", time_limit=30.0).solve(problem)
-    monkeypatch.setattr(lexmod, "MAX_REGISTERS", 0)
-    result, k, sorted_m = solved_steps(problem)
+    result, k, sorted_m = solved_steps(problem, settings=ExactSettings(climb_max_registers=0))
     assert result.status == "optimal", result.message
     np.testing.assert_allclose(sorted_m, best, atol=1e-6)
     assert float(problem.cost[problem.free] @ k**2) == pytest.approx(norm, abs=1e-9)

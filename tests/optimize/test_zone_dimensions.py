@@ -23,10 +23,9 @@ from setupfix.model import match_parts, model_from_dict
 from setupfix.optimize import CorrectionProblem, get_optimizer, harmed_columns
 from setupfix.optimize.dimensions import dimension_floor, dimension_of_rows, model_dimensions
 from setupfix.optimize.exact.lp_bound import margin_rows
-from setupfix.optimize.exact.triage import model as _triage_model
-from setupfix.optimize.exact.triage import solve as _triage
 
 from .leximin_reference import lexicographic_maxmin, prefix_sums
+from .test_exact_triage import TRIAGE_PATHS
 
 RES = 0.001
 TIE = 5e-4  # steps: half the input quantum; a margin less than this above a level counts at the level
@@ -222,21 +221,17 @@ def test_leximin_counts_a_zone_once(seed):
         assert sum(c for _, c in result.leximin) == len(want["ids"])
 
 
-@pytest.fixture(params=["listed", "forced", "milp"])
-def path(request, monkeypatch):
+@pytest.fixture(params=list(TRIAGE_PATHS))
+def path(request: pytest.FixtureRequest) -> str:
     """Every way of the triage (as in test_exact_triage): listing, the forced kept set, the MILPs."""
-    if request.param in ("forced", "milp"):
-        monkeypatch.setattr(_triage_model, "LIST_POINTS", 0)
-    if request.param == "milp":
-        monkeypatch.setattr(_triage, "FORCED", False)
-    return request.param
+    return str(request.param)
 
 
 @pytest.mark.parametrize("seed", range(12))
 def test_triage_keeps_or_gives_up_whole_zones(seed, path):
     problem = zone_problem(100 + seed, spread=0.009)
     want = brute(problem)
-    result = get_optimizer("exact", time_limit=30.0).solve(problem)
+    result = get_optimizer("exact", time_limit=30.0, settings=TRIAGE_PATHS[path]).solve(problem)
     _check(problem, result, want)
 
 

@@ -54,8 +54,6 @@ FEASIBILITY_TOL = 1e-6
 MIP_ABS_GAP = 1e-6
 #: Models up to this many matrix elements are checked with a dense copy of the matrix.
 DENSE_CHECK_ELEMENTS = 20_000
-#: Seconds added to HiGHS's own ``time_limit`` beyond the run's allowance (0: both clocks stop it).
-HIGHS_LIMIT_SLACK = 0.0
 #: Interrupts checked against the wall clock (HiGHS reads ``time_limit`` between cut rounds, not in sub-searches).
 _INTERRUPTS = (
     cb.HighsCallbackType.kCallbackMipInterrupt,
@@ -173,6 +171,9 @@ class LinearModel:
     col_lo, col_hi : ndarray of shape (n_cols,)
     integer : ndarray of bool, shape (n_cols,), optional
         Integer columns (a MILP); default all continuous.
+    limit_slack : float, default=0.0
+        Seconds added to HiGHS's own ``time_limit`` beyond each run's allowance (0: both clocks
+        stop it; a large value: only the wall-clock interrupts do).
 
     The model keeps its own copy of the data so that every answer can be checked
     (:meth:`check`).
@@ -187,7 +188,9 @@ class LinearModel:
         col_lo: Array,
         col_hi: Array,
         integer: npt.NDArray[np.bool_] | None = None,
+        limit_slack: float = 0.0,
     ) -> None:
+        self.limit_slack = float(limit_slack)
         mat = a if isinstance(a, Colwise) else Colwise.of(a)
         self.n_cols, self.n_rows = mat.n_cols, mat.n_rows
         self.is_mip = integer is not None and bool(np.any(integer))
@@ -441,7 +444,7 @@ class LinearModel:
         allowance = float(max(time_limit, 1e-3))
         # HiGHS's run clock adds up over every run of this object and its limit applies to that sum:
         # the limit given is this run's own; the callbacks stop it by the wall clock as well
-        h.setOptionValue("time_limit", float(h.getRunTime()) + allowance + HIGHS_LIMIT_SLACK)
+        h.setOptionValue("time_limit", float(h.getRunTime()) + allowance + self.limit_slack)
         self._deadline[0] = time.perf_counter() + allowance
         if self.is_mip or not self._warm:  # the answer depends on this model and start only, never on earlier runs
             h.clearSolver()

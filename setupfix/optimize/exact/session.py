@@ -184,8 +184,9 @@ class GridRows:
         """The next level down once the rounded rows ``b`` hold no grid point."""
         return next_level(self.g, self.d, b)
 
-    def memo(self, key: tuple[object, ...], make: Callable[[], T]) -> T:
-        """``make()``, computed once per G, box and costs for this key (at most ``MEMO_MAX`` kept).
+    def memo(self, key: tuple[object, ...], make: Callable[[], T], most: int = MEMO_MAX) -> T:
+        """``make()``, computed once per G, box and costs for this key (at most ``most`` kept: the memo is
+        cleared when full).
 
         ``make`` must depend on G, the box, the costs and the key only (never on g): the memo
         is shared by every report of one process model, and by threads; arrays in it are read-only.
@@ -196,7 +197,7 @@ class GridRows:
             found = make()
             if isinstance(found, np.ndarray):
                 found.flags.writeable = False
-            if len(memo) >= MEMO_MAX:
+            if len(memo) >= most:
                 memo.clear()
             memo[key] = found
         return cast(T, found)

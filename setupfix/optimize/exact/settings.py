@@ -72,6 +72,29 @@ class ExactSettings:
         Share of the whole time limit kept for the least-norm stage.
     level_steps : int
         Levels the grid-optimum stage may descend by rounded rows before the bracketed MILP.
+    network_lp : bool
+        Least-norm stage: where the rows are a network matrix (every dimension one WKS and one
+        tool), one LP over the chords first (integral, so exact); False: the listing and MILPs only.
+    climb_max_registers : int
+        Most free registers for which the leximin levels climb the grid from a level's point
+        (small problems only; its two-register moves are 2·n·(n − 1) points).
+    max_branches : int
+        Most branches the leximin levels open at discrete conflicts before the counts decide.
+    max_pair_tests : int
+        Most pairs of dimensions a discrete conflict tests before the counts decide (0: none).
+    tight_slack : float
+        The leximin point tests' first MILP holds only the rows within this many steps of the LP's
+        vertex (a large value: every row at once).
+    triage_list_points : int
+        Most grid points × margin rows the triage lists (the whole box, or its least-norm box)
+        instead of solving MILPs (0: never listed).
+    forced_triage : bool
+        The triage first tries the forced kept set before its MILPs (False: the MILPs decide).
+    forced_share : float
+        Share of the time left that proving the kept set forced may take.
+    triage_leximin_share : float
+        Share of the whole time limit the triage's leximin levels after the first may take (never
+        the time reserved for the least norm; 0: level 1 only).
     """
 
     quantum: float = 1e-3
@@ -93,6 +116,15 @@ class ExactSettings:
     least_norm_share: float = 0.5
     leximin_norm_share: float = 0.15
     level_steps: int = 40
+    network_lp: bool = True
+    climb_max_registers: int = 24
+    max_branches: int = 24
+    max_pair_tests: int = 60
+    tight_slack: float = 2.0
+    triage_list_points: int = 4_000_000
+    forced_triage: bool = True
+    forced_share: float = 0.25
+    triage_leximin_share: float = 0.45
 
     _constraints: ClassVar[dict[str, list[Constraint]]] = {
         "quantum": [Interval(float, 0.0, 1.0, closed="right")],
@@ -114,6 +146,15 @@ class ExactSettings:
         "least_norm_share": _FRACTION,
         "leximin_norm_share": _FRACTION,
         "level_steps": _COUNT,
+        "network_lp": [bool],
+        "climb_max_registers": _COUNT,
+        "max_branches": _COUNT,
+        "max_pair_tests": _COUNT,
+        "tight_slack": [Interval(float, 0.0, None)],
+        "triage_list_points": _COUNT,
+        "forced_triage": [bool],
+        "forced_share": _SHARE,
+        "triage_leximin_share": _FRACTION,
     }
 
     def __post_init__(self) -> None:

@@ -46,13 +46,10 @@ from setupfix.optimize.exact.least_norm.shop import (
 )
 from setupfix.optimize.exact.session import Relaxation, Session
 
-__all__ = ["NETWORK_LP", "TIE_MAX_REGISTERS", "TIE_WORK", "LeastNorm", "chord_proof", "grid_least_norm"]
+__all__ = ["TIE_MAX_REGISTERS", "TIE_WORK", "LeastNorm", "chord_proof", "grid_least_norm"]
 
 Array = npt.NDArray[np.float64]
 
-#: Rows of a network matrix (one WKS and one tool per dimension, ±1) with an integral right side:
-#: the least norm is the chord LP's vertex, tried before any MILP (False: never).
-NETWORK_LP = True
 #: Array elements the listing of the least norm's ties may touch (≈ 20 ms; beyond, the tie is kept
 #: as the proof found it and the path says so).
 TIE_WORK = 400_000
@@ -235,7 +232,10 @@ def grid_least_norm(
 
     def network_lp(best: Array) -> LeastNorm | None:  # rows of a network matrix: one chord LP proves it
         if not (
-            NETWORK_LP and np.all(kmin == np.rint(kmin)) and np.all(kmax == np.rint(kmax)) and network_rows(g_rows, b)
+            session.settings.network_lp
+            and np.all(kmin == np.rint(kmin))
+            and np.all(kmax == np.rint(kmax))
+            and network_rows(g_rows, b)
         ):
             return None
         k_cont = best if relaxation is None else relaxation.k

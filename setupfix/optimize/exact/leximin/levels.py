@@ -38,9 +38,11 @@ no point of the current level set has M_q above v_q + ε), the others *active*.
    compared (a branch already below the best is dropped), tied branches all go to the least
    norm.  No such dimension: two or more must stay at t_i, and every leximin-optimal point has
    the fewest there — the pairs that can be the only two left open the branches instead.  None
-   of those either (three or more), more than ``MAX_PAIR_TESTS`` pairs to test, or more than
-   ``MAX_BRANCHES`` branches: the rest is decided by counts (:mod:`setupfix.optimize.exact.leximin.counts`,
-   always correct, MILPs with binaries).
+   of those either (three or more), more than ``max_pair_tests`` pairs to test, or more than
+   ``max_branches`` branches (:class:`~setupfix.optimize.exact.settings.ExactSettings`; a branch
+   costs milliseconds on the paper's example, the counts seconds, ``bench/results/leximin_counts.txt``):
+   the rest is decided by counts (:mod:`setupfix.optimize.exact.leximin.counts`, always correct,
+   MILPs with binaries).
 
 When every dimension is fixed, the leximin-optimal points are exactly the grid points with
 M_q ≥ v_q for every q, and the least norm among them is stage 3
@@ -60,7 +62,7 @@ from setupfix.optimize.exact.leximin.counts import count_levels
 from setupfix.optimize.exact.leximin.level import LevelModel, LevelValue
 from setupfix.optimize.exact.leximin.pins import dim_all, dim_margins, excluded_alone, pinned_rows, span_closure
 from setupfix.optimize.exact.leximin.result import Leximin, levels_of, leximin_least_norm, leximin_vector
-from setupfix.optimize.exact.leximin.search import MAX_REGISTERS, climb, climb_moves, lex_order
+from setupfix.optimize.exact.leximin.search import climb, climb_moves, lex_order
 from setupfix.optimize.exact.session import Session
 
 __all__ = ["Leximin", "leximin", "leximin_least_norm", "root_climb"]
@@ -77,7 +79,7 @@ class _Search:
         self.session, self.model, self.stage_end = session, model, stage_end
         self.eps = session.settings.quantum / 2
         self.leaves = self.calls = 0
-        self.climb = session.small and session.rows.n_free <= MAX_REGISTERS
+        self.climb = session.small and session.rows.n_free <= session.settings.climb_max_registers
 
     def climbed(self, k: Array, v: Array) -> Array:
         """The grid climb from k over the active dimensions (the fixed ones kept at their floors)."""
@@ -96,11 +98,6 @@ class _Search:
         """Dimensions all of whose rows are in ``rows_mask``, shape (n_dims,)."""
         m = self.model
         return dim_all(rows_mask, m.order, m.starts, m.dims, m.n_dims)
-
-
-#: Most branches a search may open on discrete conflicts before the counts decide the rest (24: a branch costs
-#: milliseconds on the paper's example, the counts seconds; bench/results/leximin_counts.txt).
-MAX_BRANCHES = 24
 
 
 def leximin(
@@ -317,7 +314,7 @@ def _conflict(
         starts = _alone(search, v, k, t, 2)
     if starts is None:
         return [_stopped(search, v, k, path, "time limit")]
-    if not starts or search.leaves + len(starts) > MAX_BRANCHES:
+    if not starts or search.leaves + len(starts) > search.session.settings.max_branches:
         return [_counts(search, v, k, t, path)]
     search.leaves += len(starts)
     best: list[Leximin] = []
@@ -347,13 +344,10 @@ def _conflict(
     return best
 
 
-#: Most pairs of dimensions a discrete conflict tests (after the Farkas exclusion) before the counts decide.
-MAX_PAIR_TESTS = 60
-
-
 def _alone(search: _Search, v: Array, k: Array, t: float, together: int) -> list[tuple[tuple[int, ...], Array]] | None:
     """The sets of ``together`` (1 or 2) active dimensions that can be the only ones left at t, each with
-    a grid point; None: the limit stopped a test; [] also when there are more than MAX_PAIR_TESTS pairs.
+    a grid point; None: the limit stopped a test; [] also when there are more than
+    ``ExactSettings.max_pair_tests`` pairs.
 
     One Farkas certificate excludes every dimension it does not lean on
     (:func:`~setupfix.optimize.exact.leximin.pins.excluded_alone`, integer rows): on a small problem from
@@ -375,7 +369,7 @@ def _alone(search: _Search, v: Array, k: Array, t: float, together: int) -> list
     else:
         a, b = np.nonzero(np.triu(active[:, None] & active[None, :] & ~out, 1))
         sets = [(int(x), int(y)) for x, y in zip(a, b, strict=True)]
-        if len(sets) > MAX_PAIR_TESTS:
+        if len(sets) > search.session.settings.max_pair_tests:
             return []
     starts: list[tuple[tuple[int, ...], Array]] = []
     for dims in sets:

@@ -335,17 +335,13 @@ def meeting_rounding(rows: GridRows, x: Array, f: Array, most: int = 10) -> Arra
     return out
 
 
-#: Rows within this many steps of the LP's vertex make the first, small MILP of :func:`point_above`.
-TIGHT_SLACK = 2.0
-
-
 def point_above(session: Session, f: Array, stage_end: float) -> Array | bool | None:
     """A grid point with every row's margin ≥ f_j (shape (r,), −inf: no floor); False: proved none; None:
     the limit or HiGHS stopped it.
 
     Cheapest first, each answer checked: NNLS on the rows rounded at f (small problems: a Farkas
     certificate, or a point to round); the LP of those rows (infeasible, or its vertex rounded);
-    then MILPs — first of the rows within ``TIGHT_SLACK`` steps of the vertex (no grid point meets
+    then MILPs — first of the rows within ``settings.tight_slack`` steps of the vertex (no grid point meets
     them: none meets all, in ~0.6 ms where the MILP of all rows takes ~6 ms on the paper's example,
     ``bench/results/point_tests.txt``; a point of theirs that meets every row is one), then of all rows.
     """
@@ -380,7 +376,7 @@ def point_above(session: Session, f: Array, stage_end: float) -> Array | bool | 
             k_met = k if meets(k) else meeting_rounding(rows, kx, f)
             if k_met is not None:
                 return k_met
-    tight = fin & (b - rows.g_rows @ kx < TIGHT_SLACK) if kx is not None else fin
+    tight = fin & (b - rows.g_rows @ kx < session.settings.tight_slack) if kx is not None else fin
     for keep in (tight, fin) if tight.sum() < fin.sum() else (fin,):
         res = LinearModel(
             np.zeros(n),

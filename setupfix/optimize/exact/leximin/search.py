@@ -25,14 +25,12 @@ import time
 import numpy as np
 import numpy.typing as npt
 
-__all__ = ["MAX_REGISTERS", "SCALES", "Moves", "climb", "climb_moves", "group_min", "lex_order", "two_rows_each"]
+__all__ = ["SCALES", "Moves", "climb", "climb_moves", "group_min", "lex_order", "two_rows_each"]
 
 Array = npt.NDArray[np.float64]
 
 #: Steps of the moves, largest first [steps]; each scale climbs until no move improves.
 SCALES = (4.0, 1.0)
-#: The search runs up to this many free registers (its two-register moves are 2·n·(n − 1) points).
-MAX_REGISTERS = 24
 
 
 def lex_order(a: Array, b: Array, eps: float) -> int:

@@ -31,7 +31,6 @@ __all__ = [
     "Level",
     "TriageRows",
     "SLACK",
-    "LIST_POINTS",
     "count_below",
     "least_listed",
     "listable",
@@ -362,17 +361,14 @@ def lp_starts(t: TriageRows, time_limit: float) -> list[Array]:  # time_limit: f
     return out
 
 
-#: Most grid points × margin rows the triage lists (the whole box, or stage 3's box its best point's
-#: norm allows) instead of solving MILPs (about 0.1 s of numpy).
-LIST_POINTS = 4_000_000
-
-
-def least_listed(t: TriageRows, lo: Array, hi: Array, count: int, levels: tuple[Level, ...]) -> Array | None:
+def least_listed(
+    t: TriageRows, lo: Array, hi: Array, count: int, levels: tuple[Level, ...], list_points: int
+) -> Array | None:
     """The least Σ c k² grid point in the box [lo, hi] meeting ``count`` and ``levels``, ties to the
-    lexicographically smallest k, by listing the box (None when points × rows exceed LIST_POINTS or
-    no point meets them)."""
+    lexicographically smallest k, by listing the box (None when points × rows exceed ``list_points``,
+    ``ExactSettings.triage_list_points``: about 0.1 s of numpy at the default, or no point meets them)."""
     sizes = (hi - lo + 1).astype(np.int64)
-    if np.prod(sizes.astype(float)) * max(t.g.size, 1) > LIST_POINTS:
+    if np.prod(sizes.astype(float)) * max(t.g.size, 1) > list_points:
         return None
     axes = [np.arange(a, b + 1, dtype=float) for a, b in zip(lo, hi, strict=True)]
     ks = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, t.n)
@@ -389,21 +385,21 @@ def least_listed(t: TriageRows, lo: Array, hi: Array, count: int, levels: tuple[
     return best
 
 
-def listable(t: TriageRows) -> bool:
-    """Whether the whole box is small enough for :func:`listed_triage` (points × rows ≤ LIST_POINTS)."""
+def listable(t: TriageRows, list_points: int) -> bool:
+    """Whether the whole box is small enough for :func:`listed_triage` (points × rows ≤ ``list_points``)."""
     sizes = (t.kmax - t.kmin + 1).astype(float)
-    return bool(np.prod(sizes) * max(t.g.size, 1) <= LIST_POINTS)
+    return bool(np.prod(sizes) * max(t.g.size, 1) <= list_points)
 
 
-def listed_triage(t: TriageRows, quantum: float) -> tuple[Array, int] | None:
-    """The whole triage by listing the box (None when its points × rows exceed LIST_POINTS).
+def listed_triage(t: TriageRows, quantum: float, list_points: int) -> tuple[Array, int] | None:
+    """The whole triage by listing the box (None when its points × rows exceed ``list_points``).
 
     Every grid point: the held dimensions kept (no harm), the most dimensions in tolerance, then the
     leximin of the kept margins as the MILPs' levels (each level's value, then the fewest kept margins
     within ``quantum``/2 above it, :func:`triage`), then the least
     Σ c k², then the lexicographically smallest k.  Returns the point and its count.
     """
-    if not listable(t):
+    if not listable(t, list_points):
         return None
     axes = [np.arange(a, b + 1, dtype=float) for a, b in zip(t.kmin, t.kmax, strict=True)]
     ks = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, t.n)

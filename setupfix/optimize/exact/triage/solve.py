@@ -70,14 +70,6 @@ __all__ = ["Triaged", "triage", "triaged_result"]
 
 Array = npt.NDArray[np.float64]
 
-#: Share of the time limit the triage's leximin levels after the first may take (never the time
-#: reserved for the least norm); levels left unproved make the result stopped, so they get most of the rest.
-LEXIMIN_SHARE = 0.45
-#: Share of the time left that proving the kept set forced may take before the MILPs decide instead.
-FORCED_SHARE = 0.25
-#: Try the forced kept set before the MILPs (switched off by the tests that check the MILP path).
-FORCED = True
-
 
 @dataclass(frozen=True)
 class Triaged:
@@ -140,7 +132,9 @@ def _status_word(status: str) -> str:
     return "time limit" if status == "time_limit" else f"HiGHS: {status}"
 
 
-def triage(t: TriageRows, deadline: float, reserve: float, budget: float, start: Array, quantum: float) -> Triaged:
+def triage(
+    t: TriageRows, deadline: float, reserve: float, budget: float, start: Array, quantum: float, list_points: int
+) -> Triaged:
     """Keep the most dimensions in tolerance without harm, then the leximin of their margins, then the least norm.
 
     Parameters
@@ -157,6 +151,8 @@ def triage(t: TriageRows, deadline: float, reserve: float, budget: float, start:
         A grid point to start from (used when it keeps the held dimensions).
     quantum : float
         Margins within this many steps are ties (a level's multiplicity counts them).
+    list_points : int
+        Most grid points × rows listed instead of solving MILPs (``ExactSettings.triage_list_points``).
     """
     done: list[str] = []
     why = ""
@@ -173,7 +169,7 @@ def triage(t: TriageRows, deadline: float, reserve: float, budget: float, start:
         res = m1.solve(left())
         if res.status == "infeasible":
             return Triaged(None, 0, (), False, True, "", ("the dimensions measured in tolerance cannot all be kept",))
-    listed = listed_triage(t, quantum)
+    listed = listed_triage(t, quantum, list_points)
     if listed is not None:  # a small box: every grid point looked at
         k, kept = listed
         return Triaged(
@@ -283,7 +279,7 @@ def triage(t: TriageRows, deadline: float, reserve: float, budget: float, start:
     # every better point has c_i k_i² ≤ f(best): a box; chords near best, the others added lazily
     reach = np.floor(np.sqrt(float(np.sum(t.cost * best**2)) / t.cost) + 1e-9)
     lo_k, hi_k = np.maximum(t.kmin, -reach), np.minimum(t.kmax, reach)
-    least = least_listed(t, lo_k, hi_k, kept, levels)
+    least = least_listed(t, lo_k, hi_k, kept, levels, list_points)
     if least is not None and t.meets(least, kept, levels):  # a small box: listed, ties to the smallest k
         done.append("least norm (listed)")
         return Triaged(least, kept, levels, complete, not why, why, tuple(done))
@@ -362,12 +358,21 @@ def triaged_result(
     t = TriageRows(rows.g_rows, rows.g, dimension_of_rows(problem), floor / h, rows.kmin, rows.kmax, rows.cost)
     reserve = session.settings.least_norm_share * session.time_limit
     forced = None
-    if FORCED and not listable(t):  # a small box is listed whole
-        forced = forced_triage(session, t, k_start, time.perf_counter() + FORCED_SHARE * clock.left())
+    settings = session.settings
+    if settings.forced_triage and not listable(t, settings.triage_list_points):  # a small box is listed whole
+        forced = forced_triage(session, t, k_start, time.perf_counter() + settings.forced_share * clock.left())
     if forced is not None:
         out = _forced_outcome(forced, t, quantum)
     else:
-        out = triage(t, clock.deadline, reserve, LEXIMIN_SHARE * session.time_limit, k_start, quantum)
+        out = triage(
+            t,
+            clock.deadline,
+            reserve,
+            settings.triage_leximin_share * session.time_limit,
+            k_start,
+            quantum,
+            settings.triage_list_points,
+        )
     clock.lap("triage")
     path.append("triage: " + ", ".join(out.stages) if out.stages else "triage")
     x = np.zeros(problem.n_registers)
