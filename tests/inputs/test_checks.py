@@ -3,24 +3,29 @@
 from __future__ import annotations
 
 import csv
+from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 import pytest
+from conftest import GUIDE_PINS
 
 from setupfix.core.errors import MatchError
+from setupfix.model import ProcessModel
 from setupfix.usecases.contract import note_lines
 from setupfix.usecases.correct import correct_report
-from setupfix.usecases.requests import CorrectRequest, CycleOptions
-from tests.conftest import GUIDE_PINS
+from setupfix.usecases.requests import CorrectRequest, CycleCorrection, CycleOptions
 
 CYCLE = GUIDE_PINS / "cycle_01.csv"
+#: A row of the report as csv.DictReader gives it.
+Row = dict[str | Any, str | Any]
 
 
-def cycles(model, path, strict=False):
+def cycles(model: ProcessModel, path: Path, strict: bool = False) -> tuple[CycleCorrection, ...]:
     return correct_report(CorrectRequest(model, cycles=CycleOptions(strict=strict)), path).cycles
 
 
-def rewrite(tmp_path: Path, change, rows_slice=slice(None)) -> Path:
+def rewrite(tmp_path: Path, change: Callable[[int, Row], Row], rows_slice: slice = slice(None)) -> Path:
     with open(CYCLE, newline="", encoding="utf-8") as fh:
         rows = list(csv.DictReader(fh))
     out = tmp_path / "r.csv"
@@ -32,13 +37,13 @@ def rewrite(tmp_path: Path, change, rows_slice=slice(None)) -> Path:
     return out
 
 
-def inch_values(i, row):
+def inch_values(i: int, row: Row) -> Row:
     for key in ("nominal", "actual", "deviation", "lower", "upper"):
         row[key] = f"{float(row[key]) / 25.4:.5f}"
     return row
 
 
-def test_inch_values_labelled_mm_are_a_unit_error(tmp_path, guide_pins_model):
+def test_inch_values_labelled_mm_are_a_unit_error(tmp_path: Path, guide_pins_model: ProcessModel) -> None:
     path = rewrite(tmp_path, inch_values)
     with pytest.raises(
         MatchError,
@@ -54,20 +59,20 @@ def test_inch_values_labelled_mm_are_a_unit_error(tmp_path, guide_pins_model):
     assert not [w for w in note_lines(pc.notes) if "differs" in w]
 
 
-def test_mm_values_labelled_inch_are_a_unit_error(tmp_path, guide_pins_model):
+def test_mm_values_labelled_inch_are_a_unit_error(tmp_path: Path, guide_pins_model: ProcessModel) -> None:
     path = rewrite(tmp_path, lambda i, r: {**r, "unit": "inch"})
     with pytest.raises(MatchError, match=r"25.4 times too large: mm values read as inch"):
         cycles(guide_pins_model, path)
 
 
-def shifted(i, row):
+def shifted(i: int, row: Row) -> Row:
     if i == 3:
         row["nominal"] = f"{float(row['nominal']) + 100:.4f}"
         row["actual"] = f"{float(row['actual']) + 100:.4f}"
     return row
 
 
-def test_shifted_nominal_is_noted_and_refused_when_strict(tmp_path, guide_pins_model):
+def test_shifted_nominal_is_noted_and_refused_when_strict(tmp_path: Path, guide_pins_model: ProcessModel) -> None:
     path = rewrite(tmp_path, shifted)
     (pc,) = cycles(guide_pins_model, path)
     (note,) = [w for w in note_lines(pc.notes) if "nominal" in w]
@@ -76,7 +81,7 @@ def test_shifted_nominal_is_noted_and_refused_when_strict(tmp_path, guide_pins_m
         cycles(guide_pins_model, path, strict=True)
 
 
-def test_narrower_report_tolerance_is_not_silent(tmp_path, guide_pins_model):
+def test_narrower_report_tolerance_is_not_silent(tmp_path: Path, guide_pins_model: ProcessModel) -> None:
     path = rewrite(tmp_path, lambda i, r: {**r, "lower": "-0.02", "upper": "0.02"})
     (pc,) = cycles(guide_pins_model, path)
     (note,) = [w for w in note_lines(pc.notes) if "tolerance" in w]
@@ -85,14 +90,14 @@ def test_narrower_report_tolerance_is_not_silent(tmp_path, guide_pins_model):
         cycles(guide_pins_model, path, strict=True)
 
 
-def test_rounding_is_not_a_difference(tmp_path, guide_pins_model):
+def test_rounding_is_not_a_difference(tmp_path: Path, guide_pins_model: ProcessModel) -> None:
     # a nominal printed to three decimals less and a limit 1 µm off are rounding, not a revision
     path = rewrite(tmp_path, lambda i, r: {**r, "nominal": f"{float(r['nominal']) + 0.0004:.4f}", "upper": "0.101"})
     (pc,) = cycles(guide_pins_model, path, strict=True)
     assert not [w for w in note_lines(pc.notes) if "differs" in w]
 
 
-def test_one_station_of_the_fixture_warns_about_shared_tools(tmp_path, guide_pins_model):
+def test_one_station_of_the_fixture_warns_about_shared_tools(tmp_path: Path, guide_pins_model: ProcessModel) -> None:
     path = rewrite(tmp_path, lambda i, r: r, slice(0, 7))
     (pc,) = cycles(guide_pins_model, path)
     (note,) = [w for w in note_lines(pc.notes) if "does not measure" in w]
@@ -102,7 +107,7 @@ def test_one_station_of_the_fixture_warns_about_shared_tools(tmp_path, guide_pin
     assert not [w for w in note_lines(full.notes) if "does not measure" in w]
 
 
-def test_warnings_reach_json_and_stderr(tmp_path, capsys):
+def test_warnings_reach_json_and_stderr(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     import json
 
     from setupfix.cli import main

@@ -3,19 +3,26 @@
 from __future__ import annotations
 
 import csv
+from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import GUIDE_PINS
 
 from setupfix.core.errors import MatchError
 from setupfix.inputs.cycles import cycle_name, load_parts, model_groups
+from setupfix.model import ProcessModel
 from setupfix.usecases.correct import correct_report
 from setupfix.usecases.requests import CorrectRequest, CycleOptions
-from tests.conftest import GUIDE_PINS
 
 
-def long_report(tmp_path: Path, cycles=(1, 2, 3), station_order=("P1", "P2", "P3", "P4"), extra=()) -> Path:
+def long_report(
+    tmp_path: Path,
+    cycles: Sequence[int] = (1, 2, 3),
+    station_order: Sequence[str] = ("P1", "P2", "P3", "P4"),
+    extra: Sequence[Sequence[str]] = (),
+) -> Path:
     """One part per workpiece (A1, A2, …), no station column: as a CMM writes a long run."""
     out = tmp_path / "long.csv"
     n = 0
@@ -39,7 +46,7 @@ def long_report(tmp_path: Path, cycles=(1, 2, 3), station_order=("P1", "P2", "P3
 
 
 @pytest.fixture
-def short_names(guide_pins_model):
+def short_names(guide_pins_model: ProcessModel) -> ProcessModel:
     """The guide-pins model with the station-less names the long report uses (aliases "D1" … "D7")."""
     from dataclasses import replace
 
@@ -47,7 +54,7 @@ def short_names(guide_pins_model):
     return replace(guide_pins_model, dimensions=dims)
 
 
-def test_parts_per_cycle_groups_loads_named_by_their_parts(tmp_path, short_names):
+def test_parts_per_cycle_groups_loads_named_by_their_parts(tmp_path: Path, short_names: ProcessModel) -> None:
     path = long_report(tmp_path)
     parts = load_parts(short_names, path, parts_per_cycle=4)
     assert [p.part for p in parts] == ["A1+A2+A3+A4", "A5+A6+A7+A8", "A9+A10+A11+A12"]
@@ -55,11 +62,11 @@ def test_parts_per_cycle_groups_loads_named_by_their_parts(tmp_path, short_names
         (ref,) = load_parts(short_names, GUIDE_PINS / f"cycle_{c:02d}.csv")
         np.testing.assert_allclose(part.deviation, ref.deviation, atol=1e-12)
     results = correct_report(CorrectRequest(short_names, cycles=CycleOptions(parts_per_cycle=4)), path).cycles
-    (ref,) = correct_report(CorrectRequest(short_names), GUIDE_PINS / "cycle_02.csv").cycles
-    assert results[1].corrections == pytest.approx(ref.corrections)
+    (ref_cycle,) = correct_report(CorrectRequest(short_names), GUIDE_PINS / "cycle_02.csv").cycles
+    assert results[1].corrections == pytest.approx(ref_cycle.corrections)
 
 
-def test_parts_per_cycle_with_stations_in_load_order(tmp_path, short_names):
+def test_parts_per_cycle_with_stations_in_load_order(tmp_path: Path, short_names: ProcessModel) -> None:
     path = long_report(tmp_path, cycles=(1,), station_order=("P2", "P1", "P4", "P3"))
     (part,) = load_parts(short_names, path, parts_per_cycle=4, stations=["P2", "P1", "P4", "P3"])
     (ref,) = load_parts(short_names, GUIDE_PINS / "cycle_01.csv")
@@ -69,7 +76,7 @@ def test_parts_per_cycle_with_stations_in_load_order(tmp_path, short_names):
     assert not np.allclose(wrong.deviation, ref.deviation)
 
 
-def test_subset_of_stations_per_load_and_incomplete_last_load(tmp_path, short_names):
+def test_subset_of_stations_per_load_and_incomplete_last_load(tmp_path: Path, short_names: ProcessModel) -> None:
     path = long_report(tmp_path, cycles=(1, 2), station_order=("P1", "P2"))
     parts = load_parts(short_names, path, parts_per_cycle=2, stations=["P1", "P2"])
     assert [p.part for p in parts] == ["A1+A2", "A3+A4"]
@@ -81,7 +88,7 @@ def test_subset_of_stations_per_load_and_incomplete_last_load(tmp_path, short_na
     assert any("the last cycle A3 holds 1 of 2 parts" in str(n) for n in parts[-1].notes)
 
 
-def test_part_measured_twice_keeps_the_later_measurement(tmp_path, short_names):
+def test_part_measured_twice_keeps_the_later_measurement(tmp_path: Path, short_names: ProcessModel) -> None:
     path = long_report(tmp_path, cycles=(1,), extra=[["D4", "30.0", "30.0500", "0.0500", "-0.1", "0.1", "A2"]])
     (part,) = load_parts(short_names, path, parts_per_cycle=4)
     i = [d.id for d in short_names.dimensions].index("P2D4")
@@ -90,7 +97,7 @@ def test_part_measured_twice_keeps_the_later_measurement(tmp_path, short_names):
     assert "P2D4 (D4)" in note and "the later measurement here is used" in note
 
 
-def test_refusals(tmp_path, short_names):
+def test_refusals(tmp_path: Path, short_names: ProcessModel) -> None:
     path = long_report(tmp_path, cycles=(1,))
     with pytest.raises(MatchError, match="cannot tell the stations of 3 parts per cycle: the model has 4 groups"):
         load_parts(short_names, path, parts_per_cycle=3)
@@ -102,12 +109,12 @@ def test_refusals(tmp_path, short_names):
         load_parts(short_names, path)
 
 
-def test_helpers(guide_pins_model):
+def test_helpers(guide_pins_model: ProcessModel) -> None:
     assert model_groups(guide_pins_model) == ["P1", "P2", "P3", "P4"]
     assert cycle_name(["A7", "A8"]) == "A7+A8" and cycle_name([""]) == "(report)"
 
 
-def test_cli_parts_per_cycle_json_and_station_column(tmp_path, capsys):
+def test_cli_parts_per_cycle_json_and_station_column(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     import json
 
     from setupfix.cli import main

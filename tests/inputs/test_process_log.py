@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 from conftest import GUIDE_PINS, SAMPLES
@@ -14,14 +16,14 @@ LOOP = SAMPLES / "closed_loop"
 REPORT = LOOP / "measurements.csv"
 
 
-def _cycles() -> list[str]:
+def _cycles() -> list[tuple[str, str]]:
     import pandas as pd
 
     t = pd.read_csv(REPORT)
     return sorted(set(zip(t["timestamp"], t["part"], strict=True)))
 
 
-def test_text_columns_kept_only_when_asked(tmp_path):
+def test_text_columns_kept_only_when_asked(tmp_path: Path) -> None:
     f = tmp_path / "p.csv"
     f.write_text("serial,rpm,batch\n1,9000,A\n2,6000,B\n", encoding="utf-8")
     assert "batch" not in read_temperature_log(f, require_time=False).columns
@@ -29,7 +31,7 @@ def test_text_columns_kept_only_when_asked(tmp_path):
     assert log.text == {"batch": ["A", "B"]} and log.columns["rpm"].tolist() == [9000.0, 6000.0]
 
 
-def test_joined_by_timestamp_at_or_before_each_part(tmp_path):
+def test_joined_by_timestamp_at_or_before_each_part(tmp_path: Path) -> None:
     cycles = _cycles()
     rows = ["timestamp,feed,insert"]
     for i, (stamp, _) in enumerate(cycles):
@@ -42,7 +44,7 @@ def test_joined_by_timestamp_at_or_before_each_part(tmp_path):
     assert s.temperature[:, 1].tolist() == [0.0] * 10 + [1.0] * (len(cycles) - 10)
 
 
-def test_joined_by_serial_and_a_missing_part_is_named(tmp_path):
+def test_joined_by_serial_and_a_missing_part_is_named(tmp_path: Path) -> None:
     cycles = _cycles()
     f = tmp_path / "process.csv"
     f.write_text(
@@ -58,7 +60,7 @@ def test_joined_by_serial_and_a_missing_part_is_named(tmp_path):
         load_series(GUIDE_PINS / "model.toml", (REPORT,), process=str(f))
 
 
-def test_a_log_without_serial_or_timestamp_is_refused(tmp_path):
+def test_a_log_without_serial_or_timestamp_is_refused(tmp_path: Path) -> None:
     f = tmp_path / "process.csv"
     f.write_text("rpm\n1\n2\n", encoding="utf-8")
     with pytest.raises(ParseError, match="'serial' column"):

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import re
 from pathlib import Path
+from typing import Any
 
 import pandas as pd
 import pytest
@@ -11,21 +12,21 @@ import pytest
 import parsers
 from setupfix.core.errors import MatchError, ParseError
 from setupfix.inputs.cycles import load_parts
-from setupfix.model import load_model
-from setupfix.store import open_store
+from setupfix.model import ProcessModel, load_model
+from setupfix.store import Store, open_store
 from setupfix.usecases.correct import correct_report
-from setupfix.usecases.requests import CorrectRequest, History
+from setupfix.usecases.requests import CorrectRequest, CycleCorrection, History
 
 GUIDE = Path(__file__).resolve().parents[2] / "sample_reports" / "guide_pins"
 
 
-def model_with_ewma(tmp_path, lam):
+def model_with_ewma(tmp_path: Path, lam: float) -> ProcessModel:
     path = tmp_path / "m.toml"
     path.write_text((GUIDE / "model.toml").read_text() + f"\n[safety]\newma = {lam}\n")
     return load_model(path)
 
 
-def store_with(tmp_path, log_rows):
+def store_with(tmp_path: Path, log_rows: list[tuple[str, str, float | None, str]]) -> Store:
     store = open_store(tmp_path / "h.db")
     for name in ("cycle_01.csv", "cycle_02.csv"):
         store.add_report((GUIDE / name).read_bytes(), name, "canonical", parsers.read(GUIDE / name))
@@ -34,16 +35,16 @@ def store_with(tmp_path, log_rows):
     return store
 
 
-def correct(model, report, store=None):
+def correct(model: ProcessModel, report: Path, store: Store | None = None) -> tuple[CycleCorrection, ...]:
     history = History.from_store(model, store) if store is not None else None
     return correct_report(CorrectRequest(model, history=history), report).cycles
 
 
-def p1d1(pc):
+def p1d1(pc: CycleCorrection) -> dict[str, Any]:
     return next(r for r in pc.dimension_rows() if r["id"] == "P1D1")
 
 
-def test_ewma_over_earlier_reports_shifted_by_applied_corrections(tmp_path):
+def test_ewma_over_earlier_reports_shifted_by_applied_corrections(tmp_path: Path) -> None:
     model = model_with_ewma(tmp_path, 0.5)
     store = store_with(tmp_path, [("2026-11-02T12:00:00", "G54", 0.010, "correction")])
     (pc,) = correct(model, GUIDE / "cycle_03.csv", store)
@@ -57,26 +58,26 @@ def test_ewma_over_earlier_reports_shifted_by_applied_corrections(tmp_path):
     assert row["predicted"] == pytest.approx(row["estimate"] + pc.corrections["W1"] + pc.corrections["T5"])
 
 
-def test_tool_change_resets_the_dimensions_it_cuts(tmp_path):
+def test_tool_change_resets_the_dimensions_it_cuts(tmp_path: Path) -> None:
     model = model_with_ewma(tmp_path, 0.5)
     store = store_with(tmp_path, [("2026-11-03T12:00:00", "H5", None, "tool_change")])
     (pc,) = correct(model, GUIDE / "cycle_03.csv", store)
     assert p1d1(pc)["estimate"] == pytest.approx(-0.0180)  # P1 D1 = W1 + T5: history dropped
 
 
-def test_without_store_not_smoothed_and_said(tmp_path):
+def test_without_store_not_smoothed_and_said(tmp_path: Path) -> None:
     (pc,) = correct(model_with_ewma(tmp_path, 0.5), GUIDE / "cycle_03.csv")
     assert "estimate" not in p1d1(pc) and any("needs the history store" in n.message for n in pc.notes)
 
 
-def restamped(tmp_path, stamp):
+def restamped(tmp_path: Path, stamp: str) -> Path:
     text = (GUIDE / "cycle_03.csv").read_text().replace("2026-11-04T08:00:00", stamp)
     path = tmp_path / "c3.csv"
     path.write_text(text)
     return path
 
 
-def test_the_cycle_time_is_read_by_the_one_parser(tmp_path):
+def test_the_cycle_time_is_read_by_the_one_parser(tmp_path: Path) -> None:
     model = model_with_ewma(tmp_path, 0.5)
     store = store_with(tmp_path, [("2026-11-03T12:00:00", "G54", 0.010, "correction")])
     (ref,) = correct(model, GUIDE / "cycle_03.csv", store)
@@ -91,7 +92,7 @@ def test_the_cycle_time_is_read_by_the_one_parser(tmp_path):
         correct(model, restamped(tmp_path, "04.11.2026 08:00"), store)
 
 
-def test_store_log_is_read_and_checked_as_diagnose_reads_it(tmp_path, capsys):
+def test_store_log_is_read_and_checked_as_diagnose_reads_it(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     """``correct --store`` smooths over the store's log read by the one reader and checked by the one model
     check, so a row ``diagnose --db`` refuses (a register the model does not know) is refused by both, at one
     place; a log the check accepts (a register by its ID or its controller name) smooths the same either way."""
@@ -126,7 +127,7 @@ def test_store_log_is_read_and_checked_as_diagnose_reads_it(tmp_path, capsys):
     assert line in from_diagnose.splitlines()
 
 
-def test_every_stored_report_counts_not_the_newest_imports(tmp_path):
+def test_every_stored_report_counts_not_the_newest_imports(tmp_path: Path) -> None:
     """60 reports imported latest-machined first: the estimate looks at the 50 parts machined last before the
     cycle, as a history built from the same files does (the newest 50 imports would be the 50 earliest)."""
     import datetime as dt

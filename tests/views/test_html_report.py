@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import re
 from html.parser import HTMLParser
+from pathlib import Path
 
 import pytest
 from spc_examples import GUIDE_PINS, closed_loop_store
@@ -11,7 +12,7 @@ from spc_examples import GUIDE_PINS, closed_loop_store
 from setupfix.store import open_store
 from setupfix.usecases.correct import correct_report, load_request
 from setupfix.usecases.history import ImportRequest, import_history
-from setupfix.usecases.spc_report import SpcRequest, spc_report
+from setupfix.usecases.spc_report import SpcOutcome, SpcRequest, spc_report
 from setupfix.views.html import correction_page, spc_page
 
 #: What would make a page load something from elsewhere (the SVG namespace URI is a name, not a load).
@@ -29,15 +30,15 @@ class _Tags(HTMLParser):
 
     VOID = frozenset({"meta", "br", "hr", "img", "input", "link", "circle", "line", "rect", "path", "polyline"})
 
-    def handle_starttag(self, tag, attrs):  # type: ignore[no-untyped-def]
+    def handle_starttag(self, tag: str, attrs: list[tuple[str, str | None]]) -> None:
         self.count[tag] = self.count.get(tag, 0) + 1
         if tag not in self.VOID:
             self.stack.append(tag)
 
-    def handle_startendtag(self, tag, attrs):  # type: ignore[no-untyped-def]
+    def handle_startendtag(self, tag: str, attrs: list[tuple[str, str | None]]) -> None:
         self.count[tag] = self.count.get(tag, 0) + 1
 
-    def handle_endtag(self, tag):  # type: ignore[no-untyped-def]
+    def handle_endtag(self, tag: str) -> None:
         if tag in self.VOID:
             return
         if not self.stack or self.stack[-1] != tag:
@@ -55,13 +56,13 @@ def tags(page: str) -> _Tags:
 
 
 @pytest.fixture(scope="module")
-def loop_spc(tmp_path_factory):  # type: ignore[no-untyped-def]
+def loop_spc(tmp_path_factory: pytest.TempPathFactory) -> SpcOutcome:
     db = closed_loop_store(tmp_path_factory.mktemp("loop"))
     with open_store(db) as store:
         return spc_report(store, SpcRequest(dimensions=("P1 D1", "P2 D3", "P4 D7")))
 
 
-def test_spc_page_is_self_contained_and_well_formed(loop_spc):
+def test_spc_page_is_self_contained_and_well_formed(loop_spc: SpcOutcome) -> None:
     page = spc_page(loop_spc)
     assert page.startswith("<!DOCTYPE html>")
     assert not EXTERNAL.search(page)
@@ -71,7 +72,7 @@ def test_spc_page_is_self_contained_and_well_formed(loop_spc):
     assert "@page { size: A4" in page
 
 
-def test_spc_page_marks_every_violating_point_and_lists_every_split(loop_spc):
+def test_spc_page_marks_every_violating_point_and_lists_every_split(loop_spc: SpcOutcome) -> None:
     page = spc_page(loop_spc)
     charts = re.findall(r'<svg[^>]*class="chart individuals".*?</svg>', page, re.S)
     assert len(charts) == 3
@@ -85,7 +86,7 @@ def test_spc_page_marks_every_violating_point_and_lists_every_split(loop_spc):
         assert f"correction {s.time}" in page
 
 
-def test_names_are_escaped(tmp_path):
+def test_names_are_escaped(tmp_path: Path) -> None:
     hostile = 'D1 <script>alert(1)</script> & "x"'
     csv = tmp_path / "r.csv"
     rows = ["characteristic,nominal,actual,lower,upper,part,timestamp"]
@@ -103,7 +104,7 @@ def test_names_are_escaped(tmp_path):
     tags(page)
 
 
-def test_correction_page_holds_verdict_registers_rules_binding_and_predictions(loop_spc):
+def test_correction_page_holds_verdict_registers_rules_binding_and_predictions(loop_spc: SpcOutcome) -> None:
     outcome = correct_report(load_request(GUIDE_PINS / "model.toml"), GUIDE_PINS / "cycle_01.csv")
     page = correction_page(outcome, loop_spc)
     assert not EXTERNAL.search(page)
@@ -123,7 +124,7 @@ def test_correction_page_holds_verdict_registers_rules_binding_and_predictions(l
     assert page.count('class="chart individuals"') == 3
 
 
-def test_correction_page_of_one_cycle_without_history():
+def test_correction_page_of_one_cycle_without_history() -> None:
     outcome = correct_report(load_request(GUIDE_PINS / "model.toml"), GUIDE_PINS / "cycle_02.csv")
     page = correction_page(outcome.cycles[0])
     tags(page)

@@ -128,7 +128,7 @@ def check(result: dict[str, Any], chart_selectors: tuple[str, ...]) -> None:
     assert boxes and all(abs(w - 595.3) < 2 and abs(h - 841.9) < 2 for _, _, w, h in boxes), boxes  # A4 in pt
 
 
-def test_spc_page_renders_in_chromium(playwright, tmp_path):
+def test_spc_page_renders_in_chromium(playwright: Any, tmp_path: Path) -> None:
     db = closed_loop_store(tmp_path)
     with open_store(db) as store:
         outcome = spc_report(store, SpcRequest(dimensions=("P1 D1", "P3 D4")))
@@ -139,7 +139,7 @@ def test_spc_page_renders_in_chromium(playwright, tmp_path):
     assert (tmp_path / "spc.png").stat().st_size > 10_000
 
 
-def test_correction_page_renders_in_chromium(playwright, tmp_path):
+def test_correction_page_renders_in_chromium(playwright: Any, tmp_path: Path) -> None:
     outcome = correct_report(load_request(GUIDE_PINS / "model.toml"), GUIDE_PINS / "cycle_01.csv")
     result = render(playwright, correction_page(outcome), tmp_path)
     check(result, ("svg.zone",))

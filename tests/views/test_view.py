@@ -3,16 +3,17 @@
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
 import pytest
 from conftest import GUIDE_PINS
 
-from setupfix.model import load_model
+from setupfix.model import ProcessModel, load_model
 from setupfix.usecases.compare import compare_problem
 from setupfix.usecases.correct import correct_report
-from setupfix.usecases.requests import CorrectRequest, SolveOptions
+from setupfix.usecases.requests import CorrectRequest, CycleCorrection, SolveOptions
 from setupfix.views import analysis as analysis_view
 from setupfix.views import correction as view
 
@@ -21,7 +22,7 @@ REQUEST = CorrectRequest(load_model(GUIDE_PINS / "model.toml"), solve=SolveOptio
 
 
 @pytest.fixture(scope="module")
-def correction():
+def correction() -> CycleCorrection:
     return correct_report(REQUEST, GUIDE_PINS / "cycle_01.csv").cycles[0]
 
 
@@ -38,16 +39,16 @@ def correction():
         (math.nan, "├────┼────┤"),
     ],
 )
-def test_zone_bar_marks_the_value_in_the_tolerance_zone(value, expected):
+def test_zone_bar_marks_the_value_in_the_tolerance_zone(value: float, expected: str) -> None:
     assert view.zone_bar(value, -0.1, 0.1, 11) == expected
 
 
-def test_zone_bar_of_a_one_sided_tolerance_is_symmetric_about_nominal():
+def test_zone_bar_of_a_one_sided_tolerance_is_symmetric_about_nominal() -> None:
     assert view.zone_bar(-0.05, -math.inf, 0.1, 11) == view.zone_bar(-0.05, -0.1, 0.1, 11)
     assert view.zone_bar(0.2, -math.inf, 0.1, 11).endswith("▶")
 
 
-def test_dimension_rows_carry_the_correction_and_its_symbols(correction):
+def test_dimension_rows_carry_the_correction_and_its_symbols(correction: CycleCorrection) -> None:
     rows = view.dimension_rows(correction)
     assert len(rows) == 28 and [r.id for r in rows] == list(correction.problem.dimension_ids)
     pred = correction.problem.predicted(correction.x)
@@ -59,7 +60,7 @@ def test_dimension_rows_carry_the_correction_and_its_symbols(correction):
     assert view.stations(rows) == ["P1", "P2", "P3", "P4"]
 
 
-def test_an_out_of_tolerance_dimension_predicted_out_is_marked():
+def test_an_out_of_tolerance_dimension_predicted_out_is_marked() -> None:
     r = view.DimensionRow(
         "D1",
         "D1",
@@ -77,7 +78,7 @@ def test_an_out_of_tolerance_dimension_predicted_out_is_marked():
     assert guarded.flags == "✓◇"
 
 
-def test_filter_and_sort(correction):
+def test_filter_and_sort(correction: CycleCorrection) -> None:
     rows = view.dimension_rows(correction)
     p2 = view.filter_rows(rows, "P2")
     assert len(p2) == 7 and {r.station for r in p2} == {"P2"}
@@ -87,7 +88,7 @@ def test_filter_and_sort(correction):
     assert view.sort_rows(rows, "name", reverse=True)[0].name == "P4 D7"
 
 
-def test_register_rows_list_every_register_with_new_values_when_current_known(correction):
+def test_register_rows_list_every_register_with_new_values_when_current_known(correction: CycleCorrection) -> None:
     rows = view.register_rows(correction, {"G58": 1.5, "T23": -2.0})
     assert [r.register for r in rows][:2] == ["G54", "G55"] and len(rows) == 10
     g58 = next(r for r in rows if r.register == "G58")
@@ -97,7 +98,7 @@ def test_register_rows_list_every_register_with_new_values_when_current_known(co
     assert not any(r.at_limit for r in rows) and {r.offset for r in rows} == {"geometry", "wear"}
 
 
-def test_register_rows_show_what_the_export_writes_feed_forward_included(correction):
+def test_register_rows_show_what_the_export_writes_feed_forward_included(correction: CycleCorrection) -> None:
     import dataclasses
 
     from setupfix.usecases.export import cycle_rows
@@ -124,14 +125,14 @@ def test_register_rows_show_what_the_export_writes_feed_forward_included(correct
     assert t5.new == pytest.approx(0.5 + t5.delta)
 
 
-def test_summary_is_the_headline_of_the_result(correction):
+def test_summary_is_the_headline_of_the_result(correction: CycleCorrection) -> None:
     s = view.summary(correction)
     assert (s.margin_before, s.margin_after) == (correction.margin_before, correction.margin_after)
     assert s.bonus == pytest.approx(0.0651) and s.verdict == "apply" and s.rules == () and s.alarm == ""
     assert s.unit == "mm" and s.in_tolerance
 
 
-def test_a_gross_error_is_rejected_and_its_rules_and_flags_shown(tmp_path):
+def test_a_gross_error_is_rejected_and_its_rules_and_flags_shown(tmp_path: Path) -> None:
     gross = tmp_path / "gross.csv"
     gross.write_text(
         (GUIDE_PINS / "cycle_01.csv")
@@ -147,7 +148,7 @@ def test_a_gross_error_is_rejected_and_its_rules_and_flags_shown(tmp_path):
     assert all(r.delta == 0 for r in view.register_rows(c))
 
 
-def test_match_rows_suggest_close_dimension_names(guide_pins_model):
+def test_match_rows_suggest_close_dimension_names(guide_pins_model: ProcessModel) -> None:
     table = pd.DataFrame({"characteristic": ["p1  d1", "Pin1 D2", "xyz"], "part": ["c", "c", None]})
     rows = view.match_rows(guide_pins_model, table)
     assert rows[0].matched and rows[0].dimension == next(d.id for d in guide_pins_model.dimensions if d.name == "P1 D1")
@@ -155,7 +156,7 @@ def test_match_rows_suggest_close_dimension_names(guide_pins_model):
     assert rows[2].suggestions == () and rows[2].part == ""
 
 
-def test_convergence_is_the_median_best_so_far_and_ends_at_the_final_results(correction):
+def test_convergence_is_the_median_best_so_far_and_ends_at_the_final_results(correction: CycleCorrection) -> None:
     comp = compare_problem(correction.problem, methods=("pso", "ga"), trials=3, seed=1)
     curves = analysis_view.convergence(comp, 20)
     for m in comp.methods:
@@ -165,7 +166,7 @@ def test_convergence_is_the_median_best_so_far_and_ends_at_the_final_results(cor
     assert [r["optimizer"] for r in analysis_view.compare_rows(comp)] == ["exact", "pso", "ga"]
 
 
-def test_signed_and_limits_text():
+def test_signed_and_limits_text() -> None:
     assert view.signed(-0.0) == "+0.0000" and view.signed(None) == "—" and view.signed(math.inf) == "—"
     assert view.limits_text(-0.1, 0.1) == "±0.100"
     assert view.limits_text(-0.05, 0.1) == "-0.050/+0.100"
