@@ -4,19 +4,27 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
-from collections.abc import Awaitable, Callable
+from collections.abc import Callable, Coroutine
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import pytest
 from conftest import GUIDE_PINS
 
+if TYPE_CHECKING:
+    from textual.pilot import Pilot
+
+    from setupfix.tui.app import SetupfixApp
+
 MODEL = GUIDE_PINS / "model.toml"
 CYCLE_01 = GUIDE_PINS / "cycle_01.csv"
 
+#: ``make_app(report=…, **inputs)`` (the fixture below): a SetupfixApp with these Inputs.
+MakeApp = Callable[..., "SetupfixApp"]
+
 
 @pytest.fixture
-def make_app(tmp_path: Path) -> Callable[..., Any]:
+def make_app(tmp_path: Path) -> MakeApp:
     """``make_app(report=…, **inputs)``: a SetupfixApp on the guide-pins model, exports into tmp_path."""
     from setupfix.tui.app import SetupfixApp
     from setupfix.tui.state import Inputs
@@ -30,12 +38,12 @@ def make_app(tmp_path: Path) -> Callable[..., Any]:
     return make
 
 
-def run(coro: Awaitable[None]) -> None:
+def run(coro: Coroutine[Any, Any, None]) -> None:
     """Run one Pilot scenario (no pytest-asyncio here: one event loop per test)."""
-    asyncio.run(coro)  # type: ignore[arg-type]
+    asyncio.run(coro)
 
 
-async def settle(pilot: Any) -> None:
+async def settle(pilot: Pilot[None]) -> None:
     """Wait until every worker has finished and its result reached the screen."""
     from textual.worker import WorkerFailed
 

@@ -8,44 +8,63 @@ from __future__ import annotations
 
 import dataclasses
 import shutil
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 import pytest
-from conftest import GUIDE_PINS, SAMPLES
-from tui.conftest import CYCLE_01, MODEL, run, settle
+from conftest import GUIDE_PINS, SAMPLES, SHARED
+from textual.widgets import DataTable, Input, Sparkline, TabbedContent
+from tui.conftest import CYCLE_01, MODEL, MakeApp, run, settle
 
 from setupfix.cli import main
 from setupfix.model import load_model
+from setupfix.tui.screens import ExportScreen
 from setupfix.usecases.correct import correct_report
 from setupfix.usecases.requests import CorrectRequest, SolveOptions
 
+if TYPE_CHECKING:
+    from setupfix.tui.app import SetupfixApp
+    from setupfix.usecases.requests import CycleCorrection
+
 CONTROLLERS = SAMPLES / "controllers"
+#: The NIST plate, its model and its process log (the log lives in the shared folder).
+PLATE = SAMPLES / "qif" / "NIST_MTC_FAIR_Plate_Results_20parts.qif"
+PLATE_MODEL = Path(__file__).parents[1] / "data" / "nist_plate.toml"
+PLATE_LOG = SHARED / "real-series" / "nist-mtc" / "plate_process.csv"
 
 
-def _notes(app):
+def _notes(app: SetupfixApp) -> list[str]:
     return [n.message for n in app._notifications]
 
 
-def _rows(table):
+def _on_screen(app: SetupfixApp) -> CycleCorrection:
+    """The correction of the cycle on screen (there is one)."""
+    c = app.state.current()
+    assert c is not None
+    return c
+
+
+def _rows(table: DataTable[Any]) -> list[list[str]]:
     """Every row's cells as the operator reads them (cells are literal Text, never markup)."""
     return [[str(c) for c in table.get_row(k)] for k in table.rows]
 
 
-def test_open_sort_filter_export_then_a_bad_report(make_app, tmp_path):
+def test_open_sort_filter_export_then_a_bad_report(make_app: MakeApp, tmp_path: Path) -> None:
     bad = tmp_path / "bad.csv"
     bad.write_text(
         "characteristic,nominal,actual,deviation,lower,upper,unit,part\nP1 D1,25,abc,x,-0.1,0.1,mm,c1\n",
         encoding="utf-8",
     )
 
-    async def scenario():
+    async def scenario() -> None:
         app = make_app()
         async with app.run_test(size=(80, 24)) as pilot:
             await settle(pilot)
             # the sample: every dimension and register, README's δ and bonus, binding marked ●
             c = app.state.current()
             assert c is not None and c.result.optimizer == "exact"
-            dims = app.query_one("#dimensions")
-            assert dims.row_count == 28 and app.query_one("#registers").row_count == 10
+            dims = app.query_one("#dimensions", DataTable)
+            assert dims.row_count == 28 and app.query_one("#registers", DataTable).row_count == 10
             text = str(app.query_one("#summary").render())
             assert "+0.0171" in text and "+0.0822" in text and "+0.0651" in text
             assert {r[1] for r in _rows(dims) if "●" in str(r[0])} == {"P1 D6", "P1 D7"}
@@ -69,7 +88,9 @@ def test_open_sort_filter_export_then_a_bad_report(make_app, tmp_path):
             # export: the confirmation shows the text; ctrl+s writes exactly it
             await pilot.press("e")
             await pilot.pause()
-            shown = app.screen.text
+            screen = app.screen
+            assert isinstance(screen, ExportScreen)
+            shown = screen.text
             assert str(app.screen.query_one("#export-text").render()) == shown
             await pilot.press("ctrl+s")
             await pilot.pause()
@@ -81,7 +102,7 @@ def test_open_sort_filter_export_then_a_bad_report(make_app, tmp_path):
             # a folder as target: refused, named, nothing written
             await pilot.press("e")
             await pilot.pause()
-            app.screen.query_one("#export-path").value = str(tmp_path)
+            app.screen.query_one("#export-path", Input).value = str(tmp_path)
             await pilot.press("ctrl+s")
             await pilot.pause()
             assert any(n.title == "export failed" and str(tmp_path) in n.message for n in app._notifications)
@@ -102,14 +123,14 @@ def test_open_sort_filter_export_then_a_bad_report(make_app, tmp_path):
     run(scenario())
 
 
-def test_optimiser_choice_and_compare_with_cancel(make_app):
-    async def scenario():
+def test_optimiser_choice_and_compare_with_cancel(make_app: MakeApp) -> None:
+    async def scenario() -> None:
         app = make_app()
         async with app.run_test(size=(100, 30)) as pilot:
             await settle(pilot)
             await pilot.press("p")
             await settle(pilot)
-            c = app.state.current()
+            c = _on_screen(app)
             assert app.optimizer == "cripso" and c.result.optimizer == "cripso"
             expected = correct_report(
                 CorrectRequest(load_model(MODEL), solve=SolveOptions("cripso", 0)), CYCLE_01
@@ -119,8 +140,9 @@ def test_optimiser_choice_and_compare_with_cancel(make_app):
             await pilot.press("c")
             await settle(pilot)
             comp = app.comparison
+            assert comp is not None
             assert [m.optimizer for m in comp.methods] == ["cripso", "pso", "ga", "coa", "cs"]
-            assert app.query_one("#compare-table").row_count == 6
+            assert app.query_one("#compare-table", DataTable).row_count == 6
             assert all(m.f1.max() <= comp.exact.margin_after + 1e-9 for m in comp.methods)
             assert len(app.query("Sparkline.curve")) == 5
             app.comparison = None
@@ -133,7 +155,7 @@ def test_optimiser_choice_and_compare_with_cancel(make_app):
     run(scenario())
 
 
-def test_reports_that_do_not_match_show_the_match_table(make_app, tmp_path):
+def test_reports_that_do_not_match_show_the_match_table(make_app: MakeApp, tmp_path: Path) -> None:
     none = tmp_path / "none.csv"
     none.write_text(
         CYCLE_01.read_text(encoding="utf-8")
@@ -146,29 +168,29 @@ def test_reports_that_do_not_match_show_the_match_table(make_app, tmp_path):
     some = tmp_path / "some.csv"
     some.write_text(CYCLE_01.read_text(encoding="utf-8").replace("P1 D", "Pin1 D"), encoding="utf-8")
 
-    async def scenario():
+    async def scenario() -> None:
         app = make_app(report=none)
         async with app.run_test() as pilot:
             await settle(pilot)
-            assert app.query_one("TabbedContent").active == "match"
+            assert app.query_one(TabbedContent).active == "match"
             assert app.state.current() is None
-            rows = _rows(app.query_one("#match-table"))
+            rows = _rows(app.query_one("#match-table", DataTable))
             assert len(rows) == 28 and all(str(r[0]) == "✗" for r in rows)
             assert "P1 D1" in next(r for r in rows if r[1] == "Pin1 D1")[5]
             app.controller.report_picked(some)
             await settle(pilot)
             assert app.state.current() is not None  # corrected without P1; the table says which are left out
-            rows = _rows(app.query_one("#match-table"))
+            rows = _rows(app.query_one("#match-table", DataTable))
             assert sum(str(r[0]) == "✗" for r in rows) == 7
             assert "7 characteristic(s)" in str(app.query_one("#match-status").render())
 
     run(scenario())
 
 
-def test_a_folder_is_watched_and_the_newest_finished_report_opened(make_app, tmp_path):
+def test_a_folder_is_watched_and_the_newest_finished_report_opened(make_app: MakeApp, tmp_path: Path) -> None:
     shutil.copy(GUIDE_PINS / "cycle_01.csv", tmp_path / "a.csv")
 
-    async def scenario():
+    async def scenario() -> None:
         app = make_app(report=tmp_path, poll_seconds=0.05)
         async with app.run_test() as pilot:
             for _ in range(40):
@@ -176,19 +198,19 @@ def test_a_folder_is_watched_and_the_newest_finished_report_opened(make_app, tmp
                 await settle(pilot)
                 if app.state.current() is not None:
                     break
-            assert app.state.current().part.report.endswith("a.csv")
+            assert _on_screen(app).part.report.endswith("a.csv")
             shutil.copy(GUIDE_PINS / "cycle_02.csv", tmp_path / "b.csv")
             for _ in range(40):
                 await pilot.pause(0.05)
                 await settle(pilot)
-                if app.state.current() is not None and app.state.current().part.report.endswith("b.csv"):
+                if app.state.current() is not None and _on_screen(app).part.report.endswith("b.csv"):
                     break
-            assert app.state.current().part.report.endswith("b.csv")
+            assert _on_screen(app).part.report.endswith("b.csv")
 
     run(scenario())
 
 
-def test_history_from_the_store_one_key_diagnose_and_the_export_recorded(make_app, tmp_path):
+def test_history_from_the_store_one_key_diagnose_and_the_export_recorded(make_app: MakeApp, tmp_path: Path) -> None:
     from setupfix.store import open_store
     from setupfix.usecases.history import ImportRequest, import_history
 
@@ -196,15 +218,15 @@ def test_history_from_the_store_one_key_diagnose_and_the_export_recorded(make_ap
     with open_store(db) as store:
         import_history(store, ImportRequest(tuple(sorted(GUIDE_PINS.glob("cycle_0*.csv")))))
 
-    async def scenario():
+    async def scenario() -> None:
         app = make_app(db=db)
         async with app.run_test(size=(100, 40)) as pilot:
             await settle(pilot)
-            cycles = _rows(app.query_one("#history-cycles"))
+            cycles = _rows(app.query_one("#history-cycles", DataTable))
             assert [str(r[3]) for r in cycles] == ["+0.0171", "+0.0484", "+0.0681", "+0.0296", "+0.0489"]
             await pilot.press("d")
             await settle(pilot)
-            assert app.query_one("TabbedContent").active == "history"
+            assert app.query_one(TabbedContent).active == "history"
             text = str(app.query_one("#history-diagnosis").render())
             assert "diagnosis of" in text and "residual RMS" in text
             await pilot.press("1", "e")
@@ -213,7 +235,8 @@ def test_history_from_the_store_one_key_diagnose_and_the_export_recorded(make_ap
             await settle(pilot)
             with open_store(db) as store:
                 log = store.corrections()
-            x = app.state.current().result.x
+            x = _on_screen(app).result.x
+            assert app.opened is not None
             moved = {reg.register: v for reg, v in zip(app.opened.model.registers, x, strict=True) if v}
             logged = dict(zip(log["register"], log["delta"].round(6), strict=True))
             assert logged == {k: round(v, 6) for k, v in moved.items()}
@@ -222,7 +245,7 @@ def test_history_from_the_store_one_key_diagnose_and_the_export_recorded(make_ap
     run(scenario())
 
 
-def test_thermal_panel_shows_the_drift_and_the_feed_forward(make_app, tmp_path):
+def test_thermal_panel_shows_the_drift_and_the_feed_forward(make_app: MakeApp, tmp_path: Path) -> None:
     from conftest import SAMPLES
 
     from setupfix.inputs.thermal_files import predict_drift
@@ -240,7 +263,7 @@ def test_thermal_panel_shows_the_drift_and_the_feed_forward(make_app, tmp_path):
     expected = predict_drift(saved, log)
     feed = thermal_feed_forward(load_model(MODEL), saved, log, measured_at="2026-11-02T08:00:00")
 
-    async def scenario():
+    async def scenario() -> None:
         app = make_app(thermal=saved, temperatures=log)
         async with app.run_test(size=(100, 30)) as pilot:
             await settle(pilot)
@@ -248,8 +271,12 @@ def test_thermal_panel_shows_the_drift_and_the_feed_forward(make_app, tmp_path):
             await pilot.press("3")
             text = str(app.query_one("#thermal-status").render())
             assert f"{expected.latest:+.4f} mm" in text and "grey" in text
-            curve = app.query_one("#thermal-curve")
-            assert curve.display and list(curve.data) == [float(v) for v in expected.drift[-120:]]
+            curve = app.query_one("#thermal-curve", Sparkline)
+            assert (
+                curve.display
+                and curve.data is not None
+                and list(curve.data) == [float(v) for v in expected.drift[-120:]]
+            )
             assert feed.line() in str(app.query_one("#thermal-feed").render())
             assert feed.line() in str(app.query_one("#summary").render())
             # the export holds the feed-forward, exactly as `correct --offsets --thermal` writes it
@@ -276,12 +303,14 @@ def test_thermal_panel_shows_the_drift_and_the_feed_forward(make_app, tmp_path):
             )
             written = (tmp_path / "offsets.csv").read_text(encoding="utf-8")
             assert written == (tmp_path / "cli.csv").read_text(encoding="utf-8")
-            assert feed.applied and app.state.current().corrections["T5"] == app.state.current().x[8] + feed.shift
+            assert feed.applied and _on_screen(app).corrections["T5"] == _on_screen(app).x[8] + feed.shift
 
     run(scenario())
 
 
-def test_the_command_line_gives_the_app_correct_s_reader_cycle_and_thermal_options(monkeypatch, tmp_path):
+def test_the_command_line_gives_the_app_correct_s_reader_cycle_and_thermal_options(
+    monkeypatch: pytest.MonkeyPatch, tmp_path: Path
+) -> None:
     """``setupfix tui`` takes the options of ``correct`` (same adders) and hands them to the app unchanged."""
     from setupfix.tui.app import SetupfixApp
     from setupfix.usecases.requests import CycleOptions, ReadOptions
@@ -326,7 +355,7 @@ def test_the_command_line_gives_the_app_correct_s_reader_cycle_and_thermal_optio
     )
 
 
-def test_compare_solves_the_problem_correct_solves(make_app, tmp_path):
+def test_compare_solves_the_problem_correct_solves(make_app: MakeApp, tmp_path: Path) -> None:
     """The compare tab's exact result is the correction shown: the guarded problem with the register costs
     (controllers sample: T12 costs 3), not the problem on the real limits."""
     import numpy as np
@@ -338,12 +367,12 @@ def test_compare_solves_the_problem_correct_solves(make_app, tmp_path):
         (CONTROLLERS / "model.toml").read_text(encoding="utf-8") + "\n[safety]\nuncertainty = 0.004\n", encoding="utf-8"
     )
 
-    async def scenario():
+    async def scenario() -> None:
         # compare measures against the paper's objective (issue 22): the correction shown is that one when asked
         app = make_app(report=CONTROLLERS / "report.csv", model=model, objective="paper")
         async with app.run_test(size=(100, 30)) as pilot:
             await settle(pilot)
-            c = app.state.current()
+            c = _on_screen(app)
             await pilot.press("c")
             await settle(pilot)
             comp = app.comparison
@@ -359,7 +388,7 @@ def test_compare_solves_the_problem_correct_solves(make_app, tmp_path):
     run(scenario())
 
 
-def test_names_that_look_like_markup_are_shown_as_written(make_app, tmp_path):
+def test_names_that_look_like_markup_are_shown_as_written(make_app: MakeApp, tmp_path: Path) -> None:
     """A dimension named ``D1 [/b] [red`` and a report ``cycle[1] [red.csv``: a DataTable reads a plain
     string as markup (the closing tag raised a MarkupError and the screen died); every name is literal."""
     model = tmp_path / "model.toml"
@@ -369,12 +398,12 @@ def test_names_that_look_like_markup_are_shown_as_written(make_app, tmp_path):
     report = tmp_path / "cycle[1] [red.csv"
     report.write_text(CYCLE_01.read_text(encoding="utf-8").replace(" D1,", " D1 [/b] [red,"), encoding="utf-8")
 
-    async def scenario():
+    async def scenario() -> None:
         app = make_app(report=report, model=model)
         async with app.run_test(size=(100, 30)) as pilot:
             await settle(pilot)
             assert app.state.current() is not None, _notes(app)
-            names = [r[1] for r in _rows(app.query_one("#dimensions"))]
+            names = [r[1] for r in _rows(app.query_one("#dimensions", DataTable))]
             assert "P1 D1 [/b] [red" in names and "P4 D1 [/b] [red" in names
             assert "cycle[1] [red.csv" in app.sub_title.replace("\\[", "[")
             app.notify("[/b] a name from a report")  # toasts are literal too
@@ -388,26 +417,23 @@ def test_names_that_look_like_markup_are_shown_as_written(make_app, tmp_path):
     run(scenario())
 
 
-def test_diagnose_key_tests_the_declared_factors_and_a_bad_one_is_a_notice(make_app, tmp_path):
+def test_diagnose_key_tests_the_declared_factors_and_a_bad_one_is_a_notice(make_app: MakeApp, tmp_path: Path) -> None:
     """``tui --process LOG --factors …``: key d runs the same diagnosis as ``diagnose --factors`` (the effects
     it declares marked so); an unknown factor is a notice naming it, and the app stays up."""
-    from diagnose.test_plate import LOG, PLATE
-    from diagnose.test_plate import MODEL as PLATE_MODEL
-
-    if not LOG.is_file():
+    if not PLATE_LOG.is_file():
         pytest.skip("the NIST process log lives in the shared folder")
     folder = tmp_path / "plate"
     folder.mkdir()
     shutil.copy(PLATE, folder / PLATE.name)
     design = ("doe_tool_length", "doe_speed", "doe_tool_length*doe_speed")
 
-    async def scenario(factors: tuple[str, ...]) -> tuple[list[list[object]], list[str]]:
-        app = make_app(report=folder / PLATE.name, model=PLATE_MODEL, process=LOG, factors=factors)
+    async def scenario(factors: tuple[str, ...]) -> tuple[list[list[str]], list[str]]:
+        app = make_app(report=folder / PLATE.name, model=PLATE_MODEL, process=PLATE_LOG, factors=factors)
         async with app.run_test(size=(120, 40)) as pilot:
             await settle(pilot)
             await pilot.press("d")
             await settle(pilot)
-            rows = _rows(app.query_one("#history-effects"))
+            rows = _rows(app.query_one("#history-effects", DataTable))
             notes = [str(n.message) for n in app._notifications]
             assert app.is_running
         return rows, notes
@@ -420,3 +446,30 @@ def test_diagnose_key_tests_the_declared_factors_and_a_bad_one_is_a_notice(make_
         assert any("'spindle_sped'" in n for n in notes), notes
 
     run(both())
+
+
+def test_the_file_picker_opens_at_the_nearest_folder_that_exists(tmp_path: Path) -> None:
+    """After a report that could not be read (``/gone/bad.csv``), o opens the picker where that report would be,
+    or above: a tree of a missing folder selected itself as a file and closed the picker twice (the app died)."""
+    from textual.app import App
+
+    from setupfix.tui.screens import OpenFileScreen
+
+    picked: list[Path | None] = []
+
+    class Host(App[None]):
+        def on_mount(self) -> None:
+            self.push_screen(OpenFileScreen("pick", tmp_path / "gone" / "deeper" / "bad.csv"), picked.append)
+
+    async def scenario() -> None:
+        app = Host()
+        async with app.run_test(size=(80, 24)) as pilot:
+            await pilot.pause()
+            await pilot.pause()
+            screen = app.screen
+            assert isinstance(screen, OpenFileScreen) and screen.start == tmp_path and picked == []
+            await pilot.press(*str(tmp_path / "b.csv"), "enter")
+            await pilot.pause()
+            assert picked == [tmp_path / "b.csv"] and app.is_running
+
+    run(scenario())

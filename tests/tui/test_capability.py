@@ -5,21 +5,22 @@ from __future__ import annotations
 from pathlib import Path
 
 from spc_examples import closed_loop_store
-from tui.conftest import run, settle
+from tui.conftest import MakeApp, run, settle
 
 from setupfix.store import open_store
 from setupfix.usecases.spc_report import SPARK, SpcRequest, capability_rows, sparkline, spc_report
 
 
-def test_sparkline_maps_lowest_to_highest():
+def test_sparkline_maps_lowest_to_highest() -> None:
     assert sparkline([0.0, 1.0, 0.5, 0.25]) == "▁█▅▃"
     assert sparkline([2.0, 2.0]) == SPARK[3] * 2
     assert sparkline(list(range(100)), width=5) == "▁▃▅▇█"  # eight equal bins of the last five: 95 … 99
     assert sparkline([]) == ""
 
 
-def test_capability_screen_shows_every_characteristic(tmp_path: Path):
+def test_capability_screen_shows_every_characteristic(tmp_path: Path) -> None:
     from textual.app import App
+    from textual.widgets import DataTable
 
     from setupfix.tui.screens.capability import COLUMNS, CapabilityScreen
 
@@ -40,7 +41,7 @@ def test_capability_screen_shows_every_characteristic(tmp_path: Path):
             await settle(pilot)
             screen = app.screen
             assert isinstance(screen, CapabilityScreen)
-            table = screen.query_one("#capability")
+            table = screen.query_one("#capability", DataTable)
             assert table.row_count == 28 and len(table.columns) == len(COLUMNS)
             first = [str(c) for c in table.get_row_at(0)]
             assert first[0] == "P1 D1" and first[2] == rows[0].cpk and first[7] == "R1 R2 R3"
@@ -52,7 +53,11 @@ def test_capability_screen_shows_every_characteristic(tmp_path: Path):
     run(scenario())
 
 
-def test_k_opens_the_capability_of_the_history_store_and_says_when_there_is_none(make_app, tmp_path: Path):
+def test_k_opens_the_capability_of_the_history_store_and_says_when_there_is_none(
+    make_app: MakeApp, tmp_path: Path
+) -> None:
+    from textual.widgets import DataTable
+
     from setupfix.tui.screens.capability import CapabilityScreen
     from setupfix.tui.screens.help import HELP
 
@@ -69,7 +74,7 @@ def test_k_opens_the_capability_of_the_history_store_and_says_when_there_is_none
             await settle(pilot)
             screen = app.screen
             assert isinstance(screen, CapabilityScreen), [n.message for n in app._notifications]
-            table = screen.query_one("#capability")
+            table = screen.query_one("#capability", DataTable)
             shown = [[str(c) for c in table.get_row_at(i)] for i in range(table.row_count)]
             assert [(r[0], r[2], r[7]) for r in shown] == [(r.name, r.cpk, r.rules) for r in expected]
             await pilot.press("escape")

@@ -6,10 +6,13 @@ and look at the SVGs before committing them.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 import pytest
 from conftest import ROOT
+from textual.pilot import Pilot
 
 from setupfix.tui.app import SetupfixApp
 from setupfix.tui.state import Inputs
@@ -17,14 +20,17 @@ from setupfix.tui.state import Inputs
 MODEL = Path("sample_reports/guide_pins/model.toml")
 CYCLE_01 = Path("sample_reports/guide_pins/cycle_01.csv")
 
+#: The ``snap_compare`` fixture: ``(app, *, run_before=…, terminal_size=…) -> bool`` (the plugin is untyped).
+SnapCompare = Callable[..., bool]
+
 
 @pytest.fixture(autouse=True)
-def _in_the_repository(monkeypatch):
+def _in_the_repository(monkeypatch: pytest.MonkeyPatch) -> None:
     # relative paths: the screens show file names as the operator typed them
     monkeypatch.chdir(ROOT)
 
 
-async def _settled(pilot) -> None:
+async def _settled(pilot: Pilot[Any]) -> None:
     # workers done, their results laid out, breakpoint classes applied (a loaded machine needs the extra turns)
     await pilot.app.workers.wait_for_complete()
     for _ in range(3):
@@ -36,12 +42,12 @@ def _app(report: Path = CYCLE_01) -> SetupfixApp:
 
 
 @pytest.mark.parametrize("size", [(80, 24), (160, 48)], ids=["80x24", "160x48"])
-def test_correction_screen(snap_compare, size):
+def test_correction_screen(snap_compare: SnapCompare, size: tuple[int, int]) -> None:
     assert snap_compare(_app(), run_before=_settled, terminal_size=size)
 
 
-def test_export_confirmation(snap_compare):
-    async def run_before(pilot) -> None:
+def test_export_confirmation(snap_compare: SnapCompare) -> None:
+    async def run_before(pilot: Pilot[Any]) -> None:
         await _settled(pilot)
         await pilot.press("e")
         while type(pilot.app.screen).__name__ != "ExportScreen":

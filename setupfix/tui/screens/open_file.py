@@ -23,7 +23,12 @@ class OpenFileScreen(ModalScreen[Path | None]):
     def __init__(self, title: str, start: Path, *, allow_folder: bool = False) -> None:
         super().__init__()
         self.title_text = title
-        self.start = start if start.is_dir() else start.parent
+        # the nearest folder that exists: a tree of a missing folder selects it as a file at once (the last
+        # report that could not be read, say), which would close the picker before the operator saw it
+        folder = start if start.is_dir() else start.parent
+        while not folder.is_dir() and folder != folder.parent:
+            folder = folder.parent
+        self.start = folder
         self.allow_folder = allow_folder
 
     def compose(self) -> ComposeResult:
