@@ -30,7 +30,7 @@ ROOT = Path(__file__).resolve().parents[2]
 GUIDE = ROOT / "sample_reports" / "guide_pins"
 
 
-def test_offsets_csv_round_trip(tmp_path):
+def test_offsets_csv_round_trip(tmp_path: Path) -> None:
     result = correct_report(CorrectRequest(load_model(GUIDE / "model.toml")), GUIDE / "cycle_01.csv").cycles[0]
     rows = cycle_rows(result)
     write_offsets_csv(rows, tmp_path / "off.csv")
@@ -43,7 +43,7 @@ def test_offsets_csv_round_trip(tmp_path):
         assert deltas.get(key, 0.0) == pytest.approx(value, abs=1e-12)
 
 
-def test_canonical_csv_round_trip(tmp_path):
+def test_canonical_csv_round_trip(tmp_path: Path) -> None:
     table = parse_reports([GUIDE / "cycle_01.qif"]).table
     write_canonical_csv(table, tmp_path / "c.csv")
     back = read_canonical(tmp_path / "c.csv")
@@ -55,7 +55,7 @@ def test_canonical_csv_round_trip(tmp_path):
             assert back[col].fillna("").astype(str).tolist() == table[col].fillna("").astype(str).tolist(), col
 
 
-def test_canonical_reference_flag_round_trip(tmp_path):
+def test_canonical_reference_flag_round_trip(tmp_path: Path) -> None:
     table = parse_reports([GUIDE / "cycle_01.qif"]).table
     table.loc[table.index[0], "reference"] = True  # both values present, so a swap or a constant would fail
     write_canonical_csv(table, tmp_path / "c.csv")
@@ -63,14 +63,14 @@ def test_canonical_reference_flag_round_trip(tmp_path):
     assert back == table["reference"].tolist() and all(type(v) is bool for v in back)
 
 
-def test_canonical_reference_flag_refuses_other_text(tmp_path):
+def test_canonical_reference_flag_refuses_other_text(tmp_path: Path) -> None:
     (tmp_path / "c.csv").write_text("characteristic,nominal,actual,reference\nD1,25,25.01,maybe\n")
     with pytest.raises(ParseError, match=r"c.csv:2: column 'reference'"):
         read_canonical(tmp_path / "c.csv")
 
 
 @pytest.mark.parametrize("suffix", [".png", ".svg"])
-def test_figure_round_trip(tmp_path, suffix):
+def test_figure_round_trip(tmp_path: Path, suffix: str) -> None:
     from matplotlib.figure import Figure
 
     fig = Figure(figsize=(2, 1))
@@ -85,7 +85,7 @@ def test_figure_round_trip(tmp_path, suffix):
         assert ET.fromstring(data).tag.endswith("svg")
 
 
-def test_figure_unknown_suffix_or_bad_target_refused_before_drawing(tmp_path):
+def test_figure_unknown_suffix_or_bad_target_refused_before_drawing(tmp_path: Path) -> None:
     with pytest.raises(ExportError, match="not supported"):
         write_figure(None, tmp_path / "f.pdf")  # type: ignore[arg-type]
     (tmp_path / "d.png").mkdir()
@@ -93,7 +93,7 @@ def test_figure_unknown_suffix_or_bad_target_refused_before_drawing(tmp_path):
         write_figure(None, tmp_path / "d.png")  # type: ignore[arg-type]
 
 
-def test_text_and_bytes_round_trip_and_stdout(tmp_path, capsysbinary):
+def test_text_and_bytes_round_trip_and_stdout(tmp_path: Path, capsysbinary: pytest.CaptureFixture[bytes]) -> None:
     write_text(tmp_path / "t.txt", "ä\r\nb\n")
     assert (tmp_path / "t.txt").read_bytes() == "ä\r\nb\n".encode()
     write_bytes(tmp_path / "b.bin", bytes(range(256)))

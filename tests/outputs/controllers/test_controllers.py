@@ -14,7 +14,7 @@ import pytest
 
 from parsers.current import read_current
 from setupfix.core.errors import ExportError
-from setupfix.correction.offsets import offset_rows
+from setupfix.correction.offsets import OffsetRow, offset_rows
 from setupfix.model import load_model, model_from_dict
 from setupfix.outputs.controllers import CONTROLLERS, render
 from setupfix.usecases.correct import correct_report
@@ -31,12 +31,12 @@ MODEL = load_model(SAMPLE / "model.toml")
 CORRECTIONS = {"W1": -0.022, "W2": 0.022, "T5": -0.008, "T12": 0.002}
 
 
-def rows(mode: str):
+def rows(mode: str) -> list[OffsetRow]:
     current = read_current(SAMPLE / "current.csv", MODEL) if mode == "set" else None
     return offset_rows(MODEL, CORRECTIONS, report="report.csv", part="cycle 7", current=current, verdict="apply")
 
 
-def test_sample_report_gives_those_corrections():
+def test_sample_report_gives_those_corrections() -> None:
     # the README's numbers: the paper's objective (issue 22 made leximin the default)
     (pc,) = correct_report(CorrectRequest(MODEL, solve=SolveOptions(objective="paper")), SAMPLE / "report.csv").cycles
     assert pc.verdict == "apply" and pc.margin_after == pytest.approx(0.048)
@@ -47,7 +47,7 @@ CASES = [(name, mode) for name in CONTROLLERS for mode in ("add", "set") if (nam
 
 
 @pytest.mark.parametrize(("name", "mode"), CASES)
-def test_golden(name, mode):
+def test_golden(name: str, mode: str) -> None:
     text = render(name, rows(mode), "report.csv cycle 7")
     assert text == (GOLDEN / f"{name}_{mode}.txt").read_text(encoding="utf-8")
 
@@ -70,7 +70,7 @@ def siemens_state(program: str, state: dict[str, float]) -> dict[str, float]:
 
 
 @pytest.mark.parametrize("name", ["fanuc", "haas"])
-def test_absolute_program_is_idempotent_and_incremental_is_not(name):
+def test_absolute_program_is_idempotent_and_incremental_is_not(name: str) -> None:
     start = {(2, 1): -412.53, (2, 2): -412.487, (11, 5): -0.012, (11, 12): 0.0035}
     absolute = render(name, rows("set"))
     once = fanuc_state(absolute, start)
@@ -82,7 +82,7 @@ def test_absolute_program_is_idempotent_and_incremental_is_not(name):
     assert fanuc_state(incremental, once_inc)[(2, 1)] == pytest.approx(-412.574)  # … doubled the second time
 
 
-def test_siemens_absolute_is_idempotent():
+def test_siemens_absolute_is_idempotent() -> None:
     program = render("siemens", rows("set"))
     once = siemens_state(program, {})
     assert siemens_state(program, once) == once and once["$TC_DP12[5,1]"] == pytest.approx(-0.020)
@@ -90,7 +90,7 @@ def test_siemens_absolute_is_idempotent():
     assert siemens_state(inc, siemens_state(inc, once))["$P_UIFR[1,Z,TR]"] == pytest.approx(-412.552 - 0.044)
 
 
-def test_current_finer_than_the_grid_is_kept(tmp_path):
+def test_current_finer_than_the_grid_is_kept(tmp_path: Path) -> None:
     model = load_model(SAMPLE / "model.toml")
     (tmp_path / "c.csv").write_text("register,value\nG54,-412.53046\nG55,0\nH5,0\nT12,0\n")
     current = read_current(tmp_path / "c.csv", model)
@@ -108,13 +108,13 @@ TINY = {
 
 
 @pytest.mark.parametrize(("name", "register"), [("haas", "G54.1P7"), ("siemens", "G54.1P7"), ("fanuc", "T3 D2")])
-def test_inexpressible_register_is_named(name, register):
+def test_inexpressible_register_is_named(name: str, register: str) -> None:
     model = model_from_dict(TINY)
     with pytest.raises(ExportError, match=f"{name}: cannot express register '{re.escape(register)}'"):
         render(name, offset_rows(model, {"W1": 0.01, "T1": 0.0}))
 
 
-def test_heidenhain_needs_current_and_siemens_reads_t_d():
+def test_heidenhain_needs_current_and_siemens_reads_t_d() -> None:
     model = model_from_dict(TINY)
     with pytest.raises(ExportError, match="--current"):
         render("heidenhain", offset_rows(model, {}))

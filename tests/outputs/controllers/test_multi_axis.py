@@ -36,7 +36,7 @@ def g10_start() -> dict[tuple[int, int, str], float]:
 
 @pytest.mark.parametrize("name", ["fanuc", "haas"])
 @pytest.mark.parametrize("mode", ["set", "add"])
-def test_g10_program_holds_current_plus_change_on_every_axis(name, mode):
+def test_g10_program_holds_current_plus_change_on_every_axis(name: str, mode: str) -> None:
     program = render(name, fixture_rows(name, mode, rotation=0.0), "r.csv P1")
     after = run_g10(program, g10_start())
     for cid, _, axis, *_ in SPEC:
@@ -57,7 +57,7 @@ def test_g10_program_holds_current_plus_change_on_every_axis(name, mode):
 
 @pytest.mark.parametrize("name", ["fanuc", "haas"])
 @pytest.mark.parametrize("mode", ["set", "add"])
-def test_a_rotation_g10_cannot_hold_is_refused_naming_register_and_format(name, mode):
+def test_a_rotation_g10_cannot_hold_is_refused_naming_register_and_format(name: str, mode: str) -> None:
     with pytest.raises(
         ExportError,
         match=rf"^{name}: cannot express register 'G54' \(W1\.C\): G10 L2 holds no "
@@ -97,7 +97,7 @@ SIEMENS = {
 
 
 @pytest.mark.parametrize("mode", ["set", "add"])
-def test_siemens_frame_rotation_and_radius(mode):
+def test_siemens_frame_rotation_and_radius(mode: str) -> None:
     program = render("siemens", fixture_rows("siemens", mode), "r.csv P1")
     start = {SIEMENS[cid]: START[cid] for cid in SIEMENS}
     after = siemens_state(program, start)
@@ -108,7 +108,7 @@ def test_siemens_frame_rotation_and_radius(mode):
     assert (siemens_state(program, after) == after) is (mode == "set")
 
 
-def test_siemens_rotation_turns_about_the_models_spindle_and_has_no_fine_part():
+def test_siemens_rotation_turns_about_the_models_spindle_and_has_no_fine_part() -> None:
     rows = [row("W1.C", "G54", "wks", "C", 0.01, 0.0)]
     assert "$P_UIFR[1,X,RT]=+0.010" in render("siemens", rows, spindle="X")
     wear = [row("W1.C", "G54", "wks", "C", 0.01, 0.0, offset="wear")]
@@ -138,7 +138,7 @@ def heidenhain_tables(text: str) -> dict[tuple[str, str, str], str]:
     return out
 
 
-def test_heidenhain_preset_columns_and_tool_radius():
+def test_heidenhain_preset_columns_and_tool_radius() -> None:
     text = render("heidenhain", fixture_rows("heidenhain", "set"), "r.csv P1")
     cells = heidenhain_tables(text)
     want = {
@@ -162,7 +162,7 @@ def test_heidenhain_preset_columns_and_tool_radius():
         assert float(cells[key]) == pytest.approx(START[cid] + DELTA[cid], abs=1e-9), key
 
 
-def test_heidenhain_refuses_add_and_a_preset_axis_twice():
+def test_heidenhain_refuses_add_and_a_preset_axis_twice() -> None:
     with pytest.raises(ExportError, match="--current"):
         render("heidenhain", fixture_rows("heidenhain", "add"))
     twice = [row("W1.X", "PRESET 1", "wks", "X", 0.0, 1.0), row("W2.X", "PR 1", "wks", "X", 0.0, 2.0)]
@@ -170,7 +170,7 @@ def test_heidenhain_refuses_add_and_a_preset_axis_twice():
         render("heidenhain", twice)
 
 
-def test_radius_on_an_h_register_and_a_csv_of_components():
+def test_radius_on_an_h_register_and_a_csv_of_components() -> None:
     with pytest.raises(ExportError, match=r"fanuc: cannot express register 'H5' \(T5\.R\): a tool radius is a D"):
         render("fanuc", [row("T5.R", "H5", "tool", "R", 0.001)])
     # a radius row named by its model number only is a D register
@@ -179,7 +179,7 @@ def test_radius_on_an_h_register_and_a_csv_of_components():
     assert ",W1.C,G54,wks,C,0.015," in csv and ",T5.R,D5,tool,R,-0.004," in csv
 
 
-def test_inch_rows_write_g20_even_when_a_rotation_comes_first():
+def test_inch_rows_write_g20_even_when_a_rotation_comes_first() -> None:
     rows = [
         row("W1.C", "G54", "wks", "C", 0.0, 0.0, unit="inch"),
         row("W1.X", "G54", "wks", "X", 0.0004, 1.0, unit="inch", resolution=0.0001),
@@ -193,7 +193,7 @@ _STEPS = st.integers(-99_999_999, 99_999_999)
 
 @settings(max_examples=60, deadline=None)
 @given(st.lists(st.tuples(_STEPS, st.integers(-500, 500)), min_size=3, max_size=3), st.sampled_from(["fanuc", "haas"]))
-def test_any_values_on_the_grid_come_back_exactly(steps, name):
+def test_any_values_on_the_grid_come_back_exactly(steps: list[tuple[int, int]], name: str) -> None:
     """Brute force over the grid: the set program's blocks hold current + change to the last digit."""
     rows = [
         row(f"W1.{axis}", "G54", "wks", axis, d / 1000, c / 1000) for axis, (c, d) in zip("XYZ", steps, strict=True)

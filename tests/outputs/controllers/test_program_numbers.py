@@ -19,7 +19,7 @@ from setupfix.outputs.controllers import DERIVED_PROGRAMS, derived_program_numbe
 from setupfix.usecases.batch import run_batch
 from setupfix.usecases.correct import correct_report
 from setupfix.usecases.export import export, offsets_text
-from setupfix.usecases.requests import CorrectRequest
+from setupfix.usecases.requests import CorrectOutcome, CorrectRequest
 
 REQUEST = CorrectRequest(load_model(GUIDE_PINS / "model.toml"))
 
@@ -34,7 +34,7 @@ def o_number(program: str) -> int:
     ("name", "n", "word"),
     [("fanuc", 1, "O0001"), ("fanuc", 9999, "O9999"), ("haas", 12, "O0012"), ("haas", 99999, "O99999")],
 )
-def test_the_o_word(name, n, word):
+def test_the_o_word(name: str, n: int, word: str) -> None:
     assert (
         render(name, fixture_rows(name, "set", rotation=0.0), program_number=n)
         .split("\n")[1]
@@ -46,12 +46,12 @@ def test_the_o_word(name, n, word):
     ("name", "n", "span"),
     [("fanuc", 10000, "1…9999"), ("fanuc", 0, "1…9999"), ("haas", 100000, "1…99999"), ("siemens", 10**8, "1…99999999")],
 )
-def test_a_number_the_format_cannot_hold_is_refused(name, n, span):
+def test_a_number_the_format_cannot_hold_is_refused(name: str, n: int, span: str) -> None:
     with pytest.raises(ExportError, match=f"^{name}: program number {n} outside {span}"):
         render(name, fixture_rows(name, "set", rotation=0.0), program_number=n)
 
 
-def test_siemens_names_the_program_and_the_tables_have_no_name():
+def test_siemens_names_the_program_and_the_tables_have_no_name() -> None:
     text = render("siemens", fixture_rows("siemens", "set"), "t", program_number=42)
     assert text.startswith("%_N_SETUPFIX_42_MPF\n;$PATH=/_N_MPF_DIR\n; SETUPFIX t\n")
     assert not render("siemens", fixture_rows("siemens", "set"), "t").startswith("%")  # no number: no name line
@@ -60,7 +60,7 @@ def test_siemens_names_the_program_and_the_tables_have_no_name():
         assert render(name, rows, program_number=10**9) == render(name, rows)
 
 
-def test_derived_numbers_are_stable_in_range_and_spread():
+def test_derived_numbers_are_stable_in_range_and_spread() -> None:
     low, high = DERIVED_PROGRAMS
     numbers = [derived_program_number(f"cycle_{i:03d}.csv", "P1") for i in range(500)]
     assert all(low <= n <= high for n in numbers) and len(set(numbers)) > 450
@@ -69,11 +69,13 @@ def test_derived_numbers_are_stable_in_range_and_spread():
 
 
 @pytest.fixture(scope="module")
-def guide():
+def guide() -> CorrectOutcome:
     return correct_report(REQUEST, GUIDE_PINS / "cycle_01.csv")
 
 
-def test_export_derives_the_number_from_report_and_part_or_takes_the_given_one(guide, tmp_path):
+def test_export_derives_the_number_from_report_and_part_or_takes_the_given_one(
+    guide: CorrectOutcome, tmp_path: Path
+) -> None:
     cycle = guide.cycles[0]
     done = export(guide.cycles, str(tmp_path / "a.nc"), controller="fanuc")
     assert o_number(done.text) == done.program_number == derived_program_number(cycle.part.report, cycle.part.part)
@@ -86,7 +88,7 @@ def test_export_derives_the_number_from_report_and_part_or_takes_the_given_one(g
     assert export(guide.cycles, str(tmp_path / "d.csv")).program_number is None
 
 
-def test_batch_numbers_are_distinct_in_a_run_and_follow_the_path():
+def test_batch_numbers_are_distinct_in_a_run_and_follow_the_path() -> None:
     numbers = ProgramNumbers("fanuc")
     # two paths with the same derived number: the second gets the next free one
     seen: dict[int, str] = {}
@@ -108,7 +110,7 @@ def test_batch_numbers_are_distinct_in_a_run_and_follow_the_path():
     assert ProgramNumbers("heidenhain", 5).take("x.txt") is None
 
 
-def test_batch_writes_distinct_numbers_stable_run_after_run(tmp_path):
+def test_batch_writes_distinct_numbers_stable_run_after_run(tmp_path: Path) -> None:
     d = tmp_path / "in"
     d.mkdir()
     for name in ("cycle_01.csv", "cycle_02.csv", "cycle_03.csv"):
@@ -127,7 +129,9 @@ def test_batch_writes_distinct_numbers_stable_run_after_run(tmp_path):
     assert o_number(first) == 500 and "(SETUPFIX CYCLE_01.CSV" in first
 
 
-def test_cli_refuses_a_number_the_controller_cannot_hold_before_any_work(capsys, tmp_path):
+def test_cli_refuses_a_number_the_controller_cannot_hold_before_any_work(
+    capsys: pytest.CaptureFixture[str], tmp_path: Path
+) -> None:
     model, report = str(GUIDE_PINS / "model.toml"), str(GUIDE_PINS / "cycle_01.csv")
     code = main(
         [

@@ -39,14 +39,14 @@ def linuxcnc_text(program: str) -> str:
     return kept
 
 
-def test_rs274_reports_a_block_it_refuses(tmp_path):
+def test_rs274_reports_a_block_it_refuses(tmp_path: Path) -> None:
     # the harness sees rs274's errors: a Fanuc radius block (L12) is one rs274 does not know
     with pytest.raises(AssertionError, match=r"(?s)rs274 refused the program: .*G10 L12 P5"):
         run_rs274("G21\nG90 G10 L12 P5 R+1.000\nM30\n", tmp_path)
 
 
 @pytest.mark.parametrize("name", ["fanuc", "haas"])
-def test_multi_axis_set_program_holds_current_plus_change_on_every_axis(tmp_path, name):
+def test_multi_axis_set_program_holds_current_plus_change_on_every_axis(tmp_path: Path, name: str) -> None:
     program = render(name, fixture_rows(name, "set", rotation=0.0), "r.csv P1", program_number=4711)
     reads = [(FANUC_P[w], axis) for w in FANUC_P for axis in "XYZ"]
     got = read_back(linuxcnc_text(program), tmp_path, reads)
@@ -61,7 +61,7 @@ def test_multi_axis_set_program_holds_current_plus_change_on_every_axis(tmp_path
     assert state[(10, 12, "R")] == pytest.approx(START["T12"] + DELTA["T12"])
 
 
-def test_whatever_was_there_the_set_program_leaves_current_plus_change(tmp_path):
+def test_whatever_was_there_the_set_program_leaves_current_plus_change(tmp_path: Path) -> None:
     # rs274 starts from other offsets (parameter file, inches): absolute blocks overwrite them all
     program = render("fanuc", fixture_rows("fanuc", "set", rotation=0.0, wks_only=True))
     before = {5221 + 20 * (p - 1) + i: 3.0 + p + i for p in (1, 2) for i in range(3)}
@@ -72,7 +72,7 @@ def test_whatever_was_there_the_set_program_leaves_current_plus_change(tmp_path)
     assert untouched[(3, "Z")] == pytest.approx(50.8)
 
 
-def test_the_one_axis_sample_program_reads_back(tmp_path):
+def test_the_one_axis_sample_program_reads_back(tmp_path: Path) -> None:
     model = load_model(SAMPLE / "model.toml")
     current = read_current(SAMPLE / "current.csv", model)
     rows = offset_rows(model, {"W1": -0.022, "W2": 0.022, "T5": -0.008, "T12": 0.002}, current=current)
@@ -81,7 +81,7 @@ def test_the_one_axis_sample_program_reads_back(tmp_path):
     assert got == pytest.approx({(1, "Z"): -412.552, (2, "Z"): -412.465}, abs=5e-4)
 
 
-def test_an_inch_program_reads_back_in_inches(tmp_path):
+def test_an_inch_program_reads_back_in_inches(tmp_path: Path) -> None:
     rows = [
         row("W1.X", "G54", "wks", "X", 0.0004, 1.2345, unit="inch", resolution=0.0001),
         row("W1.Y", "G54", "wks", "Y", -0.0012, -3.0, unit="inch", resolution=0.0001),
@@ -100,7 +100,7 @@ XYZ_CURRENT = (
 )
 
 
-def test_the_two_station_sample_from_report_to_read_back(tmp_path):
+def test_the_two_station_sample_from_report_to_read_back(tmp_path: Path) -> None:
     """The whole door: a multi-axis report corrected, the Fanuc program written, read back on every axis."""
     if not (XYZ / "model.toml").exists():
         pytest.skip("sample_reports/two_station_xyz arrives with the multi-axis model loader (issue 23, axes part)")
@@ -135,6 +135,7 @@ def test_the_two_station_sample_from_report_to_read_back(tmp_path):
     got = read_back(linuxcnc_text(done.text), tmp_path, [(p, a) for p in (1, 2) for a in "XYZ"])
     for (p, axis), value in got.items():
         cid = f"W{p}.{axis}"
+        assert request.current is not None
         want = request.current[cid] + cycle.corrections.get(cid, 0.0)
         assert round(value, 3) == round(want, 3), cid
     tools = run_g10(done.text)
