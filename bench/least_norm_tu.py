@@ -36,9 +36,9 @@ from threadpoolctl import threadpool_limits
 ROOT = Path(__file__).resolve().parents[1]
 
 from setupfix.optimize import CorrectionProblem, get_optimizer
+from setupfix.optimize.exact import ExactSettings
 from setupfix.optimize.exact.highs import INF, LinearModel
 from setupfix.optimize.exact.lp_bound import margin_rows
-from setupfix.optimize.exact.settings import ExactSettings
 
 RESULTS = ROOT / "bench" / "results"
 SIZES = [(10, 28), (30, 100), (60, 400), (100, 800), (180, 2000), (300, 5000)]

@@ -46,9 +46,9 @@ import setupfix.optimize.exact.session as session_mod
 from bench.problems import guide_pins_problems, make_fixture, report_csv, shop_problem
 from setupfix.model import load_model
 from setupfix.optimize import CorrectionProblem, get_optimizer
+from setupfix.optimize.exact import ExactSettings
 from setupfix.optimize.exact.lp_bound import lp_bound, margin_rows
 from setupfix.optimize.exact.session import GridRows, Session
-from setupfix.optimize.exact.settings import ExactSettings
 
 RESULTS = ROOT / "bench" / "results"
 

@@ -65,9 +65,9 @@ def worker(n: int, seed: int, limit: float) -> dict[str, object]:
 
     from setupfix.model import PartMeasurement, load_model
     from setupfix.optimize import CorrectionProblem, get_optimizer
+    from setupfix.optimize.exact import ExactSettings
     from setupfix.optimize.exact.lp_bound import lp_bound, margin_rows
     from setupfix.optimize.exact.session import GridRows, Session
-    from setupfix.optimize.exact.settings import ExactSettings
 
     model = load_model(ROOT / "sample_reports" / "guide_pins" / "model.toml")
 

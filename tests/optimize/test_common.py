@@ -14,8 +14,14 @@ import pytest
 
 from setupfix.core.errors import ParameterError
 from setupfix.core.params import accepts
-from setupfix.optimize import OPTIMIZERS, CorrectionProblem, get_optimizer
-from setupfix.optimize.base import NO_BETTER_THAN_NONE, Metaheuristic, make_result
+from setupfix.optimize import (
+    NO_BETTER_THAN_NONE,
+    OPTIMIZERS,
+    CorrectionProblem,
+    Metaheuristic,
+    get_optimizer,
+    make_result,
+)
 
 from .test_metaheuristics_common import RecordingProblem, small_problem
 

@@ -89,6 +89,7 @@ def test_same_seed_gives_identical_run():
     np.testing.assert_array_equal(a.history, b.history)
 
 
+@pytest.mark.slow
 def test_different_seeds_find_different_optima_of_a_tied_problem():
     # One dimension moved equally by three registers, 1 µm off centre: e_1, e_2 and e_3 (times −1 µm)
     # are the three optima of f (same f1, same norm); which one a run returns depends on the seed.
@@ -254,6 +255,7 @@ def test_rejects_a_colony_without_tournaments():
 # -- quality ----------------------------------------------------------------------------------------
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("seed", range(4))
 def test_small_problem_reaches_brute_force_optimum(seed):
     problem = small_problem(seed)
@@ -264,6 +266,7 @@ def test_small_problem_reaches_brute_force_optimum(seed):
     assert np.median([f1_best - r.margin_after for r in results]) <= 0.001 + 1e-12
 
 
+@pytest.mark.slow
 def test_guide_pins_median_gap_to_exact_within_one_micrometre():
     gaps = []
     for problem in guide_pins_problems(5, seed=2014):

@@ -143,6 +143,7 @@ def test_continuous_mode_is_the_lp_optimum():
     assert cont.margin_after == pytest.approx(cont.bound, abs=1e-9)
 
 
+@pytest.mark.slow
 @settings(max_examples=25, deadline=None)
 @given(seed=st.integers(0, 10_000), n=st.integers(1, 6), m=st.integers(1, 10), steps=st.integers(1, 20))
 def test_no_grid_point_beats_the_exact_optimum(seed, n, m, steps):

@@ -31,6 +31,7 @@ PATHS = {
 }
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("path", list(PATHS))
 @pytest.mark.parametrize("seed", range(6))
 def test_every_proof_path_equals_brute_force(path, seed):
@@ -153,6 +154,7 @@ def test_cli_time_limit_option(capsys):
     assert "--time-limit applies to the exact optimizer" in capsys.readouterr().err
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(("objective", "count", "threads"), [("paper", 8, 2), ("leximin", 24, 4)])
 def test_threads_keep_their_own_solver_models(guide_pins_model, objective, count, threads):
     """Solves in worker threads (batch, TUI) give the same corrections as one after another — also while the

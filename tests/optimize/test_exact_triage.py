@@ -408,6 +408,7 @@ def test_gross_dimensions_triage_equals_brute_force(seed, path):
     assert ("kept set forced" in result.path) == (path == "forced")  # everything measured in is kept
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("seed", range(6))
 def test_gross_dimensions_triage_equals_an_independent_milp(seed):
     problem = gross_problem(seed, n=3, m=6)
@@ -475,6 +476,7 @@ def test_guide_pins_gross_dimension_is_fast_and_complete(guide_pins_model):
     assert result.stages["triage"] < 1.0  # 1.2–1.5 s before (MILPs); ~30 ms on an idle machine
 
 
+@pytest.mark.slow
 def test_an_incomplete_triage_leximin_is_a_stopped_solve(guide_pins_model):
     """Levels left unproved (their share of the limit spent) never read as optimal."""
     from setupfix.correction.recommend import stopped_rule

@@ -114,6 +114,7 @@ def test_descend_keeps_every_row_and_ends_where_no_single_move_helps(seed):
                 assert cost[i] * v**2 >= cost[i] * k[i] ** 2
 
 
+@pytest.mark.slow
 def test_a_stopped_least_norm_proof_returns_a_certified_near_least_correction(monkeypatch):
     """The limit hit in the least-norm stage: the stage is named, and ‖x‖ is within the certified ratio."""
     problem = shop_problem(100, 800, 1)  # 100 registers: the chord MILP in the Lagrangian box
@@ -194,6 +195,7 @@ TIE_PATHS = {
 }
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("path", list(TIE_PATHS))
 @pytest.mark.parametrize("network", [False, True])
 def test_ties_go_to_the_lexicographically_smallest_correction(path, network):

@@ -179,6 +179,7 @@ def ordered_outcomes(problem: CorrectionProblem) -> np.ndarray:
     return np.array(sorted_m)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("seed", range(8))
 def test_leximin_equals_an_independent_ordered_outcome_milp(seed):
     problem = one_axis_problem(
@@ -231,6 +232,7 @@ def make(kind: str, seed: int, kw: dict) -> CorrectionProblem:
     return random_problem(seed, **kw) if kind == "random" else one_axis_problem(seed, **kw)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("cycle", range(1, 6))
 def test_leximin_equals_brute_force_on_the_papers_topology(cycle):
     problem = guide_pins_window(cycle)
@@ -241,6 +243,7 @@ def test_leximin_equals_brute_force_on_the_papers_topology(cycle):
     assert float(problem.cost[problem.free] @ k**2) == pytest.approx(norm, abs=1e-9)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(("kind", "seed", "kw"), CONFLICTS)
 def test_discrete_conflicts_by_branches_equal_brute_force(kind, seed, kw):
     problem = make(kind, seed, kw)
@@ -251,6 +254,7 @@ def test_discrete_conflicts_by_branches_equal_brute_force(kind, seed, kw):
     assert float(problem.cost[problem.free] @ k**2) == pytest.approx(norm, abs=1e-9)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(("kind", "seed", "kw"), CONFLICTS)
 def test_counts_alone_decide_discrete_conflicts_as_brute_force(kind, seed, kw, monkeypatch):
     """With no branching allowed, every discrete conflict goes to the count MILPs: same optimum."""

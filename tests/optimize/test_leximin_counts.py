@@ -12,6 +12,7 @@ from .test_leximin import CONFLICTS, NO_BRANCHES, brute_leximin, make, solved_st
 from .test_leximin_pins import _grid
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(("kind", "seed", "kw"), CONFLICTS)
 def test_each_count_equals_the_grid_count_and_fixes_only_what_the_lattice_decides(kind, seed, kw, monkeypatch):
     """Every count MILP's optimum is the most active dimensions with margin ≥ t + ε over the grid points

@@ -38,6 +38,7 @@ def test_the_bundled_pair_conflicts_are_three():
     assert len(REPORTS) == 3
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("report", REPORTS, ids=lambda p: p.stem)
 def test_pair_branches_decide_the_whole_report_as_the_counts_would(report, monkeypatch):
     """The full report (±100 steps): the conflict goes to pair branches, proved within the default limit;
@@ -58,6 +59,7 @@ def test_pair_branches_decide_the_whole_report_as_the_counts_would(report, monke
     np.testing.assert_allclose(np.sort(steps_margins(problem, k)), np.sort(steps_margins(problem, k_c)))
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     ("report", "centre"),
     [(r, c) for r in REPORTS for c in ("paper", "leximin")],

@@ -54,6 +54,7 @@ def checked_levels(monkeypatch) -> list[int]:
     return seen
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     ("kind", "seed"),
     [("window", 1), ("window", 2), ("window", 3), ("window", 5), ("axis", 5), ("axis", 37), ("axis", 3), ("axis", 11)],
@@ -104,6 +105,7 @@ def _dims(rows, row_dim, n_dims, pts) -> np.ndarray:
     return m_dims
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("large", [False, True], ids=["small", "as-if-large"])
 def test_a_dimension_excluded_from_a_conflict_is_never_alone_at_its_level(large, monkeypatch):
     """The one Farkas certificate that spares the per-dimension tests of a discrete conflict: every

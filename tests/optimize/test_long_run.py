@@ -17,6 +17,7 @@ import sys
 from pathlib import Path
 
 import numpy as np
+import pytest
 
 from setupfix.correction.synthetic import simulate_deviations
 from setupfix.model import PartMeasurement
@@ -47,6 +48,7 @@ def fresh_process(problems: list[CorrectionProblem], tmp_path: Path) -> list[tup
     return answers
 
 
+@pytest.mark.slow
 def test_a_long_run_never_runs_out_of_time_and_equals_a_fresh_process(guide_pins_model, tmp_path):
     devs, _ = simulate_deviations(guide_pins_model, 16, seed=3)
     problems = [
@@ -84,6 +86,7 @@ def test_each_run_of_one_highs_model_has_its_own_time_limit():
     assert statuses == {"optimal"}
 
 
+@pytest.mark.slow
 def test_the_first_solve_of_a_process_imports_before_its_clock_starts():
     """scipy.optimize (NNLS, imported lazily by the stages) is loaded before the time limit starts counting."""
     import subprocess

@@ -73,6 +73,7 @@ def guide_pins_problem(cycle: int) -> CorrectionProblem:
     return CorrectionProblem.from_part(model, part)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", METHODS)
 def test_small_problem_reaches_the_brute_force_optimum(name: str) -> None:
     hits = 0
@@ -91,6 +92,7 @@ def test_small_problem_reaches_the_brute_force_optimum(name: str) -> None:
 TARGET = {"pso": 0.010, "ga": 0.010, "coa": 0.025, "cs": 0.025}
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", METHODS)
 def test_paper_size_gap_to_exact_optimum(name: str) -> None:
     exact_cls = pytest.importorskip("setupfix.optimize.exact.solve").ExactOptimizer

@@ -292,6 +292,7 @@ def test_zone_harm_is_judged_on_the_zone():
 SAMPLE = Path(__file__).resolve().parents[2] / "sample_reports" / "two_station_xyz"
 
 
+@pytest.mark.slow
 def test_sample_leximin_equals_an_independent_solver_on_its_rows():
     """two_station_xyz cycle 1 (11 registers, 4 zones of 18–19 facets): the whole leximin vector over the
     16 dimensions (a zone once) equals scipy's stage-by-stage optimum on the same rows."""
@@ -336,6 +337,7 @@ def _circle_rows(fx, sides: int = 720) -> tuple[np.ndarray, np.ndarray, np.ndarr
     return np.vstack(a) * 1e3, np.concatenate(b) * 1e3, np.array(row_dim)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("seed", [1, 2, 3])
 def test_fixture_leximin_against_an_independent_solver_on_the_circles(tmp_path, seed):
     """Held-out multi-axis fixtures: our sorted TRUE margins (circles) against scipy's lexicographic optimum

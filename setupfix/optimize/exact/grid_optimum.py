@@ -6,7 +6,7 @@ bound) ≤ t_LP holds for every grid point (:func:`~setupfix.optimize.exact.grid
 U, it is optimal.  Otherwise the stage descends by *levels* τ (from U down): the rows
 rounded at τ, b = d·⌊(g − τ)/d⌋, hold every grid point with t(k) ≥ τ
 (:func:`~setupfix.optimize.exact.grid.rounded_rhs`).  At each level an ordered list of
-strategies is tried; each answers with a :class:`Step`:
+strategies is tried; each answers with a :class:`StrategyAnswer`:
 
 ``reached``    a grid point with t(k) ≥ τ is found: t* = τ' ≥ τ is proved (no point beats U,
                and every level above τ was proved empty);
@@ -38,29 +38,21 @@ from setupfix.optimize.exact.least_norm.listing import ellipsoid_search, lagrang
 from setupfix.optimize.exact.least_norm.shop import box_least_norm
 from setupfix.optimize.exact.lp_bound import LPBound
 from setupfix.optimize.exact.session import Relaxation, Session
+from setupfix.optimize.problem import Stopped
 
 __all__ = [
     "LEVEL_STRATEGIES",
     "GridOptimum",
-    "Level",
+    "GridLevel",
     "Listed",
     "Search",
-    "Step",
-    "Stop",
+    "StrategyAnswer",
     "UnitBox",
     "grid_optimum",
     "searched",
 ]
 
 Array = npt.NDArray[np.float64]
-
-
-@dataclass(frozen=True)
-class Stop:
-    """Which stage stopped and why (``"time limit"`` or ``"HiGHS: <its words>"``)."""
-
-    stage: str
-    reason: str
 
 
 @dataclass(frozen=True)
@@ -80,7 +72,7 @@ class UnitBox:
 
 
 @dataclass(frozen=True)
-class Level:
+class GridLevel:
     """What the strategies see at one level: τ [steps], its rounded rows b (r,), the best point so far."""
 
     tau: float
@@ -99,7 +91,7 @@ Verdict = Literal["reached", "empty", "undecided", "give_up"]
 
 
 @dataclass(frozen=True)
-class Step:
+class StrategyAnswer:
     """A strategy's answer at one level (see the module text); ``k`` a grid point found (shape (n,))."""
 
     verdict: Verdict
@@ -120,7 +112,7 @@ class GridOptimum:
     k: Array
     t: float
     upper: float
-    stopped: Stop | None
+    stopped: Stopped | None
     relaxation: Relaxation | None
     listed: Listed | None
     unit_box: UnitBox | None
@@ -133,7 +125,7 @@ _NEAR = "grid optimum: a grid point near the rounded rows' least-norm point atta
 _LOWERED = "grid optimum: best point attains the bound lowered by infeasible levels"
 
 
-def relax(session: Session, level: Level) -> Step:
+def relax(session: Session, level: GridLevel) -> StrategyAnswer:
     """The continuous least norm of the rounded rows; an empty relaxation proves the level empty."""
     if session.small:
         status, relaxation = session.least_norm(level.b)
@@ -141,32 +133,32 @@ def relax(session: Session, level: Level) -> Step:
         status, _ = session.rounded_rows_feasible(level.b)
         relaxation = session.least_norm(level.b)[1] if status == "optimal" else None
         if status == "optimal":
-            return Step("undecided", relaxation=relaxation)
+            return StrategyAnswer("undecided", relaxation=relaxation)
     if relaxation is not None:
-        return Step("undecided", relaxation=relaxation)
+        return StrategyAnswer("undecided", relaxation=relaxation)
     if status != "infeasible" or not session.rows.all_integer:
-        return Step("give_up")
-    return Step("empty", text="grid optimum: rounded LP point attains the rounded-rows bound")
+        return StrategyAnswer("give_up")
+    return StrategyAnswer("empty", text="grid optimum: rounded LP point attains the rounded-rows bound")
 
 
 def _reaches(session: Session, k: Array | None, tau: float) -> bool:
     return k is not None and float(grid_margins(session.rows.g_rows, session.rows.g, k)) >= tau - TOL
 
 
-def rounded_relaxation(session: Session, level: Level) -> Step:
+def rounded_relaxation(session: Session, level: GridLevel) -> StrategyAnswer:
     """The relaxation's point rounded to the grid."""
     if level.relaxation is None:
-        return Step("undecided")
+        return StrategyAnswer("undecided")
     k = np.clip(np.rint(level.relaxation.k), session.rows.kmin, session.rows.kmax)
     reached = _reaches(session, k, level.tau)
-    return Step(
+    return StrategyAnswer(
         "reached" if reached else "undecided",
         k=k,
         text="grid optimum: least-norm point of the rounded rows attains the bound",
     )
 
 
-def listing(session: Session, level: Level) -> Step:
+def listing(session: Session, level: GridLevel) -> StrategyAnswer:
     """Small problems: grid points in growing dual ellipsoids around the relaxation (bounded work).
 
     A point found reaches the level (and a list that closes proves the least norm there too);
@@ -174,7 +166,7 @@ def listing(session: Session, level: Level) -> Step:
     """
     rel, rows, s = level.relaxation, session.rows, session.settings
     if rel is None or not session.small:
-        return Step("undecided")
+        return StrategyAnswer("undecided")
     fin = np.isfinite(level.b)
     centre, q = lagrangian_ball(
         rows.g_rows[fin], level.b[fin], rows.kmin, rows.kmax, rows.cost, rel.lam_rows[fin], rel.lam_lo, rel.lam_hi
@@ -195,21 +187,21 @@ def listing(session: Session, level: Level) -> Step:
         multipliers=rel.multipliers(),
     )
     if found is not None:
-        return Step("reached", k=found, text=_NEAR, listed=Listed(level.b, listed) if least else None)
+        return StrategyAnswer("reached", k=found, text=_NEAR, listed=Listed(level.b, listed) if least else None)
     if least and rows.all_integer:
-        return Step(
+        return StrategyAnswer(
             "empty",
             text=_LOWERED,
             path=(f"grid optimum: no grid point at {level.tau:.4g} steps (the whole box listed)",),
         )
-    return Step("undecided")
+    return StrategyAnswer("undecided")
 
 
-def unit_boxes(session: Session, level: Level) -> Step:
+def unit_boxes(session: Session, level: GridLevel) -> StrategyAnswer:
     """Large problems: the least norm in the unit box around the relaxation (a MILP), then ±1 (feasibility)."""
     rel, rows, s = level.relaxation, session.rows, session.settings
     if rel is None or session.small or level.left() <= 0:
-        return Step("undecided")
+        return StrategyAnswer("undecided")
     res, found = box_least_norm(
         rows.g_rows,
         level.b,
@@ -241,7 +233,7 @@ def unit_boxes(session: Session, level: Level) -> Step:
         if wide.x is not None:
             found = np.clip(np.rint(wide.x), lo, hi)
             found = found if _reaches(session, found, level.tau) else None
-    return Step(
+    return StrategyAnswer(
         "reached" if found is not None else "undecided",
         k=found,
         text=_NEAR,
@@ -251,11 +243,11 @@ def unit_boxes(session: Session, level: Level) -> Step:
     )
 
 
-def feasibility_milp(session: Session, level: Level) -> Step:
+def feasibility_milp(session: Session, level: GridLevel) -> StrategyAnswer:
     """A feasibility MILP on the rounded rows: a point reaches the level, a proof of infeasibility empties it."""
     rows = session.rows
     if level.left() <= 0:
-        return Step("give_up")
+        return StrategyAnswer("give_up")
     fin = np.isfinite(level.b)
     feas = LinearModel(
         np.zeros(rows.n_free),
@@ -269,7 +261,7 @@ def feasibility_milp(session: Session, level: Level) -> Step:
     path = (f"grid optimum: feasibility MILP at {level.tau:.4g} steps ({feas.status}, {feas.seconds:.2f} s)",)
     k = None if feas.x is None else np.clip(np.rint(feas.x), rows.kmin, rows.kmax)
     if _reaches(session, k, level.tau):
-        return Step(
+        return StrategyAnswer(
             "reached",
             k=k,
             path=path,
@@ -277,12 +269,12 @@ def feasibility_milp(session: Session, level: Level) -> Step:
             text="grid optimum: a feasibility MILP on the rounded rows reaches the bound",
         )
     if feas.status == "infeasible" and rows.all_integer:
-        return Step("empty", k=k, path=path, calls=1, text=_LOWERED)
-    return Step("give_up", k=k, path=path, calls=1)
+        return StrategyAnswer("empty", k=k, path=path, calls=1, text=_LOWERED)
+    return StrategyAnswer("give_up", k=k, path=path, calls=1)
 
 
 #: The strategies tried at each level, in this order.
-LEVEL_STRATEGIES: tuple[Callable[[Session, Level], Step], ...] = (
+LEVEL_STRATEGIES: tuple[Callable[[Session, GridLevel], StrategyAnswer], ...] = (
     relax,
     rounded_relaxation,
     listing,
@@ -294,18 +286,18 @@ LEVEL_STRATEGIES: tuple[Callable[[Session, Level], Step], ...] = (
 Search = Callable[[Array], Array | None]
 
 
-def searched(search: Search) -> Callable[[Session, Level], Step]:
+def searched(search: Search) -> Callable[[Session, GridLevel], StrategyAnswer]:
     """A strategy from a caller's search (the leximin levels' grid climb), started at the relaxation's point
     rounded; tried before the listing, which it spares where it reaches the level."""
 
-    def strategy(session: Session, level: Level) -> Step:
+    def strategy(session: Session, level: GridLevel) -> StrategyAnswer:
         if level.relaxation is None:
-            return Step("undecided")
+            return StrategyAnswer("undecided")
         rows = session.rows
         k = search(np.clip(np.rint(level.relaxation.k), rows.kmin, rows.kmax))
         if k is None:
-            return Step("undecided")
-        return Step(
+            return StrategyAnswer("undecided")
+        return StrategyAnswer(
             "reached" if _reaches(session, k, level.tau) else "undecided",
             k=k,
             text="grid optimum: the leximin levels' climb from the rounded rows' least-norm point attains the bound",
@@ -356,7 +348,7 @@ def grid_optimum(session: Session, bound: LPBound, search: Search | None = None)
     for _ in range(session.settings.level_steps):
         if time.perf_counter() >= stage_end:
             break
-        level = Level(tau, rows.rounded(tau), k_best, t_best, None, stage_end)
+        level = GridLevel(tau, rows.rounded(tau), k_best, t_best, None, stage_end)
         calls += 1
         verdict: Verdict = "give_up"  # when every strategy is undecided
         for strategy in strategies:
@@ -367,7 +359,7 @@ def grid_optimum(session: Session, bound: LPBound, search: Search | None = None)
             listed, unit_box = step.listed or listed, step.unit_box or unit_box
             if step.k is not None and float(grid_margins(rows.g_rows, rows.g, step.k)) > t_best:
                 k_best, t_best = step.k, float(grid_margins(rows.g_rows, rows.g, step.k))
-            level = Level(tau, level.b, k_best, t_best, step.relaxation or level.relaxation, stage_end)
+            level = GridLevel(tau, level.b, k_best, t_best, step.relaxation or level.relaxation, stage_end)
             if step.verdict != "undecided":
                 verdict = step.verdict
                 break
@@ -406,7 +398,7 @@ def _bracketed_milp(
             k_best,
             t_best,
             upper,
-            Stop("grid optimum", "time limit"),
+            Stopped("grid optimum", "time limit"),
             relaxation,
             listed,
             unit_box,
@@ -435,5 +427,5 @@ def _bracketed_milp(
     path.append(f"grid optimum: MILP ({res.status})")
     stopped = None
     if res.status != "optimal":
-        stopped = Stop("grid optimum", "time limit" if res.status == "time_limit" else f"HiGHS: {res.detail}")
+        stopped = Stopped("grid optimum", "time limit" if res.status == "time_limit" else f"HiGHS: {res.detail}")
     return GridOptimum(k_best, t_best, upper, stopped, relaxation, listed, unit_box, tuple(path), tuple(notes), calls)

@@ -15,7 +15,7 @@ from setupfix.core.params import Constraint, Interval, Options
 from setupfix.optimize.base import Optimizer, make_result
 from setupfix.optimize.dimensions import dimension_of_rows, model_dimensions
 from setupfix.optimize.exact.grid import TOL
-from setupfix.optimize.exact.grid_optimum import GridOptimum, Stop, grid_optimum
+from setupfix.optimize.exact.grid_optimum import GridOptimum, grid_optimum
 from setupfix.optimize.exact.least_norm.grid import LeastNorm, grid_least_norm
 from setupfix.optimize.exact.least_norm.shop import lower_bound_ratio
 from setupfix.optimize.exact.leximin.level import LevelValue
@@ -254,7 +254,7 @@ class ExactOptimizer(Optimizer):
     ) -> OptimizeResult:
         """The result: status, message and notes say which stage stopped and why (none: optimal);
         ``leximin_levels``: the leximin levels reached ([margin, how many dimensions], model unit)."""
-        stopped = opt.stopped if opt.stopped is not None or least.proved else Stop("least norm", least.why)
+        stopped = opt.stopped if opt.stopped is not None or least.proved else Stopped("least norm", least.why)
         notes = list(opt.notes)
         status: Status = "optimal"
         message: str | None = None
@@ -296,7 +296,7 @@ class ExactOptimizer(Optimizer):
             message=message,
             binding=binding,
             notes=tuple(notes),
-            stopped=None if stopped is None else Stopped(stopped.stage, stopped.reason),
+            stopped=stopped,
             norm_ratio_max=ratio,
             leximin=leximin_levels,
             path="; ".join(opt.path + least.path),

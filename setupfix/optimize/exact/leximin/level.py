@@ -32,7 +32,7 @@ import numpy.typing as npt
 from setupfix.optimize.exact.farkas import farkas_or_point
 from setupfix.optimize.exact.grid import TOL, rounded_rhs
 from setupfix.optimize.exact.highs import INF, LinearModel
-from setupfix.optimize.exact.leximin.pins import Certificates, Step, best_rounding, level_bound, point_above
+from setupfix.optimize.exact.leximin.pins import Certificates, LevelStep, best_rounding, level_bound, point_above
 from setupfix.optimize.exact.session import GridRows, Session
 
 __all__ = ["SPREAD", "LevelModel", "LevelValue"]
@@ -171,7 +171,7 @@ class LevelModel:
         f = self._floors(v)
         return rounded_rhs(self.rows.g, self.rows.d, self.rows.zero, np.where(np.isnan(f), tau, f))
 
-    def step(self, v: Array, k: Array, eps: float, stage_end: float, tries: int = 1) -> Step:
+    def step(self, v: Array, k: Array, eps: float, stage_end: float, tries: int = 1) -> LevelStep:
         """The level at k's own level t = min active margin, proved on the rounded rows; else a better point.
 
         Integer rows only.  b: the rows rounded at t (active) and at the floors (fixed); D: the
@@ -197,7 +197,7 @@ class LevelModel:
         t = self.level_of(k, v)
         for _ in range(tries):
             if time.perf_counter() >= stage_end:
-                return Step(t, k, False, None, "time limit", calls)
+                return LevelStep(t, k, False, None, "time limit", calls)
             b = self.rounded(v, t)
             b_up = self.rounded(v, t + eps)
             drop = act & (b_up < b)
@@ -208,7 +208,9 @@ class LevelModel:
                 y, x_ld = farkas_or_point(rows, b_up, k)
                 if y is not None:
                     cert = (y, np.where(fin, b, 0.0), np.zeros(b.size), True)
-                    return Step(t, k, True, Certificates(rows.g_rows, rows.kmin, rows.kmax, (cert,)), None, calls, last)
+                    return LevelStep(
+                        t, k, True, Certificates(rows.g_rows, rows.kmin, rows.kmax, (cert,)), None, calls, last
+                    )
                 if x_ld is not None and ascents < NNLS_ASCENTS:  # the rounded rows' least-distance point, rounded
                     ascents += 1
                     k_r, t_r = self.round_best(x_ld, v)
@@ -230,7 +232,7 @@ class LevelModel:
                     total = float(y[act].sum())
                     if total > 0 and bound < gap * total - 1e-9 * (1.0 + abs(bound)):
                         cert = (y, rhs0, np.where(act & ~drop, gap, 0.0), True)
-                        return Step(
+                        return LevelStep(
                             t,
                             k,
                             True,
@@ -241,7 +243,7 @@ class LevelModel:
                         )
             calls += 1
             if status == "time_limit":
-                return Step(t, k, False, None, "time limit", calls)
+                return LevelStep(t, k, False, None, "time limit", calls)
             if status != "optimal" or x is None:
                 break
             last = x[:-1]
@@ -249,7 +251,7 @@ class LevelModel:
             if t_r < t + eps - 1e-9:
                 break
             k, t = k_r, t_r
-        return Step(t, k, False, None, None, calls)
+        return LevelStep(t, k, False, None, None, calls)
 
     def value(self, v: Array, k_prev: Array, stage_end: float) -> LevelValue:
         """The proved level t_i (or the best point when stopped) — see the module text."""

@@ -57,13 +57,13 @@ import time
 import numpy as np
 import numpy.typing as npt
 
-from setupfix.optimize.exact.grid_optimum import Stop
 from setupfix.optimize.exact.leximin.counts import count_levels
 from setupfix.optimize.exact.leximin.level import LevelModel, LevelValue
 from setupfix.optimize.exact.leximin.pins import dim_all, dim_margins, excluded_alone, pinned_rows, span_closure
 from setupfix.optimize.exact.leximin.result import Leximin, levels_of, leximin_least_norm, leximin_vector
 from setupfix.optimize.exact.leximin.search import climb, climb_moves, lex_order
 from setupfix.optimize.exact.session import Session
+from setupfix.optimize.problem import Stopped
 
 __all__ = ["Leximin", "leximin", "leximin_least_norm", "root_climb"]
 
@@ -389,7 +389,7 @@ def _stopped(search: _Search, v: Array, k: Array, path: list[str], reason: str) 
     v = v.copy()
     if active.any():
         v[active] = float(np.min(m_k[active]))
-    return Leximin(k, v, levels_of(v), None, Stop("leximin", reason), (*path, f"leximin: stopped ({reason})"), 0)
+    return Leximin(k, v, levels_of(v), None, Stopped("leximin", reason), (*path, f"leximin: stopped ({reason})"), 0)
 
 
 def _counts(search: _Search, v: Array, k: Array, t: float, path: list[str]) -> Leximin:

@@ -40,7 +40,7 @@ from setupfix.optimize.exact.session import GridRows, Session
 
 __all__ = [
     "Certificates",
-    "Step",
+    "LevelStep",
     "best_rounding",
     "dim_all",
     "dim_margins",
@@ -83,7 +83,7 @@ class Certificates:
 
 
 @dataclass(frozen=True)
-class Step:
+class LevelStep:
     """A level by the rounded rows at a grid point's own level (:meth:`LevelModel.step`).
 
     ``proved``: no grid point of the level set has every active margin ≥ t + ε, and

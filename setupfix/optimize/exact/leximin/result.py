@@ -16,10 +16,10 @@ import numpy as np
 import numpy.typing as npt
 
 from setupfix.optimize.exact.grid import TOL
-from setupfix.optimize.exact.grid_optimum import Stop
 from setupfix.optimize.exact.least_norm.grid import LeastNorm, grid_least_norm
 from setupfix.optimize.exact.leximin.counts import CountLevels, count_least_norm
 from setupfix.optimize.exact.session import GridRows, Session
+from setupfix.optimize.problem import Stopped
 
 __all__ = ["Leximin", "leximin_least_norm", "leximin_vector", "levels_of"]
 
@@ -41,7 +41,7 @@ class Leximin:
     counts : CountLevels or None
         The count constraints that decide the dimensions left when a discrete conflict
         stopped the progressive filling (None: every dimension has its floor).
-    stopped : Stop or None
+    stopped : Stopped or None
     path : tuple of str
     calls : int
         Solver calls.
@@ -53,7 +53,7 @@ class Leximin:
     floors: Array
     levels: tuple[tuple[float, int], ...]
     counts: CountLevels | None
-    stopped: Stop | None
+    stopped: Stopped | None
     path: tuple[str, ...]
     calls: int
     alternatives: tuple[Leximin, ...] = ()

@@ -28,7 +28,7 @@ from scipy.sparse import coo_array, csr_array
 from setupfix.optimize.exact.highs import INF, LinearModel
 
 __all__ = [
-    "Level",
+    "KeptLevel",
     "TriageRows",
     "SLACK",
     "count_below",
@@ -46,7 +46,7 @@ SLACK = 1e-7
 
 
 @dataclass(frozen=True)
-class Level:
+class KeptLevel:
     """At most ``below`` kept dimensions have a margin below ``value`` (steps)."""
 
     value: float
@@ -141,7 +141,7 @@ class TriageRows:
         """Kept dimensions at k: the held ones and those in tolerance."""
         return self.held | (self.margins(k) >= -1e-6)
 
-    def meets(self, k: Array, count: int, levels: tuple[Level, ...]) -> bool:
+    def meets(self, k: Array, count: int, levels: tuple[KeptLevel, ...]) -> bool:
         """k keeps the held dimensions, ``count`` dimensions in all and every level."""
         if not self.hard_ok(k):
             return False
@@ -151,7 +151,7 @@ class TriageRows:
         m = self.margins(k)[kept]
         return all(int(np.sum(m < lv.value - 1e-6)) <= lv.below for lv in levels)
 
-    def meets_many(self, ks: Array, count: int, levels: tuple[Level, ...]) -> Mask:
+    def meets_many(self, ks: Array, count: int, levels: tuple[KeptLevel, ...]) -> Mask:
         """:meth:`meets` for grid points ks of shape (p, n), vectorised → bool ndarray of shape (p,)."""
         ok = np.all(self.g[self.hard_rows] - ks @ self.G[self.hard_rows].T >= self.hard_min - 1e-6, axis=1)
         m = self.margins_many(ks)
@@ -183,7 +183,7 @@ class TriageRows:
         return _Block(dims, value, below, below is None or below > 0)
 
     def model(
-        self, count: int, levels: tuple[Level, ...], *, objective: str, at: float | None = None, t_lo: float = 0.0
+        self, count: int, levels: tuple[KeptLevel, ...], *, objective: str, at: float | None = None, t_lo: float = 0.0
     ) -> tuple[LinearModel, int]:
         """One MILP of the triage; returns the model and the offset of its z columns.
 
@@ -362,7 +362,7 @@ def lp_starts(t: TriageRows, time_limit: float) -> list[Array]:  # time_limit: f
 
 
 def least_listed(
-    t: TriageRows, lo: Array, hi: Array, count: int, levels: tuple[Level, ...], list_points: int
+    t: TriageRows, lo: Array, hi: Array, count: int, levels: tuple[KeptLevel, ...], list_points: int
 ) -> Array | None:
     """The least Σ c k² grid point in the box [lo, hi] meeting ``count`` and ``levels``, ties to the
     lexicographically smallest k, by listing the box (None when points × rows exceed ``list_points``,
@@ -428,6 +428,6 @@ def listed_triage(t: TriageRows, quantum: float, list_points: int) -> tuple[Arra
     return ks[np.lexsort((*ks.T[::-1], norm))[0]], int(counts.max())
 
 
-def count_below(levels: tuple[Level, ...]) -> int:
+def count_below(levels: tuple[KeptLevel, ...]) -> int:
     """Kept dimensions a new level may leave below it: the last level's multiplicity."""
     return levels[-1].below if levels else 0

@@ -56,7 +56,7 @@ from setupfix.optimize.exact.session import Session
 from setupfix.optimize.exact.triage.forced import Forced, forced_triage
 from setupfix.optimize.exact.triage.model import (
     SLACK,
-    Level,
+    KeptLevel,
     TriageRows,
     count_below,
     least_listed,
@@ -82,7 +82,7 @@ class Triaged:
         can all be kept (a refusal: nothing is changed).
     kept : int
         Dimensions kept in tolerance (held ones included), N*.
-    levels : tuple of Level
+    levels : tuple of KeptLevel
         Leximin levels proved: at most ``below`` kept margins under ``value`` (steps).
     complete : bool
         Every kept position is fixed by the levels (the whole leximin vector is proved).
@@ -102,7 +102,7 @@ class Triaged:
 
     k: Array | None
     kept: int
-    levels: tuple[Level, ...]
+    levels: tuple[KeptLevel, ...]
     complete: bool
     proved: bool
     why: str
@@ -216,7 +216,7 @@ def triage(
         done.append(f"{kept} of {t.n_dims} dimensions kept in tolerance ({held} measured in tolerance held)")
 
     # 2. leximin of the kept margins
-    levels: tuple[Level, ...] = ()
+    levels: tuple[KeptLevel, ...] = ()
     complete = t.positions(kept) == 0  # nothing kept has a margin: no level to find
     eps = quantum / 2
     t_lo = float(np.min(t.sorted_kept(best), initial=t.top))
@@ -228,7 +228,7 @@ def triage(
         p = count_below(levels)
         v0 = float(t.sorted_kept(best)[p]) if t.sorted_kept(best).size > p else t.top
 
-        def level_of(k: Array, p: int = p, levels: tuple[Level, ...] = levels) -> float:
+        def level_of(k: Array, p: int = p, levels: tuple[KeptLevel, ...] = levels) -> float:
             return -float(np.r_[t.sorted_kept(k), t.top][p]) if t.meets(k, kept, levels) else np.inf
 
         res = _checked(m2, first(), t.start(best, min(max(v0, t_lo), t.top)), t.n, level_of, quantum / 10)
@@ -241,16 +241,16 @@ def triage(
             why = _status_word(res.status) if res.status != "optimal" else "HiGHS's point is below its level"
             why = f"leximin level {len(levels) + (0 if levels else 1)}: {why}"
             if not levels:  # level 1 stopped: the level its best point reaches holds in stage 3
-                levels = (Level(float(np.r_[t.sorted_kept(best), t.top][0]), 0),)
+                levels = (KeptLevel(float(np.r_[t.sorted_kept(best), t.top][0]), 0),)
             break
         value = v0
-        levels = (*levels[:-1], Level(value, p)) if levels else (Level(value, 0),)
+        levels = (*levels[:-1], KeptLevel(value, p)) if levels else (KeptLevel(value, 0),)
         # its multiplicity: the fewest kept margins within the quantum of it (p + 1 when the point has so few)
         below = int(np.sum(t.sorted_kept(best) < value + eps - SLACK))
         if below > p + 1:
             m3, _ = t.model(kept, levels, objective="multiplicity", at=value + eps)
 
-            def count_of(k: Array, at: float = value + eps, levels: tuple[Level, ...] = levels) -> float:
+            def count_of(k: Array, at: float = value + eps, levels: tuple[KeptLevel, ...] = levels) -> float:
                 return float(np.sum(t.sorted_kept(k) < at - SLACK)) if t.meets(k, kept, levels) else np.inf
 
             res = _checked(m3, first(), t.start(best), t.n, count_of, 0.5)
@@ -264,7 +264,7 @@ def triage(
                     _status_word(res.status) if res.status != "optimal" else "HiGHS's point does not reach its count"
                 )
                 break
-        levels = (*levels, Level(value + eps, below))
+        levels = (*levels, KeptLevel(value + eps, below))
         t_lo = value + eps
         done.append(f"leximin level {len(levels) - 1}: {below} kept margin(s) at {value:+.4g} steps")
         complete = below >= t.positions(kept)
@@ -459,7 +459,7 @@ def _forced_outcome(forced: Forced, t: TriageRows, quantum: float) -> Triaged:
     """:class:`Triaged` of the forced kept set: its leximin levels as triage levels, what stopped."""
     lex, least = forced.lex, forced.least
     eps = quantum / 2
-    levels: list[Level] = []
+    levels: list[KeptLevel] = []
     stages = [
         f"{int(forced.keep.sum())} of {t.n_dims} dimensions kept in tolerance ({int(t.held.sum())} "
         "measured in tolerance held; the others proved out of reach without harm)"
@@ -467,7 +467,7 @@ def _forced_outcome(forced: Forced, t: TriageRows, quantum: float) -> Triaged:
     below = 0
     for i, (value, count) in enumerate(lex.levels):
         below += count
-        levels.append(Level(value + eps, below))
+        levels.append(KeptLevel(value + eps, below))
         stages.append(f"leximin level {i + 1}: {below} kept margin(s) at {value:+.4g} steps")
     complete = lex.stopped is None
     why = "" if complete else f"leximin: {lex.stopped.reason}" if lex.stopped is not None else ""
