@@ -65,7 +65,7 @@ def main() -> None:
             for _ in range(args.passes):
                 for i, scales in enumerate(variants):
                     search_mod.SCALES = scales
-                    session_mod._DERIVED.clear()
+                    session_mod.DERIVED.clear()
                     for j, (_, p) in enumerate(probs):
                         began = time.perf_counter()
                         res = opt.solve(p)

@@ -11,7 +11,7 @@ time would measure the load), with the in-process reference of the same run (the
 bundled cycles of ``correct_report``).  The corrections must be identical where the ways are proved.
 
 The reports whose conflict two dimensions must share are decided by branches on pairs
-(:func:`setupfix.optimize.exact.leximin.levels._alone`) before the counts: each of them is corrected again with
+(:func:`setupfix.optimize.exact.leximin.levels.alone_sets`) before the counts: each of them is corrected again with
 the pairs switched off (``ExactSettings(max_pair_tests=0)``: the counts, as before), CPU time and answers compared.
 
     python -m bench.leximin_counts                 # 600 reports, 60 s limit

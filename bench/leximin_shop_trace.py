@@ -4,7 +4,7 @@ One 180 x 2,000 problem of ``bench/exact_scaling.py`` (seed 1: a discrete confli
 counts decide), solved with the default objective and a 20 s limit, twice:
 
 * as the optimiser does it: one Farkas certificate from the rows near the level's point rules out the
-  dimensions it does not lean on before any alone test (:func:`setupfix.optimize.exact.leximin.levels._alone`);
+  dimensions it does not lean on before any alone test (:func:`setupfix.optimize.exact.leximin.levels.alone_sets`);
 * with that certificate switched off beyond small problems (how the previous stop's code ran): every
   active dimension at the level is tested alone, each test an LP or MILP.
 
@@ -50,7 +50,7 @@ def _traced(lines: list[str], whole_only: bool) -> Callable[[], None]:
         saved.append((owner, name, getattr(owner, name)))
         setattr(owner, name, new)
 
-    alone = lexmod._alone
+    alone = lexmod.alone_sets
 
     @functools.wraps(alone)
     def traced_alone(search, v, k, t, together):  # type: ignore[no-untyped-def]
@@ -63,7 +63,7 @@ def _traced(lines: list[str], whole_only: bool) -> Callable[[], None]:
         )
         return out
 
-    patch(lexmod, "_alone", traced_alone)
+    patch(lexmod, "alone_sets", traced_alone)
     if whole_only:
         excluded = lexmod.excluded_alone
 
@@ -73,7 +73,7 @@ def _traced(lines: list[str], whole_only: bool) -> Callable[[], None]:
             return excluded(rows, floors, row_dim, n_dims, t, eps, together, near)
 
         patch(lexmod, "excluded_alone", no_near)
-    model = countmod._model
+    model = countmod.count_model
 
     def traced_model(rows, blocks, extra, question, objective, top, t_lo):  # type: ignore[no-untyped-def]
         lp, layout = model(rows, blocks, extra, question, objective, top, t_lo)
@@ -93,7 +93,7 @@ def _traced(lines: list[str], whole_only: bool) -> Callable[[], None]:
         lp.solve = timed
         return lp, layout
 
-    patch(countmod, "_model", traced_model)
+    patch(countmod, "count_model", traced_model)
     farkas = pins.farkas_or_point
     timed_once: list[bool] = []
 

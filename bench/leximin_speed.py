@@ -235,7 +235,7 @@ def main(argv: list[str] | None = None) -> None:
         cpu = {key: np.zeros((args.passes, len(probs))) for key in ("lp", "paper", "leximin")}
         for run in range(args.passes):
             # every pass starts as a new process would: no model's results of G kept from the pass before
-            session_mod._DERIVED.clear()
+            session_mod.DERIVED.clear()
             for key in list(CPU):
                 CPU[key] = []
             for i, (_, problem) in enumerate(probs):

@@ -68,7 +68,7 @@ def best_of(call, times: int = 5) -> float:
 def level_proofs(proofs: list[tuple[GridRows, np.ndarray, np.ndarray]]) -> list[str]:
     """The level proofs by NNLS: proofs held by the near columns, columns used, and the time of both calls."""
     columns: list[int] = []
-    solve = farkas._nnls_solve
+    solve = farkas.nnls_solve
 
     def counted(e: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
         columns.append(e.shape[1])
@@ -76,7 +76,7 @@ def level_proofs(proofs: list[tuple[GridRows, np.ndarray, np.ndarray]]) -> list[
 
     proved = near_proved = 0
     near_cols, all_cols, t_near, t_all = [], [], [], []
-    farkas._nnls_solve = counted
+    farkas.nnls_solve = counted
     try:
         for rows, b, k in proofs:
             columns.clear()
@@ -89,7 +89,7 @@ def level_proofs(proofs: list[tuple[GridRows, np.ndarray, np.ndarray]]) -> list[
                 near_cols.append(columns[0])
             all_cols.append(whole)
     finally:
-        farkas._nnls_solve = solve
+        farkas.nnls_solve = solve
     for rows, b, k in proofs:
         t_near.append(best_of(functools.partial(farkas.farkas_or_point, rows, b, k)))
         t_all.append(best_of(functools.partial(farkas.farkas_or_point, rows, b)))

@@ -169,7 +169,7 @@ def test_threads_keep_their_own_solver_models(guide_pins_model, objective, count
         CorrectionProblem.from_part(guide_pins_model, PartMeasurement("c", "r", None, d, ("",) * d.size)) for d in devs
     ]
     alone = [get_optimizer("exact", objective=objective).solve(p).x for p in problems]
-    session_mod._DERIVED.clear()
+    session_mod.DERIVED.clear()
     with ThreadPoolExecutor(max_workers=threads) as pool:
         threaded = list(pool.map(lambda p: get_optimizer("exact", objective=objective).solve(p).x, problems))
     for a, b in zip(alone, threaded, strict=True):

@@ -54,8 +54,8 @@ def test_a_proof_from_the_near_rows_alone_is_found_and_kept(monkeypatch):
     rows = GridRows(g_rows, np.zeros(4), np.full(2, -50.0), np.full(2, 50.0), np.ones(2))
     b = np.array([-1.0, -1.0, 40.0, 40.0])
     sizes: list[int] = []
-    solve = farkas._nnls_solve
-    monkeypatch.setattr(farkas, "_nnls_solve", lambda e: sizes.append(e.shape[1]) or solve(e))
+    solve = farkas.nnls_solve
+    monkeypatch.setattr(farkas, "nnls_solve", lambda e: sizes.append(e.shape[1]) or solve(e))
     y, x = farkas_or_point(rows, b, np.zeros(2))
     assert x is None and y is not None and _proves_empty(rows, b, y)
     assert sizes == [2]  # only the two rows within NEAR of k (the far rows and the box limits 50 away left out)
@@ -67,7 +67,7 @@ def test_weights_that_prove_nothing_are_refused():
     rows, b, pts = _rows(3)
     b = np.full(b.size, 100.0)  # every grid point meets these rows
     keep = np.isfinite(b)
-    assert farkas._checked(rows, b, keep, np.ones(int(keep.sum()))) is None
+    assert farkas.checked_weights(rows, b, keep, np.ones(int(keep.sum()))) is None
     assert farkas_or_point(rows, b, pts[0])[0] is None
 
 
@@ -79,8 +79,8 @@ def test_near_rows_only_prove_a_subset_of_the_cases_and_never_solve_the_whole(se
     feasible = np.all(pts @ rows.g_rows.T <= b + 1e-9, axis=1)
     k = pts[np.random.default_rng(seed).integers(len(pts))]
     sizes: list[int] = []
-    solve = farkas._nnls_solve
-    monkeypatch.setattr(farkas, "_nnls_solve", lambda e: sizes.append(e.shape[1]) or solve(e))
+    solve = farkas.nnls_solve
+    monkeypatch.setattr(farkas, "nnls_solve", lambda e: sizes.append(e.shape[1]) or solve(e))
     y, x = farkas_or_point(rows, b, k, whole=False)
     assert x is None
     if y is not None:

@@ -18,8 +18,8 @@ def test_each_count_equals_the_grid_count_and_fixes_only_what_the_lattice_decide
     """Every count MILP's optimum is the most active dimensions with margin ≥ t + ε over the grid points
     that meet the floors, t0 and the blocks found so far (brute force); a dimension the model gives no
     binary (every row's lattice value at or above t0 is ≥ t) is ≥ t at every such point, and some have none."""
-    seen: list[tuple[countmod._Rows, list[tuple[float, int]], float, np.ndarray, float]] = []
-    original = countmod._model
+    seen: list[tuple[countmod.CountRows, list[tuple[float, int]], float, np.ndarray, float]] = []
+    original = countmod.count_model
 
     def model(rows, blocks, extra, question, objective, top, t_lo):
         out, layout = original(rows, blocks, extra, question, objective, top, t_lo)
@@ -38,7 +38,7 @@ def test_each_count_equals_the_grid_count_and_fixes_only_what_the_lattice_decide
             out.solve = recorded
         return out, layout
 
-    monkeypatch.setattr(countmod, "_model", model)
+    monkeypatch.setattr(countmod, "count_model", model)
     problem = make(kind, seed, kw)
     best, norm, _ = brute_leximin(problem)
     result, k, sorted_m = solved_steps(problem, settings=NO_BRANCHES)
@@ -71,7 +71,7 @@ def test_counts_stopped_give_the_least_norm_at_the_conflict_level_not_the_counts
     (brute force) — as where the levels stop, never the counts' unproved point."""
     import setupfix.optimize.exact.solve as exactmod
 
-    monkeypatch.setattr(countmod._Runs, "room", lambda self: self.calls == 0)
+    monkeypatch.setattr(countmod.CountRuns, "room", lambda self: self.calls == 0)
     captured = []
     original = exactmod.leximin_least_norm
 
@@ -95,27 +95,27 @@ def test_counts_stopped_give_the_least_norm_at_the_conflict_level_not_the_counts
 def test_a_run_starts_only_with_more_time_left_than_the_longest_took():
     import time
 
-    runs = countmod._Runs(time.perf_counter() + 5.0)
+    runs = countmod.CountRuns(time.perf_counter() + 5.0)
     assert runs.room()
     runs.longest = 4.0
     assert runs.room()
     runs.longest = 6.0
     assert not runs.room()
-    assert not countmod._Runs(time.perf_counter() - 1e-3).room()
+    assert not countmod.CountRuns(time.perf_counter() - 1e-3).room()
 
 
 def test_no_least_norm_milp_starts_when_a_count_milp_took_longer_than_what_is_left(monkeypatch):
     """Counts proved, but the time left is less than the longest count MILP took: the chord MILP of the least
     norm is not started (HiGHS would run past the limit in its root's cut rounds); the answer says so."""
-    solve = countmod._Runs.solve
+    solve = countmod.CountRuns.solve
 
     def slow(self, model):
         res = solve(self, model)
         self.longest = 1e6  # as if a count MILP had taken longer than any limit
         return res
 
-    monkeypatch.setattr(countmod._Runs, "solve", slow)
-    monkeypatch.setattr(countmod._Runs, "room", lambda self: True)
+    monkeypatch.setattr(countmod.CountRuns, "solve", slow)
+    monkeypatch.setattr(countmod.CountRuns, "room", lambda self: True)
     monkeypatch.setattr(countmod, "lazy_chords", lambda *a, **k: pytest.fail("the chord MILP was started"))
     kind, seed, kw = CONFLICTS[0]
     result, _, _ = solved_steps(make(kind, seed, kw), settings=NO_BRANCHES)

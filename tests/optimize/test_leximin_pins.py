@@ -20,7 +20,7 @@ def checked_levels(monkeypatch) -> list[int]:
     """Wrap the search's level proofs: each claim is checked against every grid point of the box."""
     grid: dict[str, np.ndarray] = {}
     seen: list[int] = []
-    original = lexmod._level
+    original = lexmod.raise_level
 
     def level(search, v, k, given, active_rows, path):
         out = original(search, v, k, given, active_rows, path)
@@ -50,7 +50,7 @@ def checked_levels(monkeypatch) -> list[int]:
         seen.append(int(pin.sum() + sat.sum()))
         return out
 
-    monkeypatch.setattr(lexmod, "_level", level)
+    monkeypatch.setattr(lexmod, "raise_level", level)
     return seen
 
 

@@ -27,7 +27,7 @@ import numpy.typing as npt
 
 from setupfix.optimize.exact.session import GridRows
 
-__all__ = ["NEAR", "farkas_or_point"]
+__all__ = ["NEAR", "checked_weights", "farkas_or_point", "nnls_solve"]
 
 Array = npt.NDArray[np.float64]
 Mask = npt.NDArray[np.bool_]
@@ -64,25 +64,25 @@ def farkas_or_point(
     if k is not None:
         near = np.flatnonzero(np.concatenate(((b - rows.g_rows @ k)[keep], k - rows.kmin, rows.kmax - k)) <= NEAR)
         if 0 < near.size < e.shape[1]:
-            sub = _nnls_solve(e[:, near])
+            sub = nnls_solve(e[:, near])
             if sub is not None and abs(sub[1][-1]) <= 1e-9:
                 u = np.zeros(e.shape[1])
                 u[near] = sub[0]
-                y = _checked(rows, b, keep, u[:n_rows])
+                y = checked_weights(rows, b, keep, u[:n_rows])
                 if y is not None:
                     return y, None
         if not whole:
             return None, None
-    out = _nnls_solve(e)
+    out = nnls_solve(e)
     if out is None:
         return None, None
     u, r = out
     if abs(r[-1]) > 1e-9:  # the residual's last entry is not 0: a point exists
         return None, -r[:n] / r[-1] / np.sqrt(rows.cost)
-    return _checked(rows, b, keep, u[:n_rows]), None
+    return checked_weights(rows, b, keep, u[:n_rows]), None
 
 
-def _nnls_solve(e: Array) -> tuple[Array, Array] | None:
+def nnls_solve(e: Array) -> tuple[Array, Array] | None:
     """u = NNLS(E, e_last) and the residual E u − e_last; None at NNLS's iteration limit."""
     f = np.zeros(e.shape[0])
     f[-1] = 1.0
@@ -93,7 +93,7 @@ def _nnls_solve(e: Array) -> tuple[Array, Array] | None:
     return u, e @ u - f
 
 
-def _checked(rows: GridRows, b: Array, keep: Mask, u_rows: Array) -> Array | None:
+def checked_weights(rows: GridRows, b: Array, keep: Mask, u_rows: Array) -> Array | None:
     """The weights u on the finite rows, normalised, if they prove G k ≤ b empty over the box (else None)."""
     total = float(u_rows.sum())
     if total <= 0:

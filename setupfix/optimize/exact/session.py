@@ -39,7 +39,7 @@ from setupfix.optimize.exact.highs import INF, Colwise, LinearModel, Solve
 from setupfix.optimize.exact.least_norm.shop import least_distance_working_set
 from setupfix.optimize.exact.settings import ExactSettings
 
-__all__ = ["Clock", "Derived", "GridRows", "Relaxation", "Session", "derived"]
+__all__ = ["DERIVED", "Clock", "Derived", "GridRows", "Relaxation", "Session", "derived"]
 
 Array = npt.NDArray[np.float64]
 
@@ -98,7 +98,7 @@ class Derived:
 
 #: Derived data of the last few (G, box, cost): pure functions of those bytes, read-only arrays, so a
 #: memo can never change an answer (it only spares a batch of one process model recomputing them).
-_DERIVED: dict[tuple[object, ...], Derived] = {}
+DERIVED: dict[tuple[object, ...], Derived] = {}
 #: Most entries of one :attr:`Derived.memo` (cleared when full: a long batch never grows it without bound).
 MEMO_MAX = 4096
 _MISSING = object()
@@ -115,7 +115,7 @@ def _read_only(*arrays: npt.NDArray[np.generic]) -> None:
 def derived(g_rows: Array, kmin: Array, kmax: Array, cost: Array) -> Derived:
     """:class:`Derived` of exactly these arrays (memoised by their bytes)."""
     key = (g_rows.shape, g_rows.tobytes(), kmin.tobytes(), kmax.tobytes(), cost.tobytes())
-    found = _DERIVED.get(key)
+    found = DERIVED.get(key)
     if found is None:
         pairs = pair_structure(g_rows, kmin, kmax)
         lp_matrix = Colwise.of(np.hstack([g_rows, np.ones((g_rows.shape[0], 1))]))
@@ -125,9 +125,9 @@ def derived(g_rows: Array, kmin: Array, kmax: Array, cost: Array) -> Derived:
         if pairs is not None:
             _read_only(pairs.inverse, pairs.ia, pairs.ib, pairs.d, pairs.zlo, pairs.zhi)
         with _DERIVED_LOCK:
-            while len(_DERIVED) >= _DERIVED_MAX:
-                del _DERIVED[next(iter(_DERIVED))]
-            found = _DERIVED.setdefault(key, found)
+            while len(DERIVED) >= _DERIVED_MAX:
+                del DERIVED[next(iter(DERIVED))]
+            found = DERIVED.setdefault(key, found)
     return found
 
 

@@ -37,7 +37,7 @@ from setupfix.optimize.exact.least_norm.chords import chord_rows, lazy_chords
 from setupfix.optimize.exact.least_norm.grid import LeastNorm
 from setupfix.optimize.exact.session import Session
 
-__all__ = ["CountLevels", "count_least_norm", "count_levels"]
+__all__ = ["CountLevels", "CountRows", "CountRuns", "count_least_norm", "count_levels", "count_model"]
 
 #: Link the nested blocks' binaries (w_i,q ≤ w_(i−1),q); ``bench/leximin_counts.py`` compares without.
 LINK = True
@@ -79,7 +79,7 @@ class CountLevels:
     longest: float
 
 
-class _Runs:
+class CountRuns:
     """A chain's MILP runs: the next starts only with more time left than the longest so far took.
 
     HiGHS looks at its clock (and the interrupt callback) only between the cut rounds of a MILP's
@@ -103,7 +103,7 @@ class _Runs:
         return res
 
 
-class _Rows:
+class CountRows:
     """The active/fixed rows and the big-M blocks of one solve."""
 
     def __init__(self, session: Session, row_dim: npt.NDArray[np.intp], floors: Array, t0: float) -> None:
@@ -184,8 +184,8 @@ class _Layout:
         return np.concatenate([(m[d] >= t - TOL).astype(float) for d, t in zip(self.dims, levels, strict=True)])
 
 
-def _model(
-    rows: _Rows,
+def count_model(
+    rows: CountRows,
     blocks: list[tuple[float, int]],
     extra: int,
     question: tuple[float | None, int],
@@ -262,13 +262,13 @@ def count_levels(
 ) -> CountLevels:
     """The active dimensions' levels by counts from t0 (see the module text)."""
     del n_dims
-    rows = _Rows(session, row_dim, floors, t0)
+    rows = CountRows(session, row_dim, floors, t0)
     eps = session.settings.quantum / 2
     top = float(np.max(rows.g[rows.act] - rows.lo_box[rows.act])) + 1.0
     blocks: list[tuple[float, int]] = []
     levels: list[tuple[float, int]] = []
     path: list[str] = []
-    runs, cur_t, above = _Runs(stage_end), t0, rows.n_active
+    runs, cur_t, above = CountRuns(stage_end), t0, rows.n_active
     best = k
 
     def out(proved: bool, why: str) -> CountLevels:
@@ -280,7 +280,7 @@ def count_levels(
         if not runs.room():
             return out(False, "time limit")
         # how many stay strictly above cur_t
-        model, layout = _model(rows, blocks, 0, (cur_t + eps, 0), "count", top, cur_t)
+        model, layout = count_model(rows, blocks, 0, (cur_t + eps, 0), "count", top, cur_t)
         # no start point: given one, HiGHS 1.16 may report the optimum's objective with the start's point
         res = runs.solve(model)
         c_best = int(np.sum(rows.margins(best) >= cur_t + eps - TOL))
@@ -302,7 +302,7 @@ def count_levels(
         while True:
             if not runs.room():
                 return out(False, "time limit")
-            model, _ = _model(rows, blocks, 0, (tau + eps, above), "feasible", top, cur_t)
+            model, _ = count_model(rows, blocks, 0, (tau + eps, above), "feasible", top, cur_t)
             res = runs.solve(model)
             if res.status == "infeasible":
                 break
@@ -317,12 +317,12 @@ def count_levels(
 
 def count_least_norm(session: Session, row_dim: npt.NDArray[np.intp], counts: CountLevels, k: Array) -> LeastNorm:
     """Least Σ c k² subject to the floors, every active margin ≥ t0 and the count blocks (chord MILP)."""
-    rows = _Rows(session, row_dim, counts.floors, counts.t0)
+    rows = CountRows(session, row_dim, counts.floors, counts.t0)
     n, cost = rows.n, session.rows.cost
     blocks = list(counts.blocks)
     if not rows.feasible(k, blocks):
         return LeastNorm(k, False, "no feasible start", 0.0, ("least norm: no feasible start",))
-    if session.clock.deadline - time.perf_counter() <= counts.longest:  # it would not end in time (:class:`_Runs`)
+    if session.clock.deadline - time.perf_counter() <= counts.longest:  # it would not end in time (:class:`CountRuns`)
         return LeastNorm(
             k,
             False,
@@ -331,7 +331,7 @@ def count_least_norm(session: Session, row_dim: npt.NDArray[np.intp], counts: Co
             (f"least norm: less time left than a count MILP took ({counts.longest:.2f} s): the counts' point",),
         )
     top = float(np.max(rows.g[rows.act] - rows.lo_box[rows.act])) + 1.0 if rows.n_active else 0.0
-    model, layout = _model(rows, blocks[:-1], n, blocks[-1] if blocks else (counts.t0, 0), "norm", top, 0.0)
+    model, layout = count_model(rows, blocks[:-1], n, blocks[-1] if blocks else (counts.t0, 0), "norm", top, 0.0)
     chords = [{0, int(abs(v)), max(int(abs(v)) - 1, 0)} for v in k]
     a_ch, rhs_ch = chord_rows([(i, j) for i, js in enumerate(chords) for j in sorted(js)], n, model.n_cols)
     model.add_rows(a_ch, np.full(rhs_ch.size, -INF), rhs_ch)

@@ -16,7 +16,7 @@ Levels (progressive filling, each level proved on the grid)
 State: dimensions *fixed* with a floor v_q (every leximin-optimal point has M_q ≥ v_q and
 no point of the current level set has M_q above v_q + ε), the others *active*.
 
-1. Level value, from the current grid point k (:func:`_level`; small problems start each level from
+1. Level value, from the current grid point k (:func:`raise_level`; small problems start each level from
    the grid climb's point where it is higher, :mod:`setupfix.optimize.exact.leximin.search`): its own
    level t = min of the active margins is proved when the rows rounded at t + ε hold no point of
    the box — a Farkas certificate by NNLS for small problems, else the duals of the level LP on the
@@ -65,13 +65,13 @@ from setupfix.optimize.exact.leximin.search import climb, climb_moves, lex_order
 from setupfix.optimize.exact.session import Session
 from setupfix.optimize.problem import Stopped
 
-__all__ = ["Leximin", "leximin", "leximin_least_norm", "root_climb"]
+__all__ = ["Leximin", "LevelSearch", "alone_sets", "leximin", "leximin_least_norm", "raise_level", "root_climb"]
 
 Array = npt.NDArray[np.float64]
 Mask = npt.NDArray[np.bool_]
 
 
-class _Search:
+class LevelSearch:
     """What one leximin search shares across its branches: the model, the deadline, the counters, and
     whether each branch starts with a grid climb (small problems: :mod:`setupfix.optimize.exact.leximin.search`)."""
 
@@ -153,7 +153,7 @@ def leximin(
 
 def _start(
     session: Session, row_dim: npt.NDArray[np.intp], n_dims: int, floors: Array | None, k: Array, stage_end: float
-) -> tuple[_Search, Array, bool]:
+) -> tuple[LevelSearch, Array, bool]:
     """The search and the floors it starts from: −inf for a dimension without rows, its margin for one no free
     register moves (fixed from the start; True when such a dimension was active)."""
     v = np.full(n_dims, np.nan) if floors is None else np.asarray(floors, dtype=float).copy()
@@ -163,7 +163,7 @@ def _start(
     constant = np.zeros(n_dims, bool)
     np.logical_or.at(constant, row_dim, True)
     np.logical_and.at(constant, row_dim, session.rows.zero)
-    search = _Search(session, LevelModel(session, row_dim, n_dims), stage_end)
+    search = LevelSearch(session, LevelModel(session, row_dim, n_dims), stage_end)
     recompute = np.isnan(v) & constant
     if recompute.any():
         v[recompute] = search.margins(k)[recompute]
@@ -178,7 +178,7 @@ def root_climb(session: Session, row_dim: npt.NDArray[np.intp], n_dims: int, k: 
 
 
 def _fill(
-    search: _Search,
+    search: LevelSearch,
     v: Array,
     k: Array,
     t: float,
@@ -211,7 +211,7 @@ def _fill(
             k_climb = search.climbed(k, v) if k_climb is None else k_climb
             if k is not k_climb and model.level_of(k_climb, v) > model.level_of(k, v):
                 k = k_climb
-        k, t, sat, pin, stop, hint = _level(search, v, k, level, active_rows, path)
+        k, t, sat, pin, stop, hint = raise_level(search, v, k, level, active_rows, path)
         if stop is not None:
             return [_stopped(search, v, k, path, stop)]
         # a row whose margin is proved within ε of t (integer: one lattice value) or pinned stays pinned, and
@@ -252,8 +252,8 @@ def _fill(
     return [Leximin(k, v, levels_of(v), None, None, tuple(path), 0)]
 
 
-def _level(
-    search: _Search, v: Array, k: Array, level: LevelValue | None, active_rows: Mask, path: list[str]
+def raise_level(
+    search: LevelSearch, v: Array, k: Array, level: LevelValue | None, active_rows: Mask, path: list[str]
 ) -> tuple[Array, float, Mask, Mask, str | None, Array | None]:
     """The next level proved, from the point k: its point, t, saturated rows, pinned rows, and why it
     stopped (None: proved; else the best point found), and a continuous point to round for the next level.
@@ -297,7 +297,7 @@ def _level(
 
 
 def _conflict(
-    search: _Search,
+    search: LevelSearch,
     v: Array,
     k: Array,
     t: float,
@@ -309,9 +309,9 @@ def _conflict(
     (every other active dimension above t + ε at some grid point); if none can, one per pair that can
     be the only two left (every leximin-optimal point has the fewest dimensions at t); none, or too
     many branches: the counts decide (:mod:`setupfix.optimize.exact.leximin.counts`)."""
-    starts = _alone(search, v, k, t, 1)
+    starts = alone_sets(search, v, k, t, 1)
     if starts == []:
-        starts = _alone(search, v, k, t, 2)
+        starts = alone_sets(search, v, k, t, 2)
     if starts is None:
         return [_stopped(search, v, k, path, "time limit")]
     if not starts or search.leaves + len(starts) > search.session.settings.max_branches:
@@ -344,7 +344,9 @@ def _conflict(
     return best
 
 
-def _alone(search: _Search, v: Array, k: Array, t: float, together: int) -> list[tuple[tuple[int, ...], Array]] | None:
+def alone_sets(
+    search: LevelSearch, v: Array, k: Array, t: float, together: int
+) -> list[tuple[tuple[int, ...], Array]] | None:
     """The sets of ``together`` (1 or 2) active dimensions that can be the only ones left at t, each with
     a grid point; None: the limit stopped a test; [] also when there are more than
     ``ExactSettings.max_pair_tests`` pairs.
@@ -382,7 +384,7 @@ def _alone(search: _Search, v: Array, k: Array, t: float, together: int) -> list
     return starts
 
 
-def _stopped(search: _Search, v: Array, k: Array, path: list[str], reason: str) -> Leximin:
+def _stopped(search: LevelSearch, v: Array, k: Array, path: list[str], reason: str) -> Leximin:
     """The limit stopped the levels: the dimensions left get the best point's smallest margin as floor."""
     m_k = search.margins(k)
     active = np.isnan(v)
@@ -392,7 +394,7 @@ def _stopped(search: _Search, v: Array, k: Array, path: list[str], reason: str) 
     return Leximin(k, v, levels_of(v), None, Stopped("leximin", reason), (*path, f"leximin: stopped ({reason})"), 0)
 
 
-def _counts(search: _Search, v: Array, k: Array, t: float, path: list[str]) -> Leximin:
+def _counts(search: LevelSearch, v: Array, k: Array, t: float, path: list[str]) -> Leximin:
     """The dimensions left are decided by counts (MILPs with binaries)."""
     path = [*path, f"leximin: discrete conflict at {t:.4g} steps; the rest by counts"]
     model = search.model
