@@ -62,7 +62,7 @@ def centred_problem() -> CorrectionProblem:
 
 
 @pytest.mark.parametrize("name", NAMES)
-def test_same_seed_same_result(name):
+def test_same_seed_same_result(name: str) -> None:
     problem = small_problem(4)
     a, b = make(name, seed=3).solve(problem), make(name, seed=3).solve(problem)
     assert np.array_equal(a.x, b.x) and a.margin_after == b.margin_after and a.evaluations == b.evaluations
@@ -71,7 +71,7 @@ def test_same_seed_same_result(name):
 
 
 @pytest.mark.parametrize("name", NAMES)
-def test_budget_counted_and_result_on_the_grid_within_limits(name):
+def test_budget_counted_and_result_on_the_grid_within_limits(name: str) -> None:
     problem = small_problem(5, RecordingProblem)
     opt = make(name, budget=257)
     result = opt.solve(problem)
@@ -105,13 +105,13 @@ def _declared(name):
 
 
 @pytest.mark.parametrize("name", NAMES)
-def test_every_parameter_is_declared(name):
+def test_every_parameter_is_declared(name: str) -> None:
     opt, declared = _declared(name)
     assert set(opt.get_params()) <= set(declared)
 
 
 @pytest.mark.parametrize("name", NAMES)
-def test_every_declared_parameter_refuses_a_value_out_of_range(name):
+def test_every_declared_parameter_refuses_a_value_out_of_range(name: str) -> None:
     opt, declared = _declared(name)
     for param in opt.get_params():
         if param not in declared:
@@ -121,7 +121,7 @@ def test_every_declared_parameter_refuses_a_value_out_of_range(name):
             get_optimizer(name, **{param: bad})
 
 
-def test_the_issue_cases_and_unknown_names():
+def test_the_issue_cases_and_unknown_names() -> None:
     for name, params in [
         ("pso", {"n_particles": -5}),
         ("coa", {"initial_cuckoos": 0}),
@@ -139,7 +139,7 @@ def test_the_issue_cases_and_unknown_names():
 
 
 @pytest.mark.parametrize("name", NAMES)
-def test_never_worse_than_no_correction(name):
+def test_never_worse_than_no_correction(name: str) -> None:
     problem = centred_problem()
     result = make(name, budget=12).solve(problem)  # far too small a budget to find x = 0 by search
     assert result.margin_after >= problem.margin_before
@@ -147,7 +147,7 @@ def test_never_worse_than_no_correction(name):
         assert not result.x.any() and "better than none" in result.message
 
 
-def test_guard_returns_zero_and_says_so():
+def test_guard_returns_zero_and_says_so() -> None:
     problem = centred_problem()
     x = np.array([0.05, 0.0, -0.02, 0.0])
     guarded = make_result(problem, x, optimizer="pso", evaluations=1, seconds=0.0, status="budget")

@@ -65,7 +65,7 @@ def guide_pins_problems(n_sets: int, seed: int) -> list[CorrectionProblem]:
 
 
 @pytest.fixture
-def recorded(monkeypatch):
+def recorded(monkeypatch: pytest.MonkeyPatch):
     """Every array CRIPSO hands to its Evaluator, in order."""
     calls: list[np.ndarray] = []
 
@@ -81,7 +81,7 @@ def recorded(monkeypatch):
 # -- reproducibility -------------------------------------------------------------------------------
 
 
-def test_same_seed_gives_identical_run():
+def test_same_seed_gives_identical_run() -> None:
     problem = guide_pins_problems(1, seed=5)[0]
     a = CRIPSO(seed=11, n_solutions=2000).solve(problem)
     b = CRIPSO(seed=11, n_solutions=2000).solve(problem)
@@ -90,7 +90,7 @@ def test_same_seed_gives_identical_run():
 
 
 @pytest.mark.slow
-def test_different_seeds_find_different_optima_of_a_tied_problem():
+def test_different_seeds_find_different_optima_of_a_tied_problem() -> None:
     # One dimension moved equally by three registers, 1 µm off centre: e_1, e_2 and e_3 (times −1 µm)
     # are the three optima of f (same f1, same norm); which one a run returns depends on the seed.
     problem = make_problem([[1.0], [1.0], [1.0]], [0.001], 0.05, [-0.01] * 3, [0.01] * 3)
@@ -108,7 +108,7 @@ def test_different_seeds_find_different_optima_of_a_tied_problem():
 
 
 @pytest.mark.parametrize(("n_solutions", "n_polyps"), [(1500, 100), (257, 16), (7, 10), (3, 2)])
-def test_every_solution_on_grid_within_bounds_and_budget_exact(recorded, n_solutions, n_polyps):
+def test_every_solution_on_grid_within_bounds_and_budget_exact(recorded, n_solutions, n_polyps) -> None:
     problem = make_problem(
         [[1, 0, 1], [1, -1, 0], [0, 1, 1], [2, 1, -1]],
         [0.03, -0.02, 0.011],
@@ -127,7 +127,7 @@ def test_every_solution_on_grid_within_bounds_and_budget_exact(recorded, n_solut
         assert np.ptp(x[:, 0]) > 0 and np.ptp(x[:, 1]) > 0  # the free ones do move
 
 
-def test_history_is_the_best_so_far_of_the_evaluated_sequence(recorded):
+def test_history_is_the_best_so_far_of_the_evaluated_sequence(recorded) -> None:
     problem = guide_pins_problems(1, seed=9)[0]
     result = CRIPSO(seed=4, n_solutions=3000).solve(problem)
     x = np.concatenate(recorded)
@@ -146,7 +146,7 @@ def test_history_is_the_best_so_far_of_the_evaluated_sequence(recorded):
 # -- eq. 1 and eq. 11 ----------------------------------------------------------------------------------
 
 
-def test_eq11_coefficient_schedule():
+def test_eq11_coefficient_schedule() -> None:
     c = coefficient_schedule(5000)
     assert c.shape == (5000,)
     assert c[0] == pytest.approx(np.cos(np.pi / 2 / 5000))
@@ -155,7 +155,7 @@ def test_eq11_coefficient_schedule():
     assert np.all(np.diff(c) < 0)
 
 
-def test_eq1_planula_position():
+def test_eq1_planula_position() -> None:
     x = planula_position(
         np.array([0.0, 1.0]),
         np.array([2.0, 1.0]),
@@ -214,7 +214,7 @@ def reference_cripso(
 @pytest.mark.parametrize(
     ("seed", "inertia", "tied"), [(0, 0.75, False), (1, 0.75, False), (2, 0.4, False), (3, 0.75, True)]
 )
-def test_search_equals_a_literal_reference_of_the_paper(recorded, seed, inertia, tied):
+def test_search_equals_a_literal_reference_of_the_paper(recorded, seed: int, inertia, tied) -> None:
     # ``tied``: a small grid where planulae often land on their parents, so equal f (and the tie
     # rules of the tournament and of gbest) occur many times.
     problem = (
@@ -228,7 +228,7 @@ def test_search_equals_a_literal_reference_of_the_paper(recorded, seed, inertia,
 
 
 @pytest.mark.parametrize("seed", range(5))
-def test_last_planula_copies_its_parent(recorded, seed):
+def test_last_planula_copies_its_parent(recorded, seed: int) -> None:
     # With L = P + 1 the only planula is solution L: eq. 11 gives c1 = c2 = 0, and a polyp of the
     # initial colony has no inertia yet, so eq. 1 puts the planula exactly on the winner.  An off-by-
     # one in L_i (c = cos(π/2 · P/(P+1)) ≈ 0.14 here) moves it by several steps on this wide grid.
@@ -241,13 +241,13 @@ def test_last_planula_copies_its_parent(recorded, seed):
     assert f[parents].max() > np.sort(f[:10])[0]  # a winner, so never the colony's worst
 
 
-def test_early_planulae_move():
+def test_early_planulae_move() -> None:
     problem = make_problem(np.eye(3), [0.05, -0.05, 0.0], 0.1, [-0.1] * 3, [0.1] * 3)
     result = CRIPSO(seed=0, n_polyps=10, n_solutions=20).solve(problem)
     assert result.history[-1, 3] > result.history[0, 3]  # something better than the random start
 
 
-def test_rejects_a_colony_without_tournaments():
+def test_rejects_a_colony_without_tournaments() -> None:
     with pytest.raises(ValueError, match="n_polyps"):
         CRIPSO(n_polyps=1).solve(small_problem(0))
 
@@ -257,7 +257,7 @@ def test_rejects_a_colony_without_tournaments():
 
 @pytest.mark.slow
 @pytest.mark.parametrize("seed", range(4))
-def test_small_problem_reaches_brute_force_optimum(seed):
+def test_small_problem_reaches_brute_force_optimum(seed: int) -> None:
     problem = small_problem(seed)
     f_best, f1_best = brute_force_f(problem)
     results = [CRIPSO(seed=s, n_solutions=3000).solve(problem) for s in range(3)]
@@ -267,7 +267,7 @@ def test_small_problem_reaches_brute_force_optimum(seed):
 
 
 @pytest.mark.slow
-def test_guide_pins_median_gap_to_exact_within_one_micrometre():
+def test_guide_pins_median_gap_to_exact_within_one_micrometre() -> None:
     gaps = []
     for problem in guide_pins_problems(5, seed=2014):
         exact = get_optimizer("exact").solve(problem)

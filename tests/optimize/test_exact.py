@@ -11,7 +11,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from setupfix.correction.synthetic import simulate_deviations
-from setupfix.model import PartMeasurement
+from setupfix.model import PartMeasurement, ProcessModel
 from setupfix.optimize import CorrectionProblem, get_optimizer
 
 
@@ -49,7 +49,7 @@ def brute_force(problem: CorrectionProblem) -> tuple[float, float]:
 
 
 @pytest.mark.parametrize("seed", range(12))
-def test_grid_optimum_and_least_norm_equal_brute_force(seed):
+def test_grid_optimum_and_least_norm_equal_brute_force(seed: int) -> None:
     problem = random_problem(seed)
     result = get_optimizer("exact", objective="paper").solve(problem)
     best, norm = brute_force(problem)
@@ -63,7 +63,7 @@ def test_grid_optimum_and_least_norm_equal_brute_force(seed):
     np.testing.assert_allclose(result.x / problem.resolution, np.rint(result.x / problem.resolution), atol=1e-9)
 
 
-def test_fixed_registers_never_move_and_limits_hold():
+def test_fixed_registers_never_move_and_limits_hold() -> None:
     problem = random_problem(3, n=4, m=7, limit_steps=3, fixed=(1,))
     result = get_optimizer("exact", objective="paper").solve(problem)
     assert result.x[1] == 0.0
@@ -75,7 +75,7 @@ def test_fixed_registers_never_move_and_limits_hold():
         assert result.margin_after == pytest.approx(best, abs=1e-12)
 
 
-def test_out_of_reach_returns_least_bad_correction():
+def test_out_of_reach_returns_least_bad_correction() -> None:
     problem = random_problem(5, limit_steps=1, spread=0.3)
     result = get_optimizer("exact", objective="paper").solve(problem)
     best, _ = brute_force(problem)
@@ -88,7 +88,7 @@ def test_out_of_reach_returns_least_bad_correction():
     assert result.margin_after == pytest.approx(problem.margins(result.x)[kept].min(), abs=1e-12)
 
 
-def test_binding_dimensions_prove_the_bound():
+def test_binding_dimensions_prove_the_bound() -> None:
     problem = random_problem(7)
     result = get_optimizer("exact", objective="paper").solve(problem)
     assert result.binding
@@ -108,7 +108,7 @@ def test_binding_dimensions_prove_the_bound():
     assert get_optimizer("exact", objective="paper").solve(relaxed).bound == pytest.approx(result.bound, abs=1e-9)
 
 
-def test_time_limit_falls_back_and_says_so():
+def test_time_limit_falls_back_and_says_so() -> None:
     # large enough that HiGHS cannot finish in presolve before it looks at the clock
     problem = random_problem(2, n=10, m=40, limit_steps=50)
     with warnings.catch_warnings():
@@ -121,7 +121,7 @@ def test_time_limit_falls_back_and_says_so():
     assert "not proved" in result.message
 
 
-def test_paper_size_problem_against_lp_bound_and_null_space(guide_pins_model):
+def test_paper_size_problem_against_lp_bound_and_null_space(guide_pins_model: ProcessModel) -> None:
     devs, _setup = simulate_deviations(guide_pins_model, 3, seed=11)
     for dev in devs:
         part = PartMeasurement("c", "r", None, dev, ("",) * dev.size)
@@ -137,7 +137,7 @@ def test_paper_size_problem_against_lp_bound_and_null_space(guide_pins_model):
                 assert np.linalg.norm(moved) >= result.norm - 1e-12
 
 
-def test_continuous_mode_is_the_lp_optimum():
+def test_continuous_mode_is_the_lp_optimum() -> None:
     problem = random_problem(4)
     cont = get_optimizer("exact", objective="paper", grid=False).solve(problem)
     assert cont.margin_after == pytest.approx(cont.bound, abs=1e-9)
@@ -146,7 +146,7 @@ def test_continuous_mode_is_the_lp_optimum():
 @pytest.mark.slow
 @settings(max_examples=25, deadline=None)
 @given(seed=st.integers(0, 10_000), n=st.integers(1, 6), m=st.integers(1, 10), steps=st.integers(1, 20))
-def test_no_grid_point_beats_the_exact_optimum(seed, n, m, steps):
+def test_no_grid_point_beats_the_exact_optimum(seed: int, n, m, steps) -> None:
     problem = random_problem(seed, n=n, m=max(m, 1), limit_steps=steps)
     result = get_optimizer("exact", objective="paper").solve(problem)
     rng = np.random.default_rng(seed)

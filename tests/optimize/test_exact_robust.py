@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from setupfix.inputs.cycles import load_parts
-from setupfix.model import PartMeasurement
+from setupfix.model import PartMeasurement, ProcessModel
 from setupfix.optimize import CorrectionProblem, get_optimizer
 from setupfix.optimize.exact.highs import Solve
 from setupfix.optimize.exact.session import Session
@@ -34,7 +34,7 @@ PATHS = {
 @pytest.mark.slow
 @pytest.mark.parametrize("path", list(PATHS))
 @pytest.mark.parametrize("seed", range(6))
-def test_every_proof_path_equals_brute_force(path, seed):
+def test_every_proof_path_equals_brute_force(path: str, seed: int) -> None:
     problem = random_problem(100 + seed, n=4, m=8, limit_steps=6)
     result = get_optimizer("exact", objective="paper", settings=PATHS[path]).solve(problem)
     best, norm = brute_force(problem)
@@ -43,7 +43,7 @@ def test_every_proof_path_equals_brute_force(path, seed):
     assert result.norm == pytest.approx(norm, abs=1e-12)
 
 
-def test_solve_error_repro_is_optimal():
+def test_solve_error_repro_is_optimal() -> None:
     """The report on which HiGHS once answered "Solve error": optimum and least norm, proved."""
     # The solver itself: the repro's random deviations lie beyond the default reject band of
     # the safety rules (setupfix.correction.safety), so `correct` would refuse the report before solving.
@@ -58,7 +58,7 @@ def test_solve_error_repro_is_optimal():
     assert not [n for n in result.notes if "HiGHS answered" in n.message]
 
 
-def test_solver_error_is_retried_without_the_lower_bracket_and_reported(monkeypatch):
+def test_solver_error_is_retried_without_the_lower_bracket_and_reported(monkeypatch: pytest.MonkeyPatch) -> None:
     real = Session.max_margin_milp
     brackets = []
 
@@ -79,7 +79,7 @@ def test_solver_error_is_retried_without_the_lower_bracket_and_reported(monkeypa
     assert any("Solve error" in n.message and "retried" in n.message for n in result.notes)
 
 
-def test_csv_and_in_memory_inputs_give_identical_corrections(guide_pins_model):
+def test_csv_and_in_memory_inputs_give_identical_corrections(guide_pins_model: ProcessModel) -> None:
     """The last bits of the deviations (actual − nominal in floating point) change nothing."""
     import pandas as pd
 
@@ -127,7 +127,7 @@ def shop_problem(n: int, m: int, seed: int) -> CorrectionProblem:
     )
 
 
-def test_whole_solve_respects_the_time_limit_and_says_which_stage_stopped():
+def test_whole_solve_respects_the_time_limit_and_says_which_stage_stopped() -> None:
     problem = shop_problem(180, 2000, 2)  # several seconds to prove on the 2-core test machine
     start = time.perf_counter()
     result = get_optimizer("exact", objective="paper", time_limit=0.6).solve(problem)
@@ -143,7 +143,7 @@ def test_whole_solve_respects_the_time_limit_and_says_which_stage_stopped():
     assert any("time limit" in n.message for n in result.notes)
 
 
-def test_cli_time_limit_option(capsys):
+def test_cli_time_limit_option(capsys: pytest.CaptureFixture[str]) -> None:
     from setupfix.cli import main
 
     args = ["correct", "--model", str(GUIDE_PINS / "model.toml"), str(GUIDE_PINS / "cycle_01.csv")]
@@ -156,7 +156,7 @@ def test_cli_time_limit_option(capsys):
 
 @pytest.mark.slow
 @pytest.mark.parametrize(("objective", "count", "threads"), [("paper", 8, 2), ("leximin", 24, 4)])
-def test_threads_keep_their_own_solver_models(guide_pins_model, objective, count, threads):
+def test_threads_keep_their_own_solver_models(guide_pins_model: ProcessModel, objective: str, count, threads) -> None:
     """Solves in worker threads (batch, TUI) give the same corrections as one after another — also while the
     threads fill the per-model memo of results of G alone at once (it starts empty)."""
     from concurrent.futures import ThreadPoolExecutor
@@ -176,7 +176,7 @@ def test_threads_keep_their_own_solver_models(guide_pins_model, objective, count
         np.testing.assert_array_equal(a, b)
 
 
-def test_a_very_fine_grid_neither_hangs_nor_loses_the_bound(guide_pins_model):
+def test_a_very_fine_grid_neither_hangs_nor_loses_the_bound(guide_pins_model: ProcessModel) -> None:
     """Resolution 1e-11 mm: 10^10 steps per register; bounded in time, never worse than the 0.001 grid."""
     import dataclasses
 
@@ -190,7 +190,7 @@ def test_a_very_fine_grid_neither_hangs_nor_loses_the_bound(guide_pins_model):
     assert result.margin_after <= result.bound + 1e-12
 
 
-def test_the_answer_does_not_depend_on_the_reports_solved_before(guide_pins_model):
+def test_the_answer_does_not_depend_on_the_reports_solved_before(guide_pins_model: ProcessModel) -> None:
     """A solve starts from scratch (its own session), or a report whose least norm is attained at two
     grid points gets one or the other depending on history (batch workers would then disagree).  The
     pair of reports below showed it when solver models were kept across reports."""
@@ -205,7 +205,7 @@ def test_the_answer_does_not_depend_on_the_reports_solved_before(guide_pins_mode
     np.testing.assert_array_equal(after.x, fresh.x)
 
 
-def test_the_leximin_stage_ends_by_its_share_of_the_limit_and_leaves_the_least_norm_its_own():
+def test_the_leximin_stage_ends_by_its_share_of_the_limit_and_leaves_the_least_norm_its_own() -> None:
     """At 100 × 800 the single-dimension tests of a discrete conflict are hundreds of LPs: they stop when the
     stage's share is spent (they used to run on, past the whole limit, and leave the least norm no time: a
     correction of 0.67 mm where the least norm at the levels reached is 0.14 mm)."""
@@ -219,7 +219,7 @@ def test_the_leximin_stage_ends_by_its_share_of_the_limit_and_leaves_the_least_n
     assert result.margin_after == pytest.approx(paper.margin_after, abs=1e-12)  # δ was proved before the levels
 
 
-def test_a_point_test_starts_no_solve_once_its_stage_is_over(monkeypatch):
+def test_a_point_test_starts_no_solve_once_its_stage_is_over(monkeypatch: pytest.MonkeyPatch) -> None:
     from setupfix.optimize.exact.leximin.pins import point_above
     from setupfix.optimize.exact.lp_bound import margin_rows
     from setupfix.optimize.exact.session import GridRows

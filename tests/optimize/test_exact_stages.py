@@ -75,12 +75,12 @@ def test_solver_modules_import_only_lower_ranks(module: str) -> None:
     ("field", "value"),
     [("quantum", 0.0), ("level_steps", -1), ("box_share", 1.5), ("working_set_nnls", 1), ("search_limit", 2.5)],
 )
-def test_settings_are_validated_naming_the_field(field, value):
+def test_settings_are_validated_naming_the_field(field, value) -> None:
     with pytest.raises(ParameterError, match=f"ExactSettings: {field}"):
         ExactSettings(**{field: value})
 
 
-def test_settings_are_frozen_and_reach_the_optimizer_through_the_registry():
+def test_settings_are_frozen_and_reach_the_optimizer_through_the_registry() -> None:
     settings = ExactSettings(level_steps=0)
     with pytest.raises(dataclasses.FrozenInstanceError):
         settings.level_steps = 3  # type: ignore[misc]
@@ -89,7 +89,7 @@ def test_settings_are_frozen_and_reach_the_optimizer_through_the_registry():
         get_optimizer("exact", settings={"level_steps": 0})
 
 
-def test_a_coarser_quantum_rounds_the_deviations_it_says():
+def test_a_coarser_quantum_rounds_the_deviations_it_says() -> None:
     problem = random_problem(3)
     _, g_fine = margin_rows(problem)
     _, g_coarse = margin_rows(problem, quantum=0.5)
@@ -98,7 +98,7 @@ def test_a_coarser_quantum_rounds_the_deviations_it_says():
 
 
 @pytest.mark.parametrize("seed", range(4))
-def test_stage_results_are_frozen_and_bracket_the_brute_force_optimum(seed):
+def test_stage_results_are_frozen_and_bracket_the_brute_force_optimum(seed: int) -> None:
     problem = random_problem(100 + seed, n=4, m=8, limit_steps=6)
     g_rows, g = margin_rows(problem)
     free = problem.free
@@ -126,7 +126,7 @@ def test_stage_results_are_frozen_and_bracket_the_brute_force_optimum(seed):
 
 
 @pytest.mark.parametrize("seed", range(12))
-def test_a_callers_search_in_the_grid_optimum_changes_no_optimum(seed, monkeypatch):
+def test_a_callers_search_in_the_grid_optimum_changes_no_optimum(seed: int, monkeypatch: pytest.MonkeyPatch) -> None:
     """The grid optimum with a caller's search (the leximin climb; here also one that answers badly) proves
     the brute-force optimum; where the search's point reaches the level, the listing is never run."""
     import setupfix.optimize.exact.grid_optimum as go

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from setupfix.inputs.cycles import load_parts
-from setupfix.model import PartMeasurement
+from setupfix.model import PartMeasurement, ProcessModel
 from setupfix.optimize import CorrectionProblem, get_optimizer
 from setupfix.optimize.exact import ExactSettings
 
@@ -82,7 +82,7 @@ def path(request: pytest.FixtureRequest) -> str:
 
 
 @pytest.mark.parametrize("seed", range(24))
-def test_triage_equals_brute_force(seed, path):
+def test_triage_equals_brute_force(seed: int, path: str) -> None:
     problem = random_problem(seed, n=3, m=7, limit_steps=2, spread=0.3)
     result = get_optimizer("exact", time_limit=SOLVE_LIMIT, settings=TRIAGE_PATHS[path]).solve(problem)
     if brute_triage(problem)[0] == len(problem.dimension_ids):  # everything can be kept: no triage
@@ -92,7 +92,7 @@ def test_triage_equals_brute_force(seed, path):
 
 
 @pytest.mark.parametrize("seed", [13, 25, 27, 33, 40, 55, 3, 4])
-def test_triage_ties_go_to_the_smallest_correction_on_every_path(seed, path):
+def test_triage_ties_go_to_the_smallest_correction_on_every_path(seed: int, path: str) -> None:
     """Two registers that move the same dimensions alike: an odd total step splits two ways with the same
     norm (seeds 13 … 55 tied, and the MILP path picked the larger one before its tie-break)."""
     import dataclasses
@@ -107,7 +107,7 @@ def test_triage_ties_go_to_the_smallest_correction_on_every_path(seed, path):
 
 
 @pytest.mark.parametrize("seed", range(12))
-def test_triage_with_costs_fixed_registers_and_guard_floor_equals_brute_force(seed, path):
+def test_triage_with_costs_fixed_registers_and_guard_floor_equals_brute_force(seed: int, path: str) -> None:
     """Weighted norm, a fixed register, and a no-harm floor below 0 (a guard band: kept inside the real limits)."""
     import dataclasses
 
@@ -236,7 +236,7 @@ def milp_triage(problem: CorrectionProblem) -> tuple[int, np.ndarray, float]:
 
 
 @pytest.mark.parametrize("seed", range(10))
-def test_triage_equals_an_independent_milp(seed, path):
+def test_triage_equals_an_independent_milp(seed: int, path: str) -> None:
     problem = random_problem(700 + seed, n=3, m=6, limit_steps=3, spread=0.3)
     result = get_optimizer("exact", time_limit=SOLVE_LIMIT, settings=TRIAGE_PATHS[path]).solve(problem)
     if not result.given_up:
@@ -249,7 +249,7 @@ def test_triage_equals_an_independent_milp(seed, path):
     assert np.sqrt(np.sum(problem.cost * result.x**2)) == pytest.approx(norm, abs=1e-7)
 
 
-def test_one_gross_error_does_not_push_good_dimensions_out(guide_pins_model):
+def test_one_gross_error_does_not_push_good_dimensions_out(guide_pins_model: ProcessModel) -> None:
     """Issue 13: P1 D1 at −0.25 mm on ±0.1 must not move P1 D2 (−0.029, in tolerance) out."""
     (part,) = load_parts(guide_pins_model, GUIDE_PINS / "cycle_01.csv")
     dev = part.deviation.copy()
@@ -263,7 +263,7 @@ def test_one_gross_error_does_not_push_good_dimensions_out(guide_pins_model):
     assert result.status == "optimal"
 
 
-def test_a_costlier_register_moves_less_among_equally_good_corrections():
+def test_a_costlier_register_moves_less_among_equally_good_corrections() -> None:
     """Two registers that move the dimensions alike: the cheap one takes the shift."""
     comp = np.array([[1.0, 1.0, -1.0], [1.0, 1.0, -1.0], [0.0, 1.0, 1.0]])
     base = dict(
@@ -287,7 +287,7 @@ def test_a_costlier_register_moves_less_among_equally_good_corrections():
 
 
 @pytest.mark.parametrize("seed", range(6))
-def test_weighted_least_norm_equals_brute_force(seed):
+def test_weighted_least_norm_equals_brute_force(seed: int) -> None:
     problem = random_problem(200 + seed, n=4, m=6, limit_steps=4)
     cost = np.random.default_rng(seed).uniform(0.2, 5.0, problem.n_registers)
     weighted = CorrectionProblem(
@@ -314,7 +314,7 @@ def test_weighted_least_norm_equals_brute_force(seed):
 
 
 @pytest.mark.parametrize("cost", [np.array([1.0, 0.0, 1.0]), np.array([1.0, np.inf, 1.0]), np.ones(2)])
-def test_register_cost_must_be_positive_and_finite(cost):
+def test_register_cost_must_be_positive_and_finite(cost) -> None:
     from setupfix.core.errors import ParameterError
 
     problem = random_problem(0, n=3)
@@ -333,12 +333,12 @@ def test_register_cost_must_be_positive_and_finite(cost):
         )
 
 
-def test_metaheuristics_give_nothing_up():
+def test_metaheuristics_give_nothing_up() -> None:
     problem = random_problem(5, limit_steps=1, spread=0.3)
     assert get_optimizer("pso", seed=1, n_solutions=200).solve(problem).given_up == ()
 
 
-def test_no_dimension_in_reach_gives_the_least_correction():
+def test_no_dimension_in_reach_gives_the_least_correction() -> None:
     """One dimension out of reach of a ±1-step register (hypothesis found it): x = 0, given up, no crash."""
     problem = random_problem(1845, n=1, m=1, limit_steps=1)
     result = get_optimizer("exact", objective="paper").solve(problem)
@@ -349,7 +349,7 @@ def test_no_dimension_in_reach_gives_the_least_correction():
 
 
 @pytest.mark.parametrize("seed", range(8))
-def test_bound_is_the_kept_dimensions_lp_and_seconds_the_whole_call(seed, path):
+def test_bound_is_the_kept_dimensions_lp_and_seconds_the_whole_call(seed: int, path: str) -> None:
     """The bound describes the final answer: the LP over the dimensions it keeps (held ones held)."""
     from scipy.optimize import linprog
 
@@ -398,7 +398,7 @@ def gross_problem(seed: int, n: int = 4, m: int = 8) -> CorrectionProblem:
 
 
 @pytest.mark.parametrize("seed", range(20))
-def test_gross_dimensions_triage_equals_brute_force(seed, path):
+def test_gross_dimensions_triage_equals_brute_force(seed: int, path: str) -> None:
     problem = gross_problem(seed)
     result = get_optimizer("exact", time_limit=SOLVE_LIMIT, settings=TRIAGE_PATHS[path]).solve(problem)
     if brute_triage(problem)[0] == len(problem.dimension_ids):
@@ -410,7 +410,7 @@ def test_gross_dimensions_triage_equals_brute_force(seed, path):
 
 @pytest.mark.slow
 @pytest.mark.parametrize("seed", range(6))
-def test_gross_dimensions_triage_equals_an_independent_milp(seed):
+def test_gross_dimensions_triage_equals_an_independent_milp(seed: int) -> None:
     problem = gross_problem(seed, n=3, m=6)
     result = get_optimizer("exact", time_limit=SOLVE_LIMIT, settings=TRIAGE_PATHS["forced"]).solve(problem)
     if not result.given_up:
@@ -424,7 +424,7 @@ def test_gross_dimensions_triage_equals_an_independent_milp(seed):
     assert np.sqrt(np.sum(problem.cost * result.x**2)) == pytest.approx(norm, abs=1e-7)
 
 
-def test_a_dimension_within_reach_only_by_harm_is_proved_lost():
+def test_a_dimension_within_reach_only_by_harm_is_proved_lost() -> None:
     """The LP certificate: D0 can be brought in only by moving D1 (measured in) out."""
     from setupfix.optimize.exact.lp_bound import margin_rows
     from setupfix.optimize.exact.triage.forced import lost_bound
@@ -460,7 +460,7 @@ def test_a_dimension_within_reach_only_by_harm_is_proved_lost():
     assert result.x == pytest.approx([0.03], abs=1e-12)  # D1 centred
 
 
-def test_guide_pins_gross_dimension_is_fast_and_complete(guide_pins_model):
+def test_guide_pins_gross_dimension_is_fast_and_complete(guide_pins_model: ProcessModel) -> None:
     """The commonest case at paper size: P1 D1 at −0.25 mm.  The kept set is forced: the whole leximin
     vector and the least norm are proved well within the limit, and the correction is the one the MILP
     path finds alone with a 120 s limit (bench/triage_paper_size.py --check)."""
@@ -477,7 +477,7 @@ def test_guide_pins_gross_dimension_is_fast_and_complete(guide_pins_model):
 
 
 @pytest.mark.slow
-def test_an_incomplete_triage_leximin_is_a_stopped_solve(guide_pins_model):
+def test_an_incomplete_triage_leximin_is_a_stopped_solve(guide_pins_model: ProcessModel) -> None:
     """Levels left unproved (their share of the limit spent) never read as optimal."""
     from setupfix.correction.recommend import stopped_rule
 

@@ -31,7 +31,7 @@ def _proves_empty(rows: GridRows, b: np.ndarray, y: np.ndarray) -> bool:
 
 
 @pytest.mark.parametrize("seed", range(40))
-def test_near_rows_first_give_the_same_verdict_and_point(seed):
+def test_near_rows_first_give_the_same_verdict_and_point(seed: int) -> None:
     rows, b, pts = _rows(seed)
     feasible = np.all(pts @ rows.g_rows.T <= b + 1e-9, axis=1)
     k = pts[np.random.default_rng(seed).integers(len(pts))]  # any grid point: only where to look first
@@ -47,7 +47,7 @@ def test_near_rows_first_give_the_same_verdict_and_point(seed):
         assert np.all(rows.g_rows @ x_all <= b + 1e-6)
 
 
-def test_a_proof_from_the_near_rows_alone_is_found_and_kept(monkeypatch):
+def test_a_proof_from_the_near_rows_alone_is_found_and_kept(monkeypatch: pytest.MonkeyPatch) -> None:
     """Two opposite rows next to k that cannot both hold (x ≤ −1 and x ≥ 1): the near subsystem proves it,
     and the whole system is never solved."""
     g_rows = np.array([[1.0, 0.0], [-1.0, 0.0], [0.0, 1.0], [0.0, -1.0]])
@@ -62,7 +62,7 @@ def test_a_proof_from_the_near_rows_alone_is_found_and_kept(monkeypatch):
     np.testing.assert_allclose(y, [0.5, 0.5, 0.0, 0.0])
 
 
-def test_weights_that_prove_nothing_are_refused():
+def test_weights_that_prove_nothing_are_refused() -> None:
     """The check is done in numpy on every answer: weights on a system with a point are never a proof."""
     rows, b, pts = _rows(3)
     b = np.full(b.size, 100.0)  # every grid point meets these rows
@@ -72,7 +72,9 @@ def test_weights_that_prove_nothing_are_refused():
 
 
 @pytest.mark.parametrize("seed", range(40))
-def test_near_rows_only_prove_a_subset_of_the_cases_and_never_solve_the_whole(seed, monkeypatch):
+def test_near_rows_only_prove_a_subset_of_the_cases_and_never_solve_the_whole(
+    seed: int, monkeypatch: pytest.MonkeyPatch
+) -> None:
     """``whole=False``: a proof only where the whole system has one (brute force), no point ever, and NNLS
     never on every column; where the near rows prove nothing the answer is (None, None), not the whole's."""
     rows, b, pts = _rows(seed)

@@ -25,7 +25,7 @@ def _brute(pts, centre, cost, radius2, g_rows, b, fmax):
 
 
 @pytest.mark.parametrize("seed", range(10))
-def test_enumerate_ball_lists_exactly_the_points_of_brute_force(seed):
+def test_enumerate_ball_lists_exactly_the_points_of_brute_force(seed: int) -> None:
     """Radius, rows and norm pruning (with the QP's multipliers and with arbitrary ones) drop nothing."""
     g_rows, b, kmin, kmax, cost = small_system(seed, n=5, r=10, steps=4)  # 9⁵ points: no whole-box shortcut
     status, (_k, lam, lam_lo, lam_hi) = least_distance(g_rows, b, kmin, kmax, cost)
@@ -62,7 +62,7 @@ def test_enumerate_ball_lists_exactly_the_points_of_brute_force(seed):
 
 
 @pytest.mark.parametrize("seed", range(10))
-def test_ellipsoid_search_finds_the_least_norm_of_brute_force(seed):
+def test_ellipsoid_search_finds_the_least_norm_of_brute_force(seed: int) -> None:
     """Growing ellipsoids from no known point: the least Σ c k² (ties: the smallest k), proved."""
     g_rows, b, kmin, kmax, cost = small_system(seed, n=5, r=10, steps=4)
     _, (_k, lam, lam_lo, lam_hi) = least_distance(g_rows, b, kmin, kmax, cost)
@@ -90,7 +90,7 @@ def test_ellipsoid_search_finds_the_least_norm_of_brute_force(seed):
     np.testing.assert_array_equal(best, least[np.lexsort(least.T[::-1])[0]])
 
 
-def test_a_level_with_no_grid_point_is_proved_by_listing_the_whole_box():
+def test_a_level_with_no_grid_point_is_proved_by_listing_the_whole_box() -> None:
     problem = random_problem(101, n=4, m=8, limit_steps=6)
     result = get_optimizer("exact", objective="paper").solve(problem)
     assert "the whole box listed" in result.path and "MILP" not in result.path
@@ -101,7 +101,7 @@ def test_a_level_with_no_grid_point_is_proved_by_listing_the_whole_box():
 
 
 @pytest.mark.parametrize("cycle", range(1, 6))
-def test_guide_pins_cycles_equal_the_milp_proofs(cycle):
+def test_guide_pins_cycles_equal_the_milp_proofs(cycle) -> None:
     """The bundled cycles (28 dimensions × 10 registers, a box of 201¹⁰ grid points: no brute force):
     the listings' answer equals the MILP proofs' answer with a long limit; cycle 4 needs no MILP."""
     model = load_model(GUIDE_PINS / "model.toml")

@@ -25,14 +25,14 @@ def knapsack() -> tuple[LinearModel, np.ndarray, float]:
     return model, np.zeros(8), best
 
 
-def test_a_true_answer_passes_the_check():
+def test_a_true_answer_passes_the_check() -> None:
     model, _, best = knapsack()
     res = model.solve(5.0)
     assert res.status == "optimal" and res.objective == pytest.approx(best)
     assert model.check(res.x, res.objective, res.dual_bound, res.status) == ""
 
 
-def test_the_check_names_each_contradiction():
+def test_the_check_names_each_contradiction() -> None:
     model, start, best = knapsack()
     res = model.solve(5.0)
     assert res.x is not None
@@ -52,7 +52,7 @@ def test_the_check_names_each_contradiction():
     )
 
 
-def test_a_wrong_optimal_answer_is_solved_again_without_the_start(monkeypatch):
+def test_a_wrong_optimal_answer_is_solved_again_without_the_start(monkeypatch: pytest.MonkeyPatch) -> None:
     """HiGHS's answer is replaced by the start labelled optimal on the first run (as 1.16 did on 10
     of 2,239 triage MILPs); the checked solve re-runs without the start and returns the optimum."""
     model, start, best = knapsack()
@@ -73,7 +73,7 @@ def test_a_wrong_optimal_answer_is_solved_again_without_the_start(monkeypatch):
     assert res.x is not None and model.value(res.x) == pytest.approx(best)
 
 
-def test_an_answer_that_stays_wrong_is_an_error_never_optimal(monkeypatch):
+def test_an_answer_that_stays_wrong_is_an_error_never_optimal(monkeypatch: pytest.MonkeyPatch) -> None:
     model, start, best = knapsack()
     real_run = LinearModel._run
 
@@ -88,7 +88,7 @@ def test_an_answer_that_stays_wrong_is_an_error_never_optimal(monkeypatch):
     assert res.x is not None and res.objective == pytest.approx(0.0) and res.objective > best
 
 
-def test_lp_and_qp_answers_pass_the_check():
+def test_lp_and_qp_answers_pass_the_check() -> None:
     rng = np.random.default_rng(1)
     a = rng.normal(size=(6, 4))
     lp = LinearModel(
@@ -122,7 +122,7 @@ def test_the_wall_clock_stops_a_mip_whose_own_limit_is_far() -> None:
     assert wall < 0.3 + 0.25
 
 
-def test_time_limit_holds_with_a_start(monkeypatch):
+def test_time_limit_holds_with_a_start(monkeypatch: pytest.MonkeyPatch) -> None:
     model = market_split()
     started = time.perf_counter()
     res = model.solve(0.3, np.zeros(40))  # an infeasible start: HiGHS repairs or drops it
@@ -130,13 +130,13 @@ def test_time_limit_holds_with_a_start(monkeypatch):
     assert time.perf_counter() - started < 0.3 + 0.25
 
 
-def test_every_mip_runs_without_rins_and_rens():
+def test_every_mip_runs_without_rins_and_rens() -> None:
     model = market_split()
     for name in ("mip_heuristic_run_rins", "mip_heuristic_run_rens"):
         assert model.h.getOptionValue(name)[1] is False
 
 
-def test_a_stopped_run_with_a_wrong_point_stays_stopped_and_drops_the_point(monkeypatch):
+def test_a_stopped_run_with_a_wrong_point_stays_stopped_and_drops_the_point(monkeypatch: pytest.MonkeyPatch) -> None:
     model, start, _ = knapsack()
     real_run = LinearModel._run
 
@@ -149,7 +149,7 @@ def test_a_stopped_run_with_a_wrong_point_stays_stopped_and_drops_the_point(monk
     assert res.status == "time_limit" and res.x is None and "row" in res.detail
 
 
-def test_models_on_one_matrix_share_its_dense_copy_and_a_changed_model_checks_its_own():
+def test_models_on_one_matrix_share_its_dense_copy_and_a_changed_model_checks_its_own() -> None:
     """Two models on one Colwise check HiGHS's answers with one read-only dense copy of it; a model that adds
     a row checks against its own matrix, and the shared copy stays as it was."""
     from setupfix.optimize.exact.highs import Colwise

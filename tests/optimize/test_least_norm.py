@@ -43,7 +43,7 @@ def grid_points(lo, hi):
 
 
 @pytest.mark.parametrize("seed", range(8))
-def test_working_set_nnls_equals_the_full_least_distance(seed):
+def test_working_set_nnls_equals_the_full_least_distance(seed: int) -> None:
     g_rows, b, kmin, kmax, cost = small_system(seed, n=6, r=60)
     status, full = least_distance(g_rows, b, kmin, kmax, cost)
     ws_status, ws = least_distance_working_set(g_rows, b, kmin, kmax, cost, time.perf_counter() + 10, add=3)
@@ -53,7 +53,7 @@ def test_working_set_nnls_equals_the_full_least_distance(seed):
     assert all(np.all(v >= 0) for v in ws[1:])
 
 
-def test_working_set_nnls_proves_an_empty_system():
+def test_working_set_nnls_proves_an_empty_system() -> None:
     g_rows = np.array([[1.0, 0.0], [-1.0, 0.0], [0.0, 1.0]])
     b = np.array([-1.0, -1.0, 5.0])  # k0 ≤ −1 and k0 ≥ 1
     status, out = least_distance_working_set(
@@ -63,7 +63,7 @@ def test_working_set_nnls_proves_an_empty_system():
 
 
 @pytest.mark.parametrize("seed", range(8))
-def test_lagrangian_box_holds_every_point_up_to_the_norm_and_bounds_the_least(seed):
+def test_lagrangian_box_holds_every_point_up_to_the_norm_and_bounds_the_least(seed: int) -> None:
     g_rows, b, kmin, kmax, cost = small_system(seed)
     _, (_k, lam, lam_lo, lam_hi) = least_distance(g_rows, b, kmin, kmax, cost)
     centre, q = lagrangian_ball(g_rows, b, kmin, kmax, cost, lam, lam_lo, lam_hi)
@@ -79,7 +79,7 @@ def test_lagrangian_box_holds_every_point_up_to_the_norm_and_bounds_the_least(se
 
 
 @pytest.mark.parametrize("seed", range(8))
-def test_box_least_norm_equals_brute_force_over_the_box(seed):
+def test_box_least_norm_equals_brute_force_over_the_box(seed: int) -> None:
     g_rows, b, kmin, _kmax, cost = small_system(seed)
     rng = np.random.default_rng(100 + seed)
     lo = kmin + rng.integers(0, 3, kmin.size)
@@ -98,7 +98,7 @@ def test_box_least_norm_equals_brute_force_over_the_box(seed):
 
 
 @pytest.mark.parametrize("seed", range(6))
-def test_descend_keeps_every_row_and_ends_where_no_single_move_helps(seed):
+def test_descend_keeps_every_row_and_ends_where_no_single_move_helps(seed: int) -> None:
     g_rows, b, kmin, kmax, cost = small_system(seed, steps=6)
     pts = grid_points(kmin, kmax)
     feasible = pts[np.all(pts @ g_rows.T <= b + 1e-9, axis=1)]
@@ -115,7 +115,7 @@ def test_descend_keeps_every_row_and_ends_where_no_single_move_helps(seed):
 
 
 @pytest.mark.slow
-def test_a_stopped_least_norm_proof_returns_a_certified_near_least_correction(monkeypatch):
+def test_a_stopped_least_norm_proof_returns_a_certified_near_least_correction(monkeypatch: pytest.MonkeyPatch) -> None:
     """The limit hit in the least-norm stage: the stage is named, and ‖x‖ is within the certified ratio."""
     problem = shop_problem(100, 800, 1)  # 100 registers: the chord MILP in the Lagrangian box
     proven = get_optimizer("exact", objective="paper", time_limit=30.0).solve(problem)
@@ -198,7 +198,7 @@ TIE_PATHS = {
 @pytest.mark.slow
 @pytest.mark.parametrize("path", list(TIE_PATHS))
 @pytest.mark.parametrize("network", [False, True])
-def test_ties_go_to_the_lexicographically_smallest_correction(path, network):
+def test_ties_go_to_the_lexicographically_smallest_correction(path: str, network: bool) -> None:
     """Brute force over the whole grid, on problems built to tie, on every proof path (network LP on and off)."""
     tied = 0
     for seed in range(12):
@@ -227,7 +227,7 @@ def brute_tu(a: np.ndarray) -> bool:
 
 
 @pytest.mark.parametrize("seed", range(40))
-def test_network_rows_is_exact_on_two_entry_rows(seed):
+def test_network_rows_is_exact_on_two_entry_rows(seed: int) -> None:
     """On rows of one or two ±1 entries the test agrees with total unimodularity (all minors); other rows
     (three entries, a 2) are never taken for network rows."""
     rng = np.random.default_rng(seed)
@@ -247,7 +247,7 @@ def test_network_rows_is_exact_on_two_entry_rows(seed):
 
 
 @pytest.mark.parametrize("seed", range(8))
-def test_network_rows_are_proved_by_one_chord_lp_equal_to_brute_force(seed):
+def test_network_rows_are_proved_by_one_chord_lp_equal_to_brute_force(seed: int) -> None:
     problem = tied_problem(seed, network=True)
     want, _, reach = brute_lex(problem)
     # no listing first (in the grid-optimum stage of small problems, in the least-norm stage up to 120
@@ -260,7 +260,7 @@ def test_network_rows_are_proved_by_one_chord_lp_equal_to_brute_force(seed):
         np.testing.assert_array_equal(np.rint(result.x / problem.resolution), want)
 
 
-def test_shop_rows_without_differences_take_the_network_lp_and_agree_with_the_listing():
+def test_shop_rows_without_differences_take_the_network_lp_and_agree_with_the_listing() -> None:
     """60 × 400 with every dimension one WKS and one tool: the LP's answer equals the other paths'."""
     for seed in range(2):
         problem = network_shop_problem(60, 400, seed)

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import dataclasses
 import itertools
+from typing import Any
 
 import numpy as np
 import numpy.typing as npt
@@ -108,7 +109,7 @@ CASES = (
 
 
 @pytest.mark.parametrize(("kind", "seed", "kw"), CASES)
-def test_leximin_equals_brute_force(kind, seed, kw):
+def test_leximin_equals_brute_force(kind: str, seed: int, kw: dict[str, Any]) -> None:
     problem = random_problem(seed, **kw) if kind == "random" else one_axis_problem(seed, **kw)
     best, norm, _ = brute_leximin(problem)
     if best[0] < 0:
@@ -122,7 +123,7 @@ def test_leximin_equals_brute_force(kind, seed, kw):
 
 
 @pytest.mark.parametrize("seed", range(6))
-def test_first_level_is_the_papers_delta_and_paper_keeps_its_least_norm(seed):
+def test_first_level_is_the_papers_delta_and_paper_keeps_its_least_norm(seed: int) -> None:
     problem = one_axis_problem(seed)
     lex, _, s_lex = solved_steps(problem)
     paper, _, s_paper = solved_steps(problem, "paper")
@@ -181,7 +182,7 @@ def ordered_outcomes(problem: CorrectionProblem) -> np.ndarray:
 
 @pytest.mark.slow
 @pytest.mark.parametrize("seed", range(8))
-def test_leximin_equals_an_independent_ordered_outcome_milp(seed):
+def test_leximin_equals_an_independent_ordered_outcome_milp(seed: int) -> None:
     problem = one_axis_problem(
         100 + seed, n_wks=3, n_tools=4, m=8, limit=12, cost=seed % 2 == 1, fixed=(2,) if seed % 3 == 0 else ()
     )
@@ -193,7 +194,7 @@ def test_leximin_equals_an_independent_ordered_outcome_milp(seed):
     np.testing.assert_allclose(sorted_m, expected, atol=1e-5)
 
 
-def test_objective_is_validated_and_metaheuristics_refuse_leximin():
+def test_objective_is_validated_and_metaheuristics_refuse_leximin() -> None:
     with pytest.raises(ParameterError, match="objective"):
         get_optimizer("exact", objective="centred")
     assert get_optimizer("exact").objective == "leximin"
@@ -234,7 +235,7 @@ def make(kind: str, seed: int, kw: dict) -> CorrectionProblem:
 
 @pytest.mark.slow
 @pytest.mark.parametrize("cycle", range(1, 6))
-def test_leximin_equals_brute_force_on_the_papers_topology(cycle):
+def test_leximin_equals_brute_force_on_the_papers_topology(cycle) -> None:
     problem = guide_pins_window(cycle)
     best, norm, _ = brute_leximin(problem)
     result, k, sorted_m = solved_steps(problem)
@@ -245,7 +246,7 @@ def test_leximin_equals_brute_force_on_the_papers_topology(cycle):
 
 @pytest.mark.slow
 @pytest.mark.parametrize(("kind", "seed", "kw"), CONFLICTS)
-def test_discrete_conflicts_by_branches_equal_brute_force(kind, seed, kw):
+def test_discrete_conflicts_by_branches_equal_brute_force(kind: str, seed: int, kw: dict[str, Any]) -> None:
     problem = make(kind, seed, kw)
     best, norm, _ = brute_leximin(problem)
     result, k, sorted_m = solved_steps(problem)
@@ -256,7 +257,9 @@ def test_discrete_conflicts_by_branches_equal_brute_force(kind, seed, kw):
 
 @pytest.mark.slow
 @pytest.mark.parametrize(("kind", "seed", "kw"), CONFLICTS)
-def test_counts_alone_decide_discrete_conflicts_as_brute_force(kind, seed, kw, monkeypatch):
+def test_counts_alone_decide_discrete_conflicts_as_brute_force(
+    kind: str, seed: int, kw: dict[str, Any], monkeypatch: pytest.MonkeyPatch
+) -> None:
     """With no branching allowed, every discrete conflict goes to the count MILPs: same optimum."""
     problem = make(kind, seed, kw)
     best, norm, _ = brute_leximin(problem)
@@ -267,7 +270,7 @@ def test_counts_alone_decide_discrete_conflicts_as_brute_force(kind, seed, kw, m
     assert float(problem.cost[problem.free] @ k**2) == pytest.approx(norm, abs=1e-9)
 
 
-def test_is_network_recognises_one_wks_and_one_tool_per_row():
+def test_is_network_recognises_one_wks_and_one_tool_per_row() -> None:
     """±1 rows with two entries that a flip of columns makes opposite: totally unimodular (an LP's vertex on the
     grid); a row with a 2, three entries, or an odd cycle of equal signs is not."""
     from setupfix.optimize.exact.grid import is_network

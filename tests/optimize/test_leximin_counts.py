@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 import pytest
 
@@ -14,7 +16,9 @@ from .test_leximin_pins import _grid
 
 @pytest.mark.slow
 @pytest.mark.parametrize(("kind", "seed", "kw"), CONFLICTS)
-def test_each_count_equals_the_grid_count_and_fixes_only_what_the_lattice_decides(kind, seed, kw, monkeypatch):
+def test_each_count_equals_the_grid_count_and_fixes_only_what_the_lattice_decides(
+    kind: str, seed: int, kw: dict[str, Any], monkeypatch: pytest.MonkeyPatch
+) -> None:
     """Every count MILP's optimum is the most active dimensions with margin ≥ t + ε over the grid points
     that meet the floors, t0 and the blocks found so far (brute force); a dimension the model gives no
     binary (every row's lattice value at or above t0 is ≥ t) is ≥ t at every such point, and some have none."""
@@ -65,7 +69,9 @@ def test_each_count_equals_the_grid_count_and_fixes_only_what_the_lattice_decide
 
 
 @pytest.mark.parametrize(("kind", "seed", "kw"), CONFLICTS)
-def test_counts_stopped_give_the_least_norm_at_the_conflict_level_not_the_counts_point(kind, seed, kw, monkeypatch):
+def test_counts_stopped_give_the_least_norm_at_the_conflict_level_not_the_counts_point(
+    kind: str, seed: int, kw: dict[str, Any], monkeypatch: pytest.MonkeyPatch
+) -> None:
     """When the counts stop before their proof (here: no time for a second MILP), the answer is the least
     Σ c k² over every grid point with each dimension at its floor — the active ones at the conflict's level
     (brute force) — as where the levels stop, never the counts' unproved point."""
@@ -92,7 +98,7 @@ def test_counts_stopped_give_the_least_norm_at_the_conflict_level_not_the_counts
     assert float(rows.cost @ k**2) == pytest.approx(norms.min(), abs=1e-9)
 
 
-def test_a_run_starts_only_with_more_time_left_than_the_longest_took():
+def test_a_run_starts_only_with_more_time_left_than_the_longest_took() -> None:
     import time
 
     runs = countmod.CountRuns(time.perf_counter() + 5.0)
@@ -104,7 +110,9 @@ def test_a_run_starts_only_with_more_time_left_than_the_longest_took():
     assert not countmod.CountRuns(time.perf_counter() - 1e-3).room()
 
 
-def test_no_least_norm_milp_starts_when_a_count_milp_took_longer_than_what_is_left(monkeypatch):
+def test_no_least_norm_milp_starts_when_a_count_milp_took_longer_than_what_is_left(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
     """Counts proved, but the time left is less than the longest count MILP took: the chord MILP of the least
     norm is not started (HiGHS would run past the limit in its root's cut rounds); the answer says so."""
     solve = countmod.CountRuns.solve

@@ -26,7 +26,7 @@ def run(capsys, *argv):
     return code, out, err
 
 
-def test_objective_paper_reproduces_the_readme_example(capsys):
+def test_objective_paper_reproduces_the_readme_example(capsys: pytest.CaptureFixture[str]) -> None:
     """README: δ after +0.0822 mm, bonus +0.0651 mm, correction norm 0.0410 mm, T23 +0.027."""
     code, out, err = run(capsys, "correct", "--objective", "paper", "--model", MODEL, REPORT)
     assert code == 0, err
@@ -34,7 +34,9 @@ def test_objective_paper_reproduces_the_readme_example(capsys):
     assert "upper bound (continuous LP): +0.0824 mm" in out
 
 
-def test_default_is_leximin_same_delta_every_other_margin_at_least_as_centred(capsys):
+def test_default_is_leximin_same_delta_every_other_margin_at_least_as_centred(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
     code, out, err = run(capsys, "correct", "--model", MODEL, "--json", REPORT)
     assert code == 0, err
     lex = json.loads(out)
@@ -47,13 +49,13 @@ def test_default_is_leximin_same_delta_every_other_margin_at_least_as_centred(ca
     assert lex.keys() == paper.keys()  # the contract's keys either way
 
 
-def test_cli_refuses_leximin_for_a_metaheuristic_in_one_line(capsys):
+def test_cli_refuses_leximin_for_a_metaheuristic_in_one_line(capsys: pytest.CaptureFixture[str]) -> None:
     code, out, err = run(capsys, "correct", "--optimizer", "pso", "--objective", "leximin", "--model", MODEL, REPORT)
     assert code != 0 and not out
     assert "leximin" in err and "Traceback" not in err and len(err.strip().splitlines()) == 1
 
 
-def test_solve_options_resolve_the_objective_per_optimizer():
+def test_solve_options_resolve_the_objective_per_optimizer() -> None:
     assert SolveOptions().resolved_objective == "leximin" and SolveOptions().params() == {}
     assert SolveOptions(objective="paper").params() == {"objective": "paper"}
     assert SolveOptions("pso", seed=1).resolved_objective == "paper"
@@ -64,7 +66,7 @@ def test_solve_options_resolve_the_objective_per_optimizer():
         SolveOptions(objective="centre")
 
 
-def test_compare_measures_the_metaheuristics_against_the_papers_optimum():
+def test_compare_measures_the_metaheuristics_against_the_papers_optimum() -> None:
     comparison = compare_report(CompareRequest(MODEL, methods=(), trials=1), REPORT)
     model = load_model(MODEL)
     problem = CorrectionProblem.from_part(model, load_parts(model, GUIDE_PINS / "cycle_01.csv")[0])
@@ -73,7 +75,7 @@ def test_compare_measures_the_metaheuristics_against_the_papers_optimum():
 
 
 @pytest.mark.parametrize("objective", ["paper", "leximin"])
-def test_diagnose_next_correction_follows_the_objective(objective):
+def test_diagnose_next_correction_follows_the_objective(objective: str) -> None:
     """``diagnose --objective``: the next correction is ``correct``'s on the forecast with that objective."""
     from conftest import SAMPLES
 

@@ -34,13 +34,13 @@ def window(problem: CorrectionProblem, objective: str) -> CorrectionProblem:
     return dataclasses.replace(problem, lb=np.where(problem.free, x - h, 0.0), ub=np.where(problem.free, x + h, 0.0))
 
 
-def test_the_bundled_pair_conflicts_are_three():
+def test_the_bundled_pair_conflicts_are_three() -> None:
     assert len(REPORTS) == 3
 
 
 @pytest.mark.slow
 @pytest.mark.parametrize("report", REPORTS, ids=lambda p: p.stem)
-def test_pair_branches_decide_the_whole_report_as_the_counts_would(report, monkeypatch):
+def test_pair_branches_decide_the_whole_report_as_the_counts_would(report, monkeypatch: pytest.MonkeyPatch) -> None:
     """The full report (±100 steps): the conflict goes to pair branches, proved within the default limit;
     with the pairs switched off the count MILPs (the generic way, tested against brute force) give the
     same leximin margins and the same correction (on the one report where they take seconds, not tens)."""
@@ -65,7 +65,7 @@ def test_pair_branches_decide_the_whole_report_as_the_counts_would(report, monke
     [(r, c) for r in REPORTS for c in ("paper", "leximin")],
     ids=lambda v: v.stem if isinstance(v, Path) else v,
 )
-def test_pair_branches_equal_brute_force_on_windows(report, centre, monkeypatch):
+def test_pair_branches_equal_brute_force_on_windows(report, centre, monkeypatch: pytest.MonkeyPatch) -> None:
     """Windows of ±1 step around the paper's or the leximin answer; every pair the Farkas certificate
     excludes is checked on the grid: no point has every other active dimension above t + ε."""
     problem = window(report_problem(report), centre)

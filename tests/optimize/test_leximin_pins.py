@@ -59,7 +59,9 @@ def checked_levels(monkeypatch) -> list[int]:
     ("kind", "seed"),
     [("window", 1), ("window", 2), ("window", 3), ("window", 5), ("axis", 5), ("axis", 37), ("axis", 3), ("axis", 11)],
 )
-def test_every_claim_of_the_levels_holds_on_the_level_set(kind, seed, monkeypatch):
+def test_every_claim_of_the_levels_holds_on_the_level_set(
+    kind: str, seed: int, monkeypatch: pytest.MonkeyPatch
+) -> None:
     problem = guide_pins_window(seed) if kind == "window" else one_axis_problem(seed)
     best, norm, _ = brute_leximin(problem)
     if best[0] < 0:
@@ -71,7 +73,7 @@ def test_every_claim_of_the_levels_holds_on_the_level_set(kind, seed, monkeypatc
     assert float(problem.cost[problem.free] @ k**2) == pytest.approx(norm, abs=1e-9)
 
 
-def test_a_rounding_error_with_a_tiny_weight_pins_nothing():
+def test_a_rounding_error_with_a_tiny_weight_pins_nothing() -> None:
     """Weights of 1e-17 with a weighted sum of ~1e-16 (a rounding error): no room below d is claimed."""
     g_rows = np.array([[1.0, 0.0], [-1.0, 0.0], [0.0, 1.0]])
     rhs = np.array([0.0, 0.0, 3.0])
@@ -82,7 +84,7 @@ def test_a_rounding_error_with_a_tiny_weight_pins_nothing():
     assert pin.tolist() == [True, True, False]
 
 
-def test_span_closure_adds_exactly_the_rows_in_the_span():
+def test_span_closure_adds_exactly_the_rows_in_the_span() -> None:
     g_rows = np.array([[1.0, 1, 0], [0, 1, 1], [1, 2, 1], [1, 0, -1], [1, 0, 0], [-1, -2, -1]])
     key = g_rows @ np.array([3.0, 7.0, 11.0])
     closed = span_closure(g_rows, np.ones(6), np.array([True, True, False, False, False, False]), key)
@@ -107,7 +109,9 @@ def _dims(rows, row_dim, n_dims, pts) -> np.ndarray:
 
 @pytest.mark.slow
 @pytest.mark.parametrize("large", [False, True], ids=["small", "as-if-large"])
-def test_a_dimension_excluded_from_a_conflict_is_never_alone_at_its_level(large, monkeypatch):
+def test_a_dimension_excluded_from_a_conflict_is_never_alone_at_its_level(
+    large: bool, monkeypatch: pytest.MonkeyPatch
+) -> None:
     """The one Farkas certificate that spares the per-dimension tests of a discrete conflict: every
     dimension it excludes has no grid point with the other active ones above t + ε (brute force), and
     the search still finds the brute-force leximin — also on the path of problems too large for NNLS on
@@ -150,7 +154,7 @@ def test_a_dimension_excluded_from_a_conflict_is_never_alone_at_its_level(large,
 
 
 @pytest.mark.parametrize("seed", range(20))
-def test_farkas_weights_or_a_point_match_the_grid(seed):
+def test_farkas_weights_or_a_point_match_the_grid(seed: int) -> None:
     """NNLS on random rounded rows: weights only when no grid point meets them (brute force), else a
     continuous point of the rows; a floor/ceil rounding that meets them is a real grid point."""
     from setupfix.optimize.exact.farkas import farkas_or_point
@@ -176,7 +180,7 @@ def test_farkas_weights_or_a_point_match_the_grid(seed):
 
 
 @pytest.mark.parametrize("tight", [2.0, 1e9])
-def test_point_above_answers_as_the_grid_does(tight, monkeypatch):
+def test_point_above_answers_as_the_grid_does(tight: float, monkeypatch: pytest.MonkeyPatch) -> None:
     """A point that meets the floors, or False exactly when no grid point of the box does (brute force) —
     with the first MILP on the rows near the LP's vertex (TIGHT_SLACK) and with all rows at once."""
     import setupfix.optimize.exact.leximin.pins as pins
@@ -218,7 +222,7 @@ def test_point_above_answers_as_the_grid_does(tight, monkeypatch):
     assert (tight_first > 0) == (tight < 1e9)  # the tight-row MILP ran, and only where asked for
 
 
-def test_meeting_rounding_is_the_first_floor_ceil_choice_that_meets_the_floors():
+def test_meeting_rounding_is_the_first_floor_ceil_choice_that_meets_the_floors() -> None:
     """Against every floor/ceil choice listed in the same order (the lowest bits first), on 30 random cases
     of both outcomes: the same point, or None exactly when no choice meets the floors; rows without a
     floor (−inf) never refuse one."""

@@ -4,6 +4,7 @@ the proved answers are the same with it and without it."""
 from __future__ import annotations
 
 import itertools
+from typing import Any
 
 import numpy as np
 import pytest
@@ -65,7 +66,9 @@ PROBLEMS = (
 
 
 @pytest.mark.parametrize(("kind", "seed", "kw"), PROBLEMS)
-def test_climb_is_never_worse_keeps_the_floors_and_stops_where_no_move_is_better(kind, seed, kw):
+def test_climb_is_never_worse_keeps_the_floors_and_stops_where_no_move_is_better(
+    kind: str, seed: int, kw: dict[str, Any]
+) -> None:
     problem = random_problem(seed, **kw) if kind == "random" else one_axis_problem(seed, **kw)
     g_rows, g, order, starts, _ = grouped(problem)
     free = problem.free
@@ -91,7 +94,7 @@ def test_climb_is_never_worse_keeps_the_floors_and_stops_where_no_move_is_better
             assert not lex_better(mm[active], m[active]), d
 
 
-def test_climb_stops_at_its_deadline():
+def test_climb_stops_at_its_deadline() -> None:
     problem = one_axis_problem(3)
     g_rows, g, order, starts, _ = grouped(problem)
     free = problem.free
@@ -102,7 +105,7 @@ def test_climb_stops_at_its_deadline():
     assert np.array_equal(climb(g_rows, g, k0, kmin, kmax, order, starts, floors, EPS, deadline=0.0), k0)
 
 
-def test_climb_without_an_active_dimension_returns_the_start():
+def test_climb_without_an_active_dimension_returns_the_start() -> None:
     problem = one_axis_problem(0)
     g_rows, g, order, starts, _ = grouped(problem)
     free = problem.free
@@ -122,7 +125,9 @@ def test_climb_without_an_active_dimension_returns_the_start():
 
 
 @pytest.mark.parametrize(("kind", "seed", "kw"), CASES[::3] + CONFLICTS)
-def test_leximin_without_the_climb_equals_brute_force(kind, seed, kw, monkeypatch):
+def test_leximin_without_the_climb_equals_brute_force(
+    kind: str, seed: int, kw: dict[str, Any], monkeypatch: pytest.MonkeyPatch
+) -> None:
     """The levels prove every level whatever point they start from: with no climb (the ascent by roundings,
     LPs and MILPs alone) the answer is brute force's, as with it."""
     problem = make(kind, seed, kw)
@@ -138,7 +143,7 @@ def test_leximin_without_the_climb_equals_brute_force(kind, seed, kw, monkeypatc
 
 
 @pytest.mark.parametrize("seed", range(4))
-def test_climb_with_kept_moves_is_the_same_climb(seed):
+def test_climb_with_kept_moves_is_the_same_climb(seed: int) -> None:
     """The moves a caller keeps for one model (climb_moves) give the climb it would take without them."""
     problem = random_problem(seed)
     g_rows, g, order, starts, _ = grouped(problem)
@@ -155,7 +160,7 @@ def test_climb_with_kept_moves_is_the_same_climb(seed):
 
 
 @pytest.mark.parametrize("sizes", [(2, 2, 2, 2), (1, 2, 3), (2, 1, 2), (5,), (2,)])
-def test_group_min_is_the_least_of_each_group(sizes):
+def test_group_min_is_the_least_of_each_group(sizes) -> None:
     """The strided two-row path and the general one give each group's least (numpy's reduceat as reference)."""
     rng = np.random.default_rng(len(sizes))
     m = rng.normal(size=(7, sum(sizes)))

@@ -20,7 +20,7 @@ import numpy as np
 import pytest
 
 from setupfix.correction.synthetic import simulate_deviations
-from setupfix.model import PartMeasurement
+from setupfix.model import PartMeasurement, ProcessModel
 from setupfix.optimize import CorrectionProblem, get_optimizer
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -49,7 +49,9 @@ def fresh_process(problems: list[CorrectionProblem], tmp_path: Path) -> list[tup
 
 
 @pytest.mark.slow
-def test_a_long_run_never_runs_out_of_time_and_equals_a_fresh_process(guide_pins_model, tmp_path):
+def test_a_long_run_never_runs_out_of_time_and_equals_a_fresh_process(
+    guide_pins_model: ProcessModel, tmp_path: Path
+) -> None:
     devs, _ = simulate_deviations(guide_pins_model, 16, seed=3)
     problems = [
         CorrectionProblem.from_part(guide_pins_model, PartMeasurement("c", "r", None, d, ("",) * d.size)) for d in devs
@@ -66,7 +68,7 @@ def test_a_long_run_never_runs_out_of_time_and_equals_a_fresh_process(guide_pins
         np.testing.assert_array_equal(result.x, fresh[i][0])
 
 
-def test_each_run_of_one_highs_model_has_its_own_time_limit():
+def test_each_run_of_one_highs_model_has_its_own_time_limit() -> None:
     """Runs of one model within a solve (lazy cuts, levels) each get the limit they are given."""
     from setupfix.optimize.exact.highs import INF, LinearModel
 
@@ -87,7 +89,7 @@ def test_each_run_of_one_highs_model_has_its_own_time_limit():
 
 
 @pytest.mark.slow
-def test_the_first_solve_of_a_process_imports_before_its_clock_starts():
+def test_the_first_solve_of_a_process_imports_before_its_clock_starts() -> None:
     """scipy.optimize (NNLS, imported lazily by the stages) is loaded before the time limit starts counting."""
     import subprocess
     import sys

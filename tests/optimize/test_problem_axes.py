@@ -46,7 +46,7 @@ def part(model, values):
     return p
 
 
-def test_rotation_column_bounds_and_values_are_scaled_in_one_place():
+def test_rotation_column_bounds_and_values_are_scaled_in_one_place() -> None:
     model = model_from_dict(DOC)
     p = part(model, {"Y at F1": 0.02, "X at F2": 0.01})
     problem = CorrectionProblem.from_part(model, p)
@@ -65,7 +65,7 @@ def test_rotation_column_bounds_and_values_are_scaled_in_one_place():
     assert abs(theta) <= 0.0333 + 1e-12
 
 
-def test_zone_becomes_facets_mapped_back_to_one_dimension():
+def test_zone_becomes_facets_mapped_back_to_one_dimension() -> None:
     model = model_from_dict(DOC)
     p = part(model, {"Y at F1": 0.0, "X at F2": 0.0, "hole X": 0.03, "hole Y": -0.04})
     assert p.deviation[2] == pytest.approx(0.05)

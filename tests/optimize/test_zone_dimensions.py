@@ -212,7 +212,7 @@ def half_step_problem(seed: int) -> CorrectionProblem:
 
 
 @pytest.mark.parametrize("seed", range(16))
-def test_leximin_counts_a_zone_once(seed):
+def test_leximin_counts_a_zone_once(seed: int) -> None:
     problem = zone_problem(seed, spread=0.004)
     want = brute(problem)
     result = get_optimizer("exact").solve(problem)
@@ -228,7 +228,7 @@ def path(request: pytest.FixtureRequest) -> str:
 
 
 @pytest.mark.parametrize("seed", range(12))
-def test_triage_keeps_or_gives_up_whole_zones(seed, path):
+def test_triage_keeps_or_gives_up_whole_zones(seed: int, path: str) -> None:
     problem = zone_problem(100 + seed, spread=0.009)
     want = brute(problem)
     result = get_optimizer("exact", time_limit=30.0, settings=TRIAGE_PATHS[path]).solve(problem)
@@ -236,7 +236,7 @@ def test_triage_keeps_or_gives_up_whole_zones(seed, path):
 
 
 @pytest.mark.parametrize("seed", [22, 124, 125, 215, 263, 267, 280, 283, *range(8)])
-def test_half_step_ties_and_conflicts_against_brute_force(seed):
+def test_half_step_ties_and_conflicts_against_brute_force(seed: int) -> None:
     """Exact ties and a discrete conflict (seed 280 opens branches); seeds 22 … 283 are near-ties below the
     input quantum, decided by the rounded deviations the optimiser documents."""
     problem = half_step_problem(seed)
@@ -246,7 +246,7 @@ def test_half_step_ties_and_conflicts_against_brute_force(seed):
         assert "branch:" in result.path
 
 
-def test_generated_triage_cases_give_up_zones():
+def test_generated_triage_cases_give_up_zones() -> None:
     """The generator reaches what the tests are for: triage cases, and zones given up and kept among them."""
     gone = [brute(zone_problem(100 + s, spread=0.009))["gone"] for s in range(12)]
     assert sum(bool(g) for g in gone) >= 6
@@ -254,7 +254,7 @@ def test_generated_triage_cases_give_up_zones():
     assert any(g and not all(d.startswith("P") for d in g) for g in gone)
 
 
-def test_one_axis_problems_keep_one_dimension_per_column():
+def test_one_axis_problems_keep_one_dimension_per_column() -> None:
     from .test_exact import random_problem
 
     problem = random_problem(3, n=3, m=7, limit_steps=2, spread=0.3)
@@ -268,7 +268,7 @@ def test_one_axis_problems_keep_one_dimension_per_column():
     assert np.array_equal(harmed_columns(problem, x), inside & (problem.margins(x) < -1e-12))
 
 
-def test_zone_harm_is_judged_on_the_zone():
+def test_zone_harm_is_judged_on_the_zone() -> None:
     """A zone measured outside its circle cannot be harmed, whatever its facets do; one inside can."""
     problem = zone_problem(7)
     assert problem.circles is not None and problem.rows is not None
@@ -293,7 +293,7 @@ SAMPLE = Path(__file__).resolve().parents[2] / "sample_reports" / "two_station_x
 
 
 @pytest.mark.slow
-def test_sample_leximin_equals_an_independent_solver_on_its_rows():
+def test_sample_leximin_equals_an_independent_solver_on_its_rows() -> None:
     """two_station_xyz cycle 1 (11 registers, 4 zones of 18–19 facets): the whole leximin vector over the
     16 dimensions (a zone once) equals scipy's stage-by-stage optimum on the same rows."""
     from setupfix.inputs.cycles import load_parts
@@ -339,7 +339,7 @@ def _circle_rows(fx, sides: int = 720) -> tuple[np.ndarray, np.ndarray, np.ndarr
 
 @pytest.mark.slow
 @pytest.mark.parametrize("seed", [1, 2, 3])
-def test_fixture_leximin_against_an_independent_solver_on_the_circles(tmp_path, seed):
+def test_fixture_leximin_against_an_independent_solver_on_the_circles(tmp_path: Path, seed: int) -> None:
     """Held-out multi-axis fixtures: our sorted TRUE margins (circles) against scipy's lexicographic optimum
     of the circles.  Ours is exact on polygons within ``problem.polygon`` (≤ 1 µm) of the circles, so at the
     first position where the two sorted vectors differ by more than that bound, ours must be the larger."""
@@ -367,7 +367,7 @@ def test_fixture_leximin_against_an_independent_solver_on_the_circles(tmp_path, 
     assert ours[0] >= ref[0] - bound  # the paper's δ (leximin's first level) on the circles
 
 
-def test_zone_inside_its_circle_but_outside_its_polygon_is_held():
+def test_zone_inside_its_circle_but_outside_its_polygon_is_held() -> None:
     """δ = (0.0499, 0) in a zone of radius 0.05: inside the circle (margin +0.1 µm), outside the inscribed
     polygon (its facet at angle 0 is at R·cos(π/k)).  It is held (no harm) at its polygon margin before, not
     given up; a length A out of reach forces the triage."""
