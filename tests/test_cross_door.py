@@ -402,6 +402,7 @@ def seeded_store(tmp: Path, model: Path) -> Path:
 # -- the tests ----------------------------------------------------------------------------------
 
 
+@pytest.mark.slow
 def test_every_bundled_sample_through_every_door(tmp_path: Path) -> None:
     cases = [*bundled_cases(tmp_path / "reports"), *self_modelled_cases(tmp_path / "modelled")]
     for k, case in enumerate(cases):
@@ -421,6 +422,7 @@ def test_every_bundled_sample_through_every_door(tmp_path: Path) -> None:
     )
 
 
+@pytest.mark.slow
 def test_generated_reports_with_everything_switched_on(tmp_path: Path, thermal: tuple[Path, Path]) -> None:
     """Costs, safety, effects, EWMA over a store, current offsets and the feed-forward, on seeded reports."""
     model = everything_model(tmp_path)
@@ -493,6 +495,7 @@ def run_app(case: Case, report: Path, db: Path, offsets: Path) -> tuple[dict[str
     return asyncio.run(scenario()), offsets.read_text(encoding="utf-8")
 
 
+@pytest.mark.slow
 def test_generated_reports_with_stations(tmp_path: Path, thermal: tuple[Path, Path]) -> None:
     """Reports whose parts are the fixture's workpieces: one cycle only with ``--stations``."""
     model = everything_model(tmp_path)
@@ -570,6 +573,7 @@ def test_parse_sees_the_same_reports(tmp_path: Path) -> None:
     assert tried == reports == seen_by_batch(folder, tmp_path)
 
 
+@pytest.mark.slow
 def test_a_stopped_solve_is_not_solved_through_every_door(tmp_path: Path) -> None:
     """Issue 21 #1: a solve stopped by its time limit with nothing proven is "not solved" at every door, never
     "no change needed": exit 6, ``"solved": false``, the batch counts it and its store does not skip it next run."""

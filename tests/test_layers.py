@@ -146,6 +146,7 @@ def test_no_private_name_crosses_a_module(path: Path) -> None:
     assert not found, f"{path.relative_to(ROOT)} imports private names: {found}"
 
 
+@pytest.mark.slow
 def test_cli_and_parsers_do_not_load_textual() -> None:
     code = "import sys, setupfix.cli, parsers, setupfix.usecases.correct; print('textual' in sys.modules)"
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT, check=True)

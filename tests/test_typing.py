@@ -33,6 +33,7 @@ def test_ruff_format_changes_nothing() -> None:
     assert out.returncode == 0, out.stdout[-4000:] + out.stderr[-2000:]
 
 
+@pytest.mark.slow
 def test_mypy_finds_no_error() -> None:
     out = _run("mypy")
     assert out.returncode == 0, out.stdout[-4000:] + out.stderr[-2000:]

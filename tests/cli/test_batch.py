@@ -6,6 +6,7 @@ import json
 import shutil
 import signal
 
+import pytest
 from conftest import GUIDE_PINS
 
 from setupfix.cli import main
@@ -61,6 +62,7 @@ def test_killed_run_leaves_no_partial_file(tmp_path):
     assert [p.name for p in tmp_path.iterdir()] == ["in"]  # … and neither output nor temporary file is left
 
 
+@pytest.mark.slow
 def test_batch_store_smooths_as_correct_store_does(capsys, tmp_path):
     """Issue 20: with ``ewma = 0.5`` and the guide-pins cycles 1–5, ``batch --store`` differed from ``correct
     --store`` in 36 register values (batch never smoothed); now every value agrees."""

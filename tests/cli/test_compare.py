@@ -20,6 +20,7 @@ def _run_json(capsys: pytest.CaptureFixture[str], *extra: str) -> dict:
     return json.loads(capsys.readouterr().out)
 
 
+@pytest.mark.slow
 def test_json_contract_and_exact_yardstick(capsys: pytest.CaptureFixture[str]) -> None:
     out = _run_json(capsys, "--seed", "7")
     from setupfix.optimize import get_optimizer
@@ -51,6 +52,7 @@ def exact_problem():
     return CorrectionProblem.from_part(model, load_parts(model, REPORT)[0])
 
 
+@pytest.mark.slow
 def test_same_seed_same_table_other_seed_other_trials(capsys: pytest.CaptureFixture[str]) -> None:
     a = _run_json(capsys, "--seed", "3")
     b = _run_json(capsys, "--seed", "3")
@@ -60,6 +62,7 @@ def test_same_seed_same_table_other_seed_other_trials(capsys: pytest.CaptureFixt
     assert [r["seeds"] for r in a["results"]] != [r["seeds"] for r in c["results"]]
 
 
+@pytest.mark.slow
 def test_table_and_figures(capsys: pytest.CaptureFixture[str], tmp_path: Path) -> None:
     png, svg = tmp_path / "cmp.png", tmp_path / "cmp.svg"
     assert main(["compare", "--model", MODEL, "--trials", "2", "--plot", str(png), REPORT]) == 0

@@ -5,9 +5,9 @@ from __future__ import annotations
 from pathlib import Path
 
 from spc_examples import GUIDE_PINS, closed_loop_store
+from views.test_html_report import EXTERNAL, tags
 
 from setupfix.cli import main
-from tests.pipeline.test_html_report import EXTERNAL, tags
 
 
 def test_page_of_a_correction_with_and_without_history(tmp_path: Path, capsys) -> None:  # type: ignore[no-untyped-def]

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 
+import pytest
 from diagnose.test_plate import LOG, MODEL, PLATE, needs_log
 
 from setupfix.cli import main
@@ -17,6 +18,7 @@ def run(capsys, *argv):
     return code, out, err
 
 
+@pytest.mark.slow
 @needs_log
 def test_factors_are_tested_listed_and_marked_declared(capsys):
     code, out, err = run(

@@ -59,6 +59,7 @@ def test_correct_refuses_then_skips_the_row_with_a_warning(setup, capsys):
     assert not skipped and out["absent"]
 
 
+@pytest.mark.slow
 def test_compare_check_init_and_batch_take_lenient_too(setup, capsys, tmp_path):
     _, bad, model = setup
     for argv, lenient_ok in (

@@ -115,6 +115,7 @@ def test_formats_lists_readers(capsys: pytest.CaptureFixture[str]) -> None:
     assert listed["qif"]["extensions"] == [".qif"]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("suffix", ["qif", "dmo"])
 def test_correct_accepts_qif_and_dmis(suffix: str, capsys: pytest.CaptureFixture[str]) -> None:
     assert main(["correct", "--model", str(GUIDE / "model.toml"), str(GUIDE / "cycle_01.csv"), "--json"]) == OK

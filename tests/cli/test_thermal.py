@@ -34,6 +34,7 @@ def short_train(tmp_path_factory):
     return str(path)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("method", ["mra", "grey-ls", "kalman"])
 def test_evaluate_json_contract(capsys, method, short_train):
     budget = ["--iterations", "20"] if method == "kalman" else []
@@ -63,6 +64,7 @@ def test_evaluate_json_contract(capsys, method, short_train):
     assert doc["max_residual"] >= doc["rmse"]
 
 
+@pytest.mark.slow
 def test_fit_then_predict(capsys, tmp_path, short_train):
     model = tmp_path / "kalman.json"
     code, out, err = run(

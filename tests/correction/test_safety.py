@@ -85,6 +85,7 @@ def test_gain_applies_the_fraction_rounded_towards_zero():
     assert rec.x == pytest.approx([-0.023]) and "gain" in rules(rec)  # 0.5 · −0.047 towards zero
 
 
+@pytest.mark.slow
 def test_gain_never_moves_an_in_tolerance_dimension_out():
     rng = np.random.default_rng(3)
     for _ in range(30):

@@ -53,6 +53,7 @@ def test_simulate_writes_the_canonical_files(series: Path) -> None:
     assert truth["hidden_effects"][0]["kind"] == "wear"
 
 
+@pytest.mark.slow
 def test_diagnose_json_contract_and_augment(series: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     aug = tmp_path / "aug.toml"
     code, out, err = run(
@@ -133,6 +134,7 @@ def test_bad_timestamp_in_temperatures(series: Path, tmp_path: Path, capsys: pyt
     assert code == 1 and f"{bad}:3: timestamp 'yesterday' is not ISO 8601" in err  # the one log reader
 
 
+@pytest.mark.slow
 def test_diagnose_from_the_history_store_equals_the_files(
     series: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
@@ -222,6 +224,7 @@ def test_thermal_model_prediction_is_a_candidate_channel(tmp_path: Path, capsys:
     }
 
 
+@pytest.mark.slow
 def test_a_series_without_its_corrections_log_says_so_and_names_the_log_beside_it(
     series: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
@@ -260,6 +263,7 @@ def test_one_part_reported_twice_counts_once(tmp_path: Path, capsys: pytest.Capt
     )
 
 
+@pytest.mark.slow
 def test_diagnose_json_says_which_model_the_next_correction_comes_from(
     series: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
@@ -288,6 +292,7 @@ def test_diagnose_json_says_which_model_the_next_correction_comes_from(
     assert all(doc["next_correction"].get(r, 0.0) == 0.0 for r in doc["held_centred"])
 
 
+@pytest.mark.slow
 def test_diagnose_text_prints_the_centre_scores_and_where_the_next_correction_comes_from(
     series: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
@@ -322,6 +327,7 @@ def test_diagnose_text_prints_the_centre_scores_and_where_the_next_correction_co
     assert f"next correction from: {doc['next_from']} ({doc['next_from_reason']})" in out
 
 
+@pytest.mark.slow
 def test_simulate_level_step_at_a_cycle_is_found_there(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     out = tmp_path / "s"
     code, _o, err = run(

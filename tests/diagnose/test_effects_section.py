@@ -105,6 +105,7 @@ def test_model_without_effects_loads_as_before(guide_pins_model: ProcessModel) -
     assert model_from_dict(doc) == empty
 
 
+@pytest.mark.slow
 def test_correct_maps_through_a_named_relation_only(tmp_path: Path, guide_pins_model: ProcessModel) -> None:
     """A relation whose register is named changes what the correction does; a shared one does not."""
     from setupfix.usecases.contract import note_lines

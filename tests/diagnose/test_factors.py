@@ -76,6 +76,7 @@ def test_columns_keep_one_reference_level_and_the_interaction_what_the_main_effe
         term_columns(s, parse_terms("C"))
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("seed", [0, 1, 2])
 def test_a_null_series_with_a_random_design_names_nothing(seed: int) -> None:
     layout, s = _design_series(seed, part_noise=2 * NOISE)
@@ -84,6 +85,7 @@ def test_a_null_series_with_a_random_design_names_nothing(seed: int) -> None:
     assert all(0 < t.p <= 1 for t in ft.tests)
 
 
+@pytest.mark.slow
 def test_a_hidden_interaction_on_one_tool_is_named_there() -> None:
     """The design columns acting on one tool (a cell of the 2 x 3 design off by 0.01 mm, five times the noise)."""
     layout, s = _design_series(4, n=24)
@@ -95,6 +97,7 @@ def test_a_hidden_interaction_on_one_tool_is_named_there() -> None:
     assert all(t.register == layout.register_ids[j] for t in ft.tests if t.accepted)
 
 
+@pytest.mark.slow
 @needs_log
 def test_the_plate_names_the_stick_out_and_the_speed_per_cutter_as_the_independent_analysis() -> None:
     """Declared, the experiment's factors are tested as stated.  At alpha = 0.01 the stick-out is named on the
@@ -123,6 +126,7 @@ def test_the_plate_names_the_stick_out_and_the_speed_per_cutter_as_the_independe
     assert len(ft.tests) == 15 and all(t.p_holm <= min(1.0, 15 * t.p) + 1e-12 for t in ft.tests)
 
 
+@pytest.mark.slow
 @needs_log
 @pytest.mark.parametrize("seed", [0, 1, 2])
 def test_the_plate_with_its_design_permuted_across_parts_names_nothing(seed: int) -> None:
@@ -134,6 +138,7 @@ def test_the_plate_with_its_design_permuted_across_parts_names_nothing(seed: int
     assert not ft.found, [(t.term.name, t.register, t.p_holm) for t in ft.tests if t.accepted]
 
 
+@pytest.mark.slow
 @needs_log
 def test_declared_factors_enter_the_diagnosis_before_the_search(tmp_path: Path) -> None:
     out = diagnose_reports(
@@ -168,6 +173,7 @@ def test_declared_factors_enter_the_diagnosis_before_the_search(tmp_path: Path) 
     assert again.diagnosis.error_before.rms == pytest.approx(d.error_after.rms, rel=1e-6)
 
 
+@pytest.mark.slow
 @needs_log
 def test_with_the_declared_factors_the_walk_forward_prefers_the_augmented_model() -> None:
     """Without the declaration the plate's augmented model loses to EWMA in the walk forward (the search's

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 import numpy.typing as npt
+import pytest
 import scipy.stats
 from diagnose.helpers import NOISE, guide_pins, simulate
 
@@ -143,6 +144,7 @@ def test_cluster_wald_is_the_sandwich_wald_test_of_a_block_and_reduces_to_the_on
     np.testing.assert_allclose([one_f, one_p], [stat[0], pp[0]], rtol=1e-8)
 
 
+@pytest.mark.slow
 def test_cluster_wald_holds_its_level_under_shared_per_part_noise() -> None:
     from setupfix.diagnose.inference import cluster_wald, orth
 

@@ -70,6 +70,7 @@ def test_candidates_count_every_position_and_register_and_keep_process_off_therm
     assert len({c.at for c in candidate_specs(LAYOUT, _series(200), max_positions=10) if c.kind == "level"}) == 10
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("seed", [0, 1, 2])
 @pytest.mark.parametrize(
     ("spec", "magnitude"),
@@ -96,6 +97,7 @@ def test_hidden_level_and_process_effects_are_found_with_their_target(
     assert abs(e.estimate - magnitude) < 4 * e.stderr
 
 
+@pytest.mark.slow
 def test_process_channels_and_nothing_hidden_give_no_effect() -> None:
     found = [
         Diagnoser(walk=False).run(LAYOUT, ShopSimulator(n_cycles=40, process=3, seed=s).run(LAYOUT).series).effects
@@ -104,6 +106,7 @@ def test_process_channels_and_nothing_hidden_give_no_effect() -> None:
     assert found == [()] * 6
 
 
+@pytest.mark.slow
 def test_a_set_of_registers_gets_a_coefficient_each() -> None:
     hidden = [
         HiddenEffect(EffectSpec("process", channel="stickout_mm", register="W2", reference=37.5), 0.0012),

@@ -36,6 +36,7 @@ def test_process_log_is_joined_by_serial_with_factor_levels_and_their_products()
     assert any("gap_prev_min" in str(n) and "left out" in str(n) for n in inp.notes)
 
 
+@pytest.mark.slow
 @needs_log
 def test_the_designed_factors_are_named_per_cutter_not_wear_or_drift(tmp_path: Path) -> None:
     """The stick-out is named with a coefficient per cutter (one per-register set, tested per part by the
@@ -73,6 +74,7 @@ def test_the_designed_factors_are_named_per_cutter_not_wear_or_drift(tmp_path: P
     assert again.diagnosis.error_before.rms == pytest.approx(d.error_after.rms, rel=1e-6)
 
 
+@pytest.mark.slow
 @needs_log
 def test_the_spindle_speed_is_real_but_not_claimed_by_the_search() -> None:
     """The plate's second designed factor.  With the part as the unit and the hypothesis stated in advance
@@ -109,6 +111,7 @@ def test_the_spindle_speed_is_real_but_not_claimed_by_the_search() -> None:
     assert residual_rms(layout, s, (), LONG, per_dimension=True) == pytest.approx(0.0252, abs=5e-4)
 
 
+@pytest.mark.slow
 @needs_log
 def test_a_model_with_process_effects_needs_the_log(tmp_path: Path) -> None:
     diagnose_reports(
@@ -127,6 +130,7 @@ def test_without_the_log_no_wear_or_drift_is_claimed() -> None:
     assert not {"wear", "drift"} & {e.kind for e in d.effects}
 
 
+@pytest.mark.slow
 @needs_log
 def test_cli_process_option_json_and_a_bad_log(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     from setupfix.cli import main

@@ -39,6 +39,7 @@ def _free_registers(layout: Layout) -> list[str]:
     return [layout.register_ids[i] for i in np.flatnonzero(layout.composite[:, 0] == 0)]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("seed", [1, 2])
 def test_distinguishable_histories_name_the_register(seed: int) -> None:
     layout = Layout.from_model(guide_pins())
@@ -60,6 +61,7 @@ def test_distinguishable_histories_name_the_register(seed: int) -> None:
     )
 
 
+@pytest.mark.slow
 def test_registers_that_moved_together_are_named_together_and_not_guessed() -> None:
     layout = Layout.from_model(guide_pins())
     a, b = _free_registers(layout)[1:3]
@@ -85,6 +87,7 @@ def test_registers_that_moved_together_are_named_together_and_not_guessed() -> N
         np.testing.assert_array_equal(relation_composite(section, layout), layout.composite)
 
 
+@pytest.mark.slow
 def test_a_named_relation_is_used_by_the_augmented_walk(monkeypatch: pytest.MonkeyPatch) -> None:
     """The augmented controller maps its recommendation through the relation found: it does better."""
     layout = Layout.from_model(guide_pins())

@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+import pytest
 from conftest import GUIDE_PINS, SAMPLES
 
 from setupfix.diagnose import Diagnoser
@@ -13,6 +14,7 @@ from setupfix.usecases.diagnosis import DiagnoseRequest, diagnose_reports
 LOOP = SAMPLES / "closed_loop"
 
 
+@pytest.mark.slow
 def test_simulated_series_reveals_its_undeclared_thermal_effect() -> None:
     out = diagnose_reports(
         DiagnoseRequest(

@@ -37,6 +37,7 @@ def _right(diag: Diagnosis, hidden: HiddenEffect) -> bool:
     return e.target == hidden.spec.target or want in e.alike  # told apart, or said indistinguishable
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("kind", KINDS)
 def test_each_kind_is_found_on_the_guide_pins(kind: str) -> None:
     layout = Layout.from_model(guide_pins())
@@ -101,6 +102,7 @@ def test_registers_that_always_moved_together_are_named() -> None:
     assert any("known only up to" in n for n in sel.notes)  # the composite's null space
 
 
+@pytest.mark.slow
 def test_nothing_found_when_parts_vary_as_a_whole() -> None:
     """Shared per-part noise 2× the cell noise (every tool off by its own offset each cycle), nothing hidden:
     any effect reported in at most the binomial bound of α over 40 series (the cell-level F-test reported a
@@ -114,6 +116,7 @@ def test_nothing_found_when_parts_vary_as_a_whole() -> None:
     assert sum(bool(h) for h in hits) <= scipy.stats.binom.isf(0.01, n, alpha), hits
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(("static", "seed"), [("group", 0), ("position", 1), ("scale", 2)])
 def test_static_effects_do_not_depend_on_the_order_of_the_parts(static: str, seed: int) -> None:
     layout = Layout.from_model(guide_pins())
@@ -148,6 +151,7 @@ def test_selection_tries_the_next_candidate_after_one_is_refused() -> None:
     assert [(f.kind, f.register) for f in sel.found] == [("wear", layout.tool_ids[0])]
 
 
+@pytest.mark.slow
 def test_scale_needs_sizes_spread_over_the_range() -> None:
     layout = Layout.from_model(guide_pins())
     two = np.where(layout.nominal < 30, 10.0, 50.0)  # in effect two nominal sizes

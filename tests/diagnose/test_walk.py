@@ -20,6 +20,7 @@ from setupfix.diagnose.walk import (
 )
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("kind", ["drift", "wear"])
 def test_augmented_beats_declared_ewma_and_none_with_a_hidden_effect(kind: str) -> None:
     layout = Layout.from_model(guide_pins(positions=False))
@@ -79,6 +80,7 @@ def _random_walk(layout: Layout, seed: int, step: float = 0.004) -> Series:
     return dataclasses.replace(s, deviation=np.round(s.deviation + wander @ layout.composite, 4))
 
 
+@pytest.mark.slow
 def test_walk_steers_to_the_tolerance_centre_and_scores_every_dimension() -> None:
     """Limits 0 … +0.1 mm: steering to nominal puts every dimension on its lower limit (half of them out);
     steering to the centre (0.05) keeps them there, at the noise."""
@@ -136,6 +138,7 @@ def test_without_ewma_or_effects_or_walk_the_declared_model_recommends() -> None
     assert "not proven" in next_source(None, True).reason
 
 
+@pytest.mark.slow
 def test_random_walk_of_the_setup_recommends_from_ewma_and_says_so() -> None:
     layout = Layout.from_model(guide_pins(positions=False))
     d = Diagnoser().run(layout, _random_walk(layout, seed=5))
@@ -146,6 +149,7 @@ def test_random_walk_of_the_setup_recommends_from_ewma_and_says_so() -> None:
     np.testing.assert_allclose(d.next_forecast, ewma_forecast(layout, d.series, 0.3))
 
 
+@pytest.mark.slow
 def test_a_real_drift_earns_its_place() -> None:
     layout = Layout.from_model(guide_pins(positions=False))
     d = Diagnoser().run(layout, simulate(layout, [one_effect(layout, "drift")], seed=7).series)

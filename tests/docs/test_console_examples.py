@@ -71,6 +71,7 @@ def test_a_stale_example_fails(tmp_path: Path) -> None:
     assert _run_page(page, tmp_path / "run")
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("page", _WITH_EXAMPLES, ids=lambda p: p.relative_to(ROOT).as_posix())
 def test_console_examples(page: Path, outcomes: dict[Path, list[str]]) -> None:
     failures = outcomes[page]

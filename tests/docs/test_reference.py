@@ -35,6 +35,7 @@ def _section(text: str, path: tuple[str, ...]) -> str:
     return text[m.end() : m.end() + nxt.start() if nxt else len(text)]
 
 
+@pytest.mark.slow
 def test_committed_pages_are_the_generated_ones() -> None:
     """docs/reference/cli.md and model-keys.md are what the generator writes now (the build rewrites them)."""
     hint = "run python docs/_ext/setupfix_reference.py"

@@ -60,6 +60,7 @@ def csv_rows(path: Path) -> list[dict[str, str]]:
     return rows
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", HOSTILE_NAMES, ids=visible_name)
 def test_one_report_commands(name: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     path = write_named(tmp_path / "in")[HOSTILE_NAMES.index(name)]
@@ -115,6 +116,7 @@ def test_the_tui_session_opens_exports_and_records(name: str, tmp_path: Path) ->
     assert applied[0]["report"] == visible_name(name) and applied[0]["export"]["target"] == visible_name(str(target))
 
 
+@pytest.mark.slow
 def test_many_report_commands(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     paths = [str(p) for p in write_named(tmp_path / "in")]
     shown = {visible_name(n) for n in HOSTILE_NAMES}

@@ -127,6 +127,7 @@ def test_store_log_is_read_and_checked_as_diagnose_reads_it(tmp_path: Path, caps
     assert line in from_diagnose.splitlines()
 
 
+@pytest.mark.slow
 def test_every_stored_report_counts_not_the_newest_imports(tmp_path: Path) -> None:
     """60 reports imported latest-machined first: the estimate looks at the 50 parts machined last before the
     cycle, as a history built from the same files does (the newest 50 imports would be the 50 earliest)."""

@@ -69,6 +69,7 @@ def test_canonical_reference_flag_refuses_other_text(tmp_path: Path) -> None:
         read_canonical(tmp_path / "c.csv")
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("suffix", [".png", ".svg"])
 def test_figure_round_trip(tmp_path: Path, suffix: str) -> None:
     from matplotlib.figure import Figure

@@ -91,6 +91,7 @@ def test_dmis_axes_from_cortol_and_point_normals():
     assert (axes["SP_1_DN"], axes["SP_00_DN"], axes["SP_00_X"]) == ("Z", "", "X")
 
 
+@pytest.mark.slow
 @pytest.mark.needs_shared
 def test_every_qif_and_dmis_sample_states_axes_its_names_agree_with():
     """Property over the real samples: every stated axis is X/Y/Z, every CORTOL row's axis is its name's

@@ -139,6 +139,7 @@ def _same(data: bytes, name: str, monkeypatch: pytest.MonkeyPatch) -> bool:
     return True
 
 
+@pytest.mark.slow
 def test_random_files_read_alike_by_both_paths(monkeypatch):
     taken = []
     real = canonical._plain_columns

@@ -89,6 +89,7 @@ def test_samples_were_found() -> None:
     assert any(p.suffix.lower() == ".qif" for p in SAMPLES)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("sample", SAMPLES, ids=[p.name for p in SAMPLES])
 def test_mutated_sample_reads_or_fails_cleanly(sample: Path, tmp_path: Path) -> None:
     original = sample.read_bytes()

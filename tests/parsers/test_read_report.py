@@ -88,6 +88,7 @@ def test_size_limit_is_one_reader_for_all(monkeypatch):
         parsers.read_report("-")
 
 
+@pytest.mark.slow
 def test_stdin_and_pipes_keep_their_first_bytes(tmp_path):
     # Over 8 KiB: a sniff then a second open of a pipe would lose UNITS/INCH (issue 10).
     body = b"".join(

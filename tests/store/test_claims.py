@@ -78,6 +78,7 @@ def claims_of(db) -> tuple[int, int, int]:
     return len(rows), sum(r[1] for r in rows), sum(r[2] is not None for r in rows)
 
 
+@pytest.mark.slow
 def test_two_batches_at_once_correct_every_report_exactly_once(tmp_path, location):
     n = 40
     folder = tmp_path / "reports"
@@ -133,6 +134,7 @@ def _running(pid: int) -> bool:
     return stat[stat.rfind(")") + 2 :].split()[0] != "Z"  # a zombie has ended
 
 
+@pytest.mark.slow
 @pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="looks the workers up in /proc")
 def test_sigkill_of_a_batch_leaves_no_worker_and_its_claims_are_taken_over(tmp_path, location):
     folder = tmp_path / "reports"
@@ -218,6 +220,7 @@ def test_a_store_of_older_batches_keeps_its_processed_reports(tmp_path):
         assert isinstance(store.recommendations()[0], Recommendation)
 
 
+@pytest.mark.slow
 def test_a_store_that_cannot_finish_the_claims_says_the_output_stands_and_the_next_run_redoes_them(
     tmp_path, capsys, monkeypatch
 ):

@@ -9,6 +9,8 @@ import io
 import json
 from pathlib import Path
 
+import pytest
+
 from setupfix.cli import main
 from setupfix.model import load_model
 from setupfix.store import open_store
@@ -82,6 +84,7 @@ def test_the_models_machine_is_the_default(tmp_path, location, capsys):
     assert {r["machine"] for r in audit(capsys, location)} == {"VMC-7", "VMC-8"}
 
 
+@pytest.mark.slow
 def test_batch_and_diagnose_see_only_their_machine(tmp_path, location, capsys):
     for machine in ("A", "B"):
         folder = tmp_path / machine

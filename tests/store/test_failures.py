@@ -156,6 +156,7 @@ def test_a_store_in_a_read_only_folder_is_one_line_naming_it(tmp_path, capsys, e
 # -- locked --------------------------------------------------------------------------------------
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("command", ["import", "batch", "diagnose", "correct"])
 def test_a_store_locked_beyond_the_busy_timeout_is_one_line_naming_it(tmp_path, capsys, monkeypatch, command):
     import setupfix.store.sqlite as sqlite_store
@@ -224,6 +225,7 @@ def many_reports(d: Path, n: int) -> Path:
     return d
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("command", ["import", "batch"])
 def test_a_full_store_is_one_line_naming_it_and_keeps_what_it_held(tmp_path, command):
     db = store_of(tmp_path)
@@ -301,6 +303,7 @@ OUTPUTS = {
 }
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("what", sorted(OUTPUTS))
 def test_a_full_disk_under_any_output_is_one_line_naming_it_and_the_old_file_stays(tmp_path, what):
     many_reports(tmp_path / "many", 60)
@@ -321,6 +324,7 @@ def test_a_full_disk_under_any_output_is_one_line_naming_it_and_the_old_file_sta
 # -- creation ------------------------------------------------------------------------------------
 
 
+@pytest.mark.slow
 def test_a_store_created_by_many_processes_at_once_is_a_store(tmp_path):
     for round_ in range(3):
         db = tmp_path / f"new{round_}.db"
@@ -341,6 +345,7 @@ def test_a_store_created_by_many_processes_at_once_is_a_store(tmp_path):
         assert counts(db) == (0, 0)
 
 
+@pytest.mark.slow
 def test_a_store_killed_while_it_is_created_is_created_by_the_next_open(tmp_path):
     db = tmp_path / "killed.db"
     code = (

@@ -108,6 +108,7 @@ with store.transaction():  # what one import does: reports, then the logs
 """
 
 
+@pytest.mark.slow
 def test_kill_during_import_leaves_the_store_as_it_was(location):
     db = location
     with open_store(db) as store:
@@ -129,6 +130,7 @@ with open_store(sys.argv[1]) as s:
 """
 
 
+@pytest.mark.slow
 def test_readers_see_the_last_commit_while_another_process_writes(location):
     db = location
     with open_store(db) as store:

@@ -95,6 +95,7 @@ def test_unit_conversion_and_refusals(fitted: SavedModel) -> None:
         thermal_feed_forward(model, fitted_x, log, measured_at=log.timestamps[100])
 
 
+@pytest.mark.slow
 def test_correct_with_thermal_feed_forward(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
 ) -> None:

@@ -20,6 +20,7 @@ def test_golden_ratio_steady_state() -> None:
     assert float(K) == pytest.approx(1 / phi)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(("A", "N", "R"), [(0.99, 0.01, 1.0), (0.5, 2.0, 0.3), (0.999, 1e-5, 0.04)])
 def test_iterated_filter_reaches_closed_form(A: float, N: float, R: float) -> None:
     x: float | Array = 0.0

@@ -69,6 +69,7 @@ def test_grey_ls_keeps_development_coefficient_positive() -> None:
     assert np.all(np.isfinite(m.predict(np.vstack([X, X]), y0=0.0)))
 
 
+@pytest.mark.slow
 def test_grey_cs_fits_its_own_model() -> None:
     rng = np.random.default_rng(1)
     X = np.cumsum(rng.normal(0.5, 0.3, (80, 2)), axis=0)
@@ -81,6 +82,7 @@ def test_grey_cs_fits_its_own_model() -> None:
     np.testing.assert_allclose(m.theta_, truth, rtol=1e-3)
 
 
+@pytest.mark.slow
 def test_kalman_fusion_recovers_lumped_parameters(fitted: Fitted, sim_runs: SimRuns) -> None:
     train, _ = sim_runs
     T, y, te, sp = arrays(train.frame)
@@ -126,6 +128,7 @@ def test_prediction_with_failed_sensors(fitted: Fitted, sim_runs: SimRuns) -> No
     assert np.all(np.isfinite(pred)) and score(y, pred).efficiency > 0.8
 
 
+@pytest.mark.slow
 def test_streaming_prediction_matches_batch(fitted: Fitted, sim_runs: SimRuns) -> None:
     kf, _ = fitted
     _, test = sim_runs

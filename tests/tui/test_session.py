@@ -185,6 +185,7 @@ def test_the_report_is_read_once(monkeypatch):
     assert len(files) == 1 and len(reads) == 1
 
 
+@pytest.mark.slow
 def test_a_program_holds_the_chosen_cycle_and_only_it_is_recorded_as_applied(tmp_path):
     """Issue 21 item 5: recording an export recorded every cycle's corrections; now exactly what was written."""
     from setupfix.core.errors import ExportError

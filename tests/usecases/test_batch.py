@@ -131,6 +131,7 @@ def test_store_records_what_was_corrected_without_reading_again(tmp_path, monkey
     assert stored["deviation"].tolist() == pytest.approx(table["deviation"].tolist(), abs=0)
 
 
+@pytest.mark.slow
 def test_many_reports_in_chunks_give_the_same_output_and_progress_order(tmp_path):
     from setupfix.usecases.batch import chunk_size
 
@@ -201,6 +202,7 @@ def test_automatic_worker_count(monkeypatch) -> None:
     assert batch.auto_workers(1000) == 2
 
 
+@pytest.mark.slow
 def test_ewma_over_the_store_and_the_batch_does_not_depend_on_workers(tmp_path):
     """With λ < 1 and a store, each report is smoothed over every earlier part (store and batch): the same
     output for 1 and 2 workers, different from the unsmoothed one, and equal to correcting each report with

@@ -65,6 +65,7 @@ def test_batch_writes_every_hostile_name_escaped(tmp_path):
     assert all(f.isprintable() for f, _ in s.failed + s.skipped)
 
 
+@pytest.mark.slow
 def test_batch_and_correct_commands_escape_names(tmp_path, capsys):
     d = hostile_folder(tmp_path)
     assert main(["batch", str(d), "--model", str(MODEL), "--out", str(tmp_path / "b.csv"), "--settle", "0"]) == 0

@@ -25,6 +25,7 @@ def calypso_wide(tmp_path: Path) -> tuple[Path, Path]:
     return model, report
 
 
+@pytest.mark.slow
 def test_gaps_and_bound_are_over_the_kept_dimensions(calypso_wide: tuple[Path, Path]) -> None:
     model, report = calypso_wide
     comparison = compare_report(CompareRequest(model, trials=3, seed=1), report)

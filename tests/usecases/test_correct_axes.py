@@ -108,6 +108,7 @@ def test_offsets_rows_speak_components(tmp_path):
     assert by["W1.C"].cells()[6].count(".") == 1 and len(by["W1.C"].cells()[6].split(".")[1]) >= 4
 
 
+@pytest.mark.slow
 def test_sample_two_station_xyz_solves_through_the_cli():
     env_path = str(ROOT)
     out = subprocess.run(
@@ -159,6 +160,7 @@ def test_zone_with_one_component_missing_is_left_out(tmp_path):
     assert any("only one of its components" in n.message for n in cycle.notes)
 
 
+@pytest.mark.slow
 def test_history_store_keyed_by_component(tmp_path):
     from setupfix.core.errors import MatchError
     from setupfix.store import open_store

@@ -5,6 +5,7 @@ from __future__ import annotations
 import dataclasses
 
 import numpy as np
+import pytest
 from diagnose.helpers import guide_pins, one_effect, simulate
 
 from setupfix.diagnose import Diagnoser, Layout
@@ -26,6 +27,7 @@ def _random_walk(seed: int, step: float = 0.004):
     return dataclasses.replace(s, deviation=np.round(s.deviation + wander @ LAYOUT.composite, 4))
 
 
+@pytest.mark.slow
 def test_ewma_recommendation_is_the_correct_use_case_on_the_smoothed_series():
     """EWMA chosen: ``correct`` smooths the last part over the series (its History), and what it poses is the
     engine's own EWMA forecast -- two implementations of one estimate agree."""
@@ -54,6 +56,7 @@ def test_ewma_recommendation_moves_the_earlier_parts_by_the_corrections_logged()
     np.testing.assert_allclose(cycle.posed.problem.deviation, d.next_forecast[np.isfinite(d.next_forecast)], atol=1e-9)
 
 
+@pytest.mark.slow
 def test_augmented_recommendation_when_the_effect_earned_it():
     d = Diagnoser().run(LAYOUT, simulate(LAYOUT, [one_effect(LAYOUT, "drift")], seed=7).series)
     assert d.next_from.source == "augmented"

@@ -48,6 +48,7 @@ def large(tmp_path_factory):
     return path
 
 
+@pytest.mark.slow
 def test_model_show_output_grows_with_the_entries_not_the_grid(large):
     out = io.StringIO()
     start = time.perf_counter()
@@ -74,6 +75,7 @@ def test_small_models_keep_the_grid(tmp_path):
     assert DENSE_CELLS >= 20 * 20 and "\nR_FD " in out.getvalue() and "non-zero entries" not in out.getvalue()
 
 
+@pytest.mark.slow
 def test_null_space_of_many_dimensions_needs_no_square_factor(large):
     desc = describe_model(load_model(large))
     C = np.array(desc.matrices.composite)

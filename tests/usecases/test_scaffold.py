@@ -117,6 +117,7 @@ def _read(path: Path) -> pd.DataFrame | None:
     return table if bool((table["lower"].notna() & table["upper"].notna()).any()) else None
 
 
+@pytest.mark.slow
 def test_scaffold_on_every_bundled_sample_with_tolerances():
     done = 0
     for path in BUNDLED:
@@ -132,6 +133,7 @@ def test_scaffold_on_every_bundled_sample_with_tolerances():
     assert done >= 9
 
 
+@pytest.mark.slow
 @pytest.mark.needs_shared
 def test_scaffold_on_every_shared_sample_with_tolerances():
     root = shared_path("cmm-samples")

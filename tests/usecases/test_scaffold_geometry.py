@@ -121,6 +121,7 @@ def _samples() -> list[Path]:
     )
 
 
+@pytest.mark.slow
 def test_every_sample_with_vectors_gets_the_axes_and_weights_it_states():
     done: dict[str, int] = {}
     for path in _samples():  # a sample in both folders is checked twice, under one name

@@ -100,6 +100,7 @@ XYZ_CURRENT = (
 )
 
 
+@pytest.mark.slow
 def test_the_two_station_sample_from_report_to_read_back(tmp_path: Path) -> None:
     """The whole door: a multi-axis report corrected, the Fanuc program written, read back on every axis."""
     if not (XYZ / "model.toml").exists():
