@@ -2,7 +2,7 @@
 
 They share no mutable state with the screen; the comparison posts its progress as
 messages (``post_message`` is thread-safe) and stops between trials when cancelled.
-Exceptions reach :meth:`SetupfixApp.on_worker_state_changed`, the error boundary.
+Exceptions reach :meth:`~setupfix.tui.controller.SessionController.worker_changed`, the error boundary.
 """
 
 from __future__ import annotations
