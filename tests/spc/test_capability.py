@@ -81,6 +81,7 @@ def test_cpk_interval_matches_a_published_example() -> None:
     assert cpk_interval(c.ppk, c.n, confidence=0.90) == pytest.approx((0.328, 0.496), abs=5e-4)
 
 
+@pytest.mark.slow
 def test_cpk_interval_covers_the_true_value_about_95_percent_of_the_time() -> None:
     # A simulation independent of the formula: normal samples of a known process (true Cpk = 1.0).
     rng = np.random.default_rng(7)

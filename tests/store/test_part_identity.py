@@ -45,6 +45,7 @@ def _ewma(part):
     return [r["estimate"] for r in rows], [r for r in part["rules"] if r["rule"] == "ewma"]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("named", [True, False])
 def test_crlf_copy_and_export_import_do_not_change_the_ewma(tmp_path, capsys, named):
     model = _model(tmp_path)

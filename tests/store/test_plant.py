@@ -271,6 +271,7 @@ def test_migrate_copies_every_row(tmp_path, pg_url, capsys):
     assert "already holds" in capsys.readouterr().err
 
 
+@pytest.mark.slow
 def test_the_audit_export_holds_every_recommendation(tmp_path, location, capsys):
     _fill(location, tmp_path)
     out = tmp_path / "audit.csv"

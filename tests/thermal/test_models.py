@@ -102,6 +102,7 @@ def fitted(sim_runs: SimRuns) -> Fitted:
     return (KalmanFusionModel(seed=0, generations=20).fit(T, y, ambient=te, speed=sp), MRAModel().fit(T, y))
 
 
+@pytest.mark.slow
 def test_robustness_to_sinusoidal_sensor_error(fitted: Fitted, sim_runs: SimRuns) -> None:
     """Wang (2017) §4: eq. (18) on the motor sensor raises the fused model's RMSV less than MRA's."""
     kf, mra = fitted

@@ -49,6 +49,7 @@ def _rows(table: DataTable[Any]) -> list[list[str]]:
     return [[str(c) for c in table.get_row(k)] for k in table.rows]
 
 
+@pytest.mark.slow
 def test_open_sort_filter_export_then_a_bad_report(make_app: MakeApp, tmp_path: Path) -> None:
     bad = tmp_path / "bad.csv"
     bad.write_text(
@@ -123,6 +124,7 @@ def test_open_sort_filter_export_then_a_bad_report(make_app: MakeApp, tmp_path: 
     run(scenario())
 
 
+@pytest.mark.slow
 def test_optimiser_choice_and_compare_with_cancel(make_app: MakeApp) -> None:
     async def scenario() -> None:
         app = make_app()
@@ -155,6 +157,7 @@ def test_optimiser_choice_and_compare_with_cancel(make_app: MakeApp) -> None:
     run(scenario())
 
 
+@pytest.mark.slow
 def test_reports_that_do_not_match_show_the_match_table(make_app: MakeApp, tmp_path: Path) -> None:
     none = tmp_path / "none.csv"
     none.write_text(
@@ -187,6 +190,7 @@ def test_reports_that_do_not_match_show_the_match_table(make_app: MakeApp, tmp_p
     run(scenario())
 
 
+@pytest.mark.slow
 def test_a_folder_is_watched_and_the_newest_finished_report_opened(make_app: MakeApp, tmp_path: Path) -> None:
     shutil.copy(GUIDE_PINS / "cycle_01.csv", tmp_path / "a.csv")
 
@@ -210,6 +214,7 @@ def test_a_folder_is_watched_and_the_newest_finished_report_opened(make_app: Mak
     run(scenario())
 
 
+@pytest.mark.slow
 def test_history_from_the_store_one_key_diagnose_and_the_export_recorded(make_app: MakeApp, tmp_path: Path) -> None:
     from setupfix.store import open_store
     from setupfix.usecases.history import ImportRequest, import_history
@@ -245,6 +250,7 @@ def test_history_from_the_store_one_key_diagnose_and_the_export_recorded(make_ap
     run(scenario())
 
 
+@pytest.mark.slow
 def test_thermal_panel_shows_the_drift_and_the_feed_forward(make_app: MakeApp, tmp_path: Path) -> None:
     from conftest import SAMPLES
 
@@ -355,6 +361,7 @@ def test_the_command_line_gives_the_app_correct_s_reader_cycle_and_thermal_optio
     )
 
 
+@pytest.mark.slow
 def test_compare_solves_the_problem_correct_solves(make_app: MakeApp, tmp_path: Path) -> None:
     """The compare tab's exact result is the correction shown: the guarded problem with the register costs
     (controllers sample: T12 costs 3), not the problem on the real limits."""
@@ -388,6 +395,7 @@ def test_compare_solves_the_problem_correct_solves(make_app: MakeApp, tmp_path: 
     run(scenario())
 
 
+@pytest.mark.slow
 def test_names_that_look_like_markup_are_shown_as_written(make_app: MakeApp, tmp_path: Path) -> None:
     """A dimension named ``D1 [/b] [red`` and a report ``cycle[1] [red.csv``: a DataTable reads a plain
     string as markup (the closing tag raised a MarkupError and the screen died); every name is literal."""
@@ -417,6 +425,7 @@ def test_names_that_look_like_markup_are_shown_as_written(make_app: MakeApp, tmp
     run(scenario())
 
 
+@pytest.mark.slow
 def test_diagnose_key_tests_the_declared_factors_and_a_bad_one_is_a_notice(make_app: MakeApp, tmp_path: Path) -> None:
     """``tui --process LOG --factors …``: key d runs the same diagnosis as ``diagnose --factors`` (the effects
     it declares marked so); an unknown factor is a notice naming it, and the app stays up."""
@@ -448,6 +457,7 @@ def test_diagnose_key_tests_the_declared_factors_and_a_bad_one_is_a_notice(make_
     run(both())
 
 
+@pytest.mark.slow
 def test_the_file_picker_opens_at_the_nearest_folder_that_exists(tmp_path: Path) -> None:
     """After a report that could not be read (``/gone/bad.csv``), o opens the picker where that report would be,
     or above: a tree of a missing folder selected itself as a file and closed the picker twice (the app died)."""

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import pytest
 from spc_examples import closed_loop_store
 from tui.conftest import MakeApp, run, settle
 
@@ -53,6 +54,7 @@ def test_capability_screen_shows_every_characteristic(tmp_path: Path) -> None:
     run(scenario())
 
 
+@pytest.mark.slow
 def test_k_opens_the_capability_of_the_history_store_and_says_when_there_is_none(
     make_app: MakeApp, tmp_path: Path
 ) -> None:

@@ -89,6 +89,7 @@ def two_models(tmp_path: Path) -> tuple[Path, Path, Path]:
     return numbered, without, current
 
 
+@pytest.mark.slow
 def test_multi_axis_at_80x24_home_end_and_the_export_name_per_controller(
     make_app: MakeApp, tmp_path: Path, two_models: tuple[Path, Path, Path]
 ) -> None:
@@ -195,6 +196,7 @@ def test_multi_axis_at_80x24_home_end_and_the_export_name_per_controller(
     run(scenario())
 
 
+@pytest.mark.slow
 def test_switching_the_model_re_reads_current_and_a_mismatch_is_a_message(
     make_app: MakeApp, tmp_path: Path, two_models: tuple[Path, Path, Path]
 ) -> None:

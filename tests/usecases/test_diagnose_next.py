@@ -66,6 +66,7 @@ def test_augmented_recommendation_when_the_effect_earned_it():
     assert not any("did not beat" in str(n) for n in notes)
 
 
+@pytest.mark.slow
 def test_centre_rule_holds_the_registers_whose_dimensions_sat_at_the_centre():
     """Uncorrected setup errors (±0.03 mm) and a wandering W1: registers whose dimensions happen to sit within a
     quarter of the half tolerance are held -- without the rule the optimiser moves them."""
