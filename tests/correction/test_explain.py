@@ -8,7 +8,7 @@ import pytest
 from setupfix.correction.explain import fit_registers, leave_one_out, one_register, targets
 
 
-def test_leave_one_out_equals_refitting_without_each_dimension():
+def test_leave_one_out_equals_refitting_without_each_dimension() -> None:
     rng = np.random.default_rng(3)
     c = rng.choice([-1.0, 0.0, 1.0], size=(4, 12))
     r = rng.normal(0, 0.05, 12)
@@ -20,7 +20,7 @@ def test_leave_one_out_equals_refitting_without_each_dimension():
         assert loo[q] == pytest.approx(r[q] + c[:, q] @ x, abs=1e-9)
 
 
-def test_one_register_names_the_register_that_alone_explains_a_shift():
+def test_one_register_names_the_register_that_alone_explains_a_shift() -> None:
     """A WKS entered 0.35 wrong: least squares spreads it over the WKS and the tool that moves the same
     dimensions; the one-register fit finds the WKS and the whole amount, with nothing left over."""
     c = np.array(
@@ -34,7 +34,7 @@ def test_one_register_names_the_register_that_alone_explains_a_shift():
     spread = fit_registers(c, r)
     assert np.count_nonzero(np.abs(spread) > 1e-3) > 1  # the fit's minimum norm is not one register
     j, change, after = one_register(c, r)
-    assert (j, change) == (0, pytest.approx(-0.35))
+    assert j == 0 and change == pytest.approx(-0.35)
     assert np.allclose(after, 0.0)
     # brute force: no other single register leaves a smaller sum of squares
     for k in range(3):
@@ -42,7 +42,7 @@ def test_one_register_names_the_register_that_alone_explains_a_shift():
         assert np.sum((r + c[k] * a) ** 2) >= np.sum(after**2) - 1e-15
 
 
-def test_one_register_with_nothing_to_move_and_targets_of_one_sided_limits():
+def test_one_register_with_nothing_to_move_and_targets_of_one_sided_limits() -> None:
     j, change, after = one_register(np.zeros((2, 3)), np.ones(3))
     assert (j, change) == (-1, 0.0) and np.array_equal(after, np.ones(3))
     assert np.array_equal(

@@ -3,8 +3,11 @@
 from __future__ import annotations
 
 import itertools
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
+import numpy.typing as npt
 import pytest
 
 from setupfix.correction.ewma import ewma_history
@@ -13,15 +16,26 @@ from setupfix.correction.recommend import recommend
 from setupfix.correction.relation import relation_matrices
 from setupfix.diagnose.forecast import forecast_shift
 from setupfix.diagnose.terms import Layout
-from setupfix.model import PartMeasurement, model_from_dict
+from setupfix.model import PartMeasurement, ProcessModel, model_from_dict
 from setupfix.optimize import CorrectionProblem, get_optimizer
 
+if TYPE_CHECKING:
+    from setupfix.usecases.requests import CycleCorrection
+
 SOLVE = get_optimizer("exact").solve
+#: A model document's table, as model_from_dict reads it.
+Doc = dict[str, Any]
 
 
-def model(safety=None, w1=None, w2=None, t5=None, effects=None):
+def model(
+    safety: Doc | None = None,
+    w1: Doc | None = None,
+    w2: Doc | None = None,
+    t5: Doc | None = None,
+    effects: Doc | None = None,
+) -> ProcessModel:
     """Two WKS and a tool on two dimensions; W1 and W2 move D1 alike (a null space of x1 − x2)."""
-    doc = {
+    doc: Doc = {
         "process": {"name": "p", "resolution": 0.001, "limit": 0.02},
         "wks": {"W1": {"register": "G54", **(w1 or {})}, "W2": {"register": "G55", **(w2 or {})}},
         "tools": {"T5": {"register": "H5", **(t5 or {})}},
@@ -38,14 +52,14 @@ def model(safety=None, w1=None, w2=None, t5=None, effects=None):
     return model_from_dict(doc)
 
 
-def part(m, deviation, timestamp=None, name="A1"):
+def part(m: ProcessModel, deviation: npt.ArrayLike, timestamp: str | None = None, name: str = "A1") -> PartMeasurement:
     dev = np.asarray(deviation, dtype=float)
     return PartMeasurement(
         part=name, report="r.csv", timestamp=timestamp, deviation=dev, sources=tuple("" for _ in dev)
     )
 
 
-def brute_force(problem: CorrectionProblem):
+def brute_force(problem: CorrectionProblem) -> tuple[float, npt.NDArray[np.float64]]:
     """Every grid point: the best f1 (eq. 8), then the least Σ cost·x² among those (eq. 9 weighted)."""
     axes = [np.arange(k0, k1 + 1) * problem.resolution for k0, k1 in zip(problem.kmin, problem.kmax, strict=True)]
     grid = np.array(list(itertools.product(*axes)))
@@ -56,7 +70,7 @@ def brute_force(problem: CorrectionProblem):
 
 
 @pytest.mark.parametrize("costs", [(1.0, 1.0), (4.0, 1.0), (1.0, 9.0), (0.25, 1.0)])
-def test_costs_pick_the_least_weighted_norm_as_brute_force_says(costs):
+def test_costs_pick_the_least_weighted_norm_as_brute_force_says(costs: tuple[float, float]) -> None:
     m = model(w1={"cost": costs[0]}, w2={"cost": costs[1]})
     posed = pose_problem(m, part(m, [0.008, 0.0]))
     np.testing.assert_array_equal(posed.problem.cost, [costs[0], costs[1], 1.0])
@@ -71,7 +85,7 @@ def test_costs_pick_the_least_weighted_norm_as_brute_force_says(costs):
         assert abs(result.x[cheap]) > abs(result.x[1 - cheap])
 
 
-def test_ewma_equals_the_formula_with_corrections_and_a_tool_change():
+def test_ewma_equals_the_formula_with_corrections_and_a_tool_change() -> None:
     m = model()
     C = relation_matrices(m).composite
     t = np.array(
@@ -99,7 +113,7 @@ def test_ewma_equals_the_formula_with_corrections_and_a_tool_change():
     assert [e.rule for e in posed.effects] == ["ewma"] and posed.estimated
 
 
-def test_forecast_equals_forecast_shift_and_relations_replace_the_composite():
+def test_forecast_equals_forecast_shift_and_relations_replace_the_composite() -> None:
     effects = {
         "origin": "2026-01-01T06:00:00",
         "cycle_hours": 0.5,
@@ -125,7 +139,7 @@ def test_forecast_equals_forecast_shift_and_relations_replace_the_composite():
     np.testing.assert_array_equal(pose_problem(m, part(m, y), composite=given).problem.composite, given)
 
 
-def test_guard_band_cumulative_bounds_and_fixed_registers_in_order():
+def test_guard_band_cumulative_bounds_and_fixed_registers_in_order() -> None:
     m = model(
         safety={"uncertainty": 0.002, "guard_band": 0.5, "cumulative_limit": 0.005},
         w2={"cost": 2.0},
@@ -153,7 +167,7 @@ def test_guard_band_cumulative_bounds_and_fixed_registers_in_order():
     assert [r.rule for r in rec.rules][:2] == ["guard_band", "cumulative_limit"]
 
 
-def test_reject_judges_the_part_as_measured_not_the_estimate():
+def test_reject_judges_the_part_as_measured_not_the_estimate() -> None:
     m = model(safety={"reject_band": 0.005})
     y = np.array([0.02, 0.0])  # 0.01 beyond D1's upper limit: beyond the reject band
     posed = pose_problem(m, part(m, y))
@@ -168,28 +182,28 @@ from conftest import GUIDE_PINS  # noqa: E402
 TRUNCATED = ("P2 D1", "P2 D2", "P2 D3", "P2 D4")  # half of station P2's seven dimensions
 
 
-def truncated_copy(tmp_path, name="cycle_02.csv", drop=TRUNCATED):
+def truncated_copy(tmp_path: Path, name: str = "cycle_02.csv", drop: tuple[str, ...] = TRUNCATED) -> Path:
     lines = (GUIDE_PINS / name).read_text(encoding="utf-8").splitlines(keepends=True)
     out = tmp_path / f"truncated_{name}"
     out.write_text("".join(li for li in lines if not li.startswith(tuple(f"{d}," for d in drop))), encoding="utf-8")
     return out
 
 
-def corrected(report, model_path=GUIDE_PINS / "model.toml", **inputs):
+def corrected(report: Path, model_path: Path = GUIDE_PINS / "model.toml", **inputs: Any) -> CycleCorrection:
     from setupfix.usecases.correct import correct_report, load_request
 
     (cycle,) = correct_report(load_request(model_path, **inputs), report).cycles
     return cycle
 
 
-def moving(cycle, dims):
+def moving(cycle: CycleCorrection, dims: tuple[str, ...]) -> set[str]:
     """Register IDs whose composite column moves any of ``dims`` (names), from the model's relation matrices."""
     rm = relation_matrices(cycle.model)
     cols = [i for i, d in enumerate(cycle.model.dimensions) if d.name in dims]
     return {r for r, row in zip(rm.registers, rm.composite, strict=True) if np.any(row[cols] != 0)}
 
 
-def test_a_truncated_report_holds_every_register_that_moves_a_missing_dimension(tmp_path):
+def test_a_truncated_report_holds_every_register_that_moves_a_missing_dimension(tmp_path: Path) -> None:
     full = corrected(GUIDE_PINS / "cycle_02.csv")
     cycle = corrected(truncated_copy(tmp_path))
     held = moving(cycle, TRUNCATED)
@@ -203,7 +217,7 @@ def test_a_truncated_report_holds_every_register_that_moves_a_missing_dimension(
         assert any(v != 0 for r, v in cycle.corrections.items() if r not in held)
 
 
-def test_a_dimension_marked_sampled_leaves_its_registers_free(tmp_path):
+def test_a_dimension_marked_sampled_leaves_its_registers_free(tmp_path: Path) -> None:
     text = (GUIDE_PINS / "model.toml").read_text(encoding="utf-8")
     assert "[template.dimensions.D1]" in text
     for d in ("D1", "D2", "D3", "D4"):
@@ -222,7 +236,7 @@ def test_a_dimension_marked_sampled_leaves_its_registers_free(tmp_path):
         load_model(bad)
 
 
-def test_a_recent_measurement_in_the_history_stands_in_moved_by_the_corrections_since(tmp_path):
+def test_a_recent_measurement_in_the_history_stands_in_moved_by_the_corrections_since(tmp_path: Path) -> None:
     import contextlib
     import io
 

@@ -8,6 +8,8 @@ import shutil
 from pathlib import Path
 
 import numpy as np
+import pytest
+from conftest import GUIDE_PINS
 
 from setupfix.model import load_model
 from setupfix.tui.session import open_report
@@ -15,7 +17,6 @@ from setupfix.usecases.batch import run_batch
 from setupfix.usecases.correct import correct_report
 from setupfix.usecases.requests import CorrectRequest
 from setupfix.views.correction import summary as headline
-from tests.conftest import GUIDE_PINS
 
 
 def draft_copy(tmp_path: Path) -> Path:
@@ -28,7 +29,7 @@ def draft_copy(tmp_path: Path) -> Path:
     return path
 
 
-def test_the_same_model_applies_and_its_draft_holds_with_every_change_zero(tmp_path):
+def test_the_same_model_applies_and_its_draft_holds_with_every_change_zero(tmp_path: Path) -> None:
     report = GUIDE_PINS / "cycle_01.csv"
     (done,) = correct_report(CorrectRequest(load_model(GUIDE_PINS / "model.toml")), report).cycles
     assert done.verdict == "apply" and np.any(done.recommendation.x)  # so the hold below is the draft's
@@ -46,7 +47,9 @@ def test_the_same_model_applies_and_its_draft_holds_with_every_change_zero(tmp_p
     assert all(v == 0 for v in held.corrections.values())
 
 
-def test_a_draft_holds_through_the_cli_json_with_exit_status_zero(tmp_path, capsys):
+def test_a_draft_holds_through_the_cli_json_with_exit_status_zero(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     from setupfix.cli import main
 
     path = draft_copy(tmp_path)
@@ -60,7 +63,7 @@ def test_a_draft_holds_through_the_cli_json_with_exit_status_zero(tmp_path, caps
     assert "verdict: HOLD — DRAFT MODEL: edit the model (draft)" in capsys.readouterr().out
 
 
-def test_batch_and_the_tui_session_hold_a_draft_too(tmp_path):
+def test_batch_and_the_tui_session_hold_a_draft_too(tmp_path: Path) -> None:
     model = load_model(draft_copy(tmp_path))
     folder = tmp_path / "reports"
     folder.mkdir()
@@ -76,7 +79,7 @@ def test_batch_and_the_tui_session_hold_a_draft_too(tmp_path):
     assert shown.rules[0].startswith("draft: edit the model (draft)")
 
 
-def test_removing_the_key_recommends_again(tmp_path):
+def test_removing_the_key_recommends_again(tmp_path: Path) -> None:
     model = load_model(draft_copy(tmp_path))
     (cycle,) = correct_report(
         CorrectRequest(dataclasses.replace(model, draft=False)), GUIDE_PINS / "cycle_01.csv"
@@ -84,7 +87,7 @@ def test_removing_the_key_recommends_again(tmp_path):
     assert cycle.verdict == "apply"
 
 
-def test_a_batch_with_a_store_leaves_a_drafts_reports_unprocessed(tmp_path):
+def test_a_batch_with_a_store_leaves_a_drafts_reports_unprocessed(tmp_path: Path) -> None:
     from setupfix.store import open_store
 
     model = load_model(draft_copy(tmp_path))

@@ -11,7 +11,7 @@ from setupfix.correction.relation import (
     predict_features,
     relation_matrices,
 )
-from setupfix.model import model_from_dict
+from setupfix.model import ProcessModel, model_from_dict
 
 # Printed matrices of the practical example for one workpiece (Stryczek 2014).
 PAPER_R_TF = np.array([[1, 1, 0, 0, -1, -1, -1], [0, 0, -1, 1, 0, 0, 0]])
@@ -20,7 +20,7 @@ PAPER_R_FD = np.eye(7)
 PAPER_R_FD[2, 3] = -1
 
 
-def test_guide_pins_blocks_equal_the_printed_matrices(guide_pins_model):
+def test_guide_pins_blocks_equal_the_printed_matrices(guide_pins_model: ProcessModel) -> None:
     rm = relation_matrices(guide_pins_model)
     for p in range(4):
         f = slice(7 * p, 7 * p + 7)
@@ -31,7 +31,7 @@ def test_guide_pins_blocks_equal_the_printed_matrices(guide_pins_model):
         assert not rm.R_WF[others, f].any()
 
 
-def test_d4_moves_with_w1_w5_and_twice_t23(guide_pins_model):
+def test_d4_moves_with_w1_w5_and_twice_t23(guide_pins_model: ProcessModel) -> None:
     rm = relation_matrices(guide_pins_model)
     column = rm.composite[:, rm.dimensions.index("P1D4")]
     expected = dict.fromkeys(rm.registers, 0.0) | {"W1": 1.0, "W5": 1.0, "T23": 2.0}
@@ -42,7 +42,7 @@ def test_d4_moves_with_w1_w5_and_twice_t23(guide_pins_model):
     assert predict_dimensions(x, rm.composite)[rm.dimensions.index("P1D4")] == pytest.approx(0.04)
 
 
-def test_features_by_eq3_including_the_machine_level():
+def test_features_by_eq3_including_the_machine_level() -> None:
     # The paper's first illustration: F1 = -M1 + W1 + T1, F2 = -M1 + W2 - T1, D2 = F1 - F2.
     doc = {
         "process": {"name": "illustration"},
@@ -64,7 +64,7 @@ def test_features_by_eq3_including_the_machine_level():
     assert d[1] == pytest.approx(0.01 - 0.02 + 2 * 0.005)
 
 
-def test_rank_and_null_space_of_the_paper_example(guide_pins_model):
+def test_rank_and_null_space_of_the_paper_example(guide_pins_model: ProcessModel) -> None:
     rm = relation_matrices(guide_pins_model)
     comp = rm.composite
     assert np.linalg.matrix_rank(comp) == 9
@@ -74,12 +74,12 @@ def test_rank_and_null_space_of_the_paper_example(guide_pins_model):
     np.testing.assert_allclose(direction @ comp, 0.0, atol=1e-12)
 
 
-def test_null_space_empty_when_full_rank():
+def test_null_space_empty_when_full_rank() -> None:
     comp = np.array([[1.0, 0.0, 1.0], [0.0, 1.0, -1.0]])
     assert null_space_directions(comp).shape == (0, 2)
 
 
-def test_null_space_spans_and_is_readable():
+def test_null_space_spans_and_is_readable() -> None:
     rng = np.random.default_rng(0)
     comp = rng.integers(-1, 2, size=(3, 6)).astype(float)
     comp = np.vstack([comp, comp[0] + comp[1], comp[2] - comp[0]])  # rank ≤ 3, two extra dependencies
@@ -89,7 +89,7 @@ def test_null_space_spans_and_is_readable():
     assert np.allclose(np.abs(null).max(axis=1), 1.0)
 
 
-def test_matrices_are_kept_per_model_object_and_never_stale(guide_pins_model):
+def test_matrices_are_kept_per_model_object_and_never_stale(guide_pins_model: ProcessModel) -> None:
     """The matrices are built once per model object (batch: once, not per report), are read-only,
     and a different model, even one equal in all but one weight, gets its own."""
     import dataclasses

@@ -40,7 +40,7 @@ DOC = {
 }
 
 
-def test_composite_by_hand():
+def test_composite_by_hand() -> None:
     model = model_from_dict(DOC)
     assert model.register_ids == ["W1.X", "W1.Y", "W1.Z", "W1.C", "T1", "T1.R"]
     rel = relation_matrices(model)
@@ -69,7 +69,7 @@ def test_composite_by_hand():
     assert rel.zones[:, :3, :] == pytest.approx(0.0)
 
 
-def test_rotation_moves_a_feature_by_s_cross_x():
+def test_rotation_moves_a_feature_by_s_cross_x() -> None:
     positions = np.array([[3.0, 4.0, 7.0]])
     rotation = np.array([[1.0]])
     zero = np.zeros((1, 1))
@@ -80,7 +80,7 @@ def test_rotation_moves_a_feature_by_s_cross_x():
     assert p[0, 0] == pytest.approx(np.array([0.0, -7.0, 4.0]) * math.pi / 180)
 
 
-def test_projected_composite_is_the_spec_sum():
+def test_projected_composite_is_the_spec_sum() -> None:
     rng = np.random.default_rng(3)
     shifts = rng.normal(size=(4, 5, 3))
     radius = rng.normal(size=(4, 5))
@@ -95,7 +95,7 @@ def test_projected_composite_is_the_spec_sum():
             assert got[r, q] == pytest.approx(want)
 
 
-def test_one_axis_relation_unchanged():
+def test_one_axis_relation_unchanged() -> None:
     doc = {
         "process": {"name": "one"},
         "wks": {"W1": {}},

@@ -6,20 +6,38 @@ The rules are :mod:`setupfix.correction.safety`; the problems are posed by :mod:
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Callable
+from typing import Any
 
 import numpy as np
+import numpy.typing as npt
 import pytest
 
 from setupfix.correction.ewma import ewma
 from setupfix.correction.pose import pose_policy
 from setupfix.correction.recommend import recommend as recommend_posed
-from setupfix.correction.safety import Policy, apply_gain, cumulative_bounds, guard_limits, harmed_mask, reject_mask
-from setupfix.optimize import CorrectionProblem, get_optimizer
+from setupfix.correction.safety import (
+    Policy,
+    Recommendation,
+    apply_gain,
+    cumulative_bounds,
+    guard_limits,
+    harmed_mask,
+    reject_mask,
+)
+from setupfix.optimize import CorrectionProblem, OptimizeResult, get_optimizer
 
 SOLVE = get_optimizer("exact").solve
 
 
-def problem(composite, deviation, lower, upper, limit=0.1, h=0.001):
+def problem(
+    composite: npt.ArrayLike,
+    deviation: npt.ArrayLike,
+    lower: npt.ArrayLike,
+    upper: npt.ArrayLike,
+    limit: float = 0.1,
+    h: float = 0.001,
+) -> CorrectionProblem:
     c = np.atleast_2d(np.asarray(composite, dtype=float))
     n, m = c.shape
     return CorrectionProblem(
@@ -35,33 +53,39 @@ def problem(composite, deviation, lower, upper, limit=0.1, h=0.001):
     )
 
 
-def policy(p, **kw):
-    return dataclasses.replace(
-        Policy.neutral(p), **{k: np.asarray(v, float) if k != "guard_band" else v for k, v in kw.items()}
-    )
+def policy(p: CorrectionProblem, **kw: Any) -> Policy:
+    fields: dict[str, Any] = {k: np.asarray(v, float) if k != "guard_band" else v for k, v in kw.items()}
+    return dataclasses.replace(Policy.neutral(p), **fields)
 
 
-def recommend(p, pol, solve, *, measured=None, **kw):
+def recommend(
+    p: CorrectionProblem,
+    pol: Policy,
+    solve: Callable[[CorrectionProblem], OptimizeResult],
+    *,
+    measured: npt.NDArray[np.float64] | None = None,
+    **kw: Any,
+) -> Recommendation:
     """The rules around ``solve`` on ``p`` posed with ``pol`` (setupfix.correction.pose: guard band, bounds, costs)."""
     return recommend_posed(pose_policy(p, pol, measured=measured), solve, **kw)
 
 
-def rules(rec):
+def rules(rec: Recommendation) -> list[str]:
     return [r.rule for r in rec.rules]
 
 
 # one register moving two dimensions by +1: A (±0.05) measured 0, B (±0.1) measured -0.1
-TWO = dict(composite=[[1.0, 1.0]], deviation=[0.0, -0.1], lower=[-0.05, -0.1], upper=[0.05, 0.1])
+TWO: dict[str, Any] = dict(composite=[[1.0, 1.0]], deviation=[0.0, -0.1], lower=[-0.05, -0.1], upper=[0.05, 0.1])
 
 
-def test_neutral_policy_is_the_plain_optimum():
+def test_neutral_policy_is_the_plain_optimum() -> None:
     p = problem(**TWO)
     rec = recommend(p, Policy.neutral(p), SOLVE)
     assert rec.verdict == "apply" and rec.rules == ()
     assert rec.x == pytest.approx([0.025])  # 0.05 − x = x
 
 
-def test_reject_band_gives_no_correction_and_names_the_dimension():
+def test_reject_band_gives_no_correction_and_names_the_dimension() -> None:
     p = problem([[1.0, 1.0]], [0.0, -0.35], [-0.05, -0.1], [0.05, 0.1])
     rec = recommend(p, policy(p, reject_band=[0.2, 0.2]), SOLVE, names={"D1": "Bore 1"})
     assert rec.verdict == "reject" and not rec.x.any()
@@ -71,7 +95,7 @@ def test_reject_band_gives_no_correction_and_names_the_dimension():
     assert inside.verdict != "reject"
 
 
-def test_dead_band_turns_a_small_change_into_hold():
+def test_dead_band_turns_a_small_change_into_hold() -> None:
     p = problem([[1.0]], [0.002], [-0.1], [0.1])
     held = recommend(p, policy(p, dead_band=[0.003]), SOLVE)
     assert held.verdict == "hold" and not held.x.any() and rules(held) == ["dead_band"]
@@ -79,14 +103,14 @@ def test_dead_band_turns_a_small_change_into_hold():
     assert applied.verdict == "apply" and applied.x == pytest.approx([-0.002])
 
 
-def test_gain_applies_the_fraction_rounded_towards_zero():
+def test_gain_applies_the_fraction_rounded_towards_zero() -> None:
     p = problem([[1.0]], [0.047], [-0.1], [0.1])
     rec = recommend(p, policy(p, gain=[0.5]), SOLVE)
     assert rec.x == pytest.approx([-0.023]) and "gain" in rules(rec)  # 0.5 · −0.047 towards zero
 
 
 @pytest.mark.slow
-def test_gain_never_moves_an_in_tolerance_dimension_out():
+def test_gain_never_moves_an_in_tolerance_dimension_out() -> None:
     rng = np.random.default_rng(3)
     for _ in range(30):
         c = rng.choice([-1.0, 0.0, 1.0], size=(3, 6))
@@ -98,7 +122,7 @@ def test_gain_never_moves_an_in_tolerance_dimension_out():
         assert not (harmed_mask(dev, p.predicted(part.x), p.lower, p.upper) & both_in).any()
 
 
-def test_cumulative_limit_tightens_the_step_and_flags_the_register():
+def test_cumulative_limit_tightens_the_step_and_flags_the_register() -> None:
     p = problem([[1.0]], [-0.08], [-0.1], [0.1])
     rec = recommend(p, policy(p, cumulative_limit=[0.1], cumulative=[0.07]), SOLVE)
     assert rec.x == pytest.approx([0.03])  # 0.07 already applied since the reset
@@ -107,13 +131,13 @@ def test_cumulative_limit_tightens_the_step_and_flags_the_register():
     assert lb == pytest.approx([-0.1]) and ub == pytest.approx([0.0])  # beyond: may only move back
 
 
-def test_per_step_clamp_is_flagged():
+def test_per_step_clamp_is_flagged() -> None:
     p = problem([[1.0]], [-0.09], [-0.1], [0.1], limit=0.05)
     rec = recommend(p, Policy.neutral(p), SOLVE)
     assert rec.x == pytest.approx([0.05]) and rec.at_limit == ("R0",) and rules(rec) == ["clamp"]
 
 
-def test_guard_band_optimises_on_the_shrunk_limits():
+def test_guard_band_optimises_on_the_shrunk_limits() -> None:
     p = problem(**TWO)
     rec = recommend(p, policy(p, uncertainty=[0.02, 0.0]), SOLVE)
     assert rec.x == pytest.approx([0.015])  # 0.03 − x = x
@@ -122,7 +146,7 @@ def test_guard_band_optimises_on_the_shrunk_limits():
     assert lo == up == pytest.approx([0.0])
 
 
-def test_no_harm_gives_up_the_hopeless_dimension():
+def test_no_harm_gives_up_the_hopeless_dimension() -> None:
     # the max-min optimum (x = +0.1) would push B from +0.05 to +0.15; the exact optimiser's triage
     # (issue 13) already gives A up and keeps B in tolerance, and no_harm guards any optimiser that does not
     p = problem([[1.0, 1.0]], [-0.25, 0.05], [-0.1, -0.1], [0.1, 0.1])
@@ -135,14 +159,14 @@ def test_no_harm_gives_up_the_hopeless_dimension():
     assert not harmed_mask(p.deviation, p.predicted(rec.x), p.lower, p.upper).any()
 
 
-def test_no_harm_holds_when_no_correction_is_harmless():
+def test_no_harm_holds_when_no_correction_is_harmless() -> None:
     # an optimiser that pushes B (in tolerance) out, even once A is given up: nothing may be applied
     p = problem([[1.0, -1.0]], [-0.3, 0.099], [-0.1, -0.1], [0.1, 0.1])
     rec = recommend(p, Policy.neutral(p), lambda q: dataclasses.replace(SOLVE(q), x=np.array([-0.05])))
     assert rec.verdict == "hold" and not rec.x.any() and "no_harm" in rules(rec)
 
 
-def test_register_cost_moves_the_cheap_register():
+def test_register_cost_moves_the_cheap_register() -> None:
     p = problem([[1.0], [1.0]], [0.04], [-0.1], [0.1])  # W + T: any split works
     even = recommend(p, Policy.neutral(p), SOLVE)
     assert even.x == pytest.approx([-0.02, -0.02])
@@ -150,7 +174,7 @@ def test_register_cost_moves_the_cheap_register():
     assert abs(cheap_w.x[0]) > abs(cheap_w.x[1])
 
 
-def test_reject_mask_and_ewma():
+def test_reject_mask_and_ewma() -> None:
     assert reject_mask(np.array([0.31, -0.2, 0.0]), np.full(3, -0.1), np.full(3, 0.1), np.full(3, 0.2)).tolist() == [
         True,
         False,
@@ -165,7 +189,7 @@ def test_reject_mask_and_ewma():
 # --- no harm inside the triage's optimum (issue 22) -------------------------------------------------------
 
 
-def fourteen_and_seventeen():
+def fourteen_and_seventeen() -> CorrectionProblem:
     """R0 moves A1…A14 (measured +0.09, in) and B1…B15 (−0.15, out); R1 moves C1…C3 (−0.12, out).
     Bringing the B in pushes every A out; the C come in on their own.  The triage without no harm
     brought the 15 B and 3 C in, the re-solve on the A alone then gave the C up too: 14 kept."""
@@ -176,7 +200,7 @@ def fourteen_and_seventeen():
     return problem(comp, dev, np.full(32, -0.1), np.full(32, 0.1))
 
 
-def test_triage_keeps_seventeen_where_the_re_solve_kept_fourteen():
+def test_triage_keeps_seventeen_where_the_re_solve_kept_fourteen() -> None:
     p = fourteen_and_seventeen()
     rec = recommend(p, Policy.neutral(p), SOLVE)
     m = p.margins(rec.x)
@@ -194,7 +218,7 @@ def test_triage_keeps_seventeen_where_the_re_solve_kept_fourteen():
     assert "no_harm" in rules(rec) and "given_up" in rules(rec)
 
 
-def test_guarded_triage_keeps_the_dimensions_measured_inside_the_real_limits():
+def test_guarded_triage_keeps_the_dimensions_measured_inside_the_real_limits() -> None:
     # B measured at 0.095 (inside ±0.1 but within U = 0.01 of the limit): the guard band alone would let
     # the triage push it out to bring A in; the no-harm floor keeps it inside the real limits
     p = problem([[1.0, 1.0]], [-0.3, 0.095], [-0.1, -0.1], [0.1, 0.1])
@@ -205,7 +229,7 @@ def test_guarded_triage_keeps_the_dimensions_measured_inside_the_real_limits():
     assert rec.x == pytest.approx([-0.095])  # B centred (guarded margin 0.09 at the centre)
 
 
-def test_no_harm_refuses_when_not_even_the_measured_in_tolerance_can_be_kept():
+def test_no_harm_refuses_when_not_even_the_measured_in_tolerance_can_be_kept() -> None:
     # "no change" is outside the register's bounds [+0.01, +0.05]: every step pushes B (+0.095) out
     c = problem([[1.0, 1.0]], [-0.3, 0.095], [-0.1, -0.1], [0.1, 0.1])
     p = dataclasses.replace(c, lb=np.array([0.01]), ub=np.array([0.05]))
@@ -217,7 +241,7 @@ def test_no_harm_refuses_when_not_even_the_measured_in_tolerance_can_be_kept():
 
 
 @pytest.mark.parametrize("seed", range(30))
-def test_given_up_never_names_a_dimension_predicted_in_tolerance(seed):
+def test_given_up_never_names_a_dimension_predicted_in_tolerance(seed: int) -> None:
     rng = np.random.default_rng(seed)
     n, m = 3, 9
     comp = rng.integers(-1, 2, size=(n, m)).astype(float)

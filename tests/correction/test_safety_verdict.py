@@ -5,23 +5,29 @@ from __future__ import annotations
 
 import dataclasses
 import re
+from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
+import numpy.typing as npt
 import pytest
 from conftest import GUIDE_PINS
 from optimize.test_exact_robust import shop_problem
 
 import parsers
 from setupfix.correction.explain import fit_registers, leave_one_out
-from setupfix.correction.pose import pose_policy, pose_problem
+from setupfix.correction.pose import PosedProblem, pose_policy, pose_problem
 from setupfix.correction.recommend import recommend, stopped_rule
 from setupfix.correction.safety import STOPPED, Policy, short_list
 from setupfix.inputs.cycles import read_parts
-from setupfix.model import load_model
+from setupfix.model import PartMeasurement, ProcessModel, load_model
 from setupfix.optimize import CorrectionProblem, Stopped, get_optimizer
 
+if TYPE_CHECKING:
+    from setupfix.usecases.requests import CycleCorrection
 
-def test_a_solve_stopped_before_any_proof_is_not_solved_never_no_change_needed():
+
+def test_a_solve_stopped_before_any_proof_is_not_solved_never_no_change_needed() -> None:
     problem = shop_problem(60, 600, 2)  # the LP bound alone takes longer than 1e-4 s
     rec = recommend(pose_policy(problem, Policy.neutral(problem)), get_optimizer("exact", time_limit=1e-4).solve)
     assert rec.result.status == "time_limit" and rec.result.stopped == Stopped("lp bound", "time limit")
@@ -35,13 +41,13 @@ def test_a_solve_stopped_before_any_proof_is_not_solved_never_no_change_needed()
     assert done.solved and done.result.status == "optimal" and "not_solved" not in [r.rule for r in done.rules]
 
 
-def guide_posed(report: str = "cycle_01.csv"):
+def guide_posed(report: str = "cycle_01.csv") -> PosedProblem:
     model = load_model(GUIDE_PINS / "model.toml")
     _, parts = read_parts(model, parsers.load_source(GUIDE_PINS / report))
     return pose_problem(model, parts[0])
 
 
-def test_a_stopped_solve_that_still_improves_is_applied_with_what_is_certified():
+def test_a_stopped_solve_that_still_improves_is_applied_with_what_is_certified() -> None:
     posed = guide_posed()
     # the stage a tiny limit stops depends on the machine's load (an LP interrupted at once proves nothing):
     # the first limit whose solve stops after the LP bound, in the grid-optimum stage
@@ -55,12 +61,13 @@ def test_a_stopped_solve_that_still_improves_is_applied_with_what_is_certified()
     )
     assert rec.verdict == "apply" and rec.solved
     (rule,) = [r for r in rec.rules if r.rule == "stopped"]
+    assert rec.result.bound is not None
     gap = rec.result.bound - rec.result.margin_after
     assert f"within {gap:.4f} of the best possible" in rule.message
     assert rec.result.margin_after > posed.guarded.margin_before  # verified better than no correction
 
 
-def test_stopped_rule_states_the_certified_norm_ratio():
+def test_stopped_rule_states_the_certified_norm_ratio() -> None:
     posed = guide_posed()
     result = get_optimizer("exact").solve(posed.guarded)
     result = dataclasses.replace(
@@ -78,27 +85,27 @@ def test_stopped_rule_states_the_certified_norm_ratio():
 @pytest.mark.parametrize(
     ("n", "text"), [(0, ""), (1, "A0"), (4, "A0, A1, A2, A3"), (744, "A0, A1, A2, … and 741 more")]
 )
-def test_short_list_names_the_first_few_and_counts_the_rest(n, text):
+def test_short_list_names_the_first_few_and_counts_the_rest(n: int, text: str) -> None:
     assert short_list(f"A{i}" for i in range(n)) == text
 
 
 # -- deviations beyond the reject band: gross, or a setup error the registers explain -----------------------------
 
 
-def guide_part():
+def guide_part() -> tuple[ProcessModel, PartMeasurement]:
     model = load_model(GUIDE_PINS / "model.toml")
     _, parts = read_parts(model, parsers.load_source(GUIDE_PINS / "cycle_01.csv"))
     return model, parts[0]
 
 
-def corrected(model, part, deviation):
+def corrected(model: ProcessModel, part: PartMeasurement, deviation: npt.NDArray[np.float64]) -> CycleCorrection:
     from setupfix.usecases.correct import correct_cycle
     from setupfix.usecases.requests import CorrectRequest
 
     return correct_cycle(CorrectRequest(model), dataclasses.replace(part, deviation=deviation))
 
 
-def test_a_wks_entered_wrong_is_named_with_its_amount_not_rejected_as_a_broken_tool():
+def test_a_wks_entered_wrong_is_named_with_its_amount_not_rejected_as_a_broken_tool() -> None:
     model, part = guide_part()
     composite = CorrectionProblem.from_part(model, part).composite
     j = [r.id for r in model.registers].index("W2")  # G55: station P2 at B0
@@ -107,7 +114,9 @@ def test_a_wks_entered_wrong_is_named_with_its_amount_not_rejected_as_a_broken_t
     assert rec.verdict == "hold" and not rec.x.any() and rec.solved
     (rule,) = [r for r in rec.rules if r.rule == "setup_error"]
     assert rule.registers == ("W2",) and "reject" not in [r.rule for r in rec.rules]
-    amount = float(re.search(r"G55 looks off by ([-+]\d+\.\d+) mm; beyond the per-step limit 0\.1", rule.message)[1])
+    found = re.search(r"G55 looks off by ([-+]\d+\.\d+) mm; beyond the per-step limit 0\.1", rule.message)
+    assert found is not None
+    amount = float(found[1])
     # the correction that centres P2's dimensions: −0.35 plus what cycle 01 itself needs there (a few hundredths)
     assert amount == pytest.approx(-0.35, abs=0.05)
     assert rec.alarm.startswith("SETUP ERROR: G55 looks off by")
@@ -118,7 +127,7 @@ def test_a_wks_entered_wrong_is_named_with_its_amount_not_rejected_as_a_broken_t
     }
 
 
-def test_a_single_broken_dimension_still_rejects_without_a_setup_error():
+def test_a_single_broken_dimension_still_rejects_without_a_setup_error() -> None:
     model, part = guide_part()
     deviation = part.deviation.copy()
     deviation[0] = -0.9
@@ -127,7 +136,7 @@ def test_a_single_broken_dimension_still_rejects_without_a_setup_error():
     assert rec.rules[0].dimensions == ("P1D1",) and "P1 D1" in rec.alarm and "G5" not in rec.alarm
 
 
-def test_leave_one_out_equals_refitting_without_each_dimension():
+def test_leave_one_out_equals_refitting_without_each_dimension() -> None:
     rng = np.random.default_rng(4)
     c = rng.choice([-1.0, 0.0, 0.0, 1.0], size=(5, 14))
     r = rng.normal(0, 0.1, 14)
@@ -141,7 +150,7 @@ def test_leave_one_out_equals_refitting_without_each_dimension():
         assert loo[q] == pytest.approx(r[q] + c[:, q] @ x, abs=1e-6)
 
 
-def test_an_alarm_over_hundreds_of_dimensions_is_one_short_line_the_json_keeps_them_all(tmp_path):
+def test_an_alarm_over_hundreds_of_dimensions_is_one_short_line_the_json_keeps_them_all(tmp_path: Path) -> None:
     from shop_model import write_shop
 
     model_path, report = write_shop(tmp_path, m=600)

@@ -67,7 +67,8 @@ def test_a_faulty_sniffer_does_not_stop_dispatch(monkeypatch: pytest.MonkeyPatch
         raise RuntimeError("sniffer bug")
 
     spec = _registry.FormatSpec("zzboom", "test", (), boom, lambda path, **_: None, priority=1000)
-    monkeypatch.setitem(_registry._REGISTRY, "zzboom", spec)
+    real = _registry.formats
+    monkeypatch.setattr(_registry, "formats", lambda: [spec, *real()])
     assert parsers.find_format(GUIDE / "cycle_01.qif").name == "qif"
 
 

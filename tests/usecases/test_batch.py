@@ -6,6 +6,7 @@ import dataclasses
 import shutil
 from pathlib import Path
 
+import pandas as pd
 import pytest
 
 from setupfix.model import load_model
@@ -32,7 +33,7 @@ def folder(tmp_path: Path) -> Path:
     return d
 
 
-def test_good_bad_and_duplicate_reports(tmp_path):
+def test_good_bad_and_duplicate_reports(tmp_path: Path) -> None:
     d = folder(tmp_path)
     out = tmp_path / "offsets.csv"
     s = run_batch(REQUEST, d, out, settle=0)
@@ -52,7 +53,7 @@ def test_good_bad_and_duplicate_reports(tmp_path):
     assert [r[6] for r in rows if r[0] == "cycle_01.csv"] == [r[6] for r in rows if r[0] == "sub/cycle_01.qif"]
 
 
-def test_rerun_is_idempotent_and_workers_do_not_change_numbers(tmp_path):
+def test_rerun_is_idempotent_and_workers_do_not_change_numbers(tmp_path: Path) -> None:
     d = folder(tmp_path)
     run_batch(REQUEST, d, tmp_path / "a.csv", settle=0)
     run_batch(REQUEST, d, tmp_path / "a.csv", settle=0)
@@ -61,7 +62,7 @@ def test_rerun_is_idempotent_and_workers_do_not_change_numbers(tmp_path):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["a.csv", "b.csv", "reports"]  # no temp files
 
 
-def test_store_skips_processed_reports_unless_forced(tmp_path):
+def test_store_skips_processed_reports_unless_forced(tmp_path: Path) -> None:
     d = folder(tmp_path)
     out = tmp_path / "offsets.csv"
     with open_store(tmp_path / "h.db") as store:
@@ -75,11 +76,11 @@ def test_store_skips_processed_reports_unless_forced(tmp_path):
     assert out.read_text() == text  # nothing new: the previous output is left as it was
 
 
-def test_file_changing_during_the_run_is_not_read(tmp_path):
+def test_file_changing_during_the_run_is_not_read(tmp_path: Path) -> None:
     d = folder(tmp_path)
     late = d / "sub" / "cycle_01.qif"
 
-    def touch(done, total, outcome):
+    def touch(done, total, outcome) -> None:
         if done == 1:
             late.write_bytes(late.read_bytes() + b"\n")
 
@@ -87,7 +88,7 @@ def test_file_changing_during_the_run_is_not_read(tmp_path):
     assert any(Path(f) == late and "still being written" in r for f, r in s.failed)
 
 
-def test_bad_controller_register_fails_before_any_work(tmp_path):
+def test_bad_controller_register_fails_before_any_work(tmp_path: Path) -> None:
     from setupfix.core.errors import ExportError
 
     with pytest.raises(ExportError, match=r"haas: cannot express register 'G54.1P1'"):
@@ -95,7 +96,7 @@ def test_bad_controller_register_fails_before_any_work(tmp_path):
     assert not (tmp_path / "programs").exists()
 
 
-def test_one_program_per_cycle(tmp_path):
+def test_one_program_per_cycle(tmp_path: Path) -> None:
     sample = ROOT / "sample_reports" / "controllers"
     d = tmp_path / "r"
     d.mkdir()
@@ -106,7 +107,9 @@ def test_one_program_per_cycle(tmp_path):
     assert "G91 G10 L2 P1 Z-0.022" in (tmp_path / "programs" / "a.csv.nc").read_text()
 
 
-def test_store_records_what_was_corrected_without_reading_again(tmp_path, monkeypatch):
+def test_store_records_what_was_corrected_without_reading_again(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
     """With a history store each report is read once (in the worker): the store gets those bytes and that table."""
     import parsers
 
@@ -132,7 +135,7 @@ def test_store_records_what_was_corrected_without_reading_again(tmp_path, monkey
 
 
 @pytest.mark.slow
-def test_many_reports_in_chunks_give_the_same_output_and_progress_order(tmp_path):
+def test_many_reports_in_chunks_give_the_same_output_and_progress_order(tmp_path: Path) -> None:
     from setupfix.usecases.batch import chunk_size
 
     d = tmp_path / "reports"
@@ -191,7 +194,7 @@ def test_files_kept_beside_reports_are_not_read_as_reports(tmp_path: Path) -> No
     assert summary.reports == 7 and not summary.failed
 
 
-def test_automatic_worker_count(monkeypatch) -> None:
+def test_automatic_worker_count(monkeypatch: pytest.MonkeyPatch) -> None:
     """Without --workers: one process per CPU the batch may use (at most 8), one for a small folder."""
     from setupfix.usecases import batch
 
@@ -203,7 +206,7 @@ def test_automatic_worker_count(monkeypatch) -> None:
 
 
 @pytest.mark.slow
-def test_ewma_over_the_store_and_the_batch_does_not_depend_on_workers(tmp_path):
+def test_ewma_over_the_store_and_the_batch_does_not_depend_on_workers(tmp_path: Path) -> None:
     """With λ < 1 and a store, each report is smoothed over every earlier part (store and batch): the same
     output for 1 and 2 workers, different from the unsmoothed one, and equal to correcting each report with
     the history of the store holding them all."""
@@ -235,21 +238,20 @@ def test_ewma_over_the_store_and_the_batch_does_not_depend_on_workers(tmp_path):
     assert [line.split(",")[1:] for line in lines] == [line.split(",")[1:] for line in csv_lines(rows).splitlines()]
 
 
-def test_a_report_the_store_refuses_is_said_in_the_summary(tmp_path, monkeypatch):
+def test_a_report_the_store_refuses_is_said_in_the_summary(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     """Its offsets stand (it is corrected again next run), and the summary names why it was not stored."""
     from setupfix.core.errors import StoreError
-    from setupfix.usecases import batch_records
 
     d = folder(tmp_path)
-    real = batch_records._record
-
-    def refuse_one(store, outcome, solve):  # type: ignore[no-untyped-def]
-        if Path(outcome.path).name == "cycle_02.csv":
-            raise StoreError("the store is full", location=None)
-        return real(store, outcome, solve)
-
-    monkeypatch.setattr(batch_records, "_record", refuse_one)
     with open_store(tmp_path / "h.db") as store:
+        real = store.add_report
+
+        def refuse_one(data: bytes, name: str, format: str, table: pd.DataFrame) -> tuple[str, bool]:
+            if name == "cycle_02.csv":
+                raise StoreError("the store is full", location=None)
+            return real(data, name, format, table)
+
+        monkeypatch.setattr(store, "add_report", refuse_one)
         s = run_batch(REQUEST, d, tmp_path / "offsets.csv", settle=0, store=store)
         assert len(store.reports()) == 3
     assert s.reports == 4
