@@ -88,7 +88,7 @@ class SetupfixApp(App[None]):
         self.state = SessionState.start(inputs or Inputs())  #: what the operator's session holds
         self.controller = SessionController(self, self.state)  #: the work the keys ask for, and its results
 
-    # ----------------------------------------------------------------- the session, as the tests read it
+    # ----------------------------------------------------------------- the session, read through the app
     @property
     def inputs(self) -> Inputs:
         """What the command line gave."""
