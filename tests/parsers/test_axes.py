@@ -12,6 +12,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import pytest
+from conftest import SAMPLES, shared_path
 from hypothesis import given
 from hypothesis import strategies as st
 
@@ -19,10 +20,9 @@ import parsers
 from parsers.axes import AXIS_ANGLE_DEG, axis_word, vector_axis
 from setupfix.core.errors import SetupfixError
 from setupfix.usecases.model_init import name_axis
-from tests.conftest import SAMPLES, shared_path
 
 
-def test_vector_axis_either_sense_and_oblique_gives_none():
+def test_vector_axis_either_sense_and_oblique_gives_none() -> None:
     assert vector_axis((0, 0, -1)) == "Z" and vector_axis((2, 0, 0)) == "X" and vector_axis((0, -0.5, 0)) == "Y"
     assert vector_axis((1, 1, 0)) == "" and vector_axis((0, 0, 0)) == "" and vector_axis((math.nan, 0, 1)) == ""
     assert vector_axis(None) == "" and vector_axis((1, 0)) == ""
@@ -32,7 +32,7 @@ def test_vector_axis_either_sense_and_oblique_gives_none():
 
 
 @given(angle=st.floats(0, 45), turn=st.floats(0, 2 * math.pi), which=st.integers(0, 2), sign=st.sampled_from([1, -1]))
-def test_vector_axis_is_the_axis_within_five_degrees(angle, turn, which, sign):
+def test_vector_axis_is_the_axis_within_five_degrees(angle: float, turn: float, which: int, sign: int) -> None:
     if abs(angle - AXIS_ANGLE_DEG) < 1e-9:
         return  # the boundary itself is decided by rounding
     a = math.radians(angle)
@@ -46,7 +46,7 @@ def _axes(path: Path) -> dict[str, str]:
     return dict(zip(table["characteristic"], table["axis"], strict=True))
 
 
-def test_qif_axes_from_directions_vectors_and_normals():
+def test_qif_axes_from_directions_vectors_and_normals() -> None:
     # <Direction>XAXIS</Direction> … of LinearCoordinateCharacteristicNominal; DIST1 joins two circles
     # whose normals are oblique (0.042 -0.909 -0.414): no axis
     axes = _axes(SAMPLES / "qif" / "QIF3_Results_Sample.QIF")
@@ -72,7 +72,7 @@ def test_qif_axes_from_directions_vectors_and_normals():
 
 
 @pytest.mark.needs_shared
-def test_qif_axes_on_shared_samples():
+def test_qif_axes_on_shared_samples() -> None:
     axes = _axes(shared_path("cmm-samples", "qif", "NIST_MTC_Incoming_CoverResults_20_samples.QIF"))
     assert (axes["DISTANCEBETWEEN6"], axes["DISTANCEBETWEEN1"], axes["DISTANCEBETWEEN2"]) == ("Z", "X", "Y")
     axes = _axes(shared_path("cmm-samples", "qif", "QIF3_PTS_SAMPLE.QIF"))
@@ -81,7 +81,7 @@ def test_qif_axes_on_shared_samples():
 
 
 @pytest.mark.needs_shared
-def test_dmis_axes_from_cortol_and_point_normals():
+def test_dmis_axes_from_cortol_and_point_normals() -> None:
     axes = _axes(shared_path("cmm-samples", "dmis_dmo", "DMO_Example1_PiezaDemo.dmo"))
     # TA(Cono_9_X)=TOL/CORTOL,XAXIS,…; TA(Esfera_10_DIAM)=TOL/CORTOL,DIAMETER,…
     assert (axes["Cono_9_X"], axes["Cono_9_Y"], axes["Cono_9_Z"], axes["Esfera_10_DIAM"]) == ("X", "Y", "Z", "")
@@ -93,7 +93,7 @@ def test_dmis_axes_from_cortol_and_point_normals():
 
 @pytest.mark.slow
 @pytest.mark.needs_shared
-def test_every_qif_and_dmis_sample_states_axes_its_names_agree_with():
+def test_every_qif_and_dmis_sample_states_axes_its_names_agree_with() -> None:
     """Property over the real samples: every stated axis is X/Y/Z, every CORTOL row's axis is its name's
     suffix, and where a name states an axis the report never states another."""
     checked = 0
@@ -115,12 +115,12 @@ def test_every_qif_and_dmis_sample_states_axes_its_names_agree_with():
     assert checked >= 3 * 3 * 158
 
 
-def test_formats_without_directions_have_no_axis_column():
+def test_formats_without_directions_have_no_axis_column() -> None:
     table = parsers.read_report(SAMPLES / "guide_pins" / "cycle_01.csv").table
     assert "axis" not in table
 
 
-def test_axis_round_trips_through_parse_and_the_canonical_reader(tmp_path):
+def test_axis_round_trips_through_parse_and_the_canonical_reader(tmp_path: Path) -> None:
     from setupfix.cli import main
 
     out = tmp_path / "all.csv"

@@ -18,6 +18,7 @@ import parsers
 import parsers.canonical as canonical
 from parsers import Source
 from setupfix.core.errors import SetupfixError
+from setupfix.model.measurements import LENGTH_COLUMNS
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -70,7 +71,7 @@ FLAGS = ("true", "0", "", "YES", " no ", "false", "1", "maybe")
 
 def _cell(rng: random.Random, column: str, i: int, nominal: float, actual: float) -> str:
     if rng.random() < 0.03:
-        return rng.choice(NUMBERS if column in canonical.LENGTH_COLUMNS else TEXTS)
+        return rng.choice(NUMBERS if column in LENGTH_COLUMNS else TEXTS)
     return {
         "characteristic": f"P1 D{i}",
         "nominal": f"{nominal}",
@@ -140,7 +141,7 @@ def _same(data: bytes, name: str, monkeypatch: pytest.MonkeyPatch) -> bool:
 
 
 @pytest.mark.slow
-def test_random_files_read_alike_by_both_paths(monkeypatch):
+def test_random_files_read_alike_by_both_paths(monkeypatch: pytest.MonkeyPatch) -> None:
     taken = []
     real = canonical._plain_columns
 
@@ -164,7 +165,7 @@ CANONICAL_SAMPLES = [
 
 
 @pytest.mark.parametrize("path", CANONICAL_SAMPLES, ids=lambda p: p.name)
-def test_bundled_canonical_reports_read_alike(path, monkeypatch):
+def test_bundled_canonical_reports_read_alike(path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     assert _same(path.read_bytes(), str(path), monkeypatch)
 
 
@@ -179,7 +180,9 @@ def test_bundled_canonical_reports_read_alike(path, monkeypatch):
         ("1" * 401, "expected a number"),
     ],
 )
-def test_damaged_numbers_are_refused_at_their_line_by_both_paths(cell, message, monkeypatch):
+def test_damaged_numbers_are_refused_at_their_line_by_both_paths(
+    cell: str, message: str, monkeypatch: pytest.MonkeyPatch
+) -> None:
     text = (ROOT / "sample_reports" / "guide_pins" / "cycle_01.csv").read_text().splitlines(keepends=True)
     cells = text[5].split(",")
     cells[2], cells[3] = cell, ""  # the actual of P1 D5 (line 6), its stated deviation left out
@@ -199,7 +202,9 @@ def test_damaged_numbers_are_refused_at_their_line_by_both_paths(cell, message, 
         (1, "", "empty nominal value"),
     ],
 )
-def test_row_checks_refuse_at_their_line_by_both_paths(column, cell, message, monkeypatch):
+def test_row_checks_refuse_at_their_line_by_both_paths(
+    column: int, cell: str, message: str, monkeypatch: pytest.MonkeyPatch
+) -> None:
     text = (ROOT / "sample_reports" / "guide_pins" / "cycle_01.csv").read_text().splitlines(keepends=True)
     cells = text[5].split(",")
     cells[column] = cell

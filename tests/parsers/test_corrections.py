@@ -31,7 +31,7 @@ def _write(path: Path, text: str) -> Path:
 # -- the reader -----------------------------------------------------------------------------------
 
 
-def test_rows_keep_their_lines_and_the_register_as_written(tmp_path):
+def test_rows_keep_their_lines_and_the_register_as_written(tmp_path: Path) -> None:
     log = read_corrections_log(
         _write(
             tmp_path / "c.csv",
@@ -55,7 +55,7 @@ def test_rows_keep_their_lines_and_the_register_as_written(tmp_path):
 
 
 @pytest.mark.parametrize("header", ["Timestamp,Register,Delta", " TIMESTAMP , register ,Delta,Event,comment"])
-def test_the_header_is_matched_whatever_its_case(tmp_path, header):
+def test_the_header_is_matched_whatever_its_case(tmp_path: Path, header: str) -> None:
     log = read_corrections_log(_write(tmp_path / "c.csv", f"\ufeff{header}\n2026-11-02T07:00:00,G54,0.01\n"))
     assert [(r.register, r.delta, r.event) for r in log.rows] == [("G54", 0.01, "correction")]
 
@@ -84,18 +84,18 @@ def test_the_header_is_matched_whatever_its_case(tmp_path, header):
         ),
     ],
 )
-def test_a_bad_log_is_named_at_its_line(tmp_path, text, message):
+def test_a_bad_log_is_named_at_its_line(tmp_path: Path, text: str, message: str) -> None:
     with pytest.raises(ParseError, match=re.escape(message)):
         read_corrections_log(_write(tmp_path / "c.csv", text))
 
 
-def test_not_utf8_is_named_at_its_line(tmp_path):
+def test_not_utf8_is_named_at_its_line(tmp_path: Path) -> None:
     (tmp_path / "c.csv").write_bytes(b"timestamp,register,delta\n2026-01-01T00:00:00,G\xe454,0.1\n")
     with pytest.raises(ParseError, match=r"c.csv:2: not UTF-8"):
         read_corrections_log(tmp_path / "c.csv")
 
 
-def test_the_model_check_names_the_row(tmp_path):
+def test_the_model_check_names_the_row(tmp_path: Path) -> None:
     model = load_model(MODEL)
     log = read_corrections_log(_write(tmp_path / "c.csv", HEAD + GOOD_ROW + "2026-11-02T07:30:00,G54,,tool_change\n"))
     with pytest.raises(MatchError, match=r"c.csv:3: tool change of W1, which is not a tool"):
@@ -160,7 +160,9 @@ def _door(door: str, tmp_path: Path, log: Path) -> list[str]:
 @pytest.mark.parametrize(
     "door", ["history import", "history import folder", "diagnose", "diagnose folder", "diagnose --db"]
 )
-def test_one_bad_row_one_message_one_line_through_every_door(tmp_path, capsys, door, bad):
+def test_one_bad_row_one_message_one_line_through_every_door(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], door: str, bad: str
+) -> None:
     log = _write(tmp_path / "log.csv", HEAD + GOOD_ROW + "\n" + BAD_ROWS[bad])  # the bad row is line 4
     argv = _door(door, tmp_path, log)
     capsys.readouterr()
@@ -182,7 +184,9 @@ def test_one_bad_row_one_message_one_line_through_every_door(tmp_path, capsys, d
             assert store.reports() == [] and store.corrections().empty
 
 
-def test_a_bad_row_kept_in_a_store_is_named_by_the_store_and_row(tmp_path, capsys):
+def test_a_bad_row_kept_in_a_store_is_named_by_the_store_and_row(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     """Imported without a model (so unchecked), the row is refused where the store is read, named alike."""
     db = tmp_path / "h.db"
     log = _write(tmp_path / "log.csv", HEAD + GOOD_ROW + BAD_ROWS["unknown register"])
@@ -193,7 +197,9 @@ def test_a_bad_row_kept_in_a_store_is_named_by_the_store_and_row(tmp_path, capsy
     assert err.startswith(f"error: {db}#corrections: <row 2>: unknown register 'G99' (model registers: W1,")
 
 
-def test_the_capitalised_header_is_accepted_by_every_door_with_the_same_result(tmp_path, capsys):
+def test_the_capitalised_header_is_accepted_by_every_door_with_the_same_result(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     text = HEAD + GOOD_ROW + "2026-11-02T09:30:00,H5,-0.004,\n"
     lower = _write(tmp_path / "lower.csv", text)
     upper = _write(tmp_path / "upper.csv", text.replace(HEAD, "Timestamp,Register,Delta,Event\n"))

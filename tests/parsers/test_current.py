@@ -18,7 +18,7 @@ MODEL = load_model(SAMPLE / "model.toml")
 GOOD = "register,value\nG54,-412.53\nG55,-412.487\nH5,-0.012\nH12,0.0035\n"
 
 
-def test_the_sample_is_read_by_register_id():
+def test_the_sample_is_read_by_register_id() -> None:
     assert read_current(SAMPLE / "current.csv", MODEL) == {"W1": -412.53, "W2": -412.487, "T5": -0.012, "T12": 0.0035}
 
 
@@ -39,13 +39,13 @@ def test_the_sample_is_read_by_register_id():
         (GOOD.replace("G55,-412.487", "G55,4.2e7"), "c.csv:3: value 4.2e7 of G55 is beyond any control's offset"),
     ],
 )
-def test_bad_current_file(tmp_path, text, message):
+def test_bad_current_file(tmp_path: Path, text: str, message: str) -> None:
     (tmp_path / "c.csv").write_text(text)
     with pytest.raises(ParseError, match=re.escape(message)):
         read_current(tmp_path / "c.csv", MODEL)
 
 
-def test_more_header_columns_allow_as_many_cells_and_the_limit_follows_the_model_unit(tmp_path):
+def test_more_header_columns_allow_as_many_cells_and_the_limit_follows_the_model_unit(tmp_path: Path) -> None:
     (tmp_path / "c.csv").write_text(
         GOOD.replace("register,value", "register,value,comment").replace("G54,-412.53", "G54,-412.53,checked")
     )
@@ -65,7 +65,9 @@ def test_more_header_columns_allow_as_many_cells_and_the_limit_follows_the_model
     assert read_current(tmp_path / "i.csv", inch) == {"W1": 3937.0}
 
 
-def test_correct_refuses_a_decimal_comma_in_current_with_file_and_line(tmp_path, capsys):
+def test_correct_refuses_a_decimal_comma_in_current_with_file_and_line(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     bad = tmp_path / "c.csv"
     bad.write_text(GOOD.replace("G54,-412.53", "G54,-412,5300"))
     out = tmp_path / "o.csv"
@@ -108,7 +110,7 @@ ONE = model_from_dict(
     ],
 )
 @pytest.mark.parametrize("end", ["\n", "", "\r\n"])
-def test_one_row_files_are_refused_like_longer_ones(tmp_path, rows, message, end):
+def test_one_row_files_are_refused_like_longer_ones(tmp_path: Path, rows: str, message: str, end: str) -> None:
     """A file of one register row (no second row to compare with) and its last row without a line end."""
     (tmp_path / "c.csv").write_text(f"register,value{end or chr(10)}{rows}{end}", newline="")
     with pytest.raises(ParseError, match=re.escape(message)):
@@ -116,7 +118,7 @@ def test_one_row_files_are_refused_like_longer_ones(tmp_path, rows, message, end
 
 
 @pytest.mark.parametrize("row", ["H12,0,0035", "H12,1e6", "H12,1e300"])
-def test_the_last_row_of_a_longer_file_is_checked(tmp_path, row):
+def test_the_last_row_of_a_longer_file_is_checked(tmp_path: Path, row: str) -> None:
     (tmp_path / "c.csv").write_text(GOOD.replace("H12,0.0035\n", row))  # no line end after it
     with pytest.raises(ParseError, match=r"c\.csv:5: "):
         read_current(tmp_path / "c.csv", MODEL)

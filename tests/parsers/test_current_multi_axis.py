@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import re
+from pathlib import Path
 
 import pytest
 from multi_axis_rows import multi_axis_model
@@ -28,12 +29,12 @@ WANT = {
 }
 
 
-def test_every_component_by_its_id(tmp_path):
+def test_every_component_by_its_id(tmp_path: Path) -> None:
     (tmp_path / "c.csv").write_text(GOOD)
     assert read_current(tmp_path / "c.csv", MODEL) == WANT
 
 
-def test_model_ids_lower_case_axes_and_a_fixed_register(tmp_path):
+def test_model_ids_lower_case_axes_and_a_fixed_register(tmp_path: Path) -> None:
     text = (
         GOOD.replace("G54,X,", "W1,x,")
         .replace("H5,,", "T5,,")
@@ -66,13 +67,13 @@ def test_model_ids_lower_case_axes_and_a_fixed_register(tmp_path):
         (GOOD.replace("D5,,0.002", "D5,"), "c.csv:10: expected register,axis,value"),
     ],
 )
-def test_refused_naming_file_and_line(tmp_path, text, message):
+def test_refused_naming_file_and_line(tmp_path: Path, text: str, message: str) -> None:
     (tmp_path / "c.csv").write_text(text)
     with pytest.raises(ParseError, match=re.escape(message)):
         read_current(tmp_path / "c.csv", MODEL)
 
 
-def test_the_limit_follows_the_model_unit_but_not_for_a_rotation(tmp_path):
+def test_the_limit_follows_the_model_unit_but_not_for_a_rotation(tmp_path: Path) -> None:
     inch = multi_axis_model("inch")
     (tmp_path / "c.csv").write_text(GOOD.replace("G55,X,50", "G55,X,3937.1"))
     with pytest.raises(ParseError, match=re.escape("c.csv:6: value 3937.1 of G55 X is beyond")):

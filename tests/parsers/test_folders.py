@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import os
 from pathlib import Path
+from typing import Any
 
 import pytest
 
@@ -26,7 +27,7 @@ def _tree(tmp_path: Path) -> Path:
     return tmp_path
 
 
-def test_candidates_sorted_depth_first_and_every_left_out_file_has_a_reason(tmp_path):
+def test_candidates_sorted_depth_first_and_every_left_out_file_has_a_reason(tmp_path: Path) -> None:
     root = _tree(tmp_path)
     listing = list_reports(root)
     assert [p.relative_to(root).as_posix() for p in listing.paths] == ["a/r1.csv", "a/report.txt", "b/r2.qif"]
@@ -38,14 +39,14 @@ def test_candidates_sorted_depth_first_and_every_left_out_file_has_a_reason(tmp_
     assert listing.problems == ()
 
 
-def test_not_recursive_names_sub_folders(tmp_path):
+def test_not_recursive_names_sub_folders(tmp_path: Path) -> None:
     root = _tree(tmp_path)
     listing = list_reports(root, recursive=False)
     assert listing.paths == []
     assert (str(root / "a"), "sub-folder (not searched)") in listing.ignored
 
 
-def test_links_unreadable_folders_and_vanished_files_are_named(tmp_path, monkeypatch):
+def test_links_unreadable_folders_and_vanished_files_are_named(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     root = _tree(tmp_path / "root")
     outside = tmp_path / "elsewhere.csv"
     outside.write_text("x")
@@ -68,7 +69,7 @@ def test_links_unreadable_folders_and_vanished_files_are_named(tmp_path, monkeyp
 
     real_stat = os.stat
 
-    def vanishing(path, *a, **k):
+    def vanishing(path: Any, *a: Any, **k: Any) -> os.stat_result:
         if str(path).endswith("r2.qif"):
             raise FileNotFoundError(2, "No such file or directory")
         return real_stat(path, *a, **k)
@@ -78,11 +79,11 @@ def test_links_unreadable_folders_and_vanished_files_are_named(tmp_path, monkeyp
     assert problems[str(root / "b" / "r2.qif")] == "renamed or removed while the folder was listed"
 
 
-def test_unreadable_folder_is_named_even_as_root(tmp_path, monkeypatch):
+def test_unreadable_folder_is_named_even_as_root(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     root = _tree(tmp_path)
     real = os.scandir
 
-    def refuse(path):
+    def refuse(path: Any) -> object:
         if str(path).endswith("/b"):
             raise PermissionError(13, "Permission denied")
         return real(path)
@@ -92,7 +93,7 @@ def test_unreadable_folder_is_named_even_as_root(tmp_path, monkeypatch):
     assert problems[str(root / "b")] == "cannot list folder: permission denied"
 
 
-def test_link_loops_are_named_never_followed(tmp_path):
+def test_link_loops_are_named_never_followed(tmp_path: Path) -> None:
     (tmp_path / "sub").mkdir()
     os.symlink(tmp_path, tmp_path / "sub" / "up")  # a folder loop
     os.symlink(tmp_path / "self.csv", tmp_path / "self.csv")  # a link to itself
@@ -108,7 +109,7 @@ def test_link_loops_are_named_never_followed(tmp_path):
 
 
 @pytest.mark.skipif(os.geteuid() == 0, reason="root reads a chmod 000 folder")
-def test_an_unreadable_sub_folder_is_named_really(tmp_path):
+def test_an_unreadable_sub_folder_is_named_really(tmp_path: Path) -> None:
     root = _tree(tmp_path)
     (root / "b").chmod(0)
     try:
@@ -119,7 +120,7 @@ def test_an_unreadable_sub_folder_is_named_really(tmp_path):
     assert root / "a" / "r1.csv" in listing.paths
 
 
-def test_names_that_are_not_utf8_are_listed_and_shown_escaped(tmp_path):
+def test_names_that_are_not_utf8_are_listed_and_shown_escaped(tmp_path: Path) -> None:
     raw = os.fsencode(tmp_path) + b"/bad\xffname.csv"
     with open(raw, "wb") as fh:
         fh.write(b"x")
@@ -131,12 +132,12 @@ def test_names_that_are_not_utf8_are_listed_and_shown_escaped(tmp_path):
     assert all(str(n).isprintable() for n in listing.notes())
 
 
-def test_a_missing_root_is_a_problem_not_an_exception(tmp_path):
+def test_a_missing_root_is_a_problem_not_an_exception(tmp_path: Path) -> None:
     listing = list_reports(tmp_path / "nope")
     assert listing.files == () and listing.problems[0][1].startswith("cannot list folder")
 
 
-def test_expand_inputs_takes_files_as_given_and_folders_by_the_policy(tmp_path):
+def test_expand_inputs_takes_files_as_given_and_folders_by_the_policy(tmp_path: Path) -> None:
     from parsers import expand_inputs
 
     root = tmp_path / "t"
@@ -162,7 +163,7 @@ def test_expand_inputs_takes_files_as_given_and_folders_by_the_policy(tmp_path):
     assert flat.files == () and flat.empty == (str(root),)
 
 
-def test_a_scripts_byte_code_cache_is_not_searched(tmp_path):
+def test_a_scripts_byte_code_cache_is_not_searched(tmp_path: Path) -> None:
     root = _tree(tmp_path)
     (root / "__pycache__").mkdir()
     (root / "__pycache__" / "generate.cpython-311.pyc").write_bytes(b"\x00")

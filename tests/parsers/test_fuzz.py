@@ -13,6 +13,7 @@ import hashlib
 import resource
 import signal
 from pathlib import Path
+from typing import Any
 
 import pandas as pd
 import pytest
@@ -54,7 +55,7 @@ _MUTATION = st.one_of(
 )
 
 
-def mutate(data: bytes, mutations: list[tuple]) -> bytes:
+def mutate(data: bytes, mutations: list[tuple[Any, ...]]) -> bytes:
     """Apply the mutations in order; positions are fractions of the current length."""
     for mutation in mutations:
         kind, where = mutation[0], mutation[1]
@@ -104,7 +105,7 @@ def test_mutated_sample_reads_or_fails_cleanly(sample: Path, tmp_path: Path) -> 
         suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow, HealthCheck.data_too_large],
     )
     @given(st.lists(_MUTATION, min_size=1, max_size=3))
-    def check(mutations: list[tuple]) -> None:
+    def check(mutations: list[tuple[Any, ...]]) -> None:
         target.write_bytes(mutate(original, mutations))
         previous = signal.signal(signal.SIGALRM, _alarm)
         signal.setitimer(signal.ITIMER_REAL, HANG_SECONDS)

@@ -4,17 +4,18 @@ from __future__ import annotations
 
 import math
 import warnings
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
 import pytest
+from conftest import SAMPLES, SHARED
 
 import parsers
 from parsers.geometry import GEOMETRY_COLUMNS, axis_vector, geometry_cells, unit_vector
-from tests.conftest import SAMPLES, SHARED
 
 
-def read(path) -> pd.DataFrame:
+def read(path: Path) -> pd.DataFrame:
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         return parsers.read_report(path).table
@@ -24,15 +25,20 @@ def row(table: pd.DataFrame, name: str) -> pd.Series:
     return table[table["characteristic"] == name].iloc[0]
 
 
-def test_helpers():
+def test_helpers() -> None:
     assert unit_vector([0.0, 3.0, 4.0]) == (0.0, 0.6, 0.8)
     assert unit_vector([0.0, 0.0, 0.0]) is None and unit_vector([math.nan, 0, 1]) is None and unit_vector(None) is None
     assert axis_vector("Y") == (0.0, 1.0, 0.0) and axis_vector("") is None
     cells = geometry_cells()
-    assert list(cells) == list(GEOMETRY_COLUMNS) and math.isnan(cells["nx"]) and cells["size"] == ""
+    assert (
+        list(cells) == list(GEOMETRY_COLUMNS)
+        and isinstance(cells["nx"], float)
+        and math.isnan(cells["nx"])
+        and cells["size"] == ""
+    )
 
 
-def test_qif_states_vectors_oblique_ones_too_feature_types_and_sides():
+def test_qif_states_vectors_oblique_ones_too_feature_types_and_sides() -> None:
     table = read(SAMPLES / "qif" / "QIF3_WIDGET_QIF_RESULTS.QIF")
     tilted = row(table, "1")  # the widget's 10°-tilted face: a distance along its normal (0, cos 10°, sin 10°)
     assert (tilted["nx"], tilted["ny"], tilted["nz"]) == pytest.approx(
@@ -50,7 +56,7 @@ def test_qif_states_vectors_oblique_ones_too_feature_types_and_sides():
     assert abs(width["nx"]) == 1.0
 
 
-def test_pcdmis_axis_letters_and_the_located_feature():
+def test_pcdmis_axis_letters_and_the_located_feature() -> None:
     table = read(SAMPLES / "pcdmis" / "bracket_two_parts.txt")
     x, d = row(table, "LOC1.X"), row(table, "LOC1.D")
     assert (x["nx"], x["ny"], x["nz"], x["feature"], x["size"]) == (1.0, 0.0, 0.0, "circle", "")
@@ -60,7 +66,7 @@ def test_pcdmis_axis_letters_and_the_located_feature():
 
 
 @pytest.mark.needs_shared
-def test_dmis_inner_outer_feature_words_and_normals():
+def test_dmis_inner_outer_feature_words_and_normals() -> None:
     path = SHARED / "cmm-samples" / "dmis_dmo" / "DMO_Example1_PiezaDemo.dmo"
     if not path.exists():
         pytest.skip(f"{path} absent")
@@ -79,7 +85,7 @@ def test_dmis_inner_outer_feature_words_and_normals():
 
 
 @pytest.mark.needs_shared
-def test_calypso_idsymbol_states_sizes():
+def test_calypso_idsymbol_states_sizes() -> None:
     path = SHARED / "cmm-samples" / "calypso" / "CALYPSO_chr_PruefplanValidierungsbauteil1_16.txt"
     if not path.exists():
         pytest.skip(f"{path} absent")
@@ -89,7 +95,7 @@ def test_calypso_idsymbol_states_sizes():
     assert distance["size"] == "" and math.isnan(distance["nx"]) and row(table, "D Zyl. Mitte 9")["feature"] == ""
 
 
-def test_calypso_coordinate_symbols_state_their_axis(tmp_path):
+def test_calypso_coordinate_symbols_state_their_axis(tmp_path: Path) -> None:
     path = tmp_path / "plan_chr.txt"
     head = "planid\tpartnb\tid\ttype\tidsymbol\tactual\tnominal\tuppertol\tlowertol\tdeviation\tunit\n"
     path.write_text(
@@ -104,7 +110,7 @@ def test_calypso_coordinate_symbols_state_their_axis(tmp_path):
 
 
 @pytest.mark.needs_shared
-def test_korean_items_and_element_words():
+def test_korean_items_and_element_words() -> None:
     path = SHARED / "cmm-samples" / "korean_cmm_txt" / "KR_45926-4G100_240113_night_2-2-1_NG.cp949.txt"
     if not path.exists():
         pytest.skip(f"{path} absent")

@@ -97,7 +97,8 @@ def read_quietly(path: Path) -> pd.DataFrame:
 def render_full(table: pd.DataFrame) -> str:
     """The canonical table as `setupfix parse` writes it (the ``axis`` column last where the
     reader states axes), provenance reduced to the file name."""
-    from setupfix.usecases.parse import FLOAT_FORMAT, ParsedReport, ParseOutcome
+    from setupfix.outputs.writers import FLOAT_FORMAT
+    from setupfix.usecases.parse import ParsedReport, ParseOutcome
 
     table = table.copy()
     table["source"] = table["source"].map(lambda s: Path(str(s)).name)

@@ -28,8 +28,9 @@ def test_real_format_matches_the_csv(suffix: str) -> None:
 
 def test_checked_in_files_are_the_script_output(tmp_path: Path) -> None:
     spec = importlib.util.spec_from_file_location("write_formats", GUIDE / "write_formats.py")
+    assert spec is not None and spec.loader is not None
     module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)  # type: ignore[union-attr]
+    spec.loader.exec_module(module)
     rows = module._rows(GUIDE / "cycle_01.csv")
     module.write_qif(rows, tmp_path / "cycle_01.qif")
     module.write_dmo(rows, tmp_path / "cycle_01.dmo")

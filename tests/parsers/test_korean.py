@@ -57,7 +57,9 @@ def test_ng_report_out_of_tolerance_and_sign_quirk() -> None:
         (5.0, 5.1, 0.3, (-0.1, 0.2), None),  # contradicts itself
     ],
 )
-def test_deviation_along_the_feature_normal(nominal, actual, stated, limits, expected):
+def test_deviation_along_the_feature_normal(
+    nominal: float, actual: float, stated: float, limits: tuple[float, float], expected: float | None
+) -> None:
     assert along_normal(nominal, actual, stated, *limits) == (pytest.approx(expected) if expected else None)
 
 
@@ -71,7 +73,10 @@ def test_lenient_skips_a_self_contradicting_row_with_its_line(tmp_path: Path) ->
         parsers.read_report(path)
     result = parsers.read_report(path, lenient=True)
     assert not result.table["source"].str.endswith(":32").any()
-    assert any("contradicting themselves" in n.message and n.location.line == 32 for n in result.notes)
+    assert any(
+        "contradicting themselves" in n.message and n.location is not None and n.location.line == 32
+        for n in result.notes
+    )
 
 
 def test_second_part_suffix_gives_second_part() -> None:

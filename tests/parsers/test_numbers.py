@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from typing import Literal
 
 import pytest
 from hypothesis import given
@@ -26,7 +27,7 @@ from setupfix.core.errors import ParseError, SourceLocation
         ("-,5", "auto", -0.5),
     ],
 )
-def test_reads_what_reports_write(text, decimal, value):
+def test_reads_what_reports_write(text: str, decimal: Literal[".", ",", "auto"], value: float) -> None:
     assert parse_number(text, decimal=decimal) == pytest.approx(value, rel=1e-15)
 
 
@@ -51,7 +52,7 @@ def test_reads_what_reports_write(text, decimal, value):
         "1 000",
     ],
 )
-def test_refuses_what_no_metrology_file_writes(text):
+def test_refuses_what_no_metrology_file_writes(text: str) -> None:
     where = SourceLocation("r.csv", line=7)
     with pytest.raises(ParseError) as err:
         parse_number(text, location=where, what="column 'actual'")
@@ -59,19 +60,19 @@ def test_refuses_what_no_metrology_file_writes(text):
     assert try_number(text) is None
 
 
-def test_decimal_modes_are_exclusive():
+def test_decimal_modes_are_exclusive() -> None:
     assert try_number("1,5", decimal=".") is None
     assert try_number("1.5", decimal=",") is None
     assert try_number("1,234,5", decimal="auto") is None
 
 
-def test_overflow_after_unit_conversion_is_refused():
+def test_overflow_after_unit_conversion_is_refused() -> None:
     with pytest.raises(ParseError, match="beyond the range"):
         parse_number("1e307", scale=25.4, location=SourceLocation("r.dmo", line=3))
     assert math.isnan(parse_number(" ", allow_empty=True))
 
 
 @given(st.floats(allow_nan=False, allow_infinity=False, min_value=-1e12, max_value=1e12))
-def test_round_trips_every_printed_float(value):
+def test_round_trips_every_printed_float(value: float) -> None:
     assert parse_number(repr(value)) == value
     assert parse_number(f"{value:.6f}") == pytest.approx(value, abs=1e-6)

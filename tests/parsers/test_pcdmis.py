@@ -83,12 +83,15 @@ def test_unknown_units_and_garbage_number(tmp_path: Path) -> None:
 
 
 def test_csv_column_reader_equals_row_reader() -> None:
-    from parsers.pcdmis.csv_export import read_columns, read_rows
+    from parsers.pcdmis.columns import read_columns
+    from parsers.pcdmis.csv_export import read_rows
     from parsers.source import read_text as read_report_text
 
     name = str(SAMPLES / "bracket_ncgage.csv")
     text = read_report_text(name)
-    pd.testing.assert_frame_equal(read_columns(text, name, None), read_rows(text, name, None))
+    columns = read_columns(text, name, None)
+    assert columns is not None
+    pd.testing.assert_frame_equal(columns, read_rows(text, name, None))
 
 
 @pytest.mark.parametrize(

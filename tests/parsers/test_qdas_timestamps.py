@@ -7,6 +7,7 @@ a tab, ``/0``); every row must keep the date of the sample as written in the ori
 from __future__ import annotations
 
 import re
+from collections.abc import Callable
 from pathlib import Path
 
 import pytest
@@ -38,12 +39,12 @@ def variant(tmp_path: Path, text: str) -> Path:
         "successfactory_testmeasures.dfq",
     ],
 )
-def test_every_row_of_the_real_samples_has_its_date(name):
+def test_every_row_of_the_real_samples_has_its_date(name: str) -> None:
     table = read_aqdef(SAMPLES / name)
     assert len(table) and (table["timestamp"].str.match(r"^\d{4}-\d\d-\d\dT\d\d:\d\d:\d\d$")).all()
 
 
-def test_the_single_part_sample_dates_each_value():
+def test_the_single_part_sample_dates_each_value() -> None:
     assert stamps(SINGLE) == EXPECTED
 
 
@@ -56,7 +57,7 @@ def test_the_single_part_sample_dates_each_value():
         ("CRLF line ends", lambda t: t.replace("\n", "\r\n")),
     ],
 )
-def test_rewritten_sample_keeps_every_date(tmp_path, how, rewrite):
+def test_rewritten_sample_keeps_every_date(tmp_path: Path, how: str, rewrite: Callable[[str], str]) -> None:
     text = SINGLE.read_text(encoding="latin-1")
     changed = rewrite(text)
     assert changed != text, how
@@ -68,7 +69,7 @@ HEAD = (
 )
 
 
-def test_interleaved_values_dated_by_slash_zero_and_by_unindexed_lines(tmp_path):
+def test_interleaved_values_dated_by_slash_zero_and_by_unindexed_lines(tmp_path: Path) -> None:
     text = HEAD + (
         "K0001/1 10.1\nK0001/2 20.1\nK0004/0 01.01.2013/15:18:31\n"
         "K0001/1 10.2\nK0004 02.01.2013/15:18:31\nK0001/2 20.2\nK0004 03.01.2013/15:18:31\n"
@@ -81,7 +82,7 @@ def test_interleaved_values_dated_by_slash_zero_and_by_unindexed_lines(tmp_path)
     ]
 
 
-def test_unindexed_date_after_an_uncoded_value_line_dates_the_whole_line(tmp_path):
+def test_unindexed_date_after_an_uncoded_value_line_dates_the_whole_line(tmp_path: Path) -> None:
     text = HEAD + "10.1\x0f20.1\nK0004 04.01.2013/06:00:00\n10.2\x140\x1405.01.2013/07:00\x0f20.2\n"
     assert stamps(variant(tmp_path, text)) == [
         ("A", "2013-01-04T06:00:00"),
@@ -92,7 +93,7 @@ def test_unindexed_date_after_an_uncoded_value_line_dates_the_whole_line(tmp_pat
 
 
 @pytest.mark.parametrize("line", ["K0004/1 01.01.2013/15:18:31", "K0004/02 01.01.2013/15:18:31"])
-def test_a_date_with_no_value_above_it_is_refused_with_its_line(tmp_path, line):
+def test_a_date_with_no_value_above_it_is_refused_with_its_line(tmp_path: Path, line: str) -> None:
     path = variant(tmp_path, HEAD + line + "\nK0001/1 10.1\n")
     with pytest.raises(ParseError, match=r"variant\.dfq:11: K0004 \(date\) before"):
         read_aqdef(path)

@@ -6,8 +6,10 @@ import math
 import shutil
 import warnings
 from pathlib import Path
+from typing import Any
 
 import numpy as np
+import pandas as pd
 import pytest
 from goldens import expect_note
 
@@ -19,7 +21,7 @@ ROOT = Path(__file__).resolve().parents[2]
 QIF = ROOT / "sample_reports" / "qif"
 
 
-def _row(table, name):
+def _row(table: pd.DataFrame, name: str) -> pd.Series[Any]:
     rows = table[table["characteristic"] == name]
     assert len(rows) == 1, f"{name}: {len(rows)} rows"
     return rows.iloc[0]

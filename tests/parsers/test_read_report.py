@@ -25,16 +25,17 @@ DMIS_NO_UNITS = (
 DMIS_INCH = b"UNITS/INCH,ANGDEC\n" + DMIS_NO_UNITS
 
 
-def test_notes_come_back_as_data_not_warnings():
+def test_notes_come_back_as_data_not_warnings() -> None:
     with warnings.catch_warnings():
         warnings.simplefilter("error")  # any warnings.warn would fail the test
         result = parsers.read_report(Source("r.dmo", DMIS_NO_UNITS))
     assert result.format == "dmis" and result.source == "r.dmo"
     [note] = result.notes
+    assert note.location is not None
     assert "no UNITS statement" in note.message and note.location.path == "r.dmo" and note.kind == "unit"
 
 
-def test_notes_of_reads_in_threads_stay_apart():
+def test_notes_of_reads_in_threads_stay_apart() -> None:
     results: dict[int, parsers.ReadResult] = {}
 
     def work(i: int) -> None:
@@ -47,10 +48,10 @@ def test_notes_of_reads_in_threads_stay_apart():
     for t in threads:
         t.join()
     for i, result in results.items():
-        assert [n.location.path for n in result.notes] == ([f"r{i}.dmo"] if i % 2 else [])
+        assert [n.location.path if n.location else None for n in result.notes] == ([f"r{i}.dmo"] if i % 2 else [])
 
 
-def test_an_option_the_reader_does_not_use_is_refused():
+def test_an_option_the_reader_does_not_use_is_refused() -> None:
     qif = SAMPLES / "qif" / os.listdir(SAMPLES / "qif")[0] if (SAMPLES / "qif").is_dir() else None
     with pytest.raises(ParameterError, match="the canonical reader does not use --columns"):
         parsers.read_report(SAMPLES / "guide_pins" / "cycle_01.csv", format="canonical", columns="actual=x")
@@ -61,7 +62,7 @@ def test_an_option_the_reader_does_not_use_is_refused():
         parsers.read_report(SAMPLES / "guide_pins" / "cycle_01.csv", sheet="x")
 
 
-def test_legacy_read_still_returns_the_table():
+def test_legacy_read_still_returns_the_table() -> None:
     with pytest.warns(Warning, match="no UNITS"):
         table = parsers.read(_write(DMIS_NO_UNITS))
     assert table["actual"].tolist() == [1.5]
@@ -76,7 +77,7 @@ def _write(data: bytes) -> Path:
     return Path(name)
 
 
-def test_size_limit_is_one_reader_for_all(monkeypatch):
+def test_size_limit_is_one_reader_for_all(monkeypatch: pytest.MonkeyPatch) -> None:
     from parsers import source as _source
 
     monkeypatch.setattr(_source, "MAX_REPORT_BYTES", 100)
@@ -89,7 +90,7 @@ def test_size_limit_is_one_reader_for_all(monkeypatch):
 
 
 @pytest.mark.slow
-def test_stdin_and_pipes_keep_their_first_bytes(tmp_path):
+def test_stdin_and_pipes_keep_their_first_bytes(tmp_path: Path) -> None:
     # Over 8 KiB: a sniff then a second open of a pipe would lose UNITS/INCH (issue 10).
     body = b"".join(
         b"F(P%d)=FEAT/POINT,CART,1,0,0,0,0,1\nFA(P%d)=FEAT/POINT,CART,1.5,0,0,0,0,1\n"
@@ -114,18 +115,22 @@ def test_stdin_and_pipes_keep_their_first_bytes(tmp_path):
     assert MAX_REPORT_BYTES == 256 * 2**20
 
 
-def test_verdict_contradicting_the_numbers_is_a_note():
+def test_verdict_contradicting_the_numbers_is_a_note() -> None:
     data = (
         b"characteristic,nominal,actual,lower,upper,status\n"
         b"D1,10,14.4,-0.254,0.254,PASS\nD2,10,10.01,-0.254,0.254,PASS\nD3,10,10.0,-0.254,0.254,FAIL\n"
     )
     [note] = [n for n in parsers.read_report(Source("box.csv", data)).notes if n.kind == "verdict"]
-    assert note.location.line == 2 and note.message.startswith("2 row(s) whose own verdict contradicts")
+    assert (
+        note.location is not None
+        and note.location.line == 2
+        and note.message.startswith("2 row(s) whose own verdict contradicts")
+    )
     assert "D1 says PASS at deviation +4.4 mm" in note.message and "D3 says FAIL" in note.message
     assert "D2" not in note.message
 
 
-def test_lengths_carry_no_binary_noise():
+def test_lengths_carry_no_binary_noise() -> None:
     data = (
         b"UNITS/INCH,ANGDEC\nF(P)=FEAT/POINT,CART,1,0,0,0,0,1\nFA(P)=FEAT/POINT,CART,1.0001,0,0,0,0,1\n"
         b"TA(P_X)=TOL/CORTOL,XAXIS,0.0001,INTOL\nENDFIL\n"

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import pandas as pd
 import pytest
 
 import parsers
@@ -66,7 +67,7 @@ def test_a_faulty_sniffer_does_not_stop_dispatch(monkeypatch: pytest.MonkeyPatch
     def boom(peek: object) -> bool:
         raise RuntimeError("sniffer bug")
 
-    spec = _registry.FormatSpec("zzboom", "test", (), boom, lambda path, **_: None, priority=1000)
+    spec = _registry.FormatSpec("zzboom", "test", (), boom, lambda path, **_: pd.DataFrame(), priority=1000)
     real = _registry.formats
     monkeypatch.setattr(_registry, "formats", lambda: [spec, *real()])
     assert parsers.find_format(GUIDE / "cycle_01.qif").name == "qif"

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import socket
 import time
+from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
@@ -46,7 +47,7 @@ PARAMETER_ENTITY = """<?xml version="1.0"?>
 
 
 @pytest.fixture
-def listener():
+def listener() -> Iterator[socket.socket]:
     """A local TCP socket that records whether anything connected to it."""
     server = socket.socket()
     server.bind(("127.0.0.1", 0))

@@ -7,6 +7,7 @@ from pathlib import Path
 
 import numpy as np
 import openpyxl
+import pandas as pd
 import pytest
 
 import parsers
@@ -18,7 +19,7 @@ TABLES = ROOT / "sample_reports" / "tables"
 CSV = ROOT / "sample_reports" / "guide_pins" / "cycle_01.csv"
 
 
-def same_as_canonical(table) -> None:
+def same_as_canonical(table: pd.DataFrame) -> None:
     ref = parsers.read_report(CSV).table
     assert list(table["characteristic"]) == list(ref["characteristic"])
     assert np.allclose(table["deviation"], ref["deviation"], atol=1e-12)

@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -17,16 +20,17 @@ GOOD = (
 )
 
 
-def write(tmp_path, text, name="log.csv", bom=False):
+def write(tmp_path: Path, text: str, name: str = "log.csv", bom: bool = False) -> Path:
     path = tmp_path / name
     path.write_bytes((b"\xef\xbb\xbf" if bom else b"") + text.encode("utf-8"))
     return path
 
 
-def test_reads_columns_times_and_gaps(tmp_path):
+def test_reads_columns_times_and_gaps(tmp_path: Path) -> None:
     log = read_temperature_log(write(tmp_path, GOOD, bom=True))
     assert list(log.columns) == ["T1", "T2", "spindle_speed", "error"]  # the text column is ignored…
     assert any("'operator' is text" in str(n) for n in log.notes)  # …and said so
+    assert log.seconds is not None
     np.testing.assert_allclose(log.seconds, [0, 10, 20])
     assert log.sample_interval_s == 10.0
     assert np.isnan(log.columns["T2"][2])
@@ -37,7 +41,7 @@ def test_reads_columns_times_and_gaps(tmp_path):
 
 
 @pytest.mark.parametrize("cell", ["hot", "2_1", "nan", "inf", "1,5", "0x10"])
-def test_non_numbers_are_refused_with_the_line(tmp_path, cell):
+def test_non_numbers_are_refused_with_the_line(tmp_path: Path, cell: str) -> None:
     rows = GOOD.splitlines()
     rows[2] = rows[2].replace("20.5", f'"{cell}"')
     with pytest.raises(ParseError, match=rf"log\.csv:3: non-numeric value '{cell}' in column 'T1'"):
@@ -58,14 +62,14 @@ def test_non_numbers_are_refused_with_the_line(tmp_path, cell):
         ),
     ],
 )
-def test_structural_errors(tmp_path, edit, message):
+def test_structural_errors(tmp_path: Path, edit: Callable[[list[str]], object], message: str) -> None:
     rows = GOOD.splitlines()
     edit(rows)
     with pytest.raises(ParseError, match=message):
         read_temperature_log(write(tmp_path, "\n".join(rows) + "\n"))
 
 
-def test_empty_and_missing_files(tmp_path):
+def test_empty_and_missing_files(tmp_path: Path) -> None:
     with pytest.raises(ParseError, match="empty file"):
         read_temperature_log(write(tmp_path, ""))
     with pytest.raises(ParseError, match="no data rows"):
@@ -74,7 +78,7 @@ def test_empty_and_missing_files(tmp_path):
         read_temperature_log(tmp_path / "absent.csv")
 
 
-def test_interval_and_sample_index(tmp_path):
+def test_interval_and_sample_index(tmp_path: Path) -> None:
     text = "T1,T2,E\n20,20,0\n21,20.5,1\n22,21,2\n"
     with pytest.raises(ParseError, match="no 'timestamp' column"):
         read_temperature_log(write(tmp_path, text))
@@ -89,7 +93,7 @@ def test_interval_and_sample_index(tmp_path):
         read_temperature_log(write(tmp_path, text), interval=-1)
 
 
-def test_xlsx_log_without_header(tmp_path):
+def test_xlsx_log_without_header(tmp_path: Path) -> None:
     openpyxl = pytest.importorskip("openpyxl")
     book = openpyxl.Workbook()
     sheet = book.active
@@ -107,7 +111,7 @@ def test_xlsx_log_without_header(tmp_path):
         read_temperature_log(tmp_path / "bad.xlsx", interval=60)
 
 
-def test_irregular_sampling_is_noted(tmp_path):
+def test_irregular_sampling_is_noted(tmp_path: Path) -> None:
     log = read_temperature_log(write(tmp_path, GOOD.replace("06:00:20", "06:01:20")))
     assert any("sampling interval varies" in str(n) for n in log.notes)
 
@@ -127,7 +131,9 @@ _TEMPS = "timestamp,spindle\n2026-11-02T06:00:00,20.1\n\n"
         ("2026-11-02T05:00:00,20.2", "timestamp not after the previous one"),
     ],
 )
-def test_a_bad_temperature_row_is_named_alike_by_history_import_and_diagnose(tmp_path, capsys, row, message):
+def test_a_bad_temperature_row_is_named_alike_by_history_import_and_diagnose(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], row: str, message: str
+) -> None:
     from setupfix.cli import main
 
     log = write(tmp_path, _TEMPS + row + "\n")  # the bad row is line 4
