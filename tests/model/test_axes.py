@@ -8,7 +8,7 @@ from pathlib import Path
 import pytest
 
 from setupfix.core.errors import ModelError
-from setupfix.model import load_model
+from setupfix.model import ProcessModel, load_model
 
 BASE = """
 [process]
@@ -74,7 +74,7 @@ features = { F1 = 1 }
 """
 
 
-def load(tmp_path: Path, text: str):
+def load(tmp_path: Path, text: str) -> ProcessModel:
     path = tmp_path / "model.toml"
     path.write_text(text, encoding="utf-8")
     return load_model(path)
@@ -88,7 +88,7 @@ def refused(tmp_path: Path, text: str) -> list[str]:
     return lines
 
 
-def test_components_are_registers_in_file_order(tmp_path):
+def test_components_are_registers_in_file_order(tmp_path: Path) -> None:
     m = load(tmp_path, BASE)
     assert m.multi_axis and m.axes == ("X", "Y", "Z") and m.spindle == "Z"
     assert m.register_ids == ["W1.X", "W1.Y", "W1.Z", "W1.C", "W2.X", "W2.Z", "T1", "T1.R", "T2"]
@@ -109,7 +109,7 @@ def test_components_are_registers_in_file_order(tmp_path):
     assert zone.keys == () and zone.component_keys == ("hole x", "hole y")
 
 
-def test_one_axis_file_unchanged(tmp_path):
+def test_one_axis_file_unchanged(tmp_path: Path) -> None:
     text = "\n".join(
         line
         for line in BASE.splitlines()
@@ -155,7 +155,7 @@ def test_one_axis_file_unchanged(tmp_path):
         (("position = [10.0, 20.0, 0.0]\n", ""), "features.F1.position", "rotation of W1"),
     ],
 )
-def test_each_new_key_refused_on_one_line(tmp_path, edit, key, words):
+def test_each_new_key_refused_on_one_line(tmp_path: Path, edit: tuple[str, str], key: str, words: str) -> None:
     old, new = edit
     assert old in BASE
     lines = refused(tmp_path, BASE.replace(old, new, 1))
@@ -164,7 +164,7 @@ def test_each_new_key_refused_on_one_line(tmp_path, edit, key, words):
     assert words in hit[0], hit
 
 
-def test_multi_axis_keys_refused_in_a_one_axis_model(tmp_path):
+def test_multi_axis_keys_refused_in_a_one_axis_model(tmp_path: Path) -> None:
     text = BASE.replace('axes = ["X", "Y", "Z"]\n', "", 1)
     lines = refused(tmp_path, text)
     assert any("process.rotation" in line and "multi-axis key" in line for line in lines)
@@ -172,23 +172,23 @@ def test_multi_axis_keys_refused_in_a_one_axis_model(tmp_path):
     assert any("dimensions.D4.kind" in line for line in lines)
 
 
-def test_zone_component_names_must_not_collide(tmp_path):
+def test_zone_component_names_must_not_collide(tmp_path: Path) -> None:
     lines = refused(tmp_path, BASE.replace('name = "Height"', 'name = "Hole X"'))
     assert any("dimensions.D4" in line and "also used" in line for line in lines)
 
 
-def test_direction_is_normalised_within_tolerance(tmp_path):
+def test_direction_is_normalised_within_tolerance(tmp_path: Path) -> None:
     m = load(tmp_path, BASE.replace("direction = [0.6, 0.0, 0.8]", "direction = [0.6004, 0.0, 0.8]"))
     n = next(d for d in m.dimensions if d.id == "D2").direction
     assert n is not None and math.isclose(math.hypot(*n), 1.0)
 
 
-def test_machine_points_refused_in_multi_axis(tmp_path):
+def test_machine_points_refused_in_multi_axis(tmp_path: Path) -> None:
     lines = refused(tmp_path, BASE + "\n[machine.M1]\nwks = { W1 = 1 }\n")
     assert any("machine" in line and "multi-axis" in line for line in lines)
 
 
-def test_zone_components_match_and_are_suggested(tmp_path):
+def test_zone_components_match_and_are_suggested(tmp_path: Path) -> None:
     import numpy as np
     import pandas as pd
 

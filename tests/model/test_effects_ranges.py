@@ -3,25 +3,26 @@
 from __future__ import annotations
 
 import re
+from pathlib import Path
 
 import pytest
+from model.test_loader import SPEC_EXAMPLE
 
 from setupfix.core.errors import ModelError
 from setupfix.model import load_model
 from setupfix.model.effects_toml import effects_toml
 from setupfix.model.process import ProcessModel
-from tests.model.test_loader import SPEC_EXAMPLE
 
 DRIFT = '[effects.E1]\nkind = "drift"\nestimate = 0.002\nunit = "mm/h"\n'
 
 
-def load(tmp_path, extra: str, base: str = SPEC_EXAMPLE) -> ProcessModel:
+def load(tmp_path: Path, extra: str, base: str = SPEC_EXAMPLE) -> ProcessModel:
     path = tmp_path / "model.toml"
     path.write_text(base + "\n" + extra, encoding="utf-8")
     return load_model(path)
 
 
-def refusal(tmp_path, extra: str, base: str = SPEC_EXAMPLE) -> str:
+def refusal(tmp_path: Path, extra: str, base: str = SPEC_EXAMPLE) -> str:
     with pytest.raises(ModelError) as info:
         load(tmp_path, extra, base)
     (line,) = str(info.value).splitlines()
@@ -70,24 +71,24 @@ def refusal(tmp_path, extra: str, base: str = SPEC_EXAMPLE) -> str:
         (DRIFT + "unit = 3\n", "effects.E1", ""),  # TOML: a key twice is a syntax error (checked below)
     ][:-1],
 )
-def test_each_effects_value_is_checked_at_load(tmp_path, extra, key, words):
+def test_each_effects_value_is_checked_at_load(tmp_path: Path, extra: str, key: str, words: str) -> None:
     line = refusal(tmp_path, extra)
     assert f"[{key}]" in line and words in line, line
 
 
-def test_wrong_types_of_text_keys_are_named(tmp_path):
+def test_wrong_types_of_text_keys_are_named(tmp_path: Path) -> None:
     line = refusal(tmp_path, DRIFT.replace('unit = "mm/h"', "unit = 3"))
     assert "[effects.E1.unit]" in line and "expected a string, found 3" in line
 
 
-def test_bounds_follow_the_model_unit(tmp_path):
+def test_bounds_follow_the_model_unit(tmp_path: Path) -> None:
     inch = SPEC_EXAMPLE.replace('unit = "mm"', 'unit = "inch"').replace("resolution = 0.001", "resolution = 0.0001")
     line = refusal(tmp_path, DRIFT.replace("0.002", "0.05"), inch)
     assert "plausible ±0.0393701 inch/h" in line
     assert load(tmp_path, DRIFT.replace("0.002", "0.03"), inch).effects.effects[0].estimate == 0.03
 
 
-def test_plausible_section_loads_and_round_trips(tmp_path):
+def test_plausible_section_loads_and_round_trips(tmp_path: Path) -> None:
     text = (
         "[effects]\norigin = 2026-11-02T08:00:00\ncycle_hours = 0.333\nlast_hours = 13.0\n"
         + DRIFT

@@ -8,7 +8,7 @@ from pathlib import Path
 import pytest
 
 from setupfix.core.errors import ModelError
-from setupfix.model import load_model
+from setupfix.model import ProcessModel, load_model
 
 SPEC_EXAMPLE = """
 [process]
@@ -66,7 +66,7 @@ def problems(tmp_path: Path, text: str) -> list[str]:
     return str(info.value).splitlines()
 
 
-def test_spec_example_loads(tmp_path):
+def test_spec_example_loads(tmp_path: Path) -> None:
     model = load_model(write(tmp_path, SPEC_EXAMPLE))
     assert model.register_ids == ["W1", "W5", "T5", "T23"]
     assert [r.register for r in model.registers] == ["G54", "G58", "H5", "H23"]
@@ -75,7 +75,7 @@ def test_spec_example_loads(tmp_path):
     assert all(r.limit == 0.1 and not r.fixed for r in model.registers)
 
 
-def test_guide_pins_sample_loads(guide_pins_model):
+def test_guide_pins_sample_loads(guide_pins_model: ProcessModel) -> None:
     assert len(guide_pins_model.wks) == 8 and len(guide_pins_model.tools) == 2
     assert len(guide_pins_model.features) == 28 and len(guide_pins_model.dimensions) == 28
 
@@ -105,7 +105,7 @@ def test_guide_pins_sample_loads(guide_pins_model):
         ("nominal = 25.0", "nominal = 25.0\nlowr = 1", "dimensions.D1.lowr", "unknown key"),
     ],
 )
-def test_each_defect_is_named_with_file_and_key(tmp_path, old, new, key, words):
+def test_each_defect_is_named_with_file_and_key(tmp_path: Path, old: str, new: str, key: str, words: str) -> None:
     assert old in SPEC_EXAMPLE
     lines = problems(tmp_path, SPEC_EXAMPLE.replace(old, new, 1))
     hit = [line for line in lines if f"[{key}]" in line]
@@ -113,26 +113,26 @@ def test_each_defect_is_named_with_file_and_key(tmp_path, old, new, key, words):
     assert "model.toml" in hit[0] and words in hit[0]
 
 
-def test_all_problems_reported_together(tmp_path):
+def test_all_problems_reported_together(tmp_path: Path) -> None:
     text = SPEC_EXAMPLE.replace('unit = "mm"', 'unit = "cubit"').replace("F3 = -1 }", "F8 = -1 }")
     lines = problems(tmp_path, text)
     assert any("process.unit" in line for line in lines)
     assert any("dimensions.D4.features.F8" in line for line in lines)
 
 
-def test_toml_syntax_error_names_the_line(tmp_path):
+def test_toml_syntax_error_names_the_line(tmp_path: Path) -> None:
     text = SPEC_EXAMPLE.replace("nominal = 25.0", "nominal = = 25.0")
     line_no = text.splitlines().index("nominal = = 25.0") + 1
     (line,) = problems(tmp_path, text)
     assert re.search(rf"model\.toml:{line_no}: TOML syntax", line), line
 
 
-def test_missing_file(tmp_path):
+def test_missing_file(tmp_path: Path) -> None:
     with pytest.raises(ModelError, match="cannot read model"):
         load_model(tmp_path / "nope.toml")
 
 
-def test_fixed_register_and_own_limit(tmp_path):
+def test_fixed_register_and_own_limit(tmp_path: Path) -> None:
     text = SPEC_EXAMPLE.replace('register = "H23"', 'register = "H23"\nfixed = true').replace(
         'register = "G54"', 'register = "G54"\nlimit = 0.05'
     )

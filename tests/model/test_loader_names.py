@@ -8,16 +8,17 @@ from __future__ import annotations
 
 import io
 from contextlib import redirect_stdout
+from pathlib import Path
 
 import pytest
+from model.test_loader import SPEC_EXAMPLE
 
 from setupfix.cli import main
 from setupfix.core.errors import ModelError
 from setupfix.model import load_model
-from tests.model.test_loader import SPEC_EXAMPLE
 
 
-def write(tmp_path, text: str):
+def write(tmp_path: Path, text: str) -> Path:
     path = tmp_path / "model.toml"
     path.write_text(text, encoding="utf-8")
     return path
@@ -31,7 +32,9 @@ def write(tmp_path, text: str):
         ("[wks.W1]", '[wks."W\\u00071"]', "wks.W?1", "U+0007"),
     ],
 )
-def test_control_characters_in_ids_and_names_are_refused(tmp_path, old, new, key, char):
+def test_control_characters_in_ids_and_names_are_refused(
+    tmp_path: Path, old: str, new: str, key: str, char: str
+) -> None:
     assert old in SPEC_EXAMPLE
     text = SPEC_EXAMPLE.replace(old, new, 1)
     if old == "[wks.W1]":
@@ -47,7 +50,7 @@ def test_control_characters_in_ids_and_names_are_refused(tmp_path, old, new, key
 FREE_TEXT = 'name = "P1\\nD1"\ngroup = "A\\u001b[2JB"\naliases = ["x\\u2028y"]'
 
 
-def test_names_are_free_text_and_escaped_in_the_correct_table(tmp_path):
+def test_names_are_free_text_and_escaped_in_the_correct_table(tmp_path: Path) -> None:
     text = SPEC_EXAMPLE.replace('name = "P1 D1"', FREE_TEXT, 1)
     path = write(tmp_path, text)
     model = load_model(path)
@@ -66,12 +69,12 @@ def test_names_are_free_text_and_escaped_in_the_correct_table(tmp_path):
     assert "P1?D1" in row and "+0.05" in row
 
 
-def test_ordinary_names_still_load(tmp_path):
+def test_ordinary_names_still_load(tmp_path: Path) -> None:
     text = SPEC_EXAMPLE.replace('name = "P1 D1"', 'name = "P1 Ø\u00a0D1 – 表"')
     assert load_model(write(tmp_path, text)).dimensions[0].name == "P1 Ø\u00a0D1 – 表"
 
 
-def test_process_name_with_a_newline_is_escaped_in_model_show(tmp_path):
+def test_process_name_with_a_newline_is_escaped_in_model_show(tmp_path: Path) -> None:
     text = SPEC_EXAMPLE.replace('name = "Rear axle', 'name = "Rear\\naxle\\u001b[2J', 1)
     path = write(tmp_path, text)
     out = io.StringIO()

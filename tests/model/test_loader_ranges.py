@@ -5,10 +5,10 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
+from model.test_loader import SPEC_EXAMPLE
 
 from setupfix.core.errors import ModelError
 from setupfix.model import load_model
-from tests.model.test_loader import SPEC_EXAMPLE
 
 
 def lines_of(tmp_path: Path, text: str) -> list[str]:
@@ -48,7 +48,7 @@ def lines_of(tmp_path: Path, text: str) -> list[str]:
         ('register = "G54"', 'register = "G54"\nlimit = nan', "wks.W1.limit", "not finite"),
     ],
 )
-def test_absurd_numbers_are_refused(tmp_path, old, new, key, words):
+def test_absurd_numbers_are_refused(tmp_path: Path, old: str, new: str, key: str, words: str) -> None:
     assert old in SPEC_EXAMPLE
     lines = lines_of(tmp_path, SPEC_EXAMPLE.replace(old, new, 1))
     hit = [line for line in lines if f"[{key}]" in line]
@@ -56,7 +56,7 @@ def test_absurd_numbers_are_refused(tmp_path, old, new, key, words):
     assert "model.toml" in hit[0] and words in hit[0], hit
 
 
-def test_inch_model_ranges_are_converted(tmp_path):
+def test_inch_model_ranges_are_converted(tmp_path: Path) -> None:
     text = SPEC_EXAMPLE.replace('unit = "mm"', 'unit = "inch"').replace("limit = 0.1", "limit = 0.5")
     (line,) = lines_of(tmp_path, text)
     assert "[process.limit]" in line and "0.393701] inch" in line
@@ -66,7 +66,7 @@ def test_inch_model_ranges_are_converted(tmp_path):
     assert load_model(path).unit == "inch"
 
 
-def test_deep_nesting_and_huge_integer_are_messages(tmp_path):
+def test_deep_nesting_and_huge_integer_are_messages(tmp_path: Path) -> None:
     deep = SPEC_EXAMPLE + "\n[junk]\nx = " + "[" * 5000 + "]" * 5000 + "\n"
     (line,) = lines_of(tmp_path, deep)
     assert "model.toml" in line and "nested too deeply" in line
@@ -75,7 +75,7 @@ def test_deep_nesting_and_huge_integer_are_messages(tmp_path):
     assert "model.toml" in line and "out of range" in line
 
 
-def test_safety_and_register_settings_are_typed_fields_with_key_paths(tmp_path):
+def test_safety_and_register_settings_are_typed_fields_with_key_paths(tmp_path: Path) -> None:
     """[safety] and a register's cost load into typed fields (no registry); problems name file and key."""
     text = SPEC_EXAMPLE.replace('register = "H5"', 'register = "H5"\ncost = 2.5') + "\n[safety]\ngain = 0.5\n"
     path = tmp_path / "model.toml"
@@ -91,7 +91,7 @@ def test_safety_and_register_settings_are_typed_fields_with_key_paths(tmp_path):
     assert "[safety.band]" in line and "unknown key" in line
 
 
-def test_unknown_section_still_refused(tmp_path):
+def test_unknown_section_still_refused(tmp_path: Path) -> None:
     # ([safety] itself is registered by setupfix.model.safety)
     (line,) = lines_of(tmp_path, SPEC_EXAMPLE + "\n[safetee]\nband = 1\n")
     assert "[safetee]" in line and "unknown table" in line

@@ -7,10 +7,10 @@ import pandas as pd
 import pytest
 
 from setupfix.core.errors import MatchError
-from setupfix.model import match_parts, model_from_dict
+from setupfix.model import ProcessModel, match_parts, model_from_dict
 
 
-def small_model(**dim_extra):
+def small_model(**dim_extra: object) -> ProcessModel:
     doc = {
         "process": {"name": "t"},
         "wks": {"W1": {}},
@@ -32,11 +32,11 @@ def small_model(**dim_extra):
     return model_from_dict(doc, "m.toml")
 
 
-def table(rows):
+def table(rows: list[dict[str, object]]) -> pd.DataFrame:
     return pd.DataFrame(rows)
 
 
-def test_name_and_alias_ignore_case_and_spaces():
+def test_name_and_alias_ignore_case_and_spaces() -> None:
     model = small_model()
     parts = match_parts(
         model,
@@ -52,7 +52,7 @@ def test_name_and_alias_ignore_case_and_spaces():
     assert parts[1].deviation[0] == pytest.approx(0.02)
 
 
-def test_inch_converted_to_model_unit_and_absent_listed():
+def test_inch_converted_to_model_unit_and_absent_listed() -> None:
     model = small_model()
     (part,) = match_parts(
         model,
@@ -68,12 +68,12 @@ def test_inch_converted_to_model_unit_and_absent_listed():
     assert part.unmatched == ("Datum A",)
 
 
-def test_nothing_matches_is_an_error():
+def test_nothing_matches_is_an_error() -> None:
     with pytest.raises(MatchError, match="no characteristic"):
         match_parts(small_model(), table([{"characteristic": "X", "deviation": 0.1}]))
 
 
-def test_measured_twice_keeps_the_later_with_a_note():
+def test_measured_twice_keeps_the_later_with_a_note() -> None:
     rows = [
         {"characteristic": "Face", "deviation": 0.1, "source": "r.csv:2"},
         {"characteristic": "FACE", "deviation": 0.2, "source": "r.csv:5"},
@@ -84,7 +84,7 @@ def test_measured_twice_keeps_the_later_with_a_note():
     assert "measured twice" in str(note) and str(note).startswith("r.csv:5") and "r.csv:2 ignored" in str(note)
 
 
-def test_measured_twice_the_later_time_stamp_wins_over_file_order():
+def test_measured_twice_the_later_time_stamp_wins_over_file_order() -> None:
     rows = [
         {"characteristic": "Face", "deviation": 0.1, "source": "r.csv:2", "timestamp": "2026-11-02T09:00"},
         {"characteristic": "Face", "deviation": 0.2, "source": "r.csv:5", "timestamp": "2026-11-02T08:00"},
@@ -97,7 +97,7 @@ def test_measured_twice_the_later_time_stamp_wins_over_file_order():
 @pytest.mark.parametrize(
     ("report", "model_name"), [("P2-D3", "P2 D3"), ("SP_00_Z", "SP-00_Z"), ("p1d1", "P1 D1"), ("P1 D11", "P1 D1")]
 )
-def test_unmatched_names_get_the_closest_model_names(report, model_name):
+def test_unmatched_names_get_the_closest_model_names(report: str, model_name: str) -> None:
     doc = {
         "process": {"name": "t"},
         "wks": {"W1": {}},
@@ -115,12 +115,12 @@ def test_unmatched_names_get_the_closest_model_names(report, model_name):
     assert part.suggestions[report][0] == model_name
 
 
-def test_nothing_matches_suggests_names():
+def test_nothing_matches_suggests_names() -> None:
     with pytest.raises(MatchError, match=r"'face_' \(model: 'Face'\?\)"):
         match_parts(small_model(), table([{"characteristic": "face_", "deviation": 0.1}]))
 
 
-def test_report_nominal_and_limits_are_kept_in_model_unit():
+def test_report_nominal_and_limits_are_kept_in_model_unit() -> None:
     (part,) = match_parts(
         small_model(),
         table(
@@ -136,11 +136,12 @@ def test_report_nominal_and_limits_are_kept_in_model_unit():
             ]
         ),
     )
+    assert part.nominal is not None and part.upper is not None
     assert part.nominal[1] == pytest.approx(5.08) and part.upper[1] == pytest.approx(0.1016)
     assert np.isnan(part.nominal[0]) and part.units == ("", "inch")
 
 
-def test_repeated_names_told_apart_by_station():
+def test_repeated_names_told_apart_by_station() -> None:
     doc = {
         "process": {"name": "t"},
         "wks": {"W1": {}, "W2": {}},

@@ -2,13 +2,15 @@
 
 from __future__ import annotations
 
+from typing import Any
+
 import pytest
 
 from setupfix.core.errors import ModelError
 from setupfix.model import model_from_dict
 from setupfix.model.safety import RegisterPolicy, SafetySettings
 
-BASE = {
+BASE: dict[str, dict[str, Any]] = {
     "process": {"name": "p"},
     "wks": {"W1": {"register": "G54"}},
     "tools": {"T5": {"register": "H5"}},
@@ -17,8 +19,10 @@ BASE = {
 }
 
 
-def doc(**over):
-    d = {k: {kk: dict(vv) if isinstance(vv, dict) else vv for kk, vv in v.items()} for k, v in BASE.items()}
+def doc(**over: object) -> dict[str, Any]:
+    d: dict[str, Any] = {
+        k: {kk: dict(vv) if isinstance(vv, dict) else vv for kk, vv in v.items()} for k, v in BASE.items()
+    }
     for path, value in over.items():
         table, _, key = path.rpartition("__")
         node = d
@@ -28,7 +32,7 @@ def doc(**over):
     return d
 
 
-def test_defaults_without_safety_table():
+def test_defaults_without_safety_table() -> None:
     m = model_from_dict(BASE)
     s = m.safety
     assert s == SafetySettings() and s.dead_band is None and s.gain == 1.0 and s.reject_band is None and s.ewma == 1.0
@@ -38,7 +42,7 @@ def test_defaults_without_safety_table():
     assert not m.effects and m.effects.effects == ()
 
 
-def test_values_are_read():
+def test_values_are_read() -> None:
     m = model_from_dict(
         doc(
             safety__gain=0.7,
@@ -60,7 +64,7 @@ def test_values_are_read():
     assert s.dimension_uncertainty == {"D1": 0.004} and s.dimension_reject_band == {"D1": 0.5}
 
 
-def test_bad_values_are_listed_with_their_key_paths():
+def test_bad_values_are_listed_with_their_key_paths() -> None:
     with pytest.raises(ModelError) as info:
         model_from_dict(doc(tools__T5__cost=0, tools__T5__offset="both", tools__T5__number=-1), source="m.toml")
     text = str(info.value)

@@ -12,13 +12,13 @@ import re
 from pathlib import Path
 
 import pytest
+from model.test_loader import SPEC_EXAMPLE
 
 from setupfix.core.errors import ExportError, ModelError
 from setupfix.correction.offsets import OffsetRow
 from setupfix.model import load_model
 from setupfix.model.slots import register_slots
 from setupfix.outputs.controllers import render
-from tests.model.test_loader import SPEC_EXAMPLE
 
 WKS = [
     ("G54", None),
@@ -110,7 +110,7 @@ def address(controller: str, kind: str, name: str, number: int | None, edge: int
 FAMILIES = {"G10": ("fanuc", "haas"), "siemens": ("siemens",), "heidenhain": ("heidenhain",)}
 
 
-def collide(kind: str, a: tuple, b: tuple) -> set[str]:
+def collide(kind: str, a: tuple[str, int | None, int | None], b: tuple[str, int | None, int | None]) -> set[str]:
     """Controller families in which both registers write one address."""
     out = set()
     for family, controllers in FAMILIES.items():
@@ -126,7 +126,9 @@ def has_edge(name: str, edge: int | None) -> bool:
 
 
 @pytest.mark.parametrize(("kind", "registers"), [("wks", WKS), ("tool", [(n, k, e) for n, k, e in TOOLS])])
-def test_slots_agree_with_every_controller_program(kind, registers):
+def test_slots_agree_with_every_controller_program(
+    kind: str, registers: list[tuple[str, int | None, int | None]]
+) -> None:
     """Shared slot ⟺ some controller family writes both to one address (Heidenhain tool edges excepted)."""
     disagree = []
     for a, b in itertools.combinations(registers, 2):
@@ -162,7 +164,9 @@ def test_slots_agree_with_every_controller_program(kind, registers):
         ("tools", 'register = "H1"\nnumber = 8', 'register = "H2"\nnumber = 8'),
     ],
 )
-def test_two_registers_of_one_slot_refuse_the_model_naming_both(tmp_path, kind, first, second):
+def test_two_registers_of_one_slot_refuse_the_model_naming_both(
+    tmp_path: Path, kind: str, first: str, second: str
+) -> None:
     if kind == "wks":
         text = SPEC_EXAMPLE.replace('[wks.W1]\nregister = "G54"', f"[wks.W1]\n{first}").replace(
             '[wks.W5]\nregister = "G58"', f"[wks.W5]\n{second}"
@@ -192,14 +196,14 @@ def test_two_registers_of_one_slot_refuse_the_model_naming_both(tmp_path, kind, 
     ("first", "second"),
     [("G54", "G55"), ("G54.1 P1", "G54.1 P2"), ("G110", "G154 P2"), ("G54", "G54.1 P1"), ("G57", "G505")],
 )
-def test_distinct_slots_load(tmp_path, first, second):
+def test_distinct_slots_load(tmp_path: Path, first: str, second: str) -> None:
     text = SPEC_EXAMPLE.replace('"G54"', f'"{first}"').replace('"G58"', f'"{second}"')
     path = tmp_path / "model.toml"
     path.write_text(text, encoding="utf-8")
     assert [r.register for r in load_model(path).wks] == [first, second]
 
 
-def test_tool_edges_load_and_heidenhain_refuses_two_rows_of_one_tool(tmp_path):
+def test_tool_edges_load_and_heidenhain_refuses_two_rows_of_one_tool(tmp_path: Path) -> None:
     text = SPEC_EXAMPLE.replace('"H5"', '"T5 D1"').replace('"H23"', '"T5 D2"')
     path = tmp_path / "model.toml"
     path.write_text(text, encoding="utf-8")
@@ -235,12 +239,12 @@ def test_tool_edges_load_and_heidenhain_refuses_two_rows_of_one_tool(tmp_path):
         ("PR #4", "PRESET 4"),
     ],
 )
-def test_canonical_slot_names(name, slot):
+def test_canonical_slot_names(name: str, slot: str) -> None:
     kind = "tool" if name[0] in "HT" else "wks"
     assert slot in register_slots(kind, name)
 
 
-def test_sample_models_still_load():
+def test_sample_models_still_load() -> None:
     root = Path(__file__).resolve().parents[2] / "sample_reports"
     models = sorted(root.rglob("model*.toml"))
     assert models

@@ -4,19 +4,20 @@ from __future__ import annotations
 
 from dataclasses import replace
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
+from conftest import GUIDE_PINS
 
 from setupfix.core.errors import ModelError
 from setupfix.correction.relation import relation_matrices
 from setupfix.model import load_model, model_from_dict
-from tests.conftest import GUIDE_PINS
 
 EXPANDED = Path(__file__).parent / "data" / "guide_pins_expanded.toml"
 
 
-def test_guide_pins_template_equals_the_expanded_model():
+def test_guide_pins_template_equals_the_expanded_model() -> None:
     templated = load_model(GUIDE_PINS / "model.toml")
     expanded = load_model(EXPANDED)
     assert replace(templated, source="") == replace(expanded, source="")
@@ -26,7 +27,7 @@ def test_guide_pins_template_equals_the_expanded_model():
     assert (a.registers, a.features, a.dimensions) == (b.registers, b.features, b.dimensions)
 
 
-def test_generator_writes_both_forms():
+def test_generator_writes_both_forms() -> None:
     import importlib.util
 
     spec = importlib.util.spec_from_file_location("generate", GUIDE_PINS / "generate.py")
@@ -37,8 +38,8 @@ def test_generator_writes_both_forms():
     assert generate.expanded_model_toml() == EXPANDED.read_text(encoding="utf-8")
 
 
-def doc(**changes):
-    base = {
+def doc(**changes: object) -> dict[str, Any]:
+    base: dict[str, Any] = {
         "process": {"name": "t"},
         "wks": {"W1": {}, "W2": {}, "W3": {}},
         "tools": {"T1": {}},
@@ -70,7 +71,7 @@ def doc(**changes):
     return base
 
 
-def test_expansion_names_groups_shared_and_mapped_registers():
+def test_expansion_names_groups_shared_and_mapped_registers() -> None:
     model = model_from_dict(doc())
     assert [f.id for f in model.features] == ["AF1", "AF2", "BF1", "BF2"]
     assert model.features[2].wks == {"W2": 1.0} and model.features[3].wks == {"W3": 1.0}
@@ -85,7 +86,7 @@ def test_expansion_names_groups_shared_and_mapped_registers():
     )
 
 
-def problems(document) -> list[str]:
+def problems(document: dict[str, Any]) -> list[str]:
     with pytest.raises(ModelError) as info:
         model_from_dict(document, "m.toml")
     return str(info.value).splitlines()
@@ -104,28 +105,28 @@ def problems(document) -> list[str]:
         ({"template__extra": {}}, "template.extra", "unknown key"),
     ],
 )
-def test_template_problems_name_the_template_table(changes, key, words):
+def test_template_problems_name_the_template_table(changes: dict[str, Any], key: str, words: str) -> None:
     lines = problems(doc(**changes))
     hit = [line for line in lines if f"[{key}]" in line]
     assert hit, lines
     assert hit[0].startswith("m.toml: ") and words in hit[0]
 
 
-def test_template_id_colliding_with_a_plain_table():
+def test_template_id_colliding_with_a_plain_table() -> None:
     d = doc()
     d["features"] = {"AF1": {"wks": {"W1": 1}}}
     (line,) = problems(d)
     assert "[template.features.F1]" in line and "expands to [features.AF1]" in line
 
 
-def test_template_without_stations():
+def test_template_without_stations() -> None:
     d = doc()
     del d["stations"]
     lines = problems(d)
     assert any("[stations]" in line and "at least one" in line for line in lines)
 
 
-def test_tools_mapped_per_station():
+def test_tools_mapped_per_station() -> None:
     d = doc()
     d["tools"] = {"T1": {}, "T2": {}}
     d["template"]["features"]["F1"]["tools"] = {"cutter": 1}
@@ -163,7 +164,7 @@ def _per_part_report(tmp_path: Path, station: str, *, with_station: bool) -> Pat
 
 
 @pytest.mark.parametrize("with_station", [True, False])
-def test_a_template_matches_a_per_part_report_without_the_station_prefix(tmp_path, with_station):
+def test_a_template_matches_a_per_part_report_without_the_station_prefix(tmp_path: Path, with_station: bool) -> None:
     from setupfix.usecases.correct import correct_report
     from setupfix.usecases.requests import CorrectRequest, CycleOptions
 
@@ -178,7 +179,9 @@ def test_a_template_matches_a_per_part_report_without_the_station_prefix(tmp_pat
     np.testing.assert_array_equal(cycle.part.deviation[7:14], whole.part.deviation[7:14])
 
 
-def test_a_per_part_report_without_its_station_is_refused_naming_the_way_to_give_it(tmp_path, capsys):
+def test_a_per_part_report_without_its_station_is_refused_naming_the_way_to_give_it(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     from setupfix.cli import main
 
     report = _per_part_report(tmp_path, "P2", with_station=False)
@@ -188,7 +191,7 @@ def test_a_per_part_report_without_its_station_is_refused_naming_the_way_to_give
     assert main(["correct", "--model", str(GUIDE_PINS / "model.toml"), "--stations", "P2", str(report)]) == 0
 
 
-def test_model_check_does_not_send_the_user_to_model_check(tmp_path, capsys):
+def test_model_check_does_not_send_the_user_to_model_check(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     from setupfix.cli import main
 
     report = tmp_path / "other.csv"
