@@ -61,4 +61,4 @@ def test_paper_run_length() -> None:
     result = COA(seed=0).solve(problem)
     # Stryczek: 100 iterations with at most 40 habitats and 5–10 eggs ≈ 30,000 solutions
     assert 25_000 <= result.evaluations <= 36_000
-    assert result.history.shape[0] == pytest.approx(100, abs=1)
+    assert result.history is not None and result.history.shape[0] == pytest.approx(100, abs=1)

@@ -8,17 +8,19 @@ optimiser in ``OPTIMIZERS`` is covered without a line here; budgets are small.
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numpy as np
 import pytest
 
 from setupfix.core.errors import ParameterError
-from setupfix.core.params import accepts
+from setupfix.core.params import Constraint, accepts
 from setupfix.optimize import (
     NO_BETTER_THAN_NONE,
     OPTIMIZERS,
     CorrectionProblem,
     Metaheuristic,
+    Optimizer,
     get_optimizer,
     make_result,
 )
@@ -36,7 +38,7 @@ FAST = {
 }
 
 
-def make(name: str, seed: int = 0, budget: int = 300, **extra):
+def make(name: str, seed: int = 0, budget: int = 300, **extra: Any) -> Optimizer:
     params = dict(FAST.get(name, {}), **extra)
     if issubclass(type(get_optimizer(name)), Metaheuristic):
         params["n_solutions"] = budget
@@ -67,7 +69,7 @@ def test_same_seed_same_result(name: str) -> None:
     a, b = make(name, seed=3).solve(problem), make(name, seed=3).solve(problem)
     assert np.array_equal(a.x, b.x) and a.margin_after == b.margin_after and a.evaluations == b.evaluations
     if a.history is not None:
-        assert np.array_equal(a.history, b.history)
+        assert b.history is not None and np.array_equal(a.history, b.history)
 
 
 @pytest.mark.parametrize("name", NAMES)
@@ -91,7 +93,7 @@ def test_budget_counted_and_result_on_the_grid_within_limits(name: str) -> None:
     assert result.margin_after == pytest.approx(float(f1), abs=1e-12) and result.norm == pytest.approx(float(f2))
 
 
-def _bad_value(constraints):
+def _bad_value(constraints: list[Constraint]) -> object:
     """A value every constraint of a parameter refuses."""
     for value in (-1, -(10**9), 10**12, 0.5, 2.5, math.nan, "no such value", None):
         if not any(accepts(c, value) for c in constraints):
@@ -99,7 +101,7 @@ def _bad_value(constraints):
     raise AssertionError(f"no value outside {constraints}")
 
 
-def _declared(name):
+def _declared(name: str) -> tuple[Optimizer, dict[str, list[Constraint]]]:
     opt = get_optimizer(name)
     return opt, opt._parameter_constraints
 

@@ -6,6 +6,7 @@ import itertools
 from pathlib import Path
 
 import numpy as np
+import numpy.typing as npt
 import pytest
 
 from setupfix.correction.synthetic import simulate_deviations
@@ -14,10 +15,19 @@ from setupfix.optimize import CorrectionProblem, Evaluator, get_optimizer
 from setupfix.optimize import base as _base
 from setupfix.optimize.heuristics.cripso import CRIPSO, coefficient_schedule, planula_position
 
+Array = npt.NDArray[np.float64]
+
 GUIDE_PINS = Path(__file__).resolve().parents[2] / "sample_reports" / "guide_pins"
 
 
-def make_problem(composite, deviation, half_tol, lb, ub, resolution=0.001) -> CorrectionProblem:
+def make_problem(
+    composite: npt.ArrayLike,
+    deviation: npt.ArrayLike,
+    half_tol: float,
+    lb: npt.ArrayLike,
+    ub: npt.ArrayLike,
+    resolution: float = 0.001,
+) -> CorrectionProblem:
     composite = np.asarray(composite, dtype=float)
     n, m = composite.shape
     return CorrectionProblem(
@@ -65,12 +75,12 @@ def guide_pins_problems(n_sets: int, seed: int) -> list[CorrectionProblem]:
 
 
 @pytest.fixture
-def recorded(monkeypatch: pytest.MonkeyPatch):
+def recorded(monkeypatch: pytest.MonkeyPatch) -> list[Array]:
     """Every array CRIPSO hands to its Evaluator, in order."""
-    calls: list[np.ndarray] = []
+    calls: list[Array] = []
 
     class Recording(Evaluator):
-        def __call__(self, x):
+        def __call__(self, x: Array) -> Array:
             calls.append(np.atleast_2d(np.array(x, dtype=float)))
             return super().__call__(x)
 
@@ -108,7 +118,9 @@ def test_different_seeds_find_different_optima_of_a_tied_problem() -> None:
 
 
 @pytest.mark.parametrize(("n_solutions", "n_polyps"), [(1500, 100), (257, 16), (7, 10), (3, 2)])
-def test_every_solution_on_grid_within_bounds_and_budget_exact(recorded, n_solutions, n_polyps) -> None:
+def test_every_solution_on_grid_within_bounds_and_budget_exact(
+    recorded: list[Array], n_solutions: int, n_polyps: int
+) -> None:
     problem = make_problem(
         [[1, 0, 1], [1, -1, 0], [0, 1, 1], [2, 1, -1]],
         [0.03, -0.02, 0.011],
@@ -127,12 +139,13 @@ def test_every_solution_on_grid_within_bounds_and_budget_exact(recorded, n_solut
         assert np.ptp(x[:, 0]) > 0 and np.ptp(x[:, 1]) > 0  # the free ones do move
 
 
-def test_history_is_the_best_so_far_of_the_evaluated_sequence(recorded) -> None:
+def test_history_is_the_best_so_far_of_the_evaluated_sequence(recorded: list[Array]) -> None:
     problem = guide_pins_problems(1, seed=9)[0]
     result = CRIPSO(seed=4, n_solutions=3000).solve(problem)
     x = np.concatenate(recorded)
     f1, f2, f = problem.evaluate(x)
     running = np.maximum.accumulate(f)
+    assert result.history is not None
     counts = result.history[:, 0].astype(int)
     np.testing.assert_array_equal(result.history[:, 3], running[counts - 1])
     improved = np.flatnonzero(f > np.r_[-np.inf, running[:-1]]) + 1
@@ -214,7 +227,9 @@ def reference_cripso(
 @pytest.mark.parametrize(
     ("seed", "inertia", "tied"), [(0, 0.75, False), (1, 0.75, False), (2, 0.4, False), (3, 0.75, True)]
 )
-def test_search_equals_a_literal_reference_of_the_paper(recorded, seed: int, inertia, tied) -> None:
+def test_search_equals_a_literal_reference_of_the_paper(
+    recorded: list[Array], seed: int, inertia: float, tied: bool
+) -> None:
     # ``tied``: a small grid where planulae often land on their parents, so equal f (and the tie
     # rules of the tournament and of gbest) occur many times.
     problem = (
@@ -228,7 +243,7 @@ def test_search_equals_a_literal_reference_of_the_paper(recorded, seed: int, ine
 
 
 @pytest.mark.parametrize("seed", range(5))
-def test_last_planula_copies_its_parent(recorded, seed: int) -> None:
+def test_last_planula_copies_its_parent(recorded: list[Array], seed: int) -> None:
     # With L = P + 1 the only planula is solution L: eq. 11 gives c1 = c2 = 0, and a polyp of the
     # initial colony has no inertia yet, so eq. 1 puts the planula exactly on the winner.  An off-by-
     # one in L_i (c = cos(π/2 · P/(P+1)) ≈ 0.14 here) moves it by several steps on this wide grid.
@@ -244,7 +259,9 @@ def test_last_planula_copies_its_parent(recorded, seed: int) -> None:
 def test_early_planulae_move() -> None:
     problem = make_problem(np.eye(3), [0.05, -0.05, 0.0], 0.1, [-0.1] * 3, [0.1] * 3)
     result = CRIPSO(seed=0, n_polyps=10, n_solutions=20).solve(problem)
-    assert result.history[-1, 3] > result.history[0, 3]  # something better than the random start
+    assert (
+        result.history is not None and result.history[-1, 3] > result.history[0, 3]
+    )  # something better than the random start
 
 
 def test_rejects_a_colony_without_tournaments() -> None:

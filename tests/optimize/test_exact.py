@@ -59,7 +59,7 @@ def test_grid_optimum_and_least_norm_equal_brute_force(seed: int) -> None:
         return
     assert result.margin_after == pytest.approx(best, abs=1e-12)
     assert result.norm == pytest.approx(norm, abs=1e-12)
-    assert result.bound >= result.margin_after - 1e-12
+    assert result.bound is not None and result.bound >= result.margin_after - 1e-12
     np.testing.assert_allclose(result.x / problem.resolution, np.rint(result.x / problem.resolution), atol=1e-9)
 
 
@@ -116,7 +116,7 @@ def test_time_limit_falls_back_and_says_so() -> None:
         result = get_optimizer("exact", objective="paper", time_limit=1e-9).solve(problem)
     assert result.status == "time_limit"
     assert any(n.kind == "solver" and "time limit" in n.message for n in result.notes)
-    assert result.stopped.reason == "time limit"
+    assert result.stopped is not None and result.stopped.reason == "time limit"
     assert result.bound is None or result.margin_after <= result.bound + 1e-12  # None: stopped in the LP
     assert "not proved" in result.message
 
@@ -128,7 +128,7 @@ def test_paper_size_problem_against_lp_bound_and_null_space(guide_pins_model: Pr
         problem = CorrectionProblem.from_part(guide_pins_model, part)
         result = get_optimizer("exact", objective="paper").solve(problem)
         assert result.status == "optimal"
-        assert result.margin_before <= result.margin_after <= result.bound + 1e-12
+        assert result.bound is not None and result.margin_before <= result.margin_after <= result.bound + 1e-12
         # least norm: moving along the null space (tools +a, WKS -a) by one step cannot shorten x
         direction = np.r_[-np.ones(8), np.ones(2)] * problem.resolution
         for step in (-1, 1):
@@ -146,14 +146,14 @@ def test_continuous_mode_is_the_lp_optimum() -> None:
 @pytest.mark.slow
 @settings(max_examples=25, deadline=None)
 @given(seed=st.integers(0, 10_000), n=st.integers(1, 6), m=st.integers(1, 10), steps=st.integers(1, 20))
-def test_no_grid_point_beats_the_exact_optimum(seed: int, n, m, steps) -> None:
+def test_no_grid_point_beats_the_exact_optimum(seed: int, n: int, m: int, steps: int) -> None:
     problem = random_problem(seed, n=n, m=max(m, 1), limit_steps=steps)
     result = get_optimizer("exact", objective="paper").solve(problem)
     rng = np.random.default_rng(seed)
     k = rng.integers(problem.kmin, problem.kmax + 1, size=(2000, n))
-    f1, _, _ = problem.evaluate(k * problem.resolution)
+    f1, _, _ = problem.evaluate((k * problem.resolution).astype(float))
     if result.given_up and result.status == "time_limit":  # a triage whose leximin levels outran the limit
-        assert result.stopped.stage == "triage"  # says so (issue 22: never "optimal")
+        assert result.stopped is not None and result.stopped.stage == "triage"  # says so (issue 22: never "optimal")
     else:
         assert result.status == "optimal"
     if result.given_up:  # triage: the kept dimensions are in tolerance, the others given up
@@ -161,5 +161,5 @@ def test_no_grid_point_beats_the_exact_optimum(seed: int, n, m, steps) -> None:
         assert np.all(problem.margins(result.x)[kept] >= -1e-12) and f1.max() < 0
         return
     assert f1.max() <= result.margin_after + 1e-12
-    assert result.margin_after <= result.bound + 1e-12
+    assert result.bound is not None and result.margin_after <= result.bound + 1e-12
     assert np.all(np.abs(result.x) <= problem.ub + 1e-12)

@@ -6,6 +6,7 @@ import time
 from pathlib import Path
 
 import numpy as np
+import numpy.typing as npt
 import pytest
 
 from setupfix.inputs.cycles import load_parts
@@ -29,6 +30,8 @@ PATHS = {
     "working-set NNLS": ExactSettings(nnls_max_rows=0),
     "HiGHS QP": ExactSettings(nnls_max_rows=0, working_set_nnls=False),
 }
+
+Array = npt.NDArray[np.float64]
 
 
 @pytest.mark.slow
@@ -60,9 +63,11 @@ def test_solve_error_repro_is_optimal() -> None:
 
 def test_solver_error_is_retried_without_the_lower_bracket_and_reported(monkeypatch: pytest.MonkeyPatch) -> None:
     real = Session.max_margin_milp
-    brackets = []
+    brackets: list[float] = []
 
-    def failing_once(self, t_lo, t_hi, start, time_limit):  # HiGHS's "Solve error", once
+    def failing_once(  # HiGHS's "Solve error", once
+        self: Session, t_lo: float, t_hi: float, start: Array | None, time_limit: float
+    ) -> Solve:
         brackets.append(t_lo)
         if len(brackets) == 1:
             return Solve("error", "Solve error", None, float("nan"), float("nan"), None, None, 0.0)
@@ -136,10 +141,10 @@ def test_whole_solve_respects_the_time_limit_and_says_which_stage_stopped() -> N
     assert result.margin_after >= problem.margin_before  # a stopped search still improves on nothing
     assert result.status == "time_limit"
     if result.bound is None:  # a loaded machine can stop the LP bound itself: then no bound is claimed
-        assert result.stopped.stage == "lp bound"
+        assert result.stopped is not None and result.stopped.stage == "lp bound"
     else:
         assert result.margin_after <= result.bound + 1e-12
-        assert result.stopped.stage in ("grid optimum", "least norm")
+        assert result.stopped is not None and result.stopped.stage in ("grid optimum", "least norm")
     assert any("time limit" in n.message for n in result.notes)
 
 
@@ -156,7 +161,9 @@ def test_cli_time_limit_option(capsys: pytest.CaptureFixture[str]) -> None:
 
 @pytest.mark.slow
 @pytest.mark.parametrize(("objective", "count", "threads"), [("paper", 8, 2), ("leximin", 24, 4)])
-def test_threads_keep_their_own_solver_models(guide_pins_model: ProcessModel, objective: str, count, threads) -> None:
+def test_threads_keep_their_own_solver_models(
+    guide_pins_model: ProcessModel, objective: str, count: int, threads: int
+) -> None:
     """Solves in worker threads (batch, TUI) give the same corrections as one after another — also while the
     threads fill the per-model memo of results of G alone at once (it starts empty)."""
     from concurrent.futures import ThreadPoolExecutor
@@ -187,7 +194,7 @@ def test_a_very_fine_grid_neither_hangs_nor_loses_the_bound(guide_pins_model: Pr
     result = get_optimizer("exact", objective="paper", time_limit=2.0).solve(fine)
     assert time.perf_counter() - start < 2.0 + 3.0
     assert get_optimizer("exact", objective="paper").solve(coarse).margin_after - 1e-12 <= result.margin_after
-    assert result.margin_after <= result.bound + 1e-12
+    assert result.bound is not None and result.margin_after <= result.bound + 1e-12
 
 
 def test_the_answer_does_not_depend_on_the_reports_solved_before(guide_pins_model: ProcessModel) -> None:
@@ -212,7 +219,7 @@ def test_the_leximin_stage_ends_by_its_share_of_the_limit_and_leaves_the_least_n
     problem = shop_problem(100, 800, 1)
     limit = 1.0
     result = get_optimizer("exact", objective="leximin", time_limit=limit).solve(problem)
-    assert result.status == "time_limit" and result.stopped.stage == "leximin"
+    assert result.status == "time_limit" and result.stopped is not None and result.stopped.stage == "leximin"
     share = (1 - ExactSettings().leximin_norm_share) * limit
     assert result.stages["leximin"] <= share + 0.1  # one point test past the share at most
     paper = get_optimizer("exact", objective="paper", time_limit=10.0).solve(problem)

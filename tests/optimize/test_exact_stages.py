@@ -4,14 +4,17 @@ from __future__ import annotations
 
 import ast
 import dataclasses
+from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 import numpy as np
+import numpy.typing as npt
 import pytest
 
 from setupfix.core.errors import ParameterError
 from setupfix.optimize import get_optimizer
-from setupfix.optimize.exact.grid_optimum import LEVEL_STRATEGIES, GridOptimum
+from setupfix.optimize.exact.grid_optimum import LEVEL_STRATEGIES, GridLevel, GridOptimum, StrategyAnswer
 from setupfix.optimize.exact.lp_bound import lp_bound, margin_rows
 from setupfix.optimize.exact.session import GridRows, Session
 from setupfix.optimize.exact.settings import ExactSettings
@@ -45,6 +48,19 @@ RANKS: dict[str, float] = {
     "exact": 8,
 }
 
+Array = npt.NDArray[np.float64]
+Strategy = Callable[[Session, GridLevel], StrategyAnswer]
+
+
+def logged(events: list[str], strategy: Strategy) -> Strategy:
+    """``strategy``, noting "listing" in ``events`` each time it runs."""
+
+    def run(session: Session, level: GridLevel) -> StrategyAnswer:
+        events.append("listing")
+        return strategy(session, level)
+
+    return run
+
 
 def part_of(module: str) -> str:
     """The :data:`RANKS` entry of a module of ``setupfix.optimize`` (the longest prefix)."""
@@ -75,7 +91,7 @@ def test_solver_modules_import_only_lower_ranks(module: str) -> None:
     ("field", "value"),
     [("quantum", 0.0), ("level_steps", -1), ("box_share", 1.5), ("working_set_nnls", 1), ("search_limit", 2.5)],
 )
-def test_settings_are_validated_naming_the_field(field, value) -> None:
+def test_settings_are_validated_naming_the_field(field: str, value: Any) -> None:
     with pytest.raises(ParameterError, match=f"ExactSettings: {field}"):
         ExactSettings(**{field: value})
 
@@ -84,7 +100,7 @@ def test_settings_are_frozen_and_reach_the_optimizer_through_the_registry() -> N
     settings = ExactSettings(level_steps=0)
     with pytest.raises(dataclasses.FrozenInstanceError):
         settings.level_steps = 3  # type: ignore[misc]
-    assert get_optimizer("exact", time_limit=1.0, settings=settings).settings is settings
+    assert get_optimizer("exact", time_limit=1.0, settings=settings).get_params()["settings"] is settings
     with pytest.raises(ParameterError, match="settings"):
         get_optimizer("exact", settings={"level_steps": 0})
 
@@ -144,10 +160,7 @@ def test_a_callers_search_in_the_grid_optimum_changes_no_optimum(seed: int, monk
     monkeypatch.setattr(
         go,
         "LEVEL_STRATEGIES",
-        tuple(
-            (lambda sess, level: events.append("listing") or listing(sess, level)) if f is listing else f
-            for f in go.LEVEL_STRATEGIES
-        ),
+        tuple(logged(events, f) if f is listing else f for f in go.LEVEL_STRATEGIES),
     )
     session = Session(rows, ExactSettings(), 10.0)
     for search in (lambda k: root_climb(session, row_dim, n_dims, k), lambda k: np.array(rows.kmax)):
@@ -159,7 +172,7 @@ def test_a_callers_search_in_the_grid_optimum_changes_no_optimum(seed: int, monk
         opt_t = plain.t
         events.clear()
 
-        def spy(k: np.ndarray, search=search, opt_t=opt_t) -> np.ndarray | None:
+        def spy(k: Array, search: Callable[[Array], Array | None] = search, opt_t: float = opt_t) -> Array | None:
             out = search(k)
             events.append(
                 "reached" if out is not None and float(np.min(g - g_rows @ out)) >= opt_t - 1e-9 else "search"
@@ -185,9 +198,10 @@ def test_results_of_g_alone_are_computed_once_per_model_and_read_only() -> None:
     box = (np.full(3, -4.0), np.full(3, 4.0), np.ones(3))
     made: list[int] = []
 
-    def make() -> np.ndarray:
+    def make() -> Array:
         made.append(1)
-        return g_rows.sum(axis=0)
+        out: Array = g_rows.sum(axis=0)
+        return out
 
     first = GridRows(g_rows, rng.normal(size=6), *box).memo(("test",), make)
     again = GridRows(g_rows.copy(), rng.normal(size=6), *box).memo(("test",), make)

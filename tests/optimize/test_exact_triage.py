@@ -3,13 +3,15 @@
 from __future__ import annotations
 
 import itertools
+from typing import Any
 
 import numpy as np
+import numpy.typing as npt
 import pytest
 
 from setupfix.inputs.cycles import load_parts
 from setupfix.model import PartMeasurement, ProcessModel
-from setupfix.optimize import CorrectionProblem, get_optimizer
+from setupfix.optimize import CorrectionProblem, OptimizeResult, get_optimizer
 from setupfix.optimize.exact import ExactSettings
 
 from .test_exact import random_problem
@@ -18,6 +20,8 @@ from .test_exact_robust import GUIDE_PINS
 #: Seconds each solve compared with brute force or an independent MILP may take: the answers are the
 #: subject, and a loaded box can stop a 2 s solve (a stopped solve says so; other tests check that).
 SOLVE_LIMIT = 60.0
+
+Array = npt.NDArray[np.float64]
 
 
 def grid_points(problem: CorrectionProblem) -> np.ndarray:
@@ -49,7 +53,7 @@ def brute_triage(problem: CorrectionProblem) -> tuple[int, np.ndarray, float, np
     return int(best), np.array(top), float(np.sqrt(norms.min())), np.rint(x[least] / problem.resolution)
 
 
-def check_triage(problem: CorrectionProblem, result) -> None:
+def check_triage(problem: CorrectionProblem, result: OptimizeResult) -> None:
     count, sorted_kept, norm, points = brute_triage(problem)
     margins = problem.margins(result.x)
     held = np.isfinite(problem.held_floor)
@@ -199,7 +203,7 @@ def milp_triage(problem: CorrectionProblem) -> tuple[int, np.ndarray, float]:
     ub = np.r_[np.ones(nb + m), np.full(m, big / 2), np.tile(np.r_[big, np.full(m, 2 * big)], m)]
     bounds = Bounds(lb, ub)
 
-    def solve(c, extra):
+    def solve(c: Array, extra: list[LinearConstraint]) -> Any:
         res = milp(
             c,
             constraints=cons + extra,
@@ -266,7 +270,7 @@ def test_one_gross_error_does_not_push_good_dimensions_out(guide_pins_model: Pro
 def test_a_costlier_register_moves_less_among_equally_good_corrections() -> None:
     """Two registers that move the dimensions alike: the cheap one takes the shift."""
     comp = np.array([[1.0, 1.0, -1.0], [1.0, 1.0, -1.0], [0.0, 1.0, 1.0]])
-    base = dict(
+    base: dict[str, Any] = dict(
         composite=comp,
         deviation=np.array([0.03, 0.03, -0.03]),
         lower=np.full(3, -0.05),
@@ -314,7 +318,7 @@ def test_weighted_least_norm_equals_brute_force(seed: int) -> None:
 
 
 @pytest.mark.parametrize("cost", [np.array([1.0, 0.0, 1.0]), np.array([1.0, np.inf, 1.0]), np.ones(2)])
-def test_register_cost_must_be_positive_and_finite(cost) -> None:
+def test_register_cost_must_be_positive_and_finite(cost: Array) -> None:
     from setupfix.core.errors import ParameterError
 
     problem = random_problem(0, n=3)
@@ -376,7 +380,8 @@ def test_bound_is_the_kept_dimensions_lp_and_seconds_the_whole_call(seed: int, p
         method="highs",
     )
     assert result.bound == pytest.approx(-lp.fun, abs=1e-9)
-    assert result.bound >= result.margin_after - 1e-12
+    assert result.bound is not None and result.bound >= result.margin_after - 1e-12
+    assert result.triage is not None
     assert result.triage.lp_bound_all < result.bound  # the whole problem's, given-up dimensions included
     assert result.seconds >= sum(result.stages.values()) - 1e-9
     assert result.status == "optimal" and result.triage.leximin_complete
@@ -469,7 +474,7 @@ def test_guide_pins_gross_dimension_is_fast_and_complete(guide_pins_model: Proce
     dev[0] = -0.25
     problem = CorrectionProblem.from_part(guide_pins_model, PartMeasurement("c", "r", None, dev, part.sources))
     result = get_optimizer("exact").solve(problem)
-    assert result.status == "optimal" and result.stopped is None
+    assert result.status == "optimal" and result.stopped is None and result.triage is not None
     assert result.triage.leximin_complete and result.triage.kept == 27
     assert "kept set forced" in result.path
     assert result.x == pytest.approx([0.007, -0.002, -0.01, -0.004, 0.013, 0.027, 0.0, 0.012, 0.016, 0.03], abs=1e-12)
@@ -487,8 +492,9 @@ def test_an_incomplete_triage_leximin_is_a_stopped_solve(guide_pins_model: Proce
     problem = CorrectionProblem.from_part(guide_pins_model, PartMeasurement("c", "r", None, dev, part.sources))
     only_level_1 = ExactSettings(forced_triage=False, triage_leximin_share=0.0)
     result = get_optimizer("exact", settings=only_level_1).solve(problem)
-    assert not result.triage.leximin_complete
+    assert result.triage is not None and not result.triage.leximin_complete
     assert result.status == "time_limit"
+    assert result.stopped is not None and result.stopped.detail is not None
     assert result.stopped.stage == "triage" and result.stopped.reason == "time limit"
     assert "leximin" in result.stopped.detail
     assert result.given_up == ("P1D1",) and np.all(np.delete(problem.margins(result.x), 0) >= 0)

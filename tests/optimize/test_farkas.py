@@ -4,13 +4,18 @@ the same verdict and point whether the near rows are tried first or not, and eve
 from __future__ import annotations
 
 import itertools
+from collections.abc import Callable
 
 import numpy as np
+import numpy.typing as npt
 import pytest
 
 import setupfix.optimize.exact.farkas as farkas
 from setupfix.optimize.exact.farkas import farkas_or_point
 from setupfix.optimize.exact.session import GridRows
+
+Array = npt.NDArray[np.float64]
+Solver = Callable[[Array], tuple[Array, Array] | None]
 
 
 def _rows(seed: int) -> tuple[GridRows, np.ndarray, np.ndarray]:
@@ -47,6 +52,16 @@ def test_near_rows_first_give_the_same_verdict_and_point(seed: int) -> None:
         assert np.all(rows.g_rows @ x_all <= b + 1e-6)
 
 
+def counted(sizes: list[int], solve: Solver) -> Solver:
+    """``solve``, recording the number of columns of every system it is given."""
+
+    def run(e: Array) -> tuple[Array, Array] | None:
+        sizes.append(e.shape[1])
+        return solve(e)
+
+    return run
+
+
 def test_a_proof_from_the_near_rows_alone_is_found_and_kept(monkeypatch: pytest.MonkeyPatch) -> None:
     """Two opposite rows next to k that cannot both hold (x ≤ −1 and x ≥ 1): the near subsystem proves it,
     and the whole system is never solved."""
@@ -55,7 +70,7 @@ def test_a_proof_from_the_near_rows_alone_is_found_and_kept(monkeypatch: pytest.
     b = np.array([-1.0, -1.0, 40.0, 40.0])
     sizes: list[int] = []
     solve = farkas.nnls_solve
-    monkeypatch.setattr(farkas, "nnls_solve", lambda e: sizes.append(e.shape[1]) or solve(e))
+    monkeypatch.setattr(farkas, "nnls_solve", counted(sizes, solve))
     y, x = farkas_or_point(rows, b, np.zeros(2))
     assert x is None and y is not None and _proves_empty(rows, b, y)
     assert sizes == [2]  # only the two rows within NEAR of k (the far rows and the box limits 50 away left out)
@@ -82,7 +97,7 @@ def test_near_rows_only_prove_a_subset_of_the_cases_and_never_solve_the_whole(
     k = pts[np.random.default_rng(seed).integers(len(pts))]
     sizes: list[int] = []
     solve = farkas.nnls_solve
-    monkeypatch.setattr(farkas, "nnls_solve", lambda e: sizes.append(e.shape[1]) or solve(e))
+    monkeypatch.setattr(farkas, "nnls_solve", counted(sizes, solve))
     y, x = farkas_or_point(rows, b, k, whole=False)
     assert x is None
     if y is not None:

@@ -3,21 +3,25 @@
 from __future__ import annotations
 
 import numpy as np
+import numpy.typing as npt
 import pytest
 
 from setupfix.inputs.cycles import load_parts
 from setupfix.model import load_model
 from setupfix.optimize import CorrectionProblem, get_optimizer
-from setupfix.optimize.exact.grid import least_distance
 from setupfix.optimize.exact.least_norm.listing import ellipsoid_search, enumerate_ball, lagrangian_ball
 from setupfix.optimize.exact.settings import ExactSettings
 
 from .test_exact import brute_force, random_problem
 from .test_exact_robust import GUIDE_PINS
-from .test_least_norm import grid_points, small_system
+from .test_least_norm import grid_points, small_system, solved_least_distance
+
+Array = npt.NDArray[np.float64]
 
 
-def _brute(pts, centre, cost, radius2, g_rows, b, fmax):
+def brute_ball(
+    pts: Array, centre: Array, cost: Array, radius2: float, g_rows: Array, b: Array, fmax: float
+) -> set[tuple[float, ...]]:
     keep = np.sum(cost * (pts - centre) ** 2, axis=1) <= radius2
     keep &= np.all(pts @ g_rows.T <= b + 1e-9, axis=1)
     keep &= np.sum(cost * pts**2, axis=1) <= fmax
@@ -28,8 +32,7 @@ def _brute(pts, centre, cost, radius2, g_rows, b, fmax):
 def test_enumerate_ball_lists_exactly_the_points_of_brute_force(seed: int) -> None:
     """Radius, rows and norm pruning (with the QP's multipliers and with arbitrary ones) drop nothing."""
     g_rows, b, kmin, kmax, cost = small_system(seed, n=5, r=10, steps=4)  # 9⁵ points: no whole-box shortcut
-    status, (_k, lam, lam_lo, lam_hi) = least_distance(g_rows, b, kmin, kmax, cost)
-    assert status == "optimal"
+    _k, lam, lam_lo, lam_hi = solved_least_distance(g_rows, b, kmin, kmax, cost)
     centre, q = lagrangian_ball(g_rows, b, kmin, kmax, cost, lam, lam_lo, lam_hi)
     pts = grid_points(kmin, kmax)
     feasible = pts[np.all(pts @ g_rows.T <= b + 1e-9, axis=1)]
@@ -37,10 +40,11 @@ def test_enumerate_ball_lists_exactly_the_points_of_brute_force(seed: int) -> No
     rng = np.random.default_rng(seed)
     for fmax in (float(f.min()), float(np.median(f))):
         radius2 = fmax - q + 1e-9
-        expected = _brute(pts, centre, cost, radius2, g_rows, b, fmax)
+        expected = brute_ball(pts, centre, cost, radius2, g_rows, b, fmax)
         assert expected  # the points of least norm at least
-        scaled = tuple(rng.uniform(0, 2, v.size) for v in (lam, lam_lo, lam_hi))
-        for multipliers in (None, (lam, lam_lo, lam_hi), scaled):
+        scaled = (rng.uniform(0, 2, lam.size), rng.uniform(0, 2, lam_lo.size), rng.uniform(0, 2, lam_hi.size))
+        choices: tuple[tuple[Array, Array, Array] | None, ...] = (None, (lam, lam_lo, lam_hi), scaled)
+        for multipliers in choices:
             listed = enumerate_ball(
                 centre,
                 cost,
@@ -54,18 +58,19 @@ def test_enumerate_ball_lists_exactly_the_points_of_brute_force(seed: int) -> No
                 work_limit=10**9,
                 multipliers=multipliers,
             )
-            assert {tuple(p) for p in listed} == expected
+            assert listed is not None and {tuple(p) for p in listed} == expected
     # an arbitrary centre and radius, rows only
     centre = rng.uniform(-3, 3, kmin.size)
     listed = enumerate_ball(centre, cost, 12.0, kmin, kmax, 10**6, g_rows, b, work_limit=10**9)
-    assert {tuple(p) for p in listed} == _brute(pts, centre, cost, 12.0, g_rows, b, np.inf)
+    assert listed is not None
+    assert {tuple(p) for p in listed} == brute_ball(pts, centre, cost, 12.0, g_rows, b, np.inf)
 
 
 @pytest.mark.parametrize("seed", range(10))
 def test_ellipsoid_search_finds_the_least_norm_of_brute_force(seed: int) -> None:
     """Growing ellipsoids from no known point: the least Σ c k² (ties: the smallest k), proved."""
     g_rows, b, kmin, kmax, cost = small_system(seed, n=5, r=10, steps=4)
-    _, (_k, lam, lam_lo, lam_hi) = least_distance(g_rows, b, kmin, kmax, cost)
+    _k, lam, lam_lo, lam_hi = solved_least_distance(g_rows, b, kmin, kmax, cost)
     centre, q = lagrangian_ball(g_rows, b, kmin, kmax, cost, lam, lam_lo, lam_hi)
     best, proved, _ = ellipsoid_search(
         g_rows,
@@ -101,7 +106,7 @@ def test_a_level_with_no_grid_point_is_proved_by_listing_the_whole_box() -> None
 
 
 @pytest.mark.parametrize("cycle", range(1, 6))
-def test_guide_pins_cycles_equal_the_milp_proofs(cycle) -> None:
+def test_guide_pins_cycles_equal_the_milp_proofs(cycle: int) -> None:
     """The bundled cycles (28 dimensions × 10 registers, a box of 201¹⁰ grid points: no brute force):
     the listings' answer equals the MILP proofs' answer with a long limit; cycle 4 needs no MILP."""
     model = load_model(GUIDE_PINS / "model.toml")

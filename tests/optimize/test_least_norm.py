@@ -5,8 +5,10 @@ from __future__ import annotations
 import dataclasses
 import itertools
 import time
+from typing import Any
 
 import numpy as np
+import numpy.typing as npt
 import pytest
 
 import setupfix.optimize.exact.least_norm.grid as least_norm_stage
@@ -26,8 +28,10 @@ from setupfix.optimize.exact.settings import ExactSettings
 
 from .test_exact_robust import shop_problem
 
+Array = npt.NDArray[np.float64]
 
-def small_system(seed: int, n: int = 4, r: int = 10, steps: int = 4):
+
+def small_system(seed: int, n: int = 4, r: int = 10, steps: int = 4) -> tuple[Array, Array, Array, Array, Array]:
     """Integer rows G k ≤ b that the grid point 0 … may or may not meet; box ±steps."""
     rng = np.random.default_rng(seed)
     g_rows = rng.integers(-2, 3, size=(r, n)).astype(float)
@@ -38,8 +42,17 @@ def small_system(seed: int, n: int = 4, r: int = 10, steps: int = 4):
     return g_rows, b, kmin, kmax, cost
 
 
-def grid_points(lo, hi):
+def grid_points(lo: Array, hi: Array) -> Array:
     return np.array(list(itertools.product(*[np.arange(a, c + 1) for a, c in zip(lo, hi, strict=True)])), dtype=float)
+
+
+def solved_least_distance(
+    g_rows: Array, b: Array, kmin: Array, kmax: Array, cost: Array
+) -> tuple[Array, Array, Array, Array]:
+    """:func:`least_distance`'s point and multipliers (the system has a point)."""
+    status, out = least_distance(g_rows, b, kmin, kmax, cost)
+    assert out is not None, status
+    return out
 
 
 @pytest.mark.parametrize("seed", range(8))
@@ -47,7 +60,7 @@ def test_working_set_nnls_equals_the_full_least_distance(seed: int) -> None:
     g_rows, b, kmin, kmax, cost = small_system(seed, n=6, r=60)
     status, full = least_distance(g_rows, b, kmin, kmax, cost)
     ws_status, ws = least_distance_working_set(g_rows, b, kmin, kmax, cost, time.perf_counter() + 10, add=3)
-    assert status == ws_status == "optimal"
+    assert status == ws_status == "optimal" and ws is not None and full is not None
     np.testing.assert_allclose(ws[0], full[0], atol=1e-7)
     assert np.all(g_rows @ ws[0] <= b + 1e-7)
     assert all(np.all(v >= 0) for v in ws[1:])
@@ -65,7 +78,7 @@ def test_working_set_nnls_proves_an_empty_system() -> None:
 @pytest.mark.parametrize("seed", range(8))
 def test_lagrangian_box_holds_every_point_up_to_the_norm_and_bounds_the_least(seed: int) -> None:
     g_rows, b, kmin, kmax, cost = small_system(seed)
-    _, (_k, lam, lam_lo, lam_hi) = least_distance(g_rows, b, kmin, kmax, cost)
+    _k, lam, lam_lo, lam_hi = solved_least_distance(g_rows, b, kmin, kmax, cost)
     centre, q = lagrangian_ball(g_rows, b, kmin, kmax, cost, lam, lam_lo, lam_hi)
     pts = grid_points(kmin, kmax)
     feasible = pts[np.all(pts @ g_rows.T <= b + 1e-9, axis=1)]
@@ -92,7 +105,7 @@ def test_box_least_norm_equals_brute_force_over_the_box(seed: int) -> None:
         return
     assert res.status == "optimal"
     least = np.sum(cost * pts**2, axis=1).min()
-    assert np.sum(cost * k**2) == pytest.approx(least)
+    assert k is not None and np.sum(cost * k**2) == pytest.approx(least)
     assert res.objective == pytest.approx(least) and res.dual_bound <= least + 1e-6
     assert np.all(g_rows @ k <= b + 1e-9) and np.all((k >= lo) & (k <= hi))
 
@@ -122,7 +135,7 @@ def test_a_stopped_least_norm_proof_returns_a_certified_near_least_correction(mo
     assert proven.status == "optimal"
     real = least_norm_stage.chord_proof
 
-    def out_of_time(*args, **kwargs):
+    def out_of_time(*args: Any, **kwargs: Any) -> tuple[Array | None, bool, str, float]:
         kwargs["time_limit"] = 0.0  # the proof stops at once, as at the deadline
         return real(*args, **kwargs)
 
@@ -133,7 +146,7 @@ def test_a_stopped_least_norm_proof_returns_a_certified_near_least_correction(mo
     assert "least-norm stage" in result.message and "certified" in result.message
     assert result.margin_after == pytest.approx(proven.margin_after, abs=1e-12)  # the grid optimum is kept
     ratio = result.norm_ratio_max
-    assert 1.0 <= ratio < 1.1
+    assert ratio is not None and 1.0 <= ratio < 1.1
     assert proven.norm - 1e-12 <= result.norm <= ratio * proven.norm + 1e-12
     x_steps = result.x / problem.resolution
     assert grid_margins(*margin_rows(problem), x_steps[problem.free]) >= result.margin_after / problem.resolution - 1e-6

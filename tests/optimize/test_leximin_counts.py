@@ -5,13 +5,23 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
+import numpy.typing as npt
 import pytest
 
 import setupfix.optimize.exact.leximin.counts as countmod
 from setupfix.optimize.exact.grid import TOL
+from setupfix.optimize.exact.highs import LinearModel, Solve
+from setupfix.optimize.exact.least_norm.grid import LeastNorm
+from setupfix.optimize.exact.leximin.counts import CountLayout, CountRows
+from setupfix.optimize.exact.leximin.result import Leximin
+from setupfix.optimize.exact.session import GridRows, Session
 
 from .test_leximin import CONFLICTS, NO_BRANCHES, brute_leximin, make, solved_steps
-from .test_leximin_pins import _grid
+from .test_leximin_pins import box_points
+
+Array = npt.NDArray[np.float64]
+Ints = npt.NDArray[np.intp]
+Mask = npt.NDArray[np.bool_]
 
 
 @pytest.mark.slow
@@ -22,24 +32,33 @@ def test_each_count_equals_the_grid_count_and_fixes_only_what_the_lattice_decide
     """Every count MILP's optimum is the most active dimensions with margin ≥ t + ε over the grid points
     that meet the floors, t0 and the blocks found so far (brute force); a dimension the model gives no
     binary (every row's lattice value at or above t0 is ≥ t) is ≥ t at every such point, and some have none."""
-    seen: list[tuple[countmod.CountRows, list[tuple[float, int]], float, np.ndarray, float]] = []
+    seen: list[tuple[CountRows, list[tuple[float, int]], float, Mask, float]] = []
     original = countmod.count_model
 
-    def model(rows, blocks, extra, question, objective, top, t_lo):
+    def model(
+        rows: CountRows,
+        blocks: list[tuple[float, int]],
+        extra: int,
+        question: tuple[float | None, int],
+        objective: str,
+        top: float,
+        t_lo: float,
+    ) -> tuple[LinearModel, CountLayout]:
         out, layout = original(rows, blocks, extra, question, objective, top, t_lo)
         if objective == "count":
             fixed = np.ones(rows.n_active, bool)
             fixed[layout.dims[-1]] = False
             solve = out.solve
 
-            def recorded(limit, *start):
-                res = solve(limit, *start)
+            def recorded(limit: float, start: Array | None = None) -> Solve:
+                res = solve(limit, start)
                 if res.status == "optimal":
+                    assert question[0] is not None
                     count = -float(res.objective) + layout.above_anyway(len(blocks))
                     seen.append((rows, list(blocks), float(question[0]), fixed, count))
                 return res
 
-            out.solve = recorded
+            monkeypatch.setattr(out, "solve", recorded)
         return out, layout
 
     monkeypatch.setattr(countmod, "count_model", model)
@@ -52,7 +71,7 @@ def test_each_count_equals_the_grid_count_and_fixes_only_what_the_lattice_decide
     assert seen
     n_fixed = 0
     for rows, blocks, t, fixed, count in seen:
-        m_rows = rows.g[None, :] - _grid(rows) @ rows.g_rows.T
+        m_rows = rows.g[None, :] - box_points(rows) @ rows.g_rows.T
         m = np.full((m_rows.shape[0], rows.n_active), np.inf)
         for j, col in zip(np.flatnonzero(rows.act), rows.col, strict=True):
             m[:, col] = np.minimum(m[:, col], m_rows[:, j])
@@ -76,12 +95,13 @@ def test_counts_stopped_give_the_least_norm_at_the_conflict_level_not_the_counts
     Σ c k² over every grid point with each dimension at its floor — the active ones at the conflict's level
     (brute force) — as where the levels stop, never the counts' unproved point."""
     import setupfix.optimize.exact.solve as exactmod
+    from setupfix.optimize.exact.leximin.result import leximin_least_norm
 
     monkeypatch.setattr(countmod.CountRuns, "room", lambda self: self.calls == 0)
-    captured = []
-    original = exactmod.leximin_least_norm
+    captured: list[tuple[GridRows, Leximin, Ints]] = []
+    original = leximin_least_norm
 
-    def least(session, lex, row_dim, share):
+    def least(session: Session, lex: Leximin, row_dim: Ints, share: float) -> LeastNorm:
         captured.append((session.rows, lex, row_dim))
         return original(session, lex, row_dim, share)
 
@@ -91,7 +111,7 @@ def test_counts_stopped_give_the_least_norm_at_the_conflict_level_not_the_counts
     assert result.status == "time_limit" and "the rest by counts" in result.path
     ((rows, lex, row_dim),) = captured
     assert lex.counts is None and lex.stopped is not None
-    pts = _grid(rows)
+    pts = box_points(rows)
     m_rows = rows.g[None, :] - pts @ rows.g_rows.T
     ok = np.all(m_rows >= lex.floors[row_dim][None, :] - 1e-9, axis=1)
     norms = (pts[ok] ** 2) @ rows.cost
@@ -117,7 +137,7 @@ def test_no_least_norm_milp_starts_when_a_count_milp_took_longer_than_what_is_le
     norm is not started (HiGHS would run past the limit in its root's cut rounds); the answer says so."""
     solve = countmod.CountRuns.solve
 
-    def slow(self, model):
+    def slow(self: countmod.CountRuns, model: LinearModel) -> Solve:
         res = solve(self, model)
         self.longest = 1e6  # as if a count MILP had taken longer than any limit
         return res

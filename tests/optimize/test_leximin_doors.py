@@ -20,7 +20,7 @@ MODEL = str(GUIDE_PINS / "model.toml")
 REPORT = str(GUIDE_PINS / "cycle_01.csv")
 
 
-def run(capsys, *argv):
+def run(capsys: pytest.CaptureFixture[str], *argv: str) -> tuple[int, str, str]:
     code = main(list(argv))
     out, err = capsys.readouterr()
     return code, out, err

@@ -7,16 +7,20 @@ import dataclasses
 from pathlib import Path
 
 import numpy as np
+import numpy.typing as npt
 import pytest
 
 import setupfix.optimize.exact.leximin.levels as lexmod
 from setupfix.model import load_model
 from setupfix.optimize import CorrectionProblem, get_optimizer
 from setupfix.optimize.exact import ExactSettings
+from setupfix.optimize.exact.leximin.pins import excluded_alone
+from setupfix.optimize.exact.session import GridRows
 
 from .test_leximin import brute_leximin, solved_steps, steps_margins
 
 ROOT = Path(__file__).resolve().parents[2]
+Array = npt.NDArray[np.float64]
 REPORTS = sorted((Path(__file__).parent / "data" / "pair_conflicts").glob("*.csv"))
 
 
@@ -40,7 +44,7 @@ def test_the_bundled_pair_conflicts_are_three() -> None:
 
 @pytest.mark.slow
 @pytest.mark.parametrize("report", REPORTS, ids=lambda p: p.stem)
-def test_pair_branches_decide_the_whole_report_as_the_counts_would(report, monkeypatch: pytest.MonkeyPatch) -> None:
+def test_pair_branches_decide_the_whole_report_as_the_counts_would(report: Path) -> None:
     """The full report (±100 steps): the conflict goes to pair branches, proved within the default limit;
     with the pairs switched off the count MILPs (the generic way, tested against brute force) give the
     same leximin margins and the same correction (on the one report where they take seconds, not tens)."""
@@ -65,16 +69,25 @@ def test_pair_branches_decide_the_whole_report_as_the_counts_would(report, monke
     [(r, c) for r in REPORTS for c in ("paper", "leximin")],
     ids=lambda v: v.stem if isinstance(v, Path) else v,
 )
-def test_pair_branches_equal_brute_force_on_windows(report, centre, monkeypatch: pytest.MonkeyPatch) -> None:
+def test_pair_branches_equal_brute_force_on_windows(report: Path, centre: str, monkeypatch: pytest.MonkeyPatch) -> None:
     """Windows of ±1 step around the paper's or the leximin answer; every pair the Farkas certificate
     excludes is checked on the grid: no point has every other active dimension above t + ε."""
     problem = window(report_problem(report), centre)
     best, norm, _ = brute_leximin(problem)
     claims: list[int] = []
-    original = lexmod.excluded_alone
+    original = excluded_alone
 
-    def checked(rows, floors, row_dim, n_dims, t, eps, together=1, *near):
-        out = original(rows, floors, row_dim, n_dims, t, eps, together, *near)
+    def checked(
+        rows: GridRows,
+        floors: Array,
+        row_dim: npt.NDArray[np.intp],
+        n_dims: int,
+        t: float,
+        eps: float,
+        together: int = 1,
+        near: Array | None = None,
+    ) -> npt.NDArray[np.bool_]:
+        out = original(rows, floors, row_dim, n_dims, t, eps, together, near)
         if together == 2:
             free = problem.free
             axes = [np.arange(lo, hi + 1) for lo, hi in zip(problem.kmin[free], problem.kmax[free], strict=True)]

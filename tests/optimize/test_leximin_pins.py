@@ -4,25 +4,38 @@ from __future__ import annotations
 
 import itertools
 import time
+from typing import Any
 
 import numpy as np
+import numpy.typing as npt
 import pytest
 
 import setupfix.optimize.exact.leximin.levels as lexmod
-from setupfix.optimize.exact.leximin.pins import Certificates, dim_all, pinned_rows, span_closure
+from setupfix.optimize.exact.highs import LinearModel
+from setupfix.optimize.exact.leximin.counts import CountRows
+from setupfix.optimize.exact.leximin.level import LevelValue
+from setupfix.optimize.exact.leximin.levels import LevelSearch
+from setupfix.optimize.exact.leximin.pins import Certificates, dim_all, excluded_alone, pinned_rows, span_closure
+from setupfix.optimize.exact.session import GridRows
 
 from .test_leximin import brute_leximin, guide_pins_window, one_axis_problem, solved_steps
+
+Array = npt.NDArray[np.float64]
+Ints = npt.NDArray[np.intp]
+Mask = npt.NDArray[np.bool_]
 
 EPS = 5e-4  # half the input quantum [steps]
 
 
-def checked_levels(monkeypatch) -> list[int]:
+def checked_levels(monkeypatch: pytest.MonkeyPatch) -> list[int]:
     """Wrap the search's level proofs: each claim is checked against every grid point of the box."""
-    grid: dict[str, np.ndarray] = {}
+    grid: dict[str, Array] = {}
     seen: list[int] = []
     original = lexmod.raise_level
 
-    def level(search, v, k, given, active_rows, path):
+    def level(
+        search: LevelSearch, v: Array, k: Array, given: LevelValue | None, active_rows: Mask, path: list[str]
+    ) -> tuple[Array, float, Mask, Mask, str | None, Array | None]:
         out = original(search, v, k, given, active_rows, path)
         k_out, t, sat, pin, stop, _ = out
         if stop is not None:
@@ -94,12 +107,12 @@ def test_span_closure_adds_exactly_the_rows_in_the_span() -> None:
     assert dim_all(closed, order, np.array([0, 2, 4]), np.array([0, 1, 3]), 4).tolist() == [True, True, False, False]
 
 
-def _grid(rows) -> np.ndarray:
+def box_points(rows: GridRows | CountRows) -> Array:
     axes = [np.arange(lo, hi + 1) for lo, hi in zip(rows.kmin, rows.kmax, strict=True)]
     return np.array(list(itertools.product(*axes)), dtype=float)
 
 
-def _dims(rows, row_dim, n_dims, pts) -> np.ndarray:
+def box_dimension_margins(rows: GridRows, row_dim: Ints, n_dims: int, pts: Array) -> Array:
     m_rows = rows.g[None, :] - pts @ rows.g_rows.T
     m_dims = np.full((len(pts), n_dims), np.inf)
     for j, q in enumerate(row_dim):
@@ -121,14 +134,23 @@ def test_a_dimension_excluded_from_a_conflict_is_never_alone_at_its_level(
 
         monkeypatch.setattr(Session, "small", property(lambda self: False))
     claims: list[int] = []
-    original = lexmod.excluded_alone
+    original = excluded_alone
 
-    def checked(rows, floors, row_dim, n_dims, t, eps, together=1, *near):
-        out = original(rows, floors, row_dim, n_dims, t, eps, together, *near)
+    def checked(
+        rows: GridRows,
+        floors: Array,
+        row_dim: Ints,
+        n_dims: int,
+        t: float,
+        eps: float,
+        together: int = 1,
+        near: Array | None = None,
+    ) -> Mask:
+        out = original(rows, floors, row_dim, n_dims, t, eps, together, near)
         if together != 1:  # pairs: tests/optimize/test_leximin_pairs.py
             return out
-        pts = _grid(rows)
-        m = _dims(rows, row_dim, n_dims, pts)
+        pts = box_points(rows)
+        m = box_dimension_margins(rows, row_dim, n_dims, pts)
         v = np.full(n_dims, np.nan)
         v[row_dim] = floors
         active, fixed = np.isnan(v), np.isfinite(v)
@@ -166,7 +188,7 @@ def test_farkas_weights_or_a_point_match_the_grid(seed: int) -> None:
     g = rng.uniform(-2.0, 4.0, 8)
     rows = GridRows(g_rows, g, np.full(3, -3.0), np.full(3, 3.0), np.ones(3))
     b = np.floor(g)
-    pts = _grid(rows)
+    pts = box_points(rows)
     feasible = np.all(pts @ g_rows.T <= b + 1e-9, axis=1)
     y, x = farkas_or_point(rows, b)
     if y is not None:
@@ -182,15 +204,15 @@ def test_farkas_weights_or_a_point_match_the_grid(seed: int) -> None:
 @pytest.mark.parametrize("tight", [2.0, 1e9])
 def test_point_above_answers_as_the_grid_does(tight: float, monkeypatch: pytest.MonkeyPatch) -> None:
     """A point that meets the floors, or False exactly when no grid point of the box does (brute force) —
-    with the first MILP on the rows near the LP's vertex (TIGHT_SLACK) and with all rows at once."""
+    with the first MILP on the rows near the LP's vertex (tight_slack) and with all rows at once."""
     import setupfix.optimize.exact.leximin.pins as pins
-    from setupfix.optimize.exact.session import GridRows, Session
+    from setupfix.optimize.exact.session import Session
     from setupfix.optimize.exact.settings import ExactSettings
 
     sizes: list[tuple[int, int]] = []
 
-    class Counted(pins.LinearModel):
-        def __init__(self, c, a, *args, **kw):
+    class Counted(LinearModel):
+        def __init__(self, c: Array, a: object, *args: Any, **kw: Any) -> None:
             super().__init__(c, a, *args, **kw)
             sizes.append((self.n_rows, self.n_cols))
 
@@ -205,7 +227,7 @@ def test_point_above_answers_as_the_grid_does(tight: float, monkeypatch: pytest.
         rows = GridRows(g_rows, rng.uniform(-2, 6, r).round(1), np.full(n, -3.0), np.full(n, 3.0), np.ones(n))
         session = Session(rows, ExactSettings(tight_slack=tight), 30.0)
         f = np.where(rng.random(r) < 0.8, rng.uniform(-1, 3, r).round(1), -np.inf)
-        pts = _grid(rows)
+        pts = box_points(rows)
         fin = np.isfinite(f)
         meets = np.all((rows.g - pts @ g_rows.T)[:, fin] >= f[fin] - 1e-9, axis=1)
         sizes.clear()

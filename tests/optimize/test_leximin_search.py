@@ -4,9 +4,11 @@ the proved answers are the same with it and without it."""
 from __future__ import annotations
 
 import itertools
+from collections.abc import Iterator
 from typing import Any
 
 import numpy as np
+import numpy.typing as npt
 import pytest
 
 from setupfix.optimize import CorrectionProblem, get_optimizer
@@ -18,10 +20,13 @@ from setupfix.optimize.exact.lp_bound import margin_rows
 from .test_exact import random_problem
 from .test_leximin import CASES, CONFLICTS, brute_leximin, make, one_axis_problem, solved_steps
 
+Array = npt.NDArray[np.float64]
+Ints = npt.NDArray[np.intp]
+
 EPS = 0.0005  # half the input quantum [steps], as the optimiser's ties
 
 
-def grouped(problem: CorrectionProblem):
+def grouped(problem: CorrectionProblem) -> tuple[Array, Array, Ints, Ints, Ints]:
     """The solver's rows and their grouping by dimension (order, starts, dimension of each group)."""
     g_rows, g = margin_rows(problem)
     row_dim = dimension_of_rows(problem)
@@ -30,7 +35,7 @@ def grouped(problem: CorrectionProblem):
     return g_rows, g, order, starts, row_dim[order][starts]
 
 
-def dim_margins(g_rows, g, order, starts, k):
+def dim_margins(g_rows: Array, g: Array, order: Ints, starts: Ints, k: Array) -> Array:
     """Each group's margin at k, by plain loops (independent of the climb's reduceat)."""
     m = g - g_rows @ k
     return np.array([min(m[order[a:b]]) for a, b in itertools.pairwise([*starts, len(order)])])
@@ -44,7 +49,7 @@ def lex_better(a: np.ndarray, b: np.ndarray) -> bool:
     return False
 
 
-def neighbours(n: int):
+def neighbours(n: int) -> Iterator[Array]:
     """Every move of one register by ±1 and of two registers by ±1 each (the climb's last scale)."""
     for i in range(n):
         for s in (1, -1):
@@ -160,7 +165,7 @@ def test_climb_with_kept_moves_is_the_same_climb(seed: int) -> None:
 
 
 @pytest.mark.parametrize("sizes", [(2, 2, 2, 2), (1, 2, 3), (2, 1, 2), (5,), (2,)])
-def test_group_min_is_the_least_of_each_group(sizes) -> None:
+def test_group_min_is_the_least_of_each_group(sizes: tuple[int, ...]) -> None:
     """The strided two-row path and the general one give each group's least (numpy's reduceat as reference)."""
     rng = np.random.default_rng(len(sizes))
     m = rng.normal(size=(7, sum(sizes)))

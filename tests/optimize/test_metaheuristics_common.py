@@ -10,11 +10,16 @@ from __future__ import annotations
 import itertools
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TypeVar, overload
 
 import numpy as np
+import numpy.typing as npt
 import pytest
 
 from setupfix.optimize import CorrectionProblem, get_optimizer
+
+Array = npt.NDArray[np.float64]
+P = TypeVar("P", bound=CorrectionProblem)
 
 GUIDE_PINS = Path(__file__).resolve().parents[2] / "sample_reports" / "guide_pins"
 
@@ -34,9 +39,17 @@ class RecordingProblem(CorrectionProblem):
 
     log: list[np.ndarray] = field(default_factory=list, compare=False)
 
-    def evaluate(self, x):  # type: ignore[override]
+    def evaluate(self, x: Array) -> tuple[Array, Array, Array]:
         self.log.append(np.atleast_2d(np.asarray(x, dtype=float)).copy())
         return super().evaluate(x)
+
+
+@overload
+def small_problem(seed: int = 0) -> CorrectionProblem: ...
+
+
+@overload
+def small_problem(seed: int, cls: type[P]) -> P: ...
 
 
 def small_problem(seed: int = 0, cls: type[CorrectionProblem] = CorrectionProblem) -> CorrectionProblem:

@@ -7,7 +7,7 @@ import pandas as pd
 import pytest
 
 from setupfix.correction.relation import relation_matrices
-from setupfix.model import match_parts, model_from_dict
+from setupfix.model import PartMeasurement, ProcessModel, match_parts, model_from_dict
 from setupfix.optimize import CorrectionProblem, get_optimizer
 
 DOC = {
@@ -40,7 +40,7 @@ DOC = {
 }
 
 
-def part(model, values):
+def part(model: ProcessModel, values: dict[str, float]) -> PartMeasurement:
     table = pd.DataFrame({"characteristic": list(values), "deviation": list(values.values()), "unit": "mm"})
     (p,) = match_parts(model, table)
     return p

@@ -63,9 +63,10 @@ def test_eq11_coefficients() -> None:
 @pytest.mark.parametrize("seed", [0, 1, 2])
 def test_block_update_equals_particle_by_particle_loop(seed: int) -> None:
     problem = _problem(seed)
-    params = {"n_particles": 30, "n_solutions": 1234, "inertia": 0.75, "vmax_fraction": 0.2}
-    result = PSO(seed=seed, **params).solve(problem)
-    x_ref, f_ref = plain_async_pso(problem, seed=seed, **params)
+    result = PSO(seed=seed, n_particles=30, n_solutions=1234, inertia=0.75, vmax_fraction=0.2).solve(problem)
+    x_ref, f_ref = plain_async_pso(
+        problem, seed=seed, n_particles=30, n_solutions=1234, inertia=0.75, vmax_fraction=0.2
+    )
     assert np.array_equal(result.x, x_ref)
     assert result.fitness == pytest.approx(f_ref, abs=1e-12)
     assert result.evaluations == 1234
@@ -74,10 +75,10 @@ def test_block_update_equals_particle_by_particle_loop(seed: int) -> None:
 def test_async_differs_from_a_stale_global_best() -> None:
     """Guard against a silently synchronous swarm: freezing gbest per sweep changes the run."""
     problem = _problem(4)
-    params = {"n_particles": 30, "n_solutions": 1500, "inertia": 0.75, "vmax_fraction": 0.2}
-    result = PSO(seed=4, **params).solve(problem)
+    result = PSO(seed=4, n_particles=30, n_solutions=1500, inertia=0.75, vmax_fraction=0.2).solve(problem)
     # number of gbest improvements inside sweeps: the history shows improvements between
     # consecutive counts that are not multiples of the swarm size
+    assert result.history is not None
     counts = result.history[:, 0]
     inside = [c for c in counts[1:] if (c - 30) % 30 != 0]
     assert inside, "gbest never changed inside a sweep: the async path is untested"

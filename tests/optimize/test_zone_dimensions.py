@@ -13,21 +13,42 @@ quantum, 1/1000 step, which decides near-ties below it).
 from __future__ import annotations
 
 import itertools
+from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
+import numpy.typing as npt
 import pandas as pd
 import pytest
 
 from setupfix.model import match_parts, model_from_dict
-from setupfix.optimize import CorrectionProblem, get_optimizer, harmed_columns
+from setupfix.optimize import CorrectionProblem, OptimizeResult, get_optimizer, harmed_columns
 from setupfix.optimize.dimensions import dimension_floor, dimension_of_rows, model_dimensions
 from setupfix.optimize.exact.lp_bound import margin_rows
 
 from .leximin_reference import lexicographic_maxmin, prefix_sums
 from .test_exact_triage import TRIAGE_PATHS
 
+if TYPE_CHECKING:
+    from multi_axis_fixtures import Fixture
+
 RES = 0.001
+
+
+@dataclass(frozen=True)
+class Brute:
+    """The brute-force lexicographic optimum (:func:`brute`): kept count, sorted kept margins [steps], least
+    norm, the point k [steps], the dimensions given up and every dimension's ID."""
+
+    count: int
+    sorted: npt.NDArray[np.float64]
+    norm: float
+    k: tuple[float, ...]
+    gone: tuple[str, ...]
+    ids: tuple[str, ...]
+
+
 TIE = 5e-4  # steps: half the input quantum; a margin less than this above a level counts at the level
 
 
@@ -39,7 +60,7 @@ def zone_problem(seed: int, spread: float = 0.006) -> CorrectionProblem:
         features[f"F{i}"] = {"wks": {"W1": w}, "position": [float(v) for v in rng.uniform(-50, 50, 3)]}
         if i % 2 == 0:
             features[f"F{i}"]["tools"] = {"T1": 1.0}
-    dims: dict[str, dict] = {}
+    dims: dict[str, dict[str, Any]] = {}
     for i in range(3):
         tol = float(rng.choice([0.002, 0.003, 0.004]))
         dims[f"L{i}"] = {
@@ -68,7 +89,7 @@ def zone_problem(seed: int, spread: float = 0.006) -> CorrectionProblem:
             "dimensions": dims,
         }
     )
-    values = {}
+    values: dict[str, float] = {}
     for d in dims.values():
         names = d.get("components", [d["name"]])
         values |= {n: float(v) for n, v in zip(names, rng.uniform(-spread, spread, len(names)), strict=True)}
@@ -106,7 +127,7 @@ def _floors(problem: CorrectionProblem, ids: tuple[str, ...]) -> np.ndarray:
     return out
 
 
-def brute(problem: CorrectionProblem) -> dict[str, object]:
+def brute(problem: CorrectionProblem) -> Brute:
     """The lexicographic optimum over the whole grid (module docstring), in grid steps on the rows the
     optimiser solves: deviations rounded to the input quantum (``margin_rows``; the rounding is the
     optimiser's documented input, and decides near-ties below it), held rows ≥ min(floor, their margin
@@ -140,44 +161,44 @@ def brute(problem: CorrectionProblem) -> dict[str, object]:
     least = cands[norms <= norms.min() + 1e-9]
     best = min(map(tuple, k[least]))
     i = int(np.flatnonzero(np.all(k == best, axis=1))[0])
-    return {
-        "count": int(count.max()),
-        "sorted": np.sort(m[i][kept[i]]),
-        "norm": float(np.sqrt(norms.min())),
-        "k": best,
-        "gone": tuple(d for d, kp in zip(ids, kept[i], strict=True) if not kp),
-        "ids": ids,
-    }
+    return Brute(
+        count=int(count.max()),
+        sorted=np.sort(m[i][kept[i]]),
+        norm=float(np.sqrt(norms.min())),
+        k=best,
+        gone=tuple(d for d, kp in zip(ids, kept[i], strict=True) if not kp),
+        ids=ids,
+    )
 
 
-def _check(problem: CorrectionProblem, result, want: dict[str, object]) -> None:
+def _check(problem: CorrectionProblem, result: OptimizeResult, want: Brute) -> None:
     free = problem.free
     k = np.rint(result.x[free] / problem.resolution)
     assert result.status == "optimal"
-    assert tuple(k) == want["k"]  # the whole lexicographic optimum: count, leximin, norm, smallest k
+    assert tuple(k) == want.k  # the whole lexicographic optimum: count, leximin, norm, smallest k
     ids, m = _dimension_margins(problem, result.x[None, :])
     floor = _floors(problem, ids)
     held = np.isfinite(floor)
     kept = held | (m[0] >= -1e-12)
     assert np.all(m[0, held] >= floor[held] - 1e-6 * problem.resolution)  # no harm, a zone as a whole
-    assert int(kept.sum()) == want["count"]  # each zone counted once
-    assert np.sort(m[0][kept]) / problem.resolution == pytest.approx(want["sorted"], abs=1e-3)
+    assert int(kept.sum()) == want.count  # each zone counted once
+    assert np.sort(m[0][kept]) / problem.resolution == pytest.approx(want.sorted, abs=1e-3)
     # given up: whole dimensions, every facet of a zone given up, named by the problem's columns
     gone = tuple(d for d, kp in zip(ids, kept, strict=True) if not kp)
-    assert gone == want["gone"]
+    assert gone == want.gone
     rows = problem.rows or problem.dimension_ids
     assert set(result.given_up) == {c for c, r in zip(problem.dimension_ids, rows, strict=True) if r in gone}
     if gone:
-        assert set(result.triage.given_up) == set(gone)
+        assert result.triage is not None and set(result.triage.given_up) == set(gone)
         assert result.triage.kept == len(ids) - len(gone)
-        assert result.margin_after / problem.resolution == pytest.approx(want["sorted"][0], abs=1e-3)  # δ kept
+        assert result.margin_after / problem.resolution == pytest.approx(want.sorted[0], abs=1e-3)  # δ kept
 
 
 def half_step_problem(seed: int) -> CorrectionProblem:
     """Two registers (W1.X, W1.Y), deviations on half steps: exact ties and discrete conflicts (branches)."""
     rng = np.random.default_rng(seed)
     features = {f"F{i}": {"wks": {"W1": {a: float(rng.choice([-1.0, 1.0])) for a in "xy"}}} for i in range(5)}
-    dims: dict[str, dict] = {}
+    dims: dict[str, dict[str, Any]] = {}
     for i in range(3):
         tol = float(rng.choice([0.002, 0.003]))
         dims[f"L{i}"] = {
@@ -217,8 +238,8 @@ def test_leximin_counts_a_zone_once(seed: int) -> None:
     want = brute(problem)
     result = get_optimizer("exact").solve(problem)
     _check(problem, result, want)
-    if not want["gone"]:  # the levels are per dimension: as many as the dimensions (a zone once)
-        assert sum(c for _, c in result.leximin) == len(want["ids"])
+    if not want.gone:  # the levels are per dimension: as many as the dimensions (a zone once)
+        assert sum(c for _, c in result.leximin) == len(want.ids)
 
 
 @pytest.fixture(params=list(TRIAGE_PATHS))
@@ -248,7 +269,7 @@ def test_half_step_ties_and_conflicts_against_brute_force(seed: int) -> None:
 
 def test_generated_triage_cases_give_up_zones() -> None:
     """The generator reaches what the tests are for: triage cases, and zones given up and kept among them."""
-    gone = [brute(zone_problem(100 + s, spread=0.009))["gone"] for s in range(12)]
+    gone = [brute(zone_problem(100 + s, spread=0.009)).gone for s in range(12)]
     assert sum(bool(g) for g in gone) >= 6
     assert any(d.startswith("P") for g in gone for d in g)
     assert any(g and not all(d.startswith("P") for d in g) for g in gone)
@@ -317,7 +338,7 @@ def test_sample_leximin_equals_an_independent_solver_on_its_rows() -> None:
     assert prefix_sums(m) == pytest.approx(sums, abs=1e-4)  # steps; ties within the quantum
 
 
-def _circle_rows(fx, sides: int = 720) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def _circle_rows(fx: Fixture, sides: int = 720) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The fixture's true margins in µm per register step, a zone as a 720-gon of its circle (error ≤ 1 nm
     here): margin = R − n_j·v / cos(π/K) for each facet j, written from the fixture, not from setupfix."""
     a, b, row_dim = [], [], []
@@ -400,5 +421,5 @@ def test_zone_inside_its_circle_but_outside_its_polygon_is_held() -> None:
     want = brute(problem)
     result = get_optimizer("exact").solve(problem)
     _check(problem, result, want)
-    assert want["gone"] == ("A",)
+    assert want.gone == ("A",)
     assert not harmed_columns(problem, result.x).any()

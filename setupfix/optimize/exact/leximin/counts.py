@@ -37,7 +37,7 @@ from setupfix.optimize.exact.least_norm.chords import chord_rows, lazy_chords
 from setupfix.optimize.exact.least_norm.grid import LeastNorm
 from setupfix.optimize.exact.session import Session
 
-__all__ = ["CountLevels", "CountRows", "CountRuns", "count_least_norm", "count_levels", "count_model"]
+__all__ = ["CountLayout", "CountLevels", "CountRows", "CountRuns", "count_least_norm", "count_levels", "count_model"]
 
 #: Link the nested blocks' binaries (w_i,q ≤ w_(i−1),q); ``bench/leximin_counts.py`` compares without.
 LINK = True
@@ -168,7 +168,7 @@ class CountRows:
 
 
 @dataclass(frozen=True)
-class _Layout:
+class CountLayout:
     """Which binaries a count MILP has: block i's (the question last) on ``dims[i]`` (positions among the
     active dimensions), in that order after the other columns; the others of a block are above its level anyway."""
 
@@ -192,7 +192,7 @@ def count_model(
     objective: str,
     top: float,
     t_lo: float,
-) -> tuple[LinearModel, _Layout]:
+) -> tuple[LinearModel, CountLayout]:
     """The MILP: columns k (n), s (``extra``: the norm's), [t], the blocks' binaries and the question's."""
     n = rows.n
     with_t = question[0] is None
@@ -200,7 +200,7 @@ def count_model(
     made = [rows.block(t_i, top) for t_i, _ in [*blocks, question]]
     starts = tuple(int(v) for v in off + np.cumsum([0] + [d.size for _, d, _, _ in made[:-1]]))
     width = off + sum(d.size for _, d, _, _ in made)
-    layout = _Layout(tuple(d for _, d, _, _ in made), rows.n_active)
+    layout = CountLayout(tuple(d for _, d, _, _ in made), rows.n_active)
     parts, lo, hi = [], [], []
     g_keep = csr_array(rows.g_rows[rows.keep])
     parts.append(hstack([g_keep, csr_array((g_keep.shape[0], width - n))]))
