@@ -36,7 +36,7 @@ def reports(folder: Path, n: int) -> list[Path]:
     return out
 
 
-def batch(folder: Path, db: Path, out: Path, *extra: str) -> subprocess.Popen[str]:
+def batch(folder: Path, db: str | Path, out: Path, *extra: str) -> subprocess.Popen[str]:
     """``batch --store`` with a 60 s solve limit: the claims are the subject here, and on a loaded box the
     default 2 s may stop a solve (exit 6, the report left unprocessed: right, but another test's subject)."""
     return subprocess.Popen(
@@ -66,12 +66,12 @@ def batch(folder: Path, db: Path, out: Path, *extra: str) -> subprocess.Popen[st
     )
 
 
-def stored_batch_reports(db: Path) -> list[str]:
+def stored_batch_reports(db: str | Path) -> list[str]:
     with open_store(db) as store:
         return [str(r.inputs["report"]) for r in store.recommendations() if r.inputs.get("use") == "batch"]
 
 
-def claims_of(db) -> tuple[int, int, int]:
+def claims_of(db: str | Path) -> tuple[int, int, int]:
     """(claim rows, reports processed, claims held) of the store ``db``."""
     with open_store(db) as store:
         rows = list(store.dump("batch_claim"))
@@ -79,7 +79,7 @@ def claims_of(db) -> tuple[int, int, int]:
 
 
 @pytest.mark.slow
-def test_two_batches_at_once_correct_every_report_exactly_once(tmp_path, location):
+def test_two_batches_at_once_correct_every_report_exactly_once(tmp_path: Path, location: str) -> None:
     n = 40
     folder = tmp_path / "reports"
     reports(folder, n)
@@ -136,7 +136,7 @@ def _running(pid: int) -> bool:
 
 @pytest.mark.slow
 @pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="looks the workers up in /proc")
-def test_sigkill_of_a_batch_leaves_no_worker_and_its_claims_are_taken_over(tmp_path, location):
+def test_sigkill_of_a_batch_leaves_no_worker_and_its_claims_are_taken_over(tmp_path: Path, location: str) -> None:
     folder = tmp_path / "reports"
     reports(folder, 60)
     db = location
@@ -167,7 +167,7 @@ def test_sigkill_of_a_batch_leaves_no_worker_and_its_claims_are_taken_over(tmp_p
     assert summary["reports"] == 60 and summary["skipped"] == []  # ... which the next run takes over
 
 
-def test_claims_refuse_a_live_holder_and_processed_reports_take_over_a_dead_one(location):
+def test_claims_refuse_a_live_holder_and_processed_reports_take_over_a_dead_one(location: str) -> None:
     store = open_store(location)
     me = Claimant.this_run()
     other_live = Claimant("other", me.host, os.getppid(), "")  # pytest's parent runs
@@ -189,16 +189,15 @@ def test_claims_refuse_a_live_holder_and_processed_reports_take_over_a_dead_one(
     assert store.claim_reports(["z"], far) == {}
     assert "another run" in store.claim_reports(["z"], me).get("z", "")  # another host: stale only when old
     with store.transaction():  # the far claim grows old
-        store._execute(
-            "UPDATE batch_claim SET claimed_at = '2000-01-01T00:00:00+00:00' "  # type: ignore[attr-defined]
-            "WHERE owner = 'far'"
+        store._execute(  # type: ignore[attr-defined]  # both back ends have it; the Store protocol does not
+            "UPDATE batch_claim SET claimed_at = '2000-01-01T00:00:00+00:00' WHERE owner = 'far'"
         )
     store.close()
     with open_store(location) as store:
         assert store.claim_reports(["z"], me) == {}
 
 
-def test_a_store_of_older_batches_keeps_its_processed_reports(tmp_path):
+def test_a_store_of_older_batches_keeps_its_processed_reports(tmp_path: Path) -> None:
     """Migration 3 marks the reports older batch recommendations name as processed."""
     from setupfix.store import Recommendation
     from setupfix.store.schema import migrate
@@ -222,8 +221,8 @@ def test_a_store_of_older_batches_keeps_its_processed_reports(tmp_path):
 
 @pytest.mark.slow
 def test_a_store_that_cannot_finish_the_claims_says_the_output_stands_and_the_next_run_redoes_them(
-    tmp_path, capsys, monkeypatch
-):
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
     """The store fills up after the output is written: one line naming the store, the offsets in place, and
     no report marked processed (SQLITE_FULL from SQLite's page limit, set just before the claims finish)."""
     from setupfix.cli import main
@@ -234,8 +233,8 @@ def test_a_store_that_cannot_finish_the_claims_says_the_output_stands_and_the_ne
     db, out = tmp_path / "h.db", tmp_path / "out.csv"
     real = batch_records.Claims.finish
 
-    def full(self):  # type: ignore[no-untyped-def]
-        db_ = self.store.db
+    def full(self: batch_records.Claims) -> None:
+        db_ = self.store.db  # type: ignore[attr-defined]  # the SQLite store's connection
         db_.execute(f"PRAGMA max_page_count = {db_.execute('PRAGMA page_count').fetchone()[0]}")
         return real(self)
 

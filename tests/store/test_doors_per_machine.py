@@ -10,14 +10,14 @@ import json
 from pathlib import Path
 
 import pytest
+from store.test_plant import GUIDE, MODEL, machine_reports
 
 from setupfix.cli import main
 from setupfix.model import load_model
 from setupfix.store import open_store
-from tests.store.test_plant import GUIDE, MODEL, machine_reports
 
 
-def audit(capsys, db: str, *extra: str) -> list[dict[str, str]]:  # type: ignore[no-untyped-def]
+def audit(capsys: pytest.CaptureFixture[str], db: str, *extra: str) -> list[dict[str, str]]:
     capsys.readouterr()
     assert main(["history", "export", "recommendations", "--db", db, "--out", "-", *extra]) == 0
     return list(csv.DictReader(io.StringIO(capsys.readouterr().out)))
@@ -30,7 +30,9 @@ def created(location: str) -> str:
     return location
 
 
-def test_correct_records_its_recommendation_and_the_program_it_wrote(tmp_path, location, capsys):
+def test_correct_records_its_recommendation_and_the_program_it_wrote(
+    tmp_path: Path, location: str, capsys: pytest.CaptureFixture[str]
+) -> None:
     db = created(location)
     report = GUIDE / "cycle_01.csv"
     program = tmp_path / "o.nc"
@@ -70,7 +72,7 @@ def test_correct_records_its_recommendation_and_the_program_it_wrote(tmp_path, l
     assert audit(capsys, db, "--machine", "M2") == []  # another machine's handle sees none of it
 
 
-def test_the_models_machine_is_the_default(tmp_path, location, capsys):
+def test_the_models_machine_is_the_default(tmp_path: Path, location: str, capsys: pytest.CaptureFixture[str]) -> None:
     created(location)
     model = tmp_path / "m.toml"
     text = MODEL.read_text(encoding="utf-8")
@@ -85,7 +87,9 @@ def test_the_models_machine_is_the_default(tmp_path, location, capsys):
 
 
 @pytest.mark.slow
-def test_batch_and_diagnose_see_only_their_machine(tmp_path, location, capsys):
+def test_batch_and_diagnose_see_only_their_machine(
+    tmp_path: Path, location: str, capsys: pytest.CaptureFixture[str]
+) -> None:
     for machine in ("A", "B"):
         folder = tmp_path / machine
         machine_reports(folder, machine, 6 if machine == "A" else 4)
@@ -124,7 +128,7 @@ def test_batch_and_diagnose_see_only_their_machine(tmp_path, location, capsys):
     assert len(err.splitlines()) == 1 and "Traceback" not in err
 
 
-def test_a_url_for_a_missing_file_store_is_named(tmp_path, capsys):
+def test_a_url_for_a_missing_file_store_is_named(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     missing = tmp_path / "none.db"
     assert main(["correct", "--model", str(MODEL), str(GUIDE / "cycle_01.csv"), "--store", str(missing)]) != 0
     err = capsys.readouterr().err.strip()

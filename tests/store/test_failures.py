@@ -19,7 +19,9 @@ import sqlite3
 import subprocess
 import sys
 import time
+from collections.abc import Callable, Iterator, Sequence
 from pathlib import Path
+from typing import Any
 
 import pytest
 
@@ -42,7 +44,7 @@ def one_line(err: str, name: str) -> str:
     return lines[0]
 
 
-def store_of(tmp_path: Path, name: str = "h.db", reports=REPORTS[:2]) -> Path:
+def store_of(tmp_path: Path, name: str = "h.db", reports: list[Path] = REPORTS[:2]) -> Path:
     db = tmp_path / name
     assert main(["history", "import", "--db", str(db), *map(str, reports)]) == 0
     return db
@@ -79,7 +81,7 @@ def ewma_model(tmp_path: Path) -> Path:
     return path
 
 
-def run(name: str, db: Path, tmp_path: Path, capsys) -> str:
+def run(name: str, db: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> str:
     out = tmp_path / f"{name}.out.csv"
     d = tmp_path / "reports" if (tmp_path / "reports").is_dir() else folder(tmp_path)
     capsys.readouterr()
@@ -94,7 +96,9 @@ def run(name: str, db: Path, tmp_path: Path, capsys) -> str:
 
 @pytest.mark.parametrize("command", sorted(COMMANDS))
 @pytest.mark.parametrize("damage", ["garbage", "page"])
-def test_a_damaged_store_is_one_line_naming_it(tmp_path, capsys, command, damage):
+def test_a_damaged_store_is_one_line_naming_it(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], command: str, damage: str
+) -> None:
     db = store_of(tmp_path, reports=REPORTS[:3])
     data = bytearray(db.read_bytes())
     if damage == "garbage":
@@ -114,7 +118,7 @@ def test_a_damaged_store_is_one_line_naming_it(tmp_path, capsys, command, damage
 
 
 @contextlib.contextmanager
-def read_only(path: Path):
+def read_only(path: Path) -> Iterator[None]:
     """``path`` made unwritable for this process: mode 0444/0555, or as root the immutable flag."""
     if os.geteuid() != 0:
         mode = path.stat().st_mode
@@ -133,7 +137,9 @@ def read_only(path: Path):
 
 
 @pytest.mark.parametrize("command", ["import", "batch", "diagnose"])
-def test_a_read_only_store_file_is_one_line_naming_it(tmp_path, capsys, command):
+def test_a_read_only_store_file_is_one_line_naming_it(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], command: str
+) -> None:
     db = store_of(tmp_path)
     before = counts(db)
     with read_only(db):
@@ -143,7 +149,9 @@ def test_a_read_only_store_file_is_one_line_naming_it(tmp_path, capsys, command)
 
 
 @pytest.mark.parametrize("existing", [True, False])
-def test_a_store_in_a_read_only_folder_is_one_line_naming_it(tmp_path, capsys, existing):
+def test_a_store_in_a_read_only_folder_is_one_line_naming_it(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], existing: bool
+) -> None:
     where = tmp_path / "ro"
     where.mkdir()
     db = store_of(where) if existing else where / "new.db"
@@ -158,7 +166,9 @@ def test_a_store_in_a_read_only_folder_is_one_line_naming_it(tmp_path, capsys, e
 
 @pytest.mark.slow
 @pytest.mark.parametrize("command", ["import", "batch", "diagnose", "correct"])
-def test_a_store_locked_beyond_the_busy_timeout_is_one_line_naming_it(tmp_path, capsys, monkeypatch, command):
+def test_a_store_locked_beyond_the_busy_timeout_is_one_line_naming_it(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch, command: str
+) -> None:
     import setupfix.store.sqlite as sqlite_store
 
     db = store_of(tmp_path)
@@ -198,7 +208,7 @@ def test_a_store_locked_beyond_the_busy_timeout_is_one_line_naming_it(tmp_path, 
 # -- full ----------------------------------------------------------------------------------------
 
 
-def _limited(limit: int):
+def _limited(limit: int) -> Callable[[], None]:
     def apply() -> None:
         resource.setrlimit(resource.RLIMIT_FSIZE, (limit, limit))
         signal.signal(signal.SIGXFSZ, signal.SIG_IGN)  # the write fails with EFBIG instead of killing
@@ -206,7 +216,9 @@ def _limited(limit: int):
     return apply
 
 
-def cli(args: list[str], *, limit: int | None = None, cwd: Path | None = None) -> subprocess.CompletedProcess[str]:
+def cli(
+    args: Sequence[str | Path], *, limit: int | None = None, cwd: Path | None = None
+) -> subprocess.CompletedProcess[str]:
     return subprocess.run(
         [sys.executable, "-m", "setupfix", *map(str, args)],
         capture_output=True,
@@ -227,12 +239,12 @@ def many_reports(d: Path, n: int) -> Path:
 
 @pytest.mark.slow
 @pytest.mark.parametrize("command", ["import", "batch"])
-def test_a_full_store_is_one_line_naming_it_and_keeps_what_it_held(tmp_path, command):
+def test_a_full_store_is_one_line_naming_it_and_keeps_what_it_held(tmp_path: Path, command: str) -> None:
     db = store_of(tmp_path)
     before = counts(db)
     d = many_reports(tmp_path / "many", 40)
     limit = max(db.stat().st_size, 32768) + 8192  # room for the -shm index, not for 40 reports
-    args = (
+    args: list[str | Path] = (
         ["history", "import", "--db", db, d]
         if command == "import"
         else ["batch", d, "--model", MODEL, "--out", tmp_path / "o.csv", "--store", db, "--settle", "0"]
@@ -253,7 +265,9 @@ def test_a_full_store_is_one_line_naming_it_and_keeps_what_it_held(tmp_path, com
     assert '"reports": 40' in again.stdout and counts(db) == (42, 40)
 
 
-def test_sqlite_s_own_full_is_one_line_naming_the_store(tmp_path, capsys, monkeypatch):
+def test_sqlite_s_own_full_is_one_line_naming_the_store(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
     """SQLITE_FULL (the page limit here, a full disk in the field) through the CLI."""
     import setupfix.store.sqlite as sqlite_store
 
@@ -261,7 +275,7 @@ def test_sqlite_s_own_full_is_one_line_naming_the_store(tmp_path, capsys, monkey
     before = counts(db)
     real = sqlite_store.SQLiteStore.__init__
 
-    def capped(self, path, **handle):  # type: ignore[no-untyped-def]
+    def capped(self: sqlite_store.SQLiteStore, path: str, **handle: Any) -> None:
         real(self, path, **handle)
         pages = self.db.execute("PRAGMA page_count").fetchone()[0]
         self.db.execute(f"PRAGMA max_page_count = {pages}")
@@ -277,7 +291,7 @@ def test_sqlite_s_own_full_is_one_line_naming_the_store(tmp_path, capsys, monkey
 
 #: command, the file it writes, the file size limit (bytes): below the output, above what it writes before
 #: (the store's 32 KiB -shm index for ``history export``).
-OUTPUTS = {
+OUTPUTS: dict[str, tuple[list[str | Path], str, int]] = {
     "offsets CSV (correct)": (["correct", "--model", MODEL, REPORTS[0], "--offsets", "{t}/old.csv"], "old.csv", 64),
     "program (correct)": (
         ["correct", "--model", MODEL, REPORTS[0], "--offsets", "{t}/old.nc", "--controller", "fanuc"],
@@ -305,7 +319,7 @@ OUTPUTS = {
 
 @pytest.mark.slow
 @pytest.mark.parametrize("what", sorted(OUTPUTS))
-def test_a_full_disk_under_any_output_is_one_line_naming_it_and_the_old_file_stays(tmp_path, what):
+def test_a_full_disk_under_any_output_is_one_line_naming_it_and_the_old_file_stays(tmp_path: Path, what: str) -> None:
     many_reports(tmp_path / "many", 60)
     db = tmp_path / "h.db"
     assert main(["history", "import", "--db", str(db), str(tmp_path / "many")]) == 0
@@ -325,7 +339,7 @@ def test_a_full_disk_under_any_output_is_one_line_naming_it_and_the_old_file_sta
 
 
 @pytest.mark.slow
-def test_a_store_created_by_many_processes_at_once_is_a_store(tmp_path):
+def test_a_store_created_by_many_processes_at_once_is_a_store(tmp_path: Path) -> None:
     for round_ in range(3):
         db = tmp_path / f"new{round_}.db"
         start = time.time() + 1.5
@@ -346,7 +360,7 @@ def test_a_store_created_by_many_processes_at_once_is_a_store(tmp_path):
 
 
 @pytest.mark.slow
-def test_a_store_killed_while_it_is_created_is_created_by_the_next_open(tmp_path):
+def test_a_store_killed_while_it_is_created_is_created_by_the_next_open(tmp_path: Path) -> None:
     db = tmp_path / "killed.db"
     code = (
         "import os, signal\nimport setupfix.store.schema as s\n"
@@ -362,7 +376,7 @@ def test_a_store_killed_while_it_is_created_is_created_by_the_next_open(tmp_path
 
 
 @pytest.mark.parametrize("left", ["empty file", "version table only"])
-def test_what_a_killed_creation_left_is_completed(tmp_path, left):
+def test_what_a_killed_creation_left_is_completed(tmp_path: Path, left: str) -> None:
     """An empty file, and what setupfix before this fix left when killed between its two first commits."""
     db = tmp_path / "h.db"
     db.write_bytes(b"")
@@ -376,7 +390,7 @@ def test_what_a_killed_creation_left_is_completed(tmp_path, left):
 
 
 @contextlib.contextmanager
-def tiny_disk(where: Path, size: str = "512k"):
+def tiny_disk(where: Path, size: str = "512k") -> Iterator[Path]:
     """A real small file system (tmpfs) at ``where`` -- root only, where mounting is allowed; else skipped."""
     where.mkdir()
     if os.geteuid() != 0 or shutil.which("mount") is None:
@@ -397,7 +411,9 @@ def _fill(disk: Path, leave: int) -> None:
         f.write(b"\0" * max(0, free - leave))
 
 
-def test_a_full_disk_under_the_store_and_under_an_output_is_one_line_naming_it(tmp_path, capsys):
+def test_a_full_disk_under_the_store_and_under_an_output_is_one_line_naming_it(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     """ENOSPC from a real file system: the store keeps what it held, the old output stays, no temporary file."""
     with tiny_disk(tmp_path / "disk") as disk:
         db = store_of(disk)

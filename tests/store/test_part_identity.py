@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
+from typing import Any, cast
 
 import pytest
 
@@ -16,13 +17,13 @@ from setupfix.cli import main
 GUIDE = Path(__file__).resolve().parents[2] / "sample_reports" / "guide_pins"
 
 
-def _model(tmp_path):
+def _model(tmp_path: Path) -> Path:
     path = tmp_path / "m.toml"
     path.write_text((GUIDE / "model.toml").read_text() + "\n[safety]\newma = 0.5\n")
     return path
 
 
-def _unnamed(tmp_path, i):
+def _unnamed(tmp_path: Path, i: int) -> Path:
     """cycle_0i without its part column: the part is named by nothing but its report and time."""
     lines = (GUIDE / f"cycle_0{i}.csv").read_text().splitlines()
     head = lines[0].split(",")
@@ -32,22 +33,24 @@ def _unnamed(tmp_path, i):
     return path
 
 
-def _estimates(tmp_path, model, db, capsys):
+def _estimates(tmp_path: Path, model: Path, db: Path, capsys: pytest.CaptureFixture[str]) -> dict[str, Any]:
     capsys.readouterr()
     assert main(["correct", "--model", str(model), "--store", str(db), str(GUIDE / "cycle_03.csv"), "--json"]) == 0
     out = json.loads(capsys.readouterr().out)
     (part,) = out.get("parts", [out])
-    return part
+    return cast(dict[str, Any], part)
 
 
-def _ewma(part):
+def _ewma(part: dict[str, Any]) -> tuple[list[float], list[dict[str, Any]]]:
     rows = part["dimensions"]
     return [r["estimate"] for r in rows], [r for r in part["rules"] if r["rule"] == "ewma"]
 
 
 @pytest.mark.slow
 @pytest.mark.parametrize("named", [True, False])
-def test_crlf_copy_and_export_import_do_not_change_the_ewma(tmp_path, capsys, named):
+def test_crlf_copy_and_export_import_do_not_change_the_ewma(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], named: bool
+) -> None:
     model = _model(tmp_path)
     reports = (
         [GUIDE / "cycle_01.csv", GUIDE / "cycle_02.csv"] if named else [_unnamed(tmp_path, 1), _unnamed(tmp_path, 2)]
@@ -75,7 +78,7 @@ def test_crlf_copy_and_export_import_do_not_change_the_ewma(tmp_path, capsys, na
         ], db.name
 
 
-def test_two_unnamed_parts_of_one_time_that_measured_differently_both_count(tmp_path):
+def test_two_unnamed_parts_of_one_time_that_measured_differently_both_count(tmp_path: Path) -> None:
     """Within a report's time resolution two unnamed parts are told apart by their values (the former
     (name, time) key kept only one)."""
     import parsers

@@ -67,7 +67,7 @@ print(len(s.new_reports), s.corrections)
 """
 
 
-def test_eight_processes_importing_into_one_server_lose_and_double_nothing(tmp_path, pg_url):
+def test_eight_processes_importing_into_one_server_lose_and_double_nothing(tmp_path: Path, pg_url: str) -> None:
     """Eight processes, two per machine, import overlapping report sets at once; then all of it again."""
     machines = ["M1", "M2", "M3", "M4"]
     given = {m: machine_reports(tmp_path / m, m, 12) for m in machines}
@@ -113,7 +113,9 @@ def test_eight_processes_importing_into_one_server_lose_and_double_nothing(tmp_p
 BATCH_MACHINES = 8
 
 
-def test_eight_batches_at_once_on_one_server_correct_each_report_once_and_a_rerun_adds_nothing(tmp_path, pg_url):
+def test_eight_batches_at_once_on_one_server_correct_each_report_once_and_a_rerun_adds_nothing(
+    tmp_path: Path, pg_url: str
+) -> None:
     n = 24
     folder = tmp_path / "reports"
     machine_reports(folder, "plant", n)
@@ -165,7 +167,7 @@ def test_eight_batches_at_once_on_one_server_correct_each_report_once_and_a_reru
         assert len(store.recommendations()) == n and store.count("report") == n
 
 
-def test_each_machine_reads_only_its_own_rows(tmp_path, location):
+def test_each_machine_reads_only_its_own_rows(tmp_path: Path, location: str) -> None:
     temps = tmp_path / "t.csv"
     for m, delta in (("M1", 0.01), ("M2", 0.02)):
         temps.write_text(f"timestamp,spindle\n2026-11-02T08:00:00,{20 + delta}\n")
@@ -183,8 +185,8 @@ def test_each_machine_reads_only_its_own_rows(tmp_path, location):
         with open_store(location, machine=m) as store:
             tables = report_tables(store)  # what correct --store, diagnose --db and the TUI read
             assert len(tables) == 3 and all(t["part"].str.startswith(m).all() for _, t in tables)
-            log = stored_corrections(store, model)
-            assert log is not None and log.deltas.tolist() == [delta]
+            stored = stored_corrections(store, model)
+            assert stored is not None and stored.deltas.tolist() == [delta]
             assert store.temperatures()["spindle"].tolist() == [20 + delta]
             assert [r.result["corrections"] for r in store.recommendations()] == [{"G54": delta}]
             assert len(store.audit()) == 1 and len(store.audit(every_machine=True)) == 2
@@ -198,7 +200,7 @@ def test_each_machine_reads_only_its_own_rows(tmp_path, location):
     )
 
 
-def test_a_report_belongs_to_one_machine(tmp_path, location):
+def test_a_report_belongs_to_one_machine(tmp_path: Path, location: str) -> None:
     report = machine_reports(tmp_path, "M1", 1)
     with open_store(location, machine="M1") as store:
         import_history(store, ImportRequest(tuple(report)))
@@ -247,7 +249,7 @@ def _fill(db: str, tmp_path: Path) -> None:
         )
 
 
-def test_migrate_copies_every_row(tmp_path, pg_url, capsys):
+def test_migrate_copies_every_row(tmp_path: Path, pg_url: str, capsys: pytest.CaptureFixture[str]) -> None:
     source = str(tmp_path / "plant.db")
     _fill(source, tmp_path)
     assert main(["history", "migrate", "--from", source, "--db", pg_url]) == 0
@@ -272,7 +274,9 @@ def test_migrate_copies_every_row(tmp_path, pg_url, capsys):
 
 
 @pytest.mark.slow
-def test_the_audit_export_holds_every_recommendation(tmp_path, location, capsys):
+def test_the_audit_export_holds_every_recommendation(
+    tmp_path: Path, location: str, capsys: pytest.CaptureFixture[str]
+) -> None:
     _fill(location, tmp_path)
     out = tmp_path / "audit.csv"
     assert main(["history", "export", "recommendations", "--db", location, "--out", str(out)]) == 0
@@ -303,7 +307,7 @@ def test_the_audit_export_holds_every_recommendation(tmp_path, location, capsys)
     assert set(only["machine"]) == {"M2"} and len(only) == len(by_machine["M2"])
 
 
-def test_history_show_summarises_per_machine(tmp_path, location, capsys):
+def test_history_show_summarises_per_machine(tmp_path: Path, location: str, capsys: pytest.CaptureFixture[str]) -> None:
     for m in ("M1", "M2"):
         assert (
             main(
@@ -329,7 +333,7 @@ def test_history_show_summarises_per_machine(tmp_path, location, capsys):
     assert "machine M2: 3 report(s)" in text and "M2_002.csv" in text and "M1_000.csv" not in text
 
 
-def test_a_v3_store_migrates_with_its_audit(tmp_path):
+def test_a_v3_store_migrates_with_its_audit(tmp_path: Path) -> None:
     """A store of the previous schema gains machine 'default' and the audit columns of what it holds."""
     path = tmp_path / "v3.db"
     con = sqlite3.connect(path, isolation_level=None)
@@ -358,7 +362,7 @@ def test_a_v3_store_migrates_with_its_audit(tmp_path):
     ]
 
 
-def test_what_is_not_a_store_on_a_server_is_refused(pg_url):
+def test_what_is_not_a_store_on_a_server_is_refused(pg_url: str) -> None:
     import psycopg
 
     with psycopg.connect(pg_url, autocommit=True) as con:
@@ -373,7 +377,9 @@ def test_what_is_not_a_store_on_a_server_is_refused(pg_url):
         open_store(pg_url)
 
 
-def test_server_failures_are_one_line_naming_the_store_without_its_password(pg_url, capsys):
+def test_server_failures_are_one_line_naming_the_store_without_its_password(
+    pg_url: str, capsys: pytest.CaptureFixture[str]
+) -> None:
     from urllib.parse import urlsplit
 
     password = urlsplit(pg_url).password

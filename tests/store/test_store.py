@@ -32,17 +32,17 @@ TEMPS = ROOT / "sample_reports" / "thermal" / "test_constant.csv"
 LOG = "timestamp,register,delta,event\n2026-11-02T09:00:00,G54,0.012,\n2026-11-03T07:00:00,T23,,tool_change\n"
 
 
-def _counts(path):
+def _counts(path: str | Path) -> tuple[int, int, int, int]:
     with open_store(path) as s:
         return len(s.reports()), len(s.measurements()), len(s.corrections()), len(s.temperatures())
 
 
-def _log(tmp_path, text=LOG, name="corr.csv"):
+def _log(tmp_path: Path, text: str = LOG, name: str = "corr.csv") -> Path:
     (tmp_path / name).write_text(text)
     return tmp_path / name
 
 
-def test_import_twice_changes_nothing_and_rows_come_back(tmp_path, location):
+def test_import_twice_changes_nothing_and_rows_come_back(tmp_path: Path, location: str) -> None:
     db, log = location, _log(tmp_path)
     with open_store(db) as store:
         first = import_history(store, ImportRequest(tuple(REPORTS), (log,), (TEMPS,)))
@@ -59,7 +59,7 @@ def test_import_twice_changes_nothing_and_rows_come_back(tmp_path, location):
     assert _counts(db) == (5, 140, 2, len(pd.read_csv(TEMPS)))
 
 
-def test_logs_round_trip_and_contradictions_are_refused(tmp_path, location):
+def test_logs_round_trip_and_contradictions_are_refused(tmp_path: Path, location: str) -> None:
     db = location
     with open_store(db) as store:
         import_history(store, ImportRequest(corrections=(_log(tmp_path),), temperatures=(TEMPS,)))
@@ -83,7 +83,7 @@ def test_logs_round_trip_and_contradictions_are_refused(tmp_path, location):
     assert _counts(db)[:3] == (0, 0, 2)  # the reports of the refused import were not stored either
 
 
-def test_a_bad_file_stores_nothing(tmp_path, location):
+def test_a_bad_file_stores_nothing(tmp_path: Path, location: str) -> None:
     bad = tmp_path / "bad.csv"
     bad.write_text("characteristic,nominal,actual\nD1,1.0,abc\n")
     with open_store(location) as store:
@@ -109,7 +109,7 @@ with store.transaction():  # what one import does: reports, then the logs
 
 
 @pytest.mark.slow
-def test_kill_during_import_leaves_the_store_as_it_was(location):
+def test_kill_during_import_leaves_the_store_as_it_was(location: str) -> None:
     db = location
     with open_store(db) as store:
         import_history(store, ImportRequest(tuple(REPORTS[:1])))
@@ -131,7 +131,7 @@ with open_store(sys.argv[1]) as s:
 
 
 @pytest.mark.slow
-def test_readers_see_the_last_commit_while_another_process_writes(location):
+def test_readers_see_the_last_commit_while_another_process_writes(location: str) -> None:
     db = location
     with open_store(db) as store:
         import_history(store, ImportRequest(tuple(REPORTS[:1])))
@@ -145,7 +145,7 @@ def test_readers_see_the_last_commit_while_another_process_writes(location):
             assert len(reader.reports()) == 2 and len(reader.measurements()) == 56
 
 
-def test_migration_from_the_first_schema_keeps_the_data(tmp_path):
+def test_migration_from_the_first_schema_keeps_the_data(tmp_path: Path) -> None:
     db = tmp_path / "old.db"
     raw = sqlite3.connect(db, isolation_level=None)
     assert migrate(raw, str(db), upto=1) == 1
@@ -160,7 +160,7 @@ def test_migration_from_the_first_schema_keeps_the_data(tmp_path):
         assert store.corrections()["delta"].tolist() == [0.1]
 
 
-def test_what_is_not_a_store_is_refused(tmp_path):
+def test_what_is_not_a_store_is_refused(tmp_path: Path) -> None:
     (tmp_path / "text.db").write_text("hello, this is not SQLite" * 100)
     with pytest.raises(StoreError, match=r"text.db"):
         open_store(tmp_path / "text.db")
@@ -178,7 +178,7 @@ def test_what_is_not_a_store_is_refused(tmp_path):
         open_store(tmp_path / "missing" / "h.db")
 
 
-def test_recommendations_round_trip(location):
+def test_recommendations_round_trip(location: str) -> None:
     with open_store(location, machine="M7", operator="ana") as store:
         rec = Recommendation("exact", {"report": "abc", "part": "1", "seed": None}, {"corrections": {"G54": 0.01}})
         store.add_recommendation(rec)
@@ -187,7 +187,7 @@ def test_recommendations_round_trip(location):
         assert back.created_at and (back.machine, back.operator) == ("M7", "ana")
 
 
-def test_cli_import_show_export(tmp_path, capsys, location):
+def test_cli_import_show_export(tmp_path: Path, capsys: pytest.CaptureFixture[str], location: str) -> None:
     db = location
     assert main(["history", "import", "--db", db, *map(str, REPORTS), "--corrections", str(_log(tmp_path))]) == 0
     assert main(["history", "show", "--db", db, "--json"]) == 0
@@ -203,7 +203,7 @@ def test_cli_import_show_export(tmp_path, capsys, location):
     assert "folder" in capsys.readouterr().err
 
 
-def test_recommendations_of_a_correct_run_are_stored(location):
+def test_recommendations_of_a_correct_run_are_stored(location: str) -> None:
     from setupfix.model import load_model
     from setupfix.usecases.contract import cycle_json
     from setupfix.usecases.correct import correct_report
@@ -218,7 +218,7 @@ def test_recommendations_of_a_correct_run_are_stored(location):
     assert rec.inputs["report_sha256"] == hashlib.sha256(REPORTS[0].read_bytes()).hexdigest()
 
 
-def test_a_truncated_report_is_refused_and_nothing_stored(tmp_path, location):
+def test_a_truncated_report_is_refused_and_nothing_stored(tmp_path: Path, location: str) -> None:
     cut = tmp_path / "cut.csv"
     cut.write_bytes(REPORTS[0].read_bytes()[:322])  # ends inside a row: "P1 D4,30.0000,29."
     with open_store(location) as store:
@@ -227,7 +227,7 @@ def test_a_truncated_report_is_refused_and_nothing_stored(tmp_path, location):
         assert store.reports() == []
 
 
-def test_the_store_keeps_the_corrections_log_in_its_readers_columns():
+def test_the_store_keeps_the_corrections_log_in_its_readers_columns() -> None:
     from parsers.corrections import COLUMNS
     from setupfix.store import CORRECTION_COLUMNS
 
