@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 import shutil
 import signal
+from pathlib import Path
 
 import pytest
 from conftest import GUIDE_PINS
@@ -14,13 +15,13 @@ from setupfix.cli import main
 MODEL = str(GUIDE_PINS / "model.toml")
 
 
-def run(capsys, *argv):
+def run(capsys: pytest.CaptureFixture[str], *argv: str) -> tuple[int, str, str]:
     code = main(list(argv))
     out, err = capsys.readouterr()
     return code, out, err
 
 
-def test_exit_status_summary_and_bad_file_named(capsys, tmp_path):
+def test_exit_status_summary_and_bad_file_named(capsys: pytest.CaptureFixture[str], tmp_path: Path) -> None:
     d = tmp_path / "in"
     d.mkdir()
     shutil.copy(GUIDE_PINS / "cycle_01.csv", d / "a.csv")
@@ -37,7 +38,7 @@ def test_exit_status_summary_and_bad_file_named(capsys, tmp_path):
     assert code == 1 and "is not a folder" in err
 
 
-def test_killed_run_leaves_no_partial_file(tmp_path):
+def test_killed_run_leaves_no_partial_file(tmp_path: Path) -> None:
     """SIGTERM becomes KeyboardInterrupt (the CLI's handler), which unwinds the atomic writer."""
     import pytest
 
@@ -53,7 +54,7 @@ def test_killed_run_leaves_no_partial_file(tmp_path):
         (d / f"r{i:03d}.csv").write_text(text)
     out = tmp_path / "o.csv"
 
-    def killed_after_first(done, total, outcome):
+    def killed_after_first(done: int, total: int, outcome: object) -> None:
         assert any(p.name.endswith(".tmp") for p in tmp_path.iterdir())  # rows are being streamed …
         terminate(signal.SIGTERM, None)
 
@@ -63,7 +64,7 @@ def test_killed_run_leaves_no_partial_file(tmp_path):
 
 
 @pytest.mark.slow
-def test_batch_store_smooths_as_correct_store_does(capsys, tmp_path):
+def test_batch_store_smooths_as_correct_store_does(capsys: pytest.CaptureFixture[str], tmp_path: Path) -> None:
     """Issue 20: with ``ewma = 0.5`` and the guide-pins cycles 1–5, ``batch --store`` differed from ``correct
     --store`` in 36 register values (batch never smoothed); now every value agrees."""
     import csv
@@ -91,17 +92,18 @@ def test_batch_store_smooths_as_correct_store_does(capsys, tmp_path):
         capsys, "history", "import", "--db", str(tmp_path / "h.db"), "--model", str(model), *map(str, reports)
     )
     assert code == 0, err
-    expected, plain = {}, {}
+    expected: dict[tuple[str, str], float] = {}
+    plain: dict[tuple[str, str], float] = {}
     for report in reports:
         for db, into in ((["--store", str(tmp_path / "h.db")], expected), ([], plain)):
             code, out, _ = run(capsys, "correct", "--model", str(model), str(report), "--json", *db)
-            into.update({(report.name, k): v for k, v in json.loads(out)["corrections"].items()})
+            into.update({(Path(report).name, k): v for k, v in json.loads(out)["corrections"].items()})
     with (tmp_path / "batch.csv").open() as f:
         got = {(row["report"], row["id"]): float(row["delta"]) for row in csv.DictReader(f)}
     assert got == expected and sum(expected[k] != plain[k] for k in expected) >= 30
 
 
-def test_bad_thermal_inputs_are_refused_before_any_work(capsys, tmp_path):
+def test_bad_thermal_inputs_are_refused_before_any_work(capsys: pytest.CaptureFixture[str], tmp_path: Path) -> None:
     d = tmp_path / "in"
     d.mkdir()
     shutil.copy(GUIDE_PINS / "cycle_01.csv", d / "a.csv")

@@ -4,20 +4,23 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
 
 from setupfix.cli import main
+from setupfix.optimize import CorrectionProblem
 
 SAMPLE = Path(__file__).resolve().parents[2] / "sample_reports" / "guide_pins"
 MODEL = str(SAMPLE / "model.toml")
 REPORT = str(SAMPLE / "cycle_01.csv")
 
 
-def _run_json(capsys: pytest.CaptureFixture[str], *extra: str) -> dict:
+def _run_json(capsys: pytest.CaptureFixture[str], *extra: str) -> dict[str, Any]:
     assert main(["compare", "--model", MODEL, "--trials", "2", "--json", *extra, REPORT]) == 0
-    return json.loads(capsys.readouterr().out)
+    doc: dict[str, Any] = json.loads(capsys.readouterr().out)
+    return doc
 
 
 @pytest.mark.slow
@@ -43,7 +46,7 @@ def test_json_contract_and_exact_yardstick(capsys: pytest.CaptureFixture[str]) -
     assert pso["margins"][1] == pytest.approx(again.margin_after, abs=1e-9)
 
 
-def exact_problem():
+def exact_problem() -> CorrectionProblem:
     from setupfix.inputs.cycles import load_parts
     from setupfix.model import load_model
     from setupfix.optimize import CorrectionProblem
@@ -57,7 +60,10 @@ def test_same_seed_same_table_other_seed_other_trials(capsys: pytest.CaptureFixt
     a = _run_json(capsys, "--seed", "3")
     b = _run_json(capsys, "--seed", "3")
     c = _run_json(capsys, "--seed", "4")
-    strip = lambda o: [(r["optimizer"], r["margins"], r["norms"]) for r in o["results"]]  # noqa: E731
+
+    def strip(o: dict[str, Any]) -> list[tuple[Any, Any, Any]]:
+        return [(r["optimizer"], r["margins"], r["norms"]) for r in o["results"]]
+
     assert strip(a) == strip(b)
     assert [r["seeds"] for r in a["results"]] != [r["seeds"] for r in c["results"]]
 

@@ -5,6 +5,9 @@ from __future__ import annotations
 import csv
 import json
 import shutil
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
 
 import pytest
 from conftest import GUIDE_PINS
@@ -16,13 +19,13 @@ REPORT = str(GUIDE_PINS / "cycle_01.csv")
 SPEC_KEYS = {"optimizer", "margin_before", "margin_after", "bonus", "norm", "corrections", "binding", "dimensions"}
 
 
-def run(capsys, *argv):
+def run(capsys: pytest.CaptureFixture[str], *argv: str) -> tuple[int, str, str]:
     code = main(list(argv))
     out, err = capsys.readouterr()
     return code, out, err
 
 
-def test_json_has_the_contract_keys(capsys):
+def test_json_has_the_contract_keys(capsys: pytest.CaptureFixture[str]) -> None:
     code, out, err = run(capsys, "correct", "--model", MODEL, "--json", REPORT)
     assert code == 0, err
     doc = json.loads(out)
@@ -41,7 +44,7 @@ def test_json_has_the_contract_keys(capsys):
     assert d4["predicted"] == pytest.approx(d4["deviation"] + c["W1"] + c["W5"] + 2 * c["T23"])
 
 
-def test_offsets_csv_matches_json(capsys, tmp_path):
+def test_offsets_csv_matches_json(capsys: pytest.CaptureFixture[str], tmp_path: Path) -> None:
     target = tmp_path / "offsets.csv"
     code, out, _ = run(capsys, "correct", "--model", MODEL, "--json", "--offsets", str(target), REPORT)
     assert code == 0
@@ -58,14 +61,14 @@ def test_offsets_csv_matches_json(capsys, tmp_path):
     assert [p.name for p in tmp_path.iterdir()] == ["offsets.csv"]  # no temporary file left behind
 
 
-def test_human_output_names_everything(capsys):
+def test_human_output_names_everything(capsys: pytest.CaptureFixture[str]) -> None:
     code, out, _ = run(capsys, "correct", "--model", MODEL, REPORT)
     assert code == 0
     for text in ("P4 D7", "G54.1P2", "H23", "error budget before", "bonus", "binding"):
         assert text in out
 
 
-def test_cripso_reproducible_per_seed(capsys):
+def test_cripso_reproducible_per_seed(capsys: pytest.CaptureFixture[str]) -> None:
     outs = [
         json.loads(
             run(capsys, "correct", "--model", MODEL, "--optimizer", "cripso", "--seed", "4", "--json", REPORT)[1]
@@ -76,7 +79,7 @@ def test_cripso_reproducible_per_seed(capsys):
     assert outs[0]["optimizer"] == "cripso"
 
 
-def test_several_parts_and_part_selection(capsys, tmp_path):
+def test_several_parts_and_part_selection(capsys: pytest.CaptureFixture[str], tmp_path: Path) -> None:
     both = tmp_path / "two.csv"
     lines = (GUIDE_PINS / "cycle_01.csv").read_text().splitlines()
     lines2 = (GUIDE_PINS / "cycle_02.csv").read_text().splitlines()[1:]
@@ -90,7 +93,7 @@ def test_several_parts_and_part_selection(capsys, tmp_path):
     assert code == 1 and "no part 'cycle 9'" in err
 
 
-def test_absent_dimension_left_out_and_reported(capsys, tmp_path):
+def test_absent_dimension_left_out_and_reported(capsys: pytest.CaptureFixture[str], tmp_path: Path) -> None:
     report = tmp_path / "short.csv"
     lines = REPORT and (GUIDE_PINS / "cycle_01.csv").read_text().splitlines()
     report.write_text("\n".join(line for line in lines if not line.startswith("P3 D4")) + "\n")
@@ -116,7 +119,9 @@ def test_absent_dimension_left_out_and_reported(capsys, tmp_path):
         (lambda d: (d / "r.csv").write_bytes(b"\x00\x01binary\xff"), "r.csv"),
     ],
 )
-def test_bad_input_one_line_exit_1_no_output_file(capsys, tmp_path, mutate, expected):
+def test_bad_input_one_line_exit_1_no_output_file(
+    capsys: pytest.CaptureFixture[str], tmp_path: Path, mutate: Callable[[Path], object], expected: str
+) -> None:
     shutil.copy(MODEL, tmp_path / "model.toml")
     shutil.copy(REPORT, tmp_path / "r.csv")
     mutate(tmp_path)
@@ -129,13 +134,13 @@ def test_bad_input_one_line_exit_1_no_output_file(capsys, tmp_path, mutate, expe
     assert not target.exists() and out == ""
 
 
-def test_usage_errors_exit_2(capsys):
+def test_usage_errors_exit_2(capsys: pytest.CaptureFixture[str]) -> None:
     assert run(capsys, "correct", REPORT)[0] == 2
     assert run(capsys, "correct", "--model", MODEL, "--optimizer", "simplex", REPORT)[0] == 2
     assert run(capsys)[0] == 2
 
 
-def test_model_show_prints_matrices_rank_and_null_space(capsys):
+def test_model_show_prints_matrices_rank_and_null_space(capsys: pytest.CaptureFixture[str]) -> None:
     code, out, _ = run(capsys, "model", "show", MODEL)
     assert code == 0
     assert "R_TF" in out and "R_FD" in out and "rank 9" in out
@@ -145,13 +150,13 @@ def test_model_show_prints_matrices_rank_and_null_space(capsys):
     assert doc["rank"] == 9 and doc["null_space"][0]["T23"] == 1.0
 
 
-def test_group_without_action_shows_its_help(capsys):
+def test_group_without_action_shows_its_help(capsys: pytest.CaptureFixture[str]) -> None:
     code, out, err = run(capsys, "model")
     assert code == 2 and "show" in err and out == ""
     assert run(capsys, "--help")[0] == 0
 
 
-def gross_copy(tmp_path, deviation):
+def gross_copy(tmp_path: Path, deviation: float) -> Path:
     """cycle_01.csv with P1 D1 moved to ``deviation`` (issue 13's gross errors)."""
     lines = (GUIDE_PINS / "cycle_01.csv").read_text().splitlines()
     out = []
@@ -166,14 +171,16 @@ def gross_copy(tmp_path, deviation):
     return path
 
 
-def never_harms(doc):
+def never_harms(doc: dict[str, Any]) -> None:
     for d in doc["dimensions"]:
         if d["lower"] <= d["deviation"] <= d["upper"]:
             assert d["lower"] <= d["predicted"] <= d["upper"], d["name"]
             assert "out" not in d["flags"]
 
 
-def test_gross_error_is_given_up_not_paid_for_by_good_dimensions(capsys, tmp_path):
+def test_gross_error_is_given_up_not_paid_for_by_good_dimensions(
+    capsys: pytest.CaptureFixture[str], tmp_path: Path
+) -> None:
     code, out, _err = run(capsys, "correct", "--model", MODEL, "--json", str(gross_copy(tmp_path, -0.25)))
     doc = json.loads(out)
     assert code == 0 and doc["verdict"] == "apply"
@@ -184,7 +191,7 @@ def test_gross_error_is_given_up_not_paid_for_by_good_dimensions(capsys, tmp_pat
     assert {"out_before", "out", "given_up"} <= set(p1d1["flags"])
 
 
-def test_reject_exit_status_json_still_printed_no_offsets(capsys, tmp_path):
+def test_reject_exit_status_json_still_printed_no_offsets(capsys: pytest.CaptureFixture[str], tmp_path: Path) -> None:
     target = tmp_path / "offsets.csv"
     code, out, err = run(
         capsys, "correct", "--model", MODEL, "--json", "--offsets", str(target), str(gross_copy(tmp_path, -0.50))
@@ -200,7 +207,7 @@ def test_reject_exit_status_json_still_printed_no_offsets(capsys, tmp_path):
 
 
 @pytest.mark.needs_shared
-def test_calypso_one_dimension_1_2_mm_out(capsys, tmp_path):
+def test_calypso_one_dimension_1_2_mm_out(capsys: pytest.CaptureFixture[str], tmp_path: Path) -> None:
     from conftest import SAMPLES, shared_path
 
     report = shared_path("cmm-samples", "calypso", "CALYPSO_chr_PruefplanValidierungsbauteil1_16.txt")
@@ -217,7 +224,7 @@ def test_calypso_one_dimension_1_2_mm_out(capsys, tmp_path):
     never_harms(doc)
 
 
-def test_fixed_register_listed_with_zero_and_dead_band_hold(capsys, tmp_path):
+def test_fixed_register_listed_with_zero_and_dead_band_hold(capsys: pytest.CaptureFixture[str], tmp_path: Path) -> None:
     text = (GUIDE_PINS / "model.toml").read_text()
     text = text.replace('register = "H23"', 'register = "H23"\nfixed = true')
     (tmp_path / "m.toml").write_text(text + "\n[safety]\ndead_band = 0.05\n")
@@ -230,7 +237,7 @@ def test_fixed_register_listed_with_zero_and_dead_band_hold(capsys, tmp_path):
     assert "HOLD" in out and "fixed" in out
 
 
-def test_controller_program_needs_one_cycle(capsys, tmp_path):
+def test_controller_program_needs_one_cycle(capsys: pytest.CaptureFixture[str], tmp_path: Path) -> None:
     both = tmp_path / "two.csv"
     lines = (GUIDE_PINS / "cycle_01.csv").read_text().splitlines()
     both.write_text("\n".join(lines + (GUIDE_PINS / "cycle_02.csv").read_text().splitlines()[1:]) + "\n")
@@ -244,7 +251,9 @@ def test_controller_program_needs_one_cycle(capsys, tmp_path):
     assert code == 1 and "siemens: cannot express register 'G58' (W5)" in err
 
 
-def test_current_offsets_give_absolute_program_and_feed_the_cumulative_limit(capsys, tmp_path):
+def test_current_offsets_give_absolute_program_and_feed_the_cumulative_limit(
+    capsys: pytest.CaptureFixture[str], tmp_path: Path
+) -> None:
     from conftest import SAMPLES
 
     sample = SAMPLES / "controllers"
@@ -287,7 +296,9 @@ def test_current_offsets_give_absolute_program_and_feed_the_cumulative_limit(cap
     assert any(r["rule"] == "cumulative_limit" and "T5" in r["registers"] for r in doc["rules"])
 
 
-def test_a_wks_entered_wrong_is_held_and_named_on_stderr_and_in_the_json(capsys, tmp_path):
+def test_a_wks_entered_wrong_is_held_and_named_on_stderr_and_in_the_json(
+    capsys: pytest.CaptureFixture[str], tmp_path: Path
+) -> None:
     """Issue 22: G55 (W2, station P2 at B0) off by 0.35 mm: not a reject; the register and the amount are named."""
     lines = (GUIDE_PINS / "cycle_01.csv").read_text().splitlines()
     moved = {"P2 D1", "P2 D2", "P2 D4"}  # the dimensions W2 moves, each by +1 (model show)

@@ -4,13 +4,14 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import pytest
 from spc_examples import GUIDE_PINS, closed_loop_store
 from views.test_html_report import EXTERNAL, tags
 
 from setupfix.cli import main
 
 
-def test_page_of_a_correction_with_and_without_history(tmp_path: Path, capsys) -> None:  # type: ignore[no-untyped-def]
+def test_page_of_a_correction_with_and_without_history(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     args = ["correct", "--model", str(GUIDE_PINS / "model.toml"), str(GUIDE_PINS / "cycle_01.csv")]
     page = tmp_path / "c.html"
     assert main([*args, "--html", str(page)]) == 0
@@ -23,7 +24,7 @@ def test_page_of_a_correction_with_and_without_history(tmp_path: Path, capsys) -
     assert 'class="chart individuals"' in page.read_text(encoding="utf-8")  # the stored series' control charts
 
 
-def test_unwritable_page_is_refused_before_any_work(tmp_path: Path, capsys) -> None:  # type: ignore[no-untyped-def]
+def test_unwritable_page_is_refused_before_any_work(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     args = ["correct", "--model", str(GUIDE_PINS / "model.toml"), str(GUIDE_PINS / "cycle_01.csv")]
     assert main([*args, "--html", str(tmp_path / "no" / "c.html")]) == 1
     err = capsys.readouterr().err

@@ -12,7 +12,7 @@ from setupfix.cli import main
 DESIGN = "doe_tool_length,doe_speed,doe_tool_length*doe_speed"
 
 
-def run(capsys, *argv):
+def run(capsys: pytest.CaptureFixture[str], *argv: object) -> tuple[int, str, str]:
     code = main([str(a) for a in argv])
     out, err = capsys.readouterr()
     return code, out, err
@@ -20,7 +20,7 @@ def run(capsys, *argv):
 
 @pytest.mark.slow
 @needs_log
-def test_factors_are_tested_listed_and_marked_declared(capsys):
+def test_factors_are_tested_listed_and_marked_declared(capsys: pytest.CaptureFixture[str]) -> None:
     code, out, err = run(
         capsys, "diagnose", "--model", MODEL, "--process", LOG, "--factors", DESIGN, "--no-walk", PLATE
     )
@@ -45,7 +45,7 @@ def test_factors_are_tested_listed_and_marked_declared(capsys):
 
 
 @needs_log
-def test_an_unknown_factor_is_one_line_naming_it(capsys):
+def test_an_unknown_factor_is_one_line_naming_it(capsys: pytest.CaptureFixture[str]) -> None:
     code, out, err = run(
         capsys, "diagnose", "--model", MODEL, "--process", LOG, "--factors", "doe_tool_length,spindle_sped", PLATE
     )
@@ -56,7 +56,7 @@ def test_an_unknown_factor_is_one_line_naming_it(capsys):
 
 
 @needs_log
-def test_a_malformed_term_and_factors_without_a_log_are_one_line(capsys):
+def test_a_malformed_term_and_factors_without_a_log_are_one_line(capsys: pytest.CaptureFixture[str]) -> None:
     code, _, err = run(capsys, "diagnose", "--model", MODEL, "--process", LOG, "--factors", "a*a", PLATE)
     assert code != 0 and len(err.strip().splitlines()) == 1 and "a*a" in err
     code, _, err = run(capsys, "diagnose", "--model", MODEL, "--factors", "doe_speed", PLATE)

@@ -2,13 +2,16 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
+import pytest
 from spc_examples import closed_loop_store
 
 import parsers
 from setupfix.cli import main
 
 
-def test_export_dfq_reads_back_every_value(tmp_path, capsys):  # type: ignore[no-untyped-def]
+def test_export_dfq_reads_back_every_value(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     (tmp_path / "loop").mkdir()
     db = closed_loop_store(tmp_path / "loop")
     out = tmp_path / "loop.dfq"

@@ -8,9 +8,9 @@ import json
 from pathlib import Path
 
 import pytest
+from conftest import shared_path
 
 from setupfix.cli import main
-from tests.conftest import shared_path
 
 pytestmark = pytest.mark.needs_shared
 
@@ -18,7 +18,7 @@ SAMPLE = "KR_45926-4G100_230312_day_1-1-1_OK.cp949.txt"
 
 
 @pytest.fixture(scope="module")
-def setup(tmp_path_factory) -> tuple[Path, Path, Path]:
+def setup(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Path, Path]:
     """(the sample, a copy whose line 32 contradicts itself, a scaffold of the sample's Y dimensions)."""
     sample = shared_path("cmm-samples", "korean_cmm_txt", SAMPLE)
     folder = tmp_path_factory.mktemp("lenient")
@@ -37,13 +37,15 @@ def setup(tmp_path_factory) -> tuple[Path, Path, Path]:
     return sample, bad, model
 
 
-def _refused(capsys, argv: list[str]) -> None:
+def _refused(capsys: pytest.CaptureFixture[str], argv: list[str]) -> None:
     assert main(argv) != 0
     err = capsys.readouterr().err
     assert "bad.txt:32: stated deviation 0.505 mm fits neither" in err and "--lenient" in err
 
 
-def test_correct_refuses_then_skips_the_row_with_a_warning(setup, capsys):
+def test_correct_refuses_then_skips_the_row_with_a_warning(
+    setup: tuple[Path, Path, Path], capsys: pytest.CaptureFixture[str]
+) -> None:
     _, bad, model = setup
     _refused(capsys, ["correct", "--model", str(model), "--json", str(bad)])
     assert main(["correct", "--model", str(model), "--json", "--lenient", str(bad)]) == 0
@@ -60,7 +62,9 @@ def test_correct_refuses_then_skips_the_row_with_a_warning(setup, capsys):
 
 
 @pytest.mark.slow
-def test_compare_check_init_and_batch_take_lenient_too(setup, capsys, tmp_path):
+def test_compare_check_init_and_batch_take_lenient_too(
+    setup: tuple[Path, Path, Path], capsys: pytest.CaptureFixture[str], tmp_path: Path
+) -> None:
     _, bad, model = setup
     for argv, lenient_ok in (
         (["compare", "--model", str(model), "--trials", "1", "--json", str(bad)], "warnings"),
@@ -90,7 +94,7 @@ def test_compare_check_init_and_batch_take_lenient_too(setup, capsys, tmp_path):
     assert any(":32: " in n["note"] and "contradicting themselves" in n["note"] for n in summary["notes"])
 
 
-def test_lenient_is_harmless_where_the_reader_never_skips_a_row(capsys):
+def test_lenient_is_harmless_where_the_reader_never_skips_a_row(capsys: pytest.CaptureFixture[str]) -> None:
     """A folder of mixed formats can be read with --lenient: readers without such rows ignore it."""
     csv = Path(__file__).resolve().parents[2] / "sample_reports" / "guide_pins" / "cycle_01.csv"
     assert main(["parse", "--lenient", str(csv), "--out", "-"]) == 0
@@ -99,7 +103,9 @@ def test_lenient_is_harmless_where_the_reader_never_skips_a_row(capsys):
     assert lenient == capsys.readouterr().out and lenient.count("\n") > 20
 
 
-def test_history_import_takes_lenient(setup, capsys, tmp_path):
+def test_history_import_takes_lenient(
+    setup: tuple[Path, Path, Path], capsys: pytest.CaptureFixture[str], tmp_path: Path
+) -> None:
     _, bad, _ = setup
     db = tmp_path / "h.db"
     _refused(capsys, ["history", "import", "--db", str(db), str(bad)])

@@ -3,14 +3,17 @@
 from __future__ import annotations
 
 import json
+from pathlib import Path
+
+import pytest
+from conftest import GUIDE_PINS
 
 from setupfix.cli import main
-from tests.conftest import GUIDE_PINS
 
 MODEL = str(GUIDE_PINS / "model.toml")
 
 
-def renamed(tmp_path, old_new):
+def renamed(tmp_path: Path, old_new: list[tuple[str, str]]) -> Path:
     text = (GUIDE_PINS / "cycle_01.csv").read_text(encoding="utf-8")
     for old, new in old_new:
         text = text.replace(f"\n{old},", f"\n{new},")
@@ -19,7 +22,9 @@ def renamed(tmp_path, old_new):
     return path
 
 
-def test_check_lists_unmatched_with_closest_and_absent_with_closest(tmp_path, capsys):
+def test_check_lists_unmatched_with_closest_and_absent_with_closest(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     path = renamed(tmp_path, [("P2 D3", "P2-D3"), ("P1 D1", "P1D1"), ("P4 D7", "Flatness A")])
     assert main(["model", "check", MODEL, str(path)]) == 0
     out = capsys.readouterr().out
@@ -40,14 +45,14 @@ def test_check_lists_unmatched_with_closest_and_absent_with_closest(tmp_path, ca
     assert row["source"].endswith("r.csv:3") and row["differs"] is False
 
 
-def test_correct_json_lists_suggestions(tmp_path, capsys):
+def test_correct_json_lists_suggestions(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     path = renamed(tmp_path, [("P2 D3", "P2-D3")])
     assert main(["correct", "--model", MODEL, "--json", str(path)]) == 0
     obj = json.loads(capsys.readouterr().out)
     assert obj["unmatched"] == ["P2-D3"] and obj["suggestions"] == {"P2-D3": ["P2 D3"]}
 
 
-def test_check_marks_differences_and_strict_refuses(tmp_path, capsys):
+def test_check_marks_differences_and_strict_refuses(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     text = (
         (GUIDE_PINS / "cycle_01.csv")
         .read_text(encoding="utf-8")
@@ -63,7 +68,7 @@ def test_check_marks_differences_and_strict_refuses(tmp_path, capsys):
     assert "refused by --strict" in capsys.readouterr().err
 
 
-def test_wide_characters_keep_columns_aligned():
+def test_wide_characters_keep_columns_aligned() -> None:
     from setupfix.cli.model import cells, cut
 
     assert cells("원통1(I).D") == 10 and cut("원통1(I).D", 12) == "원통1(I).D  "
@@ -71,7 +76,7 @@ def test_wide_characters_keep_columns_aligned():
     assert cut("a\x1b[31mb", 8) == "a?[31mb "  # control characters never reach the terminal
 
 
-def test_init_never_overwrites_an_edited_model(tmp_path, capsys):
+def test_init_never_overwrites_an_edited_model(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     out = tmp_path / "model.toml"
     out.write_text("# edited by hand\n", encoding="utf-8")
     report = str(GUIDE_PINS / "cycle_01.csv")
@@ -81,7 +86,7 @@ def test_init_never_overwrites_an_edited_model(tmp_path, capsys):
     assert "[dimensions.D28]" in out.read_text(encoding="utf-8")
 
 
-def test_hostile_report_names_do_not_reach_the_terminal(tmp_path, capsys):
+def test_hostile_report_names_do_not_reach_the_terminal(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     path = renamed(tmp_path, [("P2 D3", "P2\x1b[2JD3")])
     assert main(["model", "check", MODEL, str(path)]) == 0
     out = capsys.readouterr().out

@@ -4,11 +4,13 @@ from __future__ import annotations
 
 import argparse
 
+import pytest
+from conftest import GUIDE_PINS
+
 from setupfix.cli import build_parser, main
-from tests.conftest import GUIDE_PINS
 
 
-def test_terms_are_explained_in_help(capsys):
+def test_terms_are_explained_in_help(capsys: pytest.CaptureFixture[str]) -> None:
     assert main(["--help"]) == 0
     out = capsys.readouterr().out
     for term in ("error budget", "bonus", "margin", "predicted", "binding"):
@@ -22,7 +24,7 @@ def _subparsers(parser: argparse.ArgumentParser) -> dict[str, argparse.ArgumentP
     return {}
 
 
-def test_every_option_of_the_model_commands_has_help():
+def test_every_option_of_the_model_commands_has_help() -> None:
     model = _subparsers(build_parser())["model"]
     commands = _subparsers(model)
     assert set(commands) >= {"show", "check", "init"}
@@ -35,7 +37,7 @@ def test_every_option_of_the_model_commands_has_help():
         assert action.help
 
 
-def test_model_show_fits_100_columns(capsys):
+def test_model_show_fits_100_columns(capsys: pytest.CaptureFixture[str]) -> None:
     assert main(["model", "show", str(GUIDE_PINS / "model.toml")]) == 0
     out = capsys.readouterr().out
     assert max(len(line) for line in out.splitlines()) <= 100

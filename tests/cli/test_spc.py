@@ -12,11 +12,11 @@ from setupfix.cli import main
 
 
 @pytest.fixture(scope="module")
-def db(tmp_path_factory) -> Path:  # type: ignore[no-untyped-def]
+def db(tmp_path_factory: pytest.TempPathFactory) -> Path:
     return closed_loop_store(tmp_path_factory.mktemp("cli_spc"))
 
 
-def test_json_and_html(db, tmp_path, capsys):
+def test_json_and_html(db: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     page = tmp_path / "spc.html"
     code = main(
         [
@@ -46,7 +46,7 @@ def test_json_and_html(db, tmp_path, capsys):
     assert f"page → {page}" in err
 
 
-def test_text_with_a_given_split(db, capsys):
+def test_text_with_a_given_split(db: Path, capsys: pytest.CaptureFixture[str]) -> None:
     assert main(["spc", "--db", str(db), "--dimension", "P1 D1", "--split", "2026-11-02T12:00:00"]) == 0
     out = capsys.readouterr().out
     assert "P1 D1" in out and "Cpk" in out
@@ -63,7 +63,9 @@ def test_text_with_a_given_split(db, capsys):
         (["--baseline", "1"], "--baseline: must be in [2,"),
     ],
 )
-def test_bad_input_is_one_line(db, tmp_path, capsys, args, message):
+def test_bad_input_is_one_line(
+    db: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str], args: list[str], message: str
+) -> None:
     page = tmp_path / "never.html"
     code = main(["spc", "--db", str(db), "--html", str(page), *args])
     err = capsys.readouterr().err
@@ -72,14 +74,14 @@ def test_bad_input_is_one_line(db, tmp_path, capsys, args, message):
     assert not page.exists()
 
 
-def test_a_missing_store_is_named(tmp_path, capsys):
+def test_a_missing_store_is_named(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     assert main(["spc", "--db", str(tmp_path / "none.db")]) == 1
     err = capsys.readouterr().err
     assert "none.db" in err and "no history store here" in err
     assert not (tmp_path / "none.db").exists()
 
 
-def test_the_page_alone_to_standard_output(db, capsys):
+def test_the_page_alone_to_standard_output(db: Path, capsys: pytest.CaptureFixture[str]) -> None:
     assert main(["spc", "--db", str(db), "--dimension", "P1 D1", "--html", "-"]) == 0
     out = capsys.readouterr().out
     assert out.startswith("<!DOCTYPE html>") and out.rstrip().endswith("</html>")

@@ -15,19 +15,19 @@ TEST = str(SAMPLES / "test_variable.csv")
 
 
 @pytest.fixture(autouse=True)
-def only_thermal(monkeypatch):
+def only_thermal(monkeypatch: pytest.MonkeyPatch) -> None:
     # Other sub-commands are written in parallel; test this one on its own.
     monkeypatch.setattr(cli, "COMMAND_MODULES", ("setupfix.cli.thermal",))
 
 
-def run(capsys, *argv):
+def run(capsys: pytest.CaptureFixture[str], *argv: str) -> tuple[int, str, str]:
     code = cli.main(list(argv))
     out, err = capsys.readouterr()
     return code, out, err
 
 
 @pytest.fixture(scope="module")
-def short_train(tmp_path_factory):
+def short_train(tmp_path_factory: pytest.TempPathFactory) -> str:
     """The first half of the training log: kalman fits in a fraction of the time, as well (0.0043 mm)."""
     path = tmp_path_factory.mktemp("thermal") / "train_half.csv"
     path.write_text("\n".join((SAMPLES / "train_variable.csv").read_text().splitlines()[:721]) + "\n")
@@ -36,7 +36,7 @@ def short_train(tmp_path_factory):
 
 @pytest.mark.slow
 @pytest.mark.parametrize("method", ["mra", "grey-ls", "kalman"])
-def test_evaluate_json_contract(capsys, method, short_train):
+def test_evaluate_json_contract(capsys: pytest.CaptureFixture[str], method: str, short_train: str) -> None:
     budget = ["--iterations", "20"] if method == "kalman" else []
     train = short_train if method == "kalman" else TRAIN
     code, out, err = run(
@@ -65,7 +65,7 @@ def test_evaluate_json_contract(capsys, method, short_train):
 
 
 @pytest.mark.slow
-def test_fit_then_predict(capsys, tmp_path, short_train):
+def test_fit_then_predict(capsys: pytest.CaptureFixture[str], tmp_path: Path, short_train: str) -> None:
     model = tmp_path / "kalman.json"
     code, out, err = run(
         capsys,
@@ -97,7 +97,7 @@ def test_fit_then_predict(capsys, tmp_path, short_train):
     assert code == 0 and json.loads(out)["rmse"] < 0.015
 
 
-def test_bad_input_is_one_line_with_file_and_line(capsys, tmp_path):
+def test_bad_input_is_one_line_with_file_and_line(capsys: pytest.CaptureFixture[str], tmp_path: Path) -> None:
     bad = tmp_path / "log.csv"
     text = (SAMPLES / "train_variable.csv").read_text().splitlines()
     text[36] = text[36].replace(text[36].split(",")[1], "n/a", 1)
@@ -110,7 +110,7 @@ def test_bad_input_is_one_line_with_file_and_line(capsys, tmp_path):
     assert not (tmp_path / "m.json").exists()
 
 
-def test_missing_columns_and_usage(capsys, tmp_path):
+def test_missing_columns_and_usage(capsys: pytest.CaptureFixture[str], tmp_path: Path) -> None:
     code, _, err = run(
         capsys, "thermal", "evaluate", "--method", "mra", "--train", TRAIN, "--test", TEST, "--target", "nope"
     )
@@ -121,7 +121,7 @@ def test_missing_columns_and_usage(capsys, tmp_path):
     assert code == 1 and "none.json" in err
 
 
-def _log_with(tmp_path, line: int, column: int, value: str):
+def _log_with(tmp_path: Path, line: int, column: int, value: str) -> str:
     rows = (SAMPLES / "train_variable.csv").read_text().splitlines()[:200]
     cells = rows[line - 1].split(",")
     cells[column] = value
@@ -142,7 +142,9 @@ def _log_with(tmp_path, line: int, column: int, value: str):
         (["--interval", "0"], 2, "--interval: must be a positive"),
     ],
 )
-def test_bad_options_are_refused(capsys, tmp_path, argv, code, message):
+def test_bad_options_are_refused(
+    capsys: pytest.CaptureFixture[str], tmp_path: Path, argv: list[str], code: int, message: str
+) -> None:
     args = ["thermal", "fit", "--method", "mra", TRAIN, "--target", "error_z", "-o", str(tmp_path / "m.json")]
     if "--method" in argv:
         i = argv.index("--method")
@@ -163,7 +165,9 @@ def test_bad_options_are_refused(capsys, tmp_path, argv, code, message):
         ("nan", "non-numeric value 'nan'"),
     ],
 )
-def test_hostile_cells_are_one_line(capsys, tmp_path, value, message):
+def test_hostile_cells_are_one_line(
+    capsys: pytest.CaptureFixture[str], tmp_path: Path, value: str, message: str
+) -> None:
     log = _log_with(tmp_path, 40, 1, value)
     code, out, err = run(
         capsys, "thermal", "fit", "--method", "grey-ls", log, "--target", "error_z", "-o", str(tmp_path / "m.json")
@@ -172,7 +176,7 @@ def test_hostile_cells_are_one_line(capsys, tmp_path, value, message):
     assert "log.csv:40:" in err and message in err
 
 
-def test_constant_target_and_directory_output(capsys, tmp_path):
+def test_constant_target_and_directory_output(capsys: pytest.CaptureFixture[str], tmp_path: Path) -> None:
     rows = (SAMPLES / "train_variable.csv").read_text().splitlines()[:100]
     const = tmp_path / "c.csv"
     const.write_text("\n".join(rows[:1] + [",".join([*r.split(",")[:-1], "0.1"]) for r in rows[1:]]) + "\n")
@@ -186,7 +190,7 @@ def test_constant_target_and_directory_output(capsys, tmp_path):
     assert code == 1 and "internal error" not in err
 
 
-def test_units_seed_and_corrupt_model(capsys, tmp_path):
+def test_units_seed_and_corrupt_model(capsys: pytest.CaptureFixture[str], tmp_path: Path) -> None:
     model = tmp_path / "g.json"
     code, out, err = run(
         capsys,
@@ -215,7 +219,7 @@ def test_units_seed_and_corrupt_model(capsys, tmp_path):
     assert code == 1 and "g.json" in err and "internal error" not in err
 
 
-def test_warm_test_log_anchor_and_interval(capsys, tmp_path):
+def test_warm_test_log_anchor_and_interval(capsys: pytest.CaptureFixture[str], tmp_path: Path) -> None:
     rows = (SAMPLES / "train_variable.csv").read_text().splitlines()
     (tmp_path / "a.csv").write_text("\n".join(rows[:721]) + "\n")
     (tmp_path / "b.csv").write_text("\n".join(rows[:1] + rows[721:]) + "\n")
@@ -274,7 +278,7 @@ def test_warm_test_log_anchor_and_interval(capsys, tmp_path):
 
 
 @pytest.mark.needs_shared
-def test_real_xlsx_logs(capsys):
+def test_real_xlsx_logs(capsys: pytest.CaptureFixture[str]) -> None:
     from conftest import shared_path
 
     folder = shared_path("thermal-data", "gooddash")
