@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import dataclasses
+import functools
+import os
 import shutil
 from pathlib import Path
 
@@ -13,6 +15,7 @@ from setupfix.model import load_model
 from setupfix.outputs.batch_output import MANIFEST
 from setupfix.store import open_store
 from setupfix.usecases.batch import run_batch
+from setupfix.usecases.batch_records import Outcome
 from setupfix.usecases.requests import CorrectRequest, SolveOptions
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -80,7 +83,7 @@ def test_file_changing_during_the_run_is_not_read(tmp_path: Path) -> None:
     d = folder(tmp_path)
     late = d / "sub" / "cycle_01.qif"
 
-    def touch(done, total, outcome) -> None:
+    def touch(done: int, total: int, outcome: object) -> None:
         if done == 1:
             late.write_bytes(late.read_bytes() + b"\n")
 
@@ -146,6 +149,10 @@ def test_many_reports_in_chunks_give_the_same_output_and_progress_order(tmp_path
     (d / "r020.csv").write_text("characteristic,nominal\n")  # one bad file inside a chunk
     assert chunk_size(45, 2) == 3 and chunk_size(1000, 2) == 16 and chunk_size(1, 2) == 1
     seen: dict[int, list[str]] = {1: [], 2: []}
+
+    def record_name(names: list[str], done: int, total: int, o: Outcome) -> None:
+        names.append(Path(o.path).name)
+
     for workers in (1, 2):
         s = run_batch(
             REQUEST,
@@ -153,7 +160,7 @@ def test_many_reports_in_chunks_give_the_same_output_and_progress_order(tmp_path
             tmp_path / f"w{workers}.csv",
             settle=0,
             workers=workers,
-            progress=lambda done, total, o, w=workers: seen[w].append(Path(o.path).name),
+            progress=functools.partial(record_name, seen[workers]),
         )
         assert (s.reports, len(s.failed)) == (44, 1) and "r020.csv" in s.failed[0][0]
     assert seen[1] == seen[2] == sorted(p.name for p in d.iterdir())
@@ -198,10 +205,10 @@ def test_automatic_worker_count(monkeypatch: pytest.MonkeyPatch) -> None:
     """Without --workers: one process per CPU the batch may use (at most 8), one for a small folder."""
     from setupfix.usecases import batch
 
-    monkeypatch.setattr(batch.os, "sched_getaffinity", lambda pid: set(range(12)), raising=False)
+    monkeypatch.setattr(os, "sched_getaffinity", lambda pid: set(range(12)), raising=False)
     assert batch.auto_workers(31) == 1
     assert batch.auto_workers(32) == 8
-    monkeypatch.setattr(batch.os, "sched_getaffinity", lambda pid: {0, 1}, raising=False)
+    monkeypatch.setattr(os, "sched_getaffinity", lambda pid: {0, 1}, raising=False)
     assert batch.auto_workers(1000) == 2
 
 

@@ -57,7 +57,7 @@ def check_offsets_csv(path: Path, expected_reports: set[str]) -> None:
     assert pd.to_numeric(frame["delta"]).notna().all()  # numbers stay numbers (a negative one unescaped)
 
 
-def test_batch_writes_every_hostile_name_escaped(tmp_path):
+def test_batch_writes_every_hostile_name_escaped(tmp_path: Path) -> None:
     d = hostile_folder(tmp_path)
     s = run_batch(REQUEST, d, tmp_path / "o.csv", settle=0)
     assert s.reports == len(NAMES) and not s.failed and not s.skipped
@@ -66,7 +66,7 @@ def test_batch_writes_every_hostile_name_escaped(tmp_path):
 
 
 @pytest.mark.slow
-def test_batch_and_correct_commands_escape_names(tmp_path, capsys):
+def test_batch_and_correct_commands_escape_names(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     d = hostile_folder(tmp_path)
     assert main(["batch", str(d), "--model", str(MODEL), "--out", str(tmp_path / "b.csv"), "--settle", "0"]) == 0
     check_offsets_csv(tmp_path / "b.csv", set(NAMES.values()))
@@ -81,14 +81,14 @@ def test_batch_and_correct_commands_escape_names(tmp_path, capsys):
         assert "internal error" not in capsys.readouterr().err
 
 
-def test_a_file_removed_between_listing_and_reading_is_a_failed_line(tmp_path):
+def test_a_file_removed_between_listing_and_reading_is_a_failed_line(tmp_path: Path) -> None:
     d = tmp_path / "in"
     d.mkdir()
     for i in (1, 2, 3):
         shutil.copy(GUIDE / f"cycle_0{i}.csv", d / f"cycle_0{i}.csv")
     gone = d / "cycle_02.csv"
 
-    def remove_next(done, total, outcome):  # runs after report 1, before report 2 is read
+    def remove_next(done: int, total: int, outcome: object) -> None:  # runs after report 1, before report 2 is read
         if done == 1:
             gone.unlink()
 
@@ -97,7 +97,7 @@ def test_a_file_removed_between_listing_and_reading_is_a_failed_line(tmp_path):
     assert s.failed == ((str(gone), f"{gone}: renamed or removed after the folder was listed: not read"),)
 
 
-def test_links_and_unreadable_folders_are_said(tmp_path):
+def test_links_and_unreadable_folders_are_said(tmp_path: Path) -> None:
     d = tmp_path / "in"
     (d / "sub").mkdir(parents=True)
     shutil.copy(GUIDE / "cycle_01.csv", d / "cycle_01.csv")
@@ -114,7 +114,7 @@ def test_links_and_unreadable_folders_are_said(tmp_path):
 
 
 @pytest.mark.skipif(os.geteuid() == 0, reason="root reads a chmod 000 folder")
-def test_an_unreadable_sub_folder_is_a_failed_line(tmp_path, capsys):
+def test_an_unreadable_sub_folder_is_a_failed_line(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     d = tmp_path / "in"
     (d / "locked").mkdir(parents=True)
     shutil.copy(GUIDE / "cycle_01.csv", d / "cycle_01.csv")

@@ -26,7 +26,7 @@ def rejected_copy(src: Path, dst: Path) -> None:
     dst.write_bytes(src.read_bytes().replace(b"24.9691,-0.0309", b"25.9691,0.9691"))
 
 
-def test_same_stem_in_two_folders_and_two_formats_never_share_a_program(tmp_path):
+def test_same_stem_in_two_folders_and_two_formats_never_share_a_program(tmp_path: Path) -> None:
     d = tmp_path / "in"
     for line in ("line_A", "line_B"):
         (d / line).mkdir(parents=True)
@@ -47,7 +47,7 @@ def test_same_stem_in_two_folders_and_two_formats_never_share_a_program(tmp_path
     assert (tmp_path / "p2" / "cycle.csv.nc").read_text().split("\n", 2)[2] == b.split("\n", 2)[2]
 
 
-def test_a_report_that_no_longer_yields_a_program_leaves_none_behind(tmp_path):
+def test_a_report_that_no_longer_yields_a_program_leaves_none_behind(tmp_path: Path) -> None:
     d = tmp_path / "in"
     d.mkdir()
     for i in (1, 2, 3):
@@ -67,7 +67,7 @@ def test_a_report_that_no_longer_yields_a_program_leaves_none_behind(tmp_path):
     assert programs(out) == ["cycle_01.csv.nc", "cycle_03.csv.nc", "keep/operator.nc"]
 
 
-def test_a_name_too_long_for_the_file_system_is_shortened_not_fatal(tmp_path):
+def test_a_name_too_long_for_the_file_system_is_shortened_not_fatal(tmp_path: Path) -> None:
     d = tmp_path / "in"
     d.mkdir()
     long_a = "x" * 250 + "_a.csv"[: 255 - 250]  # 255 bytes: the longest name a file may have
@@ -84,7 +84,7 @@ def test_a_name_too_long_for_the_file_system_is_shortened_not_fatal(tmp_path):
     assert again.written and programs(out) == names
 
 
-def test_fit_name_keeps_short_names_and_cuts_whole_characters():
+def test_fit_name_keeps_short_names_and_cuts_whole_characters() -> None:
     assert fit_name("cycle.csv", ".nc") == "cycle.csv.nc"
     long = "é" * 200  # 400 bytes in UTF-8
     fitted = fit_name(long, ".nc")

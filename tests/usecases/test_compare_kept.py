@@ -7,10 +7,10 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import shared_path
 
 from setupfix.model import load_model
 from setupfix.usecases.compare import CompareRequest, compare_report
-from conftest import shared_path
 
 ROOT = Path(__file__).resolve().parents[2]
 

@@ -2,16 +2,21 @@
 
 from __future__ import annotations
 
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+
 import pytest
 
 from setupfix.core.errors import MatchError
-from setupfix.model import load_model, model_from_dict
+from setupfix.model import ProcessModel, load_model, model_from_dict
 from setupfix.usecases.contract import cycle_json
 from setupfix.usecases.correct import correct_report
-from setupfix.usecases.requests import CorrectRequest, CycleOptions
+from setupfix.usecases.requests import CorrectRequest, CycleCorrection, CycleOptions
 
 
-def correct(model, path, stations=None):
+def correct(
+    model: ProcessModel, path: Path, stations: Sequence[str] | Mapping[str, str] | None = None
+) -> tuple[CycleCorrection, ...]:
     return correct_report(CorrectRequest(model, cycles=CycleOptions.of(stations)), path).cycles
 
 
@@ -27,7 +32,7 @@ MODEL = {
 }
 
 
-def report(tmp_path, parts=("s1", "s2")):
+def report(tmp_path: Path, parts: tuple[str, str] = ("s1", "s2")) -> Path:
     path = tmp_path / "r.csv"
     path.write_text(
         f"characteristic,nominal,actual,part\nDepth,10,10.040,{parts[0]}\nDepth,10,9.990,{parts[1]}\n", encoding="utf-8"
@@ -35,13 +40,13 @@ def report(tmp_path, parts=("s1", "s2")):
     return path
 
 
-def test_repeated_names_without_stations_are_refused(tmp_path):
+def test_repeated_names_without_stations_are_refused(tmp_path: Path) -> None:
     model = model_from_dict(MODEL)
     with pytest.raises(MatchError, match="names several dimensions"):
         correct(model, report(tmp_path))
 
 
-def test_stations_in_order_make_one_cycle(tmp_path):
+def test_stations_in_order_make_one_cycle(tmp_path: Path) -> None:
     model = model_from_dict(MODEL)
     (pc,) = correct(model, report(tmp_path), stations=["P2", "P1"])
     assert pc.part.deviation.tolist() == pytest.approx([-0.010, 0.040])  # s2 → P2 (B), s1 → P1 (A)
@@ -51,13 +56,13 @@ def test_stations_in_order_make_one_cycle(tmp_path):
     assert pc.corrections["W2"] + pc.corrections["T1"] == pytest.approx(-0.040)
 
 
-def test_part_names_equal_to_groups_are_stations(tmp_path):
+def test_part_names_equal_to_groups_are_stations(tmp_path: Path) -> None:
     model = model_from_dict(MODEL)
     (pc,) = correct(model, report(tmp_path, parts=("P1", "p2")))
     assert pc.part.deviation.tolist() == pytest.approx([0.040, -0.010])
 
 
-def test_unknown_station_and_wrong_count(tmp_path):
+def test_unknown_station_and_wrong_count(tmp_path: Path) -> None:
     model = model_from_dict(MODEL)
     with pytest.raises(MatchError, match="station 'P9'"):
         correct(model, report(tmp_path), stations={"s1": "P1", "s2": "P9"})
@@ -65,7 +70,7 @@ def test_unknown_station_and_wrong_count(tmp_path):
         correct(model, report(tmp_path), stations=["P1", "P2", "P1"])
 
 
-def test_readme_headline_example():
+def test_readme_headline_example() -> None:
     """README: P1 D6 and P1 D7 move alike (−W5 − T5) and were measured 0.0352 mm apart, so no
     correction beats the LP bound 0.1 − 0.0352/2, and they are the binding pair."""
     from conftest import GUIDE_PINS

@@ -7,23 +7,24 @@ import json
 import subprocess
 import sys
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
-from multi_axis_fixtures import independent_optimum, make_fixture, report_csv, true_margins
+from multi_axis_fixtures import Fixture, independent_optimum, make_fixture, report_csv, true_margins
 
 from setupfix.correction.offsets import offset_rows
-from setupfix.model import load_model
+from setupfix.model import ProcessModel, load_model
 from setupfix.usecases.contract import cycle_json
 from setupfix.usecases.correct import correct_report
-from setupfix.usecases.requests import CorrectRequest, SolveOptions
+from setupfix.usecases.requests import CorrectRequest, CycleCorrection, SolveOptions
 
 ROOT = Path(__file__).resolve().parents[2]
 SAMPLE = ROOT / "sample_reports" / "two_station_xyz"
 MICRON = 0.001
 
 
-def solve(tmp_path: Path, seed: int, objective: str | None = None):
+def solve(tmp_path: Path, seed: int, objective: str | None = None) -> tuple[Fixture, ProcessModel, CycleCorrection]:
     fx = make_fixture(seed)
     (tmp_path / "model.toml").write_text(fx.text, encoding="utf-8")
     (tmp_path / "report.csv").write_text(report_csv(fx), encoding="utf-8")
@@ -34,7 +35,7 @@ def solve(tmp_path: Path, seed: int, objective: str | None = None):
 
 
 @pytest.mark.parametrize("seed", [1, 2, 3, 4])
-def test_generated_fixture_solved_to_the_independent_optimum(tmp_path, seed):
+def test_generated_fixture_solved_to_the_independent_optimum(tmp_path: Path, seed: int) -> None:
     fx, model, cycle = solve(tmp_path, seed)
     assert model.register_ids == fx.registers
     best, best_values = independent_optimum(fx)
@@ -70,14 +71,14 @@ def test_generated_fixture_solved_to_the_independent_optimum(tmp_path, seed):
     assert cycle.margin_before == pytest.approx(true_margins(fx, np.zeros(len(fx.registers))).min(), abs=1e-9)
 
 
-def test_paper_objective_reaches_the_same_optimum(tmp_path):
+def test_paper_objective_reaches_the_same_optimum(tmp_path: Path) -> None:
     fx, _, cycle = solve(tmp_path, 5, objective="paper")
     best, _ = independent_optimum(fx)
     ours = true_margins(fx, cycle.problem.register_values(cycle.recommendation.result.x)).min()
     assert best - MICRON <= ours <= best + 1e-5
 
 
-def test_polygon_error_bound_against_the_circle():
+def test_polygon_error_bound_against_the_circle() -> None:
     from setupfix.correction.zones import facet_rows, polygon_error, polygon_sides
 
     rng = np.random.default_rng(0)
@@ -96,7 +97,7 @@ def test_polygon_error_bound_against_the_circle():
         assert np.all(circle - polygon <= MICRON + 1e-12)
 
 
-def test_offsets_rows_speak_components(tmp_path):
+def test_offsets_rows_speak_components(tmp_path: Path) -> None:
     _, model, cycle = solve(tmp_path, 1)
     rows = offset_rows(model, cycle.corrections)
     assert [r.id for r in rows] == model.register_ids
@@ -109,7 +110,7 @@ def test_offsets_rows_speak_components(tmp_path):
 
 
 @pytest.mark.slow
-def test_sample_two_station_xyz_solves_through_the_cli():
+def test_sample_two_station_xyz_solves_through_the_cli() -> None:
     env_path = str(ROOT)
     out = subprocess.run(
         [
@@ -149,7 +150,7 @@ def test_sample_two_station_xyz_solves_through_the_cli():
     assert zone["lower"] == 0 and zone["upper"] == 0.05 and zone["predicted"] >= 0
 
 
-def test_zone_with_one_component_missing_is_left_out(tmp_path):
+def test_zone_with_one_component_missing_is_left_out(tmp_path: Path) -> None:
     fx = make_fixture(7)
     (tmp_path / "model.toml").write_text(fx.text, encoding="utf-8")
     text = report_csv(fx).splitlines()
@@ -161,7 +162,7 @@ def test_zone_with_one_component_missing_is_left_out(tmp_path):
 
 
 @pytest.mark.slow
-def test_history_store_keyed_by_component(tmp_path):
+def test_history_store_keyed_by_component(tmp_path: Path) -> None:
     from setupfix.core.errors import MatchError
     from setupfix.store import open_store
     from setupfix.usecases.correct import load_request
@@ -192,7 +193,7 @@ def test_history_store_keyed_by_component(tmp_path):
     assert stored.result["corrections"]["W1.C"] == pytest.approx(cycle.corrections["W1.C"])
 
 
-ZONE_OUT = {
+ZONE_OUT: dict[str, Any] = {
     "process": {"name": "zone out", "axes": ["X", "Y"]},
     "wks": {"W1": {"register": "G54"}},
     "features": {"F1": {"wks": {"W1": 1}}, "F2": {"wks": {"W1": {"x": 1, "y": -1}}}},
@@ -210,7 +211,7 @@ ZONE_OUT = {
 }
 
 
-def _zone_out(tmp_path: Path):
+def _zone_out(tmp_path: Path) -> CycleCorrection:
     from setupfix.model import model_from_dict
 
     model = model_from_dict(ZONE_OUT)
@@ -224,7 +225,7 @@ def _zone_out(tmp_path: Path):
     return cycle
 
 
-def test_triage_gives_a_zone_up_whole(tmp_path):
+def test_triage_gives_a_zone_up_whole(tmp_path: Path) -> None:
     """The triage counts the zone once: A or H can be kept, not both; equal counts, equal margins 0.02 and
     equal norms 0.05, so the tie goes to the smallest k (W1.X = −0.05): A kept, the zone given up whole."""
     cycle = _zone_out(tmp_path)
@@ -239,7 +240,7 @@ def test_triage_gives_a_zone_up_whole(tmp_path):
     assert "1 dimension(s) given up (H)" in raw.message
 
 
-def test_triage_keeps_a_zone_whole_and_applies(tmp_path):
+def test_triage_keeps_a_zone_whole_and_applies(tmp_path: Path) -> None:
     """With the zone's diameter 0.06 (margin up to 0.03 kept, against A's 0.02) the leximin of the kept
     margins keeps the zone: A is given up, the correction W1.X = +0.05 is applied, the zone in its circle."""
     from setupfix.model import model_from_dict
@@ -261,7 +262,7 @@ def test_triage_keeps_a_zone_whole_and_applies(tmp_path):
     assert all("#" not in d for r in cycle.rules for d in r.dimensions)
 
 
-def test_triage_with_a_zone_given_up_applies(tmp_path):
+def test_triage_with_a_zone_given_up_applies(tmp_path: Path) -> None:
     cycle = _zone_out(tmp_path)
     assert cycle.verdict == "apply"
     assert cycle.corrections["W1.X"] == pytest.approx(-0.05) and cycle.corrections["W1.Y"] == 0
@@ -273,7 +274,7 @@ def test_triage_with_a_zone_given_up_applies(tmp_path):
     )
 
 
-def test_view_and_text_rows_speak_components(tmp_path):
+def test_view_and_text_rows_speak_components(tmp_path: Path) -> None:
     from setupfix.views.correction import dimension_rows, register_rows, summary
     from setupfix.views.present import format_correction
 

@@ -2,36 +2,33 @@
 
 from __future__ import annotations
 
-import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
 from conftest import GUIDE_PINS, SAMPLES
+from usecases.data import make_correct_goldens as golden
 
 from setupfix.diagnose import Diagnoser
 from setupfix.inputs.cycles import load_parts
-from setupfix.model import PartMeasurement, load_model
+from setupfix.model import PartMeasurement, ProcessModel, load_model
 from setupfix.store import open_store
 from setupfix.usecases.compare import CompareRequest, compare_report
 from setupfix.usecases.correct import correct_cycle, correct_report
 from setupfix.usecases.diagnosis import DiagnoseRequest, diagnose_reports, forecast_model
 from setupfix.usecases.requests import CorrectRequest, History, SolveOptions
 
-sys.path.insert(0, str(Path(__file__).resolve().parent / "data"))
-import make_correct_goldens as golden
-
 CYCLES = [GUIDE_PINS / f"cycle_{k:02d}.csv" for k in range(1, 6)]
 
 
 @pytest.fixture(scope="module")
-def costed(tmp_path_factory):
+def costed(tmp_path_factory: pytest.TempPathFactory) -> ProcessModel:
     """The guide-pins model with register costs, gain, guard band and dead band (the goldens' model)."""
     return load_model(golden.costed_model(tmp_path_factory.mktemp("costed")))
 
 
 @pytest.mark.parametrize("report", CYCLES, ids=lambda p: p.stem)
-def test_compare_exact_is_corrects_raw_optimum_with_costs(costed, report):
+def test_compare_exact_is_corrects_raw_optimum_with_costs(costed: ProcessModel, report: Path) -> None:
     # compare's yardstick is the paper's objective (issue 22): correct asked for the same
     cycle = correct_report(CorrectRequest(costed, solve=SolveOptions(objective="paper")), report).cycles[0]
     comparison = compare_report(CompareRequest(costed, methods=(), trials=1), report)
@@ -42,7 +39,7 @@ def test_compare_exact_is_corrects_raw_optimum_with_costs(costed, report):
     assert comparison.problem.cost.max() == 4.0
 
 
-def test_diagnosis_next_correction_is_correct_on_its_forecast():
+def test_diagnosis_next_correction_is_correct_on_its_forecast() -> None:
     loop = SAMPLES / "closed_loop"
     out = diagnose_reports(
         DiagnoseRequest(
@@ -63,7 +60,7 @@ def test_diagnosis_next_correction_is_correct_on_its_forecast():
     np.testing.assert_array_equal(again.problem.composite, out.diagnosis.relation_matrix()[:, part.measured])
 
 
-def test_store_history_equals_the_parts_given_and_counts_a_part_once(tmp_path):
+def test_store_history_equals_the_parts_given_and_counts_a_part_once(tmp_path: Path) -> None:
     path = tmp_path / "m.toml"
     path.write_text((GUIDE_PINS / "model.toml").read_text() + "\n[safety]\newma = 0.5\n")
     model = load_model(path)
@@ -87,7 +84,7 @@ def test_store_history_equals_the_parts_given_and_counts_a_part_once(tmp_path):
     assert any("needs the history store" in n.message for n in plain.notes)
 
 
-def test_outcome_reads_once_and_states_what_it_read():
+def test_outcome_reads_once_and_states_what_it_read() -> None:
     import hashlib
 
     import parsers
@@ -98,7 +95,7 @@ def test_outcome_reads_once_and_states_what_it_read():
     assert out.report == source.name and len(out.cycles) == 1 and not out.rejected
 
 
-def test_thermal_feed_forward_is_a_step_of_the_use_case_and_requests_pickle(tmp_path):
+def test_thermal_feed_forward_is_a_step_of_the_use_case_and_requests_pickle(tmp_path: Path) -> None:
     """The feed-forward joins the corrections (not a CLI step); the whole request survives pickling
     (batch sends it to its workers) and gives the same answer there."""
     import pickle
@@ -135,7 +132,7 @@ def test_thermal_feed_forward_is_a_step_of_the_use_case_and_requests_pickle(tmp_
     assert ff.line() in text and text.index(ff.line()) < text.index("error budget before")
 
 
-def test_load_request_reads_each_input_once_and_only_what_the_model_uses(tmp_path):
+def test_load_request_reads_each_input_once_and_only_what_the_model_uses(tmp_path: Path) -> None:
     from setupfix.core.errors import SetupfixError
     from setupfix.usecases.correct import load_request
 

@@ -12,21 +12,19 @@ from __future__ import annotations
 
 import json
 import re
-import sys
 from pathlib import Path
+from typing import Any
 
 import pytest
+from usecases.data import make_correct_goldens as golden
 
 DATA = Path(__file__).resolve().parent / "data"
-sys.path.insert(0, str(DATA))
-
-import make_correct_goldens as golden  # noqa: E402
 
 NAMES = sorted(p.stem for p in (DATA / "correct_golden").glob("*.json"))
 
 
 @pytest.fixture(scope="module")
-def cases(tmp_path_factory):
+def cases(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, dict[str, list[str | Path]]]:
     tmp = tmp_path_factory.mktemp("golden")
     return tmp, golden.cases(tmp)
 
@@ -35,13 +33,13 @@ def cases(tmp_path_factory):
 SOLVE_STATE = {"solved": True, "stopped": None, "norm_ratio_max": None}
 
 
-def without_solve_state(doc):
+def without_solve_state(doc: dict[str, Any]) -> dict[str, Any]:
     """The JSON without the stopped-solve keys (each checked: every golden case is solved)."""
     assert {k: doc[k] for k in SOLVE_STATE} == SOLVE_STATE
     return {k: v for k, v in doc.items() if k not in SOLVE_STATE}
 
 
-def without_forecast(doc):
+def without_forecast(doc: dict[str, Any]) -> dict[str, Any]:
     """The JSON with the new ``forecast`` rule taken out (checked to be there, after ``ewma`` if any)."""
     rules = doc["rules"]
     kinds = [r["rule"] for r in rules]
@@ -49,7 +47,7 @@ def without_forecast(doc):
     return {**doc, "rules": [r for r in rules if r["rule"] != "forecast"]}
 
 
-def without_work(doc):
+def without_work(doc: dict[str, Any]) -> dict[str, Any]:
     """The JSON without ``evaluations`` (how many solver calls the exact path made: the proofs of issue 22's
     speed work take fewer; a count of work, not a number of the recommendation), checked to be a count."""
     if "parts" in doc:
@@ -59,7 +57,7 @@ def without_work(doc):
 
 
 @pytest.mark.parametrize("name", NAMES)
-def test_json_text_and_offsets_equal_the_goldens(name, cases):
+def test_json_text_and_offsets_equal_the_goldens(name: str, cases: tuple[Path, dict[str, list[str | Path]]]) -> None:
     tmp, table = cases
     if name not in table:
         pytest.skip(f"{golden.CALYPSO} absent: shared sample not available")

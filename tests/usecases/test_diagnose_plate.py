@@ -37,7 +37,7 @@ def _centred_by_hand(model_path: Path, deviation: np.ndarray, fraction: float = 
     return {r for i, r in enumerate(lay.register_ids) if np.all(near[lay.composite[i] != 0])}
 
 
-def test_plate_report_says_the_effect_did_not_beat_ewma_and_keeps_centred_holes():
+def test_plate_report_says_the_effect_did_not_beat_ewma_and_keeps_centred_holes() -> None:
     out = diagnose_reports(DiagnoseRequest(MODEL, (PLATE,)))
     doc = out.to_json()
     wf = doc["walk_forward"]
@@ -53,15 +53,16 @@ def test_plate_report_says_the_effect_did_not_beat_ewma_and_keeps_centred_holes(
 
 
 @pytest.mark.skipif(not PROCESS.is_file(), reason="needs ../shared/real-series")
-def test_plate_with_its_machining_times():
+def test_plate_with_its_machining_times() -> None:
     """With the parts' machining times from the process log the verdict stands."""
     inp = load_series(MODEL, (PLATE,))
     log = pd.read_csv(PROCESS)
     stamps = pd.to_datetime(log["timestamp"])
-    hours = ((stamps - stamps.iloc[0]).dt.total_seconds() / 3600).to_numpy()
+    hours = np.asarray((stamps - stamps.iloc[0]).dt.total_seconds() / 3600, dtype=np.float64)
     series = dataclasses.replace(inp.series, time=hours, origin=str(log["timestamp"].iloc[0]))
     d = Diagnoser().run(inp.layout, series)
     assert d.next_from.source == "ewma"
+    assert d.walk is not None
     b = d.walk.budgets
     assert b["augmented"].centre_rms > b["ewma"].centre_rms
     cycle, _ = recommend_next(inp.model, d)

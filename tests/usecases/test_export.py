@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import dataclasses
 import hashlib
+from pathlib import Path
 
 import pytest
 from conftest import GUIDE_PINS, SAMPLES
@@ -12,17 +13,17 @@ from setupfix.core.errors import ExportError
 from setupfix.model import load_model
 from setupfix.usecases.correct import correct_report
 from setupfix.usecases.export import export, offsets_text
-from setupfix.usecases.requests import CorrectRequest, CurrentOffsets
+from setupfix.usecases.requests import CorrectOutcome, CorrectRequest, CurrentOffsets
 
 CONTROLLERS = SAMPLES / "controllers"
 
 
 @pytest.fixture(scope="module")
-def guide():
+def guide() -> CorrectOutcome:
     return correct_report(CorrectRequest(load_model(GUIDE_PINS / "model.toml")), GUIDE_PINS / "cycle_01.csv")
 
 
-def test_export_writes_exactly_offsets_text_with_its_hash(guide, tmp_path):
+def test_export_writes_exactly_offsets_text_with_its_hash(guide: CorrectOutcome, tmp_path: Path) -> None:
     target = tmp_path / "o.csv"
     done = export(guide.cycles, str(target))
     text = target.read_text(encoding="utf-8")
@@ -32,7 +33,7 @@ def test_export_writes_exactly_offsets_text_with_its_hash(guide, tmp_path):
     assert [r.delta for r in done.rows] == [round(v, 3) + 0.0 for v in guide.cycles[0].corrections.values()]
 
 
-def test_hold_exports_zero_rows_with_the_verdict(guide, tmp_path):
+def test_hold_exports_zero_rows_with_the_verdict(guide: CorrectOutcome, tmp_path: Path) -> None:
     cycle = guide.cycles[0]
     rec = dataclasses.replace(cycle.recommendation, verdict="hold", x=cycle.x * 0)
     held = dataclasses.replace(cycle, recommendation=rec)
@@ -40,7 +41,7 @@ def test_hold_exports_zero_rows_with_the_verdict(guide, tmp_path):
     assert {r.delta for r in done.rows} == {0.0} and {r.verdict for r in done.rows} == {"hold"}
 
 
-def test_reject_is_refused_and_nothing_written(guide, tmp_path):
+def test_reject_is_refused_and_nothing_written(guide: CorrectOutcome, tmp_path: Path) -> None:
     cycle = guide.cycles[0]
     rec = dataclasses.replace(cycle.recommendation, verdict="reject", alarm="REJECT: P1 D1 beyond the band")
     rejected = dataclasses.replace(cycle, recommendation=rec)
@@ -50,7 +51,7 @@ def test_reject_is_refused_and_nothing_written(guide, tmp_path):
     assert not target.exists()
 
 
-def test_program_holds_one_cycle_and_a_failed_export_leaves_the_old_file(guide, tmp_path):
+def test_program_holds_one_cycle_and_a_failed_export_leaves_the_old_file(guide: CorrectOutcome, tmp_path: Path) -> None:
     target = tmp_path / "o.nc"
     target.write_text("old program\n")
     with pytest.raises(ExportError, match=r"cycle_01.csv.*a program holds one correction.*choose one with --part"):
@@ -60,7 +61,7 @@ def test_program_holds_one_cycle_and_a_failed_export_leaves_the_old_file(guide, 
     assert target.read_text() == "old program\n"  # atomic: complete or not at all
 
 
-def test_current_offsets_make_set_rows():
+def test_current_offsets_make_set_rows() -> None:
     model = load_model(CONTROLLERS / "model.toml")
     current = CurrentOffsets.read(CONTROLLERS / "current.csv", model)
     out = correct_report(CorrectRequest(model, current=current), CONTROLLERS / "report.csv")

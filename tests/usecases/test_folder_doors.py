@@ -66,7 +66,9 @@ def _expected(root: Path) -> list[str]:
     return names
 
 
-def test_parse_reads_the_listed_reports_and_warns_of_the_folder_link(shop, tmp_path, capsys):
+def test_parse_reads_the_listed_reports_and_warns_of_the_folder_link(
+    shop: tuple[Path, Path], tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     root, _ = shop
     outcome = parse_reports([root])
     assert [r.path for r in outcome.reports] == _expected(root) and list(outcome.failures) == []
@@ -78,7 +80,7 @@ def test_parse_reads_the_listed_reports_and_warns_of_the_folder_link(shop, tmp_p
     assert f"warning: {root / 'folder_link'}: {LINK_PROBLEM}" in err and f"warning: {linked}" in err
 
 
-def test_model_init_reads_the_listed_reports(shop):
+def test_model_init_reads_the_listed_reports(shop: tuple[Path, Path]) -> None:
     root, _ = shop
     scaffold = scaffold_model([root])
     head = scaffold.text.splitlines()[0]
@@ -86,7 +88,7 @@ def test_model_init_reads_the_listed_reports(shop):
     assert f"{root / 'folder_link'}: {LINK_PROBLEM}" in map(str, scaffold.notes)
 
 
-def test_history_import_stores_the_listed_reports_and_the_logs_found(shop, tmp_path):
+def test_history_import_stores_the_listed_reports_and_the_logs_found(shop: tuple[Path, Path], tmp_path: Path) -> None:
     root, model = shop
     with open_store(tmp_path / "h.db") as store:
         summary = import_history(store, ImportRequest((root,), model=load_model(model)))
@@ -97,7 +99,7 @@ def test_history_import_stores_the_listed_reports_and_the_logs_found(shop, tmp_p
         assert [r.name for r in store.reports()] == ["bracket_two_parts.txt", "linked.txt"]
 
 
-def test_diagnose_reads_the_listed_reports_and_uses_the_logs_found(shop):
+def test_diagnose_reads_the_listed_reports_and_uses_the_logs_found(shop: tuple[Path, Path]) -> None:
     root, model = shop
     expected = _expected(root)
     # the logs beside the reports are used: these PC-DMIS reports carry no time to tie them to
@@ -111,7 +113,9 @@ def test_diagnose_reads_the_listed_reports_and_uses_the_logs_found(shop):
     assert series.series.n_cycles == 5  # parts 0041 and 0042 twice (root and sub-folder), 0043 (linked)
 
 
-def test_diagnose_says_the_folder_problem_as_a_warning(shop, capsys):
+def test_diagnose_says_the_folder_problem_as_a_warning(
+    shop: tuple[Path, Path], capsys: pytest.CaptureFixture[str]
+) -> None:
     root, model = shop
     for log in ("corrections.csv", "temperatures.csv"):
         (root / log).unlink()
@@ -119,7 +123,9 @@ def test_diagnose_says_the_folder_problem_as_a_warning(shop, capsys):
     assert f"\nwarning: {root / 'folder_link'}: {LINK_PROBLEM}\n" in capsys.readouterr().out
 
 
-def test_a_folder_with_nothing_readable_is_refused_naming_why(tmp_path, capsys):
+def test_a_folder_with_nothing_readable_is_refused_naming_why(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     empty = tmp_path / "empty"
     empty.mkdir()
     (empty / "model.toml").write_text("")

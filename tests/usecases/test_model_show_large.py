@@ -11,6 +11,7 @@ import io
 import time
 import tracemalloc
 from contextlib import redirect_stdout
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -42,14 +43,14 @@ def model_text(n: int, n_wks: int = 10, n_tools: int = 40) -> str:
 
 
 @pytest.fixture(scope="module")
-def large(tmp_path_factory):
+def large(tmp_path_factory: pytest.TempPathFactory) -> Path:
     path = tmp_path_factory.mktemp("large") / "model.toml"
     path.write_text(model_text(N), encoding="utf-8")
     return path
 
 
 @pytest.mark.slow
-def test_model_show_output_grows_with_the_entries_not_the_grid(large):
+def test_model_show_output_grows_with_the_entries_not_the_grid(large: Path) -> None:
     out = io.StringIO()
     start = time.perf_counter()
     with redirect_stdout(out):
@@ -66,7 +67,7 @@ def test_model_show_output_grows_with_the_entries_not_the_grid(large):
     assert f"\n  D{N}: +W1 −W2 +T1 −T2\n" in text  # F3000 on W1, T1; F1 on W2, T2
 
 
-def test_small_models_keep_the_grid(tmp_path):
+def test_small_models_keep_the_grid(tmp_path: Path) -> None:
     path = tmp_path / "model.toml"
     path.write_text(model_text(20), encoding="utf-8")
     out = io.StringIO()
@@ -76,7 +77,7 @@ def test_small_models_keep_the_grid(tmp_path):
 
 
 @pytest.mark.slow
-def test_null_space_of_many_dimensions_needs_no_square_factor(large):
+def test_null_space_of_many_dimensions_needs_no_square_factor(large: Path) -> None:
     desc = describe_model(load_model(large))
     C = np.array(desc.matrices.composite)
     tracemalloc.start()
@@ -90,7 +91,7 @@ def test_null_space_of_many_dimensions_needs_no_square_factor(large):
     assert np.abs(null @ C).max() < 1e-9
 
 
-def test_sparse_product_equals_the_dense_one():
+def test_sparse_product_equals_the_dense_one() -> None:
     rng = np.random.default_rng(21)
     for _ in range(300):
         w, t, f, d = rng.integers(0, 7, 4)
@@ -101,7 +102,7 @@ def test_sparse_product_equals_the_dense_one():
         np.testing.assert_allclose(got, np.vstack([r_wf @ r_fd, r_tf @ r_fd]), rtol=1e-12, atol=1e-14)
 
 
-def test_null_space_agrees_with_the_full_svd_on_tall_and_wide_matrices():
+def test_null_space_agrees_with_the_full_svd_on_tall_and_wide_matrices() -> None:
     import scipy.linalg
 
     rng = np.random.default_rng(5)

@@ -12,7 +12,7 @@ from setupfix.model import load_model
 from setupfix.usecases.requests import CorrectRequest, CurrentOffsets, CycleOptions, ReadOptions, SolveOptions
 
 
-def test_requests_are_hashable_options_and_checked():
+def test_requests_are_hashable_options_and_checked() -> None:
     assert CycleOptions.of({"A7": "P1"}).station_map() == {"A7": "P1"}
     assert CycleOptions.of(["P2", "P1"]).station_map() == ["P2", "P1"]
     hash(CycleOptions.of(["P1"], part="x"))
@@ -25,7 +25,7 @@ def test_requests_are_hashable_options_and_checked():
         SolveOptions(time_limit=0.0)  # the optimiser's own declared constraint, its own words
 
 
-def test_current_offsets_are_a_frozen_mapping_with_their_source():
+def test_current_offsets_are_a_frozen_mapping_with_their_source() -> None:
     model = load_model(SAMPLES / "controllers" / "model.toml")
     current = CurrentOffsets.read(SAMPLES / "controllers" / "current.csv", model)
     assert set(current) == set(model.register_ids) and len(current) == len(model.register_ids)
@@ -38,7 +38,7 @@ def test_current_offsets_are_a_frozen_mapping_with_their_source():
     assert set(current.wear_totals(model)) == {r.id for r in model.registers if r.offset == "wear"}
 
 
-def test_a_request_pickles_to_an_equal_one():
+def test_a_request_pickles_to_an_equal_one() -> None:
     model = load_model(SAMPLES / "controllers" / "model.toml")
     req = CorrectRequest(
         model,

@@ -7,19 +7,20 @@ import json
 import tomllib
 import warnings
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pandas as pd
 import pytest
+from conftest import GUIDE_PINS, SAMPLES, shared_path
 
 import parsers
 from setupfix.core.errors import ModelError, SetupfixError
 from setupfix.inputs.checks import check_parts
 from setupfix.model import ProcessModel, load_model, match_parts, model_from_dict
 from setupfix.usecases.correct import correct_cycle, correct_report
-from setupfix.usecases.model_init import name_axis, scaffold_from_tables
-from setupfix.usecases.requests import CorrectRequest
-from tests.conftest import GUIDE_PINS, SAMPLES, shared_path
+from setupfix.usecases.model_init import Scaffold, name_axis, scaffold_from_tables
+from setupfix.usecases.requests import CorrectRequest, CycleCorrection
 
 
 @pytest.mark.parametrize(
@@ -36,7 +37,7 @@ from tests.conftest import GUIDE_PINS, SAMPLES, shared_path
         ("Pos X Y", None),
     ],
 )
-def test_axis_from_the_name(name, axis):
+def test_axis_from_the_name(name: str, axis: str | None) -> None:
     assert name_axis(name) == axis
 
 
@@ -46,7 +47,9 @@ MULTI_AXIS_LOADS = hasattr(ProcessModel, "resolution_of")
 NO_MULTI_AXIS_LOADER = "the model loader does not read multi-axis models (process.axes) yet"
 
 
-def scaffold_and_correct(path: Path, table: pd.DataFrame | None = None, **kwargs):
+def scaffold_and_correct(
+    path: Path, table: pd.DataFrame | None = None, **kwargs: Any
+) -> tuple[Scaffold, ProcessModel | None, CycleCorrection | None]:
     """Scaffold from the report, load it, correct the report's first part: what a new user does.
 
     The scaffold is a draft: ``correct`` holds with the rule ``draft`` and every change 0; the
@@ -76,8 +79,9 @@ def scaffold_and_correct(path: Path, table: pd.DataFrame | None = None, **kwargs
     return scaffold, model, pc
 
 
-def test_guide_pins_scaffold_matches_every_dimension(tmp_path):
+def test_guide_pins_scaffold_matches_every_dimension(tmp_path: Path) -> None:
     scaffold, model, pc = scaffold_and_correct(GUIDE_PINS / "cycle_01.csv")
+    assert model is not None and pc is not None
     assert scaffold.dimensions == 28 and scaffold.axis == "Z" and not scaffold.skipped
     assert [d.name for d in model.dimensions] == [d.name for d in load_model(GUIDE_PINS / "model.toml").dimensions]
     assert {d.group for d in model.dimensions} == {"P1", "P2", "P3", "P4"}
@@ -118,7 +122,7 @@ def _read(path: Path) -> pd.DataFrame | None:
 
 
 @pytest.mark.slow
-def test_scaffold_on_every_bundled_sample_with_tolerances():
+def test_scaffold_on_every_bundled_sample_with_tolerances() -> None:
     done = 0
     for path in BUNDLED:
         table = _read(path)
@@ -135,7 +139,7 @@ def test_scaffold_on_every_bundled_sample_with_tolerances():
 
 @pytest.mark.slow
 @pytest.mark.needs_shared
-def test_scaffold_on_every_shared_sample_with_tolerances():
+def test_scaffold_on_every_shared_sample_with_tolerances() -> None:
     root = shared_path("cmm-samples")
     done, refused = [], []
     for path in sorted(root.glob("*/*")):
@@ -162,7 +166,7 @@ def test_scaffold_on_every_shared_sample_with_tolerances():
     assert len(done) >= 30 and "DMO_Impeller_6_Blades_Part_1.dmo" in done and "PiWebApi_sample_values.json" in done
 
 
-def test_left_out_rows_are_listed_with_reasons():
+def test_left_out_rows_are_listed_with_reasons() -> None:
     table = pd.DataFrame(
         {
             "characteristic": ["A_Z", "Flatness 1", "B", "C", "D_X"],
@@ -188,7 +192,7 @@ def test_left_out_rows_are_listed_with_reasons():
         scaffold_from_tables([("r.csv", table.iloc[2:3])])
 
 
-def test_narrow_tolerance_gets_a_finer_resolution_and_hostile_names_stay_toml():
+def test_narrow_tolerance_gets_a_finer_resolution_and_hostile_names_stay_toml() -> None:
     table = pd.DataFrame(
         {
             "characteristic": ['Bore "A"\\x7f\n#1', "Z"],
@@ -204,7 +208,7 @@ def test_narrow_tolerance_gets_a_finer_resolution_and_hostile_names_stay_toml():
     assert model.dimensions[0].name == 'Bore "A"\\x7f\n#1'
 
 
-def test_cli_init_then_correct(tmp_path, capsys):
+def test_cli_init_then_correct(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     from setupfix.cli import main
 
     out = tmp_path / "model.toml"
@@ -224,7 +228,7 @@ def test_cli_init_then_correct(tmp_path, capsys):
     assert "error:" in capsys.readouterr().err and not list(tmp_path.glob(".*tmp"))
 
 
-def test_several_reports_make_one_scaffold():
+def test_several_reports_make_one_scaffold() -> None:
     from setupfix.usecases.model_init import scaffold_model
 
     reports = [GUIDE_PINS / "cycle_01.csv", GUIDE_PINS / "cycle_02.csv", GUIDE_PINS / "cycle_01.qif"]
@@ -234,7 +238,7 @@ def test_several_reports_make_one_scaffold():
     assert "cycle_01.csv, cycle_02.csv, cycle_01.qif" in scaffold.text.splitlines()[0]
 
 
-def test_parts_as_stations_scaffold_corrects_one_fixture_cycle(tmp_path):
+def test_parts_as_stations_scaffold_corrects_one_fixture_cycle(tmp_path: Path) -> None:
     path = tmp_path / "r.csv"
     path.write_text(
         "characteristic,nominal,actual,lower,upper,part\n"
@@ -268,7 +272,7 @@ def _dimension_comments(text: str) -> dict[str, str]:
     return {d["name"]: heads[f"[dimensions.{key}]"] for key, d in model["dimensions"].items()}
 
 
-def test_axis_from_the_report_first_then_the_name_and_the_report_wins():
+def test_axis_from_the_report_first_then_the_name_and_the_report_wins() -> None:
     table = pd.DataFrame(
         {
             "characteristic": ["Depth_X", "Step", "Bore_Y", "Hole"],
@@ -310,7 +314,7 @@ def test_axis_from_the_report_first_then_the_name_and_the_report_wins():
     }
 
 
-def test_an_axis_cell_that_is_not_an_axis_is_refused_with_its_line():
+def test_an_axis_cell_that_is_not_an_axis_is_refused_with_its_line() -> None:
     table = pd.DataFrame(
         {
             "characteristic": ["A", "B"],
@@ -327,7 +331,9 @@ def test_an_axis_cell_that_is_not_an_axis_is_refused_with_its_line():
     assert "axis Z stated by the report" in scaffold_from_tables([("r.csv", table.iloc[:1])]).text  # any case
 
 
-def test_model_init_on_a_qif_takes_the_axes_from_its_vectors(tmp_path, capsys):
+def test_model_init_on_a_qif_takes_the_axes_from_its_vectors(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     from setupfix.cli import main
 
     report = SAMPLES / "qif" / "NIST_MTC_Incoming_PlateResults_20_samples.QIF"
@@ -363,7 +369,7 @@ def test_model_init_on_a_qif_takes_the_axes_from_its_vectors(tmp_path, capsys):
     }
 
 
-def test_a_folder_stands_for_its_files_and_unreadable_ones_are_left_out_with_a_note(tmp_path):
+def test_a_folder_stands_for_its_files_and_unreadable_ones_are_left_out_with_a_note(tmp_path: Path) -> None:
     from setupfix.usecases.model_init import scaffold_model
 
     folder = tmp_path / "reports"
@@ -379,7 +385,7 @@ def test_a_folder_stands_for_its_files_and_unreadable_ones_are_left_out_with_a_n
         scaffold_model([folder / "notes.txt"])  # named as a file: refused, not left out
 
 
-def test_reports_stating_different_axes_for_one_dimension_give_none():
+def test_reports_stating_different_axes_for_one_dimension_give_none() -> None:
     def table(axis: str) -> pd.DataFrame:
         return pd.DataFrame(
             {

@@ -13,10 +13,12 @@ import math
 import tomllib
 import warnings
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pandas as pd
 import pytest
+from conftest import SAMPLES, SHARED
 
 import parsers
 from parsers.geometry import INTERPOLATED
@@ -25,7 +27,6 @@ from setupfix.model import load_model, model_from_dict
 from setupfix.usecases.correct import correct_report
 from setupfix.usecases.model_init import scaffold_from_tables, scaffold_model
 from setupfix.usecases.requests import CorrectRequest
-from tests.conftest import SAMPLES, SHARED
 
 AXES = ("X", "Y", "Z")
 DMIS = SHARED / "cmm-samples" / "dmis_dmo"
@@ -44,9 +45,9 @@ def _states_geometry(table: pd.DataFrame) -> bool:
     return "nx" in table and bool(table["nx"].notna().any() or (table["size"].fillna("") != "").any())
 
 
-def _report_geometry(table: pd.DataFrame) -> dict[str, tuple[tuple[float, ...] | None, str, str, str]]:
+def _report_geometry(table: pd.DataFrame) -> dict[str, tuple[Any, ...]]:
     """name → (unit direction, size, feature, side) of its rows, for names whose rows all agree."""
-    out: dict[str, tuple[tuple[float, ...] | None, str, str, str]] = {}
+    out: dict[str, tuple[Any, ...]] = {}
     conflicting = set()
     for row in table.itertuples(index=False):
         n = np.array([row.nx, row.ny, row.nz], dtype=float)
@@ -59,7 +60,7 @@ def _report_geometry(table: pd.DataFrame) -> dict[str, tuple[tuple[float, ...] |
     return {k: v for k, v in out.items() if k not in conflicting}
 
 
-def check_scaffold(raw: dict, table: pd.DataFrame) -> int:
+def check_scaffold(raw: dict[str, Any], table: pd.DataFrame) -> int:
     """Assert every dimension's relations are the ones its report row states; the number checked."""
     geometry = _report_geometry(table)
     process = raw["process"]
@@ -122,7 +123,7 @@ def _samples() -> list[Path]:
 
 
 @pytest.mark.slow
-def test_every_sample_with_vectors_gets_the_axes_and_weights_it_states():
+def test_every_sample_with_vectors_gets_the_axes_and_weights_it_states() -> None:
     done: dict[str, int] = {}
     for path in _samples():  # a sample in both folders is checked twice, under one name
         table = _table(path)
@@ -155,7 +156,7 @@ def test_every_sample_with_vectors_gets_the_axes_and_weights_it_states():
 
 
 @pytest.mark.needs_shared
-def test_an_oblique_dmis_normal_gives_its_components_not_one():
+def test_an_oblique_dmis_normal_gives_its_components_not_one() -> None:
     path = DMIS / "DMO_Impeller_6_Blades_Part_1.dmo"
     if not path.exists():
         pytest.skip(f"{path} absent")
@@ -173,7 +174,7 @@ def test_an_oblique_dmis_normal_gives_its_components_not_one():
     assert 0.59 < n[2] < 0.6  # not +1
 
 
-def test_a_normal_facing_minus_z_gives_minus_one_in_a_one_axis_scaffold(tmp_path):
+def test_a_normal_facing_minus_z_gives_minus_one_in_a_one_axis_scaffold(tmp_path: Path) -> None:
     path = tmp_path / "down.dmo"
     path.write_text(
         "DMISMN/'down',04.0\nUNITS/MM,ANGDEC\n"
@@ -193,7 +194,7 @@ def test_a_normal_facing_minus_z_gives_minus_one_in_a_one_axis_scaffold(tmp_path
 
 
 @pytest.mark.needs_shared
-def test_sizes_move_only_by_a_radius_and_only_where_interpolated():
+def test_sizes_move_only_by_a_radius_and_only_where_interpolated() -> None:
     path = DMIS / "DMO_Example1_PiezaDemo.dmo"
     if not path.exists():
         pytest.skip(f"{path} absent")
@@ -210,7 +211,7 @@ def test_sizes_move_only_by_a_radius_and_only_where_interpolated():
             assert "radius" not in feature, name
 
 
-def test_a_drilled_hole_and_a_boss_without_feature_type_or_with_one():
+def test_a_drilled_hole_and_a_boss_without_feature_type_or_with_one() -> None:
     table = pd.DataFrame(
         {
             "characteristic": ["Hole 1 D", "Boss D", "Bore D", "Step Z"],
@@ -240,7 +241,7 @@ def test_a_drilled_hole_and_a_boss_without_feature_type_or_with_one():
     assert scaffold.axes == ("Z",)
 
 
-def test_a_report_measuring_y_gets_no_tool_length_register():
+def test_a_report_measuring_y_gets_no_tool_length_register() -> None:
     table = pd.DataFrame(
         {
             "characteristic": ["Distanz Y 5mm", "Distanz Y 33mm"],
@@ -260,7 +261,7 @@ def test_a_report_measuring_y_gets_no_tool_length_register():
 
 
 @pytest.mark.needs_shared
-def test_the_calypso_sample_is_multi_axis_and_its_y_distances_have_no_tool_length():
+def test_the_calypso_sample_is_multi_axis_and_its_y_distances_have_no_tool_length() -> None:
     path = SHARED / "cmm-samples" / "calypso" / "CALYPSO_chr_PruefplanValidierungsbauteil1_16.txt"
     if not path.exists():
         pytest.skip(f"{path} absent")
@@ -278,7 +279,7 @@ def test_the_calypso_sample_is_multi_axis_and_its_y_distances_have_no_tool_lengt
     assert "radius" not in raw["tools"]["T1"]
 
 
-def test_a_multi_axis_scaffold_loads_and_holds_as_a_draft_and_solves_without_the_key(tmp_path):
+def test_a_multi_axis_scaffold_loads_and_holds_as_a_draft_and_solves_without_the_key(tmp_path: Path) -> None:
     report = SAMPLES / "qif" / "NIST_MTC_Incoming_PlateResults_20_samples.QIF"
     out = tmp_path / "plate.toml"
     out.write_text(scaffold_model([report]).text, encoding="utf-8")

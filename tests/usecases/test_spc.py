@@ -76,7 +76,7 @@ def direct(values: list[float], lsl: float, usl: float) -> dict[str, float]:
     }
 
 
-def test_capability_equals_an_independent_computation_and_rules_are_where_planted(store_path):
+def test_capability_equals_an_independent_computation_and_rules_are_where_planted(store_path: Path) -> None:
     x, where = planted()
     with open_store(store_path) as store:
         out = spc_report(store, SpcRequest())
@@ -96,7 +96,7 @@ def test_capability_equals_an_independent_computation_and_rules_are_where_plante
     assert d1.limits.center == pytest.approx(statistics.fmean(base), rel=1e-12)
 
 
-def test_each_stored_correction_splits_the_series(store_path):
+def test_each_stored_correction_splits_the_series(store_path: Path) -> None:
     x, _ = planted()
     with open_store(store_path) as store:
         out = spc_report(store, SpcRequest(dimensions=("d1",)))
@@ -108,7 +108,7 @@ def test_each_stored_correction_splits_the_series(store_path):
     assert (effect.before.n, effect.after.n) == (24, 36)
 
 
-def test_given_splits_and_a_time_window(store_path):
+def test_given_splits_and_a_time_window(store_path: Path) -> None:
     x, _ = planted()
     with open_store(store_path) as store:
         out = spc_report(
@@ -130,7 +130,7 @@ def test_given_splits_and_a_time_window(store_path):
     assert second.before.n == 10 and second.after.n == len(window) - 18
 
 
-def test_another_machines_handle_sees_none_of_the_series(store_path):
+def test_another_machines_handle_sees_none_of_the_series(store_path: Path) -> None:
     with (
         open_store(store_path, machine="M1") as store,
         pytest.raises(StoreError, match="no measurements stored for machine 'M1'"),
@@ -138,7 +138,7 @@ def test_another_machines_handle_sees_none_of_the_series(store_path):
         spc_report(store, SpcRequest())
 
 
-def test_refusals(store_path):
+def test_refusals(store_path: Path) -> None:
     with open_store(store_path) as store:
         with pytest.raises(MatchError, match=r"no stored characteristic 'D9'.*stored: D1, D2"):
             spc_report(store, SpcRequest(dimensions=("D9",)))
@@ -150,7 +150,7 @@ def test_refusals(store_path):
             spc_report(store, SpcRequest(baseline=1))
 
 
-def test_text_and_json_say_the_same(store_path):
+def test_text_and_json_say_the_same(store_path: Path) -> None:
     with open_store(store_path) as store:
         out = spc_report(store, SpcRequest())
     js = spc_json(out)
@@ -166,7 +166,7 @@ def test_text_and_json_say_the_same(store_path):
     assert "D2: rule" not in text
 
 
-def test_reference_only_rows_are_left_out(tmp_path):
+def test_reference_only_rows_are_left_out(tmp_path: Path) -> None:
     rows = ["characteristic,nominal,actual,lower,upper,part,timestamp,reference"]
     rows += [f"D1,5,{5 + 0.001 * (i % 3)},-0.01,0.01,p{i},2026-01-01T0{i}:00:00,false" for i in range(6)]
     rows.append("D1,5,5.009,-0.01,0.01,master,2026-01-01T09:00:00,true")
@@ -179,7 +179,7 @@ def test_reference_only_rows_are_left_out(tmp_path):
     assert d.parts == tuple(f"p{i}" for i in range(6))
 
 
-def test_a_part_stored_twice_counts_once_and_parts_sharing_a_name_all_count(tmp_path):
+def test_a_part_stored_twice_counts_once_and_parts_sharing_a_name_all_count(tmp_path: Path) -> None:
     def report(name: str, day: int, crlf: bool = False) -> Path:
         rows = ["characteristic,nominal,actual,lower,upper,part,timestamp"]
         rows += [f"D1,5,{5 + 0.001 * ((i + day) % 3)},-0.01,0.01,cycle {i},2026-01-0{day}T0{i}:00:00" for i in range(4)]

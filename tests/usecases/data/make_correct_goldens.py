@@ -15,6 +15,7 @@ import json
 import os
 import re
 import sys
+from collections.abc import Sequence
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[3]
@@ -46,7 +47,7 @@ def blank(obj: object) -> object:
     return obj
 
 
-def run(args: list[str]) -> tuple[int, str, str]:
+def run(args: Sequence[str | Path]) -> tuple[int, str, str]:
     from setupfix.cli import main
 
     out, err = io.StringIO(), io.StringIO()
@@ -108,12 +109,12 @@ def ewma_store(tmp: Path) -> tuple[Path, Path]:
     return model, db
 
 
-def cases(tmp: Path) -> dict[str, list[str]]:
+def cases(tmp: Path) -> dict[str, list[str | Path]]:
     costed = costed_model(tmp)
     effects = tmp / "model_effects.toml"
     effects.write_text((GUIDE / "model.toml").read_text() + EFFECTS)
     smooth, db = ewma_store(tmp)
-    out: dict[str, list[str]] = {}
+    out: dict[str, list[str | Path]] = {}
     for k in range(1, 6):
         report = GUIDE / f"cycle_0{k}.csv"
         out[f"plain_{k}"] = ["correct", "--model", GUIDE / "model.toml", report]
