@@ -94,8 +94,6 @@ def test_matrices_are_kept_per_model_object_and_never_stale(guide_pins_model: Pr
     and a different model, even one equal in all but one weight, gets its own."""
     import dataclasses
 
-    from setupfix.correction import relation
-
     first = relation_matrices(guide_pins_model)
     assert relation_matrices(guide_pins_model) is first
     assert first.composite is first.composite
@@ -115,12 +113,10 @@ def test_matrices_are_kept_per_model_object_and_never_stale(guide_pins_model: Pr
     assert other is not first
     np.testing.assert_array_equal(other.R_FD[:, 1:], first.R_FD[:, 1:])
     assert other.R_FD[[f.id for f in changed.features].index(feature), 0] == 2.0 * d0.features[feature]
-    # More models than are kept: each still gets its own matrices, never another's.
-    models = [
-        dataclasses.replace(guide_pins_model, dimensions=guide_pins_model.dimensions[:k])
-        for k in range(1, relation._RECENT_SIZE + 3)
-    ]
-    for _ in range(2):
-        for m in models:
-            assert relation_matrices(m).R_FD.shape == (len(m.features), len(m.dimensions))
-    assert len(relation._RECENT) <= relation._RECENT_SIZE
+    # More models than are kept (the last few): each still gets its own matrices, never another's, and the
+    # first ones are let go -- built again when asked for, not held for ever.
+    models = [dataclasses.replace(guide_pins_model, dimensions=guide_pins_model.dimensions[:k]) for k in range(1, 29)]
+    kept = [relation_matrices(m) for m in models]
+    for m in models:
+        assert relation_matrices(m).R_FD.shape == (len(m.features), len(m.dimensions))
+    assert relation_matrices(models[0]) is not kept[0]
