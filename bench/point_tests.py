@@ -3,7 +3,7 @@
 A point test asks whether a grid point has every row's margin at least its floor
 (:func:`setupfix.optimize.exact.leximin.pins.point_above`: can a dimension rise alone, can it be the only
 one left at a level, is there a point above the level).  NNLS and the LP answer most; where only a
-MILP can tell, the optimiser first solves the MILP of the rows within ``TIGHT_SLACK`` steps of the
+MILP can tell, the optimiser first solves the MILP of the rows within ``ExactSettings.tight_slack`` steps of the
 LP's vertex, and the MILP of all rows only where that one does not decide.
 
 This bench runs the leximin optimiser on the paper-size set of ``bench/leximin_speed.py`` (the five
@@ -39,6 +39,7 @@ import setupfix.optimize.exact.leximin.pins as pins
 from bench.leximin_speed import lp_seconds
 from bench.problems import guide_pins_problems
 from setupfix.optimize import get_optimizer
+from setupfix.optimize.exact import ExactSettings
 from setupfix.optimize.exact.grid import rounded_rhs
 from setupfix.optimize.exact.highs import INF, LinearModel
 from setupfix.optimize.exact.session import GridRows
@@ -171,7 +172,7 @@ def main() -> None:
     ]
     if rows_out:
         lines += [
-            f"rows    : tight (within {pins.TIGHT_SLACK:g} steps of the LP's vertex) median "
+            f"rows    : tight (within {ExactSettings().tight_slack:g} steps of the LP's vertex) median "
             f"{np.median([r[0] for r in rows_out]):.0f}, all finite median {np.median([r[1] for r in rows_out]):.0f}",
             f"tight MILP: decides (no grid point) {len(decided)} of {len(rows_out)}; median "
             f"{np.median(t_tight) * 1e3:.2f} ms = {np.median(t_tight) / ref:.1f}x LP",
