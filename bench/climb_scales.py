@@ -1,4 +1,4 @@
-"""The leximin levels' grid climb: its move sizes (``SCALES``) against each other, interleaved in one process.
+"""The leximin levels' grid climb: its move sizes (``ExactSettings.climb_scales``) against each other, in one process.
 
 The climb (:mod:`setupfix.optimize.exact.leximin.search`) moves s·e_i and s·(±e_i ± e_j) with s from
 ``SCALES`` down to 1; it only gives the levels a start, so the answers must not depend on it.  The
@@ -26,11 +26,11 @@ os.environ.update(OPENBLAS_NUM_THREADS="1", MKL_NUM_THREADS="1", OMP_NUM_THREADS
 import numpy as np
 from threadpoolctl import threadpool_limits
 
-import setupfix.optimize.exact.leximin.search as search_mod
 import setupfix.optimize.exact.session as session_mod
 from bench.leximin_speed import lp_seconds
 from bench.problems import guide_pins_problems
 from setupfix.optimize import get_optimizer
+from setupfix.optimize.exact import ExactSettings
 
 RESULTS = ROOT / "bench" / "results"
 
@@ -53,27 +53,26 @@ def main() -> None:
         f"limit; {args.passes} passes, each solving every report once per variant in turn; each report's time "
         "its best",
     ]
-    saved = search_mod.SCALES
-    opt = get_optimizer("exact", objective="leximin", time_limit=2.0)
+    opts = [
+        get_optimizer("exact", objective="leximin", time_limit=2.0, settings=ExactSettings(climb_scales=scales))
+        for scales in variants
+    ]
+    opt = opts[0]
     with threadpool_limits(1):
         probs = guide_pins_problems(args.sets, 2014)
         lp = float(np.median([lp_seconds(p) for _, p in probs]))
         opt.solve(probs[0][1])  # warm-up (imports, first allocations)
         best = np.full((len(variants), len(probs)), np.inf)
         answers: list[list[np.ndarray]] = [[] for _ in variants]
-        try:
-            for _ in range(args.passes):
-                for i, scales in enumerate(variants):
-                    search_mod.SCALES = scales
-                    session_mod.DERIVED.clear()
-                    for j, (_, p) in enumerate(probs):
-                        began = time.perf_counter()
-                        res = opt.solve(p)
-                        best[i, j] = min(best[i, j], time.perf_counter() - began)
-                        if len(answers[i]) < len(probs):
-                            answers[i].append(np.asarray(res.x))
-        finally:
-            search_mod.SCALES = saved
+        for _ in range(args.passes):
+            for i, variant in enumerate(opts):
+                session_mod.DERIVED.clear()
+                for j, (_, p) in enumerate(probs):
+                    began = time.perf_counter()
+                    res = variant.solve(p)
+                    best[i, j] = min(best[i, j], time.perf_counter() - began)
+                    if len(answers[i]) < len(probs):
+                        answers[i].append(np.asarray(res.x))
     lines.append(f"reference: one LP of eq. 8, median {lp * 1e3:.3f} ms")
     first = np.median(best[0])
     for i, scales in enumerate(variants):

@@ -6,7 +6,7 @@ seeded step in ±0.005 mm) are corrected once; those whose leximin reaches the c
 then corrected again in turn three ways: as before (presolved, HiGHS's default, and no linking
 rows), without presolve (:meth:`~setupfix.optimize.exact.highs.LinearModel.skip_presolve`), and without
 presolve with the rows w_i,q ≤ w_(i−1),q that link the nested count blocks (what the optimiser does,
-:data:`setupfix.optimize.exact.leximin.counts.LINK`).  Time is process CPU time (the box is shared; wall
+``ExactSettings.link_count_blocks``).  Time is process CPU time (the box is shared; wall
 time would measure the load), with the in-process reference of the same run (the mean over the five
 bundled cycles of ``correct_report``).  The corrections must be identical where the ways are proved.
 
@@ -40,7 +40,6 @@ from bench.problems import GUIDE, make_reports
 from setupfix.model import load_model
 from setupfix.optimize.exact import ExactSettings
 from setupfix.optimize.exact.highs import LinearModel
-from setupfix.optimize.exact.leximin import counts as _leximin_counts
 from setupfix.usecases.correct import correct_report
 from setupfix.usecases.requests import CorrectRequest, SolveOptions
 
@@ -52,17 +51,26 @@ SKIP = LinearModel.skip_presolve
 WAYS = (("before", True, False), ("no presolve", False, False), ("+ links", False, True))
 
 
-def way(presolve: bool, link: bool) -> None:
-    """Count MILPs presolved (HiGHS's default) or not (the optimiser's setting), with or without the links."""
-    LinearModel.skip_presolve = (lambda self: None) if presolve else SKIP  # type: ignore[method-assign]
-    _leximin_counts.LINK = link
+@dataclasses.dataclass(frozen=True)
+class Tuned(SolveOptions):
+    """The exact optimiser with these settings (the count blocks' links, the pair branches)."""
 
-
-class NoPairs(SolveOptions):
-    """The exact optimiser with the pair branches switched off (the counts decide, as before)."""
+    settings: ExactSettings = dataclasses.field(default_factory=ExactSettings)
 
     def params(self) -> dict[str, Any]:
-        return {**super().params(), "settings": ExactSettings(max_pair_tests=0)}
+        return {**super().params(), "settings": self.settings}
+
+
+def tuned(request: CorrectRequest, **settings: Any) -> CorrectRequest:
+    """``request`` with the exact optimiser's settings changed."""
+    options = Tuned(time_limit=request.solve.time_limit, settings=ExactSettings(**settings))
+    return dataclasses.replace(request, solve=options)
+
+
+def way(request: CorrectRequest, presolve: bool, link: bool) -> CorrectRequest:
+    """Count MILPs presolved (HiGHS's default) or not (the optimiser's setting), with or without the links."""
+    LinearModel.skip_presolve = (lambda self: None) if presolve else SKIP  # type: ignore[method-assign]
+    return tuned(request, link_count_blocks=link)
 
 
 def solve(request: CorrectRequest, path: Path) -> tuple[float, str, str, np.ndarray]:
@@ -85,22 +93,20 @@ def main() -> None:
         folder = Path(tmp)
         make_reports(folder, args.reports, vary=True)
         files = sorted(folder.glob("*.csv"))
-        way(False, True)
+        way(request, False, True)
         paths = {f: solve(request, f)[2] for f in files}
         counted = [f for f in files if "the rest by counts" in paths[f]]
         paired = []
         for f in (f for f in files if "branch: dimensions" in paths[f]):
             with_pairs = solve(request, f)
-            no_pairs = dataclasses.replace(request, solve=NoPairs(time_limit=args.limit))
-            paired.append((f.name, with_pairs, solve(no_pairs, f)))
+            paired.append((f.name, with_pairs, solve(tuned(request, max_pair_tests=0), f)))
         rows = []
         for f in counted:
             runs = {}
             for name, presolve, link in WAYS:
-                way(presolve, link)
-                runs[name] = solve(request, f)
+                runs[name] = solve(way(request, presolve, link), f)
             rows.append((f.name, runs))
-        way(False, True)
+        way(request, False, True)
     lines = [
         "Leximin count MILPs: HiGHS presolve, the nested blocks' linking rows and the pair branches, process CPU time",
         f"command : python -m bench.leximin_counts --reports {args.reports} --limit {args.limit:g}",

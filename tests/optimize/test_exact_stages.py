@@ -89,7 +89,20 @@ def test_solver_modules_import_only_lower_ranks(module: str) -> None:
 
 @pytest.mark.parametrize(
     ("field", "value"),
-    [("quantum", 0.0), ("level_steps", -1), ("box_share", 1.5), ("working_set_nnls", 1), ("search_limit", 2.5)],
+    [
+        ("quantum", 0.0),
+        ("level_steps", -1),
+        ("box_share", 1.5),
+        ("working_set_nnls", 1),
+        ("search_limit", 2.5),
+        ("max_pair_tests", -1),
+        ("tight_slack", float("inf")),
+        ("triage_leximin_share", 1.0),
+        ("forced_triage", "yes"),
+        ("climb_scales", ()),
+        ("climb_scales", (4.0, 0.5)),
+        ("link_count_blocks", None),
+    ],
 )
 def test_settings_are_validated_naming_the_field(field: str, value: Any) -> None:
     with pytest.raises(ParameterError, match=f"ExactSettings: {field}"):

@@ -13,10 +13,11 @@ fractions of a time in (0, 1]; ``quantum`` is a fraction of the register resolut
 
 from __future__ import annotations
 
+import math
 from dataclasses import asdict, dataclass
 from typing import ClassVar
 
-from setupfix.core.params import Constraint, Interval, validate_params
+from setupfix.core.params import Constraint, Interval, Predicate, validate_params
 
 __all__ = ["ExactSettings"]
 
@@ -78,6 +79,8 @@ class ExactSettings:
     climb_max_registers : int
         Most free registers for which the leximin levels climb the grid from a level's point
         (small problems only; its two-register moves are 2·n·(n − 1) points).
+    climb_scales : tuple of float
+        Move sizes of that climb, largest first [steps, each ≥ 1]; each climbs until no move improves.
     max_branches : int
         Most branches the leximin levels open at discrete conflicts before the counts decide.
     max_pair_tests : int
@@ -95,6 +98,9 @@ class ExactSettings:
     triage_leximin_share : float
         Share of the whole time limit the triage's leximin levels after the first may take (never
         the time reserved for the least norm; 0: level 1 only).
+    link_count_blocks : bool
+        The leximin count MILPs link their nested blocks' binaries (w_i,q ≤ w_(i−1),q;
+        ``bench/leximin_counts.py`` compares without).
     """
 
     quantum: float = 1e-3
@@ -118,6 +124,7 @@ class ExactSettings:
     level_steps: int = 40
     network_lp: bool = True
     climb_max_registers: int = 24
+    climb_scales: tuple[float, ...] = (4.0, 1.0)
     max_branches: int = 24
     max_pair_tests: int = 60
     tight_slack: float = 2.0
@@ -125,6 +132,7 @@ class ExactSettings:
     forced_triage: bool = True
     forced_share: float = 0.25
     triage_leximin_share: float = 0.45
+    link_count_blocks: bool = True
 
     _constraints: ClassVar[dict[str, list[Constraint]]] = {
         "quantum": [Interval(float, 0.0, 1.0, closed="right")],
@@ -148,6 +156,12 @@ class ExactSettings:
         "level_steps": _COUNT,
         "network_lp": [bool],
         "climb_max_registers": _COUNT,
+        "climb_scales": [
+            Predicate(
+                lambda v: isinstance(v, tuple) and len(v) > 0 and all(math.isfinite(s) and s >= 1 for s in v),
+                "a tuple of step sizes ≥ 1, largest first",
+            )
+        ],
         "max_branches": _COUNT,
         "max_pair_tests": _COUNT,
         "tight_slack": [Interval(float, 0.0, None)],
@@ -155,6 +169,7 @@ class ExactSettings:
         "forced_triage": [bool],
         "forced_share": _SHARE,
         "triage_leximin_share": _FRACTION,
+        "link_count_blocks": [bool],
     }
 
     def __post_init__(self) -> None:

@@ -39,9 +39,6 @@ from setupfix.optimize.exact.session import Session
 
 __all__ = ["CountLayout", "CountLevels", "CountRows", "CountRuns", "count_least_norm", "count_levels", "count_model"]
 
-#: Link the nested blocks' binaries (w_i,q ≤ w_(i−1),q); ``bench/leximin_counts.py`` compares without.
-LINK = True
-
 Array = npt.NDArray[np.float64]
 
 
@@ -126,6 +123,7 @@ class CountRows:
         self.keep = self.act | self.fix
         self.f = f
         self.t0 = t0
+        self.link = session.settings.link_count_blocks  # nested blocks' binaries linked
         self.row_dim = row_dim
         self.hi_box = np.sum(np.maximum(self.g_rows * self.kmin, self.g_rows * self.kmax), axis=1)
         self.lo_box = np.sum(np.minimum(self.g_rows * self.kmin, self.g_rows * self.kmax), axis=1)
@@ -221,7 +219,7 @@ def count_model(
             parts.append(csr_array(count[None, :]))
             lo.append(np.array([float(c_i - layout.above_anyway(i))]))
             hi.append(np.array([INF]))
-    if len(made) > 1 and LINK:  # nested blocks (t rises block by block): w_i,q = 1 ⇒ M_q ≥ t_i ≥ t_(i−1), so
+    if len(made) > 1 and rows.link:  # nested blocks (t rises block by block): w_i,q = 1 ⇒ M_q ≥ t_i ≥ t_(i−1), so
         # w_i,q ≤ w_(i−1),q is valid (raise w_(i−1),q) and cuts the LP relaxation and symmetric branches;
         # a dimension with no binary in block i − 1 is above t_(i−1) anyway (w_(i−1),q = 1: no row)
         rows_i, cols_i, vals = [], [], []

@@ -86,7 +86,18 @@ class LevelSearch:
         m, rows = self.model, self.session.rows
         moves = rows.memo(("climb moves", m.order.tobytes()), lambda: climb_moves(rows.g_rows, m.order))
         return climb(
-            rows.g_rows, rows.g, k, rows.kmin, rows.kmax, m.order, m.starts, v[m.dims], self.eps, self.stage_end, moves
+            rows.g_rows,
+            rows.g,
+            k,
+            rows.kmin,
+            rows.kmax,
+            m.order,
+            m.starts,
+            v[m.dims],
+            self.eps,
+            self.stage_end,
+            moves,
+            self.session.settings.climb_scales,
         )
 
     def margins(self, k: Array) -> Array:

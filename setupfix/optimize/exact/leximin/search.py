@@ -8,8 +8,9 @@ does not.  Started from the paper's optimum, the levels spent most of their time
 margins of the active dimensions are lexicographically largest (the fixed ones kept at their
 floors), among the moves ``s·e_i`` and ``s·(±e_i ± e_j)`` — one register, or two that share a
 row (a WKS and a tool that must move together to keep a dimension) — with the step s from
-:data:`SCALES` down to 1 as the climbs stop.  How often it reaches a leximin-optimal point is
-measured by ``bench/leximin_speed.py``; where it does not, the levels climb on from its point.
+:data:`SCALES` (the solver's: ``ExactSettings.climb_scales``) down to 1 as the climbs stop.  How
+often it reaches a leximin-optimal point is measured by ``bench/leximin_speed.py``; where it does
+not, the levels climb on from its point.
 
 The climb is a heuristic and takes no decision: the levels use its point only where its own
 level is higher than theirs (:meth:`~setupfix.optimize.exact.leximin.level.LevelModel.level_of`), and
@@ -29,7 +30,8 @@ __all__ = ["SCALES", "Moves", "climb", "climb_moves", "group_min", "lex_order", 
 
 Array = npt.NDArray[np.float64]
 
-#: Steps of the moves, largest first [steps]; each scale climbs until no move improves.
+#: Steps of the moves, largest first [steps]; each scale climbs until no move improves (the default of
+#: :func:`climb`; the solver passes ``ExactSettings.climb_scales``, the same by default).
 SCALES = (4.0, 1.0)
 
 
@@ -116,6 +118,7 @@ def climb(
     eps: float,
     deadline: float = np.inf,
     moves: Moves | None = None,
+    scales: tuple[float, ...] = SCALES,
 ) -> Array:
     """A grid point at least as good as k in the leximin order of the active dimensions.
 
@@ -136,6 +139,8 @@ def climb(
         ``time.perf_counter()`` at which the climb stops where it is (the solve's limit).
     moves : tuple of ndarray, optional
         :func:`climb_moves` of (g_rows, order), when the caller keeps them (one model, many reports).
+    scales : tuple of float, optional
+        Steps of the moves, largest first [steps] (default :data:`SCALES`).
 
     Returns
     -------
@@ -151,7 +156,7 @@ def climb(
     below = floors[fixed] - 1e-9
     pairs = two_rows_each(starts, g_rows.shape[0])
     cur = _sorted_margins(m_k[None, :], starts, active, fixed, below, pairs)[0]
-    for s in SCALES:
+    for s in scales:
         moved = True
         scaled = ((single, s * d_single), (double, s * d_double))
         while moved and time.perf_counter() < deadline:
