@@ -151,15 +151,15 @@ def _ablation(levels: bool, cell_level: bool):
         p = cell_pvalue(g, lof[0], lof[1], 2) if lof is not None else cell_pvalue(g, rss0, df0, 2)
         return Candidate(p, p, 0.0, (spec,), -1)
 
-    saved = candidates.level_positions, select._relation_candidate
+    saved = candidates.level_positions, select.relation_candidate
     if not levels:
         candidates.level_positions = lambda series, max_positions, min_side: []
     if cell_level:
-        select._relation_candidate = old_relation
+        select.relation_candidate = old_relation
     try:
         yield
     finally:
-        candidates.level_positions, select._relation_candidate = saved
+        candidates.level_positions, select.relation_candidate = saved
 
 
 def section_a2(lines: list[str]) -> None:

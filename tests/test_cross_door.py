@@ -23,7 +23,6 @@ import csv
 import io
 import json
 import shutil
-import sys
 from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
@@ -370,8 +369,8 @@ def _modelled(name: str, report: Path) -> Iterator[Case]:
     model = report.parent.parent / f"{report.parent.name}.model.toml"
     code, _, _ = cli("model", "init", report, "-o", model)
     if code == 0:
-        # a scaffold is a draft, which every door holds (tests/test_recommend_draft.py): the doors are compared
-        # on its relations, as after the user has checked them
+        # a scaffold is a draft, which every door holds (tests/correction/test_recommend_draft.py): the doors are
+        # compared on its relations, as after the user has checked them
         text = model.read_text(encoding="utf-8")
         model.write_text(text.replace("\ndraft = true", "\ndraft = false"), encoding="utf-8")
         yield Case(f"{name} (model init)", model, [report])
@@ -379,12 +378,7 @@ def _modelled(name: str, report: Path) -> Iterator[Case]:
 
 def everything_model(tmp: Path) -> Path:
     """Guide pins with register costs, every safety setting, effects and EWMA λ = 0.5."""
-    sys.path.insert(0, str(Path(__file__).parent / "usecases" / "data"))
-    try:
-        # a script beside the goldens it writes, imported from its folder: not a module mypy can find
-        from make_correct_goldens import EFFECTS, costed_model  # type: ignore[import-not-found]
-    finally:
-        sys.path.pop(0)
+    from usecases.data.make_correct_goldens import EFFECTS, costed_model
     model = tmp / "everything.toml"
     text = costed_model(tmp).read_text(encoding="utf-8")
     model.write_text(text.replace("[safety]\n", "[safety]\newma = 0.5\n", 1) + EFFECTS, encoding="utf-8")
