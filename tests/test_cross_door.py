@@ -379,6 +379,7 @@ def _modelled(name: str, report: Path) -> Iterator[Case]:
 def everything_model(tmp: Path) -> Path:
     """Guide pins with register costs, every safety setting, effects and EWMA λ = 0.5."""
     from usecases.data.make_correct_goldens import EFFECTS, costed_model
+
     model = tmp / "everything.toml"
     text = costed_model(tmp).read_text(encoding="utf-8")
     model.write_text(text.replace("[safety]\n", "[safety]\newma = 0.5\n", 1) + EFFECTS, encoding="utf-8")
