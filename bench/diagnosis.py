@@ -12,8 +12,8 @@
   logged spindle speed), and the same stick-out × speed term in the diagnosis's own model;
 * :func:`svd_seconds`: the diagnosis benches' reference time.
 
-The tests have the same helpers (``tests/diagnose/helpers.py``, ``tests/diagnose/plate_doe.py``): the
-tests do not import the benches, and ``tests`` is not a package the benches can import.
+The diagnosis tests use the same helpers (``from bench.diagnosis import …``): one simulator set-up and
+one analysis of the plate's experiment for the tests and the benches.
 """
 
 from __future__ import annotations
@@ -21,8 +21,9 @@ from __future__ import annotations
 import os
 import time
 import tomllib
+from collections.abc import Iterable
 from pathlib import Path
-from typing import Any
+from typing import Any, TypedDict, Unpack
 
 import numpy as np
 import scipy.stats
@@ -88,12 +89,32 @@ def one_effect(layout: Layout, kind: str, scale: float = 1.0) -> HiddenEffect:
     raise KeyError(kind)
 
 
+class SimulatorParams(TypedDict, total=False):
+    """The keyword parameters of :class:`ShopSimulator` (the seed apart)."""
+
+    n_cycles: int
+    noise: float
+    setup_error: float
+    cycle_minutes: float
+    shift_cycles: int
+    pause_hours: float
+    correct_every: int
+    dead_time: float
+    gain: float
+    tool_change_every: int
+    heat: float
+    sparse: int
+    decimals: int
+    process: int
+    part_noise: float
+
+
 def simulate(
-    layout: Layout, effects: tuple[HiddenEffect, ...] | list[HiddenEffect] = (), seed: int = 0, **params: Any
+    layout: Layout, effects: Iterable[HiddenEffect] = (), seed: int = 0, **params: Unpack[SimulatorParams]
 ) -> SimulatedSeries:
     """A shop's series on ``layout`` with the hidden ``effects``: 40 cycles, noise :data:`NOISE` unless given."""
-    params = {"n_cycles": 40, "noise": NOISE, **params}
-    return ShopSimulator(seed=seed, **params).run(layout, tuple(effects))
+    given: SimulatorParams = {"n_cycles": 40, "noise": NOISE, **params}
+    return ShopSimulator(seed=seed, **given).run(layout, tuple(effects))
 
 
 def svd_seconds() -> float:
@@ -112,6 +133,18 @@ LONG = "doe_tool_length=Long"
 OPERATOR = "doe_tool_length=Operator"
 SPEEDS = ("doe_speed=High", "doe_speed=Medium", "doe_speed=Low")
 RPM = "endmill_rpm"
+
+
+class SpeedTest(TypedDict):
+    """One tool register's row of :func:`speed_tests`."""
+
+    register: str
+    p_speed: float
+    p_interaction: float
+    slope: float
+    t: float
+    p_slope: float
+    df_slope: int
 
 
 def channel(series: Series, name: str) -> np.ndarray:
@@ -145,7 +178,7 @@ def nested_f(y: np.ndarray, small: np.ndarray, big: np.ndarray) -> tuple[float, 
     return f, df1, df2, float(scipy.stats.f.sf(f, df1, df2))
 
 
-def speed_tests(layout: Layout, series: Series) -> list[dict[str, float | str]]:
+def speed_tests(layout: Layout, series: Series) -> list[SpeedTest]:
     """Per tool register: the speed in the factorial (any effect of speed, and the stick-out × speed
     interaction), and within the long stick-out the slope on the logged speed [mm per 1000 rpm]."""
     y_all, names = part_means(layout, series)
@@ -158,7 +191,7 @@ def speed_tests(layout: Layout, series: Series) -> list[dict[str, float | str]]:
     cells = np.column_stack([additive, spd * long[:, None]])
     on = channel(series, LONG) == 1
     rpm = channel(series, RPM)[on] / 1000.0
-    out: list[dict[str, float | str]] = []
+    out: list[SpeedTest] = []
     for i, name in enumerate(names):
         y = y_all[doe, i]
         p_any = nested_f(y, stick, cells)[3]

@@ -7,9 +7,9 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from diagnose.helpers import NOISE, guide_pins, simulate
 from diagnose.test_plate import LOG, MODEL, PLATE, needs_log
 
+from bench.diagnosis import NOISE, guide_pins, simulate
 from setupfix.diagnose import Diagnoser, Layout, Series, Term, factor_tests, parse_terms
 from setupfix.diagnose.factors import holm, term_columns
 from setupfix.diagnose.terms import channel_values
@@ -103,11 +103,11 @@ def test_the_plate_names_the_stick_out_and_the_speed_per_cutter_as_the_independe
     """Declared, the experiment's factors are tested as stated.  At alpha = 0.01 the stick-out is named on the
     cutters (T5B's holes move least: Holm 0.03) and the stick-out x speed interaction on T5A; at 0.05 on T5A, T1
     and T5B, never on T4A (whose holes do not follow the speed), as the pre-specified 2 x 3 factorial on part
-    means says (``plate_doe.speed_tests``).  The per-part p-values rank the cutters as the factorial does and
+    means says (``bench.diagnosis.speed_tests``).  The per-part p-values rank the cutters as the factorial does and
     are never more optimistic than it; they are larger (up to ~50x): the cluster-robust variance with its
     small-sample correction (CR2, Bell-McCaffrey df ~ 8 for 20 parts) pays for not assuming every part alike,
     the price of the calibration (``bench/diagnose_factors.py`` B, C)."""
-    from diagnose.plate_doe import speed_tests
+    from bench.diagnosis import speed_tests
 
     inp = load_series(MODEL, (PLATE,), process=str(LOG))
     ft = factor_tests(inp.layout, inp.series, parse_terms(DESIGN))

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from diagnose.helpers import guide_pins, simulate
 
+from bench.diagnosis import guide_pins, simulate
 from setupfix.correction.relation import null_space_directions
 from setupfix.diagnose import Layout, Series, fit_model
 from setupfix.diagnose.fit import Array, row_space_basis

@@ -7,8 +7,8 @@ import numpy as np
 import numpy.typing as npt
 import pytest
 import scipy.stats
-from diagnose.helpers import NOISE, guide_pins, simulate
 
+from bench.diagnosis import NOISE, guide_pins, simulate
 from setupfix.diagnose import Layout
 from setupfix.diagnose.inference import cluster_test, cycle_sums, dimension_pvalue, lack_of_fit
 

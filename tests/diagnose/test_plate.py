@@ -86,7 +86,7 @@ def test_the_spindle_speed_is_real_but_not_claimed_by_the_search() -> None:
     (``bench/diagnose_real.py`` C, D).  The speed is the gap to the per-cutter model's 0.025 mm."""
     import dataclasses
 
-    from diagnose.plate_doe import LONG, RPM, channel, residual_rms, speed_term_pvalues, speed_tests
+    from bench.diagnosis import LONG, RPM, channel, residual_rms, speed_term_pvalues, speed_tests
 
     inp = load_series(MODEL, (PLATE,), process=str(LOG))
     layout, s = inp.layout, inp.series

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from diagnose.helpers import NOISE, guide_pins
 
+from bench.diagnosis import NOISE, guide_pins
 from setupfix.diagnose import Diagnoser, Layout, Series, walk_forward
 from setupfix.diagnose.forecast import relation_composite
 from setupfix.model.effects import EffectsSection

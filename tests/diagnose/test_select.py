@@ -7,8 +7,8 @@ import dataclasses
 import numpy as np
 import pytest
 import scipy.stats
-from diagnose.helpers import NOISE, guide_pins, one_effect, simulate, topology
 
+from bench.diagnosis import NOISE, guide_pins, one_effect, simulate, topology
 from setupfix.diagnose import (
     Diagnoser,
     Diagnosis,

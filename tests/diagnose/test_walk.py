@@ -6,8 +6,8 @@ import dataclasses
 
 import numpy as np
 import pytest
-from diagnose.helpers import guide_pins, one_effect, simulate
 
+from bench.diagnosis import guide_pins, one_effect, simulate
 from setupfix.diagnose import Diagnoser, EffectSpec, Layout, Series, fit_model, walk_forward
 from setupfix.diagnose.walk import (
     Budget,
