@@ -6,8 +6,8 @@ import dataclasses
 
 import numpy as np
 import pytest
-from diagnose.helpers import guide_pins, one_effect, simulate
 
+from bench.diagnosis import guide_pins, one_effect, simulate
 from setupfix.diagnose import Diagnoser, Diagnosis, Layout, Series
 from setupfix.diagnose.walk import NextSource, centred_registers, ewma_forecast
 from setupfix.usecases.correct import correct_cycle
