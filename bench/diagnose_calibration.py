@@ -11,7 +11,7 @@ A. Nothing hidden: share of series with any effect reported, and with a time-dep
    interval reaches down to α or below.
    A2: the same with a three-channel process log (speed, stick-out, feed): the level and
    process candidates, one-register and per-register sets, all tried.
-B. Detection limits of every kind (the clearly detectable magnitudes of tests/diagnose/helpers.py
+B. Detection limits of every kind (the clearly detectable magnitudes of bench/diagnosis.py
    and of tests/diagnose/test_kinds.py, ×1, ×0.5 and ×0.25) on the guide pins (process log of three
    channels) without shared noise and with f = 2: share of seeds with the right kind and target
    (or the target among those named alike; a per-register set: every register hidden named on

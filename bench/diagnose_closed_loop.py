@@ -6,7 +6,7 @@ Series come from the closed-loop shop simulator (``setupfix simulate``): 40 cycl
 corrections every 5 cycles with a 30 min dead time, a tool change every 16 cycles.
 
 A. For every kind, one hidden effect (the clearly detectable magnitudes of
-   ``tests/diagnose/helpers.py``) on the guide-pins model (with feature positions)
+   ``bench/diagnosis.py``) on the guide-pins model (with feature positions)
    and on random topologies: right kind; right target (fitted, named alone, or among
    the candidates the report names as indistinguishable); residual RMS after / σ.
    A relation is also run with an operator who corrects only the two largest

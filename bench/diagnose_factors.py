@@ -3,7 +3,7 @@
 A. The NIST plate with its process log, the experiment declared (doe_tool_length, doe_speed and their
    interaction): each term per cutter register, the part as the cluster (multi-column cluster-robust Wald
    test), Holm over the 15 declared tests; beside it the pre-specified 2 x 3 factorial on part means
-   (tests/diagnose/plate_doe.py).  The diagnosis with and without the declaration: residual, out of
+   (bench/diagnosis.py).  The diagnosis with and without the declaration: residual, out of
    tolerance, walk forward.
 B. No real effect, the plate: the log's rows (every channel together, so the design stays a 2 x 3 with
    the operator's parts) dealt to the parts at random (seeded permutations): share with any declared

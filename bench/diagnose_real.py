@@ -13,7 +13,7 @@ B. Shuffled timestamps: the plate's machining times (from its log) dealt to the 
    effect (drift, thermal, wear, level) on shuffled times is a false alarm, since whatever the
    parts differ by no longer follows time.  The same for the box.
 C. The plate's second designed factor, the spindle speed: (1) the experiment analysed with the
-   part as the unit and the hypothesis stated in advance (``tests/diagnose/plate_doe.py``: the
+   part as the unit and the hypothesis stated in advance (``bench/diagnosis.py``: the
    2 x 3 factorial with three parts per cell, and the slope on the logged speed within the long
    stick-out); (2) the same stick-out x speed term tested per part as the diagnosis tests a
    one-column candidate, in the model it found, against the threshold its search must meet
