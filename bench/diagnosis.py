@@ -128,7 +128,7 @@ def svd_seconds() -> float:
     return best
 
 
-# The plate's designed experiment, analysed apart from the diagnosis (as tests/diagnose/plate_doe.py).
+# The plate's designed experiment, analysed apart from the diagnosis.
 LONG = "doe_tool_length=Long"
 OPERATOR = "doe_tool_length=Operator"
 SPEEDS = ("doe_speed=High", "doe_speed=Medium", "doe_speed=Low")
