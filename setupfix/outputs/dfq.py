@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import math
 import os
+import unicodedata
 from dataclasses import dataclass
 from datetime import datetime
 from decimal import Decimal
@@ -30,6 +31,7 @@ from typing import Any
 
 import pandas as pd
 
+from parsers.names import visible_name
 from parsers.timestamps import parse_timestamp, utc_naive
 from setupfix.core.errors import ExportError, Note, SourceLocation
 from setupfix.outputs.writers import write_text
@@ -48,9 +50,21 @@ def _number(value: float) -> str:
 
 
 def _field(text: str, what: str, where: SourceLocation) -> str:
-    """A text field for one K-field line: one line, no surrounding blanks (the reader strips them)."""
-    if any(c in text for c in "\r\n\x0f\x14") or not text.isprintable():
-        raise ExportError(f"{what} {text[:40]!r} holds a control character: a DFQ field is one line", location=where)
+    """A text field for one K-field line: one line, no surrounding blanks (the reader strips them).
+
+    Any Unicode space (category Zs: the no-break space of a spreadsheet, a thin space) is a
+    blank like the ASCII one: kept as it is inside the name (it reads back the same), stripped
+    around it.  A control or format character (a line or field separator, a tab, an escape, a
+    zero-width or direction mark) cannot be one field and is refused, named by its code point.
+    """
+    bad = next((c for c in text if not (c.isprintable() or unicodedata.category(c) == "Zs")), None)
+    if bad is not None:
+        raise ExportError(
+            f"{what} '{visible_name(text[:40])}' holds the control character U+{ord(bad):04X}: "
+            "a DFQ field is one line of visible text",
+            location=where,
+            hint="rename it in the report, or leave the report out of the store",
+        )
     return text.strip()
 
 
