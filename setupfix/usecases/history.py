@@ -28,7 +28,7 @@ from setupfix.core.errors import Note, ParameterError, ParseError, SourceLocatio
 from setupfix.inputs.stores import DEFAULT_DB, StoreRef, store_location
 from setupfix.model import CANONICAL_COLUMNS, ProcessModel
 from setupfix.outputs.dfq import export_dfq
-from setupfix.outputs.writers import write_canonical_csv, write_table_csv
+from setupfix.outputs.writers import csv_cell, escape_formulas, write_canonical_csv, write_table_csv
 from setupfix.store import Recommendation, Store
 from setupfix.store.audit import TABLES
 from setupfix.usecases.contract import cycle_json
@@ -201,6 +201,16 @@ def history_summary(store: Store, *, every_machine: bool = True) -> dict[str, ob
     }
 
 
+def _escaped(frame: pd.DataFrame) -> pd.DataFrame:
+    """``frame`` as every history CSV writes it: each text cell through
+    :func:`~setupfix.outputs.writers.escape_formulas` (a formula prefixed with ``'``, a control
+    character or a non-UTF-8 byte made visible), and each header (a temperature channel's name)
+    through the same :func:`~setupfix.outputs.writers.csv_cell`."""
+    out = escape_formulas(frame)
+    out.columns = [csv_cell(str(c)) for c in out.columns]
+    return out
+
+
 def export_history(
     store: Store, table: str, target: str | os.PathLike[str], *, every_machine: bool = False
 ) -> tuple[int, tuple[Note, ...]]:
@@ -216,15 +226,14 @@ def export_history(
     if table == "measurements":
         frame = store.measurements()
         write_canonical_csv(frame[[*CANONICAL_COLUMNS, "reference"]], target)
-    elif table == "corrections":
-        frame = store.corrections()
-        write_table_csv(frame, target)
-    elif table == "temperatures":
-        frame = store.temperatures()
-        write_table_csv(frame, target)
-    elif table == "recommendations":
-        frame = store.audit(every_machine=every_machine)
-        write_table_csv(frame, target)
+    elif table in ("corrections", "temperatures", "recommendations"):
+        if table == "corrections":
+            frame = store.corrections()
+        elif table == "temperatures":
+            frame = store.temperatures()
+        else:
+            frame = store.audit(every_machine=every_machine)
+        write_table_csv(_escaped(frame), target)
     elif table == "dfq":
         return export_dfq(store, target)
     else:
@@ -254,9 +263,9 @@ def record_recommendations(
         for r in results:
             result = cycle_json(r)
             inputs = {
-                "model": str(model),
+                "model": visible_name(os.fspath(model)),  # printable: a non-UTF-8 or ESC-holding name is escaped
                 "model_sha256": hashes["model"],
-                "report": str(report),
+                "report": visible_name(os.fspath(report)),
                 "report_sha256": hashes["report"],
                 "part": result.get("part"),
                 "seed": seed,
