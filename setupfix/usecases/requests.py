@@ -309,7 +309,22 @@ class CycleCorrection:
 
     @property
     def margin_after(self) -> float:
+        """δ after, over the dimensions kept (see :attr:`margin_all_after` for every dimension)."""
         return self.problem.dimension_budget(self.x, self.recommendation.given_up)[0]
+
+    @property
+    def margin_all_before(self) -> float:
+        """δ before over every dimension, the given-up ones included: the contract's ``margin_before``."""
+        return self.problem.dimension_budget(np.zeros_like(self.x))[0]
+
+    @property
+    def margin_all_after(self) -> float:
+        """δ after over every dimension, the given-up ones included: the contract's ``margin_after``.
+
+        Negative whenever any dimension (given up or not) is predicted out of tolerance, so a
+        script that reads ``margin_after >= 0`` as "every dimension in" is told the truth.
+        """
+        return self.problem.dimension_budget(self.x)[0]
 
     @property
     def norm(self) -> float:

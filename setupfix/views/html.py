@@ -388,7 +388,14 @@ def _cycle_section(pc: CycleCorrection, history: dict[str, DimensionSpc]) -> str
         f"<section><h2>{_e(pc.part.report)} — part {_e(pc.part.part or '—')}</h2>",
         f'<p class="verdict {_e(pc.verdict)}">{_e(said)}</p>',
         f"<p>Error budget before {_n(pc.margin_before, 4, True)} {_e(unit)}, after "
-        f"{_n(pc.margin_after, 4, True)} {_e(unit)}; binding dimensions: {_e(binding)}.</p></section>",
+        f"{_n(pc.margin_after, 4, True)} {_e(unit)}"
+        + (  # a triage: the budget above is over the kept set; say what every dimension's is
+            f" over the dimensions kept; over every dimension before {_n(pc.margin_all_before, 4, True)} "
+            f"{_e(unit)}, after {_n(pc.margin_all_after, 4, True)} {_e(unit)}"
+            if pc.given_up
+            else ""
+        )
+        + f"; binding dimensions: {_e(binding)}.</p></section>",
         f"<section><h3>Tolerance zones: measured (dot) and predicted after the correction (diamond)</h3>{zone}"
         "</section>",
         f'<section><h3>Registers [{_e(unit)}]</h3><table class="registers">{"".join(regs)}</table></section>',
