@@ -6,7 +6,14 @@ import argparse
 import json
 import sys
 
-from setupfix.cli.common import add_report_options, cycles_of, read_options, whole_number
+from setupfix.cli.common import (
+    add_machine_options,
+    add_report_options,
+    cycles_of,
+    read_options,
+    store_ref,
+    whole_number,
+)
 
 
 def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
@@ -35,6 +42,20 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
     p.add_argument(
         "--plot", default=None, metavar="FILE", help="draw convergence and spread figures to FILE (.png or .svg)"
     )
+    p.add_argument(
+        "--store",
+        metavar="DB",
+        default=None,
+        help="history store (a file, or a postgresql:// URL), as correct reads it: the EWMA smoothing and "
+        "the recent measurements that stand in for dimensions the report lacks (nothing is recorded)",
+    )
+    add_machine_options(p)
+    p.add_argument(
+        "--current",
+        metavar="FILE",
+        default=None,
+        help="the controller's current offsets (as correct reads them: the cumulative limit of wear registers)",
+    )
     add_report_options(p)
     p.set_defaults(run=run)
 
@@ -44,21 +65,22 @@ def run(args: argparse.Namespace) -> int:
     from setupfix.outputs.writers import check_target
     from setupfix.usecases.compare import CompareRequest, compare_report, plot_comparison
     from setupfix.usecases.contract import note_lines
+    from setupfix.usecases.correct import load_request
     from setupfix.usecases.requests import SolveOptions
     from setupfix.views.present import format_comparison
 
     if args.plot:
         figure_format(args.plot)  # refuse an unknown suffix or target before the trials, not after
         check_target(args.plot)
-    solve = SolveOptions("exact", None, args.time_limit)
-    request = CompareRequest(
+    correct = load_request(  # correct's request, read as correct reads it: the same problem is compared
         args.model,
-        read_options(args),
-        cycles_of(args),
-        trials=args.trials,
-        seed=args.seed,
-        params={"exact": solve.params()},
+        read=read_options(args),
+        cycles=cycles_of(args),
+        solve=SolveOptions("exact", None, args.time_limit, "paper"),
+        current=args.current,
+        store=store_ref(args, args.store),
     )
+    request = CompareRequest(correct, trials=args.trials, seed=args.seed)
     comparison = compare_report(request, args.report)
     if args.plot:
         plot_comparison(comparison, args.plot)

@@ -30,11 +30,10 @@ import numpy as np
 import numpy.typing as npt
 
 from setupfix.core.errors import Note
-from setupfix.correction.pose import pose_problem
-from setupfix.inputs.cycles import read_parts
 from setupfix.model import ProcessModel, load_model
 from setupfix.optimize import CorrectionProblem, OptimizeResult, get_optimizer
-from setupfix.usecases.requests import CycleOptions, ReadOptions
+from setupfix.usecases.correct import pose_cycle, read_cycles
+from setupfix.usecases.requests import CorrectRequest
 
 __all__ = [
     "DEFAULT_METHODS",
@@ -62,17 +61,33 @@ def trial_seeds(seed: int, trials: int) -> list[int]:
 
 @dataclass(frozen=True)
 class CompareRequest:
-    """What ``compare`` needs besides the report: the model, the reader's and the cycles' options,
-    the methods, trials per method, the root seed and hyper-parameters by optimiser name
-    (``"exact"`` included, e.g. its time limit)."""
+    """What ``compare`` needs besides the report: ``correct``'s request, the methods, trials per
+    method, the root seed and hyper-parameters by optimiser name (``"exact"`` included).
 
-    model: ProcessModel | str | Path
-    read: ReadOptions = field(default_factory=ReadOptions)
-    cycles: CycleOptions = field(default_factory=CycleOptions)
+    ``request`` is the :class:`~setupfix.usecases.requests.CorrectRequest` ``correct`` takes
+    (model, reader's and cycles' options, current offsets, history, the exact optimiser's
+    settings), so the problem compared is the one ``correct`` solves; a model or its file
+    stands for a request with every option at its default.  The exact yardstick pursues the
+    paper's objective unless ``request.solve`` or ``params["exact"]`` asks otherwise.
+    """
+
+    request: CorrectRequest | ProcessModel | str | Path
     methods: tuple[str, ...] = DEFAULT_METHODS
     trials: int = 12
     seed: int = 0
     params: Mapping[str, Mapping[str, Any]] = field(default_factory=dict)
+
+    def correct_request(self) -> CorrectRequest:
+        """``correct``'s request (the model file read once when a path was given)."""
+        if isinstance(self.request, CorrectRequest):
+            return self.request
+        model = self.request if isinstance(self.request, ProcessModel) else load_model(self.request)
+        return CorrectRequest(model)
+
+    def exact_params(self, request: CorrectRequest) -> dict[str, Any]:
+        """The exact yardstick's settings: the paper's objective, then ``request.solve``'s, then ``params``'."""
+        solve = request.solve.params() if request.solve.optimizer == "exact" else {}
+        return {"objective": "paper", **solve, **self.params.get("exact", {})}
 
 
 @dataclass(frozen=True, eq=False)
@@ -299,24 +314,30 @@ def compare_problem(
 
 
 def compare_report(request: CompareRequest, report: str | Path) -> Comparison:
-    """Compare the methods on one cycle of a report (the first one unless ``request.cycles.part`` names it).
+    """Compare the methods on one cycle of a report (the first one unless the cycles' ``part`` names it).
 
-    The problem is the one ``correct`` solves (:func:`setupfix.correction.pose.pose_problem`: the
-    model's forecast, relations, guard band and register costs), so the exact result
-    is ``correct``'s raw optimum.
+    The report is read and the problem posed by ``correct``'s own steps
+    (:func:`setupfix.usecases.correct.read_cycles`, :func:`setupfix.usecases.correct.pose_cycle`:
+    the smoothing and stand-ins of the history, the current offsets' cumulative bounds, the
+    model's forecast, relations, guard band and register costs), so the exact result is
+    ``correct``'s raw optimum on the same inputs.
     """
-    model = request.model if isinstance(request.model, ProcessModel) else load_model(request.model)
-    _, parts = read_parts(model, report, **request.read.kwargs(), **request.cycles.kwargs())
-    measured = request.cycles.select(parts, report)[0]
-    posed = pose_problem(model, measured)
+    correct = request.correct_request()
+    source, _, parts = read_cycles(correct, report)
+    measured = parts[0]
+    posed = pose_cycle(correct, measured)
     result = compare_problem(
-        posed.guarded, methods=request.methods, trials=request.trials, seed=request.seed, params=request.params
+        posed.guarded,
+        methods=request.methods,
+        trials=request.trials,
+        seed=request.seed,
+        params={**request.params, "exact": request.exact_params(correct)},
     )
     return dataclasses.replace(
         result,
         part=measured.part,
-        report=measured.report or str(report),
-        unit=model.unit,
+        report=measured.report or source.name,
+        unit=correct.model.unit,
         notes=(*measured.notes, *posed.notes),
     )
 

@@ -22,7 +22,7 @@ import numpy as np
 import parsers
 from setupfix.core.errors import Note, ParameterError, SetupfixError
 from setupfix.correction.ewma import Smoothed
-from setupfix.correction.pose import pose_problem
+from setupfix.correction.pose import PosedProblem, pose_problem
 from setupfix.correction.recommend import recommend
 from setupfix.correction.safety import Recommendation, RuleEffect, short_list
 from setupfix.inputs.cycles import read_parts
@@ -46,7 +46,7 @@ from setupfix.usecases.requests import (
 if TYPE_CHECKING:
     from setupfix.usecases.thermal_feedforward import ThermalFeedForward
 
-__all__ = ["correct_report", "correct_cycle", "load_request", "open_history"]
+__all__ = ["correct_report", "correct_cycle", "pose_cycle", "read_cycles", "load_request", "open_history"]
 
 
 def _applied_result(problem: CorrectionProblem, rec: Recommendation) -> OptimizeResult:
@@ -117,6 +117,49 @@ def _feed_forward(thermal: ThermalInputs, cycle: CycleCorrection) -> ThermalFeed
     return ff
 
 
+def pose_cycle(
+    request: CorrectRequest,
+    part: PartMeasurement,
+    *,
+    composite: np.ndarray | None = None,
+    hold: RuleEffect | None = None,
+) -> PosedProblem:
+    """The problem of one measured cycle as ``correct`` poses it: the one problem builder of every door.
+
+    The smoothing over ``request.history``, its stand-ins for dimensions the report lacks, the
+    cumulative bounds of ``request.current``'s wear totals, then
+    :func:`setupfix.correction.pose.pose_problem` (``composite`` and ``hold`` as in
+    :func:`correct_cycle`).  ``compare`` solves exactly this problem.
+    """
+    model = request.model
+    cumulative = request.current.wear_totals(model) if request.current is not None else None
+    stand_in = request.history.stand_in(model, part) if request.history is not None else None
+    return pose_problem(
+        model,
+        part,
+        smoothed=_smoothed(request, part),
+        cumulative=cumulative,
+        composite=composite,
+        stand_in=stand_in,
+        hold=hold,
+    )
+
+
+def read_cycles(
+    request: CorrectRequest, report: str | Path | parsers.Source
+) -> tuple[parsers.Source, parsers.ReadResult, list[PartMeasurement]]:
+    """Read a report once and tie it to the model: the source, what was read, the cycles ``request`` selects.
+
+    Raises
+    ------
+    SetupfixError
+        Unreadable or unmatchable report, unknown part (named with file and place).
+    """
+    source = parsers.load_source(report)
+    read, parts = read_parts(request.model, source, **request.read.kwargs(), **request.cycles.kwargs())
+    return source, read, request.cycles.select(parts, source.name)
+
+
 def correct_cycle(
     request: CorrectRequest,
     part: PartMeasurement,
@@ -131,17 +174,7 @@ def correct_cycle(
     diagnosis's centre rule, :func:`setupfix.correction.pose.pose_problem`).
     """
     model = request.model
-    cumulative = request.current.wear_totals(model) if request.current is not None else None
-    stand_in = request.history.stand_in(model, part) if request.history is not None else None
-    posed = pose_problem(
-        model,
-        part,
-        smoothed=_smoothed(request, part),
-        cumulative=cumulative,
-        composite=composite,
-        stand_in=stand_in,
-        hold=hold,
-    )
+    posed = pose_cycle(request, part, composite=composite, hold=hold)
     solve = request.solve
     opt = get_optimizer(solve.optimizer, seed=solve.seed, **solve.params())
     names = {d.id: d.name for d in model.dimensions}
@@ -195,10 +228,8 @@ def correct_report(request: CorrectRequest, report: str | Path | parsers.Source)
         Unreadable or unmatchable report, unknown part, bad thermal inputs (named with
         file and place).
     """
-    model = request.model
-    source = parsers.load_source(report)
-    read, parts = read_parts(model, source, **request.read.kwargs(), **request.cycles.kwargs())
-    cycles = tuple(correct_cycle(request, p) for p in request.cycles.select(parts, source.name))
+    source, read, parts = read_cycles(request, report)
+    cycles = tuple(correct_cycle(request, p) for p in parts)
     return CorrectOutcome(
         report=source.name,
         format=read.format,
