@@ -1,9 +1,10 @@
 """The controller's current offsets (``--current FILE``, ``cli-json.md`` "Current offsets"): the one reader.
 
-One-axis model: a CSV with the header ``register,value`` (any case; more columns after
-these two are ignored).  ``register`` is the controller register (``G54``, ``H5``) or the
-model ID (``W1``); ``value`` the register's current value in the model unit, written with
-a decimal point.
+One-axis model: a CSV with the header ``register,value`` (any case) and no other column:
+the values go into the control, so a comment column, which would hide the second half of a
+decimal comma (``G54,-412,530`` read as −412), is refused.  ``register`` is the controller
+register (``G54``, ``H5``) or the model ID (``W1``); ``value`` the register's current value
+in the model unit, written with a decimal point.
 
 Multi-axis model (``process.axes``): the header ``register,axis,value``, one row per
 register component.  A work offset's row names its axis — ``X``, ``Y``, ``Z`` or ``C``
@@ -14,9 +15,10 @@ are returned by component ID (``W1.X``, ``W1.C``, ``T5``, ``T5.R``).
 
 Either way every correctable register (component) of the model must be listed, so that a
 *set* file is complete; a register the model does not know is an error (a typo would
-otherwise pass unnoticed).  Refused, naming the file and line: a row with more cells than
-the header (a decimal comma, ``G54,-412,5300``, would otherwise be read as −412 and its
-``5300`` dropped), a value that is not a plain decimal number or that no control holds (not
+otherwise pass unnoticed).  Refused, naming the file and line: a header with any other
+column (a comment, an empty one after a trailing comma, another delimiter), a row with more
+cells than the header (a decimal comma, ``G54,-412,5300``, would otherwise be read as −412
+and its ``5300`` dropped), a value that is not a plain decimal number or that no control holds (not
 finite, or :data:`MAX_OFFSET_MM` or more in magnitude; a rotation :data:`MAX_OFFSET_MM`
 degrees), an unknown or repeated register (component), a work offset without its axis or a
 tool register with one.
@@ -67,6 +69,16 @@ def _component(model: ProcessModel, key: str, axis: str, where: SourceLocation) 
     raise ParseError(f"register {key!r} is not in the model", location=where)
 
 
+_DECIMAL_COMMA = "a decimal comma splits a number in two: write -412.53, not -412,53"
+
+
+def _header_hint(found: list[str], columns: list[str]) -> str | None:
+    """Why a header that starts right is still refused (the spec's columns only), else None."""
+    if found[: len(columns)] != columns:
+        return "the delimiter is a comma" if found and any(";" in c or "\t" in c for c in found) else None
+    return "no other columns: the values go into the control, and a comment column hides a decimal comma"
+
+
 def _label(reg: Register) -> str:
     return f"{reg.register} {reg.component}" if reg.kind == "wks" and reg.component else reg.register
 
@@ -87,10 +99,16 @@ def read_current(path: str | Path, model: ProcessModel) -> dict[str, float]:
     columns = ["register", "axis", "value"] if multi else ["register", "value"]
     records = csv_records(read_text(path), name)
     head = next(records, None)
-    if head is None or [c.strip().casefold() for c in head[1][: len(columns)]] != columns:
+    found = [c.strip().casefold() for c in head[1]] if head is not None else []
+    if found != columns:
         why = " (a multi-axis model: one row per register component)" if multi else ""
-        raise ParseError(f"expected the header '{','.join(columns)}'{why}", location=SourceLocation(name, line=1))
-    width = len(head[1])
+        line, seen = (head[0], repr(",".join(head[1])[:60])) if head is not None else (1, "an empty file")
+        raise ParseError(
+            f"expected the header '{','.join(columns)}'{why}, found {seen}",
+            location=SourceLocation(name, line=line),
+            hint=_header_hint(found, columns),
+        )
+    width = len(columns)
     limit = MAX_OFFSET_MM * length_factor("mm", model.unit)
     out: dict[str, float] = {}
     for line, cells in records:
@@ -101,9 +119,9 @@ def read_current(path: str | Path, model: ProcessModel) -> dict[str, float]:
             raise ParseError(f"expected {','.join(columns)}", location=where)
         if len(cells) > width:
             raise ParseError(
-                f"{len(cells)} cells but {width} columns in the header",
+                f"{len(cells)} cells but {width} columns in the header ({','.join(columns)})",
                 location=where,
-                hint="a decimal comma splits a number in two: write -412.53, not -412,53",
+                hint=_DECIMAL_COMMA,
             )
         key, text = cells[0].strip(), cells[len(columns) - 1].strip()
         if multi:
@@ -119,7 +137,11 @@ def read_current(path: str | Path, model: ProcessModel) -> dict[str, float]:
             raise ParseError(f"register {shown!r} given twice", location=where)
         value = try_number(text)  # the project's one strict number parser (decimal point, finite)
         if value is None:
-            raise ParseError(f"expected a decimal number, found {text[:30]!r}", location=where)
+            raise ParseError(
+                f"expected a decimal number, found {text[:30]!r}",
+                location=where,
+                hint=_DECIMAL_COMMA if "," in text else None,
+            )
         rotation = reg.component == "C" and reg.kind == "wks"
         bound, unit = (MAX_OFFSET_MM, "degrees") if rotation else (limit, model.unit)
         if abs(value) >= bound:

@@ -45,11 +45,12 @@ def test_bad_current_file(tmp_path: Path, text: str, message: str) -> None:
         read_current(tmp_path / "c.csv", MODEL)
 
 
-def test_more_header_columns_allow_as_many_cells_and_the_limit_follows_the_model_unit(tmp_path: Path) -> None:
+def test_a_comment_column_is_refused_and_the_limit_follows_the_model_unit(tmp_path: Path) -> None:
     (tmp_path / "c.csv").write_text(
         GOOD.replace("register,value", "register,value,comment").replace("G54,-412.53", "G54,-412.53,checked")
     )
-    assert read_current(tmp_path / "c.csv", MODEL)["W1"] == -412.53
+    with pytest.raises(ParseError, match=re.escape("c.csv:1: expected the header 'register,value', found")):
+        read_current(tmp_path / "c.csv", MODEL)
     inch = model_from_dict(
         {
             "process": {"name": "t", "unit": "inch"},

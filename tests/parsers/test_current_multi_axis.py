@@ -39,8 +39,8 @@ def test_model_ids_lower_case_axes_and_a_fixed_register(tmp_path: Path) -> None:
         GOOD.replace("G54,X,", "W1,x,")
         .replace("H5,,", "T5,,")
         .replace("D5,,", "T5.R,,")
-        .replace("register,axis,value", "Register,Axis,Value,comment")
-        + "H7,,1.5,fixed tool\n"
+        .replace("register,axis,value", " Register , Axis,VALUE")
+        + "H7,,1.5\n"
     )
     (tmp_path / "c.csv").write_text(text)
     assert read_current(tmp_path / "c.csv", MODEL) == {**WANT, "T7": 1.5}
