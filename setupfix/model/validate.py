@@ -19,7 +19,7 @@ from typing import Any
 from setupfix.core.errors import ModelError, SourceLocation
 from setupfix.core.units import length_factor
 from setupfix.model.process import Register
-from setupfix.model.slots import register_slots
+from setupfix.model.slots import register_slots, tool_hd
 
 __all__ = [
     "RANGES_MM",
@@ -35,6 +35,7 @@ __all__ = [
     "Ranges",
     "section_of",
     "check_slots",
+    "check_letters",
 ]
 
 #: Allowed ranges of lengths [mm], converted to the model unit when checked.
@@ -210,8 +211,32 @@ def section_of(reg: Register) -> str:
     return f"{'wks' if reg.kind == 'wks' else 'tools'}.{reg.base}"
 
 
+def check_letters(p: Problems, registers: list[Register]) -> None:
+    """A tool register whose letter names another kind of offset: a length named ``Dn`` (a Fanuc/Haas
+    radius/diameter offset, ``G10 L12``/``L13``) or a radius named ``Hn`` (a length offset).  A program
+    would write the change to the wrong offset, so the model is refused naming the key."""
+    for reg in registers:
+        found = tool_hd(reg.register) if reg.kind == "tool" else None
+        if found is None:
+            continue
+        letter, n = found
+        if reg.component == "R" and letter == "H":
+            p.add(
+                f"tools.{reg.base}.radius",
+                f"register {reg.register!r} is an H (tool length) offset; a radius goes to a D register (D{n})",
+            )
+        elif reg.component != "R" and letter == "D":
+            p.add(
+                f"tools.{reg.base}.register",
+                f"register {reg.register!r} is a D (radius/diameter) offset; a tool length goes to an H "
+                f"register (H{n}): the program would write the length change to the diameter",
+            )
+
+
 def check_slots(p: Problems, registers: list[Register]) -> None:
-    """Two registers addressing one controller slot (``H5``/``H05``, ``G110``/``G154 P1``, ``number``)."""
+    """Two registers addressing one controller slot (``H5``/``H05``, ``G110``/``G154 P1``, ``number``),
+    and a tool register whose letter names another kind of offset (:func:`check_letters`)."""
+    check_letters(p, registers)
     owner: dict[str, Register] = {}
     seen: set[tuple[str, str]] = set()
     for reg in registers:

@@ -52,6 +52,7 @@ __all__ = [
     "write_table_csv",
     "FLOAT_FORMAT",
     "FORMULA_START",
+    "ROTATION_UNIT",
 ]
 
 Target = str | os.PathLike[str]
@@ -67,6 +68,10 @@ FORMULA_START = ("=", "+", "-", "@", "\t", "\r")
 #: Columns of the offsets CSV that hold text (names from the report and the model); the others are numbers.
 _OFFSET_TEXT = frozenset({"report", "part", "id", "register", "kind", "axis", "unit", "mode", "offset", "verdict"})
 _TEXT_AT = tuple(i for i, name in enumerate(OFFSET_COLUMNS) if name in _OFFSET_TEXT)
+_UNIT_AT = OFFSET_COLUMNS.index("unit")
+
+#: The ``unit`` cell of a WKS rotation row (component ``C``): its delta, current and value are degrees.
+ROTATION_UNIT = "deg"
 
 
 def csv_cell(text: str) -> str:
@@ -87,11 +92,14 @@ def csv_header() -> str:
 
 
 def csv_lines(rows: Iterable[OffsetRow]) -> str:
-    """The data lines of ``rows``, text cells through :func:`csv_cell` (batch appends them report by report)."""
+    """The data lines of ``rows``, text cells through :func:`csv_cell` (batch appends them report by report);
+    a rotation row's unit is :data:`ROTATION_UNIT`."""
     stream = io.StringIO()
     writer = csv.writer(stream, lineterminator="\n")
     for r in rows:
         cells = r.cells()
+        if r.kind == "wks" and r.axis == "C":  # a rotation is in degrees, whatever the model's length unit
+            cells[_UNIT_AT] = ROTATION_UNIT
         for i in _TEXT_AT:
             cells[i] = csv_cell(cells[i])
         writer.writerow(cells)

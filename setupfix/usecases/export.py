@@ -11,7 +11,8 @@ Policy, the same for every door (``correct --offsets``, the TUI's export, batch)
 * **reject** — nothing is written: :func:`export` refuses with an
   :class:`~setupfix.core.errors.ExportError` naming the report and the part;
 * a controller program (every format but ``csv``) holds one cycle: several are refused
-  (choose one with ``--part``);
+  (choose one with ``--part``); a draft model (``[process] draft = true``) writes no program
+  (:func:`check_program_model`), only the CSV's hold rows;
 * a program is numbered ``program_number`` (``--program-number``) where its format has a
   name, else :func:`~setupfix.outputs.controllers.derived_program_number` of the cycle's
   report and part: the same correction always gets the same number, two corrections
@@ -34,6 +35,8 @@ from dataclasses import dataclass
 
 from setupfix.core.errors import ExportError, SourceLocation
 from setupfix.correction.offsets import OffsetRow, offset_rows
+from setupfix.correction.recommend import DRAFT_KEY
+from setupfix.model import ProcessModel
 from setupfix.outputs.controllers import (
     PROGRAM_NUMBERS,
     check_program_number,
@@ -44,7 +47,7 @@ from setupfix.outputs.controllers import (
 from setupfix.outputs.writers import write_text
 from setupfix.usecases.requests import CycleCorrection
 
-__all__ = ["Exported", "cycle_rows", "offsets_text", "export", "program_number_of"]
+__all__ = ["Exported", "cycle_rows", "offsets_text", "export", "program_number_of", "check_program_model"]
 
 
 @dataclass(frozen=True)
@@ -79,8 +82,29 @@ def cycle_rows(cycle: CycleCorrection, current: Mapping[str, float] | None = Non
     )
 
 
+def check_program_model(model: ProcessModel, controller: str) -> None:
+    """Refuse a controller program (every format but ``csv``) from a draft model (``[process] draft = true``).
+
+    A draft's relations are a guess: its hold of zeros is no instruction a control should load
+    (an incremental program of +0.000 blocks, an absolute one "safe to run again").  The offsets
+    CSV still carries the hold rows with their verdict.
+
+    Raises
+    ------
+    ExportError
+        Naming the model file and the key to remove.
+    """
+    if model.draft and controller != "csv":
+        raise ExportError(
+            f"{controller}: the model is a draft ('{DRAFT_KEY}'): no program is written until its relations "
+            f"are checked and the key removed from its [process] table",
+            location=SourceLocation(model.source),
+        )
+
+
 def _check(cycles: Sequence[CycleCorrection], controller: str) -> None:
     for c in cycles:
+        check_program_model(c.model, controller)
         if c.verdict == "reject":
             raise ExportError(
                 f"part {c.part.part or '—'} is rejected, nothing exported: {c.recommendation.alarm}",

@@ -39,7 +39,7 @@ from typing import Protocol
 
 from setupfix.core.errors import ParameterError
 from setupfix.correction.offsets import OffsetRow
-from setupfix.outputs.controllers.common import PROGRAM_NUMBERS, check_program_number
+from setupfix.outputs.controllers.common import PROGRAM_NUMBERS, check_program_number, check_values
 
 __all__ = [
     "CONTROLLERS",
@@ -104,9 +104,13 @@ def render(
     Raises
     ------
     ExportError
-        A register (or a rotation) the format cannot express, or a program number it cannot hold.
+        A register (or a rotation) the format cannot express, a slot the control does not have, a value
+        no control holds (:func:`~setupfix.outputs.controllers.common.check_values`: the bound of the
+        current-offsets reader), or a program number the format cannot hold.
     """
-    return renderer(name)(rows, title, program_number=program_number, spindle=spindle)
+    fn = renderer(name)
+    check_values(name, rows)
+    return fn(rows, title, program_number=program_number, spindle=spindle)
 
 
 def write_offsets(

@@ -5,7 +5,9 @@ from __future__ import annotations
 import re
 from collections.abc import Sequence
 
+from parsers.current import MAX_OFFSET_MM
 from setupfix.core.errors import ExportError
+from setupfix.core.units import length_factor
 from setupfix.correction.offsets import OffsetRow, format_value, grid_decimals
 
 __all__ = [
@@ -22,6 +24,9 @@ __all__ = [
     "DEFAULT_PROGRAM",
     "PROGRAM_NUMBERS",
     "check_program_number",
+    "check_values",
+    "value_bound",
+    "slot_within",
 ]
 
 #: The component of a WKS rotation about the spindle axis (degrees) and of a tool radius.
@@ -48,6 +53,41 @@ def check_program_number(controller: str, n: int) -> int:
     span = PROGRAM_NUMBERS.get(controller)
     if span is not None and not span[0] <= n <= span[1]:
         raise ExportError(f"{controller}: program number {n} outside {span[0]}…{span[1]} (--program-number)")
+    return n
+
+
+def value_bound(row: OffsetRow) -> tuple[float, str]:
+    """The bound on any value a row writes, and its unit: the one bound of the current-offsets reader
+    (:data:`parsers.current.MAX_OFFSET_MM`, 100 m, in the row's unit; a rotation the same number of degrees)."""
+    if row.kind == "wks" and row.axis == ROTATION:
+        return MAX_OFFSET_MM, "degrees"
+    return MAX_OFFSET_MM * length_factor("mm", row.unit), row.unit
+
+
+def check_values(controller: str, rows: Sequence[OffsetRow]) -> None:
+    """Refuse a row whose change, current or new value is as large as :func:`value_bound` or not finite:
+    no control holds it, so it is a misread or a unit error, never a value to write.
+
+    Raises
+    ------
+    ExportError
+        Naming the register, the value and the bound.
+    """
+    for row in rows:
+        bound, unit = value_bound(row)
+        for what, value in (("change", row.delta), ("current value", row.current), ("new value", row.value)):
+            if value is not None and not abs(value) < bound:  # NaN fails too
+                raise cannot(
+                    controller,
+                    row,
+                    f"{what} {value:g} is beyond any control's offset range (|value| < {bound:g} {unit})",
+                )
+
+
+def slot_within(controller: str, row: OffsetRow, what: str, n: int, low: int, high: int) -> int:
+    """``n`` when the control has that slot (``low`` … ``high``), else an :class:`ExportError` naming it."""
+    if not low <= n <= high:
+        raise cannot(controller, row, f"{what} {n} does not exist on this control ({low}…{high})")
     return n
 
 

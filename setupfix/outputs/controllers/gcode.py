@@ -37,6 +37,7 @@ from setupfix.outputs.controllers.common import (
     length_unit,
     number,
     one_mode,
+    slot_within,
     target,
 )
 
@@ -51,8 +52,9 @@ def _tool(controller: str, row: OffsetRow, top: int) -> tuple[int, int]:
         raise cannot(controller, row, "a tool register is Hn or Dn, or give number = n in the model")
     if row.axis == RADIUS and letter != "D":
         raise cannot(controller, row, "a tool radius is a D register (Dn)")
-    if not 1 <= n <= top:
-        raise cannot(controller, row, f"offset number {n} outside 1…{top}")
+    if row.axis != RADIUS and letter != "H":  # G10 L12/L13 would write the length change to the diameter
+        raise cannot(controller, row, f"a D register holds the radius/diameter; a tool length is an H register (H{n})")
+    slot_within(controller, row, "offset number", n, 1, top)
     wear = row.offset == "wear"
     return (11 if wear else 10) if letter == "H" else (13 if wear else 12), n
 

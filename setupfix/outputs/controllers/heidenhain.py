@@ -22,9 +22,23 @@ from collections.abc import Sequence
 from setupfix.core.errors import ExportError
 from setupfix.correction.offsets import OffsetRow
 from setupfix.model.slots import preset_row, tool_edge
-from setupfix.outputs.controllers.common import RADIUS, ROTATION, cannot, groups, length_unit, number, one_mode, target
+from setupfix.outputs.controllers.common import (
+    RADIUS,
+    ROTATION,
+    cannot,
+    groups,
+    length_unit,
+    number,
+    one_mode,
+    slot_within,
+    target,
+)
 
-__all__ = ["render", "PRESET_COLUMNS", "TOOL_COLUMNS"]
+__all__ = ["render", "PRESET_COLUMNS", "TOOL_COLUMNS", "PRESETS", "TOOLS"]
+
+#: Rows a TNC addresses: preset rows 1…99,999,999 (row 0 keeps the preset set by hand, the control's own),
+#: tools 1…32,767 (T0 is the zero tool).
+PRESETS, TOOLS = 99_999_999, 32_767
 
 #: Tool-table columns written, in table order: length geometry and wear, radius geometry and wear.
 TOOL_COLUMNS = ("L", "DL", "R", "DR")
@@ -67,6 +81,7 @@ def render(rows: Sequence[OffsetRow], title: str = "", *, program_number: int | 
             n = row.number if row.number is not None else preset_row(row.register)
             if n is None:
                 raise cannot("heidenhain", row, "give the preset row: number = n in the model (or name it PRESET n)")
+            slot_within("heidenhain", row, "preset row", n, 1, PRESETS)  # row 0: the control's manual preset
             columns = tuple(PRESET_COLUMNS.get(r.axis, r.axis) for r in group)
             for c in columns:
                 preset_columns.setdefault(c, []).append(str(n))
@@ -77,6 +92,7 @@ def render(rows: Sequence[OffsetRow], title: str = "", *, program_number: int | 
             t = row.number if row.number is not None else (found[0] if found else None)
             if t is None:
                 raise cannot("heidenhain", row, "give the tool number: number = n in the model (or name it Tn)")
+            slot_within("heidenhain", row, "tool number", t, 1, TOOLS)  # T0: the zero tool (L = R = 0)
             wear = row.offset == "wear"
             column = ("DR" if wear else "R") if row.axis == RADIUS else ("DL" if wear else "L")
             tools[column].append((str(t), number(row, target(row))))

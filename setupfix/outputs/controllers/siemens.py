@@ -32,10 +32,14 @@ from setupfix.outputs.controllers.common import (
     length_unit,
     number,
     one_mode,
+    slot_within,
     target,
 )
 
-__all__ = ["render", "program_name"]
+__all__ = ["render", "program_name", "TOOLS", "EDGES"]
+
+#: Highest tool number T and cutting edge D an 840D sl addresses (T0 is no tool, D0 no offset: 1…32000 each).
+TOOLS, EDGES = 32000, 32000
 
 
 def program_name(n: int) -> str:
@@ -58,6 +62,8 @@ def _variable(row: OffsetRow, spindle: str) -> str:
     d = d if d is not None else row.edge
     if t is None or d is None:
         raise cannot("siemens", row, "a tool is named T5 D1, or give number = T and edge = D in the model")
+    slot_within("siemens", row, "tool number T", t, 1, TOOLS)  # T0 is "no tool"
+    slot_within("siemens", row, "cutting edge D", d, 1, EDGES)  # D0 is "no offset"
     wear = row.offset == "wear"
     if row.axis == RADIUS:
         return f"$TC_DP{15 if wear else 6}[{t},{d}]"

@@ -188,7 +188,7 @@ def test_inch_rows_write_g20_even_when_a_rotation_comes_first() -> None:
     assert "\nG20\n" in program and "G90 G10 L2 P1 X+1.0004 (G54 GEOMETRY W1)" in program
 
 
-_STEPS = st.integers(-99_999_999, 99_999_999)
+_STEPS = st.integers(-99_999_499, 99_999_499)  # current ± 0.5 stays inside the 100 m bound (test_slots_values)
 
 
 @settings(max_examples=60, deadline=None)
