@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import difflib
 import re
+from collections.abc import Iterable
 from dataclasses import dataclass, field
 from typing import Final
 
@@ -26,9 +27,18 @@ import pandas as pd
 
 from setupfix.core.errors import MatchError, Note, SourceLocation
 from setupfix.core.units import length_factor
-from setupfix.model.process import ProcessModel, normalise_name
+from setupfix.model.process import Dimension, ProcessModel, normalise_name
 
-__all__ = ["CANONICAL_COLUMNS", "LENGTH_COLUMNS", "PartMeasurement", "match_parts", "suggest_names"]
+__all__ = [
+    "CANONICAL_COLUMNS",
+    "LENGTH_COLUMNS",
+    "PartMeasurement",
+    "match_parts",
+    "suggest_names",
+    "closest_names",
+    "did_you_mean",
+    "report_names",
+]
 
 #: Columns of the canonical measurement table, in the order writers emit them.
 CANONICAL_COLUMNS: Final[tuple[str, ...]] = (
@@ -312,23 +322,50 @@ def match_parts(model: ProcessModel, table: pd.DataFrame, *, source: str = "<rep
 _PUNCT = re.compile(r"[\W_]+")
 
 
-def suggest_names(model: ProcessModel, name: str, n: int = 3) -> tuple[str, ...]:
-    """The model dimension names closest to a report's characteristic name, best first.
+def report_names(dimension: Dimension) -> tuple[str, ...]:
+    """The names a report may give a dimension: its name and aliases, or a position zone's components."""
+    return (*dimension.components,) if dimension.zone else (dimension.name, *dimension.aliases)
+
+
+def closest_names(name: str, candidates: Iterable[str], n: int = 3) -> tuple[str, ...]:
+    """The candidate names closest to ``name``, best first: the one rule of every name suggestion.
 
     Names equal but for white space, punctuation and case (``P1D1`` / ``P1 D1``,
-    ``SP_00_Z`` / ``SP-00_Z``) come first, then the closest by
+    ``P1-D4`` / ``P1 D4``, ``SP_00_Z`` / ``SP-00_Z``) come first, then the closest by
     :func:`difflib.get_close_matches` (ratio ≥ 0.6) when there is no such name.
     """
-    names = list(
-        dict.fromkeys(n_ for d in model.dimensions for n_ in ((*d.components,) if d.zone else (d.name, *d.aliases)))
-    )
+    names = list(dict.fromkeys(candidates))
     skeleton = _PUNCT.sub("", name).casefold()
     exact = [m for m in names if _PUNCT.sub("", m).casefold() == skeleton] if skeleton else []
     if exact:
         return tuple(exact[:n])
     by_key = {normalise_name(m): m for m in names}
     close = difflib.get_close_matches(normalise_name(name), list(by_key), n=n, cutoff=0.6)
-    return tuple(dict.fromkeys([*exact, *(by_key[c] for c in close)]))[:n]
+    return tuple(dict.fromkeys(by_key[c] for c in close))[:n]
+
+
+def suggest_names(model: ProcessModel, name: str, n: int = 3) -> tuple[str, ...]:
+    """The model dimension names (aliases, a zone's components) closest to a report's characteristic name
+    (:func:`closest_names`)."""
+    return closest_names(name, (n_ for d in model.dimensions for n_ in report_names(d)), n)
+
+
+def did_you_mean(model: ProcessModel, part: PartMeasurement) -> dict[str, str]:
+    """Unmatched report name → the absent dimension it most likely means (``P1-D4`` → ``P1 D4``).
+
+    Only names of dimensions the part lacks are offered (a matched dimension is not what an
+    unmatched name meant), by :func:`closest_names`: ``correct`` and ``model check`` alike.
+    """
+    absent = set(part.absent)
+    names = [
+        n_ for d in model.dimensions if d.id in absent for n_ in ((*d.components,) if d.zone else (d.name, *d.aliases))
+    ]
+    out = {}
+    for unmatched in part.unmatched:
+        near = closest_names(unmatched, names, 1)
+        if near:
+            out[unmatched] = near[0]
+    return out
 
 
 def _examples(model: ProcessModel, unmatched: list[str]) -> str:

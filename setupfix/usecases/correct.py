@@ -28,6 +28,7 @@ from setupfix.correction.safety import Recommendation, RuleEffect, short_list
 from setupfix.inputs.cycles import read_parts
 from setupfix.inputs.stores import StoreRef
 from setupfix.model import PartMeasurement, ProcessModel, load_model
+from setupfix.model.measurements import did_you_mean
 from setupfix.optimize import CorrectionProblem, OptimizeResult, get_optimizer
 from setupfix.store import Store
 from setupfix.usecases.requests import (
@@ -199,9 +200,11 @@ def correct_cycle(
             )
         )
     if part.unmatched:
+        meant = did_you_mean(model, part)  # the one suggestion rule, as model check offers it
         notes.append(
             Note(
-                f"{len(part.unmatched)} characteristic(s) match no dimension: {short_list(part.unmatched)}",
+                f"{len(part.unmatched)} characteristic(s) match no dimension: "
+                + short_list(f"{u} (did you mean {meant[u]!r}?)" if u in meant else u for u in part.unmatched),
                 None,
                 "match",
             )

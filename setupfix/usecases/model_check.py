@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import difflib
-import re
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -15,7 +13,8 @@ from setupfix.core.errors import MatchError
 from setupfix.correction.relation import RelationMatrices, null_space_directions, relation_matrices
 from setupfix.inputs.checks import difference_threshold
 from setupfix.inputs.cycles import Stations, load_parts
-from setupfix.model import Dimension, PartMeasurement, ProcessModel, load_model, normalise_name
+from setupfix.model import Dimension, PartMeasurement, ProcessModel, load_model
+from setupfix.model.measurements import closest_names, report_names
 
 __all__ = ["MatchTable", "ModelDescription", "check_report", "describe_model"]
 
@@ -122,15 +121,8 @@ def _value(values: npt.NDArray[np.float64] | None, i: int) -> float | None:
 
 
 def _closest(dim: Dimension, names: tuple[str, ...], n: int = 3) -> tuple[str, ...]:
-    """Unmatched report names closest to an absent dimension (same rule as ``suggest_names``)."""
-    if not names:
-        return ()
-    keys = {normalise_name(x): x for x in names}
-    skeleton = {k: re.sub(r"[\W_]+", "", k) for k in keys}
-    found = [keys[k] for k in keys for own in dim.keys if skeleton[k] == re.sub(r"[\W_]+", "", own) and own]
-    for own in dim.keys:
-        found += [keys[k] for k in difflib.get_close_matches(own, list(keys), n=n, cutoff=0.6)]
-    return tuple(dict.fromkeys(found))[:n]
+    """Unmatched report names closest to an absent dimension (:func:`closest_names`, the one rule)."""
+    return tuple(dict.fromkeys(c for o in report_names(dim) for c in closest_names(o, names, n)))[:n]
 
 
 def check_report(
