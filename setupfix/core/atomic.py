@@ -12,6 +12,12 @@ kernel applies the umask itself; the process umask is never read or changed (the
 former ``os.umask`` toggle raced with other threads creating files).  A process
 killed mid-write leaves its temporary file behind; the next write to the same
 target removes those whose process is gone.
+
+A set of files (``batch --controller``'s programs) is written whole or not at all:
+:func:`staging_folder` gives a temporary folder on the target's file system, the
+caller writes every file there, and :func:`publish_staged` moves them into place
+only when all are written (checking every destination first); on any failure
+:func:`discard_staging` removes the temporary folder and the target is as it was.
 """
 
 from __future__ import annotations
@@ -21,6 +27,7 @@ import errno
 import os
 import re
 import secrets
+import shutil
 import stat
 import sys
 import time
@@ -30,7 +37,18 @@ from typing import IO, Any
 
 from setupfix.core.errors import ExportError, SourceLocation
 
-__all__ = ["atomic_write", "check_target", "write_text", "write_bytes", "process_started", "process_alive"]
+__all__ = [
+    "atomic_write",
+    "check_target",
+    "write_text",
+    "write_bytes",
+    "process_started",
+    "process_alive",
+    "staging_folder",
+    "publish_staged",
+    "discard_staging",
+    "STAGING_PREFIX",
+]
 
 #: Temporary files of writes whose process is unknown (other host, older setupfix)
 #: older than this are stale (seconds).
@@ -245,3 +263,107 @@ def write_bytes(target: str | os.PathLike[str], data: bytes) -> None:
     """Write ``data`` atomically to ``target`` (``-``: standard output)."""
     with atomic_write(target, binary=True) as stream:
         stream.write(data)
+
+
+#: Name prefix of a staging folder inside an existing target folder (``.setupfix-staging.PID.RANDOM.tmp``).
+STAGING_PREFIX = ".setupfix-staging"
+
+
+def _stale_staging(parent: Path, prefix: str) -> None:
+    """Remove staging folders ``PREFIX.PID.RANDOM.tmp`` in ``parent`` whose process is gone."""
+    pattern = re.compile(re.escape(prefix) + r"\.(\d+)\.[0-9a-f]+\.tmp\Z")
+    try:
+        entries = list(os.scandir(parent))
+    except OSError:
+        return
+    for entry in entries:
+        match = pattern.match(entry.name)
+        if match and entry.is_dir(follow_symlinks=False) and not process_alive(int(match.group(1))):
+            shutil.rmtree(entry.path, ignore_errors=True)
+
+
+def staging_folder(target: str | os.PathLike[str]) -> Path:
+    """A new, empty temporary folder on the file system of the folder ``target``, for a set of files
+    :func:`publish_staged` moves there at the end.
+
+    Inside ``target`` when it is a folder already (hidden: :data:`STAGING_PREFIX`), else beside the
+    nearest folder that exists on its path (so that nothing of ``target`` exists before the set is
+    complete).  Staging folders of processes that are gone are removed first.
+
+    Raises
+    ------
+    ExportError
+        ``target`` exists and is not a folder, or the temporary folder cannot be created.
+    """
+    folder = Path(target)
+    where = SourceLocation(str(folder))
+    if folder.is_symlink() or (folder.exists() and not folder.is_dir()):
+        raise ExportError("refusing to write: the target is not a folder", location=where)
+    if folder.is_dir():
+        parent, prefix = folder, STAGING_PREFIX
+    else:
+        parent = folder.parent
+        while not parent.is_dir() and parent != parent.parent:
+            parent = parent.parent
+        prefix = f".{folder.name}"
+    _stale_staging(parent, prefix)
+    for _ in range(100):
+        staging = parent / f"{prefix}.{os.getpid()}.{secrets.token_hex(6)}.tmp"
+        try:
+            staging.mkdir()
+            return staging
+        except FileExistsError:
+            continue
+        except OSError as exc:
+            raise ExportError(f"cannot write here: {exc.strerror}", location=where) from None
+    raise ExportError("cannot create a temporary folder", location=where)
+
+
+def publish_staged(staging: Path, target: str | os.PathLike[str], names: list[str]) -> None:
+    """Move the files ``names`` (``/``-separated paths below ``staging``) into the folder ``target``.
+
+    A ``target`` that does not exist yet becomes the staging folder itself (one rename: the set
+    appears whole).  Otherwise every destination is checked first (absent or a regular file, each
+    folder on its way a folder: :func:`check_target`), and only then are the files renamed over
+    them, so a destination that cannot take its file leaves every destination as it was.  The
+    staging folder is removed at the end.
+
+    Raises
+    ------
+    ExportError
+        Naming the destination that cannot be written; the staging folder is left for the
+        caller's :func:`discard_staging`.
+    """
+    folder = Path(target)
+    try:
+        if not folder.exists() and not folder.is_symlink():
+            folder.parent.mkdir(parents=True, exist_ok=True)
+            os.rename(staging, folder)
+            return
+        for name in names:
+            destination = folder / name
+            for up in reversed(Path(name).parents[:-1]):  # the folders below target on the way
+                inner = folder / up
+                if inner.is_symlink() or (inner.exists() and not inner.is_dir()):
+                    raise ExportError(
+                        "refusing to write: the path holds something that is not a folder",
+                        location=SourceLocation(str(inner)),
+                    )
+            if destination.parent.is_dir():
+                check_target(destination)
+        for name in names:
+            destination = folder / name
+            destination.parent.mkdir(parents=True, exist_ok=True)
+            os.replace(staging / name, destination)
+    except OSError as exc:
+        raise ExportError(
+            f"cannot write: {exc.strerror or exc}",
+            location=SourceLocation(str(folder)),
+            hint=_WRITE_HINTS.get(exc.errno or 0),
+        ) from None
+    discard_staging(staging)
+
+
+def discard_staging(staging: Path) -> None:
+    """Remove a staging folder and everything in it (never following a link out of it)."""
+    shutil.rmtree(staging, ignore_errors=True)

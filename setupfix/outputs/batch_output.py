@@ -4,9 +4,10 @@ Both writers take the report's path below the batch folder (``rel``), its offset
 its programs, and say at the end whether anything was written (``commit``).  The CSV is
 streamed into a temporary file renamed over the target (complete or absent; an existing
 output is left as it was when no report gave rows).  Programs go to
-:func:`~setupfix.outputs.controllers.program_path` below the output folder, each written
-atomically, with a manifest (:data:`MANIFEST`) of which report each program was written for,
-and numbered by :class:`ProgramNumbers` (distinct in a run).
+:func:`~setupfix.outputs.controllers.program_path` below the output folder, the whole set
+(with a manifest, :data:`MANIFEST`, of which report each program was written for) written
+into a temporary folder and moved into place at the end, or nothing; they are numbered by
+:class:`ProgramNumbers` (distinct in a run).
 """
 
 from __future__ import annotations
@@ -19,6 +20,7 @@ from pathlib import Path
 from typing import Any
 
 from parsers.names import visible_name
+from setupfix.core.atomic import discard_staging, publish_staged, staging_folder
 from setupfix.core.errors import ExportError, SourceLocation
 from setupfix.correction.offsets import OffsetRow
 from setupfix.outputs.controllers import (
@@ -105,7 +107,7 @@ class ProgramNumbers:
             except ExportError as exc:
                 raise ExportError(
                     f"{exc.message}: program {len(self.used) + 1} of the run ({visible_name(name)}) "
-                    f"numbered from {self.first}; give a lower --program-number"
+                    f"numbered from {self.first}; give a lower --program-number (no program written)"
                 ) from None
         else:
             low, high = DERIVED_PROGRAMS
@@ -124,14 +126,22 @@ class ProgramNumbers:
 class ProgramsOut:
     """One controller program per corrected cycle at :func:`~setupfix.outputs.controllers.program_path`.
 
+    The whole set is written or nothing: every program (and the manifest) goes into a
+    temporary folder on the output's file system (:func:`~setupfix.core.atomic.staging_folder`)
+    and is moved into place only when the run ends without an error
+    (:func:`~setupfix.core.atomic.publish_staged`); a program the format cannot hold (a number
+    past the format's last, a register it cannot express), a full disk or an interruption
+    leave the output folder as it was, earlier programs included.
+
     The folder keeps a manifest (:data:`MANIFEST`: report → the programs written for it), so
     that a report corrected again replaces exactly its own programs: one that no longer
     yields a program (rejected, refused, …) leaves none of an earlier run behind.  Only
-    files the manifest names are ever removed.  Each program is rendered from its cycle's
-    rows with the run's number (:class:`ProgramNumbers`; ``program_number`` the first)
-    and the report's path below the batch folder as its title; the text a worker rendered
-    is the proof that the cycle's rows are expressible, the program differs from it only
-    in its number and title.
+    files the manifest names are ever removed or replaced: a file of a program's name that
+    the manifest does not name (the operator's own, another tool's) is refused, naming it,
+    and nothing is written.  Each program is rendered from its cycle's rows with the run's
+    number (:class:`ProgramNumbers`; ``program_number`` the first) and the report's path
+    below the batch folder as its title; the text a worker rendered is the proof that the
+    cycle's rows are expressible, the program differs from it only in its number and title.
     """
 
     def __init__(
@@ -141,22 +151,33 @@ class ProgramsOut:
         self.controller = controller
         self.spindle = spindle
         self.numbers = ProgramNumbers(controller, program_number)
-        if self.folder.exists() and not self.folder.is_dir():
+        if self.folder.is_symlink() or (self.folder.exists() and not self.folder.is_dir()):
             raise ExportError(
                 "with --controller other than csv, --out is a folder for one program per cycle",
                 location=SourceLocation(visible_name(str(folder))),
             )
         self.written = 0
         self.manifest = _read_manifest(self.folder / MANIFEST)
+        self._ours = {n for names in self.manifest.values() for n in names}  # what earlier runs wrote
         self._owner: dict[str, tuple[str, str]] = {}  # program written in this run → (report, part)
+        self._remove: list[str] = []  # programs of earlier runs to remove at the end
         self._changed = False
+        self._staging: Path | None = None
 
     def __enter__(self) -> ProgramsOut:
-        self.folder.mkdir(parents=True, exist_ok=True)
+        self._staging = staging_folder(self.folder)
         return self
 
     def add(self, rel: str, rows: Sequence[OffsetRow], programs: Sequence[tuple[str, str]]) -> None:
-        """The programs (part, text) of the report ``rel``, one per cycle; replaces those of an earlier run."""
+        """The programs (part, text) of the report ``rel``, one per cycle; replaces those of an earlier run.
+
+        Raises
+        ------
+        ExportError
+            A file of a program's name that no run of setupfix wrote, a program number past the
+            format's last, a program that cannot be rendered or written (nothing is then published).
+        """
+        assert self._staging is not None, "ProgramsOut is used in a with block"
         several = len(programs) > 1
         names: list[str] = []
         for part, text in programs:
@@ -166,7 +187,7 @@ class ProgramsOut:
                     rel + "~" + _short_hash(rel, part), part if several else None, self.controller
                 ).as_posix()
                 self._owner[name] = (rel, part)
-            target = self.folder / name
+            self._check_foreign(name)
             own = [r for r in rows if r.part == part]
             text = (
                 render(
@@ -179,20 +200,33 @@ class ProgramsOut:
                 if own
                 else text
             )
+            target = self._staging / name
             target.parent.mkdir(parents=True, exist_ok=True)
             write_text(target, text)
             names.append(name)
             self.written += 1
         self._replace(rel, names)
 
+    def _check_foreign(self, name: str) -> None:
+        """Refuse to replace a file setupfix did not write (not in the manifest)."""
+        there = self.folder / name
+        if name in self._ours or not (there.exists() or there.is_symlink()):
+            return
+        raise ExportError(
+            "a file of this program's name is there, and no run of setupfix wrote it (it is not in "
+            f"{MANIFEST}): nothing written",
+            location=SourceLocation(visible_name(str(there))),
+            hint="move it away, or write the programs to another folder (--out)",
+        )
+
     def drop(self, rel: str) -> None:
-        """The report yields no program this run: remove those an earlier run wrote for it."""
+        """The report yields no program this run: remove those an earlier run wrote for it (at the end)."""
         self._replace(rel, [])
 
     def _replace(self, rel: str, names: list[str]) -> None:
         for old in self.manifest.get(rel, []):
-            if old not in names and old not in self._owner:  # never a program this run wrote for another report
-                _remove_inside(self.folder, old)
+            if old not in names:
+                self._remove.append(old)
         if self.manifest.get(rel, []) != names:
             self._changed = True
         if names:
@@ -201,11 +235,25 @@ class ProgramsOut:
             self.manifest.pop(rel, None)
 
     def commit(self) -> bool:
+        """Whether the run writes programs (they are published when the ``with`` block ends without error)."""
         return self.written > 0
 
     def __exit__(self, *exc: Any) -> None:
-        if self._changed:  # also after an interruption: what was written or removed is on record
-            write_text(self.folder / MANIFEST, json.dumps(self.manifest, indent=1, sort_keys=True) + "\n")
+        staging, self._staging = self._staging, None
+        if staging is None:
+            return
+        if exc[0] is not None or (not self._changed and not self.written):
+            discard_staging(staging)  # an error, an interruption, or nothing to do: the folder as it was
+            return
+        try:
+            write_text(staging / MANIFEST, json.dumps(self.manifest, indent=1, sort_keys=True) + "\n")
+            publish_staged(staging, self.folder, [*self._owner, MANIFEST])
+        except BaseException:
+            discard_staging(staging)
+            raise
+        for old in self._remove:
+            if old not in self._owner:  # never a program this run wrote (for this or another report)
+                _remove_inside(self.folder, old)
 
 
 #: The programs folder's record of which report each program was written for (hidden, JSON).

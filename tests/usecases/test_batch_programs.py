@@ -30,7 +30,7 @@ def test_same_stem_in_two_folders_and_two_formats_never_share_a_program(tmp_path
     d = tmp_path / "in"
     for line in ("line_A", "line_B"):
         (d / line).mkdir(parents=True)
-    shutil.copy(GUIDE / "cycle_01.csv", d / "line_A" / "cycle.csv")
+    shutil.copy(GUIDE / "cycle_03.csv", d / "line_A" / "cycle.csv")  # not cycle 01: its .dmo is the same part
     shutil.copy(GUIDE / "cycle_02.csv", d / "line_B" / "cycle.csv")
     shutil.copy(GUIDE / "cycle_01.dmo", d / "line_B" / "cycle.dmo")
     out = tmp_path / "programs"
@@ -38,7 +38,7 @@ def test_same_stem_in_two_folders_and_two_formats_never_share_a_program(tmp_path
     assert s.reports == 3 and s.written
     assert programs(out) == ["line_A/cycle.csv.nc", "line_B/cycle.csv.nc", "line_B/cycle.dmo.nc"]
     a, b = (out / "line_A" / "cycle.csv.nc").read_text(), (out / "line_B" / "cycle.csv.nc").read_text()
-    assert a != b  # cycle 01 and cycle 02: different corrections, both kept
+    assert a != b  # cycle 03 and cycle 02: different corrections, both kept
     # each equals the program of its report corrected alone
     alone = tmp_path / "alone"
     alone.mkdir()
