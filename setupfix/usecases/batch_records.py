@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import contextlib
 import hashlib
+import re
 from collections import Counter
 from collections.abc import Mapping
 from dataclasses import dataclass, field
@@ -27,7 +28,7 @@ from setupfix.store import Claimant, Store
 from setupfix.store import Recommendation as StoreRecommendation
 from setupfix.usecases.requests import SolveOptions
 
-__all__ = ["Outcome", "BatchSummary", "Tally", "Claims", "Item", "account"]
+__all__ = ["Outcome", "BatchSummary", "Tally", "Claims", "Item", "account", "exclusion"]
 
 
 @dataclass
@@ -118,18 +119,23 @@ class Claims:
     """A batch's claims in the history store: taken chunk by chunk, finished once the output is written.
 
     The claim is keyed by the content hash of the bytes read here; the worker reads the
-    file again and corrects it only if its hash is the one claimed.  Recommendations wait
-    in memory (a verdict and a few numbers per part) and are stored, with the claims
-    turned into "processed", in one transaction by :meth:`finish`; :meth:`release` frees
-    whatever is still held (a failure, an interrupt), so those reports are corrected by
-    the next run.  A SIGKILL leaves the claims behind: the next run takes them over (the
-    process is gone, :meth:`setupfix.store.Claimant.gone`).
+    file again and corrects it only if its hash is the one claimed.  Each corrected report
+    is stored with its recommendations in one transaction as it is done (:meth:`record`),
+    marked :func:`exclusion` when the history is to leave it out, so a failure at any
+    point leaves whole reports behind, each with its recommendations, and says how many
+    (:attr:`stored`).  The claims are turned into "processed" in one transaction by
+    :meth:`finish`, once the output is written; :meth:`release` frees whatever is still
+    held (a failure, an interrupt), so those reports are corrected by the next run (and
+    stored again: the same bytes change nothing, the newest verdict sets the mark).  A
+    SIGKILL leaves the claims behind: the next run takes them over (the process is gone,
+    :meth:`setupfix.store.Claimant.gone`).
     """
 
     def __init__(self, store: Store, force: bool) -> None:
         self.store, self.force = store, force
         self.claimant = Claimant.this_run()
-        self.pending: list[tuple[str, list[StoreRecommendation], bool]] = []
+        self.done: list[str] = []  #: reports stored, to be marked processed by finish()
+        self.stored = 0  #: reports stored with their recommendations by this run
         self.held = False
 
     def take(self, chunk: list[Item]) -> list[Item]:
@@ -143,31 +149,47 @@ class Claims:
                 sha = ""  # the worker reads it and says why it cannot
             hashed.append((path, size, mtime, sha, ""))
         self.held = True
-        refused = self.store.claim_reports([h for _, _, _, h, _ in hashed if h], self.claimant, again=self.force)
+        try:
+            refused = self.store.claim_reports([h for _, _, _, h, _ in hashed if h], self.claimant, again=self.force)
+        except StoreError as exc:
+            raise self._failed(exc, "no output was written") from None
         return [(p, n, m, h, refused.get(h, "")) for p, n, m, h, _ in hashed]
 
     def record(self, outcome: Outcome, solve: SolveOptions, *, final: bool = True) -> None:
-        """Keep ``outcome``'s recommendations for :meth:`finish`; ``final=False`` (a draft model's holds)
-        stores them but leaves the report unprocessed, so the run after the model's edit corrects it."""
-        self.pending.append((outcome.sha256, _record(self.store, outcome, solve), all(outcome.solved) and final))
+        """Store ``outcome``'s report with its recommendations, one transaction; ``final=False`` (a draft
+        model) marks it ``draft`` and leaves it unprocessed, so the run after the model's edit corrects it.
+
+        Raises
+        ------
+        StoreError
+            Nothing of this report was stored (the reports before it are).
+        """
+        excluded = exclusion(outcome, draft=not final)
+        with self.store.transaction():  # a failure here stores nothing of this report (said per report)
+            for rec in _record(self.store, outcome, solve, excluded):
+                self.store.add_recommendation(rec)
+        self.stored += 1
+        # a report with a part not solved within the time limit stays unprocessed: release() frees its
+        # claim and the next run corrects it again
+        if all(outcome.solved) and final:
+            self.done.append(outcome.sha256)
 
     def finish(self) -> None:
         try:
             with self.store.transaction():
-                for _, recs, _ in self.pending:
-                    for rec in recs:
-                        self.store.add_recommendation(rec)
-                # a report with a part not solved within the time limit stays unprocessed: release() frees its
-                # claim and the next run corrects it again
-                self.store.finish_claims([sha for sha, _, solved in self.pending if solved], self.claimant)
+                self.store.finish_claims(self.done, self.claimant)
         except StoreError as exc:
-            raise StoreError(
-                exc.message,
-                location=exc.location,
-                hint="the output was written; its reports are not marked processed in the store and "
-                "are corrected again by the next run",
-            ) from None
-        self.pending = []
+            raise self._failed(exc, "the output was written") from None
+        self.done = []
+
+    def _failed(self, exc: StoreError, output: str) -> StoreError:
+        """``exc`` saying what this run stored: whole reports with their recommendations, none processed."""
+        return StoreError(
+            f"{_cause(exc)}; {self.stored} report(s) of this run were stored, each with its recommendations, "
+            "none marked processed",
+            location=exc.location,
+            hint=f"{output}; the reports are corrected again by the next run",
+        )
 
     def release(self) -> None:
         if not self.held:
@@ -177,10 +199,33 @@ class Claims:
         self.held = False
 
 
-def _record(store: Store, outcome: Outcome, solve: SolveOptions) -> list[StoreRecommendation]:
-    """Add the report (the bytes and table the worker corrected, not a second reading); its recommendations."""
+def _cause(exc: StoreError) -> str:
+    """What went wrong, without a back end's claim about what the failed transaction left (said here)."""
+    return re.sub(r"; nothing( of the current import)? was stored$", "", exc.message)
+
+
+def exclusion(outcome: Outcome, *, draft: bool) -> str | None:
+    """Why the history leaves ``outcome``'s report out (:data:`setupfix.store.EXCLUDED_REASONS`), or None.
+
+    ``draft``: the model was a draft (its verdicts are not to be trusted); ``rejected``: a part's
+    verdict was reject (a gross error, a setup error); ``failed``: a part could not be corrected
+    (its solve stopped with nothing proven).  The first that holds, in this order.
+    """
+    if draft:
+        return "draft"
+    if "reject" in outcome.verdicts:
+        return "rejected"
+    if not all(outcome.solved):
+        return "failed"
+    return None
+
+
+def _record(store: Store, outcome: Outcome, solve: SolveOptions, excluded: str | None) -> list[StoreRecommendation]:
+    """Add the report (the bytes and table the worker corrected, not a second reading) with its mark;
+    its recommendations."""
     assert outcome.table is not None
-    sha, _ = store.add_report(outcome.data, visible_name(Path(outcome.path).name), outcome.format, outcome.table)
+    name = visible_name(Path(outcome.path).name)
+    sha, _ = store.add_report(outcome.data, name, outcome.format, outcome.table, excluded=excluded)
     by_part: dict[str, dict[str, float]] = {}
     for row in outcome.rows:
         by_part.setdefault(row.part, {})[row.id] = row.delta
