@@ -9,9 +9,10 @@ and TNC7 (an iTNC 530 keeps it in ``ROT``: rename the column there).  Tool rows 
 the tool table (``TOOL.T``, row ``T`` = ``number`` or the T of ``T5``): length in
 ``L`` (geometry) or ``DL`` (wear), radius (component ``R``) in ``R`` or ``DR``.  Each
 table is written as ``BEGIN … MM`` / header / rows / ``[END]`` with only the columns
-changed, to merge into the control's table (TNCremo, table editor): one tool-table row per
-tool with its length and radius columns; presets with different columns, and tools with
-different columns, get a table block of their own, so that no cell is left blank.  The
+changed, to merge into the control's table (TNCremo, table editor): one ``PRESET.PR`` table
+with one row per preset and one ``TOOL.T`` table with one row per tool, each holding the
+columns any of its rows changes; a cell a row does not change (a tool without a radius
+register in a table that has ``R``) is left blank — keep the control's value there.  The
 tables have no program name: a program number is not written.
 """
 
@@ -69,9 +70,10 @@ def render(rows: Sequence[OffsetRow], title: str = "", *, program_number: int | 
         raise ExportError(
             "heidenhain: the preset and tool tables hold absolute values: give the current offsets (--current FILE)"
         )
-    presets: dict[tuple[str, ...], list[tuple[str, ...]]] = {}  # columns → rows of the preset table
+    presets: dict[str, dict[str, str]] = {}  # NO → column → value: one table row per preset
     preset_columns: dict[str, list[str]] = {}  # the columns written, for the twice-check
     tools: dict[str, list[tuple[str, str]]] = {c: [] for c in TOOL_COLUMNS}  # column → (T, value)
+    by_tool: dict[str, dict[str, str]] = {}  # T → column → value: one table row per tool, in model order
     for group in groups(rows):
         if group[0].kind == "wks":
             for row in group:
@@ -82,10 +84,10 @@ def render(rows: Sequence[OffsetRow], title: str = "", *, program_number: int | 
             if n is None:
                 raise cannot("heidenhain", row, "give the preset row: number = n in the model (or name it PRESET n)")
             slot_within("heidenhain", row, "preset row", n, 1, PRESETS)  # row 0: the control's manual preset
-            columns = tuple(PRESET_COLUMNS.get(r.axis, r.axis) for r in group)
-            for c in columns:
-                preset_columns.setdefault(c, []).append(str(n))
-            presets.setdefault(("NO", *columns), []).append((str(n), *(number(r, target(r)) for r in group)))
+            for r in group:
+                column = PRESET_COLUMNS.get(r.axis, r.axis)
+                preset_columns.setdefault(column, []).append(str(n))
+                presets.setdefault(str(n), {})[column] = number(r, target(r))
             continue
         for row in group:
             found = tool_edge(row.register)
@@ -96,21 +98,23 @@ def render(rows: Sequence[OffsetRow], title: str = "", *, program_number: int | 
             wear = row.offset == "wear"
             column = ("DR" if wear else "R") if row.axis == RADIUS else ("DL" if wear else "L")
             tools[column].append((str(t), number(row, target(row))))
+            by_tool.setdefault(str(t), {})[column] = tools[column][-1][1]
     for column, seen in preset_columns.items():
         _twice("preset" if len(preset_columns) == 1 else f"preset {column}", seen)
     for column, values in tools.items():
         _twice("tool " + column, [n for n, _ in values])
     unit = length_unit(rows)
     out: list[str] = []
-    for columns, entries in presets.items():
-        out += _table("PRESET.PR", unit, columns, entries)
-    by_tool: dict[str, dict[str, str]] = {}  # T → column → value: one table row per tool
-    for column, values in tools.items():
-        for tool_row, value in values:
-            by_tool.setdefault(tool_row, {})[column] = value
-    blocks: dict[tuple[str, ...], list[tuple[str, ...]]] = {}
-    for tool_row, cells in by_tool.items():
-        blocks.setdefault(tuple(cells), []).append((tool_row, *cells.values()))
-    for columns in sorted(blocks, key=lambda cs: [TOOL_COLUMNS.index(c) for c in cs]):
-        out += _table("TOOL.T", unit, ("T", *columns), blocks[columns])
+    if presets:
+        order = [*PRESET_COLUMNS.values()]
+        columns = sorted(preset_columns, key=lambda c: (order.index(c) if c in order else len(order), c))
+        out += _table("PRESET.PR", unit, ("NO", *columns), _cells(presets, columns))
+    if by_tool:
+        columns = [c for c in TOOL_COLUMNS if tools[c]]
+        out += _table("TOOL.T", unit, ("T", *columns), _cells(by_tool, columns))
     return "\n".join(out) + "\n"
+
+
+def _cells(table: dict[str, dict[str, str]], columns: Sequence[str]) -> list[tuple[str, ...]]:
+    """Rows of one table: the key, then each column's value, blank where the row's value is not changed."""
+    return [(key, *(cells.get(c, "") for c in columns)) for key, cells in table.items()]

@@ -121,10 +121,12 @@ def test_siemens_rotation_turns_about_the_models_spindle_and_has_no_fine_part() 
 
 
 def heidenhain_tables(text: str) -> dict[tuple[str, str, str], str]:
-    """(table, column, row) → cell of every table block, columns cut at the header's positions."""
+    """(table, column, row) → cell of every table block, columns cut at the header's positions (a blank cell, one
+    the row does not change, left out); each table once."""
     out: dict[tuple[str, str, str], str] = {}
     blocks = re.findall(r"^BEGIN (\S+) MM\n(.*?)\n\[END\]$", text, re.M | re.S)
     assert "".join(f"BEGIN {t} MM\n{b}\n[END]\n" for t, b in blocks) == text  # nothing outside the blocks
+    assert len({t for t, _ in blocks}) == len(blocks), "a table opened twice"
     for table, body in blocks:
         head, *lines = body.split("\n")
         starts = [m.start() for m in re.finditer(r"\S+", head)]
@@ -132,6 +134,8 @@ def heidenhain_tables(text: str) -> dict[tuple[str, str, str], str]:
         for line in lines:
             cells = [line[a:b].strip() for a, b in zip(starts, [*starts[1:], None], strict=True)]
             for name, cell in zip(names[1:], cells[1:], strict=True):
+                if not cell:
+                    continue
                 key = (table, name, cells[0])
                 assert key not in out, key
                 out[key] = cell
