@@ -141,6 +141,46 @@ def _lookup(model: ProcessModel) -> dict[str, list[tuple[int, str | None, int]]]
     return table
 
 
+def _take_row(
+    model: ProcessModel,
+    part: str,
+    idx: int,
+    row: int,
+    value: float,
+    row_of: list[int],
+    deviation: npt.NDArray[np.float64],
+    notes: list[Note],
+    stamps: list[object],
+    wheres: list[str],
+    name: str,
+) -> None:
+    """Row ``row`` measures dimension ``idx``: the later of it and an earlier row wins, with a note."""
+    if row_of[idx] >= 0:
+        earlier = row_of[idx]
+        where = wheres[row]
+        dim = model.dimensions[idx].id
+        if not _later(stamps[earlier], stamps[row]):
+            notes.append(
+                Note(
+                    f"dimension {dim} ({name}) is measured twice in part {part or '(report)'}: the later "
+                    f"measurement at {wheres[earlier]} is used, this one ignored",
+                    SourceLocation(where),
+                    "match",
+                )
+            )
+            return
+        notes.append(
+            Note(
+                f"dimension {dim} ({name}) is measured twice in part {part or '(report)'}: the later "
+                f"measurement here is used, the one at {wheres[earlier]} ignored",
+                SourceLocation(where),
+                "match",
+            )
+        )
+    deviation[idx] = value
+    row_of[idx] = row
+
+
 def match_parts(model: ProcessModel, table: pd.DataFrame, *, source: str = "<report>") -> list[PartMeasurement]:
     """Split a canonical measurement table into parts matched to the model.
 
@@ -203,58 +243,39 @@ def match_parts(model: ProcessModel, table: pd.DataFrame, *, source: str = "<rep
         notes: list[Note] = []
         for i in rows:
             name, where = names[i], wheres[i]
-            candidates = lookup.get(keys[i], [])
+            found = lookup.get(keys[i], [])
             station = station_keys[i]
-            if len(candidates) > 1:
-                candidates = [
-                    c
-                    for c in candidates
-                    if station is not None and c[1] is not None and normalise_name(c[1]) == station
-                ]
-                if len(candidates) != 1:
-                    raise MatchError(
-                        f"characteristic {name!r} names several dimensions; give a station matching their group",
-                        location=SourceLocation(where),
-                        hint="--stations P1,P2,… or --parts-per-cycle N",
-                    )
-            if not candidates:
+            # one row may be a dimension and a position zone's component at once (the model allows a name
+            # once as each): each kind is told apart by station on its own, and the row feeds both
+            chosen: list[tuple[int, str | None, int]] = []
+            for candidates in ([c for c in found if c[2] < 0], [c for c in found if c[2] >= 0]):
+                if len(candidates) > 1:
+                    candidates = [
+                        c
+                        for c in candidates
+                        if station is not None and c[1] is not None and normalise_name(c[1]) == station
+                    ]
+                    if len(candidates) != 1:
+                        raise MatchError(
+                            f"characteristic {name!r} names several dimensions; give a station matching their group",
+                            location=SourceLocation(where),
+                            hint="--stations P1,P2,… or --parts-per-cycle N",
+                        )
+                chosen += candidates
+            if not chosen:
                 unmatched.append(name)
                 continue
-            idx, comp = candidates[0][0], candidates[0][2]
             value = float(values[i]) * factors[units[i]]
             if not np.isfinite(value):
                 raise MatchError(f"characteristic {name!r} has no measured value", location=SourceLocation(where))
-            if comp >= 0:  # a position zone's component: the later row wins, as for a dimension
-                if (idx, comp) in zone_rows and not _later(stamps[zone_rows[(idx, comp)]], stamps[i]):
-                    continue
-                zone[idx, comp] = value
-                zone_rows[(idx, comp)] = i
-                continue
-            if row_of[idx] >= 0:
-                earlier = row_of[idx]
-                if _later(stamps[earlier], stamps[i]):
-                    notes.append(
-                        Note(
-                            f"dimension {model.dimensions[idx].id} ({name}) is measured twice in part "
-                            f"{key or '(report)'}: the later measurement here is used, the one at "
-                            f"{wheres[earlier]} ignored",
-                            SourceLocation(where),
-                            "match",
-                        )
-                    )
+            for idx, _, comp in chosen:
+                if comp >= 0:  # a position zone's component: the later row wins, as for a dimension
+                    if (idx, comp) in zone_rows and not _later(stamps[zone_rows[(idx, comp)]], stamps[i]):
+                        continue
+                    zone[idx, comp] = value
+                    zone_rows[(idx, comp)] = i
                 else:
-                    notes.append(
-                        Note(
-                            f"dimension {model.dimensions[idx].id} ({name}) is measured twice in part "
-                            f"{key or '(report)'}: the later measurement at {wheres[earlier]} is used, "
-                            "this one ignored",
-                            SourceLocation(where),
-                            "match",
-                        )
-                    )
-                    continue
-            deviation[idx] = value
-            row_of[idx] = i
+                    _take_row(model, key, idx, i, value, row_of, deviation, notes, stamps, wheres, name)
         for (idx, comp), i in zone_rows.items():
             if not np.isnan(zone[idx]).any():
                 deviation[idx] = float(np.hypot(zone[idx, 0], zone[idx, 1]))
@@ -357,10 +378,8 @@ def did_you_mean(model: ProcessModel, part: PartMeasurement) -> dict[str, str]:
     unmatched name meant), by :func:`closest_names`: ``correct`` and ``model check`` alike.
     """
     absent = set(part.absent)
-    names = [
-        n_ for d in model.dimensions if d.id in absent for n_ in ((*d.components,) if d.zone else (d.name, *d.aliases))
-    ]
-    out = {}
+    names = [n_ for d in model.dimensions if d.id in absent for n_ in report_names(d)]
+    out: dict[str, str] = {}
     for unmatched in part.unmatched:
         near = closest_names(unmatched, names, 1)
         if near:

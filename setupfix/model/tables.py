@@ -137,7 +137,9 @@ def dimension_rows(
     """The ``[dimensions.*]`` tables; ``axis`` (the default measuring axis) only in a multi-axis model."""
     multi = axis is not None
     dimensions = []
-    seen_names: dict[tuple[str, str | None], str] = {}
+    # a name answers to one dimension and to at most one zone component: a drawing may tolerance a hole's
+    # X both alone (±0.03) and in its position zone (⌀0.1), and one report row then feeds both
+    seen_names: dict[tuple[str, str | None, bool], str] = {}
     for did, raw in table_of(p, "dimensions", doc.get("dimensions", {})).items():
         key = f"dimensions.{did}"
         table = table_of(p, key, raw)
@@ -202,14 +204,17 @@ def dimension_rows(
                 plane=geometry.plane,
                 diameter=geometry.diameter,
             )
-        for k in (*dim.keys, *dim.component_keys):
-            if (k, group) in seen_names and seen_names[(k, group)] != did:
+        for k, component in (*((k, False) for k in dim.keys), *((k, True) for k in dim.component_keys)):
+            other = seen_names.get((k, group, component))
+            if other is not None and other != did:
                 p.add(
-                    f"{key}.name",
-                    f"name {k!r} is also used by dimension {seen_names[(k, group)]}"
+                    f"{key}.components" if component else f"{key}.name",
+                    f"name {k!r} is also "
+                    + ("a component of position zone" if component else "used by dimension")
+                    + f" {other}"
                     + (f" in group {group!r}" if group else ""),
                 )
-            seen_names[(k, group)] = did
+            seen_names[(k, group, component)] = did
         dimensions.append(dim)
     if not dimensions:
         p.add("dimensions", "the model declares no dimension")

@@ -173,8 +173,12 @@ def test_multi_axis_keys_refused_in_a_one_axis_model(tmp_path: Path) -> None:
 
 
 def test_zone_component_names_must_not_collide(tmp_path: Path) -> None:
-    lines = refused(tmp_path, BASE.replace('name = "Height"', 'name = "Hole X"'))
-    assert any("dimensions.D4" in line and "also used" in line for line in lines)
+    """Two zones may not share a component; a dimension may also be a zone's component (issue 37)."""
+    other = '\n[dimensions.D5]\nname = "Hole 2"\nkind = "position"\ncomponents = ["Hole X", "Hole 2 Y"]\n'
+    lines = refused(tmp_path, BASE + other + 'axes = ["X", "Y"]\ndiameter = 0.1\nfeatures = { F1 = 1 }\n')
+    assert any("dimensions.D5" in line and "also a component of position zone D4" in line for line in lines)
+    m = load(tmp_path, BASE.replace('name = "Height"', 'name = "Hole X"'))
+    assert [d.id for d in m.dimensions if "hole x" in (*d.keys, *d.component_keys)] == ["D1", "D4"]
 
 
 def test_direction_is_normalised_within_tolerance(tmp_path: Path) -> None:
