@@ -54,7 +54,7 @@ from setupfix.core.units import LENGTH_UNITS
 from setupfix.model import axes as multi_axis
 from setupfix.model.effects import parse_effects
 from setupfix.model.process import Feature, MachinePoint, ProcessModel
-from setupfix.model.safety import parse_safety
+from setupfix.model.safety import guard_band_problems, parse_safety
 from setupfix.model.stations import expand_stations
 from setupfix.model.tables import TABLE_KEYS, check_keys, check_resolution, dimension_rows, register_rows, report_in
 from setupfix.model.validate import (
@@ -230,6 +230,8 @@ def model_from_dict(doc: Mapping[str, Any], source: str = "<model>", text: str |
         model = replace(
             model, safety=parse_safety(doc["safety"], model.dimension_ids, functools.partial(report_in, p, "safety"))
         )
+        for key, message in guard_band_problems(model.safety, model.dimensions):
+            report_in(p, "safety", key, message)
     p.raise_if_any()
     return model
 

@@ -32,7 +32,10 @@ import functools
 import math
 from collections.abc import Callable, Collection, Mapping
 from dataclasses import dataclass, field
-from typing import Any, Literal
+from typing import TYPE_CHECKING, Any, Literal
+
+if TYPE_CHECKING:
+    from setupfix.model.process import Dimension
 
 __all__ = [
     "OffsetType",
@@ -43,6 +46,7 @@ __all__ = [
     "DIMENSION_KEYS",
     "parse_safety",
     "parse_register_policy",
+    "guard_band_problems",
 ]
 
 OffsetType = Literal["wear", "geometry"]
@@ -209,3 +213,46 @@ def parse_safety(value: Any, dimension_ids: Collection[str], report: Callable[[s
         dimension_uncertainty=uncertainty,
         dimension_reject_band=reject,
     )
+
+
+def guard_band_problems(safety: SafetySettings, dimensions: Collection[Dimension]) -> list[tuple[str, str]]:
+    """Where the guard band leaves a dimension no conformance zone: (key of its ``U``, message) pairs.
+
+    The limits shrink by g·U at each end (ISO 14253-1, :func:`setupfix.correction.safety.guard_limits`);
+    when 2·g·U reaches the tolerance width (g·U the radius of a position zone) nothing can be proven
+    in tolerance and no correction means anything, so the model is refused rather than solved on a
+    collapsed zone.  One pair for the ``[safety] uncertainty`` shared by several dimensions (named),
+    one per ``[safety.dimensions.ID] uncertainty``.
+    """
+    g = safety.guard_band
+    shared: list[str] = []
+    out: list[tuple[str, str]] = []
+    for dim in dimensions:
+        own = dim.id in safety.dimension_uncertainty
+        u = safety.dimension_uncertainty.get(dim.id, safety.uncertainty)
+        if u <= 0 or g <= 0:
+            continue
+        room = dim.upper if dim.zone else dim.upper - dim.lower  # a zone: its radius
+        used = g * u if dim.zone else 2 * g * u
+        if not math.isfinite(room) or used < room - 1e-12:
+            continue
+        what = f"{dim.id} ({dim.name}): guard band {g:g} × U {u:g} " + (
+            f"reaches its zone's radius {room:g}" if dim.zone else f"on each side reaches its tolerance width {room:g}"
+        )
+        if own:
+            out.append((f"dimensions.{dim.id}.uncertainty", f"{what}: no conformance zone is left (ISO 14253-1)"))
+        else:
+            shared.append(what)
+    if shared:
+        more = f" and {len(shared) - 3} more" if len(shared) > 3 else ""
+        out.insert(
+            0,
+            (
+                "uncertainty",
+                f"no conformance zone is left (ISO 14253-1) for {len(shared)} dimension(s): "
+                + "; ".join(shared[:3])
+                + more
+                + ": lower uncertainty or guard_band, or give those dimensions their own U",
+            ),
+        )
+    return out
