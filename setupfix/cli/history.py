@@ -98,6 +98,12 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
         "DFQ file for SPC tools)",
     )
     exp.add_argument("--out", required=True, metavar="FILE", help="output file: CSV, or DFQ for dfq ('-': stdout)")
+    exp.add_argument(
+        "--include-excluded",
+        action="store_true",
+        help="measurements and dfq: take in the reports marked excluded (a rejected, failed or draft-model "
+        "report, stored for the record); by default they are left out and a warning says how many",
+    )
     mig = actions.add_parser(
         "migrate",
         parents=[common],
@@ -165,7 +171,11 @@ def run(args: argparse.Namespace) -> int:
                 sys.stdout.write(_format(summary) + "\n")
         else:
             n, notes = export_history(
-                store, args.table, args.out, every_machine=args.machine is None and args.table == "recommendations"
+                store,
+                args.table,
+                args.out,
+                every_machine=args.machine is None and args.table == "recommendations",
+                include_excluded=args.include_excluded,
             )
             for note in notes:
                 print(f"warning: {note}", file=sys.stderr)

@@ -208,8 +208,12 @@ def write_dfq(table: pd.DataFrame, target: str | os.PathLike[str], source: str =
     return notes
 
 
-def export_dfq(store: Store, target: str | os.PathLike[str]) -> tuple[int, tuple[Note, ...]]:
-    """``history export dfq``: every stored measurement (reference-only rows left out) as a DFQ file.
+def export_dfq(
+    store: Store, target: str | os.PathLike[str], *, include_excluded: bool = False
+) -> tuple[int, tuple[Note, ...]]:
+    """``history export dfq``: every stored measurement (reference-only rows left out) as a DFQ file; the
+    reports marked excluded (rejected, failed, draft: :func:`setupfix.store.excluded_reports`) only with
+    ``include_excluded``.
 
     Returns the number of values written and the notes (what the format cannot carry).
 
@@ -218,7 +222,7 @@ def export_dfq(store: Store, target: str | os.PathLike[str]) -> tuple[int, tuple
     ExportError
         A name that cannot be one DFQ field; the target cannot be written.
     """
-    table = store.measurements()
+    table = store.measurements(include_excluded=include_excluded)
     if "reference" in table.columns:
         table = table[~table["reference"].astype(bool)]
     notes = write_dfq(table, target, f"{store.location}#measurements")

@@ -14,7 +14,7 @@ import contextlib
 import hashlib
 import re
 from collections import Counter
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -164,7 +164,7 @@ class Claims:
         StoreError
             Nothing of this report was stored (the reports before it are).
         """
-        excluded = exclusion(outcome, draft=not final)
+        excluded = exclusion(outcome.verdicts, outcome.solved, draft=not final)
         with self.store.transaction():  # a failure here stores nothing of this report (said per report)
             for rec in _record(self.store, outcome, solve, excluded):
                 self.store.add_recommendation(rec)
@@ -204,18 +204,19 @@ def _cause(exc: StoreError) -> str:
     return re.sub(r"; nothing( of the current import)? was stored$", "", exc.message)
 
 
-def exclusion(outcome: Outcome, *, draft: bool) -> str | None:
-    """Why the history leaves ``outcome``'s report out (:data:`setupfix.store.EXCLUDED_REASONS`), or None.
+def exclusion(verdicts: Sequence[str], solved: Sequence[bool], *, draft: bool) -> str | None:
+    """Why the history leaves a corrected report out (:data:`setupfix.store.EXCLUDED_REASONS`), or None.
 
     ``draft``: the model was a draft (its verdicts are not to be trusted); ``rejected``: a part's
     verdict was reject (a gross error, a setup error); ``failed``: a part could not be corrected
-    (its solve stopped with nothing proven).  The first that holds, in this order.
+    (its solve stopped with nothing proven).  The first that holds, in this order.  ``verdicts``
+    and ``solved`` are the report's parts'; batch and ``correct --store`` mark by this one rule.
     """
     if draft:
         return "draft"
-    if "reject" in outcome.verdicts:
+    if "reject" in verdicts:
         return "rejected"
-    if not all(outcome.solved):
+    if not all(solved):
         return "failed"
     return None
 

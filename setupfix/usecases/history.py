@@ -12,6 +12,7 @@ from __future__ import annotations
 import dataclasses
 import hashlib
 import os
+from collections import Counter
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -29,8 +30,9 @@ from setupfix.inputs.stores import DEFAULT_DB, StoreRef, store_location
 from setupfix.model import CANONICAL_COLUMNS, ProcessModel
 from setupfix.outputs.dfq import export_dfq
 from setupfix.outputs.writers import csv_cell, escape_formulas, write_canonical_csv, write_table_csv
-from setupfix.store import Recommendation, Store
+from setupfix.store import Recommendation, Store, excluded_reports
 from setupfix.store.audit import TABLES
+from setupfix.usecases.batch_records import exclusion
 from setupfix.usecases.contract import cycle_json
 from setupfix.usecases.export import Exported
 from setupfix.usecases.requests import CycleCorrection, ReadOptions
@@ -45,6 +47,7 @@ __all__ = [
     "export_history",
     "record_recommendations",
     "record_correction",
+    "mark_report",
     "migrate_history",
     "EXPORTS",
     "EVENTS",
@@ -145,7 +148,8 @@ def import_history(store: Store, request: ImportRequest) -> ImportSummary:
     store.verify()  # a damaged store is refused, not written into
     with store.transaction():
         for data, name, fmt, table in read:
-            _, new = store.add_report(data, Path(name).name, fmt, table)
+            held = store.report(hashlib.sha256(data).hexdigest())  # an import gives no verdict: a mark stays
+            _, new = store.add_report(data, Path(name).name, fmt, table, excluded=held.excluded if held else None)
             (new_reports if new else known_reports).append(name)
         for log in logs:
             n_corrections += store.add_corrections(log.frame())
@@ -169,7 +173,7 @@ def history_summary(store: Store, *, every_machine: bool = True) -> dict[str, ob
     }
     if every_machine:
         return summary
-    rows = store.measurements()
+    rows = store.measurements(include_excluded=True)
     reports = []
     for rec in store.reports():
         mine = rows[rows["report_sha256"] == rec.sha256]
@@ -184,6 +188,7 @@ def history_summary(store: Store, *, every_machine: bool = True) -> dict[str, ob
                 "first": str(stamps.min()) if len(stamps) else "",
                 "last": str(stamps.max()) if len(stamps) else "",
                 "imported": rec.imported_at,
+                "excluded": rec.excluded,
             }
         )
     log = store.corrections()
@@ -212,19 +217,30 @@ def _escaped(frame: pd.DataFrame) -> pd.DataFrame:
 
 
 def export_history(
-    store: Store, table: str, target: str | os.PathLike[str], *, every_machine: bool = False
+    store: Store,
+    table: str,
+    target: str | os.PathLike[str],
+    *,
+    every_machine: bool = False,
+    include_excluded: bool = False,
 ) -> tuple[int, tuple[Note, ...]]:
     """Write one stored table of the handle's machine as its canonical CSV (``-``: standard output); the rows
-    written and the notes (what the target format cannot carry).
+    written and the notes (what the target format cannot carry, the reports left out).
 
     ``recommendations`` is the audit trail (:data:`setupfix.store.AUDIT_COLUMNS`, one row per register
     component), of every machine with ``every_machine``; ``dfq`` the measurements as an AQDEF (Q-DAS) file
-    for the SPC tools a shop runs (:func:`setupfix.outputs.dfq.export_dfq`).  The store is checked whole first
-    (:meth:`~setupfix.store.Store.verify`): a damaged one is refused, never exported in part.
+    for the SPC tools a shop runs (:func:`setupfix.outputs.dfq.export_dfq`).  ``measurements`` and ``dfq``
+    leave out the reports marked excluded (a rejected, failed or draft-model report,
+    :func:`setupfix.store.excluded_reports`) unless ``include_excluded``, and a note says how many, either
+    way.  The store is checked whole first (:meth:`~setupfix.store.Store.verify`): a damaged one is
+    refused, never exported in part.
     """
     store.verify()
+    notes: tuple[Note, ...] = ()
+    if table in ("measurements", "dfq"):
+        notes = _excluded_note(store, include_excluded)
     if table == "measurements":
-        frame = store.measurements()
+        frame = store.measurements(include_excluded=include_excluded)
         write_canonical_csv(frame[[*CANONICAL_COLUMNS, "reference"]], target)
     elif table in ("corrections", "temperatures", "recommendations"):
         if table == "corrections":
@@ -235,10 +251,24 @@ def export_history(
             frame = store.audit(every_machine=every_machine)
         write_table_csv(_escaped(frame), target)
     elif table == "dfq":
-        return export_dfq(store, target)
+        n, written = export_dfq(store, target, include_excluded=include_excluded)
+        return n, (*notes, *written)
     else:
         raise ParameterError(f"history export: table must be one of {', '.join(EXPORTS)}, got {table!r}")
-    return len(frame), ()
+    return len(frame), notes
+
+
+def _excluded_note(store: Store, included: bool) -> tuple[Note, ...]:
+    """What an export of the measurements says of the reports marked excluded: how many, why, left out or not."""
+    marked = excluded_reports(store)
+    if not marked:
+        return ()
+    why = ", ".join(f"{n} {reason}" for reason, n in sorted(Counter(r.excluded for r in marked).items()))
+    if included:
+        text = f"{len(marked)} report(s) marked excluded ({why}) taken in (--include-excluded)"
+    else:
+        text = f"left out {len(marked)} report(s) marked excluded ({why}); --include-excluded takes them in"
+    return (Note(text, SourceLocation(store.location), "excluded"),)
 
 
 def record_recommendations(
@@ -301,11 +331,28 @@ def record_correction(
         with ref.for_model(model).open() as store, store.transaction():
             exported = write()
             record_recommendations(store, results, model=model.source, report=report, seed=seed, exported=exported)
+            mark_report(store, read_bytes(os.fspath(report)), results, draft=model.draft)
     except StoreError:
         if exported is not None and exported.target != "-":
             Path(exported.target).unlink(missing_ok=True)
         raise
     return exported
+
+
+def mark_report(store: Store, data: bytes, results: Sequence[CycleCorrection], *, draft: bool) -> str | None:
+    """Give a report the store holds the mark of this correction (the newest verdict rules); its mark.
+
+    ``correct --store`` stores no report's rows, but a report imported before and now rejected, or
+    corrected with a draft model, or not solved, is left out of the history from now on (and one
+    corrected cleanly again is taken back in), by the rule batch marks by
+    (:func:`setupfix.usecases.batch_records.exclusion`).  A report the store does not hold is left alone.
+    """
+    sha = hashlib.sha256(data).hexdigest()
+    held = store.report(sha)
+    mark = exclusion([r.verdict for r in results], [r.solved for r in results], draft=draft)
+    if held is not None and held.excluded != mark:
+        store.add_report(data, held.name, held.format, store.measurements(sha), excluded=mark)
+    return mark
 
 
 def migrate_history(source: Store, target: Store) -> dict[str, int]:

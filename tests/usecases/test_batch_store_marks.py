@@ -20,7 +20,7 @@ from pgserver import location, pg_url
 from setupfix.model import load_model
 from setupfix.store import excluded_reports, open_store, report_tables
 from setupfix.usecases.batch import run_batch
-from setupfix.usecases.batch_records import Outcome, exclusion
+from setupfix.usecases.batch_records import exclusion
 from setupfix.usecases.requests import CorrectRequest
 
 __all__ = ["location", "pg_url"]
@@ -85,11 +85,10 @@ def test_a_draft_model_marks_every_report_draft(tmp_path: Path, location: str) -
 
 
 def test_the_mark_follows_draft_then_reject_then_failure() -> None:
-    out = Outcome("r.csv", verdicts=["apply", "reject"], solved=[True, True])
-    assert exclusion(out, draft=True) == "draft"
-    assert exclusion(out, draft=False) == "rejected"
-    assert exclusion(Outcome("r.csv", verdicts=["hold", "apply"], solved=[False, True]), draft=False) == "failed"
-    assert exclusion(Outcome("r.csv", verdicts=["apply", "hold"], solved=[True, True]), draft=False) is None
+    assert exclusion(["apply", "reject"], [True, True], draft=True) == "draft"
+    assert exclusion(["apply", "reject"], [True, True], draft=False) == "rejected"
+    assert exclusion(["hold", "apply"], [False, True], draft=False) == "failed"
+    assert exclusion(["apply", "hold"], [True, True], draft=False) is None
 
 
 def test_a_report_processed_for_one_machine_is_corrected_and_stored_for_another(tmp_path: Path, location: str) -> None:
