@@ -21,11 +21,15 @@ author = "the setupfix authors"
 copyright = "the setupfix authors, MIT licence"
 release = version = setupfix.__version__
 
-extensions = ["myst_parser", "setupfix_reference"]
+# docs_examples runs every command the pages show and compares its output (tests/docs_console.py)
+extensions = ["myst_parser", "setupfix_reference", "docs_examples"]
 source_suffix = {".md": "markdown"}
 master_doc = "index"
 exclude_patterns = ["_build", "README.md"]
 myst_enable_extensions = ["dollarmath", "deflist", "colon_fence"]
 myst_heading_anchors = 3
+# Typography turns straight quotes into curly ones, never "--" into an en dash: "--" is an option's
+# prefix here (``--current`` in a heading reused as a link text, ``--store`` in a help text), not a dash.
+smartquotes_action = "qe"
 html_theme = "furo"
 html_title = f"setupfix {release}"

@@ -1,51 +1,49 @@
-"""Every console example of the README and the documentation runs, and prints what the page shows.
+"""Every command example of the README and the documentation runs and prints what the page shows;
+every other command block says why it cannot run; every inline command names real options.
 
 The pages run at once (each in its own scratch folder, its steps in order): the examples are
-sub-processes, so threads overlap their start-up and keep the whole under the suite's budget.
+sub-processes, so threads overlap their start-up. The docs build runs the same checker
+(``docs/_ext/docs_examples.py``); ``SETUPFIX_DOCS_EXAMPLES=skip`` leaves the runs to it (``.ci/run``),
+so each page runs once in CI.
 """
 
 from __future__ import annotations
 
-from concurrent.futures import ThreadPoolExecutor
+import os
 from pathlib import Path
 
 import pytest
-from docs_console import PAGES, ROOT, matches, run, scratch, steps
+from docs_console import (
+    PAGES,
+    ROOT,
+    matches,
+    option_errors,
+    run_page,
+    run_pages,
+    static_problems,
+    steps,
+    unmarked,
+    with_examples,
+)
 
-_WITH_EXAMPLES = [p for p in PAGES if any(s.command for s in steps(p))]
+from setupfix.cli import build_parser
+
+_WITH_EXAMPLES = with_examples(PAGES)
 
 
-def _name(page: Path) -> str:
-    return page.relative_to(ROOT).as_posix() if page.is_relative_to(ROOT) else str(page)
-
-
-def _run_page(page: Path, folder: Path) -> list[str]:
-    """Run one page's steps; the failures, each with the page line, the command and both texts."""
-    cwd = scratch(folder)
-    failures = []
-    for step in steps(page):
-        if step.command is None:
-            assert step.file is not None
-            (cwd / step.file).write_text(step.text, encoding="utf-8")
-            continue
-        actual = run(step.command, cwd)
-        if not matches(step.text, actual):
-            failures.append(
-                f"{_name(page)}:{step.line}: $ {step.command}\n--- expected\n{step.text}\n--- got\n{actual}"
-            )
-    return failures
+def _rel(page: Path) -> str:
+    return page.relative_to(ROOT).as_posix()
 
 
 @pytest.fixture(scope="module")
 def outcomes(tmp_path_factory: pytest.TempPathFactory) -> dict[Path, list[str]]:
-    base = tmp_path_factory.mktemp("docs-examples")
-    with ThreadPoolExecutor(max_workers=4) as pool:
-        futures = {page: pool.submit(_run_page, page, base / f"page{i}") for i, page in enumerate(_WITH_EXAMPLES)}
-        return {page: future.result() for page, future in futures.items()}
+    if os.environ.get("SETUPFIX_DOCS_EXAMPLES", "") == "skip":
+        pytest.skip("SETUPFIX_DOCS_EXAMPLES=skip: the docs build runs the examples (.ci/run)")
+    return run_pages(_WITH_EXAMPLES, tmp_path_factory.mktemp("docs-examples"))
 
 
 def test_the_pages_hold_examples() -> None:
-    """The README and the tutorials are tested, not skipped by a parser that finds nothing."""
+    """The README, the tutorials and the how-tos are tested, not skipped by a parser that finds nothing."""
     names = {p.relative_to(ROOT).as_posix() for p in _WITH_EXAMPLES}
     assert {
         "README.md",
@@ -53,6 +51,9 @@ def test_the_pages_hold_examples() -> None:
         "docs/tutorials/own-report.md",
         "docs/tutorials/multi-station.md",
         "docs/tutorials/closing-the-loop.md",
+        "docs/howto/batch-and-history.md",
+        "docs/howto/plant-database.md",
+        "docs/howto/thermal.md",
     } <= names
 
 
@@ -68,7 +69,83 @@ def test_a_stale_example_fails(tmp_path: Path) -> None:
     page = tmp_path / "page.md"
     page.write_text("```console\n$ echo 1.000\n0.999\n```\n", encoding="utf-8")
     assert steps(page)[0].command == "echo 1.000"
-    assert _run_page(page, tmp_path / "run")
+    assert run_page(page, tmp_path / "run")
+
+
+#: Pages whose owner has yet to mark a block (xfail is strict: the mark goes when the page is fixed).
+_PENDING = {
+    "docs/howto/tui.md": "its `setupfix tui` block needs <!-- not run: the screen needs a terminal -->",
+}
+
+
+@pytest.mark.parametrize(
+    "page",
+    [
+        pytest.param(page, id=_rel(page), marks=[pytest.mark.xfail(reason=_PENDING[_rel(page)], strict=True)])
+        if _rel(page) in _PENDING
+        else pytest.param(page, id=_rel(page))
+        for page in PAGES
+    ],
+)
+def test_every_command_block_is_run_or_marked(page: Path) -> None:
+    """No page shows a command that is neither run nor marked not runnable (with its reason), nor an
+    inline command with an option the parser lacks."""
+    assert static_problems([page]) == []
+
+
+@pytest.mark.parametrize(
+    ("block", "line"),
+    [
+        ("```bash\nsetupfix history show --db plant.db\n```\n", 5),
+        ("```sh\nsetupfix spc --db x.db\n```\n", 5),
+        ("```text\n$ setupfix formats\ncanonical\n```\n", 5),
+        ("```\n$ setupfix formats\n```\n", 5),
+        ("<!-- not run: -->\n```bash\nsetupfix formats\n```\n", 6),
+    ],
+)
+def test_an_unmarked_command_block_is_named(tmp_path: Path, block: str, line: int) -> None:
+    page = tmp_path / "page.md"
+    page.write_text("# A page\n\nSome text.\n\n" + block, encoding="utf-8")
+    problems = unmarked(page)
+    assert len(problems) == 1 and f"page.md:{line}:" in problems[0]
+
+
+def test_a_marked_block_is_not_run(tmp_path: Path) -> None:
+    """``<!-- not run: REASON -->`` keeps a block, even a console one, out of the runs."""
+    page = tmp_path / "page.md"
+    page.write_text(
+        "<!-- not run: needs the plant's server -->\n```console\n$ false\nnever\n```\n"
+        "<!-- not run: a synopsis -->\n```bash\nsetupfix batch --model MODEL DIR\n```\n",
+        encoding="utf-8",
+    )
+    assert steps(page) == [] and unmarked(page) == []
+
+
+@pytest.mark.parametrize(
+    ("span", "missing"),
+    [
+        ("`diagnose --store shop.db`", "--store"),  # the plant how-to's slip: diagnose takes --db
+        ("`setupfix spc --store plant.db --json`", "--store"),
+        ("`setupfix history import --bd x.db`", "--bd"),
+        ("`correct --offset fix.nc`", "--offset"),
+    ],
+)
+def test_an_inline_command_with_an_unknown_option_is_named(tmp_path: Path, span: str, missing: str) -> None:
+    page = tmp_path / "page.md"
+    page.write_text(f"# A page\n\nthe history is read by {span} on each machine.\n", encoding="utf-8")
+    problems = option_errors(page, build_parser())
+    assert len(problems) == 1 and f"no option {missing}" in problems[0] and ":3:" in problems[0]
+
+
+def test_inline_commands_with_real_options_pass(tmp_path: Path) -> None:
+    page = tmp_path / "page.md"
+    page.write_text(
+        "`diagnose --db shop.db`, `setupfix history export dfq --db STORE --out F.dfq`, "
+        "`correct --thermal`, `setupfix --help`, `--store` alone, `batch` alone\n"
+        "```bash\nsetupfix spc --store x\n```\n",
+        encoding="utf-8",
+    )
+    assert option_errors(page, build_parser()) == []
 
 
 @pytest.mark.slow
