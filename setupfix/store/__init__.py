@@ -31,7 +31,13 @@ Rules every implementation keeps:
   forced.  A claim names its run (random token), host, pid, the process's start mark
   and time; a claim whose process is gone (same host: the pid is not running or is
   another process; another host: older than :data:`CLAIM_STALE_S`) is taken over;
-* a report belongs to one machine: the same bytes given for another machine are refused;
+* a report belongs to one machine: the same bytes given for another machine are another
+  record (its own rows, claims and mark);
+* a report may be stored for the record but left out of the history (``excluded``: its
+  verdict was reject, it could not be corrected, or the model was a draft,
+  :data:`EXCLUDED_REASONS`); reading every report's rows (:meth:`Store.measurements`,
+  :func:`report_tables`) leaves those out unless asked, and adding the report again with
+  another mark changes the mark (the newest verdict rules);
 * every failure (a damaged, read-only, locked or full file; a server that is down, refuses
   the login or is unknown; a bad URL) is a :class:`StoreError` naming the store (a URL
   without its password), never a bare database error.
@@ -69,6 +75,8 @@ __all__ = [
     "MachineSummary",
     "open_store",
     "report_tables",
+    "excluded_reports",
+    "EXCLUDED_REASONS",
     "stored_corrections",
     "is_server",
     "login_name",
@@ -88,6 +96,9 @@ DB_ENV = "SETUPFIX_DB"
 
 #: A claim from another host (whose process cannot be looked at) is stale after this long, seconds.
 CLAIM_STALE_S = 12 * 3600.0
+#: Why a stored report is left out of the history (``ReportRecord.excluded``): its verdict was reject,
+#: it could not be corrected, or the model it was corrected with was a draft.
+EXCLUDED_REASONS = ("rejected", "failed", "draft")
 #: Why a report a batch already processed is skipped.
 ALREADY_PROCESSED = "already processed (history store); --force corrects it again"
 #: How a refusal of a report another live batch holds begins (the rest names that run).
@@ -126,7 +137,11 @@ class Claimant:
 
 @dataclass(frozen=True)
 class ReportRecord:
-    """One stored report: its content hash, name, reader, size, rows, import time and machine."""
+    """One stored report: its content hash, name, reader, size, rows, import time and machine.
+
+    ``excluded`` is None when the history uses the report, else why it is left out (one of
+    :data:`EXCLUDED_REASONS`).
+    """
 
     sha256: str
     name: str
@@ -135,6 +150,7 @@ class ReportRecord:
     rows: int
     imported_at: str
     machine: str = DEFAULT_MACHINE
+    excluded: str | None = None
 
 
 @dataclass(frozen=True)
@@ -192,8 +208,14 @@ class Store(Protocol):
         """Everything inside is committed together at the end, or rolled back on any exception."""
         ...
 
-    def add_report(self, data: bytes, name: str, format: str, table: pd.DataFrame) -> tuple[str, bool]:
-        """Store a report (its bytes' hash, name, reader) and its canonical rows; (sha256, newly added)."""
+    def add_report(
+        self, data: bytes, name: str, format: str, table: pd.DataFrame, *, excluded: str | None = None
+    ) -> tuple[str, bool]:
+        """Store a report (its bytes' hash, name, reader) and its canonical rows; (sha256, newly added).
+
+        ``excluded`` (None or one of :data:`EXCLUDED_REASONS`) marks it left out of the history; a
+        report stored before takes the mark given now.
+        """
         ...
 
     def report(self, sha256: str) -> ReportRecord | None:
@@ -201,11 +223,12 @@ class Store(Protocol):
         ...
 
     def reports(self) -> list[ReportRecord]:
-        """Every stored report in import order."""
+        """Every stored report of this machine in import order, excluded ones too (see ``excluded``)."""
         ...
 
-    def measurements(self, sha256: str | None = None) -> pd.DataFrame:
-        """Canonical rows of one report (or all, in import order) plus ``reference`` and ``report_sha256``."""
+    def measurements(self, sha256: str | None = None, *, include_excluded: bool = False) -> pd.DataFrame:
+        """Canonical rows of one report (whatever its mark), or of all in import order (the excluded ones
+        only when ``include_excluded``), plus ``reference`` and ``report_sha256``."""
         ...
 
     def add_corrections(self, log: pd.DataFrame) -> int:
@@ -331,20 +354,26 @@ def open_store(location: str | os.PathLike[str], *, machine: str | None = None, 
     return SQLiteStore(os.fspath(location), machine=who, operator=by)
 
 
-def report_tables(store: Store) -> list[tuple[ReportRecord, pd.DataFrame]]:
+def report_tables(store: Store, *, include_excluded: bool = False) -> list[tuple[ReportRecord, pd.DataFrame]]:
     """Every stored report with its canonical rows (and ``reference`` flags), in import order: one query.
 
     The one way the doors read a store's reports (``correct --store``'s smoothing,
-    ``diagnose --db``, the TUI's history).
+    ``diagnose --db``, the TUI's history).  Reports marked excluded (rejected, failed, draft)
+    are left out unless ``include_excluded`` (:func:`excluded_reports` names them).
     """
     records = {r.sha256: r for r in store.reports()}
-    rows = store.measurements()  # in import order, each report's rows together
+    rows = store.measurements(include_excluded=include_excluded)  # in import order, each report's rows together
     keys = rows.pop("report_sha256").to_numpy()
     if not len(keys):
         return []
     starts = np.flatnonzero(np.r_[True, keys[1:] != keys[:-1]])
     ends = np.r_[starts[1:], len(keys)]
     return [(records[str(keys[a])], rows.iloc[a:b]) for a, b in zip(starts, ends, strict=True)]
+
+
+def excluded_reports(store: Store) -> list[ReportRecord]:
+    """The reports of the store's machine left out of the history (``excluded`` set), in import order."""
+    return [r for r in store.reports() if r.excluded is not None]
 
 
 def stored_corrections(store: Store, model: ProcessModel) -> RegisterLog | None:

@@ -49,7 +49,19 @@ AUDIT_COLUMNS = (
 TABLES: tuple[tuple[str, tuple[str, ...], str], ...] = (
     (
         "report",
-        ("id", "sha256", "name", "format", "size", "imported_at", "machine", "rows", "first_measured", "last_measured"),
+        (
+            "id",
+            "sha256",
+            "name",
+            "format",
+            "size",
+            "imported_at",
+            "machine",
+            "rows",
+            "first_measured",
+            "last_measured",
+            "excluded",
+        ),
         "id",
     ),
     (
@@ -101,7 +113,11 @@ TABLES: tuple[tuple[str, tuple[str, ...], str], ...] = (
         "id",
     ),
     ("recommendation_delta", ("recommendation_id", "register", "delta"), "recommendation_id, register"),
-    ("batch_claim", ("report_sha256", "done", "owner", "host", "pid", "started", "claimed_at"), "report_sha256"),
+    (
+        "batch_claim",
+        ("machine", "report_sha256", "done", "owner", "host", "pid", "started", "claimed_at"),
+        "machine, report_sha256",
+    ),
 )
 
 _SHA256 = re.compile(r"[0-9a-f]{64}")

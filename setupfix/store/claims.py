@@ -1,5 +1,8 @@
 """Batch claims on both back ends: a report is corrected by one run at a time, and once.
 
+A claim is one machine's (the store handle's): the same report given for two machines is
+claimed, processed and skipped for each on its own.
+
 See :meth:`setupfix.store.Store.claim_reports`.  A claim row is created first (``ON CONFLICT
 DO NOTHING``) and then read with the back end's row lock (PostgreSQL: ``FOR UPDATE``; SQLite's
 ``BEGIN IMMEDIATE`` already serialises writers), keys in sorted order, so two batches claiming
@@ -39,14 +42,15 @@ class ClaimingStore(SQLStore):
         wanted = sorted(dict.fromkeys(keys))
         with self.transaction():
             self._executemany(
-                "INSERT INTO batch_claim (report_sha256, done) VALUES (?, 0) ON CONFLICT (report_sha256) DO NOTHING",
-                [(k,) for k in wanted],
+                "INSERT INTO batch_claim (machine, report_sha256, done) VALUES (?, ?, 0) "
+                "ON CONFLICT (machine, report_sha256) DO NOTHING",
+                [(self.machine, k) for k in wanted],
             )
             for key in wanted:
                 row = self._one(
                     "SELECT done, owner, host, pid, started, claimed_at FROM batch_claim "
-                    f"WHERE report_sha256 = ?{self.lock}",
-                    (key,),
+                    f"WHERE machine = ? AND report_sha256 = ?{self.lock}",
+                    (self.machine, key),
                 )
                 if row is not None:
                     done, owner, host, pid, started, at = row
@@ -60,11 +64,12 @@ class ClaimingStore(SQLStore):
                         continue
                 self._execute(
                     "UPDATE batch_claim SET owner = ?, host = ?, pid = ?, started = ?, claimed_at = ? "
-                    "WHERE report_sha256 = ?",
-                    (claimant.token, claimant.host, claimant.pid, claimant.started, now(), key),
+                    "WHERE machine = ? AND report_sha256 = ?",
+                    (claimant.token, claimant.host, claimant.pid, claimant.started, now(), self.machine, key),
                 )
             self._executemany(
-                "DELETE FROM batch_claim WHERE report_sha256 = ? AND owner IS NULL AND done = 0", [(k,) for k in wanted]
+                "DELETE FROM batch_claim WHERE machine = ? AND report_sha256 = ? AND owner IS NULL AND done = 0",
+                [(self.machine, k) for k in wanted],
             )
         return {k: refused[k] for k in dict.fromkeys(keys) if k in refused}
 
@@ -73,19 +78,22 @@ class ClaimingStore(SQLStore):
         with self.transaction():
             self._executemany(
                 "UPDATE batch_claim SET done = 1, owner = NULL, host = NULL, pid = NULL, "
-                "started = NULL, claimed_at = NULL WHERE report_sha256 = ? AND owner = ?",
-                [(k, claimant.token) for k in sorted(dict.fromkeys(keys))],
+                "started = NULL, claimed_at = NULL WHERE machine = ? AND report_sha256 = ? AND owner = ?",
+                [(self.machine, k, claimant.token) for k in sorted(dict.fromkeys(keys))],
             )
 
     @guarded
     def release_claims(self, claimant: Claimant) -> None:
         with self.transaction():
             held = self._all(
-                "SELECT report_sha256 FROM batch_claim WHERE owner = ? ORDER BY report_sha256", (claimant.token,)
+                "SELECT machine, report_sha256 FROM batch_claim WHERE owner = ? ORDER BY machine, report_sha256",
+                (claimant.token,),
             )
             self._executemany(
                 "UPDATE batch_claim SET owner = NULL, host = NULL, pid = NULL, started = NULL, "
-                "claimed_at = NULL WHERE report_sha256 = ? AND owner = ?",
-                [(k, claimant.token) for (k,) in held],
+                "claimed_at = NULL WHERE machine = ? AND report_sha256 = ? AND owner = ?",
+                [(m, k, claimant.token) for m, k in held],
             )
-            self._executemany("DELETE FROM batch_claim WHERE report_sha256 = ? AND owner IS NULL AND done = 0", held)
+            self._executemany(
+                "DELETE FROM batch_claim WHERE machine = ? AND report_sha256 = ? AND owner IS NULL AND done = 0", held
+            )

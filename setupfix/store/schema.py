@@ -223,8 +223,64 @@ def _v4(db: sqlite3.Connection) -> None:
         db.executemany("INSERT INTO recommendation_delta VALUES (?, ?, ?)", [(rec_id, r, d) for r, d in a.deltas])
 
 
+def _v5(db: sqlite3.Connection) -> None:
+    """A report is one machine's record, and may be left out of the history.
+
+    The same bytes measured on two machines are two reports: ``report`` is unique by
+    (``machine``, ``sha256``) and a batch claim is keyed by (``machine``, ``report_sha256``)
+    (a claim stored before takes its report's machine).  ``report.excluded`` is NULL for a
+    report the history uses, else the reason it is left out
+    (:data:`setupfix.store.EXCLUDED_REASONS`); reports stored before are used.
+
+    SQLite cannot change a table's UNIQUE constraint: ``report`` is copied aside, dropped and
+    created again with the same ids.  The foreign keys of ``measurement`` are deferred to the
+    commit meanwhile, and hold again once every id is back.
+    """
+    db.execute("PRAGMA defer_foreign_keys = ON")
+    _script(
+        db,
+        """
+        CREATE TEMP TABLE report_v4 AS SELECT * FROM report;
+        DROP TABLE report;
+        CREATE TABLE report (
+            id INTEGER PRIMARY KEY,
+            sha256 TEXT NOT NULL,
+            name TEXT NOT NULL,
+            format TEXT NOT NULL,
+            size INTEGER NOT NULL,
+            imported_at TEXT NOT NULL,
+            machine TEXT NOT NULL DEFAULT 'default',
+            rows INTEGER NOT NULL DEFAULT 0,
+            first_measured TEXT,
+            last_measured TEXT,
+            excluded TEXT,
+            UNIQUE (machine, sha256)
+        );
+        INSERT INTO report (id, sha256, name, format, size, imported_at, machine, rows, first_measured, last_measured)
+            SELECT id, sha256, name, format, size, imported_at, machine, rows, first_measured, last_measured
+            FROM temp.report_v4 ORDER BY id;
+        DROP TABLE temp.report_v4;
+        CREATE INDEX report_machine ON report(machine, id);
+        CREATE TABLE batch_claim_v5 (
+            machine TEXT NOT NULL DEFAULT 'default',
+            report_sha256 TEXT NOT NULL,
+            done INTEGER NOT NULL DEFAULT 0,
+            owner TEXT, host TEXT, pid INTEGER, started TEXT, claimed_at TEXT,
+            PRIMARY KEY (machine, report_sha256)
+        );
+        INSERT INTO batch_claim_v5 (machine, report_sha256, done, owner, host, pid, started, claimed_at)
+            SELECT coalesce((SELECT r.machine FROM report r WHERE r.sha256 = c.report_sha256 ORDER BY r.id LIMIT 1),
+                'default'), c.report_sha256, c.done, c.owner, c.host, c.pid, c.started, c.claimed_at
+            FROM batch_claim c;
+        DROP TABLE batch_claim;
+        ALTER TABLE batch_claim_v5 RENAME TO batch_claim;
+        CREATE INDEX batch_claim_owner ON batch_claim(owner)
+    """,
+    )
+
+
 #: Migrations in order; migration i (1-based) brings a store from version i − 1 to i.
-MIGRATIONS: tuple[Callable[[sqlite3.Connection], None], ...] = (_v1, _v2, _v3, _v4)
+MIGRATIONS: tuple[Callable[[sqlite3.Connection], None], ...] = (_v1, _v2, _v3, _v4, _v5)
 SCHEMA_VERSION = len(MIGRATIONS)
 
 

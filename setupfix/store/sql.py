@@ -30,7 +30,15 @@ import pandas as pd
 
 from setupfix.core.errors import SourceLocation, StoreError
 from setupfix.model import CANONICAL_COLUMNS
-from setupfix.store import AUDIT_COLUMNS, CORRECTION_COLUMNS, MachineSummary, Recommendation, ReportRecord, Store
+from setupfix.store import (
+    AUDIT_COLUMNS,
+    CORRECTION_COLUMNS,
+    EXCLUDED_REASONS,
+    MachineSummary,
+    Recommendation,
+    ReportRecord,
+    Store,
+)
 from setupfix.store.audit import TABLES, audit_of
 
 __all__ = ["SQLStore", "guarded", "now"]
@@ -153,7 +161,11 @@ class SQLStore(Store):
 
     # -- reports and their rows ----------------------------------------------------------------
     @guarded
-    def add_report(self, data: bytes, name: str, format: str, table: pd.DataFrame) -> tuple[str, bool]:
+    def add_report(
+        self, data: bytes, name: str, format: str, table: pd.DataFrame, *, excluded: str | None = None
+    ) -> tuple[str, bool]:
+        if excluded is not None and excluded not in EXCLUDED_REASONS:
+            raise ValueError(f"excluded must be None or one of {EXCLUDED_REASONS}, not {excluded!r}")
         sha = hashlib.sha256(data).hexdigest()
         cols = list(CANONICAL_COLUMNS)
         frame = table.reindex(columns=[*cols, "reference"])
@@ -161,7 +173,8 @@ class SQLStore(Store):
         with self.transaction():
             inserted = self._one(
                 "INSERT INTO report (sha256, name, format, size, imported_at, machine, rows, first_measured, "
-                "last_measured) VALUES (?,?,?,?,?,?,?,?,?) ON CONFLICT (sha256) DO NOTHING RETURNING id",
+                "last_measured, excluded) VALUES (?,?,?,?,?,?,?,?,?,?) ON CONFLICT (machine, sha256) DO NOTHING "
+                "RETURNING id",
                 (
                     sha,
                     name,
@@ -172,10 +185,14 @@ class SQLStore(Store):
                     len(frame),
                     min(stamps, default=None),
                     max(stamps, default=None),
+                    excluded,
                 ),
             )
             if inserted is None:  # stored before (or by another process meanwhile, which committed)
-                self._known(sha, name)
+                self._execute(
+                    f"UPDATE report SET excluded = ? WHERE machine = ? AND sha256 = ? AND excluded {self.distinct} ?",
+                    (excluded, self.machine, sha, excluded),
+                )
                 return sha, False
             flags = [int(str(v).strip().lower() in ("true", "1", "1.0")) for v in frame["reference"]]
             rows = [
@@ -184,16 +201,6 @@ class SQLStore(Store):
             ]
             self._load("measurement", ["report_id", "row", *cols, "reference"], rows)
         return sha, True
-
-    def _known(self, sha: str, name: str) -> None:
-        """A stored report is this machine's (for another it is refused)."""
-        row = self._one("SELECT machine FROM report WHERE sha256 = ?", (sha,))
-        if row is not None and row[0] != self.machine:
-            raise StoreError(
-                f"report {name} is already stored for machine {row[0]!r}, not {self.machine!r}",
-                location=SourceLocation(self.location),
-                hint="a report belongs to one machine: give the --machine it was measured for",
-            )
 
     @guarded
     def report(self, sha256: str) -> ReportRecord | None:
@@ -206,16 +213,20 @@ class SQLStore(Store):
 
     def _reports(self, where: str, args: Sequence[Any]) -> list[ReportRecord]:
         rows = self._all(
-            "SELECT sha256, name, format, size, rows, imported_at, machine FROM report "
+            "SELECT sha256, name, format, size, rows, imported_at, machine, excluded FROM report "
             f"WHERE machine = ? {where} ORDER BY id",
             (self.machine, *args),
         )
         return [ReportRecord(*row) for row in rows]
 
     @guarded
-    def measurements(self, sha256: str | None = None) -> pd.DataFrame:
+    def measurements(self, sha256: str | None = None, *, include_excluded: bool = False) -> pd.DataFrame:
         cols = ", ".join(f"m.{c}" for c in CANONICAL_COLUMNS)
-        where, args = ("AND r.sha256 = ?", (self.machine, sha256)) if sha256 else ("", (self.machine,))
+        args: tuple[str, ...] = (self.machine,)
+        if sha256:
+            where, args = "AND r.sha256 = ?", (self.machine, sha256)
+        else:
+            where = "" if include_excluded else "AND r.excluded IS NULL"
         cur = self._execute(
             f"SELECT {cols}, m.reference, r.sha256 FROM report r JOIN measurement m "
             f"ON m.report_id = r.id WHERE r.machine = ? {where} ORDER BY r.id, m.row",
@@ -319,7 +330,9 @@ class SQLStore(Store):
         with self.transaction():
             name = a.report
             if not name and a.report_sha256:
-                known = self._one("SELECT name FROM report WHERE sha256 = ?", (a.report_sha256,))
+                known = self._one(
+                    "SELECT name FROM report WHERE machine = ? AND sha256 = ?", (self.machine, a.report_sha256)
+                )
                 name = str(known[0]) if known else ""
             row = self._one(
                 "INSERT INTO recommendation (created_at, optimizer, inputs, result, machine, operator, report, "

@@ -75,7 +75,7 @@ def claims_of(db: str | Path) -> tuple[int, int, int]:
     """(claim rows, reports processed, claims held) of the store ``db``."""
     with open_store(db) as store:
         rows = list(store.dump("batch_claim"))
-    return len(rows), sum(r[1] for r in rows), sum(r[2] is not None for r in rows)
+    return len(rows), sum(r[2] for r in rows), sum(r[3] is not None for r in rows)
 
 
 @pytest.mark.slow

@@ -160,7 +160,7 @@ def test_eight_batches_at_once_on_one_server_correct_each_report_once_and_a_reru
         assert len(recs) == n and len(set(recs)) == n  # corrected once in total, nothing doubled
         assert store.count("report") == n and store.count("measurement") == n * 28
         claims = list(store.dump("batch_claim"))
-        assert len(claims) == n and all(c[1] == 1 and c[2] is None for c in claims)
+        assert len(claims) == n and all(c[2] == 1 and c[3] is None for c in claims)
     again = run_all()
     assert sum(s["reports"] for s in again) == 0  # type: ignore[misc]
     with open_store(pg_url) as store:
@@ -201,11 +201,17 @@ def test_each_machine_reads_only_its_own_rows(tmp_path: Path, location: str) -> 
 
 
 def test_a_report_belongs_to_one_machine(tmp_path: Path, location: str) -> None:
+    """The same bytes measured on two machines are two records, each read by its own machine only."""
     report = machine_reports(tmp_path, "M1", 1)
-    with open_store(location, machine="M1") as store:
-        import_history(store, ImportRequest(tuple(report)))
-    with open_store(location, machine="M2") as store, pytest.raises(StoreError, match="already stored for machine"):
-        import_history(store, ImportRequest(tuple(report)))
+    for m in ("M1", "M2", "M1"):
+        with open_store(location, machine=m) as store:
+            import_history(store, ImportRequest(tuple(report)))
+    for m in ("M1", "M2"):
+        with open_store(location, machine=m) as store:
+            assert [(r.machine, r.name) for r in store.reports()] == [(m, "M1_000.csv")]
+            assert len(store.measurements()) == 28
+    with open_store(location, machine="M3") as store:
+        assert store.reports() == [] and store.measurements().empty
 
 
 def _fill(db: str, tmp_path: Path) -> None:
