@@ -38,7 +38,7 @@ PAGES = sorted([*(p for p in DOCS.rglob("*.md") if "_build" not in p.parts), ROO
 #: Info strings of blocks that show shell commands.
 COMMAND_INFOS = frozenset({"bash", "sh", "shell", "zsh", "shell-session", "sh-session", "console"})
 
-_FENCE = re.compile(r"^(`{3,})(\S*)[^\n]*$")
+_FENCE = re.compile(r"^( *)(`{3,})(\S*)[^\n]*$")  # indented: a fence inside a list item
 _FILE = re.compile(r"^<!-- file: (\S+) -->$")
 _NOT_RUN = re.compile(r"^<!-- not run:(.*)-->$")
 _INLINE = re.compile(r"(?<!`)`([^`\n]+)`(?!`)")
@@ -87,11 +87,12 @@ def blocks(page: Path) -> list[Block]:
                 pending_file = pending_reason = None
             i += 1
             continue
-        ticks, info = fence.group(1), fence.group(2)
+        indent, ticks, info = fence.group(1), fence.group(2), fence.group(3)
         j = i + 1
-        while j < len(lines) and not lines[j].startswith(ticks):
+        while j < len(lines) and not lines[j].lstrip(" ").startswith(ticks):
             j += 1
-        out.append(Block(i + 1, info, tuple(lines[i + 1 : j]), pending_file, pending_reason))
+        body = tuple(line[len(indent) :] if line.startswith(indent) else line.lstrip(" ") for line in lines[i + 1 : j])
+        out.append(Block(i + 1, info, body, pending_file, pending_reason))
         pending_file = pending_reason = None
         i = j + 1
     return out

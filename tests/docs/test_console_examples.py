@@ -101,6 +101,7 @@ def test_every_command_block_is_run_or_marked(page: Path) -> None:
         ("```text\n$ setupfix formats\ncanonical\n```\n", 5),
         ("```\n$ setupfix formats\n```\n", 5),
         ("<!-- not run: -->\n```bash\nsetupfix formats\n```\n", 6),
+        ("- in a list:\n\n  ```bash\n  setupfix formats\n  ```\n", 7),
     ],
 )
 def test_an_unmarked_command_block_is_named(tmp_path: Path, block: str, line: int) -> None:
@@ -108,6 +109,14 @@ def test_an_unmarked_command_block_is_named(tmp_path: Path, block: str, line: in
     page.write_text("# A page\n\nSome text.\n\n" + block, encoding="utf-8")
     problems = unmarked(page)
     assert len(problems) == 1 and f"page.md:{line}:" in problems[0]
+
+
+def test_an_indented_example_runs(tmp_path: Path) -> None:
+    """A console block inside a list item is run like any other, its indentation removed."""
+    page = tmp_path / "page.md"
+    page.write_text("1. count:\n\n   ```console\n   $ echo 0.071\n   0.072\n   ```\n", encoding="utf-8")
+    assert [s.command for s in steps(page)] == ["echo 0.071"]
+    assert run_page(page, tmp_path / "run")
 
 
 def test_a_marked_block_is_not_run(tmp_path: Path) -> None:
