@@ -143,7 +143,19 @@ def run(args: argparse.Namespace) -> int:
         sys.stdout.write("\n")
     else:
         sys.stdout.write(format_batch_summary(summary, shown(args.out)) + "\n")
+        if summary.stored is not None:
+            sys.stdout.write(stored_line(summary) + "\n")
     return _status(summary)
+
+
+def stored_line(summary: BatchSummary) -> str:
+    """What a batch with a history store stored: reports with their recommendations, and those marked excluded."""
+    line = f"history store: {summary.stored} report(s) stored, each with its recommendations"
+    if summary.excluded:
+        n = sum(summary.excluded.values())
+        why = ", ".join(f"{k} {reason}" for reason, k in sorted(summary.excluded.items()))
+        line += f"; {n} of them marked excluded ({why}): left out of the history, kept for the record"
+    return line
 
 
 def _status(summary: BatchSummary) -> int:

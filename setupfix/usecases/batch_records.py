@@ -69,9 +69,15 @@ class BatchSummary:
     written: bool = False
     notes: tuple[tuple[str, Note], ...] = ()
     unsolved: int = 0
+    #: with a history store: the reports this run stored, each with its recommendations (None: no store)
+    stored: int | None = None
+    #: of those, how many were marked excluded, by reason (``rejected``, ``failed``, ``draft``)
+    excluded: Mapping[str, int] = field(default_factory=Counter)
 
     def to_json(self) -> dict[str, Any]:
+        store = {} if self.stored is None else {"stored": self.stored, "excluded": dict(self.excluded)}
         return {
+            **store,
             "reports": self.reports,
             "parts": self.parts,
             "verdicts": dict(self.verdicts),
@@ -95,8 +101,11 @@ class Tally:
     skipped: list[tuple[str, str]] = field(default_factory=list)
     notes: list[tuple[str, Note]] = field(default_factory=list)
     unsolved: int = 0
+    stored: int | None = None
+    excluded: Counter[str] = field(default_factory=Counter)
 
-    def summary(self, seconds: float, written: bool) -> BatchSummary:
+    def summary(self, seconds: float, written: bool, claims: Claims | None = None) -> BatchSummary:
+        """The run's summary; with the history store's ``claims``, what they stored."""
         return BatchSummary(
             self.reports,
             self.parts,
@@ -107,6 +116,8 @@ class Tally:
             written,
             tuple(self.notes),
             self.unsolved,
+            claims.stored if claims is not None else self.stored,
+            Counter(claims.excluded) if claims is not None else Counter(self.excluded),
         )
 
 
@@ -136,6 +147,7 @@ class Claims:
         self.claimant = Claimant.this_run()
         self.done: list[str] = []  #: reports stored, to be marked processed by finish()
         self.stored = 0  #: reports stored with their recommendations by this run
+        self.excluded: Counter[str] = Counter()  #: of those, the ones marked excluded, by reason
         self.held = False
 
     def take(self, chunk: list[Item]) -> list[Item]:
@@ -169,6 +181,8 @@ class Claims:
             for rec in _record(self.store, outcome, solve, excluded):
                 self.store.add_recommendation(rec)
         self.stored += 1
+        if excluded is not None:
+            self.excluded[excluded] += 1
         # a report with a part not solved within the time limit stays unprocessed: release() frees its
         # claim and the next run corrects it again
         if all(outcome.solved) and final:

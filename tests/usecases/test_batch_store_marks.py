@@ -17,10 +17,12 @@ import pytest
 from conftest import GUIDE_PINS
 from pgserver import location, pg_url
 
+from setupfix.cli.batch import stored_line
 from setupfix.model import load_model
 from setupfix.store import excluded_reports, open_store, report_tables
 from setupfix.usecases.batch import run_batch
-from setupfix.usecases.batch_records import exclusion
+from setupfix.usecases.batch_records import Claims, Outcome, Tally, exclusion
+from setupfix.usecases.correct import correct_report
 from setupfix.usecases.requests import CorrectRequest
 
 __all__ = ["location", "pg_url"]
@@ -112,3 +114,40 @@ def test_a_report_processed_for_one_machine_is_corrected_and_stored_for_another(
         assert forced.reports == 2 and not [n for _, n in forced.notes if n.kind == "store"]
         assert len(store.recommendations()) == 4 and len(store.reports()) == 2
         assert (tmp_path / "d.csv").read_text().count("\n") == (tmp_path / "a.csv").read_text().count("\n")
+
+
+def corrected(path: Path, request: CorrectRequest) -> Outcome:
+    """``path`` corrected as a batch worker does it, with the bytes and table the store records."""
+    import parsers
+
+    source = parsers.load_source(str(path))
+    done = correct_report(request, source)
+    return Outcome(
+        str(path),
+        sha256=hashlib.sha256(source.data).hexdigest(),
+        verdicts=[c.verdict for c in done.cycles],
+        parts=[c.part.part for c in done.cycles],
+        solved=[c.solved for c in done.cycles],
+        format=done.format,
+        data=source.data,
+        table=done.table,
+    )
+
+
+def test_the_summary_says_what_the_store_took_and_what_it_marked(tmp_path: Path) -> None:
+    d, gross = folder_with_a_gross_value(tmp_path)
+    request = CorrectRequest(load_model(MODEL))
+    tally = Tally()
+    assert tally.summary(1.0, True).stored is None and "stored" not in tally.summary(1.0, True).to_json()
+    with open_store(tmp_path / "h.db") as store:
+        claims = Claims(store, force=False)
+        for path in (d / "cycle_01.csv", gross, d / "cycle_02.csv"):
+            claims.record(corrected(path, request), request.solve)
+        summary = tally.summary(1.0, True, claims)
+        assert len(store.reports()) == 3 and len(store.recommendations()) == 3
+    assert (summary.stored, dict(summary.excluded)) == (3, {"rejected": 1})
+    assert summary.to_json()["stored"] == 3 and summary.to_json()["excluded"] == {"rejected": 1}
+    assert stored_line(summary) == (
+        "history store: 3 report(s) stored, each with its recommendations; 1 of them marked excluded "
+        "(1 rejected): left out of the history, kept for the record"
+    )
