@@ -34,22 +34,33 @@ def sha(path: Path) -> str:
     return hashlib.sha256(path.read_bytes()).hexdigest()
 
 
-def folder_with_a_gross_value(tmp_path: Path) -> tuple[Path, Path]:
-    """Cycles 1, 2, 4, 5 and a copy of cycle 3 with P3 D4 measured 0.55 mm over (a gross error): rejected."""
+#: (characteristic, nominal, gross actual): the issue's P1 D1 at -0.5 mm, and P3 D4 0.55 mm over
+GROSS = [("P1 D1", "25.0000", 24.5), ("P3 D4", "30.0000", 30.55)]
+
+
+def folder_with_a_gross_value(tmp_path: Path, gross: tuple[str, str, float] = GROSS[1]) -> tuple[Path, Path]:
+    """Cycles 1, 2, 4, 5 and a copy of cycle 3 with one gross value (a gross error): rejected."""
     d = tmp_path / "in"
     d.mkdir()
     for i in (1, 2, 4, 5):
         shutil.copy(GUIDE_PINS / f"cycle_0{i}.csv", d / f"cycle_0{i}.csv")
-    gross = d / "cycle_03.csv"
-    text = (GUIDE_PINS / "cycle_03.csv").read_text()
-    row = "P3 D4,30.0000,30.0319,0.0319"
-    assert row in text
-    gross.write_text(text.replace(row, "P3 D4,30.0000,30.5500,0.5500"))
-    return d, gross
+    path = d / "cycle_03.csv"
+    name, nominal, actual = gross
+    lines = (GUIDE_PINS / "cycle_03.csv").read_text().splitlines()
+    i = next(k for k, line in enumerate(lines) if line.startswith(f"{name},{nominal},"))
+    cells = lines[i].split(",")
+    cells[2], cells[3] = f"{actual:.4f}", f"{actual - float(nominal):.4f}"
+    lines[i] = ",".join(cells)
+    path.write_text("\n".join(lines) + "\n")
+    return d, path
 
 
-def test_a_rejected_report_is_stored_marked_and_left_out(tmp_path: Path, location: str) -> None:
-    d, gross = folder_with_a_gross_value(tmp_path)
+@pytest.mark.parametrize("value", GROSS, ids=["P1 D1 -0.5", "P3 D4 +0.55"])
+def test_a_rejected_report_is_stored_marked_and_left_out(
+    tmp_path: Path, location: str, value: tuple[str, str, float]
+) -> None:
+    d, gross = folder_with_a_gross_value(tmp_path, value)
+    name, _, actual = value
     model = load_model(MODEL)
     with open_store(location, machine="m1") as store:
         summary = run_batch(CorrectRequest(model), d, tmp_path / "o.csv", settle=0, store=store)
@@ -63,9 +74,10 @@ def test_a_rejected_report_is_stored_marked_and_left_out(tmp_path: Path, locatio
         assert gross.name in {rec.name for rec, _ in report_tables(store, include_excluded=True)}
         rows = store.measurements()
         assert sha(gross) not in set(rows["report_sha256"])
-        assert rows.loc[rows["characteristic"] == "P3 D4", "actual"].max() < 30.1
+        clean = rows.loc[rows["characteristic"] == name, "deviation"]
+        assert len(clean) == 4 and clean.abs().max() < 0.1  # one value in each clean report
         kept = store.measurements(sha(gross))  # kept for the record
-        assert kept.loc[kept["characteristic"] == "P3 D4", "actual"].max() == pytest.approx(30.55)
+        assert actual in set(kept.loc[kept["characteristic"] == name, "actual"])
         verdicts = [r.result["verdict"] for r in store.recommendations()]
         assert verdicts.count("reject") == 1 and len(verdicts) == 5  # each report with its recommendation
     with open_store(location, machine="m1") as store:  # the mark is stored, not held in memory
