@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import hashlib
 import re
 from collections.abc import Sequence
 
@@ -27,6 +28,10 @@ __all__ = [
     "check_values",
     "value_bound",
     "slot_within",
+    "plan_number",
+    "PLANS",
+    "GUARD_VARIABLE",
+    "GUARD_R",
 ]
 
 #: The component of a WKS rotation about the spindle axis (degrees) and of a tool radius.
@@ -40,6 +45,23 @@ DEFAULT_PROGRAM = 4501
 #: Fanuc ``O1``…``O9999`` (four digits); Haas ``O1``…``O99999`` (five digits); Siemens names the
 #: program ``SETUPFIX_<n>`` (a name of at most 24 characters: up to 15 digits, held to 8 here).
 PROGRAM_NUMBERS: dict[str, tuple[int, int]] = {"fanuc": (1, 9999), "haas": (1, 99999), "siemens": (1, 99_999_999)}
+
+
+#: The numbers :func:`plan_number` gives (inclusive): at most 7 digits, which a Fanuc macro constant holds exactly
+#: (8 at most), never 0 (a vacant variable equals 0 in some comparisons).
+PLANS = (1, 9_999_999)
+#: Where an incremental (add) program leaves its plan number when it has run, so that a second run stops:
+#: the Fanuc/Haas common variable ``#549`` (the last of ``#500``…``#549``, kept at power off on every Fanuc
+#: and Haas control) and the Siemens R parameter ``R99`` (the last of the 100 every 840D has; retained).
+GUARD_VARIABLE, GUARD_R = 549, "R99"
+
+
+def plan_number(*parts: str) -> int:
+    """The number of an incremental program's plan, from its text (title, program number, every change): the
+    same plan always gets the same number, another plan one of :data:`PLANS` by a hash (SHA-256)."""
+    low, high = PLANS
+    digest = hashlib.sha256("\n".join(parts).encode("utf-8", "backslashreplace")).digest()
+    return low + int.from_bytes(digest[:8], "big") % (high - low + 1)
 
 
 def check_program_number(controller: str, n: int) -> int:

@@ -7,7 +7,12 @@ geometry, ``L11`` length wear, ``L12`` radius geometry, ``L13`` radius wear, ``P
 the H or D number (a radius row — component ``R`` — is a D register; the control's D
 offsets must hold radii, not diameters).  With current offsets every block is absolute
 (``G90``): running the program twice leaves the same values.  Without them the blocks
-are incremental (``G91``) and the header says the program is one-shot.  A WKS has no
+are incremental (``G91``) and the program guards itself against a second run: it has a
+plan number (:func:`~setupfix.outputs.controllers.common.plan_number` of its text), checks
+at the top that the common variable ``#549``
+(:data:`~setupfix.outputs.controllers.common.GUARD_VARIABLE`) does not hold it — else it
+stops with an alarm (``#3000``) before any change — and sets ``#549`` to it after the last
+block (custom macro B: ``IF … THEN``, standard on the 0i-F/30i and the Haas NGC).  A WKS has no
 wear offset on these controls, so ``offset = "wear"`` on a WKS is an error.
 
 ``G10 L2``/``L20`` hold no rotation: a WKS rotation row (component ``C``) with a
@@ -27,6 +32,7 @@ from setupfix.correction.offsets import OffsetRow
 from setupfix.model.slots import tool_hd, wks_fanuc, wks_haas
 from setupfix.outputs.controllers.common import (
     DEFAULT_PROGRAM,
+    GUARD_VARIABLE,
     RADIUS,
     ROTATION,
     base_id,
@@ -37,6 +43,7 @@ from setupfix.outputs.controllers.common import (
     length_unit,
     number,
     one_mode,
+    plan_number,
     slot_within,
     target,
 )
@@ -132,9 +139,15 @@ def _render(
     head = ["%", f"{o_word} ({comment_text('SETUPFIX ' + title)})" if title else f"{o_word} (SETUPFIX)"]
     if mode == "set":
         head.append("(ABSOLUTE VALUES - CURRENT PLUS CHANGE - SAFE TO RUN AGAIN)")
-    else:
-        head.append("(INCREMENTAL CHANGES: RUN ONCE ONLY - EACH RUN ADDS THEM AGAIN)")
-    return "\n".join([*head, unit, *blocks, "G90", "M30", "%"]) + "\n"
+        return "\n".join([*head, unit, *blocks, "G90", "M30", "%"]) + "\n"
+    plan = plan_number(controller, title, *blocks)  # not the O number: a plan renumbered is the same plan
+    var = f"#{GUARD_VARIABLE}"
+    head += [
+        f"(INCREMENTAL CHANGES - RUN ONCE - PLAN {plan})",
+        f"(GUARD - {var} HOLDS THE PLAN AFTER THE RUN - A SECOND RUN STOPS AT THE ALARM BELOW)",
+        f"IF [{var} EQ {plan}] THEN #3000=1 (PLAN ALREADY APPLIED)",
+    ]
+    return "\n".join([*head, unit, *blocks, "G90", f"{var}={plan}", "M30", "%"]) + "\n"
 
 
 def render_fanuc(

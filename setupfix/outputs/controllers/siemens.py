@@ -10,7 +10,10 @@ cutting edge D: ``$TC_DP3[T,D]`` / ``$TC_DP12[T,D]`` length 1 geometry / wear,
 ``$TC_DP6[T,D]`` / ``$TC_DP15[T,D]`` radius geometry / wear (component ``R``).  The
 tool is named ``T5 D1`` in the model, or given by ``number`` (T) and ``edge`` (D).
 With current offsets the assignments are absolute; without them they read
-``x = x + change`` and the header says the program is one-shot.  A changed frame
+``x = x + change`` and the program guards itself against a second run: it checks at the
+top that the R parameter ``R99`` (:data:`~setupfix.outputs.controllers.common.GUARD_R`)
+does not hold its plan number (else it jumps past every change to a message and ``M0``),
+and sets ``R99`` to it after the last change.  A changed frame
 takes effect when it is next selected (G54…), which the program does not do.
 
 With a program number the text begins in the punched-tape form that names the program
@@ -25,6 +28,7 @@ from collections.abc import Sequence
 from setupfix.correction.offsets import OffsetRow
 from setupfix.model.slots import tool_edge, wks_siemens
 from setupfix.outputs.controllers.common import (
+    GUARD_R,
     RADIUS,
     ROTATION,
     cannot,
@@ -32,11 +36,15 @@ from setupfix.outputs.controllers.common import (
     length_unit,
     number,
     one_mode,
+    plan_number,
     slot_within,
     target,
 )
 
-__all__ = ["render", "program_name", "TOOLS", "EDGES"]
+__all__ = ["render", "program_name", "TOOLS", "EDGES", "DONE_LABEL"]
+
+#: The label a second run of an incremental program jumps to (past every change).
+DONE_LABEL = "SETUPFIX_APPLIED"
 
 #: Highest tool number T and cutting edge D an 840D sl addresses (T0 is no tool, D0 no offset: 1…32000 each).
 TOOLS, EDGES = 32000, 32000
@@ -79,18 +87,24 @@ def render(rows: Sequence[OffsetRow], title: str = "", *, program_number: int | 
     lines += [f"; SETUPFIX {title}".rstrip(), f"; values in {unit}"]
     if any(r.axis == ROTATION for r in rows):
         lines.append("; rotations (RT) in degrees")
-    if mode == "set":
-        lines.append("; absolute values = current + change: safe to run again")
-    else:
-        lines.append("; incremental changes: run once only - each run adds them again")
+    body: list[str] = []
     for row in rows:
         var = _variable(row, spindle)
         if mode == "set":
-            lines.append(
+            body.append(
                 f"{var}={number(row, target(row))} ; {row.id} {row.register} {row.offset} was "
                 f"{number(row, row.current or 0.0)} change {number(row, row.delta)}"
             )
         else:
-            lines.append(f"{var}={var}{number(row, row.delta)} ; {row.id} {row.register} {row.offset}")
-    lines.append("M30")
-    return "\n".join(lines) + "\n"
+            body.append(f"{var}={var}{number(row, row.delta)} ; {row.id} {row.register} {row.offset}")
+    if mode == "set":
+        lines.append("; absolute values = current + change: safe to run again")
+        return "\n".join([*lines, *body, "M30"]) + "\n"
+    plan = plan_number("siemens", title, *body)  # not the program name: a plan renumbered is the same plan
+    lines += [
+        f"; incremental changes - run once - plan {plan}",
+        f"; guard: {GUARD_R} holds the plan after the run - a second run stops at the message below",
+        f"IF {GUARD_R}=={plan} GOTOF {DONE_LABEL}",
+    ]
+    tail = [f"{GUARD_R}={plan}", "M30", f"{DONE_LABEL}:", f'MSG("SETUPFIX PLAN {plan} ALREADY APPLIED")', "M0", "M30"]
+    return "\n".join([*lines, *body, *tail]) + "\n"

@@ -10,7 +10,7 @@ from __future__ import annotations
 import re
 
 import pytest
-from g10 import run_g10
+from g10 import Alarm, run_g10
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from multi_axis_rows import SPEC, fixture_rows, row
@@ -51,8 +51,12 @@ def test_g10_program_holds_current_plus_change_on_every_axis(name: str, mode: st
     assert re.search(r"^\(G54 W1\.C ROTATION NOT WRITTEN - G10 L2 HOLDS NONE - CHANGE \+0\.000\)$", program, re.M)
     if mode == "set":  # absolute: running it again changes nothing
         assert run_g10(program, after) == after
-    else:  # incremental: a second run adds the changes again
-        assert run_g10(program, after)[(2, 1, "Z")] == pytest.approx(START["W1.Z"] + 2 * DELTA["W1.Z"])
+    else:  # incremental: a second run stops at the guard before any change (issue 37, item 8) …
+        with pytest.raises(Alarm, match="ALREADY APPLIED"):
+            run_g10(program, after)
+        # … which is all that stands between it and the changes added again (a control whose #549 was cleared)
+        cleared = {k: v for k, v in after.items() if k[0] != 0}
+        assert run_g10(program, cleared)[(2, 1, "Z")] == pytest.approx(START["W1.Z"] + 2 * DELTA["W1.Z"])
 
 
 @pytest.mark.parametrize("name", ["fanuc", "haas"])
