@@ -84,6 +84,12 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
     p.add_argument("--alpha", type=float, default=0.01, help="family-wise level of each selection step (0.01)")
     p.add_argument("--no-walk", action="store_true", help="skip the walk-forward comparison")
     add_lenient_option(p)
+    p.add_argument(
+        "--include-excluded",
+        action="store_true",
+        help="with --db: take in the reports the store keeps marked rejected, failed or draft (left out by "
+        "default, and counted)",
+    )
     p.add_argument("--json", action="store_true", help="machine-readable output (shared/spec/cli-json.md)")
     add_objective_option(p)
     add_machine_options(p)
@@ -96,6 +102,8 @@ def _f(v: float | None, digits: int = 4) -> str:
 
 def format_diagnosis(out: DiagnoseOutcome) -> str:
     """Human summary of a diagnosis."""
+    from setupfix.views.present import verdict_line
+
     d = out.diagnosis
     unit = d.layout.unit
     lines = [
@@ -149,11 +157,18 @@ def format_diagnosis(out: DiagnoseOutcome) -> str:
     lines.append(
         f"next correction from: {d.next_from.source}" + (f" ({d.next_from.reason})" if d.next_from.reason else "")
     )
-    moves = {k: v for k, v in out.next_correction.items() if v != 0}
-    lines.append("next correction: " + (", ".join(f"{k} {v:+.4f}" for k, v in moves.items()) or "none"))
+    if out.draft:  # no number and no "none": the draft is said as ``correct`` says it
+        cycle = out.next_cycle
+        why = verdict_line(cycle) if cycle is not None else f"the model {out.input.model.source} is a draft"
+        lines.append(f"next correction: no correction, the model is a draft — {why}")
+    else:
+        moves = {k: v for k, v in out.next_correction.items() if v != 0}
+        lines.append("next correction: " + (", ".join(f"{k} {v:+.4f}" for k, v in moves.items()) or "none"))
     if out.augmented:
         lines.append(f"wrote {out.augmented}")
-    lines += [f"warning: {n}" if n.kind == "folder" else f"note: {n}" for n in out.notes]  # a folder's problems
+    lines += [  # a folder's problems are warnings; the draft is said on the next-correction line
+        f"warning: {n}" if n.kind == "folder" else f"note: {n}" for n in out.notes if n.kind != "draft"
+    ]
     # report text (characteristic names, file names) reaches the terminal: no escape sequences
     return "\n".join("".join(c if c.isprintable() else "?" for c in line) for line in lines)
 
@@ -179,6 +194,7 @@ def run(args: argparse.Namespace) -> int:
             factors=factors_of(args),
             diagnoser=Diagnoser(alpha=args.alpha, walk=not args.no_walk),
             solve=SolveOptions(objective=args.objective),
+            include_excluded=args.include_excluded,
         )
     )
     if args.json:

@@ -55,6 +55,11 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
         default=[],
         help="compare the capability before and after TIME; repeatable (default: each correction in the store)",
     )
+    p.add_argument(
+        "--include-excluded",
+        action="store_true",
+        help="take in the reports the store keeps marked rejected, failed or draft (left out by default, and counted)",
+    )
     p.add_argument("--json", action="store_true", help="machine-readable output")
     p.add_argument(
         "--html",
@@ -92,6 +97,7 @@ def run(args: argparse.Namespace) -> int:
         dimensions=tuple(args.dimension),
         baseline=args.baseline,
         splits=tuple(args.split),
+        include_excluded=args.include_excluded,
     )
     with open_store(location, machine=args.machine) as store:
         outcome = spc_report(store, request)

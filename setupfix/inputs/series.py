@@ -53,6 +53,8 @@ class SeriesInput:
     temperatures: str | None
     notes: tuple[Note, ...] = ()
     process: str | None = None
+    #: reports of the store marked rejected, failed or draft and left out (``include_excluded`` takes them in)
+    excluded: int = 0
 
 
 def _corrections(path: str, model: ProcessModel) -> RegisterLog:
@@ -70,6 +72,7 @@ def load_series(
     thermal: str | Path | None = None,
     read: ReadOptions | None = None,
     process: str | None = None,
+    include_excluded: bool = False,
 ) -> SeriesInput:
     """Read a series of reports (files, folders, or every report of a history store) with its logs.
 
@@ -81,6 +84,9 @@ def load_series(
     not used as a channel).  ``read``: the report reader's options (``lenient`` lets a
     reader skip a self-contradicting row, a note names its line).  ``process``: a process
     log (CSV or ``.xlsx``), its channels joined per cycle (:func:`process_channels`).
+    The reports a store keeps marked (rejected, failed, draft) are left out, and counted in a
+    note and :attr:`SeriesInput.excluded`, unless ``include_excluded``.  A part reported
+    twice (any format, a copy) is one cycle (:func:`setupfix.inputs.series_assembly.one_per_part`).
 
     Raises
     ------
@@ -95,12 +101,18 @@ def load_series(
     parts: list[PartMeasurement] = []
     tables: list[pd.DataFrame] = []
     log = temps = None
+    excluded = 0
     where = StoreRef.of(db).location if db is not None else ""
     if db is not None:
-        from setupfix.store import report_tables, stored_corrections
+        from setupfix.inputs.smoothing import excluded_note
+        from setupfix.store import excluded_reports, report_tables, stored_corrections
 
         with StoreRef.of(db).for_model(model).open() as store:
-            for rec, table in report_tables(store):
+            if not include_excluded:
+                excluded = len(excluded_reports(store))
+                if excluded:
+                    notes.append(excluded_note(excluded, "the series"))
+            for rec, table in report_tables(store, include_excluded=include_excluded):
                 table = table[~table["reference"]]
                 parts += match_parts(model, table, source=f"{where}#{rec.name}")
                 tables.append(table)
@@ -140,7 +152,14 @@ def load_series(
             parts += check_parts(model, match_parts(model, table, source=f), source=f)
             tables.append(table)
     if not parts:
-        raise ParseError("no report in the series", location=SourceLocation(where or "<series>"))
+        raise ParseError(
+            "no report in the series",
+            location=SourceLocation(where or "<series>"),
+            hint=f"{excluded} stored report(s) marked rejected, failed or draft were left out: "
+            "--include-excluded takes them in"
+            if excluded
+            else None,
+        )
     parts, more = one_per_part(parts)
     notes += more
     if not corrections and log is None and len(parts) > 1:
@@ -207,6 +226,7 @@ def load_series(
         temperatures,
         tuple(notes),
         process,
+        excluded,
     )
 
 

@@ -22,6 +22,7 @@ from parsers.timestamps import parse_timestamp
 from setupfix.core.errors import MatchError, Note, ParseError, SourceLocation
 from setupfix.diagnose import Layout, Series
 from setupfix.diagnose.covariates import applied_at, join_temperatures, parts_since_change
+from setupfix.inputs.duplicates import ContentIndex, part_content
 from setupfix.inputs.series_logs import (
     TempLog,
     has_serial,
@@ -59,36 +60,62 @@ def report_coordinates(model: ProcessModel, tables: Sequence[pd.DataFrame]) -> n
 
 
 def one_per_part(parts: list[PartMeasurement]) -> tuple[list[PartMeasurement], list[Note]]:
-    """Each machined part once: reports of the same part and time (the same cycle exported twice, or
-    measured twice) would count as independent cycles and make any effect look significant.
+    """Each machined part once: reports of the same part (the same cycle exported twice or in
+    another format, or measured twice) would count as independent cycles and make any effect
+    look significant.
 
-    The later one read is kept (as ``correct`` keeps a part's later measurement); the note says
-    whether their deviations agree.
+    Two parts are one when they have the same name and time as written, or are the same
+    measurement (:func:`setupfix.inputs.duplicates.same_measurement`: name up to case and
+    spacing, time, values to the reports' resolution, at most one row missing).  The later
+    one read is kept (as ``correct`` keeps a part's later measurement); the note says whether
+    their deviations agree.
     """
-    last: dict[tuple[str, str], int] = {}
+    keys = [str(q) for q in range(len(parts[0].deviation))] if parts else []
+    index = ContentIndex()
+    slot_of: list[int] = []  # position in ``index`` → slot
+    by_stamp: dict[tuple[str, str], int] = {}
+    kept: list[int] = []  # slot → the part kept (the latest read)
+    first: list[int] = []  # part → its slot
     for i, p in enumerate(parts):
+        try:
+            c = part_content(p, keys)
+        except ParseError:  # refused by the series' own time reading, named there
+            c = part_content(dataclasses.replace(p, timestamp=None), keys)
+        slot = by_stamp.get((p.part, str(p.timestamp))) if p.timestamp is not None else None
+        if slot is None:
+            j = index.find(c)
+            slot = slot_of[j] if j is not None else None
+        if slot is None:
+            slot = len(kept)
+            kept.append(i)
+        else:
+            kept[slot] = i
+        index.add(c)
+        slot_of.append(slot)
+        first.append(slot)
         if p.timestamp is not None:
-            last[(p.part, str(p.timestamp))] = i
+            by_stamp[(p.part, str(p.timestamp))] = slot
     notes: list[Note] = []
-    keep = []
     for i, p in enumerate(parts):
-        j = last[(p.part, str(p.timestamp))] if p.timestamp is not None else i
-        if j == i:
-            keep.append(p)
+        q = parts[kept[first[i]]]
+        if q is p:
             continue
-        q = parts[j]
         both = np.isfinite(p.deviation) & np.isfinite(q.deviation)
         gap = float(np.max(np.abs(p.deviation[both] - q.deviation[both]), initial=0.0))
         same = "the same deviations" if gap <= 1e-9 else f"deviations differing by up to {gap:.4g}"
+        how = (
+            f"same name and time {p.timestamp}"
+            if p.timestamp is not None and (p.part, p.timestamp) == (q.part, q.timestamp)
+            else "the same measurement: name up to case and spacing, time, values to the reports' resolution"
+        )
         notes.append(
             Note(
-                f"{p.report}:{p.part} and {q.report}:{q.part} are one part (same name and time "
-                f"{p.timestamp}, {same}): {q.report} is used once",
+                f"{p.report}:{p.part} and {q.report}:{q.part} are one part ({how}, {same}): {q.report} is used once",
                 None,
                 "series",
             )
         )
-    return keep, notes
+    return [parts[i] for i in sorted(kept)], notes
 
 
 def ordered_parts(parts: list[PartMeasurement]) -> list[PartMeasurement]:

@@ -7,17 +7,24 @@ what it needs as arrays — read once from the history store (``correct --store`
 from the parts of a batch — and :func:`setupfix.correction.ewma.ewma_history` computes the estimate:
 each earlier part shifted by the corrections logged since (eqs. 3–4), reset on a tool change.
 
-A part counts once however often it is stored: its identity is what was measured — part
-name, time and deviations (:func:`part_identity`) — never the bytes of the file that
-brought it (a CRLF copy of a report, or ``history export`` imported again, changes
-nothing).  The history is deduplicated here, on read, the one place every door's history
-goes through; the store keeps what it was given (reports by content hash).  Rows of one
-stored table that came from several reports (an exported table, its ``report`` column)
-are matched report by report (:func:`history_parts`), as they were first stored.
+A part counts once however often it is stored: its identity is what was measured -- the
+content identity of :mod:`setupfix.inputs.duplicates`: part name up to case and spacing,
+time, and every shared deviation equal to the reports' resolution with at most one row
+missing -- never the bytes of the file that brought it (a CRLF copy of a report, its
+``.dmo`` beside its ``.csv``, or ``history export`` imported again, changes nothing).  The
+history is deduplicated here, on read, the one place every door's history goes through; the
+store keeps what it was given (reports by content hash).  Rows of one stored table that came
+from several reports (an exported table, its ``report`` column) are matched report by
+report (:func:`history_parts`), as they were first stored.
+
+Reports the store keeps marked (rejected, failed, draft: :data:`setupfix.store.EXCLUDED_REASONS`)
+are left out unless asked (``include_excluded``); :attr:`History.excluded` counts them and
+the smoothing's notes say so.
 """
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -29,10 +36,11 @@ from parsers.timestamps import instant
 from setupfix.core.errors import Note, ParseError, SetupfixError, SourceLocation
 from setupfix.correction.ewma import Smoothed, ewma_history, last_measured, shifted_history
 from setupfix.correction.relation import relation_matrices
+from setupfix.inputs.duplicates import Content, ContentIndex, content_of
 from setupfix.model import PartMeasurement, ProcessModel, match_parts
-from setupfix.store import Store, report_tables, stored_corrections
+from setupfix.store import ReportRecord, Store, excluded_reports, report_tables, stored_corrections
 
-__all__ = ["History", "HISTORY", "history_parts", "part_identity"]
+__all__ = ["History", "HISTORY", "history_parts", "stored_parts", "excluded_note"]
 
 Array = npt.NDArray[np.float64]
 
@@ -52,26 +60,6 @@ def _stamp(part: PartMeasurement) -> np.datetime64 | None:
     if part.timestamp is None or not str(part.timestamp).strip():
         return None
     return np.datetime64(instant(part.timestamp, SourceLocation(part.report)), "ns")
-
-
-#: Deviations equal to this many decimals [model unit] are the same measurement (a value written to
-#: CSV and read back comes back within far less; a CMM resolves ~1e-4 mm).
-IDENTITY_DECIMALS = 9
-
-
-def part_identity(name: str, time: np.datetime64, deviation: Array) -> tuple[object, ...]:
-    """What makes a measured part itself: (name, time [ns], deviations rounded to :data:`IDENTITY_DECIMALS`).
-
-    Two stored copies of one part (any file bytes) have one identity; two parts of one name
-    and time that measured differently (unnamed parts within the report's time resolution)
-    have two.
-    """
-    rounded = np.round(np.asarray(deviation, dtype=float), IDENTITY_DECIMALS)
-    return (
-        name,
-        int(np.asarray(time, dtype="datetime64[ns]").astype(np.int64)),
-        tuple(None if np.isnan(v) else float(v) + 0.0 for v in rounded),
-    )
 
 
 def history_parts(model: ProcessModel, table: pd.DataFrame, *, source: str) -> list[PartMeasurement]:
@@ -94,6 +82,41 @@ def history_parts(model: ProcessModel, table: pd.DataFrame, *, source: str) -> l
     return parts
 
 
+def stored_parts(
+    model: ProcessModel, store: Store, *, include_excluded: bool = False
+) -> list[tuple[ReportRecord, list[PartMeasurement]]]:
+    """Every stored report's parts matched to ``model``, newest import first (one query).
+
+    Reports of other processes (that do not match the model) are left out, and so are
+    marked ones unless ``include_excluded``.
+
+    Raises
+    ------
+    ParseError
+        A stored part's timestamp that is not ISO 8601 (``diagnose --db`` refuses it too).
+    """
+    out: list[tuple[ReportRecord, list[PartMeasurement]]] = []
+    for record, table in reversed(report_tables(store, include_excluded=include_excluded)):
+        try:
+            matched = history_parts(model, table, source=record.name)
+        except SetupfixError:
+            continue
+        for p in matched:
+            _stamp(p)  # an unreadable time is refused, not left out
+        out.append((record, matched))
+    return out
+
+
+def excluded_note(count: int, what: str) -> Note:
+    """The note of a history that left ``count`` marked reports out (``what``: the history's use)."""
+    return Note(
+        f"{count} stored report(s) marked rejected, failed or draft left out of {what} "
+        "(--include-excluded takes them in)",
+        None,
+        "excluded",
+    )
+
+
 @dataclass(frozen=True, eq=False)
 class History:
     """What the smoothing of a cycle needs: the earlier parts and the corrections log, as arrays.
@@ -105,11 +128,13 @@ class History:
     deviations : ndarray of shape (n_parts, n_dimensions) [unit]
         Their deviations in model order (NaN where not measured).
     keys : tuple of str
-        Part names (a part already held -- same :func:`part_identity` -- is not added twice by
-        :meth:`with_parts`).
+        Part names (a part already held -- the same measurement,
+        :func:`setupfix.inputs.duplicates.same_measurement` -- is not added twice by :meth:`with_parts`).
     log_times, log_register, log_delta, log_reset : ndarrays of shape (n_log,)
         The corrections log: time, register index in the model (−1: not in it),
         change [unit], tool change.
+    excluded : int
+        Marked reports of the store left out (:meth:`from_store`); the smoothing's notes say so.
     """
 
     times: npt.NDArray[np.datetime64]
@@ -119,6 +144,7 @@ class History:
     log_register: npt.NDArray[np.int64]
     log_delta: Array
     log_reset: npt.NDArray[np.bool_]
+    excluded: int = 0
 
     @classmethod
     def empty(cls, model: ProcessModel) -> History:
@@ -134,15 +160,24 @@ class History:
         )
 
     @classmethod
-    def from_store(cls, model: ProcessModel, store: Store) -> History:
+    def from_store(
+        cls,
+        model: ProcessModel,
+        store: Store,
+        *,
+        include_excluded: bool = False,
+        stored: list[tuple[ReportRecord, list[PartMeasurement]]] | None = None,
+    ) -> History:
         """Every part the store holds matched to ``model`` (one query), and its corrections log.
 
         Every stored report counts, however many: the estimate itself looks at the last
         :data:`HISTORY` parts machined before the cycle, so ``batch --store`` equals
         ``history import`` + ``correct --store``.  Reports of other processes (that do
-        not match the model) are left out; a part kept by two reports (same time and
-        name) counts once, as the newest import gives it.  The log is read and checked
-        as ``diagnose --db`` reads it (:func:`setupfix.store.stored_corrections`).
+        not match the model) are left out, and so are marked ones (rejected, failed,
+        draft) unless ``include_excluded`` (:attr:`excluded` counts them); a part kept by
+        two reports (the same measurement) counts once, as the newest import gives it.
+        ``stored``: :func:`stored_parts` of this store already read.  The log is read and
+        checked as ``diagnose --db`` reads it (:func:`setupfix.store.stored_corrections`).
 
         Raises
         ------
@@ -151,19 +186,13 @@ class History:
         MatchError
             A log row the model check refuses (e.g. an unknown register).
         """
-        parts: list[PartMeasurement] = []
-        for record, table in reversed(report_tables(store)):
-            try:
-                matched = history_parts(model, table, source=record.name)
-            except SetupfixError:
-                continue
-            for p in matched:
-                _stamp(p)  # an unreadable time is refused, not left out
-            parts += matched
-        out = cls.empty(model).with_parts(parts)
+        if stored is None:
+            stored = stored_parts(model, store, include_excluded=include_excluded)
+        out = cls.empty(model).with_parts([p for _, parts in stored for p in parts])
+        excluded = 0 if include_excluded else len(excluded_reports(store))
         log = stored_corrections(store, model)
         if log is None:
-            return out
+            return dataclasses.replace(out, excluded=excluded)
         return cls(
             out.times,
             out.deviations,
@@ -172,11 +201,21 @@ class History:
             log.registers.astype(np.int64),
             log.deltas.astype(float),
             np.array([e == "tool_change" for e in log.events], dtype=bool),
+            excluded,
         )
 
+    def _index(self, model_keys: Sequence[str]) -> ContentIndex:
+        """The held parts by content."""
+        index = ContentIndex()
+        for k, t, d in zip(self.keys, self.times, self.deviations, strict=True):
+            index.add(_content(k, t, d, model_keys))
+        return index
+
     def with_parts(self, parts: Sequence[PartMeasurement]) -> History:
-        """This history plus ``parts`` (those with a timestamp, not already held: same :func:`part_identity`)."""
-        held = {part_identity(k, t, d) for k, t, d in zip(self.keys, self.times, self.deviations, strict=True)}
+        """This history plus ``parts`` (those with a timestamp, not already held: the same measurement,
+        :func:`setupfix.inputs.duplicates.same_measurement`)."""
+        model_keys = [str(q) for q in range(self.deviations.shape[1])]
+        held = self._index(model_keys)
         times, devs, keys = list(self.times), list(self.deviations), list(self.keys)
         for p in parts:
             try:
@@ -185,10 +224,10 @@ class History:
                 continue
             if t is None:
                 continue
-            key = part_identity(p.part, t, p.deviation)
-            if key in held:
+            c = _content(p.part, t, p.deviation, model_keys)
+            if held.find(c) is not None:
                 continue
-            held.add(key)
+            held.add(c)
             times.append(t)
             devs.append(np.asarray(p.deviation, dtype=float))
             keys.append(p.part)
@@ -201,6 +240,7 @@ class History:
             self.log_register,
             self.log_delta,
             self.log_reset,
+            self.excluded,
         )
 
     def stand_in(self, model: ProcessModel, part: PartMeasurement) -> Array | None:
@@ -227,9 +267,11 @@ class History:
         """The EWMA estimate of ``part`` over every held part machined before it
         (:func:`setupfix.correction.ewma.ewma_history`)."""
         now = _stamp(part)
+        said = (excluded_note(self.excluded, "the smoothing history"),) if self.excluded else ()
         if lam < 1.0 and now is None:
-            return Smoothed(part.deviation, 0, lam, (Note("no timestamp in the report: not smoothed", None, "ewma"),))
-        return ewma_history(
+            note = Note("no timestamp in the report: not smoothed", None, "ewma")
+            return Smoothed(part.deviation, 0, lam, (note, *said))
+        smoothed = ewma_history(
             part.deviation,
             now,
             self.times,
@@ -242,3 +284,10 @@ class History:
             lam,
             limit=HISTORY,
         )
+        return dataclasses.replace(smoothed, notes=(*smoothed.notes, *said)) if said else smoothed
+
+
+def _content(name: str, time: np.datetime64, deviation: Array, keys: Sequence[str]) -> Content:
+    """A held part's content (its time already read)."""
+    ns = int(np.asarray(time, dtype="datetime64[ns]").astype(np.int64))
+    return content_of(name, ns, dict(zip(keys, np.asarray(deviation, dtype=float).tolist(), strict=True)))

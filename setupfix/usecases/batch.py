@@ -20,8 +20,13 @@ Design for thousands of reports:
   printable (:func:`parsers.names.visible_name`);
 * a file whose size or modification time changes between discovery and reading
   (still being copied by the CMM) is not read;
-* the same content twice (SHA-256) is corrected once; with a history store,
-  reports it already holds are skipped unless ``force``;
+* the same content twice (SHA-256) is corrected once, and so is the same measurement
+  in other bytes (the ``.csv``, ``.dmo`` and ``.qif`` of one cycle, a CRLF copy, a part
+  name in other case): a report whose every part repeats a part corrected earlier in
+  the run -- or, with a history store, a part it holds from another report -- is skipped
+  naming it, a repeated part of a report with new ones is dropped from its rows with a
+  note (:mod:`setupfix.inputs.duplicates`, the one content identity); with a history
+  store, reports it already holds are skipped unless ``force``;
 * with a history store each report is claimed in the store before a worker gets it
   (:meth:`~setupfix.store.Store.claim_reports`, one short transaction per chunk), so
   two runs at once over one store correct each report once between them; the claims
@@ -53,13 +58,14 @@ from pathlib import Path
 import parsers
 from parsers.names import visible_name
 from setupfix.core.atomic import process_alive, process_started
-from setupfix.core.errors import Note, ParameterError, SetupfixError, SourceLocation
+from setupfix.core.errors import Note, ParameterError, ParseError, SetupfixError, SourceLocation
 from setupfix.correction.offsets import offset_rows
-from setupfix.inputs.smoothing import history_parts
-from setupfix.model import PartMeasurement
+from setupfix.inputs.duplicates import Content, ContentIndex, part_content
+from setupfix.inputs.smoothing import history_parts, stored_parts
+from setupfix.model import PartMeasurement, ProcessModel
 from setupfix.outputs.batch_output import CsvOut, ProgramsOut
 from setupfix.outputs.controllers import render
-from setupfix.store import ALREADY_PROCESSED, HELD_ELSEWHERE, Store
+from setupfix.store import ALREADY_PROCESSED, HELD_ELSEWHERE, ReportRecord, Store
 from setupfix.usecases.batch_records import BatchSummary, Claims, Item, Outcome, Tally, account
 from setupfix.usecases.correct import correct_report
 from setupfix.usecases.export import cycle_rows, offsets_text
@@ -95,6 +101,9 @@ def find_reports(root: str | Path) -> parsers.Listing:
 
 _WORK: _Work | None = None
 
+#: A report's outcome and what each of its corrected parts measured, in the order of ``Outcome.parts``.
+Done = tuple[Outcome, tuple[Content, ...]]
+
 
 #: Seconds between a worker's looks at whether the batch's process still runs.
 WATCH_S = 0.5
@@ -117,30 +126,32 @@ def _init_worker(work: _Work, parent: int, started: str) -> None:
     threading.Thread(target=watch, name="setupfix-batch-watch", daemon=True).start()
 
 
-def _correct_one(path: str, size: int, mtime_ns: int, claimed: str = "", refused: str = "") -> Outcome:
+def _correct_one(path: str, size: int, mtime_ns: int, claimed: str = "", refused: str = "") -> Done:
+    """One report corrected, with what each of its parts measured (:func:`~setupfix.inputs.duplicates.part_content`)."""
     assert _WORK is not None
+    contents: list[Content] = []
     out = Outcome(path, sha256=claimed)
     shown = visible_name(path)
     if refused:
         out.skipped = refused
-        return out
+        return out, tuple(contents)
     try:
         try:
             st = os.stat(path)
         except FileNotFoundError:
             out.error = f"{shown}: renamed or removed after the folder was listed: not read"
-            return out
+            return out, tuple(contents)
         if (st.st_size, st.st_mtime_ns) != (size, mtime_ns):
             out.skipped = "still being written (size or time changed): not read"
-            return out
+            return out, tuple(contents)
         source = parsers.load_source(path)  # read once: the bytes hashed are the bytes corrected
         out.sha256 = hashlib.sha256(source.data).hexdigest()
         if claimed and out.sha256 != claimed:
             out.skipped = "still being written (content changed since it was claimed): not read"
-            return out
+            return out, tuple(contents)
         if _WORK.record and not claimed:  # unreadable when the batch claimed it: not corrected unclaimed
             out.error = f"{path}: could not be read when it was claimed in the history store; run again"
-            return out
+            return out, tuple(contents)
         request = _WORK.request
         corrected = correct_report(request, source)
         if _WORK.record:  # the store records these very bytes and table: the parent reads nothing again
@@ -157,16 +168,26 @@ def _correct_one(path: str, size: int, mtime_ns: int, claimed: str = "", refused
             elif _WORK.controller != "csv":
                 out.programs.append((cycle.part.part, offsets_text([cycle], _WORK.controller, request.current)))
             out.parts.append(cycle.part.part)
+            contents.append(_content(cycle.part, request))
     except SetupfixError as exc:
         out.error = str(exc) if exc.location else f"{shown}: {exc}"
     except OSError as exc:
         out.error = f"{shown}: cannot read: {exc.strerror or exc}"
     except Exception as exc:  # noqa: BLE001 - one bad file never stops the batch
         out.error = f"{shown}: internal error: {type(exc).__name__}: {exc}"
-    return out
+    return out, tuple(contents)
 
 
-def _correct_chunk(items: list[Item]) -> list[Outcome]:
+def _content(part: PartMeasurement, request: CorrectRequest) -> Content:
+    """What ``part`` measured (a timestamp the correction did not need and cannot be read: no time)."""
+    keys = [d.id for d in request.model.dimensions]
+    try:
+        return part_content(part, keys)
+    except ParseError:
+        return part_content(dataclasses.replace(part, timestamp=None), keys)
+
+
+def _correct_chunk(items: list[Item]) -> list[Done]:
     return [_correct_one(*item) for item in items]
 
 
@@ -186,8 +207,8 @@ def _outcomes(
     work: _Work,
     workers: int,
     claim: Callable[[list[Item]], list[Item]] | None = None,
-) -> Iterator[Outcome]:
-    """Outcomes in file order.
+) -> Iterator[Done]:
+    """Outcomes (with their parts' contents) in file order.
 
     With several workers the request goes to each worker process once (its
     initializer), the files in chunks of :func:`chunk_size`; at most ``2·workers``
@@ -207,7 +228,7 @@ def _outcomes(
     with ProcessPoolExecutor(
         max_workers=workers, initializer=_init_worker, initargs=(work, os.getpid(), process_started(os.getpid()))
     ) as pool:
-        pending: deque[Future[list[Outcome]]] = deque(
+        pending: deque[Future[list[Done]]] = deque(
             pool.submit(_correct_chunk, c) for c in itertools.islice(chunks, 2 * workers)
         )
         while pending:
@@ -311,11 +332,13 @@ def run_batch(
         youngest = time.time() - max(m for _, _, m in files) / 1e9
         if youngest < settle:
             time.sleep(settle - youngest)
+    held = stored_parts(model, store) if store is not None else []  # one reading of the store's reports
     if model.safety.ewma < 1.0 and (store is not None or request.history is not None):
-        base = request.history if request.history is not None else History.from_store(model, store)  # type: ignore[arg-type]  # store is set: tested above
+        base = request.history if request.history is not None else History.from_store(model, store, stored=held)  # type: ignore[arg-type]  # store is set: tested above
         request = dataclasses.replace(request, history=batch_history(request, base, [f for f, _, _ in files]))
     elif store is not None and request.history is None:  # the coverage stand-ins: the store's parts (as correct)
-        request = dataclasses.replace(request, history=History.from_store(model, store))
+        request = dataclasses.replace(request, history=History.from_store(model, store, stored=held))
+    measured = _Measured(model, [] if force else held)
     summary = Tally()
     summary.failed += listing.problems  # named, never dropped: an unreadable folder, a broken link, …
     summary.notes += [
@@ -331,8 +354,12 @@ def run_batch(
     work = _Work(request, record=store is not None, controller=controller)
     try:
         with writer:
-            for i, outcome in enumerate(_outcomes(files, work, workers, claims.take if claims else None), start=1):
+            for i, (outcome, contents) in enumerate(
+                _outcomes(files, work, workers, claims.take if claims else None), start=1
+            ):
                 stored = outcome.skipped == ALREADY_PROCESSED or outcome.skipped.startswith(HELD_ELSEWHERE)
+                if not (outcome.error or outcome.skipped) and outcome.sha256 not in seen:
+                    measured.once(outcome, contents)  # the same measurement in other bytes: used once
                 account(summary, outcome, seen)
                 rel = Path(outcome.path).relative_to(folder).as_posix()
                 if outcome.error or (outcome.skipped and not stored):
@@ -357,6 +384,71 @@ def run_batch(
         if claims is not None:
             claims.release()
     return summary.summary(time.perf_counter() - start, written)
+
+
+class _Measured:
+    """The parts a batch has used so far (and, without ``force``, those the store holds), by content.
+
+    :meth:`once` turns a report whose every part repeats one of them into a skipped report
+    naming it, and drops a repeated part of a report that has new ones (a note names it).
+    """
+
+    def __init__(self, model: ProcessModel, stored: Sequence[tuple[ReportRecord, list[PartMeasurement]]]) -> None:
+        self.keys = [d.id for d in model.dimensions]
+        self.index = ContentIndex()
+        self.origin: list[tuple[str, str]] = []  #: (sha256, where) of each part in the index
+        self.contents: list[Content] = []
+        for record, parts in stored:
+            for p in parts:
+                try:
+                    self._add(part_content(p, self.keys), record.sha256, f"{record.name} in the history store")
+                except ParseError:
+                    continue  # a stored time that cannot be read: that part is refused where it is used
+
+    def _add(self, content: Content, sha: str, where: str) -> None:
+        self.index.add(content)
+        self.contents.append(content)
+        self.origin.append((sha, where))
+
+    def _repeats(self, content: Content, sha: str) -> str | None:
+        """Where ``content`` was measured before, and its part as named there (not the stored copy of these
+        very bytes); None: new."""
+        return next(
+            (
+                f"{self.origin[i][1]} (part {self.contents[i].label!r})"
+                for i in self.index.matches(content)
+                if self.origin[i][0] != sha
+            ),
+            None,
+        )
+
+    def once(self, outcome: Outcome, contents: Sequence[Content]) -> None:
+        shown = visible_name(outcome.path)
+        before = [self._repeats(c, outcome.sha256) for c in contents]
+        names = [c.label for c in contents]
+        if contents and all(b is not None for b in before):
+            outcome.skipped = f"same measurement as {before[0]}"
+            return
+        drop = {
+            k for k, b in enumerate(before) if b is not None and names.count(names[k]) == 1
+        }  # a repeated name within the report cannot be told apart in its rows: kept
+        for k in sorted(drop):
+            outcome.notes.append(
+                Note(
+                    f"part {names[k]!r} is the same measurement as {before[k]}: not corrected again",
+                    SourceLocation(shown),
+                    "duplicate",
+                )
+            )
+        gone = {names[k] for k in drop}
+        keep = [k for k in range(len(contents)) if k not in drop]
+        outcome.parts = [outcome.parts[k] for k in keep]
+        outcome.verdicts = [outcome.verdicts[k] for k in keep]
+        outcome.solved = [outcome.solved[k] for k in keep]
+        outcome.rows = [r for r in outcome.rows if r.part not in gone]
+        outcome.programs = [(part, text) for part, text in outcome.programs if part not in gone]
+        for k in keep:
+            self._add(contents[k], outcome.sha256, shown)
 
 
 def batch_history(request: CorrectRequest, base: History, files: Sequence[str | Path]) -> History:

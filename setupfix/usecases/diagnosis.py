@@ -124,6 +124,8 @@ class DiagnoseRequest:
     factors: tuple[str, ...] = ()
     diagnoser: Diagnoser = field(default_factory=Diagnoser)
     solve: SolveOptions = field(default_factory=SolveOptions)  #: the next correction's optimiser (objective)
+    #: take in the reports the store keeps marked rejected, failed or draft (left out and counted by default)
+    include_excluded: bool = False
 
 
 def note_text(note: Note) -> str:
@@ -140,8 +142,14 @@ class DiagnoseOutcome:
     next_correction: Mapping[str, float]
     augmented: str | None = None
     notes: tuple[Note, ...] = ()
-    #: ``correct`` on the forecast (None when nothing was measured); ``next_correction`` is its corrections.
+    #: ``correct`` on the forecast (None when nothing was measured); ``next_correction`` is its corrections
+    #: (none for a draft model: :attr:`draft`).
     next_cycle: CycleCorrection | None = None
+
+    @property
+    def draft(self) -> bool:
+        """Whether the model is a draft (``[process] draft = true``): no next correction is given."""
+        return self.input.model.draft
 
     def to_json(self) -> dict[str, Any]:
         """The ``diagnose --json`` object of ``../shared/spec/cli-json.md`` (plus extra keys)."""
@@ -192,8 +200,11 @@ class DiagnoseOutcome:
                 }
                 for t in d.factors.tests
             ],
-            "next_correction": {k: round(v, 9) for k, v in self.next_correction.items()},
+            # a draft's next correction is no number, not even zero: null, and "draft" says why
+            "next_correction": None if self.draft else {k: round(v, 9) for k, v in self.next_correction.items()},
             "next_solved": self.next_cycle.solved if self.next_cycle is not None else None,
+            "draft": self.draft,
+            "excluded_reports": self.input.excluded,
             "declared_effects": [e.target for e in self.input.declared],
             "rejected": [
                 {
@@ -349,7 +360,9 @@ def recommend_next(
         notes.append(Note(f"next correction: {diagnosis.next_from.reason}", None, "diagnosis"))
     if hold is not None:
         notes.append(Note(f"next correction: {hold.message}", None, "diagnosis"))
-    if cycle.verdict == "reject":
+    if model.draft:  # the draft's hold is no correction (as ``correct`` states it: its alarm)
+        notes.append(Note(f"no next correction: {cycle.recommendation.alarm}", None, "draft"))
+    elif cycle.verdict == "reject":
         notes.append(Note(f"next correction: {cycle.recommendation.alarm}", None, "safety"))
     elif not cycle.solved:
         why = next(r.message for r in cycle.recommendation.rules if r.rule == "not_solved")
@@ -377,13 +390,15 @@ def diagnose_reports(request: DiagnoseRequest) -> DiagnoseOutcome:
         thermal=request.thermal,
         read=request.read,
         process=request.process,
+        include_excluded=request.include_excluded,
     )
     diagnosis = request.diagnoser.run(
         inp.layout, inp.series, declared=inp.declared, factors=declared_terms(request.factors, inp)
     )
     cycle, more = recommend_next(inp.model, diagnosis, request.solve, request.diagnoser)
     notes = (*inp.notes, *(Note(n, None, "diagnosis") for n in diagnosis.notes), *more)
-    out = DiagnoseOutcome(inp, diagnosis, cycle.corrections if cycle is not None else {}, None, notes, cycle)
+    moves = cycle.corrections if cycle is not None and not inp.model.draft else {}
+    out = DiagnoseOutcome(inp, diagnosis, moves, None, notes, cycle)
     if request.db is not None:
         _record(request.db, inp.model, out)
     if request.augment:

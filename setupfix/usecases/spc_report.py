@@ -2,7 +2,9 @@
 
 The stored measurements (:meth:`setupfix.store.Store.measurements`, reference-only rows
 left out) become one series per characteristic: the deviation from nominal of every
-part, in time order (a part stored twice counts once: same name, time and value).  For each the
+part, in time order (a part stored twice counts once: the same measurement, by the content
+identity of :mod:`setupfix.inputs.duplicates`; reports the store keeps marked rejected, failed
+or draft are left out unless asked, and counted).  For each the
 engine (:mod:`setupfix.spc`) gives the capability against the characteristic's limits,
 the individuals / moving-range chart limits from the first ``baseline`` parts, the
 Nelson-rule violations (each naming the parts it covers) and the capability before
@@ -28,10 +30,11 @@ from numpy.typing import ArrayLike, NDArray
 from parsers.timestamps import instant
 from setupfix.core.errors import MatchError, Note, ParameterError, SourceLocation, StoreError
 from setupfix.correction.safety import short_list
-from setupfix.inputs.smoothing import IDENTITY_DECIMALS
+from setupfix.inputs.duplicates import ContentIndex, content_of, time_ns
+from setupfix.inputs.smoothing import excluded_note
 from setupfix.model import normalise_name
 from setupfix.spc import NELSON_RULES, Capability, ChartLimits, capability, chart_limits, nelson, split_capability
-from setupfix.store import Store
+from setupfix.store import Store, excluded_reports
 
 __all__ = [
     "SpcRequest",
@@ -73,6 +76,8 @@ class SpcRequest:
     splits : tuple of str
         ISO 8601 times to compare the capability before and after; empty: every applied
         correction of the store's log.
+    include_excluded : bool
+        Take in the reports the store keeps marked (rejected, failed, draft).
     """
 
     since: str | None = None
@@ -80,6 +85,7 @@ class SpcRequest:
     dimensions: tuple[str, ...] = ()
     baseline: int = DEFAULT_BASELINE
     splits: tuple[str, ...] = ()
+    include_excluded: bool = False
 
 
 @dataclass(frozen=True)
@@ -124,13 +130,14 @@ class DimensionSpc:
 
 @dataclass(frozen=True, eq=False)
 class SpcOutcome:
-    """Every characteristic's SPC, the split times used and the notes."""
+    """Every characteristic's SPC, the split times used, the notes and the marked reports left out."""
 
     store: str
     baseline: int
     dimensions: tuple[DimensionSpc, ...]
     splits: tuple[str, ...] = ()
     notes: tuple[Note, ...] = ()
+    excluded: int = 0
 
 
 def _time(text: str | None, where: str) -> datetime | None:
@@ -139,14 +146,18 @@ def _time(text: str | None, where: str) -> datetime | None:
 
 def _series(store: Store, request: SpcRequest, notes: list[Note]) -> pd.DataFrame:
     """The stored rows as one series table: characteristic, part, time, value, limits, in time order."""
-    rows = store.measurements()
+    rows = store.measurements(include_excluded=request.include_excluded)
     where = f"{store.location}#measurements"
     rows = rows[~rows["reference"].astype(bool)] if "reference" in rows.columns else rows
     if rows.empty:
+        left_out = 0 if request.include_excluded else len(excluded_reports(store))
         raise StoreError(
-            f"no measurements stored for machine {store.machine!r}",
+            f"no measurements stored for machine {store.machine!r}"
+            + (f" but of {left_out} report(s) marked rejected, failed or draft" if left_out else ""),
             location=SourceLocation(store.location),
-            hint="store reports with 'setupfix history import --machine NAME'; "
+            hint="--include-excluded takes them in"
+            if left_out
+            else "store reports with 'setupfix history import --machine NAME'; "
             "'setupfix history show' lists the machines",
         )
     stamps = rows["timestamp"].fillna("").astype(str).str.strip()
@@ -185,6 +196,7 @@ def _series(store: Store, request: SpcRequest, notes: list[Note]) -> pd.DataFram
             "upper": rows["upper"].astype(float).to_numpy(),
             "unit": rows["unit"].fillna("mm").astype(str).to_numpy(),
             "order": np.arange(len(rows)),
+            "sha": rows["report_sha256"].astype(str).to_numpy() if "report_sha256" in rows.columns else "",
         }
     )
     since, until = _time(request.since, "--since"), _time(request.until, "--until")
@@ -194,10 +206,9 @@ def _series(store: Store, request: SpcRequest, notes: list[Note]) -> pd.DataFram
         frame = frame[frame["time"] <= until]
     if frame.empty:
         raise ParameterError("spc: no stored part lies between --since and --until")
-    # a part stored twice (a report imported again under other bytes) counts once: the same identity as the
-    # smoothing history's (name, time, value rounded), so parts that share a name at other times all count
-    frame = frame.assign(ident=np.round(frame["value"].to_numpy(dtype=float), IDENTITY_DECIMALS))
-    doubles = frame.duplicated(["key", "part", "time", "ident"], keep="last")
+    # a part stored twice (a report imported again under other bytes, in another format, a name in
+    # other case) counts once: the content identity of every door's history, newest import kept
+    doubles = _repeated(frame, where)
     if doubles.any():
         notes.append(
             Note(
@@ -208,6 +219,27 @@ def _series(store: Store, request: SpcRequest, notes: list[Note]) -> pd.DataFram
         )
         frame = frame[~doubles]
     return frame.sort_values(["time", "order"], kind="stable") if dated.all() else frame
+
+
+def _repeated(frame: pd.DataFrame, where: str) -> NDArray[np.bool_]:
+    """The rows of stored parts that repeat a part stored later (the same measurement,
+    :func:`setupfix.inputs.duplicates.same_measurement`), each characteristic the later copy holds."""
+    groups = list(frame.groupby(["sha", "part", "stamp"], sort=False).indices.items())
+    index = ContentIndex()
+    kept: list[set[str]] = []
+    out = np.zeros(len(frame), dtype=bool)
+    keys = frame["key"].to_numpy()
+    values = frame["value"].to_numpy(dtype=float)
+    for (_, part, stamp), rows in reversed(groups):  # the newest import first: it is the one kept
+        when = time_ns(stamp, where) if stamp else None
+        c = content_of(str(part), when, {str(keys[r]): float(values[r]) for r in rows})
+        j = index.find(c)
+        if j is None:
+            index.add(c)
+            kept.append(set(c.values))
+        else:
+            out[[r for r in rows if keys[r] in kept[j]]] = True
+    return out
 
 
 def _selected(frame: pd.DataFrame, names: Sequence[str]) -> list[str]:
@@ -327,7 +359,10 @@ def spc_report(store: Store, request: SpcRequest) -> SpcOutcome:
                 _effects(group, splits, labels, source, lower, upper),
             )
         )
-    return SpcOutcome(store.location, request.baseline, tuple(dims), tuple(labels), tuple(notes))
+    excluded = 0 if request.include_excluded else len(excluded_reports(store))
+    if excluded:
+        notes.append(excluded_note(excluded, "the series"))
+    return SpcOutcome(store.location, request.baseline, tuple(dims), tuple(labels), tuple(notes), excluded)
 
 
 def _num(value: float) -> float | None:
@@ -356,6 +391,7 @@ def spc_json(outcome: SpcOutcome) -> dict[str, Any]:
         "store": outcome.store,
         "baseline": outcome.baseline,
         "splits": list(outcome.splits),
+        "excluded_reports": outcome.excluded,
         "dimensions": [
             {
                 "name": d.name,

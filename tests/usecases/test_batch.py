@@ -7,6 +7,7 @@ import functools
 import os
 import shutil
 from pathlib import Path
+from typing import Any
 
 import pandas as pd
 import pytest
@@ -40,20 +41,16 @@ def test_good_bad_and_duplicate_reports(tmp_path: Path) -> None:
     d = folder(tmp_path)
     out = tmp_path / "offsets.csv"
     s = run_batch(REQUEST, d, out, settle=0)
-    assert (s.reports, s.parts, s.verdicts["apply"]) == (4, 4, 4)
+    assert (s.reports, s.parts, s.verdicts["apply"]) == (3, 3, 3)
     assert [Path(f).name for f, _ in s.failed] == ["notes.txt"] and "no reader accepts" in s.failed[0][1]
-    assert [(Path(f).name, r) for f, r in s.skipped] == [("copy_of_02.csv", f"same content as {d / 'cycle_02.csv'}")]
+    # the QIF of cycle 01 is the same measurement as its CSV (issue 37 item 13): named, corrected once
+    assert [(Path(f).name, r) for f, r in s.skipped] == [
+        ("copy_of_02.csv", f"same content as {d / 'cycle_02.csv'}"),
+        ("cycle_01.qif", f"same measurement as {d / 'cycle_01.csv'} (part 'cycle 01')"),
+    ]
     lines = out.read_text().splitlines()
-    assert len(lines) == 1 + 4 * 10  # header + 10 registers per report
-    assert {line.split(",")[0] for line in lines[1:]} == {
-        "cycle_01.csv",
-        "cycle_02.csv",
-        "cycle_03.csv",
-        "sub/cycle_01.qif",
-    }
-    # the QIF and the CSV of cycle 01 are the same measurements: the same corrections
-    rows = [line.split(",") for line in lines[1:]]
-    assert [r[6] for r in rows if r[0] == "cycle_01.csv"] == [r[6] for r in rows if r[0] == "sub/cycle_01.qif"]
+    assert len(lines) == 1 + 3 * 10  # header + 10 registers per report
+    assert {line.split(",")[0] for line in lines[1:]} == {"cycle_01.csv", "cycle_02.csv", "cycle_03.csv"}
 
 
 def test_rerun_is_idempotent_and_workers_do_not_change_numbers(tmp_path: Path) -> None:
@@ -73,9 +70,13 @@ def test_store_skips_processed_reports_unless_forced(tmp_path: Path) -> None:
         text = out.read_text()
         again = run_batch(REQUEST, d, out, settle=0, store=store)
         forced = run_batch(REQUEST, d, out, settle=0, store=store, force=True)
-        assert len(store.reports()) == 4
-    assert first.reports == 4 and again.reports == 0 and not again.written and forced.reports == 4
-    assert sum("already processed" in r for _, r in again.skipped) == 5
+        assert len(store.reports()) == 3
+    assert first.reports == 3 and again.reports == 0 and not again.written and forced.reports == 3
+    assert sum("already processed" in r for _, r in again.skipped) == 4
+    # the QIF of cycle 01 is not stored (a copy of its CSV's measurement): the next run knows it by the store
+    assert [(Path(f).name, r) for f, r in again.skipped if "already processed" not in r] == [
+        ("cycle_01.qif", "same measurement as cycle_01.csv in the history store (part 'cycle 01')")
+    ]
     assert out.read_text() == text  # nothing new: the previous output is left as it was
 
 
@@ -127,7 +128,7 @@ def test_store_records_what_was_corrected_without_reading_again(
     monkeypatch.setattr(parsers, "read_report", counted)
     with open_store(tmp_path / "h.db") as store:
         s = run_batch(REQUEST, d, tmp_path / "offsets.csv", settle=0, store=store)
-        assert s.reports == 4 and len(store.reports()) == 4
+        assert s.reports == 3 and len(store.reports()) == 3  # the QIF repeats cycle_01.csv
         stored = store.measurements(store.reports()[0].sha256)
     assert sorted(Path(c).name for c in calls) == sorted(
         ["cycle_01.csv", "cycle_02.csv", "cycle_03.csv", "cycle_01.qif", "copy_of_02.csv", "notes.txt"]
@@ -198,7 +199,7 @@ def test_files_kept_beside_reports_are_not_read_as_reports(tmp_path: Path) -> No
     )
     assert dict(s.failed)[str(d / "gone.csv")] == "broken link"
     summary = run_batch(REQUEST, GUIDE, tmp_path / "out.csv", settle=0)
-    assert summary.reports == 7 and not summary.failed
+    assert summary.reports == 5 and not summary.failed  # cycle 01's .dmo and .qif repeat its .csv
 
 
 def test_automatic_worker_count(monkeypatch: pytest.MonkeyPatch) -> None:
@@ -253,14 +254,14 @@ def test_a_report_the_store_refuses_is_said_in_the_summary(tmp_path: Path, monke
     with open_store(tmp_path / "h.db") as store:
         real = store.add_report
 
-        def refuse_one(data: bytes, name: str, format: str, table: pd.DataFrame) -> tuple[str, bool]:
+        def refuse_one(data: bytes, name: str, format: str, table: pd.DataFrame, **marks: Any) -> tuple[str, bool]:
             if name == "cycle_02.csv":
                 raise StoreError("the store is full", location=None)
-            return real(data, name, format, table)
+            return real(data, name, format, table, **marks)
 
         monkeypatch.setattr(store, "add_report", refuse_one)
         s = run_batch(REQUEST, d, tmp_path / "offsets.csv", settle=0, store=store)
-        assert len(store.reports()) == 3
-    assert s.reports == 4
+        assert len(store.reports()) == 2  # cycle_01.csv and cycle_03.csv (the QIF repeats cycle_01.csv)
+    assert s.reports == 3
     said = [(Path(f).name, str(n)) for f, n in s.notes if n.kind == "store"]
     assert said == [("cycle_02.csv", "the store is full")]

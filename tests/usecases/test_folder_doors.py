@@ -108,9 +108,12 @@ def test_diagnose_reads_the_listed_reports_and_uses_the_logs_found(shop: tuple[P
     (root / "corrections.csv").unlink()
     (root / "temperatures.csv").unlink()
     series = load_series(model, [root])
-    assert sorted({p.report for p in series.parts}) == sorted(Path(n).name for n in expected)  # parts name their file
+    # parts name their file; sub/again.txt is a copy of bracket_two_parts.txt: its parts 0041 and 0042 are
+    # the same measurements, used once (the later read is kept, issue 37 item 13), and 0043 (linked)
+    assert sorted({p.report for p in series.parts}) == sorted(Path(n).name for n in expected[1:])
     assert f"warning: {root / 'folder_link'}: {LINK_PROBLEM}" in [note_text(n) for n in series.notes]
-    assert series.series.n_cycles == 5  # parts 0041 and 0042 twice (root and sub-folder), 0043 (linked)
+    assert sum("are one part" in note_text(n) for n in series.notes) == 2
+    assert series.series.n_cycles == 3
 
 
 def test_diagnose_says_the_folder_problem_as_a_warning(
