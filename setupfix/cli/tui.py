@@ -53,6 +53,12 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
         "changes)",
     )
     p.add_argument("--optimizer", default="exact", choices=sorted(OPTIMIZERS), help="optimiser to start with")
+    p.add_argument(
+        "--engineer",
+        action="store_true",
+        help="show the engineer's keys: the optimiser choice (p) and the compare tab (c, 2); "
+        "without it they are hidden, and ctrl+e in the app shows them",
+    )
     add_objective_option(p)
     p.add_argument("--seed", type=int, default=0, help="seed of the metaheuristics and the comparison (default 0)")
     p.add_argument("--trials", type=int, default=12, help="trials per method in the compare view (default 12)")
@@ -98,6 +104,7 @@ def run(args: argparse.Namespace) -> int:
             seed=args.seed,
             trials=args.trials,
             offsets=args.offsets,
+            engineer=args.engineer,
         )
     ).run()
     return 0

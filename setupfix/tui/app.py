@@ -79,6 +79,8 @@ class SetupfixApp(App[None]):
         Binding("3", "tab('thermal')", "Thermal", show=False),
         Binding("4", "tab('history')", "History", show=False),
         Binding("5", "tab('match')", "Match", show=False),
+        # an engineer's keys (p, c, 2) are hidden and do nothing for an operator: ctrl+e (or --engineer) shows them
+        Binding("ctrl+e", "engineer", "Engineer", show=False),
         Binding("question_mark,f1", "help", "Help"),
         Binding("q", "quit", "Quit"),
     ]
@@ -153,7 +155,24 @@ class SetupfixApp(App[None]):
 
     def on_mount(self) -> None:
         self.query_one(CorrectionTab).fit(self.size.width, self.size.height)
+        self._show_engineer_tabs()
         self.controller.start()
+
+    def _show_engineer_tabs(self) -> None:
+        """The compare tab for an engineer only (an operator never lands on it)."""
+        tabs = self.query_one(TabbedContent)
+        if self.state.engineer:
+            tabs.show_tab("compare")
+        else:
+            if tabs.active == "compare":
+                tabs.active = "correct"
+            tabs.hide_tab("compare")
+
+    def check_action(self, action: str, parameters: tuple[object, ...]) -> bool | None:
+        """An engineer's action (the optimiser choice, the comparison, its tab) is hidden from an operator."""
+        if action == "tab" and parameters == ("compare",):
+            return self.state.engineer
+        return self.state.allows(action)
 
     def on_resize(self, event: events.Resize) -> None:
         # Rebuild the tables only when the layout changes between narrow and wide, short and tall.
@@ -234,6 +253,18 @@ class SetupfixApp(App[None]):
 
     def action_help(self) -> None:
         self.push_screen(HelpScreen())
+
+    def action_engineer(self) -> None:
+        """ctrl+e: the engineer's keys and the compare tab shown, or hidden again."""
+        self.state.engineer = not self.state.engineer
+        self._show_engineer_tabs()
+        self.refresh_bindings()
+        self.notify(
+            "engineer mode: p optimiser, c compare, 2 compare tab (ctrl+e hides them)"
+            if self.state.engineer
+            else "operator mode: the optimiser choice and the comparison are hidden (ctrl+e shows them)",
+            timeout=4,
+        )
 
     def action_diagnose(self) -> None:
         """Diagnose the series: the history store, else the reports in the current (or watched) folder."""

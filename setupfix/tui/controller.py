@@ -174,9 +174,17 @@ class SessionController:
             self.app.notify("nothing to export: open a report that matches the model first", severity="warning")
             return
         # A controller program holds one correction: the cycle on screen ([ ] changes it).
-        cycle = self.state.part_index
+        s = self.state
+        cycle = s.part_index
+        # the format and file last written are offered again (the screen asks before overwriting the file)
         self.app.push_screen(
-            ExportScreen(CONTROLLERS, preview(opened, cycle), self.state.inputs.offsets, rename=export_name),
+            ExportScreen(
+                CONTROLLERS,
+                preview(opened, cycle),
+                s.export_path or s.inputs.offsets,
+                rename=export_name,
+                controller=s.export_controller,
+            ),
             partial(self._export_confirmed, opened, cycle),
         )
 
@@ -190,6 +198,7 @@ class SessionController:
         except SetupfixError as exc:
             notify(str(exc), title="export failed", severity="error", timeout=12)
             return
+        self.state.exported(request.controller, request.path)
         program = "" if exported.program_number is None else f" (program {exported.program_number})"
         notify(f"wrote {request.controller} offsets{program} to {request.path}", title="export")
         if i.store is not None:

@@ -8,6 +8,7 @@ the state; the app pushes the state into the widgets afterwards.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -18,11 +19,29 @@ from setupfix.usecases.compare import Comparison
 from setupfix.usecases.requests import CycleCorrection, CycleOptions, ReadOptions
 from setupfix.views import correction as view
 
-__all__ = ["Inputs", "SessionState", "SORT_ORDER"]
+__all__ = ["Inputs", "SessionState", "SORT_ORDER", "ENGINEER_ACTIONS", "attention_order"]
 
 
 #: What ``s`` cycles through: None is the model's order.
 SORT_ORDER: tuple[str | None, ...] = (None, "margin_after", "deviation", "name", "station")
+#: The app's actions an engineer has and an operator does not see (``--engineer``, or ctrl+e in the app).
+ENGINEER_ACTIONS = frozenset({"next_optimizer", "compare"})
+
+
+def attention_order(rows: Sequence[view.DimensionRow]) -> list[view.DimensionRow]:
+    """``rows`` as a small screen shows them: what needs the operator first.
+
+    Out of tolerance (measured or predicted) first, then binding or inside the guard band (at a
+    limit), then the rest; within each, the least margin after the correction first (model
+    order breaks ties).
+    """
+
+    def rank(r: view.DimensionRow) -> int:
+        if not (r.in_before and r.in_after):
+            return 0
+        return 1 if r.binding or "guard" in r.flags_ else 2
+
+    return sorted(rows, key=lambda r: (rank(r), r.margin_after))
 
 
 @dataclass(frozen=True)
@@ -49,6 +68,7 @@ class Inputs:
     trials: int = 12
     offsets: str = "offsets.csv"
     poll_seconds: float = 2.0
+    engineer: bool = False  #: the optimiser choice and the comparison shown (``--engineer``)
 
     @property
     def store(self) -> StoreRef | None:
@@ -72,11 +92,23 @@ class SessionState:
     folder_watch: FolderWatch | None = None  #: the folder watched for new reports
     problem: str = ""  #: why nothing is on screen (no model, no report, a failure), or what is under way
     current_problem: str = ""  #: why --current does not fit the model opened ("" when it fits or is not given)
+    engineer: bool = False  #: the optimiser choice and the comparison shown (--engineer, ctrl+e)
+    export_controller: str = "csv"  #: the controller format of the next export: the one last written
+    export_path: str | None = None  #: the file last written (None: ``inputs.offsets``)
 
     @classmethod
     def start(cls, inputs: Inputs) -> SessionState:
         """The session as the command line opens it (the report itself is opened by the app)."""
-        return cls(inputs, model_path=inputs.model, optimizer=inputs.optimizer)
+        return cls(inputs, model_path=inputs.model, optimizer=inputs.optimizer, engineer=inputs.engineer)
+
+    def allows(self, action: str) -> bool:
+        """False for an engineer's action (:data:`ENGINEER_ACTIONS`) in an operator's session."""
+        return self.engineer or action not in ENGINEER_ACTIONS
+
+    def exported(self, controller: str, path: str) -> None:
+        """An export was written: the next one offers the same controller and file (and asks before
+        overwriting it)."""
+        self.export_controller, self.export_path = controller, path
 
     def current(self) -> CycleCorrection | None:
         """The correction of the cycle on screen (None when nothing is corrected)."""

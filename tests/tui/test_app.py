@@ -127,7 +127,7 @@ def test_open_sort_filter_export_then_a_bad_report(make_app: MakeApp, tmp_path: 
 @pytest.mark.slow
 def test_optimiser_choice_and_compare_with_cancel(make_app: MakeApp) -> None:
     async def scenario() -> None:
-        app = make_app()
+        app = make_app(engineer=True)  # the optimiser choice and the comparison are the engineer's
         async with app.run_test(size=(100, 30)) as pilot:
             await settle(pilot)
             await pilot.press("p")
@@ -376,7 +376,7 @@ def test_compare_solves_the_problem_correct_solves(make_app: MakeApp, tmp_path: 
 
     async def scenario() -> None:
         # compare measures against the paper's objective (issue 22): the correction shown is that one when asked
-        app = make_app(report=CONTROLLERS / "report.csv", model=model, objective="paper")
+        app = make_app(report=CONTROLLERS / "report.csv", model=model, objective="paper", engineer=True)
         async with app.run_test(size=(100, 30)) as pilot:
             await settle(pilot)
             c = _on_screen(app)

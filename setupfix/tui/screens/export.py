@@ -4,6 +4,8 @@ from __future__ import annotations
 
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from functools import partial
+from pathlib import Path
 from typing import ClassVar
 
 from rich.text import Text
@@ -15,6 +17,7 @@ from textual.screen import ModalScreen
 from textual.widgets import Button, Input, Label, Select, Static
 
 from setupfix.core.errors import SetupfixError
+from setupfix.tui.screens.confirm import ConfirmScreen
 
 __all__ = ["ExportRequest", "ExportScreen"]
 
@@ -31,7 +34,9 @@ class ExportRequest:
 class ExportScreen(ModalScreen[ExportRequest | None]):
     """Shows the text ``render(controller)`` returns; ctrl+s (or Write) writes it, escape cancels.
 
+    ``controller`` is the format chosen first (the one last written; default the first of ``controllers``).
     ``rename(path, controller)``, when given, is the file name that follows a newly chosen controller.
+    A file that exists is overwritten only when the operator says yes to the question that names it.
     """
 
     BINDINGS: ClassVar[list[BindingType]] = [Binding("ctrl+s", "write", "Write"), Binding("escape", "cancel", "Cancel")]
@@ -43,12 +48,14 @@ class ExportScreen(ModalScreen[ExportRequest | None]):
         path: str,
         *,
         rename: Callable[[str, str], str] | None = None,
+        controller: str | None = None,
     ) -> None:
         super().__init__()
         self.controllers = list(controllers)
+        self.controller = controller if controller in self.controllers else self.controllers[0]
         self.render_text = render
         self.rename = rename
-        self.path = rename(path, self.controllers[0]) if rename else path
+        self.path = rename(path, self.controller) if rename else path
         self.refusal = ""
         self.text = ""  #: exactly what Write writes
 
@@ -58,13 +65,13 @@ class ExportScreen(ModalScreen[ExportRequest | None]):
             with Horizontal(id="export-options"):
                 yield Select(
                     [(c, c) for c in self.controllers],
-                    value=self.controllers[0],
+                    value=self.controller,
                     allow_blank=False,
                     id="export-controller",
                 )
                 yield Input(self.path, id="export-path")
             with ScrollableContainer(id="export-scroll"):
-                yield Static(Text(self._text(self.controllers[0]), no_wrap=True), id="export-text")
+                yield Static(Text(self._text(self.controller), no_wrap=True), id="export-text")
             with Horizontal(id="export-buttons"):
                 yield Button("Write (ctrl+s)", variant="primary", id="export-write")
                 yield Button("Cancel (esc)", id="export-cancel")
@@ -99,7 +106,21 @@ class ExportScreen(ModalScreen[ExportRequest | None]):
         if self.refusal:
             self.notify(self.refusal, title="export refused", severity="error")
             return
-        self.dismiss(ExportRequest(controller, path, self.text))
+        request = ExportRequest(controller, path, self.text)
+        target = Path(path)  # as the write takes it
+        if target.is_file() and not target.is_symlink():  # anything else that exists is refused by the write
+            self.app.push_screen(
+                ConfirmScreen(f"{path} exists. Overwrite it with this {controller} export?", yes="Overwrite (y)"),
+                partial(self._overwrite, request),
+            )
+            return
+        self.dismiss(request)
+
+    def _overwrite(self, request: ExportRequest, yes: bool | None) -> None:
+        if yes:
+            self.dismiss(request)
+        else:
+            self.notify(f"{request.path} kept: not overwritten", timeout=4)
 
     @on(Button.Pressed, "#export-cancel")
     def action_cancel(self) -> None:

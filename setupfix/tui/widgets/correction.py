@@ -14,7 +14,7 @@ from textual.message import Message
 from textual.widgets import DataTable, TabPane
 
 from setupfix.correction.offsets import grid_decimals
-from setupfix.tui.state import SessionState
+from setupfix.tui.state import SessionState, attention_order
 from setupfix.tui.widgets.dimensions import DimensionTable
 from setupfix.tui.widgets.registers import RegisterTable
 from setupfix.tui.widgets.summary import SummaryBar
@@ -25,7 +25,7 @@ __all__ = ["CorrectionTab", "WIDE", "TALL"]
 
 #: Columns from which the recommendation sits beside the dimensions and margins are shown.
 WIDE = 120
-#: Lines below which the screen is short: a compact summary, the dimensions out of tolerance first.
+#: Lines below which the screen is short: a compact summary, the dimensions that need the operator first.
 TALL = 30
 
 
@@ -83,18 +83,15 @@ class CorrectionTab(TabPane):
         )
         rows = view.filter_rows(view.dimension_rows(c), state.station)
         small = self.short or not self.wide
-        out = [r for r in rows if not (r.in_before and r.in_after)]
         if state.sort_key is not None:
             rows = view.sort_rows(rows, state.sort_key)
-        elif small:  # a small screen shows what needs the operator first: out of tolerance, before or after
-            rows = out + [r for r in rows if r.in_before and r.in_after]
+        elif small:  # a small screen shows what needs the operator first: out, binding or at a limit, least margin
+            rows = attention_order(rows)
         dims = self.query_one(DimensionTable)
         dims.show(rows, wide=self.wide)
-        order = state.sort_key or ("out of tolerance first" if small else "model")
+        order = state.sort_key or ("out, binding, margin" if small else "model")
         dims.border_title = escape(f"dimensions · station {state.station or 'all'} · sort {order}")
-        # short and narrow: the table holds the dimensions out of tolerance (at least 2 rows; with its border,
-        # header and scroll bar), the registers the rest
-        dims.styles.height = 3 + max(2, len(out)) if self.short and not self.wide else None
+        # short and narrow: the table takes the room the registers leave (app.tcss: they get at most 45 %)
         m = c.model
         registers = self.query_one(RegisterTable)
         registers.show(
