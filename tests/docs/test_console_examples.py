@@ -72,21 +72,7 @@ def test_a_stale_example_fails(tmp_path: Path) -> None:
     assert run_page(page, tmp_path / "run")
 
 
-#: Pages whose owner has yet to mark a block (xfail is strict: the mark goes when the page is fixed).
-_PENDING = {
-    "docs/howto/tui.md": "its `setupfix tui` block needs <!-- not run: the screen needs a terminal -->",
-}
-
-
-@pytest.mark.parametrize(
-    "page",
-    [
-        pytest.param(page, id=_rel(page), marks=[pytest.mark.xfail(reason=_PENDING[_rel(page)], strict=True)])
-        if _rel(page) in _PENDING
-        else pytest.param(page, id=_rel(page))
-        for page in PAGES
-    ],
-)
+@pytest.mark.parametrize("page", PAGES, ids=_rel)
 def test_every_command_block_is_run_or_marked(page: Path) -> None:
     """No page shows a command that is neither run nor marked not runnable (with its reason), nor an
     inline command with an option the parser lacks."""
