@@ -131,3 +131,31 @@ def test_channel_headers_and_register_names_are_no_formulas(tmp_path: Path, caps
     registers = [r[rows[0].index("register")] for r in rows[1:]]
     assert registers == ["'@W1", "W2"]
     assert [r[rows[0].index("delta")] for r in rows[1:]] == ["0.01", "-0.02"]  # a negative number is no formula
+
+
+def test_names_stored_raw_by_an_older_setupfix_are_exported_visible(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A row stored before names were escaped (or by another writer) is escaped on its way out."""
+    from setupfix.store import Recommendation, open_store
+
+    db = tmp_path / "h.db"
+    with open_store(db, machine="cell\x1b[2J", operator="\x1b]0;x\x07ann") as store:
+        store.add_recommendation(
+            Recommendation(
+                "exact",
+                {"report": "old\x1b[31m.csv", "part": "-p\r1", "seed": None},
+                {"verdict": "apply", "corrections": {"=W1": 0.01, "T\x1b5": -0.02}},
+            )
+        )
+    rows = export(capsys, db, "recommendations")
+    no_formula(rows)
+    header = rows[0]
+    got = {name: {r[header.index(name)] for r in rows[1:]} for name in ("machine", "operator", "report", "part")}
+    assert got == {
+        "machine": {"cell\\x1b[2J"},
+        "operator": {"\\x1b]0;x\\x07ann"},
+        "report": {"old\\x1b[31m.csv"},
+        "part": {"'-p\\r1"},
+    }
+    assert sorted(r[header.index("register")] for r in rows[1:]) == ["'=W1", "T\\x1b5"]
