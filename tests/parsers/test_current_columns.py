@@ -95,7 +95,7 @@ def variants(draw: st.DrawFn) -> Variant:
     )
 
 
-@settings(max_examples=200, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@settings(max_examples=120, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
 @given(variants())
 @example(  # the case: register,value,comment with G54,-412,530 (read as -412 before)
     Variant(False, (-412530, -412487, -12, 4), frozenset({0}), ",comment", frozenset(), False, ",")

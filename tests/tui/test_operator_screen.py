@@ -133,6 +133,7 @@ def test_the_optimiser_choice_and_the_comparison_are_the_engineer_s(make_app: Ma
     run(scenario())
 
 
+@pytest.mark.slow  # imports the app (Textual): seconds on a loaded box
 def test_the_engineer_flag_reaches_the_app_and_the_help_names_it(monkeypatch: pytest.MonkeyPatch) -> None:
     from setupfix.tui.app import SetupfixApp
     from setupfix.tui.screens.help import HELP
