@@ -18,6 +18,7 @@ import numpy as np
 import numpy.typing as npt
 
 from setupfix.correction.explain import fit_registers, leave_one_out, one_register, targets
+from setupfix.correction.numbers import fmt
 from setupfix.correction.objective import error_budget, margins
 from setupfix.correction.safety import (
     STOPPED,
@@ -173,7 +174,11 @@ def recommend(
         )
 
     verdict = "apply"
+    stopped = result.status in STOPPED
     if not np.any(x):
+        verdict = "hold"
+    elif in_dead_band(x, policy.dead_band) and stopped:  # an unproven point's small changes prove nothing
+        x = np.zeros_like(x)
         verdict = "hold"
     elif in_dead_band(x, policy.dead_band):
         rules.append(
@@ -187,10 +192,10 @@ def recommend(
     if at_limit:
         rules.append(RuleEffect("clamp", "change at the register's per-step or cumulative limit", registers=at_limit))
     solved = True
-    if result.status in STOPPED:
-        stopped = stopped_rule(result, recommended=verdict == "apply")
-        rules.append(stopped)
-        solved = stopped.rule != "not_solved"
+    if stopped:
+        effect = stopped_rule(result, recommended=verdict == "apply")
+        rules.append(effect)
+        solved = effect.rule != "not_solved"
     return Recommendation(verdict, x + 0.0, result, guarded, tuple(rules), given_up, at_limit, solved=solved)
 
 
@@ -217,37 +222,41 @@ def draft_hold(posed: PosedProblem, model_file: str, optimizer: str = "exact") -
 def stopped_rule(result: OptimizeResult, *, recommended: bool) -> RuleEffect:
     """The rule of a solve stopped before its proof (``result.status`` in :data:`STOPPED`).
 
-    ``not_solved`` when nothing is recommended: "not solved within the time limit" (or
-    "the solver failed"), naming the stage; ``stopped`` when a correction is still
-    recommended: what was proved and the certified bound on the norm
-    (``result.norm_ratio_max``: ‖x‖²_cost ≤ ratio · least norm).
+    ``not_solved`` when nothing is recommended: "not solved within the time limit" (the
+    wall-clock guard: the exact optimiser then gives no correction at all), "… within the work
+    limit" (the solver settings' work budget) or "the solver failed", naming the stage;
+    ``stopped`` when a correction is still recommended (a work-limit stop, the same under any
+    load): what was proved and the certified bound on the norm (``result.norm_ratio_max``:
+    ‖x‖²_cost ≤ ratio · least norm).
     """
     where = result.stopped
     stage = where.stage if where is not None else ""
     reason = where.reason if where is not None else ""
     at = f" (the {stage} stage stopped)" if stage else ""
+    limit = "work limit" if reason == "work limit" else "time limit"
     if not recommended:
         what = (
-            "not solved within the time limit"
+            f"not solved within the {limit}"
             if result.status == "time_limit"
             else f"not solved: the solver failed{f' ({reason})' if reason else ''}"
         )
+        advice = "allow more time (--time-limit)" if limit == "time limit" else "simplify the model"
         return RuleEffect(
             "not_solved",
             f"{what}{at}: no proven correction, nothing is recommended (this is not "
-            "'no change needed'); allow more time (--time-limit) or check the model",
+            f"'no change needed'); {advice} or check the model",
         )
     ratio = result.norm_ratio_max
     certified = []
     if stage != "least norm" and result.bound is not None and np.isfinite(result.bound):
         certified.append(
-            f"the error budget {result.margin_after:+.4f} is within "
-            f"{max(result.bound - result.margin_after, 0.0):.4f} of the best possible (LP bound "
-            f"{result.bound:+.4f})"
+            f"the error budget {fmt(result.margin_after, 4, sign=True)} is within "
+            f"{fmt(max(result.bound - result.margin_after, 0.0), 4)} of the best possible (LP bound "
+            f"{fmt(result.bound, 4, sign=True)})"
         )
     if isinstance(ratio, float) and np.isfinite(ratio):
         certified.append(f"the correction's weighted norm is at most {ratio:.3f}× the least norm")
-    first = "solve stopped by the time limit" if result.status == "time_limit" else "solve stopped by a solver error"
+    first = f"solve stopped by the {limit}" if result.status == "time_limit" else "solve stopped by a solver error"
     return RuleEffect(
         "stopped", f"{first}{at}: {result.message}" + (f"; certified: {' and '.join(certified)}" if certified else "")
     )
@@ -301,7 +310,7 @@ def beyond_band(
         if over.any():
             digits = max(0, int(-np.floor(np.log10(h) + 1e-9)))
             parts = [
-                f"{registers.get(r, r)} looks off by {v:+.{digits}f}{f' {unit}' if unit else ''}; "
+                f"{registers.get(r, r)} looks off by {fmt(v, digits, sign=True)}{f' {unit}' if unit else ''}; "
                 + ("fixed in the model" if f else f"beyond the per-step limit {max(abs(lo), hi):g}")
                 for r, v, lo, hi, f in zip(
                     ids[over], x[over], problem.lb[over], problem.ub[over], fixed[over], strict=True

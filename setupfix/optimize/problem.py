@@ -352,7 +352,9 @@ class CorrectionProblem:
 #: What a result's ``status`` says (every value some result is built with):
 #:
 #: * ``"optimal"``: proved (the exact optimiser; also its refusals and its triage, proved);
-#: * ``"time_limit"``: the exact optimiser stopped at the time limit (``stopped`` says where);
+#: * ``"time_limit"``: the exact optimiser stopped at a limit (``stopped`` says where and which: "work limit",
+#:   the settings' work budget, the same under any load; "time limit", the wall-clock guard against a
+#:   hang, and then x = 0: no correction);
 #: * ``"solver_error"``: the exact optimiser stopped by a solver failure (``stopped`` says where);
 #: * ``"budget"``: a metaheuristic spent its solution budget;
 #: * ``"no_better_than_none"``: the search found nothing better than no correction (x = 0 returned,
@@ -478,6 +480,9 @@ class OptimizeResult:
     margin_all : float, optional
         ``compare``: a trial's error budget over every dimension, when ``margin_after`` is
         restated over the dimensions the exact optimum keeps.
+    work : float
+        The exact optimiser's work units spent (HiGHS iterations, nodes × ``node_work``:
+        :mod:`setupfix.optimize.exact.work`); 0 for the other optimisers.
     """
 
     x: Array
@@ -501,6 +506,7 @@ class OptimizeResult:
     path: str = ""
     stages: Mapping[str, float] = field(default_factory=dict)
     margin_all: float | None = None
+    work: float = 0.0
 
     @property
     def bonus(self) -> float:

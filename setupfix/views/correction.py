@@ -28,6 +28,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from setupfix.correction.numbers import fmt
 from setupfix.correction.objective import margins as objective_margins
 from setupfix.model import PartMeasurement, ProcessModel, normalise_name
 from setupfix.model.measurements import suggest_names
@@ -63,10 +64,9 @@ IN, OUT, BINDING, PREDICTED_OUT, GIVEN_UP, GUARD, REJECTED = "✓", "✗", "●"
 
 
 def signed(value: float | None, digits: int = 4) -> str:
-    """``+0.0123`` / ``-0.0123``; an em dash for a missing or non-finite value."""
-    if value is None or not math.isfinite(value):
-        return "—"
-    return f"{value + 0.0:+.{digits}f}"
+    """``+0.0123`` / ``-0.0123`` (never ``-0.0000``: :func:`~setupfix.correction.numbers.fmt`); an em dash
+    for a missing or non-finite value."""
+    return fmt(value, digits, sign=True)
 
 
 def zone_bar(value: float, lower: float, upper: float, width: int = 11) -> str:

@@ -8,11 +8,11 @@ or reads files.  Typed notes (:class:`~setupfix.core.errors.Note`) become text o
 
 from __future__ import annotations
 
-import math
 import textwrap
 
 import numpy as np
 
+from setupfix.correction.numbers import fmt
 from setupfix.correction.offsets import grid_decimals
 from setupfix.correction.relation import RelationMatrices
 from setupfix.correction.safety import short_list
@@ -26,9 +26,8 @@ TEXT_LIST = 30
 
 
 def format_number(value: float, digits: int = 4) -> str:
-    if value is None or (isinstance(value, float) and not math.isfinite(value)):
-        return "—"
-    return f"{value:+.{digits}f}"
+    """``+0.0123`` (never ``-0.0000``: :func:`~setupfix.correction.numbers.fmt`); an em dash if missing."""
+    return fmt(value, digits, sign=True)
 
 
 _FLAG_TEXT = {
@@ -115,18 +114,19 @@ def format_correction(pc: CycleCorrection) -> str:
     for reg in pc.register_rows():
         note = "fixed" if reg["fixed"] else ("at limit" if reg["at_limit"] else "")
         lines.append(
-            f"  {reg['id']:<{width}} {reg['register']:<10} {reg['delta']:+.{digits[reg['id']]}f}  "
+            f"  {reg['id']:<{width}} {reg['register']:<10} {fmt(reg['delta'], digits[reg['id']], sign=True)}  "
             f"{reg['offset']:<8} {note}".rstrip()
         )
     if pc.thermal is not None:
         lines.append(pc.thermal.line())
     lines += [
         "",
-        f"error budget before {pc.margin_before:+.4f} {unit}, after {pc.margin_after:+.4f} {unit}, "
-        f"bonus {pc.margin_after - pc.margin_before:+.4f} {unit}; correction norm {pc.norm:.4f} {unit}",
+        f"error budget before {fmt(pc.margin_before, 4, sign=True)} {unit}, after "
+        f"{fmt(pc.margin_after, 4, sign=True)} {unit}, bonus {fmt(pc.margin_after - pc.margin_before, 4, sign=True)} "
+        f"{unit}; correction norm {fmt(pc.norm, 4)} {unit}",
     ]
     if r.bound is not None:
-        lines.append(f"upper bound (continuous LP): {r.bound:+.4f} {unit}")
+        lines.append(f"upper bound (continuous LP): {fmt(r.bound, 4, sign=True)} {unit}")
     names = {d.id: one_line(d.name) for d in pc.model.dimensions}
     if pc.binding:
         lines.append("binding (what stops a better correction): " + ", ".join(names[b] for b in pc.binding))
@@ -261,8 +261,9 @@ def format_comparison(c: Comparison) -> str:
     e = c.exact
     lines = [
         f"{c.report}  part {c.part or '—'}: {c.trials} trials per method, seed {c.seed}",
-        f"before correction f1 = {e.margin_before:+.4f} {unit}; exact grid optimum f1 = {e.margin_after:+.4f}, "
-        f"f2 = {e.norm:.4f}, f = {e.fitness:+.4f} ({e.status}, {e.seconds * 1000:.0f} ms)",
+        f"before correction f1 = {fmt(e.margin_before, 4, sign=True)} {unit}; exact grid optimum f1 = "
+        f"{fmt(e.margin_after, 4, sign=True)}, f2 = {fmt(e.norm, 4)}, f = {fmt(e.fitness, 4, sign=True)} "
+        f"({e.status}, {e.seconds * 1000:.0f} ms)",
         "",
         f"{'':8}{'f1 [' + unit + ']':^24}{'f2 [' + unit + ']':^24}{'f = 10·f1 − f2':^24}"
         f"{'':>9}{'':>9}{'gap f1 [' + gap_unit + ']':^14}",

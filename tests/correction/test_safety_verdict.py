@@ -1,5 +1,5 @@
-"""The verdict around a solve that did not finish, on real problems stopped by a tiny time limit
-(setupfix.correction.recommend.recommend, stopped_rule)."""
+"""The verdict around a solve that did not finish, on real problems stopped by a small work limit or the
+wall-clock guard (setupfix.correction.recommend.recommend, stopped_rule)."""
 
 from __future__ import annotations
 
@@ -22,6 +22,7 @@ from setupfix.correction.safety import STOPPED, Policy, short_list
 from setupfix.inputs.cycles import read_parts
 from setupfix.model import PartMeasurement, ProcessModel, load_model
 from setupfix.optimize import CorrectionProblem, Stopped, get_optimizer
+from setupfix.optimize.exact import ExactSettings
 
 if TYPE_CHECKING:
     from setupfix.usecases.requests import CycleCorrection
@@ -48,23 +49,21 @@ def guide_posed(report: str = "cycle_01.csv") -> PosedProblem:
 
 
 def test_a_stopped_solve_that_still_improves_is_applied_with_what_is_certified() -> None:
-    posed = guide_posed()
-    # the stage a tiny limit stops depends on the machine's load (an LP interrupted at once proves nothing):
-    # the first limit whose solve stops after the LP bound, in the grid-optimum stage
-    for limit in (1e-9, 1e-6, 1e-5, 1e-4, 3e-4, 1e-3):
-        rec = recommend(posed, get_optimizer("exact", time_limit=limit).solve)
-        stopped = rec.result.stopped
-        if stopped is not None and stopped.stage == "grid optimum":
-            break
-    assert (
-        rec.result.status in STOPPED and rec.result.stopped is not None and rec.result.stopped.stage == "grid optimum"
-    )
+    """A work limit (the settings', the same under any load) stops the grid-optimum stage: the best point
+    found is applied with what is certified, and says it was the work limit."""
+    problem = shop_problem(60, 400, 2)
+    posed = pose_policy(problem, Policy.neutral(problem))
+    solve = get_optimizer("exact", objective="paper", settings=ExactSettings(work_limit=5000.0)).solve
+    rec = recommend(posed, solve)
+    assert rec.result.status in STOPPED and rec.result.stopped == Stopped("grid optimum", "work limit")
     assert rec.verdict == "apply" and rec.solved
     (rule,) = [r for r in rec.rules if r.rule == "stopped"]
     assert rec.result.bound is not None
     gap = rec.result.bound - rec.result.margin_after
     assert f"within {gap:.4f} of the best possible" in rule.message
+    assert "stopped by the work limit" in rule.message and "time limit" not in rule.message
     assert rec.result.margin_after > posed.guarded.margin_before  # verified better than no correction
+    np.testing.assert_array_equal(recommend(posed, solve).x, rec.x)  # the same answer on every run
 
 
 def test_stopped_rule_states_the_certified_norm_ratio() -> None:

@@ -29,6 +29,7 @@ OPTIMIZE = Path(__file__).resolve().parents[2] / "setupfix" / "optimize"
 RANKS: dict[str, float] = {
     "problem": 0,
     "exact.settings": 0,
+    "exact.work": -1,
     "exact.highs": 0,
     "exact.grid": 0,
     "dimensions": 1,
@@ -132,7 +133,7 @@ def test_stage_results_are_frozen_and_bracket_the_brute_force_optimum(seed: int)
     g_rows, g = margin_rows(problem)
     free = problem.free
     rows = GridRows(g_rows, g, problem.kmin[free].astype(float), problem.kmax[free].astype(float), problem.cost[free])
-    session = Session(rows, ExactSettings(), 10.0)
+    session = Session(rows, ExactSettings())
     bound = lp_bound(session)
     assert bound is not None
     from setupfix.optimize.exact.grid_optimum import grid_optimum
@@ -175,11 +176,11 @@ def test_a_callers_search_in_the_grid_optimum_changes_no_optimum(seed: int, monk
         "LEVEL_STRATEGIES",
         tuple(logged(events, f) if f is listing else f for f in go.LEVEL_STRATEGIES),
     )
-    session = Session(rows, ExactSettings(), 10.0)
+    session = Session(rows, ExactSettings())
     for search in (lambda k: root_climb(session, row_dim, n_dims, k), lambda k: np.array(rows.kmax)):
         bound = lp_bound(session)
         assert bound is not None
-        plain = go.grid_optimum(Session(rows, ExactSettings(), 10.0), bound)
+        plain = go.grid_optimum(Session(rows, ExactSettings()), bound)
         if plain.upper < 0:  # no correction brings every dimension in: the triage's case, not this stage's
             continue
         opt_t = plain.t

@@ -68,8 +68,10 @@ def test_a_long_run_never_runs_out_of_time_and_equals_a_fresh_process(
         np.testing.assert_array_equal(result.x, fresh[i][0])
 
 
-def test_each_run_of_one_highs_model_has_its_own_time_limit() -> None:
-    """Runs of one model within a solve (lazy cuts, levels) each get the limit they are given."""
+def test_each_run_of_one_highs_model_has_its_own_work_allowance() -> None:
+    """Runs of one model within a solve (lazy cuts, levels) each get the allowance they are given, charged
+    to the solve's meter run by run (HiGHS's own clock, summed over the runs, plays no part)."""
+    from setupfix.optimize.exact import work
     from setupfix.optimize.exact.highs import INF, LinearModel
 
     model = LinearModel(
@@ -80,12 +82,15 @@ def test_each_run_of_one_highs_model_has_its_own_time_limit() -> None:
         np.array([-5.0, -INF]),
         np.array([5.0, INF]),
     )
-    statuses = set()
-    while model.h.getRunTime() < 0.1:  # HiGHS's own clock, summed over the runs: twice the limit below
-        run = model.solve(0.05)
-        statuses.add(run.status)
-        assert run.seconds < 0.05
-    assert statuses == {"optimal"}
+    token = work.CURRENT.set(work.Meter())
+    try:
+        runs = [model.solve(work.MIN_RUN) for _ in range(200)]
+        spent = work.current().spent
+    finally:
+        work.CURRENT.reset(token)
+    assert {r.status for r in runs} == {"optimal"}
+    assert len({r.seconds for r in runs}) == 1 and 0 < runs[0].seconds <= work.MIN_RUN  # the same work each run
+    assert spent == pytest.approx(sum(r.seconds for r in runs))
 
 
 @pytest.mark.slow

@@ -21,7 +21,7 @@ returns a frozen result: :func:`~setupfix.optimize.exact.lp_bound.lp_bound` →
 → :class:`~setupfix.optimize.exact.grid_optimum.GridOptimum` (an ordered list of strategies per level),
 :func:`~setupfix.optimize.exact.least_norm.grid.grid_least_norm` →
 :class:`~setupfix.optimize.exact.least_norm.grid.LeastNorm`, or the triage
-(:func:`~setupfix.optimize.exact.triage.solve.triaged_result`).  Which proof is tried and how time is
+(:func:`~setupfix.optimize.exact.triage.solve.triaged_result`).  Which proof is tried and how work is
 shared: :class:`~setupfix.optimize.exact.settings.ExactSettings`.
 
 1. **LP bound** — maximise t subject to every margin ≥ t and the register bounds;
@@ -69,16 +69,22 @@ as the grid allows, then the next, and so on — every dimension centred as far 
 discrete conflict by branches or counts; a position zone is one dimension, its margin the least of
 its polygon's facets, :func:`~setupfix.optimize.dimensions.dimension_of_rows`) — and stage 3 runs among
 the leximin-optimal grid points (every dimension's margin at least its level); the levels may use all
-but ``leximin_norm_share`` of the limit.  ``objective="paper"`` stops after stage 2 and runs stage 3 at t*
+but ``leximin_norm_share`` of the work budget.  ``objective="paper"`` stops after stage 2 and runs stage 3 at t*
 (eqs. 8–9 exactly, what ``compare`` and the paper's validation use).
 
-One ``time_limit`` bounds the wall time of the whole solve, counted from the solve's own
-start (each solve has its own session; nothing of an earlier solve's clock carries over).  The
-grid-optimum stage stops when ``least_norm_share`` of the limit is left, so the least-norm stage always runs: if a
-stage stops at the limit, its best point is used, the least-norm stage still
-shrinks the correction at the error budget reached, and the status, the message,
-``notes`` and ``stopped`` say which stage stopped and why.  The LP bound
-is always reported.
+Work, not time
+--------------
+The stages share one **work budget** (``ExactSettings.work_limit``; :mod:`setupfix.optimize.exact.work`):
+HiGHS's iterations and nodes and the heavier numpy steps are counted, never seconds, so which stage
+ends, and where, is the same on an idle machine and on a loaded one.  The grid-optimum stage stops
+when ``least_norm_share`` of the budget is left, so the least-norm stage always runs: if a stage
+stops at its share, its best point is used, the least-norm stage still shrinks the correction at the
+error budget reached, and the status (``time_limit``), the message, ``notes`` and ``stopped`` (reason
+"work limit") say which stage stopped.  The LP bound is always reported.
+
+The optimiser's ``time_limit`` (``--time-limit``) only guards against a hang: when the wall clock
+passes it, the solve gives **no correction** (x = 0, ``stopped`` reason "time limit"), never a
+different one (:func:`~setupfix.optimize.exact.solve.guarded`).
 """
 
 from setupfix.optimize.exact.settings import ExactSettings

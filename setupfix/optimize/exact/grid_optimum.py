@@ -23,7 +23,6 @@ unit box around it (large problems), a feasibility MILP.  Last, once: the MILP
 
 from __future__ import annotations
 
-import time
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Literal
@@ -38,6 +37,7 @@ from setupfix.optimize.exact.least_norm.listing import ellipsoid_search, lagrang
 from setupfix.optimize.exact.least_norm.shop import box_least_norm
 from setupfix.optimize.exact.lp_bound import LPBound
 from setupfix.optimize.exact.session import Relaxation, Session
+from setupfix.optimize.exact.work import now
 from setupfix.optimize.problem import Stopped
 
 __all__ = [
@@ -80,10 +80,10 @@ class GridLevel:
     k: Array
     t: float
     relaxation: Relaxation | None
-    stage_end: float  # ``time.perf_counter()`` at which the stage's share of the limit is spent
+    stage_end: float  # ``now()`` at which the stage's share of the limit is spent
 
     def left(self) -> float:
-        return self.stage_end - time.perf_counter()
+        return self.stage_end - now()
 
 
 #: A strategy's verdict on one level (see the module text).
@@ -258,7 +258,7 @@ def feasibility_milp(session: Session, level: GridLevel) -> StrategyAnswer:
         rows.kmax,
         integer=np.ones(rows.n_free, bool),
     ).solve(level.left() * session.settings.milp_share)
-    path = (f"grid optimum: feasibility MILP at {level.tau:.4g} steps ({feas.status}, {feas.seconds:.2f} s)",)
+    path = (f"grid optimum: feasibility MILP at {level.tau:.4g} steps ({feas.status}, {feas.seconds:.0f} work units)",)
     k = None if feas.x is None else np.clip(np.rint(feas.x), rows.kmin, rows.kmax)
     if _reaches(session, k, level.tau):
         return StrategyAnswer(
@@ -346,7 +346,7 @@ def grid_optimum(session: Session, bound: LPBound, search: Search | None = None)
     path: list[str] = []
     calls, proved = 0, False
     for _ in range(session.settings.level_steps):
-        if time.perf_counter() >= stage_end:
+        if now() >= stage_end:
             break
         level = GridLevel(tau, rows.rounded(tau), k_best, t_best, None, stage_end)
         calls += 1
@@ -392,7 +392,7 @@ def _bracketed_milp(
 ) -> GridOptimum:
     """The MILP "max t, k integer" with t ∈ [t(best point), U], started from the best point."""
     rows = session.rows
-    if time.perf_counter() >= stage_end:  # its share of the limit is spent: no MILP
+    if now() >= stage_end:  # its share of the limit is spent: no MILP
         path.append("grid optimum: its share of the time limit spent before the MILP")
         return GridOptimum(
             k_best,
@@ -407,7 +407,7 @@ def _bracketed_milp(
             calls,
         )
     notes: list[Note] = []
-    res = session.max_margin_milp(t_best, upper, k_best, stage_end - time.perf_counter())
+    res = session.max_margin_milp(t_best, upper, k_best, stage_end - now())
     calls += 1
     if res.status == "error":
         notes.append(
@@ -418,7 +418,7 @@ def _bracketed_milp(
             )
         )
         calls += 1
-        res = session.max_margin_milp(-INF, upper, None, stage_end - time.perf_counter())
+        res = session.max_margin_milp(-INF, upper, None, stage_end - now())
     if res.x is not None:
         k = np.clip(np.rint(res.x[:-1]), rows.kmin, rows.kmax)
         t_k = float(grid_margins(rows.g_rows, rows.g, k))

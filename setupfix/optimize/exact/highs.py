@@ -3,19 +3,20 @@
 Why highspy and not scipy's ``linprog``/``milp``: scipy rebuilds the model and re-validates every
 option on each call; highspy keeps it, so a solve can change only row bounds or add rows (lazy cuts)
 between runs.  Each run starts from a cleared solver (no basis or incumbent of an earlier run: the
-answer depends on this model and start only).  HiGHS's run clock is not cleared — its
-``time_limit`` applies to the sum over every run of one object — so :meth:`LinearModel.solve` sets
-it to the clock's reading plus the run's own allowance (no model outlives one solve:
-:class:`~setupfix.optimize.exact.session.Session`).
+answer depends on this model and start only).  A run is limited by **work**, not time
+(:mod:`setupfix.optimize.exact.work`): its allowance in work units becomes HiGHS's iteration limits
+(simplex, IPM, QP) and, for a MIP, its node limit; what the run did (iterations, nodes) is charged
+to the solve's meter, so the same model gives the same answer under any load (no model outlives
+one solve: :class:`~setupfix.optimize.exact.session.Session`).
 
 Nothing HiGHS answers is taken on trust (:meth:`LinearModel.solve`): its point is checked
 against the model — rows, bounds and integrality to :data:`FEASIBILITY_TOL`, its objective
 against the value HiGHS reports and, for an "optimal" MIP, against the dual bound.  HiGHS 1.16
 given a start has answered "optimal" with the start itself; such an answer is solved again
 without the start, and an answer that still fails is an ``error``, never ``optimal``.  The
-wall-clock limit is enforced by HiGHS's interrupt callbacks (MIP, simplex, IPM, QP), each
-checking a ``time.perf_counter()`` deadline; and every MIP runs without the RINS and RENS
-sub-searches, which read neither the callbacks nor, reliably, the time limit.
+wall-clock guard against a hang (the solve's meter's ``guard``) is enforced by HiGHS's interrupt
+callbacks (MIP, simplex, IPM, QP) and by HiGHS's own ``time_limit``; and every MIP runs without
+the RINS and RENS sub-searches, which read neither the callbacks nor, reliably, the limits.
 
 Every solver object is silent (nothing may reach stdout, which carries ``--json``) and single-threaded
 (the solves are small; a batch runs its own workers).  The private ``_Highs`` class is used because the
@@ -24,7 +25,6 @@ public ``Highs`` prints a banner on stdout and installs callbacks we do not use.
 
 from __future__ import annotations
 
-import time
 from dataclasses import dataclass, field, replace
 from typing import Any
 
@@ -43,6 +43,8 @@ from highspy._core import (
 )
 from scipy.sparse import csc_array, vstack
 
+from setupfix.optimize.exact.work import current, model_size, run_limits, run_work, wall
+
 __all__ = ["FEASIBILITY_TOL", "INF", "Colwise", "LinearModel", "Solve"]
 
 Array = npt.NDArray[np.float64]
@@ -54,14 +56,15 @@ FEASIBILITY_TOL = 1e-6
 MIP_ABS_GAP = 1e-6
 #: Models up to this many matrix elements are checked with a dense copy of the matrix.
 DENSE_CHECK_ELEMENTS = 20_000
-#: Interrupts checked against the wall clock (HiGHS reads ``time_limit`` between cut rounds, not in sub-searches).
+#: Interrupts checked against the wall-clock guard (HiGHS reads ``time_limit`` between cut rounds, not in sub-searches).
 _INTERRUPTS = (
     cb.HighsCallbackType.kCallbackMipInterrupt,
     cb.HighsCallbackType.kCallbackSimplexInterrupt,
     cb.HighsCallbackType.kCallbackIpmInterrupt,
     cb.HighsCallbackType.kHighsCallbackQpInterrupt,  # type: ignore[attr-defined]  # not in the stubs
 )
-#: Model statuses that are answers (optimal, proven infeasible, time limit with or without a point).
+#: Model statuses that are answers (optimal, proven infeasible, stopped at a limit with or without a point:
+#: "time_limit" whether the work limits or the wall-clock guard stopped it; the meter tells which).
 _STATUS_NAMES = {
     HighsModelStatus.kOptimal: "optimal",
     HighsModelStatus.kInfeasible: "infeasible",
@@ -69,6 +72,7 @@ _STATUS_NAMES = {
     HighsModelStatus.kUnbounded: "unbounded",
     HighsModelStatus.kTimeLimit: "time_limit",
     HighsModelStatus.kIterationLimit: "time_limit",
+    HighsModelStatus.kSolutionLimit: "time_limit",  # the node limit (``mip_max_nodes``)
     HighsModelStatus.kInterrupt: "time_limit",
 }
 
@@ -88,7 +92,8 @@ class Solve:
         Duals of an LP or QP (HiGHS's signs: for a minimisation, ≤ 0 on a row or column at its upper
         bound, ≥ 0 at its lower bound).
     seconds : float
-        Wall time of the run (with its re-solve, if the first answer failed the check).
+        Work units of the run (with its re-solve, if the first answer failed the check): iterations
+        and nodes × ``node_work`` (:mod:`setupfix.optimize.exact.work`), never wall time.
     """
 
     status: str
@@ -172,8 +177,7 @@ class LinearModel:
     integer : ndarray of bool, shape (n_cols,), optional
         Integer columns (a MILP); default all continuous.
     limit_slack : float, default=0.0
-        Seconds added to HiGHS's own ``time_limit`` beyond each run's allowance (0: both clocks
-        stop it; a large value: only the wall-clock interrupts do).
+        Work units added to each run's allowance beyond what :meth:`solve` is given.
 
     The model keeps its own copy of the data so that every answer can be checked
     (:meth:`check`).
@@ -408,17 +412,20 @@ class LinearModel:
         return ""
 
     def solve(self, time_limit: float, start: Array | None = None) -> Solve:
-        """Run HiGHS for at most ``time_limit`` seconds (optionally from a feasible ``start``), checked.
+        """Run HiGHS for at most ``time_limit`` work units (optionally from a feasible ``start``), checked.
 
-        An answer that contradicts the model (:meth:`check`) is solved again without the
-        start; if that fails too, the status is ``error`` (with the reason in ``detail``) and
-        the point is kept only if it meets every row, bound and integrality.
+        ``time_limit`` is an allowance of work (:func:`~setupfix.optimize.exact.work.run_limits`), not
+        seconds: the name is the stages' (their shares of the solve's work budget).  An answer that
+        contradicts the model (:meth:`check`) is solved again without the start; if that fails too,
+        the status is ``error`` (with the reason in ``detail``) and the point is kept only if it
+        meets every row, bound and integrality.
         """
-        began = time.perf_counter()
+        meter = current()
+        began = meter.spent
         res = self._run(time_limit, start)
         why = self.check(res.x, res.objective, res.dual_bound, res.status)
         if why and start is not None and self.is_mip:
-            left = time_limit - (time.perf_counter() - began)
+            left = time_limit - (meter.spent - began)
             if left > 0:
                 res = self._run(left, None)
                 why = self.check(res.x, res.objective, res.dual_bound, res.status)
@@ -437,15 +444,23 @@ class LinearModel:
                 row_dual=None,
                 col_dual=None,
             )
-        return replace(res, seconds=time.perf_counter() - began)
+        return replace(res, seconds=meter.spent - began)
 
     def _run(self, time_limit: float, start: Array | None) -> Solve:
         h = self.h
-        allowance = float(max(time_limit, 1e-3))
-        # HiGHS's run clock adds up over every run of this object and its limit applies to that sum:
-        # the limit given is this run's own; the callbacks stop it by the wall clock as well
-        h.setOptionValue("time_limit", float(h.getRunTime()) + allowance + self.limit_slack)
-        self._deadline[0] = time.perf_counter() + allowance
+        meter = current()
+        size = model_size(self.n_rows, self.n_cols)
+        iterations, ipm, nodes = run_limits(time_limit + self.limit_slack, meter.node_work, size)
+        h.setOptionValue("simplex_iteration_limit", iterations)
+        h.setOptionValue("qp_iteration_limit", iterations)
+        h.setOptionValue("ipm_iteration_limit", ipm)
+        if self.is_mip:
+            h.setOptionValue("mip_max_nodes", nodes)
+        # the wall clock only guards against a hang: HiGHS's run clock adds up over every run of this
+        # object and its limit applies to that sum, so the limit given is that sum plus the guard's time left
+        left = meter.guard_left()
+        h.setOptionValue("time_limit", float(h.getRunTime()) + max(left, 0.0) if left < INF else INF)
+        self._deadline[0] = meter.guard
         if self.is_mip or not self._warm:  # the answer depends on this model and start only, never on earlier runs
             h.clearSolver()
         if start is not None and self.is_mip:
@@ -454,6 +469,16 @@ class LinearModel:
         self._deadline[0] = np.inf
         model_status = h.getModelStatus()
         info = h.getInfo()
+        meter.check_guard()
+        meter.spent += run_work(
+            size,
+            max(info.simplex_iteration_count, 0)
+            + max(info.crossover_iteration_count, 0)
+            + max(info.qp_iteration_count, 0),
+            info.ipm_iteration_count,
+            info.mip_node_count,
+            meter.node_work,
+        )
         status = _STATUS_NAMES.get(model_status, "error") if run != HighsStatus.kError else "error"
         has_point = info.primal_solution_status == 2
         sol = h.getSolution()
@@ -485,6 +510,6 @@ def _interrupt(
     data_in: cb.HighsCallbackInput,
     deadline: Any,
 ) -> None:
-    """HiGHS's interrupt callback: stop once the wall clock passes the run's deadline (``deadline[0]``)."""
-    if data_in is not None and time.perf_counter() > deadline[0]:
+    """HiGHS's interrupt callback: stop once the wall clock passes the solve's guard (``deadline[0]``)."""
+    if data_in is not None and wall() > deadline[0]:
         data_in.user_interrupt = True

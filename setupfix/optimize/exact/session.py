@@ -18,7 +18,6 @@ budget ``t(k) = min_j m_j(k)`` (f1, eq. 8), norm ``f(k) = Σ c_i k_i²`` (f2, eq
 from __future__ import annotations
 
 import threading
-import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import TypeVar, cast
@@ -38,6 +37,7 @@ from setupfix.optimize.exact.grid import (
 from setupfix.optimize.exact.highs import INF, Colwise, LinearModel, Solve
 from setupfix.optimize.exact.least_norm.shop import least_distance_working_set
 from setupfix.optimize.exact.settings import ExactSettings
+from setupfix.optimize.exact.work import CURRENT, Meter, wall
 
 __all__ = ["DERIVED", "Clock", "Derived", "GridRows", "Relaxation", "Session", "derived"]
 
@@ -45,19 +45,38 @@ Array = npt.NDArray[np.float64]
 
 
 class Clock:
-    """Deadline of one solve [``time.perf_counter()`` seconds] and the wall time spent per stage."""
+    """Work budget of one solve [work units, :mod:`setupfix.optimize.exact.work`] and the wall time
+    spent per stage (a record only: no stage reads it).
 
-    def __init__(self, limit: float) -> None:
-        self.start = time.perf_counter()
+    ``start`` and ``deadline`` are readings of :func:`~setupfix.optimize.exact.work.now` (work spent by
+    this solve), so a stage's end depends on the work done, never on the machine's load.  The clock
+    makes its :class:`~setupfix.optimize.exact.work.Meter` the current one; ``guard`` [s] is the
+    wall-clock limit against a hang (inf: none), ``node_work`` what a MIP node counts.
+    """
+
+    def __init__(self, limit: float, guard: float = float("inf"), node_work: float = 50.0) -> None:
+        self.wall_start = wall()
+        self.meter = Meter(node_work=node_work, guard=self.wall_start + guard)
+        CURRENT.set(self.meter)
+        self.start = 0.0
         self.deadline = self.start + limit
         self.stages: dict[str, float] = {}
-        self._mark = self.start
+        self._mark = self.wall_start
+
+    def now(self) -> float:
+        """Work spent so far (+inf once the wall-clock guard fired)."""
+        return self.meter.now()
 
     def left(self) -> float:
-        return self.deadline - time.perf_counter()
+        return self.deadline - self.meter.now()
+
+    @property
+    def fired(self) -> bool:
+        """The wall-clock guard stopped the solve."""
+        return self.meter.check_guard()
 
     def lap(self, stage: str) -> None:
-        now = time.perf_counter()
+        now = wall()
         self.stages[stage] = self.stages.get(stage, 0.0) + now - self._mark
         self._mark = now
 
@@ -243,17 +262,19 @@ class Session:
     ----------
     rows : GridRows
     settings : ExactSettings
-    time_limit : float
-        Seconds for the whole solve.
+    time_limit : float, optional
+        Work units for the whole solve (default ``settings.work_limit``; the stages' shares are of it).
     clock : Clock, optional
-        The solve's clock, if started earlier (default: it starts now).
+        The solve's clock, if started earlier (default: it starts now, with no wall-clock guard).
     """
 
-    def __init__(self, rows: GridRows, settings: ExactSettings, time_limit: float, clock: Clock | None = None) -> None:
+    def __init__(
+        self, rows: GridRows, settings: ExactSettings, time_limit: float | None = None, clock: Clock | None = None
+    ) -> None:
         self.rows = rows
         self.settings = settings
-        self.time_limit = time_limit
-        self.clock = Clock(time_limit) if clock is None else clock
+        self.time_limit = settings.work_limit if time_limit is None else time_limit
+        self.clock = Clock(self.time_limit, node_work=settings.node_work) if clock is None else clock
         self._lp: LinearModel | None = None
         self._qp: LinearModel | None = None
 

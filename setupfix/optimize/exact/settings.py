@@ -1,4 +1,4 @@
-"""Settings of the exact optimiser: which proof is tried, how much it may list, how time is shared.
+"""Settings of the exact optimiser: which proof is tried, how much it may list, how work is shared.
 
 One frozen, validated :class:`ExactSettings` replaces the module constants the solver
 used to read; an :class:`~setupfix.optimize.exact.solve.ExactOptimizer` takes one
@@ -8,7 +8,10 @@ proved optimal — only which proof gets there and how fast; the defaults are th
 measured ones (``bench/exact_per_report.py``, ``bench/exact_scaling.py``).
 
 Units: counts are points, array elements, registers, rows or chords; shares are
-fractions of a time in (0, 1]; ``quantum`` is a fraction of the register resolution.
+fractions of the work budget in (0, 1]; ``quantum`` is a fraction of the register resolution.
+The budget is work, not time (:mod:`setupfix.optimize.exact.work`): which stage ends, and where,
+never depends on the machine's load; the wall-clock ``time_limit`` of the optimiser only guards
+against a hang.
 """
 
 from __future__ import annotations
@@ -32,6 +35,13 @@ class ExactSettings:
 
     Attributes
     ----------
+    work_limit : float
+        Work units the whole solve may spend [HiGHS simplex/IPM/QP iterations; a MIP node counts
+        ``node_work``]: the stages' shares (every ``*_share`` below, ``descent_reserve``) are of it.
+        Generous: every bundled sample finishes on its proved optimum well within it
+        (``bench/work_limits.py``).
+    node_work : float
+        Work units one branch-and-bound node counts (HiGHS's node limit is the allowance / this).
     quantum : float
         Deviations are rounded to this fraction of the register resolution before solving
         (1e-3: 1 nm on a 0.001 mm grid), so the answer does not depend on their last bits.
@@ -50,12 +60,12 @@ class ExactSettings:
     working_set_nnls : bool
         Larger problems: NNLS on a working set of rows (False: HiGHS's QP solver at once).
     box_share, stopped_box_share : float
-        Share of the time left that each box MILP around the rounded continuous point may
+        Share of the work left that each box MILP around the rounded continuous point may
         use in the least-norm stage (the second when the grid-optimum stage was stopped).
     incumbent_gap : float
         Relative gap at which those box MILPs stop (they look for an incumbent).
     descent_reserve : float
-        Share of the whole time limit kept back for coordinate descent when a least-norm
+        Share of the whole work limit kept back for coordinate descent when a least-norm
         proof stops at the limit.
     search_limit, search_work : int
         Limits of the grid-optimum stage's listing of the ellipsoids around the rounded
@@ -64,13 +74,13 @@ class ExactSettings:
         An LP with more rows than this is solved by HiGHS's interior-point method (with
         crossover: the duals are a basis').
     milp_share : float
-        Share of the grid-optimum stage's time that one feasibility MILP may use.
+        Share of the grid-optimum stage's work that one feasibility MILP may use.
     leximin_norm_share : float
-        Share of the whole time limit kept for the least-norm stage after the leximin levels
+        Share of the whole work limit kept for the least-norm stage after the leximin levels
         (smaller than ``least_norm_share``: with every dimension at its floor the least norm is
         confined to a small region and usually listed at once).
     least_norm_share : float
-        Share of the whole time limit kept for the least-norm stage.
+        Share of the whole work limit kept for the least-norm stage.
     level_steps : int
         Levels the grid-optimum stage may descend by rounded rows before the bracketed MILP.
     network_lp : bool
@@ -94,15 +104,17 @@ class ExactSettings:
     forced_triage : bool
         The triage first tries the forced kept set before its MILPs (False: the MILPs decide).
     forced_share : float
-        Share of the time left that proving the kept set forced may take.
+        Share of the work left that proving the kept set forced may take.
     triage_leximin_share : float
-        Share of the whole time limit the triage's leximin levels after the first may take (never
-        the time reserved for the least norm; 0: level 1 only).
+        Share of the whole work limit the triage's leximin levels after the first may take (never
+        the work reserved for the least norm; 0: level 1 only).
     link_count_blocks : bool
         The leximin count MILPs link their nested blocks' binaries (w_i,q ≤ w_(i−1),q;
         ``bench/leximin_counts.py`` compares without).
     """
 
+    work_limit: float = 500_000.0
+    node_work: float = 50.0
     quantum: float = 1e-3
     ellipsoid_max_registers: int = 120
     enumeration_limit: int = 20_000
@@ -135,6 +147,8 @@ class ExactSettings:
     link_count_blocks: bool = True
 
     _constraints: ClassVar[dict[str, list[Constraint]]] = {
+        "work_limit": [Interval(float, 0.0, None, closed="neither")],
+        "node_work": [Interval(float, 0.0, None, closed="neither")],
         "quantum": [Interval(float, 0.0, 1.0, closed="right")],
         "ellipsoid_max_registers": _COUNT,
         "enumeration_limit": _COUNT,

@@ -1,9 +1,15 @@
-"""The exact optimiser: the stages of the package docstring run in order, within one time limit."""
+"""The exact optimiser: the stages of the package docstring run in order, within one work budget.
+
+The budget is work (``ExactSettings.work_limit``, :mod:`setupfix.optimize.exact.work`): a stage stopped
+by it gives the same answer under any load (``stopped.reason`` "work limit").  The wall-clock
+``time_limit`` only guards against a hang: when it fires, the solve recommends **no correction**
+(x = 0, status ``time_limit``, ``stopped.reason`` "time limit"), never a different one.
+"""
 
 from __future__ import annotations
 
-import time
 from contextlib import AbstractContextManager
+from dataclasses import replace
 from typing import ClassVar
 
 import numpy as np
@@ -24,6 +30,7 @@ from setupfix.optimize.exact.lp_bound import LPBound, lp_bound, margin_rows, row
 from setupfix.optimize.exact.session import Clock, GridRows, Session
 from setupfix.optimize.exact.settings import ExactSettings
 from setupfix.optimize.exact.triage.solve import triaged_result
+from setupfix.optimize.exact.work import CURRENT, wall
 from setupfix.optimize.problem import CorrectionProblem, OptimizeResult, Status, Stopped
 
 __all__ = ["ExactOptimizer", "ExactSettings", "margin_rows"]
@@ -31,8 +38,62 @@ __all__ = ["ExactOptimizer", "ExactSettings", "margin_rows"]
 Array = npt.NDArray[np.float64]
 
 _CONTROLLER: ThreadpoolController | None = None
+#: The wall-clock guard of a solve by default [s]: far above any bundled sample's solve (a hang guard).
+DEFAULT_TIME_LIMIT = 60.0
 #: The settings an optimiser gets by default (frozen: shared safely).
 DEFAULT_SETTINGS = ExactSettings()
+
+
+def _work_words(text: str) -> str:
+    return text.replace("time limit", "work limit")
+
+
+def guarded(
+    problem: CorrectionProblem, result: OptimizeResult, clock: Clock, time_limit: float, optimizer: str
+) -> OptimizeResult:
+    """The result as the wall-clock guard and the work budget make it.
+
+    Guard fired (``clock.fired``: the solve ran past ``time_limit`` seconds): **no correction**,
+    status ``time_limit``, ``stopped`` naming the stage that was running (a hang guard must never
+    turn into a different correction).  Otherwise a stage stopped at its limit was stopped by the
+    work budget, the same under any load: its words say "work limit".
+    """
+    if clock.fired:
+        stage = result.stopped.stage if result.stopped is not None else (list(clock.stages) or ["lp bound"])[-1]
+        text = (
+            f"the {stage} stage was not proved within the time limit ({time_limit:g} s, the wall-clock guard "
+            "against a hang): no correction is recommended (this is not 'no change needed'); allow more time "
+            "(--time-limit)"
+        )
+        return make_result(
+            problem,
+            np.zeros(problem.n_registers),
+            optimizer=optimizer,
+            evaluations=result.evaluations,
+            seconds=result.seconds,
+            status="time_limit",
+            bound=result.bound,
+            message=text,
+            guard=False,
+            notes=(Note(text, kind="solver"),),
+            stopped=Stopped(stage, "time limit"),
+            path=result.path,
+            stages=result.stages,
+        )
+    stopped = result.stopped
+    if stopped is None or "time limit" not in (stopped.reason + (stopped.detail or "")):
+        return result
+    return replace(
+        result,
+        stopped=replace(
+            stopped,
+            reason=_work_words(stopped.reason),
+            detail=None if stopped.detail is None else _work_words(stopped.detail),
+        ),
+        message=None if result.message is None else _work_words(result.message),
+        notes=tuple(replace(n, message=_work_words(n.message)) if n.kind == "solver" else n for n in result.notes),
+        path=_work_words(result.path),
+    )
 
 
 def _blas_single_thread() -> AbstractContextManager[object]:
@@ -52,9 +113,10 @@ class ExactOptimizer(Optimizer):
     grid : bool, default=True
         Solve on the register grid.  False returns the continuous LP optimum with
         the least weighted Euclidean norm (not on the grid).
-    time_limit : float, default=2.0
-        Seconds of wall time for the whole solve; when a stage hits it, the best
-        point found is used and the result says which stage stopped.
+    time_limit : float, default=60.0
+        Seconds of wall time after which the solve is stopped as hung (a guard only: the stages
+        share the work budget ``settings.work_limit``, never the wall clock).  When it fires, no
+        correction is given (x = 0, status ``time_limit``; ``stopped`` names the stage).
     seed : int, optional
         Accepted for interface symmetry; the solver is deterministic.
     settings : ExactSettings, optional
@@ -81,7 +143,7 @@ class ExactOptimizer(Optimizer):
         self,
         *,
         grid: bool = True,
-        time_limit: float = 2.0,
+        time_limit: float = DEFAULT_TIME_LIMIT,
         seed: int | None = None,
         settings: ExactSettings = DEFAULT_SETTINGS,
         objective: str = "leximin",
@@ -97,12 +159,17 @@ class ExactOptimizer(Optimizer):
         # starts: the first solve of a process would otherwise spend ~0.1 s of its time limit on it.
         import scipy.optimize  # noqa: F401 - loaded for grid.nnls_least_distance, outside the clock
 
-        with _blas_single_thread():  # small solves: BLAS threads only contend
-            return self._solve(problem)
+        token = CURRENT.set(None)  # this solve's own meter (the clock sets it), dropped at its end
+        try:
+            with _blas_single_thread():  # small solves: BLAS threads only contend
+                clock = Clock(self.settings.work_limit, self.time_limit, self.settings.node_work)
+                result = self._solve(problem, clock)
+                return replace(guarded(problem, result, clock, self.time_limit, self.name), work=clock.meter.spent)
+        finally:
+            CURRENT.reset(token)
 
-    def _solve(self, problem: CorrectionProblem) -> OptimizeResult:
-        clock = Clock(self.time_limit)
-        start = clock.start
+    def _solve(self, problem: CorrectionProblem, clock: Clock) -> OptimizeResult:
+        start = clock.wall_start
         free = problem.free
         x = np.zeros(problem.n_registers)
         g_rows, g = margin_rows(problem, self.settings.quantum)
@@ -112,7 +179,7 @@ class ExactOptimizer(Optimizer):
                 x,
                 optimizer=self.name,
                 evaluations=0,
-                seconds=time.perf_counter() - start,
+                seconds=wall() - start,
                 status="optimal",
                 bound=problem.margin_before,
                 message="nothing can be corrected: every register is fixed or no limit applies",
@@ -120,24 +187,26 @@ class ExactOptimizer(Optimizer):
         rows = GridRows(
             g_rows, g, problem.kmin[free].astype(float), problem.kmax[free].astype(float), problem.cost[free]
         )
-        session = Session(rows, self.settings, self.time_limit, clock)
+        session = Session(rows, self.settings, self.settings.work_limit, clock)
         lp = lp_bound(session)
         if lp is None:  # not even the LP bound within the limit: no correction, and says so
             text = (
                 f"the LP bound was not proved within the time limit ({self.time_limit:g} s): no correction "
                 "is recommended; allow more time (--time-limit)"
+                if clock.fired
+                else "the LP bound was not proved within the work limit: no correction is recommended"
             )
             return make_result(
                 problem,
                 x,
                 optimizer=self.name,
                 evaluations=1,
-                seconds=time.perf_counter() - start,
+                seconds=wall() - start,
                 status="time_limit",
                 message=text,
                 notes=(Note(text, kind="solver"),),
-                stopped=Stopped("lp bound", "time limit"),
-                path="lp bound: time limit",
+                stopped=Stopped("lp bound", "time limit" if clock.fired else "work limit"),
+                path="lp bound: time limit" if clock.fired else "lp bound: work limit",
             )
         binding = rows_to_dimensions(problem, lp.y > 1e-9)
         bound = lp.t * problem.resolution
@@ -151,7 +220,7 @@ class ExactOptimizer(Optimizer):
                 x,
                 optimizer=self.name,
                 evaluations=2,
-                seconds=time.perf_counter() - start,
+                seconds=wall() - start,
                 status="optimal",
                 bound=bound,
                 binding=binding,
@@ -200,7 +269,7 @@ class ExactOptimizer(Optimizer):
         how many there are; ``k_climb``: the levels' first climb where the grid-optimum stage ran it and
         took its point."""
         row_dim, n_dims = dims
-        stage_end = session.clock.deadline - self.settings.leximin_norm_share * self.time_limit
+        stage_end = session.clock.deadline - self.settings.leximin_norm_share * session.time_limit
         lex = leximin(
             session,
             row_dim,
@@ -260,7 +329,7 @@ class ExactOptimizer(Optimizer):
         message: str | None = None
         ratio: float | None = None
         if stopped is not None:
-            status = "time_limit" if stopped.reason == "time limit" else "solver_error"
+            status = "time_limit" if stopped.reason in ("time limit", "work limit") else "solver_error"
             if stopped.stage == "leximin":
                 message = (
                     f"paper's optimum proved, leximin levels not all proved ({stopped.reason} in the "
@@ -290,7 +359,7 @@ class ExactOptimizer(Optimizer):
             x,
             optimizer=self.name,
             evaluations=calls,
-            seconds=time.perf_counter() - session.clock.start,
+            seconds=wall() - session.clock.wall_start,
             status=status,
             bound=bound,
             message=message,

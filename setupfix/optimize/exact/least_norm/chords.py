@@ -17,7 +17,6 @@ Lagrangian box or the whole box) and the triage's third MILP
 
 from __future__ import annotations
 
-import time
 from collections.abc import Callable
 from dataclasses import dataclass
 
@@ -26,6 +25,7 @@ import numpy.typing as npt
 from scipy.sparse import coo_array, csr_array
 
 from setupfix.optimize.exact.highs import INF, LinearModel
+from setupfix.optimize.exact.work import now
 
 __all__ = ["ROOT_LP_MULTIPLE", "ChordProof", "chord_rows", "lazy_chords", "smallest_tie"]
 
@@ -122,7 +122,7 @@ def lazy_chords(
     start : callable
         The model's full start vector for a grid point k (k, k², any other columns).
     deadline : float
-        ``time.perf_counter()`` value at which to stop.
+        ``now()`` value at which to stop.
     integer : bool
         The model is a MILP already.  False: solve it as an LP first — when its vertex is
         integral with every s_i = k_i², that vertex is the optimum (the usual case when G is
@@ -134,13 +134,13 @@ def lazy_chords(
     lp_seconds = 0.0
     width = model.n_cols
     while True:
-        left = deadline - time.perf_counter()
+        left = deadline - now()
         if left <= 0 or (integer and left < ROOT_LP_MULTIPLE * lp_seconds):
             return ChordProof(best, False, "time limit", lower)
-        started = time.perf_counter()
+        started = now()
         res = model.solve(left, None if best is None else start(best))
         if not integer:
-            lp_seconds = max(lp_seconds, time.perf_counter() - started)
+            lp_seconds = max(lp_seconds, now() - started)
         bound_k = res.dual_bound if integer else (res.objective if res.status == "optimal" else np.nan)
         if np.isfinite(bound_k):
             lower = max(lower, float(bound_k))
@@ -210,7 +210,7 @@ def smallest_tie(
         objective[i] = 1.0
         model.set_costs(cols, objective)
         while True:
-            left = deadline - time.perf_counter()
+            left = deadline - now()
             if left <= 0:
                 return cur, False
             res = model.solve(left, start(cur))

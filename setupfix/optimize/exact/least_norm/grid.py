@@ -29,7 +29,6 @@ the path says the tie is not broken.
 
 from __future__ import annotations
 
-import time
 from dataclasses import dataclass
 
 import numpy as np
@@ -45,6 +44,7 @@ from setupfix.optimize.exact.least_norm.shop import (
     network_rows,
 )
 from setupfix.optimize.exact.session import Relaxation, Session
+from setupfix.optimize.exact.work import now
 
 __all__ = ["TIE_MAX_REGISTERS", "TIE_WORK", "LeastNorm", "chord_proof", "grid_least_norm"]
 
@@ -106,7 +106,7 @@ def chord_proof(
     It runs for at most ``time_limit`` s.
     """
     rows = session.rows
-    deadline = min(session.clock.deadline, time.perf_counter() + max(time_limit, 0.0))
+    deadline = min(session.clock.deadline, now() + max(time_limit, 0.0))
     return chord_least_norm(rows.g_rows, rows.g, t_star, b, lo, hi, rows.cost, best, k_cont, deadline, proof)
 
 
@@ -144,7 +144,7 @@ def _good_incumbent(session: Session, t_star: float, b: Array, best: Array, rela
                     best = k
             else:
                 hi = mid
-    return descend(rows.g_rows, b, best, rows.cost, time.perf_counter() + 0.03 * max(session.clock.left(), 0.0))
+    return descend(rows.g_rows, b, best, rows.cost, now() + 0.03 * max(session.clock.left(), 0.0))
 
 
 def _smallest_tie(
@@ -221,7 +221,7 @@ def grid_least_norm(
 
     def finish(best: Array, proved: bool, why: str, lower: float) -> LeastNorm:
         if not proved:  # coordinate descent on the best point (the norm never grows)
-            best = descend(g_rows, b, best, cost, time.perf_counter() + max(clock.left(), 0.0) + reserve / 2)
+            best = descend(g_rows, b, best, cost, now() + max(clock.left(), 0.0) + reserve / 2)
         return LeastNorm(best, proved, why, lower, tuple(path))
 
     def proven(best: Array) -> LeastNorm:  # the least norm is proved: ties to the smallest correction

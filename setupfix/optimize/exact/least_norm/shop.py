@@ -36,8 +36,6 @@ The pieces, each with what proves it:
 
 from __future__ import annotations
 
-import time
-
 import numpy as np
 import numpy.typing as npt
 from scipy.sparse import coo_array, csr_array, hstack, vstack
@@ -46,6 +44,7 @@ from scipy.sparse.csgraph import connected_components
 from setupfix.optimize.exact.grid import TOL, grid_margins, nnls_least_distance
 from setupfix.optimize.exact.highs import INF, LinearModel, Solve
 from setupfix.optimize.exact.least_norm.chords import chord_rows, lazy_chords
+from setupfix.optimize.exact.work import now
 
 __all__ = [
     "box_least_norm",
@@ -84,7 +83,7 @@ def least_distance_working_set(
     g_rows : ndarray of shape (r, n); b : ndarray of shape (r,) (+inf: no row)
     kmin, kmax, cost : ndarray of shape (n,)
     deadline : float
-        ``time.perf_counter()`` value after which the answer is ``"unknown"``.
+        ``now()`` value after which the answer is ``"unknown"``.
     add : int
         Most rows added per round.
 
@@ -128,7 +127,7 @@ def least_distance_working_set(
             lam = np.zeros(r + 2 * n)
             lam[work] = u
             return "optimal", (k, lam[:r], lam[r + n :], lam[r : r + n])
-        if time.perf_counter() > deadline:
+        if now() > deadline:
             return "unknown", None
         new = new[np.argsort(-viol[new], kind="stable")[:add]]
         work = np.r_[work, new]
@@ -261,7 +260,7 @@ def descend(g_rows: Array, b: Array, k: Array, cost: Array, deadline: float) -> 
 
     Each move takes the coordinate whose best feasible value (the integer nearest 0 in
     its range with every other coordinate fixed) lowers the norm most; it stops when
-    no move helps or at ``deadline`` (``time.perf_counter()``).
+    no move helps or at ``deadline`` (``now()``).
 
     Parameters
     ----------
@@ -278,7 +277,7 @@ def descend(g_rows: Array, b: Array, k: Array, cost: Array, deadline: float) -> 
     slack = np.maximum(slack, 0.0)
     pos, neg = rows > 0, rows < 0
     with np.errstate(divide="ignore", invalid="ignore"):
-        while time.perf_counter() < deadline:
+        while now() < deadline:
             ratio = slack[:, None] / rows  # a move by δ on column i needs δ·G_ji ≤ slack_j
             up = np.floor(np.min(np.where(pos, ratio, np.inf), axis=0) + 1e-9)
             down = np.ceil(np.max(np.where(neg, ratio, -np.inf), axis=0) - 1e-9)
@@ -324,7 +323,7 @@ def chord_least_norm(
     case when G is a network-like matrix of ±1 relations.  Otherwise the same model
     as a MILP, started from ``best``.  Chords are added where a solution violates
     s_i ≥ k_i² (:func:`~setupfix.optimize.exact.least_norm.chords.lazy_chords`).  Stops at ``deadline``
-    (``time.perf_counter()``).
+    (``now()``).
 
     Parameters
     ----------

@@ -24,7 +24,6 @@ has 208 binaries instead of 1,965 (``bench/results/leximin_shop_trace.txt``).
 
 from __future__ import annotations
 
-import time
 from dataclasses import dataclass
 
 import numpy as np
@@ -36,6 +35,7 @@ from setupfix.optimize.exact.highs import INF, LinearModel, Solve
 from setupfix.optimize.exact.least_norm.chords import chord_rows, lazy_chords
 from setupfix.optimize.exact.least_norm.grid import LeastNorm
 from setupfix.optimize.exact.session import Session
+from setupfix.optimize.exact.work import now
 
 __all__ = ["CountLayout", "CountLevels", "CountRows", "CountRuns", "count_least_norm", "count_levels", "count_model"]
 
@@ -90,12 +90,12 @@ class CountRuns:
 
     def room(self) -> bool:
         """Whether more time than the longest run so far is left before the stage's end."""
-        return self.stage_end - time.perf_counter() > self.longest
+        return self.stage_end - now() > self.longest
 
     def solve(self, model: LinearModel) -> Solve:
-        began = time.perf_counter()
+        began = now()
         res = model.solve(self.stage_end - began)
-        self.longest = max(self.longest, time.perf_counter() - began)
+        self.longest = max(self.longest, now() - began)
         self.calls += 1
         return res
 
@@ -320,13 +320,13 @@ def count_least_norm(session: Session, row_dim: npt.NDArray[np.intp], counts: Co
     blocks = list(counts.blocks)
     if not rows.feasible(k, blocks):
         return LeastNorm(k, False, "no feasible start", 0.0, ("least norm: no feasible start",))
-    if session.clock.deadline - time.perf_counter() <= counts.longest:  # it would not end in time (:class:`CountRuns`)
+    if session.clock.deadline - now() <= counts.longest:  # it would not end in time (:class:`CountRuns`)
         return LeastNorm(
             k,
             False,
             "time limit",
             0.0,
-            (f"least norm: less time left than a count MILP took ({counts.longest:.2f} s): the counts' point",),
+            (f"least norm: less work left than a count MILP took ({counts.longest:.0f} units): the counts' point",),
         )
     top = float(np.max(rows.g[rows.act] - rows.lo_box[rows.act])) + 1.0 if rows.n_active else 0.0
     model, layout = count_model(rows, blocks[:-1], n, blocks[-1] if blocks else (counts.t0, 0), "norm", top, 0.0)

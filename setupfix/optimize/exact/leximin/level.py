@@ -23,7 +23,6 @@ bounds change from level to level, :attr:`LevelModel._lp`).
 
 from __future__ import annotations
 
-import time
 from dataclasses import dataclass
 
 import numpy as np
@@ -34,6 +33,7 @@ from setupfix.optimize.exact.grid import TOL, rounded_rhs
 from setupfix.optimize.exact.highs import INF, LinearModel
 from setupfix.optimize.exact.leximin.pins import Certificates, LevelStep, best_rounding, level_bound, point_above
 from setupfix.optimize.exact.session import GridRows, Session
+from setupfix.optimize.exact.work import now
 
 __all__ = ["SPREAD", "LevelModel", "LevelValue"]
 
@@ -196,7 +196,7 @@ class LevelModel:
         last: Array | None = None  # the last LP's point (k part)
         t = self.level_of(k, v)
         for _ in range(tries):
-            if time.perf_counter() >= stage_end:
+            if now() >= stage_end:
                 return LevelStep(t, k, False, None, "time limit", calls)
             b = self.rounded(v, t)
             b_up = self.rounded(v, t + eps)
@@ -218,12 +218,12 @@ class LevelModel:
                         k, t = k_r, t_r
                         continue
             if unrounded:  # a point of the level LP (unrounded rows): usually at the level or next to it
-                status, x, y = self._solve(self.rhs(v), v, stage_end - time.perf_counter(), SPREAD)
+                status, x, y = self._solve(self.rhs(v), v, stage_end - now(), SPREAD)
                 unrounded = False
             else:
                 gap = float(np.min(rows.d[drop]))
                 rhs = np.where(act & ~drop, b + gap, b)
-                status, x, y = self._solve(rhs, v, stage_end - time.perf_counter(), SPREAD)
+                status, x, y = self._solve(rhs, v, stage_end - now(), SPREAD)
                 if not small and status == "optimal" and x is not None and y is not None:
                     y = np.where(np.isfinite(rhs), y, 0.0)
                     rhs0 = np.where(np.isfinite(rhs), rhs, 0.0)
@@ -259,7 +259,7 @@ class LevelModel:
         # with integer rows a step proves the level, so the LP may also spread the active margins (a
         # point for the next levels as well); its bound is then the weights' (weak duality), not its t
         spread = SPREAD if rows.all_integer else 0.0
-        status, x, y = self._solve(self.rhs(v), v, stage_end - time.perf_counter(), spread)
+        status, x, y = self._solve(self.rhs(v), v, stage_end - now(), spread)
         if status != "optimal" or x is None or y is None:
             reason = "time limit" if status == "time_limit" else status
             return LevelValue(self.level_of(k_prev, v), k_prev, np.inf, None, reason, (), 1)
@@ -287,7 +287,7 @@ class LevelModel:
         # be a feasibility MILP rising by a little; the level MILP is one
         f = self._floors(v)
         for _ in range(0 if self.polygons and not rows.all_integer else s.level_steps):
-            if time.perf_counter() >= stage_end:
+            if now() >= stage_end:
                 return LevelValue(t_best, k_best, t_lp, y, "time limit", tuple(path), calls)
             found = point_above(self.session, np.where(np.isnan(f), t_best + eps, f), stage_end)
             calls += 1
@@ -329,12 +329,12 @@ class LevelModel:
             np.r_[rows.kmax, upper],
             integer=np.r_[np.ones(n, bool), False],
         )
-        res = model.solve(stage_end - time.perf_counter(), np.r_[k_best, t_best])
+        res = model.solve(stage_end - now(), np.r_[k_best, t_best])
         calls += 1
         if res.x is not None and self.level_of(np.clip(np.rint(res.x[:-1]), rows.kmin, rows.kmax), v) < (
             -res.objective - 1e-6
         ):  # HiGHS 1.16 handed back the start with the optimum's objective
-            res = model.solve(stage_end - time.perf_counter())
+            res = model.solve(stage_end - now())
             calls += 1
         path.append(f"leximin: level MILP ({res.status})")
         if res.x is not None:
@@ -382,7 +382,7 @@ class LevelModel:
     def certify_rounded(self, level: LevelValue, v: Array, stage_end: float) -> Certificates:
         """max s s.t. G_j k + s ≤ b_j (active), G_j k ≤ b_j (fixed), b rounded at t: its weights pin rows."""
         b = self.rounded(v, level.t)
-        status, _, y = self._solve(b, v, stage_end - time.perf_counter())
+        status, _, y = self._solve(b, v, stage_end - now())
         certs: tuple[tuple[Array, Array, Array, bool], ...] = ()
         if status == "optimal" and y is not None:
             y = np.where(np.isfinite(b), y, 0.0)

@@ -52,7 +52,6 @@ M_q ≥ v_q for every q, and the least norm among them is stage 3
 from __future__ import annotations
 
 import functools
-import time
 
 import numpy as np
 import numpy.typing as npt
@@ -63,6 +62,7 @@ from setupfix.optimize.exact.leximin.pins import dim_all, dim_margins, excluded_
 from setupfix.optimize.exact.leximin.result import Leximin, levels_of, leximin_least_norm, leximin_vector
 from setupfix.optimize.exact.leximin.search import climb, climb_moves, lex_order
 from setupfix.optimize.exact.session import Session
+from setupfix.optimize.exact.work import now
 from setupfix.optimize.problem import Stopped
 
 __all__ = ["Leximin", "LevelSearch", "alone_sets", "leximin", "leximin_least_norm", "raise_level", "root_climb"]
@@ -139,7 +139,7 @@ def leximin(
         Dimensions fixed before (finite floor v_q; NaN: active).  A caller that keeps a subset
         (the triage) passes floors for it and −inf for dimensions it leaves out.
     stage_end : float, optional
-        ``time.perf_counter()`` at which the levels stop (default: the solve's deadline).
+        ``now()`` at which the levels stop (default: the solve's deadline).
     k_climb : ndarray of shape (n,), optional
         The root's grid climb, when the caller climbed first (:func:`root_climb`).
 
@@ -216,7 +216,7 @@ def _fill(
         if not active.any():
             break
         active_rows = active[row_dim]
-        if time.perf_counter() >= search.stage_end:
+        if now() >= search.stage_end:
             return [_stopped(search, v, k, path, "time limit")]
         if level is None and search.climb:  # the branch's climb (once): where higher, each level starts there
             k_climb = search.climbed(k, v) if k_climb is None else k_climb

@@ -26,7 +26,6 @@ with a point checked on the rows or a proof that none exists.
 
 from __future__ import annotations
 
-import time
 from dataclasses import dataclass
 
 import numpy as np
@@ -37,6 +36,7 @@ from setupfix.optimize.exact.grid import TOL, rounded_rhs
 from setupfix.optimize.exact.highs import INF, LinearModel
 from setupfix.optimize.exact.leximin.search import group_min
 from setupfix.optimize.exact.session import GridRows, Session
+from setupfix.optimize.exact.work import charge, now
 
 __all__ = [
     "Certificates",
@@ -152,6 +152,7 @@ def span_closure(g_rows: Array, d: Array, pinned: Mask, key: Array) -> Mask:
     if not base.any():
         return pinned.copy()
     p = g_rows[base]
+    charge(p.shape[0] * p.shape[1] * min(p.shape) / 1e4)  # the SVD's work (work units, not time)
     sq = np.sort(np.einsum("ij,ij->i", p, p))[::-1]
     _, s, vt = np.linalg.svd(p, full_matrices=False)
     rank = int(np.sum(s > 1e-9 * s[0]))
@@ -163,6 +164,7 @@ def span_closure(g_rows: Array, d: Array, pinned: Mask, key: Array) -> Mask:
         out[cand] = np.einsum("ij,ij->i", rest, rest) < 0.25 / _HADAMARD_MAX
         return out | pinned
     out = pinned.copy()  # equal or opposite rows only (checked, not only keyed)
+    charge(int(base.sum()) * g_rows.shape[0] / 50)
     for j in np.flatnonzero(base):
         idx = np.flatnonzero(integer & ~out & (np.abs(key) == abs(key[j])))
         same = np.all(g_rows[idx] == g_rows[j], axis=1) | np.all(g_rows[idx] == -g_rows[j], axis=1)
@@ -215,6 +217,7 @@ def best_rounding(
         )
         cand[:, frac] = np.minimum(np.maximum(lo[frac] + bits, kmin[frac]), kmax[frac])
     fixed = ~np.isnan(floors)
+    charge(cand.shape[0] * rows.g_rows.size / 1e4)
     m = rows.g - cand @ rows.g_rows.T
     level = np.where(fixed, np.inf, m).min(axis=1)
     with np.errstate(invalid="ignore"):  # NaN floors (active rows) compare False
@@ -345,7 +348,7 @@ def point_above(session: Session, f: Array, stage_end: float) -> Array | bool | 
     them: none meets all, in ~0.6 ms where the MILP of all rows takes ~6 ms on the paper's example,
     ``bench/results/point_tests.txt``; a point of theirs that meets every row is one), then of all rows.
     """
-    if time.perf_counter() >= stage_end:  # the stage's share is spent: no test starts (a loop of them stops)
+    if now() >= stage_end:  # the stage's share is spent: no test starts (a loop of them stops)
         return None
     rows = session.rows
     n = rows.n_free
@@ -366,7 +369,7 @@ def point_above(session: Session, f: Array, stage_end: float) -> Array | bool | 
                 return k_met
     kx = None
     if rows.all_integer:
-        feas, kx = session.rounded_rows_feasible(b, stage_end - time.perf_counter(), warm=True)
+        feas, kx = session.rounded_rows_feasible(b, stage_end - now(), warm=True)
         if feas == "infeasible":
             return False
         if feas != "optimal":
@@ -386,12 +389,12 @@ def point_above(session: Session, f: Array, stage_end: float) -> Array | bool | 
             rows.kmin,
             rows.kmax,
             integer=np.ones(n, bool),
-        ).solve(stage_end - time.perf_counter())
+        ).solve(stage_end - now())
         if res.status == "infeasible":
             return False
         k_mip = None if res.x is None else np.clip(np.rint(res.x), rows.kmin, rows.kmax)
         if k_mip is not None and meets(k_mip):
             return k_mip
-        if res.status == "time_limit" or time.perf_counter() >= stage_end:
+        if res.status == "time_limit" or now() >= stage_end:
             return None
     return None

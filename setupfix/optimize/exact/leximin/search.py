@@ -21,10 +21,10 @@ over grouped rows with ties within ε, evaluated for a whole neighbourhood at on
 
 from __future__ import annotations
 
-import time
-
 import numpy as np
 import numpy.typing as npt
+
+from setupfix.optimize.exact.work import now
 
 __all__ = ["SCALES", "Moves", "climb", "climb_moves", "group_min", "lex_order", "two_rows_each"]
 
@@ -136,7 +136,7 @@ def climb(
     eps : float
         Margins within ε are ties [steps].
     deadline : float, optional
-        ``time.perf_counter()`` at which the climb stops where it is (the solve's limit).
+        ``now()`` at which the climb stops where it is (the solve's limit).
     moves : tuple of ndarray, optional
         :func:`climb_moves` of (g_rows, order), when the caller keeps them (one model, many reports).
     scales : tuple of float, optional
@@ -159,7 +159,7 @@ def climb(
     for s in scales:
         moved = True
         scaled = ((single, s * d_single), (double, s * d_double))
-        while moved and time.perf_counter() < deadline:
+        while moved and now() < deadline:
             moved = False
             for dirs, d_rows in scaled:
                 m = m_k - d_rows

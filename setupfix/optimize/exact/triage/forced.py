@@ -28,7 +28,6 @@ repeated until K's LP bound is ≥ 0 or no probed candidate is lost.
 
 from __future__ import annotations
 
-import time
 from dataclasses import dataclass
 
 import numpy as np
@@ -44,6 +43,7 @@ from setupfix.optimize.exact.leximin.levels import Leximin, leximin, leximin_lea
 from setupfix.optimize.exact.lp_bound import lp_bound
 from setupfix.optimize.exact.session import GridRows, Session
 from setupfix.optimize.exact.triage.model import TriageRows
+from setupfix.optimize.exact.work import now
 
 __all__ = ["Forced", "forced_triage", "lost_bound"]
 
@@ -131,7 +131,7 @@ def forced_triage(session: Session, t: TriageRows, k_start: Array, probe_end: fl
     k_start : ndarray of shape (n,)
         A grid point to start the leximin from.
     probe_end : float
-        ``time.perf_counter()`` after which no candidate is probed and no LP over K is started.
+        ``now()`` after which no candidate is probed and no LP over K is started.
     """
     settings, clock = session.settings, session.clock
     keep = np.zeros(t.n_dims, bool)
@@ -140,7 +140,7 @@ def forced_triage(session: Session, t: TriageRows, k_start: Array, probe_end: fl
     path: list[str] = []
     calls = 0
     while True:
-        if time.perf_counter() >= probe_end:
+        if now() >= probe_end:
             return None
         keep_rows = keep[t.row_dim]
         if not keep_rows.any():
@@ -156,11 +156,11 @@ def forced_triage(session: Session, t: TriageRows, k_start: Array, probe_end: fl
         suspects = suspects[~t.held[suspects] & ~probed[suspects]]
         lost = []
         for q in suspects:
-            if time.perf_counter() >= probe_end:
+            if now() >= probe_end:
                 return None
             probed[q] = True
             calls += 1
-            if lost_bound(t, int(q), probe_end - time.perf_counter()) < -KEPT_TOL:
+            if lost_bound(t, int(q), probe_end - now()) < -KEPT_TOL:
                 lost.append(int(q))
         if not lost:
             return None  # K's LP bound is below 0 and no dimension it names is proved lost: not forced

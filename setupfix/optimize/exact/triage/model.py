@@ -18,7 +18,6 @@ kept margins at the leximin prefix found so far (positions P_i + 1 … are ≥ v
 
 from __future__ import annotations
 
-import time
 from dataclasses import dataclass
 
 import numpy as np
@@ -26,6 +25,7 @@ import numpy.typing as npt
 from scipy.sparse import coo_array, csr_array
 
 from setupfix.optimize.exact.highs import INF, LinearModel
+from setupfix.optimize.exact.work import now
 
 __all__ = [
     "KeptLevel",
@@ -337,9 +337,9 @@ def lp_starts(t: TriageRows, time_limit: float) -> list[Array]:  # time_limit: f
     room = 0.5 * np.sum(np.abs(t.G[hard]), axis=1)
     hi_hard = t.g[hard] - t.hard_min - np.minimum(room, np.maximum(t.g[hard] - t.hard_min, 0.0))
     crow = np.flatnonzero(t.zcol[t.row_dim] >= 0)
-    until = time.perf_counter() + time_limit
+    until = now() + time_limit
     for rows in (hard, np.r_[hard, crow]):
-        if rows.size == 0 or until - time.perf_counter() <= 0:
+        if rows.size == 0 or until - now() <= 0:
             continue
         a = sparse_hstack([csr_array(t.G[rows]), csr_array(np.ones((rows.size, 1)))])
         a_hard = sparse_hstack([csr_array(t.G[hard]), csr_array((hard.size, 1))])
@@ -353,7 +353,7 @@ def lp_starts(t: TriageRows, time_limit: float) -> list[Array]:  # time_limit: f
             np.r_[t.kmin, -INF],
             np.r_[t.kmax, t.top],
         )
-        res = model.solve(until - time.perf_counter())
+        res = model.solve(until - now())
         if res.x is not None:
             k = np.clip(np.rint(res.x[: t.n]), t.kmin, t.kmax)
             if t.hard_ok(k):

@@ -38,7 +38,6 @@ reached) make the result stopped (status ``time_limit``, ``stopped``), never "op
 
 from __future__ import annotations
 
-import time
 from collections.abc import Callable
 from dataclasses import dataclass
 
@@ -64,6 +63,7 @@ from setupfix.optimize.exact.triage.model import (
     listed_triage,
     lp_starts,
 )
+from setupfix.optimize.exact.work import now, wall
 from setupfix.optimize.problem import CorrectionProblem, OptimizeResult, Status, Stopped, TriageRecord
 
 __all__ = ["Triaged", "triage", "triaged_result"]
@@ -142,7 +142,7 @@ def triage(
     t : TriageRows
         Rows, dimensions and no-harm floors in grid steps.
     deadline : float
-        ``time.perf_counter()`` value at which to stop.
+        ``now()`` value at which to stop.
     reserve : float
         Seconds kept for stage 3: no leximin level after the first starts with less left.
     budget : float
@@ -158,7 +158,7 @@ def triage(
     why = ""
 
     def left() -> float:
-        return deadline - time.perf_counter()
+        return deadline - now()
 
     def first() -> float:  # stages 1 and 2 leave the reserve to stage 3
         return max(left() - reserve, min(left(), 0.05))
@@ -220,9 +220,9 @@ def triage(
     complete = t.positions(kept) == 0  # nothing kept has a margin: no level to find
     eps = quantum / 2
     t_lo = float(np.min(t.sorted_kept(best), initial=t.top))
-    began = time.perf_counter()
+    began = now()
     while not complete and not why:
-        if levels and (left() < reserve or time.perf_counter() - began > budget):
+        if levels and (left() < reserve or now() - began > budget):
             break
         m2, _ = t.model(kept, levels, objective="level", t_lo=min(t_lo, t.top))
         p = count_below(levels)
@@ -360,7 +360,7 @@ def triaged_result(
     forced = None
     settings = session.settings
     if settings.forced_triage and not listable(t, settings.triage_list_points):  # a small box is listed whole
-        forced = forced_triage(session, t, k_start, time.perf_counter() + settings.forced_share * clock.left())
+        forced = forced_triage(session, t, k_start, now() + settings.forced_share * clock.left())
     if forced is not None:
         out = _forced_outcome(forced, t, quantum)
     else:
@@ -387,7 +387,7 @@ def triaged_result(
             x,
             optimizer=name,
             evaluations=calls + 1,
-            seconds=time.perf_counter() - clock.start,
+            seconds=wall() - clock.wall_start,
             status="optimal",
             message=message,
             guard=False,
@@ -440,7 +440,7 @@ def triaged_result(
         x,
         optimizer=name,
         evaluations=evaluations,
-        seconds=time.perf_counter() - clock.start,
+        seconds=wall() - clock.wall_start,
         status=status,
         bound=None if kept_bound is None else kept_bound * h,
         message=message,
