@@ -208,6 +208,7 @@ def _format(s: Mapping[str, Any]) -> str:
             lines.append(
                 f"{r['report'][:31]:<32}{r['format']:<10}{r['rows']:>6}{r['parts']:>6}  "
                 f"{r['first'][:19]:<20}{r['last'][:19]:<20}{r['sha256']}"
+                + (f"  excluded: {r['excluded']}" if r.get("excluded") else "")
             )
     lines.append(
         f"corrections: {s['corrections']}, tool changes: {s['tool_changes']}"

@@ -72,6 +72,8 @@ def test_batch_marks_a_rejected_report_and_the_exports_leave_it_out(
     code, out, _ = run(capsys, "history", "show", "--db", location, "--machine", "default", "--json")
     marks = {r["report"]: r["excluded"] for r in json.loads(out)["reports"]}
     assert marks == {"cycle_01.csv": None, "cycle_03.csv": None, "cycle_05.csv": None, "cycle_04.csv": "rejected"}
+    _, out, _ = run(capsys, "history", "show", "--db", location, "--machine", "default")
+    assert [line.split()[0] for line in out.splitlines() if line.endswith("excluded: rejected")] == ["cycle_04.csv"]
     dfq = tmp_path / "h.dfq"
     code, _, err = run(capsys, "history", "export", "dfq", "--db", location, "--out", str(dfq))
     assert code == 0 and "left out 1 report(s) marked excluded (1 rejected)" in err
