@@ -158,23 +158,34 @@ class PostgresStore(ClaimingStore):
         return int(row[0]) if row else 0
 
     def _migrate(self) -> None:
-        """Apply the missing migrations in one transaction, serialised across processes by an advisory lock."""
+        """Apply the missing migrations in one transaction, serialised across processes by an advisory lock.
+
+        Many processes may open one new database at once (eight machines starting a batch): each
+        waits for the lock, then looks again.  What it sees after the wait is read from the
+        catalogue by a query (``pg_tables``: a snapshot taken after the lock, which also makes the
+        backend take in the other creators' catalogue changes), never through the name cache
+        (``to_regclass``) a backend may still hold from before the wait -- a creator that finished
+        meanwhile would otherwise look like "other tables" to the next.
+        """
         where = SourceLocation(self.location)
         if self._version() == SCHEMA_VERSION:
             return
         with self.transaction():
             self._execute("SELECT pg_advisory_xact_lock(hashtext('setupfix history store schema'))")
-            version = self._version()
+            tables = {r[0] for r in self._all("SELECT tablename FROM pg_tables WHERE schemaname = current_schema()")}
+            version = 0
+            if "schema_version" in tables:
+                row = self._one("SELECT version FROM schema_version")
+                version = int(row[0]) if row else 0
             if version > SCHEMA_VERSION:
                 raise StoreError(
                     f"store schema version {version} is newer than this setupfix reads ({SCHEMA_VERSION})",
                     location=where,
                     hint="update setupfix",
                 )
+            if version == SCHEMA_VERSION:  # another process made it while this one waited
+                return
             if version == 0:
-                tables = {
-                    r[0] for r in self._all("SELECT tablename FROM pg_tables WHERE schemaname = current_schema()")
-                }
                 if tables - {"schema_version"}:
                     raise StoreError(
                         "not a setupfix history store (the database holds other tables)",
