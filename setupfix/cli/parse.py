@@ -26,7 +26,13 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
         "partial and log files and models left out; a link to a folder or an unreadable one "
         "named in a warning), '-' for standard input",
     )
-    p.add_argument("--out", required=True, metavar="CSV", help="output CSV ('-': stdout)")
+    p.add_argument(
+        "-o",
+        "--out",
+        required=True,
+        metavar="CSV",
+        help="output CSV ('-': stdout); written atomically, as model init -o",
+    )
     p.add_argument("--format", default=None, metavar="NAME", help="report format (default: sniffed; see 'formats')")
     p.add_argument("--unit", default=None, choices=("mm", "inch"), help="unit of values the report does not label")
     p.add_argument(
