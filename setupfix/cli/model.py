@@ -15,6 +15,7 @@ from setupfix.cli.common import add_reader_options, add_report_options, cycle_op
 from setupfix.core.errors import ExportError, SourceLocation
 
 if TYPE_CHECKING:
+    from setupfix.model import ProcessModel
     from setupfix.usecases.model_check import MatchTable
 
 MATRICES = ("R_MW", "R_WF", "R_TF", "R_FD", "C")
@@ -157,12 +158,20 @@ def run_show(args: argparse.Namespace) -> int:
         sys.stdout.write("\n")
         return 0
     which = args.matrix or [m for m in MATRICES if m != "R_MW" or desc.matrices.R_MW.size]
-    sys.stdout.write(
-        f"{_safe(desc.model.name)}  (axis {desc.model.axis}, unit {desc.model.unit}, "
-        f"resolution {desc.model.resolution:g})\n\n"
-    )
+    sys.stdout.write(f"{_safe(desc.model.name)}  ({_axes_of(desc.model)}, unit {desc.model.unit}, ")
+    sys.stdout.write(f"resolution {desc.model.resolution:g})\n\n")
     sys.stdout.write(format_relations(desc.matrices, which, desc.null_space, desc.rank) + "\n")
     return 0
+
+
+def _axes_of(model: ProcessModel) -> str:
+    """What a model corrects along: ``axis Z``, or ``axes X, Y, Z, spindle Z, rotation C (W1, W2), tool radius``."""
+    if not model.multi_axis:
+        return f"axis {model.axis}"
+    rotating = [w.base for w in model.wks if w.component == "C"]
+    turn = f", rotation C ({', '.join(dict.fromkeys(rotating))})" if rotating else ""
+    radius = ", tool radius" if any(t.component == "R" for t in model.tools) else ""
+    return f"axes {', '.join(model.axes)}, spindle {model.spindle}{turn}{radius}"
 
 
 def run_check(args: argparse.Namespace) -> int:

@@ -33,6 +33,8 @@ class ModelDescription:
         return {
             "name": self.model.name,
             "axis": self.model.axis,
+            # a multi-axis model: what it corrects along besides the (spindle) axis above
+            **({"axes": list(self.model.axes), "spindle": self.model.spindle} if self.model.multi_axis else {}),
             "unit": self.model.unit,
             "registers": m.registers,
             "features": m.features,
