@@ -9,7 +9,9 @@ Layout (Portuguese user interface, CP1252, decimal comma)::
 An element line ``<type>: <name>(ID:n) …`` is followed by value lines ``<quantity> =``
 whose numbers are right-aligned under the heading words; the heading repeats on
 every page.  Quantities: DX DY DZ LC (distances), D R (diameter, radius), X Y Z
-(coordinates) are lengths; CA (angle) is skipped.  The report states no unit (mm
+(coordinates) and Raio (a circle's radius) are lengths; CA (angle) is skipped.  A quantity not
+known here is refused only where its row has a nominal: an actual alone is unusable whatever
+it measures, and a report of actuals only is refused for that (its real cause).  The report states no unit (mm
 assumed, with a warning, unless ``unit=`` says otherwise).
 
 Both public samples fill only the actual column: without nominals no deviation can
@@ -59,7 +61,9 @@ _HEADINGS = {
 }
 _ELEMENT = re.compile(r"^(?P<type>[^\s:][^:]*):\s+(?P<name>[^\s(]+)")
 _VALUE = re.compile(r"^\s+(?P<label>[A-Za-z][A-Za-z0-9]*)\s+=")
-_LENGTHS = frozenset({"DX", "DY", "DZ", "LC", "D", "R", "X", "Y", "Z", "L", "W"})
+#: Length quantities; ``Raio`` is the Portuguese interface's radius of a ``Círculo`` (the upstream
+#: repository's sample3.txt).
+_LENGTHS = frozenset({"DX", "DY", "DZ", "LC", "D", "R", "X", "Y", "Z", "L", "W", "RAIO"})
 _ANGLES = frozenset({"CA", "A", "ANG"})
 
 
@@ -112,10 +116,13 @@ def read_qvpak(path: str | Path, *, unit: str | None = None, encoding: str | Non
             if label in _ANGLES:
                 skipped.add("angle row(s) (setupfix corrects lengths)", number)
                 continue
-            if label not in _LENGTHS:
-                raise ParseError(f"unknown quantity {label!r}", location=where)
             cells = split_columns(line[value.end() :].rjust(len(line)), spans)
             cells.pop("element", None)
+            if label not in _LENGTHS:
+                if "nominal" not in cells:  # unusable whatever it measures: the cause is the missing nominal
+                    skipped.add("row(s) with an actual value only (no nominal)", number)
+                    continue
+                raise ParseError(f"unknown quantity {label!r}", location=where)
             raw.append((where, f"{element}.{label}", cells))
             continue
         head = _ELEMENT.match(line)
