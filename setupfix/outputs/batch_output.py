@@ -216,7 +216,7 @@ class ProgramsOut:
             "a file of this program's name is there, and no run of setupfix wrote it (it is not in "
             f"{MANIFEST}): nothing written",
             location=SourceLocation(visible_name(str(there))),
-            hint="move it away, or write the programs to another folder (--out)",
+            hint="move it away, or give another folder with --out",
         )
 
     def drop(self, rel: str) -> None:
