@@ -54,8 +54,9 @@ def cycle_json(pc: CycleCorrection) -> dict[str, Any]:
             "margin_before": round(pc.margin_all_before, digits),
             "margin_after": round(pc.margin_all_after, digits),
             "bonus": round(pc.margin_all_after - pc.margin_all_before, digits),
-            "margin_kept_before": round(pc.margin_before, digits),
-            "margin_kept_after": round(pc.margin_after, digits),
+            # None when the triage kept no dimension (no budget: JSON has no infinity)
+            "margin_kept_before": round(pc.margin_before, digits) if math.isfinite(pc.margin_before) else None,
+            "margin_kept_after": round(pc.margin_after, digits) if math.isfinite(pc.margin_after) else None,
             "norm": round(pc.norm, digits),
             "bound": None if r.bound is None else round(r.bound, digits),
             "in_tolerance": pc.margin_after >= 0 and not pc.given_up,
