@@ -107,11 +107,12 @@ def stored_parts(
     return out
 
 
-def excluded_note(count: int, what: str) -> Note:
-    """The note of a history that left ``count`` marked reports out (``what``: the history's use)."""
+def excluded_note(count: int, what: str, *, option: bool = True) -> Note:
+    """The note of a history that left ``count`` marked reports out (``what``: the history's use; ``option``:
+    the command has ``--include-excluded``)."""
     return Note(
-        f"{count} stored report(s) marked rejected, failed or draft left out of {what} "
-        "(--include-excluded takes them in)",
+        f"{count} stored report(s) marked rejected, failed or draft left out of {what}"
+        + (" (--include-excluded takes them in)" if option else ""),
         None,
         "excluded",
     )
@@ -267,7 +268,7 @@ class History:
         """The EWMA estimate of ``part`` over every held part machined before it
         (:func:`setupfix.correction.ewma.ewma_history`)."""
         now = _stamp(part)
-        said = (excluded_note(self.excluded, "the smoothing history"),) if self.excluded else ()
+        said = (excluded_note(self.excluded, "the smoothing history", option=False),) if self.excluded else ()
         if lam < 1.0 and now is None:
             note = Note("no timestamp in the report: not smoothed", None, "ewma")
             return Smoothed(part.deviation, 0, lam, (note, *said))

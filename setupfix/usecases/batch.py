@@ -60,6 +60,9 @@ from parsers.names import visible_name
 from setupfix.core.atomic import process_alive, process_started
 from setupfix.core.errors import Note, ParameterError, ParseError, SetupfixError, SourceLocation
 from setupfix.correction.offsets import offset_rows
+from setupfix.correction.pose import pose_problem
+from setupfix.correction.recommend import beyond_band
+from setupfix.correction.safety import reject_mask
 from setupfix.inputs.duplicates import Content, ContentIndex, part_content
 from setupfix.inputs.smoothing import history_parts, stored_parts
 from setupfix.model import PartMeasurement, ProcessModel
@@ -71,7 +74,7 @@ from setupfix.usecases.correct import correct_report
 from setupfix.usecases.export import cycle_rows, offsets_text
 from setupfix.usecases.requests import CorrectRequest, History
 
-__all__ = ["find_reports", "run_batch", "batch_history", "auto_workers", "chunk_size"]
+__all__ = ["find_reports", "run_batch", "batch_history", "rejected", "auto_workers", "chunk_size"]
 
 
 @dataclass(frozen=True)
@@ -455,13 +458,35 @@ def batch_history(request: CorrectRequest, base: History, files: Sequence[str | 
     """``base`` plus the parts of every report in ``files``, read as ``history import`` stores them.
 
     A report that cannot be read or matched adds nothing here (its correction names
-    the reason); a part already held (same time and name) is not added twice.
+    the reason); a part already held (the same measurement) is not added twice; a report
+    with a part that is rejected whatever its history (:func:`rejected`) adds nothing
+    either: the store keeps it marked and the history leaves it out, as ``correct
+    --store`` after the batch would.
     """
     parts: list[PartMeasurement] = []
     for path in files:
         try:
             read = parsers.read_report(path, **request.read.kwargs())
-            parts += history_parts(request.model, read.table, source=str(path))
+            found = history_parts(request.model, read.table, source=str(path))
         except (SetupfixError, OSError):
             continue
+        if not any(rejected(request.model, p) for p in found):
+            parts += found
     return base.with_parts(parts)
+
+
+def rejected(model: ProcessModel, part: PartMeasurement) -> bool:
+    """Whether ``part`` is rejected whatever its history: a deviation beyond the reject band that no setup
+    correction explains, on the part as measured (the rule :func:`setupfix.correction.recommend.recommend`
+    applies first, :func:`~setupfix.correction.recommend.beyond_band`).  A part that cannot be posed: False
+    (its correction says why)."""
+    try:
+        posed = pose_problem(model, part)
+    except SetupfixError:
+        return False
+    problem = posed.problem
+    bad = reject_mask(posed.measured, problem.lower, problem.upper, posed.policy.reject_band)
+    if not bad.any():
+        return False
+    stop = beyond_band(posed, bad, "exact", lambda ids: ", ".join(ids), {}, model.unit)
+    return stop is not None and stop.verdict == "reject"
