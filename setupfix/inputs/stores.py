@@ -3,9 +3,10 @@
 Every command that takes ``--store``/``--db`` builds one :class:`StoreRef` from its options
 and the model, and opens the store through it, so the rules are the same on every door:
 
-* the location is ``--db``/``--store`` as given (a file path: the embedded SQLite store; a
-  ``postgresql://`` URL: the plant database); where a command needs a store and none is given,
-  ``$SETUPFIX_DB``, else ``setupfix.db`` beside the model (:func:`store_location`);
+* the location is ``--db``/``--store`` as given (a file path: the embedded SQLite store; anything
+  that looks like a URL: the plant database, read as a URL or refused, never taken for a file);
+  where a command needs a store and none is given, ``$SETUPFIX_DB``, else ``setupfix.db``
+  beside the model (:func:`store_location`);
 * the machine is ``--machine``, else the model's ``[process] machine``, else
   :data:`setupfix.store.DEFAULT_MACHINE`; the operator is ``--operator``, else the login name;
 * a command that reads history opens an existing store only: a missing file is an error naming
@@ -20,7 +21,7 @@ from pathlib import Path
 
 from setupfix.core.errors import SourceLocation, StoreError
 from setupfix.model import ProcessModel
-from setupfix.store import DB_ENV, Store, is_server, open_store
+from setupfix.store import DB_ENV, Store, is_server, open_store, shown_location
 
 __all__ = ["DEFAULT_DB", "StoreRef", "store_location"]
 
@@ -74,7 +75,8 @@ class StoreRef:
         return is_server(self.location) or Path(self.location).is_file()
 
     def __str__(self) -> str:
-        return self.location
+        """The location as messages may print it (a URL without its password)."""
+        return shown_location(self.location)
 
     def open(self, *, existing: bool = True) -> Store:
         """Open the store for this machine and operator.

@@ -66,6 +66,7 @@ from parsers.corrections import RegisterLog, check_corrections, log_from_frame
 from setupfix.core.atomic import process_alive, process_started
 from setupfix.model import ProcessModel
 from setupfix.store.audit import AUDIT_COLUMNS
+from setupfix.store.urls import looks_like_url, shown
 
 __all__ = [
     "Store",
@@ -79,6 +80,7 @@ __all__ = [
     "EXCLUDED_REASONS",
     "stored_corrections",
     "is_server",
+    "shown_location",
     "login_name",
     "CORRECTION_COLUMNS",
     "AUDIT_COLUMNS",
@@ -310,8 +312,15 @@ class Store(Protocol):
 
 
 def is_server(location: str | os.PathLike[str]) -> bool:
-    """Whether ``location`` names a PostgreSQL database (a ``postgresql://`` or ``postgres://`` URL)."""
-    return str(location).startswith(("postgresql://", "postgres://"))
+    """Whether ``location`` names a PostgreSQL database: anything that looks like a URL
+    (:func:`setupfix.store.urls.looks_like_url`: ``postgresql://``, ``PostgreSQL://``,
+    `` postgres:/…``, ``mysql://…``), which :func:`open_store` reads as one or refuses, never a file."""
+    return looks_like_url(os.fspath(location))
+
+
+def shown_location(location: str | os.PathLike[str]) -> str:
+    """``location`` as any message may print it: a URL without its password and query, a path as given."""
+    return shown(os.fspath(location))
 
 
 def login_name() -> str:

@@ -10,9 +10,11 @@ taken by :meth:`_begin`); other machines write at the same time.  Writers of the
 for each other at most :data:`LOCK_TIMEOUT_S`.
 
 Every failure becomes one :class:`StoreError` naming the store by its URL without the
-password (:func:`shown`): the server down or unreachable, a refused login, an unknown
-database, a URL that cannot be read, psycopg not installed, a lost connection, a full
-disk on the server, a read-only or forbidden database.
+password (:func:`setupfix.store.urls.shown`): the server down or unreachable, a refused login,
+an unknown database, a URL that cannot be read, psycopg not installed, a lost connection, a full
+disk on the server, a read-only or forbidden database.  The URL is read by
+:func:`setupfix.store.urls.parse_url` and given to the driver in parts, so a password typed
+without percent-encoding is never split into a host or database name the driver would quote.
 """
 
 from __future__ import annotations
@@ -21,11 +23,11 @@ import contextlib
 import re
 from collections.abc import Iterable, Sequence
 from typing import Any
-from urllib.parse import urlsplit, urlunsplit
 
 from setupfix.core.errors import SourceLocation, StoreError
 from setupfix.store.claims import ClaimingStore
 from setupfix.store.sql import guarded
+from setupfix.store.urls import URL_FORM, parse_url, shown
 
 __all__ = ["PostgresStore", "MIGRATIONS", "shown", "LOCK_TIMEOUT_S", "CONNECT_TIMEOUT_S"]
 
@@ -100,19 +102,6 @@ _FEW = 200
 _IDENTITY = ("report", "correction", "recommendation")
 
 
-def shown(url: str) -> str:
-    """``url`` as it may be printed: without its password (and without query options that could hold one)."""
-    try:
-        parts = urlsplit(url)
-        host = parts.hostname or ""
-        netloc = (f"{parts.username}@" if parts.username else "") + (f"[{host}]" if ":" in host else host)
-        if parts.port:
-            netloc += f":{parts.port}"
-        return urlunsplit((parts.scheme, netloc, parts.path, "", ""))
-    except ValueError:
-        return re.sub(r"//[^@/]*@", "//", url.split("?")[0])
-
-
 class PostgresStore(ClaimingStore):
     """:class:`~setupfix.store.Store` in a PostgreSQL database (created and migrated on open)."""
 
@@ -121,7 +110,9 @@ class PostgresStore(ClaimingStore):
 
     def __init__(self, url: str, *, machine: str, operator: str) -> None:
         self.location, self.machine, self.operator = shown(url), machine, operator
-        self._url, self._depth = url, 0
+        self._depth = 0
+        parsed = parse_url(url)  # a URL that cannot be read is refused before anything else
+        self._secrets = tuple(s for s in {parsed.password, *_raw_passwords(url)} if s)
         try:
             import psycopg
         except ImportError:
@@ -133,13 +124,13 @@ class PostgresStore(ClaimingStore):
         self._psycopg = psycopg
         self.errors = (psycopg.Error,)
         try:
-            self.conn = psycopg.connect(
-                url,
-                autocommit=True,
-                connect_timeout=CONNECT_TIMEOUT_S,
-                application_name="setupfix",
-                options=f"-c lock_timeout={int(LOCK_TIMEOUT_S * 1000)}",
-            )
+            given: dict[str, Any] = {
+                **parsed.connection(),
+                "connect_timeout": CONNECT_TIMEOUT_S,
+                "application_name": "setupfix",
+                "options": f"-c lock_timeout={int(LOCK_TIMEOUT_S * 1000)}",
+            }
+            self.conn = psycopg.connect("", autocommit=True, **given)
         except (psycopg.Error, ValueError) as exc:  # ValueError: a URL the driver cannot split
             raise self._failure(exc, opening=True) from None
         try:
@@ -245,7 +236,7 @@ class PostgresStore(ClaimingStore):
 
     def _failure(self, exc: BaseException, *, opening: bool = False) -> StoreError:
         """A psycopg failure as one :class:`StoreError` naming the store (never its password)."""
-        message, hint = _diagnose(exc, self._url, opening)
+        message, hint = _diagnose(exc, self._secrets, opening)
         return StoreError(message, location=SourceLocation(self.location), hint=hint)
 
     def close(self) -> None:
@@ -291,7 +282,14 @@ _STATES: tuple[tuple[str, str, str | None], ...] = (
 )
 
 
-def _diagnose(exc: BaseException, url: str, opening: bool) -> tuple[str, str | None]:
+def _raw_passwords(url: str) -> tuple[str, ...]:
+    """Every text a password of ``url`` could be, as typed (before decoding): taken out of the driver's texts."""
+    user_part = url.strip().rpartition("@")[0]
+    _, colon, secret = user_part.partition("//")[2].partition(":") if "//" in user_part else ("", "", "")
+    return (secret,) if colon and secret else ()
+
+
+def _diagnose(exc: BaseException, secrets: Sequence[str], opening: bool) -> tuple[str, str | None]:
     """(message, hint) for a psycopg failure; the password is taken out of any text of the driver."""
     state = str(getattr(exc, "sqlstate", None) or "")
     for prefix, message, hint in _STATES:
@@ -299,12 +297,8 @@ def _diagnose(exc: BaseException, url: str, opening: bool) -> tuple[str, str | N
             return message, hint
     text = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
     text = re.sub(r"(://[^:/@\s\"]*):[^@\s\"]*@", r"\1@", text)  # a URL the driver quotes, without its password
-    try:
-        password = urlsplit(url).password
-    except ValueError:
-        password = None
-    if password:
-        text = text.replace(password, "***")
+    for secret in sorted(secrets, key=len, reverse=True):
+        text = text.replace(secret, "***")
     lowered = text.lower()
     if (
         isinstance(exc, ValueError)
@@ -314,7 +308,7 @@ def _diagnose(exc: BaseException, url: str, opening: bool) -> tuple[str, str | N
     ):
         return (
             f"not a PostgreSQL URL setupfix can read ({text.rstrip('.')})",
-            "postgresql://user:password@host:port/database",
+            URL_FORM,
         )
     if "does not exist" in lowered and "database" in lowered:
         return "the database server has no such database", "create it (createdb) or fix the URL's database name"
