@@ -107,6 +107,8 @@ def run(args: argparse.Namespace) -> int:
     from contextlib import nullcontext
 
     from setupfix.cli.correct import correct_request
+    from setupfix.inputs.smoothing import excluded_note
+    from setupfix.store import excluded_reports
     from setupfix.usecases.batch import run_batch
     from setupfix.views.present import format_batch_summary
 
@@ -119,6 +121,7 @@ def run(args: argparse.Namespace) -> int:
             ref.for_model(request.model).open(existing=False) if ref else nullcontext() as store,
             _Progress() as progress,
         ):
+            left_out = len(excluded_reports(store)) if store is not None else 0  # before this run marks more
             summary = run_batch(
                 request,
                 args.folder,
@@ -136,6 +139,11 @@ def run(args: argparse.Namespace) -> int:
     for path, note in summary.notes:  # a note that names its file is printed as it is (not the path twice)
         text = str(note)
         print(f"warning: {text if text.startswith(path) else f'{path}: {text}'}", file=sys.stderr)
+    if left_out:
+        print(
+            f"warning: {excluded_note(left_out, 'the history the reports are smoothed over', option=False)}",
+            file=sys.stderr,
+        )
     for path, reason in summary.failed:
         print(f"error: {reason if path in reason else f'{path}: {reason}'}", file=sys.stderr)
     if args.json:

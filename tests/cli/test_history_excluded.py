@@ -119,3 +119,22 @@ def test_correct_store_marks_a_report_the_store_holds(
     assert run(capsys, "correct", "--model", MODEL, str(clean), "--store", location, "--json")[0] == 0
     _, _, err = run(capsys, "history", "export", "dfq", "--db", location, "--out", str(dfq))
     assert dfq_values(dfq) == ROWS_PER_REPORT and "left out 1 report(s) marked excluded (1 rejected)" in err
+
+
+def test_a_batch_says_how_many_marked_reports_its_history_left_out(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    db = str(tmp_path / "h.db")
+    first = tmp_path / "first"
+    first.mkdir()
+    shutil.copy(GUIDE_PINS / "cycle_01.csv", first / "cycle_01.csv")
+    gross_copy(GUIDE_PINS / "cycle_02.csv", first / "cycle_02.csv")
+    argv = ["batch", "--model", MODEL, "--settle", "0", "--store", db]
+    _, out, err = run(capsys, *argv, str(first), "--out", str(tmp_path / "a.csv"))
+    assert "left out of the history" not in err  # nothing was marked before this run
+    assert "1 reject" in out
+    second = tmp_path / "second"
+    second.mkdir()
+    shutil.copy(GUIDE_PINS / "cycle_03.csv", second / "cycle_03.csv")
+    _, _, err = run(capsys, *argv, str(second), "--out", str(tmp_path / "b.csv"))
+    assert "warning: 1 stored report(s) marked rejected, failed or draft left out of the history" in err
