@@ -64,7 +64,7 @@ from setupfix.correction.pose import pose_problem
 from setupfix.correction.recommend import beyond_band
 from setupfix.correction.safety import reject_mask
 from setupfix.inputs.duplicates import Content, ContentIndex, part_content
-from setupfix.inputs.smoothing import history_parts, stored_parts
+from setupfix.inputs.smoothing import excluded_note, history_parts, stored_parts
 from setupfix.model import PartMeasurement, ProcessModel
 from setupfix.outputs.batch_output import CsvOut, ProgramsOut
 from setupfix.outputs.controllers import render
@@ -344,6 +344,11 @@ def run_batch(
     measured = _Measured(model, [] if force else held)
     summary = Tally()
     summary.failed += listing.problems  # named, never dropped: an unreadable folder, a broken link, …
+    left_out = request.history.excluded if request.history is not None and model.safety.ewma < 1.0 else 0
+    if left_out and request.history is not None:  # said once for the run, not with every report's smoothing
+        request = dataclasses.replace(request, history=dataclasses.replace(request.history, excluded=0))
+        note = excluded_note(left_out, "the smoothing history", option=False)
+        summary.notes.append((visible_name(store.location if store is not None else "history"), note))
     summary.notes += [
         (path, Note(f"symbolic link to {target}: read as a report", None, "folder")) for path, target in listing.links
     ]

@@ -54,6 +54,12 @@ def test_a_rejected_report_of_the_batch_is_left_out_of_the_others_smoothing(tmp_
     assert set(got["dirty"]) == {"cycle_01.csv", "cycle_02.csv", "cycle_03.csv", "cycle_04.csv", "cycle_05.csv"}
     for name in ("cycle_04.csv", "cycle_05.csv"):  # smoothed over cycle 03 before: other corrections
         assert got["dirty"][name] == got["clean"][name]
+    # again, forced: the store now holds cycle 03 marked; the run says once that it left it out
+    with open_store(tmp_path / "dirty.db") as store:
+        again = run_batch(CorrectRequest(model), dirty, tmp_path / "again.csv", settle=0, store=store, force=True)
+    said = [str(n) for _, n in again.notes if n.kind == "excluded"]
+    assert said == ["1 stored report(s) marked rejected, failed or draft left out of the smoothing history"]
+    assert rows_by_report(tmp_path / "again.csv")["cycle_05.csv"] == got["clean"]["cycle_05.csv"]
 
 
 def test_rejected_is_the_reject_rule_on_the_part_as_measured(tmp_path: Path) -> None:
