@@ -34,7 +34,16 @@ from setupfix.optimize import CorrectionProblem, OptimizeResult, Status, harmed_
 if TYPE_CHECKING:  # pose builds the problem with the rules; recommend takes what it built
     from setupfix.correction.pose import PosedProblem
 
-__all__ = ["recommend", "stopped_rule", "beyond_band", "budget", "draft_hold", "DRAFT_KEY"]
+__all__ = [
+    "recommend",
+    "stopped_rule",
+    "stopped_where",
+    "verdict_cell",
+    "beyond_band",
+    "budget",
+    "draft_hold",
+    "DRAFT_KEY",
+]
 
 #: The key of a draft model, as the user removes it: ``[process] draft = true``.
 DRAFT_KEY = "draft = true"
@@ -197,6 +206,24 @@ def recommend(
         rules.append(effect)
         solved = effect.rule != "not_solved"
     return Recommendation(verdict, x + 0.0, result, guarded, tuple(rules), given_up, at_limit, solved=solved)
+
+
+def stopped_where(result: OptimizeResult) -> str:
+    """Where and why a solve stopped before its proof (``"work limit in the leximin stage"``); empty for a
+    proved solve (or one never run: a draft, a reject)."""
+    if result.status not in STOPPED or result.stopped is None:
+        return ""
+    return f"{result.stopped.reason} in the {result.stopped.stage} stage"
+
+
+def verdict_cell(rec: Recommendation) -> str:
+    """The verdict as a file's cell says it (the offsets CSV, batch's progress): ``apply``, ``hold``,
+    ``reject``; a stopped solve is never a plain one: ``not solved (time limit in the lp bound stage)``
+    (nothing proven, every delta 0) or ``apply (stopped: work limit in the leximin stage)``."""
+    where = stopped_where(rec.result)
+    if not rec.solved:
+        return f"not solved ({where})" if where else "not solved"
+    return f"{rec.verdict} (stopped: {where})" if where else rec.verdict
 
 
 def draft_hold(posed: PosedProblem, model_file: str, optimizer: str = "exact") -> Recommendation:

@@ -30,6 +30,7 @@ import pandas as pd
 
 from setupfix.correction.numbers import fmt
 from setupfix.correction.objective import margins as objective_margins
+from setupfix.correction.recommend import stopped_where
 from setupfix.model import PartMeasurement, ProcessModel, normalise_name
 from setupfix.model.measurements import suggest_names
 from setupfix.usecases.requests import CycleCorrection
@@ -295,6 +296,8 @@ class Summary:
     alarm: str = ""
     given_up: tuple[str, ...] = ()
     solved: bool = True  #: False: the solve was stopped with nothing proven (``alarm`` says so)
+    #: where and why a stopped solve stopped (``"work limit in the leximin stage"``; empty: proved)
+    stopped: str = ""
 
 
 def summary(correction: CycleCorrection) -> Summary:
@@ -322,6 +325,7 @@ def summary(correction: CycleCorrection) -> Summary:
         or ("" if rec.solved else "NOT SOLVED: " + next(e.message for e in rec.rules if e.rule == "not_solved")),
         given_up=tuple(names.get(d, d) for d in correction.given_up),
         solved=rec.solved,
+        stopped=stopped_where(r),
     )
 
 

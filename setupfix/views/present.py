@@ -14,6 +14,7 @@ import numpy as np
 
 from setupfix.correction.numbers import fmt
 from setupfix.correction.offsets import grid_decimals
+from setupfix.correction.recommend import stopped_where
 from setupfix.correction.relation import RelationMatrices
 from setupfix.correction.safety import short_list
 from setupfix.usecases.batch_records import BatchSummary
@@ -47,8 +48,12 @@ def format_flags(flags: list[str]) -> str:
 
 def verdict_label(pc: CycleCorrection) -> str:
     """The verdict as shown: APPLY, HOLD, REJECT, or NOT SOLVED for a stopped solve with nothing proven
-    (its JSON ``verdict`` stays ``hold``, with ``"solved": false``)."""
-    return pc.verdict.upper() if pc.solved else "NOT SOLVED"
+    (its JSON ``verdict`` stays ``hold``, with ``"solved": false``); a correction from a stopped solve
+    says so: ``APPLY (STOPPED: work limit in the leximin stage)``."""
+    if not pc.solved:
+        return "NOT SOLVED"
+    stopped = stopped_where(pc.result)
+    return f"{pc.verdict.upper()} (STOPPED: {stopped})" if stopped else pc.verdict.upper()
 
 
 def verdict_line(pc: CycleCorrection) -> str:
@@ -67,7 +72,8 @@ def verdict_line(pc: CycleCorrection) -> str:
         )
         why = next((r.message for r in rec.rules if r.rule in ("dead_band", "no_harm")), default)
         return f"HOLD: leave the offsets as they are ({why})"
-    return "APPLY the corrections below"
+    stopped = next((r.message for r in rec.rules if r.rule == "stopped"), "")
+    return f"APPLY the corrections below ({stopped})" if stopped else "APPLY the corrections below"
 
 
 def format_correction(pc: CycleCorrection) -> str:
