@@ -176,6 +176,20 @@ def _status(summary: BatchSummary) -> int:
     return OK
 
 
+def _shown_verdicts(outcome: Outcome) -> list[str]:
+    """Each part's verdict as the progress line shows it: NOT SOLVED for a stopped solve with nothing proven,
+    and where it stopped when its rows' verdict cell says so (``apply (stopped: work limit in the … stage)``)."""
+    cells = {row.part: row.verdict for row in outcome.rows}
+    shown = []
+    for part, verdict, solved in zip(outcome.parts, outcome.verdicts, outcome.solved, strict=False):
+        cell = cells.get(part, verdict)
+        if not solved:
+            shown.append("NOT SOLVED" + (cell.removeprefix("not solved") if cell.startswith("not solved") else ""))
+        else:
+            shown.append(cell if cell.startswith(f"{verdict} (stopped") else verdict)
+    return shown
+
+
 class _Progress:
     """A rich progress bar (rate, ETA) on a terminal; one plain line per report otherwise (stderr)."""
 
@@ -216,10 +230,7 @@ class _Progress:
             if outcome.error
             else f"skipped ({outcome.skipped})"
             if outcome.skipped
-            else ", ".join(
-                v if solved else "NOT SOLVED" for v, solved in zip(outcome.verdicts, outcome.solved, strict=True)
-            )
-            or "no part"
+            else ", ".join(_shown_verdicts(outcome)) or "no part"
         )
         print(f"[{done}/{total}] {shown(outcome.path)}: {state}", file=sys.stderr)
 
