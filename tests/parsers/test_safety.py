@@ -4,7 +4,6 @@ without touching the file system or the network."""
 from __future__ import annotations
 
 import socket
-import time
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -67,10 +66,9 @@ def _connected(server: socket.socket) -> bool:
 
 
 def _refused(path: Path) -> str:
-    start = time.perf_counter()
+    """The refusal's message (how long it takes is ``bench/work_limits.py``'s: tests never time)."""
     with pytest.raises(ParseError) as info:
         parsers.read_report(path).table
-    assert time.perf_counter() - start < 1.0
     return str(info.value)
 
 

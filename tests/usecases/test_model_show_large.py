@@ -8,7 +8,6 @@ as a dense grid (|F| × |D| cells) and the null space came from an SVD with a
 from __future__ import annotations
 
 import io
-import time
 import tracemalloc
 from contextlib import redirect_stdout
 from pathlib import Path
@@ -52,14 +51,11 @@ def large(tmp_path_factory: pytest.TempPathFactory) -> Path:
 @pytest.mark.slow
 def test_model_show_output_grows_with_the_entries_not_the_grid(large: Path) -> None:
     out = io.StringIO()
-    start = time.perf_counter()
     with redirect_stdout(out):
         assert main(["model", "show", str(large)]) == 0
-    seconds = time.perf_counter() - start
     text = out.getvalue()
     # A dense R_FD alone is N² = 9,000,000 cells; the entries are 2 per dimension.
     assert len(text) < 200 * N, len(text)
-    assert seconds < 60, seconds  # loose: the grid took minutes at this size on a busy box
     assert f"R_FD: {N} × {N}, {2 * N} non-zero entries" in text
     assert "\n  D17: +F17 −F18\n" in text and f"\n  D{N}: −F1 +F{N}\n" in text  # rows in order
     # C = [R_WF·R_FD ; R_TF·R_FD]: D17 = F17 − F18, F17 on W8 and T18, F18 on W9 and T19.
