@@ -132,12 +132,13 @@ class Claims:
     The claim is keyed by the content hash of the bytes read here; the worker reads the
     file again and corrects it only if its hash is the one claimed.  Each corrected report
     is stored with its recommendations in one transaction as it is done (:meth:`record`),
-    marked :func:`exclusion` when the history is to leave it out, so a failure at any
+    marked (:func:`exclusion`) when the history is to leave it out, so a failure at any
     point leaves whole reports behind, each with its recommendations, and says how many
     (:attr:`stored`).  The claims are turned into "processed" in one transaction by
     :meth:`finish`, once the output is written; :meth:`release` frees whatever is still
-    held (a failure, an interrupt), so those reports are corrected by the next run (and
-    stored again: the same bytes change nothing, the newest verdict sets the mark).  A
+    held (a failure, an interrupt), so those reports are corrected by the next run (which
+    adds its own recommendations; the report's rows are not stored twice, and the newest
+    verdict sets its mark).  A
     SIGKILL leaves the claims behind: the next run takes them over (the process is gone,
     :meth:`setupfix.store.Claimant.gone`).
     """
