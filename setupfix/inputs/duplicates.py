@@ -22,7 +22,8 @@ The rule (:func:`same_measurement`): two parts are one measurement when
    that differ by one step of the report are two parts.
 
 The relation is tested pairwise; :class:`ContentIndex` keeps the parts seen so far and finds
-the first one a new part repeats (a part is compared with the parts of its name only).
+the first one a new part repeats (a part is compared only with parts of its name whose first
+values lie near its own).
 """
 
 from __future__ import annotations
@@ -57,8 +58,12 @@ FINEST_DECIMALS = 9
 COARSEST = 1e-3
 
 
+#: The decimals a resolution is looked for at, finest last.
+_DECIMALS = np.arange(-round(np.log10(COARSEST)), FINEST_DECIMALS + 1)
+
+
 def resolution_of(values: npt.ArrayLike) -> float:
-    """The finest decimal step every finite value is a multiple of: 10⁻ᵏ, k ≤ :data:`FINEST_DECIMALS`, at most
+    """The coarsest decimal step every finite value is a multiple of: 10⁻ᵏ, k ≤ :data:`FINEST_DECIMALS`, at most
     :data:`COARSEST` (no finite value: :data:`COARSEST`).
 
     A value read from text and converted (``actual − nominal``) keeps its decimals to within
@@ -66,14 +71,10 @@ def resolution_of(values: npt.ArrayLike) -> float:
     """
     v = np.asarray(values, dtype=float).ravel()
     v = v[np.isfinite(v)]
-    for k in range(FINEST_DECIMALS + 1):
-        step = 10.0**-k
-        if step > COARSEST:
-            continue
-        scaled = v / step
-        if np.all(np.abs(scaled - np.round(scaled)) <= 1e-6 + 1e-12 * np.abs(scaled)):
-            return step
-    return 10.0**-FINEST_DECIMALS
+    scaled = v[None, :] * 10.0 ** _DECIMALS[:, None]  # (decimals, values)
+    fits = np.all(np.abs(scaled - np.round(scaled)) <= 1e-6 + 1e-12 * np.abs(scaled), axis=1)
+    k = int(_DECIMALS[np.argmax(fits)]) if fits.any() else FINEST_DECIMALS
+    return float(10.0**-k)
 
 
 @dataclass(frozen=True, eq=False)
@@ -150,35 +151,76 @@ def same_measurement(a: Content, b: Content) -> bool:
         return False
     if a.time is not None and b.time is not None and a.time != b.time:
         return False
-    shared = a.values.keys() & b.values.keys()
-    missing = max(len(a.values) - len(shared), len(b.values) - len(shared))
+    tol = max(a.resolution, b.resolution) / 2 * (1 + 1e-6)
+    shared = missing = 0
+    theirs = b.values
+    for k, v in a.values.items():  # the first value that differs ends it (most pairs: the first one)
+        w = theirs.get(k)
+        if w is None:
+            missing += 1
+            if missing > 1:
+                return False
+        elif abs(v - w) > tol:
+            return False
+        else:
+            shared += 1
+    missing = max(missing, len(theirs) - shared)
     if not shared or missing > 1:
         return False
     anonymous = not a.name and (a.time is None or b.time is None)
-    if (missing or anonymous) and len(shared) < 2:
-        return False
-    tol = max(a.resolution, b.resolution) / 2 * (1 + 1e-6)
-    return all(abs(a.values[k] - b.values[k]) <= tol for k in shared)
+    return not ((missing or anonymous) and shared < 2)
 
 
 @dataclass
 class ContentIndex:
-    """The parts seen so far, by name: :meth:`find` the first one a part repeats, :meth:`add` a new one."""
+    """The parts seen so far: :meth:`find` the first one a part repeats, :meth:`add` a new one.
 
-    by_name: dict[str, list[tuple[Content, int]]] = field(default_factory=dict)
+    Each part is filed under its name and each of its first three characteristics (sorted by name)
+    with the cell of :data:`COARSEST` its value falls in.  A part is compared only with the parts
+    found under its own name and at least two of its first three characteristics in their cells or
+    the neighbouring ones (one, for parts of fewer characteristics).  That finds every part it
+    repeats: the two smallest characteristics two repeats share are among the first three of each
+    (each lacks at most one of the other's), and their values, within half the coarsest resolution,
+    lie in the same or neighbouring cells.  A store of thousands of parts is searched in near
+    constant time per part.
+    """
+
+    #: (name, time, characteristic, cell) → parts, and the same without the time (for parts without one)
+    cells: dict[tuple[str, int | None, str, int], list[tuple[Content, int]]] = field(default_factory=dict)
+    anytime: dict[tuple[str, int | None, str, int], list[tuple[Content, int]]] = field(default_factory=dict)
     size: int = 0
+
+    @staticmethod
+    def _filed(c: Content) -> list[tuple[str, str, int]]:
+        return [(c.name, k, int(np.floor(c.values[k] / COARSEST))) for k in sorted(c.values)[:3]]
+
+    def _candidates(self, c: Content) -> list[tuple[Content, int]]:
+        filed = self._filed(c)
+        hits: dict[int, int] = {}
+        seen_at: dict[int, Content] = {}
+        # a part with a time: those of its time and those without; without: every part of its name
+        tables = [(self.cells, c.time), (self.cells, None)] if c.time is not None else [(self.anytime, None)]
+        for table, when in tables:
+            for name, k, cell in filed:
+                for near in (cell - 1, cell, cell + 1):
+                    for seen, i in table.get((name, when, k, near), ()):
+                        hits[i] = hits.get(i, 0) + 1
+                        seen_at[i] = seen
+        return [(seen_at[i], i) for i in sorted(hits) if hits[i] >= min(2, len(filed), len(seen_at[i].values))]
 
     def matches(self, c: Content) -> list[int]:
         """The positions (order of :meth:`add`) of every part seen that ``c`` repeats, first first."""
-        return [i for seen, i in self.by_name.get(c.name, ()) if same_measurement(seen, c)]
+        return [i for seen, i in self._candidates(c) if same_measurement(seen, c)]
 
     def find(self, c: Content) -> int | None:
         """The position of the first part seen that ``c`` repeats; None if none."""
-        return next((i for seen, i in self.by_name.get(c.name, ()) if same_measurement(seen, c)), None)
+        return next((i for seen, i in self._candidates(c) if same_measurement(seen, c)), None)
 
     def add(self, c: Content) -> int:
         """Keep ``c``; its position."""
-        self.by_name.setdefault(c.name, []).append((c, self.size))
+        for name, k, cell in self._filed(c):
+            self.cells.setdefault((name, c.time, k, cell), []).append((c, self.size))
+            self.anytime.setdefault((name, None, k, cell), []).append((c, self.size))
         self.size += 1
         return self.size - 1
 

@@ -20,6 +20,7 @@ import parsers
 from setupfix.inputs.duplicates import (
     COARSEST,
     Content,
+    ContentIndex,
     content_of,
     first_copies,
     resolution_of,
@@ -155,3 +156,29 @@ def test_a_copy_in_other_case_lacking_a_row_is_not_another_earlier_part_in_the_e
     # a part measured one step of the report's resolution apart on one dimension is another part
     moved = dataclasses.replace(again[0], deviation=again[0].deviation + np.r_[0.0, 1e-4, np.zeros(26)])
     assert len(history.with_parts([moved]).keys) == 3
+
+
+@settings(max_examples=100, deadline=None)
+@given(st.data())
+def test_the_index_finds_exactly_what_comparing_with_every_part_finds(data: st.DataObject) -> None:
+    """Brute force: :class:`ContentIndex` matches every part a pairwise search over all parts matches,
+    values on and beside the index's cell edges, copies short of a row, with and without times."""
+    edge = st.integers(min_value=-30, max_value=30).map(lambda n: round(n * COARSEST, 4))
+    near = st.sampled_from([0.0, 0.0001, -0.0001, 0.0004, -0.0004, 0.0005, -0.0005])
+    index = ContentIndex()
+    held: list[Content] = []
+    for _ in range(data.draw(st.integers(min_value=1, max_value=25))):
+        copy = data.draw(st.booleans())
+        if held and copy:  # a copy of a part held, perturbed within or beyond the rule
+            base = data.draw(st.sampled_from(held))
+            values = {k: round(v + data.draw(near), 4) for k, v in base.values.items()}
+            if len(values) > 2 and data.draw(st.booleans()):
+                values.pop(data.draw(st.sampled_from(sorted(values))))
+            c = content_of(base.label.upper(), data.draw(st.sampled_from([base.time, None])), values)
+        else:
+            n = data.draw(st.integers(min_value=1, max_value=5))
+            values = {f"D{k}": data.draw(edge) + data.draw(near) for k in range(n)}
+            c = content_of(data.draw(st.sampled_from(["a", "b", ""])), data.draw(st.sampled_from([T0, None])), values)
+        assert index.matches(c) == [i for i, seen in enumerate(held) if same_measurement(seen, c)]
+        index.add(c)
+        held.append(c)
