@@ -446,7 +446,7 @@ def _record(db: str | Path | StoreRef, model: ProcessModel, out: DiagnoseOutcome
     doc = out.to_json()
     result = {
         k: doc[k]
-        for k in ("cycles", "rms_before", "rms_after", "max_before", "max_after", "effects", "next_correction")
+        for k in ("cycles", "rms_before", "rms_after", "max_before", "max_after", "effects", "next_correction", "draft")
     }
     inputs: dict[str, Any] = {
         "command": "diagnose",
