@@ -331,7 +331,13 @@ def login_name() -> str:
         return ""
 
 
-def open_store(location: str | os.PathLike[str], *, machine: str | None = None, operator: str | None = None) -> Store:
+def open_store(
+    location: str | os.PathLike[str],
+    *,
+    machine: str | None = None,
+    operator: str | None = None,
+    read_only: bool = False,
+) -> Store:
     """Open (creating and migrating when needed) the history store at ``location``, for one machine.
 
     Parameters
@@ -343,6 +349,11 @@ def open_store(location: str | os.PathLike[str], *, machine: str | None = None, 
         :data:`DEFAULT_MACHINE` when None or empty.
     operator : str, optional
         Who writes (stored with each recommendation); the login name when None.
+    read_only : bool
+        Never change the store (``history migrate``'s source): it is checked whole first (a
+        damaged, empty or incomplete one is refused), read as it is (an older schema is read
+        through a migrated copy), and every write is a :class:`StoreError`.  A file this process
+        cannot write (read-only file, folder or mount) is opened read-only whatever this says.
 
     Raises
     ------
@@ -357,10 +368,10 @@ def open_store(location: str | os.PathLike[str], *, machine: str | None = None, 
     if is_server(location):
         from setupfix.store.postgres import PostgresStore
 
-        return PostgresStore(str(location), machine=who, operator=by)
+        return PostgresStore(str(location), machine=who, operator=by, read_only=read_only)
     from setupfix.store.sqlite import SQLiteStore
 
-    return SQLiteStore(os.fspath(location), machine=who, operator=by)
+    return SQLiteStore(os.fspath(location), machine=who, operator=by, read_only=read_only)
 
 
 def report_tables(store: Store, *, include_excluded: bool = False) -> list[tuple[ReportRecord, pd.DataFrame]]:

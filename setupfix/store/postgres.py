@@ -108,9 +108,9 @@ class PostgresStore(ClaimingStore):
     distinct = "IS DISTINCT FROM"
     lock = " FOR UPDATE"
 
-    def __init__(self, url: str, *, machine: str, operator: str) -> None:
+    def __init__(self, url: str, *, machine: str, operator: str, read_only: bool = False) -> None:
         self.location, self.machine, self.operator = shown(url), machine, operator
-        self._depth = 0
+        self._depth, self.read_only = 0, read_only
         parsed = parse_url(url)  # a URL that cannot be read is refused before anything else
         self._secrets = tuple(s for s in {parsed.password, *_raw_passwords(url)} if s)
         try:
@@ -134,7 +134,17 @@ class PostgresStore(ClaimingStore):
         except (psycopg.Error, ValueError) as exc:  # ValueError: a URL the driver cannot split
             raise self._failure(exc, opening=True) from None
         try:
-            self._migrate()
+            if read_only:
+                self._execute("SET default_transaction_read_only = on")
+                if self._version() != SCHEMA_VERSION:
+                    raise StoreError(
+                        f"the history store is at schema version {self._version()}, not {SCHEMA_VERSION}: "
+                        "it is read as it is only when current",
+                        location=SourceLocation(self.location),
+                        hint="open it once for writing (e.g. 'setupfix history show') to migrate it",
+                    )
+            else:
+                self._migrate()
         except BaseException as exc:
             self.close()
             if isinstance(exc, psycopg.Error):
@@ -210,6 +220,10 @@ class PostgresStore(ClaimingStore):
                 copy.write_row(row)
 
     def _begin(self) -> None:
+        if self.read_only:
+            raise StoreError(
+                "the history store was opened read-only and cannot be written", location=SourceLocation(self.location)
+            )
         self.conn.execute("BEGIN")
         # the writers of one machine take turns (as every writer of an SQLite file does): two imports of
         # overlapping reports in another order never wait for each other in a circle; machines write at once

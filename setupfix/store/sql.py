@@ -428,13 +428,19 @@ class SQLStore(Store):
         return [MachineSummary(m, **counts[m]) for m in sorted(counts)]
 
     # -- a whole copy (history migrate) -------------------------------------------------------
-    @guarded
     def dump(self, table: str) -> Iterator[tuple[Any, ...]]:
-        """Every row of ``table`` (:data:`setupfix.store.audit.TABLES`) in its columns' order."""
+        """Every row of ``table`` (:data:`setupfix.store.audit.TABLES`) in its columns' order.
+
+        A failure while the rows are read (a damaged page, a text that is not UTF-8) is a
+        :class:`StoreError` too, wherever the caller iterates.
+        """
         _, columns, order = next(t for t in TABLES if t[0] == table)
-        cur = self._execute(f"SELECT {', '.join(columns)} FROM {table} ORDER BY {order}")
-        while batch := cur.fetchmany(10_000):
-            yield from (tuple(r) for r in batch)
+        try:
+            cur = self._execute(f"SELECT {', '.join(columns)} FROM {table} ORDER BY {order}")
+            while batch := cur.fetchmany(10_000):
+                yield from (tuple(r) for r in batch)
+        except self.errors as exc:
+            raise self._failure(exc) from None
 
     @guarded
     def count(self, table: str) -> int:
