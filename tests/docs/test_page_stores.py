@@ -4,11 +4,13 @@ one names its own (the batch how-to and the plant how-to both wrote ``shop.db``,
 
 from __future__ import annotations
 
+import os
 import re
 from collections import defaultdict
 from pathlib import Path
 
-from docs_console import PAGES, ROOT, blocks
+import pytest
+from docs_console import DOCS, PAGES, ROOT, blocks, run_page
 
 _STORE = re.compile(r"--(?:db|store|from)[ =](?!postgresql:)(\S+)")
 
@@ -46,3 +48,13 @@ def test_a_shared_store_is_named(tmp_path: Path) -> None:
     )
     assert shared_stores([one, two]) == {"plant.db": ["one.md", "two.md"]}
     assert store_names(two) == {"plant.db"}
+
+
+@pytest.mark.slow
+def test_the_batch_and_plant_pages_followed_in_one_folder(tmp_path: Path) -> None:
+    """A reader who does the batch how-to, then the plant how-to, in one folder gets what each shows."""
+    if os.environ.get("SETUPFIX_DOCS_EXAMPLES", "") == "skip":
+        pytest.skip("SETUPFIX_DOCS_EXAMPLES=skip: the docs build runs the examples (.ci/run)")
+    folder = tmp_path / "shop"
+    assert run_page(DOCS / "howto" / "batch-and-history.md", folder) == []
+    assert run_page(DOCS / "howto" / "plant-database.md", folder) == []
