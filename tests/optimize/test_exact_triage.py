@@ -495,7 +495,7 @@ def test_an_incomplete_triage_leximin_is_a_stopped_solve(guide_pins_model: Proce
     assert result.triage is not None and not result.triage.leximin_complete
     assert result.status == "time_limit"
     assert result.stopped is not None and result.stopped.detail is not None
-    assert result.stopped.stage == "triage" and result.stopped.reason == "time limit"
+    assert result.stopped.stage == "triage" and result.stopped.reason == "work limit"
     assert "leximin" in result.stopped.detail
     assert result.given_up == ("P1D1",) and np.all(np.delete(problem.margins(result.x), 0) >= 0)
     assert "triage stage stopped" in stopped_rule(result, recommended=True).message

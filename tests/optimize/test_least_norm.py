@@ -142,7 +142,7 @@ def test_a_stopped_least_norm_proof_returns_a_certified_near_least_correction(mo
     monkeypatch.setattr(least_norm_stage, "chord_proof", out_of_time)
     result = get_optimizer("exact", objective="paper", time_limit=30.0).solve(problem)
     assert result.status == "time_limit"
-    assert result.stopped == Stopped("least norm", "time limit")
+    assert result.stopped == Stopped("least norm", "work limit")
     assert "least-norm stage" in result.message and "certified" in result.message
     assert result.margin_after == pytest.approx(proven.margin_after, abs=1e-12)  # the grid optimum is kept
     ratio = result.norm_ratio_max
