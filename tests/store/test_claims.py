@@ -223,20 +223,24 @@ def test_a_store_of_older_batches_keeps_its_processed_reports(tmp_path: Path) ->
 def test_a_store_that_cannot_finish_the_claims_says_the_output_stands_and_the_next_run_redoes_them(
     tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    """The store fills up after the output is written: one line naming the store, the offsets in place, and
-    no report marked processed (SQLITE_FULL from SQLite's page limit, set just before the claims finish)."""
+    """The store refuses to write once the output is written: one line naming the store, the offsets in place,
+    the reports stored whole with their recommendations but none marked processed, so the next run corrects
+    them again (the connection is query-only while the claims finish: SQLITE_READONLY)."""
     from setupfix.cli import main
     from setupfix.usecases import batch_records
 
     folder = tmp_path / "reports"
-    reports(folder, 60)  # their recommendations need pages the store does not have
+    reports(folder, 60)
     db, out = tmp_path / "h.db", tmp_path / "out.csv"
     real = batch_records.Claims.finish
 
     def full(self: batch_records.Claims) -> None:
-        db_ = self.store.db  # type: ignore[attr-defined]  # the SQLite store's connection
-        db_.execute(f"PRAGMA max_page_count = {db_.execute('PRAGMA page_count').fetchone()[0]}")
-        return real(self)
+        con = self.store.db  # type: ignore[attr-defined]  # the SQLite store's connection
+        con.execute("PRAGMA query_only = ON")
+        try:
+            return real(self)
+        finally:
+            con.execute("PRAGMA query_only = OFF")  # (the claims are then freed, as after a full disk)
 
     monkeypatch.setattr(batch_records.Claims, "finish", full)
     argv = [
@@ -254,9 +258,10 @@ def test_a_store_that_cannot_finish_the_claims_says_the_output_stands_and_the_ne
     assert main(argv) == 1
     err = capsys.readouterr().err
     line = next(x for x in err.splitlines() if x.startswith("error:"))
-    assert "h.db" in line and "disk is full" in line and "corrected again by the next run" in line
+    assert "h.db" in line and "cannot be written" in line and "corrected again by the next run" in line
+    assert "60 report(s) of this run were stored" in line
     assert len(out.read_text().splitlines()) > 1
     monkeypatch.undo()
-    assert stored_batch_reports(db) == []
+    assert len(set(stored_batch_reports(db))) == 60 and claims_of(db)[1:] == (0, 0)
     assert main([*argv, "--json"]) == 0
     assert json.loads(capsys.readouterr().out)["reports"] == 60
