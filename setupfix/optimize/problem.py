@@ -376,7 +376,8 @@ class Stopped:
     stage : str
         ``"lp bound"``, ``"grid optimum"``, ``"leximin"``, ``"least norm"`` or ``"triage"``.
     reason : str
-        ``"time limit"`` or what the solver said.
+        ``"work limit"`` (the settings' work budget: the same under any load), ``"time limit"`` (the
+        wall-clock guard against a hang: then no correction is given) or what the solver said.
     detail : str, optional
         The triage's own words on what stopped (its step and reason); None for the other stages.
     """
