@@ -267,11 +267,10 @@ def stopped_rule(result: OptimizeResult, *, recommended: bool) -> RuleEffect:
             if result.status == "time_limit"
             else f"not solved: the solver failed{f' ({reason})' if reason else ''}"
         )
-        advice = "allow more time (--time-limit)" if limit == "time limit" else "simplify the model"
+        advice = "allow more time (--time-limit) or check the model" if limit == "time limit" else "check the model"
         return RuleEffect(
             "not_solved",
-            f"{what}{at}: no proven correction, nothing is recommended (this is not "
-            f"'no change needed'); {advice} or check the model",
+            f"{what}{at}: no proven correction, nothing is recommended (this is not 'no change needed'); {advice}",
         )
     ratio = result.norm_ratio_max
     certified = []
