@@ -4,7 +4,9 @@ Callers see only the :class:`Store` protocol and :func:`open_store`.  Two back e
 keep the same rules, schema version and migrations: one SQLite file (:mod:`.sqlite`,
 stdlib ``sqlite3``, WAL mode) -- the embedded default, no server needed -- and a
 PostgreSQL database (:mod:`.postgres`, psycopg 3, the ``plant`` extra), chosen by the
-location: a ``postgresql://`` (or ``postgres://``) URL is a server, anything else a file.
+location: anything that looks like a URL is a server (:mod:`.urls`: read as a URL or refused,
+its password never shown), anything else a file.  A file this process cannot write (or one
+opened ``read_only``) is read without being changed.
 Their common queries are in :mod:`.sql`.
 
 A store handle belongs to one machine (``machine``, default :data:`DEFAULT_MACHINE`) and
