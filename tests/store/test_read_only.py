@@ -189,3 +189,19 @@ def test_a_v3_source_is_read_through_a_copy_and_stays_v3(tmp_path: Path) -> None
         assert store.measurements()["deviation"].tolist() == [0.03]
         assert version_of(store.db) == SCHEMA_VERSION  # type: ignore[attr-defined]
         assert next(iter(store.dump("batch_claim")))[:3] == ("default", "c" * 64, 1)
+
+
+def test_a_server_store_opened_read_only_is_read_and_never_written(location: str) -> None:
+    """On both back ends: ``read_only`` reads what is there and refuses every write in one StoreError."""
+    with open_store(location, machine="M1") as store:
+        import_history(store, ImportRequest(tuple(REPORTS[:2])))
+    with open_store(location, machine="M1", read_only=True) as store:
+        assert [r.name for r, _ in report_tables(store)] == [p.name for p in REPORTS[:2]]
+        for write in (
+            lambda: import_history(store, ImportRequest((REPORTS[2],))),
+            lambda: store.add_corrections(store.corrections()),
+        ):
+            with pytest.raises(StoreError, match="cannot be written"):
+                write()
+    with open_store(location, machine="M1") as store:
+        assert len(store.reports()) == 2
