@@ -91,6 +91,12 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
     )
     add_machine_options(p)
     p.add_argument("--force", action="store_true", help="correct reports the store already holds again")
+    p.add_argument(
+        "--include-excluded",
+        action="store_true",
+        help="with --store and the model's EWMA: the stored reports marked rejected, failed or draft enter the "
+        "smoothing too (left out by default, and counted)",
+    )
     p.add_argument("--json", action="store_true", help="the summary as JSON on stdout")
     add_report_options(p)
     add_thermal_options(p)
@@ -133,6 +139,7 @@ def run(args: argparse.Namespace) -> int:
                 store=store,
                 force=args.force,
                 program_number=args.program_number,
+                include_excluded=args.include_excluded,
             )
     finally:
         signal.signal(signal.SIGTERM, previous)

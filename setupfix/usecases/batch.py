@@ -273,6 +273,7 @@ def run_batch(
     force: bool = False,
     progress: Callable[[int, int, Outcome], None] | None = None,
     program_number: int | None = None,
+    include_excluded: bool = False,
 ) -> BatchSummary:
     """Correct every report below ``folder`` with ``request`` and write one offsets file ``out``.
 
@@ -307,6 +308,9 @@ def run_batch(
     program_number : int, optional
         The first program's number (``--program-number``); default each program's own
         derived number, distinct in the run (:class:`~setupfix.outputs.batch_output.ProgramNumbers`).
+    include_excluded : bool
+        The store's reports marked rejected, failed or draft enter the smoothing history too
+        (``--include-excluded``); by default they are left out and a note says how many.
 
     Returns
     -------
@@ -335,19 +339,28 @@ def run_batch(
         youngest = time.time() - max(m for _, _, m in files) / 1e9
         if youngest < settle:
             time.sleep(settle - youngest)
-    held = stored_parts(model, store) if store is not None else []  # one reading of the store's reports
+    held = stored_parts(model, store, include_excluded=include_excluded) if store is not None else []  # read once
     if model.safety.ewma < 1.0 and (store is not None or request.history is not None):
-        base = request.history if request.history is not None else History.from_store(model, store, stored=held)  # type: ignore[arg-type]  # store is set: tested above
-        request = dataclasses.replace(request, history=batch_history(request, base, [f for f, _, _ in files]))
+        if request.history is not None:
+            base = request.history
+        else:
+            assert store is not None  # tested above
+            base = History.from_store(model, store, include_excluded=include_excluded, stored=held)
+        paths = [f for f, _, _ in files]
+        request = dataclasses.replace(
+            request, history=batch_history(request, base, paths, include_excluded=include_excluded)
+        )
     elif store is not None and request.history is None:  # the coverage stand-ins: the store's parts (as correct)
-        request = dataclasses.replace(request, history=History.from_store(model, store, stored=held))
+        request = dataclasses.replace(
+            request, history=History.from_store(model, store, include_excluded=include_excluded, stored=held)
+        )
     measured = _Measured(model, [] if force else held)
     summary = Tally()
     summary.failed += listing.problems  # named, never dropped: an unreadable folder, a broken link, …
     left_out = request.history.excluded if request.history is not None and model.safety.ewma < 1.0 else 0
     if left_out and request.history is not None:  # said once for the run, not with every report's smoothing
         request = dataclasses.replace(request, history=dataclasses.replace(request.history, excluded=0))
-        note = excluded_note(left_out, "the smoothing history", option=False)
+        note = excluded_note(left_out, "the smoothing history")
         summary.notes.append((visible_name(store.location if store is not None else "history"), note))
     summary.notes += [
         (path, Note(f"symbolic link to {target}: read as a report", None, "folder")) for path, target in listing.links
@@ -459,14 +472,16 @@ class _Measured:
             self._add(contents[k], outcome.sha256, shown)
 
 
-def batch_history(request: CorrectRequest, base: History, files: Sequence[str | Path]) -> History:
+def batch_history(
+    request: CorrectRequest, base: History, files: Sequence[str | Path], *, include_excluded: bool = False
+) -> History:
     """``base`` plus the parts of every report in ``files``, read as ``history import`` stores them.
 
     A report that cannot be read or matched adds nothing here (its correction names
     the reason); a part already held (the same measurement) is not added twice; a report
     with a part that is rejected whatever its history (:func:`rejected`) adds nothing
-    either: the store keeps it marked and the history leaves it out, as ``correct
-    --store`` after the batch would.
+    either (unless ``include_excluded``): the store keeps it marked and the history leaves
+    it out, as ``correct --store`` after the batch would.
     """
     parts: list[PartMeasurement] = []
     for path in files:
@@ -475,7 +490,7 @@ def batch_history(request: CorrectRequest, base: History, files: Sequence[str | 
             found = history_parts(request.model, read.table, source=str(path))
         except (SetupfixError, OSError):
             continue
-        if not any(rejected(request.model, p) for p in found):
+        if include_excluded or not any(rejected(request.model, p) for p in found):
             parts += found
     return base.with_parts(parts)
 

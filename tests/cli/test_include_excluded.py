@@ -67,3 +67,28 @@ def test_diagnose_leaves_the_marked_report_out_says_so_and_takes_it_in_when_aske
     assert f"note: {SAID}" in run(capsys, *base)
     doc = json.loads(run(capsys, *base, "--json", "--include-excluded"))
     assert doc["excluded_reports"] == 0 and doc["cycles"] == 6 and doc["rms_before"] > 0.03
+
+
+def test_batch_smoothing_leaves_the_marked_report_out_says_so_once_and_takes_it_in_when_asked(
+    store: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    model = tmp_path / "ewma.toml"
+    model.write_text((GUIDE / "model.toml").read_text() + "\n[safety]\newma = 0.5\n")
+    reports = tmp_path / "new"
+    reports.mkdir()
+    for k, day in ((7, "08"), (8, "09")):
+        text = (GUIDE / "cycle_02.csv").read_text().replace("cycle 02", f"cycle 0{k}")
+        (reports / f"cycle_0{k}.csv").write_text(text.replace("2026-11-03T", f"2026-11-{day}T"))
+    rows = {}
+    for extra in ([], ["--include-excluded"]):
+        capsys.readouterr()
+        copy = tmp_path / f"copy{len(extra)}.db"
+        copy.write_bytes(store.read_bytes())
+        out = tmp_path / f"o{len(extra)}.csv"
+        args = ["batch", str(reports), "--model", str(model), "--out", str(out), "--store", str(copy), "--settle", "0"]
+        assert main([*args, *extra]) == 0
+        err = capsys.readouterr().err
+        said = err.count("1 stored report(s) marked rejected, failed or draft left out of the smoothing history")
+        assert said == (0 if extra else 1), err
+        rows[len(extra)] = out.read_text()
+    assert rows[0] != rows[1]  # the failed report's 0.3 mm entered the smoothing when asked

@@ -58,8 +58,19 @@ def test_a_rejected_report_of_the_batch_is_left_out_of_the_others_smoothing(tmp_
     with open_store(tmp_path / "dirty.db") as store:
         again = run_batch(CorrectRequest(model), dirty, tmp_path / "again.csv", settle=0, store=store, force=True)
     said = [str(n) for _, n in again.notes if n.kind == "excluded"]
-    assert said == ["1 stored report(s) marked rejected, failed or draft left out of the smoothing history"]
+    assert said == [
+        "1 stored report(s) marked rejected, failed or draft left out of the smoothing history "
+        "(--include-excluded takes them in)"
+    ]
     assert rows_by_report(tmp_path / "again.csv")["cycle_05.csv"] == got["clean"]["cycle_05.csv"]
+    # asked to, the batch takes the marked report in, stored and of the run alike: cycle 05 moves
+    with open_store(tmp_path / "dirty.db") as store:
+        request = CorrectRequest(model)
+        taken = run_batch(
+            request, dirty, tmp_path / "taken.csv", settle=0, store=store, force=True, include_excluded=True
+        )
+    assert not [n for _, n in taken.notes if n.kind == "excluded"]
+    assert rows_by_report(tmp_path / "taken.csv")["cycle_05.csv"] != got["clean"]["cycle_05.csv"]
 
 
 def test_rejected_is_the_reject_rule_on_the_part_as_measured(tmp_path: Path) -> None:
