@@ -298,9 +298,10 @@ def run_batch(
     store : Store, optional
         History store: each report is claimed in it before it is corrected
         (:class:`~setupfix.usecases.batch_records.Claims`); reports a batch processed are
-        skipped (unless ``force``), and so are reports another running batch holds.  Each corrected report is added as
-        it is done; its recommendations, and the mark that it was processed, are added
-        in one transaction committed only after the output is written.  With the
+        skipped (unless ``force``), and so are reports another running batch holds.  Each
+        corrected report is stored with its recommendations (marked when rejected, failed
+        or from a draft model) in one transaction as it is done; the mark that it was
+        processed is added only after the output is written.  With the
         model's EWMA (λ < 1) the smoothing history is the store (or
         ``request.history``) plus every report of the batch (:func:`batch_history`).
     progress : callable, optional
@@ -404,7 +405,7 @@ def run_batch(
     finally:
         if claims is not None:
             claims.release()
-    return summary.summary(time.perf_counter() - start, written)
+    return summary.summary(time.perf_counter() - start, written, claims)
 
 
 class _Measured:
