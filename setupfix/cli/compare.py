@@ -51,6 +51,11 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
     )
     add_machine_options(p)
     p.add_argument(
+        "--include-excluded",
+        action="store_true",
+        help="with --store: the stored reports marked rejected, failed or draft are read too, as correct reads them",
+    )
+    p.add_argument(
         "--current",
         metavar="FILE",
         default=None,
@@ -79,6 +84,7 @@ def run(args: argparse.Namespace) -> int:
         solve=SolveOptions("exact", None, args.time_limit, "paper"),
         current=args.current,
         store=store_ref(args, args.store),
+        include_excluded=args.include_excluded,
     )
     request = CompareRequest(correct, trials=args.trials, seed=args.seed)
     comparison = compare_report(request, args.report)

@@ -66,6 +66,12 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
     )
     add_machine_options(p)
     p.add_argument(
+        "--include-excluded",
+        action="store_true",
+        help="with --store: the stored reports marked rejected, failed or draft enter the smoothing and the "
+        "stand-ins too (left out by default, and counted)",
+    )
+    p.add_argument(
         "--html",
         metavar="OUT",
         default=None,
@@ -111,6 +117,7 @@ def correct_request(args: argparse.Namespace) -> CorrectRequest:
         temperatures=args.temperatures,
         at=args.at,
         thermal_dead_band=args.thermal_dead_band,
+        include_excluded=args.include_excluded,
     )
 
 

@@ -255,12 +255,14 @@ def load_request(
     temperatures: str | Path | None = None,
     at: str | None = None,
     thermal_dead_band: float | None = None,
+    include_excluded: bool = False,
 ) -> CorrectRequest:
     """A :class:`CorrectRequest` with every input file read once (the CLI's and the TUI's way to build one).
 
     ``current``: the controller's current offsets (``register,value``); ``store``: the
     history store (the smoothing's earlier parts when ``[safety] ewma`` < 1, and the recent
-    measurements that stand in for dimensions a report lacks);
+    measurements that stand in for dimensions a report lacks), its reports marked rejected,
+    failed or draft left out unless ``include_excluded`` (the smoothing's notes count them);
     ``thermal`` and ``temperatures`` (together): the feed-forward's inputs.
 
     Raises
@@ -278,7 +280,7 @@ def load_request(
     history = None
     if history_store is not None:
         with history_store as opened:  # read once: the smoothing needs the earlier parts and the log
-            history = History.from_store(model, opened)
+            history = History.from_store(model, opened, include_excluded=include_excluded)
     inputs = (
         load_thermal(thermal, temperatures, at=at, dead_band=thermal_dead_band)
         if thermal is not None and temperatures is not None
