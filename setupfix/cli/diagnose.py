@@ -102,7 +102,7 @@ def _f(v: float | None, digits: int = 4) -> str:
 
 def format_diagnosis(out: DiagnoseOutcome) -> str:
     """Human summary of a diagnosis."""
-    from setupfix.views.present import verdict_line
+    from setupfix.views.analysis import draft_next
 
     d = out.diagnosis
     unit = d.layout.unit
@@ -157,10 +157,9 @@ def format_diagnosis(out: DiagnoseOutcome) -> str:
     lines.append(
         f"next correction from: {d.next_from.source}" + (f" ({d.next_from.reason})" if d.next_from.reason else "")
     )
-    if out.draft:  # no number and no "none": the draft is said as ``correct`` says it
-        cycle = out.next_cycle
-        why = verdict_line(cycle) if cycle is not None else f"the model {out.input.model.source} is a draft"
-        lines.append(f"next correction: no correction, the model is a draft — {why}")
+    draft = draft_next(out)
+    if draft is not None:  # no number and no "none": the draft is said as ``correct`` says it
+        lines.append(f"next correction: {draft}")
     else:
         moves = {k: v for k, v in out.next_correction.items() if v != 0}
         lines.append("next correction: " + (", ".join(f"{k} {v:+.4f}" for k, v in moves.items()) or "none"))

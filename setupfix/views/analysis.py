@@ -21,6 +21,7 @@ from setupfix.model import PartMeasurement, ProcessModel
 from setupfix.thermal.prediction import DriftPrediction
 from setupfix.usecases.compare import Comparison
 from setupfix.usecases.diagnosis import DiagnoseOutcome, note_text
+from setupfix.views.present import verdict_line
 
 __all__ = [
     "convergence",
@@ -169,6 +170,17 @@ class DiagnosisView:
     walk_centre: tuple[tuple[str, float, float], ...] = ()  #: name, RMS and mean |·| from the tolerance centre
     next_from: str = "augmented"  #: the model the next correction comes from (augmented, ewma, declared)
     held: tuple[str, ...] = ()  #: registers the centre rule holds (model IDs)
+    draft: str | None = None  #: a draft model's next correction as said (:func:`draft_next`): no number
+
+
+def draft_next(outcome: DiagnoseOutcome) -> str | None:
+    """A draft model's next correction as every door says it: no number and not "none", but why
+    (``correct``'s verdict line of the next cycle); None when the model is no draft."""
+    if not outcome.draft:
+        return None
+    cycle = outcome.next_cycle
+    why = verdict_line(cycle) if cycle is not None else f"the model {outcome.input.model.source} is a draft"
+    return f"no correction, the model is a draft — {why}"
 
 
 def diagnosis_view(outcome: DiagnoseOutcome) -> DiagnosisView:
@@ -200,4 +212,5 @@ def diagnosis_view(outcome: DiagnoseOutcome) -> DiagnosisView:
         else tuple((name, b.centre_rms, b.centre_mean_abs) for name, b in d.walk.budgets.items()),
         next_from=d.next_from.source,
         held=() if d.centred is None else tuple(r for r, h in zip(d.layout.register_ids, d.centred, strict=True) if h),
+        draft=draft_next(outcome),
     )
