@@ -35,6 +35,7 @@ from setupfix.inputs.series_logs import TempLog, store_temperatures, temperature
 from setupfix.inputs.stores import StoreRef
 from setupfix.model import PartMeasurement, ProcessModel, load_model, match_parts
 from setupfix.model.effects import EffectsSection
+from setupfix.model.measurements import did_you_mean
 
 __all__ = ["SeriesInput", "load_series", "channel_span"]
 
@@ -202,9 +203,11 @@ def load_series(
             )
     unmatched = sorted({u for p in parts for u in p.unmatched})
     if unmatched:
+        meant = {u: m for p in parts for u, m in did_you_mean(model, p).items()}  # correct's suggestions
+        named = [f"{u} (did you mean {meant[u]!r}?)" if u in meant else u for u in unmatched]
         notes.append(
             Note(
-                f"{len(unmatched)} characteristic(s) match no dimension: {', '.join(unmatched[:6])}"
+                f"{len(unmatched)} characteristic(s) match no dimension: {', '.join(named[:6])}"
                 + (" …" if len(unmatched) > 6 else ""),
                 None,
                 "match",
