@@ -144,7 +144,8 @@ def run(args: argparse.Namespace) -> int:
     if args.action == "migrate":
         if not Path(args.source).is_file():
             raise StoreError("no history store here", location=SourceLocation(args.source))
-        with open_store(args.source) as source, open_store(where, **handle) as target:
+        # the source is only read: opened read-only and checked whole before a row is copied
+        with open_store(args.source, read_only=True) as source, open_store(where, **handle) as target:
             copied = migrate_history(source, target)
         print(f"{args.source} → {target.location}: " + ", ".join(f"{n} {t}" for t, n in copied.items()))
         return 0

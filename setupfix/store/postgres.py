@@ -289,8 +289,12 @@ _STATES: tuple[tuple[str, str, str | None], ...] = (
         f"the history store is locked by another process (waited {LOCK_TIMEOUT_S:g} s)",
         "another setupfix is writing the same rows: run again when it is done",
     ),
-    ("40P01", "the history store's writers waited for each other (deadlock); nothing was stored", "run again"),
-    ("40001", "another process wrote the same rows at once; nothing was stored", "run again"),
+    (
+        "40P01",
+        "the history store's writers waited for each other (deadlock); the transaction under way was not stored",
+        "run again",
+    ),
+    ("40001", "another process wrote the same rows at once; the transaction under way was not stored", "run again"),
     ("57P", "the database server shut down", "run again when it is back"),
     ("08", "the connection to the database server failed", "is the server running and reachable?"),
 )
@@ -337,5 +341,5 @@ def _diagnose(exc: BaseException, secrets: Sequence[str], opening: bool) -> tupl
             "is the server running, and the host and port right?",
         )
     if "closed" in lowered or "terminat" in lowered or "consuming input failed" in lowered or "server" in lowered:
-        return "the connection to the database server was lost; nothing of the current import was stored", "run again"
+        return "the connection to the database server was lost; the transaction under way was not stored", "run again"
     return f"history store: {text}", None

@@ -216,7 +216,9 @@ class Claims:
 
 def _cause(exc: StoreError) -> str:
     """What went wrong, without a back end's claim about what the failed transaction left (said here)."""
-    return re.sub(r"; nothing( of the current import)? was stored$", "", exc.message)
+    return re.sub(
+        r"; (nothing( of the current import)? was stored|the transaction under way was not stored)$", "", exc.message
+    )
 
 
 def exclusion(verdicts: Sequence[str], solved: Sequence[bool], *, draft: bool) -> str | None:
