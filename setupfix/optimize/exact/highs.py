@@ -43,7 +43,7 @@ from highspy._core import (
 )
 from scipy.sparse import csc_array, vstack
 
-from setupfix.optimize.exact.work import current, model_size, run_limits, run_work, wall
+from setupfix.optimize.exact.work import current, mip_root_work, model_size, run_limits, run_work, wall
 
 __all__ = ["FEASIBILITY_TOL", "INF", "Colwise", "LinearModel", "Solve"]
 
@@ -478,6 +478,7 @@ class LinearModel:
             info.ipm_iteration_count,
             info.mip_node_count,
             meter.node_work,
+            mip_root_work(self.n_rows, int(self._integer.sum())) if self.is_mip else 0.0,
         )
         status = _STATUS_NAMES.get(model_status, "error") if run != HighsStatus.kError else "error"
         has_point = info.primal_solution_status == 2

@@ -113,7 +113,7 @@ class ExactSettings:
         ``bench/leximin_counts.py`` compares without).
     """
 
-    work_limit: float = 500_000.0
+    work_limit: float = 1_000_000.0
     node_work: float = 50.0
     quantum: float = 1e-3
     ellipsoid_max_registers: int = 120

@@ -4,8 +4,9 @@ Which stage of a solve ends, and where, must not depend on the machine's load: t
 gives the same correction on an idle box and on one whose every core is busy.  So the solve's
 stages share a budget of **work units** (``ExactSettings.work_limit``), not of seconds.  A HiGHS
 run costs its model's size s = (rows + columns) / 100 (at least 1) for its set-up, and s per
-simplex or QP iteration, :data:`IPM_ITERATION` · s per interior-point iteration and
-``ExactSettings.node_work`` · s per branch-and-bound node (:func:`run_work`): one unit is about one
+simplex or QP iteration, :data:`IPM_ITERATION` · s per interior-point iteration,
+``ExactSettings.node_work`` · s per branch-and-bound node and, for a MIP, its root's presolve,
+probing and cuts by the model's size (:func:`mip_root_work`) (:func:`run_work`): one unit is about one
 simplex iteration on a 100-row model, some 10 µs on the 2-core test machine
 (``bench/work_limits.py``).  HiGHS is given the matching iteration and node limits
 (:func:`run_limits`), which it obeys deterministically (single thread, no time-dependent
@@ -33,9 +34,11 @@ __all__ = [
     "CURRENT",
     "IPM_ITERATION",
     "MIN_RUN",
+    "MIP_ROOT_DIVISOR",
     "Meter",
     "charge",
     "current",
+    "mip_root_work",
     "model_size",
     "now",
     "run_limits",
@@ -49,6 +52,8 @@ __all__ = [
 MIN_RUN = 1000.0
 #: An interior-point iteration counts this many simplex iterations (a factorisation each).
 IPM_ITERATION = 20.0
+#: A MIP's root work is rows × integer columns / this (:func:`mip_root_work`).
+MIP_ROOT_DIVISOR = 50.0
 #: HiGHS's own limits are ints; no run is given more than this.
 _MAX_INT = 2**31 - 1
 
@@ -130,10 +135,17 @@ def model_size(rows: int, cols: int) -> float:
     return max((rows + cols) / 100.0, 1.0)
 
 
-def run_work(size: float, simplex: int, ipm: int, nodes: int, node_work: float) -> float:
+def run_work(size: float, simplex: int, ipm: int, nodes: int, node_work: float, root: float = 0.0) -> float:
     """Work units of one HiGHS run: its set-up and its iterations and nodes, each ``size`` units
-    (negative counts, HiGHS's "not run", count 0)."""
-    return size * (1.0 + max(simplex, 0) + IPM_ITERATION * max(ipm, 0) + node_work * max(nodes, 0))
+    (negative counts, HiGHS's "not run", count 0), and ``root`` (:func:`mip_root_work`)."""
+    return size * (1.0 + max(simplex, 0) + IPM_ITERATION * max(ipm, 0) + node_work * max(nodes, 0)) + root
+
+
+def mip_root_work(rows: int, integers: int) -> float:
+    """Work units of a MIP's presolve, probing and root cuts, which HiGHS counts in neither iterations nor
+    nodes: rows × integer columns / :data:`MIP_ROOT_DIVISOR` (0.1–1 s at 1,000 rows × 460 binaries,
+    some 10,000 simplex iterations on a 100-row model; ``bench/work_limits.py``)."""
+    return rows * integers / MIP_ROOT_DIVISOR
 
 
 def run_limits(allowance: float, node_work: float, size: float = 1.0) -> tuple[int, int, int]:
