@@ -61,7 +61,7 @@ from setupfix.core.atomic import process_alive, process_started
 from setupfix.core.errors import Note, ParameterError, ParseError, SetupfixError, SourceLocation
 from setupfix.correction.offsets import offset_rows
 from setupfix.correction.pose import pose_problem
-from setupfix.correction.recommend import beyond_band
+from setupfix.correction.recommend import beyond_band, stopped_where
 from setupfix.correction.safety import reject_mask
 from setupfix.inputs.duplicates import Content, ContentIndex, part_content
 from setupfix.inputs.smoothing import excluded_note, history_parts, stored_parts
@@ -170,6 +170,10 @@ def _correct_one(path: str, size: int, mtime_ns: int, claimed: str = "", refused
                 out.notes.append(Note(cycle.result.message, SourceLocation(shown), "solver"))
             elif _WORK.controller != "csv":
                 out.programs.append((cycle.part.part, offsets_text([cycle], _WORK.controller, request.current)))
+            where = stopped_where(cycle.result)
+            if cycle.solved and where:  # a correction from a stopped solve says so, as correct does
+                said = [r.message for r in cycle.recommendation.rules if r.rule == "stopped"]
+                out.notes.append(Note(said[0] if said else f"stopped: {where}", SourceLocation(shown), "solver"))
             out.parts.append(cycle.part.part)
             contents.append(_content(cycle.part, request))
     except SetupfixError as exc:

@@ -35,7 +35,7 @@ from dataclasses import dataclass
 
 from setupfix.core.errors import ExportError, SourceLocation
 from setupfix.correction.offsets import OffsetRow, offset_rows
-from setupfix.correction.recommend import DRAFT_KEY
+from setupfix.correction.recommend import DRAFT_KEY, verdict_cell
 from setupfix.model import ProcessModel
 from setupfix.outputs.controllers import (
     PROGRAM_NUMBERS,
@@ -78,7 +78,7 @@ def cycle_rows(cycle: CycleCorrection, current: Mapping[str, float] | None = Non
         report=cycle.part.report,
         part=cycle.part.part,
         current=current,
-        verdict=cycle.verdict,
+        verdict=verdict_cell(cycle.recommendation),  # a stopped solve is never a plain apply or hold
     )
 
 
