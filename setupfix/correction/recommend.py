@@ -220,10 +220,15 @@ def verdict_cell(rec: Recommendation) -> str:
     """The verdict as a file's cell says it (the offsets CSV, batch's progress): ``apply``, ``hold``,
     ``reject``; a stopped solve is never a plain one: ``not solved (time limit in the lp bound stage)``
     (nothing proven, every delta 0) or ``apply (stopped: work limit in the leximin stage)``."""
-    where = stopped_where(rec.result)
-    if not rec.solved:
+    return verdict_text(rec.verdict, rec.solved, stopped_where(rec.result))
+
+
+def verdict_text(verdict: str, solved: bool, where: str) -> str:
+    """:func:`verdict_cell` from its parts (a stored recommendation's JSON has them): the verdict word,
+    whether anything was proven, and :func:`stopped_where`'s text ("" for a proved solve)."""
+    if not solved:
         return f"not solved ({where})" if where else "not solved"
-    return f"{rec.verdict} (stopped: {where})" if where else rec.verdict
+    return f"{verdict} (stopped: {where})" if where else verdict
 
 
 def draft_hold(posed: PosedProblem, model_file: str, optimizer: str = "exact") -> Recommendation:

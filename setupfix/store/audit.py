@@ -150,6 +150,20 @@ def _delta(value: object) -> float | None:
     return number if math.isfinite(number) else None
 
 
+def _verdict(result: Mapping[str, Any]) -> str:
+    """The verdict column: a stopped solve is never a plain verdict (``not solved (…)``, ``apply (stopped: …)``)."""
+    from setupfix.correction.recommend import verdict_text  # lazily: the store opens without the solver
+
+    verdict = _text(result.get("verdict"))
+    stopped = result.get("stopped")
+    where = (
+        f"{_text(stopped.get('reason'))} in the {_text(stopped.get('stage'))} stage"
+        if isinstance(stopped, Mapping) and stopped.get("reason")
+        else ""
+    )
+    return verdict_text(verdict, result.get("solved", True) is not False, where) if verdict else verdict
+
+
 def audit_of(inputs: Mapping[str, Any], result: Mapping[str, Any]) -> Audit:
     """The audit columns of a recommendation with these ``inputs`` and ``result`` (module docstring)."""
     given = _text(inputs.get("report"))
@@ -166,7 +180,7 @@ def audit_of(inputs: Mapping[str, Any], result: Mapping[str, Any]) -> Audit:
         report=name,
         report_sha256=sha,
         part=_text(inputs.get("part") or result.get("part")),
-        verdict=_text(result.get("verdict")),
+        verdict=_verdict(result),
         rules=json.dumps(rules if isinstance(rules, list) else [], sort_keys=True),
         applied=bool(inputs.get("applied")),
         exported_to=_text(export.get("target")),
