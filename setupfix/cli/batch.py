@@ -15,6 +15,7 @@ from setupfix.cli.common import (
     add_program_number_option,
     add_report_options,
     add_thermal_options,
+    add_time_limit_option,
     check_program_number,
     shown,
     store_ref,
@@ -56,13 +57,7 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
     add_program_number_option(p)
     p.add_argument("--optimizer", default="exact", choices=sorted(OPTIMIZERS))
     p.add_argument("--seed", type=int, default=None)
-    p.add_argument(
-        "--time-limit",
-        type=float,
-        default=None,
-        metavar="SECONDS",
-        help="wall time of the exact optimiser's whole solve per cycle (default 2)",
-    )
+    add_time_limit_option(p)
     add_objective_option(p)
     p.add_argument(
         "--workers",

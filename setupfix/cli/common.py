@@ -255,3 +255,16 @@ def parse_stations(text: str | None) -> list[str] | dict[str, str] | None:
     if any("=" in t for t in items):
         raise SetupfixError(f"--stations {text!r}: give either a list (P1,P2) or pairs (part=station), not both")
     return items
+
+
+def add_time_limit_option(p: argparse.ArgumentParser) -> None:
+    """``--time-limit``: the wall-clock guard of the exact optimiser (shared by correct, batch and compare)."""
+    p.add_argument(
+        "--time-limit",
+        type=float,
+        default=None,
+        metavar="SECONDS",
+        help="wall-clock guard against a hung exact solve, per part (default 60): when it passes nothing is "
+        "recommended (HOLD, not solved); the solver's stages end on work limits, so the answer does not "
+        "depend on the machine's load",
+    )

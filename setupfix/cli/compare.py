@@ -9,6 +9,7 @@ import sys
 from setupfix.cli.common import (
     add_machine_options,
     add_report_options,
+    add_time_limit_option,
     cycles_of,
     read_options,
     store_ref,
@@ -29,13 +30,7 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
     p.add_argument(
         "--trials", type=whole_number(1, 10_000), default=12, metavar="N", help="seeded trials per method (default 12)"
     )
-    p.add_argument(
-        "--time-limit",
-        type=float,
-        default=None,
-        metavar="SECONDS",
-        help="wall time of the exact optimiser's whole solve (default 2)",
-    )
+    add_time_limit_option(p)
     p.add_argument("--seed", type=int, default=0, metavar="S", help="root of the trial seeds (default 0)")
     p.add_argument("--part", default=None, metavar="ID", help="part / cycle of the report (default: the first)")
     p.add_argument("--json", action="store_true", help="machine-readable output (shared/spec/cli-json.md)")

@@ -14,6 +14,7 @@ from setupfix.cli.common import (
     add_program_number_option,
     add_report_options,
     add_thermal_options,
+    add_time_limit_option,
     check_program_number,
     cycles_of,
     read_options,
@@ -45,13 +46,7 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
         help="exact (default: proved grid optimum) or a metaheuristic",
     )
     p.add_argument("--seed", type=int, default=None, help="seed of a metaheuristic (reproducible runs)")
-    p.add_argument(
-        "--time-limit",
-        type=float,
-        default=None,
-        metavar="SECONDS",
-        help="wall time of the exact optimiser's whole solve per part (default 2)",
-    )
+    add_time_limit_option(p)
     add_objective_option(p)
     p.add_argument("--part", default=None, metavar="ID", help="correct only this part / cycle of the report")
     p.add_argument("--json", action="store_true", help="machine-readable output (shared/spec/cli-json.md)")
