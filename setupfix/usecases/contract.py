@@ -14,6 +14,7 @@ from typing import Any
 import numpy as np
 
 from setupfix.core.errors import Note
+from setupfix.correction.numbers import unsigned_zero
 from setupfix.correction.safety import STOPPED
 from setupfix.usecases.requests import CycleCorrection
 
@@ -51,18 +52,18 @@ def cycle_json(pc: CycleCorrection) -> dict[str, Any]:
             "stopped": r.stopped.to_json() if r.stopped is not None and r.status in STOPPED else None,
             "norm_ratio_max": finite_or_none(r.norm_ratio_max),
             # f1 over every dimension (cli-json.md); the triage's kept set has its own keys
-            "margin_before": round(pc.margin_all_before, digits),
-            "margin_after": round(pc.margin_all_after, digits),
-            "bonus": round(pc.margin_all_after - pc.margin_all_before, digits),
+            "margin_before": unsigned_zero(pc.margin_all_before, digits),
+            "margin_after": unsigned_zero(pc.margin_all_after, digits),
+            "bonus": unsigned_zero(pc.margin_all_after - pc.margin_all_before, digits),
             # None when the triage kept no dimension (no budget: JSON has no infinity)
-            "margin_kept_before": round(pc.margin_before, digits) if math.isfinite(pc.margin_before) else None,
-            "margin_kept_after": round(pc.margin_after, digits) if math.isfinite(pc.margin_after) else None,
-            "norm": round(pc.norm, digits),
-            "bound": None if r.bound is None else round(r.bound, digits),
+            "margin_kept_before": unsigned_zero(pc.margin_before, digits) if math.isfinite(pc.margin_before) else None,
+            "margin_kept_after": unsigned_zero(pc.margin_after, digits) if math.isfinite(pc.margin_after) else None,
+            "norm": unsigned_zero(pc.norm, digits),
+            "bound": None if r.bound is None else unsigned_zero(r.bound, digits),
             "in_tolerance": pc.margin_after >= 0 and not pc.given_up,
             "message": r.message,
-            "corrections": {k: round(v, digits) for k, v in pc.corrections.items()},
-            "registers": [{**row, "delta": round(row["delta"], digits)} for row in pc.register_rows()],
+            "corrections": {k: unsigned_zero(v, digits) for k, v in pc.corrections.items()},
+            "registers": [{**row, "delta": unsigned_zero(row["delta"], digits)} for row in pc.register_rows()],
             "binding": [names[b] for b in pc.binding],
             "given_up": [names[b] for b in pc.given_up],
             "at_limit": list(rec.at_limit),
@@ -70,7 +71,7 @@ def cycle_json(pc: CycleCorrection) -> dict[str, Any]:
             "dimensions": [
                 {
                     k: (
-                        round(v, digits)
+                        unsigned_zero(v, digits)
                         if isinstance(v, float) and np.isfinite(v)
                         else (None if isinstance(v, float) else v)
                     )
@@ -91,7 +92,7 @@ def cycle_json(pc: CycleCorrection) -> dict[str, Any]:
 
 
 def finite_or_none(value: object) -> float | None:
-    return round(float(value), 6) if isinstance(value, float) and math.isfinite(value) else None
+    return unsigned_zero(float(value), 6) if isinstance(value, float) and math.isfinite(value) else None
 
 
 def outcome_json(cycles: Iterable[CycleCorrection]) -> dict[str, Any]:

@@ -24,6 +24,7 @@ from collections.abc import Iterable, Sequence
 
 import numpy as np
 
+from setupfix.correction.numbers import fmt
 from setupfix.correction.safety import short_list
 from setupfix.inputs.stores import StoreRef
 from setupfix.spc import NELSON_RULES, Capability
@@ -80,9 +81,7 @@ def _e(text: object) -> str:
 
 
 def _n(value: float | None, digits: int = 4, sign: bool = False) -> str:
-    if value is None or not math.isfinite(value):
-        return "—"
-    return f"{value:+.{digits}f}" if sign else f"{value:.{digits}f}"
+    return fmt(value, digits, sign=sign)
 
 
 def _page(title: str, body: Iterable[str]) -> str:
