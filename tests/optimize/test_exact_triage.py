@@ -68,6 +68,7 @@ def check_triage(problem: CorrectionProblem, result: OptimizeResult) -> None:
     assert result.margin_after == pytest.approx(sorted_kept[0], abs=1e-9)  # δ over the kept dimensions
     assert result.bound is not None and result.bound >= result.margin_after - 1e-9
     assert "given up" in result.message and "NC program or the process" in result.message
+    assert result.given_up and f"{len(result.given_up)} dimension(s) given up (" in result.message  # never 0, ()
 
 
 #: Every way of the triage: listing a small box; the forced kept set (listing switched off), which falls

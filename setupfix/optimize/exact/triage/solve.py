@@ -407,10 +407,18 @@ def triaged_result(
     kept_bound = out.kept_lp[1] if out.kept_lp is not None and known else _kept_bound(t, ~gone, clock.left())
     n_held = int(held.sum())
     message = (
-        f"no correction within the register limits brings every dimension into tolerance: "
-        f"{len(names)} dimension(s) given up ({', '.join(names)}) need the NC program or the "
-        f"process, not the setup; the {int((~gone).sum())} others (the {n_held} measured in tolerance "
-        "among them) are kept in tolerance, centred level by level, with the smallest correction"
+        (
+            f"no correction within the register limits brings every dimension into tolerance: "
+            f"{len(names)} dimension(s) given up ({', '.join(names)}) need the NC program or the "
+            f"process, not the setup; the {int((~gone).sum())} others (the {n_held} measured in tolerance "
+            "among them) are kept in tolerance, centred level by level, with the smallest correction"
+        )
+        if names
+        # never "0 dimension(s) given up ()": the triage's answer keeps every dimension
+        else (
+            f"the triage gave up no dimension: all {int((~gone).sum())} are kept in tolerance, centred "
+            "level by level, with the smallest correction"
+        )
     )
     notes.append(Note(message, kind="solver"))
     status: Status = "optimal"
