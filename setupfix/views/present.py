@@ -131,6 +131,11 @@ def format_correction(pc: CycleCorrection) -> str:
         f"{fmt(pc.margin_after, 4, sign=True)} {unit}, bonus {fmt(pc.margin_after - pc.margin_before, 4, sign=True)} "
         f"{unit}; correction norm {fmt(pc.norm, 4)} {unit}",
     ]
+    if pc.given_up:  # the budget above is the kept dimensions'; --json's margin_before/after are this one
+        lines.append(
+            f"error budget over every dimension (those given up included) before "
+            f"{fmt(pc.margin_all_before, 4, sign=True)} {unit}, after {fmt(pc.margin_all_after, 4, sign=True)} {unit}"
+        )
     if r.bound is not None:
         lines.append(f"upper bound (continuous LP): {fmt(r.bound, 4, sign=True)} {unit}")
     names = {d.id: one_line(d.name) for d in pc.model.dimensions}
