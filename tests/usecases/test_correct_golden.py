@@ -113,7 +113,7 @@ def test_json_text_and_offsets_equal_the_goldens(name: str, cases: tuple[Path, d
 def without_every_dimension_line(text: str, doc: dict[str, Any]) -> str:
     """The text without issue 37's line of the budget over every dimension, which a triage's text (and only
     it) now gives; checked to state the JSON's ``margin_before`` and ``margin_after``."""
-    parts = doc["parts"] if "parts" in doc else [doc]
+    parts = doc.get("parts", [doc])
     lines = [li for li in text.splitlines() if li.startswith("error budget over every dimension")]
     assert len(lines) == sum(1 for p in parts if p["given_up"])
     for line, part in zip(lines, (p for p in parts if p["given_up"]), strict=True):
