@@ -35,7 +35,7 @@ import numpy as np
 import numpy.typing as npt
 
 from parsers.timestamps import instant
-from setupfix.core.errors import SourceLocation
+from setupfix.core.errors import ParseError, SourceLocation
 from setupfix.model import PartMeasurement, normalise_name
 
 __all__ = [
@@ -130,17 +130,26 @@ def time_ns(value: object, where: str = "") -> int | None:
     return int(np.datetime64(stamp, "ns").astype(np.int64))
 
 
-def part_content(part: PartMeasurement, keys: Sequence[str], *, time: int | None = None) -> Content:
+def part_content(
+    part: PartMeasurement, keys: Sequence[str], *, time: int | None = None, unreadable_time: bool = False
+) -> Content:
     """The content of a part matched to a model: its deviations keyed by the model's dimensions ``keys``.
 
-    ``time``: the part's instant when the caller has read it already (else its timestamp is read).
+    ``time``: the part's instant when the caller has read it already (else its timestamp is read);
+    ``unreadable_time``: a timestamp that cannot be read counts as none (the caller refuses it where
+    the time is needed) instead of raising.
 
     Raises
     ------
     ParseError
-        A timestamp that is not ISO 8601 (named with the report).
+        A timestamp that is not ISO 8601 (named with the report), unless ``unreadable_time``.
     """
-    when = time if time is not None else time_ns(part.timestamp, part.report)
+    try:
+        when = time if time is not None else time_ns(part.timestamp, part.report)
+    except ParseError:
+        if not unreadable_time:
+            raise
+        when = None
     dev = np.asarray(part.deviation, dtype=float)
     return content_of(part.part, when, dict(zip(keys, dev.tolist(), strict=True)), source=part.report)
 

@@ -77,10 +77,7 @@ def one_per_part(parts: list[PartMeasurement]) -> tuple[list[PartMeasurement], l
     kept: list[int] = []  # slot → the part kept (the latest read)
     first: list[int] = []  # part → its slot
     for i, p in enumerate(parts):
-        try:
-            c = part_content(p, keys)
-        except ParseError:  # refused by the series' own time reading, named there
-            c = part_content(dataclasses.replace(p, timestamp=None), keys)
+        c = part_content(p, keys, unreadable_time=True)  # refused by the series' own time reading, named there
         slot = by_stamp.get((p.part, str(p.timestamp))) if p.timestamp is not None else None
         if slot is None:
             j = index.find(c)

@@ -9,7 +9,9 @@ password, nor the query (which may hold one).
 The password is what lies between the first ``:`` of the user part and the LAST ``@``: a
 password typed without percent-encoding (holding ``@``, ``:``, ``/``, ``#``, ``?`` or ``%``)
 is still read whole, so no piece of it is ever taken for a host, port or database name (which
-the driver would then quote in its messages).  The parts are given to the driver one by one
+the driver would then quote in its messages); :func:`urllib.parse.urlsplit` ends the user part at
+the first ``/``, ``?`` or ``#``, so it cannot read such a password, hence this reader.  The parts are
+given to the driver one by one
 (:meth:`ServerURL.connection`), so it never parses the text itself.
 
 A URL that cannot be read (another scheme, a missing ``//``, a port that is not a number, a

@@ -187,11 +187,7 @@ def _correct_one(path: str, size: int, mtime_ns: int, claimed: str = "", refused
 
 def _content(part: PartMeasurement, request: CorrectRequest) -> Content:
     """What ``part`` measured (a timestamp the correction did not need and cannot be read: no time)."""
-    keys = [d.id for d in request.model.dimensions]
-    try:
-        return part_content(part, keys)
-    except ParseError:
-        return part_content(dataclasses.replace(part, timestamp=None), keys)
+    return part_content(part, [d.id for d in request.model.dimensions], unreadable_time=True)
 
 
 def _correct_chunk(items: list[Item]) -> list[Done]:
