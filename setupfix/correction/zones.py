@@ -5,7 +5,8 @@ their changes, R the radius): not linear in the corrections.  The problem builde
 (:meth:`setupfix.optimize.CorrectionProblem.from_part`) replaces it by the k facets of the regular
 k-gon inscribed in the circle, n_j · (δ + d) / cos(π/k) ≤ R, so every optimiser solves it as
 one-sided linear rows; :class:`Circles` keeps the zones themselves so that every margin shown is
-the circle's (:func:`zone_margins`).  The polygon margin min_j (R − n_j·v / cos(π/k)) lies in
+the circle's (:func:`zone_margins`).  A CMM prints a position as a diameter, twice the radial
+distance (:func:`cmm_position`); the margin stays radial.  The polygon margin min_j (R − n_j·v / cos(π/k)) lies in
 [R − ‖v‖/cos(π/k), R − ‖v‖]: the error is at most ‖v‖ (1/cos(π/k) − 1) (:func:`polygon_sides`).
 """
 
@@ -16,7 +17,16 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
-__all__ = ["ZONE_TOLERANCE_MM", "MAX_SIDES", "Circles", "polygon_sides", "facet_rows", "zone_margins", "polygon_error"]
+__all__ = [
+    "ZONE_TOLERANCE_MM",
+    "MAX_SIDES",
+    "Circles",
+    "polygon_sides",
+    "facet_rows",
+    "zone_margins",
+    "polygon_error",
+    "cmm_position",
+]
 
 Array = npt.NDArray[np.float64]
 
@@ -77,6 +87,24 @@ def zone_margins(component_dev: Array, component_comp: Array, x: Array, radius: 
     """
     moved = component_dev + np.einsum("r,rzk->zk", np.asarray(x, dtype=float), component_comp)
     out: Array = radius - np.hypot(moved[:, 0], moved[:, 1])
+    return out
+
+
+def cmm_position(distance: npt.ArrayLike) -> Array:
+    """A position zone's value as a CMM report prints it: the diameter 2‖δ‖ of the circle, centred
+    on the true position, on which the feature lies (ISO 1101 position; compared with the zone's
+    diameter, as the radial distance ‖δ‖ is with its radius).
+
+    Parameters
+    ----------
+    distance : array_like of any shape
+        Radial distances ‖δ‖ ≥ 0 [unit].
+
+    Returns
+    -------
+    ndarray of the same shape [unit]
+    """
+    out: Array = 2.0 * np.asarray(distance, dtype=float)
     return out
 
 

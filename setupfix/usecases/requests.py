@@ -23,6 +23,7 @@ import pandas as pd
 from setupfix.core.errors import MatchError, Note, ParameterError, SourceLocation
 from setupfix.correction.pose import PosedProblem
 from setupfix.correction.safety import Recommendation, RuleEffect
+from setupfix.correction.zones import cmm_position
 from setupfix.inputs.cycles import ReadOptions
 from setupfix.inputs.smoothing import History
 from setupfix.model import PartMeasurement, ProcessModel
@@ -373,7 +374,9 @@ class CycleCorrection:
         ``flags`` lists ``out`` (predicted out of tolerance after the changes),
         ``out_before`` (out of tolerance before), ``binding``, ``given_up``, ``rejected``
         and ``guard`` (predicted inside the limits but within U of one).  When the
-        problem holds an estimate, ``estimate`` is it and ``deviation`` the report's.
+        problem holds an estimate, ``estimate`` is it and ``deviation`` the report's.  A position
+        zone's row also gives ``zone_position`` and ``zone_position_predicted``, the diameters a CMM
+        prints (2 × ``deviation`` and ``predicted``, the radial distances), and ``zone_diameter``.
         """
         dims = {d.id: d for d in self.model.dimensions}
         problem = self.problem
@@ -416,6 +419,10 @@ class CycleCorrection:
             }
             if measured is not None:  # smoothed or forecast: the estimate is what was corrected
                 row["estimate"], row["deviation"] = row["deviation"], float(measured[i])
+            if d.zone:  # a position as a CMM prints it: the diameter 2‖δ‖, beside the radial margin
+                row["zone_position"] = float(cmm_position(row["deviation"]))
+                row["zone_position_predicted"] = float(cmm_position(row["predicted"]))
+                row["zone_diameter"] = d.diameter
             rows.append(row)
         return rows
 
