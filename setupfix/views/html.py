@@ -401,6 +401,20 @@ def _cycle_section(pc: CycleCorrection, history: dict[str, DimensionSpc]) -> str
         f"<section><h3>Rules</h3><ul>{rules or '<li>none</li>'}</ul></section>",
         f'<h3>Dimensions</h3><table class="dimensions">{"".join(table)}</table>',
     ]
+    zones = [r for r in rows if "zone_position" in r]  # as a CMM prints a position: its diameter
+    if zones:
+        out.append(
+            f"<h3>Position zones as a CMM prints them (⌀ = 2 × the radial distance) [{_e(unit)}]</h3>"
+            '<table class="zones"><tr><th>zone</th><th>measured ⌀</th><th>predicted ⌀</th><th>tolerance ⌀</th>'
+            "<th>margin (radial)</th></tr>"
+            + "".join(
+                f"<tr><td>{_e(r['name'])}</td><td>{_n(r['zone_position'], 4)}</td>"
+                f"<td>{_n(r['zone_position_predicted'], 4)}</td><td>{_n(r['zone_diameter'], 4)}</td>"
+                f"<td>{_n(r['margin'], 4, True)}</td></tr>"
+                for r in zones
+            )
+            + "</table>"
+        )
     if pc.notes:
         out.append("<ul>" + "".join(f"<li>{_e(n)}</li>" for n in pc.notes) + "</ul>")
     charted = [history[r["name"]] for r in rows if r["name"] in history]
