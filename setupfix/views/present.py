@@ -9,6 +9,7 @@ or reads files.  Typed notes (:class:`~setupfix.core.errors.Note`) become text o
 from __future__ import annotations
 
 import textwrap
+from typing import Any
 
 import numpy as np
 
@@ -76,6 +77,26 @@ def verdict_line(pc: CycleCorrection) -> str:
     return f"APPLY the corrections below ({stopped})" if stopped else "APPLY the corrections below"
 
 
+def zone_lines(rows: list[dict[str, Any]], unit: str) -> list[str]:
+    """The position zones of ``rows`` (:meth:`CycleCorrection.dimension_rows`) as a CMM prints them:
+    the diameter 2‖δ‖ measured and predicted against the zone's diameter, beside the radial margin."""
+    zones = [row for row in rows if "zone_position" in row]
+    if not zones:
+        return []
+    w = max(len(one_line(row["name"])) for row in zones) + 2
+    lines = [
+        "",
+        f"position zones as a CMM prints them (⌀ = 2 × the radial distance above; the margin stays radial) [{unit}]:",
+    ]
+    for row in zones:
+        lines.append(
+            f"  {one_line(row['name']):<{w}}measured ⌀{fmt(row['zone_position'], 4)}  predicted "
+            f"⌀{fmt(row['zone_position_predicted'], 4)}  tolerance ⌀{fmt(row['zone_diameter'], 4)}  "
+            f"margin {fmt(row['margin'], 4, sign=True)}"
+        )
+    return lines
+
+
 def format_correction(pc: CycleCorrection) -> str:
     """Verdict, per-dimension table with flags, every register, the thermal feed-forward, budgets,
     binding dimensions, rules and notes."""
@@ -108,6 +129,7 @@ def format_correction(pc: CycleCorrection) -> str:
             f"{one_line(dim.group or ''):<{st}}"[:st]
             + f"{one_line(dim.name):<{w}}{'absent from report: not in the objective':>50}"
         )
+    lines += zone_lines(rows, unit)
     model = pc.model
     lines += [
         "",
