@@ -30,6 +30,7 @@ RANKS: dict[str, float] = {
     "setupfix.diagnose": 3,
     "setupfix.spc": 3,
     "setupfix.store": 4.0,
+    "setupfix.links": 4.0,
     "setupfix.inputs": 4.0,
     "setupfix.outputs": 4.0,
     "setupfix.usecases": 4.1,
