@@ -36,12 +36,16 @@ dimension tables are read by :mod:`setupfix.model.tables`.
 Optional tables parsed into typed fields: ``[safety]`` (:func:`setupfix.model.safety.parse_safety`
 → ``ProcessModel.safety``), ``[effects]`` (:func:`setupfix.model.effects.parse_effects` →
 ``ProcessModel.effects``) and the per-register keys of ``[wks.*]`` / ``[tools.*]``
-(:func:`setupfix.model.safety.parse_register_policy` → ``Register.policy``).
+(:func:`setupfix.model.safety.parse_register_policy` → ``Register.policy``).  The measurement
+uncertainty of ``[measurement]`` (:func:`setupfix.model.safety.parse_measurement`) and of each
+``[dimensions.ID] uncertainty`` is folded into ``ProcessModel.safety`` with where each value comes
+from (:func:`setupfix.model.safety.with_measurement`).
 """
 
 from __future__ import annotations
 
 import functools
+import math
 import re
 import tomllib
 from collections.abc import Mapping
@@ -54,7 +58,13 @@ from setupfix.core.units import LENGTH_UNITS
 from setupfix.model import axes as multi_axis
 from setupfix.model.effects import parse_effects
 from setupfix.model.process import Feature, MachinePoint, ProcessModel
-from setupfix.model.safety import guard_band_problems, parse_safety
+from setupfix.model.safety import (
+    MeasurementSettings,
+    guard_band_problems,
+    parse_measurement,
+    parse_safety,
+    with_measurement,
+)
 from setupfix.model.stations import expand_stations
 from setupfix.model.tables import TABLE_KEYS, check_keys, check_resolution, dimension_rows, register_rows, report_in
 from setupfix.model.validate import (
@@ -78,7 +88,7 @@ __all__ = [
 ]
 
 #: Optional top-level tables, each parsed into a typed field of the model (module docstring).
-SECTIONS: tuple[str, ...] = ("effects", "safety")
+SECTIONS: tuple[str, ...] = ("effects", "safety", "measurement")
 #: A model file larger than this is refused before parsing.
 MAX_BYTES = 16 * 1024 * 1024
 #: Top-level tables consumed before validation (station templates, see ``stations``).
@@ -199,6 +209,7 @@ def model_from_dict(doc: Mapping[str, Any], source: str = "<model>", text: str |
     if multi:
         multi_axis.check_rotation_positions(p, features, {r.base for r in wks if r.component == "C"})
 
+    doc, own_u = _dimension_uncertainty(p, doc)
     dimensions = dimension_rows(p, doc, feature_ids, ranges, str(axis) if multi else None)
     if resolution is not None and not p.items:
         check_resolution(p, resolution, limit or 0.1, [*wks, *tools], dimensions, unit)
@@ -230,10 +241,42 @@ def model_from_dict(doc: Mapping[str, Any], source: str = "<model>", text: str |
         model = replace(
             model, safety=parse_safety(doc["safety"], model.dimension_ids, functools.partial(report_in, p, "safety"))
         )
+    measurement = (
+        parse_measurement(doc["measurement"], functools.partial(report_in, p, "measurement"))
+        if "measurement" in doc
+        else MeasurementSettings()
+    )
+    if "measurement" in doc or own_u:
+        safety = with_measurement(model.safety, measurement, own_u, model.dimensions, model.unit, p.add)
+        model = replace(model, safety=safety)
+    if "safety" in doc or "measurement" in doc or own_u:
         for key, message in guard_band_problems(model.safety, model.dimensions):
             report_in(p, "safety", key, message)
     p.raise_if_any()
     return model
+
+
+def _dimension_uncertainty(p: Problems, doc: Mapping[str, Any]) -> tuple[Mapping[str, Any], dict[str, float]]:
+    """The ``[dimensions.ID] uncertainty`` values (U, k = 2, model unit), and the document without them.
+
+    The key is taken out of each dimension's table before the tables are read, so the
+    dimension rows keep their own key checks; a bad value is reported at its key path.
+    """
+    dims = doc.get("dimensions")
+    if not isinstance(dims, Mapping) or not any(isinstance(t, Mapping) and "uncertainty" in t for t in dims.values()):
+        return doc, {}
+    own: dict[str, float] = {}
+    stripped: dict[str, Any] = {}
+    for did, table in dims.items():
+        if isinstance(table, Mapping) and "uncertainty" in table:
+            value = table["uncertainty"]
+            if is_number(value) and math.isfinite(value) and value >= 0:
+                own[str(did)] = float(value)
+            else:
+                p.add(f"dimensions.{did}.uncertainty", f"expected a number ≥ 0 (U, k = 2), found {show(value)}")
+            table = {k: v for k, v in table.items() if k != "uncertainty"}
+        stripped[did] = table
+    return {**doc, "dimensions": stripped}, own
 
 
 def load_model(path: str | Path) -> ProcessModel:

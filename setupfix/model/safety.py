@@ -14,7 +14,23 @@ key                    default                    meaning
 ``uncertainty``        0 (no guard band)          expanded uncertainty U of every dimension
 ``guard_band``         1.0                        fraction of U the limits shrink by
 ``ewma``               1.0 (no smoothing)         λ of the smoothing over reports
+``mean_of``            1 (the part alone)         decide on the mean of the last n parts
+``min_parts``          1 (every part)             parts measured since a register's last change
+                                                  before it moves again
 =====================  =========================  =======================================
+
+``dead_band`` may also be written ``"N %"``: a share of each dimension's tolerance width; the
+correction is held unless some dimension's predicted change exceeds N % of its width (a
+one-sided tolerance has no width: only the absolute band, 2 × resolution by default, holds
+it).  Per register, ``dead_band = "N %"`` is N % of the narrowest tolerance width (divided by
+the weight) among the dimensions the register moves.
+
+The expanded uncertainty U (k = 2) of each dimension, in order of precedence: the report's own
+``uncertainty`` column; the dimension's ``uncertainty`` (``[dimensions.ID]`` or
+``[safety.dimensions.ID]``); ``[measurement] uncertainty`` (or ``[safety] uncertainty``); the
+CMM's ``[measurement] mpe = [a, b]``, U = a + L/b µm with L the nominal size in mm
+(:func:`mpe_uncertainty`); else none.  :attr:`SafetySettings.uncertainty_source` says where each
+dimension's model value comes from (:data:`UNCERTAINTY_SOURCES`).
 
 Per register (``[wks.ID]`` / ``[tools.ID]``): ``cost`` (> 0, least-norm weight),
 ``offset`` (``"wear"`` or ``"geometry"``; default wear for a tool, geometry for a WKS),
@@ -31,8 +47,10 @@ from __future__ import annotations
 import functools
 import math
 from collections.abc import Callable, Collection, Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import TYPE_CHECKING, Any, Literal
+
+from setupfix.core.errors import ParameterError
 
 if TYPE_CHECKING:
     from setupfix.model.process import Dimension
@@ -40,6 +58,14 @@ if TYPE_CHECKING:
 __all__ = [
     "OffsetType",
     "RegisterPolicy",
+    "MeasurementSettings",
+    "Rules",
+    "MEASUREMENT_KEYS",
+    "UNCERTAINTY_SOURCES",
+    "parse_measurement",
+    "parse_rules",
+    "mpe_uncertainty",
+    "with_measurement",
     "SafetySettings",
     "SAFETY_KEYS",
     "REGISTER_KEYS",
@@ -52,9 +78,27 @@ __all__ = [
 OffsetType = Literal["wear", "geometry"]
 
 #: Keys of the ``[safety]`` table.
-SAFETY_KEYS = frozenset({"dead_band", "gain", "reject_band", "cumulative_limit", "uncertainty", "guard_band", "ewma"})
+SAFETY_KEYS = frozenset(
+    {
+        "dead_band",
+        "gain",
+        "reject_band",
+        "cumulative_limit",
+        "uncertainty",
+        "guard_band",
+        "ewma",
+        "mean_of",
+        "min_parts",
+    }
+)
 #: Extra keys a ``[wks.ID]`` or ``[tools.ID]`` table may hold.
-REGISTER_KEYS = frozenset({"cost", "offset", "number", "edge", "dead_band", "gain", "cumulative_limit"})
+REGISTER_KEYS = frozenset({"cost", "offset", "number", "edge", "dead_band", "gain", "cumulative_limit", "min_parts"})
+#: Keys of the ``[measurement]`` table.
+MEASUREMENT_KEYS = frozenset({"uncertainty", "mpe"})
+#: Where a dimension's U comes from, in order of precedence ("" where none is given).
+UNCERTAINTY_SOURCES = ("report", "dimension", "measurement", "mpe")
+#: Bound on ``mean_of`` and ``min_parts`` (parts).
+MAX_PARTS = 1000
 #: Keys of a ``[safety.dimensions.ID]`` table.
 DIMENSION_KEYS = frozenset({"uncertainty", "reject_band"})
 
@@ -75,6 +119,8 @@ class RegisterPolicy:
     dead_band: float | None = None
     gain: float | None = None
     cumulative_limit: float | None = None
+    dead_band_share: float | None = None
+    min_parts: int | None = None
 
     def offset_type(self, kind: str) -> str:
         """The offset a change goes to: the declared one, else wear for a tool and geometry for a WKS."""
@@ -97,6 +143,80 @@ class SafetySettings:
     ewma: float = 1.0
     dimension_uncertainty: Mapping[str, float] = field(default_factory=dict)
     dimension_reject_band: Mapping[str, float] = field(default_factory=dict)
+    dead_band_share: float | None = None
+    mean_of: int = 1
+    min_parts: int = 1
+    uncertainty_source: Mapping[str, str] = field(default_factory=dict)
+
+    def rules(self) -> Rules:
+        """The model-wide rules (what ``replay`` runs when no ``--rules`` is given)."""
+        return Rules(self.dead_band, self.dead_band_share, self.gain, self.mean_of, self.min_parts)
+
+    def source_of(self, dimension_id: str) -> str:
+        """Where the model's U of a dimension comes from (:data:`UNCERTAINTY_SOURCES`; "" where none)."""
+        if dimension_id in self.uncertainty_source:
+            return self.uncertainty_source[dimension_id]
+        if dimension_id in self.dimension_uncertainty:
+            return "dimension"
+        return "measurement" if self.uncertainty > 0 else ""
+
+
+@dataclass(frozen=True, slots=True)
+class Rules:
+    """A rule set as a share of the tolerance (``[safety]`` or ``replay --rules``), model-wide.
+
+    ``dead_band`` [model unit] holds when every register change is within it (None: 2 ×
+    resolution); ``dead_band_share`` (0.1 for "10 %") holds when every dimension's predicted
+    change is within that share of its tolerance width; ``gain`` in (0, 1] is the feedback
+    fraction applied; ``mean_of`` the parts the decision averages; ``min_parts`` the parts
+    measured since a register's last change before it moves again.
+    """
+
+    dead_band: float | None = None
+    dead_band_share: float | None = None
+    gain: float = 1.0
+    mean_of: int = 1
+    min_parts: int = 1
+
+    def to_json(self) -> dict[str, object]:
+        """As the replay's JSON spells it (``"dead_band": "10 %"`` for a share)."""
+        band: object = self.dead_band
+        if self.dead_band_share is not None:
+            band = f"{self.dead_band_share * 100:g} %"
+        return {"dead_band": band, "gain": self.gain, "mean_of": self.mean_of, "min_parts": self.min_parts}
+
+
+@dataclass(frozen=True, slots=True)
+class MeasurementSettings:
+    """The ``[measurement]`` table: the CMM's expanded uncertainty U (k = 2) or its MPE formula.
+
+    ``uncertainty`` [model unit] for every dimension without its own; ``mpe`` = (a, b):
+    MPE_E = a + L/b µm (L the nominal size in mm), taken as U where no other value is given.
+    """
+
+    uncertainty: float | None = None
+    mpe: tuple[float, float] | None = None
+
+
+def mpe_uncertainty(a: float, b: float, nominal: float, unit: str = "mm") -> float:
+    """U from a CMM's length-measuring error MPE_E = a + L/b µm, in the model unit.
+
+    ISO 10360-2 states the MPE of a length L [mm] as a + L/b [µm]; L is the dimension's
+    nominal size (its absolute value; a position zone's nominal is its location).
+
+    Parameters
+    ----------
+    a : float [µm], b : float [mm/µm] (> 0)
+    nominal : float [model unit]
+    unit : {"mm", "inch"}
+
+    Returns
+    -------
+    float [model unit]
+    """
+    per_mm = 25.4 if unit == "inch" else 1.0
+    length_mm = abs(nominal) * per_mm
+    return (a + length_mm / b) / 1000.0 / per_mm
 
 
 def _num(
@@ -108,6 +228,34 @@ def _num(
     bracket = "(" if open_low else "["
     upper = "∞)" if high == math.inf else f"{high:g}]"
     report(f"expected a number in {bracket}{low:g}, {upper}, found {value!r}")
+    return None
+
+
+def _share(value: Any, report: Callable[[str], None]) -> float | None:
+    """A share written ``"N %"`` (0 < N ≤ 100) as a fraction, else None after a report."""
+    text = value.strip() if isinstance(value, str) else ""
+    if text.endswith("%"):
+        try:
+            n = float(text[:-1].strip())
+        except ValueError:
+            n = math.nan
+        if math.isfinite(n) and 0 < n <= 100:
+            return n / 100.0
+    report(f'expected a share of the tolerance written "N %" with 0 < N ≤ 100, found {value!r}')
+    return None
+
+
+def _band(value: Any, report: Callable[[str], None]) -> tuple[float | None, float | None]:
+    """A dead band: (absolute [unit], share) with one of them set, or (None, None) after a report."""
+    if isinstance(value, str):
+        return None, _share(value, report)
+    return _num(report, value, 0.0), None
+
+
+def _parts(value: Any, report: Callable[[str], None]) -> int | None:
+    if isinstance(value, int) and not isinstance(value, bool) and 1 <= value <= MAX_PARTS:
+        return value
+    report(f"expected a whole number of parts in [1, {MAX_PARTS}], found {value!r}")
     return None
 
 
@@ -130,9 +278,9 @@ _REGISTER_PARSERS: dict[str, Callable[[Any, Callable[[str], None]], Any]] = {
     "offset": _offset,
     "number": _slot,
     "edge": _slot,
-    "dead_band": lambda v, r: _num(r, v, 0.0),
     "gain": lambda v, r: _num(r, v, 0.0, 1.0, open_low=True),
     "cumulative_limit": lambda v, r: _num(r, v, 0.0, open_low=True),
+    "min_parts": _parts,
 }
 
 
@@ -148,6 +296,12 @@ def parse_register_policy(table: Mapping[str, Any], report: Callable[[str, str],
             value = parse(table[key], functools.partial(report, key))
             if value is not None:
                 values[key] = value
+    if "dead_band" in table:
+        absolute, share = _band(table["dead_band"], functools.partial(report, "dead_band"))
+        if absolute is not None:
+            values["dead_band"] = absolute
+        if share is not None:
+            values["dead_band_share"] = share
     return RegisterPolicy(**values) if values else _DEFAULT_POLICY
 
 
@@ -202,8 +356,16 @@ def parse_safety(value: Any, dimension_ids: Collection[str], report: Callable[[s
     u_all = get("uncertainty", 0.0)
     guard = get("guard_band", 0.0, 1.0)
     lam = get("ewma", 0.0, 1.0, open_low=True)
+    band, share = _band(value["dead_band"], lambda m: report("dead_band", m)) if "dead_band" in value else (None, None)
+    mean_of = _parts(value["mean_of"], lambda m: report("mean_of", m)) if "mean_of" in value else None
+    min_parts = _parts(value["min_parts"], lambda m: report("min_parts", m)) if "min_parts" in value else None
+    if mean_of is not None and mean_of > 1 and lam is not None and lam < 1:
+        report("mean_of", "give either ewma (a weighted mean) or mean_of (a plain mean), not both")
     return SafetySettings(
-        dead_band=get("dead_band", 0.0),
+        dead_band=band,
+        dead_band_share=share,
+        mean_of=mean_of or 1,
+        min_parts=min_parts or 1,
         gain=1.0 if gain is None else gain,
         reject_band=get("reject_band", 0.0, open_low=True),
         cumulative_limit=get("cumulative_limit", 0.0, open_low=True),
@@ -213,6 +375,126 @@ def parse_safety(value: Any, dimension_ids: Collection[str], report: Callable[[s
         dimension_uncertainty=uncertainty,
         dimension_reject_band=reject,
     )
+
+
+def parse_measurement(value: Any, report: Callable[[str, str], None]) -> MeasurementSettings:
+    """The ``[measurement]`` table (:data:`MEASUREMENT_KEYS`).
+
+    ``report(key, message)`` adds a problem at ``measurement.<key>``; a bad value is left
+    out so every problem is reported in one pass.
+    """
+    if not isinstance(value, Mapping):
+        report("", f"expected a table, found {type(value).__name__}")
+        value = {}
+    for name in value:
+        if name not in MEASUREMENT_KEYS:
+            report(name, f"unknown key (expected one of: {', '.join(sorted(MEASUREMENT_KEYS))})")
+    u = _num(lambda m: report("uncertainty", m), value["uncertainty"], 0.0) if "uncertainty" in value else None
+    mpe: tuple[float, float] | None = None
+    if "mpe" in value:
+        raw = value["mpe"]
+        pair = raw if isinstance(raw, list) and len(raw) == 2 else None
+        a = _num(lambda m: None, pair[0], 0.0) if pair is not None else None
+        b = _num(lambda m: None, pair[1], 0.0, open_low=True) if pair is not None else None
+        if a is None or b is None:
+            report("mpe", f"expected [a, b] with a ≥ 0 µm and b > 0 (MPE = a + L/b µm), found {raw!r}")
+        else:
+            mpe = (a, b)
+    if u is not None and mpe is not None:
+        report("mpe", "give either uncertainty (U for every dimension) or mpe (U from the length), not both")
+    return MeasurementSettings(u, mpe)
+
+
+def with_measurement(
+    safety: SafetySettings,
+    measurement: MeasurementSettings,
+    own: Mapping[str, float],
+    dimensions: Collection[Dimension],
+    unit: str,
+    report: Callable[[str, str], None],
+) -> SafetySettings:
+    """The safety settings with every model source of U folded in, and where each value comes from.
+
+    ``own``: the ``[dimensions.ID] uncertainty`` values.  Precedence (module docstring): the
+    dimension's own value (``[dimensions.ID]`` or ``[safety.dimensions.ID]``, given once) →
+    ``[measurement] uncertainty`` (or ``[safety] uncertainty``, given once) → ``[measurement]
+    mpe`` → none.  ``report(key, message)`` names a value given twice, at its full key path.
+    """
+    values = dict(safety.dimension_uncertainty)
+    source = {d: "dimension" for d in values}
+    for did, u in own.items():
+        if did in values:
+            report(f"dimensions.{did}.uncertainty", "also given in [safety.dimensions]: give it once")
+            continue
+        values[did] = u
+        source[did] = "dimension"
+    shared = safety.uncertainty
+    if measurement.uncertainty is not None:
+        if shared > 0:
+            report("measurement.uncertainty", "also given as [safety] uncertainty: give it once")
+        shared = measurement.uncertainty
+    for dim in dimensions:
+        if dim.id in values:
+            continue
+        if shared > 0:
+            source[dim.id] = "measurement"
+        elif measurement.mpe is not None:
+            values[dim.id] = mpe_uncertainty(*measurement.mpe, dim.nominal, unit)
+            source[dim.id] = "mpe"
+    return replace(safety, uncertainty=shared, dimension_uncertainty=values, uncertainty_source=source)
+
+
+def parse_rules(text: str) -> Rules:
+    """A rule set written ``dead_band=10 %,gain=0.5,mean_of=3,min_parts=2`` (``replay --rules``).
+
+    Keys as in ``[safety]`` (``dead_band`` an absolute length in the model unit or ``"N %"``);
+    keys not given keep their defaults.
+
+    Raises
+    ------
+    ParameterError
+        An unknown key, a bad value, or a key given twice, named in one line.
+    """
+    known = ("dead_band", "gain", "mean_of", "min_parts")
+    values: dict[str, Any] = {}
+    problems: list[str] = []
+    for item in (t for t in text.split(",") if t.strip()):
+        key, eq, raw = item.partition("=")
+        key = key.strip()
+        if not eq or key not in known:
+            problems.append(f"{item.strip()!r}: expected KEY=VALUE with KEY one of {', '.join(known)}")
+            continue
+        if key in values:
+            problems.append(f"{key}: given twice")
+            continue
+        raw = raw.strip()
+
+        def say(message: str, key: str = key) -> None:
+            problems.append(f"{key}: {message}")
+
+        if key == "dead_band":
+            if raw.endswith("%"):
+                values["dead_band_share"] = _share(raw, say)
+            else:
+                values["dead_band"] = _num(say, _number(raw), 0.0)
+        elif key == "gain":
+            values[key] = _num(say, _number(raw), 0.0, 1.0, open_low=True)
+        else:
+            values[key] = _parts(_number(raw), say)
+    if problems:
+        raise ParameterError(f"--rules {text!r}: " + "; ".join(problems))
+    return Rules(**{k: v for k, v in values.items() if v is not None})
+
+
+def _number(text: str) -> Any:
+    """A number in a ``--rules`` value (an int where it is written as one), else the text itself."""
+    try:
+        return int(text)
+    except ValueError:
+        try:
+            return float(text)
+        except ValueError:
+            return text
 
 
 def guard_band_problems(safety: SafetySettings, dimensions: Collection[Dimension]) -> list[tuple[str, str]]:
@@ -230,7 +512,7 @@ def guard_band_problems(safety: SafetySettings, dimensions: Collection[Dimension
     for dim in dimensions:
         own = dim.id in safety.dimension_uncertainty
         u = safety.dimension_uncertainty.get(dim.id, safety.uncertainty)
-        if u <= 0 or g <= 0:
+        if u <= 0 or g <= 0 or safety.source_of(dim.id) == "mpe":  # the CMM's own: a warning, not a refusal
             continue
         room = dim.upper if dim.zone else dim.upper - dim.lower  # a zone: its radius
         used = g * u if dim.zone else 2 * g * u
