@@ -48,6 +48,7 @@ def test_every_zone_row_gives_the_diameter_a_cmm_prints(report: Path) -> None:
     assert rows
     for row in rows:
         dim = zones[row["name"]]
+        assert dim.diameter is not None
         dx, dy = (report_deviation(report, c) for c in dim.components)
         assert row["zone_position"] == pytest.approx(2 * math.hypot(dx, dy), abs=2e-9)
         assert row["zone_position_predicted"] == pytest.approx(2 * row["predicted"], abs=2e-9)
