@@ -17,9 +17,11 @@ from typing import TYPE_CHECKING
 import numpy as np
 import numpy.typing as npt
 
+from setupfix.correction.conformance import conformance_zone
 from setupfix.correction.explain import fit_registers, leave_one_out, one_register, targets
 from setupfix.correction.numbers import fmt
 from setupfix.correction.objective import error_budget, margins
+from setupfix.correction.rules import dimension_changes, within_share_band
 from setupfix.correction.safety import (
     STOPPED,
     Recommendation,
@@ -36,6 +38,7 @@ if TYPE_CHECKING:  # pose builds the problem with the rules; recommend takes wha
 
 __all__ = [
     "recommend",
+    "no_zone_left",
     "stopped_rule",
     "stopped_where",
     "verdict_cell",
@@ -128,6 +131,16 @@ def recommend(
             return stop
 
     rules = list(posed.effects)
+    empty = no_zone_left(problem.lower, problem.upper, policy.uncertainty * policy.guard_band)
+    if empty.any():
+        rules.append(
+            RuleEffect(
+                "no_conformance_zone",
+                f"U leaves {label(dims[empty])} no conformance zone (ISO 14253-1): nothing there can be proven "
+                "conforming; the correction centres them in their tolerance",
+                dimensions=tuple(dims[empty]),
+            )
+        )
     result = solve(guarded)
     x = np.asarray(result.x, dtype=float)
     given_up = tuple(result.given_up)
@@ -184,14 +197,31 @@ def recommend(
 
     verdict = "apply"
     stopped = result.status in STOPPED
+    small = bool(np.any(x)) and in_dead_band(x, policy.dead_band)
+    share = (
+        bool(np.any(x))
+        and not small
+        and policy.dimension_band is not None
+        and within_share_band(dimension_changes(problem, x)[1], policy.dimension_band)
+    )
     if not np.any(x):
         verdict = "hold"
-    elif in_dead_band(x, policy.dead_band) and stopped:  # an unproven point's small changes prove nothing
+    elif (small or share) and stopped:  # an unproven point's small changes prove nothing
         x = np.zeros_like(x)
         verdict = "hold"
-    elif in_dead_band(x, policy.dead_band):
+    elif small:
         rules.append(
             RuleEffect("dead_band", "every change is within its dead band: hold", registers=tuple(ids[x != 0]))
+        )
+        x = np.zeros_like(x)
+        verdict = "hold"
+    elif share:
+        rules.append(
+            RuleEffect(
+                "dead_band",
+                "no dimension's predicted change exceeds its dead band (a share of its tolerance width): hold",
+                registers=tuple(ids[x != 0]),
+            )
         )
         x = np.zeros_like(x)
         verdict = "hold"
@@ -206,6 +236,16 @@ def recommend(
         rules.append(effect)
         solved = effect.rule != "not_solved"
     return Recommendation(verdict, x + 0.0, result, guarded, tuple(rules), given_up, at_limit, solved=solved)
+
+
+def no_zone_left(lower: Array, upper: Array, shrink: Array) -> Mask:
+    """Columns whose guard band leaves no conformance zone: 2·g·U ≥ upper − lower (g·U > 0).
+
+    :func:`setupfix.correction.safety.guard_limits` then puts both guarded limits at the
+    mid-tolerance, so the optimum centres them: the documented fallback.
+    lower, upper, shrink : ndarray of shape (n_dimensions,) [unit] → bool ndarray (n_dimensions,)
+    """
+    return conformance_zone(lower, upper, np.asarray(shrink, dtype=float))[2]
 
 
 def stopped_where(result: OptimizeResult) -> str:

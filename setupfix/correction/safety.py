@@ -103,6 +103,11 @@ class Policy:
         Reject band beyond each limit [unit]; expanded uncertainty U [unit].
     guard_band : float
         Fraction of U by which each limit is shrunk.
+    dimension_band : ndarray of shape (n_model_dimensions,) or None
+        Dead band as a share of each tolerance width [unit], in
+        :meth:`CorrectionProblem.dimension_table` order (:mod:`setupfix.correction.rules`); None: off.
+    min_parts, parts_since : int ndarrays of shape (n_registers,) or None
+        Parts a register waits between changes, and parts measured since its last change.
     """
 
     dead_band: Array
@@ -113,6 +118,9 @@ class Policy:
     reject_band: Array
     uncertainty: Array
     guard_band: float = 1.0
+    dimension_band: Array | None = None
+    min_parts: npt.NDArray[np.int64] | None = None
+    parts_since: npt.NDArray[np.int64] | None = None
 
     @classmethod
     def neutral(cls, problem: CorrectionProblem) -> Policy:
