@@ -94,12 +94,23 @@ MIGRATIONS: tuple[str, ...] = (
     UPDATE batch_claim c SET machine = r.machine FROM report r WHERE r.sha256 = c.report_sha256;
     ALTER TABLE batch_claim ADD PRIMARY KEY (machine, report_sha256)
     """,
+    f"""
+    CREATE TABLE link_attempt ({_COMMON},
+        created_at TEXT NOT NULL, machine TEXT NOT NULL DEFAULT 'default', operator TEXT NOT NULL DEFAULT '',
+        link TEXT NOT NULL, plan_sha256 TEXT NOT NULL, outcome TEXT NOT NULL, message TEXT NOT NULL DEFAULT '',
+        unit TEXT NOT NULL);
+    CREATE TABLE link_component (attempt_id BIGINT NOT NULL REFERENCES link_attempt(id), position INTEGER NOT NULL,
+        register TEXT NOT NULL, axis TEXT NOT NULL, before DOUBLE PRECISION, change DOUBLE PRECISION,
+        written DOUBLE PRECISION, read_back DOUBLE PRECISION, restored DOUBLE PRECISION, outcome TEXT NOT NULL,
+        PRIMARY KEY (attempt_id, position));
+    CREATE INDEX link_attempt_machine ON link_attempt(machine, id)
+    """,
 )
 SCHEMA_VERSION = len(MIGRATIONS)
 #: Up to this many rows are inserted by one pipelined statement, more by COPY (faster from a few hundred on).
 _FEW = 200
 #: Tables whose ids a copy sets: their identity sequences follow.
-_IDENTITY = ("report", "correction", "recommendation")
+_IDENTITY = ("report", "correction", "recommendation", "link_attempt")
 
 
 class PostgresStore(ClaimingStore):
