@@ -68,6 +68,7 @@ from parsers.corrections import RegisterLog, check_corrections, log_from_frame
 from setupfix.core.atomic import process_alive, process_started
 from setupfix.model import ProcessModel
 from setupfix.store.audit import AUDIT_COLUMNS
+from setupfix.store.link_audit import LinkAttempt
 from setupfix.store.urls import looks_like_url, shown
 
 __all__ = [
@@ -304,6 +305,14 @@ class Store(Protocol):
         StoreError
             Naming the store, when any part of it is damaged.
         """
+        ...
+
+    def add_link_attempt(self, attempt: LinkAttempt) -> int:
+        """Record one ``machine write`` attempt (:mod:`setupfix.store.link_audit`); its id."""
+        ...
+
+    def link_attempts(self, *, every_machine: bool = False) -> list[LinkAttempt]:
+        """The recorded ``machine write`` attempts in order (this machine's unless ``every_machine``)."""
         ...
 
     def close(self) -> None: ...

@@ -279,8 +279,39 @@ def _v5(db: sqlite3.Connection) -> None:
     )
 
 
+def _v6(db: sqlite3.Connection) -> None:
+    """The machine link's audit (:mod:`setupfix.store.link_audit`): one row per ``machine write``
+    attempt and one per register component of it (values in the control's unit)."""
+    _script(
+        db,
+        """
+        CREATE TABLE link_attempt (
+            id INTEGER PRIMARY KEY,
+            created_at TEXT NOT NULL,
+            machine TEXT NOT NULL DEFAULT 'default',
+            operator TEXT NOT NULL DEFAULT '',
+            link TEXT NOT NULL,
+            plan_sha256 TEXT NOT NULL,
+            outcome TEXT NOT NULL,
+            message TEXT NOT NULL DEFAULT '',
+            unit TEXT NOT NULL
+        );
+        CREATE TABLE link_component (
+            attempt_id INTEGER NOT NULL REFERENCES link_attempt(id),
+            position INTEGER NOT NULL,
+            register TEXT NOT NULL,
+            axis TEXT NOT NULL,
+            before REAL, change REAL, written REAL, read_back REAL, restored REAL,
+            outcome TEXT NOT NULL,
+            PRIMARY KEY (attempt_id, position)
+        );
+        CREATE INDEX link_attempt_machine ON link_attempt(machine, id)
+    """,
+    )
+
+
 #: Migrations in order; migration i (1-based) brings a store from version i − 1 to i.
-MIGRATIONS: tuple[Callable[[sqlite3.Connection], None], ...] = (_v1, _v2, _v3, _v4, _v5)
+MIGRATIONS: tuple[Callable[[sqlite3.Connection], None], ...] = (_v1, _v2, _v3, _v4, _v5, _v6)
 SCHEMA_VERSION = len(MIGRATIONS)
 
 

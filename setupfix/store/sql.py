@@ -40,6 +40,7 @@ from setupfix.store import (
     Store,
 )
 from setupfix.store.audit import TABLES, audit_of
+from setupfix.store.link_audit import LinkAuditStore
 
 __all__ = ["SQLStore", "guarded", "now"]
 
@@ -77,7 +78,7 @@ def _cell(value: Any, text: bool) -> Any:
     return float(value)
 
 
-class SQLStore(Store):
+class SQLStore(LinkAuditStore, Store):
     """The store's queries over a DB-API connection; a back end fills in the hooks below."""
 
     #: The driver's exceptions that :func:`guarded` turns into :class:`StoreError`.
