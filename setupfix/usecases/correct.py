@@ -249,7 +249,7 @@ def load_request(
     read: ReadOptions | None = None,
     cycles: CycleOptions | None = None,
     solve: SolveOptions | None = None,
-    current: str | Path | None = None,
+    current: str | Path | CurrentOffsets | None = None,
     store: str | Path | StoreRef | None = None,
     thermal: str | Path | None = None,
     temperatures: str | Path | None = None,
@@ -276,7 +276,10 @@ def load_request(
     if not isinstance(model, ProcessModel):
         model = load_model(model)
     history_store = open_history(store, model) if store is not None else None
-    offsets = CurrentOffsets.read(current, model) if current is not None else None
+    if isinstance(current, CurrentOffsets):  # read from the control (``--link``): already the model's values
+        offsets: CurrentOffsets | None = current
+    else:
+        offsets = CurrentOffsets.read(current, model) if current is not None else None
     history = None
     if history_store is not None:
         with history_store as opened:  # read once: the smoothing needs the earlier parts and the log
