@@ -31,6 +31,7 @@ from setupfix.optimize import OPTIMIZERS, CorrectionProblem, OptimizeResult, get
 
 if TYPE_CHECKING:  # the thermal modules bring scipy.signal (~0.5 s): loaded only with --thermal
     from parsers.temperature import TemperatureLog
+    from setupfix.links.snapshot import ControlSnapshot
     from setupfix.thermal.persist import SavedModel
     from setupfix.usecases.thermal_feedforward import ThermalFeedForward
 
@@ -196,10 +197,14 @@ class CurrentOffsets(Mapping[str, float]):
 
     items_: tuple[tuple[str, float], ...]
     source: str = ""
+    #: Read from a control (``--link``): the control's values as read, which the plan records.
+    snapshot: ControlSnapshot | None = field(default=None, compare=False)
 
     @classmethod
-    def of(cls, values: Mapping[str, float], source: str = "") -> CurrentOffsets:
-        return cls(tuple((str(k), float(v)) for k, v in values.items()), source)
+    def of(
+        cls, values: Mapping[str, float], source: str = "", snapshot: ControlSnapshot | None = None
+    ) -> CurrentOffsets:
+        return cls(tuple((str(k), float(v)) for k, v in values.items()), source, snapshot)
 
     @classmethod
     def read(cls, path: str | Path, model: ProcessModel) -> CurrentOffsets:
