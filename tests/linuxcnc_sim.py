@@ -126,6 +126,9 @@ elif step == "abort":
             break
         time.sleep(0.025)
     c.mode(linuxcnc.MODE_MANUAL); done("manual mode")
+elif step == "status":
+    s.poll()
+    print(s.task_mode, s.g5x_index, s.program_units, s.interp_state)
 elif step == "mdi":
     c.mode(linuxcnc.MODE_MDI); done("mdi mode")
     c.mdi(sys.argv[2]); done(sys.argv[2])
@@ -310,8 +313,9 @@ class Sim:
             "SETUPFIX_LINUXCNC_ENTER": shlex.join(enter),
         }
 
-    def operator(self, step: str, *args: str) -> None:
-        """An operator's step at the control (:data:`OPERATOR`): ``ready``, ``run FILE``, ``abort``, ``mdi LINE``."""
+    def operator(self, step: str, *args: str) -> str:
+        """An operator's step at the control (:data:`OPERATOR`): ``ready``, ``run FILE``, ``abort``, ``mdi LINE``,
+        ``status`` (its printed line: the numbers :meth:`status` returns)."""
         env = {**os.environ, **self.environ()}
         enter = shlex.split(env["SETUPFIX_LINUXCNC_ENTER"])
         modules = str(self.root / "usr" / "lib" / "python3" / "dist-packages")
@@ -320,12 +324,19 @@ class Sim:
             [*enter, sys.executable, "-c", OPERATOR, step, *args], env=env, capture_output=True, text=True, timeout=60
         )
         assert done.returncode == 0, f"operator step {step} failed: {done.stderr.strip()[-2000:]}"
+        return done.stdout
 
     def run_program(self, text: str) -> None:
         """Start a program (AUTO, cycle start) and return while it runs."""
         path = self.folder / "program.ngc"
         path.write_text(text)
         self.operator("run", str(path))
+
+    def status(self) -> tuple[int, int, int, int]:
+        """Task mode (1 manual, 2 auto, 3 MDI), active work system (1…9), program units (1 inch, 2 mm),
+        interpreter state (1 idle)."""
+        mode, system, units, interp = (int(v) for v in self.operator("status").split())
+        return mode, system, units, interp
 
     def stop(self, timeout: float = 60.0) -> None:
         """Shut LinuxCNC down cleanly (the DISPLAY ends): it writes its parameter file."""

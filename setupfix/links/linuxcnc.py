@@ -30,6 +30,7 @@ written and then lost in a crash of the control is not held after the restart.
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 import re
@@ -165,7 +166,10 @@ class LinuxcncLink:
         if kind == "busy":
             raise LinkRefused(f"{message}: nothing written")
         if kind == "unknown":
-            raise LinkConfigError(message, location=SourceLocation(self.config.path, key="link.ini"))
+            raise LinkConfigError(
+                f"{answer.get('message')} (LinuxCNC {self.config.ini})",
+                location=SourceLocation(self.config.path, key="link.ini"),
+            )
         done = answer.get("done")
         raise LinkDenied(message if done is None else f"{message} ({done} register(s) before it written)")
 
@@ -191,8 +195,8 @@ class LinuxcncLink:
         bad = [str(c) if c.tool else f"{c.register}.{c.axis}" for c, k in found.items() if k is None]
         if bad:
             raise LinkConfigError(
-                f"LinuxCNC has no register component {', '.join(bad)} (work systems G54…G59.3 with X, Y, Z, R;"
-                " tools H<n> length, D<n> radius, T<n> either)",
+                f"LinuxCNC ({self.config.ini}) has no register component {', '.join(bad)}"
+                " (work systems G54…G59.3 with X, Y, Z, R; tools H<n> length, D<n> radius, T<n> either)",
                 location=SourceLocation(self.config.path, key="link.ini"),
             )
         return {c: k for c, k in found.items() if k is not None}
@@ -245,17 +249,19 @@ class LinuxcncLink:
         return self.interlock_reason is not None
 
     def close(self) -> None:
-        process = self._process if hasattr(self, "_process") else None
-        if process is not None and process.poll() is None:
-            try:
-                if process.stdin is not None:
+        """End the helper (it leaves the control as it was) and free its pipes."""
+        process = getattr(self, "_process", None)
+        if process is not None:
+            if process.stdin is not None:
+                with contextlib.suppress(OSError):
                     process.stdin.close()
+            try:
                 process.wait(timeout=5.0)
-            except (OSError, subprocess.TimeoutExpired):
+            except subprocess.TimeoutExpired:
                 process.kill()
                 process.wait()
-        if process is not None and process.stdout is not None:
-            process.stdout.close()
+            if process.stdout is not None:
+                process.stdout.close()
         self._errors.close()
 
     def __enter__(self) -> LinuxcncLink:

@@ -34,6 +34,7 @@ import importlib
 import json
 import sys
 import time
+from collections.abc import Callable
 from typing import Any
 
 #: G-code of work system n (1…9).
@@ -109,14 +110,37 @@ class Control:
             raise Failure("denied", f"{what}: no answer within {STEP_TIMEOUT:g} s")
         if done == self.lc.RCS_ERROR:
             raise Failure("denied", f"{what}: the control reports an error")
-        deadline = time.monotonic() + STEP_TIMEOUT
+        self.until(
+            lambda: self.stat.interp_state == self.lc.INTERP_IDLE, f"{what}: the interpreter to come back to idle"
+        )
+
+    def until(self, condition: Callable[[], bool], what: str, timeout: float = STEP_TIMEOUT) -> bool:
+        """Poll ``stat`` until ``condition`` holds (its status lags the command by a cycle or more).
+
+        False after ``timeout`` seconds when ``what`` is empty, else ``denied`` naming it."""
+        deadline = time.monotonic() + timeout
         while True:
             self.stat.poll()
-            if self.stat.interp_state == self.lc.INTERP_IDLE:
-                return
+            if condition():
+                return True
             if time.monotonic() > deadline:
-                raise Failure("denied", f"{what}: the interpreter did not come back to idle")
+                if not what:
+                    return False
+                raise Failure("denied", f"waited {timeout:g} s for {what}")
             time.sleep(0.005)
+
+    def select(self, n: int) -> None:
+        """Make work system ``n`` the active one and wait until ``stat`` shows it.
+
+        After an abort the interpreter may already hold ``n`` while ``stat`` still shows the
+        system before: the G-code then changes nothing and ``stat`` never follows.  Another
+        system first, then ``n``, makes both agree."""
+        self.mdi(SYSTEMS[n - 1])
+        if self.until(lambda: int(self.stat.g5x_index) == n, "", 0.5):
+            return
+        self.mdi(SYSTEMS[n % len(SYSTEMS)])
+        self.mdi(SYSTEMS[n - 1])
+        self.until(lambda: int(self.stat.g5x_index) == n, f"{SYSTEMS[n - 1]} to become the active system")
 
     def mdi(self, line: str) -> None:
         self.command.mdi(line)
@@ -142,7 +166,7 @@ class Control:
     def restore(self, before: tuple[int, int, int]) -> None:
         mode, system, units = before
         if 1 <= system <= len(SYSTEMS):
-            self.mdi(SYSTEMS[system - 1])
+            self.select(system)
         self.mdi({1: "G20", 2: "G21"}.get(units, "G21"))
         if mode != self.lc.MODE_MDI:
             self.command.mode(mode)
@@ -166,10 +190,7 @@ class Control:
             before = self.session()
             try:
                 for n in systems:
-                    self.mdi(SYSTEMS[n - 1])
-                    self.stat.poll()
-                    if int(self.stat.g5x_index) != n:
-                        raise Failure("denied", f"{SYSTEMS[n - 1]} did not become the active system")
+                    self.select(n)
                     x, y, z = (float(v) for v in self.stat.g5x_offset[:3])
                     wks[str(n)] = [x, y, z, float(self.stat.rotation_xy)]
             finally:
