@@ -39,6 +39,7 @@ COMMAND_MODULES: tuple[str, ...] = (
     "setupfix.cli.diagnose",
     "setupfix.cli.spc",
     "setupfix.cli.tui",
+    "setupfix.cli.machine",
 )
 
 
@@ -123,7 +124,7 @@ def _main(argv: Sequence[str] | None) -> int:
         return USAGE
     except SetupfixError as exc:
         print(f"error: {exc}", file=sys.stderr)
-        return ERROR
+        return int(getattr(exc, "exit_status", ERROR))  # a machine link's error carries its own (6, 7, 8)
     except KeyboardInterrupt:
         print("interrupted", file=sys.stderr)
         return INTERRUPTED
