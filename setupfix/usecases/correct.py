@@ -31,6 +31,7 @@ from setupfix.model import PartMeasurement, ProcessModel, load_model
 from setupfix.model.measurements import did_you_mean
 from setupfix.optimize import CorrectionProblem, OptimizeResult, get_optimizer
 from setupfix.store import Store
+from setupfix.usecases.decision_rules import mean_smoothed, with_history_rules, with_report_uncertainty
 from setupfix.usecases.requests import (
     CorrectOutcome,
     CorrectRequest,
@@ -85,7 +86,7 @@ def _applied_result(problem: CorrectionProblem, rec: Recommendation) -> Optimize
 def _smoothed(request: CorrectRequest, part: PartMeasurement) -> Smoothed | None:
     lam = request.model.safety.ewma
     if lam >= 1.0:
-        return None
+        return mean_smoothed(request.model, request.history, part)  # [safety] mean_of (None when 1)
     if request.history is None:
         note = Note(f"ewma = {lam:g} needs the history store (--store): deviations not smoothed", None, "ewma")
         return Smoothed(part.deviation, 0, lam, (note,))
@@ -135,15 +136,18 @@ def pose_cycle(
     model = request.model
     cumulative = request.current.wear_totals(model) if request.current is not None else None
     stand_in = request.history.stand_in(model, part) if request.history is not None else None
-    return pose_problem(
-        model,
+    smoothed = _smoothed(request, part)
+    posed = pose_problem(
+        with_report_uncertainty(model, part),  # the report's own U wins (guard band)
         part,
-        smoothed=_smoothed(request, part),
+        smoothed=smoothed,
         cumulative=cumulative,
         composite=composite,
         stand_in=stand_in,
         hold=hold,
     )
+    averaged = smoothed if model.safety.mean_of > 1 and model.safety.ewma >= 1.0 else None
+    return with_history_rules(posed, model, request.history, part, averaged)  # dead band %, min_parts
 
 
 def read_cycles(
