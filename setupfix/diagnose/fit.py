@@ -20,6 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
+from setupfix.diagnose.robust import cr2_covariance
 from setupfix.diagnose.terms import EffectSpec, Layout, Series, effect_field, field_factors
 
 __all__ = [
@@ -32,6 +33,9 @@ __all__ = [
     "fit_model",
     "RELATION_T",
 ]
+
+#: Fewest parts for the cluster-robust (CR2) standard errors; fewer keep σ²(XᵀX)⁻¹.
+ROBUST_MIN_CYCLES = 4
 
 #: A relation weight changes the matrix corrections are mapped through only when |δ| > RELATION_T · s.e.
 RELATION_T = 3.0
@@ -116,6 +120,10 @@ class Fit:
         Base coefficients (r) then each effect's columns in order.
     cov : ndarray (p, p)
         σ² (XᵀX)⁻¹ (pseudo-inverse where X is rank deficient).
+    robust_cov : ndarray (p, p) or None
+        Cluster-robust CR2 covariance with the part as the cluster
+        (:func:`~setupfix.diagnose.robust.cr2_covariance`); None for series of fewer than
+        :data:`ROBUST_MIN_CYCLES` parts.  The standard errors :meth:`estimate` gives.
     sigma : float [model unit]
         Residual standard deviation (√(RSS / (N − rank))).
     residual : ndarray (n_cycles, n_dimensions)
@@ -137,15 +145,21 @@ class Fit:
     basis: Array
     spans: tuple[slice, ...]
     dimension_ids: tuple[str, ...]
+    robust_cov: Array | None = None
 
     @property
     def rss(self) -> float:
         return float(np.nansum(self.residual**2))
 
     def estimate(self, i: int) -> tuple[float, float]:
-        """(estimate, standard error) of effect ``i`` (the slope for a relation)."""
+        """(estimate, standard error) of effect ``i`` (the slope for a relation).
+
+        The error is the cluster-robust one (CR2, the part as the cluster) when the series has
+        :data:`ROBUST_MIN_CYCLES` parts or more: it holds when the parts vary as a whole.
+        """
         j = self.spans[i].start
-        return float(self.coef[j]), float(np.sqrt(max(self.cov[j, j], 0.0)))
+        cov = self.cov if self.robust_cov is None else self.robust_cov
+        return float(self.coef[j]), float(np.sqrt(max(cov[j, j], 0.0)))
 
     def offset(self) -> Array:
         """Fitted setup state seen through C plus every static constant, shape (n_dimensions,)."""
@@ -233,6 +247,9 @@ def fit_model(
     cov: Array = (sigma**2 if dof > 0 else np.nan) * (vt.T * inv**2) @ vt
     field = np.full(series.deviation.shape, np.nan)
     field[obs.cycle, obs.dim] = resid
+    robust = None
+    if np.unique(obs.cycle).size >= ROBUST_MIN_CYCLES and specs:
+        robust = cr2_covariance(u[:, keep], inv[keep], vt[keep], resid, obs.cycle)
     return Fit(
         specs,
         coef,
@@ -244,4 +261,5 @@ def fit_model(
         row_space_basis(layout.composite),
         tuple(spans),
         layout.dimension_ids,
+        robust,
     )

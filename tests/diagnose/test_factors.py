@@ -157,7 +157,8 @@ def test_declared_factors_enter_the_diagnosis_before_the_search(tmp_path: Path) 
     assert declared and d.effects[: len(declared)] == tuple(declared)  # first, then what the search finds
     t5a = {e.spec.channel: e for e in declared if e.spec.register == "T5A"}
     low = t5a["doe_tool_length=Long & doe_speed=Low"]
-    assert low.estimate > 10 * low.stderr and low.p is not None and low.p < 0.01
+    # CR2 error, the part as the unit (issue 41): t ≈ 8 where the plain error gave ≈ 16
+    assert low.estimate > 6 * low.stderr and low.p is not None and low.p < 0.01
     assert t5a["doe_tool_length=Long"].p is not None and t5a["doe_tool_length=Long"].p < 0.01
     assert t5a["doe_speed=Low"].p is None  # fitted with its accepted interaction, its own test not accepted
     without = diagnose_reports(DiagnoseRequest(MODEL, (PLATE,), process=str(LOG), diagnoser=Diagnoser(walk=False)))

@@ -56,7 +56,8 @@ def test_the_designed_factors_are_named_per_cutter_not_wear_or_drift(tmp_path: P
     assert {e.spec.channel for e in d.effects} == {"tools=7 15 3 4 5 1 23 & doe_tool_length=Long"}
     regs = {e.spec.register: e for e in d.effects}
     assert len(regs) >= 2 and None not in regs  # per cutter, not every tool alike
-    assert regs["T5A"].estimate > 5 * regs["T5A"].stderr and regs["T4A"].estimate < -5 * regs["T4A"].stderr
+    # the printed error is cluster-robust (CR2, the part as the unit: 20 parts), about twice the plain one here
+    assert regs["T5A"].estimate > 4 * regs["T5A"].stderr and regs["T4A"].estimate < -4 * regs["T4A"].stderr
     accepted = [s for s in d.selection.steps if s.accepted]
     assert len(accepted) == 1 and len(accepted[0].terms) == len(regs)  # one candidate, tested as a block
     assert not any("doe_speed" in str(t.channel) or "rpm" in str(t.channel) for s in accepted for t in s.terms)
