@@ -15,7 +15,7 @@ the precedence of :mod:`setupfix.model.safety` (the report's own value first).
 
 from __future__ import annotations
 
-from typing import Final
+from typing import Any, Final
 
 import numpy as np
 import numpy.typing as npt
@@ -33,6 +33,7 @@ __all__ = [
     "conformance_zone",
     "report_uncertainty",
     "dimension_uncertainty",
+    "conformance_rows",
 ]
 
 Array = npt.NDArray[np.float64]
@@ -144,3 +145,36 @@ def dimension_uncertainty(model: ProcessModel, part: PartMeasurement | None = No
     own = np.isfinite(given)
     u = np.where(own, given, model_u)
     return u, tuple("report" if o else src for o, src in zip(own.tolist(), sources, strict=True))
+
+
+def conformance_rows(
+    model: ProcessModel, part: PartMeasurement | None, rows: list[dict[str, Any]]
+) -> list[dict[str, Any]]:
+    """Dimension rows (``id``, ``deviation``, ``predicted``) with U, its source and the verdicts before and after.
+
+    Adds ``uncertainty`` [model unit] (0 where none), ``uncertainty_source``
+    (:data:`setupfix.model.safety.UNCERTAINTY_SOURCES`, "" where none), ``conformance_before``
+    (on the deviation as measured) and ``conformance_after`` (on the predicted value, with the same
+    U) to each row; a position zone is judged on its radial distance against its radius.
+    """
+    if not rows:
+        return rows
+    u_all, sources = dimension_uncertainty(model, part)
+    dims = {d.id: (i, d) for i, d in enumerate(model.dimensions)}
+    at = np.array([dims[r["id"]][0] for r in rows])
+    lower = np.array([dims[r["id"]][1].lower for r in rows], dtype=np.float64)
+    upper = np.array([dims[r["id"]][1].upper for r in rows], dtype=np.float64)
+    zone = np.array([dims[r["id"]][1].zone for r in rows], dtype=bool)
+    values = np.array([[r["deviation"], r["predicted"]] for r in rows], dtype=np.float64).T
+    codes = conformance_codes(values, lower, upper, u_all[at], zone)
+    before, after = conformance_names(codes[0]), conformance_names(codes[1])
+    return [
+        row
+        | {
+            "uncertainty": float(u_all[i]),
+            "uncertainty_source": sources[i],
+            "conformance_before": b,
+            "conformance_after": a,
+        }
+        for row, i, b, a in zip(rows, at.tolist(), before, after, strict=True)
+    ]

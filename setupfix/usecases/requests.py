@@ -21,6 +21,7 @@ import numpy.typing as npt
 import pandas as pd
 
 from setupfix.core.errors import MatchError, Note, ParameterError, SourceLocation
+from setupfix.correction.conformance import conformance_rows
 from setupfix.correction.pose import PosedProblem
 from setupfix.correction.safety import Recommendation, RuleEffect
 from setupfix.correction.zones import cmm_position
@@ -378,7 +379,9 @@ class CycleCorrection:
 
         ``flags`` lists ``out`` (predicted out of tolerance after the changes),
         ``out_before`` (out of tolerance before), ``binding``, ``given_up``, ``rejected``
-        and ``guard`` (predicted inside the limits but within U of one).  When the
+        and ``guard`` (predicted inside the limits but within U of one); ``uncertainty`` (U, k = 2),
+        ``uncertainty_source`` and the ISO 14253-1 verdicts ``conformance_before`` / ``_after``
+        (:func:`setupfix.correction.conformance.conformance_rows`).  When the
         problem holds an estimate, ``estimate`` is it and ``deviation`` the report's.  A position
         zone's row also gives ``zone_position`` and ``zone_position_predicted``, the diameters a CMM
         prints (2 × ``deviation`` and ``predicted``, the radial distances), and ``zone_diameter``.
@@ -429,7 +432,7 @@ class CycleCorrection:
                 row["zone_position_predicted"] = float(cmm_position(row["predicted"]))
                 row["zone_diameter"] = d.diameter
             rows.append(row)
-        return rows
+        return conformance_rows(self.model, self.part, rows)
 
 
 @dataclass(frozen=True, eq=False)
