@@ -22,6 +22,7 @@ from setupfix.cli.common import (
     whole_number,
 )
 from setupfix.cli.exit_codes import NOT_SOLVED, OK, PARTIAL, REJECTED
+from setupfix.cli.machine import add_link_options
 
 if TYPE_CHECKING:
     from setupfix.usecases.batch_records import BatchSummary, Outcome
@@ -54,6 +55,7 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
         help="the controller's current offsets (CSV register,value; register,axis,value in a "
         "multi-axis model): write absolute new values",
     )
+    add_link_options(p, current=False)
     add_program_number_option(p)
     p.add_argument("--optimizer", default="exact", choices=sorted(OPTIMIZERS))
     p.add_argument("--seed", type=int, default=None)

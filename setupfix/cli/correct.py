@@ -21,6 +21,7 @@ from setupfix.cli.common import (
     store_ref,
 )
 from setupfix.cli.exit_codes import NOT_SOLVED, OK, REJECTED
+from setupfix.cli.machine import add_link_options, link_current
 
 if TYPE_CHECKING:
     from setupfix.usecases.export import Exported
@@ -75,6 +76,7 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
         "the stored series); prints on A4",
     )
     add_offsets_options(p)
+    add_link_options(p)
     add_report_options(p)
     add_thermal_options(p)
     p.set_defaults(run=run)
@@ -98,15 +100,18 @@ def add_offsets_options(p: argparse.ArgumentParser) -> None:
 
 def correct_request(args: argparse.Namespace) -> CorrectRequest:
     """The :class:`~setupfix.usecases.requests.CorrectRequest` of ``correct``'s arguments (every input loaded once)."""
+    from setupfix.model import load_model
     from setupfix.usecases.correct import load_request
     from setupfix.usecases.requests import SolveOptions
 
+    model = load_model(args.model)
+    solve = SolveOptions(args.optimizer, args.seed, args.time_limit, args.objective)  # bad options before the link
     return load_request(
-        args.model,
+        model,
         read=read_options(args),
         cycles=cycles_of(args),
-        solve=SolveOptions(args.optimizer, args.seed, args.time_limit, args.objective),
-        current=args.current,
+        solve=solve,
+        current=link_current(args, model) or args.current,  # --link: read from the control
         store=store_ref(args, args.store),
         thermal=args.thermal,
         temperatures=args.temperatures,
@@ -173,7 +178,10 @@ def run(args: argparse.Namespace) -> int:
     if args.offsets == "-":
         return status
     if args.json:
-        json.dump(outcome_json(cycles), sys.stdout, indent=2)
+        plan = outcome_json(cycles)
+        if request.current is not None and request.current.snapshot is not None:  # --link: the values it was made with
+            plan["link"] = request.current.snapshot.to_json()
+        json.dump(plan, sys.stdout, indent=2)
         sys.stdout.write("\n")
     else:
         sys.stdout.write("\n\n".join(format_correction(c) for c in cycles) + "\n")

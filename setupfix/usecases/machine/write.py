@@ -1,35 +1,12 @@
-"""``machine read`` and ``machine write``: the control's offsets read, and a plan written with the guarded sequence.
-
-One use case for every door (the CLI, batch, the TUI's "send to machine"):
-
-- :func:`read_control` reads every mapped component (or the model's) → :class:`ControlRead`;
-  :func:`current_from_link` turns a read into the :class:`~setupfix.usecases.requests.CurrentOffsets`
-  of ``correct --link`` (model unit) with the snapshot the plan records;
-- :func:`load_plan` reads a plan file (``correct --json`` made with ``--link``), :func:`plan_of`
-  makes one from a corrected cycle;
-- :func:`plan_write` reads the control and gives the dry-run diff (:class:`WritePlan`);
-- :func:`apply_write` runs the guarded sequence of ``../shared/spec/machine-link.md`` on it:
-  re-read and refuse a stale table, refuse on the interlock or a limit, write at the control's
-  increment and unit, read back within half an increment, roll back and name every component
-  on a mismatch or a lost connection;
-- :func:`write_to_control` is the whole command: plan, dry run or apply, and the audit record
-  (every attempt, an unreachable control and a refusal included) when a store is given.
-
-Values of the control are in the control's unit (``Link.unit``); a rotation in degrees.
-"""
+"""``machine write``: the dry-run diff, the guarded sequence of ``machine-link.md``, the audit record."""
 
 from __future__ import annotations
 
-import hashlib
-import json
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, replace
-from pathlib import Path
 from typing import Any
 
-from setupfix.core.atomic import write_text
-from setupfix.core.errors import ParseError, SourceLocation
 from setupfix.core.units import length_factor
 from setupfix.links.base import Component, Link
 from setupfix.links.errors import (
@@ -41,20 +18,12 @@ from setupfix.links.errors import (
     LinkUnreachable,
 )
 from setupfix.links.mapping import decimals_of, model_components, round_to_increment, to_control, to_model
-from setupfix.links.snapshot import ControlSnapshot
 from setupfix.model import ProcessModel
 from setupfix.store import Store
 from setupfix.store.link_audit import LinkAttempt, LinkComponentRecord
-from setupfix.usecases.requests import CurrentOffsets, CycleCorrection
+from setupfix.usecases.machine.plan import Plan
 
 __all__ = [
-    "ControlRead",
-    "read_control",
-    "current_from_link",
-    "write_current_csv",
-    "Plan",
-    "load_plan",
-    "plan_of",
     "ComponentWrite",
     "WritePlan",
     "WriteOutcome",
@@ -63,6 +32,7 @@ __all__ = [
     "write_to_control",
     "OUTCOME_STATUS",
 ]
+
 
 #: Exit status of each outcome (``machine-link.md``, "Exit status").
 OUTCOME_STATUS: dict[str, int] = {
@@ -78,219 +48,6 @@ OUTCOME_STATUS: dict[str, int] = {
 def _within(a: float, b: float, increment: float) -> bool:
     """|a − b| ≤ increment / 2 (with a float tolerance of 1e-9 increment)."""
     return abs(a - b) <= increment * (0.5 + 1e-9)
-
-
-# -- reading ---------------------------------------------------------------------------------------
-@dataclass(frozen=True)
-class ControlRead:
-    """What ``machine read`` read: the link, its unit, and every component's value (control unit)."""
-
-    snapshot: ControlSnapshot
-    ids: tuple[tuple[Component, str], ...] = ()  # the model's register ID of each component (with --model)
-
-    def to_json(self) -> dict[str, Any]:
-        s = self.snapshot
-        ids = dict(self.ids)
-        return {
-            "machine": s.machine,
-            "link": s.link,
-            "unit": s.unit,
-            "increment": s.increment,
-            "components": [
-                {"register": c.register, "axis": c.axis, "value": v, "unit": "deg" if c.rotation else s.unit}
-                | ({"id": ids[c]} if c in ids else {})
-                for c, v in s.values
-            ],
-        }
-
-
-def read_control(link: Link, model: ProcessModel | None = None) -> ControlRead:
-    """Read every component the link maps, or only the model's correctable ones (in the model's order).
-
-    Raises
-    ------
-    LinkConfigError
-        A model component the link does not map (all named; nothing read).
-    LinkUnreachable, LinkLost, LinkDenied, LinkError
-    """
-    if model is None:
-        comps = list(link.components())
-        ids: tuple[tuple[Component, str], ...] = ()
-    else:
-        by_id = model_components(model)
-        comps = list(dict.fromkeys(by_id.values()))
-        ids = tuple((c, rid) for rid, c in by_id.items())
-    values = link.read(comps)
-    snapshot = ControlSnapshot.of(link.name, link.unit, link.increment, {c: values[c] for c in comps}, link.machine)
-    return ControlRead(snapshot, ids)
-
-
-def current_from_link(link: Link, model: ProcessModel) -> CurrentOffsets:
-    """The model's current offsets read from the control (model unit), holding the snapshot for the plan."""
-    read = read_control(link, model)
-    values = read.snapshot.as_dict
-    current = {rid: to_model(values[c], c, model.unit, link.unit) for rid, c in model_components(model).items()}
-    return CurrentOffsets.of(current, link.name, read.snapshot)
-
-
-def _number(value: float, digits: int) -> str:
-    text = f"{value:.{digits}f}".rstrip("0").rstrip(".")
-    return "0" if text in ("-0", "") else text
-
-
-def write_current_csv(read: ControlRead, model: ProcessModel, path: str | Path) -> None:
-    """The read values as a ``--current`` CSV (``cli-json.md``, "Current offsets"): the model's registers,
-    the model's unit; ``register,value`` for a one-axis model, ``register,axis,value`` for a multi-axis one.
-
-    Raises
-    ------
-    LinkConfigError
-        The read holds no value for a correctable register of the model.
-    """
-    values = read.snapshot.as_dict
-    unit = read.snapshot.unit
-    digits = decimals_of(read.snapshot.increment) + (4 if unit != model.unit else 0)
-    lines = ["register,axis,value" if model.multi_axis else "register,value"]
-    for reg in model.registers:
-        if reg.fixed:
-            continue
-        comp = model_components(model)[reg.id]
-        if comp not in values:
-            raise LinkConfigError(f"no value of {comp} was read (model register {reg.id})")
-        text = _number(to_model(values[comp], comp, model.unit, unit), digits)
-        if model.multi_axis:
-            axis = reg.component if reg.kind == "wks" and reg.component else ""
-            lines.append(f"{reg.register},{axis},{text}")
-        else:
-            lines.append(f"{reg.register},{text}")
-    write_text(path, "\n".join(lines) + "\n")
-
-
-# -- the plan ------------------------------------------------------------------------------------
-@dataclass(frozen=True)
-class Plan:
-    """A decision to write: the corrections (model ID → change, model unit), its verdict, and the
-    control's values it was made with (None when it was made without a link)."""
-
-    source: str
-    sha256: str
-    verdict: str
-    solved: bool
-    corrections: tuple[tuple[str, float], ...]
-    made_with: ControlSnapshot | None
-    draft: bool = False
-    alarm: str = ""
-
-    @property
-    def refusal(self) -> str | None:
-        """Why this plan is never written, or None (``apply`` verdict of a finished solve, not a draft)."""
-        if self.draft:
-            return "the model is a draft (remove [process] draft once edited): nothing is written"
-        if not self.solved:
-            return "the solve was stopped with nothing proven to recommend: nothing is written"
-        if self.verdict != "apply":
-            return f"the verdict is {self.verdict!r}, not 'apply': nothing is written"
-        return None
-
-
-def _sha256_of(obj: Any) -> str:
-    return hashlib.sha256(json.dumps(obj, sort_keys=True, separators=(",", ":")).encode()).hexdigest()
-
-
-def plan_of(cycle: CycleCorrection, current: CurrentOffsets | None, source: str = "") -> Plan:
-    """The plan of one corrected cycle (``machine write REPORT``); its hash is that of its JSON."""
-    from setupfix.usecases.contract import cycle_json
-
-    obj = cycle_json(cycle)
-    snapshot = current.snapshot if current is not None else None
-    if snapshot is not None:
-        obj["link"] = snapshot.to_json()
-    return Plan(
-        source=source or cycle.part.report,
-        sha256=_sha256_of(obj),
-        verdict=cycle.verdict,
-        solved=cycle.solved,
-        corrections=tuple(cycle.corrections.items()),
-        made_with=snapshot,
-        draft=cycle.model.draft,
-        alarm=cycle.recommendation.alarm or "",
-    )
-
-
-def load_plan(path: str | Path, model: ProcessModel) -> Plan:
-    """A plan file: the ``correct --json`` object of one part, made with ``--link``.
-
-    Raises
-    ------
-    ParseError
-        Naming the file and key: not JSON, several parts (make it with ``--part``), no verdict,
-        corrections that are not the model's registers, no ``"link"`` values (made without ``--link``).
-    """
-    name = str(path)
-    try:
-        data = Path(path).read_bytes()
-    except OSError as exc:
-        raise ParseError(f"cannot read the plan: {exc.strerror or exc}", location=SourceLocation(name)) from None
-    try:
-        obj = json.loads(data)
-    except (ValueError, UnicodeDecodeError) as exc:
-        raise ParseError(f"not a JSON plan (correct --json): {exc}", location=SourceLocation(name)) from None
-    if isinstance(obj, dict) and "parts" in obj:
-        parts = obj["parts"]
-        if isinstance(parts, list) and len(parts) == 1:
-            obj = {**parts[0], **({"link": obj["link"]} if "link" in obj else {})}
-        else:
-            raise ParseError(
-                f"the plan holds {len(parts) if isinstance(parts, list) else 'several'} parts: one part is written",
-                location=SourceLocation(name, key="parts"),
-                hint="make the plan with correct --part ID",
-            )
-    if not isinstance(obj, dict):
-        raise ParseError("expected the JSON object of correct --json", location=SourceLocation(name))
-    verdict = obj.get("verdict")
-    if verdict not in ("apply", "hold", "reject"):
-        raise ParseError(
-            f"expected a verdict apply, hold or reject, found {verdict!r}", location=SourceLocation(name, key="verdict")
-        )
-    corrections = obj.get("corrections")
-    if not isinstance(corrections, dict):
-        raise ParseError("expected the corrections by register", location=SourceLocation(name, key="corrections"))
-    wanted = set(model_components(model))
-    given: dict[str, float] = {}
-    for key, value in corrections.items():
-        if key not in wanted:
-            raise ParseError(
-                f"register {key!r} is not a correctable register of the model {model.source}",
-                location=SourceLocation(name, key=f"corrections.{key}"),
-            )
-        if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value):
-            raise ParseError(
-                f"expected a finite number, found {value!r}", location=SourceLocation(name, key=f"corrections.{key}")
-            )
-        given[key] = float(value)
-    missing = sorted(wanted - set(given))
-    if missing:
-        raise ParseError(
-            f"no correction for {', '.join(missing)} of the model", location=SourceLocation(name, key="corrections")
-        )
-    if "link" not in obj:
-        raise ParseError(
-            "the plan records no values read from the control: nothing can prove the table unchanged",
-            location=SourceLocation(name, key="link"),
-            hint="make the plan with correct --link LINK --json",
-        )
-    snapshot = ControlSnapshot.from_json(obj["link"], SourceLocation(name))
-    solved = obj.get("solved", True)
-    return Plan(
-        source=name,
-        sha256=hashlib.sha256(data).hexdigest(),
-        verdict=str(verdict),
-        solved=bool(solved),
-        corrections=tuple((rid, given[rid]) for rid in model_components(model)),
-        made_with=snapshot,
-        draft=model.draft,
-        alarm=str(obj.get("alarm") or ""),
-    )
 
 
 # -- the write -----------------------------------------------------------------------------------
