@@ -13,6 +13,14 @@ set here for the child process only).  It keeps the work offsets (parameters 522
 axis, X = 0) in inches whatever ``G20``/``G21`` says, so :func:`read_back` reads them as
 ``#<n> = [#5221 * 25.4]`` in a millimetre program; ``(debug, …)`` prints six decimals.  It reads
 ``G10 L2`` as Fanuc does in absolute mode (``G90``) only: see :mod:`g10` for what it does not check.
+
+Macro programs (``fanuc-macro``): rs274 numbers its work offsets as Fanuc does (``#5221`` … ``#5346``
+for G54…G59), so :func:`read_parameters` reads what ``#5221=[#5221+0.012]`` left there, raw (no unit
+scaling: an assignment writes the number as it stands).  It holds parameters ``#1`` … ``#5601`` only:
+``#7001…`` (G54.1), ``#10001…``/``#12001…`` (tools above H200, radii) are out of its range, and
+``#2001…`` are plain parameters there (no tool meaning).  Fanuc's one-line guard
+``IF [#n EQ v] THEN #3000=k (TEXT)`` is not its syntax: :func:`linuxcnc_macro` rewrites it as an
+``o``-word ``if`` with ``(abort, TEXT)``, which stops the run with an error.
 """
 
 from __future__ import annotations
@@ -24,10 +32,12 @@ from pathlib import Path
 
 import pytest
 
-__all__ = ["rs274_path", "run_rs274", "read_back", "AXIS_INDEX"]
+__all__ = ["rs274_path", "run_rs274", "read_back", "read_parameters", "linuxcnc_macro", "AXIS_INDEX", "MAX_PARAMETER"]
 
 #: Where ``.ci/run`` unpacks LinuxCNC when ``SETUPFIX_RS274`` is not set.
 CACHE = Path.home() / ".cache" / "setupfix-ci" / "rs274" / "root" / "usr" / "bin" / "rs274"
+#: The highest parameter number rs274 holds.
+MAX_PARAMETER = 5601
 #: Axis word → offset of its parameter after the coordinate system's first (5221 = G54 X).
 AXIS_INDEX = {"X": 0, "Y": 1, "Z": 2}
 
@@ -101,3 +111,28 @@ def read_back(
     assert messages, "rs274 printed no debug message"
     values = [float(v) for v in messages[-1].split()]
     return dict(zip(offsets, values, strict=True))
+
+
+_GUARD = re.compile(r"^IF \[#(\d+) EQ (\d+)\] THEN #3000=\d+ \((.*)\)$", re.M)
+
+
+def linuxcnc_macro(program: str) -> str:
+    """``program`` with Fanuc's one-line guard ``IF [#n EQ v] THEN #3000=k (TEXT)`` as rs274's
+    ``o``-word ``if`` that aborts with TEXT (the run then fails, as the alarm stops a Fanuc)."""
+    return _GUARD.sub(r"o900 if [#\1 EQ \2]\n(abort, \3)\no900 endif", program)
+
+
+def read_parameters(
+    program: str, folder: Path, numbers: list[int], *, parameters: dict[int, float] | None = None
+) -> dict[int, float]:
+    """The parameters ``numbers`` (raw, as stored) after running ``program`` in rs274 from ``parameters``.
+
+    The reads are appended before ``M30``.
+    """
+    lines = program.rstrip("\n").split("\n")
+    end = lines.index("M30")
+    debug = "(debug, " + " ".join(f"#{n}" for n in numbers) + ")"
+    messages = run_rs274("\n".join([*lines[:end], debug, *lines[end:]]) + "\n", folder, parameters)
+    assert messages, "rs274 printed no debug message"
+    values = [float(v) for v in messages[-1].split()]
+    return dict(zip(numbers, values, strict=True))

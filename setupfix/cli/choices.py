@@ -10,7 +10,7 @@ from __future__ import annotations
 #: setupfix.optimize.OPTIMIZERS
 OPTIMIZERS: tuple[str, ...] = ("coa", "cripso", "cs", "exact", "ga", "pso")
 #: setupfix.outputs.controllers.CONTROLLERS
-CONTROLLERS: tuple[str, ...] = ("csv", "fanuc", "haas", "heidenhain", "siemens")
+CONTROLLERS: tuple[str, ...] = ("csv", "fanuc", "haas", "heidenhain", "siemens", "fanuc-macro", "haas-macro")
 #: setupfix.usecases.history.EXPORTS
 HISTORY_EXPORTS: tuple[str, ...] = ("measurements", "corrections", "temperatures", "recommendations", "dfq")
 #: setupfix.thermal.registry.methods()

@@ -2,7 +2,8 @@
 
 ``render(name, rows, title=…) -> str`` for ``csv`` (the offsets CSV of
 ``../shared/spec/cli-json.md`` plus unit and mode), ``fanuc`` and ``haas`` (G10
-programs), ``siemens`` (840D part program with system variables) and
+programs), ``fanuc-macro`` and ``haas-macro`` (the offsets' macro variables),
+``siemens`` (840D part program with system variables) and
 ``heidenhain`` (preset and tool table values).  Every renderer raises
 :class:`~setupfix.core.errors.ExportError` naming a register it cannot express, so no
 file is written half right.  :func:`parsers.current.read_current` reads the controller's current
@@ -76,6 +77,8 @@ CONTROLLERS: dict[str, str] = {
     "haas": "setupfix.outputs.controllers.gcode:render_haas",
     "siemens": "setupfix.outputs.controllers.siemens:render",
     "heidenhain": "setupfix.outputs.controllers.heidenhain:render",
+    "fanuc-macro": "setupfix.outputs.controllers.fanuc_macro:render_fanuc_macro",
+    "haas-macro": "setupfix.outputs.controllers.fanuc_macro:render_haas_macro",
 }
 
 
@@ -152,7 +155,14 @@ def derived_program_number(*keys: str) -> int:
 
 
 #: File suffix of a program by controller (every format but ``csv``).
-PROGRAM_SUFFIX: dict[str, str] = {"fanuc": ".nc", "haas": ".nc", "siemens": ".mpf", "heidenhain": ".txt"}
+PROGRAM_SUFFIX: dict[str, str] = {
+    "fanuc": ".nc",
+    "haas": ".nc",
+    "siemens": ".mpf",
+    "heidenhain": ".txt",
+    "fanuc-macro": ".nc",
+    "haas-macro": ".nc",
+}
 
 #: Longest file name [bytes] the file systems in use accept (POSIX ``NAME_MAX``).
 NAME_MAX = 255

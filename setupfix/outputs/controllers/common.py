@@ -44,7 +44,13 @@ DEFAULT_PROGRAM = 4501
 #: Program numbers each format can hold (inclusive); a format missing here has no program name.
 #: Fanuc ``O1``…``O9999`` (four digits); Haas ``O1``…``O99999`` (five digits); Siemens names the
 #: program ``SETUPFIX_<n>`` (a name of at most 24 characters: up to 15 digits, held to 8 here).
-PROGRAM_NUMBERS: dict[str, tuple[int, int]] = {"fanuc": (1, 9999), "haas": (1, 99999), "siemens": (1, 99_999_999)}
+PROGRAM_NUMBERS: dict[str, tuple[int, int]] = {
+    "fanuc": (1, 9999),
+    "haas": (1, 99999),
+    "siemens": (1, 99_999_999),
+    "fanuc-macro": (1, 9999),
+    "haas-macro": (1, 99999),
+}
 
 
 #: The numbers :func:`plan_number` gives (inclusive): at most 7 digits, which a Fanuc macro constant holds exactly
