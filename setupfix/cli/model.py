@@ -1,4 +1,5 @@
-"""``setupfix model show | check | init``: inspect a process model, tie a report to it, scaffold one."""
+"""``setupfix model show | check | init | map``: inspect a process model, tie a report to it, scaffold one,
+answer a scaffold's questions."""
 
 from __future__ import annotations
 
@@ -64,13 +65,17 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
         "init",
         help="write a draft model scaffold from reports (then check and edit it)",
         description="Every toleranced length characteristic of the reports becomes a "
-        "dimension (name, nominal, limits, group = station) with a feature of its "
-        "own moved by one WKS (W1, G54), measured along the axis or direction the "
-        "report states; sizes move only with a tool radius (D1) where the report's "
-        "feature type says they are interpolated; tool lengths (H1) act along the "
-        "spindle only. Several measured axes give a multi-axis model. The file is "
-        "marked draft = true: 'correct' holds until you have checked its physics "
-        "and removed the key; its comments say what to check.",
+        "dimension (name, nominal, limits, group = station). Several measured axes (or "
+        "sizes cut by interpolation, or position callouts) give a multi-axis model with a "
+        "feature per feature of the part at its position: a location follows its feature "
+        "along the axis or direction the report states, a distance is the difference of "
+        "its two features, a size moves only with a tool radius where the report's feature "
+        "type says it is interpolated, a position callout is a circular zone. Which work "
+        "offset and tool made each feature the reports do not say: each is a named "
+        "question for 'model map'. A one-axis model moves each feature by W1 (G54) and, "
+        "on the spindle axis, T1 (H1). The file is marked draft = true: 'correct' holds "
+        "until the questions are answered and the physics checked; its comments say what "
+        "to check.",
     )
     init.add_argument(
         "reports",
@@ -106,6 +111,38 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
     add_reader_options(init)
     init.set_defaults(run=run_init)
 
+    mapping = msub.add_parser(
+        "map",
+        help="answer a scaffold's questions: which work offset and tool made each feature",
+        description="Lists the features of a model init scaffold with their positions and callouts, "
+        "and the questions the reports leave open: which work offset (WKS) and which tool made each "
+        "feature. Answers (--answer, or a CSV with --answers) are written into the model: the feature's "
+        "wks and tool length relations, a size's tool radius, the register tables they name; when the "
+        "last question is answered, draft = true goes too. Written atomically; nothing is written when "
+        "an answer is refused.",
+    )
+    mapping.add_argument("model", metavar="MODEL", help="process model TOML (a model init scaffold)")
+    mapping.add_argument(
+        "--answer",
+        action="append",
+        default=[],
+        metavar="SEL=WKS,TOOL",
+        help="answer the questions SEL selects (a question Q1, a feature F1, a report feature or callout "
+        "name, a pattern DIAMETER5*, group:P1, or *; several with commas): made on WKS (G54, an ID, or "
+        "none) by TOOL (T5, H5, 5, or none); a size only asks for the tool (SEL=,T5); repeatable, a "
+        "narrower selector wins",
+    )
+    mapping.add_argument(
+        "--answers", metavar="CSV", default=None, help="answers from a CSV file with the columns feature, wks, tool"
+    )
+    mapping.add_argument("-o", "--out", metavar="MODEL", default=None, help="write here (default: MODEL itself)")
+    mapping.add_argument(
+        "--keep-draft", action="store_true", help="keep draft = true even when every question is answered"
+    )
+    mapping.add_argument("--json", action="store_true", help="the listing (or what was written) as JSON")
+    mapping.add_argument("--tui", action="store_true", help="answer in the terminal UI")
+    mapping.set_defaults(run=run_map)
+
 
 def run_init(args: argparse.Namespace) -> int:
     from setupfix.outputs.writers import check_target, write_text
@@ -138,13 +175,61 @@ def run_init(args: argparse.Namespace) -> int:
         )
         axes = f"axes {', '.join(scaffold.axes)} (multi-axis)" if scaffold.axes else f"process axis {scaffold.axis}"
         sizes = f", {scaffold.sizes} size(s)" if scaffold.sizes else ""
+        sizes += f", {scaffold.zones} position zone(s)" if scaffold.zones else ""
+        sizes += f", {scaffold.distances} distance(s)" if scaffold.distances else ""
+        if scaffold.questions:
+            todo = (
+                f"{len(scaffold.questions)} question(s) open (which work offset and tool made each feature): "
+                f"answer them with 'setupfix model map {args.out}', then 'setupfix model check' and 'setupfix correct'"
+            )
+        else:
+            todo = (
+                "('correct' holds until you remove 'draft = true'): check its registers and relations, then "
+                "'setupfix model check' and 'setupfix correct'"
+            )
         print(
             f"wrote {args.out}: {scaffold.dimensions} dimension(s) (axes: {origins}{sizes}), {axes}, "
-            f"{len(scaffold.skipped)} characteristic(s) left out (listed in its head); it is a draft "
-            "('correct' holds until you remove 'draft = true'): check its registers and relations, then "
-            "'setupfix model check' and 'setupfix correct'",
+            f"{len(scaffold.skipped)} characteristic(s) left out (listed in its head); it is a draft {todo}",
             file=sys.stderr,
         )
+    return 0
+
+
+def run_map(args: argparse.Namespace) -> int:
+    from setupfix.usecases.model_map import answer_questions, map_listing, parse_answer, read_answers
+    from setupfix.views.model_map import format_listing, format_result
+
+    if args.tui:
+        from setupfix.tui.screens.model_map import run_model_map
+
+        return run_model_map(args.model, out=args.out, keep_draft=args.keep_draft)
+    answers = read_answers(args.answers) if args.answers else []
+    for i, spec in enumerate(args.answer, start=1):
+        answers += parse_answer(spec, SourceLocation(f"--answer #{i}"))
+    if not answers:
+        listing = map_listing(args.model)
+        if args.json:
+            json.dump(listing.to_json(), sys.stdout, indent=1)
+            sys.stdout.write("\n")
+        else:
+            sys.stdout.write(format_listing(listing) + "\n")
+        return 0
+    result = answer_questions(args.model, answers, out=args.out, keep_draft=args.keep_draft)
+    if args.json:
+        json.dump(
+            {
+                "model": str(args.out or args.model),
+                "answered": [{"question": q, "wks": w, "tool": t} for q, w, t in result.answered],
+                "remaining": list(result.remaining),
+                "added": list(result.added),
+                "draft": result.draft,
+            },
+            sys.stdout,
+            indent=1,
+        )
+        sys.stdout.write("\n")
+    else:
+        sys.stdout.write(format_result(result, str(args.out or args.model)) + "\n")
     return 0
 
 

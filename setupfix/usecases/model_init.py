@@ -48,9 +48,18 @@ from setupfix.core.errors import ModelError, Note, ParseError, SetupfixError, So
 from setupfix.inputs.cycles import ReadOptions
 from setupfix.model import normalise_name
 from setupfix.model.loader import RANGES_MM
-from setupfix.outputs.model_toml import SPINDLE, ScaffoldDimension, render_scaffold
+from setupfix.model.measurements import BETWEEN_COLUMN, FEATURE_DIRECTION_COLUMNS, FEATURE_ID_COLUMN
+from setupfix.outputs.model_toml import SPINDLE, ScaffoldDimension, ScaffoldFeature, comment, render_scaffold
 
-__all__ = ["Scaffold", "scaffold_model", "scaffold_from_tables", "name_axis", "FORM_WORDS"]
+__all__ = [
+    "Scaffold",
+    "scaffold_model",
+    "scaffold_from_tables",
+    "name_axis",
+    "plan_features",
+    "FORM_WORDS",
+    "RowGeometry",
+]
 
 #: Words naming a form or orientation tolerance (English, German, Korean): no setup offset moves them.
 FORM_WORDS = (
@@ -128,6 +137,11 @@ class Scaffold:
     axes: tuple[str, ...] = ()
     #: How many dimensions are sizes (diameters, widths, …) as the reports state them.
     sizes: int = 0
+    #: How many are position zones, and distances between two features.
+    zones: int = 0
+    distances: int = 0
+    #: The named questions a multi-axis scaffold leaves (``Q1`` …): which WKS and tool made each feature.
+    questions: tuple[str, ...] = ()
 
 
 def _resolution(narrowest: float | None) -> float:
@@ -138,11 +152,32 @@ def _resolution(narrowest: float | None) -> float:
     return res
 
 
-def _geometry(
-    table: pd.DataFrame,
-) -> list[tuple[tuple[float, float, float] | None, str, str, str, tuple[float, float, float] | None]]:
-    """Per row: (measuring direction, size, feature, side, position) as the report states them
-    (:mod:`parsers.geometry`; the ``x, y, z`` location), None / "" where it states none."""
+#: The column naming what a characteristic is (``"distance"``, ``"position"``, …) where a reader states it.
+CALLOUT_COLUMN = "callout"
+#: Words of a characteristic's name that say it is a distance between two features (English, German,
+#: Spanish, Italian, Korean), used where the report states no callout type and no features.
+DISTANCE_WORDS = ("distance", "distanz", "abstand", "distancia", "distanza", "거리")
+#: Words of a name that say it is a position callout (a one-sided zone value).
+POSITION_WORDS = ("position", "posizione", "posición", "위치도")
+
+
+@dataclass(frozen=True)
+class RowGeometry:
+    """What one report row states about its geometry (:mod:`parsers.geometry`, the position columns)."""
+
+    direction: tuple[float, float, float] | None = None
+    size: str = ""
+    feature: str = ""
+    side: str = ""
+    position: tuple[float, float, float] | None = None
+    feature_id: str = ""
+    between: tuple[str, ...] = ()
+    callout: str = ""
+    feature_axis: tuple[float, float, float] | None = None
+
+
+def _geometry(table: pd.DataFrame) -> list[RowGeometry]:
+    """Per row: what the report states of its geometry, None / "" where it states nothing."""
     n = len(table)
 
     def numbers(name: str) -> list[float]:
@@ -150,13 +185,16 @@ def _geometry(
             return [math.nan] * n
         return pd.to_numeric(table[name], errors="coerce").astype(float).tolist()
 
-    def words(name: str) -> list[str]:
+    def words(name: str, fold: bool = True) -> list[str]:
         if name not in table:
             return [""] * n
-        return [str(v).strip().lower() if isinstance(v, str) else "" for v in table[name].tolist()]
+        return [(str(v).strip().lower() if fold else str(v).strip()) if isinstance(v, str) else "" for v in table[name]]
+
+    def point(x: float, y: float, z: float) -> tuple[float, float, float] | None:
+        return (x, y, z) if all(math.isfinite(v) for v in (x, y, z)) else None
 
     out = []
-    for nx, ny, nz, size, feature, side, x, y, z in zip(
+    for nx, ny, nz, size, feature, side, x, y, z, fid, between, callout, fx, fy, fz in zip(
         *(numbers(c) for c in DIRECTION_COLUMNS),
         words(SIZE_COLUMN),
         words(FEATURE_COLUMN),
@@ -164,11 +202,43 @@ def _geometry(
         numbers("x"),
         numbers("y"),
         numbers("z"),
+        words(FEATURE_ID_COLUMN, fold=False),
+        words(BETWEEN_COLUMN, fold=False),
+        words(CALLOUT_COLUMN),
+        *(numbers(c) for c in FEATURE_DIRECTION_COLUMNS),
         strict=True,
     ):
-        position = (x, y, z) if all(math.isfinite(v) for v in (x, y, z)) else None
-        out.append((unit_vector((nx, ny, nz)), size, feature, side, position))
+        ends = tuple(e.strip() for e in between.split(";") if e.strip()) if between else ()
+        out.append(
+            RowGeometry(
+                unit_vector((nx, ny, nz)),
+                size,
+                feature,
+                side,
+                point(x, y, z),
+                fid,
+                ends,
+                callout,
+                unit_vector((fx, fy, fz)),
+            )
+        )
     return out
+
+
+def _measures(name: str, row: RowGeometry, lower: float, upper: float) -> str:
+    """What a row measures (:data:`~setupfix.outputs.model_toml.MEASURES`): the report's callout type first,
+    then its ``between`` features, then the words of its name."""
+    folded = name.casefold()
+    one_sided = (math.isnan(lower) or lower == 0.0) and math.isfinite(upper) and upper > 0.0
+    if row.size:
+        return "size"
+    if row.callout == "position" or (not row.callout and one_sided and any(w in folded for w in POSITION_WORDS)):
+        return "position"
+    if row.callout == "distance" or len(row.between) == 2:
+        return "distance"
+    if not row.callout and any(w in folded for w in DISTANCE_WORDS):
+        return "distance"
+    return "location"
 
 
 def _collect(
@@ -200,16 +270,30 @@ def _collect(
             if not name or name in skipped:
                 continue
             where = str(where) if where is not None and where == where else report
-            direction, size, feature, side, position = geometry
+            direction, size, feature, side, position = (
+                geometry.direction,
+                geometry.size,
+                geometry.feature,
+                geometry.side,
+                geometry.position,
+            )
             from_report = _stated_axis(stated, where, report) or (vector_axis(direction) or None if direction else None)
             from_name = None if size else name_axis(name)
             dim_axis = from_report or from_name
             nominal, lower, upper = (
                 float(v) if v is not None and v == v else math.nan for v in (nominal, lower, upper)
             )
+            measures = _measures(name, geometry, lower, upper)
             reason = None
             if str(reference).strip().lower() in ("true", "1", "yes"):
                 reason = "reference only"
+            elif measures == "position" and axis is not None:
+                reason = f"a position callout: its circular zone needs a multi-axis model (--axis {axis})"
+            elif measures == "position":
+                if _is_form(name) or not (tol_lo <= 0.0 < upper <= 2 * tol_hi):
+                    reason = "one-sided tolerance"
+                else:
+                    lower, nominal = 0.0, 0.0  # the zone's value is a distance from the true position
             elif math.isnan(lower) or math.isnan(upper):
                 reason = "no tolerance" if math.isnan(lower) and math.isnan(upper) else "one-sided tolerance"
             elif _is_form(name):
@@ -245,9 +329,16 @@ def _collect(
                     feature,
                     side,
                     position,
+                    measures,
+                    geometry.feature_id,
+                    geometry.between,
+                    geometry.feature_axis,
                 )
                 continue
             known = dims[key]
+            known.feature_id = known.feature_id or geometry.feature_id
+            known.between = known.between or geometry.between
+            known.feature_axis = known.feature_axis or geometry.feature_axis
             known.size, known.feature, known.side = known.size or size, known.feature or feature, known.side or side
             known.position = known.position or position
             if direction is not None and known.direction is None:
@@ -267,6 +358,131 @@ def _collect(
                 known.name_says = from_name if from_name not in (None, from_report) else None
                 known.axis, known.axis_from = from_report, "report"
     return list(dims.values()), list(skipped.items())
+
+
+def _dominant(vector: tuple[float, float, float]) -> int:
+    return max(range(3), key=lambda k: abs(vector[k]))
+
+
+def plan_features(dims: Sequence[ScaffoldDimension]) -> list[ScaffoldFeature]:
+    """The model features of a multi-axis scaffold, and each dimension's ``weights`` on them (in place).
+
+    One location feature per feature of the part the reports name (``feature_id``; a
+    characteristic naming none has one of its own), at its nominal position: a location
+    enters it with weight 1 along its direction; a distance between two named features
+    is their difference, signed so that it grows as they part along its direction (a
+    work offset moving both alike cancels); a position callout is a zone on it.  A size
+    gets a feature of its own (a tool radius moves the size, not the location), sharing
+    its part feature's question.  Every feature an offset could move gets a named
+    question (``Q1`` …): the reports never say which work offset and tool made it.
+    """
+    features: list[ScaffoldFeature] = []
+    located: dict[str, ScaffoldFeature] = {}
+    known = {d.feature_id: d for d in dims if d.feature_id}
+    questions: dict[str, str] = {}
+
+    def ask(key: str) -> str:
+        return questions.setdefault(key, f"Q{len(questions) + 1}")
+
+    def location(key: str, label: str, d: ScaffoldDimension | None) -> ScaffoldFeature:
+        if key not in located:
+            source = d or known.get(key)
+            located[key] = ScaffoldFeature(
+                f"F{len(features) + 1}",
+                label,
+                source.position if source else None,
+                source.feature if source else "",
+                question=ask(key),
+            )
+            features.append(located[key])
+        found = located[key]
+        if found.position is None and d is not None:
+            found.position = d.position
+        found.kind = found.kind or (d.feature if d else "")
+        return found
+
+    by_axis = {(d.feature_id, d.axis): d.name for d in dims if d.measures == "location" and d.feature_id and d.axis}
+    for d in dims:
+        key = d.feature_id or f"{d.name}\x00"  # a characteristic naming no feature: a feature of its own
+        label = d.feature_id or d.name
+        if d.measures == "size":
+            weight = d.radius_weight() if d.interpolated else None
+            size = ScaffoldFeature(
+                f"F{len(features) + 1}",
+                label,
+                d.position,
+                d.feature,
+                "size",
+                weight,
+                ask(key) if weight is not None else "",
+                comment=(
+                    f"its {d.size}: only a tool radius moves it"
+                    + (
+                        f" ({d.side or 'inner'} side{'' if d.side else ' assumed'})"
+                        if weight is not None
+                        else ": the report does not say it is cut by interpolation, so no offset moves it"
+                    )
+                ),
+            )
+            size.callouts.append(d.name)
+            features.append(size)
+            d.weights = {size.id: 1.0}
+        elif d.measures == "position":
+            f = location(key, label, d)
+            f.callouts.append(d.name)
+            d.weights = {f.id: 1.0}
+            if d.feature_axis is not None:
+                k = _dominant(d.feature_axis)
+                d.plane = tuple(a for j, a in enumerate(AXES) if j != k)  # type: ignore[assignment]  # two axes
+                across = f"the plane across its feature's axis {AXES[k]}"
+            else:
+                d.plane = tuple(a for a in AXES if a != SPINDLE)  # type: ignore[assignment]  # two axes
+                across = f"the report states no axis of its feature: one along the spindle ({SPINDLE}) assumed"
+            rows = tuple(by_axis.get((d.feature_id, a), "") for a in d.plane)
+            if d.feature_id and all(rows):
+                d.components = rows  # type: ignore[assignment]  # two names
+                d.why = f"{across}; components: the report's own {'/'.join(d.plane)} rows of {d.feature_id}"
+            else:
+                d.components = (f"{d.name} {d.plane[0]}", f"{d.name} {d.plane[1]}")
+                d.why = (
+                    f"{across}; the report gives the zone's value only: 'correct' leaves it out until a report "
+                    f"gives its signed {'/'.join(d.plane)} deviations in the zone's datum frame as these components"
+                )
+        elif d.measures == "distance" and len(d.between) == 2:
+            a, b = (location(e, e, None) for e in d.between)
+            a.callouts.append(d.name)
+            b.callouts.append(d.name)
+            vec = d.vector()
+            if vec is None and a.position is not None and b.position is not None:
+                apart = [q - p for p, q in zip(a.position, b.position, strict=True)]
+                vec = unit_vector(apart)
+                d.direction = vec
+                d.axis = vector_axis(vec) or None if vec is not None else None
+            if vec is not None and a.position is not None and b.position is not None:
+                grows = sum(v * (q - p) for v, p, q in zip(vec, a.position, b.position, strict=True))
+                d.weights = {a.id: 1.0, b.id: -1.0} if grows < 0 else {b.id: 1.0, a.id: -1.0}
+                d.why = f"the difference of {comment(d.between[0])} and {comment(d.between[1])}"
+            else:
+                d.weights = {b.id: 1.0, a.id: -1.0}
+                d.why = (
+                    f"the difference of {comment(d.between[1])} and {comment(d.between[0])} in the report's order "
+                    "(their positions do not give its sign: check it)"
+                )
+        elif d.measures == "distance":
+            d.weights = {}
+            d.why = (
+                "the report does not say between which features: as written no offset moves it (right when both "
+                "ends are cut in one setup by one tool); else give features = { Fa = 1, Fb = -1 }"
+            )
+        elif d.vector() is None:
+            d.weights = {}
+            d.why = "no axis or direction stated: give it axis = … and features = { F… = 1 }"
+        else:
+            f = location(key, label, d)
+            f.callouts.append(d.name)
+            d.weights = {f.id: 1.0}
+    # a size feature whose part feature is located shares its question; others keep their own
+    return features
 
 
 def scaffold_model(
@@ -349,16 +565,31 @@ def scaffold_from_tables(
             location=SourceLocation(", ".join(reports)),
         )
     stated = Counter(d.axis for d in dims if d.axis)
+    zones = any(d.measures == "position" for d in dims)
+    features: list[ScaffoldFeature] = plan_features(dims) if axis is None else []
     measured = set().union(*(d.measured_axes() for d in dims))
     interpolated = any(d.interpolated for d in dims)
     axes: tuple[str, ...] = ()
-    if axis is None and (len(measured) >= 2 or interpolated):
+    named = any(d.feature_id or d.between for d in dims)  # the reports name the part's features
+    if axis is None and (len(measured) >= 2 or interpolated or zones or named):
         axes = tuple(a for a in AXES if a in measured or (interpolated and a == SPINDLE))
+    else:
+        for d in dims:  # a one-axis scaffold: a feature per dimension
+            d.weights, d.why = {}, ""
+        features = []
     model_axis = axis or (SPINDLE if axes else max(("Z", "X", "Y"), key=lambda a: stated[a]))  # Z on a tie / none
     bands = [d.upper - d.lower for d in dims]
     resolution = _resolution(min(bands))
     text = render_scaffold(
-        dims, skipped, reports, axis=model_axis, axes=axes, resolution=resolution, name=name, only_axis=axis
+        dims,
+        skipped,
+        reports,
+        axis=model_axis,
+        axes=axes,
+        resolution=resolution,
+        name=name,
+        only_axis=axis,
+        features=features,
     )
     origins = Counter(d.axis_from if d.axis_from in ("report", "name") else "none" for d in dims)
     return Scaffold(
@@ -369,4 +600,7 @@ def scaffold_from_tables(
         axes_from={k: origins[k] for k in ("report", "name", "none") if origins[k]},
         axes=axes,
         sizes=sum(1 for d in dims if d.size),
+        zones=sum(1 for d in dims if d.measures == "position") if axes else 0,
+        distances=sum(1 for d in dims if d.measures == "distance"),
+        questions=tuple(dict.fromkeys(f.question for f in features if f.question)),
     )
