@@ -124,5 +124,6 @@ def test_read_dry_run_apply_interlock_restart(tmp_path: Path) -> None:
     confirmed = {c.register: c for c in attempts[0].components}
     for register, value in new.items():
         c = confirmed[register]
-        assert (c.before, c.written, c.outcome) == (pytest.approx(START[register]), pytest.approx(value), "confirmed")
+        assert c.outcome == "confirmed"
+        assert c.before == pytest.approx(START[register]) and c.written == pytest.approx(value)
     assert all(c.written is None for c in attempts[1].components)
