@@ -24,9 +24,13 @@ import re
 from collections.abc import Iterable, Sequence
 from typing import Any
 
+import pandas as pd
+
 from setupfix.core.errors import SourceLocation, StoreError
+from setupfix.model import CANONICAL_COLUMNS
 from setupfix.store.claims import ClaimingStore
-from setupfix.store.sql import guarded
+from setupfix.store.pg_copy import read_rows
+from setupfix.store.sql import NUMERIC, guarded
 from setupfix.store.urls import URL_FORM, parse_url, shown
 
 __all__ = ["PostgresStore", "MIGRATIONS", "shown", "LOCK_TIMEOUT_S", "CONNECT_TIMEOUT_S"]
@@ -212,6 +216,18 @@ class PostgresStore(ClaimingStore):
                     if statement.strip():
                         self._execute(statement)
             self._execute("UPDATE schema_version SET version = ?", (SCHEMA_VERSION,))
+
+    # -- reads -----------------------------------------------------------------------------------
+    @guarded
+    def measurements(self, sha256: str | None = None, *, include_excluded: bool = False) -> pd.DataFrame:
+        """As :meth:`SQLStore.measurements`; a machine's whole series through ``COPY`` (:mod:`.pg_copy`)."""
+        if sha256 is None:
+            frame = read_rows(
+                self.conn, self.machine, include_excluded=include_excluded, columns=CANONICAL_COLUMNS, numeric=NUMERIC
+            )
+            if frame is not None:
+                return frame
+        return super().measurements(sha256, include_excluded=include_excluded)
 
     # -- the hooks of SQLStore ------------------------------------------------------------------
     def _execute(self, sql: str, args: Sequence[Any] = ()) -> Any:
