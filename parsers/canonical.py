@@ -20,7 +20,15 @@ from parsers.numbers import MAX_NUMBER_CHARS, number_pattern, try_number
 from parsers.source import Source, csv_records, decode, point_number, read_bytes
 from setupfix.core.errors import ParseError, SourceLocation
 from setupfix.core.units import LENGTH_UNITS, length_factor
-from setupfix.model.measurements import CANONICAL_COLUMNS, LENGTH_COLUMNS
+from setupfix.model.measurements import (
+    BETWEEN_COLUMN,
+    CANONICAL_COLUMNS,
+    DATUMS_COLUMN,
+    FEATURE_ID_COLUMN,
+    LENGTH_COLUMNS,
+    OPTIONAL_LENGTH_COLUMNS,
+    UNCERTAINTY_COLUMN,
+)
 
 __all__ = ["read_canonical", "sniff_canonical", "finish_table", "DEVIATION_TOLERANCE_MM"]
 
@@ -38,6 +46,8 @@ def _unescaped(cell: str) -> str:
 #: Text columns whose control characters are masked as ``?`` (as ``setupfix model check`` shows
 #: them) so that a name cannot drive the operator's terminal.
 TEXT_COLUMNS = ("characteristic", "part", "station", "report", "status", "timestamp")
+#: The optional text columns a report's names fill (masked as the others when present).
+OPTIONAL_TEXT_COLUMNS = (FEATURE_ID_COLUMN, BETWEEN_COLUMN, DATUMS_COLUMN)
 _CONTROL = re.compile(r"[\x00-\x1f\x7f-\x9f]")
 
 
@@ -61,7 +71,8 @@ def finish_table(rows: list[dict[str, object]] | dict[str, object], path: str) -
 
     Fills ``deviation``/``actual`` from each other, defaults ``unit`` to mm,
     ``report`` to the file name, masks control characters in the text columns,
-    refuses lengths beyond :data:`MAX_LENGTH_MM`, and orders the canonical columns first.
+    refuses lengths beyond :data:`MAX_LENGTH_MM` (the optional length columns too, where given:
+    :data:`~setupfix.model.measurements.OPTIONAL_LENGTH_COLUMNS`), and orders the canonical columns first.
 
     The work is done on plain columns (lists and arrays) and the DataFrame is built
     once at the end: per-column pandas operations cost ~0.2 ms each, which made this
@@ -78,12 +89,15 @@ def finish_table(rows: list[dict[str, object]] | dict[str, object], path: str) -
         if col not in columns:
             columns[col] = np.full(n, math.nan) if col in LENGTH_COLUMNS else [""] * n
     columns["unit"] = ["mm"] * n
-    lengths = {col: _floats(columns[col]) for col in LENGTH_COLUMNS}
+    lengths = {col: _floats(columns[col]) for col in (*LENGTH_COLUMNS, *OPTIONAL_LENGTH_COLUMNS) if col in columns}
     difference = clean_deviation(lengths["actual"], lengths["nominal"])
     lengths["deviation"] = np.where(np.isnan(difference), lengths["deviation"], difference)
     columns.update(lengths)
     for col in TEXT_COLUMNS:
         columns[col] = _masked(columns[col])
+    for col in OPTIONAL_TEXT_COLUMNS:
+        if col in columns:
+            columns[col] = _masked(columns[col])
     _check_magnitudes(lengths, columns["source"], path)
     name = Path(path).name
     columns["report"] = [name if _blank(v) else v for v in _values(columns["report"])]
@@ -187,7 +201,7 @@ def clean_deviation(actual: np.ndarray, nominal: np.ndarray) -> np.ndarray:
 
 def _check_magnitudes(lengths: dict[str, np.ndarray], source: _Column, path: str) -> None:
     """Refuse a row with a length beyond :data:`MAX_LENGTH_MM` (NaN, i.e. absent, is fine)."""
-    for col in LENGTH_COLUMNS:
+    for col in lengths:
         values = lengths[col]
         with np.errstate(invalid="ignore"):
             bad = np.flatnonzero(np.abs(values) > MAX_LENGTH_MM)
@@ -268,7 +282,8 @@ def read_canonical(
         return finish_table(columns, name)
     rows: list[dict[str, object]] = []
     width = len(header)
-    lengths_here = [c for c in LENGTH_COLUMNS if c in header]  # every row holds every header key
+    # every row holds every header key
+    lengths_here = [c for c in (*LENGTH_COLUMNS, *OPTIONAL_LENGTH_COLUMNS) if c in header]
     factors: dict[str, float] = {}
     for line_num, record in records:
         if not any(cell.strip() for cell in record):
@@ -311,6 +326,11 @@ def read_canonical(
                 location=SourceLocation(name, line=line_num),
             )
         row["actual"], row["deviation"] = actual, actual - nominal
+        if float(row.get(UNCERTAINTY_COLUMN, 0.0)) < 0:  # type: ignore[arg-type]  # numbers by now
+            raise ParseError(
+                f"uncertainty {row[UNCERTAINTY_COLUMN]:g} is negative (an expanded uncertainty U is a size)",
+                location=SourceLocation(name, line=line_num),
+            )
         lo, up = float(row.get("lower", math.nan)), float(row.get("upper", math.nan))  # type: ignore[arg-type]  # numbers by now
         if not math.isnan(lo) and not math.isnan(up) and lo >= up:
             raise ParseError(
@@ -375,8 +395,9 @@ def _plain_columns(body: str, header: list[str], name: str, unit: str | None) ->
     factor = np.array([factors[s] for s in spellings]) if len(factors) > 1 else next(iter(factors.values()))
     out: dict[str, object] = {}
     numbers: dict[str, np.ndarray] = {}
+    lengths = {*LENGTH_COLUMNS, *OPTIONAL_LENGTH_COLUMNS}
     for col in header:
-        if col not in LENGTH_COLUMNS:
+        if col not in lengths:
             out[col] = cells[col]
             continue
         text = cells[col]
@@ -399,6 +420,8 @@ def _plain_columns(body: str, header: list[str], name: str, unit: str | None) ->
         actual = np.where(np.isnan(actual), nominal + stated, actual)
         lo, up = numbers.get("lower", nan), numbers.get("upper", nan)
         if (lo >= up).any():  # NaN compares False: a missing limit is fine
+            return None
+        if (numbers.get(UNCERTAINTY_COLUMN, nan) < 0).any():
             return None
     out["actual"], out["deviation"] = actual, actual - nominal
     if "reference" in out:

@@ -26,6 +26,7 @@ from parsers.numbers import parse_number
 from parsers.source import csv_records, read_text
 from setupfix.core.errors import ParseError, SourceLocation
 from setupfix.core.units import LENGTH_UNITS, length_factor
+from setupfix.model.measurements import DATUMS_COLUMN, FEATURE_ID_COLUMN
 
 __all__ = ["read_calypso", "sniff_calypso", "REQUIRED"]
 
@@ -128,6 +129,8 @@ def read_calypso(path: str | Path, *, unit: str | None = None, encoding: str | N
                 "status": f"exceed {exceed}" if exceed else "",
                 "source": f"{name}:{line}",
                 **_geometry(_value(record, index, "idsymbol")),
+                FEATURE_ID_COLUMN: _value(record, index, "featureid"),
+                DATUMS_COLUMN: "|".join(d for d in (_value(record, index, f"datum{c}id") for c in "abc") if d),
             }
         )
     if not rows:

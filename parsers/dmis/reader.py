@@ -31,6 +31,12 @@ from parsers.numbers import is_number
 from parsers.source import point_number, read_text
 from setupfix.core.errors import ParseError, SourceLocation
 from setupfix.core.units import LENGTH_UNITS, length_factor
+from setupfix.model.measurements import (
+    ACTUAL_POSITION_COLUMNS,
+    DATUMS_COLUMN,
+    FEATURE_DIRECTION_COLUMNS,
+    FEATURE_ID_COLUMN,
+)
 
 __all__ = ["read_dmis", "sniff_dmis"]
 
@@ -181,7 +187,7 @@ def read_dmis(path: str | Path, *, unit: str | None = None, encoding: str | None
         if row is None:
             skipped.append(st.label)
             continue
-        for col in ("nominal", "actual", "lower", "upper", "x", "y", "z"):
+        for col in ("nominal", "actual", "lower", "upper", "x", "y", "z", *ACTUAL_POSITION_COLUMNS):
             row[col] = float(row[col]) * factor  # type: ignore[arg-type]  # numbers in these columns
         row["part"], row["station"] = part, station
         row["timestamp"] = f"{date}T{time}" if date and time else date
@@ -285,10 +291,8 @@ def _result_row(
         return None
     if not math.isnan(lower) and not math.isnan(upper) and lower > upper:
         raise ParseError(f"lower limit {lower:g} is above upper limit {upper:g}", location=where)
-    x = y = z = math.nan
-    if f_nom is not None and len(f_nom.values) >= 3:
-        loc = SourceLocation(name, line=f_nom.line)
-        x, y, z = (point_number(v, loc) for v in f_nom.values[:3])
+    x, y, z = _position(f_nom, name)
+    x_act, y_act, z_act = _position(f_act, name)
     return {
         "characteristic": st.label,
         "nominal": nom,
@@ -302,7 +306,59 @@ def _result_row(
         "source": f"{name}:{st.line}",
         "axis": _axis(kind, values, f_nom, name),
         **_geometry_cells(kind, values, f_nom or f_act, name),
+        "x_actual": x_act,
+        "y_actual": y_act,
+        "z_actual": z_act,
+        **dict(zip(FEATURE_DIRECTION_COLUMNS, _feature_direction(f_nom, name), strict=True)),
+        FEATURE_ID_COLUMN: feat if f_nom is not None or f_act is not None else "",
+        DATUMS_COLUMN: _datums(tol),
     }
+
+
+def _position(feature: _Feature | None, name: str) -> tuple[float, float, float]:
+    """The ``CART`` x, y, z of a feature (its location, a cylinder's or cone's axis point), file unit; NaN
+    when the feature is unknown or states fewer than three values."""
+    if feature is None or len(feature.values) < 3:
+        return (math.nan, math.nan, math.nan)
+    loc = SourceLocation(name, line=feature.line)
+    x, y, z = (point_number(v, loc) for v in feature.values[:3])
+    return (x, y, z)
+
+
+#: Features whose ``CART,x,y,z,i,j,k`` gives their own direction (i, j, k): a point's, edge point's or
+#: plane's normal, a circle's or arc's normal, a cylinder's or cone's axis.
+_DIRECTED_FEATURES = {"POINT", "EDGEPT", "PLANE", "CIRCLE", "ARC", "CYLNDR", "CYLINDER", "CONE"}
+#: Largest departure of a stated unit vector's length from 1 that is still read as a direction.
+_UNIT_TOLERANCE = 1e-3
+
+
+def _feature_direction(feature: _Feature | None, name: str) -> tuple[float, float, float]:
+    """The nominal feature's own direction (i, j, k) as a unit vector; NaN where it states none (empty
+    words, as ``CIRCLE,INNER,CART,32.5,75.5,-10,,,,15`` has) or a vector whose length is not 1."""
+    nan = (math.nan, math.nan, math.nan)
+    if feature is None or feature.kind not in _DIRECTED_FEATURES or len(feature.values) < 6:
+        return nan
+    words = feature.values[3:6]
+    if not all(w.strip() for w in words):
+        return nan
+    loc = SourceLocation(name, line=feature.line)
+    vector = [point_number(w, loc) for w in words]
+    norm = math.sqrt(sum(v * v for v in vector))
+    if not abs(norm - 1.0) <= _UNIT_TOLERANCE:
+        return nan
+    unit = unit_vector(vector)
+    return unit if unit is not None else nan
+
+
+_DATUM = re.compile(r"^DAT\((.+)\)$", re.IGNORECASE)
+
+
+def _datums(tol: Statement | None) -> str:
+    """The datum reference frame a tolerance names (``DAT(A),DAT(B)`` → ``"A|B"``); "" when none."""
+    if tol is None:
+        return ""
+    labels = [m.group(1).strip() for w in tol.words if (m := _DATUM.match(w.strip()))]
+    return "|".join(labels)
 
 
 #: DMIS feature words → the ``feature`` column (:mod:`parsers.geometry`).

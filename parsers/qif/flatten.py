@@ -40,6 +40,11 @@ _STYLESHEET = """<xsl:stylesheet version="1.0" xmlns:xsl="http://www.w3.org/1999
    <xsl:text>&#9;</xsl:text><xsl:value-of select="normalize-space(q:Value)"/>
    <xsl:text>&#9;</xsl:text><xsl:value-of select="q:Value/@linearUnit"/>
    <xsl:text>&#9;</xsl:text><xsl:value-of select="normalize-space(q:Status/*[1])"/>
+   <xsl:text>&#9;</xsl:text>
+   <xsl:for-each select="q:FeatureActualIds/q:Id | q:FeatureMeasurementIds/q:Id">
+    <xsl:value-of select="normalize-space(.)"/><xsl:text> </xsl:text>
+   </xsl:for-each>
+   <xsl:text>&#9;</xsl:text><xsl:value-of select="normalize-space(q:Value/@combinedUncertainty)"/>
    <xsl:text>&#10;</xsl:text>
   </xsl:for-each>
  </xsl:for-each>
@@ -69,6 +74,11 @@ class Record:
         ``linearUnit`` of the value ("" for the file unit).
     status : str
         Text of the status enumeration.
+    features : str
+        Its ``FeatureActualIds`` (QIF 3 also ``FeatureMeasurementIds``), separated by spaces
+        ("" when it names none).
+    uncertainty : str
+        The ``combinedUncertainty`` attribute of its ``Value`` ("" when absent).
     """
 
     results: int
@@ -79,6 +89,8 @@ class Record:
     value: str | None
     unit: str
     status: str
+    features: str = ""
+    uncertainty: str = ""
 
 
 @lru_cache(maxsize=8)
@@ -98,7 +110,19 @@ def results_elements(root: etree._Element, ns: str) -> list[etree._Element]:
 
 
 #: Columns of :func:`measurement_table` (the fields of :class:`Record` but ``results``).
-COLUMNS = ("tag", "id", "has_item", "item", "external", "has_value", "value", "unit", "status")
+COLUMNS = (
+    "tag",
+    "id",
+    "has_item",
+    "item",
+    "external",
+    "has_value",
+    "value",
+    "unit",
+    "status",
+    "features",
+    "uncertainty",
+)
 
 
 def measurement_table(root: etree._Element, ns: str) -> pd.DataFrame:
@@ -136,4 +160,6 @@ def record(frame: pd.DataFrame, index: int) -> Record:
         row["value"] if row["has_value"] else None,
         row["unit"],
         row["status"],
+        row["features"],
+        row["uncertainty"],
     )

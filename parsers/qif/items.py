@@ -30,6 +30,7 @@ __all__ = [
     "number",
     "child_text",
     "raw_float",
+    "owner_mm",
 ]
 
 
@@ -324,7 +325,7 @@ def item_info(
     notes: set[str],
 ) -> Item | str:
     """Name, nominal, limits and location of one item; a skip reason when it has no nominal."""
-    omm = mm if owner is doc else _owner_mm(owner, mm)
+    omm = mm if owner is doc else owner_mm(owner, mm)
     geometric = _child(definition, owner.ns, "ToleranceValue") is not None
     nominal = (
         0.0 if geometric or kind in PROFILE_KINDS else number(_child(nom, owner.ns, "TargetValue"), owner.path, omm)
@@ -375,6 +376,7 @@ def raw_float(text: str) -> float:
     return math.nan if value is None else value
 
 
-def _owner_mm(owner: Doc, fallback: float) -> float:
+def owner_mm(owner: Doc, fallback: float) -> float:
+    """mm per file unit of ``owner`` (a plan the results refer to): its own ``FileUnits``, else ``fallback``."""
     declared = file_unit_factor(owner.root, owner.ns, owner.path)
     return fallback if declared is None else declared

@@ -10,6 +10,7 @@ component.  Rows carry ``file#id`` of their measurement element as provenance.
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 import numpy as np
@@ -19,12 +20,21 @@ from lxml import etree
 from parsers.canonical import finish_table
 from parsers.notes import note
 from parsers.qif.external import build_index, resolve_external
+from parsers.qif.features import NO_FEATURES, FeatureGeometry, ResultsFeatures, datum_labels, measurement_features
 from parsers.qif.flatten import Record, measurement_table, record, results_elements
-from parsers.qif.items import Doc, Item, child_text, item_info, local, number, raw_float
-from parsers.qif.units import choose_file_unit, file_unit_factor
+from parsers.qif.items import Doc, Item, child_text, item_info, local, number, owner_mm, raw_float
+from parsers.qif.units import choose_file_unit, file_unit_factor, unit_factor
 from parsers.qif.xmltree import parse_xml
 from parsers.source import Source, read_bytes
 from setupfix.core.errors import ParseError, SourceLocation
+from setupfix.model.measurements import (
+    ACTUAL_POSITION_COLUMNS,
+    BETWEEN_COLUMN,
+    DATUMS_COLUMN,
+    FEATURE_DIRECTION_COLUMNS,
+    FEATURE_ID_COLUMN,
+    UNCERTAINTY_COLUMN,
+)
 
 __all__ = ["read_qif", "sniff_qif", "NON_LENGTH_KINDS"]
 
@@ -205,6 +215,8 @@ def read_qif(path: str | Path | Source, *, unit: str | None = None) -> pd.DataFr
     for i in np.flatnonzero(element_ids == ""):
         row = int(i)
         source[i] = f"{name}:{_find(results[int(results_of[row])], record(kept, kept.index[row]), ns).sourceline}"
+    columns.update(_feature_columns(kept, keys[keep].tolist(), chains, results, doc, mm, x_y_z=columns))
+    columns[UNCERTAINTY_COLUMN] = _uncertainty(kept, results, name, ns, mm)
     columns.update(
         {
             "characteristic": labels.to_numpy(),
@@ -229,6 +241,99 @@ def _actuals(table: pd.DataFrame, results: list[etree._Element], name: str, ns: 
         element = _find(results[rec.results], rec, ns).find(f"{{{ns}}}Value")
         actual.iat[int(index)] = number(element, name, mm)
     return actual
+
+
+def _feature_columns(
+    kept: pd.DataFrame,
+    keys: list[str],
+    chains: dict[str, tuple[etree._Element, etree._Element, etree._Element, Doc]],
+    results: list[etree._Element],
+    doc: Doc,
+    mm: float,
+    *,
+    x_y_z: dict[str, object],
+) -> dict[str, object]:
+    """The feature columns of each kept measurement (:mod:`parsers.qif.features`).
+
+    The nominal location ``x, y, z`` of a measurement's own feature replaces its item's
+    (given in ``x_y_z``) where the feature states one: an item measured on several
+    features gets each feature's position.
+    """
+    n = len(kept)
+    nominal = np.column_stack([np.asarray(x_y_z[c], dtype=float) for c in ("x", "y", "z")]) if n else np.empty((0, 3))
+    actual = np.full((n, 3), np.nan)
+    direction = np.full((n, 3), np.nan)
+    feature_id = np.full(n, "", dtype=object)
+    between = np.full(n, "", dtype=object)
+    datums = np.full(n, "", dtype=object)
+    per_results: dict[int, ResultsFeatures] = {}
+    frames: dict[str, str] = {}
+    scales: dict[int, float] = {}
+    swapped = 0
+    for row, (key, res, ids) in enumerate(zip(keys, kept["results"].tolist(), kept["features"].tolist(), strict=True)):
+        item, nom, definition, owner = chains[key]
+        if key not in frames:
+            frames[key] = datum_labels(definition, nom, owner)
+        datums[row] = frames[key]
+        found = per_results.get(res)
+        if found is None:
+            found = per_results[res] = ResultsFeatures(results[res], doc.ns)
+        scale = scales.get(id(owner))
+        if scale is None:
+            scale = scales[id(owner)] = mm if owner is doc else owner_mm(owner, mm)
+        geometry: FeatureGeometry = measurement_features(ids.split(), item, found, doc, owner, mm, scale)
+        if geometry is NO_FEATURES:
+            continue
+        swapped += geometry.swapped
+        if geometry.swapped or not math.isnan(geometry.nominal[0]):
+            nominal[row] = geometry.nominal
+        actual[row] = geometry.actual
+        direction[row] = geometry.direction
+        feature_id[row] = geometry.feature_id
+        between[row] = geometry.between
+    if swapped:
+        note(
+            f"{swapped} measurement(s) of features whose Normal is not a unit vector (Location and Normal "
+            "swapped?): their positions and directions are left out",
+            SourceLocation(doc.path),
+            "parse",
+        )
+    out: dict[str, object] = {c: nominal[:, k] for k, c in enumerate(("x", "y", "z"))}
+    out.update({c: actual[:, k] for k, c in enumerate(ACTUAL_POSITION_COLUMNS)})
+    out.update({c: direction[:, k] for k, c in enumerate(FEATURE_DIRECTION_COLUMNS)})
+    out.update({FEATURE_ID_COLUMN: feature_id, BETWEEN_COLUMN: between, DATUMS_COLUMN: datums})
+    return out
+
+
+#: Coverage factor of the expanded uncertainty the ``uncertainty`` column holds (ISO 14253-1, GUM).
+COVERAGE_FACTOR = 2.0
+
+
+def _uncertainty(kept: pd.DataFrame, results: list[etree._Element], name: str, ns: str, mm: float) -> np.ndarray:
+    """U = k·u_c (k = 2) of each kept measurement in mm: ``u_c`` its ``Value``'s ``combinedUncertainty``
+    (QIF: the combined standard uncertainty) in the value's unit; NaN where absent.
+
+    Raises
+    ------
+    ParseError
+        For a ``combinedUncertainty`` that is not a non-negative number, at its element.
+    """
+    text = kept["uncertainty"].to_numpy(dtype=object)
+    out = np.full(len(kept), np.nan)
+    for i in np.flatnonzero(text != ""):
+        row = int(i)
+        unit = str(kept["unit"].iat[row])
+        factor = (unit_factor(unit) if unit else mm) or math.nan
+        value = raw_float(str(text[row]))
+        if not value >= 0.0:  # NaN (not a number) too
+            rec = record(kept, kept.index[row])
+            element = _find(results[rec.results], rec, ns)
+            raise ParseError(
+                f"combinedUncertainty {text[row]!r} is not a non-negative number",
+                location=SourceLocation(name, line=element.sourceline, element=f"{rec.tag} id={rec.id}"),
+            )
+        out[row] = COVERAGE_FACTOR * value * factor
+    return out
 
 
 def _kind(tag: str) -> str:

@@ -37,6 +37,10 @@ KEYS = (
     "y",
     "z",
     "status",
+    "x_actual",
+    "y_actual",
+    "z_actual",
+    "uncertainty",
 )
 #: Options a mapping may carry besides columns.
 OPTION_KEYS = ("sheet",)
@@ -70,6 +74,10 @@ _SYNONYMS: dict[str, tuple[str, ...]] = {
     "y": ("y",),
     "z": ("z",),
     "status": ("status", "result", "verdict"),
+    "x_actual": ("xactual", "xist", "xmeas", "xmeasured"),
+    "y_actual": ("yactual", "yist", "ymeas", "ymeasured"),
+    "z_actual": ("zactual", "zist", "zmeas", "zmeasured"),
+    "uncertainty": ("uncertainty", "measurementuncertainty", "expandeduncertainty", "messunsicherheit"),
 }
 
 

@@ -27,10 +27,24 @@ from parsers.table.limits import check_workbook
 from parsers.table.mapping import guess_columns, parse_columns
 from setupfix.core.errors import ParseError, SourceLocation
 from setupfix.core.units import LENGTH_UNITS, length_factor
+from setupfix.model.measurements import OPTIONAL_LENGTH_COLUMNS, UNCERTAINTY_COLUMN
 
 __all__ = ["read_table", "sniff_table", "load_grid"]
 
-_NUMERIC = ("nominal", "actual", "deviation", "lower", "upper", "lsl", "usl", "tolerance", "x", "y", "z")
+_NUMERIC = (
+    "nominal",
+    "actual",
+    "deviation",
+    "lower",
+    "upper",
+    "lsl",
+    "usl",
+    "tolerance",
+    "x",
+    "y",
+    "z",
+    *OPTIONAL_LENGTH_COLUMNS,
+)
 _ZIP = b"PK\x03\x04"
 #: Rows of a worksheet (lines of a text table) searched for the header row.
 _HEADER_SEARCH = 30
@@ -292,6 +306,7 @@ def read_table(
     tol = np.abs(values["tolerance"])
     lower, upper = np.where(np.isnan(lower), -tol, lower), np.where(np.isnan(upper), tol, upper)
     _require(np.isnan(lower) | np.isnan(upper) | (lower <= upper), "lower limit is above upper limit", sources)
+    _require(~(values[UNCERTAINTY_COLUMN] < 0), "negative uncertainty (an expanded uncertainty U is a size)", sources)
     names = grid[mapping["characteristic"]].astype(str).str.strip()
     _require((names != "").to_numpy(), "empty characteristic name", sources)
     out: dict[str, object] = {
@@ -306,6 +321,9 @@ def read_table(
         "z": values["z"],
         "source": sources,
     }
+    for key in OPTIONAL_LENGTH_COLUMNS:
+        if key in mapping:
+            out[key] = values[key]
     for key in ("part", "report", "timestamp", "station", "status"):
         if key in mapping:
             out[key] = grid[mapping[key]].astype(str).str.strip().to_numpy()

@@ -32,6 +32,14 @@ from setupfix.model.process import Dimension, ProcessModel, normalise_name
 __all__ = [
     "CANONICAL_COLUMNS",
     "LENGTH_COLUMNS",
+    "ACTUAL_POSITION_COLUMNS",
+    "FEATURE_DIRECTION_COLUMNS",
+    "FEATURE_ID_COLUMN",
+    "BETWEEN_COLUMN",
+    "DATUMS_COLUMN",
+    "UNCERTAINTY_COLUMN",
+    "OPTIONAL_LENGTH_COLUMNS",
+    "GEOMETRY_OUTPUT_COLUMNS",
     "PartMeasurement",
     "match_parts",
     "suggest_names",
@@ -62,6 +70,40 @@ CANONICAL_COLUMNS: Final[tuple[str, ...]] = (
 
 #: Columns holding lengths (converted between units together).
 LENGTH_COLUMNS: Final[tuple[str, ...]] = ("nominal", "actual", "deviation", "lower", "upper", "x", "y", "z")
+
+# The optional columns of the geometry and the uncertainty a report states per row (issues 39, 40).
+# The contract keeps columns beyond the canonical ones; a reader that cannot state one leaves it NaN / "".
+#: Measured location of the row's feature (the same point of it as ``x, y, z`` nominally).
+ACTUAL_POSITION_COLUMNS: Final[tuple[str, ...]] = ("x_actual", "y_actual", "z_actual")
+#: The feature's own nominal direction, a unit vector: a cylinder's or cone's axis, a plane's, point's or
+#: circle's normal, a line's direction (``nx, ny, nz`` is the direction the *value* is measured along).
+FEATURE_DIRECTION_COLUMNS: Final[tuple[str, ...]] = ("feature_nx", "feature_ny", "feature_nz")
+#: The name of the feature the row measures ("" for a characteristic of several features).
+FEATURE_ID_COLUMN: Final = "feature_id"
+#: The features a distance or angle is measured between, ``"id1;id2"`` in the report's order.
+BETWEEN_COLUMN: Final = "between"
+#: The datum reference frame, ``"A|B|C"`` in precedence order (a compound datum ``"A-B"``).
+DATUMS_COLUMN: Final = "datums"
+#: Expanded measurement uncertainty U (k = 2) of the row's result, a length in the row's unit.
+UNCERTAINTY_COLUMN: Final = "uncertainty"
+#: Optional columns holding lengths: converted with the row's unit when present.
+OPTIONAL_LENGTH_COLUMNS: Final[tuple[str, ...]] = (*ACTUAL_POSITION_COLUMNS, UNCERTAINTY_COLUMN)
+#: The optional columns ``setupfix parse`` writes after the canonical ones, in this order, when a report
+#: states them (``nx … side`` are :mod:`parsers.geometry`'s).
+GEOMETRY_OUTPUT_COLUMNS: Final[tuple[str, ...]] = (
+    *ACTUAL_POSITION_COLUMNS,
+    "nx",
+    "ny",
+    "nz",
+    *FEATURE_DIRECTION_COLUMNS,
+    "feature",
+    "size",
+    "side",
+    FEATURE_ID_COLUMN,
+    BETWEEN_COLUMN,
+    DATUMS_COLUMN,
+    UNCERTAINTY_COLUMN,
+)
 
 
 @dataclass(frozen=True)
@@ -104,6 +146,10 @@ class PartMeasurement:
         component characteristics (along its plane axes, model unit); NaN for every other
         dimension.  ``deviation`` holds the zone's radial distance ‖(δ1, δ2)‖.  None when the
         model has no zone.
+    uncertainty : ndarray of shape (n_dimensions,) [model unit] or None
+        The report's expanded uncertainty U (k = 2) of each matched dimension's row
+        (:data:`UNCERTAINTY_COLUMN`); NaN where absent, not given or a position zone (whose
+        components' U do not add up to the zone's).  None when not read from a table.
     """
 
     part: str
@@ -122,6 +168,7 @@ class PartMeasurement:
     stations: tuple[str, ...] = ()
     names: tuple[str, ...] = ()
     zone: npt.NDArray[np.float64] | None = None
+    uncertainty: npt.NDArray[np.float64] | None = None
 
     @property
     def measured(self) -> npt.NDArray[np.bool_]:
@@ -215,7 +262,9 @@ def match_parts(model: ProcessModel, table: pd.DataFrame, *, source: str = "<rep
     count = len(table)
     names = table["characteristic"].astype(str).tolist()
     values = _numbers(table, "deviation", count)
-    nominals, lowers, uppers = (_numbers(table, c, count) for c in ("nominal", "lower", "upper"))
+    nominals, lowers, uppers, stated_u = (
+        _numbers(table, c, count) for c in ("nominal", "lower", "upper", UNCERTAINTY_COLUMN)
+    )
     wheres = [_text(w) or source for w in _column(table, "source", count)]
     stations = [_text(v) for v in _column(table, "station", count)]
     units = [_text(v) or "mm" for v in _column(table, "unit", count)]
@@ -237,7 +286,7 @@ def match_parts(model: ProcessModel, table: pd.DataFrame, *, source: str = "<rep
         deviation = np.full(n, np.nan)
         zone = np.full((n, 2), np.nan)
         zone_rows: dict[tuple[int, int], int] = {}
-        given = np.full((3, n), np.nan)
+        given = np.full((4, n), np.nan)
         row_of = [-1] * n  # the table row matched to each dimension
         unmatched: list[str] = []
         notes: list[Note] = []
@@ -301,7 +350,7 @@ def match_parts(model: ProcessModel, table: pd.DataFrame, *, source: str = "<rep
             )
         matched = np.flatnonzero(np.asarray(row_of) >= 0)
         taken = np.asarray(row_of)[matched]
-        for k, column in enumerate((nominals, lowers, uppers)):
+        for k, column in enumerate((nominals, lowers, uppers, stated_u)):
             given[k, matched] = column[taken] * row_factor[taken]
         given[:, [idx for idx, _ in zone_rows]] = np.nan  # a zone's limits are its diameter, not the rows'
         zone[np.isnan(deviation)] = np.nan
@@ -335,6 +384,7 @@ def match_parts(model: ProcessModel, table: pd.DataFrame, *, source: str = "<rep
                     for q, i in enumerate(row_of)
                 ),
                 zone=zone if zones else None,
+                uncertainty=given[3],
             )
         )
     return parts

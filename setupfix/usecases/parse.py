@@ -18,6 +18,7 @@ from parsers.axes import AXIS_COLUMN
 from setupfix.core.errors import Note, ParseError, SetupfixError, SourceLocation, UnknownFormatError
 from setupfix.inputs.cycles import ReadOptions
 from setupfix.model import CANONICAL_COLUMNS
+from setupfix.model.measurements import GEOMETRY_OUTPUT_COLUMNS
 from setupfix.outputs.writers import FLOAT_FORMAT, write_canonical_csv  # noqa: F401 - re-exported
 
 __all__ = ["ParsedReport", "ParseOutcome", "parse_reports", "write_canonical_csv", "OUTPUT_COLUMNS", "list_formats"]
@@ -58,7 +59,10 @@ class ParseOutcome:
     @property
     def table(self) -> pd.DataFrame:
         """Rows of every readable report, in input order, with :data:`OUTPUT_COLUMNS`, then ``axis``
-        where a report states one (:mod:`parsers.axes`; "" for the rows of others)."""
+        where a report states one (:mod:`parsers.axes`; "" for the rows of others), then the
+        geometry and uncertainty columns any report states
+        (:data:`~setupfix.model.measurements.GEOMETRY_OUTPUT_COLUMNS`, in that order; empty for
+        the rows of others)."""
         frames = [r.table for r in self.reports]
         if not frames:
             return pd.DataFrame(columns=list(OUTPUT_COLUMNS))
@@ -66,10 +70,21 @@ class ParseOutcome:
         if "reference" not in table:
             table["reference"] = False
         table["reference"] = table["reference"].fillna(False).astype(bool)
+        extra = [c for c in GEOMETRY_OUTPUT_COLUMNS if c in table and _stated(table[c])]
+        for col in extra:
+            if table[col].dtype == object:
+                table[col] = table[col].fillna("")
         if AXIS_COLUMN not in table:
-            return table[list(OUTPUT_COLUMNS)]
+            return table[[*OUTPUT_COLUMNS, *extra]]
         table[AXIS_COLUMN] = table[AXIS_COLUMN].fillna("")
-        return table[[*OUTPUT_COLUMNS, AXIS_COLUMN]]
+        return table[[*OUTPUT_COLUMNS, AXIS_COLUMN, *extra]]
+
+
+def _stated(column: pd.Series) -> bool:
+    """Whether a report states anything in an optional column (a number, or non-empty text)."""
+    if column.dtype == object:
+        return bool(column.map(lambda v: (isinstance(v, str) and v != "") or (isinstance(v, float) and v == v)).any())
+    return bool(column.notna().any())
 
 
 def parse_reports(paths: Sequence[str | Path], read: ReadOptions | None = None) -> ParseOutcome:
