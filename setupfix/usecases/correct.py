@@ -26,12 +26,12 @@ from setupfix.correction.pose import PosedProblem, pose_problem
 from setupfix.correction.recommend import recommend
 from setupfix.correction.safety import Recommendation, RuleEffect, short_list
 from setupfix.inputs.cycles import read_parts
+from setupfix.inputs.rules_history import mean_smoothed, with_history_rules, with_report_uncertainty
 from setupfix.inputs.stores import StoreRef
 from setupfix.model import PartMeasurement, ProcessModel, load_model
 from setupfix.model.measurements import did_you_mean
 from setupfix.optimize import CorrectionProblem, OptimizeResult, get_optimizer
 from setupfix.store import Store
-from setupfix.usecases.decision_rules import mean_smoothed, with_history_rules, with_report_uncertainty
 from setupfix.usecases.requests import (
     CorrectOutcome,
     CorrectRequest,
