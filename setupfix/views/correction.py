@@ -33,6 +33,7 @@ from setupfix.correction.objective import margins as objective_margins
 from setupfix.correction.recommend import stopped_where
 from setupfix.model import PartMeasurement, ProcessModel, normalise_name
 from setupfix.model.measurements import suggest_names
+from setupfix.usecases.contract import one_line
 from setupfix.usecases.requests import CycleCorrection
 
 __all__ = [
@@ -59,6 +60,7 @@ __all__ = [
     "matched_rows",
     "signed",
     "limits_text",
+    "conformance_lines",
 ]
 
 IN, OUT, BINDING, PREDICTED_OUT, GIVEN_UP, GUARD, REJECTED = "✓", "✗", "●", "▲", "⚑", "◇", "⊘"
@@ -392,3 +394,28 @@ def limits_text(lower: float, upper: float, digits: int = 3) -> str:
     if math.isfinite(lower) and math.isfinite(upper) and abs(lower + upper) < 1e-12:
         return f"±{upper:.{digits}f}"
     return f"{signed(lower, digits)}/{signed(upper, digits)}"
+
+
+#: How a verdict of ISO 14253-1 reads in the text (``conformance_before`` / ``_after``).
+CONFORMANCE_TEXT = {"conforming": "conforming", "not_proven": "not proven", "nonconforming": "NONCONFORMING"}
+#: Where a U comes from, as the text says it.
+SOURCE_TEXT = {"report": "report", "dimension": "model, dimension", "measurement": "model", "mpe": "CMM MPE"}
+
+
+def conformance_lines(rows: Sequence[Mapping[str, Any]], unit: str) -> list[str]:
+    """The measurement uncertainty of each dimension, where it comes from and its ISO 14253-1 verdicts.
+
+    ``rows``: :meth:`CycleCorrection.dimension_rows`.  Empty when no dimension has a U (conforming
+    then means in tolerance, which the table's flags already say).
+    """
+    with_u = [r for r in rows if r.get("uncertainty", 0.0)]
+    if not with_u:
+        return []
+    w = max(len(one_line(r["name"])) for r in with_u) + 2
+    lines = ["", f"measurement uncertainty U (k = 2) [{unit}] and ISO 14253-1 verdicts, before → after:"]
+    for r in with_u:
+        before = CONFORMANCE_TEXT.get(r["conformance_before"], r["conformance_before"])
+        after = CONFORMANCE_TEXT.get(r["conformance_after"], r["conformance_after"])
+        source = SOURCE_TEXT.get(r["uncertainty_source"], r["uncertainty_source"])
+        lines.append(f"  {one_line(r['name']):<{w}}U {fmt(r['uncertainty'], 4)} ({source})  {before} → {after}")
+    return lines

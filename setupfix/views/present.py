@@ -22,6 +22,7 @@ from setupfix.usecases.batch_records import BatchSummary
 from setupfix.usecases.compare import Comparison
 from setupfix.usecases.contract import note_lines, one_line
 from setupfix.usecases.requests import CycleCorrection
+from setupfix.views.correction import conformance_lines
 
 #: Names a line of the text output lists before "… and N more" (alarms name fewer; the JSON every one).
 TEXT_LIST = 30
@@ -130,6 +131,7 @@ def format_correction(pc: CycleCorrection) -> str:
             + f"{one_line(dim.name):<{w}}{'absent from report: not in the objective':>50}"
         )
     lines += zone_lines(rows, unit)
+    lines += conformance_lines(rows, unit)  # U and ISO 14253-1 verdicts, only where a U is given
     model = pc.model
     lines += [
         "",
