@@ -23,6 +23,7 @@ from setupfix.usecases.machine.reading import ControlRead, current_from_link, re
 from setupfix.usecases.machine.write import (
     OUTCOME_STATUS,
     ComponentWrite,
+    Retry,
     WriteOutcome,
     WritePlan,
     apply_write,
@@ -45,4 +46,5 @@ __all__ = [
     "apply_write",
     "write_to_control",
     "OUTCOME_STATUS",
+    "Retry",
 ]

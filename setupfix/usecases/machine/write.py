@@ -3,10 +3,12 @@
 from __future__ import annotations
 
 import math
+import time
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, replace
 from typing import Any
 
+from setupfix.core.errors import ParameterError
 from setupfix.core.units import length_factor
 from setupfix.links.base import Component, Link
 from setupfix.links.errors import (
@@ -15,6 +17,7 @@ from setupfix.links.errors import (
     EXIT_UNREACHABLE,
     LinkConfigError,
     LinkError,
+    LinkLost,
     LinkUnreachable,
 )
 from setupfix.links.mapping import decimals_of, model_components, round_to_increment, to_control, to_model
@@ -31,6 +34,7 @@ __all__ = [
     "apply_write",
     "write_to_control",
     "OUTCOME_STATUS",
+    "Retry",
 ]
 
 
@@ -239,7 +243,7 @@ def _outcome(
     return WriteOutcome(outcome, message, wp.plan.sha256, wp.machine, wp.link, wp.unit, tuple(rows), dry_run)
 
 
-def apply_write(model: ProcessModel, wp: WritePlan, link: Link) -> WriteOutcome:
+def apply_write(model: ProcessModel, wp: WritePlan, link: Link, *, retry: Retry | None = None) -> WriteOutcome:
     """The guarded sequence of ``machine-link.md`` on a dry-run diff (nothing is ever written twice).
 
     1. refuse a plan that is not ``apply`` (draft model, stopped solve, hold, reject);
@@ -253,6 +257,7 @@ def apply_write(model: ProcessModel, wp: WritePlan, link: Link) -> WriteOutcome:
     An unreachable control at step 2 is ``unreachable``; every other link error before step 4 a
     refusal with its message.  Never raises a :class:`LinkError`.
     """
+    retry = retry or Retry()
     plan = wp.plan
     why = plan.refusal
     if why is not None:
@@ -308,40 +313,80 @@ def apply_write(model: ProcessModel, wp: WritePlan, link: Link) -> WriteOutcome:
         failure = "read back differs: " + ", ".join(
             f"{r.component} written {r.new:g} read back {r.read_back:g}" for r in wrong
         )
-    return _roll_back(checked, link, now, written_rows, failure)
+    return _roll_back(checked, link, now, written_rows, failure, retry)
+
+
+@dataclass(frozen=True)
+class Retry:
+    """How often a roll-back tries again when the connection is gone (the control may come back).
+
+    Raises
+    ------
+    ParameterError
+        ``attempts`` < 1 or > 100, ``pause_s`` < 0 or > 60.
+    """
+
+    attempts: int = 3
+    pause_s: float = 2.0
+
+    def __post_init__(self) -> None:
+        if not 1 <= self.attempts <= 100:
+            raise ParameterError(f"roll-back: attempts must be an int in [1, 100], got {self.attempts}")
+        if not 0.0 <= self.pause_s <= 60.0:
+            raise ParameterError(f"roll-back: pause_s must be in [0, 60] s, got {self.pause_s}")
+
+
+def _restore(link: Link, before: Mapping[Component, float]) -> tuple[dict[Component, float], dict[Component, float]]:
+    """Read, write back what moved, read again: (values found before the roll-back, values after)."""
+    comps = list(before)
+    found = link.read(comps)
+    moved = {c: before[c] for c in comps if not _within(found[c], before[c], link.increment)}
+    if moved:
+        link.write(moved)
+    return found, link.read(comps)
 
 
 def _roll_back(
-    wp: WritePlan, link: Link, before: Mapping[Component, float], rows: list[ComponentWrite], failure: str
+    wp: WritePlan,
+    link: Link,
+    before: Mapping[Component, float],
+    rows: list[ComponentWrite],
+    failure: str,
+    retry: Retry,
 ) -> WriteOutcome:
     """Put back the values read before the write and name every component's state.
 
     The control is read first and only the components that moved are written back (a read-only
-    node or an ignored write left its value as it was), then everything is read again.
+    node or an ignored write left its value as it was), then everything is read again.  A lost or
+    unreachable control is tried again ``retry.attempts`` times, ``retry.pause_s`` apart.
     """
-    comps = list(before)
-    try:
-        now = link.read(comps)
-        rows = [r if r.read_back is not None else replace(r, read_back=now.get(r.component)) for r in rows]
-        moved = {c: before[c] for c in comps if not _within(now[c], before[c], link.increment)}
-        if moved:
-            link.write(moved)
-        restored = link.read(comps)
-    except LinkError as exc:
-        final = [replace(r, outcome="unknown") for r in rows]
+    error: LinkError | None = None
+    for attempt in range(retry.attempts):
+        try:
+            found, restored = _restore(link, before)
+        except (LinkUnreachable, LinkLost) as exc:
+            error = exc
+            if attempt + 1 < retry.attempts:
+                time.sleep(retry.pause_s)
+            continue
+        except LinkError as exc:
+            error = exc
+            break
+        rows = [r if r.read_back is not None else replace(r, read_back=found.get(r.component)) for r in rows]
+        final = []
+        for r in rows:
+            value = restored.get(r.component)
+            ok = value is not None and _within(value, before[r.component], link.increment)
+            final.append(replace(r, restored=value, outcome="rolled_back" if ok else "not_restored"))
         states = "; ".join(_state(r) for r in final)
-        return _outcome(
-            wp, "unconfirmed", f"CHECK THE CONTROL: {failure}; the roll-back failed too ({exc}); {states}", final
-        )
-    final = []
-    for r in rows:
-        value = restored.get(r.component)
-        ok = value is not None and _within(value, before[r.component], link.increment)
-        final.append(replace(r, restored=value, outcome="rolled_back" if ok else "not_restored"))
+        if all(r.outcome == "rolled_back" for r in final):
+            return _outcome(wp, "rolled_back", f"not confirmed, rolled back: {failure}; {states}", final)
+        return _outcome(wp, "unconfirmed", f"CHECK THE CONTROL: {failure}; the roll-back did not hold; {states}", final)
+    final = [replace(r, outcome="unknown") for r in rows]
     states = "; ".join(_state(r) for r in final)
-    if all(r.outcome == "rolled_back" for r in final):
-        return _outcome(wp, "rolled_back", f"not confirmed, rolled back: {failure}; {states}", final)
-    return _outcome(wp, "unconfirmed", f"CHECK THE CONTROL: {failure}; the roll-back did not hold; {states}", final)
+    return _outcome(
+        wp, "unconfirmed", f"CHECK THE CONTROL: {failure}; the roll-back failed too ({error}); {states}", final
+    )
 
 
 def _state(r: ComponentWrite) -> str:
@@ -358,6 +403,7 @@ def write_to_control(
     *,
     apply: bool = False,
     store: Store | None = None,
+    retry: Retry | None = None,
 ) -> WriteOutcome:
     """``machine write``: the dry-run diff, or the guarded sequence with ``apply``; recorded in ``store``.
 
@@ -386,7 +432,7 @@ def write_to_control(
         )
     else:
         if apply:
-            result = apply_write(model, wp, link)
+            result = apply_write(model, wp, link, retry=retry)
         else:
             note = f"; the table changed since the plan: {', '.join(map(str, wp.stale))}" if wp.stale else ""
             why = f"; {plan.refusal}" if plan.refusal else ""
