@@ -111,13 +111,12 @@ def conformance_zone(lower: Array, upper: Array, uncertainty: Array) -> tuple[Ar
 def report_uncertainty(part: PartMeasurement) -> Array | None:
     """The report's own U of each model dimension (model unit, NaN where not given), or None.
 
-    Read from ``PartMeasurement.uncertainty`` where the reader and the matching carry it
-    (the canonical ``uncertainty`` column, ``../shared/spec/measurements.md``).
+    Read from ``PartMeasurement.uncertainty`` (the canonical ``uncertainty`` column,
+    ``../shared/spec/measurements.md``, matched to the model's dimensions).
     """
-    raw = getattr(part, "uncertainty", None)
-    if raw is None:
+    if part.uncertainty is None:
         return None
-    values = np.asarray(raw, dtype=np.float64)
+    values = np.asarray(part.uncertainty, dtype=np.float64)
     if values.shape != np.shape(part.deviation) or not np.isfinite(values).any():
         return None
     return np.where(np.isfinite(values) & (values >= 0), values, np.nan)

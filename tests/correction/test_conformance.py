@@ -7,11 +7,10 @@ when the value lies beyond a limit by more than U, not proven otherwise.
 
 from __future__ import annotations
 
-import dataclasses
 import itertools
+from pathlib import Path
 
 import numpy as np
-import numpy.typing as npt
 import pytest
 
 from setupfix.correction.conformance import (
@@ -106,20 +105,10 @@ MODEL = {
 }
 
 
-@dataclasses.dataclass(frozen=True)
-class ReportedPart(PartMeasurement):
-    """A part whose report states U per dimension (the canonical ``uncertainty`` column, matched)."""
-
-    uncertainty: npt.NDArray[np.float64] | None = None
-
-
 def part(deviation: list[float], u: list[float] | None = None) -> PartMeasurement:
     d = np.array(deviation, float)
-    if u is None:
-        return PartMeasurement(part="1", report="r", timestamp=None, deviation=d, sources=("", ""))
-    return ReportedPart(
-        part="1", report="r", timestamp=None, deviation=d, sources=("", ""), uncertainty=np.array(u, float)
-    )
+    given = None if u is None else np.array(u, float)
+    return PartMeasurement(part="1", report="r", timestamp=None, deviation=d, sources=("", ""), uncertainty=given)
 
 
 def test_report_u_wins_over_the_models() -> None:
@@ -161,3 +150,38 @@ def test_rows_of_the_correct_use_case_carry_the_verdicts(u: float) -> None:
     assert rows[0]["conformance_before"] == ("conforming" if u == 0 else "not_proven")
     assert rows[0]["conformance_after"] == "conforming"
     assert rows[0]["uncertainty"] == u
+
+
+def test_a_report_carrying_u_makes_a_value_near_a_limit_not_proven(tmp_path: Path) -> None:
+    # issue 40, done when: the report's own U (canonical column) decides; inside ±0.1 at 0.0955, U 0.008
+    from setupfix.usecases.correct import correct_report, load_request
+
+    report = tmp_path / "r.csv"
+    report.write_text(
+        "characteristic,nominal,actual,deviation,lower,upper,unit,part,uncertainty\n"
+        "P1 D1,25.0,25.0955,0.0955,-0.1,0.1,mm,1,0.008\n"
+        "P1 D2,40.0,40.02,0.02,-0.1,0.1,mm,1,\n",
+        encoding="utf-8",
+    )
+    model = model_from_dict(
+        {
+            "process": {"name": "p"},
+            "measurement": {"uncertainty": 0.001},
+            "wks": {"W1": {"register": "G54"}},
+            "tools": {"T1": {"register": "H1"}},
+            "features": {"F1": {"wks": {"W1": 1}}, "F2": {"tools": {"T1": 1}}},
+            "dimensions": {
+                "D1": {"name": "P1 D1", "features": {"F1": 1}, "nominal": 25.0, "lower": -0.1, "upper": 0.1},
+                "D2": {"name": "P1 D2", "features": {"F2": 1}, "nominal": 40.0, "lower": -0.1, "upper": 0.1},
+            },
+        }
+    )
+    (cycle,) = correct_report(load_request(model), report).cycles
+    rows = {r["id"]: r for r in cycle.dimension_rows()}
+    assert rows["D1"]["conformance_before"] == "not_proven" and rows["D1"]["uncertainty_source"] == "report"
+    assert rows["D1"]["uncertainty"] == 0.008 and rows["D1"]["conformance_after"] == "conforming"
+    assert rows["D2"]["uncertainty_source"] == "measurement" and rows["D2"]["conformance_before"] == "conforming"
+    # the guard band used the report's U: the solved limits of D1 are ±(0.1 − 0.008)
+    guarded = cycle.recommendation.problem
+    at = guarded.dimension_ids.index("D1")
+    assert guarded.upper[at] == pytest.approx(0.092) and guarded.lower[at] == pytest.approx(-0.092)
