@@ -61,6 +61,8 @@ __all__ = [
     "signed",
     "limits_text",
     "conformance_lines",
+    "CONFORMANCE_TEXT",
+    "SOURCE_TEXT",
 ]
 
 IN, OUT, BINDING, PREDICTED_OUT, GIVEN_UP, GUARD, REJECTED = "✓", "✗", "●", "▲", "⚑", "◇", "⊘"

@@ -30,6 +30,7 @@ from setupfix.inputs.stores import StoreRef
 from setupfix.spc import NELSON_RULES, Capability
 from setupfix.usecases.requests import CorrectOutcome, CycleCorrection
 from setupfix.usecases.spc_report import TEXT_LIST, DimensionSpc, SpcOutcome, interval_text
+from setupfix.views.correction import CONFORMANCE_TEXT, SOURCE_TEXT
 from setupfix.views.present import format_flags, verdict_label, verdict_line
 
 __all__ = [
@@ -352,17 +353,29 @@ def _cycle_section(pc: CycleCorrection, history: dict[str, DimensionSpc]) -> str
     label, line = verdict_label(pc), verdict_line(pc)
     said = line if line.startswith(label) else f"{label}: {line}"
     zone = tolerance_zone([(r["name"], r["lower"], r["upper"], [r["deviation"]], r["predicted"]) for r in rows], unit)
+    with_u = any(r.get("uncertainty", 0.0) for r in rows)  # U and ISO 14253-1 verdicts only where a U is given
     table = [
         "<tr><th>dimension</th><th>deviation</th><th>lower</th><th>upper</th><th>predicted</th>"
-        "<th>margin</th><th>flags</th></tr>"
+        "<th>margin</th><th>flags</th>"
+        + ("<th>U (k = 2)</th><th>ISO 14253-1 before</th><th>after</th>" if with_u else "")
+        + "</tr>"
     ]
     for r in rows:
         flags = format_flags(r["flags"])
+        verdicts = (
+            f"<td>{_n(r['uncertainty'], 4)} ({_e(SOURCE_TEXT.get(r['uncertainty_source'], '—'))})</td>"
+            + "".join(
+                f"<td{_BAD if r[k] == 'nonconforming' else ''}>{_e(CONFORMANCE_TEXT.get(r[k], r[k]))}</td>"
+                for k in ("conformance_before", "conformance_after")
+            )
+            if with_u
+            else ""
+        )
         table.append(
             f"<tr><td>{_e(r['name'])}</td><td>{_n(r['deviation'], 4, True)}</td>"
             f"<td>{_n(r['lower'], 3, True)}</td><td>{_n(r['upper'], 3, True)}</td>"
             f"<td>{_n(r['predicted'], 4, True)}</td><td>{_n(r['margin'], 4, True)}</td>"
-            f"<td{_BAD if 'out' in r['flags'] else ''}>{_e(flags)}</td></tr>"
+            f"<td{_BAD if 'out' in r['flags'] else ''}>{_e(flags)}</td>{verdicts}</tr>"
         )
     regs = ["<tr><th>register</th><th>name</th><th>kind</th><th>offset</th><th>change</th><th></th></tr>"]
     for reg in pc.register_rows():
