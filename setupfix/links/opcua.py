@@ -102,6 +102,7 @@ class OpcUaLink:
 
     async def _connect(self) -> Client:
         from asyncua.client.client import Client
+        from asyncua.ua.uaerrors import UaStatusCodeError
 
         if self._client is not None:
             return self._client
@@ -114,7 +115,17 @@ class OpcUaLink:
             if self.config.security is not None:
                 await client.set_security_string(self.config.security.asyncua_string())
             await asyncio.wait_for(client.connect(), timeout=self.config.timeout * 2)
-        except Exception as exc:  # noqa: BLE001 - every failure to connect is "unreachable"
+        except UaStatusCodeError as exc:
+            code = type(exc).__name__
+            with contextlib.suppress(Exception):
+                await asyncio.wait_for(client.disconnect(), timeout=1.0)
+            if "Identity" in code or "UserAccess" in code or "Security" in code or "Certificate" in code:
+                raise LinkDenied(
+                    f"{self.name}: the control refused the session ({code})",
+                    hint="check [link] user, the password variable and the security string",
+                ) from None
+            raise LinkUnreachable(f"{self.name}: cannot reach the control: {code}") from None
+        except Exception as exc:  # noqa: BLE001 - every other failure to connect is "unreachable"
             raise LinkUnreachable(f"{self.name}: cannot reach the control: {_reason(exc)}") from None
         self._client = client
         return client
