@@ -24,8 +24,10 @@ What a row gets (the columns of :mod:`setupfix.model.measurements`):
   ``Datums/Datum`` in precedence order, each the ``DatumLabel`` of its datum definition
   (a compound datum's labels joined by ``-``), joined by ``|``.
 
-An id that points nowhere leaves what it would have given empty, never an error: the
-value and limits of the row are still right without it.
+A ``FeatureActualIds`` entry (or its ``FeatureItemId``) that points nowhere leaves all the
+feature columns of the row empty, its nominal location too (the item's first feature may
+be another one of the features it is measured on), never an error: the value and limits
+of the row are still right without them.
 """
 
 from __future__ import annotations
@@ -39,7 +41,7 @@ from lxml import etree
 from parsers.numbers import try_number
 from parsers.qif.items import Doc, child_text, local
 
-__all__ = ["FeatureGeometry", "ResultsFeatures", "measurement_features", "datum_labels", "NO_FEATURES"]
+__all__ = ["FeatureGeometry", "ResultsFeatures", "measurement_features", "datum_labels", "NO_FEATURES", "BROKEN"]
 
 #: Largest departure of a stated unit vector's length from 1 that is still read as a direction.
 UNIT_TOLERANCE = 1e-3
@@ -59,9 +61,15 @@ class FeatureGeometry:
     between: str = ""
     #: Whether a feature's Location/Normal looked swapped (its positions and direction left out).
     swapped: bool = False
+    #: Whether the measurement names an actual feature (or that one a feature item) that is not in the
+    #: file: nothing about its feature is known, not even the item's location.
+    broken: bool = False
 
 
+#: A measurement of no stated feature (its item's location, if any, stands).
 NO_FEATURES = FeatureGeometry()
+#: A measurement whose feature ids point nowhere.
+BROKEN = FeatureGeometry(broken=True)
 
 
 class ResultsFeatures:
@@ -169,11 +177,16 @@ def measurement_features(
             feature_item = doc.index.local.get(item_id) if item_id else None
             if feature_item is None and item_id:
                 feature_item = owner.index.local.get(item_id)
-            pairs.append((item_id or ident, feature_item, actual))
+            if feature_item is None:
+                return BROKEN  # an id that points nowhere: which feature this is, the file does not say
+            pairs.append((item_id, feature_item, actual))
     else:
         for ref in item.iterfind(f"{{{owner.ns}}}FeatureItemIds/{{{owner.ns}}}Id"):
             item_id = (ref.text or "").strip()
-            pairs.append((item_id, owner.index.local.get(item_id), results.by_item.get(item_id)))
+            feature_item = owner.index.local.get(item_id)
+            if feature_item is None:
+                return BROKEN
+            pairs.append((item_id, feature_item, results.by_item.get(item_id)))
     if not pairs:
         return NO_FEATURES
     names = [_name(feature_item, ident, owner.ns) for ident, feature_item, _ in pairs]

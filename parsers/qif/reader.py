@@ -269,7 +269,7 @@ def _feature_columns(
     per_results: dict[int, ResultsFeatures] = {}
     frames: dict[str, str] = {}
     scales: dict[int, float] = {}
-    swapped = 0
+    swapped = broken = 0
     for row, (key, res, ids) in enumerate(zip(keys, kept["results"].tolist(), kept["features"].tolist(), strict=True)):
         item, nom, definition, owner = chains[key]
         if key not in frames:
@@ -285,7 +285,8 @@ def _feature_columns(
         if geometry is NO_FEATURES:
             continue
         swapped += geometry.swapped
-        if geometry.swapped or not math.isnan(geometry.nominal[0]):
+        broken += geometry.broken
+        if geometry.swapped or geometry.broken or not math.isnan(geometry.nominal[0]):
             nominal[row] = geometry.nominal
         actual[row] = geometry.actual
         direction[row] = geometry.direction
@@ -295,6 +296,13 @@ def _feature_columns(
         note(
             f"{swapped} measurement(s) of features whose Normal is not a unit vector (Location and Normal "
             "swapped?): their positions and directions are left out",
+            SourceLocation(doc.path),
+            "parse",
+        )
+    if broken:
+        note(
+            f"{broken} measurement(s) name features that are not in the file (FeatureActualIds or their "
+            "FeatureItemId point nowhere): their feature columns and positions are left out",
             SourceLocation(doc.path),
             "parse",
         )
