@@ -16,6 +16,7 @@ from typing import Any
 import pytest
 from conftest import SAMPLES
 from opcua_control import ControlSpec, TestControl, free_port, link_toml
+from pgserver import pg_url  # noqa: F401 - the fixture
 
 from setupfix.cli import main
 from setupfix.store import open_store
@@ -357,3 +358,29 @@ def test_write_from_a_report_corrects_and_writes(
     code, out, err = run(capsys, "machine", "write", "--link", link, "--model", MODEL, "--apply", REPORT)
     assert code == 0, err
     assert "applied" in out and control.values["G54.Z"] == -412.553
+
+
+def test_an_applied_write_and_a_refusal_are_audited_on_postgresql(
+    capsys: pytest.CaptureFixture[str],
+    tmp_path: Path,
+    control: TestControl,
+    pg_url: str,  # noqa: F811 - the fixture
+) -> None:
+    link = write_link(tmp_path, control, machine="mc-07")
+    plan = make_plan(capsys, tmp_path, link)
+    argv = ["machine", "write", "--link", link, "--model", MODEL, "--plan", str(plan), "--db", pg_url, "--apply"]
+    code, _, err = run(capsys, *argv, "--operator", "anna")
+    assert code == 0, err
+    code, _, err = run(capsys, *argv)  # the table is not what the plan was made with any more
+    assert code == 6 and "changed since the plan" in err
+    with open_store(pg_url, machine="mc-07") as store:
+        applied, refused = store.link_attempts()
+    assert (applied.outcome, applied.operator, refused.outcome) == ("applied", "anna", "refused")
+    first = applied.components[0]
+    assert (first.register, first.before, first.written, first.read_back) == (
+        "G54",
+        -412.53,
+        -412.553,
+        -412.553,
+    )
+    assert pg_url.split("@")[0].split(":")[-1] not in applied.link + applied.message
