@@ -52,6 +52,20 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
         "when the model is switched in the app (when it does not fit, the app says so and exports "
         "changes)",
     )
+    p.add_argument(
+        "--link",
+        metavar="LINK",
+        type=Path,
+        default=None,
+        help="machine link file (TOML, shared/spec/machine-link.md): the current offsets are read from the "
+        "control instead of --current, and w sends the cycle on screen to it (a dry-run diff, then two "
+        "confirmations; the attempt is recorded with --db under --operator)",
+    )
+    p.add_argument(
+        "--insecure",
+        action="store_true",
+        help="allow the link's password over an unencrypted session (refused by default)",
+    )
     p.add_argument("--optimizer", default="exact", choices=sorted(OPTIMIZERS), help="optimiser to start with")
     p.add_argument(
         "--engineer",
@@ -80,8 +94,12 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
 
 
 def run(args: argparse.Namespace) -> int:
+    from setupfix.core.errors import SetupfixError
     from setupfix.tui.app import SetupfixApp  # deferred: the CLI never loads textual otherwise
     from setupfix.tui.state import Inputs
+
+    if args.link is not None and args.current is not None:
+        raise SetupfixError("--link and --current are two sources of the current offsets: give one")
 
     SetupfixApp(
         Inputs(
@@ -105,6 +123,8 @@ def run(args: argparse.Namespace) -> int:
             trials=args.trials,
             offsets=args.offsets,
             engineer=args.engineer,
+            link=args.link,
+            insecure=args.insecure,
         )
     ).run()
     return 0

@@ -67,6 +67,7 @@ class SetupfixApp(App[None]):
         Binding("f", "filter_station", "Station"),
         Binding("s", "sort", "Sort"),
         Binding("e", "export", "Export"),
+        Binding("w", "send", "Send"),  # shown with --link only (SessionState.allows)
         Binding("d", "diagnose", "Diagnose", show=False),
         Binding("left_square_bracket", "part(-1)", "Prev part", show=False),
         Binding("right_square_bracket", "part(1)", "Next part", show=False),
@@ -285,3 +286,7 @@ class SetupfixApp(App[None]):
 
     def action_export(self) -> None:
         self.controller.export()
+
+    def action_send(self) -> None:
+        """Send the cycle on screen to the machine (``--link``): the dry-run diff, then two confirmations."""
+        self.controller.send()

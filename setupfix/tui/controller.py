@@ -20,13 +20,16 @@ from textual.widgets import TabbedContent
 from textual.worker import Worker, WorkerState
 
 from setupfix.core.errors import SetupfixError
+from setupfix.store import login_name
 from setupfix.tui import workers
 from setupfix.tui.exporting import CONTROLLERS, export_name, preview, write_offsets
-from setupfix.tui.screens import CapabilityScreen, ExportRequest, ExportScreen
+from setupfix.tui.screens import CapabilityScreen, ConfirmScreen, ExportRequest, ExportScreen
+from setupfix.tui.screens.send import SendScreen, outcome_line, question
 from setupfix.tui.session import FolderWatch, OpenedReport, record_applied
 from setupfix.tui.state import SessionState
 from setupfix.tui.widgets import ComparePanel, CorrectionTab, HistoryPanel, MatchPanel, ThermalPanel
 from setupfix.usecases.compare import DEFAULT_METHODS, Comparison
+from setupfix.usecases.machine import WriteOutcome, WritePlan
 from setupfix.usecases.requests import SolveOptions
 from setupfix.usecases.spc_report import SpcOutcome
 from setupfix.views import analysis as analysis_view
@@ -98,6 +101,8 @@ class SessionController:
                 db=i.store,
                 current=i.current,
                 thermal=thermal,
+                link=i.link,
+                insecure=i.insecure,
             ),
             "open",
         )
@@ -209,6 +214,56 @@ class SessionController:
                 return
             notify(f"recorded {added} register change(s) as applied in {i.db}", title="history")
 
+    # ------------------------------------------------------------------ send to machine (w)
+    def send(self) -> None:
+        """The dry-run diff of the cycle on screen from the control (``--link``); then two confirmations."""
+        c, i = self.state.current(), self.state.inputs
+        if i.link is None:
+            self.app.notify(
+                "no machine link given: start with --link LINK.toml to send to the control",
+                title="send to machine",
+                severity="warning",
+                timeout=8,
+            )
+            return
+        if c is None or self.state.opened is None:
+            self.app.notify("nothing to send: open a report that matches the model first", severity="warning")
+            return
+        self.app.notify(f"reading the control ({i.link}) …", title="send to machine", timeout=3)
+        current = self.state.opened.current
+        self._work(partial(workers.send_plan, c, current, i.link, insecure=i.insecure), "send-plan")
+
+    def _send_planned(self, wp: WritePlan) -> None:
+        self.app.push_screen(SendScreen(wp), partial(self._send_first_yes, wp))
+
+    def _send_first_yes(self, wp: WritePlan, go: bool | None) -> None:
+        if not go:
+            self.app.notify("nothing sent", title="send to machine", timeout=3)
+            return
+        text = question(wp, self.operator(), self.state.inputs.store is not None)
+        self.app.push_screen(ConfirmScreen(text, yes="Write (y)", no="No (n)"), partial(self._send_confirmed, wp))
+
+    def _send_confirmed(self, wp: WritePlan, yes: bool | None) -> None:
+        i, opened = self.state.inputs, self.state.opened
+        if not yes or opened is None or i.link is None:
+            self.app.notify("nothing sent", title="send to machine", timeout=3)
+            return
+        self.state.send_increment = wp.increment
+        self.app.notify("writing to the control …", title="send to machine", timeout=3)
+        work = partial(workers.send_apply, opened.model, wp.plan, i.link, i.store, insecure=i.insecure)
+        self._work(work, "send")
+
+    def operator(self) -> str:
+        """Who sends: ``--operator``, else the login name (what the history store records)."""
+        return self.state.inputs.operator or login_name()
+
+    def _sent(self, result: WriteOutcome) -> None:
+        line = outcome_line(result, self.operator(), self.state.send_increment)
+        self.state.send_line = line
+        self.app.notify(
+            line, title="send to machine", severity="information" if result.exit_status == 0 else "error", timeout=30
+        )
+
     # ------------------------------------------------------------------ a folder watched
     def watch(self, folder: Path) -> None:
         """Watch ``folder``: its newest finished report is opened, now and whenever a newer one lands."""
@@ -257,6 +312,10 @@ class SessionController:
                     app.notify(note, title="history", severity="warning")
             elif worker.name == "diagnose" and isinstance(worker.result, analysis_view.DiagnosisView):
                 app.query_one(HistoryPanel).diagnosis(worker.result, source=s.series_source())
+            elif worker.name == "send-plan" and isinstance(worker.result, WritePlan):
+                self._send_planned(worker.result)
+            elif worker.name == "send" and isinstance(worker.result, WriteOutcome):
+                self._sent(worker.result)
             elif worker.name == "thermal" and isinstance(worker.result, analysis_view.DriftView):
                 app.query_one(ThermalPanel).show(worker.result, source=str(s.inputs.temperatures))
 
@@ -273,6 +332,8 @@ class SessionController:
             self.app.query_one(ThermalPanel).not_available(text)
         elif what in ("history", "diagnose", "capability"):
             self.app.query_one(HistoryPanel).status(f"✗ {text}")
+        elif what in ("send-plan", "send"):
+            self.state.send_line = f"✗ {text}"
 
     def _opened(self, opened: OpenedReport) -> None:
         app, i = self.app, self.state.inputs

@@ -69,6 +69,8 @@ class Inputs:
     offsets: str = "offsets.csv"
     poll_seconds: float = 2.0
     engineer: bool = False  #: the optimiser choice and the comparison shown (``--engineer``)
+    link: Path | None = None  #: ``--link``: the current offsets read from the control, and "send to machine" (w)
+    insecure: bool = False  #: ``--insecure``: the link's password over an unencrypted session allowed
 
     @property
     def store(self) -> StoreRef | None:
@@ -95,6 +97,8 @@ class SessionState:
     engineer: bool = False  #: the optimiser choice and the comparison shown (--engineer, ctrl+e)
     export_controller: str = "csv"  #: the controller format of the next export: the one last written
     export_path: str | None = None  #: the file last written (None: ``inputs.offsets``)
+    send_increment: float = 0.001  #: the control's increment of the send under way (its read-back's decimals)
+    send_line: str = ""  #: the last "send to machine" in one line: the read-back, or the refusal
 
     @classmethod
     def start(cls, inputs: Inputs) -> SessionState:
@@ -102,7 +106,10 @@ class SessionState:
         return cls(inputs, model_path=inputs.model, optimizer=inputs.optimizer, engineer=inputs.engineer)
 
     def allows(self, action: str) -> bool:
-        """False for an engineer's action (:data:`ENGINEER_ACTIONS`) in an operator's session."""
+        """False for an engineer's action (:data:`ENGINEER_ACTIONS`) in an operator's session, and for
+        "send to machine" without a machine link (``--link``)."""
+        if action == "send":
+            return self.inputs.link is not None
         return self.engineer or action not in ENGINEER_ACTIONS
 
     def exported(self, controller: str, path: str) -> None:
