@@ -175,11 +175,11 @@ def run_init(args: argparse.Namespace) -> int:
         )
         axes = f"axes {', '.join(scaffold.axes)} (multi-axis)" if scaffold.axes else f"process axis {scaffold.axis}"
         sizes = f", {scaffold.sizes} size(s)" if scaffold.sizes else ""
-        sizes += f", {scaffold.zones} position zone(s)" if scaffold.zones else ""
-        sizes += f", {scaffold.distances} distance(s)" if scaffold.distances else ""
+        axes += f", {scaffold.zones} position zone(s)" if scaffold.zones else ""
+        axes += f", {scaffold.distances} distance(s)" if scaffold.distances else ""
         if scaffold.questions:
             todo = (
-                f"{len(scaffold.questions)} question(s) open (which work offset and tool made each feature): "
+                f"with {len(scaffold.questions)} question(s) open (which work offset and tool made each feature): "
                 f"answer them with 'setupfix model map {args.out}', then 'setupfix model check' and 'setupfix correct'"
             )
         else:

@@ -259,8 +259,8 @@ def _process(title: str, resolution: float, axes_line: list[str]) -> list[str]:
 def _dimension(i: int, d: ScaffoldDimension, lines: list[str], weights: dict[str, float] | None = None) -> list[str]:
     """A dimension table; ``weights``: the features it enters (default: its own ``F{i}``)."""
     out = [
-        f"[dimensions.D{i}]  # {comment(d.source)}; {comment(d.axis_note())}"
-        + (f"; {comment(d.why)}" if d.why else ""),
+        f"[dimensions.D{i}]  # {comment(d.source)}; {comment(d.axis_note())}",
+        *([f"# {comment(d.why)}"] if d.why else []),
         f"name = {toml_string(d.name)}",
         f"features = {{ F{i} = 1 }}" if weights is None else f"features = {_table(weights)}",
         *lines,
@@ -477,8 +477,8 @@ def _dimension_lines(d: ScaffoldDimension) -> list[str]:
 def _zone(i: int, d: ScaffoldDimension) -> list[str]:
     """A position callout as a circular zone: its components, plane and diameter (the report's tolerance)."""
     out = [
-        f"[dimensions.D{i}]  # {comment(d.source)}; {comment(d.axis_note())}"
-        + (f"; {comment(d.why)}" if d.why else ""),
+        f"[dimensions.D{i}]  # {comment(d.source)}; {comment(d.axis_note())}",
+        *([f"# {comment(d.why)}"] if d.why else []),
         f"name = {toml_string(d.name)}",
         f"features = {_table(d.weights)}",
         'kind = "position"',

@@ -591,7 +591,9 @@ def scaffold_from_tables(
         only_axis=axis,
         features=features,
     )
-    origins = Counter(d.axis_from if d.axis_from in ("report", "name") else "none" for d in dims)
+    origins = Counter(
+        d.axis_from if d.axis_from in ("report", "name") else "none" for d in dims if d.measures != "position"
+    )
     return Scaffold(
         text,
         len(dims),
