@@ -20,7 +20,15 @@ from setupfix.diagnose.scores import dense_scores
 from setupfix.diagnose.support import STATIC, spread
 from setupfix.diagnose.terms import AXES, EffectSpec, Layout, Series
 
-__all__ = ["STATIC", "candidate_specs", "process_sets", "level_positions", "refine_level", "refine_tau"]
+__all__ = [
+    "STATIC",
+    "axis_positions",
+    "candidate_specs",
+    "process_sets",
+    "level_positions",
+    "refine_level",
+    "refine_tau",
+]
 
 Array = npt.NDArray[np.float64]
 
@@ -68,6 +76,8 @@ def candidate_specs(
         col = layout.coord[:, a]
         if np.isfinite(col).all() and spread(col):
             out.append(EffectSpec("position", axis=axis))
+    out += axis_positions(layout)
+    out += [EffectSpec("rotation", register=w) for w in layout.rotation_ids]
     for g in dict.fromkeys(g for g in layout.groups if g is not None):
         out.append(EffectSpec("group", group=g))
     targets: tuple[str | None, ...] = (None, *layout.register_ids)
@@ -79,6 +89,24 @@ def candidate_specs(
         if n >= 3 and np.ptp(col) > 0 and name in process:
             ref = float(f"{np.mean(col):.4g}")
             out += [EffectSpec("process", channel=name, register=r, reference=ref) for r in targets]
+    return out
+
+
+def axis_positions(layout: Layout) -> list[EffectSpec]:
+    """Position slopes per measuring axis of a multi-axis model: x-errors ∝ x, y-errors ∝ y, z-errors ∝ z.
+
+    A slope a on one axis is that axis's scale (a plate measured warm along X, a scale error
+    of the X axis): δ_q = a · n_q[a] · x_q[a].  Offered for an axis that at least three
+    dimensions measure along and whose coordinates are spread (:func:`spread`) over them.
+    """
+    if layout.direction.shape[0] != layout.n_dimensions:
+        return []
+    out = []
+    for a, axis in enumerate(AXES):
+        along = np.abs(np.nan_to_num(layout.direction[:, a])) > 0.5
+        col = layout.coord[along, a]
+        if along.sum() >= 3 and np.isfinite(col).all() and spread(col):
+            out.append(EffectSpec("position", axis=axis, along=axis))
     return out
 
 

@@ -13,6 +13,7 @@ from setupfix.core.errors import ParameterError
 from setupfix.core.params import Constraint, Interval, ValidatedParams
 from setupfix.diagnose.factors import FactorTests, Term, factor_tests
 from setupfix.diagnose.fit import Fit, fit_model, observations
+from setupfix.diagnose.inference import position_structure
 from setupfix.diagnose.select import Selection, select_effects
 from setupfix.diagnose.terms import EffectSpec, Layout, Series
 from setupfix.diagnose.walk import (
@@ -285,6 +286,9 @@ class Diagnoser(ValidatedParams):
             )
         walk = None
         notes = list(selection.notes) + (list(tests.notes) if tests is not None else [])
+        structure = position_structure(layout, series, after, self.alpha)
+        if structure is not None:
+            notes.append(structure)
         if self.walk and series.n_cycles >= self.min_train + 5:
             walk = walk_forward(
                 layout,

@@ -38,6 +38,7 @@ def spec_of(effect: ModelEffect) -> EffectSpec:
         register=effect.register,
         dimension=effect.dimension,
         axis=effect.axis,
+        along=effect.along,
         group=effect.group,
         channel=effect.channel,
         shape=effect.shape,

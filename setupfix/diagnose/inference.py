@@ -47,8 +47,9 @@ import numpy as np
 import numpy.typing as npt
 import scipy.stats
 
-from setupfix.diagnose.fit import Observations
-from setupfix.diagnose.terms import EffectSpec, Layout
+from setupfix.diagnose.fit import Fit, Observations
+from setupfix.diagnose.support import STATIC
+from setupfix.diagnose.terms import AXES, EffectSpec, Layout, Series, field_factors
 
 __all__ = [
     "MIN_CYCLES",
@@ -60,6 +61,7 @@ __all__ = [
     "cycle_sums",
     "relation_set",
     "orth",
+    "position_structure",
 ]
 
 Array = npt.NDArray[np.float64]
@@ -305,3 +307,65 @@ def relation_set(
         if p * m >= alpha:
             out.append(f"relation: {spec.dimension} ~ {layout.register_ids[j]}")
     return tuple(out)
+
+
+def position_structure(layout: Layout, series: Series, fit: Fit, alpha: float) -> str | None:
+    """A lack-of-fit note when the residual still follows the dimensions' positions (None otherwise).
+
+    The dimensions' mean residuals r̄_q (over the cycles, weight n_q) are regressed on the
+    linear displacement field a point can have in the plane of the measured axes: for every
+    measuring axis a with at least three dimensions and every coordinate b spread over them,
+    the column n_q[a] · x_q[b] (x-errors ∝ x and ∝ y, y-errors ∝ x and ∝ y: scales, rotation,
+    shear), residualised on the fit's dimension-level columns (the setup state and the static
+    effects).  F-test of that block against the rest of the offsets' scatter (Seber & Lee §4.3,
+    k and D − r − k df, D the dimensions measured, r the fitted dimension-level rank) at ``alpha``.
+    Multi-axis models only (one-axis dimensions have no measuring direction).
+    """
+    if layout.direction.shape[0] != layout.n_dimensions:
+        return None
+    res = fit.residual
+    seen = np.isfinite(res)
+    n_q = seen.sum(axis=0).astype(float)
+    used = n_q > 0
+    m = np.where(seen, res, 0.0).sum(axis=0)[used] / n_q[used]
+    w = np.sqrt(n_q[used])
+    direction = np.nan_to_num(layout.direction[used])
+    coord = layout.coord[used]
+    cols = []
+    for a in range(3):
+        along = np.abs(direction[:, a]) > 0.5
+        if along.sum() < 3:
+            continue
+        for b in range(3):
+            x = coord[along, b]
+            if np.isfinite(x).all() and np.ptp(x) > 0:
+                cols.append(direction[:, a] * np.nan_to_num(coord[:, b]))
+    if not cols:
+        return None
+    model = [fit.basis.T[used]]
+    for spec in fit.specs:
+        if spec.kind in STATIC:
+            factors = field_factors(spec, layout, series)
+            if factors is not None:
+                model.append(factors[1][used, None])
+    Q = orth(np.hstack(model) * w[:, None])
+    G = np.column_stack(cols) * w[:, None]
+    B = orth(G - Q @ (Q.T @ G))
+    k = int(B.shape[1])
+    r = m * w
+    r = r - Q @ (Q.T @ r)
+    df2 = int(used.sum()) - int(Q.shape[1]) - k
+    if k == 0 or df2 < 3:
+        return None
+    gain = float(np.sum((B.T @ r) ** 2))
+    rest = max(float(r @ r) - gain, 1e-300)
+    f = (gain / k) / (rest / df2)
+    p = float(scipy.stats.f.sf(f, k, df2))
+    if p >= alpha:
+        return None
+    axes = "/".join(AXES[a].upper() for a in range(3) if (np.abs(direction[:, a]) > 0.5).sum() >= 3)
+    return (
+        f"lack of fit against position: the residual still follows the features' coordinates along {axes} "
+        f"(F = {f:.3g} on {k} and {df2} df, p = {p:.2g}): a deformation the effects found do not explain "
+        "(a rotation or scale not modelled, a shear, a bent part)"
+    )

@@ -24,7 +24,7 @@ Array = npt.NDArray[np.float64]
 _TINY = 1e-9
 
 #: Kinds whose field is the same on every cycle.
-STATIC = ("scale", "position", "group")
+STATIC = ("scale", "position", "rotation", "group")
 
 
 def spread(values: Array) -> bool:

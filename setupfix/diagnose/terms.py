@@ -50,7 +50,18 @@ __all__ = [
 Array = npt.NDArray[np.float64]
 
 #: Effect kinds of the diagnose contract, in the order candidates are listed.
-KINDS: tuple[str, ...] = ("drift", "thermal", "wear", "scale", "position", "relation", "group", "level", "process")
+KINDS: tuple[str, ...] = (
+    "drift",
+    "thermal",
+    "wear",
+    "scale",
+    "position",
+    "rotation",
+    "relation",
+    "group",
+    "level",
+    "process",
+)
 
 AXES = ("x", "y", "z")
 
@@ -72,6 +83,18 @@ class Layout:
     groups : tuple of (str or None)
         Station / setup of each dimension.
     unit : str
+    direction : ndarray of shape (n_dimensions, 3)
+        Measuring direction n_q of each dimension of a multi-axis model (NaN where it has
+        none: a one-axis model, a size, a position zone); empty for layouts built by hand.
+    rotation : ndarray of shape (n_rotations, n_dimensions) [model unit / rad]
+        Change of every dimension per radian of rotation of one WKS about the spindle axis
+        through the WKS origin, Σ_f w_qf c_f n_q · (s × x_f) (:func:`rotation_rows`): the field
+        of a ``rotation`` effect.  Only WKS of a multi-axis model whose features all have
+        positions and that have no rotation register of their own.
+    rotation_ids : tuple of str
+        The WKS of each row of ``rotation``.
+    spindle : str
+        The spindle axis (``X``, ``Y`` or ``Z``).
     """
 
     composite: Array
@@ -85,6 +108,10 @@ class Layout:
     groups: tuple[str | None, ...]
     unit: str = "mm"
     resolution: float = 0.001
+    direction: Array = field(default_factory=lambda: np.zeros((0, 3)))
+    rotation: Array = field(default_factory=lambda: np.zeros((0, 0)))
+    rotation_ids: tuple[str, ...] = ()
+    spindle: str = "Z"
 
     @classmethod
     def from_model(cls, model: ProcessModel, coord: Array | None = None) -> Layout:
@@ -103,6 +130,7 @@ class Layout:
         if coord is not None:
             dim_coord = np.where(np.isnan(dim_coord), coord, dim_coord)
         n_w = len(model.wks)
+        direction, rotation, rotation_ids = rotation_rows(model, rel.R_FD)
         return cls(
             composite=rel.composite,
             register_ids=tuple(model.register_ids),
@@ -115,6 +143,10 @@ class Layout:
             groups=tuple(d.group for d in model.dimensions),
             unit=model.unit,
             resolution=model.resolution,
+            direction=direction,
+            rotation=rotation,
+            rotation_ids=rotation_ids,
+            spindle=model.spindle,
         )
 
     @property
@@ -128,6 +160,55 @@ class Layout:
     @property
     def tool_ids(self) -> tuple[str, ...]:
         return tuple(self.register_ids[i] for i in self.tools)
+
+
+def rotation_rows(model: ProcessModel, r_fd: Array) -> tuple[Array, Array, tuple[str, ...]]:
+    """Measuring directions and the rotation fields of the WKS of a multi-axis model.
+
+    A WKS turned by θ [rad] about the spindle axis s through its origin moves feature f at
+    x_f by θ c_f (s × x_f) (the small-angle rotation δx = −θ y, δy = θ x about Z), c_f the
+    feature's weight on the WKS (its ``c`` weight, else its ``x`` weight); dimension q
+    measured along n_q moves by θ Σ_f w_qf c_f n_q · (s × x_f).  A rotation about another
+    centre is this plus a translation, which the WKS's translation registers take.
+
+    Returns
+    -------
+    direction : ndarray (n_dimensions, 3)
+        n_q, NaN for a dimension without one (sizes and zones included); (0, 3) for a one-axis model.
+    rotation : ndarray (n_rotations, n_dimensions) [model unit / rad]
+    rotation_ids : tuple of str
+        WKS of each row: those with at least two dimensions moved, every feature positioned and
+        no rotation register (``W1.C``) in the model.
+    """
+    if not model.multi_axis:
+        return np.zeros((0, 3)), np.zeros((0, len(model.dimensions))), ()
+    direction = np.array(
+        [
+            d.direction if d.direction is not None and d.kind != "size" and not d.zone else (np.nan,) * 3
+            for d in model.dimensions
+        ],
+        dtype=float,
+    ).reshape(len(model.dimensions), 3)
+    pos = np.array(
+        [f.position if f.position is not None else (np.nan,) * 3 for f in model.features], dtype=float
+    ).reshape(len(model.features), 3)
+    s = np.eye(3)[AXES.index(model.spindle.lower())]
+    lever = np.cross(s, pos)  # (F, 3), NaN where no position
+    turned = {r.base for r in model.wks if r.component == "C"}
+    rows, ids = [], []
+    for w in dict.fromkeys(r.base for r in model.wks):
+        if w in turned:
+            continue
+        c = np.array([f.components.get(w, {}).get("c", f.components.get(w, {}).get("x", 0.0)) for f in model.features])
+        used = c != 0
+        if not used.any() or not np.isfinite(lever[used]).all():
+            continue
+        moved = (c[:, None] * np.nan_to_num(lever))[:, None, :] * r_fd[:, :, None]  # (F, Q, 3)
+        row = np.einsum("qk,qk->q", moved.sum(axis=0), np.nan_to_num(direction))
+        if np.count_nonzero(np.abs(row) > 1e-12) >= 2:
+            rows.append(row)
+            ids.append(w)
+    return direction, np.array(rows).reshape(len(rows), len(model.dimensions)), tuple(ids)
 
 
 @dataclass(frozen=True)
@@ -207,7 +288,10 @@ class EffectSpec:
     dimension : str, optional
         Dimension (relation).
     axis : str, optional
-        ``x``, ``y`` or ``z`` (position).
+        ``x``, ``y`` or ``z`` (position: the coordinate the slope is on).
+    along : str, optional
+        Position: the measuring direction the slope acts on (``x``: only the dimensions'
+        X components, δx = β x); None for every dimension alike.
     group : str, optional
         Station or setup (group).
     channel : str, optional
@@ -236,6 +320,7 @@ class EffectSpec:
     reference: float = 0.0
     at: float = 0.0
     cycle: str | None = None
+    along: str | None = None
 
     @property
     def target(self) -> str:
@@ -249,7 +334,9 @@ class EffectSpec:
         if self.kind == "scale":
             return "all dimensions ~ nominal"
         if self.kind == "position":
-            return str(self.axis)
+            return str(self.axis) if self.along is None else f"{self.along}-errors ~ {self.axis}"
+        if self.kind == "rotation":
+            return f"{self.register} ~ rotation"
         if self.kind == "relation":
             return f"{self.dimension} ~ {self.register}"
         if self.kind == "level":
@@ -266,6 +353,7 @@ class EffectSpec:
             "wear": f"{length}/cycle",
             "scale": f"{length}/{length}",
             "position": f"{length}/{length}",
+            "rotation": "rad",
             "relation": "1",
             "group": length,
             "level": length,
@@ -336,7 +424,14 @@ def field_factors(spec: EffectSpec, layout: Layout, series: Series) -> tuple[Arr
         return ones, layout.nominal
     if spec.kind == "position":
         a = AXES.index(str(spec.axis))
-        return ones, np.nan_to_num(layout.coord[:, a])
+        coord = np.nan_to_num(layout.coord[:, a])
+        if spec.along is None:
+            return ones, coord
+        if layout.direction.shape[0] != layout.n_dimensions:
+            raise KeyError(f"position along {spec.along}: the model has no measuring directions")
+        return ones, coord * np.nan_to_num(layout.direction[:, AXES.index(spec.along)])
+    if spec.kind == "rotation":
+        return ones, layout.rotation[layout.rotation_ids.index(str(spec.register))]
     if spec.kind == "group":
         mask = np.array([g == spec.group for g in layout.groups], dtype=float)
         if not mask.any():

@@ -9,7 +9,8 @@ this section; a model without it loads as before.  Layout::
     last_hours = 13.0                # time of the last cycle diagnosed, from origin [h]
 
     [effects.E1]
-    kind = "drift"                   # drift | thermal | wear | scale | position | relation | group | level | process
+    kind = "drift"                   # drift | thermal | wear | scale | position | rotation | relation
+                                     # | group | level | process
     shape = "linear"                 # drift: linear | saturating (then tau [h])
     estimate = 0.0020                # coefficient, in `unit`
     stderr = 0.00001
@@ -17,7 +18,9 @@ this section; a model without it loads as before.  Layout::
     target = "all tools ~ time"      # free text, for people
 
 Keys by kind: thermal ``channel`` and ``reference`` [°C]; wear ``register`` (a tool);
-position ``axis``; relation ``register`` and ``dimension`` (and ``registers``, every
+position ``axis`` (and ``along``: the slope acts on that axis's errors only); rotation
+``register`` (a WKS turned about the spindle axis, estimate in radians); relation
+``register`` and ``dimension`` (and ``registers``, every
 register the series could not tell from it, when more than one); group ``group``; level
 ``at`` [h from ``origin``: cycles cut at or after it are shifted], ``cycle`` (the first
 cycle after the step, for people) and ``register`` (absent: every tool alike); process
@@ -40,6 +43,7 @@ drift (saturating)       |β| ≤ 10 mm       the largest correction a register 
 thermal                  |β| ≤ 1 mm/°C     a 10 m steel part grows 0.12 mm/°C
 wear                     |β| ≤ 1 mm/cycle  a tool losing a millimetre per part is broken
 scale, position          |β| ≤ 0.01        1 %: steel grows that much over 850 °C
+rotation                 |β| ≤ 0.01 rad    0.57°: a part clamped that far askew is no setup
 relation                 |β| ≤ 1000        the bound on every relation weight of the model
 group, level             |β| ≤ 10 mm       the largest correction a register may take
 process                  |β|·span ≤ 10 mm  over the channel's range seen, at most a correction
@@ -79,6 +83,7 @@ EFFECT_KINDS: tuple[str, ...] = (
     "wear",
     "scale",
     "position",
+    "rotation",
     "relation",
     "group",
     "level",
@@ -98,6 +103,7 @@ EFFECT_KEYS = {
     "register",
     "dimension",
     "axis",
+    "along",
     "group",
     "registers",
     "description",
@@ -114,6 +120,7 @@ _REQUIRED = {
     "wear": ("register",),
     "scale": (),
     "position": ("axis",),
+    "rotation": ("register",),
     "relation": ("register", "dimension"),
     "group": ("group",),
     "level": ("at",),
@@ -140,6 +147,7 @@ class ModelEffect:
     axis: str | None = None
     group: str | None = None
     registers: tuple[str, ...] = ()
+    along: str | None = None
     at: float | None = None
     cycle: str | None = None
     span: float | None = None
@@ -177,6 +185,7 @@ ESTIMATE_BOUNDS: dict[str, tuple[float, bool]] = {
     "wear": (1.0, True),
     "scale": (0.01, False),
     "position": (0.01, False),
+    "rotation": (0.01, False),
     "relation": (1000.0, False),
     "group": (10.0, True),
     "level": (10.0, True),
@@ -266,6 +275,7 @@ def _validated(
     length = length_factor("mm", model.unit)
     regs = set(model.register_ids)
     tools = {t.id for t in model.tools}
+    wks_ids = {w.base for w in model.wks}
     dims = set(model.dimension_ids)
     groups = {d.group for d in model.dimensions if d.group}
     effects = []
@@ -357,6 +367,10 @@ def _validated(
             bad(f"{key}.group", f"unknown group {raw['group']!r}")
         if kind == "position" and raw["axis"] not in ("x", "y", "z"):
             bad(f"{key}.axis", f'expected "x", "y" or "z", found {raw["axis"]!r}')
+        if kind == "position" and raw.get("along", "x") not in ("x", "y", "z"):
+            bad(f"{key}.along", f'expected "x", "y" or "z", found {raw["along"]!r}')
+        if kind == "rotation" and raw["register"] not in wks_ids:
+            bad(f"{key}.register", f"unknown WKS {raw['register']!r} (a rotation turns one WKS)")
         stderr = raw.get("stderr")
         effects.append(
             ModelEffect(
@@ -373,6 +387,7 @@ def _validated(
                 register=raw.get("register"),
                 dimension=raw.get("dimension"),
                 axis=raw.get("axis"),
+                along=raw.get("along") if kind == "position" else None,
                 group=raw.get("group"),
                 registers=tuple(raw.get("registers", ())) if kind == "relation" else (),
                 at=float(raw["at"]) if kind == "level" else None,

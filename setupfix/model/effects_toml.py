@@ -26,7 +26,8 @@ def effects_toml(section: EffectsSection) -> str:
         "# Effects found by `setupfix diagnose` that the relations above lack. Each adds",
         "# estimate x its covariate to the deviations (drift: hours since origin, or",
         "# 1 - exp(-t/tau); thermal: channel - reference; wear: cycles since the tool's last",
-        "# change; scale: nominal; position: the dimension's coordinate; relation: the",
+        "# change; scale: nominal; position: the dimension's coordinate (along: on that axis's",
+        "# errors only); rotation: radians of a WKS turned about the spindle; relation: the",
         "# register's change on that dimension; group: 1 on the group's dimensions; level: 1",
         "# from `at` hours after origin on; process: channel - reference, from the process log).",
         "# `setupfix correct` adds the drift and wear expected until the next cycle, and maps",
@@ -46,7 +47,7 @@ def effects_toml(section: EffectsSection) -> str:
             out.append(f'shape = "{e.shape}"')
             if e.tau is not None:
                 out.append(f"tau = {e.tau!r}")
-        for name in ("channel", "register", "dimension", "axis", "group", "cycle"):
+        for name in ("channel", "register", "dimension", "axis", "along", "group", "cycle"):
             value = getattr(e, name)
             if value is not None:
                 out.append(f"{name} = {_value(value)}")

@@ -84,6 +84,7 @@ def augmented_section(diagnosis: Diagnosis, declared: EffectsSection) -> Effects
                 register=sp.register,
                 dimension=sp.dimension,
                 axis=sp.axis,
+                along=sp.along,
                 group=sp.group,
                 registers=res.registers if len(res.registers) > 1 else (),
                 at=sp.at if sp.kind == "level" else None,
