@@ -130,6 +130,15 @@ class DimensionRow:
     margin_before: float
     margin_after: float
     flags_: tuple[str, ...] = ()
+    zone: tuple[float, float, float] | None = None  # a position zone: CMM diameters measured, predicted; ⌀
+
+    @property
+    def position_text(self) -> str:
+        """A position zone as a CMM prints it, ``⌀0.086 → ⌀0.000 of ⌀0.100`` (2 × the radial distance); else ""."""
+        if self.zone is None:
+            return ""
+        measured, predicted, diameter = self.zone
+        return f"⌀{measured:.3f} → ⌀{predicted:.3f} of ⌀{diameter:.3f}"
 
     @property
     def binding(self) -> bool:
@@ -180,6 +189,9 @@ def dimension_rows(correction: CycleCorrection) -> list[DimensionRow]:
                 margin_before=before,
                 margin_after=row["margin"],
                 flags_=tuple(row.get("flags", ())),
+                zone=(row["zone_position"], row["zone_position_predicted"], row["zone_diameter"])
+                if "zone_position" in row
+                else None,
             )
         )
     return rows

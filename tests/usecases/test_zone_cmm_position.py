@@ -16,6 +16,7 @@ from setupfix.model import load_model
 from setupfix.usecases.contract import cycle_json
 from setupfix.usecases.correct import correct_report
 from setupfix.usecases.requests import CorrectRequest, CycleCorrection
+from setupfix.views.correction import dimension_rows as screen_rows
 from setupfix.views.html import correction_page
 from setupfix.views.present import format_correction
 
@@ -110,3 +111,17 @@ def test_zone_components_that_are_dimensions_load_and_solve(tmp_path: Path, repo
         assert rows[zone]["margin"] == pytest.approx(0.05 - radial, abs=1e-9)
     margins = [r["margin"] for r in doc["dimensions"]]
     assert doc["margin_after"] == pytest.approx(min(margins), abs=1e-9)
+
+
+def test_the_screen_rows_carry_the_cmm_diameter() -> None:
+    cycle = corrected(SAMPLE / "model.toml", CYCLES[0])
+    rows = {r.id: r for r in screen_rows(cycle)}
+    for d in cycle.model.dimensions:
+        if d.id not in rows:
+            continue
+        row = rows[d.id]
+        if d.zone:
+            assert row.zone is not None and row.zone[0] == pytest.approx(2 * row.deviation, abs=2e-9)
+            assert row.position_text == (f"⌀{2 * row.deviation:.3f} → ⌀{2 * row.predicted:.3f} of ⌀{d.diameter:.3f}")
+        else:
+            assert row.zone is None and row.position_text == ""
