@@ -108,10 +108,10 @@ class SendScreen(ModalScreen[bool]):
         where = d.machine or d.link
         with Vertical(id="send-box"):
             yield Static(Text(f"Send to machine {where} ({d.unit}, increment {d.increment:g})"), id="send-title")
-            table: DataTable[str] = DataTable(id="send-table", cursor_type="row", zebra_stripes=True)
+            table: DataTable[str | Text] = DataTable(id="send-table", cursor_type="row", zebra_stripes=True)
             table.add_columns("register", "axis", "current", "change", "new")
-            for row in diff_rows(d):
-                table.add_row(*row)
+            for register, axis, *numbers in diff_rows(d):
+                table.add_row(register, axis, *(Text(n, justify="right") for n in numbers))
             yield table
             text = f"✗ {self.why}" if self.why else "dry run: nothing written yet. s sends (a second question follows)"
             yield Static(Text(text), id="send-why")
