@@ -2,11 +2,14 @@
 
 :mod:`setupfix.spc.capability` holds the capability indices (Cp, Cpk, Pp, Ppk with a
 confidence interval for Cpk), :mod:`setupfix.spc.charts` the individuals and
-moving-range chart limits and the Nelson rules.
+moving-range chart limits and the Nelson rules, :mod:`setupfix.spc.baseline` whether the
+limits' baseline is a stable window and which is the first one that is.
 """
 
+from setupfix.spc.baseline import MAX_WINDOWS, BaselineCheck, baseline_check, first_stable_window
 from setupfix.spc.capability import (
     D2,
+    MIN_PARTS,
     Capability,
     capability,
     cpk_interval,
@@ -25,6 +28,11 @@ from setupfix.spc.charts import (
 )
 
 __all__ = [
+    "MAX_WINDOWS",
+    "BaselineCheck",
+    "baseline_check",
+    "first_stable_window",
+    "MIN_PARTS",
     "D2",
     "D4",
     "Capability",

@@ -19,6 +19,11 @@ also Montgomery, Introduction to Statistical Quality Control, eq. 8.19):
     Ĉpk · (1 ± z_{1−α/2} · sqrt(1 / (9 n Ĉpk²) + 1 / (2 (n − 1))))
 
 i.e. Ĉpk ± z · sqrt(1/(9n) + Ĉpk²/(2(n−1))).
+
+Below :data:`MIN_PARTS` values a Cpk is flagged *too few parts* (:attr:`Capability.too_few`):
+the approximation is rough there and the interval wide (at Ĉpk = 1.33 and n = 30 the 95 %
+interval is already ±0.36; at n = 5 and Ĉpk = 13 it is ±8).  The number is this project's
+choice, stated wherever the flag is shown.
 """
 
 from __future__ import annotations
@@ -32,12 +37,24 @@ from numpy.typing import ArrayLike, NDArray
 
 from setupfix.core.errors import ParameterError
 
-__all__ = ["D2", "Capability", "capability", "cpk_interval", "sigma_within", "sigma_overall", "split_capability"]
+__all__ = [
+    "D2",
+    "MIN_PARTS",
+    "Capability",
+    "capability",
+    "cpk_interval",
+    "sigma_within",
+    "sigma_overall",
+    "split_capability",
+]
 
 Array = NDArray[np.float64]
 
 #: Expected range of two independent standard normal values (moving range of span 2).
 D2 = 1.128
+
+#: Fewer values than this: a capability index is shown as "too few parts" (see the module docstring).
+MIN_PARTS = 30
 
 
 def _finite(x: ArrayLike) -> Array:
@@ -144,6 +161,11 @@ class Capability:
     out_of_tolerance: int
     lower: float
     upper: float
+
+    @property
+    def too_few(self) -> bool:
+        """True below :data:`MIN_PARTS` values: the indices are shown, flagged "too few parts"."""
+        return self.n < MIN_PARTS
 
 
 def capability(x: ArrayLike, lower: float, upper: float, *, confidence: float = 0.95) -> Capability:

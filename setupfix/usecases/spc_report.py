@@ -11,6 +11,11 @@ Nelson-rule violations (each naming the parts it covers) and the capability befo
 and after each split: the times given, or else every applied correction in the store's
 log (the parts since the previous split against the parts up to the next one).
 
+The baseline is checked (:func:`setupfix.spc.baseline_check`): a baseline that spans a split
+or whose own points break a Nelson rule is warned about, with the first stable window offered.
+Every Cpk carries Bissell's 95 % interval; below :data:`setupfix.spc.MIN_PARTS` parts it is
+flagged "too few parts".
+
 Renderers (text, JSON, the HTML page of :mod:`setupfix.views.html`) take the
 :class:`SpcOutcome`.
 """
@@ -33,7 +38,18 @@ from setupfix.correction.safety import short_list
 from setupfix.inputs.duplicates import ContentIndex, content_of, time_ns
 from setupfix.inputs.smoothing import excluded_note
 from setupfix.model import normalise_name
-from setupfix.spc import NELSON_RULES, Capability, ChartLimits, capability, chart_limits, nelson, split_capability
+from setupfix.spc import (
+    MIN_PARTS,
+    NELSON_RULES,
+    BaselineCheck,
+    Capability,
+    ChartLimits,
+    baseline_check,
+    capability,
+    chart_limits,
+    nelson,
+    split_capability,
+)
 from setupfix.store import Store, excluded_reports
 
 __all__ = [
@@ -51,6 +67,9 @@ __all__ = [
     "capability_rows",
     "CapabilityRow",
     "DEFAULT_BASELINE",
+    "baseline_json",
+    "baseline_warning",
+    "too_few_text",
 ]
 
 #: Parts the control limits are computed from unless ``--baseline`` says otherwise.
@@ -126,6 +145,7 @@ class DimensionSpc:
     limits: ChartLimits
     violations: tuple[RuleHit, ...]
     splits: tuple[SplitEffect, ...]
+    baseline: BaselineCheck | None = None
 
 
 @dataclass(frozen=True, eq=False)
@@ -340,6 +360,10 @@ def spc_report(store: Store, request: SpcRequest) -> SpcOutcome:
                 )
             )
         limits = chart_limits(values, request.baseline)
+        effects = _effects(group, splits, labels, source, lower, upper)
+        check = baseline_check(values, request.baseline, _split_indices(group, splits))
+        if not check.stable:
+            notes.append(Note(baseline_warning(name, check, parts, source), kind="spc"))
         hits = tuple(
             RuleHit(v.rule, NELSON_RULES[v.rule], v.start, v.end, parts[v.start : v.end + 1])
             for v in nelson(values, limits.center, limits.sigma)
@@ -356,13 +380,75 @@ def spc_report(store: Store, request: SpcRequest) -> SpcOutcome:
                 capability(values, lower, upper),
                 limits,
                 hits,
-                _effects(group, splits, labels, source, lower, upper),
+                effects,
+                check,
             )
         )
     excluded = 0 if request.include_excluded else len(excluded_reports(store))
     if excluded:
         notes.append(excluded_note(excluded, "the series"))
     return SpcOutcome(store.location, request.baseline, tuple(dims), tuple(labels), tuple(notes), excluded)
+
+
+def _split_indices(group: pd.DataFrame, splits: list[datetime]) -> list[int]:
+    """For each split time, the index of the first part of ``group`` made at or after it (inside the series only)."""
+    if group["time"].isna().any() or not splits:
+        return []
+    times = group["time"].to_numpy()
+    at = np.searchsorted(times, np.array([np.datetime64(t) for t in splits], dtype=times.dtype))
+    return sorted({int(i) for i in at if 0 < i < len(times)})
+
+
+def baseline_warning(name: str, check: BaselineCheck, parts: Sequence[str], source: str = "correction") -> str:
+    """One line: what is wrong with ``name``'s baseline and the first stable window (or why there is none)."""
+    what = []
+    if check.splits_inside:
+        what.append(f"spans {len(check.splits_inside)} {source}(s) (before parts {_parts(parts, check.splits_inside)})")
+    if check.violations:
+        rules = sorted({v.rule for v in check.violations})
+        what.append(f"breaks Nelson rule {', '.join(str(r) for r in rules)} on its own limits")
+    head = f"{name}: the baseline (parts 1–{check.size}) " + " and ".join(what) + ": its control limits are not sound"
+    if check.first_stable is not None:
+        first = check.first_stable
+        return head + (
+            f"; the first stable window of {check.size} parts is parts {first + 1}–{first + check.size} "
+            f"({parts[first]} … {parts[first + check.size - 1]})"
+        )
+    if check.longest_free < check.size:
+        return head + (
+            f"; no stable window of {check.size} parts: at most {check.longest_free} parts in a row lie between "
+            f"two {source}s (--baseline {check.longest_free} or fewer may find one)"
+        )
+    return head + f"; no stable window of {check.size} parts in the {check.searched} tried"
+
+
+def _parts(parts: Sequence[str], at: Sequence[int]) -> str:
+    return short_list([f"{i + 1} ({parts[i]})" for i in at], 4)
+
+
+def too_few_text(c: Capability) -> str:
+    """``"too few parts (n < 30)"`` when ``c`` rests on fewer than :data:`MIN_PARTS` values, else ``""``."""
+    return f"too few parts (n < {MIN_PARTS})" if c.too_few and c.n else ""
+
+
+def baseline_json(check: BaselineCheck | None, parts: Sequence[str]) -> dict[str, Any] | None:
+    """The baseline check as JSON: splits inside, the rules its points break, the first stable window."""
+    if check is None:
+        return None
+    first = check.first_stable
+    return {
+        "parts": check.size,
+        "stable": check.stable,
+        "splits_inside": [{"first_after": i, "part": parts[i]} for i in check.splits_inside],
+        "violations": [
+            {"rule": v.rule, "text": NELSON_RULES[v.rule], "first": v.start, "last": v.end} for v in check.violations
+        ],
+        "first_stable_window": None
+        if first is None
+        else {"first": first, "last": first + check.size - 1, "parts": [parts[first], parts[first + check.size - 1]]},
+        "windows_searched": check.searched,
+        "longest_without_split": check.longest_free,
+    }
 
 
 def _num(value: float) -> float | None:
@@ -382,6 +468,7 @@ def capability_json(c: Capability) -> dict[str, Any]:
         "pp": _num(c.pp),
         "ppk": _num(c.ppk),
         "out_of_tolerance": c.out_of_tolerance,
+        "too_few_parts": c.too_few,
     }
 
 
@@ -390,6 +477,8 @@ def spc_json(outcome: SpcOutcome) -> dict[str, Any]:
     return {
         "store": outcome.store,
         "baseline": outcome.baseline,
+        "min_parts": MIN_PARTS,
+        "cpk_interval": "Bissell (1990) normal approximation, 95 %",
         "splits": list(outcome.splits),
         "excluded_reports": outcome.excluded,
         "dimensions": [
@@ -412,6 +501,7 @@ def spc_json(outcome: SpcOutcome) -> dict[str, Any]:
                     {"rule": v.rule, "text": v.text, "first": v.first, "last": v.last, "parts": list(v.parts)}
                     for v in d.violations
                 ],
+                "baseline_check": baseline_json(d.baseline, d.parts),
                 "split_effects": [
                     {
                         "time": s.time,
@@ -474,14 +564,23 @@ def format_spc(outcome: SpcOutcome) -> str:
             lines.append(f"{d.name}: rule {rule} ({NELSON_RULES[rule]}): {short_list(spans, TEXT_LIST)}")
     effects = [(d, s) for d in outcome.dimensions for s in d.splits]
     if effects:
-        lines += ["", "capability before → after each split (Cpk, parts since the previous split / up to the next):"]
+        lines += [
+            "",
+            "capability before → after each split (Cpk [Bissell's 95 % interval], parts since the previous split / "
+            f"up to the next; too few: n < {MIN_PARTS}):",
+        ]
         for d, s in effects:
             lines.append(
-                f"{d.name:<{width}}{s.source} {s.time}: Cpk {_f(s.before.cpk)} (n={s.before.n}) → "
-                f"{_f(s.after.cpk)} (n={s.after.n}), mean {_f(s.before.mean, 4)} → {_f(s.after.mean, 4)}"
+                f"{d.name:<{width}}{s.source} {s.time}: Cpk {_cpk_text(s.before)} → "
+                f"{_cpk_text(s.after)}, mean {_f(s.before.mean, 4)} → {_f(s.after.mean, 4)}"
             )
     lines += [f"warning: {n}" for n in outcome.notes]
     return "\n".join(lines)
+
+
+def _cpk_text(c: Capability) -> str:
+    """``Cpk [low–high] (n=…)`` with "too few parts" below :data:`MIN_PARTS`."""
+    return f"{_f(c.cpk)} [{interval_text(c)}] (n={c.n}{', too few' if c.too_few and c.n else ''})"
 
 
 #: Glyphs of a text sparkline, lowest to highest.

@@ -25,11 +25,10 @@ from collections.abc import Iterable, Sequence
 import numpy as np
 
 from setupfix.correction.numbers import fmt
-from setupfix.correction.safety import short_list
 from setupfix.inputs.stores import StoreRef
-from setupfix.spc import NELSON_RULES, Capability
+from setupfix.spc import MIN_PARTS, NELSON_RULES, Capability
 from setupfix.usecases.requests import CorrectOutcome, CycleCorrection
-from setupfix.usecases.spc_report import TEXT_LIST, DimensionSpc, SpcOutcome, interval_text
+from setupfix.usecases.spc_report import DimensionSpc, SpcOutcome, baseline_warning, interval_text, too_few_text
 from setupfix.views.correction import CONFORMANCE_TEXT, SOURCE_TEXT
 from setupfix.views.present import format_flags, verdict_label, verdict_line
 
@@ -73,6 +72,8 @@ svg { width: 100%; height: auto; display: block; }
 .apply { border-color: #1a7f37; } .hold { border-color: #9a6700; } .reject { border-color: #cf222e; }
 .bad { color: #cf222e; font-weight: bold; } .muted { color: #666; }
 ul { margin: 1mm 0; padding-left: 6mm; }
+.warning { border-left: 3px solid #9a6700; background: #fff8c5; padding: 1mm 2mm; margin: 1mm 0; }
+details.rules summary { cursor: pointer; } .few { color: #9a6700; }
 @media print { body { max-width: none; padding: 0; } }
 """
 
@@ -174,20 +175,46 @@ def _series_chart(
     parts.append(
         f'<text x="{left - 3}" y="{top + 8}" font-size="8" text-anchor="end">{_n(hi, 4)}</text>'
         f'<text x="{left - 3}" y="{bottom}" font-size="8" text-anchor="end">{_n(lo, 4)}</text>'
-        f'<text x="{left}" y="{height - 2}" font-size="8">1</text>'
-        f'<text x="{right}" y="{height - 2}" font-size="8" text-anchor="end">{total}</text>'
     )
+    for part in _part_ticks(total):  # part numbers (1-based) along the axis
+        x = left + (part - 1) * step
+        anchor = "start" if part == 1 else "end" if part == total else "middle"
+        parts.append(
+            f'<line x1="{x:.1f}" y1="{bottom}" x2="{x:.1f}" y2="{bottom + 3}" stroke="#999" stroke-width="0.5"/>'
+            f'<text x="{x:.1f}" y="{height - 2}" font-size="8" text-anchor="{anchor}" class="tick">{part}</text>'
+        )
     parts.append("</svg>")
     return "".join(parts)
 
 
+def _part_ticks(total: int, most: int = 10) -> list[int]:
+    """Part numbers to label on a chart's axis: 1, the last, and multiples of a round step (1, 2 or 5 × 10^k)
+    between them, at most ``most`` in all, none crowding the last."""
+    if total <= 1:
+        return [1]
+    steps = (m * 10**k for k in range(12) for m in (1, 2, 5))
+    step = next(s for s in steps if (total - 1) / s <= most - 1)
+    inner = [k for k in range(step, total, step) if k > 1 and total - k >= step / 2]
+    return [1, *inner, total]
+
+
 def control_charts(d: DimensionSpc) -> str:
-    """The individuals chart and, below it, the moving-range chart of one characteristic (inline SVG)."""
+    """The individuals chart and, below it, the moving-range chart of one characteristic (inline SVG);
+    each limit line carries its value, the axis the part numbers."""
     lim = d.limits
     flagged = {i for v in d.violations for i in range(v.first, v.last + 1)}
     splits = [s.at for s in d.splits]
     x_chart = _series_chart(
-        d.values, lim.center, lim.ucl, lim.lcl, ("UCL", "CL", "LCL"), flagged, splits, 170, "individuals", lim.baseline
+        d.values,
+        lim.center,
+        lim.ucl,
+        lim.lcl,
+        (f"UCL {_n(lim.ucl, 4, True)}", f"CL {_n(lim.center, 4, True)}", f"LCL {_n(lim.lcl, 4, True)}"),
+        flagged,
+        splits,
+        170,
+        "individuals",
+        lim.baseline,
     )
     mr = np.abs(np.diff(d.values))
     mr_chart = _series_chart(
@@ -195,7 +222,7 @@ def control_charts(d: DimensionSpc) -> str:
         lim.mr_center,
         lim.mr_ucl,
         None,
-        ("UCL", "MR̄", ""),
+        (f"UCL {_n(lim.mr_ucl, 4)}", f"MR̄ {_n(lim.mr_center, 4)}", ""),
         set(),
         splits,
         90,
@@ -258,11 +285,18 @@ def tolerance_zone(rows: Sequence[tuple[str, float, float, Sequence[float], floa
     return "".join(out)
 
 
+def _cpk_cells(c: Capability) -> str:
+    """Cpk and its interval as two cells, the interval flagged "too few parts" below the stated n."""
+    few = too_few_text(c)
+    flag = f' <span class="few">{_e(few)}</span>' if few else ""
+    return f"<td>{_n(c.cpk, 2)}</td><td>{_e(interval_text(c))}{flag}</td>"
+
+
 def _capability_rows(label: str, c: Capability) -> str:
     return (
         f"<tr><td>{_e(label)}</td><td>{c.n}</td><td>{_n(c.mean, 4, True)}</td><td>{_n(c.sigma_within, 4)}</td>"
-        f"<td>{_n(c.sigma_overall, 4)}</td><td>{_n(c.cp, 2)}</td><td>{_n(c.cpk, 2)}</td>"
-        f"<td>{_e(interval_text(c))}</td><td>{_n(c.pp, 2)}</td><td>{_n(c.ppk, 2)}</td>"
+        f"<td>{_n(c.sigma_overall, 4)}</td><td>{_n(c.cp, 2)}</td>{_cpk_cells(c)}"
+        f"<td>{_n(c.pp, 2)}</td><td>{_n(c.ppk, 2)}</td>"
         f"<td{_BAD if c.out_of_tolerance else ''}>{c.out_of_tolerance}</td></tr>"
     )
 
@@ -280,31 +314,46 @@ def capability_table(d: DimensionSpc) -> str:
     if not d.splits:
         return table
     rows = [
-        "<tr><th>split</th><th>n before</th><th>mean before</th><th>Cpk before</th><th>Ppk before</th>"
-        "<th>n after</th><th>mean after</th><th>Cpk after</th><th>Ppk after</th></tr>"
+        "<tr><th>split</th><th>n before</th><th>mean before</th><th>Cpk before</th><th>95 % CI</th>"
+        "<th>Ppk before</th><th>n after</th><th>mean after</th><th>Cpk after</th><th>95 % CI</th>"
+        "<th>Ppk after</th></tr>"
     ]
     for s in d.splits:
         b, a = s.before, s.after
         rows.append(
             f"<tr><td>{_e(s.source)} {_e(s.time)}</td><td>{b.n}</td><td>{_n(b.mean, 4, True)}</td>"
-            f"<td>{_n(b.cpk, 2)}</td><td>{_n(b.ppk, 2)}</td><td>{a.n}</td><td>{_n(a.mean, 4, True)}</td>"
-            f"<td>{_n(a.cpk, 2)}</td><td>{_n(a.ppk, 2)}</td></tr>"
+            f"{_cpk_cells(b)}<td>{_n(b.ppk, 2)}</td><td>{a.n}</td><td>{_n(a.mean, 4, True)}</td>"
+            f"{_cpk_cells(a)}<td>{_n(a.ppk, 2)}</td></tr>"
         )
     return table + f'<table class="splits">{"".join(rows)}</table>'
 
 
 def _violations(d: DimensionSpc) -> str:
+    """Every Nelson-rule violation, per rule in a collapsible list (``<details>``), none left out."""
     if not d.violations:
         return '<p class="muted">No Nelson rule (1–4) violated.</p>'
-    items = []
+    blocks = []
     for rule in sorted({v.rule for v in d.violations}):
         spans = [
-            v.parts[0] if len(v.parts) == 1 else f"{v.parts[0]} … {v.parts[-1]} ({len(v.parts)} parts)"
+            f"part {v.first + 1} ({v.parts[0]})"
+            if len(v.parts) == 1
+            else f"parts {v.first + 1}–{v.last + 1} ({v.parts[0]} … {v.parts[-1]}, {len(v.parts)} parts)"
             for v in d.violations
             if v.rule == rule
         ]
-        items.append(f"<li>rule {rule} ({_e(NELSON_RULES[rule])}): {_e(short_list(spans, TEXT_LIST))}</li>")
-    return '<ul class="rules">' + "".join(items) + "</ul>"
+        blocks.append(
+            f'<details class="rules"><summary>rule {rule} ({_e(NELSON_RULES[rule])}): {len(spans)} violation(s)'
+            f"</summary><ul>{''.join(f'<li>{_e(t)}</li>' for t in spans)}</ul></details>"
+        )
+    return "".join(blocks)
+
+
+def _baseline_warning(d: DimensionSpc) -> str:
+    """The warning of a baseline that spans a split or breaks a rule (with the first stable window), or ''."""
+    if d.baseline is None or d.baseline.stable:
+        return ""
+    source = d.splits[0].source if d.splits else "correction"
+    return f'<p class="warning baseline">{_e(baseline_warning(d.name, d.baseline, d.parts, source))}</p>'
 
 
 def dimension_section(d: DimensionSpc) -> str:
@@ -315,7 +364,8 @@ def dimension_section(d: DimensionSpc) -> str:
 
     return (
         f'<section class="dimension"><h3>{_e(d.name)} <span class="muted">limits {_n(d.lower, 3, True)} / '
-        f"{_n(d.upper, 3, True)} {_e(d.unit)}, {len(d.values)} part(s)</span></h3>{zone}{control_charts(d)}"
+        f"{_n(d.upper, 3, True)} {_e(d.unit)}, {len(d.values)} part(s)</span></h3>{_baseline_warning(d)}"
+        f"{zone}{control_charts(d)}"
         f"{capability_table(d)}{_violations(d)}</section>"
     )
 
@@ -329,15 +379,15 @@ def spc_page(outcome: SpcOutcome, title: str = "setupfix — process capability 
         c = d.capability
         rules = ", ".join(str(r) for r in sorted({v.rule for v in d.violations})) or "—"
         head.append(
-            f"<tr><td>{_e(d.name)}</td><td>{c.n}</td><td>{_n(c.cpk, 2)}</td>"
-            f"<td>{_e(interval_text(c))}</td><td>{_n(c.ppk, 2)}</td>"
+            f"<tr><td>{_e(d.name)}</td><td>{c.n}</td>{_cpk_cells(c)}<td>{_n(c.ppk, 2)}</td>"
             f"<td>{c.out_of_tolerance}</td><td>{rules}</td></tr>"
         )
     body = [
         f"<h1>{_e(title)}</h1>",
         f"<p>Store {_e(outcome.store)}: {len(outcome.dimensions)} characteristic(s), values as deviations from "
         f"nominal. Control limits from the first {outcome.baseline} parts; σ within = mean moving range / 1.128, "
-        "σ overall = sample standard deviation; Cpk interval: Bissell's approximation (95 %). Blue band: "
+        "σ overall = sample standard deviation; Cpk interval: Bissell's normal approximation (95 %; A. F. Bissell, "
+        f'Applied Statistics 39 (1990) 331–340), flagged "too few parts" below {MIN_PARTS}. Blue band: '
         "the baseline parts; red points: Nelson rule violations; dotted lines: splits (corrections).</p>",
         f'<section><h2>Summary</h2><table class="summary">{"".join(head)}</table></section>',
         *(dimension_section(d) for d in outcome.dimensions),
