@@ -22,6 +22,7 @@ import socket
 import threading
 from collections.abc import Coroutine, Iterator, Mapping
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any, TypeVar
 
 from asyncua import ua
@@ -36,6 +37,17 @@ T = TypeVar("T")
 NAMESPACE = "urn:setupfix:test-control"
 #: The user a password-protected control accepts.
 USER = "setter"
+
+
+def make_certificate(folder: Path, name: str, uri: str) -> tuple[str, str]:
+    """A self-signed application certificate (DER) and its key (PEM) for ``uri`` on 127.0.0.1."""
+    from asyncua.crypto.cert_gen import setup_self_signed_certificate
+    from cryptography.x509.oid import ExtendedKeyUsageOID
+
+    cert, key = folder / f"{name}.der", folder / f"{name}-key.pem"
+    uses = [ExtendedKeyUsageOID.SERVER_AUTH, ExtendedKeyUsageOID.CLIENT_AUTH]
+    asyncio.run(setup_self_signed_certificate(key, cert, uri, "127.0.0.1", uses, {"commonName": name}))
+    return str(cert), str(key)
 
 
 def free_port() -> int:
@@ -54,6 +66,8 @@ class ControlSpec:
     clamp: dict[str, tuple[float, float]] = field(default_factory=dict)
     read_only: frozenset[str] = frozenset()
     password: str | None = None
+    #: The server's certificate and key (PEM): then it offers only Basic256Sha256 SignAndEncrypt.
+    certificate: tuple[str, str] | None = None
 
 
 class _Users(UserManager):
@@ -116,7 +130,12 @@ class TestControl:
         server = Server(user_manager=self.users)
         await server.init()
         server.set_endpoint(self.endpoint)
-        server.set_security_policy([ua.SecurityPolicyType.NoSecurity])
+        if self.spec.certificate is not None:
+            server.set_security_policy([ua.SecurityPolicyType.Basic256Sha256_SignAndEncrypt])
+            await server.load_certificate(self.spec.certificate[0])
+            await server.load_private_key(self.spec.certificate[1])
+        else:
+            server.set_security_policy([ua.SecurityPolicyType.NoSecurity])
         server.set_identity_tokens([ua.AnonymousIdentityToken, ua.UserNameIdentityToken])
         self._ns = await server.register_namespace(NAMESPACE)
         objects = server.nodes.objects

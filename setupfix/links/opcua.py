@@ -126,6 +126,11 @@ class OpcUaLink:
                 ) from None
             raise LinkUnreachable(f"{self.name}: cannot reach the control: {code}") from None
         except Exception as exc:  # noqa: BLE001 - every other failure to connect is "unreachable"
+            if "No matching endpoints" in str(exc):
+                raise LinkConfigError(
+                    f"{self.name}: the control offers no endpoint with this security ({_reason(exc)})",
+                    location=self.config.where("link.security"),
+                ) from None
             raise LinkUnreachable(f"{self.name}: cannot reach the control: {_reason(exc)}") from None
         self._client = client
         return client
