@@ -1,33 +1,4 @@
-"""Use case "model map": answer a scaffold's questions — which work offset and which tool made each feature.
-
-A multi-axis ``model init`` scaffold (:mod:`setupfix.outputs.model_toml`) leaves every
-feature an offset could move without a relation and with a named question in its
-``note`` (``question Q3: which work offset (WKS) and which tool made it?``; a size cut by
-interpolation: ``question Q3: which tool cut it? (radius weight -2)``).  The features of
-one part feature (its location and its sizes) share one question.
-
-:func:`map_listing` lists the open questions with each feature's position and the
-callouts it enters; :func:`answer_questions` writes answers into the model text:
-
-* a located feature gets ``wks = { W = 1 }`` (the work offset moves it in every axis)
-  and ``tools = { T = 1 }`` (its tool's length moves it along the spindle; a dimension
-  sees the component along its direction);
-* a size feature gets ``radius = { T = w }`` with the weight its question states;
-* an answer naming a work offset or tool the model does not declare adds its table
-  (``[wks.W2] register = "G55"``; ``[tools.T5] register = "H5"`` and ``radius = "D5"``
-  where a size needs it);
-* the question's ``note`` goes; when none is left ``draft = true`` goes too (unless
-  ``keep_draft``), so ``correct`` no longer holds.
-
-Answers select questions by name (``Q3``), feature ID (``F3``), the report's feature name
-(``CYLINDER2``), a callout name (``DIAMETER5``) or a pattern over those (``DIAMETER5*``),
-a station (``group:P1``: the features of its dimensions), or ``*`` (every open one), so
-features sharing a tool or a station are answered as a group.  A narrower answer wins:
-a group, a pattern and ``*`` answer only what no narrower answer (in that order) did;
-two answers of one breadth that disagree on a question are refused.  The text is edited line
-by line (comments and the user's other edits stay), checked by loading it, and written
-atomically; nothing is written when any answer is refused.
-"""
+"""Answers to a scaffold's questions, written into the model text (:mod:`setupfix.usecases.model_map`)."""
 
 from __future__ import annotations
 
@@ -35,116 +6,31 @@ import csv
 import fnmatch
 import io
 import re
-import tomllib
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
 
 from setupfix.core.atomic import check_target, write_text
 from setupfix.core.errors import ModelError, ParseError, SourceLocation
 from setupfix.model import model_from_dict, normalise_name
 from setupfix.outputs.model_toml import QUESTION_KEY, toml_string
+from setupfix.usecases.model_map.listing import (
+    HEADER,
+    QUESTION,
+    TABLE_KEY,
+    MapListing,
+    Question,
+    listing_of,
+    model_document,
+    read_model_text,
+)
 
-__all__ = [
-    "MapFeature",
-    "Question",
-    "MapListing",
-    "Answer",
-    "MapResult",
-    "map_listing",
-    "read_answers",
-    "parse_answer",
-    "answer_questions",
-    "NONE_WORDS",
-]
+__all__ = ["Answer", "MapResult", "parse_answer", "read_answers", "answer_questions", "NONE_WORDS"]
 
-_QUESTION = re.compile(r"^question (Q\d+): (.*?)(?: \(radius weight (-?\d+(?:\.\d+)?)\))?$")
-_HEADER = re.compile(r'^\s*\[\s*([A-Za-z_]+)\s*\.\s*(?:"([^"]+)"|([A-Za-z0-9_-]+))\s*\]')
-_KEY = re.compile(r"^\s*([A-Za-z_]+)\s*=")
 _REGISTER = re.compile(r"^[A-Za-z][A-Za-z0-9.]{0,15}$")
 _TOOL = re.compile(r"^[THDthd]?(\d{1,4})$")
 #: Answers meaning "no work offset" / "no tool" (the feature is moved by none of them).
 NONE_WORDS = frozenset({"none", "-", "no"})
-
-
-@dataclass(frozen=True)
-class MapFeature:
-    """One model feature as ``model map`` shows it."""
-
-    id: str
-    label: str
-    position: tuple[float, ...] | None
-    role: str  # "location" or "size"
-    radius_weight: float | None
-    callouts: tuple[str, ...]
-    groups: tuple[str, ...]
-    wks: Mapping[str, Any]
-    tools: Mapping[str, Any]
-    radius: Mapping[str, Any]
-    question: str
-
-
-@dataclass(frozen=True)
-class Question:
-    """One open question and the features it is asked of (a part feature's location and sizes)."""
-
-    name: str
-    text: str
-    features: tuple[MapFeature, ...]
-
-    @property
-    def needs_wks(self) -> bool:
-        """True when a located feature asks for its work offset (a size only asks for the tool)."""
-        return any(f.role == "location" for f in self.features)
-
-    @property
-    def label(self) -> str:
-        return self.features[0].label
-
-    @property
-    def callouts(self) -> tuple[str, ...]:
-        return tuple(dict.fromkeys(c for f in self.features for c in f.callouts))
-
-
-@dataclass(frozen=True)
-class MapListing:
-    """A model's features, its open questions and the registers it declares."""
-
-    source: str
-    features: tuple[MapFeature, ...]
-    questions: tuple[Question, ...]
-    wks: Mapping[str, str]  # ID → register
-    tools: Mapping[str, str]
-    draft: bool
-
-    def to_json(self) -> dict[str, Any]:
-        """The listing as JSON (``model map --json``)."""
-        return {
-            "model": self.source,
-            "draft": self.draft,
-            "wks": dict(self.wks),
-            "tools": dict(self.tools),
-            "questions": [
-                {
-                    "name": q.name,
-                    "text": q.text,
-                    "label": q.label,
-                    "callouts": list(q.callouts),
-                    "features": [
-                        {
-                            "id": f.id,
-                            "role": f.role,
-                            "position": list(f.position) if f.position is not None else None,
-                            "radius_weight": f.radius_weight,
-                            "groups": list(f.groups),
-                        }
-                        for f in q.features
-                    ],
-                }
-                for q in self.questions
-            ],
-        }
 
 
 @dataclass(frozen=True)
@@ -172,99 +58,6 @@ class MapResult:
     added: tuple[str, ...]  # the register tables added, e.g. ("W2 G55", "T5 H5 D5")
     draft_lifted: bool
     draft: bool
-
-
-def _read_text(path: str | Path) -> str:
-    try:
-        return Path(path).read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise ModelError("no such model file", location=SourceLocation(str(path))) from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise ModelError(f"cannot read the model: {exc}", location=SourceLocation(str(path))) from None
-
-
-def _doc(text: str, source: str) -> dict[str, Any]:
-    try:
-        return tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise ModelError(f"not TOML: {exc}", location=SourceLocation(source)) from None
-
-
-def _listing(text: str, source: str) -> MapListing:
-    doc = _doc(text, source)
-    model_from_dict(doc, source, text)  # refuse a model that does not load, as every command does
-    raw_features = doc.get("features", {})
-    callouts: dict[str, list[str]] = {}
-    groups: dict[str, list[str]] = {}
-    for dim in doc.get("dimensions", {}).values():
-        for fid in dim.get("features", {}):
-            callouts.setdefault(fid, []).append(str(dim.get("name", "")))
-            if dim.get("group"):
-                groups.setdefault(fid, []).append(str(dim["group"]))
-    features = []
-    for fid, table in raw_features.items():
-        note = table.get(QUESTION_KEY)
-        match = _QUESTION.match(note) if isinstance(note, str) else None
-        comment_label = fid
-        position = table.get("position")
-        radius_weight = float(match.group(3)) if match and match.group(3) else None
-        role = "size" if ("radius" in table and "wks" not in table) or radius_weight is not None else "location"
-        features.append(
-            MapFeature(
-                fid,
-                _label(text, fid) or comment_label,
-                tuple(float(v) for v in position) if isinstance(position, list) else None,
-                role,
-                radius_weight,
-                tuple(dict.fromkeys(callouts.get(fid, []))),
-                tuple(dict.fromkeys(groups.get(fid, []))),
-                table.get("wks", {}) if isinstance(table.get("wks"), dict) else {},
-                table.get("tools", {}) if isinstance(table.get("tools"), dict) else {},
-                table.get("radius", {}) if isinstance(table.get("radius"), dict) else {},
-                match.group(1) if match else "",
-            )
-        )
-    asked: dict[str, list[MapFeature]] = {}
-    texts: dict[str, str] = {}
-    for f in features:
-        if f.question:
-            asked.setdefault(f.question, []).append(f)
-            if f.role == "location" or f.question not in texts:
-                texts[f.question] = _ask(f)
-    questions = tuple(Question(q, texts[q], tuple(fs)) for q, fs in asked.items())
-    return MapListing(
-        source,
-        tuple(features),
-        questions,
-        {k: str(v.get("register", k)) for k, v in doc.get("wks", {}).items()},
-        {k: str(v.get("register", k)) for k, v in doc.get("tools", {}).items()},
-        bool(doc.get("process", {}).get("draft", False)),
-    )
-
-
-def _ask(f: MapFeature) -> str:
-    return "which tool cut it?" if f.role == "size" else "which work offset (WKS) and which tool made it?"
-
-
-def _label(text: str, fid: str) -> str:
-    """The report's feature name the scaffold wrote after the feature's header (``# CYLINDER2 (a …)``)."""
-    for line in text.splitlines():
-        m = _HEADER.match(line)
-        if m and m.group(1) == "features" and (m.group(2) or m.group(3)) == fid and "#" in line:
-            after = line.split("#", 1)[1].strip()
-            return after.split(" (")[0].split(";")[0].strip()
-    return ""
-
-
-def map_listing(model: str | Path) -> MapListing:
-    """The model's features and open questions.
-
-    Raises
-    ------
-    ModelError
-        If the file cannot be read or does not load.
-    """
-    return _listing(_read_text(model), str(model))
 
 
 def parse_answer(spec: str, where: SourceLocation) -> list[Answer]:
@@ -409,8 +202,8 @@ def answer_questions(
         The model does not load, before or after (nothing is written).
     """
     source = str(model)
-    text = _read_text(model)
-    listing = _listing(text, source)
+    text = read_model_text(model)
+    listing = listing_of(text, source)
     if out is not None:
         check_target(out)
     known_wks = dict(listing.wks)
@@ -469,11 +262,11 @@ def answer_questions(
     remaining = tuple(q.name for q in listing.questions if q.name not in chosen)
     lift = not remaining and listing.draft and not keep_draft
     new_text, added = _edit(text, relations, added_wks, used_tools, radius_tools, known_tools, lift)
-    doc = _doc(new_text, source)
+    doc = model_document(new_text, source)
     loaded = model_from_dict(doc, str(out or model), new_text)
     for fid, lines in relations.items():
         note = doc["features"][fid].get(QUESTION_KEY)
-        if isinstance(note, str) and _QUESTION.match(note):
+        if isinstance(note, str) and QUESTION.match(note):
             raise ModelError(
                 f"could not write the answer into feature {fid}: edit it by hand ({'; '.join(lines)})",
                 location=SourceLocation(source, key=f"features.{fid}"),
@@ -515,7 +308,7 @@ def _edit(
     tool_header: dict[str, int] = {}
     tool_radius: set[str] = set()
     for line in lines:
-        m = _HEADER.match(line)
+        m = HEADER.match(line)
         if m:
             section = (m.group(1), m.group(2) or m.group(3))
             if section[0] == "features" and first_feature < 0:
@@ -532,7 +325,7 @@ def _edit(
                 section = ("process", "")
             out.append(line)
             continue
-        key = _KEY.match(line)
+        key = TABLE_KEY.match(line)
         name = key.group(1) if key else ""
         if section and section[0] == "features" and section[1] in relations:
             if name in ("wks", "tools", "radius"):
