@@ -163,6 +163,8 @@ class LinuxcncLink:
         kind, message = answer.get("kind"), f"{self.name}: {answer.get('message')}"
         if kind == "unreachable":
             raise LinkUnreachable(message)
+        if kind == "lost":
+            raise LinkLost(f"{message} (the control stopped answering)")
         if kind == "busy":
             raise LinkRefused(f"{message}: nothing written")
         if kind == "unknown":

@@ -24,7 +24,8 @@ Requests (``op``) and answers (``ok`` true, or false with ``kind`` and ``message
   ``G20``/``G21`` as the INI's unit says; ``done`` counts the items written.  ``kind`` ``"busy"``
   (nothing written) or ``"denied"`` (the control's error message; the items before it written).
 
-Kinds of failure: ``unreachable``, ``busy``, ``denied``, ``unknown`` (a tool not in the table, a
+Kinds of failure: ``unreachable``, ``busy``, ``denied``, ``lost`` (the control stopped answering: a
+command or a status change not seen within :data:`STEP_TIMEOUT`), ``unknown`` (a tool not in the table, a
 system out of range), ``bad`` (a request this agent does not understand).
 """
 
@@ -107,7 +108,7 @@ class Control:
         if message:
             raise Failure("denied", f"{what}: the control says {message[1].strip()!r}")
         if done == -1:
-            raise Failure("denied", f"{what}: no answer within {STEP_TIMEOUT:g} s")
+            raise Failure("lost", f"{what}: no answer within {STEP_TIMEOUT:g} s")
         if done == self.lc.RCS_ERROR:
             raise Failure("denied", f"{what}: the control reports an error")
         self.until(
@@ -126,7 +127,7 @@ class Control:
             if time.monotonic() > deadline:
                 if not what:
                     return False
-                raise Failure("denied", f"waited {timeout:g} s for {what}")
+                raise Failure("lost", f"waited {timeout:g} s for {what}")
             time.sleep(0.005)
 
     def select(self, n: int) -> None:

@@ -16,7 +16,7 @@ from linuxcnc_sim import Sim
 from setupfix.links import open_link
 from setupfix.links.base import LENGTH, RADIUS, Component
 from setupfix.links.config import load_link
-from setupfix.links.errors import LinkConfigError, LinkRefused, LinkUnreachable
+from setupfix.links.errors import LinkConfigError, LinkLost, LinkRefused, LinkUnreachable
 from setupfix.links.linuxcnc import LinuxcncLink, agent_command, parse_register
 
 G54X, G54Y, G54Z, G54R = (Component("G54", a) for a in "XYZR")
@@ -177,3 +177,20 @@ def test_a_stopped_control_is_unreachable(tmp_path: Path, monkeypatch: pytest.Mo
     with pytest.raises(LinkUnreachable) as caught:
         open_link(link_file(tmp_path, simulation.ini))
     assert caught.value.exit_status == 8 and "\n" not in str(caught.value)
+
+
+@pytest.mark.slow
+def test_a_control_that_stops_mid_session_is_lost(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """LinuxCNC shut down under an open link: its status memory still reads, but no command is answered."""
+    simulation = Sim(tmp_path / "run", "mm")
+    with simulation:
+        for key, value in simulation.environ().items():
+            monkeypatch.setenv(key, value)
+        link = open_link(link_file(tmp_path, simulation.ini))
+    try:
+        with pytest.raises(LinkLost, match="the control stopped answering") as caught:
+            link.write({G54Z: 1.0})
+        assert caught.value.exit_status == 7
+    finally:
+        link.close()
+    assert simulation.parameters()[5223] == 0.0, "nothing was written"
