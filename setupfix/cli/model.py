@@ -108,6 +108,15 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
         action="store_true",
         help="replace MODEL if it exists (default: refuse, so an edited model is never overwritten)",
     )
+    init.add_argument(
+        "--answer",
+        action="append",
+        default=[],
+        metavar="SEL=WKS,TOOL",
+        help="answer questions at once, as 'model map --answer' does (e.g. '*=G54,T1': every feature made on "
+        "G54 by tool 1); the scaffold stays a draft",
+    )
+    init.add_argument("--answers", metavar="CSV", default=None, help="answers from a CSV (feature, wks, tool)")
     add_reader_options(init)
     init.set_defaults(run=run_init)
 
@@ -147,18 +156,23 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
 def run_init(args: argparse.Namespace) -> int:
     from setupfix.outputs.writers import check_target, write_text
     from setupfix.usecases.model_init import scaffold_model
+    from setupfix.usecases.model_map import parse_answer, read_answers
 
     check_target(args.out)
     if args.out != "-" and Path(args.out).exists() and not args.force:
         raise ExportError(
             "exists: a scaffold would replace it (give --force, or another -o)", location=SourceLocation(args.out)
         )
+    answers = read_answers(args.answers) if args.answers else []
+    for i, spec in enumerate(args.answer, start=1):
+        answers += parse_answer(spec, SourceLocation(f"--answer #{i}"))
     scaffold = scaffold_model(
         args.reports,
         axis=args.axis,
         name=args.name,
         parts_are_stations=args.parts_are_stations,
         read=read_options(args),
+        answers=answers,
     )
     for note in scaffold.notes:
         print(f"warning: {note}", file=sys.stderr)

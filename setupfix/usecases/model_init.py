@@ -2,8 +2,8 @@
 
 Every toleranced length characteristic of the reports becomes a dimension (its name,
 nominal and limits as the report states them, ``group`` = the report's station, or its
-part with ``parts_are_stations``), each entered by a feature of its own; the relations
-are written from what the report states (:mod:`setupfix.outputs.model_toml`):
+part with ``parts_are_stations``), entered by the features below; the relations are
+written from what the report states (:mod:`setupfix.outputs.model_toml`):
 
 * the axis or direction a characteristic is measured along — first the report's (the
   ``axis`` column and the measuring direction ``nx, ny, nz`` of :mod:`parsers.geometry`:
@@ -16,11 +16,16 @@ are written from what the report states (:mod:`setupfix.outputs.model_toml`):
   them; others: nothing does) and side (bore or boss);
 * the feature's nominal location as its ``position``.
 
-A report measuring one axis gets a one-axis model on that axis; one that measures
-several (or has interpolated sizes) a multi-axis model over the axes it measures.
-``axis=`` keeps one axis (and the characteristics whose axis neither tells) in a
-one-axis model.  Every scaffold is ``draft = true``: nothing is recommended from it
-until the user has checked its physics and removed the key.
+A report that names its features (``feature_id``, ``between``), measures several axes, has
+interpolated sizes or position callouts gets a multi-axis model (one feature per feature of
+the part, :func:`plan_features`: a location follows its feature, a distance is the
+difference of its two, a size moves with a tool radius only, a position callout is a
+zone); any other a one-axis model on the axis it states.  ``axis=`` keeps one axis (and
+the characteristics whose axis neither tells) in a one-axis model.  A multi-axis
+scaffold's features carry named questions (which work offset and tool made each) until
+``model map`` answers them, or the ``answers`` given here do.  Every scaffold is
+``draft = true``: nothing is recommended from it until the user has checked its physics
+and removed the key.
 
 Left out, each listed in the file's head with its reason: reference-only rows, rows
 with no limit or only one (the contract needs both; none is invented), form and
@@ -50,6 +55,7 @@ from setupfix.model import normalise_name
 from setupfix.model.loader import RANGES_MM
 from setupfix.model.measurements import BETWEEN_COLUMN, FEATURE_DIRECTION_COLUMNS, FEATURE_ID_COLUMN
 from setupfix.outputs.model_toml import SPINDLE, ScaffoldDimension, ScaffoldFeature, comment, render_scaffold
+from setupfix.usecases.model_map import Answer, answer_text
 
 __all__ = [
     "Scaffold",
@@ -492,6 +498,7 @@ def scaffold_model(
     name: str | None = None,
     parts_are_stations: bool = False,
     read: ReadOptions | None = None,
+    answers: Sequence[Answer] = (),
 ) -> Scaffold:
     """Write a process-model scaffold (TOML text) from the reports' toleranced length characteristics.
 
@@ -536,7 +543,11 @@ def scaffold_model(
             hint=str(left_out[0]) if left_out else None,
         )
     scaffold = scaffold_from_tables(
-        [(r, read.table) for r, read in reads], axis=axis, name=name, parts_are_stations=parts_are_stations
+        [(r, read.table) for r, read in reads],
+        axis=axis,
+        name=name,
+        parts_are_stations=parts_are_stations,
+        answers=answers,
     )
     return dataclasses.replace(scaffold, notes=(*left_out, *(n for _, read in reads for n in read.notes)))
 
@@ -547,11 +558,14 @@ def scaffold_from_tables(
     axis: str | None = None,
     name: str | None = None,
     parts_are_stations: bool = False,
+    answers: Sequence[Answer] = (),
 ) -> Scaffold:
     """:func:`scaffold_model` on canonical tables already read, as (report name, table) pairs.
 
     ``parts_are_stations``: the report's parts are the fixture's stations (one workpiece
     per part, names repeating): ``group`` = the part, instead of the report's station.
+    ``answers``: the questions of a multi-axis scaffold answered at once, as ``model map``
+    would (:func:`setupfix.usecases.model_map.answer_text`; the scaffold stays a draft).
     """
     if axis is not None and axis not in ("X", "Y", "Z"):
         raise ModelError(f'axis must be "X", "Y" or "Z", got {axis!r}')
@@ -591,6 +605,15 @@ def scaffold_from_tables(
         only_axis=axis,
         features=features,
     )
+    questions = tuple(dict.fromkeys(f.question for f in features if f.question))
+    if answers and not questions:
+        raise ModelError(
+            "answers given, but the scaffold asks no question (a one-axis scaffold moves each feature by W1)",
+            location=SourceLocation(", ".join(reports)),
+        )
+    if answers:
+        answered = answer_text(text, ", ".join(reports), answers, keep_draft=True)
+        text, questions = answered.text, answered.remaining
     origins = Counter(
         d.axis_from if d.axis_from in ("report", "name") else "none" for d in dims if d.measures != "position"
     )
@@ -604,5 +627,5 @@ def scaffold_from_tables(
         sizes=sum(1 for d in dims if d.size),
         zones=sum(1 for d in dims if d.measures == "position") if axes else 0,
         distances=sum(1 for d in dims if d.measures == "distance"),
-        questions=tuple(dict.fromkeys(f.question for f in features if f.question)),
+        questions=questions,
     )

@@ -245,3 +245,22 @@ def test_the_plate_answered_by_groups_gives_corrections_a_hand_computation_confi
     rows = {r["name"]: r for r in cycle.dimension_rows()}
     assert rows["DIAMETER5 (2)"]["predicted"] == pytest.approx(deviations["DIAMETER5 (2)"] - 2 * c["T2.R"], abs=1e-12)
     assert rows["DISTANCEBETWEEN5"]["predicted"] == pytest.approx(deviations["DISTANCEBETWEEN5"], abs=1e-12)
+
+
+def test_the_head_lists_only_open_questions_and_init_takes_answers_too(tmp_path: Path) -> None:
+    report = _report(tmp_path)
+    model = _scaffold(report, tmp_path)
+    assert "# Questions (3; " in model.read_text(encoding="utf-8")
+    answer_questions(model, parse_answer("HOLE2=G54,T3", HERE))
+    text = model.read_text(encoding="utf-8")
+    assert "# Questions (2; " in text and "#   Q3 " not in text and "#   Q1 " in text
+    answer_questions(model, parse_answer("*=G54,T1", HERE))
+    assert "# Questions" not in model.read_text(encoding="utf-8")
+    # the same answers given to model init: the same relations, still a draft
+    answers = [a for spec in ("HOLE2=G54,T3", "*=G54,T1") for a in parse_answer(spec, HERE)]
+    scaffold = scaffold_model([report], answers=answers)
+    assert scaffold.questions == () and "# Questions" not in scaffold.text
+    at_init = tomllib.loads(scaffold.text)
+    mapped = tomllib.loads(model.read_text(encoding="utf-8"))
+    assert at_init["process"]["draft"] is True and "draft" not in mapped["process"]
+    assert at_init["features"] == mapped["features"] and at_init["tools"] == mapped["tools"]

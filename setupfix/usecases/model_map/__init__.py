@@ -34,6 +34,7 @@ from setupfix.usecases.model_map.answers import (
     Answer,
     MapResult,
     answer_questions,
+    answer_text,
     parse_answer,
     read_answers,
 )
@@ -49,5 +50,6 @@ __all__ = [
     "read_answers",
     "parse_answer",
     "answer_questions",
+    "answer_text",
     "NONE_WORDS",
 ]

@@ -25,7 +25,7 @@ from setupfix.usecases.model_map.listing import (
     read_model_text,
 )
 
-__all__ = ["Answer", "MapResult", "parse_answer", "read_answers", "answer_questions", "NONE_WORDS"]
+__all__ = ["Answer", "MapResult", "parse_answer", "read_answers", "answer_questions", "answer_text", "NONE_WORDS"]
 
 _REGISTER = re.compile(r"^[A-Za-z][A-Za-z0-9.]{0,15}$")
 _TOOL = re.compile(r"^[THDthd]?(\d{1,4})$")
@@ -201,11 +201,16 @@ def answer_questions(
     ModelError
         The model does not load, before or after (nothing is written).
     """
-    source = str(model)
-    text = read_model_text(model)
-    listing = listing_of(text, source)
     if out is not None:
         check_target(out)
+    result = answer_text(read_model_text(model), str(model), answers, keep_draft=keep_draft)
+    write_text(out or model, result.text)
+    return result
+
+
+def answer_text(text: str, source: str, answers: Sequence[Answer], *, keep_draft: bool = False) -> MapResult:
+    """:func:`answer_questions` on a model's text (``source`` names it in messages); nothing is written."""
+    listing = listing_of(text, source)
     known_wks = dict(listing.wks)
     known_tools = dict(listing.tools)
     added_wks: dict[str, str] = {}
@@ -262,8 +267,9 @@ def answer_questions(
     remaining = tuple(q.name for q in listing.questions if q.name not in chosen)
     lift = not remaining and listing.draft and not keep_draft
     new_text, added = _edit(text, relations, added_wks, used_tools, radius_tools, known_tools, lift)
+    new_text = _head_questions(new_text, set(chosen), len(remaining))
     doc = model_document(new_text, source)
-    loaded = model_from_dict(doc, str(out or model), new_text)
+    loaded = model_from_dict(doc, source, new_text)
     for fid, lines in relations.items():
         note = doc["features"][fid].get(QUESTION_KEY)
         if isinstance(note, str) and QUESTION.match(note):
@@ -276,7 +282,6 @@ def answer_questions(
             "every question is answered but 'draft = true' is not a line of its own in [process]: remove it by hand",
             location=SourceLocation(source, key="process.draft"),
         )
-    write_text(out or model, new_text)
     return MapResult(
         new_text,
         tuple((q, w or "none", t or "none") for q, (w, t, _) in chosen.items()),
@@ -289,6 +294,26 @@ def answer_questions(
 
 def _weight(value: float) -> str:
     return str(int(value)) if value == int(value) else f"{value:.12g}"
+
+
+_ASKED = re.compile(r"^#\s+(Q\d+) ")
+_ASKED_HEAD = re.compile(r"^# Questions \((\d+); ")
+
+
+def _head_questions(text: str, answered: set[str], remaining: int) -> str:
+    """The file head's list of questions without the ones answered (its count line updated, gone at none)."""
+    out = []
+    for line in text.splitlines(keepends=True):
+        m = _ASKED.match(line)
+        if m and m.group(1) in answered:
+            continue
+        head = _ASKED_HEAD.match(line)
+        if head:
+            if not remaining:
+                continue
+            line = line.replace(f"# Questions ({head.group(1)}; ", f"# Questions ({remaining}; ", 1)
+        out.append(line)
+    return "".join(out)
 
 
 def _edit(
