@@ -188,3 +188,13 @@ def test_without_a_link_there_is_no_send(tmp_path: Path, control: TestControl) -
             assert not isinstance(app.screen, SendScreen)
 
     run(scenario())
+
+
+def test_link_and_current_together_are_refused(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    from setupfix.cli import main
+
+    link = tmp_path / "link.toml"
+    link.write_text('[link]\nprotocol = "opcua"\nendpoint = "opc.tcp://127.0.0.1:1"\n')
+    argv = ["tui", str(SAMPLE / "report.csv"), "--model", str(SAMPLE / "model.toml"), "--link", str(link)]
+    assert main([*argv, "--current", str(SAMPLE / "current.csv")]) == 1
+    assert "--link and --current are two sources of the current offsets" in capsys.readouterr().err
