@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 import logging
+import threading
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -77,6 +78,7 @@ def test_machine_read_prints_json_and_a_current_csv_that_correct_reads(
     assert read_current(csv, load_model(MODEL)) == {"W1": -412.53, "W2": -412.487, "T5": -0.0104, "T12": 0.0035}
     code, _, err = run(capsys, "machine", "read", "--link", link, "--out", str(csv))
     assert code == 1 and "--out needs --model" in err
+    assert not [t for t in threading.enumerate() if t.name == "opcua-link"]  # every link closed its loop
 
 
 def test_correct_with_link_equals_correct_with_current(

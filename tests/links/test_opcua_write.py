@@ -311,6 +311,9 @@ def test_an_unreachable_control_is_exit_8_and_recorded(capsys: pytest.CaptureFix
     code, out, err = write(capsys, str(path), plan, db, "--apply")
     assert code == 8 and out["outcome"] == "unreachable" and "could not be reached" in err
     assert attempts(db)[0].outcome == "unreachable"
+    code, _, err = run(capsys, "machine", "write", "--link", str(path), "--model", MODEL, "--db", str(db), REPORT)
+    assert code == 8 and "cannot reach the control" in err
+    assert [a.outcome for a in attempts(db)] == ["unreachable", "unreachable"]  # a report's write too
     code, _, err = run(capsys, "machine", "read", "--link", str(path))
     assert code == 8 and "cannot reach the control" in err
     code, _, err = run(capsys, "correct", "--model", MODEL, "--link", str(path), REPORT)
