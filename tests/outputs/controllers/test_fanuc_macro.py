@@ -131,6 +131,20 @@ def test_every_register_component_holds_current_plus_change(controller: str, mod
     assert PROGRAM_SUFFIX[controller] == ".nc"
 
 
+@pytest.mark.parametrize("mode", ["set", "add"])
+def test_haas_program_holds_current_plus_change(mode: str) -> None:
+    rows = [r for r in fixture_rows("haas", mode, rotation=0.0) if r.axis != "R"]  # Haas radii are refused
+    program = render("haas-macro", rows, "r.csv P1", program_number=45678)
+    start = {haas_variable(r): START[r.id] for r in rows if r.axis != "C"}
+    state = run_assignments(program, start)
+    for r in rows:
+        if r.axis != "C":
+            assert state[haas_variable(r)] == pytest.approx(START[r.id] + DELTA[r.id], abs=1e-9), r.id
+    assert "#7121" in program  # G154 P7 X
+    assert "#2205" in program and "#2012" in program  # H5 wear, H12 geometry: the Haas map, not Fanuc's
+    assert program.startswith("%\nO45678 ")
+
+
 RS274_REGS = {"W1": "G54", "W2": "G55", "T5": "H5", "T12": "H12"}
 
 
