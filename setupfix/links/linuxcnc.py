@@ -2,7 +2,9 @@
 
 The link file names the instance's INI (``[link] ini``); the registers are LinuxCNC's own: the
 work systems ``G54`` … ``G59.3`` with ``X``, ``Y``, ``Z`` and the XY rotation ``R`` (degrees), and
-the tools by number, ``H<n>`` (or ``T<n>``) ``length`` and ``D<n>`` (or ``T<n>``) ``radius``.
+the tools by number, ``H<n>`` (or ``T<n>``) ``length`` and ``D<n>`` (or ``T<n>``) ``radius``; a model's
+work rotation ``C`` (about the spindle) is ``R``.  LinuxCNC takes any value and keeps six decimals in
+its files: ``[link] increment`` says the grid the values are written on (e.g. ``0.000001``).
 Writes are MDI ``G10 L2 P<n> X Y Z R`` and ``G10 L1 P<t> Z R`` (``G10 L10``/``L11`` set an offset
 from the current position, a touch-off, not a value: not used); reads come from ``stat``, each
 work system selected in turn because ``stat`` shows only the active one.  Values are in the INI's
@@ -57,7 +59,7 @@ from setupfix.links.errors import (
     LinkUnreachable,
 )
 
-__all__ = ["LinuxcncLink", "open_linuxcnc", "SYSTEMS", "parse_register", "agent_command"]
+__all__ = ["LinuxcncLink", "open_linuxcnc", "SYSTEMS", "parse_register", "word", "agent_command"]
 
 #: LinuxCNC's work systems, number 1 … 9.
 SYSTEMS = ("G54", "G55", "G56", "G57", "G58", "G59", "G59.1", "G59.2", "G59.3")
@@ -71,17 +73,24 @@ START_TIMEOUT = 20.0
 def parse_register(component: Component) -> tuple[str, int] | None:
     """``("wks", n)`` or ``("tool", n)`` for a component LinuxCNC has, None for any other.
 
-    ``G54.X`` → ``("wks", 1)``; ``H5 length``, ``D5 radius``, ``T5 length|radius`` → ``("tool", 5)``.
+    ``G54.X`` → ``("wks", 1)``; ``G54.C`` (the model's rotation about the spindle) is LinuxCNC's ``R``;
+    ``H5 length``, ``D5 radius``, ``T5 length|radius`` → ``("tool", 5)``.
     """
     name = component.register.strip().upper()
     if name in SYSTEMS:
-        return ("wks", SYSTEMS.index(name) + 1) if component.axis in WKS_AXES else None
+        return ("wks", SYSTEMS.index(name) + 1) if component.axis in (*WKS_AXES, "C") else None
     m = _TOOL.match(name)
     if m is None or int(m.group(2)) <= 0:
         return None
     letter = m.group(1).upper()
     fits = {"H": (LENGTH,), "D": (RADIUS,), "T": (LENGTH, RADIUS)}[letter]
     return ("tool", int(m.group(2))) if component.axis in fits else None
+
+
+def word(component: Component) -> str:
+    """The G10 word of a component: its axis, ``R`` for a work system's rotation ``C`` (about the spindle:
+    LinuxCNC's XY rotation), ``length``/``radius`` for a tool."""
+    return "R" if component.axis == "C" else component.axis
 
 
 def agent_command(environ: Mapping[str, str] | None = None) -> tuple[list[str], dict[str, str]]:
@@ -194,7 +203,7 @@ class LinuxcncLink:
 
     def _kinds(self, components: Iterable[Component]) -> dict[Component, tuple[str, int]]:
         found = {c: parse_register(c) for c in components}
-        bad = [str(c) if c.tool else f"{c.register}.{c.axis}" for c, k in found.items() if k is None]
+        bad = [f"{c.register} {c.axis}" if c.tool else f"{c.register}.{c.axis}" for c, k in found.items() if k is None]
         if bad:
             raise LinkConfigError(
                 f"LinuxCNC ({self.config.ini}) has no register component {', '.join(bad)}"
@@ -221,7 +230,7 @@ class LinuxcncLink:
         out: dict[Component, float] = {}
         for comp, (kind, n) in kinds.items():
             if kind == "wks":
-                out[comp] = float(answer["systems"][str(n)][WKS_AXES.index(comp.axis)])
+                out[comp] = float(answer["systems"][str(n)][WKS_AXES.index(word(comp))])
             else:
                 out[comp] = float(answer["tools"][str(n)][0 if comp.axis == LENGTH else 1])
         return out
@@ -241,7 +250,7 @@ class LinuxcncLink:
         kinds = self._kinds(values)
         items: dict[tuple[str, int], dict[str, float]] = {}
         for comp, value in values.items():
-            items.setdefault(kinds[comp], {})[comp.axis] = float(value)
+            items.setdefault(kinds[comp], {})[word(comp)] = float(value)
         request = {"op": "write", "items": [[k, n, v] for (k, n), v in items.items()]}
         self._ask(request, self.timeout * (1 + len(items)))
 

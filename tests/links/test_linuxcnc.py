@@ -38,8 +38,8 @@ def test_registers_are_linuxcncs_own() -> None:
     assert parse_register(H5) == ("tool", 5)
     assert parse_register(D5) == ("tool", 5)
     assert parse_register(Component("T7", RADIUS)) == ("tool", 7)
-    # LinuxCNC's work systems have no C offset; a length is no D register, a radius no H register
-    assert parse_register(Component("G54", "C")) is None
+    # the model's rotation about the spindle is LinuxCNC's XY rotation; a length is no D register, a radius no H
+    assert parse_register(Component("G54", "C")) == ("wks", 1)
     assert parse_register(Component("D5", LENGTH)) is None
     assert parse_register(Component("H5", RADIUS)) is None
     assert parse_register(Component("G60", "X")) is None
@@ -110,6 +110,9 @@ def test_writes_and_reads_back_restoring_the_operators_state(sim: Sim, link: Lin
     values = {G54X: -412.519, G54Y: 3.25, G54R: 1.5, G55Z: -7.0625, H5: 121.2345, D5: 4.9875}
     link.write(values)
     assert link.read(values) == pytest.approx(values, abs=1e-9)
+    assert link.read([Component("G54", "C")]) == {Component("G54", "C"): 1.5}  # the rotation about the spindle
+    link.write({Component("G55", "C"): -2.25})
+    assert link.read([Component("G55", "R")]) == {Component("G55", "R"): -2.25}
     mode, system, units, interp = sim.status()
     assert (system, units, interp) == (3, 1, 1), "the active system (G56) and program units (G20) are restored"
     assert mode == 3  # the operator was in MDI
@@ -121,8 +124,8 @@ def test_writes_and_reads_back_restoring_the_operators_state(sim: Sim, link: Lin
 @pytest.mark.slow
 def test_components_linuxcnc_lacks_are_all_named(link: LinuxcncLink) -> None:
     with pytest.raises(LinkConfigError) as caught:
-        link.read([G54X, Component("G54", "C"), Component("H5", RADIUS)])
-    assert "G54.C" in str(caught.value) and "H5" in str(caught.value)
+        link.read([G54X, Component("G60", "X"), Component("H5", RADIUS)])
+    assert "G60.X" in str(caught.value) and "H5 radius" in str(caught.value)
     with pytest.raises(LinkConfigError, match="not in the control's tool table: T9"):
         link.read([Component("H9", LENGTH)])
 
