@@ -185,3 +185,23 @@ def test_a_report_carrying_u_makes_a_value_near_a_limit_not_proven(tmp_path: Pat
     guarded = cycle.recommendation.problem
     at = guarded.dimension_ids.index("D1")
     assert guarded.upper[at] == pytest.approx(0.092) and guarded.lower[at] == pytest.approx(-0.092)
+
+
+@pytest.mark.parametrize("u", [0.0, 0.01])
+def test_text_and_page_show_u_only_where_given(u: float) -> None:
+    from setupfix.usecases.correct import correct_cycle
+    from setupfix.usecases.requests import CorrectRequest
+    from setupfix.views.html import correction_page
+    from setupfix.views.present import format_correction
+
+    doc = {**MODEL, "measurement": {"uncertainty": u}}
+    doc["dimensions"] = {"D1": dict(MODEL["dimensions"]["D1"])}  # type: ignore[index]
+    p = PartMeasurement(part="1", report="r", timestamp=None, deviation=np.array([0.045]), sources=("",))
+    cycle = correct_cycle(CorrectRequest(model_from_dict(doc)), p)
+    text = format_correction(cycle)
+    page = correction_page(cycle)
+    if u:
+        assert "U 0.0100 (model)  not proven → conforming" in text
+        assert "ISO 14253-1 before" in page and "not proven" in page
+    else:
+        assert "ISO 14253-1" not in text and "ISO 14253-1 before" not in page
