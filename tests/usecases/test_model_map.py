@@ -133,6 +133,8 @@ def test_answers_write_relations_registers_and_lift_the_draft(tmp_path: Path) ->
     located = [f for f in features.values() if "wks" in f]
     sizes = [f for f in features.values() if "radius" in f]
     assert all(f["wks"] == {"W1": 1} for f in located) and len(sizes) == 2
+    # a tool length moves only what is measured along the spindle: the top face, not the holes' X/Y
+    assert [f.get("tools") for f in located] == [{"T1": 1}, None, None]
     assert all(f["radius"] == {"T7": -2} for f in sizes)
     assert raw["tools"]["T7"] == {"register": "H7", "radius": "D7"} and raw["tools"]["T1"] == {"register": "H1"}
     assert not load_model(model).draft

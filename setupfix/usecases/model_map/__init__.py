@@ -10,8 +10,9 @@ one part feature (its location and its sizes) share one question.
 callouts it enters; :func:`answer_questions` writes answers into the model text:
 
 * a located feature gets ``wks = { W = 1 }`` (the work offset moves it in every axis)
-  and ``tools = { T = 1 }`` (its tool's length moves it along the spindle; a dimension
-  sees the component along its direction);
+  and, where a dimension it enters is measured with a component along the spindle (a
+  face whose normal is the spindle axis, a depth), ``tools = { T = 1 }``: its tool's
+  length moves it along the spindle;
 * a size feature gets ``radius = { T = w }`` with the weight its question states;
 * an answer naming a work offset or tool the model does not declare adds its table
   (``[wks.W2] register = "G55"``; ``[tools.T5] register = "H5"`` and ``radius = "D5"``

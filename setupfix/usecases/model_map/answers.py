@@ -259,10 +259,10 @@ def answer_text(text: str, source: str, answers: Sequence[Answer], *, keep_draft
                     radius_tools.add(tool)
             else:
                 lines = [f"wks = {{ {wks} = 1 }}" if wks else "wks = {}"]
-                if tool:
+                if tool and f.along_spindle:  # a tool length moves what is measured along the spindle only
                     lines.append(f"tools = {{ {tool} = 1 }}")
                 relations[f.id] = lines
-            if tool:
+            if tool and (f.role == "size" or f.along_spindle):
                 used_tools.add(tool)
     remaining = tuple(q.name for q in listing.questions if q.name not in chosen)
     lift = not remaining and listing.draft and not keep_draft

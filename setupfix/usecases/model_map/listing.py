@@ -11,6 +11,7 @@ from typing import Any
 
 from setupfix.core.errors import ModelError, SourceLocation
 from setupfix.model import model_from_dict
+from setupfix.model.axes import AXIS_NAMES
 from setupfix.outputs.model_toml import QUESTION_KEY
 
 __all__ = [
@@ -49,6 +50,8 @@ class MapFeature:
     tools: Mapping[str, Any]
     radius: Mapping[str, Any]
     question: str
+    #: A dimension it enters sees it along the spindle axis: its tool's length offset moves that dimension.
+    along_spindle: bool = False
 
 
 @dataclass(frozen=True)
@@ -131,7 +134,15 @@ def model_document(text: str, source: str) -> dict[str, Any]:
 
 def listing_of(text: str, source: str) -> MapListing:
     doc = model_document(text, source)
-    model_from_dict(doc, source, text)  # refuse a model that does not load, as every command does
+    model = model_from_dict(doc, source, text)  # refuse a model that does not load, as every command does
+    k = AXIS_NAMES.index(model.spindle)
+    spindle_seen: set[str] = set()  # features a dimension sees along the spindle: a tool length moves those
+    for dim in model.dimensions:
+        if dim.kind == "size":
+            continue
+        n = dim.direction if dim.direction is not None else tuple(float(a == model.axis) for a in AXIS_NAMES)
+        if (model.spindle in dim.plane) if dim.zone else abs(n[k]) > 1e-9:
+            spindle_seen.update(dim.features)
     raw_features = doc.get("features", {})
     callouts: dict[str, list[str]] = {}
     groups: dict[str, list[str]] = {}
@@ -161,6 +172,7 @@ def listing_of(text: str, source: str) -> MapListing:
                 table.get("tools", {}) if isinstance(table.get("tools"), dict) else {},
                 table.get("radius", {}) if isinstance(table.get("radius"), dict) else {},
                 match.group(1) if match else "",
+                fid in spindle_seen,
             )
         )
     asked: dict[str, list[MapFeature]] = {}
