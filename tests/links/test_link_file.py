@@ -15,7 +15,7 @@ from pgserver import location, pg_url  # noqa: F401 - fixtures
 
 from setupfix.cli import exit_codes
 from setupfix.core.errors import ParseError, SetupfixError
-from setupfix.links import Component, LinkConfigError, load_link
+from setupfix.links import Component, LinkConfigError, load_link, open_link
 from setupfix.links.errors import EXIT_REFUSED, EXIT_UNCONFIRMED, EXIT_UNREACHABLE, LinkRefused, LinkUnreachable
 from setupfix.links.mapping import model_components, round_to_increment, to_control, to_model
 from setupfix.links.snapshot import ControlSnapshot
@@ -214,3 +214,13 @@ def test_a_v5_store_gets_the_link_audit_on_both_back_ends(location: str) -> None
     assert got.components == ATTEMPT.components and (got.machine, got.operator) == ("mc-07", "anna")
     assert (got.outcome, got.plan_sha256, got.link) == ("rolled_back", "a" * 64, ATTEMPT.link) and got.created_at
     assert SCHEMA_VERSION == 6 and len(PG_MIGRATIONS) == 6
+
+
+def test_an_unmapped_component_is_named_before_anything_is_read(tmp_path: Path) -> None:
+    pytest.importorskip("asyncua")
+    from setupfix.usecases.machine import read_control
+
+    path = write(tmp_path, GOOD.replace('password_env = "H1_PW"\n', "").replace('user = "setter"\n', ""))
+    with open_link(path) as link, pytest.raises(LinkConfigError) as caught:
+        read_control(link, load_model(MODEL))  # the model's G54.Z is mapped; G55, H12 are not (nor X: not the model's)
+    assert str(caught.value).startswith(f"{path}: [registers]: not mapped to a node: G55.Z, H12")
