@@ -8,6 +8,7 @@ when the value lies beyond a limit by more than U, not proven otherwise.
 from __future__ import annotations
 
 import itertools
+import tomllib
 from pathlib import Path
 
 import numpy as np
@@ -205,3 +206,37 @@ def test_text_and_page_show_u_only_where_given(u: float) -> None:
         assert "ISO 14253-1 before" in page and "not proven" in page
     else:
         assert "ISO 14253-1" not in text and "ISO 14253-1 before" not in page
+
+
+def independent_float(v: float, lo: float, up: float, u: float, zone: bool) -> str:
+    lo = -np.inf if zone else lo
+    if v < lo - u - 1e-12 or v > up + u + 1e-12:
+        return "nonconforming"
+    if lo + u - 1e-12 <= v <= up - u + 1e-12:
+        return "conforming"
+    return "not_proven"
+
+
+@pytest.mark.slow
+def test_every_row_of_a_multi_axis_sample_with_zones() -> None:
+    from setupfix.usecases.correct import correct_report, load_request
+
+    root = Path(__file__).resolve().parents[2] / "sample_reports" / "two_station_xyz"
+    text = (root / "model.toml").read_text(encoding="utf-8")
+    doc = tomllib.loads(text)
+    doc["measurement"] = {"mpe": [5.0, 100]}  # large enough to leave some rows not proven
+    model = model_from_dict(doc)
+    verdicts = set()
+    for cycle in correct_report(load_request(model), root / "cycle_01.csv").cycles:
+        rows = cycle.dimension_rows()
+        dims = {d.id: d for d in model.dimensions}
+        assert any(dims[r["id"]].zone for r in rows)
+        for r in rows:
+            d = dims[r["id"]]
+            u = (5.0 + abs(d.nominal) / 100) / 1000
+            assert r["uncertainty"] == pytest.approx(u) and r["uncertainty_source"] == "mpe"
+            lo, up = (0.0, d.upper) if d.zone else (d.lower, d.upper)
+            for key, value in (("conformance_before", r["deviation"]), ("conformance_after", r["predicted"])):
+                assert r[key] == independent_float(value, lo, up, u, d.zone), (r["name"], key)
+                verdicts.add(r[key])
+    assert "not_proven" in verdicts and "conforming" in verdicts
