@@ -40,6 +40,8 @@ __all__ = [
     "capability_table",
     "dimension_section",
     "PAGE_CSS",
+    "page_frame",
+    "series_chart",
     "MAX_ZONE_ROWS",
     "MAX_DOTS",
 ]
@@ -524,3 +526,24 @@ def write_correction_page(outcome: CorrectOutcome, target: str, store: StoreRef 
         with store.for_model(model).open() as opened:
             history = spc_report(opened, SpcRequest(dimensions=names))
     write_text(target, correction_page(outcome, history))
+
+
+def page_frame(title: str, body: Iterable[str]) -> str:
+    """The pages' frame (head, inline CSS, body) around ``body``: for the pages of other views (replay)."""
+    return _page(title, body)
+
+
+def series_chart(
+    values: np.ndarray,
+    centre: float,
+    upper: float,
+    lower: float | None,
+    labels: tuple[str, str, str],
+    flagged: set[int],
+    splits: Sequence[int],
+    height: int,
+    kind: str,
+) -> str:
+    """One series chart as the SPC page draws it (points, centre and limit lines labelled, flagged points red,
+    splits dotted, parts along the axis); ``kind`` is its CSS class."""
+    return _series_chart(values, centre, upper, lower, labels, flagged, splits, height, kind)
