@@ -282,6 +282,7 @@ def test_server_stopped_between_two_writes_says_check_the_control(
     code, doc, err = write(capsys, link, plan, db, "--apply")
     assert code == 7 and doc["outcome"] == "unconfirmed" and "CHECK THE CONTROL" in err
     assert "G54.Z before -412.53 written -412.553" in err  # every component's state is named
+    assert "G55.Z before -412.487 written ? read back ?" in err  # the write that was cut: not known to be done
     assert control.values["G54.Z"] == -412.553  # what the control really holds now
     (attempt,) = attempts(db)
     assert attempt.outcome == "unconfirmed" and {c.outcome for c in attempt.components} == {"unknown"}

@@ -249,7 +249,7 @@ def apply_write(model: ProcessModel, wp: WritePlan, link: Link, *, retry: Retry 
     1. refuse a plan that is not ``apply`` (draft model, stopped solve, hold, reject);
     2. re-read every component; refuse if any moved since the plan was made (stale);
     3. refuse if the interlock is set, or a change breaks a register's limit;
-    4. write every component (new value at the increment, control unit);
+    4. write every component, one register at a time (new value at the increment, control unit);
     5. read back: every value within half an increment of what was written → ``applied``;
        otherwise (or a connection lost, or a node refused) write back the values read in 2,
        read them back: ``rolled_back``, or ``unconfirmed`` ("CHECK THE CONTROL") if that fails.
@@ -288,19 +288,24 @@ def apply_write(model: ProcessModel, wp: WritePlan, link: Link, *, retry: Retry 
     breaches = _limit_breaches(model, rows, link)
     if breaches:
         return _outcome(checked, "refused", f"refused: {'; '.join(breaches)}; nothing written", rows)
-    values = {r.component: r.new for r in rows if r.new is not None}
     failure = ""
     back: dict[Component, float] = {}
-    try:
-        link.write(values)
-    except LinkError as exc:
-        failure = f"the write failed: {exc}"
+    sent: set[Component] = set()
+    for group in _by_register(rows):  # one register at a time: what was sent before a failure is known
+        try:
+            link.write(group)
+        except LinkError as exc:
+            failure = f"the write failed: {exc}"
+            break
+        sent.update(group)
     if not failure:
         try:
             back = link.read(comps)
         except LinkError as exc:
             failure = f"the read-back failed: {exc}"
-    written_rows = [replace(r, written=r.new, read_back=back.get(r.component)) for r in rows]
+    written_rows = [
+        replace(r, written=r.new if r.component in sent else None, read_back=back.get(r.component)) for r in rows
+    ]
     if not failure:
         wrong = [
             r
@@ -344,6 +349,15 @@ def _restore(link: Link, before: Mapping[Component, float]) -> tuple[dict[Compon
     if moved:
         link.write(moved)
     return found, link.read(comps)
+
+
+def _by_register(rows: Sequence[ComponentWrite]) -> list[dict[Component, float]]:
+    """The new values grouped by register, in the model's order (a register's components written together)."""
+    groups: dict[str, dict[Component, float]] = {}
+    for r in rows:
+        if r.new is not None:
+            groups.setdefault(r.component.register, {})[r.component] = r.new
+    return list(groups.values())
 
 
 def _roll_back(
