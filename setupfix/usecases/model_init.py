@@ -426,7 +426,11 @@ def plan_features(dims: Sequence[ScaffoldDimension]) -> list[ScaffoldFeature]:
                     + (
                         f" ({d.side or 'inner'} side{'' if d.side else ' assumed'})"
                         if weight is not None
-                        else ": the report does not say it is cut by interpolation, so no offset moves it"
+                        else (
+                            ": the report does not say it is cut by interpolation, so no offset moves it"
+                            if d.feature
+                            else " of a feature of no stated type (drilled or reamed?): no offset moves it"
+                        )
                     )
                 ),
             )
@@ -549,7 +553,9 @@ def scaffold_model(
         parts_are_stations=parts_are_stations,
         answers=answers,
     )
-    return dataclasses.replace(scaffold, notes=(*left_out, *(n for _, read in reads for n in read.notes)))
+    return dataclasses.replace(
+        scaffold, notes=(*left_out, *(n for _, read in reads for n in read.notes), *scaffold.notes)
+    )
 
 
 def scaffold_from_tables(
@@ -606,12 +612,17 @@ def scaffold_from_tables(
         features=features,
     )
     questions = tuple(dict.fromkeys(f.question for f in features if f.question))
+    notes: tuple[Note, ...] = ()
     if answers and not questions:
-        raise ModelError(
-            "answers given, but the scaffold asks no question (a one-axis scaffold moves each feature by W1)",
-            location=SourceLocation(", ".join(reports)),
+        notes = (
+            Note(
+                "answers given, but the scaffold asks no question (a one-axis scaffold moves each feature by W1): "
+                "left unused",
+                SourceLocation(", ".join(reports)),
+                "answers",
+            ),
         )
-    if answers:
+    elif answers:
         answered = answer_text(text, ", ".join(reports), answers, keep_draft=True)
         text, questions = answered.text, answered.remaining
     origins = Counter(
@@ -628,4 +639,5 @@ def scaffold_from_tables(
         zones=sum(1 for d in dims if d.measures == "position") if axes else 0,
         distances=sum(1 for d in dims if d.measures == "distance"),
         questions=questions,
+        notes=notes,
     )
