@@ -38,6 +38,7 @@ COMMAND_MODULES: tuple[str, ...] = (
     "setupfix.cli.simulate",
     "setupfix.cli.diagnose",
     "setupfix.cli.spc",
+    "setupfix.cli.replay",
     "setupfix.cli.tui",
     "setupfix.cli.machine",
 )

@@ -143,6 +143,7 @@ class ReplayOutcome:
     actual: ReplayScore
     replayed: ReplayScore
     measured: Array
+    actual_applied: Array
     trace: ReplayTrace
     grid: tuple[GridPoint, ...] = ()
     best: int | None = None
@@ -243,6 +244,7 @@ def replay_history(request: ReplayRequest) -> ReplayOutcome:
         score(measured, actual, lower, upper, u, names),
         replayed,
         measured,
+        actual,
         trace,
         tuple(grid),
         best,
