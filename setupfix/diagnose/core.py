@@ -199,6 +199,9 @@ class Diagnoser(ValidatedParams):
     centre_fraction : float, default=0.25
         Half tolerances within which a dimension counts as centred (the next correction
         holds a register whose dimensions all sat there on the last two parts).
+    score_from : int or None, default=None
+        First cycle (1, 2, … in the series' order) the walk forward is scored from; None: the
+        first from which the search's choice is stable (:func:`~setupfix.diagnose.walk.stable_from`).
     """
 
     _parameter_constraints: ClassVar[dict[str, list[Constraint]]] = {
@@ -210,6 +213,7 @@ class Diagnoser(ValidatedParams):
         "reselect_every": [Interval(int, 1, None), None],
         "lam": [Interval(float, 0, 1, closed="right"), None],
         "centre_fraction": [Interval(float, 0, 1, closed="both")],
+        "score_from": [Interval(int, 1, None), None],
     }
 
     def __init__(
@@ -223,6 +227,7 @@ class Diagnoser(ValidatedParams):
         reselect_every: int | None = None,
         lam: float | None = 0.3,
         centre_fraction: float = CENTRE_FRACTION,
+        score_from: int | None = None,
     ) -> None:
         self.alpha = alpha
         self.max_effects = max_effects
@@ -232,6 +237,7 @@ class Diagnoser(ValidatedParams):
         self.reselect_every = reselect_every
         self.lam = lam
         self.centre_fraction = centre_fraction
+        self.score_from = score_from
 
     def run(
         self, layout: Layout, series: Series, *, declared: tuple[EffectSpec, ...] = (), factors: tuple[Term, ...] = ()
@@ -300,7 +306,14 @@ class Diagnoser(ValidatedParams):
                 alpha=self.alpha,
                 declared=declared,
                 factors=factors,
+                score_from=None if self.score_from is None else self.score_from - 1,
             )
+            if walk.late and not walk.stated and walk.scored_from is not None:
+                notes.append(
+                    f"effects accepted late: the search's choice is stable only from cycle {walk.scored_from + 1} "
+                    f"of {series.n_cycles}; the walk forward is scored from there (the cycles before are its "
+                    "learning, scored apart: --score-from states another start)"
+                )
         elif self.walk:
             notes.append(
                 f"{series.n_cycles} cycle(s): too few to walk forward (needs {self.min_train + 5}: "

@@ -22,6 +22,16 @@ closest to its tolerance centre, by least squares through its relation matrix
 (minimum norm): the difference between (a)–(c) is the model,
 never the optimiser.  Effects are re-selected every ``reselect_every`` cycles on the
 cycles before (honest: no future data), coefficients refitted at every cycle.
+
+Learning is kept apart from scoring.  Under shared per-part noise an effect is accepted
+only after some tens of parts, and before that the selection on the few parts seen may
+take a wrong term: scoring those cycles judges the search's learning, not the model it
+settles on.  The walk is therefore scored from a stated cycle on: the first cycle from
+which the selection's choice no longer changes (:func:`stable_from`: the same terms, level
+positions and time constants aside, at every later selection), or the cycle the caller
+gives (``score_from``); at least :data:`MIN_SCORED` cycles are scored.  Both scores are
+kept: ``budgets`` over the scored cycles (what :func:`next_source` judges) and ``whole``
+over every cycle walked.
 """
 
 from __future__ import annotations
@@ -48,11 +58,16 @@ __all__ = [
     "next_source",
     "centred_registers",
     "CENTRE_FRACTION",
+    "MIN_SCORED",
+    "stable_from",
 ]
 
 Array = npt.NDArray[np.float64]
 
 CONTROLLERS: tuple[str, ...] = ("declared", "augmented", "ewma", "none")
+
+#: Fewest cycles a walk is scored on (a stated or stable start later than that is moved back).
+MIN_SCORED = 5
 
 
 @dataclass(frozen=True)
@@ -83,10 +98,60 @@ class Budget:
 
 @dataclass(frozen=True)
 class WalkForward:
-    """Walk-forward result: scored cycles and one :class:`Budget` per controller."""
+    """Walk-forward result: scored cycles and one :class:`Budget` per controller.
+
+    Attributes
+    ----------
+    cycles : tuple of int
+        The scored cycles (indices into the series), from ``scored_from`` on.
+    budgets : dict of str to Budget
+        Scores over ``cycles``: what the next-correction rule judges.
+    whole : dict of str to Budget or None
+        Scores over every cycle walked (None: the same as ``budgets``, scored from the first).
+    walked : tuple of int
+        Every cycle walked (the learning period included).
+    scored_from : int or None
+        First scored cycle (index); None when it is the first walked.
+    stated : bool
+        ``scored_from`` was given by the caller (``--score-from``), not found stable.
+    choices : tuple of (int, tuple of str)
+        The selection at each re-selection: its cycle and the terms chosen (targets).
+    """
 
     cycles: tuple[int, ...]
     budgets: dict[str, Budget]
+    whole: dict[str, Budget] | None = None
+    walked: tuple[int, ...] = ()
+    scored_from: int | None = None
+    stated: bool = False
+    choices: tuple[tuple[int, tuple[str, ...]], ...] = ()
+
+    @property
+    def late(self) -> bool:
+        """True when the scored cycles start after the first walked (learning left out)."""
+        return self.scored_from is not None
+
+
+def _choice_key(spec: EffectSpec) -> str:
+    """A term as the stability of a choice sees it: kind and target, refinements (step time, τ) aside."""
+    if spec.kind == "level":
+        return f"level {spec.register or 'all tools'}"
+    if spec.kind == "drift":
+        return f"drift {spec.shape}"
+    return f"{spec.kind} {spec.target}"
+
+
+def stable_from(choices: list[tuple[int, tuple[str, ...]]]) -> int | None:
+    """Cycle of the earliest selection from which every later selection made the same choice (None: none)."""
+    if not choices:
+        return None
+    last = set(choices[-1][1])
+    k = choices[-1][0]
+    for cycle, chosen in reversed(choices):
+        if set(chosen) != last:
+            break
+        k = cycle
+    return k
 
 
 def margins_of(y: Array, lower: Array, upper: Array) -> Array:
@@ -219,6 +284,7 @@ def walk_forward(
     alpha: float = 0.01,
     declared: tuple[EffectSpec, ...] = (),
     factors: tuple[Term, ...] = (),
+    score_from: int | None = None,
 ) -> WalkForward:
     """Walk forward through ``series``; see the module text.
 
@@ -240,6 +306,10 @@ def walk_forward(
     factors : tuple of Term
         Declared design factors: tested on the past at each selection, those accepted
         part of the augmented model (b) with the effects the search finds.
+    score_from : int, optional
+        First cycle scored (index into the series); default the first from which the
+        selection's choice is stable (:func:`stable_from`).  Moved back so that at least
+        :data:`MIN_SCORED` cycles are scored, and never before ``min_train``.
 
     Returns
     -------
@@ -268,6 +338,7 @@ def walk_forward(
     base_state = series.applied[scored[0]] if scored else np.zeros(layout.n_registers)
     decl = _Running(layout, series, declared, basis, z_obs, scored[0]) if scored else None
     aug = decl
+    choices: list[tuple[int, tuple[str, ...]]] = []
     for pos, k in enumerate(scored):
         assert decl is not None
         decl.add_until(k)
@@ -276,6 +347,7 @@ def walk_forward(
             pre = factor_tests(layout, past, factors, alpha=alpha, declared=declared).found if factors else ()
             sel = select_effects(layout, past, alpha=alpha, declared=declared + pre)
             specs = pre + sel.found
+            choices.append((k, tuple(sorted(_choice_key(s) for s in specs))))
             aug = _Running(layout, series, declared + specs, basis, z_obs, k, sel.unnamed) if specs else decl
         assert aug is not None
         aug.add_until(k)
@@ -285,8 +357,20 @@ def walk_forward(
         for name, v in states.items():
             reached[name][pos] = y[k] + (v - series.applied[k]) @ Cs
         ewma = np.where(np.isfinite(z_obs[k]), w * z_obs[k] + (1 - w) * ewma, ewma)
-    budgets = {name: _score(dev, layout.lower, layout.upper) for name, dev in reached.items()}
-    return WalkForward(tuple(scored), budgets)
+    whole = {name: _score(dev, layout.lower, layout.upper) for name, dev in reached.items()}
+    if not scored:
+        return WalkForward((), whole)
+    start = stable_from(choices) if score_from is None else score_from
+    start = int(
+        np.clip(start if start is not None else scored[0], scored[0], max(scored[-1] - MIN_SCORED + 1, scored[0]))
+    )
+    if start == scored[0]:
+        return WalkForward(tuple(scored), whole, None, tuple(scored), None, score_from is not None, tuple(choices))
+    keep = slice(start - scored[0], None)
+    budgets = {name: _score(dev[keep], layout.lower, layout.upper) for name, dev in reached.items()}
+    return WalkForward(
+        tuple(scored[keep]), budgets, whole, tuple(scored), start, score_from is not None, tuple(choices)
+    )
 
 
 def next_cycle(layout: Layout, series: Series, fit: Fit) -> tuple[Array, Series]:
@@ -343,13 +427,15 @@ class NextSource:
 def next_source(walk: WalkForward | None, found: bool, *, ewma: bool = True) -> NextSource:
     """The rule by which an effect earns its way into the next correction.
 
-    The augmented model (declared + effects found) is used only when, in the walk
-    forward, it beat EWMA: a smaller RMS distance to the tolerance centre **and** no
+    The augmented model (declared + effects found) is used only when, in the scored part
+    of the walk forward (:class:`WalkForward` ``budgets``: the learning period left out),
+    it beat EWMA: a smaller RMS distance to the tolerance centre **and** no
     more cells out of tolerance.  Otherwise the next correction comes from EWMA (from
     the declared model when no EWMA is configured, ``ewma=False``).  Without effects
     found the declared model is the augmented one and is used as it is; without a walk
     (series too short, or walk off) no effect has been proven and the declared model is
-    used.
+    used.  Where the walk's augmented model never differed from the declared one (no effect
+    taken on the past parts: the same scores), it is called the declared model, never "augmented".
     """
     if not found:
         return NextSource("declared", "no effect found: next correction from the declared model")
@@ -366,7 +452,28 @@ def next_source(walk: WalkForward | None, found: bool, *, ewma: bool = True) -> 
         f"walk forward over {len(walk.cycles)} cycle(s): augmented centre RMS {a.centre_rms:.4g}, "
         f"{a.out_of_tolerance} out of tolerance; {fallback} {other.centre_rms:.4g}, {other.out_of_tolerance}"
     )
+    if walk.late and walk.whole is not None and walk.scored_from is not None:
+        wa, wo = walk.whole["augmented"], walk.whole.get(fallback, walk.whole["declared"])
+        why = "as stated" if walk.stated else "where the search's choice became stable"
+        numbers = (
+            f"walk forward scored from cycle {walk.scored_from + 1} ({why}) over {len(walk.cycles)} cycle(s): "
+            f"augmented centre RMS {a.centre_rms:.4g}, {a.out_of_tolerance} out of tolerance; {fallback} "
+            f"{other.centre_rms:.4g}, {other.out_of_tolerance}; over all {len(walk.walked)} walked: augmented "
+            f"{wa.centre_rms:.4g}, {fallback} {wo.centre_rms:.4g}"
+        )
+    dec = walk.budgets["declared"]
+    same = np.array_equal(a.budget, dec.budget, equal_nan=True) and (a.centre_rms, a.rms, a.out_of_tolerance) == (
+        dec.centre_rms,
+        dec.rms,
+        dec.out_of_tolerance,
+    )
     if a.centre_rms < other.centre_rms and a.out_of_tolerance <= other.out_of_tolerance:
+        if same:  # the walk never took an effect: what beat the fallback is the declared model
+            return NextSource(
+                "declared",
+                f"the walk forward's augmented model is the declared one (no effect taken on the past parts) and "
+                f"beat {fallback} ({numbers}): next correction from the declared model",
+            )
         return NextSource(
             "augmented", f"the effects found beat {fallback} ({numbers}): next correction from the augmented model"
         )

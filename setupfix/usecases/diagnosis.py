@@ -246,6 +246,15 @@ class DiagnoseOutcome:
             if d.walk is None
             else {
                 "cycles_scored": len(d.walk.cycles),
+                "cycles_walked": len(d.walk.walked or d.walk.cycles),
+                "scored_from": (d.walk.cycles[0] + 1) if d.walk.cycles else None,
+                "score_start": "stated" if d.walk.stated else ("stable" if d.walk.late else "first"),
+                "whole_walk": None
+                if d.walk.whole is None
+                else {
+                    name: {"centre_rms": r(b.centre_rms), "out_of_tolerance": b.out_of_tolerance}
+                    for name, b in d.walk.whole.items()
+                },
                 **{
                     name: {
                         "mean_budget": r(b.mean_budget),
