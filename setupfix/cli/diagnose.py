@@ -83,6 +83,14 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
     )
     p.add_argument("--alpha", type=float, default=0.01, help="family-wise level of each selection step (0.01)")
     p.add_argument("--no-walk", action="store_true", help="skip the walk-forward comparison")
+    p.add_argument(
+        "--score-from",
+        type=int,
+        metavar="N",
+        default=None,
+        help="score the walk forward from cycle N on (default: the first from which the search's choice is stable; "
+        "the cycles before are its learning, scored apart)",
+    )
     add_lenient_option(p)
     p.add_argument(
         "--include-excluded",
@@ -90,6 +98,7 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
         help="with --db: take in the reports the store keeps marked rejected, failed or draft (left out by "
         "default, and counted)",
     )
+    p.add_argument("--verbose", action="store_true", help="show every note (default: at most five)")
     p.add_argument("--json", action="store_true", help="machine-readable output (shared/spec/cli-json.md)")
     add_objective_option(p)
     add_machine_options(p)
@@ -100,9 +109,9 @@ def _f(v: float | None, digits: int = 4) -> str:
     return "-" if v is None or not math.isfinite(v) else f"{v:.{digits}f}"
 
 
-def format_diagnosis(out: DiagnoseOutcome) -> str:
-    """Human summary of a diagnosis."""
-    from setupfix.views.analysis import draft_next
+def format_diagnosis(out: DiagnoseOutcome, verbose: bool = False) -> str:
+    """Human summary of a diagnosis: at most :data:`~setupfix.views.analysis.MAX_NOTES` notes unless ``verbose``."""
+    from setupfix.views.analysis import MAX_NOTES, assumed_conditions, draft_next, level_words, next_correction_text
 
     d = out.diagnosis
     unit = d.layout.unit
@@ -132,6 +141,9 @@ def format_diagnosis(out: DiagnoseOutcome) -> str:
                 f"  {e.kind:9s} {e.target:40s} {e.estimate:+.4g} ± {e.stderr:.2g} {e.unit}"
                 f"   (RMS after {_f(e.rms_after)}){how}"
             )
+            words = level_words(e.spec, d.series)
+            if words is not None:
+                lines.append(f"            {words}")
             if e.alike:
                 lines.append(f"            cannot be told apart from: {', '.join(e.alike)}")
         lines.append(
@@ -144,8 +156,9 @@ def format_diagnosis(out: DiagnoseOutcome) -> str:
             + ("" if d.selection.lack_of_fit else ": the declared model explains the series to its noise")
         )
     if d.walk is not None:
+        start = f" from cycle {d.walk.scored_from + 1}" if d.walk.scored_from is not None else ""
         lines.append(
-            f"walk forward over {len(d.walk.cycles)} cycle(s) (error budget: mean / worst; RMS reached; "
+            f"walk forward over {len(d.walk.cycles)} cycle(s){start} (error budget: mean / worst; RMS reached; "
             "distance to the tolerance centre: RMS / mean |.|):"
         )
         for name, b in d.walk.budgets.items():
@@ -154,6 +167,11 @@ def format_diagnosis(out: DiagnoseOutcome) -> str:
                 f"centre {_f(b.centre_rms)} / {_f(b.centre_mean_abs)}   "
                 f"out of tolerance {b.out_of_tolerance}"
             )
+        if d.walk.whole is not None:
+            lines.append(
+                f"  over all {len(d.walk.walked)} cycle(s) walked, learning included: centre RMS "
+                + ", ".join(f"{name} {_f(b.centre_rms)}" for name, b in d.walk.whole.items())
+            )
     lines.append(
         f"next correction from: {d.next_from.source}" + (f" ({d.next_from.reason})" if d.next_from.reason else "")
     )
@@ -161,13 +179,19 @@ def format_diagnosis(out: DiagnoseOutcome) -> str:
     if draft is not None:  # no number and no "none": the draft is said as ``correct`` says it
         lines.append(f"next correction: {draft}")
     else:
-        moves = {k: v for k, v in out.next_correction.items() if v != 0}
-        lines.append("next correction: " + (", ".join(f"{k} {v:+.4f}" for k, v in moves.items()) or "none"))
+        lines.append("next correction: " + next_correction_text(out.input.model, out.next_correction))
+        assumed = assumed_conditions(out)
+        if assumed is not None:
+            lines.append(assumed)
     if out.augmented:
         lines.append(f"wrote {out.augmented}")
-    lines += [  # a folder's problems are warnings; the draft is said on the next-correction line
-        f"warning: {n}" if n.kind == "folder" else f"note: {n}" for n in out.notes if n.kind != "draft"
-    ]
+    # a folder's problems are warnings (always shown); the draft is said on the next-correction line
+    lines += [f"warning: {n}" for n in out.notes if n.kind == "folder"]
+    notes = [f"note: {n}" for n in out.notes if n.kind not in ("folder", "draft")]
+    shown = notes if verbose else notes[:MAX_NOTES]
+    lines += shown
+    if len(shown) < len(notes):
+        lines.append(f"... and {len(notes) - len(shown)} more note(s): --verbose shows them")
     # report text (characteristic names, file names) reaches the terminal: no escape sequences
     return "\n".join("".join(c if c.isprintable() else "?" for c in line) for line in lines)
 
@@ -191,7 +215,7 @@ def run(args: argparse.Namespace) -> int:
             augment=args.augment,
             process=args.process,
             factors=factors_of(args),
-            diagnoser=Diagnoser(alpha=args.alpha, walk=not args.no_walk),
+            diagnoser=Diagnoser(alpha=args.alpha, walk=not args.no_walk, score_from=args.score_from),
             solve=SolveOptions(objective=args.objective),
             include_excluded=args.include_excluded,
         )
@@ -200,5 +224,5 @@ def run(args: argparse.Namespace) -> int:
         json.dump(out.to_json(), sys.stdout, indent=2)
         sys.stdout.write("\n")
     else:
-        sys.stdout.write(format_diagnosis(out) + "\n")
+        sys.stdout.write(format_diagnosis(out, verbose=args.verbose) + "\n")
     return OK

@@ -9,7 +9,7 @@ end) shows numbers without computing them; the rows of a correction itself are i
 from __future__ import annotations
 
 import math
-from collections.abc import Iterable
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 from typing import Any
 
@@ -17,6 +17,7 @@ import numpy as np
 import numpy.typing as npt
 
 from setupfix.correction.objective import margins as objective_margins
+from setupfix.diagnose.terms import PRODUCT, EffectSpec, Series, channel_values
 from setupfix.model import PartMeasurement, ProcessModel
 from setupfix.thermal.prediction import DriftPrediction
 from setupfix.usecases.compare import Comparison
@@ -33,7 +34,15 @@ __all__ = [
     "EffectRow",
     "DiagnosisView",
     "diagnosis_view",
+    "register_labels",
+    "level_words",
+    "assumed_conditions",
+    "next_correction_text",
+    "MAX_NOTES",
 ]
+
+#: Notes a diagnosis shows by default (the rest with ``--verbose``).
+MAX_NOTES = 5
 
 Array = npt.NDArray[np.float64]
 
@@ -171,6 +180,83 @@ class DiagnosisView:
     next_from: str = "augmented"  #: the model the next correction comes from (augmented, ewma, declared)
     held: tuple[str, ...] = ()  #: registers the centre rule holds (model IDs)
     draft: str | None = None  #: a draft model's next correction as said (:func:`draft_next`): no number
+
+
+def register_labels(model: ProcessModel) -> dict[str, str]:
+    """What a person types at the controller for each register: ``G54 X`` for a WKS's X component (in a
+    one-axis model its axis), ``G54 C`` for its rotation, ``H4`` for a tool length, ``D5`` for a radius.
+    Model IDs stay in the JSON; these are for the text a person acts on."""
+    out = {}
+    for reg in model.registers:
+        if reg.kind == "wks":
+            out[reg.id] = f"{reg.register} {reg.component or model.axis}"
+        else:
+            out[reg.id] = reg.register
+    return out
+
+
+def _runs(names: list[str]) -> str:
+    """Part names as runs: ``11–18, 20`` for consecutive integers, else listed (at most six, then how many)."""
+    if names and all(n.isdigit() for n in names):
+        nums = sorted(int(n) for n in names)
+        runs, start = [], nums[0]
+        for a, b in zip(nums, [*nums[1:], None], strict=True):
+            if b is None or b != a + 1:
+                runs.append(f"{start}–{a}" if a > start else f"{start}")
+                start = b if b is not None else start
+        return ", ".join(runs)
+    return ", ".join(names[:6]) + (f" and {len(names) - 6} more" if len(names) > 6 else "")
+
+
+def level_words(spec: EffectSpec, series: Series) -> str | None:
+    """A categorical process effect's levels in words with the parts that carry them:
+    ``doe_tool_length Long (parts 11–18)``, a product ``… and …``; None for other effects."""
+    if spec.kind != "process" or spec.channel is None or "=" not in spec.channel:
+        return None
+    try:
+        values = channel_values(series, spec.channel)
+    except KeyError:
+        return None
+    words = " and ".join(p.replace("=", " ", 1) if "=" in p else p for p in spec.channel.split(PRODUCT))
+    ids = list(series.cycles) if series.cycles else [str(k + 1) for k in range(series.n_cycles)]
+    on = [ids[k] for k in np.flatnonzero(values != 0)]
+    return f"{words} (parts {_runs(on)})" if on else words
+
+
+def assumed_conditions(outcome: DiagnoseOutcome) -> str | None:
+    """The process conditions the next correction assumes: the channels its model's effects follow, at the
+    values of the last part (what :func:`~setupfix.diagnose.walk.next_cycle` forecasts with); None when the
+    correction follows no channel."""
+    d = outcome.diagnosis
+    if d.next_from.source != "augmented":
+        return None
+    s = d.series
+    if not s.n_cycles:
+        return None
+    seen: dict[str, str] = {}
+    for e in d.effects:
+        ch = e.spec.channel
+        if e.kind not in ("process", "thermal") or ch is None or ch in seen:
+            continue
+        try:
+            v = float(channel_values(s, ch)[-1])
+        except KeyError:
+            continue
+        if "=" in ch:
+            words = " and ".join(p.replace("=", " ", 1) for p in ch.split(PRODUCT))
+            seen[ch] = words if v != 0 else f"not ({words})"
+        else:
+            seen[ch] = f"{ch} {v:g}"
+    if not seen:
+        return None
+    last = s.cycles[-1] if s.cycles else str(s.n_cycles)
+    return f"the next correction assumes the process of part {last}: " + ", ".join(seen.values())
+
+
+def next_correction_text(model: ProcessModel, moves: Mapping[str, float]) -> str:
+    """The next correction as a person enters it: ``G54 X +0.0130, H4 -0.1920`` (``none`` when nothing moves)."""
+    labels = register_labels(model)
+    return ", ".join(f"{labels.get(k, k)} {v:+.4f}" for k, v in moves.items() if v != 0) or "none"
 
 
 def draft_next(outcome: DiagnoseOutcome) -> str | None:

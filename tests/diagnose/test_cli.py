@@ -362,3 +362,37 @@ def test_simulate_level_step_at_a_cycle_is_found_there(tmp_path: Path, capsys: p
     level = [e for e in json.loads(js)["effects"] if e["kind"] == "level"]
     assert truth["hidden_effects"][0]["kind"] == "level"
     assert level and level[0]["target"].startswith("T5 step at") and level[0]["cycle"].endswith("18")
+
+
+def test_the_next_correction_names_the_controller_registers_and_notes_are_capped(
+    capsys: pytest.CaptureFixture[str], series: Path
+) -> None:
+    """Registers as a person types them (G54 Z, H5), not model IDs; at most five notes unless --verbose."""
+    from setupfix.model import load_model
+    from setupfix.views.analysis import MAX_NOTES, register_labels
+
+    labels = register_labels(load_model(MODEL))
+    assert labels["W1"] == "G54 Z" and labels["T5"] == "H5"
+    args = ("diagnose", "--model", MODEL, str(series / "measurements.csv"), "--no-walk")
+    code, out, _ = run(capsys, *args, "--corrections", series / "corrections.csv")
+    assert code == 0
+    (line,) = [x for x in out.splitlines() if x.startswith("next correction:")]
+    moved = [item.rsplit(" ", 1)[0] for item in line.removeprefix("next correction: ").split(", ")]
+    assert line.endswith("none") or set(moved) <= set(labels.values())
+    code, terse, _ = run(capsys, *args)  # no corrections log: more notes
+    code, verbose, _ = run(capsys, *args, "--verbose")
+    notes = [x for x in verbose.splitlines() if x.startswith("note: ")]
+    shown = [x for x in terse.splitlines() if x.startswith("note: ")]
+    assert shown == notes[:MAX_NOTES]
+    if len(notes) > MAX_NOTES:
+        assert f"... and {len(notes) - MAX_NOTES} more note(s): --verbose shows them" in terse
+
+
+def test_register_labels_of_a_multi_axis_model() -> None:
+    from setupfix.model import load_model
+    from setupfix.views.analysis import next_correction_text, register_labels
+
+    model = load_model(Path(__file__).parents[2] / "sample_reports" / "two_station_xyz" / "model.toml")
+    labels = register_labels(model)
+    assert labels["W1.X"] == "G54 X" and labels["W1.C"] == "G54 C" and labels["T1"] == "H1" and labels["T1.R"] == "D1"
+    assert next_correction_text(model, {"W1.X": 0.013, "T1": -0.192, "W2.Y": 0.0}) == "G54 X +0.0130, H1 -0.1920"
