@@ -9,6 +9,10 @@ each stage the bench times, through the store (:func:`setupfix.store.open_store`
   ``history import`` and ``batch --store`` do per report), reports/s and rows/s;
 * series: one machine's whole year (:func:`setupfix.store.report_tables`, what
   ``diagnose --db --machine`` and ``correct --store`` read), seconds;
+* query: the store's read of that year (``measurements()``: on PostgreSQL through ``COPY``,
+  :mod:`setupfix.store.pg_copy`), and, as the reference timed in the same run, the row read it
+  replaced (``SQLStore.measurements``: ``fetchall`` into ``DataFrame.from_records``), with a check
+  that both give the same frame;
 * show: the per-machine summary of ``history show`` (:meth:`Store.machines`), seconds.
 
 The reference, timed in the same run: the same import and series read on an SQLite file
@@ -38,6 +42,7 @@ import pandas as pd
 
 from setupfix.model import CANONICAL_COLUMNS
 from setupfix.store import open_store, report_tables
+from setupfix.store.sql import SQLStore
 from setupfix.usecases.parse import parse_reports
 
 OUT = ROOT / "bench" / "results" / "store_scale.txt"
@@ -108,19 +113,26 @@ def time_import(location: str, machine: str, n: int) -> float:
         return (time.perf_counter() - start) / n
 
 
-def time_series(location: str, machine: str, rounds: int = 2) -> tuple[float, float, int]:
-    """Median seconds to read one machine's rows (the store's query: ``measurements()``) and its whole series
-    split per report (:func:`report_tables`, what the doors read), and its rows."""
-    query, split, rows = [], [], 0
+def time_series(location: str, machine: str, rounds: int = 2) -> tuple[float, float, int, float, bool]:
+    """Median seconds to read one machine's rows (the store's query: ``measurements()``), its whole series
+    split per report (:func:`report_tables`, what the doors read), its rows, the median seconds of the row
+    read (``SQLStore.measurements``, the reference) and whether both reads gave the same frame."""
+    query, split, old, rows, same = [], [], [], 0, True
     for _ in range(rounds):
         with open_store(location, machine=machine) as store:
             start = time.perf_counter()
-            rows = len(store.measurements())
+            frame = store.measurements()
             query.append(time.perf_counter() - start)
+            rows = len(frame)
             start = time.perf_counter()
             report_tables(store)
             split.append(time.perf_counter() - start)
-    return statistics.median(query), statistics.median(split), rows
+            if isinstance(store, SQLStore):
+                start = time.perf_counter()
+                reference = SQLStore.measurements(store)
+                old.append(time.perf_counter() - start)
+                same = same and frame.equals(reference) and list(frame.dtypes) == list(reference.dtypes)
+    return statistics.median(query), statistics.median(split), rows, statistics.median(old or [np.nan]), same
 
 
 def time_show(location: str, rounds: int = 3) -> float:
@@ -141,7 +153,7 @@ def sqlite_reference(hours: int, imports: int) -> tuple[float, float, int]:
             for h in range(hours):
                 store.add_report(f"ref/{h}".encode(), f"{h}.csv", "canonical", report_table(0, h))
         per_report = time_import(db, "fresh", imports)
-        series, _, rows = time_series(db, "bench000")
+        series, _, rows, _, _ = time_series(db, "bench000")
     return per_report, series, rows
 
 
@@ -165,13 +177,8 @@ def main() -> None:
     open_store(args.db).close()  # the schema
     with psycopg.connect(args.db, autocommit=True) as conn:
         settings = {
-            k: conn.execute(f"SHOW {k}").fetchone()[0]
-            for k in (
-                "server_version",
-                "fsync",  # type: ignore[index]
-                "synchronous_commit",
-                "shared_buffers",
-            )
+            k: conn.execute(f"SHOW {k}").fetchone()[0]  # type: ignore[index]
+            for k in ("server_version", "fsync", "synchronous_commit", "shared_buffers")
         }
     lines.append("# server: " + ", ".join(f"{k} {v}" for k, v in settings.items()))
     ref_import, ref_series, ref_rows = sqlite_reference(args.hours, args.imports)
@@ -181,11 +188,12 @@ def main() -> None:
     )
     header = (
         f"{'stage':>5} {'machines':>8} {'reports':>9} {'rows':>11} {'fill s':>7} {'import rep/s':>12} "
-        f"{'rows/s':>8} {'query s':>8} {'series s':>9} {'show s':>7} {'db MB':>7}"
+        f"{'rows/s':>8} {'query s':>8} {'row read s':>10} {'ratio':>6} {'same':>5} {'series s':>9} {'show s':>7} "
+        f"{'db MB':>7}"
     )
     lines += ["", header]
     print("\n".join(lines), flush=True)
-    stats: list[tuple[int, int, float, float, float, float]] = []
+    stats: list[tuple[int, int, float, float, float, float, float]] = []
     filled, rows_total, fill_s = 0, 0, 0.0
     with psycopg.connect(args.db, autocommit=True) as conn:
         template(conn)
@@ -200,14 +208,15 @@ def main() -> None:
             fill_s += time.perf_counter() - start
             stage += 1
             per_report = time_import(args.db, f"fresh{stage}", args.imports)
-            query, series, _ = time_series(args.db, "bench000")
+            query, series, _, old, same = time_series(args.db, "bench000")
             show = time_show(args.db)
             size = conn.execute("SELECT pg_database_size(current_database())").fetchone()[0] / 1e6  # type: ignore[index]
             reports = filled * args.hours + stage * args.imports
-            stats.append((reports, rows_total, per_report, query, show, series))
+            stats.append((reports, rows_total, per_report, query, show, series, old))
             line = (
                 f"{stage:>5} {filled:>8} {reports:>9} {rows_total:>11} {fill_s:>7.0f} {1 / per_report:>12.0f} "
-                f"{28 / per_report:>8.0f} {query:>8.3f} {series:>9.3f} {show:>7.3f} {size:>7.0f}"
+                f"{28 / per_report:>8.0f} {query:>8.3f} {old:>10.3f} {old / query:>6.2f} {'yes' if same else 'NO':>5} "
+                f"{series:>9.3f} {show:>7.3f} {size:>7.0f}"
             )
             lines.append(line)
             print(line, flush=True)
@@ -232,6 +241,10 @@ def main() -> None:
         f"query of one machine-year, stage 1 → last: {first[3]:.3f} → {last[3]:.3f} s "
         f"(ratio {last[3] / first[3]:.2f}; SQLite reference {ref_series:.3f} s); split per report "
         f"(report_tables): {first[5]:.3f} → {last[5]:.3f} s"
+    )
+    lines.append(
+        f"one machine-year at {last[1] / 1e6:.1f} M rows: COPY read {last[3]:.3f} s, the row read it replaced "
+        f"{last[6]:.3f} s (reference, same run): {last[6] / last[3]:.2f} times faster"
     )
     lines.append(f"filled {last[1]:,} of {target_rows:,} rows ({100 * last[1] / target_rows:.0f} %) in {fill_s:.0f} s")
     Path(args.out).write_text("\n".join(lines) + "\n")

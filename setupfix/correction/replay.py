@@ -63,17 +63,29 @@ class ReplayTrace:
     held_by: tuple[str, ...]
 
 
-def centring_step(mean: Array, composite: Array, lower: Array, upper: Array, resolution: float) -> Array:
+def centring_step(
+    mean: Array,
+    composite: Array,
+    lower: Array,
+    upper: Array,
+    resolution: float,
+    inverses: dict[bytes, Array] | None = None,
+) -> Array:
     """x* = round(−(ȳ − target) · C⁺ / h) · h over the measured dimensions (least-squares centring).
 
     mean : (n_dimensions,) [unit], NaN where unmeasured; composite : (n_registers, n_dimensions);
-    lower, upper : (n_dimensions,) [unit]; resolution h [unit] → ndarray (n_registers,) [unit]
+    lower, upper : (n_dimensions,) [unit]; resolution h [unit] → ndarray (n_registers,) [unit].
+    ``inverses`` caches C⁺ per set of measured dimensions (the same pseudo-inverse, computed once).
     """
     seen = np.isfinite(mean)
     if not seen.any():
         return np.zeros(composite.shape[0])
     gap = mean[seen] - targets(lower, upper)[seen]
-    x = -(gap @ np.linalg.pinv(composite[:, seen]))
+    key = seen.tobytes()
+    cache: dict[bytes, Array] = {} if inverses is None else inverses
+    if key not in cache:
+        cache[key] = np.asarray(np.linalg.pinv(composite[:, seen]), dtype=np.float64)
+    x = -(gap @ cache[key])
     out: Array = np.round(x / resolution) * resolution + 0.0
     return out
 
@@ -118,13 +130,14 @@ def replay_rules(
     held: list[str] = []
     base = d - a @ c  # the parts without any correction, for the mean of earlier parts
     since = np.ones(r, dtype=np.int64)  # parts since each register's last change, this one included
+    inverses: dict[bytes, Array] = {}
     for t in range(n):
         applied[t] = state
         diff = state - a[t]
         out[t] = d[t] + diff @ c if np.any(diff) else d[t]
         earlier = base[max(0, t - rules.mean_of + 1) : t] + state @ c
         mean, _ = mean_of_parts(out[t], earlier, rules.mean_of)
-        step = centring_step(mean, c, lower, upper, resolution)
+        step = centring_step(mean, c, lower, upper, resolution, inverses)
         result = apply_rules(step, c, lower, upper, resolution, rules, since)
         moves[t] = result.x
         held.append(result.held_by)
