@@ -28,7 +28,12 @@ from parsers.rows import (
     warn_assumed_mm,
 )
 from setupfix.core.errors import ParseError, SourceLocation
-from setupfix.model.measurements import CANONICAL_COLUMNS
+from setupfix.model.measurements import (
+    ACTUAL_POSITION_COLUMNS,
+    BETWEEN_COLUMN,
+    CANONICAL_COLUMNS,
+    FEATURE_ID_COLUMN,
+)
 
 __all__ = ["STAMP", "heading_of", "read_columns"]
 
@@ -226,6 +231,17 @@ def read_columns(text: str, name: str, default_unit: str | None) -> pd.DataFrame
     frame["feature"] = ""
     frame["size"] = np.where(letters == "D", "diameter", np.where(letters == "R", "radius", "")).astype(object)
     frame["side"] = ""
+    # as text_report: the X, Y and Z rows of a feature are its nominal and measured location (the
+    # later row of a name measured twice wins); every row of the feature carries it
+    keys = names.astype(str)
+    frame[FEATURE_ID_COLUMN] = keys.astype(object)
+    frame[BETWEEN_COLUMN] = ""  # an export names one feature a row
+    for col, measured, letter in zip(("x", "y", "z"), ACTUAL_POSITION_COLUMNS, "XYZ", strict=True):
+        rows = letters == letter
+        nominal_of = dict(zip(keys[rows], frame["nominal"].to_numpy()[rows], strict=True))
+        actual_of = dict(zip(keys[rows], frame["actual"].to_numpy()[rows], strict=True))
+        frame[col] = np.array([nominal_of.get(k, np.nan) for k in keys], dtype=float)
+        frame[measured] = np.array([actual_of.get(k, np.nan) for k in keys], dtype=float)
     skipped.warn()
     unstated = units[usable] == ""
     if unstated.any():

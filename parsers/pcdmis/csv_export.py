@@ -23,6 +23,7 @@ from parsers.pcdmis.text_report import RawRecord, rows_from_raw
 from parsers.rows import SkipLog, unit_or_none
 from parsers.source import read_text
 from setupfix.core.errors import ParseError, SourceLocation
+from setupfix.model.measurements import FEATURE_ID_COLUMN
 
 __all__ = ["read_pcdmis_csv", "sniff_pcdmis_csv"]
 
@@ -105,7 +106,9 @@ def read_rows(text: str, name: str, default_unit: str | None) -> pd.DataFrame:
                 part = meta.get("serial number") or f"{meta.get('part name', 'part')}#1"
                 stamp = STAMP.match(meta.get("datetime", ""))
                 extra = {"timestamp": "{}-{}-{}T{}:{}:{}".format(*stamp.groups())} if stamp else {}
-            raws.append(RawRecord(cells.get("name", ""), axis, cells, row_unit or "", part, where, extra))
+            name_ = cells.get("name", "")
+            own = {**extra, FEATURE_ID_COLUMN: name_} if name_ else extra
+            raws.append(RawRecord(name_, axis, cells, row_unit or "", part, where, own))
     except csv.Error as exc:
         raise ParseError(f"malformed CSV: {exc}", location=SourceLocation(name, line=reader.line_num)) from None
     if cols is None:

@@ -43,6 +43,7 @@ from parsers.rows import (
 )
 from parsers.source import read_text
 from setupfix.core.errors import ParseError, SourceLocation
+from setupfix.model.measurements import ACTUAL_POSITION_COLUMNS, BETWEEN_COLUMN, FEATURE_ID_COLUMN
 
 __all__ = ["read_pcdmis_text", "sniff_pcdmis_text"]
 
@@ -115,6 +116,7 @@ def _collect(text: str, name: str, default_unit: str | None, skipped: SkipLog) -
         if match:
             dim, spans = match.group("name"), []
             feature = _feature_of(match.group("rest"))
+            names = _feature_names(match.group("rest"))
             found = _UNITS.search(match.group("rest"))
             unit = unit_or_none(found.group("unit")) if found else default_unit
             if found and unit is None:
@@ -152,7 +154,7 @@ def _collect(text: str, name: str, default_unit: str | None, skipped: SkipLog) -
                 unit or "",
                 _part_label(header, max(parts_seen, 1)),
                 where,
-                {"feature": feature} if feature else {},
+                {k: v for k, v in (("feature", feature), *names.items()) if v},
             )
         )
     return raws
@@ -172,6 +174,21 @@ _FEATURE_WORDS = {
 }
 #: Axis letters that state a size (Hexagon help, *Location Axes*: D diameter, R radius).
 _SIZE_LETTERS = {"D": "diameter", "R": "radius"}
+
+
+#: ``… OF CIRCLE CIR1`` (a location, a true position): the feature's name; ``… FROM CIRCLE CIR1 TO CIRCLE
+#: CIR2`` (a distance, an angle): the two it is measured between.
+_OF_NAME = re.compile(r"\bOF\s+[A-Z]+\s+(?P<name>[^\s,$]+)", re.IGNORECASE)
+_BETWEEN = re.compile(r"\bFROM\s+[A-Z]+\s+(?P<a>[^\s,$]+)\s+TO\s+[A-Z]+\s+(?P<b>[^\s,$]+)", re.IGNORECASE)
+
+
+def _feature_names(text: str) -> dict[str, str]:
+    """``feature_id`` or ``between`` of a ``DIM … =`` header (:mod:`setupfix.model.measurements`)."""
+    found = _BETWEEN.search(text)
+    if found:
+        return {BETWEEN_COLUMN: f"{found.group('a')};{found.group('b')}"}
+    found = _OF_NAME.search(text)
+    return {FEATURE_ID_COLUMN: found.group("name")} if found else {}
 
 
 def _feature_of(text: str) -> str:
@@ -215,6 +232,7 @@ def rows_from_raw(raws: list[RawRecord], name: str, skipped: SkipLog, *, what: s
         (try_number(r.cells.get("minus", "").split()[0]) or 0.0) < 0 for r in raws if r.cells.get("minus", "").split()
     )
     rows: list[dict[str, object]] = []
+    kept: list[RawRecord] = []
     unstated = False
     for raw in raws:
         where = raw.where
@@ -258,13 +276,36 @@ def rows_from_raw(raws: list[RawRecord], name: str, skipped: SkipLog, *, what: s
                 "status": "" if outtol is None else ("out" if outtol != 0 else "ok"),
                 "source": f"{name}:{where.line}",
                 **geometry_of(raw.axis, raw.extra.get("feature", "")),
+                FEATURE_ID_COLUMN: raw.extra.get(FEATURE_ID_COLUMN, ""),
+                BETWEEN_COLUMN: raw.extra.get(BETWEEN_COLUMN, ""),
             }
         )
+        kept.append(raw)
+    _positions(rows, kept)
     if rows and unstated:
         first_line = next(r.where.line for r in raws if not r.unit)
         assert first_line is not None  # _collect locates every row by its line number
         warn_assumed_mm(name, first_line)
     return finish_rows(rows, name, skipped, what=what)
+
+
+def _positions(rows: list[dict[str, object]], kept: list[RawRecord]) -> None:
+    """Fill ``x, y, z`` and ``x_actual, y_actual, z_actual`` of every row of a dimension block (one
+    part) from its X, Y and Z axis rows (a location's or true position's coordinates): nominal and
+    measured, in mm; NaN for an axis the block does not state (``LOC2`` gives X and Z only)."""
+    blocks: dict[tuple[str, str], list[int]] = {}
+    for i, raw in enumerate(kept):
+        blocks.setdefault((raw.part, raw.name), []).append(i)
+    for members in blocks.values():
+        nominal = [math.nan] * 3
+        actual = [math.nan] * 3
+        for i in members:
+            k = "XYZ".find(kept[i].axis.strip().upper()) if len(kept[i].axis.strip()) == 1 else -1
+            if k >= 0:
+                nominal[k], actual[k] = float(rows[i]["nominal"]), float(rows[i]["actual"])  # type: ignore[arg-type]  # numbers
+        for i in members:
+            rows[i].update(zip(("x", "y", "z"), nominal, strict=True))
+            rows[i].update(zip(ACTUAL_POSITION_COLUMNS, actual, strict=True))
 
 
 def read_pcdmis_text(path: str | Path, *, unit: str | None = None, encoding: str | None = None) -> pd.DataFrame:

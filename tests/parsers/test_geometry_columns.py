@@ -150,3 +150,23 @@ def test_a_matched_part_keeps_each_dimensions_uncertainty_in_the_model_unit(tmp_
     factor = 25.4 if model.unit == "mm" else 1.0
     assert part.uncertainty[i] == pytest.approx(0.004 * factor)
     assert np.isnan(np.delete(part.uncertainty, i)).all()
+
+
+@pytest.mark.parametrize("name", ["bracket_two_parts.txt", "bracket_ncgage.csv"])
+def test_pcdmis_rows_carry_their_features_location_from_its_axis_rows(name: str) -> None:
+    """A PC-DMIS location block's X/Y/Z rows are the feature's nominal and measured coordinates; every
+    row of the block (its diameter too) carries them, NaN for an axis it does not state."""
+    table = parsers.read_report(SAMPLES / "pcdmis" / name).table
+    dim = table["characteristic"].str.rsplit(".", n=1).str[0]  # the DIM block (the export: the feature)
+    for _, block in table.groupby([table["part"], dim], sort=False):
+        for col, measured, letter in (("x", "x_actual", "X"), ("y", "y_actual", "Y"), ("z", "z_actual", "Z")):
+            rows = block[block["characteristic"].str.endswith(f".{letter}")]
+            if rows.empty:
+                continue
+            assert (block[col] == rows["nominal"].iloc[-1]).all() and (block[measured] == rows["actual"].iloc[-1]).all()
+    first = table.iloc[0]
+    assert (first["feature_id"], first["x"], first["y"]) == ("CIR1", 50.0, 30.0)
+    assert math.isnan(first["z"])
+    if name.endswith(".txt"):
+        distance = table[table["characteristic"] == "DIST1.M"].iloc[0]
+        assert (distance["feature_id"], distance["between"]) == ("", "CIR1;CIR2")
