@@ -383,14 +383,15 @@ def plan_features(dims: Sequence[ScaffoldDimension]) -> list[ScaffoldFeature]:
     question (``Q1`` …): the reports never say which work offset and tool made it.
     """
     features: list[ScaffoldFeature] = []
-    located: dict[str, ScaffoldFeature] = {}
-    known = {d.feature_id: d for d in dims if d.feature_id}
-    questions: dict[str, str] = {}
+    located: dict[tuple[str, str], ScaffoldFeature] = {}
+    # a feature is the report's feature at one station: the same name at two stations is two workpieces
+    known = {(d.group or "", d.feature_id): d for d in dims if d.feature_id}
+    questions: dict[tuple[str, str], str] = {}
 
-    def ask(key: str) -> str:
+    def ask(key: tuple[str, str]) -> str:
         return questions.setdefault(key, f"Q{len(questions) + 1}")
 
-    def location(key: str, label: str, d: ScaffoldDimension | None) -> ScaffoldFeature:
+    def location(key: tuple[str, str], label: str, d: ScaffoldDimension | None) -> ScaffoldFeature:
         if key not in located:
             source = d or known.get(key)
             located[key] = ScaffoldFeature(
@@ -407,9 +408,14 @@ def plan_features(dims: Sequence[ScaffoldDimension]) -> list[ScaffoldFeature]:
         found.kind = found.kind or (d.feature if d else "")
         return found
 
-    by_axis = {(d.feature_id, d.axis): d.name for d in dims if d.measures == "location" and d.feature_id and d.axis}
+    by_axis = {
+        (d.group or "", d.feature_id, d.axis): d.name
+        for d in dims
+        if d.measures == "location" and d.feature_id and d.axis
+    }
     for d in dims:
-        key = d.feature_id or f"{d.name}\x00"  # a characteristic naming no feature: a feature of its own
+        # a characteristic naming no feature: a feature of its own
+        key = (d.group or "", d.feature_id or f"{d.name}\x00")
         label = d.feature_id or d.name
         if d.measures == "size":
             weight = d.radius_weight() if d.interpolated else None
@@ -448,7 +454,7 @@ def plan_features(dims: Sequence[ScaffoldDimension]) -> list[ScaffoldFeature]:
             else:
                 d.plane = tuple(a for a in AXES if a != SPINDLE)  # type: ignore[assignment]  # two axes
                 across = f"the report states no axis of its feature: one along the spindle ({SPINDLE}) assumed"
-            rows = tuple(by_axis.get((d.feature_id, a), "") for a in d.plane)
+            rows = tuple(by_axis.get((d.group or "", d.feature_id, a), "") for a in d.plane)
             if d.feature_id and all(rows):
                 d.components = rows  # type: ignore[assignment]  # two names
                 d.why = f"{across}; components: the report's own {'/'.join(d.plane)} rows of {d.feature_id}"
@@ -459,7 +465,7 @@ def plan_features(dims: Sequence[ScaffoldDimension]) -> list[ScaffoldFeature]:
                     f"gives its signed {'/'.join(d.plane)} deviations in the zone's datum frame as these components"
                 )
         elif d.measures == "distance" and len(d.between) == 2:
-            a, b = (location(e, e, None) for e in d.between)
+            a, b = (location((d.group or "", e), e, None) for e in d.between)
             a.callouts.append(d.name)
             b.callouts.append(d.name)
             vec = d.vector()

@@ -266,3 +266,31 @@ def test_the_head_lists_only_open_questions_and_init_takes_answers_too(tmp_path:
     mapped = tomllib.loads(model.read_text(encoding="utf-8"))
     assert at_init["process"]["draft"] is True and "draft" not in mapped["process"]
     assert at_init["features"] == mapped["features"] and at_init["tools"] == mapped["tools"]
+
+
+def test_a_station_is_answered_as_a_group_and_its_features_are_its_own(tmp_path: Path) -> None:
+    """One feature name at two fixture stations is two workpieces: two questions, answered per station."""
+    head = "characteristic,nominal,actual,lower,upper,part,station,x,y,z,nx,ny,nz,feature,feature_id\n"
+    rows = [
+        f"{name},{nominal},{nominal + 0.01},-0.05,0.05,1,{station},0,0,{z},{n},plane,{fid}\n"
+        for station in ("P1", "P2")
+        for name, nominal, z, n, fid in (("TOP Z", 20, 20, "0,0,1", "TOP"), ("SIDE X", 50, 10, "1,0,0", "SIDE"))
+    ]
+    report = tmp_path / "stations.csv"
+    report.write_text(head + "".join(rows), encoding="utf-8")
+    model = _scaffold(report, tmp_path)
+    listing = map_listing(model)
+    assert [(q.label, q.features[0].groups) for q in listing.questions] == [
+        ("TOP", ("P1",)),
+        ("SIDE", ("P1",)),
+        ("TOP", ("P2",)),
+        ("SIDE", ("P2",)),
+    ]
+    result = answer_questions(model, [*parse_answer("group:P2=G55,T1", HERE), *parse_answer("*=G54,T1", HERE)])
+    assert {q: w for q, w, _ in result.answered} == {"Q1": "W1", "Q2": "W1", "Q3": "W2", "Q4": "W2"}
+    raw = tomllib.loads(model.read_text(encoding="utf-8"))
+    by_station = {
+        (d["group"], d["name"]): raw["features"][next(iter(d["features"]))] for d in raw["dimensions"].values()
+    }
+    assert by_station[("P2", "TOP Z")] == {"wks": {"W2": 1}, "tools": {"T1": 1}, "position": [0.0, 0.0, 20.0]}
+    assert by_station[("P1", "SIDE X")] == {"wks": {"W1": 1}, "position": [0.0, 0.0, 10.0]}
