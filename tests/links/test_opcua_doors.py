@@ -171,3 +171,17 @@ def test_a_password_never_shows_in_output_logs_or_the_store(
     control.users.password = "another"  # a wrong password: refused, and still not shown
     code, out, err = run(capsys, "machine", "read", "--link", link, "--insecure")
     assert code == 1 and "refused the session" in err and SECRET not in out + err
+
+
+def test_a_node_named_by_its_namespace_uri_is_read(
+    capsys: pytest.CaptureFixture[str], tmp_path: Path, control: TestControl
+) -> None:
+    from opcua_control import NAMESPACE
+
+    text = link_toml(control, MAP).replace(control.node("G54.Z"), f"nsu={NAMESPACE};s=G54.Z")
+    assert f"nsu={NAMESPACE};s=G54.Z" in text
+    link = tmp_path / "link.toml"
+    link.write_text(text)
+    code, out, err = run(capsys, "machine", "read", "--link", str(link), "--json")
+    assert code == 0, err
+    assert json.loads(out)["components"][0] == {"register": "G54", "axis": "Z", "value": -412.53, "unit": "mm"}
