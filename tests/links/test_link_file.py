@@ -224,3 +224,28 @@ def test_an_unmapped_component_is_named_before_anything_is_read(tmp_path: Path) 
     with open_link(path) as link, pytest.raises(LinkConfigError) as caught:
         read_control(link, load_model(MODEL))  # the model's G54.Z is mapped; G55, H12 are not (nor X: not the model's)
     assert str(caught.value).startswith(f"{path}: [registers]: not mapped to a node: G55.Z, H12")
+
+
+@pytest.mark.parametrize("unit", ["mm", "inch"])
+def test_the_current_csv_of_a_read_round_trips_through_the_one_reader(tmp_path: Path, unit: str) -> None:
+    """Multi-axis: X, Y, Z and the rotation C of each WKS, tool lengths and a radius; an inch control's
+    lengths come out in the model's mm (rotations stay in degrees)."""
+    from parsers.current import read_current
+    from setupfix.usecases.machine import ControlRead, write_current_csv
+
+    model = load_model(XYZ)
+    comps = model_components(model)
+    rng = random.Random(3)
+    step = 0.0001 if unit == "inch" else 0.001
+    values = {
+        c: round_to_increment(rng.uniform(-300, 300) if not c.rotation else rng.uniform(-1, 1), step)
+        for c in comps.values()
+    }
+    read = ControlRead(ControlSnapshot.of("c", unit, step, values))
+    path = tmp_path / "current.csv"
+    write_current_csv(read, model, path)
+    got = read_current(path, model)
+    assert got.keys() == comps.keys()
+    for rid, comp in comps.items():
+        assert got[rid] == pytest.approx(to_model(values[comp], comp, "mm", unit), abs=1e-9)
+    assert "G54,C," in path.read_text() and "H1,," in path.read_text() and "D1,," in path.read_text()
