@@ -13,49 +13,12 @@ from typing import TYPE_CHECKING
 
 from setupfix.cli.common import add_machine_options, shown
 from setupfix.cli.exit_codes import OK
+from setupfix.cli.machine.options import INSECURE_HELP, add_link_options, link_current
+
+__all__ = ["add_parser", "add_link_options", "link_current", "format_read", "format_write"]
 
 if TYPE_CHECKING:
-    from setupfix.model import ProcessModel
     from setupfix.usecases.machine import ControlRead, WriteOutcome
-    from setupfix.usecases.requests import CurrentOffsets
-
-INSECURE_HELP = (
-    "allow the link's password over an unencrypted session (refused by default: use a SignAndEncrypt security string)"
-)
-
-
-def add_link_options(p: argparse.ArgumentParser, *, current: bool = True) -> None:
-    """``--link LINK.toml`` and ``--insecure`` (``correct``, ``batch``)."""
-    p.add_argument(
-        "--link",
-        metavar="LINK",
-        default=None,
-        help="read the controller's current offsets from the control through this link file "
-        "(TOML, shared/spec/machine-link.md) instead of --current: programs hold absolute values"
-        + ("; --json records the values read" if current else ""),
-    )
-    p.add_argument("--insecure", action="store_true", help=INSECURE_HELP)
-
-
-def link_current(args: argparse.Namespace, model: ProcessModel) -> CurrentOffsets | None:
-    """The current offsets read through ``--link`` (None without it).
-
-    Raises
-    ------
-    SetupfixError
-        ``--link`` together with ``--current``; the link file invalid; the control unreachable
-        (exit status 8) or a component not mapped.
-    """
-    from setupfix.core.errors import SetupfixError
-    from setupfix.links import open_link
-    from setupfix.usecases.machine import current_from_link
-
-    if getattr(args, "link", None) is None:
-        return None
-    if getattr(args, "current", None) is not None:
-        raise SetupfixError("--link and --current are two sources of the current offsets: give one")
-    with open_link(args.link, insecure=args.insecure) as link:
-        return current_from_link(link, model)
 
 
 def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
