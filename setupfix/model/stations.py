@@ -176,6 +176,9 @@ def expand_stations(doc: Mapping[str, Any]) -> tuple[dict[str, Any], dict[str, s
             if plain:
                 known = {table.get("name"), *table.get("aliases", [])}
                 table["aliases"] = [*table.get("aliases", []), *(a for a in dict.fromkeys(plain) if a not in known)]
+            components = dtable.get("components")  # a zone's: "{station}" stands for the station, as in a name
+            if isinstance(components, list):
+                table["components"] = [c.replace("{station}", sid) if isinstance(c, str) else c for c in components]
             refs = dtable.get("features")
             if isinstance(refs, Mapping):
                 table["features"] = {(f"{sid}{ref}" if ref in t_features else ref): w for ref, w in refs.items()}
