@@ -80,6 +80,8 @@ class _Feature:
     tolerances: list[str] = field(default_factory=list)
     #: ``INNER`` / ``OUTER`` (a bore / a boss) where the statement says so, else "".
     side: str = ""
+    #: What :func:`_position` and :func:`_feature_direction` read from it, once per feature.
+    cache: dict[str, tuple[float, float, float]] = field(default_factory=dict)
 
 
 def _side(words: tuple[str, ...]) -> str:
@@ -320,9 +322,11 @@ def _position(feature: _Feature | None, name: str) -> tuple[float, float, float]
     when the feature is unknown or states fewer than three values."""
     if feature is None or len(feature.values) < 3:
         return (math.nan, math.nan, math.nan)
-    loc = SourceLocation(name, line=feature.line)
-    x, y, z = (point_number(v, loc) for v in feature.values[:3])
-    return (x, y, z)
+    if "position" not in feature.cache:
+        loc = SourceLocation(name, line=feature.line)
+        x, y, z = (point_number(v, loc) for v in feature.values[:3])
+        feature.cache["position"] = (x, y, z)
+    return feature.cache["position"]
 
 
 #: Features whose ``CART,x,y,z,i,j,k`` gives their own direction (i, j, k): a point's, edge point's or
@@ -338,6 +342,13 @@ def _feature_direction(feature: _Feature | None, name: str) -> tuple[float, floa
     nan = (math.nan, math.nan, math.nan)
     if feature is None or feature.kind not in _DIRECTED_FEATURES or len(feature.values) < 6:
         return nan
+    if "direction" not in feature.cache:
+        feature.cache["direction"] = _direction_of(feature, name)
+    return feature.cache["direction"]
+
+
+def _direction_of(feature: _Feature, name: str) -> tuple[float, float, float]:
+    nan = (math.nan, math.nan, math.nan)
     words = feature.values[3:6]
     if not all(w.strip() for w in words):
         return nan

@@ -268,6 +268,7 @@ def _feature_columns(
     datums = np.full(n, "", dtype=object)
     per_results: dict[int, ResultsFeatures] = {}
     frames: dict[str, str] = {}
+    owned: dict[str, bool] = {}  # item key → whether the item names features
     scales: dict[int, float] = {}
     swapped = broken = 0
     for row, (key, res, ids) in enumerate(zip(keys, kept["results"].tolist(), kept["features"].tolist(), strict=True)):
@@ -275,6 +276,12 @@ def _feature_columns(
         if key not in frames:
             frames[key] = datum_labels(definition, nom, owner)
         datums[row] = frames[key]
+        if not ids.strip():
+            has = owned.get(key)
+            if has is None:
+                has = owned[key] = item.find(f"{{{owner.ns}}}FeatureItemIds") is not None
+            if not has:
+                continue  # a characteristic of no stated feature: its item's location stands
         found = per_results.get(res)
         if found is None:
             found = per_results[res] = ResultsFeatures(results[res], doc.ns)
