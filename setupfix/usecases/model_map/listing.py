@@ -152,6 +152,7 @@ def listing_of(text: str, source: str) -> MapListing:
             if dim.get("group"):
                 groups.setdefault(fid, []).append(str(dim["group"]))
     features = []
+    labels = _labels(text)
     for fid, table in raw_features.items():
         note = table.get(QUESTION_KEY)
         match = QUESTION.match(note) if isinstance(note, str) else None
@@ -162,7 +163,7 @@ def listing_of(text: str, source: str) -> MapListing:
         features.append(
             MapFeature(
                 fid,
-                _label(text, fid) or comment_label,
+                labels.get(fid) or comment_label,
                 tuple(float(v) for v in position) if isinstance(position, list) else None,
                 role,
                 radius_weight,
@@ -197,14 +198,15 @@ def _ask(f: MapFeature) -> str:
     return "which tool cut it?" if f.role == "size" else "which work offset (WKS) and which tool made it?"
 
 
-def _label(text: str, fid: str) -> str:
-    """The report's feature name the scaffold wrote after the feature's header (``# CYLINDER2 (a …)``)."""
+def _labels(text: str) -> dict[str, str]:
+    """Feature ID → the report's feature name the scaffold wrote after its header (``# CYLINDER2 (a …)``)."""
+    out = {}
     for line in text.splitlines():
         m = HEADER.match(line)
-        if m and m.group(1) == "features" and (m.group(2) or m.group(3)) == fid and "#" in line:
+        if m and m.group(1) == "features" and "#" in line:
             after = line.split("#", 1)[1].strip()
-            return after.split(" (")[0].split(";")[0].strip()
-    return ""
+            out[m.group(2) or m.group(3)] = after.split(" (")[0].split(";")[0].strip()
+    return out
 
 
 def map_listing(model: str | Path) -> MapListing:
