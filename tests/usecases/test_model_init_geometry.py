@@ -162,6 +162,15 @@ def test_the_cover_distances_get_no_g54_and_no_h1() -> None:
     for name in distances:
         assert dims[name]["features"] == {}, name  # the report names no ends: nothing moves it as written
     assert _dims(raw)["POSITION2"]["kind"] == "position"
+    # one axis on request: a distance along Z still moves with neither G54 Z nor H1, and the header says why Z
+    one = scaffold_model([shared_path(*COVER)], axis="Z")
+    raw = tomllib.loads(one.text)
+    for dim in raw["dimensions"].values():
+        feature = raw["features"][next(iter(dim["features"]))]
+        if dim["name"].startswith("DISTANCEBETWEEN"):
+            assert feature == {"wks": {}, "tools": {}}, dim
+    assert any(d["name"].startswith("DISTANCEBETWEEN") for d in raw["dimensions"].values())
+    assert "the one most dimensions state" not in one.text and "kept: dimensions along Z" in one.text
 
 
 def test_the_fair_box_has_no_geometry_and_gets_zones_questions_and_no_guess() -> None:
