@@ -223,6 +223,15 @@ def replay_history(request: ReplayRequest) -> ReplayOutcome:
         best = min(range(len(grid)), key=lambda i: _rank(grid[i].score))
     walk = _walk_error(inp, n) if request.walk else None
     notes = list(inp.notes)
+    if walk is not None and walk.get("declared", 0.0) > walk.get("ewma", math.inf):
+        notes.append(
+            Note(
+                f"the declared model tracks this history worse than EWMA (walk-forward RMS {walk['declared']:.4f} "
+                f"against {walk['ewma']:.4f} {layout.unit}): an effect it lacks moves the parts, and the replay "
+                "does not see it ('setupfix diagnose --db' finds it)",
+                kind="replay",
+            )
+        )
     if walk is None and request.walk:
         notes.append(
             Note(
