@@ -15,11 +15,12 @@ import pytest
 from conftest import GUIDE_PINS, SAMPLES, shared_path
 
 import parsers
-from setupfix.core.errors import ModelError, SetupfixError
+from setupfix.core.errors import ModelError, SetupfixError, SourceLocation
 from setupfix.inputs.checks import check_parts
 from setupfix.model import ProcessModel, load_model, match_parts, model_from_dict
 from setupfix.usecases.correct import correct_cycle, correct_report
 from setupfix.usecases.model_init import Scaffold, name_axis, scaffold_from_tables
+from setupfix.usecases.model_map import parse_answer
 from setupfix.usecases.requests import CorrectRequest, CycleCorrection
 
 
@@ -221,9 +222,11 @@ def test_cli_init_then_correct(tmp_path: Path, capsys: pytest.CaptureFixture[str
     obj = json.loads(capsys.readouterr().out)
     # a draft: held with the rule "draft" (before the reject band too), every change 0, exit status 0
     assert code == 0 and obj["verdict"] == "hold" and [r["rule"] for r in obj["rules"]] == ["draft"]
-    assert obj["corrections"] == {"W1": 0.0, "T1": 0.0} and obj["part"] == first and obj["dimensions"]
+    assert set(obj["corrections"].values()) == {0.0} and obj["part"] == first and obj["dimensions"]
     text = out.read_text(encoding="utf-8")
-    assert obj["unmatched"] and all(f"#   {name}: " in text for name in obj["unmatched"])  # left out, with reasons
+    # left out, with reasons; a position callout is a zone now, matched by its components (issue 39)
+    zones = {d["name"] for d in tomllib.loads(text)["dimensions"].values() if d.get("kind") == "position"}
+    assert obj["unmatched"] and all(f"#   {name}: " in text or name in zones for name in obj["unmatched"])
     assert main(["model", "init", report, "-o", str(tmp_path)]) == 1  # a folder is not a file target
     assert "error:" in capsys.readouterr().err and not list(tmp_path.glob(".*tmp"))
 
@@ -285,7 +288,7 @@ def test_axis_from_the_report_first_then_the_name_and_the_report_wins() -> None:
             "source": [f"r.csv:{i}" for i in range(2, 6)],
         }
     )
-    scaffold = scaffold_from_tables([("r.csv", table)])
+    scaffold = scaffold_from_tables([("r.csv", table)], answers=parse_answer("*=G54,T1", SourceLocation("test")))
     comments = _dimension_comments(scaffold.text)
     assert comments["Depth_X"].endswith("axis Z stated by the report (its name says X: the report's vector wins)")
     assert comments["Step"].endswith("axis Z stated by the report")
@@ -295,12 +298,12 @@ def test_axis_from_the_report_first_then_the_name_and_the_report_wins() -> None:
     # Z and Y measured: a multi-axis model; Bore_Y along Y moves with W1 but not with the tool length (Z);
     # Hole states no axis: uncorrectable until the user gives one
     assert scaffold.axes == ("Y", "Z") and raw["process"]["axes"] == ["Y", "Z"]
-    moved = {d["name"]: raw["features"][next(iter(d["features"]))] for d in raw["dimensions"].values()}
+    moved = {d["name"]: [raw["features"][f] for f in d["features"]] for d in raw["dimensions"].values()}
     assert moved == {
-        "Depth_X": {"wks": {"W1": 1}, "tools": {"T1": 1}},
-        "Step": {"wks": {"W1": 1}, "tools": {"T1": 1}},
-        "Bore_Y": {"wks": {"W1": 1}},
-        "Hole": {"wks": {}},
+        "Depth_X": [{"wks": {"W1": 1}, "tools": {"T1": 1}}],
+        "Step": [{"wks": {"W1": 1}, "tools": {"T1": 1}}],
+        "Bore_Y": [{"wks": {"W1": 1}}],
+        "Hole": [],
     }
     assert [d.get("axis") for d in raw["dimensions"].values()] == ["Z", "Z", "Y", None]
     # --axis keeps the report's axis too: Depth_X stays (Z), Bore_Y goes (name), Hole stays (none)
@@ -338,7 +341,7 @@ def test_model_init_on_a_qif_takes_the_axes_from_its_vectors(
 
     report = SAMPLES / "qif" / "NIST_MTC_Incoming_PlateResults_20_samples.QIF"
     out = tmp_path / "plate.toml"
-    assert main(["model", "init", str(report), "-o", str(out)]) == 0
+    assert main(["model", "init", str(report), "-o", str(out), "--answer", "*=G54,T1"]) == 0
     assert (
         "(axes: 8 stated by the report, 20 with none, 24 size(s)), axes X, Y, Z (multi-axis)" in capsys.readouterr().err
     )
@@ -358,7 +361,7 @@ def test_model_init_on_a_qif_takes_the_axes_from_its_vectors(
     assert dims["DS002"]["axis"] == "X" and dims["DS003"]["axis"] == "Y"
     assert dims["WIDTH1"]["kind"] == "size" and "axis" not in dims["WIDTH1"]
     slot = raw["features"][next(iter(dims["WIDTH1"]["features"]))]
-    assert slot == {"radius": {"T1": -2}}  # an inner slot: a larger radius offset leaves it narrower
+    assert slot["radius"] == {"T1": -2}  # an inner slot: a larger radius offset leaves it narrower
     assert raw["tools"] == {"T1": {"register": "H1", "radius": "D1"}}
     table = _read(report)
     scaffold_and_correct(report, table)

@@ -22,13 +22,17 @@ from conftest import SAMPLES, SHARED
 
 import parsers
 from parsers.geometry import INTERPOLATED
-from setupfix.core.errors import ModelError, SetupfixError
+from setupfix.core.errors import ModelError, SetupfixError, SourceLocation
 from setupfix.model import load_model, model_from_dict
 from setupfix.usecases.correct import correct_report
 from setupfix.usecases.model_init import scaffold_from_tables, scaffold_model
+from setupfix.usecases.model_map import parse_answer
 from setupfix.usecases.requests import CorrectRequest
 
 AXES = ("X", "Y", "Z")
+#: Every feature made on G54 by tool 1: the answer to a multi-axis scaffold's questions (issue 39) that gives
+#: the one-setup, one-tool topology these tests check.
+ONE_SETUP = parse_answer("*=G54,T1", SourceLocation("test"))
 DMIS = SHARED / "cmm-samples" / "dmis_dmo"
 
 
@@ -70,10 +74,10 @@ def check_scaffold(raw: dict[str, Any], table: pd.DataFrame) -> int:
     radius = False
     checked = 0
     for dim in raw["dimensions"].values():
+        if dim["name"] not in geometry or dim.get("kind") == "position" or len(dim["features"]) != 1:
+            continue  # a zone, or a distance: test_model_init_geometry.py checks those
         (fid,) = dim["features"]
         feature = raw["features"][fid]
-        if dim["name"] not in geometry:
-            continue
         direction, size, kind, side = geometry[dim["name"]]
         checked += 1
         if size:
@@ -88,7 +92,8 @@ def check_scaffold(raw: dict[str, Any], table: pd.DataFrame) -> int:
                 assert "radius" not in feature, dim
         elif direction is not None and multi:
             assert feature["wks"] == {"W1": 1}
-            assert ("tools" in feature) == (abs(direction[2]) > 1e-9), dim  # tool length: spindle Z only
+            if abs(direction[2]) > 1e-9:  # tool length: where a dimension sees the spindle Z
+                assert feature["tools"] == {"T1": 1}, dim
             if "axis" in dim:
                 assert direction == tuple(1.0 if a == dim["axis"] else 0.0 for a in AXES), dim
             else:
@@ -103,10 +108,11 @@ def check_scaffold(raw: dict[str, Any], table: pd.DataFrame) -> int:
                 tools = {"T1": feature["wks"]["W1"]} if process["axis"] == "Z" else {}
                 assert feature["tools"] == tools, dim
     if multi:
+        zones = {a for d in raw["dimensions"].values() if d.get("kind") == "position" for a in d["axes"]}
         assert (
             measured
             <= set(process["axes"])
-            <= measured | {"Z"} | set(d.get("axis") for d in raw["dimensions"].values())
+            <= measured | zones | {"Z"} | set(d.get("axis") for d in raw["dimensions"].values())
         )
         assert ("radius" in raw.get("tools", {}).get("T1", {})) == radius
     return checked
@@ -130,7 +136,7 @@ def test_every_sample_with_vectors_gets_the_axes_and_weights_it_states() -> None
         if table is None or not _states_geometry(table):
             continue
         try:
-            scaffold = scaffold_from_tables([(str(path), table)])
+            scaffold = scaffold_from_tables([(str(path), table)], answers=ONE_SETUP)
         except ModelError:
             continue  # no toleranced length characteristic
         raw = tomllib.loads(scaffold.text)
@@ -184,7 +190,7 @@ def test_a_normal_facing_minus_z_gives_minus_one_in_a_one_axis_scaffold(tmp_path
         "FA(BOT)=FEAT/POINT,CART,0,0,0.02,0,0,-1\nTA(BOT_DN)=TOL/PROFP,-0.02,INTOL\nENDFIL\n",
         encoding="utf-8",
     )
-    scaffold = scaffold_model([path])
+    scaffold = scaffold_model([path], axis="Z")  # the DMIS labels name its features: one axis on request
     raw = tomllib.loads(scaffold.text)
     assert not scaffold.axes and raw["process"]["axis"] == "Z"
     weights = {d["name"]: raw["features"][next(iter(d["features"]))]["wks"] for d in raw["dimensions"].values()}
@@ -198,8 +204,10 @@ def test_sizes_move_only_by_a_radius_and_only_where_interpolated() -> None:
     path = DMIS / "DMO_Example1_PiezaDemo.dmo"
     if not path.exists():
         pytest.skip(f"{path} absent")
-    raw = tomllib.loads(scaffold_model([path]).text)
-    by_name = {d["name"]: (d, raw["features"][next(iter(d["features"]))]) for d in raw["dimensions"].values()}
+    raw = tomllib.loads(scaffold_model([path], answers=ONE_SETUP).text)
+    by_name = {
+        d["name"]: (d, raw["features"][next(iter(d["features"]))]) for d in raw["dimensions"].values() if d["features"]
+    }
     circle, circle_feature = by_name["Círculo_13_DIAM"]  # F(Círculo_13)=FEAT/CIRCLE,INNER,…: a milled bore
     assert circle["kind"] == "size" and set(circle_feature) == {"radius", "position"}
     assert circle_feature["radius"] == {"T1": -2}
@@ -227,7 +235,7 @@ def test_a_drilled_hole_and_a_boss_without_feature_type_or_with_one() -> None:
             "side": ["", "outer", "inner", ""],
         }
     )
-    scaffold = scaffold_from_tables([("r.csv", table)])
+    scaffold = scaffold_from_tables([("r.csv", table)], answers=ONE_SETUP)
     raw = tomllib.loads(scaffold.text)
     features = {d["name"]: raw["features"][next(iter(d["features"]))] for d in raw["dimensions"].values()}
     assert features == {
@@ -254,7 +262,8 @@ def test_a_report_measuring_y_gets_no_tool_length_register() -> None:
     scaffold = scaffold_from_tables([("calypso.txt", table)])
     raw = tomllib.loads(scaffold.text)
     assert raw["process"]["axis"] == "Y" and "tools" not in raw and not scaffold.axes
-    assert all(f == {"wks": {"W1": 1}, "tools": {}} for f in raw["features"].values())
+    # distances (issue 39): a work offset moves both ends alike, so none moves them
+    assert all(f == {"wks": {}, "tools": {}} for f in raw["features"].values())
     assert "a tool length offset acts along the spindle" in scaffold.text
     model = model_from_dict(raw)
     assert [r.id for r in model.registers] == ["W1"]
@@ -265,24 +274,26 @@ def test_the_calypso_sample_is_multi_axis_and_its_y_distances_have_no_tool_lengt
     path = SHARED / "cmm-samples" / "calypso" / "CALYPSO_chr_PruefplanValidierungsbauteil1_16.txt"
     if not path.exists():
         pytest.skip(f"{path} absent")
-    scaffold = scaffold_model([path])
+    scaffold = scaffold_model([path], answers=ONE_SETUP)
     raw = tomllib.loads(scaffold.text)
     assert scaffold.axes == ("X", "Y", "Z")
     for dim in raw["dimensions"].values():
+        if not dim["features"]:
+            continue  # a distance naming no ends: nothing moves it (issue 39)
         feature = raw["features"][next(iter(dim["features"]))]
         if dim.get("axis") in ("X", "Y"):
             assert feature == {"wks": {"W1": 1}, "position": feature["position"]}, dim
         if dim.get("axis") == "Z":
             assert feature["tools"] == {"T1": 1}
     # its two diameters state no feature type (idsymbol diameter only): uncorrectable, no radius register
-    assert sum(d.get("kind") == "size" for d in raw["dimensions"].values()) == 2 and "T1" in raw["tools"]
-    assert "radius" not in raw["tools"]["T1"]
+    # and its Z dimensions are distances naming no ends: no tool length register either (issue 39)
+    assert sum(d.get("kind") == "size" for d in raw["dimensions"].values()) == 2 and "tools" not in raw
 
 
 def test_a_multi_axis_scaffold_loads_and_holds_as_a_draft_and_solves_without_the_key(tmp_path: Path) -> None:
     report = SAMPLES / "qif" / "NIST_MTC_Incoming_PlateResults_20_samples.QIF"
     out = tmp_path / "plate.toml"
-    out.write_text(scaffold_model([report]).text, encoding="utf-8")
+    out.write_text(scaffold_model([report], answers=ONE_SETUP).text, encoding="utf-8")
     model = load_model(out)
     assert model.multi_axis and model.draft and model.axes == ("X", "Y", "Z")
     assert {"W1.X", "W1.Y", "W1.Z", "T1", "T1.R"} <= set(model.register_ids)
