@@ -167,21 +167,25 @@ class TestControl:
         def set_(node: NodeData, attr: Any, dv: ua.DataValue) -> None:
             if self.running:  # a program runs: the control ignores offset writes
                 return
+            if self._stop_after is not None and self._stop_after <= 0:
+                # the write after the last one kept: the control goes away instead (the client has read the
+                # answers to the writes before, since it sent this one only after them)
+                self._stop_after = None
+                self._loop.create_task(self._bounce() if self._restart else self._stop())
+                return
             value = float(dv.Value.Value) if dv.Value is not None else math.nan
             low, high = self.spec.clamp.get(path, (-math.inf, math.inf))
             self.values[path] = self._grid(min(max(value, low), high), path)
             self.writes.append((path, self.values[path]))
             if self._stop_after is not None:
                 self._stop_after -= 1
-                if self._stop_after <= 0:
-                    self._stop_after = None
-                    self._loop.create_task(self._bounce() if self._restart else self._stop())
 
         return set_
 
     def stop_after(self, writes: int, *, restart: bool = False) -> None:
-        """Stop the server right after the next ``writes`` accepted writes (the client loses it mid-write);
-        with ``restart`` it starts again at once, holding its values (a control that comes back)."""
+        """Keep the next ``writes`` writes, then stop the server when the one after arrives (not kept: the
+        client loses the control mid-write); with ``restart`` it starts again at once, holding its values
+        (a control that comes back)."""
         self._stop_after = writes
         self._restart = restart
 
