@@ -16,7 +16,7 @@ GRID_KEYS = ("dead_band", "gain", "mean_of")
 def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     p = sub.add_parser(
         "replay",
-        help="what a rule set (dead band %, gain, mean of n, min parts) would have done over the stored history",
+        help="what a rule set (dead band %%, gain, mean of n, min parts) would have done over the stored history",
         description="Replays the stored history in time order under a rule set: each part's deviations minus "
         "the corrections applied plus those the rules would have applied, through the model's relation "
         "matrices.  Prints the values out of tolerance, parts at risk, corrections and their size and the "
