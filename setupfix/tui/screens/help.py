@@ -27,6 +27,7 @@ HELP = """\
 | `[` `]` | previous / next part (cycle) of the report |
 | `Home` `End` | the first / the latest part (cycle) of a multi-cycle report |
 | `e` | export the offsets: choose the controller format (the file's suffix follows it), see the text, confirm |
+| `w` | send to the machine (`--link`): the dry-run diff, a second question, then the read-back or refusal |
 | `d` | diagnose the history (one key) |
 | `k` | capability of the history store (`--db`): Cpk per dimension, individuals sparkline, Nelson rule flags |
 | `1` `3` `4` `5` | correction · thermal · history · match tabs |
