@@ -240,3 +240,21 @@ def test_every_row_of_a_multi_axis_sample_with_zones() -> None:
                 assert r[key] == independent_float(value, lo, up, u, d.zone), (r["name"], key)
                 verdicts.add(r[key])
     assert "not_proven" in verdicts and "conforming" in verdicts
+
+
+def test_the_papers_objective_stays_available_with_guard_band_zero() -> None:
+    # guard_band = 0: solved on the tolerance itself (the paper's objective), verdicts still with the full U
+    from setupfix.usecases.correct import correct_cycle
+    from setupfix.usecases.requests import CorrectRequest
+
+    def solve(extra: dict[str, object]) -> tuple[dict[str, float], list[dict[str, object]]]:
+        doc = {**MODEL, **extra}
+        doc["dimensions"] = {"D1": dict(MODEL["dimensions"]["D1"])}  # type: ignore[index]
+        p = PartMeasurement(part="1", report="r", timestamp=None, deviation=np.array([0.048]), sources=("",))
+        cycle = correct_cycle(CorrectRequest(model_from_dict(doc)), p)
+        return cycle.corrections, cycle.dimension_rows()
+
+    plain, _ = solve({"measurement": {"uncertainty": 0.0}})
+    paper, rows = solve({"measurement": {"uncertainty": 0.01}, "safety": {"guard_band": 0.0}})
+    assert paper == plain and "guard_band" not in str(rows)
+    assert rows[0]["conformance_before"] == "not_proven" and rows[0]["uncertainty"] == 0.01
