@@ -46,6 +46,9 @@ class DimensionTable(DataTable[Text]):
         if wide:
             self.add_column("margin₀", key="margin_before", width=8)
             self.add_column("margin₁", key="margin_after", width=8)
+        zones = wide and any(r.zone is not None for r in rows)  # a position as a CMM prints it (⌀)
+        if zones:
+            self.add_column("position ⌀", key="position", width=_width([r.position_text for r in rows], "position ⌀"))
         for r, lim in zip(rows, limits, strict=True):
             before, after = r.bars(BAR)
             style = "" if r.in_before else "red"
@@ -62,4 +65,6 @@ class DimensionTable(DataTable[Text]):
             ]
             if wide:
                 cells += [Text(signed(r.margin_before), justify="right"), Text(signed(r.margin_after), justify="right")]
+            if zones:
+                cells.append(plain(r.position_text))
             self.add_row(*cells, key=r.id)
