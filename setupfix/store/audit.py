@@ -27,6 +27,8 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
+from setupfix.store.link_audit import LINK_TABLES
+
 __all__ = ["Audit", "audit_of", "AUDIT_COLUMNS", "TABLES"]
 
 #: Columns of ``history export recommendations``: one row per register component of each recommendation.
@@ -118,6 +120,7 @@ TABLES: tuple[tuple[str, tuple[str, ...], str], ...] = (
         ("machine", "report_sha256", "done", "owner", "host", "pid", "started", "claimed_at"),
         "machine, report_sha256",
     ),
+    *LINK_TABLES,  # the machine link's attempts and their components (schema 6)
 )
 
 _SHA256 = re.compile(r"[0-9a-f]{64}")

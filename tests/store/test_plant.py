@@ -23,6 +23,7 @@ from setupfix.cli import main
 from setupfix.core.errors import StoreError
 from setupfix.store import AUDIT_COLUMNS, Recommendation, open_store, report_tables, stored_corrections
 from setupfix.store.audit import TABLES
+from setupfix.store.link_audit import LinkAttempt, LinkComponentRecord
 from setupfix.store.schema import migrate
 from setupfix.usecases.history import ImportRequest, import_history
 
@@ -253,6 +254,16 @@ def _fill(db: str, tmp_path: Path) -> None:
                 {"verdict": "apply", "corrections": {"W1": 0.01, "T5": -0.002}},
             )
         )
+        store.add_link_attempt(  # a machine write's audit (schema 6): an attempt and its components
+            LinkAttempt(
+                link="opc.tcp://127.0.0.1:4840 (mc.toml)",
+                plan_sha256="cd" * 32,
+                outcome="applied",
+                message="read back",
+                unit="mm",
+                components=(LinkComponentRecord("G54", "Z", -412.53, -0.023, -412.553, -412.553, None, "confirmed"),),
+            )
+        )
 
 
 def test_migrate_copies_every_row(tmp_path: Path, pg_url: str, capsys: pytest.CaptureFixture[str]) -> None:
@@ -265,6 +276,7 @@ def test_migrate_copies_every_row(tmp_path: Path, pg_url: str, capsys: pytest.Ca
             rows_a, rows_b = list(a.dump(table)), list(b.dump(table))
             assert rows_a == rows_b, table
             assert len(rows_a) > 0, table  # every table was filled, so every table was copied
+        assert {t for t, _, _ in TABLES} >= {"link_attempt", "link_component"}  # the machine link's audit too
         # the copy is a working store: ids go on after the copied ones
         b.add_recommendation(Recommendation("exact", {}, {}))
         assert b.count("recommendation") == a.count("recommendation") + 1
