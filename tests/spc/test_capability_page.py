@@ -7,6 +7,7 @@ import re
 from pathlib import Path
 from typing import Any
 
+import pytest
 from spc_examples import closed_loop_store
 from views.test_html_report_browser import CHROMIUM, check, playwright, render
 
@@ -46,6 +47,7 @@ def test_page_warns_labels_and_lists_every_violation(tmp_path: Path) -> None:
     assert "too few parts (n &lt; 30)" in page
 
 
+@pytest.mark.slow
 def test_page_with_the_warning_renders_in_chromium(playwright: Any, tmp_path: Path) -> None:
     outcome = _outcome(tmp_path)
     result = render(playwright, spc_page(outcome), tmp_path, tmp_path / "spc.png")

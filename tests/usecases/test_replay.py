@@ -114,6 +114,7 @@ def history(
     return db, base, parts, moves
 
 
+@pytest.mark.slow
 def test_the_rule_used_reproduces_the_stored_outcome_exactly(
     history: tuple[Path, np.ndarray, np.ndarray, list[tuple[int, np.ndarray]]],
 ) -> None:
@@ -131,6 +132,7 @@ def test_the_rule_used_reproduces_the_stored_outcome_exactly(
     assert "assumes the model" in format_replay(outcome)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     "tighter",
     [Rules(gain=1.0), Rules(dead_band_share=0.02, gain=0.7, mean_of=2), Rules(gain=0.5, min_parts=3)],
@@ -146,6 +148,7 @@ def test_a_tighter_rule_matches_an_independent_simulation(
     np.testing.assert_allclose(outcome.trace.deviation, expected, rtol=0, atol=1e-12)
 
 
+@pytest.mark.slow
 def test_grid_names_the_best_under_the_stated_criterion(
     history: tuple[Path, np.ndarray, np.ndarray, list[tuple[int, np.ndarray]]],
 ) -> None:

@@ -34,6 +34,7 @@ def db(tmp_path_factory: pytest.TempPathFactory) -> Path:
 RULES = "dead_band=10 %,gain=0.5,mean_of=3"
 
 
+@pytest.mark.slow
 def test_json_is_the_use_case_and_the_contract(db: Path, capsys: pytest.CaptureFixture[str]) -> None:
     assert main(["replay", "--db", str(db), "--model", str(MODEL), "--rules", RULES, "--json"]) == 0
     doc = json.loads(capsys.readouterr().out)
@@ -70,6 +71,7 @@ def test_no_store_is_refused(tmp_path: Path, capsys: pytest.CaptureFixture[str])
     assert "no history store" in capsys.readouterr().err
 
 
+@pytest.mark.slow
 def test_marked_reports_stay_out(tmp_path: Path) -> None:
     base = drifting(20, seed=5)
     parts, moves = closed_loop(base, USED)
@@ -86,6 +88,7 @@ def test_marked_reports_stay_out(tmp_path: Path) -> None:
     assert np.array_equal(kept.trace.deviation, kept.measured, equal_nan=True)
 
 
+@pytest.mark.slow
 def test_page_renders_in_chromium(playwright: Any, db: Path, tmp_path: Path) -> None:
     outcome = replay_history(ReplayRequest(db, MODEL, USED, grid=True, grid_values=((None, 0.1), (0.5, 1.0), (1,))))
     page = replay_page(outcome)
