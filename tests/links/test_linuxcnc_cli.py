@@ -98,10 +98,10 @@ def test_read_dry_run_apply_interlock_restart(tmp_path: Path) -> None:
         assert refused.returncode == 6, refused.stderr
         assert json.loads(refused.stdout)["outcome"] == "refused"
         assert "a program is running" in refused.stderr
-        # a REPORT is corrected with the values read first: refused the same, nothing recorded for no plan
+        # a REPORT is corrected with the values read first: refused the same, and recorded all the same
         sim.run_program("G4 P60\nM2\n")
         try:
-            busy = setupfix(sim, *write, "--apply")
+            busy = setupfix(sim, *write, "--apply", "--db", str(db), "--operator", "anna")
         finally:
             sim.operator("abort")
         assert busy.returncode == 6 and "a program is running" in busy.stderr
@@ -119,7 +119,7 @@ def test_read_dry_run_apply_interlock_restart(tmp_path: Path) -> None:
 
     with open_store(db, machine="mill-sim") as store:
         attempts = store.link_attempts()
-    assert [a.outcome for a in attempts] == ["applied", "refused"]
+    assert [a.outcome for a in attempts] == ["applied", "refused", "refused"]
     assert {a.operator for a in attempts} == {"anna"} and {a.machine for a in attempts} == {"mill-sim"}
     confirmed = {c.register: c for c in attempts[0].components}
     for register, value in new.items():

@@ -99,6 +99,7 @@ def run_write(args: argparse.Namespace) -> int:
     from setupfix.core.errors import SetupfixError
     from setupfix.inputs.stores import StoreRef
     from setupfix.links import open_link
+    from setupfix.links.errors import LinkConfigError, LinkError
     from setupfix.model import load_model
     from setupfix.usecases.correct import correct_report, load_request
     from setupfix.usecases.machine import current_from_link, load_plan, plan_of, write_to_control
@@ -114,7 +115,8 @@ def run_write(args: argparse.Namespace) -> int:
             try:
                 current = current_from_link(link, model)
             except SetupfixError as exc:
-                if ref is not None and getattr(exc, "exit_status", 1) == 8:  # unreachable: still recorded
+                # unreachable, or refused while reading (a program running): recorded all the same
+                if ref is not None and isinstance(exc, LinkError) and not isinstance(exc, LinkConfigError):
                     from setupfix.usecases.machine import Plan
 
                     unreached = Plan(str(args.report), "", "unknown", False, (), None)
