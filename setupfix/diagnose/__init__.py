@@ -11,6 +11,8 @@ Engine (layer 3, arrays in and out, no file I/O):
 * :mod:`~setupfix.diagnose.inference` — the tests with the cycle as the unit of evidence;
 * :mod:`~setupfix.diagnose.support` — support rules and diagnosability;
 * :mod:`~setupfix.diagnose.factors` — declared design factors, tested as a family of their own;
+* :mod:`~setupfix.diagnose.log_family` — without declared factors, the process log's own columns
+  tested first as the user's family (forward inside it, max-T over permutations of the parts);
 * :mod:`~setupfix.diagnose.select` — forward selection (ranked by what each explains, accepted on
   its per-cycle test with Bonferroni and cross-validation over cycles; keeps trying);
 * :mod:`~setupfix.diagnose.walk` — walk forward (declared, augmented, EWMA, none) and

@@ -14,6 +14,7 @@ from setupfix.core.params import Constraint, Interval, ValidatedParams
 from setupfix.diagnose.factors import FactorTests, Term, factor_tests
 from setupfix.diagnose.fit import Fit, fit_model, observations
 from setupfix.diagnose.inference import position_structure
+from setupfix.diagnose.log_family import log_factors, log_family
 from setupfix.diagnose.select import Selection, select_effects
 from setupfix.diagnose.terms import EffectSpec, Layout, Series
 from setupfix.diagnose.walk import (
@@ -202,6 +203,9 @@ class Diagnoser(ValidatedParams):
     score_from : int or None, default=None
         First cycle (1, 2, … in the series' order) the walk forward is scored from; None: the
         first from which the search's choice is stable (:func:`~setupfix.diagnose.walk.stable_from`).
+    log_first : bool, default=True
+        Without declared factors, test the process log's own columns first, as one family
+        (:mod:`~setupfix.diagnose.log_family`), before the broad search.
     """
 
     _parameter_constraints: ClassVar[dict[str, list[Constraint]]] = {
@@ -214,6 +218,7 @@ class Diagnoser(ValidatedParams):
         "lam": [Interval(float, 0, 1, closed="right"), None],
         "centre_fraction": [Interval(float, 0, 1, closed="both")],
         "score_from": [Interval(int, 1, None), None],
+        "log_first": [bool],
     }
 
     def __init__(
@@ -228,6 +233,7 @@ class Diagnoser(ValidatedParams):
         lam: float | None = 0.3,
         centre_fraction: float = CENTRE_FRACTION,
         score_from: int | None = None,
+        log_first: bool = True,
     ) -> None:
         self.alpha = alpha
         self.max_effects = max_effects
@@ -238,6 +244,7 @@ class Diagnoser(ValidatedParams):
         self.lam = lam
         self.centre_fraction = centre_fraction
         self.score_from = score_from
+        self.log_first = log_first
 
     def run(
         self, layout: Layout, series: Series, *, declared: tuple[EffectSpec, ...] = (), factors: tuple[Term, ...] = ()
@@ -247,7 +254,8 @@ class Diagnoser(ValidatedParams):
         ``declared`` effects (the model's ``[effects]``) belong to the declared model.
         ``factors`` are declared design factors (:mod:`setupfix.diagnose.factors`): tested
         first, as a family of their own (Holm at ``alpha``); those accepted enter the model
-        like effects found, and the search runs with them in its base.
+        like effects found, and the search runs with them in its base.  Without them, a
+        process log's own columns are tested first the same way (``log_first``).
 
         Raises
         ------
@@ -258,7 +266,11 @@ class Diagnoser(ValidatedParams):
         obs = observations(layout, series)
         if obs.n == 0:
             raise ParameterError("diagnose: the series has no measured dimension")
-        tests = factor_tests(layout, series, factors, alpha=self.alpha, obs=obs, declared=declared) if factors else None
+        tests: FactorTests | None = None
+        if factors:
+            tests = factor_tests(layout, series, factors, alpha=self.alpha, obs=obs, declared=declared)
+        elif self.log_first and log_factors(series):
+            tests = log_family(layout, series, alpha=self.alpha, obs=obs, declared=declared)
         pre = tests.found if tests is not None else ()
         selection = select_effects(
             layout,
@@ -286,7 +298,7 @@ class Diagnoser(ValidatedParams):
                     spec.unit(layout.unit),
                     error_summary(partial.residual, layout.lower, layout.upper).rms,
                     alike[i],
-                    "declared" if i < len(pre) else "search",
+                    tests.family if tests is not None and i < len(pre) else "search",
                     test.p_holm if test is not None else None,
                 )
             )
@@ -306,6 +318,7 @@ class Diagnoser(ValidatedParams):
                 alpha=self.alpha,
                 declared=declared,
                 factors=factors,
+                log_first=self.log_first,
                 score_from=None if self.score_from is None else self.score_from - 1,
             )
             if walk.late and not walk.stated and walk.scored_from is not None:

@@ -56,6 +56,8 @@ __all__ = [
     "factor_channels",
     "term_columns",
     "factor_tests",
+    "holm",
+    "registers_moving",
 ]
 
 Array = npt.NDArray[np.float64]
@@ -188,19 +190,24 @@ class FactorTests:
     found : tuple of EffectSpec
         The accepted blocks with the lower-order terms they contain, per register.
     notes : tuple of str
+    family : str
+        ``declared`` (``--factors``) or ``log`` (the process log's own columns,
+        :mod:`setupfix.diagnose.log_family`): the ``source`` of the effects found.
     """
 
     terms: tuple[Term, ...]
     tests: tuple[FactorTest, ...]
     found: tuple[EffectSpec, ...]
     notes: tuple[str, ...] = ()
+    family: str = "declared"
 
     def test_of(self, spec: EffectSpec) -> FactorTest | None:
         """The accepted test whose block holds ``spec`` (None for a term fitted with an accepted interaction)."""
         return next((t for t in self.tests if t.accepted and spec in t.specs), None)
 
 
-def _registers(layout: Layout) -> list[int]:
+def registers_moving(layout: Layout) -> list[int]:
+    """The tool registers that move a dimension (every such register when the model has no tools)."""
     moving = [j for j in layout.tools if np.any(layout.composite[j] != 0)]
     return moving or [j for j in range(layout.n_registers) if np.any(layout.composite[j] != 0)]
 
@@ -252,7 +259,7 @@ def factor_tests(
     for t in terms:
         model_terms += [Term((f,)) for f in t.factors if t.order > 1 and Term((f,)) not in model_terms]
     chans = term_columns(series, tuple(model_terms))
-    regs = _registers(layout)
+    regs = registers_moving(layout)
     specs: dict[tuple[Term, int, bool], tuple[EffectSpec, ...]] = {}
     cols: dict[tuple[Term, int, bool], Array] = {}
     for t in model_terms:

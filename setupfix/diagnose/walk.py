@@ -45,6 +45,7 @@ from setupfix.correction.explain import targets
 from setupfix.diagnose.covariates import typical_step
 from setupfix.diagnose.factors import Term, factor_tests
 from setupfix.diagnose.fit import RELATION_T, Fit, row_space_basis
+from setupfix.diagnose.log_family import log_family
 from setupfix.diagnose.select import select_effects
 from setupfix.diagnose.terms import EffectSpec, Layout, Series, effect_field
 
@@ -284,6 +285,7 @@ def walk_forward(
     alpha: float = 0.01,
     declared: tuple[EffectSpec, ...] = (),
     factors: tuple[Term, ...] = (),
+    log_first: bool = False,
     score_from: int | None = None,
 ) -> WalkForward:
     """Walk forward through ``series``; see the module text.
@@ -306,6 +308,9 @@ def walk_forward(
     factors : tuple of Term
         Declared design factors: tested on the past at each selection, those accepted
         part of the augmented model (b) with the effects the search finds.
+    log_first : bool, default=False
+        Without ``factors``, the process log's own columns tested first on the past at each
+        selection (:mod:`~setupfix.diagnose.log_family`).
     score_from : int, optional
         First cycle scored (index into the series); default the first from which the
         selection's choice is stable (:func:`stable_from`).  Moved back so that at least
@@ -344,7 +349,12 @@ def walk_forward(
         decl.add_until(k)
         if pos == 0 or (k - scored[0]) % every == 0:
             past = series.take(np.arange(k))
-            pre = factor_tests(layout, past, factors, alpha=alpha, declared=declared).found if factors else ()
+            if factors:
+                pre = factor_tests(layout, past, factors, alpha=alpha, declared=declared).found
+            elif log_first:
+                pre = log_family(layout, past, alpha=alpha, declared=declared).found
+            else:
+                pre = ()
             sel = select_effects(layout, past, alpha=alpha, declared=declared + pre)
             specs = pre + sel.found
             choices.append((k, tuple(sorted(_choice_key(s) for s in specs))))
