@@ -30,6 +30,7 @@ from setupfix.core.errors import ParseError, SourceLocation
 from setupfix.model.measurements import (
     ACTUAL_POSITION_COLUMNS,
     BETWEEN_COLUMN,
+    CALLOUT_COLUMN,
     DATUMS_COLUMN,
     FEATURE_DIRECTION_COLUMNS,
     FEATURE_ID_COLUMN,
@@ -217,6 +218,7 @@ def read_qif(path: str | Path | Source, *, unit: str | None = None) -> pd.DataFr
         source[i] = f"{name}:{_find(results[int(results_of[row])], record(kept, kept.index[row]), ns).sourceline}"
     columns.update(_feature_columns(kept, keys[keep].tolist(), chains, results, doc, mm, x_y_z=columns))
     columns[UNCERTAINTY_COLUMN] = _uncertainty(kept, results, name, ns, mm)
+    columns[CALLOUT_COLUMN] = kind[keep].map(lambda k: CALLOUT_OF_KIND.get(k, "")).to_numpy(dtype=object)
     columns.update(
         {
             "characteristic": labels.to_numpy(),
@@ -319,6 +321,9 @@ def _feature_columns(
     out.update({FEATURE_ID_COLUMN: feature_id, BETWEEN_COLUMN: between, DATUMS_COLUMN: datums})
     return out
 
+
+#: The ``callout`` word of a characteristic kind (``DistanceFrom`` is a location from a datum: none).
+CALLOUT_OF_KIND = {"DistanceBetween": "distance", "AngleBetween": "angle", "Position": "position"}
 
 #: Coverage factor of the expanded uncertainty the ``uncertainty`` column holds (ISO 14253-1, GUM).
 COVERAGE_FACTOR = 2.0

@@ -37,6 +37,8 @@ __all__ = [
     "FEATURE_ID_COLUMN",
     "BETWEEN_COLUMN",
     "DATUMS_COLUMN",
+    "CALLOUT_COLUMN",
+    "CALLOUTS",
     "UNCERTAINTY_COLUMN",
     "OPTIONAL_LENGTH_COLUMNS",
     "GEOMETRY_OUTPUT_COLUMNS",
@@ -84,6 +86,11 @@ FEATURE_ID_COLUMN: Final = "feature_id"
 BETWEEN_COLUMN: Final = "between"
 #: The datum reference frame, ``"A|B|C"`` in precedence order (a compound datum ``"A-B"``).
 DATUMS_COLUMN: Final = "datums"
+#: What the characteristic is, as the report's own type says it: ``"distance"`` (between features),
+#: ``"angle"`` (between features) or ``"position"`` (a true-position value); ``""`` when not stated.
+CALLOUT_COLUMN: Final = "callout"
+#: The words of :data:`CALLOUT_COLUMN`.
+CALLOUTS: Final[tuple[str, ...]] = ("distance", "angle", "position")
 #: Expanded measurement uncertainty U (k = 2) of the row's result, a length in the row's unit.
 UNCERTAINTY_COLUMN: Final = "uncertainty"
 #: Optional columns holding lengths: converted with the row's unit when present.
@@ -102,6 +109,7 @@ GEOMETRY_OUTPUT_COLUMNS: Final[tuple[str, ...]] = (
     FEATURE_ID_COLUMN,
     BETWEEN_COLUMN,
     DATUMS_COLUMN,
+    CALLOUT_COLUMN,
     UNCERTAINTY_COLUMN,
 )
 

@@ -53,7 +53,12 @@ from setupfix.core.errors import ModelError, Note, ParseError, SetupfixError, So
 from setupfix.inputs.cycles import ReadOptions
 from setupfix.model import normalise_name
 from setupfix.model.loader import RANGES_MM
-from setupfix.model.measurements import BETWEEN_COLUMN, FEATURE_DIRECTION_COLUMNS, FEATURE_ID_COLUMN
+from setupfix.model.measurements import (
+    BETWEEN_COLUMN,
+    CALLOUT_COLUMN,
+    FEATURE_DIRECTION_COLUMNS,
+    FEATURE_ID_COLUMN,
+)
 from setupfix.outputs.model_toml import SPINDLE, ScaffoldDimension, ScaffoldFeature, comment, render_scaffold
 from setupfix.usecases.model_map import Answer, answer_text
 
@@ -158,8 +163,6 @@ def _resolution(narrowest: float | None) -> float:
     return res
 
 
-#: The column naming what a characteristic is (``"distance"``, ``"position"``, …) where a reader states it.
-CALLOUT_COLUMN = "callout"
 #: Words of a characteristic's name that say it is a distance between two features (English, German,
 #: Spanish, Italian, Korean), used where the report states no callout type and no features.
 DISTANCE_WORDS = ("distance", "distanz", "abstand", "distancia", "distanza", "거리")

@@ -298,3 +298,24 @@ def test_a_negative_uncertainty_in_a_csv_is_refused_with_its_line(tmp_path: Path
     path.write_text("characteristic,nominal,actual,uncertainty\nA,1,1.001,0.001\nB,1,1.0,-0.002\n", encoding="utf-8")
     with pytest.raises(ParseError, match=r"neg\.csv:3.*uncertainty -0\.002 is negative"):
         parsers.read_report(path)
+
+
+PLATE = SHARED / "cmm-samples" / "qif" / "NIST_MTC_Incoming_PlateResults_20_samples.QIF"
+
+
+@pytest.mark.parametrize("path", [COVER, PLATE, BOX], ids=lambda p: p.name)
+def test_callout_says_what_the_qif_characteristic_type_is(path: Path) -> None:
+    """``callout`` is "distance" for a DistanceBetween characteristic and "position" for a Position one, counted
+    per part against the XML's own measurement elements (a DistanceFrom is a location: no callout)."""
+    table = _read(path)
+    root = etree.parse(str(path)).getroot()
+    results = root.xpath("//*[local-name()='MeasurementResults']")
+    assert len(results) == table["part"].nunique()
+    for word, tag in (
+        ("distance", "DistanceBetweenCharacteristicActual"),
+        ("position", "PositionCharacteristicActual"),
+    ):
+        per_part = table[table["callout"] == word].groupby("part", sort=False).size()
+        in_xml = [len(r.xpath(f".//*[local-name()='{tag}']")) for r in results]
+        assert sorted(per_part.reindex(table["part"].unique(), fill_value=0).tolist()) == sorted(in_xml), word
+    assert set(table["callout"].unique()) <= {"", "distance", "position"}
