@@ -14,7 +14,7 @@ from setupfix.core.params import Constraint, Interval, ValidatedParams
 from setupfix.diagnose.factors import FactorTests, Term, factor_tests
 from setupfix.diagnose.fit import Fit, fit_model, observations
 from setupfix.diagnose.inference import position_structure
-from setupfix.diagnose.log_family import log_factors, log_family
+from setupfix.diagnose.log_family import LOG_FAMILY, log_factors, log_family, log_recheck
 from setupfix.diagnose.select import Selection, select_effects
 from setupfix.diagnose.terms import EffectSpec, Layout, Series
 from setupfix.diagnose.walk import (
@@ -281,6 +281,9 @@ class Diagnoser(ValidatedParams):
             obs=obs,
             declared=declared + pre,
         )
+        if tests is not None and tests.family == LOG_FAMILY and selection.found:
+            tests = log_recheck(layout, series, tests, selection.found, alpha=self.alpha, obs=obs, declared=declared)
+            pre = tests.found
         found = pre + selection.found
         before = fit_model(layout, series, declared, obs=obs)
         after = fit_model(layout, series, declared + found, obs=obs)

@@ -9,28 +9,38 @@ for a declared design) leaves no degrees of freedom: ten columns on five tools i
 coefficients than twenty parts can carry.  So the family is tested hierarchically, by
 forward selection inside it:
 
-1. main effects.  Step k tests every column not yet accepted, on every register that
-   moves a dimension (the per-register ``process`` effect of
+1. main effects.  Step k tests every column not yet accepted on every register that moves
+   a dimension (tool or work offset: the per-register ``process`` effect of
    :mod:`setupfix.diagnose.candidates`), given the model's ``[effects]`` and the blocks
-   accepted so far: the multi-column cluster-robust Wald test with the part as the cluster
-   (CR2 leverage correction, Bell–McCaffrey degrees of freedom:
-   :func:`~setupfix.diagnose.inference.cluster_wald`).  The p-values are Holm-adjusted
-   over the tests of that step only (the remaining columns × registers,
-   :func:`~setupfix.diagnose.factors.holm`); the smallest is accepted when its adjusted p
-   is below ``alpha``, and the next step starts;
-2. interactions, of the columns accepted in 1 only (pairs): the product columns a main
-   effect does not hold (:func:`~setupfix.diagnose.factors.term_columns`), on each
-   register with both main effects fitted there, by the same rule;
+   accepted so far.  The statistic is what the block explains; its null is the log's rows
+   dealt to the parts at random (B seeded permutations, the same for every test of the
+   step), so shared per-part noise and a part's many cells are the permutation's to carry,
+   not an assumption's.  The step's family is its tests only (the remaining columns ×
+   registers) with the single-step max-T adjustment of Westfall & Young (1993) on each
+   statistic scaled by its permutation mean (:func:`max_t`): exact when the parts are
+   exchangeable, and it keeps the dependence of one log on every register where Holm's
+   bound (:func:`~setupfix.diagnose.factors.holm`) pays for it as if independent.  The
+   best is accepted when its adjusted p is below ``alpha``; the next step starts;
+2. interactions, of a column accepted on a register with any other column on that register
+   (weak heredity: the product columns the main effects do not hold,
+   :func:`~setupfix.diagnose.factors.term_columns`, with both main effects fitted there),
+   by the same rule;
 3. it stops when a step accepts nothing.
 
-The columns of a candidate on register j are those that add to the rank of the per-cycle
-design of the terms accepted on j (one level of a categorical column is the reference; a
-level on fewer than :data:`~setupfix.diagnose.factors.MIN_LEVEL_PARTS` parts is fitted,
-not tested).  Calibration (the log's rows permuted across parts: no claim in ≥ 95 % of
-runs) and the NIST plate: ``bench/diagnose_log_family.py``.
+The cluster-robust Wald test of a declared design (CR2, Bell–McCaffrey df) is too
+conservative here: a column on three of twenty parts has about two degrees of freedom, and
+Holm over some forty tests then refuses the plate's stick-out × speed (p 0.005, adjusted
+0.17; ``bench/diagnose_log_family.py``).  The columns of a candidate on register j are
+those that add to the rank of the per-cycle design of the terms accepted on j (one level of
+a categorical column is the reference; a level on fewer than
+:data:`~setupfix.diagnose.factors.MIN_LEVEL_PARTS` parts is fitted, not tested).
+Calibration (the log's rows permuted across the parts: no claim in ≥ 95 % of runs) and the
+NIST plate: ``bench/diagnose_log_family.py``.
 """
 
 from __future__ import annotations
+
+import dataclasses
 
 import numpy as np
 import numpy.typing as npt
@@ -39,14 +49,13 @@ from setupfix.diagnose.factors import (
     FactorTest,
     FactorTests,
     Term,
-    registers_moving,
     term_columns,
 )
 from setupfix.diagnose.fit import Observations, effect_columns, observations
 from setupfix.diagnose.inference import MIN_CYCLES, orth
 from setupfix.diagnose.terms import PRODUCT, EffectSpec, Layout, Series, channel_values
 
-__all__ = ["LOG_FAMILY", "PERMUTATIONS", "log_factors", "log_family", "max_t", "permutation_gains"]
+__all__ = ["LOG_FAMILY", "PERMUTATIONS", "log_factors", "log_family", "log_recheck", "max_t", "permutation_gains"]
 
 Array = npt.NDArray[np.float64]
 
@@ -174,7 +183,7 @@ def log_family(
     if series.n_cycles < MIN_CYCLES:
         note = f"process log: {series.n_cycles} cycle(s), too few to test its columns per part: none accepted"
         return FactorTests(mains, (), (), (note,), family=LOG_FAMILY)
-    regs = registers_moving(layout)
+    regs = [j for j in range(layout.n_registers) if np.any(layout.composite[j] != 0)]  # tools and work offsets
     n = series.n_cycles
     rng = np.random.default_rng(seed)
     base = np.hstack([obs.base] + [effect_columns(s, layout, series, obs) for s in declared])
@@ -247,3 +256,78 @@ def log_family(
     # lower orders first (an interaction after the main effects it holds)
     found = tuple(sorted(fitted, key=lambda s: PRODUCT in str(s.channel)))
     return FactorTests(mains, tuple(tests), found, (), family=LOG_FAMILY)
+
+
+def log_recheck(
+    layout: Layout,
+    series: Series,
+    family: FactorTests,
+    others: tuple[EffectSpec, ...],
+    *,
+    alpha: float = 0.01,
+    obs: Observations | None = None,
+    declared: tuple[EffectSpec, ...] = (),
+    permutations: int = PERMUTATIONS,
+    seed: int = 0,
+) -> FactorTests:
+    """The family's accepted blocks tested again once the broad search's effects are in the model.
+
+    A log column that tracks time (a setting changed in blocks) can stand in for a step or a
+    drift the search finds afterwards; the parts, permuted, are no longer exchangeable then.
+    Each accepted block is tested given every other effect (``others`` and the rest of the
+    family) by the same permutation statistic, unadjusted; the worst is dropped while its p is
+    at least ``alpha`` (a main effect is kept while an interaction on its register holds it).
+
+    Returns
+    -------
+    FactorTests
+        ``family`` with the dropped tests no longer accepted, ``found`` without their columns,
+        and a note per dropped block.
+    """
+    obs = observations(layout, series) if obs is None else obs
+    kept = [t for t in family.tests if t.accepted]
+    if not kept or not others or series.n_cycles < MIN_CYCLES:
+        return family
+    n = series.n_cycles
+    rng = np.random.default_rng(seed + 1)
+    base = np.hstack([obs.base] + [effect_columns(s, layout, series, obs) for s in (*declared, *others)])
+    dropped: list[tuple[FactorTest, float]] = []
+    while kept:
+        held = {(t.register, f) for t in kept if t.term.order > 1 for f in t.term.factors}
+        testable = [t for t in kept if not (t.term.order == 1 and (t.register, t.term.factors[0]) in held)]
+        if not testable:
+            break
+        gone = {s for t, _ in dropped for s in t.specs}
+        perms = np.argsort(rng.random((permutations, n)), axis=1)
+        gains = []
+        for t in testable:
+            j = layout.register_ids.index(t.register)
+            ctx = [s for s in family.found if s not in gone and s not in t.specs]
+            X = np.hstack([base] + [effect_columns(s, layout, series, obs) for s in ctx])
+            Q = orth(X)
+            r = obs.z - Q @ (Q.T @ obs.z)
+            pat = np.where(obs.cycle[:, None] == np.arange(n)[None, :], layout.composite[j][obs.dim][:, None], 0.0)
+            M = pat - Q @ (Q.T @ pat)
+            V = np.column_stack([channel_values(series, str(s.channel)) for s in t.specs])
+            gains.append(permutation_gains(V - V.mean(axis=0), M.T @ r, M.T @ M, perms))
+        p, _ = max_t(np.column_stack(gains))
+        worst = int(np.argmax(p))
+        if p[worst] < alpha:
+            break
+        dropped.append((testable[worst], float(p[worst])))
+        kept.remove(testable[worst])
+    if not dropped:
+        return family
+    gone = {s for t, _ in dropped for s in t.specs}
+    kept_regs = {t.register for t in kept}
+    tested = {s for t in family.tests if t.accepted for s in t.specs}
+    found = tuple(s for s in family.found if s not in gone and (s in tested or s.register in kept_regs))
+    out = {id(t) for t, _ in dropped}
+    tests = tuple(dataclasses.replace(t, accepted=False) if id(t) in out else t for t in family.tests)
+    what = ", ".join(s.target for s in others[:3]) + (" …" if len(others) > 3 else "")
+    notes = tuple(
+        f"process log: {t.term.name} on {t.register} taken first, then not needed once the search's "
+        f"{what} is in the model (p {p:.2g}): dropped"
+        for t, p in dropped
+    )
+    return dataclasses.replace(family, tests=tests, found=found, notes=family.notes + notes)
