@@ -22,6 +22,8 @@ extrapolated to 100 machines; what must stay flat (import, series) is compared s
 
     .ci/postgres python -m bench.store_scale [--budget 240] [--machines 100]
     # or --db postgresql://… ; writes bench/results/store_scale.txt
+    python -m bench.store_scale --db URL --read-only [--rounds 5]   # a database a run filled: the read alone
+    # → bench/results/store_scale_read.txt
 """
 
 from __future__ import annotations
@@ -164,10 +166,16 @@ def main() -> None:
     ap.add_argument("--machines", type=int, default=TARGET_MACHINES)
     ap.add_argument("--hours", type=int, default=HOURS, help="reports per machine")
     ap.add_argument("--imports", type=int, default=200, help="reports imported through the store per stage")
-    ap.add_argument("--out", default=str(OUT))
+    ap.add_argument("--read-only", action="store_true", help="time the read of a database a run filled, no fill")
+    ap.add_argument("--rounds", type=int, default=5, help="--read-only: reads of each kind (best and median)")
+    ap.add_argument("--out", default=None)
     args = ap.parse_args()
     if not args.db:
         sys.exit("store_scale: give --db postgresql://… (or run under .ci/postgres)")
+    if args.read_only:
+        read_only(args.db, args.rounds, Path(args.out or OUT.with_name("store_scale_read.txt")))
+        return
+    args.out = args.out or str(OUT)
     import psycopg
 
     lines = [
@@ -249,6 +257,36 @@ def main() -> None:
     lines.append(f"filled {last[1]:,} of {target_rows:,} rows ({100 * last[1] / target_rows:.0f} %) in {fill_s:.0f} s")
     Path(args.out).write_text("\n".join(lines) + "\n")
     print("\n".join(lines[-4:]))
+
+
+def read_only(url: str, rounds: int, out: Path) -> None:
+    """One machine-year read from a filled database, ``rounds`` times each way, alternating: the store's read
+    (COPY) and the row read it replaced (the reference), best and median seconds, and whether they agree."""
+    with open_store(url) as store:
+        rows = store.count("measurement")
+    copy, old, same = [], [], True
+    for _ in range(rounds):
+        with open_store(url, machine="bench000") as store:
+            assert isinstance(store, SQLStore)
+            start = time.perf_counter()
+            frame = store.measurements()
+            copy.append(time.perf_counter() - start)
+            start = time.perf_counter()
+            reference = SQLStore.measurements(store)
+            old.append(time.perf_counter() - start)
+            same = same and frame.equals(reference) and list(frame.dtypes) == list(reference.dtypes)
+    lines = [
+        f"# bench/store_scale.py --read-only --rounds {rounds}",
+        f"# {time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}, {os.cpu_count()} cores, load "
+        f"{os.getloadavg()[0]:.1f}",
+        f"store: {rows:,} measurement rows; one machine-year: {len(frame):,} rows",
+        f"COPY read (store.measurements):        best {min(copy):.3f} s, median {statistics.median(copy):.3f} s",
+        f"row read (reference, replaced):        best {min(old):.3f} s, median {statistics.median(old):.3f} s",
+        f"ratio (row / COPY): best {min(old) / min(copy):.2f}, median "
+        f"{statistics.median(old) / statistics.median(copy):.2f}; the same frame: {'yes' if same else 'NO'}",
+    ]
+    out.write_text("\n".join(lines) + "\n")
+    print("\n".join(lines))
 
 
 if __name__ == "__main__":
