@@ -79,6 +79,7 @@ __all__ = [
     "MachineSummary",
     "open_store",
     "report_tables",
+    "report_rows",
     "excluded_reports",
     "EXCLUDED_REASONS",
     "stored_corrections",
@@ -400,6 +401,23 @@ def report_tables(store: Store, *, include_excluded: bool = False) -> list[tuple
     starts = np.flatnonzero(np.r_[True, keys[1:] != keys[:-1]])
     ends = np.r_[starts[1:], len(keys)]
     return [(records[str(keys[a])], rows.iloc[a:b]) for a, b in zip(starts, ends, strict=True)]
+
+
+def report_rows(
+    store: Store, *, include_excluded: bool = False
+) -> tuple[list[ReportRecord], pd.DataFrame, np.ndarray[Any, np.dtype[np.int64]]]:
+    """:func:`report_tables` as one frame: (each report's record, all their rows, each report's first row).
+
+    The same rows in the same order as :func:`report_tables` (``report_sha256`` dropped), for a
+    reader that handles a machine's whole history at once instead of 8,760 per-report slices.
+    """
+    records = {r.sha256: r for r in store.reports()}
+    rows = store.measurements(include_excluded=include_excluded)
+    keys = rows.pop("report_sha256").to_numpy()
+    if not len(keys):
+        return [], rows, np.zeros(0, dtype=np.int64)
+    starts = np.flatnonzero(np.r_[True, keys[1:] != keys[:-1]]).astype(np.int64)
+    return [records[str(k)] for k in keys[starts]], rows, starts
 
 
 def excluded_reports(store: Store) -> list[ReportRecord]:
