@@ -120,7 +120,14 @@ def format_diagnosis(out: DiagnoseOutcome, verbose: bool = False) -> str:
         f"residual of the declared model: RMS {_f(d.error_before.rms)} {unit}, max {_f(d.error_before.max)}, "
         f"out of tolerance {d.error_before.out_of_tolerance}",
     ]
-    if d.factors is not None:
+    if d.factors is not None and d.factors.family == "log":
+        taken = [t for t in d.factors.tests if t.accepted]
+        lines.append(
+            f"process log columns tested first ({len(d.factors.terms)} columns, {len(d.factors.tests)} tests in "
+            "steps; p from permutations of the parts, adjusted over each step): "
+            + (", ".join(f"{t.term.name} on {t.register} (adjusted p {t.p_holm:.2g})" for t in taken) or "none taken")
+        )
+    elif d.factors is not None:
         lines.append(
             f"declared factors ({len(d.factors.tests)} tests, the part as the unit; p Holm-adjusted over them):"
         )
@@ -132,10 +139,11 @@ def format_diagnosis(out: DiagnoseOutcome, verbose: bool = False) -> str:
     if d.effects:
         lines.append("effects the model lacks:")
         for e in d.effects:
+            who = "from the log" if e.source == "log" else "declared"
             how = (
                 ""
                 if e.source == "search"
-                else (f"   declared, p {e.p:.2g}" if e.p is not None else "   declared, with its interaction")
+                else (f"   {who}, p {e.p:.2g}" if e.p is not None else f"   {who}, with its interaction")
             )
             lines.append(
                 f"  {e.kind:9s} {e.target:40s} {e.estimate:+.4g} ± {e.stderr:.2g} {e.unit}"

@@ -19,8 +19,11 @@ forward selection inside it:
    registers) with the single-step max-T adjustment of Westfall & Young (1993) on each
    statistic scaled by its permutation mean (:func:`max_t`): exact when the parts are
    exchangeable, and it keeps the dependence of one log on every register where Holm's
-   bound (:func:`~setupfix.diagnose.factors.holm`) pays for it as if independent.  The
-   best is accepted when its adjusted p is below ``alpha``; the next step starts;
+   bound (:func:`~setupfix.diagnose.factors.holm`) pays for it as if independent.  When the
+   smallest adjusted p is below ``alpha`` its column is taken, on the register where it
+   explains the most (a tool's effect leaks into a work offset sharing some of its
+   dimensions, where it can rank first: the search's ranking by what each explains); the
+   accepted test carries that smallest adjusted p; the next step starts;
 2. interactions, of a column accepted on a register with any other column on that register
    (weak heredity: the product columns the main effects do not hold,
    :func:`~setupfix.diagnose.factors.term_columns`, with both main effects fitted there),
@@ -28,13 +31,15 @@ forward selection inside it:
 3. it stops when a step accepts nothing.
 
 The cluster-robust Wald test of a declared design (CR2, Bell–McCaffrey df) is too
-conservative here: a column on three of twenty parts has about two degrees of freedom, and
-Holm over some forty tests then refuses the plate's stick-out × speed (p 0.005, adjusted
-0.17; ``bench/diagnose_log_family.py``).  The columns of a candidate on register j are
-those that add to the rank of the per-cycle design of the terms accepted on j (one level of
-a categorical column is the reference; a level on fewer than
-:data:`~setupfix.diagnose.factors.MIN_LEVEL_PARTS` parts is fitted, not tested).
-Calibration (the log's rows permuted across the parts: no claim in ≥ 95 % of runs) and the
+conservative for this family: a column on three of twenty parts leaves it few degrees of
+freedom, and Holm over some forty tests (every column at once, type II) refuses the plate's
+stick-out × speed on T5A (p 0.0013, Holm 0.048: ``bench/diagnose_log_family.py`` A).
+
+The columns of a candidate on register j are those that add to the rank of the per-cycle
+design of the terms accepted on j (one level of a categorical column is the reference; a
+level on fewer than :data:`~setupfix.diagnose.factors.MIN_LEVEL_PARTS` parts is fitted, not
+tested).  A block taken first is tested again once the search's effects are in the model
+(:func:`log_recheck`).  Calibration (the log's rows permuted across the parts: no claim in ≥ 95 % of runs) and the
 NIST plate: ``bench/diagnose_log_family.py``.
 """
 
@@ -244,6 +249,11 @@ def log_family(
             p, adj = max_t(np.column_stack(gains))
             best = int(np.argmin(adj - 1e-9 * np.array([x[4] for x in step])))  # ties: the larger F
             ok = bool(adj[best] < alpha)
+            column_p = float(adj[best])
+            if ok:  # the column is related: take it on the register where it explains the most
+                same = [i for i, x in enumerate(step) if x[0] == step[best][0]]
+                best = max(same, key=lambda i: (step[i][4], -adj[i]))
+                adj[best] = column_p  # what was tested: the column, through the registers
             tests += [
                 FactorTest(t, layout.register_ids[j], sp, f, float(pi), float(a), q, ok and i == best)
                 for i, ((t, j, _, sp, f, q), pi, a) in enumerate(zip(step, p, adj, strict=True))

@@ -210,12 +210,15 @@ def _runs(names: list[str]) -> str:
 
 def level_words(spec: EffectSpec, series: Series) -> str | None:
     """A categorical process effect's levels in words with the parts that carry them:
-    ``doe_tool_length Long (parts 11–18)``, a product ``… and …``; None for other effects."""
-    if spec.kind != "process" or spec.channel is None or "=" not in spec.channel:
+    ``doe_tool_length Long (parts 11–18)``, a product ``… and …``; a numeric log column that is 0 or 1 on
+    every part (``long_tool``) as the column on the parts where it is 1; None for other effects."""
+    if spec.kind != "process" or spec.channel is None:
         return None
     try:
         values = channel_values(series, spec.channel)
     except KeyError:
+        return None
+    if "=" not in spec.channel and not np.isin(values, (0.0, 1.0)).all():
         return None
     words = " and ".join(p.replace("=", " ", 1) if "=" in p else p for p in spec.channel.split(PRODUCT))
     ids = list(series.cycles) if series.cycles else [str(k + 1) for k in range(series.n_cycles)]
