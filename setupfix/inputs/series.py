@@ -35,7 +35,7 @@ from setupfix.inputs.series_logs import TempLog, store_temperatures, temperature
 from setupfix.inputs.stores import StoreRef
 from setupfix.model import PartMeasurement, ProcessModel, load_model, match_parts
 from setupfix.model.effects import EffectsSection
-from setupfix.model.measurements import did_you_mean
+from setupfix.model.measurements import did_you_mean, match_reports
 
 __all__ = ["SeriesInput", "load_series", "channel_span"]
 
@@ -106,16 +106,21 @@ def load_series(
     where = StoreRef.of(db).location if db is not None else ""
     if db is not None:
         from setupfix.inputs.smoothing import excluded_note
-        from setupfix.store import excluded_reports, report_tables, stored_corrections
+        from setupfix.store import excluded_reports, report_rows, stored_corrections
 
         with StoreRef.of(db).for_model(model).open() as store:
             if not include_excluded:
                 excluded = len(excluded_reports(store))
                 if excluded:
                     notes.append(excluded_note(excluded, "the series"))
-            for rec, table in report_tables(store, include_excluded=include_excluded):
-                table = table[~table["reference"]]
-                parts += match_parts(model, table, source=f"{where}#{rec.name}")
+            records, rows, starts = report_rows(store, include_excluded=include_excluded)
+            if records:  # every report matched in one pass (a machine-year is 8,760 reports)
+                measured = ~rows["reference"].to_numpy(dtype=bool)
+                table = rows[measured]
+                kept_before = np.r_[0, np.cumsum(measured)]
+                sources = [f"{where}#{rec.name}" for rec in records]
+                for found in match_reports(model, table, kept_before[starts], sources):
+                    parts += found
                 tables.append(table)
             if corrections is None:
                 log = stored_corrections(store, model)

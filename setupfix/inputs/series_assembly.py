@@ -41,21 +41,35 @@ def report_coordinates(model: ProcessModel, tables: Sequence[pd.DataFrame]) -> n
 
     Used where the model has no feature positions: a characteristic's location is the
     dimension's coordinate for a position effect.  Names repeated across stations are
-    left out (their location would be ambiguous).
+    left out (their location would be ambiguous).  The first row (tables in order, rows in
+    order) naming the dimension with all three coordinates readable gives it.
+
+    Returns
+    -------
+    ndarray of shape (n_dimensions, 3) [the reports' length unit]
     """
     out = np.full((len(model.dimensions), 3), np.nan)
     index: dict[str, list[int]] = {}
     for q, dim in enumerate(model.dimensions):
         for key in dim.keys:
             index.setdefault(key, []).append(q)
+    names: list[np.ndarray] = []
+    coords: list[np.ndarray] = []
     for table in tables:
         if not {"x", "y", "z", "characteristic"} <= set(table.columns):
             continue
-        xyz = table[["x", "y", "z"]].apply(pd.to_numeric, errors="coerce").to_numpy(dtype=float)
-        for name, row in zip(table["characteristic"].astype(str), xyz, strict=True):
-            qs = index.get(normalise_name(name), [])
-            if len(qs) == 1 and np.isfinite(row).all() and np.isnan(out[qs[0]]).all():
-                out[qs[0]] = row
+        names.append(table["characteristic"].astype(str).to_numpy(dtype=object))
+        coords.append(np.column_stack([pd.to_numeric(table[c], errors="coerce").to_numpy(dtype=float) for c in "xyz"]))
+    if not names:
+        return out
+    name = np.concatenate(names)
+    xyz = np.concatenate(coords)
+    unique, inverse = np.unique(name.astype(str), return_inverse=True)
+    single = [index.get(normalise_name(str(u)), []) for u in unique]
+    dim_of = np.array([qs[0] if len(qs) == 1 else -1 for qs in single], dtype=np.int64)[inverse.reshape(-1)]
+    rows = np.flatnonzero((dim_of >= 0) & np.isfinite(xyz).all(axis=1))
+    dims, first = np.unique(dim_of[rows], return_index=True)
+    out[dims] = xyz[rows[first]]
     return out
 
 

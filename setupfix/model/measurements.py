@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import difflib
 import re
-from collections.abc import Iterable
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
 from typing import Final
 
@@ -44,6 +44,7 @@ __all__ = [
     "GEOMETRY_OUTPUT_COLUMNS",
     "PartMeasurement",
     "match_parts",
+    "match_reports",
     "suggest_names",
     "closest_names",
     "did_you_mean",
@@ -263,33 +264,122 @@ def match_parts(model: ProcessModel, table: pd.DataFrame, *, source: str = "<rep
     """
     if table.empty:
         raise MatchError("the report holds no measured characteristic", location=SourceLocation(source))
-    lookup = _lookup(model)
-    n = len(model.dimensions)
-    # Plain per-column lists: row access through DataFrame.iterrows costs ~50 µs a row,
-    # which dominated the reading of large multi-part reports.
-    count = len(table)
-    names = table["characteristic"].astype(str).tolist()
-    values = _numbers(table, "deviation", count)
-    nominals, lowers, uppers, stated_u = (
-        _numbers(table, c, count) for c in ("nominal", "lower", "upper", UNCERTAINTY_COLUMN)
-    )
-    wheres = [_text(w) or source for w in _column(table, "source", count)]
-    stations = [_text(v) for v in _column(table, "station", count)]
-    units = [_text(v) or "mm" for v in _column(table, "unit", count)]
-    part_of = [_text(v) or "" for v in _column(table, "part", count)]
-    reports = _column(table, "report", count)
-    stamps = _column(table, "timestamp", count)
-    rows_of: dict[str, list[int]] = {}
-    for i, key in enumerate(part_of):
-        rows_of.setdefault(key, []).append(i)
-    keys = [normalise_name(name) for name in names]
-    station_keys = [normalise_name(s) if s is not None else None for s in stations]
-    dim_ids = np.array([d.id for d in model.dimensions], dtype=object)
-    factors = {u: length_factor(u, model.unit) for u in set(units)}
-    row_factor = np.array([factors[u] for u in units], dtype=float)
+    cols = _Rows.of(model, table)
+    return _match_slice(model, cols, 0, len(table), source, {})
+
+
+def match_reports(
+    model: ProcessModel, table: pd.DataFrame, starts: npt.NDArray[np.int64], sources: Sequence[str]
+) -> list[list[PartMeasurement]]:
+    """:func:`match_parts` of many reports stored one after another in one table, in one pass.
+
+    Parameters
+    ----------
+    model : ProcessModel
+    table : DataFrame
+        The reports' canonical rows, each report's rows together, in report order.
+    starts : ndarray of int, shape (n_reports,)
+        The first row of each report (ascending; a report ends where the next one starts,
+        the last at the table's end).  A report with no row (two equal starts) is refused
+        as :func:`match_parts` refuses an empty table.
+    sources : sequence of str, length n_reports
+        Each report's name, for messages and as the default ``source`` of its rows.
+
+    Returns
+    -------
+    list of list of PartMeasurement
+        Per report, exactly what ``match_parts(model, table.iloc[a:b], source=sources[k])`` returns:
+        the columns are converted once for the whole table instead of once per report.
+    """
+    bounds = np.r_[np.asarray(starts, dtype=np.int64), len(table)]
+    cols = _Rows.of(model, table)
     suggestions: dict[str, tuple[str, ...]] = {}
+    out: list[list[PartMeasurement]] = []
+    for k, source in enumerate(sources):
+        a, b = int(bounds[k]), int(bounds[k + 1])
+        if a >= b:
+            raise MatchError("the report holds no measured characteristic", location=SourceLocation(source))
+        out.append(_match_slice(model, cols, a, b, source, suggestions))
+    return out
+
+
+@dataclass(frozen=True)
+class _Rows:
+    """A canonical table's columns as plain lists and arrays (row access through pandas costs ~50 µs a row)."""
+
+    names: list[str]
+    keys: list[str]
+    values: npt.NDArray[np.float64]
+    given: tuple[npt.NDArray[np.float64], ...]  # nominal, lower, upper, uncertainty
+    sources: list[str | None]
+    stations: list[str | None]
+    station_keys: list[str | None]
+    units: list[str]
+    factors: dict[str, float]
+    row_factor: npt.NDArray[np.float64]
+    part_of: list[str]
+    reports: list[object]
+    stamps: list[object]
+    lookup: dict[str, list[tuple[int, str | None, int]]]
+    dim_ids: npt.NDArray[np.object_]
+    zones: bool
+
+    @classmethod
+    def of(cls, model: ProcessModel, table: pd.DataFrame) -> _Rows:
+        count = len(table)
+        names = table["characteristic"].astype(str).tolist()
+        normal = {name: normalise_name(name) for name in set(names)}
+        stations = [_text(v) for v in _column(table, "station", count)]
+        station_normal = {s: normalise_name(s) for s in set(stations) if s is not None}
+        units = [_text(v) or "mm" for v in _column(table, "unit", count)]
+        factors = {u: length_factor(u, model.unit) for u in set(units)}
+        return cls(
+            names=names,
+            keys=[normal[name] for name in names],
+            values=_numbers(table, "deviation", count),
+            given=tuple(_numbers(table, c, count) for c in ("nominal", "lower", "upper", UNCERTAINTY_COLUMN)),
+            sources=[_text(w) for w in _column(table, "source", count)],
+            stations=stations,
+            station_keys=[station_normal[s] if s is not None else None for s in stations],
+            units=units,
+            factors=factors,
+            row_factor=np.array([factors[u] for u in units], dtype=float),
+            part_of=[_text(v) or "" for v in _column(table, "part", count)],
+            reports=_column(table, "report", count),
+            stamps=_column(table, "timestamp", count),
+            lookup=_lookup(model),
+            dim_ids=np.array([d.id for d in model.dimensions], dtype=object),
+            zones=any(d.zone for d in model.dimensions),
+        )
+
+
+def _match_slice(
+    model: ProcessModel, cols: _Rows, a: int, b: int, source: str, suggestions: dict[str, tuple[str, ...]]
+) -> list[PartMeasurement]:
+    """The parts of rows ``a:b`` of ``cols`` (one report, named ``source``) matched to the model.
+
+    Row indices inside are relative to ``a``; ``suggestions`` caches :func:`suggest_names` across calls.
+    """
+    lookup = cols.lookup
+    n = len(model.dimensions)
+    names = cols.names[a:b]
+    keys = cols.keys[a:b]
+    values = cols.values[a:b]
+    nominals, lowers, uppers, stated_u = (g[a:b] for g in cols.given)
+    wheres = [w or source for w in cols.sources[a:b]]
+    stations = cols.stations[a:b]
+    station_keys = cols.station_keys[a:b]
+    units = cols.units[a:b]
+    factors = cols.factors
+    row_factor = cols.row_factor[a:b]
+    reports = cols.reports[a:b]
+    stamps = cols.stamps[a:b]
+    dim_ids = cols.dim_ids
+    zones = cols.zones
+    rows_of: dict[str, list[int]] = {}
+    for i, key in enumerate(cols.part_of[a:b]):
+        rows_of.setdefault(key, []).append(i)
     parts: list[PartMeasurement] = []
-    zones = any(d.zone for d in model.dimensions)
     for key, rows in rows_of.items():
         deviation = np.full(n, np.nan)
         zone = np.full((n, 2), np.nan)
