@@ -46,9 +46,13 @@ def test_the_designed_factors_are_named_per_cutter_not_wear_or_drift(tmp_path: P
     residual drops from 0.097 to 0.061 mm and the out-of-tolerance cells from 23 to 4.  (The walk forward
     still prefers EWMA here: W1, the distances' register, moves between parts and EWMA follows it;
     test_diagnose_plate.py.)"""
-    out = diagnose_reports(
+    out = diagnose_reports(  # the broad search alone (the log family first: test_log_family.py)
         DiagnoseRequest(
-            MODEL, (PLATE,), process=str(LOG), augment=str(tmp_path / "aug.toml"), diagnoser=Diagnoser(walk=False)
+            MODEL,
+            (PLATE,),
+            process=str(LOG),
+            augment=str(tmp_path / "aug.toml"),
+            diagnoser=Diagnoser(walk=False, log_first=False),
         )
     )
     d = out.diagnosis
@@ -140,8 +144,13 @@ def test_cli_process_option_json_and_a_bad_log(tmp_path: Path, capsys: pytest.Ca
     out, err = capsys.readouterr()
     assert code == 0, err
     doc = json.loads(out)
-    e = next(e for e in doc["effects"] if e["kind"] == "process")
-    assert "doe_tool_length=Long" in e["channel"] and e["register"] in {"T1", "T5A", "T5B", "T4A", "T4B"}
+    # the log's columns first (tested; a level on too few parts, the operator's, is fitted with them)
+    e = next(e for e in doc["effects"] if e["kind"] == "process" and e["p"] is not None)
+    assert (
+        e["source"] == "log"
+        and "doe_tool_length=Long" in e["channel"]
+        and e["register"] in {"T1", "T5A", "T5B", "T4A", "T4B"}
+    )
     assert {"kind", "target", "estimate", "stderr", "unit", "rms_after"} <= e.keys()
     bad = tmp_path / "bad.csv"
     bad.write_text("serial,rpm\n1,9000\n1,6000\n", encoding="utf-8")
