@@ -27,18 +27,20 @@ def test_map_lists_the_questions_then_answers_them(tmp_path: Path, capsys: pytes
     model = _init(tmp_path, capsys)
     assert main(["model", "map", str(model)]) == 0
     out = capsys.readouterr().out
-    assert "23 open question(s)" in out and "CYLINDER2 (F2, F3)" in out and "POSITION1" in out
+    # 21 features asked; DS002 and DS003 are QIF DistanceBetween callouts: distances no work offset moves, not asked
+    assert "21 open question(s)" in out and "CYLINDER2 (F2, F3)" in out and "POSITION1" in out
+    assert "DS002" not in out and "DS003" not in out
     assert "18.27, 65.66, 2.295" in out
     assert main(["model", "map", str(model), "--json"]) == 0
     listing = json.loads(capsys.readouterr().out)
-    assert listing["draft"] is True and len(listing["questions"]) == 23
+    assert listing["draft"] is True and len(listing["questions"]) == 21
     q2 = next(q for q in listing["questions"] if q["name"] == "Q2")
     assert q2["label"] == "CYLINDER2" and {f["role"] for f in q2["features"]} == {"size", "location"}
     answers = tmp_path / "answers.csv"
     answers.write_text("feature,wks,tool\nDIAMETER5*,,T2\nCYLINDER*,G54,T4\n", encoding="utf-8")
     assert main(["model", "map", str(model), "--answers", str(answers), "--answer", "*=G54,T9"]) == 0
     out = capsys.readouterr().out
-    assert "23 question(s) answered" in out and "draft = true removed" in out
+    assert "21 question(s) answered" in out and "draft = true removed" in out
     raw = tomllib.loads(model.read_text(encoding="utf-8"))
     assert set(raw["tools"]) == {"T2", "T4", "T9"} and "draft" not in raw["process"]
     assert main(["model", "map", str(model)]) == 0
