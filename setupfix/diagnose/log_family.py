@@ -262,7 +262,7 @@ def log_family(
                 break
             t, j, rare, block_specs = step[best][:4]
             on[j] += [Term((fa,)) for fa in t.factors if t.order > 1 and Term((fa,)) not in on[j]] + [t]
-            fitted += [*rare, *block_specs]
+            fitted += [*block_specs, *rare]  # the tested columns first, then what is fitted with them
     # lower orders first (an interaction after the main effects it holds)
     found = tuple(sorted(fitted, key=lambda s: PRODUCT in str(s.channel)))
     return FactorTests(mains, tuple(tests), found, (), family=LOG_FAMILY)
