@@ -268,3 +268,27 @@ def add_time_limit_option(p: argparse.ArgumentParser) -> None:
         "recommended (HOLD, not solved); the solver's stages end on work limits, so the answer does not "
         "depend on the machine's load",
     )
+
+
+def emit_outcome(
+    html: str | None, page: Callable[[], str], as_json: bool, doc: Callable[[], Any], text: Callable[[], str]
+) -> int:
+    """What ``spc`` and ``replay`` print: the page to ``--html`` (``-``: the page is the whole output, on
+    stdout), then the JSON document or the text; the page's path named on stderr.  Returns 0."""
+    import json
+    import sys
+
+    from setupfix.outputs.writers import write_text
+
+    if html:
+        write_text(html, page())
+        if html == "-":
+            return 0
+    if as_json:
+        json.dump(doc(), sys.stdout, indent=2)
+        sys.stdout.write("\n")
+    else:
+        sys.stdout.write(text() + "\n")
+    if html and html != "-":
+        print(f"page → {html}", file=sys.stderr)
+    return 0

@@ -3,10 +3,9 @@
 from __future__ import annotations
 
 import argparse
-import json
-import sys
 from pathlib import Path
 
+from setupfix.cli.common import emit_outcome
 from setupfix.core.errors import ParameterError, SourceLocation, StoreError
 
 #: ``--grid`` keys and how their alternatives are read.
@@ -100,7 +99,7 @@ def _share(text: str) -> float | None:
 def run(args: argparse.Namespace) -> int:
     from setupfix.inputs.stores import StoreRef
     from setupfix.model.safety import parse_rules
-    from setupfix.outputs.writers import check_target, write_text
+    from setupfix.outputs.writers import check_target
     from setupfix.store import is_server
     from setupfix.usecases.history import store_location
     from setupfix.usecases.replay import ReplayRequest, format_replay, replay_history, replay_json
@@ -128,15 +127,10 @@ def run(args: argparse.Namespace) -> int:
         include_excluded=args.include_excluded,
     )
     outcome = replay_history(request)
-    if args.html:
-        write_text(args.html, replay_page(outcome))
-        if args.html == "-":
-            return 0
-    if args.json:
-        json.dump(replay_json(outcome), sys.stdout, indent=2)
-        sys.stdout.write("\n")
-    else:
-        sys.stdout.write(format_replay(outcome) + "\n")
-    if args.html and args.html != "-":
-        print(f"page → {args.html}", file=sys.stderr)
-    return 0
+    return emit_outcome(
+        args.html,
+        lambda: replay_page(outcome),
+        args.json,
+        lambda: replay_json(outcome),
+        lambda: format_replay(outcome),
+    )

@@ -3,11 +3,9 @@
 from __future__ import annotations
 
 import argparse
-import json
-import sys
 from pathlib import Path
 
-from setupfix.cli.common import whole_number
+from setupfix.cli.common import emit_outcome, whole_number
 from setupfix.core.errors import ParameterError, SourceLocation, StoreError
 
 
@@ -72,7 +70,7 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
 
 
 def run(args: argparse.Namespace) -> int:
-    from setupfix.outputs.writers import check_target, write_text
+    from setupfix.outputs.writers import check_target
     from setupfix.store import is_server, open_store
     from setupfix.usecases.history import store_location
     from setupfix.usecases.spc_report import SpcRequest, format_spc, spc_json, spc_report
@@ -101,15 +99,6 @@ def run(args: argparse.Namespace) -> int:
     )
     with open_store(location, machine=args.machine) as store:
         outcome = spc_report(store, request)
-    if args.html:
-        write_text(args.html, spc_page(outcome))
-        if args.html == "-":  # the page is the output
-            return 0
-    if args.json:
-        json.dump(spc_json(outcome), sys.stdout, indent=2)
-        sys.stdout.write("\n")
-    else:
-        sys.stdout.write(format_spc(outcome) + "\n")
-    if args.html and args.html != "-":
-        print(f"page → {args.html}", file=sys.stderr)
-    return 0
+    return emit_outcome(
+        args.html, lambda: spc_page(outcome), args.json, lambda: spc_json(outcome), lambda: format_spc(outcome)
+    )
