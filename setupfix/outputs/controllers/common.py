@@ -10,8 +10,10 @@ from parsers.current import MAX_OFFSET_MM
 from setupfix.core.errors import ExportError
 from setupfix.core.units import length_factor
 from setupfix.correction.offsets import OffsetRow, format_value, grid_decimals
+from setupfix.model.slots import tool_hd
 
 __all__ = [
+    "tool_letter",
     "number",
     "target",
     "cannot",
@@ -168,3 +170,19 @@ _UNSAFE = re.compile(r"[^A-Z0-9 .+\-_/#]")
 def comment_text(text: str) -> str:
     """Text safe inside a G-code comment: upper case, no parentheses or control characters."""
     return _UNSAFE.sub("_", text.upper())
+
+
+def tool_letter(controller: str, row: OffsetRow) -> tuple[str, int]:
+    """A tool row's register as a Fanuc-family control names it: ``("H", n)`` for a length, ``("D", n)``
+    for a radius (``Hn``/``Dn``, else the model's ``number``); a letter that does not match the row's
+    kind is refused (a length change written to a D register would change the diameter)."""
+    found = tool_hd(row.register)
+    fallback = "D" if row.axis == RADIUS else "H"
+    letter, n = found if found else (fallback, row.number) if row.number is not None else (None, None)
+    if letter is None or n is None:
+        raise cannot(controller, row, "a tool register is Hn or Dn, or give number = n in the model")
+    if row.axis == RADIUS and letter != "D":
+        raise cannot(controller, row, "a tool radius is a D register (Dn)")
+    if row.axis != RADIUS and letter != "H":
+        raise cannot(controller, row, f"a D register holds the radius/diameter; a tool length is an H register (H{n})")
+    return letter, n

@@ -34,11 +34,10 @@ from collections.abc import Sequence
 
 from setupfix.core.errors import ExportError
 from setupfix.correction.offsets import OffsetRow
-from setupfix.model.slots import g_code, tool_hd
+from setupfix.model.slots import g_code
 from setupfix.outputs.controllers.common import (
     DEFAULT_PROGRAM,
     GUARD_VARIABLE,
-    RADIUS,
     ROTATION,
     cannot,
     check_program_number,
@@ -49,6 +48,7 @@ from setupfix.outputs.controllers.common import (
     plan_number,
     slot_within,
     target,
+    tool_letter,
 )
 
 __all__ = ["AXIS_NUMBER", "fanuc_variable", "haas_variable", "render_fanuc_macro", "render_haas_macro"]
@@ -88,15 +88,7 @@ def _work(controller: str, row: OffsetRow) -> int:
 
 def _tool(controller: str, row: OffsetRow) -> int:
     """The tool offset variable of a length (H) or radius (D) row."""
-    found = tool_hd(row.register)
-    fallback = "D" if row.axis == RADIUS else "H"
-    letter, n = found if found else (fallback, row.number) if row.number is not None else (None, None)
-    if letter is None or n is None:
-        raise cannot(controller, row, "a tool register is Hn or Dn, or give number = n in the model")
-    if row.axis == RADIUS and letter != "D":
-        raise cannot(controller, row, "a tool radius is a D register (Dn)")
-    if row.axis != RADIUS and letter != "H":
-        raise cannot(controller, row, f"a D register holds the radius/diameter; a tool length is an H register (H{n})")
+    letter, n = tool_letter(controller, row)
     wear = row.offset == "wear"
     if controller == "haas-macro":
         if letter == "D":

@@ -29,11 +29,10 @@ from __future__ import annotations
 from collections.abc import Callable, Sequence
 
 from setupfix.correction.offsets import OffsetRow
-from setupfix.model.slots import tool_hd, wks_fanuc, wks_haas
+from setupfix.model.slots import wks_fanuc, wks_haas
 from setupfix.outputs.controllers.common import (
     DEFAULT_PROGRAM,
     GUARD_VARIABLE,
-    RADIUS,
     ROTATION,
     base_id,
     cannot,
@@ -46,21 +45,14 @@ from setupfix.outputs.controllers.common import (
     plan_number,
     slot_within,
     target,
+    tool_letter,
 )
 
 __all__ = ["render_fanuc", "render_haas"]
 
 
 def _tool(controller: str, row: OffsetRow, top: int) -> tuple[int, int]:
-    found = tool_hd(row.register)
-    fallback = "D" if row.axis == RADIUS else "H"
-    letter, n = found if found else (fallback, row.number) if row.number is not None else (None, None)
-    if letter is None or n is None:
-        raise cannot(controller, row, "a tool register is Hn or Dn, or give number = n in the model")
-    if row.axis == RADIUS and letter != "D":
-        raise cannot(controller, row, "a tool radius is a D register (Dn)")
-    if row.axis != RADIUS and letter != "H":  # G10 L12/L13 would write the length change to the diameter
-        raise cannot(controller, row, f"a D register holds the radius/diameter; a tool length is an H register (H{n})")
+    letter, n = tool_letter(controller, row)
     slot_within(controller, row, "offset number", n, 1, top)
     wear = row.offset == "wear"
     return (11 if wear else 10) if letter == "H" else (13 if wear else 12), n
