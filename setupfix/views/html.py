@@ -88,7 +88,8 @@ def _n(value: float | None, digits: int = 4, sign: bool = False) -> str:
     return fmt(value, digits, sign=sign)
 
 
-def _page(title: str, body: Iterable[str]) -> str:
+def page_frame(title: str, body: Iterable[str]) -> str:
+    """The pages' frame (head, inline CSS, body) around ``body``; every page of the views uses it."""
     return (
         '<!DOCTYPE html>\n<html lang="en"><head><meta charset="utf-8">'
         '<meta name="viewport" content="width=device-width, initial-scale=1">'
@@ -115,7 +116,7 @@ def _hline(y: float, x0: float, x1: float, colour: str, label: str, dash: str = 
     )
 
 
-def _series_chart(
+def series_chart(
     values: np.ndarray,
     centre: float,
     upper: float,
@@ -206,7 +207,7 @@ def control_charts(d: DimensionSpc) -> str:
     lim = d.limits
     flagged = {i for v in d.violations for i in range(v.first, v.last + 1)}
     splits = [s.at for s in d.splits]
-    x_chart = _series_chart(
+    x_chart = series_chart(
         d.values,
         lim.center,
         lim.ucl,
@@ -219,7 +220,7 @@ def control_charts(d: DimensionSpc) -> str:
         lim.baseline,
     )
     mr = np.abs(np.diff(d.values))
-    mr_chart = _series_chart(
+    mr_chart = series_chart(
         mr,
         lim.mr_center,
         lim.mr_ucl,
@@ -396,7 +397,7 @@ def spc_page(outcome: SpcOutcome, title: str = "setupfix — process capability 
     ]
     if outcome.notes:
         body.append("<h2>Warnings</h2><ul>" + "".join(f"<li>{_e(n)}</li>" for n in outcome.notes) + "</ul>")
-    return _page(title, body)
+    return page_frame(title, body)
 
 
 def _cycle_section(pc: CycleCorrection, history: dict[str, DimensionSpc]) -> str:
@@ -507,7 +508,7 @@ def correction_page(
         )
         body += [f'<p class="muted">{_e(n)}</p>' for n in outcome.notes]
     body += [_cycle_section(pc, known) for pc in cycles]
-    return _page(title, body)
+    return page_frame(title, body)
 
 
 def write_correction_page(outcome: CorrectOutcome, target: str, store: StoreRef | None = None) -> None:
@@ -526,24 +527,3 @@ def write_correction_page(outcome: CorrectOutcome, target: str, store: StoreRef 
         with store.for_model(model).open() as opened:
             history = spc_report(opened, SpcRequest(dimensions=names))
     write_text(target, correction_page(outcome, history))
-
-
-def page_frame(title: str, body: Iterable[str]) -> str:
-    """The pages' frame (head, inline CSS, body) around ``body``: for the pages of other views (replay)."""
-    return _page(title, body)
-
-
-def series_chart(
-    values: np.ndarray,
-    centre: float,
-    upper: float,
-    lower: float | None,
-    labels: tuple[str, str, str],
-    flagged: set[int],
-    splits: Sequence[int],
-    height: int,
-    kind: str,
-) -> str:
-    """One series chart as the SPC page draws it (points, centre and limit lines labelled, flagged points red,
-    splits dotted, parts along the axis); ``kind`` is its CSS class."""
-    return _series_chart(values, centre, upper, lower, labels, flagged, splits, height, kind)
