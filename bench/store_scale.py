@@ -168,12 +168,13 @@ def main() -> None:
     ap.add_argument("--imports", type=int, default=200, help="reports imported through the store per stage")
     ap.add_argument("--read-only", action="store_true", help="time the read of a database a run filled, no fill")
     ap.add_argument("--rounds", type=int, default=5, help="--read-only: reads of each kind (best and median)")
+    ap.add_argument("--fill", type=int, default=0, help="--read-only: fill this many machines first (an empty db)")
     ap.add_argument("--out", default=None)
     args = ap.parse_args()
     if not args.db:
         sys.exit("store_scale: give --db postgresql://… (or run under .ci/postgres)")
     if args.read_only:
-        read_only(args.db, args.rounds, Path(args.out or OUT.with_name("store_scale_read.txt")))
+        read_only(args.db, args.rounds, Path(args.out or OUT.with_name("store_scale_read.txt")), args.fill)
         return
     args.out = args.out or str(OUT)
     import psycopg
@@ -259,34 +260,69 @@ def main() -> None:
     print("\n".join(lines[-4:]))
 
 
-def read_only(url: str, rounds: int, out: Path) -> None:
-    """One machine-year read from a filled database, ``rounds`` times each way, alternating: the store's read
-    (COPY) and the row read it replaced (the reference), best and median seconds, and whether they agree."""
+def read_only(url: str, rounds: int, out: Path, fill: int = 0) -> None:
+    """One machine-year read from a filled database (``fill`` > 0: fill that many machines first), the first
+    machine's and the last one's, ``rounds`` times each way, alternating: the store's read
+    (``measurements()``, :mod:`setupfix.store.pg_copy`), the row read it replaced, the whole series read
+    (:func:`setupfix.inputs.series.load_series` with the guide-pin model: the store's read plus matching
+    each report) and the reference workload (best of five SVDs of 1000 × 300); best and median seconds, the
+    ratios of the best to the same round's reference, and whether the two reads agree."""
+    from bench.diagnosis import svd_seconds
+    from setupfix.inputs.series import load_series
+    from setupfix.inputs.stores import StoreRef
+    from setupfix.model import load_model
+
+    if fill:
+        import psycopg
+
+        open_store(url).close()  # the schema
+        with psycopg.connect(url, autocommit=True) as conn:
+            template(conn)
+            for m in range(fill):
+                fill_machine(conn, m, HOURS, 1_000_000 + m * 10_000)
+            conn.execute("ANALYZE")
     with open_store(url) as store:
         rows = store.count("measurement")
-    copy, old, same = [], [], True
-    for _ in range(rounds):
-        with open_store(url, machine="bench000") as store:
-            assert isinstance(store, SQLStore)
-            start = time.perf_counter()
-            frame = store.measurements()
-            copy.append(time.perf_counter() - start)
-            start = time.perf_counter()
-            reference = SQLStore.measurements(store)
-            old.append(time.perf_counter() - start)
-            same = same and frame.equals(reference) and list(frame.dtypes) == list(reference.dtypes)
+        machines = sorted(m.machine for m in store.machines() if m.machine.startswith("bench"))
+    model = load_model(ROOT / "sample_reports" / "guide_pins" / "model.toml")
     lines = [
-        f"# bench/store_scale.py --read-only --rounds {rounds}",
+        f"# bench/store_scale.py --read-only --rounds {rounds}" + (f" --fill {fill}" if fill else ""),
         f"# {time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}, {os.cpu_count()} cores, load "
         f"{os.getloadavg()[0]:.1f}",
-        f"store: {rows:,} measurement rows; one machine-year: {len(frame):,} rows",
-        f"COPY read (store.measurements):        best {min(copy):.3f} s, median {statistics.median(copy):.3f} s",
-        f"row read (reference, replaced):        best {min(old):.3f} s, median {statistics.median(old):.3f} s",
-        f"ratio (row / COPY): best {min(old) / min(copy):.2f}, median "
-        f"{statistics.median(old) / statistics.median(copy):.2f}; the same frame: {'yes' if same else 'NO'}",
+        f"store: {rows:,} measurement rows, {len(machines)} machines of a year each",
     ]
+    for machine in dict.fromkeys([machines[0], machines[-1]]):
+        ref, copy, old, series, same, n = [], [], [], [], True, 0
+        for _ in range(rounds):
+            ref.append(svd_seconds())
+            with open_store(url, machine=machine) as store:
+                assert isinstance(store, SQLStore)
+                start = time.perf_counter()
+                frame = store.measurements()
+                copy.append(time.perf_counter() - start)
+                start = time.perf_counter()
+                reference = SQLStore.measurements(store)
+                old.append(time.perf_counter() - start)
+                same = same and frame.equals(reference) and list(frame.dtypes) == list(reference.dtypes)
+                n = len(frame)
+            start = time.perf_counter()
+            load_series(model, db=StoreRef(url, machine))
+            series.append(time.perf_counter() - start)
+        r = min(ref)
+        lines += [
+            "",
+            f"machine {machine}: {n:,} rows; reference (same rounds): best of 5 SVDs of 1000 × 300, "
+            f"best {r:.4f} s, median {statistics.median(ref):.4f} s",
+            f"  store read (store.measurements):  best {min(copy):.3f} s ({min(copy) / r:.1f} × ref), "
+            f"median {statistics.median(copy):.3f} s",
+            f"  row read (replaced, reference):   best {min(old):.3f} s ({min(old) / r:.1f} × ref), "
+            f"median {statistics.median(old):.3f} s; row / store read {min(old) / min(copy):.2f}; "
+            f"the same frame: {'yes' if same else 'NO'}",
+            f"  series read (load_series):        best {min(series):.3f} s ({min(series) / r:.1f} × ref), "
+            f"median {statistics.median(series):.3f} s",
+        ]
+        print("\n".join(lines[-4:]), flush=True)
     out.write_text("\n".join(lines) + "\n")
-    print("\n".join(lines))
 
 
 if __name__ == "__main__":

@@ -6,6 +6,14 @@ Here the server writes the rows as one CSV stream, and pandas' C parser turns it
 the result is the same frame, cell for cell and dtype for dtype, as
 :meth:`setupfix.store.sql.SQLStore.measurements` builds (``tests/store/test_pg_copy.py``).
 
+At plant scale (16 M rows, ``bench/results/store_scale_read.txt``) the stream's query is what
+costs: joined to ``report`` and filtered by machine, PostgreSQL plans a parallel scan of every
+report with a sort, and compiles it (JIT).  So the machine's report ids are read first (through
+the ``report(machine, id)`` index), and the rows are taken from ``measurement``'s primary key by
+``report_id = ANY(ids)``, already in import order, with JIT off for that one statement.  Server-side
+arrays (``string_agg(float8send(x))``, ``json_agg(text)``) were measured too: no faster than the
+stream, so not used.
+
 Exactness:
 
 * numbers: PostgreSQL (12 and later) writes a ``double precision`` as its shortest round-trip
@@ -43,14 +51,21 @@ def read_rows(
     """
     text = [c for c in columns if c not in numeric]
     flag = " OR ".join(f"m.{c} = '{NULL_MARK}'" for c in text) or "false"
-    where = "" if include_excluded else "AND r.excluded IS NULL"
+    where = "" if include_excluded else "AND excluded IS NULL"
+    shas = dict(
+        conn.execute(f"SELECT id, sha256 FROM report WHERE machine = %s {where} ORDER BY id", (machine,)).fetchall()
+    )
+    if not shas:
+        return None
     sql = (
         f"COPY (SELECT {', '.join(f'm.{c}' for c in columns)}, m.reference, m.report_id, "
-        f"CASE WHEN {flag} THEN 1 ELSE 0 END FROM report r JOIN measurement m ON m.report_id = r.id "
-        f"WHERE r.machine = %s {where} ORDER BY r.id, m.row) TO STDOUT (FORMAT CSV, NULL '{NULL_MARK}')"
+        f"CASE WHEN {flag} THEN 1 ELSE 0 END FROM measurement m WHERE m.report_id = ANY(%s) "
+        f"ORDER BY m.report_id, m.row) TO STDOUT (FORMAT CSV, NULL '{NULL_MARK}')"
     )
-    with conn.cursor() as cur, cur.copy(sql, (machine,)) as copy:
-        stream = b"".join([bytes(chunk) for chunk in copy])
+    with conn.transaction(), conn.cursor() as cur:
+        cur.execute("SET LOCAL jit = off")  # compiling the scan costs more than it saves (a machine-year)
+        with cur.copy(sql, (list(shas),)) as copy:
+            stream = b"".join([bytes(chunk) for chunk in copy])
     if not stream:
         return None
     names = [*columns, "reference", "report_id", "marked"]
@@ -67,12 +82,6 @@ def read_rows(
     )
     if bool(raw["marked"].to_numpy().any()):
         return None
-    shas = dict(
-        conn.execute(
-            f"SELECT id, sha256 FROM report r WHERE r.machine = %s {where}",
-            (machine,),
-        ).fetchall()
-    )
     ids, inverse = np.unique(raw["report_id"].to_numpy(), return_inverse=True)
     data: dict[str, Any] = {}
     for c in columns:

@@ -90,3 +90,14 @@ def test_no_rows_keeps_the_empty_frame(pg_url: str) -> None:
         assert isinstance(pg, PostgresStore)
         assert read_rows(pg.conn, "m1", include_excluded=False, columns=CANONICAL_COLUMNS, numeric=NUMERIC) is None
         pd.testing.assert_frame_equal(pg.measurements(), SQLStore.measurements(pg))
+
+
+def test_the_read_inside_a_store_transaction_keeps_the_session_settings(pg_url: str) -> None:
+    _fill(pg_url, [_table(0, 6), _table(1, 6)])
+    with open_store(pg_url, machine="m1") as pg:
+        assert isinstance(pg, PostgresStore)
+        before = pg.conn.execute("SHOW jit").fetchone()
+        with pg.transaction():
+            inside = pg.measurements(include_excluded=True)
+        assert pg.conn.execute("SHOW jit").fetchone() == before  # JIT is off for the read's statement only
+        pd.testing.assert_frame_equal(inside, SQLStore.measurements(pg, include_excluded=True), check_exact=True)
