@@ -321,6 +321,8 @@ class _Rows:
     reports: list[object]
     stamps: list[object]
     lookup: dict[str, list[tuple[int, str | None, int]]]
+    #: per row, the dimension its name alone names (no other dimension, no zone component), else -1
+    single: npt.NDArray[np.int64]
     dim_ids: npt.NDArray[np.object_]
     zones: bool
 
@@ -333,6 +335,12 @@ class _Rows:
         station_normal = {s: normalise_name(s) for s in set(stations) if s is not None}
         units = [_text(v) or "mm" for v in _column(table, "unit", count)]
         factors = {u: length_factor(u, model.unit) for u in set(units)}
+        lookup = _lookup(model)
+        one = {
+            k: (f[0][0] if len(f) == 1 and f[0][2] < 0 else -1)
+            for k in set(normal.values())
+            if (f := lookup.get(k, []))
+        }
         return cls(
             names=names,
             keys=[normal[name] for name in names],
@@ -347,7 +355,8 @@ class _Rows:
             part_of=[_text(v) or "" for v in _column(table, "part", count)],
             reports=_column(table, "report", count),
             stamps=_column(table, "timestamp", count),
-            lookup=_lookup(model),
+            lookup=lookup,
+            single=np.array([one.get(normal[name], -1) for name in names], dtype=np.int64),
             dim_ids=np.array([d.id for d in model.dimensions], dtype=object),
             zones=any(d.zone for d in model.dimensions),
         )
@@ -376,6 +385,7 @@ def _match_slice(
     stamps = cols.stamps[a:b]
     dim_ids = cols.dim_ids
     zones = cols.zones
+    single = cols.single[a:b]
     rows_of: dict[str, list[int]] = {}
     for i, key in enumerate(cols.part_of[a:b]):
         rows_of.setdefault(key, []).append(i)
@@ -388,7 +398,14 @@ def _match_slice(
         row_of = [-1] * n  # the table row matched to each dimension
         unmatched: list[str] = []
         notes: list[Note] = []
-        for i in rows:
+        at = single[rows]
+        scaled = values[rows] * row_factor[rows]
+        at_once = bool((at >= 0).all() and np.unique(at).size == len(rows) and np.isfinite(scaled).all())
+        if at_once:  # every row names one dimension by its own name, each dimension once: the loop below at once
+            deviation[at] = scaled
+            for q, i in zip(at.tolist(), rows, strict=True):
+                row_of[q] = i
+        for i in () if at_once else rows:
             name, where = names[i], wheres[i]
             found = lookup.get(keys[i], [])
             station = station_keys[i]
