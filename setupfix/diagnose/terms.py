@@ -33,6 +33,7 @@ import numpy.typing as npt
 
 from setupfix.correction.relation import relation_matrices
 from setupfix.model import ProcessModel
+from setupfix.model.effects import EFFECT_KINDS
 
 __all__ = [
     "KINDS",
@@ -49,19 +50,8 @@ __all__ = [
 
 Array = npt.NDArray[np.float64]
 
-#: Effect kinds of the diagnose contract, in the order candidates are listed.
-KINDS: tuple[str, ...] = (
-    "drift",
-    "thermal",
-    "wear",
-    "scale",
-    "position",
-    "rotation",
-    "relation",
-    "group",
-    "level",
-    "process",
-)
+#: Effect kinds of the diagnose contract, in the order candidates are listed (the kinds a model may declare).
+KINDS: tuple[str, ...] = EFFECT_KINDS
 
 AXES = ("x", "y", "z")
 
