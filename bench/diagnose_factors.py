@@ -85,7 +85,11 @@ def main(n_series: int) -> None:
     say("  accepted at alpha = 0.05: " + ", ".join(f"{t.term.name} on {t.register}" for t in loose.tests if t.accepted))
     for label, factors in (("without --factors", ()), ("with --factors", (",".join(DESIGN),))):
         t = time.perf_counter()
-        d = diagnose_reports(DiagnoseRequest(PLATE_MODEL, (PLATE,), process=str(PLATE_LOG), factors=factors)).diagnosis
+        d = diagnose_reports(  # the search alone without the declaration (the log family: diagnose_log_family)
+            DiagnoseRequest(
+                PLATE_MODEL, (PLATE,), process=str(PLATE_LOG), factors=factors, diagnoser=Diagnoser(log_first=False)
+            )
+        ).diagnosis
         dt = time.perf_counter() - t
         w = d.walk.budgets if d.walk is not None else {}
         say(
