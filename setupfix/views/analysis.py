@@ -180,6 +180,7 @@ class DiagnosisView:
     next_from: str = "augmented"  #: the model the next correction comes from (augmented, ewma, declared)
     held: tuple[str, ...] = ()  #: registers the centre rule holds (model IDs)
     draft: str | None = None  #: a draft model's next correction as said (:func:`draft_next`): no number
+    next_text: str = ""  #: the next correction as a person enters it (:func:`next_correction_text`): registers
 
 
 def register_labels(model: ProcessModel) -> dict[str, str]:
@@ -294,6 +295,7 @@ def diagnosis_view(outcome: DiagnoseOutcome) -> DiagnosisView:
         ),
         walk=walk,
         next_correction=tuple((k, v) for k, v in outcome.next_correction.items() if v != 0),
+        next_text=next_correction_text(outcome.input.model, outcome.next_correction),
         notes=tuple(note_text(n) for n in outcome.notes),
         budgets=tuple(cycle_budgets(outcome.input.model, outcome.input.parts)),
         walk_centre=()

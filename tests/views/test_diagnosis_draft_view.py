@@ -26,3 +26,15 @@ def test_a_draft_models_view_says_the_draft_and_gives_no_number(tmp_path: Path) 
 def test_a_released_models_view_has_no_draft_sentence() -> None:
     outcome = diagnose_reports(DiagnoseRequest(load_model(GUIDE / "model.toml"), REPORTS))
     assert draft_next(outcome) is None and diagnosis_view(outcome).draft is None
+
+
+def test_the_views_next_correction_names_the_controller_registers() -> None:
+    """Issue 41: the history panel gives the next correction as the operator types it (G54 Z, H5), not model IDs."""
+    model = load_model(GUIDE / "model.toml")
+    view = diagnosis_view(diagnose_reports(DiagnoseRequest(model, REPORTS)))
+    by_id = {r.id: r for r in model.registers}
+    assert view.next_correction, "the sample's series moves some register"
+    axis = {k: f" {model.axis}" if r.kind == "wks" else "" for k, r in by_id.items()}
+    expected = [f"{by_id[k].register}{axis[k]} {v:+.4f}" for k, v in view.next_correction]
+    assert view.next_text == ", ".join(expected)
+    assert not any(k in view.next_text.split() for k in by_id if k != by_id[k].register)

@@ -99,10 +99,7 @@ class HistoryPanel(VerticalScroll):
         if view.draft is not None:  # a draft's next correction is no number, not even "none"
             walk.append(f"next correction: {view.draft}", style="bold yellow")
         else:
-            walk.append(
-                f"next correction (from {view.next_from}): "
-                + (", ".join(f"{k} {signed(v, 3)}" for k, v in view.next_correction) or "none")
-            )
+            walk.append(f"next correction (from {view.next_from}): {view.next_text or 'none'}")
         if view.held:
             walk.append(f"; held at the centre: {', '.join(view.held)}")
         for note in view.notes:
