@@ -70,6 +70,11 @@ while not os.path.exists(os.path.join(here, "display.stop")):
     time.sleep(0.05)
 """
 
+#: The interpreter inside the simulation's namespaces: the real file behind ``sys.executable``, since a
+#: virtual environment's link may sit under /tmp, which the namespace replaces (they need only the
+#: standard library and LinuxCNC's module).
+PYTHON = os.path.realpath(sys.executable)
+
 #: Run inside the first namespace: the overlays, the private /tmp with the run folder carried over, LinuxCNC.
 INNER = """\
 set -eu
@@ -263,7 +268,7 @@ class Sim:
         (folder / "sim.ini").write_text(ini_text(folder, unit))
         (folder / "sim.hal").write_text(HAL)
         display = folder / "display.py"
-        display.write_text(f"#!{sys.executable}\n{DISPLAY}")
+        display.write_text(f"#!{PYTHON}\n{DISPLAY}")
         display.chmod(0o755)
         table = folder / "sim.tbl"
         if not table.exists():
@@ -309,7 +314,7 @@ class Sim:
         enter += [f"--wdns={self.folder}", "env", f"HOME={self.folder}"]
         return {
             "SETUPFIX_LINUXCNC_ROOT": str(self.root),
-            "SETUPFIX_LINUXCNC_PYTHON": sys.executable,
+            "SETUPFIX_LINUXCNC_PYTHON": PYTHON,
             "SETUPFIX_LINUXCNC_ENTER": shlex.join(enter),
         }
 
@@ -321,7 +326,7 @@ class Sim:
         modules = str(self.root / "usr" / "lib" / "python3" / "dist-packages")
         env["PYTHONPATH"] = modules
         done = subprocess.run(
-            [*enter, sys.executable, "-c", OPERATOR, step, *args], env=env, capture_output=True, text=True, timeout=60
+            [*enter, PYTHON, "-c", OPERATOR, step, *args], env=env, capture_output=True, text=True, timeout=60
         )
         assert done.returncode == 0, f"operator step {step} failed: {done.stderr.strip()[-2000:]}"
         return done.stdout
