@@ -141,6 +141,7 @@ def key_tables() -> dict[str, dict[str, frozenset[str]]]:
         "sections": {
             "safety": frozenset(safety.SAFETY_KEYS),
             "safety.dimensions.ID": frozenset(safety.DIMENSION_KEYS),
+            "measurement": frozenset(safety.MEASUREMENT_KEYS),
             # the head of [effects]: literal in effects.py (tested in tests/docs/test_reference.py)
             "effects": EFFECTS_HEAD,
             "effects.ID": frozenset(effects.EFFECT_KEYS) - free,
