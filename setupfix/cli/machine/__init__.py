@@ -96,14 +96,13 @@ def format_read(read: ControlRead) -> str:
 
 
 def run_write(args: argparse.Namespace) -> int:
+    import contextlib
+
     from setupfix.core.errors import SetupfixError
     from setupfix.inputs.stores import StoreRef
     from setupfix.links import open_link
-    from setupfix.links.errors import LinkConfigError, LinkError
     from setupfix.model import load_model
-    from setupfix.usecases.correct import correct_report, load_request
-    from setupfix.usecases.machine import current_from_link, load_plan, plan_of, write_to_control
-    from setupfix.usecases.requests import CycleOptions
+    from setupfix.usecases.machine import load_plan, report_plan, write_to_control
 
     if (args.plan is None) == (args.report is None):
         raise SetupfixError("give a plan (--plan PLAN.json) or a report to correct, not both and not neither")
@@ -112,29 +111,9 @@ def run_write(args: argparse.Namespace) -> int:
     with open_link(args.link, insecure=args.insecure) as link:
         ref = StoreRef(args.db, args.machine or link.machine, args.operator).for_model(model) if args.db else None
         if plan is None:
-            try:
-                current = current_from_link(link, model)
-            except SetupfixError as exc:
-                # unreachable, or refused while reading (a program running): recorded all the same
-                if ref is not None and isinstance(exc, LinkError) and not isinstance(exc, LinkConfigError):
-                    from setupfix.usecases.machine import Plan
-
-                    unreached = Plan(str(args.report), "", "unknown", False, (), None)
-                    with ref.open(existing=False) as store:
-                        write_to_control(model, unreached, link, apply=args.apply, store=store)
-                raise
-            request = load_request(model, cycles=CycleOptions(part=args.part), current=current)
-            outcome = correct_report(request, args.report)
-            if len(outcome.cycles) != 1:
-                raise SetupfixError(
-                    f"{shown(args.report)}: {len(outcome.cycles)} parts: one part is written (give --part ID)"
-                )
-            plan = plan_of(outcome.cycles[0], current, str(args.report))
-        if ref is not None:
-            with ref.open(existing=False) as store:
-                result = write_to_control(model, plan, link, apply=args.apply, store=store)
-        else:
-            result = write_to_control(model, plan, link, apply=args.apply)
+            plan = report_plan(model, args.report, link, part=args.part, apply=args.apply, store=ref)
+        with ref.open(existing=False) if ref is not None else contextlib.nullcontext() as store:
+            result = write_to_control(model, plan, link, apply=args.apply, store=store)
     return _show(result, args.json)
 
 

@@ -12,6 +12,8 @@ One use case for every door (the CLI, batch, the TUI's "send to machine"):
   re-read and refuse a stale table, refuse on the interlock or a limit, write at the control's
   increment and unit, read back within half an increment, roll back and name every component
   on a mismatch or a lost connection;
+- :func:`report_plan` reads the control and corrects a report with those values (``machine write
+  REPORT``); a failed read is audited too;
 - :func:`write_to_control` is the whole command: plan, dry run or apply, and the audit record
   (every attempt, an unreachable control and a refusal included) when a store is given.
 
@@ -28,6 +30,7 @@ from setupfix.usecases.machine.write import (
     WritePlan,
     apply_write,
     plan_write,
+    report_plan,
     write_to_control,
 )
 
@@ -45,6 +48,7 @@ __all__ = [
     "plan_write",
     "apply_write",
     "write_to_control",
+    "report_plan",
     "OUTCOME_STATUS",
     "Retry",
 ]

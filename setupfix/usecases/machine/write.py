@@ -6,10 +6,12 @@ import math
 import time
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, replace
+from pathlib import Path
 from typing import Any
 
-from setupfix.core.errors import ParameterError
+from setupfix.core.errors import ParameterError, SetupfixError
 from setupfix.core.units import length_factor
+from setupfix.inputs.stores import StoreRef
 from setupfix.links.base import Component, Link
 from setupfix.links.errors import (
     EXIT_REFUSED,
@@ -454,3 +456,43 @@ def write_to_control(
     if store is not None:
         store.add_link_attempt(result.attempt())
     return result
+
+
+def report_plan(
+    model: ProcessModel,
+    report: str | Path,
+    link: Link,
+    *,
+    part: str | None = None,
+    apply: bool = False,
+    store: StoreRef | None = None,
+) -> Plan:
+    """``machine write REPORT``: the control read, the report corrected with those values, its plan.
+
+    The report must give one part (``part`` picks it).  A read that fails (the control unreachable,
+    or refusing while a program runs) is recorded in ``store``'s audit like every other attempt, then
+    raised (the store is opened only then: a bad report creates no store); a link-file error is bad
+    input and is raised unrecorded.
+    """
+    from parsers.names import visible_name
+    from setupfix.usecases.correct import correct_report, load_request
+    from setupfix.usecases.machine.plan import plan_of
+    from setupfix.usecases.machine.reading import current_from_link
+    from setupfix.usecases.requests import CycleOptions
+
+    try:
+        current = current_from_link(link, model)
+    except LinkConfigError:
+        raise
+    except LinkError:
+        if store is not None:
+            unread = Plan(str(report), "", "unknown", False, (), None)
+            with store.open(existing=False) as opened:
+                write_to_control(model, unread, link, apply=apply, store=opened)
+        raise
+    outcome = correct_report(load_request(model, cycles=CycleOptions(part=part), current=current), report)
+    if len(outcome.cycles) != 1:
+        raise SetupfixError(
+            f"{visible_name(str(report))}: {len(outcome.cycles)} parts: one part is written (give --part ID)"
+        )
+    return plan_of(outcome.cycles[0], current, str(report))
