@@ -11,7 +11,7 @@ from pathlib import Path
 
 import pytest
 from conftest import SAMPLES
-from opcua_control import ControlSpec, TestControl, link_toml
+from opcua_control import ControlSpec, TestControl, link_toml, running_control
 
 from parsers.current import read_current
 from setupfix.cli import main
@@ -31,10 +31,8 @@ SECRET = "Zq7-secret-pw-91"
 
 @pytest.fixture(scope="module")
 def server() -> Iterator[TestControl]:
-    control = TestControl(ControlSpec(dict(VALUES), increment=0.0001))
-    control.start()
-    yield control
-    control.close()
+    with running_control(ControlSpec(dict(VALUES), increment=0.0001)) as control:
+        yield control
 
 
 @pytest.fixture

@@ -37,12 +37,10 @@ CHANGES = {"G54.Z": -0.023, "G55.Z": 0.022, "H5": -0.009, "H12": 0.002}
 
 @pytest.fixture(scope="module")
 def server() -> Iterator[TestControl]:
-    from opcua_control import ControlSpec, TestControl
+    from opcua_control import ControlSpec, running_control
 
-    control = TestControl(ControlSpec(dict(VALUES), increment=0.0001))
-    control.start()
-    yield control
-    control.close()
+    with running_control(ControlSpec(dict(VALUES), increment=0.0001)) as control:
+        yield control
 
 
 @pytest.fixture
